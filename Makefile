@@ -1,0 +1,39 @@
+# maglevkit: every target sets itself up (creates .venv and installs the package) on first use.
+PYTHON ?= python3
+VENV   := .venv
+BIN    := $(VENV)/bin
+STAMP  := $(VENV)/.installed-stamp
+OUT    ?= out
+
+.PHONY: demo test test-all lint bench clean
+
+$(BIN)/python:
+	$(PYTHON) -m venv $(VENV)
+	$(BIN)/python -m pip install --quiet --upgrade pip
+
+$(STAMP): $(BIN)/python pyproject.toml
+	$(BIN)/python -m pip install --quiet -e ".[test,distributed]"
+	touch $(STAMP)
+
+## demo: run the main job on the bundled default magnet (figures and report in ./out)
+demo: $(STAMP)
+	$(BIN)/maglevkit demo --out $(OUT)
+
+## test: lint (ruff), type-check (mypy) and the default test suite
+test: $(STAMP) lint
+	$(BIN)/python -m pytest -q
+
+## test-all: also the slow validation tests
+test-all: $(STAMP) lint
+	$(BIN)/python -m pytest -q -m "slow or not slow"
+
+lint: $(STAMP)
+	$(BIN)/ruff check src tests benchmarks
+	$(BIN)/mypy src
+
+## bench: run the benchmarks and rewrite BENCHMARKS.md
+bench: $(STAMP)
+	$(BIN)/python benchmarks/run.py --output BENCHMARKS.md
+
+clean:
+	rm -rf $(VENV) $(OUT) .pytest_cache .mypy_cache .ruff_cache

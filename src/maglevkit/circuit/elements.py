@@ -1,0 +1,399 @@
+"""Elements of the equivalent magnetic circuit (EMC).
+
+Each element is a small frozen dataclass: the leaf class holds the geometry, the
+base class owns the law the element contributes to its branch.
+
+* :class:`IronPath` -- saturable iron, ``V_m = l H(phi / A)`` (paper eq. 1 with mu(phi)).
+* :class:`AirGap` -- pole air gap with optional fringing and Carter factor,
+  ``V_m = phi / G(s)``.
+* :class:`LeakagePermeance` -- constant leakage permeance (Roters shapes as constructors).
+* :class:`GapLeakage` -- gap-dependent leakage/fringe permeance ``mu0 w/pi ln(1 + pi r/s)``.
+* :class:`EddyCurrent` -- the paper's "magnetic inductance", ``V_m = G_ec dphi/dt``.
+
+Sign convention: a branch flux ``phi`` flows from the branch's start node to its end
+node; an element's magnetic voltage drop ``V_m`` is measured in the same direction.
+All quantities are SI: lengths in m, areas in m^2, flux in Wb, MMF in A (ampere-turns).
+"""
+
+from __future__ import annotations
+
+import math
+from abc import ABC, abstractmethod
+from dataclasses import dataclass, field
+from typing import Any
+
+import casadi as ca
+import numpy as np
+
+from ..errors import ParameterError
+from ..materials import MU0, Material, get_material
+
+__all__ = [
+    "Element",
+    "LinearElement",
+    "IronPath",
+    "AirGap",
+    "LeakagePermeance",
+    "GapLeakage",
+    "EddyCurrent",
+    "carter_coefficient",
+]
+
+
+def _positive(owner: str, **values: float) -> None:
+    for key, v in values.items():
+        if not isinstance(v, (int, float)) or isinstance(v, bool):
+            raise ParameterError(f"{owner}: {key} must be a number, got {v!r}")
+        if not (math.isfinite(v) and v > 0.0):
+            raise ParameterError(f"{owner}: {key} = {v!r} must be a finite number > 0")
+
+
+def _nonnegative(owner: str, **values: float) -> None:
+    for key, v in values.items():
+        if not isinstance(v, (int, float)) or isinstance(v, bool):
+            raise ParameterError(f"{owner}: {key} must be a number, got {v!r}")
+        if not (math.isfinite(v) and v >= 0.0):
+            raise ParameterError(f"{owner}: {key} = {v!r} must be a finite number >= 0")
+
+
+def _log(x: Any) -> Any:
+    return ca.log(x) if isinstance(x, (ca.SX, ca.MX, ca.DM)) else np.log(x)
+
+
+def _atan(x: Any) -> Any:
+    return ca.atan(x) if isinstance(x, (ca.SX, ca.MX, ca.DM)) else np.arctan(x)
+
+
+def carter_coefficient(gap: Any, slot_pitch: float, slot_opening: float) -> Any:
+    """Carter's coefficient ``k_C = tau / (tau - gamma s)`` of a slotted surface.
+
+    ``gamma = (4/pi) [x atan(x) - ln sqrt(1 + x^2)]`` with ``x = b / (2 s)``
+    (slot pitch ``tau``, slot opening ``b``, gap ``s``; all in m).  Works on NumPy and
+    CasADi inputs.
+    """
+    x = slot_opening / (2.0 * gap)
+    gamma = (4.0 / math.pi) * (x * _atan(x) - 0.5 * _log(1.0 + x * x))
+    return slot_pitch / (slot_pitch - gamma * gap)
+
+
+@dataclass(frozen=True)
+class Element(ABC):
+    """Base of all EMC elements: one law on one branch.
+
+    Attributes
+    ----------
+    name : str
+        Unique name within the network.
+    """
+
+    name: str
+
+    #: name of the gap input this element depends on (None: gap-independent)
+    @property
+    def gap(self) -> str | None:
+        return None
+
+    @property
+    def area(self) -> float | None:
+        """Cross-section [m^2] used to report a flux density, if meaningful."""
+        return None
+
+    @property
+    def eddy_conductance(self) -> float:
+        """``G_ec`` [S] of the ``V_m = G_ec dphi/dt`` law (0 for static elements)."""
+        return 0.0
+
+    @abstractmethod
+    def mmf_drop(self, flux: Any, gap: Any = None) -> Any:
+        """Static magnetic voltage drop ``V_m`` [A] for branch flux ``flux`` [Wb]."""
+
+    def energy(self, flux: Any, gap: Any = None) -> Any:
+        """Stored energy ``integral_0^phi V_m dphi`` [J] (NumPy input)."""
+        raise NotImplementedError(f"{type(self).__name__} has no stored energy law")
+
+
+@dataclass(frozen=True)
+class LinearElement(Element):
+    """An element with a flux-independent permeance ``G`` [H]: ``V_m = phi / G``.
+
+    The stored energy is ``phi^2 / (2 G)``.  Gap-dependent elements must be linear,
+    so that the pole force is exactly ``dW/ds`` at constant flux.
+    """
+
+    @abstractmethod
+    def permeance(self, gap: Any = None) -> Any:
+        """Permeance ``G`` [H] (= Wb/A); ``gap`` [m] for gap-dependent elements."""
+
+    def mmf_drop(self, flux: Any, gap: Any = None) -> Any:
+        return flux / self.permeance(gap)
+
+    def energy(self, flux: Any, gap: Any = None) -> Any:
+        return flux * flux / (2.0 * self.permeance(gap))
+
+
+@dataclass(frozen=True)
+class IronPath(Element):
+    """A homogeneous iron part: ``V_m = l H(phi/A)`` (paper eq. 1 with mu = mu(phi)).
+
+    Parameters
+    ----------
+    length : float
+        Mean flux path length [m].
+    cross_section : float
+        Cross-section area [m^2].
+    material : Material or str
+        Constitutive law, or the name of a built-in record.
+    """
+
+    length: float
+    cross_section: float
+    material: Material = field(default_factory=lambda: get_material("ideal"))
+
+    def __post_init__(self) -> None:
+        _positive(f"iron path {self.name!r}", length=self.length, cross_section=self.cross_section)
+        object.__setattr__(self, "material", get_material(self.material))
+
+    @property
+    def area(self) -> float:
+        return self.cross_section
+
+    def mmf_drop(self, flux: Any, gap: Any = None) -> Any:
+        return self.length * self.material.field_strength(flux / self.cross_section)
+
+    def energy(self, flux: Any, gap: Any = None) -> Any:
+        b = np.asarray(flux, dtype=float) / self.cross_section
+        return self.length * self.cross_section * self.material.energy_density(b)
+
+
+@dataclass(frozen=True)
+class AirGap(LinearElement):
+    """Air gap between a pole face and the rail/stator.
+
+    ``G(s) = mu0 [A / s' + sum_e (w_e / pi) ln(1 + pi r_e / s')]`` with ``s' = k_C s``.
+
+    The first term is the homogeneous field under the pole face, the sum the fringing
+    flux from the pole flanks (Roters' quarter-circle-and-straight-line tubes, one
+    term per edge of length ``w_e`` whose flank of height ``r_e`` sees the rail).
+    ``k_C`` is Carter's coefficient of a slotted stator (1 when ``slot_pitch`` is 0).
+
+    Parameters
+    ----------
+    gap_input : str
+        Name of the gap input (one per pole).
+    pole_area : float
+        Pole face area [m^2].
+    fringe_edges : tuple of (float, float)
+        ``(edge length w_e [m], flank height r_e [m])`` per fringing edge (empty: none).
+    slot_pitch, slot_opening : float
+        Stator slot pitch and slot opening [m] for Carter's coefficient (0: smooth).
+    """
+
+    gap_input: str = "s"
+    pole_area: float = 1.0
+    fringe_edges: tuple[tuple[float, float], ...] = ()
+    slot_pitch: float = 0.0
+    slot_opening: float = 0.0
+
+    def __post_init__(self) -> None:
+        owner = f"air gap {self.name!r}"
+        if not isinstance(self.gap_input, str) or not self.gap_input:
+            raise ParameterError(f"{owner}: gap_input must be a non-empty name")
+        _positive(owner, pole_area=self.pole_area)
+        edges = tuple((float(w), float(r)) for w, r in self.fringe_edges)
+        object.__setattr__(self, "fringe_edges", edges)
+        for w, r in edges:
+            _positive(owner, fringe_edge_length=w, fringe_radius=r)
+        _nonnegative(owner, slot_pitch=self.slot_pitch, slot_opening=self.slot_opening)
+        if self.slot_pitch > 0.0 and not 0.0 < self.slot_opening < self.slot_pitch:
+            raise ParameterError(f"{owner}: slot_opening must lie in (0, slot_pitch) when a "
+                                 "slot pitch is given")
+
+    @property
+    def gap(self) -> str:
+        return self.gap_input
+
+    @property
+    def area(self) -> float:
+        return self.pole_area
+
+    def effective_gap(self, gap: Any) -> Any:
+        """Gap enlarged by Carter's coefficient [m]."""
+        if self.slot_pitch > 0.0:
+            return carter_coefficient(gap, self.slot_pitch, self.slot_opening) * gap
+        return gap
+
+    def permeance(self, gap: Any = None) -> Any:
+        if gap is None:
+            raise ParameterError(f"air gap {self.name!r}: needs a gap value")
+        s = self.effective_gap(gap)
+        g = self.pole_area / s
+        for w, r in self.fringe_edges:
+            g = g + w / math.pi * _log(1.0 + math.pi * r / s)
+        return MU0 * g
+
+
+@dataclass(frozen=True)
+class LeakagePermeance(LinearElement):
+    """A constant leakage permeance ``G`` [H] (flux that does not cross the air gap).
+
+    Use the constructors for the standard Roters flux-tube shapes.
+    """
+
+    value: float = 0.0
+
+    def __post_init__(self) -> None:
+        _positive(f"leakage permeance {self.name!r}", value=self.value)
+
+    def permeance(self, gap: Any = None) -> Any:
+        return self.value
+
+    @classmethod
+    def parallel_plates(cls, name: str, area: float, distance: float) -> LeakagePermeance:
+        """Homogeneous field between two parallel faces: ``mu0 A / d``."""
+        _positive(f"leakage {name!r}", area=area, distance=distance)
+        return cls(name, MU0 * area / distance)
+
+    @classmethod
+    def half_cylinder(cls, name: str, length: float) -> LeakagePermeance:
+        """Half cylinder of axial length l: ``0.26 mu0 l``."""
+        _positive(f"leakage {name!r}", length=length)
+        return cls(name, 0.26 * MU0 * length)
+
+    @classmethod
+    def quarter_cylinder(cls, name: str, length: float) -> LeakagePermeance:
+        """Quarter cylinder of axial length l: ``0.52 mu0 l``."""
+        _positive(f"leakage {name!r}", length=length)
+        return cls(name, 0.52 * MU0 * length)
+
+    @classmethod
+    def half_hollow_cylinder(cls, name: str, length: float, inner_radius: float,
+                             thickness: float) -> LeakagePermeance:
+        """Half hollow cylinder: ``mu0 l ln(1 + t/r_i) / pi``."""
+        _positive(f"leakage {name!r}", length=length, inner_radius=inner_radius,
+                  thickness=thickness)
+        return cls(name, MU0 * length * math.log(1.0 + thickness / inner_radius) / math.pi)
+
+    @classmethod
+    def quarter_hollow_cylinder(cls, name: str, length: float, inner_radius: float,
+                                thickness: float) -> LeakagePermeance:
+        """Quarter hollow cylinder: twice the half hollow cylinder."""
+        half = cls.half_hollow_cylinder(name, length, inner_radius, thickness)
+        return cls(name, 2.0 * half.value)
+
+    @classmethod
+    def quarter_sphere(cls, name: str, radius: float) -> LeakagePermeance:
+        """Quarter sphere: ``0.077 mu0 2 r``."""
+        _positive(f"leakage {name!r}", radius=radius)
+        return cls(name, 0.077 * MU0 * 2.0 * radius)
+
+    @classmethod
+    def eighth_sphere(cls, name: str, radius: float) -> LeakagePermeance:
+        """Eighth sphere: ``0.308 mu0 r``."""
+        _positive(f"leakage {name!r}", radius=radius)
+        return cls(name, 0.308 * MU0 * radius)
+
+    @classmethod
+    def quarter_hollow_sphere(cls, name: str, thickness: float) -> LeakagePermeance:
+        """Quarter hollow sphere of shell thickness t: ``0.25 mu0 t``."""
+        _positive(f"leakage {name!r}", thickness=thickness)
+        return cls(name, 0.25 * MU0 * thickness)
+
+
+@dataclass(frozen=True)
+class GapLeakage(LinearElement):
+    """Gap-dependent leakage around a pole: ``G = mu0 w / pi ln(1 + pi r / s)``.
+
+    Parameters
+    ----------
+    gap_input : str
+        Name of the gap input.
+    width : float
+        Edge length w [m].
+    radius : float
+        Leakage radius r [m].
+    """
+
+    gap_input: str = "s"
+    width: float = 1.0
+    radius: float = 1.0
+
+    def __post_init__(self) -> None:
+        _positive(f"gap leakage {self.name!r}", width=self.width, radius=self.radius)
+
+    @property
+    def gap(self) -> str:
+        return self.gap_input
+
+    def permeance(self, gap: Any = None) -> Any:
+        if gap is None:
+            raise ParameterError(f"gap leakage {self.name!r}: needs a gap value")
+        return MU0 * self.width / math.pi * _log(1.0 + math.pi * self.radius / gap)
+
+
+def _rectangle_torsion_constant(a: float, b: float) -> float:
+    """Saint-Venant torsion constant of an a x b rectangle (exact series) [m^4]."""
+    a, b = max(a, b), min(a, b)
+    series = sum(math.tanh(k * math.pi * a / (2.0 * b)) / k**5 for k in range(1, 200, 2))
+    return a * b**3 / 3.0 * (1.0 - 192.0 / math.pi**5 * (b / a) * series)
+
+
+@dataclass(frozen=True)
+class EddyCurrent(Element):
+    """Eddy currents as a "magnetic inductance": ``V_m = G_ec dphi/dt``.
+
+    Equivalent to a short-circuited winding of conductance ``G_ec`` [S] around the
+    flux tube (low-frequency, resistance-limited eddy currents).  It carries no
+    static drop; the flux-based dynamic model uses :attr:`eddy_conductance`.
+
+    Parameters
+    ----------
+    conductance : float
+        ``G_ec`` [S] (> 0).
+    """
+
+    conductance: float = 0.0
+
+    def __post_init__(self) -> None:
+        _positive(f"eddy-current element {self.name!r}", conductance=self.conductance)
+
+    @property
+    def eddy_conductance(self) -> float:
+        return self.conductance
+
+    def mmf_drop(self, flux: Any, gap: Any = None) -> Any:
+        return 0.0 * flux
+
+    def energy(self, flux: Any, gap: Any = None) -> Any:
+        return np.zeros_like(np.asarray(flux, dtype=float))
+
+    @classmethod
+    def one_turn(cls, name: str, path_area: float, path_length: float,
+                 resistivity: float) -> EddyCurrent:
+        """Modelica's ``G = A / (rho l)``: a one-turn short circuit of wire area A, length l."""
+        _positive(f"eddy-current element {name!r}", path_area=path_area,
+                  path_length=path_length, resistivity=resistivity)
+        return cls(name, path_area / (resistivity * path_length))
+
+    @classmethod
+    def solid_rectangular(cls, name: str, width: float, height: float, length: float,
+                          resistivity: float) -> EddyCurrent:
+        """Solid bar of cross-section width x height and length l, flux along l.
+
+        Low-frequency eddy loss under a uniform ``dB/dt`` is ``P = J l (dB/dt)^2/(4 rho)``
+        with the Saint-Venant torsion constant J of the cross-section (the stream
+        function of the eddy currents solves the same Poisson problem), so
+        ``G_ec = P / (dphi/dt)^2 = J l / (4 rho A^2)``.  Thin-sheet limit: ``b^2 l/(12 rho A)``.
+        """
+        _positive(f"eddy-current element {name!r}", width=width, height=height, length=length,
+                  resistivity=resistivity)
+        area = width * height
+        torsion = _rectangle_torsion_constant(width, height)
+        return cls(name, torsion * length / (4.0 * resistivity * area * area))
+
+    @classmethod
+    def laminated(cls, name: str, area: float, length: float, resistivity: float,
+                  sheet_thickness: float) -> EddyCurrent:
+        """Laminated stack of sheets of thickness d: ``G_ec = d^2 l / (12 rho A)``."""
+        _positive(f"eddy-current element {name!r}", area=area, length=length,
+                  resistivity=resistivity, sheet_thickness=sheet_thickness)
+        return cls(name, sheet_thickness**2 * length / (12.0 * resistivity * area))

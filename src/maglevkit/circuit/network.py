@@ -1,0 +1,355 @@
+"""Topology of the equivalent magnetic circuit and its electric circuits.
+
+A :class:`Network` is a set of :class:`Branch` es between named nodes; each branch is a
+series chain of elements.  Electric :class:`Circuit` s put coils (``theta = n I``, paper
+eq. 2) on branches, in series with a resistance and a voltage source.
+
+The network is solved in loop fluxes: with the fundamental loop matrix ``C``
+(loops x branches, from a spanning tree) the branch fluxes ``phi = C^T x`` satisfy
+Kirchhoff's node law identically, and Kirchhoff's loop law reads
+``C (V_m(phi, s) - N I) = 0`` with the branch-by-circuit turns matrix ``N``.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Iterable, Sequence
+from dataclasses import dataclass, field, replace
+from functools import cached_property
+
+import numpy as np
+
+from ..errors import ParameterError, TopologyError
+from .elements import EddyCurrent, Element, IronPath
+
+__all__ = ["Branch", "Coil", "Circuit", "Network"]
+
+
+@dataclass(frozen=True)
+class Branch:
+    """A branch of the magnetic network: elements in series from ``start`` to ``end``.
+
+    Parameters
+    ----------
+    name : str
+        Unique branch name.
+    start, end : str
+        Node names; positive flux flows from ``start`` to ``end``.
+    elements : tuple of Element
+        The series elements (may be empty only if a coil sits on the branch and the
+        loop it closes contains some reluctance).
+    """
+
+    name: str
+    start: str
+    end: str
+    elements: tuple[Element, ...] = ()
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "elements", tuple(self.elements))
+        for key in ("name", "start", "end"):
+            v = getattr(self, key)
+            if not isinstance(v, str) or not v:
+                raise TopologyError(f"branch {self.name!r}: {key} must be a non-empty string")
+        if self.start == self.end:
+            raise TopologyError(f"branch {self.name!r} starts and ends at node {self.start!r}; "
+                                "a branch must join two different nodes")
+        for el in self.elements:
+            if not isinstance(el, Element):
+                raise TopologyError(f"branch {self.name!r}: {el!r} is not an Element")
+
+    @property
+    def area(self) -> float | None:
+        """Smallest cross-section of the branch's iron/gap elements [m^2] (None if none)."""
+        areas = [a for a in (el.area for el in self.elements) if a is not None]
+        return min(areas) if areas else None
+
+
+@dataclass(frozen=True)
+class Coil:
+    """A coil of ``turns`` windings on ``branch``.
+
+    Its MMF ``turns * I`` drives flux from the branch's start node to its end node
+    when ``polarity = +1`` (and the other way for ``-1``).
+    """
+
+    branch: str
+    turns: float
+    polarity: int = 1
+
+    def __post_init__(self) -> None:
+        if not (isinstance(self.turns, (int, float)) and math.isfinite(self.turns)
+                and self.turns > 0):
+            raise ParameterError(f"coil on branch {self.branch!r}: turns = {self.turns!r} must be > 0")
+        if self.polarity not in (1, -1):
+            raise ParameterError(f"coil on branch {self.branch!r}: polarity must be +1 or -1")
+
+
+@dataclass(frozen=True)
+class Circuit:
+    """An electric circuit: coils in series with a resistance and a voltage input.
+
+    Parameters
+    ----------
+    name : str
+        Unique circuit name (also the name of its current and voltage).
+    resistance : float
+        Total ohmic resistance R_el [ohm] (> 0).
+    coils : tuple of Coil
+        At least one coil.
+    """
+
+    name: str
+    resistance: float
+    coils: tuple[Coil, ...] = ()
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "coils", tuple(self.coils))
+        if not isinstance(self.name, str) or not self.name:
+            raise TopologyError("a circuit needs a non-empty name")
+        if not (isinstance(self.resistance, (int, float)) and math.isfinite(self.resistance)
+                and self.resistance > 0):
+            raise ParameterError(f"circuit {self.name!r}: resistance = {self.resistance!r} ohm "
+                                 "must be a finite number > 0")
+        if not self.coils:
+            raise TopologyError(f"circuit {self.name!r} has no coils; every circuit must drive "
+                                "at least one coil")
+
+    @property
+    def turns(self) -> float:
+        """Total number of turns of the circuit's coils."""
+        return float(sum(c.turns for c in self.coils))
+
+
+@dataclass(frozen=True)
+class Network:
+    """Equivalent magnetic circuit with its electric circuits.
+
+    Validates on construction: unique names, known nodes, connectedness, at least
+    one closed flux path, coils on existing branches, at most one coil per circuit
+    and branch.
+    """
+
+    branches: tuple[Branch, ...]
+    circuits: tuple[Circuit, ...]
+    name: str = "network"
+    _cache: dict = field(default_factory=dict, init=False, repr=False, compare=False)
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "branches", tuple(self.branches))
+        object.__setattr__(self, "circuits", tuple(self.circuits))
+        if not self.branches:
+            raise TopologyError("the network has no branches")
+        if not self.circuits:
+            raise TopologyError("the network has no electric circuit; add at least one Circuit")
+        _unique("branch", [b.name for b in self.branches])
+        _unique("element", [e.name for b in self.branches for e in b.elements])
+        _unique("circuit", [c.name for c in self.circuits])
+        names = {b.name for b in self.branches}
+        seen: set[tuple[str, str]] = set()
+        for c in self.circuits:
+            for coil in c.coils:
+                if coil.branch not in names:
+                    raise TopologyError(
+                        f"circuit {c.name!r}: coil on branch {coil.branch!r}, which does not exist; "
+                        f"branches are: {', '.join(sorted(names))}"
+                    )
+                if (c.name, coil.branch) in seen:
+                    raise TopologyError(f"circuit {c.name!r} has two coils on branch "
+                                        f"{coil.branch!r}; merge them into one")
+                seen.add((c.name, coil.branch))
+        self._check_connected()
+        if self.n_loops == 0:
+            raise TopologyError("the network has no closed flux path (it is a tree); flux needs "
+                                "a loop through the coils")
+        coil_branches = {coil.branch for c in self.circuits for coil in c.coils}
+        loops = self.loop_matrix
+        idx = {n: i for i, n in enumerate(self.branch_names)}
+        for b in coil_branches:
+            if not np.any(loops[:, idx[b]]):
+                raise TopologyError(f"coil branch {b!r} lies on no closed loop (a dangling branch); "
+                                    "its coil could not drive any flux")
+
+    # ------------------------------------------------------------------ topology
+    @property
+    def branch_names(self) -> tuple[str, ...]:
+        return tuple(b.name for b in self.branches)
+
+    @property
+    def circuit_names(self) -> tuple[str, ...]:
+        return tuple(c.name for c in self.circuits)
+
+    @property
+    def nodes(self) -> tuple[str, ...]:
+        out: dict[str, None] = {}
+        for b in self.branches:
+            out.setdefault(b.start)
+            out.setdefault(b.end)
+        return tuple(out)
+
+    @property
+    def gap_names(self) -> tuple[str, ...]:
+        """Names of the gap inputs, in order of first appearance."""
+        out: dict[str, None] = {}
+        for b in self.branches:
+            for e in b.elements:
+                if e.gap is not None:
+                    out.setdefault(e.gap)
+        return tuple(out)
+
+    @property
+    def n_loops(self) -> int:
+        return len(self.branches) - len(self.nodes) + 1
+
+    def _check_connected(self) -> None:
+        parent = {n: n for n in self.nodes}
+
+        def find(a: str) -> str:
+            while parent[a] != a:
+                parent[a] = parent[parent[a]]
+                a = parent[a]
+            return a
+
+        for b in self.branches:
+            parent[find(b.start)] = find(b.end)
+        groups: dict[str, list[str]] = {}
+        for n in self.nodes:
+            groups.setdefault(find(n), []).append(n)
+        if len(groups) > 1:
+            parts = sorted((sorted(g) for g in groups.values()), key=len)
+            raise TopologyError(
+                f"the network is disconnected: {len(groups)} separate parts, e.g. nodes "
+                f"{parts[0]} are not joined to {parts[-1][:5]}; every node must be reachable"
+            )
+
+    @property
+    def incidence_matrix(self) -> np.ndarray:
+        """Node-by-branch incidence (+1 leaving the node, -1 entering)."""
+        nodes = {n: i for i, n in enumerate(self.nodes)}
+        a = np.zeros((len(nodes), len(self.branches)))
+        for j, b in enumerate(self.branches):
+            a[nodes[b.start], j] = 1.0
+            a[nodes[b.end], j] = -1.0
+        return a
+
+    @cached_property
+    def loop_matrix(self) -> np.ndarray:
+        """Fundamental loop matrix ``C`` (loops x branches) from a BFS spanning tree."""
+        nodes = self.nodes
+        adj: dict[str, list[tuple[int, str]]] = {n: [] for n in nodes}
+        for j, b in enumerate(self.branches):
+            adj[b.start].append((j, b.end))
+            adj[b.end].append((j, b.start))
+        root = nodes[0]
+        parent_branch: dict[str, int | None] = {root: None}
+        parent_node: dict[str, str | None] = {root: None}
+        order = [root]
+        for n in order:
+            for j, m in adj[n]:
+                if m not in parent_branch:
+                    parent_branch[m] = j
+                    parent_node[m] = n
+                    order.append(m)
+        tree = {j for j in parent_branch.values() if j is not None}
+
+        def path_to_root(n: str) -> list[str]:
+            out = [n]
+            while parent_node[out[-1]] is not None:
+                out.append(parent_node[out[-1]])  # type: ignore[arg-type]
+            return out
+
+        rows = []
+        for j, b in enumerate(self.branches):
+            if j in tree:
+                continue
+            row = np.zeros(len(self.branches))
+            row[j] = 1.0
+            # Close the loop: from b.end back to b.start through the tree.
+            pa, pb = path_to_root(b.end), path_to_root(b.start)
+            common = set(pa) & set(pb)
+            for path, sign in ((pa, 1.0), (pb, -1.0)):
+                for node in path:
+                    if node in common:
+                        break
+                    k = parent_branch[node]
+                    assert k is not None
+                    br = self.branches[k]
+                    # walking from `node` towards its parent: along the branch if it starts at node
+                    along = 1.0 if br.start == node else -1.0
+                    row[k] += sign * along
+            rows.append(row)
+        return np.array(rows).reshape(len(rows), len(self.branches))
+
+    @property
+    def turns_matrix(self) -> np.ndarray:
+        """``N`` (branches x circuits): signed turns, so that ``theta = N I`` and ``psi = N^T phi``."""
+        idx = {n: i for i, n in enumerate(self.branch_names)}
+        n = np.zeros((len(self.branches), len(self.circuits)))
+        for k, c in enumerate(self.circuits):
+            for coil in c.coils:
+                n[idx[coil.branch], k] += coil.polarity * coil.turns
+        return n
+
+    @property
+    def resistances(self) -> np.ndarray:
+        """Circuit resistances R_el [ohm]."""
+        return np.array([c.resistance for c in self.circuits], dtype=float)
+
+    @property
+    def eddy_conductances(self) -> np.ndarray:
+        """Per-branch sum of eddy-current conductances ``G_ec`` [S]."""
+        return np.array([sum(e.eddy_conductance for e in b.elements) for b in self.branches])
+
+    @property
+    def branch_areas(self) -> np.ndarray:
+        """Per-branch reporting cross-section [m^2] (NaN where none is defined)."""
+        return np.array([np.nan if b.area is None else b.area for b in self.branches])
+
+    @property
+    def has_eddy_currents(self) -> bool:
+        return bool(np.any(self.eddy_conductances > 0.0))
+
+    # ------------------------------------------------------------------ variants
+    def with_options(self, *, saturation: bool = True, eddy_currents: bool = True) -> Network:
+        """A copy with saturation (iron nonlinearity) and/or eddy currents switched off.
+
+        ``saturation=False`` replaces every iron material by its initial permeability
+        (``Material.linearized``); ``eddy_currents=False`` removes the eddy elements.
+        """
+        if saturation and eddy_currents:
+            return self
+
+        def convert(el: Element) -> Element | None:
+            if not eddy_currents and isinstance(el, EddyCurrent):
+                return None
+            if not saturation and isinstance(el, IronPath):
+                return replace(el, material=el.material.linearized())
+            return el
+
+        branches = []
+        for b in self.branches:
+            els = tuple(e for e in (convert(x) for x in b.elements) if e is not None)
+            branches.append(replace(b, elements=els))
+        return Network(tuple(branches), self.circuits, name=self.name)
+
+    def element(self, name: str) -> Element:
+        for b in self.branches:
+            for e in b.elements:
+                if e.name == name:
+                    return e
+        raise KeyError(f"no element named {name!r} in network {self.name!r}")
+
+    def branch(self, name: str) -> Branch:
+        for b in self.branches:
+            if b.name == name:
+                return b
+        raise KeyError(f"no branch named {name!r} in network {self.name!r}; "
+                       f"branches are: {', '.join(self.branch_names)}")
+
+
+def _unique(kind: str, names: Sequence[str] | Iterable[str]) -> None:
+    seen: set[str] = set()
+    for n in names:
+        if n in seen:
+            raise TopologyError(f"duplicate {kind} name {n!r}; {kind} names must be unique")
+        seen.add(n)

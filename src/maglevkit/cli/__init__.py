@@ -1,0 +1,11 @@
+"""Command-line interface ``maglevkit`` (typer).
+
+Sub-commands live in sibling modules and register themselves on :data:`app`.
+"""
+
+from __future__ import annotations
+
+from ._app import app, console, main
+from . import statics as _statics  # noqa: F401,E402  (registers commands)
+
+__all__ = ["app", "console", "main"]

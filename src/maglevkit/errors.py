@@ -1,0 +1,84 @@
+"""Exceptions raised by maglevkit.
+
+Every error says what is wrong and what is allowed.  All derive from
+:class:`MaglevkitError`; the input-validation ones also derive from
+:class:`ValueError` so that generic callers can catch them as such.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from typing import Any
+
+import numpy as np
+
+
+class MaglevkitError(Exception):
+    """Base class of all maglevkit errors."""
+
+
+class ParameterError(MaglevkitError, ValueError):
+    """A model parameter (geometry, turns, resistance, ...) is invalid."""
+
+
+class MaterialError(MaglevkitError, ValueError):
+    """An unknown material name or an invalid B-H description."""
+
+
+class TopologyError(MaglevkitError, ValueError):
+    """The equivalent magnetic circuit or its electric circuits are malformed."""
+
+
+class InputError(MaglevkitError, ValueError):
+    """A run-time input (gap, current, voltage, time grid) is invalid."""
+
+
+class OutOfRangeError(InputError):
+    """An input lies outside the range a characteristic map was built for."""
+
+
+class ParameterFileError(MaglevkitError, ValueError):
+    """A parameter or scenario file is malformed (syntax, unknown or missing keys)."""
+
+
+class SolverError(MaglevkitError, RuntimeError):
+    """A numerical solver failed.
+
+    Attributes
+    ----------
+    time : float or None
+        Simulation time [s] at which the failure happened (None for statics).
+    state : dict
+        The operating point or state at the failure (names to values).
+    reason : str
+        What the solver reported.
+    """
+
+    def __init__(
+        self,
+        message: str,
+        *,
+        time: float | None = None,
+        state: Mapping[str, Any] | None = None,
+        reason: str = "",
+    ) -> None:
+        self.time = time
+        self.state = dict(state or {})
+        self.reason = reason
+        parts = [message]
+        if time is not None:
+            parts.append(f"at t = {time:.9g} s")
+        if self.state:
+            parts.append("state: " + ", ".join(f"{k}={_fmt(v)}" for k, v in self.state.items()))
+        if reason:
+            parts.append(f"reason: {reason}")
+        super().__init__("; ".join(parts))
+
+
+def _fmt(value: Any) -> str:
+    if isinstance(value, (Sequence, np.ndarray)) and not isinstance(value, str):
+        arr = np.asarray(value, dtype=float).ravel()
+        return "[" + ", ".join(f"{v:.6g}" for v in arr) + "]"
+    if isinstance(value, float):
+        return f"{value:.6g}"
+    return str(value)

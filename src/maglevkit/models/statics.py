@@ -1,0 +1,413 @@
+"""Static solution of the equivalent magnetic circuit (paper Sec. III, eq. 5 with eta' = 0).
+
+Given gaps ``s`` and circuit currents ``I`` the loop law ``C (V_m(C^T x, s) - N I) = 0``
+is solved for the loop fluxes ``x`` by Newton's method (CasADi rootfinder with line
+search), starting from the solution of the same network with unsaturated iron; points
+that do not converge are retried by continuation in the current from zero.
+
+Derived quantities are exact (implicit function theorem, no finite differences)::
+
+    J      = dr/dx = C diag(dV_m/dphi) C^T
+    dx/dI  = J^-1 C N            dx/ds = -J^-1 dr/ds
+    psi    = N^T C^T x           dpsi/dI = N^T C^T dx/dI (differential inductance)
+    F_k    = dW_gap/ds_k |phi    (= -dW'/ds_k |I, co-energy force; attraction > 0)
+    dF/dI  = dF/dx dx/dI         (reciprocity: dF_k/dI_j = -dpsi_j/ds_k)
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from typing import Any
+
+import casadi as ca
+import numpy as np
+
+from ..circuit.assembly import assemble
+from ..circuit.network import Network
+from ..errors import InputError, SolverError
+from ..materials import MU0
+
+__all__ = [
+    "StaticSolution",
+    "solve_statics",
+    "magnetic_energy",
+    "coenergy",
+    "pole_force_eq6",
+    "as_network",
+    "gap_vector",
+    "current_vector",
+]
+
+# Convergence test on the scaled loop residual max|r| / (1 + sum|N I|): Newton reaches
+# ~1e-15 in double precision; 1e-9 leaves room for ill-conditioned deep saturation.
+_RESIDUAL_TOL = 1e-9
+
+
+def as_network(model: Any) -> Network:
+    """The :class:`Network` of a model (a Network, or anything with a ``network`` attribute)."""
+    if isinstance(model, Network):
+        return model
+    net = getattr(model, "network", None)
+    if isinstance(net, Network):
+        return net
+    raise TypeError(f"expected a Network or a magnet with a .network, got {type(model).__name__}")
+
+
+def _named_vector(kind: str, names: Sequence[str], value: Any, unit: str) -> np.ndarray:
+    """Turn a scalar, mapping or array (..., n) into a float array (..., n)."""
+    n = len(names)
+    if isinstance(value, Mapping):
+        unknown = sorted(set(value) - set(names))
+        missing = [k for k in names if k not in value]
+        if unknown:
+            raise InputError(f"unknown {kind} name(s) {unknown}; known: {list(names)}")
+        if missing:
+            raise InputError(f"{kind} value missing for {missing}; give all of {list(names)}")
+        arr = np.stack([np.asarray(value[k], dtype=float) for k in names], axis=-1)
+    else:
+        try:
+            arr = np.asarray(value, dtype=float)
+        except (TypeError, ValueError) as exc:
+            raise InputError(f"{kind}s must be numbers [{unit}], got {value!r}") from exc
+        if arr.ndim == 0:
+            arr = np.full((n,), float(arr))
+        elif arr.shape[-1] != n:
+            raise InputError(
+                f"{kind} array has shape {arr.shape}; its last axis must have length {n} "
+                f"(one value per {kind}: {list(names)}), or pass a scalar for all"
+            )
+    if not np.all(np.isfinite(arr)):
+        raise InputError(f"{kind}s must be finite numbers [{unit}], got {value!r}")
+    return arr
+
+
+def gap_vector(network: Network, gaps: Any) -> np.ndarray:
+    """Validated gaps [m] as an array (..., n_gaps); scalar means all gaps equal."""
+    arr = _named_vector("gap", network.gap_names, gaps, "m")
+    if np.any(arr <= 0.0):
+        bad = float(arr[arr <= 0.0].ravel()[0])
+        raise InputError(f"gap = {bad!r} m is not allowed; gaps must be > 0 m "
+                         "(the magnet would touch or penetrate the rail)")
+    return arr
+
+
+def current_vector(network: Network, currents: Any) -> np.ndarray:
+    """Validated circuit currents [A] as an array (..., n_circuits)."""
+    return _named_vector("circuit current", network.circuit_names, currents, "A")
+
+
+@dataclass(frozen=True)
+class StaticSolution:
+    """Static operating point(s) of a magnet.
+
+    All arrays have a leading batch shape ``shape`` (``()`` for a single point,
+    ``(n_gaps, n_currents)`` for ``grid=True``), then the named axis given in the
+    field's description.
+
+    Attributes
+    ----------
+    gaps_m : ndarray (..., n_gaps)
+        Gap inputs [m].
+    currents_A : ndarray (..., n_circuits)
+        Circuit currents [A].
+    loop_flux_Wb : ndarray (..., n_loops)
+        Loop fluxes [Wb] (the solver's unknowns).
+    branch_flux_Wb, branch_flux_density_T : ndarray (..., n_branches)
+        Branch fluxes [Wb] and flux densities [T] (NaN where a branch has no area).
+    pole_force_N : ndarray (..., n_gaps)
+        Force per gap input [N], attraction positive, from the network co-energy.
+    force_N : ndarray (...)
+        Total force [N].
+    flux_linkage_Wb : ndarray (..., n_circuits)
+        ``psi = N^T phi`` [Wb].
+    apparent_inductance_H : ndarray (..., n_circuits)
+        ``psi / I`` [H] (NaN where the circuit current is 0).
+    differential_inductance_H : ndarray (..., n_circuits, n_circuits)
+        ``dpsi_i / dI_j`` [H] (symmetric).
+    dpsi_dgap_Wb_per_m : ndarray (..., n_circuits, n_gaps)
+        ``dpsi_i / ds_k`` [Wb/m].
+    dforce_dcurrent_N_per_A : ndarray (..., n_gaps, n_circuits)
+        ``dF_k / dI_j`` [N/A]; reciprocity gives ``-dpsi_j/ds_k``.
+    dforce_dgap_N_per_m : ndarray (..., n_gaps, n_gaps)
+        ``dF_k / ds_l`` at constant currents [N/m].
+    """
+
+    gap_names: tuple[str, ...]
+    circuit_names: tuple[str, ...]
+    branch_names: tuple[str, ...]
+    gaps_m: np.ndarray
+    currents_A: np.ndarray
+    loop_flux_Wb: np.ndarray
+    branch_flux_Wb: np.ndarray
+    branch_flux_density_T: np.ndarray
+    pole_force_N: np.ndarray
+    force_N: np.ndarray
+    flux_linkage_Wb: np.ndarray
+    apparent_inductance_H: np.ndarray
+    differential_inductance_H: np.ndarray
+    dpsi_dgap_Wb_per_m: np.ndarray
+    dforce_dcurrent_N_per_A: np.ndarray
+    dforce_dgap_N_per_m: np.ndarray
+
+    @property
+    def shape(self) -> tuple[int, ...]:
+        return tuple(self.force_N.shape)
+
+    # Quantities along the "same current in every circuit, same gap at every pole" ray.
+    @property
+    def common_differential_inductance_H(self) -> np.ndarray:
+        """``dpsi_i/dI`` [H] when all circuits carry the same current (..., n_circuits)."""
+        return self.differential_inductance_H.sum(axis=-1)
+
+    @property
+    def common_dpsi_dgap_Wb_per_m(self) -> np.ndarray:
+        """``dpsi_i/ds`` [Wb/m] when all gaps move together (..., n_circuits)."""
+        return self.dpsi_dgap_Wb_per_m.sum(axis=-1)
+
+    def branch_flux(self, name: str) -> np.ndarray:
+        """Flux [Wb] of the named branch (batch shape)."""
+        return self.branch_flux_Wb[..., self.branch_names.index(name)]
+
+
+class _StaticSolver:
+    """Compiled CasADi functions for the statics of one network (cached on it)."""
+
+    def __init__(self, network: Network) -> None:
+        eq = assemble(network)
+        self.network = network
+        self.eq = eq
+        x, s, I = eq.x, eq.s, eq.I
+        nl = eq.n_loops
+        scale = 1.0 + ca.sum1(ca.fabs(ca.mtimes(ca.DM(eq.N), I)))
+        p = ca.vertcat(s, I)
+        resid_fun = ca.Function("r", [x, p], [eq.residual / scale])
+        self.rootfinder = ca.rootfinder(
+            "statics_newton", "newton", resid_fun,
+            {"abstol": 1e-13, "abstolStep": 1e-16, "max_iter": 80, "error_on_fail": False,
+             "line_search": True},
+        )
+        self.residual_fun = resid_fun
+
+        # Initial guess: the same network with unsaturated iron (linear in x).
+        lin = assemble(network.with_options(saturation=False, eddy_currents=False))
+        r_lin = ca.Function("rlin", [lin.x, lin.s, lin.I], [lin.residual])
+        jac_lin = ca.Function("jlin", [lin.x, lin.s, lin.I], [ca.jacobian(lin.residual, lin.x)])
+        xm, sm, Im = ca.MX.sym("x", nl), ca.MX.sym("s", eq.n_gaps), ca.MX.sym("I", eq.n_circuits)
+        zero = ca.MX.zeros(nl)
+        x_lin = -ca.solve(jac_lin(zero, sm, Im), r_lin(zero, sm, Im))
+        self.initial_guess = ca.Function("x_lin", [sm, Im], [x_lin])
+
+        # Exact derived quantities at a solution x (implicit function theorem).
+        J = ca.jacobian(eq.residual, x)
+        dr_dI = ca.jacobian(eq.residual, I)
+        dr_ds = ca.jacobian(eq.residual, s)
+        post_in = ca.Function("post_in", [x, s, I],
+                              [J, dr_dI, dr_ds, eq.phi, eq.psi, eq.force,
+                               ca.jacobian(eq.force, x), ca.jacobian(eq.force, s)])
+        Jm, dIm, dsm, phim, psim, fm, dfdx, dfds = post_in(xm, sm, Im)
+        dx_dI = -ca.solve(Jm, dIm)
+        dx_ds = -ca.solve(Jm, dsm)
+        NC = ca.DM(eq.N.T @ eq.C.T)
+        post = [phim, psim, fm, ca.mtimes(NC, dx_dI), ca.mtimes(NC, dx_ds),
+                ca.mtimes(dfdx, dx_dI), dfds + ca.mtimes(dfdx, dx_ds)]
+        self.post = ca.Function("statics_post", [xm, sm, Im], post)
+        pm = ca.vertcat(sm, Im)
+        xs = self.rootfinder(self.initial_guess(sm, Im), pm)
+        res = ca.mmax(ca.fabs(resid_fun(xs, pm)))
+        self.point = ca.Function("statics_point", [sm, Im], [xs, res, *self.post(xs, sm, Im)])
+        xg = ca.MX.sym("xg", nl)
+        xw = self.rootfinder(xg, pm)
+        self.point_from = ca.Function("statics_from", [xg, sm, Im],
+                                      [xw, ca.mmax(ca.fabs(resid_fun(xw, pm)))])
+        self._maps: dict[int, ca.Function] = {}
+
+    def batch(self, s: np.ndarray, I: np.ndarray) -> list[np.ndarray]:
+        """Solve m points: ``s`` (n_gaps, m), ``I`` (n_c, m)."""
+        m = s.shape[1]
+        f = self._maps.get(m)
+        if f is None:
+            f = self.point.map(m, "thread", 2) if m > 1 else self.point
+            if len(self._maps) > 16:
+                self._maps.clear()
+            self._maps[m] = f
+        out = [np.asarray(v) for v in f(s, I)]
+        res = out[1].ravel()
+        bad = np.nonzero(~(res <= _RESIDUAL_TOL))[0]
+        for j in bad:
+            xj = self._continuation(s[:, j], I[:, j])
+            outs = self.post(xj, s[:, j], I[:, j])
+            out[0][:, j] = np.asarray(xj).ravel()
+            out[1][..., j] = 0.0
+            for k, v in enumerate(outs):
+                arr = np.asarray(v)
+                _assign_column(out[2 + k], arr, j, m)
+        return out
+
+    def _continuation(self, s: np.ndarray, I: np.ndarray) -> np.ndarray:
+        """Newton continuation in the current from 0 to I; raises SolverError on failure."""
+        lam, step = 0.0, 0.1
+        x = np.zeros(self.eq.n_loops)
+        reason = "step size fell below 1e-6 of the target current"
+        while lam < 1.0:
+            target = min(1.0, lam + step)
+            xn, res = self.point_from(x, s, target * I)
+            if float(res) <= _RESIDUAL_TOL:
+                x, lam = np.asarray(xn).ravel(), target
+                step = min(step * 2.0, 0.5)
+            else:
+                step *= 0.5
+                if step < 1e-6:
+                    break
+        else:
+            return x
+        state = dict(zip((f"gap[{g}]" for g in self.network.gap_names), s, strict=True))
+        state.update(zip((f"I[{c}]" for c in self.network.circuit_names), I, strict=True))
+        raise SolverError("static network solution did not converge", state=state,
+                          reason=f"{reason} (reached {lam:.3g} of the current)")
+
+
+def _assign_column(dst: np.ndarray, src: np.ndarray, j: int, m: int) -> None:
+    # CasADi maps return horizontally concatenated blocks: (rows, m * cols).
+    cols = src.shape[1] if src.ndim == 2 else 1
+    dst[:, j * cols:(j + 1) * cols] = src.reshape(dst.shape[0], cols)
+
+
+def _solver(network: Network) -> _StaticSolver:
+    solver = network._cache.get("statics")
+    if solver is None:
+        solver = _StaticSolver(network)
+        network._cache["statics"] = solver
+    return solver  # type: ignore[no-any-return]
+
+
+def solve_statics(model: Any, *, gaps: Any, currents: Any, grid: bool = False) -> StaticSolution:
+    """Solve the magnet's statics at given gaps and circuit currents.
+
+    Parameters
+    ----------
+    model : Network or magnet
+        The equivalent magnetic circuit (or an object with a ``network``).
+    gaps : float, mapping or array_like
+        Gaps [m]: a scalar (all gap inputs equal), a mapping ``{gap name: value}``, or
+        an array whose last axis runs over the gap inputs.  With ``grid=True``: a 1-D
+        array of uniform gaps.
+    currents : float, mapping or array_like
+        Circuit currents [A], in the same forms (per circuit).  With ``grid=True``: a
+        1-D array of currents applied to every circuit.
+    grid : bool
+        Solve on the outer product ``gaps x currents`` (batch shape ``(n_s, n_I)``).
+
+    Returns
+    -------
+    StaticSolution
+
+    Raises
+    ------
+    InputError
+        Non-finite inputs, gaps <= 0, wrong shapes or names.
+    SolverError
+        If Newton's method and the continuation fallback both fail.
+    """
+    net = as_network(model)
+    ng, nc = len(net.gap_names), len(net.circuit_names)
+    if grid:
+        g1 = np.asarray(gaps, dtype=float)
+        c1 = np.asarray(currents, dtype=float)
+        if g1.ndim != 1 or c1.ndim != 1:
+            raise InputError("with grid=True, gaps and currents must be 1-D arrays "
+                             f"(got shapes {g1.shape} and {c1.shape})")
+        sv = gap_vector(net, np.repeat(g1[:, None], ng, axis=1))
+        iv = current_vector(net, np.repeat(c1[:, None], nc, axis=1))
+        sv = np.broadcast_to(sv[:, None, :], (g1.size, c1.size, ng))
+        iv = np.broadcast_to(iv[None, :, :], (g1.size, c1.size, nc))
+    else:
+        sv = gap_vector(net, gaps)
+        iv = current_vector(net, currents)
+        shape = np.broadcast_shapes(sv.shape[:-1], iv.shape[:-1])
+        sv = np.broadcast_to(sv, (*shape, ng))
+        iv = np.broadcast_to(iv, (*shape, nc))
+    batch = sv.shape[:-1]
+    m = int(np.prod(batch)) if batch else 1
+    s2 = np.ascontiguousarray(sv.reshape(m, ng).T)
+    i2 = np.ascontiguousarray(iv.reshape(m, nc).T)
+    if m == 0:
+        raise InputError("empty set of operating points")
+    solver = _solver(net)
+    x, _res, phi, psi, f, dpsi_di, dpsi_ds, df_di, df_ds = solver.batch(s2, i2)
+    nb = len(net.branches)
+
+    def per_point(a: np.ndarray, rows: int, cols: int | None = None) -> np.ndarray:
+        if cols is None:
+            return a.reshape(rows, m).T.reshape(*batch, rows)
+        return a.reshape(rows, m, cols).transpose(1, 0, 2).reshape(*batch, rows, cols)
+
+    phi_b = per_point(phi, nb)
+    psi_c = per_point(psi, nc)
+    pole = per_point(f, ng)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        app = np.where(iv != 0.0, psi_c / np.where(iv != 0.0, iv, 1.0), np.nan)
+    return StaticSolution(
+        gap_names=net.gap_names,
+        circuit_names=net.circuit_names,
+        branch_names=net.branch_names,
+        gaps_m=np.array(sv),
+        currents_A=np.array(iv),
+        loop_flux_Wb=per_point(x, solver.eq.n_loops),
+        branch_flux_Wb=phi_b,
+        branch_flux_density_T=phi_b / net.branch_areas,
+        pole_force_N=pole,
+        force_N=pole.sum(axis=-1),
+        flux_linkage_Wb=psi_c,
+        apparent_inductance_H=app,
+        differential_inductance_H=per_point(dpsi_di, nc, nc),
+        dpsi_dgap_Wb_per_m=per_point(dpsi_ds, nc, ng),
+        dforce_dcurrent_N_per_A=per_point(df_di, ng, nc),
+        dforce_dgap_N_per_m=per_point(df_ds, ng, ng),
+    )
+
+
+def magnetic_energy(model: Any, branch_flux: Any, gaps: Any) -> float:
+    """Stored magnetic energy ``W = sum_elements integral_0^phi V_m dphi`` [J] at one point.
+
+    Iron energies are integrated numerically from the material law (relative accuracy
+    ~1e-13); air and leakage parts are exact.
+    """
+    net = as_network(model)
+    phi = np.asarray(branch_flux, dtype=float).ravel()
+    if phi.size != len(net.branches):
+        raise InputError(f"branch_flux must have {len(net.branches)} entries, got {phi.size}")
+    s = gap_vector(net, gaps)
+    gidx = {g: i for i, g in enumerate(net.gap_names)}
+    total = 0.0
+    for k, br in enumerate(net.branches):
+        for el in br.elements:
+            gap = None if el.gap is None else float(s[gidx[el.gap]])
+            total += float(el.energy(phi[k], gap))
+    return total
+
+
+def coenergy(model: Any, *, gaps: Any, currents: Any) -> float:
+    """Magnetic co-energy ``W' = I^T psi - W`` [J] at one operating point."""
+    sol = solve_statics(model, gaps=gaps, currents=currents)
+    if sol.shape != ():
+        raise InputError("coenergy takes a single operating point")
+    w = magnetic_energy(model, sol.branch_flux_Wb, sol.gaps_m)
+    return float(sol.currents_A @ sol.flux_linkage_Wb) - w
+
+
+def pole_force_eq6(flux: Any, area: float, mu_r: float = math.inf) -> Any:
+    """The paper's pole force, eq. 6: ``F = (mu_r - 1) / (2 mu_r mu0 A) phi_F^2`` [N].
+
+    Parameters
+    ----------
+    flux : float or ndarray
+        Flux through the pole face contributing to the force, ``phi_F`` [Wb].
+    area : float
+        Pole face area ``A`` [m^2].
+    mu_r : float
+        Relative permeability of the iron (``inf``: ``phi^2 / (2 mu0 A)``).
+    """
+    factor = 1.0 if math.isinf(mu_r) else (mu_r - 1.0) / mu_r
+    return factor * np.asarray(flux, dtype=float) ** 2 / (2.0 * MU0 * area)

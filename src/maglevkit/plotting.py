@@ -1,0 +1,52 @@
+"""Figures (matplotlib, Agg backend): force-current-gap curves, inductances, time responses."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+
+__all__ = ["plot_force_current", "save"]
+
+
+def save(fig: Any, path: str | Path) -> Path:
+    """Save a figure as PNG (creating the folder) and close it."""
+    p = Path(path)
+    p.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(p, dpi=130, bbox_inches="tight")
+    plt.close(fig)
+    return p
+
+
+def plot_force_current(sol: Any, path: str | Path, *, title: str = "") -> Path:
+    """Total force over current, one curve per gap, from a ``grid=True`` StaticSolution."""
+    gaps = sol.gaps_m[:, 0, 0]
+    currents = sol.currents_A[0, :, 0]
+    fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(11, 4.2))
+    cmap = plt.get_cmap("viridis")
+    for i, s in enumerate(gaps):
+        color = cmap(i / max(1, len(gaps) - 1))
+        ax1.plot(currents, sol.force_N[i] / 1e3, color=color, label=f"s = {s * 1e3:.1f} mm")
+        ax2.plot(currents, sol.common_differential_inductance_H[i].sum(axis=-1) * 1e3,
+                 color=color)
+    ax1.set_xlabel("current I [A]")
+    ax1.set_ylabel("total force F [kN]")
+    ax1.set_title("force-current-gap characteristics")
+    ax1.grid(True, alpha=0.3)
+    ax1.legend(fontsize=8, ncol=2)
+    ax2.set_xlabel("current I [A]")
+    ax2.set_ylabel("differential inductance dpsi/dI [mH]")
+    ax2.set_title("differential inductance (sum over circuits)")
+    ax2.grid(True, alpha=0.3)
+    if title:
+        fig.suptitle(title)
+    return save(fig, path)
+
+
+def currents_grid_note(values: np.ndarray) -> str:
+    return f"{values.min():g} .. {values.max():g} A ({values.size} points)"
