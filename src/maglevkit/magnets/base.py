@@ -248,6 +248,8 @@ def build_magnet(parameters: Mapping[str, Any], *, options: ModelOptions | None 
         prov[str(key)] = str(tag)
     try:
         name, network = builder(parameters, materials, options)
+        # Saturation is switched generically: iron laws replaced by their initial mu_r.
+        network = network.with_options(saturation=options.saturation)
     except (ParameterError, MaterialError) as exc:
         raise ParameterFileError(f"{source or 'parameters'}: {exc}") from None
     return Magnet(name=name, kind=kind, network=network, parameters=_plain(parameters),

@@ -235,7 +235,7 @@ class _StaticSolver:
         out = [np.asarray(v) for v in f(s, I)]
         res = out[1].ravel()
         bad = np.nonzero(~(res <= _RESIDUAL_TOL))[0]
-        for j in bad:
+        for j in (int(v) for v in bad):
             xj = self._continuation(s[:, j], I[:, j])
             outs = self.post(xj, s[:, j], I[:, j])
             out[0][:, j] = np.asarray(xj).ravel()

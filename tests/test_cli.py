@@ -1,0 +1,53 @@
+"""The command-line interface: help at every level, statics CSV and plot."""
+
+from __future__ import annotations
+
+import csv
+from pathlib import Path
+
+import numpy as np
+import pytest
+from typer.testing import CliRunner
+
+import maglevkit as mk
+from maglevkit.cli import app
+
+runner = CliRunner()
+
+
+def _commands() -> list[str]:
+    import typer.main
+
+    group = typer.main.get_command(app)
+    return sorted(group.commands)  # type: ignore[attr-defined]
+
+
+def test_help_at_top_level() -> None:
+    res = runner.invoke(app, ["--help"])
+    assert res.exit_code == 0 and "statics" in res.output
+
+
+@pytest.mark.parametrize("command", _commands())
+def test_help_of_every_command(command: str) -> None:
+    res = runner.invoke(app, [command, "--help"])
+    assert res.exit_code == 0, res.output
+    assert "Usage" in res.output
+
+
+def test_statics_csv_and_plot(tmp_path: Path) -> None:
+    out_csv, out_png = tmp_path / "s.csv", tmp_path / "s.png"
+    res = runner.invoke(app, ["statics", "u-magnet", "--gaps", "0.006,0.012", "--currents",
+                              "0:40:5", "--csv", str(out_csv), "--plot", str(out_png)])
+    assert res.exit_code == 0, res.output
+    with out_csv.open() as fh:
+        rows = list(csv.reader(fh))
+    assert rows[0] == ["gap_m", "current_A", "force_N", "flux_linkage_Wb",
+                       "differential_inductance_H", "dpsi_dgap_Wb_per_m"]
+    assert len(rows) == 1 + 2 * 5
+    data = np.array(rows[1:], dtype=float)
+    # the CSV carries the same numbers as the library call
+    sol = mk.solve_statics(mk.load_magnet("u-magnet", eddy_currents=False),
+                           gaps=[0.006, 0.012], currents=np.linspace(0, 40, 5), grid=True)
+    np.testing.assert_allclose(data[:, 2], sol.force_N.ravel(), rtol=1e-8)
+    np.testing.assert_allclose(data[:, 5], sol.dpsi_dgap_Wb_per_m.sum(-1).ravel(), rtol=1e-8)
+    assert out_png.stat().st_size > 10_000 and out_png.read_bytes()[:4] == b"\x89PNG"
