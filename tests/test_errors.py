@@ -172,3 +172,13 @@ def test_cli_rejects_malformed_ranges() -> None:
     assert "start:stop:count" in res.output
     res = runner.invoke(app, ["statics", "u-magnet", "--gaps", "0:0.02:3"])
     assert res.exit_code == 2 and "gaps must be > 0" in res.output
+
+
+def test_statics_failure_is_reported_not_returned(u_magnet: mk.Magnet,
+                                                  monkeypatch: pytest.MonkeyPatch) -> None:
+    """A point whose residual never meets the tolerance raises with the operating point."""
+    from maglevkit.models import statics
+
+    monkeypatch.setattr(statics, "_RESIDUAL_TOL", -1.0)  # no residual can satisfy this
+    with pytest.raises(mk.SolverError, match=r"did not converge.*gap\[left\]=0.007.*I\[coil\]=12"):
+        mk.solve_statics(u_magnet, gaps=0.007, currents=12.0)
