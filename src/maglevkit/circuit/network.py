@@ -170,6 +170,15 @@ class Network:
                 raise TopologyError(f"coil branch {b!r} lies on no closed loop (a dangling branch); "
                                     "its coil could not drive any flux")
 
+    def __getstate__(self) -> dict:
+        # Compiled CasADi functions stay behind: a worker process rebuilds them lazily.
+        state = dict(self.__dict__)
+        state["_cache"] = {}
+        return state
+
+    def __setstate__(self, state: dict) -> None:
+        self.__dict__.update(state)
+
     # ------------------------------------------------------------------ topology
     @property
     def branch_names(self) -> tuple[str, ...]:

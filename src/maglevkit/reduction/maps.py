@@ -1,0 +1,327 @@
+"""Characteristic maps of the simplified current-based model (paper Sec. IV-B).
+
+For every electric circuit ``j`` and every point of a regular ``gap x current`` grid the
+maps hold (all gaps equal to ``s``, every circuit carrying ``I`` -- symmetric operation):
+
+* ``force_N``: ``F_j(s, I)``, the sum of the pole forces of the circuit's poles;
+* ``inductance_H``: ``L~_j(s, I) = dL/dI I + L = dpsi_j/dI_j`` (other currents fixed);
+* ``dL_ds_H_per_m``: ``dL_j/ds(s, I) = (sum_{k in j} dpsi_j/ds_k) / I`` (the circuit's own
+  poles move together; at ``I = 0`` the limit ``d L~_j(s, 0)/ds``);
+* ``flux_linkage_Wb`` and the apparent inductance ``L = psi/I``;
+* ``resistance_ohm`` ``R_el`` and ``eddy_resistance_ohm`` ``R_ec`` per circuit.
+
+A pole ``k`` belongs to the circuit whose flux linkage depends most on its gap
+(``argmax_j |dpsi_j/ds_k|`` at the grid centre), which recovers the half magnets of a
+levitation magnet without any extra parameter.
+
+Method ``"statics"`` computes ``L~`` and ``dL/ds`` from exact sensitivities of the static
+network (implicit function theorem).  The paper's time-integration procedure is the
+independent second method.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+from collections.abc import Callable, Sequence
+from concurrent.futures import Executor, Future, ProcessPoolExecutor
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import xarray as xr
+
+from ..circuit.network import Network
+from ..errors import InputError, ParameterFileError
+from ..models.statics import as_network, solve_statics
+
+__all__ = ["CharacteristicMaps", "build_maps", "circuit_pole_groups", "load_maps"]
+
+MAPS_FORMAT = "maglevkit-maps/1"
+
+
+def _version() -> str:
+    from .. import __version__
+
+    return __version__
+
+
+def _grid(values: Any, what: str, unit: str, *, positive: bool) -> np.ndarray:
+    try:
+        arr = np.asarray(values, dtype=float)
+    except (TypeError, ValueError) as exc:
+        raise InputError(f"{what} grid must be numbers [{unit}]") from exc
+    if arr.ndim != 1 or arr.size < 4:
+        raise InputError(f"{what} grid must be 1-D with at least 4 points (cubic interpolation), "
+                         f"got shape {arr.shape}")
+    if not np.all(np.isfinite(arr)):
+        raise InputError(f"{what} grid must be finite [{unit}]")
+    if np.any(np.diff(arr) <= 0.0):
+        raise InputError(f"{what} grid must be strictly increasing")
+    step = np.diff(arr)
+    if np.max(np.abs(step - step.mean())) > 1e-9 * max(1.0, float(np.max(np.abs(arr)))):
+        raise InputError(f"{what} grid must be equidistant (a regular grid, paper Sec. IV-B)")
+    if positive and arr[0] <= 0.0:
+        raise InputError(f"{what} grid must be > 0 {unit}, got {arr[0]!r}")
+    if not positive and arr[0] < 0.0:
+        raise InputError(f"{what} grid must be >= 0 {unit} (forces are even in the current)")
+    return arr
+
+
+def circuit_pole_groups(model: Any, *, gap: float, current: float) -> dict[str, tuple[str, ...]]:
+    """Assign each gap input (pole) to the circuit whose flux linkage depends most on it."""
+    net = as_network(model)
+    if len(net.circuits) == 1:
+        return {net.circuit_names[0]: net.gap_names}
+    sol = solve_statics(net, gaps=gap, currents=current)
+    owner = np.argmax(np.abs(sol.dpsi_dgap_Wb_per_m), axis=0)   # (n_gaps,)
+    groups = {c: tuple(g for g, o in zip(net.gap_names, owner, strict=True) if o == j)
+              for j, c in enumerate(net.circuit_names)}
+    empty = [c for c, g in groups.items() if not g]
+    if empty:
+        raise InputError(f"circuit(s) {empty} drive no pole of their own; the current-based model "
+                         "needs one substitute gap per circuit")
+    return groups
+
+
+def _statics_row(net: Network, s: float, currents: np.ndarray,
+                 groups: dict[str, tuple[str, ...]]) -> dict[str, np.ndarray]:
+    """Maps for one gap value over all currents (one executor task)."""
+    gi = {g: k for k, g in enumerate(net.gap_names)}
+    sol = solve_statics(net, gaps=np.full((currents.size, len(gi)), s),
+                        currents=np.repeat(currents[:, None], len(net.circuits), axis=1))
+    nc = len(net.circuits)
+    force = np.empty((nc, currents.size))
+    dpsi_ds = np.empty((nc, currents.size))
+    for j, c in enumerate(net.circuit_names):
+        idx = [gi[g] for g in groups[c]]
+        force[j] = sol.pole_force_N[:, idx].sum(axis=-1)
+        dpsi_ds[j] = sol.dpsi_dgap_Wb_per_m[:, j, idx].sum(axis=-1)
+    psi = sol.flux_linkage_Wb.T
+    ltilde = np.diagonal(sol.differential_inductance_H, axis1=-2, axis2=-1).T
+    with np.errstate(divide="ignore", invalid="ignore"):
+        dlds = np.where(currents > 0.0, dpsi_ds / np.where(currents > 0.0, currents, 1.0), np.nan)
+        lapp = np.where(currents > 0.0, psi / np.where(currents > 0.0, currents, 1.0), np.nan)
+    zero = np.nonzero(currents == 0.0)[0]
+    if zero.size:
+        # I -> 0: psi = L0(s) I + O(I^3) (odd B-H laws), so L -> L0 = L~(s, 0) and
+        # dL/ds -> dL0/ds: central difference in s of the small-signal inductance
+        # (h = 1e-6 s: truncation ~1e-12, rounding ~1e-10 relative).
+        h = 1e-6 * s
+        side = solve_statics(net, gaps=np.array([[s + h] * len(gi), [s - h] * len(gi)]),
+                             currents=np.zeros((2, nc)))
+        l0 = np.diagonal(side.differential_inductance_H, axis1=-2, axis2=-1)
+        for j, c in enumerate(net.circuit_names):
+            # moving only the circuit's own poles: sum of partial derivatives
+            idx = [gi[g] for g in groups[c]]
+            if len(idx) == len(gi):
+                d = (l0[0, j] - l0[1, j]) / (2 * h)
+            else:
+                sp = np.full(len(gi), s)
+                sm = sp.copy()
+                sp[idx] += h
+                sm[idx] -= h
+                two = solve_statics(net, gaps=np.stack([sp, sm]), currents=np.zeros((2, nc)))
+                lj = two.differential_inductance_H[:, j, j]
+                d = (lj[0] - lj[1]) / (2 * h)
+            dlds[j, zero] = d
+            lapp[j, zero] = ltilde[j, zero]
+    return {"force_N": force, "inductance_H": ltilde, "dL_ds_H_per_m": dlds,
+            "flux_linkage_Wb": psi, "apparent_inductance_H": lapp}
+
+
+@dataclass(frozen=True)
+class CharacteristicMaps:
+    """Characteristic maps of a magnet (an :class:`xarray.Dataset` with units).
+
+    Use :func:`build_maps` to compute and :func:`load_maps` / :meth:`to_netcdf` to store.
+    """
+
+    dataset: xr.Dataset
+
+    @property
+    def circuits(self) -> tuple[str, ...]:
+        return tuple(str(c) for c in self.dataset["circuit"].values)
+
+    @property
+    def gaps_m(self) -> np.ndarray:
+        return np.asarray(self.dataset["gap"].values, dtype=float)
+
+    @property
+    def currents_A(self) -> np.ndarray:
+        return np.asarray(self.dataset["current"].values, dtype=float)
+
+    @property
+    def magnet_hash(self) -> str:
+        return str(self.dataset.attrs["magnet_hash"])
+
+    @property
+    def pole_groups(self) -> dict[str, tuple[str, ...]]:
+        """Circuit name -> the gap inputs (poles) it drives."""
+        raw = json.loads(self.dataset.attrs["pole_groups"])
+        return {k: tuple(v) for k, v in raw.items()}
+
+    def variable(self, name: str, circuit: str) -> np.ndarray:
+        """A map (gap x current) of one circuit as a NumPy array."""
+        return np.asarray(self.dataset[name].sel(circuit=circuit).values, dtype=float)
+
+    def to_netcdf(self, path: str | Path) -> Path:
+        """Write the maps to a netCDF file (lossless: float64 throughout)."""
+        p = Path(path)
+        p.parent.mkdir(parents=True, exist_ok=True)
+        self.dataset.to_netcdf(p, engine="netcdf4")
+        return p
+
+    def check_magnet(self, magnet: Any) -> None:
+        """Raise if these maps were not built from ``magnet`` (same parameters and options)."""
+        h = getattr(magnet, "parameter_hash", None)
+        if h is None:
+            h = network_hash(as_network(magnet))
+        if h != self.magnet_hash:
+            raise ParameterFileError(
+                f"these maps belong to magnet {self.dataset.attrs.get('magnet_name')!r} "
+                f"(hash {self.magnet_hash[:12]}...), not to {getattr(magnet, 'name', 'this model')!r} "
+                f"(hash {h[:12]}...); rebuild them with `maglevkit maps build`"
+            )
+
+
+def network_hash(net: Network) -> str:
+    """A hash of a hand-built network (its repr covers every element and parameter)."""
+    import hashlib
+
+    return hashlib.sha256(repr((net.branches, net.circuits)).encode()).hexdigest()
+
+
+def load_maps(path: str | Path, *, magnet: Any = None) -> CharacteristicMaps:
+    """Read maps from netCDF; with ``magnet``, check that they belong to it."""
+    p = Path(path)
+    if not p.is_file():
+        raise ParameterFileError(f"maps file {str(p)!r} does not exist")
+    try:
+        with xr.open_dataset(p, engine="netcdf4") as ds:
+            ds.load()
+            data = ds
+    except (OSError, ValueError) as exc:
+        raise ParameterFileError(f"{p}: not a readable netCDF file: {exc}") from None
+    if data.attrs.get("format") != MAPS_FORMAT:
+        raise ParameterFileError(f"{p}: not a maglevkit maps file (format attribute "
+                                 f"{data.attrs.get('format')!r}, expected {MAPS_FORMAT!r})")
+    maps = CharacteristicMaps(data)
+    if magnet is not None:
+        maps.check_magnet(magnet)
+    return maps
+
+
+def _run_tasks(fn: Callable[..., dict[str, np.ndarray]], args: Sequence[tuple],
+               executor: Executor | None, progress: bool, label: str) -> list[dict[str, np.ndarray]]:
+    results: list[dict[str, np.ndarray] | None] = [None] * len(args)
+    if executor is None:
+        iterator: Any = enumerate(args)
+        if progress:
+            from rich.progress import track
+
+            iterator = track(list(iterator), description=label, transient=True)
+        for i, a in iterator:
+            results[i] = fn(*a)
+        return [r for r in results if r is not None]
+    futures: dict[Future, int] = {executor.submit(fn, *a): i for i, a in enumerate(args)}
+    from concurrent.futures import as_completed
+
+    done_iter: Any = as_completed(futures)
+    if progress:
+        from rich.progress import track
+
+        done_iter = track(done_iter, total=len(futures), description=label, transient=True)
+    for fut in done_iter:
+        results[futures[fut]] = fut.result()
+    return [r for r in results if r is not None]
+
+
+def _as_executor(executor: Any) -> tuple[Executor | None, bool]:
+    """Normalise the executor argument; returns (executor, whether we own it)."""
+    if executor is None or executor == "serial":
+        return None, False
+    if executor == "process":
+        return ProcessPoolExecutor(max_workers=os.cpu_count() or 1), True
+    if hasattr(executor, "get_executor") and not isinstance(executor, Executor):
+        return executor.get_executor(), False   # a dask.distributed Client
+    if isinstance(executor, Executor):
+        return executor, False
+    raise InputError("executor must be None/'serial', 'process', a concurrent.futures.Executor "
+                     f"or a dask.distributed Client, got {executor!r}")
+
+
+def build_maps(model: Any, *, gaps: Any, currents: Any, executor: Any = None,
+               progress: bool = False) -> CharacteristicMaps:
+    """Compute the characteristic maps of a magnet on a regular gap x current grid.
+
+    Parameters
+    ----------
+    model : Magnet or Network
+        The detailed model.
+    gaps : array_like
+        Equidistant gap grid [m] (> 0, at least 4 points).
+    currents : array_like
+        Equidistant current grid [A] (>= 0, at least 4 points).
+    executor : None, "serial", "process", Executor or dask Client
+        Where the grid rows run.  ``None``/"serial": in this process (statics maps of a
+        50 x 50 grid take well under a second, less than starting a process pool);
+        ``"process"``: a local process pool; any ``concurrent.futures.Executor``; or a
+        ``dask.distributed.Client`` (its ``get_executor()``).  Results do not depend on it.
+    progress : bool
+        Show a progress bar.
+
+    Returns
+    -------
+    CharacteristicMaps
+    """
+    net = as_network(model)
+    g = _grid(gaps, "gap", "m", positive=True)
+    c = _grid(currents, "current", "A", positive=False)
+    groups = circuit_pole_groups(net, gap=float(g[g.size // 2]),
+                                 current=float(max(c[c.size // 2], c[-1] / 2)))
+    ex, owned = _as_executor(executor)
+    try:
+        rows = _run_tasks(_statics_row, [(net, float(s), c, groups) for s in g], ex, progress,
+                          "statics maps")
+    finally:
+        if owned and ex is not None:
+            ex.shutdown()
+    names = list(rows[0])
+    data = {k: np.stack([r[k] for r in rows], axis=1) for k in names}  # (circuit, gap, current)
+    units = {"force_N": "N", "inductance_H": "H", "dL_ds_H_per_m": "H/m",
+             "flux_linkage_Wb": "Wb", "apparent_inductance_H": "H"}
+    long = {"force_N": "force of the circuit's poles F(s, I)",
+            "inductance_H": "differential inductance L~ = dL/dI I + L",
+            "dL_ds_H_per_m": "gap derivative of the inductance dL/ds",
+            "flux_linkage_Wb": "flux linkage psi",
+            "apparent_inductance_H": "inductance L = psi / I"}
+    dims = ("circuit", "gap", "current")
+    ds = xr.Dataset(
+        {k: (dims, v, {"units": units[k], "long_name": long[k]}) for k, v in data.items()},
+        coords={"circuit": list(net.circuit_names),
+                "gap": ("gap", g, {"units": "m", "long_name": "substitute air gap s"}),
+                "current": ("current", c, {"units": "A", "long_name": "circuit current I_L"})},
+    )
+    ds["resistance_ohm"] = ("circuit", net.resistances, {"units": "ohm",
+                                                         "long_name": "ohmic resistance R_el"})
+    r_ec = np.full(len(net.circuits), math.inf)
+    ds["eddy_resistance_ohm"] = ("circuit", r_ec, {"units": "ohm",
+                                                   "long_name": "eddy-current resistance R_ec"})
+    magnet_name = getattr(model, "name", net.name)
+    params = getattr(model, "parameters", None)
+    ds.attrs.update({
+        "format": MAPS_FORMAT,
+        "magnet_name": str(magnet_name),
+        "magnet_hash": getattr(model, "parameter_hash", None) or network_hash(net),
+        "magnet_parameters": json.dumps(params, sort_keys=True) if params is not None else "",
+        "pole_groups": json.dumps(groups),
+        "gap_names": ",".join(net.gap_names),
+        "method": "statics: exact sensitivities of the static network (implicit function theorem)",
+        "maglevkit_version": _version(),
+        "conventions": "all gaps equal to s and every circuit at I (symmetric operation); "
+                       "force is attraction-positive",
+    })
+    return CharacteristicMaps(ds)

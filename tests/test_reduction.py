@@ -1,0 +1,162 @@
+"""Characteristic maps (statics method) and the current-based model (paper eq. 8)."""
+
+from __future__ import annotations
+
+from concurrent.futures import ThreadPoolExecutor
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import maglevkit as mk
+from maglevkit.materials import MU0
+from maglevkit.models.current import CurrentModel
+from maglevkit.reduction import build_maps, load_maps
+
+from .conftest import build_u
+
+N_TURNS, AREA, R_EL = 600.0, 0.003, 2.0
+GAPS = np.linspace(0.004, 0.020, 17)
+CURRENTS = np.linspace(0.0, 80.0, 33)
+
+
+@pytest.fixture(scope="module")
+def ideal_maps() -> mk.reduction.CharacteristicMaps:  # type: ignore[name-defined]
+    return build_maps(build_u(material="ideal", fringing=False, leakage=False), gaps=GAPS,
+                      currents=CURRENTS)
+
+
+@pytest.fixture(scope="module")
+def u_maps(u_magnet: mk.Magnet):  # type: ignore[no-untyped-def]
+    return build_maps(u_magnet, gaps=GAPS, currents=CURRENTS)
+
+
+def test_maps_of_the_ideal_magnet_are_the_closed_forms(ideal_maps) -> None:  # type: ignore[no-untyped-def]
+    s, i = np.meshgrid(GAPS, CURRENTS, indexing="ij")
+    l_exact = MU0 * N_TURNS**2 * AREA / (2 * s)
+    # exact linear network: agreement to rounding
+    np.testing.assert_allclose(ideal_maps.variable("inductance_H", "coil"), l_exact, rtol=1e-10)
+    np.testing.assert_allclose(ideal_maps.variable("force_N", "coil"),
+                               MU0 * (N_TURNS * i) ** 2 * AREA / (4 * s * s), rtol=1e-10,
+                               atol=1e-9)
+    # dL/ds = -L/s, including the I -> 0 limit (central difference, ~1e-8 relative)
+    np.testing.assert_allclose(ideal_maps.variable("dL_ds_H_per_m", "coil"), -l_exact / s,
+                               rtol=1e-6)
+
+
+def test_maps_satisfy_eq9_reciprocity(u_maps) -> None:  # type: ignore[no-untyped-def]
+    """Eq. 9 / co-energy: dF/dI = -dL/ds I. dF/dI by a 4th-order central difference along
+    the current grid (step 2.5 A); its truncation error is the bound: 2 % of max |dF/dI|."""
+    f = u_maps.variable("force_N", "coil")
+    dlds = u_maps.variable("dL_ds_H_per_m", "coil")
+    h = CURRENTS[1] - CURRENTS[0]
+    df = (-f[:, 4:] + 8 * f[:, 3:-1] - 8 * f[:, 1:-3] + f[:, :-4]) / (12 * h)
+    rhs = -dlds[:, 2:-2] * CURRENTS[2:-2]
+    assert np.max(np.abs(df - rhs)) < 0.02 * np.max(np.abs(rhs))
+
+
+def test_maps_round_trip_netcdf_bit_exactly(u_maps, u_magnet: mk.Magnet, tmp_path: Path) -> None:  # type: ignore[no-untyped-def]
+    p = u_maps.to_netcdf(tmp_path / "maps.nc")
+    back = load_maps(p, magnet=u_magnet)
+    for name in u_maps.dataset.data_vars:
+        a = np.asarray(u_maps.dataset[name].values)
+        b = np.asarray(back.dataset[name].values)
+        assert a.dtype == b.dtype and np.array_equal(a, b, equal_nan=True), name
+    assert back.dataset.attrs == u_maps.dataset.attrs
+    assert back.dataset["force_N"].attrs["units"] == "N"
+
+
+def test_maps_of_another_magnet_are_refused(u_maps, tmp_path: Path) -> None:  # type: ignore[no-untyped-def]
+    p = u_maps.to_netcdf(tmp_path / "maps.nc")
+    other = build_u(magnet={"turns": 601})
+    with pytest.raises(mk.ParameterFileError, match="belong to magnet"):
+        load_maps(p, magnet=other)
+    with pytest.raises(mk.ParameterFileError, match="belong to magnet"):
+        load_maps(p, magnet=mk.load_magnet("u-magnet", saturation=False, eddy_currents=False))
+    (tmp_path / "junk.nc").write_bytes(b"not netcdf")
+    with pytest.raises(mk.ParameterFileError, match="netCDF"):
+        load_maps(tmp_path / "junk.nc")
+
+
+def test_executors_give_identical_maps(u_magnet: mk.Magnet, u_maps) -> None:  # type: ignore[no-untyped-def]
+    with ThreadPoolExecutor(2) as ex:
+        threaded = build_maps(u_magnet, gaps=GAPS, currents=CURRENTS, executor=ex)
+    for name in u_maps.dataset.data_vars:
+        assert np.array_equal(u_maps.dataset[name].values, threaded.dataset[name].values,
+                              equal_nan=True)
+
+
+def test_process_pool_gives_identical_maps(u_magnet: mk.Magnet, u_maps) -> None:  # type: ignore[no-untyped-def]
+    pooled = build_maps(u_magnet, gaps=GAPS, currents=CURRENTS, executor="process")
+    for name in u_maps.dataset.data_vars:
+        assert np.array_equal(u_maps.dataset[name].values, pooled.dataset[name].values,
+                              equal_nan=True)
+
+
+@pytest.mark.parametrize(
+    ("gaps", "currents", "msg"),
+    [
+        (np.linspace(0.0, 0.02, 5), CURRENTS, "> 0 m"),
+        (np.array([0.004, 0.006, 0.01, 0.02]), CURRENTS, "equidistant"),
+        (GAPS[:3], CURRENTS, "at least 4 points"),
+        (GAPS[::-1], CURRENTS, "strictly increasing"),
+        (GAPS, np.linspace(-10, 10, 5), ">= 0 A"),
+        (GAPS, [0, 1, np.nan, 3], "finite"),
+    ],
+)
+def test_bad_grids_raise(u_magnet: mk.Magnet, gaps, currents, msg: str) -> None:  # type: ignore[no-untyped-def]
+    with pytest.raises(mk.InputError, match=msg):
+        build_maps(u_magnet, gaps=gaps, currents=currents)
+
+
+def test_current_model_step_response_is_the_rl_law(ideal_maps) -> None:  # type: ignore[no-untyped-def]
+    """Ideal linear magnet at fixed gap: I = U/R (1 - exp(-t R/L)), L = mu0 n^2 A/(2 s)."""
+    model = CurrentModel(ideal_maps)
+    t = np.linspace(0.0, 0.5, 501)
+    s0, u = 0.01, 20.0
+    res = model.simulate_sampled(t, gaps=np.full((t.size, 2), s0), voltages=np.full((t.size, 1), u),
+                                 initial_currents=0.0)
+    l_exact = MU0 * N_TURNS**2 * AREA / (2 * s0)
+    exact = u / R_EL * (1 - np.exp(-t * R_EL / l_exact))
+    # CVODES at rtol 1e-8 and the B-spline through exact grid values (s0 is a grid node):
+    # error < 1e-5 A on 10 A
+    np.testing.assert_allclose(res.currents_A[:, 0], exact, atol=1e-5)
+
+
+def test_current_model_virtual_control_law_isolates_dl_ds(ideal_maps) -> None:  # type: ignore[no-untyped-def]
+    """U = R_el I cancels the resistive terms of eq. 8: psi = L(s) I stays constant, so for
+    L ~ 1/s the current follows I0 s(t)/s0 on a gap ramp."""
+    model = CurrentModel(ideal_maps)
+    t = np.linspace(0.0, 0.1, 1001)
+    s0, sdot, i0 = 0.006, 0.05, 10.0
+    gaps = (s0 + sdot * t)[:, None] * np.ones((1, 2))
+    state = model.initial_state(currents=i0)
+    currents = [i0]
+    for k in range(t.size - 1):
+        state, out = model.step(state, t[k + 1] - t[k], voltages=R_EL * state.inductor_currents_A,
+                                gaps=gaps[k], gap_rates=sdot)
+        currents.append(float(out["currents_A"][0]))
+    # The control law is applied with a zero-order hold: psi drifts by about
+    # (R/L) (dt/2) (Delta I / I) = (2/0.113) (5e-5) (0.83) = 0.07 % over the ramp; the
+    # B-spline interpolation of 1/s adds < 0.01 %.  Bound: 0.2 %.
+    np.testing.assert_allclose(currents, i0 * gaps[:, 0] / s0, rtol=2e-3)
+
+
+def test_current_model_refuses_to_leave_its_maps(ideal_maps) -> None:  # type: ignore[no-untyped-def]
+    model = CurrentModel(ideal_maps)
+    t = np.linspace(0.0, 0.5, 51)
+    with pytest.raises(mk.OutOfRangeError, match="currents 0..80 A"):
+        # 400 V / 2 ohm would settle at 200 A: leaves the 0..80 A map
+        model.simulate_sampled(t, gaps=np.full((t.size, 2), 0.01),
+                               voltages=np.full((t.size, 1), 400.0), initial_currents=0.0)
+    with pytest.raises(mk.OutOfRangeError, match="gaps 0.004..0.02 m"):
+        model.simulate_sampled(t, gaps=np.full((t.size, 2), 0.03),
+                               voltages=np.full((t.size, 1), 1.0), initial_currents=0.0)
+    with pytest.warns(UserWarning, match="extrapolating"):
+        CurrentModel(ideal_maps, extrapolate=True).simulate_sampled(
+            t, gaps=np.full((t.size, 2), 0.021), voltages=np.full((t.size, 1), 1.0),
+            initial_currents=0.0)
+    with pytest.raises(mk.InputError, match="gaps must be > 0"):
+        model.step(model.initial_state(currents=1.0), 1e-3, voltages=2.0, gaps=-0.01)
+    with pytest.raises(mk.InputError, match="expected 1 values"):
+        model.step(model.initial_state(currents=1.0), 1e-3, voltages=[2.0, 2.0], gaps=0.01)
