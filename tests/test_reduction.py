@@ -160,3 +160,33 @@ def test_current_model_refuses_to_leave_its_maps(ideal_maps) -> None:  # type: i
         model.step(model.initial_state(currents=1.0), 1e-3, voltages=2.0, gaps=-0.01)
     with pytest.raises(mk.InputError, match="expected 1 values"):
         model.step(model.initial_state(currents=1.0), 1e-3, voltages=[2.0, 2.0], gaps=0.01)
+
+
+def test_dask_local_cluster_gives_identical_maps(u_magnet: mk.Magnet, u_maps) -> None:  # type: ignore[no-untyped-def]
+    distributed = pytest.importorskip("distributed")
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
+                                  dashboard_address=None) as cluster, \
+            distributed.Client(cluster) as client:
+        remote = build_maps(u_magnet, gaps=GAPS, currents=CURRENTS, executor=client)
+    for name in u_maps.dataset.data_vars:
+        assert np.array_equal(u_maps.dataset[name].values, remote.dataset[name].values,
+                              equal_nan=True)
+
+
+def test_cli_maps_build_and_plot(tmp_path: Path) -> None:
+    from typer.testing import CliRunner
+
+    from maglevkit.cli import app
+
+    runner = CliRunner()
+    nc = tmp_path / "m.nc"
+    res = runner.invoke(app, ["maps", "build", "u-magnet", "-o", str(nc), "--gaps",
+                              "0.004:0.02:5", "--currents", "0:40:5"])
+    assert res.exit_code == 0, res.output
+    maps = load_maps(nc, magnet=mk.load_magnet("u-magnet"))
+    assert maps.dataset["force_N"].shape == (1, 5, 5)
+    res = runner.invoke(app, ["maps", "plot", str(nc), "--out", str(tmp_path)])
+    assert res.exit_code == 0, res.output
+    assert (tmp_path / "maps_coil.png").read_bytes()[:4] == b"\x89PNG"
+    res = runner.invoke(app, ["maps", "plot", str(tmp_path / "nope.nc")])
+    assert res.exit_code == 2 and "does not exist" in res.output

@@ -50,3 +50,28 @@ def plot_force_current(sol: Any, path: str | Path, *, title: str = "") -> Path:
 
 def currents_grid_note(values: np.ndarray) -> str:
     return f"{values.min():g} .. {values.max():g} A ({values.size} points)"
+
+
+def plot_maps(maps: Any, folder: str | Path) -> list[Path]:
+    """The paper's Fig. 9 analog: F, L~ and dL/ds over gap and current, one PNG per circuit."""
+    out = []
+    s_mm = maps.gaps_m * 1e3
+    cur = maps.currents_A
+    panels = [("force_N", "force F [kN]", 1e-3, "viridis"),
+              ("inductance_H", "differential inductance L~ [mH]", 1e3, "magma"),
+              ("dL_ds_H_per_m", "dL/ds [H/m]", 1.0, "cividis")]
+    for circuit in maps.circuits:
+        fig, axes = plt.subplots(1, 3, figsize=(15, 4.3))
+        for ax, (var, label, scale, cmap) in zip(axes, panels, strict=True):
+            z = maps.variable(var, circuit).T * scale   # (current, gap)
+            cs = ax.contourf(s_mm, cur, z, levels=20, cmap=cmap)
+            ax.contour(s_mm, cur, z, levels=10, colors="k", linewidths=0.4, alpha=0.6)
+            fig.colorbar(cs, ax=ax, label=label)
+            ax.set_xlabel("gap s [mm]")
+            ax.set_ylabel("current I [A]")
+            ax.set_title(label.split(" [")[0])
+        fig.suptitle(f"characteristic maps of circuit '{circuit}' "
+                     f"({maps.dataset.attrs.get('magnet_name', '')})")
+        fig.tight_layout()
+        out.append(save(fig, Path(folder) / f"maps_{circuit}.png"))
+    return out
