@@ -5,8 +5,8 @@ Sub-commands live in sibling modules and register themselves on :data:`app`.
 
 from __future__ import annotations
 
-from ._app import app, console, main
 from . import figures as _figures  # noqa: F401,E402  (registers commands)
 from . import statics as _statics  # noqa: F401,E402  (registers commands)
+from ._app import app, console, main
 
 __all__ = ["app", "console", "main"]
