@@ -169,12 +169,16 @@ class IronPath(Element):
 class AirGap(LinearElement):
     """Air gap between a pole face and the rail/stator.
 
-    ``G(s) = mu0 [A / s' + sum_e (w_e / pi) ln(1 + pi r_e / s')]`` with ``s' = k_C s``.
+    ``G(s) = mu0 [A / s' + sum_e (w_e / pi) ln(1 + pi r_e / s') + sum_j A_j / (s' + d_j)]``
+    with ``s' = k_C s``.
 
-    The first term is the homogeneous field under the pole face, the sum the fringing
-    flux from the pole flanks (Roters' quarter-circle-and-straight-line tubes, one
-    term per edge of length ``w_e`` whose flank of height ``r_e`` sees the rail).
-    ``k_C`` is Carter's coefficient of a slotted stator (1 when ``slot_pitch`` is 0).
+    The first term is the homogeneous field under the pole face, the first sum the
+    fringing flux from the pole flanks (Roters' quarter-circle-and-straight-line tubes,
+    one term per edge of length ``w_e`` whose flank of height ``r_e`` sees the rail),
+    the second sum the flux from recessed parts of the pole face (e.g. the grooves of a
+    linear-generator winding) of area ``A_j`` and depth ``d_j``, which cross the groove
+    and then the gap in series.  ``k_C`` is Carter's coefficient of a slotted stator
+    (1 when ``slot_pitch`` is 0).
 
     Parameters
     ----------
@@ -186,6 +190,8 @@ class AirGap(LinearElement):
         ``(edge length w_e [m], flank height r_e [m])`` per fringing edge (empty: none).
     slot_pitch, slot_opening : float
         Stator slot pitch and slot opening [m] for Carter's coefficient (0: smooth).
+    recesses : tuple of (float, float)
+        ``(area A_j [m^2], depth d_j [m])`` of recessed pole-face parts (empty: none).
     """
 
     gap_input: str = "s"
@@ -193,6 +199,7 @@ class AirGap(LinearElement):
     fringe_edges: tuple[tuple[float, float], ...] = ()
     slot_pitch: float = 0.0
     slot_opening: float = 0.0
+    recesses: tuple[tuple[float, float], ...] = ()
 
     def __post_init__(self) -> None:
         owner = f"air gap {self.name!r}"
@@ -203,6 +210,10 @@ class AirGap(LinearElement):
         object.__setattr__(self, "fringe_edges", edges)
         for w, r in edges:
             _positive(owner, fringe_edge_length=w, fringe_radius=r)
+        recesses = tuple((float(a), float(d)) for a, d in self.recesses)
+        object.__setattr__(self, "recesses", recesses)
+        for a, d in recesses:
+            _positive(owner, recess_area=a, recess_depth=d)
         _nonnegative(owner, slot_pitch=self.slot_pitch, slot_opening=self.slot_opening)
         if self.slot_pitch > 0.0 and not 0.0 < self.slot_opening < self.slot_pitch:
             raise ParameterError(f"{owner}: slot_opening must lie in (0, slot_pitch) when a "
@@ -229,6 +240,8 @@ class AirGap(LinearElement):
         g = self.pole_area / s
         for w, r in self.fringe_edges:
             g = g + w / math.pi * _log(1.0 + math.pi * r / s)
+        for a, d in self.recesses:
+            g = g + a / (s + d)
         return MU0 * g
 
 

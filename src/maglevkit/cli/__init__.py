@@ -6,6 +6,7 @@ Sub-commands live in sibling modules and register themselves on :data:`app`.
 from __future__ import annotations
 
 from . import demo as _demo  # noqa: F401,E402  (registers commands)
+from . import figures as _figures  # noqa: F401,E402
 from . import maps as _maps  # noqa: F401,E402
 from . import statics as _statics  # noqa: F401,E402
 from ._app import app, console, main

@@ -8,6 +8,7 @@ from typing import Any
 import numpy as np
 import typer
 from rich.console import Console
+from rich.markup import escape
 
 from ..errors import MaglevkitError
 
@@ -29,7 +30,7 @@ def _root() -> None:
 
 def fail(exc: Exception) -> typer.Exit:
     """Print a maglevkit error without a traceback and return an exit (code 2)."""
-    console.print(f"[bold red]error:[/] {exc}")
+    console.print(f"[bold red]error:[/] {escape(str(exc))}")
     return typer.Exit(code=2)
 
 

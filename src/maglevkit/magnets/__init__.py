@@ -1,6 +1,30 @@
 """Parametric magnet topologies and their parameter files."""
 
+from . import guidance as _guidance  # noqa: F401  (registers the "guidance_magnet" kind)
+from . import levitation as _levitation  # noqa: F401  (registers the "levitation_magnet" kind)
 from . import u_magnet as _u_magnet  # noqa: F401  (registers the "u_magnet" kind)
 from .base import Magnet, ModelOptions, build_magnet, bundled_magnets, load_magnet
+from .characteristics import (
+    KNEE_EXPONENT,
+    Coupling,
+    coupling_ratios,
+    force_exponent,
+    nominal_point,
+    saturation_knee,
+)
+from .levitation import pole_gap_names
 
-__all__ = ["Magnet", "ModelOptions", "build_magnet", "bundled_magnets", "load_magnet"]
+__all__ = [
+    "Magnet",
+    "ModelOptions",
+    "build_magnet",
+    "bundled_magnets",
+    "load_magnet",
+    "KNEE_EXPONENT",
+    "Coupling",
+    "coupling_ratios",
+    "force_exponent",
+    "nominal_point",
+    "saturation_knee",
+    "pole_gap_names",
+]

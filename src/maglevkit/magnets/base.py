@@ -2,7 +2,9 @@
 
 A parameter file has a ``[magnet]`` table whose ``kind`` selects the builder, the
 builder's own tables, optional ``[materials.NAME]`` tabulated B-H curves, and an
-optional ``[provenance]`` table that tags values (``"magnet.turns" = "[E] estimate"``).
+optional ``[provenance]`` table that tags values (``"magnet.turns" = "[E] estimate"``),
+and an optional ``[operating]`` table with the nominal operating point
+(``nominal_gap`` [m], ``nominal_current`` [A]) that figures and maps normalise by.
 All values are SI (m, ohm, A, ...).  Unknown and missing keys are errors.
 """
 
@@ -101,6 +103,18 @@ class Magnet:
         return self.network.circuit_names
 
     @property
+    def nominal_gap(self) -> float | None:
+        """Nominal gap [m] from the file's ``[operating]`` table (None if not given)."""
+        op = self.parameters.get("operating")
+        return None if op is None else float(op["nominal_gap"])
+
+    @property
+    def nominal_current(self) -> float | None:
+        """Nominal circuit current [A] from the file's ``[operating]`` table (None if not given)."""
+        op = self.parameters.get("operating")
+        return None if op is None else float(op["nominal_current"])
+
+    @property
     def parameter_hash(self) -> str:
         """SHA-256 of the parameters and physics options (identifies a magnet for maps)."""
         blob = json.dumps({"parameters": self.parameters, "options": self.options.__dict__},
@@ -175,6 +189,12 @@ def take(table: Any, schema: Mapping[str, Schema], where: str) -> dict[str, Any]
     return out
 
 
+OPERATING_SCHEMA = {
+    "nominal_gap": Schema(float, unit="m"),
+    "nominal_current": Schema(float, unit="A"),
+}
+
+
 def resolve_material(name: str, custom: Mapping[str, Material], where: str) -> Material:
     """A material by name: a ``[materials.NAME]`` table of the file, or a built-in record."""
     key = normalise_name(name)
@@ -230,7 +250,7 @@ def build_magnet(parameters: Mapping[str, Any], *, options: ModelOptions | None 
         raise ParameterFileError(f"[magnet] kind = {kind!r} is unknown; known kinds: "
                                  f"{', '.join(sorted(_BUILDERS))}")
     builder, tables = _BUILDERS[kind]
-    allowed = {"magnet", "materials", "provenance", *tables}
+    allowed = {"magnet", "materials", "provenance", "operating", *tables}
     unknown = sorted(set(parameters) - allowed)
     if unknown:
         raise ParameterFileError(f"unknown table(s) {unknown}; a {kind!r} file may have: "
@@ -246,12 +266,15 @@ def build_magnet(parameters: Mapping[str, Any], *, options: ModelOptions | None 
                 or sub not in parameters[table]:
             raise ParameterFileError(f"[provenance] {key!r} names no value of this file")
         prov[str(key)] = str(tag)
+    if "operating" in parameters:
+        take(parameters["operating"], OPERATING_SCHEMA, "operating")
     try:
         name, network = builder(parameters, materials, options)
-        # Saturation is switched generically: iron laws replaced by their initial mu_r.
-        network = network.with_options(saturation=options.saturation)
     except (ParameterError, MaterialError) as exc:
         raise ParameterFileError(f"{source or 'parameters'}: {exc}") from None
+    # The physics switches hold for every kind, whether or not its builder reads them.
+    network = network.with_options(saturation=options.saturation,
+                                   eddy_currents=options.eddy_currents)
     return Magnet(name=name, kind=kind, network=network, parameters=_plain(parameters),
                   provenance=prov, options=options, source=source)
 

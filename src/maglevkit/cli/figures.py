@@ -1,0 +1,32 @@
+"""``maglevkit figures``: the paper's Figs. 6-7 analogs for a magnet."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Annotated
+
+import typer
+
+from ..errors import MaglevkitError
+from ._app import app, console, fail, load_magnet_or_exit
+
+
+@app.command()
+def figures(
+    magnet: Annotated[str, typer.Argument(help="Magnet TOML file or bundled name "
+                                               "(e.g. tr09-standard).")],
+    out: Annotated[Path, typer.Option(help="Output folder for the PNG files.")] = Path("figures"),
+) -> None:
+    """Fig. 6 analog (F/F0 over I/I0) and Fig. 7 analog (L~ over I/I0 at 9.5 mm) as PNG.
+
+    Needs the magnet file's [operating] table (nominal gap and current).
+    """
+    from ..figures import write_figures
+
+    mag = load_magnet_or_exit(magnet)
+    try:
+        paths = write_figures(mag, out)
+    except MaglevkitError as exc:
+        raise fail(exc) from None
+    for p in paths:
+        console.print(f"wrote {p}")

@@ -1,0 +1,129 @@
+"""Characteristic numbers of a magnet from its statics: saturation knee and circuit coupling."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..errors import InputError
+from ..models.statics import solve_statics
+from .base import Magnet
+
+__all__ = ["saturation_knee", "coupling_ratios", "nominal_point", "force_exponent", "Coupling",
+           "KNEE_EXPONENT"]
+
+#: Force exponent ``d ln F / d ln I`` that defines the saturation knee I0: 2 for an
+#: unsaturated magnet (F ~ I^2); at 1.8 the force grows 10 % slower than quadratically.
+KNEE_EXPONENT = 1.8
+
+
+def nominal_point(magnet: Magnet) -> tuple[float, float]:
+    """``(nominal_gap [m], nominal_current [A])`` from the file's ``[operating]`` table.
+
+    Raises
+    ------
+    InputError
+        If the magnet's parameter file has no ``[operating]`` table.
+    """
+    s0, i0 = magnet.nominal_gap, magnet.nominal_current
+    if s0 is None or i0 is None:
+        raise InputError(f"magnet {magnet.name!r} has no [operating] table (nominal_gap, "
+                         "nominal_current); give the gap and current explicitly")
+    return s0, i0
+
+
+def force_exponent(magnet: Magnet, *, gap: float, currents: np.ndarray) -> np.ndarray:
+    """Local exponent ``n = d ln F / d ln I = I (dF/dI) / F`` of the total force.
+
+    Every circuit carries the same current; exact ``dF/dI`` from the statics.
+    """
+    cur = np.asarray(currents, dtype=float)
+    if np.any(cur <= 0.0):
+        raise InputError("force_exponent needs currents > 0 A")
+    sol = solve_statics(magnet, gaps=np.array([gap]), currents=cur, grid=True)
+    dfdi = sol.dforce_dcurrent_N_per_A[0].sum(axis=(-2, -1))
+    return np.asarray(cur * dfdi / sol.force_N[0])
+
+
+def saturation_knee(magnet: Magnet, *, gap: float | None = None,
+                    exponent: float = KNEE_EXPONENT, max_current: float | None = None,
+                    points: int = 161) -> float:
+    """Saturation knee I0 [A]: the current at which ``d ln F / d ln I`` falls to ``exponent``.
+
+    Parameters
+    ----------
+    magnet : Magnet
+        The magnet (all circuits carry the same current).
+    gap : float, optional
+        Gap of every pole [m]; default the nominal gap.
+    exponent : float
+        Threshold in (0, 2); default :data:`KNEE_EXPONENT`.
+    max_current : float, optional
+        Upper end of the scan [A]; default 4 x the nominal current.
+    points : int
+        Scan resolution; the crossing is interpolated linearly.
+
+    Raises
+    ------
+    InputError
+        Bad arguments, or no knee within the scanned range.
+    """
+    if not 0.0 < exponent < 2.0:
+        raise InputError(f"exponent = {exponent!r} must lie in (0, 2)")
+    if gap is None or max_current is None:
+        s0, i0 = nominal_point(magnet)
+        gap = s0 if gap is None else gap
+        max_current = 4.0 * i0 if max_current is None else max_current
+    cur = np.linspace(max_current / points, max_current, points)
+    n = force_exponent(magnet, gap=gap, currents=cur)
+    below = np.nonzero(n < exponent)[0]
+    # skip the low-current region (finite iron permeability rising with B)
+    below = below[cur[below] > 0.05 * max_current]
+    if below.size == 0:
+        raise InputError(f"no saturation knee up to {max_current:g} A at gap {gap:g} m "
+                         f"(d ln F/d ln I stays >= {exponent}); raise max_current")
+    j = int(below[0])
+    if j == 0:
+        return float(cur[0])
+    return float(np.interp(exponent, [n[j], n[j - 1]], [cur[j], cur[j - 1]]))
+
+
+@dataclass(frozen=True)
+class Coupling:
+    """Differential inductance matrix and its coupling ratios at one operating point.
+
+    Attributes
+    ----------
+    inductance_H : ndarray (n_circuits, n_circuits)
+        ``dpsi_i / dI_j`` [H].
+    ratio : ndarray (n_circuits, n_circuits)
+        ``L_ij / sqrt(L_ii L_jj)`` (coupling coefficient; 1 on the diagonal).
+    """
+
+    circuit_names: tuple[str, ...]
+    inductance_H: np.ndarray
+    ratio: np.ndarray
+
+    @property
+    def max_ratio(self) -> float:
+        """Largest ``|L_ij| / sqrt(L_ii L_jj)`` over ``i != j``."""
+        r = np.abs(self.ratio.copy())
+        np.fill_diagonal(r, 0.0)
+        return float(r.max())
+
+
+def coupling_ratios(magnet: Magnet, *, gap: float | None = None,
+                    current: float | None = None) -> Coupling:
+    """Mutual/self differential-inductance ratios of the circuits (statics, uniform gap).
+
+    Defaults: nominal gap and current of the parameter file.
+    """
+    if gap is None or current is None:
+        s0, i0 = nominal_point(magnet)
+        gap = s0 if gap is None else gap
+        current = i0 if current is None else current
+    sol = solve_statics(magnet, gaps=gap, currents=current)
+    L = np.asarray(sol.differential_inductance_H)
+    d = np.sqrt(np.diag(L))
+    return Coupling(sol.circuit_names, L, L / np.outer(d, d))

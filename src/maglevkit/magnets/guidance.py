@@ -1,0 +1,162 @@
+"""Transrapid-type guidance magnet: the cross-section of the paper's Fig. 2.
+
+Aluminium coils surround the yokes; legs connect each yoke to the two pole bars that
+face the lateral guidance rail across the gap.  The magnet is split along the track
+into sections, one per electric circuit; the pole bars and the rail run through::
+
+      rail:    RU_1 ==rail_u== RU_2 ...          RU_i --rail_i-- RL_i (through the rail)
+                |               |
+              gap_u_1         gap_u_2             one gap input per section (g1, g2, ...)
+                |               |
+      bars:     U_1 ==bar_u==  U_2 ...           upper pole bar; leak_i: U_i -> L_i
+                |
+              leg_u_1 -- YU_1 --yoke_1 (coil)-- YL_1 -- leg_l_1 -- L_1 (lower pole bar)
+
+All yokes of one section are identical and in parallel magnetically with their coils in
+series: they are merged into one yoke branch of the summed cross-section whose coil has
+the turns of one yoke (exact for identical yokes: ``psi = n phi_total``).  Formulas and
+sources: docs/magnets.md.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from typing import Any
+
+from ..circuit.elements import AirGap, EddyCurrent, Element, IronPath, LeakagePermeance
+from ..circuit.network import Branch, Circuit, Coil, Network
+from ..errors import ParameterFileError
+from ..materials import MU0, Material
+from .base import ModelOptions, Schema, register_kind, resolve_material, take
+from .levitation import _resistivity
+
+__all__ = ["build_guidance_magnet"]
+
+MAGNET_SCHEMA = {
+    "kind": Schema(str),
+    "name": Schema(str, required=False, default="guidance magnet"),
+    "section_length": Schema(float, unit="m"),
+    "pole_bar_height": Schema(float, unit="m"),
+    "pole_bar_thickness": Schema(float, unit="m"),
+    "pole_bar_distance": Schema(float, unit="m"),
+    "leg_length": Schema(float, unit="m"),
+    "leg_thickness": Schema(float, unit="m"),
+    "yokes_per_section": Schema(int, unit="-"),
+    "yoke_width": Schema(float, unit="m"),
+    "yoke_thickness": Schema(float, unit="m"),
+    "coil_height": Schema(float, unit="m"),
+    "turns_per_yoke": Schema(float, unit="-"),
+    "resistance_per_yoke": Schema(float, unit="ohm"),
+    "material": Schema(str),
+    "resistivity": Schema(float, required=False, unit="ohm m"),
+}
+CIRCUITS_SCHEMA = {"names": Schema(list)}
+RAIL_SCHEMA = {
+    "thickness": Schema(float, unit="m"),
+    "height": Schema(float, unit="m"),
+    "material": Schema(str),
+    "resistivity": Schema(float, required=False, unit="ohm m"),
+}
+
+
+def build_guidance_magnet(params: Mapping[str, Any], materials: Mapping[str, Material],
+                          options: ModelOptions) -> tuple[str, Network]:
+    """Build a guidance magnet network from parsed parameters (see module docstring)."""
+    m = take(params["magnet"], MAGNET_SCHEMA, "magnet")
+    for table in ("circuits", "rail"):
+        if table not in params:
+            raise ParameterFileError(f"missing the [{table}] table")
+    names = take(params["circuits"], CIRCUITS_SCHEMA, "circuits")["names"]
+    if not names or not all(isinstance(n, str) and n for n in names) \
+            or len(set(names)) != len(names):
+        raise ParameterFileError(f"[circuits] names = {names!r}: expected unique non-empty "
+                                 "strings, one per section (electric circuit) along the track")
+    r = take(params["rail"], RAIL_SCHEMA, "rail")
+    L, hp, tp = m["section_length"], m["pole_bar_height"], m["pole_bar_thickness"]
+    dist, ll, tl = m["pole_bar_distance"], m["leg_length"], m["leg_thickness"]
+    ny, wy, ty = m["yokes_per_section"], m["yoke_width"], m["yoke_thickness"]
+    hc = m["coil_height"]
+    window = dist - hp
+    if window <= 0.0:
+        raise ParameterFileError(f"[magnet] pole_bar_distance = {dist:g} m must exceed "
+                                 f"pole_bar_height = {hp:g} m (the bars would overlap)")
+    if ny * wy > L:
+        raise ParameterFileError(f"[magnet] {ny} yokes of width {wy:g} m do not fit in a "
+                                 f"section of length {L:g} m")
+    if hc > dist - tl:
+        raise ParameterFileError(f"[magnet] coil_height = {hc:g} m does not fit on the yoke "
+                                 f"between the legs ({dist - tl:g} m)")
+    if r["height"] < dist + hp:
+        raise ParameterFileError(f"[rail] height = {r['height']:g} m must cover both pole bars "
+                                 f"({dist + hp:g} m)")
+    iron = resolve_material(m["material"], materials, "magnet")
+    rail_mat = resolve_material(r["material"], materials, "rail")
+    eddy = options.eddy_currents
+    rho = _resistivity(m["resistivity"], iron, "magnet") if eddy else 0.0
+    rho_rail = _resistivity(r["resistivity"], rail_mat, "rail") if eddy else 0.0
+
+    face = L * hp
+    # bar flanks above and below the face see the rail (it covers both bars); flank depth
+    # = bar thickness.  The ends of the sections along the track do not fringe (the bars
+    # continue), except at the two magnet ends, which are neglected (2-D cross-section).
+    edges = ((L, tp), (L, tp)) if options.fringing else ()
+    leg_area = ny * wy * tl
+    yoke_area = ny * wy * ty
+    leg_len = ll + 0.5 * (tp + ty)
+    yoke_len = dist
+    rail_len = dist + r["thickness"]
+    rail_area = L * r["thickness"]
+    # leakage between the pole bars across the window (parallel faces, flank depth t_p)
+    # and between the legs (energy-equivalent coil height h_c/3 for the yoke part)
+    g_leak = MU0 * L * tp / window + MU0 * ny * wy * (ll + hc / 3.0) / window
+
+    def with_eddy(els: list[Element], name: str, w: float, h: float, length: float,
+                  rho_: float) -> tuple[Element, ...]:
+        if eddy:
+            els.append(EddyCurrent.solid_rectangular(name, w, h, length, rho_))
+        return tuple(els)
+
+    branches: list[Branch] = []
+    circuits: list[Circuit] = []
+    for i, cname in enumerate(names, start=1):
+        g = f"g{i}"
+        branches += [
+            Branch(f"leg_u_{i}", f"YU{i}", f"U{i}", with_eddy(
+                [IronPath(f"iron_leg_u_{i}", leg_len, leg_area, iron)], f"eddy_leg_u_{i}",
+                ny * wy, tl, leg_len, rho)),
+            Branch(f"gap_u_{i}", f"U{i}", f"RU{i}", (
+                AirGap(f"gap_u_{i}", gap_input=g, pole_area=face, fringe_edges=edges),)),
+            Branch(f"rail_{i}", f"RU{i}", f"RL{i}", with_eddy(
+                [IronPath(f"iron_rail_{i}", rail_len, rail_area, rail_mat)], f"eddy_rail_{i}",
+                L, r["thickness"], rail_len, rho_rail)),
+            Branch(f"gap_l_{i}", f"RL{i}", f"L{i}", (
+                AirGap(f"gap_l_{i}", gap_input=g, pole_area=face, fringe_edges=edges),)),
+            Branch(f"leg_l_{i}", f"L{i}", f"YL{i}", with_eddy(
+                [IronPath(f"iron_leg_l_{i}", leg_len, leg_area, iron)], f"eddy_leg_l_{i}",
+                ny * wy, tl, leg_len, rho)),
+            Branch(f"yoke_{i}", f"YL{i}", f"YU{i}", with_eddy(
+                [IronPath(f"iron_yoke_{i}", yoke_len, yoke_area, iron)], f"eddy_yoke_{i}",
+                ny * wy, ty, yoke_len, rho)),
+        ]
+        if options.leakage:
+            branches.append(Branch(f"leak_{i}", f"U{i}", f"L{i}",
+                                   (LeakagePermeance(f"leak_{i}", g_leak),)))
+        circuits.append(Circuit(cname, ny * m["resistance_per_yoke"],
+                                (Coil(f"yoke_{i}", m["turns_per_yoke"]),)))
+        if i > 1:
+            j = i - 1
+            bar = L  # centre-to-centre distance of neighbouring sections
+            branches += [
+                Branch(f"bar_u_{j}_{i}", f"U{j}", f"U{i}",
+                       (IronPath(f"iron_bar_u_{j}_{i}", bar, hp * tp, iron),)),
+                Branch(f"bar_l_{j}_{i}", f"L{j}", f"L{i}",
+                       (IronPath(f"iron_bar_l_{j}_{i}", bar, hp * tp, iron),)),
+                Branch(f"rail_u_{j}_{i}", f"RU{j}", f"RU{i}",
+                       (IronPath(f"iron_rail_u_{j}_{i}", bar, hp * r["thickness"], rail_mat),)),
+                Branch(f"rail_l_{j}_{i}", f"RL{j}", f"RL{i}",
+                       (IronPath(f"iron_rail_l_{j}_{i}", bar, hp * r["thickness"], rail_mat),)),
+            ]
+    return m["name"], Network(tuple(branches), tuple(circuits), name=m["name"])
+
+
+register_kind("guidance_magnet", build_guidance_magnet, ("circuits", "rail"))

@@ -1,0 +1,111 @@
+"""The paper's Fig. 6/7 properties as assertions, and the figure files."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import maglevkit as mk
+from maglevkit.figures import fig6_data, fig7_data, write_figures
+from maglevkit.magnets import force_exponent, saturation_knee
+
+
+@pytest.fixture(scope="module")
+def std() -> mk.Magnet:
+    return mk.load_magnet("tr09-standard")
+
+
+@pytest.fixture(scope="module")
+def f6(std: mk.Magnet):  # type: ignore[no-untyped-def]
+    return fig6_data(std)
+
+
+@pytest.fixture(scope="module")
+def f7(std: mk.Magnet):  # type: ignore[no-untyped-def]
+    return fig7_data(std)
+
+
+def test_saturation_switch_reaches_the_network() -> None:
+    """load_magnet(saturation=False) must give linear iron for every kind (u-magnet too)."""
+    for name in ("u-magnet", "tr09-standard", "tr-guidance"):
+        mag = mk.load_magnet(name, saturation=False)
+        irons = [e for b in mag.network.branches for e in b.elements if isinstance(e, mk.IronPath)]
+        assert irons and not any(e.material.saturates for e in irons)
+
+
+def test_knee_above_nominal(std: mk.Magnet) -> None:
+    i0 = saturation_knee(std)
+    assert std.nominal_current is not None
+    assert i0 > std.nominal_current
+    # at the knee the exponent equals its definition (interpolation between grid points)
+    n = force_exponent(std, gap=0.010, currents=np.array([i0]))
+    assert n[0] == pytest.approx(1.8, abs=0.01)
+
+
+def test_fig6_quadratic_below_knee(f6) -> None:  # type: ignore[no-untyped-def]
+    k = list(np.round(f6.gaps_m, 6)).index(0.010)
+    x, F = f6.current, f6.force_full[k]
+    sel = (x > 0.1) & (x < 0.7)
+    # F/F(x)/x^2 constant within 2 % below 0.7 I0 (quadratic law; the residual variation
+    # comes from the iron permeability that changes with B even below the knee)
+    ratio = F[sel] / x[sel] ** 2
+    assert np.ptp(ratio) / ratio.mean() < 0.02
+    # the linear-iron model agrees there within 3 % (mu_r(0) of 9SMnPb28 ~ its mu_r up to 1 T;
+    # the laminated stator's mu_r(0) = 1120 is below its operating permeability)
+    assert np.allclose(f6.force_linear[k][sel], F[sel], rtol=0.03)
+
+
+def test_fig6_flattens_above_knee(f6) -> None:  # type: ignore[no-untyped-def]
+    x = f6.current
+    k0 = list(np.round(f6.gaps_m, 6)).index(0.010)
+    # at the nominal gap: well above the knee the saturated force lags far behind the
+    # quadratic (linear-iron) one, and grows sub-quadratically
+    hi = x > 1.5
+    assert np.all(f6.force_full[k0][hi] < 0.9 * f6.force_linear[k0][hi])
+    assert np.all(np.gradient(np.log(f6.force_full[k0][hi]), np.log(x[hi])) < 1.8)
+    for k in range(len(f6.gaps_m)):
+        F, Fl = f6.force_full[k], f6.force_linear[k]
+        # larger gaps need more current to saturate, but at 2.2 I0 every gap is flattened
+        assert F[-1] < 0.8 * Fl[-1]
+        assert np.all(np.diff(F[x > 0]) > 0)  # monotone in current
+    # smaller gap -> larger force at every current
+    assert np.all(np.diff(f6.force_full[:, 1:], axis=0) < 0)
+
+
+def test_fig7_inductance(f7, std: mk.Magnet) -> None:  # type: ignore[no-untyped-def]
+    x, Lf, Ll = f7.current, f7.inductance_full, f7.inductance_linear
+    # without saturation: constant (linear network), normalised to 1
+    np.testing.assert_allclose(Ll, 1.0, rtol=1e-9)
+    # with saturation: decreasing above the nominal current, strongly above the knee
+    above = x >= std.nominal_current / f7.I0_A
+    assert np.all(np.diff(Lf[above]) < 0)
+    assert Lf[-1] < 0.5
+    # below the knee the two models agree within 3 % (see the Fig. 6 test)
+    assert np.allclose(Lf[x < 0.7], 1.0, atol=0.03)
+
+
+def test_static_inductance_independent_of_eddy_currents(std: mk.Magnet) -> None:
+    no_eddy = std.with_options(eddy_currents=False)
+    a = mk.solve_statics(std, gaps=0.0095, currents=40.0).differential_inductance_H
+    b = mk.solve_statics(no_eddy, gaps=0.0095, currents=40.0).differential_inductance_H
+    np.testing.assert_allclose(a, b, rtol=1e-12)
+
+
+def test_figures_written(std: mk.Magnet, tmp_path) -> None:  # type: ignore[no-untyped-def]
+    paths = write_figures(std, tmp_path)
+    assert [p.name for p in paths] == ["tr09-standard-fig6-force-current.png",
+                                       "tr09-standard-fig7-inductance.png"]
+    for p in paths:
+        assert p.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n" and p.stat().st_size > 20_000
+
+
+def test_figures_cli(tmp_path) -> None:  # type: ignore[no-untyped-def]
+    from typer.testing import CliRunner
+
+    from maglevkit.cli import app
+
+    res = CliRunner().invoke(app, ["figures", "tr-guidance", "--out", str(tmp_path)])
+    assert res.exit_code == 0, res.output
+    assert len(list(tmp_path.glob("tr-guidance-fig*.png"))) == 2
+    bad = CliRunner().invoke(app, ["figures", "u-magnet", "--out", str(tmp_path)])
+    assert bad.exit_code == 2 and "[operating]" in bad.output
