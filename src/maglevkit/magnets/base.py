@@ -250,6 +250,9 @@ def build_magnet(parameters: Mapping[str, Any], *, options: ModelOptions | None 
         name, network = builder(parameters, materials, options)
     except (ParameterError, MaterialError) as exc:
         raise ParameterFileError(f"{source or 'parameters'}: {exc}") from None
+    if not options.saturation:
+        # Builders need not handle this switch: linearise every iron law here.
+        network = network.with_options(saturation=False, eddy_currents=True)
     return Magnet(name=name, kind=kind, network=network, parameters=_plain(parameters),
                   provenance=prov, options=options, source=source)
 
