@@ -127,7 +127,8 @@ class Sine(Signal):
 
     def __call__(self, t: Any) -> np.ndarray:
         t = np.asarray(t, dtype=float)
-        return self.offset + self.amplitude * np.sin(2.0 * math.pi * self.frequency * t + self.phase)
+        arg = 2.0 * math.pi * self.frequency * t + self.phase
+        return self.offset + self.amplitude * np.sin(arg)
 
 
 @dataclass(frozen=True)
