@@ -11,7 +11,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
-__all__ = ["plot_force_current", "save"]
+__all__ = ["plot_force_current", "plot_simulation", "save"]
 
 
 def save(fig: Any, path: str | Path) -> Path:
@@ -75,3 +75,48 @@ def plot_maps(maps: Any, folder: str | Path) -> list[Path]:
         fig.tight_layout()
         out.append(save(fig, Path(folder) / f"maps_{circuit}.png"))
     return out
+
+
+def plot_simulation(res: Any, path: str | Path, *, title: str = "") -> Path:
+    """Time response of a flux-model simulation: inputs, currents, forces, eddy MMFs."""
+    t = res.time_s * 1e3
+    fig, axes = plt.subplots(2, 2, figsize=(11, 7), sharex=True)
+    ax = axes[0, 0]
+    for j, nm in enumerate(res.circuit_names):
+        ax.step(t, res.voltages_V[:, j], where="post", label=f"U [{nm}]")
+    ax.set_ylabel("voltage [V]")
+    ax2 = ax.twinx()
+    for j, nm in enumerate(res.gap_names):
+        ax2.plot(t, res.gaps_m[:, j] * 1e3, "--", label=f"s [{nm}]")
+    ax2.set_ylabel("gap [mm] (dashed)")
+    ax.legend(loc="center left", fontsize=8)
+    ax2.legend(loc="center right", fontsize=8)
+    ax.set_title("inputs")
+    ax = axes[0, 1]
+    for j, nm in enumerate(res.circuit_names):
+        ax.plot(t, res.currents_A[:, j], label=nm)
+    ax.set_ylabel("current [A]")
+    ax.set_title("circuit currents")
+    ax.legend(fontsize=8)
+    ax = axes[1, 0]
+    for j, nm in enumerate(res.gap_names):
+        ax.plot(t, res.pole_force_N[:, j] / 1e3, label=f"pole {nm}")
+    ax.plot(t, res.force_N / 1e3, "k", lw=1.5, label="total")
+    ax.set_ylabel("force [kN]")
+    ax.set_xlabel("time [ms]")
+    ax.set_title("magnet forces (attraction > 0)")
+    ax.legend(fontsize=8)
+    ax = axes[1, 1]
+    for j, nm in enumerate(res.eddy_branch_names):
+        ax.plot(t, res.eddy_mmf_A[:, j], label=nm)
+    ax.set_ylabel("eddy-current MMF [A]")
+    ax.set_xlabel("time [ms]")
+    ax.set_title("eddy currents" if res.eddy_branch_names else "eddy currents (switched off)")
+    if res.eddy_branch_names:
+        ax.legend(fontsize=8)
+    for a in axes.ravel():
+        a.grid(True, alpha=0.3)
+    if title:
+        fig.suptitle(title)
+    fig.tight_layout()
+    return save(fig, path)

@@ -8,6 +8,7 @@ from __future__ import annotations
 from . import demo as _demo  # noqa: F401,E402  (registers commands)
 from . import figures as _figures  # noqa: F401,E402
 from . import maps as _maps  # noqa: F401,E402
+from . import simulate as _simulate  # noqa: F401,E402
 from . import statics as _statics  # noqa: F401,E402
 from ._app import app, console, main
 

@@ -165,6 +165,10 @@ class CharacteristicMaps:
 
     def variable(self, name: str, circuit: str) -> np.ndarray:
         """A map (gap x current) of one circuit as a NumPy array."""
+        if circuit not in self.circuits:
+            raise InputError(f"no circuit {circuit!r} in these maps; circuits: {list(self.circuits)}")
+        if name not in self.dataset.data_vars:
+            raise InputError(f"no map {name!r}; maps: {sorted(str(k) for k in self.dataset.data_vars)}")
         return np.asarray(self.dataset[name].sel(circuit=circuit).values, dtype=float)
 
     def to_netcdf(self, path: str | Path) -> Path:

@@ -1,0 +1,159 @@
+"""Virtual experiments on the flux model: voltage step response, L~ from a step (paper IV-B).
+
+The paper identifies the small-signal differential inductance ``L~(s, I)`` from the time
+constant of the current after a small voltage step at a fixed gap.  Around an operating
+point the reduced model (paper eq. 8, facts.md sec. 5) is a resistor ``R_el`` in series
+with ``L~`` shunted by the eddy-current resistance ``R_ec``::
+
+    dI(t) = dU/R_el - (dU/R_el - dI_0) exp(-t / tau),   dI_0 = dU / (R_el + R_ec)
+    tau   = L~ (R_el + R_ec) / (R_el R_ec)   =>   L~ = tau R_el (1 - dI_0 / dI_inf)
+
+so the current jump ``dI_0`` gives ``R_ec`` and the time constant gives ``L~``.  Without
+eddy currents ``dI_0 = 0`` and ``L~ = tau R_el``.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from ..errors import InputError, SolverError
+from .flux import FluxModel, SimulationResult, simulate
+from .statics import solve_statics
+
+__all__ = ["InductanceEstimate", "voltage_step_response", "differential_inductance_from_step"]
+
+
+def _model(model: Any, options: dict[str, Any]) -> FluxModel:
+    if isinstance(model, FluxModel):
+        return FluxModel(model.network, **{**model._options, **options}) if options else model
+    return FluxModel(model, **options)
+
+
+def voltage_step_response(model: Any, *, gap: Any, voltage: Any, initial_current: Any = 0.0,
+                          duration: float, dt: float, **options: Any) -> SimulationResult:
+    """Current and force after a voltage step at ``t = 0`` at a fixed gap.
+
+    The magnet starts at the static operating point with ``initial_current`` [A] (held by
+    ``U = R I``); from ``t = 0`` the circuits get ``voltage`` [V].
+
+    Parameters
+    ----------
+    model : FluxModel, Magnet or Network
+    gap : float, sequence or mapping
+        Fixed gap(s) [m].
+    voltage : float, sequence or mapping
+        Voltage(s) after the step [V].
+    initial_current : float, sequence or mapping
+        Current(s) before the step [A].
+    duration, dt : float
+        Simulated time and output step [s].
+    **options
+        FluxModel options (``saturation``, ``eddy_currents``, ``rtol``, ...).
+    """
+    fm = _model(model, options)
+    st = fm.initial_state(gaps=gap, currents=initial_current)
+    return simulate(fm, (0.0, duration), dt=dt, gaps=st.gaps_m, voltages=voltage,
+                    initial_state=st)
+
+
+@dataclass(frozen=True)
+class InductanceEstimate:
+    """Result of :func:`differential_inductance_from_step` (one circuit).
+
+    Attributes
+    ----------
+    inductance_H : float
+        ``L~ = tau R_el (1 - dI_0/dI_inf)`` [H], the paper's differential inductance.
+    apparent_inductance_H : float
+        ``tau R_el`` [H] (what a fit ignoring the eddy-current jump reports).
+    time_constant_s : float
+        Fitted ``tau`` [s].
+    current_jump_A : float
+        Instantaneous current jump ``dI_0`` [A] (0 without eddy currents).
+    final_current_change_A : float
+        ``dI_inf = dU / R_el`` [A].
+    eddy_resistance_ohm : float
+        ``R_ec = dU/dI_0 - R_el`` [ohm] (inf without eddy currents).
+    fit_rms : float
+        RMS of the log-linear fit residual (relative deviation from one exponential).
+    response : SimulationResult
+        The simulated step.
+    """
+
+    inductance_H: float
+    apparent_inductance_H: float
+    time_constant_s: float
+    current_jump_A: float
+    final_current_change_A: float
+    eddy_resistance_ohm: float
+    fit_rms: float
+    response: SimulationResult
+
+
+def differential_inductance_from_step(model: Any, *, gap: float, current: float,
+                                      relative_step: float = 1e-3, circuit: int = 0,
+                                      samples_per_tau: int = 200, n_tau: float = 6.0,
+                                      rtol: float = 1e-9, atol: float = 1e-11,
+                                      **options: Any) -> InductanceEstimate:
+    """Identify ``L~(s, I)`` from the time constant of a small voltage step (paper IV-B).
+
+    The circuit ``circuit`` is held at ``current`` [A] at the (uniform) ``gap`` [m], then
+    its voltage steps by ``dU = R_el dI_inf`` with ``dI_inf = relative_step x max(|I|,
+    1 A)``; the other circuits keep their voltage.  ``log(dI_inf - dI(t))`` is fitted by
+    a straight line (least squares) over the samples with ``2 % < remaining < 98 %``.
+
+    The time window (``n_tau`` time constants, ``samples_per_tau`` samples each) is
+    sized with the statics' ``dpsi/dI``; that estimate is not used in the result.
+
+    Returns
+    -------
+    InductanceEstimate
+    """
+    if not (isinstance(relative_step, (int, float)) and 0.0 < relative_step < 0.1):
+        raise InputError(f"relative_step = {relative_step!r} must lie in (0, 0.1)")
+    fm = _model(model, {"rtol": rtol, "atol": atol, **options})
+    nc = len(fm.circuit_names)
+    if not (isinstance(circuit, int) and 0 <= circuit < nc):
+        raise InputError(f"circuit = {circuit!r} must be an index in 0..{nc - 1}")
+    st = fm.initial_state(gaps=gap, currents=current)
+    R = fm.resistances
+    sol = solve_statics(fm.network, gaps=st.gaps_m, currents=st.currents_A)
+    l_est = float(sol.differential_inductance_H[circuit, circuit])
+    r_par = R[circuit]
+    tau_est = max(l_est, 1e-12) / r_par
+    di_inf = relative_step * max(abs(float(st.currents_A[circuit])), 1.0)
+    U = R * st.currents_A
+    U[circuit] += r_par * di_inf
+    dt = tau_est / samples_per_tau
+    res = simulate(fm, (0.0, n_tau * tau_est), dt=dt, gaps=st.gaps_m, voltages=U,
+                   initial_state=st)
+    di = res.currents_A[:, circuit] - st.currents_A[circuit]
+    remaining = di_inf - di
+    t = res.time_s
+    sel = (t > 0.0) & (remaining > 0.02 * di_inf) & (remaining < 0.98 * di_inf)
+    if np.count_nonzero(sel) < 10:
+        raise SolverError("too few samples to fit the step-response time constant",
+                          state={"gap_m": gap, "current_A": current},
+                          reason=f"{np.count_nonzero(sel)} usable samples")
+    A = np.vstack((np.ones(np.count_nonzero(sel)), t[sel])).T
+    coef, *_ = np.linalg.lstsq(A, np.log(remaining[sel]), rcond=None)
+    fit = A @ coef - np.log(remaining[sel])
+    tau = -1.0 / float(coef[1])
+    jump = di_inf - math.exp(float(coef[0]))
+    if not (tau > 0.0 and math.isfinite(tau)):
+        raise SolverError("step response is not a decaying exponential",
+                          state={"gap_m": gap, "current_A": current}, reason=f"tau = {tau}")
+    # Without eddy currents the jump is zero; the fit's intercept then has the size of
+    # the fit error, so it is not used.
+    if not fm.has_eddy_currents:
+        jump = 0.0
+    r_ec = math.inf if jump <= 0.0 else r_par * di_inf / jump - r_par
+    return InductanceEstimate(
+        inductance_H=tau * r_par * (1.0 - max(jump, 0.0) / di_inf),
+        apparent_inductance_H=tau * r_par,
+        time_constant_s=tau, current_jump_A=jump, final_current_change_A=di_inf,
+        eddy_resistance_ohm=r_ec, fit_rms=float(np.sqrt(np.mean(fit**2))), response=res)

@@ -1,0 +1,833 @@
+"""Detailed flux-based dynamic model (paper Sec. II, eqs. 4-7) with eddy currents.
+
+Unknowns are the loop fluxes ``x`` (branch fluxes ``phi = C^T x``) and the circuit
+currents ``I``.  With the eddy conductances ``G_d = diag(G_ec)`` per branch::
+
+    Kirchhoff II:  C G_d C^T x' = -C (V_m(C^T x, s) - N I)
+    Faraday:       N^T C^T x'   = U - R I                    (psi = N^T C^T x)
+
+i.e. ``M x' = h(x, I, s, U)`` with the singular ``M = [C G_d C^T; N^T C^T]`` (paper
+eq. 4).  The model reduces it to a semi-explicit index-1 DAE (paper eq. 5): the rows of
+``D`` are a maximal independent subset of the rows of ``[N^T C^T; E C^T]`` (``E`` picks
+the eddy branches; flux-linkage rows first), so the differential states ``y = D x`` are
+circuit flux linkages and eddy-branch fluxes.  ``M = K D`` with ``K = M D^+`` of full
+column rank, hence::
+
+    y' = K^+ h                  (differential: flux linkages, eddy-branch fluxes)
+    0  = D x - y                (algebraic: loop fluxes x)
+    0  = Q h                    (algebraic: currents, Q = left null space of K)
+    s' = gap rate               (gaps as states: exactly piecewise linear)
+
+Outputs: currents (eq. 7), pole forces from the network's gap energy at constant flux
+(the exact co-energy force, which reduces to eq. 6 for a plain pole), flux linkages,
+``eta`` = sum of the coil-core fluxes per circuit (eq. 5 coordinates), all branch fluxes,
+eddy-branch fluxes and eddy MMFs ``G_ec phi'``.  Energy bookkeeping is integrated as
+quadratures: ``E_in = int U.I``, ``E_ohm = int R I^2``, ``E_eddy = int sum G_ec phi'^2``,
+``E_mech = int -F.s'``; ``E_in = E_ohm + E_eddy + Delta W + E_mech`` holds exactly.
+
+Each call integrates one hold interval in normalised time ``tau = (t - t_k) / h`` with
+the interval length ``h`` as a parameter, so one compiled integrator serves every step
+size.  See ``docs/flux_model.md``.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from typing import Any
+
+import casadi as ca
+import numpy as np
+import scipy.linalg as sla
+
+from ..circuit.assembly import assemble
+from ..circuit.network import Network
+from ..errors import InputError, SolverError, TopologyError
+from ..materials import MU0
+from .signals import Signal
+from .statics import as_network, current_vector, gap_vector, magnetic_energy, solve_statics
+
+__all__ = [
+    "DEFAULT_RTOL",
+    "DEFAULT_ATOL",
+    "FluxModel",
+    "FluxState",
+    "FluxOutputs",
+    "SimulationResult",
+    "EnergyBalance",
+    "simulate",
+]
+
+#: Default relative tolerance of the integrator (IDAS ``reltol``).
+DEFAULT_RTOL = 1e-6
+#: Default absolute tolerance, relative to each variable's nominal scale (see FluxModel).
+DEFAULT_ATOL = 1e-8
+
+_B_REF = 1.0        # T, nominal flux density for the tolerance scales
+_GAP_REF = 5e-3     # m, nominal air gap for the current scale
+_ENERGY_NAMES = ("electrical", "ohmic", "eddy", "mechanical")
+
+
+# ---------------------------------------------------------------------------- state / outputs
+@dataclass(frozen=True)
+class FluxState:
+    """State of the flux model at one instant (returned by ``initial_state`` / ``step``).
+
+    Attributes
+    ----------
+    time_s : float
+        Time [s].
+    differential_state : ndarray (n_diff,)
+        ``y = D x``: circuit flux linkages [Wb] then eddy-branch fluxes [Wb].
+    gaps_m : ndarray (n_gaps,)
+        Gaps [m].
+    loop_flux_Wb : ndarray (n_loops,)
+        Loop fluxes [Wb] (algebraic; consistent with the inputs below).
+    currents_A : ndarray (n_circuits,)
+        Circuit currents [A] (algebraic).
+    voltages_V, gap_rates_m_per_s : ndarray
+        The inputs the algebraic part is consistent with (those of the last interval).
+    energy_J : ndarray (4,)
+        Cumulative electrical input, ohmic loss, eddy loss and mechanical work [J].
+    """
+
+    time_s: float
+    differential_state: np.ndarray
+    gaps_m: np.ndarray
+    loop_flux_Wb: np.ndarray
+    currents_A: np.ndarray
+    voltages_V: np.ndarray
+    gap_rates_m_per_s: np.ndarray
+    energy_J: np.ndarray
+
+    def _vector(self) -> np.ndarray:
+        return np.concatenate((self.differential_state, self.gaps_m, self.loop_flux_Wb,
+                               self.currents_A))
+
+
+@dataclass(frozen=True)
+class FluxOutputs:
+    """Outputs of the flux model at one instant (left limit before an input change).
+
+    Attributes
+    ----------
+    time_s : float
+        Time [s].
+    currents_A, flux_linkage_Wb, eta_Wb : ndarray (n_circuits,)
+        Circuit currents [A], flux linkages [Wb], sums of coil-core fluxes [Wb].
+    pole_force_N : ndarray (n_gaps,)
+        Force per gap input [N], attraction positive.
+    force_N : float
+        Total force [N].
+    branch_flux_Wb : ndarray (n_branches,)
+        All branch fluxes [Wb].
+    eddy_flux_Wb, eddy_mmf_A : ndarray (n_eddy,)
+        Fluxes [Wb] and eddy-current MMFs ``G_ec dphi/dt`` [A] of the eddy branches.
+    """
+
+    time_s: float
+    currents_A: np.ndarray
+    flux_linkage_Wb: np.ndarray
+    eta_Wb: np.ndarray
+    pole_force_N: np.ndarray
+    force_N: float
+    branch_flux_Wb: np.ndarray
+    eddy_flux_Wb: np.ndarray
+    eddy_mmf_A: np.ndarray
+
+
+@dataclass(frozen=True)
+class EnergyBalance:
+    """Energy bookkeeping of a simulation [J].
+
+    ``electrical = ohmic + eddy + magnetic_change + mechanical + residual``.
+    """
+
+    electrical_J: float
+    ohmic_J: float
+    eddy_J: float
+    magnetic_change_J: float
+    mechanical_J: float
+    residual_J: float
+
+    @property
+    def relative_residual(self) -> float:
+        """``|residual|`` over the largest term."""
+        scale = max(abs(self.electrical_J), abs(self.ohmic_J), abs(self.eddy_J),
+                    abs(self.magnetic_change_J), abs(self.mechanical_J), 1e-300)
+        return abs(self.residual_J) / scale
+
+
+# ---------------------------------------------------------------------------- DAE structure
+class _FluxDAE:
+    """Matrices, symbolic DAE and compiled step functions of one network and solver setup."""
+
+    def __init__(self, network: Network, method: str, rtol: float, atol: float,
+                 max_num_steps: int, radau_elements: int, radau_degree: int) -> None:
+        eq = assemble(network)
+        self.network = network
+        C, N = eq.C, eq.N
+        G = network.eddy_conductances
+        self.eddy_idx = np.nonzero(G > 0.0)[0]
+        a_psi = N.T @ C.T
+        a_eddy = C.T[self.eddy_idx]
+        rows: list[np.ndarray] = []
+        self.diff_names: list[str] = []
+        names = [f"psi[{c}]" for c in network.circuit_names]
+        names += [f"phi[{network.branch_names[b]}]" for b in self.eddy_idx]
+        for name, row in zip(names, list(a_psi) + list(a_eddy), strict=True):
+            cand = np.array([*rows, row])
+            scaled = cand / np.maximum(np.abs(cand).max(axis=1, keepdims=True), 1e-300)
+            if np.linalg.matrix_rank(scaled, tol=1e-9) == len(cand):
+                rows.append(row)
+                self.diff_names.append(name)
+        D = np.array(rows).reshape(len(rows), C.shape[0])
+        M = np.vstack((C @ np.diag(G) @ C.T, a_psi))
+        Dp = np.linalg.pinv(D)
+        K = M @ Dp
+        if not np.allclose(K @ D, M, rtol=0.0, atol=1e-9 * max(1.0, np.abs(M).max())):
+            raise TopologyError("internal: the flux-model reduction M = K D failed")
+        Kp = np.linalg.pinv(K)
+        Q = sla.null_space(K.T).T
+        T = a_eddy @ Dp                       # eddy-branch flux rates = T y'
+        self.D, self.M, self.K, self.Q, self.T = D, M, K, Q, T
+        nl, nc, ng, r = C.shape[0], N.shape[1], eq.n_gaps, D.shape[0]
+        self.n_loops, self.n_circuits, self.n_gaps, self.n_diff = nl, nc, ng, r
+        self.n_eddy = len(self.eddy_idx)
+        self.n_branches = len(network.branches)
+        self.nw = r + ng + nl + nc
+        R = network.resistances
+
+        y = ca.SX.sym("y", r)
+        h = ca.SX.sym("h")
+        U = ca.SX.sym("U", nc)
+        rate = ca.SX.sym("rate", ng)
+        x, s, I = eq.x, eq.s, eq.I
+        hv = ca.vertcat(-eq.residual, U - R * I)
+        ydot = ca.mtimes(ca.DM(Kp), hv)
+        alg = ca.vertcat(ca.mtimes(ca.DM(D), x) - y, ca.mtimes(ca.DM(Q), hv))
+        phidot_e = ca.mtimes(ca.DM(T), ydot)
+        g_e = G[self.eddy_idx]
+        power = ca.vertcat(ca.dot(U, I), ca.dot(R * I, I), ca.dot(g_e * phidot_e, phidot_e),
+                           -ca.dot(eq.force, rate))
+        sign = np.sign(N)                      # eta: coil-core fluxes summed per circuit
+        eta = ca.mtimes(ca.DM(sign.T), eq.phi)
+        out = ca.vertcat(eq.phi, eq.psi, eta, eq.force, g_e * phidot_e)
+        self.n_out = int(out.numel())
+        self.output_fun = ca.Function("flux_outputs", [ca.vertcat(y, s, x, I), U, rate], [out])
+
+        # Index-1 check: d(alg)/d(x, I) must be regular (at zero flux and a 5 mm gap).
+        jac = ca.Function("jz", [x, I, s], [ca.jacobian(alg, ca.vertcat(x, I))])
+        Jz = np.array(jac(np.zeros(nl), np.zeros(nc), np.full(ng, _GAP_REF)))
+        sv = np.linalg.svd(Jz / np.maximum(np.abs(Jz).max(axis=1, keepdims=True), 1e-300),
+                           compute_uv=False)
+        if sv.size and sv[-1] < 1e-12 * sv[0]:
+            raise TopologyError(f"network {network.name!r}: the flux-model DAE is not index 1 "
+                                "(d alg / d(x, I) is singular); check the circuit topology")
+        self.index1_condition = float(sv[0] / sv[-1]) if sv.size else 1.0
+
+        # Nominal scales for the absolute tolerances.
+        areas = network.branch_areas
+        finite = areas[np.isfinite(areas)]
+        phi_nom = _B_REF * (float(np.median(finite)) if finite.size else 1e-3)
+        turns = np.maximum(np.abs(N).sum(axis=0), 1.0)
+        i_nom = _B_REF * _GAP_REF / MU0 / turns
+        nominal = np.concatenate((np.abs(D).sum(axis=1) * phi_nom, np.full(ng, 1e-2),
+                                  np.full(nl, phi_nom), i_nom))
+        self.nominal = nominal
+        dae = {"x": ca.vertcat(y, s), "z": ca.vertcat(x, I), "p": ca.vertcat(h, U, rate),
+               "ode": h * ca.vertcat(ydot, rate), "alg": alg, "quad": h * power}
+        if method == "idas":
+            opts: dict[str, Any] = {"reltol": rtol, "abstolv": list(atol * nominal),
+                                    "max_num_steps": max_num_steps,
+                                    "disable_internal_warnings": True}
+            integ = ca.integrator("flux_idas", "idas", dae, 0.0, 1.0, opts)
+        elif method == "radau":
+            integ = ca.integrator("flux_radau", "collocation", dae, 0.0, 1.0,
+                                  {"number_of_finite_elements": radau_elements,
+                                   "interpolation_order": radau_degree,
+                                   "collocation_scheme": "radau", "rootfinder": "newton",
+                                   "rootfinder_options": {"error_on_fail": True}})
+        else:
+            raise InputError(f"method = {method!r}; use 'idas' (error-controlled BDF) or "
+                             "'radau' (fixed-step Radau IIA collocation)")
+        wm = ca.MX.sym("w", self.nw)
+        pm = ca.MX.sym("p", 1 + nc + ng)
+        nx = r + ng
+        res = integ(x0=wm[:nx], z0=wm[nx:], p=pm)
+        wf = ca.vertcat(res["xf"], res["zf"])
+        o = self.output_fun(wf, pm[1:1 + nc], pm[1 + nc:])
+        self.step_fun = ca.Function("flux_step", [wm, pm], [wf, res["qf"], o])
+        self._accum: dict[int, ca.Function] = {}
+
+    def accum(self, n: int) -> ca.Function:
+        f = self._accum.get(n)
+        if f is None:
+            f = self.step_fun.mapaccum("flux_steps", n)
+            if len(self._accum) > 8:
+                self._accum.clear()
+            self._accum[n] = f
+        return f
+
+
+def _dae(network: Network, method: str, rtol: float, atol: float, max_num_steps: int,
+         radau_elements: int, radau_degree: int) -> _FluxDAE:
+    key = ("flux_dae", method, rtol, atol, max_num_steps, radau_elements, radau_degree)
+    dae = network._cache.get(key)
+    if dae is None:
+        dae = _FluxDAE(network, method, rtol, atol, max_num_steps, radau_elements, radau_degree)
+        network._cache[key] = dae
+    return dae  # type: ignore[no-any-return]
+
+
+def _resolve_network(model: Any, saturation: bool | None, eddy_currents: bool | None) -> Network:
+    if isinstance(model, FluxModel):
+        model = model.network
+    options = getattr(model, "options", None)
+    if not isinstance(model, Network) and options is not None and hasattr(model, "with_options"):
+        changes = {}
+        if saturation is not None and saturation != options.saturation:
+            changes["saturation"] = saturation
+        if eddy_currents is not None and eddy_currents != options.eddy_currents:
+            changes["eddy_currents"] = eddy_currents
+        if changes:
+            model = model.with_options(**changes)
+        return as_network(model)
+    net = as_network(model)
+    if saturation is False or eddy_currents is False:
+        net = net.with_options(saturation=saturation is not False,
+                               eddy_currents=eddy_currents is not False)
+    return net
+
+
+def _vec(value: Any, n: int, what: str, unit: str, names: tuple[str, ...]) -> np.ndarray:
+    """A finite float vector of length n from a scalar, sequence or mapping."""
+    if isinstance(value, Mapping):
+        unknown = sorted(set(value) - set(names))
+        missing = [k for k in names if k not in value]
+        if unknown or missing:
+            raise InputError(f"{what}: unknown names {unknown}, missing {missing}; "
+                             f"expected {list(names)}")
+        value = [value[k] for k in names]
+    try:
+        arr = np.asarray(value, dtype=float)
+    except (TypeError, ValueError) as exc:
+        raise InputError(f"{what} must be numbers [{unit}], got {value!r}") from exc
+    if arr.ndim == 0:
+        arr = np.full(n, float(arr))
+    elif arr.shape != (n,):
+        raise InputError(f"{what} has shape {arr.shape}; expected a scalar or {n} values "
+                         f"(one per {list(names)}) [{unit}]")
+    if not np.all(np.isfinite(arr)):
+        raise InputError(f"{what} must be finite numbers [{unit}], got {arr.tolist()}")
+    return arr
+
+
+# ---------------------------------------------------------------------------- the model
+class FluxModel:
+    """Flux-based dynamic magnet model (index-1 DAE, paper eqs. 4-7).
+
+    Parameters
+    ----------
+    model : Network, Magnet or FluxModel
+        The equivalent magnetic circuit (a magnet built with eddy-current elements
+        gives the eddy-current model).
+    saturation, eddy_currents : bool or None
+        Physics switches (None: as the model is built).  A Magnet is rebuilt with the
+        changed option; a bare Network can only have effects switched off.
+    method : {"idas", "radau"}
+        ``"idas"`` (default): SUNDIALS IDAS, variable-order BDF with error control and
+        exact Jacobians (via CasADi).  ``"radau"``: fixed-step Radau IIA collocation
+        (``radau_elements`` elements of degree ``radau_degree`` per call) - faster for
+        co-simulation at small fixed steps, without error control.
+    rtol : float
+        Relative tolerance (IDAS), default :data:`DEFAULT_RTOL` = 1e-6.
+    atol : float
+        Absolute tolerance relative to nominal scales (flux 1 T x median branch area,
+        flux linkage the same times the turns, current = MMF of 1 T over 5 mm of air
+        divided by the circuit turns, gap 10 mm), default :data:`DEFAULT_ATOL` = 1e-8.
+    max_num_steps : int
+        IDAS step limit per interval (failure raises :class:`SolverError`).
+    """
+
+    def __init__(self, model: Any, *, saturation: bool | None = None,
+                 eddy_currents: bool | None = None, method: str = "idas",
+                 rtol: float = DEFAULT_RTOL, atol: float = DEFAULT_ATOL,
+                 max_num_steps: int = 20000, radau_elements: int = 2,
+                 radau_degree: int = 3) -> None:
+        for name, v in (("rtol", rtol), ("atol", atol)):
+            if not (isinstance(v, (int, float)) and math.isfinite(v) and 0.0 < v < 1.0):
+                raise InputError(f"{name} = {v!r} must lie in (0, 1)")
+        if not (isinstance(max_num_steps, int) and max_num_steps > 0):
+            raise InputError(f"max_num_steps = {max_num_steps!r} must be a positive integer")
+        if not (isinstance(radau_elements, int) and radau_elements > 0
+                and isinstance(radau_degree, int) and 1 <= radau_degree <= 9):
+            raise InputError("radau_elements must be >= 1 and radau_degree in 1..9")
+        self.network = _resolve_network(model, saturation, eddy_currents)
+        self.method = method
+        self.rtol = float(rtol)
+        self.atol = float(atol)
+        self._dae = _dae(self.network, method, self.rtol, self.atol, max_num_steps,
+                         radau_elements, radau_degree)
+        self._options = {"method": method, "rtol": self.rtol, "atol": self.atol,
+                         "max_num_steps": max_num_steps, "radau_elements": radau_elements,
+                         "radau_degree": radau_degree}
+
+    # ------------------------------------------------------------------ description
+    @property
+    def gap_names(self) -> tuple[str, ...]:
+        return self.network.gap_names
+
+    @property
+    def circuit_names(self) -> tuple[str, ...]:
+        return self.network.circuit_names
+
+    @property
+    def branch_names(self) -> tuple[str, ...]:
+        return self.network.branch_names
+
+    @property
+    def eddy_branch_names(self) -> tuple[str, ...]:
+        return tuple(self.network.branch_names[i] for i in self._dae.eddy_idx)
+
+    @property
+    def differential_state_names(self) -> tuple[str, ...]:
+        """Names of the differential states ``y = D x`` (flux linkages, eddy-branch fluxes)."""
+        return tuple(self._dae.diff_names)
+
+    @property
+    def has_eddy_currents(self) -> bool:
+        return self._dae.n_eddy > 0
+
+    @property
+    def resistances(self) -> np.ndarray:
+        """Circuit resistances R_el [ohm]."""
+        return self.network.resistances
+
+    def with_options(self, **changes: Any) -> FluxModel:
+        """A model of the same network with other solver options (method, rtol, atol, ...)."""
+        return FluxModel(self.network, **{**self._options, **changes})
+
+    def __repr__(self) -> str:
+        return (f"FluxModel({self.network.name!r}, method={self.method!r}, rtol={self.rtol:g}, "
+                f"atol={self.atol:g}, states={list(self.differential_state_names)})")
+
+    # ------------------------------------------------------------------ states
+    def initial_state(self, *, gaps: Any, currents: Any, time: float = 0.0) -> FluxState:
+        """Consistent steady state at ``gaps`` [m] and circuit ``currents`` [A].
+
+        The fluxes come from :func:`solve_statics`; the state is at rest (no eddy
+        currents), consistent with the voltages ``U = R I`` and zero gap rates.
+        """
+        net = self.network
+        s = gap_vector(net, gaps)
+        i = current_vector(net, currents)
+        if s.shape != (len(net.gap_names),) or i.shape != (len(net.circuit_names),):
+            raise InputError("initial_state takes one operating point (one value per gap and "
+                             "circuit)")
+        if not math.isfinite(time):
+            raise InputError(f"time = {time!r} must be finite")
+        sol = solve_statics(net, gaps=s, currents=i)
+        x = np.asarray(sol.loop_flux_Wb, dtype=float).ravel()
+        return FluxState(float(time), self._dae.D @ x, s.copy(), x, i.copy(),
+                         self.resistances * i, np.zeros_like(s), np.zeros(4))
+
+    def outputs(self, state: FluxState) -> FluxOutputs:
+        """Outputs at ``state`` (with the inputs stored in the state)."""
+        o = np.asarray(self._dae.output_fun(state._vector(), state.voltages_V,
+                                            state.gap_rates_m_per_s)).ravel()
+        return self._unpack_outputs(state.time_s, state.currents_A, o)
+
+    def _unpack_outputs(self, t: float, currents: np.ndarray, o: np.ndarray) -> FluxOutputs:
+        d = self._dae
+        nb, nc, ng = d.n_branches, d.n_circuits, d.n_gaps
+        phi = o[:nb]
+        pole = o[nb + 2 * nc:nb + 2 * nc + ng]
+        return FluxOutputs(t, currents, o[nb:nb + nc], o[nb + nc:nb + 2 * nc], pole,
+                           float(pole.sum()), phi, phi[d.eddy_idx], o[nb + 2 * nc + ng:])
+
+    def _unpack_state(self, t: float, w: np.ndarray, U: np.ndarray, rate: np.ndarray,
+                      energy: np.ndarray) -> FluxState:
+        d = self._dae
+        a, b, c = d.n_diff, d.n_diff + d.n_gaps, d.n_diff + d.n_gaps + d.n_loops
+        return FluxState(t, w[:a], w[a:b], w[b:c], w[c:], U, rate, energy)
+
+    def _fail(self, exc: Exception, t: float, w: np.ndarray, U: np.ndarray,
+              rate: np.ndarray, dt: float) -> SolverError:
+        d = self._dae
+        st: dict[str, Any] = {}
+        for name, v in zip(d.diff_names, w[:d.n_diff], strict=True):
+            st[name] = float(v)
+        st["gaps_m"] = w[d.n_diff:d.n_diff + d.n_gaps]
+        st["currents_A"] = w[d.nw - d.n_circuits:]
+        st["voltages_V"] = U
+        st["gap_rates_m_per_s"] = rate
+        msg = str(exc).strip().splitlines()
+        reason = next((ln.strip() for ln in reversed(msg) if ln.strip()), type(exc).__name__)
+        return SolverError(f"flux model ({self.method}) failed on the step of {dt:.6g} s",
+                           time=t, state=st, reason=reason[:400])
+
+    def step(self, state: FluxState, dt: float, voltages: Any, gaps: Any = None,
+             gap_rates: Any = 0.0) -> tuple[FluxState, FluxOutputs]:
+        """Advance ``state`` by ``dt`` [s] with constant voltages and gap rates.
+
+        Parameters
+        ----------
+        state : FluxState
+            From :meth:`initial_state` or a previous :meth:`step`.
+        dt : float
+            Step length [s] (> 0).
+        voltages : float, sequence or mapping
+            Circuit voltages [V], held constant over the step (zero-order hold).
+        gaps : float, sequence, mapping or None
+            Gaps [m] at the start of the step (e.g. from a mechanical model); None keeps
+            the state's gaps.  Flux linkages are continuous; currents adapt.
+        gap_rates : float, sequence or mapping
+            Gap rates [m/s] over the step (gaps move linearly).
+
+        Returns
+        -------
+        (FluxState, FluxOutputs)
+            The state and the outputs at ``state.time_s + dt``.
+
+        Raises
+        ------
+        InputError
+            Bad shapes, non-finite values, ``dt <= 0``, gaps that are or become <= 0.
+        SolverError
+            The integrator failed (with time, state and the solver's reason).
+        """
+        d = self._dae
+        if not (isinstance(dt, (int, float)) and math.isfinite(dt) and dt > 0.0):
+            raise InputError(f"dt = {dt!r} s must be a finite number > 0")
+        U = _vec(voltages, d.n_circuits, "voltages", "V", self.circuit_names)
+        rate = _vec(gap_rates, d.n_gaps, "gap_rates", "m/s", self.gap_names)
+        w = state._vector()
+        if gaps is not None:
+            s0 = _vec(gaps, d.n_gaps, "gaps", "m", self.gap_names)
+            w[d.n_diff:d.n_diff + d.n_gaps] = s0
+        else:
+            s0 = state.gaps_m
+        if np.any(s0 <= 0.0) or np.any(s0 + rate * dt <= 0.0):
+            raise InputError(f"gaps must stay > 0 m over the step: start {s0.tolist()} m, end "
+                             f"{(s0 + rate * dt).tolist()} m")
+        p = np.concatenate(((dt,), U, rate))
+        try:
+            wf, q, o = d.step_fun(w, p)
+        except RuntimeError as exc:
+            raise self._fail(exc, state.time_s, w, U, rate, dt) from None
+        wf = np.asarray(wf).ravel()
+        o = np.asarray(o).ravel()
+        if not (np.all(np.isfinite(wf)) and np.all(np.isfinite(o))):
+            raise self._fail(RuntimeError("non-finite solution"), state.time_s, w, U, rate, dt)
+        t1 = state.time_s + dt
+        new = self._unpack_state(t1, wf, U, rate, state.energy_J + np.asarray(q).ravel())
+        return new, self._unpack_outputs(t1, new.currents_A, o)
+
+    # ------------------------------------------------------------------ batch
+    def _run(self, state: FluxState, h: np.ndarray, U: np.ndarray, rate: np.ndarray,
+             chunk: int = 200) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Integrate intervals ``h`` (n,) with inputs U (n, nc), rate (n, ng) in C++ chunks."""
+        d = self._dae
+        n = h.size
+        W = np.empty((n, d.nw))
+        Qd = np.empty((n, 4))
+        O = np.empty((n, d.n_out))
+        w = state._vector()
+        k = 0
+        while k < n:
+            m = min(chunk, n - k)
+            P = np.vstack((h[None, k:k + m], U[k:k + m].T, rate[k:k + m].T))
+            try:
+                Wc, Qc, Oc = d.accum(m)(w, P)
+            except RuntimeError:
+                # Locate the failing interval step by step for an informative error.
+                t = state.time_s + float(h[:k].sum())
+                for j in range(k, k + m):
+                    p = P[:, j - k]
+                    try:
+                        wf, _, _ = d.step_fun(w, p)
+                    except RuntimeError as exc:
+                        raise self._fail(exc, t, w, U[j], rate[j], float(h[j])) from None
+                    w = np.asarray(wf).ravel()
+                    t += float(h[j])
+                raise SolverError("flux model failed in a batch but not step by step",
+                                  time=t) from None
+            W[k:k + m] = np.asarray(Wc).T
+            Qd[k:k + m] = np.asarray(Qc).T
+            O[k:k + m] = np.asarray(Oc).T
+            w = W[k + m - 1]
+            k += m
+        bad = ~(np.all(np.isfinite(W), axis=1) & np.all(np.isfinite(O), axis=1))
+        if np.any(bad):
+            j = int(np.argmax(bad))
+            t = state.time_s + float(h[:j].sum())
+            w0 = state._vector() if j == 0 else W[j - 1]
+            raise self._fail(RuntimeError("non-finite solution"), t, w0, U[j], rate[j],
+                             float(h[j]))
+        return W, Qd, O
+
+
+# ---------------------------------------------------------------------------- simulate
+@dataclass(frozen=True)
+class SimulationResult:
+    """Time series of a flux-model simulation (SI units; axis 0 is time).
+
+    Values at ``time_s[k]`` are left limits (before the inputs change at ``t_k``);
+    ``voltages_V[k]`` and ``gap_rates_m_per_s[k]`` are the inputs held on
+    ``[t_k, t_{k+1})`` (the last row repeats the previous one).
+    """
+
+    time_s: np.ndarray
+    gaps_m: np.ndarray
+    gap_rates_m_per_s: np.ndarray
+    voltages_V: np.ndarray
+    currents_A: np.ndarray
+    flux_linkage_Wb: np.ndarray
+    eta_Wb: np.ndarray
+    pole_force_N: np.ndarray
+    force_N: np.ndarray
+    branch_flux_Wb: np.ndarray
+    eddy_flux_Wb: np.ndarray
+    eddy_mmf_A: np.ndarray
+    differential_state: np.ndarray
+    electrical_energy_J: np.ndarray
+    ohmic_loss_J: np.ndarray
+    eddy_loss_J: np.ndarray
+    mechanical_work_J: np.ndarray
+    gap_names: tuple[str, ...]
+    circuit_names: tuple[str, ...]
+    branch_names: tuple[str, ...]
+    eddy_branch_names: tuple[str, ...]
+    final_state: FluxState
+    network: Network = field(repr=False, compare=False)
+
+    def magnetic_energy_J(self, index: int = -1) -> float:
+        """Stored magnetic energy [J] at sample ``index`` (iron by quadrature)."""
+        return magnetic_energy(self.network, self.branch_flux_Wb[index], self.gaps_m[index])
+
+    def energy_balance(self, start: int = 0, stop: int = -1) -> EnergyBalance:
+        """Energy balance between samples ``start`` and ``stop``."""
+        def d(a: np.ndarray) -> float:
+            return float(a[stop] - a[start])
+
+        dw = self.magnetic_energy_J(stop) - self.magnetic_energy_J(start)
+        e_in, e_ohm = d(self.electrical_energy_J), d(self.ohmic_loss_J)
+        e_ed, e_me = d(self.eddy_loss_J), d(self.mechanical_work_J)
+        return EnergyBalance(e_in, e_ohm, e_ed, dw, e_me, e_in - e_ohm - e_ed - dw - e_me)
+
+    def columns(self) -> dict[str, np.ndarray]:
+        """Flat named columns (for CSV): one per scalar series, names with units."""
+        cols: dict[str, np.ndarray] = {"time_s": self.time_s}
+
+        def add(base: str, unit: str, arr: np.ndarray, names: tuple[str, ...]) -> None:
+            for j, nm in enumerate(names):
+                cols[f"{base}[{nm}]_{unit}"] = arr[:, j]
+
+        add("gap", "m", self.gaps_m, self.gap_names)
+        add("gap_rate", "m_per_s", self.gap_rates_m_per_s, self.gap_names)
+        add("voltage", "V", self.voltages_V, self.circuit_names)
+        add("current", "A", self.currents_A, self.circuit_names)
+        add("flux_linkage", "Wb", self.flux_linkage_Wb, self.circuit_names)
+        add("eta", "Wb", self.eta_Wb, self.circuit_names)
+        add("pole_force", "N", self.pole_force_N, self.gap_names)
+        cols["force_N"] = self.force_N
+        add("eddy_flux", "Wb", self.eddy_flux_Wb, self.eddy_branch_names)
+        add("eddy_mmf", "A", self.eddy_mmf_A, self.eddy_branch_names)
+        cols["electrical_energy_J"] = self.electrical_energy_J
+        cols["ohmic_loss_J"] = self.ohmic_loss_J
+        cols["eddy_loss_J"] = self.eddy_loss_J
+        cols["mechanical_work_J"] = self.mechanical_work_J
+        return cols
+
+
+def _time_grid(t: Any, dt: float | None) -> np.ndarray:
+    try:
+        arr = np.asarray(t, dtype=float)
+    except (TypeError, ValueError) as exc:
+        raise InputError(f"t must be (t0, tf) or an increasing array of times [s], got {t!r}") \
+            from exc
+    if arr.ndim != 1 or arr.size < 2 or not np.all(np.isfinite(arr)):
+        raise InputError("t must be (t0, tf) or a 1-D array of at least 2 finite times [s]")
+    if arr.size == 2 and isinstance(t, tuple):
+        t0, tf = float(arr[0]), float(arr[1])
+        if not tf > t0:
+            raise InputError(f"t_span = ({t0}, {tf}): tf must be > t0")
+        step = 1e-4 if dt is None else dt
+        if not (isinstance(step, (int, float)) and math.isfinite(step) and step > 0.0):
+            raise InputError(f"dt = {dt!r} s must be a finite number > 0")
+        n = int(math.floor((tf - t0) / step * (1.0 + 1e-12)))
+        grid = t0 + step * np.arange(n + 1)
+        if tf - grid[-1] > 1e-9 * step:
+            grid = np.append(grid, tf)
+        else:
+            grid[-1] = tf
+        return grid
+    if dt is not None:
+        raise InputError("give either dt with t = (t0, tf), or an explicit time grid, not both")
+    if np.any(np.diff(arr) <= 0.0):
+        raise InputError("the time grid must be strictly increasing")
+    return arr
+
+
+def _sample(value: Any, times: np.ndarray, names: tuple[str, ...], what: str,
+            unit: str) -> np.ndarray:
+    """Sample an input (scalar, vector, mapping, Signal, callable, array) on ``times``."""
+    n, k = times.size, len(names)
+    if isinstance(value, Mapping):
+        unknown = sorted(set(value) - set(names))
+        missing = [nm for nm in names if nm not in value]
+        if unknown or missing:
+            raise InputError(f"{what}: unknown names {unknown}, missing {missing}; expected "
+                             f"{list(names)}")
+        cols = [_sample(value[nm], times, (nm,), f"{what}[{nm}]", unit)[:, 0] for nm in names]
+        return np.stack(cols, axis=1)
+    if isinstance(value, Signal):
+        arr = np.repeat(np.asarray(value(times), dtype=float)[:, None], k, axis=1)
+    elif callable(value):
+        rows = []
+        for t in times:
+            try:
+                v = np.asarray(value(float(t)), dtype=float)
+            except (TypeError, ValueError) as exc:
+                raise InputError(f"{what}: the callable must return numbers [{unit}] for a "
+                                 f"time t [s]; it failed at t = {t}: {exc}") from exc
+            if v.ndim == 0:
+                v = np.full(k, float(v))
+            if v.shape != (k,):
+                raise InputError(f"{what}: the callable returned shape {v.shape} at t = {t}; "
+                                 f"expected a scalar or {k} values ({list(names)})")
+            rows.append(v)
+        arr = np.array(rows)
+    else:
+        try:
+            a = np.asarray(value, dtype=float)
+        except (TypeError, ValueError) as exc:
+            raise InputError(f"{what} must be numbers [{unit}], a Signal, a callable of t or "
+                             f"a sampled array; got {value!r}") from exc
+        if a.ndim == 0:
+            arr = np.full((n, k), float(a))
+        elif a.shape == (k,) and not (k == 1 and n == 1):
+            arr = np.broadcast_to(a, (n, k)).copy()
+        elif a.shape == (n,) and k == 1:
+            arr = a[:, None].copy()
+        elif a.shape == (n, k):
+            arr = a.copy()
+        else:
+            raise InputError(f"{what} array has shape {a.shape}; expected a scalar, ({k},) "
+                             f"(one per {list(names)}), or samples ({n}, {k}) on the "
+                             f"{n}-point time grid")
+    if not np.all(np.isfinite(arr)):
+        bad = int(np.argmax(~np.all(np.isfinite(arr), axis=1)))
+        raise InputError(f"{what} is not finite at t = {times[bad]:.6g} s: {arr[bad].tolist()}")
+    return arr
+
+
+def simulate(model: Any, t: Any, *, gaps: Any, voltages: Any, gap_rates: Any = None,
+             dt: float | None = None, initial_currents: Any = None,
+             initial_state: FluxState | None = None, gap_rate_tolerance: float = 0.02,
+             **options: Any) -> SimulationResult:
+    """Simulate the flux model on a time grid.
+
+    Parameters
+    ----------
+    model : FluxModel, Magnet or Network
+        The model; ``options`` (``saturation``, ``eddy_currents``, ``method``, ``rtol``,
+        ``atol``, ...) build a :class:`FluxModel` (or change a given one).
+    t : (t0, tf) or array_like
+        A time span [s] (grid ``t0 + k dt``, ending exactly at ``tf``) or an increasing
+        time grid [s].  Inputs are sampled on the grid.
+    gaps : float, sequence, mapping, Signal, callable or array
+        Gaps [m]: constant (scalar or one value per gap), a Signal or ``f(t)`` (scalar
+        or per-gap values), a mapping per gap name of any of these, or samples of shape
+        ``(n_t, n_gaps)`` (``(n_t,)`` for one gap).  Between samples the gap moves
+        linearly (rate = secant).
+    voltages : same forms
+        Circuit voltages [V]; zero-order hold: ``U(t_k)`` on ``[t_k, t_{k+1})``.
+    gap_rates : same forms, optional
+        Gap rates [m/s].  If given, they must agree with the gaps: the trapezoidal mean
+        of the rates over each interval may differ from the secant by at most
+        ``gap_rate_tolerance`` times the largest rate (plus 1 um/s); otherwise InputError.
+    dt : float, optional
+        Grid step [s] with a time span (default 1e-4 s).
+    initial_currents : float, sequence or mapping, optional
+        Start at the static operating point with these currents [A]; default the
+        steady state ``U(t0) / R``.
+    initial_state : FluxState, optional
+        Start from this state instead (its gaps are replaced by ``gaps(t0)``).
+
+    Returns
+    -------
+    SimulationResult
+
+    Raises
+    ------
+    InputError
+        Invalid inputs (shapes, NaN, gaps <= 0, inconsistent gap rates).
+    SolverError
+        The integrator failed (time, state and reason in the exception).
+    """
+    if isinstance(model, FluxModel):
+        fm = FluxModel(model.network, **{**model._options, **options}) if options else model
+    else:
+        fm = FluxModel(model, **options)
+    net = fm.network
+    times = _time_grid(t, dt)
+    s = _sample(gaps, times, net.gap_names, "gaps", "m")
+    gap_vector(net, s)  # checks > 0
+    U = _sample(voltages, times, net.circuit_names, "voltages", "V")
+    h = np.diff(times)
+    secant = np.diff(s, axis=0) / h[:, None]
+    if gap_rates is not None:
+        r = _sample(gap_rates, times, net.gap_names, "gap_rates", "m/s")
+        mean = 0.5 * (r[1:] + r[:-1])
+        tol = gap_rate_tolerance * max(float(np.abs(r).max()), float(np.abs(secant).max())) \
+            + 1e-6
+        err = np.abs(mean - secant)
+        if np.any(err > tol):
+            j = int(np.argmax(np.max(err - tol, axis=1)))
+            raise InputError(
+                f"gaps and gap_rates disagree on [{times[j]:.6g}, {times[j + 1]:.6g}] s: the "
+                f"gaps change at {secant[j].tolist()} m/s but the rates average "
+                f"{mean[j].tolist()} m/s (tolerance {tol:.3g} m/s); pass consistent signals "
+                "or only the gaps")
+    if initial_state is not None:
+        if initial_currents is not None:
+            raise InputError("give initial_currents or initial_state, not both")
+        if not isinstance(initial_state, FluxState):
+            raise InputError("initial_state must be a FluxState (from FluxModel.initial_state)")
+        st0 = FluxState(float(times[0]), initial_state.differential_state, s[0].copy(),
+                        initial_state.loop_flux_Wb, initial_state.currents_A,
+                        initial_state.voltages_V, initial_state.gap_rates_m_per_s,
+                        np.zeros(4))
+        if st0.differential_state.shape != (fm._dae.n_diff,):
+            raise InputError("initial_state belongs to a different model")
+    else:
+        i0 = U[0] / net.resistances if initial_currents is None else initial_currents
+        st0 = fm.initial_state(gaps=s[0], currents=i0, time=float(times[0]))
+    W, Qd, O = fm._run(st0, h, U[:-1], secant)
+    d = fm._dae
+    o0 = np.asarray(d.output_fun(st0._vector(), st0.voltages_V,
+                                 st0.gap_rates_m_per_s)).ravel()
+    O = np.vstack((o0, O))
+    W = np.vstack((st0._vector(), W))
+    E = np.vstack((np.zeros(4), np.cumsum(Qd, axis=0)))
+    nb, nc, ng = d.n_branches, d.n_circuits, d.n_gaps
+    rates = np.vstack((secant, secant[-1:]))
+    held_U = np.vstack((U[:-1], U[-2:-1]))
+    final = fm._unpack_state(float(times[-1]), W[-1], U[-2], secant[-1], E[-1])
+    return SimulationResult(
+        time_s=times, gaps_m=W[:, d.n_diff:d.n_diff + ng], gap_rates_m_per_s=rates,
+        voltages_V=held_U, currents_A=W[:, d.nw - nc:],
+        flux_linkage_Wb=O[:, nb:nb + nc], eta_Wb=O[:, nb + nc:nb + 2 * nc],
+        pole_force_N=O[:, nb + 2 * nc:nb + 2 * nc + ng],
+        force_N=O[:, nb + 2 * nc:nb + 2 * nc + ng].sum(axis=1),
+        branch_flux_Wb=O[:, :nb], eddy_flux_Wb=O[:, :nb][:, d.eddy_idx],
+        eddy_mmf_A=O[:, nb + 2 * nc + ng:], differential_state=W[:, :d.n_diff],
+        electrical_energy_J=E[:, 0], ohmic_loss_J=E[:, 1], eddy_loss_J=E[:, 2],
+        mechanical_work_J=E[:, 3], gap_names=net.gap_names, circuit_names=net.circuit_names,
+        branch_names=net.branch_names, eddy_branch_names=fm.eddy_branch_names,
+        final_state=final, network=net,
+    )
+

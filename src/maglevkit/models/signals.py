@@ -1,0 +1,224 @@
+"""Time signals for model inputs (voltages, gaps): constant, step, ramp, sine, tabulated.
+
+A :class:`Signal` maps times ``t`` [s] (array) to values of one scalar input.  The
+simulators sample signals on their time grid (zero-order hold for voltages, piecewise
+linear for gaps).  :func:`parse_signal` reads the TOML form used by scenario files::
+
+    {type = "constant", value = 40.0}
+    {type = "step", initial = 20.0, final = 40.0, time = 0.01}
+    {type = "ramp", initial = 0.010, final = 0.008, start = 0.0, stop = 0.05}
+    {type = "sine", offset = 0.010, amplitude = 0.001, frequency = 5.0, phase = 0.0}
+    {type = "tabulated", times = [0.0, 0.1], values = [0.0, 40.0]}
+
+A bare number is a constant.  Units are those of the input (V for voltages, m for gaps).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from ..errors import InputError, ParameterFileError
+
+__all__ = [
+    "Signal",
+    "Constant",
+    "Step",
+    "Ramp",
+    "Sine",
+    "Tabulated",
+    "parse_signal",
+]
+
+
+class Signal:
+    """Base class: a scalar input as a function of time (callable on arrays)."""
+
+    def __call__(self, t: Any) -> np.ndarray:
+        raise NotImplementedError
+
+    @property
+    def breakpoints(self) -> tuple[float, ...]:
+        """Times [s] where the signal or its slope jumps (for choosing time grids)."""
+        return ()
+
+
+def _finite(owner: str, **values: float) -> None:
+    for k, v in values.items():
+        if not (isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)):
+            raise InputError(f"{owner}: {k} = {v!r} must be a finite number")
+
+
+@dataclass(frozen=True)
+class Constant(Signal):
+    """``u(t) = value``."""
+
+    value: float
+
+    def __post_init__(self) -> None:
+        _finite("constant signal", value=self.value)
+
+    def __call__(self, t: Any) -> np.ndarray:
+        return np.full(np.shape(t), float(self.value))
+
+
+@dataclass(frozen=True)
+class Step(Signal):
+    """``u(t) = initial`` for ``t < time``, ``final`` for ``t >= time``."""
+
+    initial: float
+    final: float
+    time: float = 0.0
+
+    def __post_init__(self) -> None:
+        _finite("step signal", initial=self.initial, final=self.final, time=self.time)
+
+    def __call__(self, t: Any) -> np.ndarray:
+        return np.where(np.asarray(t, dtype=float) < self.time, self.initial, self.final)
+
+    @property
+    def breakpoints(self) -> tuple[float, ...]:
+        return (self.time,)
+
+
+@dataclass(frozen=True)
+class Ramp(Signal):
+    """Linear from ``initial`` at ``start`` to ``final`` at ``stop``; constant outside."""
+
+    initial: float
+    final: float
+    start: float
+    stop: float
+
+    def __post_init__(self) -> None:
+        _finite("ramp signal", initial=self.initial, final=self.final, start=self.start,
+                stop=self.stop)
+        if not self.stop > self.start:
+            raise InputError(f"ramp signal: stop = {self.stop} s must be > start = {self.start} s")
+
+    def __call__(self, t: Any) -> np.ndarray:
+        frac = np.clip((np.asarray(t, dtype=float) - self.start) / (self.stop - self.start),
+                       0.0, 1.0)
+        return self.initial + frac * (self.final - self.initial)
+
+    @property
+    def breakpoints(self) -> tuple[float, ...]:
+        return (self.start, self.stop)
+
+
+@dataclass(frozen=True)
+class Sine(Signal):
+    """``u(t) = offset + amplitude sin(2 pi frequency t + phase)`` (phase in rad)."""
+
+    offset: float
+    amplitude: float
+    frequency: float
+    phase: float = 0.0
+
+    def __post_init__(self) -> None:
+        _finite("sine signal", offset=self.offset, amplitude=self.amplitude,
+                frequency=self.frequency, phase=self.phase)
+        if self.frequency < 0.0:
+            raise InputError(f"sine signal: frequency = {self.frequency} Hz must be >= 0")
+
+    def __call__(self, t: Any) -> np.ndarray:
+        t = np.asarray(t, dtype=float)
+        arg = 2.0 * math.pi * self.frequency * t + self.phase
+        return self.offset + self.amplitude * np.sin(arg)
+
+
+@dataclass(frozen=True)
+class Tabulated(Signal):
+    """Piecewise-linear interpolation of ``(times, values)``; constant beyond the ends.
+
+    ``times`` must be strictly increasing.
+    """
+
+    times: tuple[float, ...]
+    values: tuple[float, ...]
+
+    def __post_init__(self) -> None:
+        try:
+            t = np.asarray(self.times, dtype=float)
+            v = np.asarray(self.values, dtype=float)
+        except (TypeError, ValueError) as exc:
+            raise InputError("tabulated signal: times and values must be lists of numbers") \
+                from exc
+        if t.ndim != 1 or v.ndim != 1 or t.size != v.size or t.size < 1:
+            raise InputError(f"tabulated signal: times ({t.size}) and values ({v.size}) must be "
+                             "1-D lists of equal, non-zero length")
+        if not (np.all(np.isfinite(t)) and np.all(np.isfinite(v))):
+            raise InputError("tabulated signal: times and values must be finite")
+        if np.any(np.diff(t) <= 0.0):
+            raise InputError("tabulated signal: times must be strictly increasing")
+        object.__setattr__(self, "times", tuple(float(a) for a in t))
+        object.__setattr__(self, "values", tuple(float(a) for a in v))
+
+    def __call__(self, t: Any) -> np.ndarray:
+        return np.interp(np.asarray(t, dtype=float), self.times, self.values)
+
+    @property
+    def breakpoints(self) -> tuple[float, ...]:
+        return self.times
+
+
+_SIGNAL_KEYS: dict[str, tuple[type[Signal], dict[str, bool]]] = {
+    # type -> (class, {key: required})
+    "constant": (Constant, {"value": True}),
+    "step": (Step, {"initial": True, "final": True, "time": False}),
+    "ramp": (Ramp, {"initial": True, "final": True, "start": True, "stop": True}),
+    "sine": (Sine, {"offset": True, "amplitude": True, "frequency": True, "phase": False}),
+    "tabulated": (Tabulated, {"times": True, "values": True}),
+}
+
+
+def parse_signal(spec: Any, where: str = "signal") -> Signal:
+    """Build a :class:`Signal` from its scenario-file form (a number or a table).
+
+    Raises
+    ------
+    ParameterFileError
+        Unknown ``type``, unknown or missing keys, or invalid values (the message names
+        ``where`` and lists the allowed keys).
+    """
+    if isinstance(spec, bool):
+        raise ParameterFileError(f"{where}: expected a number or a signal table, got {spec!r}")
+    if isinstance(spec, (int, float)):
+        try:
+            return Constant(float(spec))
+        except InputError as exc:
+            raise ParameterFileError(f"{where}: {exc}") from None
+    if not isinstance(spec, Mapping):
+        raise ParameterFileError(f"{where}: expected a number or a table like "
+                                 "{type = \"step\", initial = ..., final = ..., time = ...}")
+    kind = spec.get("type")
+    if kind not in _SIGNAL_KEYS:
+        raise ParameterFileError(f"{where}: 'type' = {kind!r} is not a signal type; use one of "
+                                 f"{', '.join(_SIGNAL_KEYS)}")
+    cls, keys = _SIGNAL_KEYS[kind]
+    given = {k: v for k, v in spec.items() if k != "type"}
+    unknown = sorted(set(given) - set(keys))
+    if unknown:
+        raise ParameterFileError(f"{where}: unknown key(s) {unknown} for a {kind!r} signal; "
+                                 f"allowed: type, {', '.join(keys)}")
+    missing = [k for k, req in keys.items() if req and k not in given]
+    if missing:
+        raise ParameterFileError(f"{where}: a {kind!r} signal needs key(s) {missing}")
+    kwargs: dict[str, Any] = {}
+    for k, v in given.items():
+        if kind == "tabulated":
+            if not isinstance(v, list):
+                raise ParameterFileError(f"{where}: {k} must be a list of numbers")
+            kwargs[k] = tuple(v)
+        else:
+            if isinstance(v, bool) or not isinstance(v, (int, float)):
+                raise ParameterFileError(f"{where}: {k} = {v!r} must be a number")
+            kwargs[k] = float(v)
+    try:
+        return cls(**kwargs)
+    except InputError as exc:
+        raise ParameterFileError(f"{where}: {exc}") from None

@@ -1,0 +1,178 @@
+"""Stepping interface, input validation, solver failures, signals, scenarios and CLI."""
+
+from __future__ import annotations
+
+import csv
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+from typer.testing import CliRunner
+
+import maglevkit as mk
+from maglevkit.cli import app
+from maglevkit.errors import InputError, ParameterFileError, SolverError
+from maglevkit.models.scenario import parse_scenario
+from maglevkit.models.signals import Ramp, Sine, Step, Tabulated, parse_signal
+
+from .conftest import loop_network
+
+
+@pytest.fixture(scope="module")
+def fm(u_magnet: mk.Magnet) -> mk.FluxModel:
+    return mk.FluxModel(u_magnet)
+
+
+def test_step_equals_simulate(fm: mk.FluxModel) -> None:
+    dt, n = 1e-3, 40
+    t = np.arange(n + 1) * dt
+    gaps = 0.01 + 0.002 * np.sin(30 * t)
+    res = mk.simulate(fm, t, gaps=np.column_stack((gaps, gaps)), voltages=50.0,
+                      initial_currents=10.0)
+    st = fm.initial_state(gaps=gaps[0], currents=10.0)
+    for k in range(n):
+        rate = (gaps[k + 1] - gaps[k]) / dt
+        st, out = fm.step(st, dt, 50.0, gaps=gaps[k], gap_rates=rate)
+    # identical arithmetic (same compiled step function): agreement to round-off
+    np.testing.assert_allclose(out.currents_A, res.currents_A[-1], rtol=1e-12)
+    np.testing.assert_allclose(out.pole_force_N, res.pole_force_N[-1], rtol=1e-12)
+    np.testing.assert_allclose(st.energy_J[0], res.electrical_energy_J[-1], rtol=1e-12)
+    assert st.time_s == pytest.approx(t[-1])
+    assert out.force_N == pytest.approx(out.pole_force_N.sum())
+
+
+def test_outputs_named_and_shaped(fm: mk.FluxModel) -> None:
+    res = mk.simulate(fm, (0.0, 0.01), dt=1e-3, gaps=0.01, voltages=30.0)
+    n = res.time_s.size
+    assert n == 11 and res.time_s[-1] == 0.01
+    assert res.gaps_m.shape == (n, 2) and res.currents_A.shape == (n, 1)
+    assert res.eddy_flux_Wb.shape == (n, len(fm.eddy_branch_names)) == (n, 4)
+    assert res.eta_Wb.shape == (n, 1)
+    # eta = flux through both coil legs; psi = n/2 * eta for the two half coils
+    np.testing.assert_allclose(res.flux_linkage_Wb, 300.0 * res.eta_Wb, rtol=1e-12)
+    # default initial current: steady state of the first voltage
+    np.testing.assert_allclose(res.currents_A, 15.0, rtol=1e-5)
+    cols = res.columns()
+    assert "current[coil]_A" in cols and "pole_force[left]_N" in cols
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "match"),
+    [
+        ({"voltages": float("nan")}, "finite"),
+        ({"gaps": 0.0}, "gap"),
+        ({"gaps": -0.01}, "gap"),
+        ({"voltages": [1.0, 2.0]}, "shape"),
+        ({"gaps": [0.01, 0.01, 0.01]}, "shape"),
+        ({"gaps": np.full((7, 2), 0.01)}, "time grid"),
+        ({"voltages": np.zeros((11, 3))}, "shape"),
+        ({"voltages": lambda t: [1.0, 2.0]}, "callable"),
+        ({"voltages": {"nope": 1.0}}, "unknown"),
+        ({"gaps": Sine(0.01, 0.001, 10.0), "gap_rates": 0.0}, "disagree"),
+        ({"gaps": Sine(0.01, -0.02, 50.0)}, "gap"),   # crosses 0 at t ~ 1.7 ms
+    ],
+)
+def test_bad_inputs_raise(fm: mk.FluxModel, kwargs: dict, match: str) -> None:
+    args = {"gaps": 0.01, "voltages": 30.0, **kwargs}
+    with pytest.raises(InputError, match=match):
+        mk.simulate(fm, (0.0, 0.01), dt=1e-3, **args)
+
+
+def test_consistent_gap_rates_accepted(fm: mk.FluxModel) -> None:
+    g = Sine(0.01, 0.001, 10.0)
+    w = 2 * math.pi * 10.0
+    res = mk.simulate(fm, (0.0, 0.02), dt=1e-4, gaps=g, voltages=30.0,
+                      gap_rates=lambda t: 0.001 * w * math.cos(w * t))
+    assert res.gap_rates_m_per_s[0, 0] == pytest.approx(2 * math.pi * 0.01, rel=1e-3)
+
+
+def test_step_bad_inputs(fm: mk.FluxModel) -> None:
+    st = fm.initial_state(gaps=0.01, currents=10.0)
+    with pytest.raises(InputError, match="dt"):
+        fm.step(st, 0.0, 20.0)
+    with pytest.raises(InputError, match="finite"):
+        fm.step(st, 1e-3, float("nan"))
+    with pytest.raises(InputError, match="shape"):
+        fm.step(st, 1e-3, [1.0, 2.0])
+    with pytest.raises(InputError, match="> 0"):
+        fm.step(st, 1e-3, 20.0, gaps=0.001, gap_rates=-2.0)    # would close to -1 mm
+    with pytest.raises(InputError):
+        fm.initial_state(gaps=[0.01, -0.01], currents=1.0)
+    with pytest.raises(InputError):
+        mk.FluxModel(fm.network, rtol=0.0)
+    with pytest.raises(InputError, match="method"):
+        mk.FluxModel(fm.network, method="euler")
+
+
+def test_solver_failure_raises_with_time_and_state() -> None:
+    fm = mk.FluxModel(loop_network(eddy=True), max_num_steps=2)
+    st = fm.initial_state(gaps=0.004, currents=0.0)
+    with pytest.raises(SolverError) as info:
+        mk.simulate(fm, (0.0, 0.1), dt=0.05, gaps=0.004, voltages=30.0, initial_state=st)
+    err = info.value
+    assert err.time == 0.0 and "gaps_m" in err.state and "psi[coil]" in err.state
+    assert err.reason
+
+
+def test_signals() -> None:
+    t = np.array([0.0, 0.5, 1.0, 2.0])
+    np.testing.assert_allclose(Step(1.0, 3.0, 0.5)(t), [1, 3, 3, 3])
+    np.testing.assert_allclose(Ramp(0.0, 2.0, 0.0, 1.0)(t), [0, 1, 2, 2])
+    np.testing.assert_allclose(Tabulated((0.0, 1.0), (0.0, 4.0))(t), [0, 2, 4, 4])
+    np.testing.assert_allclose(Sine(1.0, 2.0, 0.25)(t), [1, 1 + 2 * np.sin(np.pi / 4), 3, 1],
+                               atol=1e-12)
+    assert parse_signal(5.0)(t).tolist() == [5.0] * 4
+    assert parse_signal({"type": "step", "initial": 0, "final": 1, "time": 1.0})(2.0) == 1.0
+    with pytest.raises(ParameterFileError, match="allowed"):
+        parse_signal({"type": "step", "initial": 0, "final": 1, "tim": 1.0})
+    with pytest.raises(ParameterFileError, match="needs"):
+        parse_signal({"type": "ramp", "initial": 0, "final": 1})
+    with pytest.raises(ParameterFileError, match="type"):
+        parse_signal({"type": "square"})
+    with pytest.raises(ParameterFileError, match="increasing"):
+        parse_signal({"type": "tabulated", "times": [1, 0], "values": [0, 1]})
+
+
+def test_scenario_errors() -> None:
+    ok = {"scenario": {"duration": 0.1, "dt": 1e-3}, "voltages": {"all": 10.0},
+          "gaps": {"all": 0.01}}
+    assert parse_scenario(ok).duration_s == 0.1
+    with pytest.raises(ParameterFileError, match="unknown key"):
+        parse_scenario({**ok, "scenario": {"duration": 0.1, "dt": 1e-3, "durration": 1}})
+    with pytest.raises(ParameterFileError, match="missing"):
+        parse_scenario({"scenario": {"duration": 0.1}, "voltages": {}, "gaps": {}})
+    with pytest.raises(ParameterFileError, match=r"\[gaps\]"):
+        parse_scenario({k: v for k, v in ok.items() if k != "gaps"})
+    with pytest.raises(ParameterFileError, match="unknown table"):
+        parse_scenario({**ok, "extra": {}})
+    sc = parse_scenario({**ok, "voltages": {"coill": 10.0}})
+    with pytest.raises(ParameterFileError, match="coil"):
+        sc.inputs_for(("coil",), "voltages")
+
+
+def test_cli_simulate(tmp_path: Path) -> None:
+    out_csv, out_png = tmp_path / "sim.csv", tmp_path / "sim.png"
+    scen = tmp_path / "s.toml"
+    scen.write_text('[scenario]\nduration = 0.02\ndt = 1e-3\ninitial_current = 5.0\n'
+                    '[voltages]\n'
+                    'coil = {type = "step", initial = 10.0, final = 30.0, time = 0.005}\n'
+                    '[gaps]\nleft = 0.01\nright = {type = "ramp", initial = 0.01, final = 0.009, '
+                    'start = 0.0, stop = 0.02}\n')
+    r = CliRunner().invoke(app, ["simulate", "u-magnet", "--scenario", str(scen), "--csv",
+                                 str(out_csv), "--plot", str(out_png)])
+    assert r.exit_code == 0, r.output
+    rows = list(csv.DictReader(out_csv.open()))
+    assert len(rows) == 21
+    assert float(rows[0]["current[coil]_A"]) == pytest.approx(5.0)
+    assert float(rows[-1]["gap[right]_m"]) == pytest.approx(0.009)
+    assert out_png.stat().st_size > 10_000
+    bad = tmp_path / "bad.toml"
+    bad.write_text('[scenario]\nduration = 0.02\n[voltages]\nall = 1.0\n[gaps]\nall = 0.01\n')
+    r = CliRunner().invoke(app, ["simulate", "u-magnet", "--scenario", str(bad)])
+    assert r.exit_code == 2 and "dt" in r.output
+
+
+def test_bundled_scenario_loads() -> None:
+    sc = mk.load_scenario("step")
+    assert sc.dt_s > 0 and "all" in sc.voltages
