@@ -37,9 +37,11 @@ from .materials import (
     material_names,
 )
 from .models import (
+    CurrentModel,
     FluxModel,
     FluxState,
     InductanceEstimate,
+    ReducedSimulation,
     Scenario,
     SimulationResult,
     StaticSolution,
@@ -52,15 +54,18 @@ from .models import (
     solve_statics,
     voltage_step_response,
 )
+from .reduction import CharacteristicMaps, build_maps, load_maps
 
 __version__ = "0.1.0"
 
 __all__ = [
     "AirGap",
     "Branch",
+    "CharacteristicMaps",
     "Circuit",
     "Coil",
     "ConstantPermeability",
+    "CurrentModel",
     "EddyCurrent",
     "FluxModel",
     "FluxState",
@@ -88,13 +93,16 @@ __all__ = [
     "TabulatedBH",
     "TopologyError",
     "__version__",
+    "ReducedSimulation",
     "build_magnet",
+    "build_maps",
     "bundled_magnets",
     "carter_coefficient",
     "coenergy",
     "differential_inductance_from_step",
     "get_material",
     "load_magnet",
+    "load_maps",
     "load_scenario",
     "magnetic_energy",
     "material_names",

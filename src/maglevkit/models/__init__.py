@@ -1,5 +1,6 @@
 """Magnet models: statics of the equivalent circuit, flux-based DAE, current-based ODE."""
 
+from .current import CurrentModel, CurrentModelState, CurrentOutputs, ReducedSimulation
 from .experiments import (
     InductanceEstimate,
     differential_inductance_from_step,
@@ -23,12 +24,16 @@ __all__ = [
     "DEFAULT_ATOL",
     "DEFAULT_RTOL",
     "Constant",
+    "CurrentModel",
+    "CurrentModelState",
+    "CurrentOutputs",
     "EnergyBalance",
     "FluxModel",
     "FluxOutputs",
     "FluxState",
     "InductanceEstimate",
     "Ramp",
+    "ReducedSimulation",
     "Scenario",
     "Signal",
     "SimulationResult",

@@ -30,48 +30,84 @@ import casadi as ca
 import numpy as np
 
 from ..errors import InputError, OutOfRangeError, SolverError
+from .inputs import gap_secants, sample_input, time_grid
 
-__all__ = ["CurrentModel", "CurrentModelState", "ReducedSimulation"]
+__all__ = ["CurrentModel", "CurrentModelState", "CurrentOutputs", "ReducedSimulation"]
 
 
 @dataclass(frozen=True)
 class CurrentModelState:
-    """State of the current-based model: time [s] and inductor currents I_L [A]."""
+    """State of the current-based model at one instant.
+
+    Attributes
+    ----------
+    time_s : float
+        Time [s].
+    inductor_currents_A : ndarray (n_circuits,)
+        The ODE states ``I_L`` [A].
+    gaps_m : ndarray (n_gaps,)
+        Pole gaps [m].
+    """
 
     time_s: float
     inductor_currents_A: np.ndarray
+    gaps_m: np.ndarray
+
+
+@dataclass(frozen=True)
+class CurrentOutputs:
+    """Outputs of the current-based model at the end of a step.
+
+    Attributes
+    ----------
+    time_s : float
+    currents_A : ndarray (n_circuits,)
+        Coil currents [A] (with the voltages of the step just taken).
+    inductor_currents_A : ndarray (n_circuits,)
+    circuit_force_N : ndarray (n_circuits,)
+    pole_force_N : ndarray (n_gaps,)
+        Circuit force shared equally by the circuit's poles [N].
+    force_N : float
+    """
+
+    time_s: float
+    currents_A: np.ndarray
+    inductor_currents_A: np.ndarray
+    circuit_force_N: np.ndarray
+    pole_force_N: np.ndarray
+    force_N: float
 
 
 @dataclass(frozen=True)
 class ReducedSimulation:
-    """Time series of a current-based simulation (rows: time samples).
+    """Time series of a current-based simulation (SI units; axis 0 is time).
+
+    Same conventions as :class:`~maglevkit.models.flux.SimulationResult`: values at
+    ``time_s[k]`` are left limits (before the inputs change at ``t_k``);
+    ``voltages_V[k]`` and ``gap_rates_m_per_s[k]`` are the inputs held on
+    ``[t_k, t_{k+1})`` (the last row repeats the previous one).
 
     Attributes
     ----------
     time_s : ndarray (n_t,)
-    gaps_m : ndarray (n_t, n_gaps)
-        Pole gaps (inputs).
-    voltages_V : ndarray (n_t, n_circuits)
-        Voltages (zero-order hold: the value applied from this sample on).
-    currents_A : ndarray (n_t, n_circuits)
-        Coil currents.
-    inductor_currents_A : ndarray (n_t, n_circuits)
-        States ``I_L``.
-    circuit_force_N : ndarray (n_t, n_circuits)
+    gaps_m, gap_rates_m_per_s : ndarray (n_t, n_gaps)
+    voltages_V, currents_A, inductor_currents_A, circuit_force_N : ndarray (n_t, n_circuits)
     pole_force_N : ndarray (n_t, n_gaps)
     force_N : ndarray (n_t,)
     """
 
-    circuit_names: tuple[str, ...]
-    gap_names: tuple[str, ...]
     time_s: np.ndarray
     gaps_m: np.ndarray
+    gap_rates_m_per_s: np.ndarray
     voltages_V: np.ndarray
     currents_A: np.ndarray
     inductor_currents_A: np.ndarray
     circuit_force_N: np.ndarray
     pole_force_N: np.ndarray
     force_N: np.ndarray
+    gap_names: tuple[str, ...]
+    circuit_names: tuple[str, ...]
+    final_state: CurrentModelState
 
 
 class CurrentModel:
@@ -157,7 +193,7 @@ class CurrentModel:
         coil = (Um - u_L) / ca.DM(r_el)
         self.ode = ca.Function("current_model_ode", [xm, Um, sm, sdm], [ca.vertcat(*mx_rhs)],
                                ["I_L", "U", "s", "sdot"], ["dI_L"])
-        self.outputs = ca.Function("current_model_out", [xm, Um, sm],
+        self.outputs_fun = ca.Function("current_model_out", [xm, Um, sm],
                                    [coil, ca.vertcat(*forces), ca.vertcat(*ltil)],
                                    ["I_L", "U", "s"], ["I", "F", "Ltilde"])
         # Integrator: states [I_L; s], controls [U; sdot] piecewise constant.
@@ -212,55 +248,22 @@ class CurrentModel:
             self._integrators[key] = f
         return f
 
-    # ------------------------------------------------------------------ stepping interface
-    def initial_state(self, *, currents: Any, time_s: float = 0.0) -> CurrentModelState:
-        """A steady state with the given coil currents [A] (``I_L = I``)."""
-        i = _per_circuit(currents, self.circuit_names, "currents")
-        return CurrentModelState(float(time_s), i)
+    def _integrate_stepwise(self, t: np.ndarray, x0: np.ndarray, uu: np.ndarray,
+                            reason: str) -> np.ndarray:
+        """Fallback after a failed one-pass run: integrate interval by interval.
 
-    def step(self, state: CurrentModelState, dt: float, *, voltages: Any, gaps: Any,
-             gap_rates: Any = 0.0) -> tuple[CurrentModelState, dict[str, np.ndarray]]:
-        """Advance by ``dt`` [s] with constant voltages [V] and linearly moving gaps.
-
-        ``gaps`` [m] are the pole gaps at the start of the step, ``gap_rates`` [m/s] their
-        (constant) rates.  Returns the new state and the outputs at its end.
+        Returns the states if every interval succeeds; raises OutOfRangeError where the
+        state leaves the maps, else SolverError with the failing time and state.
         """
-        if not (isinstance(dt, (int, float)) and math.isfinite(dt) and dt > 0):
-            raise InputError(f"dt = {dt!r} s must be a finite number > 0")
-        u = _per_circuit(voltages, self.circuit_names, "voltages")
-        g = _per_gap(gaps, self.gap_names, positive=True)
-        gd = _per_gap(gap_rates, self.gap_names, positive=False)
-        s0, sd = self.substitute_gaps(g), self.substitute_gaps(gd)
-        self._check_range(s0, state.inductor_currents_A)
-        self._check_range(s0 + sd * dt, state.inductor_currents_A)
-        f = self._integrator((float(dt),))
-        try:
-            res = f(x0=np.concatenate([state.inductor_currents_A, s0]),
-                    u=np.concatenate([u, sd]))
-        except RuntimeError as exc:
-            raise SolverError("current-model integration failed", time=state.time_s,
-                              state={"I_L": state.inductor_currents_A, "s": s0},
-                              reason=_last_line(str(exc))) from None
-        x = np.asarray(res["xf"]).ravel()
-        nc = self.n_circuits
-        self._check_range(x[nc:], x[:nc])
-        new = CurrentModelState(state.time_s + float(dt), x[:nc])
-        coil, fc, _ = (np.asarray(v).ravel() for v in self.outputs(x[:nc], u, x[nc:]))
-        return new, {"currents_A": coil, "circuit_force_N": fc,
-                     "pole_force_N": self._share @ fc, "force_N": np.array(fc.sum())}
-
-    def _locate_failure(self, t: np.ndarray, x0: np.ndarray, uu: np.ndarray, reason: str) -> None:
-        """After a failed run: step interval by interval to say where and why it failed."""
         nc = self.n_circuits
         x = x0
+        out = [x0]
         for k in range(t.size - 1):
-            self._check_range(x[nc:][None, :], x[:nc][None, :], t[k:k + 1])
             try:
                 x = np.asarray(self._integrator((float(t[k + 1] - t[k]),))(
                     x0=x, u=uu[:, k])["xf"]).ravel()
             except RuntimeError as exc:
-                # The state left the maps inside this interval, or the solver failed:
-                # retrace the interval in 64 sub-steps and check the range after each.
+                # Retrace this interval in 64 sub-steps, checking the range after each.
                 h = float(t[k + 1] - t[k]) / 64
                 sub = self._integrator((h,))
                 xs = x
@@ -276,54 +279,106 @@ class CurrentModel:
                 raise SolverError("current-model integration failed", time=float(t[k]),
                                   state={"I_L": x[:nc], "s": x[nc:]},
                                   reason=_last_line(str(exc))) from None
-            if np.any(~np.isfinite(x)):
-                break
+            if not np.all(np.isfinite(x)):
+                raise SolverError("current-model integration gave non-finite states",
+                                  time=float(t[k + 1]), state={"I_L": out[-1][:nc]},
+                                  reason=_last_line(reason))
             self._check_range(x[nc:][None, :], x[:nc][None, :], t[k + 1:k + 2])
-        raise SolverError("current-model integration failed", time=float(t[0]),
-                          state={"I_L": x0[:nc], "s": x0[nc:]}, reason=_last_line(reason))
+            out.append(x)
+        return np.array(out).T[:, 1:]
 
-    # ------------------------------------------------------------------ batch simulation
-    def simulate_sampled(self, time_s: np.ndarray, *, gaps: np.ndarray, voltages: np.ndarray,
-                         initial_currents: Any) -> ReducedSimulation:
-        """Simulate on a time grid with sampled inputs.
+    # ------------------------------------------------------------------ stepping interface
+    def initial_state(self, *, gaps: Any, currents: Any, time: float = 0.0) -> CurrentModelState:
+        """The steady state at ``gaps`` [m] with coil currents ``currents`` [A] (``I_L = I``)."""
+        g = _per_gap(gaps, self.gap_names, positive=True)
+        i = _per_circuit(currents, self.circuit_names, "currents")
+        if not math.isfinite(time):
+            raise InputError(f"time = {time!r} must be finite")
+        self._check_range(self.substitute_gaps(g)[None, :], i[None, :], np.array([time]))
+        return CurrentModelState(float(time), i, g)
 
-        ``gaps`` (n_t, n_gaps) are linear between samples; ``voltages`` (n_t, n_circuits) are
-        held constant from each sample to the next.
+    def outputs(self, state: CurrentModelState, voltages: Any) -> CurrentOutputs:
+        """Outputs at ``state`` with ``voltages`` [V] applied."""
+        u = _per_circuit(voltages, self.circuit_names, "voltages")
+        coil, fc, _ = (np.asarray(v).ravel() for v in self.outputs_fun(
+            state.inductor_currents_A, u, self.substitute_gaps(state.gaps_m)))
+        return CurrentOutputs(state.time_s, coil, state.inductor_currents_A.copy(), fc,
+                              self._share @ fc, float(fc.sum()))
+
+    def step(self, state: CurrentModelState, dt: float, voltages: Any, gaps: Any = None,
+             gap_rates: Any = 0.0) -> tuple[CurrentModelState, CurrentOutputs]:
+        """Advance by ``dt`` [s] with constant voltages [V] and linearly moving gaps.
+
+        Same contract as :meth:`maglevkit.models.flux.FluxModel.step`: ``gaps`` [m] at the
+        start of the step (None keeps the state's), ``gap_rates`` [m/s] over the step.
         """
-        t = np.asarray(time_s, dtype=float)
-        if t.ndim != 1 or t.size < 2 or np.any(np.diff(t) <= 0) or not np.all(np.isfinite(t)):
-            raise InputError("time grid must be 1-D, finite, strictly increasing, >= 2 samples")
-        g = np.asarray(gaps, dtype=float)
-        u = np.asarray(voltages, dtype=float)
-        if g.shape != (t.size, len(self.gap_names)) or u.shape != (t.size, self.n_circuits):
-            raise InputError(f"gaps must be ({t.size}, {len(self.gap_names)}) and voltages "
-                             f"({t.size}, {self.n_circuits}); got {g.shape} and {u.shape}")
-        if not (np.all(np.isfinite(g)) and np.all(np.isfinite(u))):
-            raise InputError("gaps and voltages must be finite")
-        if np.any(g <= 0):
-            raise InputError("gaps must be > 0 m")
-        s = self.substitute_gaps(g)
-        i0 = _per_circuit(initial_currents, self.circuit_names, "initial_currents")
-        self._check_range(s, np.broadcast_to(i0, s.shape), t)
-        sd = np.diff(s, axis=0) / np.diff(t)[:, None]
-        rel = tuple(float(v) for v in (t[1:] - t[0]))
-        f = self._integrator(rel)
-        uu = np.concatenate([u[:-1], sd], axis=1).T
-        x0 = np.concatenate([i0, s[0]])
+        if not (isinstance(dt, (int, float)) and math.isfinite(dt) and dt > 0):
+            raise InputError(f"dt = {dt!r} s must be a finite number > 0")
+        u = _per_circuit(voltages, self.circuit_names, "voltages")
+        g = state.gaps_m if gaps is None else _per_gap(gaps, self.gap_names, positive=True)
+        gd = _per_gap(gap_rates, self.gap_names, positive=False)
+        if np.any(g + gd * dt <= 0.0):
+            raise InputError(f"gaps must stay > 0 m over the step: end {(g + gd * dt).tolist()} m")
+        s0, sd = self.substitute_gaps(g), self.substitute_gaps(gd)
+        t = np.array([state.time_s, state.time_s + dt])
+        x = self._integrate(t, np.concatenate([state.inductor_currents_A, s0]),
+                            np.concatenate([u, sd])[:, None])[-1]
+        new = CurrentModelState(state.time_s + float(dt), x[:self.n_circuits], g + gd * dt)
+        return new, self.outputs(new, u)
+
+    def _integrate(self, t: np.ndarray, x0: np.ndarray, uu: np.ndarray) -> np.ndarray:
+        """States (n_t, 2 n_c) on the grid ``t``; controls ``uu`` (2 n_c, n_t - 1)."""
+        f = self._integrator(tuple(float(v) for v in (t[1:] - t[0])))
         try:
-            res = f(x0=x0, u=uu)
+            xf = np.asarray(f(x0=x0, u=uu)["xf"])
         except RuntimeError as exc:
-            self._locate_failure(t, x0, uu, str(exc))
-        xs = np.concatenate([x0[:, None], np.asarray(res["xf"])], axis=1).T
+            xf = self._integrate_stepwise(t, x0, uu, str(exc))
+        xs = np.concatenate([x0[:, None], xf], axis=1).T
+        nc = self.n_circuits
+        self._check_range(xs[:, nc:], xs[:, :nc], t)
+        return xs
+
+    def simulate(self, t: Any, *, gaps: Any, voltages: Any, gap_rates: Any = None,
+                 dt: float | None = None, initial_currents: Any = None,
+                 initial_state: CurrentModelState | None = None,
+                 gap_rate_tolerance: float = 0.02) -> ReducedSimulation:
+        """Simulate on a time grid; same inputs and conventions as :func:`maglevkit.simulate`.
+
+        Gaps move linearly between samples, voltages are held from each sample to the
+        next; the default initial state is the steady state ``I = U(t0) / R_el``.
+        """
+        times = time_grid(t, dt)
+        g = sample_input(gaps, times, self.gap_names, "gaps", "m")
+        if np.any(g <= 0.0):
+            raise InputError("gaps must be > 0 m")
+        u = sample_input(voltages, times, self.circuit_names, "voltages", "V")
+        secant = gap_secants(times, g, gap_rates, self.gap_names, gap_rate_tolerance)
+        if initial_state is not None:
+            if initial_currents is not None:
+                raise InputError("give initial_currents or initial_state, not both")
+            if not isinstance(initial_state, CurrentModelState):
+                raise InputError("initial_state must be a CurrentModelState")
+            i0 = initial_state.inductor_currents_A
+        else:
+            i0 = _per_circuit(u[0] / self.resistance_ohm if initial_currents is None
+                              else initial_currents, self.circuit_names, "initial_currents")
+        s = self.substitute_gaps(g)
+        self._check_range(s, np.broadcast_to(i0, s.shape), times)
+        sd = self.substitute_gaps(secant)
+        xs = self._integrate(times, np.concatenate([i0, s[0]]),
+                             np.concatenate([u[:-1], sd], axis=1).T)
         nc = self.n_circuits
         il = xs[:, :nc]
-        self._check_range(xs[:, nc:], il, t)
-        coil, fc, _ = self.outputs.map(t.size)(il.T, u.T, xs[:, nc:].T)
+        held = np.vstack((u[:1], u[:-1]))          # left limits: the voltage of [t_k-1, t_k)
+        coil, fc, _ = self.outputs_fun.map(times.size)(il.T, held.T, xs[:, nc:].T)
         fc = np.asarray(fc).T
+        final = CurrentModelState(float(times[-1]), il[-1].copy(), g[-1].copy())
         return ReducedSimulation(
-            circuit_names=self.circuit_names, gap_names=self.gap_names, time_s=t, gaps_m=g,
-            voltages_V=u, currents_A=np.asarray(coil).T, inductor_currents_A=il,
-            circuit_force_N=fc, pole_force_N=fc @ self._share.T, force_N=fc.sum(axis=1))
+            time_s=times, gaps_m=g, gap_rates_m_per_s=np.vstack((secant, secant[-1:])),
+            voltages_V=np.vstack((u[:-1], u[-2:-1])), currents_A=np.asarray(coil).T,
+            inductor_currents_A=il, circuit_force_N=fc, pole_force_N=fc @ self._share.T,
+            force_N=fc.sum(axis=1), gap_names=self.gap_names, circuit_names=self.circuit_names,
+            final_state=final)
 
 
 def _last_line(text: str) -> str:

@@ -35,7 +35,7 @@ from __future__ import annotations
 import math
 from collections.abc import Mapping
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, overload
 
 import casadi as ca
 import numpy as np
@@ -45,7 +45,8 @@ from ..circuit.assembly import assemble
 from ..circuit.network import Network
 from ..errors import InputError, SolverError, TopologyError
 from ..materials import MU0
-from .signals import Signal
+from .current import CurrentModel, ReducedSimulation
+from .inputs import gap_secants, sample_input, time_grid
 from .statics import as_network, current_vector, gap_vector, magnetic_energy, solve_statics
 
 __all__ = [
@@ -642,99 +643,33 @@ class SimulationResult:
         return cols
 
 
-def _time_grid(t: Any, dt: float | None) -> np.ndarray:
-    try:
-        arr = np.asarray(t, dtype=float)
-    except (TypeError, ValueError) as exc:
-        raise InputError(f"t must be (t0, tf) or an increasing array of times [s], got {t!r}") \
-            from exc
-    if arr.ndim != 1 or arr.size < 2 or not np.all(np.isfinite(arr)):
-        raise InputError("t must be (t0, tf) or a 1-D array of at least 2 finite times [s]")
-    if arr.size == 2 and isinstance(t, tuple):
-        t0, tf = float(arr[0]), float(arr[1])
-        if not tf > t0:
-            raise InputError(f"t_span = ({t0}, {tf}): tf must be > t0")
-        step = 1e-4 if dt is None else dt
-        if not (isinstance(step, (int, float)) and math.isfinite(step) and step > 0.0):
-            raise InputError(f"dt = {dt!r} s must be a finite number > 0")
-        n = int(math.floor((tf - t0) / step * (1.0 + 1e-12)))
-        grid = t0 + step * np.arange(n + 1)
-        if tf - grid[-1] > 1e-9 * step:
-            grid = np.append(grid, tf)
-        else:
-            grid[-1] = tf
-        return grid
-    if dt is not None:
-        raise InputError("give either dt with t = (t0, tf), or an explicit time grid, not both")
-    if np.any(np.diff(arr) <= 0.0):
-        raise InputError("the time grid must be strictly increasing")
-    return arr
+@overload
+def simulate(model: CurrentModel, t: Any, *, gaps: Any, voltages: Any, gap_rates: Any = None,
+             dt: float | None = None, initial_currents: Any = None,
+             initial_state: Any = None, gap_rate_tolerance: float = 0.02,
+             **options: Any) -> ReducedSimulation: ...
 
 
-def _sample(value: Any, times: np.ndarray, names: tuple[str, ...], what: str,
-            unit: str) -> np.ndarray:
-    """Sample an input (scalar, vector, mapping, Signal, callable, array) on ``times``."""
-    n, k = times.size, len(names)
-    if isinstance(value, Mapping):
-        unknown = sorted(set(value) - set(names))
-        missing = [nm for nm in names if nm not in value]
-        if unknown or missing:
-            raise InputError(f"{what}: unknown names {unknown}, missing {missing}; expected "
-                             f"{list(names)}")
-        cols = [_sample(value[nm], times, (nm,), f"{what}[{nm}]", unit)[:, 0] for nm in names]
-        return np.stack(cols, axis=1)
-    if isinstance(value, Signal):
-        arr = np.repeat(np.asarray(value(times), dtype=float)[:, None], k, axis=1)
-    elif callable(value):
-        rows = []
-        for t in times:
-            try:
-                v = np.asarray(value(float(t)), dtype=float)
-            except (TypeError, ValueError) as exc:
-                raise InputError(f"{what}: the callable must return numbers [{unit}] for a "
-                                 f"time t [s]; it failed at t = {t}: {exc}") from exc
-            if v.ndim == 0:
-                v = np.full(k, float(v))
-            if v.shape != (k,):
-                raise InputError(f"{what}: the callable returned shape {v.shape} at t = {t}; "
-                                 f"expected a scalar or {k} values ({list(names)})")
-            rows.append(v)
-        arr = np.array(rows)
-    else:
-        try:
-            a = np.asarray(value, dtype=float)
-        except (TypeError, ValueError) as exc:
-            raise InputError(f"{what} must be numbers [{unit}], a Signal, a callable of t or "
-                             f"a sampled array; got {value!r}") from exc
-        if a.ndim == 0:
-            arr = np.full((n, k), float(a))
-        elif a.shape == (k,) and not (k == 1 and n == 1):
-            arr = np.broadcast_to(a, (n, k)).copy()
-        elif a.shape == (n,) and k == 1:
-            arr = a[:, None].copy()
-        elif a.shape == (n, k):
-            arr = a.copy()
-        else:
-            raise InputError(f"{what} array has shape {a.shape}; expected a scalar, ({k},) "
-                             f"(one per {list(names)}), or samples ({n}, {k}) on the "
-                             f"{n}-point time grid")
-    if not np.all(np.isfinite(arr)):
-        bad = int(np.argmax(~np.all(np.isfinite(arr), axis=1)))
-        raise InputError(f"{what} is not finite at t = {times[bad]:.6g} s: {arr[bad].tolist()}")
-    return arr
+@overload
+def simulate(model: Any, t: Any, *, gaps: Any, voltages: Any, gap_rates: Any = None,
+             dt: float | None = None, initial_currents: Any = None,
+             initial_state: Any = None, gap_rate_tolerance: float = 0.02,
+             **options: Any) -> SimulationResult: ...
 
 
 def simulate(model: Any, t: Any, *, gaps: Any, voltages: Any, gap_rates: Any = None,
              dt: float | None = None, initial_currents: Any = None,
-             initial_state: FluxState | None = None, gap_rate_tolerance: float = 0.02,
-             **options: Any) -> SimulationResult:
+             initial_state: Any = None, gap_rate_tolerance: float = 0.02,
+             **options: Any) -> SimulationResult | ReducedSimulation:
     """Simulate the flux model on a time grid.
 
     Parameters
     ----------
-    model : FluxModel, Magnet or Network
-        The model; ``options`` (``saturation``, ``eddy_currents``, ``method``, ``rtol``,
-        ``atol``, ...) build a :class:`FluxModel` (or change a given one).
+    model : FluxModel, CurrentModel, Magnet or Network
+        The model (a :class:`~maglevkit.models.current.CurrentModel` runs the reduced model
+        with the same inputs and conventions); ``options`` (``saturation``,
+        ``eddy_currents``, ``method``, ``rtol``, ``atol``, ...) build a :class:`FluxModel`
+        (or change a given one).
     t : (t0, tf) or array_like
         A time span [s] (grid ``t0 + k dt``, ending exactly at ``tf``) or an increasing
         time grid [s].  Inputs are sampled on the grid.
@@ -768,30 +703,24 @@ def simulate(model: Any, t: Any, *, gaps: Any, voltages: Any, gap_rates: Any = N
     SolverError
         The integrator failed (time, state and reason in the exception).
     """
+    if isinstance(model, CurrentModel):
+        if options:
+            raise InputError(f"options {sorted(options)} apply to the flux model; build the "
+                             "CurrentModel with its own options instead")
+        return model.simulate(t, gaps=gaps, voltages=voltages, gap_rates=gap_rates, dt=dt,
+                              initial_currents=initial_currents, initial_state=initial_state,
+                              gap_rate_tolerance=gap_rate_tolerance)
     if isinstance(model, FluxModel):
         fm = FluxModel(model.network, **{**model._options, **options}) if options else model
     else:
         fm = FluxModel(model, **options)
     net = fm.network
-    times = _time_grid(t, dt)
-    s = _sample(gaps, times, net.gap_names, "gaps", "m")
+    times = time_grid(t, dt)
+    s = sample_input(gaps, times, net.gap_names, "gaps", "m")
     gap_vector(net, s)  # checks > 0
-    U = _sample(voltages, times, net.circuit_names, "voltages", "V")
+    U = sample_input(voltages, times, net.circuit_names, "voltages", "V")
     h = np.diff(times)
-    secant = np.diff(s, axis=0) / h[:, None]
-    if gap_rates is not None:
-        r = _sample(gap_rates, times, net.gap_names, "gap_rates", "m/s")
-        mean = 0.5 * (r[1:] + r[:-1])
-        tol = gap_rate_tolerance * max(float(np.abs(r).max()), float(np.abs(secant).max())) \
-            + 1e-6
-        err = np.abs(mean - secant)
-        if np.any(err > tol):
-            j = int(np.argmax(np.max(err - tol, axis=1)))
-            raise InputError(
-                f"gaps and gap_rates disagree on [{times[j]:.6g}, {times[j + 1]:.6g}] s: the "
-                f"gaps change at {secant[j].tolist()} m/s but the rates average "
-                f"{mean[j].tolist()} m/s (tolerance {tol:.3g} m/s); pass consistent signals "
-                "or only the gaps")
+    secant = gap_secants(times, s, gap_rates, net.gap_names, gap_rate_tolerance)
     if initial_state is not None:
         if initial_currents is not None:
             raise InputError("give initial_currents or initial_state, not both")

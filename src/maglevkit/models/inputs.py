@@ -1,0 +1,126 @@
+"""Input signals of the dynamic models: time grids and sampling of gaps and voltages.
+
+Shared by the flux-based and the current-based model so that both accept the same inputs:
+constants, per-name mappings, :class:`~maglevkit.models.signals.Signal` objects, callables
+of time, or sampled arrays.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from typing import Any
+
+import numpy as np
+
+from ..errors import InputError
+from .signals import Signal
+
+__all__ = ["time_grid", "sample_input", "gap_secants"]
+
+
+def time_grid(t: Any, dt: float | None) -> np.ndarray:
+    try:
+        arr = np.asarray(t, dtype=float)
+    except (TypeError, ValueError) as exc:
+        raise InputError(f"t must be (t0, tf) or an increasing array of times [s], got {t!r}") \
+            from exc
+    if arr.ndim != 1 or arr.size < 2 or not np.all(np.isfinite(arr)):
+        raise InputError("t must be (t0, tf) or a 1-D array of at least 2 finite times [s]")
+    if arr.size == 2 and isinstance(t, tuple):
+        t0, tf = float(arr[0]), float(arr[1])
+        if not tf > t0:
+            raise InputError(f"t_span = ({t0}, {tf}): tf must be > t0")
+        step = 1e-4 if dt is None else dt
+        if not (isinstance(step, (int, float)) and math.isfinite(step) and step > 0.0):
+            raise InputError(f"dt = {dt!r} s must be a finite number > 0")
+        n = int(math.floor((tf - t0) / step * (1.0 + 1e-12)))
+        grid = t0 + step * np.arange(n + 1)
+        if tf - grid[-1] > 1e-9 * step:
+            grid = np.append(grid, tf)
+        else:
+            grid[-1] = tf
+        return grid
+    if dt is not None:
+        raise InputError("give either dt with t = (t0, tf), or an explicit time grid, not both")
+    if np.any(np.diff(arr) <= 0.0):
+        raise InputError("the time grid must be strictly increasing")
+    return arr
+
+
+def sample_input(value: Any, times: np.ndarray, names: tuple[str, ...], what: str,
+            unit: str) -> np.ndarray:
+    """Sample an input (scalar, vector, mapping, Signal, callable, array) on ``times``."""
+    n, k = times.size, len(names)
+    if isinstance(value, Mapping):
+        unknown = sorted(set(value) - set(names))
+        missing = [nm for nm in names if nm not in value]
+        if unknown or missing:
+            raise InputError(f"{what}: unknown names {unknown}, missing {missing}; expected "
+                             f"{list(names)}")
+        cols = [sample_input(value[nm], times, (nm,), f"{what}[{nm}]", unit)[:, 0] for nm in names]
+        return np.stack(cols, axis=1)
+    if isinstance(value, Signal):
+        arr = np.repeat(np.asarray(value(times), dtype=float)[:, None], k, axis=1)
+    elif callable(value):
+        rows = []
+        for t in times:
+            try:
+                v = np.asarray(value(float(t)), dtype=float)
+            except (TypeError, ValueError) as exc:
+                raise InputError(f"{what}: the callable must return numbers [{unit}] for a "
+                                 f"time t [s]; it failed at t = {t}: {exc}") from exc
+            if v.ndim == 0:
+                v = np.full(k, float(v))
+            if v.shape != (k,):
+                raise InputError(f"{what}: the callable returned shape {v.shape} at t = {t}; "
+                                 f"expected a scalar or {k} values ({list(names)})")
+            rows.append(v)
+        arr = np.array(rows)
+    else:
+        try:
+            a = np.asarray(value, dtype=float)
+        except (TypeError, ValueError) as exc:
+            raise InputError(f"{what} must be numbers [{unit}], a Signal, a callable of t or "
+                             f"a sampled array; got {value!r}") from exc
+        if a.ndim == 0:
+            arr = np.full((n, k), float(a))
+        elif a.shape == (k,) and not (k == 1 and n == 1):
+            arr = np.broadcast_to(a, (n, k)).copy()
+        elif a.shape == (n,) and k == 1:
+            arr = a[:, None].copy()
+        elif a.shape == (n, k):
+            arr = a.copy()
+        else:
+            raise InputError(f"{what} array has shape {a.shape}; expected a scalar, ({k},) "
+                             f"(one per {list(names)}), or samples ({n}, {k}) on the "
+                             f"{n}-point time grid")
+    if not np.all(np.isfinite(arr)):
+        bad = int(np.argmax(~np.all(np.isfinite(arr), axis=1)))
+        raise InputError(f"{what} is not finite at t = {times[bad]:.6g} s: {arr[bad].tolist()}")
+    return arr
+
+
+def gap_secants(times: np.ndarray, gaps: np.ndarray, gap_rates: Any, names: tuple[str, ...],
+                tolerance: float) -> np.ndarray:
+    """Gap rates per interval [m/s] (secants of the sampled gaps), checked against ``gap_rates``.
+
+    If ``gap_rates`` is given, the trapezoidal mean of the rates over each interval may
+    differ from the secant by at most ``tolerance`` times the largest rate (plus 1 um/s);
+    otherwise :class:`InputError`.
+    """
+    h = np.diff(times)
+    secant = np.diff(gaps, axis=0) / h[:, None]
+    if gap_rates is not None:
+        r = sample_input(gap_rates, times, names, "gap_rates", "m/s")
+        mean = 0.5 * (r[1:] + r[:-1])
+        tol = tolerance * max(float(np.abs(r).max()), float(np.abs(secant).max())) + 1e-6
+        err = np.abs(mean - secant)
+        if np.any(err > tol):
+            j = int(np.argmax(np.max(err - tol, axis=1)))
+            raise InputError(
+                f"gaps and gap_rates disagree on [{times[j]:.6g}, {times[j + 1]:.6g}] s: the "
+                f"gaps change at {secant[j].tolist()} m/s but the rates average "
+                f"{mean[j].tolist()} m/s (tolerance {tol:.3g} m/s); pass consistent signals "
+                "or only the gaps")
+    return secant
