@@ -1,0 +1,200 @@
+"""Detailed (flux-based) vs reduced (current-based) model on a standard set of scenarios.
+
+Each scenario runs both models with the same inputs (or the same closed loop) and reports,
+per circuit, the normalised RMS error of the coil current and of the circuit force
+
+    e_y = RMS(y_reduced - y_detailed) / RMS(y_detailed)
+
+and, for information, the error normalised by the peak-to-peak range of the detailed
+signal.  Wall-clock times of both runs give the speed-up.  The standard set
+(:func:`standard_scenarios`) around an operating point ``(s0, I0)``:
+
+* voltage steps up and down (+-20 % of ``R I0``) on every circuit;
+* gap sines of 1 mm amplitude at 0.5, 5 and 50 Hz with constant voltages;
+* a gap ramp of +2 mm in 0.1 s;
+* a closed loop: cascade PID gap controller and heave mass, reference step of +1 mm;
+* "coupling" (reported separately): a voltage step on the first circuit only -- the
+  reduced model neglects the transformer coupling between circuits (paper Sec. IV-A).
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from .control import closed_loop, design_gap_controller
+from .errors import InputError
+from .models.flux import FluxModel, simulate
+from .models.statics import solve_statics
+from .vehicle import STANDARD_GRAVITY, HeaveMass
+
+__all__ = ["ComparisonScenario", "ComparisonResult", "standard_scenarios", "compare_models",
+           "circuit_forces"]
+
+
+@dataclass(frozen=True)
+class ComparisonScenario:
+    """One comparison case.
+
+    ``kind`` is ``"open"`` (inputs ``gaps``/``voltages`` as accepted by
+    :func:`maglevkit.simulate`) or ``"closed"`` (``gap_reference`` callable, gap
+    controller and heave mass designed at the operating point).
+    """
+
+    name: str
+    description: str
+    duration_s: float
+    dt_s: float
+    gaps: Any = None
+    voltages: Any = None
+    gap_reference: Callable[[float], float] | None = None
+    kind: str = "open"
+    coupling: bool = False
+
+
+@dataclass(frozen=True)
+class ComparisonResult:
+    """Errors and timings of one scenario (per circuit where named so)."""
+
+    scenario: ComparisonScenario
+    circuit_names: tuple[str, ...]
+    time_s: np.ndarray
+    detailed_currents_A: np.ndarray
+    reduced_currents_A: np.ndarray
+    detailed_forces_N: np.ndarray
+    reduced_forces_N: np.ndarray
+    current_error: np.ndarray
+    force_error: np.ndarray
+    current_error_range: np.ndarray
+    force_error_range: np.ndarray
+    detailed_wall_s: float
+    reduced_wall_s: float
+    extra: dict = field(default_factory=dict)
+
+    @property
+    def speedup(self) -> float:
+        """Wall time of the detailed run over that of the reduced run."""
+        return self.detailed_wall_s / self.reduced_wall_s
+
+    @property
+    def max_error(self) -> float:
+        return float(max(self.current_error.max(), self.force_error.max()))
+
+
+def circuit_forces(pole_force: np.ndarray, gap_names: tuple[str, ...],
+                   groups: dict[str, tuple[str, ...]], circuits: tuple[str, ...]) -> np.ndarray:
+    """Sum pole forces (n_t, n_gaps) into circuit forces (n_t, n_circuits)."""
+    gi = {g: k for k, g in enumerate(gap_names)}
+    return np.stack([pole_force[:, [gi[g] for g in groups[c]]].sum(axis=1) for c in circuits],
+                    axis=1)
+
+
+def _nrms(ref: np.ndarray, red: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    err = np.sqrt(np.mean((red - ref) ** 2, axis=0))
+    scale = np.sqrt(np.mean(ref**2, axis=0))
+    rng = np.ptp(ref, axis=0)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return err / scale, np.where(rng > 0, err / np.where(rng > 0, rng, 1.0), np.nan)
+
+
+def standard_scenarios(magnet: Any, *, gap_m: float, current_A: float) -> list[ComparisonScenario]:
+    """The standard comparison set around the operating point ``(gap_m, current_A)``."""
+    net = getattr(magnet, "network", magnet)
+    r = net.resistances
+    u0 = r * current_A
+    nc = len(r)
+    tau = float(np.max(solve_statics(magnet, gaps=gap_m, currents=current_A)
+                       .common_differential_inductance_H) / np.min(r))
+    t_step = min(3.0 * tau, 1.5)
+    out = [
+        ComparisonScenario("voltage step up", "+20 % voltage on every circuit at constant gap",
+                           t_step, t_step / 1000, gaps=gap_m,
+                           voltages=lambda t: u0 * (1.2 if t >= 0.01 * t_step else 1.0)),
+        ComparisonScenario("voltage step down", "-20 % voltage on every circuit",
+                           t_step, t_step / 1000, gaps=gap_m,
+                           voltages=lambda t: u0 * (0.8 if t >= 0.01 * t_step else 1.0)),
+    ]
+    for f in (0.5, 5.0, 50.0):
+        dur = max(2.0 / f, 0.1)
+        out.append(ComparisonScenario(
+            f"gap sine {f:g} Hz", f"gap {gap_m * 1e3:g} +- 1 mm at {f:g} Hz, constant voltage",
+            dur, min(1.0 / (f * 100), 1e-3),
+            gaps=lambda t, f=f: gap_m + 1e-3 * math.sin(2 * math.pi * f * t), voltages=u0))
+    out.append(ComparisonScenario(
+        "gap ramp", "gap +2 mm in 0.1 s, then held; constant voltage", 0.3, 3e-4,
+        gaps=lambda t: gap_m + 2e-3 * min(max(t - 0.02, 0.0) / 0.1, 1.0), voltages=u0))
+    out.append(ComparisonScenario(
+        "closed loop", "cascade PID gap control, heave mass, +1 mm reference step", 0.4, 1e-3,
+        gap_reference=lambda t: gap_m + (1e-3 if t >= 0.05 else 0.0), kind="closed"))
+    if nc > 1:
+        first = np.zeros(nc)
+        first[0] = 1.0
+        out.append(ComparisonScenario(
+            "coupling", "+20 % voltage on the first circuit only", t_step, t_step / 1000,
+            gaps=gap_m, voltages=lambda t: u0 * (1.0 + 0.2 * first * (t >= 0.01 * t_step)),
+            coupling=True))
+    return out
+
+
+def compare_models(detailed: Any, reduced: Any, scenarios: list[ComparisonScenario], *,
+                   gap_m: float, current_A: float) -> list[ComparisonResult]:
+    """Run every scenario with both models and measure errors and wall times.
+
+    Parameters
+    ----------
+    detailed : Magnet, Network or FluxModel
+        The detailed model.
+    reduced : CurrentModel
+        The current-based model (its maps must belong to the same magnet).
+    """
+    fm = detailed if isinstance(detailed, FluxModel) else FluxModel(detailed)
+    if tuple(reduced.circuit_names) != tuple(fm.circuit_names) or \
+            tuple(reduced.gap_names) != tuple(fm.gap_names):
+        raise InputError("the reduced model has other circuits or gaps than the detailed one")
+    groups = reduced.maps.pole_groups
+    circuits = tuple(fm.circuit_names)
+    results = []
+    for sc in scenarios:
+        if sc.kind == "closed":
+            force0 = float(solve_statics(fm.network, gaps=gap_m, currents=current_A).force_N)
+            veh = HeaveMass(force0 / STANDARD_GRAVITY)
+            ctl = design_gap_controller(fm.network, mass_kg=veh.mass_kg, gap_m=gap_m,
+                                        current_A=current_A)
+            runs = []
+            for model in (fm, reduced):
+                t0 = time.perf_counter()
+                res = closed_loop(model, veh, ctl, duration_s=sc.duration_s, dt_s=sc.dt_s,
+                                  initial_gap_m=gap_m, initial_current_A=current_A,
+                                  gap_reference=sc.gap_reference)
+                runs.append((time.perf_counter() - t0, res))
+            (wd, d), (wr, r) = runs
+            t = d.time_s
+            fd = circuit_forces(d.pole_force_N, d.gap_names, groups, circuits)
+            fr = circuit_forces(r.pole_force_N, r.gap_names, groups, circuits)
+            extra = {"gap_error": float(np.sqrt(np.mean((r.gap_m - d.gap_m) ** 2))
+                                        / np.ptp(d.gap_m))}
+            cd, cr = d.currents_A, r.currents_A
+        else:
+            t0 = time.perf_counter()
+            ds = simulate(fm, (0.0, sc.duration_s), dt=sc.dt_s, gaps=sc.gaps,
+                          voltages=sc.voltages)
+            wd = time.perf_counter() - t0
+            t0 = time.perf_counter()
+            rs = simulate(reduced, (0.0, sc.duration_s), dt=sc.dt_s, gaps=sc.gaps,
+                          voltages=sc.voltages)
+            wr = time.perf_counter() - t0
+            t = ds.time_s
+            fd = circuit_forces(ds.pole_force_N, ds.gap_names, groups, circuits)
+            fr = rs.circuit_force_N
+            cd, cr = ds.currents_A, rs.currents_A
+            extra = {}
+        ce, cer = _nrms(cd, cr)
+        fe, fer = _nrms(fd, fr)
+        results.append(ComparisonResult(sc, circuits, t, cd, cr, fd, fr, ce, fe, cer, fer,
+                                        wd, wr, extra))
+    return results
