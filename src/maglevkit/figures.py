@@ -152,9 +152,69 @@ def figure_inductance(magnet: Magnet, path: str | Path, *, data: Fig7Data | None
     return save(fig, path)
 
 
+@dataclass(frozen=True)
+class CouplingResponse:
+    """Response of all circuits to a voltage step in the first one (flux-based model)."""
+
+    time_s: np.ndarray
+    circuit_names: tuple[str, ...]
+    relative_current_change: np.ndarray   # (n_t, n_circuits), (I - I0) / I0
+    other_peak_ratio: float               # max |dI_other| / max |dI_stepped|
+    mutual_ratio: float                   # max |L_ij| / sqrt(L_ii L_jj), i != j
+
+
+def coupling_response(magnet: Magnet, *, step: float = 0.2) -> CouplingResponse:
+    """Step the first circuit's voltage by ``step`` (relative) at the nominal point and
+    simulate the detailed flux-based model for three time constants."""
+    from .magnets.characteristics import coupling_ratios
+    from .models.flux import simulate
+
+    s0, i0 = nominal_point(magnet)
+    net = magnet.network
+    r = net.resistances
+    sol = solve_statics(magnet, gaps=s0, currents=i0)
+    tau = float(sol.differential_inductance_H[0, 0] / r[0])
+    u0 = r * i0
+    bump = np.zeros(len(r))
+    bump[0] = step
+    dur = 3.0 * tau
+    res = simulate(magnet, (0.0, dur), dt=dur / 600, gaps=s0,
+                   voltages=lambda t: u0 * (1.0 + bump * (t >= 0.02 * dur)), initial_currents=i0)
+    rel = (res.currents_A - i0) / i0
+    peak = np.max(np.abs(rel), axis=0)
+    ratios = coupling_ratios(magnet, gap=s0, current=i0).ratio
+    off = np.abs(ratios - np.diag(np.diag(ratios)))
+    return CouplingResponse(res.time_s, res.circuit_names, rel,
+                            float(peak[1:].max() / peak[0]), float(off.max()))
+
+
+def figure_coupling(magnet: Magnet, path: str | Path, *,
+                    data: CouplingResponse | None = None) -> Path:
+    """Currents of all circuits after a voltage step in the first circuit (paper Sec. IV-A)."""
+    d = data or coupling_response(magnet)
+    fig, ax = plt.subplots(figsize=(7.5, 4.5))
+    for j, name in enumerate(d.circuit_names):
+        ax.plot(d.time_s * 1e3, 100 * d.relative_current_change[:, j],
+                lw=2.2 if j == 0 else 1.6, label=f"circuit {name}" + (" (stepped)" if j == 0 else ""))
+    ax.set_xlabel("time [ms]")
+    ax.set_ylabel("current change (I - I0)/I0 [%]")
+    ax.set_title(f"Coupling of the circuits: +20 % voltage step on '{d.circuit_names[0]}'\n"
+                 f"{magnet.name}")
+    ax.grid(True, alpha=0.3)
+    ax.legend()
+    fig.text(0.01, -0.04, f"largest response of another circuit: {100 * d.other_peak_ratio:.2f} % "
+             f"of the stepped one; static mutual/self inductance ratio {d.mutual_ratio:.4f} "
+             "(flux-based model, nominal point)", fontsize=8, color="0.3")
+    return save(fig, path)
+
+
 def write_figures(magnet: Magnet, out: str | Path) -> list[Path]:
-    """Write every figure that statics can give for ``magnet`` into folder ``out``."""
+    """Write the figures of ``magnet`` into folder ``out``: Figs. 6-7 analogs and, for
+    magnets with several circuits, the coupling response (flux-based model)."""
     out = Path(out)
     stem = Path(magnet.source).stem or "magnet"
-    return [figure_force_current(magnet, out / f"{stem}-fig6-force-current.png"),
-            figure_inductance(magnet, out / f"{stem}-fig7-inductance.png")]
+    paths = [figure_force_current(magnet, out / f"{stem}-fig6-force-current.png"),
+             figure_inductance(magnet, out / f"{stem}-fig7-inductance.png")]
+    if len(magnet.network.circuits) > 1:
+        paths.append(figure_coupling(magnet, out / f"{stem}-coupling.png"))
+    return paths

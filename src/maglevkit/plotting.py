@@ -120,3 +120,30 @@ def plot_simulation(res: Any, path: str | Path, *, title: str = "") -> Path:
         fig.suptitle(title)
     fig.tight_layout()
     return save(fig, path)
+
+
+def plot_comparison(result: Any, path: str | Path, *, title: str = "") -> Path:
+    """Detailed vs reduced time responses of one comparison scenario (current and force)."""
+    t = result.time_s * 1e3
+    fig, (a1, a2) = plt.subplots(2, 1, figsize=(9, 6.5), sharex=True)
+    for j, name in enumerate(result.circuit_names):
+        line, = a1.plot(t, result.detailed_currents_A[:, j], lw=2.0, label=f"{name}: detailed")
+        a1.plot(t, result.reduced_currents_A[:, j], "--", color="k", lw=1.0,
+                label=f"{name}: reduced")
+        a2.plot(t, result.detailed_forces_N[:, j] / 1e3, lw=2.0, color=line.get_color())
+        a2.plot(t, result.reduced_forces_N[:, j] / 1e3, "--", color="k", lw=1.0)
+    a1.set_ylabel("coil current [A]")
+    a2.set_ylabel("circuit force [kN]")
+    a2.set_xlabel("time [ms]")
+    for ax in (a1, a2):
+        ax.grid(True, alpha=0.3)
+    a1.legend(fontsize=8, ncol=2)
+    errs = ", ".join(f"{n}: I {100 * ci:.2f} %, F {100 * fi:.2f} %" for n, ci, fi in
+                     zip(result.circuit_names, result.current_error, result.force_error,
+                         strict=True))
+    a1.set_title((title + "\n" if title else "") + f"{result.scenario.name}: "
+                 f"{result.scenario.description}")
+    fig.text(0.01, 0.0, f"normalised RMS error {errs}; wall time detailed "
+             f"{result.detailed_wall_s * 1e3:.0f} ms, reduced {result.reduced_wall_s * 1e3:.1f} ms "
+             f"(x{result.speedup:.0f})", fontsize=8, color="0.3")
+    return save(fig, path)

@@ -5,7 +5,8 @@ Sub-commands live in sibling modules and register themselves on :data:`app`.
 
 from __future__ import annotations
 
-from . import demo as _demo  # noqa: F401,E402  (registers commands)
+from . import compare as _compare  # noqa: F401,E402  (registers commands)
+from . import demo as _demo  # noqa: F401,E402
 from . import figures as _figures  # noqa: F401,E402
 from . import maps as _maps  # noqa: F401,E402
 from . import simulate as _simulate  # noqa: F401,E402
