@@ -94,7 +94,8 @@ def test_static_inductance_independent_of_eddy_currents(std: mk.Magnet) -> None:
 def test_figures_written(std: mk.Magnet, tmp_path) -> None:  # type: ignore[no-untyped-def]
     paths = write_figures(std, tmp_path)
     assert [p.name for p in paths] == ["tr09-standard-fig6-force-current.png",
-                                       "tr09-standard-fig7-inductance.png"]
+                                       "tr09-standard-fig7-inductance.png",
+                                       "tr09-standard-coupling.png"]
     for p in paths:
         assert p.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n" and p.stat().st_size > 20_000
 
@@ -107,5 +108,6 @@ def test_figures_cli(tmp_path) -> None:  # type: ignore[no-untyped-def]
     res = CliRunner().invoke(app, ["figures", "tr-guidance", "--out", str(tmp_path)])
     assert res.exit_code == 0, res.output
     assert len(list(tmp_path.glob("tr-guidance-fig*.png"))) == 2
+    assert (tmp_path / "tr-guidance-coupling.png").is_file()   # two circuits
     bad = CliRunner().invoke(app, ["figures", "u-magnet", "--out", str(tmp_path)])
     assert bad.exit_code == 2 and "[operating]" in bad.output

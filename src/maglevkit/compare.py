@@ -97,6 +97,13 @@ def circuit_forces(pole_force: np.ndarray, gap_names: tuple[str, ...],
                     axis=1)
 
 
+def _scaled(fraction: Callable[[float], float] | None,
+            force: float) -> Callable[[float], float] | None:
+    if fraction is None:
+        return None
+    return lambda t: fraction(t) * force
+
+
 def _nrms(ref: np.ndarray, red: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     err = np.sqrt(np.mean((red - ref) ** 2, axis=0))
     scale = np.sqrt(np.mean(ref**2, axis=0))
@@ -173,12 +180,10 @@ def compare_models(detailed: Any, reduced: Any, scenarios: list[ComparisonScenar
             runs = []
             for model in (fm, reduced):
                 t0 = time.perf_counter()
-                frac = sc.external_force_fraction
                 res = closed_loop(model, veh, ctl, duration_s=sc.duration_s, dt_s=sc.dt_s,
                                   initial_gap_m=gap_m, initial_current_A=current_A,
                                   gap_reference=sc.gap_reference,
-                                  external_force=None if frac is None
-                                  else (lambda t, f=frac, f0=force0: f(t) * f0))
+                                  external_force=_scaled(sc.external_force_fraction, force0))
                 runs.append((time.perf_counter() - t0, res))
             (wd, d), (wr, r) = runs
             t = d.time_s
