@@ -51,3 +51,30 @@ def test_statics_csv_and_plot(tmp_path: Path) -> None:
     np.testing.assert_allclose(data[:, 2], sol.force_N.ravel(), rtol=1e-8)
     np.testing.assert_allclose(data[:, 5], sol.dpsi_dgap_Wb_per_m.sum(-1).ravel(), rtol=1e-8)
     assert out_png.stat().st_size > 10_000 and out_png.read_bytes()[:4] == b"\x89PNG"
+
+
+@pytest.mark.parametrize("sub", ["build", "plot"])
+def test_help_of_maps_subcommands(sub: str) -> None:
+    res = runner.invoke(app, ["maps", sub, "--help"])
+    assert res.exit_code == 0 and "Usage" in res.output
+
+
+def test_demo_runs_the_whole_chain(tmp_path: Path) -> None:
+    res = runner.invoke(app, ["demo", "--magnet", "u-magnet", "--quick", "--out", str(tmp_path)])
+    assert res.exit_code == 0, res.output
+    for name in ("statics.csv", "force_current.png", "maps.nc", "maps_coil.png",
+                 "compare-closed-loop.png"):
+        assert (tmp_path / name).stat().st_size > 1000, name
+    assert "largest normalised RMS error" in res.output and "speed-up" in res.output
+
+
+def test_compare_cli_with_a_scenario_file(tmp_path: Path) -> None:
+    nc = tmp_path / "m.nc"
+    assert runner.invoke(app, ["maps", "build", "u-magnet", "-o", str(nc)]).exit_code == 0
+    res = runner.invoke(app, ["compare", "u-magnet", str(nc), "--scenario", "step", "--gap",
+                              "0.01", "--current", "10", "--out", str(tmp_path)])
+    assert res.exit_code == 0, res.output
+    assert (tmp_path / "compare-step.png").is_file()
+    res = runner.invoke(app, ["compare", "tr09-standard", str(nc), "--gap", "0.01",
+                              "--current", "10"])
+    assert res.exit_code == 2 and "belong to magnet" in res.output
