@@ -218,6 +218,7 @@ class CurrentModel:
             "cvodes_interval", [X, Uc, h], [norm(x0=X, p=ca.vertcat(Uc, h))["xf"]])
         self._integrators: dict[Any, ca.Function] = {}
         self._rk4: dict[tuple[int, int], ca.Function] = {}
+        self._fused: dict[int, ca.Function] = {}
 
     # ------------------------------------------------------------------ helpers
     @property
@@ -298,6 +299,21 @@ class CurrentModel:
             return np.asarray(self._rk4_function(n, 1)(x0, u, h)).ravel()
         return np.asarray(self._cvodes_interval(x0, u, h)).ravel()
 
+    def _fused_step(self, h: float) -> ca.Function:
+        """One compiled call per step: ``(x0, u, h) -> (x1, coil currents, circuit forces)``."""
+        n = max(1, math.ceil(h / self.max_step_s * (1 - 1e-12))) if self.method == "rk4" else 0
+        f = self._fused.get(n)
+        if f is None:
+            nc = self.n_circuits
+            x, u, hh = ca.MX.sym("x", 2 * nc), ca.MX.sym("u", 2 * nc), ca.MX.sym("h")
+            xn = self._rk4_function(n, 1)(x, u, hh) if n else self._cvodes_interval(x, u, hh)
+            coil, force, _ = self.outputs_fun(xn[:nc], u[:nc], xn[nc:])
+            f = ca.Function("current_model_fused_step", [x, u, hh], [xn, coil, force])
+            if n:
+                f = f.expand()
+            self._fused[n] = f
+        return f
+
     def _integrate_stepwise(self, t: np.ndarray, x0: np.ndarray, uu: np.ndarray,
                             reason: str) -> np.ndarray:
         """Fallback after a failed one-pass run: integrate interval by interval.
@@ -371,17 +387,21 @@ class CurrentModel:
         s0, sd = self.substitute_gaps(g), self.substitute_gaps(gd)
         x0 = np.concatenate([state.inductor_currents_A, s0])
         uu = np.concatenate([u, sd])
+        nc = self.n_circuits
         try:
-            x = self._interval(x0, uu, float(dt))
+            xr, coil_r, force_r = self._fused_step(float(dt))(x0, uu, float(dt))
+            x = np.asarray(xr).ravel()
             if not np.all(np.isfinite(x)):
                 raise RuntimeError("non-finite state")
+            coil, fc = np.asarray(coil_r).ravel(), np.asarray(force_r).ravel()
         except RuntimeError as exc:
             x = self._integrate_stepwise(np.array([state.time_s, state.time_s + dt]), x0,
                                          uu[:, None], str(exc))[:, -1]
-        nc = self.n_circuits
-        self._check_range(x[nc:][None, :], x[:nc][None, :], np.array([state.time_s + dt]))
-        new = CurrentModelState(state.time_s + float(dt), x[:self.n_circuits], g + gd * dt)
-        return new, self.outputs(new, u)
+            coil, fc, _ = (np.asarray(v).ravel() for v in self.outputs_fun(x[:nc], u, x[nc:]))
+        t1 = state.time_s + float(dt)
+        self._check_range(x[nc:][None, :], x[:nc][None, :], np.array([t1]))
+        new = CurrentModelState(t1, x[:nc], g + gd * dt)
+        return new, CurrentOutputs(t1, coil, x[:nc].copy(), fc, self._share @ fc, float(fc.sum()))
 
     def _integrate(self, t: np.ndarray, x0: np.ndarray, uu: np.ndarray) -> np.ndarray:
         """States (n_t, 2 n_c) on the grid ``t``; controls ``uu`` (2 n_c, n_t - 1)."""
