@@ -15,14 +15,17 @@ A pole ``k`` belongs to the circuit whose flux linkage depends most on its gap
 levitation magnet without any extra parameter.
 
 Method ``"statics"`` computes ``L~`` and ``dL/ds`` from exact sensitivities of the static
-network (implicit function theorem).  The paper's time-integration procedure is the
-independent second method.
+network (implicit function theorem).  Method ``"transient"`` uses the paper's
+time-integration procedure (:mod:`maglevkit.reduction.transient`: voltage-step time
+constants and the virtual control law ``U = R_el I`` on a gap ramp), one executor task
+per grid point; ``"both"`` keeps the statics maps and adds the transient ones and their
+relative differences.  ``R_ec`` comes from the detailed DAE analytically
+(:mod:`maglevkit.reduction.parameters`).  See ``docs/reduction.md``.
 """
 
 from __future__ import annotations
 
 import json
-import math
 import os
 from collections.abc import Callable, Sequence
 from concurrent.futures import Executor, Future, ProcessPoolExecutor
@@ -36,6 +39,8 @@ import xarray as xr
 from ..circuit.network import Network
 from ..errors import InputError, ParameterFileError
 from ..models.statics import as_network, solve_statics
+from .parameters import eddy_resistance
+from .transient import transient_point
 
 __all__ = ["CharacteristicMaps", "build_maps", "circuit_pole_groups", "load_maps"]
 
@@ -257,8 +262,18 @@ def _as_executor(executor: Any) -> tuple[Executor | None, bool]:
                      f"or a dask.distributed Client, got {executor!r}")
 
 
+METHODS = ("statics", "transient", "both")
+_METHOD_TEXT = {
+    "statics": "statics: exact sensitivities of the static network (implicit function theorem)",
+    "transient": "transient: L~ from voltage-step time constants and dL/ds from the virtual "
+                 "control law U = R_el I on a gap ramp (paper IV-B); force from statics",
+    "both": "both: statics maps (exact sensitivities) plus the transient identification "
+            "(paper IV-B) as *_transient variables with relative differences",
+}
+
+
 def build_maps(model: Any, *, gaps: Any, currents: Any, executor: Any = None,
-               progress: bool = False) -> CharacteristicMaps:
+               progress: bool = False, method: str = "statics") -> CharacteristicMaps:
     """Compute the characteristic maps of a magnet on a regular gap x current grid.
 
     Parameters
@@ -276,32 +291,73 @@ def build_maps(model: Any, *, gaps: Any, currents: Any, executor: Any = None,
         ``dask.distributed.Client`` (its ``get_executor()``).  Results do not depend on it.
     progress : bool
         Show a progress bar.
+    method : {"statics", "transient", "both"}
+        How ``L~`` and ``dL/ds`` are computed.  ``"statics"`` (default, fast): exact
+        sensitivities of the static network.  ``"transient"``: the paper's time
+        integrations of the detailed model (a voltage step and a flux-held gap ramp per
+        grid point and circuit; ~0.3 s per point and circuit on the U-magnet, so use an
+        executor).  ``"both"``: statics maps plus ``inductance_transient_H``,
+        ``dL_ds_transient_H_per_m`` and their relative differences to the statics
+        (``*_relative_difference`` = transient / statics - 1).  The transient methods
+        also store ``eddy_resistance_step_ohm``, the ``R_ec`` a single-exponential fit of
+        the step response implies (its slow mode; see docs/reduction.md).
 
     Returns
     -------
     CharacteristicMaps
     """
+    if method not in METHODS:
+        raise InputError(f"method = {method!r}; use one of {list(METHODS)}")
     net = as_network(model)
     g = _grid(gaps, "gap", "m", positive=True)
     c = _grid(currents, "current", "A", positive=False)
-    groups = circuit_pole_groups(net, gap=float(g[g.size // 2]),
-                                 current=float(max(c[c.size // 2], c[-1] / 2)))
+    ref_gap, ref_current = float(g[g.size // 2]), float(max(c[c.size // 2], c[-1] / 2))
+    groups = circuit_pole_groups(net, gap=ref_gap, current=ref_current)
     ex, owned = _as_executor(executor)
     try:
         rows = _run_tasks(_statics_row, [(net, float(s), c, groups) for s in g], ex, progress,
                           "statics maps")
+        if method != "statics":
+            gi = {name: k for k, name in enumerate(net.gap_names)}
+            poles = tuple(tuple(gi[p] for p in groups[name]) for name in net.circuit_names)
+            key = getattr(model, "parameter_hash", None) or network_hash(net)
+            points = [(key, net, float(s), float(i), poles) for s in g for i in c]
+            trans = _run_tasks(transient_point, points, ex, progress, "transient maps")
     finally:
         if owned and ex is not None:
             ex.shutdown()
     names = list(rows[0])
     data = {k: np.stack([r[k] for r in rows], axis=1) for k in names}  # (circuit, gap, current)
     units = {"force_N": "N", "inductance_H": "H", "dL_ds_H_per_m": "H/m",
-             "flux_linkage_Wb": "Wb", "apparent_inductance_H": "H"}
+             "flux_linkage_Wb": "Wb", "apparent_inductance_H": "H",
+             "inductance_transient_H": "H", "dL_ds_transient_H_per_m": "H/m",
+             "inductance_relative_difference": "1", "dL_ds_relative_difference": "1",
+             "eddy_resistance_step_ohm": "ohm"}
     long = {"force_N": "force of the circuit's poles F(s, I)",
             "inductance_H": "differential inductance L~ = dL/dI I + L",
             "dL_ds_H_per_m": "gap derivative of the inductance dL/ds",
             "flux_linkage_Wb": "flux linkage psi",
-            "apparent_inductance_H": "inductance L = psi / I"}
+            "apparent_inductance_H": "inductance L = psi / I",
+            "inductance_transient_H": "L~ from voltage-step time constants (paper IV-B)",
+            "dL_ds_transient_H_per_m": "dL/ds from the virtual control law U = R_el I on a "
+                                       "gap ramp (paper IV-B)",
+            "inductance_relative_difference": "L~ transient / statics - 1",
+            "dL_ds_relative_difference": "dL/ds transient / statics - 1",
+            "eddy_resistance_step_ohm": "R_ec implied by a single-exponential fit of the "
+                                        "voltage step (slow mode)"}
+    if method != "statics":
+        shape = (len(net.circuits), g.size, c.size)
+        tdata = {k: np.stack([t[k] for t in trans], axis=1).reshape(shape) for k in trans[0]}
+        if method == "transient":
+            data["inductance_H"] = tdata["inductance_H"]
+            data["dL_ds_H_per_m"] = tdata["dL_ds_H_per_m"]
+        else:
+            data["inductance_transient_H"] = tdata["inductance_H"]
+            data["dL_ds_transient_H_per_m"] = tdata["dL_ds_H_per_m"]
+            data["inductance_relative_difference"] = tdata["inductance_H"] / data["inductance_H"] - 1
+            data["dL_ds_relative_difference"] = (tdata["dL_ds_H_per_m"] / data["dL_ds_H_per_m"]
+                                                 - 1)
+        data["eddy_resistance_step_ohm"] = tdata["eddy_resistance_step_ohm"]
     dims = ("circuit", "gap", "current")
     ds = xr.Dataset(
         {k: (dims, v, {"units": units[k], "long_name": long[k]}) for k, v in data.items()},
@@ -311,9 +367,21 @@ def build_maps(model: Any, *, gaps: Any, currents: Any, executor: Any = None,
     )
     ds["resistance_ohm"] = ("circuit", net.resistances, {"units": "ohm",
                                                          "long_name": "ohmic resistance R_el"})
-    r_ec = np.full(len(net.circuits), math.inf)
-    ds["eddy_resistance_ohm"] = ("circuit", r_ec, {"units": "ohm",
-                                                   "long_name": "eddy-current resistance R_ec"})
+    r_ec = eddy_resistance(net, gap=ref_gap, current=ref_current)
+    # R_ec depends on the operating point only through the iron's differential
+    # reluctances (and not at all when every loop carries an eddy element): its spread
+    # over the grid corners is recorded, not hidden.
+    corners = np.array([eddy_resistance(net, gap=float(sv), current=float(iv))
+                        for sv in (g[0], g[-1]) for iv in (c[0], c[-1])])
+    with np.errstate(invalid="ignore"):
+        spread = np.where(np.isinf(r_ec), 0.0, np.ptp(corners, axis=0) / np.where(
+            np.isinf(r_ec), 1.0, r_ec))
+    ds["eddy_resistance_ohm"] = ("circuit", r_ec, {
+        "units": "ohm", "long_name": "eddy-current resistance R_ec",
+        "description": "1/Y_jj - R_el with Y = dI/dU at fixed flux linkages and eddy fluxes "
+                       "(exact instantaneous current jump of the detailed model) at the "
+                       f"reference point s = {ref_gap!r} m, I = {ref_current!r} A",
+        "relative_spread_over_grid_corners": spread})
     magnet_name = getattr(model, "name", net.name)
     params = getattr(model, "parameters", None)
     ds.attrs.update({
@@ -323,7 +391,7 @@ def build_maps(model: Any, *, gaps: Any, currents: Any, executor: Any = None,
         "magnet_parameters": json.dumps(params, sort_keys=True) if params is not None else "",
         "pole_groups": json.dumps(groups),
         "gap_names": ",".join(net.gap_names),
-        "method": "statics: exact sensitivities of the static network (implicit function theorem)",
+        "method": _METHOD_TEXT[method],
         "maglevkit_version": _version(),
         "conventions": "all gaps equal to s and every circuit at I (symmetric operation); "
                        "force is attraction-positive",

@@ -1,0 +1,259 @@
+"""The paper's time-integration identification of ``L~`` and ``dL/ds`` (Sec. IV-B).
+
+Both quantities come from simulations of the detailed flux-based model (``models/flux.py``):
+
+* ``L~(s, I)``: time constant of a small voltage step at a fixed gap
+  (:func:`~maglevkit.models.experiments.differential_inductance_from_step`).
+* ``dL/ds(s, I)``: the virtual control law ``U = R_el I`` with a linearly increasing gap.
+  In the detailed model Faraday's law reads ``psi' = U - R_el I``, so the law holds the
+  flux linkages constant.  It is applied *exactly*: the resistive drop is substituted
+  into the DAE (``h = [-r(x, s, I); 0]``), not sampled by a zero-order hold.  Eq. 8 then
+  reduces to ``dI/dt = -dL/ds I s' / L~``, i.e.::
+
+      d ln I / ds = -(dL/ds) / L~        =>   dL/ds = -L~ d ln I/ds
+
+  ``ln I`` is fitted against the gap by a cubic polynomial over the ramp (least squares)
+  and differentiated at the ramp start.  The ramp is slow compared with the eddy-current
+  time constants, so the eddy currents (which lag the motion) bias the slope by only
+  ``~ tau_ec / T`` (measured in ``docs/reduction.md``).
+
+At ``I = 0`` the flux linkage is zero and stays zero, so the ramp carries no information.
+The map needs the limit ``dL/ds(s, 0) = dL0/ds`` (the small-signal inductance's slope);
+it is taken from the same experiment at the small current ``I_eps = 1e-4 A``
+(``zero_current``).  The Roschke B-H law's permeability rises linearly with ``|B|`` from
+its initial value, so ``L(s, I) = L0(s) + O(|I|)``: on the U-magnet ``dL/ds`` at 1e-3 A
+differs from the limit by 6e-4 relative, at 1e-4 A by < 1e-5 (measured).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any
+
+import casadi as ca
+import numpy as np
+
+from ..circuit.assembly import assemble
+from ..circuit.network import Network
+from ..errors import InputError, SolverError
+from ..models.experiments import differential_inductance_from_step
+from ..models.flux import FluxModel
+from ..models.statics import as_network, solve_statics
+
+__all__ = ["RampEstimate", "RampResponse", "dl_ds_from_ramp", "flux_held_ramp", "transient_point"]
+
+#: Integrator tolerances of the identification experiments (tighter than simulation).
+RTOL = 1e-9
+ATOL = 1e-11
+
+
+@dataclass(frozen=True)
+class RampResponse:
+    """Detailed-model response to a gap ramp under ``U = R_el I`` (constant flux linkage).
+
+    Attributes
+    ----------
+    time_s : ndarray (n,)
+    gaps_m : ndarray (n, n_gaps)
+    currents_A : ndarray (n, n_circuits)
+    flux_linkage_Wb : ndarray (n, n_circuits)
+        Constant up to the integrator's rounding (the law is exact).
+    """
+
+    time_s: np.ndarray
+    gaps_m: np.ndarray
+    currents_A: np.ndarray
+    flux_linkage_Wb: np.ndarray
+
+
+@dataclass(frozen=True)
+class RampEstimate:
+    """Result of :func:`dl_ds_from_ramp` (one circuit at one operating point).
+
+    Attributes
+    ----------
+    dL_ds_H_per_m : float
+        ``dL/ds = -L~ d ln I / ds`` [H/m].
+    dlnI_ds_per_m : float
+        Fitted slope of ``ln I`` over the gap at the ramp start [1/m].
+    inductance_H : float
+        The ``L~`` [H] used (from a voltage step unless given).
+    current_A : float
+        Current of the experiment [A] (``I_eps`` when the requested current is 0).
+    fit_rms : float
+        RMS residual of the cubic fit of ``ln I`` (relative current deviation).
+    response : RampResponse
+    """
+
+    dL_ds_H_per_m: float
+    dlnI_ds_per_m: float
+    inductance_H: float
+    current_A: float
+    fit_rms: float
+    response: RampResponse
+
+
+class _HeldRamp:
+    """Compiled DAE of the flux model with ``U = R_el I`` substituted (cached on the network).
+
+    It reuses the flux model's structure (``D``, ``K``, ``Q`` of ``_FluxDAE``) and only
+    replaces the Faraday rows ``U - R I`` of ``h`` by zero.  Time is normalised to
+    ``[0, 1]``; parameters are the duration ``T`` and the gap change ``Delta s`` per gap.
+    """
+
+    def __init__(self, net: Network, n_out: int) -> None:
+        fm = FluxModel(net, rtol=RTOL, atol=ATOL)
+        d = fm._dae
+        eq = assemble(net)
+        nc, ng = d.n_circuits, d.n_gaps
+        y = ca.SX.sym("y", d.n_diff)
+        T = ca.SX.sym("T")
+        ds = ca.SX.sym("ds", ng)
+        hv = ca.vertcat(-eq.residual, ca.SX.zeros(nc))
+        ydot = ca.mtimes(ca.DM(np.linalg.pinv(d.K)), hv)
+        alg = ca.vertcat(ca.mtimes(ca.DM(d.D), eq.x) - y, ca.mtimes(ca.DM(d.Q), hv))
+        dae = {"x": ca.vertcat(y, eq.s), "z": ca.vertcat(eq.x, eq.I), "p": ca.vertcat(T, ds),
+               "ode": ca.vertcat(T * ydot, ds), "alg": alg}
+        self.tau = np.linspace(0.0, 1.0, n_out)
+        opts: dict[str, Any] = {"reltol": RTOL, "abstolv": list(ATOL * d.nominal), "max_num_steps": 100000,
+                "disable_internal_warnings": True}
+        self.integrator = ca.integrator("flux_held_ramp", "idas", dae, 0.0, self.tau[1:], opts)
+        self.D = d.D
+        self.n_diff, self.n_gaps, self.n_loops, self.n_circuits = d.n_diff, ng, d.n_loops, nc
+        self.psi = ca.Function("psi", [eq.x], [eq.psi])
+
+
+def _held(net: Network, n_out: int) -> _HeldRamp:
+    key = ("reduction_held_ramp", n_out)
+    obj = net._cache.get(key)
+    if obj is None:
+        obj = _HeldRamp(net, n_out)
+        net._cache[key] = obj
+    return obj  # type: ignore[no-any-return]
+
+
+def flux_held_ramp(model: Any, *, gap: Any, current: Any, gap_change: Any, duration: float,
+                   samples: int = 201) -> RampResponse:
+    """Simulate the detailed model under ``U = R_el I`` with linearly moving gaps.
+
+    Starts at rest at the static operating point (``gap`` [m], ``current`` [A]) and moves
+    every gap linearly by ``gap_change`` [m] (scalar or per gap) over ``duration`` [s].
+    """
+    net = as_network(model)
+    if not (isinstance(duration, (int, float)) and math.isfinite(duration) and duration > 0.0):
+        raise InputError(f"duration = {duration!r} s must be a finite number > 0")
+    if not (isinstance(samples, int) and samples >= 10):
+        raise InputError(f"samples = {samples!r} must be an integer >= 10")
+    sol = solve_statics(net, gaps=gap, currents=current)
+    if sol.shape != ():
+        raise InputError("flux_held_ramp takes one operating point")
+    dsv = np.broadcast_to(np.asarray(gap_change, dtype=float), sol.gaps_m.shape).copy()
+    if not np.all(np.isfinite(dsv)) or np.any(sol.gaps_m + dsv <= 0.0):
+        raise InputError(f"gap_change = {gap_change!r} m must be finite and keep the gaps > 0")
+    h = _held(net, samples)
+    x0 = np.asarray(sol.loop_flux_Wb, dtype=float)
+    xd0 = np.concatenate((h.D @ x0, sol.gaps_m))
+    try:
+        res = h.integrator(x0=xd0, z0=np.concatenate((x0, sol.currents_A)),
+                           p=np.concatenate(((duration,), dsv)))
+    except RuntimeError as exc:
+        raise SolverError("flux-held gap ramp failed", state={"gap_m": sol.gaps_m,
+                          "current_A": sol.currents_A}, reason=str(exc)[-300:]) from None
+    xf = np.hstack((xd0[:, None], np.asarray(res["xf"])))
+    zf = np.hstack((np.concatenate((x0, sol.currents_A))[:, None], np.asarray(res["zf"])))
+    loops = zf[:h.n_loops]
+    psi = np.asarray(h.psi(loops)).T
+    return RampResponse(time_s=duration * h.tau, gaps_m=xf[h.n_diff:].T.copy(),
+                        currents_A=zf[h.n_loops:].T.copy(), flux_linkage_Wb=psi)
+
+
+def dl_ds_from_ramp(model: Any, *, gap: float, current: float, circuit: int = 0,
+                    poles: Any = None, inductance: float | None = None,
+                    relative_gap_change: float = 0.02, duration: float | None = None,
+                    zero_current: float = 1e-4, samples: int = 201) -> RampEstimate:
+    """Identify ``dL/ds(s, I)`` of circuit ``circuit`` by the virtual control law (paper IV-B).
+
+    Parameters
+    ----------
+    gap, current : float
+        Operating point: every gap at ``gap`` [m], every circuit at ``current`` [A].
+    circuit : int
+        Index of the circuit.
+    poles : sequence of int, optional
+        Indices of the gap inputs that move (the circuit's own poles); default all.
+    inductance : float, optional
+        ``L~`` [H] to convert the slope; default: identified by a voltage step
+        (:func:`~maglevkit.models.experiments.differential_inductance_from_step`), which
+        keeps the method independent of the statics' sensitivities.
+    relative_gap_change : float
+        Ramp length as a fraction of the gap (the cubic fit removes the curvature).
+    duration : float, optional
+        Ramp time [s]; default ``50 L~/R_el`` (slow compared with the eddy currents).
+    zero_current : float
+        Current [A] used when ``current == 0`` (the limit ``I -> 0``, see module doc).
+    """
+    net = as_network(model)
+    nc = len(net.circuits)
+    if not (isinstance(circuit, int) and 0 <= circuit < nc):
+        raise InputError(f"circuit = {circuit!r} must be an index in 0..{nc - 1}")
+    if not (isinstance(relative_gap_change, (int, float)) and 0.0 < relative_gap_change <= 0.2):
+        raise InputError(f"relative_gap_change = {relative_gap_change!r} must lie in (0, 0.2]")
+    if not (isinstance(current, (int, float)) and math.isfinite(current) and current >= 0.0):
+        raise InputError(f"current = {current!r} A must be a finite number >= 0 (maps are even "
+                         "in the current)")
+    if not (isinstance(zero_current, (int, float)) and zero_current > 0.0):
+        raise InputError(f"zero_current = {zero_current!r} A must be > 0")
+    i_exp = float(current) if current > 0.0 else float(zero_current)
+    if inductance is None:
+        inductance = differential_inductance_from_step(net, gap=gap, current=i_exp,
+                                                       circuit=circuit).inductance_H
+    r_el = float(net.resistances[circuit])
+    if duration is None:
+        duration = 50.0 * inductance / r_el
+    ng = len(net.gap_names)
+    idx = list(range(ng)) if poles is None else [int(k) for k in poles]
+    change = np.zeros(ng)
+    change[idx] = relative_gap_change * gap
+    resp = flux_held_ramp(net, gap=gap, current=i_exp, gap_change=change, duration=duration,
+                          samples=samples)
+    cur = resp.currents_A[:, circuit]
+    if np.any(cur <= 0.0):
+        raise SolverError("the current changed sign on the flux-held ramp",
+                          state={"gap_m": gap, "current_A": i_exp})
+    u = (resp.gaps_m[:, idx[0]] - gap) / (relative_gap_change * gap)   # 0..1
+    coef = np.polynomial.polynomial.polyfit(u, np.log(cur), 3)
+    fit = np.polynomial.polynomial.polyval(u, coef) - np.log(cur)
+    slope = float(coef[1]) / (relative_gap_change * gap)
+    return RampEstimate(dL_ds_H_per_m=-inductance * slope, dlnI_ds_per_m=slope,
+                        inductance_H=float(inductance), current_A=i_exp,
+                        fit_rms=float(np.sqrt(np.mean(fit**2))), response=resp)
+
+
+# Networks unpickled in a worker process lose their compiled functions (Network pickles
+# without its cache); keep one instance per magnet so every task after the first in a
+# process reuses the compiled integrators.
+_WORKER_NETWORKS: dict[str, Network] = {}
+
+
+def transient_point(key: str, net: Network, s: float, current: float,
+                    poles: tuple[tuple[int, ...], ...]) -> dict[str, np.ndarray]:
+    """Transient identification at one grid point for every circuit (one executor task).
+
+    Returns per circuit: ``L~`` from a voltage step, ``dL/ds`` from the flux-held ramp of
+    the circuit's own poles (``poles[j]``), and the step's slow-mode ``R_ec``.
+    """
+    net = _WORKER_NETWORKS.setdefault(key, net)
+    nc = len(net.circuits)
+    lt, dl, rec = np.empty(nc), np.empty(nc), np.empty(nc)
+    for j in range(nc):
+        step = differential_inductance_from_step(net, gap=s, current=current, circuit=j,
+                                                 rtol=RTOL, atol=ATOL)
+        if current > 0.0:
+            l_ramp = step.inductance_H
+        else:   # the ramp runs at I_eps; use L~ at the same current
+            l_ramp = None
+        ramp = dl_ds_from_ramp(net, gap=s, current=current, circuit=j, poles=poles[j],
+                               inductance=l_ramp)
+        lt[j], dl[j], rec[j] = step.inductance_H, ramp.dL_ds_H_per_m, step.eddy_resistance_ohm
+    return {"inductance_H": lt, "dL_ds_H_per_m": dl, "eddy_resistance_step_ohm": rec}
