@@ -272,6 +272,16 @@ _METHOD_TEXT = {
 }
 
 
+def _fitted_eddy_resistance(net: Network, gap: float, current: float) -> np.ndarray:
+    """Per-circuit R_ec from the step-response time constant (inf without eddy currents)."""
+    from ..models.experiments import differential_inductance_from_step
+
+    if not net.has_eddy_currents:
+        return np.full(len(net.circuits), np.inf)
+    return np.array([differential_inductance_from_step(net, gap=gap, current=current, circuit=j)
+                     .eddy_resistance_ohm for j in range(len(net.circuits))])
+
+
 def build_maps(model: Any, *, gaps: Any, currents: Any, executor: Any = None,
                progress: bool = False, method: str = "statics") -> CharacteristicMaps:
     """Compute the characteristic maps of a magnet on a regular gap x current grid.
@@ -382,6 +392,13 @@ def build_maps(model: Any, *, gaps: Any, currents: Any, executor: Any = None,
                        "(exact instantaneous current jump of the detailed model) at the "
                        f"reference point s = {ref_gap!r} m, I = {ref_current!r} A",
         "relative_spread_over_grid_corners": spread})
+    ds["eddy_resistance_fit_ohm"] = ("circuit", _fitted_eddy_resistance(net, ref_gap,
+                                                                         ref_current), {
+        "units": "ohm", "long_name": "eddy-current resistance R_ec from the step time constant",
+        "description": "R_ec that a single-exponential fit of a small voltage step of the "
+                       "detailed model implies (paper Sec. IV-B procedure; matches the slow "
+                       f"eddy mode) at s = {ref_gap!r} m, I = {ref_current!r} A; the "
+                       "current-based model uses it by default (docs/decisions.md)"})
     magnet_name = getattr(model, "name", net.name)
     params = getattr(model, "parameters", None)
     ds.attrs.update({
