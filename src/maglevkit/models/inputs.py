@@ -63,20 +63,7 @@ def sample_input(value: Any, times: np.ndarray, names: tuple[str, ...], what: st
     if isinstance(value, Signal):
         arr = np.repeat(np.asarray(value(times), dtype=float)[:, None], k, axis=1)
     elif callable(value):
-        rows = []
-        for t in times:
-            try:
-                v = np.asarray(value(float(t)), dtype=float)
-            except (TypeError, ValueError) as exc:
-                raise InputError(f"{what}: the callable must return numbers [{unit}] for a "
-                                 f"time t [s]; it failed at t = {t}: {exc}") from exc
-            if v.ndim == 0:
-                v = np.full(k, float(v))
-            if v.shape != (k,):
-                raise InputError(f"{what}: the callable returned shape {v.shape} at t = {t}; "
-                                 f"expected a scalar or {k} values ({list(names)})")
-            rows.append(v)
-        arr = np.array(rows)
+        arr = _sample_callable(value, times, k, names, what, unit)
     else:
         try:
             a = np.asarray(value, dtype=float)
@@ -99,6 +86,44 @@ def sample_input(value: Any, times: np.ndarray, names: tuple[str, ...], what: st
         bad = int(np.argmax(~np.all(np.isfinite(arr), axis=1)))
         raise InputError(f"{what} is not finite at t = {times[bad]:.6g} s: {arr[bad].tolist()}")
     return arr
+
+
+def _sample_callable(value: Any, times: np.ndarray, k: int, names: tuple[str, ...], what: str,
+                     unit: str) -> np.ndarray:
+    """Evaluate ``value(t)`` at every time; scalars apply to every name.
+
+    Fast path: one array conversion of all returned values. If that fails (mixed
+    shapes, non-numbers), the samples are checked one by one for a precise error.
+    """
+    raw = []
+    for t in times.tolist():
+        try:
+            raw.append(value(t))
+        except (TypeError, ValueError) as exc:
+            raise InputError(f"{what}: the callable must return numbers [{unit}] for a "
+                             f"time t [s]; it failed at t = {t}: {exc}") from exc
+    try:
+        arr = np.asarray(raw, dtype=float)
+    except (TypeError, ValueError):
+        arr = np.empty(0)
+    if arr.ndim == 1 and arr.size == times.size:
+        return np.repeat(arr[:, None], k, axis=1)
+    if arr.shape == (times.size, k):
+        return arr
+    rows = []
+    for t, r in zip(times, raw, strict=True):
+        try:
+            v = np.asarray(r, dtype=float)
+        except (TypeError, ValueError) as exc:
+            raise InputError(f"{what}: the callable must return numbers [{unit}] for a "
+                             f"time t [s]; it returned {r!r} at t = {t}: {exc}") from exc
+        if v.ndim == 0:
+            v = np.full(k, float(v))
+        if v.shape != (k,):
+            raise InputError(f"{what}: the callable returned shape {v.shape} at t = {t}; "
+                             f"expected a scalar or {k} values ({list(names)})")
+        rows.append(v)
+    return np.array(rows)
 
 
 def gap_secants(times: np.ndarray, gaps: np.ndarray, gap_rates: Any, names: tuple[str, ...],
