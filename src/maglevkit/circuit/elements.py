@@ -169,13 +169,16 @@ class IronPath(Element):
 class AirGap(LinearElement):
     """Air gap between a pole face and the rail/stator.
 
-    ``G(s) = mu0 [A / s' + sum_e (w_e / pi) ln(1 + pi r_e / s') + sum_j A_j / (s' + d_j)]``
+    ``G(s) = mu0 [A / s' + sum_e (2 w_e / pi) ln(1 + pi r_e / (2 s')) + sum_j A_j / (s' + d_j)]``
     with ``s' = k_C s``.
 
     The first term is the homogeneous field under the pole face, the first sum the
-    fringing flux from the pole flanks (Roters' quarter-circle-and-straight-line tubes,
-    one term per edge of length ``w_e`` whose flank of height ``r_e`` sees the rail),
-    the second sum the flux from recessed parts of the pole face (e.g. the grooves of a
+    fringing flux from the pole flanks to the flat rail (Roters' quarter-circle-and-
+    straight-line tubes: the line leaving the flank at height ``x`` has length
+    ``s' + pi x / 2``, so ``dG = mu0 w dx / (s' + pi x / 2)``; one term per edge of length
+    ``w_e`` whose flank of height ``r_e`` sees the rail).  This is the image of the
+    pole-to-pole tube :class:`GapLeakage` at distance ``2 s'``, doubled.  The second sum
+    is the flux from recessed parts of the pole face (e.g. the grooves of a
     linear-generator winding) of area ``A_j`` and depth ``d_j``, which cross the groove
     and then the gap in series.  ``k_C`` is Carter's coefficient of a slotted stator
     (1 when ``slot_pitch`` is 0).
@@ -239,7 +242,7 @@ class AirGap(LinearElement):
         s = self.effective_gap(gap)
         g = self.pole_area / s
         for w, r in self.fringe_edges:
-            g = g + w / math.pi * _log(1.0 + math.pi * r / s)
+            g = g + 2.0 * w / math.pi * _log(1.0 + math.pi * r / (2.0 * s))
         for a, d in self.recesses:
             g = g + a / (s + d)
         return MU0 * g
@@ -315,6 +318,10 @@ class LeakagePermeance(LinearElement):
 @dataclass(frozen=True)
 class GapLeakage(LinearElement):
     """Gap-dependent leakage around a pole: ``G = mu0 w / pi ln(1 + pi r / s)``.
+
+    Modelica's ``LeakageAroundPoles``: half-circle-and-straight-line tubes between two
+    facing poles at distance ``s`` (line length ``s + pi x``).  For a pole facing a flat
+    rail use the fringe edges of :class:`AirGap` (quarter circles).
 
     Parameters
     ----------

@@ -11,7 +11,7 @@ yoke path ``c``; rail path ``c + rail.thickness``.
 
 Estimates of the secondary flux paths (Roters' method, facts.md section 3):
 
-* fringing at each pole edge that faces the rail: ``mu0 w/pi ln(1 + pi r/s)``, with
+* fringing at each pole edge that faces the rail: ``2 mu0 w/pi ln(1 + pi r/(2 s))``, with
   ``r`` the flank height between pole face and coil (``coil_gap_to_pole_face``); on the
   outer edge ``r`` is limited by the rail overhang; the two depth-wise ends fringe
   only with ``end_effects = true``.
