@@ -53,6 +53,26 @@ def test_statics_csv_and_plot(tmp_path: Path) -> None:
     assert out_png.stat().st_size > 10_000 and out_png.read_bytes()[:4] == b"\x89PNG"
 
 
+def test_statics_csv_of_a_two_circuit_magnet(tmp_path: Path) -> None:
+    out_csv = tmp_path / "s.csv"
+    res = runner.invoke(app, ["statics", "tr09-standard", "--gaps", "0.010", "--currents",
+                              "0,34", "--csv", str(out_csv)])
+    assert res.exit_code == 0, res.output
+    with out_csv.open() as fh:
+        rows = list(csv.reader(fh))
+    assert rows[0] == ["gap_m", "current_A", "force_N",
+                       "flux_linkage_Wb_front", "flux_linkage_Wb_rear",
+                       "differential_inductance_H_front", "differential_inductance_H_rear",
+                       "dpsi_dgap_Wb_per_m_front", "dpsi_dgap_Wb_per_m_rear"]
+    assert rows[1][2] == "0"            # no force at zero current, and no "-0"
+    sol = mk.solve_statics(mk.load_magnet("tr09-standard", eddy_currents=False), gaps=0.010,
+                           currents=34.0)
+    data = np.array(rows[2], dtype=float)
+    # 9 significant digits in the file
+    np.testing.assert_allclose(data[3:5], sol.flux_linkage_Wb, rtol=1e-8)
+    np.testing.assert_allclose(data[5:7], sol.differential_inductance_H.sum(-1), rtol=1e-8)
+
+
 @pytest.mark.parametrize("sub", ["build", "plot"])
 def test_help_of_maps_subcommands(sub: str) -> None:
     res = runner.invoke(app, ["maps", sub, "--help"])

@@ -103,6 +103,9 @@ def test_random_monotone_tables_interpolate_monotonically(db: list[float], dh: l
         ((0, 1e6, 2e6), (0, 1.0, 1.1), "mu_r\\(0\\)"),
         ((0, 100, 1e6), (0, 0.5, 0.6), "below mu0"),
         ((0, 100, float("nan")), (0, 0.5, 0.9), "finite"),
+        # chords all steeper than mu0, but the interpolant starts with mu_r = 0.73 at B = 0
+        ((0, 1000, 1001), (0, 1.1 * MU0 * 1000, 2.2 * MU0 * 1000), "interpolation"),
+        (((0, 100), (200, 300)), ((0, 0.5), (0.9, 1.0)), "flat lists"),
     ],
 )
 def test_bad_tables_raise(H: tuple, B: tuple, msg: str) -> None:

@@ -266,10 +266,13 @@ class TabulatedBH(Material):
 
     def __post_init__(self) -> None:
         try:
-            h = np.asarray(self.H, dtype=float).ravel()
-            b = np.asarray(self.B, dtype=float).ravel()
+            h = np.asarray(self.H, dtype=float)
+            b = np.asarray(self.B, dtype=float)
         except (TypeError, ValueError) as exc:
             raise MaterialError(f"material {self.name!r}: H and B must be lists of numbers") from exc
+        if h.ndim != 1 or b.ndim != 1:
+            raise MaterialError(f"material {self.name!r}: H and B must be flat lists of numbers, "
+                                f"got arrays of shape {h.shape} and {b.shape}")
         object.__setattr__(self, "H", tuple(float(v) for v in h))
         object.__setattr__(self, "B", tuple(float(v) for v in b))
         who = f"B-H table {self.name!r}"
@@ -299,7 +302,21 @@ class TabulatedBH(Material):
             )
         if self.resistivity is not None and not self.resistivity > 0.0:
             raise MaterialError(f"{who}: resistivity must be > 0 ohm m")
-        object.__setattr__(self, "_pp", PchipInterpolator(b, h, extrapolate=False))
+        pp = PchipInterpolator(b, h, extrapolate=False)
+        # The interpolant, not only the chords, must keep dB/dH >= mu0 (mu_r >= 1): a cubic
+        # segment's slope can exceed its end slopes.  Checked on a dense sampling of every
+        # segment (the slope is a quadratic per segment; 65 samples resolve its maximum to
+        # well below the 0.1 % allowance).
+        bs = np.concatenate([np.linspace(b[i], b[i + 1], 65) for i in range(b.size - 1)])
+        dh_db = pp.derivative()(bs)
+        worst = int(np.argmax(dh_db))
+        if dh_db[worst] * MU0 > 1.0 + 1e-3:
+            raise MaterialError(
+                f"{who}: the monotone interpolation through the points has mu_r = "
+                f"{1.0 / (MU0 * dh_db[worst]):.4g} < 1 at B = {bs[worst]:.4g} T (dB/dH below mu0); "
+                "add points where the curve bends, or check the units (H in A/m, B in T)"
+            )
+        object.__setattr__(self, "_pp", pp)
 
     @property
     def initial_relative_permeability(self) -> float:

@@ -14,7 +14,13 @@ from ._app import app, console, fail, load_magnet_or_exit, parse_values
 
 
 def write_statics_csv(sol, path: Path) -> None:  # type: ignore[no-untyped-def]
-    """CSV of a grid solution: one row per (gap, current), per-circuit columns suffixed."""
+    """CSV of a grid solution: one row per (gap, current), per-circuit columns suffixed.
+
+    With several circuits (all at the same current) the per-circuit columns are
+    ``flux_linkage_Wb_NAME``, ``differential_inductance_H_NAME`` (``d psi_NAME / dI`` with
+    every circuit's current moving together) and ``dpsi_dgap_Wb_per_m_NAME`` (all gaps
+    moving together).
+    """
     names = sol.circuit_names
     multi = len(names) > 1
 
@@ -32,13 +38,10 @@ def write_statics_csv(sol, path: Path) -> None:  # type: ignore[no-untyped-def]
         ns, ni = sol.force_N.shape
         for i in range(ns):
             for j in range(ni):
-                w.writerow([
-                    f"{sol.gaps_m[i, j, 0]:.9g}", f"{sol.currents_A[i, j, 0]:.9g}",
-                    f"{sol.force_N[i, j]:.9g}",
-                    *(f"{v:.9g}" for v in sol.flux_linkage_Wb[i, j]),
-                    *(f"{v:.9g}" for v in ldiff[i, j]),
-                    *(f"{v:.9g}" for v in dpsi[i, j]),
-                ])
+                row = [sol.gaps_m[i, j, 0], sol.currents_A[i, j, 0], sol.force_N[i, j],
+                       *sol.flux_linkage_Wb[i, j], *ldiff[i, j], *dpsi[i, j]]
+                # "+ 0.0" turns a negative zero (e.g. the force at I = 0) into "0"
+                w.writerow([f"{float(v) + 0.0:.9g}" for v in row])
 
 
 @app.command()

@@ -1,0 +1,150 @@
+"""Element laws against the published flux-tube formulas (facts.md sec. 3/4), computed here
+independently of the package, and the physics switches of the U-magnet one at a time."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from scipy.integrate import quad
+
+import maglevkit as mk
+from maglevkit.materials import MU0
+
+from .conftest import build_u, u_params
+
+# Every comparison below is between two evaluations of the same closed form (or a quadrature
+# of it to ~1e-12), so 1e-12 relative is rounding, not modelling error.
+RTOL = 1e-12
+
+
+@pytest.mark.parametrize(("ctor", "args", "expected"), [
+    ("half_cylinder", (0.2,), 0.26 * MU0 * 0.2),
+    ("quarter_cylinder", (0.2,), 0.52 * MU0 * 0.2),
+    ("half_hollow_cylinder", (0.2, 0.01, 0.03), MU0 * 0.2 * math.log(1 + 0.03 / 0.01) / math.pi),
+    ("quarter_hollow_cylinder", (0.2, 0.01, 0.03),
+     2 * MU0 * 0.2 * math.log(1 + 0.03 / 0.01) / math.pi),
+    ("quarter_sphere", (0.02,), 0.077 * MU0 * 2 * 0.02),
+    ("eighth_sphere", (0.02,), 0.308 * MU0 * 0.02),
+    ("quarter_hollow_sphere", (0.015,), 0.25 * MU0 * 0.015),
+    ("parallel_plates", (0.01, 0.05), MU0 * 0.01 / 0.05),
+])
+def test_roters_leakage_shapes(ctor: str, args: tuple, expected: float) -> None:
+    el = getattr(mk.LeakagePermeance, ctor)("leak", *args)
+    assert el.permeance() == pytest.approx(expected, rel=RTOL)
+
+
+def test_gap_leakage_around_poles_is_the_modelica_formula() -> None:
+    el = mk.GapLeakage("g", gap_input="s", width=0.1, radius=0.02)
+    for s in (0.002, 0.01, 0.05):
+        assert el.permeance(s) == pytest.approx(MU0 * 0.1 / math.pi * math.log(1 + math.pi * 0.02 / s),
+                                                rel=RTOL)
+
+
+@pytest.mark.parametrize("s", [0.004, 0.010, 0.020])
+def test_air_gap_fringe_edge_is_the_quarter_circle_tube_to_a_plane(s: float) -> None:
+    """The field line leaving the flank at height x runs a quarter circle (pi x/2) and then
+    straight across the gap: dG = mu0 w dx/(s + pi x/2).  Quadrature of that tube, not the
+    closed form in the code."""
+    w, r, area = 0.1, 0.01, 0.003
+    gap = mk.AirGap("g", gap_input="s", pole_area=area, fringe_edges=((w, r),))
+    tube, _ = quad(lambda x: MU0 * w / (s + math.pi * x / 2), 0.0, r, epsabs=0, epsrel=1e-13)
+    assert gap.permeance(s) - MU0 * area / s == pytest.approx(tube, rel=1e-10)
+    # the image construction: twice the pole-to-pole tube at distance 2 s
+    image = 2 * mk.GapLeakage("i", gap_input="s", width=w, radius=r).permeance(2 * s)
+    assert gap.permeance(s) - MU0 * area / s == pytest.approx(image, rel=RTOL)
+
+
+ROSCHKE_FACTS = {  # facts.md sec. 4: mu_i, B_mymax, c_a, c_b, n
+    "M330-50A": (500, 0.7, 24000, 9.38, 9.6),
+    "AISI 1008": (200, 1.17, 8100, 2.59, 10),
+    "9SMnPb28": (400, 1.488, 1200, 3, 12.5),
+    "M700-100A": (1120, 1.2, 20750, 3.55, 13.15),
+    "VACOFLUX 50": (3850, 1.75, 11790, 2.63, 15.02),
+}
+
+
+@pytest.mark.parametrize("name", sorted(ROSCHKE_FACTS))
+def test_roschke_records_follow_the_published_formula(name: str) -> None:
+    mu_i, b_max, c_a, c_b, n = ROSCHKE_FACTS[name]
+    b = np.array([-2.2, -1.0, 0.05, 0.5, 1.0, 1.5, 2.0, 3.0])
+    bn = np.abs(b / b_max)
+    mu_r = 1 + (mu_i - 1 + c_a * bn) / (1 + c_b * bn + bn**n)
+    mat = mk.get_material(name.lower().replace(" ", "_"))   # lookup ignores case/punctuation
+    np.testing.assert_allclose(mat.field_strength(b), b / (MU0 * mu_r), rtol=RTOL)
+
+
+# ---------------------------------------------------------------- U-magnet switches
+P = u_params()["magnet"]
+RAIL = u_params()["rail"]
+N, D, WP = P["turns"], P["depth"], P["pole_width"]
+GCP, HC, WW = P["coil_gap_to_pole_face"], P["coil_height"], P["window_width"]
+OVERHANG = 0.5 * (RAIL["width"] - (WW + 2 * WP))
+
+
+def _fringe(s: float) -> float:
+    """Documented U-magnet fringing (docs/equations.md sec. 6): an inner edge of flank height
+    GCP and an outer edge limited by the rail overhang, each along the depth."""
+    return sum(2 * MU0 * D / math.pi * math.log(1 + math.pi * r / (2 * s))
+               for r in (GCP, min(GCP, OVERHANG)))
+
+
+@pytest.mark.parametrize("s", [0.004, 0.012, 0.020])
+def test_u_magnet_fringing_alone(s: float) -> None:
+    """Ideal iron, no leakage, fringing on: two equal gaps in series, L = n^2 G(s)/2."""
+    mag = build_u(material="ideal", leakage=False)
+    sol = mk.solve_statics(mag, gaps=s, currents=10.0)
+    g = MU0 * WP * D / s + _fringe(s)
+    assert sol.differential_inductance_H[0, 0] == pytest.approx(N**2 * g / 2, rel=1e-9)
+
+
+@pytest.mark.parametrize("s", [0.004, 0.012, 0.020])
+def test_u_magnet_leakage_alone(s: float) -> None:
+    """Ideal iron, no fringing, leakage on: the window permeance is in parallel with the
+    gaps, so L = n^2 (mu0 A/(2s) + G_window); the force is the textbook one (the leakage
+    tube does not depend on the gap)."""
+    mag = build_u(material="ideal", fringing=False)
+    i = 10.0
+    sol = mk.solve_statics(mag, gaps=s, currents=i)
+    g_window = MU0 * D / WW * (HC / 3 + GCP)
+    a = WP * D
+    assert sol.differential_inductance_H[0, 0] == pytest.approx(
+        N**2 * (MU0 * a / (2 * s) + g_window), rel=1e-9)
+    assert sol.force_N == pytest.approx(MU0 * (N * i) ** 2 * a / (4 * s * s), rel=1e-9)
+
+
+def test_u_magnet_saturation_switch_alone() -> None:
+    """Without saturation the iron is linear at mu_i: the inductance does not depend on
+    the current (to Newton's tolerance); with saturation it falls by far more."""
+    lin = mk.solve_statics(build_u(saturation=False), gaps=0.006, currents=[[1.0], [80.0]])
+    sat = mk.solve_statics(build_u(), gaps=0.006, currents=[[1.0], [80.0]])
+    l_lin, l_sat = lin.differential_inductance_H[:, 0, 0], sat.differential_inductance_H[:, 0, 0]
+    assert l_lin[1] == pytest.approx(l_lin[0], rel=1e-9)
+    assert l_sat[1] < 0.5 * l_sat[0]
+
+
+def test_kirchhoff_loop_law_by_hand_in_deep_saturation() -> None:
+    """The MMF around the main loop (legs, yoke, rail, both gaps) equals n I, summed here
+    from the solved branch fluxes with each element's own law (not the solver's residual)."""
+    mag = mk.load_magnet("u-magnet", eddy_currents=False)
+    s, i = 0.005, 80.0
+    sol = mk.solve_statics(mag, gaps=s, currents=i)
+    steel = mk.get_material("AISI 1008")
+    c = WW + WP
+    iron = {  # branch: (length, area), docs/equations.md sec. 6
+        "leg_left": (P["leg_height"] + P["yoke_thickness"] / 2, WP * D),
+        "leg_right": (P["leg_height"] + P["yoke_thickness"] / 2, WP * D),
+        "yoke": (c, P["yoke_thickness"] * D),
+        "rail": (c + RAIL["thickness"], RAIL["thickness"] * D),
+    }
+    mmf = sum(length * float(steel.field_strength(sol.branch_flux(b) / area))
+              for b, (length, area) in iron.items())
+    g = MU0 * WP * D / s + _fringe(s)
+    mmf += (sol.branch_flux("gap_left") + sol.branch_flux("gap_right")) / g
+    # deep saturation: the legs carry > 2 T, so the iron takes a large share of n I
+    assert abs(float(sol.branch_flux_density_T[sol.branch_names.index("leg_left")])) > 2.0
+    assert float(mmf) == pytest.approx(N * i, rel=1e-9)
+    # node law at the pole tips: leg flux = gap flux + leakage flux
+    assert float(sol.branch_flux("leg_left")) == pytest.approx(
+        float(sol.branch_flux("gap_left") + sol.branch_flux("leakage")), rel=1e-12)
