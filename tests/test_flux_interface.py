@@ -79,6 +79,101 @@ def test_bad_inputs_raise(fm: mk.FluxModel, kwargs: dict, match: str) -> None:
         mk.simulate(fm, (0.0, 0.01), dt=1e-3, **args)
 
 
+def test_nan_and_shape_errors_in_array_inputs(fm: mk.FluxModel) -> None:
+    """NaN inside sampled (n, k) arrays and a wrongly shaped gap_rates array are rejected."""
+    n = 11                                       # (0, 0.01) at dt = 1 ms
+    gaps = np.full((n, 2), 0.01)
+    gaps[4, 1] = np.nan
+    with pytest.raises(InputError, match=r"gaps is not finite at t = 0\.004 s"):
+        mk.simulate(fm, (0.0, 0.01), dt=1e-3, gaps=gaps, voltages=30.0)
+    volts = np.full((n, 1), 30.0)
+    volts[7, 0] = np.inf
+    with pytest.raises(InputError, match=r"voltages is not finite at t = 0\.007 s"):
+        mk.simulate(fm, (0.0, 0.01), dt=1e-3, gaps=0.01, voltages=volts)
+    with pytest.raises(InputError, match=r"gap_rates array has shape \(7, 2\).*\(11, 2\)"):
+        mk.simulate(fm, (0.0, 0.01), dt=1e-3, gaps=0.01, voltages=30.0,
+                    gap_rates=np.zeros((7, 2)))
+    with pytest.raises(InputError, match="gap_rates array has shape"):
+        mk.simulate(fm, (0.0, 0.01), dt=1e-3, gaps=0.01, voltages=30.0,
+                    gap_rates=[0.0, 0.0, 0.0])
+
+
+def test_step_rejects_nan_gap_and_foreign_state(u_magnet: mk.Magnet, fm: mk.FluxModel) -> None:
+    st = fm.initial_state(gaps=0.01, currents=10.0)
+    with pytest.raises(InputError, match="gaps must be finite"):
+        fm.step(st, 1e-3, 20.0, gaps=[float("nan"), 0.01])
+    with pytest.raises(InputError, match="gap_rates must be finite"):
+        fm.step(st, 1e-3, 20.0, gap_rates=[0.0, float("nan")])
+    # a state of the eddy-current model given to the eddy-free model (finding: used to
+    # be mis-sliced into a SolverError)
+    plain = mk.FluxModel(u_magnet, eddy_currents=False)
+    assert len(fm.differential_state_names) != len(plain.differential_state_names)
+    with pytest.raises(InputError, match=r"differential_state has shape \(2,\).*expects \(1,\)"):
+        plain.step(st, 1e-3, 20.0)
+    with pytest.raises(InputError, match=r"expects \(2,\)"):
+        fm.step(plain.initial_state(gaps=0.01, currents=10.0), 1e-3, 20.0)
+    with pytest.raises(InputError, match="different model"):
+        mk.simulate(plain, (0.0, 0.01), dt=1e-3, gaps=0.01, voltages=20.0, initial_state=st)
+    with pytest.raises(InputError, match="FluxState"):
+        fm.step({"differential_state": st.differential_state}, 1e-3, 20.0)  # type: ignore[arg-type]
+
+
+def test_dt_types_and_bools(fm: mk.FluxModel) -> None:
+    st = fm.initial_state(gaps=0.01, currents=10.0)
+    ref, out_ref = fm.step(st, 1e-3, 20.0)
+    for dt in (np.float32(1e-3), np.float64(1e-3)):
+        st1, out = fm.step(st, dt, 20.0)
+        # float32(1e-3) differs from 1e-3 by 4.7e-11 s; over that the current moves by
+        # ~|dI/dt| 5e-11 s << 1e-6 relative
+        assert st1.time_s == pytest.approx(1e-3, rel=1e-7)
+        assert out.currents_A[0] == pytest.approx(out_ref.currents_A[0], rel=1e-6)
+    for bad in (True, np.bool_(True), "1e-3", np.array([1e-3])):
+        with pytest.raises(InputError, match="dt"):
+            fm.step(st, bad, 20.0)  # type: ignore[arg-type]
+    with pytest.raises(InputError, match="bool"):
+        fm.step(st, 1e-3, True)
+    with pytest.raises(InputError, match="bool"):
+        fm.step(st, 1e-3, 20.0, gaps=[True, 0.01])
+    with pytest.raises(InputError, match="bool"):
+        mk.simulate(fm, (0.0, 0.01), dt=1e-3, gaps=0.01, voltages=True)
+    with pytest.raises(InputError, match="dt"):
+        mk.simulate(fm, (0.0, 0.01), dt=True, gaps=0.01, voltages=20.0)
+    res = mk.simulate(fm, (0.0, 0.002), dt=np.float32(1e-3), gaps=0.01, voltages=20.0)
+    assert res.time_s.size == 3 and res.time_s[-1] == 0.002
+
+
+def test_callable_exceptions_are_wrapped(fm: mk.FluxModel) -> None:
+    def bad(t: float) -> float:
+        return 1.0 / (t - 0.003) if t < 0.0025 else 1.0 / 0.0
+
+    with pytest.raises(InputError, match=r"voltages.*ZeroDivisionError at t = 0\.003 s") as info:
+        mk.simulate(fm, (0.0, 0.01), dt=1e-3, gaps=0.01, voltages=bad)
+    assert isinstance(info.value.__cause__, ZeroDivisionError)
+
+    def key_error(t: float) -> float:
+        return {}["x"]  # type: ignore[no-any-return]
+
+    with pytest.raises(InputError, match=r"gaps\[left\].*KeyError at t = 0\.0 s") as info:
+        mk.simulate(fm, (0.0, 0.01), dt=1e-3, gaps={"left": key_error, "right": 0.01},
+                    voltages=20.0)
+    assert isinstance(info.value.__cause__, KeyError)
+
+
+def test_time_span_rule(fm: mk.FluxModel) -> None:
+    """A 2-element tuple or list is a span (t0, tf); an array is always an explicit grid."""
+    kw = {"gaps": 0.01, "voltages": 20.0}
+    assert mk.simulate(fm, (0.0, 0.01), dt=1e-3, **kw).time_s.size == 11
+    assert mk.simulate(fm, [0.0, 0.01], dt=1e-3, **kw).time_s.size == 11
+    grid = mk.simulate(fm, np.array([0.0, 0.01]), **kw).time_s
+    np.testing.assert_array_equal(grid, [0.0, 0.01])
+    np.testing.assert_array_equal(mk.simulate(fm, [0.0, 0.004, 0.01], **kw).time_s,
+                                  [0.0, 0.004, 0.01])
+    with pytest.raises(InputError, match="either dt"):
+        mk.simulate(fm, np.array([0.0, 0.01]), dt=1e-3, **kw)
+    with pytest.raises(InputError, match="tf must be > t0"):
+        mk.simulate(fm, [0.01, 0.0], **kw)
+
+
 def test_consistent_gap_rates_accepted(fm: mk.FluxModel) -> None:
     g = Sine(0.01, 0.001, 10.0)
     w = 2 * math.pi * 10.0

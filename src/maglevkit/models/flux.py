@@ -46,7 +46,7 @@ from ..circuit.network import Network
 from ..errors import InputError, SolverError, TopologyError
 from ..materials import MU0
 from .current import CurrentModel, ReducedSimulation
-from .inputs import gap_secants, sample_input, time_grid
+from .inputs import check_step, gap_secants, reject_bools, sample_input, time_grid
 from .statics import as_network, current_vector, gap_vector, magnetic_energy, solve_statics
 
 __all__ = [
@@ -311,6 +311,7 @@ def _vec(value: Any, n: int, what: str, unit: str, names: tuple[str, ...]) -> np
             raise InputError(f"{what}: unknown names {unknown}, missing {missing}; "
                              f"expected {list(names)}")
         value = [value[k] for k in names]
+    reject_bools(value, what)
     try:
         arr = np.asarray(value, dtype=float)
     except (TypeError, ValueError) as exc:
@@ -434,8 +435,32 @@ class FluxModel:
         return FluxState(float(time), self._dae.D @ x, s.copy(), x, i.copy(),
                          self.resistances * i, np.zeros_like(s), np.zeros(4))
 
+    def _check_state(self, state: Any) -> None:
+        """InputError unless ``state`` is a finite FluxState with this model's array shapes."""
+        if not isinstance(state, FluxState):
+            raise InputError(f"state must be a FluxState (from FluxModel.initial_state or "
+                             f"step), got {type(state).__name__}")
+        d = self._dae
+        expected = {"differential_state": d.n_diff, "gaps_m": d.n_gaps,
+                    "loop_flux_Wb": d.n_loops, "currents_A": d.n_circuits,
+                    "voltages_V": d.n_circuits, "gap_rates_m_per_s": d.n_gaps, "energy_J": 4}
+        for name, n in expected.items():
+            arr = np.asarray(getattr(state, name))
+            if arr.shape != (n,):
+                raise InputError(
+                    f"state.{name} has shape {arr.shape}, but this model "
+                    f"({self.network.name!r}, differential states "
+                    f"{list(self.differential_state_names)}) expects ({n},); the state "
+                    "belongs to a different model (e.g. other eddy_currents setting) - make "
+                    "it with this model's initial_state")
+            if not np.all(np.isfinite(arr)):
+                raise InputError(f"state.{name} = {arr.tolist()} is not finite")
+        if not math.isfinite(state.time_s):
+            raise InputError(f"state.time_s = {state.time_s!r} must be finite")
+
     def outputs(self, state: FluxState) -> FluxOutputs:
         """Outputs at ``state`` (with the inputs stored in the state)."""
+        self._check_state(state)
         o = np.asarray(self._dae.output_fun(state._vector(), state.voltages_V,
                                             state.gap_rates_m_per_s)).ravel()
         return self._unpack_outputs(state.time_s, state.currents_A, o)
@@ -495,13 +520,15 @@ class FluxModel:
         Raises
         ------
         InputError
-            Bad shapes, non-finite values, ``dt <= 0``, gaps that are or become <= 0.
+            A state of another model (array shapes differ from this model's), bad shapes,
+            non-finite values or bools, ``dt`` not a real number > 0, gaps that are or
+            become <= 0.
         SolverError
             The integrator failed (with time, state and the solver's reason).
         """
         d = self._dae
-        if not (isinstance(dt, (int, float)) and math.isfinite(dt) and dt > 0.0):
-            raise InputError(f"dt = {dt!r} s must be a finite number > 0")
+        self._check_state(state)
+        dt = check_step(dt)
         U = _vec(voltages, d.n_circuits, "voltages", "V", self.circuit_names)
         rate = _vec(gap_rates, d.n_gaps, "gap_rates", "m/s", self.gap_names)
         w = state._vector()
@@ -670,9 +697,12 @@ def simulate(model: Any, t: Any, *, gaps: Any, voltages: Any, gap_rates: Any = N
         with the same inputs and conventions); ``options`` (``saturation``,
         ``eddy_currents``, ``method``, ``rtol``, ``atol``, ...) build a :class:`FluxModel`
         (or change a given one).
-    t : (t0, tf) or array_like
-        A time span [s] (grid ``t0 + k dt``, ending exactly at ``tf``) or an increasing
-        time grid [s].  Inputs are sampled on the grid.
+    t : (t0, tf), [t0, tf] or array
+        A time span [s]: a tuple or list of exactly two numbers gives the grid
+        ``t0 + k dt`` ending exactly at ``tf``.  A numpy array (any length >= 2) or a
+        sequence of three or more times is an explicit increasing grid [s] (then no
+        ``dt``; a two-point grid is ``np.array([t0, t1])``).  Inputs are sampled on the
+        grid.
     gaps : float, sequence, mapping, Signal, callable or array
         Gaps [m]: constant (scalar or one value per gap), a Signal or ``f(t)`` (scalar
         or per-gap values), a mapping per gap name of any of these, or samples of shape
@@ -685,7 +715,8 @@ def simulate(model: Any, t: Any, *, gaps: Any, voltages: Any, gap_rates: Any = N
         of the rates over each interval may differ from the secant by at most
         ``gap_rate_tolerance`` times the largest rate (plus 1 um/s); otherwise InputError.
     dt : float, optional
-        Grid step [s] with a time span (default 1e-4 s).
+        Grid step [s] with a time span (default 1e-4 s); a real number > 0 (numpy scalars
+        allowed, bools rejected).
     initial_currents : float, sequence or mapping, optional
         Start at the static operating point with these currents [A]; default the
         steady state ``U(t0) / R``.
@@ -724,14 +755,11 @@ def simulate(model: Any, t: Any, *, gaps: Any, voltages: Any, gap_rates: Any = N
     if initial_state is not None:
         if initial_currents is not None:
             raise InputError("give initial_currents or initial_state, not both")
-        if not isinstance(initial_state, FluxState):
-            raise InputError("initial_state must be a FluxState (from FluxModel.initial_state)")
+        fm._check_state(initial_state)
         st0 = FluxState(float(times[0]), initial_state.differential_state, s[0].copy(),
                         initial_state.loop_flux_Wb, initial_state.currents_A,
                         initial_state.voltages_V, initial_state.gap_rates_m_per_s,
                         np.zeros(4))
-        if st0.differential_state.shape != (fm._dae.n_diff,):
-            raise InputError("initial_state belongs to a different model")
     else:
         i0 = U[0] / net.resistances if initial_currents is None else initial_currents
         st0 = fm.initial_state(gaps=s[0], currents=i0, time=float(times[0]))

@@ -8,6 +8,7 @@ of time, or sampled arrays.
 from __future__ import annotations
 
 import math
+import numbers
 from collections.abc import Mapping
 from typing import Any
 
@@ -16,10 +17,62 @@ import numpy as np
 from ..errors import InputError
 from .signals import Signal
 
-__all__ = ["time_grid", "sample_input", "gap_secants"]
+__all__ = ["time_grid", "sample_input", "gap_secants", "check_step", "reject_bools"]
 
 
-def time_grid(t: Any, dt: float | None) -> np.ndarray:
+def check_step(dt: Any, what: str = "dt") -> float:
+    """A time step [s] as a float: a finite real number > 0 (numpy scalars allowed, bools not).
+
+    Raises
+    ------
+    InputError
+        ``dt`` is a bool, not a real number, not finite, or <= 0.
+    """
+    if isinstance(dt, (bool, np.bool_)) or not isinstance(dt, numbers.Real):
+        raise InputError(f"{what} = {dt!r} must be a real number of seconds > 0 (a float, int "
+                         f"or numpy scalar; not a bool, string or array), got {type(dt).__name__}")
+    value = float(dt)
+    if not (math.isfinite(value) and value > 0.0):
+        raise InputError(f"{what} = {dt!r} s must be a finite number > 0")
+    return value
+
+
+def _has_bool(value: Any) -> bool:
+    if isinstance(value, (bool, np.bool_)):
+        return True
+    if isinstance(value, np.ndarray):
+        return value.dtype.kind == "b" or (value.dtype == object
+                                           and any(_has_bool(v) for v in value.ravel()))
+    if isinstance(value, (list, tuple)):
+        return any(_has_bool(v) for v in value)
+    return False
+
+
+def reject_bools(value: Any, what: str) -> None:
+    """Raise InputError if ``value`` is or contains a bool (True would silently be 1.0)."""
+    if _has_bool(value):
+        raise InputError(f"{what} = {value!r} is or contains a bool; give numbers")
+
+
+def time_grid(t: Any, dt: Any) -> np.ndarray:
+    """The simulation time grid [s] from ``t`` and ``dt``.
+
+    The rule (the type of ``t`` decides, never its length alone):
+
+    * a **tuple or list of exactly two numbers** ``(t0, tf)`` / ``[t0, tf]`` is a time
+      *span*: the grid is ``t0 + k dt`` (``dt`` default 1e-4 s), ending exactly at ``tf``
+      (like ``scipy.integrate.solve_ivp``'s ``t_span``);
+    * a **numpy array** (any length >= 2) or a sequence of three or more times is an
+      explicit, strictly increasing *grid*; ``dt`` must then be None.  A two-point grid
+      is ``np.array([t0, t1])`` (or the span ``(t0, t1)`` with ``dt = t1 - t0``).
+
+    Raises
+    ------
+    InputError
+        Non-numeric, non-finite or non-increasing times, ``tf <= t0``, a bad ``dt``, or
+        ``dt`` given together with an explicit grid.
+    """
+    reject_bools(t, "t")
     try:
         arr = np.asarray(t, dtype=float)
     except (TypeError, ValueError) as exc:
@@ -27,13 +80,11 @@ def time_grid(t: Any, dt: float | None) -> np.ndarray:
             from exc
     if arr.ndim != 1 or arr.size < 2 or not np.all(np.isfinite(arr)):
         raise InputError("t must be (t0, tf) or a 1-D array of at least 2 finite times [s]")
-    if arr.size == 2 and isinstance(t, tuple):
+    if arr.size == 2 and isinstance(t, (tuple, list)):
         t0, tf = float(arr[0]), float(arr[1])
         if not tf > t0:
             raise InputError(f"t_span = ({t0}, {tf}): tf must be > t0")
-        step = 1e-4 if dt is None else dt
-        if not (isinstance(step, (int, float)) and math.isfinite(step) and step > 0.0):
-            raise InputError(f"dt = {dt!r} s must be a finite number > 0")
+        step = 1e-4 if dt is None else check_step(dt)
         n = int(math.floor((tf - t0) / step * (1.0 + 1e-12)))
         grid = t0 + step * np.arange(n + 1)
         if tf - grid[-1] > 1e-9 * step:
@@ -65,6 +116,7 @@ def sample_input(value: Any, times: np.ndarray, names: tuple[str, ...], what: st
     elif callable(value):
         arr = _sample_callable(value, times, k, names, what, unit)
     else:
+        reject_bools(value, what)
         try:
             a = np.asarray(value, dtype=float)
         except (TypeError, ValueError) as exc:
@@ -99,9 +151,10 @@ def _sample_callable(value: Any, times: np.ndarray, k: int, names: tuple[str, ..
     for t in times.tolist():
         try:
             raw.append(value(t))
-        except (TypeError, ValueError) as exc:
-            raise InputError(f"{what}: the callable must return numbers [{unit}] for a "
-                             f"time t [s]; it failed at t = {t}: {exc}") from exc
+        except Exception as exc:  # any failure of user code is an input error, chained
+            raise InputError(f"{what}: the callable raised {type(exc).__name__} at t = {t} s: "
+                             f"{exc}; it must return numbers [{unit}] for every time t [s] of "
+                             "the grid") from exc
     try:
         arr = np.asarray(raw, dtype=float)
     except (TypeError, ValueError):
