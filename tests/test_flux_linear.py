@@ -5,8 +5,8 @@ from __future__ import annotations
 import math
 
 import numpy as np
-import scipy.linalg as sla
 import pytest
+import scipy.linalg as sla
 
 import maglevkit as mk
 from maglevkit.magnets import ModelOptions, build_magnet
