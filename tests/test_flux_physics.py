@@ -6,7 +6,8 @@ import numpy as np
 import pytest
 
 import maglevkit as mk
-from maglevkit.models.signals import Sine, Step
+from maglevkit.errors import SolverError
+from maglevkit.models.signals import Ramp, Sine, Step
 
 
 def test_energy_balance_moving_gap_saturation_eddy(u_magnet: mk.Magnet) -> None:
@@ -36,21 +37,72 @@ def test_steady_state_reproduces_statics(u_magnet: mk.Magnet, eddy: bool) -> Non
     fm = mk.FluxModel(u_magnet, eddy_currents=eddy)
     gaps, i1 = [0.009, 0.012], 37.0
     st = fm.initial_state(gaps=gaps, currents=12.0)
-    tau = 0.15   # s, > L~/R * (1 + R/R_ec) at the start; 2 s = 13 tau -> e^-13 ~ 2e-6
+    # 2 s is ~13 slowest time constants (L~/R (1 + R/R_ec) <= 0.15 s here): e^-13 ~ 2e-6
     res = mk.simulate(fm, (0.0, 2.0), dt=5e-3, gaps=gaps,
                       voltages=fm.resistances * i1, initial_state=st)
-    sol = mk.solve_statics(u_magnet, gaps=gaps, currents=i1)
-    assert tau > 0
-    # remaining transient e^-13 and IDAS error (~1e-5) -> 1e-4 relative
+    # the transient has died out: the current reached U/R and stopped moving (the last
+    # 0.2 s change it by < 1e-7 relative; the remaining e^-13 transient and the IDAS
+    # error (~1e-5 at rtol 1e-6) bound the first check)
     assert res.currents_A[-1, 0] == pytest.approx(i1, rel=1e-4)
-    np.testing.assert_allclose(res.branch_flux_Wb[-1], sol.branch_flux_Wb, rtol=1e-4, atol=1e-9)
-    np.testing.assert_allclose(res.pole_force_N[-1], sol.pole_force_N, rtol=2e-4)
-    np.testing.assert_allclose(res.flux_linkage_Wb[-1], sol.flux_linkage_Wb, rtol=1e-4)
-    # and the outputs at the static state itself are exactly the statics
-    out = fm.outputs(fm.initial_state(gaps=gaps, currents=i1))
-    np.testing.assert_allclose(out.pole_force_N, sol.pole_force_N, rtol=1e-12)
-    np.testing.assert_allclose(out.branch_flux_Wb, sol.branch_flux_Wb, rtol=1e-12)
-    np.testing.assert_allclose(out.eddy_mmf_A, 0.0, atol=1e-8)
+    assert abs(res.currents_A[-1, 0] - res.currents_A[-41, 0]) < 1e-7 * i1
+    # Same currents -> same fluxes and forces: statics at the simulation's own final
+    # current (an independent Newton solve of the static network).  At rest the DAE's
+    # algebraic part is exactly the static network (eddy MMFs G phi' ~ 1e-11 A vs
+    # n I ~ 2e4 A), so only the algebraic solve tolerances remain: measured 2e-15
+    # relative; 1e-8 is 100x below rtol and would catch any force/flux inconsistency.
+    sol = mk.solve_statics(u_magnet, gaps=gaps, currents=res.currents_A[-1])
+    np.testing.assert_allclose(res.branch_flux_Wb[-1], sol.branch_flux_Wb, rtol=1e-8,
+                               atol=1e-8 * np.abs(sol.branch_flux_Wb).max())
+    np.testing.assert_allclose(res.pole_force_N[-1], sol.pole_force_N, rtol=1e-8)
+    np.testing.assert_allclose(res.flux_linkage_Wb[-1], sol.flux_linkage_Wb, rtol=1e-8)
+    # eddy MMFs vanish at rest (scale n I = 2.2e4 A; measured 2e-11 A)
+    np.testing.assert_allclose(res.eddy_mmf_A[-1], 0.0, atol=1e-9 * 600 * i1)
+
+
+def test_energy_balance_large_gap_motion(u_magnet: mk.Magnet) -> None:
+    """Gaps closing 14 -> 6 mm: mechanical work is a sizeable term, bound relative to it.
+
+    At the default rtol = 1e-6 the energy quadratures are not error-controlled (IDAS
+    ``quad_err_con`` is off; turning it on costs 2.4x run time) and the mechanical term is
+    only ~3e-4 accurate on this run (measured residual 3.1e-4 E_mech), which the issue's
+    1e-4-of-the-largest-term criterion cannot see.  So this test uses rtol = 1e-9.
+    """
+    res = mk.simulate(u_magnet, (0.0, 0.12), dt=2e-4,
+                      gaps={"left": Ramp(0.014, 0.006, 0.01, 0.09),
+                            "right": Ramp(0.013, 0.007, 0.01, 0.09)},
+                      voltages=40.0, initial_currents=20.0, rtol=1e-9, atol=1e-11)
+    eb = res.energy_balance()
+    assert eb.mechanical_J > 0.1 * eb.electrical_J > 0.0     # closing gaps: magnet does work
+    # Residual relative to the mechanical work: measured 1.1e-6, bound 2e-5.  The magnetic
+    # energy is recomputed from the branch fluxes and gaps (statics.magnetic_energy), so a
+    # pole-force error of 2e-5 relative would show here: forces, fluxes and currents are
+    # mutually consistent far beyond the 1 % an input-energy-relative bound allowed.
+    assert abs(eb.residual_J) < 2e-5 * eb.mechanical_J
+    assert eb.relative_residual < 1e-5                      # measured 1.2e-7
+    # A second method for the mechanical work: trapezoidal -sum F ds of the sampled pole
+    # forces and gaps vs the integrator's quadrature.  Trapezoid error O(h^2) with 400
+    # intervals over the ramp: measured 3.2e-7; bound 1e-5.
+    ds = np.diff(res.gaps_m, axis=0)
+    f_mid = 0.5 * (res.pole_force_N[1:] + res.pole_force_N[:-1])
+    w_trap = float(-(f_mid * ds).sum())
+    assert w_trap == pytest.approx(eb.mechanical_J, rel=1e-5)
+
+
+def test_solver_failure_mid_run_reports_time_state_reason() -> None:
+    """A 1e12 V step at 5 ms: IDAS fails there; the error names time, state and reason."""
+    fm = mk.FluxModel(mk.load_magnet("u-magnet"))
+    with pytest.raises(SolverError) as info:
+        mk.simulate(fm, (0.0, 0.01), dt=1e-3, gaps=0.01, voltages=Step(20.0, 1e12, 0.005))
+    err = info.value
+    assert err.time == pytest.approx(0.005, abs=1e-12)     # start of the failing interval
+    np.testing.assert_allclose(err.state["voltages_V"], [1e12])
+    np.testing.assert_allclose(err.state["gaps_m"], [0.01, 0.01])
+    # the state is the one at 5 ms (steady state of 20 V: 10 A), not the initial one
+    np.testing.assert_allclose(err.state["currents_A"], [10.0], rtol=1e-4)
+    assert set(fm.differential_state_names) <= set(err.state)
+    msg = str(err)
+    assert "t = 0.005 s" in msg and "psi[coil]=" in msg and "voltages_V=[1e+12]" in msg
+    assert "IDA" in err.reason and f"reason: {err.reason}" in msg
 
 
 @pytest.mark.parametrize(("gap", "current"), [(0.008, 5.0), (0.010, 20.0), (0.012, 40.0)])
