@@ -292,6 +292,57 @@ def test_cli_simulate(tmp_path: Path) -> None:
     assert r.exit_code == 2 and "dt" in r.output
 
 
+def test_cli_simulate_sine_and_tabulated(tmp_path: Path) -> None:
+    """Sine gap and tabulated voltage through the CLI; the CSV reproduces the signals."""
+    out_csv = tmp_path / "sim.csv"
+    scen = tmp_path / "s.toml"
+    scen.write_text('[scenario]\nduration = 0.02\ndt = 1e-3\ninitial_current = 10.0\n'
+                    '[voltages]\n'
+                    'coil = {type = "tabulated", times = [0.0, 0.01, 0.02], '
+                    'values = [20.0, 60.0, 40.0]}\n'
+                    '[gaps]\nleft = {type = "sine", offset = 0.010, amplitude = 0.001, '
+                    'frequency = 50.0}\nright = 0.011\n')
+    r = CliRunner().invoke(app, ["simulate", "u-magnet", "--scenario", str(scen), "--csv",
+                                 str(out_csv)])
+    assert r.exit_code == 0, r.output
+    rows = list(csv.DictReader(out_csv.open()))
+    t = np.array([float(row["time_s"]) for row in rows])
+    gap = np.array([float(row["gap[left]_m"]) for row in rows])
+    volt = np.array([float(row["voltage[coil]_V"]) for row in rows])
+    # CSV values are written with 10 significant digits: compare to 1e-9 relative
+    np.testing.assert_allclose(gap, 0.010 + 0.001 * np.sin(2 * np.pi * 50.0 * t), rtol=1e-9)
+    # held voltages: U(t_k) of the tabulated signal (the last row repeats the previous)
+    expect = np.interp(t, [0.0, 0.01, 0.02], [20.0, 60.0, 40.0])
+    np.testing.assert_allclose(volt[:-1], expect[:-1], rtol=1e-9)
+    assert float(rows[0]["current[coil]_A"]) == pytest.approx(10.0)
+    assert np.all(np.array([float(row["gap[right]_m"]) for row in rows]) == 0.011)
+
+
+@pytest.mark.parametrize(
+    ("text", "key"),
+    [
+        ('[scenario]\nduration = 0.02\ndt = 1e-3\ninitial_curent = 1.0\n'
+         '[voltages]\nall = 10.0\n[gaps]\nall = 0.01\n', "initial_curent"),
+        ('[scenario]\nduration = 0.02\ndt = 1e-3\n[voltages]\nall = 10.0\n[gaps]\n'
+         'all = {type = "sine", offset = 0.01, amplitude = 0.001, frequncy = 10.0}\n',
+         "frequncy"),
+        ('[scenario]\nduration = 0.02\ndt = 1e-3\n[voltages]\nall = 10.0\n[gaps]\n'
+         'all = 0.01\n[model]\neddy_current = true\n', "eddy_current"),
+        ('[scenario]\nduration = 0.02\ndt = 1e-3\n[voltages]\nall = 10.0\n[gaps]\n'
+         'lefft = 0.01\nright = 0.01\n', "lefft"),
+        ('[scenario]\nduration = 0.02\ndt = 1e-3\n[voltages]\nall = 10.0\n[gaps]\n'
+         'all = 0.01\n[solvr]\nrtol = 1e-6\n', "solvr"),
+    ],
+)
+def test_cli_simulate_typo_exits_2(tmp_path: Path, text: str, key: str) -> None:
+    scen = tmp_path / "typo.toml"
+    scen.write_text(text)
+    r = CliRunner().invoke(app, ["simulate", "u-magnet", "--scenario", str(scen)])
+    assert r.exit_code == 2, r.output
+    assert key in r.output
+    assert "Traceback" not in r.output and isinstance(r.exception, SystemExit)
+
+
 def test_bundled_scenario_loads() -> None:
     sc = mk.load_scenario("step")
     assert sc.dt_s > 0 and "all" in sc.voltages
