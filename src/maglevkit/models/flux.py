@@ -372,6 +372,11 @@ class FluxModel:
         self.atol = float(atol)
         self._dae = _dae(self.network, method, self.rtol, self.atol, max_num_steps,
                          radau_elements, radau_degree)
+        d = self._dae
+        self._state_shapes = (("differential_state", d.n_diff), ("gaps_m", d.n_gaps),
+                              ("loop_flux_Wb", d.n_loops), ("currents_A", d.n_circuits),
+                              ("voltages_V", d.n_circuits), ("gap_rates_m_per_s", d.n_gaps),
+                              ("energy_J", 4))
         self._options = {"method": method, "rtol": self.rtol, "atol": self.atol,
                          "max_num_steps": max_num_steps, "radau_elements": radau_elements,
                          "radau_degree": radau_degree}
@@ -440,23 +445,21 @@ class FluxModel:
         if not isinstance(state, FluxState):
             raise InputError(f"state must be a FluxState (from FluxModel.initial_state or "
                              f"step), got {type(state).__name__}")
-        d = self._dae
-        expected = {"differential_state": d.n_diff, "gaps_m": d.n_gaps,
-                    "loop_flux_Wb": d.n_loops, "currents_A": d.n_circuits,
-                    "voltages_V": d.n_circuits, "gap_rates_m_per_s": d.n_gaps, "energy_J": 4}
-        for name, n in expected.items():
-            arr = np.asarray(getattr(state, name))
-            if arr.shape != (n,):
+        for name, n in self._state_shapes:
+            got = np.shape(getattr(state, name))
+            if got != (n,):
                 raise InputError(
-                    f"state.{name} has shape {arr.shape}, but this model "
+                    f"state.{name} has shape {got}, but this model "
                     f"({self.network.name!r}, differential states "
                     f"{list(self.differential_state_names)}) expects ({n},); the state "
                     "belongs to a different model (e.g. other eddy_currents setting) - make "
                     "it with this model's initial_state")
-            if not np.all(np.isfinite(arr)):
-                raise InputError(f"state.{name} = {arr.tolist()} is not finite")
-        if not math.isfinite(state.time_s):
-            raise InputError(f"state.time_s = {state.time_s!r} must be finite")
+        if not (math.isfinite(state.time_s) and np.isfinite(state._vector()).all()
+                and np.isfinite(state.voltages_V).all()
+                and np.isfinite(state.gap_rates_m_per_s).all()):
+            raise InputError(f"state is not finite (time {state.time_s!r} s, differential "
+                             f"state {np.asarray(state.differential_state).tolist()}, "
+                             f"currents {np.asarray(state.currents_A).tolist()})")
 
     def outputs(self, state: FluxState) -> FluxOutputs:
         """Outputs at ``state`` (with the inputs stored in the state)."""
