@@ -22,7 +22,8 @@ def f6(std: mk.Magnet):  # type: ignore[no-untyped-def]
 
 @pytest.fixture(scope="module")
 def f7(std: mk.Magnet):  # type: ignore[no-untyped-def]
-    return fig7_data(std)
+    # 4 simulated voltage steps (I/I0 = 0.1, 0.8, 1.5, 2.2) of each model keep this ~10 s
+    return fig7_data(std, step_points=4)
 
 
 def test_saturation_switch_reaches_the_network() -> None:
@@ -84,6 +85,46 @@ def test_fig7_inductance(f7, std: mk.Magnet) -> None:  # type: ignore[no-untyped
     assert np.allclose(Lf[x < 0.7], 1.0, atol=0.03)
 
 
+def test_fig7_step_response_inductance(f7, std: mk.Magnet) -> None:  # type: ignore[no-untyped-def]
+    """The paper's Fig. 7 claim, on the quantity it measured (tau R_el of a voltage step):
+    without saturation and eddy currents the inductance is smaller and constant."""
+    from maglevkit.reduction import eddy_resistance
+
+    x, full, lin = f7.step_current, f7.step_inductance_full, f7.step_inductance_linear
+    assert x.size == 4
+    # simple model: one exponential, tau R_el = L_11 (the stepped circuit's self inductance;
+    # the other circuit keeps its voltage).  Constant to fit/integrator precision (computed
+    # spread 1e-4; bound 1e-3) and equal to the static L_11 (computed 0.1 % apart, from the
+    # 25-samples-per-tau fit window; bound 0.5 %)
+    assert np.ptp(lin) / lin.mean() < 1e-3
+    lin_static = mk.solve_statics(std.with_options(saturation=False, eddy_currents=False),
+                                  gaps=f7.gap_m, currents=10.0).differential_inductance_H[0, 0]
+    np.testing.assert_allclose(lin * f7.L0_H, lin_static, rtol=5e-3)
+    # full model below the knee: larger than the simple one (computed 1.33 x at 0.1 I0,
+    # 1.31 x at 0.8 I0; bound 1.2 x)
+    below = x < 1.0
+    assert below.sum() == 2
+    assert np.all(full[below] > 1.2 * lin[below])
+    # ... and it falls with current: flat below the knee (the iron permeability still rises a
+    # little, computed <= +0.15 %; allowed +0.5 %), strictly falling above the nominal current
+    assert np.all(np.diff(full) < 5e-3 * full[0])
+    above = x >= std.nominal_current / f7.I0_A
+    assert np.all(np.diff(full[above]) < 0.0) and full[-1] < 0.4 * full[0]
+    # independent check of the eddy-current effect: the reduced model (paper eq. 8, facts.md
+    # sec. 5) gives tau R_el = L_11 (1 + R_el/R_ec) with L_11 from the statics and R_ec from
+    # the exact current-jump admittance of the network (no time fit).  The detailed model's
+    # 23 eddy elements have several modes and its slow mode is slower than eq. 8's single
+    # one (docs/reduction.md), so the step value lies above; computed ratio 1.075 below the
+    # knee, 1.048 at 2.2 I0; bounds 1.0 .. 1.12
+    r_el = float(std.network.resistances[0])
+    for xi, li in zip(x, full, strict=True):
+        cur = float(xi * f7.I0_A)
+        l11 = mk.solve_statics(std, gaps=f7.gap_m, currents=cur).differential_inductance_H[0, 0]
+        r_ec = float(eddy_resistance(std, gap=f7.gap_m, current=cur)[0])
+        ratio = li * f7.L0_H / (l11 * (1.0 + r_el / r_ec))
+        assert 1.0 < ratio < 1.12, (xi, ratio)
+
+
 def test_static_inductance_independent_of_eddy_currents(std: mk.Magnet) -> None:
     no_eddy = std.with_options(eddy_currents=False)
     a = mk.solve_statics(std, gaps=0.0095, currents=40.0).differential_inductance_H
@@ -92,7 +133,7 @@ def test_static_inductance_independent_of_eddy_currents(std: mk.Magnet) -> None:
 
 
 def test_figures_written(std: mk.Magnet, tmp_path) -> None:  # type: ignore[no-untyped-def]
-    paths = write_figures(std, tmp_path)
+    paths = write_figures(std, tmp_path, step_points=2)   # fewer voltage steps: fast
     assert [p.name for p in paths] == ["tr09-standard-fig6-force-current.png",
                                        "tr09-standard-fig7-inductance.png",
                                        "tr09-standard-coupling.png"]

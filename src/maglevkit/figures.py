@@ -1,22 +1,26 @@
-"""The paper's validation figures, reproduced in kind from a magnet's statics.
+"""The paper's validation figures, reproduced in kind from a magnet's models.
 
 * :func:`figure_force_current` -- Fig. 6 analog: ``F/F0`` over ``I/I0`` at several gaps,
   full model vs the model without saturation (constant ``mu_r(0)``).
-* :func:`figure_inductance` -- Fig. 7 analog: normalised differential inductance
-  ``L~ = dpsi/dI`` over ``I/I0`` at s = 9.5 mm, full model vs the model without saturation
-  and eddy currents.  Statically ``L~`` does not depend on eddy currents (they carry no
-  static MMF); they matter only for the dynamic identification of the paper's Sec. IV-B.
+* :func:`figure_inductance` -- Fig. 7 analog at s = 9.5 mm: the full model's static
+  differential inductance ``L~ = dpsi/dI`` and its *apparent* inductance ``tau R_el``
+  from simulated small voltage steps of the detailed flux model (how fast the current
+  follows a voltage step, what the paper measured), vs the model without saturation and
+  eddy currents.  Statically ``L~`` does not depend on eddy currents (they carry no static
+  MMF); in the step response they slow the current down, ``tau R_el ~ L~ (1 + R_el/R_ec)``.
+* :func:`figure_coupling` -- time response of all circuits to a voltage step in the first
+  one (detailed flux-based model, :func:`coupling_response`), with the coupling quantified.
 
 Normalisation: ``I0`` is the saturation knee (:func:`~maglevkit.magnets.saturation_knee`
 at the nominal gap ``s0``), ``F0 = F(s0, I0)`` of the full model.  The nominal current of
-the parameter file is marked.  The time response of the coupled circuits needs the
-flux-based dynamic model and is not produced here.
+the parameter file is marked.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -25,8 +29,9 @@ from .magnets.characteristics import KNEE_EXPONENT, nominal_point, saturation_kn
 from .models.statics import solve_statics
 from .plotting import plt, save
 
-__all__ = ["Fig6Data", "Fig7Data", "fig6_data", "fig7_data", "figure_force_current",
-           "figure_inductance", "write_figures"]
+__all__ = ["Fig6Data", "Fig7Data", "CouplingResponse", "fig6_data", "fig7_data",
+           "coupling_response", "figure_force_current", "figure_inductance", "figure_coupling",
+           "write_figures"]
 
 
 @dataclass(frozen=True)
@@ -49,10 +54,23 @@ class Fig6Data:
 
 @dataclass(frozen=True)
 class Fig7Data:
-    """Normalised differential inductance over current (paper Fig. 7).
+    """Normalised inductance over current (paper Fig. 7).
 
-    ``inductance_*`` are ``L~/L0`` with ``L0`` the model without saturation (constant),
-    for the first circuit with every circuit at the same current.
+    Attributes
+    ----------
+    current : ndarray
+        ``I/I0`` of the static curves.
+    inductance_full, inductance_linear : ndarray
+        Static ``L~/L0 = (dpsi/dI)/L0`` of the first circuit with every circuit at the
+        same current; full model and model without saturation and eddy currents.
+    step_current : ndarray
+        ``I/I0`` of the simulated voltage steps (empty if none were simulated).
+    step_inductance_full, step_inductance_linear : ndarray
+        Apparent inductance ``tau R_el / L0`` from a small voltage step of the first
+        circuit (:func:`~maglevkit.models.experiments.differential_inductance_from_step`,
+        detailed flux model, other circuits at constant voltage).
+    L0_H : float
+        Static inductance of the model without saturation and eddy currents [H].
     """
 
     gap_m: float
@@ -62,6 +80,9 @@ class Fig7Data:
     I0_A: float
     L0_H: float
     nominal_current_A: float
+    step_current: np.ndarray
+    step_inductance_full: np.ndarray
+    step_inductance_linear: np.ndarray
 
 
 def fig6_data(magnet: Magnet, *, gap_factors: tuple[float, ...] = (0.8, 1.0, 1.2, 1.5),
@@ -78,9 +99,42 @@ def fig6_data(magnet: Magnet, *, gap_factors: tuple[float, ...] = (0.8, 1.0, 1.2
     return Fig6Data(gaps, cur, full / f0, lin / f0, i0, f0, s0, i_nom)
 
 
+#: Settings of the Fig. 7 voltage steps: coarse enough that 2 x 12 steps of the TR09 magnet
+#: take ~15 s, fine enough that ``tau R_el`` agrees with 200 samples per time constant and
+#: rtol 1e-9 within 0.3 % (checked at 20 and 70 A).
+_STEP_SETTINGS: dict[str, Any] = {"samples_per_tau": 25, "n_tau": 4.0, "rtol": 1e-6,
+                                  "atol": 1e-8}
+
+
 def fig7_data(magnet: Magnet, *, gap: float = 0.0095, max_current: float = 2.2,
-              points: int = 89) -> Fig7Data:
-    """Data of the Fig. 7 analog at ``gap`` [m] (the paper: 9.5 mm)."""
+              points: int = 89, step_points: int = 12) -> Fig7Data:
+    """Data of the Fig. 7 analog at ``gap`` [m] (the paper: 9.5 mm).
+
+    Parameters
+    ----------
+    magnet : Magnet
+        Magnet with an ``[operating]`` table.
+    gap : float
+        Uniform gap [m].
+    max_current : float
+        Largest current as a multiple of the knee ``I0``.
+    points : int
+        Currents of the static curves.
+    step_points : int
+        Currents ``0.1 .. max_current x I0`` at which a small voltage step of the first
+        circuit is simulated with the detailed flux model, full and without saturation and
+        eddy currents (0: none; each step costs ~0.3-1 s).
+
+    Raises
+    ------
+    InputError
+        If ``step_points`` is negative or the magnet has no ``[operating]`` table.
+    """
+    from .errors import InputError
+    from .models.experiments import differential_inductance_from_step
+
+    if isinstance(step_points, bool) or not isinstance(step_points, int) or step_points < 0:
+        raise InputError(f"step_points = {step_points!r} must be an integer >= 0")
     s0, i_nom = nominal_point(magnet)
     i0 = saturation_knee(magnet, gap=s0)
     cur = np.linspace(0.0, max_current, points)
@@ -90,7 +144,15 @@ def fig7_data(magnet: Magnet, *, gap: float = 0.0095, max_current: float = 2.2,
     l_full = full.common_differential_inductance_H[0, :, 0]
     l_lin = lin.common_differential_inductance_H[0, :, 0]
     l0 = float(l_lin[0])
-    return Fig7Data(gap, cur, l_full / l0, l_lin / l0, i0, l0, i_nom)
+    x_step = np.linspace(0.1, max_current, step_points) if step_points else np.zeros(0)
+    step_full = np.array([differential_inductance_from_step(
+        magnet, gap=gap, current=float(x * i0), **_STEP_SETTINGS).apparent_inductance_H
+        for x in x_step])
+    step_lin = np.array([differential_inductance_from_step(
+        magnet, gap=gap, current=float(x * i0), saturation=False, eddy_currents=False,
+        **_STEP_SETTINGS).apparent_inductance_H for x in x_step])
+    return Fig7Data(gap, cur, l_full / l0, l_lin / l0, i0, l0, i_nom, x_step,
+                    step_full / l0, step_lin / l0)
 
 
 def _mark_currents(ax: object, i_nom_rel: float) -> None:
@@ -131,24 +193,51 @@ def figure_force_current(magnet: Magnet, path: str | Path, *, data: Fig6Data | N
 
 
 def figure_inductance(magnet: Magnet, path: str | Path, *, data: Fig7Data | None = None) -> Path:
-    """Write the Fig. 7 analog (PNG) and return its path."""
+    """Write the Fig. 7 analog (PNG) and return its path.
+
+    Static ``L~ = dpsi/dI`` and, where simulated, the apparent inductance ``tau R_el`` of
+    small voltage steps (detailed flux model), for the full model and for the model without
+    saturation and eddy currents.
+    """
     d = data or fig7_data(magnet)
-    fig, ax = plt.subplots(figsize=(6.4, 4.6))
-    ax.plot(d.current, d.inductance_full, color="tab:blue", lw=2.0, label="full model")
+    fig, ax = plt.subplots(figsize=(6.8, 4.8))
+    has_steps = d.step_current.size > 0
+    ax.plot(d.current, d.inductance_full, color="tab:blue", lw=2.0,
+            label="full model: static L~ = dpsi/dI")
+    if has_steps:
+        ax.plot(d.step_current, d.step_inductance_full, color="tab:blue", lw=1.0, ls="-.",
+                marker="o", ms=5, label="full model: step response tau R_el")
     ax.plot(d.current, d.inductance_linear, color="tab:orange", lw=1.5, ls="--",
-            label="without saturation and eddy currents")
-    ax.set_xlim(0.0, d.current[-1])
-    ax.set_ylim(0.0, 1.15 * max(float(d.inductance_full.max()), 1.0))
+            label="without saturation and eddy currents: static L~")
+    if has_steps:
+        ax.plot(d.step_current, d.step_inductance_linear, color="tab:orange", lw=0, marker="s",
+                ms=5, mfc="none", label="without saturation and eddy currents: tau R_el")
+    top = max(float(d.inductance_full.max()), 1.0,
+              float(d.step_inductance_full.max()) if has_steps else 0.0)
+    ax.set_xlim(0.0, 1.02 * d.current[-1])
+    ax.set_ylim(0.0, 1.3 * top)
     ax.set_xlabel("normalised current I / I0")
-    ax.set_ylabel("normalised differential inductance L~ / L0")
+    ax.set_ylabel("normalised inductance L / L0")
     ax.set_title(f"Fig. 7 analog: differential inductance at s = {d.gap_m * 1e3:.1f} mm\n"
                  f"{magnet.name}", fontsize=10)
     ax.grid(True, alpha=0.3)
     _mark_currents(ax, d.nominal_current_A / d.I0_A)
-    ax.legend(fontsize=8, loc="lower left")
-    fig.text(0.01, -0.08, f"L~ = dpsi/dI of one circuit with all circuits at the same current; "
-             f"L0 = {d.L0_H:.3f} H\n(model without saturation), I0 = {d.I0_A:.1f} A. "
-             "Statically L~ is independent of eddy currents.", fontsize=7.5, color="0.3")
+    ax.legend(fontsize=7.5, loc="lower left", framealpha=0.9)
+    note = (f"L~ = dpsi/dI of one circuit with all circuits at the same current; L0 = {d.L0_H:.3f} H "
+            f"(model without saturation\nand eddy currents), I0 = {d.I0_A:.1f} A.  Statically L~ "
+            "is independent of eddy currents.")
+    if has_steps:
+        below = d.step_current < 0.7
+        ratio = (float(np.mean(d.step_inductance_full[below] / d.step_inductance_linear[below]))
+                 if np.any(below) else float("nan"))
+        note += ("  tau R_el: time constant of the current after a\nsmall voltage step of one "
+                 "circuit (detailed flux model) times its resistance, the paper's measured "
+                 "inductance.  With eddy\ncurrents the current follows more slowly, "
+                 f"tau R_el ~ L~ (1 + R_el/R_ec): {ratio:.2f} x the model without saturation and "
+                 "eddy currents\nbelow 0.7 I0, falling with saturation.  Without them "
+                 f"tau R_el = L_11 = {float(np.mean(d.step_inductance_linear)):.3f} L0, constant "
+                 "(one circuit stepped: the other's\nmutual share of L~ is missing).")
+    fig.text(0.01, -0.02, note, fontsize=7.5, color="0.3", va="top")
     return save(fig, path)
 
 
@@ -190,31 +279,65 @@ def coupling_response(magnet: Magnet, *, step: float = 0.2) -> CouplingResponse:
 
 def figure_coupling(magnet: Magnet, path: str | Path, *,
                     data: CouplingResponse | None = None) -> Path:
-    """Currents of all circuits after a voltage step in the first circuit (paper Sec. IV-A)."""
+    """Currents of all circuits after a voltage step in the first circuit (paper Sec. IV-A).
+
+    The stepped circuit is drawn against the left axis; the other circuits, whose response
+    is below 1 % of it, against a magnified right axis with the same zero.
+    """
     d = data or coupling_response(magnet)
     fig, ax = plt.subplots(figsize=(7.5, 4.5))
-    for j, name in enumerate(d.circuit_names):
-        ax.plot(d.time_s * 1e3, 100 * d.relative_current_change[:, j],
-                lw=2.2 if j == 0 else 1.6, label=f"circuit {name}" + (" (stepped)" if j == 0 else ""))
+    rel = 100.0 * d.relative_current_change
+    t_ms = d.time_s * 1e3
+    ax.plot(t_ms, rel[:, 0], color="tab:blue", lw=2.2,
+            label=f"circuit {d.circuit_names[0]} (stepped, left axis)")
+    m_step = float(np.max(np.abs(rel[:, 0])))
+    others = rel[:, 1:]
+    m_other = float(np.max(np.abs(others))) if others.size else 0.0
+    negative = others.size > 0 and float(others.flat[np.argmax(np.abs(others))]) < 0.0
+    lim = (-0.6 * m_step if negative else -0.1 * m_step, 1.1 * m_step)
+    ax.set_ylim(*lim)
+    ax.axhline(0.0, color="0.5", lw=0.8)
     ax.set_xlabel("time [ms]")
-    ax.set_ylabel("current change (I - I0)/I0 [%]")
-    ax.set_title(f"Coupling of the circuits: +20 % voltage step on '{d.circuit_names[0]}'\n"
-                 f"{magnet.name}")
+    ax.set_ylabel("stepped circuit: (I - I0)/I0 [%]", color="tab:blue")
+    ax.tick_params(axis="y", colors="tab:blue")
     ax.grid(True, alpha=0.3)
-    ax.legend()
-    fig.text(0.01, -0.04, f"largest response of another circuit: {100 * d.other_peak_ratio:.2f} % "
-             f"of the stepped one; static mutual/self inductance ratio {d.mutual_ratio:.4f} "
-             "(flux-based model, nominal point)", fontsize=8, color="0.3")
+    handles, labels = ax.get_legend_handles_labels()
+    if others.size and m_other > 0.0:
+        # magnify so that the other circuits' peak spans ~half the stepped circuit's range
+        k = m_other / (0.5 * m_step)
+        ax2 = ax.twinx()
+        colors = ["tab:orange", "tab:green", "tab:red", "tab:purple"]
+        for j, name in enumerate(d.circuit_names[1:]):
+            ax2.plot(t_ms, rel[:, j + 1], color=colors[j % len(colors)], lw=1.6,
+                     label=f"circuit {name} (right axis, magnified x{1.0 / k:.0f})")
+        ax2.set_ylim(lim[0] * k, lim[1] * k)
+        c2 = "tab:orange" if len(d.circuit_names) == 2 else "0.2"
+        ax2.set_ylabel("other circuits: (I - I0)/I0 [%]", color=c2)
+        ax2.tick_params(axis="y", colors=c2)
+        h2, l2 = ax2.get_legend_handles_labels()
+        handles, labels = handles + h2, labels + l2
+    ax.legend(handles, labels, fontsize=8.5, loc="center right", framealpha=0.9)
+    ax.set_title(f"Coupling of the circuits: +20 % voltage step on '{d.circuit_names[0]}'\n"
+                 f"{magnet.name}", fontsize=10)
+    fig.text(0.01, -0.02, f"Largest response of another circuit: {100 * d.other_peak_ratio:.2f} % "
+             f"of the stepped circuit's; static mutual/self inductance ratio {d.mutual_ratio:.4f}.\n"
+             "Detailed flux-based model with eddy currents, at the nominal gap and current; "
+             "both y axes share the zero.", fontsize=8, color="0.3", va="top")
     return save(fig, path)
 
 
-def write_figures(magnet: Magnet, out: str | Path) -> list[Path]:
+def write_figures(magnet: Magnet, out: str | Path, *, step_points: int = 12) -> list[Path]:
     """Write the figures of ``magnet`` into folder ``out``: Figs. 6-7 analogs and, for
-    magnets with several circuits, the coupling response (flux-based model)."""
+    magnets with several circuits, the coupling response (flux-based model).
+
+    ``step_points`` is the number of simulated voltage steps of the Fig. 7 analog (see
+    :func:`fig7_data`).
+    """
     out = Path(out)
     stem = Path(magnet.source).stem or "magnet"
     paths = [figure_force_current(magnet, out / f"{stem}-fig6-force-current.png"),
-             figure_inductance(magnet, out / f"{stem}-fig7-inductance.png")]
+             figure_inductance(magnet, out / f"{stem}-fig7-inductance.png",
+                               data=fig7_data(magnet, step_points=step_points))]
     if len(magnet.network.circuits) > 1:
         paths.append(figure_coupling(magnet, out / f"{stem}-coupling.png"))
     return paths
