@@ -1,4 +1,4 @@
-"""``maglevkit figures``: the paper's Figs. 6-7 analogs for a magnet."""
+"""``maglevkit figures``: the paper's Figs. 6-7 analogs and the circuit coupling of a magnet."""
 
 from __future__ import annotations
 
@@ -17,7 +17,8 @@ def figures(
                                                "(e.g. tr09-standard).")],
     out: Annotated[Path, typer.Option(help="Output folder for the PNG files.")] = Path("figures"),
 ) -> None:
-    """Fig. 6 analog (F/F0 over I/I0) and Fig. 7 analog (L~ over I/I0 at 9.5 mm) as PNG.
+    """Fig. 6 analog (F/F0 over I/I0), Fig. 7 analog (static L~ and step-response tau R_el
+    over I/I0 at 9.5 mm) and, for several circuits, their coupling time response, as PNG.
 
     Needs the magnet file's [operating] table (nominal gap and current).
     """
