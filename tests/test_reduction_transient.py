@@ -2,8 +2,6 @@
 
 from __future__ import annotations
 
-from concurrent.futures import ProcessPoolExecutor
-
 import numpy as np
 import pytest
 
@@ -22,6 +20,7 @@ CURRENTS = np.linspace(0.0, 60.0, 4)
 
 @pytest.fixture(scope="module")
 def both_maps(u_magnet: mk.Magnet):  # type: ignore[no-untyped-def]
+    # the default executor ("auto"; in-process for this 16-point grid)
     return build_maps(u_magnet, gaps=GAPS, currents=CURRENTS, method="both")
 
 
@@ -93,12 +92,69 @@ def test_transient_and_statics_maps_agree(both_maps) -> None:  # type: ignore[no
 
 def test_transient_maps_through_a_process_pool_are_identical(u_magnet: mk.Magnet,  # type: ignore[no-untyped-def]
                                                              both_maps) -> None:
+    """The fixture runs the default path (executor="auto": in-process for a 16-point grid,
+    below AUTO_POOL_MIN_POINTS); a 2-process pool must give the same maps."""
+    from concurrent.futures import ProcessPoolExecutor
+
     with ProcessPoolExecutor(2) as ex:
-        pooled = build_maps(u_magnet, gaps=GAPS, currents=CURRENTS, method="both", executor=ex)
+        pooled = build_maps(u_magnet, gaps=GAPS, currents=CURRENTS, method="both", executor=ex,
+                            progress=False)
     for name in both_maps.dataset.data_vars:
         # same compiled code on the same inputs: bit-identical
         assert np.array_equal(both_maps.dataset[name].values, pooled.dataset[name].values,
                               equal_nan=True), name
+
+
+def _assert_transient_equals_both(tr, both) -> None:  # type: ignore[no-untyped-def]
+    """Maps of method="transient" carry the transient variables of method="both"."""
+    pairs = {"inductance_H": "inductance_transient_H", "dL_ds_H_per_m": "dL_ds_transient_H_per_m",
+             "force_N": "force_N", "eddy_resistance_step_ohm": "eddy_resistance_step_ohm",
+             "eddy_resistance_ohm": "eddy_resistance_ohm",
+             "eddy_resistance_fit_ohm": "eddy_resistance_fit_ohm"}
+    for a, b in pairs.items():
+        # same compiled code on the same inputs, wherever it runs: bit-identical
+        assert np.array_equal(tr.dataset[a].values, both.dataset[b].values, equal_nan=True), a
+
+
+def test_dask_local_cluster_gives_identical_transient_maps(u_magnet: mk.Magnet,  # type: ignore[no-untyped-def]
+                                                           both_maps) -> None:
+    distributed = pytest.importorskip("distributed")
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
+                                  dashboard_address=None) as cluster, \
+            distributed.Client(cluster) as client:
+        remote = build_maps(u_magnet, gaps=GAPS, currents=CURRENTS, method="transient",
+                            executor=client, progress=False)
+    _assert_transient_equals_both(remote, both_maps)
+
+
+def test_cli_maps_build_method_and_difference_plots(both_maps, tmp_path) -> None:  # type: ignore[no-untyped-def]
+    from typer.testing import CliRunner
+
+    from maglevkit.cli import app
+
+    runner = CliRunner()
+    nc = tmp_path / "t.nc"
+    res = runner.invoke(app, ["maps", "build", "u-magnet", "-o", str(nc), "--gaps",
+                              "0.006:0.012:4", "--currents", "0:60:4", "--method", "transient"])
+    assert res.exit_code == 0, res.output
+    tr = mk.load_maps(nc, magnet=mk.load_magnet("u-magnet"))
+    assert "transient" in tr.dataset.attrs["method"]
+    _assert_transient_equals_both(tr, both_maps)
+    res = runner.invoke(app, ["maps", "build", "u-magnet", "-o", str(nc), "--method", "fit"])
+    assert res.exit_code == 2 and "--method" in res.output
+    # plot: maps of method "both" also get the per-point relative differences
+    both_nc = both_maps.to_netcdf(tmp_path / "both.nc")
+    res = runner.invoke(app, ["maps", "plot", str(both_nc), "--out", str(tmp_path / "b")])
+    assert res.exit_code == 0, res.output
+    assert (tmp_path / "b" / "maps_coil.png").read_bytes()[:4] == b"\x89PNG"
+    assert (tmp_path / "b" / "maps_difference_coil.png").read_bytes()[:4] == b"\x89PNG"
+    res = runner.invoke(app, ["maps", "plot", str(nc), "--out", str(tmp_path / "t")])
+    assert res.exit_code == 0, res.output
+    assert not (tmp_path / "t" / "maps_difference_coil.png").exists()
+    with pytest.raises(mk.InputError, match="method='both'"):
+        from maglevkit.reduction.plots import plot_method_differences
+
+        plot_method_differences(tr, tmp_path / "x")
 
 
 def test_transient_method_replaces_only_the_inductance_maps(u_magnet: mk.Magnet,  # type: ignore[no-untyped-def]

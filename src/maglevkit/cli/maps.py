@@ -24,8 +24,14 @@ def build(
     = "0.004:0.020:17",
     currents: Annotated[str, typer.Option(help="Current grid [A], start:stop:count.")]
     = "0:80:33",
-    workers: Annotated[int, typer.Option(help="Local worker processes (1: in this process).")]
-    = 1,
+    method: Annotated[str, typer.Option(help="How L~ and dL/ds are computed: statics (exact "
+                                             "sensitivities, fast), transient (the paper's "
+                                             "time integrations) or both (statics plus "
+                                             "transient and their relative differences).")]
+    = "statics",
+    workers: Annotated[int | None, typer.Option(help="Local worker processes (1: in this "
+                                                     "process; default: automatic, a pool "
+                                                     "for transient maps).")] = None,
     scheduler: Annotated[str | None, typer.Option(help="Address of a dask.distributed "
                                                         "scheduler (tcp://host:port).")] = None,
 ) -> None:
@@ -33,32 +39,47 @@ def build(
     from concurrent.futures import ProcessPoolExecutor
 
     from ..reduction import build_maps
+    from ..reduction.maps import METHODS
 
+    if method not in METHODS:
+        raise typer.BadParameter(f"--method {method!r}: use one of {', '.join(METHODS)}")
+    if workers is not None and workers < 1:
+        raise typer.BadParameter("--workers must be >= 1")
     g = parse_values(gaps, "--gaps", "m")
     c = parse_values(currents, "--currents", "A")
     mag = load_magnet_or_exit(magnet)
-    if workers < 1:
-        raise typer.BadParameter("--workers must be >= 1")
     client = None
+    pool = None
     try:
+        executor: object
         if scheduler:
             from distributed import Client
 
             client = Client(scheduler)
-            executor: object = client
+            executor = client
+        elif workers is None:
+            executor = "auto"
         elif workers > 1:
-            executor = ProcessPoolExecutor(max_workers=workers)
+            pool = ProcessPoolExecutor(max_workers=workers)
+            executor = pool
         else:
             executor = None
-        maps = build_maps(mag, gaps=g, currents=c, executor=executor, progress=True)
+        maps = build_maps(mag, gaps=g, currents=c, executor=executor, progress=True,
+                          method=method)
     except MaglevkitError as exc:
         raise fail(exc) from None
     finally:
+        if pool is not None:
+            pool.shutdown()
         if client is not None:
             client.close()
     path = maps.to_netcdf(output)
-    console.print(f"maps of {mag.name!r}: circuits {', '.join(maps.circuits)}; "
+    console.print(f"maps of {mag.name!r} ({method}): circuits {', '.join(maps.circuits)}; "
                   f"{g.size} gaps x {c.size} currents")
+    if method == "both":
+        for name in ("inductance_relative_difference", "dL_ds_relative_difference"):
+            worst = float(abs(maps.dataset[name]).max())
+            console.print(f"max |{name}| = {100 * worst:.3f} %")
     console.print(f"wrote {path}")
 
 
@@ -67,13 +88,21 @@ def plot(
     maps_file: Annotated[Path, typer.Argument(help="netCDF maps file.")],
     out: Annotated[Path, typer.Option(help="Folder for the PNG files.")] = Path("out"),
 ) -> None:
-    """Plot the maps (the paper's Fig. 9): one PNG per circuit."""
+    """Plot the maps (the paper's Fig. 9): one PNG per circuit.
+
+    Maps built with ``--method both`` also get the per-point relative differences of the
+    transient and statics methods (``maps_difference_<circuit>.png``).
+    """
     from ..plotting import plot_maps
     from ..reduction import load_maps
+    from ..reduction.plots import has_method_differences, plot_method_differences
 
     try:
         maps = load_maps(maps_file)
     except MaglevkitError as exc:
         raise fail(exc) from None
-    for p in plot_maps(maps, out):
+    paths = plot_maps(maps, out)
+    if has_method_differences(maps):
+        paths += plot_method_differences(maps, out)
+    for p in paths:
         console.print(f"wrote {p}")
