@@ -32,7 +32,8 @@ import numpy as np
 from ..errors import InputError, OutOfRangeError, SolverError
 from .inputs import gap_secants, sample_input, time_grid
 
-__all__ = ["CurrentModel", "CurrentModelState", "CurrentOutputs", "ReducedSimulation"]
+__all__ = ["CurrentModel", "CurrentModelLinearization", "CurrentModelState", "CurrentOutputs",
+           "ReducedSimulation"]
 
 
 @dataclass(frozen=True)
@@ -110,6 +111,65 @@ class ReducedSimulation:
     final_state: CurrentModelState
 
 
+@dataclass(frozen=True)
+class CurrentModelLinearization:
+    """Linearisation of the current-based model at one operating point (CasADi AD).
+
+    With deviations ``x = dI_L`` (state), ``u = dU`` (voltages), ``g = ds`` (pole gaps)
+    and ``r = d(ds/dt)`` (pole gap rates)::
+
+        dx/dt = A x + B u + E_gap g + E_gap_rate r
+        dF    = C_force x + D_force_gap g                 (circuit forces)
+        dI    = C_current x + D_current u                 (coil currents)
+
+    Attributes
+    ----------
+    gaps_m : ndarray (n_gaps,)
+        Pole gaps of the operating point [m].
+    inductor_currents_A : ndarray (n_circuits,)
+        ``I_L`` of the operating point [A].
+    voltages_V : ndarray (n_circuits,)
+        Voltages of the operating point [V].
+    gap_rates_m_per_s : ndarray (n_gaps,)
+        Pole gap rates of the operating point [m/s].
+    state_derivative_A_per_s : ndarray (n_circuits,)
+        ``dI_L/dt`` at the operating point [A/s] (0 at a steady state).
+    A_per_s : ndarray (n_circuits, n_circuits)
+        ``d(dI_L/dt)/dI_L`` [1/s].
+    B_A_per_V_s : ndarray (n_circuits, n_circuits)
+        ``d(dI_L/dt)/dU`` [A/(V s)].
+    E_gap_A_per_m_s : ndarray (n_circuits, n_gaps)
+        ``d(dI_L/dt)/ds_k`` per pole gap [A/(m s)].
+    E_gap_rate_A_per_m : ndarray (n_circuits, n_gaps)
+        ``d(dI_L/dt)/d(ds_k/dt)`` per pole gap rate [A/m].
+    C_force_N_per_A : ndarray (n_circuits, n_circuits)
+        ``dF_j/dI_L`` [N/A].
+    D_force_gap_N_per_m : ndarray (n_circuits, n_gaps)
+        ``dF_j/ds_k`` [N/m] (the force does not depend on the voltage).
+    C_current : ndarray (n_circuits, n_circuits)
+        ``dI/dI_L`` [A/A].
+    D_current_A_per_V : ndarray (n_circuits, n_circuits)
+        ``dI/dU`` [A/V] (the current jump ``1/(R_el + R_ec)`` of a voltage step).
+    circuit_names, gap_names : tuple of str
+    """
+
+    gaps_m: np.ndarray
+    inductor_currents_A: np.ndarray
+    voltages_V: np.ndarray
+    gap_rates_m_per_s: np.ndarray
+    state_derivative_A_per_s: np.ndarray
+    A_per_s: np.ndarray
+    B_A_per_V_s: np.ndarray
+    E_gap_A_per_m_s: np.ndarray
+    E_gap_rate_A_per_m: np.ndarray
+    C_force_N_per_A: np.ndarray
+    D_force_gap_N_per_m: np.ndarray
+    C_current: np.ndarray
+    D_current_A_per_V: np.ndarray
+    circuit_names: tuple[str, ...]
+    gap_names: tuple[str, ...]
+
+
 class CurrentModel:
     """The current-based model of a magnet, built from its characteristic maps.
 
@@ -173,6 +233,12 @@ class CurrentModel:
         self._share = (self._avg > 0).T / np.maximum((self._avg > 0).sum(axis=1), 1)  # (ng, nc)
         self.gap_range = (float(maps.gaps_m[0]), float(maps.gaps_m[-1]))
         self.current_range = (float(maps.currents_A[0]), float(maps.currents_A[-1]))
+        # bounds of the state [I_L; s] with the tolerances of _check_range (sub-step check)
+        tol_s, tol_i = 1e-12 * self.gap_range[1], 1e-9 * max(1.0, self.current_range[1])
+        self._lower = np.concatenate([np.full(nc, self.current_range[0] - tol_i),
+                                      np.full(nc, self.gap_range[0] - tol_s)])
+        self._upper = np.concatenate([np.full(nc, self.current_range[1] + tol_i),
+                                      np.full(nc, self.gap_range[1] + tol_s)])
         r_el = np.asarray(maps.dataset["resistance_ohm"].values, dtype=float)
         var = {"fit": "eddy_resistance_fit_ohm", "jump": "eddy_resistance_ohm"}.get(eddy_resistance)
         if var is None:
@@ -241,6 +307,7 @@ class CurrentModel:
         self._rk4: dict[tuple[int, int], ca.Function] = {}
         self._fused: dict[int, ca.Function] = {}
         self._step_calls: dict[int, Any] = {}
+        self._lin_fun: ca.Function | None = None
 
     # ------------------------------------------------------------------ helpers
     @property
@@ -251,7 +318,8 @@ class CurrentModel:
         """Mean gap per circuit [m] from pole gaps (..., n_gaps)."""
         return np.asarray(gaps) @ self._avg.T
 
-    def _check_range(self, s: np.ndarray, i_l: np.ndarray, t: np.ndarray | None = None) -> None:
+    def _check_range(self, s: np.ndarray, i_l: np.ndarray, t: np.ndarray | None = None, *,
+                     where: str | None = None) -> None:
         lo_s, hi_s = self.gap_range
         lo_i, hi_i = self.current_range
         tol_s = 1e-12 * hi_s
@@ -264,7 +332,8 @@ class CurrentModel:
         idx = np.argwhere(bad)[0]
         k = int(idx[0]) if bad.ndim > 1 else 0
         j = int(idx[-1])
-        where = f" at t = {t[k]:.6g} s" if t is not None else ""
+        if where is None:
+            where = f" at t = {t[k]:.6g} s" if t is not None else ""
         msg = (f"circuit {self.circuit_names[j]!r}{where}: substitute gap "
                f"{np.atleast_2d(s)[k if bad.ndim > 1 else 0, j]:.6g} m and current "
                f"{np.atleast_2d(i_l)[k if bad.ndim > 1 else 0, j]:.6g} A; the maps cover gaps "
@@ -278,6 +347,22 @@ class CurrentModel:
                     "maps")
         raise OutOfRangeError("outside the characteristic maps: " + msg
                               + " (rebuild the maps on a larger grid, or pass extrapolate=True)")
+
+    def _check_substeps(self, lo: np.ndarray, hi: np.ndarray, t0: float, t1: float) -> None:
+        """Range check of the RK4 sub-step states of one interval from their extremes.
+
+        ``lo``/``hi`` are the element-wise minima/maxima (``[I_L; s]``) over the sub-step
+        end states.  The fast path is two vector comparisons (the step is a hot path);
+        only a violation builds the message (and warns or raises like the end check).
+        """
+        if not ((lo < self._lower).any() or (hi > self._upper).any()):
+            return
+        nc = self.n_circuits
+        pts = np.stack([lo, hi])
+        # report the extreme sub-step state (gap and current extremes may come from
+        # different sub-steps of the interval)
+        self._check_range(pts[:, nc:], pts[:, :nc], np.array([t0, t0]),
+                          where=f" in an RK4 sub-step within t = {t0:.6g}..{t1:.6g} s")
 
     def _integrator(self, grid: tuple[float, ...]) -> ca.Function:
         """CVODES over a relative output grid (one run, no restarts), cached per grid."""
@@ -295,8 +380,10 @@ class CurrentModel:
     def _rk4_function(self, substeps: int, intervals: int) -> ca.Function:
         """``intervals`` RK4 intervals (each ``substeps`` sub-steps), compiled, cached.
 
-        ``(x0, u, h) -> (x_end, coil currents, circuit forces)`` per interval; the outputs
-        are those at the end of each interval with that interval's (held) voltages.
+        ``(x0, u, h) -> (x_end, coil currents, circuit forces, x_min, x_max)`` per
+        interval; the outputs are those at the end of each interval with that interval's
+        (held) voltages, ``x_min``/``x_max`` the element-wise extremes of the states at
+        the ends of its sub-steps (for the range check).
         ``intervals`` is 1 or a power of two (see :meth:`_rk4_run`).
         """
         key = (substeps, intervals)
@@ -307,14 +394,21 @@ class CurrentModel:
                 x, u, h = ca.MX.sym("x", 2 * nc), ca.MX.sym("u", 2 * nc), ca.MX.sym("h")
                 hs = h / substeps
                 xk = x
+                lo: Any = None
+                hi: Any = None
                 for _ in range(substeps):
                     k1 = self._rhs(xk, u)
                     k2 = self._rhs(xk + hs / 2 * k1, u)
                     k3 = self._rhs(xk + hs / 2 * k2, u)
                     k4 = self._rhs(xk + hs * k3, u)
                     xk = xk + hs / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
+                    # element-wise extremes of the sub-step end states (incl. the last):
+                    # the range check covers every RK4 sub-step, not only interval ends
+                    lo = xk if lo is None else ca.fmin(lo, xk)
+                    hi = xk if hi is None else ca.fmax(hi, xk)
                 coil, force, _ = self.outputs_fun(xk[:nc], u[:nc], xk[nc:])
-                f = ca.Function("rk4_interval", [x, u, h], [xk, coil, force]).expand()  # SX: ~2x
+                outs: list[Any] = [xk, coil, force, lo, hi]
+                f = ca.Function("rk4_interval", [x, u, h], outs).expand()  # SX: ~2x
                 if self.jit:
                     f = _jit_compile(f)
             else:
@@ -323,23 +417,26 @@ class CurrentModel:
         return f
 
     def _rk4_run(self, substeps: int, x0: np.ndarray, uu: np.ndarray, h: np.ndarray
-                 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+                 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """RK4 over ``h.size`` intervals in power-of-two chunks (each chunk one compiled
         call; at most ~log2(n) distinct chunk functions are ever built, so a new run
         length costs no new compilation)."""
         n = h.size
-        xs, cs, fs = [], [], []
+        xs, cs, fs, los, his = [], [], [], [], []
         x, k = x0, 0
         while k < n:
             m = 1 << min((n - k).bit_length() - 1, 12)     # chunks of <= 4096 intervals
-            xr, coil, force = self._rk4_function(substeps, m)(x, uu[:, k:k + m], h[k:k + m][None, :])
+            xr, coil, force, lo, hi = self._rk4_function(substeps, m)(
+                x, uu[:, k:k + m], h[k:k + m][None, :])
             xr = np.asarray(xr)
             xs.append(xr)
             cs.append(np.asarray(coil))
             fs.append(np.asarray(force))
+            los.append(np.asarray(lo))
+            his.append(np.asarray(hi))
             x = xr[:, -1]
             k += m
-        return np.hstack(xs), np.hstack(cs), np.hstack(fs)
+        return np.hstack(xs), np.hstack(cs), np.hstack(fs), np.hstack(los), np.hstack(his)
 
     def _interval(self, x0: np.ndarray, u: np.ndarray, h: float) -> np.ndarray:
         """Integrate one interval of length ``h`` with held controls ``u``."""
@@ -428,6 +525,65 @@ class CurrentModel:
         return CurrentOutputs(state.time_s, coil, state.inductor_currents_A.copy(), fc,
                               self._share @ fc, float(fc.sum()))
 
+    def linearize(self, *, gap_m: Any, current_A: Any, voltage_V: Any = None,
+                  gap_rate_m_per_s: Any = 0.0) -> CurrentModelLinearization:
+        """State-space matrices of eq. 8 at an operating point, by CasADi AD (exact).
+
+        Parameters
+        ----------
+        gap_m : float, sequence or mapping
+            Pole gaps [m] (a scalar for all poles).
+        current_A : float, sequence or mapping
+            Inductor currents ``I_L`` [A] per circuit.
+        voltage_V : float, sequence, mapping or None
+            Voltages [V]; None (default): the steady-state voltages ``R_el I_L``, which
+            make the operating point an equilibrium at zero gap rate.
+        gap_rate_m_per_s : float, sequence or mapping
+            Pole gap rates [m/s] (default 0).
+
+        Returns
+        -------
+        CurrentModelLinearization
+            ``A``, ``B``, ``E`` (gap and gap-rate inputs per pole) and ``C``/``D`` of the
+            circuit forces and coil currents.
+
+        Raises
+        ------
+        OutOfRangeError
+            If the operating point lies outside the maps (or warns with ``extrapolate``).
+        """
+        g = _per_gap(gap_m, self.gap_names, positive=True)
+        il = _per_circuit(current_A, self.circuit_names, "current_A")
+        u = (self.resistance_ohm * il if voltage_V is None
+             else _per_circuit(voltage_V, self.circuit_names, "voltage_V"))
+        gd = _per_gap(gap_rate_m_per_s, self.gap_names, positive=False)
+        s, sd = self.substitute_gaps(g), self.substitute_gaps(gd)
+        self._check_range(s[None, :], il[None, :], None)
+        f = self._linearization_function()
+        f_x, a, b, e_s, e_sd, c_f, d_f, c_i, d_i = (np.asarray(v, dtype=float)
+                                                    for v in f(il, u, s, sd))
+        # substitute gap of circuit j = mean of its poles' gaps: chain rule through _avg
+        return CurrentModelLinearization(
+            gaps_m=g, inductor_currents_A=il, voltages_V=u, gap_rates_m_per_s=gd,
+            state_derivative_A_per_s=f_x.ravel(), A_per_s=a, B_A_per_V_s=b,
+            E_gap_A_per_m_s=e_s @ self._avg, E_gap_rate_A_per_m=e_sd @ self._avg,
+            C_force_N_per_A=c_f, D_force_gap_N_per_m=d_f @ self._avg, C_current=c_i,
+            D_current_A_per_V=d_i, circuit_names=self.circuit_names, gap_names=self.gap_names)
+
+    def _linearization_function(self) -> ca.Function:
+        f = self._lin_fun
+        if f is None:
+            nc = self.n_circuits
+            x, u, s, sd = (ca.MX.sym(n, nc) for n in ("I_L", "U", "s", "sdot"))
+            rhs = self.ode(x, u, s, sd)
+            coil, force, _ = self.outputs_fun(x, u, s)
+            f = ca.Function("current_model_linearization", [x, u, s, sd],
+                            [rhs, ca.jacobian(rhs, x), ca.jacobian(rhs, u), ca.jacobian(rhs, s),
+                             ca.jacobian(rhs, sd), ca.jacobian(force, x), ca.jacobian(force, s),
+                             ca.jacobian(coil, x), ca.jacobian(coil, u)])
+            self._lin_fun = f
+        return f
+
     def step(self, state: CurrentModelState, dt: float, voltages: Any, gaps: Any = None,
              gap_rates: Any = 0.0) -> tuple[CurrentModelState, CurrentOutputs]:
         """Advance by ``dt`` [s] with constant voltages [V] and linearly moving gaps.
@@ -446,8 +602,12 @@ class CurrentModel:
         x0 = np.concatenate([state.inductor_currents_A, s0])
         uu = np.concatenate([u, sd])
         nc = self.n_circuits
+        extremes = None
         try:
-            x, coil, fc = self._step_call(float(dt))(x0, uu, float(dt))
+            res = self._step_call(float(dt))(x0, uu, float(dt))
+            x, coil, fc = res[0], res[1], res[2]
+            if len(res) == 5:
+                extremes = (res[3], res[4])
             if not np.isfinite(x).all():
                 raise RuntimeError("non-finite state")
         except RuntimeError as exc:
@@ -456,6 +616,8 @@ class CurrentModel:
             coil, fc, _ = (np.asarray(v).ravel() for v in self.outputs_fun(x[:nc], u, x[nc:]))
         t1 = state.time_s + float(dt)
         self._check_range(x[nc:][None, :], x[:nc][None, :], np.array([t1]))
+        if extremes is not None:
+            self._check_substeps(extremes[0], extremes[1], state.time_s, t1)
         new = CurrentModelState(t1, x[:nc], g + gd * dt)
         return new, CurrentOutputs(t1, coil, x[:nc].copy(), fc, self._share @ fc, float(fc.sum()))
 
@@ -467,23 +629,32 @@ class CurrentModel:
         the ends of the intervals with their held voltages; else None.
         """
         outs = None
+        extremes = None
         try:
             if self.method == "rk4":
                 h = np.diff(t)
                 n = max(1, math.ceil(float(h.max()) / self.max_step_s * (1 - 1e-12)))
-                xf, coil, force = self._rk4_run(n, x0, uu, h)
+                xf, coil, force, lo, hi = self._rk4_run(n, x0, uu, h)
                 if not np.isfinite(xf).all():
                     raise RuntimeError("non-finite state in the RK4 integration")
                 outs = (coil, force)
+                extremes = (lo, hi)
             else:
                 f = self._integrator(tuple(float(v) for v in (t[1:] - t[0])))
                 xf = np.asarray(f(x0=x0, u=uu)["xf"])
         except RuntimeError as exc:
             xf = self._integrate_stepwise(t, x0, uu, str(exc))
             outs = None
+            extremes = None
         xs = np.concatenate([x0[:, None], xf], axis=1).T
         nc = self.n_circuits
         self._check_range(xs[:, nc:], xs[:, :nc], t)
+        if extremes is not None:
+            lo, hi = extremes
+            bad = (lo < self._lower[:, None]) | (hi > self._upper[:, None])
+            k = int(np.argmax(bad.any(axis=0))) if bad.any() else None
+            if k is not None:
+                self._check_substeps(lo[:, k], hi[:, k], float(t[k]), float(t[k + 1]))
         return xs, outs
 
     def simulate(self, t: Any, *, gaps: Any, voltages: Any, gap_rates: Any = None,
