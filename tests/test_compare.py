@@ -54,3 +54,21 @@ def test_tr09_standard_magnet_full_set_both_eddy_resistances() -> None:
     for which in ("fit", "jump"):
         _check(_run("tr09-standard", 0.010, 34.0, (0.005, 0.016, 12), (0.0, 80.0, 41),
                     eddy_resistance=which))
+
+
+@pytest.mark.slow
+def test_u_magnet_with_transient_method_maps() -> None:
+    """The paper's own identification (method="transient": voltage-step time constants and
+    the virtual control law) instead of the statics sensitivities, on the standard set.
+    A 9 x 9 grid (1 mm x 5 A, 81 points: 27 s for the maps on 2 cores, 30 s in all)
+    covers the scenarios (gaps 9-12 mm, currents 13-30 A).  Measured largest NRMS 0.88 %
+    (50 Hz gap sine, current); the 2 % bound is the issue's acceptance criterion."""
+    mag = mk.load_magnet("u-magnet")
+    maps = mk.build_maps(mag, gaps=np.linspace(0.006, 0.014, 9), currents=np.linspace(0, 40, 9),
+                         method="transient", progress=False)
+    assert "transient" in maps.dataset.attrs["method"]
+    scenarios = standard_scenarios(mag, gap_m=0.010, current_A=20.0)
+    results = compare_models(mag, mk.CurrentModel(maps), scenarios, gap_m=0.010, current_A=20.0)
+    assert {r.scenario.name for r in results} >= {"voltage step up", "gap sine 50 Hz",
+                                                   "gap ramp", "closed loop"}
+    _check(results)

@@ -33,7 +33,7 @@ def demo(
     from ..models.statics import solve_statics
     from ..plotting import plot_comparison, plot_force_current, plot_maps
     from ..reduction import build_maps
-    from .compare import comparison_table, slug
+    from .compare import comparison_table, plot_title, slug
     from .statics import write_statics_csv
 
     out.mkdir(parents=True, exist_ok=True)
@@ -78,7 +78,7 @@ def demo(
         raise fail(exc) from None
     for r in results:
         written.append(plot_comparison(r, out / f"compare-{slug(r.scenario.name)}.png",
-                                       title=mag.name))
+                                       title=plot_title(mag.name, r)))
     console.print("4. detailed vs reduced model:")
     console.print(comparison_table(results, f"{mag.name}: detailed vs reduced"))
     main = [r for r in results if not r.scenario.coupling]
@@ -87,6 +87,9 @@ def demo(
     console.rule("report")
     console.print(f"largest normalised RMS error (coupling case excluded): "
                   f"{100 * worst.max_error:.2f} % ({worst.scenario.name})")
+    worst_ac = max(main, key=lambda r: r.max_error_ac)
+    console.print(f"largest AC-normalised error (RMS over the signal's variation): "
+                  f"{100 * worst_ac.max_error_ac:.2f} % ({worst_ac.scenario.name})")
     for r in results:
         if r.scenario.coupling:
             console.print(f"neglected coupling: stepping only '{r.circuit_names[0]}' moves the "
