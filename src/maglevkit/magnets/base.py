@@ -203,7 +203,8 @@ def resolve_material(name: str, custom: Mapping[str, Material], where: str) -> M
     try:
         return get_material(name)
     except MaterialError as exc:
-        extra = f" or one of this file's [materials] tables {sorted(custom)}" if custom else ""
+        names = sorted(m.name for m in custom.values())
+        extra = f" or one of this file's [materials] tables {names}" if custom else ""
         raise ParameterFileError(f"[{where}] material: {exc}{extra}") from None
 
 
@@ -260,18 +261,20 @@ def build_magnet(parameters: Mapping[str, Any], *, options: ModelOptions | None 
     raw_prov = parameters.get("provenance", {})
     if not isinstance(raw_prov, Mapping):
         raise ParameterFileError("[provenance] must map 'table.key' to a tag string")
-    for key, tag in raw_prov.items():
-        table, _, sub = str(key).partition(".")
-        if table not in parameters or not isinstance(parameters[table], Mapping) \
-                or sub not in parameters[table]:
-            raise ParameterFileError(f"[provenance] {key!r} names no value of this file")
-        prov[str(key)] = str(tag)
     if "operating" in parameters:
         take(parameters["operating"], OPERATING_SCHEMA, "operating")
     try:
         name, network = builder(parameters, materials, options)
     except (ParameterError, MaterialError) as exc:
         raise ParameterFileError(f"{source or 'parameters'}: {exc}") from None
+    # After the builder, so that a missing or misspelt value is reported as such rather
+    # than as a provenance entry that names nothing.
+    for key, tag in raw_prov.items():
+        table, _, sub = str(key).partition(".")
+        if table not in parameters or not isinstance(parameters[table], Mapping) \
+                or sub not in parameters[table]:
+            raise ParameterFileError(f"[provenance] {key!r} names no value of this file")
+        prov[str(key)] = str(tag)
     # The physics switches hold for every kind, whether or not its builder reads them.
     network = network.with_options(saturation=options.saturation,
                                    eddy_currents=options.eddy_currents)
