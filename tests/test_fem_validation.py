@@ -1,0 +1,90 @@
+"""U-magnet EMC against the independent 2-D FEM of benchmarks/fem_u_magnet.py (issue 2).
+
+The errors asserted here are the ones *measured* (docs/validation_fem.md), plus a margin;
+they are not the 5 % target of issue 2, which the EMC does not meet yet:
+
+    s [mm]  I [A]   err F [%]   err psi [%]      (EMC - FEM)/FEM, AISI 1008
+      4       5       -0.6         -9.0
+      8      40      +17.9         -5.4
+     20      80      +48.0         -8.1
+    linear iron mu_r = 200, I = 10 A, s = 8 mm:  err F -0.5 %, err psi -14.3 %
+
+The FEM itself is accurate to < 0.1 % (h/2 mesh study, virtual work vs Maxwell stress).
+"""
+
+from __future__ import annotations
+
+import importlib.util
+import math
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import maglevkit as mk
+
+pytest.importorskip("skfem")
+
+_PATH = Path(__file__).resolve().parents[1] / "benchmarks" / "fem_u_magnet.py"
+
+
+def _fem():  # type: ignore[no-untyped-def]
+    spec = importlib.util.spec_from_file_location("fem_u_magnet", _PATH)
+    assert spec is not None and spec.loader is not None
+    mod = importlib.util.module_from_spec(spec)
+    sys.modules.setdefault("fem_u_magnet", mod)
+    spec.loader.exec_module(mod)
+    return mod
+
+
+def _emc(s: float, current: float, **opts: bool) -> tuple[float, float]:
+    mag = mk.load_magnet("u-magnet", eddy_currents=False, **opts)
+    sol = mk.solve_statics(mag, gaps=s, currents=current)
+    return float(np.ravel(sol.force_N)[0]), float(np.ravel(sol.flux_linkage_Wb)[0])
+
+
+def _err(emc: float, fem: float) -> float:
+    return 100.0 * (emc - fem) / fem
+
+
+MARGIN = 3.0   # percentage points on top of the measured EMC error
+
+
+def test_fem_linear_point_against_textbook_and_emc() -> None:
+    """Fast: linear iron only (one direct solve each)."""
+    fem = _fem()
+    # nearly ideal iron, small gap: force -> textbook (measured 1.036 at 1 mm, fringing)
+    s, current, n, area = 0.001, 10.0, 600.0, 0.030 * 0.100
+    r = fem.solve_full(s, current, mu_r=1e5)
+    f_tb = fem.MU0 * (n * current) ** 2 * area / (4 * s**2)
+    assert 1.0 < r.force_N / f_tb < 1.05
+    assert math.isclose(r.coenergy_J, 0.5 * r.psi_Wb * current, rel_tol=1e-9)
+    # linear iron mu_i = 200 at 8 mm against the EMC without saturation
+    s = 0.008
+    r = fem.solve_full(s, current, mu_r=200.0)
+    f_emc, psi_emc = _emc(s, current, saturation=False)
+    assert math.isclose(r.force_N, 466.8, rel_tol=5e-3)        # FEM regression
+    assert math.isclose(r.psi_Wb, 1.3539, rel_tol=5e-3)
+    assert abs(_err(f_emc, r.force_N)) < 0.5 + MARGIN
+    assert abs(_err(psi_emc, r.psi_Wb)) < 14.3 + MARGIN
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize(
+    ("s", "current", "f_fem", "psi_fem", "err_f", "err_psi"),
+    [
+        (0.004, 5.0, 566.5, 1.2531, -0.6, -9.0),
+        (0.008, 40.0, 3913.4, 3.8614, 17.9, -5.4),
+        (0.020, 80.0, 2409.6, 4.2676, 48.0, -8.1),
+    ],
+)
+def test_emc_against_fem_saturable(s: float, current: float, f_fem: float, psi_fem: float,
+                                   err_f: float, err_psi: float) -> None:
+    fem = _fem()
+    force, psi = fem.solve_fem(s, current)
+    assert math.isclose(force, f_fem, rel_tol=5e-3)              # FEM regression
+    assert math.isclose(psi, psi_fem, rel_tol=5e-3)
+    f_emc, psi_emc = _emc(s, current)
+    assert abs(_err(f_emc, force)) < abs(err_f) + MARGIN
+    assert abs(_err(psi_emc, psi)) < abs(err_psi) + MARGIN
