@@ -71,13 +71,22 @@ class Coil:
 
     Its MMF ``turns * I`` drives flux from the branch's start node to its end node
     when ``polarity = +1`` (and the other way for ``-1``).
+
+    A pole winding distributed over several branches (a leg split into segments, so
+    that leakage can leave it part-way up the coil) is given as several coils with the
+    same ``pole`` name; the pole's flux (paper eq. 5, ``eta``) is then the turn-weighted
+    mean of its segments' fluxes, ``psi_pole / n_pole``.  Default: one pole per coil.
     """
 
     branch: str
     turns: float
     polarity: int = 1
+    pole: str | None = None
 
     def __post_init__(self) -> None:
+        if self.pole is not None and (not isinstance(self.pole, str) or not self.pole):
+            raise ParameterError(f"coil on branch {self.branch!r}: pole must be a non-empty "
+                                 "name or None")
         if not (isinstance(self.turns, (int, float)) and math.isfinite(self.turns)
                 and self.turns > 0):
             raise ParameterError(f"coil on branch {self.branch!r}: turns = {self.turns!r} must be > 0")
@@ -298,6 +307,22 @@ class Network:
             for coil in c.coils:
                 n[idx[coil.branch], k] += coil.polarity * coil.turns
         return n
+
+    @property
+    def pole_flux_matrix(self) -> np.ndarray:
+        """``W`` (branches x circuits) with ``eta = W^T phi``: the sum of the pole fluxes of
+        each circuit (paper eq. 5), a pole's flux being ``psi_pole / n_pole`` over the coils
+        that share its ``pole`` name (one coil: just its branch flux, signed)."""
+        idx = {n: i for i, n in enumerate(self.branch_names)}
+        w = np.zeros((len(self.branches), len(self.circuits)))
+        for k, c in enumerate(self.circuits):
+            totals: dict[str, float] = {}
+            for coil in c.coils:
+                key = coil.pole or coil.branch
+                totals[key] = totals.get(key, 0.0) + coil.turns
+            for coil in c.coils:
+                w[idx[coil.branch], k] += coil.polarity * coil.turns / totals[coil.pole or coil.branch]
+        return w
 
     @property
     def resistances(self) -> np.ndarray:

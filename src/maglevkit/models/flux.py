@@ -212,8 +212,9 @@ class _FluxDAE:
         g_e = G[self.eddy_idx]
         power = ca.vertcat(ca.dot(U, I), ca.dot(R * I, I), ca.dot(g_e * phidot_e, phidot_e),
                            -ca.dot(eq.force, rate))
-        sign = np.sign(N)                      # eta: coil-core fluxes summed per circuit
-        eta = ca.mtimes(ca.DM(sign.T), eq.phi)
+        # eta (eq. 5): pole fluxes summed per circuit (coil-core fluxes; a pole winding
+        # split over several branches counts with its turn-weighted mean flux)
+        eta = ca.mtimes(ca.DM(network.pole_flux_matrix.T), eq.phi)
         out = ca.vertcat(eq.phi, eq.psi, eta, eq.force, g_e * phidot_e)
         self.n_out = int(out.numel())
         self.output_fun = ca.Function("flux_outputs", [ca.vertcat(y, s, x, I), U, rate], [out])
