@@ -240,8 +240,8 @@ def test_jit_compiled_current_model_matches_the_interpreted_one(u_maps) -> None:
 
 
 def test_rk4_and_cvodes_agree_in_deep_saturation(u_maps) -> None:  # type: ignore[no-untyped-def]
-    """Eq. 8 is not stiff (time constants >= ~4 ms on these maps); RK4 at 1 ms sub-steps vs
-    CVODES at rtol 1e-11: measured 2.5e-6 relative; bound 2e-5."""
+    """Eq. 8 is not stiff (time constants >= ~5 ms on these maps); RK4 at 1 ms sub-steps vs
+    CVODES at rtol 1e-11: measured 6.4e-7 relative; bound 2e-5."""
     kw = {"gaps": 0.0045, "voltages": lambda t: 40.0 if t < 0.005 else 150.0,
           "initial_currents": 20.0}
     ref = mk.simulate(CurrentModel(u_maps, method="cvodes", rtol=1e-11, atol=1e-12), (0, 0.1),
@@ -423,8 +423,8 @@ def test_linearization_at_a_steady_state_matches_the_statics(u_maps, u_magnet: m
     linearisation equals the statics' dF/dI (= -dpsi/ds, co-energy) of the detailed model,
     and dF/ds equals the statics' dF/ds; A = -R_el / (a L~), D_current = 1/(R_el + R_ec).
     The spline derivative at a node of a 2.5 A x 1 mm grid differs from the exact one by
-    the cubic interpolation error of a derivative, O(h^3 f''''): measured 1.3e-5 for dF/dI
-    (bound 1e-3) and 5.8e-3 for dF/ds at 6 mm / 40 A, where the knee bends F(s) within
+    the cubic interpolation error of a derivative, O(h^3 f''''): measured 4.8e-4 for dF/dI
+    (bound 1e-3) and 7.8e-3 for dF/ds at 6 mm / 40 A, where the knee bends F(s) within
     one 1 mm cell (bound 1.5e-2; elsewhere < 1e-4).  A and D_current use map values at a
     node (the B-spline interpolates them): measured 3e-14; bound 1e-9."""
     model = CurrentModel(u_maps)
