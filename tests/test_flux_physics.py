@@ -25,16 +25,8 @@ def test_energy_balance_moving_gap_saturation_eddy(u_magnet: mk.Magnet) -> None:
     assert np.all(np.diff(res.ohmic_loss_J) >= 0) and np.all(np.diff(res.eddy_loss_J) >= 0)
 
 
-def test_energy_balance_moving_gap_radau() -> None:
-    # The U-magnet with one coil segment per leg (4 eddy states): fixed-step Radau's
-    # Newton iteration fails on the default 5-segment network (12 eddy states, fast modes
-    # at 0.2 ms steps; docs/flux_model.md), IDAS is the default for that reason.
-    from .conftest import u_params
-
-    p = u_params()
-    p["magnet"]["coil_segments"] = 1
-    mag = mk.build_magnet(p)
-    res = mk.simulate(mag, (0.0, 0.05), dt=2e-4, gaps=Sine(0.010, 0.002, 20.0),
+def test_energy_balance_moving_gap_radau(u_magnet: mk.Magnet) -> None:
+    res = mk.simulate(u_magnet, (0.0, 0.05), dt=2e-4, gaps=Sine(0.010, 0.002, 20.0),
                       voltages=60.0, initial_currents=10.0, method="radau")
     # fixed-step Radau IIA(5) at 0.2 ms: local errors ~1e-9, balance well within 1e-4
     assert res.energy_balance().relative_residual < 1e-4

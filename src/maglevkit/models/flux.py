@@ -249,7 +249,10 @@ class _FluxDAE:
             integ = ca.integrator("flux_radau", "collocation", dae, 0.0, 1.0,
                                   {"number_of_finite_elements": radau_elements,
                                    "interpolation_order": radau_degree,
-                                   "collocation_scheme": "radau", "rootfinder": "newton",
+                                   # KINSOL (SUNDIALS Newton with line search): plain
+                                   # Newton failed mid-run on stiff networks (12 eddy
+                                   # states of the U-magnet at 1 ms steps)
+                                   "collocation_scheme": "radau", "rootfinder": "kinsol",
                                    "rootfinder_options": {"error_on_fail": True}})
         else:
             raise InputError(f"method = {method!r}; use 'idas' (error-controlled BDF) or "
