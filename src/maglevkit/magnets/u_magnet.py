@@ -185,9 +185,8 @@ def build_u_magnet(params: Mapping[str, Any], materials: Mapping[str, Material],
     ]
     if options.leakage:
         ends = 4.0 * 0.52 * MU0 if m["end_effects"] else 0.0   # quarter cylinders, leg ends
-        if gcp > 0.0:
-            branches.append(Branch("leakage", "PL", "PR", (
-                LeakagePermeance("leakage_window", MU0 * d * gcp / ww + ends * gcp),)))
+        branches.append(Branch("leakage", "PL", "PR", (
+            LeakagePermeance("leakage_window", MU0 * d * gcp / ww + ends * gcp),)))
         for k in range(K):
             branches.append(Branch(f"leakage_{k + 1}", left[k + 1], right[k + 1], (
                 LeakagePermeance(f"leakage_window_{k + 1}", MU0 * d * h / ww + ends * h),)))

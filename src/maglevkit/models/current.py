@@ -30,7 +30,7 @@ import casadi as ca
 import numpy as np
 
 from ..errors import InputError, OutOfRangeError, SolverError
-from .inputs import gap_secants, sample_input, time_grid
+from .inputs import check_step, gap_secants, sample_input, time_grid
 
 __all__ = ["CurrentModel", "CurrentModelLinearization", "CurrentModelState", "CurrentOutputs",
            "ReducedSimulation"]
@@ -591,8 +591,7 @@ class CurrentModel:
         Same contract as :meth:`maglevkit.models.flux.FluxModel.step`: ``gaps`` [m] at the
         start of the step (None keeps the state's), ``gap_rates`` [m/s] over the step.
         """
-        if not (isinstance(dt, (int, float)) and math.isfinite(dt) and dt > 0):
-            raise InputError(f"dt = {dt!r} s must be a finite number > 0")
+        dt = check_step(dt)
         u = _per_circuit(voltages, self.circuit_names, "voltages")
         g = state.gaps_m if gaps is None else _per_gap(gaps, self.gap_names, positive=True)
         gd = _per_gap(gap_rates, self.gap_names, positive=False)
@@ -615,9 +614,11 @@ class CurrentModel:
                                          uu[:, None], str(exc))[:, -1]
             coil, fc, _ = (np.asarray(v).ravel() for v in self.outputs_fun(x[:nc], u, x[nc:]))
         t1 = state.time_s + float(dt)
-        self._check_range(x[nc:][None, :], x[:nc][None, :], np.array([t1]))
         if extremes is not None:
+            # the sub-step extremes include the end state: one check covers both
             self._check_substeps(extremes[0], extremes[1], state.time_s, t1)
+        else:
+            self._check_range(x[nc:][None, :], x[:nc][None, :], np.array([t1]))
         new = CurrentModelState(t1, x[:nc], g + gd * dt)
         return new, CurrentOutputs(t1, coil, x[:nc].copy(), fc, self._share @ fc, float(fc.sum()))
 

@@ -195,11 +195,8 @@ class CharacteristicMaps:
         h = model_hash(magnet)
         if h == self.magnet_hash:
             return
-        # Files written before the identity became the network hash stored the magnet's
-        # parameter hash; accept them for that same Magnet only.
-        legacy = "magnet_hash_kind" not in self.dataset.attrs
-        if legacy and getattr(magnet, "parameter_hash", None) == self.magnet_hash:
-            return
+        # Files of earlier versions stored the parameter-file hash instead; they are refused
+        # too: the physics behind the same parameters may have changed since.
         raise ParameterFileError(
             f"these maps belong to magnet {self.dataset.attrs.get('magnet_name')!r} "
             f"(hash {self.magnet_hash[:12]}...), not to {getattr(magnet, 'name', 'this model')!r} "
