@@ -233,8 +233,10 @@ class CurrentModel:
         self._share = (self._avg > 0).T / np.maximum((self._avg > 0).sum(axis=1), 1)  # (ng, nc)
         self.gap_range = (float(maps.gaps_m[0]), float(maps.gaps_m[-1]))
         self.current_range = (float(maps.currents_A[0]), float(maps.currents_A[-1]))
-        # bounds of the state [I_L; s] with the tolerances of _check_range (sub-step check)
-        tol_s, tol_i = 1e-12 * self.gap_range[1], 1e-9 * max(1.0, self.current_range[1])
+        # rounding allowances of every range check, and the bounds of the state [I_L; s]
+        # they give (sub-step check)
+        self._tol_s = tol_s = 1e-12 * self.gap_range[1]
+        self._tol_i = tol_i = 1e-9 * max(1.0, self.current_range[1])
         self._lower = np.concatenate([np.full(nc, self.current_range[0] - tol_i),
                                       np.full(nc, self.gap_range[0] - tol_s)])
         self._upper = np.concatenate([np.full(nc, self.current_range[1] + tol_i),
@@ -322,8 +324,7 @@ class CurrentModel:
                      where: str | None = None) -> None:
         lo_s, hi_s = self.gap_range
         lo_i, hi_i = self.current_range
-        tol_s = 1e-12 * hi_s
-        tol_i = 1e-9 * max(1.0, hi_i)
+        tol_s, tol_i = self._tol_s, self._tol_i
         bad_s = (s < lo_s - tol_s) | (s > hi_s + tol_s)
         bad_i = (i_l < lo_i - tol_i) | (i_l > hi_i + tol_i)
         bad = bad_s | bad_i
