@@ -37,10 +37,14 @@ from .materials import (
     material_names,
 )
 from .models import (
+    BankOutputs,
+    BankSimulation,
+    BankState,
     CurrentModel,
     FluxModel,
     FluxState,
     InductanceEstimate,
+    MagnetBank,
     ReducedSimulation,
     Scenario,
     SimulationResult,
@@ -60,6 +64,9 @@ __version__ = "0.1.0"
 
 __all__ = [
     "AirGap",
+    "BankOutputs",
+    "BankSimulation",
+    "BankState",
     "Branch",
     "CharacteristicMaps",
     "Circuit",
@@ -78,6 +85,7 @@ __all__ = [
     "MU0",
     "MaglevkitError",
     "Magnet",
+    "MagnetBank",
     "Material",
     "MaterialError",
     "ModelOptions",

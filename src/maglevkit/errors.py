@@ -82,3 +82,7 @@ def _fmt(value: Any) -> str:
     if isinstance(value, float):
         return f"{value:.6g}"
     return str(value)
+
+
+class CompilationWarning(UserWarning):
+    """Compiling a model to machine code failed; the slower interpreted path is used."""

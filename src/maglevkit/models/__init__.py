@@ -1,5 +1,6 @@
 """Magnet models: statics of the equivalent circuit, flux-based DAE, current-based ODE."""
 
+from .bank import BankOutputs, BankSimulation, BankState, MagnetBank
 from .current import CurrentModel, CurrentModelState, CurrentOutputs, ReducedSimulation
 from .experiments import (
     InductanceEstimate,
@@ -21,6 +22,9 @@ from .signals import Constant, Ramp, Signal, Sine, Step, Tabulated, parse_signal
 from .statics import StaticSolution, coenergy, magnetic_energy, pole_force_eq6, solve_statics
 
 __all__ = [
+    "BankOutputs",
+    "BankSimulation",
+    "BankState",
     "DEFAULT_ATOL",
     "DEFAULT_RTOL",
     "Constant",
@@ -32,6 +36,7 @@ __all__ = [
     "FluxOutputs",
     "FluxState",
     "InductanceEstimate",
+    "MagnetBank",
     "Ramp",
     "ReducedSimulation",
     "Scenario",

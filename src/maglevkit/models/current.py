@@ -33,7 +33,7 @@ from ..errors import InputError, OutOfRangeError, SolverError
 from .inputs import check_step, gap_secants, sample_input, time_grid
 
 __all__ = ["CurrentModel", "CurrentModelLinearization", "CurrentModelState", "CurrentOutputs",
-           "ReducedSimulation"]
+           "ReducedSimulation", "eq8_coil_current", "eq8_rhs"]
 
 
 @dataclass(frozen=True)
@@ -280,12 +280,10 @@ class CurrentModel:
         for j in range(nc):
             vals = spline(j)(ca.vertcat(sm[j], xm[j]))
             lt, dl, f = vals[0], vals[1], vals[2]
-            rhs = ((Um[j] - r_el[j] * xm[j]) / a[j] - dl * xm[j] * sdm[j]) / lt
-            mx_rhs.append(rhs)
+            mx_rhs.append(eq8_rhs(xm[j], Um[j], sdm[j], lt, dl, r_el[j], a[j]))
             forces.append(f)
             ltil.append(lt)
-        u_L = (Um - ca.DM(r_el) * xm) / ca.DM(a)
-        coil = (Um - u_L) / ca.DM(r_el)
+        coil = eq8_coil_current(xm, Um, ca.DM(r_el), ca.DM(a))
         self.ode = ca.Function("current_model_ode", [xm, Um, sm, sdm], [ca.vertcat(*mx_rhs)],
                                ["I_L", "U", "s", "sdot"], ["dI_L"])
         self.outputs_fun = ca.Function("current_model_out", [xm, Um, sm],
@@ -757,6 +755,20 @@ class _BufferedCall:
 
 EXTRA_CELLS = 3
 """Grid cells by which the maps are continued linearly beyond their range."""
+
+
+def eq8_rhs(i_l: Any, u: Any, gap_rate: Any, ltilde: Any, dl_ds: Any, r_el: Any, a: Any) -> Any:
+    """Eq. 8: ``dI_L/dt = [(U - R_el I_L)/a - dL/ds I_L ds/dt] / L~`` with ``a = 1 + R_el/R_ec``.
+
+    Works element-wise on floats, NumPy arrays and CasADi expressions; the one expression
+    of eq. 8 that :class:`CurrentModel` and :class:`~maglevkit.models.bank.MagnetBank` use.
+    """
+    return ((u - r_el * i_l) / a - dl_ds * i_l * gap_rate) / ltilde
+
+
+def eq8_coil_current(i_l: Any, u: Any, r_el: Any, a: Any) -> Any:
+    """Coil current of Fig. 8: ``I = (U - U_L)/R_el`` with ``U_L = (U - R_el I_L)/a``."""
+    return (u - (u - r_el * i_l) / a) / r_el
 
 
 def _extend_axis(axis: np.ndarray) -> np.ndarray:

@@ -31,6 +31,7 @@ from ..materials import MU0
 
 __all__ = [
     "StaticSolution",
+    "circuit_pole_groups",
     "solve_statics",
     "magnetic_energy",
     "coenergy",
@@ -411,3 +412,19 @@ def pole_force_eq6(flux: Any, area: float, mu_r: float = math.inf) -> Any:
     """
     factor = 1.0 if math.isinf(mu_r) else (mu_r - 1.0) / mu_r
     return factor * np.asarray(flux, dtype=float) ** 2 / (2.0 * MU0 * area)
+
+
+def circuit_pole_groups(model: Any, *, gap: float, current: float) -> dict[str, tuple[str, ...]]:
+    """Assign each gap input (pole) to the circuit whose flux linkage depends most on it."""
+    net = as_network(model)
+    if len(net.circuits) == 1:
+        return {net.circuit_names[0]: net.gap_names}
+    sol = solve_statics(net, gaps=gap, currents=current)
+    owner = np.argmax(np.abs(sol.dpsi_dgap_Wb_per_m), axis=0)   # (n_gaps,)
+    groups = {c: tuple(g for g, o in zip(net.gap_names, owner, strict=True) if o == j)
+              for j, c in enumerate(net.circuit_names)}
+    empty = [c for c, g in groups.items() if not g]
+    if empty:
+        raise InputError(f"circuit(s) {empty} drive no pole of their own; the current-based model "
+                         "needs one substitute gap per circuit")
+    return groups

@@ -38,7 +38,7 @@ import xarray as xr
 
 from ..circuit.network import Network
 from ..errors import InputError, ParameterFileError
-from ..models.statics import as_network, solve_statics
+from ..models.statics import as_network, circuit_pole_groups, solve_statics
 from .parameters import eddy_resistance
 from .transient import transient_point
 
@@ -74,22 +74,6 @@ def _grid(values: Any, what: str, unit: str, *, positive: bool) -> np.ndarray:
     if not positive and arr[0] < 0.0:
         raise InputError(f"{what} grid must be >= 0 {unit} (forces are even in the current)")
     return arr
-
-
-def circuit_pole_groups(model: Any, *, gap: float, current: float) -> dict[str, tuple[str, ...]]:
-    """Assign each gap input (pole) to the circuit whose flux linkage depends most on it."""
-    net = as_network(model)
-    if len(net.circuits) == 1:
-        return {net.circuit_names[0]: net.gap_names}
-    sol = solve_statics(net, gaps=gap, currents=current)
-    owner = np.argmax(np.abs(sol.dpsi_dgap_Wb_per_m), axis=0)   # (n_gaps,)
-    groups = {c: tuple(g for g, o in zip(net.gap_names, owner, strict=True) if o == j)
-              for j, c in enumerate(net.circuit_names)}
-    empty = [c for c, g in groups.items() if not g]
-    if empty:
-        raise InputError(f"circuit(s) {empty} drive no pole of their own; the current-based model "
-                         "needs one substitute gap per circuit")
-    return groups
 
 
 def _statics_row(net: Network, s: float, currents: np.ndarray,

@@ -1,0 +1,832 @@
+"""Many magnets advanced together: one compiled call per step for every reduced circuit.
+
+A vehicle carries on the order of 100 levitation and guidance circuits.  A
+:class:`MagnetBank` holds magnets of mixed kinds (standard, bow, guidance, U-magnet; each
+with its own characteristic maps, stored once when several magnets share them) and
+advances all of them by one call with arrays over circuits.  For the reduced members the
+whole step, eq. 8 integrated by RK4 for every circuit, is one CasADi function mapped over
+the circuits, generated as C, compiled by the system compiler and cached on disk
+(:mod:`maglevkit.models.compiled`); no Python runs per circuit.  Detailed flux-based
+members (:class:`~maglevkit.models.flux.FluxModel`) can join the bank too; each is
+advanced by its own integrator (correct, not fast: for studies of the per-pole force
+distribution).
+
+Per reduced circuit ``j`` (paper eq. 8, Fig. 8; the same expression as
+:class:`~maglevkit.models.current.CurrentModel`)::
+
+    dI_L/dt = [ (U - R_el I_L) / a  -  dL/ds(s, I_L) I_L ds/dt ] / L~(s, I_L),   a = 1 + R_el/R_ec
+    I       = (U - U_L) / R_el,   U_L = (U - R_el I_L) / a                (coil current)
+    F       = F(s, I_L)
+
+with ``L~``, ``dL/ds`` and ``F`` from per-cell polynomial tables of the maps
+(:mod:`maglevkit.models.tables`; ``"bicubic"`` reproduces the single model's B-spline to
+rounding).  The same expressions are available as CasADi functions
+(:attr:`MagnetBank.ode_function`, :attr:`MagnetBank.output_function`) for vehicle
+models, linearisation and MPC.
+"""
+
+from __future__ import annotations
+
+import math
+import warnings
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from typing import Any
+
+import casadi as ca
+import numpy as np
+
+from ..errors import InputError, OutOfRangeError, SolverError
+from .compiled import compile_function
+from .current import (
+    EXTRA_CELLS,
+    CurrentModel,
+    _BufferedCall,
+    _extend_axis,
+    _extend_values,
+    eq8_coil_current,
+    eq8_rhs,
+)
+from .flux import FluxModel, FluxState
+from .inputs import check_step, gap_secants, reject_bools, sample_input, time_grid
+from .statics import circuit_pole_groups
+from .tables import INTERPOLATION_METHODS, cell_table
+
+__all__ = ["BankOutputs", "BankSimulation", "BankState", "MagnetBank"]
+
+_MAP_VARIABLES = ("inductance_H", "dL_ds_H_per_m", "force_N")
+_N_PAR = 13  # per-circuit kernel parameters: s0, 1/ds, cells_s, i0, 1/di, cells_i, offset, R_el,
+#               a, and the range bounds s_lo, s_hi, I_lo, I_hi (with rounding allowances)
+
+
+@dataclass(frozen=True)
+class BankState:
+    """State of a magnet bank at one instant.
+
+    Attributes
+    ----------
+    time_s : float
+        Time [s].
+    inductor_currents_A : ndarray (n_circuits,)
+        ``I_L`` of every reduced circuit [A] (NaN for circuits of detailed members).
+    gaps_m : ndarray (n_gaps,)
+        The bank's gap inputs [m] (one per circuit or one per pole, see
+        :attr:`MagnetBank.gap_names`).
+    member_states : tuple of FluxState
+        States of the detailed members, in member order.
+    """
+
+    time_s: float
+    inductor_currents_A: np.ndarray
+    gaps_m: np.ndarray
+    member_states: tuple[FluxState, ...] = ()
+
+
+@dataclass(frozen=True)
+class BankOutputs:
+    """Outputs of a bank at the end of a step.
+
+    Attributes
+    ----------
+    time_s : float
+    currents_A : ndarray (n_circuits,)
+        Coil currents [A] (with the voltages of the step just taken).
+    inductor_currents_A : ndarray (n_circuits,)
+        ``I_L`` [A] (NaN for detailed members).
+    circuit_force_N : ndarray (n_circuits,)
+        Force of each circuit's poles [N], attraction positive.
+    member_force_N : ndarray (n_members,)
+        Total force of each magnet [N].
+    pole_force_N : ndarray (n_poles,) or None
+        Force per pole [N] (:attr:`MagnetBank.pole_names`) when asked for: a reduced
+        circuit's force shared equally by its poles, a detailed member's own pole forces.
+    """
+
+    time_s: float
+    currents_A: np.ndarray
+    inductor_currents_A: np.ndarray
+    circuit_force_N: np.ndarray
+    member_force_N: np.ndarray
+    pole_force_N: np.ndarray | None = None
+
+
+@dataclass(frozen=True)
+class BankSimulation:
+    """Time series of a bank simulation (SI units, axis 0 is time; conventions as
+    :class:`~maglevkit.models.current.ReducedSimulation`: outputs at ``t_k`` are left
+    limits, with the voltages held on ``[t_k-1, t_k)``).
+
+    Attributes
+    ----------
+    time_s : ndarray (n_t,)
+    gaps_m : ndarray (n_t, n_gaps)
+    voltages_V : ndarray (n_t, n_circuits)
+        Voltages held on ``[t_k, t_k+1)`` (the last row repeats the previous one).
+    currents_A, inductor_currents_A, circuit_force_N : ndarray (n_t, n_circuits)
+    member_force_N : ndarray (n_t, n_members)
+    pole_force_N : ndarray (n_t, n_poles)
+    circuit_names, gap_names, pole_names, member_names : tuple of str
+    final_state : BankState
+    """
+
+    time_s: np.ndarray
+    gaps_m: np.ndarray
+    voltages_V: np.ndarray
+    currents_A: np.ndarray
+    inductor_currents_A: np.ndarray
+    circuit_force_N: np.ndarray
+    member_force_N: np.ndarray
+    pole_force_N: np.ndarray
+    circuit_names: tuple[str, ...]
+    gap_names: tuple[str, ...]
+    pole_names: tuple[str, ...]
+    member_names: tuple[str, ...]
+    final_state: BankState
+
+
+@dataclass(frozen=True)
+class _Member:
+    name: str
+    kind: str                         # "reduced" or "detailed"
+    circuits: tuple[str, ...]         # the member's own circuit names
+    poles: tuple[str, ...]            # its pole (gap input) names
+    pole_groups: dict[str, tuple[str, ...]]
+    maps: Any = None
+    resistance_ohm: np.ndarray | None = None
+    eddy_resistance_ohm: np.ndarray | None = None
+    model: FluxModel | None = None
+
+
+class MagnetBank:
+    """Magnets of mixed kinds advanced together (``initial_state`` / ``step`` / ``simulate``).
+
+    Parameters
+    ----------
+    members : mapping or sequence of (name, model)
+        The magnets, each named; a model is a
+        :class:`~maglevkit.reduction.CharacteristicMaps` or a
+        :class:`~maglevkit.models.current.CurrentModel` (reduced member: its maps and
+        resistances) or a :class:`~maglevkit.models.flux.FluxModel` (detailed member).
+        A single magnet is a bank of one.
+    gap_inputs : {"circuit", "pole"}
+        ``"circuit"`` (default): one gap input per circuit, the substitute gap of the
+        reduced model (a detailed member's poles all get their circuit's gap);
+        ``"pole"``: one gap input per pole, as for the single models (a reduced circuit
+        uses the mean of its poles' gaps).
+    interpolation : {"bicubic", "monotone", "bilinear"}
+        How the maps are interpolated (:mod:`maglevkit.models.tables`); ``"bicubic"``
+        equals the single :class:`CurrentModel`.
+    compiled : {"auto", "always", "never"}
+        ``"auto"`` (default): generated C compiled by the system C compiler and cached on
+        disk, falling back with a warning to CasADi's virtual machine; ``"never"``: the
+        virtual machine; ``"always"``: a :class:`SolverError` if compiling fails.
+    eddy_resistance : {"fit", "jump"}
+        Which ``R_ec`` of the maps reduced members given as maps use (as
+        :class:`CurrentModel`); a member given as a ``CurrentModel`` keeps its own.
+    max_step_s : float
+        Largest RK4 sub-step [s] (default 1e-3 s, as :class:`CurrentModel`).
+    extrapolate : bool
+        Leaving a map's range raises :class:`OutOfRangeError` (default); ``True`` continues
+        the maps linearly for up to three grid cells with a warning.
+    cache_dir : path, optional
+        Where compiled kernels are cached (default :func:`maglevkit.models.compiled.cache_directory`).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import maglevkit as mk
+    >>> magnet = mk.load_magnet("u-magnet")
+    >>> maps = mk.build_maps(magnet, gaps=np.linspace(0.006, 0.016, 6),
+    ...                      currents=np.linspace(0, 60, 13), progress=False)
+    >>> bank = mk.MagnetBank({f"m{k}": maps for k in range(4)}, compiled="never")
+    >>> state = bank.initial_state(gaps=0.010, currents=20.0)
+    >>> state, out = bank.step(state, 1e-3, voltages=bank.resistance_ohm * 20.0)
+    >>> out.circuit_force_N.shape
+    (4,)
+    """
+
+    def __init__(self, members: Mapping[str, Any] | Sequence[tuple[str, Any]], *,
+                 gap_inputs: str = "circuit", interpolation: str = "bicubic",
+                 compiled: str = "auto", eddy_resistance: str = "fit", max_step_s: float = 1e-3,
+                 extrapolate: bool = False, cache_dir: Any = None) -> None:
+        if gap_inputs not in ("circuit", "pole"):
+            raise InputError(f"gap_inputs = {gap_inputs!r}; use 'circuit' or 'pole'")
+        if interpolation not in INTERPOLATION_METHODS:
+            raise InputError(f"interpolation = {interpolation!r}; use one of "
+                             f"{list(INTERPOLATION_METHODS)}")
+        if eddy_resistance not in ("fit", "jump"):
+            raise InputError(f"eddy_resistance = {eddy_resistance!r}; use 'fit' or 'jump'")
+        reject_bools(max_step_s, "max_step_s")
+        if not (isinstance(max_step_s, (int, float)) and math.isfinite(max_step_s)
+                and max_step_s > 0):
+            raise InputError(f"max_step_s = {max_step_s!r} must be a finite number > 0")
+        if not isinstance(extrapolate, bool):
+            raise InputError(f"extrapolate = {extrapolate!r} must be True or False")
+        self.gap_inputs = gap_inputs
+        self.interpolation = interpolation
+        self.compiled_mode = compiled
+        self.max_step_s = float(max_step_s)
+        self.extrapolate = extrapolate
+        self._cache_dir = cache_dir
+        pairs = list(members.items()) if isinstance(members, Mapping) else list(members)
+        if not pairs:
+            raise InputError("a magnet bank needs at least one member")
+        self._members = tuple(self._member(p, eddy_resistance) for p in pairs)
+        names = [m.name for m in self._members]
+        dup = sorted({n for n in names if names.count(n) > 1})
+        if dup:
+            raise InputError(f"member names must be unique; repeated: {dup}")
+        self.member_names: tuple[str, ...] = tuple(names)
+        self._layout()
+        self._build_reduced()
+        self._kernels: dict[int, Any] = {}
+        self.compiled: bool | None = None       # known after the first step
+
+    # ------------------------------------------------------------------ construction
+    @staticmethod
+    def _member(pair: Any, eddy_resistance: str) -> _Member:
+        try:
+            name, model = pair
+        except (TypeError, ValueError):
+            raise InputError("members: give a mapping name -> model or (name, model) pairs, "
+                             f"got {pair!r}") from None
+        if not isinstance(name, str) or not name or "/" in name:
+            raise InputError(f"member name {name!r} must be a non-empty string without '/'")
+        if isinstance(model, FluxModel):
+            net = model.network
+            groups = (circuit_pole_groups(net, gap=0.01, current=10.0)
+                      if len(net.circuit_names) > 1 else {net.circuit_names[0]: net.gap_names})
+            return _Member(name, "detailed", tuple(model.circuit_names), tuple(model.gap_names),
+                           groups, model=model)
+        if isinstance(model, CurrentModel):
+            maps = model.maps
+            r_el, r_ec = model.resistance_ohm, model.eddy_resistance_ohm
+        elif hasattr(model, "dataset") and hasattr(model, "variable"):
+            maps = model
+            var = "eddy_resistance_fit_ohm" if eddy_resistance == "fit" else "eddy_resistance_ohm"
+            if var not in maps.dataset:
+                raise InputError(f"member {name!r}: these maps have no {var!r}; rebuild them "
+                                 "with this version")
+            r_el = np.asarray(maps.dataset["resistance_ohm"].values, dtype=float)
+            r_ec = np.asarray(maps.dataset[var].values, dtype=float)
+        else:
+            raise InputError(f"member {name!r}: a model must be CharacteristicMaps, a "
+                             f"CurrentModel or a FluxModel, got {type(model).__name__}")
+        groups = maps.pole_groups
+        circuits = tuple(maps.circuits)
+        attr = maps.dataset.attrs.get("gap_names")
+        poles = (tuple(str(attr).split(",")) if attr
+                 else tuple(g for c in circuits for g in groups[c]))
+        return _Member(name, "reduced", circuits, poles, groups, maps=maps,
+                       resistance_ohm=np.asarray(r_el, dtype=float),
+                       eddy_resistance_ohm=np.asarray(r_ec, dtype=float))
+
+    def _layout(self) -> None:
+        circuits: list[str] = []
+        poles: list[str] = []
+        member_of: list[int] = []
+        self._circuit_slices: list[slice] = []
+        self._pole_slices: list[slice] = []
+        for k, m in enumerate(self._members):
+            c0, p0 = len(circuits), len(poles)
+            circuits += [f"{m.name}/{c}" for c in m.circuits]
+            poles += [f"{m.name}/{p}" for p in m.poles]
+            member_of += [k] * len(m.circuits)
+            self._circuit_slices.append(slice(c0, len(circuits)))
+            self._pole_slices.append(slice(p0, len(poles)))
+        self.circuit_names: tuple[str, ...] = tuple(circuits)
+        self.pole_names: tuple[str, ...] = tuple(poles)
+        self.gap_names: tuple[str, ...] = (self.circuit_names if self.gap_inputs == "circuit"
+                                           else self.pole_names)
+        nc, npl = len(circuits), len(poles)
+        self._member_of = np.array(member_of)
+        self._member_starts = np.array([s.start for s in self._circuit_slices])
+        # share: circuit force -> pole forces (equal shares); avg: pole gaps -> circuit gap
+        share = np.zeros((npl, nc))
+        for m, cs, ps in zip(self._members, self._circuit_slices, self._pole_slices, strict=True):
+            pi = {p: ps.start + j for j, p in enumerate(m.poles)}
+            for j, c in enumerate(m.circuits):
+                for p in m.pole_groups[c]:
+                    share[pi[p], cs.start + j] = 1.0 / len(m.pole_groups[c])
+        self._share = share
+        self._avg = (share > 0).T / np.maximum((share > 0).sum(axis=0), 1)[:, None]
+        self._reduced_idx = np.array([j for m, cs in zip(self._members, self._circuit_slices,
+                                                         strict=True)
+                                      if m.kind == "reduced" for j in range(cs.start, cs.stop)],
+                                     dtype=int)
+        self._all_reduced = all(m.kind == "reduced" for m in self._members)
+        self._fast = self._all_reduced and self.gap_inputs == "circuit"
+        r = np.full(nc, np.nan)
+        for m, cs in zip(self._members, self._circuit_slices, strict=True):
+            if m.kind == "reduced":
+                r[cs] = m.resistance_ohm
+            else:
+                assert m.model is not None
+                r[cs] = m.model.network.resistances
+        self.resistance_ohm = r
+        """Ohmic resistance R_el of every circuit [ohm]."""
+
+    def _build_reduced(self) -> None:
+        """Per-cell tables (one per distinct map), kernel parameters and range bounds."""
+        idx = self._reduced_idx
+        n = idx.size
+        self._par = np.zeros((_N_PAR, n))
+        self._bounds = np.zeros((4, n))            # s_lo, s_hi, i_lo, i_hi (map ranges)
+        self._spline_bounds = np.zeros((4, n))     # the same extended by EXTRA_CELLS cells
+        tables: list[np.ndarray] = []
+        known: dict[tuple, tuple[int, tuple[float, float, float, float], tuple[int, int]]] = {}
+        size = 0
+        k = 0
+        self._degree = 1 if self.interpolation == "bilinear" else 3
+        for m in self._members:
+            if m.kind != "reduced":
+                continue
+            maps = m.maps
+            gs, gi = _extend_axis(maps.gaps_m), _extend_axis(maps.currents_A)
+            for j, c in enumerate(m.circuits):
+                values = [maps.variable(v, c) for v in _MAP_VARIABLES]
+                # maps are stored once however many circuits use them
+                key = (maps.gaps_m.tobytes(), maps.currents_A.tobytes(),
+                       *(v.tobytes() for v in values))
+                if key not in known:
+                    for v, arr in zip(_MAP_VARIABLES, values, strict=True):
+                        if not np.all(np.isfinite(arr)):
+                            raise InputError(f"member {m.name!r}: map {v!r} of circuit {c!r} has "
+                                             "non-finite values; rebuild the maps")
+                    ext = np.stack([_extend_values(_extend_values(a, axis=0), axis=1)
+                                    for a in values])
+                    tab = cell_table(gs, gi, ext, method=self.interpolation)
+                    # layout per cell: map-major, then the (d+1)^2 coefficients t^p w^q
+                    tables.append(tab.coefficients.reshape(-1))
+                    known[key] = (size, (tab.s0_m, tab.ds_m, tab.i0_A, tab.di_A), tab.n_cells)
+                    size += tab.coefficients.size
+                offset, (s0, ds_, i0, di_), (cs_, ci_) = known[key]
+                assert m.resistance_ohm is not None and m.eddy_resistance_ohm is not None
+                r_el = float(m.resistance_ohm[j])
+                r_ec = float(m.eddy_resistance_ohm[j])
+                a = 1.0 if math.isinf(r_ec) else 1.0 + r_el / r_ec
+                self._par[:9, k] = (s0, 1.0 / ds_, cs_, i0, 1.0 / di_, ci_, offset, r_el, a)
+                self._bounds[:, k] = (maps.gaps_m[0], maps.gaps_m[-1], maps.currents_A[0],
+                                      maps.currents_A[-1])
+                self._spline_bounds[:, k] = (gs[0], gs[-1], gi[0], gi[-1])
+                k += 1
+        self._table = np.concatenate(tables) if tables else np.zeros(1)
+        self.n_distinct_maps = len(tables)
+        """How many distinct circuit maps the bank stores (shared when equal)."""
+        b = self._bounds
+        # rounding allowances of the range checks (as CurrentModel)
+        tol_s = 1e-12 * np.abs(b[1])
+        tol_i = 1e-9 * np.maximum(1.0, np.abs(b[3]))
+        self._lo_s, self._hi_s = b[0] - tol_s, b[1] + tol_s
+        self._lo_i, self._hi_i = b[2] - tol_i, b[3] + tol_i
+        self._par[9:13] = (self._lo_s, self._hi_s, self._lo_i, self._hi_i)
+        self._circuit_kernel = self._make_circuit_kernel()
+
+    # ------------------------------------------------------------------ CasADi kernels
+    def _lookup(self, s: Any, i: Any, p: Any, table: Any) -> tuple[Any, Any, Any]:
+        """``(L~, dL/ds, F)`` of one circuit from the per-cell table (MX expressions)."""
+        d = self._degree
+        nk = (d + 1) ** 2
+        us = (s - p[0]) * p[1]
+        ks = ca.fmin(ca.fmax(ca.floor(us), 0), p[2] - 1)
+        t = us - ks
+        ui = (i - p[3]) * p[4]
+        ki = ca.fmin(ca.fmax(ca.floor(ui), 0), p[5] - 1)
+        w = ui - ki
+        base = p[6] + (ks * p[5] + ki) * (3 * nk)
+        c = table[base + ca.DM(np.arange(3 * nk, dtype=float))]
+        out = []
+        for m in range(3):
+            acc: Any = 0
+            for pp in range(d, -1, -1):         # Horner in t of Horner polynomials in w
+                row: Any = 0
+                for q in range(d, -1, -1):
+                    row = row * w + c[m * nk + pp * (d + 1) + q]
+                acc = acc * t + row
+            out.append(acc)
+        return out[0], out[1], out[2]
+
+    def _circuit_expressions(self, i: Any, s: Any, u: Any, sd: Any, p: Any, table: Any
+                             ) -> tuple[Any, Any, Any, Any]:
+        """Eq. 8 of one circuit as MX expressions: ``(dI_L/dt, I, F, L~)``."""
+        lt, dl, f = self._lookup(s, i, p, table)
+        r_el, a = p[7], p[8]
+        return eq8_rhs(i, u, sd, lt, dl, r_el, a), eq8_coil_current(i, u, r_el, a), f, lt
+
+    def _make_circuit_kernel(self) -> dict[str, ca.Function]:
+        """Single-circuit functions: right-hand side, outputs (MX, table embedded)."""
+        table = ca.MX(ca.DM(self._table))
+        i, s, u, sd = (ca.MX.sym(n) for n in ("I_L", "s", "U", "sdot"))
+        p = ca.MX.sym("p", _N_PAR)
+        rhs, coil, f, lt = self._circuit_expressions(i, s, u, sd, p, table)
+        return {"rhs": ca.Function("bank_circuit_rhs", [i, s, u, sd, p], [rhs]),
+                "out": ca.Function("bank_circuit_out", [i, s, u, p], [coil, f, lt])}
+
+    def _step_kernel(self, substeps: int) -> ca.Function:
+        """One RK4 step of every reduced circuit: ``(I_L, s, U, sdot, h) -> (I_L', I, F,
+        I_min, I_max, n_bad)``.
+
+        The gap moves linearly (exact); ``I_min``/``I_max`` are the extremes of the
+        current over the sub-step ends; ``n_bad`` counts circuits with a gap or current
+        outside their map's range (start, end and every sub-step) or a non-finite value,
+        so that the caller checks one number (and diagnoses only when it is > 0).
+        Everything is inlined into one expression graph (no nested calls).
+        """
+        table = ca.MX(ca.DM(self._table))
+        i, s, u, sd, h = (ca.MX.sym(n) for n in ("I_L", "s", "U", "sdot", "h"))
+        p = ca.MX.sym("p", _N_PAR)
+        hs = h / substeps
+
+        def f(x: Any, sk: Any) -> Any:
+            return self._circuit_expressions(x, sk, u, sd, p, table)[0]
+
+        x: Any = i
+        lo: Any = i
+        hi: Any = i
+        for k in range(substeps):
+            sk = s + sd * (k * hs)
+            k1 = f(x, sk)
+            k2 = f(x + hs / 2 * k1, sk + sd * (hs / 2))
+            k3 = f(x + hs / 2 * k2, sk + sd * (hs / 2))
+            k4 = f(x + hs * k3, sk + sd * hs)
+            x = x + hs / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
+            lo = ca.fmin(lo, x)
+            hi = ca.fmax(hi, x)
+        se = s + sd * h
+        _, coil, force, _ = self._circuit_expressions(x, se, u, sd, p, table)
+        # range flags (p[9:13] = gap and current bounds incl. rounding allowances);
+        # |v| <= DBL_MAX is false for NaN and inf (x - x would be simplified to 0)
+        big = float(np.finfo(float).max)
+
+        def non_finite(v: Any) -> Any:
+            return 1 - (ca.fabs(v) <= big)
+
+        bad = ((ca.fmin(s, se) < p[9]) + (ca.fmax(s, se) > p[10]) + (lo < p[11])
+               + (hi > p[12]) + non_finite(x) + non_finite(u) + non_finite(s)
+               + non_finite(sd) > 0)
+        one = ca.Function("bank_circuit_step", [i, s, u, sd, h, p],
+                          [x, coil, force, lo, hi, bad])
+        n = self._reduced_idx.size
+        mapped = one.map(n, "serial")
+        vi, vs, vu, vsd = (ca.MX.sym(nm, n) for nm in ("I_L", "s", "U", "sdot"))
+        vh = ca.MX.sym("h")
+        res = mapped(vi.T, vs.T, vu.T, vsd.T, vh, ca.DM(self._par))
+        return ca.Function(f"maglevkit_bank_step{substeps}", [vi, vs, vu, vsd, vh],
+                           [r.T for r in res[:5]] + [ca.sum2(res[5])],
+                           ["I_L", "s", "U", "sdot", "h"],
+                           ["I_L_next", "I", "F", "I_L_min", "I_L_max", "n_bad"])
+
+    @property
+    def ode_function(self) -> ca.Function:
+        """Eq. 8 of every reduced circuit: ``(I_L, U, s, sdot) -> dI_L/dt`` (CasADi, arrays
+        over the reduced circuits, ``s`` the substitute gaps); differentiable (AD) and
+        code-generatable, for vehicle models, linearisation and MPC."""
+        n = self._reduced_idx.size
+        vi, vu, vs, vsd = (ca.MX.sym(nm, n) for nm in ("I_L", "U", "s", "sdot"))
+        f = self._circuit_kernel["rhs"].map(n, "serial")
+        return ca.Function("maglevkit_bank_ode", [vi, vu, vs, vsd],
+                           [f(vi.T, vs.T, vu.T, vsd.T, ca.DM(self._par)).T],
+                           ["I_L", "U", "s", "sdot"], ["dI_L"])
+
+    @property
+    def output_function(self) -> ca.Function:
+        """Outputs of every reduced circuit: ``(I_L, U, s) -> (I, F, L~)`` (CasADi)."""
+        n = self._reduced_idx.size
+        vi, vu, vs = (ca.MX.sym(nm, n) for nm in ("I_L", "U", "s"))
+        res = self._circuit_kernel["out"].map(n, "serial")(vi.T, vs.T, vu.T, ca.DM(self._par))
+        return ca.Function("maglevkit_bank_outputs", [vi, vu, vs], [r.T for r in res],
+                           ["I_L", "U", "s"], ["I", "F", "Ltilde"])
+
+    def _kernel(self, dt: float) -> Any:
+        n = max(1, math.ceil(dt / self.max_step_s * (1 - 1e-12)))
+        call = self._kernels.get(n)
+        if call is None:
+            f, is_compiled = compile_function(self._step_kernel(n), mode=self.compiled_mode,
+                                              cache_dir=self._cache_dir)
+            self.compiled = is_compiled
+            call = _BufferedCall(f)
+            self._kernels[n] = call
+        return call
+
+    # ------------------------------------------------------------------ properties
+    @property
+    def n_circuits(self) -> int:
+        return len(self.circuit_names)
+
+    @property
+    def n_gaps(self) -> int:
+        return len(self.gap_names)
+
+    @property
+    def circuit_slices(self) -> dict[str, slice]:
+        """Member name -> its slice of the circuit arrays."""
+        return dict(zip(self.member_names, self._circuit_slices, strict=True))
+
+    @property
+    def gap_slices(self) -> dict[str, slice]:
+        """Member name -> its slice of the gap-input arrays."""
+        return dict(zip(self.member_names, self._circuit_slices if self.gap_inputs == "circuit"
+                        else self._pole_slices, strict=True))
+
+    def circuit_gaps(self, gaps: np.ndarray) -> np.ndarray:
+        """Substitute gap of every circuit [m] from the gap inputs."""
+        return gaps if self.gap_inputs == "circuit" else self._avg @ gaps
+
+    def pole_gaps(self, gaps: np.ndarray) -> np.ndarray:
+        """Gap of every pole [m] from the gap inputs."""
+        return (self._share > 0).astype(float) @ gaps if self.gap_inputs == "circuit" else gaps
+
+    # ------------------------------------------------------------------ input handling
+    def _vector(self, value: Any, names: tuple[str, ...], what: str, unit: str,
+                check: bool = True) -> np.ndarray:
+        """``value`` as a float array over ``names`` (a scalar for all); finite unless
+        ``check`` is False (the fast step path, whose kernel flags non-finite values)."""
+        n = len(names)
+        if type(value) is np.ndarray and value.dtype == np.float64 and value.shape == (n,):
+            arr = value
+            if not check:
+                return arr
+        else:
+            reject_bools(value, what)
+            if isinstance(value, Mapping):
+                missing = [k for k in names if k not in value]
+                unknown = sorted(set(value) - set(names))
+                if missing or unknown:
+                    raise InputError(f"{what}: give one value per name (missing {missing[:5]}, "
+                                     f"unknown {unknown[:5]})")
+                value = [value[k] for k in names]
+            try:
+                arr = np.asarray(value, dtype=float)
+            except (TypeError, ValueError):
+                raise InputError(f"{what} must be numbers [{unit}], got {value!r}") from None
+            if arr.ndim == 0:
+                arr = np.full(n, float(arr))
+            if arr.shape != (n,):
+                raise InputError(f"{what}: expected {n} values [{unit}] (one per "
+                                 f"{'gap input' if what.startswith('gap') else 'circuit'}), "
+                                 f"got shape {arr.shape}")
+        if not np.isfinite(arr).all():
+            j = int(np.argmax(~np.isfinite(arr)))
+            raise InputError(f"{what} must be finite: {names[j]!r} = {arr[j]!r} {unit}")
+        return arr
+
+    def _range_error(self, k: int, s: float, i: float, where: str) -> None:
+        j = int(self._reduced_idx[k])
+        name = self.circuit_names[j]
+        member, circuit = name.split("/", 1)
+        b = self._bounds[:, k]
+        msg = (f"member {member!r}, circuit {circuit!r}{where}: substitute gap {s:.6g} m and "
+               f"current {i:.6g} A; its maps cover gaps {b[0]:g}..{b[1]:g} m and currents "
+               f"{b[2]:g}..{b[3]:g} A")
+        if self.extrapolate:
+            e = self._spline_bounds[:, k]
+            if e[0] <= s <= e[1] and e[2] <= i <= e[3]:
+                warnings.warn("extrapolating the characteristic maps: " + msg, stacklevel=4)
+                return
+            msg += f"; linear extrapolation reaches only {EXTRA_CELLS} grid cells beyond the maps"
+        raise OutOfRangeError("outside the characteristic maps: " + msg
+                              + " (rebuild the maps on a larger grid, or pass extrapolate=True)")
+
+    def _check_range(self, s_lo: np.ndarray, s_hi: np.ndarray, i_lo: np.ndarray,
+                     i_hi: np.ndarray, where: str) -> None:
+        """Vectorised range check of the reduced circuits (two comparisons when fine)."""
+        bad = (s_lo < self._lo_s) | (s_hi > self._hi_s) | (i_lo < self._lo_i) | (i_hi > self._hi_i)
+        if not bad.any():
+            return
+        for k in np.flatnonzero(bad):
+            s = s_lo[k] if s_lo[k] < self._lo_s[k] else s_hi[k]
+            i = i_lo[k] if i_lo[k] < self._lo_i[k] else i_hi[k]
+            self._range_error(int(k), float(s), float(i), where)
+
+    def _diagnose(self, s: np.ndarray, sd: np.ndarray, i0: np.ndarray, u: np.ndarray,
+                  x: np.ndarray, lo: np.ndarray, hi: np.ndarray, t0: float, t1: float) -> None:
+        """The kernel flagged a circuit: raise (or warn) with the details."""
+        for what, arr, unit in (("voltages", u, "V"), ("gaps", s, "m"), ("gap_rates", sd, "m/s")):
+            if not np.isfinite(arr).all():
+                k = int(np.argmax(~np.isfinite(arr)))
+                raise InputError(f"{what} must be finite: circuit "
+                                 f"{self.circuit_names[int(self._reduced_idx[k])]!r} has "
+                                 f"{arr[k]!r} {unit}")
+        se = s + sd * (t1 - t0)
+        if (s <= 0).any() or (se <= 0).any():
+            k = int(np.argmax((s <= 0) | (se <= 0)))
+            raise InputError(f"gaps must stay > 0 m over the step: circuit "
+                             f"{self.circuit_names[int(self._reduced_idx[k])]!r} from {s[k]!r} m "
+                             f"to {se[k]!r} m")
+        self._check_range(np.minimum(s, se), np.maximum(s, se), i0, i0,
+                          f" over the step t = {t0:.6g}..{t1:.6g} s")
+        bad = ~(np.isfinite(x) & np.isfinite(u) & np.isfinite(sd))
+        if bad.any():
+            k = int(np.argmax(bad))
+            j = int(self._reduced_idx[k])
+            raise SolverError(f"non-finite value in circuit {self.circuit_names[j]!r}",
+                              time=t0, state={"I_L_A": float(i0[k]), "gap_m": float(s[k]),
+                                              "gap_rate_m_per_s": float(sd[k]),
+                                              "voltage_V": float(u[k])},
+                              reason="the RK4 step gave a non-finite current (or an input "
+                                     "was not finite)")
+        self._check_range(se, se, lo, hi, f" in an RK4 sub-step within t = {t0:.6g}..{t1:.6g} s")
+
+    # ------------------------------------------------------------------ stepping interface
+    def initial_state(self, *, gaps: Any, currents: Any, time: float = 0.0) -> BankState:
+        """The steady state at ``gaps`` [m] (per gap input, or a scalar) with coil currents
+        ``currents`` [A] (per circuit, or a scalar)."""
+        g = self._vector(gaps, self.gap_names, "gaps", "m")
+        if (g <= 0).any():
+            j = int(np.argmax(g <= 0))
+            raise InputError(f"gaps must be > 0 m: {self.gap_names[j]!r} = {g[j]!r} m")
+        i = self._vector(currents, self.circuit_names, "currents", "A").copy()
+        reject_bools(time, "time")
+        if not (isinstance(time, (int, float, np.floating)) and math.isfinite(time)):
+            raise InputError(f"time = {time!r} must be a finite number of seconds")
+        s = self.circuit_gaps(g)
+        ri = self._reduced_idx
+        self._check_range(s[ri], s[ri], i[ri], i[ri], f" at t = {float(time):.6g} s")
+        states = []
+        pg = self.pole_gaps(g)
+        for m, cs, ps in zip(self._members, self._circuit_slices, self._pole_slices, strict=True):
+            if m.kind == "detailed":
+                assert m.model is not None
+                states.append(m.model.initial_state(gaps=pg[ps], currents=i[cs], time=float(time)))
+                i[cs] = np.nan
+        return BankState(float(time), i, g.copy(), tuple(states))
+
+    def step(self, state: BankState, dt: float, voltages: Any, gaps: Any = None,
+             gap_rates: Any = 0.0, *, pole_forces: bool = False) -> tuple[BankState, BankOutputs]:
+        """Advance every member by ``dt`` [s] with constant voltages and linearly moving gaps.
+
+        Parameters
+        ----------
+        state : BankState
+            From :meth:`initial_state` or a previous step.
+        dt : float
+            Step length [s] (> 0).
+        voltages : float or array (n_circuits,)
+            Circuit voltages [V], held over the step.
+        gaps : float, array (n_gaps,) or None
+            Gap inputs [m] at the start of the step (None keeps the state's).
+        gap_rates : float or array (n_gaps,)
+            Gap rates [m/s] over the step.
+        pole_forces : bool
+            Also return the per-pole force distribution.
+
+        Returns
+        -------
+        (BankState, BankOutputs)
+
+        Raises
+        ------
+        InputError
+            Bad shapes, non-finite values (naming the member and circuit), gaps that are or
+            become <= 0.
+        OutOfRangeError
+            A reduced circuit leaves its maps (checked before integrating for the gaps and
+            over every RK4 sub-step for the currents), naming member, circuit, gap, current
+            and the map's range.
+        SolverError
+            Non-finite results (with time, state and reason) or a detailed member's
+            integrator failing.
+        """
+        if type(state) is not BankState or state.gaps_m.shape != (self.n_gaps,):
+            raise InputError("state must be a BankState of this bank (from initial_state or step)")
+        if not (type(dt) is float and 0.0 < dt < math.inf):
+            dt = check_step(dt)
+        # fast path (all reduced, one gap per circuit): the kernel flags non-finite
+        # inputs, gaps outside the maps (which start above 0) and currents leaving them;
+        # only a flagged step is diagnosed in Python
+        checked = not self._fast
+        u = self._vector(voltages, self.circuit_names, "voltages", "V", checked)
+        g = state.gaps_m if gaps is None else self._vector(gaps, self.gap_names, "gaps", "m",
+                                                           checked)
+        gd = self._vector(gap_rates, self.gap_names, "gap_rates", "m/s", checked)
+        g1 = g + gd * dt
+        if checked and ((g <= 0).any() or (g1 <= 0).any()):
+            j = int(np.argmax((g <= 0) | (g1 <= 0)))
+            raise InputError(f"gaps must stay > 0 m over the step: {self.gap_names[j]!r} from "
+                             f"{g[j]!r} m to {g1[j]!r} m")
+        t0, t1 = state.time_s, state.time_s + dt
+        nc = self.n_circuits
+        coil = np.empty(nc)
+        force = np.empty(nc)
+        i_next = np.full(nc, np.nan)
+        ri = self._reduced_idx
+        if ri.size:
+            s, sd = self.circuit_gaps(g), self.circuit_gaps(gd)
+            if not self._all_reduced:
+                s, sd, ur, ir = s[ri], sd[ri], u[ri], state.inductor_currents_A[ri]
+            else:
+                ur, ir = u, state.inductor_currents_A
+            x, c, f, lo, hi, n_bad = self._kernel(dt)(ir, s, ur, sd, dt)
+            if n_bad[0]:
+                self._diagnose(s, sd, ir, ur, x, lo, hi, t0, t1)
+            if self._all_reduced:
+                i_next, coil, force = x, c, f
+            else:
+                i_next[ri], coil[ri], force[ri] = x, c, f
+        states = list(state.member_states)
+        pf_detailed: dict[int, np.ndarray] = {}
+        if not self._all_reduced:
+            pg, pgd = self.pole_gaps(g), self.pole_gaps(gd)
+            k = 0
+            for mi, (m, cs, ps) in enumerate(zip(self._members, self._circuit_slices,
+                                                 self._pole_slices, strict=True)):
+                if m.kind != "detailed":
+                    continue
+                assert m.model is not None
+                new, out = m.model.step(states[k], dt, u[cs], gaps=pg[ps], gap_rates=pgd[ps])
+                states[k] = new
+                coil[cs] = out.currents_A
+                force[cs] = _circuit_forces(out.pole_force_N, m)
+                pf_detailed[mi] = out.pole_force_N
+                k += 1
+        member_force = np.add.reduceat(force, self._member_starts)
+        pf = None
+        if pole_forces:
+            pf = self._share @ force
+            for mi, v in pf_detailed.items():
+                pf[self._pole_slices[mi]] = v
+        new_state = BankState(t1, i_next, g1, tuple(states))
+        return new_state, BankOutputs(t1, coil, i_next.copy(), force, member_force, pf)
+
+    def simulate(self, t: Any, *, gaps: Any, voltages: Any, gap_rates: Any = None,
+                 dt: float | None = None, initial_currents: Any = None,
+                 initial_state: BankState | None = None,
+                 gap_rate_tolerance: float = 0.02) -> BankSimulation:
+        """Simulate on a time grid (inputs and conventions as :func:`maglevkit.simulate`).
+
+        Gaps move linearly between samples, voltages are held from each sample to the
+        next; the default initial state is the steady state ``I = U(t0) / R_el`` at the
+        first gaps.  Every interval is one :meth:`step`.
+        """
+        times = time_grid(t, dt)
+        g = sample_input(gaps, times, self.gap_names, "gaps", "m")
+        if np.any(g <= 0.0):
+            raise InputError("gaps must be > 0 m")
+        u = sample_input(voltages, times, self.circuit_names, "voltages", "V")
+        rates = gap_secants(times, g, gap_rates, self.gap_names, gap_rate_tolerance)
+        if initial_state is not None:
+            if initial_currents is not None:
+                raise InputError("give initial_currents or initial_state, not both")
+            if not isinstance(initial_state, BankState):
+                raise InputError("initial_state must be a BankState")
+            state = initial_state
+        else:
+            i0 = u[0] / self.resistance_ohm if initial_currents is None else initial_currents
+            state = self.initial_state(gaps=g[0], currents=i0, time=float(times[0]))
+        nt, nc = times.size, self.n_circuits
+        cur, il, fc = (np.empty((nt, nc)) for _ in range(3))
+        pf = np.empty((nt, len(self.pole_names)))
+        o = self._outputs_at(state, u[0])
+        cur[0], il[0], fc[0], pf[0] = o.currents_A, o.inductor_currents_A, o.circuit_force_N, \
+            o.pole_force_N
+        for k in range(nt - 1):
+            state, o = self.step(state, float(times[k + 1] - times[k]), u[k], gaps=g[k],
+                                 gap_rates=rates[k], pole_forces=True)
+            cur[k + 1], il[k + 1], fc[k + 1] = o.currents_A, o.inductor_currents_A, o.circuit_force_N
+            assert o.pole_force_N is not None
+            pf[k + 1] = o.pole_force_N
+        return BankSimulation(
+            time_s=times, gaps_m=g, voltages_V=np.vstack((u[:-1], u[-2:-1])), currents_A=cur,
+            inductor_currents_A=il, circuit_force_N=fc,
+            member_force_N=np.add.reduceat(fc, self._member_starts, axis=1), pole_force_N=pf,
+            circuit_names=self.circuit_names, gap_names=self.gap_names,
+            pole_names=self.pole_names, member_names=self.member_names, final_state=state)
+
+    def outputs(self, state: BankState, voltages: Any = None) -> BankOutputs:
+        """Outputs at ``state`` with ``voltages`` [V] (default: the steady-state voltages
+        ``R_el I_L``; for detailed members their state's own currents)."""
+        u = (self.resistance_ohm * np.where(np.isnan(state.inductor_currents_A), 0.0,
+                                            state.inductor_currents_A)
+             if voltages is None else self._vector(voltages, self.circuit_names, "voltages", "V"))
+        return self._outputs_at(state, u)
+
+    def _outputs_at(self, state: BankState, u: np.ndarray) -> BankOutputs:
+        nc = self.n_circuits
+        coil, force = np.empty(nc), np.empty(nc)
+        ri = self._reduced_idx
+        s = self.circuit_gaps(state.gaps_m)
+        if ri.size:
+            c, f, _ = self.output_function(state.inductor_currents_A[ri], u[ri], s[ri])
+            coil[ri], force[ri] = np.asarray(c).ravel(), np.asarray(f).ravel()
+        pf_detailed = {}
+        k = 0
+        for mi, (m, cs) in enumerate(zip(self._members, self._circuit_slices, strict=True)):
+            if m.kind == "detailed":
+                assert m.model is not None
+                out = m.model.outputs(state.member_states[k])
+                coil[cs] = out.currents_A
+                force[cs] = _circuit_forces(out.pole_force_N, m)
+                pf_detailed[mi] = out.pole_force_N
+                k += 1
+        pf = self._share @ force
+        for mi, v in pf_detailed.items():
+            pf[self._pole_slices[mi]] = v
+        return BankOutputs(state.time_s, coil, state.inductor_currents_A.copy(), force,
+                           np.add.reduceat(force, self._member_starts), pf)
+
+
+def _circuit_forces(pole_force: np.ndarray, member: _Member) -> np.ndarray:
+    """Sum of a detailed member's pole forces over each circuit's poles."""
+    pi = {p: k for k, p in enumerate(member.poles)}
+    return np.array([sum(pole_force[pi[p]] for p in member.pole_groups[c])
+                     for c in member.circuits])
