@@ -208,6 +208,11 @@ class CurrentModel:
     def __init__(self, maps: Any, *, extrapolate: bool = False, method: str = "rk4",
                  rtol: float = 1e-8, atol: float = 1e-10, max_step_s: float = 1e-3,
                  eddy_resistance: str = "fit", jit: bool = False) -> None:
+        if not (hasattr(maps, "dataset") and hasattr(maps, "variable")):
+            hint = (" (load a maps file with maglevkit.load_maps first)"
+                    if isinstance(maps, (str, bytes)) or hasattr(maps, "__fspath__") else "")
+            raise InputError("CurrentModel needs CharacteristicMaps (from build_maps or load_maps), "
+                             f"got {type(maps).__name__}{hint}")
         if method not in ("cvodes", "rk4"):
             raise InputError(f"method = {method!r}; use 'cvodes' (adaptive) or 'rk4' (fixed step)")
         if not (math.isfinite(max_step_s) and max_step_s > 0):
@@ -597,7 +602,15 @@ class CurrentModel:
         if (g + gd * dt <= 0.0).any():
             raise InputError(f"gaps must stay > 0 m over the step: end {(g + gd * dt).tolist()} m")
         s0, sd = self.substitute_gaps(g), self.substitute_gaps(gd)
-        x0 = np.concatenate([state.inductor_currents_A, s0])
+        # the gap moves linearly: its whole path is known before integrating, so a step
+        # far outside the maps is refused here (not as a non-finite integration later)
+        s1 = s0 + sd * dt
+        i_now = state.inductor_currents_A
+        self._check_range(np.minimum(s0, s1)[None, :], i_now[None, :], None,
+                          where=f" at the start of the step t = {state.time_s:.6g} s")
+        self._check_range(np.maximum(s0, s1)[None, :], i_now[None, :], None,
+                          where=f" at the end of the step t = {state.time_s + dt:.6g} s")
+        x0 = np.concatenate([i_now, s0])
         uu = np.concatenate([u, sd])
         nc = self.n_circuits
         extremes = None

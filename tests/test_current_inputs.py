@@ -1,0 +1,33 @@
+"""CurrentModel bad input (issue 10): range before integrating, a path instead of maps."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import maglevkit as mk
+from maglevkit.errors import InputError, OutOfRangeError
+
+
+@pytest.fixture(scope="module")
+def model(u_magnet: mk.Magnet) -> mk.CurrentModel:
+    maps = mk.build_maps(u_magnet, gaps=np.linspace(0.008, 0.012, 5),
+                         currents=np.linspace(0.0, 40.0, 9), progress=False)
+    return mk.CurrentModel(maps)
+
+
+def test_far_outside_the_maps_is_out_of_range_not_a_solver_error(model) -> None:
+    state = model.initial_state(gaps=0.010, currents=20.0)
+    # 20 mm on 8-12 mm maps: refused before integrating (the spline would be evaluated
+    # far beyond its extension and the state would become non-finite)
+    with pytest.raises(OutOfRangeError, match=r"start of the step.*gap 0\.02 m.*0\.008\.\.0\.012"):
+        model.step(state, 1e-3, 20.0, gaps=0.02)
+    with pytest.raises(OutOfRangeError, match=r"end of the step.*gap 1\.01 m"):
+        model.step(state, 1e-3, 20.0, gap_rates=1e3)
+
+
+def test_a_path_instead_of_maps_is_an_input_error() -> None:
+    with pytest.raises(InputError, match=r"needs CharacteristicMaps.*load_maps"):
+        mk.CurrentModel("maps.nc")
+    with pytest.raises(InputError, match=r"needs CharacteristicMaps.*got NoneType"):
+        mk.CurrentModel(None)
