@@ -247,15 +247,20 @@ def test_solver_error_on_non_finite_state_carries_time_and_state(u_maps, monkeyp
     state = bank.initial_state(gaps=0.010, currents=20.0, time=0.5)
     real = bank._kernel
 
-    def poisoned(dt: float):  # type: ignore[no-untyped-def]
-        call = real(dt)
+    class Poisoned:
+        """The real compiled step, with a NaN current put into its result."""
 
-        def run(*args):  # type: ignore[no-untyped-def]
-            out = call(*args)
-            out[0][:] = np.nan
-            out[5][:] = 1.0
-            return out
-        return run
+        def __init__(self, call) -> None:  # type: ignore[no-untyped-def]
+            self.call = call
+            self.res = call.res
+
+        def __call__(self, *args):  # type: ignore[no-untyped-def]
+            x, c, f, mf, _ = self.call(*args)
+            x[:] = np.nan
+            return x, c, f, mf, 1.0
+
+    def poisoned(dt: float) -> Poisoned:
+        return Poisoned(real(dt))
 
     monkeypatch.setattr(bank, "_kernel", poisoned)
     with pytest.raises(SolverError, match=r"non-finite.*'m/coil'.*t = 0\.5 s.*I_L_A=20"):

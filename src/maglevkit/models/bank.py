@@ -41,7 +41,6 @@ from .compiled import compile_function
 from .current import (
     EXTRA_CELLS,
     CurrentModel,
-    _BufferedCall,
     _extend_axis,
     _extend_values,
     eq8_coil_current,
@@ -239,7 +238,7 @@ class MagnetBank:
         self.member_names: tuple[str, ...] = tuple(names)
         self._layout()
         self._build_reduced()
-        self._kernels: dict[int, Any] = {}
+        self._kernels: dict[int, _StepCall] = {}
         self.compiled: bool | None = None       # known after the first step
 
     # ------------------------------------------------------------------ construction
@@ -383,33 +382,44 @@ class MagnetBank:
         self._circuit_kernel = self._make_circuit_kernel()
 
     # ------------------------------------------------------------------ CasADi kernels
-    def _lookup(self, s: Any, i: Any, p: Any, table: Any) -> tuple[Any, Any, Any]:
-        """``(L~, dL/ds, F)`` of one circuit from the per-cell table (MX expressions)."""
-        d = self._degree
-        nk = (d + 1) ** 2
+    @staticmethod
+    def _gap_cell(s: Any, p: Any) -> tuple[Any, Any]:
+        """Cell row offset and local coordinate ``t`` of gap ``s`` (MX expressions)."""
         us = (s - p[0]) * p[1]
         ks = ca.fmin(ca.fmax(ca.floor(us), 0), p[2] - 1)
-        t = us - ks
+        return ks * p[5], us - ks
+
+    def _lookup(self, cell: tuple[Any, Any], i: Any, p: Any, table: Any,
+                maps: tuple[int, ...] = (0, 1, 2)) -> list[Any]:
+        """Maps ``maps`` of ``(L~, dL/ds, F)`` of one circuit at the gap cell ``cell``
+        (:meth:`_gap_cell`) and current ``i`` from the per-cell table (MX expressions).
+
+        The fmax/fmin clamp keeps the index inside the table for any input, NaN included.
+        """
+        d = self._degree
+        nk = (d + 1) ** 2
+        row0, t = cell
         ui = (i - p[3]) * p[4]
         ki = ca.fmin(ca.fmax(ca.floor(ui), 0), p[5] - 1)
         w = ui - ki
-        base = p[6] + (ks * p[5] + ki) * (3 * nk)
-        c = table[base + ca.DM(np.arange(3 * nk, dtype=float))]
+        base = p[6] + (row0 + ki) * (3 * nk)
+        idx = np.concatenate([np.arange(m * nk, (m + 1) * nk) for m in maps]).astype(float)
+        c = table[base + ca.DM(idx)]
         out = []
-        for m in range(3):
+        for j, _ in enumerate(maps):
             acc: Any = 0
             for pp in range(d, -1, -1):         # Horner in t of Horner polynomials in w
                 row: Any = 0
                 for q in range(d, -1, -1):
-                    row = row * w + c[m * nk + pp * (d + 1) + q]
+                    row = row * w + c[j * nk + pp * (d + 1) + q]
                 acc = acc * t + row
             out.append(acc)
-        return out[0], out[1], out[2]
+        return out
 
-    def _circuit_expressions(self, i: Any, s: Any, u: Any, sd: Any, p: Any, table: Any
-                             ) -> tuple[Any, Any, Any, Any]:
+    def _circuit_expressions(self, i: Any, s: Any, u: Any, sd: Any, p: Any, table: Any,
+                             cell: tuple[Any, Any] | None = None) -> tuple[Any, Any, Any, Any]:
         """Eq. 8 of one circuit as MX expressions: ``(dI_L/dt, I, F, L~)``."""
-        lt, dl, f = self._lookup(s, i, p, table)
+        lt, dl, f = self._lookup(self._gap_cell(s, p) if cell is None else cell, i, p, table)
         r_el, a = p[7], p[8]
         return eq8_rhs(i, u, sd, lt, dl, r_el, a), eq8_coil_current(i, u, r_el, a), f, lt
 
@@ -437,23 +447,31 @@ class MagnetBank:
         p = ca.MX.sym("p", _N_PAR)
         hs = h / substeps
 
-        def f(x: Any, sk: Any) -> Any:
-            return self._circuit_expressions(x, sk, u, sd, p, table)[0]
+        def f(x: Any, cell: tuple[Any, Any]) -> Any:
+            return self._circuit_expressions(x, 0, u, sd, p, table, cell)[0]
 
         x: Any = i
         lo: Any = i
         hi: Any = i
+        # the stage gaps of a sub-step: start, middle (k2 and k3 share it), end; the end
+        # of one sub-step is the start of the next
+        cell_start = self._gap_cell(s, p)
         for k in range(substeps):
             sk = s + sd * (k * hs)
-            k1 = f(x, sk)
-            k2 = f(x + hs / 2 * k1, sk + sd * (hs / 2))
-            k3 = f(x + hs / 2 * k2, sk + sd * (hs / 2))
-            k4 = f(x + hs * k3, sk + sd * hs)
+            cell_mid = self._gap_cell(sk + sd * (hs / 2), p)
+            cell_end = self._gap_cell(sk + sd * hs, p)
+            k1 = f(x, cell_start)
+            k2 = f(x + hs / 2 * k1, cell_mid)
+            k3 = f(x + hs / 2 * k2, cell_mid)
+            k4 = f(x + hs * k3, cell_end)
             x = x + hs / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
             lo = ca.fmin(lo, x)
             hi = ca.fmax(hi, x)
+            cell_start = cell_end
         se = s + sd * h
-        _, coil, force, _ = self._circuit_expressions(x, se, u, sd, p, table)
+        r_el, a = p[7], p[8]
+        coil = eq8_coil_current(x, u, r_el, a)
+        force = self._lookup(self._gap_cell(se, p), x, p, table, maps=(2,))[0]
         # range flags (p[9:13] = gap and current bounds incl. rounding allowances);
         # |v| <= DBL_MAX is false for NaN and inf (x - x would be simplified to 0)
         big = float(np.finfo(float).max)
@@ -471,10 +489,15 @@ class MagnetBank:
         vi, vs, vu, vsd = (ca.MX.sym(nm, n) for nm in ("I_L", "s", "U", "sdot"))
         vh = ca.MX.sym("h")
         res = mapped(vi.T, vs.T, vu.T, vsd.T, vh, ca.DM(self._par))
+        # member totals of the reduced circuits' forces (sparse 0/1 matrix)
+        rows = self._member_of[self._reduced_idx]
+        summ = ca.DM(ca.Sparsity.triplet(len(self._members), n, rows.tolist(), list(range(n))),
+                     1.0)
         return ca.Function(f"maglevkit_bank_step{substeps}", [vi, vs, vu, vsd, vh],
-                           [r.T for r in res[:5]] + [ca.sum2(res[5])],
+                           [r.T for r in res[:3]] + [ca.densify(ca.mtimes(summ, res[2].T)), ca.sum2(res[5])]
+                           + [res[3].T, res[4].T],
                            ["I_L", "s", "U", "sdot", "h"],
-                           ["I_L_next", "I", "F", "I_L_min", "I_L_max", "n_bad"])
+                           ["I_L_next", "I", "F", "member_F", "n_bad", "I_L_min", "I_L_max"])
 
     @property
     def ode_function(self) -> ca.Function:
@@ -497,14 +520,14 @@ class MagnetBank:
         return ca.Function("maglevkit_bank_outputs", [vi, vu, vs], [r.T for r in res],
                            ["I_L", "U", "s"], ["I", "F", "Ltilde"])
 
-    def _kernel(self, dt: float) -> Any:
+    def _kernel(self, dt: float) -> _StepCall:
         n = max(1, math.ceil(dt / self.max_step_s * (1 - 1e-12)))
         call = self._kernels.get(n)
         if call is None:
             f, is_compiled = compile_function(self._step_kernel(n), mode=self.compiled_mode,
                                               cache_dir=self._cache_dir)
             self.compiled = is_compiled
-            call = _BufferedCall(f)
+            call = _StepCall(f)
             self._kernels[n] = call
         return call
 
@@ -599,8 +622,9 @@ class MagnetBank:
             self._range_error(int(k), float(s), float(i), where)
 
     def _diagnose(self, s: np.ndarray, sd: np.ndarray, i0: np.ndarray, u: np.ndarray,
-                  x: np.ndarray, lo: np.ndarray, hi: np.ndarray, t0: float, t1: float) -> None:
+                  x: np.ndarray, call: _StepCall, t0: float, t1: float) -> None:
         """The kernel flagged a circuit: raise (or warn) with the details."""
+        lo, hi = call.res[5].copy(), call.res[6].copy()   # sub-step extremes of this call
         for what, arr, unit in (("voltages", u, "V"), ("gaps", s, "m"), ("gap_rates", sd, "m/s")):
             if not np.isfinite(arr).all():
                 k = int(np.argmax(~np.isfinite(arr)))
@@ -705,41 +729,45 @@ class MagnetBank:
             raise InputError(f"gaps must stay > 0 m over the step: {self.gap_names[j]!r} from "
                              f"{g[j]!r} m to {g1[j]!r} m")
         t0, t1 = state.time_s, state.time_s + dt
+        if self._fast:
+            # all reduced, one gap per circuit: one kernel call and two objects
+            call = self._kernel(dt)
+            x, coil, force, member_force, n_bad = call(state.inductor_currents_A, g, u, gd, dt)
+            if n_bad:
+                self._diagnose(g, gd, state.inductor_currents_A, u, x, call, t0, t1)
+            pf = self._share @ force if pole_forces else None
+            return (BankState(t1, x, g1),
+                    BankOutputs(t1, coil, x.copy(), force, member_force, pf))
         nc = self.n_circuits
         coil = np.empty(nc)
         force = np.empty(nc)
         i_next = np.full(nc, np.nan)
+        member_force = np.zeros(len(self._members))
         ri = self._reduced_idx
         if ri.size:
-            s, sd = self.circuit_gaps(g), self.circuit_gaps(gd)
-            if not self._all_reduced:
-                s, sd, ur, ir = s[ri], sd[ri], u[ri], state.inductor_currents_A[ri]
-            else:
-                ur, ir = u, state.inductor_currents_A
-            x, c, f, lo, hi, n_bad = self._kernel(dt)(ir, s, ur, sd, dt)
-            if n_bad[0]:
-                self._diagnose(s, sd, ir, ur, x, lo, hi, t0, t1)
-            if self._all_reduced:
-                i_next, coil, force = x, c, f
-            else:
-                i_next[ri], coil[ri], force[ri] = x, c, f
+            s, sd = self.circuit_gaps(g)[ri], self.circuit_gaps(gd)[ri]
+            ur, ir = u[ri], state.inductor_currents_A[ri]
+            call = self._kernel(dt)
+            x, c, f, member_force, n_bad = call(ir, s, ur, sd, dt)
+            if n_bad:
+                self._diagnose(s, sd, ir, ur, x, call, t0, t1)
+            i_next[ri], coil[ri], force[ri] = x, c, f
         states = list(state.member_states)
         pf_detailed: dict[int, np.ndarray] = {}
-        if not self._all_reduced:
-            pg, pgd = self.pole_gaps(g), self.pole_gaps(gd)
-            k = 0
-            for mi, (m, cs, ps) in enumerate(zip(self._members, self._circuit_slices,
-                                                 self._pole_slices, strict=True)):
-                if m.kind != "detailed":
-                    continue
-                assert m.model is not None
-                new, out = m.model.step(states[k], dt, u[cs], gaps=pg[ps], gap_rates=pgd[ps])
-                states[k] = new
-                coil[cs] = out.currents_A
-                force[cs] = _circuit_forces(out.pole_force_N, m)
-                pf_detailed[mi] = out.pole_force_N
-                k += 1
-        member_force = np.add.reduceat(force, self._member_starts)
+        pg, pgd = self.pole_gaps(g), self.pole_gaps(gd)
+        k = 0
+        for mi, (m, cs, ps) in enumerate(zip(self._members, self._circuit_slices,
+                                             self._pole_slices, strict=True)):
+            if m.kind != "detailed":
+                continue
+            assert m.model is not None
+            new, out = m.model.step(states[k], dt, u[cs], gaps=pg[ps], gap_rates=pgd[ps])
+            states[k] = new
+            coil[cs] = out.currents_A
+            force[cs] = _circuit_forces(out.pole_force_N, m)
+            member_force[mi] = out.force_N
+            pf_detailed[mi] = out.pole_force_N
+            k += 1
         pf = None
         if pole_forces:
             pf = self._share @ force
@@ -822,7 +850,8 @@ class MagnetBank:
         for mi, v in pf_detailed.items():
             pf[self._pole_slices[mi]] = v
         return BankOutputs(state.time_s, coil, state.inductor_currents_A.copy(), force,
-                           np.add.reduceat(force, self._member_starts), pf)
+                           np.bincount(self._member_of, weights=force,
+                                       minlength=len(self._members)), pf)
 
 
 def _circuit_forces(pole_force: np.ndarray, member: _Member) -> np.ndarray:
@@ -830,3 +859,34 @@ def _circuit_forces(pole_force: np.ndarray, member: _Member) -> np.ndarray:
     pi = {p: k for k, p in enumerate(member.poles)}
     return np.array([sum(pole_force[pi[p]] for p in member.pole_groups[c])
                      for c in member.circuits])
+
+
+class _StepCall:
+    """The compiled step through bound NumPy buffers (no per-call conversion).
+
+    Returns copies of the currents, coil currents, circuit and member forces, and the
+    flag count; the sub-step extremes stay in ``res[5]``, ``res[6]`` for a diagnosis.
+    """
+
+    def __init__(self, f: ca.Function) -> None:
+        buf: Any
+        buf, self.eval = f.buffer()
+        self.buf = buf
+        self.args = [np.zeros(f.nnz_in(i)) for i in range(f.n_in())]
+        self.res = [np.zeros(f.nnz_out(i)) for i in range(f.n_out())]
+        for i, a in enumerate(self.args):
+            buf.set_arg(i, memoryview(a))  # type: ignore[arg-type]
+        for i, r in enumerate(self.res):
+            buf.set_res(i, memoryview(r))  # type: ignore[arg-type]
+
+    def __call__(self, i: np.ndarray, s: np.ndarray, u: np.ndarray, sd: np.ndarray, h: float
+                 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, float]:
+        a = self.args
+        a[0][:] = i
+        a[1][:] = s
+        a[2][:] = u
+        a[3][:] = sd
+        a[4][0] = h
+        self.eval()
+        r = self.res
+        return r[0].copy(), r[1].copy(), r[2].copy(), r[3].copy(), float(r[4][0])
