@@ -334,6 +334,7 @@ class MagnetBank:
         self._spline_bounds = np.zeros((4, n))     # the same extended by EXTRA_CELLS cells
         tables: list[np.ndarray] = []
         known: dict[tuple, tuple[int, tuple[float, float, float, float], tuple[int, int]]] = {}
+        by_object: dict[tuple[int, str], list[np.ndarray]] = {}
         size = 0
         k = 0
         self._degree = 1 if self.interpolation == "bilinear" else 3
@@ -343,7 +344,9 @@ class MagnetBank:
             maps = m.maps
             gs, gi = _extend_axis(maps.gaps_m), _extend_axis(maps.currents_A)
             for j, c in enumerate(m.circuits):
-                values = [maps.variable(v, c) for v in _MAP_VARIABLES]
+                if (id(maps), c) not in by_object:       # xarray access is ~1 ms a map
+                    by_object[(id(maps), c)] = [maps.variable(v, c) for v in _MAP_VARIABLES]
+                values = by_object[(id(maps), c)]
                 # maps are stored once however many circuits use them
                 key = (maps.gaps_m.tobytes(), maps.currents_A.tobytes(),
                        *(v.tobytes() for v in values))
@@ -447,8 +450,12 @@ class MagnetBank:
         p = ca.MX.sym("p", _N_PAR)
         hs = h / substeps
 
+        r_el, a = p[7], p[8]
+
         def f(x: Any, cell: tuple[Any, Any]) -> Any:
-            return self._circuit_expressions(x, 0, u, sd, p, table, cell)[0]
+            # the stages need L~ and dL/ds only (the gather of F would be wasted)
+            lt, dl = self._lookup(cell, x, p, table, maps=(0, 1))
+            return eq8_rhs(x, u, sd, lt, dl, r_el, a)
 
         x: Any = i
         lo: Any = i
@@ -469,7 +476,6 @@ class MagnetBank:
             hi = ca.fmax(hi, x)
             cell_start = cell_end
         se = s + sd * h
-        r_el, a = p[7], p[8]
         coil = eq8_coil_current(x, u, r_el, a)
         force = self._lookup(self._gap_cell(se, p), x, p, table, maps=(2,))[0]
         # range flags (p[9:13] = gap and current bounds incl. rounding allowances);
