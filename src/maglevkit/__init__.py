@@ -18,14 +18,24 @@ from .circuit import (
 from .errors import (
     InputError,
     MaglevkitError,
+    MaglevkitWarning,
     MaterialError,
     OutOfRangeError,
     ParameterError,
     ParameterFileError,
+    PlausibilityWarning,
+    ProvenanceWarning,
     SolverError,
     TopologyError,
 )
-from .magnets import Magnet, ModelOptions, build_magnet, bundled_magnets, load_magnet
+from .magnets import (
+    Magnet,
+    ModelOptions,
+    PlausibleRange,
+    build_magnet,
+    bundled_magnets,
+    load_magnet,
+)
 from .materials import (
     MU0,
     ConstantPermeability,
@@ -84,6 +94,7 @@ __all__ = [
     "LeakagePermeance",
     "MU0",
     "MaglevkitError",
+    "MaglevkitWarning",
     "Magnet",
     "MagnetBank",
     "Material",
@@ -93,6 +104,9 @@ __all__ = [
     "OutOfRangeError",
     "ParameterError",
     "ParameterFileError",
+    "PlausibilityWarning",
+    "PlausibleRange",
+    "ProvenanceWarning",
     "Scenario",
     "SimulationResult",
     "SoftMagneticMaterial",

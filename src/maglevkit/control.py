@@ -33,7 +33,9 @@ from typing import Any
 import numpy as np
 
 from .errors import InputError, ParameterError
+from .models.inputs import check_span
 from .models.statics import solve_statics
+from .validation import real_number
 from .vehicle import HeaveMass, HeaveState
 
 __all__ = ["GapController", "ClosedLoopResult", "design_gap_controller", "closed_loop"]
@@ -76,11 +78,9 @@ class GapController:
     setpoint_weight: float = 0.0
 
     def __post_init__(self) -> None:
-        for k in ("gap_ref_m", "kp_per_m", "kd_s_per_m", "ki_per_m_s", "kflux_per_s",
-                  "voltage_limit_V"):
-            v = getattr(self, k)
-            if not math.isfinite(v):
-                raise ParameterError(f"{k} = {v!r} must be finite")
+        for k in ("gap_ref_m", "bias_current_A", "kp_per_m", "kd_s_per_m", "ki_per_m_s",
+                  "kflux_per_s", "voltage_limit_V", "setpoint_weight"):
+            real_number(getattr(self, k), k, error=ParameterError)
         if self.gap_ref_m <= 0 or self.voltage_limit_V <= 0 or self.kflux_per_s <= 0:
             raise ParameterError("gap_ref_m, voltage_limit_V and kflux_per_s must be > 0")
         if len(self.flux_bias_Wb) != len(self.resistances_ohm):
@@ -108,9 +108,9 @@ def design_gap_controller(magnet: Any, *, mass_kg: float, gap_m: float, current_
     """Place the gains from the linearised magnet at ``(gap_m, current_A)`` (all gaps equal,
     every circuit at the same current; exact statics sensitivities)."""
     for name, v in (("mass_kg", mass_kg), ("bandwidth_hz", bandwidth_hz),
-                    ("flux_bandwidth_hz", flux_bandwidth_hz), ("damping", damping)):
-        if not (math.isfinite(v) and v > 0):
-            raise InputError(f"{name} = {v!r} must be a finite number > 0")
+                    ("flux_bandwidth_hz", flux_bandwidth_hz), ("damping", damping),
+                    ("voltage_limit_V", voltage_limit_V)):
+        real_number(v, name, positive=True)
     sol = solve_statics(magnet, gaps=gap_m, currents=current_A)
     dF_dI = sol.dforce_dcurrent_N_per_A.sum(axis=0)            # (n_c,) total force per I_j
     dF_ds = float(sol.dforce_dgap_N_per_m.sum())               # uniform gap, constant I
@@ -173,11 +173,18 @@ def closed_loop(model: Any, vehicle: HeaveMass, controller: GapController, *, du
     The flux estimate starts at ``initial_flux_Wb`` [Wb] (default: the controller's bias
     flux, valid when the run starts at the controller's design point).
     """
-    if not (math.isfinite(duration_s) and duration_s > 0 and math.isfinite(dt_s) and dt_s > 0):
-        raise InputError("duration_s and dt_s must be finite numbers > 0")
+    duration_s = real_number(duration_s, "duration_s", "s", positive=True)
+    dt_s = real_number(dt_s, "dt_s", "s", positive=True)
+    real_number(initial_gap_m, "initial_gap_m", "m", positive=True)
+    real_number(initial_current_A, "initial_current_A", "A")
+    check_span(0.0, duration_s, dt_s)     # the rule of simulate and scenario files
     n = int(round(duration_s / dt_s))
-    if n < 1:
-        raise InputError("duration_s must be at least one step dt_s")
+    # the loop runs whole steps: a duration between two step counts would silently be
+    # rounded (0.5 s at dt 0.3 s ran 0.6 s); allowance 1e-6 steps for decimal rounding
+    if abs(n * dt_s - duration_s) > 1e-6 * dt_s:
+        raise InputError(f"duration_s = {duration_s:g} s is not a whole number of steps "
+                         f"dt_s = {dt_s:g} s ({duration_s / dt_s:.6g}); use e.g. duration_s = "
+                         f"{n * dt_s:g} s")
     ref = gap_reference or (lambda t: controller.gap_ref_m)
     ext = external_force or (lambda t: 0.0)
     st = model.initial_state(gaps=initial_gap_m, currents=initial_current_A)

@@ -1,8 +1,9 @@
-"""Exceptions raised by maglevkit.
+"""Exceptions and warnings raised by maglevkit.
 
 Every error says what is wrong and what is allowed.  All derive from
 :class:`MaglevkitError`; the input-validation ones also derive from
-:class:`ValueError` so that generic callers can catch them as such.
+:class:`ValueError` so that generic callers can catch them as such.  Warnings derive
+from :class:`MaglevkitWarning` (a :class:`UserWarning`).
 """
 
 from __future__ import annotations
@@ -39,6 +40,24 @@ class OutOfRangeError(InputError):
 
 class ParameterFileError(MaglevkitError, ValueError):
     """A parameter or scenario file is malformed (syntax, unknown or missing keys)."""
+
+
+class MaglevkitWarning(UserWarning):
+    """Base class of all maglevkit warnings."""
+
+
+class PlausibilityWarning(MaglevkitWarning):
+    """An input lies far outside the magnet's physical range (likely a unit mistake).
+
+    Examples: a gap larger than the magnet's pole (``10`` typed for 10 mm into a metre
+    option), or a current whose density in the winding no coil carries.  The
+    computation still runs; silence it with ``warnings.filterwarnings("ignore",
+    category=maglevkit.PlausibilityWarning)`` when such values are intended.
+    """
+
+
+class ProvenanceWarning(MaglevkitWarning):
+    """A parameter file lacks provenance tags (``[provenance]`` table or entries)."""
 
 
 class SolverError(MaglevkitError, RuntimeError):

@@ -6,10 +6,10 @@ and an external force (the magnet's share of a vehicle, for gap-control studies)
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 
-from .errors import InputError, ParameterError
+from .errors import ParameterError
+from .validation import real_number
 
 __all__ = ["HeaveMass", "HeaveState", "STANDARD_GRAVITY"]
 
@@ -44,10 +44,8 @@ class HeaveMass:
     gravity: float = STANDARD_GRAVITY
 
     def __post_init__(self) -> None:
-        if not (math.isfinite(self.mass_kg) and self.mass_kg > 0):
-            raise ParameterError(f"mass_kg = {self.mass_kg!r} must be a finite number > 0")
-        if not (math.isfinite(self.gravity) and self.gravity >= 0):
-            raise ParameterError(f"gravity = {self.gravity!r} m/s^2 must be finite and >= 0")
+        real_number(self.mass_kg, "mass_kg", "kg", positive=True, error=ParameterError)
+        real_number(self.gravity, "gravity", "m/s^2", nonnegative=True, error=ParameterError)
 
     def acceleration(self, magnet_force_N: float, external_force_N: float = 0.0) -> float:
         """Gap acceleration [m/s^2]."""
@@ -56,10 +54,9 @@ class HeaveMass:
     def step(self, state: HeaveState, dt: float, magnet_force_N: float,
              external_force_N: float = 0.0) -> HeaveState:
         """Advance by ``dt`` [s] with forces held constant (exact for constant acceleration)."""
-        if not (math.isfinite(dt) and dt > 0):
-            raise InputError(f"dt = {dt!r} s must be a finite number > 0")
-        if not (math.isfinite(magnet_force_N) and math.isfinite(external_force_N)):
-            raise InputError("forces must be finite")
+        real_number(dt, "dt", "s", positive=True)
+        real_number(magnet_force_N, "magnet_force_N", "N")
+        real_number(external_force_N, "external_force_N", "N")
         a = self.acceleration(magnet_force_N, external_force_N)
         return HeaveState(state.gap_m + state.gap_rate_m_per_s * dt + 0.5 * a * dt * dt,
                           state.gap_rate_m_per_s + a * dt)

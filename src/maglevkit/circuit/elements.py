@@ -25,8 +25,9 @@ from typing import Any
 import casadi as ca
 import numpy as np
 
-from ..errors import ParameterError
+from ..errors import InputError, ParameterError
 from ..materials import MU0, Material, get_material
+from ..validation import real_array
 
 __all__ = [
     "Element",
@@ -70,7 +71,23 @@ def carter_coefficient(gap: Any, slot_pitch: float, slot_opening: float) -> Any:
     ``gamma = (4/pi) [x atan(x) - ln sqrt(1 + x^2)]`` with ``x = b / (2 s)``
     (slot pitch ``tau``, slot opening ``b``, gap ``s``; all in m).  Works on NumPy and
     CasADi inputs.
+
+    Raises
+    ------
+    ParameterError
+        ``slot_pitch`` not a number > 0, ``slot_opening`` not in ``[0, slot_pitch)``.
+    InputError
+        A numeric ``gap`` that is not real numbers > 0 (bools and strings included).
     """
+    _positive("carter_coefficient", slot_pitch=slot_pitch)
+    _nonnegative("carter_coefficient", slot_opening=slot_opening)
+    if slot_opening >= slot_pitch:
+        raise ParameterError(f"carter_coefficient: slot_opening = {slot_opening!r} m must be "
+                             f"smaller than slot_pitch = {slot_pitch!r} m")
+    if not isinstance(gap, (ca.SX, ca.MX, ca.DM)):
+        gap = real_array(gap, "gap", "m")
+        if np.any(gap <= 0.0):
+            raise InputError(f"carter_coefficient: gap = {gap.tolist()!r} m must be > 0")
     x = slot_opening / (2.0 * gap)
     gamma = (4.0 / math.pi) * (x * _atan(x) - 0.5 * _log(1.0 + x * x))
     return slot_pitch / (slot_pitch - gamma * gap)

@@ -87,10 +87,10 @@ class Coil:
         if self.pole is not None and (not isinstance(self.pole, str) or not self.pole):
             raise ParameterError(f"coil on branch {self.branch!r}: pole must be a non-empty "
                                  "name or None")
-        if not (isinstance(self.turns, (int, float)) and math.isfinite(self.turns)
-                and self.turns > 0):
+        if not (isinstance(self.turns, (int, float)) and not isinstance(self.turns, bool)
+                and math.isfinite(self.turns) and self.turns > 0):
             raise ParameterError(f"coil on branch {self.branch!r}: turns = {self.turns!r} must be > 0")
-        if self.polarity not in (1, -1):
+        if isinstance(self.polarity, bool) or self.polarity not in (1, -1):
             raise ParameterError(f"coil on branch {self.branch!r}: polarity must be +1 or -1")
 
 
@@ -116,8 +116,9 @@ class Circuit:
         object.__setattr__(self, "coils", tuple(self.coils))
         if not isinstance(self.name, str) or not self.name:
             raise TopologyError("a circuit needs a non-empty name")
-        if not (isinstance(self.resistance, (int, float)) and math.isfinite(self.resistance)
-                and self.resistance > 0):
+        if not (isinstance(self.resistance, (int, float))
+                and not isinstance(self.resistance, bool)
+                and math.isfinite(self.resistance) and self.resistance > 0):
             raise ParameterError(f"circuit {self.name!r}: resistance = {self.resistance!r} ohm "
                                  "must be a finite number > 0")
         if not self.coils:
@@ -145,8 +146,16 @@ class Network:
     _cache: dict = field(default_factory=dict, init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
-        object.__setattr__(self, "branches", tuple(self.branches))
-        object.__setattr__(self, "circuits", tuple(self.circuits))
+        for key, cls in (("branches", Branch), ("circuits", Circuit)):
+            items = getattr(self, key)
+            if isinstance(items, (str, bytes, cls)) or not hasattr(items, "__iter__"):
+                raise TopologyError(f"network {key} must be a sequence of {cls.__name__} "
+                                    f"objects, got {type(items).__name__}")
+            items = tuple(items)
+            for item in items:
+                if not isinstance(item, cls):
+                    raise TopologyError(f"network {key}: {item!r} is not a {cls.__name__}")
+            object.__setattr__(self, key, items)
         if not self.branches:
             raise TopologyError("the network has no branches")
         if not self.circuits:

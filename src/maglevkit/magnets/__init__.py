@@ -3,7 +3,15 @@
 from . import guidance as _guidance  # noqa: F401  (registers the "guidance_magnet" kind)
 from . import levitation as _levitation  # noqa: F401  (registers the "levitation_magnet" kind)
 from . import u_magnet as _u_magnet  # noqa: F401  (registers the "u_magnet" kind)
-from .base import Magnet, ModelOptions, build_magnet, bundled_magnets, load_magnet
+from .base import (
+    MAX_CURRENT_DENSITY_A_PER_M2,
+    Magnet,
+    ModelOptions,
+    PlausibleRange,
+    build_magnet,
+    bundled_magnets,
+    load_magnet,
+)
 from .characteristics import (
     KNEE_EXPONENT,
     Coupling,
@@ -15,8 +23,10 @@ from .characteristics import (
 from .levitation import pole_gap_names
 
 __all__ = [
+    "MAX_CURRENT_DENSITY_A_PER_M2",
     "Magnet",
     "ModelOptions",
+    "PlausibleRange",
     "build_magnet",
     "bundled_magnets",
     "load_magnet",

@@ -1,11 +1,14 @@
 """Magnets: parametric topologies built from TOML parameter files.
 
 A parameter file has a ``[magnet]`` table whose ``kind`` selects the builder, the
-builder's own tables, optional ``[materials.NAME]`` tabulated B-H curves, and an
-optional ``[provenance]`` table that tags values (``"magnet.turns" = "[E] estimate"``),
-and an optional ``[operating]`` table with the nominal operating point
-(``nominal_gap`` [m], ``nominal_current`` [A]) that figures and maps normalise by.
-All values are SI (m, ohm, A, ...).  Unknown and missing keys are errors.
+builder's own tables, optional ``[materials.NAME]`` tabulated B-H curves, a
+``[provenance]`` table that tags every value (``"magnet.turns" = "[E] estimate"``; tags
+start with ``[P]``, ``[R]`` or ``[E]``), and an optional ``[operating]`` table with the
+nominal operating point (``nominal_gap`` [m], ``nominal_current`` [A]) that figures and
+maps normalise by.  All values are SI (m, ohm, A, ...).  Unknown and missing keys,
+wrong types, negative or fractional counts (turns included) are errors; a missing
+``[provenance]`` table, values without a tag and malformed tags are a
+:class:`~maglevkit.errors.ProvenanceWarning`.
 """
 
 from __future__ import annotations
@@ -13,16 +16,28 @@ from __future__ import annotations
 import hashlib
 import json
 import math
+import os
 import sys
+import warnings
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from importlib import resources
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+
 from ..circuit.network import Network
-from ..errors import MaterialError, ParameterError, ParameterFileError
+from ..errors import (
+    InputError,
+    MaterialError,
+    ParameterError,
+    ParameterFileError,
+    PlausibilityWarning,
+    ProvenanceWarning,
+)
 from ..materials import Material, TabulatedBH, get_material, normalise_name
+from ..validation import flag
 
 if sys.version_info >= (3, 11):
     import tomllib
@@ -30,8 +45,11 @@ else:  # pragma: no cover
     import tomli as tomllib
 
 __all__ = [
+    "MAX_CURRENT_DENSITY_A_PER_M2",
+    "OPTION_NAMES",
     "Magnet",
     "ModelOptions",
+    "PlausibleRange",
     "load_magnet",
     "build_magnet",
     "bundled_magnets",
@@ -56,12 +74,97 @@ class ModelOptions:
         Leakage permeances.
     eddy_currents : bool
         Eddy-current elements (used by the dynamic model).
+
+    Raises
+    ------
+    InputError
+        A switch that is not True or False (``"no"`` would be truthy).
     """
 
     saturation: bool = True
     fringing: bool = True
     leakage: bool = True
     eddy_currents: bool = True
+
+    def __post_init__(self) -> None:
+        # "no" or 0 would be truthy/falsy by accident: every switch must be a real bool
+        for name in OPTION_NAMES:
+            object.__setattr__(self, name, flag(getattr(self, name), name))
+
+
+#: The physics switches of :class:`ModelOptions` (keyword names of ``load_magnet`` and
+#: ``Magnet.with_options``).
+OPTION_NAMES = ("saturation", "fringing", "leakage", "eddy_currents")
+
+#: Winding current density [A/m^2], averaged over the coil's cross-section, above which a
+#: current is reported as implausible (:class:`PlausibleRange`): at 100 A/mm^2 even a
+#: winding that were solid copper heats adiabatically at ~50 K/s (rho J^2 / c_v with
+#: rho = 1.7e-8 ohm m, c_v = 3.45e6 J/(m^3 K)), at a fill factor of 0.6 at ~140 K/s
+#: (aluminium ~320 K/s): no coil carries it for more than a second.  Continuous ratings
+#: are 2-10 A/mm^2 (up to ~30 water-cooled); the bundled U-magnet example reaches
+#: 32 A/mm^2 at 80 A, the top of its documented grids.
+MAX_CURRENT_DENSITY_A_PER_M2 = 100e6
+
+
+@dataclass(frozen=True)
+class PlausibleRange:
+    """Bounds beyond which an input lies far outside a magnet's physical range.
+
+    Inputs beyond them are computed anyway but raise a :class:`PlausibilityWarning`:
+    they are almost always a unit mistake (a gap of ``10`` meant as 10 mm, a current
+    in mA) or a typo.
+
+    Attributes
+    ----------
+    max_gap_m : float
+        Largest plausible gap [m]: the smallest pole-face dimension (a gap as wide as
+        the pole leaves the equivalent circuit's air-gap tubes, made for ``s << w``,
+        far outside their range).
+    max_current_A : float
+        Largest plausible circuit current magnitude [A]: the current at which the
+        winding carries :data:`MAX_CURRENT_DENSITY_A_PER_M2` over its cross-section.
+    gap_basis, current_basis : str
+        Where the bounds come from (for the warning text).
+    """
+
+    max_gap_m: float
+    max_current_A: float
+    gap_basis: str
+    current_basis: str
+
+    @classmethod
+    def from_geometry(cls, *, gap_m: float, gap_basis: str, turns: float,
+                      winding_area_m2: float, winding: str) -> PlausibleRange:
+        """Bounds from a pole dimension and one coil (``turns`` on ``winding_area_m2``)."""
+        current = MAX_CURRENT_DENSITY_A_PER_M2 * winding_area_m2 / turns
+        basis = (f"{MAX_CURRENT_DENSITY_A_PER_M2 / 1e6:g} A/mm^2 in {winding} "
+                 f"({winding_area_m2 * 1e6:.4g} mm^2, {turns:g} turns)")
+        return cls(float(gap_m), float(current), gap_basis, basis)
+
+    def check(self, *, gaps: Any = None, currents: Any = None, where: str = "",
+              stacklevel: int = 3) -> None:
+        """Warn (:class:`PlausibilityWarning`) if gaps [m] or currents [A] exceed the bounds.
+
+        ``gaps`` and ``currents`` are numbers or arrays of any shape (NaN ignored).
+        """
+        prefix = f"{where}: " if where else ""
+        if gaps is not None:
+            g = np.asarray(gaps, dtype=float)
+            worst = float(np.nanmax(g)) if g.size and not np.all(np.isnan(g)) else 0.0
+            if worst > self.max_gap_m:
+                warnings.warn(
+                    f"{prefix}gap {worst:.6g} m is larger than {self.gap_basis} "
+                    f"({self.max_gap_m:.6g} m), far outside this magnet's range (gaps are in "
+                    "metres: 10 mm is 0.01)", PlausibilityWarning, stacklevel=stacklevel)
+        if currents is not None:
+            c = np.abs(np.asarray(currents, dtype=float))
+            worst = float(np.nanmax(c)) if c.size and not np.all(np.isnan(c)) else 0.0
+            # rounding allowance 1e-9: the bound itself is a product of file values
+            if worst > self.max_current_A * (1.0 + 1e-9):
+                warnings.warn(
+                    f"{prefix}current {worst:.6g} A exceeds {self.max_current_A:.4g} A, "
+                    f"i.e. {self.current_basis}; no coil carries this (currents are in "
+                    "amperes)", PlausibilityWarning, stacklevel=stacklevel)
 
 
 @dataclass(frozen=True)
@@ -84,6 +187,9 @@ class Magnet:
         The physics switches used.
     source : str
         File path or bundled name it came from.
+    plausible_range : PlausibleRange or None
+        Gaps and currents beyond which inputs raise a :class:`PlausibilityWarning`
+        (from the magnet's geometry; None for kinds without such bounds).
     """
 
     name: str
@@ -93,6 +199,7 @@ class Magnet:
     provenance: Mapping[str, str] = field(default_factory=dict)
     options: ModelOptions = field(default_factory=ModelOptions)
     source: str = ""
+    plausible_range: PlausibleRange | None = None
 
     @property
     def gap_names(self) -> tuple[str, ...]:
@@ -122,18 +229,41 @@ class Magnet:
         return hashlib.sha256(blob.encode()).hexdigest()
 
     def with_options(self, **changes: bool) -> Magnet:
-        """Rebuild this magnet with some physics switches changed."""
+        """Rebuild this magnet with some physics switches changed.
+
+        Parameters
+        ----------
+        **changes : bool
+            Any of ``saturation``, ``fringing``, ``leakage``, ``eddy_currents``.
+
+        Raises
+        ------
+        InputError
+            An unknown switch name or a value that is not True/False.
+        """
+        unknown = sorted(set(changes) - set(OPTION_NAMES))
+        if unknown:
+            raise InputError(f"with_options: unknown switch(es) {unknown}; the physics "
+                             f"switches are {', '.join(OPTION_NAMES)} (True or False)")
         opts = {**self.options.__dict__, **changes}
-        return build_magnet(self.parameters, options=ModelOptions(**opts), source=self.source,
-                            provenance=self.provenance)
+        return _build(self.parameters, options=ModelOptions(**opts), source=self.source,
+                      provenance=self.provenance, check_provenance=False)
 
 
 # ----------------------------------------------------------------- schema helpers
+_CHECKS = ("positive", "nonnegative", "any")
+_KINDS = (float, int, bool, str, list)
+
+
 @dataclass(frozen=True)
 class Schema:
     """One key of a parameter table: type, whether required, unit and a check.
 
-    ``check`` is one of ``"positive"``, ``"nonnegative"``, ``"any"``.
+    ``kind`` is ``float``, ``int``, ``bool``, ``str`` or ``list``.  ``check`` is one of
+    ``"positive"``, ``"nonnegative"``, ``"any"`` and applies to ``float`` and ``int``
+    values alike.  ``whole=True`` (for ``float``) requires a whole number (e.g. turns)
+    and still returns a float; an ``int`` key accepts a float only if it is whole
+    (``poles = 12.0``) and returns an int.
     """
 
     kind: type
@@ -141,6 +271,33 @@ class Schema:
     unit: str = ""
     check: str = "positive"
     default: Any = None
+    whole: bool = False
+
+    def __post_init__(self) -> None:
+        if self.kind not in _KINDS:
+            raise TypeError(f"Schema kind {self.kind!r} is not one of {_KINDS}")
+        if self.check not in _CHECKS:
+            raise TypeError(f"Schema check {self.check!r} is not one of {_CHECKS}")
+
+
+def _number(v: Any, sc: Schema, key: str, where: str) -> float | int:
+    """A numeric value of a parameter table, checked against its schema."""
+    unit = f" {sc.unit}" if sc.unit and sc.unit != "-" else ""
+    whole = sc.kind is int or sc.whole
+    if isinstance(v, bool) or not isinstance(v, (int, float)):
+        expected = ("a whole number" if sc.kind is int
+                    else "a number (a whole count)" if whole else f"a number [{sc.unit}]")
+        raise ParameterFileError(f"[{where}] {key} = {v!r}: expected {expected}")
+    if not math.isfinite(v):
+        raise ParameterFileError(f"[{where}] {key} = {v!r}: must be finite")
+    if whole and not float(v).is_integer():
+        raise ParameterFileError(f"[{where}] {key} = {v!r}{unit}: must be a whole number "
+                                 "(a count)")
+    if sc.check == "positive" and v <= 0:
+        raise ParameterFileError(f"[{where}] {key} = {v!r}{unit}: must be > 0")
+    if sc.check == "nonnegative" and v < 0:
+        raise ParameterFileError(f"[{where}] {key} = {v!r}{unit}: must be >= 0")
+    return int(v) if sc.kind is int else float(v)
 
 
 def take(table: Any, schema: Mapping[str, Schema], where: str) -> dict[str, Any]:
@@ -161,21 +318,8 @@ def take(table: Any, schema: Mapping[str, Schema], where: str) -> dict[str, Any]
             out[key] = sc.default
             continue
         v = table[key]
-        if sc.kind is float:
-            if isinstance(v, bool) or not isinstance(v, (int, float)):
-                raise ParameterFileError(f"[{where}] {key} = {v!r}: expected a number [{sc.unit}]")
-            v = float(v)
-            if not math.isfinite(v):
-                raise ParameterFileError(f"[{where}] {key} = {v!r}: must be finite")
-            if sc.check == "positive" and v <= 0.0:
-                raise ParameterFileError(f"[{where}] {key} = {v!r} {sc.unit}: must be > 0")
-            if sc.check == "nonnegative" and v < 0.0:
-                raise ParameterFileError(f"[{where}] {key} = {v!r} {sc.unit}: must be >= 0")
-        elif sc.kind is int:
-            if isinstance(v, bool) or not isinstance(v, int):
-                raise ParameterFileError(f"[{where}] {key} = {v!r}: expected a whole number")
-            if sc.check == "positive" and v <= 0:
-                raise ParameterFileError(f"[{where}] {key} = {v!r}: must be > 0")
+        if sc.kind is float or sc.kind is int:
+            v = _number(v, sc, key, where)
         elif sc.kind is bool:
             if not isinstance(v, bool):
                 raise ParameterFileError(f"[{where}] {key} = {v!r}: expected true or false")
@@ -228,17 +372,48 @@ def _parse_materials(raw: Any) -> dict[str, Material]:
 
 # ----------------------------------------------------------------- registry and loading
 Builder = Callable[[Mapping[str, Any], Mapping[str, Material], ModelOptions], tuple[str, Network]]
+RangeFunction = Callable[[Mapping[str, Any]], PlausibleRange]
 _BUILDERS: dict[str, tuple[Builder, tuple[str, ...]]] = {}
+_RANGES: dict[str, RangeFunction] = {}
+
+#: Provenance tags a ``[provenance]`` entry must start with (README, "Parameter files").
+PROVENANCE_TAGS = ("[P]", "[R]", "[E]")
 
 
-def register_kind(kind: str, builder: Builder, tables: tuple[str, ...]) -> None:
-    """Register a builder for ``[magnet] kind = KIND``; ``tables`` are its allowed top-level tables."""
+def register_kind(kind: str, builder: Builder, tables: tuple[str, ...],
+                  plausible_range: RangeFunction | None = None) -> None:
+    """Register a builder for ``[magnet] kind = KIND``; ``tables`` are its allowed top-level
+    tables; ``plausible_range`` maps the (validated) parameters to the magnet's
+    :class:`PlausibleRange`."""
     _BUILDERS[kind] = (builder, tables)
+    if plausible_range is not None:
+        _RANGES[kind] = plausible_range
 
 
 def build_magnet(parameters: Mapping[str, Any], *, options: ModelOptions | None = None,
                  source: str = "", provenance: Mapping[str, str] | None = None) -> Magnet:
-    """Build a :class:`Magnet` from a parsed parameter dictionary."""
+    """Build a :class:`Magnet` from a parsed parameter dictionary.
+
+    Raises
+    ------
+    ParameterFileError
+        Unknown, missing or invalid tables and values.
+
+    Warns
+    -----
+    ProvenanceWarning
+        No ``[provenance]`` table, values without an entry in it (listed by name), or
+        entries whose tag does not start with ``[P]``, ``[R]`` or ``[E]``.
+    """
+    return _build(parameters, options=options, source=source, provenance=provenance,
+                  check_provenance=True)
+
+
+def _build(parameters: Mapping[str, Any], *, options: ModelOptions | None, source: str,
+           provenance: Mapping[str, str] | None, check_provenance: bool) -> Magnet:
+    if options is not None and not isinstance(options, ModelOptions):
+        raise InputError(f"options = {options!r}: expected a ModelOptions (e.g. "
+                         "ModelOptions(saturation=False)) or None")
     options = options or ModelOptions()
     if not isinstance(parameters, Mapping) or "magnet" not in parameters:
         raise ParameterFileError(f"{source or 'parameters'}: missing the [magnet] table")
@@ -247,7 +422,7 @@ def build_magnet(parameters: Mapping[str, Any], *, options: ModelOptions | None 
         raise ParameterFileError(f"{source or 'parameters'}: [magnet] needs a 'kind' key; "
                                  f"known kinds: {', '.join(sorted(_BUILDERS))}")
     kind = mag["kind"]
-    if kind not in _BUILDERS:
+    if not isinstance(kind, str) or kind not in _BUILDERS:
         raise ParameterFileError(f"[magnet] kind = {kind!r} is unknown; known kinds: "
                                  f"{', '.join(sorted(_BUILDERS))}")
     builder, tables = _BUILDERS[kind]
@@ -274,12 +449,47 @@ def build_magnet(parameters: Mapping[str, Any], *, options: ModelOptions | None 
         if table not in parameters or not isinstance(parameters[table], Mapping) \
                 or sub not in parameters[table]:
             raise ParameterFileError(f"[provenance] {key!r} names no value of this file")
-        prov[str(key)] = str(tag)
+        if not isinstance(tag, str):
+            raise ParameterFileError(f"[provenance] {key!r} = {tag!r}: expected a string "
+                                     f"starting with one of {', '.join(PROVENANCE_TAGS)}")
+        prov[str(key)] = tag
+    if check_provenance:
+        _warn_provenance(parameters, raw_prov, source)
     # The physics switches hold for every kind, whether or not its builder reads them.
     network = network.with_options(saturation=options.saturation,
                                    eddy_currents=options.eddy_currents)
+    ranges = _RANGES.get(kind)
     return Magnet(name=name, kind=kind, network=network, parameters=_plain(parameters),
-                  provenance=prov, options=options, source=source)
+                  provenance=prov, options=options, source=source,
+                  plausible_range=None if ranges is None else ranges(parameters))
+
+
+def _warn_provenance(parameters: Mapping[str, Any], raw_prov: Mapping[str, Any],
+                     source: str) -> None:
+    """ProvenanceWarning for values without a provenance entry and for malformed tags.
+
+    Every value of every table needs an entry ``"table.key"`` (a ``[materials.NAME]``
+    table: ``"materials.NAME"``), except the identity keys ``magnet.kind`` and
+    ``magnet.name``.
+    """
+    label = source or "parameters"
+    needed = [f"{table}.{key}" for table, values in parameters.items()
+              if table != "provenance" and isinstance(values, Mapping) for key in values
+              if not (table == "magnet" and key in ("kind", "name"))]
+    missing = [k for k in needed if k not in raw_prov]
+    if "provenance" not in parameters:
+        warnings.warn(f"{label}: no [provenance] table; every value should carry a tag "
+                      f"({', '.join(PROVENANCE_TAGS)}: published, widely quoted, estimate), "
+                      f"e.g. \"{needed[0] if needed else 'magnet.turns'}\" = \"[E] estimate\"",
+                      ProvenanceWarning, stacklevel=4)
+    elif missing:
+        warnings.warn(f"{label}: [provenance] has no entry for {', '.join(missing)}; every "
+                      f"value should carry a tag ({', '.join(PROVENANCE_TAGS)})",
+                      ProvenanceWarning, stacklevel=4)
+    bad = [k for k, tag in raw_prov.items() if not str(tag).startswith(PROVENANCE_TAGS)]
+    if bad:
+        warnings.warn(f"{label}: [provenance] tag(s) of {', '.join(map(str, bad))} do not start "
+                      f"with {', '.join(PROVENANCE_TAGS)}", ProvenanceWarning, stacklevel=4)
 
 
 def _plain(obj: Any) -> Any:
@@ -300,13 +510,30 @@ def load_magnet(source: str | Path, *, saturation: bool = True, fringing: bool =
                 leakage: bool = True, eddy_currents: bool = True) -> Magnet:
     """Load a magnet from a TOML file path or a bundled name (e.g. ``"u-magnet"``).
 
+    Parameters
+    ----------
+    source : str or path
+        A bundled name (:func:`bundled_magnets`) or a ``.toml`` file.
+    saturation, fringing, leakage, eddy_currents : bool
+        Physics switches (:class:`ModelOptions`); True or False only.
+
     Raises
     ------
     ParameterFileError
         Missing file, TOML syntax error, unknown/missing keys or invalid values.
+    InputError
+        ``source`` is not a name or path, or a switch is not True/False.
+
+    Warns
+    -----
+    ProvenanceWarning
+        The file lacks provenance entries (see :func:`build_magnet`).
     """
     options = ModelOptions(saturation=saturation, fringing=fringing, leakage=leakage,
                            eddy_currents=eddy_currents)
+    if not isinstance(source, (str, os.PathLike)) or not str(source):
+        raise InputError(f"load_magnet: source = {source!r}: expected a bundled magnet name "
+                         f"({', '.join(bundled_magnets())}) or the path of a .toml file")
     path = Path(source)
     if path.suffix != ".toml" and not path.exists():
         names = bundled_magnets()

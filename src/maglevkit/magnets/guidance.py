@@ -27,7 +27,14 @@ from ..circuit.elements import AirGap, EddyCurrent, Element, IronPath, LeakagePe
 from ..circuit.network import Branch, Circuit, Coil, Network
 from ..errors import ParameterFileError
 from ..materials import MU0, Material
-from .base import ModelOptions, Schema, register_kind, resolve_material, take
+from .base import (
+    ModelOptions,
+    PlausibleRange,
+    Schema,
+    register_kind,
+    resolve_material,
+    take,
+)
 from .levitation import _resistivity
 
 __all__ = ["build_guidance_magnet"]
@@ -45,7 +52,7 @@ MAGNET_SCHEMA = {
     "yoke_width": Schema(float, unit="m"),
     "yoke_thickness": Schema(float, unit="m"),
     "coil_height": Schema(float, unit="m"),
-    "turns_per_yoke": Schema(float, unit="-"),
+    "turns_per_yoke": Schema(float, unit="-", whole=True),
     "resistance_per_yoke": Schema(float, unit="ohm"),
     "material": Schema(str),
     "resistivity": Schema(float, required=False, unit="ohm m"),
@@ -159,4 +166,20 @@ def build_guidance_magnet(params: Mapping[str, Any], materials: Mapping[str, Mat
     return m["name"], Network(tuple(branches), tuple(circuits), name=m["name"])
 
 
-register_kind("guidance_magnet", build_guidance_magnet, ("circuits", "rail"))
+def guidance_magnet_range(params: Mapping[str, Any]) -> PlausibleRange:
+    """Plausible inputs: gaps up to the pole-bar height, currents up to
+    :data:`~maglevkit.magnets.base.MAX_CURRENT_DENSITY_A_PER_M2` in one yoke's coil.
+
+    The file gives no coil build; it cannot exceed the leg length between yoke and pole
+    bar, so ``coil_height x leg_length`` bounds the coil's cross-section from above
+    (and the current bound is generous)."""
+    m = params["magnet"]
+    return PlausibleRange.from_geometry(
+        gap_m=float(m["pole_bar_height"]), gap_basis="the pole-bar height",
+        turns=float(m["turns_per_yoke"]),
+        winding_area_m2=float(m["coil_height"]) * float(m["leg_length"]),
+        winding="the coil of one yoke (coil_height x leg_length, an upper bound)")
+
+
+register_kind("guidance_magnet", build_guidance_magnet, ("circuits", "rail"),
+              guidance_magnet_range)

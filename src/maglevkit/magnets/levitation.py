@@ -39,7 +39,14 @@ from ..circuit.elements import AirGap, EddyCurrent, Element, IronPath, LeakagePe
 from ..circuit.network import Branch, Circuit, Coil, Network
 from ..errors import ParameterFileError
 from ..materials import MU0, Material
-from .base import ModelOptions, Schema, register_kind, resolve_material, take
+from .base import (
+    ModelOptions,
+    PlausibleRange,
+    Schema,
+    register_kind,
+    resolve_material,
+    take,
+)
 
 __all__ = ["build_levitation_magnet", "pole_gap_names"]
 
@@ -54,7 +61,7 @@ MAGNET_SCHEMA = {
     "coil_height": Schema(float, unit="m"),
     "coil_thickness": Schema(float, unit="m"),
     "coil_to_face": Schema(float, unit="m"),
-    "turns_per_pole": Schema(float, unit="-"),
+    "turns_per_pole": Schema(float, unit="-", whole=True),
     "resistance_per_pole": Schema(float, unit="ohm"),
     "back_height": Schema(float, unit="m"),
     "back_width": Schema(float, unit="m"),
@@ -225,4 +232,18 @@ def build_levitation_magnet(params: Mapping[str, Any], materials: Mapping[str, M
     return m["name"], Network(tuple(branches), tuple(circuits), name=m["name"])
 
 
-register_kind("levitation_magnet", build_levitation_magnet, ("circuits", "stator"))
+def levitation_magnet_range(params: Mapping[str, Any]) -> PlausibleRange:
+    """Plausible inputs: gaps up to the smaller pole-face dimension, currents up to
+    :data:`~maglevkit.magnets.base.MAX_CURRENT_DENSITY_A_PER_M2` in one pole's coil
+    (``turns_per_pole`` on ``coil_height x coil_thickness``)."""
+    m = params["magnet"]
+    lp, wp = float(m["pole_length"]), float(m["pole_width"])
+    return PlausibleRange.from_geometry(
+        gap_m=min(lp, wp), gap_basis="the pole " + ("length" if lp <= wp else "width"),
+        turns=float(m["turns_per_pole"]),
+        winding_area_m2=float(m["coil_height"]) * float(m["coil_thickness"]),
+        winding="the coil of one pole")
+
+
+register_kind("levitation_magnet", build_levitation_magnet, ("circuits", "stator"),
+              levitation_magnet_range)

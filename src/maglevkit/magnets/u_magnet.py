@@ -51,12 +51,12 @@ from ..circuit.elements import AirGap, EddyCurrent, Element, IronPath, LeakagePe
 from ..circuit.network import Branch, Circuit, Coil, Network
 from ..errors import ParameterFileError
 from ..materials import MU0, Material
-from .base import ModelOptions, Schema, register_kind, resolve_material, take
+from .base import ModelOptions, PlausibleRange, Schema, register_kind, resolve_material, take
 
 MAGNET_SCHEMA = {
     "kind": Schema(str),
     "name": Schema(str, required=False, default="U-magnet"),
-    "turns": Schema(float, unit="-"),
+    "turns": Schema(float, unit="-", whole=True),
     "resistance": Schema(float, unit="ohm"),
     "depth": Schema(float, unit="m"),
     "pole_width": Schema(float, unit="m"),
@@ -99,6 +99,10 @@ def build_u_magnet(params: Mapping[str, Any], materials: Mapping[str, Material],
     if "rail" not in params:
         raise ParameterFileError("missing the [rail] table (thickness, width, material)")
     r = take(params["rail"], RAIL_SCHEMA, "rail")
+    if m["turns"] % 2:
+        raise ParameterFileError(f"[magnet] turns = {m['turns']:g}: the turns are split equally "
+                                 "on the two legs, so the total must be even (e.g. "
+                                 f"{m['turns'] - 1:g} or {m['turns'] + 1:g})")
     if m["laminated"] and m["sheet_thickness"] is None:
         raise ParameterFileError("[magnet] laminated = true needs sheet_thickness [m]")
     if m["sheet_thickness"] is not None and not m["laminated"]:
@@ -205,4 +209,16 @@ def build_u_magnet(params: Mapping[str, Any], materials: Mapping[str, Material],
     return m["name"], Network(tuple(branches), (circuit,), name=m["name"])
 
 
-register_kind("u_magnet", build_u_magnet, ("rail",))
+def u_magnet_range(params: Mapping[str, Any]) -> PlausibleRange:
+    """Plausible inputs: gaps up to the pole width, currents up to
+    :data:`~maglevkit.magnets.base.MAX_CURRENT_DENSITY_A_PER_M2` in one leg's coil
+    (``turns / 2`` on ``coil_height x coil_thickness``)."""
+    m = params["magnet"]
+    return PlausibleRange.from_geometry(
+        gap_m=float(m["pole_width"]), gap_basis="the pole width",
+        turns=0.5 * float(m["turns"]),
+        winding_area_m2=float(m["coil_height"]) * float(m["coil_thickness"]),
+        winding="the coil of one leg")
+
+
+register_kind("u_magnet", build_u_magnet, ("rail",), u_magnet_range)

@@ -15,12 +15,14 @@ eddy currents ``dI_0 = 0`` and ``L~ = tau R_el``.
 from __future__ import annotations
 
 import math
+import numbers
 from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
 from ..errors import InputError, SolverError
+from ..validation import real_number, whole_number
 from .flux import FluxModel, SimulationResult, simulate
 from .statics import solve_statics
 
@@ -29,7 +31,7 @@ __all__ = ["InductanceEstimate", "voltage_step_response", "differential_inductan
 
 def _model(model: Any, options: dict[str, Any]) -> FluxModel:
     if isinstance(model, FluxModel):
-        return FluxModel(model.network, **{**model._options, **options}) if options else model
+        return FluxModel(model, **{**model._options, **options}) if options else model
     return FluxModel(model, **options)
 
 
@@ -113,11 +115,14 @@ def differential_inductance_from_step(model: Any, *, gap: float, current: float,
     -------
     InductanceEstimate
     """
-    if not (isinstance(relative_step, (int, float)) and 0.0 < relative_step < 0.1):
+    if not 0.0 < real_number(relative_step, "relative_step") < 0.1:
         raise InputError(f"relative_step = {relative_step!r} must lie in (0, 0.1)")
+    samples_per_tau = whole_number(samples_per_tau, "samples_per_tau", minimum=1)
+    n_tau = real_number(n_tau, "n_tau", positive=True)
     fm = _model(model, {"rtol": rtol, "atol": atol, **options})
     nc = len(fm.circuit_names)
-    if not (isinstance(circuit, int) and 0 <= circuit < nc):
+    if isinstance(circuit, bool) or not isinstance(circuit, numbers.Integral) \
+            or not 0 <= circuit < nc:
         raise InputError(f"circuit = {circuit!r} must be an index in 0..{nc - 1}")
     st = fm.initial_state(gaps=gap, currents=current)
     R = fm.resistances

@@ -44,10 +44,19 @@ import scipy.linalg as sla
 from ..circuit.assembly import assemble
 from ..circuit.network import Network
 from ..errors import InputError, SolverError, TopologyError
+from ..magnets.base import PlausibleRange
 from ..materials import MU0
+from ..validation import optional_flag, real_array, real_number, whole_number
 from .current import CurrentModel, ReducedSimulation
-from .inputs import check_step, gap_secants, reject_bools, sample_input, time_grid
-from .statics import as_network, current_vector, gap_vector, magnetic_energy, solve_statics
+from .inputs import check_step, gap_secants, sample_input, time_grid
+from .statics import (
+    as_network,
+    current_vector,
+    gap_vector,
+    magnetic_energy,
+    plausible_range,
+    solve_statics,
+)
 
 __all__ = [
     "DEFAULT_RTOL",
@@ -287,6 +296,8 @@ def _dae(network: Network, method: str, rtol: float, atol: float, max_num_steps:
 
 
 def _resolve_network(model: Any, saturation: bool | None, eddy_currents: bool | None) -> Network:
+    saturation = optional_flag(saturation, "saturation")
+    eddy_currents = optional_flag(eddy_currents, "eddy_currents")
     if isinstance(model, FluxModel):
         model = model.network
     options = getattr(model, "options", None)
@@ -315,11 +326,7 @@ def _vec(value: Any, n: int, what: str, unit: str, names: tuple[str, ...]) -> np
             raise InputError(f"{what}: unknown names {unknown}, missing {missing}; "
                              f"expected {list(names)}")
         value = [value[k] for k in names]
-    reject_bools(value, what)
-    try:
-        arr = np.asarray(value, dtype=float)
-    except (TypeError, ValueError) as exc:
-        raise InputError(f"{what} must be numbers [{unit}], got {value!r}") from exc
+    arr = real_array(value, what, unit, finite=False)
     if arr.ndim == 0:
         arr = np.full(n, float(arr))
     elif arr.shape != (n,):
@@ -363,14 +370,19 @@ class FluxModel:
                  max_num_steps: int = 20000, radau_elements: int = 2,
                  radau_degree: int = 3) -> None:
         for name, v in (("rtol", rtol), ("atol", atol)):
-            if not (isinstance(v, (int, float)) and math.isfinite(v) and 0.0 < v < 1.0):
+            if not 0.0 < real_number(v, name) < 1.0:
                 raise InputError(f"{name} = {v!r} must lie in (0, 1)")
-        if not (isinstance(max_num_steps, int) and max_num_steps > 0):
-            raise InputError(f"max_num_steps = {max_num_steps!r} must be a positive integer")
-        if not (isinstance(radau_elements, int) and radau_elements > 0
-                and isinstance(radau_degree, int) and 1 <= radau_degree <= 9):
-            raise InputError("radau_elements must be >= 1 and radau_degree in 1..9")
+        max_num_steps = whole_number(max_num_steps, "max_num_steps", minimum=1)
+        radau_elements = whole_number(radau_elements, "radau_elements", minimum=1)
+        radau_degree = whole_number(radau_degree, "radau_degree", minimum=1)
+        if radau_degree > 9:
+            raise InputError(f"radau_degree = {radau_degree!r} must lie in 1..9")
+        if not isinstance(method, str) or method not in ("idas", "radau"):
+            raise InputError(f"method = {method!r}; use 'idas' (error-controlled BDF) or "
+                             "'radau' (fixed-step Radau IIA collocation)")
         self.network = _resolve_network(model, saturation, eddy_currents)
+        #: Gaps and currents beyond which inputs warn (from a Magnet; None for a Network).
+        self.plausible_range: PlausibleRange | None = plausible_range(model)
         self.method = method
         self.rtol = float(rtol)
         self.atol = float(atol)
@@ -418,7 +430,7 @@ class FluxModel:
 
     def with_options(self, **changes: Any) -> FluxModel:
         """A model of the same network with other solver options (method, rtol, atol, ...)."""
-        return FluxModel(self.network, **{**self._options, **changes})
+        return FluxModel(self, **{**self._options, **changes})
 
     def __repr__(self) -> str:
         return (f"FluxModel({self.network.name!r}, method={self.method!r}, rtol={self.rtol:g}, "
@@ -431,14 +443,20 @@ class FluxModel:
         The fluxes come from :func:`solve_statics`; the state is at rest (no eddy
         currents), consistent with the voltages ``U = R I`` and zero gap rates.
         """
+        return self._initial_state(gaps, currents, time, where="FluxModel.initial_state")
+
+    def _initial_state(self, gaps: Any, currents: Any, time: Any, *,
+                       where: str | None) -> FluxState:
+        """:meth:`initial_state`; ``where=None``: the caller has checked plausibility."""
         net = self.network
         s = gap_vector(net, gaps)
         i = current_vector(net, currents)
         if s.shape != (len(net.gap_names),) or i.shape != (len(net.circuit_names),):
             raise InputError("initial_state takes one operating point (one value per gap and "
                              "circuit)")
-        if not math.isfinite(time):
-            raise InputError(f"time = {time!r} must be finite")
+        time = real_number(time, "time", "s")
+        if self.plausible_range is not None and where is not None:
+            self.plausible_range.check(gaps=s, currents=i, where=where, stacklevel=4)
         sol = solve_statics(net, gaps=s, currents=i)
         x = np.asarray(sol.loop_flux_Wb, dtype=float).ravel()
         return FluxState(float(time), self._dae.D @ x, s.copy(), x, i.copy(),
@@ -547,6 +565,8 @@ class FluxModel:
         if np.any(s0 <= 0.0) or np.any(s0 + rate * dt <= 0.0):
             raise InputError(f"gaps must stay > 0 m over the step: start {s0.tolist()} m, end "
                              f"{(s0 + rate * dt).tolist()} m")
+        if self.plausible_range is not None and gaps is not None:
+            self.plausible_range.check(gaps=(s0, s0 + rate * dt), where="FluxModel.step")
         p = np.concatenate(((dt,), U, rate))
         try:
             wf, q, o = d.step_fun(w, p)
@@ -741,6 +761,9 @@ def simulate(model: Any, t: Any, *, gaps: Any, voltages: Any, gap_rates: Any = N
     SolverError
         The integrator failed (time, state and reason in the exception).
     """
+    if initial_currents is not None:
+        real_array(initial_currents if not isinstance(initial_currents, Mapping)
+                   else list(initial_currents.values()), "initial_currents", "A")
     if isinstance(model, CurrentModel):
         if options:
             raise InputError(f"options {sorted(options)} apply to the flux model; build the "
@@ -749,7 +772,7 @@ def simulate(model: Any, t: Any, *, gaps: Any, voltages: Any, gap_rates: Any = N
                               initial_currents=initial_currents, initial_state=initial_state,
                               gap_rate_tolerance=gap_rate_tolerance)
     if isinstance(model, FluxModel):
-        fm = FluxModel(model.network, **{**model._options, **options}) if options else model
+        fm = FluxModel(model, **{**model._options, **options}) if options else model
     else:
         fm = FluxModel(model, **options)
     net = fm.network
@@ -757,6 +780,9 @@ def simulate(model: Any, t: Any, *, gaps: Any, voltages: Any, gap_rates: Any = N
     s = sample_input(gaps, times, net.gap_names, "gaps", "m")
     gap_vector(net, s)  # checks > 0
     U = sample_input(voltages, times, net.circuit_names, "voltages", "V")
+    rng = fm.plausible_range
+    if rng is not None:
+        rng.check(gaps=s, currents=initial_currents, where="simulate")
     h = np.diff(times)
     secant = gap_secants(times, s, gap_rates, net.gap_names, gap_rate_tolerance)
     if initial_state is not None:
@@ -769,7 +795,7 @@ def simulate(model: Any, t: Any, *, gaps: Any, voltages: Any, gap_rates: Any = N
                         np.zeros(4))
     else:
         i0 = U[0] / net.resistances if initial_currents is None else initial_currents
-        st0 = fm.initial_state(gaps=s[0], currents=i0, time=float(times[0]))
+        st0 = fm._initial_state(s[0], i0, float(times[0]), where=None)
     W, Qd, O = fm._run(st0, h, U[:-1], secant)
     d = fm._dae
     o0 = np.asarray(d.output_fun(st0._vector(), st0.voltages_V,
@@ -781,6 +807,9 @@ def simulate(model: Any, t: Any, *, gaps: Any, voltages: Any, gap_rates: Any = N
     rates = np.vstack((secant, secant[-1:]))
     held_U = np.vstack((U[:-1], U[-2:-1]))
     final = fm._unpack_state(float(times[-1]), W[-1], U[-2], secant[-1], E[-1])
+    if rng is not None:
+        # voltages may drive currents no coil carries (e.g. U typed in mV)
+        rng.check(currents=W[:, d.nw - nc:], where="simulate (the currents the voltages drive)")
     return SimulationResult(
         time_s=times, gaps_m=W[:, d.n_diff:d.n_diff + ng], gap_rates_m_per_s=rates,
         voltages_V=held_U, currents_A=W[:, d.nw - nc:],

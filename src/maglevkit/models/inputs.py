@@ -8,16 +8,17 @@ of time, or sampled arrays.
 from __future__ import annotations
 
 import math
-import numbers
 from collections.abc import Mapping
 from typing import Any
 
 import numpy as np
 
 from ..errors import InputError
+from ..validation import real_array, real_number
 from .signals import Signal
 
-__all__ = ["time_grid", "sample_input", "gap_secants", "check_step", "reject_bools"]
+__all__ = ["time_grid", "sample_input", "gap_secants", "check_step", "check_span",
+           "reject_bools"]
 
 
 def check_step(dt: Any, what: str = "dt") -> float:
@@ -28,30 +29,30 @@ def check_step(dt: Any, what: str = "dt") -> float:
     InputError
         ``dt`` is a bool, not a real number, not finite, or <= 0.
     """
-    if isinstance(dt, (bool, np.bool_)) or not isinstance(dt, numbers.Real):
-        raise InputError(f"{what} = {dt!r} must be a real number of seconds > 0 (a float, int "
-                         f"or numpy scalar; not a bool, string or array), got {type(dt).__name__}")
-    value = float(dt)
-    if not (math.isfinite(value) and value > 0.0):
-        raise InputError(f"{what} = {dt!r} s must be a finite number > 0")
-    return value
-
-
-def _has_bool(value: Any) -> bool:
-    if isinstance(value, (bool, np.bool_)):
-        return True
-    if isinstance(value, np.ndarray):
-        return value.dtype.kind == "b" or (value.dtype == object
-                                           and any(_has_bool(v) for v in value.ravel()))
-    if isinstance(value, (list, tuple)):
-        return any(_has_bool(v) for v in value)
-    return False
+    return real_number(dt, what, "s", positive=True)
 
 
 def reject_bools(value: Any, what: str) -> None:
-    """Raise InputError if ``value`` is or contains a bool (True would silently be 1.0)."""
-    if _has_bool(value):
-        raise InputError(f"{what} = {value!r} is or contains a bool; give numbers")
+    """Raise InputError if ``value`` is or contains a bool or a string (not a number)."""
+    real_array(value, what, finite=False)
+
+
+def check_span(t0: float, tf: float, dt: float) -> None:
+    """The rule for a time span and its step, shared by :func:`time_grid` and scenario files.
+
+    ``tf > t0`` and ``dt <= tf - t0`` (a rounding allowance of 1e-9 dt): a step longer
+    than the span would silently give a two-sample "grid" ``[t0, tf]``.
+
+    Raises
+    ------
+    InputError
+        ``tf <= t0`` or ``dt`` longer than the span.
+    """
+    if not tf > t0:
+        raise InputError(f"t_span = ({t0:g}, {tf:g}) s: tf must be > t0")
+    if dt > (tf - t0) * (1.0 + 1e-9):
+        raise InputError(f"dt = {dt:g} s exceeds the simulated span tf - t0 = {tf - t0:g} s; "
+                         "give a step no longer than the span (e.g. dt = 1e-4 s)")
 
 
 def time_grid(t: Any, dt: Any) -> np.ndarray:
@@ -60,8 +61,9 @@ def time_grid(t: Any, dt: Any) -> np.ndarray:
     The rule (the type of ``t`` decides, never its length alone):
 
     * a **tuple or list of exactly two numbers** ``(t0, tf)`` / ``[t0, tf]`` is a time
-      *span*: the grid is ``t0 + k dt`` (``dt`` default 1e-4 s), ending exactly at ``tf``
-      (like ``scipy.integrate.solve_ivp``'s ``t_span``);
+      *span*: the grid is ``t0 + k dt`` (``dt`` default 1e-4 s, at most ``tf - t0``,
+      see :func:`check_span`), ending exactly at ``tf`` (like
+      ``scipy.integrate.solve_ivp``'s ``t_span``);
     * a **numpy array** (any length >= 2) or a sequence of three or more times is an
       explicit, strictly increasing *grid*; ``dt`` must then be None.  A two-point grid
       is ``np.array([t0, t1])`` (or the span ``(t0, t1)`` with ``dt = t1 - t0``).
@@ -69,22 +71,19 @@ def time_grid(t: Any, dt: Any) -> np.ndarray:
     Raises
     ------
     InputError
-        Non-numeric, non-finite or non-increasing times, ``tf <= t0``, a bad ``dt``, or
-        ``dt`` given together with an explicit grid.
+        Non-numeric (bools, strings), non-finite or non-increasing times, ``tf <= t0``,
+        a bad ``dt`` or one longer than the span, or ``dt`` given together with an
+        explicit grid.
     """
-    reject_bools(t, "t")
-    try:
-        arr = np.asarray(t, dtype=float)
-    except (TypeError, ValueError) as exc:
-        raise InputError(f"t must be (t0, tf) or an increasing array of times [s], got {t!r}") \
-            from exc
+    arr = real_array(t, "t", "s", finite=False)
     if arr.ndim != 1 or arr.size < 2 or not np.all(np.isfinite(arr)):
         raise InputError("t must be (t0, tf) or a 1-D array of at least 2 finite times [s]")
     if arr.size == 2 and isinstance(t, (tuple, list)):
         t0, tf = float(arr[0]), float(arr[1])
-        if not tf > t0:
-            raise InputError(f"t_span = ({t0}, {tf}): tf must be > t0")
         step = 1e-4 if dt is None else check_step(dt)
+        if dt is None and tf > t0:
+            step = min(step, tf - t0)
+        check_span(t0, tf, step)
         n = int(math.floor((tf - t0) / step * (1.0 + 1e-12)))
         grid = t0 + step * np.arange(n + 1)
         if tf - grid[-1] > 1e-9 * step:
@@ -116,12 +115,11 @@ def sample_input(value: Any, times: np.ndarray, names: tuple[str, ...], what: st
     elif callable(value):
         arr = _sample_callable(value, times, k, names, what, unit)
     else:
-        reject_bools(value, what)
         try:
-            a = np.asarray(value, dtype=float)
-        except (TypeError, ValueError) as exc:
-            raise InputError(f"{what} must be numbers [{unit}], a Signal, a callable of t or "
-                             f"a sampled array; got {value!r}") from exc
+            a = real_array(value, what, unit, finite=False)
+        except InputError as exc:
+            raise InputError(f"{exc}; {what} may also be a Signal, a callable of t or a "
+                             "mapping per name") from None
         if a.ndim == 0:
             arr = np.full((n, k), float(a))
         elif a.shape == (k,) and not (k == 1 and n == 1):
@@ -156,8 +154,8 @@ def _sample_callable(value: Any, times: np.ndarray, k: int, names: tuple[str, ..
                              f"{exc}; it must return numbers [{unit}] for every time t [s] of "
                              "the grid") from exc
     try:
-        arr = np.asarray(raw, dtype=float)
-    except (TypeError, ValueError):
+        arr = real_array(raw, what, unit, finite=False)
+    except InputError:
         arr = np.empty(0)
     if arr.ndim == 1 and arr.size == times.size:
         return np.repeat(arr[:, None], k, axis=1)
@@ -166,10 +164,10 @@ def _sample_callable(value: Any, times: np.ndarray, k: int, names: tuple[str, ..
     rows = []
     for t, r in zip(times, raw, strict=True):
         try:
-            v = np.asarray(r, dtype=float)
-        except (TypeError, ValueError) as exc:
+            v = real_array(r, what, unit, finite=False)
+        except InputError as exc:
             raise InputError(f"{what}: the callable must return numbers [{unit}] for a "
-                             f"time t [s]; it returned {r!r} at t = {t}: {exc}") from exc
+                             f"time t [s]; it returned {r!r} at t = {t}: {exc}") from None
         if v.ndim == 0:
             v = np.full(k, float(v))
         if v.shape != (k,):
@@ -187,6 +185,7 @@ def gap_secants(times: np.ndarray, gaps: np.ndarray, gap_rates: Any, names: tupl
     differ from the secant by at most ``tolerance`` times the largest rate (plus 1 um/s);
     otherwise :class:`InputError`.
     """
+    tolerance = real_number(tolerance, "gap_rate_tolerance", nonnegative=True)
     h = np.diff(times)
     secant = np.diff(gaps, axis=0) / h[:, None]
     if gap_rates is not None:

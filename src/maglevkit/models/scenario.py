@@ -28,6 +28,8 @@ keys raise :class:`~maglevkit.errors.ParameterFileError`.
 
 from __future__ import annotations
 
+import math
+import os
 import sys
 from collections.abc import Mapping
 from dataclasses import dataclass, field
@@ -35,7 +37,8 @@ from importlib import resources
 from pathlib import Path
 from typing import Any
 
-from ..errors import ParameterFileError
+from ..errors import InputError, ParameterFileError
+from .inputs import check_span
 from .signals import Signal, parse_signal
 
 if sys.version_info >= (3, 11):
@@ -101,6 +104,8 @@ def _number(tab: Mapping[str, Any], key: str, where: str, *, positive: bool = Tr
     v = tab[key]
     if isinstance(v, bool) or not isinstance(v, (int, float)):
         raise ParameterFileError(f"[{where}] {key} = {v!r}: expected a number")
+    if not math.isfinite(v):
+        raise ParameterFileError(f"[{where}] {key} = {v!r}: must be finite")
     if positive and not v > 0:
         raise ParameterFileError(f"[{where}] {key} = {v!r}: must be > 0")
     return float(v)
@@ -130,8 +135,10 @@ def parse_scenario(data: Mapping[str, Any], source: str = "scenario") -> Scenari
     dt = _number(sc, "dt", "scenario")
     i0 = _number(sc, "initial_current", "scenario", positive=False, required=False)
     assert duration is not None and dt is not None
-    if dt > duration:
-        raise ParameterFileError(f"[scenario] dt = {dt} s exceeds duration = {duration} s")
+    try:
+        check_span(0.0, duration, dt)   # the same rule as simulate((0, duration), dt=dt)
+    except InputError as exc:
+        raise ParameterFileError(f"{source}: [scenario] {exc}") from None
     sigs: dict[str, dict[str, Signal]] = {}
     for which in ("voltages", "gaps"):
         tab = data[which]
@@ -153,7 +160,18 @@ def parse_scenario(data: Mapping[str, Any], source: str = "scenario") -> Scenari
 
 
 def load_scenario(source: str | Path) -> Scenario:
-    """Load a scenario TOML file, or a bundled scenario by name (e.g. ``"step"``)."""
+    """Load a scenario TOML file, or a bundled scenario by name (e.g. ``"step"``).
+
+    Raises
+    ------
+    ParameterFileError
+        Missing file, TOML syntax error, unknown/missing keys or invalid values.
+    InputError
+        ``source`` is not a name or a path.
+    """
+    if not isinstance(source, (str, os.PathLike)) or not str(source):
+        raise InputError(f"load_scenario: source = {source!r}: expected a bundled scenario "
+                         f"name ({', '.join(bundled_scenarios())}) or the path of a .toml file")
     path = Path(source)
     if path.suffix != ".toml" and not path.exists():
         names = bundled_scenarios()

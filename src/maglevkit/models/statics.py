@@ -17,6 +17,7 @@ Derived quantities are exact (implicit function theorem, no finite differences):
 from __future__ import annotations
 
 import math
+import os
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
@@ -27,7 +28,9 @@ import numpy as np
 from ..circuit.assembly import assemble
 from ..circuit.network import Network
 from ..errors import InputError, SolverError
+from ..magnets.base import PlausibleRange
 from ..materials import MU0
+from ..validation import describe, flag, real_array, real_number
 
 __all__ = [
     "StaticSolution",
@@ -37,6 +40,7 @@ __all__ = [
     "coenergy",
     "pole_force_eq6",
     "as_network",
+    "plausible_range",
     "gap_vector",
     "current_vector",
 ]
@@ -47,13 +51,33 @@ _RESIDUAL_TOL = 1e-9
 
 
 def as_network(model: Any) -> Network:
-    """The :class:`Network` of a model (a Network, or anything with a ``network`` attribute)."""
+    """The :class:`Network` of a model (a Network, or anything with a ``network`` attribute).
+
+    Raises
+    ------
+    InputError
+        ``model`` is a name or path (load it with ``load_magnet`` first) or another
+        object without an equivalent circuit.
+    """
     if isinstance(model, Network):
         return model
     net = getattr(model, "network", None)
     if isinstance(net, Network):
         return net
-    raise TypeError(f"expected a Network or a magnet with a .network, got {type(model).__name__}")
+    if isinstance(model, (str, os.PathLike)):
+        raise InputError(f"model = {str(model)!r} is a name or path, not a magnet; load it "
+                         f"first: magnet = maglevkit.load_magnet({str(model)!r})")
+    raise InputError(f"model = {describe(model)}: expected a Magnet (maglevkit.load_magnet), "
+                     "a FluxModel or a Network")
+
+
+def plausible_range(model: Any) -> PlausibleRange | None:
+    """The model's :class:`~maglevkit.magnets.base.PlausibleRange` (None if it has none).
+
+    A Magnet has one from its geometry, a FluxModel keeps that of the magnet it was
+    built from; a bare Network has none."""
+    rng = getattr(model, "plausible_range", None)
+    return rng if isinstance(rng, PlausibleRange) else None
 
 
 def _named_vector(kind: str, names: Sequence[str], value: Any, unit: str) -> np.ndarray:
@@ -66,12 +90,14 @@ def _named_vector(kind: str, names: Sequence[str], value: Any, unit: str) -> np.
             raise InputError(f"unknown {kind} name(s) {unknown}; known: {list(names)}")
         if missing:
             raise InputError(f"{kind} value missing for {missing}; give all of {list(names)}")
-        arr = np.stack([np.asarray(value[k], dtype=float) for k in names], axis=-1)
-    else:
+        cols = [real_array(value[k], f"{kind} {k!r}", unit) for k in names]
         try:
-            arr = np.asarray(value, dtype=float)
-        except (TypeError, ValueError) as exc:
-            raise InputError(f"{kind}s must be numbers [{unit}], got {value!r}") from exc
+            arr = np.stack(cols, axis=-1)
+        except ValueError as exc:
+            raise InputError(f"{kind} values per name must have equal shapes, got "
+                             f"{[c.shape for c in cols]}") from exc
+    else:
+        arr = real_array(value, f"{kind}s", unit)
         if arr.ndim == 0:
             arr = np.full((n,), float(arr))
         elif arr.shape[-1] != n:
@@ -233,7 +259,10 @@ class _StaticSolver:
             if len(self._maps) > 16:
                 self._maps.clear()
             self._maps[m] = f
-        out = [np.asarray(v) for v in f(s, I)]
+        try:
+            out = [np.asarray(v) for v in f(s, I)]
+        except RuntimeError as exc:
+            raise self._evaluation_error(exc, s, I) from None
         res = out[1].ravel()
         bad = np.nonzero(~(res <= _RESIDUAL_TOL))[0]
         for j in (int(v) for v in bad):
@@ -245,6 +274,31 @@ class _StaticSolver:
                 arr = np.asarray(v)
                 _assign_column(out[2 + k], arr, j, m)
         return out
+
+    def _evaluation_error(self, exc: RuntimeError, s: np.ndarray, I: np.ndarray) -> SolverError:
+        """SolverError for a failed evaluation of the compiled network equations.
+
+        CasADi stops with "Evaluation failed" when the equations produce non-finite
+        numbers (e.g. iron paths or permeances of absurd size); the first point that
+        fails on its own is reported.
+        """
+        point = 0
+        for j in range(s.shape[1]):
+            try:
+                self.point(s[:, j], I[:, j])
+            except RuntimeError:
+                point = j
+                break
+        state = dict(zip((f"gap[{g}]" for g in self.network.gap_names), s[:, point],
+                         strict=True))
+        state.update(zip((f"I[{c}]" for c in self.network.circuit_names), I[:, point],
+                         strict=True))
+        lines = [ln.strip() for ln in str(exc).splitlines() if ln.strip()]
+        reason = lines[-1] if lines else type(exc).__name__
+        return SolverError(
+            f"the network equations of {self.network.name!r} could not be evaluated (non-finite "
+            "numbers); check the magnet's dimensions and materials for absurd values",
+            state=state, reason=reason[:300])
 
     def _continuation(self, s: np.ndarray, I: np.ndarray) -> np.ndarray:
         """Newton continuation in the current from 0 to I; raises SolverError on failure."""
@@ -307,15 +361,24 @@ def solve_statics(model: Any, *, gaps: Any, currents: Any, grid: bool = False) -
     Raises
     ------
     InputError
-        Non-finite inputs, gaps <= 0, wrong shapes or names.
+        Inputs that are not real finite numbers (bools and strings included), gaps
+        <= 0, wrong shapes or names, ``grid`` not True/False, or a ``model`` that is not
+        a magnet or network (e.g. a name: load it with ``load_magnet``).
     SolverError
-        If Newton's method and the continuation fallback both fail.
+        If Newton's method and the continuation fallback both fail, or the network
+        equations cannot be evaluated (non-finite numbers).
+
+    Warns
+    -----
+    PlausibilityWarning
+        With a Magnet (or a FluxModel of one): gaps or currents far outside the
+        magnet's physical range (:class:`~maglevkit.magnets.base.PlausibleRange`).
     """
     net = as_network(model)
     ng, nc = len(net.gap_names), len(net.circuit_names)
-    if grid:
-        g1 = np.asarray(gaps, dtype=float)
-        c1 = np.asarray(currents, dtype=float)
+    if flag(grid, "grid"):
+        g1 = real_array(gaps, "gaps", "m")
+        c1 = real_array(currents, "currents", "A")
         if g1.ndim != 1 or c1.ndim != 1:
             raise InputError("with grid=True, gaps and currents must be 1-D arrays "
                              f"(got shapes {g1.shape} and {c1.shape})")
@@ -335,6 +398,9 @@ def solve_statics(model: Any, *, gaps: Any, currents: Any, grid: bool = False) -
     i2 = np.ascontiguousarray(iv.reshape(m, nc).T)
     if m == 0:
         raise InputError("empty set of operating points")
+    rng = plausible_range(model)
+    if rng is not None:
+        rng.check(gaps=sv, currents=iv, where="solve_statics")
     solver = _solver(net)
     x, _res, phi, psi, f, dpsi_di, dpsi_ds, df_di, df_ds = solver.batch(s2, i2)
     nb = len(net.branches)
@@ -376,7 +442,7 @@ def magnetic_energy(model: Any, branch_flux: Any, gaps: Any) -> float:
     ~1e-13); air and leakage parts are exact.
     """
     net = as_network(model)
-    phi = np.asarray(branch_flux, dtype=float).ravel()
+    phi = real_array(branch_flux, "branch_flux", "Wb").ravel()
     if phi.size != len(net.branches):
         raise InputError(f"branch_flux must have {len(net.branches)} entries, got {phi.size}")
     s = gap_vector(net, gaps)
@@ -410,8 +476,17 @@ def pole_force_eq6(flux: Any, area: float, mu_r: float = math.inf) -> Any:
     mu_r : float
         Relative permeability of the iron (``inf``: ``phi^2 / (2 mu0 A)``).
     """
-    factor = 1.0 if math.isinf(mu_r) else (mu_r - 1.0) / mu_r
-    return factor * np.asarray(flux, dtype=float) ** 2 / (2.0 * MU0 * area)
+    phi = real_array(flux, "flux", "Wb")
+    a = real_number(area, "area", "m^2", positive=True)
+    if isinstance(mu_r, (int, float)) and not isinstance(mu_r, bool) and math.isinf(mu_r) \
+            and mu_r > 0:
+        factor = 1.0
+    else:
+        mu = real_number(mu_r, "mu_r")
+        if mu < 1.0:
+            raise InputError(f"mu_r = {mu_r!r}: a relative permeability must be >= 1 (or inf)")
+        factor = (mu - 1.0) / mu
+    return factor * phi ** 2 / (2.0 * MU0 * a)
 
 
 def circuit_pole_groups(model: Any, *, gap: float, current: float) -> dict[str, tuple[str, ...]]:

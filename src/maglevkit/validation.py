@@ -1,0 +1,183 @@
+"""One validation path for the numbers and switches of every public entry point.
+
+Every public function that takes a number, an array of numbers or a physics switch checks
+it here, so that the same input gets the same answer everywhere:
+
+* a **number** is a real, finite int, float or numpy scalar (or an array of them); bools
+  (``True`` would silently become 1.0), strings (``"0.01"`` would be parsed by numpy),
+  complex numbers, ``None`` and other objects are refused;
+* a **whole number** (counts such as ``max_num_steps``) is a real number without a
+  fractional part, not a bool;
+* a **flag** (``saturation``, ``grid``, ...) is ``True`` or ``False`` (or a numpy bool);
+  ``"no"``, ``0`` or ``None`` are refused (a non-empty string is truthy: ``"no"`` would
+  switch the option *on*).
+
+All failures raise :class:`~maglevkit.errors.InputError` naming the argument, what it got
+and what is allowed.  The module sits below every other layer (it needs only numpy and
+:mod:`maglevkit.errors`).
+"""
+
+from __future__ import annotations
+
+import math
+import numbers
+from collections.abc import Sequence
+from typing import Any
+
+import numpy as np
+
+from .errors import InputError, MaglevkitError
+
+__all__ = ["real_number", "real_array", "whole_number", "flag", "optional_flag",
+           "describe"]
+
+
+def describe(value: Any) -> str:
+    """A short description of ``value`` for error messages: its repr and type."""
+    text = repr(value)
+    if len(text) > 80:
+        text = text[:77] + "..."
+    return f"{text} ({type(value).__name__})"
+
+
+def _what(what: str, unit: str) -> str:
+    return f"{what} [{unit}]" if unit else what
+
+
+def _is_bool(value: Any) -> bool:
+    return isinstance(value, (bool, np.bool_))
+
+
+def real_number(value: Any, what: str, unit: str = "", *, positive: bool = False,
+                nonnegative: bool = False, error: type[MaglevkitError] = InputError) -> float:
+    """A finite real number as a float (ints, floats and numpy scalars; 0-d arrays too).
+
+    Parameters
+    ----------
+    value : Any
+        The argument to check.
+    what : str
+        Its name in error messages (e.g. ``"dt"``).
+    unit : str
+        Its unit in error messages (e.g. ``"s"``).
+    positive, nonnegative : bool
+        Also require ``> 0`` / ``>= 0``.
+    error : MaglevkitError subclass
+        The class raised (default :class:`InputError`; e.g. :class:`ParameterError` for
+        model parameters).
+
+    Raises
+    ------
+    InputError
+        A bool, string, complex, non-number, array of several values, NaN/inf, or a
+        value failing the sign check.
+    """
+    if isinstance(value, np.ndarray) and value.ndim == 0:
+        value = value[()]
+    if _is_bool(value) or isinstance(value, (str, bytes)) \
+            or not isinstance(value, numbers.Real):
+        raise error(f"{_what(what, unit)} = {describe(value)}: expected a real number "
+                         "(an int, float or numpy scalar; not a bool, string or array)")
+    v = float(value)
+    if not math.isfinite(v):
+        raise error(f"{_what(what, unit)} = {value!r}: must be finite")
+    if positive and not v > 0.0:
+        raise error(f"{_what(what, unit)} = {value!r}: must be > 0")
+    if nonnegative and not v >= 0.0:
+        raise error(f"{_what(what, unit)} = {value!r}: must be >= 0")
+    return v
+
+
+_OK = object()   # sentinel of _bad_element: every part is a real number
+
+
+def _bad_element(value: Any) -> Any:
+    """The first part of ``value`` that is not a real number (``_OK`` if all are).
+
+    Sequences (lists, tuples, ranges) are searched element by element; arrays and
+    array-likes (anything with ``__array__``: numpy, pandas, xarray) by their dtype.
+    """
+    if isinstance(value, (str, bytes)) or _is_bool(value):
+        return value
+    if isinstance(value, numbers.Real):
+        return _OK
+    if isinstance(value, Sequence):
+        for v in value:
+            bad = _bad_element(v)
+            if bad is not _OK:
+                return bad
+        return _OK
+    if isinstance(value, np.ndarray) or hasattr(value, "__array__"):
+        arr = np.asarray(value)
+        if arr.dtype == object:
+            for v in arr.ravel():
+                bad = _bad_element(v)
+                if bad is not _OK:
+                    return bad
+            return _OK
+        return _OK if arr.dtype.kind in "iuf" else arr
+    return value
+
+
+def real_array(value: Any, what: str, unit: str = "", *, finite: bool = True) -> np.ndarray:
+    """Real numbers (a scalar or a nested sequence/array of any shape) as a float array.
+
+    Raises
+    ------
+    InputError
+        The value is or contains a bool, string, complex number, None or another
+        non-number; a ragged nesting; or (``finite=True``) NaN/inf.
+    """
+    bad = _bad_element(value)
+    if bad is not _OK:
+        kind = ("a bool" if _is_bool(bad) else "a string" if isinstance(bad, (str, bytes))
+                else f"an array of {bad.dtype} values" if isinstance(bad, np.ndarray)
+                else f"a {type(bad).__name__}")
+        got = (f"is {kind}" if bad is value
+               else f"contains {kind} ({bad!r})" if not isinstance(bad, np.ndarray)
+               else f"contains {kind}")
+        raise InputError(f"{_what(what, unit)} = {describe(value)} {got}; {what} must be "
+                         "numbers (real ints, floats or numpy numbers; not bools or strings)")
+    try:
+        arr = np.asarray(value, dtype=float)
+    except (TypeError, ValueError) as exc:
+        raise InputError(f"{_what(what, unit)} = {describe(value)}: {what} must be numbers "
+                         f"(a scalar or a regular array): {exc}") from None
+    if finite and not np.all(np.isfinite(arr)):
+        raise InputError(f"{_what(what, unit)} must be finite numbers, got {describe(value)}")
+    return arr
+
+
+def whole_number(value: Any, what: str, *, minimum: int | None = None) -> int:
+    """A whole number as an int (ints, numpy ints, or floats without a fractional part).
+
+    Raises
+    ------
+    InputError
+        Not a real number, a bool, a fractional value, or below ``minimum``.
+    """
+    v = real_number(value, what)
+    if not v.is_integer():
+        raise InputError(f"{what} = {value!r}: must be a whole number")
+    n = int(v)
+    if minimum is not None and n < minimum:
+        raise InputError(f"{what} = {value!r}: must be a whole number >= {minimum}")
+    return n
+
+
+def flag(value: Any, what: str) -> bool:
+    """A switch: ``True`` or ``False`` (numpy bools allowed), nothing else.
+
+    Raises
+    ------
+    InputError
+        Any other value (``"no"``, ``0``, ``None``, ...).
+    """
+    if not _is_bool(value):
+        raise InputError(f"{what} = {describe(value)}: expected True or False")
+    return bool(value)
+
+
+def optional_flag(value: Any, what: str) -> bool | None:
+    """Like :func:`flag`, but ``None`` (meaning "unchanged" or "default") is allowed."""
+    return None if value is None else flag(value, what)
