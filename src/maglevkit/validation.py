@@ -89,6 +89,9 @@ def real_number(value: Any, what: str, unit: str = "", *, positive: bool = False
 
 
 _OK = object()   # sentinel of _bad_element: every part is a real number
+# exact types that are real numbers (bool is a subclass of int, so exact types exclude it);
+# the fast path of long lists of plain floats (sampled inputs of callables)
+_PLAIN = frozenset({float, int, np.float64, np.float32, np.int64, np.int32})
 
 
 def _bad_element(value: Any) -> Any:
@@ -97,26 +100,36 @@ def _bad_element(value: Any) -> Any:
     Sequences (lists, tuples, ranges) are searched element by element; arrays and
     array-likes (anything with ``__array__``: numpy, pandas, xarray) by their dtype.
     """
+    tp = type(value)
+    if tp in _PLAIN:
+        return _OK
+    if tp is np.ndarray:
+        if value.dtype.kind in "iuf":
+            return _OK
+        if value.dtype != object:
+            return value
+        return _first_bad(value.ravel().tolist())
+    if tp is list or tp is tuple:
+        if _PLAIN.issuperset(map(type, value)):
+            return _OK
+        return _first_bad(value)
     if isinstance(value, (str, bytes)) or _is_bool(value):
         return value
     if isinstance(value, numbers.Real):
         return _OK
     if isinstance(value, Sequence):
-        for v in value:
-            bad = _bad_element(v)
-            if bad is not _OK:
-                return bad
-        return _OK
+        return _first_bad(value)
     if isinstance(value, np.ndarray) or hasattr(value, "__array__"):
-        arr = np.asarray(value)
-        if arr.dtype == object:
-            for v in arr.ravel():
-                bad = _bad_element(v)
-                if bad is not _OK:
-                    return bad
-            return _OK
-        return _OK if arr.dtype.kind in "iuf" else arr
+        return _bad_element(np.asarray(value))
     return value
+
+
+def _first_bad(items: Any) -> Any:
+    for v in items:
+        bad = _bad_element(v)
+        if bad is not _OK:
+            return bad
+    return _OK
 
 
 def real_array(value: Any, what: str, unit: str = "", *, finite: bool = True) -> np.ndarray:
