@@ -465,3 +465,14 @@ def test_vehicle_and_controller_arguments(u_lin: mk.Magnet) -> None:
     with pytest.raises(mk.InputError, match=r"initial_current_A \[A\] = True \(bool\)"):
         closed_loop(fm, mass, ctl, duration_s=0.01, dt_s=1e-3, initial_gap_m=0.01,
                     initial_current_A=True)
+
+
+def test_unknown_flux_model_options(u_lin: mk.Magnet) -> None:
+    # was: TypeError from FluxModel.__init__
+    msg = r"unknown option\(s\) \['bogus'\]; the FluxModel options are saturation, eddy_currents"
+    with pytest.raises(mk.InputError, match=r"simulate: " + msg):
+        mk.simulate(u_lin, (0.0, 1e-3), gaps=0.01, voltages=1.0, bogus=1)
+    with pytest.raises(mk.InputError, match=r"FluxModel.with_options: " + msg):
+        mk.FluxModel(u_lin).with_options(bogus=1)
+    with pytest.raises(mk.InputError, match=msg):
+        mk.voltage_step_response(u_lin, gap=0.01, voltage=1.0, duration=1e-3, dt=1e-4, bogus=1)

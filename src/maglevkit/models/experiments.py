@@ -23,13 +23,14 @@ import numpy as np
 
 from ..errors import InputError, SolverError
 from ..validation import real_number, whole_number
-from .flux import FluxModel, SimulationResult, simulate
+from .flux import FluxModel, SimulationResult, check_options, simulate
 from .statics import solve_statics
 
 __all__ = ["InductanceEstimate", "voltage_step_response", "differential_inductance_from_step"]
 
 
 def _model(model: Any, options: dict[str, Any]) -> FluxModel:
+    check_options(options, "the step experiment")
     if isinstance(model, FluxModel):
         return FluxModel(model, **{**model._options, **options}) if options else model
     return FluxModel(model, **options)

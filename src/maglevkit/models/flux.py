@@ -317,6 +317,19 @@ def _resolve_network(model: Any, saturation: bool | None, eddy_currents: bool | 
     return net
 
 
+#: Keyword options of :class:`FluxModel` (also accepted by ``simulate`` and ``with_options``).
+FLUX_MODEL_OPTIONS = ("saturation", "eddy_currents", "method", "rtol", "atol", "max_num_steps",
+                      "radau_elements", "radau_degree")
+
+
+def check_options(options: Mapping[str, Any], where: str) -> None:
+    """InputError for keyword options that :class:`FluxModel` does not have."""
+    unknown = sorted(set(options) - set(FLUX_MODEL_OPTIONS))
+    if unknown:
+        raise InputError(f"{where}: unknown option(s) {unknown}; the FluxModel options are "
+                         f"{', '.join(FLUX_MODEL_OPTIONS)}")
+
+
 def _vec(value: Any, n: int, what: str, unit: str, names: tuple[str, ...]) -> np.ndarray:
     """A finite float vector of length n from a scalar, sequence or mapping."""
     if isinstance(value, Mapping):
@@ -430,6 +443,7 @@ class FluxModel:
 
     def with_options(self, **changes: Any) -> FluxModel:
         """A model of the same network with other solver options (method, rtol, atol, ...)."""
+        check_options(changes, "FluxModel.with_options")
         return FluxModel(self, **{**self._options, **changes})
 
     def __repr__(self) -> str:
@@ -771,6 +785,7 @@ def simulate(model: Any, t: Any, *, gaps: Any, voltages: Any, gap_rates: Any = N
         return model.simulate(t, gaps=gaps, voltages=voltages, gap_rates=gap_rates, dt=dt,
                               initial_currents=initial_currents, initial_state=initial_state,
                               gap_rate_tolerance=gap_rate_tolerance)
+    check_options(options, "simulate")
     if isinstance(model, FluxModel):
         fm = FluxModel(model, **{**model._options, **options}) if options else model
     else:
