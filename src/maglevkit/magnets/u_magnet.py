@@ -99,10 +99,6 @@ def build_u_magnet(params: Mapping[str, Any], materials: Mapping[str, Material],
     if "rail" not in params:
         raise ParameterFileError("missing the [rail] table (thickness, width, material)")
     r = take(params["rail"], RAIL_SCHEMA, "rail")
-    if m["turns"] % 2:
-        raise ParameterFileError(f"[magnet] turns = {m['turns']:g}: the turns are split equally "
-                                 "on the two legs, so the total must be even (e.g. "
-                                 f"{m['turns'] - 1:g} or {m['turns'] + 1:g})")
     if m["laminated"] and m["sheet_thickness"] is None:
         raise ParameterFileError("[magnet] laminated = true needs sheet_thickness [m]")
     if m["sheet_thickness"] is not None and not m["laminated"]:
