@@ -33,7 +33,12 @@ def check_step(dt: Any, what: str = "dt") -> float:
 
 
 def reject_bools(value: Any, what: str) -> None:
-    """Raise InputError if ``value`` is or contains a bool or a string (not a number)."""
+    """Raise InputError if ``value`` is or contains a bool, a string or another non-number
+    (a mapping: its values; NaN/inf are left to the caller)."""
+    if isinstance(value, Mapping):
+        for key, v in value.items():
+            reject_bools(v, f"{what}[{key}]")
+        return
     real_array(value, what, finite=False)
 
 
