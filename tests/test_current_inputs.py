@@ -31,3 +31,25 @@ def test_a_path_instead_of_maps_is_an_input_error() -> None:
         mk.CurrentModel("maps.nc")
     with pytest.raises(InputError, match=r"needs CharacteristicMaps.*got NoneType"):
         mk.CurrentModel(None)
+
+
+def test_bools_and_strings_are_refused_by_the_current_model(model) -> None:
+    state = model.initial_state(gaps=0.010, currents=20.0)
+    with pytest.raises(InputError, match="voltages.*bool"):
+        model.step(state, 1e-3, True)
+    with pytest.raises(InputError, match="voltages.*string"):
+        model.step(state, 1e-3, "1")
+    with pytest.raises(InputError, match="initial_currents.*bool"):
+        model.simulate((0.0, 0.01), dt=1e-3, gaps=0.01, voltages=20.0, initial_currents=True)
+
+
+def test_maps_entry_points_refuse_wrong_types() -> None:
+    with pytest.raises(InputError, match="load_maps needs the path.*NoneType"):
+        mk.load_maps(None)  # type: ignore[arg-type]
+    with pytest.raises(InputError, match="wraps an xarray.Dataset"):
+        mk.CharacteristicMaps("x")  # type: ignore[arg-type]
+    with pytest.raises(InputError, match="gap grid.*string"):
+        mk.build_maps(mk.load_magnet("u-magnet"), gaps=["0.01"] * 4, currents=[0, 1, 2, 3])
+    with pytest.raises(InputError, match="current grid.*bool"):
+        mk.build_maps(mk.load_magnet("u-magnet"), gaps=[0.01, 0.02, 0.03, 0.04],
+                      currents=[True, 1, 2, 3])

@@ -30,6 +30,7 @@ import casadi as ca
 import numpy as np
 
 from ..errors import InputError, OutOfRangeError, SolverError
+from ..validation import real_array
 from .inputs import check_step, gap_secants, sample_input, time_grid
 
 __all__ = ["CurrentModel", "CurrentModelLinearization", "CurrentModelState", "CurrentOutputs",
@@ -810,18 +811,13 @@ def _per_circuit(value: Any, names: tuple[str, ...], what: str) -> np.ndarray:
         if missing or unknown:
             raise InputError(f"{what}: give one value per circuit {list(names)} "
                              f"(missing {missing}, unknown {unknown})")
-        arr = np.array([float(value[n]) for n in names])
-    elif isinstance(value, (int, float)):
-        arr = np.full(len(names), float(value))
-    else:
-        arr = np.asarray(value, dtype=float)
-        if arr.ndim == 0:
-            arr = np.full(len(names), float(arr))
-        if arr.shape != (len(names),):
-            raise InputError(f"{what}: expected {len(names)} values (circuits {list(names)}), "
-                             f"got shape {arr.shape}")
-    if not np.isfinite(arr).all():
-        raise InputError(f"{what} must be finite, got {arr}")
+        value = [value[n] for n in names]
+    arr = real_array(value, what)          # no bools, strings, NaN or inf
+    if arr.ndim == 0:
+        arr = np.full(len(names), float(arr))
+    if arr.shape != (len(names),):
+        raise InputError(f"{what}: expected {len(names)} values (circuits {list(names)}), "
+                         f"got shape {arr.shape}")
     return arr
 
 

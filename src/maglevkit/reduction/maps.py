@@ -39,6 +39,7 @@ import xarray as xr
 from ..circuit.network import Network
 from ..errors import InputError, ParameterFileError
 from ..models.statics import as_network, circuit_pole_groups, solve_statics
+from ..validation import real_array
 from .parameters import eddy_resistance
 from .transient import transient_point
 
@@ -55,10 +56,7 @@ def _version() -> str:
 
 
 def _grid(values: Any, what: str, unit: str, *, positive: bool) -> np.ndarray:
-    try:
-        arr = np.asarray(values, dtype=float)
-    except (TypeError, ValueError) as exc:
-        raise InputError(f"{what} grid must be numbers [{unit}]") from exc
+    arr = real_array(values, f"{what} grid", unit, finite=False)
     if arr.ndim != 1 or arr.size < 4:
         raise InputError(f"{what} grid must be 1-D with at least 4 points (cubic interpolation), "
                          f"got shape {arr.shape}")
@@ -130,6 +128,11 @@ class CharacteristicMaps:
     """
 
     dataset: xr.Dataset
+
+    def __post_init__(self) -> None:
+        if not isinstance(self.dataset, xr.Dataset):
+            raise InputError("CharacteristicMaps wraps an xarray.Dataset of maps; use "
+                             "build_maps or load_maps, got " + type(self.dataset).__name__)
 
     @property
     def circuits(self) -> tuple[str, ...]:
@@ -207,6 +210,9 @@ def model_hash(model: Any) -> str:
 
 def load_maps(path: str | Path, *, magnet: Any = None) -> CharacteristicMaps:
     """Read maps from netCDF; with ``magnet``, check that they belong to it."""
+    if not isinstance(path, (str, os.PathLike)):
+        raise InputError(f"load_maps needs the path of a maps file (str or Path), got "
+                         f"{type(path).__name__}")
     p = Path(path)
     if not p.is_file():
         raise ParameterFileError(f"maps file {str(p)!r} does not exist")
