@@ -8,8 +8,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from .errors import ParameterError
-from .validation import real_number
+from ..errors import ParameterError
+from ..validation import real_number
 
 __all__ = ["HeaveMass", "HeaveState", "STANDARD_GRAVITY"]
 

@@ -1,0 +1,55 @@
+"""Mechanical models the magnets are coupled to, and what a vehicle run is judged by.
+
+* :mod:`~maglevkit.vehicle.heave`: a rigid heave mass under one magnet (gap-control studies).
+* :mod:`~maglevkit.vehicle.guideway`: simply supported Euler-Bernoulli spans in modal form,
+  chained into a periodically pillared guideway with a moving system boundary.
+* :mod:`~maglevkit.vehicle.irregularities`: deterministic and random guideway irregularities.
+* :mod:`~maglevkit.vehicle.comfort`: ride comfort (ISO 2631-1 ``Wk`` and Sperling ``Wz``).
+* :mod:`~maglevkit.vehicle.data`: the guideway parameter file.
+"""
+
+from __future__ import annotations
+
+from .comfort import (
+    iso2631_weighted_rms,
+    iso2631_wk,
+    sperling_index,
+    sperling_weighting,
+)
+from .data import GuidewayData, load_guideway
+from .guideway import BeamSpan, Guideway, GuidewayDeflection, GuidewayState
+from .heave import STANDARD_GRAVITY, HeaveMass, HeaveState
+from .irregularities import (
+    GermanTrackPSD,
+    HarmonicProfile,
+    JointSteps,
+    PowerLawPSD,
+    Profile,
+    RandomProfile,
+    SpanSag,
+    TabulatedProfile,
+)
+
+__all__ = [
+    "HeaveMass",
+    "HeaveState",
+    "STANDARD_GRAVITY",
+    "BeamSpan",
+    "Guideway",
+    "GuidewayDeflection",
+    "GuidewayState",
+    "GuidewayData",
+    "load_guideway",
+    "Profile",
+    "SpanSag",
+    "JointSteps",
+    "HarmonicProfile",
+    "RandomProfile",
+    "TabulatedProfile",
+    "GermanTrackPSD",
+    "PowerLawPSD",
+    "iso2631_wk",
+    "iso2631_weighted_rms",
+    "sperling_weighting",
+    "sperling_index",
+]

@@ -1,0 +1,169 @@
+"""Ride comfort of vertical acceleration: ISO 2631-1 ``Wk`` weighted RMS and Sperling ``Wz``.
+
+ISO 2631-1:1997, Annex A (parameters as in ISO 8041): the weighting ``Wk`` (vertical,
+seated/standing/recumbent) is the product of four analogue filters, ``s = j 2 pi f``::
+
+    band-limiting high pass   H_h = s^2 / (s^2 + w1 s / Q1 + w1^2)
+    band-limiting low pass    H_l = w2^2 / (s^2 + w2 s / Q2 + w2^2)
+    a-v transition            H_t = (1 + s / w3) / (1 + s / (Q4 w4) + s^2 / w4^2)
+    upward step               H_s = (w5/w6)^2 (1 + s / (Q5 w5) + s^2 / w5^2)
+                                              / (1 + s / (Q6 w6) + s^2 / w6^2)
+
+with ``w_i = 2 pi f_i``: f1 = 0.4 Hz, f2 = 100 Hz, Q1 = Q2 = 1/sqrt(2), f3 = f4 = 12.5 Hz,
+Q4 = 0.63, f5 = 2.37 Hz, Q5 = 0.91, f6 = 3.35 Hz, Q6 = 0.91 (gain K = 1).
+
+Sperling's ride comfort index for vertical vibration (Sperling and Betzhold 1956; in the
+filter form of e.g. Garg and Dukkipati, Dynamics of Railway Vehicle Systems, 1984, and
+Forstberg, Ride comfort and motion sickness in tilting trains, KTH/VTI 2000)::
+
+    B(f) = 0.588 sqrt((1.911 f^2 + (0.25 f^2)^2)
+                      / ((1 - 0.277 f^2)^2 + (1.563 f - 0.0368 f^3)^2))      (f in Hz)
+    Wz   = (sum_i (a_i B(f_i))^3)^(1/10)     for sinusoids of amplitude a_i [cm/s^2]
+         = (100 sqrt(2) a_B)^0.3             with a_B the B-weighted RMS [m/s^2]
+
+``B`` is the magnitude of the rational filter
+``0.588 p (1.3824 + 0.25 p) / (1 + 1.563 p + 0.277 p^2 + 0.0368 p^3)``, ``p = j f``.
+We evaluate a whole record with the RMS form (the "second power, 6.67th root" form, which
+for one sine equals Sperling's amplitude form exactly and does not depend on the spectral
+resolution).  Sperling's original amplitude formula with his frequency factor ``F(f)`` is
+:func:`sperling_sine_index`.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import numpy as np
+import scipy.signal
+
+from ..errors import InputError
+
+__all__ = [
+    "WK_PARAMETERS",
+    "iso2631_wk",
+    "iso2631_wk_sections",
+    "iso2631_weighted_rms",
+    "sperling_weighting",
+    "sperling_index",
+    "sperling_sine_index",
+]
+
+WK_PARAMETERS = {"f1": 0.4, "Q1": 1 / math.sqrt(2), "f2": 100.0, "Q2": 1 / math.sqrt(2),
+                 "f3": 12.5, "f4": 12.5, "Q4": 0.63, "f5": 2.37, "Q5": 0.91, "f6": 3.35,
+                 "Q6": 0.91, "K": 1.0}
+"""ISO 2631-1:1997 Table A.1 / ISO 8041 parameters of the ``Wk`` weighting [Hz, -]."""
+
+SPERLING_SCALE = (100.0 * math.sqrt(2.0)) ** 0.3
+"""``Wz = SPERLING_SCALE a_B^0.3`` with the B-weighted RMS ``a_B`` in m/s^2 (about 4.42)."""
+
+
+def iso2631_wk_sections() -> list[tuple[np.ndarray, np.ndarray]]:
+    """The four analogue sections of ``Wk`` as ``(b, a)`` polynomials in ``s`` [rad/s]
+    (descending powers): high pass, low pass, a-v transition, upward step."""
+    p = WK_PARAMETERS
+    w1, w2, w3, w4, w5, w6 = (2 * math.pi * p[k] for k in ("f1", "f2", "f3", "f4", "f5", "f6"))
+    return [
+        (np.array([1.0, 0.0, 0.0]), np.array([1.0, w1 / p["Q1"], w1 * w1])),
+        (np.array([w2 * w2]), np.array([1.0, w2 / p["Q2"], w2 * w2])),
+        (np.array([1.0 / w3, 1.0]), np.array([1.0 / w4 ** 2, 1.0 / (p["Q4"] * w4), 1.0])),
+        (np.array([1.0 / w5 ** 2, 1.0 / (p["Q5"] * w5), 1.0]) * (w5 / w6) ** 2,
+         np.array([1.0 / w6 ** 2, 1.0 / (p["Q6"] * w6), 1.0])),
+    ]
+
+
+def _freqs(frequency_Hz: Any) -> np.ndarray:
+    f = np.asarray(frequency_Hz, dtype=float)
+    if not np.isfinite(f).all() or (f < 0).any():
+        raise InputError("frequencies must be finite and >= 0 Hz")
+    return f
+
+
+def iso2631_wk(frequency_Hz: Any) -> np.ndarray:
+    """Complex frequency response of ``Wk`` at frequencies [Hz] (``|Wk|`` is the weighting
+    factor of ISO 2631-1 Table 3)."""
+    s = 2j * math.pi * _freqs(frequency_Hz)
+    h = np.ones_like(s)
+    for b, a in iso2631_wk_sections():
+        h = h * np.polyval(b, s) / np.polyval(a, s)
+    return WK_PARAMETERS["K"] * h
+
+
+def sperling_weighting(frequency_Hz: Any) -> np.ndarray:
+    """Sperling's vertical comfort weighting ``B(f)`` [-] at frequencies [Hz]."""
+    f = _freqs(frequency_Hz)
+    return 0.588 * np.sqrt((1.911 * f ** 2 + (0.25 * f ** 2) ** 2)
+                           / ((1 - 0.277 * f ** 2) ** 2 + (1.563 * f - 0.0368 * f ** 3) ** 2))
+
+
+def _signal(acceleration: Any, sample_rate_Hz: float) -> tuple[np.ndarray, float]:
+    a = np.asarray(acceleration, dtype=float)
+    if a.ndim != 1 or a.size < 8 or not np.isfinite(a).all():
+        raise InputError("acceleration must be a finite 1-D record of at least 8 samples [m/s^2]")
+    if isinstance(sample_rate_Hz, bool) or not isinstance(sample_rate_Hz, (int, float)) \
+            or not math.isfinite(sample_rate_Hz) or sample_rate_Hz <= 0:
+        raise InputError(f"sample_rate_Hz = {sample_rate_Hz!r} must be a finite number > 0")
+    return a, float(sample_rate_Hz)
+
+
+def _weighted_fft(a: np.ndarray, fs: float, magnitude: np.ndarray) -> np.ndarray:
+    return np.fft.irfft(np.fft.rfft(a) * magnitude, n=a.size)
+
+
+def iso2631_weighted_rms(acceleration: Any, sample_rate_Hz: float, *,
+                         method: str = "fft") -> float:
+    """ISO 2631-1 frequency-weighted RMS ``a_w`` [m/s^2] of a vertical acceleration record.
+
+    Parameters
+    ----------
+    acceleration : array_like (n,)
+        Vertical acceleration [m/s^2], equally sampled.
+    sample_rate_Hz : float
+        Sampling rate [Hz].
+    method : {"fft", "filter"}
+        "fft": the record's spectrum times ``|Wk(f)|`` (zero phase; the record is treated
+        as periodic); "filter": the four sections, bilinear-transformed, run causally
+        over the record (as a measuring instrument would; start-up transient included).
+    """
+    a, fs = _signal(acceleration, sample_rate_Hz)
+    if method == "fft":
+        f = np.fft.rfftfreq(a.size, 1.0 / fs)
+        y = _weighted_fft(a, fs, np.abs(iso2631_wk(f)))
+    elif method == "filter":
+        y = a
+        for b, den in iso2631_wk_sections():
+            bz, az = scipy.signal.bilinear(b, den, fs)
+            y = scipy.signal.lfilter(bz, az, y)
+        y = WK_PARAMETERS["K"] * y
+    else:
+        raise InputError(f"method = {method!r}; allowed: 'fft', 'filter'")
+    return float(np.sqrt(np.mean(y ** 2)))
+
+
+def sperling_index(acceleration: Any, sample_rate_Hz: float) -> float:
+    """Sperling's ride comfort index ``Wz`` [-] of a vertical acceleration record [m/s^2]:
+    ``Wz = (100 sqrt(2) a_B)^0.3`` with the B-weighted RMS ``a_B`` (frequency domain).
+
+    Rough scale (Sperling): 1 just noticeable, 2 clearly noticeable, 2.5 more
+    pronounced but not unpleasant, 3 strong, irregular but tolerable, 3.25 very irregular,
+    3.5 extremely irregular, unpleasant, 4 extremely unpleasant.
+    """
+    a, fs = _signal(acceleration, sample_rate_Hz)
+    f = np.fft.rfftfreq(a.size, 1.0 / fs)
+    y = _weighted_fft(a, fs, sperling_weighting(f))
+    return SPERLING_SCALE * float(np.sqrt(np.mean(y ** 2))) ** 0.3
+
+
+def sperling_sine_index(amplitude_m_per_s2: Any, frequency_Hz: Any) -> np.ndarray:
+    """Sperling's original formula for one sinusoid, ``Wz = 0.896 (a^3 F(f) / f)^(1/10)``.
+
+    ``a`` is the acceleration amplitude in cm/s^2 (converted from the m/s^2 given here);
+    the vertical frequency factor is ``F = 0.325 f^2`` (0.5-5.9 Hz), ``400 / f^2``
+    (5.9-20 Hz), ``1`` (above 20 Hz).  Defined for 0.5 Hz <= f.
+    """
+    a = np.asarray(amplitude_m_per_s2, dtype=float) * 100.0
+    f = _freqs(frequency_Hz)
+    if (f < 0.5).any():
+        raise InputError("Sperling's frequency factor is defined from 0.5 Hz up")
+    ff = np.where(f < 5.9, 0.325 * f ** 2, np.where(f < 20.0, 400.0 / f ** 2, 1.0))
+    return 0.896 * (np.abs(a) ** 3 * ff / f) ** 0.1

@@ -1,0 +1,132 @@
+"""The guideway parameter file (TOML, SI units, provenance tags like the magnet files).
+
+::
+
+    [guideway]
+    span_length = 24.768          # m (pier spacing of single-span girders)
+    mass_per_length = 7500.0      # kg/m
+    bending_stiffness = 4.0e10    # N m^2
+    damping_ratio = 0.01          # - (every mode)
+    modes = 5                     # sine modes per span
+    [provenance]
+    "guideway.span_length" = "[R] ..."
+
+Unknown or missing keys and bad values raise :class:`~maglevkit.errors.ParameterFileError`.
+The bundled file is ``guideway`` (``maglevkit/data/vehicle/guideway.toml``).
+"""
+
+from __future__ import annotations
+
+import sys
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from importlib import resources
+from pathlib import Path
+from typing import Any
+
+from ..errors import ParameterError, ParameterFileError
+from ..magnets.base import Schema, take
+from .guideway import BeamSpan, Guideway
+
+if sys.version_info >= (3, 11):
+    import tomllib
+else:  # pragma: no cover
+    import tomli as tomllib
+
+__all__ = ["GuidewayData", "load_guideway", "parse_guideway", "bundled_guideways",
+           "GUIDEWAY_SCHEMA"]
+
+GUIDEWAY_SCHEMA = {
+    "span_length": Schema(float, unit="m"),
+    "mass_per_length": Schema(float, unit="kg/m"),
+    "bending_stiffness": Schema(float, unit="N m^2"),
+    "damping_ratio": Schema(float, unit="-", check="nonnegative"),
+    "modes": Schema(int, unit="-"),
+}
+
+
+@dataclass(frozen=True)
+class GuidewayData:
+    """A parsed guideway file.
+
+    Attributes
+    ----------
+    span : BeamSpan
+        The girder (all spans identical).
+    provenance : dict
+        ``"guideway.key" -> tag/source``.
+    source : str
+        File path or bundled name.
+    """
+
+    span: BeamSpan
+    provenance: Mapping[str, str] = field(default_factory=dict)
+    source: str = ""
+
+    def guideway(self, *, n_spans: int = 3, moving_boundary: bool = True, rigid: bool = False,
+                 origin_m: float = 0.0) -> Guideway:
+        """A :class:`Guideway` of these spans (see there for the options)."""
+        return Guideway(self.span, n_spans=n_spans, moving_boundary=moving_boundary, rigid=rigid,
+                        origin_m=origin_m)
+
+
+def parse_guideway(parameters: Mapping[str, Any], source: str = "parameters") -> GuidewayData:
+    """Validate a parsed guideway TOML dictionary."""
+    if not isinstance(parameters, Mapping) or "guideway" not in parameters:
+        raise ParameterFileError(f"{source}: missing the [guideway] table")
+    unknown = sorted(set(parameters) - {"guideway", "provenance"})
+    if unknown:
+        raise ParameterFileError(f"{source}: unknown table(s) {unknown}; a guideway file may have: "
+                                 "guideway, provenance")
+    g = take(parameters["guideway"], GUIDEWAY_SCHEMA, "guideway")
+    try:
+        span = BeamSpan(g["span_length"], g["bending_stiffness"], g["mass_per_length"],
+                        n_modes=g["modes"], damping_ratio=g["damping_ratio"])
+    except ParameterError as exc:
+        raise ParameterFileError(f"{source}: {exc}") from None
+    raw = parameters.get("provenance", {})
+    if not isinstance(raw, Mapping):
+        raise ParameterFileError(f"{source}: [provenance] must map 'table.key' to a tag string")
+    prov: dict[str, str] = {}
+    for key, tag in raw.items():
+        table, _, sub = str(key).partition(".")
+        if table != "guideway" or sub not in parameters["guideway"]:
+            raise ParameterFileError(f"{source}: [provenance] {key!r} names no value of this file")
+        if not isinstance(tag, str):
+            raise ParameterFileError(f"{source}: [provenance] {key!r} must be a string")
+        prov[str(key)] = tag
+    return GuidewayData(span, prov, source)
+
+
+def bundled_guideways() -> list[str]:
+    """Names of the guideway files shipped with maglevkit."""
+    files = resources.files("maglevkit") / "data" / "vehicle"
+    return sorted(p.name[:-5] for p in files.iterdir() if p.name.endswith(".toml"))
+
+
+def load_guideway(source: str | Path = "guideway") -> GuidewayData:
+    """Load a guideway file by path or bundled name (default: the bundled ``guideway``).
+
+    Raises
+    ------
+    ParameterFileError
+        Missing file, TOML syntax error, unknown/missing keys or invalid values.
+    """
+    path = Path(source)
+    if path.suffix != ".toml" and not path.exists():
+        names = bundled_guideways()
+        if str(source) not in names:
+            raise ParameterFileError(f"no guideway file {str(source)!r} and no bundled guideway of "
+                                     f"that name; bundled: {', '.join(names)}")
+        text = (resources.files("maglevkit") / "data" / "vehicle" / f"{source}.toml").read_text()
+        label = str(source)
+    else:
+        if not path.is_file():
+            raise ParameterFileError(f"guideway file {str(path)!r} does not exist")
+        text = path.read_text()
+        label = str(path)
+    try:
+        params = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise ParameterFileError(f"{label}: not valid TOML: {exc}") from None
+    return parse_guideway(params, label)

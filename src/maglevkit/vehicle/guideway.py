@@ -1,0 +1,506 @@
+"""Elastic guideway: simply supported Euler-Bernoulli spans in modal form.
+
+A Transrapid guideway is a chain of single-span girders, each simply supported on its own
+piers, so the spans are mechanically independent.  Each span is described by its first
+``n`` sine modes (the exact eigenfunctions of a simply supported Euler-Bernoulli beam)::
+
+    w(x, t) = sum_j q_j(t) sin(j pi xi / L),        xi = x - x_pier   (0 <= xi <= L)
+    M q_j'' + 2 zeta_j omega_j M q_j' + omega_j^2 M q_j = sum_k F_k sin(j pi xi_k / L)
+    M = m L / 2,   omega_j = (j pi / L)^2 sqrt(EI / m)
+
+with point loads ``F_k`` [N] (positive downward, like ``w``) at ``xi_k``.  The modal
+equations are linear; :meth:`BeamSpan.discretize` gives their exact discretisation for
+forces held over a step (zero-order hold), :meth:`BeamSpan.modal_rhs` the right-hand side
+for NumPy or CasADi.
+
+:class:`Guideway` chains the spans.  With ``moving_boundary=True`` only a window of
+``n_spans`` consecutive spans is integrated (a ring buffer of span states): when every load
+has left the rearmost span, that span is reset to rest and reused as the next span ahead.
+This is exact for the loads, because the spans are independent and a span ahead of the
+train is at rest until the train reaches it (the paper's "moving system boundary").
+Equations and sources: ``docs/vehicle.md``.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from functools import lru_cache
+from typing import Any
+
+import numpy as np
+import scipy.linalg
+
+from ..errors import InputError, OutOfRangeError, ParameterError
+from .heave import STANDARD_GRAVITY
+
+__all__ = ["BeamSpan", "Guideway", "GuidewayState", "GuidewayDeflection"]
+
+
+def _positive(name: str, value: float, unit: str) -> float:
+    if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value) \
+            or value <= 0:
+        raise ParameterError(f"{name} = {value!r} {unit} must be a finite number > 0")
+    return float(value)
+
+
+@dataclass(frozen=True)
+class BeamSpan:
+    """One simply supported Euler-Bernoulli span, described by its first sine modes.
+
+    Parameters
+    ----------
+    length_m : float
+        Span length ``L`` between the supports [m] (> 0).
+    bending_stiffness_N_m2 : float
+        Bending stiffness ``EI`` [N m^2] (> 0).
+    mass_per_length_kg_per_m : float
+        Mass per unit length ``m`` [kg/m] (> 0).
+    n_modes : int
+        Number of sine modes (>= 1).
+    damping_ratio : float or sequence of float
+        Modal damping ratio ``zeta_j`` [-], one value for all modes or one per mode
+        (each >= 0; 0 = undamped).
+    """
+
+    length_m: float
+    bending_stiffness_N_m2: float
+    mass_per_length_kg_per_m: float
+    n_modes: int = 5
+    damping_ratio: float | tuple[float, ...] = 0.01
+    _zeta: np.ndarray = field(init=False, repr=False, compare=False)
+    _k: np.ndarray = field(init=False, repr=False, compare=False)
+    _omega: np.ndarray = field(init=False, repr=False, compare=False)
+
+    def __post_init__(self) -> None:
+        _positive("length_m", self.length_m, "m")
+        _positive("bending_stiffness_N_m2", self.bending_stiffness_N_m2, "N m^2")
+        _positive("mass_per_length_kg_per_m", self.mass_per_length_kg_per_m, "kg/m")
+        if isinstance(self.n_modes, bool) or not isinstance(self.n_modes, int) or self.n_modes < 1:
+            raise ParameterError(f"n_modes = {self.n_modes!r} must be a whole number >= 1")
+        d = self.damping_ratio
+        if isinstance(d, (int, float)) and not isinstance(d, bool):
+            zeta = np.full(self.n_modes, float(d))
+        elif isinstance(d, Sequence) and not isinstance(d, str):
+            if len(d) != self.n_modes or any(isinstance(v, bool) or not isinstance(v, (int, float))
+                                             for v in d):
+                raise ParameterError(f"damping_ratio must be one number or {self.n_modes} numbers "
+                                     f"(one per mode), got {d!r}")
+            zeta = np.array(d, dtype=float)
+            object.__setattr__(self, "damping_ratio", tuple(float(v) for v in d))
+        else:
+            raise ParameterError(f"damping_ratio = {d!r} must be a number or a sequence of numbers")
+        if not (np.isfinite(zeta).all() and (zeta >= 0).all()):
+            raise ParameterError(f"damping_ratio = {d!r} must be finite and >= 0")
+        k = np.arange(1, self.n_modes + 1) * math.pi / self.length_m
+        omega = k ** 2 * math.sqrt(self.bending_stiffness_N_m2 / self.mass_per_length_kg_per_m)
+        for name, v in (("_zeta", zeta), ("_k", k), ("_omega", omega)):
+            v.setflags(write=False)
+            object.__setattr__(self, name, v)
+
+    # ------------------------------------------------------------------ modal data
+    @property
+    def damping_ratios(self) -> np.ndarray:
+        """Modal damping ratios ``zeta_j`` (n_modes,) [-]."""
+        return self._zeta
+
+    @property
+    def wavenumbers_rad_per_m(self) -> np.ndarray:
+        """``k_j = j pi / L`` (n_modes,) [rad/m]."""
+        return self._k
+
+    @property
+    def natural_frequencies_rad_per_s(self) -> np.ndarray:
+        """``omega_j = k_j^2 sqrt(EI/m)`` (n_modes,) [rad/s]."""
+        return self._omega
+
+    @property
+    def natural_frequencies_Hz(self) -> np.ndarray:
+        """``f_j = omega_j / (2 pi)`` (n_modes,) [Hz]."""
+        return self.natural_frequencies_rad_per_s / (2 * math.pi)
+
+    @property
+    def modal_mass_kg(self) -> float:
+        """Generalised mass of every sine mode, ``m L / 2`` [kg]."""
+        return 0.5 * self.mass_per_length_kg_per_m * self.length_m
+
+    def speed_parameter(self, speed_m_per_s: float) -> float:
+        """Fryba's speed parameter ``alpha = v / (2 f_1 L)`` [-] (1 = critical speed)."""
+        return float(speed_m_per_s) / (2.0 * float(self.natural_frequencies_Hz[0]) * self.length_m)
+
+    def static_midspan_deflection_m(self, force_N: float) -> float:
+        """Exact static midspan deflection under a midspan point force, ``F L^3 / (48 EI)``."""
+        return float(force_N) * self.length_m ** 3 / (48.0 * self.bending_stiffness_N_m2)
+
+    def self_weight_sag_m(self, gravity: float = STANDARD_GRAVITY) -> float:
+        """Exact static midspan sag under the span's own weight, ``5 m g L^4 / (384 EI)`` [m]."""
+        return 5.0 * self.mass_per_length_kg_per_m * gravity * self.length_m ** 4 / (
+            384.0 * self.bending_stiffness_N_m2)
+
+    def mode_shapes(self, local_x_m: Any) -> tuple[np.ndarray, np.ndarray]:
+        """Mode shapes ``sin(k_j xi)`` and their slopes ``k_j cos(k_j xi)`` [1/m].
+
+        Parameters
+        ----------
+        local_x_m : array_like
+            Positions ``xi`` from the span's left support [m] (0 <= xi <= L).
+
+        Returns
+        -------
+        (phi, dphi_dx) : ndarray (..., n_modes) each
+        """
+        arg = np.multiply.outer(np.asarray(local_x_m, dtype=float), self._k)
+        return np.sin(arg), self._k * np.cos(arg)
+
+    def static_modal_displacement(self, modal_force_N: Any) -> np.ndarray:
+        """Static modal response ``q_j = Q_j / (M omega_j^2)`` [m] to generalised forces [N]."""
+        return np.asarray(modal_force_N, dtype=float) / (
+            self.modal_mass_kg * self.natural_frequencies_rad_per_s ** 2)
+
+    # ------------------------------------------------------------------ equations of motion
+    def state_space(self) -> tuple[np.ndarray, np.ndarray]:
+        """``dx/dt = A x + B Q`` with ``x = [q; q']`` (2 n) and generalised forces ``Q`` (n) [N]."""
+        n = self.n_modes
+        om = self.natural_frequencies_rad_per_s
+        a = np.zeros((2 * n, 2 * n))
+        a[:n, n:] = np.eye(n)
+        a[n:, :n] = -np.diag(om ** 2)
+        a[n:, n:] = -np.diag(2.0 * self._zeta * om)
+        b = np.zeros((2 * n, n))
+        b[n:, :] = np.eye(n) / self.modal_mass_kg
+        return a, b
+
+    def modal_rhs(self, q: Any, q_dot: Any, modal_force_N: Any) -> tuple[Any, Any]:
+        """Right-hand side of the modal equations: ``(dq/dt, d2q/dt2)``.
+
+        Works elementwise on NumPy arrays (any leading batch axes, modes last) and on
+        CasADi column vectors (``SX``/``MX``/``DM`` of length n_modes), so the same
+        function builds the guideway part of a CasADi vehicle model.
+
+        Parameters
+        ----------
+        q, q_dot : array_like or CasADi
+            Modal displacements [m] and velocities [m/s].
+        modal_force_N : array_like or CasADi
+            Generalised forces ``Q_j = sum_k F_k sin(k_j xi_k)`` [N].
+        """
+        om = self.natural_frequencies_rad_per_s
+        c, k, inv_m = 2.0 * self._zeta * om, om ** 2, 1.0 / self.modal_mass_kg
+        if _is_casadi(q) or _is_casadi(q_dot) or _is_casadi(modal_force_N):
+            import casadi as ca
+
+            cd, kd = ca.DM(c), ca.DM(k)
+            return q_dot, inv_m * modal_force_N - cd * q_dot - kd * q
+        q_dot = np.asarray(q_dot, dtype=float)
+        return q_dot, inv_m * np.asarray(modal_force_N, dtype=float) - c * q_dot - k * np.asarray(q)
+
+    def discretize(self, dt_s: float) -> tuple[np.ndarray, np.ndarray]:
+        """Exact discretisation for forces held over a step: ``x+ = Ad x + Bd Q``.
+
+        ``Ad = exp(A dt)``, ``Bd = int_0^dt exp(A s) ds B`` (zero-order hold), computed
+        from the matrix exponential of the augmented matrix ``[[A, B], [0, 0]] dt``.
+        """
+        dt = _check_dt(dt_s)
+        return _discretize_cached(self.length_m, self.bending_stiffness_N_m2,
+                                  self.mass_per_length_kg_per_m, tuple(self._zeta.tolist()), dt)
+
+
+def _is_casadi(v: Any) -> bool:
+    mod = type(v).__module__
+    return mod.startswith("casadi")
+
+
+def _check_dt(dt: Any) -> float:
+    if isinstance(dt, bool) or not isinstance(dt, (int, float, np.floating)) or not math.isfinite(dt) \
+            or dt <= 0:
+        raise InputError(f"dt = {dt!r} s must be a finite number > 0")
+    return float(dt)
+
+
+@lru_cache(maxsize=64)
+def _discretize_cached(length: float, ei: float, m: float, zeta: tuple[float, ...],
+                       dt: float) -> tuple[np.ndarray, np.ndarray]:
+    span = BeamSpan(length, ei, m, n_modes=len(zeta), damping_ratio=zeta)
+    a, b = span.state_space()
+    n2, n = b.shape
+    aug = np.zeros((n2 + n, n2 + n))
+    aug[:n2, :n2] = a * dt
+    aug[:n2, n2:] = b * dt
+    e = scipy.linalg.expm(aug)
+    ad, bd = e[:n2, :n2].copy(), e[:n2, n2:].copy()
+    ad.setflags(write=False)
+    bd.setflags(write=False)
+    return ad, bd
+
+
+@dataclass(frozen=True)
+class GuidewayState:
+    """State of the integrated spans at one instant.
+
+    The window holds spans ``first_span ... first_span + n_spans - 1``; span ``k`` lives
+    in row ``k mod n_spans`` of the arrays (a ring buffer: a recycled span keeps its row).
+
+    Attributes
+    ----------
+    time_s : float
+        Time [s].
+    first_span : int
+        Index of the rearmost integrated span (span ``k`` lies on
+        ``[x0 + k L, x0 + (k + 1) L]``).
+    modal_displacement_m : ndarray (n_spans, n_modes)
+        ``q_j`` per ring-buffer row [m].
+    modal_velocity_m_per_s : ndarray (n_spans, n_modes)
+        ``q_j'`` per ring-buffer row [m/s].
+    """
+
+    time_s: float
+    first_span: int
+    modal_displacement_m: np.ndarray
+    modal_velocity_m_per_s: np.ndarray
+
+
+@dataclass(frozen=True)
+class GuidewayDeflection:
+    """Guideway deflection at given positions (positive downward).
+
+    Attributes
+    ----------
+    position_m : ndarray
+    deflection_m : ndarray
+        ``w(x, t)`` [m].
+    slope : ndarray
+        ``dw/dx`` [m/m].
+    rate_m_per_s : ndarray
+        ``dw/dt`` at fixed ``x`` [m/s].
+    """
+
+    position_m: np.ndarray
+    deflection_m: np.ndarray
+    slope: np.ndarray
+    rate_m_per_s: np.ndarray
+
+    def moving_rate_m_per_s(self, speed_m_per_s: Any) -> np.ndarray:
+        """Rate seen by a point moving at ``v``: ``dw/dt + v dw/dx`` [m/s]."""
+        return self.rate_m_per_s + np.asarray(speed_m_per_s, dtype=float) * self.slope
+
+
+class Guideway:
+    """A periodically pillared guideway of independent simply supported spans.
+
+    Parameters
+    ----------
+    span : BeamSpan
+        The (identical) spans.
+    n_spans : int
+        Number of integrated spans: the window of the moving system boundary, or the
+        whole guideway with ``moving_boundary=False``.  The window must cover every span
+        that carries a load at once (see :meth:`spans_needed`).
+    moving_boundary : bool
+        True: the window follows the loads; a span every load has left is reset to rest
+        and reused ahead (an infinitely long guideway).  False: a guideway of exactly
+        ``n_spans`` spans, ``first_span ... first_span + n_spans - 1`` of the initial state.
+    rigid : bool
+        A rigid guideway (no deflection, no states; loads are accepted and ignored).
+    origin_m : float
+        Position of pier 0 [m]; pier ``k`` stands at ``origin_m + k L``.
+    """
+
+    def __init__(self, span: BeamSpan, *, n_spans: int = 3, moving_boundary: bool = True,
+                 rigid: bool = False, origin_m: float = 0.0) -> None:
+        if not isinstance(span, BeamSpan):
+            raise ParameterError(f"span must be a BeamSpan, got {type(span).__name__}")
+        if isinstance(n_spans, bool) or not isinstance(n_spans, int) or n_spans < 1:
+            raise ParameterError(f"n_spans = {n_spans!r} must be a whole number >= 1")
+        if not math.isfinite(origin_m):
+            raise ParameterError(f"origin_m = {origin_m!r} must be finite")
+        self.span = span
+        self.n_spans = n_spans
+        self.moving_boundary = bool(moving_boundary)
+        self.rigid = bool(rigid)
+        self.origin_m = float(origin_m)
+        self.n_modes = 0 if rigid else span.n_modes
+
+    def __repr__(self) -> str:
+        kind = "rigid" if self.rigid else f"{self.n_modes} modes"
+        mode = "moving boundary" if self.moving_boundary else "fixed"
+        return (f"Guideway(L={self.span.length_m} m, {kind}, {self.n_spans} spans, {mode})")
+
+    def spans_needed(self, load_extent_m: float) -> int:
+        """Smallest window that always covers loads spread over ``load_extent_m`` [m]."""
+        if not (math.isfinite(load_extent_m) and load_extent_m >= 0):
+            raise InputError(f"load_extent_m = {load_extent_m!r} must be finite and >= 0")
+        return int(math.floor(load_extent_m / self.span.length_m)) + 2 if load_extent_m > 0 else 1
+
+    # ------------------------------------------------------------------ state
+    def initial_state(self, *, first_span: int = 0, time_s: float = 0.0) -> GuidewayState:
+        """All spans at rest; the window starts at span ``first_span``."""
+        if isinstance(first_span, bool) or not isinstance(first_span, (int, np.integer)):
+            raise InputError(f"first_span = {first_span!r} must be a whole number")
+        if not math.isfinite(time_s):
+            raise InputError(f"time_s = {time_s!r} must be finite")
+        z = np.zeros((self.n_spans, self.n_modes))
+        return GuidewayState(float(time_s), int(first_span), z, z.copy())
+
+    def span_index(self, position_m: Any) -> np.ndarray:
+        """Index ``k`` of the span each position lies on (a pier belongs to the span ahead)."""
+        x = np.asarray(position_m, dtype=float)
+        return np.floor((x - self.origin_m) / self.span.length_m).astype(int)
+
+    def _locate(self, state: GuidewayState, x: np.ndarray, *, for_loads: bool
+                ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Span indices, ring rows and local coordinates; checks that x is covered."""
+        k = self.span_index(x)
+        lo, hi = state.first_span, state.first_span + self.n_spans - 1
+        behind = k < lo
+        ahead = k > hi
+        if behind.any():
+            what = ("recycled by the moving system boundary" if self.moving_boundary
+                    else "not part of this guideway")
+            raise OutOfRangeError(
+                f"position {float(x[behind].min()):.6g} m lies on span {int(k[behind].min())}, "
+                f"which is {what}; integrated spans are {lo} ... {hi} "
+                f"({self.origin_m + lo * self.span.length_m:.6g} ... "
+                f"{self.origin_m + (hi + 1) * self.span.length_m:.6g} m)")
+        if ahead.any() and (for_loads or not self.moving_boundary):
+            need = int(k.max() - k.min()) + 1
+            hint = (f"; the loads cover {need} spans, use n_spans >= {need}"
+                    if self.moving_boundary else "")
+            raise OutOfRangeError(
+                f"position {float(x[ahead].max()):.6g} m lies on span {int(k[ahead].max())}, "
+                f"beyond the integrated spans {lo} ... {hi}{hint}")
+        xi = x - (self.origin_m + k * self.span.length_m)
+        return k, np.mod(k, self.n_spans), xi
+
+    def advance(self, state: GuidewayState, rear_position_m: float) -> GuidewayState:
+        """Move the window so that it starts at the span under ``rear_position_m``.
+
+        Spans behind it are reset to rest and reused ahead (moving boundary only; a
+        window never moves backwards).
+        """
+        if not self.moving_boundary or self.rigid:
+            return state
+        if not math.isfinite(rear_position_m):
+            raise InputError(f"rear_position_m = {rear_position_m!r} must be finite")
+        k_new = int(self.span_index(rear_position_m))
+        shift = k_new - state.first_span
+        if shift <= 0:
+            return state
+        q = state.modal_displacement_m.copy()
+        qd = state.modal_velocity_m_per_s.copy()
+        rows = np.mod(np.arange(state.first_span, state.first_span + min(shift, self.n_spans)),
+                      self.n_spans)
+        q[rows] = 0.0
+        qd[rows] = 0.0
+        return GuidewayState(state.time_s, k_new, q, qd)
+
+    # ------------------------------------------------------------------ loads and outputs
+    def _positions(self, positions_m: Any) -> np.ndarray:
+        x = np.atleast_1d(np.asarray(positions_m, dtype=float))
+        if x.ndim != 1 or not np.isfinite(x).all():
+            raise InputError("positions_m must be a finite scalar or 1-D sequence [m]")
+        return x
+
+    def influence(self, state: GuidewayState, positions_m: Any) -> tuple[np.ndarray, np.ndarray]:
+        """Modal influence matrices of point loads at ``positions_m``.
+
+        Returns
+        -------
+        (phi, dphi_dx) : ndarray (n_spans, n_modes, n_points) each
+            ``phi[r, j, p] = sin(k_j xi_p)`` if point ``p`` lies on the span in ring row
+            ``r``, else 0; so ``Q = phi @ F`` are the generalised forces of point forces
+            ``F`` and ``w = einsum('rj,rjp->p', q, phi)`` the deflections.  Constant over a
+            step for loads held in place; the CasADi vehicle model takes them as inputs.
+        """
+        x = self._positions(positions_m)
+        nm = self.n_modes
+        phi = np.zeros((self.n_spans, nm, x.size))
+        dphi = np.zeros_like(phi)
+        if nm == 0 or x.size == 0:
+            return phi, dphi
+        _, rows, xi = self._locate(state, x, for_loads=True)
+        s, ds = self.span.mode_shapes(xi)          # (n_points, n_modes)
+        cols = np.arange(x.size)
+        phi[rows, :, cols] = s
+        dphi[rows, :, cols] = ds
+        return phi, dphi
+
+    def modal_forces(self, state: GuidewayState, positions_m: Any, forces_N: Any) -> np.ndarray:
+        """Generalised forces (n_spans, n_modes) [N] of point forces (positive downward)."""
+        x = self._positions(positions_m)
+        f = np.broadcast_to(np.asarray(forces_N, dtype=float), x.shape)
+        if not np.isfinite(f).all():
+            raise InputError("forces_N must be finite")
+        out = np.zeros((self.n_spans, self.n_modes))
+        if self.n_modes == 0 or x.size == 0:
+            return out
+        _, rows, xi = self._locate(state, x, for_loads=True)
+        s, _ = self.span.mode_shapes(xi)
+        np.add.at(out, rows, s * f[:, None])
+        return out
+
+    def deflection(self, state: GuidewayState, positions_m: Any) -> GuidewayDeflection:
+        """Deflection, slope and rate at ``positions_m`` (on integrated spans, or ahead of
+        the window with the moving boundary, where the spans are at rest)."""
+        x = self._positions(positions_m)
+        zero = np.zeros_like(x)
+        if self.n_modes == 0:
+            return GuidewayDeflection(x, zero, zero.copy(), zero.copy())
+        k, rows, xi = self._locate(state, x, for_loads=False)
+        inside = k <= state.first_span + self.n_spans - 1
+        s, ds = self.span.mode_shapes(np.where(inside, xi, 0.0))
+        q = state.modal_displacement_m[rows] * inside[:, None]
+        qd = state.modal_velocity_m_per_s[rows] * inside[:, None]
+        return GuidewayDeflection(x, (q * s).sum(axis=1), (q * ds).sum(axis=1),
+                                  (qd * s).sum(axis=1))
+
+    def midspan_deflection_m(self, state: GuidewayState) -> np.ndarray:
+        """Midspan deflection of every integrated span, ordered from the rearmost [m]."""
+        spans = state.first_span + np.arange(self.n_spans)
+        if self.n_modes == 0:
+            return np.zeros(self.n_spans)
+        s, _ = self.span.mode_shapes(0.5 * self.span.length_m)
+        q = state.modal_displacement_m[np.mod(spans, self.n_spans)]
+        return q @ s
+
+    # ------------------------------------------------------------------ time stepping
+    def step(self, state: GuidewayState, dt_s: float, positions_m: Any = (),
+             forces_N: Any = 0.0) -> GuidewayState:
+        """Advance by ``dt_s`` [s] with point forces held over the step (exact for them).
+
+        Parameters
+        ----------
+        state : GuidewayState
+        dt_s : float
+            Step [s] (> 0).
+        positions_m : array_like
+            Load positions [m], held over the step.  For loads moving at ``v``, passing
+            the mid-step positions ``x(t) + v dt / 2`` makes the step second-order
+            accurate in the moving load.
+        forces_N : array_like
+            Point forces on the guideway [N], positive downward (the magnets' attraction
+            pulls the guideway towards the vehicle); one per position or one for all.
+
+        Returns
+        -------
+        GuidewayState
+            With the moving boundary, the window is first moved to the rearmost load.
+        """
+        dt = _check_dt(dt_s)
+        if not isinstance(state, GuidewayState):
+            raise InputError("state must be a GuidewayState (from Guideway.initial_state)")
+        if state.modal_displacement_m.shape != (self.n_spans, self.n_modes):
+            raise InputError(f"state has shape {state.modal_displacement_m.shape}, this guideway "
+                             f"needs ({self.n_spans}, {self.n_modes})")
+        x = self._positions(positions_m)
+        if self.n_modes == 0:
+            return GuidewayState(state.time_s + dt, state.first_span,
+                                 state.modal_displacement_m, state.modal_velocity_m_per_s)
+        if x.size:
+            state = self.advance(state, float(x.min()))
+        qf = self.modal_forces(state, x, forces_N)
+        ad, bd = self.span.discretize(dt)
+        xs = np.concatenate([state.modal_displacement_m, state.modal_velocity_m_per_s], axis=1)
+        xs = xs @ ad.T + qf @ bd.T
+        n = self.n_modes
+        return GuidewayState(state.time_s + dt, state.first_span, xs[:, :n], xs[:, n:])

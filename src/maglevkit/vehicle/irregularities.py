@@ -1,0 +1,446 @@
+"""Guideway irregularities: vertical deviations of the stator underside from its nominal line.
+
+Sign convention: positive downward, like the guideway deflection ``w``; a positive
+irregularity under a levitation magnet closes its gap just as a deflection does.
+Every profile gives its elevation ``r(x)`` [m] and slope ``dr/dx`` [m/m] at any positions,
+so that a magnet at ``x_m(t)`` moving at ``v`` sees ``r(x_m)`` and the rate ``v dr/dx``.
+
+Deterministic profiles
+    :class:`SpanSag` (span-periodic sag or camber between the piers), :class:`JointSteps`
+    (steps at the stator-pack joints, every 1.032 m on the Transrapid), and
+    :class:`HarmonicProfile` (a sinusoid, e.g. of the stator-pack or pole pitch).
+Random profiles
+    :class:`RandomProfile`: a seeded sum of cosines with amplitudes from a one-sided PSD
+    (:class:`GermanTrackPSD`, :class:`PowerLawPSD` or any callable), reproducible and
+    evaluable anywhere.  :meth:`Profile.tabulate` samples any profile once for fast
+    interpolation in a simulation loop.
+
+Profiles add: ``SpanSag(...) + JointSteps(...) + RandomProfile(...)``.  Formulas and
+sources: ``docs/vehicle.md``.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+import scipy.interpolate
+
+from ..errors import InputError, ParameterError
+
+__all__ = [
+    "Profile",
+    "SumProfile",
+    "SpanSag",
+    "JointSteps",
+    "HarmonicProfile",
+    "RandomProfile",
+    "TabulatedProfile",
+    "GermanTrackPSD",
+    "PowerLawPSD",
+    "STATOR_PACK_LENGTH_M",
+]
+
+STATOR_PACK_LENGTH_M = 1.032
+"""Transrapid long-stator pack length [m]: 12 slots of 86 mm = 4 pole pitches of 258 mm
+(widely quoted, [R]); 24 packs make one 24.768 m span."""
+
+
+def _x(position_m: Any) -> np.ndarray:
+    x = np.asarray(position_m, dtype=float)
+    if not np.isfinite(x).all():
+        raise InputError("positions must be finite [m]")
+    return x
+
+
+def _finite(name: str, value: Any, unit: str, *, positive: bool = False) -> float:
+    if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
+        raise ParameterError(f"{name} = {value!r} {unit} must be a finite number")
+    if positive and value <= 0:
+        raise ParameterError(f"{name} = {value!r} {unit} must be > 0")
+    return float(value)
+
+
+class Profile:
+    """Base class: an irregularity profile ``r(x)`` [m], positive downward."""
+
+    def elevation_m(self, position_m: Any) -> np.ndarray:  # pragma: no cover - abstract
+        """Irregularity ``r(x)`` [m] at positions [m]."""
+        raise NotImplementedError
+
+    def slope(self, position_m: Any) -> np.ndarray:  # pragma: no cover - abstract
+        """``dr/dx`` [m/m] at positions [m] (steps contribute nothing: a jump has no rate)."""
+        raise NotImplementedError
+
+    def __call__(self, position_m: Any) -> np.ndarray:
+        return self.elevation_m(position_m)
+
+    def __add__(self, other: Profile) -> SumProfile:
+        if not isinstance(other, Profile):
+            return NotImplemented
+        return SumProfile((self, other))
+
+    def tabulate(self, start_m: float, stop_m: float, step_m: float) -> TabulatedProfile:
+        """Sample this profile on ``[start_m, stop_m]`` every ``step_m`` for fast lookup
+        (cubic Hermite interpolation of elevation and slope)."""
+        a, b = _finite("start_m", start_m, "m"), _finite("stop_m", stop_m, "m")
+        h = _finite("step_m", step_m, "m", positive=True)
+        if b <= a:
+            raise ParameterError(f"stop_m = {b} m must be > start_m = {a} m")
+        n = int(math.ceil((b - a) / h)) + 1
+        x = a + h * np.arange(n)
+        return TabulatedProfile(x, self.elevation_m(x), self.slope(x))
+
+
+@dataclass(frozen=True, eq=False)
+class SumProfile(Profile):
+    """The sum of several profiles."""
+
+    parts: tuple[Profile, ...]
+
+    def elevation_m(self, position_m: Any) -> np.ndarray:
+        x = _x(position_m)
+        return sum((p.elevation_m(x) for p in self.parts), np.zeros_like(x))
+
+    def slope(self, position_m: Any) -> np.ndarray:
+        x = _x(position_m)
+        return sum((p.slope(x) for p in self.parts), np.zeros_like(x))
+
+    def __add__(self, other: Profile) -> SumProfile:
+        if not isinstance(other, Profile):
+            return NotImplemented
+        return SumProfile((*self.parts, other))
+
+
+@dataclass(frozen=True, eq=False)
+class SpanSag(Profile):
+    """Span-periodic sag (amplitude > 0) or camber (< 0) between the piers.
+
+    ``shape="uniform_load"``: the static deflection line of a simply supported beam under
+    a uniform load, scaled to ``amplitude_m`` at midspan,
+    ``r = A (16/5) (xi - 2 xi^3 + xi^4)``, ``xi = (x - x0)/L mod 1``;
+    ``shape="half_sine"``: ``r = A sin(pi xi)``.  Both vanish at the piers, with a kink
+    there (single-span girders rotate independently at their bearings).
+
+    Parameters
+    ----------
+    amplitude_m : float
+        Midspan value [m].
+    span_length_m : float
+        Pier spacing [m] (> 0).
+    origin_m : float
+        Position of a pier [m].
+    shape : {"uniform_load", "half_sine"}
+    """
+
+    amplitude_m: float
+    span_length_m: float
+    origin_m: float = 0.0
+    shape: str = "uniform_load"
+
+    def __post_init__(self) -> None:
+        _finite("amplitude_m", self.amplitude_m, "m")
+        _finite("span_length_m", self.span_length_m, "m", positive=True)
+        _finite("origin_m", self.origin_m, "m")
+        if self.shape not in ("uniform_load", "half_sine"):
+            raise ParameterError(f"shape = {self.shape!r}; allowed: 'uniform_load', 'half_sine'")
+
+    def _xi(self, position_m: Any) -> np.ndarray:
+        return np.mod((_x(position_m) - self.origin_m) / self.span_length_m, 1.0)
+
+    def elevation_m(self, position_m: Any) -> np.ndarray:
+        xi = self._xi(position_m)
+        if self.shape == "half_sine":
+            return self.amplitude_m * np.sin(math.pi * xi)
+        return self.amplitude_m * 3.2 * (xi - 2 * xi ** 3 + xi ** 4)
+
+    def slope(self, position_m: Any) -> np.ndarray:
+        xi = self._xi(position_m)
+        if self.shape == "half_sine":
+            d = math.pi * np.cos(math.pi * xi)
+        else:
+            d = 3.2 * (1 - 6 * xi ** 2 + 4 * xi ** 3)
+        return self.amplitude_m * d / self.span_length_m
+
+
+@dataclass(frozen=True, eq=False)
+class JointSteps(Profile):
+    """Steps at the stator-pack joints: pack ``n`` (on ``[x0 + n p, x0 + (n+1) p)``) is
+    offset by ``h_n``.
+
+    ``pattern="alternating"``: ``h_n = +-step_m/2`` alternately, a step of ``step_m`` at
+    every joint; ``pattern="random"``: ``h_n`` uniform in ``[-step_m/2, step_m/2]``, seeded
+    (reproducible; pack ``n`` always gets the same offset, whatever is evaluated first).
+
+    Parameters
+    ----------
+    step_m : float
+        Step height (alternating) or the range of offsets (random) [m] (>= 0).
+    pitch_m : float
+        Pack length [m]; default the Transrapid's 1.032 m.
+    origin_m : float
+        Position of a joint [m].
+    pattern : {"alternating", "random"}
+    seed : int
+        Seed of the random offsets.
+    """
+
+    step_m: float
+    pitch_m: float = STATOR_PACK_LENGTH_M
+    origin_m: float = 0.0
+    pattern: str = "alternating"
+    seed: int = 0
+
+    def __post_init__(self) -> None:
+        if _finite("step_m", self.step_m, "m") < 0:
+            raise ParameterError(f"step_m = {self.step_m!r} m must be >= 0")
+        _finite("pitch_m", self.pitch_m, "m", positive=True)
+        _finite("origin_m", self.origin_m, "m")
+        if self.pattern not in ("alternating", "random"):
+            raise ParameterError(f"pattern = {self.pattern!r}; allowed: 'alternating', 'random'")
+        if isinstance(self.seed, bool) or not isinstance(self.seed, int) or self.seed < 0:
+            raise ParameterError(f"seed = {self.seed!r} must be a whole number >= 0")
+
+    def pack_index(self, position_m: Any) -> np.ndarray:
+        """Index ``n`` of the stator pack at each position."""
+        return np.floor((_x(position_m) - self.origin_m) / self.pitch_m).astype(np.int64)
+
+    def elevation_m(self, position_m: Any) -> np.ndarray:
+        n = self.pack_index(position_m)
+        if self.pattern == "alternating":
+            return np.where(n % 2 == 0, 0.5, -0.5) * self.step_m
+        # a counter-based hash of (seed, n): the same offset for pack n in any evaluation
+        u = _hash_uniform(self.seed, n)
+        return (u - 0.5) * self.step_m
+
+    def slope(self, position_m: Any) -> np.ndarray:
+        return np.zeros_like(_x(position_m))
+
+
+def _hash_uniform(seed: int, n: np.ndarray) -> np.ndarray:
+    """Uniform [0, 1) numbers from integers (SplitMix64 finaliser), reproducible per index."""
+    with np.errstate(over="ignore"):
+        z = (n.astype(np.uint64) + np.uint64(seed) * np.uint64(0x9E3779B97F4A7C15)
+             + np.uint64(0x632BE59BD9B4E019))
+        z = (z ^ (z >> np.uint64(30))) * np.uint64(0xBF58476D1CE4E5B9)
+        z = (z ^ (z >> np.uint64(27))) * np.uint64(0x94D049BB133111EB)
+        z = z ^ (z >> np.uint64(31))
+    return (z >> np.uint64(11)).astype(np.float64) / float(2 ** 53)
+
+
+@dataclass(frozen=True, eq=False)
+class HarmonicProfile(Profile):
+    """``r = A sin(2 pi (x - x0) / lambda)``: e.g. the stator-pack (1.032 m) or pole-pitch
+    (0.258 m) periodicity."""
+
+    amplitude_m: float
+    wavelength_m: float = STATOR_PACK_LENGTH_M
+    origin_m: float = 0.0
+
+    def __post_init__(self) -> None:
+        _finite("amplitude_m", self.amplitude_m, "m")
+        _finite("wavelength_m", self.wavelength_m, "m", positive=True)
+        _finite("origin_m", self.origin_m, "m")
+
+    def elevation_m(self, position_m: Any) -> np.ndarray:
+        k = 2 * math.pi / self.wavelength_m
+        return self.amplitude_m * np.sin(k * (_x(position_m) - self.origin_m))
+
+    def slope(self, position_m: Any) -> np.ndarray:
+        k = 2 * math.pi / self.wavelength_m
+        return self.amplitude_m * k * np.cos(k * (_x(position_m) - self.origin_m))
+
+
+# ----------------------------------------------------------------------------- PSDs
+@dataclass(frozen=True)
+class GermanTrackPSD:
+    """One-sided vertical-profile PSD of the form used for German high-speed track::
+
+        S(Omega) = A_v Omega_c^2 / ((Omega^2 + Omega_r^2) (Omega^2 + Omega_c^2))
+
+    in m^2/(rad/m), ``Omega`` the spatial angular frequency [rad/m].  The defaults are the
+    widely quoted "low irregularity" values ``A_v = 4.032e-7 m rad``,
+    ``Omega_c = 0.8246 rad/m``, ``Omega_r = 0.0206 rad/m`` (high irregularity:
+    ``A_v = 1.080e-6``) for *railway* track (e.g. Zhai, Vehicle-Track Coupled Dynamics,
+    2020; Lei, High Speed Railway Track Dynamics, 2017); a maglev guideway is smoother at
+    long and rougher at short wavelengths (Shi et al., J. Zhejiang Univ. Sci. A 15 (2014)
+    385-394), so scale ``A_v`` to the case.
+    """
+
+    A_v_m_rad: float = 4.032e-7
+    omega_c_rad_per_m: float = 0.8246
+    omega_r_rad_per_m: float = 0.0206
+
+    def __post_init__(self) -> None:
+        _finite("A_v_m_rad", self.A_v_m_rad, "m rad", positive=True)
+        _finite("omega_c_rad_per_m", self.omega_c_rad_per_m, "rad/m", positive=True)
+        _finite("omega_r_rad_per_m", self.omega_r_rad_per_m, "rad/m", positive=True)
+        if self.omega_r_rad_per_m == self.omega_c_rad_per_m:
+            raise ParameterError("omega_r_rad_per_m must differ from omega_c_rad_per_m")
+
+    def __call__(self, omega_rad_per_m: Any) -> np.ndarray:
+        w2 = np.asarray(omega_rad_per_m, dtype=float) ** 2
+        c, r = self.omega_c_rad_per_m, self.omega_r_rad_per_m
+        return self.A_v_m_rad * c * c / ((w2 + r * r) * (w2 + c * c))
+
+    def variance_m2(self, omega_min: float, omega_max: float) -> float:
+        """Exact ``int S dOmega`` over ``[omega_min, omega_max]`` [m^2] (partial fractions)."""
+        c, r = self.omega_c_rad_per_m, self.omega_r_rad_per_m
+
+        def prim(w: float) -> float:
+            return (math.atan(w / r) / r - math.atan(w / c) / c) * c * c / (c * c - r * r)
+
+        return self.A_v_m_rad * (prim(omega_max) - prim(omega_min))
+
+
+@dataclass(frozen=True)
+class PowerLawPSD:
+    """One-sided power-law PSD ``S(Omega) = S0 (Omega / Omega0)^(-n)`` [m^2/(rad/m)]."""
+
+    S0_m2_per_rad_per_m: float
+    exponent: float = 2.0
+    omega0_rad_per_m: float = 1.0
+
+    def __post_init__(self) -> None:
+        _finite("S0_m2_per_rad_per_m", self.S0_m2_per_rad_per_m, "m^2/(rad/m)", positive=True)
+        _finite("exponent", self.exponent, "")
+        _finite("omega0_rad_per_m", self.omega0_rad_per_m, "rad/m", positive=True)
+
+    def __call__(self, omega_rad_per_m: Any) -> np.ndarray:
+        w = np.asarray(omega_rad_per_m, dtype=float)
+        return self.S0_m2_per_rad_per_m * (w / self.omega0_rad_per_m) ** (-self.exponent)
+
+    def variance_m2(self, omega_min: float, omega_max: float) -> float:
+        """Exact ``int S dOmega`` over ``[omega_min, omega_max]`` [m^2]."""
+        s0, n, w0 = self.S0_m2_per_rad_per_m, self.exponent, self.omega0_rad_per_m
+        if n == 1.0:
+            return s0 * w0 * math.log(omega_max / omega_min)
+        return s0 * w0 ** n * (omega_max ** (1 - n) - omega_min ** (1 - n)) / (1 - n)
+
+
+@dataclass(frozen=True, eq=False)
+class RandomProfile(Profile):
+    """A random profile from a one-sided PSD by a seeded sum of cosines::
+
+        r(x) = sum_k sqrt(2 S(Omega_k) dOmega) cos(Omega_k x + phi_k)
+
+    over ``n_components`` equal bins of ``[omega_min, omega_max]`` (``dOmega`` wide),
+    ``Omega_k`` uniformly jittered within the middle half of bin ``k`` (so the profile
+    does not repeat after ``2 pi / dOmega``) and phases ``phi_k`` uniform in
+    ``[0, 2 pi)``, both from ``numpy.random.default_rng(seed)`` (Shinozuka and Deodatis,
+    Appl. Mech. Rev. 44 (1991) 191-204).  Its spatial variance is exactly
+    ``sum_k S(Omega_k) dOmega``, the midpoint-type quadrature of ``int S dOmega``.
+
+    Parameters
+    ----------
+    psd : callable
+        One-sided PSD ``S(Omega)`` [m^2/(rad/m)] of ``Omega`` [rad/m].
+    omega_min_rad_per_m, omega_max_rad_per_m : float
+        Band [rad/m] (wavelengths ``2 pi / Omega``); 0 < min < max.
+    n_components : int
+        Number of cosines (>= 1).
+    seed : int
+        Seed (>= 0): the same seed gives the same profile.
+    """
+
+    psd: Callable[[np.ndarray], np.ndarray]
+    omega_min_rad_per_m: float
+    omega_max_rad_per_m: float
+    n_components: int = 1000
+    seed: int = 0
+    omega_rad_per_m: np.ndarray = field(init=False, repr=False)
+    amplitude_m: np.ndarray = field(init=False, repr=False)
+    phase_rad: np.ndarray = field(init=False, repr=False)
+
+    def __post_init__(self) -> None:
+        lo = _finite("omega_min_rad_per_m", self.omega_min_rad_per_m, "rad/m", positive=True)
+        hi = _finite("omega_max_rad_per_m", self.omega_max_rad_per_m, "rad/m", positive=True)
+        if hi <= lo:
+            raise ParameterError(f"omega_max_rad_per_m = {hi} must be > omega_min_rad_per_m = {lo}")
+        n = self.n_components
+        if isinstance(n, bool) or not isinstance(n, int) or n < 1:
+            raise ParameterError(f"n_components = {n!r} must be a whole number >= 1")
+        if isinstance(self.seed, bool) or not isinstance(self.seed, int) or self.seed < 0:
+            raise ParameterError(f"seed = {self.seed!r} must be a whole number >= 0")
+        if not callable(self.psd):
+            raise ParameterError("psd must be a callable S(Omega) [m^2/(rad/m)]")
+        rng = np.random.default_rng(self.seed)
+        d = (hi - lo) / n
+        om = lo + d * (np.arange(n) + 0.5 + 0.5 * (rng.random(n) - 0.5))
+        phase = 2 * math.pi * rng.random(n)
+        s = np.asarray(self.psd(om), dtype=float)
+        if s.shape != om.shape or not np.isfinite(s).all() or (s < 0).any():
+            raise ParameterError("psd must return finite values >= 0, one per frequency")
+        for name, v in (("omega_rad_per_m", om), ("amplitude_m", np.sqrt(2 * s * d)),
+                        ("phase_rad", phase)):
+            v.setflags(write=False)
+            object.__setattr__(self, name, v)
+
+    @property
+    def bin_width_rad_per_m(self) -> float:
+        return (self.omega_max_rad_per_m - self.omega_min_rad_per_m) / self.n_components
+
+    @property
+    def variance_m2(self) -> float:
+        """Exact spatial variance of the profile, ``sum_k a_k^2 / 2`` [m^2]."""
+        return float(0.5 * np.sum(self.amplitude_m ** 2))
+
+    def _sum(self, position_m: Any, derivative: bool) -> np.ndarray:
+        x = _x(position_m)
+        flat = x.ravel()
+        out = np.empty_like(flat)
+        chunk = max(1, 2 ** 22 // self.n_components)
+        for i in range(0, flat.size, chunk):
+            arg = np.multiply.outer(flat[i:i + chunk], self.omega_rad_per_m) + self.phase_rad
+            if derivative:
+                out[i:i + chunk] = -(np.sin(arg) @ (self.amplitude_m * self.omega_rad_per_m))
+            else:
+                out[i:i + chunk] = np.cos(arg) @ self.amplitude_m
+        return out.reshape(x.shape)
+
+    def elevation_m(self, position_m: Any) -> np.ndarray:
+        return self._sum(position_m, False)
+
+    def slope(self, position_m: Any) -> np.ndarray:
+        return self._sum(position_m, True)
+
+
+@dataclass(frozen=True, eq=False)
+class TabulatedProfile(Profile):
+    """A profile sampled at increasing positions, cubic-Hermite interpolated (elevation
+    and slope given at the samples); positions outside the table raise."""
+
+    position_m: np.ndarray
+    values_m: np.ndarray
+    slopes: np.ndarray
+    _interp: Any = field(init=False, repr=False)
+
+    def __post_init__(self) -> None:
+        x, v, s = (np.asarray(a, dtype=float) for a in (self.position_m, self.values_m,
+                                                        self.slopes))
+        if x.ndim != 1 or x.size < 2 or v.shape != x.shape or s.shape != x.shape:
+            raise ParameterError("position_m, values_m and slopes must be 1-D, equally long (>= 2)")
+        if not (np.isfinite(x).all() and np.isfinite(v).all() and np.isfinite(s).all()):
+            raise ParameterError("tabulated profile values must be finite")
+        if (np.diff(x) <= 0).any():
+            raise ParameterError("position_m must be strictly increasing")
+        object.__setattr__(self, "_interp", scipy.interpolate.CubicHermiteSpline(x, v, s))
+
+    def _check(self, position_m: Any) -> np.ndarray:
+        x = _x(position_m)
+        lo, hi = float(self.position_m[0]), float(self.position_m[-1])
+        if x.size and (x.min() < lo or x.max() > hi):
+            from ..errors import OutOfRangeError
+
+            raise OutOfRangeError(f"positions {float(x.min()):.6g} ... {float(x.max()):.6g} m leave "
+                                  f"the tabulated range {lo:.6g} ... {hi:.6g} m")
+        return x
+
+    def elevation_m(self, position_m: Any) -> np.ndarray:
+        return np.asarray(self._interp(self._check(position_m)), dtype=float)
+
+    def slope(self, position_m: Any) -> np.ndarray:
+        return np.asarray(self._interp(self._check(position_m), 1), dtype=float)
