@@ -325,14 +325,16 @@ class PowerLawPSD:
 class RandomProfile(Profile):
     """A random profile from a one-sided PSD by a seeded sum of cosines::
 
-        r(x) = sum_k sqrt(2 S(Omega_k) dOmega) cos(Omega_k x + phi_k)
+        r(x) = sum_k a_k cos(Omega_k x + phi_k),   a_k = sqrt(2 P_k),
+        P_k = int_{bin k} S(Omega) dOmega
 
-    over ``n_components`` equal bins of ``[omega_min, omega_max]`` (``dOmega`` wide),
-    ``Omega_k`` uniformly jittered within the middle half of bin ``k`` (so the profile
-    does not repeat after ``2 pi / dOmega``) and phases ``phi_k`` uniform in
-    ``[0, 2 pi)``, both from ``numpy.random.default_rng(seed)`` (Shinozuka and Deodatis,
-    Appl. Mech. Rev. 44 (1991) 191-204).  Its spatial variance is exactly
-    ``sum_k S(Omega_k) dOmega``, the midpoint-type quadrature of ``int S dOmega``.
+    over ``n_components`` equal bins of ``[omega_min, omega_max]``; ``Omega_k`` uniformly
+    jittered within the middle half of bin ``k`` (so the profile does not repeat after
+    ``2 pi / dOmega``) and phases ``phi_k`` uniform in ``[0, 2 pi)``, both from
+    ``numpy.random.default_rng(seed)`` (spectral representation, Shinozuka and Deodatis,
+    Appl. Mech. Rev. 44 (1991) 191-204).  The bin powers ``P_k`` are 5-point
+    Gauss-Legendre integrals of ``S``, so the profile's spatial variance
+    ``sum_k a_k^2 / 2`` equals ``int S dOmega`` over the band.
 
     Parameters
     ----------
@@ -371,10 +373,15 @@ class RandomProfile(Profile):
         d = (hi - lo) / n
         om = lo + d * (np.arange(n) + 0.5 + 0.5 * (rng.random(n) - 0.5))
         phase = 2 * math.pi * rng.random(n)
-        s = np.asarray(self.psd(om), dtype=float)
-        if s.shape != om.shape or not np.isfinite(s).all() or (s < 0).any():
+        # power of each bin: 5-point Gauss-Legendre of S over the bin (exact to ~1e-10
+        # for smooth spectra), so the variance is the band integral whatever the jitter
+        g, gw = np.polynomial.legendre.leggauss(5)
+        nodes = lo + d * (np.arange(n)[:, None] + 0.5 + 0.5 * g[None, :])
+        s = np.asarray(self.psd(nodes.ravel()), dtype=float)
+        if s.shape != (nodes.size,) or not np.isfinite(s).all() or (s < 0).any():
             raise ParameterError("psd must return finite values >= 0, one per frequency")
-        for name, v in (("omega_rad_per_m", om), ("amplitude_m", np.sqrt(2 * s * d)),
+        power = 0.5 * d * (s.reshape(nodes.shape) @ gw)
+        for name, v in (("omega_rad_per_m", om), ("amplitude_m", np.sqrt(2 * power)),
                         ("phase_rad", phase)):
             v.setflags(write=False)
             object.__setattr__(self, name, v)
