@@ -85,7 +85,10 @@ class Profile:
 
     def tabulate(self, start_m: float, stop_m: float, step_m: float) -> TabulatedProfile:
         """Sample this profile on ``[start_m, stop_m]`` every ``step_m`` for fast lookup
-        (cubic Hermite interpolation of elevation and slope)."""
+        (cubic Hermite interpolation of elevation and slope).
+
+        For smooth profiles only: the interpolation rounds off steps (:class:`JointSteps`,
+        the kinks of :class:`SpanSag` at the piers); evaluate those directly (cheap)."""
         a, b = _finite("start_m", start_m, "m"), _finite("stop_m", stop_m, "m")
         h = _finite("step_m", step_m, "m", positive=True)
         if b <= a:
