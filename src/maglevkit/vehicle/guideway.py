@@ -334,7 +334,11 @@ class Guideway:
 
     # ------------------------------------------------------------------ state
     def initial_state(self, *, first_span: int = 0, time_s: float = 0.0) -> GuidewayState:
-        """All spans at rest; the window starts at span ``first_span``."""
+        """All spans at rest; the window starts at span ``first_span``.
+
+        With the moving boundary start it at the rearmost load,
+        ``first_span=int(guideway.span_index(x_rear))``; the window then follows the loads.
+        """
         if isinstance(first_span, bool) or not isinstance(first_span, (int, np.integer)):
             raise InputError(f"first_span = {first_span!r} must be a whole number")
         if not math.isfinite(time_s):
