@@ -110,6 +110,8 @@ def test_comfort_bad_input_raises() -> None:
         iso2631_weighted_rms(np.ones((3, 3)), 100.0)
     with pytest.raises(mk.InputError, match="sample_rate_Hz"):
         sperling_index(np.ones(100), 0.0)
+    with pytest.raises(mk.InputError, match="sample_rate_Hz"):
+        sperling_index(np.ones(100), True)
     with pytest.raises(mk.InputError, match="method"):
         iso2631_weighted_rms(np.ones(100), 100.0, method="wavelet")
     with pytest.raises(mk.InputError, match="0.5 Hz"):

@@ -360,6 +360,17 @@ def test_bad_step_inputs_raise() -> None:
         gw.step(st, 1e-3, [float("nan")], [FORCE])
     with pytest.raises(mk.InputError, match="shape"):
         Guideway(_span(4)).step(st, 1e-3)
+    # the project's one validation path: bools and strings are not numbers or switches
+    with pytest.raises(mk.InputError, match="dt"):
+        gw.step(st, True, [1.0], [FORCE])
+    with pytest.raises(mk.InputError, match="positions_m"):
+        gw.step(st, 1e-3, ["1.0"], [FORCE])
+    with pytest.raises(mk.InputError, match="forces_N"):
+        gw.step(st, 1e-3, [1.0, 2.0], [FORCE, FORCE, FORCE])
+    with pytest.raises(mk.InputError, match="moving_boundary"):
+        Guideway(_span(3), moving_boundary="no")
+    with pytest.raises(mk.ParameterError, match="n_spans"):
+        Guideway(_span(3), n_spans=True)
 
 
 # ----------------------------------------------------------------------------- data file

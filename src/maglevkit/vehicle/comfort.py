@@ -38,6 +38,7 @@ import numpy as np
 import scipy.signal
 
 from ..errors import InputError
+from ..validation import real_array, real_number
 
 __all__ = [
     "WK_PARAMETERS",
@@ -73,8 +74,8 @@ def iso2631_wk_sections() -> list[tuple[np.ndarray, np.ndarray]]:
 
 
 def _freqs(frequency_Hz: Any) -> np.ndarray:
-    f = np.asarray(frequency_Hz, dtype=float)
-    if not np.isfinite(f).all() or (f < 0).any():
+    f = real_array(frequency_Hz, "frequencies", "Hz")
+    if (f < 0).any():
         raise InputError("frequencies must be finite and >= 0 Hz")
     return f
 
@@ -97,13 +98,10 @@ def sperling_weighting(frequency_Hz: Any) -> np.ndarray:
 
 
 def _signal(acceleration: Any, sample_rate_Hz: float) -> tuple[np.ndarray, float]:
-    a = np.asarray(acceleration, dtype=float)
-    if a.ndim != 1 or a.size < 8 or not np.isfinite(a).all():
+    a = real_array(acceleration, "acceleration", "m/s^2")
+    if a.ndim != 1 or a.size < 8:
         raise InputError("acceleration must be a finite 1-D record of at least 8 samples [m/s^2]")
-    if isinstance(sample_rate_Hz, bool) or not isinstance(sample_rate_Hz, (int, float)) \
-            or not math.isfinite(sample_rate_Hz) or sample_rate_Hz <= 0:
-        raise InputError(f"sample_rate_Hz = {sample_rate_Hz!r} must be a finite number > 0")
-    return a, float(sample_rate_Hz)
+    return a, real_number(sample_rate_Hz, "sample_rate_Hz", "Hz", positive=True)
 
 
 def _weighted_fft(a: np.ndarray, fs: float, magnitude: np.ndarray) -> np.ndarray:
@@ -161,7 +159,7 @@ def sperling_sine_index(amplitude_m_per_s2: Any, frequency_Hz: Any) -> np.ndarra
     the vertical frequency factor is ``F = 0.325 f^2`` (0.5-5.9 Hz), ``400 / f^2``
     (5.9-20 Hz), ``1`` (above 20 Hz).  Defined for 0.5 Hz <= f.
     """
-    a = np.asarray(amplitude_m_per_s2, dtype=float) * 100.0
+    a = real_array(amplitude_m_per_s2, "amplitude_m_per_s2", "m/s^2") * 100.0
     f = _freqs(frequency_Hz)
     if (f < 0.5).any():
         raise InputError("Sperling's frequency factor is defined from 0.5 Hz up")

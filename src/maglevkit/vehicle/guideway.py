@@ -33,16 +33,21 @@ import numpy as np
 import scipy.linalg
 
 from ..errors import InputError, OutOfRangeError, ParameterError
+from ..validation import flag, real_array, real_number, whole_number
 from .heave import STANDARD_GRAVITY
 
 __all__ = ["BeamSpan", "Guideway", "GuidewayState", "GuidewayDeflection"]
 
 
 def _positive(name: str, value: float, unit: str) -> float:
-    if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value) \
-            or value <= 0:
-        raise ParameterError(f"{name} = {value!r} {unit} must be a finite number > 0")
-    return float(value)
+    return real_number(value, name, unit, positive=True, error=ParameterError)
+
+
+def _count(name: str, value: Any, minimum: int) -> int:
+    try:
+        return whole_number(value, name, minimum=minimum)
+    except InputError as exc:
+        raise ParameterError(str(exc)) from None
 
 
 @dataclass(frozen=True)
@@ -74,25 +79,23 @@ class BeamSpan:
     _omega: np.ndarray = field(init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
-        _positive("length_m", self.length_m, "m")
-        _positive("bending_stiffness_N_m2", self.bending_stiffness_N_m2, "N m^2")
-        _positive("mass_per_length_kg_per_m", self.mass_per_length_kg_per_m, "kg/m")
-        if isinstance(self.n_modes, bool) or not isinstance(self.n_modes, int) or self.n_modes < 1:
-            raise ParameterError(f"n_modes = {self.n_modes!r} must be a whole number >= 1")
+        for name, unit in (("length_m", "m"), ("bending_stiffness_N_m2", "N m^2"),
+                           ("mass_per_length_kg_per_m", "kg/m")):
+            object.__setattr__(self, name, _positive(name, getattr(self, name), unit))
+        object.__setattr__(self, "n_modes", _count("n_modes", self.n_modes, 1))
         d = self.damping_ratio
-        if isinstance(d, (int, float)) and not isinstance(d, bool):
-            zeta = np.full(self.n_modes, float(d))
-        elif isinstance(d, Sequence) and not isinstance(d, str):
-            if len(d) != self.n_modes or any(isinstance(v, bool) or not isinstance(v, (int, float))
-                                             for v in d):
+        if isinstance(d, Sequence) and not isinstance(d, str):
+            if len(d) != self.n_modes:
                 raise ParameterError(f"damping_ratio must be one number or {self.n_modes} numbers "
                                      f"(one per mode), got {d!r}")
-            zeta = np.array(d, dtype=float)
-            object.__setattr__(self, "damping_ratio", tuple(float(v) for v in d))
+            vals = tuple(real_number(v, "damping_ratio", nonnegative=True, error=ParameterError)
+                         for v in d)
+            zeta = np.array(vals)
+            object.__setattr__(self, "damping_ratio", vals)
         else:
-            raise ParameterError(f"damping_ratio = {d!r} must be a number or a sequence of numbers")
-        if not (np.isfinite(zeta).all() and (zeta >= 0).all()):
-            raise ParameterError(f"damping_ratio = {d!r} must be finite and >= 0")
+            z = real_number(d, "damping_ratio", nonnegative=True, error=ParameterError)
+            zeta = np.full(self.n_modes, z)
+            object.__setattr__(self, "damping_ratio", z)
         k = np.arange(1, self.n_modes + 1) * math.pi / self.length_m
         omega = k ** 2 * math.sqrt(self.bending_stiffness_N_m2 / self.mass_per_length_kg_per_m)
         for name, v in (("_zeta", zeta), ("_k", k), ("_omega", omega)):
@@ -212,10 +215,7 @@ def _is_casadi(v: Any) -> bool:
 
 
 def _check_dt(dt: Any) -> float:
-    if isinstance(dt, bool) or not isinstance(dt, (int, float, np.floating)) or not math.isfinite(dt) \
-            or dt <= 0:
-        raise InputError(f"dt = {dt!r} s must be a finite number > 0")
-    return float(dt)
+    return real_number(dt, "dt", "s", positive=True)
 
 
 @lru_cache(maxsize=64)
@@ -310,15 +310,11 @@ class Guideway:
                  rigid: bool = False, origin_m: float = 0.0) -> None:
         if not isinstance(span, BeamSpan):
             raise ParameterError(f"span must be a BeamSpan, got {type(span).__name__}")
-        if isinstance(n_spans, bool) or not isinstance(n_spans, int) or n_spans < 1:
-            raise ParameterError(f"n_spans = {n_spans!r} must be a whole number >= 1")
-        if not math.isfinite(origin_m):
-            raise ParameterError(f"origin_m = {origin_m!r} must be finite")
         self.span = span
-        self.n_spans = n_spans
-        self.moving_boundary = bool(moving_boundary)
-        self.rigid = bool(rigid)
-        self.origin_m = float(origin_m)
+        self.n_spans = _count("n_spans", n_spans, 1)
+        self.moving_boundary = flag(moving_boundary, "moving_boundary")
+        self.rigid = flag(rigid, "rigid")
+        self.origin_m = real_number(origin_m, "origin_m", "m", error=ParameterError)
         self.n_modes = 0 if rigid else span.n_modes
 
     def __repr__(self) -> str:
@@ -328,8 +324,7 @@ class Guideway:
 
     def spans_needed(self, load_extent_m: float) -> int:
         """Smallest window that always covers loads spread over ``load_extent_m`` [m]."""
-        if not (math.isfinite(load_extent_m) and load_extent_m >= 0):
-            raise InputError(f"load_extent_m = {load_extent_m!r} must be finite and >= 0")
+        load_extent_m = real_number(load_extent_m, "load_extent_m", "m", nonnegative=True)
         return int(math.floor(load_extent_m / self.span.length_m)) + 2 if load_extent_m > 0 else 1
 
     # ------------------------------------------------------------------ state
@@ -339,12 +334,10 @@ class Guideway:
         With the moving boundary start it at the rearmost load,
         ``first_span=int(guideway.span_index(x_rear))``; the window then follows the loads.
         """
-        if isinstance(first_span, bool) or not isinstance(first_span, (int, np.integer)):
-            raise InputError(f"first_span = {first_span!r} must be a whole number")
-        if not math.isfinite(time_s):
-            raise InputError(f"time_s = {time_s!r} must be finite")
+        first_span = whole_number(first_span, "first_span")
+        time_s = real_number(time_s, "time_s", "s")
         z = np.zeros((self.n_spans, self.n_modes))
-        return GuidewayState(float(time_s), int(first_span), z, z.copy())
+        return GuidewayState(time_s, first_span, z, z.copy())
 
     def span_index(self, position_m: Any) -> np.ndarray:
         """Index ``k`` of the span each position lies on (a pier belongs to the span ahead)."""
@@ -384,8 +377,7 @@ class Guideway:
         """
         if not self.moving_boundary or self.rigid:
             return state
-        if not math.isfinite(rear_position_m):
-            raise InputError(f"rear_position_m = {rear_position_m!r} must be finite")
+        rear_position_m = real_number(rear_position_m, "rear_position_m", "m")
         k_new = int(self.span_index(rear_position_m))
         shift = k_new - state.first_span
         if shift <= 0:
@@ -400,9 +392,9 @@ class Guideway:
 
     # ------------------------------------------------------------------ loads and outputs
     def _positions(self, positions_m: Any) -> np.ndarray:
-        x = np.atleast_1d(np.asarray(positions_m, dtype=float))
-        if x.ndim != 1 or not np.isfinite(x).all():
-            raise InputError("positions_m must be a finite scalar or 1-D sequence [m]")
+        x = np.atleast_1d(real_array(positions_m, "positions_m", "m"))
+        if x.ndim != 1:
+            raise InputError("positions_m must be a scalar or a 1-D sequence [m]")
         return x
 
     def influence(self, state: GuidewayState, positions_m: Any) -> tuple[np.ndarray, np.ndarray]:
@@ -432,9 +424,11 @@ class Guideway:
     def modal_forces(self, state: GuidewayState, positions_m: Any, forces_N: Any) -> np.ndarray:
         """Generalised forces (n_spans, n_modes) [N] of point forces (positive downward)."""
         x = self._positions(positions_m)
-        f = np.broadcast_to(np.asarray(forces_N, dtype=float), x.shape)
-        if not np.isfinite(f).all():
-            raise InputError("forces_N must be finite")
+        f = real_array(forces_N, "forces_N", "N")
+        if f.ndim > 1 or f.size not in (1, x.size):
+            raise InputError(f"forces_N: one force or one per position ({x.size}), got shape "
+                             f"{f.shape}")
+        f = np.broadcast_to(f, x.shape)
         out = np.zeros((self.n_spans, self.n_modes))
         if self.n_modes == 0 or x.size == 0:
             return out

@@ -29,7 +29,8 @@ from typing import Any
 import numpy as np
 import scipy.interpolate
 
-from ..errors import InputError, ParameterError
+from ..errors import InputError, OutOfRangeError, ParameterError
+from ..validation import real_array, real_number, whole_number
 
 __all__ = [
     "Profile",
@@ -50,18 +51,18 @@ STATOR_PACK_LENGTH_M = 1.032
 
 
 def _x(position_m: Any) -> np.ndarray:
-    x = np.asarray(position_m, dtype=float)
-    if not np.isfinite(x).all():
-        raise InputError("positions must be finite [m]")
-    return x
+    return real_array(position_m, "positions", "m")
 
 
 def _finite(name: str, value: Any, unit: str, *, positive: bool = False) -> float:
-    if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
-        raise ParameterError(f"{name} = {value!r} {unit} must be a finite number")
-    if positive and value <= 0:
-        raise ParameterError(f"{name} = {value!r} {unit} must be > 0")
-    return float(value)
+    return real_number(value, name, unit, positive=positive, error=ParameterError)
+
+
+def _seed(value: Any, what: str = "seed") -> int:
+    try:
+        return whole_number(value, what, minimum=0)
+    except InputError as exc:
+        raise ParameterError(str(exc)) from None
 
 
 class Profile:
@@ -204,8 +205,7 @@ class JointSteps(Profile):
         _finite("origin_m", self.origin_m, "m")
         if self.pattern not in ("alternating", "random"):
             raise ParameterError(f"pattern = {self.pattern!r}; allowed: 'alternating', 'random'")
-        if isinstance(self.seed, bool) or not isinstance(self.seed, int) or self.seed < 0:
-            raise ParameterError(f"seed = {self.seed!r} must be a whole number >= 0")
+        object.__setattr__(self, "seed", _seed(self.seed))
 
     def pack_index(self, position_m: Any) -> np.ndarray:
         """Index ``n`` of the stator pack at each position."""
@@ -365,11 +365,11 @@ class RandomProfile(Profile):
         hi = _finite("omega_max_rad_per_m", self.omega_max_rad_per_m, "rad/m", positive=True)
         if hi <= lo:
             raise ParameterError(f"omega_max_rad_per_m = {hi} must be > omega_min_rad_per_m = {lo}")
-        n = self.n_components
-        if isinstance(n, bool) or not isinstance(n, int) or n < 1:
-            raise ParameterError(f"n_components = {n!r} must be a whole number >= 1")
-        if isinstance(self.seed, bool) or not isinstance(self.seed, int) or self.seed < 0:
-            raise ParameterError(f"seed = {self.seed!r} must be a whole number >= 0")
+        n = _seed(self.n_components, "n_components")
+        if n < 1:
+            raise ParameterError(f"n_components = {n!r}: must be a whole number >= 1")
+        object.__setattr__(self, "n_components", n)
+        object.__setattr__(self, "seed", _seed(self.seed))
         if not callable(self.psd):
             raise ParameterError("psd must be a callable S(Omega) [m^2/(rad/m)]")
         rng = np.random.default_rng(self.seed)
@@ -443,8 +443,6 @@ class TabulatedProfile(Profile):
         x = _x(position_m)
         lo, hi = float(self.position_m[0]), float(self.position_m[-1])
         if x.size and (x.min() < lo or x.max() > hi):
-            from ..errors import OutOfRangeError
-
             raise OutOfRangeError(f"positions {float(x.min()):.6g} ... {float(x.max()):.6g} m leave "
                                   f"the tabulated range {lo:.6g} ... {hi:.6g} m")
         return x
