@@ -364,7 +364,7 @@ class TabulatedBH(Material):
 # --------------------------------------------------------------------------- records
 # Modelica Standard Library, Magnetic.FluxTubes.Material.SoftMagnetic (Roschke fits).
 # Resistivities: pure iron 0.098e-6 ohm m [P]; solid structural/free-cutting steels
-# 1.5e-7 ohm m [E] (facts.md: 1e-7 to 2e-7); none given for electrical sheet grades.
+# 1.5e-7 ohm m [E] (typically 1e-7 to 2e-7; docs/sources.md sec. 4); none given for electrical sheet grades.
 _ROSCHKE: dict[str, tuple[float, float, float, float, float, float | None]] = {
     # name: (mu_i, B_mymax, c_a, c_b, n, resistivity)
     "M330-50A": (500, 0.7, 24000, 9.38, 9.6, None),

@@ -16,7 +16,7 @@ the nodes ``y_k = coil_gap_to_pole_face + (k - 1/2) h``, ``h = coil_height / K``
 the pole face; the coil's turns are shared by the segments in proportion to the coil
 height they hold); yoke path ``c``; rail path ``c + rail.thickness``.
 
-Estimates of the secondary flux paths (Roters' method, facts.md section 3):
+Estimates of the secondary flux paths (Roters' method, docs/sources.md sec. 3):
 
 * fringing at each pole edge that faces the rail: ``2 mu0 w/pi ln(1 + pi r/(2 s))``, with
   ``r`` the flank height between pole face and coil (``coil_gap_to_pole_face``); on the

@@ -2,7 +2,7 @@
 
 The paper identifies the small-signal differential inductance ``L~(s, I)`` from the time
 constant of the current after a small voltage step at a fixed gap.  Around an operating
-point the reduced model (paper eq. 8, facts.md sec. 5) is a resistor ``R_el`` in series
+point the reduced model (paper eq. 8, docs/sources.md sec. 5) is a resistor ``R_el`` in series
 with ``L~`` shunted by the eddy-current resistance ``R_ec``::
 
     dI(t) = dU/R_el - (dU/R_el - dI_0) exp(-t / tau),   dI_0 = dU / (R_el + R_ec)

@@ -19,7 +19,7 @@ the inductor current cannot jump either, so the jump is ``dU / (R_el + R_ec)`` a
     R_ec,j = 1 / Y_jj - R_el,j        (inf if Y_jj = 0: no eddy currents)
 
 For one coil of ``n`` turns on one loop with one eddy element of conductance ``G`` this
-is ``n^2 / G`` exactly (facts.md sec. 5).  ``Y`` depends on the operating point through
+is ``n^2 / G`` exactly (docs/sources.md sec. 5).  ``Y`` depends on the operating point through
 the iron's differential reluctances (saturation moves flux between main and leakage
 paths, which changes how much of the eddy conductance the coil sees).
 """
