@@ -15,6 +15,8 @@ from ._app import app, console, fail, load_magnet_or_exit
 
 def comparison_table(results, title: str) -> Table:  # type: ignore[no-untyped-def]
     """A rich table of errors and speed-ups."""
+    from ..compare import AC_MIN_RELATIVE_VARIATION, format_ac_error
+
     table = Table(title=title)
     for col in ("scenario", "circuit", "current NRMS [%]", "force NRMS [%]",
                 "current AC [%]", "force AC [%]", "detailed [ms]", "reduced [ms]", "speed-up"):
@@ -23,18 +25,23 @@ def comparison_table(results, title: str) -> Table:  # type: ignore[no-untyped-d
         for j, c in enumerate(r.circuit_names):
             table.add_row(r.scenario.name if j == 0 else "", c,
                           f"{100 * r.current_error[j]:.3f}", f"{100 * r.force_error[j]:.3f}",
-                          f"{100 * r.current_error_ac[j]:.2f}", f"{100 * r.force_error_ac[j]:.2f}",
+                          format_ac_error(r.current_error_ac[j], suffix=""),
+                          format_ac_error(r.force_error_ac[j], suffix=""),
                           f"{r.detailed_wall_s * 1e3:.0f}" if j == 0 else "",
                           f"{r.reduced_wall_s * 1e3:.1f}" if j == 0 else "",
                           f"{r.speedup:.0f}" if j == 0 else "")
     table.caption = ("NRMS: RMS(reduced - detailed) / RMS(detailed), the acceptance metric "
-                     "(<= 2 %); AC: over the RMS of the detailed signal minus its mean")
+                     "(<= 2 %); AC: over the RMS of the detailed signal minus its mean; "
+                     "n/a: the detailed signal varies by less than "
+                     f"{100 * AC_MIN_RELATIVE_VARIATION:g} % of its level (RMS about its mean)")
     return table
 
 
 def plot_title(name: str, result) -> str:  # type: ignore[no-untyped-def]
     """Figure title with the AC-normalised errors (the plot's own note has the NRMS)."""
-    ac = ", ".join(f"{c}: I {100 * ci:.2f} %, F {100 * fi:.2f} %" for c, ci, fi in
+    from ..compare import format_ac_error
+
+    ac = ", ".join(f"{c}: I {format_ac_error(ci)}, F {format_ac_error(fi)}" for c, ci, fi in
                    zip(result.circuit_names, result.current_error_ac, result.force_error_ac,
                        strict=True))
     return f"{name} -- AC-normalised RMS error {ac}"
