@@ -27,7 +27,7 @@ import numpy as np
 from .magnets.base import Magnet
 from .magnets.characteristics import KNEE_EXPONENT, nominal_point, saturation_knee
 from .models.statics import solve_statics
-from .plotting import plt, save
+from .plotting import place_legend, plt, save
 
 __all__ = ["Fig6Data", "Fig7Data", "CouplingResponse", "fig6_data", "fig7_data",
            "coupling_response", "figure_force_current", "figure_inductance", "figure_coupling",
@@ -155,19 +155,43 @@ def fig7_data(magnet: Magnet, *, gap: float = 0.0095, max_current: float = 2.2,
                     step_full / l0, step_lin / l0)
 
 
-def _mark_currents(ax: object, i_nom_rel: float) -> None:
-    ax.axvline(1.0, color="0.35", lw=0.9, ls=":")  # type: ignore[attr-defined]
-    ax.axvline(i_nom_rel, color="tab:red", lw=0.9, ls=":")  # type: ignore[attr-defined]
-    ymax = ax.get_ylim()[1]  # type: ignore[attr-defined]
-    ax.text(1.0, 0.97 * ymax, " knee I0", va="top", fontsize=8, color="0.35")  # type: ignore[attr-defined]
-    ax.text(i_nom_rel, 0.97 * ymax, "nominal ", va="top", ha="right", fontsize=8,  # type: ignore[attr-defined]
-            color="tab:red")
+def _mark_currents(ax: Any, i_nom_rel: float) -> list[Any]:
+    """Vertical lines at the knee (``I/I0 = 1``) and the nominal current, with labels.
+
+    Each label sits on the outer side of its line (the left line's label to its left, the
+    right line's to its right), so the two never collide whichever current is larger; a
+    label that would leave the axes on the left goes inside, one row lower.  Returns the
+    text artists.
+    """
+    ax.axvline(1.0, color="0.35", lw=0.9, ls=":")
+    ax.axvline(i_nom_rel, color="tab:red", lw=0.9, ls=":")
+    trans = ax.get_xaxis_transform()          # x in data, y in axes fraction
+    marks = [(1.0, "knee I0", "0.35"), (i_nom_rel, "nominal", "tab:red")]
+    if abs(i_nom_rel - 1.0) < 1e-9:
+        return [ax.text(1.0, 0.98, " nominal = knee I0", transform=trans, va="top",
+                        ha="left", fontsize=8, color="tab:red")]
+    (x_l, lab_l, c_l), (x_r, lab_r, c_r) = sorted(marks, key=lambda m: m[0])
+    x0, x1 = ax.get_xlim()
+    left_inside = (x_l - x0) / (x1 - x0) < 0.12   # no room for the label left of the line
+    texts = [ax.text(x_r, 0.98, f" {lab_r}", transform=trans, va="top", ha="left",
+                     fontsize=8, color=c_r)]
+    if left_inside:
+        texts.append(ax.text(x_l, 0.91, f" {lab_l}", transform=trans, va="top", ha="left",
+                             fontsize=8, color=c_l))
+    else:
+        texts.append(ax.text(x_l, 0.98, f"{lab_l} ", transform=trans, va="top", ha="right",
+                             fontsize=8, color=c_l))
+    return texts
 
 
 def figure_force_current(magnet: Magnet, path: str | Path, *, data: Fig6Data | None = None
                          ) -> Path:
     """Write the Fig. 6 analog (PNG) and return its path."""
-    d = data or fig6_data(magnet)
+    return save(_draw_force_current(magnet.name, data or fig6_data(magnet)), path)
+
+
+def _draw_force_current(magnet_name: str, d: Fig6Data) -> Any:
+    """The Fig. 6 analog as a matplotlib figure (not saved)."""
     fig, ax = plt.subplots(figsize=(6.4, 4.6))
     cmap = plt.get_cmap("viridis")
     n = len(d.gaps_m)
@@ -182,14 +206,14 @@ def figure_force_current(magnet: Magnet, path: str | Path, *, data: Fig6Data | N
     ax.set_ylim(0.0, min(float(d.force_linear.max()), 3.5) * 1.02)
     ax.set_xlabel("normalised current I / I0")
     ax.set_ylabel("normalised force F / F0")
-    ax.set_title(f"Fig. 6 analog: force-current characteristics\n{magnet.name}", fontsize=10)
+    ax.set_title(f"Fig. 6 analog: force-current characteristics\n{magnet_name}", fontsize=10)
     ax.grid(True, alpha=0.3)
     _mark_currents(ax, d.nominal_current_A / d.I0_A)
-    ax.legend(fontsize=8, loc="lower right")
+    place_legend(ax, fontsize=8)
     fig.text(0.01, -0.08, f"I0 = {d.I0_A:.1f} A (knee: d ln F/d ln I = {KNEE_EXPONENT} at "
              f"s0 = {d.nominal_gap_m * 1e3:.1f} mm),\nF0 = F(s0, I0) = {d.F0_N / 1e3:.1f} kN "
              f"(whole magnet); all circuits at the same current.", fontsize=7.5, color="0.3")
-    return save(fig, path)
+    return fig
 
 
 def figure_inductance(magnet: Magnet, path: str | Path, *, data: Fig7Data | None = None) -> Path:
@@ -199,7 +223,11 @@ def figure_inductance(magnet: Magnet, path: str | Path, *, data: Fig7Data | None
     small voltage steps (detailed flux model), for the full model and for the model without
     saturation and eddy currents.
     """
-    d = data or fig7_data(magnet)
+    return save(_draw_inductance(magnet.name, data or fig7_data(magnet)), path)
+
+
+def _draw_inductance(magnet_name: str, d: Fig7Data) -> Any:
+    """The Fig. 7 analog as a matplotlib figure (not saved)."""
     fig, ax = plt.subplots(figsize=(6.8, 4.8))
     has_steps = d.step_current.size > 0
     ax.plot(d.current, d.inductance_full, color="tab:blue", lw=2.0,
@@ -219,10 +247,10 @@ def figure_inductance(magnet: Magnet, path: str | Path, *, data: Fig7Data | None
     ax.set_xlabel("normalised current I / I0")
     ax.set_ylabel("normalised inductance L / L0")
     ax.set_title(f"Fig. 7 analog: differential inductance at s = {d.gap_m * 1e3:.1f} mm\n"
-                 f"{magnet.name}", fontsize=10)
+                 f"{magnet_name}", fontsize=10)
     ax.grid(True, alpha=0.3)
     _mark_currents(ax, d.nominal_current_A / d.I0_A)
-    ax.legend(fontsize=7.5, loc="lower left", framealpha=0.9)
+    place_legend(ax, fontsize=7.5, framealpha=0.9)
     note = (f"L~ = dpsi/dI of one circuit with all circuits at the same current; L0 = {d.L0_H:.3f} H "
             f"(model without saturation\nand eddy currents), I0 = {d.I0_A:.1f} A.  Statically L~ "
             "is independent of eddy currents.")
@@ -238,7 +266,7 @@ def figure_inductance(magnet: Magnet, path: str | Path, *, data: Fig7Data | None
                  f"tau R_el = L_11 = {float(np.mean(d.step_inductance_linear)):.3f} L0, constant "
                  "(one circuit stepped: the other's\nmutual share of L~ is missing).")
     fig.text(0.01, -0.02, note, fontsize=7.5, color="0.3", va="top")
-    return save(fig, path)
+    return fig
 
 
 @dataclass(frozen=True)
@@ -284,7 +312,11 @@ def figure_coupling(magnet: Magnet, path: str | Path, *,
     The stepped circuit is drawn against the left axis; the other circuits, whose response
     is below 1 % of it, against a magnified right axis with the same zero.
     """
-    d = data or coupling_response(magnet)
+    return save(_draw_coupling(magnet.name, data or coupling_response(magnet)), path)
+
+
+def _draw_coupling(magnet_name: str, d: CouplingResponse) -> Any:
+    """The coupling figure as a matplotlib figure (not saved)."""
     fig, ax = plt.subplots(figsize=(7.5, 4.5))
     rel = 100.0 * d.relative_current_change
     t_ms = d.time_s * 1e3
@@ -316,14 +348,14 @@ def figure_coupling(magnet: Magnet, path: str | Path, *,
         ax2.tick_params(axis="y", colors=c2)
         h2, l2 = ax2.get_legend_handles_labels()
         handles, labels = handles + h2, labels + l2
-    ax.legend(handles, labels, fontsize=8.5, loc="center right", framealpha=0.9)
+    place_legend(ax, handles, labels, fontsize=8.5, framealpha=0.9)
     ax.set_title(f"Coupling of the circuits: +20 % voltage step on '{d.circuit_names[0]}'\n"
-                 f"{magnet.name}", fontsize=10)
+                 f"{magnet_name}", fontsize=10)
     fig.text(0.01, -0.02, f"Largest response of another circuit: {100 * d.other_peak_ratio:.2f} % "
              f"of the stepped circuit's; static mutual/self inductance ratio {d.mutual_ratio:.4f}.\n"
              "Detailed flux-based model with eddy currents, at the nominal gap and current; "
              "both y axes share the zero.", fontsize=8, color="0.3", va="top")
-    return save(fig, path)
+    return fig
 
 
 def write_figures(magnet: Magnet, out: str | Path, *, step_points: int = 12) -> list[Path]:
