@@ -142,13 +142,15 @@ class ComparisonResult:
                                          self.force_error_ac, strict=True))
 
 
-def format_ac_error(value: float, *, digits: int = 2, suffix: str = " %") -> str:
+def format_ac_error(value: float, *, digits: int = 2, suffix: str = " %",
+                    short: bool = False) -> str:
     """An AC-normalised error (a fraction) as percent text: ``"3.45 %"``, or
     ``"n/a (no variation)"`` for NaN, which marks a detailed signal without variation
-    (see ``AC_MIN_RELATIVE_VARIATION``).  ``suffix=""`` drops the unit (table columns).
+    (see ``AC_MIN_RELATIVE_VARIATION``).  ``suffix=""`` drops the unit and ``short=True``
+    writes just ``"n/a"`` (table columns, whose caption explains it).
     """
     if not math.isfinite(float(value)):
-        return "n/a (no variation)"
+        return "n/a" if short else "n/a (no variation)"
     return f"{100.0 * float(value):.{digits}f}{suffix}"
 
 

@@ -25,14 +25,14 @@ def comparison_table(results, title: str) -> Table:  # type: ignore[no-untyped-d
         for j, c in enumerate(r.circuit_names):
             table.add_row(r.scenario.name if j == 0 else "", c,
                           f"{100 * r.current_error[j]:.3f}", f"{100 * r.force_error[j]:.3f}",
-                          format_ac_error(r.current_error_ac[j], suffix=""),
-                          format_ac_error(r.force_error_ac[j], suffix=""),
+                          format_ac_error(r.current_error_ac[j], suffix="", short=True),
+                          format_ac_error(r.force_error_ac[j], suffix="", short=True),
                           f"{r.detailed_wall_s * 1e3:.0f}" if j == 0 else "",
                           f"{r.reduced_wall_s * 1e3:.1f}" if j == 0 else "",
                           f"{r.speedup:.0f}" if j == 0 else "")
     table.caption = ("NRMS: RMS(reduced - detailed) / RMS(detailed), the acceptance metric "
                      "(<= 2 %); AC: over the RMS of the detailed signal minus its mean; "
-                     "n/a: the detailed signal varies by less than "
+                     "n/a: no variation, the detailed signal varies by less than "
                      f"{100 * AC_MIN_RELATIVE_VARIATION:g} % of its level (RMS about its mean)")
     return table
 
