@@ -363,10 +363,11 @@ def test_fitted_eddy_resistance_one_run_is_faster_and_agrees() -> None:
     # measured 0.33 s vs 0.03 s (TR09 standard: 4.1 s vs 0.2 s); 3x leaves room for load
     assert t_new < t_old / 3.0
     # the old value carries the 300 restarts' accumulated error: measured 8.8453 vs
-    # 8.8685 ohm (-0.26 %); bound 0.5 %
+    # 8.8678 ohm (-0.25 %); bound 0.5 %
     assert r_new == pytest.approx(r_old, rel=5e-3)
     # the restarted run converges to the one-run value as the tolerance shrinks: at rtol
-    # 1e-11 it gives 8.86817 (3.8e-5 from the one run at rtol 1e-9); bound 1e-4
+    # 1e-11 it gives 8.86817, 4.4e-5 from the one run at rtol 1e-9 (their errors against
+    # the converged 8.86859: -4.7e-5 and -9.1e-5); bound 2e-4
     r_tight = old(rtol=1e-11, atol=1e-13)
-    assert r_new == pytest.approx(r_tight, rel=1e-4)
-    assert abs(r_new - r_tight) < abs(r_old - r_tight)       # more accurate than before
+    assert r_new == pytest.approx(r_tight, rel=2e-4)
+    assert abs(r_new - r_tight) < 0.1 * abs(r_old - r_tight)     # more accurate than before
