@@ -2,7 +2,10 @@
 PYTHON ?= python3
 VENV   := .venv
 BIN    := $(VENV)/bin
+# test/lint/bench environment: the package with its test, distributed and FEM extras
 STAMP  := $(VENV)/.installed-stamp
+# demo: the package alone (same .venv; `make demo` does not install the extras)
+DEMO_STAMP := $(VENV)/.demo-stamp
 OUT    ?= out
 
 .PHONY: demo test test-all lint bench clean
@@ -15,8 +18,12 @@ $(STAMP): $(BIN)/python pyproject.toml Makefile
 	$(BIN)/python -m pip install --quiet -e ".[test,distributed,validation]"
 	touch $(STAMP)
 
+$(DEMO_STAMP): $(BIN)/python pyproject.toml Makefile
+	$(BIN)/python -m pip install --quiet -e .
+	touch $(DEMO_STAMP)
+
 ## demo: run the main job on the bundled default magnet (figures and report in ./out)
-demo: $(STAMP)
+demo: $(DEMO_STAMP)
 	$(BIN)/maglevkit demo --out $(OUT)
 
 ## test: lint (ruff), type-check (mypy) and the default test suite

@@ -1,20 +1,17 @@
 """maglevkit: electromagnet models of EMS maglev vehicles (Transrapid type).
 
 Layers (data flows one way): ``materials`` -> ``circuit`` -> ``magnets`` -> ``models``.
+
+The public names are loaded on first use (PEP 562 module ``__getattr__``), so ``import
+maglevkit`` (and every ``maglevkit`` command-line call) does not pay for CasADi, SciPy and
+xarray before it needs them (docs/decisions.md, "Command-line conventions").
 """
 
-from .circuit import (
-    AirGap,
-    Branch,
-    Circuit,
-    Coil,
-    EddyCurrent,
-    GapLeakage,
-    IronPath,
-    LeakagePermeance,
-    Network,
-    carter_coefficient,
-)
+from __future__ import annotations
+
+import importlib
+from typing import TYPE_CHECKING, Any
+
 from .errors import (
     InputError,
     MaglevkitError,
@@ -28,47 +25,136 @@ from .errors import (
     SolverError,
     TopologyError,
 )
-from .magnets import (
-    Magnet,
-    ModelOptions,
-    PlausibleRange,
-    build_magnet,
-    bundled_magnets,
-    load_magnet,
-)
-from .materials import (
-    MU0,
-    ConstantPermeability,
-    IdealIron,
-    Material,
-    SoftMagneticMaterial,
-    TabulatedBH,
-    get_material,
-    material_names,
-)
-from .models import (
-    BankOutputs,
-    BankSimulation,
-    BankState,
-    CurrentModel,
-    FluxModel,
-    FluxState,
-    InductanceEstimate,
-    MagnetBank,
-    ReducedSimulation,
-    Scenario,
-    SimulationResult,
-    StaticSolution,
-    coenergy,
-    differential_inductance_from_step,
-    load_scenario,
-    magnetic_energy,
-    pole_force_eq6,
-    simulate,
-    solve_statics,
-    voltage_step_response,
-)
-from .reduction import CharacteristicMaps, build_maps, load_maps
+
+if TYPE_CHECKING:  # the eager imports, for type checkers and IDEs
+    from .circuit import (
+        AirGap,
+        Branch,
+        Circuit,
+        Coil,
+        EddyCurrent,
+        GapLeakage,
+        IronPath,
+        LeakagePermeance,
+        Network,
+        carter_coefficient,
+    )
+    from .magnets import (
+        Magnet,
+        ModelOptions,
+        PlausibleRange,
+        build_magnet,
+        bundled_magnets,
+        load_magnet,
+    )
+    from .materials import (
+        MU0,
+        ConstantPermeability,
+        IdealIron,
+        Material,
+        SoftMagneticMaterial,
+        TabulatedBH,
+        get_material,
+        material_names,
+    )
+    from .models import (
+        BankOutputs,
+        BankSimulation,
+        BankState,
+        CurrentModel,
+        FluxModel,
+        FluxState,
+        InductanceEstimate,
+        MagnetBank,
+        ReducedSimulation,
+        Scenario,
+        SimulationResult,
+        StaticSolution,
+        coenergy,
+        differential_inductance_from_step,
+        load_scenario,
+        magnetic_energy,
+        pole_force_eq6,
+        simulate,
+        solve_statics,
+        voltage_step_response,
+    )
+    from .reduction import CharacteristicMaps, build_maps, load_maps
+
+_LAZY: dict[str, str] = {
+    "AirGap": ".circuit",
+    "Branch": ".circuit",
+    "Circuit": ".circuit",
+    "Coil": ".circuit",
+    "EddyCurrent": ".circuit",
+    "GapLeakage": ".circuit",
+    "IronPath": ".circuit",
+    "LeakagePermeance": ".circuit",
+    "Network": ".circuit",
+    "carter_coefficient": ".circuit",
+    "Magnet": ".magnets",
+    "ModelOptions": ".magnets",
+    "PlausibleRange": ".magnets",
+    "build_magnet": ".magnets",
+    "bundled_magnets": ".magnets",
+    "load_magnet": ".magnets",
+    "MU0": ".materials",
+    "ConstantPermeability": ".materials",
+    "IdealIron": ".materials",
+    "Material": ".materials",
+    "SoftMagneticMaterial": ".materials",
+    "TabulatedBH": ".materials",
+    "get_material": ".materials",
+    "material_names": ".materials",
+    "BankOutputs": ".models",
+    "BankSimulation": ".models",
+    "BankState": ".models",
+    "CurrentModel": ".models",
+    "FluxModel": ".models",
+    "FluxState": ".models",
+    "InductanceEstimate": ".models",
+    "MagnetBank": ".models",
+    "ReducedSimulation": ".models",
+    "Scenario": ".models",
+    "SimulationResult": ".models",
+    "StaticSolution": ".models",
+    "coenergy": ".models",
+    "differential_inductance_from_step": ".models",
+    "load_scenario": ".models",
+    "magnetic_energy": ".models",
+    "pole_force_eq6": ".models",
+    "simulate": ".models",
+    "solve_statics": ".models",
+    "voltage_step_response": ".models",
+    "CharacteristicMaps": ".reduction",
+    "build_maps": ".reduction",
+    "load_maps": ".reduction",
+}
+"""Public name -> the submodule that defines it (imported on first access)."""
+
+_SUBPACKAGES = frozenset({"circuit", "cli", "compare", "control", "errors", "figures", "magnets",
+                          "materials", "models", "plotting", "reduction", "validation",
+                          "vehicle"})
+
+
+# Hidden from type checkers, which see the imports above: a typo such as
+# ``maglevkit.laod_magnet`` stays a type error instead of becoming ``Any``.
+if not TYPE_CHECKING:
+    def __getattr__(name: str) -> Any:
+        """Import a public name (or a subpackage) on first access and cache it here."""
+        module = _LAZY.get(name)
+        if module is not None:
+            value = getattr(importlib.import_module(module, __name__), name)
+        elif name in _SUBPACKAGES:
+            value = importlib.import_module(f".{name}", __name__)
+        else:
+            raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+        globals()[name] = value
+        return value
+
+    def __dir__() -> list[str]:
+        return sorted(set(globals()) | set(__all__) | _SUBPACKAGES)
+
 
 __version__ = "0.1.0"
 

@@ -1,16 +1,41 @@
-"""The typer application and shared CLI helpers."""
+"""The typer application and shared CLI helpers.
+
+Conventions (docs/decisions.md, "Command-line conventions"):
+
+* results and reports (tables, summaries, ``--format csv|json``) go to **stdout**
+  (:data:`console`); progress, diagnostics (``wrote ...``) and errors go to **stderr**
+  (:data:`err_console`), so ``maglevkit statics ... > f`` captures the result only;
+* no rich markup is interpreted in printed text (``gap [mm]`` stays ``gap [mm]``);
+* off a terminal the consoles are :data:`LOG_WIDTH` columns wide (unless ``COLUMNS`` is
+  set) and table cells fold instead of being cut with an ellipsis;
+* bad input is a one-line ``error: ...`` on stderr and exit code 2, checked before the
+  computation where possible (output paths, plot formats).
+"""
 
 from __future__ import annotations
 
+import csv
+import io
+import json
+import math
+import os
+import sys
+from collections.abc import Iterator, Mapping, Sequence
+from contextlib import contextmanager
+from enum import Enum
 from pathlib import Path
-from typing import Any
+from typing import Annotated, Any
 
-import numpy as np
 import typer
-from rich.console import Console
-from rich.markup import escape
+from rich.console import Console, ConsoleDimensions
+from rich.table import Table
+from rich.text import Text
 
 from ..errors import MaglevkitError
+
+LOG_WIDTH = 200
+"""Console width [characters] when the output is not a terminal and ``COLUMNS`` is unset
+(rich's default of 80 cut the comparison table's headers and numbers in logs)."""
 
 app = typer.Typer(
     name="maglevkit",
@@ -20,22 +45,88 @@ app = typer.Typer(
     pretty_exceptions_enable=False,
     rich_markup_mode=None,
 )
-console = Console(stderr=True, soft_wrap=True)
+
+
+class _CliConsole(Console):
+    """A rich console that is :data:`LOG_WIDTH` wide off a terminal (pipes, logs, CI)."""
+
+    @property
+    def size(self) -> ConsoleDimensions:
+        dims = Console.size.fget(self)  # type: ignore[attr-defined]
+        if (self._width is None and not self.is_terminal
+                and not os.environ.get("COLUMNS", "").isdigit()):
+            return ConsoleDimensions(LOG_WIDTH, dims.height)
+        return dims  # type: ignore[no-any-return]
+
+    @size.setter
+    def size(self, new_size: tuple[int, int]) -> None:
+        Console.size.fset(self, new_size)  # type: ignore[attr-defined]
+
+
+# markup and emoji off: printed text (units in brackets, names, paths) is shown verbatim
+console = _CliConsole(soft_wrap=True, markup=False, emoji=False)
+"""Results and reports (stdout)."""
+err_console = _CliConsole(stderr=True, soft_wrap=True, markup=False, emoji=False)
+"""Progress, diagnostics and errors (stderr)."""
+
+
+class OutputFormat(str, Enum):
+    """``--format`` of the commands that print tables."""
+
+    table = "table"
+    csv = "csv"
+    json = "json"
+
+
+FormatOption = Annotated[OutputFormat, typer.Option(
+    "--format", case_sensitive=False,
+    help="How the result is printed on stdout: table (for reading), csv or json (for "
+         "programs).")]
+
+
+def _version(value: bool) -> None:
+    if value:
+        from .. import __version__
+
+        typer.echo(f"maglevkit {__version__}")
+        raise typer.Exit()
 
 
 @app.callback()
-def _root() -> None:
+def _root(
+    version: Annotated[bool, typer.Option("--version", callback=_version, is_eager=True,
+                                          help="Print the version and exit.")] = False,
+) -> None:
     """Electromagnet models of EMS maglev vehicles: statics, dynamics, reduced models."""
 
 
-def fail(exc: Exception) -> typer.Exit:
-    """Print a maglevkit error without a traceback and return an exit (code 2)."""
-    console.print(f"[bold red]error:[/] {escape(str(exc))}")
+# ---------------------------------------------------------------------------- errors
+def fail(exc: Exception | str) -> typer.Exit:
+    """Print a one-line error (no traceback) on stderr and return an exit (code 2)."""
+    message = " ".join(str(exc).split()) if isinstance(exc, Exception) else exc
+    err_console.print(Text.assemble(("error:", "bold red"), " ", message))
     return typer.Exit(code=2)
 
 
-def parse_values(text: str, what: str, unit: str) -> np.ndarray:
+def info(message: str) -> None:
+    """A diagnostic line (e.g. ``wrote FILE``) on stderr."""
+    err_console.print(message)
+
+
+def load_magnet_or_exit(source: str | Path, **options: Any) -> Any:
+    from ..magnets import load_magnet
+
+    try:
+        return load_magnet(source, **options)
+    except MaglevkitError as exc:
+        raise fail(exc) from None
+
+
+# ---------------------------------------------------------------------------- input values
+def parse_values(text: str, what: str, unit: str) -> Any:
     """Parse ``start:stop:count`` or a comma list into a float array."""
+    import numpy as np
+
     text = text.strip()
     try:
         if ":" in text:
@@ -57,14 +148,125 @@ def parse_values(text: str, what: str, unit: str) -> np.ndarray:
         ) from None
 
 
-def load_magnet_or_exit(source: str | Path, **options: Any) -> Any:
-    from ..magnets import load_magnet
+# ---------------------------------------------------------------------------- output paths
+def plot_formats() -> tuple[str, ...]:
+    """File suffixes matplotlib can write (``png``, ``pdf``, ``svg``, ...)."""
+    from matplotlib.backend_bases import FigureCanvasBase
 
+    return tuple(sorted(FigureCanvasBase.get_supported_filetypes()))
+
+
+def output_file(path: Path | None, option: str, *,
+                formats: Sequence[str] | None = None) -> Path | None:
+    """Check an output file before the computation (None passes through).
+
+    Refuses a directory, a missing parent directory (nothing is created silently) and,
+    with ``formats``, a suffix outside them.  Raises the CLI's error exit (code 2).
+    """
+    if path is None:
+        return None
+    if path.is_dir():
+        raise fail(f"{option} {str(path)!r} is a directory; give a file name")
+    parent = path.parent
+    if not parent.is_dir():
+        raise fail(f"{option} {str(path)!r}: the directory {str(parent)!r} does not exist; "
+                   "create it first (nothing is created outside an existing directory)")
+    if formats is not None:
+        suffix = path.suffix.lower().lstrip(".")
+        if suffix not in formats:
+            got = f"format {suffix!r}" if suffix else "no file suffix"
+            raise fail(f"{option} {str(path)!r}: {got}; use one of "
+                       f"{', '.join('.' + f for f in formats)}")
+    return path
+
+
+def plot_file(path: Path | None, option: str = "--plot") -> Path | None:
+    """:func:`output_file` for a figure: the suffix must be a matplotlib format."""
+    if path is None:
+        return None
+    return output_file(path, option, formats=plot_formats())
+
+
+def output_dir(path: Path, option: str) -> Path:
+    """An output folder: created if missing, but only inside an existing directory."""
+    if path.exists() and not path.is_dir():
+        raise fail(f"{option} {str(path)!r} is a file, not a folder")
+    if not path.exists():
+        if not path.parent.is_dir():
+            raise fail(f"{option} {str(path)!r}: the directory {str(path.parent)!r} does not "
+                       "exist; create it first (only the last folder is created)")
+        try:
+            path.mkdir()
+        except OSError as exc:
+            raise fail(f"{option} {str(path)!r}: cannot create the folder: "
+                       f"{exc.strerror or exc}") from None
+    return path
+
+
+@contextmanager
+def writing(path: Path, what: str = "") -> Iterator[None]:
+    """Turn an OS error while writing ``path`` into the CLI's one-line error."""
     try:
-        return load_magnet(source, **options)
-    except MaglevkitError as exc:
-        raise fail(exc) from None
+        yield
+    except OSError as exc:
+        raise fail(f"cannot write {what + ' ' if what else ''}{str(path)!r}: "
+                   f"{exc.strerror or exc}") from None
+
+
+# ---------------------------------------------------------------------------- results
+def _plain(value: Any) -> Any:
+    """A JSON-safe value (numpy scalars to Python, non-finite floats to None)."""
+    if isinstance(value, Mapping):
+        return {str(k): _plain(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [_plain(v) for v in value]
+    if hasattr(value, "item") and callable(value.item):
+        value = value.item()
+    if isinstance(value, float) and not math.isfinite(value):
+        return None
+    return value
+
+
+def print_records(records: Sequence[Mapping[str, Any]], fmt: OutputFormat,
+                  table: Table | None = None, meta: Mapping[str, Any] | None = None) -> None:
+    """Print a result on stdout: the rich ``table``, CSV of ``records`` or JSON.
+
+    CSV: one header line with the record keys, one line per record (floats with 10
+    significant digits).  JSON: ``{**meta, "rows": records}`` (``records`` alone
+    without ``meta``).
+    """
+    if fmt == OutputFormat.table:
+        if table is not None:
+            console.print(table)
+        return
+    if fmt == OutputFormat.csv:
+        buf = io.StringIO()
+        keys = list(records[0]) if records else []
+        w = csv.writer(buf, lineterminator="\n")
+        w.writerow(keys)
+        for r in records:
+            w.writerow([f"{float(v) + 0.0:.10g}" if isinstance(v, float) else v
+                        for v in (r[k] for k in keys)])
+        sys.stdout.write(buf.getvalue())
+    else:
+        payload: Any = _plain(list(records)) if meta is None else \
+            {**_plain(dict(meta)), "rows": _plain(list(records))}
+        sys.stdout.write(json.dumps(payload, indent=2) + "\n")
+    sys.stdout.flush()
+
+
+def new_table(title: str | None = None, caption: str | None = None) -> Table:
+    """A table whose cells fold instead of being cut when the console is narrow."""
+    return Table(title=title, caption=caption)
+
+
+def add_columns(table: Table, names: Sequence[str], left: Sequence[str] = ()) -> None:
+    for name in names:
+        table.add_column(name, justify="left" if name in left else "right", overflow="fold")
 
 
 def main() -> None:  # pragma: no cover - console entry point
-    app()
+    try:
+        app()
+    except MaglevkitError as exc:   # a safety net: the commands catch their own errors
+        raise SystemExit(fail(exc).exit_code) from None

@@ -10,17 +10,53 @@ import typer
 from rich.table import Table
 
 from ..errors import MaglevkitError
-from ._app import app, console, fail, load_magnet_or_exit
+from ._app import (
+    FormatOption,
+    OutputFormat,
+    add_columns,
+    app,
+    fail,
+    info,
+    load_magnet_or_exit,
+    new_table,
+    output_dir,
+    print_records,
+    writing,
+)
+
+COLUMNS = ("scenario", "circuit", "current NRMS [%]", "force NRMS [%]", "current AC [%]",
+           "force AC [%]", "detailed [ms]", "reduced [ms]", "speed-up")
+"""Table headers; :func:`comparison_records` has the same columns with unit-suffixed keys."""
+
+
+def comparison_records(results) -> list[dict[str, object]]:  # type: ignore[no-untyped-def]
+    """One record per scenario and circuit (errors in percent, wall times in ms)."""
+    rows: list[dict[str, object]] = []
+    for r in results:
+        for j, c in enumerate(r.circuit_names):
+            rows.append({"scenario": r.scenario.name, "circuit": c,
+                         "current_nrms_percent": 100 * float(r.current_error[j]),
+                         "force_nrms_percent": 100 * float(r.force_error[j]),
+                         # None (JSON null, empty CSV cell): no variation to normalise by
+                         "current_ac_percent": _percent_or_none(r.current_error_ac[j]),
+                         "force_ac_percent": _percent_or_none(r.force_error_ac[j]),
+                         "detailed_ms": 1e3 * float(r.detailed_wall_s),
+                         "reduced_ms": 1e3 * float(r.reduced_wall_s),
+                         "speedup": float(r.speedup)})
+    return rows
+
+
+def _percent_or_none(value: float) -> float | None:
+    v = float(value)
+    return None if v != v else 100 * v
 
 
 def comparison_table(results, title: str) -> Table:  # type: ignore[no-untyped-def]
-    """A rich table of errors and speed-ups."""
+    """A rich table of errors and speed-ups (cells fold, nothing is cut)."""
     from ..compare import AC_MIN_RELATIVE_VARIATION, format_ac_error
 
-    table = Table(title=title)
-    for col in ("scenario", "circuit", "current NRMS [%]", "force NRMS [%]",
-                "current AC [%]", "force AC [%]", "detailed [ms]", "reduced [ms]", "speed-up"):
-        table.add_column(col, justify="left" if col in ("scenario", "circuit") else "right")
+    table = new_table(title)
+    add_columns(table, COLUMNS, left=("scenario", "circuit"))
     for r in results:
         for j, c in enumerate(r.circuit_names):
             table.add_row(r.scenario.name if j == 0 else "", c,
@@ -51,7 +87,7 @@ def slug(text: str) -> str:
     return re.sub(r"[^0-9a-z]+", "-", text.lower()).strip("-")
 
 
-@app.command()
+@app.command(short_help="Detailed vs reduced model: errors and speed-up per scenario.")
 def compare(
     magnet: Annotated[str, typer.Argument(help="Magnet TOML file or bundled name.")],
     maps_file: Annotated[Path, typer.Argument(help="netCDF maps of this magnet "
@@ -62,23 +98,30 @@ def compare(
     = None,
     current: Annotated[float | None, typer.Option(help="Operating current [A] "
                                                        "(default: nominal).")] = None,
-    out: Annotated[Path | None, typer.Option(help="Folder for response plots (PNG).")] = None,
+    out: Annotated[Path | None, typer.Option(help="Folder for response plots (PNG; created "
+                                                  "inside an existing directory).")] = None,
+    fmt: FormatOption = OutputFormat.table,
 ) -> None:
-    """Run the detailed flux-based and the reduced current-based model side by side."""
+    """Run the detailed flux-based and the reduced current-based model side by side.
+
+    Prints NRMS and AC-normalised errors, wall times and the speed-up per scenario and
+    circuit; --format csv or json prints the same columns with unit-suffixed keys.
+    """
     from ..compare import ComparisonScenario, compare_models, standard_scenarios
     from ..models.current import CurrentModel
     from ..models.scenario import load_scenario
-    from ..plotting import plot_comparison
     from ..reduction import load_maps
 
     mag = load_magnet_or_exit(magnet)
+    s0 = gap if gap is not None else getattr(mag, "nominal_gap", None)
+    i0 = current if current is not None else getattr(mag, "nominal_current", None)
+    if s0 is None or i0 is None:
+        raise fail(f"magnet {mag.name!r}: give --gap and --current (the magnet file has no "
+                   "[operating] table)")
+    if out is not None:
+        output_dir(out, "--out")
     try:
         maps = load_maps(maps_file, magnet=mag)
-        s0 = gap if gap is not None else getattr(mag, "nominal_gap", None)
-        i0 = current if current is not None else getattr(mag, "nominal_current", None)
-        if s0 is None or i0 is None:
-            raise typer.BadParameter("give --gap and --current (the magnet file has no "
-                                     "[operating] table)")
         if scenario is None:
             cases = standard_scenarios(mag, gap_m=s0, current_A=i0)
         else:
@@ -91,9 +134,14 @@ def compare(
         results = compare_models(mag, CurrentModel(maps), cases, gap_m=s0, current_A=i0)
     except MaglevkitError as exc:
         raise fail(exc) from None
-    console.print(comparison_table(results, f"{mag.name}: detailed vs reduced"))
+    print_records(comparison_records(results) if fmt != OutputFormat.table else [], fmt,
+                  comparison_table(results, f"{mag.name}: detailed vs reduced"),
+                  meta={"magnet": mag.name, "gap_m": s0, "current_A": i0})
     if out is not None:
+        from ..plotting import plot_comparison
+
         for r in results:
-            p = plot_comparison(r, out / f"compare-{slug(r.scenario.name)}.png",
-                                title=plot_title(mag.name, r))
-            console.print(f"wrote {p}")
+            target = out / f"compare-{slug(r.scenario.name)}.png"
+            with writing(target):
+                p = plot_comparison(r, target, title=plot_title(mag.name, r))
+            info(f"wrote {p}")

@@ -14,19 +14,30 @@ import numpy as np
 import typer
 
 from ..errors import MaglevkitError
-from ._app import app, console, fail, load_magnet_or_exit
+from ._app import app, console, fail, load_magnet_or_exit, output_dir
 
 DEFAULT_MAGNET = "tr09-standard"
 
 
-@app.command()
+def _rule(title: str) -> None:
+    """A heading line (at most 100 columns wide, also in a wide log console)."""
+    from rich.rule import Rule
+
+    console.print(Rule(title), width=min(console.width, 100))
+
+
+@app.command(short_help="The whole chain on the bundled standard magnet, with a report.")
 def demo(
-    out: Annotated[Path, typer.Option(help="Folder for figures and data.")] = Path("out"),
+    out: Annotated[Path, typer.Option(help="Folder for figures and data (created inside an "
+                                           "existing directory).")] = Path("out"),
     magnet: Annotated[str, typer.Option(help="Magnet file or bundled name.")] = DEFAULT_MAGNET,
     quick: Annotated[bool, typer.Option(help="Skip the slow open-loop comparison cases "
                                              "(0.5 Hz sine).")] = False,
 ) -> None:
-    """Run statics, figures, maps and the detailed-vs-reduced comparison; print a report."""
+    """Run statics, figures, maps and the detailed-vs-reduced comparison; print a report.
+
+    The report goes to stdout, the progress of the maps to stderr.
+    """
     from ..compare import compare_models, standard_scenarios
     from ..figures import write_figures
     from ..models.current import CurrentModel
@@ -36,11 +47,11 @@ def demo(
     from .compare import comparison_table, plot_title, slug
     from .statics import write_statics_csv
 
-    out.mkdir(parents=True, exist_ok=True)
     mag = load_magnet_or_exit(magnet)
+    output_dir(out, "--out")
     s0 = getattr(mag, "nominal_gap", None) or 0.010
     i0 = getattr(mag, "nominal_current", None)
-    console.rule(f"maglevkit demo: {mag.name}")
+    _rule(f"maglevkit demo: {mag.name}")
     written: list[Path] = []
     try:
         gaps = np.linspace(0.5 * s0, 2.0 * s0, 9)
@@ -74,17 +85,20 @@ def demo(
         if quick:
             cases = [c for c in cases if "0.5 Hz" not in c.name]
         results = compare_models(mag, CurrentModel(maps), cases, gap_m=s0, current_A=i0)
+        for r in results:
+            written.append(plot_comparison(r, out / f"compare-{slug(r.scenario.name)}.png",
+                                           title=plot_title(mag.name, r)))
     except MaglevkitError as exc:
         raise fail(exc) from None
-    for r in results:
-        written.append(plot_comparison(r, out / f"compare-{slug(r.scenario.name)}.png",
-                                       title=plot_title(mag.name, r)))
+    except OSError as exc:
+        raise fail(f"cannot write the demo's files in {str(out)!r}: "
+                   f"{exc.strerror or exc}") from None
     console.print("4. detailed vs reduced model:")
     console.print(comparison_table(results, f"{mag.name}: detailed vs reduced"))
     main = [r for r in results if not r.scenario.coupling]
     worst = max(main, key=lambda r: r.max_error)
     open_loop = [r.speedup for r in main if r.scenario.kind == "open"]
-    console.rule("report")
+    _rule("report")
     console.print(f"largest normalised RMS error (coupling case excluded): "
                   f"{100 * worst.max_error:.2f} % ({worst.scenario.name})")
     worst_ac = max(main, key=lambda r: r.max_error_ac)

@@ -8,14 +8,15 @@ from typing import Annotated
 import typer
 
 from ..errors import MaglevkitError
-from ._app import app, console, fail, load_magnet_or_exit
+from ._app import app, fail, info, load_magnet_or_exit, output_dir, writing
 
 
-@app.command()
+@app.command(short_help="The paper's Fig. 6/7 analogs and the circuit coupling (PNG).")
 def figures(
     magnet: Annotated[str, typer.Argument(help="Magnet TOML file or bundled name "
                                                "(e.g. tr09-standard).")],
-    out: Annotated[Path, typer.Option(help="Output folder for the PNG files.")] = Path("figures"),
+    out: Annotated[Path, typer.Option(help="Output folder for the PNG files (created inside "
+                                           "an existing directory).")] = Path("figures"),
 ) -> None:
     """Fig. 6 analog (F/F0 over I/I0), Fig. 7 analog (static L~ and step-response tau R_el
     over I/I0 at 9.5 mm) and, for several circuits, their coupling time response, as PNG.
@@ -25,9 +26,11 @@ def figures(
     from ..figures import write_figures
 
     mag = load_magnet_or_exit(magnet)
+    output_dir(out, "--out")
     try:
-        paths = write_figures(mag, out)
+        with writing(out, "figures in"):
+            paths = write_figures(mag, out)
     except MaglevkitError as exc:
         raise fail(exc) from None
     for p in paths:
-        console.print(f"wrote {p}")
+        info(f"wrote {p}")

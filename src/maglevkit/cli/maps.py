@@ -2,23 +2,83 @@
 
 from __future__ import annotations
 
+import math
 from pathlib import Path
-from typing import Annotated
+from typing import Annotated, Any
 
 import typer
 
-from ..errors import MaglevkitError
-from ._app import app, console, fail, load_magnet_or_exit, parse_values
+from ..errors import InputError, MaglevkitError
+from ._app import (
+    app,
+    console,
+    fail,
+    info,
+    load_magnet_or_exit,
+    output_dir,
+    output_file,
+    parse_values,
+    writing,
+)
 
 maps_app = typer.Typer(help="Characteristic maps F(s, I), L~(s, I), dL/ds(s, I) (paper Sec. IV).",
                        no_args_is_help=True, rich_markup_mode=None)
-app.add_typer(maps_app, name="maps")
+app.add_typer(maps_app, name="maps",
+              short_help="Characteristic maps of the reduced model: build (netCDF) and plot.")
+
+SCHEDULER_TIMEOUT_S = 10.0
+"""Default ``--scheduler-timeout`` [s] (dask's own default is 30 s)."""
 
 
-@maps_app.command("build")
+def connect_scheduler(address: str, timeout_s: float) -> Any:
+    """A ``dask.distributed.Client`` for ``address``, or an :class:`InputError` that says why not.
+
+    A ``tcp://host:port`` address is first probed with a plain TCP connection (at most
+    ``timeout_s``), before dask is even imported, so a refused connection fails at once
+    instead of after dask's retries (30 s by default).
+    """
+    import importlib.util
+    from urllib.parse import urlsplit
+
+    if importlib.util.find_spec("distributed") is None:
+        raise InputError("--scheduler needs dask.distributed: pip install "
+                         "'maglevkit[distributed]'")
+    if not (math.isfinite(timeout_s) and timeout_s > 0.0):
+        raise InputError(f"--scheduler-timeout = {timeout_s!r} s must be a number > 0")
+    parts = urlsplit(address if "://" in address else f"tcp://{address}")
+    try:
+        host, port = parts.hostname, parts.port
+    except ValueError:
+        host = port = None
+    if parts.scheme not in ("tcp", "tls", "inproc", "ucx", "ws", "wss") or \
+            (parts.scheme == "tcp" and (not host or port is None)):
+        raise InputError(f"--scheduler {address!r}: expected an address like tcp://host:8786")
+    if parts.scheme == "tcp" and host and port is not None:
+        import socket
+
+        try:
+            socket.create_connection((host, port), timeout=timeout_s).close()
+        except OSError as exc:
+            why = "timed out" if isinstance(exc, TimeoutError) else (exc.strerror or str(exc))
+            raise InputError(f"cannot reach the dask scheduler at {address}: {why} (waited at "
+                             f"most {timeout_s:g} s, --scheduler-timeout); start one with "
+                             "`dask scheduler` or check the address") from None
+    from distributed import Client
+
+    try:
+        return Client(address, timeout=timeout_s)
+    except Exception as exc:   # noqa: BLE001 - any failure of the remote end is reported
+        detail = " ".join(str(exc).split())[:200] or type(exc).__name__
+        raise InputError(f"could not connect to the dask scheduler at {address} within "
+                         f"{timeout_s:g} s (--scheduler-timeout): {detail} (is it a dask "
+                         "scheduler?)") from None
+
+
+@maps_app.command("build", short_help="Compute the maps on a regular grid (netCDF).")
 def build(
     magnet: Annotated[str, typer.Argument(help="Magnet TOML file or bundled name.")],
-    output: Annotated[Path, typer.Option("-o", "--output", help="netCDF file to write.")]
+    output: Annotated[Path, typer.Option("-o", "--output", help="netCDF file to write (its "
+                                                                "folder must exist).")]
     = Path("maps.nc"),
     gaps: Annotated[str, typer.Option(help="Gap grid [m], start:stop:count (equidistant).")]
     = "0.004:0.020:17",
@@ -34,28 +94,41 @@ def build(
                                                      "for transient maps).")] = None,
     scheduler: Annotated[str | None, typer.Option(help="Address of a dask.distributed "
                                                         "scheduler (tcp://host:port).")] = None,
+    scheduler_timeout: Annotated[float, typer.Option(help="Seconds to wait for the scheduler "
+                                                          "before giving up.")]
+    = SCHEDULER_TIMEOUT_S,
 ) -> None:
-    """Compute the maps of a magnet on a regular grid and store them as netCDF."""
+    """Compute the maps of a magnet on a regular grid and store them as netCDF.
+
+    Progress goes to stderr: a progress bar on a terminal, otherwise a plain line with
+    the ETA every 10 % (at least every 10 s).
+    """
     from concurrent.futures import ProcessPoolExecutor
+
+    if workers is not None and workers < 1:
+        raise typer.BadParameter("--workers must be >= 1")
+    g = parse_values(gaps, "--gaps", "m")
+    c = parse_values(currents, "--currents", "A")
+    output_file(output, "--output")
+    client = None
+    if scheduler:   # before the heavy imports: an unreachable scheduler fails at once
+        try:
+            client = connect_scheduler(scheduler, scheduler_timeout)
+        except MaglevkitError as exc:
+            raise fail(exc) from None
 
     from ..reduction import build_maps
     from ..reduction.maps import METHODS
 
     if method not in METHODS:
+        if client is not None:
+            client.close()
         raise typer.BadParameter(f"--method {method!r}: use one of {', '.join(METHODS)}")
-    if workers is not None and workers < 1:
-        raise typer.BadParameter("--workers must be >= 1")
-    g = parse_values(gaps, "--gaps", "m")
-    c = parse_values(currents, "--currents", "A")
-    mag = load_magnet_or_exit(magnet)
-    client = None
     pool = None
     try:
+        mag = load_magnet_or_exit(magnet)
         executor: object
-        if scheduler:
-            from distributed import Client
-
-            client = Client(scheduler)
+        if client is not None:
             executor = client
         elif workers is None:
             executor = "auto"
@@ -73,36 +146,45 @@ def build(
             pool.shutdown()
         if client is not None:
             client.close()
-    path = maps.to_netcdf(output)
+    with writing(output, "--output"):
+        path = maps.to_netcdf(output)
     console.print(f"maps of {mag.name!r} ({method}): circuits {', '.join(maps.circuits)}; "
                   f"{g.size} gaps x {c.size} currents")
     if method == "both":
         for name in ("inductance_relative_difference", "dL_ds_relative_difference"):
             worst = float(abs(maps.dataset[name]).max())
             console.print(f"max |{name}| = {100 * worst:.3f} %")
-    console.print(f"wrote {path}")
+    info(f"wrote {path}")
 
 
-@maps_app.command("plot")
+@maps_app.command("plot", short_help="Plot the maps (the paper's Fig. 9 analog, PNG).")
 def plot(
     maps_file: Annotated[Path, typer.Argument(help="netCDF maps file.")],
-    out: Annotated[Path, typer.Option(help="Folder for the PNG files.")] = Path("out"),
+    out: Annotated[Path, typer.Option(help="Folder for the PNG files (created inside an "
+                                           "existing directory).")] = Path("out"),
 ) -> None:
     """Plot the maps (the paper's Fig. 9): one PNG per circuit.
 
     Maps built with ``--method both`` also get the per-point relative differences of the
     transient and statics methods (``maps_difference_<circuit>.png``).
     """
-    from ..plotting import plot_maps
     from ..reduction import load_maps
-    from ..reduction.plots import has_method_differences, plot_method_differences
+    from ..reduction.plots import has_method_differences
 
     try:
         maps = load_maps(maps_file)
     except MaglevkitError as exc:
         raise fail(exc) from None
-    paths = plot_maps(maps, out)
-    if has_method_differences(maps):
-        paths += plot_method_differences(maps, out)
+    output_dir(out, "--out")
+    from ..plotting import plot_maps
+    from ..reduction.plots import plot_method_differences
+
+    try:
+        with writing(out, "plots in"):
+            paths = plot_maps(maps, out)
+            if has_method_differences(maps):
+                paths += plot_method_differences(maps, out)
+    except MaglevkitError as exc:
+        raise fail(exc) from None
     for p in paths:
-        console.print(f"wrote {p}")
+        info(f"wrote {p}")

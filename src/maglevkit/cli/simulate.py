@@ -4,20 +4,33 @@ from __future__ import annotations
 
 import csv
 from pathlib import Path
-from typing import Annotated
+from typing import Annotated, Any
 
-import numpy as np
 import typer
-from rich.markup import escape
 
 from ..errors import MaglevkitError
-from ._app import app, console, fail, load_magnet_or_exit
+from ._app import (
+    FormatOption,
+    OutputFormat,
+    add_columns,
+    app,
+    console,
+    fail,
+    info,
+    load_magnet_or_exit,
+    new_table,
+    output_file,
+    plot_file,
+    print_records,
+    writing,
+)
 
 
 def write_simulation_csv(res, path: Path) -> None:  # type: ignore[no-untyped-def]
-    """CSV with one row per time sample and unit-suffixed columns."""
+    """CSV with one row per time sample and unit-suffixed columns (the folder must exist)."""
+    import numpy as np
+
     cols = res.columns()
-    path.parent.mkdir(parents=True, exist_ok=True)
     with path.open("w", newline="") as fh:
         w = csv.writer(fh)
         w.writerow(list(cols))
@@ -26,23 +39,56 @@ def write_simulation_csv(res, path: Path) -> None:  # type: ignore[no-untyped-de
             w.writerow([f"{v:.10g}" for v in row])
 
 
-@app.command()
+def simulation_summary(res) -> list[dict[str, Any]]:  # type: ignore[no-untyped-def]
+    """The summary of a run: one record per quantity with its start, end and maximum.
+
+    Quantities: every circuit's current [A], the total force [N]; then the energy
+    balance [J] (``end`` = the value over the run) and its relative residual.
+    """
+    eb = res.energy_balance()
+    rows: list[dict[str, Any]] = []
+    for j, nm in enumerate(res.circuit_names):
+        i = res.currents_A[:, j]
+        rows.append({"quantity": f"current[{nm}]", "unit": "A", "start": float(i[0]),
+                     "end": float(i[-1]), "max": float(i.max())})
+    f = res.force_N
+    rows.append({"quantity": "force", "unit": "N", "start": float(f[0]), "end": float(f[-1]),
+                 "max": float(f.max())})
+    for name, value in (("energy_in", eb.electrical_J), ("energy_ohmic", eb.ohmic_J),
+                        ("energy_eddy", eb.eddy_J), ("energy_stored_change", eb.magnetic_change_J),
+                        ("energy_mechanical", eb.mechanical_J)):
+        rows.append({"quantity": name, "unit": "J", "start": None, "end": float(value),
+                     "max": None})
+    rows.append({"quantity": "energy_relative_residual", "unit": "1", "start": None,
+                 "end": float(eb.relative_residual), "max": None})
+    return rows
+
+
+@app.command(short_help="Transient of the detailed flux-based model under a scenario.")
 def simulate(
     magnet: Annotated[str, typer.Argument(help="Magnet TOML file or bundled name "
                                                "(e.g. u-magnet).")],
     scenario: Annotated[str, typer.Option(help="Scenario TOML file or bundled name (e.g. step).")]
     = "step",
-    csv_path: Annotated[Path | None, typer.Option("--csv", help="Write the time series (CSV).")]
+    csv_path: Annotated[Path | None, typer.Option("--csv", help="Write the time series (CSV; "
+                                                            "its folder must exist).")]
     = None,
-    plot: Annotated[Path | None, typer.Option(help="Write a figure of the response (PNG).")]
+    plot: Annotated[Path | None, typer.Option(help="Write a figure of the response (PNG, PDF, "
+                                                   "SVG, ... by the file suffix).")]
     = None,
+    fmt: FormatOption = OutputFormat.table,
 ) -> None:
-    """Simulate the flux-based dynamic model (paper eqs. 4-7) under a scenario's signals."""
+    """Simulate the flux-based dynamic model (paper eqs. 4-7) under a scenario's signals.
+
+    Prints a summary (currents, force, energy balance); --format csv or json prints it as
+    records (quantity, unit, start, end, max).
+    """
     from ..models.flux import FluxModel
     from ..models.flux import simulate as run_simulation
     from ..models.scenario import load_scenario
-    from ..plotting import plot_simulation
 
+    output_file(csv_path, "--csv")
+    plot_file(plot)
     try:
         sc = load_scenario(scenario)
     except MaglevkitError as exc:
@@ -56,20 +102,28 @@ def simulate(
                              initial_currents=sc.initial_current_A)
     except MaglevkitError as exc:
         raise fail(exc) from None
-    eb = res.energy_balance()
-    console.print(f"{mag.name}: simulated {sc.duration_s:g} s in {res.time_s.size - 1} steps "
-                  f"({fm.method}, rtol {fm.rtol:g})")
-    for j, nm in enumerate(res.circuit_names):
-        line = (f"  current [{nm}]: {res.currents_A[0, j]:.4g} A -> {res.currents_A[-1, j]:.4g} A "
-                f"(max {res.currents_A[:, j].max():.4g} A)")
-        console.print(escape(line))
-    console.print(f"  total force: {res.force_N[0]:.5g} N -> {res.force_N[-1]:.5g} N")
-    console.print(f"  energy: in {eb.electrical_J:.5g} J = ohmic {eb.ohmic_J:.5g} + eddy "
-                  f"{eb.eddy_J:.5g} + stored {eb.magnetic_change_J:.5g} + mechanical "
-                  f"{eb.mechanical_J:.5g} (relative residual {eb.relative_residual:.1e})")
+    rows = simulation_summary(res)
+    headline = (f"{mag.name}: simulated {sc.duration_s:g} s in {res.time_s.size - 1} steps "
+                f"({fm.method}, rtol {fm.rtol:g})")
+    if fmt == OutputFormat.table:
+        console.print(headline)
+        table = new_table()
+        add_columns(table, ["quantity", "unit", "start", "end", "max"], left=("quantity", "unit"))
+        for r in rows:
+            table.add_row(r["quantity"], r["unit"],
+                          *("" if r[k] is None else f"{r[k]:.6g}" for k in ("start", "end", "max")))
+        console.print(table)
+    else:
+        print_records(rows, fmt, meta={"magnet": mag.name, "scenario": str(scenario),
+                                       "duration_s": sc.duration_s, "steps": res.time_s.size - 1,
+                                       "method": fm.method, "rtol": fm.rtol})
     if csv_path is not None:
-        write_simulation_csv(res, csv_path)
-        console.print(f"wrote {csv_path}")
+        with writing(csv_path, "--csv"):
+            write_simulation_csv(res, csv_path)
+        info(f"wrote {csv_path}")
     if plot is not None:
-        plot_simulation(res, plot, title=f"{mag.name}: {Path(str(scenario)).stem}")
-        console.print(f"wrote {plot}")
+        from ..plotting import plot_simulation
+
+        with writing(plot, "--plot"):
+            plot_simulation(res, plot, title=f"{mag.name}: {Path(str(scenario)).stem}")
+        info(f"wrote {plot}")
