@@ -53,3 +53,17 @@ def test_maps_entry_points_refuse_wrong_types() -> None:
     with pytest.raises(InputError, match="current grid.*bool"):
         mk.build_maps(mk.load_magnet("u-magnet"), gaps=[0.01, 0.02, 0.03, 0.04],
                       currents=[True, 1, 2, 3])
+
+
+def test_cli_prints_warnings_as_one_line(tmp_path) -> None:
+    """A plausibility warning on the CLI is one 'warning: ...' line on stderr."""
+    import subprocess
+    import sys
+
+    out = subprocess.run([sys.executable, "-c", "from maglevkit.cli import main; main()",
+                          "statics", "u-magnet", "--gaps", "10", "--currents", "20"],
+                         capture_output=True, text=True, cwd=tmp_path, timeout=300)
+    lines = [ln for ln in out.stderr.splitlines() if ln.strip()]
+    warn = [ln for ln in lines if ln.startswith("warning: ")]
+    assert warn and "gap" in warn[0]
+    assert not any("warnings.warn" in ln or ".py:" in ln for ln in lines)

@@ -265,7 +265,16 @@ def add_columns(table: Table, names: Sequence[str], left: Sequence[str] = ()) ->
         table.add_column(name, justify="left" if name in left else "right", overflow="fold")
 
 
+def _one_line_warning(message: Warning | str, category: type[Warning], filename: str,
+                      lineno: int, file: Any = None, line: str | None = None) -> None:
+    """Warnings on the CLI: one ``warning: ...`` line on stderr (no file/line/source)."""
+    sys.stderr.write(f"warning: {message}\n")
+
+
 def main() -> None:  # pragma: no cover - console entry point
+    import warnings
+
+    warnings.showwarning = _one_line_warning
     try:
         app()
     except MaglevkitError as exc:   # a safety net: the commands catch their own errors
