@@ -232,6 +232,7 @@ def _u_magnet_with(material: dict) -> dict:
     p["magnet"]["material"] = "table_steel"
     p["rail"]["material"] = "table_steel"
     p["materials"] = {"table_steel": material}
+    p["provenance"]["materials.table_steel"] = "[E] test table"
     return p
 
 
@@ -247,7 +248,7 @@ def test_issue10_table_solves_statics() -> None:
     # 5, 20, 80 A)
     p_ideal = _u_magnet_with({"H": list(ISSUE10_H), "B": list(ISSUE10_B)})
     p_ideal["magnet"]["material"] = p_ideal["rail"]["material"] = "ideal"
-    del p_ideal["materials"]
+    del p_ideal["materials"], p_ideal["provenance"]["materials.table_steel"]
     ideal = mk.solve_statics(mk.build_magnet(p_ideal, options=mk.ModelOptions(eddy_currents=False)),
                              gaps=0.010, currents=currents[:, None])
     assert np.all(sol.force_N[1:] < ideal.force_N[1:])
@@ -324,6 +325,7 @@ def test_toml_csv_and_interpolation(tmp_path: Path) -> None:
     _csv(tmp_path, "H [A/m], B [T]\n" + "".join(f"{h}, {b}\n" for h, b in rows))
     base = (Path(mk.__file__).parent / "data" / "u-magnet.toml").read_text()
     base = base.replace('material = "AISI 1008"', 'material = "steel1010"')
+    base = base.replace("[provenance]\n", '[provenance]\n"materials.steel1010" = "[E] test"\n')
     toml = tmp_path / "magnet.toml"
     results = {}
     for key, extra in [("csv", 'csv = "steel.csv"'),
