@@ -1,7 +1,8 @@
 """Magnets: parametric topologies built from TOML parameter files.
 
 A parameter file has a ``[magnet]`` table whose ``kind`` selects the builder, the
-builder's own tables, optional ``[materials.NAME]`` tabulated B-H curves, a
+builder's own tables, optional ``[materials.NAME]`` tabulated B-H curves (``H``/``B`` lists or
+``csv = "file.csv"``, optional ``interpolation``, ``resistivity``), a
 ``[provenance]`` table that tags every value (``"magnet.turns" = "[E] estimate"``; tags
 start with ``[P]``, ``[R]`` or ``[E]``), and an optional ``[operating]`` table with the
 nominal operating point (``nominal_gap`` [m], ``nominal_current`` [A]) that figures and
@@ -36,7 +37,7 @@ from ..errors import (
     PlausibilityWarning,
     ProvenanceWarning,
 )
-from ..materials import Material, TabulatedBH, get_material, normalise_name
+from ..materials import Material, TabulatedBH, get_material, normalise_name, read_bh_csv
 from ..validation import flag
 
 if sys.version_info >= (3, 11):
@@ -352,7 +353,17 @@ def resolve_material(name: str, custom: Mapping[str, Material], where: str) -> M
         raise ParameterFileError(f"[{where}] material: {exc}{extra}") from None
 
 
-def _parse_materials(raw: Any) -> dict[str, Material]:
+_MATERIAL_SCHEMA = {
+    "H": Schema(list, required=False, unit="A/m"),
+    "B": Schema(list, required=False, unit="T"),
+    "csv": Schema(str, required=False),
+    "interpolation": Schema(str, required=False, default="smooth"),
+    "resistivity": Schema(float, required=False, unit="ohm m"),
+}
+
+
+def _parse_materials(raw: Any, source: str = "") -> dict[str, Material]:
+    """``[materials.NAME]`` tables: ``H``/``B`` lists or ``csv`` (relative to the file's folder)."""
     if raw is None:
         return {}
     if not isinstance(raw, Mapping):
@@ -360,11 +371,21 @@ def _parse_materials(raw: Any) -> dict[str, Material]:
     out: dict[str, Material] = {}
     for name, tab in raw.items():
         where = f"materials.{name}"
-        t = take(tab, {"H": Schema(list, unit="A/m"), "B": Schema(list, unit="T"),
-                       "resistivity": Schema(float, required=False, unit="ohm m")}, where)
+        t = take(tab, _MATERIAL_SCHEMA, where)
+        lists = (t["H"] is not None) + (t["B"] is not None)
+        if (lists, t["csv"] is not None) not in ((2, False), (0, True)):
+            raise ParameterFileError(f"[{where}]: give the B-H points either as lists H [A/m] and "
+                                     "B [T] or as csv = \"file.csv\" (columns H [A/m], B [T])")
         try:
-            out[normalise_name(name)] = TabulatedBH(tuple(t["H"]), tuple(t["B"]), name=name,
-                                                    resistivity=t["resistivity"])
+            if t["csv"] is not None:
+                path = Path(t["csv"])
+                if not path.is_absolute() and source and Path(source).is_file():
+                    path = Path(source).parent / path
+                H, B = read_bh_csv(path)
+            else:
+                H, B = tuple(t["H"]), tuple(t["B"])
+            out[normalise_name(name)] = TabulatedBH(H, B, name=name, resistivity=t["resistivity"],
+                                                    interpolation=t["interpolation"])
         except MaterialError as exc:
             raise ParameterFileError(f"[{where}]: {exc}") from None
     return out
@@ -431,7 +452,7 @@ def _build(parameters: Mapping[str, Any], *, options: ModelOptions | None, sourc
     if unknown:
         raise ParameterFileError(f"unknown table(s) {unknown}; a {kind!r} file may have: "
                                  f"{', '.join(sorted(allowed))}")
-    materials = _parse_materials(parameters.get("materials"))
+    materials = _parse_materials(parameters.get("materials"), source)
     prov = dict(provenance or {})
     raw_prov = parameters.get("provenance", {})
     if not isinstance(raw_prov, Mapping):
