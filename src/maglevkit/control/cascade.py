@@ -19,26 +19,26 @@ eddy currents, and at constant flux an EMS magnet has almost no negative stiffne
 operating point: with ``K_rho = sum_j (dF/dpsi_j) psi_0,j`` and the stiffness at constant
 flux ``F_s = dF/ds|_psi``, the gap loop ``m e'' = -(K_rho k_p + F_s) e - K_rho k_d e'``
 gets the natural frequency ``omega`` and damping ``zeta``; ``k_i = k_p omega / 5``.
-:func:`closed_loop` co-simulates any magnet model with the ``initial_state``/``step``
-interface (flux-based or current-based) with a :class:`~maglevkit.vehicle.HeaveMass`.
+:class:`CascadeController` is the sampled-data form (the shared controller interface,
+:class:`~maglevkit.control.interface.Controller`): it integrates the flux estimate and the
+error integral between samples.
 """
 
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
+from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
-from .errors import InputError, ParameterError
-from .models.inputs import check_span
-from .models.statics import solve_statics
-from .validation import real_number
-from .vehicle import HeaveMass, HeaveState
+from ..errors import InputError, ParameterError
+from ..models.statics import solve_statics
+from ..validation import real_number
+from .interface import Measurement
 
-__all__ = ["GapController", "ClosedLoopResult", "design_gap_controller", "closed_loop"]
+__all__ = ["CascadeController", "GapController", "design_gap_controller"]
 
 
 @dataclass(frozen=True)
@@ -131,97 +131,70 @@ def design_gap_controller(magnet: Any, *, mass_kg: float, gap_m: float, current_
                          tuple(float(v) for v in net.resistances), voltage_limit_V)
 
 
-@dataclass(frozen=True)
-class ClosedLoopResult:
-    """Time series of a closed-loop co-simulation (axis 0: time).
 
-    Attributes
+
+class CascadeController:
+    """The cascade controller as a sampled-data :class:`~maglevkit.control.interface.
+    Controller` (flux estimate and error integral as its internal state).
+
+    Between samples ``k`` and ``k+1`` (sample time ``T``)::
+
+        psi_hat <- psi_hat + T (U_k - R (I_k + I_k+1) / 2)      (trapezoidal in I)
+        int e   <- int e + T (s_k - s_ref,k)
+
+    Parameters
     ----------
-    time_s : (n,)
-    gap_m, gap_rate_m_per_s : (n,)
-    voltages_V, currents_A, flux_estimate_Wb : (n, n_circuits)
-    pole_force_N : (n, n_gaps)
-    force_N : (n,)
-    voltage_limited : (n,) bool
-        Whether a voltage hit the actuator limit in the interval starting there.
+    design : GapController
+        Gains and limits.
+    initial_flux_Wb : array (n_circuits,), optional
+        Flux estimate at the start [Wb] (default: the design's bias flux, valid when the
+        run starts at the design point).
     """
 
-    time_s: np.ndarray
-    gap_m: np.ndarray
-    gap_rate_m_per_s: np.ndarray
-    voltages_V: np.ndarray
-    currents_A: np.ndarray
-    flux_estimate_Wb: np.ndarray
-    pole_force_N: np.ndarray
-    force_N: np.ndarray
-    voltage_limited: np.ndarray
-    circuit_names: tuple[str, ...]
-    gap_names: tuple[str, ...]
+    def __init__(self, design: GapController, *, initial_flux_Wb: object = None) -> None:
+        if not isinstance(design, GapController):
+            raise InputError(f"design must be a GapController, got {type(design).__name__}")
+        self.design = design
+        n = len(design.flux_bias_Wb)
+        self._psi0 = (np.asarray(design.flux_bias_Wb, dtype=float) if initial_flux_Wb is None
+                      else np.asarray(initial_flux_Wb, dtype=float).reshape(n))
+        self._r = np.asarray(design.resistances_ohm)
+        self._dt = math.nan
+        self.flux_estimate_Wb = self._psi0.copy()
+        self._integral = 0.0
+        self._last: tuple[Measurement, np.ndarray] | None = None
 
+    @property
+    def gap_ref_m(self) -> float:
+        return self.design.gap_ref_m
 
-def closed_loop(model: Any, vehicle: HeaveMass, controller: GapController, *, duration_s: float,
-                dt_s: float, initial_gap_m: float, initial_current_A: float,
-                gap_reference: Callable[[float], float] | None = None,
-                external_force: Callable[[float], float] | None = None,
-                initial_flux_Wb: Any = None) -> ClosedLoopResult:
-    """Co-simulate magnet model, heave mass and controller at a fixed step ``dt_s`` [s].
+    @property
+    def voltage_limit_V(self) -> float:
+        return self.design.voltage_limit_V
 
-    Per step: the controller reads gap, gap rate, currents and its flux estimate
-    (sample-and-hold); the magnet model integrates with the voltages held and the gaps moving
-    at the current rate (its ``step``); the mass integrates with the magnet force held; the
-    flux estimate integrates ``U - R I`` (trapezoidal in I).  Every pole sees the same gap.
-    The flux estimate starts at ``initial_flux_Wb`` [Wb] (default: the controller's bias
-    flux, valid when the run starts at the controller's design point).
-    """
-    duration_s = real_number(duration_s, "duration_s", "s", positive=True)
-    dt_s = real_number(dt_s, "dt_s", "s", positive=True)
-    real_number(initial_gap_m, "initial_gap_m", "m", positive=True)
-    real_number(initial_current_A, "initial_current_A", "A")
-    check_span(0.0, duration_s, dt_s)     # the rule of simulate and scenario files
-    n = int(round(duration_s / dt_s))
-    # the loop runs whole steps: a duration between two step counts would silently be
-    # rounded (0.5 s at dt 0.3 s ran 0.6 s); allowance 1e-6 steps for decimal rounding
-    if abs(n * dt_s - duration_s) > 1e-6 * dt_s:
-        raise InputError(f"duration_s = {duration_s:g} s is not a whole number of steps "
-                         f"dt_s = {dt_s:g} s ({duration_s / dt_s:.6g}); use e.g. duration_s = "
-                         f"{n * dt_s:g} s")
-    ref = gap_reference or (lambda t: controller.gap_ref_m)
-    ext = external_force or (lambda t: 0.0)
-    st = model.initial_state(gaps=initial_gap_m, currents=initial_current_A)
-    out = model.outputs(st)
-    if initial_flux_Wb is None:
-        if not (math.isclose(initial_gap_m, controller.gap_ref_m, rel_tol=1e-12)
-                        and math.isclose(initial_current_A, controller.bias_current_A, rel_tol=1e-12)):
-            raise InputError("give initial_flux_Wb when the run does not start at the "
-                             "controller's design point")
-        psi_hat = np.asarray(controller.flux_bias_Wb, dtype=float)
-    else:
-        psi_hat = np.asarray(initial_flux_Wb, dtype=float).reshape(len(controller.flux_bias_Wb))
-    r = np.asarray(controller.resistances_ohm)
-    mech = HeaveState(initial_gap_m, 0.0)
-    integral = 0.0
-    nc, ng = len(model.circuit_names), len(model.gap_names)
-    T = np.arange(n + 1) * dt_s
-    S, V = np.empty(n + 1), np.empty(n + 1)
-    U, I, Psi = np.empty((n + 1, nc)), np.empty((n + 1, nc)), np.empty((n + 1, nc))
-    P, lim = np.empty((n + 1, ng)), np.zeros(n + 1, dtype=bool)
-    S[0], V[0], I[0], P[0], Psi[0] = mech.gap_m, 0.0, out.currents_A, out.pole_force_N, psi_hat
-    for k in range(n):
-        t = T[k]
-        u = controller.voltages(mech.gap_m, mech.gap_rate_m_per_s, integral, I[k], psi_hat,
-                                ref(t))
-        lim[k] = bool(np.any(np.abs(u) >= controller.voltage_limit_V))
-        U[k] = u
-        if not mech.gap_m + mech.gap_rate_m_per_s * dt_s > 0:
-            raise InputError(f"the magnet hit the rail at t = {t:.4g} s (gap {mech.gap_m:.3g} m); "
-                             "the controller is unstable for this case")
-        force = float(out.force_N)
-        st, out = model.step(st, dt_s, u, gaps=mech.gap_m, gap_rates=mech.gap_rate_m_per_s)
-        psi_hat = psi_hat + dt_s * (u - r * 0.5 * (I[k] + out.currents_A))
-        integral += (mech.gap_m - ref(t)) * dt_s
-        mech = vehicle.step(mech, dt_s, force, ext(t))
-        S[k + 1], V[k + 1], I[k + 1], P[k + 1], Psi[k + 1] = (
-            mech.gap_m, mech.gap_rate_m_per_s, out.currents_A, out.pole_force_N, psi_hat)
-    U[n] = U[n - 1]
-    return ClosedLoopResult(T, S, V, U, I, Psi, P, P.sum(axis=1), lim,
-                            tuple(model.circuit_names), tuple(model.gap_names))
+    def reset(self, measurement: Measurement, *, sample_time_s: float) -> None:
+        if not (math.isfinite(sample_time_s) and sample_time_s > 0):
+            raise InputError(f"sample_time_s = {sample_time_s!r} must be a finite number > 0")
+        self._dt = float(sample_time_s)
+        self.flux_estimate_Wb = self._psi0.copy()
+        self._integral = 0.0
+        self._last = None
+
+    def update(self, measurement: Measurement) -> np.ndarray:
+        if not math.isfinite(self._dt):
+            raise InputError("call reset() before update()")
+        i_now = np.asarray(measurement.currents_A, dtype=float)
+        if self._last is not None:
+            prev, u_prev = self._last
+            self.flux_estimate_Wb = self.flux_estimate_Wb + self._dt * (
+                u_prev - self._r * 0.5 * (np.asarray(prev.currents_A) + i_now))
+            self._integral += (prev.gap_m - prev.gap_ref_m) * self._dt
+        u = self.design.voltages(measurement.gap_m, measurement.gap_rate_m_per_s,
+                                 self._integral, i_now, self.flux_estimate_Wb,
+                                 measurement.gap_ref_m)
+        self._last = (measurement, u)
+        return u
+
+    def diagnostics(self) -> Mapping[str, float | np.ndarray]:
+        return {"flux_estimate_Wb": self.flux_estimate_Wb.copy(),
+                "gap_error_integral_m_s": self._integral}

@@ -1,0 +1,75 @@
+"""The controller interface shared by every gap controller (cascade, MPC).
+
+A controller is a sampled-data object: :meth:`Controller.reset` once at the start of a
+run, then :meth:`Controller.update` once per sample with the latest :class:`Measurement`;
+it returns the circuit voltages held until the next sample.  :func:`~maglevkit.control.
+closed_loop` (and vehicle models, scenario sweeps) take any object with this interface.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass
+from typing import Protocol, runtime_checkable
+
+import numpy as np
+
+__all__ = ["Controller", "Measurement"]
+
+
+@dataclass(frozen=True)
+class Measurement:
+    """What a gap controller receives at one sample instant.
+
+    Attributes
+    ----------
+    time_s : float
+        Sample time [s].
+    gap_m : float
+        Measured gap [m].
+    gap_rate_m_per_s : float
+        Measured gap rate [m/s] (controllers that estimate it themselves ignore it).
+    currents_A : ndarray (n_circuits,)
+        Measured coil currents [A] (at the end of the previous hold interval, i.e. with
+        the voltages last applied).
+    gap_ref_m : float
+        Gap reference [m] for this sample.
+    """
+
+    time_s: float
+    gap_m: float
+    gap_rate_m_per_s: float
+    currents_A: np.ndarray
+    gap_ref_m: float
+
+
+@runtime_checkable
+class Controller(Protocol):
+    """Sampled-data gap controller.
+
+    Attributes
+    ----------
+    gap_ref_m : float
+        Default gap reference [m] (used when the run gives none).
+    voltage_limit_V : float
+        Actuator limit ``|U| <= U_max`` [V]; :meth:`update` never returns more.
+    """
+
+    @property
+    def gap_ref_m(self) -> float: ...
+
+    @property
+    def voltage_limit_V(self) -> float: ...
+
+    def reset(self, measurement: Measurement, *, sample_time_s: float) -> None:
+        """Start a run at ``measurement`` with the sample time ``sample_time_s`` [s]."""
+        ...
+
+    def update(self, measurement: Measurement) -> np.ndarray:
+        """Voltages [V] (n_circuits,) to hold from this sample to the next."""
+        ...
+
+    def diagnostics(self) -> Mapping[str, float | np.ndarray]:
+        """Internal values after the last :meth:`update` (estimates, solver statistics),
+        recorded by :func:`~maglevkit.control.closed_loop`; names carry units."""
+        ...
