@@ -86,20 +86,19 @@ def test_offset_free_on_the_detailed_plant(setup) -> None:  # type: ignore[no-un
 
 
 def test_min_gap_constraint_in_a_large_disturbance(setup) -> None:  # type: ignore[no-untyped-def]
-    """A load drop of 60 % pulls the magnet towards the rail: the MPC with min_gap_m =
-    9.5 mm holds it, the cascade on the same run comes closer."""
+    """A load drop of 30 % pulls the magnet towards the rail: the MPC with min_gap_m =
+    9.5 mm holds it, the cascade on the same run comes closer (60 % puts the cascade on
+    the rail)."""
     mag, maps, model, _, veh, f0 = setup
     plant = mk.CurrentModel(maps)
-    drop = lambda t: -0.6 * f0 if t >= 0.02 else 0.0  # noqa: E731
+    drop = lambda t: -0.3 * f0 if t >= 0.02 else 0.0  # noqa: E731
     ctl = _mpc(model, min_gap_m=0.0095)
     mpc = closed_loop(plant, veh, ctl, duration_s=0.3, dt_s=DT, initial_gap_m=S0,
                       initial_current_A=ctl.design_state[0], external_force=drop)
     design = design_gap_controller(mag, mass_kg=veh.mass_kg, gap_m=S0, current_A=20.0)
-    i0 = float(ctl.design_state[0])
-    cas = closed_loop(plant, veh, design, duration_s=0.3, dt_s=DT, initial_gap_m=S0,
-                      initial_current_A=i0,
-                      initial_flux_Wb=mk.solve_statics(mag, gaps=S0,
-                                                       currents=i0).flux_linkage_Wb)
+    cas = closed_loop(mk.CurrentModel(maps), veh, design, duration_s=0.3, dt_s=DT,
+                      initial_gap_m=S0,
+                      initial_current_A=20.0, external_force=drop)
     for name, r in (("mpc", mpc), ("cascade", cas)):
         print(name, "min gap", r.gap_m.min(), "max dev", r.max_gap_deviation_m(),
               "IAE", r.iae_m_s(), "energy", r.energy_J())

@@ -88,15 +88,15 @@ class MagnetHeaveModel:
         sizes = {"force": 1, "voltage": nc, "gap_sensor": 1, "current_sensor": nc}
         self.nd = sum(sizes[d] for d in dist)
         self.disturbance_names: tuple[str, ...] = tuple(
-            n for d in dist for n in ((f"{d}_N",) if d == "force" else (f"{d}_m",)
-                                      if d == "gap_sensor" else
-                                      tuple(f"{d}_{'V' if d == 'voltage' else 'A'}[{c}]"
-                                            for c in bank.circuit_names)))
+            n for dn in dist for n in ((f"{dn}_N",) if dn == "force" else (f"{dn}_m",)
+                                       if dn == "gap_sensor" else
+                                       tuple(f"{dn}_{'V' if dn == 'voltage' else 'A'}[{c}]"
+                                             for c in bank.circuit_names)))
         self._dslices: dict[str, slice] = {}
         k = 0
-        for d in dist:
-            self._dslices[d] = slice(k, k + sizes[d])
-            k += sizes[d]
+        for dname in dist:
+            self._dslices[dname] = slice(k, k + sizes[dname])
+            k += sizes[dname]
         self.resistance_ohm = np.asarray(bank.resistance_ohm, dtype=float)
         b = bank._bounds
         self.gap_range_m = (float(b[0].max()), float(b[1].min()))

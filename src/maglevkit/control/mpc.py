@@ -243,7 +243,7 @@ class OffsetFreeMPC:
         return N * (nx + nu) + nx, N * (nx + nu) + nx + N, nx + nu
 
     def _unpack(self, w: Any) -> tuple[list[Any], list[Any], Any]:
-        nx, nu, N = self.model.nx, self.model.nu, self.horizon
+        nx, N = self.model.nx, self.horizon
         n_xu, _, blk = self._layout()
         X = [w[k * blk:k * blk + nx] for k in range(N)] + [w[N * blk:N * blk + nx]]
         U = [w[k * blk + nx:(k + 1) * blk] for k in range(N)]
@@ -406,7 +406,8 @@ class OffsetFreeMPC:
             self._lam = (np.asarray(r["lam_x"]).ravel(), np.asarray(r["lam_g"]).ravel())
             it = int(st["iter_count"])
         else:
-            for it in range(1, self.max_iter + 1):
+            for k in range(1, self.max_iter + 1):
+                it = k
                 grad, g, a_nz = self._qp_data(w, p)
                 A = ca.DM(self._A_sparsity, a_nz)
                 r = self._qp(h=self._H, g=grad, a=A, lba=self._lbg - g, uba=self._ubg - g,
