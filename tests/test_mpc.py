@@ -21,7 +21,6 @@ DT = 1e-3
 def setup(u_magnet: mk.Magnet):  # type: ignore[no-untyped-def]
     maps = mk.build_maps(u_magnet, gaps=np.linspace(0.004, 0.02, 17),
                          currents=np.linspace(0, 80, 33), progress=False)
-    model = MagnetHeaveModel(maps, mass_kg=1.0)      # mass set below from the statics
     i0 = 20.0
     f0 = float(mk.solve_statics(u_magnet, gaps=S0, currents=i0).force_N)
     veh = HeaveMass(f0 / STANDARD_GRAVITY)
@@ -57,13 +56,15 @@ def test_offset_free_under_an_unknown_load(setup) -> None:  # type: ignore[no-un
                                  initial_current_A=ctl.design_state[0], external_force=load)
     free, nominal = runs["offset-free"], runs["plain"]
     print("offset-free end error", free.gap_m[-1] - S0, "plain", nominal.gap_m[-1] - S0)
+    # measured: 5e-18 m (the plant is the controller's model, the loop converges to its
+    # fixed point) against the issue's 1 um; plain NMPC 211 um, bound 20 um
     assert abs(free.gap_m[-1] - S0) < 1e-6
     assert abs(nominal.gap_m[-1] - S0) > 2e-5
     for r in runs.values():
         assert np.all(np.abs(r.voltages_V) <= 440.0)
     # the force disturbance estimate is the load
     d = free.diagnostics["disturbance_estimate"][-1]
-    assert d[0] == pytest.approx(0.1 * f0, rel=1e-3)
+    assert d[0] == pytest.approx(0.1 * f0, rel=1e-3)     # exact model: estimate = load
 
 
 @pytest.mark.slow
@@ -81,18 +82,19 @@ def test_offset_free_on_the_detailed_plant(setup) -> None:  # type: ignore[no-un
         ends[name] = r.gap_m[-1] - S0
         assert np.all(np.abs(r.voltages_V) <= 440.0)
     print(ends)
+    # measured: 1.7e-17 m (n_d = n_y: zero steady innovation) against 1 um; plain 211 um
     assert abs(ends["offset-free"]) < 1e-6
     assert abs(ends["plain"]) > 2e-5
 
 
 def test_min_gap_constraint_in_a_large_disturbance(setup) -> None:  # type: ignore[no-untyped-def]
     """A load drop of 30 % pulls the magnet towards the rail: the MPC with min_gap_m =
-    9.5 mm holds it, the cascade on the same run comes closer (60 % puts the cascade on
-    the rail)."""
+    9.9 mm holds it (voltage at its 440 V limit), the cascade on the same run comes
+    within 7 mm (60 % puts the cascade on the rail)."""
     mag, maps, model, _, veh, f0 = setup
     plant = mk.CurrentModel(maps)
     drop = lambda t: -0.3 * f0 if t >= 0.02 else 0.0  # noqa: E731
-    ctl = _mpc(model, min_gap_m=0.0095)
+    ctl = _mpc(model, min_gap_m=0.0099)
     mpc = closed_loop(plant, veh, ctl, duration_s=0.3, dt_s=DT, initial_gap_m=S0,
                       initial_current_A=ctl.design_state[0], external_force=drop)
     design = design_gap_controller(mag, mass_kg=veh.mass_kg, gap_m=S0, current_A=20.0)
@@ -103,8 +105,14 @@ def test_min_gap_constraint_in_a_large_disturbance(setup) -> None:  # type: igno
         print(name, "min gap", r.gap_m.min(), "max dev", r.max_gap_deviation_m(),
               "IAE", r.iae_m_s(), "energy", r.energy_J())
     assert np.all(np.abs(mpc.voltages_V) <= 440.0)
-    assert mpc.gap_m.min() >= 0.0095 - 2e-6
-    assert cas.gap_m.min() < mpc.gap_m.min()
+    assert np.abs(mpc.voltages_V).max() == pytest.approx(440.0)   # the limit is used
+    # soft constraint at the 2 ms shooting nodes, one RTI iteration per 1 ms sample:
+    # measured 4.8 um below 9.9 mm; bound 10 um
+    assert mpc.gap_m.min() >= 0.0099 - 1e-5
+    # measured: cascade min 6.97 mm, max deviation 3.0 mm against the MPC's 0.11 mm
+    assert cas.gap_m.min() < 0.0099 - 1e-3
+    assert cas.max_gap_deviation_m() > 10 * mpc.max_gap_deviation_m()
+    assert cas.iae_m_s() > mpc.iae_m_s()
 
 
 def test_observer_converges_on_the_detailed_plant(setup) -> None:  # type: ignore[no-untyped-def]
@@ -124,6 +132,8 @@ def test_observer_converges_on_the_detailed_plant(setup) -> None:  # type: ignor
         err.append((z[1] - r.gap_m[k], z[2] - r.gap_rate_m_per_s[k], z[0] - r.currents_A[k, 0]))
     e = np.array(err)
     print("initial", e[0], "final", e[-1], "d", z[3:])
+    # measured at 0.4 s: gap 7e-11 m, rate 1e-7 m/s, load estimate 0.05 % off; the
+    # bounds leave 10x or more (the start errors are 1 mm, 1.6 mm/s after one sample)
     assert abs(e[-1, 0]) < 1e-6
     assert abs(e[-1, 1]) < 1e-4
     assert abs(z[3] - 0.1 * f0) < 0.02 * f0
@@ -139,6 +149,8 @@ def test_ipopt_peer_gives_the_same_solution(setup) -> None:  # type: ignore[no-u
     du = np.max(np.abs(sqp["inputs_V"] - ipo["inputs_V"]))
     dx = np.max(np.abs(sqp["states"][:, 1] - ipo["states"][:, 1]))
     print("du", du, "ds", dx, sqp["iterations"], ipo["iterations"])
+    # measured: 3e-9 V and 2e-15 m (tables vs B-splines agree to rounding; both solvers
+    # at tight tolerances); bounds 1 mV and 1 nm
     assert du < 1e-3
     assert dx < 1e-9
 

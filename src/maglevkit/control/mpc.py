@@ -239,22 +239,28 @@ class OffsetFreeMPC:
 
     # ------------------------------------------------------------------ OCP
     def _layout(self) -> tuple[int, int, int]:
+        """``(index of x_N, n_w, block length)``: blocks ``[x_k, U_k, e_k+1]`` for
+        ``k < N``, then ``x_N`` (interleaved, so that the KKT matrix stays banded)."""
         nx, nu, N = self.model.nx, self.model.nu, self.horizon
-        return N * (nx + nu) + nx, N * (nx + nu) + nx + N, nx + nu
+        blk = nx + nu + 1
+        return N * blk, N * blk + nx, blk
 
-    def _unpack(self, w: Any) -> tuple[list[Any], list[Any], Any]:
-        nx, N = self.model.nx, self.horizon
-        n_xu, _, blk = self._layout()
-        X = [w[k * blk:k * blk + nx] for k in range(N)] + [w[N * blk:N * blk + nx]]
-        U = [w[k * blk + nx:(k + 1) * blk] for k in range(N)]
-        return X, U, w[n_xu:]
+    def _unpack(self, w: Any) -> tuple[list[Any], list[Any], list[Any]]:
+        nx, nu, N = self.model.nx, self.model.nu, self.horizon
+        _, _, blk = self._layout()
+        X = [w[k * blk:k * blk + nx] for k in range(N + 1)]
+        U = [w[k * blk + nx:k * blk + nx + nu] for k in range(N)]
+        E = [w[k * blk + nx + nu] for k in range(N)]
+        return X, U, E
 
     def _problem(self, w: Any, p: Any, interval: Any) -> tuple[Any, Any]:
-        """Cost and constraints of the OCP in the scaled variables ``w`` (symbolic)."""
+        """Cost and constraints of the OCP in the scaled variables ``w`` (symbolic);
+        ``interval(k, x, u)`` is the state after interval ``k`` (physical units).  Rows:
+        ``x_0``, then per interval its dynamics and the soft constraints at its end."""
         m, N = self.model, self.horizon
         nx, nd, nc = m.nx, m.nd, m.n_circuits
         sx, su = ca.DM(self._sx), ca.DM(self._su)
-        x0, d, xt, ut = p[:nx], p[nx:nx + nd], p[nx + nd:2 * nx + nd], p[2 * nx + nd:]
+        x0, xt, ut = p[:nx], p[nx + nd:2 * nx + nd], p[2 * nx + nd:]
         X, U, E = self._unpack(w)
         Q, R, P = ca.DM(self._Q), ca.DM(self._R), ca.DM(self._P)
         rho = self.weights.soft_constraint
@@ -262,19 +268,18 @@ class OffsetFreeMPC:
         g = [X[0] - x0 / sx]
         for k in range(N):
             ex, eu = X[k] * sx - xt, U[k] * su - ut
-            J += ca.bilin(Q, ex, ex) + ca.bilin(R, eu, eu)
-            g.append(interval(X[k] * sx, U[k] * su, d) / sx - X[k + 1])
+            J += ca.bilin(Q, ex, ex) + ca.bilin(R, eu, eu) + rho * (E[k] + E[k] ** 2)
+            g.append(interval(k, X[k] * sx, U[k] * su) / sx - X[k + 1])
+            g.append((X[k + 1][nc] * sx[nc] - self.min_gap_m) / sx[nc] + E[k])
+            g.append((self.max_current_A - X[k + 1][:nc] * sx[:nc]) / sx[:nc] + E[k])
         ex = X[N] * sx - xt
-        J += ca.bilin(P, ex, ex) + rho * ca.sum1(E) + rho * ca.sumsqr(E)
-        for k in range(1, N + 1):
-            g.append((X[k][nc] * sx[nc] - self.min_gap_m) / sx[nc] + E[k - 1])
-            g.append((self.max_current_A - X[k][:nc] * sx[:nc]) / sx[:nc] + E[k - 1])
+        J += ca.bilin(P, ex, ex)
         return J, ca.vertcat(*g)
 
     def _bounds(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         m, N = self.model, self.horizon
-        nx, nc = m.nx, m.n_circuits
-        n_xu, nw, blk = self._layout()
+        nx, nu, nc = m.nx, m.nu, m.n_circuits
+        _, nw, blk = self._layout()
         lbw, ubw = np.full(nw, -np.inf), np.full(nw, np.inf)
         xlo = np.r_[np.full(nc, m.current_range_A[0]), m.gap_range_m[0], -np.inf] / self._sx
         xhi = np.r_[np.full(nc, m.current_range_A[1]), m.gap_range_m[1], np.inf] / self._sx
@@ -282,12 +287,15 @@ class OffsetFreeMPC:
             if k >= 1:
                 lbw[k * blk:k * blk + nx], ubw[k * blk:k * blk + nx] = xlo, xhi
             if k < N:
-                lbw[k * blk + nx:(k + 1) * blk] = -self._ulim / self._su
-                ubw[k * blk + nx:(k + 1) * blk] = self._ulim / self._su
-        lbw[n_xu:], ubw[n_xu:] = 0.0, np.inf
-        ng = nx * (N + 1) + N * (1 + nc)
+                lbw[k * blk + nx:k * blk + nx + nu] = -self._ulim / self._su
+                ubw[k * blk + nx:k * blk + nx + nu] = self._ulim / self._su
+                lbw[k * blk + nx + nu] = 0.0
+        rows = nx + 1 + nc
+        ng = nx + N * rows
         lbg, ubg = np.zeros(ng), np.zeros(ng)
-        lbg[nx * (N + 1):], ubg[nx * (N + 1):] = 0.0, np.inf
+        for k in range(N):
+            lbg[nx + k * rows + nx:nx + (k + 1) * rows] = 0.0
+            ubg[nx + k * rows + nx:nx + (k + 1) * rows] = np.inf
         return lbw, ubw, lbg, ubg
 
     def _build(self, substeps: int) -> None:
@@ -310,7 +318,8 @@ class OffsetFreeMPC:
                 k4 = rhs(xk + hs * k3, us, ds)
                 xk = xk + hs / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
             F = ca.Function("interval", [xs, us, ds], [xk])
-            J, g = self._problem(w, p, F)
+            dv = p[nx:nx + nd]
+            J, g = self._problem(w, p, lambda k, x, u: F(x, u, dv))
             self._nlp = ca.nlpsol("mpc_ipopt", "ipopt", {"x": w, "p": p, "f": J, "g": g},
                                   {"print_time": False, "ipopt.print_level": 0,
                                    "ipopt.sb": "yes", "ipopt.tol": 1e-10,
@@ -323,33 +332,12 @@ class OffsetFreeMPC:
         X, U, _ = self._unpack(w)
         sx, su = ca.DM(self._sx), ca.DM(self._su)
         d = p[nx:nx + nd]
-        blocks = []
-        for k in range(self.horizon):
-            xf, A, B = Fd(X[k] * sx, U[k] * su, d, T)[:3]
-            blocks.append((xf, A, B))
+        blocks = [Fd(X[k] * sx, U[k] * su, d, T)[:3] for k in range(self.horizon)]
+        J, g = self._problem(w, p, lambda k, x, u: blocks[k][0])
+        # the constraints linearised in a step dw: the interval maps replaced by their
+        # Jacobians (A dx + B du), the rest is linear already
         dw = ca.MX.sym("dw", nw)
-        it = iter(blocks)
-
-        def interval_lin(x: Any, u: Any, dd: Any) -> Any:
-            xf, A, B = next(it)
-            return xf  # the value; the linear part is added below
-
-        J, g = self._problem(w, p, interval_lin)
-        dX, dU, _ = self._unpack(dw)
-        # linearised constraints: the same structure with the interval maps replaced by
-        # xf + A dx + B du (scaled)
-        it2 = iter(blocks)
-
-        def interval_dw(x: Any, u: Any, dd: Any) -> Any:
-            return next(it2)[0]
-
-        lin_terms = []
-        for k, (_, A, B) in enumerate(blocks):
-            lin_terms.append((A @ (dX[k] * sx) + B @ (dU[k] * su)) / sx - dX[k + 1])
-        # the linear (non-dynamics) constraints and the initial-value row, in dw
-        _, g_dw = self._problem(dw, ca.vertcat(ca.DM.zeros(nx), p[nx:]), interval_dw)
-        ng0 = nx * (self.horizon + 1)
-        g_lin = ca.vertcat(dX[0], *lin_terms, g_dw[ng0:])
+        _, g_lin = self._problem(dw, p, lambda k, x, u: blocks[k][1] @ x + blocks[k][2] @ u)
         Jg = ca.jacobian(g_lin, dw)
         H, grad = ca.hessian(J, w)
         data = ca.Function("mpc_qp_data", [w, p, T], [grad, g, Jg])
@@ -370,13 +358,13 @@ class OffsetFreeMPC:
                             {"h": self._H.sparsity(), "a": Jg.sparsity()}, opts)
 
     def _initial_guess(self, x_hat: np.ndarray, xt: np.ndarray, ut: np.ndarray) -> np.ndarray:
-        nx, N = self.model.nx, self.horizon
-        n_xu, nw, blk = self._layout()
+        nx, nu, N = self.model.nx, self.model.nu, self.horizon
+        _, nw, blk = self._layout()
         w = np.zeros(nw)
         for k in range(N + 1):
             w[k * blk:k * blk + nx] = (x_hat if k == 0 else xt) / self._sx
             if k < N:
-                w[k * blk + nx:(k + 1) * blk] = ut / self._su
+                w[k * blk + nx:k * blk + nx + nu] = ut / self._su
         return w
 
     def solve(self, x_hat: np.ndarray, d_hat: np.ndarray, xt: np.ndarray,
@@ -410,6 +398,9 @@ class OffsetFreeMPC:
                 it = k
                 grad, g, a_nz = self._qp_data(w, p)
                 A = ca.DM(self._A_sparsity, a_nz)
+                # cold QPs: starting qrqp from the previous multipliers (lam_x0, lam_a0)
+                # took 1 iteration instead of ~20 but returned non-optimal steps that
+                # let the gap run away (measured), so the QP is not warm-started
                 r = self._qp(h=self._H, g=grad, a=A, lba=self._lbg - g, uba=self._ubg - g,
                              lbx=self._lbw - w, ubx=self._ubw - w)
                 st = self._qp.stats()
@@ -430,14 +421,12 @@ class OffsetFreeMPC:
         return np.clip(u, -self._ulim, self._ulim), {"iterations": it, "solution": w.copy()}
 
     def _shift(self, w: np.ndarray) -> np.ndarray:
+        """The previous solution advanced by one interval (last block repeated)."""
         nx, N = self.model.nx, self.horizon
-        n_xu, nw, blk = self._layout()
+        _, nw, blk = self._layout()
         out = w.copy()
         out[:(N - 1) * blk] = w[blk:N * blk]
         out[(N - 1) * blk:(N - 1) * blk + nx] = w[N * blk:N * blk + nx]
-        out[(N - 1) * blk + nx:N * blk] = w[(N - 1) * blk + nx:N * blk]
-        out[N * blk:N * blk + nx] = w[N * blk:N * blk + nx]
-        out[n_xu:-1] = w[n_xu + 1:]
         return out
 
     def solve_ocp(self, x_hat: Any, d_hat: Any = None, *, gap_ref_m: float | None = None,
@@ -453,8 +442,8 @@ class OffsetFreeMPC:
             self._w, self._lam = None, None
         _, info = self.solve(x, d, xt, ut)
         X, U, _ = self._unpack(info["solution"])
-        return {"states": np.array([np.asarray(v) * self._sx for v in X]),
-                "inputs_V": np.array([np.asarray(v) * self._su for v in U]),
+        return {"states": np.array([np.asarray(v).ravel() * self._sx for v in X]),
+                "inputs_V": np.array([np.asarray(v).ravel() * self._su for v in U]),
                 "target_state": xt, "target_input_V": ut,
                 "iterations": np.array(info["iterations"])}
 
