@@ -420,3 +420,17 @@ def test_interpolation_options_change_results_by_little(u_maps) -> None:
             # bilinear on a 2 mm x 10 A grid: ~1-3 % map error (BENCHMARKS.md)
             assert _rel(res.currents_A, ref.currents_A) <= 0.05
             assert _rel(res.currents_A, ref.currents_A) > 0.0
+
+
+def test_circuit_expressions_with_the_table_as_input_equal_ode_function(u_maps,
+                                                                       tr09_maps) -> None:
+    bank = MagnetBank({"u": u_maps, "t": tr09_maps}, compiled="never")
+    tab = ca.MX.sym("table", bank.table.size)
+    x, u, s, sd = (ca.MX.sym(n, 3) for n in ("x", "u", "s", "sd"))
+    rhs = ca.vertcat(*[bank.circuit_expressions(k, x[k], s[k], u[k], sd[k], tab)[0]
+                       for k in range(3)])
+    f = ca.Function("f", [x, u, s, sd, tab], [rhs])
+    args = ([20.0, 30.0, 35.0], [30.0, 40.0, 45.0], [0.009, 0.011, 0.012], [0.01, -0.02, 0.0])
+    assert _rel(np.asarray(f(*args, bank.table)), np.asarray(bank.ode_function(*args))) == 0.0
+    assert not bank.table.flags.writeable
+    assert bank.map_ranges.shape == (4, 3) and bank.members[1][:2] == ("t", "reduced")

@@ -72,7 +72,7 @@ class MagnetHeaveModel:
                                  f"{list(DISTURBANCES)}")
         bank = maps if isinstance(maps, MagnetBank) else MagnetBank({"magnet": maps},
                                                                      compiled="never")
-        if len(bank.member_names) != 1 or bank._reduced_idx.size != bank.n_circuits:
+        if len(bank.member_names) != 1 or bank.members[0][1] != "reduced":
             raise ParameterError("the prediction model needs the maps of exactly one magnet "
                                  "(a bank of one reduced member)")
         self.bank = bank
@@ -98,11 +98,10 @@ class MagnetHeaveModel:
             self._dslices[dname] = slice(k, k + sizes[dname])
             k += sizes[dname]
         self.resistance_ohm = np.asarray(bank.resistance_ohm, dtype=float)
-        b = bank._bounds
+        b = bank.map_ranges
         self.gap_range_m = (float(b[0].max()), float(b[1].min()))
         self.current_range_A = (float(b[2].max()), float(b[3].min()))
-        self.table = np.asarray(bank._table, dtype=float)
-        self._par = [ca.DM(bank._par[:, k]) for k in range(nc)]
+        self.table = np.asarray(bank.table, dtype=float)
         self._T = ca.MX.sym("table", self.table.size)
         x, u, d = ca.MX.sym("x", self.nx), ca.MX.sym("u", self.nu), ca.MX.sym("d", self.nd)
         xdot, y, force = self._expressions(x, u, d, self._T)
@@ -125,7 +124,7 @@ class MagnetHeaveModel:
         ueff = u + self._d(d, "voltage")
         rhs, coil, force = [], [], 0
         for j in range(nc):
-            r, c, f, _ = self.bank._circuit_expressions(x[j], s, ueff[j], v, self._par[j], table)
+            r, c, f, _ = self.bank.circuit_expressions(j, x[j], s, ueff[j], v, table)
             rhs.append(r)
             coil.append(c)
             force = force + f
@@ -277,8 +276,7 @@ class MagnetHeaveModel:
         for the IPOPT reference formulation."""
         from ..models.current import CurrentModel
 
-        member = self.bank._members[0]
-        cm = CurrentModel(member.maps)
+        cm = CurrentModel(self.bank.members[0][2])
         nc = self.n_circuits
         x, u, d = ca.MX.sym("x", self.nx), ca.MX.sym("u", self.nu), ca.MX.sym("d", self.nd)
         s, v = x[nc], x[nc + 1]

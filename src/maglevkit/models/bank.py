@@ -505,6 +505,38 @@ class MagnetBank:
                            ["I_L", "s", "U", "sdot", "h"],
                            ["I_L_next", "I", "F", "member_F", "n_bad", "I_L_min", "I_L_max"])
 
+    # ------------------------------------------------------------------ public model pieces
+    @property
+    def table(self) -> np.ndarray:
+        """The per-cell coefficients of every distinct map, one flat array (read-only)."""
+        view = self._table.view()
+        view.flags.writeable = False
+        return view
+
+    @property
+    def map_ranges(self) -> np.ndarray:
+        """(4, n_reduced) gap and current ranges of each reduced circuit's maps:
+        rows ``s_min, s_max`` [m], ``I_min, I_max`` [A]."""
+        return self._bounds.copy()
+
+    @property
+    def members(self) -> tuple[tuple[str, str, Any], ...]:
+        """``(name, kind, model)`` per member: kind ``"reduced"`` (model: its maps) or
+        ``"detailed"`` (model: its FluxModel)."""
+        return tuple((m.name, m.kind, m.maps if m.kind == "reduced" else m.model)
+                     for m in self._members)
+
+    def circuit_expressions(self, k: int, i_l: Any, s: Any, u: Any, gap_rate: Any,
+                            table: Any) -> tuple[Any, Any, Any, Any]:
+        """Eq. 8 of reduced circuit ``k`` as CasADi expressions ``(dI_L/dt, I, F, L~)``.
+
+        ``table`` is :attr:`table` as a CasADi symbol (a function input, so that CasADi's
+        virtual machine does not copy the constant on every call) or as a constant.  The
+        same expressions as :attr:`ode_function` and the compiled step.
+        """
+        p = ca.DM(self._par[:, k])
+        return self._circuit_expressions(i_l, s, u, gap_rate, p, table)
+
     @property
     def ode_function(self) -> ca.Function:
         """Eq. 8 of every reduced circuit: ``(I_L, U, s, sdot) -> dI_L/dt`` (CasADi, arrays
