@@ -67,6 +67,7 @@ EXP = "src/maglevkit/models/experiments.py"
 PAR = "src/maglevkit/reduction/parameters.py"
 MAP = "src/maglevkit/reduction/maps.py"
 TRA = "src/maglevkit/reduction/transient.py"
+VEH = "src/maglevkit/vehicle.py"
 
 T_STA = "tests/test_statics.py"
 T_EL = "tests/test_elements.py"
@@ -267,6 +268,15 @@ MUTATIONS: tuple[Mutation, ...] = (
              "lt[j], dl[j], rec[j] = step.inductance_H, 1.05 * ramp.dL_ds_H_per_m, "
              "step.eddy_resistance_ohm",
              (f"{T_RT}::test_transient_and_statics_maps_agree",)),
+    # ------------------------------------------------------------------ vehicle (heave mass)
+    Mutation("heave: 0.5 a dt^2 -> a dt^2", VEH,
+             "state.gap_m + state.gap_rate_m_per_s * dt + 0.5 * a * dt * dt",
+             "state.gap_m + state.gap_rate_m_per_s * dt + a * dt * dt",
+             ("tests/test_control.py::test_heave_mass_free_fall_is_exact",)),
+    Mutation("heave: magnet force x1.05", VEH,
+             "return self.gravity + (external_force_N - magnet_force_N) / self.mass_kg",
+             "return self.gravity + (external_force_N - 1.05 * magnet_force_N) / self.mass_kg",
+             ("tests/test_control.py::test_gap_controller_levitates_and_tracks_a_reference",)),
 )
 
 
