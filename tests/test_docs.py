@@ -40,6 +40,12 @@ EXPECTED: dict[str, list[tuple[str, float]]] = {
         (rf"A = {NUMBER} 1/s", -17.1), (rf"dF/dI = {NUMBER} N/A", 114.0)],
     # README, closed-loop gap control: the reference steps to 11 mm (checked below too)
     'print(f"gap after 0.5 s:': [(rf"gap after 0.5 s: {NUMBER} mm", 11.001)],
+    # README, the magnet bank: 100 circuits (a shape, exact)
+    "print(out.circuit_force_N.shape, bank.ode_function)": [(r"^\((\d+),\)", 100.0)],
+    # docs/bank.md: one step of +10 % voltage from 20 A (the current jumps by
+    # dU/(R_el + R_ec), then rises with the inductance's time constant)
+    'print(f"{out.currents_A[0]:.3f} A, {out.circuit_force_N[0]:.0f} N")': [
+        (rf"^{NUMBER} A", 20.397), (rf"A, {NUMBER} N", 1532.0)],
     # README, hand-built network (printed at full precision: compared to 1e-9 relative)
     "print(mk.solve_statics(net, gaps=0.002, currents=3.0).force_N)": [
         (rf"^{NUMBER}$", 18.60471113014329)],
