@@ -8,7 +8,7 @@ STAMP  := $(VENV)/.installed-stamp
 DEMO_STAMP := $(VENV)/.demo-stamp
 OUT    ?= out
 
-.PHONY: demo test test-all lint bench clean
+.PHONY: demo test test-all lint bench mutation clean
 
 $(BIN)/python:
 	$(PYTHON) -m venv $(VENV)
@@ -37,6 +37,10 @@ test-all: $(STAMP) lint
 lint: $(STAMP)
 	$(BIN)/ruff check src tests benchmarks
 	$(BIN)/mypy src
+
+## mutation: deliberate small errors in the physics core, one at a time; reports which the tests catch
+mutation: $(STAMP)
+	$(BIN)/python tools/mutation.py
 
 ## bench: run the benchmarks and rewrite BENCHMARKS.md
 bench: $(STAMP)

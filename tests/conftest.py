@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import copy
+import importlib.util
+import os
 import sys
 from importlib import resources
 from typing import Any
@@ -16,6 +18,21 @@ if sys.version_info >= (3, 11):
     import tomllib
 else:  # pragma: no cover
     import tomli as tomllib
+
+
+HAVE_SKFEM = importlib.util.find_spec("skfem") is not None
+SKIP_FEM_VAR = "MAGLEVKIT_SKIP_FEM"
+
+
+def pytest_report_header(config: pytest.Config) -> str:
+    """State in the log whether the FEM validation (tests/test_fem_validation.py) runs."""
+    if HAVE_SKFEM:
+        return "maglevkit: scikit-fem found, the FEM validation runs"
+    if os.environ.get(SKIP_FEM_VAR) == "1":
+        return (f"maglevkit: scikit-fem NOT installed, FEM validation SKIPPED on request "
+                f"({SKIP_FEM_VAR}=1)")
+    return ("maglevkit: scikit-fem NOT installed: the FEM validation FAILS "
+            f"(install the 'validation' extra, or set {SKIP_FEM_VAR}=1 to skip it)")
 
 
 def u_params() -> dict[str, Any]:
@@ -47,10 +64,10 @@ R_EL = 1.5        # ohm
 G_EC = 50.0       # S, eddy conductance of the core (R_ec = n^2/G = 800 ohm)
 
 
-def loop_network(*, eddy: bool) -> mk.Network:
+def loop_network(*, eddy: bool, g_ec: float = G_EC) -> mk.Network:
     els: list = [mk.IronPath("core_iron", L_FE, AREA, ConstantPermeability(MU_R))]
     if eddy:
-        els.append(mk.EddyCurrent("core_eddy", G_EC))
+        els.append(mk.EddyCurrent("core_eddy", g_ec))
     return mk.Network(
         (mk.Branch("core", "A", "B", tuple(els)),
          mk.Branch("gap", "B", "A", (mk.AirGap("airgap", gap_input="s", pole_area=AREA),))),

@@ -226,9 +226,9 @@ def test_step_bad_inputs(fm: mk.FluxModel) -> None:
         fm.step(st, 1e-3, [1.0, 2.0])
     with pytest.raises(InputError, match="> 0"):
         fm.step(st, 1e-3, 20.0, gaps=0.001, gap_rates=-2.0)    # would close to -1 mm
-    with pytest.raises(InputError):
+    with pytest.raises(InputError, match=r"gap = -0.01 m is not allowed; gaps must be > 0 m"):
         fm.initial_state(gaps=[0.01, -0.01], currents=1.0)
-    with pytest.raises(InputError):
+    with pytest.raises(InputError, match=r"rtol = 0.0 must lie in \(0, 1\)"):
         mk.FluxModel(fm.network, rtol=0.0)
     with pytest.raises(InputError, match="method"):
         mk.FluxModel(fm.network, method="euler")

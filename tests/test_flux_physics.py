@@ -112,8 +112,9 @@ def test_step_inductance_equals_statics_without_eddies(u_magnet: mk.Magnet, gap:
                                                eddy_currents=False)
     sol = mk.solve_statics(u_magnet, gaps=gap, currents=current)
     # Two independent methods (time constant of a 0.1 % step vs implicit-function dpsi/dI);
-    # the issue asks for 1 %; measured agreement ~0.2 % (step nonlinearity, fit).
-    assert est.inductance_H == pytest.approx(sol.differential_inductance_H[0, 0], rel=1e-2)
+    # the issue asks for 1 %; measured +4e-5, -1.4e-3, -1.1e-3 at the three points (the
+    # 0.1 % step measures a chord of psi(I) where L~ falls with I; fit); bound 3e-3.
+    assert est.inductance_H == pytest.approx(sol.differential_inductance_H[0, 0], rel=3e-3)
     assert est.current_jump_A == 0.0
 
 
@@ -123,11 +124,13 @@ def test_inductance_with_eddies_has_jump_and_same_l_tilde(u_magnet: mk.Magnet) -
                                                    eddy_currents=False)
     assert with_e.current_jump_A > 0.05 * with_e.final_current_change_A
     assert 0.0 < with_e.eddy_resistance_ohm < np.inf
-    # paper IV-B: L~ does not depend on eddy currents; the U-magnet has two eddy time
-    # constants (leakage loop) fitted by one exponential: measured agreement ~0.1 %.
-    assert with_e.inductance_H == pytest.approx(without.inductance_H, rel=2e-2)
-    # the apparent inductance tau R_el is larger by ~(1 + R_el/R_ec)
-    assert with_e.apparent_inductance_H > 1.1 * with_e.inductance_H
+    # paper IV-B: L~ does not depend on eddy currents; the U-magnet's several eddy modes
+    # are fitted by one exponential: measured -1.2e-4 relative; bound 1e-3 (8x; the
+    # earlier 2e-2 was 170x the measured value)
+    assert with_e.inductance_H == pytest.approx(without.inductance_H, rel=1e-3)
+    # the apparent inductance tau R_el is larger by ~(1 + R_el/R_ec): measured 1.276
+    # (slow-mode R_ec 7.2 ohm at this point); window 1.25 ... 1.30
+    assert 1.25 < with_e.apparent_inductance_H / with_e.inductance_H < 1.30
 
 
 def test_fig7_behaviour(u_magnet: mk.Magnet) -> None:
@@ -192,7 +195,7 @@ def test_laminated_eddy_conductance() -> None:
     # correction (1 - 0.6302 d/w) (d/w = 5e-3); with it they agree: measured 2.5e-7.
     sheet = mk.EddyCurrent.solid_rectangular("sheet", width, d, length, RHO).eddy_conductance
     assert sheet / n_sheets == pytest.approx(g * (1 - 0.6302 * d / width), rel=1e-5)
-    with pytest.raises(mk.ParameterError):
+    with pytest.raises(mk.ParameterError, match=r"'bad': sheet_thickness = 0.0 must be a finite"):
         mk.EddyCurrent.laminated("bad", area, length, RHO, 0.0)
 
 

@@ -127,7 +127,25 @@ def test_coupling_of_the_two_circuits_is_small(std: mk.Magnet) -> None:
     # pole back and stator is ~0 and only the leakage/iron paths at the p06-p07 junction
     # couple the halves: the ratio is < 2 % (computed ~0.7 %); the paper: "hardly couple"
     assert 0.0 < c.max_ratio < 0.02
-    assert c.inductance_H[0, 0] == pytest.approx(0.52, rel=0.1)  # facts.md: L ~ 0.5 H [E]
+    # the differential inductance matrix against central differences of the solved flux
+    # linkages, one circuit current at a time (h = 1e-4 I: truncation ~1e-9, measured
+    # 8e-10 for L_11 and 1.1e-9 for the coupling ratio; bound 1e-7)
+    i0 = std.nominal_current
+    h = 1e-4 * i0
+    psi = mk.solve_statics(std, gaps=std.nominal_gap,
+                           currents=[[i0 + h, i0], [i0 - h, i0], [i0, i0 + h],
+                                     [i0, i0 - h]]).flux_linkage_Wb
+    l_fd = np.column_stack([psi[0] - psi[1], psi[2] - psi[3]]) / (2 * h)   # [i, j] = dpsi_i/dI_j
+    np.testing.assert_allclose(c.inductance_H, l_fd, rtol=1e-7)
+    assert c.max_ratio == pytest.approx(abs(l_fd[0, 1]) / np.sqrt(l_fd[0, 0] * l_fd[1, 1]),
+                                        rel=1e-7)
+    # Half-magnet inductance: the only public figure is an estimate, "~0.5 H" [E] given to
+    # one significant digit (facts.md), i.e. 0.45 ... 0.55 H; the model gives 0.5401 H at
+    # the nominal point (the earlier centre value 0.52 H had no source).  Regression bound
+    # on the model value: +-1 % (any change of the TR09 network, iron or leakage that
+    # moves it more must re-measure it).
+    assert 0.45 <= c.inductance_H[0, 0] < 0.55
+    assert c.inductance_H[0, 0] == pytest.approx(0.5401, rel=0.01)
 
 
 def test_coupling_time_response_is_small(std: mk.Magnet) -> None:
@@ -138,7 +156,9 @@ def test_coupling_time_response_is_small(std: mk.Magnet) -> None:
 
     r = coupling_response(std)
     assert 0.0 < r.other_peak_ratio < 0.01
-    assert r.mutual_ratio == pytest.approx(coupling_ratios(std).max_ratio, rel=1e-12)
+    # the static ratio reported with the response is the matrix checked against finite
+    # differences in test_coupling_of_the_two_circuits_is_small (measured 0.007234)
+    assert r.mutual_ratio == pytest.approx(0.007234, rel=1e-3)
     # the stepped circuit really responded: it approaches +20 % within three time constants
     assert r.relative_current_change[-1, 0] > 0.15
 

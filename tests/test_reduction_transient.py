@@ -47,11 +47,81 @@ def test_eddy_resistance_is_the_instantaneous_current_jump(u_magnet: mk.Magnet) 
     # adds nothing visible.  Bound 1e-4.
     np.testing.assert_allclose(du / jump - r_el, r_ec, rtol=1e-4)
     # The single-exponential fit of differential_inductance_from_step extrapolates the
-    # *slow* mode back to t = 0; it implies a smaller R_ec (measured 8.5 vs 22.4 ohm),
-    # because the fast eddy modes (several: every leg segment has its own) decay within
-    # a few ms.  Documented in docs/reduction.md.
+    # *slow* mode back to t = 0; it implies a smaller R_ec (measured 8.485 vs 22.374 ohm,
+    # ratio 0.3792), because the fast eddy modes (several: every leg segment has its own)
+    # decay within a few ms.  Documented in docs/reduction.md.  Window +-3 % around the
+    # measured ratio (its value is checked independently in
+    # test_default_eddy_resistance_against_an_independent_tail_fit).
     slow = differential_inductance_from_step(u_magnet, gap=s, current=i0).eddy_resistance_ohm
-    assert 0.25 * r_ec < slow < 0.9 * r_ec
+    assert 0.368 * r_ec < slow < 0.391 * r_ec
+
+
+def test_default_eddy_resistance_of_one_loop_is_n2_over_g() -> None:
+    """The step-fitted R_ec (the current-based model's default) on a network whose step
+    response is exactly one exponential: one loop with one eddy element, R_ec = n^2/G.
+
+    G is chosen so that R_ec = 10 R_el (the bundled magnets: 4-11): the current jump is
+    then 9 % of the final change and the fit's intercept is well conditioned (with
+    R_ec/R_el = 533, conftest's G_EC, the jump is 0.2 % and the fitted value is off by
+    -10 %, a limit of the identification method, not of this loop).  Measured error
+    -0.17 % (IDAS at rtol 1e-9 on a 1e-3 step); bound 0.5 %."""
+    r_ec = 10.0 * R_EL
+    net = loop_network(eddy=True, g_ec=TURNS**2 / r_ec)
+    maps = build_maps(net, gaps=np.linspace(0.002, 0.008, 4), currents=np.linspace(0, 10, 4),
+                      progress=False)
+    assert float(maps.dataset["eddy_resistance_ohm"].values[0]) == pytest.approx(r_ec, rel=1e-12)
+    fit = float(maps.dataset["eddy_resistance_fit_ohm"].values[0])
+    assert fit == pytest.approx(r_ec, rel=5e-3)
+
+
+def test_default_eddy_resistance_against_an_independent_tail_fit(u_magnet: mk.Magnet) -> None:
+    """The default R_ec of the current-based model (``eddy_resistance_fit_ohm``, the slow
+    eddy mode) against a second identification that shares no code with the library's:
+    a FluxModel voltage step (own dt and tolerances) fitted by scipy's nonlinear least
+    squares (curve_fit) with dI(t) = dI_inf - A exp(-t/tau) on t >= 5 ms only, where the
+    fast eddy modes (tau ~1 ms and ~0.24 ms) have decayed (fit rms 2e-5 of dI_inf), so
+    A is the slow mode's amplitude extrapolated to t = 0 and R_ec = dU/(dI_inf - A) - R_el.
+
+    Measured: tail fit 8.60 ohm, tau 16.82 ms (8.61/8.62 ohm when starting at 10/20 ms);
+    library 8.845 ohm, +2.8 %: its log-linear fit starts at 98 % of the remaining change
+    (t ~ 0.3 ms), where the fast modes still add to the response.  Signed window
+    +1.5 ... +4.0 % (the fit-start spread 0.2 % plus 1 % for tolerances and the machine),
+    so R_ec x1.05 (+7.9 %) or x0.95 (-2.3 %) fails.  The current-based model must use the
+    same value: its current jump after a step (eq. 8 outputs, 0.1 us after the step) gives
+    the same ratio, and its single time constant equals the slow mode (measured
+    16.838 vs 16.820 ms, +0.1 %; bound +-0.5 %)."""
+    from scipy.optimize import curve_fit
+
+    s, i0 = 0.012, 40.0                       # the maps' reference point (grid centre)
+    maps = build_maps(u_magnet, gaps=np.linspace(0.008, 0.016, 5),
+                      currents=np.linspace(0.0, 80.0, 5), progress=False)
+    assert "s = 0.012 m, I = 40.0 A" in maps.dataset["eddy_resistance_fit_ohm"].attrs[
+        "description"]
+    fit_lib = float(maps.dataset["eddy_resistance_fit_ohm"].values[0])
+    fm = mk.FluxModel(u_magnet, rtol=1e-9, atol=1e-11)
+    r_el = float(fm.resistances[0])
+    di_inf = 1e-3 * i0
+    st = fm.initial_state(gaps=s, currents=i0)
+    tau0 = 0.0137                             # L~/R_el (statics), sizes the window only
+    res = mk.simulate(fm, (0.0, 6 * tau0), dt=tau0 / 25, gaps=st.gaps_m,
+                      voltages=r_el * (i0 + di_inf), initial_state=st)
+    t, di = res.time_s, res.currents_A[:, 0] - i0
+    sel = t >= 5e-3
+
+    def law(t: np.ndarray, a: float, tau: float) -> np.ndarray:
+        return di_inf - a * np.exp(-t / tau)
+
+    (amp, tau), _ = curve_fit(law, t[sel], di[sel], p0=(di_inf, 1.2 * tau0))
+    assert np.sqrt(np.mean((law(t[sel], amp, tau) - di[sel]) ** 2)) < 1e-4 * di_inf
+    r_tail = r_el * di_inf / (di_inf - amp) - r_el
+    assert 1.015 < fit_lib / r_tail < 1.04, (fit_lib, r_tail)
+    model = mk.CurrentModel(maps)
+    _, out = model.step(model.initial_state(gaps=s, currents=i0), 1e-7, r_el * (i0 + di_inf),
+                        gaps=s, gap_rates=0.0)
+    r_model = r_el * di_inf / float(out.currents_A[0] - i0) - r_el
+    assert 1.015 < r_model / r_tail < 1.04, (r_model, r_tail)
+    lin = model.linearize(gap_m=s, current_A=i0)
+    assert -1.0 / lin.A_per_s[0, 0] == pytest.approx(tau, rel=5e-3)
 
 
 def test_eddy_resistance_of_the_standard_magnet_is_symmetric() -> None:

@@ -1,0 +1,420 @@
+#!/usr/bin/env python3
+"""Mutation check of maglevkit's physics core (issue 16): do the tests catch small errors?
+
+Each mutation is a deliberate small error -- a factor 1.05, a sign flip, an index shift --
+given as ``(file, exact source snippet, replacement)``.  For every mutation the script
+
+1. copies ``src``, ``tests``, ``benchmarks``, ``docs``, ``README.md`` and ``pyproject.toml``
+   of this repository into a temporary directory (once) and checks that ``import maglevkit``
+   there loads the copy (``PYTHONPATH`` = the copy's ``src``), not the installed package;
+2. replaces the snippet in the copy (it must occur exactly once; a snippet that is not found,
+   e.g. because the code was rewritten, is reported as ``NOT APPLIED`` and the spec below
+   needs updating, not the code);
+3. runs the mutation's selected tests there (``pytest -x``, slow ones included when named)
+   and reports ``KILLED`` (a test failed: named in the table), ``SURVIVED`` (all passed),
+   ``TIMEOUT`` or ``ERROR`` (pytest could not run: collection or usage error);
+4. restores the file.
+
+Before the mutations the union of all selected tests runs once on the unmodified copy
+(baseline): a failing baseline would make every mutation look killed, so it aborts.
+
+A mutation listed with ``equivalent="reason"`` is one whose survival is expected because it
+does not change the physics (the reason says why); its survival is reported as
+``EQUIVALENT``.  Exit status: 0 if no mutation survived (NOT APPLIED does not fail the run,
+it is listed), 1 otherwise, 2 if the baseline fails.
+
+Usage::
+
+    python tools/mutation.py               # all mutations (make mutation)
+    python tools/mutation.py --list        # the list, no runs
+    python tools/mutation.py -k eq8        # mutations whose name contains "eq8"
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import re
+import shutil
+import subprocess
+import sys
+import tempfile
+import time
+from dataclasses import dataclass
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+COPY = ("src", "tests", "benchmarks", "docs", "README.md", "pyproject.toml")
+
+
+@dataclass(frozen=True)
+class Mutation:
+    name: str
+    file: str                 # relative to the repository root
+    snippet: str              # exact source text (must occur exactly once)
+    replacement: str
+    tests: tuple[str, ...]    # pytest node ids (relative to the repository root)
+    equivalent: str | None = None
+
+
+EL = "src/maglevkit/circuit/elements.py"
+ASM = "src/maglevkit/circuit/assembly.py"
+NET = "src/maglevkit/circuit/network.py"
+STA = "src/maglevkit/models/statics.py"
+FLX = "src/maglevkit/models/flux.py"
+CUR = "src/maglevkit/models/current.py"
+EXP = "src/maglevkit/models/experiments.py"
+PAR = "src/maglevkit/reduction/parameters.py"
+MAP = "src/maglevkit/reduction/maps.py"
+TRA = "src/maglevkit/reduction/transient.py"
+VEH = "src/maglevkit/vehicle/heave.py"
+
+T_STA = "tests/test_statics.py"
+T_EL = "tests/test_elements.py"
+T_FL = "tests/test_flux_linear.py"
+T_FP = "tests/test_flux_physics.py"
+T_RED = "tests/test_reduction.py"
+T_RT = "tests/test_reduction_transient.py"
+T_LEV = "tests/test_magnets_levitation.py"
+
+MUTATIONS: tuple[Mutation, ...] = (
+    # ------------------------------------------------------------------ element laws
+    Mutation("iron law x1.05", EL,
+             "return self.length * self.material.field_strength(flux / self.cross_section)",
+             "return 1.05 * self.length * self.material.field_strength(flux / self.cross_section)",
+             (f"{T_STA}::test_constant_mu_iron_is_series_reluctances",
+              f"{T_STA}::test_single_saturable_loop_against_a_scalar_root_solve")),
+    Mutation("iron law B index (A -> 1.05 A)", EL,
+             "return self.length * self.material.field_strength(flux / self.cross_section)",
+             "return self.length * self.material.field_strength(flux / (1.05 * self.cross_section))",
+             (f"{T_STA}::test_single_saturable_loop_against_a_scalar_root_solve",)),
+    Mutation("air-gap permeance x1.05", EL,
+             "g = self.pole_area / s\n",
+             "g = 1.05 * self.pole_area / s\n",
+             (f"{T_STA}::test_ideal_iron_matches_textbook",)),
+    Mutation("fringing quarter circle -> half circle", EL,
+             "_log(1.0 + math.pi * r / (2.0 * s))",
+             "_log(1.0 + math.pi * r / s)",
+             (f"{T_EL}::test_air_gap_fringe_edge_is_the_quarter_circle_tube_to_a_plane",)),
+    Mutation("recess depth sign flip", EL,
+             "g = g + a / (s + d)",
+             "g = g + a / (s - d)",
+             (f"{T_LEV}::test_lig_grooves_matter",)),
+    Mutation("Carter gamma x1.05", EL,
+             "return slot_pitch / (slot_pitch - gamma * gap)",
+             "return slot_pitch / (slot_pitch - 1.05 * gamma * gap)",
+             (f"{T_LEV}::test_carter_coefficient_against_hand_computation",)),
+    Mutation("gap leakage pi r/s -> pi r/(2 s)", EL,
+             "_log(1.0 + math.pi * self.radius / gap)",
+             "_log(1.0 + math.pi * self.radius / (2.0 * gap))",
+             (f"{T_EL}::test_gap_leakage_around_poles_is_the_modelica_formula",)),
+    Mutation("linear element energy x1/1.05", EL,
+             "return flux * flux / (2.0 * self.permeance(gap))",
+             "return flux * flux / (2.1 * self.permeance(gap))",
+             (f"{T_STA}::test_ideal_iron_matches_textbook",)),
+    Mutation("solid-bar eddy conductance x1.05", EL,
+             "return cls(name, torsion * length / (4.0 * resistivity * area * area))",
+             "return cls(name, 1.05 * torsion * length / (4.0 * resistivity * area * area))",
+             (f"{T_FP}::test_solid_bar_eddy_conductance_limits",)),
+    Mutation("laminated eddy conductance x1.05", EL,
+             "sheet_thickness**2 * length / (12.0 * resistivity * area)",
+             "sheet_thickness**2 * length / (11.4 * resistivity * area)",
+             (f"{T_FP}::test_laminated_eddy_conductance",)),
+    Mutation("torsion series 192 -> 190", EL,
+             "192.0 / math.pi**5",
+             "190.0 / math.pi**5",
+             (f"{T_FP}::test_solid_bar_eddy_conductance_limits",)),
+    Mutation("quarter-cylinder leakage 0.52 -> 0.546", EL,
+             "return cls(name, 0.52 * MU0 * length)",
+             "return cls(name, 0.546 * MU0 * length)",
+             (f"{T_EL}::test_roters_leakage_shapes",)),
+    # ------------------------------------------------------------------ assembly, network
+    Mutation("loop law MMF sign flip", ASM,
+             "residual = ca.mtimes(ca.DM(C), mmf - ca.mtimes(ca.DM(N), I))",
+             "residual = ca.mtimes(ca.DM(C), mmf + ca.mtimes(ca.DM(N), I))",
+             (f"{T_STA}::test_ideal_iron_matches_textbook",)),
+    Mutation("flux linkage psi x1.05", ASM,
+             "psi = ca.mtimes(ca.DM(N.T), phi)",
+             "psi = 1.05 * ca.mtimes(ca.DM(N.T), phi)",
+             (f"{T_STA}::test_ideal_iron_matches_textbook",)),
+    Mutation("force x1.05", ASM,
+             "force_b = ca.gradient(w_gap, s)",
+             "force_b = 1.05 * ca.gradient(w_gap, s)",
+             (f"{T_STA}::test_ideal_iron_matches_textbook",)),
+    Mutation("turns matrix polarity dropped", NET,
+             "n[idx[coil.branch], k] += coil.polarity * coil.turns",
+             "n[idx[coil.branch], k] += coil.turns",
+             (f"{T_LEV}::test_half_magnet_carries_section_share",
+              f"{T_LEV}::test_coupling_of_the_two_circuits_is_small")),
+    Mutation("resistance x1.05", NET,
+             "return np.array([c.resistance for c in self.circuits], dtype=float)",
+             "return 1.05 * np.array([c.resistance for c in self.circuits], dtype=float)",
+             (f"{T_FL}::test_rl_step_response_matches_exponential",)),
+    Mutation("eddy conductances x1.05 (network)", NET,
+             "return np.array([sum(e.eddy_conductance for e in b.elements) for b in self.branches])",
+             "return 1.05 * np.array([sum(e.eddy_conductance for e in b.elements) "
+             "for b in self.branches])",
+             (f"{T_FL}::test_one_eddy_element_first_order_with_jump",)),
+    Mutation("pole flux matrix (eta) x1.05", NET,
+             "w[idx[coil.branch], k] += coil.polarity * coil.turns / totals[coil.pole or coil.branch]",
+             "w[idx[coil.branch], k] += 1.05 * coil.polarity * coil.turns / totals[coil.pole or "
+             "coil.branch]",
+             ("tests/test_flux_interface.py::test_eta_is_sum_of_pole_core_fluxes",)),
+    Mutation("loop matrix: tree path sign flip", NET,
+             "for path, sign in ((pa, 1.0), (pb, -1.0)):",
+             "for path, sign in ((pa, -1.0), (pb, 1.0)):",
+             (f"{T_STA}::test_ideal_iron_matches_textbook",)),
+    # ------------------------------------------------------------------ statics, force
+    Mutation("dx/dI sign flip (inductance)", STA,
+             "dx_dI = -ca.solve(Jm, dIm)",
+             "dx_dI = ca.solve(Jm, dIm)",
+             (f"{T_STA}::test_ideal_iron_matches_textbook",)),
+    Mutation("dF/ds: implicit term sign flip", STA,
+             "dfds + ca.mtimes(dfdx, dx_ds)]",
+             "dfds - ca.mtimes(dfdx, dx_ds)]",
+             (f"{T_STA}::test_force_gap_derivative_against_finite_differences",)),
+    Mutation("dpsi/ds x1.05", STA,
+             "ca.mtimes(NC, dx_ds),",
+             "1.05 * ca.mtimes(NC, dx_ds),",
+             (f"{T_STA}::test_reciprocity_and_inductance_against_finite_differences",)),
+    Mutation("co-energy sign of W", STA,
+             "return float(sol.currents_A @ sol.flux_linkage_Wb) - w",
+             "return float(sol.currents_A @ sol.flux_linkage_Wb) + w",
+             (f"{T_STA}::test_coenergy_force_matches_finite_difference_of_coenergy",)),
+    Mutation("eq. 6 factor (mu_r-1)/mu_r -> mu_r/(mu_r+1)", STA,
+             "factor = (mu - 1.0) / mu",
+             "factor = mu / (mu + 1.0)",
+             (f"{T_STA}::test_constant_mu_iron_is_series_reluctances",)),
+    # ------------------------------------------------------------------ eddy law (flux DAE)
+    Mutation("eddy law G_ec x1.05 in the DAE", FLX,
+             "M = np.vstack((C @ np.diag(G) @ C.T, a_psi))",
+             "M = np.vstack((1.05 * C @ np.diag(G) @ C.T, a_psi))",
+             (f"{T_FL}::test_one_eddy_element_first_order_with_jump",)),
+    Mutation("eddy loss x1.05 (energy bookkeeping)", FLX,
+             "ca.dot(g_e * phidot_e, phidot_e)",
+             "1.05 * ca.dot(g_e * phidot_e, phidot_e)",
+             (f"{T_FP}::test_energy_balance_moving_gap_saturation_eddy",)),
+    Mutation("circuit law R I sign flip", FLX,
+             "hv = ca.vertcat(-eq.residual, U - R * I)",
+             "hv = ca.vertcat(-eq.residual, U + R * I)",
+             (f"{T_FL}::test_rl_step_response_matches_exponential",)),
+    Mutation("mechanical power sign flip", FLX,
+             "-ca.dot(eq.force, rate))",
+             "ca.dot(eq.force, rate))",
+             (f"{T_FP}::test_energy_balance_large_gap_motion",)),
+    # ------------------------------------------------------------------ eq. 8 (current model)
+    Mutation("eq8 dL/ds term x1.05", CUR,
+             "return ((u - r_el * i_l) / a - dl_ds * i_l * gap_rate) / ltilde",
+             "return ((u - r_el * i_l) / a - 1.05 * dl_ds * i_l * gap_rate) / ltilde",
+             (f"{T_RED}::test_current_model_virtual_control_law_isolates_dl_ds",
+              "tests/test_compare.py::test_u_magnet_with_eddy_currents_and_saturation")),
+    Mutation("eq8 R_ec x1.05 (model)", CUR,
+             "r_ec = np.asarray(maps.dataset[var].values, dtype=float)",
+             "r_ec = 1.05 * np.asarray(maps.dataset[var].values, dtype=float)",
+             (f"{T_RT}::test_default_eddy_resistance_against_an_independent_tail_fit",)),
+    Mutation("eq8 a = 1 + R_el/R_ec -> 1 + 1.05 R_el/R_ec", CUR,
+             "a = 1.0 + np.where(np.isinf(r_ec), 0.0, r_el / np.where(np.isinf(r_ec), 1.0, r_ec))",
+             "a = 1.0 + np.where(np.isinf(r_ec), 0.0, 1.05 * r_el / np.where(np.isinf(r_ec), 1.0, "
+             "r_ec))",
+             (f"{T_RT}::test_default_eddy_resistance_against_an_independent_tail_fit",)),
+    Mutation("eq8 resistive term sign flip", CUR,
+             "return ((u - r_el * i_l) / a - dl_ds",
+             "return ((u + r_el * i_l) / a - dl_ds",
+             (f"{T_RED}::test_current_model_step_response_is_the_rl_law",)),
+    Mutation("eq8 coil current output x1.05", CUR,
+             "return (u - (u - r_el * i_l) / a) / r_el",
+             "return 1.05 * (u - (u - r_el * i_l) / a) / r_el",
+             (f"{T_RED}::test_current_model_step_response_is_the_rl_law",)),
+    # ------------------------------------------------------------------ R_ec identification
+    Mutation("R_ec jump: -R_el -> +R_el", PAR,
+             "out[j] = 1.0 / yjj - float(net.resistances[j])",
+             "out[j] = 1.0 / yjj + float(net.resistances[j])",
+             (f"{T_RT}::test_eddy_resistance_of_one_loop_is_n2_over_g",)),
+    Mutation("R_ec jump admittance dr/dI x1.05", PAR,
+             "dh_dz = np.block([[-drdx, -drdi],",
+             "dh_dz = np.block([[-drdx, -1.05 * drdi],",
+             (f"{T_RT}::test_eddy_resistance_of_one_loop_is_n2_over_g",)),
+    Mutation("R_ec fit x1.05 (maps)", MAP,
+             "out[j] = R[j] * di_inf / jump - R[j]",
+             "out[j] = 1.05 * (R[j] * di_inf / jump - R[j])",
+             (f"{T_RT}::test_default_eddy_resistance_against_an_independent_tail_fit",)),
+    Mutation("R_ec fit: step formula x1.05", EXP,
+             "r_ec = math.inf if jump <= 0.0 else r_par * di_inf / jump - r_par",
+             "r_ec = math.inf if jump <= 0.0 else 1.05 * (r_par * di_inf / jump - r_par)",
+             (f"{T_RT}::test_default_eddy_resistance_of_one_loop_is_n2_over_g",)),
+    Mutation("L~ from step: (1 - jump) -> (1 + jump)", EXP,
+             "inductance_H=tau * r_par * (1.0 - max(jump, 0.0) / di_inf)",
+             "inductance_H=tau * r_par * (1.0 + max(jump, 0.0) / di_inf)",
+             (f"{T_FP}::test_inductance_with_eddies_has_jump_and_same_l_tilde",)),
+    # ------------------------------------------------------------------ map building
+    Mutation("maps dpsi/ds: circuit index shift", MAP,
+             "dpsi_ds[j] = sol.dpsi_dgap_Wb_per_m[:, j, idx].sum(axis=-1)",
+             "dpsi_ds[j] = sol.dpsi_dgap_Wb_per_m[:, (j + 1) % nc, idx].sum(axis=-1)",
+             (f"{T_RED}::test_tr09_maps_satisfy_eq9_reciprocity_per_circuit",)),
+    Mutation("maps force: one pole dropped", MAP,
+             "force[j] = sol.pole_force_N[:, idx].sum(axis=-1)",
+             "force[j] = sol.pole_force_N[:, idx[:-1]].sum(axis=-1)",
+             (f"{T_RED}::test_maps_of_the_ideal_magnet_are_the_closed_forms",)),
+    Mutation("maps dL/ds at I = 0: 2h -> h", MAP,
+             "d = (l0[0, j] - l0[1, j]) / (2 * h)",
+             "d = (l0[0, j] - l0[1, j]) / h",
+             (f"{T_RED}::test_maps_of_the_ideal_magnet_are_the_closed_forms",)),
+    Mutation("maps L~: self -> row sum (adds mutual)", MAP,
+             "ltilde = np.diagonal(sol.differential_inductance_H, axis1=-2, axis2=-1).T",
+             "ltilde = sol.differential_inductance_H.sum(axis=-1).T",
+             (f"{T_RED}::test_tr09_maps_satisfy_eq9_reciprocity_per_circuit",)),
+    Mutation("transient dL/ds from the ramp x1.05", TRA,
+             "lt[j], dl[j], rec[j] = step.inductance_H, ramp.dL_ds_H_per_m, step.eddy_resistance_ohm",
+             "lt[j], dl[j], rec[j] = step.inductance_H, 1.05 * ramp.dL_ds_H_per_m, "
+             "step.eddy_resistance_ohm",
+             (f"{T_RT}::test_transient_and_statics_maps_agree",)),
+    # ------------------------------------------------------------------ vehicle (heave mass)
+    Mutation("heave: 0.5 a dt^2 -> a dt^2", VEH,
+             "state.gap_m + state.gap_rate_m_per_s * dt + 0.5 * a * dt * dt",
+             "state.gap_m + state.gap_rate_m_per_s * dt + a * dt * dt",
+             ("tests/test_control.py::test_heave_mass_free_fall_is_exact",)),
+    Mutation("heave: magnet force x1.05", VEH,
+             "return self.gravity + (external_force_N - magnet_force_N) / self.mass_kg",
+             "return self.gravity + (external_force_N - 1.05 * magnet_force_N) / self.mass_kg",
+             ("tests/test_control.py::test_gap_controller_levitates_and_tracks_a_reference",)),
+)
+
+
+@dataclass
+class Outcome:
+    mutation: Mutation
+    status: str
+    seconds: float
+    detail: str
+
+
+def _copy_tree(dest: Path) -> None:
+    ignore = shutil.ignore_patterns("__pycache__", "*.pyc", ".pytest_cache", "*.egg-info")
+    for name in COPY:
+        src = ROOT / name
+        if src.is_dir():
+            shutil.copytree(src, dest / name, ignore=ignore)
+        elif src.is_file():
+            shutil.copy2(src, dest / name)
+
+
+def _env(copy: Path) -> dict[str, str]:
+    env = dict(os.environ)
+    env["PYTHONPATH"] = str(copy / "src") + os.pathsep + str(copy)
+    env["PYTHONDONTWRITEBYTECODE"] = "1"
+    env.setdefault("MPLBACKEND", "Agg")
+    return env
+
+
+def _pytest(copy: Path, tests: tuple[str, ...], timeout: float) -> tuple[int | None, str, float]:
+    cmd = [sys.executable, "-m", "pytest", "-x", "-q", "-p", "no:cacheprovider",
+           "-o", "addopts=--strict-markers", "--no-header", "-rf", *tests]
+    t0 = time.perf_counter()
+    try:
+        proc = subprocess.run(cmd, cwd=copy, env=_env(copy), capture_output=True, text=True,
+                              timeout=timeout)
+    except subprocess.TimeoutExpired as exc:
+        out = (exc.stdout or b"").decode() if isinstance(exc.stdout, bytes) else (exc.stdout or "")
+        return None, out, time.perf_counter() - t0
+    return proc.returncode, proc.stdout + proc.stderr, time.perf_counter() - t0
+
+
+def _first_failure(output: str) -> str:
+    m = re.search(r"^FAILED (\S+)", output, flags=re.M)
+    return m.group(1) if m else ""
+
+
+def _check_import(copy: Path) -> None:
+    out = subprocess.run([sys.executable, "-c", "import maglevkit; print(maglevkit.__file__)"],
+                         cwd=copy, env=_env(copy), capture_output=True, text=True, check=True)
+    path = Path(out.stdout.strip()).resolve()
+    if copy.resolve() not in path.parents:
+        raise SystemExit(f"mutation: `import maglevkit` in the copy loads {path}, not the copy "
+                         f"under {copy}; refusing to run (mutations would not be tested)")
+
+
+def run(mutations: list[Mutation], *, timeout: float, baseline: bool) -> list[Outcome]:
+    outcomes: list[Outcome] = []
+    with tempfile.TemporaryDirectory(prefix="maglevkit-mutation-") as tmp:
+        copy = Path(tmp)
+        _copy_tree(copy)
+        _check_import(copy)
+        if baseline:
+            union = tuple(dict.fromkeys(t for m in mutations for t in m.tests))
+            print(f"baseline: {len(union)} selected tests on the unmodified copy ...", flush=True)
+            rc, out, sec = _pytest(copy, union, timeout * 3)
+            if rc != 0:
+                print(out[-4000:])
+                print(f"mutation: the baseline fails (exit {rc}); fix the tests first")
+                raise SystemExit(2)
+            print(f"baseline passed in {sec:.0f} s", flush=True)
+        for k, m in enumerate(mutations, 1):
+            target = copy / m.file
+            original = target.read_text()
+            count = original.count(m.snippet)
+            if count != 1:
+                why = "snippet not found" if count == 0 else f"snippet found {count} times"
+                outcomes.append(Outcome(m, "NOT APPLIED", 0.0, why))
+                print(f"[{k}/{len(mutations)}] {m.name}: NOT APPLIED ({why})", flush=True)
+                continue
+            target.write_text(original.replace(m.snippet, m.replacement))
+            try:
+                rc, out, sec = _pytest(copy, m.tests, timeout)
+            finally:
+                target.write_text(original)
+            if rc is None:
+                status, detail = "TIMEOUT", f"> {timeout:.0f} s"
+            elif rc == 0:
+                status = "EQUIVALENT" if m.equivalent else "SURVIVED"
+                detail = m.equivalent or "all selected tests passed"
+            elif rc == 1:
+                status, detail = "KILLED", _first_failure(out) or "a test failed"
+            else:
+                status, detail = "ERROR", f"pytest exit {rc}: " + out.strip().splitlines()[-1][:120]
+            outcomes.append(Outcome(m, status, sec, detail))
+            print(f"[{k}/{len(mutations)}] {m.name}: {status} ({sec:.0f} s) {detail}", flush=True)
+    return outcomes
+
+
+def table(outcomes: list[Outcome]) -> str:
+    lines = ["| # | mutation | file | result | time [s] | killed by / note |",
+             "|---|---|---|---|---|---|"]
+    for k, o in enumerate(outcomes, 1):
+        f = o.mutation.file.removeprefix("src/maglevkit/")
+        lines.append(f"| {k} | {o.mutation.name} | {f} | {o.status} | {o.seconds:.0f} | "
+                     f"{o.detail} |")
+    counts: dict[str, int] = {}
+    for o in outcomes:
+        counts[o.status] = counts.get(o.status, 0) + 1
+    lines.append("")
+    lines.append("summary: " + ", ".join(f"{v} {k.lower()}" for k, v in sorted(counts.items())))
+    return "\n".join(lines)
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("-k", dest="select", default="", help="run mutations whose name contains this")
+    ap.add_argument("--list", action="store_true", help="list the mutations and exit")
+    ap.add_argument("--timeout", type=float, default=600.0, help="per mutation [s] (default 600)")
+    ap.add_argument("--no-baseline", action="store_true", help="skip the unmodified baseline run")
+    ap.add_argument("--report", type=Path, help="also write the table to this file")
+    args = ap.parse_args(argv)
+    chosen = [m for m in MUTATIONS if args.select.lower() in m.name.lower()]
+    if args.list:
+        for m in chosen:
+            print(f"{m.name}  [{m.file}]  -> {', '.join(m.tests)}")
+        return 0
+    if not chosen:
+        print(f"no mutation matches {args.select!r}")
+        return 2
+    outcomes = run(chosen, timeout=args.timeout, baseline=not args.no_baseline)
+    text = table(outcomes)
+    print()
+    print(text)
+    if args.report:
+        args.report.write_text(text + "\n")
+    return 1 if any(o.status in ("SURVIVED", "ERROR") for o in outcomes) else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
