@@ -30,13 +30,13 @@ from typing import Any
 
 import numpy as np
 
-from ..errors import InputError, MaglevkitError
+from ..errors import InputError, MaglevkitError, OutOfRangeError
 from .guideway import Guideway
 from .heave import STANDARD_GRAVITY
 from .mechanics import VehicleMechanics
 from .train import TrainData
 
-__all__ = ["Failure", "VehicleRun", "VehicleModel", "run_vehicle", "parse_failure"]
+__all__ = ["Failure", "VehicleRun", "VehicleModel", "run_vehicle", "parse_failure", "parse_irregularity"]
 
 
 @dataclass(frozen=True)
@@ -297,6 +297,13 @@ class VehicleModel:
                                                   ctl.kflux_per_s)
         for j in range(nc):
             psi0[j] = self._interp(j, "flux_linkage_Wb", s0, float(self.trim_current_A[j]))
+        r_ec = np.empty(nc)
+        for j, name in enumerate(self.bank.circuit_names):
+            member, circuit = name.split("/", 1)
+            kind = self.slots[self.bank.member_names.index(member)].kind
+            r_ec[j] = float(self.maps[kind].dataset["eddy_resistance_fit_ohm"].sel(
+                circuit=circuit))
+        self.eddy_resistance_ohm = r_ec
         self.gains = {"kp_per_m": kp, "kd_s_per_m": kd, "ki_per_m_s": ki, "kflux_per_s": kf}
         self.flux_bias_Wb = psi0
 
@@ -378,13 +385,6 @@ class VehicleModel:
         ad_g, bd_g = span.discretize(dt) if nm else (np.zeros((0, 0)), np.zeros((0, 0)))
         kk = span.wavenumbers_rad_per_m
 
-        def shapes(st: Any, x: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-            k = gw.span_index(x)
-            rows = np.mod(k, gw.n_spans)
-            loc = x - (gw.origin_m + k * span_l)
-            arg = np.multiply.outer(loc, kk)
-            return rows, np.sin(arg), kk * np.cos(arg)
-
         # initial state: static guideway deflection under the trim loads, frames fitted
         f_pts = self.mechanics_trim_forces()
         if nm:
@@ -431,15 +431,15 @@ class VehicleModel:
         res = bank.resistance_ohm
         umax = tr.voltage_limit_V
         psi_hat = psi0.copy()
+        r_ec = self.eddy_resistance_ohm
         integ = np.zeros(nc)
         # records
         rec = {k: np.empty((n_steps + 1, nc)) for k in ("gap", "current", "voltage", "force",
                                                         "deflection")}
         rec_q = np.empty((n_steps + 1, ndof))
         rec_qd = np.empty((n_steps + 1, ndof))
-        rec_qdd = np.empty((n_steps + 1, ndof))
-        rec_mid = np.empty((n_steps + 1, gw.n_spans))
-        rec_span = np.empty((n_steps + 1, gw.n_spans), dtype=int)
+        rec_mid = np.zeros((n_steps + 1, gw.n_spans))
+        rec_span = np.zeros((n_steps + 1, gw.n_spans), dtype=int)
         minv = 1.0 / np.diag(mech.M)
         timing = dict.fromkeys(("magnets", "mechanics", "guideway", "controllers", "other"), 0.0)
         touchdown: tuple[str, float, float] | None = None
@@ -449,18 +449,42 @@ class VehicleModel:
         t_start = clock()
         mid_shape = span.mode_shapes(0.5 * span_l)[0] if nm else np.zeros(0)
         zeros_np = np.zeros(npt)
+        # guideway modal state in ring order, [q | q'] per row (as Guideway.step)
+        gx = np.concatenate([gstate.modal_displacement_m, gstate.modal_velocity_m_per_s], axis=1)
+        first = gstate.first_span
+        n_sp = gw.n_spans
+        span_ids = np.arange(n_sp)
+        ad_gt, bd_gt = ad_g.T.copy(), bd_g.T.copy()
+        half = 0.5 * v * dt
+        fail_any = np.isfinite(fail_t)
+        t_fail0 = float(fail_t.min()) if fail_any.any() else math.inf
+        rec_fp = np.empty((n_steps + 1, npt))
         for k in range(n_steps + 1):
             t0 = clock()
             t = times[k]
             x_pts = xpath[k]
-            # guideway deflection at the points
+            # guideway deflection at the points (and mode shapes at the mid-step positions)
             if nm:
-                gstate = gw.advance(gstate, float(x_pts.min()))
-                rows, phi, dphi = shapes(gstate, x_pts)
-                qg = gstate.modal_displacement_m[rows]
-                qgd = gstate.modal_velocity_m_per_s[rows]
-                w = (qg * phi).sum(axis=1)
-                w_rate = (qgd * phi).sum(axis=1) + v * (qg * dphi).sum(axis=1)
+                if gw.moving_boundary:
+                    k_rear = int(gw.span_index(x_pts.min()))
+                    if k_rear > first:
+                        for kk_ in range(first, min(k_rear, first + n_sp)):
+                            gx[kk_ % n_sp] = 0.0
+                        first = k_rear
+                x2 = np.concatenate([x_pts, x_pts + half])
+                ks = np.floor((x2 - gw.origin_m) / span_l).astype(int)
+                if ks.min() < first or ks.max() > first + n_sp - 1:
+                    raise OutOfRangeError(f"vehicle run at t = {t:.4f} s: the train left the "
+                                          f"integrated spans {first} ... {first + n_sp - 1}")
+                rows2 = ks % n_sp
+                arg = np.multiply.outer(x2 - (gw.origin_m + ks * span_l), kk)
+                sn = np.sin(arg)
+                rows = rows2[:npt]
+                phi, dphi = sn[:npt], kk * np.cos(arg[:npt])
+                qg = gx[rows]
+                w = np.einsum("pj,pj->p", qg[:, :nm], phi)
+                w_rate = (np.einsum("pj,pj->p", qg[:, nm:], phi)
+                          + v * np.einsum("pj,pj->p", qg[:, :nm], dphi))
             else:
                 w = w_rate = zeros_np
             t1 = clock()
@@ -469,22 +493,16 @@ class VehicleModel:
             rates_p = bt @ qd - w_rate - v * rx_all[k]
             gaps_c = gaps_p if circ_avg is None else circ_avg @ gaps_p
             rates_c = rates_p if circ_avg is None else circ_avg @ rates_p
-            t2 = clock()
             # record the state at t_k
             rec["gap"][k] = gaps_c
             rec["current"][k] = current
-            rec["force"][k] = force_c * sides
+            rec["force"][k] = force_c
             rec["deflection"][k] = w if circ_avg is None else circ_avg @ w
             rec_q[k], rec_qd[k] = q, qd
-            rec_qdd[k] = minv * (mech.Q_gravity - mech.K @ q - mech.C @ qd
-                                 - mech.B @ (force_pts * sides))
+            rec_fp[k] = force_pts
             if nm:
-                spans_idx = gstate.first_span + np.arange(gw.n_spans)
-                rec_span[k] = spans_idx
-                rec_mid[k] = gstate.modal_displacement_m[np.mod(spans_idx, gw.n_spans)] @ mid_shape
-            else:
-                rec_span[k] = 0
-                rec_mid[k] = 0.0
+                rec_span[k] = first + span_ids
+                rec_mid[k] = gx[(first + span_ids) % n_sp, :nm] @ mid_shape
             gmin = float(gaps_c.min())
             if gmin <= tr.touchdown_gap_m:
                 j = int(np.argmin(gaps_c))
@@ -496,12 +514,18 @@ class VehicleModel:
                 rec["voltage"][k] = rec["voltage"][k - 1]
                 break
             t3 = clock()
-            # controllers
+            # controllers (flux cascade, every circuit at once)
             rho = kp * (gaps_c - s0) + kd * rates_c + ki * integ
             u = res * current + kf * (psi0 * (1.0 + rho) - psi_hat)
             np.clip(u, -umax, umax, out=u)
-            u[current < 1.0] = np.maximum(u[current < 1.0], 0.0)   # 2-quadrant chopper
-            u[fail_t <= t] = 0.0
+            # 2-quadrant chopper: the coil current cannot reverse.  Reduced model (eq. 8):
+            # I = (U + R_ec I_L) / (R_el + R_ec) >= 0  <=>  U >= -R_ec I_L
+            if self.fine:
+                u = np.where((current < 1.0) & (u < 0.0), 0.0, u)
+            else:
+                u = np.maximum(u, -r_ec * bstate.inductor_currents_A)
+            if t >= t_fail0:
+                u = np.where(fail_t <= t, 0.0, u)
             rec["voltage"][k] = u
             t4 = clock()
             try:
@@ -514,24 +538,20 @@ class VehicleModel:
             integ += (gaps_c - s0) * dt
             new_pts = out.pole_force_N if self.fine else out.circuit_force_N
             assert new_pts is not None
-            f_bar = 0.5 * (force_pts + new_pts) * sides
+            f_bar = (0.5 * sides) * (force_pts + new_pts)
             t6 = clock()
             x_m = ad_m @ x_m + bd_m @ (mech.Q_gravity - mech.B @ f_bar)
             t7 = clock()
             if nm:
-                x_mid = x_pts + 0.5 * v * dt
-                rows, phi, _ = shapes(gstate, x_mid)
-                qmod = np.zeros((gw.n_spans, nm))
-                np.add.at(qmod, rows, phi * f_bar[:, None])
-                xs = np.concatenate([gstate.modal_displacement_m, gstate.modal_velocity_m_per_s],
-                                    axis=1) @ ad_g.T + qmod @ bd_g.T
-                gstate = type(gstate)(t + dt, gstate.first_span, xs[:, :nm], xs[:, nm:])
+                onehot = (rows2[npt:, None] == span_ids).astype(float)
+                qmod = onehot.T @ (sn[npt:] * f_bar[:, None])
+                gx = gx @ ad_gt + qmod @ bd_gt
             t8 = clock()
             current = new_current
             force_c = out.circuit_force_N
             force_pts = new_pts
             timing["guideway"] += (t1 - t0) + (t8 - t7)
-            timing["other"] += (t2 - t1) + (t3 - t2) + (t6 - t5)
+            timing["other"] += (t3 - t1) + (t6 - t5)
             timing["controllers"] += t4 - t3
             timing["magnets"] += t5 - t4
             timing["mechanics"] += t7 - t6
@@ -542,7 +562,10 @@ class VehicleModel:
         times = times[:n]
         sl = slice(0, n)
         secs = tr.n_sections
-        q_all, qdd_all = rec_q[sl], rec_qdd[sl]
+        q_all = rec_q[sl]
+        rec["force"] *= sides
+        qdd_all = minv * (mech.Q_gravity - q_all @ mech.K.T - rec_qd[sl] @ mech.C.T
+                          - (rec_fp[sl] * sides) @ mech.B.T)
         floor = np.asarray(floor_points, dtype=float)
         acc_floor = (qdd_all[:, 0:2 * secs:2, None]
                      + qdd_all[:, 1:2 * secs:2, None] * floor[None, None, :] * tr.section_length_m)
@@ -667,3 +690,47 @@ def run_vehicle(train: TrainData, *, speed_m_per_s: float, duration_s: float, dt
 
 
 _ = sys  # stderr progress goes through rich
+
+
+def parse_irregularity(text: str, *, span_length_m: float) -> Any:
+    """A guideway irregularity from a short spec (parts joined by ``+``):
+
+    * ``sag:A`` - span-periodic sag of midspan amplitude ``A`` [m] (negative: camber);
+    * ``joints:H`` - steps of height ``H`` [m] at the stator-pack joints (alternating);
+    * ``random:RMS[:SEED]`` - random profile of the German track PSD shape over wavelengths
+      1-100 m, scaled to the RMS ``RMS`` [m] (seed default 0);
+    * ``none``.
+
+    Example: ``sag:0.5e-3+random:0.3e-3:7``.
+    """
+    from .irregularities import GermanTrackPSD, JointSteps, RandomProfile, SpanSag
+
+    parts = [p.strip() for p in str(text).split("+") if p.strip()]
+    if not parts:
+        raise InputError("irregularity: empty spec; use e.g. sag:0.5e-3+random:0.3e-3 or none")
+    prof: Any = None
+    for p in parts:
+        if p == "none":
+            continue
+        kind, _, rest = p.partition(":")
+        vals = rest.split(":") if rest else []
+        try:
+            nums = [float(x) for x in vals]
+        except ValueError:
+            raise InputError(f"irregularity part {p!r}: values must be numbers") from None
+        if kind == "sag" and len(nums) == 1:
+            new: Any = SpanSag(nums[0], span_length_m)
+        elif kind == "joints" and len(nums) == 1:
+            new = JointSteps(nums[0])
+        elif kind == "random" and len(nums) in (1, 2) and nums[0] > 0:
+            seed = int(nums[1]) if len(nums) == 2 else 0
+            lo, hi = 2 * np.pi / 100.0, 2 * np.pi / 1.0
+            base = GermanTrackPSD()
+            var = base.variance_m2(lo, hi)
+            psd = GermanTrackPSD(A_v_m_rad=base.A_v_m_rad * nums[0] ** 2 / var)
+            new = RandomProfile(psd, lo, hi, seed=seed)
+        else:
+            raise InputError(f"irregularity part {p!r}: use sag:A, joints:H, random:RMS[:SEED] "
+                             "(metres) or none, joined by '+'")
+        prof = new if prof is None else prof + new
+    return prof
