@@ -314,16 +314,26 @@ def derive_sympy(mech: VehicleMechanics) -> dict[str, np.ndarray]:
     lm.form_lagranges_equations()
     mm = lm.mass_matrix
     fo = lm.forcing
-    zero = {**{v: 0 for v in qd}, **{v: 0 for v in q}}
-    qv, qdv = sp.Matrix(q), sp.Matrix(qd)
-    fvec = sp.Matrix(fsym)
+    # plain symbols for q' and q (derivatives first), then the Jacobians at 0 one variable
+    # at a time: every other variable set to 0 first keeps the expressions small
+    us = sp.symbols(f"u0:{2 * n_b}")
+    xs = sp.symbols(f"x0:{2 * n_b}")
+    fo = me.msubs(me.msubs(fo, dict(zip(qd, us, strict=True))), dict(zip(q, xs, strict=True)))
+    mm = me.msubs(mm, dict(zip(q, xs, strict=True)))
+    allv = (*xs, *us, *fsym)
+
+    def column(var: Any) -> np.ndarray:
+        others = {v: 0 for v in allv if v is not var}
+        e = fo.xreplace(others)
+        return np.array(e.diff(var).xreplace({var: 0}), dtype=float).ravel()
 
     def num(expr: Any) -> np.ndarray:
-        return np.array(expr.subs(zero).subs({f: 0 for f in fsym}), dtype=float)
+        return np.array(expr.xreplace({v: 0 for v in allv}), dtype=float)
 
-    k = -num(fo.jacobian(qv))
-    c = -num(fo.jacobian(qdv))
-    b = -num(fo.jacobian(fvec)) if fsym else np.zeros((2 * n_b, 0))
-    trial = {v: 0.01 * (i + 1) for i, v in enumerate(q)}
-    return {"M": num(mm), "C": c, "K": k, "Q_gravity": num(fo).ravel(), "B": b,
-            "mass_matrix_q": np.array(mm.subs(trial), dtype=float)}
+    k_mat = -np.column_stack([column(v) for v in xs])
+    c_mat = -np.column_stack([column(v) for v in us])
+    b_mat = (-np.column_stack([column(v) for v in fsym]) if fsym
+             else np.zeros((2 * n_b, 0)))
+    trial = {v: 0.01 * (i + 1) for i, v in enumerate(xs)}
+    return {"M": num(mm), "C": c_mat, "K": k_mat, "Q_gravity": num(fo).ravel(), "B": b_mat,
+            "mass_matrix_q": np.array(mm.xreplace(trial), dtype=float)}

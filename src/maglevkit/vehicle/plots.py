@@ -38,6 +38,7 @@ def plot_vehicle_run(dataset: Any, directory: str | Path) -> list[Path]:
         ax[0].plot(t, ds.gap.values[:, j] * 1e3, color=col, lw=lw)
         ax[1].plot(t, ds.current.values[:, j], color=col, lw=lw)
     ax[0].axhline(float(ds.attrs["touchdown_gap_m"]) * 1e3, color="k", ls="--", lw=0.8)
+    ax[0].axhline(float(ds.attrs["landing_gap_m"]) * 1e3, color="k", ls=":", lw=0.8)
     ax[0].set_ylabel("gap [mm]")
     ax[1].set_ylabel("coil current [A]")
     ax[1].set_xlabel("time [s]")

@@ -14,8 +14,9 @@ Per time step ``t_k -> t_k + dt`` (fixed step, sample-and-hold controllers)::
 Coarse distribution (default): one gap and one force per circuit at the circuit's centre,
 reduced models (maps).  Fine distribution (``magnets="detailed"``): the detailed flux-based
 models with one gap and one force per pole.  Failures switch a circuit's voltage to 0 from
-a given time on.  A run stops at the first touchdown (a gap at or below the skid gap):
-there is no skid contact model.  Equations: ``docs/vehicle.md``.
+a given time on.  A run stops at the first touchdown, a gap at or below the touchdown gap
+(magnet closing onto the stator) or at or above the landing gap (frame down on its skids):
+there is no contact model.  Equations: ``docs/vehicle.md``.
 """
 
 from __future__ import annotations
@@ -76,7 +77,9 @@ class VehicleRun:
     peak_current_A : dict
         Peak coil current per circuit [A].
     touchdown : tuple or None
-        ``(circuit, time_s, gap_m)`` of the first gap at or below the touchdown gap, or None.
+        ``(circuit, time_s, gap_m, kind)`` of the first gap at or below the touchdown gap
+        (``kind = "closed"``: the magnet closes onto the stator) or at or above the landing
+        gap (``"landed"``: the frame is down on its skids), or None.
     comfort : dict
         ``"<section>.<point>" -> {"wk_rms_m_per_s2": ..., "sperling_wz": ...}``.
     wall_time_s : float
@@ -90,7 +93,7 @@ class VehicleRun:
     dataset: Any
     min_gap_m: dict[str, float]
     peak_current_A: dict[str, float]
-    touchdown: tuple[str, float, float] | None
+    touchdown: tuple[str, float, float, str] | None
     comfort: dict[str, dict[str, float]]
     wall_time_s: float
     real_time_factor: float
@@ -112,11 +115,15 @@ class VehicleRun:
         lines.append(f"  minimum gap {mg[1] * 1e3:.3f} mm (magnet {mg[0]}); peak current "
                      f"{mc[1]:.2f} A (circuit {mc[0]})")
         if self.touchdown is None:
-            lines.append(f"  no touchdown (touchdown gap {float(ds.attrs['touchdown_gap_m']) * 1e3:g} mm)")
+            lines.append(f"  no touchdown (gaps stayed within "
+                         f"{float(ds.attrs['touchdown_gap_m']) * 1e3:g} ... "
+                         f"{float(ds.attrs['landing_gap_m']) * 1e3:g} mm)")
         else:
-            c, t, g = self.touchdown
-            lines.append(f"  TOUCHDOWN: circuit {c} at t = {t:.4f} s (gap {g * 1e3:.3f} mm); "
-                         "the run stopped there")
+            c, t, g, kind = self.touchdown
+            what = ("gap closed: magnet on the stator" if kind == "closed"
+                    else "frame down on its skids")
+            lines.append(f"  TOUCHDOWN ({what}): circuit {c} at t = {t:.4f} s (gap "
+                         f"{g * 1e3:.3f} mm); the run stopped there")
         for k, v in self.comfort.items():
             lines.append(f"  comfort {k}: ISO 2631 Wk a_w = {v['wk_rms_m_per_s2']:.4f} m/s^2, "
                          f"Sperling Wz = {v['sperling_wz']:.2f}")
@@ -175,8 +182,13 @@ class VehicleModel:
                                compiled=compiled)
         bank = self.bank
         # pole and circuit positions (train coordinate), frame of every circuit
-        pole_xi, pole_frame, pole_circuit = [], [], []
-        circ_xi, circ_frame, circ_poles, circ_kind = [], [], [], []
+        pole_xi: list[float] = []
+        pole_frame: list[int] = []
+        pole_circuit: list[int] = []
+        circ_xi: list[float] = []
+        circ_frame: list[int] = []
+        circ_poles: list[int] = []
+        circ_kind: list[str] = []
         for s in self.slots:
             mag = kinds[s.kind]
             pitch = float(mag.parameters["magnet"]["pole_pitch"])
@@ -184,7 +196,7 @@ class VehicleModel:
             xi = s.centre_m - 0.5 * train.magnet_length_m + (np.arange(len(names)) + 0.5) * pitch
             groups = self.maps[s.kind].pole_groups
             first = len(circ_xi)
-            circuit_of = {}
+            circuit_of: dict[int, int] = {}
             for c in mag.circuit_names:
                 idx = [names.index(p) for p in groups[c]]
                 for j in idx:
@@ -216,7 +228,7 @@ class VehicleModel:
             self.point_xi_m = self.circuit_xi_m
             frames = self.circuit_frame
             weights = self.circuit_poles.astype(float)
-        self.mechanics = VehicleMechanics(train, self.point_xi_m, frames)
+        self.mechanics = VehicleMechanics(train, self.point_xi_m.tolist(), frames.tolist())
         self._weights = weights
         # guideway
         if guideway is None:
@@ -229,10 +241,8 @@ class VehicleModel:
         # trim: forces per point, per circuit; trim currents
         self.trim_q, point_force = self.mechanics.static_trim(weights)
         per_side = point_force / train.sides
-        if self.fine:
-            circ_force = np.bincount(self.pole_circuit, weights=per_side, minlength=nc)
-        else:
-            circ_force = per_side
+        circ_force: np.ndarray = (np.bincount(self.pole_circuit, weights=per_side, minlength=nc)
+                                  if self.fine else per_side)
         self.trim_force_N = circ_force          # per circuit of one side
         self.trim_current_A = self._trim_currents(circ_force)
         self._design_controllers()
@@ -304,6 +314,17 @@ class VehicleModel:
             r_ec[j] = float(self.maps[kind].dataset["eddy_resistance_fit_ohm"].sel(
                 circuit=circuit))
         self.eddy_resistance_ohm = r_ec
+        # integral action on what a rigid frame can correct: the gap errors of a frame's
+        # circuits projected on its heave and pitch (P = A (A^T A)^-1 A^T, rows of A =
+        # (1, xi_j - xi_frame)).  On a curved girder the circuits' gaps cannot all be
+        # nominal at once; independent integrators would wind up against each other.
+        proj = np.zeros((nc, nc))
+        centres = self.train.frame_centres_m
+        for f in range(self.train.n_frames):
+            cols = np.flatnonzero(self.circuit_frame == f)
+            a = np.column_stack([np.ones(cols.size), self.circuit_xi_m[cols] - centres[f]])
+            proj[np.ix_(cols, cols)] = a @ np.linalg.solve(a.T @ a, a.T)
+        self.integral_projection = proj
         self.gains = {"kp_per_m": kp, "kd_s_per_m": kd, "ki_per_m_s": ki, "kflux_per_s": kf}
         self.flux_bias_Wb = psi0
 
@@ -398,10 +419,11 @@ class VehicleModel:
         q = self.trim_q.copy()
         nsec2 = 2 * tr.n_sections
         frames_of_pts = mech.force_bodies - tr.n_sections
-        for f in range(tr.n_frames):
-            cols = np.flatnonzero(frames_of_pts == f)
-            a = mech.B[nsec2 + 2 * f: nsec2 + 2 * f + 2, cols].T
-            q[nsec2 + 2 * f: nsec2 + 2 * f + 2] = np.linalg.lstsq(a, target[cols], rcond=None)[0]
+        for fi in range(tr.n_frames):
+            cols = np.flatnonzero(frames_of_pts == fi)
+            a = mech.B[nsec2 + 2 * fi: nsec2 + 2 * fi + 2][:, cols].T
+            q[nsec2 + 2 * fi: nsec2 + 2 * fi + 2] = np.linalg.lstsq(a, target[cols],
+                                                                   rcond=None)[0]
         q[:nsec2] = np.linalg.solve(mech.K[:nsec2, :nsec2],
                                     mech.Q_gravity[:nsec2] - mech.K[:nsec2, nsec2:] @ q[nsec2:])
         qd = np.zeros_like(q)
@@ -422,7 +444,9 @@ class VehicleModel:
             circ_avg = None
         out0 = bank.outputs(bstate)
         force_c = out0.circuit_force_N.copy()
-        force_pts = (out0.pole_force_N if self.fine else force_c).copy()
+        pf0 = out0.pole_force_N if self.fine else force_c
+        assert pf0 is not None
+        force_pts = pf0.copy()
         current = out0.currents_A.copy()
         # controllers (vectorised over circuits)
         g = self.gains
@@ -432,6 +456,7 @@ class VehicleModel:
         umax = tr.voltage_limit_V
         psi_hat = psi0.copy()
         r_ec = self.eddy_resistance_ohm
+        proj = self.integral_projection
         integ = np.zeros(nc)
         # records
         rec = {k: np.empty((n_steps + 1, nc)) for k in ("gap", "current", "voltage", "force",
@@ -442,7 +467,7 @@ class VehicleModel:
         rec_span = np.zeros((n_steps + 1, gw.n_spans), dtype=int)
         minv = 1.0 / np.diag(mech.M)
         timing = dict.fromkeys(("magnets", "mechanics", "guideway", "controllers", "other"), 0.0)
-        touchdown: tuple[str, float, float] | None = None
+        touchdown: tuple[str, float, float, str] | None = None
         last = n_steps
         bar = _Progress(n_steps, enabled=progress)
         clock = time.perf_counter
@@ -504,9 +529,12 @@ class VehicleModel:
                 rec_span[k] = first + span_ids
                 rec_mid[k] = gx[(first + span_ids) % n_sp, :nm] @ mid_shape
             gmin = float(gaps_c.min())
-            if gmin <= tr.touchdown_gap_m:
-                j = int(np.argmin(gaps_c))
-                touchdown = (names[j], float(t), gmin)
+            gmax = float(gaps_c.max())
+            if gmin <= tr.touchdown_gap_m or gmax >= tr.landing_gap_m:
+                closed = gmin <= tr.touchdown_gap_m
+                j = int(np.argmin(gaps_c) if closed else np.argmax(gaps_c))
+                touchdown = (names[j], float(t), float(gaps_c[j]),
+                             "closed" if closed else "landed")
                 rec["voltage"][k] = np.nan
                 last = k
                 break
@@ -535,7 +563,7 @@ class VehicleModel:
             t5 = clock()
             new_current = out.currents_A
             psi_hat += dt * (u - res * 0.5 * (current + new_current))
-            integ += (gaps_c - s0) * dt
+            integ += proj @ ((gaps_c - s0) * dt)
             new_pts = out.pole_force_N if self.fine else out.circuit_force_N
             assert new_pts is not None
             f_bar = (0.5 * sides) * (force_pts + new_pts)
@@ -613,13 +641,16 @@ class VehicleModel:
                                     "long_name": "position from the section centre / "
                                                  "section length"})},
             attrs={"vehicle": tr.name, "speed_m_per_s": v, "dt_s": dt,
+                   "nose_position_at_t0_m": x_nose0,
                    "nominal_gap_m": s0, "touchdown_gap_m": tr.touchdown_gap_m,
+                   "landing_gap_m": tr.landing_gap_m,
                    "magnets": "detailed (fine, per pole)" if self.fine else
                               "reduced (coarse, per circuit)",
                    "guideway": repr(gw), "failures": ", ".join(f"{f.circuit}@{f.time_s:g}"
                                                                for f in failures),
                    "touchdown": "" if touchdown is None else
-                                f"{touchdown[0]}@{touchdown[1]:.6g} s ({touchdown[2]:.6g} m)"},
+                                f"{touchdown[3]}: {touchdown[0]}@{touchdown[1]:.6g} s "
+                                f"({touchdown[2]:.6g} m)"},
         )
         gaps = rec["gap"][sl]
         min_gap = {m: float(gaps[:, [j for j, o in enumerate(member_of) if o == m]].min())

@@ -4,7 +4,7 @@ A vehicle file is TOML with SI units and a ``[provenance]`` table, like the magn
 guideway files (see ``maglevkit/data/vehicle/tr09.toml``, bundled as ``"tr09"``)::
 
     [vehicle]    name, sections, section_length, magnets_per_side, frames_per_section,
-                 nominal_gap, touchdown_gap, standard_magnet, bow_magnet
+                 nominal_gap, touchdown_gap, landing_gap, standard_magnet, bow_magnet
     [car_body]   mass, pitch_inertia, payload
     [frame]      mass, pitch_inertia, magnet_mass
     [secondary]  stiffness, damping, positions
@@ -50,6 +50,7 @@ VEHICLE_SCHEMA: dict[str, dict[str, Schema]] = {
         "frames_per_section": Schema(int, unit="-"),
         "nominal_gap": Schema(float, unit="m"),
         "touchdown_gap": Schema(float, unit="m", check="nonnegative"),
+        "landing_gap": Schema(float, unit="m"),
         "standard_magnet": Schema(str),
         "bow_magnet": Schema(str),
     },
@@ -138,6 +139,7 @@ class TrainData:
     n_frames_per_section: int
     nominal_gap_m: float
     touchdown_gap_m: float
+    landing_gap_m: float
     standard_magnet: str
     bow_magnet: str
     car_body_mass_kg: float
@@ -276,8 +278,9 @@ def parse_vehicle(parameters: Mapping[str, Any], source: str = "parameters") -> 
     _check(all(abs(p) <= half for p in pos),
            f"[secondary] positions = {pos!r}: air springs must lie on their frame "
            f"(|position| <= {half:.4g} m)", source)
-    _check(len(pos) >= 2 or len(pos) == 1,
-           "[secondary] positions: need at least one air spring", source)
+    _check(v["landing_gap"] > v["nominal_gap"],
+           f"[vehicle] landing_gap = {v['landing_gap']} m must be above nominal_gap = "
+           f"{v['nominal_gap']} m", source)
     c = t["control"]
     _check(0 < c["damping"] < 5, f"[control] damping = {c['damping']} must be in (0, 5)", source)
     raw = parameters.get("provenance", {})
@@ -296,6 +299,7 @@ def parse_vehicle(parameters: Mapping[str, Any], source: str = "parameters") -> 
         name=v["name"], n_sections=v["sections"], section_length_m=v["section_length"],
         magnets_per_side=v["magnets_per_side"], n_frames_per_section=v["frames_per_section"],
         nominal_gap_m=v["nominal_gap"], touchdown_gap_m=v["touchdown_gap"],
+        landing_gap_m=v["landing_gap"],
         standard_magnet=v["standard_magnet"], bow_magnet=v["bow_magnet"],
         car_body_mass_kg=cb["mass"], car_body_pitch_inertia_kg_m2=cb["pitch_inertia"],
         payload_kg=cb["payload"], frame_mass_kg=fr["mass"],
