@@ -469,7 +469,8 @@ class VehicleModel:
         touchdown: tuple[str, float, float, str] | None = None
         last = n_steps
         # one discarded step first: compiles (or loads) the bank's kernel outside the timing
-        bank.step(bstate, dt, res * current, gaps_p, 0.0, pole_forces=self.fine)
+        if not self.fine:
+            bank.step(bstate, dt, res * current, gaps_p, 0.0)
         bar = _Progress(n_steps, enabled=progress)
         clock = time.perf_counter
         t_start = clock()
