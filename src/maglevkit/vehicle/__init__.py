@@ -6,6 +6,10 @@
 * :mod:`~maglevkit.vehicle.irregularities`: deterministic and random guideway irregularities.
 * :mod:`~maglevkit.vehicle.comfort`: ride comfort (ISO 2631-1 ``Wk`` and Sperling ``Wz``).
 * :mod:`~maglevkit.vehicle.data`: the guideway parameter file.
+* :mod:`~maglevkit.vehicle.train`: the vehicle (train) parameter file and its layout.
+* :mod:`~maglevkit.vehicle.mechanics`: the train's heave-pitch multibody model.
+* :mod:`~maglevkit.vehicle.simulation`: vehicle runs (magnet bank, gap controllers,
+  guideway, irregularities, failures).
 """
 
 from __future__ import annotations
@@ -29,6 +33,9 @@ from .irregularities import (
     SpanSag,
     TabulatedProfile,
 )
+from .mechanics import VehicleMechanics
+from .simulation import Failure, VehicleModel, VehicleRun, run_vehicle
+from .train import TrainData, load_vehicle
 
 __all__ = [
     "HeaveMass",
@@ -52,4 +59,11 @@ __all__ = [
     "iso2631_weighted_rms",
     "sperling_weighting",
     "sperling_index",
+    "TrainData",
+    "load_vehicle",
+    "VehicleMechanics",
+    "VehicleModel",
+    "VehicleRun",
+    "Failure",
+    "run_vehicle",
 ]

@@ -1,0 +1,71 @@
+"""``maglevkit vehicle run``: the 3-section train on the elastic guideway."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Annotated
+
+import typer
+
+from ..errors import MaglevkitError
+from ._app import app, console, fail
+
+vehicle_app = typer.Typer(help="Vehicle runs: heave-pitch train on an elastic guideway.",
+                          no_args_is_help=True)
+app.add_typer(vehicle_app, name="vehicle")
+
+
+@vehicle_app.command("run")
+def run(
+    vehicle: Annotated[str, typer.Argument(help="Vehicle TOML file or bundled name.")] = "tr09",
+    speed: Annotated[float, typer.Option(help="Speed [km/h].")] = 0.0,
+    duration: Annotated[float, typer.Option(help="Simulated time [s].")] = 1.0,
+    dt: Annotated[float, typer.Option(help="Time step [s].")] = 1e-3,
+    irregularity: Annotated[str, typer.Option(
+        help="Guideway irregularity: sag:A, joints:H, random:RMS[:SEED] (metres), joined by '+', "
+             "or none.")] = "none",
+    failure: Annotated[list[str] | None, typer.Option(
+        help="CIRCUIT@T: switch a circuit off at T seconds (e.g. s2m4/front@0.5); repeatable.")]
+    = None,
+    rigid: Annotated[bool, typer.Option(help="Rigid guideway instead of the elastic spans.")] = False,
+    magnets: Annotated[str, typer.Option(
+        help="reduced (one force per circuit) or detailed (flux models, per pole; slow).")]
+    = "reduced",
+    maps_cache: Annotated[Path | None, typer.Option(help="Directory of the cached maps.")] = None,
+    output: Annotated[Path | None, typer.Option("-o", "--output", help="Write the run (netCDF).")]
+    = None,
+    plot: Annotated[Path | None, typer.Option(help="Write figures (PNG) into this directory.")]
+    = None,
+    progress: Annotated[bool, typer.Option(help="Progress bar on stderr.")] = True,
+) -> None:
+    """Run the train at constant speed; report minimum gaps, peak currents, comfort and the
+    real-time factor (results on stdout, diagnostics on stderr)."""
+    from ..vehicle.simulation import VehicleModel, parse_failure, parse_irregularity
+    from ..vehicle.train import load_vehicle
+
+    try:
+        if not (speed >= 0 and speed < 2000):
+            raise typer.BadParameter(f"--speed {speed} km/h must be in 0 ... 2000")
+        train = load_vehicle(vehicle)
+        fails = [parse_failure(f) for f in (failure or [])]
+        prof = parse_irregularity(irregularity, span_length_m=train.section_length_m)
+        console.print(f"setting up {train.name} (maps, controllers) ...")
+        model = VehicleModel(train, rigid=rigid, magnets=magnets, maps_cache=maps_cache)
+        if prof is not None and not rigid:
+            prof = parse_irregularity(irregularity, span_length_m=model.guideway.span.length_m)
+        res = model.run(speed_m_per_s=speed / 3.6, duration_s=duration, dt_s=dt,
+                        irregularity=prof, failures=fails, progress=progress)
+    except typer.BadParameter as exc:
+        console.print(f"[bold red]error:[/] {exc}")
+        raise typer.Exit(code=2) from None
+    except MaglevkitError as exc:
+        raise fail(exc) from None
+    typer.echo(res.report())
+    if output is not None:
+        res.to_netcdf(output)
+        console.print(f"wrote {output}")
+    if plot is not None:
+        from ..vehicle.plots import plot_vehicle_run
+
+        for p in plot_vehicle_run(res.dataset, plot):
+            console.print(f"wrote {p}")

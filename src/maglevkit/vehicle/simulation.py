@@ -1,0 +1,768 @@
+"""Vehicle runs: the train's mechanics, its magnets (one bank), gap controllers and the guideway.
+
+Per time step ``t_k -> t_k + dt`` (fixed step, sample-and-hold controllers)::
+
+    x_p      = x_nose(t_k) - xi_p                       force points on the guideway
+    s_p      = s_0 + u_p - w(x_p) - r(x_p)              gap (u_p = B_p^T q: frame point)
+    s_p'     = u_p' - (w_t + v w_x)(x_p) - v r_x(x_p)   gap rate (moving-load term v w_x)
+    U        = controllers(s, s', I, psi_hat)           one vectorised flux cascade per circuit
+    I, F     = bank.step(U, s, s')                      all circuits, one call
+    q, q'    <- exact ZOH step of M q'' + C q' + K q = Q_g - B F_bar
+    guideway <- exact ZOH step with F_bar at the mid-step positions
+    F_bar    = (F(t_k) + F(t_k+1)) / 2 x sides          (both sides' magnets per lumped line)
+
+Coarse distribution (default): one gap and one force per circuit at the circuit's centre,
+reduced models (maps).  Fine distribution (``magnets="detailed"``): the detailed flux-based
+models with one gap and one force per pole.  Failures switch a circuit's voltage to 0 from
+a given time on.  A run stops at the first touchdown, a gap at or below the touchdown gap
+(magnet closing onto the stator) or at or above the landing gap (frame down on its skids):
+there is no contact model.  Equations: ``docs/vehicle.md``.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from ..errors import InputError, MaglevkitError, OutOfRangeError
+from .guideway import Guideway
+from .heave import STANDARD_GRAVITY
+from .mechanics import VehicleMechanics
+from .train import TrainData
+
+__all__ = ["Failure", "VehicleRun", "VehicleModel", "run_vehicle", "parse_failure", "parse_irregularity"]
+
+
+@dataclass(frozen=True)
+class Failure:
+    """Circuit ``circuit`` (a bank circuit name, e.g. ``"s2m4/front"``) switched off
+    (voltage 0) from ``time_s`` [s] on."""
+
+    circuit: str
+    time_s: float
+
+
+def parse_failure(text: str) -> Failure:
+    """``"CIRCUIT@T"`` -> :class:`Failure` (``T`` in seconds)."""
+    name, sep, t = str(text).rpartition("@")
+    try:
+        if not sep or not name:
+            raise ValueError
+        ts = float(t)
+        if not math.isfinite(ts) or ts < 0:
+            raise ValueError
+    except ValueError:
+        raise InputError(f"failure {text!r}: expected CIRCUIT@T, e.g. s2m4/front@0.5 (T >= 0 s)"
+                         ) from None
+    return Failure(name, ts)
+
+
+@dataclass(frozen=True)
+class VehicleRun:
+    """Result of a vehicle run.
+
+    Attributes
+    ----------
+    dataset : xarray.Dataset
+        Time series (see :meth:`VehicleModel.run`), units in the variables' attributes.
+    min_gap_m : dict
+        Minimum gap per magnet [m] (over its circuits' gaps).
+    peak_current_A : dict
+        Peak coil current per circuit [A].
+    touchdown : tuple or None
+        ``(circuit, time_s, gap_m, kind)`` of the first gap at or below the touchdown gap
+        (``kind = "closed"``: the magnet closes onto the stator) or at or above the landing
+        gap (``"landed"``: the frame is down on its skids), or None.
+    comfort : dict
+        ``"<section>.<point>" -> {"wk_rms_m_per_s2": ..., "sperling_wz": ...}``.
+    wall_time_s : float
+        Time spent in the time loop [s].
+    real_time_factor : float
+        Simulated time / wall time.
+    timing_s : dict
+        Wall time per part of the loop (magnets, mechanics, guideway, controllers, other).
+    """
+
+    dataset: Any
+    min_gap_m: dict[str, float]
+    peak_current_A: dict[str, float]
+    touchdown: tuple[str, float, float, str] | None
+    comfort: dict[str, dict[str, float]]
+    wall_time_s: float
+    real_time_factor: float
+    timing_s: dict[str, float] = field(default_factory=dict)
+
+    def to_netcdf(self, path: str | Path) -> Path:
+        p = Path(path)
+        p.parent.mkdir(parents=True, exist_ok=True)
+        self.dataset.to_netcdf(p, engine="netcdf4")
+        return p
+
+    def report(self) -> str:
+        """A short plain-text report."""
+        ds = self.dataset
+        lines = [f"{ds.attrs['vehicle']}: {float(ds.attrs['speed_m_per_s']) * 3.6:.0f} km/h, "
+                 f"{float(ds.time[-1]):.3g} s simulated ({self.real_time_factor:.2f}x real time)"]
+        mg = min(self.min_gap_m.items(), key=lambda kv: kv[1])
+        mc = max(self.peak_current_A.items(), key=lambda kv: kv[1])
+        lines.append(f"  minimum gap {mg[1] * 1e3:.3f} mm (magnet {mg[0]}); peak current "
+                     f"{mc[1]:.2f} A (circuit {mc[0]})")
+        if self.touchdown is None:
+            lines.append(f"  no touchdown (gaps stayed within "
+                         f"{float(ds.attrs['touchdown_gap_m']) * 1e3:g} ... "
+                         f"{float(ds.attrs['landing_gap_m']) * 1e3:g} mm)")
+        else:
+            c, t, g, kind = self.touchdown
+            what = ("gap closed: magnet on the stator" if kind == "closed"
+                    else "frame down on its skids")
+            lines.append(f"  TOUCHDOWN ({what}): circuit {c} at t = {t:.4f} s (gap "
+                         f"{g * 1e3:.3f} mm); the run stopped there")
+        for k, v in self.comfort.items():
+            lines.append(f"  comfort {k}: ISO 2631 Wk a_w = {v['wk_rms_m_per_s2']:.4f} m/s^2, "
+                         f"Sperling Wz = {v['sperling_wz']:.2f}")
+        return "\n".join(lines)
+
+
+class VehicleModel:
+    """The assembled train: mechanics, magnet bank, controllers, guideway.
+
+    Parameters
+    ----------
+    train : TrainData
+    guideway : Guideway, optional
+        Default: the bundled guideway file's spans with a moving system boundary of the
+        window the train needs; ``rigid=True`` for a rigid guideway.
+    rigid : bool
+        Use a rigid guideway (ignored when ``guideway`` is given).
+    magnets : {"reduced", "detailed"}
+        Reduced current-based models with one force per circuit (coarse), or detailed
+        flux-based models with one gap and force per pole (fine).
+    maps_cache : path, optional
+        Directory of the cached characteristic maps (:mod:`maglevkit.vehicle.mapcache`).
+    compiled : {"auto", "always", "never"}
+        Passed to the bank.
+    """
+
+    def __init__(self, train: TrainData, *, guideway: Guideway | None = None, rigid: bool = False,
+                 magnets: str = "reduced", maps_cache: Any = None, compiled: str = "auto") -> None:
+        from ..magnets import load_magnet
+        from ..models.bank import MagnetBank
+        from ..models.flux import FluxModel
+        from .data import load_guideway
+        from .mapcache import vehicle_maps
+
+        if not isinstance(train, TrainData):
+            raise InputError(f"train must be TrainData (from load_vehicle), got {type(train).__name__}")
+        if magnets not in ("reduced", "detailed"):
+            raise InputError(f"magnets = {magnets!r}; use 'reduced' or 'detailed'")
+        self.train = train
+        self.fine = magnets == "detailed"
+        kinds = {"standard": load_magnet(train.standard_magnet), "bow": load_magnet(train.bow_magnet)}
+        self.magnets = kinds
+        for kind, mag in kinds.items():
+            par = mag.parameters["magnet"]
+            length = float(par["poles"]) * float(par["pole_pitch"])
+            if abs(length - train.magnet_length_m) > 1e-3:
+                raise InputError(f"{kind} magnet {mag.name!r} is {length:.4f} m long, but the "
+                                 f"vehicle's magnet positions are {train.magnet_length_m:.4f} m "
+                                 "(section_length / magnets_per_side)")
+        self.maps = {k: vehicle_maps(m, cache_dir=maps_cache) for k, m in kinds.items()}
+        self.slots = train.magnet_slots()
+        members: list[tuple[str, Any]] = []
+        for s in self.slots:
+            members.append((s.name, FluxModel(kinds[s.kind]) if self.fine else self.maps[s.kind]))
+        self.bank = MagnetBank(members, gap_inputs="pole" if self.fine else "circuit",
+                               compiled=compiled)
+        bank = self.bank
+        # pole and circuit positions (train coordinate), frame of every circuit
+        pole_xi: list[float] = []
+        pole_frame: list[int] = []
+        pole_circuit: list[int] = []
+        circ_xi: list[float] = []
+        circ_frame: list[int] = []
+        circ_poles: list[int] = []
+        circ_kind: list[str] = []
+        for s in self.slots:
+            mag = kinds[s.kind]
+            pitch = float(mag.parameters["magnet"]["pole_pitch"])
+            names = list(mag.gap_names)
+            xi = s.centre_m - 0.5 * train.magnet_length_m + (np.arange(len(names)) + 0.5) * pitch
+            groups = self.maps[s.kind].pole_groups
+            first = len(circ_xi)
+            circuit_of: dict[int, int] = {}
+            for c in mag.circuit_names:
+                idx = [names.index(p) for p in groups[c]]
+                for j in idx:
+                    circuit_of[j] = len(circ_xi)
+                circ_xi.append(float(xi[idx].mean()))
+                circ_frame.append(s.frame)
+                circ_poles.append(len(idx))
+                circ_kind.append(s.kind)
+            for j in range(len(names)):            # bank pole order: the magnet's gap names
+                pole_xi.append(float(xi[j]))
+                pole_frame.append(s.frame)
+                pole_circuit.append(circuit_of[j])
+            assert len(circ_xi) - first == len(mag.circuit_names)
+        self.circuit_xi_m = np.array(circ_xi)
+        self.circuit_frame = np.array(circ_frame)
+        self.circuit_poles = np.array(circ_poles)
+        self.circuit_kind = tuple(circ_kind)
+        self.pole_xi_m = np.array(pole_xi)
+        self.pole_circuit = np.array(pole_circuit)
+        nc = bank.n_circuits
+        if len(circ_xi) != nc:  # pragma: no cover - layout and bank disagree
+            raise InputError("internal: circuit layout does not match the bank")
+        if self.fine:
+            # bank pole order = member order, each member's gap_names order
+            self.point_xi_m = self.pole_xi_m
+            frames = np.array(pole_frame)
+            weights = np.ones(self.pole_xi_m.size)
+        else:
+            self.point_xi_m = self.circuit_xi_m
+            frames = self.circuit_frame
+            weights = self.circuit_poles.astype(float)
+        self.mechanics = VehicleMechanics(train, self.point_xi_m.tolist(), frames.tolist())
+        self._weights = weights
+        # guideway
+        if guideway is None:
+            data = load_guideway()
+            gw0 = data.guideway(n_spans=1, rigid=rigid)
+            guideway = data.guideway(n_spans=gw0.spans_needed(train.length_m), rigid=rigid)
+        if not isinstance(guideway, Guideway):
+            raise InputError(f"guideway must be a Guideway, got {type(guideway).__name__}")
+        self.guideway = guideway
+        # trim: forces per point, per circuit; trim currents
+        self.trim_q, point_force = self.mechanics.static_trim(weights)
+        per_side = point_force / train.sides
+        circ_force: np.ndarray = (np.bincount(self.pole_circuit, weights=per_side, minlength=nc)
+                                  if self.fine else per_side)
+        self.trim_force_N = circ_force          # per circuit of one side
+        self.trim_current_A = self._trim_currents(circ_force)
+        self._design_controllers()
+
+    # ------------------------------------------------------------------ set-up helpers
+    def _circuit_map(self, j: int, var: str) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        member, circuit = self.bank.circuit_names[j].split("/", 1)
+        kind = self.slots[self.bank.member_names.index(member)].kind
+        maps = self.maps[kind]
+        return maps.gaps_m, maps.currents_A, maps.variable(var, circuit)
+
+    def _interp(self, j: int, var: str, gap: float, current: float) -> float:
+        from scipy.interpolate import RectBivariateSpline
+
+        g, c, v = self._circuit_map(j, var)
+        return float(RectBivariateSpline(g, c, v)(gap, current)[0, 0])
+
+    def _trim_currents(self, force: np.ndarray) -> np.ndarray:
+        """Current of every circuit carrying ``force`` [N] at the nominal gap (statics maps)."""
+        from scipy.interpolate import RectBivariateSpline
+        from scipy.optimize import brentq
+
+        s0 = self.train.nominal_gap_m
+        out = np.empty(force.size)
+        cache: dict[tuple[str, str], Any] = {}
+        for j, f in enumerate(force):
+            member, circuit = self.bank.circuit_names[j].split("/", 1)
+            kind = self.slots[self.bank.member_names.index(member)].kind
+            key = (kind, circuit)
+            if key not in cache:
+                g, c, v = self._circuit_map(j, "force_N")
+                cache[key] = (RectBivariateSpline(g, c, v), c)
+            spl, c = cache[key]
+            fmax = float(spl(s0, c[-1])[0, 0])
+            if not 0 < f < fmax:
+                raise InputError(f"circuit {self.bank.circuit_names[j]!r} would have to carry "
+                                 f"{f:.5g} N at the nominal gap; its maps reach {fmax:.5g} N")
+            out[j] = brentq(lambda i, f=f, spl=spl: float(spl(s0, i)[0, 0]) - f, c[0], c[-1],
+                            xtol=1e-10)
+        return out
+
+    def _design_controllers(self) -> None:
+        from ..control import design_gap_controller
+
+        tr = self.train
+        nc = self.bank.n_circuits
+        kp, kd, ki, kf = (np.empty(nc) for _ in range(4))
+        psi0 = np.empty(nc)
+        s0 = tr.nominal_gap_m
+        for kind, mag in self.magnets.items():
+            sel = np.array([k == kind for k in self.circuit_kind])
+            if not sel.any():
+                continue
+            load = float(self.trim_force_N[sel].sum()) / (sel.sum() / len(mag.circuit_names))
+            cur = float(self.trim_current_A[sel].mean())
+            ctl = design_gap_controller(mag, mass_kg=load / STANDARD_GRAVITY, gap_m=s0,
+                                        current_A=cur, bandwidth_hz=tr.control_bandwidth_Hz,
+                                        damping=tr.control_damping,
+                                        flux_bandwidth_hz=tr.flux_bandwidth_Hz,
+                                        voltage_limit_V=tr.voltage_limit_V)
+            kp[sel], kd[sel], ki[sel], kf[sel] = (ctl.kp_per_m, ctl.kd_s_per_m, ctl.ki_per_m_s,
+                                                  ctl.kflux_per_s)
+        for j in range(nc):
+            psi0[j] = self._interp(j, "flux_linkage_Wb", s0, float(self.trim_current_A[j]))
+        r_ec = np.empty(nc)
+        for j, name in enumerate(self.bank.circuit_names):
+            member, circuit = name.split("/", 1)
+            kind = self.slots[self.bank.member_names.index(member)].kind
+            r_ec[j] = float(self.maps[kind].dataset["eddy_resistance_fit_ohm"].sel(
+                circuit=circuit))
+        self.eddy_resistance_ohm = r_ec
+        # integral action on what a rigid frame can correct: the gap errors of a frame's
+        # circuits projected on its heave and pitch (P = A (A^T A)^-1 A^T, rows of A =
+        # (1, xi_j - xi_frame)).  On a curved girder the circuits' gaps cannot all be
+        # nominal at once; independent integrators would wind up against each other.
+        proj = np.zeros((nc, nc))
+        centres = self.train.frame_centres_m
+        for f in range(self.train.n_frames):
+            cols = np.flatnonzero(self.circuit_frame == f)
+            a = np.column_stack([np.ones(cols.size), self.circuit_xi_m[cols] - centres[f]])
+            proj[np.ix_(cols, cols)] = a @ np.linalg.solve(a.T @ a, a.T)
+        self.integral_projection = proj
+        self.gains = {"kp_per_m": kp, "kd_s_per_m": kd, "ki_per_m_s": ki, "kflux_per_s": kf}
+        self.flux_bias_Wb = psi0
+
+    # ------------------------------------------------------------------ the run
+    def run(self, *, speed_m_per_s: float, duration_s: float, dt_s: float = 1e-3,
+            irregularity: Any = None, failures: Sequence[Failure] = (), progress: bool = False,
+            floor_points: Sequence[float] = (-0.4, 0.0, 0.4)) -> VehicleRun:
+        """Simulate the train at constant speed.
+
+        Parameters
+        ----------
+        speed_m_per_s : float
+            Speed [m/s] (>= 0).
+        duration_s, dt_s : float
+            Run length and fixed step [s].
+        irregularity : Profile, optional
+            Guideway irregularity ``r(x)`` (positive downward), see
+            :mod:`maglevkit.vehicle.irregularities`.
+        failures : sequence of Failure
+        progress : bool
+            A progress bar on stderr.
+        floor_points : sequence of float
+            Car-body floor points for comfort, as fractions of the section length from its
+            centre (negative: forward).
+
+        Returns
+        -------
+        VehicleRun
+            Its dataset has dims ``time``, ``circuit``, ``magnet``, ``section``, ``frame``,
+            ``span``, ``floor_point``.
+        """
+        import xarray as xr
+
+        from ..models.inputs import reject_bools
+
+        for name, v in (("speed_m_per_s", speed_m_per_s), ("duration_s", duration_s),
+                        ("dt_s", dt_s)):
+            reject_bools(v, name)
+            if not (isinstance(v, (int, float)) and math.isfinite(v)):
+                raise InputError(f"{name} = {v!r} must be a finite number")
+        if speed_m_per_s < 0 or duration_s <= 0 or dt_s <= 0:
+            raise InputError("speed_m_per_s must be >= 0 and duration_s, dt_s > 0")
+        n_steps = int(round(duration_s / dt_s))
+        if n_steps < 2:
+            raise InputError(f"duration_s = {duration_s} s is less than two steps of {dt_s} s")
+        tr, bank, mech, gw = self.train, self.bank, self.mechanics, self.guideway
+        names = bank.circuit_names
+        nc = bank.n_circuits
+        fail_t = np.full(nc, np.inf)
+        for f in failures:
+            if not isinstance(f, Failure):
+                raise InputError(f"failures must be Failure objects, got {f!r}")
+            if f.circuit not in names:
+                raise InputError(f"failure: no circuit {f.circuit!r}; circuits are e.g. "
+                                 f"{', '.join(names[:3])} ... {names[-1]} (magnet/circuit)")
+            fail_t[names.index(f.circuit)] = min(fail_t[names.index(f.circuit)], f.time_s)
+        v = float(speed_m_per_s)
+        dt = float(dt_s)
+        s0 = tr.nominal_gap_m
+        sides = tr.sides
+        xi = self.point_xi_m
+        npt = xi.size
+        span_l = gw.span.length_m
+        # nose such that the rear starts 0.3 span behind pier 1 of the guideway
+        x_nose0 = gw.origin_m + span_l * 1.3 + tr.length_m
+        times = np.arange(n_steps + 1) * dt
+        # irregularities at every point and step (vectorised once)
+        xpath = x_nose0 + v * times[:, None] - xi[None, :]
+        if irregularity is not None:
+            r_all = np.asarray(irregularity.elevation_m(xpath.ravel())).reshape(xpath.shape)
+            rx_all = np.asarray(irregularity.slope(xpath.ravel())).reshape(xpath.shape)
+        else:
+            r_all = np.zeros_like(xpath)
+            rx_all = np.zeros_like(xpath)
+        # guideway helpers (exact ZOH, mode shapes at the points)
+        span = gw.span
+        nm = gw.n_modes
+        gstate = gw.initial_state(first_span=int(gw.span_index(xpath[0].min())))
+        ad_g, bd_g = span.discretize(dt) if nm else (np.zeros((0, 0)), np.zeros((0, 0)))
+        kk = span.wavenumbers_rad_per_m
+
+        # initial state: static guideway deflection under the trim loads, frames fitted
+        f_pts = self.mechanics_trim_forces()
+        if nm:
+            qf = gw.modal_forces(gstate, xpath[0], f_pts)
+            qs = span.static_modal_displacement(qf)
+            gstate = type(gstate)(0.0, gstate.first_span, qs, np.zeros_like(qs))
+            d0 = gw.deflection(gstate, xpath[0]).deflection_m
+        else:
+            d0 = np.zeros(npt)
+        target = d0 + r_all[0]                  # point displacement giving the nominal gap
+        q = self.trim_q.copy()
+        nsec2 = 2 * tr.n_sections
+        frames_of_pts = mech.force_bodies - tr.n_sections
+        for fi in range(tr.n_frames):
+            cols = np.flatnonzero(frames_of_pts == fi)
+            a = mech.B[nsec2 + 2 * fi: nsec2 + 2 * fi + 2][:, cols].T
+            q[nsec2 + 2 * fi: nsec2 + 2 * fi + 2] = np.linalg.lstsq(a, target[cols],
+                                                                   rcond=None)[0]
+        q[:nsec2] = np.linalg.solve(mech.K[:nsec2, :nsec2],
+                                    mech.Q_gravity[:nsec2] - mech.K[:nsec2, nsec2:] @ q[nsec2:])
+        qd = np.zeros_like(q)
+        ad_m, bd_m = mech.discretize(dt)
+        ndof = mech.n_dof
+        x_m = np.concatenate([q, qd])
+        bt = mech.B.T.copy()
+        # bank initial state
+        u_p = bt @ q
+        gaps_p = s0 + u_p - d0 - r_all[0]
+        if self.fine:
+            bstate = bank.initial_state(gaps=gaps_p, currents=self.trim_current_A)
+            circ_avg = np.zeros((nc, npt))
+            circ_avg[self.pole_circuit, np.arange(npt)] = 1.0
+            circ_avg /= circ_avg.sum(axis=1, keepdims=True)
+        else:
+            bstate = bank.initial_state(gaps=gaps_p, currents=self.trim_current_A)
+            circ_avg = None
+        out0 = bank.outputs(bstate)
+        force_c = out0.circuit_force_N.copy()
+        pf0 = out0.pole_force_N if self.fine else force_c
+        assert pf0 is not None
+        force_pts = pf0.copy()
+        current = out0.currents_A.copy()
+        # controllers (vectorised over circuits)
+        g = self.gains
+        kp, kd, ki, kf = g["kp_per_m"], g["kd_s_per_m"], g["ki_per_m_s"], g["kflux_per_s"]
+        psi0 = self.flux_bias_Wb
+        res = bank.resistance_ohm
+        umax = tr.voltage_limit_V
+        psi_hat = psi0.copy()
+        r_ec = self.eddy_resistance_ohm
+        proj = self.integral_projection
+        integ = np.zeros(nc)
+        # records
+        rec = {k: np.empty((n_steps + 1, nc)) for k in ("gap", "current", "voltage", "force",
+                                                        "deflection")}
+        rec_q = np.empty((n_steps + 1, ndof))
+        rec_qd = np.empty((n_steps + 1, ndof))
+        rec_mid = np.zeros((n_steps + 1, gw.n_spans))
+        rec_span = np.zeros((n_steps + 1, gw.n_spans), dtype=int)
+        minv = 1.0 / np.diag(mech.M)
+        timing = dict.fromkeys(("magnets", "mechanics", "guideway", "controllers", "other"), 0.0)
+        touchdown: tuple[str, float, float, str] | None = None
+        last = n_steps
+        # one discarded step first: compiles (or loads) the bank's kernel outside the timing
+        if not self.fine:
+            bank.step(bstate, dt, res * current, gaps_p, 0.0)
+        bar = _Progress(n_steps, enabled=progress)
+        clock = time.perf_counter
+        t_start = clock()
+        mid_shape = span.mode_shapes(0.5 * span_l)[0] if nm else np.zeros(0)
+        zeros_np = np.zeros(npt)
+        # guideway modal state in ring order, [q | q'] per row (as Guideway.step)
+        gx = np.concatenate([gstate.modal_displacement_m, gstate.modal_velocity_m_per_s], axis=1)
+        first = gstate.first_span
+        n_sp = gw.n_spans
+        span_ids = np.arange(n_sp)
+        ad_gt, bd_gt = ad_g.T.copy(), bd_g.T.copy()
+        half = 0.5 * v * dt
+        fail_any = np.isfinite(fail_t)
+        t_fail0 = float(fail_t.min()) if fail_any.any() else math.inf
+        rec_fp = np.empty((n_steps + 1, npt))
+        for k in range(n_steps + 1):
+            t0 = clock()
+            t = times[k]
+            x_pts = xpath[k]
+            # guideway deflection at the points (and mode shapes at the mid-step positions)
+            if nm:
+                if gw.moving_boundary:
+                    k_rear = int(gw.span_index(x_pts.min()))
+                    if k_rear > first:
+                        for kk_ in range(first, min(k_rear, first + n_sp)):
+                            gx[kk_ % n_sp] = 0.0
+                        first = k_rear
+                x2 = np.concatenate([x_pts, x_pts + half])
+                ks = np.floor((x2 - gw.origin_m) / span_l).astype(int)
+                if ks.min() < first or ks.max() > first + n_sp - 1:
+                    raise OutOfRangeError(f"vehicle run at t = {t:.4f} s: the train left the "
+                                          f"integrated spans {first} ... {first + n_sp - 1}")
+                rows2 = ks % n_sp
+                arg = np.multiply.outer(x2 - (gw.origin_m + ks * span_l), kk)
+                sn = np.sin(arg)
+                rows = rows2[:npt]
+                phi, dphi = sn[:npt], kk * np.cos(arg[:npt])
+                qg = gx[rows]
+                w = np.einsum("pj,pj->p", qg[:, :nm], phi)
+                w_rate = (np.einsum("pj,pj->p", qg[:, nm:], phi)
+                          + v * np.einsum("pj,pj->p", qg[:, :nm], dphi))
+            else:
+                w = w_rate = zeros_np
+            t1 = clock()
+            q, qd = x_m[:ndof], x_m[ndof:]
+            gaps_p = s0 + bt @ q - w - r_all[k]
+            rates_p = bt @ qd - w_rate - v * rx_all[k]
+            gaps_c = gaps_p if circ_avg is None else circ_avg @ gaps_p
+            rates_c = rates_p if circ_avg is None else circ_avg @ rates_p
+            # record the state at t_k
+            rec["gap"][k] = gaps_c
+            rec["current"][k] = current
+            rec["force"][k] = force_c
+            rec["deflection"][k] = w if circ_avg is None else circ_avg @ w
+            rec_q[k], rec_qd[k] = q, qd
+            rec_fp[k] = force_pts
+            if nm:
+                rec_span[k] = first + span_ids
+                rec_mid[k] = gx[(first + span_ids) % n_sp, :nm] @ mid_shape
+            gmin = float(gaps_c.min())
+            gmax = float(gaps_c.max())
+            if gmin <= tr.touchdown_gap_m or gmax >= tr.landing_gap_m:
+                closed = gmin <= tr.touchdown_gap_m
+                j = int(np.argmin(gaps_c) if closed else np.argmax(gaps_c))
+                touchdown = (names[j], float(t), float(gaps_c[j]),
+                             "closed" if closed else "landed")
+                rec["voltage"][k] = np.nan
+                last = k
+                break
+            if k == n_steps:
+                rec["voltage"][k] = rec["voltage"][k - 1]
+                break
+            t3 = clock()
+            # controllers (flux cascade, every circuit at once)
+            rho = kp * (gaps_c - s0) + kd * rates_c + ki * integ
+            u = res * current + kf * (psi0 * (1.0 + rho) - psi_hat)
+            np.clip(u, -umax, umax, out=u)
+            # 2-quadrant chopper: the coil current cannot reverse.  Reduced model (eq. 8):
+            # I = (U + R_ec I_L) / (R_el + R_ec) >= 0  <=>  U >= -R_ec I_L
+            if self.fine:
+                u = np.where((current < 1.0) & (u < 0.0), 0.0, u)
+            else:
+                u = np.maximum(u, -r_ec * bstate.inductor_currents_A)
+            if t >= t_fail0:
+                u = np.where(fail_t <= t, 0.0, u)
+            rec["voltage"][k] = u
+            t4 = clock()
+            try:
+                bstate, out = bank.step(bstate, dt, u, gaps_p, rates_p, pole_forces=self.fine)
+            except MaglevkitError as exc:
+                raise type(exc)(f"vehicle run at t = {t:.4f} s: {exc}") from None
+            t5 = clock()
+            new_current = out.currents_A
+            psi_hat += dt * (u - res * 0.5 * (current + new_current))
+            integ += proj @ ((gaps_c - s0) * dt)
+            new_pts = out.pole_force_N if self.fine else out.circuit_force_N
+            assert new_pts is not None
+            f_bar = (0.5 * sides) * (force_pts + new_pts)
+            t6 = clock()
+            x_m = ad_m @ x_m + bd_m @ (mech.Q_gravity - mech.B @ f_bar)
+            t7 = clock()
+            if nm:
+                onehot = (rows2[npt:, None] == span_ids).astype(float)
+                qmod = onehot.T @ (sn[npt:] * f_bar[:, None])
+                gx = gx @ ad_gt + qmod @ bd_gt
+            t8 = clock()
+            current = new_current
+            force_c = out.circuit_force_N
+            force_pts = new_pts
+            timing["guideway"] += (t1 - t0) + (t8 - t7)
+            timing["other"] += (t3 - t1) + (t6 - t5)
+            timing["controllers"] += t4 - t3
+            timing["magnets"] += t5 - t4
+            timing["mechanics"] += t7 - t6
+            bar.update(k + 1)
+        wall = clock() - t_start
+        bar.close()
+        n = last + 1
+        times = times[:n]
+        sl = slice(0, n)
+        secs = tr.n_sections
+        q_all = rec_q[sl]
+        rec["force"] *= sides
+        qdd_all = minv * (mech.Q_gravity - q_all @ mech.K.T - rec_qd[sl] @ mech.C.T
+                          - (rec_fp[sl] * sides) @ mech.B.T)
+        floor = np.asarray(floor_points, dtype=float)
+        acc_floor = (qdd_all[:, 0:2 * secs:2, None]
+                     + qdd_all[:, 1:2 * secs:2, None] * floor[None, None, :] * tr.section_length_m)
+        fr0 = 2 * secs
+        member_of = [nm_.split("/", 1)[0] for nm_ in names]
+        ds = xr.Dataset(
+            {
+                "gap": (("time", "circuit"), rec["gap"][sl], {"units": "m",
+                        "long_name": "air gap of the circuit (substitute gap)"}),
+                "current": (("time", "circuit"), rec["current"][sl], {"units": "A",
+                            "long_name": "coil current (one side's circuit)"}),
+                "voltage": (("time", "circuit"), rec["voltage"][sl], {"units": "V",
+                            "long_name": "circuit voltage held from this sample to the next"}),
+                "force": (("time", "circuit"), rec["force"][sl], {"units": "N",
+                          "long_name": "magnet force of the lumped circuit (both sides), "
+                                       "attraction positive"}),
+                "guideway_deflection": (("time", "circuit"), rec["deflection"][sl],
+                                        {"units": "m", "long_name": "guideway deflection under "
+                                                                    "the circuit (down positive)"}),
+                "car_body_heave": (("time", "section"), q_all[:, 0:fr0:2], {"units": "m",
+                                   "long_name": "car-body heave (down positive)"}),
+                "car_body_pitch": (("time", "section"), q_all[:, 1:fr0:2], {"units": "rad",
+                                   "long_name": "car-body pitch (rear down positive)"}),
+                "car_body_acceleration": (("time", "section", "floor_point"), acc_floor,
+                                          {"units": "m/s^2", "long_name": "car-body vertical "
+                                           "floor acceleration (down positive)"}),
+                "frame_heave": (("time", "frame"), q_all[:, fr0::2], {"units": "m",
+                                "long_name": "levitation-frame heave (down positive)"}),
+                "frame_pitch": (("time", "frame"), q_all[:, fr0 + 1::2], {"units": "rad",
+                                "long_name": "levitation-frame pitch (rear down positive)"}),
+                "midspan_deflection": (("time", "span_slot"), rec_mid[sl], {"units": "m",
+                                       "long_name": "midspan deflection of the integrated "
+                                                    "spans, rearmost first"}),
+                "span_index": (("time", "span_slot"), rec_span[sl], {"units": "1",
+                               "long_name": "index of the span in each slot"}),
+            },
+            coords={"time": ("time", times, {"units": "s"}),
+                    "circuit": list(names),
+                    "magnet_of_circuit": ("circuit", member_of),
+                    "circuit_position": ("circuit", self.circuit_xi_m, {"units": "m",
+                                         "long_name": "distance behind the nose"}),
+                    "section": np.arange(1, secs + 1),
+                    "frame": np.arange(1, tr.n_frames + 1),
+                    "floor_point": ("floor_point", floor, {"units": "1",
+                                    "long_name": "position from the section centre / "
+                                                 "section length"})},
+            attrs={"vehicle": tr.name, "speed_m_per_s": v, "dt_s": dt,
+                   "nose_position_at_t0_m": x_nose0,
+                   "nominal_gap_m": s0, "touchdown_gap_m": tr.touchdown_gap_m,
+                   "landing_gap_m": tr.landing_gap_m,
+                   "magnets": "detailed (fine, per pole)" if self.fine else
+                              "reduced (coarse, per circuit)",
+                   "guideway": repr(gw), "failures": ", ".join(f"{f.circuit}@{f.time_s:g}"
+                                                               for f in failures),
+                   "touchdown": "" if touchdown is None else
+                                f"{touchdown[3]}: {touchdown[0]}@{touchdown[1]:.6g} s "
+                                f"({touchdown[2]:.6g} m)"},
+        )
+        gaps = rec["gap"][sl]
+        min_gap = {m: float(gaps[:, [j for j, o in enumerate(member_of) if o == m]].min())
+                   for m in bank.member_names}
+        peak = {c: float(rec["current"][sl, j].max()) for j, c in enumerate(names)}
+        comfort = self._comfort(acc_floor, times, dt, floor)
+        sim_t = float(times[-1])
+        return VehicleRun(ds, min_gap, peak, touchdown, comfort, wall,
+                          sim_t / wall if wall > 0 else math.inf, timing)
+
+    def mechanics_trim_forces(self) -> np.ndarray:
+        """Downward force on the guideway at every force point at the trim [N] (both sides)."""
+        if self.fine:
+            per_c = self.trim_force_N * self.train.sides
+            return per_c[self.pole_circuit] / self.circuit_poles[self.pole_circuit]
+        return self.trim_force_N * self.train.sides
+
+    @staticmethod
+    def _comfort(acc: np.ndarray, times: np.ndarray, dt: float,
+                 floor: np.ndarray) -> dict[str, dict[str, float]]:
+        from .comfort import iso2631_weighted_rms, sperling_index
+
+        out: dict[str, dict[str, float]] = {}
+        if times.size < 64:
+            return out
+        fs = 1.0 / dt
+        for s in range(acc.shape[1]):
+            for p, fp in enumerate(floor):
+                a = acc[:, s, p] - acc[:, s, p].mean()
+                out[f"car{s + 1}@{fp:+.2f}L"] = {
+                    "wk_rms_m_per_s2": float(iso2631_weighted_rms(a, fs)),
+                    "sperling_wz": float(sperling_index(a, fs))}
+        return out
+
+
+class _Progress:
+    """A minimal progress bar on stderr (rich, when enabled)."""
+
+    def __init__(self, total: int, *, enabled: bool) -> None:
+        self.enabled = enabled
+        self.total = total
+        self._next = 0
+        if enabled:
+            from rich.console import Console
+            from rich.progress import Progress
+
+            self._p = Progress(transient=True, console=Console(stderr=True))
+            self._p.start()
+            self._task = self._p.add_task("vehicle run", total=total)
+
+    def update(self, k: int) -> None:
+        if self.enabled and k >= self._next:
+            self._p.update(self._task, completed=k)
+            self._next = k + max(1, self.total // 200)
+
+    def close(self) -> None:
+        if self.enabled:
+            self._p.stop()
+
+
+def run_vehicle(train: TrainData, *, speed_m_per_s: float, duration_s: float, dt_s: float = 1e-3,
+                rigid: bool = False, irregularity: Any = None, failures: Sequence[Failure] = (),
+                magnets: str = "reduced", maps_cache: Any = None, progress: bool = False
+                ) -> VehicleRun:
+    """Build a :class:`VehicleModel` and run it (see :meth:`VehicleModel.run`)."""
+    model = VehicleModel(train, rigid=rigid, magnets=magnets, maps_cache=maps_cache)
+    return model.run(speed_m_per_s=speed_m_per_s, duration_s=duration_s, dt_s=dt_s,
+                     irregularity=irregularity, failures=failures, progress=progress)
+
+
+
+def parse_irregularity(text: str, *, span_length_m: float) -> Any:
+    """A guideway irregularity from a short spec (parts joined by ``+``):
+
+    * ``sag:A`` - span-periodic sag of midspan amplitude ``A`` [m] (negative: camber);
+    * ``joints:H`` - steps of height ``H`` [m] at the stator-pack joints (alternating);
+    * ``random:RMS[:SEED]`` - random profile of the German track PSD shape over wavelengths
+      1-100 m, scaled to the RMS ``RMS`` [m] (seed default 0);
+    * ``none``.
+
+    Example: ``sag:0.5e-3+random:0.3e-3:7``.
+    """
+    from .irregularities import GermanTrackPSD, JointSteps, RandomProfile, SpanSag
+
+    parts = [p.strip() for p in str(text).split("+") if p.strip()]
+    if not parts:
+        raise InputError("irregularity: empty spec; use e.g. sag:0.5e-3+random:0.3e-3 or none")
+    prof: Any = None
+    for p in parts:
+        if p == "none":
+            continue
+        kind, _, rest = p.partition(":")
+        vals = rest.split(":") if rest else []
+        try:
+            nums = [float(x) for x in vals]
+        except ValueError:
+            raise InputError(f"irregularity part {p!r}: values must be numbers") from None
+        if kind == "sag" and len(nums) == 1:
+            new: Any = SpanSag(nums[0], span_length_m)
+        elif kind == "joints" and len(nums) == 1:
+            new = JointSteps(nums[0])
+        elif kind == "random" and len(nums) in (1, 2) and nums[0] > 0:
+            seed = int(nums[1]) if len(nums) == 2 else 0
+            lo, hi = 2 * np.pi / 100.0, 2 * np.pi / 1.0
+            base = GermanTrackPSD()
+            var = base.variance_m2(lo, hi)
+            psd = GermanTrackPSD(A_v_m_rad=base.A_v_m_rad * nums[0] ** 2 / var)
+            new = RandomProfile(psd, lo, hi, seed=seed)
+        else:
+            raise InputError(f"irregularity part {p!r}: use sag:A, joints:H, random:RMS[:SEED] "
+                             "(metres) or none, joined by '+'")
+        prof = new if prof is None else prof + new
+    return prof
