@@ -277,6 +277,24 @@ MUTATIONS: tuple[Mutation, ...] = (
              "return self.gravity + (external_force_N - magnet_force_N) / self.mass_kg",
              "return self.gravity + (external_force_N - 1.05 * magnet_force_N) / self.mass_kg",
              ("tests/test_control.py::test_gap_controller_levitates_and_tracks_a_reference",)),
+    # ------------------------------------------------------------------ magnet bank
+    Mutation("bank: bicubic cell coefficients t^p scaled by h^(p+1)", "src/maglevkit/models/tables.py",
+             "return c * (h ** np.arange(4)).reshape((4,) + (1,) * (c.ndim - 1))",
+             "return c * (h ** np.arange(1, 5)).reshape((4,) + (1,) * (c.ndim - 1))",
+             ("tests/test_bank.py::test_bicubic_table_equals_casadi_bspline",)),
+    Mutation("bank: Horner coefficient index shift (q -> q + 1 in w)", "src/maglevkit/models/bank.py",
+             "row = row * w + c[j * nk + pp * (d + 1) + q]",
+             "row = row * w + c[j * nk + pp * (d + 1) + min(q + 1, d)]",
+             ("tests/test_bank.py::test_bank_of_identical_magnets_equals_single_runs",)),
+    Mutation("bank: RK4 stage gap at the sub-step start instead of its middle",
+             "src/maglevkit/models/bank.py",
+             "cell_mid = self._gap_cell(sk + sd * (hs / 2), p)",
+             "cell_mid = self._gap_cell(sk, p)",
+             ("tests/test_bank.py::test_bank_of_identical_magnets_equals_single_runs",)),
+    Mutation("bank: range flag of the current's upper bound dropped", "src/maglevkit/models/bank.py",
+             "+ (hi > p[12]) + non_finite(x)",
+             "+ non_finite(x)",
+             ("tests/test_bank.py::test_range_checked_before_integrating_names_member_and_range",)),
 )
 
 
