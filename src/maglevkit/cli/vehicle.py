@@ -8,7 +8,7 @@ from typing import Annotated
 import typer
 
 from ..errors import MaglevkitError
-from ._app import app, console, fail
+from ._app import app, fail, info, output_dir, output_file
 
 vehicle_app = typer.Typer(help="Vehicle runs: heave-pitch train on an elastic guideway.",
                           no_args_is_help=True)
@@ -43,29 +43,31 @@ def run(
     from ..vehicle.simulation import VehicleModel, parse_failure, parse_irregularity
     from ..vehicle.train import load_vehicle
 
+    output = output_file(output, "-o")
+    if plot is not None:
+        plot = output_dir(plot, "--plot")
     try:
         if not (speed >= 0 and speed < 2000):
             raise typer.BadParameter(f"--speed {speed} km/h must be in 0 ... 2000")
         train = load_vehicle(vehicle)
         fails = [parse_failure(f) for f in (failure or [])]
         prof = parse_irregularity(irregularity, span_length_m=train.section_length_m)
-        console.print(f"setting up {train.name} (maps, controllers) ...")
+        info(f"setting up {train.name} (maps, controllers) ...")
         model = VehicleModel(train, rigid=rigid, magnets=magnets, maps_cache=maps_cache)
         if prof is not None and not rigid:
             prof = parse_irregularity(irregularity, span_length_m=model.guideway.span.length_m)
         res = model.run(speed_m_per_s=speed / 3.6, duration_s=duration, dt_s=dt,
                         irregularity=prof, failures=fails, progress=progress)
     except typer.BadParameter as exc:
-        console.print(f"[bold red]error:[/] {exc}")
-        raise typer.Exit(code=2) from None
+        raise fail(str(exc)) from None
     except MaglevkitError as exc:
         raise fail(exc) from None
     typer.echo(res.report())
     if output is not None:
         res.to_netcdf(output)
-        console.print(f"wrote {output}")
+        info(f"wrote {output}")
     if plot is not None:
         from ..vehicle.plots import plot_vehicle_run
 
         for p in plot_vehicle_run(res.dataset, plot):
-            console.print(f"wrote {p}")
+            info(f"wrote {p}")

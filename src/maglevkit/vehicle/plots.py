@@ -20,7 +20,13 @@ def plot_vehicle_run(dataset: Any, directory: str | Path) -> list[Path]:
     import matplotlib.pyplot as plt
 
     out = Path(directory)
-    out.mkdir(parents=True, exist_ok=True)
+    if not out.is_dir():
+        if not out.parent.is_dir():
+            from ..errors import InputError
+
+            raise InputError(f"cannot write figures into {str(out)!r}: the directory "
+                             f"{str(out.parent)!r} does not exist")
+        out.mkdir()
     ds = dataset
     t = ds.time.values
     title = (f"{ds.attrs['vehicle']}\n{float(ds.attrs['speed_m_per_s']) * 3.6:.0f} km/h, "

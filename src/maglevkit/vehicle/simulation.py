@@ -99,8 +99,11 @@ class VehicleRun:
     timing_s: dict[str, float] = field(default_factory=dict)
 
     def to_netcdf(self, path: str | Path) -> Path:
+        """Write the run's Dataset (the folder must exist: nothing is created silently)."""
         p = Path(path)
-        p.parent.mkdir(parents=True, exist_ok=True)
+        if not p.parent.is_dir():
+            raise InputError(f"cannot write {str(p)!r}: the directory {str(p.parent)!r} does "
+                             "not exist")
         self.dataset.to_netcdf(p, engine="netcdf4")
         return p
 

@@ -1,4 +1,4 @@
-"""CurrentModel bad input (issue 10): range before integrating, a path instead of maps."""
+"""Bad input (issue 10) found in review: CurrentModel, maps, CLI warnings, vehicle CLI."""
 
 from __future__ import annotations
 
@@ -67,3 +67,22 @@ def test_cli_prints_warnings_as_one_line(tmp_path) -> None:
     warn = [ln for ln in lines if ln.startswith("warning: ")]
     assert warn and "gap" in warn[0]
     assert not any("warnings.warn" in ln or ".py:" in ln for ln in lines)
+
+
+def test_vehicle_cli_refuses_a_missing_output_folder_before_running(tmp_path) -> None:
+    import subprocess
+    import sys
+
+    out = subprocess.run([sys.executable, "-c", "from maglevkit.cli import main; main()",
+                          "vehicle", "run", "--speed", "100", "--duration", "0.01",
+                          "-o", str(tmp_path / "missing" / "x.nc")],
+                         capture_output=True, text=True, cwd=tmp_path, timeout=300)
+    assert out.returncode == 2
+    assert out.stderr.strip().startswith("error: -o") and "does not exist" in out.stderr
+    assert "setting up" not in out.stderr            # refused before any work
+    assert not (tmp_path / "missing").exists()
+    bad = subprocess.run([sys.executable, "-c", "from maglevkit.cli import main; main()",
+                          "vehicle", "run", "--speed", "-5", "--duration", "0.01"],
+                         capture_output=True, text=True, cwd=tmp_path, timeout=300)
+    assert bad.returncode == 2 and bad.stderr.startswith("error: --speed")
+    assert "[bold" not in bad.stderr                  # no raw markup
