@@ -11,11 +11,12 @@ from ..errors import MaglevkitError
 from ._app import app, fail, info, output_dir, output_file
 
 vehicle_app = typer.Typer(help="Vehicle runs: heave-pitch train on an elastic guideway.",
-                          no_args_is_help=True)
-app.add_typer(vehicle_app, name="vehicle")
+                          no_args_is_help=True, rich_markup_mode=None)
+app.add_typer(vehicle_app, name="vehicle",
+              short_help="Vehicle runs: heave-pitch train on an elastic guideway.")
 
 
-@vehicle_app.command("run")
+@vehicle_app.command("run", short_help="Run the train at constant speed; report gaps, currents, comfort.")
 def run(
     vehicle: Annotated[str, typer.Argument(help="Vehicle TOML file or bundled name.")] = "tr09",
     speed: Annotated[float, typer.Option(help="Speed [km/h].")] = 0.0,
