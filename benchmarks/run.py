@@ -12,6 +12,7 @@ import datetime as _dt
 import importlib.util
 import os
 import platform
+import re
 import sys
 import time
 from pathlib import Path
@@ -34,10 +35,24 @@ def _machine() -> str:
             f"{platform.release()}")
 
 
+def merge_sections(old: str, sections: list[str]) -> str:
+    """``old`` with the sections whose ``## title`` line matches one of ``sections``
+    replaced (new titles appended); everything before the first section is kept."""
+    chunks = re.split(r"(?m)^(?=## )", old)
+    head, parts = chunks[0], {c.split("\n", 1)[0]: c for c in chunks[1:]}
+    for sec in sections:
+        parts[sec.split("\n", 1)[0]] = sec
+    return head.rstrip("\n") + "\n\n" + "\n".join(v.rstrip("\n") + "\n" for v in parts.values())
+
+
 def main() -> int:
     ap = argparse.ArgumentParser()
     ap.add_argument("--output", default="BENCHMARKS.md")
     ap.add_argument("--only", default="", help="substring of the module names to run")
+    ap.add_argument("--merge", action="store_true",
+                    help="replace only the sections run now in an existing output file (each "
+                         "section states when it ran)")
+    ap.add_argument("--note", default="", help="a line about this run (e.g. CPU pinning)")
     args = ap.parse_args()
     here = Path(__file__).parent
     sections = []
@@ -52,12 +67,19 @@ def main() -> int:
         t0 = time.perf_counter()
         body = mod.run()
         dt = time.perf_counter() - t0
-        sections.append(f"## {mod.TITLE}\n\n{body.strip()}\n\n_(section ran in {dt:.1f} s)_\n")
+        stamp = _dt.datetime.now(_dt.timezone.utc).strftime("%Y-%m-%d %H:%M UTC")
+        note = f"; {args.note}" if args.note else ""
+        sections.append(f"## {mod.TITLE}\n\n{body.strip()}\n\n_(section ran in {dt:.1f} s, "
+                        f"finished {stamp}{note})_\n")
     now = _dt.datetime.now(_dt.timezone.utc).strftime("%Y-%m-%d %H:%M UTC")
-    text = ("# Benchmarks\n\nWritten by `make bench` (benchmarks/run.py); every figure below was "
-            f"measured in that run.\n\n- date: {now}\n- machine: {_machine()}\n\n"
-            + "\n".join(sections))
-    Path(args.output).write_text(text)
+    out = Path(args.output)
+    if args.merge and out.is_file():
+        text = merge_sections(out.read_text(), sections)
+    else:
+        text = ("# Benchmarks\n\nWritten by `make bench` (benchmarks/run.py); every figure below "
+                "was measured in the run whose time its section states.\n\n"
+                f"- date: {now}\n- machine: {_machine()}\n\n" + "\n".join(sections))
+    out.write_text(text)
     print(f"wrote {args.output}")
     return 0
 
