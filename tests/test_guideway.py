@@ -413,5 +413,5 @@ def test_bad_guideway_files_raise(tmp_path: Path, text: str, match: str) -> None
 
 
 def test_unknown_guideway_name_raises() -> None:
-    with pytest.raises(mk.ParameterFileError, match="bundled: guideway"):
+    with pytest.raises(mk.ParameterFileError, match="bundled guideways: guideway$"):
         load_guideway("nonesuch")

@@ -17,12 +17,9 @@ from __future__ import annotations
 import hashlib
 import json
 import math
-import os
-import sys
 import warnings
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
-from importlib import resources
 from pathlib import Path
 from typing import Any
 
@@ -38,12 +35,8 @@ from ..errors import (
     ProvenanceWarning,
 )
 from ..materials import Material, TabulatedBH, get_material, normalise_name, read_bh_csv
+from ..parameter_files import bundled_files, read_parameter_file
 from ..validation import flag
-
-if sys.version_info >= (3, 11):
-    import tomllib
-else:  # pragma: no cover
-    import tomli as tomllib
 
 __all__ = [
     "MAX_CURRENT_DENSITY_A_PER_M2",
@@ -523,8 +516,7 @@ def _plain(obj: Any) -> Any:
 
 def bundled_magnets() -> list[str]:
     """Names of the parameter files shipped with maglevkit."""
-    files = resources.files("maglevkit") / "data"
-    return sorted(p.name[:-5] for p in files.iterdir() if p.name.endswith(".toml"))
+    return bundled_files("")
 
 
 def load_magnet(source: str | Path, *, saturation: bool = True, fringing: bool = True,
@@ -552,24 +544,5 @@ def load_magnet(source: str | Path, *, saturation: bool = True, fringing: bool =
     """
     options = ModelOptions(saturation=saturation, fringing=fringing, leakage=leakage,
                            eddy_currents=eddy_currents)
-    if not isinstance(source, (str, os.PathLike)) or not str(source):
-        raise InputError(f"load_magnet: source = {source!r}: expected a bundled magnet name "
-                         f"({', '.join(bundled_magnets())}) or the path of a .toml file")
-    path = Path(source)
-    if path.suffix != ".toml" and not path.exists():
-        names = bundled_magnets()
-        if str(source) not in names:
-            raise ParameterFileError(f"no magnet file {str(source)!r} and no bundled magnet of that "
-                                     f"name; bundled magnets: {', '.join(names)}")
-        text = (resources.files("maglevkit") / "data" / f"{source}.toml").read_text()
-        label = str(source)
-    else:
-        if not path.is_file():
-            raise ParameterFileError(f"magnet file {str(path)!r} does not exist")
-        text = path.read_text()
-        label = str(path)
-    try:
-        params = tomllib.loads(text)
-    except tomllib.TOMLDecodeError as exc:
-        raise ParameterFileError(f"{label}: not valid TOML: {exc}") from None
+    params, label = read_parameter_file(source, what="magnet")
     return build_magnet(params, options=options, source=label)

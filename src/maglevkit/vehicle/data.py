@@ -17,21 +17,15 @@ The bundled file is ``guideway`` (``maglevkit/data/vehicle/guideway.toml``).
 
 from __future__ import annotations
 
-import sys
 from collections.abc import Mapping
 from dataclasses import dataclass, field
-from importlib import resources
 from pathlib import Path
 from typing import Any
 
 from ..errors import ParameterError, ParameterFileError
 from ..magnets.base import Schema, take
+from ..parameter_files import bundled_files, read_parameter_file
 from .guideway import BeamSpan, Guideway
-
-if sys.version_info >= (3, 11):
-    import tomllib
-else:  # pragma: no cover
-    import tomli as tomllib
 
 __all__ = ["GuidewayData", "load_guideway", "parse_guideway", "bundled_guideways",
            "GUIDEWAY_SCHEMA"]
@@ -100,8 +94,7 @@ def parse_guideway(parameters: Mapping[str, Any], source: str = "parameters") ->
 
 def bundled_guideways() -> list[str]:
     """Names of the guideway files shipped with maglevkit."""
-    files = resources.files("maglevkit") / "data" / "vehicle"
-    return sorted(p.name[:-5] for p in files.iterdir() if p.name.endswith(".toml"))
+    return bundled_files("vehicle", table="guideway")
 
 
 def load_guideway(source: str | Path = "guideway") -> GuidewayData:
@@ -112,21 +105,6 @@ def load_guideway(source: str | Path = "guideway") -> GuidewayData:
     ParameterFileError
         Missing file, TOML syntax error, unknown/missing keys or invalid values.
     """
-    path = Path(source)
-    if path.suffix != ".toml" and not path.exists():
-        names = bundled_guideways()
-        if str(source) not in names:
-            raise ParameterFileError(f"no guideway file {str(source)!r} and no bundled guideway of "
-                                     f"that name; bundled: {', '.join(names)}")
-        text = (resources.files("maglevkit") / "data" / "vehicle" / f"{source}.toml").read_text()
-        label = str(source)
-    else:
-        if not path.is_file():
-            raise ParameterFileError(f"guideway file {str(path)!r} does not exist")
-        text = path.read_text()
-        label = str(path)
-    try:
-        params = tomllib.loads(text)
-    except tomllib.TOMLDecodeError as exc:
-        raise ParameterFileError(f"{label}: not valid TOML: {exc}") from None
+    params, label = read_parameter_file(source, what="guideway", folder="vehicle",
+                                        table="guideway")
     return parse_guideway(params, label)

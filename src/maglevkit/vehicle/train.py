@@ -22,10 +22,8 @@ equal circuits of both sides (its force counts twice; :attr:`TrainData.sides`).
 
 from __future__ import annotations
 
-import sys
 from collections.abc import Mapping
 from dataclasses import dataclass, field
-from importlib import resources
 from pathlib import Path
 from typing import Any
 
@@ -33,13 +31,10 @@ import numpy as np
 
 from ..errors import ParameterFileError
 from ..magnets.base import Schema, take
+from ..parameter_files import bundled_files, read_parameter_file
 
-if sys.version_info >= (3, 11):
-    import tomllib
-else:  # pragma: no cover
-    import tomli as tomllib
-
-__all__ = ["TrainData", "MagnetSlot", "load_vehicle", "parse_vehicle", "VEHICLE_SCHEMA"]
+__all__ = ["TrainData", "MagnetSlot", "bundled_vehicles", "load_vehicle", "parse_vehicle",
+           "VEHICLE_SCHEMA"]
 
 VEHICLE_SCHEMA: dict[str, dict[str, Schema]] = {
     "vehicle": {
@@ -312,6 +307,11 @@ def parse_vehicle(parameters: Mapping[str, Any], source: str = "parameters") -> 
         provenance=prov, source=source)
 
 
+def bundled_vehicles() -> list[str]:
+    """Names of the vehicle files shipped with maglevkit."""
+    return bundled_files("vehicle", table="vehicle")
+
+
 def load_vehicle(source: str | Path = "tr09") -> TrainData:
     """Load a vehicle file by path or bundled name (default: the bundled ``tr09``).
 
@@ -320,21 +320,6 @@ def load_vehicle(source: str | Path = "tr09") -> TrainData:
     ParameterFileError
         Missing file, TOML syntax error, unknown/missing keys or invalid values.
     """
-    path = Path(source)
-    folder = resources.files("maglevkit") / "data" / "vehicle"
-    if path.suffix != ".toml" and not path.exists():
-        if str(source) != "tr09":
-            raise ParameterFileError(f"no vehicle file {str(source)!r} and no bundled vehicle of "
-                                     "that name; bundled: tr09")
-        text = (folder / f"{source}.toml").read_text()
-        label = str(source)
-    else:
-        if not path.is_file():
-            raise ParameterFileError(f"vehicle file {str(path)!r} does not exist")
-        text = path.read_text()
-        label = str(path)
-    try:
-        params = tomllib.loads(text)
-    except tomllib.TOMLDecodeError as exc:
-        raise ParameterFileError(f"{label}: not valid TOML: {exc}") from None
+    params, label = read_parameter_file(source, what="vehicle", folder="vehicle",
+                                        table="vehicle")
     return parse_vehicle(params, label)

@@ -1,0 +1,98 @@
+"""Reading the TOML parameter files (magnets, guideways, vehicles, sweeps): one reader.
+
+Every kind of parameter file is found the same way: a bundled name (a ``.toml`` file
+shipped in ``maglevkit/data/<folder>``) or the path of a ``.toml`` file, and fails the
+same way, with a :class:`~maglevkit.errors.ParameterFileError` that names the file and
+what is allowed.  The files' contents are checked by each kind's own parser.
+"""
+
+from __future__ import annotations
+
+import os
+import sys
+from importlib import resources
+from pathlib import Path
+from typing import Any
+
+from .errors import InputError, ParameterFileError
+
+if sys.version_info >= (3, 11):
+    import tomllib
+else:  # pragma: no cover
+    import tomli as tomllib
+
+__all__ = ["bundled_files", "read_parameter_file"]
+
+
+def _folder(folder: str) -> Any:
+    base = resources.files("maglevkit") / "data"
+    return base / folder if folder else base
+
+
+def bundled_files(folder: str = "", *, table: str | None = None) -> list[str]:
+    """Names (without ``.toml``) of the files bundled in ``maglevkit/data/<folder>``.
+
+    Parameters
+    ----------
+    folder : str
+        Sub-folder of the package data ("" for the magnets).
+    table : str, optional
+        Only files with this top-level table (e.g. ``"guideway"``), for folders that hold
+        files of several kinds.
+    """
+    names = []
+    for p in _folder(folder).iterdir():
+        if not p.name.endswith(".toml"):
+            continue
+        if table is not None and table not in tomllib.loads(p.read_text()):
+            continue
+        names.append(p.name[:-5])
+    return sorted(names)
+
+
+def read_parameter_file(source: str | os.PathLike[str], *, what: str, folder: str = "",
+                        table: str | None = None) -> tuple[dict[str, Any], str]:
+    """The parsed TOML of a bundled file or a path, and a label for messages.
+
+    Parameters
+    ----------
+    source : str or path
+        A bundled name (:func:`bundled_files` of ``folder`` and ``table``) or a ``.toml``
+        file path.
+    what : str
+        The kind of file, for messages ("magnet", "guideway", ...).
+    folder, table : see :func:`bundled_files`.
+
+    Returns
+    -------
+    (dict, str)
+        The TOML contents and the label (the bundled name or the path).
+
+    Raises
+    ------
+    InputError
+        ``source`` is neither a name nor a path.
+    ParameterFileError
+        No such bundled name or file, or not valid TOML.
+    """
+    if not isinstance(source, (str, os.PathLike)) or not str(source):
+        names = ", ".join(bundled_files(folder, table=table))
+        raise InputError(f"source = {source!r}: expected a bundled {what} name ({names}) or "
+                         "the path of a .toml file")
+    path = Path(source)
+    if path.suffix != ".toml" and not path.exists():
+        names_list = bundled_files(folder, table=table)
+        if str(source) not in names_list:
+            raise ParameterFileError(f"no {what} file {str(source)!r} and no bundled {what} of "
+                                     f"that name; bundled {what}s: {', '.join(names_list)}")
+        text = (_folder(folder) / f"{source}.toml").read_text()
+        label = str(source)
+    else:
+        if not path.is_file():
+            raise ParameterFileError(f"{what} file {str(path)!r} does not exist")
+        text = path.read_text()
+        label = str(path)
+    try:
+        return tomllib.loads(text), label
+    except tomllib.TOMLDecodeError as exc:
+        raise ParameterFileError(f"{label}: not valid TOML: {exc}") from None
