@@ -47,7 +47,7 @@ from .current import (
     eq8_rhs,
 )
 from .flux import FluxModel, FluxState
-from .inputs import check_step, gap_secants, reject_bools, sample_input, time_grid
+from .inputs import check_initial_choice, check_step, reject_bools, simulation_inputs
 from .statics import circuit_pole_groups
 from .tables import INTERPOLATION_METHODS, cell_table
 
@@ -824,17 +824,11 @@ class MagnetBank:
         next; the default initial state is the steady state ``I = U(t0) / R_el`` at the
         first gaps.  Every interval is one :meth:`step`.
         """
-        times = time_grid(t, dt)
-        g = sample_input(gaps, times, self.gap_names, "gaps", "m")
-        if np.any(g <= 0.0):
-            raise InputError("gaps must be > 0 m")
-        u = sample_input(voltages, times, self.circuit_names, "voltages", "V")
-        rates = gap_secants(times, g, gap_rates, self.gap_names, gap_rate_tolerance)
+        times, g, u, rates = simulation_inputs(
+            t, dt, gaps=gaps, voltages=voltages, gap_rates=gap_rates, gap_names=self.gap_names,
+            circuit_names=self.circuit_names, gap_rate_tolerance=gap_rate_tolerance)
+        check_initial_choice(initial_state, initial_currents, BankState)
         if initial_state is not None:
-            if initial_currents is not None:
-                raise InputError("give initial_currents or initial_state, not both")
-            if not isinstance(initial_state, BankState):
-                raise InputError("initial_state must be a BankState")
             state = initial_state
         else:
             i0 = u[0] / self.resistance_ohm if initial_currents is None else initial_currents

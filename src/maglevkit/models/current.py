@@ -31,7 +31,7 @@ import numpy as np
 
 from ..errors import InputError, OutOfRangeError, SolverError
 from ..validation import real_array
-from .inputs import check_step, gap_secants, sample_input, time_grid
+from .inputs import check_initial_choice, check_step, simulation_inputs
 
 __all__ = ["CurrentModel", "CurrentModelLinearization", "CurrentModelState", "CurrentOutputs",
            "ReducedSimulation", "eq8_coil_current", "eq8_rhs"]
@@ -680,17 +680,11 @@ class CurrentModel:
         Gaps move linearly between samples, voltages are held from each sample to the
         next; the default initial state is the steady state ``I = U(t0) / R_el``.
         """
-        times = time_grid(t, dt)
-        g = sample_input(gaps, times, self.gap_names, "gaps", "m")
-        if np.any(g <= 0.0):
-            raise InputError("gaps must be > 0 m")
-        u = sample_input(voltages, times, self.circuit_names, "voltages", "V")
-        secant = gap_secants(times, g, gap_rates, self.gap_names, gap_rate_tolerance)
+        times, g, u, secant = simulation_inputs(
+            t, dt, gaps=gaps, voltages=voltages, gap_rates=gap_rates, gap_names=self.gap_names,
+            circuit_names=self.circuit_names, gap_rate_tolerance=gap_rate_tolerance)
+        check_initial_choice(initial_state, initial_currents, CurrentModelState)
         if initial_state is not None:
-            if initial_currents is not None:
-                raise InputError("give initial_currents or initial_state, not both")
-            if not isinstance(initial_state, CurrentModelState):
-                raise InputError("initial_state must be a CurrentModelState")
             i0 = initial_state.inductor_currents_A
         else:
             i0 = _per_circuit(u[0] / self.resistance_ohm if initial_currents is None

@@ -18,7 +18,7 @@ from ..validation import real_array, real_number
 from .signals import Signal
 
 __all__ = ["time_grid", "sample_input", "gap_secants", "check_step", "check_span",
-           "reject_bools"]
+           "reject_bools", "simulation_inputs", "check_initial_choice"]
 
 
 def check_step(dt: Any, what: str = "dt") -> float:
@@ -206,3 +206,32 @@ def gap_secants(times: np.ndarray, gaps: np.ndarray, gap_rates: Any, names: tupl
                 f"{mean[j].tolist()} m/s (tolerance {tol:.3g} m/s); pass consistent signals "
                 "or only the gaps")
     return secant
+
+
+def simulation_inputs(t: Any, dt: Any, *, gaps: Any, voltages: Any, gap_rates: Any,
+                      gap_names: tuple[str, ...], circuit_names: tuple[str, ...],
+                      gap_rate_tolerance: float
+                      ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """The sampled inputs of a ``simulate`` call: ``(times, gaps, voltages, gap_rates)``.
+
+    Times from :func:`time_grid`; gaps [m] (all > 0) and voltages [V] sampled at the
+    times (:func:`sample_input`); the gap rate of every interval [m/s] from
+    :func:`gap_secants` (the gaps move linearly between samples).
+    """
+    times = time_grid(t, dt)
+    g = sample_input(gaps, times, gap_names, "gaps", "m")
+    if np.any(g <= 0.0):
+        raise InputError("gaps must be > 0 m")
+    u = sample_input(voltages, times, circuit_names, "voltages", "V")
+    rates = gap_secants(times, g, gap_rates, gap_names, gap_rate_tolerance)
+    return times, g, u, rates
+
+
+def check_initial_choice(initial_state: Any, initial_currents: Any, state_type: type) -> None:
+    """At most one of ``initial_state`` / ``initial_currents``; the state of the right type."""
+    if initial_state is None:
+        return
+    if initial_currents is not None:
+        raise InputError("give initial_currents or initial_state, not both")
+    if not isinstance(initial_state, state_type):
+        raise InputError(f"initial_state must be a {state_type.__name__}")
