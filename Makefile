@@ -26,9 +26,10 @@ $(DEMO_STAMP): $(BIN)/python pyproject.toml Makefile
 demo: $(DEMO_STAMP)
 	$(BIN)/maglevkit demo --out $(OUT)
 
-## test: lint (ruff), type-check (mypy) and the default test suite
+## test: lint (ruff), type-check (mypy) and the default test suite (two workers, one per core;
+## a test file stays on one worker, so its module fixtures are built once)
 test: $(STAMP) lint
-	$(BIN)/python -m pytest -q
+	$(BIN)/python -m pytest -q -n 2 --dist loadfile
 
 ## test-all: also the slow validation tests
 test-all: $(STAMP) lint
