@@ -51,11 +51,15 @@ from .inputs import check_initial_choice, check_step, reject_bools, simulation_i
 from .statics import circuit_pole_groups
 from .tables import INTERPOLATION_METHODS, cell_table
 
-__all__ = ["BankOutputs", "BankSimulation", "BankState", "MagnetBank"]
+__all__ = ["KERNEL_PARAMETERS", "BankOutputs", "BankSimulation", "BankState", "MagnetBank"]
 
 _MAP_VARIABLES = ("inductance_H", "dL_ds_H_per_m", "force_N")
-_N_PAR = 13  # per-circuit kernel parameters: s0, 1/ds, cells_s, i0, 1/di, cells_i, offset, R_el,
-#               a, and the range bounds s_lo, s_hi, I_lo, I_hi (with rounding allowances)
+KERNEL_PARAMETERS = ("s0_m", "inv_ds_per_m", "cells_s", "i0_A", "inv_di_per_A", "cells_i",
+                     "table_offset", "resistance_ohm", "a", "gap_lower_m", "gap_upper_m",
+                     "current_lower_A", "current_upper_A")
+"""Rows of :attr:`MagnetBank.circuit_parameters`: the circuit's grid, its table offset,
+``R_el``, ``a = 1 + R_el/R_ec`` and the range bounds (with rounding allowances)."""
+_N_PAR = len(KERNEL_PARAMETERS)
 
 
 @dataclass(frozen=True)
@@ -324,6 +328,13 @@ class MagnetBank:
                 r[cs] = m.model.network.resistances
         self.resistance_ohm = r
         """Ohmic resistance R_el of every circuit [ohm]."""
+        r_ec = np.full(nc, np.nan)
+        for m, cs in zip(self._members, self._circuit_slices, strict=True):
+            if m.kind == "reduced":
+                r_ec[cs] = m.eddy_resistance_ohm
+        self.eddy_resistance_ohm = r_ec
+        """Eddy-current resistance R_ec of every reduced circuit [ohm] (inf: none; NaN for
+        detailed members, whose eddy currents are part of their network)."""
 
     def _build_reduced(self) -> None:
         """Per-cell tables (one per distinct map), kernel parameters and range bounds."""
@@ -435,16 +446,20 @@ class MagnetBank:
         return {"rhs": ca.Function("bank_circuit_rhs", [i, s, u, sd, p], [rhs]),
                 "out": ca.Function("bank_circuit_out", [i, s, u, p], [coil, f, lt])}
 
-    def _step_kernel(self, substeps: int) -> ca.Function:
-        """One RK4 step of every reduced circuit: ``(I_L, s, U, sdot, h) -> (I_L', I, F,
-        I_min, I_max, n_bad)``.
+    def circuit_step_function(self, substeps: int = 1) -> ca.Function:
+        """The bank's RK4 step of one reduced circuit, with its parameters as an input.
 
-        The gap moves linearly (exact); ``I_min``/``I_max`` are the extremes of the
-        current over the sub-step ends; ``n_bad`` counts circuits with a gap or current
-        outside their map's range (start, end and every sub-step) or a non-finite value,
-        so that the caller checks one number (and diagnoses only when it is > 0).
-        Everything is inlined into one expression graph (no nested calls).
+        ``(I_L, s, U, sdot, h, p) -> (I_L', I, F, I_min, I_max, bad)``: ``substeps``
+        classical RK4 sub-steps of eq. 8 over ``h`` [s] with the gap moving linearly from
+        ``s`` at ``sdot``; ``I``, ``F`` at the end (gap ``s + sdot h``); ``I_min``/``I_max``
+        the extremes of ``I_L`` over the sub-step ends; ``bad`` is 1 when the gap path or a
+        sub-step current leaves the map range or a value is not finite.  ``p`` is one
+        column of :attr:`circuit_parameters` (rows :data:`KERNEL_PARAMETERS`; change
+        ``R_el`` and ``a`` there to tune the resistances).  The table of every distinct map
+        is embedded as a constant.  :meth:`step` maps this function over the circuits.
         """
+        if not (isinstance(substeps, int) and not isinstance(substeps, bool) and substeps >= 1):
+            raise InputError(f"substeps = {substeps!r} must be a whole number >= 1")
         table = ca.MX(ca.DM(self._table))
         i, s, u, sd, h = (ca.MX.sym(n) for n in ("I_L", "s", "U", "sdot", "h"))
         p = ca.MX.sym("p", _N_PAR)
@@ -488,8 +503,23 @@ class MagnetBank:
         bad = ((ca.fmin(s, se) < p[9]) + (ca.fmax(s, se) > p[10]) + (lo < p[11])
                + (hi > p[12]) + non_finite(x) + non_finite(u) + non_finite(s)
                + non_finite(sd) > 0)
-        one = ca.Function("bank_circuit_step", [i, s, u, sd, h, p],
-                          [x, coil, force, lo, hi, bad])
+        return ca.Function("bank_circuit_step", [i, s, u, sd, h, p],
+                           [x, coil, force, lo, hi, bad],
+                           ["I_L", "s", "U", "sdot", "h", "p"],
+                           ["I_L_next", "I", "F", "I_L_min", "I_L_max", "bad"])
+
+    def _step_kernel(self, substeps: int) -> ca.Function:
+        """One RK4 step of every reduced circuit: ``(I_L, s, U, sdot, h) -> (I_L', I, F,
+        I_min, I_max, n_bad)``.
+
+        :meth:`circuit_step_function` mapped over the circuits (a serial loop); the
+        gap moves linearly (exact); ``I_min``/``I_max`` are the extremes of the
+        current over the sub-step ends; ``n_bad`` counts circuits with a gap or current
+        outside their map's range (start, end and every sub-step) or a non-finite value,
+        so that the caller checks one number (and diagnoses only when it is > 0).
+        Everything is inlined into one expression graph (no nested calls).
+        """
+        one = self.circuit_step_function(substeps)
         n = self._reduced_idx.size
         mapped = one.map(n, "serial")
         vi, vs, vu, vsd = (ca.MX.sym(nm, n) for nm in ("I_L", "s", "U", "sdot"))
@@ -512,6 +542,20 @@ class MagnetBank:
         view = self._table.view()
         view.flags.writeable = False
         return view
+
+    @property
+    def circuit_parameters(self) -> np.ndarray:
+        """(13, n_reduced) parameter column ``p`` of every reduced circuit for
+        :meth:`circuit_step_function` and :attr:`circuit_output_function` (rows
+        :data:`KERNEL_PARAMETERS`: grid, table offset, ``R_el`` [ohm], ``a = 1 + R_el/R_ec``
+        and the range bounds with their rounding allowances)."""
+        return self._par.copy()
+
+    @property
+    def circuit_output_function(self) -> ca.Function:
+        """Outputs of one reduced circuit ``(I_L, s, U, p) -> (I, F, L~)`` (CasADi, table
+        embedded; ``p`` a column of :attr:`circuit_parameters`)."""
+        return self._circuit_kernel["out"]
 
     @property
     def map_ranges(self) -> np.ndarray:
