@@ -1,0 +1,84 @@
+"""``maglevkit export fmu``: the reduced magnet model as an FMI 2.0 co-simulation FMU."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Annotated
+
+import typer
+
+from ..errors import MaglevkitError
+from ._app import app, console, fail, info, load_magnet_or_exit, output_file
+
+export_app = typer.Typer(help="Export the reduced magnet model for other simulation tools.",
+                         no_args_is_help=True, rich_markup_mode=None)
+app.add_typer(export_app, name="export",
+              short_help="Export the reduced model for other tools (FMI 2.0 FMU).")
+
+
+@export_app.command("fmu", short_help="FMI 2.0 co-simulation FMU of the reduced model (C, no "
+                                      "Python needed).")
+def fmu(
+    magnet: Annotated[str, typer.Argument(help="Magnet TOML file or bundled name (the maps "
+                                               "must belong to it).")],
+    maps_file: Annotated[Path, typer.Argument(help="netCDF maps of this magnet "
+                                                   "(maglevkit maps build).")],
+    output: Annotated[Path, typer.Option("-o", "--output", help="FMU file to write (.fmu; its "
+                                                                "folder must exist).")]
+    = Path("magnet.fmu"),
+    model_identifier: Annotated[str | None, typer.Option(
+        help="FMI model identifier (C identifier); default from the magnet's name.")] = None,
+    eddy_resistance: Annotated[str, typer.Option(
+        help="R_ec start values from the maps: fit (step-response fit, default) or jump.")]
+    = "fit",
+    interpolation: Annotated[str, typer.Option(
+        help="Map interpolation: bicubic (default, as the Python model), monotone or "
+             "bilinear.")] = "bicubic",
+    max_substep: Annotated[float, typer.Option(
+        help="Longest RK4 sub-step [s] (start value of the FMU parameter).")] = 1e-3,
+    gap: Annotated[float | None, typer.Option(
+        help="Start value of the gap inputs [m] (default: the magnet's nominal gap if it "
+             "has one and the maps cover it, else the middle of the maps).")] = None,
+    current: Annotated[float | None, typer.Option(
+        help="Start value of the initial currents I0 [A] (default: nominal, as --gap).")]
+    = None,
+) -> None:
+    """Write an FMI 2.0 co-simulation FMU of the reduced model (paper eq. 8) of every
+    circuit: inputs voltages, gaps and gap rates; outputs coil currents and forces;
+    R_el and R_ec as parameters; the maps embedded as C arrays; compiled by the system C
+    compiler.  See docs/fmu.md.
+    """
+    output_file(output, "--output")
+    if output.suffix.lower() != ".fmu":
+        raise fail(f"--output {str(output)!r}: an FMU file must end in .fmu")
+    from ..export import export_fmu
+    from ..reduction import load_maps
+
+    mag = load_magnet_or_exit(magnet)
+    try:
+        maps = load_maps(maps_file, magnet=mag)
+        lo_s, hi_s = float(maps.gaps_m[0]), float(maps.gaps_m[-1])
+        lo_i, hi_i = float(maps.currents_A[0]), float(maps.currents_A[-1])
+        for opt, value, lo, hi, unit in (("--gap", gap, lo_s, hi_s, "m"),
+                                          ("--current", current, lo_i, hi_i, "A")):
+            if value is not None and not lo <= value <= hi:
+                raise fail(f"{opt} {value:g} {unit} is outside the maps' range {lo:g}..{hi:g} "
+                           f"{unit}")
+        if gap is None:
+            nominal = getattr(mag, "nominal_gap", None)
+            gap = nominal if nominal is not None and lo_s <= nominal <= hi_s else None
+        if current is None:
+            nominal = getattr(mag, "nominal_current", None)
+            current = nominal if nominal is not None and lo_i <= nominal <= hi_i else None
+        result = export_fmu(maps, output, model_identifier=model_identifier,
+                            eddy_resistance=eddy_resistance, interpolation=interpolation,
+                            max_substep_s=max_substep, start_gaps_m=gap,
+                            initial_currents_A=current)
+    except MaglevkitError as exc:
+        raise fail(exc) from None
+    console.print(f"FMU (FMI 2.0 co-simulation) {result.model_identifier!r} of {mag.name!r}: "
+                  f"circuits {', '.join(result.circuit_names)}; inputs "
+                  f"{', '.join(result.input_names)}; outputs {', '.join(result.output_names)}; "
+                  f"parameters {', '.join(result.parameter_names)}; "
+                  f"{result.size_bytes / 1024:.0f} KiB, binary for {result.platform}")
+    info(f"wrote {result.path}")
