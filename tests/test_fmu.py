@@ -145,8 +145,11 @@ def _compare_scenarios(magnet: mk.Magnet, maps: mk.CharacteristicMaps, path: Pat
                   _rel(coil, ref_bank.currents_A), _rel(force, ref_bank.circuit_force_N))
         assert max(errors) <= REL, (sc.name, errors)
         worst = max(worst, *errors)
-        # the scenario moves the model (a constant run would agree trivially)
-        assert np.ptp(coil) > 0.5 and np.ptp(res["F_total"]) > 100.0, sc.name
+        # the scenario moves the model (a constant run would agree trivially): current and
+        # force vary by more than 1 % of their mean (smallest measured: the current by
+        # 1.8 % in the U-magnet's 0.5 Hz gap sine)
+        assert np.ptp(coil) > 0.01 * np.mean(coil), sc.name
+        assert np.ptp(res["F_total"]) > 0.01 * np.mean(res["F_total"]), sc.name
     return worst
 
 
