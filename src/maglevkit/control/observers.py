@@ -88,6 +88,7 @@ class ExtendedKalmanFilter:
         Pc = 0.5 * (Pc + Pc.T)
         f = ca.Function("mpc_ekf", [z, P, u_prev, y, T], [zc, Pc, y - yp],
                         ["z", "P", "u_prev", "y", "table"], ["z_next", "P_next", "innovation"])
+        self.step_function = f          # symbolic, for controllers that embed the step
         self._step = model.compile(f)
         self.state = np.zeros(nz)
         self.covariance = np.eye(nz)

@@ -1,0 +1,481 @@
+"""Real-time iteration of the offset-free NMPC: condensed QP, compiled, dense active set.
+
+:class:`RealTimeMPC` solves the same optimal control problem as
+:class:`~maglevkit.control.mpc.OffsetFreeMPC` with ``solver="rti"`` (one Gauss-Newton QP
+per sample at the shifted previous solution) and gives the same QP solution; it only
+computes it faster (docs/control.md, "Real-time iteration"):
+
+* the QP data come from one compiled function built from the same CasADi expressions
+  (`OffsetFreeMPC._problem`: eq. 8 + mechanics, RK4, the interval Jacobians by AD), which
+  also *condenses* the QP: the linearised dynamics ``dx_k+1 = A_k dx_k + B_k du_k + c_k``
+  eliminate the state steps, ``dw = E z + e`` with ``z = [du_k, de_k]_k``, leaving a dense
+  QP in ``N (n_u + 1)`` variables (Hessian ``E' H E``, general constraints: the soft
+  state constraints and the maps' state bounds);
+* that dense QP is solved by qpOASES (shipped in the casadi wheel) hot-started from the
+  previous sample's active set, called through preallocated buffers;
+* the target calculation (Newton on the force balance) is compiled as well (a fixed
+  number of Newton steps, checked; the Python Newton of
+  :meth:`MagnetHeaveModel.steady_state` takes over if they did not converge);
+* the EKF step is the observer's compiled function, called through bound buffers;
+* per sample, Python only copies a few numbers between preallocated arrays.
+
+The full Gauss-Newton SQP, the sparse reference RTI and the IPOPT peer stay in
+:class:`OffsetFreeMPC` as the references (tests/test_mpc_realtime.py compares them).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import math
+import os
+import sys
+import time
+from collections.abc import Iterator, Mapping
+from typing import Any
+
+import casadi as ca
+import numpy as np
+
+from ..errors import ParameterError, SolverError
+from .interface import Measurement
+from .model import MagnetHeaveModel
+from .mpc import OffsetFreeMPC
+
+__all__ = ["DENSE_QP_SOLVERS", "RealTimeMPC"]
+
+#: conic solvers of the casadi wheel tried on the condensed QP (docs/decisions.md)
+DENSE_QP_SOLVERS = ("qpoases", "daqp", "qrqp", "proxqp", "osqp")
+
+#: Newton steps of the compiled target calculation (from the previous target: measured
+#: 2-3 steps to a step below 1e-10 A; 6 leave margin, each costs ~0.1 us)
+_NEWTON_STEPS = 6
+
+
+@contextlib.contextmanager
+def _quiet_stdout() -> Iterator[None]:
+    """Silence the C-level standard output (file descriptor 1) for a moment."""
+    sys.stdout.flush()
+    try:
+        saved = os.dup(1)
+    except OSError:           # no file descriptor 1 (embedded interpreters)
+        yield
+        return
+    try:
+        with open(os.devnull, "wb") as null:
+            os.dup2(null.fileno(), 1)
+            yield
+    finally:
+        os.dup2(saved, 1)
+        os.close(saved)
+
+
+class _Buffers:
+    """A CasADi function called through preallocated NumPy arrays bound by pointer:
+    ``args[i]``/``res[i]`` are the nonzeros of input/output ``i`` (column-major)."""
+
+    def __init__(self, f: ca.Function, bound: Mapping[int, np.ndarray] | None = None,
+                 bound_res: Mapping[int, np.ndarray] | None = None) -> None:
+        buf: Any
+        buf, self.eval = f.buffer()
+        self.buf = buf
+        self.function = f
+        bound, bres = dict(bound or {}), dict(bound_res or {})
+        self.args = [bound[i] if i in bound else np.zeros(f.nnz_in(i)) for i in range(f.n_in())]
+        self.res = [bres[i] if i in bres else np.zeros(f.nnz_out(i)) for i in range(f.n_out())]
+        for i, a in enumerate(self.args + self.res):
+            n = f.nnz_in(i) if i < f.n_in() else f.nnz_out(i - f.n_in())
+            if a.shape != (n,) or a.dtype != np.float64 or not a.flags["C_CONTIGUOUS"]:
+                raise SolverError(f"buffer {i} of {f.name()!r} must be {n} contiguous floats")
+        for i, a in enumerate(self.args):
+            buf.set_arg(i, memoryview(a))  # type: ignore[arg-type]
+        for i, r in enumerate(self.res):
+            buf.set_res(i, memoryview(r))  # type: ignore[arg-type]
+
+
+class RealTimeMPC(OffsetFreeMPC):
+    """The offset-free NMPC's real-time iteration, real-time capable (same QP solution as
+    ``OffsetFreeMPC(solver="rti")``).
+
+    Parameters
+    ----------
+    model, gap_ref_m, sample_time_s, horizon, interval_s, substeps, voltage_limit_V,
+    min_gap_m, max_current_A, weights, observer_options, initial_estimate
+        As :class:`~maglevkit.control.mpc.OffsetFreeMPC`.
+    qp_solver : str
+        Dense QP solver of the condensed QP, one of :data:`DENSE_QP_SOLVERS` (default
+        qpOASES, hot-started; the others for comparison).
+
+    Notes
+    -----
+    The functions are compiled with the model's ``compiled`` mode (disk cache, see
+    :func:`~maglevkit.models.compiled.compile_function`); the first build of a new
+    horizon takes a compile of a few seconds to a minute.
+    """
+
+    def __init__(self, model: MagnetHeaveModel, *, gap_ref_m: float, sample_time_s: float,
+                 horizon: int = 20, interval_s: float | None = None, substeps: int = 1,
+                 qp_solver: str = "qpoases", voltage_limit_V: float = 440.0,
+                 min_gap_m: float | None = None, max_current_A: float | None = None,
+                 weights: Any = None, observer_options: Mapping[str, Any] | None = None,
+                 initial_estimate: Any = None) -> None:
+        if qp_solver not in DENSE_QP_SOLVERS:
+            raise ParameterError(f"qp_solver = {qp_solver!r}; the condensed QP takes one of "
+                                 f"{list(DENSE_QP_SOLVERS)}")
+        self._dense_solver = qp_solver
+        super().__init__(model, gap_ref_m=gap_ref_m, sample_time_s=sample_time_s,
+                         horizon=horizon, interval_s=interval_s, substeps=substeps,
+                         solver="rti", qp_solver="qrqp", voltage_limit_V=voltage_limit_V,
+                         min_gap_m=min_gap_m, max_current_A=max_current_A, weights=weights,
+                         observer_options=observer_options, initial_estimate=initial_estimate)
+        self.qp_solver = qp_solver
+        self._finish_build()
+
+    # ------------------------------------------------------------------ build
+    def _build(self, substeps: int) -> None:
+        """The condensed QP data function, the target function and the dense QP solver
+        (replaces the sparse QP of :class:`OffsetFreeMPC`)."""
+        m = self.model
+        nx, nu, nd, nc, N = m.nx, m.nu, m.nd, m.n_circuits, self.horizon
+        xN, nw, blk = self._layout()
+        self._np = 2 * nx + nd + nu
+        self._lbw, self._ubw, self._lbg, self._ubg = self._bounds()
+        nzs = nu + 1                                  # free variables per stage [U_k, e_k]
+        nz = N * nzs
+        w = ca.MX.sym("w", nw)
+        p = ca.MX.sym("p", self._np)
+        T = ca.MX.sym("table", m.table.size)
+        Fd = m.discrete(self.interval_s, substeps, jacobians=True)
+        X, U, _ = self._unpack(w)
+        sx, su = ca.DM(self._sx), ca.DM(self._su)
+        d = p[nx:nx + nd]
+        blocks = [Fd(X[k] * sx, U[k] * su, d, T)[:3] for k in range(N)]
+        # the reference RTI's QP (OffsetFreeMPC._build): cost gradient, constraint values
+        # and the Jacobian of the constraints linearised in dw
+        J, g = self._problem(w, p, lambda k, x, u: blocks[k][0])
+        grad = ca.gradient(J, w)
+        dw = ca.MX.sym("dw", nw)
+        _, g_lin = self._problem(dw, p, lambda k, x, u: blocks[k][1] @ x + blocks[k][2] @ u)
+        Jg = ca.jacobian(g_lin, dw)
+        H = ca.DM(ca.Function("H", [w, p], [ca.hessian(J, w)[0]])(np.zeros(nw),
+                                                                   np.zeros(self._np)))
+        # condensing: dX_0 = -g_0 (initial-state rows), dX_k+1 = Ab_k dX_k + Bb_k dU_k + c_k
+        # (the defect rows, Ab = A scaled, Bb = B scaled), everything affine in z
+        rows_per = nx + 1 + nc
+        Sx_inv = ca.DM(np.diag(1 / self._sx))
+        Sx, Su = ca.DM(np.diag(self._sx)), ca.DM(np.diag(self._su))
+        eye_z = ca.DM.eye(nz)
+        # structurally zero start: M_k has nonzeros only in the columns of du_0..du_k-1,
+        # so that the products below skip the upper (zero) triangle of E
+        Mk: Any = ca.MX(nx, nz)
+        mk: Any = -g[:nx]
+        rows_E: list[Any] = []
+        rows_e: list[Any] = []
+        for k in range(N):
+            rows_E += [Mk, eye_z[k * nzs:(k + 1) * nzs, :]]
+            rows_e += [mk, ca.MX(nzs, 1)]
+            Ab = Sx_inv @ blocks[k][1] @ Sx
+            Bb = Sx_inv @ blocks[k][2] @ Su
+            c = g[nx + k * rows_per:nx + k * rows_per + nx]
+            Mk = Ab @ Mk + Bb @ eye_z[k * nzs:k * nzs + nu, :]
+            mk = Ab @ mk + c
+        rows_E.append(Mk)
+        rows_e.append(mk)
+        E = ca.vertcat(*rows_E)                       # dw = E z + e   (nw x nz)
+        e = ca.vertcat(*rows_e)
+        # general constraints of the condensed QP: the soft rows of the linearised
+        # constraints, then the maps' bounds on the states x_1..x_N
+        ineq = [nx + k * rows_per + nx + j for k in range(N) for j in range(1 + nc)]
+        box = [k * blk + j for k in range(1, N + 1) for j in range(nx)
+               if np.isfinite(self._lbw[k * blk + j]) or np.isfinite(self._ubw[k * blk + j])]
+        zi = [k * blk + nx + j for k in range(N) for j in range(nzs)]
+        Jin = Jg[ineq, :]
+        lbw, ubw = ca.DM(self._lbw), ca.DM(self._ubw)
+        Hm = ca.DM(H)
+        Hc = E.T @ (Hm @ E)
+        gc = E.T @ (Hm @ e + grad)
+        Ac = ca.vertcat(Jin @ E, E[box, :])
+        lbA = ca.vertcat(ca.DM(self._lbg[ineq]) - g[ineq] - Jin @ e,
+                         lbw[box] - w[box] - e[box])
+        ubA = ca.vertcat(ca.DM(self._ubg[ineq]) - g[ineq] - Jin @ e,
+                         ubw[box] - w[box] - e[box])
+        lbz, ubz = lbw[zi] - w[zi], ubw[zi] - w[zi]
+        self._data_f = ca.Function("mpc_rti_condensed", [w, p, T],
+                                   [ca.densify(v) for v in (Hc, gc, Ac, lbA, ubA, lbz, ubz,
+                                                            E, e)],
+                                   ["w", "p", "table"],
+                                   ["H", "g", "A", "lba", "uba", "lbx", "ubx", "E", "e"])
+        self._na = Ac.size1()
+        self._nz = nz
+        self._nw = nw
+        self._blk = blk
+        self._target_f = self._target_function()
+        self._diag_raw: tuple[Any, ...] | None = None
+        self._t_prep = self._t_qp = 0.0
+
+    def _target_function(self) -> ca.Function:
+        """``(d_hat, s_ref, I_guess, table) -> (x_t, u_t, last Newton step)``: the target
+        of :meth:`MagnetHeaveModel.steady_state` by a fixed number of Newton steps
+        (clamped to the maps' current range like the Python Newton; the step is NaN where
+        a slope <= 0 stopped the Python Newton)."""
+        m = self.model
+        nc, nd = m.n_circuits, m.nd
+        dh, sref, ig = ca.MX.sym("d", nd), ca.MX.sym("s_ref"), ca.MX.sym("i_guess")
+        T = ca.MX.sym("table", m.table.size)
+        s = sref - m._d(dh, "gap_sensor")
+        load = m.mass_kg * m.gravity + m._d(dh, "force")
+        i_s = ca.MX.sym("i")
+        x = ca.vertcat(ca.repmat(i_s, nc, 1), s, 0)
+        # the force expression inlined (m.force is a Function: AD through a nested call
+        # clears a 40 000-entry zero seed for the table, measured 28 us per target)
+        F = m._expressions(x, ca.MX.zeros(m.nu), dh, T)[2]
+        fs = ca.Function("mpc_rti_force", [i_s, dh, sref, T], [F, ca.jacobian(F, i_s)])
+        i: Any = ig
+        step: Any = ca.MX(0)
+        bad: Any = ca.MX(0)
+        lo, hi = m.current_range_A
+        for _ in range(_NEWTON_STEPS):
+            f, df = fs(i, dh, sref, T)
+            bad = bad + (df <= 0)
+            step = ca.if_else(df > 0, (f - load) / df, 0)
+            i = ca.fmin(ca.fmax(i - step, lo), hi)
+        step = ca.if_else(bad > 0, np.nan, step)
+        xt = ca.vertcat(ca.repmat(i, nc, 1), s, 0)
+        ut = ca.DM(m.resistance_ohm) * i - m._d(dh, "voltage")
+        return ca.Function("mpc_rti_target", [dh, sref, ig, T], [xt, ut, step])
+
+    def _finish_build(self) -> None:
+        """One compiled function per sample, ``prepare``: the EKF step, the target, the
+        previous QP step applied (``w = w_prev + E_prev z_prev + e_prev``, shifted when
+        the interval is the sample time) and the condensed QP data at ``w``; then the
+        dense QP solver.  Two buffer sets alternate (the outputs of one sample are the
+        inputs of the next), so that Python copies nothing between samples."""
+        m = self.model
+        nx, nu, nd, N = m.nx, m.nu, m.nd, self.horizon
+        nz, nw, blk = self._nz, self._nw, self._blk
+        nzz = nx + nd
+        ekf = self.observer.step_function
+        T = ca.MX.sym("table", m.table.size)
+        z, P = ca.MX.sym("z", nzz), ca.MX.sym("P", nzz, nzz)
+        u_prev, y = ca.MX.sym("u_prev", nu), ca.MX.sym("y", m.ny)
+        sref, ig = ca.MX.sym("s_ref"), ca.MX.sym("i_guess")
+        w_prev, E_prev = ca.MX.sym("w_prev", nw), ca.MX.sym("E_prev", nw, nz)
+        e_prev, z_prev = ca.MX.sym("e_prev", nw), ca.MX.sym("z_prev", nz)
+        cold, given, use_given = ca.MX.sym("cold"), ca.MX.sym("target", nx + nu), \
+            ca.MX.sym("use_given")
+        zc, Pc, _ = ekf(z, P, u_prev, y, T)
+        xt_n, ut_n, step = self._target_f(zc[nx:], sref, ig, T)
+        xt = ca.if_else(use_given, given[:nx], xt_n)
+        ut = ca.if_else(use_given, given[nx:], ut_n)
+        p = ca.vertcat(zc, xt, ut)
+        w_warm = w_prev + ca.mtimes(E_prev, z_prev) + e_prev
+        if math.isclose(self.interval_s, self.sample_time_s, rel_tol=1e-9):
+            # OffsetFreeMPC._shift: advance by one interval, repeat the last block
+            w_warm = ca.vertcat(w_warm[blk:N * blk], w_warm[N * blk:N * blk + nx],
+                                w_warm[(N - 1) * blk + nx:N * blk], w_warm[N * blk:nw])
+        sx, su = ca.DM(self._sx), ca.DM(self._su)
+        w_cold = ca.vertcat(*[ca.vertcat(zc[:nx] / sx if k == 0 else xt / sx, ut / su,
+                                         ca.MX(1, 1)) for k in range(N)], xt / sx)
+        w = ca.if_else(cold, w_cold, w_warm)
+        qp = self._data_f(w, p, T)
+        status = ca.vertcat(step, ca.sum1(zc))
+        f = ca.Function("mpc_rti_prepare",
+                        [z, P, u_prev, y, sref, ig, w_prev, E_prev, e_prev, z_prev, cold,
+                         given, use_given, T],
+                        [zc, Pc, w, qp[7], qp[8], p, status, *qp[:7]])
+        compiled, _ = self._compile(f)
+        with _quiet_stdout():        # qpOASES prints its licence banner per instance
+            solver = self._qp_solver_function()
+        qz = solver.index_out("x")
+        self._z = np.zeros(nz)
+        self._u = np.zeros(nu)
+        shared_in = {4: np.zeros(1), 5: np.zeros(1), 9: self._z, 10: np.ones(1),
+                     11: np.zeros(nx + nu), 12: np.zeros(1), 13: self._table_array(),
+                     2: self._u}
+        self._y = np.zeros(m.ny)
+        shared_in[3] = self._y
+        qpdata = [np.zeros(f.nnz_out(7 + j)) for j in range(7)]
+        self._p_arr = np.zeros(f.nnz_out(5))
+        self._status = np.zeros(2)
+        par = [[np.zeros(nzz), np.zeros(nzz * nzz), np.zeros(nw), np.zeros(nw * nz),
+                np.zeros(nw)] for _ in range(2)]
+        self._par = par
+        self._prep = []
+        for k in range(2):
+            a, b = par[k], par[1 - k]
+            args = dict(shared_in)
+            args.update({0: a[0], 1: a[1], 6: a[2], 7: a[3], 8: a[4]})
+            res = {0: b[0], 1: b[1], 2: b[2], 3: b[3], 4: b[4], 5: self._p_arr,
+                   6: self._status}
+            res.update({7 + j: qpdata[j] for j in range(7)})
+            self._prep.append(_Buffers(compiled, args, res))
+        names = ("h", "g", "a", "lba", "uba", "lbx", "ubx")
+        with _quiet_stdout():
+            self._qpb = _Buffers(solver, {solver.index_in(n): qpdata[j]
+                                          for j, n in enumerate(names)}, {qz: self._z})
+        self._sref, self._ig = shared_in[4], shared_in[5]
+        self._cold, self._given, self._use_given = shared_in[10], shared_in[11], shared_in[12]
+        self._k = 0
+
+    def _table_array(self) -> np.ndarray:
+        t = getattr(self, "_table_c", None)
+        if t is None:
+            t = self._table_c = np.ascontiguousarray(self.model.table, dtype=float)
+        return t
+
+    def _compile(self, f: ca.Function) -> tuple[ca.Function, bool]:
+        from ..models.compiled import compile_function
+
+        return compile_function(f, mode=self.model.compiled_mode)
+
+    def _qp_solver_function(self) -> ca.Function:
+        nz, na = self._nz, self._na
+        name = self._dense_solver
+        opts: dict[str, Any] = {"error_on_fail": False}
+        if name == "qpoases":
+            # dense SQProblem; casadi's interface hot-starts every solve after the first
+            # from the previous working set
+            opts.update(printLevel="none", sparse=False, schur=False)
+        elif name == "qrqp":
+            opts.update(print_iter=False, print_header=False, print_info=False)
+        elif name == "osqp":
+            opts["osqp"] = {"verbose": False, "eps_abs": 1e-10, "eps_rel": 1e-10,
+                            "max_iter": 50000, "polish": True}
+            opts["warm_start_primal"] = True
+        elif name == "proxqp":
+            opts["proxqp"] = {"backend": "dense", "eps_abs": 1e-10, "max_iter": 10000}
+        return ca.conic("mpc_rti_dense_qp", name,
+                        {"h": ca.Sparsity.dense(nz, nz), "a": ca.Sparsity.dense(na, nz)}, opts)
+
+    # ------------------------------------------------------------------ interface
+    def reset(self, measurement: Measurement, *, sample_time_s: float) -> None:
+        super().reset(measurement, sample_time_s=sample_time_s)
+        obs = self.observer
+        self._k = 0
+        a = self._par[0]
+        a[0][:] = obs.state
+        a[1][:] = np.ravel(obs.covariance, order="F")
+        self._u[:] = self._u_prev
+        self._ig[0] = self.design_state[0]
+        self._cold[0] = 1.0
+        self._diag_raw = None
+
+    def update(self, measurement: Measurement) -> np.ndarray:
+        """One sample: one compiled call (EKF step, target, QP data), one dense QP.
+
+        The observer object's own ``state`` is not advanced (its step runs inside the
+        compiled function); the estimates are in :meth:`diagnostics`."""
+        t0 = time.perf_counter()
+        c0 = time.thread_time()
+        self._y[0] = measurement.gap_m
+        self._y[1:] = measurement.currents_A
+        self._sref[0] = measurement.gap_ref_m
+        k = self._k
+        prep = self._prep[k]
+        prep.eval()
+        st = self._status
+        nxd = self.model.nx + self.model.nd
+        i_t = float(self._p_arr[nxd])
+        if not abs(float(st[0])) < 1e-10 * max(1.0, abs(i_t)):    # also for NaN
+            self._target_fallback(measurement, prep)
+        if not math.isfinite(float(st[1])):
+            raise SolverError("the extended Kalman filter diverged", time=measurement.time_s,
+                              state={"estimate": self._par[1 - k][0].copy()},
+                              reason="non-finite estimate")
+        t1 = time.perf_counter()
+        self._qpb.eval()
+        t2 = time.perf_counter()
+        z = self._z
+        if self._qpb.buf.ret() != 0 or not math.isfinite(z.sum()):
+            self._qp_failed(measurement.time_s)
+        u = self._u
+        nx, nu = self.model.nx, self.model.nu
+        # dU_0 = z[:nu] (the E rows of U_0 select it): u = (w + dw)[U_0] * scale
+        np.add(self._par[1 - k][2][nx:nx + nu], z[:nu], out=u)
+        u *= self._su
+        if float(np.abs(u).max()) > self._ulim * (1 + 1e-6):
+            raise SolverError("the MPC solution violates the voltage limit",
+                              time=measurement.time_s, state={"u": u.copy()},
+                              reason="QP tolerance too loose")
+        u.clip(-self._ulim, self._ulim, out=u)
+        self._ig[0] = self._p_arr[nxd]
+        self._cold[0] = 0.0
+        self._k = 1 - k
+        t3 = time.perf_counter()
+        c3 = time.thread_time()
+        self._diag_raw = (t1 - t0, t2 - t1, t3 - t0, c3 - c0)
+        self._u_prev = u
+        return u.copy()
+
+    def _target_fallback(self, measurement: Measurement, prep: _Buffers) -> None:
+        """The compiled Newton did not converge: the Python Newton's target (or its
+        SolverError), then the same compiled call with that target given."""
+        m = self.model
+        nx = m.nx
+        zc = self._par[1 - self._k][0]
+        guess = float(self._ig[0])
+        if not math.isfinite(guess):
+            guess = float(self.design_state[0])
+        xs, us = m.steady_state(measurement.gap_ref_m, zc[nx:].copy(), current_guess_A=guess)
+        self._given[:nx] = xs
+        self._given[nx:] = us
+        self._use_given[0] = 1.0
+        try:
+            prep.eval()            # the same inputs: the same EKF step, the given target
+        finally:
+            self._use_given[0] = 0.0
+
+    def _qp_failed(self, time_s: float | None) -> None:
+        m = self.model
+        p = self._p_arr
+        raise SolverError("the MPC's condensed QP failed", time=time_s,
+                          state={"x_hat": p[:m.nx].copy(), "d_hat": p[m.nx:m.nx + m.nd].copy()},
+                          reason=str(self._qpb.buf.stats().get("return_status", "unknown")))
+
+    def current_solution(self) -> np.ndarray:
+        """The scaled decision vector after the last update (``w + E z + e``)."""
+        b = self._par[self._k]        # the last call wrote w, E, e into this set
+        nw, nz = self._nw, self._nz
+        return b[2] + b[3].reshape(nz, nw).T @ self._z + b[4]
+
+    def diagnostics(self) -> Mapping[str, float | np.ndarray]:
+        """Estimates as :meth:`OffsetFreeMPC.diagnostics`; times [s]: ``prepare_time_s``
+        (the compiled EKF step, target and QP data), ``qp_time_s`` (the dense QP
+        solver), ``solve_time_s`` (the whole update, estimation included) and
+        ``update_cpu_time_s`` (its CPU time)."""
+        if self._diag_raw is None:
+            return {}
+        tp, tq, tu, cpu = self._diag_raw
+        m = self.model
+        nc, nx = m.n_circuits, m.nx
+        z = self._par[self._k][0]
+        return {"gap_estimate_m": float(z[nc]), "gap_rate_estimate_m_per_s": float(z[nc + 1]),
+                "inductor_current_estimate_A": z[:nc].copy(),
+                "disturbance_estimate": z[nx:].copy(),
+                "target_voltage_V": self._p_arr[2 * nx + m.nd:].copy(),
+                "prepare_time_s": tp, "qp_time_s": tq, "solve_time_s": tu,
+                "update_cpu_time_s": cpu, "iterations": 1.0}
+
+    # ------------------------------------------------------------------ OCP (tests)
+    def solve(self, x_hat: np.ndarray, d_hat: np.ndarray, xt: np.ndarray,
+              ut: np.ndarray) -> tuple[np.ndarray, dict[str, Any]]:
+        """One condensed RTI QP from ``x_hat`` for the target ``(xt, ut)`` (for tests):
+        the same QP data function and solver as :meth:`update`, without the observer."""
+        m = self.model
+        nx = m.nx
+        if self._w is None:
+            w = self._initial_guess(x_hat, xt, ut)
+        else:
+            w = self._shift(self._w) if math.isclose(self.interval_s, self.sample_time_s,
+                                                     rel_tol=1e-9) else self._w
+        p = np.r_[x_hat, d_hat, xt, ut]
+        out = self._data_f(w, p, self.model.table)
+        qp = self._qpb.function
+        r = qp(h=out[0], g=out[1], a=out[2], lba=out[3], uba=out[4], lbx=out[5], ubx=out[6])
+        if not qp.stats()["success"]:
+            raise SolverError("the MPC's condensed QP failed", state={"x_hat": x_hat},
+                              reason=str(qp.stats().get("return_status", "unknown")))
+        zs = np.asarray(r["x"], dtype=float).ravel()
+        w = w + np.asarray(out[7]) @ zs + np.asarray(out[8]).ravel()
+        self._w = w
+        u = w[nx:nx + m.nu] * self._su
+        return np.clip(u, -self._ulim, self._ulim), {"iterations": 1, "solution": w.copy()}
