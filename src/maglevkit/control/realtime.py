@@ -5,19 +5,21 @@
 per sample at the shifted previous solution) and gives the same QP solution; it only
 computes it faster (docs/control.md, "Real-time iteration"):
 
-* the QP data come from one compiled function built from the same CasADi expressions
-  (`OffsetFreeMPC._problem`: eq. 8 + mechanics, RK4, the interval Jacobians by AD), which
-  also *condenses* the QP: the linearised dynamics ``dx_k+1 = A_k dx_k + B_k du_k + c_k``
-  eliminate the state steps, ``dw = E z + e`` with ``z = [du_k, de_k]_k``, leaving a dense
-  QP in ``N (n_u + 1)`` variables (Hessian ``E' H E``, general constraints: the soft
-  state constraints and the maps' state bounds);
-* that dense QP is solved by qpOASES (shipped in the casadi wheel) hot-started from the
-  previous sample's active set, called through preallocated buffers;
-* the target calculation (Newton on the force balance) is compiled as well (a fixed
-  number of Newton steps, checked; the Python Newton of
-  :meth:`MagnetHeaveModel.steady_state` takes over if they did not converge);
-* the EKF step is the observer's compiled function, called through bound buffers;
-* per sample, Python only copies a few numbers between preallocated arrays.
+* one compiled function per sample (CasADi code generation, ``cc -O3``, disk cache) does
+  the EKF step (the observer's own symbolic step), the target calculation (a fixed number
+  of Newton steps, checked; the Python Newton of :meth:`MagnetHeaveModel.steady_state`
+  takes over if they did not converge), the previous QP step and the QP data at the new
+  linearisation point, from the same CasADi expressions (``OffsetFreeMPC._problem``:
+  eq. 8 + mechanics, RK4, the interval Jacobians by AD);
+* the QP is *condensed* in that function: the linearised dynamics
+  ``dx_k+1 = A_k dx_k + B_k du_k + c_k`` eliminate the state steps, ``dw = E z + e`` with
+  ``z = [du_k, de_k]_k``, leaving a dense, strictly convex QP in ``N (n_u + 1)`` variables
+  (Hessian ``E' H E``; general constraints: the soft state constraints and the maps'
+  state bounds);
+* that QP is solved by qpOASES (shipped in the casadi wheel), called through
+  preallocated buffers;
+* two buffer sets alternate between samples (the outputs of one are bound as the inputs
+  of the next), so that Python copies only the measurement in and the voltages out.
 
 The full Gauss-Newton SQP, the sparse reference RTI and the IPOPT peer stay in
 :class:`OffsetFreeMPC` as the references (tests/test_mpc_realtime.py compares them).
@@ -39,7 +41,7 @@ import numpy as np
 from ..errors import ParameterError, SolverError
 from .interface import Measurement
 from .model import MagnetHeaveModel
-from .mpc import OffsetFreeMPC
+from .mpc import MPCWeights, OffsetFreeMPC
 
 __all__ = ["DENSE_QP_SOLVERS", "RealTimeMPC"]
 
@@ -116,7 +118,7 @@ class RealTimeMPC(OffsetFreeMPC):
                  horizon: int = 20, interval_s: float | None = None, substeps: int = 1,
                  qp_solver: str = "qpoases", voltage_limit_V: float = 440.0,
                  min_gap_m: float | None = None, max_current_A: float | None = None,
-                 weights: Any = None, observer_options: Mapping[str, Any] | None = None,
+                 weights: MPCWeights | None = None, observer_options: Mapping[str, Any] | None = None,
                  initial_estimate: Any = None) -> None:
         if qp_solver not in DENSE_QP_SOLVERS:
             raise ParameterError(f"qp_solver = {qp_solver!r}; the condensed QP takes one of "
