@@ -34,13 +34,14 @@ def test_step_equals_simulate(fm: mk.FluxModel) -> None:
     for k in range(n):
         rate = (gaps[k + 1] - gaps[k]) / dt
         st, out = fm.step(st, dt, 50.0, gaps=gaps[k], gap_rates=rate)
-    # Same compiled step function, but simulate carries the integrated gap state from one
-    # interval to the next while the loop above resets it to the sampled value; IDAS's
-    # adaptive steps react to that round-off, so the two agree to the integrator's
-    # accuracy (rtol 1e-6 per interval; measured 3e-8), not bit for bit.
-    np.testing.assert_allclose(out.currents_A, res.currents_A[-1], rtol=1e-6)
-    np.testing.assert_allclose(out.pole_force_N, res.pole_force_N[-1], rtol=1e-6)
-    np.testing.assert_allclose(st.energy_J[0], res.electrical_energy_J[-1], rtol=1e-6)
+    # step restarts IDAS at every interval (consistent re-initialisation, order 1 again),
+    # simulate runs through intervals of equal voltages without restart, so the two agree
+    # to the integrator's accuracy, not bit for bit: measured 2.1e-5 relative in the
+    # current after 40 intervals (the restarts' accumulated error, docs/flux_model.md);
+    # bound 1e-4.
+    np.testing.assert_allclose(out.currents_A, res.currents_A[-1], rtol=1e-4)
+    np.testing.assert_allclose(out.pole_force_N, res.pole_force_N[-1], rtol=1e-4)
+    np.testing.assert_allclose(st.energy_J[0], res.electrical_energy_J[-1], rtol=1e-4)
     assert st.time_s == pytest.approx(t[-1])
     assert out.force_N == pytest.approx(out.pole_force_N.sum())
 

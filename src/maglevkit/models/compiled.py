@@ -6,7 +6,9 @@ compiler and flags, and loads it with ``casadi.external``.  A second call with t
 function finds the library in the cache and only loads it (milliseconds instead of the
 compile time).  Without a working C compiler it warns once
 (:class:`~maglevkit.errors.CompilationWarning`) and returns ``f`` itself, evaluated by
-CasADi's virtual machine.
+CasADi's virtual machine.  ``compile_library(name, functions)`` does the same for several
+functions in one C file (one compiler run), e.g. a DAE and the residual, Jacobian and
+quadrature functions an integrator looks up in the DAE's library.
 
 Cache directory: ``$MAGLEVKIT_CACHE_DIR``, else ``$XDG_CACHE_HOME/maglevkit``, else
 ``~/.cache/maglevkit``.  The compiler: ``$CC``, else ``cc``, else ``gcc``.
@@ -20,13 +22,15 @@ import shutil
 import subprocess
 import tempfile
 import warnings
+from collections.abc import Sequence
 from pathlib import Path
 
 import casadi as ca
 
 from ..errors import CompilationWarning, SolverError
 
-__all__ = ["COMPILE_MODES", "cache_directory", "compile_function", "find_compiler"]
+__all__ = ["COMPILE_MODES", "cache_directory", "compile_function", "compile_library",
+           "find_compiler"]
 
 COMPILE_MODES = ("auto", "always", "never")
 _FLAGS = ("-O3", "-shared", "-fPIC")
@@ -51,6 +55,13 @@ def find_compiler() -> str | None:
     return None
 
 
+def _check_mode(mode: str) -> None:
+    if mode not in COMPILE_MODES:
+        from ..errors import InputError
+
+        raise InputError(f"compiled = {mode!r}; use one of {list(COMPILE_MODES)}")
+
+
 def compile_function(f: ca.Function, *, mode: str = "auto",
                      cache_dir: str | Path | None = None) -> tuple[ca.Function, bool]:
     """``f`` as compiled machine code (cached), or ``f`` itself where that is impossible.
@@ -71,49 +82,97 @@ def compile_function(f: ca.Function, *, mode: str = "auto",
     (casadi.Function, bool)
         The function to call and whether it is compiled.
     """
-    if mode not in COMPILE_MODES:
-        from ..errors import InputError
+    funcs, ok = compile_library(f.name(), [f], mode=mode, cache_dir=cache_dir, stacklevel=4)
+    return (funcs[0] if ok else f), ok
 
-        raise InputError(f"compiled = {mode!r}; use one of {list(COMPILE_MODES)}")
+
+def compile_library(name: str, functions: Sequence[ca.Function], *, mode: str = "auto",
+                    cache_dir: str | Path | None = None, flags: Sequence[str] = _FLAGS,
+                    stacklevel: int = 3) -> tuple[list[ca.Function], bool]:
+    """Several CasADi functions generated as ONE C file, compiled into one cached library.
+
+    Functions of the library may find each other by name: an integrator whose DAE is
+    the loaded ``functions[0]`` takes ``daeF``/``jacF``/``quadF`` from the same library
+    if they are in it (``casadi.external`` looks factory functions up by name).
+
+    Parameters
+    ----------
+    name : str
+        Stem of the C file and the library (a C identifier).
+    functions : sequence of casadi.Function
+        The functions (distinct names; each supports code generation).
+    mode, cache_dir
+        As in :func:`compile_function`.
+    flags : sequence of str
+        Compiler flags (part of the cache key).
+
+    Returns
+    -------
+    (list of casadi.Function, bool)
+        The loaded functions in the order given and True, or ``functions`` unchanged and
+        False (``mode="never"``, or ``"auto"`` without a working compiler).
+    """
+    _check_mode(mode)
+    funcs = list(functions)
     if mode == "never":
-        return f, False
+        return funcs, False
     try:
-        return _compile(f, Path(cache_dir) if cache_dir is not None else cache_directory()), True
+        cache = Path(cache_dir) if cache_dir is not None else cache_directory()
+        lib = _build(name, funcs, cache, tuple(flags))
+        return [ca.external(f.name(), str(lib)) for f in funcs], True
     except (OSError, RuntimeError, subprocess.SubprocessError) as exc:
         reason = _last_line(str(exc))
         if mode == "always":
-            raise SolverError(f"compiling {f.name()!r} to machine code failed (needs a C "
+            raise SolverError(f"compiling {name!r} to machine code failed (needs a C "
                               "compiler such as gcc; compiled='auto' falls back to the "
                               "interpreter)", reason=reason) from None
-        warnings.warn(f"could not compile {f.name()!r} ({reason}); using CasADi's virtual "
-                      "machine, which is much slower", CompilationWarning, stacklevel=3)
-        return f, False
+        warnings.warn(f"could not compile {name!r} ({reason}); using CasADi's virtual "
+                      "machine, which is much slower", CompilationWarning, stacklevel=stacklevel)
+        return funcs, False
 
 
-def _compile(f: ca.Function, cache: Path) -> ca.Function:
+def library_path(name: str, functions: Sequence[ca.Function], *,
+                 cache_dir: str | Path | None = None,
+                 flags: Sequence[str] = _FLAGS) -> Path:
+    """Where :func:`compile_library` caches this library (it need not exist)."""
+    cc = find_compiler() or ""
+    with tempfile.TemporaryDirectory(prefix="maglevkit-cg-") as tmp:
+        code = _generate(name, list(functions), tmp)
+    cache = Path(cache_dir) if cache_dir is not None else cache_directory()
+    return cache / f"{name}_{_key(code, cc, tuple(flags))}.so"
+
+
+def _generate(name: str, funcs: list[ca.Function], tmp: str) -> bytes:
+    src = Path(tmp) / f"{name}.c"
+    cg = ca.CodeGenerator(src.name, {"with_header": False})
+    for f in funcs:
+        cg.add(f)
+    cg.generate(tmp + os.sep)
+    return src.read_bytes()
+
+
+def _key(code: bytes, cc: str, flags: tuple[str, ...]) -> str:
+    return hashlib.sha256(code + cc.encode() + " ".join(flags).encode()
+                          + str(getattr(ca, "__version__", "")).encode()).hexdigest()[:24]
+
+
+def _build(name: str, funcs: list[ca.Function], cache: Path, flags: tuple[str, ...]) -> Path:
     cc = find_compiler()
     if cc is None:
         raise OSError("no C compiler found ($CC, cc, gcc)")
-    name = f.name()
     with tempfile.TemporaryDirectory(prefix="maglevkit-cg-") as tmp:
-        src = Path(tmp) / f"{name}.c"
-        cg = ca.CodeGenerator(src.name, {"with_header": False})
-        cg.add(f)
-        cg.generate(tmp + os.sep)
-        code = src.read_bytes()
-        key = hashlib.sha256(code + cc.encode() + " ".join(_FLAGS).encode()
-                             + str(getattr(ca, "__version__", "")).encode()).hexdigest()[:24]
-        lib = cache / f"{name}_{key}.so"
+        code = _generate(name, funcs, tmp)
+        lib = cache / f"{name}_{_key(code, cc, flags)}.so"
         if not lib.exists():
             cache.mkdir(parents=True, exist_ok=True)
             part = cache / f".{lib.name}.{os.getpid()}.tmp"
-            proc = subprocess.run([cc, *_FLAGS, str(src), "-o", str(part), "-lm"],
-                                  capture_output=True, text=True, timeout=600)
+            proc = subprocess.run([cc, *flags, str(Path(tmp) / f"{name}.c"), "-o", str(part),
+                                   "-lm"], capture_output=True, text=True, timeout=600)
             if proc.returncode != 0:
                 part.unlink(missing_ok=True)
                 raise RuntimeError(f"{Path(cc).name} failed: {_last_line(proc.stderr)}")
             os.replace(part, lib)        # atomic: concurrent builders never see half a file
-    return ca.external(name, str(lib))
+    return lib
 
 
 def _last_line(text: str) -> str:

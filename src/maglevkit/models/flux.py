@@ -33,6 +33,7 @@ size.  See ``docs/flux_model.md``.
 from __future__ import annotations
 
 import math
+import os
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import Any, overload
@@ -47,6 +48,7 @@ from ..errors import InputError, SolverError, TopologyError
 from ..magnets.base import PlausibleRange
 from ..materials import MU0
 from ..validation import optional_flag, real_array, real_number, whole_number
+from .compiled import COMPILE_MODES, compile_library
 from .current import CurrentModel, ReducedSimulation
 from .inputs import check_step, gap_secants, sample_input, time_grid
 from .statics import (
@@ -77,6 +79,9 @@ DEFAULT_ATOL = 1e-8
 _B_REF = 1.0        # T, nominal flux density for the tolerance scales
 _GAP_REF = 5e-3     # m, nominal air gap for the current scale
 _ENERGY_NAMES = ("electrical", "ohmic", "eddy", "mechanical")
+#: Compiler flags of the flux model's library (docs/decisions.md "Flux model speed":
+#: -O1 compiles in a fraction of the -O3 time and runs about as fast).
+COMPILE_FLAGS = ("-O1", "-shared", "-fPIC")
 
 
 # ---------------------------------------------------------------------------- state / outputs
@@ -174,7 +179,8 @@ class _FluxDAE:
     """Matrices, symbolic DAE and compiled step functions of one network and solver setup."""
 
     def __init__(self, network: Network, method: str, rtol: float, atol: float,
-                 max_num_steps: int, radau_elements: int, radau_degree: int) -> None:
+                 max_num_steps: int, radau_elements: int, radau_degree: int,
+                 compiled: str = "never", cache_dir: str | None = None) -> None:
         eq = assemble(network)
         self.network = network
         C, N = eq.C, eq.N
@@ -247,14 +253,18 @@ class _FluxDAE:
         nominal = np.concatenate((np.abs(D).sum(axis=1) * phi_nom, np.full(ng, 1e-2),
                                   np.full(nl, phi_nom), i_nom))
         self.nominal = nominal
-        dae = {"x": ca.vertcat(y, s), "z": ca.vertcat(x, I), "p": ca.vertcat(h, U, rate),
-               "ode": h * ca.vertcat(ydot, rate), "alg": alg, "quad": h * power}
+        wm = ca.MX.sym("w", self.nw)
+        pm = ca.MX.sym("p", 1 + nc + ng)
+        nx = r + ng
+        #: Whether the residual, Jacobian and output functions run as compiled C.
+        self.compiled = False
+        self._chunks: dict[int, ca.Function] = {}
         if method == "idas":
-            opts: dict[str, Any] = {"reltol": rtol, "abstolv": list(atol * nominal),
-                                    "max_num_steps": max_num_steps,
-                                    "disable_internal_warnings": True}
-            integ = ca.integrator("flux_idas", "idas", dae, 0.0, 1.0, opts)
+            self._init_idas(eq, Kp, hv, y, h, U, rate, g_e, nominal, rtol, atol, max_num_steps,
+                            compiled, cache_dir)
         elif method == "radau":
+            dae = {"x": ca.vertcat(y, s), "z": ca.vertcat(x, I), "p": ca.vertcat(h, U, rate),
+                   "ode": h * ca.vertcat(ydot, rate), "alg": alg, "quad": h * power}
             integ = ca.integrator("flux_radau", "collocation", dae, 0.0, 1.0,
                                   {"number_of_finite_elements": radau_elements,
                                    "interpolation_order": radau_degree,
@@ -263,17 +273,123 @@ class _FluxDAE:
                                    # states of the U-magnet at 1 ms steps)
                                    "collocation_scheme": "radau", "rootfinder": "kinsol",
                                    "rootfinder_options": {"error_on_fail": True}})
+            res = integ(x0=wm[:nx], z0=wm[nx:], p=pm)
+            wf = ca.vertcat(res["xf"], res["zf"])
+            o = self.output_fun(wf, pm[1:1 + nc], pm[1 + nc:])
+            self.step_fun = ca.Function("flux_step", [wm, pm], [wf, res["qf"], o])
         else:
             raise InputError(f"method = {method!r}; use 'idas' (error-controlled BDF) or "
                              "'radau' (fixed-step Radau IIA collocation)")
+        self._accum: dict[int, ca.Function] = {}
+
+    def _init_idas(self, eq: Any, Kp: np.ndarray, hv: ca.SX, y: ca.SX, h: ca.SX, U: ca.SX,
+                   rate: ca.SX, g_e: np.ndarray, nominal: np.ndarray, rtol: float, atol: float,
+                   max_num_steps: int, compiled: str, cache_dir: str | None) -> None:
+        """The IDAS form: sparse balance unknowns, explicit gaps, optionally compiled.
+
+        * The balance vector ``v = h(x, I, s, U)`` is an algebraic unknown, so the dense
+          ``K^+`` and ``Q`` multiply ``v`` linearly (constant Jacobian blocks) instead of
+          entering every nonlinear Jacobian entry (TR09: IDAS's Jacobian function 73672 ->
+          14377 SX instructions).  Eliminating ``v`` gives back the system of the class
+          docstring, so it is index 1 exactly when that is.  ``v`` is fixed by ``y'``;
+          its error weight is small (see ``v_scale``).
+        * The gaps are explicit, ``s = s_k + h_k rate_k (tau - k)`` on interval ``k``
+          (the hold inputs of each interval are IDAS controls ``u``), so one IDAS run
+          crosses many hold intervals without a restart: a kink of the gap path is no
+          jump of any unknown.  A run restarts (consistent re-initialisation) where the
+          voltages change, since the eddy-current model's currents jump there.
+        """
+        D, Q, T = self.D, self.Q, self.T
+        nl, nc, ng, r = self.n_loops, self.n_circuits, self.n_gaps, self.n_diff
+        R = self.network.resistances
+        x, s, I = eq.x, eq.s, eq.I
+        nv = nl + nc
+        v = ca.SX.sym("v", nv)
+        s0 = ca.SX.sym("s0", ng)
+        t_sym = ca.SX.sym("t")
+        tau0 = ca.SX.sym("tau0")
+        s_t = s0 + h * rate * (t_sym - tau0)
+        ydot_v = ca.mtimes(ca.DM(Kp), v)
+        phidot_v = ca.mtimes(ca.DM(T), ydot_v)
+        power_v = ca.vertcat(ca.dot(U, I), ca.dot(R * I, I), ca.dot(g_e * phidot_v, phidot_v),
+                             -ca.dot(eq.force, rate))
+        alg = ca.vertcat(ca.mtimes(ca.DM(D), x) - y, ca.mtimes(ca.DM(Q), v), v - hv)
+        alg, quad = ca.substitute([alg, h * power_v], [s], [s_t])
+        self.n_u = 2 + 2 * ng                         # per interval: h, s_k, rate_k, tau_k
+        dae_fun = ca.Function(
+            "flux_dae", [t_sym, y, ca.vertcat(x, I, v), U, ca.vertcat(h, s0, rate, tau0)],
+            [h * ydot_v, alg, quad, ca.SX(0, 1)],
+            ["t", "x", "z", "p", "u"], ["ode", "alg", "quad", "zero"])
+        balance_fun = ca.Function("flux_balance", [ca.vertcat(x, I), s, U], [hv])
+        keep = np.r_[0:r, r + ng:r + ng + nl + nc]     # no gap states
+        # v's absolute tolerance: 1e3 x atol x its scale (MMF of 1 T over 5 mm of air per
+        # loop, R x nominal current per circuit).  Measured on the U-magnet: x1 ran 4x
+        # slower; v out of the error test (x1e300) left x and I consistent only to 2e-7
+        # (psi = L I of a linear magnet) because IDAS's Newton test ignored v; x1e3:
+        # as fast as x1e300, consistent to 5e-9.
+        v_scale = 1e3 * atol * np.concatenate((np.full(nl, _B_REF * _GAP_REF / MU0),
+                                                R * nominal[-nc:]))
+        opts: dict[str, Any] = {"reltol": rtol,
+                                "abstolv": list(atol * nominal[keep]) + list(v_scale),
+                                "max_num_steps": max_num_steps,
+                                "disable_internal_warnings": True}
+        oracle: Any = dae_fun
+        output_fun = self.output_fun
+        if compiled != "never":
+            # One C file: the DAE, the residual/Jacobian/quadrature functions IDAS asks its
+            # DAE for (casadi.external finds them by name in the DAE's library), the
+            # balance and the outputs.  Taken from an interpreted integrator, so both paths
+            # evaluate the same expressions in the same order.
+            vm_integ = ca.integrator("flux_idas", "idas", dae_fun, 0.0, 1.0, opts)
+            daeF, jacF, quadF = (vm_integ.get_function(k) for k in ("daeF", "jacF", "quadF"))
+            # the library's DAE calls daeF and quadF (their code is generated once)
+            args = [ca.MX.sym(dae_fun.name_in(i), dae_fun.sparsity_in(i)) for i in range(5)]
+            ode_alg = daeF(*args)
+            lib_dae = ca.Function("flux_dae", args, [*ode_alg, quadF(*args), ca.MX(0, 1)],
+                                  dae_fun.name_in(), dae_fun.name_out())
+            lib = [lib_dae, daeF, jacF, quadF, balance_fun, output_fun]
+            loaded, self.compiled = compile_library("maglevkit_flux", lib, mode=compiled,
+                                                    cache_dir=cache_dir, flags=COMPILE_FLAGS,
+                                                    stacklevel=7)
+            if self.compiled:
+                oracle, balance_fun, output_fun = loaded[0], loaded[4], loaded[5]
+                self.output_fun = output_fun
+        self._oracle, self._idas_opts, self._balance = oracle, opts, balance_fun
+        # one hold interval, (w, p = (h, U, rate)) -> (w, q, outputs) as for radau
         wm = ca.MX.sym("w", self.nw)
         pm = ca.MX.sym("p", 1 + nc + ng)
+        P1 = ca.vertcat(pm[0], wm[r:r + ng], pm[1 + nc:], 0.0)
+        W, Qi, O = self.chunk(1)(wm, pm[1:1 + nc], P1)
+        self.step_fun = ca.Function("flux_step", [wm, pm], [W, Qi, O])
+
+    def chunk(self, n: int) -> ca.Function:
+        """IDAS over ``n`` hold intervals without restart: ``(w0, U, P) -> (W, Q, O)``.
+
+        ``P`` (n_u, n): per interval ``h``, start gaps, gap rates, interval index;
+        ``W`` (nw, n) states, ``Q`` (4, n) energy increments, ``O`` (n_out, n) outputs at
+        the interval ends.  IDAS only.
+        """
+        f = self._chunks.get(n)
+        if f is not None:
+            return f
+        nl, nc, ng, r = self.n_loops, self.n_circuits, self.n_gaps, self.n_diff
+        integ = ca.integrator(f"flux_idas_{n}", "idas", self._oracle, 0.0,
+                              [float(k) for k in range(1, n + 1)], self._idas_opts)
+        w0 = ca.MX.sym("w", self.nw)
+        Um = ca.MX.sym("U", nc)
+        P = ca.MX.sym("P", self.n_u, n)
         nx = r + ng
-        res = integ(x0=wm[:nx], z0=wm[nx:], p=pm)
-        wf = ca.vertcat(res["xf"], res["zf"])
-        o = self.output_fun(wf, pm[1:1 + nc], pm[1 + nc:])
-        self.step_fun = ca.Function("flux_step", [wm, pm], [wf, res["qf"], o])
-        self._accum: dict[int, ca.Function] = {}
+        v0 = self._balance(w0[nx:], P[1:1 + ng, 0], Um)
+        res = integ(x0=w0[:r], z0=ca.vertcat(w0[nx:], v0), p=Um, u=P)
+        rates = P[1 + ng:1 + 2 * ng, :]
+        s_end = P[1:1 + ng, :] + rates * ca.repmat(P[0, :], ng, 1)
+        W = ca.vertcat(res["xf"], s_end, res["zf"][:nl + nc, :])
+        qf = res["qf"]                                   # cumulative from the chunk start
+        Qi = qf if n == 1 else ca.horzcat(qf[:, 0], qf[:, 1:] - qf[:, :-1])
+        O = self.output_fun.map(n)(W, ca.repmat(Um, 1, n), rates)
+        f = ca.Function(f"flux_chunk_{n}", [w0, Um, P], [W, Qi, O])
+        self._chunks[n] = f
+        return f
 
     def accum(self, n: int) -> ca.Function:
         f = self._accum.get(n)
@@ -286,11 +402,16 @@ class _FluxDAE:
 
 
 def _dae(network: Network, method: str, rtol: float, atol: float, max_num_steps: int,
-         radau_elements: int, radau_degree: int) -> _FluxDAE:
-    key = ("flux_dae", method, rtol, atol, max_num_steps, radau_elements, radau_degree)
+         radau_elements: int, radau_degree: int, compiled: str = "never",
+         cache_dir: str | None = None) -> _FluxDAE:
+    if method != "idas":
+        compiled, cache_dir = "never", None   # only the IDAS functions are compiled
+    key = ("flux_dae", method, rtol, atol, max_num_steps, radau_elements, radau_degree,
+           compiled, cache_dir)
     dae = network._cache.get(key)
     if dae is None:
-        dae = _FluxDAE(network, method, rtol, atol, max_num_steps, radau_elements, radau_degree)
+        dae = _FluxDAE(network, method, rtol, atol, max_num_steps, radau_elements, radau_degree,
+                       compiled, cache_dir)
         network._cache[key] = dae
     return dae  # type: ignore[no-any-return]
 
@@ -317,9 +438,12 @@ def _resolve_network(model: Any, saturation: bool | None, eddy_currents: bool | 
     return net
 
 
+#: Longest IDAS run without restart in ``simulate`` [hold intervals].
+MAX_RUN = 128
+
 #: Keyword options of :class:`FluxModel` (also accepted by ``simulate`` and ``with_options``).
 FLUX_MODEL_OPTIONS = ("saturation", "eddy_currents", "method", "rtol", "atol", "max_num_steps",
-                      "radau_elements", "radau_degree")
+                      "radau_elements", "radau_degree", "compiled", "cache_dir")
 
 
 def check_options(options: Mapping[str, Any], where: str) -> None:
@@ -375,13 +499,31 @@ class FluxModel:
         divided by the circuit turns, gap 10 mm), default :data:`DEFAULT_ATOL` = 1e-8.
     max_num_steps : int
         IDAS step limit per interval (failure raises :class:`SolverError`).
+    compiled : {"auto", "always", "never"}
+        IDAS only: ``"auto"`` (default) generates the DAE's residual, Jacobian, quadrature
+        and output functions as one C file, compiles it with the system C compiler and
+        caches the library on disk (a second model of the same network only loads it);
+        without a working compiler it warns (:class:`~maglevkit.errors.CompilationWarning`)
+        and runs on CasADi's virtual machine.  ``"always"`` raises
+        :class:`~maglevkit.errors.SolverError` instead; ``"never"`` always interprets.
+        Both paths evaluate the same expressions: the trajectories agree to rounding.
+        ``method="radau"`` is always interpreted.
+    cache_dir : str or None
+        Where compiled libraries are cached (default
+        :func:`maglevkit.models.compiled.cache_directory`).
+
+    Attributes
+    ----------
+    compiled : bool
+        Whether this model runs compiled code.
     """
 
     def __init__(self, model: Any, *, saturation: bool | None = None,
                  eddy_currents: bool | None = None, method: str = "idas",
                  rtol: float = DEFAULT_RTOL, atol: float = DEFAULT_ATOL,
                  max_num_steps: int = 20000, radau_elements: int = 2,
-                 radau_degree: int = 3) -> None:
+                 radau_degree: int = 3, compiled: str = "auto",
+                 cache_dir: Any = None) -> None:
         for name, v in (("rtol", rtol), ("atol", atol)):
             if not 0.0 < real_number(v, name) < 1.0:
                 raise InputError(f"{name} = {v!r} must lie in (0, 1)")
@@ -393,6 +535,12 @@ class FluxModel:
         if not isinstance(method, str) or method not in ("idas", "radau"):
             raise InputError(f"method = {method!r}; use 'idas' (error-controlled BDF) or "
                              "'radau' (fixed-step Radau IIA collocation)")
+        if not isinstance(compiled, str) or compiled not in COMPILE_MODES:
+            raise InputError(f"compiled = {compiled!r}; use one of {list(COMPILE_MODES)} "
+                             "('auto': compiled C where a compiler exists)")
+        if cache_dir is not None and not isinstance(cache_dir, (str, os.PathLike)):
+            raise InputError(f"cache_dir = {cache_dir!r} must be a path (str or Path) or None")
+        cache_dir = None if cache_dir is None else os.fspath(cache_dir)
         self.network = _resolve_network(model, saturation, eddy_currents)
         #: Gaps and currents beyond which inputs warn (from a Magnet; None for a Network).
         self.plausible_range: PlausibleRange | None = plausible_range(model)
@@ -400,7 +548,8 @@ class FluxModel:
         self.rtol = float(rtol)
         self.atol = float(atol)
         self._dae = _dae(self.network, method, self.rtol, self.atol, max_num_steps,
-                         radau_elements, radau_degree)
+                         radau_elements, radau_degree, compiled, cache_dir)
+        self.compiled = self._dae.compiled
         d = self._dae
         self._state_shapes = (("differential_state", d.n_diff), ("gaps_m", d.n_gaps),
                               ("loop_flux_Wb", d.n_loops), ("currents_A", d.n_circuits),
@@ -408,7 +557,8 @@ class FluxModel:
                               ("energy_J", 4))
         self._options = {"method": method, "rtol": self.rtol, "atol": self.atol,
                          "max_num_steps": max_num_steps, "radau_elements": radau_elements,
-                         "radau_degree": radau_degree}
+                         "radau_degree": radau_degree, "compiled": compiled,
+                         "cache_dir": cache_dir}
 
     # ------------------------------------------------------------------ description
     @property
@@ -448,7 +598,8 @@ class FluxModel:
 
     def __repr__(self) -> str:
         return (f"FluxModel({self.network.name!r}, method={self.method!r}, rtol={self.rtol:g}, "
-                f"atol={self.atol:g}, states={list(self.differential_state_names)})")
+                f"atol={self.atol:g}, compiled={self.compiled}, "
+                f"states={list(self.differential_state_names)})")
 
     # ------------------------------------------------------------------ states
     def initial_state(self, *, gaps: Any, currents: Any, time: float = 0.0) -> FluxState:
@@ -595,9 +746,69 @@ class FluxModel:
         return new, self._unpack_outputs(t1, new.currents_A, o)
 
     # ------------------------------------------------------------------ batch
+    def _run_idas(self, state: FluxState, h: np.ndarray, U: np.ndarray, rate: np.ndarray
+                  ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """IDAS runs without restart over intervals of equal voltages (at most
+        :data:`MAX_RUN` intervals each, split into power-of-two chunks)."""
+        d = self._dae
+        n, ng = h.size, d.n_gaps
+        W = np.empty((n, d.nw))
+        Qd = np.empty((n, 4))
+        O = np.empty((n, d.n_out))
+        s_start = state.gaps_m + np.vstack((np.zeros((1, ng)),
+                                            np.cumsum(h[:-1, None] * rate[:-1], axis=0)))
+        P = np.vstack((h[None, :], s_start.T, rate.T, np.zeros((1, n))))
+        change = np.nonzero(np.any(U[1:] != U[:-1], axis=1))[0] + 1
+        bounds = [0, *change.tolist(), n]
+        w = state._vector()
+        for a, b in zip(bounds[:-1], bounds[1:], strict=True):
+            k = a
+            while k < b:
+                m = min(MAX_RUN, 1 << ((b - k).bit_length() - 1))
+                Pc = P[:, k:k + m].copy()
+                Pc[-1] = np.arange(m)
+                try:
+                    Wc, Qc, Oc = d.chunk(m)(w, U[k], Pc)
+                except RuntimeError:
+                    self._locate_failure(state, w, h, U, rate, k, m)
+                W[k:k + m] = np.asarray(Wc).T
+                Qd[k:k + m] = np.asarray(Qc).T
+                O[k:k + m] = np.asarray(Oc).T
+                w = W[k + m - 1]
+                k += m
+        self._check_finite(state, W, O, h, U, rate)
+        return W, Qd, O
+
+    def _locate_failure(self, state: FluxState, w: np.ndarray, h: np.ndarray, U: np.ndarray,
+                        rate: np.ndarray, k: int, m: int) -> None:
+        """Repeat intervals ``k..k+m-1`` one by one and raise the informative SolverError."""
+        t = state.time_s + float(h[:k].sum())
+        for j in range(k, k + m):
+            p = np.concatenate(((h[j],), U[j], rate[j]))
+            try:
+                wf, _, _ = self._dae.step_fun(w, p)
+            except RuntimeError as exc:
+                raise self._fail(exc, t, w, U[j], rate[j], float(h[j])) from None
+            w = np.asarray(wf).ravel()
+            t += float(h[j])
+        raise SolverError("flux model failed over several hold intervals but not interval by "
+                          "interval", time=t) from None
+
+    def _check_finite(self, state: FluxState, W: np.ndarray, O: np.ndarray, h: np.ndarray,
+                      U: np.ndarray, rate: np.ndarray) -> None:
+        bad = ~(np.all(np.isfinite(W), axis=1) & np.all(np.isfinite(O), axis=1))
+        if np.any(bad):
+            j = int(np.argmax(bad))
+            t = state.time_s + float(h[:j].sum())
+            w0 = state._vector() if j == 0 else W[j - 1]
+            raise self._fail(RuntimeError("non-finite solution"), t, w0, U[j], rate[j],
+                             float(h[j]))
+
     def _run(self, state: FluxState, h: np.ndarray, U: np.ndarray, rate: np.ndarray,
              chunk: int = 200) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Integrate intervals ``h`` (n,) with inputs U (n, nc), rate (n, ng) in C++ chunks."""
+        if self.method == "idas":
+            return self._run_idas(state, h, U, rate)
         d = self._dae
         n = h.size
         W = np.empty((n, d.nw))
