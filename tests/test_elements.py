@@ -72,7 +72,11 @@ def test_roschke_records_follow_the_published_formula(name: str) -> None:
     bn = np.abs(b / b_max)
     mu_r = 1 + (mu_i - 1 + c_a * bn) / (1 + c_b * bn + bn**n)
     mat = mk.get_material(name.lower().replace(" ", "_"))   # lookup ignores case/punctuation
-    np.testing.assert_allclose(mat.field_strength(b), b / (MU0 * mu_r), rtol=RTOL)
+    # the formula up to its polarisation peak B* (1.79-3.57 T); beyond it the record
+    # continues along the tangent of slope 1/mu0 (tests/test_materials_saturation_tail.py)
+    ok = np.abs(b) <= mat.tail_from_T
+    assert ok.sum() >= 5
+    np.testing.assert_allclose(mat.field_strength(b[ok]), (b / (MU0 * mu_r))[ok], rtol=RTOL)
 
 
 # ---------------------------------------------------------------- U-magnet switches

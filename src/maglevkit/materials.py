@@ -119,6 +119,12 @@ class Material(ABC):
 class SoftMagneticMaterial(Material):
     """Roschke/Modelica approximation of a soft-magnetic B-H curve.
 
+    The formula's polarisation ``J = B - mu0 H`` peaks at some ``B*`` (1.79-3.57 T for the
+    bundled records, :attr:`tail_from_T`) and falls beyond it (``mu_r,diff < 1``), which is
+    unphysical: a saturated ferromagnet keeps its polarisation.  Beyond ``B*`` the law is
+    therefore continued along its tangent of slope ``1/mu0``, ``H = H(B*) + (|B| - B*) / mu0``
+    (``J = J(B*)`` constant, C1 at ``B*``), so ``0 < dH/dB <= 1/mu0`` holds everywhere.
+
     Parameters
     ----------
     mu_i : float
@@ -142,6 +148,8 @@ class SoftMagneticMaterial(Material):
     n: float
     name: str = "soft-magnetic"
     resistivity: float | None = None
+    #: Flux density [T] above which ``H`` continues with slope ``1/mu0`` (inf: never).
+    tail_from_T: float = field(init=False, default=math.inf)
 
     def __post_init__(self) -> None:
         vals = {"mu_i": self.mu_i, "B_mymax": self.B_mymax, "c_a": self.c_a,
@@ -163,6 +171,7 @@ class SoftMagneticMaterial(Material):
             raise MaterialError(f"material {self.name!r}: exponent n = {self.n} must be > 1")
         if self.resistivity is not None and not self.resistivity > 0.0:
             raise MaterialError(f"material {self.name!r}: resistivity must be > 0 ohm m")
+        object.__setattr__(self, "tail_from_T", self._polarisation_peak())
         # H(B) must be strictly increasing, otherwise the network has no unique solution.
         b = np.linspace(0.0, 6.0 * max(self.B_mymax, 1.0), 4001)
         h = self.field_strength(b)
@@ -177,10 +186,50 @@ class SoftMagneticMaterial(Material):
         bn = (ca.fabs(B) if sym else np.abs(B)) / self.B_mymax
         return 1.0 + (self.mu_i - 1.0 + self.c_a * bn) / (1.0 + self.c_b * bn + bn**self.n)
 
+    def _fit_slope(self, b: np.ndarray) -> np.ndarray:
+        """``mu0 dH/dB`` of the plain Roschke formula at ``b >= 0`` (= 1 / mu_r,diff)."""
+        bm, a, n = self.B_mymax, self.mu_i - 1.0, self.n
+        bn = b / bm
+        num = a + self.c_a * bn
+        den = 1.0 + self.c_b * bn + bn**n
+        mu = 1.0 + num / den
+        dmu = (self.c_a * den - num * (self.c_b + n * bn ** (n - 1.0))) / (bm * den**2)
+        return np.asarray((mu - b * dmu) / mu**2)
+
+    def _polarisation_peak(self) -> float:
+        """Smallest ``B > 0`` where the fit's ``mu_r,diff`` falls to 1 (inf if nowhere).
+
+        There the polarisation ``J = B - mu0 H`` of the formula peaks; beyond it the
+        formula has ``dJ/dB < 0`` (``mu_r,diff < 1``: incrementally less permeable than
+        air), which no ferromagnet shows.
+        """
+        b = np.geomspace(1e-6, 1e3, 6001) * self.B_mymax
+        g = self._fit_slope(b) - 1.0
+        up = np.nonzero((g[:-1] < 0.0) & (g[1:] >= 0.0))[0]
+        if up.size == 0:
+            return math.inf
+        from scipy.optimize import brentq
+
+        k = int(up[0])
+        return float(brentq(lambda x: float(self._fit_slope(np.array(x))) - 1.0, b[k], b[k + 1],
+                            xtol=1e-14, rtol=1e-14))
+
     def field_strength(self, B: Any) -> Any:
-        if not _is_symbolic(B):
-            B = np.asarray(B, dtype=float)
-        return B / (MU0 * self._mu_r(B))
+        bs = self.tail_from_T
+        if _is_symbolic(B):
+            h_fit = B / (MU0 * self._mu_r(B))
+            if not math.isfinite(bs):
+                return h_fit
+            h_s = bs / (MU0 * float(self._mu_r(np.float64(bs))))
+            tail = ca.sign(B) * (h_s + (ca.fabs(B) - bs) / MU0)
+            return ca.if_else(ca.fabs(B) <= bs, h_fit, tail)
+        B = np.asarray(B, dtype=float)
+        h_fit = B / (MU0 * self._mu_r(B))
+        if not math.isfinite(bs):
+            return h_fit
+        h_s = bs / (MU0 * float(self._mu_r(np.float64(bs))))
+        return np.where(np.abs(B) <= bs, h_fit,
+                        np.sign(B) * (h_s + (np.abs(B) - bs) / MU0))
 
     @property
     def initial_relative_permeability(self) -> float:

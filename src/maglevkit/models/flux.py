@@ -25,9 +25,12 @@ eddy-branch fluxes and eddy MMFs ``G_ec phi'``.  Energy bookkeeping is integrate
 quadratures: ``E_in = int U.I``, ``E_ohm = int R I^2``, ``E_eddy = int sum G_ec phi'^2``,
 ``E_mech = int -F.s'``; ``E_in = E_ohm + E_eddy + Delta W + E_mech`` holds exactly.
 
-Each call integrates one hold interval in normalised time ``tau = (t - t_k) / h`` with
-the interval length ``h`` as a parameter, so one compiled integrator serves every step
-size.  See ``docs/flux_model.md``.
+Time is normalised per hold interval (``tau = k + (t - t_k) / h_k``, the interval length
+an input), so one integrator serves every step size.  IDAS integrates a sparse form of the
+DAE (the balance ``h`` as an algebraic unknown, the gaps explicit) and, in ``simulate``,
+runs through hold intervals of equal voltages without a restart; its residual, Jacobian,
+quadrature and output functions are compiled to C and cached on disk by default
+(``compiled="auto"``).  See ``docs/flux_model.md``.
 """
 
 from __future__ import annotations
@@ -498,7 +501,8 @@ class FluxModel:
         flux linkage the same times the turns, current = MMF of 1 T over 5 mm of air
         divided by the circuit turns, gap 10 mm), default :data:`DEFAULT_ATOL` = 1e-8.
     max_num_steps : int
-        IDAS step limit per interval (failure raises :class:`SolverError`).
+        IDAS step limit per run (one hold interval in :meth:`step`, up to :data:`MAX_RUN`
+        intervals in ``simulate``; failure raises :class:`SolverError`).
     compiled : {"auto", "always", "never"}
         IDAS only: ``"auto"`` (default) generates the DAE's residual, Jacobian, quadrature
         and output functions as one C file, compiles it with the system C compiler and
