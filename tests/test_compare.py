@@ -97,9 +97,12 @@ def test_tr09_standard_magnet_fast_set() -> None:
                    skip=("gap sine 0.5 Hz",))
     _check(results)
     _check_ac(results, TR09_AC_MEASURED)
-    # the reduced model is much faster on every open-loop case (measured 100-250x; a
-    # generous floor keeps the test robust on a loaded machine)
-    assert all(r.speedup > 20 for r in results if r.scenario.kind == "open")
+    # the reduced model is faster on every open-loop case (measured 100-250x against the
+    # interpreted detailed model restarted per interval; against the compiled detailed model
+    # that runs through hold intervals 8.6-34x, cold, on a loaded machine; floor 3)
+    speedups = {r.scenario.name: round(r.speedup, 1) for r in results
+                if r.scenario.kind == "open"}
+    assert all(v > 3 for v in speedups.values()), speedups
 
 
 @pytest.mark.slow
