@@ -728,15 +728,16 @@ class VehicleModel:
             integral_projection=self.integral_projection,
             midspan_shape=span.mode_shapes(0.5 * span.length_m)[0] if nm else np.zeros(0))
 
-    def _compiled_step(self, dt: float) -> tuple[Any, Any]:
-        """(compiled function, layout), built and compiled (or loaded) once per ``dt``."""
+    def _compiled_step(self, dt: float) -> tuple[Any, Any, int]:
+        """(compiled block function, layout, steps per block), built and compiled (or
+        loaded from the disk cache) once per ``dt``."""
         from ..models.compiled import compile_function
 
         hit = self._step_functions.get(dt)
         if hit is None:
             vs = self.step_function(dt)
-            f, _ = compile_function(vs.function, mode=self.bank.compiled_mode)
-            hit = (f, vs.layout)
+            f, _ = compile_function(vs.block_function, mode=self.bank.compiled_mode)
+            hit = (f, vs.layout, vs.block_steps)
             self._step_functions[dt] = hit
         return hit
 
@@ -748,19 +749,32 @@ class VehicleModel:
                        rec_fp: np.ndarray, rec_mid: np.ndarray, rec_span: np.ndarray,
                        timing: dict[str, float], progress: bool
                        ) -> tuple[int, tuple[str, float, float, str] | None, float, float]:
-        """The time loop with one compiled call per step; fills the records like the NumPy
-        loop.  Returns ``(last step, touchdown, wall time, CPU time)``."""
+        """The time loop with one compiled call per block of steps; fills the records like
+        the NumPy loop.  Returns ``(last step, touchdown, wall time, CPU time)``.
+
+        Events are looked for after every block, in the NumPy loop's order per step: the
+        loads leaving the integrated spans, touchdown, the end of the run, a circuit the
+        kernel flagged (diagnosed by the bank's own step, which raises).  Steps a block
+        computed after the event are discarded.
+        """
         from ..models.bank import BankState
 
-        fun, lay = self._compiled_step(dt)
+        fun, lay, nb = self._compiled_step(dt)
         tr, gw, bank = self.train, self.guideway, self.bank
         names = bank.circuit_names
         n_steps = times.size - 1
         nm = gw.n_modes
         n_sp = lay.n_spans
         st, sp, rl = lay.state, lay.step_inputs, lay.record
+        n_rows = -(-(n_steps + 1) // nb) * nb            # whole blocks
+        p_all = np.empty((n_rows, lay.n_step_inputs))
+        pad = np.minimum(np.arange(n_rows), n_steps)      # the last step repeated
+        p_all[:, sp["x"]], p_all[:, sp["r"]] = xpath[pad], r_all[pad]
+        p_all[:, sp["r_x"]], p_all[:, sp["t"]] = rx_all[pad], times[pad, None]
+        p_all[:, sp["keep"]] = 1.0
         # moving system boundary, vectorised: the window's first span at every step (it
-        # moves to the rearmost load, never back) and the first step whose loads leave it
+        # moves to the rearmost load, never back), the rows it recycles (reset to rest at
+        # that step) and the first step whose loads leave the window
         first0 = gstate.first_span
         k_out = -1
         if nm:
@@ -771,9 +785,14 @@ class VehicleModel:
                        else np.full(lo.shape, first0))
             out = (lo < first_k) | (hi > first_k + n_sp - 1)
             k_out = int(np.argmax(out)) if out.any() else -1
+            keep = p_all[:, sp["keep"]]
+            for kr in (np.flatnonzero(np.diff(first_k) > 0) + 1).tolist():
+                old = int(first_k[kr - 1])
+                for span in range(old, min(int(first_k[kr]), old + n_sp)):
+                    keep[kr, span % n_sp] = 0.0
         else:
             first_k = np.full(times.shape, first0)
-        # packed buffers: two state vectors (ping-pong), per-step inputs, records
+        # two state vectors, each bound once to one of two buffers (ping-pong)
         s_buf = [np.zeros(lay.n_state), np.zeros(lay.n_state)]
         s0v = s_buf[0]
         s0v[st["x_mech"]] = x_m
@@ -782,67 +801,73 @@ class VehicleModel:
                                                   gstate.modal_velocity_m_per_s], axis=1).ravel()
         s0v[st["I_L"]], s0v[st["psi_hat"]], s0v[st["integral"]] = i_l, psi_hat, integ
         s0v[st["current"]], s0v[st["force"]] = current, force
-        p_all = np.empty((n_steps + 1, lay.n_step_inputs))
-        p_all[:, sp["x"]], p_all[:, sp["r"]], p_all[:, sp["r_x"]] = xpath, r_all, rx_all
-        p_all[:, sp["t"]] = times[:, None]
-        r_all_rec = np.empty((n_steps + 1, lay.n_record))
+        r_all_rec = np.empty((n_rows, lay.n_record))
         consts = np.concatenate([[v], fail_t])
-        buf: Any
-        buf, ev = fun.buffer()
-        buf.set_arg(2, memoryview(consts))     # type: ignore[arg-type]
-        mv = [memoryview(s_buf[0]), memoryview(s_buf[1])]   # type: ignore[arg-type]
+        bufs: list[Any] = []
+        evals = []
+        for j in (0, 1):
+            buf, ev = fun.buffer()
+            buf.set_arg(0, memoryview(s_buf[j]))        # type: ignore[arg-type]
+            buf.set_res(0, memoryview(s_buf[1 - j]))    # type: ignore[arg-type]
+            buf.set_arg(2, memoryview(consts))          # type: ignore[arg-type]
+            bufs.append(buf)
+            evals.append(ev)
         i_min, i_max, i_bad = rl["gap_min"].start, rl["gap_max"].start, rl["n_bad"].start
-        g_sl = st["guideway"]
         td_gap, land_gap = tr.touchdown_gap_m, tr.landing_gap_m
         touchdown: tuple[str, float, float, str] | None = None
         last = n_steps
-        first = first0
-        cur = 0
         t_call = 0.0
+        done = False
         bar = _Progress(n_steps, enabled=progress)
         clock = time.perf_counter
         t_start = clock()
         cpu0 = time.process_time()
-        for k in range(n_steps + 1):
-            if k == k_out:
-                raise OutOfRangeError(f"vehicle run at t = {times[k]:.4f} s: the train left the "
-                                      f"integrated spans {first_k[k]} ... "
-                                      f"{first_k[k] + n_sp - 1}")
-            fk = first_k[k]
-            if fk > first:                      # recycle the spans the train has left
-                ring = s_buf[cur][g_sl].reshape(n_sp, 2 * nm)
-                for kk_ in range(first, min(fk, first + n_sp)):
-                    ring[kk_ % n_sp] = 0.0
-                first = int(fk)
-            buf.set_arg(0, mv[cur])             # type: ignore[arg-type]
-            buf.set_res(0, mv[1 - cur])         # type: ignore[arg-type]
-            buf.set_arg(1, memoryview(p_all[k]))   # type: ignore[arg-type]
-            row = r_all_rec[k]
-            buf.set_res(1, memoryview(row))     # type: ignore[arg-type]
+        for blk in range(n_rows // nb):
+            k0 = blk * nb
+            j = blk & 1
+            buf = bufs[j]
+            buf.set_arg(1, memoryview(p_all[k0:k0 + nb]))   # type: ignore[arg-type]
+            rows = r_all_rec[k0:k0 + nb]
+            buf.set_res(1, memoryview(rows))                 # type: ignore[arg-type]
             tc = clock()
-            ev()
+            evals[j]()
             t_call += clock() - tc
-            if row[i_min] <= td_gap or row[i_max] >= land_gap:
-                gaps = row[rl["gap"]]
-                if np.isfinite(gaps).all():
-                    closed = row[i_min] <= td_gap
-                    j = int(np.argmin(gaps) if closed else np.argmax(gaps))
-                    touchdown = (names[j], float(times[k]), float(gaps[j]),
-                                 "closed" if closed else "landed")
-                    last = k
+            events = ((rows[:, i_min] <= td_gap) | (rows[:, i_max] >= land_gap)
+                      | (rows[:, i_bad] != 0))
+            end = k0 + nb > n_steps
+            if not (end or events.any() or k0 <= k_out < k0 + nb):
+                bar.update(k0 + nb)
+                continue
+            for k in range(k0, min(k0 + nb, n_steps + 1)):
+                row = r_all_rec[k]
+                if k == k_out:
+                    raise OutOfRangeError(f"vehicle run at t = {times[k]:.4f} s: the train left "
+                                          f"the integrated spans {first_k[k]} ... "
+                                          f"{first_k[k] + n_sp - 1}")
+                if row[i_min] <= td_gap or row[i_max] >= land_gap:
+                    gaps = row[rl["gap"]]
+                    if np.isfinite(gaps).all():
+                        closed = row[i_min] <= td_gap
+                        jj = int(np.argmin(gaps) if closed else np.argmax(gaps))
+                        touchdown = (names[jj], float(times[k]), float(gaps[jj]),
+                                     "closed" if closed else "landed")
+                        last = k
+                        done = True
+                        break
+                if k == n_steps:
+                    done = True
                     break
-            if k == n_steps:
+                if row[i_bad]:                  # out of the maps or not finite: diagnose
+                    state = BankState(float(times[k]), row[rl["I_L"]].copy(),
+                                      row[rl["gap"]].copy())
+                    try:
+                        bank.step(state, dt, row[rl["voltage"]].copy(), row[rl["gap"]].copy(),
+                                  row[rl["gap_rate"]].copy())
+                    except MaglevkitError as exc:
+                        raise type(exc)(f"vehicle run at t = {times[k]:.4f} s: {exc}") from None
+            if done:
                 break
-            if row[i_bad]:                      # out of the maps or not finite: diagnose
-                state = BankState(float(times[k]), s_buf[cur][st["I_L"]].copy(),
-                                  row[rl["gap"]].copy())
-                try:
-                    bank.step(state, dt, row[rl["voltage"]].copy(), row[rl["gap"]].copy(),
-                              row[rl["gap_rate"]].copy())
-                except MaglevkitError as exc:
-                    raise type(exc)(f"vehicle run at t = {times[k]:.4f} s: {exc}") from None
-            cur = 1 - cur
-            bar.update(k + 1)
+            bar.update(k0 + nb)
         wall = clock() - t_start
         cpu = time.process_time() - cpu0
         bar.close()

@@ -76,8 +76,8 @@ def _layout(n_dof: int, nc: int, n_sp: int, nm: int) -> StepLayout:
 
     state = pack([("x_mech", 2 * n_dof), ("guideway", n_sp * 2 * nm), ("I_L", nc),
                   ("psi_hat", nc), ("integral", nc), ("current", nc), ("force", nc)])
-    step = pack([("x", nc), ("r", nc), ("r_x", nc), ("t", 1)])
-    record = pack([("gap", nc), ("gap_rate", nc), ("current", nc), ("force", nc),
+    step = pack([("x", nc), ("r", nc), ("r_x", nc), ("t", 1), ("keep", n_sp)])
+    record = pack([("gap", nc), ("gap_rate", nc), ("current", nc), ("force", nc), ("I_L", nc),
                    ("deflection", nc), ("q", n_dof), ("q_dot", n_dof), ("midspan_ring", n_sp),
                    ("voltage", nc), ("gap_min", 1), ("gap_max", 1), ("n_bad", 1)])
     return StepLayout(n_dof, nc, n_sp, nm, state, step, record)
@@ -90,7 +90,11 @@ class VehicleStepFunction:
     Attributes
     ----------
     function : casadi.Function
-        ``(S, P, C) -> (S_next, R)``.
+        One step: ``(S, P, C) -> (S_next, R)``.
+    block_function : casadi.Function
+        ``block_steps`` steps in one call: ``(S, P, C) -> (S_next, R)`` with ``P`` and
+        ``R`` one column per step (the rows of C-ordered ``(steps, n)`` arrays).
+    block_steps : int
     layout : StepLayout
     parts : dict of casadi.Function
         ``"guideway_in"`` (deflection, rate at the loads; gaps), ``"controllers"``
@@ -99,6 +103,8 @@ class VehicleStepFunction:
     """
 
     function: Any
+    block_function: Any
+    block_steps: int
     layout: StepLayout
     parts: dict[str, Any]
 
@@ -115,14 +121,16 @@ def build_vehicle_step(*, bank_step: Any, dt: float, nominal_gap_m: float, sides
                        flux_bias_Wb: np.ndarray, resistance_ohm: np.ndarray,
                        eddy_resistance_ohm: np.ndarray, voltage_limit_V: float,
                        integral_projection: np.ndarray, midspan_shape: np.ndarray,
-                       name: str = "maglevkit_vehicle_step") -> VehicleStepFunction:
+                       block_steps: int = 10, name: str = "maglevkit_vehicle_step"
+                       ) -> VehicleStepFunction:
     """Compose the vehicle step function (see the module docstring).
 
     Parameters are the run's constants, as the NumPy loop uses them: ``bank_step`` from
     :meth:`MagnetBank.step_function`, the guideway's and the mechanics' ZOH matrices, the
     mechanics' ``Q_g`` and ``B``, the controller gains and biases, the chopper data, the
     integral projection, the mode shapes at midspan.  ``wavenumbers`` may be empty (rigid
-    guideway).
+    guideway).  ``block_steps`` steps are chained in the block function (one call from
+    Python per block: the per-call cost of binding buffers is ~1-2 us, a step ~40 us).
     """
     kk = np.asarray(wavenumbers, dtype=float).ravel()
     nm = kk.size
@@ -232,8 +240,11 @@ def build_vehicle_step(*, bank_step: Any, dt: float, nominal_gap_m: float, sides
     st, sp = lay.state, lay.step_inputs
     s_xm, s_gx, s_il, s_psi, s_int, s_cur, s_f = (S[st[k]] for k in (
         "x_mech", "guideway", "I_L", "psi_hat", "integral", "current", "force"))
-    p_x, p_r, p_rx, p_t = (P[sp[k]] for k in ("x", "r", "r_x", "t"))
+    p_x, p_r, p_rx, p_t, p_keep = (P[sp[k]] for k in ("x", "r", "r_x", "t", "keep"))
     c_v, c_fail = C[0], C[1:]
+    if nm:    # spans recycled by the moving boundary at this step: rows reset to rest
+        s_gx = ca.reshape(ca.reshape(s_gx, 2 * nm, n_sp) * ca.repmat(p_keep.T, 2 * nm, 1),
+                          n_sp * 2 * nm, 1)
     gap_k, rate_k, w_k, mid_k = f_in(s_xm, s_gx, p_x, p_r, p_rx, c_v)
     u_k = f_ctl(gap_k, rate_k, s_il, s_cur, s_psi, s_int, p_t, c_fail)
     bout = bank_step.call({"I_L": s_il, "s": gap_k, "U": u_k, "sdot": rate_k, "h": ca.MX(dt)})
@@ -243,10 +254,19 @@ def build_vehicle_step(*, bank_step: Any, dt: float, nominal_gap_m: float, sides
     xm_n = f_mech(s_xm, fb)
     gx_n = f_out(s_gx, p_x, c_v, fb)
     s_next = ca.vertcat(xm_n, gx_n, il_next, psi_n, int_n, cur_next, force_next)
-    rec = ca.vertcat(gap_k, rate_k, s_cur, s_f, w_k, s_xm, mid_k, u_k, ca.mmin(gap_k),
+    rec = ca.vertcat(gap_k, rate_k, s_cur, s_f, s_il, w_k, s_xm, mid_k, u_k, ca.mmin(gap_k),
                      ca.mmax(gap_k), n_bad)
     assert rec.shape[0] == lay.n_record and s_next.shape[0] == lay.n_state
     fun = ca.Function(name, [S, P, C], [s_next, rec], ["S", "P", "C"], ["S_next", "R"])
+    nb = int(block_steps)
+    Sb, Pb = sym("S", lay.n_state), sym("P", lay.n_step_inputs, nb)
+    s_b: Any = Sb
+    recs = []
+    for j in range(nb):
+        s_b, r_j = fun(s_b, Pb[:, j], C)
+        recs.append(r_j)
+    block = ca.Function(f"{name}s{nb}", [Sb, Pb, C], [s_b, ca.horzcat(*recs)],
+                        ["S", "P", "C"], ["S_next", "R"])
     parts = {"guideway_in": f_in, "controllers": f_ctl, "magnets": bank_step,
              "controller_update": f_upd, "mechanics": f_mech, "guideway_out": f_out}
-    return VehicleStepFunction(fun, lay, parts)
+    return VehicleStepFunction(fun, block, nb, lay, parts)
