@@ -14,16 +14,19 @@ It is the same arithmetic as the NumPy loop of ``simulation.py`` (the reference,
     guideway  X+ = X Ad^T + Q Bd^T,  Q[r] = sum over the loads on ring row r of
               sin(k_j xi_mid) F_bar  (mid-step positions)
 
-The ring-buffer bookkeeping of the moving system boundary (which rows are recycled, and
-the check that the loads stay on the integrated spans) is done in Python: it changes once
-per span crossing.  The mode shapes' ring rows follow inside the function from the load
-positions (``row = floor((x - x0)/L) mod N``, as the loop computes them).
+Which ring rows the moving system boundary recycles at which step, and the check that the
+loads stay on the integrated spans, are computed in Python before the loop (they change
+once per span crossing); the rows come in as a per-step keep mask (1 keep, 0 reset to
+rest).  The mode shapes' ring rows follow inside the function from the load positions
+(``row = floor((x - x0)/L) mod N``, as the loop computes them).
 
 Layout (:class:`StepLayout`): input ``S`` (state), ``P`` (per-step inputs: the load
-positions at the step start, the irregularity and its slope there, the time), ``C``
-(per-run constants: speed and failure times); outputs ``S_next`` and ``R`` (the record of
-the step: gaps, rates, currents, forces, deflections, the mechanical state, the midspan
-deflection per ring row, the voltages, min/max gap and the bank's out-of-range count).
+positions at the step start, the irregularity and its slope there, the time, the keep
+mask), ``C`` (per-run constants: speed and failure times); outputs ``S_next`` and ``R``
+(the record of the step: gaps, rates, coil currents, forces and ``I_L`` at the step start,
+deflections, the mechanical state, the midspan deflection per ring row, the voltages,
+min/max gap and the bank's out-of-range count).  The block function chains the step
+``block_steps`` times (``P`` and ``R`` one column per step).
 """
 
 from __future__ import annotations
