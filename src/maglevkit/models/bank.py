@@ -602,6 +602,22 @@ class MagnetBank:
         return ca.Function("maglevkit_bank_outputs", [vi, vu, vs], [r.T for r in res],
                            ["I_L", "U", "s"], ["I", "F", "Ltilde"])
 
+    def step_function(self, dt: float) -> ca.Function:
+        """The step of every reduced circuit over ``dt`` [s] as an uncompiled CasADi
+        function, for composing larger compiled models (the vehicle step).
+
+        The same function the compiled :meth:`step` runs, with inputs ``I_L``, ``s``,
+        ``U``, ``sdot`` (arrays over the circuits), ``h`` (= ``dt``) and outputs named
+        ``I_L_next``, ``I``, ``F``, ``member_F``, ``n_bad`` (count of circuits out of
+        range or not finite; diagnose with :meth:`step`) and more; address them by
+        name.  Only for banks of reduced members with one gap input per circuit.
+        """
+        if not self._fast:
+            raise InputError("step_function needs a bank of reduced members only with "
+                             "gap_inputs='circuit'")
+        dt = check_step(dt)
+        return self._step_kernel(max(1, math.ceil(dt / self.max_step_s * (1 - 1e-12))))
+
     def _kernel(self, dt: float) -> _StepCall:
         n = max(1, math.ceil(dt / self.max_step_s * (1 - 1e-12)))
         call = self._kernels.get(n)

@@ -86,7 +86,14 @@ class VehicleRun:
     real_time_factor : float
         Simulated time / wall time.
     timing_s : dict
-        Wall time per part of the loop (magnets, mechanics, guideway, controllers, other).
+        Wall time per part of the loop [s]: magnets, mechanics, guideway, controllers,
+        other (the NumPy loop), or ``compiled step`` and ``other`` (the compiled loop,
+        whose parts are one call; :mod:`benchmarks.bench_vehicle` times them apart).
+    cpu_time_s : float
+        Process CPU time spent in the time loop [s] (less sensitive to a busy machine
+        than the wall time).
+    loop : str
+        ``"compiled"`` or ``"python"``: which implementation of the step ran.
     """
 
     dataset: Any
@@ -97,6 +104,8 @@ class VehicleRun:
     wall_time_s: float
     real_time_factor: float
     timing_s: dict[str, float] = field(default_factory=dict)
+    cpu_time_s: float = math.nan
+    loop: str = "python"
 
     def to_netcdf(self, path: str | Path) -> Path:
         """Write the run's Dataset (the folder must exist: nothing is created silently)."""
@@ -248,6 +257,7 @@ class VehicleModel:
         self.trim_force_N = circ_force          # per circuit of one side
         self.trim_current_A = self._trim_currents(circ_force)
         self._design_controllers()
+        self._step_functions: dict[float, Any] = {}
 
     # ------------------------------------------------------------------ set-up helpers
     def _circuit_map(self, j: int, var: str) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -333,7 +343,7 @@ class VehicleModel:
     # ------------------------------------------------------------------ the run
     def run(self, *, speed_m_per_s: float, duration_s: float, dt_s: float = 1e-3,
             irregularity: Any = None, failures: Sequence[Failure] = (), progress: bool = False,
-            floor_points: Sequence[float] = (-0.4, 0.0, 0.4)) -> VehicleRun:
+            floor_points: Sequence[float] = (-0.4, 0.0, 0.4), loop: str = "auto") -> VehicleRun:
         """Simulate the train at constant speed.
 
         Parameters
@@ -351,6 +361,13 @@ class VehicleModel:
         floor_points : sequence of float
             Car-body floor points for comfort, as fractions of the section length from its
             centre (negative: forward).
+        loop : {"auto", "compiled", "python"}
+            How a time step is computed: ``"compiled"``, one compiled CasADi function per
+            step for guideway, gaps, controllers, magnets and mechanics
+            (:mod:`maglevkit.vehicle.stepkernel`; reduced magnets only); ``"python"``, the
+            NumPy loop (the reference; needed for detailed magnets); ``"auto"`` (default):
+            compiled for reduced magnets unless the bank was made with
+            ``compiled="never"``.  Both give the same run to rounding.
 
         Returns
         -------
@@ -369,6 +386,13 @@ class VehicleModel:
                 raise InputError(f"{name} = {v!r} must be a finite number")
         if speed_m_per_s < 0 or duration_s <= 0 or dt_s <= 0:
             raise InputError("speed_m_per_s must be >= 0 and duration_s, dt_s > 0")
+        if loop not in ("auto", "compiled", "python"):
+            raise InputError(f"loop = {loop!r}; use 'auto', 'compiled' or 'python'")
+        if loop == "compiled" and self.fine:
+            raise InputError("loop = 'compiled' needs reduced magnets (magnets='reduced'); "
+                             "detailed magnets run in the Python loop")
+        compiled_loop = loop == "compiled" or (loop == "auto" and not self.fine
+                                               and self.bank.compiled_mode != "never")
         n_steps = int(round(duration_s / dt_s))
         if n_steps < 2:
             raise InputError(f"duration_s = {duration_s} s is less than two steps of {dt_s} s")
@@ -467,130 +491,140 @@ class VehicleModel:
         rec_qd = np.empty((n_steps + 1, ndof))
         rec_mid = np.zeros((n_steps + 1, gw.n_spans))
         rec_span = np.zeros((n_steps + 1, gw.n_spans), dtype=int)
+        rec_fp = np.empty((n_steps + 1, npt))
         minv = 1.0 / np.diag(mech.M)
         timing = dict.fromkeys(("magnets", "mechanics", "guideway", "controllers", "other"), 0.0)
         touchdown: tuple[str, float, float, str] | None = None
         last = n_steps
-        # one discarded step first: compiles (or loads) the bank's kernel outside the timing
-        if not self.fine:
-            bank.step(bstate, dt, res * current, gaps_p, 0.0)
-        bar = _Progress(n_steps, enabled=progress)
-        clock = time.perf_counter
-        t_start = clock()
-        mid_shape = span.mode_shapes(0.5 * span_l)[0] if nm else np.zeros(0)
-        zeros_np = np.zeros(npt)
-        # guideway modal state in ring order, [q | q'] per row (as Guideway.step)
-        gx = np.concatenate([gstate.modal_displacement_m, gstate.modal_velocity_m_per_s], axis=1)
-        first = gstate.first_span
-        n_sp = gw.n_spans
-        span_ids = np.arange(n_sp)
-        ad_gt, bd_gt = ad_g.T.copy(), bd_g.T.copy()
-        half = 0.5 * v * dt
-        fail_any = np.isfinite(fail_t)
-        t_fail0 = float(fail_t.min()) if fail_any.any() else math.inf
-        rec_fp = np.empty((n_steps + 1, npt))
-        for k in range(n_steps + 1):
-            t0 = clock()
-            t = times[k]
-            x_pts = xpath[k]
-            # guideway deflection at the points (and mode shapes at the mid-step positions)
-            if nm:
-                if gw.moving_boundary:
-                    k_rear = int(gw.span_index(x_pts.min()))
-                    if k_rear > first:
-                        for kk_ in range(first, min(k_rear, first + n_sp)):
-                            gx[kk_ % n_sp] = 0.0
-                        first = k_rear
-                x2 = np.concatenate([x_pts, x_pts + half])
-                ks = np.floor((x2 - gw.origin_m) / span_l).astype(int)
-                if ks.min() < first or ks.max() > first + n_sp - 1:
-                    raise OutOfRangeError(f"vehicle run at t = {t:.4f} s: the train left the "
-                                          f"integrated spans {first} ... {first + n_sp - 1}")
-                rows2 = ks % n_sp
-                arg = np.multiply.outer(x2 - (gw.origin_m + ks * span_l), kk)
-                sn = np.sin(arg)
-                rows = rows2[:npt]
-                phi, dphi = sn[:npt], kk * np.cos(arg[:npt])
-                qg = gx[rows]
-                w = np.einsum("pj,pj->p", qg[:, :nm], phi)
-                w_rate = (np.einsum("pj,pj->p", qg[:, nm:], phi)
-                          + v * np.einsum("pj,pj->p", qg[:, :nm], dphi))
-            else:
-                w = w_rate = zeros_np
-            t1 = clock()
-            q, qd = x_m[:ndof], x_m[ndof:]
-            gaps_p = s0 + bt @ q - w - r_all[k]
-            rates_p = bt @ qd - w_rate - v * rx_all[k]
-            gaps_c = gaps_p if circ_avg is None else circ_avg @ gaps_p
-            rates_c = rates_p if circ_avg is None else circ_avg @ rates_p
-            # record the state at t_k
-            rec["gap"][k] = gaps_c
-            rec["current"][k] = current
-            rec["force"][k] = force_c
-            rec["deflection"][k] = w if circ_avg is None else circ_avg @ w
-            rec_q[k], rec_qd[k] = q, qd
-            rec_fp[k] = force_pts
-            if nm:
-                rec_span[k] = first + span_ids
-                rec_mid[k] = gx[(first + span_ids) % n_sp, :nm] @ mid_shape
-            gmin = float(gaps_c.min())
-            gmax = float(gaps_c.max())
-            if gmin <= tr.touchdown_gap_m or gmax >= tr.landing_gap_m:
-                closed = gmin <= tr.touchdown_gap_m
-                j = int(np.argmin(gaps_c) if closed else np.argmax(gaps_c))
-                touchdown = (names[j], float(t), float(gaps_c[j]),
-                             "closed" if closed else "landed")
-                rec["voltage"][k] = np.nan
-                last = k
-                break
-            if k == n_steps:
-                rec["voltage"][k] = rec["voltage"][k - 1]
-                break
-            t3 = clock()
-            # controllers (flux cascade, every circuit at once)
-            rho = kp * (gaps_c - s0) + kd * rates_c + ki * integ
-            u = res * current + kf * (psi0 * (1.0 + rho) - psi_hat)
-            np.clip(u, -umax, umax, out=u)
-            # 2-quadrant chopper: the coil current cannot reverse.  Reduced model (eq. 8):
-            # I = (U + R_ec I_L) / (R_el + R_ec) >= 0  <=>  U >= -R_ec I_L
-            if self.fine:
-                u = np.where((current < 1.0) & (u < 0.0), 0.0, u)
-            else:
-                u = np.maximum(u, -r_ec * bstate.inductor_currents_A)
-            if t >= t_fail0:
-                u = np.where(fail_t <= t, 0.0, u)
-            rec["voltage"][k] = u
-            t4 = clock()
-            try:
-                bstate, out = bank.step(bstate, dt, u, gaps_p, rates_p, pole_forces=self.fine)
-            except MaglevkitError as exc:
-                raise type(exc)(f"vehicle run at t = {t:.4f} s: {exc}") from None
-            t5 = clock()
-            new_current = out.currents_A
-            psi_hat += dt * (u - res * 0.5 * (current + new_current))
-            integ += proj @ ((gaps_c - s0) * dt)
-            new_pts = out.pole_force_N if self.fine else out.circuit_force_N
-            assert new_pts is not None
-            f_bar = (0.5 * sides) * (force_pts + new_pts)
-            t6 = clock()
-            x_m = ad_m @ x_m + bd_m @ (mech.Q_gravity - mech.B @ f_bar)
-            t7 = clock()
-            if nm:
-                onehot = (rows2[npt:, None] == span_ids).astype(float)
-                qmod = onehot.T @ (sn[npt:] * f_bar[:, None])
-                gx = gx @ ad_gt + qmod @ bd_gt
-            t8 = clock()
-            current = new_current
-            force_c = out.circuit_force_N
-            force_pts = new_pts
-            timing["guideway"] += (t1 - t0) + (t8 - t7)
-            timing["other"] += (t3 - t1) + (t6 - t5)
-            timing["controllers"] += t4 - t3
-            timing["magnets"] += t5 - t4
-            timing["mechanics"] += t7 - t6
-            bar.update(k + 1)
-        wall = clock() - t_start
-        bar.close()
+        if compiled_loop:
+            last, touchdown, wall, cpu = self._compiled_loop(
+                dt=dt, v=v, times=times, xpath=xpath, r_all=r_all, rx_all=rx_all,
+                x_m=x_m, gstate=gstate, i_l=bstate.inductor_currents_A, psi_hat=psi_hat,
+                integ=integ, current=current, force=force_c, fail_t=fail_t, rec=rec,
+                rec_q=rec_q, rec_qd=rec_qd, rec_fp=rec_fp, rec_mid=rec_mid,
+                rec_span=rec_span, timing=timing, progress=progress)
+        else:
+            # one discarded step first: compiles (or loads) the bank's kernel outside the timing
+            if not self.fine:
+                bank.step(bstate, dt, res * current, gaps_p, 0.0)
+            bar = _Progress(n_steps, enabled=progress)
+            clock = time.perf_counter
+            t_start = clock()
+            cpu0 = time.process_time()
+            mid_shape = span.mode_shapes(0.5 * span_l)[0] if nm else np.zeros(0)
+            zeros_np = np.zeros(npt)
+            # guideway modal state in ring order, [q | q'] per row (as Guideway.step)
+            gx = np.concatenate([gstate.modal_displacement_m, gstate.modal_velocity_m_per_s], axis=1)
+            first = gstate.first_span
+            n_sp = gw.n_spans
+            span_ids = np.arange(n_sp)
+            ad_gt, bd_gt = ad_g.T.copy(), bd_g.T.copy()
+            half = 0.5 * v * dt
+            fail_any = np.isfinite(fail_t)
+            t_fail0 = float(fail_t.min()) if fail_any.any() else math.inf
+            for k in range(n_steps + 1):
+                t0 = clock()
+                t = times[k]
+                x_pts = xpath[k]
+                # guideway deflection at the points (and mode shapes at the mid-step positions)
+                if nm:
+                    if gw.moving_boundary:
+                        k_rear = int(gw.span_index(x_pts.min()))
+                        if k_rear > first:
+                            for kk_ in range(first, min(k_rear, first + n_sp)):
+                                gx[kk_ % n_sp] = 0.0
+                            first = k_rear
+                    x2 = np.concatenate([x_pts, x_pts + half])
+                    ks = np.floor((x2 - gw.origin_m) / span_l).astype(int)
+                    if ks.min() < first or ks.max() > first + n_sp - 1:
+                        raise OutOfRangeError(f"vehicle run at t = {t:.4f} s: the train left the "
+                                              f"integrated spans {first} ... {first + n_sp - 1}")
+                    rows2 = ks % n_sp
+                    arg = np.multiply.outer(x2 - (gw.origin_m + ks * span_l), kk)
+                    sn = np.sin(arg)
+                    rows = rows2[:npt]
+                    phi, dphi = sn[:npt], kk * np.cos(arg[:npt])
+                    qg = gx[rows]
+                    w = np.einsum("pj,pj->p", qg[:, :nm], phi)
+                    w_rate = (np.einsum("pj,pj->p", qg[:, nm:], phi)
+                              + v * np.einsum("pj,pj->p", qg[:, :nm], dphi))
+                else:
+                    w = w_rate = zeros_np
+                t1 = clock()
+                q, qd = x_m[:ndof], x_m[ndof:]
+                gaps_p = s0 + bt @ q - w - r_all[k]
+                rates_p = bt @ qd - w_rate - v * rx_all[k]
+                gaps_c = gaps_p if circ_avg is None else circ_avg @ gaps_p
+                rates_c = rates_p if circ_avg is None else circ_avg @ rates_p
+                # record the state at t_k
+                rec["gap"][k] = gaps_c
+                rec["current"][k] = current
+                rec["force"][k] = force_c
+                rec["deflection"][k] = w if circ_avg is None else circ_avg @ w
+                rec_q[k], rec_qd[k] = q, qd
+                rec_fp[k] = force_pts
+                if nm:
+                    rec_span[k] = first + span_ids
+                    rec_mid[k] = gx[(first + span_ids) % n_sp, :nm] @ mid_shape
+                gmin = float(gaps_c.min())
+                gmax = float(gaps_c.max())
+                if gmin <= tr.touchdown_gap_m or gmax >= tr.landing_gap_m:
+                    closed = gmin <= tr.touchdown_gap_m
+                    j = int(np.argmin(gaps_c) if closed else np.argmax(gaps_c))
+                    touchdown = (names[j], float(t), float(gaps_c[j]),
+                                 "closed" if closed else "landed")
+                    rec["voltage"][k] = np.nan
+                    last = k
+                    break
+                if k == n_steps:
+                    rec["voltage"][k] = rec["voltage"][k - 1]
+                    break
+                t3 = clock()
+                # controllers (flux cascade, every circuit at once)
+                rho = kp * (gaps_c - s0) + kd * rates_c + ki * integ
+                u = res * current + kf * (psi0 * (1.0 + rho) - psi_hat)
+                np.clip(u, -umax, umax, out=u)
+                # 2-quadrant chopper: the coil current cannot reverse.  Reduced model (eq. 8):
+                # I = (U + R_ec I_L) / (R_el + R_ec) >= 0  <=>  U >= -R_ec I_L
+                if self.fine:
+                    u = np.where((current < 1.0) & (u < 0.0), 0.0, u)
+                else:
+                    u = np.maximum(u, -r_ec * bstate.inductor_currents_A)
+                if t >= t_fail0:
+                    u = np.where(fail_t <= t, 0.0, u)
+                rec["voltage"][k] = u
+                t4 = clock()
+                try:
+                    bstate, out = bank.step(bstate, dt, u, gaps_p, rates_p, pole_forces=self.fine)
+                except MaglevkitError as exc:
+                    raise type(exc)(f"vehicle run at t = {t:.4f} s: {exc}") from None
+                t5 = clock()
+                new_current = out.currents_A
+                psi_hat += dt * (u - res * 0.5 * (current + new_current))
+                integ += proj @ ((gaps_c - s0) * dt)
+                new_pts = out.pole_force_N if self.fine else out.circuit_force_N
+                assert new_pts is not None
+                f_bar = (0.5 * sides) * (force_pts + new_pts)
+                t6 = clock()
+                x_m = ad_m @ x_m + bd_m @ (mech.Q_gravity - mech.B @ f_bar)
+                t7 = clock()
+                if nm:
+                    onehot = (rows2[npt:, None] == span_ids).astype(float)
+                    qmod = onehot.T @ (sn[npt:] * f_bar[:, None])
+                    gx = gx @ ad_gt + qmod @ bd_gt
+                t8 = clock()
+                current = new_current
+                force_c = out.circuit_force_N
+                force_pts = new_pts
+                timing["guideway"] += (t1 - t0) + (t8 - t7)
+                timing["other"] += (t3 - t1) + (t6 - t5)
+                timing["controllers"] += t4 - t3
+                timing["magnets"] += t5 - t4
+                timing["mechanics"] += t7 - t6
+                bar.update(k + 1)
+            wall = clock() - t_start
+            bar.close()
+            cpu = time.process_time() - cpu0
         n = last + 1
         times = times[:n]
         sl = slice(0, n)
@@ -664,7 +698,196 @@ class VehicleModel:
         comfort = self._comfort(acc_floor, times, dt, floor)
         sim_t = float(times[-1])
         return VehicleRun(ds, min_gap, peak, touchdown, comfort, wall,
-                          sim_t / wall if wall > 0 else math.inf, timing)
+                          sim_t / wall if wall > 0 else math.inf, timing, cpu,
+                          "compiled" if compiled_loop else "python")
+
+    # ------------------------------------------------------------------ compiled loop
+    def step_function(self, dt_s: float = 1e-3) -> Any:
+        """The vehicle step for steps of ``dt_s`` [s] as one CasADi function (uncompiled),
+        with its layout and parts (:class:`maglevkit.vehicle.stepkernel.VehicleStepFunction`);
+        reduced magnets only."""
+        from .stepkernel import build_vehicle_step
+
+        if self.fine:
+            raise InputError("the compiled vehicle step needs reduced magnets "
+                             "(magnets='reduced')")
+        dt = float(dt_s)
+        gw, mech, span = self.guideway, self.mechanics, self.guideway.span
+        nm = gw.n_modes
+        ad_g, bd_g = span.discretize(dt) if nm else (np.zeros((0, 0)), np.zeros((0, 0)))
+        ad_m, bd_m = mech.discretize(dt)
+        return build_vehicle_step(
+            bank_step=self.bank.step_function(dt), dt=dt, nominal_gap_m=self.train.nominal_gap_m,
+            sides=float(self.train.sides), span_length_m=span.length_m, origin_m=gw.origin_m,
+            wavenumbers=span.wavenumbers_rad_per_m if nm else np.zeros(0),
+            guideway_ad=ad_g, guideway_bd=bd_g, n_spans=gw.n_spans, mech_ad=ad_m,
+            mech_bd=bd_m, gravity_force=mech.Q_gravity, force_matrix=mech.B, gains=self.gains,
+            flux_bias_Wb=self.flux_bias_Wb, resistance_ohm=self.bank.resistance_ohm,
+            eddy_resistance_ohm=self.eddy_resistance_ohm,
+            voltage_limit_V=self.train.voltage_limit_V,
+            integral_projection=self.integral_projection,
+            midspan_shape=span.mode_shapes(0.5 * span.length_m)[0] if nm else np.zeros(0))
+
+    def _compiled_step(self, dt: float) -> tuple[Any, Any, int]:
+        """(compiled block function, layout, steps per block), built and compiled (or
+        loaded from the disk cache) once per ``dt``."""
+        from ..models.compiled import compile_function
+
+        hit = self._step_functions.get(dt)
+        if hit is None:
+            vs = self.step_function(dt)
+            f, _ = compile_function(vs.block_function, mode=self.bank.compiled_mode)
+            hit = (f, vs.layout, vs.block_steps)
+            self._step_functions[dt] = hit
+        return hit
+
+    def _compiled_loop(self, *, dt: float, v: float, times: np.ndarray, xpath: np.ndarray,
+                       r_all: np.ndarray, rx_all: np.ndarray, x_m: np.ndarray, gstate: Any,
+                       i_l: np.ndarray, psi_hat: np.ndarray, integ: np.ndarray,
+                       current: np.ndarray, force: np.ndarray, fail_t: np.ndarray,
+                       rec: dict[str, np.ndarray], rec_q: np.ndarray, rec_qd: np.ndarray,
+                       rec_fp: np.ndarray, rec_mid: np.ndarray, rec_span: np.ndarray,
+                       timing: dict[str, float], progress: bool
+                       ) -> tuple[int, tuple[str, float, float, str] | None, float, float]:
+        """The time loop with one compiled call per block of steps; fills the records like
+        the NumPy loop.  Returns ``(last step, touchdown, wall time, CPU time)``.
+
+        Events are looked for after every block, in the NumPy loop's order per step: the
+        loads leaving the integrated spans, touchdown, the end of the run, a circuit the
+        kernel flagged (diagnosed by the bank's own step, which raises).  Steps a block
+        computed after the event are discarded.
+        """
+        from ..models.bank import BankState
+
+        fun, lay, nb = self._compiled_step(dt)
+        tr, gw, bank = self.train, self.guideway, self.bank
+        names = bank.circuit_names
+        n_steps = times.size - 1
+        nm = gw.n_modes
+        n_sp = lay.n_spans
+        st, sp, rl = lay.state, lay.step_inputs, lay.record
+        n_rows = -(-(n_steps + 1) // nb) * nb            # whole blocks
+        p_all = np.empty((n_rows, lay.n_step_inputs))
+        pad = np.minimum(np.arange(n_rows), n_steps)      # the last step repeated
+        p_all[:, sp["x"]], p_all[:, sp["r"]] = xpath[pad], r_all[pad]
+        p_all[:, sp["r_x"]], p_all[:, sp["t"]] = rx_all[pad], times[pad, None]
+        p_all[:, sp["keep"]] = 1.0
+        # moving system boundary, vectorised: the window's first span at every step (it
+        # moves to the rearmost load, never back), the rows it recycles (reset to rest at
+        # that step) and the first step whose loads leave the window
+        first0 = gstate.first_span
+        k_out = -1
+        if nm:
+            span_l = gw.span.length_m
+            lo = np.floor((xpath.min(axis=1) - gw.origin_m) / span_l).astype(int)
+            hi = np.floor((xpath.max(axis=1) + 0.5 * v * dt - gw.origin_m) / span_l).astype(int)
+            first_k = (np.maximum.accumulate(np.maximum(lo, first0)) if gw.moving_boundary
+                       else np.full(lo.shape, first0))
+            out = (lo < first_k) | (hi > first_k + n_sp - 1)
+            k_out = int(np.argmax(out)) if out.any() else -1
+            keep = p_all[:, sp["keep"]]
+            for kr in (np.flatnonzero(np.diff(first_k) > 0) + 1).tolist():
+                old = int(first_k[kr - 1])
+                for span in range(old, min(int(first_k[kr]), old + n_sp)):
+                    keep[kr, span % n_sp] = 0.0
+        else:
+            first_k = np.full(times.shape, first0)
+        # two state vectors, each bound once to one of two buffers (ping-pong)
+        s_buf = [np.zeros(lay.n_state), np.zeros(lay.n_state)]
+        s0v = s_buf[0]
+        s0v[st["x_mech"]] = x_m
+        if nm:
+            s0v[st["guideway"]] = np.concatenate([gstate.modal_displacement_m,
+                                                  gstate.modal_velocity_m_per_s], axis=1).ravel()
+        s0v[st["I_L"]], s0v[st["psi_hat"]], s0v[st["integral"]] = i_l, psi_hat, integ
+        s0v[st["current"]], s0v[st["force"]] = current, force
+        r_all_rec = np.empty((n_rows, lay.n_record))
+        consts = np.concatenate([[v], fail_t])
+        bufs: list[Any] = []
+        evals = []
+        for j in (0, 1):
+            buf, ev = fun.buffer()
+            buf.set_arg(0, memoryview(s_buf[j]))        # type: ignore[arg-type]
+            buf.set_res(0, memoryview(s_buf[1 - j]))    # type: ignore[arg-type]
+            buf.set_arg(2, memoryview(consts))          # type: ignore[arg-type]
+            bufs.append(buf)
+            evals.append(ev)
+        i_min, i_max, i_bad = rl["gap_min"].start, rl["gap_max"].start, rl["n_bad"].start
+        td_gap, land_gap = tr.touchdown_gap_m, tr.landing_gap_m
+        touchdown: tuple[str, float, float, str] | None = None
+        last = n_steps
+        t_call = 0.0
+        done = False
+        bar = _Progress(n_steps, enabled=progress)
+        clock = time.perf_counter
+        t_start = clock()
+        cpu0 = time.process_time()
+        for blk in range(n_rows // nb):
+            k0 = blk * nb
+            j = blk & 1
+            buf = bufs[j]
+            buf.set_arg(1, memoryview(p_all[k0:k0 + nb]))   # type: ignore[arg-type]
+            rows = r_all_rec[k0:k0 + nb]
+            buf.set_res(1, memoryview(rows))                 # type: ignore[arg-type]
+            tc = clock()
+            evals[j]()
+            t_call += clock() - tc
+            events = ((rows[:, i_min] <= td_gap) | (rows[:, i_max] >= land_gap)
+                      | (rows[:, i_bad] != 0))
+            end = k0 + nb > n_steps
+            if not (end or events.any() or k0 <= k_out < k0 + nb):
+                bar.update(k0 + nb)
+                continue
+            for k in range(k0, min(k0 + nb, n_steps + 1)):
+                row = r_all_rec[k]
+                if k == k_out:
+                    raise OutOfRangeError(f"vehicle run at t = {times[k]:.4f} s: the train left "
+                                          f"the integrated spans {first_k[k]} ... "
+                                          f"{first_k[k] + n_sp - 1}")
+                if row[i_min] <= td_gap or row[i_max] >= land_gap:
+                    gaps = row[rl["gap"]]
+                    if np.isfinite(gaps).all():
+                        closed = row[i_min] <= td_gap
+                        jj = int(np.argmin(gaps) if closed else np.argmax(gaps))
+                        touchdown = (names[jj], float(times[k]), float(gaps[jj]),
+                                     "closed" if closed else "landed")
+                        last = k
+                        done = True
+                        break
+                if k == n_steps:
+                    done = True
+                    break
+                if row[i_bad]:                  # out of the maps or not finite: diagnose
+                    state = BankState(float(times[k]), row[rl["I_L"]].copy(),
+                                      row[rl["gap"]].copy())
+                    try:
+                        bank.step(state, dt, row[rl["voltage"]].copy(), row[rl["gap"]].copy(),
+                                  row[rl["gap_rate"]].copy())
+                    except MaglevkitError as exc:
+                        raise type(exc)(f"vehicle run at t = {times[k]:.4f} s: {exc}") from None
+            if done:
+                break
+            bar.update(k0 + nb)
+        wall = clock() - t_start
+        cpu = time.process_time() - cpu0
+        bar.close()
+        timing.clear()
+        timing["compiled step"] = t_call
+        timing["other"] = max(wall - t_call, 0.0)
+        n = last + 1
+        rr = r_all_rec[:n]
+        for key in ("gap", "current", "force", "deflection", "voltage"):
+            rec[key][:n] = rr[:, rl[key]]
+        rec_q[:n], rec_qd[:n], rec_fp[:n] = rr[:, rl["q"]], rr[:, rl["q_dot"]], rr[:, rl["force"]]
+        if nm:
+            rec_span[:n] = first_k[:n, None] + np.arange(n_sp)
+            rec_mid[:n] = np.take_along_axis(rr[:, rl["midspan_ring"]], rec_span[:n] % n_sp,
+                                             axis=1)
+        if touchdown is not None:
+            rec["voltage"][last] = np.nan
+        elif n_steps >= 1:
+            rec["voltage"][n_steps] = rec["voltage"][n_steps - 1]
+        return last, touchdown, wall, cpu
 
     def mechanics_trim_forces(self) -> np.ndarray:
         """Downward force on the guideway at every force point at the trim [N] (both sides)."""
