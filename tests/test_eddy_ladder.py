@@ -179,3 +179,92 @@ def test_energy_balance_with_the_ladder() -> None:
 def _fem_case(label: str) -> dict:
     runs = json.loads(FEM_CASES.read_text())["runs"]
     return next(r for r in runs if r["label"] == label)
+
+
+def _model_errors(ref: dict, times: np.ndarray, **kw: object) -> np.ndarray:
+    """(model - FEM) current in units of the step at ``times`` (FEM linearly interpolated
+    on its own grid; its steps there are <= 4 ms on a smooth response)."""
+    mag = mk.load_magnet("u-magnet", **kw)
+    res = mk.simulate(mk.FluxModel(mag, rtol=1e-7), times, gaps=ref["gap_m"],
+                      voltages=2.0 * ref["i1_A"], initial_currents=ref["i0_A"])
+    fem = np.interp(times, np.asarray(ref["time_s"]), np.asarray(ref["current_A"]))
+    return (res.currents_A[:, 0] - fem) / (ref["i1_A"] - ref["i0_A"])
+
+
+SAMPLES = np.array([0.0, 1e-3, 2e-3, 5e-3, 1e-2, 2e-2, 4e-2, 7e-2, 0.1, 0.15, 0.25])
+
+
+def test_recorded_fem_is_converged() -> None:
+    """The recorded FEM's own error (from the script's mesh and time-step study)."""
+    base = _fem_case("10 mm, 10 -> 20 A")
+    study = json.loads(FEM_CASES.with_name("fem_transient_study.json").read_text())["runs"]
+    t = SAMPLES[1:]
+    ib = np.interp(t, base["time_s"], base["current_A"])
+    for run in study:
+        other = np.interp(t, run["time_s"], run["current_A"])
+        # h 0.4 -> 0.2 mm and dt -> dt/2 changed the current by at most 0.09 % of the step
+        # for t >= 1 ms (measured); the model comparisons below use bounds of >= 1 %
+        assert np.max(np.abs(other - ib)) / 10.0 < 2e-3
+    # energy balance of the FEM (rectangle rule on the BDF2 steps): measured 1.2e-3 ... 1.8e-3
+    assert all(r["energy_residual"] < 3e-3 for r in json.loads(FEM_CASES.read_text())["runs"])
+
+
+def test_ladder_follows_the_fem_and_the_lumped_model_jumps() -> None:
+    ref = _fem_case("10 mm, 10 -> 20 A")
+    ladder = _model_errors(ref, SAMPLES, eddy_model="ladder", eddy_layers=4)
+    lumped = _model_errors(ref, SAMPLES[:3])
+    # issue 12's observation: the lumped current is too high at 1 ms because it jumps
+    # (measured +15.3 % of the step)
+    assert lumped[1] > 0.10
+    # the ladder (n = 4): measured +0.04 % of the step at 1 ms; at these samples at most
+    # 4.6 % (20 ms; 5.8 % on the FEM's dense grid); bounds: 1 % and 5.5 %
+    assert abs(ladder[1]) < 0.01
+    assert np.max(np.abs(ladder[1:])) < 0.055
+
+
+@pytest.mark.slow
+def test_ladder_vs_fem_all_steps() -> None:
+    """All four recorded steps with n = 6 (docs/validation_fem.md section 5)."""
+    import sys
+
+    sys.path.insert(0, str(FEM_CASES.parents[1]))
+    from fem_u_magnet_transient import metrics, simulate_model
+
+    for ref in json.loads(FEM_CASES.read_text())["runs"]:
+        res = simulate_model(ref, eddy_model="ladder", eddy_layers=6)
+        m = metrics(res.time_s, res.currents_A[:, 0], res.eddy_loss_J, ref)
+        # measured: at 1 ms +0.3 ... +3.3 %, max (t >= 1 ms) 2.8 ... 6.5 % of the step,
+        # E_eddy +4 ... +18 %, t63 -3.4 ... -14.5 % (the issue's aims, 5 % / 5 % / 20 %,
+        # are met for the energy and for the current below the knee, not in saturation
+        # and not for t63: docs/validation_fem.md)
+        assert abs(m["err_1ms"]) < 0.04
+        assert m["err_max"] < 0.075
+        assert abs(m["e_eddy_J"] / m["e_eddy_fem_J"] - 1) < 0.20
+        assert abs(m["t63_s"] / m["t63_fem_s"] - 1) < 0.16
+
+
+def test_laminated_core_diffuses_across_each_sheet() -> None:
+    import copy
+
+    from maglevkit.magnets.base import ModelOptions, build_magnet
+
+    params = copy.deepcopy(mk.load_magnet("u-magnet").parameters)
+    params["magnet"].update(laminated=True, sheet_thickness=5e-4)
+    params["provenance"].update({"magnet.laminated": "[E] test variant",
+                                 "magnet.sheet_thickness": "[E] test variant"})
+    lumped = build_magnet(params).network
+    one = build_magnet(params, options=ModelOptions(eddy_model="ladder", eddy_layers=1)).network
+    three = build_magnet(params, options=ModelOptions(eddy_model="ladder",
+                                                       eddy_layers=3)).network
+    g_lumped = lumped.eddy_conductances[lumped.branch_names.index("leg_left_1")]
+    g_one = one.eddy_conductances[one.branch_names.index("leg_left_1")]
+    # n = 1 across a sheet is the lamination formula d^2 l/(12 rho A) (to rounding)
+    assert g_one == pytest.approx(g_lumped, rel=1e-12)
+    # the laminated core's ladder tubes span the whole section; the rail stays solid
+    # (its outermost element is the 2-D slab's w_1 = 3.26e-3 of sigma l t b/(2A))
+    tubes = [b for b in three.branches if b.name.startswith("leg_left_1:tube")]
+    assert sum(b.elements[0].cross_section for b in tubes) == pytest.approx(0.03 * 0.1)
+    g_rail = three.eddy_conductances[three.branch_names.index("rail")]
+    rail_len = 0.06 + 0.03 + 0.03
+    assert g_rail == pytest.approx(LADDER_COEFFICIENTS[3][1][0] * rail_len * 0.03 * 0.015
+                                   / (2 * 1.5e-7 * 0.03 * 0.1), rel=1e-9)
