@@ -263,7 +263,9 @@ class Magnet:
         unknown = sorted(set(changes) - set(OPTION_NAMES))
         if unknown:
             raise InputError(f"with_options: unknown switch(es) {unknown}; the physics "
-                             f"options are {', '.join(OPTION_NAMES)}")
+                             f"switches are {', '.join(SWITCH_NAMES)} (True or False), "
+                             f"eddy_model ({' or '.join(map(repr, EDDY_MODELS))}) and "
+                             f"eddy_layers (1 ... {max(LADDER_COEFFICIENTS)})")
         opts = {**self.options.__dict__, **changes}
         return _build(self.parameters, options=ModelOptions(**opts), source=self.source,
                       provenance=self.provenance, check_provenance=False)
