@@ -84,20 +84,20 @@ def slab_errors() -> dict[int, np.ndarray]:
 
 
 def test_ladder_matches_closed_form_slab_impedance(slab_errors: dict[int, np.ndarray]) -> None:
-    # measured max relative errors over omega tau in [1e-2, 1e5]: n = 6: 5.1e-2,
-    # n = 8: 8.8e-3 (the fit's own values, tools/fit_eddy_ladder.py); the bounds give 10 %
-    # on top for the 141-point grid here vs the fit's 400 points
+    # measured max relative errors over omega tau in [1e-2, 1e5] on this 141-point grid:
+    # n = 6: 5.09e-2, n = 8: 8.81e-3 (the fit's own values on 400 points, 5.09e-2 and
+    # 8.81e-3, tools/fit_eddy_ladder.py); bounds 10 % above
     assert slab_errors[6].max() < 0.056
     assert slab_errors[8].max() < 0.0097
-    # low frequencies (omega tau <= 1, where the lumped element is already good): n = 6
-    # measured 1.6e-3 -- well within 1 %
-    assert slab_errors[6][OMEGA_TAU <= 1.0].max() < 0.01
+    # low frequencies (omega tau <= 1): n = 6 measured 3.5e-3 (n = 1, the lumped element:
+    # 2.1e-2); bound 5e-3
+    assert slab_errors[6][OMEGA_TAU <= 1.0].max() < 5e-3
 
 
 def test_ladder_converges_in_layers(slab_errors: dict[int, np.ndarray]) -> None:
     worst = [slab_errors[n].max() for n in sorted(slab_errors)]
     # strictly falling from n = 1 (lumped: error ~ sqrt(omega tau)/3 - grows without bound,
-    # 32 at the top of the band) to n = 8; each extra tube at least 1.5x better from n = 3
+    # ~100 at the top of the band) to n = 8; each extra tube at least 1.5x better from n = 3
     # on (measured ratios 2.1-2.5)
     assert all(b < a for a, b in zip(worst, worst[1:], strict=False))
     assert all(b < a / 1.5 for a, b in zip(worst[2:], worst[3:], strict=False))
