@@ -500,7 +500,11 @@ def main(argv: list[str] | None = None) -> None:
         out()
     out(f"Total run time {time.perf_counter() - t_start:.0f} s.")
     if args.output:
-        Path(args.output).write_text(_HEADER + "\n".join(lines) + "\n" + _NOTES)
+        # keep the transient section written by fem_u_magnet_transient.py
+        old = Path(args.output).read_text() if Path(args.output).exists() else ""
+        keep = old[old.index("<!-- transient:begin -->"):] if "<!-- transient:begin -->" in old else ""
+        Path(args.output).write_text(_HEADER + "\n".join(lines) + "\n" + _NOTES
+                                     + ("\n" + keep if keep else ""))
         print(f"wrote {args.output}")
 
 

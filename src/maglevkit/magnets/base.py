@@ -25,6 +25,7 @@ from typing import Any
 
 import numpy as np
 
+from ..circuit.ladder import EDDY_MODELS, LADDER_COEFFICIENTS
 from ..circuit.network import Network
 from ..errors import (
     InputError,
@@ -68,27 +69,50 @@ class ModelOptions:
         Leakage permeances.
     eddy_currents : bool
         Eddy-current elements (used by the dynamic model).
+    eddy_model : str
+        ``"lumped"``: one eddy element per iron part (a resistor for the coil at
+        ``t = 0+``); ``"ladder"``: ``eddy_layers`` nested flux tubes across each part's
+        section, each with its own eddy element (diffusion into solid iron,
+        :mod:`maglevkit.circuit.ladder`).  Kinds that have no ladder refuse ``"ladder"``.
+    eddy_layers : int
+        Tubes per iron part of the ladder (1 ... 8; ignored by ``"lumped"``).
 
     Raises
     ------
     InputError
-        A switch that is not True or False (``"no"`` would be truthy).
+        A switch that is not True or False (``"no"`` would be truthy), an unknown
+        ``eddy_model``, ``eddy_layers`` not a whole number in 1 ... 8.
     """
 
     saturation: bool = True
     fringing: bool = True
     leakage: bool = True
     eddy_currents: bool = True
+    eddy_model: str = "lumped"
+    eddy_layers: int = 6
 
     def __post_init__(self) -> None:
         # "no" or 0 would be truthy/falsy by accident: every switch must be a real bool
-        for name in OPTION_NAMES:
+        for name in SWITCH_NAMES:
             object.__setattr__(self, name, flag(getattr(self, name), name))
+        if self.eddy_model not in EDDY_MODELS:
+            raise InputError(f"eddy_model = {self.eddy_model!r}; allowed are "
+                             f"{', '.join(repr(m) for m in EDDY_MODELS)}")
+        n = self.eddy_layers
+        if isinstance(n, bool) or not isinstance(n, (int, np.integer)) \
+                or int(n) not in LADDER_COEFFICIENTS:
+            raise InputError(f"eddy_layers = {n!r}; allowed are the whole numbers "
+                             f"{min(LADDER_COEFFICIENTS)} ... {max(LADDER_COEFFICIENTS)}")
+        object.__setattr__(self, "eddy_layers", int(n))
 
 
-#: The physics switches of :class:`ModelOptions` (keyword names of ``load_magnet`` and
+#: The True/False physics switches of :class:`ModelOptions`.
+SWITCH_NAMES = ("saturation", "fringing", "leakage", "eddy_currents")
+#: All options of :class:`ModelOptions` (keyword names of ``load_magnet`` and
 #: ``Magnet.with_options``).
-OPTION_NAMES = ("saturation", "fringing", "leakage", "eddy_currents")
+OPTION_NAMES = (*SWITCH_NAMES, "eddy_model", "eddy_layers")
+#: Magnet kinds whose builder has the ``"ladder"`` eddy model.
+LADDER_KINDS = ("u_magnet",)
 
 #: Winding current density [A/m^2], averaged over the coil's cross-section, above which a
 #: current is reported as implausible (:class:`PlausibleRange`): at 100 A/mm^2 even a
@@ -222,13 +246,14 @@ class Magnet:
                           sort_keys=True, default=str)
         return hashlib.sha256(blob.encode()).hexdigest()
 
-    def with_options(self, **changes: bool) -> Magnet:
+    def with_options(self, **changes: Any) -> Magnet:
         """Rebuild this magnet with some physics switches changed.
 
         Parameters
         ----------
-        **changes : bool
-            Any of ``saturation``, ``fringing``, ``leakage``, ``eddy_currents``.
+        **changes : bool, str or int
+            Any of ``saturation``, ``fringing``, ``leakage``, ``eddy_currents`` (bool),
+            ``eddy_model`` (str), ``eddy_layers`` (int); see :class:`ModelOptions`.
 
         Raises
         ------
@@ -238,7 +263,9 @@ class Magnet:
         unknown = sorted(set(changes) - set(OPTION_NAMES))
         if unknown:
             raise InputError(f"with_options: unknown switch(es) {unknown}; the physics "
-                             f"switches are {', '.join(OPTION_NAMES)} (True or False)")
+                             f"switches are {', '.join(SWITCH_NAMES)} (True or False), "
+                             f"eddy_model ({' or '.join(map(repr, EDDY_MODELS))}) and "
+                             f"eddy_layers (1 ... {max(LADDER_COEFFICIENTS)})")
         opts = {**self.options.__dict__, **changes}
         return _build(self.parameters, options=ModelOptions(**opts), source=self.source,
                       provenance=self.provenance, check_provenance=False)
@@ -440,6 +467,9 @@ def _build(parameters: Mapping[str, Any], *, options: ModelOptions | None, sourc
         raise ParameterFileError(f"[magnet] kind = {kind!r} is unknown; known kinds: "
                                  f"{', '.join(sorted(_BUILDERS))}")
     builder, tables = _BUILDERS[kind]
+    if options.eddy_model != "lumped" and kind not in LADDER_KINDS:
+        raise InputError(f"eddy_model = {options.eddy_model!r} is not available for kind "
+                         f"{kind!r} (only for {', '.join(LADDER_KINDS)}); use 'lumped'")
     allowed = {"magnet", "materials", "provenance", "operating", *tables}
     unknown = sorted(set(parameters) - allowed)
     if unknown:
@@ -520,7 +550,8 @@ def bundled_magnets() -> list[str]:
 
 
 def load_magnet(source: str | Path, *, saturation: bool = True, fringing: bool = True,
-                leakage: bool = True, eddy_currents: bool = True) -> Magnet:
+                leakage: bool = True, eddy_currents: bool = True, eddy_model: str = "lumped",
+                eddy_layers: int = 6) -> Magnet:
     """Load a magnet from a TOML file path or a bundled name (e.g. ``"u-magnet"``).
 
     Parameters
@@ -529,6 +560,11 @@ def load_magnet(source: str | Path, *, saturation: bool = True, fringing: bool =
         A bundled name (:func:`bundled_magnets`) or a ``.toml`` file.
     saturation, fringing, leakage, eddy_currents : bool
         Physics switches (:class:`ModelOptions`); True or False only.
+    eddy_model : str
+        ``"lumped"`` (default) or ``"ladder"`` (diffusing eddy currents, ``eddy_layers``
+        nested tubes per iron part; :class:`ModelOptions`).
+    eddy_layers : int
+        Tubes per iron part of the ladder (1 ... 8).
 
     Raises
     ------
@@ -543,6 +579,7 @@ def load_magnet(source: str | Path, *, saturation: bool = True, fringing: bool =
         The file lacks provenance entries (see :func:`build_magnet`).
     """
     options = ModelOptions(saturation=saturation, fringing=fringing, leakage=leakage,
-                           eddy_currents=eddy_currents)
+                           eddy_currents=eddy_currents, eddy_model=eddy_model,
+                           eddy_layers=eddy_layers)
     params, label = read_parameter_file(source, what="magnet")
     return build_magnet(params, options=options, source=label)

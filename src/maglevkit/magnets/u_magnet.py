@@ -36,8 +36,14 @@ Estimates of the secondary flux paths (Roters' method, docs/sources.md sec. 3):
   leakage takes over).  The further path across the gap is left out: this flux spreads
   into the wide air space beside the pole, and the FEM shows it adds flux linkage but
   hardly any force (it does not depend on the gap).
-* eddy currents: one element per iron part, solid bars (Saint-Venant formula) or a
-  laminated stack (``sheet_thickness``); the rail is always solid.  Each leg segment
+* eddy currents (``eddy_model = "lumped"``, default): one element per iron part, solid bars
+  (Saint-Venant formula) or a laminated stack (``sheet_thickness``); the rail is always
+  solid.  ``eddy_model = "ladder"``: each part's section is ``eddy_layers`` nested flux
+  tubes with their own eddy elements (:mod:`maglevkit.circuit.ladder`), diffusing across
+  the bar's width (yoke, rail: their thickness) or across each sheet of a laminated core;
+  with ``end_effects = false`` (a 2-D cross-section) the solid bar is the 2-D slab, with
+  ``end_effects = true`` its conductances carry the Saint-Venant factor of the finite
+  depth (the lumped element always does).  Each leg segment
   carries the eddy currents of its own length (the element conductance is proportional
   to the length), so every branch the winding sits on induces them.
 """
@@ -47,7 +53,15 @@ from __future__ import annotations
 from collections.abc import Mapping
 from typing import Any
 
-from ..circuit.elements import AirGap, EddyCurrent, Element, IronPath, LeakagePermeance
+from ..circuit.elements import (
+    AirGap,
+    EddyCurrent,
+    Element,
+    IronPath,
+    LeakagePermeance,
+    _rectangle_torsion_constant,
+)
+from ..circuit.ladder import ladder_branches
 from ..circuit.network import Branch, Circuit, Coil, Network
 from ..errors import ParameterFileError
 from ..materials import MU0, Material
@@ -149,12 +163,30 @@ def build_u_magnet(params: Mapping[str, Any], materials: Mapping[str, Material],
         rho_core = _resistivity(m["resistivity"], core, "magnet")
         rho_rail = _resistivity(r["resistivity"], rail_mat, "rail")
 
-    def eddy(name: str, width: float, length: float) -> tuple[Element, ...]:
+    def eddy(name: str, width: float, length: float, rho: float,
+             solid: bool) -> tuple[Element, ...]:
         if not options.eddy_currents:
             return ()
-        if m["laminated"]:
-            return (EddyCurrent.laminated(name, width * d, length, rho_core, m["sheet_thickness"]),)
-        return (EddyCurrent.solid_rectangular(name, width, d, length, rho_core),)
+        if m["laminated"] and not solid:
+            return (EddyCurrent.laminated(name, width * d, length, rho, m["sheet_thickness"]),)
+        return (EddyCurrent.solid_rectangular(name, width, d, length, rho),)
+
+    def part(name: str, start: str, end: str, iron: IronPath, width: float,
+             solid: bool = False) -> list[Branch]:
+        """Branches of one iron part (flux along it, section ``width`` x depth)."""
+        rho = rho_rail if solid else rho_core
+        if not options.eddy_currents or options.eddy_model == "lumped":
+            return [Branch(name, start, end, (iron, *eddy(f"eddy_{name}", width, iron.length,
+                                                          rho, solid)))]
+        if m["laminated"] and not solid:       # diffusion across each sheet
+            return ladder_branches(name, start, end, iron, thickness=m["sheet_thickness"],
+                                   resistivity=rho, layers=options.eddy_layers)
+        # solid bar: slab across the width; with end_effects the Saint-Venant factor of
+        # the finite depth (the eddy currents close within the depth), else the 2-D slab
+        factor = (_rectangle_torsion_constant(width, d) / (d * width**3 / 3.0)
+                  if m["end_effects"] else 1.0)
+        return ladder_branches(name, start, end, iron, thickness=width, resistivity=rho,
+                               layers=options.eddy_layers, factor=factor)
 
     left = ["PL", *(f"L{k + 1}" for k in range(K)), "YL"]
     right = ["PR", *(f"R{k + 1}" for k in range(K)), "YR"]
@@ -167,22 +199,15 @@ def build_u_magnet(params: Mapping[str, Any], materials: Mapping[str, Material],
             # every segment carries the eddy currents of its own length: all of the
             # winding sits on solid (or laminated) iron, so no flux linked by the coil can
             # change without inducing them
-            branches.append(Branch(name, start, end_, (
-                IronPath(f"iron_{name}", seg_len[j], area, core),
-                *eddy(f"eddy_{name}", wp, seg_len[j]))))
+            branches += part(name, start, end_, IronPath(f"iron_{name}", seg_len[j], area, core),
+                             wp)
             coils.append(Coil(name, seg_turns[j], pole=side))
-    rail_eddy: tuple[Element, ...] = ()
-    if options.eddy_currents:
-        rail_eddy = (EddyCurrent.solid_rectangular("eddy_rail", r["thickness"], d, rail_len,
-                                                   rho_rail),)
-    branches += [
-        Branch("gap_left", "PL", "RL", (gap("gap_left"),)),
-        Branch("rail", "RL", "RR",
-               (IronPath("iron_rail", rail_len, r["thickness"] * d, rail_mat), *rail_eddy)),
-        Branch("gap_right", "RR", "PR", (gap("gap_right"),)),
-        Branch("yoke", "YR", "YL", (IronPath("iron_yoke", c, ty * d, core),
-                                    *eddy("eddy_yoke", ty, c))),
-    ]
+    branches += [Branch("gap_left", "PL", "RL", (gap("gap_left"),))]
+    branches += part("rail", "RL", "RR",
+                     IronPath("iron_rail", rail_len, r["thickness"] * d, rail_mat),
+                     r["thickness"], solid=True)
+    branches += [Branch("gap_right", "RR", "PR", (gap("gap_right"),))]
+    branches += part("yoke", "YR", "YL", IronPath("iron_yoke", c, ty * d, core), ty)
     if options.leakage:
         ends = 4.0 * 0.52 * MU0 if m["end_effects"] else 0.0   # quarter cylinders, leg ends
         branches.append(Branch("leakage", "PL", "PR", (

@@ -1,0 +1,731 @@
+# ruff: noqa: B023  (the Newton helpers are defined and used within one time step)
+"""Transient 2-D finite-element reference of the U-magnet with solid iron (issue 12, part 3).
+
+Magnetodynamics of the cross-section in the vector potential ``A_z`` (half model x >= 0,
+mirror symmetry, ``A = 0`` on the outer boundary of the air box)::
+
+    sigma (dA/dt - u_b) - div( nu(|grad A|) grad A ) = J_coil      in conducting body b
+                          - div( nu grad A )          = J_coil      elsewhere
+    int_b sigma (dA/dt - u_b) dA = 0                                (zero net current per body)
+    U = R I + dpsi/dt,   psi = depth sum_k sign_k (n/2)/(t_c h_c) int_k A dA
+
+``E_z = -(dA/dt - u_b)``: ``u_b`` is the constant (per body) gradient of the electric
+potential along z that makes the body's net current zero, the 2-D picture of eddy currents
+that close at the far ends of a long body.  Two conducting bodies: the U-core (legs and yoke,
+one solid piece) and the rail.  The coil is driven by a voltage through its resistance; its
+current is an unknown of the same Newton system.
+
+Discretisation: P1 triangles on a structured tensor mesh from ``fem_u_magnet.py`` (grid lines
+on every material boundary) refined to cells of ``h_surface`` at every iron surface (graded
+by 20 % per cell), lumped (row-sum) conductor mass, variable-step BDF2 in time (implicit Euler
+for the first step) on a geometric time grid, Newton's method with the full Jacobian of the
+nonlinear reluctivity (``dnu/dB`` from H(B)) and a backtracking line search at every step.
+The element loops are vectorised by hand (P1 gradients are constant per element), so a step
+costs one sparse LU per Newton iteration.
+
+Outputs: coil current, flux linkage, eddy power per body, magnetic energy; an energy balance
+``int U I = int R I^2 + int P_eddy + Delta W`` checks the discretisation.
+
+``python benchmarks/fem_u_magnet_transient.py --fem PART`` runs the FEM (PART = ``cases``:
+the voltage steps, ``study``: mesh and time-step convergence, ``noeddy``: the steps with
+sigma = 0) and rewrites ``benchmarks/results/fem_transient_PART.json`` (``--only K,..``
+runs some cases into part files, ``--merge`` joins them); without ``--fem`` it compares the
+recorded FEM with the flux model (lumped and ladder eddy models) and rewrites
+``docs/figures/fem-transient-steps.png`` and the transient section of
+``docs/validation_fem.md`` (between the markers).
+Needs the optional extra ``validation`` (scikit-fem, only for the tensor mesh).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import os
+import sys
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+
+os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")   # threaded BLAS on 1e4 vectors: spin-waits
+os.environ.setdefault("OMP_NUM_THREADS", "1")
+
+import numpy as np  # noqa: E402
+import scipy.sparse as sp  # noqa: E402
+import scipy.sparse.linalg as spla  # noqa: E402
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from fem_u_magnet import GEOM, MU0, Geometry, Reluctivity, _cap, _grid_1d  # noqa: E402
+
+import maglevkit as mk  # noqa: E402
+
+ROOT = Path(__file__).resolve().parents[1]
+RESULTS = {part: ROOT / "benchmarks" / "results" / f"fem_transient_{part}.json"
+           for part in ("cases", "study", "noeddy")}
+RESULTS_DIR = ROOT / "benchmarks" / "results"
+
+
+# ---------------------------------------------------------------------------------------
+# mesh
+# ---------------------------------------------------------------------------------------
+
+
+def build_mesh(s: float, h_surface: float = 1e-4, g: Geometry = GEOM):
+    """Tensor mesh of the half model, cells of ``h_surface`` at every iron surface."""
+    from skfem import MeshTri
+
+    hf = min(s / 6.0, 1.0e-3)
+    hs = min(h_surface, hf)
+    hm, hi, hmax, grade = 1.0e-3, 4.0e-3, 0.06, 0.2
+    # x: iron surfaces at the leg faces and the rail end; coil edges
+    xp = np.array([0.0, g.xi - g.coil_thickness, g.xi, g.xo, g.xo + g.coil_thickness,
+                   0.5 * g.rail_width, 0.5 * g.rail_width + 0.01])
+    xs = np.array([hi, hm, hs, hs, hm, hs, hi])
+    x = _grid_1d(xp, xs, 0.0, g.box_half_width, hmax, grade)
+    x = _cap(x, 0.0, xp[-1], hi)
+    yc0 = g.coil_gap_to_pole_face
+    yl, yt = g.leg_height, g.leg_height + g.yoke_thickness
+    ya = _grid_1d(np.array([0.0, yc0, yc0 + g.coil_height, yl, yt]),
+                  np.array([hs, hm, hm, hs, hs]), 0.0, yt + g.box_above, hmax, grade)
+    ya = _cap(ya, 0.0, yt, hi)
+    ng = max(6, int(math.ceil(s / hf - 1e-9)))
+    # gap: graded towards both iron faces (pole face and rail top)
+    yg = _grid_1d(np.array([-s, 0.0]), np.array([hs, hs]), -s, 0.0, hf, grade)
+    if yg.size - 1 < ng:
+        yg = np.linspace(-s, 0.0, ng + 1)
+    yb = _grid_1d(np.array([0.0, -g.rail_thickness]), np.array([hs, hs]),
+                  -g.box_below, 0.0, hmax, grade)
+    yb = _cap(yb, -g.rail_thickness, 0.0, hi) - s
+    y = np.unique(np.round(np.concatenate([yb, yg, ya]), 12))
+    return MeshTri.init_tensor(x, y)
+
+
+def regions(mesh, s: float, g: Geometry = GEOM):
+    """Per element: core mask (legs + yoke), rail mask, coil sign (+1/-1/0)."""
+    cx, cy = mesh.p[:, mesh.t].mean(axis=1)
+    ax = np.abs(cx)
+    leg = (ax > g.xi) & (ax < g.xo) & (cy > 0) & (cy < g.leg_height)
+    yoke = (ax < g.xo) & (cy > g.leg_height) & (cy < g.leg_height + g.yoke_thickness)
+    rail = (ax < 0.5 * g.rail_width) & (cy < -s) & (cy > -s - g.rail_thickness)
+    incoil = (cy > g.coil_gap_to_pole_face) & (cy < g.coil_gap_to_pole_face + g.coil_height)
+    inner = incoil & (ax > g.xi - g.coil_thickness) & (ax < g.xi)
+    outer = incoil & (ax > g.xo) & (ax < g.xo + g.coil_thickness)
+    sign = np.zeros(mesh.t.shape[1])
+    sign[inner] = -1.0
+    sign[outer] = +1.0
+    return leg | yoke, rail, sign
+
+
+# ---------------------------------------------------------------------------------------
+# P1 assembly (vectorised)
+# ---------------------------------------------------------------------------------------
+
+
+class P1:
+    """Gradients, areas and sparse index pattern of P1 triangles."""
+
+    def __init__(self, mesh) -> None:
+        p, t = mesh.p, mesh.t
+        self.t = t
+        x, y = p[0][t], p[1][t]                      # (3, ne)
+        det = (x[1] - x[0]) * (y[2] - y[0]) - (x[2] - x[0]) * (y[1] - y[0])
+        self.area = 0.5 * np.abs(det)
+        # grad lambda_i = (y_j - y_k, x_k - x_j)/det (cyclic)
+        gx = np.array([y[1] - y[2], y[2] - y[0], y[0] - y[1]]) / det
+        gy = np.array([x[2] - x[1], x[0] - x[2], x[1] - x[0]]) / det
+        self.gx, self.gy = gx, gy
+        self.n = p.shape[1]
+        self.rows = np.repeat(t, 3, axis=0).ravel()      # (9 ne): i index
+        self.cols = np.tile(t, (3, 1)).ravel()           # j index
+        self.nodal_area = np.bincount(t.ravel(), np.repeat(self.area[None] / 3, 3, 0).ravel(),
+                                      self.n)
+
+    def grad(self, A: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        a = A[self.t]
+        return (a * self.gx).sum(0), (a * self.gy).sum(0)
+
+    def lumped(self, mask: np.ndarray) -> np.ndarray:
+        """Row-sum mass vector int_mask v_i over the elements in ``mask``."""
+        w = np.where(mask, self.area, 0.0) / 3.0
+        return np.bincount(self.t.ravel(), np.repeat(w[None], 3, 0).ravel(), self.n)
+
+    def stiffness(self, nu: np.ndarray, c: np.ndarray, ax: np.ndarray, ay: np.ndarray):
+        """K_ij = int nu grad_i.grad_j + c (ga.grad_i)(ga.grad_j)."""
+        gx, gy = self.gx, self.gy
+        dg = gx * ax + gy * ay                            # (3, ne)
+        k = (nu * self.area)[None, None] * (gx[:, None] * gx[None] + gy[:, None] * gy[None])
+        k = k + (c * self.area)[None, None] * (dg[:, None] * dg[None])
+        return sp.csr_matrix((k.ravel(), (self.rows, self.cols)), shape=(self.n, self.n))
+
+    def residual(self, nu: np.ndarray, ax: np.ndarray, ay: np.ndarray) -> np.ndarray:
+        r = (nu * self.area)[None] * (self.gx * ax + self.gy * ay)
+        return np.bincount(self.t.ravel(), r.ravel(), self.n)
+
+
+# ---------------------------------------------------------------------------------------
+# transient solver
+# ---------------------------------------------------------------------------------------
+
+
+@dataclass
+class Transient:
+    """Time histories of one FEM run (SI)."""
+
+    time_s: np.ndarray
+    current_A: np.ndarray
+    psi_Wb: np.ndarray
+    eddy_power_core_W: np.ndarray
+    eddy_power_rail_W: np.ndarray
+    energy_W: np.ndarray          # stored magnetic energy [J]
+    nodes: int
+    newton_max: int
+    energy_residual: float        # |int UI - int RI^2 - int P - dW| / int UI
+    wall_s: float
+    meta: dict = field(default_factory=dict)
+
+    @property
+    def eddy_power_W(self) -> np.ndarray:
+        return self.eddy_power_core_W + self.eddy_power_rail_W
+
+
+def _spd_solve(K, b: np.ndarray) -> np.ndarray:
+    lu = spla.splu(K.tocsc(), permc_spec="MMD_AT_PLUS_A", options={"SymmetricMode": True})
+    return lu.solve(b)
+
+
+def time_grid(t_end: float, dt0: float, block: int, dt_max: float) -> np.ndarray:
+    """Steps of ``dt0`` doubling every ``block`` steps up to ``dt_max`` (then constant)."""
+    t, dt, out, k = 0.0, dt0, [0.0], 0
+    while t < t_end * (1 - 1e-12):
+        t = min(t + dt, t_end)
+        out.append(t)
+        k += 1
+        if k % block == 0:
+            dt = min(2.0 * dt, dt_max)
+    return np.array(out)
+
+
+class UMagnetFem:
+    """Static and transient P1 FEM of the U-magnet half model at a fixed gap."""
+
+    def __init__(self, s: float, *, h_surface: float = 1e-4, sigma: float | None = None,
+                 resistance: float = 2.0, material: str = "AISI 1008",
+                 g: Geometry = GEOM) -> None:
+        self.s, self.g = s, g
+        self.mesh = build_mesh(s, h_surface, g)
+        self.fe = P1(self.mesh)
+        core, rail, sign = regions(self.mesh, s, g)
+        self.iron = core | rail
+        mat = mk.get_material(material)
+        self.sigma = 1.0 / float(mat.resistivity) if sigma is None else sigma
+        self.R = resistance
+        self.rel = Reluctivity(None, material)
+        self.mat = mat
+        # energy density table w(B) = int_0^B H dB (trapezoid on a fine grid)
+        bb = np.concatenate([np.linspace(0.0, 3.0, 30001), np.linspace(3.0, 20.0, 3401)[1:]])
+        hh = np.asarray(mat.field_strength(bb), dtype=float)
+        self._wb = bb
+        self._tb = bb
+        self._tnu, self._tc = self.rel.nu_r(bb)
+        self._w = np.concatenate([[0.0], np.cumsum(0.5 * (hh[1:] + hh[:-1]) * np.diff(bb))])
+        fe = self.fe
+        self.m_core, self.m_rail = fe.lumped(core), fe.lumped(rail)
+        self.vol_core, self.vol_rail = self.m_core.sum(), self.m_rail.sum()
+        self.nside = 0.5 * g.turns
+        self.ac = g.coil_thickness * g.coil_height
+        w = sign * fe.area / 3.0
+        self.bsign = np.bincount(fe.t.ravel(), np.repeat(w[None], 3, 0).ravel(), fe.n)
+        # psi = kpsi . A (both halves)
+        self.kpsi = 2.0 * g.depth * self.nside / self.ac * self.bsign
+        p = self.mesh.p
+        bnd = self.mesh.boundary_nodes()
+        fixed = bnd[p[0, bnd] > 1e-9]                   # A = 0 except on the symmetry line
+        self.free = np.setdiff1d(np.arange(fe.n), fixed)
+        self.iron_e = self.iron
+
+    # -- material coefficients per element (tables of fem_u_magnet.Reluctivity.nu_r on a
+    #    fine grid; linear interpolation, 1e-4 T steps up to 3 T)
+    def _coeffs(self, A: np.ndarray):
+        ax, ay = self.fe.grad(A)
+        b = np.hypot(ax, ay)
+        nu_i = np.interp(b, self._tb, self._tnu)
+        c_i = np.interp(b, self._tb, self._tc)
+        nu = np.where(self.iron_e, nu_i, 1.0)
+        c = np.where(self.iron_e, c_i, 0.0)
+        return ax, ay, b, nu, c
+
+    def energy(self, A: np.ndarray) -> float:
+        """Stored magnetic energy W = int int_0^B H dB [J] (both halves)."""
+        ax, ay = self.fe.grad(A)
+        b = np.hypot(ax, ay)
+        w = np.where(self.iron_e, np.interp(b, self._wb, self._w), b**2 / (2 * MU0))
+        return float(2.0 * self.g.depth * np.sum(w * self.fe.area))
+
+    def static(self, current: float, tol: float = 1e-10) -> np.ndarray:
+        """Magnetostatic A at coil current ``current`` [A]."""
+        fe, free = self.fe, self.free
+        src = MU0 * self.nside * current / self.ac * self.bsign
+        nu0 = np.where(self.iron_e, 1e-3, 1.0)
+        K = fe.stiffness(nu0, np.zeros_like(nu0), np.zeros_like(nu0), np.zeros_like(nu0))
+        A = np.zeros(fe.n)
+        A[free] = _spd_solve(K[free][:, free], src[free])
+        scale = np.linalg.norm(src[free])
+        for _ in range(80):
+            ax, ay, _, nu, c = self._coeffs(A)
+            r = fe.residual(nu, ax, ay) - src
+            rel = np.linalg.norm(r[free]) / scale
+            if rel < tol:
+                return A
+            K = fe.stiffness(nu, c, ax, ay)
+            dA = np.zeros(fe.n)
+            dA[free] = _spd_solve(K[free][:, free], -r[free])
+            step = 1.0
+            while True:
+                An = A + step * dA
+                ax, ay, _, nu, _ = self._coeffs(An)
+                rn = np.linalg.norm((fe.residual(nu, ax, ay) - src)[free]) / scale
+                if rn < rel or step < 1 / 64:
+                    break
+                step *= 0.5
+            A = An
+        raise RuntimeError(f"static Newton did not converge at s={self.s}, I={current}")
+
+    def step_response(self, i0: float, i1: float, times: np.ndarray,
+                      tol: float = 1e-9, verbose: bool = False) -> Transient:
+        """Voltage step U: R i0 -> R i1 at t = 0 from the static state at i0."""
+        t_wall = time.perf_counter()
+        fe, free = self.fe, self.free
+        nf = free.size
+        U = self.R * i1
+        A = self.static(i0)
+        mc, mr = self.m_core[free], self.m_rail[free]
+        ms = self.m_core + self.m_rail
+        msig = MU0 * self.sigma * ms[free]                 # mu0-scaled conductor mass
+        kps = self.kpsi[free]
+        bs = MU0 * self.nside / self.ac * self.bsign[free]
+        hist_A = [A.copy()]
+        cache: dict = {}
+        self.factorisations = 0
+        I, uc, ur = i0, 0.0, 0.0
+        out_I, out_psi, out_pc, out_pr, out_W = [i0], [self.kpsi @ A], [0.0], [0.0], [self.energy(A)]
+        nmax = 0
+        for n in range(1, times.size):
+            h = times[n] - times[n - 1]
+            if n == 1:
+                a0, hist = 1.0 / h, -hist_A[-1] / h
+            else:
+                w = h / (times[n - 1] - times[n - 2])
+                a0 = (1 + 2 * w) / ((1 + w) * h)
+                hist = (-(1 + w) * hist_A[-1] + w * w / (1 + w) * hist_A[-2]) / h
+            x = np.concatenate([A[free], [uc, ur, I]])
+            scaleA = MU0 * self.nside * max(abs(i0), abs(i1)) / self.ac * np.linalg.norm(
+                self.bsign[free])
+
+            def res_jac(x, need_jac=True):
+                Af = np.zeros(fe.n)
+                Af[free] = x[:nf]
+                uc_, ur_, I_ = x[nf:]
+                ax, ay, _, nu, c = self._coeffs(Af)
+                adot = a0 * x[:nf] + hist[free]
+                ra = (fe.residual(nu, ax, ay)[free] + MU0 * self.sigma
+                      * (mc * (adot - uc_) + mr * (adot - ur_)) - bs * I_)
+                rc = mc @ adot - self.vol_core * uc_
+                rr = mr @ adot - self.vol_rail * ur_
+                rI = self.R * I_ + kps @ adot - U
+                r = np.concatenate([ra, [rc, rr, rI]])
+                if not need_jac:
+                    return r, None, Af
+                K = fe.stiffness(nu, c, ax, ay)[free][:, free] + sp.diags(a0 * msig)
+                return r, K, Af
+
+            # bordered Newton system [[K, Bc], [Br, Dd]] by its Schur complement: K is
+            # symmetric positive definite (SuperLU in symmetric mode), 3 border columns
+            Bc = np.stack([-MU0 * self.sigma * mc, -MU0 * self.sigma * mr, -bs], axis=1)
+            Br = np.stack([a0 * mc, a0 * mr, a0 * kps], axis=0)
+            Dd = np.diag([-self.vol_core, -self.vol_rail, self.R])
+
+            def factor(K):
+                lu = spla.splu(K.tocsc(), permc_spec="MMD_AT_PLUS_A",
+                               options={"SymmetricMode": True})
+                kb = lu.solve(Bc)
+                cache.update(lu=lu, kb=kb, S=Dd - Br @ kb, a0=a0)
+                self.factorisations += 1
+
+            def solve(r):
+                kr = cache["lu"].solve(r[:nf])
+                dy = np.linalg.solve(cache["S"], r[nf:] - Br @ kr)
+                return -np.concatenate([kr - cache["kb"] @ dy, dy])
+
+            def norm(r):
+                # the body rows are linear (solved exactly by every Newton step)
+                return max(np.linalg.norm(r[:nf]) / scaleA, abs(r[nf + 2]) / max(abs(U), 1e-9))
+
+            # modified Newton: the factorisation is kept while the step size is the same
+            # and the residual falls by at least 4x per iteration
+            fresh = cache.get("a0") != a0
+            r, J, Af = res_jac(x, need_jac=fresh)
+            if fresh:
+                factor(J)
+            rel = norm(r)
+            it = 0
+            while True:
+                it += 1
+                dx = solve(r)
+                stp = 1.0
+                while True:
+                    xn = x + stp * dx
+                    rn, _, _ = res_jac(xn, need_jac=False)
+                    reln = norm(rn)
+                    if reln < max(rel, 1e-14) or stp < 1 / 64:
+                        break
+                    stp *= 0.5
+                slow = reln > 0.25 * rel
+                x, r, rel = xn, rn, reln
+                if verbose > 1:
+                    print(f"    it {it} step {stp} rel {rel:.3e} dI {dx[-1]:.3e}", flush=True)
+                small = np.linalg.norm(stp * dx[:nf]) <= 1e-9 * np.linalg.norm(x[:nf])
+                if (rel < tol and small) or it >= 40:
+                    break
+                if slow:
+                    _, J, _ = res_jac(x)
+                    factor(J)
+            if rel > 1e3 * tol:
+                raise RuntimeError(f"Newton failed at t={times[n]:.3e}: residual {rel:.2e}")
+            nmax = max(nmax, it)
+            A = np.zeros(fe.n)
+            A[free] = x[:nf]
+            uc, ur, I = x[nf:]
+            adot = a0 * A + hist
+            adot[~np.isin(np.arange(fe.n), free)] = 0.0
+            pc = 2 * self.g.depth * self.sigma * float(self.m_core @ (adot - uc) ** 2)
+            pr = 2 * self.g.depth * self.sigma * float(self.m_rail @ (adot - ur) ** 2)
+            hist_A.append(A.copy())
+            if len(hist_A) > 2:
+                hist_A.pop(0)
+            out_I.append(I)
+            out_psi.append(self.kpsi @ A)
+            out_pc.append(pc)
+            out_pr.append(pr)
+            out_W.append(self.energy(A))
+            if verbose and n % 20 == 0:
+                print(f"  t={times[n] * 1e3:8.3f} ms I={I:8.4f} A its={it}", flush=True)
+        Iv, pc, pr, W = map(np.asarray, (out_I, out_pc, out_pr, out_W))
+        # energy balance (rectangle rule with the step-end values, as BDF2 computes them)
+        dt = np.diff(times)
+        ein = float(np.sum(dt * U * Iv[1:]))
+        eohm = float(np.sum(dt * self.R * Iv[1:] ** 2))
+        eed = float(np.sum(dt * (pc + pr)[1:]))
+        res = abs(ein - eohm - eed - (W[-1] - W[0])) / abs(ein)
+        return Transient(times, Iv, np.asarray(out_psi), pc, pr, W, fe.n, nmax, res,
+                         time.perf_counter() - t_wall,
+                         {"s_m": self.s, "i0_A": i0, "i1_A": i1, "sigma_S_per_m": self.sigma})
+
+
+# ---------------------------------------------------------------------------------------
+# FEM runs -> docs/fem_transient_results.json
+# ---------------------------------------------------------------------------------------
+
+#: (label, gap [m], I0 [A], I1 [A]) of the voltage steps U = R I0 -> R I1
+CASES = (("10 mm, 10 -> 20 A", 0.010, 10.0, 20.0),
+         ("6 mm, 10 -> 20 A", 0.006, 10.0, 20.0),
+         ("10 mm, 20 -> 50 A", 0.010, 20.0, 50.0),
+         ("6 mm, 20 -> 50 A", 0.006, 20.0, 50.0))
+T_END = 0.25                 # s
+H_SURFACE = 4e-4             # m, production mesh (see the convergence study)
+DT0, BLOCK, DT_MAX = 2e-5, 8, 4e-3
+#: convergence study at 10 mm, 10 -> 20 A: (label, h_surface, dt0, block); the production
+#: settings are the case itself
+STUDY = (("h 0.2 mm", 2e-4, DT0, BLOCK), ("h 0.4 mm, dt/2", 4e-4, DT0 / 2, 2 * BLOCK))
+
+
+def _record(r: Transient, label: str, h: float) -> dict:
+    return {"label": label, "gap_m": r.meta["s_m"], "i0_A": r.meta["i0_A"],
+            "i1_A": r.meta["i1_A"], "sigma_S_per_m": r.meta["sigma_S_per_m"],
+            "h_surface_m": h, "nodes": r.nodes, "steps": int(r.time_s.size - 1),
+            "newton_max": r.newton_max, "energy_residual": r.energy_residual,
+            "wall_s": r.wall_s, "time_s": r.time_s.tolist(), "current_A": r.current_A.tolist(),
+            "psi_Wb": r.psi_Wb.tolist(), "eddy_power_core_W": r.eddy_power_core_W.tolist(),
+            "eddy_power_rail_W": r.eddy_power_rail_W.tolist()}
+
+
+def run_fem(part: str, only: list[int] | None = None) -> dict:
+    """FEM runs of ``part`` ("cases": :data:`CASES`, "study": :data:`STUDY`), or of the
+    cases numbered ``only``."""
+    out: dict = {"generated_by": f"benchmarks/fem_u_magnet_transient.py --fem {part}",
+                 "t_end_s": T_END, "runs": []}
+    sigma = 0.0 if part == "noeddy" else None          # noeddy: the same steps, sigma = 0
+    if part == "study":
+        runs = [(label, 0.010, 10.0, 20.0, h, dt0, block) for label, h, dt0, block in STUDY]
+    else:
+        runs = [(label, s, i0, i1, H_SURFACE, DT0, BLOCK)
+                for k, (label, s, i0, i1) in enumerate(CASES) if only is None or k in only]
+    for label, s, i0, i1, h, dt0, block in runs:
+        fem = UMagnetFem(s, h_surface=h, sigma=sigma)
+        r = fem.step_response(i0, i1, time_grid(T_END, dt0, block, DT_MAX))
+        rec = _record(r, label, h)
+        rec["dt0_s"] = dt0
+        out["runs"].append(rec)
+        print(f"{part} {label}: {r.nodes} nodes, {r.time_s.size - 1} steps, {r.wall_s:.0f} s, "
+              f"energy residual {r.energy_residual:.1e}", flush=True)
+    return out
+
+
+# ---------------------------------------------------------------------------------------
+# comparison with the flux model
+# ---------------------------------------------------------------------------------------
+
+#: model variants compared with the FEM: (label, load_magnet keywords)
+MODELS = (("lumped (today)", {"eddy_model": "lumped"}),
+          ("ladder n = 1 (2-D slab)", {"eddy_model": "ladder", "eddy_layers": 1}),
+          ("ladder n = 4", {"eddy_model": "ladder", "eddy_layers": 4}),
+          ("ladder n = 6", {"eddy_model": "ladder", "eddy_layers": 6}),
+          ("no eddy currents", {"eddy_currents": False}))
+
+
+def load_results(part: str = "cases") -> list[dict]:
+    """Recorded FEM runs (written by ``--fem PART``)."""
+    return json.loads(RESULTS[part].read_text())["runs"]
+
+
+def rise_time(t: np.ndarray, i: np.ndarray, i0: float, i1: float, frac: float = 0.632) -> float:
+    """First time [s] the current passes ``i0 + frac (i1 - i0)`` (linear interpolation)."""
+    y = (i - i0) / (i1 - i0) - frac
+    k = np.nonzero(y >= 0.0)[0]
+    if k.size == 0 or k[0] == 0:
+        return float("nan")
+    j = k[0]
+    return float(t[j - 1] + (t[j] - t[j - 1]) * (-y[j - 1]) / (y[j] - y[j - 1]))
+
+
+def metrics(t: np.ndarray, i: np.ndarray, e_eddy: np.ndarray, ref: dict) -> dict:
+    """Errors of a model response against the recorded FEM run ``ref``."""
+    tf = np.asarray(ref["time_s"])
+    i_f = np.asarray(ref["current_A"])
+    p_f = np.asarray(ref["eddy_power_core_W"]) + np.asarray(ref["eddy_power_rail_W"])
+    i0, i1 = ref["i0_A"], ref["i1_A"]
+    step = i1 - i0
+    im = np.interp(tf, t, i)
+    late = tf >= 1e-3 - 1e-12
+    e_f = np.concatenate([[0.0], np.cumsum(np.diff(tf) * p_f[1:])])
+    em = np.interp(tf, t, e_eddy)
+    pm = np.diff(e_eddy) / np.diff(t)
+    tm = 0.5 * (t[1:] + t[:-1])
+    return {"err_1ms": float((np.interp(1e-3, t, i) - np.interp(1e-3, tf, i_f)) / step),
+            "err_max": float(np.max(np.abs(im - i_f)[late]) / step),
+            "t63_s": rise_time(t, i, i0, i1), "t63_fem_s": rise_time(tf, i_f, i0, i1),
+            "e_eddy_J": float(em[-1]), "e_eddy_fem_J": float(e_f[-1]),
+            "t_peak_s": float(tm[np.argmax(pm)]) if pm.size else float("nan"),
+            "t_peak_fem_s": float(tf[1:][np.argmax(p_f[1:])])}
+
+
+def simulate_model(ref: dict, **kw):  # type: ignore[no-untyped-def]
+    """The flux model's response to the recorded FEM run's voltage step."""
+    mag = mk.load_magnet("u-magnet", **kw)
+    times = np.asarray(ref["time_s"])
+    fm = mk.FluxModel(mag, rtol=1e-7)
+    res = mk.simulate(fm, times, gaps=ref["gap_m"], voltages=mag.network.resistances[0]
+                      * ref["i1_A"], initial_currents=ref["i0_A"])
+    return res
+
+
+def compare(out_md: Path | None, figure: Path | None) -> dict:
+    cases = load_results("cases")
+    study = load_results("study") if RESULTS["study"].exists() else []
+    table: dict = {}
+    curves: dict = {}
+    for ref in cases:
+        for label, kw in MODELS:
+            res = simulate_model(ref, **kw)
+            t = res.time_s
+            table[ref["label"], label] = metrics(t, res.currents_A[:, 0], res.eddy_loss_J, ref)
+            curves[ref["label"], label] = (t, res.currents_A[:, 0], res.eddy_loss_J)
+            print(ref["label"], label, table[ref["label"], label], flush=True)
+    noeddy = load_results("noeddy") if RESULTS["noeddy"].exists() else []
+    static: dict = {}
+    for ref in noeddy:
+        res = simulate_model(ref, eddy_currents=False)
+        t, i = res.time_s, res.currents_A[:, 0]
+        tf, i_f = np.asarray(ref["time_s"]), np.asarray(ref["current_A"])
+        late = tf >= 1e-3 - 1e-12
+        static[ref["label"]] = {
+            "err_max": float(np.max(np.abs(np.interp(tf, t, i) - i_f)[late])
+                             / (ref["i1_A"] - ref["i0_A"])),
+            "t63_s": rise_time(t, i, ref["i0_A"], ref["i1_A"]),
+            "t63_fem_s": rise_time(tf, i_f, ref["i0_A"], ref["i1_A"])}
+        print(ref["label"], "sigma = 0", static[ref["label"]], flush=True)
+    lines = _report(cases, study, table, static)
+    if out_md is not None:
+        text = out_md.read_text()
+        a, b = "<!-- transient:begin -->", "<!-- transient:end -->"
+        block = a + "\n" + "\n".join(lines) + "\n" + b
+        if a in text:
+            text = text[:text.index(a)] + block + text[text.index(b) + len(b):]
+        else:
+            text = text.rstrip("\n") + "\n\n" + block + "\n"
+        out_md.write_text(text)
+        print(f"wrote {out_md}")
+    if figure is not None:
+        _plot(cases, curves, figure)
+    return table
+
+
+def _t63_err(x: dict | None) -> str:
+    return f"{100 * (x['t63_s'] / x['t63_fem_s'] - 1):+.1f}" if x else "-"
+
+
+def _report(cases: list[dict], study: list[dict], table: dict, static: dict) -> list[str]:
+    L: list[str] = []
+    L.append("## 5. Transient: voltage steps with solid iron (eddy currents)\n")
+    L.append("Tests: `tests/test_eddy_ladder.py` (against the recorded FEM; all steps with "
+             "`-m slow`).\n")
+    L.append("Generated by `python benchmarks/fem_u_magnet_transient.py` (`--fem cases`, "
+             "`--fem study` and `--fem noeddy` rerun the FEM and rewrite "
+             "`benchmarks/results/fem_transient_*.json`, about 3 min of CPU per run; without "
+             "them it only reruns the models against the recorded FEM).\n")
+    c0 = cases[0]
+    L.append(f"FEM: the 2-D magnetodynamic problem of `benchmarks/fem_u_magnet_transient.py` "
+             f"(docstring): solid U-core and rail, sigma = {c0['sigma_S_per_m']:.3g} S/m (the "
+             f"material's own 1/rho, `AISI 1008`: rho = 1.5e-7 ohm m), zero net current per "
+             f"body, coil driven by U through R = 2 ohm, P1 with cells of "
+             f"{c0['h_surface_m'] * 1e3:g} mm at every iron surface, variable-step BDF2 from "
+             f"dt = {c0['dt0_s'] * 1e6:g} us (doubling every {BLOCK} steps, at most "
+             f"{DT_MAX * 1e3:g} ms), Newton at every step.  Step at t = 0 from the static state "
+             f"at I0 to U = R I1; t up to {T_END:g} s.\n")
+    L.append("### FEM convergence (10 mm, 10 -> 20 A)\n")
+    L.append("| run | nodes | steps | I(1 ms) [A] | I(10 ms) [A] | I(50 ms) [A] | t63 [ms] | "
+             "E_eddy [J] | energy balance residual | wall [s] |")
+    L.append("|---|---|---|---|---|---|---|---|---|---|")
+    for r in [cases[0], *study]:
+        t, i = np.asarray(r["time_s"]), np.asarray(r["current_A"])
+        p = np.asarray(r["eddy_power_core_W"]) + np.asarray(r["eddy_power_rail_W"])
+        e = float(np.sum(np.diff(t) * p[1:]))
+        lab = r["label"] if r in study else f"production (h {r['h_surface_m'] * 1e3:g} mm)"
+        L.append(f"| {lab} | {r['nodes']} | {r['steps']} | {np.interp(1e-3, t, i):.4f} | "
+                 f"{np.interp(1e-2, t, i):.4f} | {np.interp(5e-2, t, i):.4f} | "
+                 f"{rise_time(t, i, r['i0_A'], r['i1_A']) * 1e3:.2f} | {e:.3f} | "
+                 f"{r['energy_residual']:.1e} | {r['wall_s']:.0f} |")
+    L.append("")
+    L.append("### Flux model vs FEM\n")
+    L.append("err: (model - FEM) current in % of the step; max over t >= 1 ms.  t63: time to "
+             "63.2 % of the step.  E_eddy: eddy loss over the run; t_peak: time of the "
+             "largest eddy power.  Plot: `docs/figures/fem-transient-steps.png` (below).\n")
+    L.append("| case | model | err at 1 ms [%] | max err t >= 1 ms [%] | t63 model / FEM [ms] "
+             "| t63 err [%] | E_eddy model / FEM [J] | E_eddy err [%] | t_peak model / FEM [ms] |")
+    L.append("|---|---|---|---|---|---|---|---|---|")
+    for (case, model), m in table.items():
+        et = 100 * (m["t63_s"] / m["t63_fem_s"] - 1)
+        ee = 100 * (m["e_eddy_J"] / m["e_eddy_fem_J"] - 1)
+        L.append(f"| {case} | {model} | {100 * m['err_1ms']:+.1f} | {100 * m['err_max']:.1f} | "
+                 f"{m['t63_s'] * 1e3:.2f} / {m['t63_fem_s'] * 1e3:.2f} | {et:+.1f} | "
+                 f"{m['e_eddy_J']:.3f} / {m['e_eddy_fem_J']:.3f} | {ee:+.0f} | "
+                 f"{m['t_peak_s'] * 1e3:.3f} / {m['t_peak_fem_s'] * 1e3:.3f} |")
+    L.append("")
+    if static:
+        L.append("### The same steps without eddy currents (FEM with sigma = 0, model with "
+                 "`eddy_currents=False`)\n")
+        L.append("This isolates the static network's error (its differential inductance, "
+                 "sections 1-2) from the eddy model's: the rise time of a model with eddy "
+                 "currents inherits it.\n")
+        L.append("Eddy factor: t63 with eddy currents / t63 without, of the model (its own "
+                 "no-eddy run) and of the FEM (sigma = 0 run); its error is the eddy model's "
+                 "own share of the t63 error.\n")
+        L.append("| case | max err t >= 1 ms [%] | t63 model / FEM [ms] | t63 err [%] | "
+                 "t63 err with eddies: ladder n = 6 / lumped [%] | eddy factor FEM | "
+                 "ladder n = 6 (err) | lumped (err) |")
+        L.append("|---|---|---|---|---|---|---|---|")
+        for case, m in static.items():
+            lad = table.get((case, "ladder n = 6"))
+            lum = table.get((case, "lumped (today)"))
+            noe = table.get((case, "no eddy currents"))
+            if not (lad and lum and noe):
+                continue
+            f_fem = lad["t63_fem_s"] / m["t63_fem_s"]
+            f_lad, f_lum = lad["t63_s"] / noe["t63_s"], lum["t63_s"] / noe["t63_s"]
+            L.append(f"| {case} | {100 * m['err_max']:.1f} | {m['t63_s'] * 1e3:.2f} / "
+                     f"{m['t63_fem_s'] * 1e3:.2f} | {_t63_err(m)} | {_t63_err(lad)} / "
+                     f"{_t63_err(lum)} | {f_fem:.3f} | {f_lad:.3f} "
+                     f"({100 * (f_lad / f_fem - 1):+.1f} %) | {f_lum:.3f} "
+                     f"({100 * (f_lum / f_fem - 1):+.1f} %) |")
+        L.append("")
+    L.append("![transient steps: FEM, lumped, ladder](figures/fem-transient-steps.png)\n")
+    return L
+
+
+def _plot(cases: list[dict], curves: dict, path: Path) -> None:
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, ax = plt.subplots(2, len(cases), figsize=(4.2 * len(cases), 7.0), squeeze=False)
+    styles = {"lumped (today)": ("tab:red", "--"), "ladder n = 6": ("tab:blue", "-"),
+              "ladder n = 4": ("tab:cyan", ":"), "no eddy currents": ("0.5", "-.")}
+    for j, ref in enumerate(cases):
+        tf = np.asarray(ref["time_s"])
+        i0, i1 = ref["i0_A"], ref["i1_A"]
+        pf = np.asarray(ref["eddy_power_core_W"]) + np.asarray(ref["eddy_power_rail_W"])
+        ax[0, j].semilogx(tf[1:] * 1e3, (np.asarray(ref["current_A"])[1:] - i0) / (i1 - i0),
+                          "k-", lw=2.5, alpha=0.5, label="FEM")
+        ax[1, j].loglog(tf[1:] * 1e3, pf[1:], "k-", lw=2.5, alpha=0.5, label="FEM")
+        for label, (col, ls) in styles.items():
+            t, i, e = curves[ref["label"], label]
+            ax[0, j].semilogx(t[1:] * 1e3, (i[1:] - i0) / (i1 - i0), color=col, ls=ls,
+                              label=label)
+            if label != "no eddy currents":
+                p = np.diff(e) / np.diff(t)
+                ax[1, j].loglog(0.5 * (t[1:] + t[:-1]) * 1e3, np.maximum(p, 1e-6), color=col,
+                                ls=ls, label=label)
+        ax[0, j].set_title(ref["label"])
+        ax[0, j].set_ylabel("(I - I0)/(I1 - I0)")
+        ax[1, j].set_ylabel("eddy power [W]")
+        ax[1, j].set_xlabel("t [ms]")
+        ax[0, j].grid(True, which="both", alpha=0.3)
+        ax[1, j].grid(True, which="both", alpha=0.3)
+        ax[1, j].set_ylim(bottom=max(1e-2, pf[1:].max() * 1e-4))
+    ax[0, 0].legend(fontsize=8)
+    fig.tight_layout()
+    fig.savefig(path, dpi=90)
+    print(f"wrote {path}")
+
+
+def main(argv: list[str] | None = None) -> None:
+    ap = argparse.ArgumentParser(description=(__doc__ or "").splitlines()[0])
+    ap.add_argument("--fem", choices=("cases", "study", "noeddy"),
+                    help="run that part of the FEM (a few minutes of CPU each) and rewrite "
+                         "benchmarks/results/fem_transient_PART.json")
+    ap.add_argument("--only", default=None,
+                    help="with --fem cases: comma-separated case numbers (0-based); the runs "
+                         "go to fem_transient_cases-K.json, merged by --merge")
+    ap.add_argument("--merge", action="store_true",
+                    help="merge fem_transient_cases-K.json into fem_transient_cases.json")
+    ap.add_argument("--no-docs", action="store_true", help="do not rewrite validation_fem.md")
+    args = ap.parse_args(argv)
+    if args.merge:
+        for part in ("cases", "noeddy"):
+            parts = sorted(RESULTS_DIR.glob(f"fem_transient_{part}-*.json"))
+            if not parts:
+                continue
+            runs = [r for p in parts for r in json.loads(p.read_text())["runs"]]
+            order = [c[0] for c in CASES]
+            runs.sort(key=lambda r: order.index(r["label"]))
+            data = {"generated_by": f"benchmarks/fem_u_magnet_transient.py --fem {part}",
+                    "t_end_s": T_END, "runs": runs}
+            RESULTS[part].write_text(json.dumps(data, separators=(",", ":")) + "\n")
+            for p in parts:
+                p.unlink()
+            print(f"wrote {RESULTS[part]}")
+        return
+    if args.fem:
+        only = None if args.only is None else [int(k) for k in args.only.split(",")]
+        data = run_fem(args.fem, only)
+        RESULTS_DIR.mkdir(exist_ok=True)
+        path = RESULTS[args.fem] if only is None else RESULTS_DIR / (
+            f"fem_transient_{args.fem}-{'_'.join(map(str, only))}.json")
+        path.write_text(json.dumps(data, separators=(",", ":")) + "\n")
+        print(f"wrote {path}")
+        return
+    compare(ROOT / "docs" / "validation_fem.md" if not args.no_docs else None,
+            ROOT / "docs" / "figures" / "fem-transient-steps.png")
+
+
+if __name__ == "__main__":
+    main()
