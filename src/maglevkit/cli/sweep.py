@@ -23,8 +23,7 @@ def _resume_folder(path: Path) -> Path:
     return path
 
 
-@app.command("sweep", short_help="Run a sweep file's cases (speeds, seeds, failures, ...) "
-                                 "into one netCDF dataset.")
+@app.command("sweep", short_help="Scenario sweeps of vehicle runs into one netCDF dataset.")
 def sweep(
     sweep_file: Annotated[str, typer.Argument(help="Sweep TOML file or bundled name.")],
     output: Annotated[Path, typer.Option("-o", "--output", help="netCDF file to write (its "
