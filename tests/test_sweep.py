@@ -12,6 +12,7 @@ coordinates and attributes).
 
 from __future__ import annotations
 
+import io
 import signal
 import subprocess
 import sys
@@ -247,8 +248,11 @@ def test_interrupt_and_resume_gives_the_same_dataset(serial: Any, spec: SweepSpe
     assert len(stored) == 3 and not list(work.glob(".*tmp"))
     # a damaged case file (e.g. a copy cut short) is not trusted: that case runs again
     stored[0].write_bytes(stored[0].read_bytes()[:100])
-    resumed = run_sweep(spec, workers=1, resume_dir=work, progress=False)
+    log = io.StringIO()           # progress off a terminal: plain lines, a final one
+    resumed = run_sweep(spec, workers=1, resume_dir=work, stream=log)
     assert (resumed.n_run, resumed.n_reused) == (N_CASES - 2, 2)
+    assert log.getvalue().splitlines()[-1].startswith(f"sweep test: {N_CASES - 2}/"
+                                                      f"{N_CASES - 2} done in ")
     xr.testing.assert_identical(_physics(resumed.dataset), _physics(serial.dataset))
 
 

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import os
 from pathlib import Path
 from typing import Annotated, Any
 
@@ -71,7 +72,7 @@ def sweep(
                            "'maglevkit[distributed]'")
             from distributed import Client, LocalCluster
 
-            cluster = LocalCluster(n_workers=workers or 2, threads_per_worker=1,
+            cluster = LocalCluster(n_workers=workers or (os.cpu_count() or 1), threads_per_worker=1,
                                    processes=True, dashboard_address=None)
             client = Client(cluster)
             executor = client
@@ -87,9 +88,11 @@ def sweep(
             res = run_sweep(spec, executor=executor, workers=workers, resume_dir=folder,
                             retry_failed=retry_failed, progress=progress)
         except KeyboardInterrupt:
-            stored = len(list(folder.glob("*.nc"))) if folder.is_dir() else 0
-            info(f"interrupted: {stored} case file(s) stored in {folder}; run the same "
-                 "command again to resume")
+            from ..sweep import case_path
+
+            stored = sum(case_path(folder, spec.case_key(c)).is_file() for c in spec.cases())
+            info(f"interrupted: {stored} of {spec.n_cases} cases stored in {folder}; run the "
+                 "same command again to resume")
             raise typer.Exit(code=INTERRUPTED_EXIT_CODE) from None
     except MaglevkitError as exc:
         raise fail(exc) from None

@@ -13,6 +13,7 @@ cases were distributed or interrupted.
 
 from __future__ import annotations
 
+import contextlib
 import json
 import math
 import os
@@ -187,39 +188,36 @@ def run_sweep(spec: SweepSpec, *, executor: Any = None, workers: int | None = No
         if on_case is not None:
             on_case(i, ds)
 
-    reporter = ProgressReporter(len(pending), f"sweep {spec.name}", stream=stream) \
-        if progress and pending else None
+    reporter: Any = ProgressReporter(len(pending), f"sweep {spec.name}", stream=stream) \
+        if progress and pending else contextlib.nullcontext()
     pool, owned = _as_executor(executor, workers) if pending else (None, False)
     try:
-        if reporter is not None:
-            reporter.__enter__()
-        if pool is None:
-            for i in pending:
-                store(i, run_case(spec.job, cases[i], keys[i]))
-                if reporter is not None:
-                    reporter.advance()
-        else:
-            futures: dict[Future[Any], int] = {
-                pool.submit(run_case, spec.job, cases[i], keys[i]): i for i in pending}
-            try:
-                for fut in as_completed(futures):
-                    i = futures[fut]
-                    exc = fut.exception()
-                    if exc is None:
-                        store(i, fut.result())
-                    else:     # the executor lost the task: recorded, not stored
-                        msg = " ".join(str(exc).split()) or "(no message)"
-                        results[i] = error_case(cases[i], keys[i],
-                                                f"worker: {type(exc).__name__}: {msg}")
-                    if reporter is not None:
+        with reporter:
+            if pool is None:
+                for i in pending:
+                    store(i, run_case(spec.job, cases[i], keys[i]))
+                    if progress:
                         reporter.advance()
-            except BaseException:
-                for f in futures:
-                    f.cancel()
-                raise
+            else:
+                futures: dict[Future[Any], int] = {
+                    pool.submit(run_case, spec.job, cases[i], keys[i]): i for i in pending}
+                try:
+                    for fut in as_completed(futures):
+                        i = futures[fut]
+                        exc = fut.exception()
+                        if exc is None:
+                            store(i, fut.result())
+                        else:     # the executor lost the task: recorded, not stored
+                            msg = " ".join(str(exc).split()) or "(no message)"
+                            results[i] = error_case(cases[i], keys[i],
+                                                    f"worker: {type(exc).__name__}: {msg}")
+                        if progress:
+                            reporter.advance()
+                except BaseException:
+                    for f in futures:
+                        f.cancel()
+                    raise
     finally:
-        if reporter is not None:
-            reporter.__exit__(None, None, None)
         if owned and pool is not None:
             pool.shutdown(wait=True, cancel_futures=True)
     ds = assemble(spec, results)

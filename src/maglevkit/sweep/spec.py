@@ -31,13 +31,14 @@ keys, empty or repeated lists and values of the wrong type or sign raise
 
 from __future__ import annotations
 
+import dataclasses
 import hashlib
 import itertools
 import json
 import math
 import sys
 from collections.abc import Iterator, Mapping
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from importlib import resources
 from pathlib import Path
 from typing import Any
@@ -173,7 +174,6 @@ class SweepSpec:
     swept: Mapping[str, tuple[Any, ...]]
     fixed: Mapping[str, Any]
     source: str = ""
-    units: Mapping[str, str] = field(default_factory=lambda: {p.name: p.unit for p in PARAMETERS})
 
     @property
     def shape(self) -> tuple[int, ...]:
@@ -289,7 +289,7 @@ def _vehicle_identity(vehicle_file: str) -> tuple[float, tuple[str, ...], str]:
     kinds = {"standard": load_magnet(train.standard_magnet), "bow": load_magnet(train.bow_magnet)}
     names = tuple(f"{s.name}/{c}" for s in train.magnet_slots()
                   for c in kinds[s.kind].circuit_names)
-    h = hashlib.sha256(repr(train).encode())
+    h = hashlib.sha256(repr(dataclasses.replace(train, source="")).encode())
     for kind in ("standard", "bow"):
         h.update(network_hash(kinds[kind].network).encode())
     return train.payload_kg, names, h.hexdigest()
