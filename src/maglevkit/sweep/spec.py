@@ -36,20 +36,13 @@ import hashlib
 import itertools
 import json
 import math
-import sys
 from collections.abc import Iterator, Mapping
 from dataclasses import dataclass
-from importlib import resources
 from pathlib import Path
 from typing import Any
 
 from ..errors import MaglevkitError, ParameterFileError
 from ..magnets.base import Schema, take
-
-if sys.version_info >= (3, 11):
-    import tomllib
-else:  # pragma: no cover
-    import tomli as tomllib
 
 __all__ = ["PARAMETERS", "SweepParameter", "SweepSpec", "VehicleJob", "load_sweep",
            "parse_sweep", "bundled_sweeps", "SWEEP_FORMAT"]
@@ -201,9 +194,10 @@ class SweepSpec:
 
 
 def bundled_sweeps() -> tuple[str, ...]:
-    """Names of the sweep files shipped with maglevkit."""
-    folder = resources.files("maglevkit") / "data" / "sweeps"
-    return tuple(sorted(p.name[:-5] for p in folder.iterdir() if p.name.endswith(".toml")))
+    """Names of the sweep files shipped with maglevkit (``maglevkit/data/sweeps``)."""
+    from ..parameter_files import bundled_files
+
+    return tuple(bundled_files("sweeps"))
 
 
 def load_sweep(source: str | Path) -> SweepSpec:
@@ -214,22 +208,11 @@ def load_sweep(source: str | Path) -> SweepSpec:
     ParameterFileError
         Missing file, TOML syntax error, unknown/missing keys or invalid values.
     """
+    from ..parameter_files import read_parameter_file
+
+    params, label = read_parameter_file(source, what="sweep", folder="sweeps")
     path = Path(source)
-    if path.suffix != ".toml" and not path.exists():
-        names = bundled_sweeps()
-        if str(source) not in names:
-            raise ParameterFileError(f"no sweep file {str(source)!r} and no bundled sweep of "
-                                     f"that name; bundled: {', '.join(names)}")
-        res = resources.files("maglevkit") / "data" / "sweeps" / f"{source}.toml"
-        text, label, base = res.read_text(), str(source), None
-    else:
-        if not path.is_file():
-            raise ParameterFileError(f"sweep file {str(path)!r} does not exist")
-        text, label, base = path.read_text(), str(path), path.resolve().parent
-    try:
-        params = tomllib.loads(text)
-    except tomllib.TOMLDecodeError as exc:
-        raise ParameterFileError(f"{label}: not valid TOML: {exc}") from None
+    base = path.resolve().parent if path.is_file() else None
     return parse_sweep(params, label, base_dir=base)
 
 
