@@ -319,6 +319,10 @@ def test_cli_errors_are_one_line(folder: Path) -> None:
     _one_line_error(res, "no sweep file 'nope' and no bundled sweep of that name")
     res = runner.invoke(app, ["sweep", str(typo), "-o", str(folder / "t.nc"), "--workers", "0"])
     _one_line_error(res, "--workers 0: must be >= 1")
+    good = _sweep_file(folder, SWEEP, "good.toml")
+    res = runner.invoke(app, ["sweep", str(good), "-o", str(folder / "t.nc"), "--scheduler",
+                              "tcp://127.0.0.1:1"])
+    _one_line_error(res, "cannot reach the dask scheduler at tcp://127.0.0.1:1")
     assert not (folder / "t.cases").exists()
 
 

@@ -100,6 +100,10 @@ def sweep(
         if client is not None:
             client.close()
         if cluster is not None:
+            import logging
+
+            # the nanny's "still alive after 4 s, killing" while the workers exit is noise
+            logging.getLogger("distributed.nanny").setLevel(logging.ERROR)
             cluster.close()
     with writing(output, "-o"):
         res.to_netcdf(output)
