@@ -159,10 +159,17 @@ class VehicleModel:
         Directory of the cached characteristic maps (:mod:`maglevkit.vehicle.mapcache`).
     compiled : {"auto", "always", "never"}
         Passed to the bank.
+    resistance_scale, eddy_resistance_scale : float
+        Factors on every circuit's ohmic resistance ``R_el`` and eddy-current resistance
+        ``R_ec`` of the reduced models (e.g. 1.3 for a hot coil); default 1.  They change the
+        plant and what the controllers' flux estimate and chopper limit use (both read the
+        bank's resistances); the gains stay designed on the nominal magnet.  Reduced models
+        only (``magnets="reduced"``).
     """
 
     def __init__(self, train: TrainData, *, guideway: Guideway | None = None, rigid: bool = False,
-                 magnets: str = "reduced", maps_cache: Any = None, compiled: str = "auto") -> None:
+                 magnets: str = "reduced", maps_cache: Any = None, compiled: str = "auto",
+                 resistance_scale: float = 1.0, eddy_resistance_scale: float = 1.0) -> None:
         from ..magnets import load_magnet
         from ..models.bank import MagnetBank
         from ..models.flux import FluxModel
@@ -185,6 +192,17 @@ class VehicleModel:
                                  f"vehicle's magnet positions are {train.magnet_length_m:.4f} m "
                                  "(section_length / magnets_per_side)")
         self.maps = {k: vehicle_maps(m, cache_dir=maps_cache) for k, m in kinds.items()}
+        scales = (resistance_scale, eddy_resistance_scale)
+        for what, sc in zip(("resistance_scale", "eddy_resistance_scale"), scales, strict=True):
+            if isinstance(sc, bool) or not isinstance(sc, (int, float)) or \
+                    not (math.isfinite(sc) and sc > 0):
+                raise InputError(f"{what} = {sc!r} must be a number > 0 (a factor on the "
+                                 "nominal resistance)")
+        if scales != (1.0, 1.0):
+            if self.fine:
+                raise InputError("resistance_scale and eddy_resistance_scale apply to the "
+                                 "reduced models' maps; use magnets='reduced'")
+            self.maps = {k: _scaled_resistances(m, *scales) for k, m in self.maps.items()}
         self.slots = train.magnet_slots()
         members: list[tuple[str, Any]] = []
         for s in self.slots:
@@ -912,6 +930,17 @@ class VehicleModel:
                     "wk_rms_m_per_s2": float(iso2631_weighted_rms(a, fs)),
                     "sperling_wz": float(sperling_index(a, fs))}
         return out
+
+
+def _scaled_resistances(maps: Any, r_el: float, r_ec: float) -> Any:
+    """A copy of ``maps`` with ``R_el`` x ``r_el`` and every ``R_ec`` variable x ``r_ec``."""
+    ds = maps.dataset.copy()
+    for name in ds.data_vars:
+        factor = (r_el if name == "resistance_ohm" else
+                  r_ec if str(name).startswith("eddy_resistance") else None)
+        if factor is not None:
+            ds[name] = ds[name].copy(data=ds[name].values * float(factor))
+    return type(maps)(ds)
 
 
 class _Progress:

@@ -1,0 +1,172 @@
+"""One case of a sweep: a vehicle run reduced to its summary (and optional time series).
+
+:func:`run_case` runs in the executor's worker processes; it never raises for a failing
+case: the error is returned in the case's Dataset (``status = "error"``, ``error`` the
+exception's type and message).  Each worker process keeps the last few assembled
+:class:`~maglevkit.vehicle.VehicleModel` objects (maps, bank, controllers), keyed by what
+they depend on (vehicle, guideway, payload, resistance scales), so cases that differ only
+in speed, seed or failure reuse them (a run does not change its model), and a model whose
+assembly failed with a :class:`~maglevkit.errors.MaglevkitError` (e.g. a payload the
+magnets cannot carry) fails the other cases of the same key without a second attempt.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import time
+from collections import OrderedDict
+from collections.abc import Mapping
+from typing import Any
+
+import numpy as np
+
+from ..errors import MaglevkitError
+from .spec import PARAMETERS, SWEEP_FORMAT, VehicleJob
+
+__all__ = ["run_case", "error_case", "TIMING_VARIABLES", "SUMMARY_UNITS"]
+
+TIMING_VARIABLES = ("setup_time", "wall_time", "real_time_factor")
+"""Per-case variables that measure the machine, not the physics (they differ between
+runs; everything else of a case is deterministic)."""
+
+SUMMARY_UNITS = {
+    "min_gap": ("m", "smallest gap of any circuit over the run"),
+    "max_gap": ("m", "largest gap of any circuit over the run"),
+    "max_current": ("A", "largest coil current of any circuit"),
+    "max_abs_voltage": ("V", "largest |voltage| of any circuit"),
+    "touchdown_time": ("s", "time of the first touchdown (NaN: none); the run stopped there"),
+    "simulated_time": ("s", "simulated time (shorter than the duration after a touchdown)"),
+    "gap_min": ("m", "smallest gap of the circuit"),
+    "gap_max": ("m", "largest gap of the circuit"),
+    "current_peak": ("A", "largest coil current of the circuit"),
+    "wk_rms": ("m/s^2", "ISO 2631-1 Wk-weighted RMS floor acceleration (NaN: run too short, "
+                        "< 64 samples)"),
+    "sperling_wz": ("1", "Sperling ride index Wz (NaN: run too short)"),
+    "setup_time": ("s", "wall time to assemble the vehicle model (0: reused in this worker)"),
+    "wall_time": ("s", "wall time of the run's time loop"),
+    "real_time_factor": ("1", "simulated time / wall time of the time loop"),
+}
+"""Unit and meaning of every summary variable of a case."""
+
+_MODELS: OrderedDict[tuple[Any, ...], Any] = OrderedDict()
+_MODELS_KEPT = 4
+
+
+def _model(job: VehicleJob, params: Mapping[str, Any]) -> tuple[Any, float]:
+    """The vehicle model of a case (from this process's cache) and its setup time [s]."""
+    from ..vehicle.simulation import VehicleModel
+    from ..vehicle.train import load_vehicle
+
+    key = (job.vehicle_file, job.vehicle_sha256, job.rigid, params["payload"],
+           params["resistance_scale"], params["eddy_resistance_scale"])
+    if key in _MODELS:
+        _MODELS.move_to_end(key)
+        known = _MODELS[key]
+        if isinstance(known, MaglevkitError):    # the same assembly fails the same way
+            raise known
+        return known, 0.0
+    t0 = time.perf_counter()
+    try:
+        train = dataclasses.replace(load_vehicle(job.vehicle_file), payload_kg=params["payload"])
+        model = VehicleModel(train, rigid=job.rigid,
+                             resistance_scale=params["resistance_scale"],
+                             eddy_resistance_scale=params["eddy_resistance_scale"])
+    except MaglevkitError as exc:
+        _remember(key, exc)
+        raise
+    _remember(key, model)
+    return model, time.perf_counter() - t0
+
+
+def _remember(key: tuple[Any, ...], value: Any) -> None:
+    _MODELS[key] = value
+    while len(_MODELS) > _MODELS_KEPT:
+        _MODELS.popitem(last=False)
+
+
+def _irregularity(job: VehicleJob, seed: int, span_length_m: float) -> Any:
+    from ..vehicle.simulation import parse_irregularity
+
+    parts = [p.strip() for p in job.irregularity.split("+") if p.strip()]
+    parts = [f"{p}:{seed}" if p.startswith("random:") else p for p in parts]
+    return parse_irregularity("+".join(parts), span_length_m=span_length_m)
+
+
+def _failures(text: str) -> list[Any]:
+    from ..vehicle.simulation import parse_failure
+
+    return [] if text == "none" else [parse_failure(p.strip()) for p in text.split("+")]
+
+
+def _base(params: Mapping[str, Any], key: str, status: str, error: str) -> Any:
+    import xarray as xr
+
+    return xr.Dataset(
+        {"status": ((), status), "error": ((), error)},
+        attrs={"format": SWEEP_FORMAT, "case_key": key,
+               **{f"param_{p.name}": params[p.name] for p in PARAMETERS}})
+
+
+def error_case(params: Mapping[str, Any], key: str, error: str) -> Any:
+    """The Dataset of a failed case (status ``"error"`` and the error text)."""
+    return _base(params, key, "error", error)
+
+
+def run_case(job: VehicleJob, params: Mapping[str, Any], key: str) -> Any:
+    """Run one case; return its Dataset (summary, optional time series, status, error).
+
+    Never raises for an error of the case itself (any ``Exception``): it is returned as
+    ``status = "error"`` with ``"TypeName: message"``.
+    """
+    try:
+        return _run(job, params, key)
+    except Exception as exc:   # noqa: BLE001 - a failing case is a result, not a crash
+        msg = " ".join(str(exc).split()) or "(no message)"
+        return error_case(params, key, f"{type(exc).__name__}: {msg}")
+
+
+def _run(job: VehicleJob, params: Mapping[str, Any], key: str) -> Any:
+    model, setup = _model(job, params)
+    prof = _irregularity(job, int(params["seed"]), model.guideway.span.length_m)
+    res = model.run(speed_m_per_s=float(params["speed"]), duration_s=job.duration_s,
+                    dt_s=job.dt_s, irregularity=prof, failures=_failures(params["failure"]))
+    ds = res.dataset
+    gap = ds["gap"].values
+    cur = ds["current"].values
+    volt = ds["voltage"].values
+    out = _base(params, key, "ok", "")
+    scalars = {
+        "min_gap": float(gap.min()), "max_gap": float(gap.max()),
+        "max_current": float(cur.max()),
+        "max_abs_voltage": float(np.nanmax(np.abs(volt))) if np.isfinite(volt).any() else math.nan,
+        "touchdown_time": math.nan if res.touchdown is None else float(res.touchdown[1]),
+        "simulated_time": float(ds["time"].values[-1]),
+        "setup_time": setup, "wall_time": float(res.wall_time_s),
+        "real_time_factor": float(res.real_time_factor),
+    }
+    for name, value in scalars.items():
+        out[name] = ((), value)
+    td = res.touchdown
+    out["touchdown_circuit"] = ((), "" if td is None else td[0])
+    out["touchdown_kind"] = ((), "" if td is None else td[3])
+    circuits = [str(c) for c in ds["circuit"].values]
+    out = out.assign_coords(circuit=("circuit", circuits))
+    out["gap_min"] = ("circuit", gap.min(axis=0))
+    out["gap_max"] = ("circuit", gap.max(axis=0))
+    out["current_peak"] = ("circuit", cur.max(axis=0))
+    points = list(res.comfort)
+    out = out.assign_coords(comfort_point=("comfort_point", points))
+    out["wk_rms"] = ("comfort_point", [res.comfort[p]["wk_rms_m_per_s2"] for p in points])
+    out["sperling_wz"] = ("comfort_point", [res.comfort[p]["sperling_wz"] for p in points])
+    if job.time_series:
+        n = job.n_steps + 1
+        out = out.assign_coords(time=("time", np.arange(n) * job.dt_s))
+        for name in job.time_series:
+            full = np.full((n, len(circuits)), np.nan)
+            vals = ds[name].values
+            full[:vals.shape[0]] = vals
+            out[name] = (("time", "circuit"), full, {"units": ds[name].attrs.get("units", ""),
+                                                     "long_name": ds[name].attrs.get(
+                                                         "long_name", name)})
+    return out

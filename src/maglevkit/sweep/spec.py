@@ -1,0 +1,410 @@
+"""Sweep files: a base job and the parameters swept as a Cartesian product (TOML, SI units).
+
+Example (``maglevkit/data/sweeps/vehicle-speeds.toml``)::
+
+    [sweep]
+    name = "speeds, seeds and a circuit failure"
+    job = "vehicle"
+
+    [vehicle]                  # the base job: one maglevkit.vehicle run per case
+    file = "tr09"              # vehicle file (path relative to this file) or bundled name
+    duration = 0.5             # s
+    dt = 1e-3                  # s
+    rigid = false              # rigid guideway instead of the elastic spans
+    irregularity = "random:0.3e-3"   # vehicle-run syntax; the random part's seed is swept
+    payload = 5000.0           # kg per section (a fixed value of a parameter)
+
+    [parameters]               # non-empty lists; every combination is one case
+    speed = [69.4, 138.9]      # m/s
+    seed = [0, 1]              # seeds of the random irregularity
+    failure = ["none", "s2m4/front@0.2"]   # CIRCUIT@T [s], several joined by '+', or none
+
+    [output]                   # optional
+    time_series = []           # per-case (time, circuit) series to keep, e.g. ["gap"]
+
+The sweepable parameters are :data:`PARAMETERS`.  Each is given at most once: as a list
+in ``[parameters]`` (swept; a coordinate of the result) or as a scalar in the job table
+(fixed; an attribute of the result); otherwise its default applies.  Unknown or missing
+keys, empty or repeated lists and values of the wrong type or sign raise
+:class:`~maglevkit.errors.ParameterFileError` naming the key and what is allowed.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import hashlib
+import itertools
+import json
+import math
+from collections.abc import Iterator, Mapping
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from ..errors import MaglevkitError, ParameterFileError
+from ..magnets.base import Schema, take
+
+__all__ = ["PARAMETERS", "SweepParameter", "SweepSpec", "VehicleJob", "load_sweep",
+           "parse_sweep", "bundled_sweeps", "SWEEP_FORMAT"]
+
+SWEEP_FORMAT = "maglevkit-sweep-1"
+"""Format tag of the result and case files (part of every case key)."""
+
+MAX_SPEED_M_PER_S = 250.0
+"""Largest speed a sweep file accepts [m/s] (900 km/h; the Transrapid's record is 501 km/h):
+a larger number is almost surely a speed in km/h."""
+
+TIME_SERIES_VARIABLES = ("gap", "current", "voltage", "force", "guideway_deflection")
+"""The vehicle run's (time, circuit) variables a sweep can keep per case."""
+
+
+@dataclass(frozen=True)
+class SweepParameter:
+    """One sweepable parameter: name, kind, unit, default and meaning."""
+
+    name: str
+    kind: type
+    unit: str
+    default: Any
+    description: str
+
+
+PARAMETERS: tuple[SweepParameter, ...] = (
+    SweepParameter("speed", float, "m/s", 0.0, "train speed (0 ... 250 m/s)"),
+    SweepParameter("seed", int, "1", 0, "seed of the random irregularity (whole number >= 0)"),
+    SweepParameter("failure", str, "", "none",
+                   "circuits switched off: CIRCUIT@T [s], several joined by '+', or 'none'"),
+    SweepParameter("payload", float, "kg", None,
+                   "payload per section (default: the vehicle file's)"),
+    SweepParameter("resistance_scale", float, "1", 1.0, "factor on every coil's R_el (> 0)"),
+    SweepParameter("eddy_resistance_scale", float, "1", 1.0, "factor on every R_ec (> 0)"),
+)
+"""The sweepable parameters, in the order of the result's dimensions."""
+
+_BY_NAME = {p.name: p for p in PARAMETERS}
+
+_SWEEP_SCHEMA = {
+    "name": Schema(str, required=False, default=""),
+    "job": Schema(str),
+}
+_VEHICLE_SCHEMA = {
+    "file": Schema(str, required=False, default="tr09"),
+    "duration": Schema(float, unit="s"),
+    "dt": Schema(float, required=False, unit="s", default=1e-3),
+    "rigid": Schema(bool, required=False, default=False),
+    "irregularity": Schema(str, required=False, default="none"),
+}
+_OUTPUT_SCHEMA = {
+    "time_series": Schema(list, required=False, default=[]),
+}
+_TABLES = ("sweep", "vehicle", "parameters", "output")
+JOBS = ("vehicle",)
+
+
+@dataclass(frozen=True)
+class VehicleJob:
+    """The base job of a vehicle sweep (see the module docstring).
+
+    Attributes
+    ----------
+    vehicle_file : str
+        Bundled vehicle name or an absolute path.
+    vehicle_sha256 : str
+        Hash of the vehicle file's text and its magnets' equivalent circuits (part of the
+        case key: a changed file invalidates stored cases).
+    duration_s, dt_s : float
+        Run length and step [s].
+    rigid : bool
+        Rigid guideway.
+    irregularity : str
+        Irregularity spec without seeds (``maglevkit.vehicle.simulation.parse_irregularity``).
+    time_series : tuple of str
+        The run's (time, circuit) variables kept per case.
+    circuit_names : tuple of str
+        The train's bank circuits (to check failures).
+    default_payload_kg : float
+        The vehicle file's payload per section [kg].
+    """
+
+    vehicle_file: str
+    vehicle_sha256: str
+    duration_s: float
+    dt_s: float
+    rigid: bool
+    irregularity: str
+    time_series: tuple[str, ...]
+    circuit_names: tuple[str, ...]
+    default_payload_kg: float
+
+    @property
+    def n_steps(self) -> int:
+        return int(round(self.duration_s / self.dt_s))
+
+    def key_data(self) -> dict[str, Any]:
+        """What a case's result depends on besides its parameters (for the case key)."""
+        return {"job": "vehicle", "vehicle_sha256": self.vehicle_sha256,
+                "duration_s": self.duration_s, "dt_s": self.dt_s, "rigid": self.rigid,
+                "irregularity": self.irregularity, "time_series": list(self.time_series)}
+
+
+@dataclass(frozen=True)
+class SweepSpec:
+    """A parsed sweep file.
+
+    Attributes
+    ----------
+    name : str
+    job : VehicleJob
+    swept : dict
+        Swept parameter -> tuple of values (in :data:`PARAMETERS` order).
+    fixed : dict
+        Every other parameter -> its value.
+    source : str
+    """
+
+    name: str
+    job: VehicleJob
+    swept: Mapping[str, tuple[Any, ...]]
+    fixed: Mapping[str, Any]
+    source: str = ""
+
+    @property
+    def shape(self) -> tuple[int, ...]:
+        return tuple(len(v) for v in self.swept.values())
+
+    @property
+    def n_cases(self) -> int:
+        return math.prod(self.shape)
+
+    def cases(self) -> Iterator[dict[str, Any]]:
+        """Every case's full parameter set (swept and fixed), in C order of :attr:`shape`."""
+        names = list(self.swept)
+        for combo in itertools.product(*self.swept.values()):
+            yield {**self.fixed, **dict(zip(names, combo, strict=True))}
+
+    def case_key(self, params: Mapping[str, Any]) -> str:
+        """Hash of the job, the case's parameters and the format (its stored file's name)."""
+        from .. import __version__
+
+        blob = json.dumps({"format": SWEEP_FORMAT, "maglevkit": __version__,
+                           "job": self.job.key_data(),
+                           "case": {p.name: params[p.name] for p in PARAMETERS}},
+                          sort_keys=True, allow_nan=False)
+        return hashlib.sha256(blob.encode()).hexdigest()[:24]
+
+
+def bundled_sweeps() -> tuple[str, ...]:
+    """Names of the sweep files shipped with maglevkit (``maglevkit/data/sweeps``)."""
+    from ..parameter_files import bundled_files
+
+    return tuple(bundled_files("sweeps"))
+
+
+def load_sweep(source: str | Path) -> SweepSpec:
+    """Load a sweep file by path or bundled name (see :func:`bundled_sweeps`).
+
+    Raises
+    ------
+    ParameterFileError
+        Missing file, TOML syntax error, unknown/missing keys or invalid values.
+    """
+    from ..parameter_files import read_parameter_file
+
+    params, label = read_parameter_file(source, what="sweep", folder="sweeps")
+    path = Path(source)
+    base = path.resolve().parent if path.is_file() else None
+    return parse_sweep(params, label, base_dir=base)
+
+
+def _value(name: str, v: Any, where: str) -> Any:
+    """One value of a sweepable parameter, checked (``where`` names the key for errors)."""
+    p = _BY_NAME[name]
+    unit = f" [{p.unit}]" if p.unit not in ("", "1") else ""
+    if p.kind is str:
+        if not isinstance(v, str) or not v.strip():
+            raise ParameterFileError(f"{where} = {v!r}: expected a string: {p.description}")
+        return " ".join(v.split())
+    if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v):
+        what = "a whole number" if p.kind is int else f"a number{unit}"
+        raise ParameterFileError(f"{where} = {v!r}: expected {what}: {p.description} "
+                                 "(SI units; no unit strings)")
+    if p.kind is int:
+        if not float(v).is_integer() or v < 0:
+            raise ParameterFileError(f"{where} = {v!r}: expected a whole number >= 0")
+        return int(v)
+    v = float(v)
+    if name == "speed" and not 0.0 <= v <= MAX_SPEED_M_PER_S:
+        raise ParameterFileError(f"{where} = {v!r} m/s: must be in 0 ... {MAX_SPEED_M_PER_S:g} "
+                                 "m/s (speeds are in m/s: 500 km/h is 138.9)")
+    if name == "payload" and v < 0:
+        raise ParameterFileError(f"{where} = {v!r} kg: must be >= 0")
+    if name.endswith("_scale") and v <= 0:
+        raise ParameterFileError(f"{where} = {v!r}: must be > 0 (a factor on the nominal value)")
+    return v
+
+
+def _check_failure(text: str, where: str, circuits: tuple[str, ...], duration: float) -> None:
+    from ..vehicle.simulation import parse_failure
+
+    if text == "none":
+        return
+    for part in text.split("+"):
+        try:
+            f = parse_failure(part.strip())
+        except MaglevkitError as exc:
+            raise ParameterFileError(f"{where}: {exc}; or 'none', several joined by '+'") from None
+        if f.circuit not in circuits:
+            raise ParameterFileError(
+                f"{where}: no circuit {f.circuit!r} in this vehicle; circuits are "
+                f"{circuits[0]} ... {circuits[-1]} (sNmK/front|rear|mid: section N, magnet K)")
+        if f.time_s >= duration:
+            raise ParameterFileError(f"{where}: failure time {f.time_s:g} s is not within the "
+                                     f"run (duration {duration:g} s)")
+
+
+def _vehicle_identity(vehicle_file: str) -> tuple[float, tuple[str, ...], str]:
+    """Payload, bank circuit names and the identity hash of a vehicle file (no maps built)."""
+    from ..magnets import load_magnet
+    from ..reduction.maps import network_hash
+    from ..vehicle.train import load_vehicle
+
+    train = load_vehicle(vehicle_file)
+    kinds = {"standard": load_magnet(train.standard_magnet), "bow": load_magnet(train.bow_magnet)}
+    names = tuple(f"{s.name}/{c}" for s in train.magnet_slots()
+                  for c in kinds[s.kind].circuit_names)
+    h = hashlib.sha256(repr(dataclasses.replace(train, source="")).encode())
+    for kind in ("standard", "bow"):
+        h.update(network_hash(kinds[kind].network).encode())
+    return train.payload_kg, names, h.hexdigest()
+
+
+def parse_sweep(parameters: Mapping[str, Any], source: str = "parameters", *,
+                base_dir: Path | None = None) -> SweepSpec:
+    """Validate a parsed sweep TOML dictionary (see the module docstring).
+
+    ``base_dir``: folder that relative vehicle file paths are relative to (the sweep
+    file's folder; None: the current directory).
+    """
+    def bad(msg: str) -> ParameterFileError:
+        return ParameterFileError(f"{source}: {msg}")
+
+    if not isinstance(parameters, Mapping):
+        raise bad("a sweep file must be a TOML table")
+    unknown = sorted(set(parameters) - set(_TABLES))
+    if unknown:
+        raise bad(f"unknown table(s) {unknown}; a sweep file may have: {', '.join(_TABLES)}")
+    for table in ("sweep", "vehicle", "parameters"):
+        if table not in parameters:
+            raise bad(f"missing the [{table}] table")
+    try:
+        sw = take(parameters["sweep"], _SWEEP_SCHEMA, "sweep")
+        if sw["job"] not in JOBS:
+            raise ParameterFileError(f"[sweep] job = {sw['job']!r}: use one of {', '.join(JOBS)}")
+        raw_job = parameters["vehicle"]
+        if not isinstance(raw_job, Mapping):
+            raise ParameterFileError("[vehicle] must be a table")
+        fixed_raw = {k: v for k, v in raw_job.items() if k in _BY_NAME}
+        unknown_keys = sorted(set(raw_job) - set(_VEHICLE_SCHEMA) - set(_BY_NAME))
+        if unknown_keys:
+            raise ParameterFileError(
+                f"[vehicle]: unknown key(s) {unknown_keys}; allowed keys are: "
+                f"{', '.join(_VEHICLE_SCHEMA)} and the parameters {', '.join(_BY_NAME)}")
+        job = take({k: v for k, v in raw_job.items() if k in _VEHICLE_SCHEMA},
+                   _VEHICLE_SCHEMA, "vehicle")
+        out = take(parameters.get("output", {}), _OUTPUT_SCHEMA, "output")
+        ts = out["time_series"]
+        if not all(isinstance(v, str) and v in TIME_SERIES_VARIABLES for v in ts) or \
+                len(set(ts)) != len(ts):
+            raise ParameterFileError(f"[output] time_series = {ts!r}: a list of distinct names "
+                                     f"from {', '.join(TIME_SERIES_VARIABLES)} (or [])")
+        swept_raw = parameters["parameters"]
+        if not isinstance(swept_raw, Mapping):
+            raise ParameterFileError("[parameters] must be a table of lists")
+        unknown_keys = sorted(set(swept_raw) - set(_BY_NAME))
+        if unknown_keys:
+            raise ParameterFileError(f"[parameters]: unknown key(s) {unknown_keys}; allowed keys "
+                                     "are: " + ", ".join(f"{p.name} [{p.unit or 'text'}]"
+                                                         for p in PARAMETERS))
+        if not swept_raw:
+            raise ParameterFileError("[parameters] is empty: give at least one list, e.g. "
+                                     "speed = [0.0, 138.9] (m/s)")
+        both = sorted(set(swept_raw) & set(fixed_raw))
+        if both:
+            raise ParameterFileError(f"{both} given both in [vehicle] (fixed) and in "
+                                     "[parameters] (swept); give each once")
+    except ParameterFileError as exc:
+        raise bad(str(exc)) from None
+    # time grid
+    from ..models.inputs import check_span
+
+    try:
+        check_span(0.0, job["duration"], job["dt"])
+    except MaglevkitError as exc:
+        raise bad(f"[vehicle] duration/dt: {exc}") from None
+    if int(round(job["duration"] / job["dt"])) < 2:
+        raise bad(f"[vehicle] duration = {job['duration']} s is less than two steps of "
+                  f"dt = {job['dt']} s")
+    # the vehicle (cheap: the file and its magnets' circuits; no maps)
+    vfile = job["file"]
+    vpath = Path(vfile)
+    if vpath.suffix == ".toml" or vpath.exists() or (base_dir is not None
+                                                     and (base_dir / vpath).exists()):
+        if not vpath.is_absolute() and base_dir is not None:
+            vpath = base_dir / vpath
+        vfile = str(vpath.resolve())
+    try:
+        payload0, circuits, vhash = _vehicle_identity(vfile)
+    except MaglevkitError as exc:
+        raise bad(f"[vehicle] file = {job['file']!r}: {exc}") from None
+    # parameters
+    swept: dict[str, tuple[Any, ...]] = {}
+    fixed: dict[str, Any] = {}
+    try:
+        for p in PARAMETERS:
+            if p.name in swept_raw:
+                vals = swept_raw[p.name]
+                if not isinstance(vals, list) or not vals:
+                    unit = f" [{p.unit}]" if p.unit not in ("", "1") else ""
+                    raise ParameterFileError(f"[parameters] {p.name} = {vals!r}: expected a "
+                                             f"non-empty list of values: {p.description}{unit}")
+                checked = tuple(_value(p.name, v, f"[parameters] {p.name}[{i}]")
+                                for i, v in enumerate(vals))
+                if len(set(checked)) != len(checked):
+                    raise ParameterFileError(f"[parameters] {p.name} = {vals!r}: repeated values "
+                                             "(each value once)")
+                swept[p.name] = checked
+            elif p.name in fixed_raw:
+                fixed[p.name] = _value(p.name, fixed_raw[p.name], f"[vehicle] {p.name}")
+            else:
+                fixed[p.name] = payload0 if p.name == "payload" else p.default
+        for i, v in enumerate(swept.get("failure", (fixed.get("failure"),))):
+            where = f"[parameters] failure[{i}]" if "failure" in swept else "[vehicle] failure"
+            _check_failure(v, where, circuits, job["duration"])
+    except ParameterFileError as exc:
+        raise bad(str(exc)) from None
+    irr = _check_irregularity(job["irregularity"], "seed" in swept, bad)
+    spec_job = VehicleJob(vehicle_file=vfile, vehicle_sha256=vhash, duration_s=job["duration"],
+                          dt_s=job["dt"], rigid=job["rigid"], irregularity=irr,
+                          time_series=tuple(ts), circuit_names=circuits,
+                          default_payload_kg=payload0)
+    return SweepSpec(name=sw["name"] or Path(source).stem, job=spec_job, swept=swept,
+                     fixed=fixed, source=source)
+
+
+def _check_irregularity(text: str, seed_swept: bool, bad: Any) -> str:
+    """The irregularity spec, checked; its random parts must not carry their own seed."""
+    from ..vehicle.simulation import parse_irregularity
+
+    parts = [p.strip() for p in text.split("+") if p.strip()]
+    for p in parts:
+        if p.startswith("random:") and len(p.split(":")) > 2:
+            raise bad(f"[vehicle] irregularity = {text!r}: give random:RMS without a seed; the "
+                      "seed is the parameter 'seed' (fixed in [vehicle] or swept)")
+    if seed_swept and not any(p.startswith("random:") for p in parts):
+        raise bad(f"[parameters] seed is swept but [vehicle] irregularity = {text!r} has no "
+                  "random part (random:RMS); the seed would change nothing")
+    try:
+        parse_irregularity(text, span_length_m=1.0)
+    except MaglevkitError as exc:
+        raise bad(f"[vehicle] irregularity: {exc}") from None
+    return " ".join(text.split())
