@@ -29,6 +29,7 @@ import math
 import time
 from dataclasses import dataclass
 from pathlib import Path
+from types import SimpleNamespace
 
 import numpy as np
 import scipy.sparse.linalg as spla
@@ -376,14 +377,62 @@ def virtual_work_force(s: float, I: float, *, refine: int = 1, rel_ds: float = 0
 # ---------------------------------------------------------------------------------------
 
 
-def emc(s: float, I: float, **opts):  # type: ignore[no-untyped-def]
-    """EMC statics at one point: (force, psi, {branch: flux})."""
-    mag = mk.load_magnet("u-magnet", eddy_currents=False, **opts)
+def emc(s: float, I: float, discretisation: str = "lumped", **opts):  # type: ignore[no-untyped-def]
+    """EMC statics at one point: (force, psi, {branch: flux}); ``discretisation`` of the
+    U-magnet network ("lumped": legs split along the coil; "grid": iron cells)."""
+    mag = _magnet(discretisation, eddy_currents=False, **opts)
     sol = mk.solve_statics(mag, gaps=s, currents=I)
     flux = dict(zip(sol.branch_names, np.abs(np.ravel(sol.branch_flux_Wb)), strict=True))
-    # the leg at mid-coil height: the node between segments 2 and 3 (coil_segments = 5)
-    flux["leg_left"] = 0.5 * (flux["leg_left_2"] + flux["leg_left_3"])
+    if discretisation == "lumped":
+        # the leg at mid-coil height: the node between segments 2 and 3 (coil_segments = 5)
+        flux["leg_left"] = 0.5 * (flux["leg_left_2"] + flux["leg_left_3"])
+        flux["gap_total"] = flux["gap_left"]
+    else:
+        flux["leg_left"] = _grid_leg_flux(mag, sol)
+        flux["gap_total"] = sum(v for k, v in flux.items() if k.startswith("gap_left_"))
     return float(np.ravel(sol.force_N)[0]), float(np.ravel(sol.flux_linkage_Wb)[0]), flux
+
+
+_MAGNETS: dict = {}
+
+
+def _magnet(discretisation: str, **opts):  # type: ignore[no-untyped-def]
+    key = (discretisation, tuple(sorted(opts.items())))
+    if key not in _MAGNETS:
+        import warnings
+        from importlib import resources
+
+        import tomllib
+
+        from maglevkit.magnets.base import build_magnet
+
+        params = tomllib.loads((resources.files("maglevkit") / "data" / "u-magnet.toml")
+                               .read_text())
+        params["magnet"]["discretisation"] = discretisation
+        with warnings.catch_warnings():      # the two added keys have no provenance entry
+            warnings.simplefilter("ignore", mk.ProvenanceWarning)
+            _MAGNETS[key] = build_magnet(params, options=mk.ModelOptions(**opts))
+    return _MAGNETS[key]
+
+
+def _grid_leg_flux(mag, sol) -> float:  # type: ignore[no-untyped-def]
+    """Grid network: flux in the left leg at mid-coil height (sum over the leg's columns
+    of the vertical links between the two cell rows around it)."""
+    from maglevkit.magnets.u_magnet import grid_lines
+
+    g = GEOM
+    m = dict(pole_width=g.pole_width, leg_height=g.leg_height, yoke_thickness=g.yoke_thickness,
+             window_width=g.window_width, coil_height=g.coil_height,
+             coil_gap_to_pole_face=g.coil_gap_to_pole_face,
+             grid_columns=mag.parameters["magnet"].get("grid_columns", 3))
+    xf, yf, _, _, _ = grid_lines(m, dict(width=g.rail_width, thickness=g.rail_thickness))
+    yc = 0.5 * (np.array(yf[1:]) + np.array(yf[:-1]))
+    xc = 0.5 * (np.array(xf[1:]) + np.array(xf[:-1]))
+    ym = g.coil_gap_to_pole_face + 0.5 * g.coil_height
+    j = int(np.searchsorted(yc, ym) - 1)               # link from row j to row j + 1
+    cols = [i for i, x in enumerate(xc) if -g.xo < x < -g.xi]
+    flux = dict(zip(sol.branch_names, np.ravel(sol.branch_flux_Wb), strict=True))
+    return float(abs(sum(flux[f"frame_v_{i}_{j}"] for i in cols)))
 
 
 def _emc_face_share(s: float, g: Geometry = GEOM) -> float:
@@ -395,6 +444,28 @@ def _emc_face_share(s: float, g: Geometry = GEOM) -> float:
     return face / (face + fr)
 
 
+class _Cache:
+    """FEM results of sections 1-2 by case, optionally kept in a JSON file."""
+
+    def __init__(self, path: Path | None) -> None:
+        import json
+
+        self.path = path
+        self.data: dict = {}
+        if path is not None and path.exists():
+            self.data = json.loads(path.read_text())
+
+    def get(self, key: str) -> dict | None:
+        return self.data.get(key)
+
+    def put(self, key: str, value: dict) -> None:
+        import json
+
+        self.data[key] = value
+        if self.path is not None:
+            self.path.write_text(json.dumps(self.data, indent=1, sort_keys=True))
+
+
 def main(argv: list[str] | None = None) -> None:
     ap = argparse.ArgumentParser(description=(__doc__ or "").splitlines()[0])
     ap.add_argument("--output", default=str(Path(__file__).resolve().parents[1] / "docs"
@@ -402,6 +473,10 @@ def main(argv: list[str] | None = None) -> None:
     ap.add_argument("--gaps", default="4,8,12,16,20", help="mm")
     ap.add_argument("--currents", default="5,20,40,80", help="A")
     ap.add_argument("--skip-checks", action="store_true", help="only the EMC comparison")
+    ap.add_argument("--cache", default="", help=(
+        "JSON file of FEM results (sections 1, 2) to reuse and extend: re-running the EMC "
+        "comparison after a network change then takes seconds; delete it after any change "
+        "to the FEM"))
     args = ap.parse_args(argv)
     gaps = [float(v) * 1e-3 for v in args.gaps.split(",")]
     currents = [float(v) for v in args.currents.split(",")]
@@ -416,34 +491,91 @@ def main(argv: list[str] | None = None) -> None:
     n, area = g.turns, g.pole_width * g.depth
     mu_i = float(mk.get_material("AISI 1008").mu_i)
 
+    cache = _Cache(Path(args.cache) if args.cache else None)
+
+    def fem_point(s: float, I: float, mu_r: float | None = None) -> dict:
+        key = f"s={s:.6g},I={I:.6g},mu_r={mu_r},refine=1"
+        hit = cache.get(key)
+        if hit is None:
+            r = solve_full(s, I, mu_r=mu_r)
+            hit = dict(F=r.force_N, psi=r.psi_Wb, gap=r.flux_gap_Wb, leg=r.flux_leg_Wb,
+                       split=list(r.gap_split_Wb))
+            cache.put(key, hit)
+        return hit
+
+    def full_point(s: float, I: float, *, mu_r: float | None = None, refine: int = 1,
+                   g: Geometry = GEOM, box: bool = False) -> SimpleNamespace:
+        key = f"full:s={s:.6g},I={I:.6g},mu_r={mu_r},refine={refine},box2={box}"
+        hit = cache.get(key)
+        if hit is None:
+            r = solve_full(s, I, mu_r=mu_r, refine=refine, g=g)
+            hit = dict(force_N=r.force_N, psi_Wb=r.psi_Wb, coenergy_J=r.coenergy_J,
+                       dofs=r.dofs, force_line_N=r.force_line_N,
+                       newton_iterations=r.newton_iterations, residual=r.residual)
+            cache.put(key, hit)
+        return SimpleNamespace(**hit)
+
+    def vw_point(s: float, I: float, *, mu_r: float | None = None, refine: int = 1) -> float:
+        key = f"virtual-work:s={s:.6g},I={I:.6g},mu_r={mu_r},refine={refine}"
+        hit = cache.get(key)
+        if hit is None:
+            hit = {"force_N": virtual_work_force(s, I, refine=refine, mu_r=mu_r)}
+            cache.put(key, hit)
+        return float(hit["force_N"])
+
     # 1. EMC vs FEM
     out("## 1. EMC vs FEM (AISI 1008, refine = 1)\n")
-    out("Errors are (EMC - FEM)/FEM.  Phi: flux of one pole crossing the mid-gap line (incl. "
-        "fringing) and flux in one leg at mid-coil height, EMC branch `gap_left` / mean of "
-        "`leg_left_2`, `leg_left_3`.  The EMC's `gap_left` leaves out the flank leakage, which "
-        "in the field also crosses the gap line beside the pole: compare the leg fluxes.\n")
-    out("| s [mm] | I [A] | F_EMC [N] | F_FEM [N] | err F [%] | psi_EMC [Wb] | psi_FEM [Wb] | "
-        "err psi [%] | Phi_gap EMC/FEM [mWb] | Phi_leg EMC/FEM [mWb] | B_leg,FEM [T] |")
-    out("|---|---|---|---|---|---|---|---|---|---|---|")
+    out("Errors are (EMC - FEM)/FEM, for the two U-magnet networks: `lumped` (the default, "
+        "legs split along the coil) and `grid` (`discretisation = \"grid\"`, iron cells of "
+        "pole_width/3, docs/equations.md sec. 6).  Phi_leg: flux in one leg at mid-coil "
+        "height (lumped: mean of `leg_left_2`, `leg_left_3`; grid: the leg's vertical links "
+        "at that height).\n")
+    out("| s [mm] | I [A] | F_FEM [N] | err F lumped [%] | err F grid [%] | psi_FEM [Wb] | "
+        "err psi lumped [%] | err psi grid [%] | Phi_leg FEM [mWb] | lumped | grid | "
+        "B_leg,FEM [T] |")
+    out("|---|---|---|---|---|---|---|---|---|---|---|---|")
     stored = {}
+    errs: dict[str, dict[tuple[float, float], tuple[float, float]]] = {"lumped": {}, "grid": {}}
     for s in gaps:
         for I in currents:
-            r = solve_full(s, I)
-            fe, pe, fl = emc(s, I)
-            stored[s, I] = (r, fl)
-            ef = 100 * (fe - r.force_N) / r.force_N
-            ep = 100 * (pe - r.psi_Wb) / r.psi_Wb
-            out(f"| {s * 1e3:g} | {I:g} | {fe:.1f} | {r.force_N:.1f} | {ef:+.1f} | {pe:.4f} | "
-                f"{r.psi_Wb:.4f} | {ep:+.1f} | {fl['gap_left'] * 1e3:.3f} / "
-                f"{r.flux_gap_Wb * 1e3:.3f} | {fl['leg_left'] * 1e3:.3f} / "
-                f"{r.flux_leg_Wb * 1e3:.3f} | {r.flux_leg_Wb / area:.2f} |")
+            r = fem_point(s, I)
+            row = []
+            legs = []
+            for disc in ("lumped", "grid"):
+                fe, pe, fl = emc(s, I, disc)
+                errs[disc][s, I] = (100 * (fe - r["F"]) / r["F"], 100 * (pe - r["psi"]) / r["psi"])
+                legs.append(fl["leg_left"])
+                if disc == "lumped":
+                    stored[s, I] = (r, fl)
+            (efl, epl), (efg, epg) = errs["lumped"][s, I], errs["grid"][s, I]
+            row = [f"{s * 1e3:g}", f"{I:g}", f"{r['F']:.1f}", f"{efl:+.1f}", f"{efg:+.1f}",
+                   f"{r['psi']:.4f}", f"{epl:+.1f}", f"{epg:+.1f}", f"{r['leg'] * 1e3:.3f}",
+                   f"{legs[0] * 1e3:.3f}", f"{legs[1] * 1e3:.3f}", f"{r['leg'] / area:.2f}"]
+            out("| " + " | ".join(row) + " |")
+    out()
+    out("### Error over the gap x current grid: lumped -> grid\n")
+    for label, col in (("force", 0), ("flux linkage", 1)):
+        out(f"{label} error [%], (EMC - FEM)/FEM, `lumped` / `grid`:\n")
+        out("| s [mm] | " + " | ".join(f"{I:g} A" for I in currents) + " |")
+        out("|---|" + "---|" * len(currents))
+        for s in gaps:
+            out(f"| {s * 1e3:g} | " + " | ".join(
+                f"{errs['lumped'][s, I][col]:+.1f} / {errs['grid'][s, I][col]:+.1f}"
+                for I in currents) + " |")
+        out()
+    for disc in ("lumped", "grid"):
+        ef = [v[0] for v in errs[disc].values()]
+        ep = [v[1] for v in errs[disc].values()]
+        out(f"* `{disc}`: force {min(ef):+.1f} ... {max(ef):+.1f} %, flux linkage "
+            f"{min(ep):+.1f} ... {max(ep):+.1f} % (largest |error| {max(map(abs, ef)):.1f} % / "
+            f"{max(map(abs, ep)):.1f} %).")
     out()
     out("### Where the flux crossing the mid-gap line goes (FEM), one pole\n")
     out("| s [mm] | I [A] | window side [%] | under the pole face [%] | outside [%] | "
         "total FEM [mWb] | EMC gap_left [mWb] | EMC face share [%] |")
     out("|---|---|---|---|---|---|---|---|")
     for (s, I), (r, fl) in stored.items():
-        a, b, c = r.gap_split_Wb
+        a, b, c = r["split"]
         tot = a + b + c
         face = 100 * _emc_face_share(s)
         out(f"| {s * 1e3:g} | {I:g} | {100 * a / tot:.1f} | {100 * b / tot:.1f} | "
@@ -453,15 +585,17 @@ def main(argv: list[str] | None = None) -> None:
         # 2. linear iron mu_i: geometry (leakage, fringing) only
         out(f"## 2. Geometry only: EMC (`saturation=False`) and FEM both with linear iron "
             f"mu_r = mu_i = {mu_i:g}, I = 10 A\n")
-        out("| s [mm] | F_EMC [N] | F_FEM [N] | err F [%] | psi_EMC [Wb] | psi_FEM [Wb] | "
-            "err psi [%] | leg flux / gap flux EMC | same FEM |")
-        out("|---|---|---|---|---|---|---|---|---|")
+        out("| s [mm] | F_FEM [N] | err F lumped [%] | err F grid [%] | psi_FEM [Wb] | "
+            "err psi lumped [%] | err psi grid [%] |")
+        out("|---|---|---|---|---|---|---|")
         for s in gaps:
-            r = solve_full(s, 10.0, mu_r=mu_i)
-            fe, pe, fl = emc(s, 10.0, saturation=False)
-            out(f"| {s * 1e3:g} | {fe:.1f} | {r.force_N:.1f} | {100 * (fe / r.force_N - 1):+.1f} | "
-                f"{pe:.4f} | {r.psi_Wb:.4f} | {100 * (pe / r.psi_Wb - 1):+.1f} | "
-                f"{fl['leg_left'] / fl['gap_left']:.3f} | {r.flux_leg_Wb / r.flux_gap_Wb:.3f} |")
+            r = fem_point(s, 10.0, mu_r=mu_i)
+            cells = []
+            for disc in ("lumped", "grid"):
+                fe, pe, _ = emc(s, 10.0, disc, saturation=False)
+                cells.append((100 * (fe / r["F"] - 1), 100 * (pe / r["psi"] - 1)))
+            out(f"| {s * 1e3:g} | {r['F']:.1f} | {cells[0][0]:+.1f} | {cells[1][0]:+.1f} | "
+                f"{r['psi']:.4f} | {cells[0][1]:+.1f} | {cells[1][1]:+.1f} |")
         out()
 
         # 3. sanity check: linear iron mu_r = 1e5 vs the textbook inductance
@@ -470,11 +604,11 @@ def main(argv: list[str] | None = None) -> None:
             "F_tb = mu0 (nI)^2 A/(4s^2) [N] | F_FEM/F_tb | F_virtual-work/F_tb | W'/(psi I/2) |")
         out("|---|---|---|---|---|---|---|---|---|")
         for s in (0.001, 0.002, 0.004):
-            r = solve_full(s, 10.0, mu_r=1e5)
+            r = full_point(s, 10.0, mu_r=1e5)
             L = r.psi_Wb / 10.0
             Ltb = MU0 * n**2 * area / (2 * s)
             Ftb = MU0 * (n * 10.0) ** 2 * area / (4 * s**2)
-            fvw = virtual_work_force(s, 10.0, mu_r=1e5)
+            fvw = vw_point(s, 10.0, mu_r=1e5)
             out(f"| {s * 1e3:g} | {L * 1e3:.2f} | {Ltb * 1e3:.2f} | {L / Ltb:.3f} | "
                 f"{r.force_N:.1f} | {Ftb:.1f} | {r.force_N / Ftb:.4f} | {fvw / Ftb:.4f} | "
                 f"{r.coenergy_J / (0.5 * r.psi_Wb * 10.0):.6f} |")
@@ -492,8 +626,8 @@ def main(argv: list[str] | None = None) -> None:
                  ("refine 1, air box x2", 0.020, 80.0, 1,
                   Geometry(box_half_width=1.0, box_below=0.9, box_above=0.9), False)]
         for label, s, I, ref, geo, vw in cases:
-            r = solve_full(s, I, refine=ref, g=geo)
-            fvw = f"{virtual_work_force(s, I, refine=ref):.2f}" if vw else "-"
+            r = full_point(s, I, refine=ref, g=geo, box=label.endswith("x2"))
+            fvw = f"{vw_point(s, I, refine=ref):.2f}" if vw else "-"
             out(f"| {label} | {s * 1e3:g} | {I:g} | {r.dofs} | {r.force_N:.2f} | "
                 f"{r.force_line_N:.2f} | {fvw} | {r.psi_Wb:.5f} | "
                 f"{r.newton_iterations} / {r.residual:.1e} |")
