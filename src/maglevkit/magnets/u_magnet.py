@@ -84,6 +84,7 @@ MAGNET_SCHEMA = {
     "coil_segments": Schema(int, required=False, default=5, unit="-"),
     "discretisation": Schema(str, required=False, default="lumped"),
     "grid_columns": Schema(int, required=False, default=3, unit="-"),
+    "coil_air": Schema(bool, required=False, default=False),
 }
 DISCRETISATIONS = ("lumped", "grid")
 RAIL_SCHEMA = {
@@ -363,6 +364,23 @@ def _build_grid(m: Mapping[str, Any], r: Mapping[str, Any], core: Material, rail
                     *eddy_part(name, "leg", length, xf[i + 1] - xf[i], side is not None))))
                 if side is not None:
                     add_coil(name, side, half_turns * _overlap(cyf[j], cyf[j + 1], *y_coil) / hc)
+    # air inside the coil sides, between the leg flank and the winding's centre plane: the
+    # winding (concentrated at its centre plane) encloses it with the leg, so it is a
+    # parallel path of the leg link carrying the same turns
+    if options.leakage and m["coil_air"]:
+        for side in ("left", "right"):
+            edge_cols = [k for k, v in enumerate(cxf) if leg_side(v) == side]
+            for i in (edge_cols[0], edge_cols[-1]):
+                for j in range(nleg):
+                    ov = _overlap(cyf[j], cyf[j + 1], *y_coil)
+                    if ov <= 0.0:
+                        continue
+                    length = cyf[j + 1] - cyf[j]
+                    name = f"coil_air_{i}_{j}"
+                    branches.append(Branch(name, f"F{i}_{j}", f"F{i}_{j + 1}", (
+                        LeakagePermeance(f"air_{name}",
+                                         MU0 * d * 0.5 * m["coil_thickness"] * ov / length**2),)))
+                    add_coil(name, side, half_turns * ov / hc)
     # rail: horizontal and vertical iron links
     for j in range(len(cyr)):
         for i in range(len(cxs)):
