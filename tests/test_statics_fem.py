@@ -260,6 +260,15 @@ def test_grid_options_bad_input(key: str, value: object, match: str) -> None:
         _quiet_build(**{"discretisation": "grid", key: value})
 
 
+@pytest.mark.parametrize(("disc", "key", "value"), [("grid", "coil_segments", 5),
+                                                    ("lumped", "grid_columns", 3),
+                                                    ("lumped", "coil_air", True)])
+def test_keys_of_the_other_network_are_refused(disc: str, key: str, value: object) -> None:
+    """A key that the chosen network would ignore is an error, not silently dropped."""
+    with pytest.raises(ParameterFileError, match=f"{key} does not apply"):
+        _quiet_build(**{"discretisation": disc, key: value})
+
+
 @pytest.mark.slow
 def test_grid_network_builds_maps_and_flux_model(grid: mk.Magnet) -> None:
     """The reduction and the dynamic model take the grid network (maps ~20 s, FluxModel

@@ -133,6 +133,14 @@ def build_u_magnet(params: Mapping[str, Any], materials: Mapping[str, Material],
     if m["discretisation"] not in DISCRETISATIONS:
         raise ParameterFileError(f"[magnet] discretisation = {m['discretisation']!r}: expected "
                                  f"one of {', '.join(map(repr, DISCRETISATIONS))}")
+    given = set(params["magnet"])
+    only = {"lumped": ("grid_columns", "coil_air"), "grid": ("coil_segments",)}
+    for key in only[m["discretisation"]]:
+        if key in given:
+            raise ParameterFileError(
+                f"[magnet] {key} does not apply to discretisation = {m['discretisation']!r} "
+                f"(it is a key of the {'grid' if m['discretisation'] == 'lumped' else 'lumped'}"
+                " network); remove it or change the discretisation")
     if m["grid_columns"] > 12:
         raise ParameterFileError(f"[magnet] grid_columns = {m['grid_columns']}: at most 12 "
                                  "cells across the pole width (the cell network grows as its "
