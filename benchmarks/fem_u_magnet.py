@@ -29,6 +29,7 @@ import math
 import time
 from dataclasses import dataclass
 from pathlib import Path
+from types import SimpleNamespace
 
 import numpy as np
 import scipy.sparse.linalg as spla
@@ -376,14 +377,66 @@ def virtual_work_force(s: float, I: float, *, refine: int = 1, rel_ds: float = 0
 # ---------------------------------------------------------------------------------------
 
 
-def emc(s: float, I: float, **opts):  # type: ignore[no-untyped-def]
-    """EMC statics at one point: (force, psi, {branch: flux})."""
-    mag = mk.load_magnet("u-magnet", eddy_currents=False, **opts)
+def emc(s: float, I: float, discretisation: str = "lumped", coil_air: bool = False,
+        **opts):  # type: ignore[no-untyped-def]
+    """EMC statics at one point: (force, psi, {branch: flux}); ``discretisation`` of the
+    U-magnet network ("lumped": legs split along the coil; "grid": iron cells, with the
+    air inside the coil sides if ``coil_air``)."""
+    mag = _magnet(discretisation, coil_air, eddy_currents=False, **opts)
     sol = mk.solve_statics(mag, gaps=s, currents=I)
     flux = dict(zip(sol.branch_names, np.abs(np.ravel(sol.branch_flux_Wb)), strict=True))
-    # the leg at mid-coil height: the node between segments 2 and 3 (coil_segments = 5)
-    flux["leg_left"] = 0.5 * (flux["leg_left_2"] + flux["leg_left_3"])
+    if discretisation == "lumped":
+        # the leg at mid-coil height: the node between segments 2 and 3 (coil_segments = 5)
+        flux["leg_left"] = 0.5 * (flux["leg_left_2"] + flux["leg_left_3"])
+        flux["gap_total"] = flux["gap_left"]
+    else:
+        flux["leg_left"] = _grid_leg_flux(mag, sol)
+        flux["gap_total"] = sum(v for k, v in flux.items() if k.startswith("gap_left_"))
     return float(np.ravel(sol.force_N)[0]), float(np.ravel(sol.flux_linkage_Wb)[0]), flux
+
+
+_MAGNETS: dict = {}
+
+
+def _magnet(discretisation: str, coil_air: bool = False, **opts):  # type: ignore[no-untyped-def]
+    key = (discretisation, coil_air, tuple(sorted(opts.items())))
+    if key not in _MAGNETS:
+        import warnings
+        from importlib import resources
+
+        import tomllib
+
+        from maglevkit.magnets.base import build_magnet
+
+        params = tomllib.loads((resources.files("maglevkit") / "data" / "u-magnet.toml")
+                               .read_text())
+        params["magnet"]["discretisation"] = discretisation
+        if coil_air:
+            params["magnet"]["coil_air"] = True
+        with warnings.catch_warnings():      # the two added keys have no provenance entry
+            warnings.simplefilter("ignore", mk.ProvenanceWarning)
+            _MAGNETS[key] = build_magnet(params, options=mk.ModelOptions(**opts))
+    return _MAGNETS[key]
+
+
+def _grid_leg_flux(mag, sol) -> float:  # type: ignore[no-untyped-def]
+    """Grid network: flux in the left leg at mid-coil height (sum over the leg's columns
+    of the vertical links between the two cell rows around it)."""
+    from maglevkit.magnets.u_magnet import grid_lines
+
+    g = GEOM
+    m = dict(pole_width=g.pole_width, leg_height=g.leg_height, yoke_thickness=g.yoke_thickness,
+             window_width=g.window_width, coil_height=g.coil_height,
+             coil_gap_to_pole_face=g.coil_gap_to_pole_face,
+             grid_columns=mag.parameters["magnet"].get("grid_columns", 3))
+    xf, yf, _, _, _ = grid_lines(m, dict(width=g.rail_width, thickness=g.rail_thickness))
+    yc = 0.5 * (np.array(yf[1:]) + np.array(yf[:-1]))
+    xc = 0.5 * (np.array(xf[1:]) + np.array(xf[:-1]))
+    ym = g.coil_gap_to_pole_face + 0.5 * g.coil_height
+    j = int(np.searchsorted(yc, ym) - 1)               # link from row j to row j + 1
+    cols = [i for i, x in enumerate(xc) if -g.xo < x < -g.xi]
+    flux = dict(zip(sol.branch_names, np.ravel(sol.branch_flux_Wb), strict=True))
+    return float(abs(sum(flux[f"frame_v_{i}_{j}"] for i in cols)))
 
 
 def _emc_face_share(s: float, g: Geometry = GEOM) -> float:
@@ -395,6 +448,73 @@ def _emc_face_share(s: float, g: Geometry = GEOM) -> float:
     return face / (face + fr)
 
 
+def plot_fields(path: Path, points: list[tuple[float, float]], g: Geometry = GEOM) -> None:
+    """|B| per element and flux lines (contours of A_z) of the half model at (s [m], I [A])
+    points: where the iron saturates and where the flux leaves it (docs/validation_fem.md)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    import matplotlib.tri as mtri
+    from skfem import Basis, ElementTriP2
+
+    fig, axes = plt.subplots(1, len(points), figsize=(4.2 * len(points), 5.2), squeeze=False)
+    pc = None
+    for ax, (s, I) in zip(axes[0], points, strict=True):
+        r = solve_full(s, I, g=g)
+        mesh = build_mesh(s, g=g)
+        grad_a = Basis(mesh, ElementTriP2()).interpolate(r.A).grad
+        b = np.sqrt(grad_a[0] ** 2 + grad_a[1] ** 2).mean(axis=1)
+        tri = mtri.Triangulation(mesh.p[0] * 1e3, mesh.p[1] * 1e3, mesh.t.T)
+        pc = ax.tripcolor(tri, facecolors=b, cmap="viridis", vmin=0.0, vmax=2.6)
+        ax.tricontour(tri, r.A[:mesh.p.shape[1]], levels=24, colors="w", linewidths=0.4)
+        for x0, y0, w, h in [(g.xi, 0, g.pole_width, g.leg_height),
+                             (0, g.leg_height, g.xo, g.yoke_thickness),
+                             (0, -s - g.rail_thickness, 0.5 * g.rail_width,
+                              g.rail_thickness),
+                             (g.xi - g.coil_thickness, g.coil_gap_to_pole_face,
+                              g.coil_thickness, g.coil_height),
+                             (g.xo, g.coil_gap_to_pole_face, g.coil_thickness, g.coil_height)]:
+            ax.add_patch(plt.Rectangle((x0 * 1e3, y0 * 1e3), w * 1e3, h * 1e3, fill=False,
+                                       ec="r", lw=0.6))
+        ax.set_xlim(0, 100)
+        ax.set_ylim(-s * 1e3 - 35, 105)
+        ax.set_aspect("equal")
+        ax.set_title(f"s = {s * 1e3:g} mm, I = {I:g} A", fontsize=10)
+        ax.set_xlabel("x [mm]")
+    axes[0][0].set_ylabel("y [mm]")
+    assert pc is not None
+    fig.colorbar(pc, ax=axes[0].tolist(), shrink=0.8, label="|B| [T]")
+    fig.suptitle("2-D FEM, half model: |B| and flux lines (coils and iron outlined)", fontsize=10)
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+
+
+class _Cache:
+    """FEM results of sections 1-2 by case, optionally kept in a JSON file."""
+
+    def __init__(self, path: Path | None) -> None:
+        import json
+
+        self.path = path
+        self.hits = 0
+        self.data: dict = {}
+        if path is not None and path.exists():
+            self.data = json.loads(path.read_text())
+
+    def get(self, key: str) -> dict | None:
+        hit = self.data.get(key)
+        self.hits += hit is not None
+        return hit
+
+    def put(self, key: str, value: dict) -> None:
+        import json
+
+        self.data[key] = value
+        if self.path is not None:
+            self.path.write_text(json.dumps(self.data, indent=1, sort_keys=True))
+
+
 def main(argv: list[str] | None = None) -> None:
     ap = argparse.ArgumentParser(description=(__doc__ or "").splitlines()[0])
     ap.add_argument("--output", default=str(Path(__file__).resolve().parents[1] / "docs"
@@ -402,7 +522,16 @@ def main(argv: list[str] | None = None) -> None:
     ap.add_argument("--gaps", default="4,8,12,16,20", help="mm")
     ap.add_argument("--currents", default="5,20,40,80", help="A")
     ap.add_argument("--skip-checks", action="store_true", help="only the EMC comparison")
+    ap.add_argument("--cache", default="", help=(
+        "JSON file of FEM results (sections 1, 2) to reuse and extend: re-running the EMC "
+        "comparison after a network change then takes seconds; delete it after any change "
+        "to the FEM"))
+    ap.add_argument("--field-plot", default="", help=(
+        "only draw |B| and the flux lines at 8 mm / 20, 40 A and 4 mm / 80 A into this PNG"))
     args = ap.parse_args(argv)
+    if args.field_plot:
+        plot_fields(Path(args.field_plot), [(0.008, 20.0), (0.008, 40.0), (0.004, 80.0)])
+        return
     gaps = [float(v) * 1e-3 for v in args.gaps.split(",")]
     currents = [float(v) for v in args.currents.split(",")]
     t_start = time.perf_counter()
@@ -416,34 +545,99 @@ def main(argv: list[str] | None = None) -> None:
     n, area = g.turns, g.pole_width * g.depth
     mu_i = float(mk.get_material("AISI 1008").mu_i)
 
+    cache = _Cache(Path(args.cache) if args.cache else None)
+
+    def fem_point(s: float, I: float, mu_r: float | None = None) -> dict:
+        key = f"s={s:.6g},I={I:.6g},mu_r={mu_r},refine=1"
+        hit = cache.get(key)
+        if hit is None:
+            r = solve_full(s, I, mu_r=mu_r)
+            hit = dict(F=r.force_N, psi=r.psi_Wb, gap=r.flux_gap_Wb, leg=r.flux_leg_Wb,
+                       split=list(r.gap_split_Wb))
+            cache.put(key, hit)
+        return hit
+
+    def full_point(s: float, I: float, *, mu_r: float | None = None, refine: int = 1,
+                   g: Geometry = GEOM, box: bool = False) -> SimpleNamespace:
+        key = f"full:s={s:.6g},I={I:.6g},mu_r={mu_r},refine={refine},box2={box}"
+        hit = cache.get(key)
+        if hit is None:
+            r = solve_full(s, I, mu_r=mu_r, refine=refine, g=g)
+            hit = dict(force_N=r.force_N, psi_Wb=r.psi_Wb, coenergy_J=r.coenergy_J,
+                       dofs=r.dofs, force_line_N=r.force_line_N,
+                       newton_iterations=r.newton_iterations, residual=r.residual)
+            cache.put(key, hit)
+        return SimpleNamespace(**hit)
+
+    def vw_point(s: float, I: float, *, mu_r: float | None = None, refine: int = 1) -> float:
+        key = f"virtual-work:s={s:.6g},I={I:.6g},mu_r={mu_r},refine={refine}"
+        hit = cache.get(key)
+        if hit is None:
+            hit = {"force_N": virtual_work_force(s, I, refine=refine, mu_r=mu_r)}
+            cache.put(key, hit)
+        return float(hit["force_N"])
+
     # 1. EMC vs FEM
     out("## 1. EMC vs FEM (AISI 1008, refine = 1)\n")
-    out("Errors are (EMC - FEM)/FEM.  Phi: flux of one pole crossing the mid-gap line (incl. "
-        "fringing) and flux in one leg at mid-coil height, EMC branch `gap_left` / mean of "
-        "`leg_left_2`, `leg_left_3`.  The EMC's `gap_left` leaves out the flank leakage, which "
-        "in the field also crosses the gap line beside the pole: compare the leg fluxes.\n")
-    out("| s [mm] | I [A] | F_EMC [N] | F_FEM [N] | err F [%] | psi_EMC [Wb] | psi_FEM [Wb] | "
-        "err psi [%] | Phi_gap EMC/FEM [mWb] | Phi_leg EMC/FEM [mWb] | B_leg,FEM [T] |")
-    out("|---|---|---|---|---|---|---|---|---|---|---|")
+    out("Errors are (EMC - FEM)/FEM, for the two U-magnet networks: `lumped` (the default, "
+        "legs split along the coil) and `grid` (`discretisation = \"grid\"`, iron cells of "
+        "pole_width/3, docs/equations.md sec. 6).  Phi_leg: flux in one leg at mid-coil "
+        "height (lumped: mean of `leg_left_2`, `leg_left_3`; grid: the leg's vertical links "
+        "at that height).\n")
+    out("| s [mm] | I [A] | F_FEM [N] | err F lumped [%] | err F grid [%] | psi_FEM [Wb] | "
+        "err psi lumped [%] | err psi grid [%] | Phi_leg FEM [mWb] | lumped | grid | "
+        "B_leg,FEM [T] |")
+    out("|---|---|---|---|---|---|---|---|---|---|---|---|")
     stored = {}
+    errs: dict[str, dict[tuple[float, float], tuple[float, float]]] = {
+        "lumped": {}, "grid": {}, "grid + coil_air": {}}
     for s in gaps:
         for I in currents:
-            r = solve_full(s, I)
-            fe, pe, fl = emc(s, I)
-            stored[s, I] = (r, fl)
-            ef = 100 * (fe - r.force_N) / r.force_N
-            ep = 100 * (pe - r.psi_Wb) / r.psi_Wb
-            out(f"| {s * 1e3:g} | {I:g} | {fe:.1f} | {r.force_N:.1f} | {ef:+.1f} | {pe:.4f} | "
-                f"{r.psi_Wb:.4f} | {ep:+.1f} | {fl['gap_left'] * 1e3:.3f} / "
-                f"{r.flux_gap_Wb * 1e3:.3f} | {fl['leg_left'] * 1e3:.3f} / "
-                f"{r.flux_leg_Wb * 1e3:.3f} | {r.flux_leg_Wb / area:.2f} |")
+            r = fem_point(s, I)
+            row = []
+            legs = []
+            for disc in ("lumped", "grid"):
+                fe, pe, fl = emc(s, I, disc)
+                errs[disc][s, I] = (100 * (fe - r["F"]) / r["F"], 100 * (pe - r["psi"]) / r["psi"])
+                legs.append(fl["leg_left"])
+                if disc == "lumped":
+                    stored[s, I] = (r, fl)
+            fe, pe, _ = emc(s, I, "grid", coil_air=True)
+            errs["grid + coil_air"][s, I] = (100 * (fe - r["F"]) / r["F"],
+                                             100 * (pe - r["psi"]) / r["psi"])
+            (efl, epl), (efg, epg) = errs["lumped"][s, I], errs["grid"][s, I]
+            row = [f"{s * 1e3:g}", f"{I:g}", f"{r['F']:.1f}", f"{efl:+.1f}", f"{efg:+.1f}",
+                   f"{r['psi']:.4f}", f"{epl:+.1f}", f"{epg:+.1f}", f"{r['leg'] * 1e3:.3f}",
+                   f"{legs[0] * 1e3:.3f}", f"{legs[1] * 1e3:.3f}", f"{r['leg'] / area:.2f}"]
+            out("| " + " | ".join(row) + " |")
+    out()
+    out("### Error over the gap x current grid: lumped -> grid\n")
+    for label, col in (("force", 0), ("flux linkage", 1)):
+        out(f"{label} error [%], (EMC - FEM)/FEM, `lumped` / `grid` / `grid` with "
+            "`coil_air = true`:\n")
+        out("| s [mm] | " + " | ".join(f"{I:g} A" for I in currents) + " |")
+        out("|---|" + "---|" * len(currents))
+        for s in gaps:
+            out(f"| {s * 1e3:g} | " + " | ".join(
+                f"{errs['lumped'][s, I][col]:+.1f} / {errs['grid'][s, I][col]:+.1f} / "
+                f"{errs['grid + coil_air'][s, I][col]:+.1f}"
+                for I in currents) + " |")
+        out()
+    for disc in errs:
+        ef = [v[0] for v in errs[disc].values()]
+        ep = [v[1] for v in errs[disc].values()]
+        nf = sum(abs(v) <= 3.0 for v in ef)
+        npsi = sum(abs(v) <= 3.0 for v in ep)
+        out(f"* `{disc}`: force {min(ef):+.1f} ... {max(ef):+.1f} %, flux linkage "
+            f"{min(ep):+.1f} ... {max(ep):+.1f} %; within 3 %: force at {nf}, flux linkage at "
+            f"{npsi} of the {len(ef)} points.")
     out()
     out("### Where the flux crossing the mid-gap line goes (FEM), one pole\n")
     out("| s [mm] | I [A] | window side [%] | under the pole face [%] | outside [%] | "
         "total FEM [mWb] | EMC gap_left [mWb] | EMC face share [%] |")
     out("|---|---|---|---|---|---|---|---|")
     for (s, I), (r, fl) in stored.items():
-        a, b, c = r.gap_split_Wb
+        a, b, c = r["split"]
         tot = a + b + c
         face = 100 * _emc_face_share(s)
         out(f"| {s * 1e3:g} | {I:g} | {100 * a / tot:.1f} | {100 * b / tot:.1f} | "
@@ -453,15 +647,17 @@ def main(argv: list[str] | None = None) -> None:
         # 2. linear iron mu_i: geometry (leakage, fringing) only
         out(f"## 2. Geometry only: EMC (`saturation=False`) and FEM both with linear iron "
             f"mu_r = mu_i = {mu_i:g}, I = 10 A\n")
-        out("| s [mm] | F_EMC [N] | F_FEM [N] | err F [%] | psi_EMC [Wb] | psi_FEM [Wb] | "
-            "err psi [%] | leg flux / gap flux EMC | same FEM |")
-        out("|---|---|---|---|---|---|---|---|---|")
+        out("| s [mm] | F_FEM [N] | err F lumped [%] | err F grid [%] | psi_FEM [Wb] | "
+            "err psi lumped [%] | err psi grid [%] |")
+        out("|---|---|---|---|---|---|---|")
         for s in gaps:
-            r = solve_full(s, 10.0, mu_r=mu_i)
-            fe, pe, fl = emc(s, 10.0, saturation=False)
-            out(f"| {s * 1e3:g} | {fe:.1f} | {r.force_N:.1f} | {100 * (fe / r.force_N - 1):+.1f} | "
-                f"{pe:.4f} | {r.psi_Wb:.4f} | {100 * (pe / r.psi_Wb - 1):+.1f} | "
-                f"{fl['leg_left'] / fl['gap_left']:.3f} | {r.flux_leg_Wb / r.flux_gap_Wb:.3f} |")
+            r = fem_point(s, 10.0, mu_r=mu_i)
+            cells = []
+            for disc in ("lumped", "grid"):
+                fe, pe, _ = emc(s, 10.0, disc, saturation=False)
+                cells.append((100 * (fe / r["F"] - 1), 100 * (pe / r["psi"] - 1)))
+            out(f"| {s * 1e3:g} | {r['F']:.1f} | {cells[0][0]:+.1f} | {cells[1][0]:+.1f} | "
+                f"{r['psi']:.4f} | {cells[0][1]:+.1f} | {cells[1][1]:+.1f} |")
         out()
 
         # 3. sanity check: linear iron mu_r = 1e5 vs the textbook inductance
@@ -470,11 +666,11 @@ def main(argv: list[str] | None = None) -> None:
             "F_tb = mu0 (nI)^2 A/(4s^2) [N] | F_FEM/F_tb | F_virtual-work/F_tb | W'/(psi I/2) |")
         out("|---|---|---|---|---|---|---|---|---|")
         for s in (0.001, 0.002, 0.004):
-            r = solve_full(s, 10.0, mu_r=1e5)
+            r = full_point(s, 10.0, mu_r=1e5)
             L = r.psi_Wb / 10.0
             Ltb = MU0 * n**2 * area / (2 * s)
             Ftb = MU0 * (n * 10.0) ** 2 * area / (4 * s**2)
-            fvw = virtual_work_force(s, 10.0, mu_r=1e5)
+            fvw = vw_point(s, 10.0, mu_r=1e5)
             out(f"| {s * 1e3:g} | {L * 1e3:.2f} | {Ltb * 1e3:.2f} | {L / Ltb:.3f} | "
                 f"{r.force_N:.1f} | {Ftb:.1f} | {r.force_N / Ftb:.4f} | {fvw / Ftb:.4f} | "
                 f"{r.coenergy_J / (0.5 * r.psi_Wb * 10.0):.6f} |")
@@ -492,13 +688,14 @@ def main(argv: list[str] | None = None) -> None:
                  ("refine 1, air box x2", 0.020, 80.0, 1,
                   Geometry(box_half_width=1.0, box_below=0.9, box_above=0.9), False)]
         for label, s, I, ref, geo, vw in cases:
-            r = solve_full(s, I, refine=ref, g=geo)
-            fvw = f"{virtual_work_force(s, I, refine=ref):.2f}" if vw else "-"
+            r = full_point(s, I, refine=ref, g=geo, box=label.endswith("x2"))
+            fvw = f"{vw_point(s, I, refine=ref):.2f}" if vw else "-"
             out(f"| {label} | {s * 1e3:g} | {I:g} | {r.dofs} | {r.force_N:.2f} | "
                 f"{r.force_line_N:.2f} | {fvw} | {r.psi_Wb:.5f} | "
                 f"{r.newton_iterations} / {r.residual:.1e} |")
         out()
-    out(f"Total run time {time.perf_counter() - t_start:.0f} s.")
+    reused = f"; {cache.hits} FEM results reused from the --cache file" if cache.hits else ""
+    out(f"Total run time {time.perf_counter() - t_start:.0f} s{reused}.")
     if args.output:
         # keep the transient section written by fem_u_magnet_transient.py
         old = Path(args.output).read_text() if Path(args.output).exists() else ""
@@ -510,9 +707,11 @@ def main(argv: list[str] | None = None) -> None:
 
 _HEADER = """# 2-D FEM validation of the U-magnet EMC
 
-Generated by `python benchmarks/fem_u_magnet.py` (about 4 min on 2 cores; needs the optional
-extra: `pip install -e ".[validation]"`, i.e. scikit-fem).  Tests:
-`tests/test_fem_validation.py` (`pytest -m slow` for the nonlinear points).
+Generated by `python benchmarks/fem_u_magnet.py` (about 4 min on 2 idle cores; needs the
+optional extra: `pip install -e ".[validation]"`, i.e. scikit-fem; `--cache FILE` keeps the FEM
+results in a JSON file, so that re-running the EMC comparison after a network change takes
+seconds).  Tests: `tests/test_fem_validation.py` (`pytest -m slow` for the nonlinear points),
+`tests/test_statics_fem.py` (the `grid` network against the recorded FEM numbers).
 
 ## FEM set-up
 
@@ -556,22 +755,68 @@ extra: `pip install -e ".[validation]"`, i.e. scikit-fem).  Tests:
 """
 
 _NOTES = """
-## Assessment of the EMC (measured on the grid of section 1)
+## Assessment of the two networks (measured on the grid of section 1)
 
-* **Force** -7.6 ... +3.9 % over 4-20 mm and 5-80 A: within 5 % at low current (5 A: -1.1 ...
-  +3.9 %) and at 20 A for gaps >= 12 mm; the largest errors, -5 ... -7.6 %, sit at the knee
-  (20-40 A at 4-16 mm) and at 4 mm / 80 A.
-* **Flux linkage** -7.9 ... +0.1 %: within 0.6 % at low current at every gap (the leg flux at
-  mid-coil height agrees with the FEM to ~1 %, an independent check of the leakage
-  topology); -4 ... -8 % in saturation (40-80 A).
-* Section 2 (both linear, mu_r = 200): force -8.7 ... +0.2 %, psi -2.8 ... -4.8 %.
-* What is left: at the knee and beyond, the EMC's mean-path iron (uniform B across each leg,
-  the yoke and the rail) saturates more abruptly than the real parts, in which the flux
-  crowds to the inner corners (shorter paths) while the outer fibres still carry little;
-  the EMC then gives a little too much MMF to the iron (force and psi low).  Shorter
-  effective paths in saturation, or two parallel iron paths per part, would be the next
-  refinement; we have not made it, because the published material data behind the
-  Roschke curve is itself uncertain at that level.
+![FEM field](figures/fem_u_magnet_field.png)
+
+(`python benchmarks/fem_u_magnet.py --field-plot docs/figures/fem_u_magnet_field.png`: |B| and
+flux lines at 8 mm / 20 A, 8 mm / 40 A (the knee) and 4 mm / 80 A (deep saturation).)
+
+**What the field shows.**  The legs saturate almost uniformly along the coil, but not the
+corners: the flux crowds to the inner leg-yoke corner (the shortest path) and leaves the
+outer yoke corner nearly empty; in the rail it turns down under each pole, fills the rail's
+thickness between the poles and leaves the rail beyond the outer pole edges nearly empty.
+A mean-path model (uniform B over each section, path lengths along the centre lines)
+therefore gives the iron too long a path: even with *linear* iron (section 2) the `lumped`
+network's force is up to 8.7 % and its flux linkage 2.8-4.8 % low.  In
+deep saturation |B| in the coil sides next to the leg is 0.3-0.6 T: the leg's tangential H
+continues into the bundle, and that flux links part of the turns.
+
+**`grid`** (`discretisation = "grid"`, docs/equations.md sec. 6): legs, yoke and rail as grids
+of iron cells (`pole_width/3`), gap tubes per leg column, edge fringing landing on the rail
+beside the pole, window and flank leakage attached to the cells they leave.  No parameter was
+fitted to the FEM: every element is the geometry's Roters tube or iron cell.
+
+* **Force** -3.2 ... +4.3 % (`lumped` -7.6 ... +3.9 %): within 3 % at 16 of the 20 points;
+  at the knee (20-40 A, 4-16 mm) -1.2 ... -3.2 % instead of -5 ... -7.6 %, in deep saturation
+  (80 A) -1.8 ... +3.3 % instead of -1.4 ... -7.1 %.  Outside 3 %: 12 mm / 40 A (-3.2 %) and
+  20 mm at 5, 20 and 80 A (+4.3, +4.3, +3.3 %).
+* **Flux linkage** -5.6 ... +0.3 % (`lumped` -7.9 ... +0.1 %): within 0.4 % up to 20 A at
+  every gap, -1.5 ... -3.4 % at 40 A, -4.4 ... -5.6 % at 80 A.  The leg flux at mid-coil
+  height is 0.7 ... 4.7 % low, most at 40-80 A and 12-20 mm (-2.3 ... -4.7 %); at 4 mm / 80 A
+  it is 0.7 % low (7.689 vs 7.743 mWb) while psi is 4.4 % low: there the rest is flux in
+  and around the coil bundles that links part of the turns (above).
+* Section 2 (both linear, mu_r = 200): force -1.3 ... +4.1 %, psi -1.2 ... -0.6 % (`lumped`
+  -8.7 ... +0.2 %, -4.8 ... -2.8 %): the cell network gets the iron's geometry right.
+* Its own discretisation: 2 / 3 / 5 cells across the pole change the force at 4 mm / 80 A
+  -1.0 / -1.8 / -3.3 % and psi -4.6 / -4.4 / -4.1 %, at 8 mm / 40 A -2.0 / -2.4 / -2.5 % and
+  -3.4 / -3.0 / -2.5 %: 3 cells are within ~1.5 pp of the finer network.  5 cells (709
+  branches) took 14x as long as 3 (235 branches; the `lumped` network has 32) to compile
+  and solve four points.
+
+**`coil_air = true`** (with `grid`): the air between each leg flank and its winding's centre
+plane, as a parallel path of every leg link in the coil carrying the same turns (the
+winding, concentrated at its centre plane, encloses it with the leg).  With unsaturated
+iron these paths have no MMF across them (zero flux, nothing changes); in saturation they
+carry `mu0 H_leg` as the FEM shows.  Flux linkage at 80 A -1.7 ... -4.3 % instead of
+-4.4 ... -5.6 %, but the force at 80 A rises to +2.5 ... +5.9 % (the extra flux reaches the
+pole face; in the field part of it leaves the flank beside the pole).  Off by default: it
+trades force for flux linkage.
+
+**Not within 3 % yet, and why.**
+* The force at 20 mm and low current (+4.3 %, `lumped` +3.9 %) is the air model: with
+  unsaturated iron both networks have only Roters tubes for the fringing and flank flux,
+  which at s = 2/3 of the pole width carries a third of the flux crossing the gap line.
+* The flux linkage in saturation (-3.3 ... -5.6 % at 40-80 A, 12-20 mm): the leg flux is
+  still up to 4.7 % low there (not explained yet: a cell sees only its own flux component,
+  not |B|, which would err the other way; the air around the saturated leg is Roters tubes),
+  and the partly linked flux inside the coil sides is missing (`coil_air` adds it, at the
+  cost of the force).
+* Tried and dropped: a parallel path through each coil side made of strips whose MMF is the
+  share of the row's turns between strip and leg (the distributed winding).  At
+  unsaturated iron those strips carry the bundle's own field, which the flank leakage tubes
+  (starting at the leg flank, crossing the bundle) already carry: double counting, low-
+  current psi +1.4 ... +2.5 %, knee force -3.5 ... -5.5 %.
 
 ## What the FEM changed in the EMC
 

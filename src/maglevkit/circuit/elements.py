@@ -8,6 +8,8 @@ base class owns the law the element contributes to its branch.
   ``V_m = phi / G(s)``.
 * :class:`LeakagePermeance` -- constant leakage permeance (Roters shapes as constructors).
 * :class:`GapLeakage` -- gap-dependent leakage/fringe permeance ``mu0 w/pi ln(1 + pi r/s)``.
+* :class:`FringePermeance` -- fringing from a pole flank to a flat rail on its own branch,
+  ``2 mu0 w/pi ln(1 + pi r/(2 s))``.
 * :class:`EddyCurrent` -- the paper's "magnetic inductance", ``V_m = G_ec dphi/dt``.
 
 Sign convention: a branch flux ``phi`` flows from the branch's start node to its end
@@ -36,6 +38,7 @@ __all__ = [
     "AirGap",
     "LeakagePermeance",
     "GapLeakage",
+    "FringePermeance",
     "EddyCurrent",
     "carter_coefficient",
 ]
@@ -365,6 +368,46 @@ class GapLeakage(LinearElement):
         if gap is None:
             raise ParameterError(f"gap leakage {self.name!r}: needs a gap value")
         return MU0 * self.width / math.pi * _log(1.0 + math.pi * self.radius / gap)
+
+
+@dataclass(frozen=True)
+class FringePermeance(LinearElement):
+    """Fringing from a pole flank to a flat rail: ``G = (2 mu0 w/pi) ln(1 + pi r/(2 s))``.
+
+    The fringe term of :class:`AirGap` (Roters' quarter circle from the flank at height
+    ``x`` plus the straight line across the gap, length ``s + pi x/2``, integrated over
+    ``x`` in ``[0, r]``) as an element of its own, so that a network can let the fringe
+    flux leave the flank and land on the rail beside the pole instead of sharing the
+    pole face's branch.
+
+    Parameters
+    ----------
+    gap_input : str
+        Name of the gap input.
+    width : float
+        Edge length w [m].
+    radius : float
+        Flank height r [m] whose tubes reach the rail.
+    """
+
+    gap_input: str = "s"
+    width: float = 1.0
+    radius: float = 1.0
+
+    def __post_init__(self) -> None:
+        owner = f"fringe permeance {self.name!r}"
+        if not isinstance(self.gap_input, str) or not self.gap_input:
+            raise ParameterError(f"{owner}: gap_input must be a non-empty name")
+        _positive(owner, width=self.width, radius=self.radius)
+
+    @property
+    def gap(self) -> str:
+        return self.gap_input
+
+    def permeance(self, gap: Any = None) -> Any:
+        if gap is None:
+            raise ParameterError(f"fringe permeance {self.name!r}: needs a gap value")
+        return 2.0 * MU0 * self.width / math.pi * _log(1.0 + math.pi * self.radius / (2.0 * gap))
 
 
 def _rectangle_torsion_constant(a: float, b: float) -> float:

@@ -76,12 +76,18 @@ class Coil:
     that leakage can leave it part-way up the coil) is given as several coils with the
     same ``pole`` name; the pole's flux (paper eq. 5, ``eta``) is then the turn-weighted
     mean of its segments' fluxes, ``psi_pole / n_pole``.  Default: one pole per coil.
+
+    ``pole_turns`` is ``n_pole`` when the pole's coils are not all in series along one
+    path, e.g. a leg modelled as parallel columns of iron cells, each column carrying the
+    MMF of the turns it passes (then the coils' turns add up to a multiple of the winding's
+    turns); default: the sum of the turns of the coils with the same ``pole`` name.
     """
 
     branch: str
     turns: float
     polarity: int = 1
     pole: str | None = None
+    pole_turns: float | None = None
 
     def __post_init__(self) -> None:
         if self.pole is not None and (not isinstance(self.pole, str) or not self.pole):
@@ -92,6 +98,15 @@ class Coil:
             raise ParameterError(f"coil on branch {self.branch!r}: turns = {self.turns!r} must be > 0")
         if isinstance(self.polarity, bool) or self.polarity not in (1, -1):
             raise ParameterError(f"coil on branch {self.branch!r}: polarity must be +1 or -1")
+        if self.pole_turns is not None:
+            if self.pole is None:
+                raise ParameterError(f"coil on branch {self.branch!r}: pole_turns needs a pole "
+                                     "name (the winding the coil belongs to)")
+            pt = self.pole_turns
+            if not (isinstance(pt, (int, float)) and not isinstance(pt, bool)
+                    and math.isfinite(pt) and pt > 0):
+                raise ParameterError(f"coil on branch {self.branch!r}: pole_turns = {pt!r} "
+                                     "must be a finite number > 0")
 
 
 @dataclass(frozen=True)
@@ -321,7 +336,8 @@ class Network:
     def pole_flux_matrix(self) -> np.ndarray:
         """``W`` (branches x circuits) with ``eta = W^T phi``: the sum of the pole fluxes of
         each circuit (paper eq. 5), a pole's flux being ``psi_pole / n_pole`` over the coils
-        that share its ``pole`` name (one coil: just its branch flux, signed)."""
+        that share its ``pole`` name (one coil: just its branch flux, signed; ``n_pole`` is
+        the coils' ``pole_turns`` where given)."""
         idx = {n: i for i, n in enumerate(self.branch_names)}
         w = np.zeros((len(self.branches), len(self.circuits)))
         for k, c in enumerate(self.circuits):
@@ -329,6 +345,9 @@ class Network:
             for coil in c.coils:
                 key = coil.pole or coil.branch
                 totals[key] = totals.get(key, 0.0) + coil.turns
+            for coil in c.coils:
+                if coil.pole_turns is not None:
+                    totals[coil.pole or coil.branch] = coil.pole_turns
             for coil in c.coils:
                 w[idx[coil.branch], k] += coil.polarity * coil.turns / totals[coil.pole or coil.branch]
         return w

@@ -50,13 +50,17 @@ Estimates of the secondary flux paths (Roters' method, docs/sources.md sec. 3):
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+import bisect
+import math
+from collections.abc import Callable, Mapping
+from dataclasses import replace
 from typing import Any
 
 from ..circuit.elements import (
     AirGap,
     EddyCurrent,
     Element,
+    FringePermeance,
     IronPath,
     LeakagePermeance,
     _rectangle_torsion_constant,
@@ -64,7 +68,7 @@ from ..circuit.elements import (
 from ..circuit.ladder import ladder_branches
 from ..circuit.network import Branch, Circuit, Coil, Network
 from ..errors import ParameterFileError
-from ..materials import MU0, Material
+from ..materials import MU0, IdealIron, Material
 from .base import ModelOptions, PlausibleRange, Schema, register_kind, resolve_material, take
 
 MAGNET_SCHEMA = {
@@ -86,7 +90,11 @@ MAGNET_SCHEMA = {
     "sheet_thickness": Schema(float, required=False, unit="m"),
     "resistivity": Schema(float, required=False, unit="ohm m"),
     "coil_segments": Schema(int, required=False, default=5, unit="-"),
+    "discretisation": Schema(str, required=False, default="lumped"),
+    "grid_columns": Schema(int, required=False, default=3, unit="-"),
+    "coil_air": Schema(bool, required=False, default=False),
 }
+DISCRETISATIONS = ("lumped", "grid")
 RAIL_SCHEMA = {
     "thickness": Schema(float, unit="m"),
     "width": Schema(float, unit="m"),
@@ -130,6 +138,21 @@ def build_u_magnet(params: Mapping[str, Any], materials: Mapping[str, Material],
     if r["width"] < span:
         raise ParameterFileError(f"[rail] width = {r['width']:g} m is narrower than the magnet "
                                  f"({span:g} m across both poles); the rail must cover both poles")
+    if m["discretisation"] not in DISCRETISATIONS:
+        raise ParameterFileError(f"[magnet] discretisation = {m['discretisation']!r}: expected "
+                                 f"one of {', '.join(map(repr, DISCRETISATIONS))}")
+    given = set(params["magnet"])
+    only = {"lumped": ("grid_columns", "coil_air"), "grid": ("coil_segments",)}
+    for key in only[m["discretisation"]]:
+        if key in given:
+            raise ParameterFileError(
+                f"[magnet] {key} does not apply to discretisation = {m['discretisation']!r} "
+                f"(it is a key of the {'grid' if m['discretisation'] == 'lumped' else 'lumped'}"
+                " network); remove it or change the discretisation")
+    if m["grid_columns"] > 12:
+        raise ParameterFileError(f"[magnet] grid_columns = {m['grid_columns']}: at most 12 "
+                                 "cells across the pole width (the cell network grows as its "
+                                 "square)")
     core = resolve_material(m["material"], materials, "magnet")
     rail_mat = resolve_material(r["material"], materials, "rail")
 
@@ -188,6 +211,39 @@ def build_u_magnet(params: Mapping[str, Any], materials: Mapping[str, Material],
         return ladder_branches(name, start, end, iron, thickness=width, resistivity=rho,
                                layers=options.eddy_layers, factor=factor)
 
+    if m["discretisation"] == "grid":
+        if options.eddy_currents and options.eddy_model != "lumped":
+            raise ParameterFileError(
+                "[magnet] discretisation = \"grid\" has one eddy element per iron cell; the "
+                f"eddy_model {options.eddy_model!r} is available with discretisation = "
+                "\"lumped\" only")
+        for mat, where in ((core, "magnet"), (rail_mat, "rail")):
+            if isinstance(mat, IdealIron):
+                raise ParameterFileError(
+                    f"[{where}] material {mat.name!r} is ideal iron: the grid network joins "
+                    "iron cells in closed loops of iron alone, which need a finite "
+                    "permeability; use discretisation = \"lumped\" or a real material")
+
+        def eddy_part(name: str, part: str, length: float, width: float,
+                      main: bool) -> tuple[Element, ...]:
+            # along the part's main flux direction only; scaled so that a uniform dB/dt in
+            # the part dissipates what the part's single element does (docs/equations.md)
+            if not options.eddy_currents or not main:
+                return ()
+            thick = {"leg": wp, "yoke": ty, "rail": r["thickness"]}[part]
+            share = thick / width                   # parallel cells across the part
+            if part == "rail":
+                el = EddyCurrent.solid_rectangular("e", thick, d, length, rho_rail)
+            elif m["laminated"]:
+                el = EddyCurrent.laminated("e", thick * d, length, rho_core, m["sheet_thickness"])
+            else:
+                el = EddyCurrent.solid_rectangular("e", thick, d, length, rho_core)
+            return (EddyCurrent(f"eddy_{name}", el.conductance * share),)
+
+        grid_branches, grid_coils = _build_grid(m, r, core, rail_mat, options, eddy_part)
+        circuit = Circuit("coil", m["resistance"], tuple(grid_coils))
+        return m["name"], Network(tuple(grid_branches), (circuit,), name=m["name"])
+
     left = ["PL", *(f"L{k + 1}" for k in range(K)), "YL"]
     right = ["PR", *(f"R{k + 1}" for k in range(K)), "YR"]
     branches: list[Branch] = []
@@ -228,6 +284,226 @@ def build_u_magnet(params: Mapping[str, Any], materials: Mapping[str, Material],
                                    (LeakagePermeance(f"flank_right_{k + 1}", g),)))
     circuit = Circuit("coil", m["resistance"], tuple(coils))
     return m["name"], Network(tuple(branches), (circuit,), name=m["name"])
+
+
+# ----------------------------------------------------------------------------------------
+# discretisation = "grid": the iron as a network of cells (non-uniform saturation)
+# ----------------------------------------------------------------------------------------
+
+
+def _divide(a: float, b: float, cell: float) -> list[float]:
+    """Equal subdivision of ``[a, b]`` into cells of at most ``cell`` (at least one)."""
+    n = max(1, math.ceil((b - a) / cell - 1e-9))
+    return [a + (b - a) * k / n for k in range(n + 1)]
+
+
+def _lines(*pieces: tuple[float, float], cell: float) -> list[float]:
+    out: list[float] = []
+    for a, b in pieces:
+        pts = _divide(a, b, cell)
+        out += pts if not out else pts[1:]
+    return out
+
+
+def _overlap(a: float, b: float, lo: float, hi: float) -> float:
+    return max(0.0, min(b, hi) - max(a, lo))
+
+
+def grid_lines(m: Mapping[str, Any], r: Mapping[str, Any]
+               ) -> tuple[list[float], list[float], list[float], list[float], int]:
+    """Cell boundaries of the "grid" network [m]: frame x and y (legs and yoke; pole
+    faces at y = 0), rail x and y (rail top at 0), and the number of leg rows.
+
+    ``m``, ``r``: the checked ``[magnet]`` and ``[rail]`` tables.  Frame cell ``(i, j)``
+    is node ``F{i}_{j}``, rail cell ``(i, j)`` node ``S{i}_{j}`` (x index first).
+    """
+    wp, hl, ty, ww = m["pole_width"], m["leg_height"], m["yoke_thickness"], m["window_width"]
+    hc, gcp = m["coil_height"], m["coil_gap_to_pole_face"]
+    cell = wp / m["grid_columns"]
+    xi, xo = 0.5 * ww, 0.5 * ww + wp
+    xf = _lines((-xo, -xi), (-xi, xi), (xi, xo), cell=cell)
+    xs = _lines((-0.5 * r["width"], -xo), cell=cell)[:-1] + xf \
+        + _lines((xo, 0.5 * r["width"]), cell=cell)[1:]
+    yl = _lines((0.0, gcp), (gcp, gcp + hc), (gcp + hc, hl), cell=cell)
+    yf = yl + _lines((hl, hl + ty), cell=cell)[1:]
+    yr = _lines((-r["thickness"], 0.0), cell=cell)
+    return xf, yf, xs, yr, len(yl) - 1
+
+
+def _build_grid(m: Mapping[str, Any], r: Mapping[str, Any], core: Material, rail_mat: Material,
+                options: ModelOptions,
+                eddy_part: Callable[..., tuple[Element, ...]]) -> tuple[list[Branch], list[Coil]]:
+    """Branches and coils of the cell network (docs/equations.md, U-magnet "grid").
+
+    Legs, yoke and rail are tensor grids of rectangular cells of at most
+    ``pole_width / grid_columns`` (x across the magnet, y up, pole faces at y = 0); a node
+    sits at each cell centre, neighbouring cells are joined by an iron path of their
+    centre distance and shared face.  The gap under each leg column, the fringing at the
+    pole edges, the window leakage per leg row and the flank leakage per coil row attach
+    to the cells where their flux enters the iron.
+    """
+    d, wp = m["depth"], m["pole_width"]
+    ww, hc, gcp = m["window_width"], m["coil_height"], m["coil_gap_to_pole_face"]
+    wr = r["width"]
+    cell = wp / m["grid_columns"]
+    xi, xo = 0.5 * ww, 0.5 * ww + wp
+    half_turns = 0.5 * m["turns"]
+    y_coil = (gcp, gcp + hc)
+    xf, yf, xs, yr, nleg = grid_lines(m, r)
+    def centres(v: list[float]) -> list[float]:
+        return [0.5 * (a + b) for a, b in zip(v[:-1], v[1:], strict=True)]
+
+    cxf, cyf, cxs, cyr = centres(xf), centres(yf), centres(xs), centres(yr)
+
+    def leg_side(x: float) -> str | None:
+        if -xo < x < -xi:
+            return "left"
+        if xi < x < xo:
+            return "right"
+        return None
+
+    def frame_iron(i: int, j: int) -> bool:
+        return j >= nleg or leg_side(cxf[i]) is not None
+
+    branches: list[Branch] = []
+    coils: list[Coil] = []
+
+    def iron(name: str, length: float, width: float, mat: Material) -> IronPath:
+        return IronPath(name, length, width * d, mat)
+
+    def add_coil(name: str, side: str, turns: float) -> None:
+        if turns > 1e-12 * half_turns:
+            coils.append(Coil(name, turns, -1 if side == "left" else 1, pole=side,
+                              pole_turns=half_turns))
+
+    # frame: horizontal and vertical iron links
+    for j in range(len(cyf)):
+        for i in range(len(cxf)):
+            if not frame_iron(i, j):
+                continue
+            if i + 1 < len(cxf) and frame_iron(i + 1, j):
+                name = f"frame_h_{i}_{j}"
+                length = cxf[i + 1] - cxf[i]
+                branches.append(Branch(name, f"F{i}_{j}", f"F{i + 1}_{j}", (
+                    iron(f"iron_{name}", length, yf[j + 1] - yf[j], core),
+                    *eddy_part(name, "yoke", length, yf[j + 1] - yf[j], j >= nleg))))
+            if j + 1 < len(cyf) and frame_iron(i, j + 1):
+                name = f"frame_v_{i}_{j}"
+                length = cyf[j + 1] - cyf[j]
+                side = leg_side(cxf[i])
+                branches.append(Branch(name, f"F{i}_{j}", f"F{i}_{j + 1}", (
+                    iron(f"iron_{name}", length, xf[i + 1] - xf[i], core),
+                    *eddy_part(name, "leg", length, xf[i + 1] - xf[i], side is not None))))
+                if side is not None:
+                    add_coil(name, side, half_turns * _overlap(cyf[j], cyf[j + 1], *y_coil) / hc)
+    # air inside the coil sides, between the leg flank and the winding's centre plane: the
+    # winding (concentrated at its centre plane) encloses it with the leg, so it is a
+    # parallel path of the leg link carrying the same turns
+    if options.leakage and m["coil_air"]:
+        for side in ("left", "right"):
+            edge_cols = [k for k, v in enumerate(cxf) if leg_side(v) == side]
+            for i in (edge_cols[0], edge_cols[-1]):
+                for j in range(nleg):
+                    ov = _overlap(cyf[j], cyf[j + 1], *y_coil)
+                    if ov <= 0.0:
+                        continue
+                    length = cyf[j + 1] - cyf[j]
+                    name = f"coil_air_{i}_{j}"
+                    branches.append(Branch(name, f"F{i}_{j}", f"F{i}_{j + 1}", (
+                        LeakagePermeance(f"air_{name}",
+                                         MU0 * d * 0.5 * m["coil_thickness"] * ov / length**2),)))
+                    add_coil(name, side, half_turns * ov / hc)
+    # rail: horizontal and vertical iron links
+    for j in range(len(cyr)):
+        for i in range(len(cxs)):
+            if i + 1 < len(cxs):
+                name = f"rail_h_{i}_{j}"
+                length = cxs[i + 1] - cxs[i]
+                branches.append(Branch(name, f"S{i}_{j}", f"S{i + 1}_{j}", (
+                    iron(f"iron_{name}", length, yr[j + 1] - yr[j], rail_mat),
+                    *eddy_part(name, "rail", length, yr[j + 1] - yr[j], True))))
+            if j + 1 < len(cyr):
+                name = f"rail_v_{i}_{j}"
+                branches.append(Branch(name, f"S{i}_{j}", f"S{i}_{j + 1}", (
+                    iron(f"iron_{name}", cyr[j + 1] - cyr[j], xs[i + 1] - xs[i], rail_mat),)))
+    top = len(cyr) - 1                        # rail row at its top surface
+    off = xs.index(xf[0])                     # rail column under frame column 0
+
+    def rail_column(x: float) -> int:
+        return min(max(bisect.bisect_right(xs, x) - 1, 0), len(cxs) - 1)
+
+    def rail_top(i: int) -> tuple[str, IronPath]:
+        """Rail surface cell ``i``: its node and the half-cell path down to its centre."""
+        return f"S{i}_{top}", iron(f"iron_rail_top_{i}", 0.5 * (yr[-1] - yr[-2]), xs[i + 1] - xs[i],
+                                   rail_mat)
+
+    # gap: one tube per leg column, pole face to rail surface
+    for i, x in enumerate(cxf):
+        side = leg_side(x)
+        if side is None:
+            continue
+        w = xf[i + 1] - xf[i]
+        gname = f"gap_{side}"
+        node_r, half_r = rail_top(i + off)
+        half_f = iron(f"iron_face_{i}", 0.5 * (yf[1] - yf[0]), w, core)
+        air = AirGap(f"air_{gname}_{i}", gap_input=side, pole_area=w * d)
+        el: tuple[Element, ...] = (half_f, air, replace(half_r, name=f"iron_rail_face_{i}"))
+        a, b = (f"F{i}_0", node_r) if side == "left" else (node_r, f"F{i}_0")
+        branches.append(Branch(f"{gname}_{i}", a, b, el if side == "left" else el[::-1]))
+    # leg columns at the window flank (inner) and at the outer flank
+    cols = {side: [k for k, v in enumerate(cxf) if leg_side(v) == side] for side in ("left", "right")}
+    inner = {"left": cols["left"][-1], "right": cols["right"][0]}
+    outer = {"left": cols["left"][0], "right": cols["right"][-1]}
+    # fringing at the pole edges (flank of height gcp below the coil), landing beside the pole
+    if options.fringing:
+        overhang = 0.5 * (wr - ww - 2.0 * wp)
+        for side, sgn in (("left", -1.0), ("right", 1.0)):
+            for edge, x_edge, out_sign, radius in (
+                    ("inner", sgn * xi, -sgn, gcp),
+                    ("outer", sgn * xo, sgn, min(gcp, overhang) if overhang > 0 else 0.0)):
+                if radius <= 0.0:
+                    continue
+                i = inner[side] if edge == "inner" else outer[side]
+                land = rail_column(x_edge + out_sign * 0.5 * min(radius, cell))
+                node_r, half_r = rail_top(land)
+                name = f"fringe_{side}_{edge}"
+                el = (iron(f"iron_{name}", 0.5 * (xf[i + 1] - xf[i]), yf[1] - yf[0], core),
+                      FringePermeance(f"air_{name}", gap_input=side, width=d, radius=radius),
+                      replace(half_r, name=f"iron_rail_{name}"))
+                a, b = (f"F{i}_0", node_r) if side == "left" else (node_r, f"F{i}_0")
+                branches.append(Branch(name, a, b, el if side == "left" else el[::-1]))
+    if options.leakage:
+        i_left, i_right = inner["left"], inner["right"]
+        o_left, o_right = outer["left"], outer["right"]
+        wcol = xf[i_left + 1] - xf[i_left]
+        for j in range(nleg):
+            dy = yf[j + 1] - yf[j]
+            name = f"leakage_{j}"
+            branches.append(Branch(name, f"F{i_left}_{j}", f"F{i_right}_{j}", (
+                iron(f"iron_{name}_l", 0.5 * wcol, dy, core),
+                LeakagePermeance(f"air_{name}", MU0 * d * dy / ww),
+                iron(f"iron_{name}_r", 0.5 * wcol, dy, core))))
+            y0, y1 = max(yf[j], gcp), min(yf[j + 1], gcp + hc)
+            if y1 <= y0:
+                continue
+            # flank leakage (Roters quarter circles to the pole-face level), per coil row
+            tubes = [("outer", o_left, o_right,
+                      LeakagePermeance.quarter_hollow_cylinder("o", d, y0, y1 - y0).value,
+                      xo + 0.5 * (y0 + y1))]
+            if y0 < 0.5 * ww:
+                y1w = min(y1, 0.5 * ww)
+                tubes.append(("window", i_left, i_right, LeakagePermeance.quarter_hollow_cylinder(
+                    "i", d, y0, y1w - y0).value, xi - 0.5 * (y0 + y1w)))
+            for kind, il, ir, g, dist in tubes:
+                for side, i, sgn in (("left", il, -1.0), ("right", ir, 1.0)):
+                    node_r, half_r = rail_top(rail_column(sgn * min(dist, 0.5 * wr - 1e-9)))
+                    name = f"flank_{side}_{kind}_{j}"
+                    el = (iron(f"iron_{name}", 0.5 * wcol, dy, core),
+                          LeakagePermeance(f"air_{name}", g),
+                          replace(half_r, name=f"iron_rail_{name}"))
+                    a, b = (f"F{i}_{j}", node_r) if side == "left" else (node_r, f"F{i}_{j}")
+                    branches.append(Branch(name, a, b, el if side == "left" else el[::-1]))
+    return branches, coils
 
 
 def u_magnet_range(params: Mapping[str, Any]) -> PlausibleRange:
