@@ -68,6 +68,15 @@ PAR = "src/maglevkit/reduction/parameters.py"
 MAP = "src/maglevkit/reduction/maps.py"
 TRA = "src/maglevkit/reduction/transient.py"
 VEH = "src/maglevkit/vehicle/heave.py"
+GW = "src/maglevkit/vehicle/guideway.py"
+SIM = "src/maglevkit/vehicle/simulation.py"
+MEC = "src/maglevkit/vehicle/mechanics.py"
+TRN = "src/maglevkit/vehicle/train.py"
+IRR = "src/maglevkit/vehicle/irregularities.py"
+CMF = "src/maglevkit/vehicle/comfort.py"
+OBS = "src/maglevkit/control/observers.py"
+MOD = "src/maglevkit/control/model.py"
+MPC = "src/maglevkit/control/mpc.py"
 
 T_STA = "tests/test_statics.py"
 T_EL = "tests/test_elements.py"
@@ -76,6 +85,8 @@ T_FP = "tests/test_flux_physics.py"
 T_RED = "tests/test_reduction.py"
 T_RT = "tests/test_reduction_transient.py"
 T_LEV = "tests/test_magnets_levitation.py"
+T_GW = "tests/test_guideway.py"
+T_SV = "tests/test_strength_vehicle.py"
 
 MUTATIONS: tuple[Mutation, ...] = (
     # ------------------------------------------------------------------ element laws
@@ -295,6 +306,145 @@ MUTATIONS: tuple[Mutation, ...] = (
              "+ (hi > p[12]) + non_finite(x)",
              "+ non_finite(x)",
              ("tests/test_bank.py::test_range_checked_before_integrating_names_member_and_range",)),
+    # ------------------------------------------------------------------ guideway (spans)
+    Mutation("guideway: modal mass m L/2 x1.05", GW,
+             "return 0.5 * self.mass_per_length_kg_per_m * self.length_m",
+             "return 0.525 * self.mass_per_length_kg_per_m * self.length_m",
+             (f"{T_GW}::test_static_point_load_matches_beam_formula",)),
+    Mutation("guideway: modal stiffness EI x1.05 in omega_j", GW,
+             "omega = k ** 2 * math.sqrt(self.bending_stiffness_N_m2 / self.mass_per_length_kg_per_m)",
+             "omega = k ** 2 * math.sqrt(1.05 * self.bending_stiffness_N_m2 "
+             "/ self.mass_per_length_kg_per_m)",
+             (f"{T_GW}::test_natural_frequencies_match_finite_difference_beam",)),
+    Mutation("guideway: mode shape sin(j pi x/L) index shift j -> j + 1", GW,
+             "k = np.arange(1, self.n_modes + 1) * math.pi / self.length_m",
+             "k = np.arange(2, self.n_modes + 2) * math.pi / self.length_m",
+             (f"{T_GW}::test_natural_frequencies_match_finite_difference_beam",)),
+    Mutation("guideway: ZOH input matrix over dt/2", GW,
+             "aug[:n2, n2:] = b * dt",
+             "aug[:n2, n2:] = b * dt / 2",
+             (f"{T_GW}::test_damped_moving_force_matches_closed_form",)),
+    Mutation("guideway: recycled span's displacements not reset", GW,
+             "        q[rows] = 0.0\n",
+             "",
+             (f"{T_GW}::test_recycled_span_is_reset_and_window_too_short_is_refused",)),
+    # ------------------------------------------------------------------ vehicle run loop
+    Mutation("vehicle loop: moving-load term v dw/dx sign flip", SIM,
+             "+ v * np.einsum(\"pj,pj->p\", qg[:, :nm], dphi))",
+             "- v * np.einsum(\"pj,pj->p\", qg[:, :nm], dphi))",
+             (f"{T_SV}::test_gap_rate_is_the_time_derivative_of_the_gap",)),
+    Mutation("vehicle loop: irregularity rate v dr/dx sign flip", SIM,
+             "rates_p = bt @ qd - w_rate - v * rx_all[k]",
+             "rates_p = bt @ qd - w_rate + v * rx_all[k]",
+             (f"{T_SV}::test_gap_rate_is_the_time_derivative_of_the_gap",)),
+    Mutation("vehicle loop: deflection enters the gap with the wrong sign", SIM,
+             "gaps_p = s0 + bt @ q - w - r_all[k]",
+             "gaps_p = s0 + bt @ q + w - r_all[k]",
+             (f"{T_SV}::test_recorded_gap_is_the_kinematic_gap",)),
+    Mutation("vehicle loop: recycled ring-buffer span not reset", SIM,
+             "gx[kk_ % n_sp] = 0.0",
+             "gx[kk_ % n_sp] *= 1.0",
+             (f"{T_SV}::test_guideway_replay_over_recycled_spans",)),
+    Mutation("vehicle loop: guideway load not equal and opposite (sign)", SIM,
+             "qmod = onehot.T @ (sn[npt:] * f_bar[:, None])",
+             "qmod = onehot.T @ (sn[npt:] * -f_bar[:, None])",
+             ("tests/test_vehicle.py::test_guideway_in_the_loop_matches_guideway_step",)),
+    Mutation("vehicle loop: guideway loads at the step end, not mid-step", SIM,
+             "half = 0.5 * v * dt",
+             "half = v * dt",
+             ("tests/test_vehicle.py::test_guideway_in_the_loop_matches_guideway_step",)),
+    Mutation("vehicle: floor acceleration pitch lever arm sign", SIM,
+             "+ qdd_all[:, 1:2 * secs:2, None] * floor[None, None, :] * tr.section_length_m)",
+             "- qdd_all[:, 1:2 * secs:2, None] * floor[None, None, :] * tr.section_length_m)",
+             (f"{T_SV}::test_floor_acceleration_is_the_second_derivative_of_the_floor",)),
+    Mutation("vehicle: comfort record's mean not removed", SIM,
+             "a = acc[:, s, p] - acc[:, s, p].mean()",
+             "a = acc[:, s, p]",
+             (f"{T_SV}::test_floor_acceleration_is_the_second_derivative_of_the_floor",),
+             equivalent="both weightings vanish at 0 Hz (Wk has the s^2 high pass, Sperling's "
+                        "B(0) = 0), so the record's mean is multiplied by 0 in either case"),
+    Mutation("vehicle: integral projection lever arm sign (xi_f - xi)", SIM,
+             "a = np.column_stack([np.ones(cols.size), self.circuit_xi_m[cols] - centres[f]])",
+             "a = np.column_stack([np.ones(cols.size), centres[f] - self.circuit_xi_m[cols]])",
+             ("tests/test_vehicle.py::test_levitates_standing_on_elastic_guideway",),
+             equivalent="the projector A (A^T A)^-1 A^T depends only on the column space of A; "
+                        "(1, xi - xi_f) and (1, xi_f - xi) span the same space"),
+    # ------------------------------------------------------------------ mechanics, train
+    Mutation("mechanics: air-spring stiffness x1.05", MEC,
+             "train.spring_stiffness_N_per_m,",
+             "1.05 * train.spring_stiffness_N_per_m,",
+             (f"{T_SV}::test_car_bodies_sink_by_weight_over_air_spring_stiffness",)),
+    Mutation("mechanics: frame pitch lever arm sign (xi_b - xi)", MEC,
+             "jac[:, 2 * body + 1] = x - self.body_centres_m[body]",
+             "jac[:, 2 * body + 1] = self.body_centres_m[body] - x",
+             ("tests/test_vehicle.py::test_mechanics_against_sympy_lagrange_small_train",)),
+    Mutation("mechanics: gravity sign", MEC,
+             "self.Q_gravity[0::2] = self.body_mass_kg * self.gravity",
+             "self.Q_gravity[0::2] = -self.body_mass_kg * self.gravity",
+             ("tests/test_vehicle.py::test_mechanics_against_sympy_lagrange_small_train",)),
+    Mutation("mechanics: ZOH input matrix over dt/2", MEC,
+             "aug[:n2, n2:] = bq * dt_s",
+             "aug[:n2, n2:] = bq * dt_s / 2",
+             (f"{T_SV}::test_mechanics_zoh_step_matches_an_ode_solver_with_held_forces",)),
+    Mutation("train: magnets' pitch offsets not centred on the frame", TRN,
+             "offsets = (np.arange(per) + 0.5) * lm - 0.5 * per * lm",
+             "offsets = np.arange(per) * lm - 0.5 * per * lm",
+             (f"{T_SV}::test_frame_and_car_body_inertia_by_the_parallel_axis_theorem",)),
+    # ------------------------------------------------------------------ irregularities, comfort
+    Mutation("irregularity: bin power x2 (two-sided PSD read as one-sided)", IRR,
+             "power = 0.5 * d * (s.reshape(nodes.shape) @ gw)",
+             "power = d * (s.reshape(nodes.shape) @ gw)",
+             ("tests/test_irregularities.py::test_variance_equals_integral_of_psd",)),
+    Mutation("irregularity: random phases over [0, pi) instead of [0, 2 pi)", IRR,
+             "phase = 2 * math.pi * rng.random(n)",
+             "phase = math.pi * rng.random(n)",
+             (f"{T_SV}::test_random_profile_ensemble_is_zero_mean_and_stationary",)),
+    Mutation("irregularity: seed ignored", IRR,
+             "rng = np.random.default_rng(self.seed)",
+             "rng = np.random.default_rng(0)",
+             ("tests/test_irregularities.py::test_random_profile_is_reproducible",)),
+    Mutation("comfort: Wk upward-step corner f5 2.37 -> 2.5 Hz", CMF,
+             '"f5": 2.37',
+             '"f5": 2.5',
+             ("tests/test_comfort.py::test_wk_matches_iso_table",)),
+    Mutation("comfort: Sperling exponent 0.3 -> 1/3", CMF,
+             "return SPERLING_SCALE * float(np.sqrt(np.mean(y ** 2))) ** 0.3",
+             "return SPERLING_SCALE * float(np.sqrt(np.mean(y ** 2))) ** (1 / 3)",
+             ("tests/test_comfort.py::test_sperling_index_of_a_sine",)),
+    # ------------------------------------------------------------------ MPC, observer, model
+    Mutation("EKF: Joseph covariance update I + K H", OBS,
+             "IKH = ca.DM.eye(nz) - K @ H",
+             "IKH = ca.DM.eye(nz) + K @ H",
+             (f"{T_SV}::test_ekf_step_is_the_textbook_kalman_step",)),
+    Mutation("EKF: process noise dropped from the prediction", OBS,
+             "Pp = Az @ P @ Az.T + Qm",
+             "Pp = Az @ P @ Az.T",
+             (f"{T_SV}::test_ekf_step_is_the_textbook_kalman_step",)),
+    Mutation("MPC model: voltage disturbance enters with the wrong sign", MOD,
+             'ueff = u + self._d(d, "voltage")\n        rhs, coil, force = [], [], 0',
+             'ueff = u - self._d(d, "voltage")\n        rhs, coil, force = [], [], 0',
+             (f"{T_SV}::test_target_is_an_equilibrium_with_the_reference_as_measured_gap",)),
+    Mutation("MPC model: force disturbance sign", MOD,
+             'acc = self.gravity + (self._d(d, "force") - force) / self.mass_kg',
+             'acc = self.gravity + (-self._d(d, "force") - force) / self.mass_kg',
+             (f"{T_SV}::test_target_is_an_equilibrium_with_the_reference_as_measured_gap",)),
+    Mutation("MPC target: gap-sensor offset added instead of subtracted", MOD,
+             's = gap_m - float(dd.get("gap_sensor", np.zeros(1))[0])',
+             's = gap_m + float(dd.get("gap_sensor", np.zeros(1))[0])',
+             (f"{T_SV}::test_target_is_an_equilibrium_with_the_reference_as_measured_gap",)),
+    Mutation("MPC model: RK4 third stage from k1", MOD,
+             "k3 = f(xk + hs / 2 * k2)",
+             "k3 = f(xk + hs / 2 * k1)",
+             ("tests/test_mpc.py::test_ipopt_peer_gives_the_same_solution",)),
+    Mutation("MPC: upper voltage bound x1.05", MPC,
+             "ubw[k * blk + nx:k * blk + nx + nu] = self._ulim / self._su",
+             "ubw[k * blk + nx:k * blk + nx + nu] = 1.05 * self._ulim / self._su",
+             (f"{T_SV}::test_mpc_inputs_saturate_exactly_at_the_voltage_limit",)),
+    Mutation("MPC: terminal cost from the Riccati equation with R x1.05", MPC,
+             'self._P = scipy.linalg.solve_discrete_are(lin["A"], lin["B"], self._Q, self._R)',
+             'self._P = scipy.linalg.solve_discrete_are(lin["A"], lin["B"], self._Q, '
+             '1.05 * self._R)',
+             (f"{T_SV}::test_one_interval_mpc_is_the_lqr_of_the_linearisation",)),
 )
 
 
@@ -326,7 +476,7 @@ def _env(copy: Path) -> dict[str, str]:
 
 def _pytest(copy: Path, tests: tuple[str, ...], timeout: float) -> tuple[int | None, str, float]:
     cmd = [sys.executable, "-m", "pytest", "-x", "-q", "-p", "no:cacheprovider",
-           "-o", "addopts=--strict-markers", "--no-header", "-rf", *tests]
+           "-o", "addopts=--strict-markers", "--no-header", "-rfE", *tests]
     t0 = time.perf_counter()
     try:
         proc = subprocess.run(cmd, cwd=copy, env=_env(copy), capture_output=True, text=True,
@@ -339,7 +489,10 @@ def _pytest(copy: Path, tests: tuple[str, ...], timeout: float) -> tuple[int | N
 
 def _first_failure(output: str) -> str:
     m = re.search(r"^FAILED (\S+)", output, flags=re.M)
-    return m.group(1) if m else ""
+    if m:
+        return m.group(1)
+    m = re.search(r"^ERROR (\S+)", output, flags=re.M)   # a fixture (set-up) failed
+    return f"{m.group(1)} (error in set-up)" if m else ""
 
 
 def _check_import(copy: Path) -> None:
