@@ -70,6 +70,7 @@ TRA = "src/maglevkit/reduction/transient.py"
 VEH = "src/maglevkit/vehicle/heave.py"
 GW = "src/maglevkit/vehicle/guideway.py"
 SIM = "src/maglevkit/vehicle/simulation.py"
+KER = "src/maglevkit/vehicle/stepkernel.py"
 MEC = "src/maglevkit/vehicle/mechanics.py"
 TRN = "src/maglevkit/vehicle/train.py"
 IRR = "src/maglevkit/vehicle/irregularities.py"
@@ -340,19 +341,31 @@ MUTATIONS: tuple[Mutation, ...] = (
     Mutation("vehicle loop: deflection enters the gap with the wrong sign", SIM,
              "gaps_p = s0 + bt @ q - w - r_all[k]",
              "gaps_p = s0 + bt @ q + w - r_all[k]",
-             (f"{T_SV}::test_recorded_gap_is_the_kinematic_gap",)),
+             (f"{T_SV}::test_recorded_gap_is_the_kinematic_gap",
+              "tests/test_vehicle_compiled.py::test_compiled_loop_equals_python_loop")),
     Mutation("vehicle loop: recycled ring-buffer span not reset", SIM,
              "gx[kk_ % n_sp] = 0.0",
              "gx[kk_ % n_sp] *= 1.0",
-             (f"{T_SV}::test_guideway_replay_over_recycled_spans",)),
+             (f"{T_SV}::test_guideway_replay_over_recycled_spans",
+              "tests/test_vehicle_compiled.py::test_compiled_loop_equals_python_loop")),
     Mutation("vehicle loop: guideway load not equal and opposite (sign)", SIM,
              "qmod = onehot.T @ (sn[npt:] * f_bar[:, None])",
              "qmod = onehot.T @ (sn[npt:] * -f_bar[:, None])",
-             ("tests/test_vehicle.py::test_guideway_in_the_loop_matches_guideway_step",)),
+             ("tests/test_vehicle.py::test_guideway_in_the_loop_matches_guideway_step",
+              "tests/test_vehicle_compiled.py::test_compiled_loop_equals_python_loop")),
     Mutation("vehicle loop: guideway loads at the step end, not mid-step", SIM,
              "half = 0.5 * v * dt",
              "half = v * dt",
-             ("tests/test_vehicle.py::test_guideway_in_the_loop_matches_guideway_step",)),
+             ("tests/test_vehicle.py::test_guideway_in_the_loop_matches_guideway_step",
+              "tests/test_vehicle_compiled.py::test_compiled_loop_equals_python_loop")),
+    Mutation("compiled vehicle step: deflection enters the gap with the wrong sign", KER,
+             "gaps = s0 + ca.mtimes(bt, q) - w - r",
+             "gaps = s0 + ca.mtimes(bt, q) + w - r",
+             ("tests/test_vehicle_compiled.py::test_compiled_loop_equals_python_loop",)),
+    Mutation("compiled vehicle step: guideway load not equal and opposite (sign)", KER,
+             "qmod = ca.mtimes(onehot_m.T, sn_m * ca.repmat(f_bar, 1, nm))",
+             "qmod = ca.mtimes(onehot_m.T, -sn_m * ca.repmat(f_bar, 1, nm))",
+             ("tests/test_vehicle_compiled.py::test_compiled_loop_equals_python_loop",)),
     Mutation("vehicle: floor acceleration pitch lever arm sign", SIM,
              "+ qdd_all[:, 1:2 * secs:2, None] * floor[None, None, :] * tr.section_length_m)",
              "- qdd_all[:, 1:2 * secs:2, None] * floor[None, None, :] * tr.section_length_m)",
