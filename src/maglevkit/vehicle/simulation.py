@@ -120,7 +120,9 @@ class VehicleRun:
         """A short plain-text report."""
         ds = self.dataset
         lines = [f"{ds.attrs['vehicle']}: {float(ds.attrs['speed_m_per_s']) * 3.6:.0f} km/h, "
-                 f"{float(ds.time[-1]):.3g} s simulated ({self.real_time_factor:.2f}x real time)"]
+                 f"{float(ds.time[-1]):.3g} s simulated ({self.real_time_factor:.2f}x real time"
+                 + (f", {float(ds.time[-1]) / self.cpu_time_s:.2f}x by CPU time"
+                    if self.cpu_time_s > 0 else "") + f"; {self.loop} step)"]
         mg = min(self.min_gap_m.items(), key=lambda kv: kv[1])
         mc = max(self.peak_current_A.items(), key=lambda kv: kv[1])
         lines.append(f"  minimum gap {mg[1] * 1e3:.3f} mm (magnet {mg[0]}); peak current "
