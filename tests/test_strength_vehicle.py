@@ -140,10 +140,15 @@ def recorded_run() -> dict[str, Any]:
 
     model.bank.step = spy  # type: ignore[method-assign]
     try:
-        res = model.run(speed_m_per_s=V_RUN, duration_s=T_RUN, irregularity=prof)
+        # the NumPy loop (the reference; the compiled step calls the bank inside its own
+        # kernel, so the spy would see nothing there): tests/test_vehicle_compiled.py
+        # holds the compiled step equal to this loop
+        res = model.run(speed_m_per_s=V_RUN, duration_s=T_RUN, irregularity=prof,
+                        loop="python")
     finally:
         del model.bank.step
     assert res.touchdown is None, res.report()
+    assert len(calls) == res.dataset.time.size       # one bank step per time step
     gaps = np.array([c[0] for c in calls[1:]])        # calls[0]: the discarded warm-up step
     rates = np.array([c[1] for c in calls[1:]])
     ds = res.dataset
