@@ -262,7 +262,7 @@ class AirGap(LinearElement):
         s = self.effective_gap(gap)
         g = self.pole_area / s
         for w, r in self.fringe_edges:
-            g = g + 2.0 * w / math.pi * _log(1.0 + math.pi * r / (2.0 * s))
+            g = g + _fringe_per_mu0(w, r, s)
         for a, d in self.recesses:
             g = g + a / (s + d)
         return MU0 * g
@@ -407,7 +407,13 @@ class FringePermeance(LinearElement):
     def permeance(self, gap: Any = None) -> Any:
         if gap is None:
             raise ParameterError(f"fringe permeance {self.name!r}: needs a gap value")
-        return 2.0 * MU0 * self.width / math.pi * _log(1.0 + math.pi * self.radius / (2.0 * gap))
+        return MU0 * _fringe_per_mu0(self.width, self.radius, gap)
+
+
+def _fringe_per_mu0(w: float, r: float, s: Any) -> Any:
+    """Roters' quarter-circle fringe of an edge of length ``w`` and flank height ``r`` to a
+    plane at distance ``s``, divided by mu0: ``(2 w/pi) ln(1 + pi r/(2 s))`` [m]."""
+    return 2.0 * w / math.pi * _log(1.0 + math.pi * r / (2.0 * s))
 
 
 def _rectangle_torsion_constant(a: float, b: float) -> float:
