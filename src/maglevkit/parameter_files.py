@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import os
 import sys
+from collections.abc import Collection, Mapping
 from importlib import resources
 from pathlib import Path
 from typing import Any
@@ -21,7 +22,7 @@ if sys.version_info >= (3, 11):
 else:  # pragma: no cover
     import tomli as tomllib
 
-__all__ = ["bundled_files", "read_parameter_file"]
+__all__ = ["bundled_files", "parse_provenance", "read_parameter_file"]
 
 
 def _folder(folder: str) -> Any:
@@ -96,3 +97,24 @@ def read_parameter_file(source: str | os.PathLike[str], *, what: str, folder: st
         return tomllib.loads(text), label
     except tomllib.TOMLDecodeError as exc:
         raise ParameterFileError(f"{label}: not valid TOML: {exc}") from None
+
+
+def parse_provenance(parameters: Mapping[str, Any], tables: Collection[str],
+                     source: str) -> dict[str, str]:
+    """The ``[provenance]`` table of a parameter file: ``"table.key" -> tag``.
+
+    Every entry must name a value of one of ``tables`` present in ``parameters`` and
+    carry a string; otherwise :class:`~maglevkit.errors.ParameterFileError`.
+    """
+    raw = parameters.get("provenance", {})
+    if not isinstance(raw, Mapping):
+        raise ParameterFileError(f"{source}: [provenance] must map 'table.key' to a tag string")
+    prov: dict[str, str] = {}
+    for key, tag in raw.items():
+        table, _, sub = str(key).partition(".")
+        if table not in tables or sub not in parameters[table]:
+            raise ParameterFileError(f"{source}: [provenance] {key!r} names no value of this file")
+        if not isinstance(tag, str):
+            raise ParameterFileError(f"{source}: [provenance] {key!r} must be a string")
+        prov[str(key)] = tag
+    return prov

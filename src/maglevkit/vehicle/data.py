@@ -24,7 +24,7 @@ from typing import Any
 
 from ..errors import ParameterError, ParameterFileError
 from ..magnets.base import Schema, take
-from ..parameter_files import bundled_files, read_parameter_file
+from ..parameter_files import bundled_files, parse_provenance, read_parameter_file
 from .guideway import BeamSpan, Guideway
 
 __all__ = ["GuidewayData", "load_guideway", "parse_guideway", "bundled_guideways",
@@ -78,17 +78,7 @@ def parse_guideway(parameters: Mapping[str, Any], source: str = "parameters") ->
                         n_modes=g["modes"], damping_ratio=g["damping_ratio"])
     except ParameterError as exc:
         raise ParameterFileError(f"{source}: {exc}") from None
-    raw = parameters.get("provenance", {})
-    if not isinstance(raw, Mapping):
-        raise ParameterFileError(f"{source}: [provenance] must map 'table.key' to a tag string")
-    prov: dict[str, str] = {}
-    for key, tag in raw.items():
-        table, _, sub = str(key).partition(".")
-        if table != "guideway" or sub not in parameters["guideway"]:
-            raise ParameterFileError(f"{source}: [provenance] {key!r} names no value of this file")
-        if not isinstance(tag, str):
-            raise ParameterFileError(f"{source}: [provenance] {key!r} must be a string")
-        prov[str(key)] = tag
+    prov = parse_provenance(parameters, ("guideway",), source)
     return GuidewayData(span, prov, source)
 
 

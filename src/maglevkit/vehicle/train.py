@@ -31,7 +31,7 @@ import numpy as np
 
 from ..errors import ParameterFileError
 from ..magnets.base import Schema, take
-from ..parameter_files import bundled_files, read_parameter_file
+from ..parameter_files import bundled_files, parse_provenance, read_parameter_file
 
 __all__ = ["TrainData", "MagnetSlot", "bundled_vehicles", "load_vehicle", "parse_vehicle",
            "VEHICLE_SCHEMA"]
@@ -278,17 +278,7 @@ def parse_vehicle(parameters: Mapping[str, Any], source: str = "parameters") -> 
            f"{v['nominal_gap']} m", source)
     c = t["control"]
     _check(0 < c["damping"] < 5, f"[control] damping = {c['damping']} must be in (0, 5)", source)
-    raw = parameters.get("provenance", {})
-    if not isinstance(raw, Mapping):
-        raise ParameterFileError(f"{source}: [provenance] must map 'table.key' to a tag string")
-    prov: dict[str, str] = {}
-    for key, tag in raw.items():
-        table, _, sub = str(key).partition(".")
-        if table not in VEHICLE_SCHEMA or sub not in parameters[table]:
-            raise ParameterFileError(f"{source}: [provenance] {key!r} names no value of this file")
-        if not isinstance(tag, str):
-            raise ParameterFileError(f"{source}: [provenance] {key!r} must be a string")
-        prov[str(key)] = tag
+    prov = parse_provenance(parameters, VEHICLE_SCHEMA, source)
     cb, fr, se, jo = t["car_body"], t["frame"], t["secondary"], t["joint"]
     return TrainData(
         name=v["name"], n_sections=v["sections"], section_length_m=v["section_length"],
