@@ -211,8 +211,8 @@ MUTATIONS: tuple[Mutation, ...] = (
              "hv = ca.vertcat(-eq.residual, U + R * I)",
              (f"{T_FL}::test_rl_step_response_matches_exponential",)),
     Mutation("mechanical power sign flip", FLX,
-             "-ca.dot(eq.force, rate))",
-             "ca.dot(eq.force, rate))",
+             "-ca.dot(force, rate))",
+             "ca.dot(force, rate))",
              (f"{T_FP}::test_energy_balance_large_gap_motion",)),
     # ------------------------------------------------------------------ eq. 8 (current model)
     Mutation("eq8 dL/ds term x1.05", CUR,

@@ -87,6 +87,14 @@ _ENERGY_NAMES = ("electrical", "ohmic", "eddy", "mechanical")
 COMPILE_FLAGS = ("-O1", "-shared", "-fPIC")
 
 
+def _power_flows(U: Any, I: Any, R: Any, g_e: Any, phidot_e: Any, force: Any, rate: Any) -> Any:
+    """The energy balance's power flows [W] (integrated as quadratures): electric input
+    ``U.I``, ohmic loss ``R I.I``, eddy loss ``sum G phi_e'^2`` and mechanical power
+    ``-F.s'``."""
+    return ca.vertcat(ca.dot(U, I), ca.dot(R * I, I), ca.dot(g_e * phidot_e, phidot_e),
+                      -ca.dot(force, rate))
+
+
 # ---------------------------------------------------------------------------- state / outputs
 @dataclass(frozen=True)
 class FluxState:
@@ -228,8 +236,7 @@ class _FluxDAE:
         alg = ca.vertcat(ca.mtimes(ca.DM(D), x) - y, ca.mtimes(ca.DM(Q), hv))
         phidot_e = ca.mtimes(ca.DM(T), ydot)
         g_e = G[self.eddy_idx]
-        power = ca.vertcat(ca.dot(U, I), ca.dot(R * I, I), ca.dot(g_e * phidot_e, phidot_e),
-                           -ca.dot(eq.force, rate))
+        power = _power_flows(U, I, R, g_e, phidot_e, eq.force, rate)
         # eta (eq. 5): pole fluxes summed per circuit (coil-core fluxes; a pole winding
         # split over several branches counts with its turn-weighted mean flux)
         eta = ca.mtimes(ca.DM(network.pole_flux_matrix.T), eq.phi)
@@ -314,8 +321,7 @@ class _FluxDAE:
         s_t = s0 + h * rate * (t_sym - tau0)
         ydot_v = ca.mtimes(ca.DM(Kp), v)
         phidot_v = ca.mtimes(ca.DM(T), ydot_v)
-        power_v = ca.vertcat(ca.dot(U, I), ca.dot(R * I, I), ca.dot(g_e * phidot_v, phidot_v),
-                             -ca.dot(eq.force, rate))
+        power_v = _power_flows(U, I, R, g_e, phidot_v, eq.force, rate)
         alg = ca.vertcat(ca.mtimes(ca.DM(D), x) - y, ca.mtimes(ca.DM(Q), v), v - hv)
         alg, quad = ca.substitute([alg, h * power_v], [s], [s_t])
         self.n_u = 2 + 2 * ng                         # per interval: h, s_k, rate_k, tau_k
