@@ -150,6 +150,14 @@ def regions(mesh, s: float, g: Geometry = GEOM) -> tuple[np.ndarray, np.ndarray]
     Series aiding: both window-side coil sections carry the same sense, the two outer
     sections the opposite one, so the loop leg-yoke-leg-rail links n I ampere-turns.
     """
+    core, rail, sign = body_regions(mesh, s, g)
+    return core | rail, sign
+
+
+def body_regions(mesh, s: float, g: Geometry = GEOM
+                 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Per element: core mask (legs + yoke), rail mask, coil sign (+1/-1/0); see
+    :func:`regions`."""
     cx, cy = mesh.p[:, mesh.t].mean(axis=1)
     ax = np.abs(cx)
     leg = (ax > g.xi) & (ax < g.xo) & (cy > 0) & (cy < g.leg_height)
@@ -161,7 +169,7 @@ def regions(mesh, s: float, g: Geometry = GEOM) -> tuple[np.ndarray, np.ndarray]
     sign = np.zeros(mesh.t.shape[1])
     sign[inner] = -1.0
     sign[outer] = +1.0
-    return leg | yoke | rail, sign
+    return leg | yoke, rail, sign
 
 
 # ---------------------------------------------------------------------------------------

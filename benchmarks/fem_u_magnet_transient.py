@@ -55,7 +55,15 @@ import scipy.sparse as sp  # noqa: E402
 import scipy.sparse.linalg as spla  # noqa: E402
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from fem_u_magnet import GEOM, MU0, Geometry, Reluctivity, _cap, _grid_1d  # noqa: E402
+from fem_u_magnet import (  # noqa: E402
+    GEOM,
+    MU0,
+    Geometry,
+    Reluctivity,
+    _cap,
+    _grid_1d,
+    body_regions,
+)
 
 import maglevkit as mk  # noqa: E402
 
@@ -98,22 +106,6 @@ def build_mesh(s: float, h_surface: float = 1e-4, g: Geometry = GEOM):
     yb = _cap(yb, -g.rail_thickness, 0.0, hi) - s
     y = np.unique(np.round(np.concatenate([yb, yg, ya]), 12))
     return MeshTri.init_tensor(x, y)
-
-
-def regions(mesh, s: float, g: Geometry = GEOM):
-    """Per element: core mask (legs + yoke), rail mask, coil sign (+1/-1/0)."""
-    cx, cy = mesh.p[:, mesh.t].mean(axis=1)
-    ax = np.abs(cx)
-    leg = (ax > g.xi) & (ax < g.xo) & (cy > 0) & (cy < g.leg_height)
-    yoke = (ax < g.xo) & (cy > g.leg_height) & (cy < g.leg_height + g.yoke_thickness)
-    rail = (ax < 0.5 * g.rail_width) & (cy < -s) & (cy > -s - g.rail_thickness)
-    incoil = (cy > g.coil_gap_to_pole_face) & (cy < g.coil_gap_to_pole_face + g.coil_height)
-    inner = incoil & (ax > g.xi - g.coil_thickness) & (ax < g.xi)
-    outer = incoil & (ax > g.xo) & (ax < g.xo + g.coil_thickness)
-    sign = np.zeros(mesh.t.shape[1])
-    sign[inner] = -1.0
-    sign[outer] = +1.0
-    return leg | yoke, rail, sign
 
 
 # ---------------------------------------------------------------------------------------
@@ -214,7 +206,7 @@ class UMagnetFem:
         self.s, self.g = s, g
         self.mesh = build_mesh(s, h_surface, g)
         self.fe = P1(self.mesh)
-        core, rail, sign = regions(self.mesh, s, g)
+        core, rail, sign = body_regions(self.mesh, s, g)
         self.iron = core | rail
         mat = mk.get_material(material)
         self.sigma = 1.0 / float(mat.resistivity) if sigma is None else sigma
