@@ -28,16 +28,18 @@ models, linearisation and MPC.
 from __future__ import annotations
 
 import math
+import subprocess
 import warnings
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
+from pathlib import Path
 from typing import Any
 
 import casadi as ca
 import numpy as np
 
 from ..errors import InputError, OutOfRangeError, SolverError
-from .compiled import compile_function
+from .compiled import COMPILE_MODES, build_source, cache_directory, compile_function, find_compiler
 from .current import (
     EXTRA_CELLS,
     CurrentModel,
@@ -48,6 +50,7 @@ from .current import (
 )
 from .flux import FluxModel, FluxState
 from .inputs import check_initial_choice, check_step, reject_bools, simulation_inputs
+from .lanes import LaneInput, external_source, lane_source, lane_target
 from .statics import circuit_pole_groups
 from .tables import INTERPOLATION_METHODS, cell_table
 
@@ -193,6 +196,12 @@ class MagnetBank:
         the maps linearly for up to three grid cells with a warning.
     cache_dir : path, optional
         Where compiled kernels are cached (default :func:`maglevkit.models.compiled.cache_directory`).
+    codegen : {"lanes", "casadi"}
+        How the compiled step is generated from the same CasADi function: ``"lanes"``
+        (default) evaluates several circuits at once in SIMD lanes
+        (:mod:`maglevkit.models.lanes`: 4 with AVX2, else 2), ``"casadi"`` is CasADi's
+        own code generation of the mapped function (one circuit after the other).  Both
+        give the same numbers; ``"lanes"`` is ~2-3x faster (BENCHMARKS.md).
 
     Examples
     --------
@@ -211,7 +220,12 @@ class MagnetBank:
     def __init__(self, members: Mapping[str, Any] | Sequence[tuple[str, Any]], *,
                  gap_inputs: str = "circuit", interpolation: str = "bicubic",
                  compiled: str = "auto", eddy_resistance: str = "fit", max_step_s: float = 1e-3,
-                 extrapolate: bool = False, cache_dir: Any = None) -> None:
+                 extrapolate: bool = False, cache_dir: Any = None,
+                 codegen: str = "lanes") -> None:
+        if compiled not in COMPILE_MODES:
+            raise InputError(f"compiled = {compiled!r}; use one of {list(COMPILE_MODES)}")
+        if codegen not in ("lanes", "casadi"):
+            raise InputError(f"codegen = {codegen!r}; use 'lanes' or 'casadi'")
         if gap_inputs not in ("circuit", "pole"):
             raise InputError(f"gap_inputs = {gap_inputs!r}; use 'circuit' or 'pole'")
         if interpolation not in INTERPOLATION_METHODS:
@@ -228,6 +242,7 @@ class MagnetBank:
         self.gap_inputs = gap_inputs
         self.interpolation = interpolation
         self.compiled_mode = compiled
+        self.codegen = codegen
         self.max_step_s = float(max_step_s)
         self.extrapolate = extrapolate
         self._cache_dir = cache_dir
@@ -622,12 +637,60 @@ class MagnetBank:
         n = max(1, math.ceil(dt / self.max_step_s * (1 - 1e-12)))
         call = self._kernels.get(n)
         if call is None:
-            f, is_compiled = compile_function(self._step_kernel(n), mode=self.compiled_mode,
-                                              cache_dir=self._cache_dir)
-            self.compiled = is_compiled
+            f = self._lanes_kernel(n) if self.codegen == "lanes" else None
+            if f is None:
+                f, is_compiled = compile_function(self._step_kernel(n), mode=self.compiled_mode,
+                                                  cache_dir=self._cache_dir)
+                self.compiled = is_compiled
             call = _StepCall(f)
             self._kernels[n] = call
         return call
+
+    def _lanes_kernel(self, substeps: int) -> ca.Function | None:
+        """The step of :meth:`_step_kernel` compiled through :mod:`.lanes` (SIMD lanes over
+        the circuits), or None where that is not possible (compiled = "never", or no
+        working compiler: then the CasADi path decides about warnings and errors)."""
+        if self.compiled_mode == "never" or find_compiler() is None:
+            return None
+        n = int(self._reduced_idx.size)
+        nm = len(self._members)
+        width, avx2, flags = lane_target()
+        name = f"maglevkit_bank_lanes{substeps}"
+        try:
+            kernel = lane_source(self.circuit_step_function(substeps), name=f"{name}_k", n=n,
+                                 inputs=[LaneInput("instance")] * 4
+                                 + [LaneInput("shared"), LaneInput("baked", self._par)],
+                                 width=width, avx2=avx2)
+        except NotImplementedError:                        # pragma: no cover - defensive
+            return None
+        members = self._member_of[self._reduced_idx]
+        body = (f"  static const int member[{n}] = {{{','.join(str(int(m)) for m in members)}}};\n"
+                "  const double *a[5];\n  double *r[6];\n  long c;\n  int k;\n"
+                f"  for (k = 0; k < 4; ++k) {{ a[k] = arg[k]; if (!a[k]) {{ double *z = w + "
+                f"{6 * n} + k * {n}; for (c = 0; c < {n}; ++c) z[c] = 0.0; a[k] = z; }} }}\n"
+                f"  a[4] = arg[4] ? arg[4] : w + {10 * n};\n  w[{10 * n}] = 0.0;\n"
+                + "".join(f"  r[{j}] = res[{o}] ? res[{o}] : w + {j * n};\n"
+                          for j, o in enumerate((0, 1, 2, 5, 6)))
+                + f"  r[5] = w + {5 * n};\n"
+                + f"  {name}_k(a, r);\n"
+                + f"  if (res[3]) {{ for (k = 0; k < {nm}; ++k) res[3][k] = 0.0;\n"
+                + f"    for (c = 0; c < {n}; ++c) res[3][member[c]] += r[2][c]; }}\n"
+                + f"  if (res[4]) {{ double nb = 0.0; for (c = 0; c < {n}; ++c) nb += r[5][c]; "
+                  "res[4][0] = nb; }\n")
+        code = ("#include <math.h>\n" + kernel
+                + external_source(name, inputs=[("I_L", n), ("s", n), ("U", n), ("sdot", n),
+                                                ("h", 1)],
+                                  outputs=[("I_L_next", n), ("I", n), ("F", n), ("member_F", nm),
+                                           ("n_bad", 1), ("I_L_min", n), ("I_L_max", n)],
+                                  body=body, work=10 * n + 1))
+        cache = Path(self._cache_dir) if self._cache_dir is not None else cache_directory()
+        try:
+            lib = build_source(name, code.encode(), cache=cache,
+                               flags=("-O3", "-shared", "-fPIC", "-ffp-contract=off", *flags))
+        except (OSError, RuntimeError, subprocess.SubprocessError):
+            return None                  # the CasADi path reports (or raises) the failure
+        self.compiled = True
+        return ca.external(name, str(lib))
 
     # ------------------------------------------------------------------ properties
     @property

@@ -29,8 +29,8 @@ import casadi as ca
 
 from ..errors import CompilationWarning, SolverError
 
-__all__ = ["COMPILE_MODES", "cache_directory", "compile_function", "compile_library",
-           "find_compiler"]
+__all__ = ["COMPILE_MODES", "build_source", "cache_directory", "compile_function",
+           "compile_library", "find_compiler"]
 
 COMPILE_MODES = ("auto", "always", "never")
 _FLAGS = ("-O3", "-shared", "-fPIC")
@@ -157,17 +157,33 @@ def _key(code: bytes, cc: str, flags: tuple[str, ...]) -> str:
 
 
 def _build(name: str, funcs: list[ca.Function], cache: Path, flags: tuple[str, ...]) -> Path:
+    with tempfile.TemporaryDirectory(prefix="maglevkit-cg-") as tmp:
+        code = _generate(name, funcs, tmp)
+    return build_source(name, code, cache=cache, flags=flags)
+
+
+def build_source(name: str, code: bytes, *, cache: Path, flags: Sequence[str] = _FLAGS) -> Path:
+    """Compile C source ``code`` into the cached shared library ``<cache>/<name>_<key>.so``
+    (key: SHA-256 of source, compiler, flags and CasADi version) unless it is there.
+
+    Raises
+    ------
+    OSError, RuntimeError, subprocess.SubprocessError
+        No compiler, or the compiler failed (its last line of output).
+    """
     cc = find_compiler()
     if cc is None:
         raise OSError("no C compiler found ($CC, cc, gcc)")
-    with tempfile.TemporaryDirectory(prefix="maglevkit-cg-") as tmp:
-        code = _generate(name, funcs, tmp)
-        lib = cache / f"{name}_{_key(code, cc, flags)}.so"
-        if not lib.exists():
-            cache.mkdir(parents=True, exist_ok=True)
+    flags = tuple(flags)
+    lib = cache / f"{name}_{_key(code, cc, flags)}.so"
+    if not lib.exists():
+        cache.mkdir(parents=True, exist_ok=True)
+        with tempfile.TemporaryDirectory(prefix="maglevkit-cc-") as tmp:
+            src = Path(tmp) / f"{name}.c"
+            src.write_bytes(code)
             part = cache / f".{lib.name}.{os.getpid()}.tmp"
-            proc = subprocess.run([cc, *flags, str(Path(tmp) / f"{name}.c"), "-o", str(part),
-                                   "-lm"], capture_output=True, text=True, timeout=600)
+            proc = subprocess.run([cc, *flags, str(src), "-o", str(part), "-lm"],
+                                  capture_output=True, text=True, timeout=600)
             if proc.returncode != 0:
                 part.unlink(missing_ok=True)
                 raise RuntimeError(f"{Path(cc).name} failed: {_last_line(proc.stderr)}")
