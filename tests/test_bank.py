@@ -255,9 +255,9 @@ def test_solver_error_on_non_finite_state_carries_time_and_state(u_maps, monkeyp
             self.res = call.res
 
         def __call__(self, *args):  # type: ignore[no-untyped-def]
-            x, c, f, mf, _ = self.call(*args)
+            x, c, f, mf, _, s_next = self.call(*args)
             x[:] = np.nan
-            return x, c, f, mf, 1.0
+            return x, c, f, mf, 1.0, s_next
 
     def poisoned(dt: float) -> Poisoned:
         return Poisoned(real(dt))

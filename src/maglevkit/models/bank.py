@@ -258,6 +258,8 @@ class MagnetBank:
         self._layout()
         self._build_reduced()
         self._kernels: dict[int, _StepCall] = {}
+        self._last_dt: float = math.nan             # the last step length and its kernel
+        self._last_call: _StepCall | None = None
         self.compiled: bool | None = None       # known after the first step
 
     # ------------------------------------------------------------------ construction
@@ -532,7 +534,8 @@ class MagnetBank:
         current over the sub-step ends; ``n_bad`` counts circuits with a gap or current
         outside their map's range (start, end and every sub-step) or a non-finite value,
         so that the caller checks one number (and diagnoses only when it is > 0).
-        Everything is inlined into one expression graph (no nested calls).
+        Everything is inlined into one expression graph (no nested calls).  ``s_next``:
+        the gaps at the end of the step, ``s + sdot h``.
         """
         one = self.circuit_step_function(substeps)
         n = self._reduced_idx.size
@@ -546,9 +549,10 @@ class MagnetBank:
                      1.0)
         return ca.Function(f"maglevkit_bank_step{substeps}", [vi, vs, vu, vsd, vh],
                            [r.T for r in res[:3]] + [ca.densify(ca.mtimes(summ, res[2].T)), ca.sum2(res[5])]
-                           + [res[3].T, res[4].T],
+                           + [res[3].T, res[4].T, vs + vsd * vh],
                            ["I_L", "s", "U", "sdot", "h"],
-                           ["I_L_next", "I", "F", "member_F", "n_bad", "I_L_min", "I_L_max"])
+                           ["I_L_next", "I", "F", "member_F", "n_bad", "I_L_min", "I_L_max",
+                            "s_next"])
 
     # ------------------------------------------------------------------ public model pieces
     @property
@@ -644,6 +648,7 @@ class MagnetBank:
                 self.compiled = is_compiled
             call = _StepCall(f)
             self._kernels[n] = call
+        self._last_dt, self._last_call = dt, call
         return call
 
     def _lanes_kernel(self, substeps: int) -> ca.Function | None:
@@ -676,12 +681,14 @@ class MagnetBank:
                 + f"  if (res[3]) {{ for (k = 0; k < {nm}; ++k) res[3][k] = 0.0;\n"
                 + f"    for (c = 0; c < {n}; ++c) res[3][member[c]] += r[2][c]; }}\n"
                 + f"  if (res[4]) {{ double nb = 0.0; for (c = 0; c < {n}; ++c) nb += r[5][c]; "
-                  "res[4][0] = nb; }\n")
+                  "res[4][0] = nb; }\n"
+                + f"  if (res[7]) for (c = 0; c < {n}; ++c) res[7][c] = a[1][c] + a[3][c] * a[4][0];\n")
         code = ("#include <math.h>\n" + kernel
                 + external_source(name, inputs=[("I_L", n), ("s", n), ("U", n), ("sdot", n),
                                                 ("h", 1)],
                                   outputs=[("I_L_next", n), ("I", n), ("F", n), ("member_F", nm),
-                                           ("n_bad", 1), ("I_L_min", n), ("I_L_max", n)],
+                                           ("n_bad", 1), ("I_L_min", n), ("I_L_max", n),
+                                           ("s_next", n)],
                                   body=body, work=10 * n + 1))
         cache = Path(self._cache_dir) if self._cache_dir is not None else cache_directory()
         try:
@@ -884,21 +891,24 @@ class MagnetBank:
         g = state.gaps_m if gaps is None else self._vector(gaps, self.gap_names, "gaps", "m",
                                                            checked)
         gd = self._vector(gap_rates, self.gap_names, "gap_rates", "m/s", checked)
-        g1 = g + gd * dt
-        if checked and ((g <= 0).any() or (g1 <= 0).any()):
-            j = int(np.argmax((g <= 0) | (g1 <= 0)))
-            raise InputError(f"gaps must stay > 0 m over the step: {self.gap_names[j]!r} from "
-                             f"{g[j]!r} m to {g1[j]!r} m")
         t0, t1 = state.time_s, state.time_s + dt
         if self._fast:
-            # all reduced, one gap per circuit: one kernel call and two objects
-            call = self._kernel(dt)
-            x, coil, force, member_force, n_bad = call(state.inductor_currents_A, g, u, gd, dt)
+            # all reduced, one gap per circuit: one kernel call and two objects (the kernel
+            # also returns the end gaps g + gd dt)
+            last = self._last_call
+            call = last if last is not None and dt == self._last_dt else self._kernel(dt)
+            x, coil, force, member_force, n_bad, g1 = call(state.inductor_currents_A, g, u, gd,
+                                                           dt)
             if n_bad:
                 self._diagnose(g, gd, state.inductor_currents_A, u, x, call, t0, t1)
             pf = self._share @ force if pole_forces else None
             return (BankState(t1, x, g1),
                     BankOutputs(t1, coil, x.copy(), force, member_force, pf))
+        g1 = g + gd * dt
+        if checked and ((g <= 0).any() or (g1 <= 0).any()):
+            j = int(np.argmax((g <= 0) | (g1 <= 0)))
+            raise InputError(f"gaps must stay > 0 m over the step: {self.gap_names[j]!r} from "
+                             f"{g[j]!r} m to {g1[j]!r} m")
         nc = self.n_circuits
         coil = np.empty(nc)
         force = np.empty(nc)
@@ -909,7 +919,7 @@ class MagnetBank:
             s, sd = self.circuit_gaps(g)[ri], self.circuit_gaps(gd)[ri]
             ur, ir = u[ri], state.inductor_currents_A[ri]
             call = self._kernel(dt)
-            x, c, f, member_force, n_bad = call(ir, s, ur, sd, dt)
+            x, c, f, member_force, n_bad, _ = call(ir, s, ur, sd, dt)
             if n_bad:
                 self._diagnose(s, sd, ir, ur, x, call, t0, t1)
             i_next[ri], coil[ri], force[ri] = x, c, f
@@ -1035,7 +1045,7 @@ class _StepCall:
             buf.set_res(i, memoryview(r))  # type: ignore[arg-type]
 
     def __call__(self, i: np.ndarray, s: np.ndarray, u: np.ndarray, sd: np.ndarray, h: float
-                 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, float]:
+                 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, float, np.ndarray]:
         a = self.args
         a[0][:] = i
         a[1][:] = s
@@ -1044,4 +1054,5 @@ class _StepCall:
         a[4][0] = h
         self.eval()
         r = self.res
-        return r[0].copy(), r[1].copy(), r[2].copy(), r[3].copy(), float(r[4][0])
+        return (r[0].copy(), r[1].copy(), r[2].copy(), r[3].copy(), float(r[4][0]),
+                r[7].copy())

@@ -78,13 +78,14 @@ _PER_LANE_UNARY = {
 }
 _SLOW_GATHER = """#ifndef LANES_GATHER_SLOW
 #define LANES_GATHER_SLOW
-/* table[(int)(offs[e] + b[l])], NaN outside the table (CasADi's GetNonzerosParam) */
+/* table[(int)(offs[e] + b[l])], NaN outside the table (CasADi's GetNonzerosParam; a
+   value that does not truncate into the table, NaN and inf included, gives NaN) */
 static void __attribute__((noinline)) lanes_gather_slow(const double *tbl, int size,
     const double *b, const double *offs, int count, double *out) {
   int e, l;
   for (e = 0; e < count; ++e) for (l = 0; l < W; ++l) {
     double x = offs[e] + b[l];
-    int i = (int) x;
+    int i = x > -1.0 && x < size ? (int) x : -1;   /* no undefined conversion */
     out[e * W + l] = i >= 0 && i < size ? tbl[i] : (0.0 / 0.0);
   }
 }
@@ -238,7 +239,8 @@ def lane_source(f: ca.Function, *, name: str, n: int, inputs: Sequence[LaneInput
         decl = "double" if scalar else "vd"
         body.append(f"    {decl} {', '.join(out)};")
         general = "".join(
-            f" {{ int i = (int) {at(ix)}; {t}{'' if scalar else '[l]'} = i >= 0 && i < {tsize}"
+            f" {{ double x = {at(ix)}; int i = x > -1.0 && x < {tsize} ? (int) x : -1; "
+            f"{t}{'' if scalar else '[l]'} = i >= 0"
             f" ? {tname}[i] : (0.0 / 0.0); }}" for t, ix in zip(out, idx, strict=True))
         loop = "" if scalar else "for (l = 0; l < W; ++l) "
         if aff is None:
@@ -267,9 +269,34 @@ def lane_source(f: ca.Function, *, name: str, n: int, inputs: Sequence[LaneInput
                 f"const double *g = {tname} + ib;{fast} }} else {{ {slow} }} }}")
             return out
         if avx2 and tsize < 2**31 - 1 - hi:
-            # all four lanes at once: one hardware gather per element
-            fast4 = "".join(f" {t} = (vd)_mm256_i32gather_pd({tname} + {o}, ix, 8);"
-                            for t, o in zip(out, offs, strict=True))
+            # all four lanes at once: runs of four consecutive offsets as one 4-double
+            # load per lane and a 4 x 4 transpose (cheaper than hardware gathers, which
+            # remain for the other elements)
+            parts = []
+            j = 0
+            while j < len(offs):
+                if j + 3 < len(offs) and offs[j + 1:j + 4] == [offs[j] + 1, offs[j] + 2,
+                                                               offs[j] + 3]:
+                    o = offs[j]
+                    c0, c1, c2, c3 = out[j:j + 4]
+                    parts.append(
+                        f" {{ __m256d r0 = _mm256_loadu_pd({tname} + i0 + {o}), "
+                        f"r1 = _mm256_loadu_pd({tname} + i1 + {o}), "
+                        f"r2 = _mm256_loadu_pd({tname} + i2 + {o}), "
+                        f"r3 = _mm256_loadu_pd({tname} + i3 + {o}); "
+                        "__m256d u0 = _mm256_unpacklo_pd(r0, r1), u1 = _mm256_unpackhi_pd(r0, r1), "
+                        "u2 = _mm256_unpacklo_pd(r2, r3), u3 = _mm256_unpackhi_pd(r2, r3); "
+                        f"{c0} = (vd)_mm256_permute2f128_pd(u0, u2, 0x20); "
+                        f"{c1} = (vd)_mm256_permute2f128_pd(u1, u3, 0x20); "
+                        f"{c2} = (vd)_mm256_permute2f128_pd(u0, u2, 0x31); "
+                        f"{c3} = (vd)_mm256_permute2f128_pd(u1, u3, 0x31); }}")
+                    j += 4
+                else:
+                    parts.append(f" {out[j]} = (vd)_mm256_i32gather_pd({tname} + {offs[j]}, ix, 8);")
+                    j += 1
+            fast4 = (" int i0 = _mm_extract_epi32(ix, 0), i1 = _mm_extract_epi32(ix, 1), "
+                     "i2 = _mm_extract_epi32(ix, 2), i3 = _mm_extract_epi32(ix, 3);"
+                     + "".join(parts))
             body.append(
                 f"    {{ vd bv = {vec(base)}; __m256d b = (__m256d)bv; __m256d ok = _mm256_and_pd("
                 f"_mm256_cmp_pd(b, _mm256_floor_pd(b), _CMP_EQ_OQ), _mm256_and_pd("
@@ -292,24 +319,24 @@ def lane_source(f: ca.Function, *, name: str, n: int, inputs: Sequence[LaneInput
         op = f.instruction_id(k)
         ins, outs = f.instruction_input(k), f.instruction_output(k)
         if op == ca.OP_OUTPUT:
-            (src,), (ind,) = ins, outs[:1]
-            e = work[src][0]
+            (slot,), (ind,) = ins, outs[:1]
+            value = work[slot][0]
             if scalar:
-                body.append(f"    res[{ind}][c0] = {e};")
+                body.append(f"    res[{ind}][c0] = {value};")
             else:
-                body.append(f"    for (l = 0; l < m; ++l) res[{ind}][c0 + l] = {at(e)};")
+                body.append(f"    for (l = 0; l < m; ++l) res[{ind}][c0 + l] = {at(value)};")
             continue
-        e = f.instruction_MX(k)
-        if not e.sparsity().is_dense():
-            raise NotImplementedError(f"instruction {k}: sparse value {e.sparsity().dim()}")
-        size = int(e.nnz())
+        node = f.instruction_MX(k)
+        if not node.sparsity().is_dense():
+            raise NotImplementedError(f"instruction {k}: sparse value {node.sparsity().dim()}")
+        size = int(node.nnz())
         # index-vector bookkeeping: the operands' entries are read before the output
         # (which may reuse an operand's work slot) replaces them
         operand_affine = [affine.get(j) for j in ins]
         operand_work = [work.get(j, []) for j in ins]
         affine.pop(outs[0], None)
         if op == ca.OP_INPUT:
-            info = e.info()
+            info = node.info()
             ind, off = int(info["ind"]), int(info["offset"])
             spec = inputs[ind]
             names = []
@@ -317,12 +344,12 @@ def lane_source(f: ca.Function, *, name: str, n: int, inputs: Sequence[LaneInput
                 if spec.kind == "shared":
                     names.append(per_lane(f"arg[{arg_of[ind]}][{el}]"))
                 else:
-                    src = (f"{name}_in{ind}" if spec.kind == "baked"
-                           else f"arg[{arg_of[ind]}]")
-                    names.append(per_lane(f"{src}[{el} * {n} + {'c0' if scalar else 'id[l]'}]"))
+                    array = (f"{name}_in{ind}" if spec.kind == "baked"
+                             else f"arg[{arg_of[ind]}]")
+                    names.append(per_lane(f"{array}[{el} * {n} + {'c0' if scalar else 'id[l]'}]"))
             work[outs[0]] = names
         elif op == ca.OP_CONST:
-            vals = np.asarray(e.to_DM().nonzeros(), dtype=float)
+            vals = np.asarray(node.to_DM().nonzeros(), dtype=float)
             if vals.size > _TABLE_MIN:
                 tname = f"{name}_c{k}"
                 head.append(_table_literal(tname, vals))
@@ -333,7 +360,7 @@ def lane_source(f: ca.Function, *, name: str, n: int, inputs: Sequence[LaneInput
                 if vals.size > 1 and np.all(vals == np.round(vals)) and np.all(np.abs(vals) < 2**30):
                     affine[outs[0]] = ([int(v) for v in vals], "")
         elif op == ca.OP_GETNONZEROS:
-            info = e.info()
+            info = node.info()
             if "slice" in info:
                 sl = info["slice"]
                 nz = list(range(int(sl["start"]), int(sl["stop"]), int(sl["step"])))
@@ -371,23 +398,23 @@ def lane_source(f: ca.Function, *, name: str, n: int, inputs: Sequence[LaneInput
                              for a in args]
         else:
             raise NotImplementedError(f"instruction {k}: operation {op} "
-                                      f"({e}) is not translated to lanes")
-    src = (("#include <immintrin.h>\n" if avx2 else "") + f"#define W {w}\n"
+                                      f"({node}) is not translated to lanes")
+    code = (("#include <immintrin.h>\n" if avx2 else "") + f"#define W {w}\n"
            + ("" if scalar else _PRELUDE) + _SLOW_GATHER + "".join(head))
     if scalar:
-        src += (f"static void {name}(const double **arg, double **res) {{\n"
+        code += (f"static void {name}(const double **arg, double **res) {{\n"
                 f"  long c0;\n"
                 f"  for (c0 = 0; c0 < {n}; ++c0) {{\n"
                 + "\n".join(body) + "\n  }\n}\n#undef W\n")
-        return src
-    src += (f"static void {name}(const double **arg, double **res) {{\n"
+        return code
+    code += (f"static void {name}(const double **arg, double **res) {{\n"
             f"  long c0;\n"
             f"  for (c0 = 0; c0 < {n}; c0 += W) {{\n"
             f"    int l, m = {n} - c0 < W ? (int) ({n} - c0) : W;\n"
             f"    long id[W];\n"
             f"    for (l = 0; l < W; ++l) id[l] = l < m ? c0 + l : {n} - 1;\n"
             + "\n".join(body) + "\n  }\n}\n#undef W\n#undef SEL\n#undef ONE\n#undef ABSMASK\n#undef ZERO\n")
-    return src
+    return code
 
 
 def external_source(name: str, *, inputs: Sequence[tuple[str, int]],
@@ -430,13 +457,15 @@ def lane_target() -> tuple[int, bool, tuple[str, ...]]:
     AVX2 (4 doubles per vector, hardware gathers) where the processor has it (NumPy's
     run-time CPU detection), otherwise 2 lanes: the SSE2 of every x86-64, or NEON.
     """
-    try:
-        from numpy._core._multiarray_umath import __cpu_features__ as features
-    except ImportError:                       # pragma: no cover - NumPy < 2
+    import importlib
+
+    features: dict[str, bool] = {}
+    for module in ("numpy._core._multiarray_umath", "numpy.core._multiarray_umath"):
         try:
-            from numpy.core._multiarray_umath import __cpu_features__ as features
-        except ImportError:
-            features = {}
+            features = dict(importlib.import_module(module).__cpu_features__)
+            break
+        except (ImportError, AttributeError):      # pragma: no cover - other NumPy layouts
+            continue
     if platform.machine().lower() in ("x86_64", "amd64") and features.get("AVX2"):
         return 4, True, ("-mavx2",)
     return 2, False, ()

@@ -1,0 +1,150 @@
+"""SIMD-lane code generation (models/lanes.py): the same numbers as CasADi, every lane width.
+
+The lane kernel translates a CasADi function's algorithm instruction by instruction, so
+its results must equal CasADi's own evaluation bit for bit (same IEEE operations in the
+same order; compiled with -ffp-contract=off, so no fused multiply-adds).  The checks
+compare with ``numpy.testing.assert_array_equal`` (exact; NaN equals NaN), on random and
+on special inputs (NaN, inf, signed zeros, indices outside the table, non-integral
+indices), for every width the generator offers on this machine and with instance counts
+that are not multiples of the width (the tail block).
+"""
+
+from __future__ import annotations
+
+import ctypes
+import tempfile
+from pathlib import Path
+
+import casadi as ca
+import numpy as np
+import pytest
+
+import maglevkit as mk
+from maglevkit.errors import InputError
+from maglevkit.models.bank import MagnetBank
+from maglevkit.models.compiled import build_source, find_compiler
+from maglevkit.models.lanes import LaneInput, lane_source, lane_target
+
+pytestmark = pytest.mark.skipif(find_compiler() is None, reason="needs a C compiler")
+
+N = 7            # instances: one full block of 4 and a tail of 3 (or 3 blocks of 2 + 1)
+TABLE = np.linspace(-3.0, 5.0, 80) ** 3
+
+
+def _widths() -> list[tuple[int, bool]]:
+    w, avx2, _ = lane_target()
+    out = [(1, False), (2, False)]
+    if avx2:
+        out.append((4, True))
+    return out
+
+
+def _function() -> ca.Function:
+    """Every translated operation once, and gathers from a constant table: at an index
+    "integer offsets + base" (the fast path when the base is whole and inside the table)
+    and at an arbitrary computed index."""
+    x, y = ca.MX.sym("x"), ca.MX.sym("y")
+    p = ca.MX.sym("p", 3)
+    table = ca.MX(ca.DM(TABLE))
+    base = ca.floor(x) * p[0]                       # whole, or NaN/inf, or out of range
+    idx = ca.DM(np.array([0.0, 1.0, 2.0, 3.0, 7.0, 4.0])) + base
+    g = table[idx]
+    h = table[ca.fabs(y) * 3.3]                     # non-integral index: truncated
+    e = [x + y, x - y, x * y, x / y, -x, 2 * x, x ** 2, 1 / y, ca.fabs(y),
+         ca.floor(y), ca.ceil(x), ca.fmin(x, y), ca.fmax(x, y), ca.fmin(p[1], x),
+         ca.fmax(x, p[1]), x < y, x <= y, x == y, x != y, ca.logic_and(x, y),
+         ca.logic_or(x, p[2]), ca.logic_not(x), ca.if_else(x < p[1], y, 0.0),
+         ca.sqrt(ca.fabs(x)), ca.exp(-ca.fabs(y)), ca.log(ca.fabs(x) + 1), ca.sin(x),
+         ca.cos(y), ca.tanh(x), ca.atan2(x, y), ca.power(ca.fabs(x), y), ca.sign(y),
+         ca.fmod(x, 0.7), ca.erf(y), g[0] + g[1] * g[2] - g[3] * g[4] + g[5], h, p[0] * x]
+    return ca.Function("probe", [x, y, p], e)
+
+
+def _inputs(rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    x = rng.uniform(-4.0, 12.0, N)
+    y = rng.uniform(-3.0, 3.0, N)
+    x[:4] = [np.nan, np.inf, -0.0, 1e300]           # special values in the first block
+    y[4:6] = [0.0, -np.inf]
+    p = np.vstack([rng.integers(1, 6, N).astype(float), rng.uniform(-1, 1, N),
+                   rng.uniform(-1, 1, N)])
+    p[0, 6] = 0.5                                   # non-integral base for one instance
+    return x, y, p
+
+
+def _run_lanes(f: ca.Function, width: int, avx2: bool, x: np.ndarray, y: np.ndarray,
+               p: np.ndarray) -> list[np.ndarray]:
+    src = ("#include <math.h>\n"
+           + lane_source(f, name="probe_k", n=N, inputs=[LaneInput("instance"),
+                                                         LaneInput("instance"),
+                                                         LaneInput("baked", p)],
+                         width=width, avx2=avx2)
+           + "void probe(const double **arg, double **res) { probe_k(arg, res); }\n")
+    with tempfile.TemporaryDirectory() as tmp:
+        flags = ("-O3", "-shared", "-fPIC", "-ffp-contract=off") + (("-mavx2",) if avx2 else ())
+        lib = ctypes.CDLL(str(build_source("probe", src.encode(), cache=Path(tmp),
+                                           flags=flags)))
+        outs = [np.zeros(N) for _ in range(f.n_out())]
+        args = (ctypes.c_void_p * 2)(x.ctypes.data, y.ctypes.data)
+        res = (ctypes.c_void_p * len(outs))(*[o.ctypes.data for o in outs])
+        lib.probe(args, res)
+    return outs
+
+
+@pytest.mark.parametrize("width,avx2", _widths())
+def test_lane_kernel_equals_casadi_bit_for_bit(width: int, avx2: bool) -> None:
+    f = _function()
+    x, y, p = _inputs(np.random.default_rng(width))
+    got = _run_lanes(f, width, avx2, x, y, p)
+    ref = f.map(N)(x[None], y[None], p)
+    with np.errstate(all="ignore"):
+        for k, r in enumerate(ref):
+            np.testing.assert_array_equal(got[k], np.asarray(r).ravel(),
+                                          err_msg=f"output {k} ({width} lanes)")
+    # the special inputs reached the gathers' general path: NaN outside the table
+    assert np.isnan(got[34][0]) and np.isnan(got[34][1])
+
+
+def test_unsupported_operation_is_refused() -> None:
+    a = ca.MX.sym("a", 2, 2)
+    f = ca.Function("m", [a], [ca.mtimes(a, a)[0, 0]])
+    with pytest.raises(NotImplementedError):
+        lane_source(f, name="m_k", n=3, inputs=[LaneInput("instance")])
+
+
+@pytest.fixture(scope="module")
+def mixed_maps() -> list[mk.CharacteristicMaps]:
+    g, i = np.linspace(0.006, 0.016, 6), np.linspace(0.0, 60.0, 7)
+    return [mk.build_maps(mk.load_magnet(name), gaps=g, currents=i, progress=False)
+            for name in ("u-magnet", "tr09-standard")]
+
+
+def test_bank_lanes_equal_casadi_code_and_virtual_machine(mixed_maps, tmp_path) -> None:
+    """The bank's step through lanes, through CasADi's generated C and on CasADi's
+    virtual machine: identical outputs (all seven, n_bad included) for random states and
+    for circuits with NaN inputs, gaps and currents outside the maps."""
+    u, tr = mixed_maps
+    members = {"a": u, "b": tr, "c": u, "d": tr}                    # 1+2+1+2 = 6 circuits
+    calls = {}
+    for cg, mode in (("lanes", "always"), ("casadi", "always"), ("casadi", "never")):
+        bank = MagnetBank(members, compiled=mode, codegen=cg, cache_dir=tmp_path)
+        calls[(cg, mode)] = bank._kernel(1e-3)
+    nc = bank.n_circuits
+    rng = np.random.default_rng(3)
+    for trial in range(4):
+        x = rng.uniform(1.0, 55.0, nc)
+        s = rng.uniform(0.0065, 0.0155, nc)
+        v = rng.uniform(-50.0, 150.0, nc)
+        sd = rng.uniform(-0.05, 0.05, nc)
+        if trial == 3:
+            v[1], s[2], x[4], sd[5] = np.nan, 0.05, 500.0, np.inf
+        results = {key: call(x, s, v, sd, 1e-3) for key, call in calls.items()}
+        ref = results[("casadi", "never")]
+        for key, res in results.items():
+            for k, (a, b) in enumerate(zip(res, ref, strict=True)):
+                np.testing.assert_array_equal(a, b, err_msg=f"{key} output {k} trial {trial}")
+        assert (ref[4] > 0) == (trial == 3)          # the flag count sees the bad circuits
+
+
+def test_codegen_option_is_checked(mixed_maps) -> None:
+    with pytest.raises(InputError, match="codegen = 'simd'.*'lanes' or 'casadi'"):
+        MagnetBank({"m": mixed_maps[0]}, codegen="simd")
