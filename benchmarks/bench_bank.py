@@ -22,8 +22,10 @@ from pathlib import Path
 import numpy as np
 
 import maglevkit as mk
+from maglevkit.models import bank as bank_mod
 from maglevkit.models.bank import MagnetBank
 from maglevkit.models.current import _extend_axis, _extend_values
+from maglevkit.models.lanes import lane_target
 
 TITLE = "Magnet bank: cost per circuit-step at 1 ms (RK4), against an independent C kernel"
 
@@ -221,6 +223,24 @@ def _size_row(maps: mk.CharacteristicMaps, n: int, lib: ctypes.CDLL, cache: Path
         state[0], _ = bank.step(state[0], DT, u, gap_rates=sd)
 
     t_bank = _per_step(bank_step, steps)
+    # the same step through CasADi's own code generation, and lanes 2 wide (what a
+    # processor without AVX2 gets)
+    other = {}
+    for key, codegen, target in (("casadi", "casadi", None), ("lanes2", "lanes", (2, False, ()))):
+        orig = bank_mod.lane_target
+        if target is not None:
+            bank_mod.lane_target = lambda target=target: target  # type: ignore[assignment]
+        try:
+            b2 = MagnetBank(members, compiled="always", cache_dir=cache, codegen=codegen)
+            st2 = [b2.initial_state(gaps=0.010, currents=33.5)]
+            b2.step(st2[0], DT, u, gap_rates=sd)
+        finally:
+            bank_mod.lane_target = orig
+
+        def other_step(b2: MagnetBank = b2, st2: list = st2) -> None:
+            st2[0], _ = b2.step(st2[0], DT, u, gap_rates=sd)
+
+        other[key] = _per_step(other_step, steps)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         interp = MagnetBank(members, compiled="never")
@@ -253,9 +273,10 @@ def _size_row(maps: mk.CharacteristicMaps, n: int, lib: ctypes.CDLL, cache: Path
 
         t_loop = _per_step(loop, max(20, steps // 20))
         loop_txt = f"{t_loop / nc * 1e9:.0f}"
-    row = (f"| {nc} | {t_bank / nc * 1e9:.0f} | {t_interp / nc * 1e9:.0f} | "
+    row = (f"| {nc} | {t_bank / nc * 1e9:.0f} | {other['lanes2'] / nc * 1e9:.0f} | "
+           f"{other['casadi'] / nc * 1e9:.0f} | {t_interp / nc * 1e9:.0f} | "
            f"{loop_txt} | {t_base / nc * 1e9:.0f} | {t_bank / t_base:.2f} | "
-           f"{DT / t_bank:.0f} | {agree:.1e} |")
+           f"{DT / t_bank:.0f} | {other['casadi'] / t_bank:.1f} | {agree:.1e} |")
     return row, (t_build, t_first, t_cached)
 
 
@@ -281,18 +302,22 @@ def run() -> str:
     return "\n".join([
         "TR09 standard magnets (2 circuits each; maps 12 x 41 points, shared by all "
         "magnets), one `MagnetBank.step` of 1 ms (RK4, 1 sub-step) per call; times per "
-        "circuit-step in ns (CPU time of the benchmark process, best of 3 runs).  *bank* "
-        "is the compiled kernel (generated C, "
-        "`compiled='always'`), *interpreted* the same CasADi function on its virtual "
+        "circuit-step in ns (CPU time of the benchmark process, best of 3 runs), each "
+        "a whole `step` call from Python.  *bank* is the default compiled kernel "
+        f"(`codegen='lanes'`: {lane_target()[0]} circuits per SIMD vector on this "
+        "machine), *2 lanes* the same generator forced to 2-wide vectors (what a processor "
+        "without AVX2 gets), *CasADi C* CasADi's own code generation of the same function "
+        "(`codegen='casadi'`), *interpreted* the same CasADi function on its virtual "
         "machine, *step loop* one `CurrentModel.step` per magnet, *baseline* the "
-        "independent C kernel written in this benchmark (called once per step through "
-        "ctypes).  Ratio = bank / baseline (the figure of merit; target <= 2 at N >= 100); "
-        "RTF = real-time factor of the bank at 1 kHz; agreement = max relative difference "
-        "of the currents after one step, bank vs baseline.",
+        "independent scalar C kernel written in this benchmark (called once per step "
+        "through ctypes).  Ratio = bank / baseline (the figure of merit; target <= 2 at "
+        "N >= 100); RTF = real-time factor of the bank at 1 kHz; speed-up = CasADi C / "
+        "bank; agreement = max relative difference of the currents after one step, bank "
+        "vs baseline.",
         "",
-        "| circuits | bank [ns] | interpreted [ns] | step loop [ns] | baseline [ns] | ratio | "
-        "RTF | agreement |",
-        "|---|---|---|---|---|---|---|---|",
+        "| circuits | bank [ns] | 2 lanes [ns] | CasADi C [ns] | interpreted [ns] | "
+        "step loop [ns] | baseline [ns] | ratio | RTF | speed-up | agreement |",
+        "|---|---|---|---|---|---|---|---|---|---|---|",
         *rows,
         "",
         "Set-up and compile cost [s] (bank construction; first step incl. C generation and "

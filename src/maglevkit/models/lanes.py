@@ -130,8 +130,12 @@ def _c_double(v: float) -> str:
 
 
 def _table_literal(name: str, values: np.ndarray) -> str:
-    items = ",".join(_c_double(v) for v in values.ravel())
-    return f"static const double {name}[{values.size}] = {{{items}}};\n"
+    flat = np.asarray(values, dtype=float).ravel()
+    if np.isfinite(flat).all():                   # the common case, fast: float.hex
+        items = ",".join(map(float.hex, flat.tolist()))
+    else:
+        items = ",".join(_c_double(v) for v in flat)
+    return f"static const double {name}[{flat.size}] = {{{items}}};\n"
 
 
 def lane_source(f: ca.Function, *, name: str, n: int, inputs: Sequence[LaneInput],
