@@ -9,7 +9,8 @@ step with one compiled CasADi function (``loop="compiled"``); the NumPy loop
 Times are process CPU time (``time.process_time``: the machine is shared, and wall time
 counts the other processes' share of the core); the wall-time factor is given beside it.
 The share of each part of the compiled step is measured by compiling each part (the
-functions the step composes) on its own and timing many calls of it on the trim state; the
+functions the step composes) on its own and timing many calls of it on the trim state (the
+magnets: the bank's SIMD-lane library, which the compiled step calls); the
 rest of the run's CPU time per step is the Python loop (one call per block of 10 steps,
 event checks) and what a real run costs beyond hot repeated calls (fresh inputs and
 records every step, caches cleared by other processes).
@@ -35,9 +36,10 @@ SPEED_KMH = 400.0
 CALLS = 3000
 
 
-def _time_calls(f: Any, args: list[np.ndarray], calls: int = CALLS) -> tuple[float, list]:
+def _time_calls(f: Any, args: list[np.ndarray], calls: int = CALLS, compile_it: bool = True
+                ) -> tuple[float, list]:
     """CPU time per call [s] of the compiled ``f`` (best of 3 batches) and its outputs."""
-    fc, _ = compile_function(f)
+    fc = compile_function(f)[0] if compile_it else f
     buf, ev = fc.buffer()
     arrs = [np.ascontiguousarray(np.asarray(a, dtype=float).ravel()) for a in args]
     outs = [np.zeros(fc.nnz_out(i)) for i in range(fc.n_out())]
@@ -83,8 +85,14 @@ def part_times(model: VehicleModel, speed: float, dt: float = 1e-3) -> dict[str,
                                                                  p[sp["r_x"]], [speed]])
     t_ctl, (u,) = _time_calls(parts["controllers"], [gap, rate, il, cur, psi, integ, [0.0],
                                                      c[1:]])
-    t_mag, bank_out = _time_calls(parts["magnets"], [il, gap, u, rate, [dt]])
-    names = [parts["magnets"].name_out(i) for i in range(parts["magnets"].n_out())]
+    lanes = model.bank.compiled_step_library(dt)
+    if lanes is not None:
+        # the compiled step calls the bank's SIMD-lane library (already machine code)
+        t_mag, bank_out = _time_calls(lanes[0], [il, gap, u, rate, [dt]], compile_it=False)
+        names = [lanes[0].name_out(i) for i in range(lanes[0].n_out())]
+    else:
+        t_mag, bank_out = _time_calls(parts["magnets"], [il, gap, u, rate, [dt]])
+        names = [parts["magnets"].name_out(i) for i in range(parts["magnets"].n_out())]
     new_cur, new_f = bank_out[names.index("I")], bank_out[names.index("F")]
     t_upd, _ = _time_calls(parts["controller_update"], [psi, integ, u, cur, new_cur, gap])
     f_bar = 0.5 * model.train.sides * (s[st["force"]] + new_f)

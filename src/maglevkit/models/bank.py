@@ -27,6 +27,7 @@ models, linearisation and MPC.
 
 from __future__ import annotations
 
+import hashlib
 import math
 import subprocess
 import warnings
@@ -258,6 +259,7 @@ class MagnetBank:
         self._layout()
         self._build_reduced()
         self._kernels: dict[int, _StepCall] = {}
+        self._lanes: dict[int, tuple[ca.Function, Path]] = {}   # sub-steps -> (f, library)
         self._last_dt: float = math.nan             # the last step length and its kernel
         self._last_call: _StepCall | None = None
         self.compiled: bool | None = None       # known after the first step
@@ -655,12 +657,17 @@ class MagnetBank:
         """The step of :meth:`_step_kernel` compiled through :mod:`.lanes` (SIMD lanes over
         the circuits), or None where that is not possible (compiled = "never", or no
         working compiler: then the CasADi path decides about warnings and errors)."""
+        hit = self._lanes.get(substeps)
+        if hit is not None:
+            return hit[0]
         if self.compiled_mode == "never" or find_compiler() is None:
             return None
         n = int(self._reduced_idx.size)
         nm = len(self._members)
         width, avx2, flags = lane_target()
-        name = f"maglevkit_bank_lanes{substeps}"
+        # the C names carry a hash of the source (written with a placeholder name first),
+        # so that libraries of different banks never share a symbol
+        name = "MAGLEVKIT_LANES_NAME"
         try:
             kernel = lane_source(self.circuit_step_function(substeps), name=f"{name}_k", n=n,
                                  inputs=[LaneInput("instance")] * 4
@@ -690,6 +697,9 @@ class MagnetBank:
                                            ("n_bad", 1), ("I_L_min", n), ("I_L_max", n),
                                            ("s_next", n)],
                                   body=body, work=10 * n + 1))
+        digest = hashlib.sha256(code.encode()).hexdigest()[:16]
+        name = f"maglevkit_bank_lanes{substeps}_{digest}"
+        code = code.replace("MAGLEVKIT_LANES_NAME", name)
         cache = Path(self._cache_dir) if self._cache_dir is not None else cache_directory()
         try:
             lib = build_source(name, code.encode(), cache=cache,
@@ -697,7 +707,30 @@ class MagnetBank:
         except (OSError, RuntimeError, subprocess.SubprocessError):
             return None                  # the CasADi path reports (or raises) the failure
         self.compiled = True
-        return ca.external(name, str(lib))
+        f = ca.external(name, str(lib))
+        self._lanes[substeps] = (f, lib)
+        return f
+
+    def compiled_step_library(self, dt: float) -> tuple[ca.Function, Path] | None:
+        """The compiled (lanes) step over ``dt`` [s] as a CasADi external function and the
+        path of its shared library, or None (no compiler, ``compiled="never"`` or
+        ``codegen="casadi"``).
+
+        The function has the inputs and outputs of :meth:`step_function`; a larger
+        CasADi function that calls it can be generated as C and compiled when linked
+        against the library (the vehicle's compiled step does this).
+        """
+        if not self._fast:
+            raise InputError("compiled_step_library needs a bank of reduced members only "
+                             "with gap_inputs='circuit'")
+        dt = check_step(dt)
+        if self.codegen != "lanes":
+            return None
+        f = self._lanes_kernel(max(1, math.ceil(dt / self.max_step_s * (1 - 1e-12))))
+        if f is None:
+            return None
+        n = max(1, math.ceil(dt / self.max_step_s * (1 - 1e-12)))
+        return f, self._lanes[n][1]
 
     # ------------------------------------------------------------------ properties
     @property

@@ -30,7 +30,7 @@ from typing import Any
 
 import numpy as np
 
-from ..errors import InputError, MaglevkitError, OutOfRangeError
+from ..errors import InputError, MaglevkitError, OutOfRangeError, SolverError
 from .guideway import Guideway
 from .heave import STANDARD_GRAVITY
 from .mechanics import VehicleMechanics
@@ -726,18 +726,20 @@ class VehicleModel:
         """The vehicle step for steps of ``dt_s`` [s] as one CasADi function (uncompiled),
         with its layout and parts (:class:`maglevkit.vehicle.stepkernel.VehicleStepFunction`);
         reduced magnets only."""
+        return self._step_function(float(dt_s), self.bank.step_function(float(dt_s)))
+
+    def _step_function(self, dt: float, bank_step: Any) -> Any:
         from .stepkernel import build_vehicle_step
 
         if self.fine:
             raise InputError("the compiled vehicle step needs reduced magnets "
                              "(magnets='reduced')")
-        dt = float(dt_s)
         gw, mech, span = self.guideway, self.mechanics, self.guideway.span
         nm = gw.n_modes
         ad_g, bd_g = span.discretize(dt) if nm else (np.zeros((0, 0)), np.zeros((0, 0)))
         ad_m, bd_m = mech.discretize(dt)
         return build_vehicle_step(
-            bank_step=self.bank.step_function(dt), dt=dt, nominal_gap_m=self.train.nominal_gap_m,
+            bank_step=bank_step, dt=dt, nominal_gap_m=self.train.nominal_gap_m,
             sides=float(self.train.sides), span_length_m=span.length_m, origin_m=gw.origin_m,
             wavenumbers=span.wavenumbers_rad_per_m if nm else np.zeros(0),
             guideway_ad=ad_g, guideway_bd=bd_g, n_spans=gw.n_spans, mech_ad=ad_m,
@@ -751,12 +753,30 @@ class VehicleModel:
     def _compiled_step(self, dt: float) -> tuple[Any, Any, int]:
         """(compiled block function, layout, steps per block), built and compiled (or
         loaded from the disk cache) once per ``dt``."""
-        from ..models.compiled import compile_function
+        from ..models.compiled import _FLAGS, compile_function, compile_library
 
         hit = self._step_functions.get(dt)
         if hit is None:
-            vs = self.step_function(dt)
-            f, _ = compile_function(vs.block_function, mode=self.bank.compiled_mode)
+            f = None
+            lanes = (self.bank.compiled_step_library(dt)
+                     if self.bank.compiled_mode != "never" and not self.fine else None)
+            if lanes is not None:
+                # the bank's SIMD-lane step (its own library) called from the vehicle's
+                # generated C, linked against that library
+                ext, lib = lanes
+                vs = self._step_function(dt, ext)
+                bf = vs.block_function
+                try:
+                    funcs, _ = compile_library(
+                        bf.name(), [bf], mode="always",
+                        flags=(*_FLAGS, "-Wl,--no-as-needed", str(lib),
+                               f"-Wl,-rpath,{lib.parent}"))
+                    f = funcs[0]
+                except SolverError:          # e.g. a linker without these options:
+                    f = None                 # the CasADi-generated bank step below
+            if f is None:
+                vs = self.step_function(dt)
+                f, _ = compile_function(vs.block_function, mode=self.bank.compiled_mode)
             hit = (f, vs.layout, vs.block_steps)
             self._step_functions[dt] = hit
         return hit
