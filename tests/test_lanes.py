@@ -68,6 +68,10 @@ def _inputs(rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray, np.ndarra
     p = np.vstack([rng.integers(1, 6, N).astype(float), rng.uniform(-1, 1, N),
                    rng.uniform(-1, 1, N)])
     p[0, 6] = 0.5                                   # non-integral base for one instance
+    # bases at the table's end: 72 (largest offset 7 -> index 79, the last element) and
+    # 73 (index 80: one past the end, NaN)
+    x[4], x[5] = 72.9, 73.2
+    p[0, 4] = p[0, 5] = 1.0
     return x, y, p
 
 
@@ -100,8 +104,10 @@ def test_lane_kernel_equals_casadi_bit_for_bit(width: int, avx2: bool) -> None:
         for k, r in enumerate(ref):
             np.testing.assert_array_equal(got[k], np.asarray(r).ravel(),
                                           err_msg=f"output {k} ({width} lanes)")
-    # the special inputs reached the gathers' general path: NaN outside the table
+    # the special inputs reached the gathers' general path: NaN outside the table; the
+    # base at the end of the table is inside, one further is outside
     assert np.isnan(got[34][0]) and np.isnan(got[34][1])
+    assert np.isfinite(got[34][4]) and np.isnan(got[34][5])
 
 
 def test_unsupported_operation_is_refused() -> None:
