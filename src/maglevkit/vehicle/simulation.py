@@ -440,8 +440,7 @@ class VehicleModel:
         # irregularities at every point and step (vectorised once)
         xpath = x_nose0 + v * times[:, None] - xi[None, :]
         if irregularity is not None:
-            r_all = np.asarray(irregularity.elevation_m(xpath.ravel())).reshape(xpath.shape)
-            rx_all = np.asarray(irregularity.slope(xpath.ravel())).reshape(xpath.shape)
+            r_all, rx_all = irregularity.on_paths(xpath, start_m=x_nose0 - xi, step_m=v * dt)
         else:
             r_all = np.zeros_like(xpath)
             rx_all = np.zeros_like(xpath)
