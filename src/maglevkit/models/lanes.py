@@ -1,14 +1,15 @@
 """C code for many instances of one CasADi function, evaluated in SIMD lanes.
 
 CasADi's code generation of ``f.map(n, "serial")`` is a loop that evaluates ``f`` for one
-instance after another.  When ``f`` is a long serial chain (an RK4 step: each stage
-depends on the last, Horner polynomials), one instance at a time leaves the processor
-waiting on latencies.  :func:`lane_source` writes C that evaluates ``f`` for ``width``
-instances at once: every work value of ``f``'s algorithm becomes a small array over the
-lanes and every instruction a loop over them, which the C compiler turns into vector
-instructions and interleaves.  The arithmetic is ``f``'s own, instruction by
-instruction and in the same order, so the results equal CasADi's (bit for bit with the
-same compiler flags; ``fmin``/``fmax`` may differ only in the sign of a zero result).
+instance after another.  :func:`lane_source` writes C that evaluates ``f`` for ``width``
+instances at once: every work value of ``f``'s algorithm becomes one GCC/Clang
+vector-extension value (``width`` doubles, one SIMD register for width 4 with AVX2 or
+width 2 with SSE2/NEON) and every instruction one vector operation.  The arithmetic is
+``f``'s own, instruction by instruction and in the same order, so the results equal
+CasADi's bit for bit when compiled without floating-point contraction
+(``-ffp-contract=off``); ``fmin``/``fmax`` (C99 NaN rule, as selects) could differ only in
+the sign of a zero result.  ``width=1`` writes plain scalar C (one instance per loop
+iteration) with the same translation.
 
 It reads ``f``'s algorithm through CasADi's instruction API (``instruction_id``,
 ``instruction_input``, ``instruction_output``, ``instruction_MX``) and supports the
@@ -17,6 +18,13 @@ operations (with scalar broadcast), ``GetNonzeros`` (element selection) and
 ``GetNonzerosParam`` (a gather from a constant table at computed indices).  Anything else
 raises :class:`NotImplementedError` so that the caller can fall back to CasADi's own
 code generation.  Every output must be one scalar per instance.
+
+Gathers whose index vector is "integer offsets + one base" (a per-cell table lookup) are
+loads at fixed offsets from the base once the base is checked to be a whole number with
+every index inside the table (then ``(int)(offset + base)`` is exactly ``offset + base``);
+with AVX2, runs of four consecutive offsets are one 4-double load per lane and a 4 x 4
+transpose, other offsets hardware gathers.  Any other base takes CasADi's general
+gather (NaN outside the table), out of line.
 """
 
 from __future__ import annotations
