@@ -386,11 +386,11 @@ def virtual_work_force(s: float, I: float, *, refine: int = 1, rel_ds: float = 0
 
 
 def emc(s: float, I: float, discretisation: str = "lumped", coil_air: bool = False,
-        **opts):  # type: ignore[no-untyped-def]
+        columns: int | None = None, **opts):  # type: ignore[no-untyped-def]
     """EMC statics at one point: (force, psi, {branch: flux}); ``discretisation`` of the
     U-magnet network ("lumped": legs split along the coil; "grid": iron cells, with the
-    air inside the coil sides if ``coil_air``)."""
-    mag = _magnet(discretisation, coil_air, eddy_currents=False, **opts)
+    air inside the coil sides if ``coil_air``, ``columns`` cells across the pole)."""
+    mag = _magnet(discretisation, coil_air, columns, eddy_currents=False, **opts)
     sol = mk.solve_statics(mag, gaps=s, currents=I)
     flux = dict(zip(sol.branch_names, np.abs(np.ravel(sol.branch_flux_Wb)), strict=True))
     if discretisation == "lumped":
@@ -406,8 +406,9 @@ def emc(s: float, I: float, discretisation: str = "lumped", coil_air: bool = Fal
 _MAGNETS: dict = {}
 
 
-def _magnet(discretisation: str, coil_air: bool = False, **opts):  # type: ignore[no-untyped-def]
-    key = (discretisation, coil_air, tuple(sorted(opts.items())))
+def _magnet(discretisation: str, coil_air: bool = False, columns: int | None = None,
+            **opts):  # type: ignore[no-untyped-def]
+    key = (discretisation, coil_air, columns, tuple(sorted(opts.items())))
     if key not in _MAGNETS:
         import warnings
         from importlib import resources
@@ -421,7 +422,9 @@ def _magnet(discretisation: str, coil_air: bool = False, **opts):  # type: ignor
         params["magnet"]["discretisation"] = discretisation
         if coil_air:
             params["magnet"]["coil_air"] = True
-        with warnings.catch_warnings():      # the two added keys have no provenance entry
+        if columns is not None:
+            params["magnet"]["grid_columns"] = columns
+        with warnings.catch_warnings():      # the added keys have no provenance entry
             warnings.simplefilter("ignore", mk.ProvenanceWarning)
             _MAGNETS[key] = build_magnet(params, options=mk.ModelOptions(**opts))
     return _MAGNETS[key]
@@ -445,6 +448,71 @@ def _grid_leg_flux(mag, sol) -> float:  # type: ignore[no-untyped-def]
     cols = [i for i, x in enumerate(xc) if -g.xo < x < -g.xi]
     flux = dict(zip(sol.branch_names, np.ravel(sol.branch_flux_Wb), strict=True))
     return float(abs(sum(flux[f"frame_v_{i}_{j}"] for i in cols)))
+
+
+def grid_leg_profile(s: float, I: float, columns: int | None = None
+                     ) -> list[tuple[float, float]]:
+    """Grid network: (height [m], flux [Wb]) of the left leg at each boundary between two
+    cell rows (the leg's vertical links between the row centres around it)."""
+    from maglevkit.magnets.u_magnet import grid_lines
+
+    mag = _magnet("grid", False, columns, eddy_currents=False)
+    sol = mk.solve_statics(mag, gaps=s, currents=I)
+    g = GEOM
+    m = dict(pole_width=g.pole_width, leg_height=g.leg_height, yoke_thickness=g.yoke_thickness,
+             window_width=g.window_width, coil_height=g.coil_height,
+             coil_gap_to_pole_face=g.coil_gap_to_pole_face,
+             grid_columns=mag.parameters["magnet"].get("grid_columns", 3))
+    xf, yf, _, _, nleg = grid_lines(m, dict(width=g.rail_width, thickness=g.rail_thickness))
+    xc = 0.5 * (np.array(xf[1:]) + np.array(xf[:-1]))
+    cols = [i for i, x in enumerate(xc) if -g.xo < x < -g.xi]
+    flux = dict(zip(sol.branch_names, np.ravel(sol.branch_flux_Wb), strict=True))
+    return [(float(yf[j + 1]), float(abs(sum(flux[f"frame_v_{i}_{j}"] for i in cols))))
+            for j in range(nleg)]
+
+
+LEG_HEIGHTS = (0.010, 0.020, 0.030, 0.040, 0.050, 0.060)   # m, grid row boundaries (3 columns)
+
+
+def flux_diagnostics(s: float, I: float, g: Geometry = GEOM) -> dict:
+    """Where the FEM's flux linkage comes from, at (s [m], I [A]).
+
+    Each turn of a leg's coil has one conductor in the outer and one in the window coil
+    side, so it links the leg's flux at its height plus the vertical flux in the two
+    bundles between its conductors and the leg flanks.  Returns ``psi`` [Wb], ``psi_leg``
+    (the turn-weighted leg flux, ``(n/2)/h_c int Phi_leg(y) dy`` over the coil, both legs;
+    what a network that puts all turns on the iron links counts), ``psi_outer`` and
+    ``psi_window`` (the bundles' share), and the leg flux at :data:`LEG_HEIGHTS`
+    (``leg_flux``) [Wb].  Evaluated on the FEM's A_z by point probes (flux per depth
+    between two points = difference of A_z); the three parts add up to ``psi`` to the
+    quadrature error (~1e-5 relative).
+    """
+    from skfem import Basis, ElementTriP2
+
+    r = solve_full(s, I, g=g)
+    basis = Basis(build_mesh(s, g=g), ElementTriP2())
+
+    def a_z(x: np.ndarray, y: np.ndarray) -> np.ndarray:
+        return basis.probes(np.vstack([x, y])) @ r.A
+
+    d, tc, hc = g.depth, g.coil_thickness, g.coil_height
+    ny, nx = 200, 24
+    y = g.coil_gap_to_pole_face + (np.arange(ny) + 0.5) * hc / ny
+    ones = np.ones_like(y)
+    a_i, a_o = a_z(g.xi * ones, y), a_z(g.xo * ones, y)
+    # half model (x >= 0, right leg); both legs and psi's sign: the A_z differences below
+    # are oriented like psi (outer conductor minus window conductor)
+    scale = 2.0 * 0.5 * g.turns * d / ny                # both legs, (n/2) turns, mean over y
+    psi_leg = scale * float(np.sum(a_i - a_o))
+    po = pw = 0.0
+    for f in (np.arange(nx) + 0.5) / nx:                # conductor depth into the bundle
+        po += scale * float(np.sum(a_o - a_z((g.xo + f * tc) * ones, y))) / nx
+        pw += scale * float(np.sum(a_z((g.xi - f * tc) * ones, y) - a_i)) / nx
+    yl = np.array(LEG_HEIGHTS)
+    leg = d * np.abs(a_z(g.xi * np.ones_like(yl), yl) - a_z(g.xo * np.ones_like(yl), yl))
+    sign = 1.0 if psi_leg + po + pw > 0 else -1.0
+    return dict(psi=r.psi_Wb, psi_leg=sign * psi_leg, psi_outer=sign * po,
+                psi_window=sign * pw, leg_flux=leg.tolist())
 
 
 def _emc_face_share(s: float, g: Geometry = GEOM) -> float:
@@ -651,6 +719,84 @@ def main(argv: list[str] | None = None) -> None:
         out(f"| {s * 1e3:g} | {I:g} | {100 * a / tot:.1f} | {100 * b / tot:.1f} | "
             f"{100 * c / tot:.1f} | {tot * 1e3:.3f} | {fl['gap_left'] * 1e3:.3f} | {face:.1f} |")
     out()
+    # where the flux linkage comes from (FEM field), against the grid network
+    out("### What the flux linkage is made of (FEM), and what the grid network misses\n")
+    out("psi = psi_leg + psi_bundles: psi_leg is the turn-weighted leg flux "
+        "`(n/2)/h_c int Phi_leg(y) dy` over the coil (both legs), all that a network with its "
+        "turns on the iron links counts; psi_bundles the vertical flux inside the two coil "
+        "sides between each conductor and the leg flank (`flux_diagnostics`).  The grid "
+        "network's psi is its turn-weighted leg flux only, so `grid psi / psi_leg - 1` is its "
+        "leg-flux error and the bundle share is missing on top of it.\n")
+    out("| s [mm] | I [A] | psi_FEM [Wb] | psi_leg [% of psi] | outer bundle [%] | "
+        "window bundle [%] | closure [-] | grid psi vs psi_FEM [%] | grid psi vs psi_leg [%] |")
+    out("|---|---|---|---|---|---|---|---|---|")
+    diag_points = [(0.008, 5.0), (0.020, 5.0), (0.012, 40.0), (0.004, 80.0), (0.012, 80.0),
+                   (0.020, 80.0)]
+    diags = {}
+    for s, I in diag_points:
+        key = f"diag:s={s:.6g},I={I:.6g}"
+        dg = cache.get(key)
+        if dg is None:
+            dg = flux_diagnostics(s, I)
+            cache.put(key, dg)
+        diags[s, I] = dg
+        _, pe, _ = emc(s, I, "grid")
+        out(f"| {s * 1e3:g} | {I:g} | {dg['psi']:.4f} | {100 * dg['psi_leg'] / dg['psi']:.1f} | "
+            f"{100 * dg['psi_outer'] / dg['psi']:+.1f} | {100 * dg['psi_window'] / dg['psi']:+.1f} | "
+            f"{(dg['psi_leg'] + dg['psi_outer'] + dg['psi_window']) / dg['psi'] - 1:.0e} | "
+            f"{100 * (pe / dg['psi'] - 1):+.1f} | {100 * (pe / dg['psi_leg'] - 1):+.1f} |")
+    out()
+    prof_points = [(0.020, 5.0), (0.020, 80.0), (0.004, 80.0)]
+    out("### Leg flux along the height: FEM vs grid network [mWb]\n")
+    out("Flux in one leg at the heights of the grid's row boundaries (3 columns: rows of "
+        "10 mm; the coil spans 10-60 mm); grid: its vertical links there.\n")
+    out("| y [mm] | " + " | ".join(f"{s * 1e3:g} mm / {I:g} A: FEM | grid | err [%]"
+                                   for s, I in prof_points) + " |")
+    out("|---|" + "---|---|---|" * len(prof_points))
+    profiles = {p: dict(grid_leg_profile(*p)) for p in prof_points}
+    for k, yv in enumerate(LEG_HEIGHTS):
+        cells = []
+        for p in prof_points:
+            fem_v = diags[p]["leg_flux"][k] if p in diags else None
+            if fem_v is None:
+                key = f"diag:s={p[0]:.6g},I={p[1]:.6g}"
+                dg = cache.get(key) or flux_diagnostics(*p)
+                cache.put(key, dg)
+                diags[p] = dg
+                fem_v = dg["leg_flux"][k]
+            net = min(profiles[p].items(), key=lambda kv, yv=yv: abs(kv[0] - yv))[1]
+            cells.append(f"{fem_v * 1e3:.3f} | {net * 1e3:.3f} | {100 * (net / fem_v - 1):+.1f}")
+        out(f"| {yv * 1e3:g} | " + " | ".join(cells) + " |")
+    out()
+    # the grid network's own discretisation
+    out("### Convergence of the grid network in `grid_columns` (cells across the pole)\n")
+    out("Errors (EMC - FEM)/FEM over the 20 points of the table above; time: building the "
+        "network and solving the 20 points (one process, after the first build).\n")
+    out("| grid_columns | branches | force err [%] | within 3 % | psi err [%] | within 3 % | "
+        "F 4 mm / 80 A | F 8 mm / 40 A | psi 20 mm / 80 A | psi 4 mm / 80 A | time [s] |")
+    out("|---|---|---|---|---|---|---|---|---|---|---|")
+    for ncol in (1, 2, 3, 4, 5, 6):
+        t0 = time.perf_counter()
+        ef_c, ep_c = {}, {}
+        for s in gaps:
+            for I in currents:
+                r = fem_point(s, I)
+                fe, pe, _ = emc(s, I, "grid", columns=ncol)
+                ef_c[s, I] = 100 * (fe / r["F"] - 1)
+                ep_c[s, I] = 100 * (pe / r["psi"] - 1)
+        dt = time.perf_counter() - t0
+        nb = len(_magnet("grid", False, ncol, eddy_currents=False).network.branches)
+        fv, pv = list(ef_c.values()), list(ep_c.values())
+
+        def at(dct: dict, s: float, I: float) -> str:
+            return f"{dct[s, I]:+.1f}" if (s, I) in dct else "-"
+
+        out(f"| {ncol} | {nb} | {min(fv):+.1f} ... {max(fv):+.1f} | "
+            f"{sum(abs(v) <= 3.0 for v in fv)} | {min(pv):+.1f} ... {max(pv):+.1f} | "
+            f"{sum(abs(v) <= 3.0 for v in pv)} | {at(ef_c, 0.004, 80.0)} | "
+            f"{at(ef_c, 0.008, 40.0)} | {at(ep_c, 0.020, 80.0)} | {at(ep_c, 0.004, 80.0)} | "
+            f"{dt:.1f} |")
+    out()
     if not args.skip_checks:
         # 2. linear iron mu_i: geometry (leakage, fringing) only
         out(f"## 2. Geometry only: EMC (`saturation=False`) and FEM both with linear iron "
@@ -719,7 +865,9 @@ Generated by `python benchmarks/fem_u_magnet.py` (about 4 min on 2 idle cores; n
 optional extra: `pip install -e ".[validation]"`, i.e. scikit-fem; `--cache FILE` keeps the FEM
 results in a JSON file, so that re-running the EMC comparison after a network change takes
 seconds).  Tests: `tests/test_fem_validation.py` (`pytest -m slow` for the nonlinear points),
-`tests/test_statics_fem.py` (the `grid` network against the recorded FEM numbers).
+`tests/test_statics_fem.py` (the `grid` network against the recorded FEM numbers),
+`tests/test_statics_grid3.py` (its convergence in `grid_columns`, the FEM's flux-linkage
+decomposition).
 
 ## FEM set-up
 
@@ -796,11 +944,14 @@ fitted to the FEM: every element is the geometry's Roters tube or iron cell.
   and around the coil bundles that links part of the turns (above).
 * Section 2 (both linear, mu_r = 200): force -1.3 ... +4.1 %, psi -1.2 ... -0.6 % (`lumped`
   -8.7 ... +0.2 %, -4.8 ... -2.8 %): the cell network gets the iron's geometry right.
-* Its own discretisation: 2 / 3 / 5 cells across the pole change the force at 4 mm / 80 A
-  -1.0 / -1.8 / -3.3 % and psi -4.6 / -4.4 / -4.1 %, at 8 mm / 40 A -2.0 / -2.4 / -2.5 % and
-  -3.4 / -3.0 / -2.5 %: 3 cells are within ~1.5 pp of the finer network.  5 cells (709
-  branches) took 14x as long as 3 (235 branches; the `lumped` network has 32) to compile
-  and solve four points.
+* Its own discretisation (convergence table above): 1 ... 6 cells across the pole.  The
+  network converges (force at 4 mm / 80 A -1.9 / -3.0 / -3.3 / -3.4 % for 3 / 4 / 5 / 6
+  cells, psi at 20 mm / 80 A -5.6 / -5.2 / -5.0 / -4.9 %), so the converged network is
+  about F -3.4 ... +4.3 %, psi -4.9 ... +0.8 %: the 3-cell network's deep-saturation force
+  (-1.9 %) is ~1.5 pp better than its limit by discretisation error, its psi ~0.7 pp
+  worse.  4 cells: psi within 3 % at 15 instead of 12 points (force unchanged, 16), for
+  455 branches instead of 235 (20 points in 3.1 s instead of 0.7 s); 6 cells take 14 s.
+  The low-current force at 20 mm (+4.3 %) does not move with the cells at all.
 
 **`coil_air = true`** (with `grid`): the air between each leg flank and its winding's centre
 plane, as a parallel path of every leg link in the coil carrying the same turns (the
@@ -811,20 +962,50 @@ carry `mu0 H_leg` as the FEM shows.  Flux linkage at 80 A -1.7 ... -4.3 % instea
 pole face; in the field part of it leaves the flank beside the pole).  Off by default: it
 trades force for flux linkage.
 
-**Not within 3 % yet, and why.**
-* The force at 20 mm and low current (+4.3 %, `lumped` +3.9 %) is the air model: with
-  unsaturated iron both networks have only Roters tubes for the fringing and flank flux,
-  which at s = 2/3 of the pole width carries a third of the flux crossing the gap line.
-* The flux linkage in saturation (-3.3 ... -5.6 % at 40-80 A, 12-20 mm): the leg flux is
-  still up to 4.7 % low there (not explained yet: a cell sees only its own flux component,
-  not |B|, which would err the other way; the air around the saturated leg is Roters tubes),
-  and the partly linked flux inside the coil sides is missing (`coil_air` adds it, at the
-  cost of the force).
-* Tried and dropped: a parallel path through each coil side made of strips whose MMF is the
-  share of the row's turns between strip and leg (the distributed winding).  At
-  unsaturated iron those strips carry the bundle's own field, which the flank leakage tubes
-  (starting at the leg flank, crossing the bundle) already carry: double counting, low-
-  current psi +1.4 ... +2.5 %, knee force -3.5 ... -5.5 %.
+**Not within 3 % yet, and why** (the diagnostics tables above).
+* What is left is the air model, not the iron cells: the converged cell network keeps
+  +4.3 % force at 20 mm / 5-20 A and -4.9 % psi at 20 mm / 80 A.
+* **Where the leakage leaves the leg.**  In the FEM the flux leaves the leg mostly at the
+  bottom (below and at the lower end of the coil, next to the gap): at 20 mm the leg
+  carries 0.581 mWb at 10 mm height (5 A), the grid 0.476 (-18 %), at 80 A -20 %; higher
+  up (30-60 mm) the grid's leg is +1 ... +4 % (5 A) or -1 ... -2 % (80 A) off.  The
+  network's Roters tubes take too little flux from the pole's edge region (at 20 mm / 5 A
+  its two fringe tubes `(2/pi) ln(1 + pi r/2s)` carry 0.137 mWb, while 0.283 mWb cross the
+  FEM's mid-gap line beside the pole) and too much from the lower coil rows
+  (gap-independent quarter circles); at low current the two errors cancel in psi (within
+  0.4 %).  The force at 20 mm (+4.3 %) goes with the face: the grid's face tubes carry
+  0.278 mWb where 0.268 mWb cross the FEM's mid-gap line under the pole (3.6 % more flux,
+  ~7 % more face force if uniform), the flux beside the pole adds little force in
+  either.  In saturation the misplaced leakage loads the legs
+  differently: at 20 mm / 80 A the grid's turn-weighted leg flux is 4.5 % below the FEM's.
+* **Flux inside the coil sides.**  The FEM's psi = turn-weighted leg flux + the vertical
+  flux inside the two coil sides between each conductor and the leg (table above): the
+  coil sides add +3.1 % at 4 mm / 80 A, +1.9 % at 12 mm / 80 A, +1.2 % at 20 mm / 80 A
+  (the leg's tangential H continues into the bundles), and -0.8 % at 20 mm / 5 A (the
+  flank leakage crossing the bundles is linked by fewer turns than the leg below it).  A
+  network with all turns on the iron links cannot count it: at 4 mm / 80 A it is most of
+  the grid's psi error (-4.4 %, of which -1.4 % leg flux).
+* **Tried for this issue and not kept** (measured on the 20 points; numbers in
+  docs/decisions.md, "U-magnet statics: what the air model is missing"): the coil sides as
+  cells with their own share of the turns and the flank tubes starting at the coil's
+  outer face (psi -5 ... -14 % at low current: the Roters tubes in series with the bundle
+  lose 30-40 % of their permeance); each flank tube carrying only the turns its loop
+  encloses (psi at low current -1 ... -2.7 %, force at 80 A up to +7.5 %); the flank
+  tubes crossing the gap
+  (Roters' path `s + pi y/2`; force up to +33 %); the exact 2-D field of a right-angled
+  pole edge over a plane (Schwarz-Christoffel) instead of Roters' fringe (psi up to +14 %
+  or force down to -17 %); the whole air region as cells on the grid's lines (1294
+  branches; even with nearly ideal iron psi -5.5 ... -6.7 %, halving the cells only to
+  -4 %: the cells do not resolve the field at the pole corners).  Each fixes one of the
+  tube network's errors and loses the others' compensation.
+* Earlier attempt (kept out): a parallel path through each coil side made of strips whose
+  MMF is the share of the row's turns between strip and leg; it double-counts the flank
+  leakage tubes (low-current psi +1.4 ... +2.5 %, knee force -3.5 ... -5.5 %).
+* Next step: an air model solved as a field, not assembled from tubes: the air cells with
+  local refinement at the four pole corners and the gap (the corner field is what the
+  uniform cells miss), or a conformal/boundary-element solution of the window and flank
+  regions with the winding's MMF along the flank; or the calibration route of the issue
+  (network factors fitted to a FEM run of the geometry, validated on others).
 
 ## What the FEM changed in the EMC
 
