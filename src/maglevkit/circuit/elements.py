@@ -10,6 +10,7 @@ base class owns the law the element contributes to its branch.
 * :class:`GapLeakage` -- gap-dependent leakage/fringe permeance ``mu0 w/pi ln(1 + pi r/s)``.
 * :class:`FringePermeance` -- fringing from a pole flank to a flat rail on its own branch,
   ``2 mu0 w/pi ln(1 + pi r/(2 s))``.
+* :class:`GapLayerPermeance` -- air along a cell layer filling the gap, ``mu0 w s/l``.
 * :class:`EddyCurrent` -- the paper's "magnetic inductance", ``V_m = G_ec dphi/dt``.
 
 Sign convention: a branch flux ``phi`` flows from the branch's start node to its end
@@ -39,6 +40,7 @@ __all__ = [
     "LeakagePermeance",
     "GapLeakage",
     "FringePermeance",
+    "GapLayerPermeance",
     "EddyCurrent",
     "carter_coefficient",
 ]
@@ -408,6 +410,46 @@ class FringePermeance(LinearElement):
         if gap is None:
             raise ParameterError(f"fringe permeance {self.name!r}: needs a gap value")
         return MU0 * _fringe_per_mu0(self.width, self.radius, gap)
+
+
+@dataclass(frozen=True)
+class GapLayerPermeance(LinearElement):
+    """Air inside the gap layer between two neighbouring cells: ``G = mu0 w s / l``.
+
+    The lateral link of a cell network whose row of cells fills the air gap (height
+    ``s``, the gap): flux along the layer, cross-section ``w x s`` (``w`` the depth),
+    length ``l`` between the cell centres.  Its permeance grows with the gap, so its
+    share of the force ``phi^2/2 dR/ds`` is repulsive: the ``-B_x^2/(2 mu0)`` part of the
+    Maxwell stress on the rail.
+
+    Parameters
+    ----------
+    gap_input : str
+        Name of the gap input.
+    width : float
+        Extent across the flux and the gap [m] (the depth).
+    length : float
+        Path length along the layer [m].
+    """
+
+    gap_input: str = "s"
+    width: float = 1.0
+    length: float = 1.0
+
+    def __post_init__(self) -> None:
+        owner = f"gap layer permeance {self.name!r}"
+        if not isinstance(self.gap_input, str) or not self.gap_input:
+            raise ParameterError(f"{owner}: gap_input must be a non-empty name")
+        _positive(owner, width=self.width, length=self.length)
+
+    @property
+    def gap(self) -> str:
+        return self.gap_input
+
+    def permeance(self, gap: Any = None) -> Any:
+        if gap is None:
+            raise ParameterError(f"gap layer permeance {self.name!r}: needs a gap value")
+        return MU0 * self.width * gap / self.length
 
 
 def _fringe_per_mu0(w: float, r: float, s: Any) -> Any:

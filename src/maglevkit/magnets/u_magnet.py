@@ -61,6 +61,7 @@ from ..circuit.elements import (
     EddyCurrent,
     Element,
     FringePermeance,
+    GapLayerPermeance,
     IronPath,
     LeakagePermeance,
     _rectangle_torsion_constant,
@@ -93,8 +94,12 @@ MAGNET_SCHEMA = {
     "discretisation": Schema(str, required=False, default="lumped"),
     "grid_columns": Schema(int, required=False, default=3, unit="-"),
     "coil_air": Schema(bool, required=False, default=False),
+    "air_model": Schema(str, required=False, default="tubes"),
+    "air_gap_rows": Schema(int, required=False, default=4, unit="-"),
+    "air_margin": Schema(float, required=False, default=0.2, unit="m"),
 }
 DISCRETISATIONS = ("lumped", "grid")
+AIR_MODELS = ("tubes", "cells")
 RAIL_SCHEMA = {
     "thickness": Schema(float, unit="m"),
     "width": Schema(float, unit="m"),
@@ -142,13 +147,35 @@ def build_u_magnet(params: Mapping[str, Any], materials: Mapping[str, Material],
         raise ParameterFileError(f"[magnet] discretisation = {m['discretisation']!r}: expected "
                                  f"one of {', '.join(map(repr, DISCRETISATIONS))}")
     given = set(params["magnet"])
-    only = {"lumped": ("grid_columns", "coil_air"), "grid": ("coil_segments",)}
+    only = {"lumped": ("grid_columns", "coil_air", "air_model", "air_gap_rows", "air_margin"),
+            "grid": ("coil_segments",)}
     for key in only[m["discretisation"]]:
         if key in given:
             raise ParameterFileError(
                 f"[magnet] {key} does not apply to discretisation = {m['discretisation']!r} "
                 f"(it is a key of the {'grid' if m['discretisation'] == 'lumped' else 'lumped'}"
                 " network); remove it or change the discretisation")
+    if m["air_model"] not in AIR_MODELS:
+        raise ParameterFileError(f"[magnet] air_model = {m['air_model']!r}: expected one of "
+                                 f"{', '.join(map(repr, AIR_MODELS))}")
+    if m["air_model"] == "tubes":
+        for key in ("air_gap_rows", "air_margin"):
+            if key in given:
+                raise ParameterFileError(f"[magnet] {key} applies to air_model = \"cells\" "
+                                         "only; remove it or set air_model = \"cells\"")
+    else:
+        if m["coil_air"]:
+            raise ParameterFileError("[magnet] coil_air is a path of the Roters-tube air model; "
+                                     "air_model = \"cells\" has the coil sides as cells "
+                                     "already: remove coil_air")
+        if not (options.leakage and options.fringing):
+            raise ParameterFileError(
+                "[magnet] air_model = \"cells\" solves all air paths as one field, so "
+                "leakage and fringing cannot be switched off separately; use "
+                "air_model = \"tubes\" for ModelOptions(leakage=False) or (fringing=False)")
+        if m["air_gap_rows"] > 8:
+            raise ParameterFileError(f"[magnet] air_gap_rows = {m['air_gap_rows']}: at most 8 "
+                                     "rows of cells across the gap")
     if m["grid_columns"] > 12:
         raise ParameterFileError(f"[magnet] grid_columns = {m['grid_columns']}: at most 12 "
                                  "cells across the pole width (the cell network grows as its "
@@ -426,6 +453,9 @@ def _build_grid(m: Mapping[str, Any], r: Mapping[str, Any], core: Material, rail
                 name = f"rail_v_{i}_{j}"
                 branches.append(Branch(name, f"S{i}_{j}", f"S{i}_{j + 1}", (
                     iron(f"iron_{name}", cyr[j + 1] - cyr[j], xs[i + 1] - xs[i], rail_mat),)))
+    if m["air_model"] == "cells":
+        _air_cells(m, r, core, rail_mat, branches, add_coil, xf, yf, xs, yr, frame_iron)
+        return branches, coils
     top = len(cyr) - 1                        # rail row at its top surface
     off = xs.index(xf[0])                     # rail column under frame column 0
 
@@ -504,6 +534,170 @@ def _build_grid(m: Mapping[str, Any], r: Mapping[str, Any], core: Material, rail
                     a, b = (f"F{i}_{j}", node_r) if side == "left" else (node_r, f"F{i}_{j}")
                     branches.append(Branch(name, a, b, el if side == "left" else el[::-1]))
     return branches, coils
+
+
+CORNER_REFINEMENT = (0.1, 0.25, 0.5)
+"""Air-cell grid lines at these fractions of the cell size beside each pole edge and above
+the pole faces (``air_model = "cells"``)."""
+
+
+def _graded(a: float, length: float, cell: float, growth: float = 1.5) -> list[float]:
+    """Lines from ``a`` outwards over ``length`` (sign gives the direction), first cell
+    ``cell``, each next one ``growth`` times longer, the last one stretched to end exactly
+    at ``a + length``."""
+    out, x, h = [], 0.0, cell
+    total = abs(length)
+    while x + h < total - 1e-12:
+        x += h
+        out.append(x)
+        h *= growth
+    if out and total - out[-1] < 0.5 * h / growth:
+        out.pop()
+    out.append(total)
+    sgn = 1.0 if length > 0 else -1.0
+    return [a + sgn * v for v in out]
+
+
+def _air_cells(m: Mapping[str, Any], r: Mapping[str, Any], core: Material, rail_mat: Material,
+               branches: list[Branch], add_coil: Callable[[str, str, float], None],
+               xf: list[float], yf: list[float], xs: list[float], yr: list[float],
+               frame_iron: Callable[[int, int], bool]) -> None:
+    """The air around the iron as a cell network (``air_model = "cells"``,
+    docs/equations.md sec. 6): a tensor grid of air cells over a box around the magnet
+    and the rail, one row of cells filling the gap, the winding bundles as air cells whose
+    vertical links carry the turns that enclose them with the leg."""
+    d, wp, ww = m["depth"], m["pole_width"], m["window_width"]
+    tc, hc, gcp = m["coil_thickness"], m["coil_height"], m["coil_gap_to_pole_face"]
+    hl, ty = m["leg_height"], m["yoke_thickness"]
+    tr, wr = r["thickness"], r["width"]
+    cell = wp / m["grid_columns"]
+    xi, xo = 0.5 * ww, 0.5 * ww + wp
+    half_turns = 0.5 * m["turns"]
+    margin = m["air_margin"]
+    eps = 1e-9 * wp
+    # x lines: the rail's (they contain the frame's), the bundle faces and layers, the box
+    xb = max(0.5 * wr, xo + tc)
+    xl = set(xs)
+    for sgn in (-1.0, 1.0):
+        xl.update(sgn * a for a in _divide(xo, xo + tc, cell) + _divide(xi - tc, xi, cell))
+        if xo + tc > 0.5 * wr:                      # coil sides beyond the rail's edge
+            xl.update(sgn * v for v in _divide(0.5 * wr, xo + tc, cell))
+        xl.update(sgn * v for v in _graded(xb, margin, cell))
+        # finer air next to the pole edges, where the field concentrates
+        xl.update(sgn * (xi - f * cell) for f in CORNER_REFINEMENT)
+        xl.update(sgn * (xo + f * cell) for f in CORNER_REFINEMENT)
+    X: list[float] = []
+    for v in sorted(xl):
+        if not X or v - X[-1] > eps:
+            X.append(v)
+    cx = [0.5 * (a + b) for a, b in zip(X[:-1], X[1:], strict=True)]
+    # rows from the bottom: below the rail and the rail (relative to the rail top), the gap,
+    # the frame's rows and above the yoke (absolute, pole faces at 0)
+    below = _graded(-tr, -margin, cell)[::-1]
+    rail_lines = [*below, *yr]
+    top = hl + ty
+    up_lines = sorted({*yf, *(f * cell for f in CORNER_REFINEMENT), *_graded(top, margin, cell)})
+    rows: list[tuple[str, float, float]] = [("rail", a, b) for a, b in
+                                            zip(rail_lines[:-1], rail_lines[1:], strict=True)]
+    ngap = m["air_gap_rows"]
+    rows += [("gap", 0.0, 0.0)] * ngap           # each s/ngap high
+    rows += [("up", a, b) for a, b in zip(up_lines[:-1], up_lines[1:], strict=True)]
+
+    def iron_node(ix: int, iy: int) -> tuple[str, float, float, float, float] | None:
+        """The iron cell at air-grid cell (ix, iy): node, its x and y extent."""
+        kind, lo, hi = rows[iy]
+        x = cx[ix]
+        if kind == "rail" and -0.5 * wr < x < 0.5 * wr and lo >= yr[0] - eps:
+            i = bisect.bisect_right(xs, x) - 1
+            j = bisect.bisect_right(yr, 0.5 * (lo + hi)) - 1
+            return f"S{i}_{j}", xs[i], xs[i + 1], yr[j], yr[j + 1]
+        if kind == "up" and -xo < x < xo and hi <= top + eps:
+            i = bisect.bisect_right(xf, x) - 1
+            j = bisect.bisect_right(yf, 0.5 * (lo + hi)) - 1
+            if frame_iron(i, j):
+                return f"F{i}_{j}", xf[i], xf[i + 1], yf[j], yf[j + 1]
+        return None
+
+    def side_of(x: float) -> str:
+        return "left" if x < 0.0 else "right"
+
+    def bundle(x: float) -> tuple[str, float] | None:
+        """(side, share of the row's turns) of a column inside a winding bundle: the
+        conductors between the column and the bundle's far face."""
+        ax = abs(x)
+        if xo < ax < xo + tc:
+            return side_of(x), 1.0 - (ax - xo) / tc
+        if xi - tc < ax < xi:
+            return side_of(x), 1.0 - (xi - ax) / tc
+        return None
+
+    def air_half(name: str, iy: int, ix: int, along: str, width: float) -> Element:
+        """Half of air cell (ix, iy) along x or y, cross-section ``width`` x depth."""
+        kind, lo, hi = rows[iy]
+        if along == "x":
+            half = 0.5 * (X[ix + 1] - X[ix])
+            if kind == "gap":
+                return GapLayerPermeance(name, gap_input=side_of(cx[ix]), width=d / ngap,
+                                         length=half)
+            return LeakagePermeance(name, MU0 * d * width / half)
+        if kind == "gap":
+            return AirGap(name, gap_input=side_of(cx[ix]), pole_area=2.0 * ngap * width * d)
+        return LeakagePermeance(name, MU0 * d * width / (0.5 * (hi - lo)))
+
+    def node(ix: int, iy: int) -> str:
+        hit = iron_node(ix, iy)
+        return hit[0] if hit is not None else f"A{ix}_{iy}"
+
+    def coil_rows(iy: int) -> float:
+        """Coil height between the centres of rows iy and iy + 1 (up rows only)."""
+        (k0, a0, b0), (k1, a1, b1) = rows[iy], rows[iy + 1]
+        if k0 != "up" or k1 != "up":
+            return 0.0
+        return _overlap(0.5 * (a0 + b0), 0.5 * (a1 + b1), gcp, gcp + hc)
+
+    for iy in range(len(rows)):
+        kind, lo, hi = rows[iy]
+        for ix in range(len(cx)):
+            here = iron_node(ix, iy)
+            w = X[ix + 1] - X[ix]
+            # horizontal neighbour
+            if ix + 1 < len(cx):
+                there = iron_node(ix + 1, iy)
+                h = hi - lo
+                if here is None or there is None:
+                    name = f"air_h_{ix}_{iy}"
+                    els: list[Element] = []
+                    for k, hit in ((ix, here), (ix + 1, there)):
+                        if hit is None:
+                            els.append(air_half(f"{name}_{k}", iy, k, "x", h))
+                        else:
+                            nd, a, b, ya, yb = hit
+                            face = X[ix + 1]
+                            dist = face - 0.5 * (a + b) if k == ix else 0.5 * (a + b) - face
+                            els.append(IronPath(f"iron_{name}_{k}", dist, h * d,
+                                                rail_mat if nd.startswith("S") else core))
+                    branches.append(Branch(name, node(ix, iy), node(ix + 1, iy), tuple(els)))
+            # vertical neighbour
+            if iy + 1 < len(rows):
+                there = iron_node(ix, iy + 1)
+                if here is None or there is None:
+                    name = f"air_v_{ix}_{iy}"
+                    els = []
+                    for k, hit in ((iy, here), (iy + 1, there)):
+                        if hit is None:
+                            els.append(air_half(f"{name}_{k}", k, ix, "y", w))
+                        else:
+                            nd, a, b, ya, yb = hit
+                            kk, lo2, hi2 = rows[k]
+                            face = hi2 if k == iy else lo2       # shared face, own frame
+                            dist = abs(face - 0.5 * (ya + yb))
+                            els.append(IronPath(f"iron_{name}_{k}", dist, w * d,
+                                                rail_mat if nd.startswith("S") else core))
+                    branches.append(Branch(name, node(ix, iy), node(ix, iy + 1), tuple(els)))
+                    share = bundle(cx[ix])
+                    ov = coil_rows(iy)
+                    if share is not None and ov > 0.0 and here is None and there is None:
+                        add_coil(name, share[0], half_turns * share[1] * ov / hc)
 
 
 def u_magnet_range(params: Mapping[str, Any]) -> PlausibleRange:
