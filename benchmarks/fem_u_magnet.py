@@ -386,11 +386,12 @@ def virtual_work_force(s: float, I: float, *, refine: int = 1, rel_ds: float = 0
 
 
 def emc(s: float, I: float, discretisation: str = "lumped", coil_air: bool = False,
-        columns: int | None = None, **opts):  # type: ignore[no-untyped-def]
+        columns: int | None = None, extra: tuple = (), **opts):  # type: ignore[no-untyped-def]
     """EMC statics at one point: (force, psi, {branch: flux}); ``discretisation`` of the
     U-magnet network ("lumped": legs split along the coil; "grid": iron cells, with the
-    air inside the coil sides if ``coil_air``, ``columns`` cells across the pole)."""
-    mag = _magnet(discretisation, coil_air, columns, eddy_currents=False, **opts)
+    air inside the coil sides if ``coil_air``, ``columns`` cells across the pole, ``extra``
+    more ``[magnet]`` keys as (key, value) pairs, e.g. ``(("air_model", "cells"),)``)."""
+    mag = _magnet(discretisation, coil_air, columns, extra, eddy_currents=False, **opts)
     sol = mk.solve_statics(mag, gaps=s, currents=I)
     flux = dict(zip(sol.branch_names, np.abs(np.ravel(sol.branch_flux_Wb)), strict=True))
     if discretisation == "lumped":
@@ -407,8 +408,8 @@ _MAGNETS: dict = {}
 
 
 def _magnet(discretisation: str, coil_air: bool = False, columns: int | None = None,
-            **opts):  # type: ignore[no-untyped-def]
-    key = (discretisation, coil_air, columns, tuple(sorted(opts.items())))
+            extra: tuple = (), **opts):  # type: ignore[no-untyped-def]
+    key = (discretisation, coil_air, columns, extra, tuple(sorted(opts.items())))
     if key not in _MAGNETS:
         import warnings
         from importlib import resources
@@ -424,6 +425,7 @@ def _magnet(discretisation: str, coil_air: bool = False, columns: int | None = N
             params["magnet"]["coil_air"] = True
         if columns is not None:
             params["magnet"]["grid_columns"] = columns
+        params["magnet"].update(dict(extra))
         with warnings.catch_warnings():      # the added keys have no provenance entry
             warnings.simplefilter("ignore", mk.ProvenanceWarning)
             _MAGNETS[key] = build_magnet(params, options=mk.ModelOptions(**opts))
@@ -470,6 +472,9 @@ def grid_leg_profile(s: float, I: float, columns: int | None = None
     return [(float(yf[j + 1]), float(abs(sum(flux[f"frame_v_{i}_{j}"] for i in cols))))
             for j in range(nleg)]
 
+
+CELLS = (("air_model", "cells"),)
+"""The ``[magnet]`` key of the grid network's air-cell model (its defaults otherwise)."""
 
 LEG_HEIGHTS = (0.010, 0.020, 0.030, 0.040, 0.050, 0.060)   # m, grid row boundaries (3 columns)
 
@@ -657,16 +662,18 @@ def main(argv: list[str] | None = None) -> None:
     out("## 1. EMC vs FEM (AISI 1008, refine = 1)\n")
     out("Errors are (EMC - FEM)/FEM, for the two U-magnet networks: `lumped` (the default, "
         "legs split along the coil) and `grid` (`discretisation = \"grid\"`, iron cells of "
-        "pole_width/3, docs/equations.md sec. 6).  Phi_leg: flux in one leg at mid-coil "
-        "height (lumped: mean of `leg_left_2`, `leg_left_3`; grid: the leg's vertical links "
-        "at that height).\n")
-    out("| s [mm] | I [A] | F_FEM [N] | err F lumped [%] | err F grid [%] | psi_FEM [Wb] | "
-        "err psi lumped [%] | err psi grid [%] | Phi_leg FEM [mWb] | lumped | grid | "
+        "pole_width/3, docs/equations.md sec. 6), the latter with its default air model "
+        "(Roters tubes) and with `air_model = \"cells\"` (grid cells: the air as cells too).  "
+        "Phi_leg: flux in one leg at mid-coil height (lumped: mean of `leg_left_2`, "
+        "`leg_left_3`; grid: the leg's vertical links at that height).\n")
+    out("| s [mm] | I [A] | F_FEM [N] | err F lumped [%] | err F grid [%] | "
+        "err F grid cells [%] | psi_FEM [Wb] | err psi lumped [%] | err psi grid [%] | "
+        "err psi grid cells [%] | Phi_leg FEM [mWb] | lumped | grid | grid cells | "
         "B_leg,FEM [T] |")
-    out("|---|---|---|---|---|---|---|---|---|---|---|---|")
+    out("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|")
     stored = {}
     errs: dict[str, dict[tuple[float, float], tuple[float, float]]] = {
-        "lumped": {}, "grid": {}, "grid + coil_air": {}}
+        "lumped": {}, "grid": {}, "grid + coil_air": {}, "grid + air cells": {}}
     for s in gaps:
         for I in currents:
             r = fem_point(s, I)
@@ -681,22 +688,29 @@ def main(argv: list[str] | None = None) -> None:
             fe, pe, _ = emc(s, I, "grid", coil_air=True)
             errs["grid + coil_air"][s, I] = (100 * (fe - r["F"]) / r["F"],
                                              100 * (pe - r["psi"]) / r["psi"])
+            fe, pe, fl = emc(s, I, "grid", extra=CELLS)
+            errs["grid + air cells"][s, I] = (100 * (fe - r["F"]) / r["F"],
+                                              100 * (pe - r["psi"]) / r["psi"])
+            legs.append(fl["leg_left"])
             (efl, epl), (efg, epg) = errs["lumped"][s, I], errs["grid"][s, I]
+            efc, epc = errs["grid + air cells"][s, I]
             row = [f"{s * 1e3:g}", f"{I:g}", f"{r['F']:.1f}", f"{efl:+.1f}", f"{efg:+.1f}",
-                   f"{r['psi']:.4f}", f"{epl:+.1f}", f"{epg:+.1f}", f"{r['leg'] * 1e3:.3f}",
-                   f"{legs[0] * 1e3:.3f}", f"{legs[1] * 1e3:.3f}", f"{r['leg'] / area:.2f}"]
+                   f"{efc:+.1f}", f"{r['psi']:.4f}", f"{epl:+.1f}", f"{epg:+.1f}",
+                   f"{epc:+.1f}", f"{r['leg'] * 1e3:.3f}", f"{legs[0] * 1e3:.3f}",
+                   f"{legs[1] * 1e3:.3f}", f"{legs[2] * 1e3:.3f}", f"{r['leg'] / area:.2f}"]
             out("| " + " | ".join(row) + " |")
     out()
     out("### Error over the gap x current grid: lumped -> grid\n")
     for label, col in (("force", 0), ("flux linkage", 1)):
         out(f"{label} error [%], (EMC - FEM)/FEM, `lumped` / `grid` / `grid` with "
-            "`coil_air = true`:\n")
+            "`coil_air = true` / `grid` with `air_model = \"cells\"`:\n")
         out("| s [mm] | " + " | ".join(f"{I:g} A" for I in currents) + " |")
         out("|---|" + "---|" * len(currents))
         for s in gaps:
             out(f"| {s * 1e3:g} | " + " | ".join(
                 f"{errs['lumped'][s, I][col]:+.1f} / {errs['grid'][s, I][col]:+.1f} / "
-                f"{errs['grid + coil_air'][s, I][col]:+.1f}"
+                f"{errs['grid + coil_air'][s, I][col]:+.1f} / "
+                f"{errs['grid + air cells'][s, I][col]:+.1f}"
                 for I in currents) + " |")
         out()
     for disc in errs:
@@ -797,21 +811,46 @@ def main(argv: list[str] | None = None) -> None:
             f"{at(ef_c, 0.008, 40.0)} | {at(ep_c, 0.020, 80.0)} | {at(ep_c, 0.004, 80.0)} | "
             f"{dt:.1f} |")
     out()
+    out("### Convergence of the air cells (`air_model = \"cells\"`)\n")
+    out("Errors (EMC - FEM)/FEM [%] at four points, changing one discretisation setting of the "
+        "air-cell model at a time (defaults: `air_gap_rows = 4`, `air_margin = 0.2` m, 3 "
+        "columns); time: building the network and solving the four points.\n")
+    conv_points = [(0.004, 5.0), (0.020, 5.0), (0.004, 80.0), (0.020, 80.0)]
+    out("| setting | branches | " + " | ".join(
+        f"F {s * 1e3:g} mm / {I:g} A | psi {s * 1e3:g} mm / {I:g} A" for s, I in conv_points)
+        + " | time [s] |")
+    out("|---|---|" + "---|---|" * len(conv_points) + "---|")
+    for label, extra in (("defaults", ()), ("air_gap_rows = 2", (("air_gap_rows", 2),)),
+                         ("air_gap_rows = 6", (("air_gap_rows", 6),)),
+                         ("air_margin = 0.09 m", (("air_margin", 0.09),)),
+                         ("air_margin = 0.35 m", (("air_margin", 0.35),))):
+        t0 = time.perf_counter()
+        vals = []
+        for s, I in conv_points:
+            r = fem_point(s, I)
+            fe, pe, _ = emc(s, I, "grid", extra=CELLS + extra)
+            vals += [f"{100 * (fe / r['F'] - 1):+.2f}", f"{100 * (pe / r['psi'] - 1):+.2f}"]
+        nb = len(_magnet("grid", False, None, CELLS + extra, eddy_currents=False)
+                 .network.branches)
+        out(f"| {label} | {nb} | " + " | ".join(vals)
+            + f" | {time.perf_counter() - t0:.0f} |")
+    out()
     if not args.skip_checks:
         # 2. linear iron mu_i: geometry (leakage, fringing) only
         out(f"## 2. Geometry only: EMC (`saturation=False`) and FEM both with linear iron "
             f"mu_r = mu_i = {mu_i:g}, I = 10 A\n")
-        out("| s [mm] | F_FEM [N] | err F lumped [%] | err F grid [%] | psi_FEM [Wb] | "
-            "err psi lumped [%] | err psi grid [%] |")
-        out("|---|---|---|---|---|---|---|")
+        out("| s [mm] | F_FEM [N] | err F lumped [%] | err F grid [%] | err F grid cells [%] | "
+            "psi_FEM [Wb] | err psi lumped [%] | err psi grid [%] | err psi grid cells [%] |")
+        out("|---|---|---|---|---|---|---|---|---|")
         for s in gaps:
             r = fem_point(s, 10.0, mu_r=mu_i)
             cells = []
-            for disc in ("lumped", "grid"):
-                fe, pe, _ = emc(s, 10.0, disc, saturation=False)
+            for disc, extra in (("lumped", ()), ("grid", ()), ("grid", CELLS)):
+                fe, pe, _ = emc(s, 10.0, disc, extra=extra, saturation=False)
                 cells.append((100 * (fe / r["F"] - 1), 100 * (pe / r["psi"] - 1)))
             out(f"| {s * 1e3:g} | {r['F']:.1f} | {cells[0][0]:+.1f} | {cells[1][0]:+.1f} | "
-                f"{r['psi']:.4f} | {cells[0][1]:+.1f} | {cells[1][1]:+.1f} |")
+                f"{cells[2][0]:+.1f} | {r['psi']:.4f} | {cells[0][1]:+.1f} | "
+                f"{cells[1][1]:+.1f} | {cells[2][1]:+.1f} |")
         out()
 
         # 3. sanity check: linear iron mu_r = 1e5 vs the textbook inductance
@@ -861,10 +900,12 @@ def main(argv: list[str] | None = None) -> None:
 
 _HEADER = """# 2-D FEM validation of the U-magnet EMC
 
-Generated by `python benchmarks/fem_u_magnet.py` (about 4 min on 2 idle cores; needs the
-optional extra: `pip install -e ".[validation]"`, i.e. scikit-fem; `--cache FILE` keeps the FEM
-results in a JSON file, so that re-running the EMC comparison after a network change takes
-seconds).  Tests: `tests/test_fem_validation.py` (`pytest -m slow` for the nonlinear points),
+Generated by `python benchmarks/fem_u_magnet.py` (about 4 min of FEM on 2 idle cores, plus
+5-10 min for the EMC side: the grid networks of the convergence tables, up to 3136 branches,
+each take 10-60 s to build; needs the optional extra: `pip install -e ".[validation]"`, i.e.
+scikit-fem; `--cache FILE` keeps the FEM results in a JSON file, so that re-running the EMC
+comparison after a network change needs no FEM solve).  Tests:
+`tests/test_fem_validation.py` (`pytest -m slow` for the nonlinear points),
 `tests/test_statics_fem.py` (the `grid` network against the recorded FEM numbers),
 `tests/test_statics_grid3.py` (its convergence in `grid_columns`, the FEM's flux-linkage
 decomposition).
@@ -962,8 +1003,38 @@ carry `mu0 H_leg` as the FEM shows.  Flux linkage at 80 A -1.7 ... -4.3 % instea
 pole face; in the field part of it leaves the flank beside the pole).  Off by default: it
 trades force for flux linkage.
 
-**Not within 3 % yet, and why** (the diagnostics tables above).
-* What is left is the air model, not the iron cells: the converged cell network keeps
+**`air_model = "cells"`** (with `grid`, docs/equations.md sec. 6): the air as a cell network
+too, the same discretisation as the iron's: window, coil sides, the outside air in a box
+0.2 m beyond the rail and the yoke, and the gap filled by 4 rows of cells (vertical links
+`AirGap`, lateral links `GapLayerPermeance mu0 depth s/l`, whose force share is the
+`-B_x^2/(2 mu0)` part of the stress); grid lines at 0.1, 0.25 and 0.5 cell beside each pole
+edge and above the pole faces.  The coil sides' vertical links carry the turns that
+enclose them with the leg (Ampere's law on each loop), so their own flux is linked as in
+the FEM.  No Roters tube and nothing fitted to the FEM: the three settings are
+discretisation choices (picked while watching these errors, so the convergence table is
+what shows they are not tuned): 4 -> 6 gap rows move the four points by <= 0.6 pp (most:
+the 20 mm / 80 A force, +2.7 -> +2.1 %), 2 -> 4 rows by up to 2.7 pp; a 0.09 / 0.2 / 0.35 m
+box by <= 0.4 / 0.13 pp.
+* **Force -2.0 ... +2.8 %, flux linkage -2.4 ... -0.1 %: within 3 % at all 20 points**
+  (tubes: 16 and 12 points).  At 80 A force +2.5 ... +2.8 %, psi -0.6 ... -0.1 % (tubes
+  -1.9 ... +3.3 %, -5.6 ... -4.4 %); the 20 mm / low-current force -1.5 % (tubes +4.3 %).
+* Section 2 (linear iron): force -1.7 ... -1.2 %, psi -2.4 ... -1.9 %.
+* Not better at every point than `lumped` (4 mm / 5 A: psi -2.0 % vs -0.4 %), so `lumped`
+  stays the default; and it costs: 2812 branches (tubes 235, lumped 32), building and
+  solving the 20 points takes ~1-1.5 min (tubes ~1 s).
+* What is left: psi at low current -2.0 ... -2.4 % and the linear-iron force -1.2 ... -1.7 %
+  are the cells' discretisation (with nearly ideal iron the air cells are ~1-2 % below the
+  FEM's inductance where the Roters tubes are within 0.2 %: the field at the pole corners
+  is only resolved down to a tenth of a cell); the deep-saturation force +2.1 ... +2.8 %
+  falls with finer gap rows (20 mm / 80 A: +5.4 / +2.7 / +2.1 % for 2 / 4 / 6 rows) and
+  depends on the iron cells too (tubes: -1.5 pp from 3 to 6 columns at 4 mm / 80 A);
+  finer cells cost more than the network's loop equations afford by default (6 rows:
+  3002 branches).  One geometry only: the settings are not validated on a second FEM
+  geometry.
+
+**Roters tubes (`air_model = "tubes"`, the default): why they stay off by up to 5.6 %**
+(the diagnostics tables above).
+* What is left there is the air model, not the iron cells: the converged cell network keeps
   +4.3 % force at 20 mm / 5-20 A and -4.9 % psi at 20 mm / 80 A.
 * **Where the leakage leaves the leg.**  In the FEM the flux leaves the leg mostly at the
   bottom (below and at the lower end of the coil, next to the gap): at 20 mm the leg
@@ -986,7 +1057,7 @@ trades force for flux linkage.
   network with all turns on the iron links cannot count it: at 4 mm / 80 A it is most of
   the grid's psi error (-4.4 %, of which -1.4 % leg flux).
 * **Tried for this issue and not kept** (measured on the 20 points; numbers in
-  docs/decisions.md, "U-magnet statics: what the air model is missing"): the coil sides as
+  docs/decisions.md, "U-magnet statics within 3 %: the air as cells"): the coil sides as
   cells with their own share of the turns and the flank tubes starting at the coil's
   outer face (psi -5 ... -14 % at low current: the Roters tubes in series with the bundle
   lose 30-40 % of their permeance); each flank tube carrying only the turns its loop
@@ -994,18 +1065,11 @@ trades force for flux linkage.
   tubes crossing the gap
   (Roters' path `s + pi y/2`; force up to +33 %); the exact 2-D field of a right-angled
   pole edge over a plane (Schwarz-Christoffel) instead of Roters' fringe (psi up to +14 %
-  or force down to -17 %); the whole air region as cells on the grid's lines (1294
-  branches; even with nearly ideal iron psi -5.5 ... -6.7 %, halving the cells only to
-  -4 %: the cells do not resolve the field at the pole corners).  Each fixes one of the
-  tube network's errors and loses the others' compensation.
+  or force down to -17 %).  Each fixes one of the tube network's errors and loses the
+  others' compensation, which is why the air cells replace all tubes at once.
 * Earlier attempt (kept out): a parallel path through each coil side made of strips whose
   MMF is the share of the row's turns between strip and leg; it double-counts the flank
   leakage tubes (low-current psi +1.4 ... +2.5 %, knee force -3.5 ... -5.5 %).
-* Next step: an air model solved as a field, not assembled from tubes: the air cells with
-  local refinement at the four pole corners and the gap (the corner field is what the
-  uniform cells miss), or a conformal/boundary-element solution of the window and flank
-  regions with the winding's MMF along the flank; or the calibration route of the issue
-  (network factors fitted to a FEM run of the geometry, validated on others).
 
 ## What the FEM changed in the EMC
 

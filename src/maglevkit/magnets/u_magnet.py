@@ -46,6 +46,12 @@ Estimates of the secondary flux paths (Roters' method, docs/sources.md sec. 3):
   depth (the lumped element always does).  Each leg segment
   carries the eddy currents of its own length (the element conductance is proportional
   to the length), so every branch the winding sits on induces them.
+
+``discretisation = "grid"`` replaces the legs, yoke and rail by grids of iron cells
+(:func:`_build_grid`); its air is the Roters tubes above attached to the cells
+(``air_model = "tubes"``, default) or a cell network as well (``air_model = "cells"``,
+:func:`_air_cells`: window, coil sides with their turns, outside air in a box
+``air_margin`` beyond the magnet, ``air_gap_rows`` rows of cells in the gap).
 """
 
 from __future__ import annotations
