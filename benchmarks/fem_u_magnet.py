@@ -1025,7 +1025,7 @@ box by <= 0.4 / 0.13 pp.
 * What is left: psi at low current -2.0 ... -2.4 % and the linear-iron force -1.2 ... -1.7 %
   are the cells' discretisation (with nearly ideal iron the air cells are ~1-2 % below the
   FEM's inductance where the Roters tubes are within 0.2 %: the field at the pole corners
-  is only resolved down to a tenth of a cell); the deep-saturation force +2.1 ... +2.8 %
+  is only resolved down to a tenth of a cell); the deep-saturation force +2.5 ... +2.8 %
   falls with finer gap rows (20 mm / 80 A: +5.4 / +2.7 / +2.1 % for 2 / 4 / 6 rows) and
   depends on the iron cells too (tubes: -1.5 pp from 3 to 6 columns at 4 mm / 80 A);
   finer cells cost more than the network's loop equations afford by default (6 rows:
