@@ -43,10 +43,13 @@ __all__ = ["LaneInput", "external_source", "lane_source", "lane_target"]
 # compiler keeps in vector registers.  Templates: a, b the operands (vd expressions or
 # scalar literals, which the vector operators broadcast).
 # arithmetic in the vector operators themselves
-_VECTOR = {
+_ARITHMETIC = {
     ca.OP_ADD: "{a} + {b}", ca.OP_SUB: "{a} - {b}", ca.OP_MUL: "{a} * {b}",
     ca.OP_DIV: "{a} / {b}", ca.OP_NEG: "-{a}", ca.OP_TWICE: "2. * {a}",
     ca.OP_SQ: "{a} * {a}", ca.OP_INV: "1. / {a}", ca.OP_ASSIGN: "{a}",
+}
+_VECTOR = {
+    **_ARITHMETIC,
     # comparisons give all-ones/zero masks; & ONE turns them into 1.0/0.0
     ca.OP_LT: "(vd)(({a} < {b}) & ONE)", ca.OP_LE: "(vd)(({a} <= {b}) & ONE)",
     ca.OP_EQ: "(vd)(({a} == {b}) & ONE)", ca.OP_NE: "(vd)(({a} != {b}) & ONE)",
@@ -58,9 +61,7 @@ _VECTOR = {
 }
 # the same operations for one scalar (width 1, and the lane-by-lane fallback)
 _SCALAR = {
-    ca.OP_ADD: "{a} + {b}", ca.OP_SUB: "{a} - {b}", ca.OP_MUL: "{a} * {b}",
-    ca.OP_DIV: "{a} / {b}", ca.OP_NEG: "-{a}", ca.OP_TWICE: "2. * {a}",
-    ca.OP_SQ: "{a} * {a}", ca.OP_INV: "1. / {a}", ca.OP_ASSIGN: "{a}",
+    **_ARITHMETIC,
     ca.OP_LT: "(double)({a} < {b})", ca.OP_LE: "(double)({a} <= {b})",
     ca.OP_EQ: "(double)({a} == {b})", ca.OP_NE: "(double)({a} != {b})",
     ca.OP_FMIN: "(({a} < {b} || {b} != {b}) ? {a} : {b})",
