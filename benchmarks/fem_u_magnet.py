@@ -469,31 +469,19 @@ def _magnet(discretisation: str, coil_air: bool = False, columns: int | None = N
 def _grid_leg_flux(mag, sol) -> float:  # type: ignore[no-untyped-def]
     """Grid network: flux in the left leg at mid-coil height (sum over the leg's columns
     of the vertical links between the two cell rows around it)."""
-    from maglevkit.magnets.u_magnet import grid_lines
-
     g = GEOM
-    m = dict(pole_width=g.pole_width, leg_height=g.leg_height, yoke_thickness=g.yoke_thickness,
-             window_width=g.window_width, coil_height=g.coil_height,
-             coil_gap_to_pole_face=g.coil_gap_to_pole_face,
-             grid_columns=mag.parameters["magnet"].get("grid_columns", 3))
-    xf, yf, _, _, _ = grid_lines(m, dict(width=g.rail_width, thickness=g.rail_thickness))
+    yf, cols, _, flux = _grid_leg_links(mag, sol)
     yc = 0.5 * (np.array(yf[1:]) + np.array(yf[:-1]))
-    xc = 0.5 * (np.array(xf[1:]) + np.array(xf[:-1]))
     ym = g.coil_gap_to_pole_face + 0.5 * g.coil_height
     j = int(np.searchsorted(yc, ym) - 1)               # link from row j to row j + 1
-    cols = [i for i, x in enumerate(xc) if -g.xo < x < -g.xi]
-    flux = dict(zip(sol.branch_names, np.ravel(sol.branch_flux_Wb), strict=True))
     return float(abs(sum(flux[f"frame_v_{i}_{j}"] for i in cols)))
 
 
-def grid_leg_profile(s: float, I: float, columns: int | None = None
-                     ) -> list[tuple[float, float]]:
-    """Grid network: (height [m], flux [Wb]) of the left leg at each boundary between two
-    cell rows (the leg's vertical links between the row centres around it)."""
+def _grid_leg_links(mag, sol):  # type: ignore[no-untyped-def]
+    """The grid network's frame row lines, the left leg's columns, the number of leg rows
+    and the branch fluxes of a statics solution."""
     from maglevkit.magnets.u_magnet import grid_lines
 
-    mag = _magnet("grid", False, columns, eddy_currents=False)
-    sol = mk.solve_statics(mag, gaps=s, currents=I)
     g = GEOM
     m = dict(pole_width=g.pole_width, leg_height=g.leg_height, yoke_thickness=g.yoke_thickness,
              window_width=g.window_width, coil_height=g.coil_height,
@@ -503,6 +491,16 @@ def grid_leg_profile(s: float, I: float, columns: int | None = None
     xc = 0.5 * (np.array(xf[1:]) + np.array(xf[:-1]))
     cols = [i for i, x in enumerate(xc) if -g.xo < x < -g.xi]
     flux = dict(zip(sol.branch_names, np.ravel(sol.branch_flux_Wb), strict=True))
+    return yf, cols, nleg, flux
+
+
+def grid_leg_profile(s: float, I: float, columns: int | None = None
+                     ) -> list[tuple[float, float]]:
+    """Grid network: (height [m], flux [Wb]) of the left leg at each boundary between two
+    cell rows (the leg's vertical links between the row centres around it)."""
+    mag = _magnet("grid", False, columns, eddy_currents=False)
+    sol = mk.solve_statics(mag, gaps=s, currents=I)
+    yf, cols, nleg, flux = _grid_leg_links(mag, sol)
     return [(float(yf[j + 1]), float(abs(sum(flux[f"frame_v_{i}_{j}"] for i in cols))))
             for j in range(nleg)]
 
