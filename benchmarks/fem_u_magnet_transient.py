@@ -44,7 +44,7 @@ import math
 import os
 import sys
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")   # threaded BLAS on 1e4 vectors: spin-waits
@@ -466,12 +466,23 @@ def run_fem(part: str, only: list[int] | None = None) -> dict:
 # comparison with the flux model
 # ---------------------------------------------------------------------------------------
 
-#: model variants compared with the FEM: (label, load_magnet keywords)
-MODELS = (("lumped (today)", {"eddy_model": "lumped"}),
-          ("ladder n = 1 (2-D slab)", {"eddy_model": "ladder", "eddy_layers": 1}),
-          ("ladder n = 4", {"eddy_model": "ladder", "eddy_layers": 4}),
-          ("ladder n = 6", {"eddy_model": "ladder", "eddy_layers": 6}),
-          ("no eddy currents", {"eddy_currents": False}))
+#: model variants compared with the FEM: (label, load_magnet keywords, variant keywords of
+#: :func:`model_magnet`: network ``discretisation``, ``rail = "one-sided"``)
+MODELS: tuple[tuple[str, dict, dict], ...] = (
+    ("lumped (today)", {"eddy_model": "lumped"}, {}),
+    ("ladder n = 1 (2-D slab)", {"eddy_model": "ladder", "eddy_layers": 1}, {}),
+    ("ladder n = 4", {"eddy_model": "ladder", "eddy_layers": 4}, {}),
+    ("ladder n = 6", {"eddy_model": "ladder", "eddy_layers": 6}, {}),
+    ("ladder n = 6, rail one-sided", {"eddy_model": "ladder", "eddy_layers": 6},
+     {"rail": "one-sided"}),
+    ("ladder_split n = 6", {"eddy_model": "ladder_split", "eddy_layers": 6}, {}),
+    ("no eddy currents", {"eddy_currents": False}, {}),
+    ("grid, lumped", {"eddy_model": "lumped"}, {"discretisation": "grid"}),
+    ("grid, ladder n = 2", {"eddy_model": "ladder", "eddy_layers": 2},
+     {"discretisation": "grid"}),
+    ("grid, ladder n = 4", {"eddy_model": "ladder", "eddy_layers": 4},
+     {"discretisation": "grid"}),
+    ("grid, no eddy currents", {"eddy_currents": False}, {"discretisation": "grid"}))
 
 
 def load_results(part: str = "cases") -> list[dict]:
@@ -510,14 +521,58 @@ def metrics(t: np.ndarray, i: np.ndarray, e_eddy: np.ndarray, ref: dict) -> dict
             "t_peak_fem_s": float(tf[1:][np.argmax(p_f[1:])])}
 
 
-def simulate_model(ref: dict, **kw):  # type: ignore[no-untyped-def]
-    """The flux model's response to the recorded FEM run's voltage step."""
+def model_magnet(*, discretisation: str = "lumped", rail: str = "slab",
+                 **kw):  # type: ignore[no-untyped-def]
+    """The bundled U-magnet with ``load_magnet`` options ``kw`` on the ``discretisation``
+    network; ``rail = "one-sided"`` (ladder only) replaces the rail's two-sided slab by a
+    one-sided one (diffusion from the gap face over the rail thickness: the slab of
+    thickness ``2 t``), a variant measured and not adopted (docs/validation_fem.md)."""
+    from maglevkit.circuit.elements import IronPath
+    from maglevkit.circuit.ladder import ladder_branches
+    from maglevkit.magnets.base import ModelOptions, build_magnet
+
     mag = mk.load_magnet("u-magnet", **kw)
+    if discretisation != "lumped":
+        params = json.loads(json.dumps(mag.parameters))
+        params["magnet"]["discretisation"] = discretisation
+        params["provenance"]["magnet.discretisation"] = "[E] modelling choice (benchmark)"
+        mag = build_magnet(params, options=ModelOptions(**kw))
+    if rail == "one-sided":
+        net = mag.network
+        tube = net.branch("rail:tube1").elements[0]
+        t = float(mag.parameters["rail"]["thickness"])
+        iron = IronPath("iron_rail", tube.length, t * float(mag.parameters["magnet"]["depth"]),
+                        tube.material)
+        keep = [b for b in net.branches if b.name.split(":")[0] != "rail"]
+        new = ladder_branches("rail", "RL", "RR", iron, thickness=2.0 * t,
+                              resistivity=float(mag.parameters["rail"].get("resistivity")
+                                                or tube.material.resistivity),
+                              layers=kw.get("eddy_layers", 6))
+        mag = replace(mag, network=mk.Network((*keep, *new), net.circuits, name=net.name))
+    return mag
+
+
+def simulate_model(ref: dict, *, discretisation: str = "lumped", rail: str = "slab",
+                   **kw):  # type: ignore[no-untyped-def]
+    """The flux model's response to the recorded FEM run's voltage step.  The grid
+    networks run uncompiled (their C code would take minutes to compile once per
+    variant; uncompiled they run in 10-60 s)."""
+    mag = model_magnet(discretisation=discretisation, rail=rail, **kw)
     times = np.asarray(ref["time_s"])
-    fm = mk.FluxModel(mag, rtol=1e-7)
+    fm = mk.FluxModel(mag, rtol=1e-7, compiled="never" if discretisation != "lumped"
+                      else "auto")
     res = mk.simulate(fm, times, gaps=ref["gap_m"], voltages=mag.network.resistances[0]
                       * ref["i1_A"], initial_currents=ref["i0_A"])
     return res
+
+
+def body_energies(res) -> tuple[float, float]:  # type: ignore[no-untyped-def]
+    """Eddy energy [J] of the core and of the rail over the run (sum of ``V_m dphi`` of
+    every eddy element, trapezoidal in time)."""
+    mmf, phi = res.eddy_mmf_A, res.eddy_flux_Wb
+    e = np.sum(0.5 * (mmf[1:] + mmf[:-1]) * np.diff(phi, axis=0), axis=0)
+    rail = np.array([n.startswith("rail") for n in res.eddy_branch_names])
+    return float(e[~rail].sum()), float(e[rail].sum())
 
 
 def compare(out_md: Path | None, figure: Path | None) -> dict:
@@ -526,25 +581,33 @@ def compare(out_md: Path | None, figure: Path | None) -> dict:
     table: dict = {}
     curves: dict = {}
     for ref in cases:
-        for label, kw in MODELS:
-            res = simulate_model(ref, **kw)
+        for label, kw, var in MODELS:
+            t0 = time.perf_counter()
+            res = simulate_model(ref, **var, **kw)
             t = res.time_s
             table[ref["label"], label] = metrics(t, res.currents_A[:, 0], res.eddy_loss_J, ref)
+            core, rail = body_energies(res) if res.eddy_branch_names else (0.0, 0.0)
+            table[ref["label"], label].update(
+                e_core_J=core, e_rail_J=rail, wall_s=time.perf_counter() - t0,
+                e_core_fem_J=_fem_energy(ref, "eddy_power_core_W"),
+                e_rail_fem_J=_fem_energy(ref, "eddy_power_rail_W"),
+                states=len(res.eddy_branch_names))
             curves[ref["label"], label] = (t, res.currents_A[:, 0], res.eddy_loss_J)
             print(ref["label"], label, table[ref["label"], label], flush=True)
     noeddy = load_results("noeddy") if RESULTS["noeddy"].exists() else []
     static: dict = {}
     for ref in noeddy:
-        res = simulate_model(ref, eddy_currents=False)
-        t, i = res.time_s, res.currents_A[:, 0]
-        tf, i_f = np.asarray(ref["time_s"]), np.asarray(ref["current_A"])
-        late = tf >= 1e-3 - 1e-12
-        static[ref["label"]] = {
-            "err_max": float(np.max(np.abs(np.interp(tf, t, i) - i_f)[late])
-                             / (ref["i1_A"] - ref["i0_A"])),
-            "t63_s": rise_time(t, i, ref["i0_A"], ref["i1_A"]),
-            "t63_fem_s": rise_time(tf, i_f, ref["i0_A"], ref["i1_A"])}
-        print(ref["label"], "sigma = 0", static[ref["label"]], flush=True)
+        for net in ("lumped", "grid"):
+            res = simulate_model(ref, discretisation=net, eddy_currents=False)
+            t, i = res.time_s, res.currents_A[:, 0]
+            tf, i_f = np.asarray(ref["time_s"]), np.asarray(ref["current_A"])
+            late = tf >= 1e-3 - 1e-12
+            static[ref["label"], net] = {
+                "err_max": float(np.max(np.abs(np.interp(tf, t, i) - i_f)[late])
+                                 / (ref["i1_A"] - ref["i0_A"])),
+                "t63_s": rise_time(t, i, ref["i0_A"], ref["i1_A"]),
+                "t63_fem_s": rise_time(tf, i_f, ref["i0_A"], ref["i1_A"])}
+            print(ref["label"], net, "sigma = 0", static[ref["label"], net], flush=True)
     lines = _report(cases, study, table, static)
     if out_md is not None:
         text = out_md.read_text()
@@ -561,6 +624,11 @@ def compare(out_md: Path | None, figure: Path | None) -> dict:
     return table
 
 
+def _fem_energy(ref: dict, key: str) -> float:
+    t, p = np.asarray(ref["time_s"]), np.asarray(ref[key])
+    return float(np.sum(np.diff(t) * p[1:]))
+
+
 def _t63_err(x: dict | None) -> str:
     return f"{100 * (x['t63_s'] / x['t63_fem_s'] - 1):+.1f}" if x else "-"
 
@@ -568,8 +636,8 @@ def _t63_err(x: dict | None) -> str:
 def _report(cases: list[dict], study: list[dict], table: dict, static: dict) -> list[str]:
     L: list[str] = []
     L.append("## 5. Transient: voltage steps with solid iron (eddy currents)\n")
-    L.append("Tests: `tests/test_eddy_ladder.py` (against the recorded FEM; all steps with "
-             "`-m slow`).\n")
+    L.append("Tests: `tests/test_eddy_ladder.py`, `tests/test_eddy_grid.py` (against the "
+             "recorded FEM; all steps with `-m slow`).\n")
     L.append("Generated by `python benchmarks/fem_u_magnet_transient.py` (`--fem cases`, "
              "`--fem study` and `--fem noeddy` rerun the FEM and rewrite "
              "`benchmarks/results/fem_transient_*.json`, about 3 min of CPU per run; without "
@@ -599,18 +667,24 @@ def _report(cases: list[dict], study: list[dict], table: dict, static: dict) -> 
     L.append("")
     L.append("### Flux model vs FEM\n")
     L.append("err: (model - FEM) current in % of the step; max over t >= 1 ms.  t63: time to "
-             "63.2 % of the step.  E_eddy: eddy loss over the run; t_peak: time of the "
-             "largest eddy power.  Plot: `docs/figures/fem-transient-steps.png` (below).\n")
+             "63.2 % of the step.  E_eddy: eddy loss over the run (rail: its rail part); "
+             "t_peak: time of the largest eddy power.  Networks: `lumped` (default) or "
+             "`grid` (`discretisation = \"grid\"`, run uncompiled).  Eddy states: the "
+             "model's eddy-branch fluxes; wall: build and run of the flux model on the shared "
+             "machine (load 2-3).  Plot: `docs/figures/fem-transient-steps.png` (below).\n")
     L.append("| case | model | err at 1 ms [%] | max err t >= 1 ms [%] | t63 model / FEM [ms] "
-             "| t63 err [%] | E_eddy model / FEM [J] | E_eddy err [%] | t_peak model / FEM [ms] |")
-    L.append("|---|---|---|---|---|---|---|---|---|")
+             "| t63 err [%] | E_eddy model / FEM [J] | E_eddy err [%] | E_rail model / FEM [J] "
+             "| t_peak model / FEM [ms] | eddy states | wall [s] |")
+    L.append("|---|---|---|---|---|---|---|---|---|---|---|---|")
     for (case, model), m in table.items():
         et = 100 * (m["t63_s"] / m["t63_fem_s"] - 1)
         ee = 100 * (m["e_eddy_J"] / m["e_eddy_fem_J"] - 1)
         L.append(f"| {case} | {model} | {100 * m['err_1ms']:+.1f} | {100 * m['err_max']:.1f} | "
                  f"{m['t63_s'] * 1e3:.2f} / {m['t63_fem_s'] * 1e3:.2f} | {et:+.1f} | "
                  f"{m['e_eddy_J']:.3f} / {m['e_eddy_fem_J']:.3f} | {ee:+.0f} | "
-                 f"{m['t_peak_s'] * 1e3:.3f} / {m['t_peak_fem_s'] * 1e3:.3f} |")
+                 f"{m['e_rail_J']:.3f} / {m['e_rail_fem_J']:.3f} | "
+                 f"{m['t_peak_s'] * 1e3:.3f} / {m['t_peak_fem_s'] * 1e3:.3f} | {m['states']} | "
+                 f"{m['wall_s']:.0f} |")
     L.append("")
     if static:
         L.append("### The same steps without eddy currents (FEM with sigma = 0, model with "
@@ -619,25 +693,26 @@ def _report(cases: list[dict], study: list[dict], table: dict, static: dict) -> 
                  "sections 1-2) from the eddy model's: the rise time of a model with eddy "
                  "currents inherits it.\n")
         L.append("Eddy factor: t63 with eddy currents / t63 without, of the model (its own "
-                 "no-eddy run) and of the FEM (sigma = 0 run); its error is the eddy model's "
-                 "own share of the t63 error.\n")
-        L.append("| case | max err t >= 1 ms [%] | t63 model / FEM [ms] | t63 err [%] | "
-                 "t63 err with eddies: ladder n = 6 / lumped [%] | eddy factor FEM | "
-                 "ladder n = 6 (err) | lumped (err) |")
+                 "no-eddy run on the same network) and of the FEM (sigma = 0 run); its error "
+                 "is the eddy model's own share of the t63 error.\n")
+        pairs = (("lumped", "ladder_split n = 6", "lumped (today)"),
+                 ("grid", "grid, ladder n = 4", "grid, lumped"))
+        L.append("| case | network | max err t >= 1 ms [%] | t63 model / FEM [ms] | "
+                 "t63 err [%] | eddy factor FEM | ladder (err) | lumped (err) |")
         L.append("|---|---|---|---|---|---|---|---|")
-        for case, m in static.items():
-            lad = table.get((case, "ladder n = 6"))
-            lum = table.get((case, "lumped (today)"))
-            noe = table.get((case, "no eddy currents"))
+        for (case, net), m in static.items():
+            _, lad_name, lum_name = next(p for p in pairs if p[0] == net)
+            noe_name = "no eddy currents" if net == "lumped" else "grid, no eddy currents"
+            lad, lum = table.get((case, lad_name)), table.get((case, lum_name))
+            noe = table.get((case, noe_name))
             if not (lad and lum and noe):
                 continue
             f_fem = lad["t63_fem_s"] / m["t63_fem_s"]
             f_lad, f_lum = lad["t63_s"] / noe["t63_s"], lum["t63_s"] / noe["t63_s"]
-            L.append(f"| {case} | {100 * m['err_max']:.1f} | {m['t63_s'] * 1e3:.2f} / "
-                     f"{m['t63_fem_s'] * 1e3:.2f} | {_t63_err(m)} | {_t63_err(lad)} / "
-                     f"{_t63_err(lum)} | {f_fem:.3f} | {f_lad:.3f} "
-                     f"({100 * (f_lad / f_fem - 1):+.1f} %) | {f_lum:.3f} "
-                     f"({100 * (f_lum / f_fem - 1):+.1f} %) |")
+            L.append(f"| {case} | {net} | {100 * m['err_max']:.1f} | {m['t63_s'] * 1e3:.2f} / "
+                     f"{m['t63_fem_s'] * 1e3:.2f} | {_t63_err(m)} | {f_fem:.3f} | "
+                     f"{lad_name}: {f_lad:.3f} ({100 * (f_lad / f_fem - 1):+.1f} %) | "
+                     f"{f_lum:.3f} ({100 * (f_lum / f_fem - 1):+.1f} %) |")
         L.append("")
     L.append("![transient steps: FEM, lumped, ladder](figures/fem-transient-steps.png)\n")
     return L
@@ -649,8 +724,9 @@ def _plot(cases: list[dict], curves: dict, path: Path) -> None:
     import matplotlib.pyplot as plt
 
     fig, ax = plt.subplots(2, len(cases), figsize=(4.2 * len(cases), 7.0), squeeze=False)
-    styles = {"lumped (today)": ("tab:red", "--"), "ladder n = 6": ("tab:blue", "-"),
-              "ladder n = 4": ("tab:cyan", ":"), "no eddy currents": ("0.5", "-.")}
+    styles = {"lumped (today)": ("tab:red", "--"), "ladder n = 6": ("tab:cyan", ":"),
+              "ladder_split n = 6": ("tab:blue", "-"), "grid, ladder n = 4": ("tab:green", "-"),
+              "no eddy currents": ("0.5", "-.")}
     for j, ref in enumerate(cases):
         tf = np.asarray(ref["time_s"])
         i0, i1 = ref["i0_A"], ref["i1_A"]

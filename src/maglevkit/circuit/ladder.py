@@ -35,8 +35,9 @@ from .network import Branch
 __all__ = ["LADDER_COEFFICIENTS", "LADDER_BAND", "ladder_parameters", "ladder_branches",
            "EDDY_MODELS"]
 
-#: Eddy-current models of the bundled magnets: one element per iron part, or nested tubes.
-EDDY_MODELS = ("lumped", "ladder")
+#: Eddy-current models of the bundled magnets: one element per iron part, nested tubes,
+#: or nested tubes with the rail split under and between the poles (U-magnet).
+EDDY_MODELS = ("lumped", "ladder", "ladder_split")
 
 #: Band of ``omega tau`` (``tau = mu sigma b^2``) over which the coefficients were fitted.
 LADDER_BAND = (1e-2, 1e5)

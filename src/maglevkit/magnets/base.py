@@ -73,7 +73,9 @@ class ModelOptions:
         ``"lumped"``: one eddy element per iron part (a resistor for the coil at
         ``t = 0+``); ``"ladder"``: ``eddy_layers`` nested flux tubes across each part's
         section, each with its own eddy element (diffusion into solid iron,
-        :mod:`maglevkit.circuit.ladder`).  Kinds that have no ladder refuse ``"ladder"``.
+        :mod:`maglevkit.circuit.ladder`); ``"ladder_split"``: the ladder with the
+        U-magnet's rail split under and between the poles.  Kinds that have no ladder
+        refuse both.
     eddy_layers : int
         Tubes per iron part of the ladder (1 ... 8; ignored by ``"lumped"``).
 
@@ -561,8 +563,9 @@ def load_magnet(source: str | Path, *, saturation: bool = True, fringing: bool =
     saturation, fringing, leakage, eddy_currents : bool
         Physics switches (:class:`ModelOptions`); True or False only.
     eddy_model : str
-        ``"lumped"`` (default) or ``"ladder"`` (diffusing eddy currents, ``eddy_layers``
-        nested tubes per iron part; :class:`ModelOptions`).
+        ``"lumped"`` (default), ``"ladder"`` (diffusing eddy currents, ``eddy_layers``
+        nested tubes per iron part) or ``"ladder_split"`` (the ladder, U-magnet rail split
+        under and between the poles); :class:`ModelOptions`.
     eddy_layers : int
         Tubes per iron part of the ladder (1 ... 8).
 

@@ -46,12 +46,19 @@ Estimates of the secondary flux paths (Roters' method, docs/sources.md sec. 3):
   depth (the lumped element always does).  Each leg segment
   carries the eddy currents of its own length (the element conductance is proportional
   to the length), so every branch the winding sits on induces them.
+  ``eddy_model = "ladder_split"``: the ladder with the rail split under and between the
+  poles (its flux rises across each pole face and is uniform between the poles: eddy
+  length ``window_width + 2 pole_width/3``, docs/equations.md section 1b).  On the cell
+  network (``discretisation = "grid"``) ``"ladder"`` puts the part's slab ladder on every
+  cell link that carries an eddy element (the rail's flux along its length is the
+  cells' own, so ``"ladder_split"`` is refused there).
 
 ``discretisation = "grid"`` replaces the legs, yoke and rail by grids of iron cells
 (:func:`_build_grid`); its air is the Roters tubes above attached to the cells
 (``air_model = "tubes"``, default) or a cell network as well (``air_model = "cells"``,
 :func:`_air_cells`: window, coil sides with their turns, outside air in a box
 ``air_margin`` beyond the magnet, ``air_gap_rows`` rows of cells in the gap).
+
 """
 
 from __future__ import annotations
@@ -241,15 +248,20 @@ def build_u_magnet(params: Mapping[str, Any], materials: Mapping[str, Material],
         # the finite depth (the eddy currents close within the depth), else the 2-D slab
         factor = (_rectangle_torsion_constant(width, d) / (d * width**3 / 3.0)
                   if m["end_effects"] else 1.0)
+        if solid and options.eddy_model == "ladder_split":
+            # rail split under and between the poles: the flux enters the rail over each
+            # pole face (rising linearly across it), runs uniform between the poles and
+            # hardly reaches the overhangs: eddy length ww + 2 wp/3 (docs/equations.md 1b)
+            factor *= (ww + 2.0 * wp / 3.0) / iron.length
         return ladder_branches(name, start, end, iron, thickness=width, resistivity=rho,
                                layers=options.eddy_layers, factor=factor)
 
     if m["discretisation"] == "grid":
-        if options.eddy_currents and options.eddy_model != "lumped":
+        if options.eddy_currents and options.eddy_model == "ladder_split":
             raise ParameterFileError(
-                "[magnet] discretisation = \"grid\" has one eddy element per iron cell; the "
-                f"eddy_model {options.eddy_model!r} is available with discretisation = "
-                "\"lumped\" only")
+                "[magnet] discretisation = \"grid\" resolves the rail's flux along its "
+                "length itself; eddy_model 'ladder_split' (the lumped network's rail split) "
+                "does not apply: use 'ladder' or 'lumped'")
         for mat, where in ((core, "magnet"), (rail_mat, "rail")):
             if isinstance(mat, IdealIron):
                 raise ParameterFileError(
@@ -274,6 +286,9 @@ def build_u_magnet(params: Mapping[str, Any], materials: Mapping[str, Material],
             return (EddyCurrent(f"eddy_{name}", el.conductance * share),)
 
         grid_branches, grid_coils = _build_grid(m, r, core, rail_mat, options, eddy_part)
+        if options.eddy_currents and options.eddy_model != "lumped":
+            grid_branches = _grid_ladders(grid_branches, m, r, rho_core, rho_rail,
+                                          options.eddy_layers)
         circuit = Circuit("coil", m["resistance"], tuple(grid_coils))
         return m["name"], Network(tuple(grid_branches), (circuit,), name=m["name"])
 
@@ -704,6 +719,41 @@ def _air_cells(m: Mapping[str, Any], r: Mapping[str, Any], core: Material, rail_
                     ov = coil_rows(iy)
                     if share is not None and ov > 0.0 and here is None and there is None:
                         add_coil(name, share[0], half_turns * share[1] * ov / hc)
+
+
+def _grid_ladders(branches: list[Branch], m: Mapping[str, Any], r: Mapping[str, Any],
+                  rho_core: float, rho_rail: float, layers: int) -> list[Branch]:
+    """The grid's eddy elements replaced by ladders (``eddy_model = "ladder"``).
+
+    Every link that carries an eddy element (along its part's main flux) becomes the
+    nested tubes of the part's slab (thickness: pole width, yoke or rail thickness, or the
+    sheet of a laminated core) on the link's own section: ``n`` parallel links of one row
+    then have the part's ladder impedance exactly (conductances ``n`` times, permeances
+    ``1/n`` of the part's), and the grid's statics are unchanged (parallel tubes of one
+    material and length carry one flux density).
+    """
+    d = m["depth"]
+    out: list[Branch] = []
+    for br in branches:
+        eddy = [el for el in br.elements if isinstance(el, EddyCurrent)]
+        if not eddy:
+            out.append(br)
+            continue
+        (iron,) = [el for el in br.elements if isinstance(el, IronPath)]
+        kind = br.name.split("_")[0] + "_" + br.name.split("_")[1]
+        if kind == "rail_h":
+            thick, rho, solid = r["thickness"], rho_rail, True
+        else:
+            thick = m["yoke_thickness"] if kind == "frame_h" else m["pole_width"]
+            rho, solid = rho_core, not m["laminated"]
+        factor = 1.0
+        if not solid:
+            thick = m["sheet_thickness"]
+        elif m["end_effects"]:
+            factor = _rectangle_torsion_constant(thick, d) / (d * thick**3 / 3.0)
+        out += ladder_branches(br.name, br.start, br.end, iron, thickness=thick,
+                               resistivity=rho, layers=layers, factor=factor)
+    return out
 
 
 def u_magnet_range(params: Mapping[str, Any]) -> PlausibleRange:
