@@ -170,12 +170,14 @@ def test_grid_network_textbook_limit() -> None:
                                                    rel=1e-6)
 
 
-def test_grid_network_refuses_the_eddy_ladder() -> None:
-    # the grid's cells have one eddy element each; the ladder is built for the lumped parts
-    with pytest.raises(ParameterFileError, match="available with discretisation"):
+def test_grid_network_refuses_the_rail_split() -> None:
+    # the grid has the ladder on its cell links (tests/test_eddy_grid.py); the lumped
+    # network's rail split does not apply to it (its cells resolve the rail's flux)
+    with pytest.raises(ParameterFileError, match="does not apply"):
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", mk.ProvenanceWarning)
-            build_u(magnet={"discretisation": "grid"}, eddy_currents=True, eddy_model="ladder")
+            build_u(magnet={"discretisation": "grid"}, eddy_currents=True,
+                    eddy_model="ladder_split")
 
 
 def test_grid_network_refuses_ideal_iron() -> None:
