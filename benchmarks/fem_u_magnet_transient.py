@@ -478,11 +478,14 @@ MODELS: tuple[tuple[str, dict, dict], ...] = (
     ("ladder_split n = 6", {"eddy_model": "ladder_split", "eddy_layers": 6}, {}),
     ("no eddy currents", {"eddy_currents": False}, {}),
     ("grid, lumped", {"eddy_model": "lumped"}, {"discretisation": "grid"}),
-    ("grid, ladder n = 2", {"eddy_model": "ladder", "eddy_layers": 2},
-     {"discretisation": "grid"}),
     ("grid, ladder n = 4", {"eddy_model": "ladder", "eddy_layers": 4},
      {"discretisation": "grid"}),
     ("grid, no eddy currents", {"eddy_currents": False}, {"discretisation": "grid"}))
+#: variants too slow to rerun with every comparison (~15-20 min per step on the shared
+#: machine): their model runs are recorded in ``benchmarks/results/model_transient/`` by
+#: ``--model LABEL --only K`` and read back (rerun: delete the file)
+RECORDED_MODELS = ("grid, ladder n = 4",)
+MODEL_DIR = RESULTS_DIR / "model_transient"
 
 
 def load_results(part: str = "cases") -> list[dict]:
@@ -566,6 +569,34 @@ def simulate_model(ref: dict, *, discretisation: str = "lumped", rail: str = "sl
     return res
 
 
+def _slug(text: str) -> str:
+    return "".join(c if c.isalnum() else "_" for c in text).strip("_")
+
+
+def model_run(ref: dict, label: str, kw: dict, var: dict, *, record: bool,
+              reuse: bool = False) -> dict | None:
+    """One model variant's response to the recorded step ``ref`` (time, current, eddy loss,
+    core/rail eddy energy, eddy states, wall time), written to :data:`MODEL_DIR`.
+    :data:`RECORDED_MODELS` (and with ``reuse`` every variant) are read from there
+    (``None`` if not recorded) unless ``record``, which runs and writes them."""
+    path = MODEL_DIR / f"{_slug(label)}__{_slug(ref['label'])}.json"
+    if (label in RECORDED_MODELS or reuse) and not record and path.exists():
+        return json.loads(path.read_text())
+    if label in RECORDED_MODELS and not record:
+        return None
+    t0 = time.perf_counter()
+    res = simulate_model(ref, **var, **kw)
+    core, rail = body_energies(res) if res.eddy_branch_names else (0.0, 0.0)
+    run = {"label": label, "case": ref["label"], "time_s": res.time_s.tolist(),
+           "current_A": res.currents_A[:, 0].tolist(), "eddy_loss_J": res.eddy_loss_J.tolist(),
+           "e_core_J": core, "e_rail_J": rail, "states": len(res.eddy_branch_names),
+           "wall_s": time.perf_counter() - t0}
+    MODEL_DIR.mkdir(exist_ok=True)
+    path.write_text(json.dumps(run, separators=(",", ":")) + "\n")
+    print(f"wrote {path}", flush=True)
+    return run
+
+
 def body_energies(res) -> tuple[float, float]:  # type: ignore[no-untyped-def]
     """Eddy energy [J] of the core and of the rail over the run (sum of ``V_m dphi`` of
     every eddy element, trapezoidal in time)."""
@@ -575,31 +606,33 @@ def body_energies(res) -> tuple[float, float]:  # type: ignore[no-untyped-def]
     return float(e[~rail].sum()), float(e[rail].sum())
 
 
-def compare(out_md: Path | None, figure: Path | None) -> dict:
+def compare(out_md: Path | None, figure: Path | None, *, reuse: bool = False) -> dict:
     cases = load_results("cases")
     study = load_results("study") if RESULTS["study"].exists() else []
     table: dict = {}
     curves: dict = {}
     for ref in cases:
         for label, kw, var in MODELS:
-            t0 = time.perf_counter()
-            res = simulate_model(ref, **var, **kw)
-            t = res.time_s
-            table[ref["label"], label] = metrics(t, res.currents_A[:, 0], res.eddy_loss_J, ref)
-            core, rail = body_energies(res) if res.eddy_branch_names else (0.0, 0.0)
+            run = model_run(ref, label, kw, var, record=False, reuse=reuse)
+            if run is None:
+                print(f"{ref['label']} {label}: no recorded run (--model), left out", flush=True)
+                continue
+            t, i, e = (np.asarray(run[k]) for k in ("time_s", "current_A", "eddy_loss_J"))
+            table[ref["label"], label] = metrics(t, i, e, ref)
             table[ref["label"], label].update(
-                e_core_J=core, e_rail_J=rail, wall_s=time.perf_counter() - t0,
+                e_core_J=run["e_core_J"], e_rail_J=run["e_rail_J"], wall_s=run["wall_s"],
                 e_core_fem_J=_fem_energy(ref, "eddy_power_core_W"),
-                e_rail_fem_J=_fem_energy(ref, "eddy_power_rail_W"),
-                states=len(res.eddy_branch_names))
-            curves[ref["label"], label] = (t, res.currents_A[:, 0], res.eddy_loss_J)
+                e_rail_fem_J=_fem_energy(ref, "eddy_power_rail_W"), states=run["states"])
+            curves[ref["label"], label] = (t, i, e)
             print(ref["label"], label, table[ref["label"], label], flush=True)
     noeddy = load_results("noeddy") if RESULTS["noeddy"].exists() else []
     static: dict = {}
     for ref in noeddy:
         for net in ("lumped", "grid"):
-            res = simulate_model(ref, discretisation=net, eddy_currents=False)
-            t, i = res.time_s, res.currents_A[:, 0]
+            run = model_run(ref, f"sigma 0, {net}", {"eddy_currents": False},
+                            {"discretisation": net}, record=False, reuse=reuse)
+            assert run is not None
+            t, i = np.asarray(run["time_s"]), np.asarray(run["current_A"])
             tf, i_f = np.asarray(ref["time_s"]), np.asarray(ref["current_A"])
             late = tf >= 1e-3 - 1e-12
             static[ref["label"], net] = {
@@ -669,12 +702,13 @@ def _report(cases: list[dict], study: list[dict], table: dict, static: dict) -> 
     L.append("err: (model - FEM) current in % of the step; max over t >= 1 ms.  t63: time to "
              "63.2 % of the step.  E_eddy: eddy loss over the run (rail: its rail part); "
              "t_peak: time of the largest eddy power.  Networks: `lumped` (default) or "
-             "`grid` (`discretisation = \"grid\"`, run uncompiled).  Eddy states: the "
-             "model's eddy-branch fluxes; wall: build and run of the flux model on the shared "
-             "machine (load 2-3).  Plot: `docs/figures/fem-transient-steps.png` (below).\n")
+             "`grid` (`discretisation = \"grid\"`, run uncompiled).  Eddy elements: the "
+             "model's eddy branches; wall: build and run of the flux model on the shared "
+             "machine (load 2-7; the first run of a lumped network includes compiling its C "
+             "code, ~1-3 min).  Plot: `docs/figures/fem-transient-steps.png` (below).\n")
     L.append("| case | model | err at 1 ms [%] | max err t >= 1 ms [%] | t63 model / FEM [ms] "
              "| t63 err [%] | E_eddy model / FEM [J] | E_eddy err [%] | E_rail model / FEM [J] "
-             "| t_peak model / FEM [ms] | eddy states | wall [s] |")
+             "| t_peak model / FEM [ms] | eddy elements | wall [s] |")
     L.append("|---|---|---|---|---|---|---|---|---|---|---|---|")
     for (case, model), m in table.items():
         et = 100 * (m["t63_s"] / m["t63_fem_s"] - 1)
@@ -723,33 +757,41 @@ def _plot(cases: list[dict], curves: dict, path: Path) -> None:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    fig, ax = plt.subplots(2, len(cases), figsize=(4.2 * len(cases), 7.0), squeeze=False)
+    fig, ax = plt.subplots(3, len(cases), figsize=(4.2 * len(cases), 10.0), squeeze=False)
     styles = {"lumped (today)": ("tab:red", "--"), "ladder n = 6": ("tab:cyan", ":"),
               "ladder_split n = 6": ("tab:blue", "-"), "grid, ladder n = 4": ("tab:green", "-"),
-              "no eddy currents": ("0.5", "-.")}
+              "grid, no eddy currents": ("tab:olive", "-."), "no eddy currents": ("0.5", "-.")}
     for j, ref in enumerate(cases):
         tf = np.asarray(ref["time_s"])
+        i_f = np.asarray(ref["current_A"])
         i0, i1 = ref["i0_A"], ref["i1_A"]
         pf = np.asarray(ref["eddy_power_core_W"]) + np.asarray(ref["eddy_power_rail_W"])
-        ax[0, j].semilogx(tf[1:] * 1e3, (np.asarray(ref["current_A"])[1:] - i0) / (i1 - i0),
+        ax[0, j].semilogx(tf[1:] * 1e3, (i_f[1:] - i0) / (i1 - i0),
                           "k-", lw=2.5, alpha=0.5, label="FEM")
-        ax[1, j].loglog(tf[1:] * 1e3, pf[1:], "k-", lw=2.5, alpha=0.5, label="FEM")
+        ax[2, j].loglog(tf[1:] * 1e3, pf[1:], "k-", lw=2.5, alpha=0.5, label="FEM")
         for label, (col, ls) in styles.items():
+            if (ref["label"], label) not in curves:
+                continue
             t, i, e = curves[ref["label"], label]
             ax[0, j].semilogx(t[1:] * 1e3, (i[1:] - i0) / (i1 - i0), color=col, ls=ls,
                               label=label)
-            if label != "no eddy currents":
+            ax[1, j].semilogx(tf[1:] * 1e3, 100 * (np.interp(tf, t, i) - i_f)[1:] / (i1 - i0),
+                              color=col, ls=ls, label=label)
+            if not label.endswith("no eddy currents"):
                 p = np.diff(e) / np.diff(t)
-                ax[1, j].loglog(0.5 * (t[1:] + t[:-1]) * 1e3, np.maximum(p, 1e-6), color=col,
+                ax[2, j].loglog(0.5 * (t[1:] + t[:-1]) * 1e3, np.maximum(p, 1e-6), color=col,
                                 ls=ls, label=label)
         ax[0, j].set_title(ref["label"])
         ax[0, j].set_ylabel("(I - I0)/(I1 - I0)")
-        ax[1, j].set_ylabel("eddy power [W]")
-        ax[1, j].set_xlabel("t [ms]")
-        ax[0, j].grid(True, which="both", alpha=0.3)
-        ax[1, j].grid(True, which="both", alpha=0.3)
-        ax[1, j].set_ylim(bottom=max(1e-2, pf[1:].max() * 1e-4))
-    ax[0, 0].legend(fontsize=8)
+        ax[1, j].set_ylabel("(I - I_FEM)/(I1 - I0) [%]")
+        ax[1, j].axhspan(-5, 5, color="0.9", zorder=0)
+        ax[1, j].set_ylim(-20, 20)
+        ax[2, j].set_ylabel("eddy power [W]")
+        ax[2, j].set_xlabel("t [ms]")
+        for k in range(3):
+            ax[k, j].grid(True, which="both", alpha=0.3)
+        ax[2, j].set_ylim(bottom=max(1e-2, pf[1:].max() * 1e-4))
+    ax[0, 0].legend(fontsize=7)
     fig.tight_layout()
     fig.savefig(path, dpi=90)
     print(f"wrote {path}")
@@ -766,7 +808,22 @@ def main(argv: list[str] | None = None) -> None:
     ap.add_argument("--merge", action="store_true",
                     help="merge fem_transient_cases-K.json into fem_transient_cases.json")
     ap.add_argument("--no-docs", action="store_true", help="do not rewrite validation_fem.md")
+    ap.add_argument("--model", default=None,
+                    help="run and record the model variant LABEL (one of RECORDED_MODELS) on "
+                         "the cases --only (default all) into benchmarks/results/"
+                         "model_transient/")
+    ap.add_argument("--reuse", action="store_true",
+                    help="read every model variant recorded in benchmarks/results/"
+                         "model_transient/ instead of rerunning it (the tables and figure "
+                         "from the recorded runs)")
     args = ap.parse_args(argv)
+    if args.model:
+        spec = next(m for m in MODELS if m[0] == args.model)
+        runs = load_results("cases")
+        only = range(len(runs)) if args.only is None else [int(k) for k in args.only.split(",")]
+        for k in only:
+            model_run(runs[k], spec[0], spec[1], spec[2], record=True)
+        return
     if args.merge:
         for part in ("cases", "noeddy"):
             parts = sorted(RESULTS_DIR.glob(f"fem_transient_{part}-*.json"))
@@ -792,7 +849,7 @@ def main(argv: list[str] | None = None) -> None:
         print(f"wrote {path}")
         return
     compare(ROOT / "docs" / "validation_fem.md" if not args.no_docs else None,
-            ROOT / "docs" / "figures" / "fem-transient-steps.png")
+            ROOT / "docs" / "figures" / "fem-transient-steps.png", reuse=args.reuse)
 
 
 if __name__ == "__main__":
