@@ -151,11 +151,11 @@ def _compile_baseline(tmp: Path) -> ctypes.CDLL:
 
 
 def _per_step(fn, steps: int) -> float:  # type: ignore[no-untyped-def]
-    """Best of 3 runs of CPU time per call (process time: robust against other load on
+    """Best of 5 runs of CPU time per call (process time: robust against other load on
     the machine; equal to wall time on an idle one)."""
     fn()
     best = np.inf
-    for _ in range(3):
+    for _ in range(5):
         t0 = time.process_time()
         for _ in range(steps):
             fn()
@@ -302,7 +302,7 @@ def run() -> str:
     return "\n".join([
         "TR09 standard magnets (2 circuits each; maps 12 x 41 points, shared by all "
         "magnets), one `MagnetBank.step` of 1 ms (RK4, 1 sub-step) per call; times per "
-        "circuit-step in ns (CPU time of the benchmark process, best of 3 runs), each "
+        "circuit-step in ns (CPU time of the benchmark process, best of 5 runs), each "
         "a whole `step` call from Python.  *bank* is the default compiled kernel "
         f"(`codegen='lanes'`: {lane_target()[0]} circuits per SIMD vector on this "
         "machine), *2 lanes* the same generator forced to 2-wide vectors (what a processor "

@@ -770,6 +770,8 @@ class MagnetBank:
             arr = value
             if not check:
                 return arr
+        elif type(value) is float and (not check or math.isfinite(value)):
+            return np.full(n, value)             # a plain float for all (e.g. gap_rates=0.0)
         else:
             reject_bools(value, what)
             if isinstance(value, Mapping):
