@@ -17,8 +17,14 @@ import sys
 import time
 from pathlib import Path
 
-import casadi
-import numpy as np
+# one BLAS thread: the benchmarks measure one core, and idle BLAS worker threads that
+# spin-wait after a matrix call would count in the process's CPU time (set before NumPy
+# is imported)
+for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
+    os.environ.setdefault(_var, "1")
+
+import casadi  # noqa: E402
+import numpy as np  # noqa: E402
 
 
 def _machine() -> str:
