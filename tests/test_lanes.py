@@ -64,7 +64,7 @@ def _inputs(rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray, np.ndarra
     x = rng.uniform(-4.0, 12.0, N)
     y = rng.uniform(-3.0, 3.0, N)
     x[:4] = [np.nan, np.inf, -0.0, 1e300]           # special values in the first block
-    y[4:6] = [0.0, -np.inf]
+    y[4:7] = [0.0, -np.inf, np.nan]
     p = np.vstack([rng.integers(1, 6, N).astype(float), rng.uniform(-1, 1, N),
                    rng.uniform(-1, 1, N)])
     p[0, 6] = 0.5                                   # non-integral base for one instance

@@ -82,7 +82,8 @@ _PER_LANE_UNARY = {
     ca.OP_ACOS: "acos({a})", ca.OP_ATAN: "atan({a})", ca.OP_SINH: "sinh({a})",
     ca.OP_COSH: "cosh({a})", ca.OP_TANH: "tanh({a})", ca.OP_ASINH: "asinh({a})",
     ca.OP_ACOSH: "acosh({a})", ca.OP_ATANH: "atanh({a})", ca.OP_ERF: "erf({a})",
-    ca.OP_NOT: "(double)(!{a})", ca.OP_SIGN: "(double)(({a} > 0) - ({a} < 0))",
+    ca.OP_NOT: "(double)(!{a})",
+    ca.OP_SIGN: "({a} < 0 ? -1.0 : ({a} > 0 ? 1.0 : {a}))",     # CasADi's: NaN, +-0 kept
     ca.OP_LOG1P: "log1p({a})", ca.OP_EXPM1: "expm1({a})",
 }
 _SLOW_GATHER = """#ifndef LANES_GATHER_SLOW
