@@ -102,7 +102,9 @@ def test_lane_kernel_equals_casadi_bit_for_bit(width: int, avx2: bool) -> None:
     ref = f.map(N)(x[None], y[None], p)
     with np.errstate(all="ignore"):
         for k, r in enumerate(ref):
-            np.testing.assert_array_equal(got[k], np.asarray(r).ravel(),
+            # bit patterns: signed zeros and the sign of NaN included
+            np.testing.assert_array_equal(got[k].view(np.int64),
+                                          np.asarray(r, dtype=float).ravel().view(np.int64),
                                           err_msg=f"output {k} ({width} lanes)")
     # the special inputs reached the gathers' general path: NaN outside the table; the
     # base at the end of the table is inside, one further is outside
@@ -134,6 +136,8 @@ def test_bank_lanes_equal_casadi_code_and_virtual_machine(mixed_maps, tmp_path) 
     for cg, mode in (("lanes", "always"), ("casadi", "always"), ("casadi", "never")):
         bank = MagnetBank(members, compiled=mode, codegen=cg, cache_dir=tmp_path)
         calls[(cg, mode)] = bank._kernel(1e-3)
+        if cg == "lanes":
+            bank_lanes = bank
     nc = bank.n_circuits
     rng = np.random.default_rng(3)
     for trial in range(4):
@@ -147,8 +151,15 @@ def test_bank_lanes_equal_casadi_code_and_virtual_machine(mixed_maps, tmp_path) 
         ref = results[("casadi", "never")]
         for key, res in results.items():
             for k, (a, b) in enumerate(zip(res, ref, strict=True)):
-                np.testing.assert_array_equal(a, b, err_msg=f"{key} output {k} trial {trial}")
+                a, b = np.atleast_1d(a).astype(float), np.atleast_1d(b).astype(float)
+                # bit patterns, except the sign of a NaN (the member sums of a NaN force
+                # differ in it between CasADi's own C and its virtual machine)
+                nan = np.isnan(b)
+                np.testing.assert_array_equal(np.isnan(a), nan, err_msg=f"{key} output {k}")
+                np.testing.assert_array_equal(a[~nan].view(np.int64), b[~nan].view(np.int64),
+                                              err_msg=f"{key} output {k} trial {trial}")
         assert (ref[4] > 0) == (trial == 3)          # the flag count sees the bad circuits
+    assert bank_lanes._lanes            # the lanes library was built and used (no fallback)
 
 
 def test_codegen_option_is_checked(mixed_maps) -> None:

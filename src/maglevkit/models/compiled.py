@@ -18,8 +18,10 @@ from __future__ import annotations
 
 import hashlib
 import os
+import platform
 import shutil
 import subprocess
+import sys
 import tempfile
 import warnings
 from collections.abc import Sequence
@@ -152,8 +154,11 @@ def _generate(name: str, funcs: list[ca.Function], tmp: str) -> bytes:
 
 
 def _key(code: bytes, cc: str, flags: tuple[str, ...]) -> str:
+    # the platform too: machines sharing a cache directory (a network home) may write
+    # the same source
     return hashlib.sha256(code + cc.encode() + " ".join(flags).encode()
-                          + str(getattr(ca, "__version__", "")).encode()).hexdigest()[:24]
+                          + str(getattr(ca, "__version__", "")).encode()
+                          + f"{platform.machine()} {sys.platform}".encode()).hexdigest()[:24]
 
 
 def _build(name: str, funcs: list[ca.Function], cache: Path, flags: tuple[str, ...]) -> Path:

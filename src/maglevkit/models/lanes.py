@@ -6,10 +6,11 @@ instances at once: every work value of ``f``'s algorithm becomes one GCC/Clang
 vector-extension value (``width`` doubles, one SIMD register for width 4 with AVX2 or
 width 2 with SSE2/NEON) and every instruction one vector operation.  The arithmetic is
 ``f``'s own, instruction by instruction and in the same order, so the results equal
-CasADi's bit for bit when compiled without floating-point contraction
-(``-ffp-contract=off``); ``fmin``/``fmax`` (C99 NaN rule, as selects) could differ only in
-the sign of a zero result.  ``width=1`` writes plain scalar C (one instance per loop
-iteration) with the same translation.
+CasADi's virtual machine bit for bit when compiled without floating-point contraction
+(``-ffp-contract=off``), signed zeros and NaN signs included (``fmin``/``fmax`` as
+selects with glibc's rules: a NaN operand yields the other one, a tie the first).
+``width=1`` writes plain scalar C (one instance per loop iteration) with the same
+translation.
 
 It reads ``f``'s algorithm through CasADi's instruction API (``instruction_id``,
 ``instruction_input``, ``instruction_output``, ``instruction_MX``) and supports the
@@ -54,8 +55,8 @@ _VECTOR = {
     ca.OP_LT: "(vd)(({a} < {b}) & ONE)", ca.OP_LE: "(vd)(({a} <= {b}) & ONE)",
     ca.OP_EQ: "(vd)(({a} == {b}) & ONE)", ca.OP_NE: "(vd)(({a} != {b}) & ONE)",
     # C99 fmin/fmax semantics (a NaN operand yields the other one) as a select
-    ca.OP_FMIN: "SEL(({a} < {b}) | ({b} != {b}), {a}, {b})",
-    ca.OP_FMAX: "SEL(({a} > {b}) | ({b} != {b}), {a}, {b})",
+    ca.OP_FMIN: "SEL(({a} <= {b}) | ({b} != {b}), {a}, {b})",
+    ca.OP_FMAX: "SEL(({a} >= {b}) | ({b} != {b}), {a}, {b})",
     ca.OP_FABS: "(vd)((vl){a} & ABSMASK)",
     ca.OP_IF_ELSE_ZERO: "SEL({a} != ZERO, {b}, ZERO)",
 }
@@ -64,8 +65,8 @@ _SCALAR = {
     **_ARITHMETIC,
     ca.OP_LT: "(double)({a} < {b})", ca.OP_LE: "(double)({a} <= {b})",
     ca.OP_EQ: "(double)({a} == {b})", ca.OP_NE: "(double)({a} != {b})",
-    ca.OP_FMIN: "(({a} < {b} || {b} != {b}) ? {a} : {b})",
-    ca.OP_FMAX: "(({a} > {b} || {b} != {b}) ? {a} : {b})",
+    ca.OP_FMIN: "(({a} <= {b} || {b} != {b}) ? {a} : {b})",
+    ca.OP_FMAX: "(({a} >= {b} || {b} != {b}) ? {a} : {b})",
     ca.OP_FABS: "fabs({a})", ca.OP_IF_ELSE_ZERO: "({a} ? {b} : 0.0)",
 }
 # everything else lane by lane through libm (C expressions of scalars x, y)
@@ -86,19 +87,20 @@ _PER_LANE_UNARY = {
     ca.OP_SIGN: "({a} < 0 ? -1.0 : ({a} > 0 ? 1.0 : {a}))",     # CasADi's: NaN, +-0 kept
     ca.OP_LOG1P: "log1p({a})", ca.OP_EXPM1: "expm1({a})",
 }
-_SLOW_GATHER = """#ifndef LANES_GATHER_SLOW
-#define LANES_GATHER_SLOW
-/* table[(int)(offs[e] + b[l])], NaN outside the table (CasADi's GetNonzerosParam; a
-   value that does not truncate into the table, NaN and inf included, gives NaN) */
-static void __attribute__((noinline)) lanes_gather_slow(const double *tbl, int size,
-    const double *b, const double *offs, int count, double *out) {
+_SLOW_GATHER = """#ifndef LANES_GATHER_SLOW_W{w}
+#define LANES_GATHER_SLOW_W{w}
+/* table[(int)(offs[e] + b[l])] for {w} lanes, NaN outside the table (CasADi's
+   GetNonzerosParam; a value that does not truncate into the table, NaN and inf
+   included, gives NaN) */
+static void __attribute__((noinline)) lanes_gather_slow_w{w}(const double *tbl, int size,
+    const double *b, const double *offs, int count, double *out) {{
   int e, l;
-  for (e = 0; e < count; ++e) for (l = 0; l < W; ++l) {
+  for (e = 0; e < count; ++e) for (l = 0; l < {w}; ++l) {{
     double x = offs[e] + b[l];
     int i = x > -1.0 && x < size ? (int) x : -1;   /* no undefined conversion */
-    out[e * W + l] = i >= 0 && i < size ? tbl[i] : (0.0 / 0.0);
-  }
-}
+    out[e * {w} + l] = i >= 0 && i < size ? tbl[i] : NAN;
+  }}
+}}
 #endif
 """
 _PRELUDE = """typedef double vd __attribute__((vector_size(W * 8)));
@@ -133,9 +135,9 @@ class LaneInput:
 def _c_double(v: float) -> str:
     v = float(v)
     if np.isnan(v):
-        return "(0.0 / 0.0)"
+        return "NAN"
     if np.isinf(v):
-        return "(1.0 / 0.0)" if v > 0 else "(-1.0 / 0.0)"
+        return "INFINITY" if v > 0 else "(-INFINITY)"
     return v.hex()
 
 
@@ -255,7 +257,7 @@ def lane_source(f: ca.Function, *, name: str, n: int, inputs: Sequence[LaneInput
         general = "".join(
             f" {{ double x = {at(ix)}; int i = x > -1.0 && x < {tsize} ? (int) x : -1; "
             f"{t}{'' if scalar else '[l]'} = i >= 0"
-            f" ? {tname}[i] : (0.0 / 0.0); }}" for t, ix in zip(out, idx, strict=True))
+            f" ? {tname}[i] : NAN; }}" for t, ix in zip(out, idx, strict=True))
         loop = "" if scalar else "for (l = 0; l < W; ++l) "
         if aff is None:
             body.append(f"    {loop}{{{general} }}")
@@ -272,15 +274,16 @@ def lane_source(f: ca.Function, *, name: str, n: int, inputs: Sequence[LaneInput
         slow_unpack = "".join(f" {t} = {'sl' if scalar else '*(vd *)(sl + ' + str(j * w) + ')'}"
                               f"{'[' + str(j) + ']' if scalar else ''};"
                               for j, t in enumerate(out))
-        slow = (f"double sl[{len(offs) * w}]; lanes_gather_slow({tname}, {tsize}, "
+        slow = (f"double sl[{len(offs) * w}] __attribute__((aligned({8 * w}))); "
+                f"lanes_gather_slow_w{w}({tname}, {tsize}, "
                 f"{'&b' if scalar else '(const double *) &bv'}, {oname}, {len(offs)}, sl);"
                 + slow_unpack)
         if scalar:
-            fast = "".join(f" {t} = g[{o}];" for t, o in zip(out, offs, strict=True))
+            fast = "".join(f" {t} = {tname}[ib + {o}];" for t, o in zip(out, offs, strict=True))
             body.append(
                 f"    {{ double b = {base}; int ib = fabs(b) < 1e9 ? (int) b : -1; "
                 f"if (b == (double) ib && ib + {lo} >= 0 && ib + {hi} < {tsize}) {{ "
-                f"const double *g = {tname} + ib;{fast} }} else {{ {slow} }} }}")
+                f"{fast} }} else {{ {slow} }} }}")
             return out
         if avx2 and tsize < 2**31 - 1 - hi:
             # all four lanes at once: runs of four consecutive offsets as one 4-double
@@ -294,10 +297,10 @@ def lane_source(f: ca.Function, *, name: str, n: int, inputs: Sequence[LaneInput
                     o = offs[j]
                     c0, c1, c2, c3 = out[j:j + 4]
                     parts.append(
-                        f" {{ __m256d r0 = _mm256_loadu_pd({tname} + i0 + {o}), "
-                        f"r1 = _mm256_loadu_pd({tname} + i1 + {o}), "
-                        f"r2 = _mm256_loadu_pd({tname} + i2 + {o}), "
-                        f"r3 = _mm256_loadu_pd({tname} + i3 + {o}); "
+                        f" {{ __m256d r0 = _mm256_loadu_pd({tname} + (i0 + {o})), "
+                        f"r1 = _mm256_loadu_pd({tname} + (i1 + {o})), "
+                        f"r2 = _mm256_loadu_pd({tname} + (i2 + {o})), "
+                        f"r3 = _mm256_loadu_pd({tname} + (i3 + {o})); "
                         "__m256d u0 = _mm256_unpacklo_pd(r0, r1), u1 = _mm256_unpackhi_pd(r0, r1), "
                         "u2 = _mm256_unpacklo_pd(r2, r3), u3 = _mm256_unpackhi_pd(r2, r3); "
                         f"{c0} = (vd)_mm256_permute2f128_pd(u0, u2, 0x20); "
@@ -320,12 +323,12 @@ def lane_source(f: ca.Function, *, name: str, n: int, inputs: Sequence[LaneInput
                 f"if (_mm256_movemask_pd(ok) == 15) {{ __m128i ix = _mm256_cvttpd_epi32(b);"
                 f"{fast4} }} else {{ {slow} }} }}")
             return out
-        fast = "".join(f" {t}[l] = g[{o}];" for t, o in zip(out, offs, strict=True))
+        fast = "".join(f" {t}[l] = {tname}[ib + {o}];" for t, o in zip(out, offs, strict=True))
         body.append(
             f"    {{ vd bv = {vec(base)}; int ok = 1; for (l = 0; l < W; ++l) {{ double b = bv[l]; "
             f"int ib = fabs(b) < 1e9 ? (int) b : -1; ok = ok && b == (double) ib && "
             f"ib + {lo} >= 0 && ib + {hi} < {tsize}; }} "
-            f"if (ok) {{ for (l = 0; l < W; ++l) {{ const double *g = {tname} + (int) bv[l];{fast} }} }}"
+            f"if (ok) {{ for (l = 0; l < W; ++l) {{ int ib = (int) bv[l];{fast} }} }}"
             f" else {{ {slow} }} }}")
         return out
 
@@ -349,6 +352,7 @@ def lane_source(f: ca.Function, *, name: str, n: int, inputs: Sequence[LaneInput
         operand_affine = [affine.get(j) for j in ins]
         operand_work = [work.get(j, []) for j in ins]
         affine.pop(outs[0], None)
+        tables.pop(outs[0], None)            # CasADi may reuse a large constant's slot
         if op == ca.OP_INPUT:
             info = node.info()
             ind, off = int(info["ind"]), int(info["offset"])
@@ -414,7 +418,7 @@ def lane_source(f: ca.Function, *, name: str, n: int, inputs: Sequence[LaneInput
             raise NotImplementedError(f"instruction {k}: operation {op} "
                                       f"({node}) is not translated to lanes")
     code = (("#include <immintrin.h>\n" if avx2 else "") + f"#define W {w}\n"
-           + ("" if scalar else _PRELUDE) + _SLOW_GATHER + "".join(head))
+           + ("" if scalar else _PRELUDE) + _SLOW_GATHER.format(w=w) + "".join(head))
     if scalar:
         code += (f"static void {name}(const double **arg, double **res) {{\n"
                 f"  long c0;\n"

@@ -767,7 +767,7 @@ class VehicleModel:
                 bf = vs.block_function
                 try:
                     funcs, _ = compile_library(
-                        bf.name(), [bf], mode="always",
+                        bf.name(), [bf], mode="always", cache_dir=self.bank._cache_dir,
                         flags=(*_FLAGS, "-Wl,--no-as-needed", str(lib),
                                f"-Wl,-rpath,{lib.parent}"))
                     f = funcs[0]
