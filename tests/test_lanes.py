@@ -165,3 +165,41 @@ def test_bank_lanes_equal_casadi_code_and_virtual_machine(mixed_maps, tmp_path) 
 def test_codegen_option_is_checked(mixed_maps) -> None:
     with pytest.raises(InputError, match="codegen = 'simd'.*'lanes' or 'casadi'"):
         MagnetBank({"m": mixed_maps[0]}, codegen="simd")
+
+
+def test_reused_work_slot_of_a_table_is_not_gathered_from() -> None:
+    """CasADi reuses a large constant's work slot for later values; a gather from such a
+    later (non-constant) value must be refused, not served from the old table (found in
+    review: it gave table values instead of y's)."""
+    x, y = ca.MX.sym("x"), ca.MX.sym("y")
+    a = ca.MX(ca.DM(np.arange(100.0) + 1000.0))[ca.floor(x)]
+    v = y[[0] * 100] * 1.0 + 0.0                    # 100 elements, not a constant
+    f = ca.Function("reuse", [x, y], [a + v[ca.floor(x) + 1]])
+    with pytest.raises(NotImplementedError, match="non-constant"):
+        lane_source(f, name="reuse_k", n=3, inputs=[LaneInput("instance")] * 2)
+
+
+def test_kernels_of_two_widths_in_one_file() -> None:
+    """Each width has its own out-of-line gather (found in review: one definition per
+    file, for the first kernel's width, gave wrong slow-path values for the second)."""
+    f = _function()
+    x, y, p = _inputs(np.random.default_rng(5))
+    parts = [lane_source(f, name=f"probe_w{w}", n=N, inputs=[LaneInput("instance"),
+                                                             LaneInput("instance"),
+                                                             LaneInput("baked", p)], width=w)
+             for w in (1, 2)]
+    src = ("#include <math.h>\n" + "".join(parts)
+           + "void probe(const double **arg, double **res) { probe_w2(arg, res); }\n")
+    with tempfile.TemporaryDirectory() as tmp:
+        lib = ctypes.CDLL(str(build_source("probe2", src.encode(), cache=Path(tmp),
+                                           flags=("-O3", "-shared", "-fPIC",
+                                                  "-ffp-contract=off"))))
+        outs = [np.zeros(N) for _ in range(f.n_out())]
+        args = (ctypes.c_void_p * 2)(x.ctypes.data, y.ctypes.data)
+        res = (ctypes.c_void_p * len(outs))(*[o.ctypes.data for o in outs])
+        lib.probe(args, res)
+    ref = f.map(N)(x[None], y[None], p)
+    with np.errstate(all="ignore"):
+        for k, r in enumerate(ref):
+            np.testing.assert_array_equal(outs[k].view(np.int64),
+                                          np.asarray(r, dtype=float).ravel().view(np.int64))
