@@ -636,14 +636,22 @@ class MagnetBank:
         range or not finite; diagnose with :meth:`step`) and more; address them by
         name.  Only for banks of reduced members with one gap input per circuit.
         """
+        return self._step_kernel(self._composable_substeps(dt, "step_function"))
+
+    def _substeps(self, dt: float) -> int:
+        """RK4 sub-steps of a step of ``dt`` [s] (at most ``max_step_s`` each)."""
+        return max(1, math.ceil(dt / self.max_step_s * (1 - 1e-12)))
+
+    def _composable_substeps(self, dt: float, what: str) -> int:
+        """Sub-steps of ``dt`` for the step functions other models compose (banks of
+        reduced members with one gap input per circuit only)."""
         if not self._fast:
-            raise InputError("step_function needs a bank of reduced members only with "
+            raise InputError(f"{what} needs a bank of reduced members only with "
                              "gap_inputs='circuit'")
-        dt = check_step(dt)
-        return self._step_kernel(max(1, math.ceil(dt / self.max_step_s * (1 - 1e-12))))
+        return self._substeps(check_step(dt))
 
     def _kernel(self, dt: float) -> _StepCall:
-        n = max(1, math.ceil(dt / self.max_step_s * (1 - 1e-12)))
+        n = self._substeps(dt)
         call = self._kernels.get(n)
         if call is None:
             f = self._lanes_kernel(n) if self.codegen == "lanes" else None
@@ -723,17 +731,11 @@ class MagnetBank:
         CasADi function that calls it can be generated as C and compiled when linked
         against the library (the vehicle's compiled step does this).
         """
-        if not self._fast:
-            raise InputError("compiled_step_library needs a bank of reduced members only "
-                             "with gap_inputs='circuit'")
-        dt = check_step(dt)
+        n = self._composable_substeps(dt, "compiled_step_library")
         if self.codegen != "lanes":
             return None
-        f = self._lanes_kernel(max(1, math.ceil(dt / self.max_step_s * (1 - 1e-12))))
-        if f is None:
-            return None
-        n = max(1, math.ceil(dt / self.max_step_s * (1 - 1e-12)))
-        return f, self._lanes[n][1]
+        f = self._lanes_kernel(n)
+        return None if f is None else (f, self._lanes[n][1])
 
     # ------------------------------------------------------------------ properties
     @property

@@ -757,8 +757,7 @@ class VehicleModel:
         hit = self._step_functions.get(dt)
         if hit is None:
             f = None
-            lanes = (self.bank.compiled_step_library(dt)
-                     if self.bank.compiled_mode != "never" and not self.fine else None)
+            lanes = None if self.fine else self.bank.compiled_step_library(dt)
             if lanes is not None:
                 # the bank's SIMD-lane step (its own library) called from the vehicle's
                 # generated C, linked against that library
