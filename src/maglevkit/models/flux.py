@@ -832,30 +832,14 @@ class FluxModel:
             try:
                 Wc, Qc, Oc = d.accum(m)(w, P)
             except RuntimeError:
-                # Locate the failing interval step by step for an informative error.
-                t = state.time_s + float(h[:k].sum())
-                for j in range(k, k + m):
-                    p = P[:, j - k]
-                    try:
-                        wf, _, _ = d.step_fun(w, p)
-                    except RuntimeError as exc:
-                        raise self._fail(exc, t, w, U[j], rate[j], float(h[j])) from None
-                    w = np.asarray(wf).ravel()
-                    t += float(h[j])
-                raise SolverError("flux model failed in a batch but not step by step",
-                                  time=t) from None
+                # locate the failing interval step by step for an informative error
+                self._locate_failure(state, w, h, U, rate, k, m)
             W[k:k + m] = np.asarray(Wc).T
             Qd[k:k + m] = np.asarray(Qc).T
             O[k:k + m] = np.asarray(Oc).T
             w = W[k + m - 1]
             k += m
-        bad = ~(np.all(np.isfinite(W), axis=1) & np.all(np.isfinite(O), axis=1))
-        if np.any(bad):
-            j = int(np.argmax(bad))
-            t = state.time_s + float(h[:j].sum())
-            w0 = state._vector() if j == 0 else W[j - 1]
-            raise self._fail(RuntimeError("non-finite solution"), t, w0, U[j], rate[j],
-                             float(h[j]))
+        self._check_finite(state, W, O, h, U, rate)
         return W, Qd, O
 
 
