@@ -223,6 +223,15 @@ def _size_row(maps: mk.CharacteristicMaps, n: int, lib: ctypes.CDLL, cache: Path
         state[0], _ = bank.step(state[0], DT, u, gap_rates=sd)
 
     t_bank = _per_step(bank_step, steps)
+    # the in-place stepper: voltages, gaps and gap rates written in every step (as a
+    # co-simulation does, and as the baseline's call copies its four inputs)
+    stepper = bank.stepper(st, DT)
+    g_in = np.full(nc, 0.010)
+
+    def stepper_step() -> None:
+        stepper.advance(voltages=u, gaps=g_in, gap_rates=sd)
+
+    t_stepper = _per_step(stepper_step, steps)
     # the same step through CasADi's own code generation, and lanes 2 wide (what a
     # processor without AVX2 gets)
     other = {}
@@ -273,10 +282,12 @@ def _size_row(maps: mk.CharacteristicMaps, n: int, lib: ctypes.CDLL, cache: Path
 
         t_loop = _per_step(loop, max(20, steps // 20))
         loop_txt = f"{t_loop / nc * 1e9:.0f}"
-    row = (f"| {nc} | {t_bank / nc * 1e9:.0f} | {other['lanes2'] / nc * 1e9:.0f} | "
+    row = (f"| {nc} | {t_bank / nc * 1e9:.0f} | {t_stepper / nc * 1e9:.0f} | "
+           f"{other['lanes2'] / nc * 1e9:.0f} | "
            f"{other['casadi'] / nc * 1e9:.0f} | {t_interp / nc * 1e9:.0f} | "
            f"{loop_txt} | {t_base / nc * 1e9:.0f} | {t_bank / t_base:.2f} | "
-           f"{DT / t_bank:.0f} | {other['casadi'] / t_bank:.1f} | {agree:.1e} |")
+           f"{t_stepper / t_base:.2f} | {DT / t_bank:.0f} | {DT / t_stepper:.0f} | "
+           f"{other['casadi'] / t_bank:.1f} | {agree:.1e} |")
     return row, (t_build, t_first, t_cached)
 
 
@@ -303,21 +314,28 @@ def run() -> str:
         "TR09 standard magnets (2 circuits each; maps 12 x 41 points, shared by all "
         "magnets), one `MagnetBank.step` of 1 ms (RK4, 1 sub-step) per call; times per "
         "circuit-step in ns (CPU time of the benchmark process, best of 5 runs), each "
-        "a whole `step` call from Python.  *bank* is the default compiled kernel "
+        "a whole call from Python.  *bank step* is `MagnetBank.step` (new state and "
+        "output objects per call) with the default compiled kernel "
         f"(`codegen='lanes'`: {lane_target()[0]} circuits per SIMD vector on this "
-        "machine), *2 lanes* the same generator forced to 2-wide vectors (what a processor "
+        "machine), *stepper* the same kernel through `MagnetBank.stepper` "
+        "(`BankStepper.advance(voltages=, gaps=, gap_rates=)`: inputs copied into bound "
+        "buffers, outputs left in alternating buffers), *2 lanes* the same generator "
+        "forced to 2-wide vectors (what a processor "
         "without AVX2 gets), *CasADi C* CasADi's own code generation of the same function "
         "(`codegen='casadi'`), *interpreted* the same CasADi function on its virtual "
         "machine, *step loop* one `CurrentModel.step` per magnet, *baseline* the "
         "independent scalar C kernel written in this benchmark (called once per step "
-        "through ctypes).  Ratio = bank / baseline (the figure of merit; target <= 2 at "
-        "N >= 100); RTF = real-time factor of the bank at 1 kHz; speed-up = CasADi C / "
-        "bank; agreement = max relative difference of the currents after one step, bank "
+        "through ctypes, its four inputs copied into bound buffers and its result "
+        "copied out).  Ratio = bank / baseline (the figure of merit; target <= 2 at "
+        "N >= 100), for `step` and for the stepper; RTF = real-time factor at 1 kHz "
+        "(target >= 50 at 100 circuits); speed-up = CasADi C / bank step; agreement = "
+        "max relative difference of the currents after one step, bank "
         "vs baseline.",
         "",
-        "| circuits | bank [ns] | 2 lanes [ns] | CasADi C [ns] | interpreted [ns] | "
-        "step loop [ns] | baseline [ns] | ratio | RTF | speed-up | agreement |",
-        "|---|---|---|---|---|---|---|---|---|---|---|",
+        "| circuits | bank step [ns] | stepper [ns] | 2 lanes [ns] | CasADi C [ns] | "
+        "interpreted [ns] | step loop [ns] | baseline [ns] | ratio step | ratio stepper | "
+        "RTF step | RTF stepper | speed-up | agreement |",
+        "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|",
         *rows,
         "",
         "Set-up and compile cost [s] (bank construction; first step incl. C generation and "

@@ -20,11 +20,13 @@ from .flux import (
 from .scenario import Scenario, bundled_scenarios, load_scenario, parse_scenario
 from .signals import Constant, Ramp, Signal, Sine, Step, Tabulated, parse_signal
 from .statics import StaticSolution, coenergy, magnetic_energy, pole_force_eq6, solve_statics
+from .stepper import BankStepper
 
 __all__ = [
     "BankOutputs",
     "BankSimulation",
     "BankState",
+    "BankStepper",
     "DEFAULT_ATOL",
     "DEFAULT_RTOL",
     "Constant",

@@ -53,6 +53,7 @@ from .flux import FluxModel, FluxState
 from .inputs import check_initial_choice, check_step, reject_bools, simulation_inputs
 from .lanes import LaneInput, external_source, lane_source, lane_target
 from .statics import circuit_pole_groups
+from .stepper import BankStepper
 from .tables import INTERPOLATION_METHODS, cell_table
 
 __all__ = ["KERNEL_PARAMETERS", "BankOutputs", "BankSimulation", "BankState", "MagnetBank"]
@@ -989,6 +990,26 @@ class MagnetBank:
         new_state = BankState(t1, i_next, g1, tuple(states))
         return new_state, BankOutputs(t1, coil, i_next.copy(), force, member_force, pf)
 
+    def stepper(self, state: BankState, dt: float) -> BankStepper:
+        """A :class:`~maglevkit.models.stepper.BankStepper` that advances the bank from
+        ``state`` in steps of ``dt`` [s] in place: the co-simulation loop of a vehicle
+        model or controller without the per-step objects and copies of :meth:`step`
+        (the same compiled function and checks, bit-identical results).
+
+        Examples
+        --------
+        >>> import numpy as np
+        >>> import maglevkit as mk
+        >>> maps = mk.build_maps(mk.load_magnet("u-magnet"), gaps=np.linspace(0.006, 0.016, 6),
+        ...                      currents=np.linspace(0, 60, 13), progress=False)
+        >>> bank = mk.MagnetBank({"a": maps, "b": maps}, compiled="never")
+        >>> stepper = bank.stepper(bank.initial_state(gaps=0.010, currents=20.0), dt=1e-3)
+        >>> stepper.advance(voltages=45.0, gap_rates=0.0)
+        >>> bool(stepper.inductor_currents_A[0] > 20.0)
+        True
+        """
+        return BankStepper(self, state, dt)
+
     def simulate(self, t: Any, *, gaps: Any, voltages: Any, gap_rates: Any = None,
                  dt: float | None = None, initial_currents: Any = None,
                  initial_state: BankState | None = None,
@@ -1086,6 +1107,7 @@ class _StepCall:
 
     def __init__(self, f: ca.Function) -> None:
         buf: Any
+        self.f = f
         buf, self.eval = f.buffer()
         self.buf = buf
         self.args = [np.zeros(f.nnz_in(i)) for i in range(f.n_in())]
