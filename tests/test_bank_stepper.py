@@ -142,3 +142,29 @@ def test_stepper_bad_input(u_maps) -> None:
         stepper.currents_A[0] = 1.0
     assert stepper.time_s == 0.0                      # nothing was stepped
     assert "2 circuits" in repr(stepper)
+
+
+def test_simulate_in_place_equals_a_loop_of_steps(u_maps, guidance_maps) -> None:
+    """simulate() of a reduced bank runs through the stepper; it equals one step() per
+    interval bit for bit, on a grid whose intervals differ in the last bits (linspace),
+    and on a grid with two sub-step counts (which takes the step() loop)."""
+    bank = MagnetBank({"a": u_maps, "g": guidance_maps})
+    for times in (np.linspace(0.0, 0.05, 51), np.concatenate([np.arange(0.0, 0.01, 1e-3),
+                                                             0.01 + 1.5e-3 * np.arange(6)])):
+        gaps = 0.010 + 0.001 * np.sin(2 * np.pi * 10 * times)[:, None] * np.ones(bank.n_gaps)
+        volts = np.outer(1.0 + 0.1 * np.cos(2 * np.pi * 7 * times), bank.resistance_ohm * 20.0)
+        res = bank.simulate(times, gaps=gaps, voltages=volts)
+        state = bank.initial_state(gaps=gaps[0], currents=volts[0] / bank.resistance_ohm,
+                                   time=float(times[0]))
+        rates = (gaps[1:] - gaps[:-1]) / np.diff(times)[:, None]
+        for k in range(times.size - 1):
+            state, out = bank.step(state, float(times[k + 1] - times[k]), volts[k],
+                                   gaps=gaps[k], gap_rates=rates[k], pole_forces=True)
+            np.testing.assert_array_equal(res.currents_A[k + 1], out.currents_A)
+            np.testing.assert_array_equal(res.circuit_force_N[k + 1], out.circuit_force_N)
+            assert out.pole_force_N is not None
+            np.testing.assert_array_equal(res.pole_force_N[k + 1], out.pole_force_N)
+        assert res.final_state.time_s == state.time_s
+        np.testing.assert_array_equal(res.final_state.inductor_currents_A,
+                                      state.inductor_currents_A)
+        np.testing.assert_array_equal(res.final_state.gaps_m, state.gaps_m)

@@ -335,6 +335,9 @@ class MagnetBank:
                 for p in m.pole_groups[c]:
                     share[pi[p], cs.start + j] = 1.0 / len(m.pole_groups[c])
         self._share = share
+        nonzero = share != 0
+        self._pole_gather = ((np.argmax(nonzero, axis=1), share.max(axis=1))
+                             if np.all(nonzero.sum(axis=1) == 1) else None)
         self._avg = (share > 0).T / np.maximum((share > 0).sum(axis=0), 1)[:, None]
         self._reduced_idx = np.array([j for m, cs in zip(self._members, self._circuit_slices,
                                                          strict=True)
@@ -1018,7 +1021,9 @@ class MagnetBank:
 
         Gaps move linearly between samples, voltages are held from each sample to the
         next; the default initial state is the steady state ``I = U(t0) / R_el`` at the
-        first gaps.  Every interval is one :meth:`step`.
+        first gaps.  Every interval is one :meth:`step` (for banks of reduced members
+        with one gap per circuit, through :meth:`stepper`: the same compiled function,
+        without the per-step objects).
         """
         times, g, u, rates = simulation_inputs(
             t, dt, gaps=gaps, voltages=voltages, gap_rates=gap_rates, gap_names=self.gap_names,
@@ -1035,18 +1040,45 @@ class MagnetBank:
         o = self._outputs_at(state, u[0])
         cur[0], il[0], fc[0], pf[0] = o.currents_A, o.inductor_currents_A, o.circuit_force_N, \
             o.pole_force_N
-        for k in range(nt - 1):
-            state, o = self.step(state, float(times[k + 1] - times[k]), u[k], gaps=g[k],
-                                 gap_rates=rates[k], pole_forces=True)
-            cur[k + 1], il[k + 1], fc[k + 1] = o.currents_A, o.inductor_currents_A, o.circuit_force_N
-            assert o.pole_force_N is not None
-            pf[k + 1] = o.pole_force_N
+        steps = np.diff(times)
+        substeps = np.ceil(steps / self.max_step_s * (1 - 1e-12))
+        if self._fast and nt > 1 and np.all(substeps == substeps[0]):
+            # every interval runs the same compiled kernel: step in place (the same
+            # function and inputs as step(), so the same numbers), pole forces at the end
+            # (each pole takes one share of one circuit's force: exact in any order)
+            stepper = self.stepper(state, float(steps[0]))
+            for k in range(nt - 1):
+                stepper._set_step_length(float(steps[k]))
+                stepper.advance(u[k], g[k], rates[k])
+                cur[k + 1] = stepper.currents_A
+                il[k + 1] = stepper.inductor_currents_A
+                fc[k + 1] = stepper.circuit_force_N
+            pf[1:] = self._pole_forces_of(fc[1:])
+            state = stepper.state
+        else:
+            for k in range(nt - 1):
+                state, o = self.step(state, float(steps[k]), u[k], gaps=g[k],
+                                     gap_rates=rates[k], pole_forces=True)
+                cur[k + 1], il[k + 1], fc[k + 1] = (o.currents_A, o.inductor_currents_A,
+                                                    o.circuit_force_N)
+                assert o.pole_force_N is not None
+                pf[k + 1] = o.pole_force_N
         return BankSimulation(
             time_s=times, gaps_m=g, voltages_V=np.vstack((u[:-1], u[-2:-1])), currents_A=cur,
             inductor_currents_A=il, circuit_force_N=fc,
             member_force_N=np.add.reduceat(fc, self._member_starts, axis=1), pole_force_N=pf,
             circuit_names=self.circuit_names, gap_names=self.gap_names,
             pole_names=self.pole_names, member_names=self.member_names, final_state=state)
+
+    def _pole_forces_of(self, circuit_forces: np.ndarray) -> np.ndarray:
+        """Per-pole forces of a time series of reduced circuit forces (n_t, n_circuits),
+        equal to ``self._share @ f`` row by row: where every pole takes a share of one
+        circuit (the bundled magnets) a gather and a product, exact as the matrix product
+        (its other terms are exact zeros), else the product itself."""
+        if self._pole_gather is None:
+            return circuit_forces @ self._share.T
+        col, w = self._pole_gather
+        return circuit_forces[:, col] * w
 
     def outputs(self, state: BankState, voltages: Any = None) -> BankOutputs:
         """Outputs at ``state`` with ``voltages`` [V] (default: the steady-state voltages

@@ -119,7 +119,7 @@ class BankStepper:
         coil = [out.currents_A.copy(), np.zeros(nc)]
         force = [out.circuit_force_N.copy(), np.zeros(nc)]
         member = [out.member_force_N.copy(), np.zeros(nm)]
-        h = np.array([self.dt_s])
+        h = self._h = np.array([self.dt_s])
         n_bad, lo, hi = np.zeros(1), np.zeros(nc), np.zeros(nc)
         self._sets = [_Buffers(call.f, [il[c], s[c], self.voltages_V, self.gap_rates_m_per_s, h],
                                [il[1 - c], coil[1 - c], force[1 - c], member[1 - c], n_bad,
@@ -190,6 +190,12 @@ class BankStepper:
             target[:] = value
         else:
             target[:] = self.bank._vector(value, names, what, unit)
+
+    def _set_step_length(self, dt: float) -> None:
+        """Change the step length to ``dt`` [s] with the same RK4 sub-step count (for
+        :meth:`MagnetBank.simulate` on grids whose intervals differ in the last bits)."""
+        self.dt_s = dt
+        self._h[0] = dt
 
     def advance(self, voltages: Any = None, gaps: Any = None, gap_rates: Any = None) -> None:
         """Advance every circuit by :attr:`dt_s` (constant voltages, linearly moving gaps).
