@@ -168,3 +168,143 @@ def test_simulate_in_place_equals_a_loop_of_steps(u_maps, guidance_maps) -> None
         np.testing.assert_array_equal(res.final_state.inductor_currents_A,
                                       state.inductor_currents_A)
         np.testing.assert_array_equal(res.final_state.gaps_m, state.gaps_m)
+
+
+def test_arrays_keep_their_identity_and_bound_references_see_every_step(u_maps) -> None:
+    """A co-simulation binds the stepper's arrays once: writes into a kept gaps_m are used
+    at every step and a kept output view shows every step's values (review finding)."""
+    bank = MagnetBank({"a": u_maps, "b": u_maps})
+    st0 = bank.initial_state(gaps=0.010, currents=20.0)
+    bound, ref = bank.stepper(st0, 1e-3), bank.stepper(st0, 1e-3)
+    gaps, volts, rates = bound.gaps_m, bound.voltages_V, bound.gap_rates_m_per_s
+    force, current = bound.circuit_force_N, bound.currents_A
+    for k in range(6):
+        gaps[:] = 0.0105 + 0.0005 * k
+        volts[:] = 45.0 + k
+        rates[:] = 0.01 * (-1) ** k
+        bound.advance()
+        ref.advance(voltages=45.0 + k, gaps=0.0105 + 0.0005 * k, gap_rates=0.01 * (-1) ** k)
+        np.testing.assert_array_equal(force, ref.circuit_force_N)
+        np.testing.assert_array_equal(current, ref.currents_A)
+    assert bound.gaps_m is gaps and bound.voltages_V is volts and bound.circuit_force_N is force
+
+
+def test_assignment_copies_into_the_inputs_and_typos_are_refused(u_maps) -> None:
+    bank = MagnetBank({"a": u_maps, "b": u_maps})
+    st0 = bank.initial_state(gaps=0.010, currents=20.0)
+    by_attr, by_arg = bank.stepper(st0, 1e-3), bank.stepper(st0, 1e-3)
+    volts = by_attr.voltages_V
+    by_attr.voltages_V = np.array([60.0, 60.0])      # assignment copies into the buffer
+    by_attr.gap_rates_m_per_s = 0.01
+    by_attr.gaps_m = [0.011, 0.011]
+    assert by_attr.voltages_V is volts and volts[0] == 60.0
+    by_attr.advance()
+    by_arg.advance(voltages=60.0, gaps=0.011, gap_rates=0.01)
+    np.testing.assert_array_equal(by_attr.inductor_currents_A, by_arg.inductor_currents_A)
+    assert by_attr.inductor_currents_A[0] > 20.1      # the 60 V step took effect
+    with pytest.raises(AttributeError):
+        by_attr.dt_s = 2e-3  # type: ignore[misc]
+    with pytest.raises(AttributeError):
+        by_attr.voltage_V = 1.0  # type: ignore[attr-defined]
+    with pytest.raises(InputError, match=r"voltages: expected 2 values"):
+        by_attr.voltages_V = [1.0, 2.0, 3.0]
+
+
+def test_refused_or_failed_advance_changes_nothing_of_the_state(u_maps) -> None:
+    bank = MagnetBank({"a": u_maps, "b": u_maps})
+    sp = bank.stepper(bank.initial_state(gaps=0.010, currents=20.0), 1e-3)
+    sp.advance(voltages=45.0)
+    good_gaps = sp.gaps_m.copy()
+    with pytest.raises(InputError, match="gaps must be numbers"):
+        sp.advance(voltages=50.0, gaps="x")
+    assert sp.voltages_V[0] == 45.0                  # nothing of a refused call is written
+    with pytest.raises(OutOfRangeError, match=r"member 'a'.*gap 0\.05 m"):
+        sp.advance(gaps=np.array([0.05, 0.010]))
+    np.testing.assert_array_equal(sp.gaps_m, good_gaps)      # reset to the last good state
+    np.testing.assert_array_equal(sp.state.gaps_m, good_gaps)
+    sp.advance()                                     # and it goes on without new gaps
+    s2, _ = bank.step(sp.state, 1e-3, 45.0)          # the state continues with step
+    assert s2.time_s == pytest.approx(3e-3, abs=1e-15)
+
+
+def test_non_fast_path_failure_and_initial_voltages(u_magnet, u_maps) -> None:
+    """Detailed members: the start voltages are the steady state R_el I of every circuit
+    (a detailed magnet then holds its current), and a failed step keeps the state."""
+    bank = MagnetBank({"d": mk.FluxModel(u_magnet, eddy_currents=False), "r": u_maps})
+    sp = bank.stepper(bank.initial_state(gaps=0.010, currents=20.0), 1e-3)
+    np.testing.assert_allclose(sp.voltages_V, bank.resistance_ohm * 20.0, rtol=1e-9)
+    for _ in range(5):
+        sp.advance()
+    # steady state held: the detailed model's own consistency (IDAS tolerance ~1e-6)
+    np.testing.assert_allclose(sp.currents_A, 20.0, rtol=1e-5)
+    before = (sp.time_s, sp.currents_A.copy(), sp.gaps_m.copy())
+    with pytest.raises(OutOfRangeError, match=r"member 'r'"):
+        sp.advance(gaps=np.array([0.010, 0.05]))
+    assert sp.time_s == before[0]
+    np.testing.assert_array_equal(sp.currents_A, before[1])
+    np.testing.assert_array_equal(sp.gaps_m, before[2])
+
+
+def test_messages_match_step_and_several_sub_steps(u_maps) -> None:
+    bank = MagnetBank({"a": u_maps, "b": u_maps}, max_step_s=4e-4)
+    st0 = bank.initial_state(gaps=0.010, currents=20.0)
+    sp = bank.stepper(st0, 1e-3)                     # 3 RK4 sub-steps per step
+    msgs = []
+    for call in (lambda: bank.step(st0, 1e-3, np.array([40.0, np.nan])),
+                 lambda: sp.advance(voltages=np.array([40.0, np.nan]))):
+        with pytest.raises(InputError) as err:
+            call()
+        msgs.append(str(err.value))
+    assert msgs[0] == msgs[1] and "circuit 'b/coil' has nan V" in msgs[0]
+    sp.voltages_V[:] = 45.0
+    sp.voltages_V[1] = np.inf                        # written directly into the array
+    with pytest.raises(InputError, match=r"voltages must be finite.*'b/coil'"):
+        sp.advance()
+    # ints, float32, lists and scalars are converted; 3 sub-steps equal step bit for bit
+    state = st0
+    sp2 = bank.stepper(st0, 1e-3)
+    for volts in ([45, 46], np.array([45.0, 47.0], dtype=np.float32), 44):
+        state, out = bank.step(state, 1e-3, np.asarray(volts, dtype=float) * np.ones(2))
+        sp2.advance(voltages=volts)
+        np.testing.assert_array_equal(sp2.inductor_currents_A, out.inductor_currents_A)
+
+
+def test_bad_states_copies_and_pickling(u_maps) -> None:
+    import copy
+    import pickle
+
+    from maglevkit.models.bank import BankState
+
+    bank = MagnetBank({"a": u_maps, "b": u_maps})
+    bad = BankState(0.0, np.array([20.0]), np.array([0.01, 0.01]), ())
+    with pytest.raises(InputError, match="BankState of this bank"):
+        bank.stepper(bad, 1e-3)
+    with pytest.raises(InputError, match="BankState of this bank"):
+        bank.step(bad, 1e-3, 40.0)
+    sp = bank.stepper(bank.initial_state(gaps=0.010, currents=20.0), 1e-3)
+    sp.advance(voltages=45.0)
+    twin = copy.copy(sp)
+    deep = copy.deepcopy(sp)
+    sp.advance(voltages=60.0)                        # the copies do not move with it
+    twin.advance()
+    deep.advance()
+    np.testing.assert_array_equal(twin.inductor_currents_A, deep.inductor_currents_A)
+    assert twin.inductor_currents_A[0] < sp.inductor_currents_A[0]
+    with pytest.raises(InputError, match="cannot be pickled"):
+        pickle.dumps(sp)
+
+
+def test_extrapolation_is_reported_once_per_circuit(u_maps) -> None:
+    bank = MagnetBank({"a": u_maps, "b": u_maps}, extrapolate=True)
+    sp = bank.stepper(bank.initial_state(gaps=0.0155, currents=20.0), 1e-3)
+    import warnings
+
+    with warnings.catch_warnings(record=True) as seen:
+        warnings.simplefilter("always")
+        for _ in range(20):
+            sp.advance(voltages=40.0, gaps=0.0165)
+    texts = [str(w.message) for w in seen]
+    assert len(texts) == 2 and all("reported once per circuit" in t for t in texts)
+    with pytest.raises(OutOfRangeError) as err:
+        sp.advance(gaps=0.030)
+    assert "extrapolate=True" not in str(err.value)

@@ -267,6 +267,7 @@ class MagnetBank:
         self._last_dt: float = math.nan             # the last step length and its kernel
         self._last_call: _StepCall | None = None
         self.compiled: bool | None = None       # known after the first step
+        self._extrapolation_warned: set[int] = set()   # circuits already reported
 
     # ------------------------------------------------------------------ construction
     @staticmethod
@@ -344,6 +345,7 @@ class MagnetBank:
                                       if m.kind == "reduced" for j in range(cs.start, cs.stop)],
                                      dtype=int)
         self._all_reduced = all(m.kind == "reduced" for m in self._members)
+        self._n_detailed = sum(m.kind == "detailed" for m in self._members)
         self._fast = self._all_reduced and self.gap_inputs == "circuit"
         r = np.full(nc, np.nan)
         for m, cs in zip(self._members, self._circuit_slices, strict=True):
@@ -802,7 +804,7 @@ class MagnetBank:
                                  f"got shape {arr.shape}")
         if not np.isfinite(arr).all():
             j = int(np.argmax(~np.isfinite(arr)))
-            raise InputError(f"{what} must be finite: {names[j]!r} = {arr[j]!r} {unit}")
+            raise InputError(f"{what} must be finite: {names[j]!r} = {float(arr[j])!r} {unit}")
         return arr
 
     def _range_error(self, k: int, s: float, i: float, where: str) -> None:
@@ -816,11 +818,18 @@ class MagnetBank:
         if self.extrapolate:
             e = self._spline_bounds[:, k]
             if e[0] <= s <= e[1] and e[2] <= i <= e[3]:
-                warnings.warn("extrapolating the characteristic maps: " + msg, stacklevel=4)
+                # once per circuit and bank: a run that stays near a map's edge would
+                # otherwise warn at every step (each message names its own time)
+                if k not in self._extrapolation_warned:
+                    self._extrapolation_warned.add(k)
+                    warnings.warn("extrapolating the characteristic maps: " + msg
+                                  + " (reported once per circuit)", stacklevel=4)
                 return
             msg += f"; linear extrapolation reaches only {EXTRA_CELLS} grid cells beyond the maps"
-        raise OutOfRangeError("outside the characteristic maps: " + msg
-                              + " (rebuild the maps on a larger grid, or pass extrapolate=True)")
+            advice = " (rebuild the maps on a larger grid)"
+        else:
+            advice = " (rebuild the maps on a larger grid, or pass extrapolate=True)"
+        raise OutOfRangeError("outside the characteristic maps: " + msg + advice)
 
     def _check_range(self, s_lo: np.ndarray, s_hi: np.ndarray, i_lo: np.ndarray,
                      i_hi: np.ndarray, where: str) -> None:
@@ -842,13 +851,13 @@ class MagnetBank:
                 k = int(np.argmax(~np.isfinite(arr)))
                 raise InputError(f"{what} must be finite: circuit "
                                  f"{self.circuit_names[int(self._reduced_idx[k])]!r} has "
-                                 f"{arr[k]!r} {unit}")
+                                 f"{float(arr[k])!r} {unit}")
         se = s + sd * (t1 - t0)
         if (s <= 0).any() or (se <= 0).any():
             k = int(np.argmax((s <= 0) | (se <= 0)))
             raise InputError(f"gaps must stay > 0 m over the step: circuit "
-                             f"{self.circuit_names[int(self._reduced_idx[k])]!r} from {s[k]!r} m "
-                             f"to {se[k]!r} m")
+                             f"{self.circuit_names[int(self._reduced_idx[k])]!r} from "
+                             f"{float(s[k])!r} m to {float(se[k])!r} m")
         self._check_range(np.minimum(s, se), np.maximum(s, se), i0, i0,
                           f" over the step t = {t0:.6g}..{t1:.6g} s")
         bad = ~(np.isfinite(x) & np.isfinite(u) & np.isfinite(sd))
@@ -870,7 +879,7 @@ class MagnetBank:
         g = self._vector(gaps, self.gap_names, "gaps", "m")
         if (g <= 0).any():
             j = int(np.argmax(g <= 0))
-            raise InputError(f"gaps must be > 0 m: {self.gap_names[j]!r} = {g[j]!r} m")
+            raise InputError(f"gaps must be > 0 m: {self.gap_names[j]!r} = {float(g[j])!r} m")
         i = self._vector(currents, self.circuit_names, "currents", "A").copy()
         reject_bools(time, "time")
         if not (isinstance(time, (int, float, np.floating)) and math.isfinite(time)):
@@ -886,6 +895,14 @@ class MagnetBank:
                 states.append(m.model.initial_state(gaps=pg[ps], currents=i[cs], time=float(time)))
                 i[cs] = np.nan
         return BankState(float(time), i, g.copy(), tuple(states))
+
+    def _check_state(self, state: Any) -> None:
+        """``state`` is a BankState of this bank (type, array shapes, detailed members)."""
+        if (type(state) is not BankState or state.gaps_m.shape != (self.n_gaps,)
+                or state.inductor_currents_A.shape != (self.n_circuits,)
+                or len(state.member_states) != self._n_detailed):
+            raise InputError("state must be a BankState of this bank (from initial_state, step "
+                             "or a stepper's state)")
 
     def step(self, state: BankState, dt: float, voltages: Any, gaps: Any = None,
              gap_rates: Any = 0.0, *, pole_forces: bool = False) -> tuple[BankState, BankOutputs]:
@@ -923,8 +940,7 @@ class MagnetBank:
             Non-finite results (with time, state and reason) or a detailed member's
             integrator failing.
         """
-        if type(state) is not BankState or state.gaps_m.shape != (self.n_gaps,):
-            raise InputError("state must be a BankState of this bank (from initial_state or step)")
+        self._check_state(state)
         if not (type(dt) is float and 0.0 < dt < math.inf):
             dt = check_step(dt)
         # fast path (all reduced, one gap per circuit): the kernel flags non-finite
@@ -954,7 +970,7 @@ class MagnetBank:
         if checked and ((g <= 0).any() or (g1 <= 0).any()):
             j = int(np.argmax((g <= 0) | (g1 <= 0)))
             raise InputError(f"gaps must stay > 0 m over the step: {self.gap_names[j]!r} from "
-                             f"{g[j]!r} m to {g1[j]!r} m")
+                             f"{float(g[j])!r} m to {float(g1[j])!r} m")
         nc = self.n_circuits
         coil = np.empty(nc)
         force = np.empty(nc)

@@ -6,10 +6,11 @@ about as much as the compiled arithmetic itself.  A :class:`BankStepper` binds t
 compiled step to arrays it owns: the caller writes voltages, gaps and gap rates into the
 stepper's input arrays (or passes them to :meth:`BankStepper.advance`), calls
 :meth:`~BankStepper.advance`, and reads the currents and forces from the stepper's output
-arrays.  Two sets of state and output arrays alternate, so a step never overwrites its
-own inputs and a step that fails (out of the maps, non-finite) leaves the stepper at the
-last good step.  The numbers are the bank's own: the same compiled function as
-:meth:`MagnetBank.step`, equal to it bit for bit.
+arrays.  Every array keeps its identity for the stepper's life, so a co-simulation may
+bind them once.  The compiled step writes into scratch buffers that are copied into the
+state and output arrays only when the step is good, so a step that fails (out of the
+maps, non-finite) leaves the stepper at the last good step.  The numbers are the bank's
+own: the same compiled function as :meth:`MagnetBank.step`, equal to it bit for bit.
 
 Banks with detailed members or one gap input per pole have no compiled fast path; their
 stepper runs :meth:`MagnetBank.step` behind the same interface.
@@ -17,6 +18,7 @@ stepper runs :meth:`MagnetBank.step` behind the same interface.
 
 from __future__ import annotations
 
+from types import SimpleNamespace
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -36,38 +38,25 @@ def _readonly(a: np.ndarray) -> np.ndarray:
     return v
 
 
-class _Buffers:
-    """One bound evaluation of the compiled step: reads state set ``c``, writes set
-    ``1 - c`` (``res`` as :class:`~maglevkit.models.bank._StepCall`, for the diagnosis)."""
-
-    def __init__(self, f: Any, args: list[np.ndarray], res: list[np.ndarray]) -> None:
-        buf, self.eval = f.buffer()
-        self.buf = buf                   # keeps the bound buffer alive
-        self.args, self.res = args, res
-        for i, a in enumerate(args):
-            buf.set_arg(i, memoryview(a))  # type: ignore[arg-type]
-        for i, r in enumerate(res):
-            buf.set_res(i, memoryview(r))  # type: ignore[arg-type]
-
-
 class BankStepper:
     """Advance a :class:`~maglevkit.models.bank.MagnetBank` step by step in place.
 
-    Made by :meth:`MagnetBank.stepper <maglevkit.models.bank.MagnetBank.stepper>`; one
-    stepper per step length.  The input arrays belong to the stepper and are written in
-    place; the output arrays are read-only views of the stepper's buffers, valid until
-    the next :meth:`advance` (copy them to keep them).
+    Made by :meth:`MagnetBank.stepper <maglevkit.models.bank.MagnetBank.stepper>` (which
+    compiles the bank's step for ``dt`` if that has not happened yet); one stepper per
+    step length.  The input arrays (:attr:`voltages_V`, :attr:`gaps_m`,
+    :attr:`gap_rates_m_per_s`) belong to the stepper and are written in place (assigning
+    to the attribute copies into them); the output arrays are read-only views that always
+    show the last good step.  All keep their identity, so they may be bound once.
 
     Attributes
     ----------
     bank : MagnetBank
     dt_s : float
-        Step length [s].
-    voltages_V : ndarray (n_circuits,)
-        Circuit voltages [V] held over the next step (writable; initially the
-        steady-state voltages ``R_el I_L`` of the start state).
-    gap_rates_m_per_s : ndarray (n_gaps,)
-        Gap rates [m/s] over the next step (writable; initially 0).
+        Step length [s] (read-only).
+    time_s : float
+        Time of the current state [s]: the start time plus one ``dt_s`` per step, summed
+        as :meth:`MagnetBank.step` sums it (so ``time_s == k * dt_s`` may be off in the
+        last bits; count steps where exact times matter).
 
     Examples
     --------
@@ -78,57 +67,104 @@ class BankStepper:
     ...                      currents=np.linspace(0, 60, 13), progress=False)
     >>> bank = mk.MagnetBank({f"m{k}": maps for k in range(4)}, compiled="never")
     >>> stepper = bank.stepper(bank.initial_state(gaps=0.010, currents=20.0), dt=1e-3)
+    >>> force = stepper.circuit_force_N            # bound once, always the last step's
     >>> for k in range(10):
     ...     stepper.voltages_V[:] = bank.resistance_ohm * 21.0   # e.g. from a controller
     ...     stepper.gaps_m[:] = 0.010                             # e.g. from the mechanics
     ...     stepper.advance()
-    >>> round(stepper.time_s, 6), stepper.circuit_force_N.shape
-    (0.01, (4,))
+    >>> round(stepper.time_s, 6), force.shape, bool(force[0] == stepper.circuit_force_N[0])
+    (0.01, (4,), True)
     """
 
-    def __init__(self, bank: MagnetBank, state: BankState, dt: float) -> None:
-        from .bank import BankState
+    __slots__ = ("_bank", "_dt", "_time", "_fast", "_u", "_g", "_gd", "_il", "_coil",
+                 "_force", "_member", "_pole", "_views", "_state_gaps", "_state",
+                 "_buf", "_eval", "_args", "_res", "_n_bad", "_h")
 
-        if type(state) is not BankState or state.gaps_m.shape != (bank.n_gaps,):
-            raise InputError("state must be a BankState of this bank (from initial_state or "
-                             "step)")
-        self.bank = bank
-        self.dt_s = check_step(dt)
+    def __init__(self, bank: MagnetBank, state: BankState, dt: float) -> None:
+        bank._check_state(state)
+        self._bank = bank
+        self._dt = check_step(dt)
         nc, ng = bank.n_circuits, bank.n_gaps
         out = bank.outputs(state)
-        self.voltages_V = bank.resistance_ohm * np.where(
-            np.isnan(state.inductor_currents_A), 0.0, state.inductor_currents_A)
-        self.gap_rates_m_per_s = np.zeros(ng)
+        # steady-state voltages U = R_el I (I = I_L for reduced circuits in steady state)
+        i_ss = np.where(np.isnan(state.inductor_currents_A), out.currents_A,
+                        state.inductor_currents_A)
+        self._u = bank.resistance_ohm * i_ss
+        self._g = state.gaps_m.copy()
+        self._gd = np.zeros(ng)
         self._time = float(state.time_s)
         self._fast = bank._fast
+        self._il = out.inductor_currents_A.copy()
+        self._coil = out.currents_A.copy()
+        self._force = out.circuit_force_N.copy()
+        self._member = out.member_force_N.copy()
+        assert out.pole_force_N is not None
+        self._pole = out.pole_force_N.copy()
+        self._state_gaps = state.gaps_m.copy()      # the gaps of the last good state
+        self._views = tuple(_readonly(a) for a in (self._il, self._coil, self._force,
+                                                   self._member))
         if not self._fast:
             self._state = state
-            self._gaps = state.gaps_m.copy()
-            self._out = [_readonly(a) for a in (out.inductor_currents_A.copy(),
-                                                out.currents_A.copy(),
-                                                out.circuit_force_N.copy(),
-                                                out.member_force_N.copy())]
-            assert out.pole_force_N is not None
-            self._pole_force = out.pole_force_N
             return
-        nm = len(bank.member_names)
-        call = bank._kernel(self.dt_s)
-        # state set c: I_L, s; outputs of the step that produced it: coil, F, member F
-        il = [state.inductor_currents_A.copy(), np.zeros(nc)]
-        s = [state.gaps_m.copy(), np.zeros(nc)]
-        coil = [out.currents_A.copy(), np.zeros(nc)]
-        force = [out.circuit_force_N.copy(), np.zeros(nc)]
-        member = [out.member_force_N.copy(), np.zeros(nm)]
-        h = self._h = np.array([self.dt_s])
-        n_bad, lo, hi = np.zeros(1), np.zeros(nc), np.zeros(nc)
-        self._sets = [_Buffers(call.f, [il[c], s[c], self.voltages_V, self.gap_rates_m_per_s, h],
-                               [il[1 - c], coil[1 - c], force[1 - c], member[1 - c], n_bad,
-                                lo, hi, s[1 - c]])
-                      for c in (0, 1)]
-        self._n_bad = n_bad
-        self._il, self._s = il, s
-        self._views = [[_readonly(a[c]) for a in (il, coil, force, member)] for c in (0, 1)]
-        self._c = 0
+        call = bank._kernel(self._dt)
+        self._h = np.array([self._dt])
+        # the kernel reads the state and input arrays and writes scratch buffers (copied
+        # into the state and output arrays only after a good step)
+        self._args = [self._il, self._g, self._u, self._gd, self._h]
+        self._res = [np.zeros(nc), np.zeros(nc), np.zeros(nc), np.zeros(len(bank.member_names)),
+                     np.zeros(1), np.zeros(nc), np.zeros(nc), np.zeros(nc)]
+        buf: Any
+        buf, self._eval = call.f.buffer()
+        self._buf = buf                     # keeps the bound buffer alive
+        for i, a in enumerate(self._args):
+            buf.set_arg(i, memoryview(a))  # type: ignore[arg-type]
+        for i, r in enumerate(self._res):
+            buf.set_res(i, memoryview(r))  # type: ignore[arg-type]
+        self._n_bad = self._res[4]
+
+    # ------------------------------------------------------------------ inputs
+    @property
+    def bank(self) -> MagnetBank:
+        """The bank this stepper advances."""
+        return self._bank
+
+    @property
+    def dt_s(self) -> float:
+        """Step length [s] (make a new stepper for another one)."""
+        return self._dt
+
+    @property
+    def voltages_V(self) -> np.ndarray:
+        """Circuit voltages [V] held over the next step (writable in place; assigning
+        copies into it; initially the steady-state voltages ``R_el I`` of the start
+        state).  Kept as written when a step fails."""
+        return self._u
+
+    @voltages_V.setter
+    def voltages_V(self, value: Any) -> None:
+        self._u[:] = self._convert(value, self._bank.circuit_names, "voltages", "V")
+
+    @property
+    def gaps_m(self) -> np.ndarray:
+        """Gap inputs [m] at the start of the next step (writable in place; assigning
+        copies into it).  Each good step moves them on by ``gap_rates * dt``; a failed
+        step resets them to the gaps of the last good state."""
+        return self._g
+
+    @gaps_m.setter
+    def gaps_m(self, value: Any) -> None:
+        self._g[:] = self._convert(value, self._bank.gap_names, "gaps", "m")
+
+    @property
+    def gap_rates_m_per_s(self) -> np.ndarray:
+        """Gap rates [m/s] over the next step (writable in place; assigning copies into
+        it; initially 0; kept from step to step, unlike the ``gap_rates=0.0`` default
+        of :meth:`MagnetBank.step`)."""
+        return self._gd
+
+    @gap_rates_m_per_s.setter
+    def gap_rates_m_per_s(self, value: Any) -> None:
+        self._gd[:] = self._convert(value, self._bank.gap_names, "gap_rates", "m/s")
 
     # ------------------------------------------------------------------ state and outputs
     @property
@@ -137,64 +173,54 @@ class BankStepper:
         return self._time
 
     @property
-    def gaps_m(self) -> np.ndarray:
-        """Gap inputs [m] at the start of the next step (writable; each :meth:`advance`
-        moves them on by ``gap_rates * dt``)."""
-        return self._s[self._c] if self._fast else self._gaps
-
-    @property
     def inductor_currents_A(self) -> np.ndarray:
         """``I_L`` of every circuit [A] (read-only; NaN for detailed members)."""
-        return (self._views[self._c] if self._fast else self._out)[0]
+        return self._views[0]
 
     @property
     def currents_A(self) -> np.ndarray:
         """Coil currents of the last step [A] (with its voltages; read-only)."""
-        return (self._views[self._c] if self._fast else self._out)[1]
+        return self._views[1]
 
     @property
     def circuit_force_N(self) -> np.ndarray:
         """Force of every circuit [N], attraction positive (read-only)."""
-        return (self._views[self._c] if self._fast else self._out)[2]
+        return self._views[2]
 
     @property
     def member_force_N(self) -> np.ndarray:
         """Total force of every member [N] (read-only)."""
-        return (self._views[self._c] if self._fast else self._out)[3]
+        return self._views[3]
 
     @property
     def pole_force_N(self) -> np.ndarray:
         """Force per pole [N] (a reduced circuit's force shared equally by its poles;
-        computed on request, a new array)."""
+        a new array)."""
         if self._fast:
-            return self.bank._share @ self.circuit_force_N
-        return self._pole_force.copy()
+            return self._bank._share @ self._force
+        return self._pole.copy()
 
     @property
     def state(self) -> BankState:
-        """The current state as a :class:`BankState` (a copy; continue with
+        """The last good state as a :class:`BankState` (a copy; continue with
         :meth:`MagnetBank.step` or a new stepper)."""
         from .bank import BankState
 
-        if not self._fast:
-            st = self._state
-            return BankState(st.time_s, st.inductor_currents_A.copy(), self._gaps.copy(),
-                             st.member_states)
-        c = self._c
-        return BankState(self._time, self._il[c].copy(), self._s[c].copy(), ())
+        members = () if self._fast else self._state.member_states
+        return BankState(self._time, self._il.copy(), self._state_gaps.copy(), members)
 
     # ------------------------------------------------------------------ stepping
-    def _set(self, target: np.ndarray, value: Any, names: tuple[str, ...], what: str,
-             unit: str) -> None:
-        if type(value) is np.ndarray and value.shape == target.shape and value.dtype == float:
-            target[:] = value
-        else:
-            target[:] = self.bank._vector(value, names, what, unit)
+    def _convert(self, value: Any, names: tuple[str, ...], what: str, unit: str) -> np.ndarray:
+        if type(value) is np.ndarray and value.dtype == np.float64 and value.shape == (len(names),):
+            return value
+        # non-finite values pass on the fast path: the kernel flags them and the step is
+        # diagnosed as MagnetBank.step diagnoses it (the same messages)
+        return self._bank._vector(value, names, what, unit, not self._fast)
 
     def _set_step_length(self, dt: float) -> None:
         """Change the step length to ``dt`` [s] with the same RK4 sub-step count (for
         :meth:`MagnetBank.simulate` on grids whose intervals differ in the last bits)."""
-        self.dt_s = dt
+        self._dt = dt
         self._h[0] = dt
 
     def advance(self, voltages: Any = None, gaps: Any = None, gap_rates: Any = None) -> None:
@@ -208,47 +234,81 @@ class BankStepper:
             Written into :attr:`gaps_m` first [m] (None: continue from the last step's
             end gaps, or what the caller wrote there).
         gap_rates : float or array (n_gaps,), optional
-            Written into :attr:`gap_rates_m_per_s` first [m/s].
+            Written into :attr:`gap_rates_m_per_s` first [m/s] (None: keep them).
+
+        All three are converted before any is written, so an argument that is refused
+        changes nothing.
 
         Raises
         ------
         InputError, OutOfRangeError, SolverError
-            As :meth:`MagnetBank.step` (the same checks, the same messages); the stepper
-            then stays at the state before the step.
+            As :meth:`MagnetBank.step` (the same checks and messages); the stepper then
+            stays at the last good step: time, state and outputs unchanged, gap inputs
+            reset to the state's gaps (voltages and gap rates stay as written).
         """
-        bank = self.bank
-        if voltages is not None:
-            self._set(self.voltages_V, voltages, bank.circuit_names, "voltages", "V")
-        if gaps is not None:
-            self._set(self.gaps_m, gaps, bank.gap_names, "gaps", "m")
-        if gap_rates is not None:
-            self._set(self.gap_rates_m_per_s, gap_rates, bank.gap_names, "gap_rates", "m/s")
+        bank = self._bank
+        new = [(target, self._convert(value, names, what, unit))
+               for target, value, names, what, unit in (
+                   (self._u, voltages, bank.circuit_names, "voltages", "V"),
+                   (self._g, gaps, bank.gap_names, "gaps", "m"),
+                   (self._gd, gap_rates, bank.gap_names, "gap_rates", "m/s"))
+               if value is not None]
+        for target, arr in new:
+            target[:] = arr
         t0 = self._time
+        t1 = t0 + self._dt
         if not self._fast:
-            st = self._state
             from .bank import BankState
 
-            st = BankState(st.time_s, st.inductor_currents_A, self._gaps.copy(),
-                           st.member_states)
-            st, out = bank.step(st, self.dt_s, self.voltages_V.copy(), self._gaps.copy(),
-                                self.gap_rates_m_per_s.copy(), pole_forces=True)
+            st = self._state
+            try:
+                st, out = bank.step(BankState(st.time_s, st.inductor_currents_A,
+                                              self._g.copy(), st.member_states),
+                                    self._dt, self._u.copy(), None, self._gd.copy(),
+                                    pole_forces=True)
+            except BaseException:
+                self._g[:] = self._state_gaps
+                raise
             assert out.pole_force_N is not None
-            self._state, self._pole_force = st, out.pole_force_N
-            self._gaps[:] = st.gaps_m
-            self._out = [_readonly(a) for a in (out.inductor_currents_A, out.currents_A,
-                                                out.circuit_force_N, out.member_force_N)]
+            self._state = st
+            self._il[:], self._coil[:] = out.inductor_currents_A, out.currents_A
+            self._force[:], self._member[:] = out.circuit_force_N, out.member_force_N
+            self._pole[:] = out.pole_force_N
+            self._g[:] = st.gaps_m
+            self._state_gaps[:] = st.gaps_m
             self._time = st.time_s
             return
-        c = self._c
-        b = self._sets[c]
-        b.eval()
-        t1 = t0 + self.dt_s
+        self._eval()
         if self._n_bad[0]:
-            a = b.args
-            bank._diagnose(a[1], a[3], a[0], a[2], b.res[0], b, t0, t1)  # type: ignore[arg-type]
-        self._c = 1 - c
+            try:
+                bank._diagnose(self._g, self._gd, self._il, self._u, self._res[0],
+                               SimpleNamespace(res=self._res), t0, t1)  # type: ignore[arg-type]
+            except BaseException:
+                self._g[:] = self._state_gaps
+                raise
+        r = self._res
+        self._il[:] = r[0]
+        self._coil[:] = r[1]
+        self._force[:] = r[2]
+        self._member[:] = r[3]
+        self._g[:] = r[7]
+        self._state_gaps[:] = r[7]
         self._time = t1
 
+    # ------------------------------------------------------------------ copies
+    def __copy__(self) -> BankStepper:
+        """An independent stepper at the same state with the same inputs."""
+        other = BankStepper(self._bank, self.state, self._dt)
+        other._u[:], other._gd[:], other._g[:] = self._u, self._gd, self._g
+        return other
+
+    def __deepcopy__(self, memo: dict) -> BankStepper:
+        return self.__copy__()
+
+    def __reduce__(self) -> Any:
+        raise InputError("a BankStepper holds bound compiled buffers and cannot be pickled; "
+                         "pickle stepper.state and make a new one with bank.stepper(state, dt)")
+
     def __repr__(self) -> str:
-        return (f"BankStepper({self.bank.n_circuits} circuits, dt={self.dt_s:g} s, "
+        return (f"BankStepper({self._bank.n_circuits} circuits, dt={self._dt:g} s, "
                 f"t={self._time:g} s, {'compiled buffers' if self._fast else 'bank.step'})")
