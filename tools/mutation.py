@@ -314,8 +314,8 @@ MUTATIONS: tuple[Mutation, ...] = (
              ("tests/test_bank_stepper.py::test_failed_step_leaves_the_stepper_at_the_last_good_step",)),
     Mutation("bank stepper: the end gaps not carried on to the next step",
              "src/maglevkit/models/stepper.py",
-             "        self._g[:] = r[7]\n",
-             "",
+             "        self._block[:] = self._scratch\n        self._g[:] = self._state_gaps\n",
+             "        self._block[:] = self._scratch\n",
              ("tests/test_bank_stepper.py::test_stepper_equals_step_bit_for_bit",)),
     # ------------------------------------------------------------------ SIMD lanes (bank kernel)
     Mutation("lanes: 4x4 transpose, high halves swapped (0x31 -> 0x20 for coefficient 2)",

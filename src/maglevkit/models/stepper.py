@@ -78,7 +78,7 @@ class BankStepper:
 
     __slots__ = ("_bank", "_dt", "_time", "_fast", "_u", "_g", "_gd", "_il", "_coil",
                  "_force", "_member", "_pole", "_views", "_state_gaps", "_state",
-                 "_buf", "_eval", "_args", "_res", "_n_bad", "_h")
+                 "_buf", "_eval", "_args", "_res", "_n_bad", "_h", "_block", "_scratch")
 
     def __init__(self, bank: MagnetBank, state: BankState, dt: float) -> None:
         bank._check_state(state)
@@ -94,13 +94,17 @@ class BankStepper:
         self._gd = np.zeros(ng)
         self._time = float(state.time_s)
         self._fast = bank._fast
-        self._il = out.inductor_currents_A.copy()
-        self._coil = out.currents_A.copy()
-        self._force = out.circuit_force_N.copy()
-        self._member = out.member_force_N.copy()
+        # state and outputs in one block [I_L | I | F | member F | gaps of the state], so
+        # that a good step is committed by one copy of the kernel's block of results
+        nm = len(bank.member_names)
+        self._block = np.concatenate([out.inductor_currents_A, out.currents_A,
+                                      out.circuit_force_N, out.member_force_N, state.gaps_m])
+        b = self._block
+        self._il, self._coil = b[:nc], b[nc:2 * nc]
+        self._force, self._member = b[2 * nc:3 * nc], b[3 * nc:3 * nc + nm]
+        self._state_gaps = b[3 * nc + nm:]           # the gaps of the last good state
         assert out.pole_force_N is not None
         self._pole = out.pole_force_N.copy()
-        self._state_gaps = state.gaps_m.copy()      # the gaps of the last good state
         self._views = tuple(_readonly(a) for a in (self._il, self._coil, self._force,
                                                    self._member))
         if not self._fast:
@@ -111,8 +115,9 @@ class BankStepper:
         # the kernel reads the state and input arrays and writes scratch buffers (copied
         # into the state and output arrays only after a good step)
         self._args = [self._il, self._g, self._u, self._gd, self._h]
-        self._res = [np.zeros(nc), np.zeros(nc), np.zeros(nc), np.zeros(len(bank.member_names)),
-                     np.zeros(1), np.zeros(nc), np.zeros(nc), np.zeros(nc)]
+        self._scratch = r = np.zeros_like(self._block)       # the same layout as the block
+        self._res = [r[:nc], r[nc:2 * nc], r[2 * nc:3 * nc], r[3 * nc:3 * nc + nm],
+                     np.zeros(1), np.zeros(nc), np.zeros(nc), r[3 * nc + nm:]]
         buf: Any
         buf, self._eval = call.f.buffer()
         self._buf = buf                     # keeps the bound buffer alive
@@ -217,6 +222,21 @@ class BankStepper:
         # diagnosed as MagnetBank.step diagnoses it (the same messages)
         return self._bank._vector(value, names, what, unit, not self._fast)
 
+    def _write_inputs(self, voltages: Any, gaps: Any, gap_rates: Any) -> None:
+        """Convert the given inputs, then write them (a refused one writes nothing)."""
+        bank = self._bank
+        u = None if voltages is None else self._convert(voltages, bank.circuit_names,
+                                                        "voltages", "V")
+        g = None if gaps is None else self._convert(gaps, bank.gap_names, "gaps", "m")
+        gd = None if gap_rates is None else self._convert(gap_rates, bank.gap_names,
+                                                          "gap_rates", "m/s")
+        if u is not None:
+            self._u[:] = u
+        if g is not None:
+            self._g[:] = g
+        if gd is not None:
+            self._gd[:] = gd
+
     def _set_step_length(self, dt: float) -> None:
         """Change the step length to ``dt`` [s] with the same RK4 sub-step count (for
         :meth:`MagnetBank.simulate` on grids whose intervals differ in the last bits)."""
@@ -247,14 +267,8 @@ class BankStepper:
             reset to the state's gaps (voltages and gap rates stay as written).
         """
         bank = self._bank
-        new = [(target, self._convert(value, names, what, unit))
-               for target, value, names, what, unit in (
-                   (self._u, voltages, bank.circuit_names, "voltages", "V"),
-                   (self._g, gaps, bank.gap_names, "gaps", "m"),
-                   (self._gd, gap_rates, bank.gap_names, "gap_rates", "m/s"))
-               if value is not None]
-        for target, arr in new:
-            target[:] = arr
+        if voltages is not None or gaps is not None or gap_rates is not None:
+            self._write_inputs(voltages, gaps, gap_rates)
         t0 = self._time
         t1 = t0 + self._dt
         if not self._fast:
@@ -286,13 +300,8 @@ class BankStepper:
             except BaseException:
                 self._g[:] = self._state_gaps
                 raise
-        r = self._res
-        self._il[:] = r[0]
-        self._coil[:] = r[1]
-        self._force[:] = r[2]
-        self._member[:] = r[3]
-        self._g[:] = r[7]
-        self._state_gaps[:] = r[7]
+        self._block[:] = self._scratch
+        self._g[:] = self._state_gaps
         self._time = t1
 
     # ------------------------------------------------------------------ copies
