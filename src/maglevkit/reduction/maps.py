@@ -476,6 +476,25 @@ def _eddy_network_steps(net: Network, gap: float, current: float
     return times, responses, ltilde
 
 
+def _eddy_point(value: Any, g: np.ndarray, c: np.ndarray, ref_gap: float, ref_current: float
+                ) -> tuple[float, float]:
+    """The identification point of ``build_maps(eddy_reference=...)``, checked."""
+    if value is None:
+        return ref_gap, ref_current
+    try:
+        gap, current = value
+    except (TypeError, ValueError):
+        raise InputError(f"eddy_reference = {value!r}; give (gap_m, current_A) or None") from None
+    ga, ca_ = real_array(gap, "eddy_reference gap"), real_array(current, "eddy_reference current")
+    if ga.ndim or ca_.ndim:
+        raise InputError(f"eddy_reference = {value!r}; give one gap [m] and one current [A]")
+    gap, current = float(ga), float(ca_)
+    if not (g[0] <= gap <= g[-1] and c[0] <= current <= c[-1]):
+        raise InputError(f"eddy_reference = ({gap!r} m, {current!r} A) lies outside the maps' "
+                         f"grid (gaps {g[0]:g}..{g[-1]:g} m, currents {c[0]:g}..{c[-1]:g} A)")
+    return gap, current
+
+
 def _fit_eddy_networks(net: Network, gap: float, current: float, r_ec_fit: np.ndarray
                        ) -> tuple[np.ndarray, list[list[EddyNetworkFit]]]:
     """``L~`` per circuit and, per circuit, the fitted networks for every entry of
@@ -543,7 +562,8 @@ def _store_eddy_network(ds: Any, net: Network, gap: float, current: float,
 
 
 def build_maps(model: Any, *, gaps: Any, currents: Any, executor: Any = "auto",
-               progress: bool = True, method: str = "statics") -> CharacteristicMaps:
+               progress: bool = True, method: str = "statics",
+               eddy_reference: Any = None) -> CharacteristicMaps:
     """Compute the characteristic maps of a magnet on a regular gap x current grid.
 
     Parameters
@@ -582,6 +602,13 @@ def build_maps(model: Any, *, gaps: Any, currents: Any, executor: Any = "auto",
         also store ``eddy_resistance_step_ohm``, the ``R_ec`` a single-exponential fit of
         the step response implies (its slow mode; see docs/reduction.md).
 
+    eddy_reference : (gap_m, current_A) or None
+        Where the step-response identifications (``eddy_resistance_fit_ohm`` and the eddy
+        network ``eddy_network_*``) run: a point inside the grid, e.g. the operating point
+        of the scenarios the current model will run.  None (default): the maps' reference
+        point, the grid centre gap and ``max(I_mid, I_max/2)`` (docs/reduction.md, "More
+        eddy modes": the identification point matters).
+
     Returns
     -------
     CharacteristicMaps
@@ -592,6 +619,7 @@ def build_maps(model: Any, *, gaps: Any, currents: Any, executor: Any = "auto",
     g = _grid(gaps, "gap", "m", positive=True)
     c = _grid(currents, "current", "A", positive=False)
     ref_gap, ref_current = float(g[g.size // 2]), float(max(c[c.size // 2], c[-1] / 2))
+    eddy_gap, eddy_current = _eddy_point(eddy_reference, g, c, ref_gap, ref_current)
     groups = circuit_pole_groups(net, gap=ref_gap, current=ref_current)
     ex, owned = _as_executor(executor, method, g.size * c.size)
     try:
@@ -667,14 +695,14 @@ def build_maps(model: Any, *, gaps: Any, currents: Any, executor: Any = "auto",
                        "(exact instantaneous current jump of the detailed model) at the "
                        f"reference point s = {ref_gap!r} m, I = {ref_current!r} A",
         "relative_spread_over_grid_corners": spread})
-    ds["eddy_resistance_fit_ohm"] = ("circuit", _fitted_eddy_resistance(net, ref_gap,
-                                                                         ref_current), {
+    ds["eddy_resistance_fit_ohm"] = ("circuit", _fitted_eddy_resistance(net, eddy_gap,
+                                                                         eddy_current), {
         "units": "ohm", "long_name": "eddy-current resistance R_ec from the step time constant",
         "description": "R_ec that a single-exponential fit of a small voltage step of the "
                        "detailed model implies (paper Sec. IV-B procedure; matches the slow "
-                       f"eddy mode) at s = {ref_gap!r} m, I = {ref_current!r} A; the "
+                       f"eddy mode) at s = {eddy_gap!r} m, I = {eddy_current!r} A; the "
                        "current-based model uses it by default (docs/decisions.md)"})
-    _store_eddy_network(ds, net, ref_gap, ref_current,
+    _store_eddy_network(ds, net, eddy_gap, eddy_current,
                         np.asarray(ds["eddy_resistance_fit_ohm"].values, dtype=float))
     magnet_name = getattr(model, "name", net.name)
     params = getattr(model, "parameters", None)
