@@ -17,6 +17,14 @@ with the characteristic maps ``L~ = dL/dI I + L``, ``dL/ds`` and ``F(s, I)``.  O
 
 The substitute gap of a circuit is the mean of its poles' gaps.  Maps are B-spline
 interpolants (CasADi), so the same model gives exact Jacobians for linearisation and MPC.
+
+``CurrentModel(maps, eddy_modes=m)`` replaces ``R_ec`` by an RL eddy network
+``1/R_0 + sum_k 1/(R_k + p L_k)`` with one state ``I_k`` per branch (for detailed models
+whose eddy currents diffuse; :mod:`maglevkit.reduction.eddy_network`, docs/reduction.md)::
+
+    U_L = (U - R_el (I_L + sum_k I_k)) / (1 + R_el/R_0)
+    L~ dI_L/dt = U_L - dL/ds I_L ds/dt,     L_k L~/L~_ref dI_k/dt = U_L - R_k I_k
+    I = (U - U_L)/R_el
 """
 
 from __future__ import annotations
@@ -209,19 +217,20 @@ class CurrentModel:
         fastest eddy branch's rate over the maps (RK4 is stable up to 2.78/lambda): the
         fast branches are stiff for the explicit integrator (attribute ``max_step_s``
         holds the step used).
-    eddy_resistance : {"fit", "jump"}
-        Which ``R_ec`` of the maps to use: ``"fit"`` (default) the value the step-response
-        time constant implies (the paper's procedure; eq. 8 then has the detailed model's
-        dominant time constant), or ``"jump"`` the exact instantaneous current jump of the
-        detailed model.  Measured on the standard scenarios the fit value gives the smaller
-        errors (docs/decisions.md).  Not with ``eddy_modes > 0`` (the network's ``R_0``
-        takes ``R_ec``'s place there).
+    eddy_resistance : {"fit", "jump"} or None
+        Which ``R_ec`` of the maps to use: ``"fit"`` (default; None means ``"fit"``) the
+        value the step-response time constant implies (the paper's procedure; eq. 8 then
+        has the detailed model's dominant time constant), or ``"jump"`` the exact
+        instantaneous current jump of the detailed model.  Measured on the standard
+        scenarios the fit value gives the smaller errors (docs/decisions.md).  Not with
+        ``eddy_modes > 0`` (the network's ``R_0`` takes ``R_ec``'s place there).
     eddy_modes : int
         ``0`` (default): eq. 8 with one eddy resistor ``R_ec`` (Fig. 8).  ``m`` in
         :data:`~maglevkit.reduction.eddy_network.EDDY_NETWORK_MODES` (1, 2, 3): the eddy branch is
         the RL network ``1/R_0 + sum_k 1/(R_k + p L_k)`` with ``m`` branches fitted to the
-        detailed model's voltage step at the maps' reference point (maps variables
-        ``eddy_network_*``), one extra state ``I_k`` per branch and circuit; ``L_k`` scales
+        detailed model's voltage step at the maps' reference point or at
+        ``build_maps(eddy_reference=...)`` (maps variables ``eddy_network_*``; identify
+        at the operating point if it is known), one extra state ``I_k`` per branch and circuit; ``L_k`` scales
         with ``L~(s, I_L)`` (docs/reduction.md, "More eddy modes").  For detailed models
         whose eddy currents diffuse (``eddy_model="ladder_split"``).
     jit : bool
