@@ -286,6 +286,13 @@ class MagnetBank:
             return _Member(name, "detailed", tuple(model.circuit_names), tuple(model.gap_names),
                            groups, model=model)
         if isinstance(model, CurrentModel):
+            if model.eddy_modes:
+                # the bank's lanes carry eq. 8's one state per circuit; the eddy network's
+                # branch currents would be dropped silently
+                raise InputError(f"member {name!r}: a CurrentModel with eddy_modes="
+                                 f"{model.eddy_modes} cannot be a bank member (the bank "
+                                 "advances eq. 8 with one R_ec per circuit); use "
+                                 "CurrentModel(maps) or the model on its own")
             maps = model.maps
             r_el, r_ec = model.resistance_ohm, model.eddy_resistance_ohm
         elif hasattr(model, "dataset") and hasattr(model, "variable"):

@@ -17,6 +17,14 @@ with the characteristic maps ``L~ = dL/dI I + L``, ``dL/ds`` and ``F(s, I)``.  O
 
 The substitute gap of a circuit is the mean of its poles' gaps.  Maps are B-spline
 interpolants (CasADi), so the same model gives exact Jacobians for linearisation and MPC.
+
+``CurrentModel(maps, eddy_modes=m)`` replaces ``R_ec`` by an RL eddy network
+``1/R_0 + sum_k 1/(R_k + p L_k)`` with one state ``I_k`` per branch (for detailed models
+whose eddy currents diffuse; :mod:`maglevkit.reduction.eddy_network`, docs/reduction.md)::
+
+    U_L = (U - R_el (I_L + sum_k I_k)) / (1 + R_el/R_0)
+    L~ dI_L/dt = U_L - dL/ds I_L ds/dt,     L_k L~/L~_ref dI_k/dt = U_L - R_k I_k
+    I = (U - U_L)/R_el
 """
 
 from __future__ import annotations
@@ -34,7 +42,7 @@ from ..validation import real_array
 from .inputs import check_initial_choice, check_step, simulation_inputs
 
 __all__ = ["CurrentModel", "CurrentModelLinearization", "CurrentModelState", "CurrentOutputs",
-           "ReducedSimulation", "eq8_coil_current", "eq8_rhs"]
+           "ReducedSimulation", "eq8_coil_current", "eq8_eddy_branch_rhs", "eq8_rhs"]
 
 
 @dataclass(frozen=True)
@@ -49,11 +57,15 @@ class CurrentModelState:
         The ODE states ``I_L`` [A].
     gaps_m : ndarray (n_gaps,)
         Pole gaps [m].
+    eddy_currents_A : ndarray (n_circuits, m) or None
+        Currents ``I_k`` [A] of the eddy network's RL branches (``CurrentModel(maps,
+        eddy_modes=m)``); None for eq. 8's single ``R_ec`` (``eddy_modes=0``, the default).
     """
 
     time_s: float
     inductor_currents_A: np.ndarray
     gaps_m: np.ndarray
+    eddy_currents_A: np.ndarray | None = None
 
 
 @dataclass(frozen=True)
@@ -96,6 +108,8 @@ class ReducedSimulation:
     voltages_V, currents_A, inductor_currents_A, circuit_force_N : ndarray (n_t, n_circuits)
     pole_force_N : ndarray (n_t, n_gaps)
     force_N : ndarray (n_t,)
+    eddy_currents_A : ndarray (n_t, n_circuits, m) or None
+        Eddy-branch currents ``I_k`` [A] with ``eddy_modes = m > 0``, else None.
     """
 
     time_s: np.ndarray
@@ -110,6 +124,7 @@ class ReducedSimulation:
     gap_names: tuple[str, ...]
     circuit_names: tuple[str, ...]
     final_state: CurrentModelState
+    eddy_currents_A: np.ndarray | None = None
 
 
 @dataclass(frozen=True)
@@ -122,6 +137,11 @@ class CurrentModelLinearization:
         dx/dt = A x + B u + E_gap g + E_gap_rate r
         dF    = C_force x + D_force_gap g                 (circuit forces)
         dI    = C_current x + D_current u                 (coil currents)
+
+    With ``eddy_modes = m > 0`` the state is ``x = (dI_L, dI_ec)``: the ``n_c`` inductor
+    currents, then the ``n_c m`` eddy-branch currents (circuit by circuit, branch ``k``
+    of circuit ``j`` at ``n_c + j m + k``); the rows and columns below that say
+    ``n_circuits`` for the state have ``n_c (1 + m)`` entries then.
 
     Attributes
     ----------
@@ -192,13 +212,27 @@ class CurrentModel:
     rtol, atol : float
         CVODES tolerances (defaults 1e-8 relative, 1e-10 absolute).
     max_step_s : float
-        Largest RK4 sub-step [s] (default 1e-3 s).
-    eddy_resistance : {"fit", "jump"}
-        Which ``R_ec`` of the maps to use: ``"fit"`` (default) the value the step-response
-        time constant implies (the paper's procedure; eq. 8 then has the detailed model's
-        dominant time constant), or ``"jump"`` the exact instantaneous current jump of the
-        detailed model.  Measured on the standard scenarios the fit value gives the smaller
-        errors (docs/decisions.md).
+        Largest RK4 sub-step [s] (default 1e-3 s).  With ``eddy_modes > 0`` the sub-step
+        is also limited to ``1.5/lambda`` with ``lambda`` a bound (Gershgorin) of the
+        fastest eddy branch's rate over the maps (RK4 is stable up to 2.78/lambda): the
+        fast branches are stiff for the explicit integrator (attribute ``max_step_s``
+        holds the step used).
+    eddy_resistance : {"fit", "jump"} or None
+        Which ``R_ec`` of the maps to use: ``"fit"`` (default; None means ``"fit"``) the
+        value the step-response time constant implies (the paper's procedure; eq. 8 then
+        has the detailed model's dominant time constant), or ``"jump"`` the exact
+        instantaneous current jump of the detailed model.  Measured on the standard
+        scenarios the fit value gives the smaller errors (docs/decisions.md).  Not with
+        ``eddy_modes > 0`` (the network's ``R_0`` takes ``R_ec``'s place there).
+    eddy_modes : int
+        ``0`` (default): eq. 8 with one eddy resistor ``R_ec`` (Fig. 8).  ``m`` in
+        :data:`~maglevkit.reduction.eddy_network.EDDY_NETWORK_MODES` (1, 2, 3): the eddy branch is
+        the RL network ``1/R_0 + sum_k 1/(R_k + p L_k)`` with ``m`` branches fitted to the
+        detailed model's voltage step at the maps' reference point or at
+        ``build_maps(eddy_reference=...)`` (maps variables ``eddy_network_*``; identify
+        at the operating point if it is known), one extra state ``I_k`` per branch and circuit; ``L_k`` scales
+        with ``L~(s, I_L)`` (docs/reduction.md, "More eddy modes").  For detailed models
+        whose eddy currents diffuse (``eddy_model="ladder_split"``).
     jit : bool
         Compile the RK4 interval to machine code with CasADi's JIT (needs a C compiler on
         the ``PATH``; ~0.3 s once per sub-step count).  About 1.8x faster RK4 intervals;
@@ -208,7 +242,8 @@ class CurrentModel:
 
     def __init__(self, maps: Any, *, extrapolate: bool = False, method: str = "rk4",
                  rtol: float = 1e-8, atol: float = 1e-10, max_step_s: float = 1e-3,
-                 eddy_resistance: str = "fit", jit: bool = False) -> None:
+                 eddy_resistance: str | None = None, jit: bool = False,
+                 eddy_modes: int = 0) -> None:
         if not (hasattr(maps, "dataset") and hasattr(maps, "variable")):
             hint = (" (load a maps file with maglevkit.load_maps first)"
                     if isinstance(maps, (str, bytes)) or hasattr(maps, "__fspath__") else "")
@@ -248,15 +283,43 @@ class CurrentModel:
         self._upper = np.concatenate([np.full(nc, self.current_range[1] + tol_i),
                                       np.full(nc, self.gap_range[1] + tol_s)])
         r_el = np.asarray(maps.dataset["resistance_ohm"].values, dtype=float)
-        var = {"fit": "eddy_resistance_fit_ohm", "jump": "eddy_resistance_ohm"}.get(eddy_resistance)
-        if var is None:
-            raise InputError(f"eddy_resistance = {eddy_resistance!r}; use 'fit' or 'jump'")
-        if var not in maps.dataset:
-            raise InputError(f"these maps have no {var!r}; rebuild them with this version")
-        r_ec = np.asarray(maps.dataset[var].values, dtype=float)
+        m = _check_eddy_modes(eddy_modes)
+        self.eddy_modes = m
+        if m:
+            if eddy_resistance is not None:
+                raise InputError(f"eddy_resistance = {eddy_resistance!r} chooses eq. 8's single "
+                                 "R_ec; with eddy_modes > 0 the eddy network's R_0 takes its "
+                                 "place: leave eddy_resistance out")
+            r_ec, r_k, l_k, l_ref = _eddy_network(maps, m)
+        else:
+            var = {None: "eddy_resistance_fit_ohm", "fit": "eddy_resistance_fit_ohm",
+                   "jump": "eddy_resistance_ohm"}.get(eddy_resistance)
+            if var is None:
+                raise InputError(f"eddy_resistance = {eddy_resistance!r}; use 'fit' or 'jump'")
+            if var not in maps.dataset:
+                raise InputError(f"these maps have no {var!r}; rebuild them with this version")
+            r_ec = np.asarray(maps.dataset[var].values, dtype=float)
         self.resistance_ohm = r_el
+        #: ``R_ec`` of eq. 8, or the eddy network's ``R_0`` with ``eddy_modes > 0``
         self.eddy_resistance_ohm = r_ec
         a = 1.0 + np.where(np.isinf(r_ec), 0.0, r_el / np.where(np.isinf(r_ec), 1.0, r_ec))
+        # state [I_L; s; I_ec]: the gap slice and the bounds of the sub-step check
+        # (eddy-branch currents are not range-checked)
+        self._n_x = (2 + m) * nc
+        self._sl = slice(nc, 2 * nc)
+        if m:
+            self._lower = np.concatenate([self._lower, np.full(nc * m, -np.inf)])
+            self._upper = np.concatenate([self._upper, np.full(nc * m, np.inf)])
+            # RK4 stability: the eigenvalues of M^-1 S (network_step_response) lie within
+            # the Gershgorin discs of its rows, |lambda| <= (R_k + (m + 1) R_el/a)/L_k, with
+            # the smallest L_k over the maps (L_k scales with L~)
+            lt_min = np.array([float(np.min(maps.variable("inductance_H", c)))
+                               for c in self.circuit_names])
+            scale = lt_min / l_ref if _EDDY_INDUCTANCE_SCALES else np.ones(nc)
+            if np.all(scale > 0):
+                rate = float(np.max((r_k + ((m + 1) * r_el / a)[:, None])
+                                    / (l_k * scale[:, None])))
+                self.max_step_s = min(self.max_step_s, 1.5 / rate)
 
         # CasADi's B-spline is 0 outside its grid. The map data are therefore continued
         # linearly (edge slope) by EXTRA_CELLS grid cells on every side before the spline
@@ -283,22 +346,51 @@ class CurrentModel:
 
         mx_rhs, forces, ltil = [], [], []
         xm, Um, sm, sdm = (ca.MX.sym(n, nc) for n in ("I_L", "U", "s", "sdot"))
+        em = ca.MX.sym("I_ec", nc * m)
+        eddy_rhs, coils = [], []
         for j in range(nc):
             vals = spline(j)(ca.vertcat(sm[j], xm[j]))
             lt, dl, f = vals[0], vals[1], vals[2]
-            mx_rhs.append(eq8_rhs(xm[j], Um[j], sdm[j], lt, dl, r_el[j], a[j]))
+            if m:
+                # the eddy network (module docstring): eq. 8 with U - R_el sum_k I_k as the
+                # voltage behind R_el gives U_L and dI_L/dt; I = that coil current + sum I_k
+                ik = em[j * m:(j + 1) * m]
+                i_sum = ca.sum1(ik)
+                u_eff = Um[j] - r_el[j] * i_sum
+                mx_rhs.append(eq8_rhs(xm[j], u_eff, sdm[j], lt, dl, r_el[j], a[j]))
+                u_l = (u_eff - r_el[j] * xm[j]) / a[j]
+                scale = lt / l_ref[j] if _EDDY_INDUCTANCE_SCALES else 1.0
+                eddy_rhs.append(eq8_eddy_branch_rhs(ik, u_l, ca.DM(r_k[j]), ca.DM(l_k[j]) * scale))
+                coils.append(eq8_coil_current(xm[j], u_eff, r_el[j], a[j]) + i_sum)
+            else:
+                mx_rhs.append(eq8_rhs(xm[j], Um[j], sdm[j], lt, dl, r_el[j], a[j]))
             forces.append(f)
             ltil.append(lt)
-        coil = eq8_coil_current(xm, Um, ca.DM(r_el), ca.DM(a))
-        self.ode = ca.Function("current_model_ode", [xm, Um, sm, sdm], [ca.vertcat(*mx_rhs)],
-                               ["I_L", "U", "s", "sdot"], ["dI_L"])
-        self.outputs_fun = ca.Function("current_model_out", [xm, Um, sm],
-                                   [coil, ca.vertcat(*forces), ca.vertcat(*ltil)],
-                                   ["I_L", "U", "s"], ["I", "F", "Ltilde"]).expand()
-        # Integrator: states [I_L; s], controls [U; sdot] piecewise constant.
-        X = ca.MX.sym("X", 2 * nc)
+        if m:
+            self.ode = ca.Function("current_model_ode", [xm, Um, sm, sdm, em],
+                                   [ca.vertcat(*mx_rhs), ca.vertcat(*eddy_rhs)],
+                                   ["I_L", "U", "s", "sdot", "I_ec"], ["dI_L", "dI_ec"])
+            self.outputs_fun = ca.Function("current_model_out", [xm, Um, sm, em],
+                                           [ca.vertcat(*coils), ca.vertcat(*forces),
+                                            ca.vertcat(*ltil)],
+                                           ["I_L", "U", "s", "I_ec"],
+                                           ["I", "F", "Ltilde"]).expand()
+        else:
+            coil = eq8_coil_current(xm, Um, ca.DM(r_el), ca.DM(a))
+            self.ode = ca.Function("current_model_ode", [xm, Um, sm, sdm],
+                                   [ca.vertcat(*mx_rhs)], ["I_L", "U", "s", "sdot"], ["dI_L"])
+            self.outputs_fun = ca.Function("current_model_out", [xm, Um, sm],
+                                           [coil, ca.vertcat(*forces), ca.vertcat(*ltil)],
+                                           ["I_L", "U", "s"], ["I", "F", "Ltilde"]).expand()
+        # Integrator: states [I_L; s] (and I_ec with eddy modes), controls [U; sdot]
+        # piecewise constant.
+        X = ca.MX.sym("X", self._n_x)
         Uc = ca.MX.sym("u", 2 * nc)
-        rhs = ca.vertcat(self.ode(X[:nc], Uc[:nc], X[nc:], Uc[nc:]), Uc[nc:])
+        if m:
+            di, de = self.ode(X[:nc], Uc[:nc], X[self._sl], Uc[nc:], X[2 * nc:])
+            rhs = ca.vertcat(di, Uc[nc:], de)
+        else:
+            rhs = ca.vertcat(self.ode(X[:nc], Uc[:nc], X[nc:], Uc[nc:]), Uc[nc:])
         self._rhs = ca.Function("rhs", [X, Uc], [rhs])
         self._dae = {"x": X, "u": Uc, "ode": rhs}
         # One interval of length h in normalised time (CVODES), no cache per step length.
@@ -323,6 +415,37 @@ class CurrentModel:
     def substitute_gaps(self, gaps: np.ndarray) -> np.ndarray:
         """Mean gap per circuit [m] from pole gaps (..., n_gaps)."""
         return np.asarray(gaps) @ self._avg.T
+
+    def _outs(self, x: Any, u: Any) -> Any:
+        """``outputs_fun`` on a full state ``x = [I_L; s(; I_ec)]`` with voltages ``u``."""
+        nc = self.n_circuits
+        if self.eddy_modes:
+            return self.outputs_fun(x[:nc], u, x[self._sl], x[2 * nc:])
+        return self.outputs_fun(x[:nc], u, x[nc:])
+
+    def _eddy_state(self, state: CurrentModelState) -> np.ndarray:
+        """The eddy-branch currents of ``state`` as a flat vector (empty for eq. 8)."""
+        m = self.eddy_modes
+        e = state.eddy_currents_A
+        if not m:
+            if e is not None and np.size(e):
+                raise InputError("this state has eddy-branch currents (eddy_currents_A) but "
+                                 "the model has eddy_modes=0; use a state of this model")
+            return np.zeros(0)
+        if e is None:
+            raise InputError(f"the model has eddy_modes={m} but the state has no "
+                             "eddy_currents_A; make it with this model's initial_state")
+        arr = real_array(e, "eddy_currents_A")
+        if arr.shape != (self.n_circuits, m):
+            raise InputError(f"eddy_currents_A: expected shape ({self.n_circuits}, {m}) "
+                             f"(circuits x eddy modes), got {arr.shape}")
+        return arr.ravel()
+
+    def _eddy_of(self, x: np.ndarray) -> np.ndarray | None:
+        """The eddy-branch currents (n_c, m) of a full state vector, None for eq. 8."""
+        if not self.eddy_modes:
+            return None
+        return np.array(x[2 * self.n_circuits:]).reshape(self.n_circuits, self.eddy_modes)
 
     def _check_range(self, s: np.ndarray, i_l: np.ndarray, t: np.ndarray | None = None, *,
                      where: str | None = None) -> None:
@@ -366,7 +489,7 @@ class CurrentModel:
         pts = np.stack([lo, hi])
         # report the extreme sub-step state (gap and current extremes may come from
         # different sub-steps of the interval)
-        self._check_range(pts[:, nc:], pts[:, :nc], np.array([t0, t0]),
+        self._check_range(pts[:, self._sl], pts[:, :nc], np.array([t0, t0]),
                           where=f" in an RK4 sub-step within t = {t0:.6g}..{t1:.6g} s")
 
     def _integrator(self, grid: tuple[float, ...]) -> ca.Function:
@@ -396,7 +519,7 @@ class CurrentModel:
         if f is None:
             if intervals == 1:
                 nc = self.n_circuits
-                x, u, h = ca.MX.sym("x", 2 * nc), ca.MX.sym("u", 2 * nc), ca.MX.sym("h")
+                x, u, h = ca.MX.sym("x", self._n_x), ca.MX.sym("u", 2 * nc), ca.MX.sym("h")
                 hs = h / substeps
                 xk = x
                 lo: Any = None
@@ -411,7 +534,7 @@ class CurrentModel:
                     # the range check covers every RK4 sub-step, not only interval ends
                     lo = xk if lo is None else ca.fmin(lo, xk)
                     hi = xk if hi is None else ca.fmax(hi, xk)
-                coil, force, _ = self.outputs_fun(xk[:nc], u[:nc], xk[nc:])
+                coil, force, _ = self._outs(xk, u[:nc])
                 outs: list[Any] = [xk, coil, force, lo, hi]
                 f = ca.Function("rk4_interval", [x, u, h], outs).expand()  # SX: ~2x
                 if self.jit:
@@ -458,9 +581,9 @@ class CurrentModel:
         f = self._fused.get(n)
         if f is None:
             nc = self.n_circuits
-            x, u, hh = ca.MX.sym("x", 2 * nc), ca.MX.sym("u", 2 * nc), ca.MX.sym("h")
+            x, u, hh = ca.MX.sym("x", self._n_x), ca.MX.sym("u", 2 * nc), ca.MX.sym("h")
             xn = self._cvodes_interval(x, u, hh)
-            coil, force, _ = self.outputs_fun(xn[:nc], u[:nc], xn[nc:])
+            coil, force, _ = self._outs(xn, u[:nc])
             f = ca.Function("current_model_fused_step", [x, u, hh], [xn, coil, force])
             self._fused[n] = f
         return f
@@ -501,23 +624,28 @@ class CurrentModel:
                         break
                     if not np.all(np.isfinite(xs)):
                         break
-                    self._check_range(xs[nc:][None, :], xs[:nc][None, :],
+                    self._check_range(xs[self._sl][None, :], xs[:nc][None, :],
                                       np.array([t[k] + (m + 1) * h]))
                 raise SolverError("current-model integration failed", time=float(t[k]),
-                                  state={"I_L": x[:nc], "s": x[nc:]},
+                                  state={"I_L": x[:nc], "s": x[self._sl]},
                                   reason=_last_line(str(exc))) from None
-            self._check_range(x[nc:][None, :], x[:nc][None, :], t[k + 1:k + 2])
+            self._check_range(x[self._sl][None, :], x[:nc][None, :], t[k + 1:k + 2])
             out.append(x)
         return np.array(out).T[:, 1:]
 
     # ------------------------------------------------------------------ stepping interface
     def initial_state(self, *, gaps: Any, currents: Any, time: float = 0.0) -> CurrentModelState:
-        """The steady state at ``gaps`` [m] with coil currents ``currents`` [A] (``I_L = I``)."""
+        """The steady state at ``gaps`` [m] with coil currents ``currents`` [A] (``I_L = I``;
+        with eddy modes ``I_k = 0``)."""
         g = _per_gap(gaps, self.gap_names, positive=True)
         i = _per_circuit(currents, self.circuit_names, "currents")
         if not math.isfinite(time):
             raise InputError(f"time = {time!r} must be finite")
         self._check_range(self.substitute_gaps(g)[None, :], i[None, :], np.array([time]))
+        if self.eddy_modes:
+            # steady state: U_L = 0, so every eddy branch has decayed (I_k = 0)
+            return CurrentModelState(float(time), i, g,
+                                     np.zeros((self.n_circuits, self.eddy_modes)))
         return CurrentModelState(float(time), i, g)
 
     def outputs(self, state: CurrentModelState, voltages: Any = None) -> CurrentOutputs:
@@ -525,8 +653,9 @@ class CurrentModel:
         voltages ``R_el I_L``, as in :meth:`initial_state`)."""
         u = (self.resistance_ohm * state.inductor_currents_A if voltages is None
              else _per_circuit(voltages, self.circuit_names, "voltages"))
-        coil, fc, _ = (np.asarray(v).ravel() for v in self.outputs_fun(
-            state.inductor_currents_A, u, self.substitute_gaps(state.gaps_m)))
+        x = np.concatenate([state.inductor_currents_A, self.substitute_gaps(state.gaps_m),
+                            self._eddy_state(state)])
+        coil, fc, _ = (np.asarray(v).ravel() for v in self._outs(x, u))
         return CurrentOutputs(state.time_s, coil, state.inductor_currents_A.copy(), fc,
                               self._share @ fc, float(fc.sum()))
 
@@ -565,8 +694,13 @@ class CurrentModel:
         s, sd = self.substitute_gaps(g), self.substitute_gaps(gd)
         self._check_range(s[None, :], il[None, :], None)
         f = self._linearization_function()
+        args = [il, u, s, sd]
+        if self.eddy_modes:
+            # the operating point's eddy-branch currents are 0 (they decay at any steady
+            # state; away from one the linearisation is about the same I_ec = 0 point)
+            args.append(np.zeros(self.n_circuits * self.eddy_modes))
         f_x, a, b, e_s, e_sd, c_f, d_f, c_i, d_i = (np.asarray(v, dtype=float)
-                                                    for v in f(il, u, s, sd))
+                                                    for v in f(*args))
         # substitute gap of circuit j = mean of its poles' gaps: chain rule through _avg
         return CurrentModelLinearization(
             gaps_m=g, inductor_currents_A=il, voltages_V=u, gap_rates_m_per_s=gd,
@@ -580,9 +714,18 @@ class CurrentModel:
         if f is None:
             nc = self.n_circuits
             x, u, s, sd = (ca.MX.sym(n, nc) for n in ("I_L", "U", "s", "sdot"))
-            rhs = self.ode(x, u, s, sd)
-            coil, force, _ = self.outputs_fun(x, u, s)
-            f = ca.Function("current_model_linearization", [x, u, s, sd],
+            ins = [x, u, s, sd]
+            if self.eddy_modes:
+                e = ca.MX.sym("I_ec", nc * self.eddy_modes)
+                ins.append(e)
+                di, de = self.ode(x, u, s, sd, e)
+                rhs = ca.vertcat(di, de)
+                coil, force, _ = self.outputs_fun(x, u, s, e)
+                x = ca.vertcat(x, e)     # the state the Jacobians are taken with respect to
+            else:
+                rhs = self.ode(x, u, s, sd)
+                coil, force, _ = self.outputs_fun(x, u, s)
+            f = ca.Function("current_model_linearization", ins,
                             [rhs, ca.jacobian(rhs, x), ca.jacobian(rhs, u), ca.jacobian(rhs, s),
                              ca.jacobian(rhs, sd), ca.jacobian(force, x), ca.jacobian(force, s),
                              ca.jacobian(coil, x), ca.jacobian(coil, u)])
@@ -611,7 +754,8 @@ class CurrentModel:
                           where=f" at the start of the step t = {state.time_s:.6g} s")
         self._check_range(np.maximum(s0, s1)[None, :], i_now[None, :], None,
                           where=f" at the end of the step t = {state.time_s + dt:.6g} s")
-        x0 = np.concatenate([i_now, s0])
+        x0 = (np.concatenate([i_now, s0, self._eddy_state(state)]) if self.eddy_modes
+              else np.concatenate([i_now, s0]))
         uu = np.concatenate([u, sd])
         nc = self.n_circuits
         extremes = None
@@ -625,19 +769,21 @@ class CurrentModel:
         except RuntimeError as exc:
             x = self._integrate_stepwise(np.array([state.time_s, state.time_s + dt]), x0,
                                          uu[:, None], str(exc))[:, -1]
-            coil, fc, _ = (np.asarray(v).ravel() for v in self.outputs_fun(x[:nc], u, x[nc:]))
+            coil, fc, _ = (np.asarray(v).ravel() for v in self._outs(x, u))
         t1 = state.time_s + float(dt)
         if extremes is not None:
             # the sub-step extremes include the end state: one check covers both
             self._check_substeps(extremes[0], extremes[1], state.time_s, t1)
         else:
-            self._check_range(x[nc:][None, :], x[:nc][None, :], np.array([t1]))
-        new = CurrentModelState(t1, x[:nc], g + gd * dt)
+            self._check_range(x[self._sl][None, :], x[:nc][None, :], np.array([t1]))
+        new = (CurrentModelState(t1, x[:nc], g + gd * dt, self._eddy_of(x)) if self.eddy_modes
+               else CurrentModelState(t1, x[:nc], g + gd * dt))
         return new, CurrentOutputs(t1, coil, x[:nc].copy(), fc, self._share @ fc, float(fc.sum()))
 
     def _integrate(self, t: np.ndarray, x0: np.ndarray, uu: np.ndarray
                    ) -> tuple[np.ndarray, tuple[np.ndarray, np.ndarray] | None]:
-        """States (n_t, 2 n_c) on the grid ``t``; controls ``uu`` (2 n_c, n_t - 1).
+        """States (n_t, n_x) on the grid ``t`` (``n_x = 2 n_c``, plus ``n_c m`` with eddy
+        modes); controls ``uu`` (2 n_c, n_t - 1).
 
         With RK4 also the outputs (coil currents, circuit forces), each (n_c, n_t - 1), at
         the ends of the intervals with their held voltages; else None.
@@ -662,7 +808,7 @@ class CurrentModel:
             extremes = None
         xs = np.concatenate([x0[:, None], xf], axis=1).T
         nc = self.n_circuits
-        self._check_range(xs[:, nc:], xs[:, :nc], t)
+        self._check_range(xs[:, self._sl], xs[:, :nc], t)
         if extremes is not None:
             lo, hi = extremes
             bad = (lo < self._lower[:, None]) | (hi > self._upper[:, None])
@@ -686,31 +832,38 @@ class CurrentModel:
         check_initial_choice(initial_state, initial_currents, CurrentModelState)
         if initial_state is not None:
             i0 = initial_state.inductor_currents_A
+            e0 = self._eddy_state(initial_state)
         else:
             i0 = _per_circuit(u[0] / self.resistance_ohm if initial_currents is None
                               else initial_currents, self.circuit_names, "initial_currents")
+            e0 = np.zeros(self.n_circuits * self.eddy_modes)    # steady state: I_k = 0
         s = self.substitute_gaps(g)
         self._check_range(s, np.broadcast_to(i0, s.shape), times)
         sd = self.substitute_gaps(secant)
-        xs, outs = self._integrate(times, np.concatenate([i0, s[0]]),
+        xs, outs = self._integrate(times, np.concatenate([i0, s[0], e0]),
                                    np.concatenate([u[:-1], sd], axis=1).T)
         nc = self.n_circuits
         il = xs[:, :nc]
         # outputs at t_k with the left-limit voltage (that of [t_k-1, t_k)); u[0] at t_0
-        c0, f0, _ = self.outputs_fun(il[0], u[0], xs[0, nc:])
+        c0, f0, _ = self._outs(xs[0], u[0])
         if outs is None:
             held = u[:-1].T
-            c1, f1, _ = self.outputs_fun.map(times.size - 1)(il[1:].T, held, xs[1:, nc:].T)
+            rest = [xs[1:, 2 * nc:].T] if self.eddy_modes else []
+            c1, f1, _ = self.outputs_fun.map(times.size - 1)(il[1:].T, held,
+                                                             xs[1:, self._sl].T, *rest)
             outs = (np.asarray(c1), np.asarray(f1))
         coil = np.concatenate([np.asarray(c0), outs[0]], axis=1)
         fc = np.concatenate([np.asarray(f0), outs[1]], axis=1).T
-        final = CurrentModelState(float(times[-1]), il[-1].copy(), g[-1].copy())
+        eddy = (xs[:, 2 * nc:].reshape(times.size, nc, self.eddy_modes) if self.eddy_modes
+                else None)
+        final = CurrentModelState(float(times[-1]), il[-1].copy(), g[-1].copy(),
+                                  None if eddy is None else eddy[-1].copy())
         return ReducedSimulation(
             time_s=times, gaps_m=g, gap_rates_m_per_s=np.vstack((secant, secant[-1:])),
             voltages_V=np.vstack((u[:-1], u[-2:-1])), currents_A=coil.T,
             inductor_currents_A=il, circuit_force_N=fc, pole_force_N=fc @ self._share.T,
             force_N=fc.sum(axis=1), gap_names=self.gap_names, circuit_names=self.circuit_names,
-            final_state=final)
+            final_state=final, eddy_currents_A=eddy)
 
 
 def _jit_compile(f: ca.Function) -> ca.Function:
@@ -777,6 +930,50 @@ def eq8_rhs(i_l: Any, u: Any, gap_rate: Any, ltilde: Any, dl_ds: Any, r_el: Any,
 def eq8_coil_current(i_l: Any, u: Any, r_el: Any, a: Any) -> Any:
     """Coil current of Fig. 8: ``I = (U - U_L)/R_el`` with ``U_L = (U - R_el I_L)/a``."""
     return (u - (u - r_el * i_l) / a) / r_el
+
+
+def eq8_eddy_branch_rhs(i_k: Any, u_l: Any, r_k: Any, l_k: Any) -> Any:
+    """An RL branch of the eddy network in parallel with ``L~`` (Fig. 8 extended):
+    ``dI_k/dt = (U_L - R_k I_k)/L_k``, ``U_L`` the inductor voltage."""
+    return (u_l - r_k * i_k) / l_k
+
+
+#: Whether the eddy branches' ``L_k`` scale with ``L~(s, I_L)/L~_ref`` (True) or stay at
+#: their fitted values (decided by measurement: docs/decisions.md, "Reduction").
+_EDDY_INDUCTANCE_SCALES = True
+
+
+def _check_eddy_modes(value: Any) -> int:
+    from ..reduction.eddy_network import EDDY_NETWORK_MODES
+
+    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or \
+            (int(value) != 0 and int(value) not in EDDY_NETWORK_MODES):
+        raise InputError(f"eddy_modes = {value!r}; use 0 (eq. 8, one R_ec) or one of "
+                         f"{list(EDDY_NETWORK_MODES)} (RL branches of the eddy network)")
+    return int(value)
+
+
+def _eddy_network(maps: Any, m: int) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """``R_0`` (n_c,), ``R_k``, ``L_k`` (n_c, m) and ``L~_ref`` (n_c,) of the maps' fitted
+    eddy network with ``m`` branches."""
+    ds = maps.dataset
+    names = ("eddy_network_r0_ohm", "eddy_network_resistance_ohm",
+             "eddy_network_inductance_H", "eddy_network_reference_inductance_H")
+    missing = [n for n in names if n not in ds]
+    if missing:
+        raise InputError(f"these maps have no eddy network ({', '.join(missing)}); rebuild "
+                         "them with this version (build_maps) to use eddy_modes > 0")
+    r0 = np.asarray(ds["eddy_network_r0_ohm"].sel(eddy_modes=m).values, dtype=float)
+    r_k = np.asarray(ds["eddy_network_resistance_ohm"].sel(eddy_modes=m).values,
+                     dtype=float)[:, :m]
+    l_k = np.asarray(ds["eddy_network_inductance_H"].sel(eddy_modes=m).values,
+                     dtype=float)[:, :m]
+    l_ref = np.asarray(ds["eddy_network_reference_inductance_H"].values, dtype=float)
+    if not (np.all(np.isfinite(r_k)) and np.all(np.isfinite(l_k)) and np.all(r_k > 0)
+            and np.all(l_k > 0) and np.all(l_ref > 0) and not np.any(np.isnan(r0))):
+        raise InputError("these maps have no eddy network to use (the magnet has no eddy "
+                         "currents, or the fit failed); use eddy_modes=0")
+    return r0, r_k, l_k, l_ref
 
 
 def _extend_axis(axis: np.ndarray) -> np.ndarray:

@@ -40,6 +40,7 @@ from ..circuit.network import Network
 from ..errors import InputError, ParameterFileError, SolverError
 from ..models.statics import as_network, circuit_pole_groups, solve_statics
 from ..validation import real_array
+from .eddy_network import EDDY_NETWORK_MODES, EddyNetworkFit, fit_eddy_network
 from .parameters import eddy_resistance
 from .transient import transient_point
 
@@ -335,7 +336,7 @@ class _StepRun:
     ``[0, 1]`` with the duration ``T`` as a parameter.  Compiled once per network.
     """
 
-    def __init__(self, net: Network, n_out: int) -> None:
+    def __init__(self, net: Network, n_out: int, tau: np.ndarray | None = None) -> None:
         import casadi as ca
 
         from ..circuit.assembly import assemble
@@ -351,7 +352,7 @@ class _StepRun:
         alg = ca.vertcat(ca.mtimes(ca.DM(d.D), eq.x) - y, ca.mtimes(ca.DM(d.Q), hv))
         dae = {"x": y, "z": ca.vertcat(eq.x, eq.I), "p": ca.vertcat(T, U, eq.s),
                "ode": T * ydot, "alg": alg}
-        self.tau = np.linspace(0.0, 1.0, n_out + 1)[1:]
+        self.tau = np.linspace(0.0, 1.0, n_out + 1)[1:] if tau is None else tau
         # absolute tolerances for every IDAS unknown (y, then z = (x, I)): the flux
         # model's nominal scales without its gap states
         nominal = np.concatenate((d.nominal[:d.n_diff], d.nominal[d.n_diff + d.n_gaps:]))
@@ -425,8 +426,144 @@ def _fitted_eddy_resistance(net: Network, gap: float, current: float) -> np.ndar
     return out
 
 
+#: The eddy network's identification (docs/reduction.md, "More eddy modes"): the same
+#: small voltage step as the R_ec fit, observed over ``_FIT_N_TAU`` slow time constants
+#: ``L~/R_el`` on a grid of ``_NET_LOG_SAMPLES`` geometric samples from 1e-5 of the
+#: window (the fast eddy modes) plus ``_NET_LIN_SAMPLES`` equidistant ones (the slow part).
+_NET_LOG_SAMPLES, _NET_LIN_SAMPLES = 200, 100
+
+
+def _network_grid() -> np.ndarray:
+    return np.unique(np.concatenate((np.geomspace(1e-5, 1.0, _NET_LOG_SAMPLES),
+                                     np.linspace(0.0, 1.0, _NET_LIN_SAMPLES + 1)[1:])))
+
+
+def _eddy_network_steps(net: Network, gap: float, current: float
+                        ) -> tuple[list[np.ndarray], list[np.ndarray], np.ndarray]:
+    """The detailed model's small voltage steps at ``(gap, current)``, one per circuit.
+
+    Returns per circuit the sample times [s] and ``dI_j/dU_j`` [A/V] there, and ``L~``
+    (``dpsi_j/dI_j`` of the statics) per circuit.
+    """
+    nc = len(net.circuits)
+    sol = solve_statics(net, gaps=np.full(len(net.gap_names), gap), currents=np.full(nc, current))
+    x0 = np.asarray(sol.loop_flux_Wb, dtype=float).ravel()
+    i0 = np.asarray(sol.currents_A, dtype=float).ravel()
+    s0 = np.asarray(sol.gaps_m, dtype=float).ravel()
+    R = net.resistances
+    key = ("reduction_step_network", _NET_LOG_SAMPLES, _NET_LIN_SAMPLES)
+    run = net._cache.get(key)
+    if run is None:
+        run = _StepRun(net, 0, tau=_network_grid())
+        net._cache[key] = run
+    ltilde = np.array([float(sol.differential_inductance_H[j, j]) for j in range(nc)])
+    times, responses = [], []
+    for j in range(nc):
+        t_end = _FIT_N_TAU * max(ltilde[j], 1e-12) / R[j]
+        du = R[j] * _FIT_RELATIVE_STEP * max(abs(float(i0[j])), 1.0)
+        U = R * i0
+        U[j] += du
+        try:
+            res = run.integrator(x0=run.D @ x0, z0=np.concatenate((x0, i0)),
+                                 p=np.concatenate(((t_end,), U, s0)))
+        except RuntimeError as exc:
+            raise SolverError("the voltage step of the eddy-network fit failed", time=0.0,
+                              state={"gap_m": gap, "current_A": current,
+                                     "circuit": net.circuit_names[j]},
+                              reason=str(exc)[-300:]) from None
+        times.append(t_end * run.tau)
+        responses.append((np.asarray(res["zf"])[run.n_loops + j].ravel() - i0[j]) / du)
+    return times, responses, ltilde
+
+
+def _eddy_point(value: Any, g: np.ndarray, c: np.ndarray, ref_gap: float, ref_current: float
+                ) -> tuple[float, float]:
+    """The identification point of ``build_maps(eddy_reference=...)``, checked."""
+    if value is None:
+        return ref_gap, ref_current
+    try:
+        gap, current = value
+    except (TypeError, ValueError):
+        raise InputError(f"eddy_reference = {value!r}; give (gap_m, current_A) or None") from None
+    ga, ca_ = real_array(gap, "eddy_reference gap"), real_array(current, "eddy_reference current")
+    if ga.ndim or ca_.ndim:
+        raise InputError(f"eddy_reference = {value!r}; give one gap [m] and one current [A]")
+    gap, current = float(ga), float(ca_)
+    if not (g[0] <= gap <= g[-1] and c[0] <= current <= c[-1]):
+        raise InputError(f"eddy_reference = ({gap!r} m, {current!r} A) lies outside the maps' "
+                         f"grid (gaps {g[0]:g}..{g[-1]:g} m, currents {c[0]:g}..{c[-1]:g} A)")
+    return gap, current
+
+
+def _fit_eddy_networks(net: Network, gap: float, current: float, r_ec_fit: np.ndarray
+                       ) -> tuple[np.ndarray, list[list[EddyNetworkFit]]]:
+    """``L~`` per circuit and, per circuit, the fitted networks for every entry of
+    :data:`EDDY_NETWORK_MODES` (each fit starts from the one with a branch less)."""
+    times, responses, ltilde = _eddy_network_steps(net, gap, current)
+    fits = []
+    for j in range(len(net.circuits)):
+        if not np.all(np.isfinite(responses[j])):
+            raise SolverError("the eddy-network fit's step response is not finite",
+                              state={"gap_m": gap, "current_A": current,
+                                     "circuit": net.circuit_names[j]})
+        per: list[EddyNetworkFit] = []
+        prev = None
+        for m in EDDY_NETWORK_MODES:
+            prev = fit_eddy_network(times[j], responses[j], ltilde=float(ltilde[j]),
+                                    r_el=float(net.resistances[j]), modes=m,
+                                    r_ec_guess=float(r_ec_fit[j]), start=prev)
+            per.append(prev)
+        fits.append(per)
+    return ltilde, fits
+
+
+def _store_eddy_network(ds: Any, net: Network, gap: float, current: float,
+                        r_ec_fit: np.ndarray) -> None:
+    """Add the ``eddy_network_*`` variables (docs/reduction.md, "More eddy modes")."""
+    nc, mm = len(net.circuits), max(EDDY_NETWORK_MODES)
+    r0 = np.full((nc, len(EDDY_NETWORK_MODES)), np.inf)
+    rk = np.full((nc, len(EDDY_NETWORK_MODES), mm), np.nan)
+    lk = np.full_like(rk, np.nan)
+    rms = np.full(r0.shape, np.nan)
+    ltilde = np.full(nc, np.nan)
+    if net.has_eddy_currents:
+        ltilde, fits = _fit_eddy_networks(net, gap, current, r_ec_fit)
+        for j, per in enumerate(fits):
+            for i, f in enumerate(per):
+                r0[j, i] = f.r0_ohm
+                rk[j, i, :f.resistance_ohm.size] = f.resistance_ohm
+                lk[j, i, :f.inductance_H.size] = f.inductance_H
+                rms[j, i] = f.rms_residual
+    where = f"at the reference point s = {gap!r} m, I = {current!r} A"
+    ds.coords["eddy_modes"] = ("eddy_modes", np.array(EDDY_NETWORK_MODES), {
+        "long_name": "number m of RL branches of the eddy network"})
+    ds.coords["eddy_branch"] = ("eddy_branch", np.arange(1, mm + 1), {
+        "long_name": "RL branch k of the eddy network (fastest first)"})
+    ds["eddy_network_r0_ohm"] = (("circuit", "eddy_modes"), r0, {
+        "units": "ohm", "long_name": "resistor R_0 of the eddy network (its current jump)",
+        "description": "Y_e(p) = 1/R_0 + sum_k 1/(R_k + p L_k) in parallel with L~ (Fig. 8 "
+                       "extended), fitted to a small voltage step of the detailed model "
+                       f"{where}; inf: no jump (or no eddy currents)"})
+    ds["eddy_network_resistance_ohm"] = (("circuit", "eddy_modes", "eddy_branch"), rk, {
+        "units": "ohm", "long_name": "resistance R_k of the eddy network's RL branches",
+        "description": f"fitted {where}; NaN for k > m"})
+    ds["eddy_network_inductance_H"] = (("circuit", "eddy_modes", "eddy_branch"), lk, {
+        "units": "H", "long_name": "inductance L_k of the eddy network's RL branches",
+        "description": f"fitted {where}; the current model scales it with "
+                       "L~(s, I_L)/eddy_network_reference_inductance_H; NaN for k > m"})
+    ds["eddy_network_reference_inductance_H"] = ("circuit", ltilde, {
+        "units": "H", "long_name": "L~ at the eddy network's reference point",
+        "description": f"dpsi_j/dI_j of the statics {where}"})
+    ds["eddy_network_fit_rms"] = (("circuit", "eddy_modes"), rms, {
+        "units": "1", "long_name": "RMS residual of the eddy network's step fit",
+        "description": "RMS of (fitted - detailed) coil current over the fit's samples "
+                       "(200 geometric from 1e-5 of the window, 100 equidistant; window 6 "
+                       "L~/R_el), relative to the step's final value"})
+
+
 def build_maps(model: Any, *, gaps: Any, currents: Any, executor: Any = "auto",
-               progress: bool = True, method: str = "statics") -> CharacteristicMaps:
+               progress: bool = True, method: str = "statics",
+               eddy_reference: Any = None) -> CharacteristicMaps:
     """Compute the characteristic maps of a magnet on a regular gap x current grid.
 
     Parameters
@@ -465,6 +602,13 @@ def build_maps(model: Any, *, gaps: Any, currents: Any, executor: Any = "auto",
         also store ``eddy_resistance_step_ohm``, the ``R_ec`` a single-exponential fit of
         the step response implies (its slow mode; see docs/reduction.md).
 
+    eddy_reference : (gap_m, current_A) or None
+        Where the step-response identifications (``eddy_resistance_fit_ohm`` and the eddy
+        network ``eddy_network_*``) run: a point inside the grid, e.g. the operating point
+        of the scenarios the current model will run.  None (default): the maps' reference
+        point, the grid centre gap and ``max(I_mid, I_max/2)`` (docs/reduction.md, "More
+        eddy modes": the identification point matters).
+
     Returns
     -------
     CharacteristicMaps
@@ -475,6 +619,7 @@ def build_maps(model: Any, *, gaps: Any, currents: Any, executor: Any = "auto",
     g = _grid(gaps, "gap", "m", positive=True)
     c = _grid(currents, "current", "A", positive=False)
     ref_gap, ref_current = float(g[g.size // 2]), float(max(c[c.size // 2], c[-1] / 2))
+    eddy_gap, eddy_current = _eddy_point(eddy_reference, g, c, ref_gap, ref_current)
     groups = circuit_pole_groups(net, gap=ref_gap, current=ref_current)
     ex, owned = _as_executor(executor, method, g.size * c.size)
     try:
@@ -550,13 +695,15 @@ def build_maps(model: Any, *, gaps: Any, currents: Any, executor: Any = "auto",
                        "(exact instantaneous current jump of the detailed model) at the "
                        f"reference point s = {ref_gap!r} m, I = {ref_current!r} A",
         "relative_spread_over_grid_corners": spread})
-    ds["eddy_resistance_fit_ohm"] = ("circuit", _fitted_eddy_resistance(net, ref_gap,
-                                                                         ref_current), {
+    ds["eddy_resistance_fit_ohm"] = ("circuit", _fitted_eddy_resistance(net, eddy_gap,
+                                                                         eddy_current), {
         "units": "ohm", "long_name": "eddy-current resistance R_ec from the step time constant",
         "description": "R_ec that a single-exponential fit of a small voltage step of the "
                        "detailed model implies (paper Sec. IV-B procedure; matches the slow "
-                       f"eddy mode) at s = {ref_gap!r} m, I = {ref_current!r} A; the "
+                       f"eddy mode) at s = {eddy_gap!r} m, I = {eddy_current!r} A; the "
                        "current-based model uses it by default (docs/decisions.md)"})
+    _store_eddy_network(ds, net, eddy_gap, eddy_current,
+                        np.asarray(ds["eddy_resistance_fit_ohm"].values, dtype=float))
     magnet_name = getattr(model, "name", net.name)
     params = getattr(model, "parameters", None)
     ds.attrs.update({
