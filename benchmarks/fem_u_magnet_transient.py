@@ -494,12 +494,14 @@ MODELS: tuple[tuple[str, dict, dict], ...] = (
     ("cells, lumped", {"eddy_model": "lumped"}, CELLS),
     ("cells, ladder n = 4", {"eddy_model": "ladder", "eddy_layers": 4}, CELLS),
     ("cells, ladder n = 6", {"eddy_model": "ladder", "eddy_layers": 6}, CELLS),
+    ("cells, ladder n = 8", {"eddy_model": "ladder", "eddy_layers": 8}, CELLS),
     ("cells, no eddy currents", {"eddy_currents": False}, CELLS))
 #: variants too slow to rerun with every comparison (~15-20 min per step on the shared
 #: machine): their model runs are recorded in ``benchmarks/results/model_transient/`` by
 #: ``--model LABEL --only K`` and read back (rerun: delete the file)
 RECORDED_MODELS = ("grid, ladder n = 4", "cells, lumped", "cells, ladder n = 4",
-                   "cells, ladder n = 6", "cells, no eddy currents", "sigma 0, cells")
+                   "cells, ladder n = 6", "cells, ladder n = 8", "cells, no eddy currents",
+                   "sigma 0, cells")
 MODEL_DIR = RESULTS_DIR / "model_transient"
 
 
@@ -760,17 +762,17 @@ def _report(cases: list[dict], study: list[dict], table: dict, static: dict) -> 
         L.append("Eddy factor: t63 with eddy currents / t63 without, of the model (its own "
                  "no-eddy run on the same network) and of the FEM (sigma = 0 run); its error "
                  "is the eddy model's own share of the t63 error.\n")
-        pairs = (("lumped", "ladder_split n = 6", "lumped (today)"),
-                 ("grid", "grid, ladder n = 4", "grid, lumped"),
-                 ("cells", "cells, ladder n = 4", "cells, lumped"))
+        pairs = (("lumped", ("ladder_split n = 6",), "lumped (today)"),
+                 ("grid", ("grid, ladder n = 4",), "grid, lumped"),
+                 ("cells", ("cells, ladder n = 4", "cells, ladder n = 6", "cells, ladder n = 8"),
+                  "cells, lumped"))
         L.append("| case | network | max err t >= 1 ms [%] | t63 model / FEM [ms] | "
                  "t63 err [%] | eddy factor FEM | ladder (err) | lumped (err) |")
         L.append("|---|---|---|---|---|---|---|---|")
         for (case, net), m in static.items():
-            _, lad_name, lum_name = next(p for p in pairs if p[0] == net)
+            _, lad_names, lum_name = next(p for p in pairs if p[0] == net)
             noe_name = "no eddy currents" if net == "lumped" else f"{net}, no eddy currents"
-            lad, lum = table.get((case, lad_name)), table.get((case, lum_name))
-            noe = table.get((case, noe_name))
+            lum, noe = table.get((case, lum_name)), table.get((case, noe_name))
             f_fem = m["t63_fem_eddy_s"] / m["t63_fem_s"]
 
             def factor(x: dict | None, name: str = "") -> str:
@@ -779,9 +781,11 @@ def _report(cases: list[dict], study: list[dict], table: dict, static: dict) -> 
                 f = x["t63_s"] / noe["t63_s"]
                 return f"{name}{f:.3f} ({100 * (f / f_fem - 1):+.1f} %)"
 
+            lads = [factor(table.get((case, n)), n + ": ") for n in lad_names
+                    if (case, n) in table] or ["-"]
             L.append(f"| {case} | {net} | {100 * m['err_max']:.1f} | {m['t63_s'] * 1e3:.2f} / "
                      f"{m['t63_fem_s'] * 1e3:.2f} | {_t63_err(m)} | {f_fem:.3f} | "
-                     f"{factor(lad, lad_name + ': ')} | {factor(lum)} |")
+                     f"{'<br>'.join(lads)} | {factor(lum)} |")
         L.append("")
     L.append("![transient steps: FEM, lumped, ladder](figures/fem-transient-steps.png)\n")
     return L
@@ -796,7 +800,7 @@ def _plot(cases: list[dict], curves: dict, path: Path) -> None:
     styles = {"lumped (today)": ("tab:red", "--"), "ladder n = 6": ("tab:cyan", ":"),
               "ladder_split n = 6": ("tab:blue", "-"), "grid, ladder n = 4": ("tab:green", "-"),
               "grid, no eddy currents": ("tab:olive", "-."), "no eddy currents": ("0.5", "-."),
-              "cells, ladder n = 4": ("tab:purple", "-"),
+              "cells, ladder n = 6": ("tab:purple", "-"),
               "cells, no eddy currents": ("tab:pink", "-.")}
     for j, ref in enumerate(cases):
         tf = np.asarray(ref["time_s"])
