@@ -490,6 +490,8 @@ MODELS: tuple[tuple[str, dict, dict], ...] = (
     ("grid, lumped", {"eddy_model": "lumped"}, {"discretisation": "grid"}),
     ("grid, ladder n = 4", {"eddy_model": "ladder", "eddy_layers": 4},
      {"discretisation": "grid"}),
+    ("grid, ladder n = 8", {"eddy_model": "ladder", "eddy_layers": 8},
+     {"discretisation": "grid"}),
     ("grid, no eddy currents", {"eddy_currents": False}, {"discretisation": "grid"}),
     ("cells, lumped", {"eddy_model": "lumped"}, CELLS),
     ("cells, ladder n = 4", {"eddy_model": "ladder", "eddy_layers": 4}, CELLS),
@@ -499,7 +501,7 @@ MODELS: tuple[tuple[str, dict, dict], ...] = (
 #: variants too slow to rerun with every comparison (~15-20 min per step on the shared
 #: machine): their model runs are recorded in ``benchmarks/results/model_transient/`` by
 #: ``--model LABEL --only K`` and read back (rerun: delete the file)
-RECORDED_MODELS = ("grid, ladder n = 4", "cells, lumped", "cells, ladder n = 4",
+RECORDED_MODELS = ("grid, ladder n = 4", "grid, ladder n = 8", "cells, lumped", "cells, ladder n = 4",
                    "cells, ladder n = 6", "cells, ladder n = 8", "cells, no eddy currents",
                    "sigma 0, cells")
 MODEL_DIR = RESULTS_DIR / "model_transient"
@@ -763,7 +765,7 @@ def _report(cases: list[dict], study: list[dict], table: dict, static: dict) -> 
                  "no-eddy run on the same network) and of the FEM (sigma = 0 run); its error "
                  "is the eddy model's own share of the t63 error.\n")
         pairs = (("lumped", ("ladder_split n = 6",), "lumped (today)"),
-                 ("grid", ("grid, ladder n = 4",), "grid, lumped"),
+                 ("grid", ("grid, ladder n = 4", "grid, ladder n = 8"), "grid, lumped"),
                  ("cells", ("cells, ladder n = 4", "cells, ladder n = 6", "cells, ladder n = 8"),
                   "cells, lumped"))
         L.append("| case | network | max err t >= 1 ms [%] | t63 model / FEM [ms] | "
@@ -800,7 +802,7 @@ def _plot(cases: list[dict], curves: dict, path: Path) -> None:
     styles = {"lumped (today)": ("tab:red", "--"), "ladder n = 6": ("tab:cyan", ":"),
               "ladder_split n = 6": ("tab:blue", "-"), "grid, ladder n = 4": ("tab:green", "-"),
               "grid, no eddy currents": ("tab:olive", "-."), "no eddy currents": ("0.5", "-."),
-              "cells, ladder n = 6": ("tab:purple", "-"),
+              "cells, ladder n = 8": ("tab:purple", "-"),
               "cells, no eddy currents": ("tab:pink", "-.")}
     for j, ref in enumerate(cases):
         tf = np.asarray(ref["time_s"])

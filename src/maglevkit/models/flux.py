@@ -100,7 +100,7 @@ def _power_flows(U: Any, I: Any, R: Any, g_e: Any, phidot_e: Any, force: Any, ra
 #: (``K y' = h``, :meth:`_FluxDAE._init_idas`); smaller ones on the dense form (``K^+``,
 #: ``Q``), whose results and compiled libraries stay those of earlier versions.  Counted:
 #: the bundled lumped networks 9-36 (the U-magnet's ladder n = 8: 116), the grid with
-#: Roters tubes 111 (its ladder n = 4: 507), the air-cell grid 1386-1782.  A bound between
+#: Roters tubes 111 (its ladder n = 4: 507), the air-cell grid 1386-2310.  A bound between
 #: those, not tuned (docs/decisions.md, "The air-cell network in the transient").
 SPARSE_FORM_SIZE = 400
 
