@@ -96,6 +96,7 @@ def _power_flows(U: Any, I: Any, R: Any, g_e: Any, phidot_e: Any, force: Any, ra
     return ca.vertcat(ca.dot(U, I), ca.dot(R * I, I), ca.dot(g_e * phidot_e, phidot_e),
                       -ca.dot(force, rate))
 
+
 #: Networks with more loop and circuit unknowns than this run IDAS on the sparse form
 #: (``K y' = h``, :meth:`_FluxDAE._init_idas`); smaller ones on the dense form (``K^+``,
 #: ``Q``), whose results and compiled libraries stay those of earlier versions.  Counted:
@@ -253,10 +254,11 @@ class EnergyBalance:
 class _FluxDAE:
     """Matrices, symbolic DAE and compiled step functions of one network and solver setup.
 
-    ``form``: ``"dense"`` (the IDAS form of :meth:`_init_idas`, dense ``K^+`` and ``Q``) or
-    ``"sparse"`` (:meth:`_init_idas_sparse`: ``K y' = h`` with a sparse ``K``, for large
-    networks); ``"auto"`` takes the sparse form for IDAS on networks with more than
-    :data:`SPARSE_FORM_SIZE` loop and circuit unknowns.
+    ``form``: ``"dense"`` (IDAS on ``y' = K^+ v``, ``Q v = 0``, ``v = h``: dense ``K^+`` and
+    ``Q``) or ``"sparse"`` (IDAS on ``K y' = h`` with a sparse ``K``, for large networks;
+    both in :meth:`_init_idas`; ``method="radau"`` is always dense); ``"auto"`` takes the
+    sparse form for IDAS on networks with more than :data:`SPARSE_FORM_SIZE` loop and
+    circuit unknowns.
     """
 
     def __init__(self, network: Network, method: str, rtol: float, atol: float,
@@ -314,7 +316,6 @@ class _FluxDAE:
         self.n_branches = len(network.branches)
         self.nw = r + ng + nl + nc
         R = network.resistances
-        self._Kp = Kp
 
         y = ca.SX.sym("y", r)
         h = ca.SX.sym("h")
@@ -421,6 +422,9 @@ class _FluxDAE:
           crosses many hold intervals without a restart: a kink of the gap path is no
           jump of any unknown.  A run restarts (consistent re-initialisation) where the
           voltages change, since the eddy-current model's currents jump there.
+        * The sparse form (``self.form``, large networks) takes ``y'`` itself as the
+          algebraic unknown instead of ``v``: ``K y' = h`` with the sparse ``K``, no ``Q``
+          and no ``K^+`` in IDAS's Jacobian (docs/flux_model.md).
         """
         D, T = self.D, self.T
         nl, nc, ng, r = self.n_loops, self.n_circuits, self.n_gaps, self.n_diff
