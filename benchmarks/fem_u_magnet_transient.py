@@ -31,11 +31,13 @@ the voltage steps, ``study``: mesh and time-step convergence, ``noeddy``: the st
 sigma = 0) and rewrites ``benchmarks/results/fem_transient_PART.json`` (``--only K,..``
 runs some cases into part files, ``--merge`` joins them); without ``--fem`` it compares the
 recorded FEM with the flux model (lumped, ladder and ladder_split eddy models on the
-lumped network, lumped and ladder on the cell network) and rewrites
-``docs/figures/fem-transient-steps.png`` and the transient section of
-``docs/validation_fem.md`` (between the markers).  Every model run is written to
-``benchmarks/results/model_transient/``; the slow grid ladder is only read from there
-(``--model "grid, ladder n = 4" --only K`` runs and records it, ~15-30 min per step),
+lumped network, lumped and ladder on the cell network with Roters tubes and with the air
+as cells) and rewrites ``docs/figures/fem-transient-steps.png`` and the transient section
+of ``docs/validation_fem.md`` (between the markers).  Every model run is written to
+``benchmarks/results/model_transient/``; the slow variants (``RECORDED_MODELS``: the grid
+ladder, ~15-30 min per step on the dense IDAS form it was recorded with, and the air-cell
+network, 1-3 min per step) are only read from there (``--model LABEL --only K`` runs and
+records them; ``--model "sigma 0, cells"`` the air cells against the sigma = 0 FEM),
 ``--reuse`` reads every recorded run instead of rerunning it.
 Needs the optional extra ``validation`` (scikit-fem, only for the tensor mesh).
 """
@@ -471,7 +473,11 @@ def run_fem(part: str, only: list[int] | None = None) -> dict:
 # ---------------------------------------------------------------------------------------
 
 #: model variants compared with the FEM: (label, load_magnet keywords, variant keywords of
-#: :func:`model_magnet`: network ``discretisation``, ``rail = "one-sided"``)
+#: :func:`model_magnet`: network ``discretisation``, ``air_model``, ``rail = "one-sided"``)
+#: the grid with the air as cells (``air_model = "cells"``, the statics within 3 %)
+CELLS = {"discretisation": "grid", "air_model": "cells"}
+#: the networks of the sigma = 0 comparison: variant keywords of :func:`model_magnet`
+NETWORKS = {"lumped": {}, "grid": {"discretisation": "grid"}, "cells": CELLS}
 MODELS: tuple[tuple[str, dict, dict], ...] = (
     ("lumped (today)", {"eddy_model": "lumped"}, {}),
     ("ladder n = 1 (2-D slab)", {"eddy_model": "ladder", "eddy_layers": 1}, {}),
@@ -484,11 +490,20 @@ MODELS: tuple[tuple[str, dict, dict], ...] = (
     ("grid, lumped", {"eddy_model": "lumped"}, {"discretisation": "grid"}),
     ("grid, ladder n = 4", {"eddy_model": "ladder", "eddy_layers": 4},
      {"discretisation": "grid"}),
-    ("grid, no eddy currents", {"eddy_currents": False}, {"discretisation": "grid"}))
+    ("grid, ladder n = 8", {"eddy_model": "ladder", "eddy_layers": 8},
+     {"discretisation": "grid"}),
+    ("grid, no eddy currents", {"eddy_currents": False}, {"discretisation": "grid"}),
+    ("cells, lumped", {"eddy_model": "lumped"}, CELLS),
+    ("cells, ladder n = 4", {"eddy_model": "ladder", "eddy_layers": 4}, CELLS),
+    ("cells, ladder n = 6", {"eddy_model": "ladder", "eddy_layers": 6}, CELLS),
+    ("cells, ladder n = 8", {"eddy_model": "ladder", "eddy_layers": 8}, CELLS),
+    ("cells, no eddy currents", {"eddy_currents": False}, CELLS))
 #: variants too slow to rerun with every comparison (~15-20 min per step on the shared
 #: machine): their model runs are recorded in ``benchmarks/results/model_transient/`` by
 #: ``--model LABEL --only K`` and read back (rerun: delete the file)
-RECORDED_MODELS = ("grid, ladder n = 4",)
+RECORDED_MODELS = ("grid, ladder n = 4", "grid, ladder n = 8", "cells, lumped", "cells, ladder n = 4",
+                   "cells, ladder n = 6", "cells, ladder n = 8", "cells, no eddy currents",
+                   "sigma 0, cells")
 MODEL_DIR = RESULTS_DIR / "model_transient"
 
 
@@ -528,12 +543,13 @@ def metrics(t: np.ndarray, i: np.ndarray, e_eddy: np.ndarray, ref: dict) -> dict
             "t_peak_fem_s": float(tf[1:][np.argmax(p_f[1:])])}
 
 
-def model_magnet(*, discretisation: str = "lumped", rail: str = "slab",
-                 **kw):  # type: ignore[no-untyped-def]
+def model_magnet(*, discretisation: str = "lumped", air_model: str = "tubes",
+                 rail: str = "slab", **kw):  # type: ignore[no-untyped-def]
     """The bundled U-magnet with ``load_magnet`` options ``kw`` on the ``discretisation``
-    network; ``rail = "one-sided"`` (ladder only) replaces the rail's two-sided slab by a
-    one-sided one (diffusion from the gap face over the rail thickness: the slab of
-    thickness ``2 t``), a variant measured and not adopted (docs/validation_fem.md)."""
+    network (the grid's air as ``air_model``); ``rail = "one-sided"`` (ladder only)
+    replaces the rail's two-sided slab by a one-sided one (diffusion from the gap face
+    over the rail thickness: the slab of thickness ``2 t``), a variant measured and not
+    adopted (docs/validation_fem.md)."""
     from maglevkit.circuit.elements import IronPath
     from maglevkit.circuit.ladder import ladder_branches
     from maglevkit.magnets.base import ModelOptions, build_magnet
@@ -543,6 +559,9 @@ def model_magnet(*, discretisation: str = "lumped", rail: str = "slab",
         params = json.loads(json.dumps(mag.parameters))
         params["magnet"]["discretisation"] = discretisation
         params["provenance"]["magnet.discretisation"] = "[E] modelling choice (benchmark)"
+        if air_model != "tubes":
+            params["magnet"]["air_model"] = air_model
+            params["provenance"]["magnet.air_model"] = "[E] modelling choice (benchmark)"
         mag = build_magnet(params, options=ModelOptions(**kw))
     if rail == "one-sided":
         net = mag.network
@@ -559,12 +578,12 @@ def model_magnet(*, discretisation: str = "lumped", rail: str = "slab",
     return mag
 
 
-def simulate_model(ref: dict, *, discretisation: str = "lumped", rail: str = "slab",
-                   **kw):  # type: ignore[no-untyped-def]
+def simulate_model(ref: dict, *, discretisation: str = "lumped", air_model: str = "tubes",
+                   rail: str = "slab", **kw):  # type: ignore[no-untyped-def]
     """The flux model's response to the recorded FEM run's voltage step.  The grid
     networks run uncompiled (their C code would take minutes to compile once per
     variant; uncompiled they run in 10-60 s)."""
-    mag = model_magnet(discretisation=discretisation, rail=rail, **kw)
+    mag = model_magnet(discretisation=discretisation, air_model=air_model, rail=rail, **kw)
     times = np.asarray(ref["time_s"])
     fm = mk.FluxModel(mag, rtol=1e-7, compiled="never" if discretisation != "lumped"
                       else "auto")
@@ -630,12 +649,17 @@ def compare(out_md: Path | None, figure: Path | None, *, reuse: bool = False) ->
             curves[ref["label"], label] = (t, i, e)
             print(ref["label"], label, table[ref["label"], label], flush=True)
     noeddy = load_results("noeddy") if RESULTS["noeddy"].exists() else []
+    fem_t63 = {r["label"]: rise_time(np.asarray(r["time_s"]), np.asarray(r["current_A"]),
+                                     r["i0_A"], r["i1_A"]) for r in cases}
     static: dict = {}
     for ref in noeddy:
-        for net in ("lumped", "grid"):
-            run = model_run(ref, f"sigma 0, {net}", {"eddy_currents": False},
-                            {"discretisation": net}, record=False, reuse=reuse)
-            assert run is not None
+        for net, var in NETWORKS.items():
+            run = model_run(ref, f"sigma 0, {net}", {"eddy_currents": False}, var,
+                            record=False, reuse=reuse)
+            if run is None:
+                print(f"{ref['label']} sigma 0, {net}: no recorded run (--model), left out",
+                      flush=True)
+                continue
             t, i = np.asarray(run["time_s"]), np.asarray(run["current_A"])
             tf, i_f = np.asarray(ref["time_s"]), np.asarray(ref["current_A"])
             late = tf >= 1e-3 - 1e-12
@@ -643,7 +667,8 @@ def compare(out_md: Path | None, figure: Path | None, *, reuse: bool = False) ->
                 "err_max": float(np.max(np.abs(np.interp(tf, t, i) - i_f)[late])
                                  / (ref["i1_A"] - ref["i0_A"])),
                 "t63_s": rise_time(t, i, ref["i0_A"], ref["i1_A"]),
-                "t63_fem_s": rise_time(tf, i_f, ref["i0_A"], ref["i1_A"])}
+                "t63_fem_s": rise_time(tf, i_f, ref["i0_A"], ref["i1_A"]),
+                "t63_fem_eddy_s": fem_t63[ref["label"]]}
             print(ref["label"], net, "sigma = 0", static[ref["label"], net], flush=True)
     lines = _report(cases, study, table, static)
     if out_md is not None:
@@ -678,10 +703,11 @@ def _report(cases: list[dict], study: list[dict], table: dict, static: dict) -> 
     L.append("Generated by `python benchmarks/fem_u_magnet_transient.py` (`--fem cases`, "
              "`--fem study` and `--fem noeddy` rerun the FEM and rewrite "
              "`benchmarks/results/fem_transient_*.json`, about 3 min of CPU per run; without "
-             "them it only reruns the models against the recorded FEM; the grid ladder's "
-             "runs are recorded by `--model \"grid, ladder n = 4\"` in "
-             "`benchmarks/results/model_transient/`, `--reuse` reads all recorded model "
-             "runs).\n")
+             "them it only reruns the models against the recorded FEM; the slow variants' "
+             "runs (grid ladder, air-cell network: `RECORDED_MODELS`) are recorded by "
+             "`--model LABEL` (`--model \"sigma 0, cells\"`: the air cells against the "
+             "sigma = 0 runs) in `benchmarks/results/model_transient/`, `--reuse` reads all "
+             "recorded model runs).\n")
     c0 = cases[0]
     L.append(f"FEM: the 2-D magnetodynamic problem of `benchmarks/fem_u_magnet_transient.py` "
              f"(docstring): solid U-core and rail, sigma = {c0['sigma_S_per_m']:.3g} S/m (the "
@@ -709,7 +735,9 @@ def _report(cases: list[dict], study: list[dict], table: dict, static: dict) -> 
     L.append("err: (model - FEM) current in % of the step; max over t >= 1 ms.  t63: time to "
              "63.2 % of the step.  E_eddy: eddy loss over the run (rail: its rail part); "
              "t_peak: time of the largest eddy power.  Networks: `lumped` (default) or "
-             "`grid` (`discretisation = \"grid\"`, run uncompiled).  Eddy elements: the "
+             "`grid` (`discretisation = \"grid\"`, run uncompiled) or `cells` (the grid with "
+             "`air_model = \"cells\"`, uncompiled, the flux model's sparse IDAS form).  "
+             "Eddy elements: the "
              "model's eddy branches; wall: build and run of the flux model on the shared "
              "machine (load 2-7; the first run of a lumped network includes compiling its C "
              "code, ~1-3 min).  Plot: `docs/figures/fem-transient-steps.png` (below).\n")
@@ -736,24 +764,30 @@ def _report(cases: list[dict], study: list[dict], table: dict, static: dict) -> 
         L.append("Eddy factor: t63 with eddy currents / t63 without, of the model (its own "
                  "no-eddy run on the same network) and of the FEM (sigma = 0 run); its error "
                  "is the eddy model's own share of the t63 error.\n")
-        pairs = (("lumped", "ladder_split n = 6", "lumped (today)"),
-                 ("grid", "grid, ladder n = 4", "grid, lumped"))
+        pairs = (("lumped", ("ladder_split n = 6",), "lumped (today)"),
+                 ("grid", ("grid, ladder n = 4", "grid, ladder n = 8"), "grid, lumped"),
+                 ("cells", ("cells, ladder n = 4", "cells, ladder n = 6", "cells, ladder n = 8"),
+                  "cells, lumped"))
         L.append("| case | network | max err t >= 1 ms [%] | t63 model / FEM [ms] | "
                  "t63 err [%] | eddy factor FEM | ladder (err) | lumped (err) |")
         L.append("|---|---|---|---|---|---|---|---|")
         for (case, net), m in static.items():
-            _, lad_name, lum_name = next(p for p in pairs if p[0] == net)
-            noe_name = "no eddy currents" if net == "lumped" else "grid, no eddy currents"
-            lad, lum = table.get((case, lad_name)), table.get((case, lum_name))
-            noe = table.get((case, noe_name))
-            if not (lad and lum and noe):
-                continue
-            f_fem = lad["t63_fem_s"] / m["t63_fem_s"]
-            f_lad, f_lum = lad["t63_s"] / noe["t63_s"], lum["t63_s"] / noe["t63_s"]
+            _, lad_names, lum_name = next(p for p in pairs if p[0] == net)
+            noe_name = "no eddy currents" if net == "lumped" else f"{net}, no eddy currents"
+            lum, noe = table.get((case, lum_name)), table.get((case, noe_name))
+            f_fem = m["t63_fem_eddy_s"] / m["t63_fem_s"]
+
+            def factor(x: dict | None, name: str = "") -> str:
+                if not (x and noe):
+                    return "-"
+                f = x["t63_s"] / noe["t63_s"]
+                return f"{name}{f:.3f} ({100 * (f / f_fem - 1):+.1f} %)"
+
+            lads = [factor(table.get((case, n)), n + ": ") for n in lad_names
+                    if (case, n) in table] or ["-"]
             L.append(f"| {case} | {net} | {100 * m['err_max']:.1f} | {m['t63_s'] * 1e3:.2f} / "
                      f"{m['t63_fem_s'] * 1e3:.2f} | {_t63_err(m)} | {f_fem:.3f} | "
-                     f"{lad_name}: {f_lad:.3f} ({100 * (f_lad / f_fem - 1):+.1f} %) | "
-                     f"{f_lum:.3f} ({100 * (f_lum / f_fem - 1):+.1f} %) |")
+                     f"{'<br>'.join(lads)} | {factor(lum)} |")
         L.append("")
     L.append("![transient steps: FEM, lumped, ladder](figures/fem-transient-steps.png)\n")
     return L
@@ -767,7 +801,9 @@ def _plot(cases: list[dict], curves: dict, path: Path) -> None:
     fig, ax = plt.subplots(3, len(cases), figsize=(4.2 * len(cases), 10.0), squeeze=False)
     styles = {"lumped (today)": ("tab:red", "--"), "ladder n = 6": ("tab:cyan", ":"),
               "ladder_split n = 6": ("tab:blue", "-"), "grid, ladder n = 4": ("tab:green", "-"),
-              "grid, no eddy currents": ("tab:olive", "-."), "no eddy currents": ("0.5", "-.")}
+              "grid, no eddy currents": ("tab:olive", "-."), "no eddy currents": ("0.5", "-."),
+              "cells, ladder n = 8": ("tab:purple", "-"),
+              "cells, no eddy currents": ("tab:pink", "-.")}
     for j, ref in enumerate(cases):
         tf = np.asarray(ref["time_s"])
         i_f = np.asarray(ref["current_A"])
@@ -825,8 +861,13 @@ def main(argv: list[str] | None = None) -> None:
                          "from the recorded runs)")
     args = ap.parse_args(argv)
     if args.model:
-        spec = next(m for m in MODELS if m[0] == args.model)
-        runs = load_results("cases")
+        if args.model.startswith("sigma 0, "):
+            net = args.model.removeprefix("sigma 0, ")
+            spec = (args.model, {"eddy_currents": False}, NETWORKS[net])
+            runs = load_results("noeddy")
+        else:
+            spec = next(m for m in MODELS if m[0] == args.model)
+            runs = load_results("cases")
         only = range(len(runs)) if args.only is None else [int(k) for k in args.only.split(",")]
         for k in only:
             model_run(runs[k], spec[0], spec[1], spec[2], record=True)

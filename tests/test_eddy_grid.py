@@ -151,3 +151,48 @@ def test_grid_ladder_statics_are_the_grid_statics() -> None:
     # force and 4e-11 in flux linkage (the Newton tolerance); bound 1e-8
     assert float(b.force_N) == pytest.approx(float(a.force_N), rel=1e-8)
     assert float(b.flux_linkage_Wb[0]) == pytest.approx(float(a.flux_linkage_Wb[0]), rel=1e-8)
+
+
+@pytest.mark.slow
+def test_air_cells_without_eddy_currents_rise_with_the_fem() -> None:
+    """The air-cell network (``air_model = "cells"``, statics within 3 % of the FEM) in the
+    transient: a saturating step without eddy currents against the FEM with sigma = 0
+    (``benchmarks/results/fem_transient_noeddy.json``); its flux model runs on the sparse
+    IDAS form (1386 loop and circuit unknowns)."""
+    sys.path.insert(0, str(ROOT / "benchmarks"))
+    from fem_u_magnet_transient import CELLS, model_magnet, rise_time
+
+    noeddy = ROOT / "benchmarks" / "results" / "fem_transient_noeddy.json"
+    ref = next(r for r in json.loads(noeddy.read_text())["runs"]
+               if r["label"] == "10 mm, 20 -> 50 A")
+    mag = model_magnet(**CELLS, eddy_currents=False)
+    fm = mk.FluxModel(mag, rtol=1e-7, compiled="never")
+    tf, i_f = np.asarray(ref["time_s"]), np.asarray(ref["current_A"])
+    res = mk.simulate(fm, tf, gaps=ref["gap_m"], voltages=fm.resistances[0] * ref["i1_A"],
+                      initial_currents=ref["i0_A"])
+    i = res.currents_A[:, 0]
+    t63 = rise_time(tf, i, ref["i0_A"], ref["i1_A"])
+    t63_fem = rise_time(tf, i_f, ref["i0_A"], ref["i1_A"])
+    err = np.max(np.abs(i - i_f)[tf >= 1e-3 - 1e-12]) / (ref["i1_A"] - ref["i0_A"])
+    # measured: t63 26.23 vs 25.66 ms (+2.2 %; the grid with Roters tubes -9.8 %), max
+    # current error 1.3 % of the step (grid 6.3 %); bounds 3 % (the statics' aim) and 2 %
+    assert abs(t63 / t63_fem - 1.0) < 0.03
+    assert err < 0.02
+
+
+@pytest.mark.slow
+def test_air_cells_with_the_ladder_meet_the_rise_time_aim_below_the_knee() -> None:
+    """The step with the smallest margin (6 mm, 10 -> 20 A): the air-cell network with the
+    slab ladder n = 8 on every eddy link against the transient FEM."""
+    sys.path.insert(0, str(ROOT / "benchmarks"))
+    from fem_u_magnet_transient import CELLS, model_magnet
+
+    ref = _fem_case("6 mm, 10 -> 20 A")
+    m, rail = _run(model_magnet(**CELLS, eddy_model="ladder", eddy_layers=8), ref)
+    # measured: t63 68.07 vs 65.38 ms (+4.1 %; n = 4: +12.3 %, n = 6: +6.5 %), max current
+    # error 1.5 % of the step, eddy energy -8 %, rail -27 %; bounds: the issue's 5 % for
+    # t63 and current, 15 % for the energy (aim 20 %), the rail's deficit below 35 %
+    assert abs(m["t63_s"] / m["t63_fem_s"] - 1.0) < 0.05
+    assert m["err_max"] < 0.05
+    assert abs(m["e_eddy_J"] / m["e_eddy_fem_J"] - 1.0) < 0.15
+    assert 0.65 < rail / _fem_energy(ref, "eddy_power_rail_W") < 1.0

@@ -44,6 +44,8 @@ from typing import Any, overload
 import casadi as ca
 import numpy as np
 import scipy.linalg as sla
+import scipy.sparse as sp
+import scipy.sparse.linalg as spla
 
 from ..circuit.assembly import assemble
 from ..circuit.network import Network
@@ -93,6 +95,69 @@ def _power_flows(U: Any, I: Any, R: Any, g_e: Any, phidot_e: Any, force: Any, ra
     ``-F.s'``."""
     return ca.vertcat(ca.dot(U, I), ca.dot(R * I, I), ca.dot(g_e * phidot_e, phidot_e),
                       -ca.dot(force, rate))
+
+
+#: Networks with more loop and circuit unknowns than this run IDAS on the sparse form
+#: (``K y' = h``, :meth:`_FluxDAE._init_idas`); smaller ones on the dense form (``K^+``,
+#: ``Q``), whose results and compiled libraries stay those of earlier versions.  Counted:
+#: the bundled lumped networks 9-36 (the U-magnet's ladder n = 8: 116), the grid with
+#: Roters tubes 111 (its ladder n = 4: 507), the air-cell grid 1386-2310.  A bound between
+#: those, not tuned (docs/decisions.md, "The air-cell network in the transient").
+SPARSE_FORM_SIZE = 400
+
+
+def _dm(a: Any, form: str) -> ca.DM:
+    """A CasADi matrix of ``a``: sparse (structural zeros dropped) in the sparse form, dense
+    (every entry, as earlier versions) in the dense form."""
+    if form == "dense":
+        return ca.DM(np.asarray(a))
+    return ca.DM(sp.csc_matrix(a))
+
+
+def _independent_rows(A: np.ndarray, tol: float = 1e-9) -> list[int]:
+    """Indices of the rows of ``A`` that are not in the span of the rows before them
+    (greedy, in order), each row scaled to a largest entry of 1.
+
+    Incremental Gram-Schmidt (twice, for orthogonality to rounding) instead of a rank
+    (an SVD) per candidate row, which took minutes for the 1800 x 530 rows of the
+    air-cell grid with the eddy ladder.  A row counts as independent when the part of it
+    outside the span has a norm above ``tol`` (the scaled rows have norm >= 1; rows of
+    loop and turns matrices are either in the span to rounding or clearly out of it).
+    """
+    basis = np.zeros((0, A.shape[1]))
+    out: list[int] = []
+    for k, row in enumerate(A):
+        scale = float(np.abs(row).max())
+        if scale == 0.0:
+            continue
+        v = row / scale
+        for _ in range(2):
+            v = v - basis.T @ (basis @ v)
+        nv = float(np.linalg.norm(v))
+        if nv > tol:
+            basis = np.vstack((basis, v / nv))
+            out.append(k)
+    return out
+
+
+def _sparse_condition(J: sp.spmatrix) -> tuple[bool, float]:
+    """``(singular, condition estimate)`` of a square sparse matrix: a sparse LU (singular
+    if it fails or a pivot is below 1e-12 of the largest) and the 1-norm condition
+    estimate ``||J||_1 ||J^-1||_1`` (Hager-Higham)."""
+    Jc = sp.csc_matrix(J)
+    if Jc.shape[0] == 0:
+        return False, 1.0
+    try:
+        lu = spla.splu(Jc)
+    except RuntimeError:
+        return True, math.inf
+    piv = np.abs(lu.U.diagonal())
+    if piv.min() < 1e-12 * piv.max():
+        return True, math.inf
+    n = Jc.shape[0]
+    inv = spla.LinearOperator((n, n), matvec=lu.solve, rmatvec=lambda b: lu.solve(b, "T"),
+                              dtype=float)
+    return False, float(spla.norm(Jc, 1) * spla.onenormest(inv))
 
 
 # ---------------------------------------------------------------------------- state / outputs
@@ -187,38 +252,64 @@ class EnergyBalance:
 
 # ---------------------------------------------------------------------------- DAE structure
 class _FluxDAE:
-    """Matrices, symbolic DAE and compiled step functions of one network and solver setup."""
+    """Matrices, symbolic DAE and compiled step functions of one network and solver setup.
+
+    ``form``: ``"dense"`` (IDAS on ``y' = K^+ v``, ``Q v = 0``, ``v = h``: dense ``K^+`` and
+    ``Q``) or ``"sparse"`` (IDAS on ``K y' = h`` with a sparse ``K``, for large networks;
+    both in :meth:`_init_idas`; ``method="radau"`` is always dense); ``"auto"`` takes the
+    sparse form for IDAS on networks with more than :data:`SPARSE_FORM_SIZE` loop and
+    circuit unknowns.
+    """
 
     def __init__(self, network: Network, method: str, rtol: float, atol: float,
                  max_num_steps: int, radau_elements: int, radau_degree: int,
-                 compiled: str = "never", cache_dir: str | None = None) -> None:
+                 compiled: str = "never", cache_dir: str | None = None,
+                 form: str = "auto") -> None:
         eq = assemble(network)
         self.network = network
         C, N = eq.C, eq.N
         G = network.eddy_conductances
         self.eddy_idx = np.nonzero(G > 0.0)[0]
+        if form == "auto":
+            form = ("sparse" if method == "idas" and C.shape[0] + N.shape[1] > SPARSE_FORM_SIZE
+                    else "dense")
+        if form not in ("dense", "sparse") or (form == "sparse" and method != "idas"):
+            raise InputError(f"internal: flux-model form {form!r} with method {method!r}")
+        self.form = form
         a_psi = N.T @ C.T
         a_eddy = C.T[self.eddy_idx]
-        rows: list[np.ndarray] = []
-        self.diff_names: list[str] = []
+        A = np.vstack((a_psi, a_eddy))
         names = [f"psi[{c}]" for c in network.circuit_names]
         names += [f"phi[{network.branch_names[b]}]" for b in self.eddy_idx]
-        for name, row in zip(names, list(a_psi) + list(a_eddy), strict=True):
-            cand = np.array([*rows, row])
-            scaled = cand / np.maximum(np.abs(cand).max(axis=1, keepdims=True), 1e-300)
-            if np.linalg.matrix_rank(scaled, tol=1e-9) == len(cand):
-                rows.append(row)
-                self.diff_names.append(name)
-        D = np.array(rows).reshape(len(rows), C.shape[0])
-        M = np.vstack((C @ np.diag(G) @ C.T, a_psi))
+        sel = _independent_rows(A)
+        self.diff_names: list[str] = [names[k] for k in sel]
+        D = A[sel].reshape(len(sel), C.shape[0])
+        g_e = G[self.eddy_idx]
         Dp = np.linalg.pinv(D)
-        K = M @ Dp
+        if form == "dense":
+            M = np.vstack((C @ np.diag(G) @ C.T, a_psi))
+            K = M @ Dp
+            T = a_eddy @ Dp                   # eddy-branch flux rates = T y'
+        else:
+            # A = S D (S: which combination of the states each candidate row is), so
+            # K = M D^+ = [a_eddy^T G_e S_e; S_psi] and T = a_eddy D^+ = S_e, both sparse.
+            # S's entries are those of node and loop laws (0, +-1, turns ratios): rounding
+            # below 1e-12 of the largest is dropped and the product checked below.
+            Cs = sp.csr_matrix(C)
+            M = np.vstack(((Cs.multiply(G[None, :]) @ Cs.T).toarray(), a_psi))
+            S = A @ Dp
+            S[np.abs(S) < 1e-12 * max(1.0, float(np.abs(S).max()))] = 0.0
+            S[sel] = np.eye(len(sel))
+            nc_ = N.shape[1]
+            self.K_sparse = sp.vstack((sp.csr_matrix(a_eddy.T * g_e[None, :]) @ sp.csr_matrix(
+                S[nc_:]), sp.csr_matrix(S[:nc_]))).tocsc()
+            K = self.K_sparse.toarray()
+            T = S[nc_:]
         if not np.allclose(K @ D, M, rtol=0.0, atol=1e-9 * max(1.0, np.abs(M).max())):
             raise TopologyError("internal: the flux-model reduction M = K D failed")
         Kp = np.linalg.pinv(K)
-        Q = sla.null_space(K.T).T
-        T = a_eddy @ Dp                       # eddy-branch flux rates = T y'
-        self.D, self.M, self.K, self.Q, self.T = D, M, K, Q, T
+        self.D, self.M, self.K, self.T = D, M, K, T
+        self._Q: np.ndarray | None = sla.null_space(K.T).T if form == "dense" else None
         nl, nc, ng, r = C.shape[0], N.shape[1], eq.n_gaps, D.shape[0]
         self.n_loops, self.n_circuits, self.n_gaps, self.n_diff = nl, nc, ng, r
         self.n_eddy = len(self.eddy_idx)
@@ -233,9 +324,7 @@ class _FluxDAE:
         x, s, I = eq.x, eq.s, eq.I
         hv = ca.vertcat(-eq.residual, U - R * I)
         ydot = ca.mtimes(ca.DM(Kp), hv)
-        alg = ca.vertcat(ca.mtimes(ca.DM(D), x) - y, ca.mtimes(ca.DM(Q), hv))
-        phidot_e = ca.mtimes(ca.DM(T), ydot)
-        g_e = G[self.eddy_idx]
+        phidot_e = ca.mtimes(_dm(T, form), ydot)
         power = _power_flows(U, I, R, g_e, phidot_e, eq.force, rate)
         # eta (eq. 5): pole fluxes summed per circuit (coil-core fluxes; a pole winding
         # split over several branches counts with its turn-weighted mean flux)
@@ -244,15 +333,32 @@ class _FluxDAE:
         self.n_out = int(out.numel())
         self.output_fun = ca.Function("flux_outputs", [ca.vertcat(y, s, x, I), U, rate], [out])
 
-        # Index-1 check: d(alg)/d(x, I) must be regular (at zero flux and a 5 mm gap).
-        jac = ca.Function("jz", [x, I, s], [ca.jacobian(alg, ca.vertcat(x, I))])
-        Jz = np.array(jac(np.zeros(nl), np.zeros(nc), np.full(ng, _GAP_REF)))
-        sv = np.linalg.svd(Jz / np.maximum(np.abs(Jz).max(axis=1, keepdims=True), 1e-300),
-                           compute_uv=False)
-        if sv.size and sv[-1] < 1e-12 * sv[0]:
+        if form == "dense":
+            alg = ca.vertcat(ca.mtimes(ca.DM(D), x) - y, ca.mtimes(ca.DM(self.Q), hv))
+            # Index-1 check: d(alg)/d(x, I) must be regular (at zero flux and a 5 mm gap).
+            jac = ca.Function("jz", [x, I, s], [ca.jacobian(alg, ca.vertcat(x, I))])
+            Jz = np.array(jac(np.zeros(nl), np.zeros(nc), np.full(ng, _GAP_REF)))
+            sv = np.linalg.svd(Jz / np.maximum(np.abs(Jz).max(axis=1, keepdims=True), 1e-300),
+                               compute_uv=False)
+            singular = bool(sv.size and sv[-1] < 1e-12 * sv[0])
+            self.index1_condition = float(sv[0] / sv[-1]) if sv.size and not singular else 1.0
+        else:
+            # the same check on the sparse form's Jacobian d(alg)/d(x, I, y') (regular
+            # exactly when the dense form's is): a sparse LU and a 1-norm estimate of the
+            # condition instead of an SVD of a matrix of several thousand rows
+            yd = ca.SX.sym("yd", r)
+            alg = ca.vertcat(ca.mtimes(_dm(D, form), x) - y,
+                             ca.mtimes(_dm(self.K_sparse, form), yd) - hv)
+            z = ca.vertcat(x, I, yd)
+            jac = ca.Function("jz", [z, s, y, U], [ca.jacobian(alg, z)])
+            Jz = jac(np.zeros(z.numel()), np.full(ng, _GAP_REF), np.zeros(r),
+                     np.zeros(nc)).sparse().tocsr()
+            row_max = np.maximum(abs(Jz).max(axis=1).toarray().ravel(), 1e-300)
+            singular, self.index1_condition = _sparse_condition(
+                sp.diags(1.0 / row_max) @ Jz)
+        if singular:
             raise TopologyError(f"network {network.name!r}: the flux-model DAE is not index 1 "
                                 "(d alg / d(x, I) is singular); check the circuit topology")
-        self.index1_condition = float(sv[0] / sv[-1]) if sv.size else 1.0
 
         # Nominal scales for the absolute tolerances.
         areas = network.branch_areas
@@ -292,6 +398,14 @@ class _FluxDAE:
                              "'radau' (fixed-step Radau IIA collocation)")
         self._accum: dict[int, ca.Function] = {}
 
+    @property
+    def Q(self) -> np.ndarray:
+        """Left null space of ``K`` (rows): the balance combinations ``Q h = 0`` that fix
+        the currents (dense; computed on first use in the sparse form)."""
+        if self._Q is None:
+            self._Q = sla.null_space(self.K.T).T
+        return self._Q
+
     def _init_idas(self, eq: Any, Kp: np.ndarray, hv: ca.SX, y: ca.SX, h: ca.SX, U: ca.SX,
                    rate: ca.SX, g_e: np.ndarray, nominal: np.ndarray, rtol: float, atol: float,
                    max_num_steps: int, compiled: str, cache_dir: str | None) -> None:
@@ -308,29 +422,18 @@ class _FluxDAE:
           crosses many hold intervals without a restart: a kink of the gap path is no
           jump of any unknown.  A run restarts (consistent re-initialisation) where the
           voltages change, since the eddy-current model's currents jump there.
+        * The sparse form (``self.form``, large networks) takes ``y'`` itself as the
+          algebraic unknown instead of ``v``: ``K y' = h`` with the sparse ``K``, no ``Q``
+          and no ``K^+`` in IDAS's Jacobian (docs/flux_model.md).
         """
-        D, Q, T = self.D, self.Q, self.T
+        D, T = self.D, self.T
         nl, nc, ng, r = self.n_loops, self.n_circuits, self.n_gaps, self.n_diff
         R = self.network.resistances
         x, s, I = eq.x, eq.s, eq.I
-        nv = nl + nc
-        v = ca.SX.sym("v", nv)
         s0 = ca.SX.sym("s0", ng)
         t_sym = ca.SX.sym("t")
         tau0 = ca.SX.sym("tau0")
         s_t = s0 + h * rate * (t_sym - tau0)
-        ydot_v = ca.mtimes(ca.DM(Kp), v)
-        phidot_v = ca.mtimes(ca.DM(T), ydot_v)
-        power_v = _power_flows(U, I, R, g_e, phidot_v, eq.force, rate)
-        alg = ca.vertcat(ca.mtimes(ca.DM(D), x) - y, ca.mtimes(ca.DM(Q), v), v - hv)
-        alg, quad = ca.substitute([alg, h * power_v], [s], [s_t])
-        self.n_u = 2 + 2 * ng                         # per interval: h, s_k, rate_k, tau_k
-        dae_fun = ca.Function(
-            "flux_dae", [t_sym, y, ca.vertcat(x, I, v), U, ca.vertcat(h, s0, rate, tau0)],
-            [h * ydot_v, alg, quad, ca.SX(0, 1)],
-            ["t", "x", "z", "p", "u"], ["ode", "alg", "quad", "zero"])
-        balance_fun = ca.Function("flux_balance", [ca.vertcat(x, I), s, U], [hv])
-        keep = np.r_[0:r, r + ng:r + ng + nl + nc]     # no gap states
         # v's absolute tolerance: 1e3 x atol x its scale (MMF of 1 T over 5 mm of air per
         # loop, R x nominal current per circuit).  Measured on the U-magnet: x1 ran 4x
         # slower; v out of the error test (x1e300) left x and I consistent only to 2e-7
@@ -338,8 +441,36 @@ class _FluxDAE:
         # as fast as x1e300, consistent to 5e-9.
         v_scale = 1e3 * atol * np.concatenate((np.full(nl, _B_REF * _GAP_REF / MU0),
                                                 R * nominal[-nc:]))
+        if self.form == "dense":
+            v = ca.SX.sym("v", nl + nc)
+            ydot_v = ca.mtimes(ca.DM(Kp), v)
+            phidot_v = ca.mtimes(ca.DM(T), ydot_v)
+            alg = ca.vertcat(ca.mtimes(ca.DM(D), x) - y, ca.mtimes(ca.DM(self.Q), v), v - hv)
+            extra, extra_scale = v, v_scale
+            balance_fun = ca.Function("flux_balance", [ca.vertcat(x, I), s, U], [hv])
+        else:
+            # K y' = h with y' an algebraic unknown: the sparse K (a few entries per row)
+            # instead of the dense K^+ and Q (a Jacobian block of (n_loops + n_circuits)^2
+            # entries, 2e6 on the air-cell grid).  Eliminating y' gives back y' = K^+ h,
+            # Q h = 0 (K has full column rank).  y''s tolerance: that of the y' a v of
+            # v's tolerance gives, |K^+| v_scale.
+            ydot_v = ca.SX.sym("yd", r)
+            phidot_v = ca.mtimes(_dm(T, "sparse"), ydot_v)
+            alg = ca.vertcat(ca.mtimes(_dm(D, "sparse"), x) - y,
+                             ca.mtimes(_dm(self.K_sparse, "sparse"), ydot_v) - hv)
+            extra, extra_scale = ydot_v, np.abs(Kp) @ v_scale
+            balance_fun = ca.Function("flux_balance", [ca.vertcat(x, I), s, U],
+                                      [ca.mtimes(ca.DM(Kp), hv)])
+        power_v = _power_flows(U, I, R, g_e, phidot_v, eq.force, rate)
+        alg, quad = ca.substitute([alg, h * power_v], [s], [s_t])
+        self.n_u = 2 + 2 * ng                         # per interval: h, s_k, rate_k, tau_k
+        dae_fun = ca.Function(
+            "flux_dae", [t_sym, y, ca.vertcat(x, I, extra), U, ca.vertcat(h, s0, rate, tau0)],
+            [h * ydot_v, alg, quad, ca.SX(0, 1)],
+            ["t", "x", "z", "p", "u"], ["ode", "alg", "quad", "zero"])
+        keep = np.r_[0:r, r + ng:r + ng + nl + nc]     # no gap states
         opts: dict[str, Any] = {"reltol": rtol,
-                                "abstolv": list(atol * nominal[keep]) + list(v_scale),
+                                "abstolv": list(atol * nominal[keep]) + list(extra_scale),
                                 "max_num_steps": max_num_steps,
                                 "disable_internal_warnings": True}
         oracle: Any = dae_fun
@@ -415,12 +546,14 @@ def _dae(network: Network, method: str, rtol: float, atol: float, max_num_steps:
          cache_dir: str | None = None) -> _FluxDAE:
     if method != "idas":
         compiled, cache_dir = "never", None   # only the IDAS functions are compiled
+    form = ("sparse" if method == "idas" and network.n_loops + len(network.circuits)
+            > SPARSE_FORM_SIZE else "dense")
     key = ("flux_dae", method, rtol, atol, max_num_steps, radau_elements, radau_degree,
-           compiled, cache_dir)
+           compiled, cache_dir, form)
     dae = network._cache.get(key)
     if dae is None:
         dae = _FluxDAE(network, method, rtol, atol, max_num_steps, radau_elements, radau_degree,
-                       compiled, cache_dir)
+                       compiled, cache_dir, form)
         network._cache[key] = dae
     return dae  # type: ignore[no-any-return]
 
