@@ -187,3 +187,18 @@ def test_sparse_form_compiles_to_the_same_trajectory(monkeypatch: pytest.MonkeyP
     # as the dense form's compiled test: bit-identical measured, bound 1e-9 of the range
     np.testing.assert_allclose(runs[0].currents_A, runs[1].currents_A, rtol=0.0,
                                atol=1e-9 * 20.0)
+
+
+def test_auto_does_not_compile_large_networks(monkeypatch: pytest.MonkeyPatch,
+                                              tmp_path: Path) -> None:
+    """compiled="auto" interprets networks above AUTO_COMPILE_SIZE (compiling the grid's
+    eddy ladders took many minutes); "always" still compiles them."""
+    if compiled_mod.find_compiler() is None:
+        pytest.skip("no C compiler on this machine")
+    mag = mk.load_magnet("u-magnet", eddy_currents=False)
+    size = mag.network.n_loops + len(mag.network.circuits)
+    monkeypatch.setattr(flux, "AUTO_COMPILE_SIZE", size - 1)
+    assert mk.FluxModel(mag, compiled="auto", cache_dir=tmp_path).compiled is False
+    assert mk.FluxModel(mag, compiled="always", cache_dir=tmp_path).compiled is True
+    monkeypatch.setattr(flux, "AUTO_COMPILE_SIZE", size)
+    assert mk.FluxModel(mag, compiled="auto", cache_dir=tmp_path).compiled is True

@@ -294,6 +294,13 @@ def test_bad_input(split_maps: CharacteristicMaps) -> None:
     # the bank must not drop the branch currents silently
     with pytest.raises(mk.InputError, match="eddy_modes=1 cannot be a bank member"):
         mk.MagnetBank({"a": model})
+    # maps holding only some networks name the ones they hold
+    one = _linear_maps(ltilde=0.1, r_el=2.0, r0=40.0, rk=[6.0], lk=[2e-3])
+    with pytest.raises(mk.InputError, match=r"eddy_modes = 2: these maps hold eddy networks "
+                                            r"with \[1\] branches"):
+        mk.CurrentModel(one, eddy_modes=2)
+    with pytest.raises(mk.InputError, match=r"use 'fit' or 'jump' \(or None"):
+        mk.CurrentModel(split_maps, eddy_resistance="bogus")
 
 
 def test_maps_without_eddy_currents_refuse_eddy_modes() -> None:

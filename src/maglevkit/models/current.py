@@ -295,7 +295,8 @@ class CurrentModel:
             var = {None: "eddy_resistance_fit_ohm", "fit": "eddy_resistance_fit_ohm",
                    "jump": "eddy_resistance_ohm"}.get(eddy_resistance)
             if var is None:
-                raise InputError(f"eddy_resistance = {eddy_resistance!r}; use 'fit' or 'jump'")
+                raise InputError(f"eddy_resistance = {eddy_resistance!r}; use 'fit' or 'jump' "
+                                 "(or None: the fit)")
             if var not in maps.dataset:
                 raise InputError(f"these maps have no {var!r}; rebuild them with this version")
             r_ec = np.asarray(maps.dataset[var].values, dtype=float)
@@ -963,6 +964,10 @@ def _eddy_network(maps: Any, m: int) -> tuple[np.ndarray, np.ndarray, np.ndarray
     if missing:
         raise InputError(f"these maps have no eddy network ({', '.join(missing)}); rebuild "
                          "them with this version (build_maps) to use eddy_modes > 0")
+    have = [int(v) for v in ds["eddy_modes"].values] if "eddy_modes" in ds.coords else []
+    if m not in have:
+        raise InputError(f"eddy_modes = {m}: these maps hold eddy networks with {have} "
+                         "branches; use one of those or 0")
     r0 = np.asarray(ds["eddy_network_r0_ohm"].sel(eddy_modes=m).values, dtype=float)
     r_k = np.asarray(ds["eddy_network_resistance_ohm"].sel(eddy_modes=m).values,
                      dtype=float)[:, :m]

@@ -105,6 +105,13 @@ def _power_flows(U: Any, I: Any, R: Any, g_e: Any, phidot_e: Any, force: Any, ra
 #: those, not tuned (docs/decisions.md, "The air-cell network in the transient").
 SPARSE_FORM_SIZE = 400
 
+#: ``compiled="auto"`` compiles networks up to this many loop and circuit unknowns; larger
+#: ones run on CasADi's virtual machine (``compiled="always"`` still compiles them).  The
+#: C compiler takes minutes there: the grid with Roters tubes and its placeholder eddy
+#: elements ~500 s once, its ladder n = 4 (507 unknowns) had not finished after 290 s
+#: (measured in an independent review), while its interpreted run takes seconds.
+AUTO_COMPILE_SIZE = SPARSE_FORM_SIZE
+
 
 def _dm(a: Any, form: str) -> ca.DM:
     """A CasADi matrix of ``a``: sparse (structural zeros dropped) in the sparse form, dense
@@ -546,8 +553,10 @@ def _dae(network: Network, method: str, rtol: float, atol: float, max_num_steps:
          cache_dir: str | None = None) -> _FluxDAE:
     if method != "idas":
         compiled, cache_dir = "never", None   # only the IDAS functions are compiled
-    form = ("sparse" if method == "idas" and network.n_loops + len(network.circuits)
-            > SPARSE_FORM_SIZE else "dense")
+    size = network.n_loops + len(network.circuits)
+    if compiled == "auto" and size > AUTO_COMPILE_SIZE:
+        compiled = "never"                    # compiling would take many minutes
+    form = "sparse" if method == "idas" and size > SPARSE_FORM_SIZE else "dense"
     key = ("flux_dae", method, rtol, atol, max_num_steps, radau_elements, radau_degree,
            compiled, cache_dir, form)
     dae = network._cache.get(key)
@@ -647,8 +656,12 @@ class FluxModel:
         and output functions as one C file, compiles it with the system C compiler and
         caches the library on disk (a second model of the same network only loads it);
         without a working compiler it warns (:class:`~maglevkit.errors.CompilationWarning`)
-        and runs on CasADi's virtual machine.  ``"always"`` raises
-        :class:`~maglevkit.errors.SolverError` instead; ``"never"`` always interprets.
+        and runs on CasADi's virtual machine.  Networks with more than
+        :data:`AUTO_COMPILE_SIZE` loop and circuit unknowns (the cell networks of
+        ``discretisation="grid"`` with eddy ladders) are interpreted under ``"auto"``: the
+        C compiler would take many minutes there.  ``"always"`` compiles every network and
+        raises :class:`~maglevkit.errors.SolverError` where that fails; ``"never"`` always
+        interprets.
         Both paths evaluate the same expressions: the trajectories agree to rounding.
         ``method="radau"`` is always interpreted.
     cache_dir : str or None
