@@ -1064,8 +1064,8 @@ class MagnetBank:
         cur[0], il[0], fc[0], pf[0] = o.currents_A, o.inductor_currents_A, o.circuit_force_N, \
             o.pole_force_N
         steps = np.diff(times)
-        substeps = np.ceil(steps / self.max_step_s * (1 - 1e-12))
-        if self._fast and nt > 1 and np.all(substeps == substeps[0]):
+        if self._fast and nt > 1 and len({self._substeps(float(h))
+                                          for h in np.unique(steps)}) == 1:
             # every interval runs the same compiled kernel: step in place (the same
             # function and inputs as step(), so the same numbers), pole forces at the end
             # (each pole takes one share of one circuit's force: exact in any order)

@@ -78,7 +78,7 @@ class BankStepper:
 
     __slots__ = ("_bank", "_dt", "_time", "_fast", "_u", "_g", "_gd", "_il", "_coil",
                  "_force", "_member", "_pole", "_views", "_state_gaps", "_state",
-                 "_buf", "_eval", "_args", "_res", "_n_bad", "_h", "_block", "_scratch")
+                 "_buf", "_eval", "_res", "_n_bad", "_h", "_block", "_scratch")
 
     def __init__(self, bank: MagnetBank, state: BankState, dt: float) -> None:
         bank._check_state(state)
@@ -114,14 +114,14 @@ class BankStepper:
         self._h = np.array([self._dt])
         # the kernel reads the state and input arrays and writes scratch buffers (copied
         # into the state and output arrays only after a good step)
-        self._args = [self._il, self._g, self._u, self._gd, self._h]
+        args = [self._il, self._g, self._u, self._gd, self._h]
         self._scratch = r = np.zeros_like(self._block)       # the same layout as the block
         self._res = [r[:nc], r[nc:2 * nc], r[2 * nc:3 * nc], r[3 * nc:3 * nc + nm],
                      np.zeros(1), np.zeros(nc), np.zeros(nc), r[3 * nc + nm:]]
         buf: Any
         buf, self._eval = call.f.buffer()
         self._buf = buf                     # keeps the bound buffer alive
-        for i, a in enumerate(self._args):
+        for i, a in enumerate(args):
             buf.set_arg(i, memoryview(a))  # type: ignore[arg-type]
         for i, r in enumerate(self._res):
             buf.set_res(i, memoryview(r))  # type: ignore[arg-type]
@@ -216,10 +216,8 @@ class BankStepper:
 
     # ------------------------------------------------------------------ stepping
     def _convert(self, value: Any, names: tuple[str, ...], what: str, unit: str) -> np.ndarray:
-        if type(value) is np.ndarray and value.dtype == np.float64 and value.shape == (len(names),):
-            return value
-        # non-finite values pass on the fast path: the kernel flags them and the step is
-        # diagnosed as MagnetBank.step diagnoses it (the same messages)
+        # as MagnetBank.step converts: non-finite values pass on the fast path, where the
+        # kernel flags them and the step is diagnosed as step diagnoses it
         return self._bank._vector(value, names, what, unit, not self._fast)
 
     def _write_inputs(self, voltages: Any, gaps: Any, gap_rates: Any) -> None:
