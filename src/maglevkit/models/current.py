@@ -777,8 +777,7 @@ class CurrentModel:
             self._check_substeps(extremes[0], extremes[1], state.time_s, t1)
         else:
             self._check_range(x[self._sl][None, :], x[:nc][None, :], np.array([t1]))
-        new = (CurrentModelState(t1, x[:nc], g + gd * dt, self._eddy_of(x)) if self.eddy_modes
-               else CurrentModelState(t1, x[:nc], g + gd * dt))
+        new = CurrentModelState(t1, x[:nc], g + gd * dt, self._eddy_of(x))   # None for eq. 8
         return new, CurrentOutputs(t1, coil, x[:nc].copy(), fc, self._share @ fc, float(fc.sum()))
 
     def _integrate(self, t: np.ndarray, x0: np.ndarray, uu: np.ndarray
