@@ -34,6 +34,7 @@ import warnings
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
+from types import SimpleNamespace
 from typing import Any, TypeVar
 
 import casadi as ca
@@ -56,7 +57,8 @@ from .statics import circuit_pole_groups
 from .stepper import BankStepper
 from .tables import INTERPOLATION_METHODS, cell_table
 
-__all__ = ["KERNEL_PARAMETERS", "BankOutputs", "BankSimulation", "BankState", "MagnetBank"]
+__all__ = ["KERNEL_PARAMETERS", "RUN_CHUNK", "BankOutputs", "BankRun", "BankSimulation",
+           "BankState", "MagnetBank"]
 
 _MAP_VARIABLES = ("inductance_H", "dL_ds_H_per_m", "force_N")
 KERNEL_PARAMETERS = ("s0_m", "inv_ds_per_m", "cells_s", "i0_A", "inv_di_per_A", "cells_i",
@@ -65,6 +67,9 @@ KERNEL_PARAMETERS = ("s0_m", "inv_ds_per_m", "cells_s", "i0_A", "inv_di_per_A", 
 """Rows of :attr:`MagnetBank.circuit_parameters`: the circuit's grid, its table offset,
 ``R_el``, ``a = 1 + R_el/R_ec`` and the range bounds (with rounding allowances)."""
 _N_PAR = len(KERNEL_PARAMETERS)
+RUN_CHUNK = 1024
+"""Steps per call of the compiled time loop of :meth:`MagnetBank.run_steps` (longer runs
+take several calls)."""
 _T = TypeVar("_T")
 
 
@@ -151,6 +156,29 @@ class BankSimulation:
     pole_names: tuple[str, ...]
     member_names: tuple[str, ...]
     final_state: BankState
+
+
+@dataclass(frozen=True)
+class BankRun:
+    """The reduced circuits of a bank over a sequence of steps (:meth:`MagnetBank.run_steps`).
+
+    Row ``k`` holds the values at the end of step ``k`` (coil currents with that step's
+    voltages), as :meth:`MagnetBank.step` returns them.
+
+    Attributes
+    ----------
+    inductor_currents_A, currents_A, circuit_force_N : ndarray (n_steps, n_circuits)
+        ``I_L`` [A], coil currents [A] and circuit forces [N]; rows from ``n_good`` on are
+        NaN when the run stopped at a flagged step.
+    n_good : int
+        Steps completed (``n_steps`` unless ``stop_at_flag`` stopped the run at step
+        ``n_good``, which the kernel flagged: out of the maps or not finite).
+    """
+
+    inductor_currents_A: np.ndarray
+    currents_A: np.ndarray
+    circuit_force_N: np.ndarray
+    n_good: int
 
 
 @dataclass(frozen=True)
@@ -264,6 +292,8 @@ class MagnetBank:
         self._build_reduced()
         self._kernels: dict[int, _StepCall] = {}
         self._lanes: dict[int, tuple[ca.Function, Path]] = {}   # sub-steps -> (f, library)
+        self._lane_runs: dict[int, ca.Function] = {}    # sub-steps -> the compiled time loop
+        self._runs: dict[int, _RunCall] = {}
         self._last_dt: float = math.nan             # the last step length and its kernel
         self._last_call: _StepCall | None = None
         self.compiled: bool | None = None       # known after the first step
@@ -651,6 +681,120 @@ class MagnetBank:
         """
         return self._step_kernel(self._composable_substeps(dt, "step_function"))
 
+    def step_kernel(self, dt: float) -> ca.Function:
+        """The compiled step that :meth:`step` calls for steps of ``dt`` [s] (lanes or
+        CasADi code, or CasADi's virtual machine, by ``compiled`` and ``codegen``).
+
+        Inputs and outputs as :meth:`step_function` (``n_bad`` > 0: a circuit left its
+        maps or a value was not finite; diagnose with :meth:`step`).  Banks of reduced
+        members with one gap input per circuit only.
+        """
+        self._composable_substeps(dt, "step_kernel")
+        return self._kernel(float(dt)).f
+
+    def run_steps(self, inductor_currents_A: Any, gaps_m: Any, voltages_V: Any,
+                  gap_rates_m_per_s: Any, dt_s: Any, *, time_s: float = 0.0,
+                  stop_at_flag: bool = False) -> BankRun:
+        """Advance every circuit over ``n_steps`` steps in one compiled time loop.
+
+        The same compiled step as :meth:`step` (bit-identical results) with the loop over
+        the steps in C (:mod:`.lanes`; without a compiler or with ``codegen="casadi"`` a
+        CasADi ``mapaccum`` of the step), :data:`RUN_CHUNK` steps per call.  Banks of
+        reduced members with one gap input per circuit only.
+
+        Parameters
+        ----------
+        inductor_currents_A : array (n_circuits,)
+            ``I_L`` at the start [A].
+        gaps_m, voltages_V, gap_rates_m_per_s : array (n_steps, n_circuits)
+            Gap at the start of each step [m], voltage held over it [V] and gap rate over it
+            [m/s] (the gap moves linearly); the caller keeps the gaps consistent
+            (``gaps_m[k + 1] = gaps_m[k] + gap_rates_m_per_s[k] dt_s[k]`` for a
+            continuous path).
+        dt_s : array (n_steps,)
+            Step lengths [s] (>= 0; a step of 0 s gives the outputs at its start).  Runs
+            of steps with the same RK4 sub-step count share one compiled loop.
+        time_s : float
+            Time at the start [s] (for messages).
+        stop_at_flag : bool
+            False (default): a step the kernel flags (out of the maps, non-finite) is
+            diagnosed as :meth:`step` diagnoses it (raises, or warns with
+            ``extrapolate``); True: the run stops there (``n_good``) for the caller to
+            handle.
+
+        Returns
+        -------
+        BankRun
+
+        Raises
+        ------
+        InputError
+            Not a bank of reduced members with circuit gap inputs, bad shapes or step
+            lengths.
+        OutOfRangeError, SolverError
+            As :meth:`step`.
+        """
+        if not self._fast:
+            raise InputError("run_steps needs a bank of reduced members only with "
+                             "gap_inputs='circuit'")
+        nc = self.n_circuits
+        x0 = np.asarray(inductor_currents_A, dtype=float)
+        s, u, sd = (np.ascontiguousarray(v, dtype=float) for v in (gaps_m, voltages_V,
+                                                                     gap_rates_m_per_s))
+        h = np.ascontiguousarray(dt_s, dtype=float).ravel()
+        n = h.size
+        if x0.shape != (nc,) or any(v.shape != (n, nc) for v in (s, u, sd)):
+            raise InputError(f"run_steps: expected I_L ({nc},) and gaps, voltages and gap "
+                             f"rates of shape ({n}, {nc}) for {n} steps")
+        if n and not (np.all(h >= 0) and np.all(np.isfinite(h))):
+            raise InputError("run_steps: dt_s must be finite and >= 0 s")
+        # the sub-step count of every step (the one rule, _substeps, per distinct
+        # length); a step of length 0 joins the segment before it (or after it)
+        lengths, inverse = np.unique(h, return_inverse=True)
+        per = np.array([self._substeps(float(v)) if v > 0 else 0 for v in lengths],
+                       dtype=int)[inverse.ravel()]
+        if n and per.max() == 0:
+            per[:] = 1
+        for j in range(n):
+            if per[j] == 0:
+                per[j] = per[j - 1] if j else per[per > 0][0]
+        out = [np.full((n, nc), np.nan) for _ in range(3)]
+        k, x, t = 0, x0, float(time_s)
+        while k < n:
+            run = self._run_call(int(per[k]))
+            same = np.flatnonzero(per[k:k + RUN_CHUNK] != per[k])
+            m = int(same[0]) if same.size else min(RUN_CHUNK, n - k)
+            res = run(x, s[k:k + m], u[k:k + m], sd[k:k + m], h[k:k + m])
+            done = res.n_done
+            for o, r in zip(out, res.rows, strict=True):
+                o[k:k + done] = r[:done]
+            t_k = t + float(np.sum(h[k:k + done]))
+            if done < m:                 # step k + done was flagged
+                if stop_at_flag:
+                    return BankRun(out[0], out[1], out[2], n_good=k + done)
+                j = k + done
+                self._diagnose(s[j], sd[j], x if done == 0 else out[0][j - 1], u[j],
+                               res.rows[0][done],
+                               SimpleNamespace(res=res.extremes),  # type: ignore[arg-type]
+                               t_k, t_k + h[j])
+                for o, r in zip(out, res.rows, strict=True):    # warned only: accept it
+                    o[j] = r[done]
+                done += 1
+                t_k += float(h[j])
+            k += done
+            t = t_k
+            x = out[0][k - 1]
+        return BankRun(out[0], out[1], out[2], n_good=n)
+
+    def _run_call(self, substeps: int) -> _RunCall:
+        call = self._runs.get(substeps)
+        if call is None:
+            self._kernel(self.max_step_s * substeps)         # compiles (lanes or CasADi)
+            loop = self._lane_runs.get(substeps)
+            call = _RunCall(loop, self._kernels[substeps].f, self._reduced_idx.size)
+            self._runs[substeps] = call
+        return call
+
     def _substeps(self, dt: float) -> int:
         """RK4 sub-steps of a step of ``dt`` [s] (at most ``max_step_s`` each)."""
         return max(1, math.ceil(dt / self.max_step_s * (1 - 1e-12)))
@@ -714,13 +858,40 @@ class MagnetBank:
                 + f"  if (res[4]) {{ double nb = 0.0; for (c = 0; c < {n}; ++c) nb += r[5][c]; "
                   "res[4][0] = nb; }\n"
                 + f"  if (res[7]) for (c = 0; c < {n}; ++c) res[7][c] = a[1][c] + a[3][c] * a[4][0];\n")
+        # the time loop around the same step (MagnetBank.run_steps): up to RUN_CHUNK steps,
+        # step k reads the state row k - 1 of its own output and writes row k; it stops
+        # after the first flagged step (n_done = the good steps before it; that step's
+        # rows, extremes and flags stay in the outputs for the diagnosis)
+        ch = RUN_CHUNK
+        loop = (f"  const double *a[5];\n  double *r[6];\n  long k, c, ns;\n"
+                f"  for (k = 0; k < 7; ++k) if (!res[k]) return 1;\n"
+                f"  ns = arg[5][0] > 0 ? (long) arg[5][0] : 0;\n  if (ns > {ch}) ns = {ch};\n"
+                f"  r[3] = res[4]; r[4] = res[5]; r[5] = res[6];\n"
+                f"  for (c = 0; c < {n}; ++c) r[5][c] = 0.0;\n"
+                f"  for (k = 0; k < ns; ++k) {{\n"
+                f"    double nb = 0.0;\n"
+                f"    a[0] = k ? res[0] + (k - 1) * {n} : arg[0];\n"
+                f"    for (c = 1; c < 4; ++c) a[c] = arg[c] + k * {n};\n"
+                f"    a[4] = arg[4] + k;\n"
+                f"    for (c = 0; c < 3; ++c) r[c] = res[c] + k * {n};\n"
+                f"    {name}_k(a, r);\n"
+                f"    for (c = 0; c < {n}; ++c) nb += r[5][c];\n"
+                f"    if (nb != 0.0) break;\n  }}\n"
+                f"  res[3][0] = (double) k;\n")
         code = ("#include <math.h>\n" + kernel
                 + external_source(name, inputs=[("I_L", n), ("s", n), ("U", n), ("sdot", n),
                                                 ("h", 1)],
                                   outputs=[("I_L_next", n), ("I", n), ("F", n), ("member_F", nm),
                                            ("n_bad", 1), ("I_L_min", n), ("I_L_max", n),
                                            ("s_next", n)],
-                                  body=body, work=10 * n + 1))
+                                  body=body, work=10 * n + 1)
+                + external_source(f"{name}_run", inputs=[("I_L0", n), ("s", n * ch),
+                                                         ("U", n * ch), ("sdot", n * ch),
+                                                         ("h", ch), ("n_steps", 1)],
+                                  outputs=[("I_L", n * ch), ("I", n * ch), ("F", n * ch),
+                                           ("n_done", 1), ("I_L_min", n), ("I_L_max", n),
+                                           ("bad", n)],
+                                  body=loop))
         digest = hashlib.sha256(code.encode()).hexdigest()[:16]
         name = f"maglevkit_bank_lanes{substeps}_{digest}"
         code = code.replace("MAGLEVKIT_LANES_NAME", name)
@@ -729,6 +900,7 @@ class MagnetBank:
             lib = build_source(name, code.encode(), cache=cache,
                                flags=("-O3", "-shared", "-fPIC", "-ffp-contract=off", *flags))
             f = ca.external(name, str(lib))
+            self._lane_runs[substeps] = ca.external(f"{name}_run", str(lib))
         except (OSError, RuntimeError, subprocess.SubprocessError):
             return None                  # the CasADi path reports (or raises) the failure
         self.compiled = True
@@ -1151,6 +1323,69 @@ def _circuit_forces(pole_force: np.ndarray, member: _Member) -> np.ndarray:
     pi = {p: k for k, p in enumerate(member.poles)}
     return np.array([sum(pole_force[pi[p]] for p in member.pole_groups[c])
                      for c in member.circuits])
+
+
+@dataclass
+class _RunResult:
+    rows: tuple[np.ndarray, np.ndarray, np.ndarray]    # I_L, I, F (m, n_circuits)
+    n_done: int
+    extremes: list[Any]          # as _StepCall.res: [5], [6] the flagged step's I_L extremes
+
+
+class _RunCall:
+    """Up to :data:`RUN_CHUNK` steps of the compiled step in one call: the lanes' C loop
+    through bound buffers, else a CasADi ``mapaccum`` of the step (padded with steps of
+    length 0, which change nothing)."""
+
+    def __init__(self, loop: ca.Function | None, step: ca.Function, n: int) -> None:
+        self.n = n
+        ch = RUN_CHUNK
+        if loop is not None:
+            buf: Any
+            buf, self.eval = loop.buffer()
+            self.buf = buf
+            self.args = [np.zeros(n), np.zeros((ch, n)), np.zeros((ch, n)), np.zeros((ch, n)),
+                         np.zeros(ch), np.zeros(1)]
+            self.res = [np.zeros((ch, n)), np.zeros((ch, n)), np.zeros((ch, n)), np.zeros(1),
+                        np.zeros(n), np.zeros(n), np.zeros(n)]
+            for i, a in enumerate(self.args):
+                buf.set_arg(i, memoryview(a.reshape(-1)))  # type: ignore[arg-type]
+            for i, r in enumerate(self.res):
+                buf.set_res(i, memoryview(r.reshape(-1)))  # type: ignore[arg-type]
+            self.acc = None
+        else:
+            self.acc = step.mapaccum("maglevkit_bank_run", ch)
+
+    def __call__(self, x0: np.ndarray, s: np.ndarray, u: np.ndarray, sd: np.ndarray,
+                 h: np.ndarray) -> _RunResult:
+        m = h.size
+        if self.acc is None:
+            a = self.args
+            a[0][:] = x0
+            a[1][:m] = s
+            a[2][:m] = u
+            a[3][:m] = sd
+            a[4][:m] = h
+            a[5][0] = m
+            self.eval()
+            r = self.res
+            done = int(r[3][0])
+            return _RunResult((r[0][:m], r[1][:m], r[2][:m]), done,
+                              [None] * 5 + [r[4].copy(), r[5].copy()])
+        ch = RUN_CHUNK
+        pad = ch - m
+        end = s[-1] + sd[-1] * h[-1]
+
+        def padded(v: np.ndarray, fill: np.ndarray) -> np.ndarray:
+            return np.vstack([v, np.broadcast_to(fill, (pad, self.n))]).T if pad else v.T
+
+        res = self.acc(x0, padded(s, end), padded(u, u[-1]), padded(sd, np.zeros(self.n)),
+                       np.concatenate([h, np.zeros(pad)])[None, :])
+        x, coil, force = (np.asarray(res[j]).T[:m] for j in range(3))
+        flags = np.asarray(res[4]).ravel()[:m]
+        done = int(np.argmax(flags != 0)) if (flags != 0).any() else m
+        lo, hi = (np.asarray(res[j])[:, min(done, m - 1)] for j in (5, 6))
+        return _RunResult((x, coil, force), done, [None] * 5 + [lo, hi])
 
 
 class _StepCall:
