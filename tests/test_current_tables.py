@@ -18,7 +18,7 @@ CURRENTS = np.linspace(0.0, 60.0, 7)
 # The tables hold the same bicubic function as CasADi's B-spline (docs/bank.md: 4e-14
 # relative); the two paths differ only in rounding (map evaluation, and the bank's RK4
 # stage gaps s + sdot t against the B-spline path's gap state).  Measured largest
-# difference over these scenarios and every bundled magnet: 3.3e-14 relative
+# difference over the full standard scenarios of every bundled magnet: 3.7e-14 relative
 # (docs/decisions.md); bound 1e-12, the bank's own bound against CurrentModel.
 REL = 1e-12
 MAGNETS = ("u-magnet", "tr09-standard", "tr09-bow", "tr-guidance")    # every bundled one
@@ -161,3 +161,45 @@ def test_tables_need_rk4_without_eddy_modes_and_a_known_lookup(all_maps) -> None
         warnings.simplefilter("error")
         CurrentModel(maps, compiled="never").simulate(np.linspace(0.0, 0.01, 11), gaps=0.010,
                                                       voltages=25.0, initial_currents=20.0)
+
+
+@pytest.mark.parametrize("codegen", ["lanes", "casadi"])
+def test_bank_run_steps_equals_its_stepper_bit_for_bit(all_maps, codegen: str) -> None:
+    from maglevkit.models.bank import RUN_CHUNK, MagnetBank
+
+    maps = {"a": all_maps["tr09-standard"][1], "b": all_maps["u-magnet"][1]}
+    bank = MagnetBank(maps, codegen=codegen)
+    n = RUN_CHUNK + 300                     # two calls of the compiled loop
+    rng = np.random.default_rng(3)
+    t = np.arange(n + 1) * 1e-3
+    g = 0.010 + 1e-3 * np.sin(2 * np.pi * 5 * t)[:, None] * rng.uniform(0.5, 1.0, 3)
+    u = bank.resistance_ohm * rng.uniform(18.0, 30.0, (n, 3))
+    rates = np.diff(g, axis=0) / 1e-3
+    i0 = np.full(3, 20.0)
+    run = bank.run_steps(i0, g[:-1], u, rates, np.full(n, 1e-3))
+    stepper = bank.stepper(bank.initial_state(gaps=g[0], currents=i0), 1e-3)
+    for k in range(n):
+        stepper.advance(u[k], g[k], rates[k])
+        assert np.array_equal(run.inductor_currents_A[k], stepper.inductor_currents_A)
+        assert np.array_equal(run.currents_A[k], stepper.currents_A)
+        assert np.array_equal(run.circuit_force_N[k], stepper.circuit_force_N)
+    assert run.n_good == n
+    # steps of 2 ms take two RK4 sub-steps: a run of mixed lengths equals step() per step
+    h = np.where(np.arange(n) % 500 < 250, 1e-3, 2e-3)[:600]
+    mixed = bank.run_steps(i0, g[:600], u[:600], rates[:600] * 0.5, h)
+    state = bank.initial_state(gaps=g[0], currents=i0)
+    for k in range(600):
+        state, out = bank.step(state, float(h[k]), u[k], gaps=g[k], gap_rates=rates[k] * 0.5)
+        assert np.array_equal(mixed.circuit_force_N[k], out.circuit_force_N)
+    # a step that leaves the maps: step()'s diagnosis, or a stop at it
+    u_bad = u[:20].copy()
+    u_bad[12, 1] = 1e5
+    with pytest.raises(OutOfRangeError, match=r"member 'a', circuit .*RK4 sub-step within "
+                                              r"t = 0\.012\.\.0\.013 s"):
+        bank.run_steps(i0, g[:20], u_bad, rates[:20], np.full(20, 1e-3))
+    stop = bank.run_steps(i0, g[:20], u_bad, rates[:20], np.full(20, 1e-3), stop_at_flag=True)
+    assert stop.n_good == 12
+    assert np.array_equal(stop.circuit_force_N[:12], run.circuit_force_N[:12])
+    assert np.isnan(stop.circuit_force_N[12:]).all()
+    with pytest.raises(InputError, match=r"run_steps: expected I_L \(3,\)"):
+        bank.run_steps(i0, g[:20, :2], u[:20], rates[:20], np.full(20, 1e-3))

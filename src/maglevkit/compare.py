@@ -16,7 +16,10 @@ current by a few percent of its DC value, so e_y hides errors that e_y,AC shows)
 reported as undefined (NaN, printed "n/a (no variation)", :func:`format_ac_error`) when the
 detailed signal hardly moves: RMS(y_detailed - mean) < ``AC_MIN_RELATIVE_VARIATION`` x
 |mean(y_detailed)| (see there).
-Wall-clock times of both runs give the speed-up.  The standard set
+The speed-up is the ratio of the two models' CPU times (``time.process_time``), each the
+best of ``repeat`` runs after one untimed warm-up run (which compiles and fills caches and
+whose results are compared): warm, CPU, best of N, so that neither the first call's
+compilation nor other processes on the machine decide it.  The standard set
 (:func:`standard_scenarios`) around an operating point ``(s0, I0)``:
 
 * voltage steps up and down (+-20 % of ``R I0``) on every circuit;
@@ -34,6 +37,7 @@ import math
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
+from functools import partial
 from typing import Any
 
 import numpy as np
@@ -91,6 +95,10 @@ class ComparisonResult:
     part (detailed signal minus its mean; NaN where the signal has no variation, i.e. its AC
     RMS is below ``AC_MIN_RELATIVE_VARIATION`` x its mean).  All dimensionless.
 
+    ``detailed_cpu_s`` and ``reduced_cpu_s`` are the CPU times of one run of each model [s]:
+    the best of ``timing_runs`` runs after an untimed warm-up run (NaN with
+    ``timing_runs = 0``, :func:`compare_models`'s ``repeat``).
+
     ``detailed_gap_m`` and ``reduced_gap_m`` (n_t,) are the gap of each run [m]: the heave
     mass's gap in a closed loop, the mean of the gap inputs in an open-loop run (the same
     input for both); ``reference_gap_m`` is the closed loop's gap reference (None in open
@@ -110,17 +118,19 @@ class ComparisonResult:
     force_error_range: np.ndarray
     current_error_ac: np.ndarray
     force_error_ac: np.ndarray
-    detailed_wall_s: float
-    reduced_wall_s: float
+    detailed_cpu_s: float
+    reduced_cpu_s: float
     extra: dict = field(default_factory=dict)
     detailed_gap_m: np.ndarray | None = None
     reduced_gap_m: np.ndarray | None = None
     reference_gap_m: np.ndarray | None = None
+    timing_runs: int = 1
 
     @property
     def speedup(self) -> float:
-        """Wall time of the detailed run over that of the reduced run."""
-        return self.detailed_wall_s / self.reduced_wall_s
+        """CPU time of the detailed run over that of the reduced run (each the best of
+        ``timing_runs`` warm runs; NaN when not timed)."""
+        return self.detailed_cpu_s / self.reduced_cpu_s
 
     @property
     def max_error(self) -> float:
@@ -227,9 +237,22 @@ def standard_scenarios(magnet: Any, *, gap_m: float, current_A: float) -> list[C
     return out
 
 
+def _timed(run: Callable[[], Any], repeat: int) -> tuple[float, Any]:
+    """``run()``'s result and its CPU time [s]: one untimed warm-up run (compilation,
+    caches; its result is returned), then the best of ``repeat`` timed runs
+    (``time.process_time``; NaN for ``repeat = 0``)."""
+    result = run()
+    best = math.inf if repeat else math.nan
+    for _ in range(repeat):
+        c0 = time.process_time()
+        run()
+        best = min(best, time.process_time() - c0)
+    return best, result
+
+
 def compare_models(detailed: Any, reduced: Any, scenarios: list[ComparisonScenario], *,
-                   gap_m: float, current_A: float) -> list[ComparisonResult]:
-    """Run every scenario with both models and measure errors and wall times.
+                   gap_m: float, current_A: float, repeat: int = 3) -> list[ComparisonResult]:
+    """Run every scenario with both models and measure errors and CPU times.
 
     Parameters
     ----------
@@ -237,7 +260,16 @@ def compare_models(detailed: Any, reduced: Any, scenarios: list[ComparisonScenar
         The detailed model.
     reduced : CurrentModel
         The current-based model (its maps must belong to the same magnet).
+    scenarios : list of ComparisonScenario
+    gap_m, current_A : float
+        Operating point [m], [A] (closed loop: controller design and load).
+    repeat : int
+        Timed runs per model and scenario after the untimed warm-up run (default 3); the
+        best CPU time counts.  0: no timing (the times and speed-ups are NaN).
     """
+    if isinstance(repeat, bool) or not isinstance(repeat, int) or repeat < 0:
+        raise InputError(f"repeat = {repeat!r}; use a whole number >= 0 of timed runs (0: no "
+                         "timing)")
     fm = detailed if isinstance(detailed, FluxModel) else FluxModel(detailed)
     if tuple(reduced.circuit_names) != tuple(fm.circuit_names) or \
             tuple(reduced.gap_names) != tuple(fm.gap_names):
@@ -251,15 +283,15 @@ def compare_models(detailed: Any, reduced: Any, scenarios: list[ComparisonScenar
             veh = HeaveMass(force0 / STANDARD_GRAVITY)
             ctl = design_gap_controller(fm.network, mass_kg=veh.mass_kg, gap_m=gap_m,
                                         current_A=current_A)
-            runs = []
-            for model in (fm, reduced):
-                t0 = time.perf_counter()
-                res = closed_loop(model, veh, ctl, duration_s=sc.duration_s, dt_s=sc.dt_s,
-                                  initial_gap_m=gap_m, initial_current_A=current_A,
-                                  gap_reference=sc.gap_reference,
-                                  external_force=_scaled(sc.external_force_fraction, force0))
-                runs.append((time.perf_counter() - t0, res))
-            (wd, d), (wr, r) = runs
+            loads = _scaled(sc.external_force_fraction, force0)
+
+            def loop(model: Any, veh: HeaveMass = veh, ctl: Any = ctl,
+                     sc: ComparisonScenario = sc, loads: Any = loads) -> Any:
+                return closed_loop(model, veh, ctl, duration_s=sc.duration_s, dt_s=sc.dt_s,
+                                   initial_gap_m=gap_m, initial_current_A=current_A,
+                                   gap_reference=sc.gap_reference, external_force=loads)
+
+            (wd, d), (wr, r) = (_timed(partial(loop, model), repeat) for model in (fm, reduced))
             t = d.time_s
             fd = circuit_forces(d.pole_force_N, d.gap_names, groups, circuits)
             fr = circuit_forces(r.pole_force_N, r.gap_names, groups, circuits)
@@ -270,14 +302,12 @@ def compare_models(detailed: Any, reduced: Any, scenarios: list[ComparisonScenar
             gref: np.ndarray | None = (None if sc.gap_reference is None else
                                        np.array([sc.gap_reference(float(tk)) for tk in t]))
         else:
-            t0 = time.perf_counter()
-            ds = simulate(fm, (0.0, sc.duration_s), dt=sc.dt_s, gaps=sc.gaps,
-                          voltages=sc.voltages, initial_currents=sc.initial_current_A)
-            wd = time.perf_counter() - t0
-            t0 = time.perf_counter()
-            rs = simulate(reduced, (0.0, sc.duration_s), dt=sc.dt_s, gaps=sc.gaps,
-                          voltages=sc.voltages, initial_currents=sc.initial_current_A)
-            wr = time.perf_counter() - t0
+            wd, ds = _timed(partial(simulate, fm, (0.0, sc.duration_s), dt=sc.dt_s,
+                                    gaps=sc.gaps, voltages=sc.voltages,
+                                    initial_currents=sc.initial_current_A), repeat)
+            wr, rs = _timed(partial(simulate, reduced, (0.0, sc.duration_s), dt=sc.dt_s,
+                                    gaps=sc.gaps, voltages=sc.voltages,
+                                    initial_currents=sc.initial_current_A), repeat)
             t = ds.time_s
             fd = circuit_forces(ds.pole_force_N, ds.gap_names, groups, circuits)
             fr = rs.circuit_force_N
@@ -292,6 +322,7 @@ def compare_models(detailed: Any, reduced: Any, scenarios: list[ComparisonScenar
             scenario=sc, circuit_names=circuits, time_s=t, detailed_currents_A=cd,
             reduced_currents_A=cr, detailed_forces_N=fd, reduced_forces_N=fr,
             current_error=ce, force_error=fe, current_error_range=cer, force_error_range=fer,
-            current_error_ac=cea, force_error_ac=fea, detailed_wall_s=wd, reduced_wall_s=wr,
-            extra=extra, detailed_gap_m=gd, reduced_gap_m=gr, reference_gap_m=gref))
+            current_error_ac=cea, force_error_ac=fea, detailed_cpu_s=wd, reduced_cpu_s=wr,
+            extra=extra, detailed_gap_m=gd, reduced_gap_m=gr, reference_gap_m=gref,
+            timing_runs=repeat))
     return results
