@@ -748,16 +748,8 @@ class MagnetBank:
                              f"rates of shape ({n}, {nc}) for {n} steps")
         if n and not (np.all(h >= 0) and np.all(np.isfinite(h))):
             raise InputError("run_steps: dt_s must be finite and >= 0 s")
-        # the sub-step count of every step (the one rule, _substeps, per distinct
-        # length); a step of length 0 joins the segment before it (or after it)
-        lengths, inverse = np.unique(h, return_inverse=True)
-        per = np.array([self._substeps(float(v)) if v > 0 else 0 for v in lengths],
-                       dtype=int)[inverse.ravel()]
-        if n and per.max() == 0:
-            per[:] = 1
-        for j in range(n):
-            if per[j] == 0:
-                per[j] = per[j - 1] if j else per[per > 0][0]
+        # the sub-step count of every step (a step of 0 s takes one: it changes nothing)
+        per = self._substep_counts(h)
         out = [np.full((n, nc), np.nan) for _ in range(3)]
         k, x, t = 0, x0, float(time_s)
         while k < n:
@@ -795,9 +787,13 @@ class MagnetBank:
             self._runs[substeps] = call
         return call
 
+    def _substep_counts(self, dt: np.ndarray) -> np.ndarray:
+        """RK4 sub-steps of steps of ``dt`` [s] (at most ``max_step_s`` each; the rule)."""
+        return np.maximum(1, np.ceil(dt / self.max_step_s * (1 - 1e-12))).astype(int)
+
     def _substeps(self, dt: float) -> int:
-        """RK4 sub-steps of a step of ``dt`` [s] (at most ``max_step_s`` each)."""
-        return max(1, math.ceil(dt / self.max_step_s * (1 - 1e-12)))
+        """RK4 sub-steps of one step of ``dt`` [s] (:meth:`_substep_counts`)."""
+        return int(self._substep_counts(np.array([dt]))[0])
 
     def _composable_substeps(self, dt: float, what: str) -> int:
         """Sub-steps of ``dt`` for the step functions other models compose (banks of
