@@ -203,3 +203,28 @@ def test_bank_run_steps_equals_its_stepper_bit_for_bit(all_maps, codegen: str) -
     assert np.isnan(stop.circuit_force_N[12:]).all()
     with pytest.raises(InputError, match=r"run_steps: expected I_L \(3,\)"):
         bank.run_steps(i0, g[:20, :2], u[:20], rates[:20], np.full(20, 1e-3))
+
+
+def test_kernel_reason_codes_name_each_reason(all_maps) -> None:
+    from maglevkit.models.bank import MagnetBank, StepFlag
+
+    maps = all_maps["u-magnet"][1]
+    bank = MagnetBank({"a": maps, "b": maps, "c": maps, "d": maps})
+    f = bank.step_kernel(1e-3)
+    i = np.array([20.0, 20.0, 70.0, 20.0])          # c starts above the maps' 60 A
+    s = np.array([0.010, 0.030, 0.010, 0.010])      # b outside the 6-16 mm maps
+    u = bank.resistance_ohm * np.array([20.0, 20.0, 20.0, np.nan])    # d: NaN voltage
+    res = f.call({"I_L": i, "s": s, "U": u, "sdot": np.zeros(4), "h": 1e-3})
+    flags = np.asarray(res["flags"]).ravel()
+    assert flags[0] == 0
+    assert flags[1] == StepFlag.GAP_OUT_OF_RANGE
+    assert flags[2] == StepFlag.CURRENT_OUT_OF_RANGE
+    assert int(flags[3]) & StepFlag.INPUT_NOT_FINITE
+    assert float(res["n_bad"]) == 3                 # a count of circuits, not of reasons
+    # the step turns the codes into messages, inputs first
+    state = bank.initial_state(gaps=0.010, currents=20.0)
+    with pytest.raises(InputError, match=r"voltages must be finite: circuit 'd/coil'"):
+        bank.step(state, 1e-3, u)
+    with pytest.raises(OutOfRangeError, match=r"member 'b'.*over the step.*gap 0\.03 m"):
+        bank.step(state, 1e-3, u[0], gaps=s)
+    assert [int(r) for r in StepFlag.by_priority()] == [4, 1, 8, 2]

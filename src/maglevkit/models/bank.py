@@ -27,6 +27,7 @@ models, linearisation and MPC.
 
 from __future__ import annotations
 
+import enum
 import hashlib
 import math
 import subprocess
@@ -58,7 +59,7 @@ from .stepper import BankStepper
 from .tables import INTERPOLATION_METHODS, cell_table
 
 __all__ = ["KERNEL_PARAMETERS", "RUN_CHUNK", "BankOutputs", "BankRun", "BankSimulation",
-           "BankState", "MagnetBank"]
+           "BankState", "MagnetBank", "StepFlag"]
 
 _MAP_VARIABLES = ("inductance_H", "dL_ds_H_per_m", "force_N")
 KERNEL_PARAMETERS = ("s0_m", "inv_ds_per_m", "cells_s", "i0_A", "inv_di_per_A", "cells_i",
@@ -156,6 +157,30 @@ class BankSimulation:
     pole_names: tuple[str, ...]
     member_names: tuple[str, ...]
     final_state: BankState
+
+
+class StepFlag(enum.IntFlag):
+    """Why the compiled step flagged a circuit: the bits of the kernel's reason code.
+
+    The step (:meth:`MagnetBank.circuit_step_function`) returns, per circuit, the sum of
+    the reasons that hold (0: a good step); :meth:`MagnetBank.step` and the stepper turn
+    the code into the one message of each reason.
+    """
+
+    GAP_OUT_OF_RANGE = 1
+    """The gap path of the step leaves the map's gap range (or a gap is <= 0)."""
+    CURRENT_OUT_OF_RANGE = 2
+    """The current at the start or at a sub-step end leaves the map's current range."""
+    INPUT_NOT_FINITE = 4
+    """A voltage, gap or gap rate is NaN or infinite."""
+    RESULT_NOT_FINITE = 8
+    """The RK4 step gave a NaN or infinite current."""
+
+    @classmethod
+    def by_priority(cls) -> tuple[StepFlag, ...]:
+        """The order in which reasons are reported: inputs, gap path, result, currents."""
+        return (cls.INPUT_NOT_FINITE, cls.GAP_OUT_OF_RANGE, cls.RESULT_NOT_FINITE,
+                cls.CURRENT_OUT_OF_RANGE)
 
 
 @dataclass(frozen=True)
@@ -517,8 +542,9 @@ class MagnetBank:
         ``(I_L, s, U, sdot, h, p) -> (I_L', I, F, I_min, I_max, bad)``: ``substeps``
         classical RK4 sub-steps of eq. 8 over ``h`` [s] with the gap moving linearly from
         ``s`` at ``sdot``; ``I``, ``F`` at the end (gap ``s + sdot h``); ``I_min``/``I_max``
-        the extremes of ``I_L`` over the sub-step ends; ``bad`` is 1 when the gap path or a
-        sub-step current leaves the map range or a value is not finite.  ``p`` is one
+        the extremes of ``I_L`` over the sub-step ends; ``bad`` is the circuit's reason
+        code, a sum of :class:`StepFlag` bits (0: a good step; the gap path or a sub-step
+        current leaving the map range, an input or the result not finite).  ``p`` is one
         column of :attr:`circuit_parameters` (rows :data:`KERNEL_PARAMETERS`; change
         ``R_el`` and ``a`` there to tune the resistances).  The table of every distinct map
         is embedded as a constant.  :meth:`step` maps this function over the circuits.
@@ -565,9 +591,15 @@ class MagnetBank:
         def non_finite(v: Any) -> Any:
             return 1 - (ca.fabs(v) <= big)
 
-        bad = ((ca.fmin(s, se) < p[9]) + (ca.fmax(s, se) > p[10]) + (lo < p[11])
-               + (hi > p[12]) + non_finite(x) + non_finite(u) + non_finite(s)
-               + non_finite(sd) > 0)
+        def any_of(*conditions: Any) -> Any:
+            return sum(conditions[1:], conditions[0]) > 0
+
+        # the reason code (StepFlag): one bit per reason, 0 for a good step
+        bad = (float(StepFlag.GAP_OUT_OF_RANGE) * any_of(ca.fmin(s, se) < p[9], ca.fmax(s, se) > p[10])
+               + float(StepFlag.CURRENT_OUT_OF_RANGE) * any_of(lo < p[11], hi > p[12])
+               + float(StepFlag.INPUT_NOT_FINITE) * any_of(non_finite(u), non_finite(s),
+                                                    non_finite(sd))
+               + float(StepFlag.RESULT_NOT_FINITE) * non_finite(x))
         return ca.Function("bank_circuit_step", [i, s, u, sd, h, p],
                            [x, coil, force, lo, hi, bad],
                            ["I_L", "s", "U", "sdot", "h", "p"],
@@ -581,7 +613,8 @@ class MagnetBank:
         gap moves linearly (exact); ``I_min``/``I_max`` are the extremes of the
         current over the sub-step ends; ``n_bad`` counts circuits with a gap or current
         outside their map's range (start, end and every sub-step) or a non-finite value,
-        so that the caller checks one number (and diagnoses only when it is > 0).
+        so that the caller checks one number (and diagnoses only when it is > 0);
+        ``flags``: the reason code of every circuit (:class:`StepFlag` bits).
         Everything is inlined into one expression graph (no nested calls).  ``s_next``:
         the gaps at the end of the step, ``s + sdot h``.
         """
@@ -596,11 +629,12 @@ class MagnetBank:
         summ = ca.DM(ca.Sparsity.triplet(len(self._members), n, rows.tolist(), list(range(n))),
                      1.0)
         return ca.Function(f"maglevkit_bank_step{substeps}", [vi, vs, vu, vsd, vh],
-                           [r.T for r in res[:3]] + [ca.densify(ca.mtimes(summ, res[2].T)), ca.sum2(res[5])]
-                           + [res[3].T, res[4].T, vs + vsd * vh],
+                           [r.T for r in res[:3]]
+                           + [ca.densify(ca.mtimes(summ, res[2].T)), ca.sum2(res[5] > 0)]
+                           + [res[3].T, res[4].T, vs + vsd * vh, res[5].T],
                            ["I_L", "s", "U", "sdot", "h"],
                            ["I_L_next", "I", "F", "member_F", "n_bad", "I_L_min", "I_L_max",
-                            "s_next"])
+                            "s_next", "flags"])
 
     # ------------------------------------------------------------------ public model pieces
     @property
@@ -851,9 +885,10 @@ class MagnetBank:
                 + f"  {name}_k(a, r);\n"
                 + f"  if (res[3]) {{ for (k = 0; k < {nm}; ++k) res[3][k] = 0.0;\n"
                 + f"    for (c = 0; c < {n}; ++c) res[3][member[c]] += r[2][c]; }}\n"
-                + f"  if (res[4]) {{ double nb = 0.0; for (c = 0; c < {n}; ++c) nb += r[5][c]; "
+                + f"  if (res[4]) {{ double nb = 0.0; for (c = 0; c < {n}; ++c) nb += r[5][c] != 0.0; "
                   "res[4][0] = nb; }\n"
-                + f"  if (res[7]) for (c = 0; c < {n}; ++c) res[7][c] = a[1][c] + a[3][c] * a[4][0];\n")
+                + f"  if (res[7]) for (c = 0; c < {n}; ++c) res[7][c] = a[1][c] + a[3][c] * a[4][0];\n"
+                + f"  if (res[8]) for (c = 0; c < {n}; ++c) res[8][c] = r[5][c];\n")
         # the time loop around the same step (MagnetBank.run_steps): up to RUN_CHUNK steps,
         # step k reads the state row k - 1 of its own output and writes row k; it stops
         # after the first flagged step (n_done = the good steps before it; that step's
@@ -871,7 +906,7 @@ class MagnetBank:
                 f"    a[4] = arg[4] + k;\n"
                 f"    for (c = 0; c < 3; ++c) r[c] = res[c] + k * {n};\n"
                 f"    {name}_k(a, r);\n"
-                f"    for (c = 0; c < {n}; ++c) nb += r[5][c];\n"
+                f"    for (c = 0; c < {n}; ++c) nb += r[5][c] != 0.0;\n"
                 f"    if (nb != 0.0) break;\n  }}\n"
                 f"  res[3][0] = (double) k;\n")
         code = ("#include <math.h>\n" + kernel
@@ -879,7 +914,7 @@ class MagnetBank:
                                                 ("h", 1)],
                                   outputs=[("I_L_next", n), ("I", n), ("F", n), ("member_F", nm),
                                            ("n_bad", 1), ("I_L_min", n), ("I_L_max", n),
-                                           ("s_next", n)],
+                                           ("s_next", n), ("flags", n)],
                                   body=body, work=10 * n + 1)
                 + external_source(f"{name}_run", inputs=[("I_L0", n), ("s", n * ch),
                                                          ("U", n * ch), ("sdot", n * ch),
@@ -1019,33 +1054,52 @@ class MagnetBank:
 
     def _diagnose(self, s: np.ndarray, sd: np.ndarray, i0: np.ndarray, u: np.ndarray,
                   x: np.ndarray, call: _StepCall, t0: float, t1: float) -> None:
-        """The kernel flagged a circuit: raise (or warn) with the details."""
+        """The kernel flagged circuits: turn their reason codes (:class:`StepFlag`, the
+        kernel's ``flags``) into the error (or, extrapolating, the warning).
+
+        Reasons are taken in the order of :class:`StepFlag`'s priority (inputs first, then
+        the gap path, the result, the sub-step currents), each for every circuit that has
+        it; the message of each reason is written here once.
+        """
         lo, hi = call.res[5].copy(), call.res[6].copy()   # sub-step extremes of this call
-        for what, arr, unit in (("voltages", u, "V"), ("gaps", s, "m"), ("gap_rates", sd, "m/s")):
-            if not np.isfinite(arr).all():
-                k = int(np.argmax(~np.isfinite(arr)))
-                raise InputError(f"{what} must be finite: circuit "
-                                 f"{self.circuit_names[int(self._reduced_idx[k])]!r} has "
-                                 f"{float(arr[k])!r} {unit}")
+        flags = np.asarray(call.res[8], dtype=float).astype(int)
         se = s + sd * (t1 - t0)
-        if (s <= 0).any() or (se <= 0).any():
-            k = int(np.argmax((s <= 0) | (se <= 0)))
-            raise InputError(f"gaps must stay > 0 m over the step: circuit "
-                             f"{self.circuit_names[int(self._reduced_idx[k])]!r} from "
-                             f"{float(s[k])!r} m to {float(se[k])!r} m")
-        self._check_range(np.minimum(s, se), np.maximum(s, se), i0, i0,
-                          f" over the step t = {t0:.6g}..{t1:.6g} s")
-        bad = ~(np.isfinite(x) & np.isfinite(u) & np.isfinite(sd))
-        if bad.any():
-            k = int(np.argmax(bad))
-            j = int(self._reduced_idx[k])
-            raise SolverError(f"non-finite value in circuit {self.circuit_names[j]!r}",
-                              time=t0, state={"I_L_A": float(i0[k]), "gap_m": float(s[k]),
-                                              "gap_rate_m_per_s": float(sd[k]),
-                                              "voltage_V": float(u[k])},
-                              reason="the RK4 step gave a non-finite current (or an input "
-                                     "was not finite)")
-        self._check_range(se, se, lo, hi, f" in an RK4 sub-step within t = {t0:.6g}..{t1:.6g} s")
+        for reason in StepFlag.by_priority():
+            for k in np.flatnonzero(flags & reason):
+                self._flag_error(StepFlag(reason), int(k), s, se, sd, i0, u, lo, hi, t0, t1)
+
+    def _flag_error(self, reason: StepFlag, k: int, s: np.ndarray, se: np.ndarray,
+                    sd: np.ndarray, i0: np.ndarray, u: np.ndarray, lo: np.ndarray,
+                    hi: np.ndarray, t0: float, t1: float) -> None:
+        """The message of one reason code of reduced circuit ``k`` (raises, or returns after
+        an extrapolation warning)."""
+        name = self.circuit_names[int(self._reduced_idx[k])]
+        if reason is StepFlag.INPUT_NOT_FINITE:
+            for what, arr, unit in (("voltages", u, "V"), ("gaps", s, "m"),
+                                    ("gap_rates", sd, "m/s")):
+                if not math.isfinite(float(arr[k])):
+                    raise InputError(f"{what} must be finite: circuit {name!r} has "
+                                     f"{float(arr[k])!r} {unit}")
+        elif reason is StepFlag.GAP_OUT_OF_RANGE:
+            if s[k] <= 0 or se[k] <= 0:
+                raise InputError(f"gaps must stay > 0 m over the step: circuit {name!r} from "
+                                 f"{float(s[k])!r} m to {float(se[k])!r} m")
+            low, high = min(s[k], se[k]), max(s[k], se[k])
+            self._range_error(k, float(low if low < self._lo_s[k] else high), float(i0[k]),
+                              f" over the step t = {t0:.6g}..{t1:.6g} s")
+        elif reason is StepFlag.RESULT_NOT_FINITE:
+            raise SolverError(f"non-finite value in circuit {name!r}", time=t0,
+                              state={"I_L_A": float(i0[k]), "gap_m": float(s[k]),
+                                     "gap_rate_m_per_s": float(sd[k]),
+                                     "voltage_V": float(u[k])},
+                              reason="the RK4 step gave a non-finite current")
+        elif not self._lo_i[k] <= i0[k] <= self._hi_i[k]:   # CURRENT_OUT_OF_RANGE at the start
+            self._range_error(k, float(s[k]), float(i0[k]),
+                              f" over the step t = {t0:.6g}..{t1:.6g} s")
+        else:                                     # CURRENT_OUT_OF_RANGE in a sub-step
+            cur = lo[k] if lo[k] < self._lo_i[k] else hi[k]
+            self._range_error(k, float(se[k]), float(cur),
+                              f" in an RK4 sub-step within t = {t0:.6g}..{t1:.6g} s")
 
     # ------------------------------------------------------------------ stepping interface
     def initial_state(self, *, gaps: Any, currents: Any, time: float = 0.0) -> BankState:
@@ -1325,7 +1379,8 @@ def _circuit_forces(pole_force: np.ndarray, member: _Member) -> np.ndarray:
 class _RunResult:
     rows: tuple[np.ndarray, np.ndarray, np.ndarray]    # I_L, I, F (m, n_circuits)
     n_done: int
-    extremes: list[Any]          # as _StepCall.res: [5], [6] the flagged step's I_L extremes
+    extremes: list[Any]          # as _StepCall.res: [5], [6] the flagged step's I_L extremes,
+                                 # [8] its reason codes
 
 
 class _RunCall:
@@ -1367,7 +1422,7 @@ class _RunCall:
             r = self.res
             done = int(r[3][0])
             return _RunResult((r[0][:m], r[1][:m], r[2][:m]), done,
-                              [None] * 5 + [r[4].copy(), r[5].copy()])
+                              [None] * 5 + [r[4].copy(), r[5].copy(), None, r[6].copy()])
         ch = RUN_CHUNK
         pad = ch - m
         end = s[-1] + sd[-1] * h[-1]
@@ -1380,8 +1435,8 @@ class _RunCall:
         x, coil, force = (np.asarray(res[j]).T[:m] for j in range(3))
         flags = np.asarray(res[4]).ravel()[:m]
         done = int(np.argmax(flags != 0)) if (flags != 0).any() else m
-        lo, hi = (np.asarray(res[j])[:, min(done, m - 1)] for j in (5, 6))
-        return _RunResult((x, coil, force), done, [None] * 5 + [lo, hi])
+        lo, hi, flagged = (np.asarray(res[j])[:, min(done, m - 1)] for j in (5, 6, 8))
+        return _RunResult((x, coil, force), done, [None] * 5 + [lo, hi, None, flagged])
 
 
 class _StepCall:

@@ -117,7 +117,7 @@ class BankStepper:
         args = [self._il, self._g, self._u, self._gd, self._h]
         self._scratch = r = np.zeros_like(self._block)       # the same layout as the block
         self._res = [r[:nc], r[nc:2 * nc], r[2 * nc:3 * nc], r[3 * nc:3 * nc + nm],
-                     np.zeros(1), np.zeros(nc), np.zeros(nc), r[3 * nc + nm:]]
+                     np.zeros(1), np.zeros(nc), np.zeros(nc), r[3 * nc + nm:], np.zeros(nc)]
         buf: Any
         buf, self._eval = call.f.buffer()
         self._buf = buf                     # keeps the bound buffer alive
