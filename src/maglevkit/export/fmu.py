@@ -42,7 +42,7 @@ from xml.sax.saxutils import escape, quoteattr
 import numpy as np
 
 from ..errors import InputError, SolverError
-from ..models.bank import KERNEL_PARAMETERS, MagnetBank
+from ..models.bank import KERNEL_PARAMETERS, MagnetBank, StepFlag
 from ..models.compiled import cache_directory, find_compiler
 from ..models.current import CurrentModel
 
@@ -417,6 +417,8 @@ def _config_header(ident: str, guid: str, circuits: tuple[str, ...], par: np.nda
         f"#define MK_STEP {ident}_step", f"#define MK_STEP_WORK {ident}_step_work",
         f"#define MK_OUT {ident}_out", f"#define MK_OUT_WORK {ident}_out_work",
         f"#define START_MAX_SUBSTEP {_c_double(max_substep)}",
+        "/* the kernel's reason codes (maglevkit.models.bank.StepFlag) */",
+        *(f"#define STEP_FLAG_{flag.name} {int(flag)}" for flag in StepFlag),
         "/* kernel parameters, one column of N_PAR per circuit (MagnetBank.circuit_parameters) */",
     ]
     text = "\n".join(lines) + "\n"
