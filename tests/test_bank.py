@@ -15,8 +15,8 @@ import maglevkit as mk
 from maglevkit.compare import standard_scenarios
 from maglevkit.errors import CompilationWarning, InputError, OutOfRangeError, SolverError
 from maglevkit.models import compiled as compiled_mod
-from maglevkit.models.bank import MagnetBank, StepFlag
-from maglevkit.models.tables import cell_table
+from maglevkit.reduced.bank import MagnetBank, StepFlag
+from maglevkit.reduced.tables import cell_table
 
 from .conftest import u_params
 

@@ -10,8 +10,8 @@ import pytest
 import maglevkit as mk
 from maglevkit.compare import standard_scenarios
 from maglevkit.errors import InputError, MaglevkitError, OutOfRangeError
-from maglevkit.models.current import CurrentModel
 from maglevkit.models.inputs import sample_input
+from maglevkit.reduced.current import CurrentModel
 
 GAPS = np.linspace(0.006, 0.016, 6)
 CURRENTS = np.linspace(0.0, 60.0, 7)
@@ -165,7 +165,7 @@ def test_tables_need_rk4_without_eddy_modes_and_a_known_lookup(all_maps) -> None
 
 @pytest.mark.parametrize("codegen", ["lanes", "casadi"])
 def test_bank_run_steps_equals_its_stepper_bit_for_bit(all_maps, codegen: str) -> None:
-    from maglevkit.models.bank import RUN_CHUNK, MagnetBank
+    from maglevkit.reduced.bank import RUN_CHUNK, MagnetBank
 
     maps = {"a": all_maps["tr09-standard"][1], "b": all_maps["u-magnet"][1]}
     bank = MagnetBank(maps, codegen=codegen)
@@ -206,7 +206,7 @@ def test_bank_run_steps_equals_its_stepper_bit_for_bit(all_maps, codegen: str) -
 
 
 def test_kernel_reason_codes_name_each_reason(all_maps) -> None:
-    from maglevkit.models.bank import MagnetBank, StepFlag
+    from maglevkit.reduced.bank import MagnetBank, StepFlag
 
     maps = all_maps["u-magnet"][1]
     bank = MagnetBank({"a": maps, "b": maps, "c": maps, "d": maps})

@@ -58,16 +58,9 @@ if TYPE_CHECKING:  # the eager imports, for type checkers and IDEs
         material_names,
     )
     from .models import (
-        BankOutputs,
-        BankSimulation,
-        BankState,
-        BankStepper,
-        CurrentModel,
         FluxModel,
         FluxState,
         InductanceEstimate,
-        MagnetBank,
-        ReducedSimulation,
         Scenario,
         SimulationResult,
         StaticSolution,
@@ -79,6 +72,15 @@ if TYPE_CHECKING:  # the eager imports, for type checkers and IDEs
         simulate,
         solve_statics,
         voltage_step_response,
+    )
+    from .reduced import (
+        BankOutputs,
+        BankSimulation,
+        BankState,
+        BankStepper,
+        CurrentModel,
+        MagnetBank,
+        ReducedSimulation,
     )
     from .reduction import CharacteristicMaps, build_maps, load_maps
 
@@ -107,16 +109,16 @@ _LAZY: dict[str, str] = {
     "TabulatedBH": ".materials",
     "get_material": ".materials",
     "material_names": ".materials",
-    "BankOutputs": ".models",
-    "BankSimulation": ".models",
-    "BankState": ".models",
-    "BankStepper": ".models",
-    "CurrentModel": ".models",
+    "BankOutputs": ".reduced",
+    "BankSimulation": ".reduced",
+    "BankState": ".reduced",
+    "BankStepper": ".reduced",
+    "CurrentModel": ".reduced",
     "FluxModel": ".models",
     "FluxState": ".models",
     "InductanceEstimate": ".models",
-    "MagnetBank": ".models",
-    "ReducedSimulation": ".models",
+    "MagnetBank": ".reduced",
+    "ReducedSimulation": ".reduced",
     "Scenario": ".models",
     "SimulationResult": ".models",
     "StaticSolution": ".models",
@@ -135,7 +137,7 @@ _LAZY: dict[str, str] = {
 """Public name -> the submodule that defines it (imported on first access)."""
 
 _SUBPACKAGES = frozenset({"circuit", "cli", "compare", "control", "errors", "figures", "magnets",
-                          "materials", "models", "plotting", "reduction", "validation",
+                          "materials", "models", "plotting", "reduced", "reduction", "validation",
                           "vehicle"})
 
 

@@ -122,8 +122,8 @@ def compare(
     circuit; --format csv or json prints the same columns with unit-suffixed keys.
     """
     from ..compare import ComparisonScenario, compare_models, standard_scenarios
-    from ..models.current import CurrentModel
     from ..models.scenario import load_scenario
+    from ..reduced.current import CurrentModel
     from ..reduction import load_maps
 
     mag = load_magnet_or_exit(magnet)

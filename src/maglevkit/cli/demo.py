@@ -40,9 +40,9 @@ def demo(
     """
     from ..compare import compare_models, standard_scenarios
     from ..figures import write_figures
-    from ..models.current import CurrentModel
     from ..models.statics import solve_statics
     from ..plotting import plot_comparison, plot_force_current, plot_maps
+    from ..reduced.current import CurrentModel
     from ..reduction import build_maps
     from .compare import comparison_table, plot_title, slug
     from .statics import write_statics_csv

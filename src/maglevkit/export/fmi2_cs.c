@@ -590,7 +590,7 @@ fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunicationPoint,
         }
         snprintf(where, sizeof where, " in the RK4 sub-step ending at t = %.9g s", t0 + (double)(k + 1) * hs);
         for (j = 0; j < NC; ++j) {
-            /* the kernel's reason code (maglevkit.models.bank.StepFlag), not a check of our own */
+            /* the kernel's reason code (maglevkit.reduced.bank.StepFlag), not a check of our own */
             if (m->bad[j] != 0.0) {
                 report_step_flags(m, j, (int)m->bad[j], sk[j], hs, where);
                 memcpy(m->x, x0, sizeof x0);   /* the state before the step */

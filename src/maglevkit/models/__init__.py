@@ -1,7 +1,6 @@
-"""Magnet models: statics of the equivalent circuit, flux-based DAE, current-based ODE."""
+"""Magnet models: statics of the equivalent circuit and the flux-based DAE (the
+current-based model and the bank are in :mod:`maglevkit.reduced`)."""
 
-from .bank import BankOutputs, BankSimulation, BankState, MagnetBank
-from .current import CurrentModel, CurrentModelState, CurrentOutputs, ReducedSimulation
 from .experiments import (
     InductanceEstimate,
     differential_inductance_from_step,
@@ -20,27 +19,17 @@ from .flux import (
 from .scenario import Scenario, bundled_scenarios, load_scenario, parse_scenario
 from .signals import Constant, Ramp, Signal, Sine, Step, Tabulated, parse_signal
 from .statics import StaticSolution, coenergy, magnetic_energy, pole_force_eq6, solve_statics
-from .stepper import BankStepper
 
 __all__ = [
-    "BankOutputs",
-    "BankSimulation",
-    "BankState",
-    "BankStepper",
     "DEFAULT_ATOL",
     "DEFAULT_RTOL",
     "Constant",
-    "CurrentModel",
-    "CurrentModelState",
-    "CurrentOutputs",
     "EnergyBalance",
     "FluxModel",
     "FluxOutputs",
     "FluxState",
     "InductanceEstimate",
-    "MagnetBank",
     "Ramp",
-    "ReducedSimulation",
     "Scenario",
     "Signal",
     "SimulationResult",

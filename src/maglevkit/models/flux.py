@@ -39,7 +39,7 @@ import math
 import os
 from collections.abc import Mapping
 from dataclasses import dataclass, field
-from typing import Any, overload
+from typing import TYPE_CHECKING, Any, overload
 
 import casadi as ca
 import numpy as np
@@ -54,7 +54,6 @@ from ..magnets.base import PlausibleRange
 from ..materials import MU0
 from ..validation import optional_flag, real_array, real_number, whole_number
 from .compiled import COMPILE_MODES, compile_library
-from .current import CurrentModel, ReducedSimulation
 from .inputs import check_step, gap_secants, sample_input, time_grid
 from .statics import (
     as_network,
@@ -64,6 +63,9 @@ from .statics import (
     plausible_range,
     solve_statics,
 )
+
+if TYPE_CHECKING:
+    from ..reduced.current import CurrentModel, ReducedSimulation
 
 __all__ = [
     "DEFAULT_RTOL",
@@ -1085,7 +1087,7 @@ def simulate(model: Any, t: Any, *, gaps: Any, voltages: Any, gap_rates: Any = N
     Parameters
     ----------
     model : FluxModel, CurrentModel, Magnet or Network
-        The model (a :class:`~maglevkit.models.current.CurrentModel` runs the reduced model
+        The model (a :class:`~maglevkit.reduced.current.CurrentModel` runs the reduced model
         with the same inputs and conventions); ``options`` (``saturation``,
         ``eddy_currents``, ``method``, ``rtol``, ``atol``, ...) build a :class:`FluxModel`
         (or change a given one).
@@ -1129,6 +1131,8 @@ def simulate(model: Any, t: Any, *, gaps: Any, voltages: Any, gap_rates: Any = N
     if initial_currents is not None:
         real_array(initial_currents if not isinstance(initial_currents, Mapping)
                    else list(initial_currents.values()), "initial_currents", "A")
+    from ..reduced.current import CurrentModel  # the reduced model sits above this layer
+
     if isinstance(model, CurrentModel):
         if options:
             raise InputError(f"options {sorted(options)} apply to the flux model; build the "

@@ -12,14 +12,14 @@ advanced by its own integrator (correct, not fast: for studies of the per-pole f
 distribution).
 
 Per reduced circuit ``j`` (paper eq. 8, Fig. 8; the same expression as
-:class:`~maglevkit.models.current.CurrentModel`)::
+:class:`~maglevkit.reduced.current.CurrentModel`)::
 
     dI_L/dt = [ (U - R_el I_L) / a  -  dL/ds(s, I_L) I_L ds/dt ] / L~(s, I_L),   a = 1 + R_el/R_ec
     I       = (U - U_L) / R_el,   U_L = (U - R_el I_L) / a                (coil current)
     F       = F(s, I_L)
 
 with ``L~``, ``dL/ds`` and ``F`` from per-cell polynomial tables of the maps
-(:mod:`maglevkit.models.tables`; ``"bicubic"`` reproduces the single model's B-spline to
+(:mod:`maglevkit.reduced.tables`; ``"bicubic"`` reproduces the single model's B-spline to
 rounding).  The same expressions are available as CasADi functions
 (:attr:`MagnetBank.ode_function`, :attr:`MagnetBank.output_function`) for vehicle
 models, linearisation and MPC.
@@ -42,7 +42,10 @@ import casadi as ca
 import numpy as np
 
 from ..errors import InputError, OutOfRangeError, SolverError
-from .compiled import COMPILE_MODES, build_source, cache_directory, compile_function, find_compiler
+from ..models.compiled import COMPILE_MODES, build_source, cache_directory, compile_function, find_compiler
+from ..models.flux import FluxModel, FluxState
+from ..models.inputs import check_initial_choice, check_step, reject_bools, simulation_inputs
+from ..models.statics import circuit_pole_groups
 from .current import (
     EXTRA_CELLS,
     CurrentModel,
@@ -51,10 +54,7 @@ from .current import (
     eq8_coil_current,
     eq8_rhs,
 )
-from .flux import FluxModel, FluxState
-from .inputs import check_initial_choice, check_step, reject_bools, simulation_inputs
 from .lanes import LaneInput, external_source, lane_source, lane_target
-from .statics import circuit_pole_groups
 from .stepper import BankStepper
 from .tables import INTERPOLATION_METHODS, cell_table
 
@@ -128,7 +128,7 @@ class BankOutputs:
 @dataclass(frozen=True)
 class BankSimulation:
     """Time series of a bank simulation (SI units, axis 0 is time; conventions as
-    :class:`~maglevkit.models.current.ReducedSimulation`: outputs at ``t_k`` are left
+    :class:`~maglevkit.reduced.current.ReducedSimulation`: outputs at ``t_k`` are left
     limits, with the voltages held on ``[t_k-1, t_k)``).
 
     Attributes
@@ -227,7 +227,7 @@ class MagnetBank:
     members : mapping or sequence of (name, model)
         The magnets, each named; a model is a
         :class:`~maglevkit.reduction.CharacteristicMaps` or a
-        :class:`~maglevkit.models.current.CurrentModel` (reduced member: its maps and
+        :class:`~maglevkit.reduced.current.CurrentModel` (reduced member: its maps and
         resistances) or a :class:`~maglevkit.models.flux.FluxModel` (detailed member).
         A single magnet is a bank of one.
     gap_inputs : {"circuit", "pole"}
@@ -236,7 +236,7 @@ class MagnetBank:
         ``"pole"``: one gap input per pole, as for the single models (a reduced circuit
         uses the mean of its poles' gaps).
     interpolation : {"bicubic", "monotone", "bilinear"}
-        How the maps are interpolated (:mod:`maglevkit.models.tables`); ``"bicubic"``
+        How the maps are interpolated (:mod:`maglevkit.reduced.tables`); ``"bicubic"``
         equals the single :class:`CurrentModel`.
     compiled : {"auto", "always", "never"}
         ``"auto"`` (default): generated C compiled by the system C compiler and cached on
@@ -255,7 +255,7 @@ class MagnetBank:
     codegen : {"lanes", "casadi"}
         How the compiled step is generated from the same CasADi function: ``"lanes"``
         (default) evaluates several circuits at once in SIMD lanes
-        (:mod:`maglevkit.models.lanes`: 4 with AVX2, else 2), ``"casadi"`` is CasADi's
+        (:mod:`maglevkit.reduced.lanes`: 4 with AVX2, else 2), ``"casadi"`` is CasADi's
         own code generation of the mapped function (one circuit after the other).  Both
         give the same numbers; ``"lanes"`` is ~3-5x faster at 100-1000 circuits
         (BENCHMARKS.md).  Where the lanes cannot be compiled or loaded, the bank uses
@@ -1239,7 +1239,7 @@ class MagnetBank:
         return new_state, BankOutputs(t1, coil, i_next.copy(), force, member_force, pf)
 
     def stepper(self, state: BankState, dt: float) -> BankStepper:
-        """A :class:`~maglevkit.models.stepper.BankStepper` that advances the bank from
+        """A :class:`~maglevkit.reduced.stepper.BankStepper` that advances the bank from
         ``state`` in steps of ``dt`` [s] in place: the co-simulation loop of a vehicle
         model or controller without the per-step objects and copies of :meth:`step`
         (the same compiled function and checks, bit-identical results).

@@ -38,9 +38,9 @@ import casadi as ca
 import numpy as np
 
 from ..errors import InputError, OutOfRangeError, SolverError
+from ..models.compiled import COMPILE_MODES
+from ..models.inputs import check_initial_choice, check_step, simulation_inputs
 from ..validation import real_array
-from .compiled import COMPILE_MODES
-from .inputs import check_initial_choice, check_step, simulation_inputs
 
 __all__ = ["CurrentModel", "CurrentModelLinearization", "CurrentModelState", "CurrentOutputs",
            "ReducedSimulation", "eq8_coil_current", "eq8_eddy_branch_rhs", "eq8_rhs"]
@@ -241,7 +241,7 @@ class CurrentModel:
     lookup : {"tables", "bspline"}
         How RK4 (``method="rk4"``, ``eddy_modes=0``) reads the maps in :meth:`step` and
         :meth:`simulate`.  ``"tables"`` (default): the compiled per-cell tables of
-        :class:`~maglevkit.models.bank.MagnetBank` (the same bicubic function as the
+        :class:`~maglevkit.reduced.bank.MagnetBank` (the same bicubic function as the
         B-spline, equal to it within 1e-12 relative on the standard scenarios,
         docs/decisions.md), one compiled call per step and the whole time loop of
         :meth:`simulate` in C.  ``"bspline"``: CasADi's B-spline interpolants evaluated
@@ -251,7 +251,7 @@ class CurrentModel:
         :attr:`outputs_fun` (AD, MPC), ``method="cvodes"`` and ``eddy_modes > 0`` always
         use the B-splines.
     compiled : {"auto", "always", "never"}
-        How the tables are compiled (as :class:`~maglevkit.models.bank.MagnetBank`):
+        How the tables are compiled (as :class:`~maglevkit.reduced.bank.MagnetBank`):
         ``"auto"`` (default) by the system C compiler, cached on disk, falling back to
         CasADi's virtual machine with a warning; ``"never"`` the virtual machine;
         ``"always"`` a :class:`SolverError` if compiling fails.
@@ -1104,7 +1104,7 @@ def eq8_rhs(i_l: Any, u: Any, gap_rate: Any, ltilde: Any, dl_ds: Any, r_el: Any,
     """Eq. 8: ``dI_L/dt = [(U - R_el I_L)/a - dL/ds I_L ds/dt] / L~`` with ``a = 1 + R_el/R_ec``.
 
     Works element-wise on floats, NumPy arrays and CasADi expressions; the one expression
-    of eq. 8 that :class:`CurrentModel` and :class:`~maglevkit.models.bank.MagnetBank` use.
+    of eq. 8 that :class:`CurrentModel` and :class:`~maglevkit.reduced.bank.MagnetBank` use.
     """
     return ((u - r_el * i_l) / a - dl_ds * i_l * gap_rate) / ltilde
 
