@@ -286,7 +286,7 @@ def test_bad_input(split_maps: CharacteristicMaps) -> None:
     with pytest.raises(mk.InputError, match="no eddy_currents_A"):
         model.step(plain.initial_state(gaps=0.01, currents=20.0), 1e-3, 40.0)
     with pytest.raises(mk.InputError, match=r"expected shape \(1, 1\)"):
-        model.step(mk.models.current.CurrentModelState(0.0, np.array([20.0]),
+        model.step(mk.reduced.current.CurrentModelState(0.0, np.array([20.0]),
                                                        np.array([0.01, 0.01]), np.zeros((1, 2))),
                    1e-3, 40.0)
     with pytest.raises(mk.InputError, match="eddy_modes=0"):
