@@ -8,7 +8,7 @@ STAMP  := $(VENV)/.installed-stamp
 DEMO_STAMP := $(VENV)/.demo-stamp
 OUT    ?= out
 
-.PHONY: demo test test-all lint bench mutation clean
+.PHONY: demo test test-all lint bench mutation docs clean
 
 $(BIN)/python:
 	$(PYTHON) -m venv $(VENV)
@@ -43,9 +43,19 @@ lint: $(STAMP)
 mutation: $(STAMP)
 	$(BIN)/python tools/mutation.py
 
+## docs: build the HTML documentation (user guide, API reference, example gallery) in docs/_build/html
+DOCS_STAMP := $(VENV)/.docs-stamp
+$(DOCS_STAMP): $(BIN)/python pyproject.toml Makefile
+	$(BIN)/python -m pip install --quiet -e ".[docs]"
+	touch $(DOCS_STAMP)
+
+docs: $(DOCS_STAMP)
+	MPLBACKEND=Agg $(BIN)/sphinx-build -q -b html docs docs/_build/html
+	@echo "docs: open docs/_build/html/index.html"
+
 ## bench: run the benchmarks and rewrite BENCHMARKS.md
 bench: $(STAMP)
 	$(BIN)/python benchmarks/run.py --output BENCHMARKS.md
 
 clean:
-	rm -rf $(VENV) $(OUT) .pytest_cache .mypy_cache .ruff_cache
+	rm -rf $(VENV) $(OUT) .pytest_cache .mypy_cache .ruff_cache docs/_build docs/api docs/gallery

@@ -60,7 +60,7 @@ class GapController:
     resistances_ohm : tuple of float
         Circuit resistances [ohm] (resistive feed-forward and flux estimate).
     voltage_limit_V : float
-        Actuator limit |U| <= U_max (chopper supply).
+        Actuator limit ``|U| <= U_max`` (chopper supply).
     setpoint_weight : float
         Set-point weight b of the proportional term (0: I-PD form, reference changes act
         through the integrator only and do not kick the flux; 1: plain PID).
@@ -134,8 +134,8 @@ def design_gap_controller(magnet: Any, *, mass_kg: float, gap_m: float, current_
 
 
 class CascadeController:
-    """The cascade controller as a sampled-data :class:`~maglevkit.control.interface.
-    Controller` (flux estimate and error integral as its internal state).
+    """The cascade controller as a sampled-data ``Controller`` (flux estimate and error
+    integral as its internal state; the interface is :class:`maglevkit.control.Controller`).
 
     Between samples ``k`` and ``k+1`` (sample time ``T``)::
 
