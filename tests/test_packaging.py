@@ -51,13 +51,16 @@ def test_wheel_installs_and_runs_the_demo(tmp_path: Path) -> None:
     names = zipfile.ZipFile(wheel).namelist()
     for f in _data_files():
         assert f"maglevkit/{f}" in names
+    # without PYTHONPATH: a source tree on it would make pip and Python see the source,
+    # not the wheel
+    env = {k: v for k, v in os.environ.items() if k != "PYTHONPATH"}
+    env["MPLBACKEND"] = "Agg"
     env_dir = tmp_path / "venv"
     venv.create(env_dir, with_pip=True)
     python = env_dir / "bin" / "python"
     subprocess.run([str(python), "-m", "pip", "install", "--quiet", str(wheel)], check=True,
-                   timeout=1200)
-    env = {k: v for k, v in os.environ.items() if k != "PYTHONPATH"}
-    env["MPLBACKEND"] = "Agg"
+                   timeout=1200, env=env, cwd=tmp_path)
+    assert (env_dir / "bin" / "maglevkit").exists()
     out = tmp_path / "out"
     proc = subprocess.run([str(env_dir / "bin" / "maglevkit"), "demo", "--out", str(out)],
                           capture_output=True, text=True, cwd=tmp_path, env=env, timeout=1800)
