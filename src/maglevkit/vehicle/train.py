@@ -107,8 +107,16 @@ class TrainData:
     Attributes
     ----------
     name : str
+        Vehicle name.
     n_sections, n_frames_per_section, magnets_per_side : int
+        Sections (car bodies), levitation frames per section and magnet positions per
+        side of a section (a multiple of the frames per section).
     section_length_m, nominal_gap_m, touchdown_gap_m : float
+        Section length [m], nominal gap [m] and the gap at or below which a magnet counts
+        as closed onto the stator [m] (``touchdown_gap_m < nominal_gap_m``).
+    landing_gap_m : float
+        Gap at or above which the frame's skids sit on the slide rail [m]
+        (``> nominal_gap_m``); a vehicle run stops at either limit.
     standard_magnet, bow_magnet : str
         Magnet files (bundled names or paths).
     car_body_mass_kg, car_body_pitch_inertia_kg_m2, payload_kg : float
@@ -120,9 +128,15 @@ class TrainData:
     spring_positions_m : tuple of float
         Air springs relative to the frame centre (train coordinate) [m].
     joint_stiffness_N_per_m, joint_damping_N_s_per_m : float
+        Vertical stiffness [N/m] and damping [N s/m] of the joint between two sections.
     control_bandwidth_Hz, control_damping, flux_bandwidth_Hz, voltage_limit_V : float
+        Gap-controller design of every circuit: gap-loop natural frequency [Hz], damping
+        ratio [-] (in (0, 5)), flux-loop bandwidth [Hz] and voltage limit [V] (see
+        :func:`~maglevkit.control.design_gap_controller`).
     provenance : dict
+        ``"table.key" -> tag/source``.
     source : str
+        File path or bundled name.
     sides : int
         Magnets per lumped position (2: left and right).
     """
@@ -239,7 +253,28 @@ def _check(cond: bool, msg: str, source: str) -> None:
 
 
 def parse_vehicle(parameters: Mapping[str, Any], source: str = "parameters") -> TrainData:
-    """Validate a parsed vehicle TOML dictionary (see the module docstring)."""
+    """Validate a parsed vehicle TOML dictionary (see the module docstring).
+
+    Parameters
+    ----------
+    parameters : mapping
+        The parsed file: the tables ``vehicle``, ``car_body``, ``frame``, ``secondary``,
+        ``joint``, ``control`` (all required) and an optional ``provenance``.
+    source : str, default "parameters"
+        Label for error messages and :attr:`TrainData.source`.
+
+    Returns
+    -------
+    TrainData
+
+    Raises
+    ------
+    ParameterFileError
+        Missing or unknown tables or keys, invalid values, and inconsistent ones:
+        sections < 1, magnets per side not a multiple of the frames per section,
+        ``touchdown_gap >= nominal_gap`` or ``landing_gap <= nominal_gap``, air springs
+        off their frame, control damping outside (0, 5).
+    """
     if not isinstance(parameters, Mapping):
         raise ParameterFileError(f"{source}: a vehicle file must be a TOML table")
     allowed = set(VEHICLE_SCHEMA) | {"provenance"}
@@ -304,6 +339,15 @@ def bundled_vehicles() -> list[str]:
 
 def load_vehicle(source: str | Path = "tr09") -> TrainData:
     """Load a vehicle file by path or bundled name (default: the bundled ``tr09``).
+
+    Parameters
+    ----------
+    source : str or Path, default "tr09"
+        Path of a TOML file, or the name of a bundled file (:func:`bundled_vehicles`).
+
+    Returns
+    -------
+    TrainData
 
     Raises
     ------
