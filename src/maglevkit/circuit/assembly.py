@@ -37,6 +37,12 @@ class NetworkEquations:
 
     Attributes
     ----------
+    network : Network
+        The network the equations belong to.
+    C : ndarray (n_loops, n_branches)
+        Fundamental loop matrix (:attr:`Network.loop_matrix`).
+    N : ndarray (n_branches, n_circuits)
+        Signed turns matrix (:attr:`Network.turns_matrix`).
     x, s, I : casadi.SX
         Loop fluxes [Wb], gaps [m], circuit currents [A].
     phi : casadi.SX
@@ -80,7 +86,24 @@ class NetworkEquations:
 
 
 def assemble(network: Network) -> NetworkEquations:
-    """Assemble (and cache on the network) the symbolic equations of ``network``."""
+    """Assemble (and cache on the network) the symbolic equations of ``network``.
+
+    Parameters
+    ----------
+    network : Network
+        The equivalent magnetic circuit.  The result is cached on it: a second call
+        returns the same object.
+
+    Returns
+    -------
+    NetworkEquations
+
+    Raises
+    ------
+    TopologyError
+        A network without a gap-dependent element, or a gap-dependent element that is
+        not linear (not a :class:`~maglevkit.circuit.elements.LinearElement`).
+    """
     cached = network._cache.get("equations")
     if cached is not None:
         return cached  # type: ignore[no-any-return]
