@@ -123,22 +123,7 @@ class Material(ABC):
         return ConstantPermeability(mu_r=mu, name=f"{self.name} (linear)", resistivity=self.resistivity)
 
     def energy_density(self, B: Any) -> np.ndarray:
-        """Stored magnetic energy density ``w(B) = integral_0^B H dB`` [J/m^3] (NumPy).
-
-        The base class integrates :meth:`field_strength` numerically (adaptive quadrature,
-        relative tolerance 1e-13), one value at a time; subclasses with a closed form
-        override it.
-
-        Parameters
-        ----------
-        B : float or array_like
-            Flux density [T] (NumPy only).
-
-        Returns
-        -------
-        ndarray
-            ``w(B)`` [J/m^3], the shape of ``B`` (even in B).
-        """
+        """Stored magnetic energy density ``w(B) = integral_0^B H dB`` [J/m^3] (NumPy)."""
         b = np.asarray(B, dtype=float)
 
         def one(bb: float) -> float:

@@ -86,24 +86,7 @@ class NetworkEquations:
 
 
 def assemble(network: Network) -> NetworkEquations:
-    """Assemble (and cache on the network) the symbolic equations of ``network``.
-
-    Parameters
-    ----------
-    network : Network
-        The equivalent magnetic circuit.  The result is cached on it: a second call
-        returns the same object.
-
-    Returns
-    -------
-    NetworkEquations
-
-    Raises
-    ------
-    TopologyError
-        A network without a gap-dependent element, or a gap-dependent element that is
-        not linear (not a :class:`~maglevkit.circuit.elements.LinearElement`).
-    """
+    """Assemble (and cache on the network) the symbolic equations of ``network``."""
     cached = network._cache.get("equations")
     if cached is not None:
         return cached  # type: ignore[no-any-return]

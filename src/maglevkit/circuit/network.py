@@ -169,10 +169,6 @@ class Circuit:
 class Network:
     """Equivalent magnetic circuit with its electric circuits.
 
-    Validates on construction: unique names, known nodes, connectedness, at least
-    one closed flux path, coils on existing branches, at most one coil per circuit
-    and branch.
-
     Parameters
     ----------
     branches : sequence of Branch
@@ -189,6 +185,12 @@ class Network:
         duplicate branch, element or circuit names, a coil on a missing branch or two
         coils of one circuit on one branch, a disconnected network, no closed flux
         path, or a coil branch on no loop.
+
+    Notes
+    -----
+    Validates on construction: unique names, known nodes, connectedness, at least
+    one closed flux path, coils on existing branches, at most one coil per circuit
+    and branch.
     """
 
     branches: tuple[Branch, ...]

@@ -200,21 +200,7 @@ class SweepSpec:
             yield {**self.fixed, **dict(zip(names, combo, strict=True))}
 
     def case_key(self, params: Mapping[str, Any]) -> str:
-        """Hash of the job, the case's parameters and the format (its stored file's name).
-
-        Parameters
-        ----------
-        params : mapping
-            A full parameter set of one case (as from :meth:`cases`): a value for every
-            name in :data:`PARAMETERS` (``KeyError`` otherwise; non-finite floats raise
-            ``ValueError``).
-
-        Returns
-        -------
-        str
-            24 hex digits of a SHA-256 over the format tag, the maglevkit version, the job's
-            :meth:`VehicleJob.key_data` and the parameters.
-        """
+        """Hash of the job, the case's parameters and the format (its stored file's name)."""
         from .. import __version__
 
         blob = json.dumps({"format": SWEEP_FORMAT, "maglevkit": __version__,

@@ -209,6 +209,23 @@ def sperling_sine_index(amplitude_m_per_s2: Any, frequency_Hz: Any) -> np.ndarra
     ``a`` is the acceleration amplitude in cm/s^2 (converted from the m/s^2 given here);
     the vertical frequency factor is ``F = 0.325 f^2`` (0.5-5.9 Hz), ``400 / f^2``
     (5.9-20 Hz), ``1`` (above 20 Hz).  Defined for 0.5 Hz <= f.
+
+    Parameters
+    ----------
+    amplitude_m_per_s2 : float or array_like
+        Acceleration amplitude [m/s^2] (its magnitude is used).
+    frequency_Hz : float or array_like
+        Frequency [Hz], >= 0.5; broadcast against the amplitude.
+
+    Returns
+    -------
+    ndarray
+        ``Wz`` [-].
+
+    Raises
+    ------
+    InputError
+        Non-finite values, or a frequency below 0.5 Hz.
     """
     a = real_array(amplitude_m_per_s2, "amplitude_m_per_s2", "m/s^2") * 100.0
     f = _freqs(frequency_Hz)

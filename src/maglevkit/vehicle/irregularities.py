@@ -167,20 +167,66 @@ class Profile:
 
 @dataclass(frozen=True, eq=False)
 class SumProfile(Profile):
-    """The sum of several profiles."""
+    """The sum of several profiles (what ``profile_a + profile_b`` gives).
+
+    Parameters
+    ----------
+    parts : tuple of Profile
+        The summed profiles.
+    """
 
     parts: tuple[Profile, ...]
 
     def elevation_m(self, position_m: Any) -> np.ndarray:
+        """Sum of the parts' elevations [m].
+
+        Parameters
+        ----------
+        position_m : float or array_like
+            Positions along the guideway [m], finite.
+
+        Returns
+        -------
+        ndarray
+            ``r(x)`` [m], same shape as ``position_m``.
+        """
         x = _x(position_m)
         return sum((p.elevation_m(x) for p in self.parts), np.zeros_like(x))
 
     def slope(self, position_m: Any) -> np.ndarray:
+        """Sum of the parts' slopes [m/m].
+
+        Parameters
+        ----------
+        position_m : float or array_like
+            Positions along the guideway [m], finite.
+
+        Returns
+        -------
+        ndarray
+            ``dr/dx`` [m/m], same shape as ``position_m``.
+        """
         x = _x(position_m)
         return sum((p.slope(x) for p in self.parts), np.zeros_like(x))
 
     def on_paths(self, positions_m: np.ndarray, *, start_m: np.ndarray, step_m: float
                  ) -> tuple[np.ndarray, np.ndarray]:
+        """Sum of the parts' :meth:`Profile.on_paths` (each part's fast path).
+
+        Parameters
+        ----------
+        positions_m : array_like (n_steps, n_points)
+            Positions [m] of the points at every step.
+        start_m : array_like (n_points,)
+            Position of each point at step 0 [m].
+        step_m : float
+            Distance travelled per step [m].
+
+        Returns
+        -------
+        (elevation_m, slope) : ndarray (n_steps, n_points) each
+            ``r`` [m] and ``dr/dx`` [m/m].
+        """
         x = np.asarray(positions_m, dtype=float)
         r, rx = np.zeros_like(x), np.zeros_like(x)
         for p in self.parts:
@@ -238,46 +284,50 @@ class SpanSag(Profile):
         return np.mod((_x(position_m) - self.origin_m) / self.span_length_m, 1.0)
 
     def elevation_m(self, position_m: Any) -> np.ndarray:
-        """Irregularity ``r(x)`` [m] at positions [m], positive downward.
+        """Steps at the stator-pack joints: pack ``n`` (on ``[x0 + n p, x0 + (n+1) p)``) is
+    offset by ``h_n``.
 
-        Parameters
-        ----------
-        position_m : float or array_like
-            Positions along the guideway [m], finite.
+    ``pattern="alternating"``: ``h_n = +-step_m/2`` alternately, a step of ``step_m`` at
+    every joint; ``pattern="random"``: ``h_n`` uniform in ``[-step_m/2, step_m/2]``, seeded
+    (reproducible; pack ``n`` always gets the same offset, whatever is evaluated first).
 
-        Returns
-        -------
-        ndarray
-            ``r(x)`` [m], same shape as ``position_m``.
-
-        Raises
-        ------
-        InputError
-            Positions that are not finite real numbers.
-        """
+    Parameters
+    ----------
+    step_m : float
+        Step height (alternating) or the range of offsets (random) [m] (>= 0).
+    pitch_m : float
+        Pack length [m]; default the Transrapid's 1.032 m.
+    origin_m : float
+        Position of a joint [m].
+    pattern : {"alternating", "random"}
+    seed : int
+        Seed of the random offsets.
+    """
         xi = self._xi(position_m)
         if self.shape == "half_sine":
             return self.amplitude_m * np.sin(math.pi * xi)
         return self.amplitude_m * 3.2 * (xi - 2 * xi ** 3 + xi ** 4)
 
     def slope(self, position_m: Any) -> np.ndarray:
-        """``dr/dx`` [m/m] at positions [m].
+        """Steps at the stator-pack joints: pack ``n`` (on ``[x0 + n p, x0 + (n+1) p)``) is
+    offset by ``h_n``.
 
-        Parameters
-        ----------
-        position_m : float or array_like
-            Positions along the guideway [m], finite.
+    ``pattern="alternating"``: ``h_n = +-step_m/2`` alternately, a step of ``step_m`` at
+    every joint; ``pattern="random"``: ``h_n`` uniform in ``[-step_m/2, step_m/2]``, seeded
+    (reproducible; pack ``n`` always gets the same offset, whatever is evaluated first).
 
-        Returns
-        -------
-        ndarray
-            ``dr/dx`` [m/m], same shape as ``position_m``.
-
-        Raises
-        ------
-        InputError
-            Positions that are not finite real numbers.
-        """
+    Parameters
+    ----------
+    step_m : float
+        Step height (alternating) or the range of offsets (random) [m] (>= 0).
+    pitch_m : float
+        Pack length [m]; default the Transrapid's 1.032 m.
+    origin_m : float
+        Position of a joint [m].
+    pattern : {"alternating", "random"}
+    seed : int
+        Seed of the random offsets.
+    """
         xi = self._xi(position_m)
         if self.shape == "half_sine":
             d = math.pi * np.cos(math.pi * xi)
@@ -733,21 +783,6 @@ class RandomProfile(Profile):
         ``W[n, k] = exp(i Omega_k n step_m)`` computed once: one complex matrix product per
         block instead of ``n_points x n_components`` cosines per step.  Mathematically the
         same sum; the phase differs by rounding only (|Omega x| eps, < 1e-12 rad here).
-
-        Parameters
-        ----------
-        positions_m : array_like (n_steps, n_points)
-            Positions [m] of the points at every step; only its shape is used when it
-            matches ``start_m`` (otherwise the positions are evaluated directly).
-        start_m : array_like (n_points,)
-            Position of each point at step 0 [m].
-        step_m : float
-            Distance travelled per step [m].
-
-        Returns
-        -------
-        (elevation_m, slope) : ndarray (n_steps, n_points) each
-            ``r`` [m] and ``dr/dx`` [m/m].
         """
         x = np.asarray(positions_m, dtype=float)
         start = np.asarray(start_m, dtype=float).ravel()

@@ -377,6 +377,12 @@ def derive_sympy(mech: VehicleMechanics) -> dict[str, np.ndarray]:
     vertical displacement of the attachment points, gravity, dampers and magnet forces as
     point forces; then linearised at ``q = q' = 0``.
 
+    Parameters
+    ----------
+    mech : VehicleMechanics
+        The model whose bodies, elements and force points are rederived (slow for many
+        bodies: symbolic differentiation).
+
     Returns
     -------
     dict with ``M``, ``C``, ``K`` (n_dof, n_dof), ``Q_gravity`` (n_dof,), ``B`` (n_dof,

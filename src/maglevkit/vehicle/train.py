@@ -253,28 +253,7 @@ def _check(cond: bool, msg: str, source: str) -> None:
 
 
 def parse_vehicle(parameters: Mapping[str, Any], source: str = "parameters") -> TrainData:
-    """Validate a parsed vehicle TOML dictionary (see the module docstring).
-
-    Parameters
-    ----------
-    parameters : mapping
-        The parsed file: the tables ``vehicle``, ``car_body``, ``frame``, ``secondary``,
-        ``joint``, ``control`` (all required) and an optional ``provenance``.
-    source : str, default "parameters"
-        Label for error messages and :attr:`TrainData.source`.
-
-    Returns
-    -------
-    TrainData
-
-    Raises
-    ------
-    ParameterFileError
-        Missing or unknown tables or keys, invalid values, and inconsistent ones:
-        sections < 1, magnets per side not a multiple of the frames per section,
-        ``touchdown_gap >= nominal_gap`` or ``landing_gap <= nominal_gap``, air springs
-        off their frame, control damping outside (0, 5).
-    """
+    """Validate a parsed vehicle TOML dictionary (see the module docstring)."""
     if not isinstance(parameters, Mapping):
         raise ParameterFileError(f"{source}: a vehicle file must be a TOML table")
     allowed = set(VEHICLE_SCHEMA) | {"provenance"}
