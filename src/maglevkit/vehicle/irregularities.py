@@ -284,50 +284,12 @@ class SpanSag(Profile):
         return np.mod((_x(position_m) - self.origin_m) / self.span_length_m, 1.0)
 
     def elevation_m(self, position_m: Any) -> np.ndarray:
-        """Steps at the stator-pack joints: pack ``n`` (on ``[x0 + n p, x0 + (n+1) p)``) is
-    offset by ``h_n``.
-
-    ``pattern="alternating"``: ``h_n = +-step_m/2`` alternately, a step of ``step_m`` at
-    every joint; ``pattern="random"``: ``h_n`` uniform in ``[-step_m/2, step_m/2]``, seeded
-    (reproducible; pack ``n`` always gets the same offset, whatever is evaluated first).
-
-    Parameters
-    ----------
-    step_m : float
-        Step height (alternating) or the range of offsets (random) [m] (>= 0).
-    pitch_m : float
-        Pack length [m]; default the Transrapid's 1.032 m.
-    origin_m : float
-        Position of a joint [m].
-    pattern : {"alternating", "random"}
-    seed : int
-        Seed of the random offsets.
-    """
         xi = self._xi(position_m)
         if self.shape == "half_sine":
             return self.amplitude_m * np.sin(math.pi * xi)
         return self.amplitude_m * 3.2 * (xi - 2 * xi ** 3 + xi ** 4)
 
     def slope(self, position_m: Any) -> np.ndarray:
-        """Steps at the stator-pack joints: pack ``n`` (on ``[x0 + n p, x0 + (n+1) p)``) is
-    offset by ``h_n``.
-
-    ``pattern="alternating"``: ``h_n = +-step_m/2`` alternately, a step of ``step_m`` at
-    every joint; ``pattern="random"``: ``h_n`` uniform in ``[-step_m/2, step_m/2]``, seeded
-    (reproducible; pack ``n`` always gets the same offset, whatever is evaluated first).
-
-    Parameters
-    ----------
-    step_m : float
-        Step height (alternating) or the range of offsets (random) [m] (>= 0).
-    pitch_m : float
-        Pack length [m]; default the Transrapid's 1.032 m.
-    origin_m : float
-        Position of a joint [m].
-    pattern : {"alternating", "random"}
-    seed : int
-        Seed of the random offsets.
-    """
         xi = self._xi(position_m)
         if self.shape == "half_sine":
             d = math.pi * np.cos(math.pi * xi)
