@@ -53,6 +53,15 @@ _RESIDUAL_TOL = 1e-9
 def as_network(model: Any) -> Network:
     """The :class:`Network` of a model (a Network, or anything with a ``network`` attribute).
 
+    Parameters
+    ----------
+    model : Network, Magnet, FluxModel or CurrentModel
+        The model.
+
+    Returns
+    -------
+    Network
+
     Raises
     ------
     InputError
@@ -75,7 +84,17 @@ def plausible_range(model: Any) -> PlausibleRange | None:
     """The model's :class:`~maglevkit.magnets.base.PlausibleRange` (None if it has none).
 
     A Magnet has one from its geometry, a FluxModel keeps that of the magnet it was
-    built from; a bare Network has none."""
+    built from; a bare Network has none.
+
+    Parameters
+    ----------
+    model : object
+        A Magnet, model or Network.
+
+    Returns
+    -------
+    PlausibleRange or None
+    """
     rng = getattr(model, "plausible_range", None)
     return rng if isinstance(rng, PlausibleRange) else None
 
@@ -111,7 +130,26 @@ def _named_vector(kind: str, names: Sequence[str], value: Any, unit: str) -> np.
 
 
 def gap_vector(network: Network, gaps: Any) -> np.ndarray:
-    """Validated gaps [m] as an array (..., n_gaps); scalar means all gaps equal."""
+    """Validated gaps [m] as an array (..., n_gaps); scalar means all gaps equal.
+
+    Parameters
+    ----------
+    network : Network
+        Gives the gap names.
+    gaps : float, mapping or array_like
+        Gaps [m], > 0: a scalar, ``{gap name: value}`` with every name, or an array
+        whose last axis has one entry per gap input.
+
+    Returns
+    -------
+    ndarray (..., n_gaps)
+
+    Raises
+    ------
+    InputError
+        Non-numbers, non-finite values, gaps <= 0, wrong shapes, unknown or missing
+        names.
+    """
     arr = _named_vector("gap", network.gap_names, gaps, "m")
     if np.any(arr <= 0.0):
         bad = float(arr[arr <= 0.0].ravel()[0])
@@ -121,7 +159,25 @@ def gap_vector(network: Network, gaps: Any) -> np.ndarray:
 
 
 def current_vector(network: Network, currents: Any) -> np.ndarray:
-    """Validated circuit currents [A] as an array (..., n_circuits)."""
+    """Validated circuit currents [A] as an array (..., n_circuits).
+
+    Parameters
+    ----------
+    network : Network
+        Gives the circuit names.
+    currents : float, mapping or array_like
+        Currents [A]: a scalar (every circuit), ``{circuit name: value}`` with every
+        name, or an array whose last axis has one entry per circuit.
+
+    Returns
+    -------
+    ndarray (..., n_circuits)
+
+    Raises
+    ------
+    InputError
+        Non-numbers, non-finite values, wrong shapes, unknown or missing names.
+    """
     return _named_vector("circuit current", network.circuit_names, currents, "A")
 
 

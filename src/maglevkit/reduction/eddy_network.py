@@ -41,6 +41,27 @@ def network_step_response(t: np.ndarray, *, ltilde: float, r_el: float, r0: floa
     ``a = 1 + R_el/R_0``; with ``W = M^-1/2 S M^-1/2 = Q diag(lam) Q^T``:
     ``z(t) = M^-1/2 Q diag((exp(lam t) - 1)/lam) Q^T M^-1/2 e dU/a`` and
     ``dI = dU (1 - 1/a)/R_el + e^T z/a``.
+
+    Parameters
+    ----------
+    t : array_like
+        Times after the step [s] (>= 0).
+    ltilde : float
+        Differential inductance ``L~`` of the main branch [H], > 0 (keyword only, like
+        all that follow).
+    r_el : float
+        Circuit resistance ``R_el`` [ohm], > 0.
+    r0 : float
+        Resistance ``R_0`` of the instantaneous eddy path [ohm] (``inf``: none).
+    rk : array_like (m,)
+        Resistances ``R_1 .. R_m`` of the eddy branches [ohm], > 0.
+    lk : array_like (m,)
+        Inductances ``L_1 .. L_m`` of the eddy branches [H], > 0.
+
+    Returns
+    -------
+    ndarray
+        ``dI(t) / dU`` [A/V], shape of ``t``.  Inputs are not checked.
     """
     rk = np.atleast_1d(np.asarray(rk, dtype=float))
     lk = np.atleast_1d(np.asarray(lk, dtype=float))
