@@ -62,7 +62,9 @@ def read_parameter_file(source: str | os.PathLike[str], *, what: str, folder: st
         file path.
     what : str
         The kind of file, for messages ("magnet", "guideway", ...).
-    folder, table : see :func:`bundled_files`.
+    folder, table : str
+        Where bundled files of this kind live and the table they must have (see
+        :func:`bundled_files`).
 
     Returns
     -------

@@ -126,11 +126,19 @@ def fit_eddy_network(t: np.ndarray, response: np.ndarray, *, ltilde: float, r_el
         Per-sample weights of the residual (default 1).
     start : EddyNetworkFit, optional
         A fit with ``modes - 1`` branches to start from (its branches are kept, a faster
-        one is added).
+        one is added); ignored with another number of branches.
 
+    Returns
+    -------
+    EddyNetworkFit
+        Branches ordered by time constant ``L_k / R_k`` (fastest first); ``R_0 = inf``
+        when the fit opens the instantaneous path.
+
+    Notes
+    -----
     The parameters are fitted as logarithms (all stay positive: a physical RL network),
     with scipy's trust-region least squares; the residual is relative to the final
-    value ``1/R_el``.
+    value ``1/R_el``.  Inputs are not checked.
     """
     from scipy.optimize import least_squares
 
