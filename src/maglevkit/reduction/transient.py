@@ -295,6 +295,26 @@ def transient_point(key: str, net: Network, s: float, current: float,
 
     Returns per circuit: ``L~`` from a voltage step, ``dL/ds`` from the flux-held ramp of
     the circuit's own poles (``poles[j]``), and the step's slow-mode ``R_ec``.
+
+    Parameters
+    ----------
+    key : str
+        Identifies the network in this worker process (the first network given for a
+        key is kept and reused, with its compiled functions).
+    net : Network
+        The detailed magnet's network.
+    s : float
+        Gap of every pole [m].
+    current : float
+        Current of every circuit [A], >= 0.
+    poles : tuple of tuple of int
+        Per circuit, the indices of its own gap inputs (moved by its ramp).
+
+    Returns
+    -------
+    dict of str to ndarray (n_circuits,)
+        ``"inductance_H"`` [H], ``"dL_ds_H_per_m"`` [H/m], ``"eddy_resistance_step_ohm"``
+        [ohm].
     """
     net = _WORKER_NETWORKS.setdefault(key, net)
     nc = len(net.circuits)
