@@ -37,6 +37,12 @@ class NetworkEquations:
 
     Attributes
     ----------
+    network : Network
+        The network the equations belong to.
+    C : ndarray (n_loops, n_branches)
+        Fundamental loop matrix (:attr:`Network.loop_matrix`).
+    N : ndarray (n_branches, n_circuits)
+        Signed turns matrix (:attr:`Network.turns_matrix`).
     x, s, I : casadi.SX
         Loop fluxes [Wb], gaps [m], circuit currents [A].
     phi : casadi.SX

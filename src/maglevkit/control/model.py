@@ -46,14 +46,21 @@ class MagnetHeaveModel:
         The magnet's characteristic maps (or a bank of exactly this one magnet, all
         members reduced).
     mass_kg : float
-        The mass the magnet carries [kg].
+        The mass the magnet carries [kg], finite and > 0.
     gravity : float
-        [m/s^2].
+        Gravitational acceleration [m/s^2], finite and >= 0 (default 9.80665; 0 for a
+        guidance magnet).
     disturbances : sequence of str
         The disturbance model, a subset of :data:`DISTURBANCES` (may be empty).
     compiled : {"auto", "always", "never"}
         How the model functions are evaluated (:func:`~maglevkit.models.compiled.
         compile_function`).
+
+    Raises
+    ------
+    ParameterError
+        ``mass_kg`` or ``gravity`` out of range, unknown or repeated disturbance names
+        (or a single string), or maps that are not those of exactly one reduced magnet.
     """
 
     def __init__(self, maps: Any, *, mass_kg: float, gravity: float = STANDARD_GRAVITY,
@@ -140,7 +147,23 @@ class MagnetHeaveModel:
 
         The stages are inlined expressions (no nested function calls), so that CasADi's
         AD does not create derivative seeds for the 40 000-entry table input (which the
-        generated code would copy at every call: measured 120 ms instead of 0.1 ms)."""
+        generated code would copy at every call: measured 120 ms instead of 0.1 ms).
+
+        Parameters
+        ----------
+        h : float
+            Interval [s], > 0 (not checked).
+        substeps : int
+            Number of RK4 steps in the interval, >= 1 (not checked).
+        jacobians : bool, default False
+            Also return the Jacobians and the measurement (keyword only).
+
+        Returns
+        -------
+        casadi.Function
+            Inputs ``x`` (n_x: [A]..., [m], [m/s]), ``u`` (n_u) [V], ``d`` (n_d), ``table``;
+            outputs ``xf`` (and ``A, B, Bd, y, C, D, Cd`` with ``jacobians``).
+        """
         x, u, d = ca.MX.sym("x", self.nx), ca.MX.sym("u", self.nu), ca.MX.sym("d", self.nd)
         T = ca.MX.sym("table", self.table.size)
         hs = h / substeps
@@ -167,7 +190,19 @@ class MagnetHeaveModel:
     def compile(self, f: ca.Function) -> _TableCall:
         """``f`` (last input: the table) compiled (cached on disk per source, see
         :func:`compile_function`) and bound to the table: a callable of the other inputs
-        returning NumPy arrays (dense outputs; sparse ones as their nonzeros)."""
+        returning NumPy arrays (dense outputs; sparse ones as their nonzeros).
+
+        Parameters
+        ----------
+        f : casadi.Function
+            A function whose last input is the map table (e.g. from :meth:`discrete`).
+
+        Returns
+        -------
+        callable
+            ``call(*inputs_but_table) -> list of ndarray``; compiled or interpreted as the
+            model's ``compiled`` mode says.
+        """
         out, _ = compile_function(f, mode=self.compiled_mode)
         return _TableCall(out, self.table)
 
@@ -177,6 +212,23 @@ class MagnetHeaveModel:
         """Equilibrium ``(x_s, u_s)`` with the *measured* gap at ``gap_m`` [m] under the
         disturbance ``d`` (every circuit at the same inductor current; Newton on the
         force balance ``sum_j F_j(s, I) = m g + d_F``).
+
+        Parameters
+        ----------
+        gap_m : float
+            Measured gap [m] (the true gap is ``gap_m - d_s`` with a gap-sensor
+            disturbance); should lie within the maps' gap range.
+        disturbance : array_like (n_d,), optional
+            Disturbance estimate in the order of :attr:`disturbance_names` (default zeros).
+        current_guess_A : float, default 20.0
+            Start of the Newton iteration [A] (keyword only); iterates are clipped to the
+            maps' current range.
+
+        Returns
+        -------
+        (x_s, u_s) : ndarray (n_x,), ndarray (n_u,)
+            Steady state (inductor currents [A], gap [m], gap rate 0) and voltages [V]
+            ``R I - d_U``.
 
         Raises
         ------
@@ -223,7 +275,27 @@ class MagnetHeaveModel:
     # ------------------------------------------------------------------ linearisation
     def linearize(self, x: np.ndarray, u: np.ndarray, d: Any = None, *, h: float,
                   substeps: int = 1) -> dict[str, np.ndarray]:
-        """Discrete-time linearisation over ``h`` [s] (RK4): ``A, B, Bd`` and ``C, D, Cd``."""
+        """Discrete-time linearisation over ``h`` [s] (RK4): ``A, B, Bd`` and ``C, D, Cd``.
+
+        Parameters
+        ----------
+        x : array_like (n_x,)
+            State: inductor currents [A], gap [m], gap rate [m/s].
+        u : array_like (n_u,)
+            Circuit voltages [V].
+        d : array_like (n_d,), optional
+            Disturbances (default zeros).
+        h : float
+            Interval [s] (keyword only).
+        substeps : int, default 1
+            RK4 steps in the interval (keyword only).
+
+        Returns
+        -------
+        dict of str to ndarray
+            ``A`` (n_x, n_x), ``B`` (n_x, n_u), ``Bd`` (n_x, n_d), ``C`` (n_y, n_x),
+            ``D`` (n_y, n_u), ``Cd`` (n_y, n_d).
+        """
         dv = np.zeros(self.nd) if d is None else np.asarray(d, dtype=float)
         F = self.discrete(h, substeps, jacobians=True)
         out = F(x, u, dv, self.table)
@@ -233,7 +305,23 @@ class MagnetHeaveModel:
     def check_detectability(self, x: np.ndarray, u: np.ndarray, *, h: float) -> None:
         """Raise :class:`ParameterError` unless the augmented system (x, d) is detectable
         at ``(x, u)``: ``n_d <= n_y``, ``(A, C)`` detectable and the rank condition
-        ``rank [[A - I, Bd], [C, Cd]] = n_x + n_d`` (Pannocchia & Rawlings 2003)."""
+        ``rank [[A - I, Bd], [C, Cd]] = n_x + n_d`` (Pannocchia & Rawlings 2003).
+
+        Parameters
+        ----------
+        x : array_like (n_x,)
+            Operating state: inductor currents [A], gap [m], gap rate [m/s].
+        u : array_like (n_u,)
+            Operating voltages [V].
+        h : float
+            Sample time of the linearisation [s] (keyword only).
+
+        Raises
+        ------
+        ParameterError
+            More disturbances than measurements, an undetectable unstable mode, or a
+            disturbance model whose steady-state effects on the measurements coincide.
+        """
         nx, nd, ny = self.nx, self.nd, self.ny
         if nd > ny:
             raise ParameterError(f"disturbance model {self.disturbances!r} has {nd} "
@@ -266,6 +354,18 @@ class MagnetHeaveModel:
                 "current measurements can tell apart, e.g. ('force', 'voltage')")
 
     def check_inputs(self, x: np.ndarray) -> None:
+        """Check a state vector.
+
+        Parameters
+        ----------
+        x : ndarray (n_x,)
+            State: inductor currents [A], gap [m], gap rate [m/s].
+
+        Raises
+        ------
+        InputError
+            Wrong shape or non-finite values.
+        """
         if x.shape != (self.nx,) or not np.isfinite(x).all():
             raise InputError(f"state must be {self.nx} finite values [I_L..., s, s']")
 

@@ -107,6 +107,9 @@ def compile_library(name: str, functions: Sequence[ca.Function], *, mode: str = 
         As in :func:`compile_function`.
     flags : sequence of str
         Compiler flags (part of the cache key).
+    stacklevel : int, default 3
+        ``stacklevel`` of the :class:`CompilationWarning` issued when ``mode="auto"``
+        falls back to the interpreter (so that it points at the caller's caller).
 
     Returns
     -------
@@ -170,6 +173,22 @@ def _build(name: str, funcs: list[ca.Function], cache: Path, flags: tuple[str, .
 def build_source(name: str, code: bytes, *, cache: Path, flags: Sequence[str] = _FLAGS) -> Path:
     """Compile C source ``code`` into the cached shared library ``<cache>/<name>_<key>.so``
     (key: SHA-256 of source, compiler, flags and CasADi version) unless it is there.
+
+    Parameters
+    ----------
+    name : str
+        Stem of the library's file name.
+    code : bytes
+        The C source.
+    cache : Path
+        Cache folder (created if missing; keyword only).
+    flags : sequence of str
+        Compiler flags (default optimised, position-independent shared library).
+
+    Returns
+    -------
+    Path
+        The shared library (written atomically).
 
     Raises
     ------

@@ -46,8 +46,10 @@ def voltage_step_response(model: Any, *, gap: Any, voltage: Any, initial_current
     Parameters
     ----------
     model : FluxModel, Magnet or Network
+        The magnet model (a Magnet or Network is wrapped in a :class:`FluxModel` with
+        ``options``; a FluxModel's own options are overridden by ``options``).
     gap : float, sequence or mapping
-        Fixed gap(s) [m].
+        Fixed gap(s) [m], > 0.
     voltage : float, sequence or mapping
         Voltage(s) after the step [V].
     initial_current : float, sequence or mapping
@@ -112,9 +114,44 @@ def differential_inductance_from_step(model: Any, *, gap: float, current: float,
     The time window (``n_tau`` time constants, ``samples_per_tau`` samples each) is
     sized with the statics' ``dpsi/dI``; that estimate is not used in the result.
 
+    Parameters
+    ----------
+    model : FluxModel, Magnet or Network
+        The magnet model (a Magnet or Network is wrapped in a :class:`FluxModel`).
+    gap : float
+        Gap of every pole [m], > 0 (keyword only, like all that follow).
+    current : float
+        Operating current of every circuit [A] before the step.
+    relative_step : float, default 1e-3
+        Size of the final current change relative to ``max(|I|, 1 A)`` [-], in
+        (0, 0.1): small enough for the response to be linear.
+    circuit : int, default 0
+        Index of the circuit whose voltage steps, ``0 .. n_circuits - 1``.
+    samples_per_tau : int, default 200
+        Output samples per estimated time constant (whole number >= 1).
+    n_tau : float, default 6.0
+        Length of the simulated window in estimated time constants, > 0.
+    rtol, atol : float, default 1e-9 and 1e-11
+        Integrator tolerances of the flux model [-] (``atol`` relative to the model's
+        nominal scales, see :class:`FluxModel`); tighter than the FluxModel defaults,
+        because the step is small.
+    **options
+        Further FluxModel options (``saturation``, ``eddy_currents``, ...).
+
     Returns
     -------
     InductanceEstimate
+
+    Raises
+    ------
+    InputError
+        ``relative_step`` outside (0, 0.1), ``samples_per_tau`` not a whole number
+        >= 1, ``n_tau`` not > 0, ``circuit`` not an index of a circuit, unknown
+        options or bad gap or current.
+    SolverError
+        Fewer than 10 samples between 2 % and 98 % of the step (window too short or
+        too coarse), a response that is not a decaying exponential, or a failed
+        simulation.
     """
     if not 0.0 < real_number(relative_step, "relative_step") < 0.1:
         raise InputError(f"relative_step = {relative_step!r} must lie in (0, 0.1)")

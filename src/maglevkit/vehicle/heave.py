@@ -19,7 +19,16 @@ STANDARD_GRAVITY = 9.80665
 
 @dataclass(frozen=True)
 class HeaveState:
-    """Gap [m] and gap rate [m/s] of the heave mass (the gap grows downwards)."""
+    """Gap [m] and gap rate [m/s] of the heave mass (the gap grows downwards).
+
+    Parameters
+    ----------
+    gap_m : float
+        Air gap s [m] (not checked here; :func:`~maglevkit.control.closed_loop` stops
+        when it would reach 0).
+    gap_rate_m_per_s : float
+        Gap rate ds/dt [m/s], > 0 when the gap opens.
+    """
 
     gap_m: float
     gap_rate_m_per_s: float
@@ -48,12 +57,48 @@ class HeaveMass:
         real_number(self.gravity, "gravity", "m/s^2", nonnegative=True, error=ParameterError)
 
     def acceleration(self, magnet_force_N: float, external_force_N: float = 0.0) -> float:
-        """Gap acceleration [m/s^2]."""
+        """Gap acceleration [m/s^2]: ``g + (F_ext - F_mag) / m``.
+
+        Parameters
+        ----------
+        magnet_force_N : float
+            Attractive magnet force [N] (closes the gap).
+        external_force_N : float, default 0.0
+            External force on the mass [N], positive opening the gap (like gravity).
+
+        Returns
+        -------
+        float
+            ``s''`` [m/s^2] (> 0: the gap opens faster).  The forces are not checked here
+            (they are in :meth:`step`).
+        """
         return self.gravity + (external_force_N - magnet_force_N) / self.mass_kg
 
     def step(self, state: HeaveState, dt: float, magnet_force_N: float,
              external_force_N: float = 0.0) -> HeaveState:
-        """Advance by ``dt`` [s] with forces held constant (exact for constant acceleration)."""
+        """Advance by ``dt`` [s] with forces held constant (exact for constant acceleration).
+
+        Parameters
+        ----------
+        state : HeaveState
+            Gap [m] and gap rate [m/s] at the start of the step.
+        dt : float
+            Step [s], finite and > 0.
+        magnet_force_N : float
+            Attractive magnet force [N], held over the step.
+        external_force_N : float, default 0.0
+            External force [N], positive opening the gap, held over the step.
+
+        Returns
+        -------
+        HeaveState
+            Gap and gap rate at the end of the step.
+
+        Raises
+        ------
+        InputError
+            ``dt`` not finite and > 0, or a force that is not a finite real number.
+        """
         real_number(dt, "dt", "s", positive=True)
         real_number(magnet_force_N, "magnet_force_N", "N")
         real_number(external_force_N, "external_force_N", "N")
