@@ -104,7 +104,7 @@ def test_second_model_loads_the_cached_library(magnet: mk.Magnet, flux_cache: Pa
         raise AssertionError("the compiler ran although the library is cached")
 
     monkeypatch.setattr(compiled_mod.subprocess, "run", no_compiler)
-    # a fresh network (not the cached _FluxDAE of the fixture) with other tolerances: the
+    # a fresh network (not the cached FluxDAE of the fixture) with other tolerances: the
     # generated code does not depend on them, so the same library serves
     t0 = time.perf_counter()
     fm = mk.FluxModel(build_u(), rtol=1e-7, compiled="always", cache_dir=flux_cache)

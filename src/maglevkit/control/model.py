@@ -30,7 +30,7 @@ import numpy as np
 from ..errors import InputError, ParameterError
 from ..models.bank import MagnetBank
 from ..models.compiled import compile_function
-from ..vehicle import STANDARD_GRAVITY
+from ..plant import STANDARD_GRAVITY
 
 __all__ = ["DISTURBANCES", "MagnetHeaveModel"]
 

@@ -39,7 +39,7 @@ import math
 import os
 from collections.abc import Mapping
 from dataclasses import dataclass, field
-from typing import Any, overload
+from typing import Any
 
 import casadi as ca
 import numpy as np
@@ -54,7 +54,6 @@ from ..magnets.base import PlausibleRange
 from ..materials import MU0
 from ..validation import optional_flag, real_array, real_number, whole_number
 from .compiled import COMPILE_MODES, compile_library
-from .current import CurrentModel, ReducedSimulation
 from .inputs import check_step, gap_secants, sample_input, time_grid
 from .statics import (
     as_network,
@@ -73,7 +72,9 @@ __all__ = [
     "FluxOutputs",
     "SimulationResult",
     "EnergyBalance",
-    "simulate",
+    "FluxDAE",
+    "flux_dae",
+    "simulate_flux",
 ]
 
 #: Default relative tolerance of the integrator (IDAS ``reltol``).
@@ -98,7 +99,7 @@ def _power_flows(U: Any, I: Any, R: Any, g_e: Any, phidot_e: Any, force: Any, ra
 
 
 #: Networks with more loop and circuit unknowns than this run IDAS on the sparse form
-#: (``K y' = h``, :meth:`_FluxDAE._init_idas`); smaller ones on the dense form (``K^+``,
+#: (``K y' = h``, :meth:`FluxDAE._init_idas`); smaller ones on the dense form (``K^+``,
 #: ``Q``), whose results and compiled libraries stay those of earlier versions.  Counted:
 #: the bundled lumped networks 9-36 (the U-magnet's ladder n = 8: 116), the grid with
 #: Roters tubes 111 (its ladder n = 4: 507), the air-cell grid 1386-2310.  A bound between
@@ -258,8 +259,11 @@ class EnergyBalance:
 
 
 # ---------------------------------------------------------------------------- DAE structure
-class _FluxDAE:
+class FluxDAE:
     """Matrices, symbolic DAE and compiled step functions of one network and solver setup.
+
+    Built through :func:`flux_dae` (once per network and setup); the reduction
+    (:mod:`maglevkit.reduction`) reads its matrices ``D``, ``K``, ``T``, ``Q`` and functions.
 
     ``form``: ``"dense"`` (IDAS on ``y' = K^+ v``, ``Q v = 0``, ``v = h``: dense ``K^+`` and
     ``Q``) or ``"sparse"`` (IDAS on ``K y' = h`` with a sparse ``K``, for large networks;
@@ -548,9 +552,29 @@ class _FluxDAE:
         return f
 
 
-def _dae(network: Network, method: str, rtol: float, atol: float, max_num_steps: int,
-         radau_elements: int, radau_degree: int, compiled: str = "never",
-         cache_dir: str | None = None) -> _FluxDAE:
+def flux_dae(network: Network, method: str, rtol: float, atol: float, max_num_steps: int,
+             radau_elements: int, radau_degree: int, compiled: str = "never",
+             cache_dir: str | None = None) -> FluxDAE:
+    """The :class:`FluxDAE` of ``network`` for one solver setup, built once and kept in
+    ``network.cache``.
+
+    Parameters
+    ----------
+    network : Network
+        The equivalent magnetic circuit.
+    method : {"idas", "radau"}
+        Integrator.
+    rtol, atol : float
+        Relative and (nominal-scaled) absolute tolerance.
+    max_num_steps : int
+        IDAS step limit per run.
+    radau_elements, radau_degree : int
+        Radau collocation: elements per call and their degree.
+    compiled : {"auto", "always", "never"}
+        Whether the IDAS functions run as compiled C (see :class:`FluxModel`).
+    cache_dir : str or None
+        Where compiled libraries are cached.
+    """
     if method != "idas":
         compiled, cache_dir = "never", None   # only the IDAS functions are compiled
     size = network.n_loops + len(network.circuits)
@@ -559,11 +583,11 @@ def _dae(network: Network, method: str, rtol: float, atol: float, max_num_steps:
     form = "sparse" if method == "idas" and size > SPARSE_FORM_SIZE else "dense"
     key = ("flux_dae", method, rtol, atol, max_num_steps, radau_elements, radau_degree,
            compiled, cache_dir, form)
-    dae = network._cache.get(key)
+    dae = network.cache.get(key)
     if dae is None:
-        dae = _FluxDAE(network, method, rtol, atol, max_num_steps, radau_elements, radau_degree,
+        dae = FluxDAE(network, method, rtol, atol, max_num_steps, radau_elements, radau_degree,
                        compiled, cache_dir, form)
-        network._cache[key] = dae
+        network.cache[key] = dae
     return dae  # type: ignore[no-any-return]
 
 
@@ -703,8 +727,8 @@ class FluxModel:
         self.method = method
         self.rtol = float(rtol)
         self.atol = float(atol)
-        self._dae = _dae(self.network, method, self.rtol, self.atol, max_num_steps,
-                         radau_elements, radau_degree, compiled, cache_dir)
+        self._dae = flux_dae(self.network, method, self.rtol, self.atol, max_num_steps,
+                             radau_elements, radau_degree, compiled, cache_dir)
         self.compiled = self._dae.compiled
         d = self._dae
         self._state_shapes = (("differential_state", d.n_diff), ("gaps_m", d.n_gaps),
@@ -746,6 +770,17 @@ class FluxModel:
     def resistances(self) -> np.ndarray:
         """Circuit resistances R_el [ohm]."""
         return self.network.resistances
+
+    @property
+    def dae(self) -> FluxDAE:
+        """The model's DAE: matrices, symbolic functions and integrators (shared by every
+        model of the same network and solver setup)."""
+        return self._dae
+
+    @property
+    def options(self) -> dict[str, Any]:
+        """The solver options this model was built with (a copy; see :meth:`with_options`)."""
+        return dict(self._options)
 
     def with_options(self, **changes: Any) -> FluxModel:
         """A model of the same network with other solver options (method, rtol, atol, ...)."""
@@ -1062,33 +1097,18 @@ class SimulationResult:
         return cols
 
 
-@overload
-def simulate(model: CurrentModel, t: Any, *, gaps: Any, voltages: Any, gap_rates: Any = None,
-             dt: float | None = None, initial_currents: Any = None,
-             initial_state: Any = None, gap_rate_tolerance: float = 0.02,
-             **options: Any) -> ReducedSimulation: ...
-
-
-@overload
-def simulate(model: Any, t: Any, *, gaps: Any, voltages: Any, gap_rates: Any = None,
-             dt: float | None = None, initial_currents: Any = None,
-             initial_state: Any = None, gap_rate_tolerance: float = 0.02,
-             **options: Any) -> SimulationResult: ...
-
-
-def simulate(model: Any, t: Any, *, gaps: Any, voltages: Any, gap_rates: Any = None,
-             dt: float | None = None, initial_currents: Any = None,
-             initial_state: Any = None, gap_rate_tolerance: float = 0.02,
-             **options: Any) -> SimulationResult | ReducedSimulation:
-    """Simulate the flux model on a time grid.
+def simulate_flux(model: Any, t: Any, *, gaps: Any, voltages: Any, gap_rates: Any = None,
+                  dt: float | None = None, initial_currents: Any = None,
+                  initial_state: Any = None, gap_rate_tolerance: float = 0.02,
+                  **options: Any) -> SimulationResult:
+    """Simulate the flux model on a time grid (the flux-model branch of
+    :func:`maglevkit.simulate`, which also runs the reduced models).
 
     Parameters
     ----------
-    model : FluxModel, CurrentModel, Magnet or Network
-        The model (a :class:`~maglevkit.models.current.CurrentModel` runs the reduced model
-        with the same inputs and conventions); ``options`` (``saturation``,
-        ``eddy_currents``, ``method``, ``rtol``, ``atol``, ...) build a :class:`FluxModel`
-        (or change a given one).
+    model : FluxModel, Magnet or Network
+        The model; ``options`` (``saturation``, ``eddy_currents``, ``method``, ``rtol``,
+        ``atol``, ...) build a :class:`FluxModel` (or change a given one).
     t : (t0, tf), [t0, tf] or array
         A time span [s]: a tuple or list of exactly two numbers gives the grid
         ``t0 + k dt`` ending exactly at ``tf``.  A numpy array (any length >= 2) or a
@@ -1129,16 +1149,9 @@ def simulate(model: Any, t: Any, *, gaps: Any, voltages: Any, gap_rates: Any = N
     if initial_currents is not None:
         real_array(initial_currents if not isinstance(initial_currents, Mapping)
                    else list(initial_currents.values()), "initial_currents", "A")
-    if isinstance(model, CurrentModel):
-        if options:
-            raise InputError(f"options {sorted(options)} apply to the flux model; build the "
-                             "CurrentModel with its own options instead")
-        return model.simulate(t, gaps=gaps, voltages=voltages, gap_rates=gap_rates, dt=dt,
-                              initial_currents=initial_currents, initial_state=initial_state,
-                              gap_rate_tolerance=gap_rate_tolerance)
     check_options(options, "simulate")
     if isinstance(model, FluxModel):
-        fm = FluxModel(model, **{**model._options, **options}) if options else model
+        fm = model.with_options(**options) if options else model
     else:
         fm = FluxModel(model, **options)
     net = fm.network
