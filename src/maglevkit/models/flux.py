@@ -513,6 +513,8 @@ class FluxDAE:
                         "flux_force_quad", [t_sym, y, ca.vertcat(x, I, extra), U,
                                             ca.vertcat(h, s0, rate, tau0)],
                         [ca.substitute(h * eq.force, s, s_t)])
+                    # -O3 (DEFAULT_FLAGS): -O1 saved a quarter of the compile time but
+                    # the live step ran 1.6x slower (docs/decisions.md)
                     self._live_parts = (daeF, jacF, quadF, force_fun, cache_dir)
         self._oracle, self._idas_opts, self._balance = oracle, opts, balance_fun
         # one hold interval, (w, p = (h, U, rate)) -> (w, q, outputs) as for radau

@@ -291,7 +291,8 @@ def _sundials_paths() -> list[Path] | None:
 
 
 def live_library(dae_f: ca.Function, jac_f: ca.Function, quad_f: ca.Function,
-                 force_f: ca.Function, cache_dir: str | None) -> Path | None:
+                 force_f: ca.Function, cache_dir: str | None,
+                 flags: tuple[str, ...] = DEFAULT_FLAGS) -> Path | None:
     """The compiled live-integrator library of one flux DAE (cached on disk by content), or
     None where CasADi ships no IDAS library to link against or compiling fails.
 
@@ -305,6 +306,8 @@ def live_library(dae_f: ca.Function, jac_f: ca.Function, quad_f: ca.Function,
         has no integrand that jumps where the gap rate does.
     cache_dir : str or None
         The compiled-library cache (default :func:`~maglevkit.models.compiled.cache_directory`).
+    flags : tuple of str
+        Compiler flags (the linker options for the IDAS library are added).
     """
     libs = _sundials_paths()
     if libs is None:
@@ -318,7 +321,7 @@ def live_library(dae_f: ca.Function, jac_f: ca.Function, quad_f: ca.Function,
                       f"#define {k}_sparsity_out {v}_sparsity_out\n" for k, v in names.items())
     defines += f"#define FX_QUAD_N {quad_f.numel_out(0)}\n"
     code = (cg.dump() + "\n" + defines + _DRIVER).encode()
-    flags = (*DEFAULT_FLAGS, "-Wl,--no-as-needed", *map(str, libs),
+    flags = (*flags, "-Wl,--no-as-needed", *map(str, libs),
              f"-Wl,-rpath,{libs[0].parent}")
     cache = Path(cache_dir) if cache_dir is not None else cache_directory()
     try:
