@@ -965,6 +965,14 @@ class FluxModel:
             become <= 0.
         SolverError
             The integrator failed (with time, state and the solver's reason).
+
+        Notes
+        -----
+        With :attr:`live_step` the IDAS integrator stays alive between calls: stepping the
+        state the last call returned, with the same ``dt`` and voltages and the gaps where
+        that step ended, integrates on (as ``simulate`` does across hold intervals); any
+        other call restarts IDAS from ``state`` with consistent algebraic variables.  Both
+        agree with a restart per call to the integrator's accuracy.
         """
         d = self._dae
         self._check_state(state)
@@ -993,6 +1001,7 @@ class FluxModel:
         wf = np.asarray(wf).ravel()
         o = np.asarray(o).ravel()
         if not (np.all(np.isfinite(wf)) and np.all(np.isfinite(o))):
+            self._live_next = None
             raise self._fail(RuntimeError("non-finite solution"), state.time_s, w, U, rate, dt)
         t1 = state.time_s + dt
         new = self._unpack_state(t1, wf, U, rate, state.energy_J + np.asarray(q).ravel())
