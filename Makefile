@@ -26,7 +26,8 @@ $(DEMO_STAMP): $(BIN)/python pyproject.toml Makefile
 demo: $(DEMO_STAMP)
 	$(BIN)/maglevkit demo --out $(OUT)
 
-## test: lint (ruff), type-check (mypy) and the default test suite (two workers, one per core;
+## test: lint (ruff), type-check (mypy), the layers contract (import-linter) and the default
+## test suite (two workers, one per core;
 ## a test file stays on one worker, so its module fixtures are built once)
 test: $(STAMP) lint
 	$(BIN)/python -m pytest -q -n 2 --dist loadfile
@@ -35,9 +36,11 @@ test: $(STAMP) lint
 test-all: $(STAMP) lint
 	$(BIN)/python -m pytest -q -m "slow or not slow"
 
+## lint: ruff, mypy and the layers contract (import-linter, pyproject.toml [tool.importlinter])
 lint: $(STAMP)
 	$(BIN)/ruff check src tests benchmarks
 	$(BIN)/mypy src
+	$(BIN)/lint-imports --no-cache
 
 ## mutation: deliberate small errors in the physics core, one at a time; reports which the tests catch
 mutation: $(STAMP)

@@ -11,7 +11,7 @@
 * :func:`figure_coupling` -- time response of all circuits to a voltage step in the first
   one (detailed flux-based model, :func:`coupling_response`), with the coupling quantified.
 
-Normalisation: ``I0`` is the saturation knee (:func:`~maglevkit.magnets.saturation_knee`
+Normalisation: ``I0`` is the saturation knee (:func:`~maglevkit.models.saturation_knee`
 at the nominal gap ``s0``), ``F0 = F(s0, I0)`` of the full model.  The nominal current of
 the parameter file is marked.
 """
@@ -25,7 +25,7 @@ from typing import Any
 import numpy as np
 
 from .magnets.base import Magnet
-from .magnets.characteristics import KNEE_EXPONENT, nominal_point, saturation_knee
+from .models.characteristics import KNEE_EXPONENT, nominal_point, saturation_knee
 from .models.statics import solve_statics
 from .plotting import place_legend, plt, save
 
@@ -376,8 +376,8 @@ class CouplingResponse:
 def coupling_response(magnet: Magnet, *, step: float = 0.2) -> CouplingResponse:
     """Step the first circuit's voltage by ``step`` (relative) at the nominal point and
     simulate the detailed flux-based model for three time constants."""
-    from .magnets.characteristics import coupling_ratios
-    from .models.flux import simulate
+    from .models.characteristics import coupling_ratios
+    from .models.flux import simulate_flux as simulate
 
     s0, i0 = nominal_point(magnet)
     net = magnet.network

@@ -43,6 +43,7 @@ __all__ = [
     "GapLayerPermeance",
     "EddyCurrent",
     "carter_coefficient",
+    "rectangle_torsion_constant",
 ]
 
 
@@ -845,7 +846,7 @@ def _fringe_per_mu0(w: float, r: float, s: Any) -> Any:
     return 2.0 * w / math.pi * _log(1.0 + math.pi * r / (2.0 * s))
 
 
-def _rectangle_torsion_constant(a: float, b: float) -> float:
+def rectangle_torsion_constant(a: float, b: float) -> float:
     """Saint-Venant torsion constant of an a x b rectangle (exact series) [m^4]."""
     a, b = max(a, b), min(a, b)
     series = sum(math.tanh(k * math.pi * a / (2.0 * b)) / k**5 for k in range(1, 200, 2))
@@ -978,7 +979,7 @@ class EddyCurrent(Element):
         _positive(f"eddy-current element {name!r}", width=width, height=height, length=length,
                   resistivity=resistivity)
         area = width * height
-        torsion = _rectangle_torsion_constant(width, height)
+        torsion = rectangle_torsion_constant(width, height)
         return cls(name, torsion * length / (4.0 * resistivity * area * area))
 
     @classmethod

@@ -191,12 +191,20 @@ class Network:
     Validates on construction: unique names, known nodes, connectedness, at least
     one closed flux path, coils on existing branches, at most one coil per circuit
     and branch.
+
+    Attributes
+    ----------
+    cache : dict
+        Objects derived from this (immutable) network once and reused: its equations, the
+        statics solver, flux-model DAEs, map runs; keyed by the module that derives them
+        (e.g. ``"equations"``, ``("flux_dae", ...)``).  Not part of equality, the repr or
+        a pickle (a worker process derives them again).
     """
 
     branches: tuple[Branch, ...]
     circuits: tuple[Circuit, ...]
     name: str = "network"
-    _cache: dict = field(default_factory=dict, init=False, repr=False, compare=False)
+    cache: dict = field(default_factory=dict, init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
         for key, cls in (("branches", Branch), ("circuits", Circuit)):
@@ -244,7 +252,7 @@ class Network:
     def __getstate__(self) -> dict:
         # Compiled CasADi functions stay behind: a worker process rebuilds them lazily.
         state = dict(self.__dict__)
-        state["_cache"] = {}
+        state["cache"] = {}
         return state
 
     def __setstate__(self, state: dict) -> None:

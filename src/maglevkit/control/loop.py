@@ -12,8 +12,8 @@ import numpy as np
 
 from ..errors import InputError
 from ..models.inputs import check_span
+from ..plant import HeaveMass, HeaveState
 from ..validation import real_number
-from ..vehicle import HeaveMass, HeaveState
 from .cascade import CascadeController, GapController
 from .interface import Controller, Measurement
 

@@ -30,7 +30,7 @@ import numpy as np
 from ..errors import InputError, ParameterError
 from ..models.bank import MagnetBank
 from ..models.compiled import compile_function
-from ..vehicle import STANDARD_GRAVITY
+from ..plant import STANDARD_GRAVITY
 
 __all__ = ["DISTURBANCES", "MagnetHeaveModel"]
 
@@ -111,7 +111,7 @@ class MagnetHeaveModel:
         self.table = np.asarray(bank.table, dtype=float)
         self._T = ca.MX.sym("table", self.table.size)
         x, u, d = ca.MX.sym("x", self.nx), ca.MX.sym("u", self.nu), ca.MX.sym("d", self.nd)
-        xdot, y, force = self._expressions(x, u, d, self._T)
+        xdot, y, force = self.expressions(x, u, d, self._T)
         self.rhs = ca.Function("mpc_rhs", [x, u, d, self._T], [xdot], ["x", "u", "d", "table"],
                                ["xdot"])
         self.measurement = ca.Function("mpc_meas", [x, u, d, self._T], [y],
@@ -120,25 +120,31 @@ class MagnetHeaveModel:
         self._compiled: dict[Any, _TableCall] = {}
 
     # ------------------------------------------------------------------ expressions
-    def _d(self, d: Any, name: str) -> Any:
+    def disturbance(self, d: Any, name: str) -> Any:
+        """The part ``name`` (``"voltage"`` [V] per circuit, ``"force"`` [N],
+        ``"gap_sensor"`` [m], ``"current_sensor"`` [A] per circuit) of the disturbance vector
+        ``d``; zeros where the model has no such disturbance."""
         sl = self._dslices.get(name)
         n = 1 if name in ("force", "gap_sensor") else self.n_circuits
         return d[sl] if sl is not None else ca.DM.zeros(n)
 
-    def _expressions(self, x: Any, u: Any, d: Any, table: Any) -> tuple[Any, Any, Any]:
+    def expressions(self, x: Any, u: Any, d: Any, table: Any) -> tuple[Any, Any, Any]:
+        """Symbolic ``(xdot, y, force)`` at state ``x``, voltages ``u`` [V], disturbances
+        ``d`` and the bank's cell table ``table``: the state derivative, the measurements
+        (gap [m], coil currents [A]) and the total magnet force [N]."""
         nc = self.n_circuits
         s, v = x[nc], x[nc + 1]
-        ueff = u + self._d(d, "voltage")
+        ueff = u + self.disturbance(d, "voltage")
         rhs, coil, force = [], [], 0
         for j in range(nc):
             r, c, f, _ = self.bank.circuit_expressions(j, x[j], s, ueff[j], v, table)
             rhs.append(r)
             coil.append(c)
             force = force + f
-        acc = self.gravity + (self._d(d, "force") - force) / self.mass_kg
+        acc = self.gravity + (self.disturbance(d, "force") - force) / self.mass_kg
         xdot = ca.vertcat(*rhs, v, acc)
-        y = ca.vertcat(s + self._d(d, "gap_sensor"), ca.vertcat(*coil)
-                       + self._d(d, "current_sensor"))
+        y = ca.vertcat(s + self.disturbance(d, "gap_sensor"), ca.vertcat(*coil)
+                       + self.disturbance(d, "current_sensor"))
         return xdot, y, force
 
     def discrete(self, h: float, substeps: int, *, jacobians: bool = False) -> ca.Function:
@@ -169,7 +175,7 @@ class MagnetHeaveModel:
         hs = h / substeps
 
         def f(xx: Any) -> Any:
-            return self._expressions(xx, u, d, T)[0]
+            return self.expressions(xx, u, d, T)[0]
 
         xk: Any = x
         for _ in range(substeps):
@@ -180,7 +186,7 @@ class MagnetHeaveModel:
             xk = xk + hs / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
         if not jacobians:
             return ca.Function("mpc_rk4", [x, u, d, T], [xk], ["x", "u", "d", "table"], ["xf"])
-        y = self._expressions(x, u, d, T)[1]
+        y = self.expressions(x, u, d, T)[1]
         return ca.Function("mpc_rk4_jac", [x, u, d, T],
                            [xk, ca.jacobian(xk, x), ca.jacobian(xk, u), ca.jacobian(xk, d),
                             y, ca.jacobian(y, x), ca.jacobian(y, u), ca.jacobian(y, d)],
@@ -380,12 +386,12 @@ class MagnetHeaveModel:
         nc = self.n_circuits
         x, u, d = ca.MX.sym("x", self.nx), ca.MX.sym("u", self.nu), ca.MX.sym("d", self.nd)
         s, v = x[nc], x[nc + 1]
-        ueff = u + self._d(d, "voltage")
+        ueff = u + self.disturbance(d, "voltage")
         sv = ca.repmat(s, nc, 1)
         didt = cm.ode(x[:nc], ueff, sv, ca.repmat(v, nc, 1))
         coil, force, _ = cm.outputs_fun(x[:nc], ueff, sv)
-        acc = self.gravity + (self._d(d, "force") - ca.sum1(force)) / self.mass_kg
-        y = ca.vertcat(s + self._d(d, "gap_sensor"), coil + self._d(d, "current_sensor"))
+        acc = self.gravity + (self.disturbance(d, "force") - ca.sum1(force)) / self.mass_kg
+        y = ca.vertcat(s + self.disturbance(d, "gap_sensor"), coil + self.disturbance(d, "current_sensor"))
         return (ca.Function("spline_rhs", [x, u, d], [ca.vertcat(didt, v, acc)]),
                 ca.Function("spline_meas", [x, u, d], [y]))
 

@@ -226,13 +226,13 @@ class RealTimeMPC(OffsetFreeMPC):
         nc, nd = m.n_circuits, m.nd
         dh, sref, ig = ca.MX.sym("d", nd), ca.MX.sym("s_ref"), ca.MX.sym("i_guess")
         T = ca.MX.sym("table", m.table.size)
-        s = sref - m._d(dh, "gap_sensor")
-        load = m.mass_kg * m.gravity + m._d(dh, "force")
+        s = sref - m.disturbance(dh, "gap_sensor")
+        load = m.mass_kg * m.gravity + m.disturbance(dh, "force")
         i_s = ca.MX.sym("i")
         x = ca.vertcat(ca.repmat(i_s, nc, 1), s, 0)
         # the force expression inlined (m.force is a Function: AD through a nested call
         # clears a 40 000-entry zero seed for the table, measured 28 us per target)
-        F = m._expressions(x, ca.MX.zeros(m.nu), dh, T)[2]
+        F = m.expressions(x, ca.MX.zeros(m.nu), dh, T)[2]
         fs = ca.Function("mpc_rti_force", [i_s, dh, sref, T], [F, ca.jacobian(F, i_s)])
         i: Any = ig
         step: Any = ca.MX(0)
@@ -245,7 +245,7 @@ class RealTimeMPC(OffsetFreeMPC):
             i = ca.fmin(ca.fmax(i - step, lo), hi)
         step = ca.if_else(bad > 0, np.nan, step)
         xt = ca.vertcat(ca.repmat(i, nc, 1), s, 0)
-        ut = ca.DM(m.resistance_ohm) * i - m._d(dh, "voltage")
+        ut = ca.DM(m.resistance_ohm) * i - m.disturbance(dh, "voltage")
         return ca.Function("mpc_rti_target", [dh, sref, ig, T], [xt, ut, step])
 
     def _finish_build(self) -> None:

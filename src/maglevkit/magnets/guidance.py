@@ -32,10 +32,10 @@ from .base import (
     PlausibleRange,
     Schema,
     register_kind,
+    resistivity,
     resolve_material,
     take,
 )
-from .levitation import _resistivity
 
 __all__ = ["build_guidance_magnet"]
 
@@ -121,8 +121,8 @@ def build_guidance_magnet(params: Mapping[str, Any], materials: Mapping[str, Mat
     iron = resolve_material(m["material"], materials, "magnet")
     rail_mat = resolve_material(r["material"], materials, "rail")
     eddy = options.eddy_currents
-    rho = _resistivity(m["resistivity"], iron, "magnet") if eddy else 0.0
-    rho_rail = _resistivity(r["resistivity"], rail_mat, "rail") if eddy else 0.0
+    rho = resistivity(m["resistivity"], iron, "magnet") if eddy else 0.0
+    rho_rail = resistivity(r["resistivity"], rail_mat, "rail") if eddy else 0.0
 
     face = L * hp
     # bar flanks above and below the face see the rail (it covers both bars); flank depth

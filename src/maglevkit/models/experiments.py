@@ -23,7 +23,7 @@ import numpy as np
 
 from ..errors import InputError, SolverError
 from ..validation import real_number, whole_number
-from .flux import FluxModel, SimulationResult, check_options, simulate
+from .flux import FluxModel, SimulationResult, check_options, simulate_flux
 from .statics import solve_statics
 
 __all__ = ["InductanceEstimate", "voltage_step_response", "differential_inductance_from_step"]
@@ -32,7 +32,7 @@ __all__ = ["InductanceEstimate", "voltage_step_response", "differential_inductan
 def _model(model: Any, options: dict[str, Any]) -> FluxModel:
     check_options(options, "the step experiment")
     if isinstance(model, FluxModel):
-        return FluxModel(model, **{**model._options, **options}) if options else model
+        return model.with_options(**options) if options else model
     return FluxModel(model, **options)
 
 
@@ -61,7 +61,7 @@ def voltage_step_response(model: Any, *, gap: Any, voltage: Any, initial_current
     """
     fm = _model(model, options)
     st = fm.initial_state(gaps=gap, currents=initial_current)
-    return simulate(fm, (0.0, duration), dt=dt, gaps=st.gaps_m, voltages=voltage,
+    return simulate_flux(fm, (0.0, duration), dt=dt, gaps=st.gaps_m, voltages=voltage,
                     initial_state=st)
 
 
@@ -172,7 +172,7 @@ def differential_inductance_from_step(model: Any, *, gap: float, current: float,
     U = R * st.currents_A
     U[circuit] += r_par * di_inf
     dt = tau_est / samples_per_tau
-    res = simulate(fm, (0.0, n_tau * tau_est), dt=dt, gaps=st.gaps_m, voltages=U,
+    res = simulate_flux(fm, (0.0, n_tau * tau_est), dt=dt, gaps=st.gaps_m, voltages=U,
                    initial_state=st)
     di = res.currents_A[:, circuit] - st.currents_A[circuit]
     remaining = di_inf - di

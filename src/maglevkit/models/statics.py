@@ -403,10 +403,10 @@ def _assign_column(dst: np.ndarray, src: np.ndarray, j: int, m: int) -> None:
 
 
 def _solver(network: Network) -> _StaticSolver:
-    solver = network._cache.get("statics")
+    solver = network.cache.get("statics")
     if solver is None:
         solver = _StaticSolver(network)
-        network._cache["statics"] = solver
+        network.cache["statics"] = solver
     return solver  # type: ignore[no-any-return]
 
 

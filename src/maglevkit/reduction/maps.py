@@ -56,7 +56,7 @@ REQUIRED_VARIABLES = ("force_N", "inductance_H", "dL_ds_H_per_m", "resistance_oh
 
 
 def _version() -> str:
-    from .. import __version__
+    from .._version import __version__
 
     return __version__
 
@@ -340,9 +340,9 @@ class _StepRun:
         import casadi as ca
 
         from ..circuit.assembly import assemble
-        from ..models.flux import _dae
+        from ..models.flux import flux_dae
 
-        d = _dae(net, "idas", _FIT_RTOL, _FIT_ATOL, 20000, 2, 3)
+        d = flux_dae(net, "idas", _FIT_RTOL, _FIT_ATOL, 20000, 2, 3)
         eq = assemble(net)
         y = ca.SX.sym("y", d.n_diff)
         U = ca.SX.sym("U", d.n_circuits)
@@ -367,10 +367,10 @@ class _StepRun:
 
 def _step_run(net: Network, n_out: int) -> _StepRun:
     key = ("reduction_step_fit", n_out)
-    run = net._cache.get(key)
+    run = net.cache.get(key)
     if run is None:
         run = _StepRun(net, n_out)
-        net._cache[key] = run
+        net.cache[key] = run
     return run  # type: ignore[no-any-return]
 
 
@@ -452,10 +452,10 @@ def _eddy_network_steps(net: Network, gap: float, current: float
     s0 = np.asarray(sol.gaps_m, dtype=float).ravel()
     R = net.resistances
     key = ("reduction_step_network", _NET_LOG_SAMPLES, _NET_LIN_SAMPLES)
-    run = net._cache.get(key)
+    run = net.cache.get(key)
     if run is None:
         run = _StepRun(net, 0, tau=_network_grid())
-        net._cache[key] = run
+        net.cache[key] = run
     ltilde = np.array([float(sol.differential_inductance_H[j, j]) for j in range(nc)])
     times, responses = [], []
     for j in range(nc):

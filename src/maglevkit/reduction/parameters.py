@@ -35,7 +35,7 @@ import numpy as np
 from ..circuit.assembly import assemble
 from ..circuit.network import Network
 from ..errors import InputError
-from ..models.flux import DEFAULT_ATOL, DEFAULT_RTOL, _dae
+from ..models.flux import DEFAULT_ATOL, DEFAULT_RTOL, flux_dae
 from ..models.statics import as_network, solve_statics
 
 __all__ = ["current_jump_admittance", "eddy_resistance"]
@@ -43,18 +43,18 @@ __all__ = ["current_jump_admittance", "eddy_resistance"]
 
 def _jacobians(net: Network) -> ca.Function:
     """``(x, s, I) -> (dr/dx, dr/dI)`` of the static loop law (cached on the network)."""
-    f = net._cache.get("reduction_jacobians")
+    f = net.cache.get("reduction_jacobians")
     if f is None:
         eq = assemble(net)
         f = ca.Function("r_jac", [eq.x, eq.s, eq.I],
                         [ca.jacobian(eq.residual, eq.x), ca.jacobian(eq.residual, eq.I)])
-        net._cache["reduction_jacobians"] = f
+        net.cache["reduction_jacobians"] = f
     return f  # type: ignore[no-any-return]
 
 
 def _structure(net: Network) -> Any:
     # The flux model's DAE matrices D, Q (same setup as FluxModel's defaults, so cached).
-    return _dae(net, "idas", DEFAULT_RTOL, DEFAULT_ATOL, 20000, 2, 3)
+    return flux_dae(net, "idas", DEFAULT_RTOL, DEFAULT_ATOL, 20000, 2, 3)
 
 
 def current_jump_admittance(model: Any, *, gap: Any, current: Any) -> np.ndarray:

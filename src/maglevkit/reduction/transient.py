@@ -101,14 +101,14 @@ class RampEstimate:
 class _HeldRamp:
     """Compiled DAE of the flux model with ``U = R_el I`` substituted (cached on the network).
 
-    It reuses the flux model's structure (``D``, ``K``, ``Q`` of ``_FluxDAE``) and only
+    It reuses the flux model's structure (``D``, ``K``, ``Q`` of ``FluxDAE``) and only
     replaces the Faraday rows ``U - R I`` of ``h`` by zero.  Time is normalised to
     ``[0, 1]``; parameters are the duration ``T`` and the gap change ``Delta s`` per gap.
     """
 
     def __init__(self, net: Network, n_out: int) -> None:
         fm = FluxModel(net, rtol=RTOL, atol=ATOL, compiled="never")   # matrices only
-        d = fm._dae
+        d = fm.dae
         eq = assemble(net)
         nc, ng = d.n_circuits, d.n_gaps
         y = ca.SX.sym("y", d.n_diff)
@@ -130,10 +130,10 @@ class _HeldRamp:
 
 def _held(net: Network, n_out: int) -> _HeldRamp:
     key = ("reduction_held_ramp", n_out)
-    obj = net._cache.get(key)
+    obj = net.cache.get(key)
     if obj is None:
         obj = _HeldRamp(net, n_out)
-        net._cache[key] = obj
+        net.cache[key] = obj
     return obj  # type: ignore[no-any-return]
 
 

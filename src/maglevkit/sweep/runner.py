@@ -295,7 +295,7 @@ def assemble(spec: SweepSpec, results: list[Any]) -> Any:
     """
     import xarray as xr
 
-    from .. import __version__
+    from .._version import __version__
 
     dims = list(spec.swept)
     shape = spec.shape

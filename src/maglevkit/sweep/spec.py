@@ -201,7 +201,7 @@ class SweepSpec:
 
     def case_key(self, params: Mapping[str, Any]) -> str:
         """Hash of the job, the case's parameters and the format (its stored file's name)."""
-        from .. import __version__
+        from .._version import __version__
 
         blob = json.dumps({"format": SWEEP_FORMAT, "maglevkit": __version__,
                            "job": self.job.key_data(),

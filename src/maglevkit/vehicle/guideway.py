@@ -33,8 +33,8 @@ import numpy as np
 import scipy.linalg
 
 from ..errors import InputError, OutOfRangeError, ParameterError
+from ..plant import STANDARD_GRAVITY
 from ..validation import flag, real_array, real_number, whole_number
-from .heave import STANDARD_GRAVITY
 
 __all__ = ["BeamSpan", "Guideway", "GuidewayState", "GuidewayDeflection"]
 

@@ -41,7 +41,7 @@ import numpy as np
 import scipy.linalg
 
 from ..errors import InputError
-from .heave import STANDARD_GRAVITY
+from ..plant import STANDARD_GRAVITY
 from .train import TrainData
 
 __all__ = ["VehicleMechanics", "ForceElement", "derive_sympy"]

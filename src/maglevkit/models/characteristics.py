@@ -1,4 +1,8 @@
-"""Characteristic numbers of a magnet from its statics: saturation knee and circuit coupling."""
+"""Characteristic numbers of a magnet from its statics: saturation knee and circuit coupling.
+
+(In :mod:`maglevkit.models`, not :mod:`maglevkit.magnets`: they solve the statics, which
+sit a layer above the magnets.)
+"""
 
 from __future__ import annotations
 
@@ -7,8 +11,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import InputError
-from ..models.statics import solve_statics
-from .base import Magnet
+from ..magnets.base import Magnet
+from .statics import solve_statics
 
 __all__ = ["saturation_knee", "coupling_ratios", "nominal_point", "force_exponent", "Coupling",
            "KNEE_EXPONENT"]

@@ -1,15 +1,18 @@
-"""Mechanical models the magnets are coupled to.
+"""The simplest mechanical plant a magnet is coupled to, and gravity.
 
-Only the simplest one so far: a rigid mass moving in heave under gravity, the magnet force
-and an external force (the magnet's share of a vehicle, for gap-control studies).
+A rigid mass moving in heave under gravity, the magnet force and an external force (the
+magnet's share of a vehicle, for gap-control studies).  It sits below both
+:mod:`maglevkit.control` (which designs and runs controllers on it) and
+:mod:`maglevkit.vehicle` (whose mechanics use the same gravity); ``maglevkit.vehicle``
+re-exports its names.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
 
-from ..errors import ParameterError
-from ..validation import real_number
+from .errors import ParameterError
+from .validation import real_number
 
 __all__ = ["HeaveMass", "HeaveState", "STANDARD_GRAVITY"]
 
