@@ -1240,6 +1240,9 @@ def simulate_flux(model: Any, t: Any, *, gaps: Any, voltages: Any, gap_rates: An
         steady state ``U(t0) / R``.
     initial_state : FluxState, optional
         Start from this state instead (its gaps are replaced by ``gaps(t0)``).
+    gap_rate_tolerance : float, optional
+        Allowed mismatch between given gap rates and the gaps' secants, as a fraction of
+        the largest rate [-] (default 0.02); see ``gap_rates``.
 
     Returns
     -------
