@@ -46,7 +46,8 @@ import numpy as np
 from ..errors import SolverError
 
 __all__ = ["DetailedFrequencyResponse", "MotionEddyFit", "detailed_frequency_response",
-           "fit_motion_eddy", "ladder_frequency_response", "FIT_FREQUENCIES_HZ"]
+           "fit_motion_eddy", "ladder_frequency_response",
+           "relative_rms_residual", "FIT_FREQUENCIES_HZ"]
 
 #: Frequencies of the fit [Hz]: 0.1 Hz .. 1 kHz, 60 points evenly spaced in log f.
 FIT_FREQUENCIES_HZ = np.geomspace(0.1, 1000.0, 60)
@@ -212,6 +213,25 @@ def ladder_frequency_response(frequencies_Hz: Any, *, ltilde: float, dpsi_ds: fl
     return iu_s / a, il_s, (1.0 - 1.0 / a) / r_el + iu_u / a
 
 
+def relative_rms_residual(response: DetailedFrequencyResponse, gap_to_current: np.ndarray,
+                          voltage_to_current: np.ndarray) -> float:
+    """RMS over frequencies and both responses of ``(model - detailed)/|detailed|`` (real
+    and imaginary parts; the gap response is left out where the detailed one is 0)."""
+    return float(np.sqrt(np.mean(_residuals(response, gap_to_current, voltage_to_current)
+                                 ** 2)))
+
+
+def _residuals(response: DetailedFrequencyResponse, gap_to_current: np.ndarray,
+               voltage_to_current: np.ndarray) -> np.ndarray:
+    gs, gu = response.gap_to_current_A_per_m, response.voltage_to_current_A_per_V
+    ns = np.abs(gs)
+    # at I = 0 the gap does not move the current (dpsi/ds = 0): the voltage path only
+    ws = 1.0 if np.all(ns > 0) else 0.0
+    es = ws * (gap_to_current - gs) / np.where(ns > 0, ns, 1.0)
+    eu = (voltage_to_current - gu) / np.abs(gu)
+    return np.concatenate((es.real, es.imag, eu.real, eu.imag))
+
+
 @dataclass(frozen=True)
 class MotionEddyFit:
     """Fitted shielded-gap ladder of one circuit.
@@ -264,10 +284,6 @@ def fit_motion_eddy(response: DetailedFrequencyResponse, *, r_el: float, r_ec_ju
     lt, k = response.differential_inductance_H, response.dpsi_ds_Wb_per_m
     f = response.frequencies_Hz
     gs, gu = response.gap_to_current_A_per_m, response.voltage_to_current_A_per_V
-    ns, nu = np.abs(gs), np.abs(gu)
-    # at I = 0 the gap does not move the current (dpsi/ds = 0): fit the voltage path only
-    ws = 1.0 if np.all(ns > 0) else 0.0
-    ns = np.where(ns > 0, ns, 1.0)
 
     def unpack(x: np.ndarray) -> tuple[float, float, float]:
         return float(np.exp(x[0])), float(lt / (1.0 + np.exp(-x[1]))), float(np.exp(x[2]))
@@ -276,8 +292,7 @@ def fit_motion_eddy(response: DetailedFrequencyResponse, *, r_el: float, r_ec_ju
         r_a, l_u, r_2 = unpack(x)
         ms, _, mu = ladder_frequency_response(f, ltilde=lt, dpsi_ds=k, r_el=r_el, r_a=r_a,
                                               l_u=l_u, r_2=r_2)
-        es, eu = ws * (ms - gs) / ns, (mu - gu) / nu
-        return np.concatenate((es.real, es.imag, eu.real, eu.imag))
+        return _residuals(response, ms, mu)
 
     r_a0 = r_ec_jump if np.isfinite(r_ec_jump) and r_ec_jump > 0 else 3.0 * r_ec_fit
     best = None
@@ -293,6 +308,7 @@ def fit_motion_eddy(response: DetailedFrequencyResponse, *, r_el: float, r_ec_ju
     r_a, l_u, r_2 = unpack(best.x)
     ms, _, mu = ladder_frequency_response(f, ltilde=lt, dpsi_ds=k, r_el=r_el, r_a=r_a,
                                           l_u=l_u, r_2=r_2)
-    return MotionEddyFit(r_a, l_u, r_2, float(np.sqrt(np.mean(best.fun ** 2))),
-                         float(np.max(np.abs(ms - gs) / ns)) if ws else float("nan"),
+    moving = bool(np.all(np.abs(gs) > 0))
+    return MotionEddyFit(r_a, l_u, r_2, relative_rms_residual(response, ms, mu),
+                         float(np.max(np.abs(ms / gs - 1.0))) if moving else float("nan"),
                          float(np.max(np.abs(mu / gu - 1.0))))
