@@ -226,11 +226,11 @@ class CurrentModel:
     rtol, atol : float
         CVODES tolerances (defaults 1e-8 relative, 1e-10 absolute).
     max_step_s : float
-        Largest RK4 sub-step [s] (default 1e-3 s).  With ``eddy_modes > 0`` the sub-step
-        is also limited to ``1.5/lambda`` with ``lambda`` a bound (Gershgorin) of the
-        fastest eddy branch's rate over the maps (RK4 is stable up to 2.78/lambda): the
-        fast branches are stiff for the explicit integrator (attribute ``max_step_s``
-        holds the step used).
+        Largest RK4 sub-step [s] (default 1e-3 s).  With ``eddy_modes > 0`` or
+        ``motion_eddy`` the sub-step is also limited to ``1.5/lambda`` with ``lambda`` a
+        bound (Gershgorin) of the fastest eddy branch's rate over the maps (RK4 is
+        stable up to 2.78/lambda): the fast branches are stiff for the explicit
+        integrator (attribute ``max_step_s`` holds the step used).
     eddy_resistance : {"fit", "jump"} or None
         Which ``R_ec`` of the maps to use: ``"fit"`` (default; None means ``"fit"``) the
         value the step-response time constant implies (the paper's procedure; eq. 8 then
