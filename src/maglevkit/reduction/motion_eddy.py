@@ -113,11 +113,11 @@ def detailed_frequency_response(net: Any, *, gap: float, current: float,
     import casadi as ca
 
     from ..circuit.assembly import assemble
-    from ..models.flux import _dae
+    from ..models.flux import flux_dae
     from ..models.statics import circuit_pole_groups, solve_statics
 
     freqs = np.asarray(frequencies_Hz, dtype=float)
-    d = _dae(net, "idas", 1e-9, 1e-11, 20000, 2, 3)
+    d = flux_dae(net, "idas", 1e-9, 1e-11, 20000, 2, 3)
     eq = assemble(net)
     nc, ng = len(net.circuits), len(net.gap_names)
     y = ca.SX.sym("y", d.n_diff)
