@@ -13,6 +13,8 @@ import importlib
 from typing import TYPE_CHECKING, Any
 
 from .errors import (
+    DataError,
+    DataWarning,
     InputError,
     MaglevkitError,
     MaglevkitWarning,
@@ -80,7 +82,7 @@ if TYPE_CHECKING:  # the eager imports, for type checkers and IDEs
         solve_statics,
         voltage_step_response,
     )
-    from .reduction import CharacteristicMaps, build_maps, load_maps
+    from .reduction import CharacteristicMaps, build_maps, load_maps, maps_from_table
 
 _LAZY: dict[str, str] = {
     "AirGap": ".circuit",
@@ -131,6 +133,7 @@ _LAZY: dict[str, str] = {
     "CharacteristicMaps": ".reduction",
     "build_maps": ".reduction",
     "load_maps": ".reduction",
+    "maps_from_table": ".reduction",
 }
 """Public name -> the submodule that defines it (imported on first access)."""
 
@@ -172,6 +175,8 @@ __all__ = [
     "Coil",
     "ConstantPermeability",
     "CurrentModel",
+    "DataError",
+    "DataWarning",
     "EddyCurrent",
     "FluxModel",
     "FluxState",
@@ -216,6 +221,7 @@ __all__ = [
     "load_maps",
     "load_scenario",
     "magnetic_energy",
+    "maps_from_table",
     "material_names",
     "pole_force_eq6",
     "simulate",

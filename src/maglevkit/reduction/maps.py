@@ -561,6 +561,61 @@ def _store_eddy_network(ds: Any, net: Network, gap: float, current: float,
                        "L~/R_el), relative to the step's final value"})
 
 
+MAP_UNITS = {"force_N": "N", "inductance_H": "H", "dL_ds_H_per_m": "H/m",
+             "flux_linkage_Wb": "Wb", "apparent_inductance_H": "H",
+             "inductance_transient_H": "H", "dL_ds_transient_H_per_m": "H/m",
+             "inductance_relative_difference": "1", "dL_ds_relative_difference": "1",
+             "eddy_resistance_step_ohm": "ohm"}
+"""Units of the (circuit, gap, current) map variables."""
+MAP_LONG_NAMES = {
+    "force_N": "force of the circuit's poles F(s, I)",
+    "inductance_H": "differential inductance L~ = dL/dI I + L",
+    "dL_ds_H_per_m": "gap derivative of the inductance dL/ds",
+    "flux_linkage_Wb": "flux linkage psi",
+    "apparent_inductance_H": "inductance L = psi / I",
+    "inductance_transient_H": "L~ from voltage-step time constants (paper IV-B)",
+    "dL_ds_transient_H_per_m": "dL/ds from the virtual control law U = R_el I on a "
+                               "gap ramp (paper IV-B)",
+    "inductance_relative_difference": "L~ transient / statics - 1",
+    "dL_ds_relative_difference": "dL/ds transient / statics - 1",
+    "eddy_resistance_step_ohm": "R_ec implied by a single-exponential fit of the "
+                                "voltage step (slow mode)"}
+"""Long names of the (circuit, gap, current) map variables."""
+
+
+def maps_dataset(data: dict[str, np.ndarray], *, circuits: Sequence[str], gaps_m: np.ndarray,
+                 currents_A: np.ndarray, resistance_ohm: np.ndarray) -> xr.Dataset:
+    """The maps' dataset layout: variables ``(circuit, gap, current)`` with units, the
+    coordinates and ``resistance_ohm``; shared by :func:`build_maps` and the table import
+    (:mod:`maglevkit.reduction.tables_in`).
+
+    Parameters
+    ----------
+    data : dict
+        Variable name (a key of :data:`MAP_UNITS`) -> array (circuit, gap, current).
+    circuits : sequence of str
+        Circuit names.
+    gaps_m, currents_A : ndarray
+        The grid [m], [A].
+    resistance_ohm : ndarray
+        ``R_el`` per circuit [ohm].
+    """
+    import xarray as xr
+
+    dims = ("circuit", "gap", "current")
+    ds = xr.Dataset(
+        {k: (dims, v, {"units": MAP_UNITS[k], "long_name": MAP_LONG_NAMES[k]})
+         for k, v in data.items()},
+        coords={"circuit": list(circuits),
+                "gap": ("gap", gaps_m, {"units": "m", "long_name": "substitute air gap s"}),
+                "current": ("current", currents_A, {"units": "A",
+                                                    "long_name": "circuit current I_L"})},
+    )
+    ds["resistance_ohm"] = ("circuit", np.asarray(resistance_ohm, dtype=float),
+                            {"units": "ohm", "long_name": "ohmic resistance R_el"})
+    return ds
+
+
 def build_maps(model: Any, *, gaps: Any, currents: Any, executor: Any = "auto",
                progress: bool = True, method: str = "statics",
                eddy_reference: Any = None) -> CharacteristicMaps:
@@ -639,23 +694,6 @@ def build_maps(model: Any, *, gaps: Any, currents: Any, executor: Any = "auto",
             ex.shutdown()
     names = list(rows[0])
     data = {k: np.stack([r[k] for r in rows], axis=1) for k in names}  # (circuit, gap, current)
-    units = {"force_N": "N", "inductance_H": "H", "dL_ds_H_per_m": "H/m",
-             "flux_linkage_Wb": "Wb", "apparent_inductance_H": "H",
-             "inductance_transient_H": "H", "dL_ds_transient_H_per_m": "H/m",
-             "inductance_relative_difference": "1", "dL_ds_relative_difference": "1",
-             "eddy_resistance_step_ohm": "ohm"}
-    long = {"force_N": "force of the circuit's poles F(s, I)",
-            "inductance_H": "differential inductance L~ = dL/dI I + L",
-            "dL_ds_H_per_m": "gap derivative of the inductance dL/ds",
-            "flux_linkage_Wb": "flux linkage psi",
-            "apparent_inductance_H": "inductance L = psi / I",
-            "inductance_transient_H": "L~ from voltage-step time constants (paper IV-B)",
-            "dL_ds_transient_H_per_m": "dL/ds from the virtual control law U = R_el I on a "
-                                       "gap ramp (paper IV-B)",
-            "inductance_relative_difference": "L~ transient / statics - 1",
-            "dL_ds_relative_difference": "dL/ds transient / statics - 1",
-            "eddy_resistance_step_ohm": "R_ec implied by a single-exponential fit of the "
-                                        "voltage step (slow mode)"}
     if method != "statics":
         shape = (len(net.circuits), g.size, c.size)
         tdata = {k: np.stack([t[k] for t in trans], axis=1).reshape(shape) for k in trans[0]}
@@ -669,17 +707,8 @@ def build_maps(model: Any, *, gaps: Any, currents: Any, executor: Any = "auto",
             data["dL_ds_relative_difference"] = (tdata["dL_ds_H_per_m"] / data["dL_ds_H_per_m"]
                                                  - 1)
         data["eddy_resistance_step_ohm"] = tdata["eddy_resistance_step_ohm"]
-    import xarray as xr
-
-    dims = ("circuit", "gap", "current")
-    ds = xr.Dataset(
-        {k: (dims, v, {"units": units[k], "long_name": long[k]}) for k, v in data.items()},
-        coords={"circuit": list(net.circuit_names),
-                "gap": ("gap", g, {"units": "m", "long_name": "substitute air gap s"}),
-                "current": ("current", c, {"units": "A", "long_name": "circuit current I_L"})},
-    )
-    ds["resistance_ohm"] = ("circuit", net.resistances, {"units": "ohm",
-                                                         "long_name": "ohmic resistance R_el"})
+    ds = maps_dataset(data, circuits=net.circuit_names, gaps_m=g, currents_A=c,
+                      resistance_ohm=net.resistances)
     r_ec = eddy_resistance(net, gap=ref_gap, current=ref_current)
     # R_ec depends on the operating point only through the iron's differential
     # reluctances (and not at all when every loop carries an eddy element): its spread
