@@ -29,6 +29,7 @@ from .errors import (
 )
 
 if TYPE_CHECKING:  # the eager imports, for type checkers and IDEs
+    from .calibration import calibrate
     from .circuit import (
         AirGap,
         Branch,
@@ -134,12 +135,13 @@ _LAZY: dict[str, str] = {
     "build_maps": ".reduction",
     "load_maps": ".reduction",
     "maps_from_table": ".reduction",
+    "calibrate": ".calibration",
 }
 """Public name -> the submodule that defines it (imported on first access)."""
 
-_SUBPACKAGES = frozenset({"circuit", "cli", "compare", "control", "errors", "figures", "magnets",
-                          "materials", "models", "plotting", "reduction", "validation",
-                          "vehicle"})
+_SUBPACKAGES = frozenset({"calibration", "circuit", "cli", "compare", "control", "errors",
+                          "figures", "magnets", "materials", "models", "plotting", "reduction",
+                          "validation", "vehicle"})
 
 
 # Hidden from type checkers, which see the imports above: a typo such as
@@ -213,6 +215,7 @@ __all__ = [
     "build_magnet",
     "build_maps",
     "bundled_magnets",
+    "calibrate",
     "carter_coefficient",
     "coenergy",
     "differential_inductance_from_step",

@@ -1,4 +1,5 @@
-"""``maglevkit maps import``: characteristic maps from measured or FEM tables."""
+"""``maglevkit maps import`` (maps from measured or FEM tables) and ``maglevkit calibrate``
+(a magnet's uncertain factors fitted to measured statics)."""
 
 from __future__ import annotations
 
@@ -9,7 +10,21 @@ from typing import Annotated, Any
 import typer
 
 from ..errors import MaglevkitError
-from ._app import console, fail, info, load_magnet_or_exit, output_file, writing
+from ._app import (
+    FormatOption,
+    OutputFormat,
+    add_columns,
+    app,
+    console,
+    fail,
+    info,
+    load_magnet_or_exit,
+    new_table,
+    output_file,
+    parse_values,
+    print_records,
+    writing,
+)
 from .maps import maps_app
 
 
@@ -124,3 +139,83 @@ def import_table(
             console.print(f"reciprocity residual {c}: max {100 * v:.3g} % at "
                           f"{rep.reciprocity_worst[c]}")
     info(f"wrote {path}")
+
+
+@app.command("calibrate", short_help="Fit a magnet's uncertain network factors to measured "
+                                     "statics (TOML out).")
+def calibrate_cmd(
+    magnet: Annotated[str, typer.Argument(help="Magnet TOML file or bundled name.")],
+    data: Annotated[Path, typer.Argument(help="Measured statics, CSV (gap_m, current_A, "
+                                              "force_N and/or flux_linkage_Wb[_<circuit>]).")],
+    output: Annotated[Path, typer.Option("-o", "--output", help="Calibrated magnet TOML to "
+                                                                "write.")]
+    = Path("calibrated.toml"),
+    params: Annotated[str | None, typer.Option("--params", help="Parameters to fit (comma "
+                                                                "list; default: the whole "
+                                                                "documented set).")] = None,
+    holdout_gaps: Annotated[str | None, typer.Option("--holdout-gaps", help="Gaps [m] left out "
+                                                                           "of the fit and "
+                                                                           "reported (comma "
+                                                                           "list).")] = None,
+    fmt: FormatOption = OutputFormat.table,
+) -> None:
+    """Calibrate the magnet's leakage and fringing factors, gap offset and iron B-H scalings
+    to measured force and/or flux linkage (bounded least squares, exact derivatives).
+
+    Prints the values with 95 % confidence intervals, the parameters the data cannot
+    determine, and the relative error per point (fitted and held out); --format csv or json
+    prints the per-point errors.  Writes the magnet file with a [calibration] table
+    (values tagged calibrated, with the data file's SHA-256).
+    """
+    from ..calibration import PARAMETERS, calibrate, write_calibrated_toml
+
+    output_file(output, "--output")
+    names = None
+    if params is not None:
+        names = [p.strip() for p in params.split(",") if p.strip()]
+        unknown = [p for p in names if p not in PARAMETERS]
+        if unknown or not names:
+            raise fail(f"--params {params!r}: unknown {unknown}; choose from "
+                       f"{', '.join(PARAMETERS)}")
+    gaps = list(parse_values(holdout_gaps, "--holdout-gaps", "m")) if holdout_gaps else []
+    mag = load_magnet_or_exit(magnet)
+    with warnings.catch_warnings():
+        warnings.simplefilter("always")
+        try:
+            res = calibrate(mag, data, parameters=names, holdout_gaps_m=gaps)
+        except MaglevkitError as exc:
+            raise fail(exc) from None
+    with writing(output, "--output"):
+        write_calibrated_toml(mag, res, output, data_source=str(data))
+    records = [{"set": which, "gap_m": r["gap_m"], "current_A": r["current_A"],
+                "row": r["row"], "circuit": r["circuit"], "quantity": r["quantity"],
+                "data": r["data"], "model": r["model"],
+                "relative_error_pct": 100.0 * r["relative_error"]}
+               for which, rows in (("fit", res.points), ("holdout", res.holdout)) for r in rows]
+    table = new_table(title="relative error per point (model - data)/data")
+    add_columns(table, ["set", "gap [m]", "I [A]", "row", "quantity", "data", "model",
+                        "error [%]"], left=["set", "quantity"])
+    for r in records:
+        table.add_row(r["set"], f"{r['gap_m']:g}", f"{r['current_A']:g}", str(r["row"]),
+                      r["quantity"], f"{r['data']:.6g}", f"{r['model']:.6g}",
+                      f"{r['relative_error_pct']:+.2f}")
+    meta = {"values": res.values, "confidence_95": res.confidence_95,
+            "undetermined": list(res.undetermined), "bounds_active": list(res.bounds_active),
+            "singular_values": res.singular_values.tolist(), "data_sha256": res.data_sha256}
+    if fmt == OutputFormat.table:
+        for name in res.parameters:
+            unit = "" if PARAMETERS[name].unit == "1" else f" {PARAMETERS[name].unit}"
+            console.print(f"{name} = {res.values[name]:.6g} +- {res.confidence_95[name]:.3g}"
+                          f"{unit} (95 %)"
+                          + ("  NOT DETERMINED by the data" if name in res.undetermined else "")
+                          + ("  at a bound" if name in res.bounds_active else ""))
+        console.print("singular values (scaled Jacobian): "
+                      + ", ".join(f"{v:.3g}" for v in res.singular_values))
+        console.print(f"fit: rms {100 * res.residual_rms:.2f} %, max "
+                      f"{100 * res.max_error('points'):.2f} %"
+                      + (f"; held out: max {100 * res.max_error('holdout'):.2f} % (force "
+                         f"{100 * res.max_error('holdout', 'force_N'):.2f} %, flux linkage "
+                         f"{100 * res.max_error('holdout', 'flux_linkage_Wb'):.2f} %)"
+                         if res.holdout else ""))
+    print_records(records, fmt, table, meta)
+    info(f"wrote {output}")

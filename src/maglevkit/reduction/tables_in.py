@@ -49,8 +49,8 @@ from ..errors import DataError, DataWarning, InputError, PlausibilityWarning
 from ..validation import real_number
 from .maps import MAPS_FORMAT, CharacteristicMaps, _grid, _version, maps_dataset
 
-__all__ = ["GridTable", "TableReport", "eddy_resistance_from_step", "maps_from_table",
-           "read_table", "RECIPROCITY_TOLERANCE"]
+__all__ = ["GridTable", "TableReport", "TableRows", "eddy_resistance_from_step",
+           "maps_from_table", "read_rows", "read_table", "RECIPROCITY_TOLERANCE"]
 
 QUANTITIES = ("force_N", "flux_linkage_Wb")
 """The tabulated quantities (CSV column prefixes and netCDF variable names)."""
@@ -199,6 +199,51 @@ def _key(value: float) -> float:
     return float(f"{value:.12g}")
 
 
+@dataclass(frozen=True)
+class TableRows:
+    """The rows of a CSV table, checked cell by cell (:func:`read_rows`).
+
+    Attributes
+    ----------
+    gap_m, current_A : ndarray (n,)
+        Per row [m], [A].
+    columns : dict
+        ``(quantity, circuit suffix)`` -> values per row.
+    circuit_keys : tuple of str
+        The column suffixes (``""`` without).
+    circuits : tuple of str
+        Circuit names (``"coil"`` without suffix).
+    lines : ndarray (n,) of int
+        Line number of each row (header = 1).
+    source, sha256 : str
+        File and SHA-256 of its bytes.
+    """
+
+    gap_m: np.ndarray
+    current_A: np.ndarray
+    columns: dict[tuple[str, str], np.ndarray]
+    circuit_keys: tuple[str, ...]
+    circuits: tuple[str, ...]
+    lines: np.ndarray
+    source: str
+    sha256: str
+
+
+def read_rows(path: str | Path) -> TableRows:
+    """The rows of a CSV table (format of :func:`read_table`), any points: columns and
+    cells checked (numbers, finite, gap > 0, current >= 0, gap plausible), naming the row.
+    """
+    from ..errors import ParameterFileError
+
+    if not isinstance(path, (str, Path)):
+        raise InputError(f"a table needs a file path (str or Path), got {type(path).__name__}")
+    p = Path(path)
+    if not p.is_file():
+        raise ParameterFileError(f"table file {str(p)!r} does not exist")
+    raw = p.read_bytes()
+    return _parse_csv(p, raw, hashlib.sha256(raw).hexdigest())
+
+
 def read_table(path: str | Path) -> GridTable:
     """Read a table of ``F(s, I)`` and/or ``psi(s, I)`` from CSV or netCDF.
 
@@ -229,6 +274,12 @@ def read_table(path: str | Path) -> GridTable:
     digest = hashlib.sha256(raw).hexdigest()
     if raw[:4] in (b"CDF\x01", b"CDF\x02", b"\x89HDF"):
         return _read_netcdf(p, digest)
+    rows = _parse_csv(p, raw, digest)
+    return _assemble(rows.gap_m, rows.current_A, rows.columns, rows.circuit_keys, rows.lines,
+                     str(p), digest, checked=True)
+
+
+def _parse_csv(p: Path, raw: bytes, digest: str) -> TableRows:
     try:
         text = raw.decode("utf-8-sig")
     except UnicodeDecodeError as exc:
@@ -265,14 +316,15 @@ def read_table(path: str | Path) -> GridTable:
                                 "finite number (every grid point needs a value)")
             values[r, i] = v
     lines = np.array([row for row, _ in records])
-    return _assemble(values[:, base["gap_m"]], values[:, base["current_A"]],
-                     {k: values[:, i] for k, i in cols.items()}, circuits, lines, str(p), digest)
+    gap, cur = values[:, base["gap_m"]], values[:, base["current_A"]]
+    _check_axes(gap, cur, lines, str(p))
+    return TableRows(gap_m=gap, current_A=cur, columns={k: values[:, i] for k, i in cols.items()},
+                     circuit_keys=circuits, circuits=tuple(c or "coil" for c in circuits),
+                     lines=lines, source=str(p), sha256=digest)
 
 
-def _assemble(gap: np.ndarray, cur: np.ndarray, cols: Mapping[tuple[str, str], np.ndarray],
-              circuits: tuple[str, ...], lines: np.ndarray, source: str,
-              digest: str) -> GridTable:
-    """Scattered rows -> a rectangular grid (checks gaps, currents, duplicates, coverage)."""
+def _check_axes(gap: np.ndarray, cur: np.ndarray, lines: np.ndarray, source: str) -> None:
+    """Gaps > 0 (plausible), currents >= 0, naming the row."""
     def row(i: int) -> str:
         return f"row {lines[i]}" if lines[i] else f"point {i}"
 
@@ -281,14 +333,26 @@ def _assemble(gap: np.ndarray, cur: np.ndarray, cols: Mapping[tuple[str, str], n
         raise DataError(f"{source}: {row(bad[0])}: gap_m = {float(gap[bad[0]]):g} must be > 0 m")
     bad = np.nonzero(cur < 0.0)[0]
     if bad.size:
-        raise DataError(f"{source}: {row(bad[0])}: current_A = {float(cur[bad[0]]):g} must be >= 0 A "
-                        "(forces are even and flux linkages odd in the current: tabulate I >= 0)")
+        raise DataError(f"{source}: {row(bad[0])}: current_A = {float(cur[bad[0]]):g} must be "
+                        ">= 0 A (forces are even and flux linkages odd in the current: tabulate "
+                        "I >= 0)")
     lo, hi = _GAP_PLAUSIBLE_M
     odd = np.nonzero((gap < lo) | (gap > hi))[0]
     if odd.size:
         warnings.warn(f"{source}: {row(odd[0])}: gap_m = {float(gap[odd[0]]):g} m lies outside "
                       f"{lo:g}-{hi:g} m (EMS air gaps are ~ 4-20 mm); is the gap in mm, not "
-                      "m? (gap_m is in metres)", PlausibilityWarning, stacklevel=3)
+                      "m? (gap_m is in metres)", PlausibilityWarning, stacklevel=4)
+
+
+def _assemble(gap: np.ndarray, cur: np.ndarray, cols: Mapping[tuple[str, str], np.ndarray],
+              circuits: tuple[str, ...], lines: np.ndarray, source: str,
+              digest: str, *, checked: bool = False) -> GridTable:
+    """Scattered rows -> a rectangular grid (checks duplicates, coverage, equidistance)."""
+    def row(i: int) -> str:
+        return f"row {lines[i]}" if lines[i] else f"point {i}"
+
+    if not checked:
+        _check_axes(gap, cur, lines, source)
     gk = np.array([_key(v) for v in gap])
     ck = np.array([_key(v) for v in cur])
     seen: dict[tuple[float, float], int] = {}
