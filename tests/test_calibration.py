@@ -172,3 +172,30 @@ def test_cli_calibrate(tmp_path: Path) -> None:
     res = runner.invoke(app, ["calibrate", "u-magnet", str(FEM), "-o", str(out), "--params",
                               "nonsense"])
     assert res.exit_code == 2 and "Traceback" not in res.output and "nonsense" in res.output
+
+
+def test_voltage_step_response_and_its_parameter_derivatives() -> None:
+    from maglevkit.calibration import step_response_sensitivities
+
+    mag = mk.load_magnet("u-magnet")                 # with eddy currents: a current jump
+    vals = {"leakage_factor": 1.1, "iron_saturation_scale": 0.97}
+    times = np.linspace(0.002, 0.2, 12)
+    kw = {"gap_m": 0.01, "current_A": 20.0, "voltage_step_V": 8.0, "times_s": times}
+    d = step_response_sensitivities(mag, vals, **kw)
+    ref = mk.voltage_step_response(calibrated_network(mag, vals), gap=0.01, voltage=48.0,
+                                   initial_current=20.0, duration=0.2, dt=0.002, rtol=1e-10,
+                                   atol=1e-12)
+    idx = np.rint(times / 0.002).astype(int)
+    # the collocation run against the adaptive IDAS one: measured 3.4e-10
+    np.testing.assert_allclose(d["current_A"], ref.currents_A[idx, 0], rtol=1e-8)
+    for k, name in enumerate(vals):
+        h = 1e-4 * PARAMETERS[name].scale
+        out = [step_response_sensitivities(mag, {**vals, name: vals[name] + sg * h},
+                                           **kw)["current_A"] for sg in (1, -1)]
+        fd = (out[0] - out[1]) / (2 * h)
+        err = np.max(np.abs(d["dcurrent_dp"][:, k] - fd)) / np.max(np.abs(fd))
+        # measured 3-6e-6 (max over the samples relative to the largest derivative), the
+        # same for h = 1e-3, 1e-4 and 1e-5: the differences are converged and the AD
+        # derivative of the collocation run differs from them by that much (not the 1e-6
+        # of the statics; cause not found, docs/magnets.md)
+        assert err < 2e-5, (name, err)

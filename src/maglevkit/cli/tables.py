@@ -141,8 +141,7 @@ def import_table(
     info(f"wrote {path}")
 
 
-@app.command("calibrate", short_help="Fit a magnet's uncertain network factors to measured "
-                                     "statics (TOML out).")
+@app.command("calibrate", short_help="Fit a magnet's network factors to measured statics.")
 def calibrate_cmd(
     magnet: Annotated[str, typer.Argument(help="Magnet TOML file or bundled name.")],
     data: Annotated[Path, typer.Argument(help="Measured statics, CSV (gap_m, current_A, "

@@ -336,13 +336,20 @@ class _StepRun:
     ``[0, 1]`` with the duration ``T`` as a parameter.  Compiled once per network.
     """
 
-    def __init__(self, net: Network, n_out: int, tau: np.ndarray | None = None) -> None:
+    def __init__(self, net: Network, n_out: int, tau: np.ndarray | None = None,
+                 params: Any = None, topology: Network | None = None) -> None:
+        """``params``: CasADi symbols that ``net``'s elements contain (calibration
+        factors, :mod:`maglevkit.calibration`), appended to the DAE's parameters (``dae``
+        attribute; the IDAS ``integrator`` is not built then); ``topology``: a numeric
+        network of the same topology and eddy elements for ``D``, ``K``, ``Q`` (default
+        ``net``)."""
         import casadi as ca
 
         from ..circuit.assembly import assemble
         from ..models.flux import _dae
 
-        d = _dae(net, "idas", _FIT_RTOL, _FIT_ATOL, 20000, 2, 3)
+        d = _dae(topology if topology is not None else net, "idas", _FIT_RTOL, _FIT_ATOL,
+                 20000, 2, 3)
         eq = assemble(net)
         y = ca.SX.sym("y", d.n_diff)
         U = ca.SX.sym("U", d.n_circuits)
@@ -350,8 +357,8 @@ class _StepRun:
         hv = ca.vertcat(-eq.residual, U - net.resistances * eq.I)
         ydot = ca.mtimes(ca.DM(np.linalg.pinv(d.K)), hv)
         alg = ca.vertcat(ca.mtimes(ca.DM(d.D), eq.x) - y, ca.mtimes(ca.DM(d.Q), hv))
-        dae = {"x": y, "z": ca.vertcat(eq.x, eq.I), "p": ca.vertcat(T, U, eq.s),
-               "ode": T * ydot, "alg": alg}
+        p = ca.vertcat(T, U, eq.s) if params is None else ca.vertcat(T, U, eq.s, params)
+        dae = {"x": y, "z": ca.vertcat(eq.x, eq.I), "p": p, "ode": T * ydot, "alg": alg}
         self.tau = np.linspace(0.0, 1.0, n_out + 1)[1:] if tau is None else tau
         # absolute tolerances for every IDAS unknown (y, then z = (x, I)): the flux
         # model's nominal scales without its gap states
@@ -361,8 +368,11 @@ class _StepRun:
         opts: dict[str, Any] = {"reltol": _FIT_RTOL,
                                 "abstolv": list(_FIT_ATOL * nominal),
                                 "max_num_steps": 100000, "disable_internal_warnings": True}
-        self.integrator = ca.integrator("maglevkit_step_fit", "idas", dae, 0.0, self.tau, opts)
+        self.dae = dae
         self.D, self.n_loops = d.D, d.n_loops
+        if params is not None:
+            return
+        self.integrator = ca.integrator("maglevkit_step_fit", "idas", dae, 0.0, self.tau, opts)
 
 
 def _step_run(net: Network, n_out: int) -> _StepRun:

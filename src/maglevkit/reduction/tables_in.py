@@ -39,7 +39,7 @@ import math
 import re
 import warnings
 from collections.abc import Mapping, Sequence
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
@@ -677,8 +677,8 @@ def maps_from_table(data: str | Path | GridTable, *, resistance_ohm: Any = None,
     """
     table = data if isinstance(data, GridTable) else read_table(data)
     tol = real_number(reciprocity_tolerance, "reciprocity_tolerance", positive=True)
+    table, groups, gap_names, r_default, default_name = _identity(table, magnet, pole_groups)
     circuits = table.circuits
-    groups, gap_names, r_default, default_name = _identity(table, magnet, pole_groups)
     if resistance_ohm is None:
         if r_default is None:
             raise InputError("resistance_ohm (R_el per circuit [ohm]) is required: a table "
@@ -795,8 +795,9 @@ def _array_hash(table: GridTable) -> str:
 
 
 def _identity(table: GridTable, magnet: Any, pole_groups: Mapping[str, Sequence[str]] | None
-              ) -> tuple[dict[str, tuple[str, ...]], tuple[str, ...], Any, str]:
-    """(pole groups, gap names, default R_el, default name) of the imported maps."""
+              ) -> tuple[GridTable, dict[str, tuple[str, ...]], tuple[str, ...], Any, str]:
+    """(table, pole groups, gap names, default R_el, default name) of the imported maps; a
+    one-circuit table takes the name of a one-circuit magnet's circuit."""
     circuits = table.circuits
     r_default = None
     default_name = Path(table.source).stem if table.source != "<memory>" else "table"
@@ -806,7 +807,7 @@ def _identity(table: GridTable, magnet: Any, pole_groups: Mapping[str, Sequence[
         net = as_network(magnet)
         if len(circuits) == 1 and len(net.circuits) == 1:
             circuits = tuple(net.circuit_names)
-            object.__setattr__(table, "circuits", circuits)
+            table = replace(table, circuits=circuits)
         if tuple(sorted(circuits)) != tuple(sorted(net.circuit_names)):
             raise DataError(f"{table.source}: the table's circuits {list(circuits)} are not the "
                             f"magnet's {list(net.circuit_names)} (column suffixes _<circuit>)")
@@ -825,7 +826,7 @@ def _identity(table: GridTable, magnet: Any, pole_groups: Mapping[str, Sequence[
     if set(groups) != set(circuits) or any(not v for v in groups.values()):
         raise InputError(f"pole_groups must give every circuit {list(circuits)} at least one "
                          f"gap name, got {dict(groups)}")
-    return groups, gap_names, r_default, default_name
+    return table, groups, gap_names, r_default, default_name
 
 
 # ---------------------------------------------------------------------------- R_ec from a step
