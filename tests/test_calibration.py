@@ -199,3 +199,34 @@ def test_voltage_step_response_and_its_parameter_derivatives() -> None:
         # derivative of the collocation run differs from them by that much (not the 1e-6
         # of the statics; cause not found, docs/magnets.md)
         assert err < 2e-5, (name, err)
+
+
+def test_two_circuit_magnet_from_a_suffixed_csv(tmp_path: Path) -> None:
+    """TR09 half magnets: per-circuit columns, forces summed over each circuit's poles."""
+    mag = mk.load_magnet("tr09-standard", eddy_currents=False)
+    true = {"leakage_factor": 1.2, "iron_saturation_scale": 0.95}
+    net = calibrated_network(mag, true)
+    g, c = (a.ravel() for a in np.meshgrid([0.008, 0.010, 0.012], [10.0, 25.0, 40.0],
+                                           indexing="ij"))
+    groups = mk.reduction.circuit_pole_groups(mag, gap=0.01, current=10.0)
+    gi = {n: k for k, n in enumerate(net.gap_names)}
+    sol = mk.solve_statics(net, gaps=np.repeat(g[:, None], len(gi), axis=1),
+                           currents=np.repeat(c[:, None], 2, axis=1))
+    path = tmp_path / "tr09.csv"
+    with path.open("w", newline="") as fh:
+        w = csv.writer(fh)
+        w.writerow(["gap_m", "current_A", "force_N_rear", "force_N_front",
+                    "flux_linkage_Wb_rear", "flux_linkage_Wb_front"])
+        for k in range(g.size):
+            f = {cn: sol.pole_force_N[k, [gi[p] for p in groups[cn]]].sum()
+                 for cn in ("front", "rear")}
+            j = {cn: net.circuit_names.index(cn) for cn in ("front", "rear")}
+            w.writerow([g[k], c[k], f["rear"], f["front"], sol.flux_linkage_Wb[k, j["rear"]],
+                        sol.flux_linkage_Wb[k, j["front"]]])
+    res = calibrate(mag, path, parameters=list(true))
+    # noise-free data of the model itself: the fit returns the truth to the solver's
+    # precision (measured 2e-14, residual rms 1e-14)
+    for name, value in true.items():
+        assert res.values[name] == pytest.approx(value, rel=1e-6), name
+    assert res.residual_rms < 1e-8
+    assert {r["circuit"] for r in res.points} == {"front", "rear"}
