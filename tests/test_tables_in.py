@@ -346,3 +346,23 @@ def test_cli_import(own_csv: Path, tmp_path: Path) -> None:
     res = runner.invoke(app, ["maps", "import", str(own_csv), "-o", str(out)])
     assert res.exit_code == 2 and "resistance_ohm" in res.output
     assert not math.isnan(float(maps.dataset["reciprocity_residual"].max()))
+
+
+def test_cli_import_with_a_measured_voltage_step(own_csv: Path, tmp_path: Path) -> None:
+    r_el, r_ec, lt, du = 2.0, 8.8, 0.15, 0.4
+    tau = lt * (r_el + r_ec) / (r_el * r_ec)
+    t = np.linspace(-0.01, 6 * tau, 600)
+    i = 20.0 + np.where(t > 0, du / r_el - (du / r_el - du / (r_el + r_ec)) * np.exp(-t / tau),
+                        0.0)
+    step = _write(tmp_path / "step.csv", ["time_s", "current_A"], np.c_[t, i].tolist())
+    out = tmp_path / "m.nc"
+    res = CliRunner().invoke(app, ["maps", "import", str(own_csv), "-o", str(out), "--magnet",
+                                   "u-magnet", "--voltage-step", str(step), "--step-voltage",
+                                   str(du)])
+    assert res.exit_code == 0, res.output
+    # eq. 8's exact step: the fit recovers R_ec to rounding
+    assert mk.load_maps(out).dataset["eddy_resistance_fit_ohm"].values[0] == pytest.approx(
+        r_ec, rel=1e-8)
+    res = CliRunner().invoke(app, ["maps", "import", str(own_csv), "-o", str(out), "--magnet",
+                                   "u-magnet", "--voltage-step", str(step)])
+    assert res.exit_code == 2 and "--step-voltage" in res.output
