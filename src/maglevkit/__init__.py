@@ -19,6 +19,8 @@ from typing import TYPE_CHECKING, Any
 
 from ._version import __version__
 from .errors import (
+    DataError,
+    DataWarning,
     InputError,
     MaglevkitError,
     MaglevkitWarning,
@@ -33,6 +35,7 @@ from .errors import (
 )
 
 if TYPE_CHECKING:  # the eager imports, for type checkers and IDEs
+    from .calibration import calibrate
     from .circuit import (
         AirGap,
         Branch,
@@ -85,7 +88,7 @@ if TYPE_CHECKING:  # the eager imports, for type checkers and IDEs
         solve_statics,
         voltage_step_response,
     )
-    from .reduction import CharacteristicMaps, build_maps, load_maps
+    from .reduction import CharacteristicMaps, build_maps, load_maps, maps_from_table
     from .simulation import simulate
 
 _LAZY: dict[str, str] = {
@@ -137,12 +140,15 @@ _LAZY: dict[str, str] = {
     "CharacteristicMaps": ".reduction",
     "build_maps": ".reduction",
     "load_maps": ".reduction",
+    "maps_from_table": ".reduction",
+    "calibrate": ".calibration",
 }
 """Public name -> the submodule that defines it (imported on first access)."""
 
-_SUBPACKAGES = frozenset({"circuit", "cli", "compare", "control", "errors", "export", "figures",
-                          "magnets", "materials", "models", "plant", "plotting", "reduction",
-                          "simulation", "sweep", "validation", "vehicle"})
+_SUBPACKAGES = frozenset({"calibration", "circuit", "cli", "compare", "control", "errors",
+                          "export", "figures", "magnets", "materials", "models", "plant",
+                          "plotting", "reduction", "simulation", "sweep", "validation",
+                          "vehicle"})
 
 
 # Hidden from type checkers, which see the imports above: a typo such as
@@ -176,6 +182,8 @@ __all__ = [
     "Coil",
     "ConstantPermeability",
     "CurrentModel",
+    "DataError",
+    "DataWarning",
     "EddyCurrent",
     "FluxModel",
     "FluxState",
@@ -212,6 +220,7 @@ __all__ = [
     "build_magnet",
     "build_maps",
     "bundled_magnets",
+    "calibrate",
     "carter_coefficient",
     "coenergy",
     "differential_inductance_from_step",
@@ -220,6 +229,7 @@ __all__ = [
     "load_maps",
     "load_scenario",
     "magnetic_energy",
+    "maps_from_table",
     "material_names",
     "pole_force_eq6",
     "simulate",

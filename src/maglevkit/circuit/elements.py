@@ -425,7 +425,7 @@ class AirGap(LinearElement):
         s = self.effective_gap(gap)
         g = self.pole_area / s
         for w, r in self.fringe_edges:
-            g = g + _fringe_per_mu0(w, r, s)
+            g = g + fringe_per_mu0(w, r, s)
         for a, d in self.recesses:
             g = g + a / (s + d)
         return MU0 * g
@@ -778,7 +778,7 @@ class FringePermeance(LinearElement):
         """
         if gap is None:
             raise ParameterError(f"fringe permeance {self.name!r}: needs a gap value")
-        return MU0 * _fringe_per_mu0(self.width, self.radius, gap)
+        return MU0 * fringe_per_mu0(self.width, self.radius, gap)
 
 
 @dataclass(frozen=True)
@@ -840,7 +840,7 @@ class GapLayerPermeance(LinearElement):
         return MU0 * self.width * gap / self.length
 
 
-def _fringe_per_mu0(w: float, r: float, s: Any) -> Any:
+def fringe_per_mu0(w: float, r: float, s: Any) -> Any:
     """Roters' quarter-circle fringe of an edge of length ``w`` and flank height ``r`` to a
     plane at distance ``s``, divided by mu0: ``(2 w/pi) ln(1 + pi r/(2 s))`` [m]."""
     return 2.0 * w / math.pi * _log(1.0 + math.pi * r / (2.0 * s))

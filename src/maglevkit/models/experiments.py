@@ -26,7 +26,8 @@ from ..validation import real_number, whole_number
 from .flux import FluxModel, SimulationResult, check_options, simulate_flux
 from .statics import solve_statics
 
-__all__ = ["InductanceEstimate", "voltage_step_response", "differential_inductance_from_step"]
+__all__ = ["InductanceEstimate", "StepFit", "voltage_step_response",
+           "differential_inductance_from_step", "fit_step_response"]
 
 
 def _model(model: Any, options: dict[str, Any]) -> FluxModel:
@@ -175,21 +176,15 @@ def differential_inductance_from_step(model: Any, *, gap: float, current: float,
     res = simulate_flux(fm, (0.0, n_tau * tau_est), dt=dt, gaps=st.gaps_m, voltages=U,
                    initial_state=st)
     di = res.currents_A[:, circuit] - st.currents_A[circuit]
-    remaining = di_inf - di
     t = res.time_s
-    sel = (t > 0.0) & (remaining > 0.02 * di_inf) & (remaining < 0.98 * di_inf)
-    if np.count_nonzero(sel) < 10:
-        raise SolverError("too few samples to fit the step-response time constant",
-                          state={"gap_m": gap, "current_A": current},
-                          reason=f"{np.count_nonzero(sel)} usable samples")
-    A = np.vstack((np.ones(np.count_nonzero(sel)), t[sel])).T
-    coef, *_ = np.linalg.lstsq(A, np.log(remaining[sel]), rcond=None)
-    fit = A @ coef - np.log(remaining[sel])
-    tau = -1.0 / float(coef[1])
-    jump = di_inf - math.exp(float(coef[0]))
-    if not (tau > 0.0 and math.isfinite(tau)):
-        raise SolverError("step response is not a decaying exponential",
-                          state={"gap_m": gap, "current_A": current}, reason=f"tau = {tau}")
+    sel = t > 0.0
+    try:
+        fit = fit_step_response(t[sel], di[sel] / di_inf)
+    except SolverError as exc:
+        raise SolverError(str(exc).split(";")[0], state={"gap_m": gap, "current_A": current},
+                          reason=exc.reason) from None
+    tau = fit.time_constant_s
+    jump = fit.jump_fraction * di_inf
     # Without eddy currents the jump is zero; the fit's intercept then has the size of
     # the fit error, so it is not used.
     if not fm.has_eddy_currents:
@@ -199,4 +194,51 @@ def differential_inductance_from_step(model: Any, *, gap: float, current: float,
         inductance_H=tau * r_par * (1.0 - max(jump, 0.0) / di_inf),
         apparent_inductance_H=tau * r_par,
         time_constant_s=tau, current_jump_A=jump, final_current_change_A=di_inf,
-        eddy_resistance_ohm=r_ec, fit_rms=float(np.sqrt(np.mean(fit**2))), response=res)
+        eddy_resistance_ohm=r_ec, fit_rms=fit.rms, response=res)
+
+
+@dataclass(frozen=True)
+class StepFit:
+    """A single-exponential fit of a normalised step response (:func:`fit_step_response`).
+
+    Attributes
+    ----------
+    time_constant_s : float
+        ``tau`` [s].
+    jump_fraction : float
+        ``dI_0/dI_inf``: the jump at ``t = 0`` the fit extrapolates, relative to the final
+        change (0 without eddy currents, up to the fit's error).
+    rms : float
+        RMS of the residual of ``log(1 - x)`` (relative deviation from one exponential).
+    """
+
+    time_constant_s: float
+    jump_fraction: float
+    rms: float
+
+
+def fit_step_response(time_s: np.ndarray, response: np.ndarray) -> StepFit:
+    """Fit ``x(t) = 1 - (1 - x_0) exp(-t/tau)`` to a normalised step response (paper IV-B).
+
+    ``response`` is ``dI(t)/dI_inf`` at ``time_s > 0``; ``log(1 - x)`` is fitted by a
+    straight line (least squares) over the samples with ``2 % < 1 - x < 98 %``.
+
+    Raises
+    ------
+    SolverError
+        Fewer than 10 usable samples, or no decaying exponential.
+    """
+    t = np.asarray(time_s, dtype=float)
+    remaining = 1.0 - np.asarray(response, dtype=float)
+    sel = np.isfinite(remaining) & (remaining > 0.02) & (remaining < 0.98)
+    if np.count_nonzero(sel) < 10:
+        raise SolverError("too few samples to fit the step-response time constant",
+                          reason=f"{np.count_nonzero(sel)} usable samples (2-98 % of the step)")
+    A = np.vstack((np.ones(np.count_nonzero(sel)), t[sel])).T
+    coef, *_ = np.linalg.lstsq(A, np.log(remaining[sel]), rcond=None)
+    fit = A @ coef - np.log(remaining[sel])
+    tau = -1.0 / float(coef[1]) if coef[1] != 0.0 else math.inf
+    if not (tau > 0.0 and math.isfinite(tau)):
+        raise SolverError("step response is not a decaying exponential", reason=f"tau = {tau}")
+    return StepFit(time_constant_s=tau, jump_fraction=1.0 - math.exp(float(coef[0])),
+                   rms=float(np.sqrt(np.mean(fit**2))))

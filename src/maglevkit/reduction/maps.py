@@ -65,7 +65,21 @@ def _version() -> str:
     return __version__
 
 
-def _grid(values: Any, what: str, unit: str, *, positive: bool) -> np.ndarray:
+def check_grid(values: Any, what: str, unit: str, *, positive: bool) -> np.ndarray:
+    """A map grid axis as a float array: 1-D, at least 4 points, finite, strictly increasing
+    (and > 0 with ``positive``); otherwise InputError naming ``what`` and ``unit``.
+
+    Parameters
+    ----------
+    values : array_like
+        The axis values [``unit``].
+    what : str
+        Its name in messages (``"gap"``, ``"current"``).
+    unit : str
+        Its unit in messages.
+    positive : bool
+        Require every value > 0.
+    """
     arr = real_array(values, f"{what} grid", unit, finite=False)
     if arr.ndim != 1 or arr.size < 4:
         raise InputError(f"{what} grid must be 1-D with at least 4 points (cubic interpolation), "
@@ -328,7 +342,7 @@ _FIT_SAMPLES_PER_TAU = 50
 _FIT_RTOL, _FIT_ATOL = 1e-9, 1e-11
 
 
-class _StepRun:
+class StepRun:
     """One IDAS run of the flux DAE under constant voltages with an output grid.
 
     The flux model's ``simulate`` restarts IDAS at every output interval (its inputs may
@@ -340,13 +354,20 @@ class _StepRun:
     ``[0, 1]`` with the duration ``T`` as a parameter.  Compiled once per network.
     """
 
-    def __init__(self, net: Network, n_out: int, tau: np.ndarray | None = None) -> None:
+    def __init__(self, net: Network, n_out: int, tau: np.ndarray | None = None,
+                 params: Any = None, topology: Network | None = None) -> None:
+        """``params``: CasADi symbols that ``net``'s elements contain (calibration
+        factors, :mod:`maglevkit.calibration`), appended to the DAE's parameters (``dae``
+        attribute; the IDAS ``integrator`` is not built then); ``topology``: a numeric
+        network of the same topology and eddy elements for ``D``, ``K``, ``Q`` (default
+        ``net``)."""
         import casadi as ca
 
         from ..circuit.assembly import assemble
         from ..models.flux import flux_dae
 
-        d = flux_dae(net, "idas", _FIT_RTOL, _FIT_ATOL, 20000, 2, 3)
+        d = flux_dae(topology if topology is not None else net, "idas", _FIT_RTOL, _FIT_ATOL,
+                     20000, 2, 3)
         eq = assemble(net)
         y = ca.SX.sym("y", d.n_diff)
         U = ca.SX.sym("U", d.n_circuits)
@@ -354,8 +375,8 @@ class _StepRun:
         hv = ca.vertcat(-eq.residual, U - net.resistances * eq.I)
         ydot = ca.mtimes(ca.DM(np.linalg.pinv(d.K)), hv)
         alg = ca.vertcat(ca.mtimes(ca.DM(d.D), eq.x) - y, ca.mtimes(ca.DM(d.Q), hv))
-        dae = {"x": y, "z": ca.vertcat(eq.x, eq.I), "p": ca.vertcat(T, U, eq.s),
-               "ode": T * ydot, "alg": alg}
+        p = ca.vertcat(T, U, eq.s) if params is None else ca.vertcat(T, U, eq.s, params)
+        dae = {"x": y, "z": ca.vertcat(eq.x, eq.I), "p": p, "ode": T * ydot, "alg": alg}
         self.tau = np.linspace(0.0, 1.0, n_out + 1)[1:] if tau is None else tau
         # absolute tolerances for every IDAS unknown (y, then z = (x, I)): the flux
         # model's nominal scales without its gap states
@@ -365,15 +386,18 @@ class _StepRun:
         opts: dict[str, Any] = {"reltol": _FIT_RTOL,
                                 "abstolv": list(_FIT_ATOL * nominal),
                                 "max_num_steps": 100000, "disable_internal_warnings": True}
-        self.integrator = ca.integrator("maglevkit_step_fit", "idas", dae, 0.0, self.tau, opts)
+        self.dae = dae
         self.D, self.n_loops = d.D, d.n_loops
+        if params is not None:
+            return
+        self.integrator = ca.integrator("maglevkit_step_fit", "idas", dae, 0.0, self.tau, opts)
 
 
-def _step_run(net: Network, n_out: int) -> _StepRun:
+def _step_run(net: Network, n_out: int) -> StepRun:
     key = ("reduction_step_fit", n_out)
     run = net.cache.get(key)
     if run is None:
-        run = _StepRun(net, n_out)
+        run = StepRun(net, n_out)
         net.cache[key] = run
     return run  # type: ignore[no-any-return]
 
@@ -385,7 +409,7 @@ def _fitted_eddy_resistance(net: Network, gap: float, current: float) -> np.ndar
     (paper Sec. IV-B): circuit ``j`` at ``current`` [A] and every gap at ``gap`` [m] gets
     a voltage step ``dU = R_el dI_inf``; ``log(dI_inf - dI(t))`` is fitted by a straight
     line over the samples with ``2 % < remaining < 98 %``; its intercept gives the jump
-    ``dI_0`` and ``R_ec = dU / dI_0 - R_el``.  The step is one IDAS run (:class:`_StepRun`)
+    ``dI_0`` and ``R_ec = dU / dI_0 - R_el``.  The step is one IDAS run (:class:`StepRun`)
     instead of 300 restarted intervals: TR09 standard 4.1 -> 0.26 s per build; the value
     moved by +0.13 % (TR09) and +0.25 % (U-magnet) towards the converged (rtol 1e-12)
     value, which it now matches within 1e-4 (docs/decisions.md).
@@ -458,7 +482,7 @@ def _eddy_network_steps(net: Network, gap: float, current: float
     key = ("reduction_step_network", _NET_LOG_SAMPLES, _NET_LIN_SAMPLES)
     run = net.cache.get(key)
     if run is None:
-        run = _StepRun(net, 0, tau=_network_grid())
+        run = StepRun(net, 0, tau=_network_grid())
         net.cache[key] = run
     ltilde = np.array([float(sol.differential_inductance_H[j, j]) for j in range(nc)])
     times, responses = [], []
@@ -599,6 +623,60 @@ def _store_motion_eddy(ds: Any, net: Network, gap: float, current: float,
         "description": "over both responses and 60 frequencies, each relative to the "
                        "detailed response's modulus"})
 
+MAP_UNITS = {"force_N": "N", "inductance_H": "H", "dL_ds_H_per_m": "H/m",
+             "flux_linkage_Wb": "Wb", "apparent_inductance_H": "H",
+             "inductance_transient_H": "H", "dL_ds_transient_H_per_m": "H/m",
+             "inductance_relative_difference": "1", "dL_ds_relative_difference": "1",
+             "eddy_resistance_step_ohm": "ohm"}
+"""Units of the (circuit, gap, current) map variables."""
+MAP_LONG_NAMES = {
+    "force_N": "force of the circuit's poles F(s, I)",
+    "inductance_H": "differential inductance L~ = dL/dI I + L",
+    "dL_ds_H_per_m": "gap derivative of the inductance dL/ds",
+    "flux_linkage_Wb": "flux linkage psi",
+    "apparent_inductance_H": "inductance L = psi / I",
+    "inductance_transient_H": "L~ from voltage-step time constants (paper IV-B)",
+    "dL_ds_transient_H_per_m": "dL/ds from the virtual control law U = R_el I on a "
+                               "gap ramp (paper IV-B)",
+    "inductance_relative_difference": "L~ transient / statics - 1",
+    "dL_ds_relative_difference": "dL/ds transient / statics - 1",
+    "eddy_resistance_step_ohm": "R_ec implied by a single-exponential fit of the "
+                                "voltage step (slow mode)"}
+"""Long names of the (circuit, gap, current) map variables."""
+
+
+def maps_dataset(data: dict[str, np.ndarray], *, circuits: Sequence[str], gaps_m: np.ndarray,
+                 currents_A: np.ndarray, resistance_ohm: np.ndarray) -> xr.Dataset:
+    """The maps' dataset layout: variables ``(circuit, gap, current)`` with units, the
+    coordinates and ``resistance_ohm``; shared by :func:`build_maps` and the table import
+    (:mod:`maglevkit.reduction.tables_in`).
+
+    Parameters
+    ----------
+    data : dict
+        Variable name (a key of :data:`MAP_UNITS`) -> array (circuit, gap, current).
+    circuits : sequence of str
+        Circuit names.
+    gaps_m, currents_A : ndarray
+        The grid [m], [A].
+    resistance_ohm : ndarray
+        ``R_el`` per circuit [ohm].
+    """
+    import xarray as xr
+
+    dims = ("circuit", "gap", "current")
+    ds = xr.Dataset(
+        {k: (dims, v, {"units": MAP_UNITS[k], "long_name": MAP_LONG_NAMES[k]})
+         for k, v in data.items()},
+        coords={"circuit": list(circuits),
+                "gap": ("gap", gaps_m, {"units": "m", "long_name": "substitute air gap s"}),
+                "current": ("current", currents_A, {"units": "A",
+                                                    "long_name": "circuit current I_L"})},
+    )
+    ds["resistance_ohm"] = ("circuit", np.asarray(resistance_ohm, dtype=float),
+                            {"units": "ohm", "long_name": "ohmic resistance R_el"})
+    return ds
+
 
 def build_maps(model: Any, *, gaps: Any, currents: Any, executor: Any = "auto",
                progress: bool = True, method: str = "statics",
@@ -656,8 +734,8 @@ def build_maps(model: Any, *, gaps: Any, currents: Any, executor: Any = "auto",
     if method not in METHODS:
         raise InputError(f"method = {method!r}; use one of {list(METHODS)}")
     net = as_network(model)
-    g = _grid(gaps, "gap", "m", positive=True)
-    c = _grid(currents, "current", "A", positive=False)
+    g = check_grid(gaps, "gap", "m", positive=True)
+    c = check_grid(currents, "current", "A", positive=False)
     ref_gap, ref_current = float(g[g.size // 2]), float(max(c[c.size // 2], c[-1] / 2))
     eddy_gap, eddy_current = _eddy_point(eddy_reference, g, c, ref_gap, ref_current)
     groups = circuit_pole_groups(net, gap=ref_gap, current=ref_current)
@@ -679,23 +757,6 @@ def build_maps(model: Any, *, gaps: Any, currents: Any, executor: Any = "auto",
             ex.shutdown()
     names = list(rows[0])
     data = {k: np.stack([r[k] for r in rows], axis=1) for k in names}  # (circuit, gap, current)
-    units = {"force_N": "N", "inductance_H": "H", "dL_ds_H_per_m": "H/m",
-             "flux_linkage_Wb": "Wb", "apparent_inductance_H": "H",
-             "inductance_transient_H": "H", "dL_ds_transient_H_per_m": "H/m",
-             "inductance_relative_difference": "1", "dL_ds_relative_difference": "1",
-             "eddy_resistance_step_ohm": "ohm"}
-    long = {"force_N": "force of the circuit's poles F(s, I)",
-            "inductance_H": "differential inductance L~ = dL/dI I + L",
-            "dL_ds_H_per_m": "gap derivative of the inductance dL/ds",
-            "flux_linkage_Wb": "flux linkage psi",
-            "apparent_inductance_H": "inductance L = psi / I",
-            "inductance_transient_H": "L~ from voltage-step time constants (paper IV-B)",
-            "dL_ds_transient_H_per_m": "dL/ds from the virtual control law U = R_el I on a "
-                                       "gap ramp (paper IV-B)",
-            "inductance_relative_difference": "L~ transient / statics - 1",
-            "dL_ds_relative_difference": "dL/ds transient / statics - 1",
-            "eddy_resistance_step_ohm": "R_ec implied by a single-exponential fit of the "
-                                        "voltage step (slow mode)"}
     if method != "statics":
         shape = (len(net.circuits), g.size, c.size)
         tdata = {k: np.stack([t[k] for t in trans], axis=1).reshape(shape) for k in trans[0]}
@@ -709,17 +770,8 @@ def build_maps(model: Any, *, gaps: Any, currents: Any, executor: Any = "auto",
             data["dL_ds_relative_difference"] = (tdata["dL_ds_H_per_m"] / data["dL_ds_H_per_m"]
                                                  - 1)
         data["eddy_resistance_step_ohm"] = tdata["eddy_resistance_step_ohm"]
-    import xarray as xr
-
-    dims = ("circuit", "gap", "current")
-    ds = xr.Dataset(
-        {k: (dims, v, {"units": units[k], "long_name": long[k]}) for k, v in data.items()},
-        coords={"circuit": list(net.circuit_names),
-                "gap": ("gap", g, {"units": "m", "long_name": "substitute air gap s"}),
-                "current": ("current", c, {"units": "A", "long_name": "circuit current I_L"})},
-    )
-    ds["resistance_ohm"] = ("circuit", net.resistances, {"units": "ohm",
-                                                         "long_name": "ohmic resistance R_el"})
+    ds = maps_dataset(data, circuits=net.circuit_names, gaps_m=g, currents_A=c,
+                      resistance_ohm=net.resistances)
     r_ec = eddy_resistance(net, gap=ref_gap, current=ref_current)
     # R_ec depends on the operating point only through the iron's differential
     # reluctances (and not at all when every loop carries an eddy element): its spread
