@@ -1,0 +1,85 @@
+"""Review findings on the public API: raw Python errors, unchecked values, bools taken as
+numbers, unstable results reported as bad input (each test names the finding it pins)."""
+
+from __future__ import annotations
+
+import pytest
+
+import maglevkit as mk
+
+
+@pytest.fixture(scope="module")
+def u_lin() -> mk.Magnet:
+    """The bundled U-magnet without eddy currents (cheap transients)."""
+    return mk.load_magnet("u-magnet", eddy_currents=False)
+
+
+# ------------------------------------------------------------ closed loop (control/loop)
+def _short_run(u_lin: mk.Magnet, **kw):  # type: ignore[no-untyped-def]
+    from maglevkit.control import closed_loop, design_gap_controller
+    from maglevkit.vehicle import STANDARD_GRAVITY, HeaveMass
+
+    f0 = float(mk.solve_statics(u_lin, gaps=0.01, currents=10.0).force_N)
+    veh = HeaveMass(f0 / STANDARD_GRAVITY)
+    ctl = design_gap_controller(u_lin, mass_kg=veh.mass_kg, gap_m=0.01, current_A=10.0)
+    return f0, closed_loop(mk.FluxModel(u_lin), veh, ctl, dt_s=1e-3, initial_gap_m=0.01,
+                           initial_current_A=10.0, **kw)
+
+
+def test_gap_metrics_refuse_start_after_the_end_and_missing_reference(u_lin) -> None:  # type: ignore[no-untyped-def]
+    import dataclasses
+
+    _, res = _short_run(u_lin, duration_s=0.01)
+    assert res.max_gap_deviation_m(0.01) >= 0.0          # the last sample still counts
+    # was: numpy ValueError "zero-size array to reduction operation maximum"
+    with pytest.raises(mk.InputError, match=r"start_s = 0.5 s is after the last sample "
+                                            r"\(t = 0.01 s\)"):
+        res.max_gap_deviation_m(0.5)
+    with pytest.raises(mk.InputError, match=r"start_s \[s\] = True \(bool\)"):
+        res.max_gap_deviation_m(True)
+    # was: AssertionError (or nothing under python -O)
+    bare = dataclasses.replace(res, gap_ref_m=None)
+    with pytest.raises(mk.InputError, match="gap_ref_m = None"):
+        bare.iae_m_s()
+    with pytest.raises(mk.InputError, match="gap_ref_m = None"):
+        bare.max_gap_deviation_m()
+
+
+def test_closed_loop_touchdown_is_a_solver_error_not_bad_input(u_lin) -> None:  # type: ignore[no-untyped-def]
+    # a pull 20x the weight towards the rail: the loop cannot hold it and the magnet
+    # closes onto the rail; was: InputError (the inputs were fine, the run was unstable)
+    f0 = float(mk.solve_statics(u_lin, gaps=0.01, currents=10.0).force_N)
+    with pytest.raises(mk.SolverError, match=r"TOUCHDOWN.*at t = .* s; state: gap_m=") as exc:
+        _short_run(u_lin, duration_s=0.5, external_force=lambda t: -20 * f0)
+    assert not isinstance(exc.value, mk.InputError)
+    assert exc.value.time is not None and exc.value.time < 0.5
+    assert exc.value.state["gap_m"] > 0.0
+
+
+# ------------------------------------------------------- gap controller design (cascade)
+def test_gap_controller_design_refuses_gains_without_sign(u_lin, monkeypatch) -> None:  # type: ignore[no-untyped-def]
+    from maglevkit.control import cascade, design_gap_controller
+
+    # was: ZeroDivisionError (0 A: no flux, K_rho = 0)
+    with pytest.raises(mk.InputError, match=r"operating point gap_m = 0.01 m, current_A = "
+                                            r"0.0 A .*K_rho = .* = 0 N; must be > 0"):
+        design_gap_controller(u_lin, mass_kg=100.0, gap_m=0.01, current_A=0.0)
+    # a magnet whose force grows with the gap at constant flux (F_s > m omega^2): the
+    # formula gave kp < 0 (an unstable loop) without a word
+    real = cascade.solve_statics
+
+    class Stiff:
+        def __init__(self, sol):  # type: ignore[no-untyped-def]
+            self._sol = sol
+
+        def __getattr__(self, name):  # type: ignore[no-untyped-def]
+            return getattr(self._sol, name)
+
+        @property
+        def dforce_dgap_N_per_m(self):  # type: ignore[no-untyped-def]
+            return self._sol.dforce_dgap_N_per_m + 1e9
+
+    monkeypatch.setattr(cascade, "solve_statics", lambda *a, **k: Stiff(real(*a, **k)))
+    with pytest.raises(mk.InputError, match=r"current_A = 10.0 A the gap gain kp = -.* 1/m "
+                                            r"\(must be > 0\).*bandwidth_hz = 5 Hz above"):
+        design_gap_controller(u_lin, mass_kg=100.0, gap_m=0.01, current_A=10.0)
