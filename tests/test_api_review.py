@@ -3,6 +3,7 @@ numbers, unstable results reported as bad input (each test names the finding it 
 
 from __future__ import annotations
 
+import numpy as np
 import pytest
 
 import maglevkit as mk
@@ -83,3 +84,27 @@ def test_gap_controller_design_refuses_gains_without_sign(u_lin, monkeypatch) ->
     with pytest.raises(mk.InputError, match=r"current_A = 10.0 A the gap gain kp = -.* 1/m "
                                             r"\(must be > 0\).*bandwidth_hz = 5 Hz above"):
         design_gap_controller(u_lin, mass_kg=100.0, gap_m=0.01, current_A=10.0)
+
+
+# --------------------------------------------------------------- vehicle map cache key
+def test_map_cache_key_separates_gaps_from_currents_and_checks_the_grid(u_lin, tmp_path) -> None:  # type: ignore[no-untyped-def]
+    import shutil
+
+    from maglevkit.vehicle.mapcache import maps_path, vehicle_maps
+
+    # was: one hash of concatenate([gaps, currents]): these two grids shared a file
+    a = maps_path(u_lin, np.array([0.008, 0.01]), np.array([0.0, 10.0, 20.0]), tmp_path)
+    b = maps_path(u_lin, np.array([0.008, 0.01, 0.0]), np.array([10.0, 20.0]), tmp_path)
+    assert a != b
+    # a stale file under the name (another grid) is rebuilt, not returned
+    g1, c1 = np.linspace(0.008, 0.011, 4), np.linspace(0.0, 30.0, 5)
+    g2, c2 = np.linspace(0.008, 0.012, 5), np.linspace(0.0, 30.0, 4)
+    vehicle_maps(u_lin, cache_dir=tmp_path, gaps=g1, currents=c1)
+    shutil.copy(maps_path(u_lin, g1, c1, tmp_path), maps_path(u_lin, g2, c2, tmp_path))
+    maps = vehicle_maps(u_lin, cache_dir=tmp_path, gaps=g2, currents=c2)
+    np.testing.assert_array_equal(maps.gaps_m, g2)
+    np.testing.assert_array_equal(maps.currents_A, c2)
+    again = vehicle_maps(u_lin, cache_dir=tmp_path, gaps=g2, currents=c2)   # now cached
+    np.testing.assert_array_equal(again.currents_A, c2)
+    with pytest.raises(mk.InputError, match=r"gaps \[m\] = True \(bool\)"):
+        vehicle_maps(u_lin, cache_dir=tmp_path, gaps=True)
