@@ -3,6 +3,8 @@ numbers, unstable results reported as bad input (each test names the finding it 
 
 from __future__ import annotations
 
+import re
+
 import numpy as np
 import pytest
 
@@ -108,3 +110,39 @@ def test_map_cache_key_separates_gaps_from_currents_and_checks_the_grid(u_lin, t
     np.testing.assert_array_equal(again.currents_A, c2)
     with pytest.raises(mk.InputError, match=r"gaps \[m\] = True \(bool\)"):
         vehicle_maps(u_lin, cache_dir=tmp_path, gaps=True)
+
+
+# ---------------------------------------------------- bools are not numbers (ints)
+def test_ramp_identification_refuses_bools_and_empty_poles(u_lin) -> None:  # type: ignore[no-untyped-def]
+    from maglevkit.reduction.transient import dl_ds_from_ramp, flux_held_ramp
+
+    # was: True taken as 1 s / circuit 1; poles=[] an IndexError
+    with pytest.raises(mk.InputError, match=r"duration \[s\] = True \(bool\)"):
+        flux_held_ramp(u_lin, gap=0.01, current=1.0, gap_change=1e-4, duration=True)
+    with pytest.raises(mk.InputError, match=r"samples = True \(bool\)"):
+        flux_held_ramp(u_lin, gap=0.01, current=1.0, gap_change=1e-4, duration=1.0,
+                       samples=True)
+    with pytest.raises(mk.InputError, match=r"circuit = True \(bool\)"):
+        dl_ds_from_ramp(u_lin, gap=0.01, current=10.0, circuit=True)
+    ng = len(u_lin.network.gap_names)
+    for poles in ([], [ng], [0, 0]):
+        with pytest.raises(mk.InputError, match=rf"poles = {re.escape(repr(poles))}: expected at least one "
+                                                rf"distinct gap-input index in 0..{ng - 1}"):
+            dl_ds_from_ramp(u_lin, gap=0.01, current=10.0, poles=poles)
+    with pytest.raises(mk.InputError, match=r"poles = True \(bool\)"):
+        dl_ds_from_ramp(u_lin, gap=0.01, current=10.0, poles=[True])
+
+
+def test_mechanics_discretize_takes_numpy_ints_not_bools() -> None:
+    from maglevkit.vehicle.mechanics import VehicleMechanics
+    from maglevkit.vehicle.train import load_vehicle
+
+    train = load_vehicle("tr09")
+    slots = train.magnet_slots()
+    mech = VehicleMechanics(train, [s.centre_m for s in slots], [s.frame for s in slots])
+    with pytest.raises(mk.InputError, match=r"dt_s \[s\] = True \(bool\)"):
+        mech.discretize(True)        # was: accepted as 1 s
+    ad, bd = mech.discretize(np.int64(1))   # was: refused
+    ad1, bd1 = mech.discretize(1.0)
+    np.testing.assert_array_equal(ad, ad1)
+    np.testing.assert_array_equal(bd, bd1)

@@ -41,6 +41,7 @@ import numpy as np
 import scipy.linalg
 
 from ..errors import InputError
+from ..validation import real_number
 from .heave import STANDARD_GRAVITY
 from .train import TrainData
 
@@ -286,10 +287,10 @@ class VehicleMechanics:
         Raises
         ------
         InputError
-            ``dt_s`` not a finite number > 0 (a Python or NumPy float or int).
+            ``dt_s`` not a finite real number > 0 (Python or NumPy floats and ints; not
+            a bool).
         """
-        if not (isinstance(dt_s, (int, float)) and np.isfinite(dt_s) and dt_s > 0):
-            raise InputError(f"dt_s = {dt_s!r} must be a finite number > 0")
+        dt_s = real_number(dt_s, "dt_s", "s", positive=True)
         a, bq = self.state_matrices(damping=damping)
         n2, n = bq.shape
         aug = np.zeros((n2 + n, n2 + n))
