@@ -146,3 +146,26 @@ def test_mechanics_discretize_takes_numpy_ints_not_bools() -> None:
     ad1, bd1 = mech.discretize(1.0)
     np.testing.assert_array_equal(ad, ad1)
     np.testing.assert_array_equal(bd, bd1)
+
+
+# ------------------------------------------------------------------ PSD variances
+def test_psd_variance_refuses_reversed_and_divergent_bands() -> None:
+    from maglevkit.vehicle.irregularities import GermanTrackPSD, PowerLawPSD
+
+    german, power = GermanTrackPSD(), PowerLawPSD(1e-8, exponent=2.0)
+    assert german.variance_m2(0.0, 1.0) > 0.0               # 0 is a fine lower end here
+    assert PowerLawPSD(1e-8, exponent=0.5).variance_m2(0.0, 1.0) == pytest.approx(2e-8)
+    for psd in (german, power):
+        # was: a negative variance
+        with pytest.raises(mk.InputError, match=r"omega_max = 0.5 rad/m must be > "
+                                                r"omega_min = 5 rad/m"):
+            psd.variance_m2(5.0, 0.5)
+        with pytest.raises(mk.InputError, match=r"omega_min \[rad/m\] = -1.0: must be >= 0"):
+            psd.variance_m2(-1.0, 0.5)
+        with pytest.raises(mk.InputError, match=r"omega_max \[rad/m\] = True \(bool\)"):
+            psd.variance_m2(0.1, True)
+    # was: ZeroDivisionError (exponent 2) / math domain error (exponent 1)
+    for n in (1.0, 2.0):
+        with pytest.raises(mk.InputError, match=rf"omega_min = 0 rad/m: .*exponent = {n:g} "
+                                                r">= 1 diverges"):
+            PowerLawPSD(1e-8, exponent=n).variance_m2(0.0, 1.0)
