@@ -169,3 +169,48 @@ def test_psd_variance_refuses_reversed_and_divergent_bands() -> None:
         with pytest.raises(mk.InputError, match=rf"omega_min = 0 rad/m: .*exponent = {n:g} "
                                                 r">= 1 diverges"):
             PowerLawPSD(1e-8, exponent=n).variance_m2(0.0, 1.0)
+
+
+# ------------------------------------------------- raw Python errors -> maglevkit errors
+def test_branch_flux_unknown_name(u_lin) -> None:  # type: ignore[no-untyped-def]
+    sol = mk.solve_statics(u_lin, gaps=0.01, currents=10.0)
+    first = sol.branch_names[0]
+    assert np.isfinite(sol.branch_flux(first))
+    # was: ValueError "'nope' is not in list"
+    with pytest.raises(mk.InputError, match=rf"name = 'nope' is no branch of this network; "
+                                            rf"allowed: {re.escape(first)}, "):
+        sol.branch_flux("nope")
+
+
+def test_parse_provenance_entry_of_a_missing_table() -> None:
+    from maglevkit.parameter_files import parse_provenance
+
+    params = {"magnet": {"turns": 10}, "provenance": {"rail.width": "[D]"}}
+    # was: KeyError 'rail'
+    with pytest.raises(mk.ParameterFileError, match=r"f.toml: \[provenance\] 'rail.width' "
+                                                    r"names no value of this file; the file "
+                                                    r"has no \[rail\] table"):
+        parse_provenance(params, ("magnet", "rail"), "f.toml")
+    assert parse_provenance({"magnet": {"turns": 10}, "provenance": {"magnet.turns": "[D]"}},
+                            ("magnet", "rail"), "f.toml") == {"magnet.turns": "[D]"}
+
+
+def test_static_trim_needs_two_force_points_per_frame() -> None:
+    from maglevkit.vehicle.mechanics import VehicleMechanics
+    from maglevkit.vehicle.train import load_vehicle
+
+    train = load_vehicle("tr09")
+    slots = train.magnet_slots()
+    pts, frames = [s.centre_m for s in slots], [s.frame for s in slots]
+    mech = VehicleMechanics(train, pts, frames)
+    _, forces = mech.static_trim(np.ones(len(pts)))
+    assert forces.sum() == pytest.approx(mech.Q_gravity[0::2].sum(), rel=1e-9)
+    with pytest.raises(mk.InputError, match=rf"(?s)pole_weights = .*: expected {len(pts)} "
+                                            r"numbers > 0"):
+        mech.static_trim(np.zeros(len(pts)))
+    # frame 1 standing on one point only: was numpy LinAlgError "Singular matrix"
+    keep = [k for k, f in enumerate(frames) if f != 0 or pts[k] == pts[frames.index(0)]]
+    one = VehicleMechanics(train, [pts[k] for k in keep], [frames[k] for k in keep])
+    with pytest.raises(mk.InputError, match=r"static_trim: frame1 has force points at "
+                                            r"\[.*\] m; each frame needs at least two"):
+        one.static_trim(np.ones(len(keep)))
