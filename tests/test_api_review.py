@@ -214,3 +214,90 @@ def test_static_trim_needs_two_force_points_per_frame() -> None:
     with pytest.raises(mk.InputError, match=r"static_trim: frame1 has force points at "
                                             r"\[.*\] m; each frame needs at least two"):
         one.static_trim(np.ones(len(keep)))
+
+
+# ------------------------------------------------------------ unvalidated values
+def test_scenario_inputs_for_only_voltages_or_gaps() -> None:
+    from maglevkit.models import parse_scenario
+
+    sc = parse_scenario({"scenario": {"duration": 1e-3, "dt": 1e-3}, "voltages": {"all": 1.0},
+                         "gaps": {"all": 0.01}}, "s.toml")
+    assert float(sc.inputs_for(("a",), "voltages")["a"](0.0)) == 1.0
+    assert float(sc.inputs_for(("g",), "gaps")["g"](0.0)) == 0.01
+    # was: any other value (a typo) silently read the gaps
+    with pytest.raises(mk.InputError, match=r"which = 'voltage'; allowed: 'voltages' or 'gaps'"):
+        sc.inputs_for(("a",), "voltage")
+
+
+def test_network_with_options_takes_only_true_or_false(u_lin) -> None:  # type: ignore[no-untyped-def]
+    net = mk.load_magnet("u-magnet").network
+    assert net.with_options() is net
+    assert net.with_options(eddy_currents=False) is not net
+    # was: "no" is truthy and kept the eddy currents, 0 removed them
+    with pytest.raises(mk.InputError, match=r"eddy_currents = 'no' \(str\): expected True or False"):
+        net.with_options(eddy_currents="no")
+    with pytest.raises(mk.InputError, match=r"saturation = 0 \(int\): expected True or False"):
+        net.with_options(saturation=0)
+
+
+def test_linear_and_ideal_materials_check_resistivity() -> None:
+    from maglevkit.materials import ConstantPermeability, IdealIron
+
+    assert ConstantPermeability(1000.0, resistivity=1.5e-7).resistivity == 1.5e-7
+    assert IdealIron(resistivity=1.5e-7).resistivity == 1.5e-7
+    # was: accepted (only the other materials checked it)
+    for make in (lambda r: ConstantPermeability(1000.0, resistivity=r),
+                 lambda r: IdealIron(resistivity=r)):
+        with pytest.raises(mk.MaterialError, match=r"resistivity \[ohm m\] = -1e-07: must be > 0"):
+            make(-1e-7)
+        with pytest.raises(mk.MaterialError, match=r"resistivity \[ohm m\] = 'high' \(str\)"):
+            make("high")
+        with pytest.raises(mk.MaterialError, match=r"resistivity \[ohm m\] = nan: must be finite"):
+            make(float("nan"))
+
+
+def test_tabulated_signal_refuses_bools() -> None:
+    from maglevkit.models.signals import Tabulated
+
+    assert Tabulated((0.0, 1.0), (0.0, 2.0))(0.5) == pytest.approx(1.0)
+    # was: True taken as 1 s / 1 V
+    with pytest.raises(mk.InputError, match=r"tabulated signal times \[s\] = \(0.0, True\) "
+                                            r"\(tuple\) contains a bool"):
+        Tabulated((0.0, True), (0.0, 2.0))
+    with pytest.raises(mk.InputError, match=r"tabulated signal values = \(False, 2.0\) "
+                                            r"\(tuple\) contains a bool"):
+        Tabulated((0.0, 1.0), (False, 2.0))
+    with pytest.raises(mk.InputError, match="tabulated signal values .* contains a string"):
+        Tabulated((0.0, 1.0), ("0", 2.0))
+
+
+def test_eddy_resistance_never_negative(u_lin, monkeypatch) -> None:  # type: ignore[no-untyped-def]
+    from maglevkit.reduction import parameters
+
+    mag = mk.load_magnet("u-magnet")
+    r_el = float(mag.network.resistances[0])
+    assert parameters.eddy_resistance(mag, gap=0.01, current=10.0)[0] > 0.0
+    # a current jump above the resistive limit (rounding or a non-passive model): was
+    # returned as a negative R_ec
+    nc = len(mag.network.circuits)
+    monkeypatch.setattr(parameters, "current_jump_admittance",
+                        lambda *a, **k: np.eye(nc) * 1.01 / r_el)
+    with pytest.raises(mk.SolverError, match=r"negative R_ec = -.* ohm for circuit .*"
+                                             r"reason: current-jump admittance Y_jj = .* S "
+                                             r"exceeds 1/R_el"):
+        parameters.eddy_resistance(mag, gap=0.01, current=10.0)
+
+
+def test_saturation_knee_checks_points_and_max_current(u_lin) -> None:  # type: ignore[no-untyped-def]
+    from maglevkit.magnets.characteristics import saturation_knee
+
+    # was: points=True scanned one current, points=0 divided by zero, a negative
+    # max_current scanned negative currents
+    with pytest.raises(mk.InputError, match=r"points = True \(bool\)"):
+        saturation_knee(u_lin, gap=0.01, max_current=100.0, points=True)
+    with pytest.raises(mk.InputError, match=r"points = 1: must be a whole number >= 2"):
+        saturation_knee(u_lin, gap=0.01, max_current=100.0, points=1)
+    with pytest.raises(mk.InputError, match=r"max_current \[A\] = -100.0: must be > 0"):
+        saturation_knee(u_lin, gap=0.01, max_current=-100.0)
+    with pytest.raises(mk.InputError, match=r"max_current \[A\] = '100' \(str\)"):
+        saturation_knee(u_lin, gap=0.01, max_current="100")
