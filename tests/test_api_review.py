@@ -301,3 +301,13 @@ def test_saturation_knee_checks_points_and_max_current(u_lin) -> None:  # type: 
         saturation_knee(u_lin, gap=0.01, max_current=-100.0)
     with pytest.raises(mk.InputError, match=r"max_current \[A\] = '100' \(str\)"):
         saturation_knee(u_lin, gap=0.01, max_current="100")
+
+
+def test_heave_model_mass_and_gravity_refuse_bools() -> None:
+    from maglevkit.control.model import MagnetHeaveModel
+
+    # was: mass_kg=True accepted as 1 kg (checked before the maps are looked at)
+    with pytest.raises(mk.ParameterError, match=r"mass_kg \[kg\] = True \(bool\)"):
+        MagnetHeaveModel(None, mass_kg=True)
+    with pytest.raises(mk.ParameterError, match=r"gravity \[m/s\^2\] = -1.0: must be >= 0"):
+        MagnetHeaveModel(None, mass_kg=100.0, gravity=-1.0)
