@@ -36,6 +36,7 @@ import numpy as np
 from scipy import integrate
 
 from .errors import MaterialError
+from .validation import real_number
 
 MU0: float = 4e-7 * math.pi
 """Permeability of free space [H/m] (the classical value; the 2019 SI value differs by 1e-10)."""
@@ -192,8 +193,7 @@ class SoftMagneticMaterial(Material):
             raise MaterialError(f"material {self.name!r}: c_a and c_b must be >= 0")
         if self.n <= 1.0:
             raise MaterialError(f"material {self.name!r}: exponent n = {self.n} must be > 1")
-        if self.resistivity is not None and not self.resistivity > 0.0:
-            raise MaterialError(f"material {self.name!r}: resistivity must be > 0 ohm m")
+        _check_resistivity(self)
         object.__setattr__(self, "tail_from_T", self._polarisation_peak())
         # H(B) must be strictly increasing, otherwise the network has no unique solution.
         b = np.linspace(0.0, 6.0 * max(self.B_mymax, 1.0), 4001)
@@ -274,6 +274,14 @@ class SoftMagneticMaterial(Material):
         return float(self.mu_i)
 
 
+def _check_resistivity(material: Material) -> None:
+    """The one check of every material's optional ``resistivity`` (finite, > 0 ohm m)."""
+    rho = getattr(material, "resistivity", None)
+    if rho is not None:
+        real_number(rho, f"material {getattr(material, 'name', '?')!r}: resistivity",
+                    "ohm m", positive=True, error=MaterialError)
+
+
 @dataclass(frozen=True)
 class ConstantPermeability(Material):
     """Linear material ``H = B / (mu0 mu_r)``.
@@ -285,13 +293,14 @@ class ConstantPermeability(Material):
     name : str, default "linear"
         Display name.
     resistivity : float or None
-        Electrical resistivity [ohm m] for eddy-current estimates, if known (not checked
-        here, unlike the other materials).
+        Electrical resistivity [ohm m] for eddy-current estimates, if known (finite,
+        > 0).
 
     Raises
     ------
     MaterialError
-        ``mu_r`` not finite or < 1 (use :class:`IdealIron` for ``mu_r -> inf``).
+        ``mu_r`` not finite or < 1 (use :class:`IdealIron` for ``mu_r -> inf``); a
+        ``resistivity`` that is not a finite number > 0.
     """
 
     mu_r: float
@@ -304,6 +313,7 @@ class ConstantPermeability(Material):
                 f"material {self.name!r}: mu_r = {self.mu_r} must be finite and >= 1 "
                 "(use IdealIron for mu -> inf)"
             )
+        _check_resistivity(self)
 
     def field_strength(self, B: Any) -> Any:
         """Magnetic field strength H [A/m] for flux density B [T] (NumPy or CasADi).
@@ -358,12 +368,20 @@ class IdealIron(Material):
     name : str, default "ideal"
         Display name.
     resistivity : float or None
-        Electrical resistivity [ohm m] for eddy-current estimates, if known (not
-        checked).
+        Electrical resistivity [ohm m] for eddy-current estimates, if known (finite,
+        > 0).
+
+    Raises
+    ------
+    MaterialError
+        A ``resistivity`` that is not a finite number > 0.
     """
 
     name: str = "ideal"
     resistivity: float | None = None
+
+    def __post_init__(self) -> None:
+        _check_resistivity(self)
 
     def field_strength(self, B: Any) -> Any:
         """Magnetic field strength H [A/m] for flux density B [T] (NumPy or CasADi).
@@ -748,8 +766,7 @@ class TabulatedBH(Material):
                 f"below mu0 by more than the rounding allowance {CHORD_TOLERANCE:g}; physical "
                 "curves have dB/dH >= mu0 (check the units: H in A/m, B in T)"
             )
-        if self.resistivity is not None and not self.resistivity > 0.0:
-            raise MaterialError(f"{who}: resistivity must be > 0 ohm m")
+        _check_resistivity(self)
         h_used = _physical_points(h, b)
         try:
             x, c = _bh_pieces(h_used, b, self.interpolation)

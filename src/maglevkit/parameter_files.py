@@ -113,8 +113,8 @@ def parse_provenance(parameters: Mapping[str, Any], tables: Collection[str],
     parameters : mapping
         The parsed file; its optional ``provenance`` table is read.
     tables : collection of str
-        Tables whose values may carry a provenance tag (each must be present in
-        ``parameters``: a missing one raises ``KeyError``).
+        Tables whose values may carry a provenance tag (an entry naming one that
+        ``parameters`` lacks raises :class:`~maglevkit.errors.ParameterFileError`).
     source : str
         File label for error messages.
 
@@ -129,8 +129,13 @@ def parse_provenance(parameters: Mapping[str, Any], tables: Collection[str],
     prov: dict[str, str] = {}
     for key, tag in raw.items():
         table, _, sub = str(key).partition(".")
-        if table not in tables or sub not in parameters[table]:
-            raise ParameterFileError(f"{source}: [provenance] {key!r} names no value of this file")
+        values = parameters.get(table) if table in tables else None
+        if not isinstance(values, Mapping) or sub not in values:
+            lacks = (f"; the file has no [{table}] table" if table in tables
+                     and not isinstance(values, Mapping) else "")
+            raise ParameterFileError(f"{source}: [provenance] {key!r} names no value of this "
+                                     f"file{lacks} (allowed: 'table.key' of the tables "
+                                     f"{', '.join(sorted(tables))})")
         if not isinstance(tag, str):
             raise ParameterFileError(f"{source}: [provenance] {key!r} must be a string")
         prov[str(key)] = tag

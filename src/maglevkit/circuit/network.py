@@ -20,6 +20,7 @@ from functools import cached_property
 import numpy as np
 
 from ..errors import ParameterError, TopologyError
+from ..validation import flag
 from .elements import EddyCurrent, Element, IronPath
 
 __all__ = ["Branch", "Coil", "Circuit", "Network"]
@@ -435,8 +436,14 @@ class Network:
         -------
         Network
             ``self`` when both are True, else a new network (same name and circuits).
-            The values are used for their truth value (not checked to be bools).
+
+        Raises
+        ------
+        InputError
+            ``saturation`` or ``eddy_currents`` not True or False.
         """
+        saturation = flag(saturation, "saturation")
+        eddy_currents = flag(eddy_currents, "eddy_currents")
         if saturation and eddy_currents:
             return self
 

@@ -170,7 +170,9 @@ def design_gap_controller(magnet: Any, *, mass_kg: float, gap_m: float, current_
     InputError
         ``mass_kg``, ``bandwidth_hz``, ``flux_bandwidth_hz``, ``damping`` or
         ``voltage_limit_V`` not a finite real number > 0; bad gap or current (from
-        :func:`~maglevkit.models.statics.solve_statics`).
+        :func:`~maglevkit.models.statics.solve_statics`); an operating point without
+        force gain ``K_rho <= 0`` (e.g. zero current) or where the bandwidth gives
+        ``k_p <= 0`` (the error names the operating point).
     SolverError
         If the statics at the operating point cannot be solved.
     """
@@ -188,8 +190,20 @@ def design_gap_controller(magnet: Any, *, mass_kg: float, gap_m: float, current_
     psi0 = np.asarray(sol.flux_linkage_Wb)
     k_rho = float(dF_dpsi @ psi0)
     omega = 2 * math.pi * bandwidth_hz
+    point = (f"operating point gap_m = {float(gap_m):g} m, "
+             f"current_A = {np.asarray(current_A, dtype=float).tolist()} A")
+    if not (math.isfinite(k_rho) and k_rho > 0.0):
+        raise InputError(f"design_gap_controller: at the {point} the force does not grow "
+                         f"with the flux (K_rho = sum_j dF/dpsi_j psi_0,j = {k_rho:g} N; "
+                         "must be > 0): give a bias current that carries the load")
     # m e'' = -dF = -(K_rho rho + dF/ds|_psi e)  ->  K_rho k_p + dF/ds|_psi = m omega^2
     kp = (mass_kg * omega**2 - dF_ds_psi) / k_rho
+    if not (math.isfinite(kp) and kp > 0.0):
+        f_min = math.sqrt(max(dF_ds_psi, 0.0) / mass_kg) / (2 * math.pi)
+        raise InputError(f"design_gap_controller: at the {point} the gap gain kp = {kp:g} "
+                         f"1/m (must be > 0): the stiffness at constant flux dF/ds = "
+                         f"{dF_ds_psi:g} N/m exceeds m omega^2 = {mass_kg * omega**2:g} N/m; "
+                         f"allowed: bandwidth_hz = {bandwidth_hz:g} Hz above {f_min:.4g} Hz")
     kd = 2 * damping * mass_kg * omega / k_rho
     net = getattr(magnet, "network", magnet)
     return GapController(gap_m, tuple(float(v) for v in psi0), float(current_A), kp, kd,

@@ -10,7 +10,7 @@ from typing import Any
 
 import numpy as np
 
-from ..errors import InputError
+from ..errors import InputError, SolverError
 from ..models.inputs import check_span
 from ..plant import HeaveMass, HeaveState
 from ..validation import real_number
@@ -69,28 +69,50 @@ class ClosedLoopResult:
     controller_time_s: np.ndarray | None = None
     diagnostics: dict[str, np.ndarray] = field(default_factory=dict)
 
+    def _gap_error_m(self, what: str) -> np.ndarray:
+        if self.gap_ref_m is None:
+            raise InputError(f"{what} needs the gap reference, but this result has "
+                             "gap_ref_m = None (closed_loop always records it)")
+        return np.abs(self.gap_m - self.gap_ref_m)
+
     def max_gap_deviation_m(self, start_s: float = 0.0) -> float:
         """Largest ``|s - s_ref|`` [m] from ``start_s`` on.
 
         Parameters
         ----------
         start_s : float, default 0.0
-            Samples at times ``>= start_s`` [s] count (e.g. skip a start transient).
-            At least one sample must remain (numpy raises ``ValueError`` otherwise).
+            Samples at times ``>= start_s`` [s] count (e.g. skip a start transient); at
+            most the last sample time.
 
         Returns
         -------
         float
             The largest gap deviation [m].
+
+        Raises
+        ------
+        InputError
+            ``start_s`` not a real number or after the last sample; a result without
+            ``gap_ref_m``.
         """
-        assert self.gap_ref_m is not None
+        start_s = real_number(start_s, "start_s", "s")
+        e = self._gap_error_m("max_gap_deviation_m")
         k = self.time_s >= start_s
-        return float(np.max(np.abs(self.gap_m[k] - self.gap_ref_m[k])))
+        if not np.any(k):
+            raise InputError(f"start_s = {start_s:g} s is after the last sample "
+                             f"(t = {float(self.time_s[-1]):g} s); allowed: start_s <= "
+                             f"{float(self.time_s[-1]):g} s")
+        return float(np.max(e[k]))
 
     def iae_m_s(self) -> float:
-        """Integral of the absolute gap error ``int |s - s_ref| dt`` [m s] (trapezoidal)."""
-        assert self.gap_ref_m is not None
-        e = np.abs(self.gap_m - self.gap_ref_m)
+        """Integral of the absolute gap error ``int |s - s_ref| dt`` [m s] (trapezoidal).
+
+        Raises
+        ------
+        InputError
+            A result without ``gap_ref_m``.
+        """
+        e = self._gap_error_m("iae_m_s")
         return float(np.sum(0.5 * (e[1:] + e[:-1]) * np.diff(self.time_s)))
 
     def energy_J(self) -> float:
@@ -153,8 +175,11 @@ def closed_loop(model: Any, vehicle: HeaveMass, controller: GapController | Cont
         Durations or steps not finite and > 0 or not a whole number of steps; a gap <= 0;
         a controller that is neither a :class:`GapController` nor a
         :class:`~maglevkit.control.interface.Controller`; ``initial_flux_Wb`` missing or
-        not allowed (see above); and when the magnet would hit the rail (gap <= 0 within
-        the next step: the controller is unstable for this case).
+        not allowed (see above).
+    SolverError
+        Touchdown: the magnet would hit the rail (gap <= 0 within the next step; the
+        closed loop is unstable for this case).  ``time`` and ``state`` (gap, gap rate)
+        name the step.
     """
     duration_s = real_number(duration_s, "duration_s", "s", positive=True)
     dt_s = real_number(dt_s, "dt_s", "s", positive=True)
@@ -220,8 +245,12 @@ def closed_loop(model: Any, vehicle: HeaveMass, controller: GapController | Cont
         lim[k] = bool(np.any(np.abs(u) >= limit))
         U[k] = u
         if not mech.gap_m + mech.gap_rate_m_per_s * dt_s > 0:
-            raise InputError(f"the magnet hit the rail at t = {t:.4g} s (gap {mech.gap_m:.3g} m); "
-                             "the controller is unstable for this case")
+            raise SolverError(
+                "TOUCHDOWN: the magnet would hit the rail within the next step",
+                time=float(t), state={"gap_m": mech.gap_m,
+                                      "gap_rate_m_per_s": mech.gap_rate_m_per_s},
+                reason="the closed loop is unstable for this case (controller, "
+                       "reference or disturbance)")
         force = float(out.force_N)
         st, out = model.step(st, dt_s, u, gaps=mech.gap_m, gap_rates=mech.gap_rate_m_per_s)
         mech = vehicle.step(mech, dt_s, force, ext(t))

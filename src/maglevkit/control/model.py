@@ -31,6 +31,7 @@ from ..errors import InputError, ParameterError
 from ..models.bank import MagnetBank
 from ..models.compiled import compile_function
 from ..plant import STANDARD_GRAVITY
+from ..validation import real_number
 
 __all__ = ["DISTURBANCES", "MagnetHeaveModel"]
 
@@ -66,10 +67,9 @@ class MagnetHeaveModel:
     def __init__(self, maps: Any, *, mass_kg: float, gravity: float = STANDARD_GRAVITY,
                  disturbances: Sequence[str] = ("force", "voltage"),
                  compiled: str = "auto") -> None:
-        if not (isinstance(mass_kg, (int, float)) and math.isfinite(mass_kg) and mass_kg > 0):
-            raise ParameterError(f"mass_kg = {mass_kg!r} must be a finite number > 0")
-        if not (isinstance(gravity, (int, float)) and math.isfinite(gravity) and gravity >= 0):
-            raise ParameterError(f"gravity = {gravity!r} m/s^2 must be finite and >= 0")
+        mass_kg = real_number(mass_kg, "mass_kg", "kg", positive=True, error=ParameterError)
+        gravity = real_number(gravity, "gravity", "m/s^2", nonnegative=True,
+                              error=ParameterError)
         if isinstance(disturbances, str):
             raise ParameterError("disturbances must be a sequence of names, e.g. ('force',)")
         dist = tuple(disturbances)

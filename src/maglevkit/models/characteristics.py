@@ -12,6 +12,7 @@ import numpy as np
 
 from ..errors import InputError
 from ..magnets.base import Magnet
+from ..validation import real_number, whole_number
 from .statics import solve_statics
 
 __all__ = ["saturation_knee", "coupling_ratios", "nominal_point", "force_exponent", "Coupling",
@@ -95,10 +96,10 @@ def saturation_knee(magnet: Magnet, *, gap: float | None = None,
     exponent : float
         Threshold in (0, 2); default :data:`KNEE_EXPONENT`.
     max_current : float, optional
-        Upper end of the scan [A]; default 4 x the nominal current.
+        Upper end of the scan [A], finite and > 0; default 4 x the nominal current.
     points : int
-        Scan resolution (currents ``max_current / points ... max_current``); the crossing
-        is interpolated linearly.
+        Scan resolution, a whole number >= 2 (currents ``max_current / points ...
+        max_current``); the crossing is interpolated linearly.
 
     Returns
     -------
@@ -110,8 +111,11 @@ def saturation_knee(magnet: Magnet, *, gap: float | None = None,
     InputError
         Bad arguments, or no knee within the scanned range.
     """
-    if not 0.0 < exponent < 2.0:
+    if not 0.0 < real_number(exponent, "exponent") < 2.0:
         raise InputError(f"exponent = {exponent!r} must lie in (0, 2)")
+    points = whole_number(points, "points", minimum=2)
+    if max_current is not None:
+        max_current = real_number(max_current, "max_current", "A", positive=True)
     if gap is None or max_current is None:
         s0, i0 = nominal_point(magnet)
         gap = s0 if gap is None else gap

@@ -88,7 +88,7 @@ class Scenario:
             The model's circuit names (voltages, signals in [V]) or gap names (gaps,
             signals in [m]).
         which : {"voltages", "gaps"}
-            Which table to read; any other value reads the gaps.
+            Which table to read.
 
         Returns
         -------
@@ -97,10 +97,14 @@ class Scenario:
 
         Raises
         ------
+        InputError
+            ``which`` neither ``"voltages"`` nor ``"gaps"``.
         ParameterFileError
             A name in the table that the model does not have, or a name without a signal
             (and no ``"all"``).
         """
+        if not isinstance(which, str) or which not in ("voltages", "gaps"):
+            raise InputError(f"inputs_for: which = {which!r}; allowed: 'voltages' or 'gaps'")
         table = self.voltages if which == "voltages" else self.gaps
         unit = "circuit" if which == "voltages" else "gap"
         unknown = sorted(set(table) - set(names) - {"all"})

@@ -23,6 +23,7 @@ from typing import Any
 import numpy as np
 
 from ..errors import InputError, ParameterFileError
+from ..validation import real_array
 
 __all__ = [
     "Signal",
@@ -200,7 +201,7 @@ class Tabulated(Signal):
     Raises
     ------
     InputError
-        Non-numeric or non-finite entries, lists that are not 1-D and equally long
+        Non-numeric (strings, bools, ...) or non-finite entries, lists that are not 1-D and equally long
         (>= 1), or times that are not strictly increasing.
     """
 
@@ -208,12 +209,9 @@ class Tabulated(Signal):
     values: tuple[float, ...]
 
     def __post_init__(self) -> None:
-        try:
-            t = np.asarray(self.times, dtype=float)
-            v = np.asarray(self.values, dtype=float)
-        except (TypeError, ValueError) as exc:
-            raise InputError("tabulated signal: times and values must be lists of numbers") \
-                from exc
+        # bools are refused (True was taken as 1 s / 1 V), like every number of the API
+        t = real_array(self.times, "tabulated signal times", "s", finite=False)
+        v = real_array(self.values, "tabulated signal values", finite=False)
         if t.ndim != 1 or v.ndim != 1 or t.size != v.size or t.size < 1:
             raise InputError(f"tabulated signal: times ({t.size}) and values ({v.size}) must be "
                              "1-D lists of equal, non-zero length")

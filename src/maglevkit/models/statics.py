@@ -261,14 +261,23 @@ class StaticSolution:
         Parameters
         ----------
         name : str
-            Branch name, one of :attr:`branch_names` (another name raises ``ValueError``).
+            Branch name, one of :attr:`branch_names`.
 
         Returns
         -------
         ndarray (...)
             Branch flux [Wb], of batch shape :attr:`shape`.
+
+        Raises
+        ------
+        InputError
+            ``name`` is not one of :attr:`branch_names`.
         """
-        return self.branch_flux_Wb[..., self.branch_names.index(name)]
+        names = list(self.branch_names)
+        if not isinstance(name, str) or name not in names:
+            raise InputError(f"branch_flux: name = {name!r} is no branch of this network; "
+                             f"allowed: {', '.join(names)}")
+        return self.branch_flux_Wb[..., names.index(name)]
 
 
 class _StaticSolver:

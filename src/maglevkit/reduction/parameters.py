@@ -34,7 +34,7 @@ import numpy as np
 
 from ..circuit.assembly import assemble
 from ..circuit.network import Network
-from ..errors import InputError
+from ..errors import InputError, SolverError
 from ..models.flux import DEFAULT_ATOL, DEFAULT_RTOL, flux_dae
 from ..models.statics import as_network, solve_statics
 
@@ -130,7 +130,7 @@ def eddy_resistance(model: Any, *, gap: Any, current: Any) -> np.ndarray:
         Bad inputs, more than one operating point, or a non-positive or non-finite
         ``Y_jj`` (a network that is not passive).
     SolverError
-        If the statics cannot be solved.
+        If the statics cannot be solved, or ``Y_jj > 1 / R_el`` (a negative ``R_ec``).
     """
     net = as_network(model)
     y = current_jump_admittance(net, gap=gap, current=current)
@@ -143,5 +143,15 @@ def eddy_resistance(model: Any, *, gap: Any, current: Any) -> np.ndarray:
             raise InputError(f"circuit {net.circuit_names[j]!r}: current-jump admittance "
                              f"{yjj!r} S is not a positive number; the network is not passive")
         else:
-            out[j] = 1.0 / yjj - float(net.resistances[j])
+            r_el = float(net.resistances[j])
+            out[j] = 1.0 / yjj - r_el
+            if out[j] < 0.0:
+                # Y_jj > 1/R_el: a current jump larger than the coil resistance alone allows
+                raise SolverError(
+                    f"eddy_resistance: negative R_ec = {out[j]:.6g} ohm for circuit "
+                    f"{net.circuit_names[j]!r}",
+                    state={"gap_m": gap, "current_A": current},
+                    reason=f"current-jump admittance Y_jj = {yjj:.9g} S exceeds 1/R_el = "
+                           f"{1.0 / r_el:.9g} S (R_el = {r_el:g} ohm); R_ec must be >= 0 "
+                           "for a passive network (rounding or a non-passive model)")
     return out

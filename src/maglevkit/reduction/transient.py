@@ -27,7 +27,6 @@ differs from the limit by 6e-4 relative, at 1e-4 A by < 1e-5 (measured).
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 from typing import Any
 
@@ -40,6 +39,7 @@ from ..errors import InputError, SolverError
 from ..models.experiments import differential_inductance_from_step
 from ..models.flux import FluxModel
 from ..models.statics import as_network, solve_statics
+from ..validation import real_number, whole_number
 
 __all__ = ["RampEstimate", "RampResponse", "dl_ds_from_ramp", "flux_held_ramp", "transient_point"]
 
@@ -175,10 +175,8 @@ def flux_held_ramp(model: Any, *, gap: Any, current: Any, gap_change: Any, durat
         If the statics or the integration fail.
     """
     net = as_network(model)
-    if not (isinstance(duration, (int, float)) and math.isfinite(duration) and duration > 0.0):
-        raise InputError(f"duration = {duration!r} s must be a finite number > 0")
-    if not (isinstance(samples, int) and samples >= 10):
-        raise InputError(f"samples = {samples!r} must be an integer >= 10")
+    duration = real_number(duration, "duration", "s", positive=True)
+    samples = whole_number(samples, "samples", minimum=10)
     sol = solve_statics(net, gaps=gap, currents=current)
     if sol.shape != ():
         raise InputError("flux_held_ramp takes one operating point")
@@ -248,15 +246,28 @@ def dl_ds_from_ramp(model: Any, *, gap: float, current: float, circuit: int = 0,
     """
     net = as_network(model)
     nc = len(net.circuits)
-    if not (isinstance(circuit, int) and 0 <= circuit < nc):
+    circuit = whole_number(circuit, "circuit", minimum=0)
+    if circuit >= nc:
         raise InputError(f"circuit = {circuit!r} must be an index in 0..{nc - 1}")
-    if not (isinstance(relative_gap_change, (int, float)) and 0.0 < relative_gap_change <= 0.2):
+    relative_gap_change = real_number(relative_gap_change, "relative_gap_change")
+    if not 0.0 < relative_gap_change <= 0.2:
         raise InputError(f"relative_gap_change = {relative_gap_change!r} must lie in (0, 0.2]")
-    if not (isinstance(current, (int, float)) and math.isfinite(current) and current >= 0.0):
+    current = real_number(current, "current", "A")
+    if current < 0.0:
         raise InputError(f"current = {current!r} A must be a finite number >= 0 (maps are even "
                          "in the current)")
-    if not (isinstance(zero_current, (int, float)) and zero_current > 0.0):
-        raise InputError(f"zero_current = {zero_current!r} A must be > 0")
+    zero_current = real_number(zero_current, "zero_current", "A", positive=True)
+    ng = len(net.gap_names)
+    if poles is None:
+        idx = list(range(ng))
+    else:
+        if isinstance(poles, (str, bytes)) or not hasattr(poles, "__iter__"):
+            raise InputError(f"poles = {poles!r}: expected a sequence of gap-input indices "
+                             f"in 0..{ng - 1}")
+        idx = [whole_number(k, "poles", minimum=0) for k in poles]
+        if not idx or max(idx) >= ng or len(set(idx)) != len(idx):
+            raise InputError(f"poles = {list(poles)!r}: expected at least one distinct "
+                             f"gap-input index in 0..{ng - 1} (or None: all gaps)")
     i_exp = float(current) if current > 0.0 else float(zero_current)
     if inductance is None:
         inductance = differential_inductance_from_step(net, gap=gap, current=i_exp,
@@ -264,8 +275,6 @@ def dl_ds_from_ramp(model: Any, *, gap: float, current: float, circuit: int = 0,
     r_el = float(net.resistances[circuit])
     if duration is None:
         duration = 50.0 * inductance / r_el
-    ng = len(net.gap_names)
-    idx = list(range(ng)) if poles is None else [int(k) for k in poles]
     change = np.zeros(ng)
     change[idx] = relative_gap_change * gap
     resp = flux_held_ramp(net, gap=gap, current=i_exp, gap_change=change, duration=duration,

@@ -65,6 +65,16 @@ def _seed(value: Any, what: str = "seed") -> int:
         raise ParameterError(str(exc)) from None
 
 
+def _band(omega_min: Any, omega_max: Any, *, zero_ok: bool) -> tuple[float, float]:
+    """A band ``[omega_min, omega_max]`` [rad/m] of a PSD integral, checked (InputError)."""
+    lo = real_number(omega_min, "omega_min", "rad/m", nonnegative=zero_ok, positive=not zero_ok)
+    hi = real_number(omega_max, "omega_max", "rad/m", positive=True)
+    if not hi > lo:
+        raise InputError(f"omega_max = {hi:g} rad/m must be > omega_min = {lo:g} rad/m (a "
+                         "reversed or empty band)")
+    return lo, hi
+
+
 class Profile:
     """Base class: an irregularity profile ``r(x)`` [m], positive downward."""
 
@@ -539,15 +549,20 @@ class GermanTrackPSD:
         Parameters
         ----------
         omega_min, omega_max : float
-            Band of spatial angular frequencies [rad/m], ``0 <= omega_min < omega_max``
-            for the result to mean anything (not checked: a reversed band gives a
-            negative value).
+            Band of spatial angular frequencies [rad/m], finite,
+            ``0 <= omega_min < omega_max``.
 
         Returns
         -------
         float
             Variance [m^2] of the profile components in the band.
+
+        Raises
+        ------
+        InputError
+            A band that is not finite, starts below 0, or is reversed or empty.
         """
+        omega_min, omega_max = _band(omega_min, omega_max, zero_ok=True)
         c, r = self.omega_c_rad_per_m, self.omega_r_rad_per_m
 
         def prim(w: float) -> float:
@@ -595,16 +610,27 @@ class PowerLawPSD:
         Parameters
         ----------
         omega_min, omega_max : float
-            Band of spatial angular frequencies [rad/m], ``0 < omega_min < omega_max``
-            for the result to mean anything (not checked: a reversed band gives a
-            negative value; ``omega_min = 0`` diverges for ``exponent >= 1``).
+            Band of spatial angular frequencies [rad/m], finite,
+            ``0 <= omega_min < omega_max``; ``omega_min = 0`` only for ``exponent < 1``
+            (the integral diverges at 0 otherwise).
 
         Returns
         -------
         float
             Variance [m^2] of the profile components in the band.
+
+        Raises
+        ------
+        InputError
+            A band that is not finite, starts below 0, or is reversed or empty; or
+            ``omega_min = 0`` with ``exponent >= 1``.
         """
+        omega_min, omega_max = _band(omega_min, omega_max, zero_ok=True)
         s0, n, w0 = self.S0_m2_per_rad_per_m, self.exponent, self.omega0_rad_per_m
+        if omega_min == 0.0 and n >= 1.0:
+            raise InputError(f"omega_min = 0 rad/m: the variance of a power law with "
+                             f"exponent = {n:g} >= 1 diverges at 0; allowed: omega_min > 0 "
+                             "(or an exponent < 1)")
         if n == 1.0:
             return s0 * w0 * math.log(omega_max / omega_min)
         return s0 * w0 ** n * (omega_max ** (1 - n) - omega_min ** (1 - n)) / (1 - n)

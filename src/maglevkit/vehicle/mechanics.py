@@ -42,6 +42,7 @@ import scipy.linalg
 
 from ..errors import InputError
 from ..plant import STANDARD_GRAVITY
+from ..validation import describe, real_array, real_number
 from .train import TrainData
 
 __all__ = ["VehicleMechanics", "ForceElement", "derive_sympy"]
@@ -286,10 +287,10 @@ class VehicleMechanics:
         Raises
         ------
         InputError
-            ``dt_s`` not a finite number > 0 (a Python or NumPy float or int).
+            ``dt_s`` not a finite real number > 0 (Python or NumPy floats and ints; not
+            a bool).
         """
-        if not (isinstance(dt_s, (int, float)) and np.isfinite(dt_s) and dt_s > 0):
-            raise InputError(f"dt_s = {dt_s!r} must be a finite number > 0")
+        dt_s = real_number(dt_s, "dt_s", "s", positive=True)
         a, bq = self.state_matrices(damping=damping)
         n2, n = bq.shape
         aug = np.zeros((n2 + n, n2 + n))
@@ -345,24 +346,41 @@ class VehicleMechanics:
         Parameters
         ----------
         pole_weights : array_like (n_points,)
-            Weight ``w_p`` [-] of each force point, > 0 (not checked).  Every frame needs
-            at least two force points at different positions, or the balance is singular
-            (``numpy.linalg.LinAlgError``).
+            Weight ``w_p`` [-] of each force point, finite and > 0.
 
         Returns
         -------
         (q, forces_N) : ndarray (n_dof,), ndarray (n_points,)
             The equilibrium displacements and the upward force at every point [N].
+
+        Raises
+        ------
+        InputError
+            ``pole_weights`` not finite numbers > 0, one per force point; or a frame
+            with fewer than two force points at different positions (its force and
+            moment balance has no solution).
         """
+        npts = self.B.shape[1]
+        w = real_array(pole_weights, "pole_weights")
+        if w.shape != (npts,) or not np.all(w > 0.0):
+            raise InputError(f"pole_weights = {describe(pole_weights)}: expected {npts} "
+                             "numbers > 0, one per force point")
         nc = 2 * self.n_sections
+        cols_of = [np.flatnonzero(self.force_bodies == self.n_sections + f)
+                   for f in range(self.n_frames)]
+        for f, cols in enumerate(cols_of):
+            xs = np.unique(self.force_points_m[cols])
+            if xs.size < 2:
+                raise InputError(f"static_trim: {self.body_names[self.n_sections + f]} has "
+                                 f"force points at {xs.tolist()} m; each frame needs at "
+                                 "least two force points at different positions "
+                                 "(force_points_m, force_frames)")
         q = np.zeros(self.n_dof)
         q[:nc] = np.linalg.solve(self.K[:nc, :nc], self.Q_gravity[:nc])
         need = self.Q_gravity - self.K @ q            # = B F on the frame rows
-        w = np.asarray(pole_weights, dtype=float)
-        forces = np.zeros(self.B.shape[1])
-        for f in range(self.n_frames):
+        forces = np.zeros(npts)
+        for f, cols in enumerate(cols_of):
             rows = slice(nc + 2 * f, nc + 2 * f + 2)
-            cols = np.flatnonzero(self.force_bodies == self.n_sections + f)
             a = self.B[rows, cols]
             lam = np.linalg.solve(a @ (w[cols, None] * a.T), need[rows])
             forces[cols] = w[cols] * (a.T @ lam)
