@@ -90,6 +90,26 @@ def test_one_body_against_a_hand_derivation_and_sympy() -> None:
     np.testing.assert_allclose(ref["mass_matrix_q"], hand["M"], rtol=1e-14)
 
 
+def test_preload_stiffness_against_a_hand_derivation_and_sympy() -> None:
+    """A body on two preloaded vertical springs at (+-b, h below the centre) and an
+    upward force F at hp below the centre: the exact rotation adds -2 f h - F hp to the
+    roll stiffness (an inverted pendulum), on top of 2 k b^2."""
+    m, j, zc, b, h, hp, k, f, force = 900.0, 350.0, -0.5, 0.8, 0.4, 0.25, 6e4, 3e3, 2.5e3
+    sysm = PlanarMultibody(
+        [RigidBody("b", m, j, (0.0, zc))],
+        [SpringDamper("l", "b", (-b, zc + h), None, (-b, zc + h), "z", k, 0.0),
+         SpringDamper("r", "b", (b, zc + h), None, (b, zc + h), "z", k, 0.0)],
+        [ForcePoint("up", "b", (0.3, zc + hp), "-z")])
+    k_pre = sysm.preload_stiffness([f, f], [force])
+    hand = np.diag([0.0, 2 * k, 2 * k * b * b - 2 * f * h - force * hp])
+    # 1e-12 of the largest entry: rounding
+    np.testing.assert_allclose(sysm.K + k_pre, hand, rtol=0, atol=1e-12 * hand.max())
+    ref = derive_sympy(sysm, element_forces_N=[f, f], forces_N=[force])
+    np.testing.assert_allclose(ref["K"], hand, rtol=0, atol=1e-12 * hand.max())
+    with pytest.raises(mk.InputError, match="one finite value per element"):
+        sysm.preload_stiffness([f], [force])
+
+
 def test_multibody_refuses_bad_descriptions() -> None:
     body = RigidBody("b", 1.0, 1.0, (0.0, 0.0))
     with pytest.raises(mk.InputError, match="unique names"):
@@ -121,6 +141,20 @@ def test_cross_section_matrices_against_sympy() -> None:
                                    atol=1e-12 * np.abs(ref[key]).max(), err_msg=key)
     np.testing.assert_allclose(ref["mass_matrix_q"], s.M, rtol=1e-14)
     np.testing.assert_array_equal(s.K, s.K.T)
+    # about the trim in a curve: the air springs' and magnets' static forces add the
+    # preload stiffness; sympy with the same element and point forces agrees
+    a = track_field_m_per_s2(450 / 3.6, 4000.0, math.radians(12.0))
+    q, forces = mech.static_trim(a, guidance_bias_N=2e4)
+    fe = s.stiffness_N_per_m * s.element_deflections(q)
+    ref = derive_sympy(s, element_forces_N=fe, forces_N=forces)
+    k_lin = mech.linearised_stiffness(a, guidance_bias_N=2e4)
+    np.testing.assert_allclose(k_lin, ref["K"], rtol=0, atol=1e-12 * np.abs(ref["K"]).max())
+    # the car body's pendulum term lowers its roll stiffness by about m a_z h (h = 0.95 m)
+    i = s.dof_names.index("car_body.phi")
+    d = load_cross_section()
+    drop = s.K[i, i] - k_lin[i, i]
+    assert drop == pytest.approx(d.loaded_car_body_mass_kg * a[1]
+                                 * (d.spring_z_m - d.car_body_centre_z_m), rel=1e-12)
 
 
 def test_casadi_functions_equal_numpy() -> None:

@@ -512,3 +512,29 @@ class CrossSectionMechanics:
         rhs[n + 3] = 2.0 * bias
         sol = np.linalg.solve(lhs, rhs)
         return sol[:n], sol[n:]
+
+    def linearised_stiffness(self, field_m_per_s2: Any, *, guidance_bias_N: float = 0.0
+                             ) -> np.ndarray:
+        """``K + K_pre`` about the static trim of :meth:`static_trim`.
+
+        The preload ("pendulum") stiffness of the air springs' and magnets' static forces
+        (:meth:`PlanarMultibody.preload_stiffness`) is evaluated with the trim's element
+        forces ``k Delta`` and magnet forces; it assumes level bodies (the car body's trim
+        roll in a curve, tens of mrad, changes it by that fraction).
+
+        Parameters
+        ----------
+        field_m_per_s2 : array_like (2,)
+            Acceleration field ``(a_y, a_z)`` [m/s^2].
+        guidance_bias_N : float, default 0
+            Bias force of each guidance magnet [N] (keyword only).
+
+        Returns
+        -------
+        ndarray (6, 6)
+            Stiffness about the trim [N/m, N, N m/rad].
+        """
+        q, forces = self.static_trim(field_m_per_s2, guidance_bias_N=guidance_bias_N)
+        s = self.system
+        element_forces = s.stiffness_N_per_m * s.element_deflections(q)
+        return s.K + s.preload_stiffness(element_forces, forces)

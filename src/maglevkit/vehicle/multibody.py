@@ -435,16 +435,81 @@ class PlanarMultibody:
         bq[n:] = minv
         return a, bq
 
-    def natural_frequencies_Hz(self) -> np.ndarray:
+    def preload_stiffness(self, element_forces_N: Any, forces_N: Any) -> np.ndarray:
+        """Stiffness of static preloads about an operating point with level bodies.
+
+        Linearised at ``q = 0`` with the element forces ``f_e`` (``k Delta + preload``,
+        positive as in :class:`SpringDamper`) and point forces ``F_p`` held, the exact
+        rotation adds the "pendulum" terms the small-angle matrices leave out: a point
+        ``r = c + R(phi) d`` has ``d^2 r/d phi^2 = -d`` at ``phi = 0``, so
+
+            K_pre[phi_a, phi_a] -= f_e e.d_a,   K_pre[phi_b, phi_b] += f_e e.d_b,
+            K_pre[phi, phi]     += F_p e_p.d_p       (d: offset from the centre of mass)
+
+        (a support force pushing a body up from a point below its centre of mass lowers
+        its roll stiffness by ``F h``).  The total stiffness about that operating point is
+        ``K + K_pre`` (checked against :func:`derive_sympy` with the same preloads).
+
+        Parameters
+        ----------
+        element_forces_N : array_like (n_elements,)
+            Force of every spring-damper at the operating point [N].
+        forces_N : array_like (n_points,)
+            Force at every force point at the operating point [N].
+
+        Returns
+        -------
+        ndarray (n_dof, n_dof)
+            Diagonal in the ``phi`` coordinates [N m/rad].
+
+        Raises
+        ------
+        InputError
+            Wrong lengths or non-finite values.
+        """
+        fe = np.asarray(element_forces_N, dtype=float).ravel()
+        fp = np.asarray(forces_N, dtype=float).ravel()
+        if fe.shape != (len(self.elements),) or fp.shape != (len(self.force_points),) \
+                or not (np.isfinite(fe).all() and np.isfinite(fp).all()):
+            raise InputError(f"element_forces_N ({fe.size} values) and forces_N ({fp.size}) "
+                             f"need one finite value per element ({len(self.elements)}) and "
+                             f"per force point ({len(self.force_points)}) [N]")
+        k = np.zeros((self.n_dof, self.n_dof))
+
+        def add(body: str | None, point: tuple[float, float], unit: tuple[float, float],
+                force: float) -> None:
+            b = self._body(body, "preload_stiffness")
+            if b is None or "phi" not in self._cols[b]:
+                return
+            c = self._cols[b]["phi"]
+            d = (point[0] - self._centre[b][0], point[1] - self._centre[b][1])
+            k[c, c] += force * (unit[0] * d[0] + unit[1] * d[1])
+
+        for e, f in zip(self.elements, fe, strict=True):
+            unit = (1.0, 0.0) if e.direction == "y" else (0.0, 1.0)
+            add(e.body_a, e.point_a_m, unit, -f)
+            add(e.body_b, e.point_b_m, unit, f)
+        for p, f in zip(self.force_points, fp, strict=True):
+            add(p.body, p.point_m, DIRECTIONS[p.direction], f)
+        return k
+
+    def natural_frequencies_Hz(self, stiffness: Any = None) -> np.ndarray:
         """Undamped natural frequencies ``sqrt(eig(M^-1 K))/(2 pi)``, ascending [Hz].
+
+        Parameters
+        ----------
+        stiffness : array_like (n_dof, n_dof), optional
+            The stiffness matrix to use (e.g. ``K + preload_stiffness(...)``); default
+            :attr:`K`.
 
         Returns
         -------
         ndarray (n_dof,)
             Frequencies [Hz]; rigid-body modes (zero stiffness) give 0.
         """
+        kk = self.K if stiffness is None else np.asarray(stiffness, dtype=float)
         m_half = 1.0 / np.sqrt(np.diag(self.M))
-        ev = np.linalg.eigvalsh(m_half[:, None] * self.K * m_half[None, :])
+        ev = np.linalg.eigvalsh(m_half[:, None] * kk * m_half[None, :])
         return np.sqrt(np.clip(ev, 0.0, None)) / (2.0 * np.pi)
 
     # ------------------------------------------------------------------ CasADi
@@ -481,19 +546,28 @@ class PlanarMultibody:
         }
 
 
-def derive_sympy(system: PlanarMultibody) -> dict[str, np.ndarray]:
+def derive_sympy(system: PlanarMultibody, *, element_forces_N: Any = None,
+                 forces_N: Any = None) -> dict[str, np.ndarray]:
     """Derive ``system``'s linear equations independently with sympy.physics.mechanics.
 
     Lagrange's equations from ``T`` and ``V`` of the bodies with the **exact** rotation
     (body frames rotated about the plane's normal, points at their exact positions),
     ``V = sum k Delta^2/2`` with the exact deflection along each element's direction, the
     acceleration field as a force ``m a`` at every centre of mass, dampers and the point
-    forces as forces at the exact points; then linearised at ``q = q' = 0``, ``F = 0``.
+    forces as forces at the exact points; then linearised at ``q = q' = 0`` and the
+    point forces ``F = F_0``; each element may carry a preload force ``f_e`` at
+    ``q = 0`` (potential ``f_e Delta + k Delta^2/2``).  With zero preloads and forces this
+    is the small-angle system; otherwise ``K`` includes the preload stiffness
+    (:meth:`PlanarMultibody.preload_stiffness`).
 
     Parameters
     ----------
     system : PlanarMultibody
         The model whose bodies, elements and force points are rederived.
+    element_forces_N : array_like (n_elements,), optional
+        Element forces ``f_e`` at ``q = 0`` [N] (default zero; keyword only).
+    forces_N : array_like (n_points,), optional
+        Point forces ``F_0`` of the operating point [N] (default zero; keyword only).
 
     Returns
     -------
@@ -550,11 +624,16 @@ def derive_sympy(system: PlanarMultibody) -> dict[str, np.ndarray]:
 
     potential = sp.Integer(0)
     zero = {qq: 0 for qq in q}
+    fe0 = (np.zeros(len(system.elements)) if element_forces_N is None
+           else np.asarray(element_forces_N, dtype=float).ravel())
+    fp0 = (np.zeros(len(system.force_points)) if forces_N is None
+           else np.asarray(forces_N, dtype=float).ravel())
     for i, e in enumerate(system.elements):
         unit = N.x if e.direction == "y" else N.z
         pa, pb = point(e.body_a, e.point_a_m, f"A{i}"), point(e.body_b, e.point_b_m, f"B{i}")
         delta = (pa.pos_from(O) - pb.pos_from(O)).dot(unit)
-        potential += sp.Float(e.stiffness_N_per_m) * (delta - delta.subs(zero)) ** 2 / 2
+        dev = delta - delta.subs(zero)
+        potential += sp.Float(e.stiffness_N_per_m) * dev ** 2 / 2 + sp.Float(fe0[i]) * dev
         drate = (pa.vel(N) - pb.vel(N)).dot(unit)
         c = sp.Float(e.damping_N_s_per_m)
         forces.append((pa, -c * drate * unit))
@@ -574,9 +653,12 @@ def derive_sympy(system: PlanarMultibody) -> dict[str, np.ndarray]:
     mm = me.msubs(lm.mass_matrix, dict(zip(q, xs, strict=True)))
     allv = (*xs, *us, *fsym, ay, az)
 
+    base = {v: 0 for v in allv}
+    base.update({f: float(f0) for f, f0 in zip(fsym, fp0, strict=True)})
+
     def column(var: Any) -> np.ndarray:
-        e = fo.xreplace({v: 0 for v in allv if v is not var})
-        return np.array(e.diff(var).xreplace({var: 0}), dtype=float).ravel()
+        e = fo.xreplace({v: b for v, b in base.items() if v is not var})
+        return np.array(e.diff(var).xreplace({var: base[var]}), dtype=float).ravel()
 
     def block(vs: Sequence[Any]) -> np.ndarray:
         return np.column_stack([column(v) for v in vs]) if vs else np.zeros((n, 0))
