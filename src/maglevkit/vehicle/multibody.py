@@ -34,8 +34,9 @@ track; centrifugal and superelevation terms in a curve, see
 :mod:`maglevkit.vehicle.crosssection`).  What the linearisation leaves out is of second
 order in the angles (``|sin(phi) - phi| <= |phi|^3/6``, ``1 - cos(phi) <= phi^2/2``) or in
 products of forces and angles: the roll stiffness of preloaded springs and of forces acting
-at rotated points (``F_0 d phi``, the "pendulum" terms).  A spring-damper acts along a
-direction fixed in the plane (its attachment points move by millimetres against element
+at rotated points (``F_0 d phi``, the "pendulum" terms), which
+:meth:`PlanarMultibody.preload_stiffness` adds about an operating point.  A spring-damper
+acts along a direction fixed in the plane (its attachment points move by millimetres against element
 lengths of decimetres), and its deflection is zero in the reference configuration (a
 static preload is carried as part of the equilibrium ``q``).
 
