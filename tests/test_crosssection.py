@@ -382,3 +382,31 @@ def test_sources_page_lists_every_value_with_its_tag() -> None:
         v = data[table][k]
         shown = value if value.startswith('"') else value.split(" ")[0]
         assert shown == (f'"{v}"' if isinstance(v, str) else repr(v)), key
+
+
+def test_the_heave_pitch_train_is_expressible_in_the_planar_description() -> None:
+    """The module docstring's recipe: the bundled heave-pitch train's bodies, air springs,
+    joints and magnet points as a PlanarMultibody in the longitudinal plane (train
+    coordinate as y, dofs z and pitch) give today's composed matrices."""
+    from maglevkit.vehicle import VehicleMechanics, load_vehicle
+
+    train = load_vehicle()
+    slots = train.magnet_slots()
+    mech = VehicleMechanics(train, [s.centre_m for s in slots], [s.frame for s in slots])
+    bodies = [RigidBody(name, float(m), float(j), (float(x), 0.0), ("z", "phi"))
+              for name, m, j, x in zip(mech.body_names, mech.body_mass_kg,
+                                       mech.body_inertia_kg_m2, mech.body_centres_m,
+                                       strict=True)]
+    names = mech.body_names
+    elements = [SpringDamper(e.name, names[e.body_a], (e.xi_a_m, 0.0), names[e.body_b],
+                             (e.xi_b_m, 0.0), "z", e.stiffness_N_per_m, e.damping_N_s_per_m)
+                for e in mech.elements]
+    points = [ForcePoint(f"p{i}", names[int(b)], (float(x), 0.0), "-z")
+              for i, (b, x) in enumerate(zip(mech.force_bodies, mech.force_points_m,
+                                             strict=True))]
+    planar = PlanarMultibody(bodies, elements, points)
+    assert planar.dof_names == tuple(n.replace("theta", "phi") for n in mech.dof_names)
+    for mine, theirs in ((planar.M, mech.M), (planar.K, mech.K), (planar.C, mech.C),
+                         (planar.B, -mech.B), (planar.G[:, 1] * G0, mech.Q_gravity)):
+        # the same sums in a different order: 1e-12 of the largest entry
+        np.testing.assert_allclose(mine, theirs, rtol=0, atol=1e-12 * np.abs(theirs).max())
