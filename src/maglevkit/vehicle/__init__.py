@@ -9,6 +9,10 @@
 * :mod:`~maglevkit.vehicle.data`: the guideway parameter file.
 * :mod:`~maglevkit.vehicle.train`: the vehicle (train) parameter file and its layout.
 * :mod:`~maglevkit.vehicle.mechanics`: the train's heave-pitch multibody model.
+* :mod:`~maglevkit.vehicle.multibody`: planar rigid bodies, spring-dampers and force
+  points turned into linear equations of motion (NumPy, CasADi; checked by sympy).
+* :mod:`~maglevkit.vehicle.crosssection`: the cross-section vehicle's mechanics (car
+  body, levitation chassis, air springs, magnet force points; curves) and its file.
 * :mod:`~maglevkit.vehicle.simulation`: vehicle runs (magnet bank, gap controllers,
   guideway, irregularities, failures).
 """
@@ -21,6 +25,12 @@ from .comfort import (
     iso2631_wk,
     sperling_index,
     sperling_weighting,
+)
+from .crosssection import (
+    CrossSectionData,
+    CrossSectionMechanics,
+    load_cross_section,
+    track_field_m_per_s2,
 )
 from .data import GuidewayData, load_guideway
 from .guideway import BeamSpan, Guideway, GuidewayDeflection, GuidewayState
@@ -35,6 +45,7 @@ from .irregularities import (
     TabulatedProfile,
 )
 from .mechanics import VehicleMechanics
+from .multibody import ForcePoint, PlanarMultibody, RigidBody, SpringDamper
 from .simulation import Failure, VehicleModel, VehicleRun, run_vehicle
 from .train import TrainData, load_vehicle
 
@@ -63,6 +74,14 @@ __all__ = [
     "TrainData",
     "load_vehicle",
     "VehicleMechanics",
+    "PlanarMultibody",
+    "RigidBody",
+    "SpringDamper",
+    "ForcePoint",
+    "CrossSectionData",
+    "CrossSectionMechanics",
+    "load_cross_section",
+    "track_field_m_per_s2",
     "VehicleModel",
     "VehicleRun",
     "Failure",
