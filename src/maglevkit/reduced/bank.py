@@ -348,6 +348,12 @@ class MagnetBank:
                                  f"{model.eddy_modes} cannot be a bank member (the bank "
                                  "advances eq. 8 with one R_ec per circuit); use "
                                  "CurrentModel(maps) or the model on its own")
+            if getattr(model, "motion_eddy", False):
+                # the same: the shielded-gap ladder's second state per circuit
+                raise InputError(f"member {name!r}: a CurrentModel with motion_eddy=True "
+                                 "cannot be a bank member (the bank advances eq. 8 with one "
+                                 "state per circuit); use CurrentModel(maps) or the model on "
+                                 "its own")
             maps = model.maps
             r_el, r_ec = model.resistance_ohm, model.eddy_resistance_ohm
         elif hasattr(model, "dataset") and hasattr(model, "variable"):
@@ -720,8 +726,17 @@ class MagnetBank:
         CasADi code, or CasADi's virtual machine, by ``compiled`` and ``codegen``).
 
         Inputs and outputs as :meth:`step_function` (``n_bad`` > 0: a circuit left its
-        maps or a value was not finite; diagnose with :meth:`step`).  Banks of reduced
-        members with one gap input per circuit only.
+        maps or a value was not finite, ``flags`` says why per circuit; diagnose with
+        :meth:`step`).  Banks of reduced members with one gap input per circuit only.
+
+        Parameters
+        ----------
+        dt : float
+            Step length [s] (> 0); steps with the same RK4 sub-step count share a kernel.
+
+        Returns
+        -------
+        casadi.Function
         """
         self._composable_substeps(dt, "step_kernel")
         return self._kernel(float(dt)).f
