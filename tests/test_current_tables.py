@@ -228,3 +228,24 @@ def test_kernel_reason_codes_name_each_reason(all_maps) -> None:
     with pytest.raises(OutOfRangeError, match=r"member 'b'.*over the step.*gap 0\.03 m"):
         bank.step(state, 1e-3, u[0], gaps=s)
     assert [int(r) for r in StepFlag.by_priority()] == [4, 1, 8, 2]
+
+
+def test_maps_the_tables_cannot_hold_stay_on_the_bsplines() -> None:
+    import dataclasses
+
+    mag = mk.load_magnet("u-magnet")
+    regular = mk.build_maps(mag, gaps=np.linspace(0.006, 0.016, 5), currents=CURRENTS,
+                            progress=False)
+    # as an old maps file on a grid that is not equidistant would load (build_maps refuses
+    # such grids now; load_maps does not check)
+    ds = regular.dataset.assign_coords(gap=[0.006, 0.008, 0.011, 0.013, 0.016])
+    maps = dataclasses.replace(regular, dataset=ds)
+    with pytest.raises(InputError, match="regular"):
+        mk.MagnetBank({"m": maps})
+    tables, spline = CurrentModel(maps), CurrentModel(maps, lookup="bspline")
+    runs = [m.simulate(np.linspace(0.0, 0.05, 51), gaps=0.010, voltages=25.0,
+                       initial_currents=20.0) for m in (tables, spline)]
+    assert np.array_equal(runs[0].currents_A, runs[1].currents_A)
+    st = tables.initial_state(gaps=0.010, currents=20.0)
+    st, out = tables.step(st, 1e-3, 25.0)
+    assert out.currents_A[0] == pytest.approx(runs[1].currents_A[1, 0], rel=1e-12)

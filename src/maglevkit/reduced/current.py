@@ -271,7 +271,8 @@ class CurrentModel:
         :meth:`simulate` in C.  ``"bspline"``: CasADi's B-spline interpolants evaluated
         per interval.  Where the tables cannot follow (a step leaves the maps, with
         ``extrapolate`` too, or is not finite) the call is redone on the B-spline path,
-        which raises or warns as before.  :meth:`linearize`, :attr:`ode` and
+        which raises or warns as before; maps on a grid that is not regular (or has fewer
+        than 4 points) stay on the B-splines.  :meth:`linearize`, :attr:`ode` and
         :attr:`outputs_fun` (AD, MPC), ``method="cvodes"``, ``eddy_modes > 0`` and
         ``motion_eddy=True`` always use the B-splines.
     compiled : {"auto", "always", "never"}
@@ -891,8 +892,14 @@ class CurrentModel:
         if self._bank is None:
             from .bank import MagnetBank  # the bank builds on this module
 
-            self._bank = MagnetBank({"magnet": self}, compiled=self.compiled,
-                                    max_step_s=self.max_step_s)
+            try:
+                self._bank = MagnetBank({"magnet": self}, compiled=self.compiled,
+                                        max_step_s=self.max_step_s)
+            except InputError:
+                # maps the cell tables cannot hold (a grid that is not regular, or shorter
+                # than 4 points): the B-splines take them, as before
+                self._use_tables = False
+                return None
         return self._bank
 
     def _run_tables(self, times: np.ndarray, s: np.ndarray, u: np.ndarray, sd: np.ndarray,
@@ -905,6 +912,8 @@ class CurrentModel:
         runs from ``t_k-1`` with the substitute gap ``s[k-1]``, its rate and ``u[k-1]``.
         """
         bank = self._table_bank()
+        if bank is None:
+            return None
         h = np.empty(times.size)
         h[0] = 0.0
         h[1:] = np.diff(times)
@@ -942,7 +951,10 @@ class CurrentModel:
             gd = _per_gap(gap_rates, self.gap_names, positive=False)
         call = self._table_steps.get(dt)
         if call is None:
-            call = _TableStep(self._table_bank().step_kernel(dt), self._avg, self._share)
+            bank = self._table_bank()
+            if bank is None:
+                return None
+            call = _TableStep(bank.step_kernel(dt), self._avg, self._share)
             if len(self._table_steps) > 16:
                 self._table_steps.clear()
             self._table_steps[dt] = call
