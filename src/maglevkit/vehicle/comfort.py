@@ -35,7 +35,6 @@ import math
 from typing import Any
 
 import numpy as np
-import scipy.signal
 
 from ..errors import InputError
 from ..validation import real_array, real_number
@@ -128,6 +127,8 @@ def iso2631_weighted_rms(acceleration: Any, sample_rate_Hz: float, *,
         f = np.fft.rfftfreq(a.size, 1.0 / fs)
         y = _weighted_fft(a, fs, np.abs(iso2631_wk(f)))
     elif method == "filter":
+        import scipy.signal  # lazily: 0.6 s to import, only this method needs it
+
         y = a
         for b, den in iso2631_wk_sections():
             bz, az = scipy.signal.bilinear(b, den, fs)
