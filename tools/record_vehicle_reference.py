@@ -13,6 +13,7 @@ precision, compressed: ~120 kB instead of ~640 kB for all steps).
 
 from __future__ import annotations
 
+import json
 import subprocess
 import sys
 from pathlib import Path
@@ -39,6 +40,10 @@ def main(path: str) -> None:
                                 text=True, check=True, cwd=Path(maglevkit.__file__).parent).stdout.strip()
     except (OSError, subprocess.CalledProcessError):
         commit = "unknown"
+    # the run's summaries (from every step, not only the stored ones), as JSON
+    ds.attrs["comfort"] = json.dumps(res.comfort)
+    ds.attrs["min_gap_m"] = json.dumps(res.min_gap_m)
+    ds.attrs["peak_current_A"] = json.dumps(res.peak_current_A)
     ds.attrs["recorded_by"] = f"tools/record_vehicle_reference.py at commit {commit}"
     enc = {v: {"zlib": True, "complevel": 9} for v in ds.data_vars}
     ds.to_netcdf(path, engine="netcdf4", encoding=enc)

@@ -175,19 +175,29 @@ class SpanSag(Profile):
     def _xi(self, position_m: Any) -> np.ndarray:
         return np.mod((_x(position_m) - self.origin_m) / self.span_length_m, 1.0)
 
-    def elevation_m(self, position_m: Any) -> np.ndarray:
-        xi = self._xi(position_m)
+    def _value(self, xi: np.ndarray) -> np.ndarray:
         if self.shape == "half_sine":
             return self.amplitude_m * np.sin(math.pi * xi)
-        return self.amplitude_m * 3.2 * (xi - 2 * xi ** 3 + xi ** 4)
+        return (self.amplitude_m * 3.2) * (xi * (1.0 + xi * xi * (xi - 2.0)))
+
+    def _slope(self, xi: np.ndarray) -> np.ndarray:
+        if self.shape == "half_sine":
+            return (self.amplitude_m * math.pi / self.span_length_m) * np.cos(math.pi * xi)
+        return (self.amplitude_m * 3.2 / self.span_length_m) * (1.0 + xi * xi * (4.0 * xi - 6.0))
+
+    def elevation_m(self, position_m: Any) -> np.ndarray:
+        return self._value(self._xi(position_m))
 
     def slope(self, position_m: Any) -> np.ndarray:
-        xi = self._xi(position_m)
-        if self.shape == "half_sine":
-            d = math.pi * np.cos(math.pi * xi)
-        else:
-            d = 3.2 * (1 - 6 * xi ** 2 + 4 * xi ** 3)
-        return self.amplitude_m * d / self.span_length_m
+        return self._slope(self._xi(position_m))
+
+    def on_paths(self, positions_m: np.ndarray, *, start_m: np.ndarray, step_m: float
+                 ) -> tuple[np.ndarray, np.ndarray]:
+        """:meth:`elevation_m` and :meth:`slope` at ``positions_m`` (the span coordinate
+        computed once for both)."""
+        x = np.asarray(positions_m, dtype=float)
+        xi = self._xi(x.ravel()).reshape(x.shape)
+        return self._value(xi), self._slope(xi)
 
 
 @dataclass(frozen=True, eq=False)
