@@ -70,3 +70,24 @@ def test_track_synthesis_equals_the_sums_on_each_path(monkeypatch: pytest.Monkey
     assert np.max(np.abs(r - r_ref)) <= 1e-12 * np.max(np.abs(r_ref))
     assert np.max(np.abs(rx - rx_ref)) <= 2e-12 * np.max(np.abs(rx_ref))
     assert prof.track_spacing_m() > step                 # one grid node per step here
+
+
+@pytest.mark.parametrize("offset", [1e-12, 1e-6])
+def test_track_synthesis_at_positions_rounded_off_the_paths(offset: float) -> None:
+    """Positions a little off ``start + k step`` (a run's ``x0 + v t`` rounds to ~1e-13 m
+    off them): within 1e-12 m plus their rounding the elevation is corrected by slope x offset,
+    further off they are evaluated where they are; either way the direct sums at the
+    positions themselves are reproduced."""
+    prof = parse_irregularity("random:0.3e-3:2", span_length_m=24.768)
+    start = 300.0 - np.linspace(0.0, 75.0, 40)
+    step = 0.12
+    x = start[None, :] + step * np.arange(2000)[:, None]
+    x = x + np.random.default_rng(3).uniform(-offset, offset, x.shape)
+    r, rx = prof.on_paths(x, start_m=start, step_m=step)
+    sub = x[::37]
+    ref = prof.elevation_m(sub.ravel()).reshape(sub.shape)
+    ref_x = prof.slope(sub.ravel()).reshape(sub.shape)
+    # uncorrected, the 1e-6 m offsets would be |r'| 1e-6 ~ 3e-10 m, 1e-6 of the largest
+    # elevation; the bounds are those of the exact paths
+    assert np.max(np.abs(r[::37] - ref)) <= 1e-12 * np.max(np.abs(ref))
+    assert np.max(np.abs(rx[::37] - ref_x)) <= 2e-12 * np.max(np.abs(ref_x))

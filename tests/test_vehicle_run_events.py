@@ -4,6 +4,7 @@ kept (item 3), progress lines off a terminal; the same in both loops and on the 
 from __future__ import annotations
 
 import dataclasses
+import pickle
 from pathlib import Path
 from typing import Any
 
@@ -90,6 +91,8 @@ def test_ctrl_c_keeps_the_run_up_to_there(model: VehicleModel, loop: str,
         model.run(**kw, progress=True)
     assert isinstance(err.value, KeyboardInterrupt)
     part = err.value.run
+    back = pickle.loads(pickle.dumps(err.value))       # e.g. from a sweep's worker process
+    assert back.run.dataset.sizes == part.dataset.sizes
     ds, ref = part.dataset, full.dataset
     n = ds.sizes["time"]
     assert 100 < n < ref.sizes["time"]

@@ -461,11 +461,12 @@ class RandomProfile(Profile):
         The remainder ``h^(2M) / (4^M (2M)!) max|r^(2M)|``, bounded by
         ``sum_k a_k Omega_k^(2M)``, is kept below :data:`TRACK_TOLERANCE` of the profile's
         RMS elevation (and of the RMS slope for the slope).  Cost: (track length /
-        spacing) x ``n_components`` x ``(M + 1)`` complex products instead of
-        ``n_steps x n_points x n_components x 2`` on the points' own paths; where that is
-        not cheaper (few points, very slow runs), for positions not on such paths and for
-        ``step_m <= 0``, the sums are taken on the paths themselves
-        (:meth:`_on_paths_phasors`).
+        spacing) x ``n_components`` x ``(M + 1)`` products instead of
+        ``n_steps x n_points x n_components x 2`` complex ones on the points' own paths;
+        where that is not cheaper (few points, very slow runs) and for ``step_m <= 0``,
+        the sums are taken on the paths themselves (:meth:`_on_paths_phasors`); positions
+        further off ``start_m + k step_m`` than their rounding are evaluated where they are
+        (:meth:`elevation_m`, :meth:`slope`).
         """
         x = np.asarray(positions_m, dtype=float)
         start = np.asarray(start_m, dtype=float).ravel()
@@ -486,10 +487,13 @@ class RandomProfile(Profile):
         u = (start - g0) / hg if step > 0 else np.zeros(n_pts)
         i0 = np.floor(u).astype(np.int64)
         n_grid = int(i0.max()) + q * (n_steps - 1) + 2
-        k = np.arange(n_steps, dtype=float)[:, None]
-        on_path = np.max(np.abs(x - (start[None, :] + k * step)), initial=0.0) <= \
-            1e-9 * (1.0 + float(np.max(np.abs(x))))
-        if not (step > 0 and on_path and n_grid * (m + 1) < 2 * x.size):
+        # the positions' rounding off the ideal paths (~1e-13 m from ``x0 + v t``) is
+        # corrected to first order in the elevation below; positions further off are not
+        # such paths: evaluated where they are
+        delta = x - (start[None, :] + np.arange(n_steps, dtype=float)[:, None] * step)
+        if float(np.max(np.abs(delta), initial=0.0)) > _on_path_tolerance_m(x):
+            return super().on_paths(x, start_m=start_m, step_m=step_m)
+        if not (step > 0 and n_grid * (m + 1) < 2 * x.size):
             return self._on_paths_phasors(x, start, step)
         cols = self._track_table(g0, hg, n_grid, m + 1)           # h^p r^(p), p = 0..m
         t = np.clip(u - i0, 0.0, 1.0)
@@ -502,6 +506,7 @@ class RandomProfile(Profile):
             b = cols[i0[j] + 1:i0[j] + 1 + stop:q]
             r[:, j] = a[:, :m] @ w[j, :m] + b[:, :m] @ w[j, m:]
             rx[:, j] = (a[:, 1:] @ w[j, :m] + b[:, 1:] @ w[j, m:]) / hg
+        r += rx * delta             # first order; the slope's r'' delta is < 1e-11 r''
         return r, rx
 
     def track_spacing_m(self) -> float:
@@ -572,6 +577,15 @@ class RandomProfile(Profile):
 TRACK_HERMITE_ORDER = 6
 """Conditions at each grid node (the value and 5 derivatives) of the Hermite interpolation
 of :meth:`RandomProfile.on_paths` (degree 11)."""
+
+def _on_path_tolerance_m(x: np.ndarray) -> float:
+    """How far [m] positions may be from ``start_m + k step_m`` for
+    :meth:`RandomProfile.on_paths` to take them as on those paths: 1e-12 m plus 16 units
+    of rounding of the largest position (a run's ``x0 + v t`` is a few units off them,
+    1e-13 m at 400 m, 1.5e-11 m at 33 km); the elevation is corrected by
+    ``slope x offset``, the slope's error ``r'' offset`` stays below the phases' own
+    rounding ``|Omega x| eps``."""
+    return 1e-12 + 16.0 * float(np.finfo(float).eps) * float(np.max(np.abs(x), initial=0.0))
 
 TRACK_TOLERANCE = 1e-13
 """Bound of the interpolation error of :meth:`RandomProfile.on_paths`, relative to the

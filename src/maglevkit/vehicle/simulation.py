@@ -1081,6 +1081,9 @@ class VehicleRunInterrupted(KeyboardInterrupt):
         super().__init__(run.dataset.attrs.get("interrupted", "interrupted"))
         self.run = run
 
+    def __reduce__(self) -> tuple[Any, tuple[VehicleRun]]:
+        return (type(self), (self.run,))      # picklable (e.g. from a worker process)
+
 
 def run_vehicle(train: TrainData, *, speed_m_per_s: float, duration_s: float, dt_s: float = 1e-3,
                 rigid: bool = False, irregularity: Any = None, failures: Sequence[Failure] = (),
