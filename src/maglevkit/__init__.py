@@ -1,6 +1,11 @@
 """maglevkit: electromagnet models of EMS maglev vehicles (Transrapid type).
 
-Layers (data flows one way): ``materials`` -> ``circuit`` -> ``magnets`` -> ``models``.
+Layers (data flows one way; a module imports only from layers below it, checked by
+import-linter's ``layers`` contract in ``pyproject.toml`` and ``tests/test_layers.py``):
+``errors``, ``validation``, ... -> ``materials`` -> ``circuit`` -> ``magnets`` -> ``models``
+(statics, flux DAE) -> ``reduction`` (maps) -> reduced circuits -> ``simulation``
+(:func:`simulate` for every model) -> ``plant`` -> ``control`` -> ``vehicle`` ->
+``export``, ``sweep``, ``compare``, ``figures`` -> ``cli``.
 
 The public names are loaded on first use (PEP 562 module ``__getattr__``), so ``import
 maglevkit`` (and every ``maglevkit`` command-line call) does not pay for CasADi, SciPy and
@@ -12,6 +17,7 @@ from __future__ import annotations
 import importlib
 from typing import TYPE_CHECKING, Any
 
+from ._version import __version__
 from .errors import (
     InputError,
     MaglevkitError,
@@ -76,11 +82,11 @@ if TYPE_CHECKING:  # the eager imports, for type checkers and IDEs
         load_scenario,
         magnetic_energy,
         pole_force_eq6,
-        simulate,
         solve_statics,
         voltage_step_response,
     )
     from .reduction import CharacteristicMaps, build_maps, load_maps
+    from .simulation import simulate
 
 _LAZY: dict[str, str] = {
     "AirGap": ".circuit",
@@ -125,7 +131,7 @@ _LAZY: dict[str, str] = {
     "load_scenario": ".models",
     "magnetic_energy": ".models",
     "pole_force_eq6": ".models",
-    "simulate": ".models",
+    "simulate": ".simulation",
     "solve_statics": ".models",
     "voltage_step_response": ".models",
     "CharacteristicMaps": ".reduction",
@@ -134,9 +140,9 @@ _LAZY: dict[str, str] = {
 }
 """Public name -> the submodule that defines it (imported on first access)."""
 
-_SUBPACKAGES = frozenset({"circuit", "cli", "compare", "control", "errors", "figures", "magnets",
-                          "materials", "models", "plotting", "reduction", "validation",
-                          "vehicle"})
+_SUBPACKAGES = frozenset({"circuit", "cli", "compare", "control", "errors", "export", "figures",
+                          "magnets", "materials", "models", "plant", "plotting", "reduction",
+                          "simulation", "sweep", "validation", "vehicle"})
 
 
 # Hidden from type checkers, which see the imports above: a typo such as
@@ -157,8 +163,6 @@ if not TYPE_CHECKING:
     def __dir__() -> list[str]:
         return sorted(set(globals()) | set(__all__) | _SUBPACKAGES)
 
-
-__version__ = "0.1.0"
 
 __all__ = [
     "AirGap",

@@ -62,7 +62,9 @@ def read_parameter_file(source: str | os.PathLike[str], *, what: str, folder: st
         file path.
     what : str
         The kind of file, for messages ("magnet", "guideway", ...).
-    folder, table : see :func:`bundled_files`.
+    folder, table : str
+        Where bundled files of this kind live and the table they must have (see
+        :func:`bundled_files`).
 
     Returns
     -------
@@ -105,6 +107,21 @@ def parse_provenance(parameters: Mapping[str, Any], tables: Collection[str],
 
     Every entry must name a value of one of ``tables`` present in ``parameters`` and
     carry a string; otherwise :class:`~maglevkit.errors.ParameterFileError`.
+
+    Parameters
+    ----------
+    parameters : mapping
+        The parsed file; its optional ``provenance`` table is read.
+    tables : collection of str
+        Tables whose values may carry a provenance tag (each must be present in
+        ``parameters``: a missing one raises ``KeyError``).
+    source : str
+        File label for error messages.
+
+    Returns
+    -------
+    dict of str to str
+        ``"table.key" -> tag``.
     """
     raw = parameters.get("provenance", {})
     if not isinstance(raw, Mapping):

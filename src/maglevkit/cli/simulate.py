@@ -84,7 +84,7 @@ def simulate(
     records (quantity, unit, start, end, max).
     """
     from ..models.flux import FluxModel
-    from ..models.flux import simulate as run_simulation
+    from ..models.flux import simulate_flux as run_simulation
     from ..models.scenario import load_scenario
 
     output_file(csv_path, "--csv")

@@ -23,7 +23,7 @@ import numpy as np
 
 from ..errors import InputError, SolverError
 from ..validation import real_number, whole_number
-from .flux import FluxModel, SimulationResult, check_options, simulate
+from .flux import FluxModel, SimulationResult, check_options, simulate_flux
 from .statics import solve_statics
 
 __all__ = ["InductanceEstimate", "voltage_step_response", "differential_inductance_from_step"]
@@ -32,7 +32,7 @@ __all__ = ["InductanceEstimate", "voltage_step_response", "differential_inductan
 def _model(model: Any, options: dict[str, Any]) -> FluxModel:
     check_options(options, "the step experiment")
     if isinstance(model, FluxModel):
-        return FluxModel(model, **{**model._options, **options}) if options else model
+        return model.with_options(**options) if options else model
     return FluxModel(model, **options)
 
 
@@ -46,8 +46,10 @@ def voltage_step_response(model: Any, *, gap: Any, voltage: Any, initial_current
     Parameters
     ----------
     model : FluxModel, Magnet or Network
+        The magnet model (a Magnet or Network is wrapped in a :class:`FluxModel` with
+        ``options``; a FluxModel's own options are overridden by ``options``).
     gap : float, sequence or mapping
-        Fixed gap(s) [m].
+        Fixed gap(s) [m], > 0.
     voltage : float, sequence or mapping
         Voltage(s) after the step [V].
     initial_current : float, sequence or mapping
@@ -59,7 +61,7 @@ def voltage_step_response(model: Any, *, gap: Any, voltage: Any, initial_current
     """
     fm = _model(model, options)
     st = fm.initial_state(gaps=gap, currents=initial_current)
-    return simulate(fm, (0.0, duration), dt=dt, gaps=st.gaps_m, voltages=voltage,
+    return simulate_flux(fm, (0.0, duration), dt=dt, gaps=st.gaps_m, voltages=voltage,
                     initial_state=st)
 
 
@@ -112,9 +114,44 @@ def differential_inductance_from_step(model: Any, *, gap: float, current: float,
     The time window (``n_tau`` time constants, ``samples_per_tau`` samples each) is
     sized with the statics' ``dpsi/dI``; that estimate is not used in the result.
 
+    Parameters
+    ----------
+    model : FluxModel, Magnet or Network
+        The magnet model (a Magnet or Network is wrapped in a :class:`FluxModel`).
+    gap : float
+        Gap of every pole [m], > 0 (keyword only, like all that follow).
+    current : float
+        Operating current of every circuit [A] before the step.
+    relative_step : float, default 1e-3
+        Size of the final current change relative to ``max(|I|, 1 A)`` [-], in
+        (0, 0.1): small enough for the response to be linear.
+    circuit : int, default 0
+        Index of the circuit whose voltage steps, ``0 .. n_circuits - 1``.
+    samples_per_tau : int, default 200
+        Output samples per estimated time constant (whole number >= 1).
+    n_tau : float, default 6.0
+        Length of the simulated window in estimated time constants, > 0.
+    rtol, atol : float, default 1e-9 and 1e-11
+        Integrator tolerances of the flux model [-] (``atol`` relative to the model's
+        nominal scales, see :class:`FluxModel`); tighter than the FluxModel defaults,
+        because the step is small.
+    **options
+        Further FluxModel options (``saturation``, ``eddy_currents``, ...).
+
     Returns
     -------
     InductanceEstimate
+
+    Raises
+    ------
+    InputError
+        ``relative_step`` outside (0, 0.1), ``samples_per_tau`` not a whole number
+        >= 1, ``n_tau`` not > 0, ``circuit`` not an index of a circuit, unknown
+        options or bad gap or current.
+    SolverError
+        Fewer than 10 samples between 2 % and 98 % of the step (window too short or
+        too coarse), a response that is not a decaying exponential, or a failed
+        simulation.
     """
     if not 0.0 < real_number(relative_step, "relative_step") < 0.1:
         raise InputError(f"relative_step = {relative_step!r} must lie in (0, 0.1)")
@@ -135,7 +172,7 @@ def differential_inductance_from_step(model: Any, *, gap: float, current: float,
     U = R * st.currents_A
     U[circuit] += r_par * di_inf
     dt = tau_est / samples_per_tau
-    res = simulate(fm, (0.0, n_tau * tau_est), dt=dt, gaps=st.gaps_m, voltages=U,
+    res = simulate_flux(fm, (0.0, n_tau * tau_est), dt=dt, gaps=st.gaps_m, voltages=U,
                    initial_state=st)
     di = res.currents_A[:, circuit] - st.currents_A[circuit]
     remaining = di_inf - di

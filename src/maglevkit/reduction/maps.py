@@ -8,7 +8,10 @@ maps hold (all gaps equal to ``s``, every circuit carrying ``I`` -- symmetric op
 * ``dL_ds_H_per_m``: ``dL_j/ds(s, I) = (sum_{k in j} dpsi_j/ds_k) / I`` (the circuit's own
   poles move together; at ``I = 0`` the limit ``d L~_j(s, 0)/ds``);
 * ``flux_linkage_Wb`` and the apparent inductance ``L = psi/I``;
-* ``resistance_ohm`` ``R_el`` and ``eddy_resistance_ohm`` ``R_ec`` per circuit.
+* ``resistance_ohm`` ``R_el`` and ``eddy_resistance_ohm`` ``R_ec`` per circuit;
+* the identified eddy extensions of the current model: ``eddy_network_*`` (RL branches,
+  :mod:`~maglevkit.reduction.eddy_network`) and ``motion_eddy_*`` (the shielded-gap ladder,
+  :mod:`~maglevkit.reduction.motion_eddy`).
 
 A pole ``k`` belongs to the circuit whose flux linkage depends most on its gap
 (``argmax_j |dpsi_j/ds_k|`` at the grid centre), which recovers the half magnets of a
@@ -41,6 +44,7 @@ from ..errors import InputError, ParameterFileError, SolverError
 from ..models.statics import as_network, circuit_pole_groups, solve_statics
 from ..validation import real_array
 from .eddy_network import EDDY_NETWORK_MODES, EddyNetworkFit, fit_eddy_network
+from .motion_eddy import detailed_frequency_response, fit_motion_eddy
 from .parameters import eddy_resistance
 from .transient import transient_point
 
@@ -56,7 +60,7 @@ REQUIRED_VARIABLES = ("force_N", "inductance_H", "dL_ds_H_per_m", "resistance_oh
 
 
 def _version() -> str:
-    from .. import __version__
+    from .._version import __version__
 
     return __version__
 
@@ -340,9 +344,9 @@ class _StepRun:
         import casadi as ca
 
         from ..circuit.assembly import assemble
-        from ..models.flux import _dae
+        from ..models.flux import flux_dae
 
-        d = _dae(net, "idas", _FIT_RTOL, _FIT_ATOL, 20000, 2, 3)
+        d = flux_dae(net, "idas", _FIT_RTOL, _FIT_ATOL, 20000, 2, 3)
         eq = assemble(net)
         y = ca.SX.sym("y", d.n_diff)
         U = ca.SX.sym("U", d.n_circuits)
@@ -367,10 +371,10 @@ class _StepRun:
 
 def _step_run(net: Network, n_out: int) -> _StepRun:
     key = ("reduction_step_fit", n_out)
-    run = net._cache.get(key)
+    run = net.cache.get(key)
     if run is None:
         run = _StepRun(net, n_out)
-        net._cache[key] = run
+        net.cache[key] = run
     return run  # type: ignore[no-any-return]
 
 
@@ -452,10 +456,10 @@ def _eddy_network_steps(net: Network, gap: float, current: float
     s0 = np.asarray(sol.gaps_m, dtype=float).ravel()
     R = net.resistances
     key = ("reduction_step_network", _NET_LOG_SAMPLES, _NET_LIN_SAMPLES)
-    run = net._cache.get(key)
+    run = net.cache.get(key)
     if run is None:
         run = _StepRun(net, 0, tau=_network_grid())
-        net._cache[key] = run
+        net.cache[key] = run
     ltilde = np.array([float(sol.differential_inductance_H[j, j]) for j in range(nc)])
     times, responses = [], []
     for j in range(nc):
@@ -561,6 +565,41 @@ def _store_eddy_network(ds: Any, net: Network, gap: float, current: float,
                        "L~/R_el), relative to the step's final value"})
 
 
+def _store_motion_eddy(ds: Any, net: Network, gap: float, current: float,
+                       r_ec_fit: np.ndarray, groups: dict[str, tuple[str, ...]]) -> None:
+    """Add the ``motion_eddy_*`` variables: the shielded-gap ladder of
+    :mod:`maglevkit.reduction.motion_eddy` (docs/reduction.md, "Gap motion")."""
+    nc = len(net.circuits)
+    r_a = np.full(nc, np.nan)
+    l_u = np.full(nc, np.nan)
+    r_2 = np.full(nc, np.nan)
+    rms = np.full(nc, np.nan)
+    if net.has_eddy_currents:
+        responses = detailed_frequency_response(net, gap=gap, current=current, groups=groups)
+        r_jump = eddy_resistance(net, gap=gap, current=current)
+        for j, resp in enumerate(responses):
+            fit = fit_motion_eddy(resp, r_el=float(net.resistances[j]),
+                                  r_ec_jump=float(r_jump[j]), r_ec_fit=float(r_ec_fit[j]))
+            r_a[j], l_u[j] = fit.jump_resistance_ohm, fit.unshielded_inductance_H
+            r_2[j], rms[j] = fit.shielding_resistance_ohm, fit.rms_residual
+    where = (f"fitted to the detailed model's small-signal gap -> current and voltage -> "
+             f"current responses (0.1 Hz - 1 kHz) at s = {gap!r} m, I = {current!r} A; NaN: "
+             "no eddy currents")
+    ds["motion_eddy_jump_resistance_ohm"] = ("circuit", r_a, {
+        "units": "ohm", "long_name": "shunt R_a of the shielded-gap ladder (current jump)",
+        "description": where})
+    ds["motion_eddy_unshielded_inductance_H"] = ("circuit", l_u, {
+        "units": "H", "long_name": "unshielded series inductance L_u of the shielded-gap "
+                                   "ladder", "description": where})
+    ds["motion_eddy_shielding_resistance_ohm"] = ("circuit", r_2, {
+        "units": "ohm", "long_name": "shielding eddy resistance R_2 of the gap section",
+        "description": where})
+    ds["motion_eddy_fit_rms"] = ("circuit", rms, {
+        "units": "1", "long_name": "RMS relative residual of the shielded-gap ladder's fit",
+        "description": "over both responses and 60 frequencies, each relative to the "
+                       "detailed response's modulus"})
+
+
 def build_maps(model: Any, *, gaps: Any, currents: Any, executor: Any = "auto",
                progress: bool = True, method: str = "statics",
                eddy_reference: Any = None) -> CharacteristicMaps:
@@ -603,9 +642,10 @@ def build_maps(model: Any, *, gaps: Any, currents: Any, executor: Any = "auto",
         the step response implies (its slow mode; see docs/reduction.md).
 
     eddy_reference : (gap_m, current_A) or None
-        Where the step-response identifications (``eddy_resistance_fit_ohm`` and the eddy
-        network ``eddy_network_*``) run: a point inside the grid, e.g. the operating point
-        of the scenarios the current model will run.  None (default): the maps' reference
+        Where the step-response identifications (``eddy_resistance_fit_ohm``, the eddy
+        network ``eddy_network_*`` and the shielded-gap ladder ``motion_eddy_*``) run: a
+        point inside the grid, e.g. the operating point of the scenarios the current model
+        will run.  None (default): the maps' reference
         point, the grid centre gap and ``max(I_mid, I_max/2)`` (docs/reduction.md, "More
         eddy modes": the identification point matters).
 
@@ -704,6 +744,8 @@ def build_maps(model: Any, *, gaps: Any, currents: Any, executor: Any = "auto",
                        "current-based model uses it by default (docs/decisions.md)"})
     _store_eddy_network(ds, net, eddy_gap, eddy_current,
                         np.asarray(ds["eddy_resistance_fit_ohm"].values, dtype=float))
+    _store_motion_eddy(ds, net, eddy_gap, eddy_current,
+                       np.asarray(ds["eddy_resistance_fit_ohm"].values, dtype=float), groups)
     magnet_name = getattr(model, "name", net.name)
     params = getattr(model, "parameters", None)
     ds.attrs.update({

@@ -1,6 +1,7 @@
 """Mechanical models the magnets are coupled to, and what a vehicle run is judged by.
 
-* :mod:`~maglevkit.vehicle.heave`: a rigid heave mass under one magnet (gap-control studies).
+* :mod:`maglevkit.plant` (re-exported here): a rigid heave mass under one magnet and gravity
+  (gap-control studies; below :mod:`maglevkit.control`, which uses it).
 * :mod:`~maglevkit.vehicle.guideway`: simply supported Euler-Bernoulli spans in modal form,
   chained into a periodically pillared guideway with a moving system boundary.
 * :mod:`~maglevkit.vehicle.irregularities`: deterministic and random guideway irregularities.
@@ -14,6 +15,7 @@
 
 from __future__ import annotations
 
+from ..plant import STANDARD_GRAVITY, HeaveMass, HeaveState
 from .comfort import (
     iso2631_weighted_rms,
     iso2631_wk,
@@ -22,7 +24,6 @@ from .comfort import (
 )
 from .data import GuidewayData, load_guideway
 from .guideway import BeamSpan, Guideway, GuidewayDeflection, GuidewayState
-from .heave import STANDARD_GRAVITY, HeaveMass, HeaveState
 from .irregularities import (
     GermanTrackPSD,
     HarmonicProfile,

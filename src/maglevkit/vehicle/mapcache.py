@@ -26,7 +26,25 @@ VEHICLE_MAP_CURRENTS_A = np.linspace(0.0, 100.0, 51)
 
 def maps_path(magnet: Any, gaps: np.ndarray, currents: np.ndarray,
               cache_dir: str | Path | None = None) -> Path:
-    """Where the maps of ``magnet`` on this grid are cached."""
+    """Where the maps of ``magnet`` on this grid are cached.
+
+    Parameters
+    ----------
+    magnet : Magnet
+        The magnet (its name and network hash name the file).
+    gaps : ndarray
+        Gap grid [m] (float array; its bytes are hashed).
+    currents : ndarray
+        Current grid [A] (float array).
+    cache_dir : str or Path, optional
+        Directory of the cached files (default: ``<cache>/vehicle-maps``, see the module
+        docstring).  Not created here.
+
+    Returns
+    -------
+    Path
+        ``<dir>/<magnet name>-<network hash>-<grid hash>.nc``.
+    """
     from ..models.compiled import cache_directory
     from ..reduction.maps import network_hash
 
@@ -43,6 +61,7 @@ def vehicle_maps(magnet: Any, *, cache_dir: str | Path | None = None,
     Parameters
     ----------
     magnet : Magnet
+        The magnet whose maps are wanted.
     cache_dir : path, optional
         Directory of the cached netCDF files (default: the user's cache, see module doc).
     gaps, currents : array_like, optional
@@ -53,6 +72,8 @@ def vehicle_maps(magnet: Any, *, cache_dir: str | Path | None = None,
     Returns
     -------
     CharacteristicMaps
+        Read from the cache (checked against the magnet), or built and then written
+        there (atomically, creating the directory).
     """
     from ..reduction.maps import build_maps, load_maps
 

@@ -40,7 +40,7 @@ from typing import Any
 import numpy as np
 
 from ..errors import InputError
-from .heave import STANDARD_GRAVITY
+from ..plant import STANDARD_GRAVITY
 from .train import TrainData
 
 __all__ = ["VehicleMechanics", "ForceElement", "derive_sympy"]
@@ -53,6 +53,20 @@ class ForceElement:
     Its compression is ``Delta = u_a(xi_a) - u_b(xi_b)`` (``a`` above ``b``: the car body
     above a frame, or the front car body's rear end above the next one's front end);
     force ``k Delta + c Delta'`` pushes ``a`` up and ``b`` down.
+
+    Parameters
+    ----------
+    name : str
+        Label, e.g. ``"spring1.2"`` or ``"joint1"``.
+    body_a, body_b : int
+        Body indices (car bodies first, then frames; see
+        :attr:`VehicleMechanics.body_names`).
+    xi_a_m, xi_b_m : float
+        Train coordinates of the attachment points [m] (distance behind the nose).
+    stiffness_N_per_m : float
+        Vertical stiffness k [N/m].
+    damping_N_s_per_m : float
+        Vertical damping c [N s/m].
     """
 
     name: str
@@ -70,17 +84,31 @@ class VehicleMechanics:
     Parameters
     ----------
     train : TrainData
+        Masses, inertias, positions, air springs and joints of the train
+        (from :func:`~maglevkit.vehicle.load_vehicle`).
     force_points_m : sequence of float
-        Train coordinates ``xi`` [m] where magnet forces act (circuit centres or poles).
+        Train coordinates ``xi`` [m] where magnet forces act (circuit centres or poles);
+        finite, one per force point.
     force_frames : sequence of int
-        Frame index (0-based, nose first) carrying each force point.
+        Frame index (0-based, nose first) carrying each force point, in
+        ``0 .. n_frames - 1``.
+    gravity : float, default STANDARD_GRAVITY
+        Gravitational acceleration g [m/s^2] (9.80665; not checked; keyword only).
+
+    Raises
+    ------
+    InputError
+        ``train`` not a :class:`TrainData`, points and frames of different lengths or
+        non-finite points, or a frame index out of range.
 
     Attributes
     ----------
     body_names : tuple of str
         ``"car1" ... , "frame1" ...`` (car bodies first, then frames).
     body_centres_m, body_mass_kg, body_inertia_kg_m2 : ndarray (n_bodies,)
+        Centre of mass ``xi_b`` [m], mass [kg] and pitch inertia [kg m^2] of each body.
     elements : tuple of ForceElement
+        Air springs (every frame, nose first) then the inter-car joints.
     M, C, K : ndarray (n_dof, n_dof)
         Mass [kg, kg m^2], damping and stiffness matrices.
     Q_gravity : ndarray (n_dof,)
@@ -133,7 +161,20 @@ class VehicleMechanics:
 
     # ------------------------------------------------------------------ assembly
     def point_jacobian(self, body: int, xi_m: Any) -> np.ndarray:
-        """``d u(xi) / dq`` of body points (small angles): (n_points, n_dof)."""
+        """``d u(xi) / dq`` of body points (small angles): (n_points, n_dof).
+
+        Parameters
+        ----------
+        body : int
+            Body index (car bodies first, then frames).
+        xi_m : float or array_like
+            Train coordinates of the points [m] (distance behind the nose; not checked).
+
+        Returns
+        -------
+        ndarray (n_points, n_dof)
+            1 in the body's heave column, ``xi - xi_b`` [m] in its pitch column.
+        """
         x = np.atleast_1d(np.asarray(xi_m, dtype=float))
         jac = np.zeros((x.size, self.n_dof))
         jac[:, 2 * body] = 1.0
@@ -164,12 +205,38 @@ class VehicleMechanics:
         return tuple(f"{b}.{c}" for b in self.body_names for c in ("z", "theta"))
 
     def element_compressions(self, q: np.ndarray) -> np.ndarray:
-        """Compression ``Delta_e`` of every force element [m] (axis -1 over elements)."""
+        """Compression ``Delta_e`` of every force element [m] (axis -1 over elements).
+
+        Parameters
+        ----------
+        q : array_like (..., n_dof)
+            Generalised displacements ``[z_1, theta_1, ...]`` [m, rad].
+
+        Returns
+        -------
+        ndarray (..., n_elements)
+            Compressions [m], in the order of :attr:`elements`.
+        """
         return np.asarray(q) @ self._element_g.T
 
     def energy_J(self, q: np.ndarray, q_dot: np.ndarray) -> np.ndarray:
         """Kinetic energy plus spring energy, ``sum m z'^2/2 + J theta'^2/2 + sum k Delta^2/2``,
-        from the bodies and elements one by one (not from ``K``) [J]."""
+        from the bodies and elements one by one (not from ``K``) [J].
+
+        Gravity's potential is not included.
+
+        Parameters
+        ----------
+        q : array_like (..., n_dof)
+            Generalised displacements [m, rad].
+        q_dot : array_like (..., n_dof)
+            Generalised velocities [m/s, rad/s].
+
+        Returns
+        -------
+        ndarray (...)
+            Energy [J].
+        """
         q, qd = np.asarray(q), np.asarray(q_dot)
         kin = 0.5 * (qd[..., 0::2] ** 2 @ self.body_mass_kg + qd[..., 1::2] ** 2
                      @ self.body_inertia_kg_m2)
@@ -177,7 +244,18 @@ class VehicleMechanics:
         return kin + 0.5 * (self.element_compressions(q) ** 2 @ k)
 
     def state_matrices(self, *, damping: bool = True) -> tuple[np.ndarray, np.ndarray]:
-        """``x' = A x + Bq Q`` with ``x = [q; q']`` and generalised forces ``Q`` (n_dof)."""
+        """``x' = A x + Bq Q`` with ``x = [q; q']`` and generalised forces ``Q`` (n_dof).
+
+        Parameters
+        ----------
+        damping : bool, default True
+            Include the dampers (``-M^-1 C`` block); False: the undamped system.
+
+        Returns
+        -------
+        (A, Bq) : ndarray (2 n_dof, 2 n_dof) and (2 n_dof, n_dof)
+            ``Q`` in [N] (heave rows) and [N m] (pitch rows).
+        """
         n = self.n_dof
         minv = np.diag(1.0 / np.diag(self.M))
         a = np.zeros((2 * n, 2 * n))
@@ -191,7 +269,24 @@ class VehicleMechanics:
 
     def discretize(self, dt_s: float, *, damping: bool = True) -> tuple[np.ndarray, np.ndarray]:
         """Exact zero-order-hold discretisation ``x+ = Ad x + Bd Q`` for forces held over
-        ``dt_s`` (matrix exponential of ``[[A, Bq], [0, 0]] dt``)."""
+        ``dt_s`` (matrix exponential of ``[[A, Bq], [0, 0]] dt``).
+
+        Parameters
+        ----------
+        dt_s : float
+            Step [s], finite and > 0.
+        damping : bool, default True
+            Include the dampers (as :meth:`state_matrices`).
+
+        Returns
+        -------
+        (Ad, Bd) : ndarray (2 n_dof, 2 n_dof) and (2 n_dof, n_dof)
+
+        Raises
+        ------
+        InputError
+            ``dt_s`` not a finite number > 0 (a Python or NumPy float or int).
+        """
         if not (isinstance(dt_s, (int, float)) and np.isfinite(dt_s) and dt_s > 0):
             raise InputError(f"dt_s = {dt_s!r} must be a finite number > 0")
         a, bq = self.state_matrices(damping=damping)
@@ -205,7 +300,22 @@ class VehicleMechanics:
         return e[:n2, :n2].copy(), e[:n2, n2:].copy()
 
     def accelerations(self, q: np.ndarray, q_dot: np.ndarray, forces_N: np.ndarray) -> np.ndarray:
-        """``q''`` from the equations of motion (forces: upward magnet forces per point)."""
+        """``q''`` from the equations of motion (forces: upward magnet forces per point).
+
+        Parameters
+        ----------
+        q : array_like (..., n_dof)
+            Generalised displacements [m, rad].
+        q_dot : array_like (..., n_dof)
+            Generalised velocities [m/s, rad/s].
+        forces_N : array_like (..., n_points)
+            Upward (attractive) magnet force at each force point [N].
+
+        Returns
+        -------
+        ndarray (..., n_dof)
+            ``q''`` [m/s^2, rad/s^2] (heave positive downward).  Inputs are not checked.
+        """
         rhs = (self.Q_gravity - np.asarray(q) @ self.K.T - np.asarray(q_dot) @ self.C.T
                - np.asarray(forces_N) @ self.B.T)
         return rhs / np.diag(self.M)
@@ -232,6 +342,13 @@ class VehicleMechanics:
         least-squares distribution ``min sum F_p^2 / w_p`` subject to the frame's force and
         moment balance, with weights ``w_p`` (the number of poles a point stands for, so
         that equal poles carry equal forces).
+
+        Parameters
+        ----------
+        pole_weights : array_like (n_points,)
+            Weight ``w_p`` [-] of each force point, > 0 (not checked).  Every frame needs
+            at least two force points at different positions, or the balance is singular
+            (``numpy.linalg.LinAlgError``).
 
         Returns
         -------
@@ -260,6 +377,12 @@ def derive_sympy(mech: VehicleMechanics) -> dict[str, np.ndarray]:
     frame, exact rotation about the pitch axis), ``V = sum k Delta^2/2`` with the exact
     vertical displacement of the attachment points, gravity, dampers and magnet forces as
     point forces; then linearised at ``q = q' = 0``.
+
+    Parameters
+    ----------
+    mech : VehicleMechanics
+        The model whose bodies, elements and force points are rederived (slow for many
+        bodies: symbolic differentiation).
 
     Returns
     -------

@@ -1,4 +1,8 @@
-"""Characteristic numbers of a magnet from its statics: saturation knee and circuit coupling."""
+"""Characteristic numbers of a magnet from its statics: saturation knee and circuit coupling.
+
+(In :mod:`maglevkit.models`, not :mod:`maglevkit.magnets`: they solve the statics, which
+sit a layer above the magnets.)
+"""
 
 from __future__ import annotations
 
@@ -7,8 +11,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import InputError
-from ..models.statics import solve_statics
-from .base import Magnet
+from ..magnets.base import Magnet
+from .statics import solve_statics
 
 __all__ = ["saturation_knee", "coupling_ratios", "nominal_point", "force_exponent", "Coupling",
            "KNEE_EXPONENT"]
@@ -20,6 +24,16 @@ KNEE_EXPONENT = 1.8
 
 def nominal_point(magnet: Magnet) -> tuple[float, float]:
     """``(nominal_gap [m], nominal_current [A])`` from the file's ``[operating]`` table.
+
+    Parameters
+    ----------
+    magnet : Magnet
+        A magnet loaded from a parameter file.
+
+    Returns
+    -------
+    (gap_m, current_A) : tuple of float
+        Nominal gap [m] and nominal current [A].
 
     Raises
     ------
@@ -37,6 +51,27 @@ def force_exponent(magnet: Magnet, *, gap: float, currents: np.ndarray) -> np.nd
     """Local exponent ``n = d ln F / d ln I = I (dF/dI) / F`` of the total force.
 
     Every circuit carries the same current; exact ``dF/dI`` from the statics.
+
+    Parameters
+    ----------
+    magnet : Magnet
+        The magnet (or network; anything :func:`~maglevkit.models.solve_statics` takes).
+    gap : float
+        Gap of every pole [m], > 0 (keyword only).
+    currents : array_like (n,)
+        Currents [A], each > 0, applied to every circuit at once (keyword only).
+
+    Returns
+    -------
+    ndarray (n,)
+        ``n`` [-] at each current: 2 for an unsaturated magnet, falling with saturation.
+
+    Raises
+    ------
+    InputError
+        A current <= 0, or a bad gap (from the statics).
+    SolverError
+        If the statics cannot be solved.
     """
     cur = np.asarray(currents, dtype=float)
     if np.any(cur <= 0.0):
@@ -62,7 +97,13 @@ def saturation_knee(magnet: Magnet, *, gap: float | None = None,
     max_current : float, optional
         Upper end of the scan [A]; default 4 x the nominal current.
     points : int
-        Scan resolution; the crossing is interpolated linearly.
+        Scan resolution (currents ``max_current / points ... max_current``); the crossing
+        is interpolated linearly.
+
+    Returns
+    -------
+    float
+        I0 [A].
 
     Raises
     ------
@@ -95,6 +136,8 @@ class Coupling:
 
     Attributes
     ----------
+    circuit_names : tuple of str
+        The circuits, in the order of the matrix rows and columns.
     inductance_H : ndarray (n_circuits, n_circuits)
         ``dpsi_i / dI_j`` [H].
     ratio : ndarray (n_circuits, n_circuits)
@@ -118,6 +161,27 @@ def coupling_ratios(magnet: Magnet, *, gap: float | None = None,
     """Mutual/self differential-inductance ratios of the circuits (statics, uniform gap).
 
     Defaults: nominal gap and current of the parameter file.
+
+    Parameters
+    ----------
+    magnet : Magnet
+        The magnet.
+    gap : float, optional
+        Gap of every pole [m], > 0; default the nominal gap (keyword only).
+    current : float, optional
+        Current of every circuit [A]; default the nominal current (keyword only).
+
+    Returns
+    -------
+    Coupling
+
+    Raises
+    ------
+    InputError
+        A default needed but no ``[operating]`` table in the magnet's file, or a bad gap
+        or current (from the statics).
+    SolverError
+        If the statics cannot be solved.
     """
     if gap is None or current is None:
         s0, i0 = nominal_point(magnet)
