@@ -129,3 +129,22 @@ def test_cli_ctrl_c_writes_the_partial_run(monkeypatch: pytest.MonkeyPatch,
     with xr.open_dataset(out) as ds:
         assert 50 < ds.sizes["time"] < 301 and ds.attrs["interrupted"]
     assert [p.name for p in tmp_path.iterdir()] == ["run.nc"]      # no temporary file left
+
+
+def test_cli_touchdown_inside_a_step_reports_and_writes(tmp_path: Path) -> None:
+    """The CLI: a 3 mm RMS random profile at 400 km/h closes a gap within a step (measured:
+    s2m7/front, 2.45 mm at 0.048 s, 1.98 mm at 0.049 s): TOUCHDOWN on stdout, the file
+    written, exit code 0 (before: "outside the characteristic maps", rc 2, no file)."""
+    from maglevkit.cli import app
+
+    out = tmp_path / "td.nc"
+    r = CliRunner().invoke(app, ["vehicle", "run", "--speed", "400", "--duration", "0.2",
+                                 "--irregularity", "random:3e-3", "--no-progress",
+                                 "-o", str(out)])
+    assert r.exit_code == 0, r.output
+    assert "TOUCHDOWN (gap closed: magnet on the stator): circuit " in r.stdout
+    assert "outside the characteristic maps" not in r.output
+    xr = pytest.importorskip("xarray")
+    with xr.open_dataset(out) as ds:
+        assert ds.attrs["touchdown"].startswith("closed: ")
+        assert float(ds.gap.min()) > float(ds.attrs["touchdown_gap_m"])   # inside the step
