@@ -312,7 +312,23 @@ class SpanSag(Profile):
     def on_paths(self, positions_m: np.ndarray, *, start_m: np.ndarray, step_m: float
                  ) -> tuple[np.ndarray, np.ndarray]:
         """:meth:`elevation_m` and :meth:`slope` at ``positions_m`` (the span coordinate
-        computed once for both)."""
+        computed once for both).
+
+        Parameters
+        ----------
+        positions_m : array_like (n_steps, n_points)
+            Positions [m] of the points at every step.
+        start_m : array_like (n_points,)
+            Position of each point at step 0 [m] (not needed here: the sag is evaluated
+            where the points are).
+        step_m : float
+            Distance travelled per step [m] (not needed here).
+
+        Returns
+        -------
+        (elevation_m, slope) : ndarray (n_steps, n_points) each
+            ``r`` [m] and ``dr/dx`` [m/m].
+        """
         x = np.asarray(positions_m, dtype=float)
         xi = self._xi(x.ravel()).reshape(x.shape)
         return self._value(xi), self._slope(xi)
