@@ -8,7 +8,10 @@ from typing import Annotated
 import typer
 
 from ..errors import MaglevkitError
-from ._app import app, fail, info, output_dir, output_file
+from ._app import app, fail, info, output_dir, output_file, writing
+
+INTERRUPTED_EXIT_CODE = 130
+"""Exit code after Ctrl-C (128 + SIGINT), as the shells report it."""
 
 vehicle_app = typer.Typer(help="Vehicle runs: heave-pitch train on an elastic guideway.",
                           no_args_is_help=True, rich_markup_mode=None)
@@ -37,11 +40,30 @@ def run(
     = None,
     plot: Annotated[Path | None, typer.Option(help="Write figures (PNG) into this directory.")]
     = None,
-    progress: Annotated[bool, typer.Option(help="Progress bar on stderr.")] = True,
+    progress: Annotated[bool, typer.Option(
+        help="Progress on stderr (a bar on a terminal, plain lines with the ETA in logs).")]
+    = True,
 ) -> None:
     """Run the train at constant speed; report minimum gaps, peak currents, comfort and the
-    real-time factor (results on stdout, diagnostics on stderr)."""
-    from ..vehicle.simulation import VehicleModel, parse_failure, parse_irregularity
+    real-time factor (results on stdout, diagnostics on stderr).  Ctrl-C stops the run:
+    "interrupted" on stderr, exit code 130, and with -o the run up to there is written."""
+    try:
+        _run(vehicle, speed, duration, dt, irregularity, failure, rigid, magnets, maps_cache,
+             output, plot, progress)
+    except KeyboardInterrupt:
+        info("interrupted")
+        raise typer.Exit(code=INTERRUPTED_EXIT_CODE) from None
+
+
+def _run(vehicle: str, speed: float, duration: float, dt: float, irregularity: str,
+         failure: list[str] | None, rigid: bool, magnets: str, maps_cache: Path | None,
+         output: Path | None, plot: Path | None, progress: bool) -> None:
+    from ..vehicle.simulation import (
+        VehicleModel,
+        VehicleRunInterrupted,
+        parse_failure,
+        parse_irregularity,
+    )
     from ..vehicle.train import load_vehicle
 
     output = output_file(output, "-o")
@@ -59,13 +81,22 @@ def run(
             prof = parse_irregularity(irregularity, span_length_m=model.guideway.span.length_m)
         res = model.run(speed_m_per_s=speed / 3.6, duration_s=duration, dt_s=dt,
                         irregularity=prof, failures=fails, progress=progress)
+    except VehicleRunInterrupted as exc:
+        typer.echo(exc.run.report())
+        info(f"interrupted: {exc.run.dataset.attrs['interrupted']}")
+        if output is not None:
+            with writing(output, "-o"):
+                exc.run.to_netcdf(output)
+            info(f"wrote the run up to there to {output}")
+        raise typer.Exit(code=INTERRUPTED_EXIT_CODE) from None
     except typer.BadParameter as exc:
         raise fail(str(exc)) from None
     except MaglevkitError as exc:
         raise fail(exc) from None
     typer.echo(res.report())
     if output is not None:
-        res.to_netcdf(output)
+        with writing(output, "-o"):
+            res.to_netcdf(output)
         info(f"wrote {output}")
     if plot is not None:
         from ..vehicle.plots import plot_vehicle_run
