@@ -412,3 +412,30 @@ def test_derived_force_and_dlds_on_a_coarse_grid_are_warned(tmp_path: Path) -> N
     text = " ".join(str(w.message) for w in rec)
     assert "the force derived from psi" in text and "the dL/ds derived from psi" in text
     assert "estimated grid error" in text
+
+
+def test_an_inconsistent_voltage_step_is_refused() -> None:
+    r_el, r_ec, lt = 1.0, 8.8, 0.03
+    tau = lt * (r_el + r_ec) / (r_el * r_ec)
+    t = np.linspace(-0.01, 8 * tau, 600)
+
+    def step(di_inf: float) -> np.ndarray:
+        di0 = di_inf * r_el / (r_el + r_ec)
+        return 20.0 + np.where(t > 0, di_inf - (di_inf - di0) * np.exp(-t / tau), 0.0)
+
+    # settles 10 A higher, but dU/R_el = 5 A: L~ would come out ~5 mH instead of 30 mH
+    with pytest.raises(DataError, match=r"settles at a change of 9\.99\d A.*--step-voltage.*"
+                                        r"5 V.*R_el.*allowed \+-5%"):
+        eddy_resistance_from_step(t, step(10.0), voltage_step_V=5.0, resistance_ohm=r_el)
+    with pytest.raises(DataError, match=r"step voltage's sign"):
+        eddy_resistance_from_step(t, step(10.0), voltage_step_V=-10.0, resistance_ohm=r_el)
+    noisy = step(10.0) + np.where(t > 0, 0.3 * np.sin(t / tau * 40.0), 0.0)
+    with pytest.raises(DataError, match=r"not one exponential: .*rms"):
+        eddy_resistance_from_step(t, noisy, voltage_step_V=10.0, resistance_ohm=r_el)
+    # a current that starts half a time constant late extrapolates to a negative jump
+    # (1 - e^0.5 = -0.65 of the step): no eq. 8 response
+    late = 20.0 + np.where(t > tau / 2, 10.0 * (1.0 - np.exp(-(t - tau / 2) / tau)), 0.0)
+    with pytest.raises(DataError, match=r"jump at t = 0 is -0\.649 of the step"):
+        eddy_resistance_from_step(t, late, voltage_step_V=10.0, resistance_ohm=r_el)
+    ok = eddy_resistance_from_step(t, step(10.0), voltage_step_V=10.0, resistance_ohm=r_el)
+    assert ok.inductance_H == pytest.approx(lt, rel=1e-8)

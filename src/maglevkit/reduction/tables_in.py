@@ -66,6 +66,15 @@ the worst cells.  Measured: our own statics written as a table meet it to 0.018 
 initial-permeability knee lies below the grid's 2.5 A step); a force 30 % off (another
 magnet) or a unit slip (x 1000) is refused, a force 7 % off is warned."""
 
+STEP_SETTLE_TOLERANCE = 0.05
+"""Largest relative difference between a voltage step's settled current change and
+``dU/R_el`` (:func:`eddy_resistance_from_step`): a record ending after 3 time constants
+still lacks 5 % of the step; a wrong step voltage or R_el is usually off by far more."""
+
+STEP_FIT_RMS = 0.05
+"""Largest rms of the step fit's ``log(remaining)`` residual: 5 % scatter of the remaining
+step; eq. 8's response is one exponential (rms ~ 1e-12 for exact data)."""
+
 RECIPROCITY_FLOOR = 0.01
 """The reciprocity residual's scale is at least this fraction of the map's largest force
 (near 0 A the force vanishes and a relative error says nothing)."""
@@ -953,6 +962,13 @@ def eddy_resistance_from_step(time_s: Any, current_A: Any, *, voltage_step_V: fl
         The voltage step ``dU`` [V] (either sign).
     resistance_ohm : float
         ``R_el`` [ohm].
+
+    Raises
+    ------
+    DataError
+        Bad samples; a settled current change of the wrong sign or off ``dU/R_el`` by more
+        than :data:`STEP_SETTLE_TOLERANCE`; a fit rms above :data:`STEP_FIT_RMS`; a fitted
+        jump fraction outside ``[0, 1)``.
     """
     from ..models.experiments import fit_step_response
 
@@ -975,7 +991,29 @@ def eddy_resistance_from_step(time_s: Any, current_A: Any, *, voltage_step_V: fl
     before = i[t <= 0.0]
     di_inf = du / r
     sel = t > 0.0
+    names = (f"voltage_step_V (--step-voltage) = {du:g} V and resistance_ohm (R_el) = "
+             f"{r:g} ohm give dU/R_el = {di_inf:.4g} A")
+    # the settled change: the mean of the last 3 samples (noise), against dU/R_el
+    settled = float(np.mean(i[sel][-3:])) - float(before[-1])
+    if settled * di_inf <= 0.0:
+        raise DataError(f"the voltage step's current changes by {settled:.4g} A (last samples "
+                        f"against the one before t = 0) but {names}: the step voltage's sign "
+                        "(or the current's) is wrong, or the record is not the step")
+    if abs(settled / di_inf - 1.0) > STEP_SETTLE_TOLERANCE:
+        raise DataError(f"the voltage step's current settles at a change of {settled:.4g} A but "
+                        f"{names} ({settled / di_inf - 1.0:+.1%}; allowed "
+                        f"+-{STEP_SETTLE_TOLERANCE:.0%}): check the step voltage and R_el, or "
+                        "record until the current has settled (> 3 time constants)")
     fit = fit_step_response(t[sel], (i[sel] - before[-1]) / di_inf)
+    if fit.rms > STEP_FIT_RMS:
+        raise DataError(f"the voltage step is not one exponential: the log-linear fit's rms is "
+                        f"{fit.rms:.3g} (allowed {STEP_FIT_RMS:g}); eq. 8 at a fixed gap answers "
+                        "a step with one exponential (noise, a moving gap or saturation?)")
+    if not -STEP_SETTLE_TOLERANCE <= fit.jump_fraction < 1.0:
+        raise DataError(f"the voltage step's fitted jump at t = 0 is {fit.jump_fraction:.3g} of "
+                        f"the step (allowed [0, 1), down to -{STEP_SETTLE_TOLERANCE:g} read as 0 "
+                        f"for noise): with {names} that is no eq. 8 response (R_ec = dU/dI_0 - "
+                        "R_el needs 0 < dI_0 < dI_inf)")
     jump = fit.jump_fraction * di_inf
     r_ec = math.inf if fit.jump_fraction <= 0.0 else r / fit.jump_fraction - r
     return StepIdentification(
