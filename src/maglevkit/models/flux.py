@@ -37,6 +37,10 @@ from __future__ import annotations
 
 import math
 import os
+import re
+import subprocess
+import threading
+import warnings
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
@@ -46,7 +50,7 @@ import numpy as np
 
 from ..circuit.assembly import assemble
 from ..circuit.network import Network
-from ..errors import InputError, SolverError, TopologyError
+from ..errors import CompilationWarning, InputError, SolverError, TopologyError
 from ..magnets.base import PlausibleRange
 from ..materials import MU0
 from ..validation import flag, optional_flag, real_array, real_number, whole_number
@@ -540,16 +544,25 @@ class FluxDAE:
         ``method="radau"``, or no IDAS library to link against."""
         if self._live_parts is None:
             return None
-        if self._live_lib is False:
-            self._live_lib = live_library(*self._live_parts)
-        if self._live_lib is None:
+        try:
+            if self._live_lib is False:
+                self._live_lib = live_library(*self._live_parts)
+            if self._live_lib is None:
+                return None
+            opts = self._idas_opts
+            nz = len(opts["abstolv"]) - self.n_diff        # loop fluxes, currents, balance
+            return LiveIntegrator(self._live_lib, self.n_diff, nz, self.n_circuits, self.n_u,
+                                  4 + self.n_gaps,
+                                  opts["reltol"], np.asarray(opts["abstolv"]),
+                                  opts["max_num_steps"])
+        except (OSError, RuntimeError, AttributeError, subprocess.SubprocessError) as exc:
+            # a library that does not load (a missing symbol), lacks an entry point or
+            # cannot set IDAS up: the restarting step works without it
+            self._live_lib = None
+            warnings.warn(f"the live IDAS step is unavailable ({type(exc).__name__}: "
+                          f"{str(exc).strip()[:200]}); FluxModel.step restarts IDAS every call",
+                          CompilationWarning, stacklevel=3)
             return None
-        opts = self._idas_opts
-        nz = len(opts["abstolv"]) - self.n_diff        # loop fluxes, currents, balance
-        return LiveIntegrator(self._live_lib, self.n_diff, nz, self.n_circuits, self.n_u,
-                              4 + self.n_gaps,
-                              opts["reltol"], np.asarray(opts["abstolv"]),
-                              opts["max_num_steps"])
 
     def chunk(self, n: int) -> ca.Function:
         """IDAS over ``n`` hold intervals without restart: ``(w0, U, P) -> (W, Q, O)``.
@@ -672,6 +685,19 @@ def check_options(options: Mapping[str, Any], where: str) -> None:
                          f"{', '.join(FLUX_MODEL_OPTIONS)}")
 
 
+def _physical_time(exc: Exception, t_restart: float, dt: float) -> RuntimeError:
+    """The live integrator's IDAS message with its normalised times ``t``, ``tstop``,
+    ``tout`` (intervals of ``dt`` since the restart at ``t_restart``) and step ``h`` in
+    seconds."""
+    def sec(m: re.Match[str]) -> str:
+        v = float(m.group(2))
+        phys = v * dt if m.group(1) == "h" else t_restart + v * dt
+        return f"{m.group(1)} = {phys:.9g} s"
+
+    num = r"([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)"
+    return RuntimeError(re.sub(r"\b(tstop|tout|t|h)\s*=\s*" + num, sec, str(exc)))
+
+
 def _vec(value: Any, n: int, what: str, unit: str, names: tuple[str, ...]) -> np.ndarray:
     """A finite float vector of length n from a scalar, sequence or mapping."""
     if isinstance(value, Mapping):
@@ -792,6 +818,8 @@ class FluxModel:
         self._live: LiveIntegrator | None | bool = None if flag(live_step, "live_step") else False
         self._live_last: tuple[Any, ...] | None = None
         self._live_next: tuple[Any, ...] | None = None
+        # one IDAS memory per model: threads stepping the model take turns
+        self._live_lock = threading.Lock()
         self._options = {"method": method, "rtol": self.rtol, "atol": self.atol,
                          "max_num_steps": max_num_steps, "radau_elements": radau_elements,
                          "radau_degree": radau_degree, "compiled": compiled,
@@ -849,7 +877,13 @@ class FluxModel:
 
     def __getstate__(self) -> dict[str, Any]:
         # the live integrator (C memory) stays behind; a copy makes its own on first step
-        return {**self.__dict__, "_live": None, "_live_last": None, "_live_next": None}
+        state = {**self.__dict__, "_live": None, "_live_last": None, "_live_next": None}
+        state.pop("_live_lock", None)
+        return state
+
+    def __setstate__(self, state: dict[str, Any]) -> None:
+        self.__dict__.update(state)
+        self._live_lock = threading.Lock()
 
     def with_options(self, **changes: Any) -> FluxModel:
         """A model of the same network with other solver options (method, rtol, atol, ...)."""
@@ -982,7 +1016,9 @@ class FluxModel:
         state the last call returned, with the same ``dt`` and voltages and the gaps where
         that step ended, integrates on (as ``simulate`` does across hold intervals); any
         other call restarts IDAS from ``state`` with consistent algebraic variables.  Both
-        agree with a restart per call to the integrator's accuracy.
+        agree with a restart per call to the integrator's accuracy.  Threads stepping one
+        model take turns on its integrator (a per-model lock); a live library that does not
+        load falls back to the restarting step with a ``CompilationWarning``.
         """
         d = self._dae
         self._check_state(state)
@@ -1001,13 +1037,22 @@ class FluxModel:
         if self.plausible_range is not None and gaps is not None:
             self.plausible_range.check(gaps=(s0, s0 + rate * dt), where="FluxModel.step")
         if self.live_step:
-            assert isinstance(self._live, LiveIntegrator)
-            wf, q, o = self._step_live(self._live, state, dt, U, rate, s0, w)
-        else:
-            try:
-                wf, q, o = d.step_fun(w, np.concatenate(((dt,), U, rate)))
-            except RuntimeError as exc:
-                raise self._fail(exc, state.time_s, w, U, rate, dt) from None
+            with self._live_lock:
+                return self._step_live_locked(state, dt, U, rate, s0, w)
+        try:
+            wf, q, o = d.step_fun(w, np.concatenate(((dt,), U, rate)))
+        except RuntimeError as exc:
+            raise self._fail(exc, state.time_s, w, U, rate, dt) from None
+        return self._finish_step(state, dt, U, rate, w, wf, q, o)
+
+    def _step_live_locked(self, state: FluxState, dt: float, U: np.ndarray, rate: np.ndarray,
+                          s0: np.ndarray, w: np.ndarray) -> tuple[FluxState, FluxOutputs]:
+        assert isinstance(self._live, LiveIntegrator)
+        wf, q, o = self._step_live(self._live, state, dt, U, rate, s0, w)
+        return self._finish_step(state, dt, U, rate, w, wf, q, o)
+
+    def _finish_step(self, state: FluxState, dt: float, U: np.ndarray, rate: np.ndarray,
+                     w: np.ndarray, wf: Any, q: Any, o: Any) -> tuple[FluxState, FluxOutputs]:
         wf = np.asarray(wf).ravel()
         o = np.asarray(o).ravel()
         if not (np.all(np.isfinite(wf)) and np.all(np.isfinite(o))):
@@ -1038,12 +1083,14 @@ class FluxModel:
                 live.reinit(0.0, w[:r], np.concatenate((w[nx:], v0)), U,
                             np.concatenate(((dt,), s0, rate, (0.0,))))
             except RuntimeError as exc:
-                raise self._fail(exc, state.time_s, w, U, rate, dt) from None
+                raise self._fail(_physical_time(exc, state.time_s, dt), state.time_s, w, U,
+                                 rate, dt) from None
         k = last[3]
         try:
             y, q = live.step(k + 1.0, np.concatenate(((dt,), s0, rate, (float(k),))))
         except RuntimeError as exc:
-            raise self._fail(exc, state.time_s, w, U, rate, dt) from None
+            raise self._fail(_physical_time(exc, state.time_s - k * dt, dt), state.time_s,
+                             w, U, rate, dt) from None
         wf = np.concatenate((y[:r], s0 + rate * dt, y[r:r + d.n_loops + d.n_circuits]))
         o = np.asarray(d.output_fun(wf, U, rate)).ravel()
         self._live_next = (dt, U.copy(), k + 1, q.copy())
