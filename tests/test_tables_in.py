@@ -124,6 +124,12 @@ def test_force_from_psi_by_coenergy_matches_the_closed_form(tmp_path: Path) -> N
     # the spline's gap slope at the 4 mm edge (integral exact): measured 9.7e-3
     assert err.max() < 1.5e-2, err.max()
     assert table_report(maps).force_from == "co-energy of psi"
+    assert "mirrored" not in maps.dataset.attrs["method"]          # MIRROR_CURRENTS is off
+    with pytest.raises(mk.InputError, match="imported from a table .* cannot carry the "
+                                            "shielded-gap ladder.*motion_eddy=False"):
+        mk.CurrentModel(maps, motion_eddy=True)
+    with pytest.raises(mk.InputError, match=r"build CurrentModel\(maps\) first"):
+        mk.simulate(maps, [0.0, 0.01], gaps=0.01, voltages=1.0)
 
 
 # ---------------------------------------------------------------- our own statics
@@ -286,6 +292,10 @@ def test_gap_in_mm_is_warned_with_the_row(tmp_path: Path) -> None:
     path = _small(tmp_path, lambda r: [[repr(float(x[0]) * 1e3)] + x[1:] for x in r])
     with pytest.warns(PlausibilityWarning, match=r"row 2: gap_m = 4 m .* in mm"):
         read_table(path)
+    # psi only: the derived force would be 1000x too small -- refused, not only warned
+    with pytest.warns(PlausibilityWarning), pytest.raises(
+            DataError, match=r"gap_m runs from 4 to 7 m.*1000x too small"):
+        mk.maps_from_table(path, resistance_ohm=2.0)
 
 
 def test_mixed_and_partial_circuit_columns(tmp_path: Path) -> None:
@@ -344,8 +354,19 @@ def test_cli_import(own_csv: Path, tmp_path: Path) -> None:
     lines = [ln for ln in res.output.splitlines() if ln.strip()]
     assert len(lines) == 1 and lines[0].startswith("error: ") and "row 6" in lines[0]
     res = runner.invoke(app, ["maps", "import", str(own_csv), "-o", str(out)])
-    assert res.exit_code == 2 and "resistance_ohm" in res.output
+    assert res.exit_code == 2 and "--resistance (R_el per circuit [ohm]) is required" in res.output
     assert not math.isnan(float(maps.dataset["reciprocity_residual"].max()))
+
+
+def test_cli_resistance_errors_name_the_option(own_csv: Path, tmp_path: Path) -> None:
+    runner = CliRunner()
+    for value, message in (("1,abc", "--resistance '1,abc': value 2, 'abc', is not a number"),
+                           ("-1", "value 1, '-1', is not a resistance > 0"),
+                           ("1,2", "--resistance: expected 1 values")):
+        res = runner.invoke(app, ["maps", "import", str(own_csv), "-o", str(tmp_path / "m.nc"),
+                                  "--resistance", value])
+        assert res.exit_code != 0 and message in " ".join(res.output.split()), res.output
+        assert "resistance_ohm" not in res.output and "inf: no eddy" not in res.output
 
 
 def test_cli_import_with_a_measured_voltage_step(own_csv: Path, tmp_path: Path) -> None:

@@ -1234,8 +1234,12 @@ def _motion_eddy_ladder(maps: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
              "motion_eddy_unshielded_inductance_H")
     missing = [n for n in names if n not in ds]
     if missing:
-        raise InputError(f"these maps have no shielded-gap ladder ({', '.join(missing)}); "
-                         "rebuild them with this version (build_maps) to use motion_eddy=True")
+        raise InputError(
+            "maps imported from a table (maps_from_table) cannot carry the shielded-gap ladder "
+            "(it is fitted to the detailed flux model's frequency response, which a table does "
+            "not have); use motion_eddy=False" if "table_report" in ds.attrs else
+            f"these maps have no shielded-gap ladder ({', '.join(missing)}); rebuild them with "
+            "this version (build_maps) to use motion_eddy=True")
     r_a, r_2, l_u = (np.asarray(ds[n].values, dtype=float) for n in names)
     if not (np.all(np.isfinite(r_a)) and np.all(np.isfinite(r_2)) and np.all(np.isfinite(l_u))
             and np.all(r_a > 0) and np.all(r_2 > 0) and np.all(l_u > 0)):

@@ -9,10 +9,10 @@ equal to ``s``, every circuit at ``I``: the maps' convention, :mod:`maglevkit.re
   cubic interpolating spline of ``psi`` (not-a-knot; the same interpolant the current model
   puts through its maps).  On a grid row ``s = s_k`` that spline is the 1-D spline of the
   row, so the derivatives at the nodes are 1-D spline derivatives along one axis.
-* ``I -> 0``: ``psi`` is odd in ``I`` (``F`` even), so a current grid that starts at 0 A is
-  mirrored to negative currents before the spline is fitted; the spline then honours the
-  symmetry, ``L~(s, 0)`` is its slope at 0 and ``dL/ds(s, 0) = d^2 psi/(ds dI)`` at 0 (the
-  limit of ``(dpsi/ds)/I``), as in :func:`~maglevkit.reduction.build_maps`.
+* ``I -> 0``: the spline is fitted to the currents as tabulated (not mirrored to ``-I``:
+  ``psi`` is odd in ``I`` but not smooth at 0 where the iron's permeability rises,
+  :data:`MIRROR_CURRENTS`); ``L~(s, 0)`` is its one-sided slope at 0 and
+  ``dL/ds(s, 0) = d^2 psi/(ds dI)`` at 0 (the limit of ``(dpsi/ds)/I``).
 * ``F`` from ``psi`` when no force is given: co-energy ``W'(s, I) = int_0^I psi di`` (the
   spline's exact antiderivative) and ``F = -dW'/ds`` (attraction-positive).  Exact for one
   circuit; with several circuits it is exact for their sum and per circuit when they do
@@ -466,8 +466,9 @@ def _read_netcdf(p: Path, digest: str) -> GridTable:
 class _Axes:
     """Node derivatives and integrals of the tensor-product not-a-knot cubic spline.
 
-    Along the current the data are mirrored to ``-I`` (odd for ``psi``, even for ``F``)
-    when the grid starts at 0 A, so the spline honours the symmetry at ``I = 0``.
+    Along the current the spline is fitted to the tabulated currents; only with
+    :data:`MIRROR_CURRENTS` (off) would a grid from 0 A be mirrored to ``-I`` first (odd
+    for ``psi``, even for ``F``).
     """
 
     def __init__(self, gaps: np.ndarray, currents: np.ndarray) -> None:
@@ -799,7 +800,7 @@ def maps_from_table(data: str | Path | GridTable, *, resistance_ohm: Any = None,
         dlds = np.where(pos, dpsi_ds / np.where(pos, c, 1.0), np.nan)
         lapp = np.where(pos, psi / np.where(pos, c, 1.0), np.nan)
     if not pos[0]:
-        # I -> 0: the limit of (dpsi/ds)/I is d^2 psi/(ds dI) at 0 (odd-mirrored spline)
+        # I -> 0: the limit of (dpsi/ds)/I is d^2 psi/(ds dI) at 0 (the spline's slope in I)
         for j in range(nc):
             dlds[j, :, 0] = axes.d_current(dpsi_ds[j], -1)[:, 0]
             lapp[j, :, 0] = ltilde[j, :, 0]
@@ -819,6 +820,13 @@ def maps_from_table(data: str | Path | GridTable, *, resistance_ohm: Any = None,
             raise DataError(f"{table.source}: deriving the force from the flux linkage needs "
                             f"the co-energy from 0 A, but the currents start at {c[0]:g} A; "
                             "add rows at 0 A or force_N columns")
+        lo_g, hi_g = _GAP_PLAUSIBLE_M
+        if g.min() < lo_g or g.max() > hi_g:
+            raise DataError(f"{table.source}: gap_m runs from {g.min():g} to {g.max():g} m, "
+                            f"outside {lo_g:g}-{hi_g:g} m (mm or km typed as m?); the force "
+                            "derived from psi (F = -dW'/ds) scales with 1/gap unit, e.g. "
+                            "1000x too small for gaps in mm; give gap_m in m (or force_N "
+                            "columns)")
         force = np.stack([_coenergy_force(axes, psi[j]) for j in range(nc)])
         _derived_grid_error(table, "force", force, np.stack(
             [axes.gap_error(axes.integral_current(psi[j], -1)) for j in range(nc)]), messages)
@@ -851,7 +859,8 @@ def maps_from_table(data: str | Path | GridTable, *, resistance_ohm: Any = None,
         "pole_groups": json.dumps(groups),
         "gap_names": ",".join(gap_names),
         "method": "imported table: L~ and dL/ds from the not-a-knot bicubic spline of psi "
-                  "(odd-mirrored in I); force " + ("from the table" if force_from == "table"
+                  + ("(odd-mirrored in I)" if MIRROR_CURRENTS else "(currents as tabulated)")
+                  + "; force " + ("from the table" if force_from == "table"
                                                    else "by co-energy, -d/ds int_0^I psi di"),
         "table_source": table.source,
         "table_sha256": table.sha256,
