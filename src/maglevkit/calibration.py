@@ -54,11 +54,9 @@ from .circuit.elements import (
     IronPath,
     LeakagePermeance,
     LinearElement,
-    fringe_per_mu0,
 )
 from .circuit.network import Network
 from .errors import DataError, InputError, MaglevkitWarning, SolverError
-from .materials import MU0
 
 __all__ = ["PARAMETERS", "DEFAULT_PARAMETERS", "Calibration", "StaticPoints", "calibrate",
            "calibrated_network", "parameter_sensitivities", "read_points",
@@ -127,9 +125,7 @@ class CalibratedLinear(LinearElement):
         if isinstance(el, FringePermeance):
             return self.fringing * base
         if isinstance(el, AirGap) and el.fringe_edges:
-            s = el.effective_gap(g)
-            fringe = sum(MU0 * fringe_per_mu0(w, r, s) for w, r in el.fringe_edges)
-            return base + (self.fringing - 1.0) * fringe
+            return base + (self.fringing - 1.0) * el.fringe_permeance(g)
         return base
 
 

@@ -407,6 +407,28 @@ class AirGap(LinearElement):
             return carter_coefficient(gap, self.slot_pitch, self.slot_opening) * gap
         return gap
 
+    def fringe_permeance(self, gap: Any) -> Any:
+        """The fringe edges' share of :meth:`permeance` [H]: ``mu0 sum fringe_per_mu0(w, r,
+        k_C s)`` over ``fringe_edges`` (0 without).
+
+        Parameters
+        ----------
+        gap : float, array_like or CasADi
+            Mechanical air gap s [m], > 0.
+
+        Returns
+        -------
+        float, ndarray or CasADi
+            The fringe permeance [H].
+        """
+        return MU0 * self._add_fringe(0.0, self.effective_gap(gap))
+
+    def _add_fringe(self, g: Any, s: Any) -> Any:
+        """``g + sum fringe_per_mu0(w, r, s)`` over the fringe edges (``s`` effective)."""
+        for w, r in self.fringe_edges:
+            g = g + fringe_per_mu0(w, r, s)
+        return g
+
     def permeance(self, gap: Any = None) -> Any:
         """Permeance ``G(s)`` [H] of the gap (see the class docstring).
 
@@ -423,9 +445,7 @@ class AirGap(LinearElement):
         if gap is None:
             raise ParameterError(f"air gap {self.name!r}: needs a gap value")
         s = self.effective_gap(gap)
-        g = self.pole_area / s
-        for w, r in self.fringe_edges:
-            g = g + fringe_per_mu0(w, r, s)
+        g = self._add_fringe(self.pole_area / s, s)
         for a, d in self.recesses:
             g = g + a / (s + d)
         return MU0 * g
