@@ -24,7 +24,9 @@ equal to ``s``, every circuit at ``I``: the maps' convention, :mod:`maglevkit.re
   (:func:`eddy_resistance_from_step`, the paper's time-constant identification).
 
 Consistency checks (:class:`TableReport`): co-energy reciprocity ``dF/dI = -dpsi/ds``
-(attraction-positive ``F``) where both are given, monotonicity (``psi`` rising with ``I``
+(attraction-positive ``F``) where both are given, in integral form over each gap cell with
+a tolerance widened by the grid's own error (a derived ``F`` or ``dL/ds`` with a large grid
+error is warned), monotonicity (``psi`` rising with ``I``
 is required, since eq. 8 divides by ``L~``; ``psi`` and ``F`` falling with ``s`` and ``F``
 rising with ``I`` are expected) and grid coverage.  Failures name the gap, the current and
 the table row.  See docs/reduction.md, "Maps from tables".
@@ -527,8 +529,9 @@ class TableReport:
     Attributes
     ----------
     reciprocity_max : dict
-        Circuit -> largest relative reciprocity residual ``|dF/dI + dpsi/ds| / scale``
-        (NaN when the force was derived from ``psi``: reciprocal by construction).
+        Circuit -> largest relative reciprocity residual over the gap cells,
+        ``|int F ds - (W'(s_k) - W'(s_k+1))| / scale`` (NaN when the force was derived
+        from ``psi``: reciprocal by construction).
     reciprocity_worst : dict
         Circuit -> where it is largest (gap, current, row).
     force_from : str
@@ -741,8 +744,9 @@ def maps_from_table(data: str | Path | GridTable, *, resistance_ohm: Any = None,
     name : str, optional
         The maps' ``magnet_name`` (default: the magnet's name or the file's stem).
     reciprocity_tolerance : float
-        Largest relative residual of ``dF/dI = -dpsi/ds`` (:data:`RECIPROCITY_TOLERANCE`)
-        before the table is refused; warned above half of it.
+        Largest relative residual of ``dF/dI = -dpsi/ds`` per gap cell, integral form
+        (:data:`RECIPROCITY_TOLERANCE`), before the table is refused; warned above half of
+        it; both plus :data:`GRID_ERROR_FACTOR` times the grid's own error estimate.
 
     Returns
     -------
@@ -846,9 +850,11 @@ def maps_from_table(data: str | Path | GridTable, *, resistance_ohm: Any = None,
         "description": given})
     if residual is not None:
         ds["reciprocity_residual"] = (("circuit", "gap", "current"), residual, {
-            "units": "1", "long_name": "(F - F_coenergy(psi)) / scale of the table",
-            "description": "co-energy reciprocity residual at the grid points, F_coenergy = "
-                           "-d/ds int_0^I psi di of the spline; scale max(|F|, 1 % of max |F|)"})
+            "units": "1", "long_name": "co-energy reciprocity residual of the table",
+            "description": "(int F ds - (W'(s_k) - W'(s_k+1))) / scale over each gap cell, "
+                           "W' = int_0^I psi di of the spline, scale max(|int F ds|, 1 % of "
+                           "its largest); at a node the adjacent cell's with the larger "
+                           "magnitude"})
     ds.attrs.update({
         "format": MAPS_FORMAT,
         "magnet_name": name or default_name,
