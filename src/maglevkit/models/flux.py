@@ -861,7 +861,9 @@ class FluxModel:
         """Whether :meth:`step` keeps an IDAS integrator alive between calls (the option,
         where this model supports it; builds the integrator's library on first use)."""
         if self._live is None:
-            self._live = self._dae.live_integrator() or False
+            with self._live_lock:            # threads' first steps make one integrator
+                if self._live is None:
+                    self._live = self._dae.live_integrator() or False
         return self._live is not False
 
     @property
