@@ -88,13 +88,17 @@ class CurrentOutputs:
     Attributes
     ----------
     time_s : float
+        Time [s].
     currents_A : ndarray (n_circuits,)
         Coil currents [A] (with the voltages of the step just taken).
     inductor_currents_A : ndarray (n_circuits,)
+        Currents ``I_L`` through the inductors ``L~`` [A] (the ODE states, a copy).
     circuit_force_N : ndarray (n_circuits,)
+        Force of each circuit's poles [N], attraction positive.
     pole_force_N : ndarray (n_gaps,)
         Circuit force shared equally by the circuit's poles [N].
     force_N : float
+        Total force of the magnet [N].
     """
 
     time_s: float
@@ -117,10 +121,16 @@ class ReducedSimulation:
     Attributes
     ----------
     time_s : ndarray (n_t,)
+        Sample times [s].
     gaps_m, gap_rates_m_per_s : ndarray (n_t, n_gaps)
+        Pole gaps [m] and the gap rates [m/s] held on each interval (the gaps' secants).
     voltages_V, currents_A, inductor_currents_A, circuit_force_N : ndarray (n_t, n_circuits)
+        Circuit voltages [V], coil currents [A], inductor currents ``I_L`` [A] and circuit
+        forces [N].
     pole_force_N : ndarray (n_t, n_gaps)
+        Circuit forces shared equally by each circuit's poles [N].
     force_N : ndarray (n_t,)
+        Total force [N].
     gap_names : tuple of str
         Names of the pole gaps, the order of the ``n_gaps`` columns.
     circuit_names : tuple of str
