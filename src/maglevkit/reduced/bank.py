@@ -134,14 +134,23 @@ class BankSimulation:
     Attributes
     ----------
     time_s : ndarray (n_t,)
+        Sample times [s].
     gaps_m : ndarray (n_t, n_gaps)
+        Gap inputs [m] (one per circuit or per pole, ``gap_names``).
     voltages_V : ndarray (n_t, n_circuits)
-        Voltages held on ``[t_k, t_k+1)`` (the last row repeats the previous one).
+        Voltages [V] held on ``[t_k, t_k+1)`` (the last row repeats the previous one).
     currents_A, inductor_currents_A, circuit_force_N : ndarray (n_t, n_circuits)
+        Coil currents [A], inductor currents ``I_L`` [A] (NaN for detailed members) and
+        circuit forces [N].
     member_force_N : ndarray (n_t, n_members)
+        Total force of each magnet [N].
     pole_force_N : ndarray (n_t, n_poles)
+        Force per pole [N].
     circuit_names, gap_names, pole_names, member_names : tuple of str
+        Column orders of the arrays.
     final_state : BankState
+        State at ``time_s[-1]`` (to continue with :meth:`MagnetBank.step` or a new
+        ``simulate``).
     """
 
     time_s: np.ndarray
