@@ -251,6 +251,22 @@ class EnergyBalance:
     """Energy bookkeeping of a simulation [J].
 
     ``electrical = ohmic + eddy + magnetic_change + mechanical + residual``.
+
+    Attributes
+    ----------
+    electrical_J : float
+        Electrical energy fed into the circuits, the integral of ``U I`` [J].
+    ohmic_J : float
+        Ohmic loss in the windings, the integral of ``R I^2`` [J].
+    eddy_J : float
+        Eddy-current loss in the eddy branches [J] (0 without eddy currents).
+    magnetic_change_J : float
+        Change of the stored magnetic energy (air gaps and iron) [J].
+    mechanical_J : float
+        Mechanical work done by the magnet's force on the moving gaps [J].
+    residual_J : float
+        What the other terms leave unexplained [J]: the integration error of the
+        balance (small against the largest term, see :attr:`relative_residual`).
     """
 
     electrical_J: float
@@ -767,6 +783,22 @@ class FluxModel:
         (:mod:`maglevkit.models.flux_live`; compiled IDAS on the dense form, else ignored).
         False restarts CasADi's integrator on every call (the behaviour before).
 
+    Other Parameters
+    ----------------
+    radau_elements : int, default 2
+        ``method="radau"`` only: collocation elements per integrator call (per hold
+        interval), a whole number >= 1.
+    radau_degree : int, default 3
+        ``method="radau"`` only: degree of the Radau IIA collocation polynomial, 1..9.
+
+    Raises
+    ------
+    InputError
+        ``rtol`` or ``atol`` outside (0, 1), a step limit, element count or degree that is
+        not a whole number in range, an unknown ``method`` or ``compiled``, a ``cache_dir``
+        that is not a path, or switches that are neither bool nor None.  (A bare
+        Network ignores ``True`` switches: it can only have effects switched off.)
+
     Attributes
     ----------
     compiled : bool
@@ -903,6 +935,32 @@ class FluxModel:
 
         The fluxes come from :func:`solve_statics`; the state is at rest (no eddy
         currents), consistent with the voltages ``U = R I`` and zero gap rates.
+
+        Parameters
+        ----------
+        gaps : float, array_like (n_gaps,) or mapping
+            Gaps [m], each > 0: one value for all, one per gap input (:attr:`gap_names`),
+            or ``{gap name: value}`` with every name.  One operating point only.
+        currents : float, array_like (n_circuits,) or mapping
+            Circuit currents [A], same forms per circuit (:attr:`circuit_names`).
+        time : float, default 0.0
+            Time of the state [s], a finite real number.
+
+        Returns
+        -------
+        FluxState
+
+        Raises
+        ------
+        InputError
+            Bad gaps or currents (wrong count or names, not finite, a gap <= 0, more than
+            one operating point) or a bad ``time``.
+
+        Warns
+        -----
+        PlausibilityWarning
+            Gaps or currents beyond the magnet's plausible range (models built from a
+            Magnet).
         """
         return self._initial_state(gaps, currents, time, where="FluxModel.initial_state")
 
@@ -945,7 +1003,23 @@ class FluxModel:
                              f"currents {np.asarray(state.currents_A).tolist()})")
 
     def outputs(self, state: FluxState) -> FluxOutputs:
-        """Outputs at ``state`` (with the inputs stored in the state)."""
+        """Outputs at ``state`` (with the inputs stored in the state).
+
+        Parameters
+        ----------
+        state : FluxState
+            A finite state of this model (from :meth:`initial_state` or :meth:`step`); its
+            ``voltages_V`` [V] and ``gap_rates_m_per_s`` [m/s] are the inputs used.
+
+        Returns
+        -------
+        FluxOutputs
+
+        Raises
+        ------
+        InputError
+            ``state`` not a FluxState, of another model's shapes, or not finite.
+        """
         self._check_state(state)
         o = np.asarray(self._dae.output_fun(state._vector(), state.voltages_V,
                                             state.gap_rates_m_per_s)).ravel()
@@ -1197,6 +1271,57 @@ class SimulationResult:
     Values at ``time_s[k]`` are left limits (before the inputs change at ``t_k``);
     ``voltages_V[k]`` and ``gap_rates_m_per_s[k]`` are the inputs held on
     ``[t_k, t_{k+1})`` (the last row repeats the previous one).
+
+    Attributes
+    ----------
+    time_s : ndarray (n_t,)
+        Sample times [s].
+    gaps_m : ndarray (n_t, n_gaps)
+        Gap inputs [m].
+    gap_rates_m_per_s : ndarray (n_t, n_gaps)
+        Gap rates [m/s] held on each interval.
+    voltages_V : ndarray (n_t, n_circuits)
+        Circuit voltages [V] held on each interval.
+    currents_A : ndarray (n_t, n_circuits)
+        Circuit currents [A].
+    flux_linkage_Wb : ndarray (n_t, n_circuits)
+        Circuit flux linkages [Wb].
+    eta_Wb : ndarray (n_t, n_circuits)
+        Sums of the coil-core fluxes of each circuit [Wb].
+    pole_force_N : ndarray (n_t, n_gaps)
+        Force per gap input [N], attraction positive.
+    force_N : ndarray (n_t,)
+        Total force [N].
+    branch_flux_Wb : ndarray (n_t, n_branches)
+        All branch fluxes [Wb] (:attr:`branch_names`).
+    eddy_flux_Wb : ndarray (n_t, n_eddy)
+        Fluxes of the eddy branches [Wb] (no columns without eddy currents).
+    eddy_mmf_A : ndarray (n_t, n_eddy)
+        Eddy-current MMFs ``G_ec dphi/dt`` of the eddy branches [A].
+    differential_state : ndarray (n_t, n_diff)
+        The DAE's differential states ``y = D x``: flux linkages, then eddy fluxes [Wb].
+    electrical_energy_J : ndarray (n_t,)
+        Electrical energy fed in since ``time_s[0]`` [J] (cumulative).
+    ohmic_loss_J : ndarray (n_t,)
+        Cumulative ohmic loss [J].
+    eddy_loss_J : ndarray (n_t,)
+        Cumulative eddy-current loss [J].
+    mechanical_work_J : ndarray (n_t,)
+        Cumulative mechanical work of the magnet's force on the moving gaps [J].
+    gap_names : tuple of str
+        Column order of the gap arrays.
+    circuit_names : tuple of str
+        Column order of the circuit arrays.
+    branch_names : tuple of str
+        Column order of ``branch_flux_Wb``.
+    eddy_branch_names : tuple of str
+        Column order of the eddy arrays.
+    final_state : FluxState
+        State at ``time_s[-1]``, to continue with :meth:`FluxModel.step` or as
+        ``initial_state`` of another simulation.
+    network : Network
+        The simulated equivalent circuit (for the magnetic energy; not in ``repr`` or
+        comparisons).
     """
 
     time_s: np.ndarray
@@ -1224,11 +1349,37 @@ class SimulationResult:
     network: Network = field(repr=False, compare=False)
 
     def magnetic_energy_J(self, index: int = -1) -> float:
-        """Stored magnetic energy [J] at sample ``index`` (iron by quadrature)."""
+        """Stored magnetic energy [J] at sample ``index`` (iron by quadrature).
+
+        Parameters
+        ----------
+        index : int, default -1
+            Sample index into the time axis (NumPy indexing: negative counts from the end;
+            out of range raises ``IndexError``).
+
+        Returns
+        -------
+        float
+            Energy stored in the air gaps and the iron [J].
+        """
         return magnetic_energy(self.network, self.branch_flux_Wb[index], self.gaps_m[index])
 
     def energy_balance(self, start: int = 0, stop: int = -1) -> EnergyBalance:
-        """Energy balance between samples ``start`` and ``stop``."""
+        """Energy balance between samples ``start`` and ``stop``.
+
+        Parameters
+        ----------
+        start : int, default 0
+            Sample index where the balance starts.
+        stop : int, default -1
+            Sample index where it ends (NumPy indexing; default the last sample).  Each
+            term is the value at ``stop`` minus that at ``start``, so ``stop`` before
+            ``start`` gives the negated balance.
+
+        Returns
+        -------
+        EnergyBalance
+        """
         def d(a: np.ndarray) -> float:
             return float(a[stop] - a[start])
 
