@@ -27,6 +27,15 @@ nominal flux -> the ``pole_area / s'`` term, LIG flux -> the groove term
 End poles are built like the inner poles (same core, coil and turns); they differ only
 in having one neighbour, so their outer flank leaks into the pole back (extra
 ``leak_pb`` length) instead of to a neighbour pole.
+
+``end_effects`` (``[magnet]`` key, default true) keeps the terms that exist only because
+the magnet has a finite width across the track: the fringing of the two pole-face edges
+along the track (onto the stator's overhang) and the leakage around the coil's two
+across-track sides into the pole back.  ``end_effects = false`` leaves them out: the
+network is then a longitudinal cut of depth ``pole_width`` (the end poles' outer-side
+leakage over that depth), the like-for-like partner of a 2-D field solution.  The
+material cross-sections (stator yoke ``width``, pole back ``back_width``) and the eddy
+elements are unchanged.
 """
 
 from __future__ import annotations
@@ -70,6 +79,7 @@ MAGNET_SCHEMA = {
     "lig_groove_depth": Schema(float, unit="m"),
     "material": Schema(str),
     "resistivity": Schema(float, required=False, unit="ohm m"),
+    "end_effects": Schema(bool, required=False, default=True),
 }
 CIRCUITS_SCHEMA = {
     "names": Schema(list),
@@ -170,10 +180,11 @@ def build_levitation_magnet(params: Mapping[str, Any], materials: Mapping[str, M
     face_area = (lp - ng * bg) * wp
     grooves = ((ng * bg * wp, dg),) if ng > 0 else ()
     overhang = 0.5 * (st["width"] - wp)
+    ends = m["end_effects"]       # across-track terms (a 2-D longitudinal cut has none)
     edges: list[tuple[float, float]] = []
     if options.fringing:
         edges += [(wp, hf), (wp, hf)]                         # flanks facing the neighbours
-        if overhang > 0.0:
+        if ends and overhang > 0.0:
             r = min(hf, overhang)                             # limited by the stator edge
             edges += [(lp, r), (lp, r)]
     tooth_area = lp * wp * (1.0 - st["slot_opening"] / st["slot_pitch"])
@@ -187,10 +198,12 @@ def build_levitation_magnet(params: Mapping[str, Any], materials: Mapping[str, M
     # around the coil into the own pole back: half hollow cylinders around the coil's
     # cross-section (inner radius h_c/2, radial extent t_c) along the coil sides that do
     # not face a neighbour pole: both across-track sides, plus the outer side of an end pole
+    # (without end effects only the end pole's outer side, over the cut's depth wp)
     side = lp + 2.0 * tc
 
     def g_pb(k: int) -> float:
-        length = 2.0 * side + (wp + 2.0 * tc) * ((k == 0) + (k == poles - 1))
+        end_side = wp + 2.0 * tc if ends else wp
+        length = 2.0 * side * ends + end_side * ((k == 0) + (k == poles - 1))
         return MU0 * length * math.log(1.0 + tc / (0.5 * hc)) / math.pi
 
     rho = _resistivity(m["resistivity"], core_mat, "magnet") if options.eddy_currents else 0.0
@@ -208,7 +221,7 @@ def build_levitation_magnet(params: Mapping[str, Any], materials: Mapping[str, M
                    recesses=grooves),
             IronPath(f"iron_teeth_{p}", st["slot_depth"], tooth_area, stator_mat),
         )))
-        if options.leakage:
+        if options.leakage and g_pb(k) > 0.0:
             branches.append(Branch(f"leak_pb_{p}", f"H{k + 1}", f"K{k + 1}",
                                    (LeakagePermeance(f"leak_pb_{p}", g_pb(k)),)))
     for k in range(poles - 1):
