@@ -2,7 +2,8 @@
 
 ``end_effects = false`` must give exactly the longitudinal-cut network: the default
 network with the two along-track fringing edges of every pole face removed and the
-pole-back leakage cut down to the end poles' outer side over the depth ``pole_width``.
+pole-back leakage cut down to the end poles' outer side over the depth ``pole_width``
+(the flank fringing and flank strips face the neighbours and stay).
 """
 
 from __future__ import annotations
@@ -52,10 +53,10 @@ def _by_hand(full: mk.Magnet) -> Network:
         elif br.name.startswith("gap_"):
             gap, teeth = br.elements
             assert isinstance(gap, mk.AirGap)
-            # the fringing edges of length pole_length run along the track: dropped
-            edges = tuple(e for e in gap.fringe_edges if e[0] != lp)
-            assert len(edges) == 2 and all(w == wp for w, _ in edges)
-            out.append(replace(br, elements=(replace(gap, fringe_edges=edges), teeth)))
+            # the gap's fringing edges are the two of length pole_length along the track
+            # (the flanks facing the neighbours fringe in branches of their own): dropped
+            assert [w for w, _ in gap.fringe_edges] == [lp, lp]
+            out.append(replace(br, elements=(replace(gap, fringe_edges=()), teeth)))
         else:
             out.append(br)
     return Network(tuple(out), full.network.circuits, name="by hand")
@@ -125,3 +126,29 @@ def test_bad_end_effects_values() -> None:
         guid.with_options(end_effects=False)
     with pytest.raises(mk.InputError, match=r"unknown switch\(es\) \['end_effect'\]"):
         std.with_options(end_effect=False)
+
+
+def test_coil_segments_key() -> None:
+    """``coil_segments`` splits each core along its coil; the turns of a pole add up to
+    ``turns_per_pole`` whatever K, and a finer split changes the statics little (the
+    leakage's MMF profile along the coil converges): 10 mm / 33.5 A, K = 3 vs 6 within 1 %
+    (measured 0.1 % force, 0.5 % flux linkage).  Bad values name the key and the range."""
+    p = _params("tr09-standard")
+    mags = {}
+    for k in (1, 3, 6):
+        p["magnet"]["coil_segments"] = k
+        with pytest.warns(mk.ProvenanceWarning, match="magnet.coil_segments"):
+            mags[k] = mk.build_magnet(p, options=mk.ModelOptions(eddy_currents=False))
+        for c in mags[k].network.circuits:
+            assert len(c.coils) == 6 * (k + 1)
+            assert sum(coil.turns for coil in c.coils) == pytest.approx(6 * 190.0, rel=1e-12)
+    s3 = mk.solve_statics(mags[3], gaps=0.010, currents=33.5)
+    s6 = mk.solve_statics(mags[6], gaps=0.010, currents=33.5)
+    assert float(s6.force_N) == pytest.approx(float(s3.force_N), rel=0.01)
+    np.testing.assert_allclose(s6.flux_linkage_Wb, s3.flux_linkage_Wb, rtol=0.01)
+    p["magnet"]["coil_segments"] = 0
+    with pytest.raises(mk.ParameterFileError, match=r"coil_segments = 0: must be > 0"):
+        mk.build_magnet(p)
+    p["magnet"]["coil_segments"] = 13
+    with pytest.raises(mk.ParameterFileError, match=r"coil_segments = 13: allowed are 1 \.\.\. 12"):
+        mk.build_magnet(p)
