@@ -395,14 +395,14 @@ WEIGHTS = (0.25, 0.5, 0.25)
 
 
 def _key(s: float, current: float, offset: float, refine: float = 1.0, order: int = 2,
-         box: float = 1.0) -> str:
+         box: float = 1.0, half: bool = True) -> str:
     return (f"s{s * 1e3:g}_I{current:g}_o{offset * 1e3:g}"
             + (f"_r{refine:g}" if refine != 1.0 else "") + (f"_p{order}" if order != 2 else "")
-            + (f"_box{box:g}" if box != 1.0 else ""))
+            + (f"_box{box:g}" if box != 1.0 else "") + ("" if half else "_full"))
 
 
 def run(g: Geometry, name: str, points: list[tuple[float, float, float]], *,
-        refine: float = 1.0, order: int = 2, box: float = 1.0) -> dict:
+        refine: float = 1.0, order: int = 2, box: float = 1.0, half: bool = True) -> dict:
     """Solve ``points`` (s [m], I [A], offset [m]) not yet in ``fem_tr09_NAME.json``,
     saving after each; consecutive points on one mesh start from the previous A."""
     path = RESULTS / f"fem_tr09_{name}.json"
@@ -411,13 +411,13 @@ def run(g: Geometry, name: str, points: list[tuple[float, float, float]], *,
                      "box_below": g.box_below * box})
     prev: tuple[float, float, float, np.ndarray] | None = None
     for s, current, off in points:
-        key = _key(s, current, off, refine, order, box)
+        key = _key(s, current, off, refine, order, box, half)
         if key in data:
             continue
         A0 = None
         if prev is not None and prev[0] == s and prev[1] == off:
             A0 = prev[3] * (current / prev[2])
-        pt, A = solve(gb, s, current, off, refine=refine, order=order, A0=A0)
+        pt, A = solve(gb, s, current, off, refine=refine, order=order, A0=A0, half=half)
         prev = (s, off, current, A)
         data[key] = pt.__dict__
         _save(name, data)
@@ -459,13 +459,23 @@ def compare(magnet: mk.Magnet, data: dict, gaps_mm=GAPS_MM, currents=CURRENTS_A 
 def densities(magnet: mk.Magnet, data: dict, s: float, current: float) -> list[dict]:
     """Mean flux densities [T] per pole (rear circuit, poles 7-12) and region: FEM
     (position average) and network.  Regions: core (mid-coil), shoe (between coil and
-    face), teeth (FEM: the most loaded tooth of the pole pitch at mid-height and at the
-    tips; network: the gap branch's tooth element), pole back and stator yoke (the
-    segment towards the next pole)."""
+    face; network: the core segment there), teeth (FEM: the most loaded tooth of the
+    pole pitch at mid-height and at the tips; network: the gap branch's tooth element),
+    pole back and stator yoke (the segment towards the next pole)."""
     g = Geometry.from_magnet(magnet)
     pts = [data[_key(s, current, o, GRID_REFINE)] for o in OFFSETS]
     net = network(magnet, s, current)["flux"]
     d = g.depth
+    nseg = int(magnet.parameters["magnet"].get("coil_segments", 3))
+    h = g.hc / nseg
+    y_nodes = [g.hf + (j + 0.5) * h for j in range(nseg)]
+
+    def core_flux(p: str, y: float) -> float:
+        """Network core flux at depth y below the face (the segment holding y)."""
+        if f"core_{p}" in net:                       # the core in one branch
+            return abs(net[f"core_{p}"])
+        return abs(net[f"core_{p}_{sum(yn < y for yn in y_nodes)}"])
+
     rows = []
     for k in range(g.poles // 2 + 1, g.poles + 1):
         def fem(tag: str, area: float | None, k: int = k) -> float:
@@ -477,8 +487,9 @@ def densities(magnet: mk.Magnet, data: dict, s: float, current: float) -> list[d
         teeth = g.lp * d * (1.0 - g.slot_open / g.slot_pitch)
         rows.append({
             "pole": k,
-            "core": (fem("core", g.lp * d), abs(net[f"core_{p}"]) / (g.lp * d)),
-            "shoe": (fem("shoe", g.lp * d), float("nan")),
+            "core": (fem("core", g.lp * d),
+                     core_flux(p, g.hf + 0.5 * g.hc - 1e-9) / (g.lp * d)),
+            "shoe": (fem("shoe", g.lp * d), core_flux(p, 0.5 * g.hf) / (g.lp * d)),
             "teeth": (fem("tooth_max_B", None), abs(net[f"gap_{p}"]) / teeth),
             "tips": (fem("tip_max_B", None), float("nan")),
             "back": (fem("back", g.hb * d),
@@ -506,6 +517,7 @@ def main(argv: list[str] | None = None) -> None:
     ap.add_argument("--refine", type=float, default=1.0)
     ap.add_argument("--grid", action="store_true", help="the gap x current x offset grid")
     ap.add_argument("--compare", action="store_true", help="network vs the recorded grid")
+    ap.add_argument("--convergence", action="store_true", help="mesh, order, box, half model")
     args = ap.parse_args(argv)
     mag = mk.load_magnet(args.magnet, eddy_currents=False).with_options(end_effects=False)
     g = Geometry.from_magnet(mag)
@@ -518,6 +530,14 @@ def main(argv: list[str] | None = None) -> None:
         return
     if args.compare:
         print(table(compare(mag, _load("grid"))))  # type: ignore[arg-type]
+    if args.convergence:
+        # mesh (sizes / 0.7, 1, 1.4), element order, air box, and the half model at a
+        # position whose slot pattern is not mirror-symmetric against the whole magnet
+        for r in (GRID_REFINE, 1.0, 1.4):
+            run(g, "convergence", [(0.010, 80.0, 0.0)], refine=r)
+        run(g, "convergence", [(0.010, 80.0, 0.0)], refine=1.4, order=1)
+        run(g, "convergence", [(0.010, 80.0, 0.0)], refine=GRID_REFINE, box=1.5)
+        run(g, "convergence", [(0.010, 80.0, 0.0215)], refine=GRID_REFINE, half=False)
     if args.grid:
         order = (10.0, 20.0, 6.0)                # the most telling gaps first
         pts = [(s * 1e-3, i, o) for s in order for o in OFFSETS for i in CURRENTS_A]
