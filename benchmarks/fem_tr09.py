@@ -358,6 +358,19 @@ def region_fluxes(basis, A: np.ndarray, g: Geometry, s: float, offset: float,  #
 # ---------------------------------------------------------------------------------------
 
 
+def cut_magnet(name: str = "tr09-standard", flux_paths: str = "split") -> mk.Magnet:
+    """The magnet's network as a longitudinal cut (``end_effects = false``) with the given
+    ``flux_paths`` (``"split"``: the paths checked against this FEM; ``"paper"``: the
+    former default), without eddy elements."""
+    base = mk.load_magnet(name, eddy_currents=False)
+    params = dict(base.parameters)
+    params["magnet"] = {**params["magnet"], "end_effects": False, "flux_paths": flux_paths}
+    params["provenance"] = {**params["provenance"],
+                            "magnet.end_effects": "[E] modelling choice: 2-D cut",
+                            "magnet.flux_paths": "[E] modelling choice"}
+    return mk.build_magnet(params, options=base.options, source=base.source)
+
+
 def network(magnet: mk.Magnet, s: float, current: float) -> dict:
     """The network's statics at one point: force, psi, L (both currents together),
     pole forces and branch fluxes."""
@@ -515,11 +528,12 @@ def main(argv: list[str] | None = None) -> None:
     ap.add_argument("--magnet", default="tr09-standard")
     ap.add_argument("--probe", nargs=3, type=float, metavar=("S_MM", "I_A", "OFFSET_MM"))
     ap.add_argument("--refine", type=float, default=1.0)
+    ap.add_argument("--flux-paths", default="split", help="network to compare: split, paper")
     ap.add_argument("--grid", action="store_true", help="the gap x current x offset grid")
     ap.add_argument("--compare", action="store_true", help="network vs the recorded grid")
     ap.add_argument("--convergence", action="store_true", help="mesh, order, box, half model")
     args = ap.parse_args(argv)
-    mag = mk.load_magnet(args.magnet, eddy_currents=False).with_options(end_effects=False)
+    mag = cut_magnet(args.magnet, args.flux_paths)
     g = Geometry.from_magnet(mag)
     if args.probe:
         s, current, off = args.probe

@@ -16,8 +16,12 @@ Longitudinal cut (x along the track, poles hang under the stator, see docs/magne
       core_1 ...
         K1 ---back--- K2 ---back--- K3 ...      pole back (solid)
 
-Per pole k: the core split along its coil into ``coil_segments`` (K, default 3) strips as
-the U-magnet's legs, ``core_k_j`` (K_k -> C_k_K ... C_k_1 -> H_k, each segment with the
+``flux_paths = "paper"`` (default) is the former network: one core branch ``core_k`` with
+the whole coil, the flank fringing in the gap branch, the grooves' bottom in series with the
+gap, the window leakage ``leak_pp_k`` at the coil's energy-equivalent height ``h_c/3``.
+``flux_paths = "split"`` (the paths a 2-D FEM led to, docs/validation_fem.md) is drawn
+above.  Per pole k: the core split along its coil into ``coil_segments`` (K, default 3)
+strips as the U-magnet's legs, ``core_k_j`` (K_k -> C_k_K ... C_k_1 -> H_k, each segment with the
 turns of the coil it holds, saturable, eddy currents); ``gap_k`` (H_k -> S_k: air gap of the
 face with Carter's coefficient of the stator slots and the recessed linear-generator
 grooves as slots of the face, in series with the saturable stator teeth under the face);
@@ -95,8 +99,10 @@ MAGNET_SCHEMA = {
     "material": Schema(str),
     "resistivity": Schema(float, required=False, unit="ohm m"),
     "end_effects": Schema(bool, required=False, default=True),
+    "flux_paths": Schema(str, required=False, default="paper"),
     "coil_segments": Schema(int, required=False, default=3, unit="-"),
 }
+FLUX_PATHS = ("paper", "split")
 CIRCUITS_SCHEMA = {
     "names": Schema(list),
     "assignment": Schema(list),
@@ -196,7 +202,14 @@ def build_levitation_magnet(params: Mapping[str, Any], materials: Mapping[str, M
     # LIG grooves: deeper than half their width (the bundled files: 20 mm x 10 mm), their
     # flux enters through the side walls as into a slot: Carter's slot loss on the whole
     # face; shallow ones: the groove bottom in series with the gap
-    deep = dg >= 0.5 * bg
+    if m["flux_paths"] not in FLUX_PATHS:
+        raise ParameterFileError(f"[magnet] flux_paths = {m['flux_paths']!r}: expected one of "
+                                 f"{', '.join(map(repr, FLUX_PATHS))}")
+    split = m["flux_paths"] == "split"
+    if not split and "coil_segments" in params["magnet"]:
+        raise ParameterFileError("[magnet] coil_segments applies to flux_paths = \"split\" "
+                                 "only; remove it or set flux_paths = \"split\"")
+    deep = split and dg >= 0.5 * bg
     face_area = (lp - (0 if deep else ng) * bg) * wp
     grooves = ((ng * bg * wp, dg),) if ng > 0 and not deep else ()
     face_slots = ((wp, bg),) * ng if deep else ()
@@ -207,6 +220,8 @@ def build_levitation_magnet(params: Mapping[str, Any], materials: Mapping[str, M
     # window's teeth), not in the teeth under the face; the along-track edges (end
     # effects) land on the overhang of the face's own teeth and stay in the gap branch
     edges: list[tuple[float, float]] = []
+    if options.fringing and not split:
+        edges += [(wp, hf), (wp, hf)]                         # flanks facing the neighbours
     if options.fringing and ends and overhang > 0.0:
         r = min(hf, overhang)                                 # limited by the stator edge
         edges += [(lp, r), (lp, r)]
@@ -219,7 +234,7 @@ def build_levitation_magnet(params: Mapping[str, Any], materials: Mapping[str, M
     # y_j = h_f + (j - 1/2) h below the face, h = h_c/K; segments from the face up: tip
     # (to C_1), K - 1 coil strips, top (C_K to the pole back's mid-line); turns in
     # proportion to the coil they hold, so leakage can leave part-way along the winding
-    nseg = m["coil_segments"]
+    nseg = m["coil_segments"] if split else 1
     if not 1 <= nseg <= 12:
         raise ParameterFileError(f"[magnet] coil_segments = {nseg}: allowed are 1 ... 12 "
                                  "strips along the coil")
@@ -227,6 +242,8 @@ def build_levitation_magnet(params: Mapping[str, Any], materials: Mapping[str, M
     y_nodes = [hf + (j + 0.5) * h for j in range(nseg)]
     seg_len = [y_nodes[0], *([h] * (nseg - 1)), core_len - y_nodes[-1]]
     seg_turns = [0.5 / nseg, *([1.0 / nseg] * (nseg - 1)), 0.5 / nseg]
+    if not split:                          # "paper": one core branch with the whole coil
+        seg_len, seg_turns = [core_len], [1.0]
 
     # ---- leakage estimates (Roters' method, docs/magnets.md)
     # neighbour poles: parallel faces across the window, flank below the coil (between the
@@ -234,13 +251,15 @@ def build_levitation_magnet(params: Mapping[str, Any], materials: Mapping[str, M
     # along the coil because the nodes see the turns below them (energy: h_c/3 as K -> oo)
     g_pp_face = MU0 * wp * hf / window
     g_pp_strip = MU0 * wp * h / window
+    if not split:                          # energy-equivalent height h_c/3 of the coil
+        g_pp_face = MU0 * wp * (hc / 3.0 + hf) / window
     # flanks facing the window, per coil strip [y - h/2, y + h/2]: Roters' quarter circles
     # to the face level and on across the gap to the stator (a fringe strip), while the
     # circle lands before the window's centre plane (y <= window/2; beyond it the window
     # leakage takes over); both flanks of every pole (an end pole's outer flank faces the
     # stator beyond the magnet)
     strips = [(y - 0.5 * h, min(y + 0.5 * h, 0.5 * window)) for y in y_nodes
-              if y - 0.5 * h < 0.5 * window]
+              if y - 0.5 * h < 0.5 * window] if split else []
     # around the coil into the own pole back: half hollow cylinders around the coil's
     # cross-section (inner radius h_c/2, radial extent t_c) along the coil sides that do
     # not face a neighbour pole: both across-track sides, plus the outer side of an end pole
@@ -257,7 +276,8 @@ def build_levitation_magnet(params: Mapping[str, Any], materials: Mapping[str, M
 
     def chain(k: int) -> list[str]:
         """Nodes of pole k's core from the face to the pole back."""
-        return [f"H{k + 1}", *(f"C{k + 1}_{j + 1}" for j in range(nseg)), f"K{k + 1}"]
+        inner = [f"C{k + 1}_{j + 1}" for j in range(nseg)] if split else []
+        return [f"H{k + 1}", *inner, f"K{k + 1}"]
 
     branches: list[Branch] = []
     coil_turns: list[list[tuple[str, float]]] = []
@@ -265,8 +285,8 @@ def build_levitation_magnet(params: Mapping[str, Any], materials: Mapping[str, M
         p = gaps[k]
         nodes = chain(k)
         turns = []
-        for j in range(nseg + 1):
-            name = f"core_{p}_{j}"
+        for j in range(len(seg_len)):
+            name = f"core_{p}_{j}" if split else f"core_{p}"
             core: list[Element] = [IronPath(f"iron_{name}", seg_len[j], lp * wp, core_mat)]
             if options.eddy_currents:
                 # every segment carries the eddy currents of its own length
@@ -280,11 +300,11 @@ def build_levitation_magnet(params: Mapping[str, Any], materials: Mapping[str, M
                    recesses=grooves, face_slots=face_slots, **slots),
             IronPath(f"iron_teeth_{p}", st["slot_depth"], tooth_area, stator_mat),
         )))
-        if options.fringing or options.leakage:
+        if split and (options.fringing or options.leakage):
             # the window's teeth beside the face carry what lands there
             branches.append(Branch(f"window_{p}", f"W{k + 1}", f"S{k + 1}", (
                 IronPath(f"iron_window_teeth_{p}", st["slot_depth"], window_teeth, stator_mat),)))
-        if options.fringing:
+        if split and options.fringing:
             branches.append(Branch(f"fringe_{p}", f"H{k + 1}", f"W{k + 1}", (
                 FringePermeance(f"fringe_{p}", gap_input=p, width=2.0 * wp, radius=hf,
                                 **slots),)))
@@ -308,7 +328,7 @@ def build_levitation_magnet(params: Mapping[str, Any], materials: Mapping[str, M
         if options.leakage:
             branches.append(Branch(f"leak_pp_{q}", f"H{k + 1}", f"H{k + 2}",
                                    (LeakagePermeance(f"leak_pp_{q}", g_pp_face),)))
-            for j in range(nseg):
+            for j in range(nseg if split else 0):
                 branches.append(Branch(f"leak_pp_{q}_{j + 1}", chain(k)[j + 1],
                                        chain(k + 1)[j + 1],
                                        (LeakagePermeance(f"leak_pp_{q}_{j + 1}", g_pp_strip),)))
@@ -317,7 +337,7 @@ def build_levitation_magnet(params: Mapping[str, Any], materials: Mapping[str, M
     circuits = []
     n = m["turns_per_pole"]
     for i, cname in enumerate(names):
-        coils = tuple(Coil(seg, n * share, 1 if k % 2 == 0 else -1, pole=gaps[k])
+        coils = tuple(Coil(seg, n * share, 1 if k % 2 == 0 else -1, pole=gaps[k] if split else None)
                       for k in range(poles) if assign[k] == i + 1 for seg, share in coil_turns[k])
         npoles = sum(1 for a in assign if a == i + 1)
         circuits.append(Circuit(cname, m["resistance_per_pole"] * npoles, coils))
