@@ -116,6 +116,9 @@ SWITCH_NAMES = ("saturation", "fringing", "leakage", "eddy_currents")
 OPTION_NAMES = (*SWITCH_NAMES, "eddy_model", "eddy_layers")
 #: Magnet kinds whose builder has the ``"ladder"`` eddy model.
 LADDER_KINDS = ("u_magnet",)
+#: Magnet kinds whose ``[magnet]`` table has the ``end_effects`` key (true: the terms of the
+#: finite extent across the 2-D cut; ``Magnet.with_options(end_effects=...)`` sets it).
+END_EFFECTS_KINDS = ("u_magnet", "levitation_magnet")
 
 #: Winding current density [A/m^2], averaged over the coil's cross-section, above which a
 #: current is reported as implausible (:class:`PlausibleRange`): at 100 A/mm^2 even a
@@ -257,20 +260,32 @@ class Magnet:
         **changes : bool, str or int
             Any of ``saturation``, ``fringing``, ``leakage``, ``eddy_currents`` (bool),
             ``eddy_model`` (str), ``eddy_layers`` (int); see :class:`ModelOptions`.
+            ``end_effects`` (bool, kinds in :data:`END_EFFECTS_KINDS`) is a key of the
+            ``[magnet]`` table: it is set there, so ``parameters`` and
+            ``parameter_hash`` of the result show it.
 
         Raises
         ------
         InputError
-            An unknown switch name or a value that is not True/False.
+            An unknown switch name, a value that is not True/False, or ``end_effects``
+            for a kind without it.
         """
-        unknown = sorted(set(changes) - set(OPTION_NAMES))
+        unknown = sorted(set(changes) - {*OPTION_NAMES, "end_effects"})
         if unknown:
             raise InputError(f"with_options: unknown switch(es) {unknown}; the physics "
                              f"switches are {', '.join(SWITCH_NAMES)} (True or False), "
-                             f"eddy_model ({' or '.join(map(repr, EDDY_MODELS))}) and "
-                             f"eddy_layers (1 ... {max(LADDER_COEFFICIENTS)})")
+                             f"eddy_model ({' or '.join(map(repr, EDDY_MODELS))}), "
+                             f"eddy_layers (1 ... {max(LADDER_COEFFICIENTS)}) and "
+                             "end_effects (True or False)")
+        params = self.parameters
+        if "end_effects" in changes:
+            ends = flag(changes.pop("end_effects"), "end_effects")
+            if self.kind not in END_EFFECTS_KINDS:
+                raise InputError(f"with_options: end_effects is not a key of kind "
+                                 f"{self.kind!r} (only of {', '.join(END_EFFECTS_KINDS)})")
+            params = {**params, "magnet": {**params["magnet"], "end_effects": ends}}
         opts = {**self.options.__dict__, **changes}
-        return _build(self.parameters, options=ModelOptions(**opts), source=self.source,
+        return _build(params, options=ModelOptions(**opts), source=self.source,
                       provenance=self.provenance, check_provenance=False)
 
 
