@@ -159,7 +159,26 @@ class PlausibleRange:
     @classmethod
     def from_geometry(cls, *, gap_m: float, gap_basis: str, turns: float,
                       winding_area_m2: float, winding: str) -> PlausibleRange:
-        """Bounds from a pole dimension and one coil (``turns`` on ``winding_area_m2``)."""
+        """Bounds from a pole dimension and one coil (``turns`` on ``winding_area_m2``).
+
+        Parameters
+        ----------
+        gap_m : float
+            The largest plausible gap [m] (a pole dimension of the magnet).
+        gap_basis : str
+            What ``gap_m`` is, for the warning text (e.g. ``"the pole width"``).
+        turns : float
+            Turns of the coil [-].
+        winding_area_m2 : float
+            Copper cross-section of the coil's winding [m^2]; the current bound is
+            ``MAX_CURRENT_DENSITY_A_PER_M2 * winding_area_m2 / turns`` [A].
+        winding : str
+            Name of the winding, for the warning text.
+
+        Returns
+        -------
+        PlausibleRange
+        """
         current = MAX_CURRENT_DENSITY_A_PER_M2 * winding_area_m2 / turns
         basis = (f"{MAX_CURRENT_DENSITY_A_PER_M2 / 1e6:g} A/mm^2 in {winding} "
                  f"({winding_area_m2 * 1e6:.4g} mm^2, {turns:g} turns)")
@@ -170,6 +189,17 @@ class PlausibleRange:
         """Warn (:class:`PlausibilityWarning`) if gaps [m] or currents [A] exceed the bounds.
 
         ``gaps`` and ``currents`` are numbers or arrays of any shape (NaN ignored).
+
+        Parameters
+        ----------
+        gaps : float or array_like, optional
+            Gaps [m] to check against :attr:`max_gap_m`.
+        currents : float or array_like, optional
+            Currents [A] to check (by magnitude) against :attr:`max_current_A`.
+        where : str
+            Prefix of the warning text (what is being checked, e.g. a command or key).
+        stacklevel : int
+            Passed to :func:`warnings.warn` so the warning points at the caller's line.
         """
         prefix = f"{where}: " if where else ""
         if gaps is not None:
@@ -470,6 +500,24 @@ def register_kind(kind: str, builder: Builder, tables: tuple[str, ...],
 def build_magnet(parameters: Mapping[str, Any], *, options: ModelOptions | None = None,
                  source: str = "", provenance: Mapping[str, str] | None = None) -> Magnet:
     """Build a :class:`Magnet` from a parsed parameter dictionary.
+
+    Parameters
+    ----------
+    parameters : mapping
+        The parsed parameter file: a ``[magnet]`` table with ``kind`` and the kind's
+        tables (lengths in m, currents in A, resistivities in ohm m, as in the bundled
+        TOML files).
+    options : ModelOptions, optional
+        Physics switches (saturation, eddy currents, ...); default all on.
+    source : str
+        Where the parameters came from (a file name), used in messages.
+    provenance : mapping of str to str, optional
+        Extra ``"table.key"`` -> provenance tag entries (``[P]``, ``[R]``, ``[E]`` ...),
+        merged under the ``[provenance]`` table of ``parameters`` (which wins).
+
+    Returns
+    -------
+    Magnet
 
     Raises
     ------

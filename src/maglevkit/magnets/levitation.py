@@ -119,7 +119,17 @@ STATOR_SCHEMA = {
 
 
 def pole_gap_names(poles: int) -> tuple[str, ...]:
-    """Gap input names ``("p01", "p02", ...)`` of a magnet with ``poles`` poles."""
+    """Gap input names ``("p01", "p02", ...)`` of a magnet with ``poles`` poles.
+
+    Parameters
+    ----------
+    poles : int
+        Number of poles.
+
+    Returns
+    -------
+    tuple of str
+    """
     return tuple(f"p{k:02d}" for k in range(1, poles + 1))
 
 
