@@ -40,6 +40,7 @@ import casadi as ca
 import numpy as np
 
 from ..errors import InputError, OutOfRangeError, SolverError
+from ..validation import describe, flag
 from .compiled import COMPILE_MODES, build_source, cache_directory, compile_function, find_compiler
 from .current import (
     EXTRA_CELLS,
@@ -242,8 +243,7 @@ class MagnetBank:
         if not (isinstance(max_step_s, (int, float)) and math.isfinite(max_step_s)
                 and max_step_s > 0):
             raise InputError(f"max_step_s = {max_step_s!r} must be a finite number > 0")
-        if not isinstance(extrapolate, bool):
-            raise InputError(f"extrapolate = {extrapolate!r} must be True or False")
+        flag(extrapolate, "extrapolate")
         self.gap_inputs = gap_inputs
         self.interpolation = interpolation
         self.compiled_mode = compiled
@@ -251,6 +251,9 @@ class MagnetBank:
         self.max_step_s = float(max_step_s)
         self.extrapolate = extrapolate
         self._cache_dir = cache_dir
+        if not isinstance(members, (Mapping, Sequence)) or isinstance(members, (str, bytes)):
+            raise InputError(f"members = {describe(members)}: expected a mapping of names to "
+                             "magnets or maps, or a list of (name, magnet or maps) pairs")
         pairs = list(members.items()) if isinstance(members, Mapping) else list(members)
         if not pairs:
             raise InputError("a magnet bank needs at least one member")

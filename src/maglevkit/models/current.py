@@ -38,7 +38,7 @@ import casadi as ca
 import numpy as np
 
 from ..errors import InputError, OutOfRangeError, SolverError
-from ..validation import real_array
+from ..validation import flag, real_array
 from .inputs import check_initial_choice, check_step, simulation_inputs
 
 __all__ = ["CurrentModel", "CurrentModelLinearization", "CurrentModelState", "CurrentOutputs",
@@ -254,11 +254,12 @@ class CurrentModel:
         if not (math.isfinite(max_step_s) and max_step_s > 0):
             raise InputError(f"max_step_s = {max_step_s!r} must be a finite number > 0")
         self.maps = maps
-        self.extrapolate = extrapolate
+        # one flag check everywhere: "no" would be truthy (MagnetBank, load_magnet refuse it)
+        self.extrapolate = flag(extrapolate, "extrapolate")
         self.method = method
         self.rtol, self.atol = rtol, atol
         self.max_step_s = float(max_step_s)
-        self.jit = bool(jit)
+        self.jit = flag(jit, "jit")
         self.circuit_names: tuple[str, ...] = maps.circuits
         groups = maps.pole_groups
         self.gap_names: tuple[str, ...] = tuple(
@@ -740,6 +741,9 @@ class CurrentModel:
         Same contract as :meth:`maglevkit.models.flux.FluxModel.step`: ``gaps`` [m] at the
         start of the step (None keeps the state's), ``gap_rates`` [m/s] over the step.
         """
+        if not isinstance(state, CurrentModelState):
+            raise InputError(f"state must be a CurrentModelState (from CurrentModel."
+                             f"initial_state or step), got {type(state).__name__}")
         dt = check_step(dt)
         u = _per_circuit(voltages, self.circuit_names, "voltages")
         g = state.gaps_m if gaps is None else _per_gap(gaps, self.gap_names, positive=True)
