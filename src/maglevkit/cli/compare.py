@@ -133,6 +133,7 @@ def compare(
     try:
         maps = load_maps(maps_file, magnet=mag)
         if scenario is None:
+            assert s0 is not None and i0 is not None   # checked above
             cases = standard_scenarios(mag, gap_m=s0, current_A=i0)
             meta = {"magnet": mag.name, "gap_m": s0, "current_A": i0}
         else:
