@@ -3,6 +3,13 @@
 from __future__ import annotations
 
 import copy
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pytest
@@ -52,3 +59,83 @@ def test_a_non_finite_statics_result_is_a_solver_error(u_magnet: mk.Magnet,
         m = mk.build_magnet(p)
     with pytest.raises(mk.SolverError):
         mk.solve_statics(m, gaps=0.01, currents=30.0)
+
+
+# ------------------------------------------------------------ hangs and tracebacks
+ENTRY = Path(sys.executable).parent / "maglevkit"
+
+
+def _children(pid: int) -> list[int]:
+    """Live child processes of ``pid`` (from /proc; zombies excluded)."""
+    out = []
+    for stat in Path("/proc").glob("[0-9]*/stat"):
+        try:
+            fields = stat.read_text().rsplit(")", 1)[1].split()
+        except OSError:
+            continue
+        if int(fields[1]) == pid and fields[0] != "Z":
+            out.append(int(stat.parent.name))
+    return out
+
+
+def _alive(pid: int) -> bool:
+    try:
+        return Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0] != "Z"
+    except OSError:
+        return False
+
+
+def _interrupt(cmd: list[str], ready: Any, *, group: bool, cwd: Path,
+               timeout_s: float = 120.0) -> tuple[subprocess.Popen[str], str, float]:
+    """Start ``cmd`` in its own session, wait for ``ready(proc)``, send SIGINT (to the main
+    process only or to its group); returns the process, its stderr and the seconds it took
+    to exit after the signal."""
+    # the package under test, also from another folder
+    src = str(Path(mk.__file__).resolve().parents[1])
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join(
+        [src, *filter(None, [os.environ.get("PYTHONPATH")])])}
+    proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                            cwd=cwd, start_new_session=True, env=env)
+    try:
+        t0 = time.monotonic()
+        while not ready(proc) and proc.poll() is None and time.monotonic() - t0 < timeout_s:
+            time.sleep(0.1)
+        if proc.poll() is not None:
+            _, err = proc.communicate()
+            pytest.fail(f"ended before the signal (rc {proc.returncode}): {err[-2000:]}")
+        if group:
+            os.killpg(proc.pid, signal.SIGINT)
+        else:
+            proc.send_signal(signal.SIGINT)
+        t1 = time.monotonic()
+        _, err = proc.communicate(timeout=30)
+        return proc, err, time.monotonic() - t1
+    finally:
+        if proc.poll() is None:    # pragma: no cover - a hang: clean up, the test fails
+            os.killpg(proc.pid, signal.SIGKILL)
+            proc.communicate()
+
+
+@pytest.mark.skipif(not Path("/proc/self/stat").exists(), reason="needs /proc (Linux)")
+@pytest.mark.parametrize("group", [False, True], ids=["main-only", "group"])
+def test_sweep_with_workers_ends_promptly_on_sigint(group: bool, tmp_path: Path) -> None:
+    # was: SIGINT to the main process printed "interrupted" and never exited (it waited on
+    # its pool workers); a second SIGINT gave a traceback and left orphaned workers
+    seen: set[int] = set()
+
+    def workers_busy(proc: subprocess.Popen[str]) -> bool:
+        kids = _children(proc.pid)
+        seen.update(kids)
+        # the resource tracker and two spawned workers, given time to start a case
+        if len(kids) >= 3 and not hasattr(workers_busy, "t"):
+            workers_busy.t = time.monotonic()  # type: ignore[attr-defined]
+        return hasattr(workers_busy, "t") and time.monotonic() - workers_busy.t > 3.0  # type: ignore[attr-defined]
+
+    cmd = [str(ENTRY), "sweep", "vehicle-speeds", "-o", "s.nc", "--workers", "2"]
+    proc, err, took = _interrupt(cmd, workers_busy, group=group, cwd=tmp_path)
+    assert proc.returncode == 130, err
+    assert took < 10.0, took
+    assert "interrupted:" in err and "Traceback" not in err, err
+    time.sleep(0.5)
+    assert not [p for p in seen if _alive(p)], "pool workers outlived the interrupted sweep"
+    assert not (tmp_path / "s.nc").exists()

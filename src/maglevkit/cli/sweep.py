@@ -88,7 +88,12 @@ def sweep(
             res = run_sweep(spec, executor=executor, workers=workers, resume_dir=folder,
                             retry_failed=retry_failed, progress=progress)
         except KeyboardInterrupt:
+            import signal
+
             from ..sweep import case_path
+
+            # a second Ctrl-C while reporting gave a traceback: the exit is on its way
+            signal.signal(signal.SIGINT, signal.SIG_IGN)
 
             stored = sum(case_path(folder, spec.case_key(c)).is_file() for c in spec.cases())
             info(f"interrupted: {stored} of {spec.n_cases} cases stored in {folder}; run the "

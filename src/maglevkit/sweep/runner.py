@@ -17,6 +17,7 @@ import contextlib
 import json
 import math
 import os
+import time
 from collections.abc import Callable
 from concurrent.futures import Executor, Future, ProcessPoolExecutor, as_completed
 from dataclasses import dataclass
@@ -106,15 +107,66 @@ def _as_executor(executor: Any, workers: int | None) -> tuple[Executor | None, b
             return None, False
         import multiprocessing
 
-        # spawn: fresh interpreters (no fork of a process with threads, e.g. a dask client)
-        return ProcessPoolExecutor(max_workers=n,
-                                   mp_context=multiprocessing.get_context("spawn")), True
+        # spawn: fresh interpreters (no fork of a process with threads, e.g. a dask client);
+        # the workers ignore SIGINT: Ctrl-C is this process's to handle, and it stops them
+        # (a worker interrupted mid-case, or waited for, left the main process hanging)
+        return ProcessPoolExecutor(max_workers=n, mp_context=multiprocessing.get_context("spawn"),
+                                   initializer=_ignore_sigint), True
     if hasattr(executor, "get_executor") and not isinstance(executor, Executor):
         return executor.get_executor(), False      # a dask.distributed Client
     if isinstance(executor, Executor):
         return executor, False
     raise InputError("executor must be None (a local process pool), a concurrent.futures."
                      f"Executor or a dask.distributed Client, got {type(executor).__name__}")
+
+
+def _ignore_sigint() -> None:
+    """Initializer of the local pool's workers: SIGINT (Ctrl-C to the process group) is
+    ignored there; the main process stops the workers (:func:`_stop_pool`)."""
+    import signal
+
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+
+
+def _stop_pool(pool: Executor) -> None:
+    """Stop a local process pool at once: terminate its workers (what waits fails).
+
+    ``shutdown(wait=True)`` after an interrupt waited for the running cases (minutes) and
+    a second Ctrl-C then left orphaned workers behind.
+    """
+    import signal
+    import threading
+
+    procs = list((getattr(pool, "_processes", None) or {}).values())
+    old = None
+    if threading.current_thread() is threading.main_thread():
+        old = signal.signal(signal.SIGINT, signal.SIG_IGN)   # a second Ctrl-C waits for this
+    try:
+        _terminate(procs)
+    finally:
+        if old is not None:
+            signal.signal(signal.SIGINT, old)
+    # not cancel_futures: the pool's manager thread fails the waiting futures itself when
+    # it sees the terminated workers (setting a cancelled one raised InvalidStateError)
+    pool.shutdown(wait=False)
+
+
+def _terminate(procs: list[Any], timeout_s: float = 5.0) -> None:
+    """SIGTERM, then (after ``timeout_s``) SIGKILL; waits on the processes' sentinels
+    (the pool's manager thread may reap them first, so ``join`` could not tell)."""
+    from multiprocessing.connection import wait
+
+    for proc in procs:
+        with contextlib.suppress(Exception):
+            proc.terminate()
+    sentinels = {proc.sentinel: proc for proc in procs}
+    deadline = time.monotonic() + timeout_s
+    while sentinels and time.monotonic() < deadline:
+        for ready in wait(list(sentinels), timeout=max(deadline - time.monotonic(), 0.0)):
+            sentinels.pop(ready, None)  # type: ignore[call-overload]
+    for proc in sentinels.values():
+        with contextlib.suppress(Exception):
+            proc.kill()
 
 
 def run_sweep(spec: SweepSpec, *, executor: Any = None, workers: int | None = None,
@@ -191,6 +243,7 @@ def run_sweep(spec: SweepSpec, *, executor: Any = None, workers: int | None = No
     reporter: Any = ProgressReporter(len(pending), f"sweep {spec.name}", stream=stream) \
         if progress and pending else contextlib.nullcontext()
     pool, owned = _as_executor(executor, workers) if pending else (None, False)
+    stop_now = False
     try:
         with reporter:
             if pool is None:
@@ -214,12 +267,17 @@ def run_sweep(spec: SweepSpec, *, executor: Any = None, workers: int | None = No
                         if progress:
                             reporter.advance()
                 except BaseException:
-                    for f in futures:
-                        f.cancel()
+                    stop_now = True      # interrupted (Ctrl-C) or failed: stop at once
+                    if not owned:        # (our own pool's futures fail with it: a cancelled
+                        for f in futures:  # one made its manager thread raise in 3.11)
+                            f.cancel()
                     raise
     finally:
         if owned and pool is not None:
-            pool.shutdown(wait=True, cancel_futures=True)
+            if stop_now:
+                _stop_pool(pool)
+            else:
+                pool.shutdown(wait=True, cancel_futures=True)
     ds = assemble(spec, results)
     n_failed = int((ds["status"].values != "ok").sum())
     return SweepResult(ds, len(cases), len(pending), n_reused, n_failed)
