@@ -139,3 +139,25 @@ def test_sweep_with_workers_ends_promptly_on_sigint(group: bool, tmp_path: Path)
     time.sleep(0.5)
     assert not [p for p in seen if _alive(p)], "pool workers outlived the interrupted sweep"
     assert not (tmp_path / "s.nc").exists()
+
+
+@pytest.mark.skipif(not Path("/proc/self/stat").exists(), reason="needs /proc (Linux)")
+@pytest.mark.parametrize("group, workers", [(False, "1"), (True, "1"), (False, "2")],
+                         ids=["main-only", "group", "pool-main-only"])
+def test_transient_maps_build_interrupted_exits_130(group: bool, workers: str,
+                                                    tmp_path: Path) -> None:
+    # was: rc 2 "flux model failed ... check the magnet's dimensions", once with pages of
+    # CasADi inputs (CasADi made the SIGINT inside IDAS a failed evaluation)
+    def transient_running(proc: subprocess.Popen[str]) -> bool:
+        return time.monotonic() - transient_running.t0 > 5.0  # type: ignore[attr-defined]
+
+    transient_running.t0 = time.monotonic()  # type: ignore[attr-defined]
+    cmd = [str(ENTRY), "maps", "build", "u-magnet", "-o", "m.nc", "--method", "transient",
+           "--gaps", "0.006:0.014:10", "--currents", "10:40:10", "--workers", workers]
+    proc, err, took = _interrupt(cmd, transient_running, group=group, cwd=tmp_path)
+    assert proc.returncode == 130, err
+    assert took < 10.0, took
+    lines = err.strip().splitlines()
+    assert lines[-1] == "interrupted: no maps written to 'm.nc'", err
+    assert len(lines) < 20 and "Traceback" not in err and "Input 0" not in err, err
+    assert not (tmp_path / "m.nc").exists()

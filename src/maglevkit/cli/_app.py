@@ -14,6 +14,7 @@ Conventions (docs/decisions.md, "Command-line conventions"):
 
 from __future__ import annotations
 
+import contextlib
 import csv
 import io
 import json
@@ -106,6 +107,21 @@ def fail(exc: Exception | str) -> typer.Exit:
     message = " ".join(str(exc).split()) if isinstance(exc, Exception) else exc
     err_console.print(Text.assemble(("error:", "bold red"), " ", message))
     return typer.Exit(code=2)
+
+
+INTERRUPTED_EXIT_CODE = 130
+"""Exit code after Ctrl-C / SIGINT (128 + SIGINT, the shell convention)."""
+
+
+def interrupted(detail: str = "") -> typer.Exit:
+    """Print ``interrupted[: detail]`` on stderr and return the exit with code 130."""
+    import signal
+
+    # a second Ctrl-C while reporting gave a traceback: the exit is on its way
+    with contextlib.suppress(ValueError):   # (not in the main thread)
+        signal.signal(signal.SIGINT, signal.SIG_IGN)
+    err_console.print(f"interrupted{': ' + detail if detail else ''}")
+    return typer.Exit(code=INTERRUPTED_EXIT_CODE)
 
 
 def info(message: str) -> None:

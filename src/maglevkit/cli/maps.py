@@ -8,12 +8,14 @@ from typing import Annotated, Any
 
 import typer
 
+from .._interrupt import deferred_sigint, stop_pool
 from ..errors import InputError, MaglevkitError
 from ._app import (
     app,
     console,
     fail,
     info,
+    interrupted,
     load_magnet_or_exit,
     output_dir,
     output_file,
@@ -125,6 +127,7 @@ def build(
             client.close()
         raise typer.BadParameter(f"--method {method!r}: use one of {', '.join(METHODS)}")
     pool = None
+    built = False
     try:
         mag = load_magnet_or_exit(magnet)
         executor: object
@@ -137,13 +140,24 @@ def build(
             executor = pool
         else:
             executor = None
-        maps = build_maps(mag, gaps=g, currents=c, executor=executor, progress=True,
-                          method=method)
+        with deferred_sigint() as sig:
+            try:
+                maps = build_maps(mag, gaps=g, currents=c, executor=executor, progress=True,
+                                  method=method)
+            except BaseException as exc:
+                # a Ctrl-C, or whatever failure CasADi made of it (a second Ctrl-C)
+                if sig.requested or isinstance(exc, KeyboardInterrupt):
+                    raise interrupted(f"no maps written to {str(output)!r}") from None
+                raise
+        built = True
     except MaglevkitError as exc:
         raise fail(exc) from None
     finally:
         if pool is not None:
-            pool.shutdown()
+            if built:
+                pool.shutdown()
+            else:   # interrupted or failed: stop the workers, do not run the rest
+                stop_pool(pool)
         if client is not None:
             client.close()
     with writing(output, "--output"):

@@ -9,10 +9,9 @@ from typing import Annotated, Any
 import typer
 
 from ..errors import MaglevkitError
-from ._app import app, console, fail, info, output_file, writing
+from ._app import INTERRUPTED_EXIT_CODE, app, console, fail, info, output_file, writing
 
-INTERRUPTED_EXIT_CODE = 130
-"""Exit code after Ctrl-C / SIGINT (128 + SIGINT, the shell convention)."""
+__all__ = ["INTERRUPTED_EXIT_CODE", "sweep"]
 
 
 def _resume_folder(path: Path) -> Path:

@@ -17,7 +17,6 @@ import contextlib
 import json
 import math
 import os
-import time
 from collections.abc import Callable
 from concurrent.futures import Executor, Future, ProcessPoolExecutor, as_completed
 from dataclasses import dataclass
@@ -26,6 +25,7 @@ from typing import IO, Any
 
 import numpy as np
 
+from .._interrupt import stop_pool
 from ..errors import InputError
 from .cases import SUMMARY_UNITS, error_case, run_case
 from .spec import PARAMETERS, SWEEP_FORMAT, SweepSpec
@@ -122,51 +122,10 @@ def _as_executor(executor: Any, workers: int | None) -> tuple[Executor | None, b
 
 def _ignore_sigint() -> None:
     """Initializer of the local pool's workers: SIGINT (Ctrl-C to the process group) is
-    ignored there; the main process stops the workers (:func:`_stop_pool`)."""
+    ignored there; the main process stops the workers (:func:`~maglevkit._interrupt.stop_pool`)."""
     import signal
 
     signal.signal(signal.SIGINT, signal.SIG_IGN)
-
-
-def _stop_pool(pool: Executor) -> None:
-    """Stop a local process pool at once: terminate its workers (what waits fails).
-
-    ``shutdown(wait=True)`` after an interrupt waited for the running cases (minutes) and
-    a second Ctrl-C then left orphaned workers behind.
-    """
-    import signal
-    import threading
-
-    procs = list((getattr(pool, "_processes", None) or {}).values())
-    old = None
-    if threading.current_thread() is threading.main_thread():
-        old = signal.signal(signal.SIGINT, signal.SIG_IGN)   # a second Ctrl-C waits for this
-    try:
-        _terminate(procs)
-    finally:
-        if old is not None:
-            signal.signal(signal.SIGINT, old)
-    # not cancel_futures: the pool's manager thread fails the waiting futures itself when
-    # it sees the terminated workers (setting a cancelled one raised InvalidStateError)
-    pool.shutdown(wait=False)
-
-
-def _terminate(procs: list[Any], timeout_s: float = 5.0) -> None:
-    """SIGTERM, then (after ``timeout_s``) SIGKILL; waits on the processes' sentinels
-    (the pool's manager thread may reap them first, so ``join`` could not tell)."""
-    from multiprocessing.connection import wait
-
-    for proc in procs:
-        with contextlib.suppress(Exception):
-            proc.terminate()
-    sentinels = {proc.sentinel: proc for proc in procs}
-    deadline = time.monotonic() + timeout_s
-    while sentinels and time.monotonic() < deadline:
-        for ready in wait(list(sentinels), timeout=max(deadline - time.monotonic(), 0.0)):
-            sentinels.pop(ready, None)  # type: ignore[call-overload]
-    for proc in sentinels.values():
-        with contextlib.suppress(Exception):
-            proc.kill()
 
 
 def run_sweep(spec: SweepSpec, *, executor: Any = None, workers: int | None = None,
@@ -275,7 +234,7 @@ def run_sweep(spec: SweepSpec, *, executor: Any = None, workers: int | None = No
     finally:
         if owned and pool is not None:
             if stop_now:
-                _stop_pool(pool)
+                stop_pool(pool)
             else:
                 pool.shutdown(wait=True, cancel_futures=True)
     ds = assemble(spec, results)
