@@ -8,14 +8,19 @@ import signal
 import subprocess
 import sys
 import time
+from importlib import resources
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 import pytest
+from typer.testing import CliRunner
 
 import maglevkit as mk
+from maglevkit.cli import app
 from maglevkit.models.bank import MagnetBank
+
+runner = CliRunner()
 
 GAPS = np.linspace(0.006, 0.016, 4)
 CURRENTS = np.linspace(0.0, 60.0, 4)
@@ -161,3 +166,35 @@ def test_transient_maps_build_interrupted_exits_130(group: bool, workers: str,
     assert lines[-1] == "interrupted: no maps written to 'm.nc'", err
     assert len(lines) < 20 and "Traceback" not in err and "Input 0" not in err, err
     assert not (tmp_path / "m.nc").exists()
+
+
+def test_a_vehicle_with_a_non_levitation_magnet_is_refused(tmp_path: Path) -> None:
+    # was: KeyError 'poles' traceback
+    from maglevkit.vehicle.simulation import VehicleModel
+    from maglevkit.vehicle.train import load_vehicle
+
+    text = (resources.files("maglevkit") / "data" / "vehicle" / "tr09.toml").read_text()
+    path = tmp_path / "veh.toml"
+    path.write_text(text.replace('standard_magnet = "tr09-standard"',
+                                 'standard_magnet = "u-magnet"'))
+    with pytest.raises(mk.ParameterFileError,
+                       match=r"\[vehicle\] standard_magnet = 'u-magnet' is a 'u_magnet' magnet; "
+                             "a vehicle's magnets must be levitation magnets"):
+        VehicleModel(load_vehicle(path))
+    res = runner.invoke(app, ["vehicle", "run", str(path), "--duration", "0.01"])
+    assert res.exit_code == 2 and "must be levitation magnets" in res.stderr
+    assert "Traceback" not in res.output
+
+
+@pytest.mark.skipif(not Path("/proc/self/stat").exists(), reason="needs /proc (Linux)")
+def test_vehicle_run_output_is_netcdf_and_its_writes_are_guarded(tmp_path: Path) -> None:
+    # was: -o run.txt wrote netCDF to .txt; -o /proc/x.nc a PermissionError traceback
+    res = runner.invoke(app, ["vehicle", "run", "--duration", "0.01", "-o",
+                              str(tmp_path / "run.txt")])
+    assert res.exit_code == 2 and "format 'txt'; use one of .nc" in res.stderr
+    # /proc is a folder in which nobody (root included) can create a file
+    res = runner.invoke(app, ["vehicle", "run", "--duration", "0.01", "--no-progress",
+                              "-o", "/proc/maglevkit-x.nc"])
+    assert res.exit_code == 2, res.output
+    assert "cannot write -o '/proc/maglevkit-x.nc': " in res.stderr
+    assert "minimum gap" in res.stdout and "Traceback" not in res.output

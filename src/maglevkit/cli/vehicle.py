@@ -8,7 +8,7 @@ from typing import Annotated
 import typer
 
 from ..errors import MaglevkitError
-from ._app import app, fail, info, output_dir, output_file
+from ._app import app, fail, info, output_dir, output_file, writing
 
 vehicle_app = typer.Typer(help="Vehicle runs: heave-pitch train on an elastic guideway.",
                           no_args_is_help=True, rich_markup_mode=None)
@@ -44,7 +44,7 @@ def run(
     from ..vehicle.simulation import VehicleModel, parse_failure, parse_irregularity
     from ..vehicle.train import load_vehicle
 
-    output = output_file(output, "-o")
+    output = output_file(output, "-o", formats=("nc",))   # netCDF, as sweep -o
     if plot is not None:
         plot = output_dir(plot, "--plot")
     try:
@@ -65,10 +65,13 @@ def run(
         raise fail(exc) from None
     typer.echo(res.report())
     if output is not None:
-        res.to_netcdf(output)
+        with writing(output, "-o"):
+            res.to_netcdf(output)
         info(f"wrote {output}")
     if plot is not None:
         from ..vehicle.plots import plot_vehicle_run
 
-        for p in plot_vehicle_run(res.dataset, plot):
+        with writing(plot, "--plot"):
+            written = plot_vehicle_run(res.dataset, plot)
+        for p in written:
             info(f"wrote {p}")

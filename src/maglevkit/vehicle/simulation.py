@@ -30,7 +30,7 @@ from typing import Any
 
 import numpy as np
 
-from ..errors import InputError, MaglevkitError, OutOfRangeError, SolverError
+from ..errors import InputError, MaglevkitError, OutOfRangeError, ParameterFileError, SolverError
 from .guideway import Guideway
 from .heave import STANDARD_GRAVITY
 from .mechanics import VehicleMechanics
@@ -187,6 +187,12 @@ class VehicleModel:
         kinds = {"standard": load_magnet(train.standard_magnet), "bow": load_magnet(train.bow_magnet)}
         self.magnets = kinds
         for kind, mag in kinds.items():
+            if mag.kind != "levitation_magnet":   # was: KeyError 'poles'
+                source = train.standard_magnet if kind == "standard" else train.bow_magnet
+                raise ParameterFileError(
+                    f"{train.source or 'vehicle file'}: [vehicle] {kind}_magnet = {source!r} is "
+                    f"a {mag.kind!r} magnet; a vehicle's magnets must be levitation magnets "
+                    "(kind = \"levitation_magnet\", e.g. the bundled tr09-standard and tr09-bow)")
             par = mag.parameters["magnet"]
             length = float(par["poles"]) * float(par["pole_pitch"])
             if abs(length - train.magnet_length_m) > 1e-3:
