@@ -198,3 +198,43 @@ def test_vehicle_run_output_is_netcdf_and_its_writes_are_guarded(tmp_path: Path)
     assert res.exit_code == 2, res.output
     assert "cannot write -o '/proc/maglevkit-x.nc': " in res.stderr
     assert "minimum gap" in res.stdout and "Traceback" not in res.output
+
+
+def test_maps_cache_folder_is_created_only_as_its_last_level(tmp_path: Path) -> None:
+    # was: --maps-cache /nonexistent/dir created both levels although nothing else does
+    target = tmp_path / "missing" / "cache"
+    res = runner.invoke(app, ["vehicle", "run", "--duration", "0.01", "--no-progress",
+                              "--maps-cache", str(target)])
+    assert res.exit_code == 2
+    assert f"the directory {str(target.parent)!r} does not exist; create it first" \
+        in " ".join(res.stderr.split())
+    assert not target.parent.exists()
+    afile = tmp_path / "afile"
+    afile.write_text("")
+    with pytest.raises(mk.InputError, match="is a file, not a folder"):
+        from maglevkit.vehicle.mapcache import vehicle_maps
+
+        vehicle_maps(mk.load_magnet("tr09-standard"), cache_dir=afile)
+
+
+def test_failed_figures_leave_no_empty_folder(tmp_path: Path) -> None:
+    # the U-magnet file has no [operating] table: figures fail before writing anything
+    out = tmp_path / "figs"
+    res = runner.invoke(app, ["figures", "u-magnet", "--out", str(out)])
+    assert res.exit_code == 2 and "error:" in res.stderr
+    assert not out.exists()
+    out.mkdir()            # a folder that was there before stays
+    res = runner.invoke(app, ["figures", "u-magnet", "--out", str(out)])
+    assert res.exit_code == 2 and out.is_dir()
+
+
+def test_a_failure_after_the_end_of_the_run_is_noted() -> None:
+    # was: ignored without a note
+    from maglevkit.vehicle.simulation import VehicleModel, parse_failure
+    from maglevkit.vehicle.train import load_vehicle
+
+    model = VehicleModel(load_vehicle("tr09"), rigid=True)
+    with pytest.warns(mk.MaglevkitWarning, match=r"failure s2m4/front@5: 5 s is after the end "
+                                                 r"of the run \(0.02 s, --duration\)"):
+        model.run(speed_m_per_s=0.0, duration_s=0.02, dt_s=1e-3,
+                  failures=[parse_failure("s2m4/front@5")])

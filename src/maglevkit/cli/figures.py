@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import contextlib
 from pathlib import Path
 from typing import Annotated
 
@@ -26,11 +27,18 @@ def figures(
     from ..figures import write_figures
 
     mag = load_magnet_or_exit(magnet)
+    created = not out.exists()
     output_dir(out, "--out")
     try:
         with writing(out, "figures in"):
             paths = write_figures(mag, out)
-    except MaglevkitError as exc:
-        raise fail(exc) from None
+    except BaseException as exc:
+        # a failed (or interrupted) run leaves no empty folder behind
+        if created:
+            with contextlib.suppress(OSError):
+                out.rmdir()     # only if empty: figures written before stay
+        if isinstance(exc, MaglevkitError):
+            raise fail(exc) from None
+        raise
     for p in paths:
         info(f"wrote {p}")

@@ -433,6 +433,15 @@ class VehicleModel:
                 raise InputError(f"failure: no circuit {f.circuit!r}; circuits are e.g. "
                                  f"{', '.join(names[:3])} ... {names[-1]} (magnet/circuit)")
             fail_t[names.index(f.circuit)] = min(fail_t[names.index(f.circuit)], f.time_s)
+            if f.time_s > n_steps * dt_s:   # was ignored without a note
+                import warnings
+
+                from ..errors import MaglevkitWarning
+
+                warnings.warn(f"failure {f.circuit}@{f.time_s:g}: {f.time_s:g} s is after the "
+                              f"end of the run ({n_steps * dt_s:g} s, --duration); the "
+                              "circuit does not fail in this run", MaglevkitWarning,
+                              stacklevel=2)
         v = float(speed_m_per_s)
         dt = float(dt_s)
         s0 = tr.nominal_gap_m
