@@ -87,6 +87,10 @@ def test_demo_runs_the_whole_chain(tmp_path: Path) -> None:
                  "compare-closed-loop.png"):
         assert (tmp_path / name).stat().st_size > 1000, name
     assert "largest normalised RMS error" in res.output and "speed-up" in res.output
+    # issue 27: the headline numbers come with what they mean
+    assert "; acceptance limit 2 %: met" in res.output
+    assert "not an acceptance metric but the error relative to how much the signal moves" \
+        in res.output
 
 
 def test_compare_cli_with_a_scenario_file(tmp_path: Path) -> None:

@@ -238,3 +238,16 @@ def test_a_failure_after_the_end_of_the_run_is_noted() -> None:
                                                  r"of the run \(0.02 s, --duration\)"):
         model.run(speed_m_per_s=0.0, duration_s=0.02, dt_s=1e-3,
                   failures=[parse_failure("s2m4/front@5")])
+
+
+def test_the_demo_errors_get_a_verdict() -> None:
+    from maglevkit.compare import error_verdicts
+
+    nrms, ac = error_verdicts(0.0128, 0.4267)     # the demo headline
+    assert nrms == "acceptance limit 2 %: met"
+    assert "42.7 % means the reduced model follows only the trend" in ac
+    assert "tens of percent" in ac
+    assert error_verdicts(0.03, 0.01)[0] == "acceptance limit 2 %: NOT met"
+    assert "follows the signal's variation closely" in error_verdicts(0.01, 0.01)[1]
+    assert "approximately" in error_verdicts(0.01, 0.1)[1]
+    assert error_verdicts(0.01, float("nan"))[1] == "no variation to compare with"

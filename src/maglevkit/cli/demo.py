@@ -38,7 +38,7 @@ def demo(
 
     The report goes to stdout, the progress of the maps to stderr.
     """
-    from ..compare import compare_models, standard_scenarios
+    from ..compare import compare_models, error_verdicts, standard_scenarios
     from ..figures import write_figures
     from ..models.current import CurrentModel
     from ..models.statics import solve_statics
@@ -99,11 +99,13 @@ def demo(
     worst = max(main, key=lambda r: r.max_error)
     open_loop = [r.speedup for r in main if r.scenario.kind == "open"]
     _rule("report")
-    console.print(f"largest normalised RMS error (coupling case excluded): "
-                  f"{100 * worst.max_error:.2f} % ({worst.scenario.name})")
     worst_ac = max(main, key=lambda r: r.max_error_ac)
+    nrms_verdict, ac_verdict = error_verdicts(worst.max_error, worst_ac.max_error_ac)
+    console.print(f"largest normalised RMS error (coupling case excluded): "
+                  f"{100 * worst.max_error:.2f} % ({worst.scenario.name}); {nrms_verdict}")
     console.print(f"largest AC-normalised error (RMS over the signal's variation): "
-                  f"{100 * worst_ac.max_error_ac:.2f} % ({worst_ac.scenario.name})")
+                  f"{100 * worst_ac.max_error_ac:.2f} % ({worst_ac.scenario.name}); "
+                  f"{ac_verdict}")
     for r in results:
         if r.scenario.coupling:
             console.print(f"neglected coupling: stepping only '{r.circuit_names[0]}' moves the "
