@@ -251,3 +251,24 @@ def test_the_demo_errors_get_a_verdict() -> None:
     assert "follows the signal's variation closely" in error_verdicts(0.01, 0.01)[1]
     assert "approximately" in error_verdicts(0.01, 0.1)[1]
     assert error_verdicts(0.01, float("nan"))[1] == "no variation to compare with"
+
+
+def test_existing_outputs_are_not_overwritten_without_force(tmp_path: Path) -> None:
+    # was: --csv and -o overwrote existing files silently
+    out = tmp_path / "s.csv"
+    out.write_text("precious\n")
+    args = ["statics", "u-magnet", "--gaps", "0.01", "--currents", "10", "--csv", str(out)]
+    res = runner.invoke(app, args)
+    assert res.exit_code == 2 and out.read_text() == "precious\n"
+    assert f"--csv {str(out)!r} exists; add --force to overwrite it" in res.stderr
+    res = runner.invoke(app, [*args, "--force"])
+    assert res.exit_code == 0 and out.read_text().startswith("gap_m,")
+    for cmd in (["maps", "build", "u-magnet", "-o"], ["sweep", "vehicle-speeds", "-o"],
+                ["vehicle", "run", "-o"]):
+        nc = tmp_path / "x.nc"
+        nc.write_text("")
+        res = runner.invoke(app, [*cmd, str(nc)])
+        assert res.exit_code == 2 and "exists; add --force" in res.stderr, (cmd, res.output)
+    for command in ("statics", "simulate", "maps build", "export fmu", "sweep", "vehicle run"):
+        res = runner.invoke(app, [*command.split(), "--help"])
+        assert "--force" in res.stdout, command

@@ -172,17 +172,26 @@ def plot_formats() -> tuple[str, ...]:
     return tuple(sorted(FigureCanvasBase.get_supported_filetypes()))
 
 
+ForceOption = Annotated[bool, typer.Option(
+    "--force", help="Overwrite existing output files (without it an existing file is an "
+                    "error, reported before the computation).")]
+
+
 def output_file(path: Path | None, option: str, *,
-                formats: Sequence[str] | None = None) -> Path | None:
+                formats: Sequence[str] | None = None, force: bool = True) -> Path | None:
     """Check an output file before the computation (None passes through).
 
-    Refuses a directory, a missing parent directory (nothing is created silently) and,
-    with ``formats``, a suffix outside them.  Raises the CLI's error exit (code 2).
+    Refuses a directory, a missing parent directory (nothing is created silently), with
+    ``formats`` a suffix outside them and, with ``force=False``, an existing file (the
+    command's ``--force`` overwrites).  Raises the CLI's error exit (code 2).
     """
     if path is None:
         return None
     if path.is_dir():
         raise fail(f"{option} {str(path)!r} is a directory; give a file name")
+    if not force and path.exists():
+        raise fail(f"{option} {str(path)!r} exists; add --force to overwrite it, or give "
+                   "another name (nothing was computed)")
     parent = path.parent
     if not parent.is_dir():
         raise fail(f"{option} {str(path)!r}: the directory {str(parent)!r} does not exist; "
@@ -196,11 +205,11 @@ def output_file(path: Path | None, option: str, *,
     return path
 
 
-def plot_file(path: Path | None, option: str = "--plot") -> Path | None:
+def plot_file(path: Path | None, option: str = "--plot", *, force: bool = True) -> Path | None:
     """:func:`output_file` for a figure: the suffix must be a matplotlib format."""
     if path is None:
         return None
-    return output_file(path, option, formats=plot_formats())
+    return output_file(path, option, formats=plot_formats(), force=force)
 
 
 def output_dir(path: Path, option: str) -> Path:

@@ -8,7 +8,7 @@ from typing import Annotated
 import typer
 
 from ..errors import MaglevkitError
-from ._app import app, console, fail, info, load_magnet_or_exit, output_file
+from ._app import ForceOption, app, console, fail, info, load_magnet_or_exit, output_file
 
 export_app = typer.Typer(help="Export the reduced magnet model for other simulation tools.",
                          no_args_is_help=True, rich_markup_mode=None)
@@ -42,13 +42,14 @@ def fmu(
     current: Annotated[float | None, typer.Option(
         help="Start value of the initial currents I0 [A] (default: nominal, as --gap).")]
     = None,
+    force: ForceOption = False,
 ) -> None:
     """Write an FMI 2.0 co-simulation FMU of the reduced model (paper eq. 8) of every
     circuit: inputs voltages, gaps and gap rates; outputs coil currents and forces;
     R_el and R_ec as parameters; the maps embedded as C arrays; compiled by the system C
     compiler.  See docs/fmu.md.
     """
-    output_file(output, "--output")
+    output_file(output, "--output", force=force)
     if output.suffix.lower() != ".fmu":
         raise fail(f"--output {str(output)!r}: an FMU file must end in .fmu")
     from ..export import export_fmu

@@ -11,6 +11,7 @@ import typer
 from .._interrupt import deferred_sigint, stop_pool
 from ..errors import InputError, MaglevkitError
 from ._app import (
+    ForceOption,
     app,
     console,
     fail,
@@ -99,6 +100,7 @@ def build(
     scheduler_timeout: Annotated[float, typer.Option(help="Seconds to wait for the scheduler "
                                                           "before giving up.")]
     = SCHEDULER_TIMEOUT_S,
+    force: ForceOption = False,
 ) -> None:
     """Compute the maps of a magnet on a regular grid and store them as netCDF.
 
@@ -111,7 +113,7 @@ def build(
         raise typer.BadParameter("--workers must be >= 1")
     g = parse_values(gaps, "--gaps", "m")
     c = parse_values(currents, "--currents", "A")
-    output_file(output, "--output")
+    output_file(output, "--output", force=force)
     client = None
     if scheduler:   # before the heavy imports: an unreachable scheduler fails at once
         try:

@@ -10,6 +10,7 @@ import typer
 
 from ..errors import MaglevkitError
 from ._app import (
+    ForceOption,
     FormatOption,
     OutputFormat,
     add_columns,
@@ -77,6 +78,7 @@ def simulate(
                                                    "SVG, ... by the file suffix).")]
     = None,
     fmt: FormatOption = OutputFormat.table,
+    force: ForceOption = False,
 ) -> None:
     """Simulate the flux-based dynamic model (paper eqs. 4-7) under a scenario's signals.
 
@@ -87,8 +89,8 @@ def simulate(
     from ..models.flux import simulate as run_simulation
     from ..models.scenario import load_scenario
 
-    output_file(csv_path, "--csv")
-    plot_file(plot)
+    output_file(csv_path, "--csv", force=force)
+    plot_file(plot, force=force)
     try:
         sc = load_scenario(scenario)
     except MaglevkitError as exc:

@@ -10,6 +10,7 @@ import typer
 
 from ..errors import MaglevkitError
 from ._app import (
+    ForceOption,
     FormatOption,
     OutputFormat,
     add_columns,
@@ -86,6 +87,7 @@ def statics(
     fringing: Annotated[bool, typer.Option(help="Fringing permeances at the pole edges.")] = True,
     leakage: Annotated[bool, typer.Option(help="Leakage permeances.")] = True,
     fmt: FormatOption = OutputFormat.table,
+    force: ForceOption = False,
 ) -> None:
     """Solve the magnet's statics on a gap x current grid (same current in every circuit).
 
@@ -96,8 +98,8 @@ def statics(
 
     g = parse_values(gaps, "--gaps", "m")
     c = parse_values(currents, "--currents", "A")
-    output_file(csv_path, "--csv")
-    plot_file(plot)
+    output_file(csv_path, "--csv", force=force)
+    plot_file(plot, force=force)
     mag = load_magnet_or_exit(magnet, saturation=saturation, fringing=fringing, leakage=leakage,
                               eddy_currents=False)
     try:

@@ -9,7 +9,7 @@ from typing import Annotated, Any
 import typer
 
 from ..errors import MaglevkitError
-from ._app import INTERRUPTED_EXIT_CODE, app, console, fail, info, output_file, writing
+from ._app import INTERRUPTED_EXIT_CODE, ForceOption, app, console, fail, info, output_file, writing
 
 __all__ = ["INTERRUPTED_EXIT_CODE", "sweep"]
 
@@ -41,6 +41,7 @@ def sweep(
              "a rerun skips the cases stored there.")] = None,
     retry_failed: Annotated[bool, typer.Option(help="Run stored failed cases again.")] = False,
     progress: Annotated[bool, typer.Option(help="Progress on stderr.")] = True,
+    force: ForceOption = False,
 ) -> None:
     """Run every combination of a sweep file's parameters and write one netCDF dataset
     (a coordinate per swept parameter; summary per case, errors of failed cases).
@@ -50,7 +51,7 @@ def sweep(
     """
     from ..sweep import load_sweep, run_sweep
 
-    output_file(output, "-o", formats=("nc",))
+    output_file(output, "-o", formats=("nc",), force=force)
     folder = _resume_folder(resume_dir if resume_dir is not None
                             else output.with_suffix(".cases"))
     if workers is not None and workers < 1:

@@ -8,7 +8,7 @@ from typing import Annotated
 import typer
 
 from ..errors import MaglevkitError
-from ._app import app, fail, info, output_dir, output_file, writing
+from ._app import ForceOption, app, fail, info, output_dir, output_file, writing
 
 vehicle_app = typer.Typer(help="Vehicle runs: heave-pitch train on an elastic guideway.",
                           no_args_is_help=True, rich_markup_mode=None)
@@ -38,13 +38,14 @@ def run(
     plot: Annotated[Path | None, typer.Option(help="Write figures (PNG) into this directory.")]
     = None,
     progress: Annotated[bool, typer.Option(help="Progress bar on stderr.")] = True,
+    force: ForceOption = False,
 ) -> None:
     """Run the train at constant speed; report minimum gaps, peak currents, comfort and the
     real-time factor (results on stdout, diagnostics on stderr)."""
     from ..vehicle.simulation import VehicleModel, parse_failure, parse_irregularity
     from ..vehicle.train import load_vehicle
 
-    output = output_file(output, "-o", formats=("nc",))   # netCDF, as sweep -o
+    output = output_file(output, "-o", formats=("nc",), force=force)   # netCDF, as sweep -o
     if plot is not None:
         plot = output_dir(plot, "--plot")
     try:
