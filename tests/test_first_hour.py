@@ -272,3 +272,40 @@ def test_existing_outputs_are_not_overwritten_without_force(tmp_path: Path) -> N
     for command in ("statics", "simulate", "maps build", "export fmu", "sweep", "vehicle run"):
         res = runner.invoke(app, [*command.split(), "--help"])
         assert "--force" in res.stdout, command
+
+
+# ------------------------------------------------------------ unclear
+def test_errors_name_the_users_words_not_python_parameters(tmp_path: Path) -> None:
+    # a 309-digit integer: was an OverflowError (and the number printed in full)
+    p = copy.deepcopy(dict(mk.load_magnet("tr09-standard").parameters))
+    p["magnet"]["turns_per_pole"] = 10 ** 309
+    with pytest.raises(mk.ParameterFileError,
+                       match=r"\[magnet\] turns_per_pole = 10000000\.\.\.0000 \(310 digits\): "
+                             "too large") as info:
+        mk.build_magnet(p)
+    assert len(str(info.value)) < 200
+    # an internal element named: say which file values make it
+    p = copy.deepcopy(dict(mk.load_magnet("tr09-standard").parameters))
+    p["magnet"]["back_height"] = 1e300
+    with pytest.warns(mk.PlausibilityWarning, match=r"\[magnet\] back_height"), \
+            pytest.raises(mk.ParameterFileError, match="conductance comes from the material's "
+                                                       "resistivity and the section"):
+        mk.build_magnet(p)
+    # CLI options by their names (was: duration_s, dt_s, max_substep_s)
+    res = runner.invoke(app, ["vehicle", "run", "--duration", "0.001", "--dt", "0.001"])
+    assert res.exit_code == 2
+    assert "--duration 0.001 s is less than two steps of --dt 0.001 s" in res.stderr
+    res = runner.invoke(app, ["vehicle", "run", "--dt", "0"])
+    assert res.exit_code == 2 and "--dt 0: must be a finite number of seconds > 0" in res.stderr
+    res = runner.invoke(app, ["export", "fmu", "u-magnet", str(tmp_path / "none.nc"),
+                              "--max-substep", "-1", "-o", str(tmp_path / "m.fmu")])
+    assert res.exit_code == 2 and "--max-substep -1: must be a finite number" in res.stderr
+    # no such option "max_current": the knee names the file's value it scanned up to
+    p = copy.deepcopy(dict(mk.load_magnet("tr09-standard").parameters))
+    p["operating"]["nominal_current"] = 0.5
+    from maglevkit.magnets import saturation_knee
+
+    with pytest.raises(mk.InputError, match=r"4 x the file's \[operating\] nominal_current = "
+                                            r"0.5 A\) .*does not saturate") as info:
+        saturation_knee(mk.build_magnet(p))
+    assert "raise max_current" not in str(info.value)

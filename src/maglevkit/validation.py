@@ -278,7 +278,10 @@ def check_plausible(values: Mapping[str, Any], ranges: Mapping[str, Plausible],
         for item in items:
             if _is_bool(item) or not isinstance(item, numbers.Real):
                 continue
-            mag = abs(float(item))
+            try:
+                mag = abs(float(item))
+            except OverflowError:   # an integer beyond float: the file's own check refuses it
+                continue
             if mag == 0.0 or not math.isfinite(mag) or rng.low <= mag <= rng.high:
                 continue
             side = "above" if mag > rng.high else "below"

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 from pathlib import Path
 from typing import Annotated
 
@@ -49,6 +50,8 @@ def fmu(
     R_el and R_ec as parameters; the maps embedded as C arrays; compiled by the system C
     compiler.  See docs/fmu.md.
     """
+    if not (math.isfinite(max_substep) and max_substep > 0):   # was named max_substep_s
+        raise fail(f"--max-substep {max_substep:g}: must be a finite number of seconds > 0")
     output_file(output, "--output", force=force)
     if output.suffix.lower() != ".fmu":
         raise fail(f"--output {str(output)!r}: an FMU file must end in .fmu")

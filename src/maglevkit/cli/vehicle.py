@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 from pathlib import Path
 from typing import Annotated
 
@@ -51,6 +52,14 @@ def run(
     try:
         if not (speed >= 0 and speed < 2000):
             raise typer.BadParameter(f"--speed {speed} km/h must be in 0 ... 2000")
+        # the options' names, not the API's (duration_s, dt_s)
+        for opt, value in (("--duration", duration), ("--dt", dt)):
+            if not (math.isfinite(value) and value > 0):
+                raise typer.BadParameter(f"{opt} {value:g}: must be a finite number of "
+                                         "seconds > 0")
+        if duration < 2 * dt:
+            raise typer.BadParameter(f"--duration {duration:g} s is less than two steps of "
+                                     f"--dt {dt:g} s")
         train = load_vehicle(vehicle)
         fails = [parse_failure(f) for f in (failure or [])]
         prof = parse_irregularity(irregularity, span_length_m=train.section_length_m)

@@ -312,6 +312,12 @@ def _number(v: Any, sc: Schema, key: str, where: str) -> float | int:
         expected = ("a whole number" if sc.kind is int
                     else "a number (a whole count)" if whole else f"a number [{sc.unit}]")
         raise ParameterFileError(f"[{where}] {key} = {v!r}: expected {expected}")
+    if isinstance(v, int) and abs(v) > 2 ** 53:
+        # beyond float (was: OverflowError) or beyond exact counts; not all its digits
+        text = str(v)
+        shown = text if len(text) <= 20 else f"{text[:8]}...{text[-4:]} ({len(text)} digits)"
+        raise ParameterFileError(f"[{where}] {key} = {shown}{unit}: too large (at most "
+                                 f"2^53 = {2 ** 53})")
     if not math.isfinite(v):
         raise ParameterFileError(f"[{where}] {key} = {v!r}: must be finite")
     if whole and not float(v).is_integer():
@@ -527,7 +533,14 @@ def _build(parameters: Mapping[str, Any], *, options: ModelOptions | None, sourc
     try:
         name, network = builder(parameters, materials, options)
     except (ParameterError, MaterialError) as exc:
-        raise ParameterFileError(f"{source or 'parameters'}: {exc}") from None
+        hint = ""
+        if "eddy-current element" in str(exc):
+            # the element is internal: say which file values make it
+            hint = ("; an eddy-current element's conductance comes from the material's "
+                    "resistivity and the section and length of its iron part: one of those "
+                    "values is absurd (a warning above names the key when one lies outside "
+                    "its plausible range)")
+        raise ParameterFileError(f"{source or 'parameters'}: {exc}{hint}") from None
     # After the builder, so that a missing or misspelt value is reported as such rather
     # than as a provenance entry that names nothing.
     for key, tag in raw_prov.items():
