@@ -309,3 +309,16 @@ def test_errors_name_the_users_words_not_python_parameters(tmp_path: Path) -> No
                                             r"0.5 A\) .*does not saturate") as info:
         saturation_knee(mk.build_magnet(p))
     assert "raise max_current" not in str(info.value)
+
+
+def test_vehicle_run_speed_has_its_unit_in_the_name() -> None:
+    # was: vehicle run --speed in km/h, sweep files' speed in m/s
+    res = runner.invoke(app, ["vehicle", "run", "--help"])
+    assert "--speed-kmh" in res.stdout and "Deprecated" in res.stdout
+    with pytest.warns(FutureWarning, match="--speed is deprecated .* use --speed-kmh"):
+        res = runner.invoke(app, ["vehicle", "run", "--speed", "-5"])
+    assert res.exit_code == 2 and "--speed -5.0 km/h must be in 0 ... 2000" in res.stderr
+    res = runner.invoke(app, ["vehicle", "run", "--speed", "5", "--speed-kmh", "5"])
+    assert res.exit_code == 2 and "give --speed-kmh only" in res.stderr
+    res = runner.invoke(app, ["vehicle", "run", "--speed-kmh", "2500"])
+    assert res.exit_code == 2 and "--speed-kmh 2500.0 km/h must be in 0 ... 2000" in res.stderr

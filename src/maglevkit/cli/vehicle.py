@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+import warnings
 from pathlib import Path
 from typing import Annotated
 
@@ -20,7 +21,11 @@ app.add_typer(vehicle_app, name="vehicle",
 @vehicle_app.command("run", short_help="Run the train at constant speed; report gaps, currents, comfort.")
 def run(
     vehicle: Annotated[str, typer.Argument(help="Vehicle TOML file or bundled name.")] = "tr09",
-    speed: Annotated[float, typer.Option(help="Speed [km/h].")] = 0.0,
+    speed_kmh: Annotated[float | None, typer.Option(
+        "--speed-kmh", help="Speed [km/h] (0 ... 2000; sweep files give speed in m/s).")]
+    = None,
+    speed: Annotated[float | None, typer.Option(
+        "--speed", help="Deprecated: the speed in km/h; use --speed-kmh.")] = None,
     duration: Annotated[float, typer.Option(help="Simulated time [s].")] = 1.0,
     dt: Annotated[float, typer.Option(help="Time step [s].")] = 1e-3,
     irregularity: Annotated[str, typer.Option(
@@ -50,8 +55,19 @@ def run(
     if plot is not None:
         plot = output_dir(plot, "--plot")
     try:
-        if not (speed >= 0 and speed < 2000):
-            raise typer.BadParameter(f"--speed {speed} km/h must be in 0 ... 2000")
+        # the unit in the option's name: sweep files' speed is in m/s (issue 27)
+        opt = "--speed-kmh"
+        if speed is not None:
+            if speed_kmh is not None:
+                raise typer.BadParameter("give --speed-kmh only (--speed is its deprecated "
+                                         "old name)")
+            warnings.warn("--speed is deprecated and will be removed: use --speed-kmh (the "
+                          "same value, km/h; sweep files give speed in m/s)",
+                          FutureWarning, stacklevel=1)   # shown to users
+            opt, speed_kmh = "--speed", speed
+        speed_kmh = 0.0 if speed_kmh is None else speed_kmh
+        if not (speed_kmh >= 0 and speed_kmh < 2000):
+            raise typer.BadParameter(f"{opt} {speed_kmh} km/h must be in 0 ... 2000")
         # the options' names, not the API's (duration_s, dt_s)
         for opt, value in (("--duration", duration), ("--dt", dt)):
             if not (math.isfinite(value) and value > 0):
@@ -67,7 +83,7 @@ def run(
         model = VehicleModel(train, rigid=rigid, magnets=magnets, maps_cache=maps_cache)
         if prof is not None and not rigid:
             prof = parse_irregularity(irregularity, span_length_m=model.guideway.span.length_m)
-        res = model.run(speed_m_per_s=speed / 3.6, duration_s=duration, dt_s=dt,
+        res = model.run(speed_m_per_s=speed_kmh / 3.6, duration_s=duration, dt_s=dt,
                         irregularity=prof, failures=fails, progress=progress)
     except typer.BadParameter as exc:
         raise fail(str(exc)) from None
