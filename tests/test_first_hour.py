@@ -322,3 +322,73 @@ def test_vehicle_run_speed_has_its_unit_in_the_name() -> None:
     assert res.exit_code == 2 and "give --speed-kmh only" in res.stderr
     res = runner.invoke(app, ["vehicle", "run", "--speed-kmh", "2500"])
     assert res.exit_code == 2 and "--speed-kmh 2500.0 km/h must be in 0 ... 2000" in res.stderr
+
+
+# ------------------------------------------------------------ discoverable
+def _click_commands() -> dict[str, Any]:
+    """Every leaf command as ``"maps build" -> click command``."""
+    import typer.main
+
+    out: dict[str, Any] = {}
+
+    def walk(cmd: Any, path: str) -> None:
+        if hasattr(cmd, "commands"):     # a group
+            for name, sub in cmd.commands.items():
+                walk(sub, f"{path} {name}".strip())
+        else:
+            out[path] = cmd
+
+    walk(typer.main.get_command(app), "")
+    return out
+
+
+def test_every_command_has_an_example_that_parses() -> None:
+    import shlex
+
+    commands = _click_commands()
+    assert {"list", "template", "statics", "vehicle run", "maps build"} <= set(commands)
+    for path, cmd in commands.items():
+        res = runner.invoke(app, [*path.split(), "--help"])
+        assert res.exit_code == 0 and "Example:" in res.stdout, path
+        line = res.stdout.split("Example:")[1].strip().splitlines()[0]
+        words = shlex.split(line.split(">")[0])
+        assert words[:1 + len(path.split())] == ["maglevkit", *path.split()], (path, line)
+        # the example's options and arguments exist and parse (nothing is run)
+        cmd.make_context(path, words[1 + len(path.split()):])
+
+
+def test_list_and_template(tmp_path: Path) -> None:
+    from maglevkit.models.scenario import load_scenario
+    from maglevkit.sweep import load_sweep
+    from maglevkit.vehicle.data import load_guideway
+    from maglevkit.vehicle.train import load_vehicle
+
+    res = runner.invoke(app, ["list"])
+    assert res.exit_code == 0
+    for kind, name in (("magnets", "tr09-standard"), ("vehicles", "tr09"),
+                       ("guideways", "guideway"), ("scenarios", "step"),
+                       ("sweeps", "vehicle-speeds")):
+        assert f"{kind}:" in res.stdout and f"  {name} " in res.stdout
+    res = runner.invoke(app, ["list", "magnets"])
+    assert "u-magnet" in res.stdout and "TR09 standard levitation magnet" in res.stdout
+    assert "next: maglevkit statics NAME" in res.stderr
+    loaders = {"magnet": mk.load_magnet, "vehicle": load_vehicle, "guideway": load_guideway,
+               "scenario": load_scenario, "sweep": load_sweep}
+    for kind, name in (("magnet", "u_magnet"), ("magnet", "levitation_magnet"),
+                       ("magnet", "guidance_magnet"), ("magnet", "tr09-bow"),
+                       ("vehicle", None), ("guideway", None), ("scenario", None),
+                       ("sweep", None)):
+        res = runner.invoke(app, ["template", kind, *([name] if name else [])])
+        assert res.exit_code == 0, res.output
+        assert res.stdout.startswith(f"# maglevkit {kind} template, made from the bundled")
+        path = tmp_path / f"{kind}-{name}.toml"
+        path.write_text(res.stdout)
+        import warnings as _w
+
+        with _w.catch_warnings():
+            _w.simplefilter("error")       # a template loads without any warning
+            loaders[kind](path)
+    res = runner.invoke(app, ["template", "magnet", "x_magnet"])
+    assert res.exit_code == 2 and "NAME 'x_magnet': use a magnet kind (u_magnet" in res.stderr
+    res = runner.invoke(app, ["template", "bridge"])
+    assert res.exit_code == 2 and "KIND 'bridge': use one of magnet, vehicle" in res.stderr

@@ -109,6 +109,10 @@ def compare(
 
     Prints NRMS and AC-normalised errors, wall times and the speed-up per scenario and
     circuit; --format csv or json prints the same columns with unit-suffixed keys.
+
+    \b
+    Example:
+      maglevkit compare tr09-standard maps.nc --out compare-figures
     """
     from ..compare import ComparisonScenario, compare_models, standard_scenarios
     from ..models.current import CurrentModel

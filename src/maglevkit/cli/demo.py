@@ -37,6 +37,10 @@ def demo(
     """Run statics, figures, maps and the detailed-vs-reduced comparison; print a report.
 
     The report goes to stdout, the progress of the maps to stderr.
+
+    \b
+    Example:
+      maglevkit demo --quick --out demo
     """
     from ..compare import compare_models, error_verdicts, standard_scenarios
     from ..figures import write_figures

@@ -49,6 +49,10 @@ def fmu(
     circuit: inputs voltages, gaps and gap rates; outputs coil currents and forces;
     R_el and R_ec as parameters; the maps embedded as C arrays; compiled by the system C
     compiler.  See docs/fmu.md.
+
+    \b
+    Example:
+      maglevkit export fmu tr09-standard maps.nc -o tr09.fmu
     """
     if not (math.isfinite(max_substep) and max_substep > 0):   # was named max_substep_s
         raise fail(f"--max-substep {max_substep:g}: must be a finite number of seconds > 0")

@@ -23,6 +23,10 @@ def figures(
     over I/I0 at 9.5 mm) and, for several circuits, their coupling time response, as PNG.
 
     Needs the magnet file's [operating] table (nominal gap and current).
+
+    \b
+    Example:
+      maglevkit figures tr09-standard --out figures
     """
     from ..figures import write_figures
 

@@ -106,6 +106,10 @@ def build(
 
     Progress goes to stderr: a progress bar on a terminal, otherwise a plain line with
     the ETA every 10 % (at least every 10 s).
+
+    \b
+    Example:
+      maglevkit maps build tr09-standard -o maps.nc
     """
     from concurrent.futures import ProcessPoolExecutor
 
@@ -183,6 +187,10 @@ def plot(
 
     Maps built with ``--method both`` also get the per-point relative differences of the
     transient and statics methods (``maps_difference_<circuit>.png``).
+
+    \b
+    Example:
+      maglevkit maps plot maps.nc --out maps-figures
     """
     from ..reduction import load_maps
     from ..reduction.plots import has_method_differences

@@ -84,6 +84,10 @@ def simulate(
 
     Prints a summary (currents, force, energy balance); --format csv or json prints it as
     records (quantity, unit, start, end, max).
+
+    \b
+    Example:
+      maglevkit simulate u-magnet --scenario step --csv run.csv
     """
     from ..models.flux import FluxModel
     from ..models.flux import simulate as run_simulation

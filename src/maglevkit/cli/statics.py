@@ -93,6 +93,10 @@ def statics(
 
     Prints the total force at (up to) three currents as a table; --format csv or json
     prints the whole grid instead (the columns of --csv).
+
+    \b
+    Example:
+      maglevkit statics u-magnet --gaps 0.006:0.014:5 --currents 0:40:9 --csv s.csv
     """
     from ..models.statics import solve_statics
 

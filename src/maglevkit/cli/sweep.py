@@ -48,6 +48,10 @@ def sweep(
 
     Cases are stored one file each in the resume folder as they finish; interrupt (Ctrl-C)
     and run the same command again to continue.  Results on stdout, progress on stderr.
+
+    \b
+    Example:
+      maglevkit sweep vehicle-speeds -o sweep.nc --workers 2
     """
     from ..sweep import load_sweep, run_sweep
 

@@ -47,7 +47,12 @@ def run(
     force: ForceOption = False,
 ) -> None:
     """Run the train at constant speed; report minimum gaps, peak currents, comfort and the
-    real-time factor (results on stdout, diagnostics on stderr)."""
+    real-time factor (results on stdout, diagnostics on stderr).
+
+    \b
+    Example:
+      maglevkit vehicle run tr09 --speed-kmh 400 --duration 1.5 -o run.nc
+    """
     from ..vehicle.simulation import VehicleModel, parse_failure, parse_irregularity
     from ..vehicle.train import load_vehicle
 
