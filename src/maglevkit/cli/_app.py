@@ -31,6 +31,7 @@ import typer
 from rich.console import Console, ConsoleDimensions
 from rich.table import Table
 from rich.text import Text
+from typer.exceptions import TyperException
 
 from ..errors import MaglevkitError
 
@@ -113,14 +114,20 @@ INTERRUPTED_EXIT_CODE = 130
 """Exit code after Ctrl-C / SIGINT (128 + SIGINT, the shell convention)."""
 
 
+_INTERRUPT_REPORTED = False
+
+
 def interrupted(detail: str = "") -> typer.Exit:
     """Print ``interrupted[: detail]`` on stderr and return the exit with code 130."""
     import signal
 
     # a second Ctrl-C while reporting gave a traceback: the exit is on its way
+    global _INTERRUPT_REPORTED
+
     with contextlib.suppress(ValueError):   # (not in the main thread)
         signal.signal(signal.SIGINT, signal.SIG_IGN)
     err_console.print(f"interrupted{': ' + detail if detail else ''}")
+    _INTERRUPT_REPORTED = True
     return typer.Exit(code=INTERRUPTED_EXIT_CODE)
 
 
@@ -296,11 +303,38 @@ def _one_line_warning(message: Warning | str, category: type[Warning], filename:
     sys.stderr.write(f"warning: {message}\n")
 
 
+def _usage_error(exc: Exception) -> int:
+    """Print a usage error as the one-line ``error: ...`` of the commands; the exit code.
+
+    Plain ``maglevkit`` (or a group without its command) prints the help on stdout, rc 0.
+    """
+    ctx = getattr(exc, "ctx", None)
+    if type(exc).__name__ == "NoArgsIsHelpError" and ctx is not None:
+        sys.stdout.write(ctx.get_help() + "\n")
+        return 0
+    text = exc.format_message() if hasattr(exc, "format_message") else str(exc)
+    where = f" (see {ctx.command_path} --help)" if ctx is not None else ""
+    fail(f"{text}{where}")
+    return int(getattr(exc, "exit_code", 2))
+
+
 def main() -> None:  # pragma: no cover - console entry point
     import warnings
 
     warnings.showwarning = _one_line_warning
     try:
-        app()
+        # not standalone: a Ctrl-C outside the commands' own handling (while starting,
+        # importing, loading) ends with rc 130 and the "interrupted" line too, not silently
+        rc = app(prog_name="maglevkit", standalone_mode=False)
     except MaglevkitError as exc:   # a safety net: the commands catch their own errors
         raise SystemExit(fail(exc).exit_code) from None
+    except KeyboardInterrupt:
+        rc = INTERRUPTED_EXIT_CODE
+    except typer.Abort:             # end of input at a prompt
+        sys.stderr.write("Aborted!\n")
+        raise SystemExit(1) from None
+    except TyperException as exc:   # usage errors: one line, as every other error
+        raise SystemExit(_usage_error(exc)) from None
+    if rc == INTERRUPTED_EXIT_CODE and not _INTERRUPT_REPORTED:
+        interrupted()
+    raise SystemExit(rc if isinstance(rc, int) else 0)

@@ -90,8 +90,8 @@ def slug(text: str) -> str:
 
 @app.command(short_help="Detailed vs reduced model: errors and speed-up per scenario.")
 def compare(
-    magnet: Annotated[str, typer.Argument(help="Magnet TOML file or bundled name.")],
-    maps_file: Annotated[Path, typer.Argument(help="netCDF maps of this magnet "
+    magnet: Annotated[str, typer.Argument(metavar="MAGNET", help="Magnet TOML file or bundled name.")],
+    maps_file: Annotated[Path, typer.Argument(metavar="MAPS_FILE", help="netCDF maps of this magnet "
                                                    "(maglevkit maps build).")],
     scenario: Annotated[str | None, typer.Option(help="Scenario TOML file or bundled name; "
                                                       "default: the standard set (not with "

@@ -75,7 +75,7 @@ def _title(kind: str, name: str) -> str:
 @app.command("list", short_help="List the bundled magnets, vehicles, guideways, scenarios, "
                                 "sweeps.")
 def list_files(
-    kind: Annotated[Kind | None, typer.Argument(
+    kind: Annotated[Kind | None, typer.Argument(metavar="KIND",
         help="Which kind to list (default: all).", case_sensitive=False)] = None,
 ) -> None:
     """List the parameter files bundled with maglevkit (name and description, on stdout).
@@ -100,9 +100,9 @@ def list_files(
 
 @app.command("template", short_help="Print a commented parameter file to start from.")
 def template(
-    kind: Annotated[str, typer.Argument(
+    kind: Annotated[str, typer.Argument(metavar="KIND",
         help="magnet, vehicle, guideway, scenario or sweep.")],
-    name: Annotated[str | None, typer.Argument(
+    name: Annotated[str | None, typer.Argument(metavar="NAME",
         help="For a magnet: its kind (u_magnet, levitation_magnet, guidance_magnet) or a "
              "bundled name; otherwise a bundled name (default: the first).")] = None,
 ) -> None:

@@ -20,9 +20,9 @@ app.add_typer(export_app, name="export",
 @export_app.command("fmu", short_help="FMI 2.0 co-simulation FMU of the reduced model (C, no "
                                       "Python needed).")
 def fmu(
-    magnet: Annotated[str, typer.Argument(help="Magnet TOML file or bundled name (the maps "
+    magnet: Annotated[str, typer.Argument(metavar="MAGNET", help="Magnet TOML file or bundled name (the maps "
                                                "must belong to it).")],
-    maps_file: Annotated[Path, typer.Argument(help="netCDF maps of this magnet "
+    maps_file: Annotated[Path, typer.Argument(metavar="MAPS_FILE", help="netCDF maps of this magnet "
                                                    "(maglevkit maps build).")],
     output: Annotated[Path, typer.Option("-o", "--output", help="FMU file to write (.fmu; its "
                                                                 "folder must exist).")]

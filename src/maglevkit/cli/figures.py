@@ -14,7 +14,7 @@ from ._app import app, fail, info, load_magnet_or_exit, output_dir, writing
 
 @app.command(short_help="The paper's Fig. 6/7 analogs and the circuit coupling (PNG).")
 def figures(
-    magnet: Annotated[str, typer.Argument(help="Magnet TOML file or bundled name "
+    magnet: Annotated[str, typer.Argument(metavar="MAGNET", help="Magnet TOML file or bundled name "
                                                "(e.g. tr09-standard).")],
     out: Annotated[Path, typer.Option(help="Output folder for the PNG files (created inside "
                                            "an existing directory).")] = Path("figures"),

@@ -79,7 +79,7 @@ def connect_scheduler(address: str, timeout_s: float) -> Any:
 
 @maps_app.command("build", short_help="Compute the maps on a regular grid (netCDF).")
 def build(
-    magnet: Annotated[str, typer.Argument(help="Magnet TOML file or bundled name.")],
+    magnet: Annotated[str, typer.Argument(metavar="MAGNET", help="Magnet TOML file or bundled name.")],
     output: Annotated[Path, typer.Option("-o", "--output", help="netCDF file to write (its "
                                                                 "folder must exist).")]
     = Path("maps.nc"),
@@ -179,14 +179,14 @@ def build(
 
 @maps_app.command("plot", short_help="Plot the maps (the paper's Fig. 9 analog, PNG).")
 def plot(
-    maps_file: Annotated[Path, typer.Argument(help="netCDF maps file.")],
+    maps_file: Annotated[Path, typer.Argument(metavar="MAPS_FILE", help="netCDF maps file.")],
     out: Annotated[Path, typer.Option(help="Folder for the PNG files (created inside an "
                                            "existing directory).")] = Path("out"),
 ) -> None:
     """Plot the maps (the paper's Fig. 9): one PNG per circuit.
 
-    Maps built with ``--method both`` also get the per-point relative differences of the
-    transient and statics methods (``maps_difference_<circuit>.png``).
+    Maps built with --method both also get the per-point relative differences of the
+    transient and statics methods (maps_difference_<circuit>.png).
 
     \b
     Example:

@@ -67,7 +67,7 @@ def simulation_summary(res) -> list[dict[str, Any]]:  # type: ignore[no-untyped-
 
 @app.command(short_help="Transient of the detailed flux-based model under a scenario.")
 def simulate(
-    magnet: Annotated[str, typer.Argument(help="Magnet TOML file or bundled name "
+    magnet: Annotated[str, typer.Argument(metavar="MAGNET", help="Magnet TOML file or bundled name "
                                                "(e.g. u-magnet).")],
     scenario: Annotated[str, typer.Option(help="Scenario TOML file or bundled name (e.g. step).")]
     = "step",

@@ -71,7 +71,8 @@ def write_statics_csv(sol, path: Path) -> None:  # type: ignore[no-untyped-def]
 
 @app.command(short_help="Force, flux linkage and inductance on a gap x current grid.")
 def statics(
-    magnet: Annotated[str, typer.Argument(help="Magnet TOML file or bundled name (e.g. u-magnet).")],
+    magnet: Annotated[str, typer.Argument(
+        metavar="MAGNET", help="Magnet TOML file or bundled name (e.g. u-magnet).")],
     gaps: Annotated[str, typer.Option(help="Gaps [m]: start:stop:count or a comma list.")]
     = "0.004:0.020:9",
     currents: Annotated[str, typer.Option(help="Currents [A] (every circuit): start:stop:count "

@@ -25,7 +25,7 @@ def _resume_folder(path: Path) -> Path:
 
 @app.command("sweep", short_help="Scenario sweeps of vehicle runs into one netCDF dataset.")
 def sweep(
-    sweep_file: Annotated[str, typer.Argument(help="Sweep TOML file or bundled name.")],
+    sweep_file: Annotated[str, typer.Argument(metavar="SWEEP_FILE", help="Sweep TOML file or bundled name.")],
     output: Annotated[Path, typer.Option("-o", "--output", help="netCDF file to write (its "
                                                                 "folder must exist).")],
     workers: Annotated[int | None, typer.Option(help="Local worker processes (default: the "

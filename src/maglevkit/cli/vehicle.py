@@ -20,7 +20,8 @@ app.add_typer(vehicle_app, name="vehicle",
 
 @vehicle_app.command("run", short_help="Run the train at constant speed; report gaps, currents, comfort.")
 def run(
-    vehicle: Annotated[str, typer.Argument(help="Vehicle TOML file or bundled name.")] = "tr09",
+    vehicle: Annotated[str, typer.Argument(
+        metavar="VEHICLE", help="Vehicle TOML file or bundled name.")] = "tr09",
     speed_kmh: Annotated[float | None, typer.Option(
         "--speed-kmh", help="Speed [km/h] (0 ... 2000; sweep files give speed in m/s).")]
     = None,
@@ -32,6 +33,7 @@ def run(
         help="Guideway irregularity: sag:A, joints:H, random:RMS[:SEED] (metres), joined by '+', "
              "or none.")] = "none",
     failure: Annotated[list[str] | None, typer.Option(
+        metavar="CIRCUIT@T",
         help="CIRCUIT@T: switch a circuit off at T seconds (e.g. s2m4/front@0.5); repeatable.")]
     = None,
     rigid: Annotated[bool, typer.Option(help="Rigid guideway instead of the elastic spans.")] = False,

@@ -249,7 +249,7 @@ def load_maps(path: str | Path, *, magnet: Any = None) -> CharacteristicMaps:
 
 def _run_tasks(fn: Callable[..., dict[str, np.ndarray]], args: Sequence[tuple],
                executor: Executor | None, progress: bool, label: str) -> list[dict[str, np.ndarray]]:
-    from concurrent.futures import as_completed
+    from concurrent.futures import FIRST_COMPLETED, wait
 
     from .._interrupt import check_interrupt
     from .._progress import ProgressReporter
@@ -265,11 +265,16 @@ def _run_tasks(fn: Callable[..., dict[str, np.ndarray]], args: Sequence[tuple],
                     reporter.advance()
         else:
             futures: dict[Future, int] = {executor.submit(fn, *a): i for i, a in enumerate(args)}
-            for fut in as_completed(futures):
+            waiting = set(futures)
+            while waiting:
+                # short waits: a deferred Ctrl-C is acted on within 0.2 s, not after the
+                # next point (this process is not inside CasADi here)
+                done, waiting = wait(waiting, timeout=0.2, return_when=FIRST_COMPLETED)
                 check_interrupt()
-                results[futures[fut]] = fut.result()
-                if reporter is not None:
-                    reporter.advance()
+                for fut in done:
+                    results[futures[fut]] = fut.result()
+                    if reporter is not None:
+                        reporter.advance()
     return [r for r in results if r is not None]
 
 
