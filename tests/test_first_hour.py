@@ -428,3 +428,12 @@ def test_help_texts_show_no_markup_or_python_types() -> None:
         usage = out.splitlines()[0]
         assert not any(c.islower() for w in usage.split()[2 + len(path.split()):]
                        if w.startswith(("{", "[")) and w != "[OPTIONS]" for c in w), usage
+
+
+def test_maps_build_names_the_next_step(tmp_path: Path) -> None:
+    out = tmp_path / "m.nc"
+    res = runner.invoke(app, ["maps", "build", "u-magnet", "-o", str(out), "--gaps",
+                              "0.006:0.014:4", "--currents", "0:40:4"])
+    assert res.exit_code == 0, res.output
+    assert f"next: maglevkit compare u-magnet {out} (detailed vs reduced)" in res.stderr
+    assert res.stdout.startswith("maps of ")      # results on stdout, the hint on stderr

@@ -175,6 +175,8 @@ def build(
             worst = float(abs(maps.dataset[name]).max())
             console.print(f"max |{name}| = {100 * worst:.3f} %")
     info(f"wrote {path}")
+    info(f"next: maglevkit compare {magnet} {path} (detailed vs reduced), or maglevkit maps "
+         f"plot {path}")
 
 
 @maps_app.command("plot", short_help="Plot the maps (the paper's Fig. 9 analog, PNG).")

@@ -118,6 +118,8 @@ def sweep(
         res.to_netcdf(output)
     _report(res)
     info(f"wrote {output}")
+    info(f"next: xarray.open_dataset({str(output)!r}) (one coordinate per swept parameter; "
+         "docs/sweep.md)")
 
 
 def _report(res: Any) -> None:
