@@ -20,7 +20,8 @@ from collections.abc import Iterator
 from concurrent.futures import Executor
 from typing import Any
 
-__all__ = ["InterruptState", "deferred_sigint", "check_interrupt", "stop_pool"]
+__all__ = ["InterruptState", "deferred_sigint", "check_interrupt", "sigint_blocked",
+           "stop_pool"]
 
 
 class InterruptState:
@@ -63,6 +64,27 @@ def check_interrupt() -> None:
     """Raise :class:`KeyboardInterrupt` if a deferred SIGINT is pending (a safe point)."""
     if _ACTIVE and _ACTIVE[-1].requested:
         raise KeyboardInterrupt
+
+
+@contextlib.contextmanager
+def sigint_blocked() -> Iterator[None]:
+    """Block SIGINT in this thread while starting pool workers (POSIX, main thread).
+
+    Worker processes started meanwhile inherit the blocked mask, so a Ctrl-C to the
+    process group cannot interrupt them while they import (a traceback per worker
+    before their initializer could ignore SIGINT); the main process stops them
+    (:func:`stop_pool`).  A SIGINT to this process meanwhile stays pending and is
+    delivered when the block ends: nothing is lost.
+    """
+    if not hasattr(signal, "pthread_sigmask") \
+            or threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    old = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
+    try:
+        yield
+    finally:
+        signal.pthread_sigmask(signal.SIG_SETMASK, old)
 
 
 def stop_pool(pool: Executor, timeout_s: float = 5.0) -> None:

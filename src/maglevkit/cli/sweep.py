@@ -3,13 +3,24 @@
 from __future__ import annotations
 
 import os
+import signal
 from pathlib import Path
 from typing import Annotated, Any
 
 import typer
 
 from ..errors import MaglevkitError
-from ._app import INTERRUPTED_EXIT_CODE, ForceOption, app, console, fail, info, output_file, writing
+from ._app import (
+    INTERRUPTED_EXIT_CODE,
+    ForceOption,
+    app,
+    console,
+    fail,
+    info,
+    interrupted,
+    output_file,
+    writing,
+)
 
 __all__ = ["INTERRUPTED_EXIT_CODE", "sweep"]
 
@@ -92,17 +103,13 @@ def sweep(
             res = run_sweep(spec, executor=executor, workers=workers, resume_dir=folder,
                             retry_failed=retry_failed, progress=progress)
         except KeyboardInterrupt:
-            import signal
-
             from ..sweep import case_path
 
-            # a second Ctrl-C while reporting gave a traceback: the exit is on its way
+            # a second Ctrl-C while counting is ignored: the exit is on its way
             signal.signal(signal.SIGINT, signal.SIG_IGN)
-
             stored = sum(case_path(folder, spec.case_key(c)).is_file() for c in spec.cases())
-            info(f"interrupted: {stored} of {spec.n_cases} cases stored in {folder}; run the "
-                 "same command again to resume")
-            raise typer.Exit(code=INTERRUPTED_EXIT_CODE) from None
+            raise interrupted(f"{stored} of {spec.n_cases} cases stored in {folder}; run the "
+                              "same command again to resume") from None
     except MaglevkitError as exc:
         raise fail(exc) from None
     finally:

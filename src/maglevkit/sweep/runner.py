@@ -25,7 +25,7 @@ from typing import IO, Any
 
 import numpy as np
 
-from .._interrupt import stop_pool
+from .._interrupt import sigint_blocked, stop_pool
 from ..errors import InputError
 from .cases import SUMMARY_UNITS, error_case, run_case
 from .spec import PARAMETERS, SWEEP_FORMAT, SweepSpec
@@ -211,8 +211,9 @@ def run_sweep(spec: SweepSpec, *, executor: Any = None, workers: int | None = No
                     if progress:
                         reporter.advance()
             else:
-                futures: dict[Future[Any], int] = {
-                    pool.submit(run_case, spec.job, cases[i], keys[i]): i for i in pending}
+                with sigint_blocked():   # the workers start with SIGINT blocked
+                    futures: dict[Future[Any], int] = {
+                        pool.submit(run_case, spec.job, cases[i], keys[i]): i for i in pending}
                 try:
                     for fut in as_completed(futures):
                         i = futures[fut]
