@@ -75,11 +75,22 @@ def run() -> str:
                                      f"{t_build[2]:.1f} | {t_load[0]:.2f} | {t_load[1]:.2f} |")
                 _simulate(fm, mag, i0)                       # warm-up (builds the chunks)
                 t_sim = min(_simulate(fm, mag, i0) for _ in range(3))
-                t_step = min(_stepping(fm, mag, i0) for _ in range(2))
+                # step: CasADi's integrator restarted per call (before issue 22) and, where
+                # compiled, the live integrator kept between calls; alternating, best of 3
+                restart = fm.with_options(live_step=False)
+                live = fm if fm.live_step else None
+                t_restart, t_live = [], []
+                for _ in range(3):
+                    t_restart.append(_stepping(restart, mag, i0))
+                    if live is not None:
+                        t_live.append(_stepping(live, mag, i0))
+                t_step = min(t_live or t_restart)
                 label = "compiled" if fm.compiled else "interpreted"
+                rtf_live = f"{DURATION / min(t_live):.2f}" if t_live else "-"
+                ratio = f"{min(t_restart) / min(t_live):.1f}x" if t_live else "-"
                 rows.append(f"| {name} | {label} | {len(fm.differential_state_names)} | "
-                            f"{DURATION / t_sim:.2f} | {DURATION / t_step:.2f} | "
-                            f"{t_step / (DURATION / DT) * 1e6:.0f} |")
+                            f"{DURATION / t_sim:.2f} | {DURATION / min(t_restart):.2f} | "
+                            f"{rtf_live} | {ratio} | {t_step / (DURATION / DT) * 1e6:.0f} |")
     return (
         f"Standard scenario of the reduced-model benchmark: {DURATION:g} s at a {DT * 1e3:g} ms "
         "hold, gaps 10 +- 1 mm at 5 Hz, voltage +20 % at 0.1 s, from the nominal point "
@@ -87,12 +98,17 @@ def run() -> str:
         "Real-time factor = simulated seconds per CPU second of this process (best of 3; "
         "the machine is shared, CPU time is steadier than wall time).  `simulate` runs IDAS "
         "through hold intervals of equal voltages (restart where they change, at most every "
-        "128 intervals); `step` is one Python call per millisecond (a co-simulation), IDAS "
-        "restarted per call.  *compiled*: residual, Jacobian, quadrature and output functions "
-        "as one C library (`compiled='always'`, cc -O1); *interpreted*: the same functions "
+        "128 intervals); `step` is one Python call per millisecond (a co-simulation): "
+        "*restart* = CasADi's IDAS set up and restarted on every call (`live_step=False`, the "
+        "only path before issue 22), *live* = one IDAS kept between calls, restarted only "
+        "where an input jumps (models/flux_live.py; compiled models only), both measured "
+        "alternately in this run, best of 3; *us per step call* is the faster.  *compiled*: "
+        "residual, Jacobian, quadrature and output functions as one C library "
+        "(`compiled='always'`, cc -O1); *interpreted*: the same functions "
         "on CasADi's virtual machine.\n\n"
-        "| magnet | functions | differential states | RTF simulate | RTF step | "
-        "us per step call |\n|---|---|---|---|---|---|\n" + "\n".join(rows)
+        "| magnet | functions | differential states | RTF simulate | RTF step (restart) | "
+        "RTF step (live) | live / restart | us per step call |\n"
+        "|---|---|---|---|---|---|---|---|\n" + "\n".join(rows)
         + "\n\nCompile and load cost (first model of a network: code generation in this "
         "process + the C compiler's CPU time in child processes, wall time; a second model "
         "finds the library in the on-disk cache):\n\n"

@@ -25,7 +25,7 @@ from maglevkit.models import flux as fx
 def main(name: str) -> None:
     mag = mk.load_magnet(name)
     fm = mk.FluxModel(mag)
-    d = fx._dae(mag.network, "idas", 1e-6, 1e-8, 20000, 2, 3)
+    d = fx.flux_dae(mag.network, "idas", 1e-6, 1e-8, 20000, 2, 3)
     net = d.network
     eq = assemble(net)
     res_ohm = net.resistances

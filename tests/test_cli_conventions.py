@@ -254,7 +254,9 @@ def test_help_summaries_are_explicit_and_whole() -> None:
         assert summaries[name] == cmd.short_help, name       # not cut at a dot
         assert not summaries[name].endswith(("...", "Fig.", "eqs.", "Sec.")), name
     maps_help = runner.invoke(app, ["maps", "--help"]).output
-    assert "build  Compute the maps on a regular grid (netCDF)." in maps_help
+    assert re.search(r"build +Compute the maps on a regular grid \(netCDF\)\.", maps_help)
+    assert re.search(r"import +Maps from a table of psi\(s, I\) and/or F\(s, I\) \(CSV, "
+                     r"netCDF\)\.", maps_help)
 
 
 # ---------------------------------------------------------------- 6. progress in logs

@@ -19,7 +19,7 @@ import numpy as np
 import pytest
 
 import maglevkit as mk
-from maglevkit.circuit.elements import EddyCurrent, IronPath, _rectangle_torsion_constant
+from maglevkit.circuit.elements import EddyCurrent, IronPath, rectangle_torsion_constant
 from maglevkit.circuit.ladder import LADDER_BAND, LADDER_COEFFICIENTS, ladder_branches
 from maglevkit.errors import InputError, ParameterError
 from maglevkit.materials import MU0, ConstantPermeability
@@ -107,7 +107,7 @@ def test_ladder_converges_in_layers(slab_errors: dict[int, np.ndarray]) -> None:
 def test_one_layer_is_the_lumped_element() -> None:
     iron = IronPath("i", 0.1, 0.03 * 0.1, "AISI 1008")
     solid = EddyCurrent.solid_rectangular("e", 0.03, 0.1, 0.1, 1.5e-7)
-    factor = _rectangle_torsion_constant(0.03, 0.1) / (0.1 * 0.03**3 / 3.0)
+    factor = rectangle_torsion_constant(0.03, 0.1) / (0.1 * 0.03**3 / 3.0)
     br = ladder_branches("p", "a", "b", iron, thickness=0.03, resistivity=1.5e-7, layers=1,
                          factor=factor)
     assert br[0].elements[0].conductance == pytest.approx(solid.conductance, rel=1e-12)
@@ -159,7 +159,7 @@ def test_no_current_jump_with_the_ladder() -> None:
     # measured lumped 22.4 ohm, n = 1 18.1 ohm (2-D slab: 1/0.81 of the Saint-Venant
     # conductance), n = 3 1854 ohm, n = 4 2636 ohm, n = 6 4198 ohm: the jump
     # dU/(R_el + R_ec) vanishes as the outer layer thins
-    assert r[1] == pytest.approx(lumped * _rectangle_torsion_constant(0.03, 0.1)
+    assert r[1] == pytest.approx(lumped * rectangle_torsion_constant(0.03, 0.1)
                                  / (0.1 * 0.03**3 / 3.0), rel=0.02)
     assert r[3] > 50.0 * lumped
 

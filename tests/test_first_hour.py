@@ -309,7 +309,7 @@ def test_errors_name_the_users_words_not_python_parameters(tmp_path: Path) -> No
     # no such option "max_current": the knee names the file's value it scanned up to
     p = copy.deepcopy(dict(mk.load_magnet("tr09-standard").parameters))
     p["operating"]["nominal_current"] = 0.5
-    from maglevkit.magnets import saturation_knee
+    from maglevkit.models import saturation_knee
 
     with pytest.raises(mk.InputError, match=r"4 x the file's \[operating\] nominal_current = "
                                             r"0.5 A\) .*does not saturate") as info:

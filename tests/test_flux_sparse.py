@@ -19,7 +19,7 @@ from maglevkit.circuit.assembly import assemble
 from maglevkit.magnets.base import ModelOptions, build_magnet
 from maglevkit.models import compiled as compiled_mod
 from maglevkit.models import flux
-from maglevkit.models.flux import _FluxDAE, _independent_rows
+from maglevkit.models.flux import FluxDAE, _independent_rows
 
 
 def _grid(**options: object) -> mk.Magnet:
@@ -54,14 +54,14 @@ def _old_rows(A: np.ndarray) -> list[int]:
 
 
 @pytest.fixture(scope="module", params=sorted(NETWORKS))
-def pair(request: pytest.FixtureRequest) -> tuple[_FluxDAE, _FluxDAE]:
+def pair(request: pytest.FixtureRequest) -> tuple[FluxDAE, FluxDAE]:
     net = NETWORKS[request.param]()
     args = (net, "idas", 1e-6, 1e-8, 20000, 2, 3, "never", None)
-    return _FluxDAE(*args, form="dense"), _FluxDAE(*args, form="sparse")
+    return FluxDAE(*args, form="dense"), FluxDAE(*args, form="sparse")
 
 
 def test_incremental_row_selection_is_the_rank_test_per_row(
-        pair: tuple[_FluxDAE, _FluxDAE]) -> None:
+        pair: tuple[FluxDAE, FluxDAE]) -> None:
     dense, _ = pair
     eq = assemble(dense.network)
     a_psi = eq.N.T @ eq.C.T
@@ -70,7 +70,7 @@ def test_incremental_row_selection_is_the_rank_test_per_row(
     assert len(_old_rows(A)) == dense.n_diff
 
 
-def test_sparse_form_matrices_equal_the_dense_ones(pair: tuple[_FluxDAE, _FluxDAE]) -> None:
+def test_sparse_form_matrices_equal_the_dense_ones(pair: tuple[FluxDAE, FluxDAE]) -> None:
     dense, sparse = pair
     assert dense.form == "dense" and sparse.form == "sparse"
     assert dense.diff_names == sparse.diff_names
@@ -90,7 +90,7 @@ def test_sparse_form_matrices_equal_the_dense_ones(pair: tuple[_FluxDAE, _FluxDA
     assert np.isfinite(sparse.index1_condition) and sparse.index1_condition >= 1.0
 
 
-def test_sparse_form_functions_equal_the_dense_ones(pair: tuple[_FluxDAE, _FluxDAE]) -> None:
+def test_sparse_form_functions_equal_the_dense_ones(pair: tuple[FluxDAE, FluxDAE]) -> None:
     """Outputs, initial balance and the energy quadrature at random states: the dense form's
     ``v`` and the sparse form's ``y' = K^+ v`` give the same values to rounding."""
     dense, sparse = pair
@@ -142,7 +142,7 @@ def test_sparse_form_trajectory_equals_the_dense_one(monkeypatch: pytest.MonkeyP
     dense = run()
     monkeypatch.setattr(flux, "SPARSE_FORM_SIZE", 0)   # the cache key holds the form
     sparse = run()
-    assert flux._dae(mag.network, "idas", 1e-9, flux.DEFAULT_ATOL, 20000, 2, 3,
+    assert flux.flux_dae(mag.network, "idas", 1e-9, flux.DEFAULT_ATOL, 20000, 2, 3,
                      "never").form == "sparse"
     step = 25.0
     err = np.abs(sparse.currents_A - dense.currents_A).max() / step
@@ -162,7 +162,7 @@ def test_air_cell_network_builds_in_the_sparse_form() -> None:
     params["provenance"]["magnet.air_model"] = "[E] test variant"
     mag = build_magnet(params, options=ModelOptions(eddy_currents=False))
     fm = mk.FluxModel(mag, compiled="never")
-    assert fm._dae.form == "sparse"
+    assert fm.dae.form == "sparse"
     res = mk.simulate(fm, np.linspace(0.0, 0.004, 5), gaps=0.010,
                       voltages=fm.resistances[0] * 20.0, initial_currents=20.0)
     np.testing.assert_allclose(res.currents_A[:, 0], 20.0, rtol=1e-6)
@@ -181,7 +181,7 @@ def test_sparse_form_compiles_to_the_same_trajectory(monkeypatch: pytest.MonkeyP
     runs = []
     for mode in ("always", "never"):
         fm = mk.FluxModel(mag, compiled=mode, cache_dir=tmp_path)
-        assert fm._dae.form == "sparse" and fm.compiled == (mode == "always")
+        assert fm.dae.form == "sparse" and fm.compiled == (mode == "always")
         runs.append(mk.simulate(fm, np.linspace(0.0, 0.05, 51), gaps=0.010,
                                 voltages=fm.resistances[0] * 30.0, initial_currents=10.0))
     # as the dense form's compiled test: bit-identical measured, bound 1e-9 of the range

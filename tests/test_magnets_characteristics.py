@@ -7,7 +7,7 @@ import pytest
 
 import maglevkit as mk
 from maglevkit.figures import fig6_data, fig7_data, write_figures
-from maglevkit.magnets import force_exponent, saturation_knee
+from maglevkit.models import force_exponent, saturation_knee
 
 
 @pytest.fixture(scope="module")

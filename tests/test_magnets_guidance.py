@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 import maglevkit as mk
-from maglevkit.magnets import coupling_ratios, saturation_knee
+from maglevkit.models import coupling_ratios, saturation_knee
 
 
 @pytest.fixture(scope="module")

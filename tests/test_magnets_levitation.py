@@ -9,7 +9,8 @@ import numpy as np
 import pytest
 
 import maglevkit as mk
-from maglevkit.magnets import coupling_ratios, pole_gap_names, saturation_knee
+from maglevkit.magnets import pole_gap_names
+from maglevkit.models import coupling_ratios, saturation_knee
 
 if sys.version_info >= (3, 11):
     import tomllib

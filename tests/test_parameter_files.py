@@ -17,7 +17,7 @@ def test_bundled_lists_hold_only_their_own_kind() -> None:
     # (bundled_guideways() once listed "tr09", which load_guideway then refused)
     assert bundled_guideways() == ["guideway"]
     assert bundled_vehicles() == ["tr09"]
-    assert set(bundled_files("vehicle")) == {"guideway", "tr09"}
+    assert set(bundled_files("vehicle")) == {"guideway", "tr09", "tr09-cross-section"}
     for name in bundled_guideways():
         load_guideway(name)
     for name in bundled_vehicles():

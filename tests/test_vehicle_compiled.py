@@ -176,8 +176,8 @@ def test_bundled_guideway_consistent_with_published_values() -> None:
     girders of 175-190 t) and the static sag of ~2.7 mm on a 24 m span, read as the
     deflection under the TR09's own weight (170 t empty over 75.80 m); see docs/vehicle.md
     for why not as self-weight sag."""
+    from maglevkit.plant import STANDARD_GRAVITY
     from maglevkit.vehicle import load_guideway
-    from maglevkit.vehicle.heave import STANDARD_GRAVITY
 
     data = load_guideway()
     span = data.span

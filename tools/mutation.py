@@ -67,7 +67,7 @@ EXP = "src/maglevkit/models/experiments.py"
 PAR = "src/maglevkit/reduction/parameters.py"
 MAP = "src/maglevkit/reduction/maps.py"
 TRA = "src/maglevkit/reduction/transient.py"
-VEH = "src/maglevkit/vehicle/heave.py"
+VEH = "src/maglevkit/plant.py"
 GW = "src/maglevkit/vehicle/guideway.py"
 SIM = "src/maglevkit/vehicle/simulation.py"
 KER = "src/maglevkit/vehicle/stepkernel.py"
@@ -463,12 +463,12 @@ MUTATIONS: tuple[Mutation, ...] = (
              "Pp = Az @ P @ Az.T",
              (f"{T_SV}::test_ekf_step_is_the_textbook_kalman_step",)),
     Mutation("MPC model: voltage disturbance enters with the wrong sign", MOD,
-             'ueff = u + self._d(d, "voltage")\n        rhs, coil, force = [], [], 0',
-             'ueff = u - self._d(d, "voltage")\n        rhs, coil, force = [], [], 0',
+             'ueff = u + self.disturbance(d, "voltage")\n        rhs, coil, force = [], [], 0',
+             'ueff = u - self.disturbance(d, "voltage")\n        rhs, coil, force = [], [], 0',
              (f"{T_SV}::test_target_is_an_equilibrium_with_the_reference_as_measured_gap",)),
     Mutation("MPC model: force disturbance sign", MOD,
-             'acc = self.gravity + (self._d(d, "force") - force) / self.mass_kg',
-             'acc = self.gravity + (-self._d(d, "force") - force) / self.mass_kg',
+             'acc = self.gravity + (self.disturbance(d, "force") - force) / self.mass_kg',
+             'acc = self.gravity + (-self.disturbance(d, "force") - force) / self.mass_kg',
              (f"{T_SV}::test_target_is_an_equilibrium_with_the_reference_as_measured_gap",)),
     Mutation("MPC target: gap-sensor offset added instead of subtracted", MOD,
              's = gap_m - float(dd.get("gap_sensor", np.zeros(1))[0])',

@@ -1,6 +1,11 @@
 """maglevkit: electromagnet models of EMS maglev vehicles (Transrapid type).
 
-Layers (data flows one way): ``materials`` -> ``circuit`` -> ``magnets`` -> ``models``.
+Layers (data flows one way; a module imports only from layers below it, checked by
+import-linter's ``layers`` contract in ``pyproject.toml`` and ``tests/test_layers.py``):
+``errors``, ``validation``, ... -> ``materials`` -> ``circuit`` -> ``magnets`` -> ``models``
+(statics, flux DAE) -> ``reduction`` (maps) -> reduced circuits -> ``simulation``
+(:func:`simulate` for every model) -> ``plant`` -> ``control`` -> ``vehicle`` ->
+``export``, ``sweep``, ``compare``, ``figures`` -> ``cli``.
 
 The public names are loaded on first use (PEP 562 module ``__getattr__``), so ``import
 maglevkit`` (and every ``maglevkit`` command-line call) does not pay for CasADi, SciPy and
@@ -12,7 +17,10 @@ from __future__ import annotations
 import importlib
 from typing import TYPE_CHECKING, Any
 
+from ._version import __version__
 from .errors import (
+    DataError,
+    DataWarning,
     InputError,
     MaglevkitError,
     MaglevkitWarning,
@@ -27,6 +35,7 @@ from .errors import (
 )
 
 if TYPE_CHECKING:  # the eager imports, for type checkers and IDEs
+    from .calibration import calibrate
     from .circuit import (
         AirGap,
         Branch,
@@ -76,11 +85,11 @@ if TYPE_CHECKING:  # the eager imports, for type checkers and IDEs
         load_scenario,
         magnetic_energy,
         pole_force_eq6,
-        simulate,
         solve_statics,
         voltage_step_response,
     )
-    from .reduction import CharacteristicMaps, build_maps, load_maps
+    from .reduction import CharacteristicMaps, build_maps, load_maps, maps_from_table
+    from .simulation import simulate
 
 _LAZY: dict[str, str] = {
     "AirGap": ".circuit",
@@ -125,17 +134,20 @@ _LAZY: dict[str, str] = {
     "load_scenario": ".models",
     "magnetic_energy": ".models",
     "pole_force_eq6": ".models",
-    "simulate": ".models",
+    "simulate": ".simulation",
     "solve_statics": ".models",
     "voltage_step_response": ".models",
     "CharacteristicMaps": ".reduction",
     "build_maps": ".reduction",
     "load_maps": ".reduction",
+    "maps_from_table": ".reduction",
+    "calibrate": ".calibration",
 }
 """Public name -> the submodule that defines it (imported on first access)."""
 
-_SUBPACKAGES = frozenset({"circuit", "cli", "compare", "control", "errors", "figures", "magnets",
-                          "materials", "models", "plotting", "reduction", "validation",
+_SUBPACKAGES = frozenset({"calibration", "circuit", "cli", "compare", "control", "errors",
+                          "export", "figures", "magnets", "materials", "models", "plant",
+                          "plotting", "reduction", "simulation", "sweep", "validation",
                           "vehicle"})
 
 
@@ -158,8 +170,6 @@ if not TYPE_CHECKING:
         return sorted(set(globals()) | set(__all__) | _SUBPACKAGES)
 
 
-__version__ = "0.1.0"
-
 __all__ = [
     "AirGap",
     "BankOutputs",
@@ -172,6 +182,8 @@ __all__ = [
     "Coil",
     "ConstantPermeability",
     "CurrentModel",
+    "DataError",
+    "DataWarning",
     "EddyCurrent",
     "FluxModel",
     "FluxState",
@@ -208,6 +220,7 @@ __all__ = [
     "build_magnet",
     "build_maps",
     "bundled_magnets",
+    "calibrate",
     "carter_coefficient",
     "coenergy",
     "differential_inductance_from_step",
@@ -216,6 +229,7 @@ __all__ = [
     "load_maps",
     "load_scenario",
     "magnetic_energy",
+    "maps_from_table",
     "material_names",
     "pole_force_eq6",
     "simulate",

@@ -100,7 +100,13 @@ class ProgressReporter:
 
     # ------------------------------------------------------------------ progress
     def advance(self, n: int = 1) -> None:
-        """Mark ``n`` more tasks as done."""
+        """Mark ``n`` more tasks as done.
+
+        Parameters
+        ----------
+        n : int, default 1
+            Tasks finished since the last call (the count stops at the total).
+        """
         self.done = min(self.done + n, self.total)
         if self._bar is not None:
             self._bar.update(self._task, completed=self.done)

@@ -40,9 +40,10 @@ import numpy as np
 
 from .control import closed_loop, design_gap_controller
 from .errors import InputError
-from .models.flux import FluxModel, simulate
+from .models.flux import FluxModel
 from .models.statics import solve_statics
-from .vehicle import STANDARD_GRAVITY, HeaveMass
+from .plant import STANDARD_GRAVITY, HeaveMass
+from .simulation import simulate
 
 __all__ = ["AC_MIN_RELATIVE_VARIATION", "ACCEPTANCE_NRMS", "error_verdicts",
            "ComparisonScenario", "ComparisonResult",

@@ -105,3 +105,14 @@ def _fmt(value: Any) -> str:
 
 class CompilationWarning(UserWarning):
     """Compiling a model to machine code failed; the slower interpreted path is used."""
+
+
+class DataError(MaglevkitError, ValueError):
+    """Tabulated or measured data (a table of F(s, I) / psi(s, I), a measured step) is
+    malformed or inconsistent; the message names the column, the row or grid point and
+    what is allowed."""
+
+
+class DataWarning(MaglevkitWarning):
+    """Tabulated data is usable but questionable (e.g. force not monotone in the gap, or
+    co-energy reciprocity met only loosely); the message names where."""

@@ -11,7 +11,7 @@
 * :func:`figure_coupling` -- time response of all circuits to a voltage step in the first
   one (detailed flux-based model, :func:`coupling_response`), with the coupling quantified.
 
-Normalisation: ``I0`` is the saturation knee (:func:`~maglevkit.magnets.saturation_knee`
+Normalisation: ``I0`` is the saturation knee (:func:`~maglevkit.models.saturation_knee`
 at the nominal gap ``s0``), ``F0 = F(s0, I0)`` of the full model.  The nominal current of
 the parameter file is marked.
 """
@@ -25,7 +25,7 @@ from typing import Any
 import numpy as np
 
 from .magnets.base import Magnet
-from .magnets.characteristics import KNEE_EXPONENT, nominal_point, saturation_knee
+from .models.characteristics import KNEE_EXPONENT, nominal_point, saturation_knee
 from .models.statics import solve_statics
 from .plotting import place_legend, plt, save
 
@@ -40,6 +40,23 @@ class Fig6Data:
 
     ``force_full`` and ``force_linear`` have shape (n_gaps, n_currents) and are ``F/F0``;
     ``current`` is ``I/I0``; ``gaps_m`` the gaps [m].
+
+    Attributes
+    ----------
+    gaps_m : ndarray (n_gaps,)
+        Uniform gaps of the curves [m].
+    current : ndarray (n_currents,)
+        ``I/I0`` [-], every circuit at the same current.
+    force_full, force_linear : ndarray (n_gaps, n_currents)
+        Total force ``F/F0`` [-] of the full model and of the model without saturation
+        and eddy currents.
+    I0_A : float
+        Saturation knee ``I0`` [A] at the nominal gap
+        (:func:`~maglevkit.magnets.saturation_knee`).
+    F0_N : float
+        Force at the nominal gap and ``I0`` [N] (full model).
+    nominal_gap_m, nominal_current_A : float
+        The magnet's nominal operating point [m], [A].
     """
 
     gaps_m: np.ndarray
@@ -58,6 +75,8 @@ class Fig7Data:
 
     Attributes
     ----------
+    gap_m : float
+        Uniform gap of the curves [m].
     current : ndarray
         ``I/I0`` of the static curves.
     inductance_full, inductance_linear : ndarray
@@ -71,6 +90,10 @@ class Fig7Data:
         detailed flux model, other circuits at constant voltage).
     L0_H : float
         Static inductance of the model without saturation and eddy currents [H].
+    I0_A : float
+        Saturation knee ``I0`` [A] at the nominal gap.
+    nominal_current_A : float
+        The magnet's nominal current [A].
     """
 
     gap_m: float
@@ -87,7 +110,28 @@ class Fig7Data:
 
 def fig6_data(magnet: Magnet, *, gap_factors: tuple[float, ...] = (0.8, 1.0, 1.2, 1.5),
               max_current: float = 2.2, points: int = 89) -> Fig6Data:
-    """Data of the Fig. 6 analog; gaps ``gap_factors x s0``, currents ``0..max_current x I0``."""
+    """Data of the Fig. 6 analog; gaps ``gap_factors x s0``, currents ``0..max_current x I0``.
+
+    Parameters
+    ----------
+    magnet : Magnet
+        Magnet with an ``[operating]`` table (nominal gap ``s0`` and current).
+    gap_factors : tuple of float
+        Gaps as multiples of the nominal gap [-] (keyword only, like all that follow).
+    max_current : float, default 2.2
+        Largest current as a multiple of the knee ``I0`` [-].
+    points : int, default 89
+        Currents per curve.
+
+    Returns
+    -------
+    Fig6Data
+
+    Raises
+    ------
+    InputError
+        A magnet without an ``[operating]`` table, no saturation knee, or bad gaps.
+    """
     s0, i_nom = nominal_point(magnet)
     i0 = saturation_knee(magnet, gap=s0)
     gaps = s0 * np.asarray(gap_factors, dtype=float)
@@ -126,6 +170,10 @@ def fig7_data(magnet: Magnet, *, gap: float = 0.0095, max_current: float = 2.2,
         Currents ``0.1 .. max_current x I0`` at which a small voltage step of the first
         circuit is simulated with the detailed flux model, full and without saturation and
         eddy currents (0: none; each step costs ~0.3-1 s).
+
+    Returns
+    -------
+    Fig7Data
 
     Raises
     ------
@@ -188,7 +236,22 @@ def _mark_currents(ax: Any, i_nom_rel: float) -> list[Any]:
 
 def figure_force_current(magnet: Magnet, path: str | Path, *, data: Fig6Data | None = None
                          ) -> Path:
-    """Write the Fig. 6 analog (PNG) and return its path."""
+    """Write the Fig. 6 analog (PNG) and return its path.
+
+    Parameters
+    ----------
+    magnet : Magnet
+        Magnet with an ``[operating]`` table.
+    path : str or Path
+        The PNG file to write.
+    data : Fig6Data, optional
+        Precomputed data (default: :func:`fig6_data` of ``magnet``; keyword only).
+
+    Returns
+    -------
+    Path
+        The written file.
+    """
     return save(_draw_force_current(magnet.name, data or fig6_data(magnet)), path)
 
 
@@ -224,6 +287,20 @@ def figure_inductance(magnet: Magnet, path: str | Path, *, data: Fig7Data | None
     Static ``L~ = dpsi/dI`` and, where simulated, the apparent inductance ``tau R_el`` of
     small voltage steps (detailed flux model), for the full model and for the model without
     saturation and eddy currents.
+
+    Parameters
+    ----------
+    magnet : Magnet
+        Magnet with an ``[operating]`` table.
+    path : str or Path
+        The PNG file to write.
+    data : Fig7Data, optional
+        Precomputed data (default: :func:`fig7_data` of ``magnet``; keyword only).
+
+    Returns
+    -------
+    Path
+        The written file.
     """
     return save(_draw_inductance(magnet.name, data or fig7_data(magnet)), path)
 
@@ -273,7 +350,21 @@ def _draw_inductance(magnet_name: str, d: Fig7Data) -> Any:
 
 @dataclass(frozen=True)
 class CouplingResponse:
-    """Response of all circuits to a voltage step in the first one (flux-based model)."""
+    """Response of all circuits to a voltage step in the first one (flux-based model).
+
+    Attributes
+    ----------
+    time_s : ndarray (n_t,)
+        Sample times [s].
+    circuit_names : tuple of str
+        The circuits (columns of ``relative_current_change``).
+    relative_current_change : ndarray (n_t, n_circuits)
+        ``(I - I0) / I0`` [-].
+    other_peak_ratio : float
+        ``max |dI_other| / max |dI_stepped|`` [-].
+    mutual_ratio : float
+        ``max |L_ij| / sqrt(L_ii L_jj)``, ``i != j`` [-] (statics).
+    """
 
     time_s: np.ndarray
     circuit_names: tuple[str, ...]
@@ -285,8 +376,8 @@ class CouplingResponse:
 def coupling_response(magnet: Magnet, *, step: float = 0.2) -> CouplingResponse:
     """Step the first circuit's voltage by ``step`` (relative) at the nominal point and
     simulate the detailed flux-based model for three time constants."""
-    from .magnets.characteristics import coupling_ratios
-    from .models.flux import simulate
+    from .models.characteristics import coupling_ratios
+    from .models.flux import simulate_flux as simulate
 
     s0, i0 = nominal_point(magnet)
     net = magnet.network
@@ -313,6 +404,20 @@ def figure_coupling(magnet: Magnet, path: str | Path, *,
 
     The stepped circuit is drawn against the left axis; the other circuits, whose response
     is below 1 % of it, against a magnified right axis with the same zero.
+
+    Parameters
+    ----------
+    magnet : Magnet
+        Magnet with an ``[operating]`` table and at least two circuits.
+    path : str or Path
+        The PNG file to write.
+    data : CouplingResponse, optional
+        Precomputed data (default: :func:`coupling_response` of ``magnet``; keyword only).
+
+    Returns
+    -------
+    Path
+        The written file.
     """
     return save(_draw_coupling(magnet.name, data or coupling_response(magnet)), path)
 
@@ -366,6 +471,21 @@ def write_figures(magnet: Magnet, out: str | Path, *, step_points: int = 12) -> 
 
     ``step_points`` is the number of simulated voltage steps of the Fig. 7 analog (see
     :func:`fig7_data`).
+
+    Parameters
+    ----------
+    magnet : Magnet
+        Magnet with an ``[operating]`` table; its file name gives the figures' names.
+    out : str or Path
+        Existing output folder.
+    step_points : int, default 12
+        Simulated voltage steps of the Fig. 7 analog (>= 0; keyword only).
+
+    Returns
+    -------
+    list of Path
+        ``<stem>-fig6-force-current.png``, ``<stem>-fig7-inductance.png`` and, with
+        several circuits, ``<stem>-coupling.png``.
     """
     out = Path(out)
     stem = Path(magnet.source).stem or "magnet"

@@ -36,6 +36,7 @@ import numpy as np
 from scipy import integrate
 
 from .errors import MaterialError
+from .validation import real_number
 
 MU0: float = 4e-7 * math.pi
 """Permeability of free space [H/m] (the classical value; the 2019 SI value differs by 1e-10)."""
@@ -72,10 +73,33 @@ class Material(ABC):
 
     @abstractmethod
     def field_strength(self, B: Any) -> Any:
-        """Magnetic field strength H [A/m] for flux density B [T] (NumPy or CasADi)."""
+        """Magnetic field strength H [A/m] for flux density B [T] (NumPy or CasADi).
+
+        Parameters
+        ----------
+        B : float, array_like or CasADi
+            Flux density [T] (any sign: the law is odd in B).
+
+        Returns
+        -------
+        ndarray or CasADi
+            H [A/m], the shape of ``B``.
+        """
 
     def relative_permeability(self, B: Any) -> Any:
-        """Relative permeability ``B / (mu0 H)`` (NumPy input only; ``mu_r(0)`` at B = 0)."""
+        """Relative permeability ``B / (mu0 H)`` (NumPy input only; ``mu_r(0)`` at B = 0).
+
+        Parameters
+        ----------
+        B : float or array_like
+            Flux density [T].
+
+        Returns
+        -------
+        ndarray
+            Secant relative permeability ``mu_r`` [-], the shape of ``B`` (``inf`` for
+            ideal iron).
+        """
         b = np.asarray(B, dtype=float)
         h = np.asarray(self.field_strength(b), dtype=float)
         with np.errstate(divide="ignore", invalid="ignore"):
@@ -169,8 +193,7 @@ class SoftMagneticMaterial(Material):
             raise MaterialError(f"material {self.name!r}: c_a and c_b must be >= 0")
         if self.n <= 1.0:
             raise MaterialError(f"material {self.name!r}: exponent n = {self.n} must be > 1")
-        if self.resistivity is not None and not self.resistivity > 0.0:
-            raise MaterialError(f"material {self.name!r}: resistivity must be > 0 ohm m")
+        _check_resistivity(self)
         object.__setattr__(self, "tail_from_T", self._polarisation_peak())
         # H(B) must be strictly increasing, otherwise the network has no unique solution.
         b = np.linspace(0.0, 6.0 * max(self.B_mymax, 1.0), 4001)
@@ -215,6 +238,21 @@ class SoftMagneticMaterial(Material):
                             xtol=1e-14, rtol=1e-14))
 
     def field_strength(self, B: Any) -> Any:
+        """Magnetic field strength H [A/m] for flux density B [T] (NumPy or CasADi).
+
+        The Roschke fit ``H = B / (mu0 mu_r(B))`` up to :attr:`tail_from_T`, then the tangent
+        of slope ``1/mu0``.
+
+        Parameters
+        ----------
+        B : float, array_like or CasADi
+            Flux density [T] (any sign: the law is odd in B).
+
+        Returns
+        -------
+        ndarray or CasADi
+            H [A/m], the shape of ``B``.
+        """
         bs = self.tail_from_T
         if _is_symbolic(B):
             h_fit = B / (MU0 * self._mu_r(B))
@@ -236,6 +274,14 @@ class SoftMagneticMaterial(Material):
         return float(self.mu_i)
 
 
+def _check_resistivity(material: Material) -> None:
+    """The one check of every material's optional ``resistivity`` (finite, > 0 ohm m)."""
+    rho = getattr(material, "resistivity", None)
+    if rho is not None:
+        real_number(rho, f"material {getattr(material, 'name', '?')!r}: resistivity",
+                    "ohm m", positive=True, error=MaterialError)
+
+
 @dataclass(frozen=True)
 class ConstantPermeability(Material):
     """Linear material ``H = B / (mu0 mu_r)``.
@@ -243,7 +289,18 @@ class ConstantPermeability(Material):
     Parameters
     ----------
     mu_r : float
-        Relative permeability [-], >= 1.
+        Relative permeability [-], finite and >= 1.
+    name : str, default "linear"
+        Display name.
+    resistivity : float or None
+        Electrical resistivity [ohm m] for eddy-current estimates, if known (finite,
+        > 0).
+
+    Raises
+    ------
+    MaterialError
+        ``mu_r`` not finite or < 1 (use :class:`IdealIron` for ``mu_r -> inf``); a
+        ``resistivity`` that is not a finite number > 0.
     """
 
     mu_r: float
@@ -256,8 +313,23 @@ class ConstantPermeability(Material):
                 f"material {self.name!r}: mu_r = {self.mu_r} must be finite and >= 1 "
                 "(use IdealIron for mu -> inf)"
             )
+        _check_resistivity(self)
 
     def field_strength(self, B: Any) -> Any:
+        """Magnetic field strength H [A/m] for flux density B [T] (NumPy or CasADi).
+
+        ``H = B / (mu0 mu_r)``.
+
+        Parameters
+        ----------
+        B : float, array_like or CasADi
+            Flux density [T] (any sign: the law is odd in B).
+
+        Returns
+        -------
+        ndarray or CasADi
+            H [A/m], the shape of ``B``.
+        """
         if not _is_symbolic(B):
             B = np.asarray(B, dtype=float)
         return B / (MU0 * self.mu_r)
@@ -271,18 +343,61 @@ class ConstantPermeability(Material):
         return False
 
     def energy_density(self, B: Any) -> np.ndarray:
+        """Energy density ``B^2 / (2 mu0 mu_r)`` [J/m^3] (closed form).
+
+        Parameters
+        ----------
+        B : float or array_like
+            Flux density [T] (NumPy only).
+
+        Returns
+        -------
+        ndarray
+            ``w(B)`` [J/m^3], the shape of ``B`` (even in B).
+        """
         b = np.asarray(B, dtype=float)
         return b * b / (2.0 * MU0 * self.mu_r)
 
 
 @dataclass(frozen=True)
 class IdealIron(Material):
-    """Infinitely permeable iron (``H = 0``): the reluctance of the part vanishes."""
+    """Infinitely permeable iron (``H = 0``): the reluctance of the part vanishes.
+
+    Parameters
+    ----------
+    name : str, default "ideal"
+        Display name.
+    resistivity : float or None
+        Electrical resistivity [ohm m] for eddy-current estimates, if known (finite,
+        > 0).
+
+    Raises
+    ------
+    MaterialError
+        A ``resistivity`` that is not a finite number > 0.
+    """
 
     name: str = "ideal"
     resistivity: float | None = None
 
+    def __post_init__(self) -> None:
+        _check_resistivity(self)
+
     def field_strength(self, B: Any) -> Any:
+        """Magnetic field strength H [A/m] for flux density B [T] (NumPy or CasADi).
+
+        Zero for every B.
+
+        Parameters
+        ----------
+        B : float, array_like or CasADi
+            Flux density [T] (any sign: the law is odd in B).
+
+        Returns
+        -------
+        ndarray or CasADi
+            H [A/m], the shape of ``B``.
+        """
         return 0.0 * B if _is_symbolic(B) else np.zeros_like(np.asarray(B, dtype=float))
 
     @property
@@ -294,6 +409,18 @@ class IdealIron(Material):
         return False
 
     def energy_density(self, B: Any) -> np.ndarray:
+        """Energy density: zero (ideal iron stores no energy) [J/m^3].
+
+        Parameters
+        ----------
+        B : float or array_like
+            Flux density [T] (NumPy only).
+
+        Returns
+        -------
+        ndarray
+            ``w(B)`` [J/m^3], the shape of ``B`` (even in B).
+        """
         return np.zeros_like(np.asarray(B, dtype=float))
 
 
@@ -327,6 +454,11 @@ def read_bh_csv(path: str | os.PathLike[str]) -> tuple[tuple[float, ...], tuple[
     the header must be ``A/m`` and ``T``; a header naming the columns ``B, H`` is refused
     (the order is H, B).  The points must be a first-magnetisation curve from the origin
     (see :class:`TabulatedBH`).
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The text file.
 
     Returns
     -------
@@ -634,8 +766,7 @@ class TabulatedBH(Material):
                 f"below mu0 by more than the rounding allowance {CHORD_TOLERANCE:g}; physical "
                 "curves have dB/dH >= mu0 (check the units: H in A/m, B in T)"
             )
-        if self.resistivity is not None and not self.resistivity > 0.0:
-            raise MaterialError(f"{who}: resistivity must be > 0 ohm m")
+        _check_resistivity(self)
         h_used = _physical_points(h, b)
         try:
             x, c = _bh_pieces(h_used, b, self.interpolation)
@@ -651,7 +782,29 @@ class TabulatedBH(Material):
     @classmethod
     def from_csv(cls, path: str | os.PathLike[str], *, name: str | None = None,
                  resistivity: float | None = None, interpolation: str = "smooth") -> TabulatedBH:
-        """A table read by :func:`read_bh_csv` (H [A/m], B [T]); ``name`` defaults to the file stem."""
+        """A table read by :func:`read_bh_csv` (H [A/m], B [T]); ``name`` defaults to the file stem.
+
+        Parameters
+        ----------
+        path : str or os.PathLike
+            Two-column text file, H [A/m] then B [T] (format: :func:`read_bh_csv`).
+        name : str, optional
+            Display name (default: the file name without its suffix).
+        resistivity : float or None
+            Electrical resistivity [ohm m], > 0, for eddy-current estimates, if known.
+        interpolation : {"smooth", "linear"}
+            Interpolation law between the points (default ``"smooth"``).
+
+        Returns
+        -------
+        TabulatedBH
+
+        Raises
+        ------
+        MaterialError
+            An unreadable file or a table that is not a physical first-magnetisation curve
+            (see the class docstring).
+        """
         h, b = read_bh_csv(path)
         return cls(h, b, name=Path(path).stem if name is None else name, resistivity=resistivity,
                    interpolation=interpolation)
@@ -675,6 +828,21 @@ class TabulatedBH(Material):
         return 1.0 / (MU0 * dh_db) if dh_db > 0.0 else math.inf
 
     def field_strength(self, B: Any) -> Any:
+        """Magnetic field strength H [A/m] for flux density B [T] (NumPy or CasADi).
+
+        The interpolant through the table points, continued above the last point with
+        slope ``1/mu0``.
+
+        Parameters
+        ----------
+        B : float, array_like or CasADi
+            Flux density [T] (any sign: the law is odd in B).
+
+        Returns
+        -------
+        ndarray or CasADi
+            H [A/m], the shape of ``B``.
+        """
         x, c = self._x, self._c
         b_end, h_end = float(x[-1]), self._h_end
         if _is_symbolic(B):
@@ -698,6 +866,18 @@ class TabulatedBH(Material):
         return np.sign(b) * mag
 
     def energy_density(self, B: Any) -> np.ndarray:
+        """Energy density ``w(B) = integral_0^B H dB`` [J/m^3], exact for the interpolant.
+
+        Parameters
+        ----------
+        B : float or array_like
+            Flux density [T] (NumPy only).
+
+        Returns
+        -------
+        ndarray
+            ``w(B)`` [J/m^3], the shape of ``B`` (even in B).
+        """
         x, c, w = self._x, self._c, self._w
         b = np.abs(np.asarray(B, dtype=float))
         b_end, h_end = float(x[-1]), self._h_end
@@ -732,7 +912,18 @@ _ROSCHKE: dict[str, tuple[float, float, float, float, float, float | None]] = {
 
 
 def normalise_name(name: str) -> str:
-    """Case- and punctuation-insensitive key: ``"AISI 1008" -> "aisi1008"``."""
+    """Case- and punctuation-insensitive key: ``"AISI 1008" -> "aisi1008"``.
+
+    Parameters
+    ----------
+    name : str
+        A material name.
+
+    Returns
+    -------
+    str
+        Lower-case letters and digits of ``name`` only.
+    """
     return re.sub(r"[^0-9a-z]", "", name.lower())
 
 
@@ -752,10 +943,21 @@ def get_material(name: str | Material) -> Material:
 
     ``"ideal"`` gives :class:`IdealIron`.  A :class:`Material` is returned unchanged.
 
+    Parameters
+    ----------
+    name : str or Material
+        A built-in record name (:func:`material_names`, e.g. ``"AISI 1008"``), ``"ideal"``,
+        or a material.
+
+    Returns
+    -------
+    Material
+
     Raises
     ------
     MaterialError
-        If the name is unknown; the message lists the known names.
+        If the name is unknown (the message lists the known names), or ``name`` is
+        neither a string nor a :class:`Material`.
     """
     if isinstance(name, Material):
         return name

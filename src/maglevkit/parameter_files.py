@@ -62,7 +62,9 @@ def read_parameter_file(source: str | os.PathLike[str], *, what: str, folder: st
         file path.
     what : str
         The kind of file, for messages ("magnet", "guideway", ...).
-    folder, table : see :func:`bundled_files`.
+    folder, table : str
+        Where bundled files of this kind live and the table they must have (see
+        :func:`bundled_files`).
 
     Returns
     -------
@@ -105,6 +107,21 @@ def parse_provenance(parameters: Mapping[str, Any], tables: Collection[str],
 
     Every entry must name a value of one of ``tables`` present in ``parameters`` and
     carry a string; otherwise :class:`~maglevkit.errors.ParameterFileError`.
+
+    Parameters
+    ----------
+    parameters : mapping
+        The parsed file; its optional ``provenance`` table is read.
+    tables : collection of str
+        Tables whose values may carry a provenance tag (an entry naming one that
+        ``parameters`` lacks raises :class:`~maglevkit.errors.ParameterFileError`).
+    source : str
+        File label for error messages.
+
+    Returns
+    -------
+    dict of str to str
+        ``"table.key" -> tag``.
     """
     raw = parameters.get("provenance", {})
     if not isinstance(raw, Mapping):
@@ -112,8 +129,13 @@ def parse_provenance(parameters: Mapping[str, Any], tables: Collection[str],
     prov: dict[str, str] = {}
     for key, tag in raw.items():
         table, _, sub = str(key).partition(".")
-        if table not in tables or sub not in parameters[table]:
-            raise ParameterFileError(f"{source}: [provenance] {key!r} names no value of this file")
+        values = parameters.get(table) if table in tables else None
+        if not isinstance(values, Mapping) or sub not in values:
+            lacks = (f"; the file has no [{table}] table" if table in tables
+                     and not isinstance(values, Mapping) else "")
+            raise ParameterFileError(f"{source}: [provenance] {key!r} names no value of this "
+                                     f"file{lacks} (allowed: 'table.key' of the tables "
+                                     f"{', '.join(sorted(tables))})")
         if not isinstance(tag, str):
             raise ParameterFileError(f"{source}: [provenance] {key!r} must be a string")
         prov[str(key)] = tag

@@ -17,7 +17,19 @@ __all__ = ["covers_data", "place_legend", "plot_comparison", "plot_force_current
 
 
 def save(fig: Any, path: str | Path) -> Path:
-    """Save a figure as PNG (creating the folder) and close it."""
+    """Save a figure as PNG (creating the folder) and close it.
+
+    Parameters
+    ----------
+    fig : matplotlib.figure.Figure
+        The figure (closed afterwards).
+    path : str or Path
+        Target file; missing folders are created.
+
+    Returns
+    -------
+    Path
+    """
     p = Path(path)
     p.parent.mkdir(parents=True, exist_ok=True)
     fig.savefig(p, dpi=130, bbox_inches="tight")
@@ -40,7 +52,19 @@ def _artists_in(ax: Any) -> list[Any]:
 
 def covers_data(legend: Any, ax: Any) -> bool:
     """True if ``legend``'s box overlaps a line (any segment, also between samples) or a
-    text of ``ax`` or of its twin axes, in display coordinates of the drawn figure."""
+    text of ``ax`` or of its twin axes, in display coordinates of the drawn figure.
+
+    Parameters
+    ----------
+    legend : matplotlib.legend.Legend
+        A drawn legend.
+    ax : matplotlib.axes.Axes
+        Its axes.
+
+    Returns
+    -------
+    bool
+    """
     from matplotlib.lines import Line2D
 
     renderer = ax.figure.canvas.get_renderer()
@@ -66,6 +90,21 @@ def place_legend(ax: Any, handles: list[Any] | None = None, labels: list[str] | 
     Inside positions are tried in the order of ``_LEGEND_INSIDE`` (each checked with
     :func:`covers_data` on the drawn figure); if none is free, or with ``outside=True``,
     the legend goes to the right of the axes.  Call it after the axes' limits are final.
+
+    Parameters
+    ----------
+    ax : matplotlib.axes.Axes
+        The axes.
+    handles, labels : list, optional
+        Legend entries (default: the axes' own).
+    outside : bool, default False
+        Put the legend outside at once (keyword only).
+    **kwargs
+        Passed to ``ax.legend``.
+
+    Returns
+    -------
+    matplotlib.legend.Legend
     """
     if handles is None or labels is None:
         handles, labels = ax.get_legend_handles_labels()
@@ -88,13 +127,40 @@ def _has_twin(ax: Any) -> bool:
 
 
 def sequence_colors(n: int, cmap: str = "viridis") -> list[Any]:
-    """``n`` distinct colours along a colormap (for traces ordered along the magnet)."""
+    """``n`` distinct colours along a colormap (for traces ordered along the magnet).
+
+    Parameters
+    ----------
+    n : int
+        Number of colours.
+    cmap : str, default "viridis"
+        Matplotlib colormap name.
+
+    Returns
+    -------
+    list of RGBA tuples
+        From the start to 90 % of the colormap.
+    """
     cm = plt.get_cmap(cmap)
     return [cm(0.9 * k / max(1, n - 1)) for k in range(n)]
 
 
 def plot_force_current(sol: Any, path: str | Path, *, title: str = "") -> Path:
-    """Total force over current, one curve per gap, from a ``grid=True`` StaticSolution."""
+    """Total force over current, one curve per gap, from a ``grid=True`` StaticSolution.
+
+    Parameters
+    ----------
+    sol : StaticSolution
+        From :func:`~maglevkit.models.solve_statics` with ``grid=True``.
+    path : str or Path
+        The PNG file to write.
+    title : str, optional
+        Figure title (keyword only).
+
+    Returns
+    -------
+    Path
+    """
     gaps = sol.gaps_m[:, 0, 0]
     currents = sol.currents_A[0, :, 0]
     fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(11, 4.2))
@@ -206,6 +272,19 @@ def plot_simulation(res: Any, path: str | Path, *, title: str = "") -> Path:
     a trace).  Equal inputs and currents (e.g. the same gap at all 12 poles) are drawn once
     with a merged label; pole forces take their colours from a colormap along the magnet,
     eddy elements one colormap and line style per group (:func:`group_styles`).
+
+    Parameters
+    ----------
+    res : SimulationResult
+        A flux-model simulation result.
+    path : str or Path
+        The PNG file to write.
+    title : str, optional
+        Figure title (keyword only).
+
+    Returns
+    -------
+    Path
     """
     t = res.time_s * 1e3
     n_pole = len(res.gap_names)
@@ -286,6 +365,19 @@ def plot_comparison(result: Any, path: str | Path, *, title: str = "") -> Path:
     darker shade with the circuit's marker.  Circuits whose traces coincide (symmetric
     magnet and inputs, within ``COINCIDE_FRACTION`` of the range) are drawn once and named
     together.  The legend sits to the right of the axes.
+
+    Parameters
+    ----------
+    result : ComparisonResult
+        One scenario of :func:`~maglevkit.compare.compare_models`.
+    path : str or Path
+        The PNG file to write.
+    title : str, optional
+        Figure title (keyword only).
+
+    Returns
+    -------
+    Path
     """
     from matplotlib.colors import to_rgb
 

@@ -35,7 +35,18 @@ __all__ = ["real_number", "real_array", "whole_number", "flag", "optional_flag",
 
 
 def describe(value: Any) -> str:
-    """A short description of ``value`` for error messages: its repr and type."""
+    """A short description of ``value`` for error messages: its repr and type.
+
+    Parameters
+    ----------
+    value : object
+        Anything.
+
+    Returns
+    -------
+    str
+        ``"<repr, at most 80 characters> (<type name>)"``.
+    """
     text = repr(value)
     if len(text) > 80:
         text = text[:77] + "..."
@@ -142,6 +153,22 @@ def real_array(value: Any, what: str, unit: str = "", *, finite: bool = True) ->
     InputError
         The value is or contains a bool, string, complex number, None or another
         non-number; a ragged nesting; or (``finite=True``) NaN/inf.
+
+    Parameters
+    ----------
+    value : object
+        The argument to check.
+    what : str
+        Its name in error messages.
+    unit : str, optional
+        Its unit in error messages.
+    finite : bool, default True
+        Also reject NaN and inf (keyword only).
+
+    Returns
+    -------
+    ndarray of float
+        Same shape as ``value``.
     """
     bad = _bad_element(value)
     if bad is not _OK:
@@ -170,6 +197,19 @@ def whole_number(value: Any, what: str, *, minimum: int | None = None) -> int:
     ------
     InputError
         Not a real number, a bool, a fractional value, or below ``minimum``.
+
+    Parameters
+    ----------
+    value : object
+        The argument to check.
+    what : str
+        Its name in error messages.
+    minimum : int, optional
+        Smallest allowed value (keyword only).
+
+    Returns
+    -------
+    int
     """
     v = real_number(value, what)
     if not v.is_integer():
@@ -187,6 +227,17 @@ def flag(value: Any, what: str) -> bool:
     ------
     InputError
         Any other value (``"no"``, ``0``, ``None``, ...).
+
+    Parameters
+    ----------
+    value : object
+        The argument to check.
+    what : str
+        Its name in error messages.
+
+    Returns
+    -------
+    bool
     """
     if not _is_bool(value):
         raise InputError(f"{what} = {describe(value)}: expected True or False")
@@ -194,7 +245,19 @@ def flag(value: Any, what: str) -> bool:
 
 
 def optional_flag(value: Any, what: str) -> bool | None:
-    """Like :func:`flag`, but ``None`` (meaning "unchanged" or "default") is allowed."""
+    """Like :func:`flag`, but ``None`` (meaning "unchanged" or "default") is allowed.
+
+    Parameters
+    ----------
+    value : object
+        ``True``, ``False`` or ``None``.
+    what : str
+        Its name in error messages.
+
+    Returns
+    -------
+    bool or None
+    """
     return None if value is None else flag(value, what)
 
 

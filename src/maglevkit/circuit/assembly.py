@@ -37,6 +37,12 @@ class NetworkEquations:
 
     Attributes
     ----------
+    network : Network
+        The network the equations belong to.
+    C : ndarray (n_loops, n_branches)
+        Fundamental loop matrix (:attr:`Network.loop_matrix`).
+    N : ndarray (n_branches, n_circuits)
+        Signed turns matrix (:attr:`Network.turns_matrix`).
     x, s, I : casadi.SX
         Loop fluxes [Wb], gaps [m], circuit currents [A].
     phi : casadi.SX
@@ -81,7 +87,7 @@ class NetworkEquations:
 
 def assemble(network: Network) -> NetworkEquations:
     """Assemble (and cache on the network) the symbolic equations of ``network``."""
-    cached = network._cache.get("equations")
+    cached = network.cache.get("equations")
     if cached is not None:
         return cached  # type: ignore[no-any-return]
     C = network.loop_matrix
@@ -119,5 +125,5 @@ def assemble(network: Network) -> NetworkEquations:
     force = ca.substitute(force_b, phi_b, phi)
     energy = ca.substitute(w_gap, phi_b, phi)
     eq = NetworkEquations(network, C, N, x, s, I, phi, mmf, residual, psi, force, energy)
-    network._cache["equations"] = eq
+    network.cache["equations"] = eq
     return eq

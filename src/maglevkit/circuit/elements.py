@@ -43,6 +43,7 @@ __all__ = [
     "GapLayerPermeance",
     "EddyCurrent",
     "carter_coefficient",
+    "rectangle_torsion_constant",
 ]
 
 
@@ -76,6 +77,20 @@ def carter_coefficient(gap: Any, slot_pitch: float, slot_opening: float) -> Any:
     ``gamma = (4/pi) [x atan(x) - ln sqrt(1 + x^2)]`` with ``x = b / (2 s)``
     (slot pitch ``tau``, slot opening ``b``, gap ``s``; all in m).  Works on NumPy and
     CasADi inputs.
+
+    Parameters
+    ----------
+    gap : float, array_like or CasADi
+        Air gap s [m], > 0 (numeric gaps are checked; CasADi expressions are not).
+    slot_pitch : float
+        Slot pitch tau [m], > 0.
+    slot_opening : float
+        Slot opening b [m], ``0 <= b < tau``.
+
+    Returns
+    -------
+    float, ndarray or CasADi
+        ``k_C`` [-] (>= 1), the shape of ``gap``.
 
     Raises
     ------
@@ -127,10 +142,41 @@ class Element(ABC):
 
     @abstractmethod
     def mmf_drop(self, flux: Any, gap: Any = None) -> Any:
-        """Static magnetic voltage drop ``V_m`` [A] for branch flux ``flux`` [Wb]."""
+        """Static magnetic voltage drop ``V_m`` [A] for branch flux ``flux`` [Wb].
+
+        Parameters
+        ----------
+        flux : float, array_like or CasADi
+            Branch flux phi [Wb], in the branch's direction.
+        gap : float, array_like or CasADi, optional
+            Value of the element's gap input [m] (ignored by gap-independent elements).
+
+        Returns
+        -------
+        float, ndarray or CasADi
+            ``V_m`` [A] (ampere-turns), the shape of ``flux``.
+        """
 
     def energy(self, flux: Any, gap: Any = None) -> Any:
-        """Stored energy ``integral_0^phi V_m dphi`` [J] (NumPy input)."""
+        """Stored energy ``integral_0^phi V_m dphi`` [J] (NumPy input).
+
+        Parameters
+        ----------
+        flux : float or array_like
+            Branch flux phi [Wb].
+        gap : float or array_like, optional
+            Value of the element's gap input [m] (gap-dependent elements only).
+
+        Returns
+        -------
+        float or ndarray
+            Energy [J].
+
+        Raises
+        ------
+        NotImplementedError
+            For elements without a stored-energy law (the base class).
+        """
         raise NotImplementedError(f"{type(self).__name__} has no stored energy law")
 
 
@@ -140,16 +186,61 @@ class LinearElement(Element):
 
     The stored energy is ``phi^2 / (2 G)``.  Gap-dependent elements must be linear,
     so that the pole force is exactly ``dW/ds`` at constant flux.
+
+    Parameters
+    ----------
+    name : str
+        Unique name of the element within its network.
     """
 
     @abstractmethod
     def permeance(self, gap: Any = None) -> Any:
-        """Permeance ``G`` [H] (= Wb/A); ``gap`` [m] for gap-dependent elements."""
+        """Permeance ``G`` [H] (= Wb/A); ``gap`` [m] for gap-dependent elements.
+
+        Parameters
+        ----------
+        gap : float, array_like or CasADi, optional
+            Value of the element's gap input [m]; required by gap-dependent elements
+            (``ParameterError`` when missing), ignored by the others.
+
+        Returns
+        -------
+        float, ndarray or CasADi
+            ``G`` [H].
+        """
 
     def mmf_drop(self, flux: Any, gap: Any = None) -> Any:
+        """``V_m = phi / G`` [A].
+
+        Parameters
+        ----------
+        flux : float, array_like or CasADi
+            Branch flux phi [Wb].
+        gap : float, array_like or CasADi, optional
+            Value of the element's gap input [m] (required by gap-dependent elements).
+
+        Returns
+        -------
+        float, ndarray or CasADi
+            ``V_m`` [A].
+        """
         return flux / self.permeance(gap)
 
     def energy(self, flux: Any, gap: Any = None) -> Any:
+        """Stored energy ``phi^2 / (2 G)`` [J] (NumPy or CasADi input).
+
+        Parameters
+        ----------
+        flux : float, array_like or CasADi
+            Branch flux phi [Wb].
+        gap : float, array_like or CasADi, optional
+            Value of the element's gap input [m] (required by gap-dependent elements).
+
+        Returns
+        -------
+        float, ndarray or CasADi
+            Energy [J].
+        """
         return flux * flux / (2.0 * self.permeance(gap))
 
 
@@ -159,12 +250,20 @@ class IronPath(Element):
 
     Parameters
     ----------
+    name : str
+        Unique name of the element within its network.
     length : float
-        Mean flux path length [m].
+        Mean flux path length [m], > 0.
     cross_section : float
-        Cross-section area [m^2].
+        Cross-section area [m^2], > 0.
     material : Material or str
-        Constitutive law, or the name of a built-in record.
+        Constitutive law, or the name of a built-in record (default ``"ideal"``:
+        infinitely permeable iron).
+
+    Raises
+    ------
+    ParameterError
+        ``length`` or ``cross_section`` not a finite number > 0; an unknown material.
     """
 
     length: float
@@ -180,9 +279,37 @@ class IronPath(Element):
         return self.cross_section
 
     def mmf_drop(self, flux: Any, gap: Any = None) -> Any:
+        """``V_m = l H(phi / A)`` [A].
+
+        Parameters
+        ----------
+        flux : float, array_like or CasADi
+            Branch flux phi [Wb].
+        gap : optional
+            Ignored (an iron path does not depend on a gap).
+
+        Returns
+        -------
+        float, ndarray or CasADi
+            ``V_m`` [A].
+        """
         return self.length * self.material.field_strength(flux / self.cross_section)
 
     def energy(self, flux: Any, gap: Any = None) -> Any:
+        """Stored energy ``l A w(phi / A)`` [J], with the material's energy density ``w(B)``.
+
+        Parameters
+        ----------
+        flux : float or array_like
+            Branch flux phi [Wb].
+        gap : optional
+            Ignored.
+
+        Returns
+        -------
+        float or ndarray
+            Energy [J].
+        """
         b = np.asarray(flux, dtype=float) / self.cross_section
         return self.length * self.cross_section * self.material.energy_density(b)
 
@@ -207,16 +334,26 @@ class AirGap(LinearElement):
 
     Parameters
     ----------
+    name : str
+        Unique name of the element within its network.
     gap_input : str
-        Name of the gap input (one per pole).
+        Name of the gap input (one per pole), non-empty.
     pole_area : float
-        Pole face area [m^2].
+        Pole face area [m^2], > 0.
     fringe_edges : tuple of (float, float)
-        ``(edge length w_e [m], flank height r_e [m])`` per fringing edge (empty: none).
+        ``(edge length w_e [m], flank height r_e [m])`` per fringing edge, each > 0
+        (empty: none).
     slot_pitch, slot_opening : float
-        Stator slot pitch and slot opening [m] for Carter's coefficient (0: smooth).
+        Stator slot pitch and slot opening [m] for Carter's coefficient (0: smooth);
+        with a pitch > 0 the opening must lie in ``(0, slot_pitch)``.
     recesses : tuple of (float, float)
-        ``(area A_j [m^2], depth d_j [m])`` of recessed pole-face parts (empty: none).
+        ``(area A_j [m^2], depth d_j [m])`` of recessed pole-face parts, each > 0
+        (empty: none).
+
+    Raises
+    ------
+    ParameterError
+        An empty ``gap_input`` or any of the above out of range.
     """
 
     gap_input: str = "s"
@@ -253,18 +390,42 @@ class AirGap(LinearElement):
         return self.pole_area
 
     def effective_gap(self, gap: Any) -> Any:
-        """Gap enlarged by Carter's coefficient [m]."""
+        """Gap enlarged by Carter's coefficient [m].
+
+        Parameters
+        ----------
+        gap : float, array_like or CasADi
+            Mechanical air gap s [m], > 0 (checked only with a slot pitch, by
+            :func:`carter_coefficient`).
+
+        Returns
+        -------
+        float, ndarray or CasADi
+            ``k_C s`` [m] (``s`` itself for a smooth stator).
+        """
         if self.slot_pitch > 0.0:
             return carter_coefficient(gap, self.slot_pitch, self.slot_opening) * gap
         return gap
 
     def permeance(self, gap: Any = None) -> Any:
+        """Permeance ``G(s)`` [H] of the gap (see the class docstring).
+
+        Parameters
+        ----------
+        gap : float, array_like or CasADi
+            Mechanical air gap s [m], > 0; required (``ParameterError`` when None).
+
+        Returns
+        -------
+        float, ndarray or CasADi
+            ``G`` [H].
+        """
         if gap is None:
             raise ParameterError(f"air gap {self.name!r}: needs a gap value")
         s = self.effective_gap(gap)
         g = self.pole_area / s
         for w, r in self.fringe_edges:
-            g = g + _fringe_per_mu0(w, r, s)
+            g = g + fringe_per_mu0(w, r, s)
         for a, d in self.recesses:
             g = g + a / (s + d)
         return MU0 * g
@@ -275,6 +436,18 @@ class LeakagePermeance(LinearElement):
     """A constant leakage permeance ``G`` [H] (flux that does not cross the air gap).
 
     Use the constructors for the standard Roters flux-tube shapes.
+
+    Parameters
+    ----------
+    name : str
+        Unique name of the element within its network.
+    value : float
+        Permeance G [H], > 0 (required, although it has a default for the dataclass).
+
+    Raises
+    ------
+    ParameterError
+        ``value`` not a finite number > 0.
     """
 
     value: float = 0.0
@@ -283,30 +456,116 @@ class LeakagePermeance(LinearElement):
         _positive(f"leakage permeance {self.name!r}", value=self.value)
 
     def permeance(self, gap: Any = None) -> Any:
+        """The constant permeance ``G`` [H].
+
+        Parameters
+        ----------
+        gap : optional
+            Ignored (gap-independent).
+
+        Returns
+        -------
+        float
+            :attr:`value` [H].
+        """
         return self.value
 
     @classmethod
     def parallel_plates(cls, name: str, area: float, distance: float) -> LeakagePermeance:
-        """Homogeneous field between two parallel faces: ``mu0 A / d``."""
+        """Homogeneous field between two parallel faces: ``mu0 A / d``.
+
+        Parameters
+        ----------
+        name : str
+            Unique name of the element within its network.
+        area : float
+            Face area A [m^2], > 0.
+        distance : float
+            Distance d between the faces [m], > 0.
+
+        Returns
+        -------
+        LeakagePermeance
+
+        Raises
+        ------
+        ParameterError
+            A dimension that is not a finite number > 0.
+        """
         _positive(f"leakage {name!r}", area=area, distance=distance)
         return cls(name, MU0 * area / distance)
 
     @classmethod
     def half_cylinder(cls, name: str, length: float) -> LeakagePermeance:
-        """Half cylinder of axial length l: ``0.26 mu0 l``."""
+        """Half cylinder of axial length l: ``0.26 mu0 l``.
+
+        Parameters
+        ----------
+        name : str
+            Unique name of the element within its network.
+        length : float
+            Axial length l [m], > 0.
+
+        Returns
+        -------
+        LeakagePermeance
+
+        Raises
+        ------
+        ParameterError
+            A dimension that is not a finite number > 0.
+        """
         _positive(f"leakage {name!r}", length=length)
         return cls(name, 0.26 * MU0 * length)
 
     @classmethod
     def quarter_cylinder(cls, name: str, length: float) -> LeakagePermeance:
-        """Quarter cylinder of axial length l: ``0.52 mu0 l``."""
+        """Quarter cylinder of axial length l: ``0.52 mu0 l``.
+
+        Parameters
+        ----------
+        name : str
+            Unique name of the element within its network.
+        length : float
+            Axial length l [m], > 0.
+
+        Returns
+        -------
+        LeakagePermeance
+
+        Raises
+        ------
+        ParameterError
+            A dimension that is not a finite number > 0.
+        """
         _positive(f"leakage {name!r}", length=length)
         return cls(name, 0.52 * MU0 * length)
 
     @classmethod
     def half_hollow_cylinder(cls, name: str, length: float, inner_radius: float,
                              thickness: float) -> LeakagePermeance:
-        """Half hollow cylinder: ``mu0 l ln(1 + t/r_i) / pi``."""
+        """Half hollow cylinder: ``mu0 l ln(1 + t/r_i) / pi``.
+
+        Parameters
+        ----------
+        name : str
+            Unique name of the element within its network.
+        length : float
+            Axial length l [m], > 0.
+        inner_radius : float
+            Inner radius r_i [m], > 0 (half the distance between the faces).
+        thickness : float
+            Shell thickness t [m], > 0.
+
+        Returns
+        -------
+        LeakagePermeance
+
+        Raises
+        ------
+        ParameterError
+            A dimension that is not a finite number > 0.
+        """
         _positive(f"leakage {name!r}", length=length, inner_radius=inner_radius,
                   thickness=thickness)
         return cls(name, MU0 * length * math.log(1.0 + thickness / inner_radius) / math.pi)
@@ -314,25 +573,97 @@ class LeakagePermeance(LinearElement):
     @classmethod
     def quarter_hollow_cylinder(cls, name: str, length: float, inner_radius: float,
                                 thickness: float) -> LeakagePermeance:
-        """Quarter hollow cylinder: twice the half hollow cylinder."""
+        """Quarter hollow cylinder: twice the half hollow cylinder.
+
+        Parameters
+        ----------
+        name : str
+            Unique name of the element within its network.
+        length : float
+            Axial length l [m], > 0.
+        inner_radius : float
+            Inner radius r_i [m], > 0.
+        thickness : float
+            Shell thickness t [m], > 0.
+
+        Returns
+        -------
+        LeakagePermeance
+
+        Raises
+        ------
+        ParameterError
+            A dimension that is not a finite number > 0.
+        """
         half = cls.half_hollow_cylinder(name, length, inner_radius, thickness)
         return cls(name, 2.0 * half.value)
 
     @classmethod
     def quarter_sphere(cls, name: str, radius: float) -> LeakagePermeance:
-        """Quarter sphere: ``0.077 mu0 2 r``."""
+        """Quarter sphere: ``0.077 mu0 2 r``.
+
+        Parameters
+        ----------
+        name : str
+            Unique name of the element within its network.
+        radius : float
+            Radius r [m], > 0.
+
+        Returns
+        -------
+        LeakagePermeance
+
+        Raises
+        ------
+        ParameterError
+            A dimension that is not a finite number > 0.
+        """
         _positive(f"leakage {name!r}", radius=radius)
         return cls(name, 0.077 * MU0 * 2.0 * radius)
 
     @classmethod
     def eighth_sphere(cls, name: str, radius: float) -> LeakagePermeance:
-        """Eighth sphere: ``0.308 mu0 r``."""
+        """Eighth sphere: ``0.308 mu0 r``.
+
+        Parameters
+        ----------
+        name : str
+            Unique name of the element within its network.
+        radius : float
+            Radius r [m], > 0.
+
+        Returns
+        -------
+        LeakagePermeance
+
+        Raises
+        ------
+        ParameterError
+            A dimension that is not a finite number > 0.
+        """
         _positive(f"leakage {name!r}", radius=radius)
         return cls(name, 0.308 * MU0 * radius)
 
     @classmethod
     def quarter_hollow_sphere(cls, name: str, thickness: float) -> LeakagePermeance:
-        """Quarter hollow sphere of shell thickness t: ``0.25 mu0 t``."""
+        """Quarter hollow sphere of shell thickness t: ``0.25 mu0 t``.
+
+        Parameters
+        ----------
+        name : str
+            Unique name of the element within its network.
+        thickness : float
+            Shell thickness t [m], > 0.
+
+        Returns
+        -------
+        LeakagePermeance
+
+        Raises
+        ------
+        ParameterError
+            A dimension that is not a finite number > 0.
+        """
         _positive(f"leakage {name!r}", thickness=thickness)
         return cls(name, 0.25 * MU0 * thickness)
 
@@ -347,12 +678,19 @@ class GapLeakage(LinearElement):
 
     Parameters
     ----------
+    name : str
+        Unique name of the element within its network.
     gap_input : str
         Name of the gap input.
     width : float
-        Edge length w [m].
+        Edge length w [m], > 0.
     radius : float
-        Leakage radius r [m].
+        Leakage radius r [m], > 0.
+
+    Raises
+    ------
+    ParameterError
+        ``width`` or ``radius`` not a finite number > 0.
     """
 
     gap_input: str = "s"
@@ -367,6 +705,18 @@ class GapLeakage(LinearElement):
         return self.gap_input
 
     def permeance(self, gap: Any = None) -> Any:
+        """Permeance ``G = mu0 w / pi ln(1 + pi r / s)`` [H].
+
+        Parameters
+        ----------
+        gap : float, array_like or CasADi
+            Air gap s [m], > 0 (not checked here); required (``ParameterError`` when None).
+
+        Returns
+        -------
+        float, ndarray or CasADi
+            ``G`` [H].
+        """
         if gap is None:
             raise ParameterError(f"gap leakage {self.name!r}: needs a gap value")
         return MU0 * self.width / math.pi * _log(1.0 + math.pi * self.radius / gap)
@@ -384,12 +734,19 @@ class FringePermeance(LinearElement):
 
     Parameters
     ----------
+    name : str
+        Unique name of the element within its network.
     gap_input : str
-        Name of the gap input.
+        Name of the gap input, non-empty.
     width : float
-        Edge length w [m].
+        Edge length w [m], > 0.
     radius : float
-        Flank height r [m] whose tubes reach the rail.
+        Flank height r [m] whose tubes reach the rail, > 0.
+
+    Raises
+    ------
+    ParameterError
+        An empty ``gap_input``, or ``width`` or ``radius`` not a finite number > 0.
     """
 
     gap_input: str = "s"
@@ -407,9 +764,21 @@ class FringePermeance(LinearElement):
         return self.gap_input
 
     def permeance(self, gap: Any = None) -> Any:
+        """Permeance ``G = (2 mu0 w / pi) ln(1 + pi r / (2 s))`` [H].
+
+        Parameters
+        ----------
+        gap : float, array_like or CasADi
+            Air gap s [m], > 0 (not checked here); required (``ParameterError`` when None).
+
+        Returns
+        -------
+        float, ndarray or CasADi
+            ``G`` [H].
+        """
         if gap is None:
             raise ParameterError(f"fringe permeance {self.name!r}: needs a gap value")
-        return MU0 * _fringe_per_mu0(self.width, self.radius, gap)
+        return MU0 * fringe_per_mu0(self.width, self.radius, gap)
 
 
 @dataclass(frozen=True)
@@ -424,12 +793,19 @@ class GapLayerPermeance(LinearElement):
 
     Parameters
     ----------
+    name : str
+        Unique name of the element within its network.
     gap_input : str
-        Name of the gap input.
+        Name of the gap input, non-empty.
     width : float
-        Extent across the flux and the gap [m] (the depth).
+        Extent across the flux and the gap [m] (the depth), > 0.
     length : float
-        Path length along the layer [m].
+        Path length along the layer [m], > 0.
+
+    Raises
+    ------
+    ParameterError
+        An empty ``gap_input``, or ``width`` or ``length`` not a finite number > 0.
     """
 
     gap_input: str = "s"
@@ -447,18 +823,30 @@ class GapLayerPermeance(LinearElement):
         return self.gap_input
 
     def permeance(self, gap: Any = None) -> Any:
+        """Permeance ``G = mu0 w s / l`` [H].
+
+        Parameters
+        ----------
+        gap : float, array_like or CasADi
+            Air gap s [m], > 0 (not checked here); required (``ParameterError`` when None).
+
+        Returns
+        -------
+        float, ndarray or CasADi
+            ``G`` [H].
+        """
         if gap is None:
             raise ParameterError(f"gap layer permeance {self.name!r}: needs a gap value")
         return MU0 * self.width * gap / self.length
 
 
-def _fringe_per_mu0(w: float, r: float, s: Any) -> Any:
+def fringe_per_mu0(w: float, r: float, s: Any) -> Any:
     """Roters' quarter-circle fringe of an edge of length ``w`` and flank height ``r`` to a
     plane at distance ``s``, divided by mu0: ``(2 w/pi) ln(1 + pi r/(2 s))`` [m]."""
     return 2.0 * w / math.pi * _log(1.0 + math.pi * r / (2.0 * s))
 
 
-def _rectangle_torsion_constant(a: float, b: float) -> float:
+def rectangle_torsion_constant(a: float, b: float) -> float:
     """Saint-Venant torsion constant of an a x b rectangle (exact series) [m^4]."""
     a, b = max(a, b), min(a, b)
     series = sum(math.tanh(k * math.pi * a / (2.0 * b)) / k**5 for k in range(1, 200, 2))
@@ -475,8 +863,15 @@ class EddyCurrent(Element):
 
     Parameters
     ----------
+    name : str
+        Unique name of the element within its network.
     conductance : float
-        ``G_ec`` [S] (> 0).
+        ``G_ec`` [S] (> 0; required, although it has a default for the dataclass).
+
+    Raises
+    ------
+    ParameterError
+        ``conductance`` not a finite number > 0.
     """
 
     conductance: float = 0.0
@@ -489,15 +884,64 @@ class EddyCurrent(Element):
         return self.conductance
 
     def mmf_drop(self, flux: Any, gap: Any = None) -> Any:
+        """Static drop: zero (the element acts through :attr:`eddy_conductance` only).
+
+        Parameters
+        ----------
+        flux : float, array_like or CasADi
+            Branch flux phi [Wb].
+        gap : optional
+            Ignored.
+
+        Returns
+        -------
+        float, ndarray or CasADi
+            ``0 * flux`` [A].
+        """
         return 0.0 * flux
 
     def energy(self, flux: Any, gap: Any = None) -> Any:
+        """Stored energy: zero (eddy currents dissipate, they store nothing).
+
+        Parameters
+        ----------
+        flux : float or array_like
+            Branch flux phi [Wb].
+        gap : optional
+            Ignored.
+
+        Returns
+        -------
+        ndarray
+            Zeros [J] of the shape of ``flux``.
+        """
         return np.zeros_like(np.asarray(flux, dtype=float))
 
     @classmethod
     def one_turn(cls, name: str, path_area: float, path_length: float,
                  resistivity: float) -> EddyCurrent:
-        """Modelica's ``G = A / (rho l)``: a one-turn short circuit of wire area A, length l."""
+        """Modelica's ``G = A / (rho l)``: a one-turn short circuit of wire area A, length l.
+
+        Parameters
+        ----------
+        name : str
+            Unique name of the element within its network.
+        path_area : float
+            Cross-section A of the current path [m^2], > 0.
+        path_length : float
+            Length l of the current path (once around the flux) [m], > 0.
+        resistivity : float
+            Electrical resistivity rho of the conductor [ohm m], > 0.
+
+        Returns
+        -------
+        EddyCurrent
+
+        Raises
+        ------
+        ParameterError
+            A dimension or the resistivity not a finite number > 0.
+        """
         _positive(f"eddy-current element {name!r}", path_area=path_area,
                   path_length=path_length, resistivity=resistivity)
         return cls(name, path_area / (resistivity * path_length))
@@ -511,17 +955,60 @@ class EddyCurrent(Element):
         with the Saint-Venant torsion constant J of the cross-section (the stream
         function of the eddy currents solves the same Poisson problem), so
         ``G_ec = P / (dphi/dt)^2 = J l / (4 rho A^2)``.  Thin-sheet limit: ``b^2 l/(12 rho A)``.
+
+        Parameters
+        ----------
+        name : str
+            Unique name of the element within its network.
+        width, height : float
+            Sides of the cross-section [m], > 0.
+        length : float
+            Length l of the bar along the flux [m], > 0.
+        resistivity : float
+            Electrical resistivity rho of the conductor [ohm m], > 0.
+
+        Returns
+        -------
+        EddyCurrent
+
+        Raises
+        ------
+        ParameterError
+            A dimension or the resistivity not a finite number > 0.
         """
         _positive(f"eddy-current element {name!r}", width=width, height=height, length=length,
                   resistivity=resistivity)
         area = width * height
-        torsion = _rectangle_torsion_constant(width, height)
+        torsion = rectangle_torsion_constant(width, height)
         return cls(name, torsion * length / (4.0 * resistivity * area * area))
 
     @classmethod
     def laminated(cls, name: str, area: float, length: float, resistivity: float,
                   sheet_thickness: float) -> EddyCurrent:
-        """Laminated stack of sheets of thickness d: ``G_ec = d^2 l / (12 rho A)``."""
+        """Laminated stack of sheets of thickness d: ``G_ec = d^2 l / (12 rho A)``.
+
+        Parameters
+        ----------
+        name : str
+            Unique name of the element within its network.
+        area : float
+            Cross-section A of the stack (across the flux) [m^2], > 0.
+        length : float
+            Length l of the stack along the flux [m], > 0.
+        resistivity : float
+            Electrical resistivity rho of the sheets [ohm m], > 0.
+        sheet_thickness : float
+            Sheet thickness d [m], > 0.
+
+        Returns
+        -------
+        EddyCurrent
+
+        Raises
+        ------
+        ParameterError
+            A dimension or the resistivity not a finite number > 0.
+        """
         _positive(f"eddy-current element {name!r}", area=area, length=length,
                   resistivity=resistivity, sheet_thickness=sheet_thickness)
         return cls(name, sheet_thickness**2 * length / (12.0 * resistivity * area))

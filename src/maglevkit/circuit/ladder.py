@@ -119,6 +119,35 @@ def ladder_branches(name: str, start: str, end: str, iron: IronPath, *, thicknes
     and material on the area fraction ``a_k``; eddy element ``k >= 2`` is on
     ``f"{name}:eddy{k}"``.  Statics are those of ``iron`` exactly (parallel tubes of one
     material and length at one MMF carry one flux density).
+
+    Parameters
+    ----------
+    name : str
+        Name of the first branch (and prefix of the others and of the eddy elements).
+    start, end : str
+        Nodes the part joins [-]; flux flows from ``start`` to ``end``.
+    iron : IronPath
+        The part: its length [m], cross-section [m^2] and material are split into the
+        tubes.
+    thickness : float
+        Thickness across which the eddy currents diffuse [m], > 0 (keyword only, like
+        all that follow).
+    resistivity : float
+        Electrical resistivity of the part [ohm m], > 0.
+    layers : int
+        Number of nested tubes, 1 ... 8.
+    factor : float, default 1.0
+        Scales every eddy conductance, > 0 (see :func:`ladder_parameters`).
+
+    Returns
+    -------
+    list of Branch
+        ``2 layers`` branches, with ``layers - 1`` internal nodes ``f"{name}:n{k}"``.
+
+    Raises
+    ------
+    ParameterError
+        As :func:`ladder_parameters`.
     """
     areas, gs = ladder_parameters(length=iron.length, area=iron.cross_section,
                                   thickness=thickness, resistivity=resistivity, layers=layers,

@@ -20,6 +20,7 @@ from functools import cached_property
 import numpy as np
 
 from ..errors import ParameterError, TopologyError
+from ..validation import flag
 from .elements import EddyCurrent, Element, IronPath
 
 __all__ = ["Branch", "Coil", "Circuit", "Network"]
@@ -81,6 +82,25 @@ class Coil:
     path, e.g. a leg modelled as parallel columns of iron cells, each column carrying the
     MMF of the turns it passes (then the coils' turns add up to a multiple of the winding's
     turns); default: the sum of the turns of the coils with the same ``pole`` name.
+
+    Parameters
+    ----------
+    branch : str
+        Name of the branch the coil sits on (checked by :class:`Network`).
+    turns : float
+        Number of turns [-], finite and > 0 (need not be whole: a lumped share).
+    polarity : {1, -1}
+        Direction of the coil's MMF relative to the branch (default +1).
+    pole : str, optional
+        Name of the pole winding the coil belongs to (default: a pole of its own).
+    pole_turns : float, optional
+        Turns ``n_pole`` of the pole winding [-], > 0; only with ``pole``.
+
+    Raises
+    ------
+    ParameterError
+        ``turns`` or ``pole_turns`` not a finite number > 0, ``polarity`` not +1 or -1,
+        an empty ``pole`` name, or ``pole_turns`` without ``pole``.
     """
 
     branch: str
@@ -150,15 +170,42 @@ class Circuit:
 class Network:
     """Equivalent magnetic circuit with its electric circuits.
 
+    Parameters
+    ----------
+    branches : sequence of Branch
+        The magnetic branches (at least one); nodes are named by the branches.
+    circuits : sequence of Circuit
+        The electric circuits (at least one), each driving coils on the branches.
+    name : str, default "network"
+        Name used in messages and reports.
+
+    Raises
+    ------
+    TopologyError
+        Not sequences of :class:`Branch` / :class:`Circuit`, no branches or circuits,
+        duplicate branch, element or circuit names, a coil on a missing branch or two
+        coils of one circuit on one branch, a disconnected network, no closed flux
+        path, or a coil branch on no loop.
+
+    Notes
+    -----
     Validates on construction: unique names, known nodes, connectedness, at least
     one closed flux path, coils on existing branches, at most one coil per circuit
     and branch.
+
+    Attributes
+    ----------
+    cache : dict
+        Objects derived from this (immutable) network once and reused: its equations, the
+        statics solver, flux-model DAEs, map runs; keyed by the module that derives them
+        (e.g. ``"equations"``, ``("flux_dae", ...)``).  Not part of equality, the repr or
+        a pickle (a worker process derives them again).
     """
 
     branches: tuple[Branch, ...]
     circuits: tuple[Circuit, ...]
     name: str = "network"
-    _cache: dict = field(default_factory=dict, init=False, repr=False, compare=False)
+    cache: dict = field(default_factory=dict, init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
         for key, cls in (("branches", Branch), ("circuits", Circuit)):
@@ -206,7 +253,7 @@ class Network:
     def __getstate__(self) -> dict:
         # Compiled CasADi functions stay behind: a worker process rebuilds them lazily.
         state = dict(self.__dict__)
-        state["_cache"] = {}
+        state["cache"] = {}
         return state
 
     def __setstate__(self, state: dict) -> None:
@@ -377,7 +424,26 @@ class Network:
 
         ``saturation=False`` replaces every iron material by its initial permeability
         (``Material.linearized``); ``eddy_currents=False`` removes the eddy elements.
+
+        Parameters
+        ----------
+        saturation : bool, default True
+            Keep the iron materials' nonlinear laws (keyword only).
+        eddy_currents : bool, default True
+            Keep the eddy-current elements (keyword only).
+
+        Returns
+        -------
+        Network
+            ``self`` when both are True, else a new network (same name and circuits).
+
+        Raises
+        ------
+        InputError
+            ``saturation`` or ``eddy_currents`` not True or False.
         """
+        saturation = flag(saturation, "saturation")
+        eddy_currents = flag(eddy_currents, "eddy_currents")
         if saturation and eddy_currents:
             return self
 
@@ -395,6 +461,22 @@ class Network:
         return Network(tuple(branches), self.circuits, name=self.name)
 
     def element(self, name: str) -> Element:
+        """The element called ``name`` (in any branch).
+
+        Parameters
+        ----------
+        name : str
+            Element name.
+
+        Returns
+        -------
+        Element
+
+        Raises
+        ------
+        KeyError
+            No element of that name.
+        """
         for b in self.branches:
             for e in b.elements:
                 if e.name == name:
@@ -402,6 +484,22 @@ class Network:
         raise KeyError(f"no element named {name!r} in network {self.name!r}")
 
     def branch(self, name: str) -> Branch:
+        """The branch called ``name``.
+
+        Parameters
+        ----------
+        name : str
+            Branch name (:attr:`branch_names`).
+
+        Returns
+        -------
+        Branch
+
+        Raises
+        ------
+        KeyError
+            No branch of that name (the message lists the branches).
+        """
         for b in self.branches:
             if b.name == name:
                 return b

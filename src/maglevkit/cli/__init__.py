@@ -14,6 +14,7 @@ from . import maps as _maps  # noqa: F401,E402
 from . import simulate as _simulate  # noqa: F401,E402
 from . import statics as _statics  # noqa: F401,E402
 from . import sweep as _sweep  # noqa: F401,E402
+from . import tables as _tables  # noqa: F401,E402
 from . import vehicle as _vehicle  # noqa: F401,E402
 from ._app import app, console, err_console, main
 

@@ -88,7 +88,7 @@ FormatOption = Annotated[OutputFormat, typer.Option(
 
 def _version(value: bool) -> None:
     if value:
-        from .. import __version__
+        from .._version import __version__
 
         typer.echo(f"maglevkit {__version__}")
         raise typer.Exit()

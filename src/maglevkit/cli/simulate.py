@@ -90,7 +90,7 @@ def simulate(
       maglevkit simulate u-magnet --scenario step --csv run.csv
     """
     from ..models.flux import FluxModel
-    from ..models.flux import simulate as run_simulation
+    from ..models.flux import simulate_flux as run_simulation
     from ..models.scenario import load_scenario
 
     output_file(csv_path, "--csv", force=force)

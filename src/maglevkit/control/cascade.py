@@ -60,7 +60,7 @@ class GapController:
     resistances_ohm : tuple of float
         Circuit resistances [ohm] (resistive feed-forward and flux estimate).
     voltage_limit_V : float
-        Actuator limit |U| <= U_max (chopper supply).
+        Actuator limit ``|U| <= U_max`` (chopper supply).
     setpoint_weight : float
         Set-point weight b of the proportional term (0: I-PD form, reference changes act
         through the integrator only and do not kick the flux; 1: plain PID).
@@ -90,7 +90,35 @@ class GapController:
                  currents_A: np.ndarray, flux_estimate_Wb: np.ndarray,
                  gap_ref_m: float | None = None) -> np.ndarray:
         """Circuit voltages [V] from the measured gap, gap rate, error integral, currents
-        and the flux estimate."""
+        and the flux estimate.
+
+        Parameters
+        ----------
+        gap_m : float
+            Measured gap s [m].
+        gap_rate_m_per_s : float
+            Measured gap rate ds/dt [m/s] (> 0: the gap opens).
+        integral_m_s : float
+            Integral of the gap error ``s - s_ref`` over time [m s].
+        currents_A : array_like (n_circuits,)
+            Measured circuit currents [A] (resistive feed-forward ``R I``).
+        flux_estimate_Wb : array_like (n_circuits,)
+            Estimated flux linkage of each circuit [Wb].
+        gap_ref_m : float, optional
+            Gap reference [m] for this sample; ``None`` (default): the design gap
+            :attr:`gap_ref_m`.  Acts through the proportional term only with the weight
+            :attr:`setpoint_weight` (and through ``integral_m_s``, which the caller keeps).
+
+        Returns
+        -------
+        ndarray (n_circuits,)
+            Voltages [V], clipped to ``[-voltage_limit_V, voltage_limit_V]``.
+
+        Notes
+        -----
+        No input checks (this is called once per controller sample); arrays of the wrong
+        length raise numpy's broadcasting ``ValueError``.
+        """
         ref = self.gap_ref_m if gap_ref_m is None else gap_ref_m
         s0 = self.gap_ref_m
         rho = (self.kp_per_m * (gap_m - s0 - self.setpoint_weight * (ref - s0))
@@ -106,7 +134,48 @@ def design_gap_controller(magnet: Any, *, mass_kg: float, gap_m: float, current_
                           flux_bandwidth_hz: float = 30.0,
                           voltage_limit_V: float = 440.0) -> GapController:
     """Place the gains from the linearised magnet at ``(gap_m, current_A)`` (all gaps equal,
-    every circuit at the same current; exact statics sensitivities)."""
+    every circuit at the same current; exact statics sensitivities).
+
+    Parameters
+    ----------
+    magnet : Magnet or Network
+        The magnet (or its equivalent magnetic circuit, or a model with a ``network``)
+        whose statics are solved at the operating point.
+    mass_kg : float
+        Mass carried by this magnet [kg], > 0 (the gap loop ``m e'' = ...``).
+    gap_m : float
+        Design gap s_0 [m], > 0; every gap input of the magnet at this value.  Becomes
+        the controller's default reference.
+    current_A : float
+        Design (bias) current I_0 [A] of every circuit; it should carry ``mass_kg`` at
+        ``gap_m`` (not checked: the gains are only placed around this point).
+    bandwidth_hz : float, default 5.0
+        Natural frequency f = omega / 2 pi of the closed gap loop [Hz], > 0.
+    damping : float, default 0.7
+        Damping ratio zeta of the gap loop [-], > 0.
+    flux_bandwidth_hz : float, default 30.0
+        Bandwidth of the inner flux loop [Hz], > 0 (``k_psi = 2 pi f``); keep it well
+        above ``bandwidth_hz``.
+    voltage_limit_V : float, default 440.0
+        Actuator limit ``|U| <= U_max`` [V], > 0 (chopper supply).
+
+    Returns
+    -------
+    GapController
+        ``k_p = (m omega^2 - F_s) / K_rho``, ``k_d = 2 zeta m omega / K_rho``,
+        ``k_i = k_p omega / 5``.
+
+    Raises
+    ------
+    InputError
+        ``mass_kg``, ``bandwidth_hz``, ``flux_bandwidth_hz``, ``damping`` or
+        ``voltage_limit_V`` not a finite real number > 0; bad gap or current (from
+        :func:`~maglevkit.models.statics.solve_statics`); an operating point without
+        force gain ``K_rho <= 0`` (e.g. zero current) or where the bandwidth gives
+        ``k_p <= 0`` (the error names the operating point).
+    SolverError
+        If the statics at the operating point cannot be solved.
+    """
     for name, v in (("mass_kg", mass_kg), ("bandwidth_hz", bandwidth_hz),
                     ("flux_bandwidth_hz", flux_bandwidth_hz), ("damping", damping),
                     ("voltage_limit_V", voltage_limit_V)):
@@ -121,8 +190,20 @@ def design_gap_controller(magnet: Any, *, mass_kg: float, gap_m: float, current_
     psi0 = np.asarray(sol.flux_linkage_Wb)
     k_rho = float(dF_dpsi @ psi0)
     omega = 2 * math.pi * bandwidth_hz
+    point = (f"operating point gap_m = {float(gap_m):g} m, "
+             f"current_A = {np.asarray(current_A, dtype=float).tolist()} A")
+    if not (math.isfinite(k_rho) and k_rho > 0.0):
+        raise InputError(f"design_gap_controller: at the {point} the force does not grow "
+                         f"with the flux (K_rho = sum_j dF/dpsi_j psi_0,j = {k_rho:g} N; "
+                         "must be > 0): give a bias current that carries the load")
     # m e'' = -dF = -(K_rho rho + dF/ds|_psi e)  ->  K_rho k_p + dF/ds|_psi = m omega^2
     kp = (mass_kg * omega**2 - dF_ds_psi) / k_rho
+    if not (math.isfinite(kp) and kp > 0.0):
+        f_min = math.sqrt(max(dF_ds_psi, 0.0) / mass_kg) / (2 * math.pi)
+        raise InputError(f"design_gap_controller: at the {point} the gap gain kp = {kp:g} "
+                         f"1/m (must be > 0): the stiffness at constant flux dF/ds = "
+                         f"{dF_ds_psi:g} N/m exceeds m omega^2 = {mass_kg * omega**2:g} N/m; "
+                         f"allowed: bandwidth_hz = {bandwidth_hz:g} Hz above {f_min:.4g} Hz")
     kd = 2 * damping * mass_kg * omega / k_rho
     net = getattr(magnet, "network", magnet)
     return GapController(gap_m, tuple(float(v) for v in psi0), float(current_A), kp, kd,
@@ -134,8 +215,8 @@ def design_gap_controller(magnet: Any, *, mass_kg: float, gap_m: float, current_
 
 
 class CascadeController:
-    """The cascade controller as a sampled-data :class:`~maglevkit.control.interface.
-    Controller` (flux estimate and error integral as its internal state).
+    """The cascade controller as a sampled-data ``Controller`` (flux estimate and error
+    integral as its internal state; the interface is :class:`maglevkit.control.Controller`).
 
     Between samples ``k`` and ``k+1`` (sample time ``T``)::
 
@@ -173,6 +254,21 @@ class CascadeController:
         return self.design.voltage_limit_V
 
     def reset(self, measurement: Measurement, *, sample_time_s: float) -> None:
+        """Start a run: flux estimate back to its initial value, error integral to zero.
+
+        Parameters
+        ----------
+        measurement : Measurement
+            The measurement at the start of the run (not used: the flux estimate starts
+            from ``initial_flux_Wb`` or the design's bias flux).
+        sample_time_s : float
+            Sample time T [s], finite and > 0 (keyword only).
+
+        Raises
+        ------
+        InputError
+            ``sample_time_s`` not finite or <= 0.
+        """
         if not (math.isfinite(sample_time_s) and sample_time_s > 0):
             raise InputError(f"sample_time_s = {sample_time_s!r} must be a finite number > 0")
         self._dt = float(sample_time_s)
@@ -181,6 +277,24 @@ class CascadeController:
         self._last = None
 
     def update(self, measurement: Measurement) -> np.ndarray:
+        """Advance the flux estimate and the error integral to this sample and return the
+        voltages to hold until the next.
+
+        Parameters
+        ----------
+        measurement : Measurement
+            Gap [m], gap rate [m/s], currents [A] and gap reference [m] at this sample.
+
+        Returns
+        -------
+        ndarray (n_circuits,)
+            Circuit voltages [V], within ``+-voltage_limit_V``.
+
+        Raises
+        ------
+        InputError
+            If :meth:`reset` has not been called.
+        """
         if not math.isfinite(self._dt):
             raise InputError("call reset() before update()")
         i_now = np.asarray(measurement.currents_A, dtype=float)

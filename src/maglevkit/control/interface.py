@@ -62,11 +62,30 @@ class Controller(Protocol):
     def voltage_limit_V(self) -> float: ...
 
     def reset(self, measurement: Measurement, *, sample_time_s: float) -> None:
-        """Start a run at ``measurement`` with the sample time ``sample_time_s`` [s]."""
+        """Start a run at ``measurement`` with the sample time ``sample_time_s`` [s].
+
+        Parameters
+        ----------
+        measurement : Measurement
+            The measurement at the first sample of the run.
+        sample_time_s : float
+            Sample (hold) time of the controller [s], finite and > 0.
+        """
         ...
 
     def update(self, measurement: Measurement) -> np.ndarray:
-        """Voltages [V] (n_circuits,) to hold from this sample to the next."""
+        """Voltages [V] (n_circuits,) to hold from this sample to the next.
+
+        Parameters
+        ----------
+        measurement : Measurement
+            The measurement at this sample.
+
+        Returns
+        -------
+        ndarray (n_circuits,)
+            Circuit voltages [V], within ``+-voltage_limit_V``.
+        """
         ...
 
     def diagnostics(self) -> Mapping[str, float | np.ndarray]:

@@ -10,10 +10,10 @@ from typing import Any
 
 import numpy as np
 
-from ..errors import InputError
+from ..errors import InputError, SolverError
 from ..models.inputs import check_span
+from ..plant import HeaveMass, HeaveState
 from ..validation import real_number
-from ..vehicle import HeaveMass, HeaveState
 from .cascade import CascadeController, GapController
 from .interface import Controller, Measurement
 
@@ -26,16 +26,26 @@ class ClosedLoopResult:
 
     Attributes
     ----------
-    time_s : (n,)
-    gap_m, gap_rate_m_per_s : (n,)
-    voltages_V, currents_A, flux_estimate_Wb : (n, n_circuits)
-        ``flux_estimate_Wb`` is the controller's flux estimate (NaN for controllers
-        without one).
-    pole_force_N : (n, n_gaps)
-    force_N : (n,)
-    voltage_limited : (n,) bool
+    time_s : ndarray (n,)
+        Sample instants [s], from 0 in steps of ``dt_s``.
+    gap_m, gap_rate_m_per_s : ndarray (n,)
+        Gap [m] and gap rate [m/s] of the heave mass (> 0: the gap opens).
+    voltages_V, currents_A, flux_estimate_Wb : ndarray (n, n_circuits)
+        Voltages [V] held from each sample to the next (the last row repeats the
+        previous), circuit currents [A], and the controller's flux estimate [Wb] (NaN for
+        controllers without one).
+    pole_force_N : ndarray (n, n_gaps)
+        Attractive force of each pole [N].
+    force_N : ndarray (n,)
+        Total magnet force [N] (sum over the poles).
+    voltage_limited : ndarray (n,) of bool
         Whether a voltage hit the actuator limit in the interval starting there.
-    gap_ref_m : (n,)
+    circuit_names : tuple of str
+        Names of the circuits (columns of ``voltages_V``, ``currents_A``,
+        ``flux_estimate_Wb``).
+    gap_names : tuple of str
+        Names of the gap inputs (columns of ``pole_force_N``).
+    gap_ref_m : ndarray (n,) or None
         The gap reference [m] at each sample.
     controller_time_s : (n,)
         Wall-clock time of each controller update [s] (the last row repeats the previous).
@@ -59,16 +69,50 @@ class ClosedLoopResult:
     controller_time_s: np.ndarray | None = None
     diagnostics: dict[str, np.ndarray] = field(default_factory=dict)
 
+    def _gap_error_m(self, what: str) -> np.ndarray:
+        if self.gap_ref_m is None:
+            raise InputError(f"{what} needs the gap reference, but this result has "
+                             "gap_ref_m = None (closed_loop always records it)")
+        return np.abs(self.gap_m - self.gap_ref_m)
+
     def max_gap_deviation_m(self, start_s: float = 0.0) -> float:
-        """Largest ``|s - s_ref|`` [m] from ``start_s`` on."""
-        assert self.gap_ref_m is not None
+        """Largest ``|s - s_ref|`` [m] from ``start_s`` on.
+
+        Parameters
+        ----------
+        start_s : float, default 0.0
+            Samples at times ``>= start_s`` [s] count (e.g. skip a start transient); at
+            most the last sample time.
+
+        Returns
+        -------
+        float
+            The largest gap deviation [m].
+
+        Raises
+        ------
+        InputError
+            ``start_s`` not a real number or after the last sample; a result without
+            ``gap_ref_m``.
+        """
+        start_s = real_number(start_s, "start_s", "s")
+        e = self._gap_error_m("max_gap_deviation_m")
         k = self.time_s >= start_s
-        return float(np.max(np.abs(self.gap_m[k] - self.gap_ref_m[k])))
+        if not np.any(k):
+            raise InputError(f"start_s = {start_s:g} s is after the last sample "
+                             f"(t = {float(self.time_s[-1]):g} s); allowed: start_s <= "
+                             f"{float(self.time_s[-1]):g} s")
+        return float(np.max(e[k]))
 
     def iae_m_s(self) -> float:
-        """Integral of the absolute gap error ``int |s - s_ref| dt`` [m s] (trapezoidal)."""
-        assert self.gap_ref_m is not None
-        e = np.abs(self.gap_m - self.gap_ref_m)
+        """Integral of the absolute gap error ``int |s - s_ref| dt`` [m s] (trapezoidal).
+
+        Raises
+        ------
+        InputError
+            A result without ``gap_ref_m``.
+        """
+        e = self._gap_error_m("iae_m_s")
         return float(np.sum(0.5 * (e[1:] + e[:-1]) * np.diff(self.time_s)))
 
     def energy_J(self) -> float:
@@ -93,10 +137,11 @@ def closed_loop(model: Any, vehicle: HeaveMass, controller: GapController | Cont
 
     Parameters
     ----------
-    model
+    model : FluxModel or CurrentModel
         Any magnet model with ``initial_state``/``step``/``outputs`` (flux-based or
-        current-based).
+        current-based), with ``circuit_names`` and ``gap_names``.
     vehicle : HeaveMass
+        The mass on the magnet (one heave degree of freedom).
     controller : GapController or Controller
         A :class:`GapController` design is run as a :class:`CascadeController` (its flux
         estimate starts at ``initial_flux_Wb`` [Wb], default the bias flux, valid when
@@ -104,13 +149,37 @@ def closed_loop(model: Any, vehicle: HeaveMass, controller: GapController | Cont
         :class:`~maglevkit.control.interface.Controller` interface (``initial_flux_Wb``
         is then not allowed: give the controller its own initial estimate).
     duration_s, dt_s : float
-        Run length and sample time [s].
+        Run length and sample time [s], finite and > 0; ``duration_s`` must be a whole
+        number of steps ``dt_s`` (to 1e-6 of a step).
     initial_gap_m : float
+        Gap at the start [m], > 0 (every pole).
     initial_current_A : float or array (n_circuits,)
-        Steady start: the model starts at rest at this gap and current.
+        Steady start: the model starts at rest at this gap and current [A].
     gap_reference, external_force : callable t -> value, optional
         Gap reference [m] (default the controller's) and external force on the mass [N]
-        (positive opens the gap, like gravity).
+        (positive opens the gap, like gravity); both called with the time [s].
+    initial_flux_Wb : array_like (n_circuits,), optional
+        Initial flux estimate [Wb] of the cascade controller built from a
+        :class:`GapController`.  Required when the run does not start at the design
+        point (``initial_gap_m`` and ``initial_current_A`` equal to the design's);
+        not allowed with any other controller.
+
+    Returns
+    -------
+    ClosedLoopResult
+        ``n_steps + 1`` samples from t = 0 to ``duration_s``.
+
+    Raises
+    ------
+    InputError
+        Durations or steps not finite and > 0 or not a whole number of steps; a gap <= 0;
+        a controller that is neither a :class:`GapController` nor a
+        :class:`~maglevkit.control.interface.Controller`; ``initial_flux_Wb`` missing or
+        not allowed (see above).
+    SolverError
+        Touchdown: the magnet would hit the rail (gap <= 0 within the next step; the
+        closed loop is unstable for this case).  ``time`` and ``state`` (gap, gap rate)
+        name the step.
     """
     duration_s = real_number(duration_s, "duration_s", "s", positive=True)
     dt_s = real_number(dt_s, "dt_s", "s", positive=True)
@@ -176,8 +245,12 @@ def closed_loop(model: Any, vehicle: HeaveMass, controller: GapController | Cont
         lim[k] = bool(np.any(np.abs(u) >= limit))
         U[k] = u
         if not mech.gap_m + mech.gap_rate_m_per_s * dt_s > 0:
-            raise InputError(f"the magnet hit the rail at t = {t:.4g} s (gap {mech.gap_m:.3g} m); "
-                             "the controller is unstable for this case")
+            raise SolverError(
+                "TOUCHDOWN: the magnet would hit the rail within the next step",
+                time=float(t), state={"gap_m": mech.gap_m,
+                                      "gap_rate_m_per_s": mech.gap_rate_m_per_s},
+                reason="the closed loop is unstable for this case (controller, "
+                       "reference or disturbance)")
         force = float(out.force_N)
         st, out = model.step(st, dt_s, u, gaps=mech.gap_m, gap_rates=mech.gap_rate_m_per_s)
         mech = vehicle.step(mech, dt_s, force, ext(t))

@@ -30,7 +30,8 @@ import numpy as np
 from ..errors import InputError, ParameterError
 from ..models.bank import MagnetBank
 from ..models.compiled import compile_function
-from ..vehicle import STANDARD_GRAVITY
+from ..plant import STANDARD_GRAVITY
+from ..validation import real_number
 
 __all__ = ["DISTURBANCES", "MagnetHeaveModel"]
 
@@ -46,23 +47,29 @@ class MagnetHeaveModel:
         The magnet's characteristic maps (or a bank of exactly this one magnet, all
         members reduced).
     mass_kg : float
-        The mass the magnet carries [kg].
+        The mass the magnet carries [kg], finite and > 0.
     gravity : float
-        [m/s^2].
+        Gravitational acceleration [m/s^2], finite and >= 0 (default 9.80665; 0 for a
+        guidance magnet).
     disturbances : sequence of str
         The disturbance model, a subset of :data:`DISTURBANCES` (may be empty).
     compiled : {"auto", "always", "never"}
         How the model functions are evaluated (:func:`~maglevkit.models.compiled.
         compile_function`).
+
+    Raises
+    ------
+    ParameterError
+        ``mass_kg`` or ``gravity`` out of range, unknown or repeated disturbance names
+        (or a single string), or maps that are not those of exactly one reduced magnet.
     """
 
     def __init__(self, maps: Any, *, mass_kg: float, gravity: float = STANDARD_GRAVITY,
                  disturbances: Sequence[str] = ("force", "voltage"),
                  compiled: str = "auto") -> None:
-        if not (isinstance(mass_kg, (int, float)) and math.isfinite(mass_kg) and mass_kg > 0):
-            raise ParameterError(f"mass_kg = {mass_kg!r} must be a finite number > 0")
-        if not (isinstance(gravity, (int, float)) and math.isfinite(gravity) and gravity >= 0):
-            raise ParameterError(f"gravity = {gravity!r} m/s^2 must be finite and >= 0")
+        mass_kg = real_number(mass_kg, "mass_kg", "kg", positive=True, error=ParameterError)
+        gravity = real_number(gravity, "gravity", "m/s^2", nonnegative=True,
+                              error=ParameterError)
         if isinstance(disturbances, str):
             raise ParameterError("disturbances must be a sequence of names, e.g. ('force',)")
         dist = tuple(disturbances)
@@ -104,7 +111,7 @@ class MagnetHeaveModel:
         self.table = np.asarray(bank.table, dtype=float)
         self._T = ca.MX.sym("table", self.table.size)
         x, u, d = ca.MX.sym("x", self.nx), ca.MX.sym("u", self.nu), ca.MX.sym("d", self.nd)
-        xdot, y, force = self._expressions(x, u, d, self._T)
+        xdot, y, force = self.expressions(x, u, d, self._T)
         self.rhs = ca.Function("mpc_rhs", [x, u, d, self._T], [xdot], ["x", "u", "d", "table"],
                                ["xdot"])
         self.measurement = ca.Function("mpc_meas", [x, u, d, self._T], [y],
@@ -113,25 +120,31 @@ class MagnetHeaveModel:
         self._compiled: dict[Any, _TableCall] = {}
 
     # ------------------------------------------------------------------ expressions
-    def _d(self, d: Any, name: str) -> Any:
+    def disturbance(self, d: Any, name: str) -> Any:
+        """The part ``name`` (``"voltage"`` [V] per circuit, ``"force"`` [N],
+        ``"gap_sensor"`` [m], ``"current_sensor"`` [A] per circuit) of the disturbance vector
+        ``d``; zeros where the model has no such disturbance."""
         sl = self._dslices.get(name)
         n = 1 if name in ("force", "gap_sensor") else self.n_circuits
         return d[sl] if sl is not None else ca.DM.zeros(n)
 
-    def _expressions(self, x: Any, u: Any, d: Any, table: Any) -> tuple[Any, Any, Any]:
+    def expressions(self, x: Any, u: Any, d: Any, table: Any) -> tuple[Any, Any, Any]:
+        """Symbolic ``(xdot, y, force)`` at state ``x``, voltages ``u`` [V], disturbances
+        ``d`` and the bank's cell table ``table``: the state derivative, the measurements
+        (gap [m], coil currents [A]) and the total magnet force [N]."""
         nc = self.n_circuits
         s, v = x[nc], x[nc + 1]
-        ueff = u + self._d(d, "voltage")
+        ueff = u + self.disturbance(d, "voltage")
         rhs, coil, force = [], [], 0
         for j in range(nc):
             r, c, f, _ = self.bank.circuit_expressions(j, x[j], s, ueff[j], v, table)
             rhs.append(r)
             coil.append(c)
             force = force + f
-        acc = self.gravity + (self._d(d, "force") - force) / self.mass_kg
+        acc = self.gravity + (self.disturbance(d, "force") - force) / self.mass_kg
         xdot = ca.vertcat(*rhs, v, acc)
-        y = ca.vertcat(s + self._d(d, "gap_sensor"), ca.vertcat(*coil)
-                       + self._d(d, "current_sensor"))
+        y = ca.vertcat(s + self.disturbance(d, "gap_sensor"), ca.vertcat(*coil)
+                       + self.disturbance(d, "current_sensor"))
         return xdot, y, force
 
     def discrete(self, h: float, substeps: int, *, jacobians: bool = False) -> ca.Function:
@@ -140,13 +153,29 @@ class MagnetHeaveModel:
 
         The stages are inlined expressions (no nested function calls), so that CasADi's
         AD does not create derivative seeds for the 40 000-entry table input (which the
-        generated code would copy at every call: measured 120 ms instead of 0.1 ms)."""
+        generated code would copy at every call: measured 120 ms instead of 0.1 ms).
+
+        Parameters
+        ----------
+        h : float
+            Interval [s], > 0 (not checked).
+        substeps : int
+            Number of RK4 steps in the interval, >= 1 (not checked).
+        jacobians : bool, default False
+            Also return the Jacobians and the measurement (keyword only).
+
+        Returns
+        -------
+        casadi.Function
+            Inputs ``x`` (n_x: [A]..., [m], [m/s]), ``u`` (n_u) [V], ``d`` (n_d), ``table``;
+            outputs ``xf`` (and ``A, B, Bd, y, C, D, Cd`` with ``jacobians``).
+        """
         x, u, d = ca.MX.sym("x", self.nx), ca.MX.sym("u", self.nu), ca.MX.sym("d", self.nd)
         T = ca.MX.sym("table", self.table.size)
         hs = h / substeps
 
         def f(xx: Any) -> Any:
-            return self._expressions(xx, u, d, T)[0]
+            return self.expressions(xx, u, d, T)[0]
 
         xk: Any = x
         for _ in range(substeps):
@@ -157,7 +186,7 @@ class MagnetHeaveModel:
             xk = xk + hs / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
         if not jacobians:
             return ca.Function("mpc_rk4", [x, u, d, T], [xk], ["x", "u", "d", "table"], ["xf"])
-        y = self._expressions(x, u, d, T)[1]
+        y = self.expressions(x, u, d, T)[1]
         return ca.Function("mpc_rk4_jac", [x, u, d, T],
                            [xk, ca.jacobian(xk, x), ca.jacobian(xk, u), ca.jacobian(xk, d),
                             y, ca.jacobian(y, x), ca.jacobian(y, u), ca.jacobian(y, d)],
@@ -167,7 +196,19 @@ class MagnetHeaveModel:
     def compile(self, f: ca.Function) -> _TableCall:
         """``f`` (last input: the table) compiled (cached on disk per source, see
         :func:`compile_function`) and bound to the table: a callable of the other inputs
-        returning NumPy arrays (dense outputs; sparse ones as their nonzeros)."""
+        returning NumPy arrays (dense outputs; sparse ones as their nonzeros).
+
+        Parameters
+        ----------
+        f : casadi.Function
+            A function whose last input is the map table (e.g. from :meth:`discrete`).
+
+        Returns
+        -------
+        callable
+            ``call(*inputs_but_table) -> list of ndarray``; compiled or interpreted as the
+            model's ``compiled`` mode says.
+        """
         out, _ = compile_function(f, mode=self.compiled_mode)
         return _TableCall(out, self.table)
 
@@ -177,6 +218,23 @@ class MagnetHeaveModel:
         """Equilibrium ``(x_s, u_s)`` with the *measured* gap at ``gap_m`` [m] under the
         disturbance ``d`` (every circuit at the same inductor current; Newton on the
         force balance ``sum_j F_j(s, I) = m g + d_F``).
+
+        Parameters
+        ----------
+        gap_m : float
+            Measured gap [m] (the true gap is ``gap_m - d_s`` with a gap-sensor
+            disturbance); should lie within the maps' gap range.
+        disturbance : array_like (n_d,), optional
+            Disturbance estimate in the order of :attr:`disturbance_names` (default zeros).
+        current_guess_A : float, default 20.0
+            Start of the Newton iteration [A] (keyword only); iterates are clipped to the
+            maps' current range.
+
+        Returns
+        -------
+        (x_s, u_s) : ndarray (n_x,), ndarray (n_u,)
+            Steady state (inductor currents [A], gap [m], gap rate 0) and voltages [V]
+            ``R I - d_U``.
 
         Raises
         ------
@@ -223,7 +281,27 @@ class MagnetHeaveModel:
     # ------------------------------------------------------------------ linearisation
     def linearize(self, x: np.ndarray, u: np.ndarray, d: Any = None, *, h: float,
                   substeps: int = 1) -> dict[str, np.ndarray]:
-        """Discrete-time linearisation over ``h`` [s] (RK4): ``A, B, Bd`` and ``C, D, Cd``."""
+        """Discrete-time linearisation over ``h`` [s] (RK4): ``A, B, Bd`` and ``C, D, Cd``.
+
+        Parameters
+        ----------
+        x : array_like (n_x,)
+            State: inductor currents [A], gap [m], gap rate [m/s].
+        u : array_like (n_u,)
+            Circuit voltages [V].
+        d : array_like (n_d,), optional
+            Disturbances (default zeros).
+        h : float
+            Interval [s] (keyword only).
+        substeps : int, default 1
+            RK4 steps in the interval (keyword only).
+
+        Returns
+        -------
+        dict of str to ndarray
+            ``A`` (n_x, n_x), ``B`` (n_x, n_u), ``Bd`` (n_x, n_d), ``C`` (n_y, n_x),
+            ``D`` (n_y, n_u), ``Cd`` (n_y, n_d).
+        """
         dv = np.zeros(self.nd) if d is None else np.asarray(d, dtype=float)
         F = self.discrete(h, substeps, jacobians=True)
         out = F(x, u, dv, self.table)
@@ -233,7 +311,23 @@ class MagnetHeaveModel:
     def check_detectability(self, x: np.ndarray, u: np.ndarray, *, h: float) -> None:
         """Raise :class:`ParameterError` unless the augmented system (x, d) is detectable
         at ``(x, u)``: ``n_d <= n_y``, ``(A, C)`` detectable and the rank condition
-        ``rank [[A - I, Bd], [C, Cd]] = n_x + n_d`` (Pannocchia & Rawlings 2003)."""
+        ``rank [[A - I, Bd], [C, Cd]] = n_x + n_d`` (Pannocchia & Rawlings 2003).
+
+        Parameters
+        ----------
+        x : array_like (n_x,)
+            Operating state: inductor currents [A], gap [m], gap rate [m/s].
+        u : array_like (n_u,)
+            Operating voltages [V].
+        h : float
+            Sample time of the linearisation [s] (keyword only).
+
+        Raises
+        ------
+        ParameterError
+            More disturbances than measurements, an undetectable unstable mode, or a
+            disturbance model whose steady-state effects on the measurements coincide.
+        """
         nx, nd, ny = self.nx, self.nd, self.ny
         if nd > ny:
             raise ParameterError(f"disturbance model {self.disturbances!r} has {nd} "
@@ -266,6 +360,18 @@ class MagnetHeaveModel:
                 "current measurements can tell apart, e.g. ('force', 'voltage')")
 
     def check_inputs(self, x: np.ndarray) -> None:
+        """Check a state vector.
+
+        Parameters
+        ----------
+        x : ndarray (n_x,)
+            State: inductor currents [A], gap [m], gap rate [m/s].
+
+        Raises
+        ------
+        InputError
+            Wrong shape or non-finite values.
+        """
         if x.shape != (self.nx,) or not np.isfinite(x).all():
             raise InputError(f"state must be {self.nx} finite values [I_L..., s, s']")
 
@@ -280,12 +386,12 @@ class MagnetHeaveModel:
         nc = self.n_circuits
         x, u, d = ca.MX.sym("x", self.nx), ca.MX.sym("u", self.nu), ca.MX.sym("d", self.nd)
         s, v = x[nc], x[nc + 1]
-        ueff = u + self._d(d, "voltage")
+        ueff = u + self.disturbance(d, "voltage")
         sv = ca.repmat(s, nc, 1)
         didt = cm.ode(x[:nc], ueff, sv, ca.repmat(v, nc, 1))
         coil, force, _ = cm.outputs_fun(x[:nc], ueff, sv)
-        acc = self.gravity + (self._d(d, "force") - ca.sum1(force)) / self.mass_kg
-        y = ca.vertcat(s + self._d(d, "gap_sensor"), coil + self._d(d, "current_sensor"))
+        acc = self.gravity + (self.disturbance(d, "force") - ca.sum1(force)) / self.mass_kg
+        y = ca.vertcat(s + self.disturbance(d, "gap_sensor"), coil + self.disturbance(d, "current_sensor"))
         return (ca.Function("spline_rhs", [x, u, d], [ca.vertcat(didt, v, acc)]),
                 ca.Function("spline_meas", [x, u, d], [y]))
 

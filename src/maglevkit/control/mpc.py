@@ -87,23 +87,27 @@ class OffsetFreeMPC:
         Prediction and observer model (its disturbance model makes the controller
         offset-free; an empty one gives plain NMPC).
     gap_ref_m : float
-        Default reference and design point [m].
+        Default reference and design point [m], > 0, inside the maps' gap range.
     sample_time_s : float
-        Controller sample time [s].
+        Controller sample time [s], > 0.
     horizon : int
-        Number of shooting intervals ``N``.
+        Number of shooting intervals ``N`` (>= 1, default 20).
     interval_s : float, optional
-        Interval length ``h`` [s] (default: the sample time).
+        Interval length ``h`` [s], > 0 (default: the sample time).
     substeps : int
-        RK4 steps per interval.
+        RK4 steps per interval (>= 1, default 1).
     solver : {"rti", "sqp", "ipopt"}
+        "rti": one QP per sample (real-time iteration); "sqp": full SQP; "ipopt": the
+        NLP solver (reference).
     qp_solver : str
-        Conic solver of "rti"/"sqp" (see :data:`QP_SOLVERS`).
+        Conic solver of "rti"/"sqp" (see :data:`QP_SOLVERS`; default "qrqp").
     voltage_limit_V : float
-        ``|U| <= U_max`` [V] (chopper limit).
+        ``|U| <= U_max`` [V] (chopper limit), > 0.
     min_gap_m, max_current_A : float
-        Soft state constraints (the maps' range is a hard bound).
+        Soft state constraints [m], [A] (default: the maps' lowest gap and highest
+        current; the maps' range is a hard bound).  ``min_gap_m < gap_ref_m``.
     weights : MPCWeights
+        Cost weights (default :class:`MPCWeights()`).
     max_iter, tol : int, float
         SQP iterations and step tolerance (scaled variables) of "sqp".
     observer_options : mapping, optional
@@ -198,6 +202,22 @@ class OffsetFreeMPC:
         return self._ulim
 
     def reset(self, measurement: Measurement, *, sample_time_s: float) -> None:
+        """Start a run: observer at the initial estimate, cold start of the OCP.
+
+        Parameters
+        ----------
+        measurement : Measurement
+            The first measurement (not used: the estimate starts at ``initial_estimate``
+            or the design equilibrium).
+        sample_time_s : float
+            The run's sample time [s]; must equal the controller's ``sample_time_s``
+            (keyword only).
+
+        Raises
+        ------
+        InputError
+            A sample time other than the one the controller was built for.
+        """
         if not math.isclose(sample_time_s, self.sample_time_s, rel_tol=1e-9):
             raise InputError(f"this MPC was built for a sample time of {self.sample_time_s:g} s, "
                              f"the run uses {sample_time_s:g} s")
@@ -212,6 +232,24 @@ class OffsetFreeMPC:
         self._target = (self.design_state, self.design_input)
 
     def update(self, measurement: Measurement) -> np.ndarray:
+        """One sample: observer step, steady-state target for the reference, OCP solve.
+
+        Parameters
+        ----------
+        measurement : Measurement
+            Gap [m], currents [A] and gap reference [m] of this sample (the gap rate is
+            not used: the observer estimates it).
+
+        Returns
+        -------
+        ndarray (n_u,)
+            Voltages [V] to hold until the next sample, within ``+-voltage_limit_V``.
+
+        Raises
+        ------
+        SolverError
+            A diverged observer, no equilibrium for the reference, or a failed solver.
+        """
         m = self.model
         y = np.r_[measurement.gap_m, np.asarray(measurement.currents_A, dtype=float)]
         t0 = time.perf_counter()
@@ -370,7 +408,29 @@ class OffsetFreeMPC:
     def solve(self, x_hat: np.ndarray, d_hat: np.ndarray, xt: np.ndarray,
               ut: np.ndarray) -> tuple[np.ndarray, dict[str, Any]]:
         """Solve the OCP (warm-started from the previous solution); returns the first
-        voltages [V] and ``{"iterations", "solution"}`` (the scaled decision vector)."""
+        voltages [V] and ``{"iterations", "solution"}`` (the scaled decision vector).
+
+        Parameters
+        ----------
+        x_hat : ndarray (n_x,)
+            Estimated state: inductor currents [A], gap [m], gap rate [m/s].
+        d_hat : ndarray (n_d,)
+            Estimated disturbances.
+        xt : ndarray (n_x,)
+            Target steady state (from :meth:`MagnetHeaveModel.steady_state`).
+        ut : ndarray (n_u,)
+            Target voltages [V].
+
+        Returns
+        -------
+        (u, info) : ndarray (n_u,), dict
+            First voltages [V], and the iteration count and scaled solution.
+
+        Raises
+        ------
+        SolverError
+            A failed QP or IPOPT solve, or a solution beyond the voltage limit.
+        """
         m = self.model
         nx = m.nx
         p = np.r_[x_hat, d_hat, xt, ut]
@@ -433,7 +493,25 @@ class OffsetFreeMPC:
                   cold: bool = True) -> dict[str, np.ndarray]:
         """One OCP solve from ``x_hat`` (for tests and comparisons): the target for
         ``gap_ref_m`` and the disturbance, the optimal inputs (N, n_u) [V] and states
-        (N+1, n_x)."""
+        (N+1, n_x).
+
+        Parameters
+        ----------
+        x_hat : array_like (n_x,)
+            Initial state: inductor currents [A], gap [m], gap rate [m/s].
+        d_hat : array_like (n_d,), optional
+            Disturbances (default zeros).
+        gap_ref_m : float, optional
+            Gap reference [m] (default: the controller's; keyword only).
+        cold : bool, default True
+            Forget the previous solution (no warm start; keyword only).
+
+        Returns
+        -------
+        dict of str to ndarray
+            ``states`` (N+1, n_x), ``inputs_V`` (N, n_u), ``target_state``,
+            ``target_input_V``, ``iterations``.
+        """
         m = self.model
         x = np.asarray(x_hat, dtype=float).reshape(m.nx)
         d = np.zeros(m.nd) if d_hat is None else np.asarray(d_hat, dtype=float).reshape(m.nd)

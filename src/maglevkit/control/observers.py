@@ -30,8 +30,10 @@ class ExtendedKalmanFilter:
     Parameters
     ----------
     model : MagnetHeaveModel
+        Prediction model with its disturbance model (the estimated state is
+        ``[x; d]``).
     sample_time_s : float
-        Sample time T [s].
+        Sample time T [s], finite and > 0.
     process_std : array (n_x,), optional
         Standard deviation of the state noise per sample ``w_x`` (default: 0.05 A,
         1e-7 m, 1e-4 m/s).
@@ -39,9 +41,15 @@ class ExtendedKalmanFilter:
         Standard deviation of the disturbance random walk per sample ``w_d`` (default:
         20 N, 0.5 V, 1e-5 m, 0.05 A per sample; sets how fast the estimates follow).
     measurement_std : array (n_y,), optional
-        Measurement noise (default: 1e-6 m gap, 0.01 A current).
+        Measurement noise, > 0 (default: 1e-6 m gap, 0.01 A current).
     substeps : int
-        RK4 steps per sample.
+        RK4 steps per sample (default 1).
+
+    Raises
+    ------
+    InputError
+        ``sample_time_s`` not finite and > 0; standard deviations not finite and >= 0
+        (measurement ones > 0).  Arrays of the wrong length raise numpy's ``ValueError``.
     """
 
     def __init__(self, model: MagnetHeaveModel, *, sample_time_s: float,
@@ -96,7 +104,18 @@ class ExtendedKalmanFilter:
 
     def reset(self, state: Any, disturbance: Any = None, *, covariance: Any = None) -> None:
         """Initial estimate: state ``x`` (n_x,), disturbance (n_d,, default 0), covariance
-        (default: 1 A, 1 mm, 10 mm/s, and 10 % of the weight / 10 V / 1 mm / 1 A)."""
+        (default: 1 A, 1 mm, 10 mm/s, and 10 % of the weight / 10 V / 1 mm / 1 A).
+
+        Parameters
+        ----------
+        state : array_like (n_x,)
+            Initial state: inductor currents [A], gap [m], gap rate [m/s].
+        disturbance : array_like (n_d,), optional
+            Initial disturbance estimate in the order of the model's
+            ``disturbance_names`` (default zeros).
+        covariance : array_like (n_x + n_d, n_x + n_d), optional
+            Initial error covariance (SI units squared; keyword only).
+        """
         m = self.model
         x = np.asarray(state, dtype=float).reshape(m.nx)
         d = np.zeros(m.nd) if disturbance is None else np.asarray(disturbance, dtype=float)
@@ -114,7 +133,25 @@ class ExtendedKalmanFilter:
 
     def update(self, measurement: np.ndarray, previous_voltages: np.ndarray) -> np.ndarray:
         """Predict over the last interval (voltages ``previous_voltages`` [V]) and correct
-        with ``measurement = [gap, currents]``; returns the estimate ``[x; d]``."""
+        with ``measurement = [gap, currents]``; returns the estimate ``[x; d]``.
+
+        Parameters
+        ----------
+        measurement : array_like (n_y,)
+            Measured gap [m], then the circuit currents [A].
+        previous_voltages : array_like (n_u,)
+            Voltages [V] held over the interval that just ended.
+
+        Returns
+        -------
+        ndarray (n_x + n_d,)
+            The corrected estimate (also kept as :attr:`state`).
+
+        Raises
+        ------
+        SolverError
+            If the estimate becomes non-finite (the filter diverged).
+        """
         z, P, e = self._step(self.state, self.covariance, previous_voltages, measurement)
         if not np.isfinite(z).all():
             raise SolverError("the extended Kalman filter diverged",

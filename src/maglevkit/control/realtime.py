@@ -100,9 +100,12 @@ class RealTimeMPC(OffsetFreeMPC):
 
     Parameters
     ----------
-    model, gap_ref_m, sample_time_s, horizon, interval_s, substeps, voltage_limit_V,
-    min_gap_m, max_current_A, weights, observer_options, initial_estimate
-        As :class:`~maglevkit.control.mpc.OffsetFreeMPC`.
+    model, gap_ref_m, sample_time_s, horizon, interval_s, substeps
+        As :class:`~maglevkit.control.mpc.OffsetFreeMPC` (model, reference [m], sample
+        time [s], horizon, interval [s], RK4 steps per interval).
+    voltage_limit_V, min_gap_m, max_current_A, weights, observer_options, initial_estimate
+        As :class:`~maglevkit.control.mpc.OffsetFreeMPC` (voltage limit [V], soft
+        constraints [m], [A], weights, EKF options, initial ``[x; d]``).
     qp_solver : str
         Dense QP solver of the condensed QP, one of :data:`DENSE_QP_SOLVERS` (default
         qpOASES, hot-started; the others for comparison).
@@ -223,13 +226,13 @@ class RealTimeMPC(OffsetFreeMPC):
         nc, nd = m.n_circuits, m.nd
         dh, sref, ig = ca.MX.sym("d", nd), ca.MX.sym("s_ref"), ca.MX.sym("i_guess")
         T = ca.MX.sym("table", m.table.size)
-        s = sref - m._d(dh, "gap_sensor")
-        load = m.mass_kg * m.gravity + m._d(dh, "force")
+        s = sref - m.disturbance(dh, "gap_sensor")
+        load = m.mass_kg * m.gravity + m.disturbance(dh, "force")
         i_s = ca.MX.sym("i")
         x = ca.vertcat(ca.repmat(i_s, nc, 1), s, 0)
         # the force expression inlined (m.force is a Function: AD through a nested call
         # clears a 40 000-entry zero seed for the table, measured 28 us per target)
-        F = m._expressions(x, ca.MX.zeros(m.nu), dh, T)[2]
+        F = m.expressions(x, ca.MX.zeros(m.nu), dh, T)[2]
         fs = ca.Function("mpc_rti_force", [i_s, dh, sref, T], [F, ca.jacobian(F, i_s)])
         i: Any = ig
         step: Any = ca.MX(0)
@@ -242,7 +245,7 @@ class RealTimeMPC(OffsetFreeMPC):
             i = ca.fmin(ca.fmax(i - step, lo), hi)
         step = ca.if_else(bad > 0, np.nan, step)
         xt = ca.vertcat(ca.repmat(i, nc, 1), s, 0)
-        ut = ca.DM(m.resistance_ohm) * i - m._d(dh, "voltage")
+        ut = ca.DM(m.resistance_ohm) * i - m.disturbance(dh, "voltage")
         return ca.Function("mpc_rti_target", [dh, sref, ig, T], [xt, ut, step])
 
     def _finish_build(self) -> None:
@@ -350,6 +353,20 @@ class RealTimeMPC(OffsetFreeMPC):
 
     # ------------------------------------------------------------------ interface
     def reset(self, measurement: Measurement, *, sample_time_s: float) -> None:
+        """Start a run: observer at the initial estimate, cold start of the QP.
+
+        Parameters
+        ----------
+        measurement : Measurement
+            The first measurement (not used).
+        sample_time_s : float
+            The run's sample time [s]; must equal the controller's (keyword only).
+
+        Raises
+        ------
+        InputError
+            A sample time other than the one the controller was built for.
+        """
         super().reset(measurement, sample_time_s=sample_time_s)
         obs = self.observer
         self._k = 0
@@ -365,7 +382,24 @@ class RealTimeMPC(OffsetFreeMPC):
         """One sample: one compiled call (EKF step, target, QP data), one dense QP.
 
         The observer object's own ``state`` is not advanced (its step runs inside the
-        compiled function); the estimates are in :meth:`diagnostics`."""
+        compiled function); the estimates are in :meth:`diagnostics`.
+
+        Parameters
+        ----------
+        measurement : Measurement
+            Gap [m], currents [A] and gap reference [m] of this sample.
+
+        Returns
+        -------
+        ndarray (n_u,)
+            Voltages [V] to hold until the next sample, within ``+-voltage_limit_V``.
+
+        Raises
+        ------
+        SolverError
+            A diverged observer, no equilibrium for the reference, a failed QP, or a
+            solution beyond the voltage limit.
+        """
         t0 = time.perf_counter()
         c0 = time.thread_time()
         self._y[0] = measurement.gap_m
@@ -461,7 +495,29 @@ class RealTimeMPC(OffsetFreeMPC):
     def solve(self, x_hat: np.ndarray, d_hat: np.ndarray, xt: np.ndarray,
               ut: np.ndarray) -> tuple[np.ndarray, dict[str, Any]]:
         """One condensed RTI QP from ``x_hat`` for the target ``(xt, ut)`` (for tests):
-        the same QP data function and solver as :meth:`update`, without the observer."""
+        the same QP data function and solver as :meth:`update`, without the observer.
+
+        Parameters
+        ----------
+        x_hat : ndarray (n_x,)
+            Estimated state: inductor currents [A], gap [m], gap rate [m/s].
+        d_hat : ndarray (n_d,)
+            Estimated disturbances.
+        xt : ndarray (n_x,)
+            Target steady state.
+        ut : ndarray (n_u,)
+            Target voltages [V].
+
+        Returns
+        -------
+        (u, info) : ndarray (n_u,), dict
+            First voltages [V] (clipped to the limit), ``{"iterations": 1, "solution"}``.
+
+        Raises
+        ------
+        SolverError
+            If the QP fails.
+        """
         m = self.model
         nx = m.nx
         if self._w is None:

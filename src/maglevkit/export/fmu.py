@@ -445,7 +445,7 @@ def _model_description(ident: str, names: dict[str, list[str]], circuits: tuple[
                        ranges: np.ndarray, s_start: np.ndarray, i_start: np.ndarray,
                        r_el: np.ndarray, r_ec: np.ndarray, max_substep: float,
                        description: str, stop_time: float, step_size: float) -> str:
-    from .. import __version__
+    from .._version import __version__
 
     nc = len(circuits)
     vars_: list[str] = []

@@ -1,4 +1,8 @@
-"""Parametric magnet topologies and their parameter files."""
+"""Parametric magnet topologies and their parameter files.
+
+Characteristic numbers from the statics (saturation knee, coupling) are in
+:mod:`maglevkit.models.characteristics`.
+"""
 
 from . import guidance as _guidance  # noqa: F401  (registers the "guidance_magnet" kind)
 from . import levitation as _levitation  # noqa: F401  (registers the "levitation_magnet" kind)
@@ -12,14 +16,6 @@ from .base import (
     bundled_magnets,
     load_magnet,
 )
-from .characteristics import (
-    KNEE_EXPONENT,
-    Coupling,
-    coupling_ratios,
-    force_exponent,
-    nominal_point,
-    saturation_knee,
-)
 from .levitation import pole_gap_names
 
 __all__ = [
@@ -30,11 +26,5 @@ __all__ = [
     "build_magnet",
     "bundled_magnets",
     "load_magnet",
-    "KNEE_EXPONENT",
-    "Coupling",
-    "coupling_ratios",
-    "force_exponent",
-    "nominal_point",
-    "saturation_knee",
     "pole_gap_names",
 ]

@@ -49,6 +49,7 @@ __all__ = [
     "load_magnet",
     "build_magnet",
     "bundled_magnets",
+    "resistivity",
     "register_kind",
     "Schema",
     "take",
@@ -413,6 +414,24 @@ def resolve_material(name: str, custom: Mapping[str, Material], where: str) -> M
         names = sorted(m.name for m in custom.values())
         extra = f" or one of this file's [materials] tables {names}" if custom else ""
         raise ParameterFileError(f"[{where}] material: {exc}{extra}") from None
+
+
+def resistivity(given: float | None, material: Material, where: str) -> float:
+    """Electrical resistivity [ohm m] of an eddy-current path: ``given`` (the file's
+    ``resistivity``) or else the material's built-in value.
+
+    Raises
+    ------
+    ParameterFileError
+        Neither is known (the message names the table ``where`` and the material).
+    """
+    if given is not None:
+        return given
+    if material.resistivity is None:
+        raise ParameterFileError(
+            f"[{where}] material {material.name!r} has no built-in resistivity; give "
+            "'resistivity' (ohm m) or build the magnet with eddy_currents=False")
+    return material.resistivity
 
 
 _MATERIAL_SCHEMA = {

@@ -32,10 +32,10 @@ from .base import (
     PlausibleRange,
     Schema,
     register_kind,
+    resistivity,
     resolve_material,
     take,
 )
-from .levitation import _resistivity
 
 __all__ = ["build_guidance_magnet"]
 
@@ -68,7 +68,29 @@ RAIL_SCHEMA = {
 
 def build_guidance_magnet(params: Mapping[str, Any], materials: Mapping[str, Material],
                           options: ModelOptions) -> tuple[str, Network]:
-    """Build a guidance magnet network from parsed parameters (see module docstring)."""
+    """Build a guidance magnet network from parsed parameters (see module docstring).
+
+    Parameters
+    ----------
+    params : mapping
+        The parsed parameter file (its ``magnet`` table and the tables this kind
+        needs: ``circuits``, ``rail``).
+    materials : mapping of str to Material
+        Materials defined in the file (by name), besides the built-in records.
+    options : ModelOptions
+        Physics switches (saturation, fringing, leakage, eddy currents).
+
+    Returns
+    -------
+    (kind, network) : tuple of str and Network
+        The magnet kind and its equivalent magnetic circuit.
+
+    Raises
+    ------
+    ParameterFileError
+        Missing tables, unknown or missing keys, bad values, or a geometry that does not
+        fit together.
+    """
     m = take(params["magnet"], MAGNET_SCHEMA, "magnet")
     for table in ("circuits", "rail"):
         if table not in params:
@@ -99,8 +121,8 @@ def build_guidance_magnet(params: Mapping[str, Any], materials: Mapping[str, Mat
     iron = resolve_material(m["material"], materials, "magnet")
     rail_mat = resolve_material(r["material"], materials, "rail")
     eddy = options.eddy_currents
-    rho = _resistivity(m["resistivity"], iron, "magnet") if eddy else 0.0
-    rho_rail = _resistivity(r["resistivity"], rail_mat, "rail") if eddy else 0.0
+    rho = resistivity(m["resistivity"], iron, "magnet") if eddy else 0.0
+    rho_rail = resistivity(r["resistivity"], rail_mat, "rail") if eddy else 0.0
 
     face = L * hp
     # bar flanks above and below the face see the rail (it covers both bars); flank depth

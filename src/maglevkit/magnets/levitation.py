@@ -44,6 +44,7 @@ from .base import (
     PlausibleRange,
     Schema,
     register_kind,
+    resistivity,
     resolve_material,
     take,
 )
@@ -117,16 +118,6 @@ def _circuits(raw: Any, poles: int) -> tuple[list[str], list[int]]:
     return list(names), list(assign)
 
 
-def _resistivity(given: float | None, material: Material, where: str) -> float:
-    if given is not None:
-        return given
-    if material.resistivity is None:
-        raise ParameterFileError(
-            f"[{where}] material {material.name!r} has no built-in resistivity; give "
-            "'resistivity' (ohm m) or build the magnet with eddy_currents=False")
-    return material.resistivity
-
-
 def build_levitation_magnet(params: Mapping[str, Any], materials: Mapping[str, Material],
                             options: ModelOptions) -> tuple[str, Network]:
     """Build a levitation magnet network from parsed parameters (see module docstring)."""
@@ -193,7 +184,7 @@ def build_levitation_magnet(params: Mapping[str, Any], materials: Mapping[str, M
         length = 2.0 * side + (wp + 2.0 * tc) * ((k == 0) + (k == poles - 1))
         return MU0 * length * math.log(1.0 + tc / (0.5 * hc)) / math.pi
 
-    rho = _resistivity(m["resistivity"], core_mat, "magnet") if options.eddy_currents else 0.0
+    rho = resistivity(m["resistivity"], core_mat, "magnet") if options.eddy_currents else 0.0
 
     branches: list[Branch] = []
     for k in range(poles):

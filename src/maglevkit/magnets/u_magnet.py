@@ -77,13 +77,21 @@ from ..circuit.elements import (
     GapLayerPermeance,
     IronPath,
     LeakagePermeance,
-    _rectangle_torsion_constant,
+    rectangle_torsion_constant,
 )
 from ..circuit.ladder import ladder_branches
 from ..circuit.network import Branch, Circuit, Coil, Network
 from ..errors import ParameterFileError
 from ..materials import MU0, IdealIron, Material
-from .base import ModelOptions, PlausibleRange, Schema, register_kind, resolve_material, take
+from .base import (
+    ModelOptions,
+    PlausibleRange,
+    Schema,
+    register_kind,
+    resistivity,
+    resolve_material,
+    take,
+)
 
 MAGNET_SCHEMA = {
     "kind": Schema(str),
@@ -121,20 +129,31 @@ RAIL_SCHEMA = {
 }
 
 
-def _resistivity(given: float | None, material: Material, where: str) -> float:
-    if given is not None:
-        return given
-    if material.resistivity is None:
-        raise ParameterFileError(
-            f"[{where}] material {material.name!r} has no built-in resistivity; give "
-            "'resistivity' (ohm m) or build the magnet with eddy_currents=False"
-        )
-    return material.resistivity
-
-
 def build_u_magnet(params: Mapping[str, Any], materials: Mapping[str, Material],
                    options: ModelOptions) -> tuple[str, Network]:
-    """Build the U-magnet network from parsed parameters (see module docstring)."""
+    """Build the U-magnet network from parsed parameters (see module docstring).
+
+    Parameters
+    ----------
+    params : mapping
+        The parsed parameter file (its ``magnet`` table and the tables this kind
+        needs: ``rail``).
+    materials : mapping of str to Material
+        Materials defined in the file (by name), besides the built-in records.
+    options : ModelOptions
+        Physics switches (saturation, fringing, leakage, eddy currents).
+
+    Returns
+    -------
+    (kind, network) : tuple of str and Network
+        The magnet kind and its equivalent magnetic circuit.
+
+    Raises
+    ------
+    ParameterFileError
+        Missing tables, unknown or missing keys, bad values, or a geometry that does not
+        fit together.
+    """
     m = take(params["magnet"], MAGNET_SCHEMA, "magnet")
     if "rail" not in params:
         raise ParameterFileError("missing the [rail] table (thickness, width, material)")
@@ -223,8 +242,8 @@ def build_u_magnet(params: Mapping[str, Any], materials: Mapping[str, Material],
     seg_turns = [half * 0.5 / K, *([half / K] * (K - 1)), half * 0.5 / K]
     rho_core = rho_rail = 0.0
     if options.eddy_currents:
-        rho_core = _resistivity(m["resistivity"], core, "magnet")
-        rho_rail = _resistivity(r["resistivity"], rail_mat, "rail")
+        rho_core = resistivity(m["resistivity"], core, "magnet")
+        rho_rail = resistivity(r["resistivity"], rail_mat, "rail")
 
     def eddy(name: str, width: float, length: float, rho: float,
              solid: bool) -> tuple[Element, ...]:
@@ -246,7 +265,7 @@ def build_u_magnet(params: Mapping[str, Any], materials: Mapping[str, Material],
                                    resistivity=rho, layers=options.eddy_layers)
         # solid bar: slab across the width; with end_effects the Saint-Venant factor of
         # the finite depth (the eddy currents close within the depth), else the 2-D slab
-        factor = (_rectangle_torsion_constant(width, d) / (d * width**3 / 3.0)
+        factor = (rectangle_torsion_constant(width, d) / (d * width**3 / 3.0)
                   if m["end_effects"] else 1.0)
         if solid and options.eddy_model == "ladder_split":
             # rail split under and between the poles: the flux enters the rail over each
@@ -750,7 +769,7 @@ def _grid_ladders(branches: list[Branch], m: Mapping[str, Any], r: Mapping[str, 
         if not solid:
             thick = m["sheet_thickness"]
         elif m["end_effects"]:
-            factor = _rectangle_torsion_constant(thick, d) / (d * thick**3 / 3.0)
+            factor = rectangle_torsion_constant(thick, d) / (d * thick**3 / 3.0)
         out += ladder_branches(br.name, br.start, br.end, iron, thickness=thick,
                                resistivity=rho, layers=layers, factor=factor)
     return out

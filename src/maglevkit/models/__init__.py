@@ -1,6 +1,18 @@
-"""Magnet models: statics of the equivalent circuit, flux-based DAE, current-based ODE."""
+"""Magnet models: statics of the equivalent circuit, flux-based DAE, current-based ODE.
+
+:func:`maglevkit.simulate` (one entry for every model) is in :mod:`maglevkit.simulation`,
+above the reduced models; :func:`simulate_flux` is its flux-model branch.
+"""
 
 from .bank import BankOutputs, BankSimulation, BankState, MagnetBank
+from .characteristics import (
+    KNEE_EXPONENT,
+    Coupling,
+    coupling_ratios,
+    force_exponent,
+    nominal_point,
+    saturation_knee,
+)
 from .current import CurrentModel, CurrentModelState, CurrentOutputs, ReducedSimulation
 from .experiments import (
     InductanceEstimate,
@@ -15,7 +27,7 @@ from .flux import (
     FluxOutputs,
     FluxState,
     SimulationResult,
-    simulate,
+    simulate_flux,
 )
 from .scenario import Scenario, bundled_scenarios, load_scenario, parse_scenario
 from .signals import Constant, Ramp, Signal, Sine, Step, Tabulated, parse_signal
@@ -30,6 +42,8 @@ __all__ = [
     "DEFAULT_ATOL",
     "DEFAULT_RTOL",
     "Constant",
+    "Coupling",
+    "KNEE_EXPONENT",
     "CurrentModel",
     "CurrentModelState",
     "CurrentOutputs",
@@ -50,13 +64,17 @@ __all__ = [
     "Tabulated",
     "bundled_scenarios",
     "coenergy",
+    "coupling_ratios",
+    "force_exponent",
+    "nominal_point",
+    "saturation_knee",
     "differential_inductance_from_step",
     "load_scenario",
     "magnetic_energy",
     "parse_scenario",
     "parse_signal",
     "pole_force_eq6",
-    "simulate",
+    "simulate_flux",
     "solve_statics",
     "voltage_step_response",
 ]

@@ -296,6 +296,12 @@ class MagnetBank:
                                  f"{model.eddy_modes} cannot be a bank member (the bank "
                                  "advances eq. 8 with one R_ec per circuit); use "
                                  "CurrentModel(maps) or the model on its own")
+            if getattr(model, "motion_eddy", False):
+                # the same: the shielded-gap ladder's second state per circuit
+                raise InputError(f"member {name!r}: a CurrentModel with motion_eddy=True "
+                                 "cannot be a bank member (the bank advances eq. 8 with one "
+                                 "state per circuit); use CurrentModel(maps) or the model on "
+                                 "its own")
             maps = model.maps
             r_el, r_ec = model.resistance_ohm, model.eddy_resistance_ohm
         elif hasattr(model, "dataset") and hasattr(model, "variable"):

@@ -31,11 +31,13 @@ import casadi as ca
 
 from ..errors import CompilationWarning, SolverError
 
-__all__ = ["COMPILE_MODES", "build_source", "cache_directory", "compile_function",
+__all__ = ["COMPILE_MODES", "DEFAULT_FLAGS", "build_source", "cache_directory", "compile_function",
            "compile_library", "find_compiler"]
 
 COMPILE_MODES = ("auto", "always", "never")
-_FLAGS = ("-O3", "-shared", "-fPIC")
+#: Default C compiler flags of the compiled kernels (optimised, position-independent shared
+#: library); callers add linker options to these.
+DEFAULT_FLAGS = ("-O3", "-shared", "-fPIC")
 
 
 def cache_directory() -> Path:
@@ -89,7 +91,7 @@ def compile_function(f: ca.Function, *, mode: str = "auto",
 
 
 def compile_library(name: str, functions: Sequence[ca.Function], *, mode: str = "auto",
-                    cache_dir: str | Path | None = None, flags: Sequence[str] = _FLAGS,
+                    cache_dir: str | Path | None = None, flags: Sequence[str] = DEFAULT_FLAGS,
                     stacklevel: int = 3) -> tuple[list[ca.Function], bool]:
     """Several CasADi functions generated as ONE C file, compiled into one cached library.
 
@@ -107,6 +109,9 @@ def compile_library(name: str, functions: Sequence[ca.Function], *, mode: str = 
         As in :func:`compile_function`.
     flags : sequence of str
         Compiler flags (part of the cache key).
+    stacklevel : int, default 3
+        ``stacklevel`` of the :class:`CompilationWarning` issued when ``mode="auto"``
+        falls back to the interpreter (so that it points at the caller's caller).
 
     Returns
     -------
@@ -135,7 +140,7 @@ def compile_library(name: str, functions: Sequence[ca.Function], *, mode: str = 
 
 def library_path(name: str, functions: Sequence[ca.Function], *,
                  cache_dir: str | Path | None = None,
-                 flags: Sequence[str] = _FLAGS) -> Path:
+                 flags: Sequence[str] = DEFAULT_FLAGS) -> Path:
     """Where :func:`compile_library` caches this library (it need not exist)."""
     cc = find_compiler() or ""
     with tempfile.TemporaryDirectory(prefix="maglevkit-cg-") as tmp:
@@ -167,9 +172,25 @@ def _build(name: str, funcs: list[ca.Function], cache: Path, flags: tuple[str, .
     return build_source(name, code, cache=cache, flags=flags)
 
 
-def build_source(name: str, code: bytes, *, cache: Path, flags: Sequence[str] = _FLAGS) -> Path:
+def build_source(name: str, code: bytes, *, cache: Path, flags: Sequence[str] = DEFAULT_FLAGS) -> Path:
     """Compile C source ``code`` into the cached shared library ``<cache>/<name>_<key>.so``
     (key: SHA-256 of source, compiler, flags and CasADi version) unless it is there.
+
+    Parameters
+    ----------
+    name : str
+        Stem of the library's file name.
+    code : bytes
+        The C source.
+    cache : Path
+        Cache folder (created if missing; keyword only).
+    flags : sequence of str
+        Compiler flags (default optimised, position-independent shared library).
+
+    Returns
+    -------
+    Path
+        The shared library (written atomically).
 
     Raises
     ------

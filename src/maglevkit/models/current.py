@@ -25,6 +25,15 @@ whose eddy currents diffuse; :mod:`maglevkit.reduction.eddy_network`, docs/reduc
     U_L = (U - R_el (I_L + sum_k I_k)) / (1 + R_el/R_0)
     L~ dI_L/dt = U_L - dL/ds I_L ds/dt,     L_k L~/L~_ref dI_k/dt = U_L - R_k I_k
     I = (U - U_L)/R_el
+
+``CurrentModel(maps, motion_eddy=True)`` makes the motion-induced term pass through eddy
+dynamics (our extension of Fig. 8 for gap motion; :mod:`maglevkit.reduction.motion_eddy`):
+the ladder ``R_el`` -- shunt ``R_a`` -- series ``L_u`` -- shunt ``R_2 || L(s, I_L)``, two
+states per circuit (``I_L`` and the shielding eddy current ``I_e``)::
+
+    V_A = (U - R_el (I_L + I_e))/(1 + R_el/R_a),   V_m = R_2 I_e
+    (L~ - L_u) dI_L/dt = V_m - dL/ds I_L ds/dt,     L_u dI_e/dt = V_A - V_m - L_u dI_L/dt
+    I = (U - V_A)/R_el
 """
 
 from __future__ import annotations
@@ -42,7 +51,8 @@ from ..validation import flag, real_array
 from .inputs import check_initial_choice, check_step, simulation_inputs
 
 __all__ = ["CurrentModel", "CurrentModelLinearization", "CurrentModelState", "CurrentOutputs",
-           "ReducedSimulation", "eq8_coil_current", "eq8_eddy_branch_rhs", "eq8_rhs"]
+           "ReducedSimulation", "eq8_coil_current", "eq8_eddy_branch_rhs", "eq8_rhs",
+           "eq8_shielded_gap_rhs"]
 
 
 @dataclass(frozen=True)
@@ -59,7 +69,9 @@ class CurrentModelState:
         Pole gaps [m].
     eddy_currents_A : ndarray (n_circuits, m) or None
         Currents ``I_k`` [A] of the eddy network's RL branches (``CurrentModel(maps,
-        eddy_modes=m)``); None for eq. 8's single ``R_ec`` (``eddy_modes=0``, the default).
+        eddy_modes=m)``), or ``(n_circuits, 1)``: the shielding eddy current ``I_e`` of
+        the gap section (``motion_eddy=True``); None for eq. 8's single ``R_ec`` (the
+        default).
     """
 
     time_s: float
@@ -109,7 +121,8 @@ class ReducedSimulation:
     pole_force_N : ndarray (n_t, n_gaps)
     force_N : ndarray (n_t,)
     eddy_currents_A : ndarray (n_t, n_circuits, m) or None
-        Eddy-branch currents ``I_k`` [A] with ``eddy_modes = m > 0``, else None.
+        Eddy-branch currents ``I_k`` [A] with ``eddy_modes = m > 0``, the shielding eddy
+        current ``I_e`` (``m = 1``) with ``motion_eddy=True``, else None.
     """
 
     time_s: np.ndarray
@@ -141,7 +154,8 @@ class CurrentModelLinearization:
     With ``eddy_modes = m > 0`` the state is ``x = (dI_L, dI_ec)``: the ``n_c`` inductor
     currents, then the ``n_c m`` eddy-branch currents (circuit by circuit, branch ``k``
     of circuit ``j`` at ``n_c + j m + k``); the rows and columns below that say
-    ``n_circuits`` for the state have ``n_c (1 + m)`` entries then.
+    ``n_circuits`` for the state have ``n_c (1 + m)`` entries then.  With
+    ``motion_eddy=True`` likewise with ``m = 1`` (``dI_e``, the shielding eddy current).
 
     Attributes
     ----------
@@ -212,11 +226,11 @@ class CurrentModel:
     rtol, atol : float
         CVODES tolerances (defaults 1e-8 relative, 1e-10 absolute).
     max_step_s : float
-        Largest RK4 sub-step [s] (default 1e-3 s).  With ``eddy_modes > 0`` the sub-step
-        is also limited to ``1.5/lambda`` with ``lambda`` a bound (Gershgorin) of the
-        fastest eddy branch's rate over the maps (RK4 is stable up to 2.78/lambda): the
-        fast branches are stiff for the explicit integrator (attribute ``max_step_s``
-        holds the step used).
+        Largest RK4 sub-step [s] (default 1e-3 s).  With ``eddy_modes > 0`` or
+        ``motion_eddy`` the sub-step is also limited to ``1.5/lambda`` with ``lambda`` a
+        bound (Gershgorin) of the fastest eddy branch's rate over the maps (RK4 is
+        stable up to 2.78/lambda): the fast branches are stiff for the explicit
+        integrator (attribute ``max_step_s`` holds the step used).
     eddy_resistance : {"fit", "jump"} or None
         Which ``R_ec`` of the maps to use: ``"fit"`` (default; None means ``"fit"``) the
         value the step-response time constant implies (the paper's procedure; eq. 8 then
@@ -233,6 +247,16 @@ class CurrentModel:
         at the operating point if it is known), one extra state ``I_k`` per branch and circuit; ``L_k`` scales
         with ``L~(s, I_L)`` (docs/reduction.md, "More eddy modes").  For detailed models
         whose eddy currents diffuse (``eddy_model="ladder_split"``).
+    motion_eddy : bool
+        ``False`` (default): eq. 8.  ``True``: the shielded-gap ladder (our extension of
+        Fig. 8 for gap motion; :mod:`maglevkit.reduction.motion_eddy`, docs/reduction.md,
+        "Gap motion"): ``R_el``, a shunt ``R_a``, a series ``L_u`` and the gap section
+        ``L(s, I_L)`` shunted by its eddy resistance ``R_2``, so that the motion-induced
+        current passes through eddy dynamics; ``R_a``, ``L_u``, ``R_2`` are fitted by
+        ``build_maps`` to the detailed model's small-signal gap and voltage responses
+        (maps variables ``motion_eddy_*``).  Two states per circuit: ``I_L`` and the
+        shielding eddy current ``I_e`` (``eddy_currents_A``, shape ``(n_circuits, 1)``).
+        Not with ``eddy_modes > 0`` or ``eddy_resistance``.
     jit : bool
         Compile the RK4 interval to machine code with CasADi's JIT (needs a C compiler on
         the ``PATH``; ~0.3 s once per sub-step count).  About 1.8x faster RK4 intervals;
@@ -243,7 +267,7 @@ class CurrentModel:
     def __init__(self, maps: Any, *, extrapolate: bool = False, method: str = "rk4",
                  rtol: float = 1e-8, atol: float = 1e-10, max_step_s: float = 1e-3,
                  eddy_resistance: str | None = None, jit: bool = False,
-                 eddy_modes: int = 0) -> None:
+                 eddy_modes: int = 0, motion_eddy: bool = False) -> None:
         if not (hasattr(maps, "dataset") and hasattr(maps, "variable")):
             hint = (" (load a maps file with maglevkit.load_maps first)"
                     if isinstance(maps, (str, bytes)) or hasattr(maps, "__fspath__") else "")
@@ -286,7 +310,21 @@ class CurrentModel:
         r_el = np.asarray(maps.dataset["resistance_ohm"].values, dtype=float)
         m = _check_eddy_modes(eddy_modes)
         self.eddy_modes = m
-        if m:
+        if not isinstance(motion_eddy, (bool, np.bool_)):
+            raise InputError(f"motion_eddy = {motion_eddy!r}; use False (eq. 8, the default) "
+                             "or True (the shielded-gap ladder)")
+        #: whether the shielded-gap ladder replaces eq. 8 (:mod:`~maglevkit.reduction.motion_eddy`)
+        self.motion_eddy = bool(motion_eddy)
+        if self.motion_eddy:
+            if m:
+                raise InputError(f"motion_eddy=True with eddy_modes={m}: these are two "
+                                 "different eddy extensions of eq. 8; use one of them")
+            if eddy_resistance is not None:
+                raise InputError(f"eddy_resistance = {eddy_resistance!r} chooses eq. 8's single "
+                                 "R_ec; with motion_eddy=True the ladder's fitted R_a and R_2 "
+                                 "take its place: leave eddy_resistance out")
+            r_ec, r_2, l_u = _motion_eddy_ladder(maps)
+        elif m:
             if eddy_resistance is not None:
                 raise InputError(f"eddy_resistance = {eddy_resistance!r} chooses eq. 8's single "
                                  "R_ec; with eddy_modes > 0 the eddy network's R_0 takes its "
@@ -302,13 +340,34 @@ class CurrentModel:
                 raise InputError(f"these maps have no {var!r}; rebuild them with this version")
             r_ec = np.asarray(maps.dataset[var].values, dtype=float)
         self.resistance_ohm = r_el
-        #: ``R_ec`` of eq. 8, or the eddy network's ``R_0`` with ``eddy_modes > 0``
+        #: ``R_ec`` of eq. 8, the eddy network's ``R_0`` with ``eddy_modes > 0``, the
+        #: ladder's shunt ``R_a`` with ``motion_eddy``
         self.eddy_resistance_ohm = r_ec
         a = 1.0 + np.where(np.isinf(r_ec), 0.0, r_el / np.where(np.isinf(r_ec), 1.0, r_ec))
+        # extra (eddy) states per circuit: the m branch currents, or the ladder's I_e
+        n_e = m if m else (1 if self.motion_eddy else 0)
+        self._n_e = n_e
         # state [I_L; s; I_ec]: the gap slice and the bounds of the sub-step check
         # (eddy-branch currents are not range-checked)
-        self._n_x = (2 + m) * nc
+        self._n_x = (2 + n_e) * nc
         self._sl = slice(nc, 2 * nc)
+        if self.motion_eddy:
+            self._lower = np.concatenate([self._lower, np.full(nc, -np.inf)])
+            self._upper = np.concatenate([self._upper, np.full(nc, np.inf)])
+            lt_min = np.array([float(np.min(maps.variable("inductance_H", c)))
+                               for c in self.circuit_names])
+            if np.any(lt_min <= l_u):
+                j = int(np.argmax(lt_min <= l_u))
+                raise InputError(f"motion_eddy=True: the maps' smallest L~ of circuit "
+                                 f"{self.circuit_names[j]!r}, {lt_min[j]:.4g} H, is not above "
+                                 f"the ladder's L_u = {l_u[j]:.4g} H (the gap section would "
+                                 "have no inductance left); use motion_eddy=False or maps "
+                                 "that stay out of such deep saturation")
+            # RK4 stability: Gershgorin bound of the ladder's rates in (I_u, I_L) with the
+            # smallest L~ - L_u over the maps (module reduction.motion_eddy)
+            rate = float(np.max(np.maximum((r_el / a + 2.0 * r_2) / l_u,
+                                           2.0 * r_2 / (lt_min - l_u))))
+            self.max_step_s = min(self.max_step_s, 1.5 / rate)
         if m:
             self._lower = np.concatenate([self._lower, np.full(nc * m, -np.inf)])
             self._upper = np.concatenate([self._upper, np.full(nc * m, np.inf)])
@@ -348,12 +407,19 @@ class CurrentModel:
 
         mx_rhs, forces, ltil = [], [], []
         xm, Um, sm, sdm = (ca.MX.sym(n, nc) for n in ("I_L", "U", "s", "sdot"))
-        em = ca.MX.sym("I_ec", nc * m)
+        em = ca.MX.sym("I_ec", nc * n_e)
         eddy_rhs, coils = [], []
         for j in range(nc):
             vals = spline(j)(ca.vertcat(sm[j], xm[j]))
             lt, dl, f = vals[0], vals[1], vals[2]
-            if m:
+            if self.motion_eddy:
+                # the shielded-gap ladder (module docstring, reduction.motion_eddy)
+                d_il, d_ie = eq8_shielded_gap_rhs(xm[j], em[j], Um[j], sdm[j], lt, dl, r_el[j],
+                                                  a[j], r_2[j], l_u[j])
+                mx_rhs.append(d_il)
+                eddy_rhs.append(d_ie)
+                coils.append(eq8_coil_current(xm[j] + em[j], Um[j], r_el[j], a[j]))
+            elif m:
                 # the eddy network (module docstring): eq. 8 with U - R_el sum_k I_k as the
                 # voltage behind R_el gives U_L and dI_L/dt; I = that coil current + sum I_k
                 ik = em[j * m:(j + 1) * m]
@@ -368,7 +434,7 @@ class CurrentModel:
                 mx_rhs.append(eq8_rhs(xm[j], Um[j], sdm[j], lt, dl, r_el[j], a[j]))
             forces.append(f)
             ltil.append(lt)
-        if m:
+        if n_e:
             self.ode = ca.Function("current_model_ode", [xm, Um, sm, sdm, em],
                                    [ca.vertcat(*mx_rhs), ca.vertcat(*eddy_rhs)],
                                    ["I_L", "U", "s", "sdot", "I_ec"], ["dI_L", "dI_ec"])
@@ -388,7 +454,7 @@ class CurrentModel:
         # piecewise constant.
         X = ca.MX.sym("X", self._n_x)
         Uc = ca.MX.sym("u", 2 * nc)
-        if m:
+        if n_e:
             di, de = self.ode(X[:nc], Uc[:nc], X[self._sl], Uc[nc:], X[2 * nc:])
             rhs = ca.vertcat(di, Uc[nc:], de)
         else:
@@ -421,22 +487,25 @@ class CurrentModel:
     def _outs(self, x: Any, u: Any) -> Any:
         """``outputs_fun`` on a full state ``x = [I_L; s(; I_ec)]`` with voltages ``u``."""
         nc = self.n_circuits
-        if self.eddy_modes:
+        if self._n_e:
             return self.outputs_fun(x[:nc], u, x[self._sl], x[2 * nc:])
         return self.outputs_fun(x[:nc], u, x[nc:])
 
     def _eddy_state(self, state: CurrentModelState) -> np.ndarray:
         """The eddy-branch currents of ``state`` as a flat vector (empty for eq. 8)."""
-        m = self.eddy_modes
+        m = self._n_e
         e = state.eddy_currents_A
         if not m:
             if e is not None and np.size(e):
                 raise InputError("this state has eddy-branch currents (eddy_currents_A) but "
-                                 "the model has eddy_modes=0; use a state of this model")
+                                 "the model has eddy_modes=0 and motion_eddy=False; use a "
+                                 "state of this model")
             return np.zeros(0)
         if e is None:
-            raise InputError(f"the model has eddy_modes={m} but the state has no "
-                             "eddy_currents_A; make it with this model's initial_state")
+            raise InputError(f"the model has {m} eddy state(s) per circuit (eddy_modes="
+                             f"{self.eddy_modes}, motion_eddy={self.motion_eddy}) but the "
+                             "state has no eddy_currents_A; make it with this model's "
+                             "initial_state")
         arr = real_array(e, "eddy_currents_A")
         if arr.shape != (self.n_circuits, m):
             raise InputError(f"eddy_currents_A: expected shape ({self.n_circuits}, {m}) "
@@ -445,9 +514,9 @@ class CurrentModel:
 
     def _eddy_of(self, x: np.ndarray) -> np.ndarray | None:
         """The eddy-branch currents (n_c, m) of a full state vector, None for eq. 8."""
-        if not self.eddy_modes:
+        if not self._n_e:
             return None
-        return np.array(x[2 * self.n_circuits:]).reshape(self.n_circuits, self.eddy_modes)
+        return np.array(x[2 * self.n_circuits:]).reshape(self.n_circuits, self._n_e)
 
     def _check_range(self, s: np.ndarray, i_l: np.ndarray, t: np.ndarray | None = None, *,
                      where: str | None = None) -> None:
@@ -644,10 +713,10 @@ class CurrentModel:
         if not math.isfinite(time):
             raise InputError(f"time = {time!r} must be finite")
         self._check_range(self.substitute_gaps(g)[None, :], i[None, :], np.array([time]))
-        if self.eddy_modes:
+        if self._n_e:
             # steady state: U_L = 0, so every eddy branch has decayed (I_k = 0)
             return CurrentModelState(float(time), i, g,
-                                     np.zeros((self.n_circuits, self.eddy_modes)))
+                                     np.zeros((self.n_circuits, self._n_e)))
         return CurrentModelState(float(time), i, g)
 
     def outputs(self, state: CurrentModelState, voltages: Any = None) -> CurrentOutputs:
@@ -697,10 +766,10 @@ class CurrentModel:
         self._check_range(s[None, :], il[None, :], None)
         f = self._linearization_function()
         args = [il, u, s, sd]
-        if self.eddy_modes:
+        if self._n_e:
             # the operating point's eddy-branch currents are 0 (they decay at any steady
             # state; away from one the linearisation is about the same I_ec = 0 point)
-            args.append(np.zeros(self.n_circuits * self.eddy_modes))
+            args.append(np.zeros(self.n_circuits * self._n_e))
         f_x, a, b, e_s, e_sd, c_f, d_f, c_i, d_i = (np.asarray(v, dtype=float)
                                                     for v in f(*args))
         # substitute gap of circuit j = mean of its poles' gaps: chain rule through _avg
@@ -717,8 +786,8 @@ class CurrentModel:
             nc = self.n_circuits
             x, u, s, sd = (ca.MX.sym(n, nc) for n in ("I_L", "U", "s", "sdot"))
             ins = [x, u, s, sd]
-            if self.eddy_modes:
-                e = ca.MX.sym("I_ec", nc * self.eddy_modes)
+            if self._n_e:
+                e = ca.MX.sym("I_ec", nc * self._n_e)
                 ins.append(e)
                 di, de = self.ode(x, u, s, sd, e)
                 rhs = ca.vertcat(di, de)
@@ -759,7 +828,7 @@ class CurrentModel:
                           where=f" at the start of the step t = {state.time_s:.6g} s")
         self._check_range(np.maximum(s0, s1)[None, :], i_now[None, :], None,
                           where=f" at the end of the step t = {state.time_s + dt:.6g} s")
-        x0 = (np.concatenate([i_now, s0, self._eddy_state(state)]) if self.eddy_modes
+        x0 = (np.concatenate([i_now, s0, self._eddy_state(state)]) if self._n_e
               else np.concatenate([i_now, s0]))
         uu = np.concatenate([u, sd])
         nc = self.n_circuits
@@ -840,7 +909,7 @@ class CurrentModel:
         else:
             i0 = _per_circuit(u[0] / self.resistance_ohm if initial_currents is None
                               else initial_currents, self.circuit_names, "initial_currents")
-            e0 = np.zeros(self.n_circuits * self.eddy_modes)    # steady state: I_k = 0
+            e0 = np.zeros(self.n_circuits * self._n_e)    # steady state: I_k = 0
         s = self.substitute_gaps(g)
         self._check_range(s, np.broadcast_to(i0, s.shape), times)
         sd = self.substitute_gaps(secant)
@@ -852,14 +921,13 @@ class CurrentModel:
         c0, f0, _ = self._outs(xs[0], u[0])
         if outs is None:
             held = u[:-1].T
-            rest = [xs[1:, 2 * nc:].T] if self.eddy_modes else []
+            rest = [xs[1:, 2 * nc:].T] if self._n_e else []
             c1, f1, _ = self.outputs_fun.map(times.size - 1)(il[1:].T, held,
                                                              xs[1:, self._sl].T, *rest)
             outs = (np.asarray(c1), np.asarray(f1))
         coil = np.concatenate([np.asarray(c0), outs[0]], axis=1)
         fc = np.concatenate([np.asarray(f0), outs[1]], axis=1).T
-        eddy = (xs[:, 2 * nc:].reshape(times.size, nc, self.eddy_modes) if self.eddy_modes
-                else None)
+        eddy = (xs[:, 2 * nc:].reshape(times.size, nc, self._n_e) if self._n_e else None)
         final = CurrentModelState(float(times[-1]), il[-1].copy(), g[-1].copy(),
                                   None if eddy is None else eddy[-1].copy())
         return ReducedSimulation(
@@ -940,6 +1008,48 @@ def eq8_eddy_branch_rhs(i_k: Any, u_l: Any, r_k: Any, l_k: Any) -> Any:
     """An RL branch of the eddy network in parallel with ``L~`` (Fig. 8 extended):
     ``dI_k/dt = (U_L - R_k I_k)/L_k``, ``U_L`` the inductor voltage."""
     return (u_l - r_k * i_k) / l_k
+
+
+def eq8_shielded_gap_rhs(i_l: Any, i_e: Any, u: Any, gap_rate: Any, ltilde: Any, dl_ds: Any,
+                         r_el: Any, a: Any, r_2: Any, l_u: Any) -> tuple[Any, Any]:
+    """Eq. 8 with a shielded gap section (``CurrentModel(maps, motion_eddy=True)``).
+
+    The ladder ``R_el``, shunt ``R_a``, series ``L_u``, shunt ``R_2 || L(s, I_L)``
+    (:mod:`maglevkit.reduction.motion_eddy`), with ``a = 1 + R_el/R_a``::
+
+        V_A = (U - R_el (I_L + I_e))/a,   V_m = R_2 I_e
+        dI_L/dt = (V_m - dL/ds I_L ds/dt)/(L~ - L_u)
+        dI_e/dt = (V_A - V_m)/L_u - dI_L/dt
+
+    ``I_L`` [A] is the gap section's current (the force's), ``I_e`` [A] the shielding eddy
+    current through ``R_2``; the coil current is ``eq8_coil_current(I_L + I_e, U, R_el, a)``.
+    Element-wise on floats, NumPy arrays and CasADi expressions.
+
+    Returns
+    -------
+    (dI_L/dt, dI_e/dt) [A/s]
+    """
+    v_a = (u - r_el * (i_l + i_e)) / a
+    v_m = r_2 * i_e
+    d_il = (v_m - dl_ds * i_l * gap_rate) / (ltilde - l_u)
+    return d_il, (v_a - v_m) / l_u - d_il
+
+
+def _motion_eddy_ladder(maps: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """``R_a``, ``R_2`` [ohm] and ``L_u`` [H] (n_c,) of the maps' shielded-gap ladder."""
+    ds = maps.dataset
+    names = ("motion_eddy_jump_resistance_ohm", "motion_eddy_shielding_resistance_ohm",
+             "motion_eddy_unshielded_inductance_H")
+    missing = [n for n in names if n not in ds]
+    if missing:
+        raise InputError(f"these maps have no shielded-gap ladder ({', '.join(missing)}); "
+                         "rebuild them with this version (build_maps) to use motion_eddy=True")
+    r_a, r_2, l_u = (np.asarray(ds[n].values, dtype=float) for n in names)
+    if not (np.all(np.isfinite(r_a)) and np.all(np.isfinite(r_2)) and np.all(np.isfinite(l_u))
+            and np.all(r_a > 0) and np.all(r_2 > 0) and np.all(l_u > 0)):
+        raise InputError("these maps have no shielded-gap ladder to use (the magnet has no "
+                         "eddy currents); use motion_eddy=False")
+    return r_a, r_2, l_u
 
 
 #: Whether the eddy branches' ``L_k`` scale with ``L~(s, I_L)/L~_ref`` (True) or stay at

@@ -23,16 +23,17 @@ import numpy as np
 
 from ..errors import InputError, SolverError
 from ..validation import real_number, whole_number
-from .flux import FluxModel, SimulationResult, check_options, simulate
+from .flux import FluxModel, SimulationResult, check_options, simulate_flux
 from .statics import solve_statics
 
-__all__ = ["InductanceEstimate", "voltage_step_response", "differential_inductance_from_step"]
+__all__ = ["InductanceEstimate", "StepFit", "voltage_step_response",
+           "differential_inductance_from_step", "fit_step_response"]
 
 
 def _model(model: Any, options: dict[str, Any]) -> FluxModel:
     check_options(options, "the step experiment")
     if isinstance(model, FluxModel):
-        return FluxModel(model, **{**model._options, **options}) if options else model
+        return model.with_options(**options) if options else model
     return FluxModel(model, **options)
 
 
@@ -46,8 +47,10 @@ def voltage_step_response(model: Any, *, gap: Any, voltage: Any, initial_current
     Parameters
     ----------
     model : FluxModel, Magnet or Network
+        The magnet model (a Magnet or Network is wrapped in a :class:`FluxModel` with
+        ``options``; a FluxModel's own options are overridden by ``options``).
     gap : float, sequence or mapping
-        Fixed gap(s) [m].
+        Fixed gap(s) [m], > 0.
     voltage : float, sequence or mapping
         Voltage(s) after the step [V].
     initial_current : float, sequence or mapping
@@ -59,7 +62,7 @@ def voltage_step_response(model: Any, *, gap: Any, voltage: Any, initial_current
     """
     fm = _model(model, options)
     st = fm.initial_state(gaps=gap, currents=initial_current)
-    return simulate(fm, (0.0, duration), dt=dt, gaps=st.gaps_m, voltages=voltage,
+    return simulate_flux(fm, (0.0, duration), dt=dt, gaps=st.gaps_m, voltages=voltage,
                     initial_state=st)
 
 
@@ -112,9 +115,44 @@ def differential_inductance_from_step(model: Any, *, gap: float, current: float,
     The time window (``n_tau`` time constants, ``samples_per_tau`` samples each) is
     sized with the statics' ``dpsi/dI``; that estimate is not used in the result.
 
+    Parameters
+    ----------
+    model : FluxModel, Magnet or Network
+        The magnet model (a Magnet or Network is wrapped in a :class:`FluxModel`).
+    gap : float
+        Gap of every pole [m], > 0 (keyword only, like all that follow).
+    current : float
+        Operating current of every circuit [A] before the step.
+    relative_step : float, default 1e-3
+        Size of the final current change relative to ``max(|I|, 1 A)`` [-], in
+        (0, 0.1): small enough for the response to be linear.
+    circuit : int, default 0
+        Index of the circuit whose voltage steps, ``0 .. n_circuits - 1``.
+    samples_per_tau : int, default 200
+        Output samples per estimated time constant (whole number >= 1).
+    n_tau : float, default 6.0
+        Length of the simulated window in estimated time constants, > 0.
+    rtol, atol : float, default 1e-9 and 1e-11
+        Integrator tolerances of the flux model [-] (``atol`` relative to the model's
+        nominal scales, see :class:`FluxModel`); tighter than the FluxModel defaults,
+        because the step is small.
+    **options
+        Further FluxModel options (``saturation``, ``eddy_currents``, ...).
+
     Returns
     -------
     InductanceEstimate
+
+    Raises
+    ------
+    InputError
+        ``relative_step`` outside (0, 0.1), ``samples_per_tau`` not a whole number
+        >= 1, ``n_tau`` not > 0, ``circuit`` not an index of a circuit, unknown
+        options or bad gap or current.
+    SolverError
+        Fewer than 10 samples between 2 % and 98 % of the step (window too short or
+        too coarse), a response that is not a decaying exponential, or a failed
+        simulation.
     """
     if not 0.0 < real_number(relative_step, "relative_step") < 0.1:
         raise InputError(f"relative_step = {relative_step!r} must lie in (0, 0.1)")
@@ -135,24 +173,18 @@ def differential_inductance_from_step(model: Any, *, gap: float, current: float,
     U = R * st.currents_A
     U[circuit] += r_par * di_inf
     dt = tau_est / samples_per_tau
-    res = simulate(fm, (0.0, n_tau * tau_est), dt=dt, gaps=st.gaps_m, voltages=U,
+    res = simulate_flux(fm, (0.0, n_tau * tau_est), dt=dt, gaps=st.gaps_m, voltages=U,
                    initial_state=st)
     di = res.currents_A[:, circuit] - st.currents_A[circuit]
-    remaining = di_inf - di
     t = res.time_s
-    sel = (t > 0.0) & (remaining > 0.02 * di_inf) & (remaining < 0.98 * di_inf)
-    if np.count_nonzero(sel) < 10:
-        raise SolverError("too few samples to fit the step-response time constant",
-                          state={"gap_m": gap, "current_A": current},
-                          reason=f"{np.count_nonzero(sel)} usable samples")
-    A = np.vstack((np.ones(np.count_nonzero(sel)), t[sel])).T
-    coef, *_ = np.linalg.lstsq(A, np.log(remaining[sel]), rcond=None)
-    fit = A @ coef - np.log(remaining[sel])
-    tau = -1.0 / float(coef[1])
-    jump = di_inf - math.exp(float(coef[0]))
-    if not (tau > 0.0 and math.isfinite(tau)):
-        raise SolverError("step response is not a decaying exponential",
-                          state={"gap_m": gap, "current_A": current}, reason=f"tau = {tau}")
+    sel = t > 0.0
+    try:
+        fit = fit_step_response(t[sel], di[sel] / di_inf)
+    except SolverError as exc:
+        raise SolverError(str(exc).split(";")[0], state={"gap_m": gap, "current_A": current},
+                          reason=exc.reason) from None
+    tau = fit.time_constant_s
+    jump = fit.jump_fraction * di_inf
     # Without eddy currents the jump is zero; the fit's intercept then has the size of
     # the fit error, so it is not used.
     if not fm.has_eddy_currents:
@@ -162,4 +194,51 @@ def differential_inductance_from_step(model: Any, *, gap: float, current: float,
         inductance_H=tau * r_par * (1.0 - max(jump, 0.0) / di_inf),
         apparent_inductance_H=tau * r_par,
         time_constant_s=tau, current_jump_A=jump, final_current_change_A=di_inf,
-        eddy_resistance_ohm=r_ec, fit_rms=float(np.sqrt(np.mean(fit**2))), response=res)
+        eddy_resistance_ohm=r_ec, fit_rms=fit.rms, response=res)
+
+
+@dataclass(frozen=True)
+class StepFit:
+    """A single-exponential fit of a normalised step response (:func:`fit_step_response`).
+
+    Attributes
+    ----------
+    time_constant_s : float
+        ``tau`` [s].
+    jump_fraction : float
+        ``dI_0/dI_inf``: the jump at ``t = 0`` the fit extrapolates, relative to the final
+        change (0 without eddy currents, up to the fit's error).
+    rms : float
+        RMS of the residual of ``log(1 - x)`` (relative deviation from one exponential).
+    """
+
+    time_constant_s: float
+    jump_fraction: float
+    rms: float
+
+
+def fit_step_response(time_s: np.ndarray, response: np.ndarray) -> StepFit:
+    """Fit ``x(t) = 1 - (1 - x_0) exp(-t/tau)`` to a normalised step response (paper IV-B).
+
+    ``response`` is ``dI(t)/dI_inf`` at ``time_s > 0``; ``log(1 - x)`` is fitted by a
+    straight line (least squares) over the samples with ``2 % < 1 - x < 98 %``.
+
+    Raises
+    ------
+    SolverError
+        Fewer than 10 usable samples, or no decaying exponential.
+    """
+    t = np.asarray(time_s, dtype=float)
+    remaining = 1.0 - np.asarray(response, dtype=float)
+    sel = np.isfinite(remaining) & (remaining > 0.02) & (remaining < 0.98)
+    if np.count_nonzero(sel) < 10:
+        raise SolverError("too few samples to fit the step-response time constant",
+                          reason=f"{np.count_nonzero(sel)} usable samples (2-98 % of the step)")
+    A = np.vstack((np.ones(np.count_nonzero(sel)), t[sel])).T
+    coef, *_ = np.linalg.lstsq(A, np.log(remaining[sel]), rcond=None)
+    fit = A @ coef - np.log(remaining[sel])
+    tau = -1.0 / float(coef[1]) if coef[1] != 0.0 else math.inf
+    if not (tau > 0.0 and math.isfinite(tau)):
+        raise SolverError("step response is not a decaying exponential", reason=f"tau = {tau}")
+    return StepFit(time_constant_s=tau, jump_fraction=1.0 - math.exp(float(coef[0])),
+                   rms=float(np.sqrt(np.mean(fit**2))))

@@ -39,7 +39,7 @@ import math
 import os
 from collections.abc import Mapping
 from dataclasses import dataclass, field
-from typing import Any, overload
+from typing import Any
 
 import casadi as ca
 import numpy as np
@@ -52,9 +52,9 @@ from ..circuit.network import Network
 from ..errors import InputError, SolverError, TopologyError
 from ..magnets.base import PlausibleRange
 from ..materials import MU0
-from ..validation import optional_flag, real_array, real_number, whole_number
+from ..validation import flag, optional_flag, real_array, real_number, whole_number
 from .compiled import COMPILE_MODES, compile_library
-from .current import CurrentModel, ReducedSimulation
+from .flux_live import LiveIntegrator, live_library
 from .inputs import check_step, gap_secants, sample_input, time_grid
 from .statics import (
     as_network,
@@ -73,7 +73,9 @@ __all__ = [
     "FluxOutputs",
     "SimulationResult",
     "EnergyBalance",
-    "simulate",
+    "FluxDAE",
+    "flux_dae",
+    "simulate_flux",
 ]
 
 #: Default relative tolerance of the integrator (IDAS ``reltol``).
@@ -98,7 +100,7 @@ def _power_flows(U: Any, I: Any, R: Any, g_e: Any, phidot_e: Any, force: Any, ra
 
 
 #: Networks with more loop and circuit unknowns than this run IDAS on the sparse form
-#: (``K y' = h``, :meth:`_FluxDAE._init_idas`); smaller ones on the dense form (``K^+``,
+#: (``K y' = h``, :meth:`FluxDAE._init_idas`); smaller ones on the dense form (``K^+``,
 #: ``Q``), whose results and compiled libraries stay those of earlier versions.  Counted:
 #: the bundled lumped networks 9-36 (the U-magnet's ladder n = 8: 116), the grid with
 #: Roters tubes 111 (its ladder n = 4: 507), the air-cell grid 1386-2310.  A bound between
@@ -258,8 +260,11 @@ class EnergyBalance:
 
 
 # ---------------------------------------------------------------------------- DAE structure
-class _FluxDAE:
+class FluxDAE:
     """Matrices, symbolic DAE and compiled step functions of one network and solver setup.
+
+    Built through :func:`flux_dae` (once per network and setup); the reduction
+    (:mod:`maglevkit.reduction`) reads its matrices ``D``, ``K``, ``T``, ``Q`` and functions.
 
     ``form``: ``"dense"`` (IDAS on ``y' = K^+ v``, ``Q v = 0``, ``v = h``: dense ``K^+`` and
     ``Q``) or ``"sparse"`` (IDAS on ``K y' = h`` with a sparse ``K``, for large networks;
@@ -381,6 +386,8 @@ class _FluxDAE:
         nx = r + ng
         #: Whether the residual, Jacobian and output functions run as compiled C.
         self.compiled = False
+        self._live_parts: tuple[Any, ...] | None = None
+        self._live_lib: Any = False                  # False: not built yet; None: unavailable
         self._chunks: dict[int, ca.Function] = {}
         if method == "idas":
             self._init_idas(eq, Kp, hv, y, h, U, rate, g_e, nominal, rtol, atol, max_num_steps,
@@ -501,6 +508,14 @@ class _FluxDAE:
             if self.compiled:
                 oracle, balance_fun, output_fun = loaded[0], loaded[4], loaded[5]
                 self.output_fun = output_fun
+                if self.form == "dense":
+                    force_fun = ca.Function(
+                        "flux_force_quad", [t_sym, y, ca.vertcat(x, I, extra), U,
+                                            ca.vertcat(h, s0, rate, tau0)],
+                        [ca.substitute(h * eq.force, s, s_t)])
+                    # -O3 (DEFAULT_FLAGS): -O1 saved a quarter of the compile time but
+                    # the live step ran 1.6x slower (docs/decisions.md)
+                    self._live_parts = (daeF, jacF, quadF, force_fun, cache_dir)
         self._oracle, self._idas_opts, self._balance = oracle, opts, balance_fun
         # one hold interval, (w, p = (h, U, rate)) -> (w, q, outputs) as for radau
         wm = ca.MX.sym("w", self.nw)
@@ -508,6 +523,23 @@ class _FluxDAE:
         P1 = ca.vertcat(pm[0], wm[r:r + ng], pm[1 + nc:], 0.0)
         W, Qi, O = self.chunk(1)(wm, pm[1:1 + nc], P1)
         self.step_fun = ca.Function("flux_step", [wm, pm], [W, Qi, O])
+
+    def live_integrator(self) -> LiveIntegrator | None:
+        """A new IDAS integrator kept alive between :meth:`FluxModel.step` calls
+        (:mod:`maglevkit.models.flux_live`), or None: interpreted functions, the sparse form,
+        ``method="radau"``, or no IDAS library to link against."""
+        if self._live_parts is None:
+            return None
+        if self._live_lib is False:
+            self._live_lib = live_library(*self._live_parts)
+        if self._live_lib is None:
+            return None
+        opts = self._idas_opts
+        nz = len(opts["abstolv"]) - self.n_diff        # loop fluxes, currents, balance
+        return LiveIntegrator(self._live_lib, self.n_diff, nz, self.n_circuits, self.n_u,
+                              4 + self.n_gaps,
+                              opts["reltol"], np.asarray(opts["abstolv"]),
+                              opts["max_num_steps"])
 
     def chunk(self, n: int) -> ca.Function:
         """IDAS over ``n`` hold intervals without restart: ``(w0, U, P) -> (W, Q, O)``.
@@ -548,9 +580,29 @@ class _FluxDAE:
         return f
 
 
-def _dae(network: Network, method: str, rtol: float, atol: float, max_num_steps: int,
-         radau_elements: int, radau_degree: int, compiled: str = "never",
-         cache_dir: str | None = None) -> _FluxDAE:
+def flux_dae(network: Network, method: str, rtol: float, atol: float, max_num_steps: int,
+             radau_elements: int, radau_degree: int, compiled: str = "never",
+             cache_dir: str | None = None) -> FluxDAE:
+    """The :class:`FluxDAE` of ``network`` for one solver setup, built once and kept in
+    ``network.cache``.
+
+    Parameters
+    ----------
+    network : Network
+        The equivalent magnetic circuit.
+    method : {"idas", "radau"}
+        Integrator.
+    rtol, atol : float
+        Relative and (nominal-scaled) absolute tolerance.
+    max_num_steps : int
+        IDAS step limit per run.
+    radau_elements, radau_degree : int
+        Radau collocation: elements per call and their degree.
+    compiled : {"auto", "always", "never"}
+        Whether the IDAS functions run as compiled C (see :class:`FluxModel`).
+    cache_dir : str or None
+        Where compiled libraries are cached.
+    """
     if method != "idas":
         compiled, cache_dir = "never", None   # only the IDAS functions are compiled
     size = network.n_loops + len(network.circuits)
@@ -559,11 +611,11 @@ def _dae(network: Network, method: str, rtol: float, atol: float, max_num_steps:
     form = "sparse" if method == "idas" and size > SPARSE_FORM_SIZE else "dense"
     key = ("flux_dae", method, rtol, atol, max_num_steps, radau_elements, radau_degree,
            compiled, cache_dir, form)
-    dae = network._cache.get(key)
+    dae = network.cache.get(key)
     if dae is None:
-        dae = _FluxDAE(network, method, rtol, atol, max_num_steps, radau_elements, radau_degree,
+        dae = FluxDAE(network, method, rtol, atol, max_num_steps, radau_elements, radau_degree,
                        compiled, cache_dir, form)
-        network._cache[key] = dae
+        network.cache[key] = dae
     return dae  # type: ignore[no-any-return]
 
 
@@ -589,12 +641,17 @@ def _resolve_network(model: Any, saturation: bool | None, eddy_currents: bool | 
     return net
 
 
+#: Largest jump of the gaps between a step's end and the next step's start, relative to the
+#: largest gap, that :meth:`FluxModel.step` integrates on across without restarting IDAS
+#: (rounding of ``s_k + rate dt``; a larger jump moves the currents: restart).
+LIVE_GAP_TOLERANCE = 1e-9
+
 #: Longest IDAS run without restart in ``simulate`` [hold intervals].
 MAX_RUN = 128
 
 #: Keyword options of :class:`FluxModel` (also accepted by ``simulate`` and ``with_options``).
 FLUX_MODEL_OPTIONS = ("saturation", "eddy_currents", "method", "rtol", "atol", "max_num_steps",
-                      "radau_elements", "radau_degree", "compiled", "cache_dir")
+                      "radau_elements", "radau_degree", "compiled", "cache_dir", "live_step")
 
 
 def check_options(options: Mapping[str, Any], where: str) -> None:
@@ -667,6 +724,12 @@ class FluxModel:
     cache_dir : str or None
         Where compiled libraries are cached (default
         :func:`maglevkit.models.compiled.cache_directory`).
+    live_step : bool
+        :meth:`step` keeps its IDAS integrator alive between calls (default True): it
+        integrates on where nothing jumped since the last call (same state, ``dt`` and
+        voltages, continuous gaps) and restarts only where something did
+        (:mod:`maglevkit.models.flux_live`; compiled IDAS on the dense form, else ignored).
+        False restarts CasADi's integrator on every call (the behaviour before).
 
     Attributes
     ----------
@@ -679,7 +742,7 @@ class FluxModel:
                  rtol: float = DEFAULT_RTOL, atol: float = DEFAULT_ATOL,
                  max_num_steps: int = 20000, radau_elements: int = 2,
                  radau_degree: int = 3, compiled: str = "auto",
-                 cache_dir: Any = None) -> None:
+                 cache_dir: Any = None, live_step: bool = True) -> None:
         for name, v in (("rtol", rtol), ("atol", atol)):
             if not 0.0 < real_number(v, name) < 1.0:
                 raise InputError(f"{name} = {v!r} must lie in (0, 1)")
@@ -698,32 +761,40 @@ class FluxModel:
             raise InputError(f"cache_dir = {cache_dir!r} must be a path (str or Path) or None")
         cache_dir = None if cache_dir is None else os.fspath(cache_dir)
         self.network = _resolve_network(model, saturation, eddy_currents)
+        # the network's names, derived once (step reads them on every call)
+        self._gap_names = self.network.gap_names
+        self._circuit_names = self.network.circuit_names
         #: Gaps and currents beyond which inputs warn (from a Magnet; None for a Network).
         self.plausible_range: PlausibleRange | None = plausible_range(model)
         self.method = method
         self.rtol = float(rtol)
         self.atol = float(atol)
-        self._dae = _dae(self.network, method, self.rtol, self.atol, max_num_steps,
-                         radau_elements, radau_degree, compiled, cache_dir)
+        self._dae = flux_dae(self.network, method, self.rtol, self.atol, max_num_steps,
+                             radau_elements, radau_degree, compiled, cache_dir)
         self.compiled = self._dae.compiled
         d = self._dae
         self._state_shapes = (("differential_state", d.n_diff), ("gaps_m", d.n_gaps),
                               ("loop_flux_Wb", d.n_loops), ("currents_A", d.n_circuits),
                               ("voltages_V", d.n_circuits), ("gap_rates_m_per_s", d.n_gaps),
                               ("energy_J", 4))
+        # step's live integrator (None: not made yet, False: none for this model), the last
+        # state it returned with (dt, voltages, interval index, quadratures)
+        self._live: LiveIntegrator | None | bool = None if flag(live_step, "live_step") else False
+        self._live_last: tuple[Any, ...] | None = None
+        self._live_next: tuple[Any, ...] | None = None
         self._options = {"method": method, "rtol": self.rtol, "atol": self.atol,
                          "max_num_steps": max_num_steps, "radau_elements": radau_elements,
                          "radau_degree": radau_degree, "compiled": compiled,
-                         "cache_dir": cache_dir}
+                         "cache_dir": cache_dir, "live_step": bool(live_step)}
 
     # ------------------------------------------------------------------ description
     @property
     def gap_names(self) -> tuple[str, ...]:
-        return self.network.gap_names
+        return self._gap_names
 
     @property
     def circuit_names(self) -> tuple[str, ...]:
-        return self.network.circuit_names
+        return self._circuit_names
 
     @property
     def branch_names(self) -> tuple[str, ...]:
@@ -746,6 +817,29 @@ class FluxModel:
     def resistances(self) -> np.ndarray:
         """Circuit resistances R_el [ohm]."""
         return self.network.resistances
+
+    @property
+    def live_step(self) -> bool:
+        """Whether :meth:`step` keeps an IDAS integrator alive between calls (the option,
+        where this model supports it; builds the integrator's library on first use)."""
+        if self._live is None:
+            self._live = self._dae.live_integrator() or False
+        return self._live is not False
+
+    @property
+    def dae(self) -> FluxDAE:
+        """The model's DAE: matrices, symbolic functions and integrators (shared by every
+        model of the same network and solver setup)."""
+        return self._dae
+
+    @property
+    def options(self) -> dict[str, Any]:
+        """The solver options this model was built with (a copy; see :meth:`with_options`)."""
+        return dict(self._options)
+
+    def __getstate__(self) -> dict[str, Any]:
+        # the live integrator (C memory) stays behind; a copy makes its own on first step
+        return {**self.__dict__, "_live": None, "_live_last": None, "_live_next": None}
 
     def with_options(self, **changes: Any) -> FluxModel:
         """A model of the same network with other solver options (method, rtol, atol, ...)."""
@@ -871,6 +965,14 @@ class FluxModel:
             become <= 0.
         SolverError
             The integrator failed (with time, state and the solver's reason).
+
+        Notes
+        -----
+        With :attr:`live_step` the IDAS integrator stays alive between calls: stepping the
+        state the last call returned, with the same ``dt`` and voltages and the gaps where
+        that step ended, integrates on (as ``simulate`` does across hold intervals); any
+        other call restarts IDAS from ``state`` with consistent algebraic variables.  Both
+        agree with a restart per call to the integrator's accuracy.
         """
         d = self._dae
         self._check_state(state)
@@ -888,18 +990,57 @@ class FluxModel:
                              f"{(s0 + rate * dt).tolist()} m")
         if self.plausible_range is not None and gaps is not None:
             self.plausible_range.check(gaps=(s0, s0 + rate * dt), where="FluxModel.step")
-        p = np.concatenate(((dt,), U, rate))
-        try:
-            wf, q, o = d.step_fun(w, p)
-        except RuntimeError as exc:
-            raise self._fail(exc, state.time_s, w, U, rate, dt) from None
+        if self.live_step:
+            assert isinstance(self._live, LiveIntegrator)
+            wf, q, o = self._step_live(self._live, state, dt, U, rate, s0, w)
+        else:
+            try:
+                wf, q, o = d.step_fun(w, np.concatenate(((dt,), U, rate)))
+            except RuntimeError as exc:
+                raise self._fail(exc, state.time_s, w, U, rate, dt) from None
         wf = np.asarray(wf).ravel()
         o = np.asarray(o).ravel()
         if not (np.all(np.isfinite(wf)) and np.all(np.isfinite(o))):
+            self._live_next = None
             raise self._fail(RuntimeError("non-finite solution"), state.time_s, w, U, rate, dt)
         t1 = state.time_s + dt
         new = self._unpack_state(t1, wf, U, rate, state.energy_J + np.asarray(q).ravel())
+        if self._live_next is not None:
+            self._live_last, self._live_next = (new, *self._live_next), None
         return new, self._unpack_outputs(t1, new.currents_A, o)
+
+    def _step_live(self, live: LiveIntegrator, state: FluxState, dt: float, U: np.ndarray,
+                   rate: np.ndarray, s0: np.ndarray, w: np.ndarray
+                   ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """One :meth:`step` on the live integrator: integrate on from the last step where
+        nothing jumped (``state`` is the one it returned, same ``dt`` and voltages, gaps
+        continuous to :data:`LIVE_GAP_TOLERANCE`), else restart IDAS from ``state``."""
+        d = self._dae
+        r, nx = d.n_diff, d.n_diff + d.n_gaps
+        last = self._live_last
+        self._live_last = None
+        if not (last is not None and state is last[0] and dt == last[1]
+                and np.array_equal(U, last[2]) and np.all(
+                    np.abs(s0 - state.gaps_m) <= LIVE_GAP_TOLERANCE * np.abs(s0).max())):
+            last = (None, dt, U, 0, np.zeros(4 + d.n_gaps))
+            v0 = np.asarray(d._balance(w[nx:], s0, U)).ravel()
+            try:
+                live.reinit(0.0, w[:r], np.concatenate((w[nx:], v0)), U,
+                            np.concatenate(((dt,), s0, rate, (0.0,))))
+            except RuntimeError as exc:
+                raise self._fail(exc, state.time_s, w, U, rate, dt) from None
+        k = last[3]
+        try:
+            y, q = live.step(k + 1.0, np.concatenate(((dt,), s0, rate, (float(k),))))
+        except RuntimeError as exc:
+            raise self._fail(exc, state.time_s, w, U, rate, dt) from None
+        wf = np.concatenate((y[:r], s0 + rate * dt, y[r:r + d.n_loops + d.n_circuits]))
+        o = np.asarray(d.output_fun(wf, U, rate)).ravel()
+        self._live_next = (dt, U.copy(), k + 1, q.copy())
+        dq = q - last[4]
+        # the mechanical work from the integrated pole forces (-rate . int F dt, exact for
+        # the constant rate), not from -F.rate (whose integrand jumps at every step)
+        return wf, np.concatenate((dq[:3], (-rate @ dq[4:],))), o
 
     # ------------------------------------------------------------------ batch
     def _run_idas(self, state: FluxState, h: np.ndarray, U: np.ndarray, rate: np.ndarray
@@ -1062,33 +1203,18 @@ class SimulationResult:
         return cols
 
 
-@overload
-def simulate(model: CurrentModel, t: Any, *, gaps: Any, voltages: Any, gap_rates: Any = None,
-             dt: float | None = None, initial_currents: Any = None,
-             initial_state: Any = None, gap_rate_tolerance: float = 0.02,
-             **options: Any) -> ReducedSimulation: ...
-
-
-@overload
-def simulate(model: Any, t: Any, *, gaps: Any, voltages: Any, gap_rates: Any = None,
-             dt: float | None = None, initial_currents: Any = None,
-             initial_state: Any = None, gap_rate_tolerance: float = 0.02,
-             **options: Any) -> SimulationResult: ...
-
-
-def simulate(model: Any, t: Any, *, gaps: Any, voltages: Any, gap_rates: Any = None,
-             dt: float | None = None, initial_currents: Any = None,
-             initial_state: Any = None, gap_rate_tolerance: float = 0.02,
-             **options: Any) -> SimulationResult | ReducedSimulation:
-    """Simulate the flux model on a time grid.
+def simulate_flux(model: Any, t: Any, *, gaps: Any, voltages: Any, gap_rates: Any = None,
+                  dt: float | None = None, initial_currents: Any = None,
+                  initial_state: Any = None, gap_rate_tolerance: float = 0.02,
+                  **options: Any) -> SimulationResult:
+    """Simulate the flux model on a time grid (the flux-model branch of
+    :func:`maglevkit.simulate`, which also runs the reduced models).
 
     Parameters
     ----------
-    model : FluxModel, CurrentModel, Magnet or Network
-        The model (a :class:`~maglevkit.models.current.CurrentModel` runs the reduced model
-        with the same inputs and conventions); ``options`` (``saturation``,
-        ``eddy_currents``, ``method``, ``rtol``, ``atol``, ...) build a :class:`FluxModel`
-        (or change a given one).
+    model : FluxModel, Magnet or Network
+        The model; ``options`` (``saturation``, ``eddy_currents``, ``method``, ``rtol``,
+        ``atol``, ...) build a :class:`FluxModel` (or change a given one).
     t : (t0, tf), [t0, tf] or array
         A time span [s]: a tuple or list of exactly two numbers gives the grid
         ``t0 + k dt`` ending exactly at ``tf``.  A numpy array (any length >= 2) or a
@@ -1114,6 +1240,9 @@ def simulate(model: Any, t: Any, *, gaps: Any, voltages: Any, gap_rates: Any = N
         steady state ``U(t0) / R``.
     initial_state : FluxState, optional
         Start from this state instead (its gaps are replaced by ``gaps(t0)``).
+    gap_rate_tolerance : float, optional
+        Allowed mismatch between given gap rates and the gaps' secants, as a fraction of
+        the largest rate [-] (default 0.02); see ``gap_rates``.
 
     Returns
     -------
@@ -1129,16 +1258,9 @@ def simulate(model: Any, t: Any, *, gaps: Any, voltages: Any, gap_rates: Any = N
     if initial_currents is not None:
         real_array(initial_currents if not isinstance(initial_currents, Mapping)
                    else list(initial_currents.values()), "initial_currents", "A")
-    if isinstance(model, CurrentModel):
-        if options:
-            raise InputError(f"options {sorted(options)} apply to the flux model; build the "
-                             "CurrentModel with its own options instead")
-        return model.simulate(t, gaps=gaps, voltages=voltages, gap_rates=gap_rates, dt=dt,
-                              initial_currents=initial_currents, initial_state=initial_state,
-                              gap_rate_tolerance=gap_rate_tolerance)
     check_options(options, "simulate")
     if isinstance(model, FluxModel):
-        fm = FluxModel(model, **{**model._options, **options}) if options else model
+        fm = model.with_options(**options) if options else model
     else:
         fm = FluxModel(model, **options)
     net = fm.network

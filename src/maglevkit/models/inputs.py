@@ -24,6 +24,17 @@ __all__ = ["time_grid", "sample_input", "gap_secants", "check_step", "check_span
 def check_step(dt: Any, what: str = "dt") -> float:
     """A time step [s] as a float: a finite real number > 0 (numpy scalars allowed, bools not).
 
+    Parameters
+    ----------
+    dt : float
+        The step [s].
+    what : str, default "dt"
+        Name of the argument in error messages.
+
+    Returns
+    -------
+    float
+
     Raises
     ------
     InputError
@@ -34,7 +45,20 @@ def check_step(dt: Any, what: str = "dt") -> float:
 
 def reject_bools(value: Any, what: str) -> None:
     """Raise InputError if ``value`` is or contains a bool, a string or another non-number
-    (a mapping: its values; NaN/inf are left to the caller)."""
+    (a mapping: its values; NaN/inf are left to the caller).
+
+    Parameters
+    ----------
+    value : object
+        A number, array_like or mapping of them.
+    what : str
+        Name of the value in error messages.
+
+    Raises
+    ------
+    InputError
+        A bool, string or other non-number anywhere in ``value``.
+    """
     if isinstance(value, Mapping):
         for key, v in value.items():
             reject_bools(v, f"{what}[{key}]")
@@ -47,6 +71,13 @@ def check_span(t0: float, tf: float, dt: float) -> None:
 
     ``tf > t0`` and ``dt <= tf - t0`` (a rounding allowance of 1e-9 dt): a step longer
     than the span would silently give a two-sample "grid" ``[t0, tf]``.
+
+    Parameters
+    ----------
+    t0, tf : float
+        Start and end of the span [s] (finiteness is not checked here).
+    dt : float
+        Step [s] (its sign and finiteness are not checked here: see :func:`check_step`).
 
     Raises
     ------
@@ -72,6 +103,20 @@ def time_grid(t: Any, dt: Any) -> np.ndarray:
     * a **numpy array** (any length >= 2) or a sequence of three or more times is an
       explicit, strictly increasing *grid*; ``dt`` must then be None.  A two-point grid
       is ``np.array([t0, t1])`` (or the span ``(t0, t1)`` with ``dt = t1 - t0``).
+
+    Parameters
+    ----------
+    t : tuple, list or ndarray
+        A span ``(t0, tf)`` [s] or an explicit grid [s] (see above).
+    dt : float or None
+        Step [s] of a span (None: 1e-4 s, or ``tf - t0`` if shorter); must be None
+        with an explicit grid.
+
+    Returns
+    -------
+    ndarray (n,)
+        Times [s].  For a span that is not a whole number of steps, the last interval
+        is shorter than ``dt`` (the grid still ends at ``tf``).
 
     Raises
     ------
@@ -105,7 +150,35 @@ def time_grid(t: Any, dt: Any) -> np.ndarray:
 
 def sample_input(value: Any, times: np.ndarray, names: tuple[str, ...], what: str,
             unit: str) -> np.ndarray:
-    """Sample an input (scalar, vector, mapping, Signal, callable, array) on ``times``."""
+    """Sample an input (scalar, vector, mapping, Signal, callable, array) on ``times``.
+
+    Parameters
+    ----------
+    value : float, array_like, mapping, Signal or callable
+        The input: a scalar (every name, every time), one value per name ``(k,)``,
+        samples ``(n, k)`` (or ``(n,)`` for one name), a mapping ``{name: input}``
+        with every name, a :class:`Signal` (every name), or a callable ``f(t)``
+        returning a scalar or ``k`` values for a time t [s].
+    times : ndarray (n,)
+        Sample times [s].
+    names : tuple of str
+        Names of the input's components (gap or circuit names).
+    what : str
+        Name of the input in error messages (e.g. ``"gaps"``).
+    unit : str
+        Unit of the input in error messages (e.g. ``"m"``).
+
+    Returns
+    -------
+    ndarray (n, k)
+        The samples, in the input's unit.
+
+    Raises
+    ------
+    InputError
+        Unknown or missing names, non-numbers, wrong shapes, a callable that raises or
+        returns non-numbers, or non-finite samples.
+    """
     n, k = times.size, len(names)
     if isinstance(value, Mapping):
         unknown = sorted(set(value) - set(names))
@@ -189,6 +262,24 @@ def gap_secants(times: np.ndarray, gaps: np.ndarray, gap_rates: Any, names: tupl
     If ``gap_rates`` is given, the trapezoidal mean of the rates over each interval may
     differ from the secant by at most ``tolerance`` times the largest rate (plus 1 um/s);
     otherwise :class:`InputError`.
+
+    Parameters
+    ----------
+    times : ndarray (n,)
+        Sample times [s], strictly increasing.
+    gaps : ndarray (n, n_gaps)
+        Sampled gaps [m].
+    gap_rates : input or None
+        Gap rates [m/s] in any form :func:`sample_input` takes, or None (no check).
+    names : tuple of str
+        Gap names.
+    tolerance : float
+        Relative tolerance [-], >= 0.
+
+    Returns
+    -------
+    ndarray (n - 1, n_gaps)
+        Secant gap rate of every interval [m/s].
     """
     tolerance = real_number(tolerance, "gap_rate_tolerance", nonnegative=True)
     h = np.diff(times)
@@ -217,6 +308,31 @@ def simulation_inputs(t: Any, dt: Any, *, gaps: Any, voltages: Any, gap_rates: A
     Times from :func:`time_grid`; gaps [m] (all > 0) and voltages [V] sampled at the
     times (:func:`sample_input`); the gap rate of every interval [m/s] from
     :func:`gap_secants` (the gaps move linearly between samples).
+
+    Parameters
+    ----------
+    t, dt
+        Time span or grid [s] and step [s] (see :func:`time_grid`).
+    gaps : input
+        Gaps [m], > 0 (any form of :func:`sample_input`; keyword only, like all that
+        follow).
+    voltages : input
+        Circuit voltages [V].
+    gap_rates : input or None
+        Gap rates [m/s] to check the gaps against (None: no check).
+    gap_names, circuit_names : tuple of str
+        The model's gap and circuit names.
+    gap_rate_tolerance : float
+        Relative tolerance of the check [-] (see :func:`gap_secants`).
+
+    Returns
+    -------
+    (times, gaps, voltages, gap_rates) : ndarray (n,), (n, n_gaps), (n, n_circuits), (n - 1, n_gaps)
+
+    Raises
+    ------
+    InputError
+        Any bad input (see the functions above), or a gap <= 0.
     """
     times = time_grid(t, dt)
     g = sample_input(gaps, times, gap_names, "gaps", "m")
@@ -228,7 +344,22 @@ def simulation_inputs(t: Any, dt: Any, *, gaps: Any, voltages: Any, gap_rates: A
 
 
 def check_initial_choice(initial_state: Any, initial_currents: Any, state_type: type) -> None:
-    """At most one of ``initial_state`` / ``initial_currents``; the state of the right type."""
+    """At most one of ``initial_state`` / ``initial_currents``; the state of the right type.
+
+    Parameters
+    ----------
+    initial_state : object or None
+        The initial state given to ``simulate``.
+    initial_currents : object or None
+        The initial currents [A] given to ``simulate``.
+    state_type : type
+        The model's state class.
+
+    Raises
+    ------
+    InputError
+        Both given, or a state of another type.
+    """
     if initial_state is None:
         return
     if initial_currents is not None:

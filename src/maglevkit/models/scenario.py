@@ -64,7 +64,10 @@ class Scenario:
     voltages, gaps : dict of str to Signal
         Signals per circuit / gap name (key ``"all"``: every input).
     model_options, solver_options : dict
-        FluxModel switches (``saturation``, ``eddy_currents``) and solver settings.
+        FluxModel switches (``saturation``, ``eddy_currents``) and solver settings
+        (``method`` ``"idas"`` or ``"radau"``, ``rtol``, ``atol``).
+    source : str
+        File path or bundled name (for messages).
     """
 
     duration_s: float
@@ -77,7 +80,31 @@ class Scenario:
     source: str = ""
 
     def inputs_for(self, names: tuple[str, ...], which: str) -> dict[str, Signal]:
-        """Signals for the given input names (``which`` is ``"voltages"`` or ``"gaps"``)."""
+        """Signals for the given input names (``which`` is ``"voltages"`` or ``"gaps"``).
+
+        Parameters
+        ----------
+        names : tuple of str
+            The model's circuit names (voltages, signals in [V]) or gap names (gaps,
+            signals in [m]).
+        which : {"voltages", "gaps"}
+            Which table to read.
+
+        Returns
+        -------
+        dict of str to Signal
+            One signal per name, the named entry or else the ``"all"`` entry.
+
+        Raises
+        ------
+        InputError
+            ``which`` neither ``"voltages"`` nor ``"gaps"``.
+        ParameterFileError
+            A name in the table that the model does not have, or a name without a signal
+            (and no ``"all"``).
+        """
+        if not isinstance(which, str) or which not in ("voltages", "gaps"):
+            raise InputError(f"inputs_for: which = {which!r}; allowed: 'voltages' or 'gaps'")
         table = self.voltages if which == "voltages" else self.gaps
         unit = "circuit" if which == "voltages" else "gap"
         unknown = sorted(set(table) - set(names) - {"all"})
@@ -122,7 +149,28 @@ def _check_keys(tab: Any, allowed: set[str], where: str) -> Mapping[str, Any]:
 
 
 def parse_scenario(data: Mapping[str, Any], source: str = "scenario") -> Scenario:
-    """Validate a parsed scenario dictionary (see the module docstring)."""
+    """Validate a parsed scenario dictionary (see the module docstring).
+
+    Parameters
+    ----------
+    data : mapping
+        The parsed TOML: tables ``scenario`` (``duration`` [s], ``dt`` [s], optional
+        ``initial_current`` [A]), ``voltages`` and ``gaps`` (signals per name or
+        ``"all"``), optional ``model`` and ``solver``.
+    source : str, default "scenario"
+        Label for error messages and :attr:`Scenario.source`.
+
+    Returns
+    -------
+    Scenario
+
+    Raises
+    ------
+    ParameterFileError
+        Unknown or missing tables or keys; a duration or step that is not a finite number
+        > 0, or a duration that is not a whole number of steps; bad signals; model
+        switches that are not true/false; an unknown solver method or tolerances <= 0.
+    """
     unknown = sorted(set(data) - _TABLES)
     if unknown:
         raise ParameterFileError(f"{source}: unknown table(s) {unknown}; allowed: "
@@ -161,6 +209,16 @@ def parse_scenario(data: Mapping[str, Any], source: str = "scenario") -> Scenari
 
 def load_scenario(source: str | Path) -> Scenario:
     """Load a scenario TOML file, or a bundled scenario by name (e.g. ``"step"``).
+
+    Parameters
+    ----------
+    source : str or Path
+        Path of a ``.toml`` file, or the name of a bundled scenario
+        (:func:`bundled_scenarios`).
+
+    Returns
+    -------
+    Scenario
 
     Raises
     ------

@@ -23,6 +23,7 @@ from typing import Any
 import numpy as np
 
 from ..errors import InputError, ParameterFileError
+from ..validation import real_array
 
 __all__ = [
     "Signal",
@@ -55,7 +56,18 @@ def _finite(owner: str, **values: float) -> None:
 
 @dataclass(frozen=True)
 class Constant(Signal):
-    """``u(t) = value``."""
+    """``u(t) = value``.
+
+    Parameters
+    ----------
+    value : float
+        The value, finite, in the unit of the input (V for voltages, m for gaps).
+
+    Raises
+    ------
+    InputError
+        A value that is not a finite number.
+    """
 
     value: float
 
@@ -68,7 +80,20 @@ class Constant(Signal):
 
 @dataclass(frozen=True)
 class Step(Signal):
-    """``u(t) = initial`` for ``t < time``, ``final`` for ``t >= time``."""
+    """``u(t) = initial`` for ``t < time``, ``final`` for ``t >= time``.
+
+    Parameters
+    ----------
+    initial, final : float
+        Values before and from the step, in the unit of the input (V or m).
+    time : float, default 0.0
+        Time of the step [s].
+
+    Raises
+    ------
+    InputError
+        A value that is not a finite number.
+    """
 
     initial: float
     final: float
@@ -87,7 +112,20 @@ class Step(Signal):
 
 @dataclass(frozen=True)
 class Ramp(Signal):
-    """Linear from ``initial`` at ``start`` to ``final`` at ``stop``; constant outside."""
+    """Linear from ``initial`` at ``start`` to ``final`` at ``stop``; constant outside.
+
+    Parameters
+    ----------
+    initial, final : float
+        Values before ``start`` and after ``stop``, in the unit of the input (V or m).
+    start, stop : float
+        Start and end of the ramp [s], ``stop > start``.
+
+    Raises
+    ------
+    InputError
+        A value that is not a finite number, or ``stop <= start``.
+    """
 
     initial: float
     final: float
@@ -112,7 +150,22 @@ class Ramp(Signal):
 
 @dataclass(frozen=True)
 class Sine(Signal):
-    """``u(t) = offset + amplitude sin(2 pi frequency t + phase)`` (phase in rad)."""
+    """``u(t) = offset + amplitude sin(2 pi frequency t + phase)`` (phase in rad).
+
+    Parameters
+    ----------
+    offset, amplitude : float
+        Mean value and amplitude, in the unit of the input (V or m).
+    frequency : float
+        Frequency [Hz], >= 0.
+    phase : float, default 0.0
+        Phase at t = 0 [rad].
+
+    Raises
+    ------
+    InputError
+        A value that is not a finite number, or a negative frequency.
+    """
 
     offset: float
     amplitude: float
@@ -136,18 +189,29 @@ class Tabulated(Signal):
     """Piecewise-linear interpolation of ``(times, values)``; constant beyond the ends.
 
     ``times`` must be strictly increasing.
+
+    Parameters
+    ----------
+    times : sequence of float
+        Sample times [s], finite, strictly increasing, at least one.
+    values : sequence of float
+        Values at the sample times, in the unit of the input (V or m), as many as
+        ``times``.
+
+    Raises
+    ------
+    InputError
+        Non-numeric (strings, bools, ...) or non-finite entries, lists that are not 1-D and equally long
+        (>= 1), or times that are not strictly increasing.
     """
 
     times: tuple[float, ...]
     values: tuple[float, ...]
 
     def __post_init__(self) -> None:
-        try:
-            t = np.asarray(self.times, dtype=float)
-            v = np.asarray(self.values, dtype=float)
-        except (TypeError, ValueError) as exc:
-            raise InputError("tabulated signal: times and values must be lists of numbers") \
-                from exc
+        # bools are refused (True was taken as 1 s / 1 V), like every number of the API
+        t = real_array(self.times, "tabulated signal times", "s", finite=False)
+        v = real_array(self.values, "tabulated signal values", finite=False)
         if t.ndim != 1 or v.ndim != 1 or t.size != v.size or t.size < 1:
             raise InputError(f"tabulated signal: times ({t.size}) and values ({v.size}) must be "
                              "1-D lists of equal, non-zero length")
@@ -178,6 +242,19 @@ _SIGNAL_KEYS: dict[str, tuple[type[Signal], dict[str, bool]]] = {
 
 def parse_signal(spec: Any, where: str = "signal") -> Signal:
     """Build a :class:`Signal` from its scenario-file form (a number or a table).
+
+    Parameters
+    ----------
+    spec : float or mapping
+        A number (a :class:`Constant`) or a table with ``type`` (``"constant"``,
+        ``"step"``, ``"ramp"``, ``"sine"``, ``"tabulated"``) and that type's keys (see
+        the module docstring); values in the unit of the input, times in s.
+    where : str, default "signal"
+        Where the signal was found, for error messages (e.g. ``"[voltages] all"``).
+
+    Returns
+    -------
+    Signal
 
     Raises
     ------

@@ -53,6 +53,15 @@ _RESIDUAL_TOL = 1e-9
 def as_network(model: Any) -> Network:
     """The :class:`Network` of a model (a Network, or anything with a ``network`` attribute).
 
+    Parameters
+    ----------
+    model : Network, Magnet, FluxModel or CurrentModel
+        The model.
+
+    Returns
+    -------
+    Network
+
     Raises
     ------
     InputError
@@ -75,7 +84,17 @@ def plausible_range(model: Any) -> PlausibleRange | None:
     """The model's :class:`~maglevkit.magnets.base.PlausibleRange` (None if it has none).
 
     A Magnet has one from its geometry, a FluxModel keeps that of the magnet it was
-    built from; a bare Network has none."""
+    built from; a bare Network has none.
+
+    Parameters
+    ----------
+    model : object
+        A Magnet, model or Network.
+
+    Returns
+    -------
+    PlausibleRange or None
+    """
     rng = getattr(model, "plausible_range", None)
     return rng if isinstance(rng, PlausibleRange) else None
 
@@ -111,7 +130,26 @@ def _named_vector(kind: str, names: Sequence[str], value: Any, unit: str) -> np.
 
 
 def gap_vector(network: Network, gaps: Any) -> np.ndarray:
-    """Validated gaps [m] as an array (..., n_gaps); scalar means all gaps equal."""
+    """Validated gaps [m] as an array (..., n_gaps); scalar means all gaps equal.
+
+    Parameters
+    ----------
+    network : Network
+        Gives the gap names.
+    gaps : float, mapping or array_like
+        Gaps [m], > 0: a scalar, ``{gap name: value}`` with every name, or an array
+        whose last axis has one entry per gap input.
+
+    Returns
+    -------
+    ndarray (..., n_gaps)
+
+    Raises
+    ------
+    InputError
+        Non-numbers, non-finite values, gaps <= 0, wrong shapes, unknown or missing
+        names.
+    """
     arr = _named_vector("gap", network.gap_names, gaps, "m")
     if np.any(arr <= 0.0):
         bad = float(arr[arr <= 0.0].ravel()[0])
@@ -121,7 +159,25 @@ def gap_vector(network: Network, gaps: Any) -> np.ndarray:
 
 
 def current_vector(network: Network, currents: Any) -> np.ndarray:
-    """Validated circuit currents [A] as an array (..., n_circuits)."""
+    """Validated circuit currents [A] as an array (..., n_circuits).
+
+    Parameters
+    ----------
+    network : Network
+        Gives the circuit names.
+    currents : float, mapping or array_like
+        Currents [A]: a scalar (every circuit), ``{circuit name: value}`` with every
+        name, or an array whose last axis has one entry per circuit.
+
+    Returns
+    -------
+    ndarray (..., n_circuits)
+
+    Raises
+    ------
+    InputError
+        Non-numbers, non-finite values, wrong shapes, unknown or missing names.
+    """
     return _named_vector("circuit current", network.circuit_names, currents, "A")
 
 
@@ -135,6 +191,12 @@ class StaticSolution:
 
     Attributes
     ----------
+    gap_names : tuple of str
+        Names of the gap inputs (last axis of ``gaps_m``, ``pole_force_N``).
+    circuit_names : tuple of str
+        Names of the circuits (last axis of ``currents_A``, ``flux_linkage_Wb``).
+    branch_names : tuple of str
+        Names of the network branches (last axis of ``branch_flux_Wb``).
     gaps_m : ndarray (..., n_gaps)
         Gap inputs [m].
     currents_A : ndarray (..., n_circuits)
@@ -194,8 +256,28 @@ class StaticSolution:
         return self.dpsi_dgap_Wb_per_m.sum(axis=-1)
 
     def branch_flux(self, name: str) -> np.ndarray:
-        """Flux [Wb] of the named branch (batch shape)."""
-        return self.branch_flux_Wb[..., self.branch_names.index(name)]
+        """Flux [Wb] of the named branch (batch shape).
+
+        Parameters
+        ----------
+        name : str
+            Branch name, one of :attr:`branch_names`.
+
+        Returns
+        -------
+        ndarray (...)
+            Branch flux [Wb], of batch shape :attr:`shape`.
+
+        Raises
+        ------
+        InputError
+            ``name`` is not one of :attr:`branch_names`.
+        """
+        names = list(self.branch_names)
+        if not isinstance(name, str) or name not in names:
+            raise InputError(f"branch_flux: name = {name!r} is no branch of this network; "
+                             f"allowed: {', '.join(names)}")
+        return self.branch_flux_Wb[..., names.index(name)]
 
 
 class _StaticSolver:
@@ -347,10 +429,10 @@ def _assign_column(dst: np.ndarray, src: np.ndarray, j: int, m: int) -> None:
 
 
 def _solver(network: Network) -> _StaticSolver:
-    solver = network._cache.get("statics")
+    solver = network.cache.get("statics")
     if solver is None:
         solver = _StaticSolver(network)
-        network._cache["statics"] = solver
+        network.cache["statics"] = solver
     return solver  # type: ignore[no-any-return]
 
 
@@ -457,6 +539,27 @@ def magnetic_energy(model: Any, branch_flux: Any, gaps: Any) -> float:
 
     Iron energies are integrated numerically from the material law (relative accuracy
     ~1e-13); air and leakage parts are exact.
+
+    Parameters
+    ----------
+    model : Magnet, FluxModel or Network
+        The equivalent magnetic circuit (or a model with a ``network``).
+    branch_flux : array_like (n_branches,)
+        Flux of every branch [Wb], in :attr:`Network.branch_names` order (e.g.
+        ``StaticSolution.branch_flux_Wb`` of a single point).
+    gaps : float, mapping or array_like (n_gaps,)
+        Gaps [m], > 0: a scalar (all equal), ``{gap name: value}`` or one per gap input.
+
+    Returns
+    -------
+    float
+        W [J].
+
+    Raises
+    ------
+    InputError
+        A model without a network, non-finite fluxes or a wrong number of them, gaps
+        <= 0 or of the wrong shape or names.
     """
     net = as_network(model)
     phi = real_array(branch_flux, "branch_flux", "Wb").ravel()
@@ -473,7 +576,29 @@ def magnetic_energy(model: Any, branch_flux: Any, gaps: Any) -> float:
 
 
 def coenergy(model: Any, *, gaps: Any, currents: Any) -> float:
-    """Magnetic co-energy ``W' = I^T psi - W`` [J] at one operating point."""
+    """Magnetic co-energy ``W' = I^T psi - W`` [J] at one operating point.
+
+    Parameters
+    ----------
+    model : Magnet, FluxModel or Network
+        The equivalent magnetic circuit (or a model with a ``network``).
+    gaps : float, mapping or array_like (n_gaps,)
+        Gaps [m], > 0 (keyword only; forms as in :func:`solve_statics`).
+    currents : float, mapping or array_like (n_circuits,)
+        Circuit currents [A] (keyword only).
+
+    Returns
+    -------
+    float
+        W' [J].
+
+    Raises
+    ------
+    InputError
+        Bad inputs (see :func:`solve_statics`), or more than one operating point.
+    SolverError
+        If the statics cannot be solved.
+    """
     sol = solve_statics(model, gaps=gaps, currents=currents)
     if sol.shape != ():
         raise InputError("coenergy takes a single operating point")
@@ -507,7 +632,31 @@ def pole_force_eq6(flux: Any, area: float, mu_r: float = math.inf) -> Any:
 
 
 def circuit_pole_groups(model: Any, *, gap: float, current: float) -> dict[str, tuple[str, ...]]:
-    """Assign each gap input (pole) to the circuit whose flux linkage depends most on it."""
+    """Assign each gap input (pole) to the circuit whose flux linkage depends most on it.
+
+    Parameters
+    ----------
+    model : Magnet, FluxModel or Network
+        The equivalent magnetic circuit (or a model with a ``network``).
+    gap : float
+        Gap of every pole [m], > 0, at which ``dpsi/ds`` is evaluated (keyword only).
+    current : float
+        Current of every circuit [A] (keyword only).
+
+    Returns
+    -------
+    dict of str to tuple of str
+        Circuit name -> the gap inputs it drives.  With one circuit: every gap, without
+        solving the statics.
+
+    Raises
+    ------
+    InputError
+        A circuit that drives no pole of its own (the current-based model needs one
+        substitute gap per circuit), or bad inputs.
+    SolverError
+        If the statics cannot be solved.
+    """
     net = as_network(model)
     if len(net.circuits) == 1:
         return {net.circuit_names[0]: net.gap_names}

@@ -41,6 +41,27 @@ def network_step_response(t: np.ndarray, *, ltilde: float, r_el: float, r0: floa
     ``a = 1 + R_el/R_0``; with ``W = M^-1/2 S M^-1/2 = Q diag(lam) Q^T``:
     ``z(t) = M^-1/2 Q diag((exp(lam t) - 1)/lam) Q^T M^-1/2 e dU/a`` and
     ``dI = dU (1 - 1/a)/R_el + e^T z/a``.
+
+    Parameters
+    ----------
+    t : array_like
+        Times after the step [s] (>= 0).
+    ltilde : float
+        Differential inductance ``L~`` of the main branch [H], > 0 (keyword only, like
+        all that follow).
+    r_el : float
+        Circuit resistance ``R_el`` [ohm], > 0.
+    r0 : float
+        Resistance ``R_0`` of the instantaneous eddy path [ohm] (``inf``: none).
+    rk : array_like (m,)
+        Resistances ``R_1 .. R_m`` of the eddy branches [ohm], > 0.
+    lk : array_like (m,)
+        Inductances ``L_1 .. L_m`` of the eddy branches [H], > 0.
+
+    Returns
+    -------
+    ndarray
+        ``dI(t) / dU`` [A/V], shape of ``t``.  Inputs are not checked.
     """
     rk = np.atleast_1d(np.asarray(rk, dtype=float))
     lk = np.atleast_1d(np.asarray(lk, dtype=float))
@@ -105,11 +126,19 @@ def fit_eddy_network(t: np.ndarray, response: np.ndarray, *, ltilde: float, r_el
         Per-sample weights of the residual (default 1).
     start : EddyNetworkFit, optional
         A fit with ``modes - 1`` branches to start from (its branches are kept, a faster
-        one is added).
+        one is added); ignored with another number of branches.
 
+    Returns
+    -------
+    EddyNetworkFit
+        Branches ordered by time constant ``L_k / R_k`` (fastest first); ``R_0 = inf``
+        when the fit opens the instantaneous path.
+
+    Notes
+    -----
     The parameters are fitted as logarithms (all stay positive: a physical RL network),
     with scipy's trust-region least squares; the residual is relative to the final
-    value ``1/R_el``.
+    value ``1/R_el``.  Inputs are not checked.
     """
     from scipy.optimize import least_squares
 

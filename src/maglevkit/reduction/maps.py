@@ -8,7 +8,10 @@ maps hold (all gaps equal to ``s``, every circuit carrying ``I`` -- symmetric op
 * ``dL_ds_H_per_m``: ``dL_j/ds(s, I) = (sum_{k in j} dpsi_j/ds_k) / I`` (the circuit's own
   poles move together; at ``I = 0`` the limit ``d L~_j(s, 0)/ds``);
 * ``flux_linkage_Wb`` and the apparent inductance ``L = psi/I``;
-* ``resistance_ohm`` ``R_el`` and ``eddy_resistance_ohm`` ``R_ec`` per circuit.
+* ``resistance_ohm`` ``R_el`` and ``eddy_resistance_ohm`` ``R_ec`` per circuit;
+* the identified eddy extensions of the current model: ``eddy_network_*`` (RL branches,
+  :mod:`~maglevkit.reduction.eddy_network`) and ``motion_eddy_*`` (the shielded-gap ladder,
+  :mod:`~maglevkit.reduction.motion_eddy`).
 
 A pole ``k`` belongs to the circuit whose flux linkage depends most on its gap
 (``argmax_j |dpsi_j/ds_k|`` at the grid centre), which recovers the half magnets of a
@@ -41,6 +44,7 @@ from ..errors import InputError, ParameterFileError, SolverError
 from ..models.statics import as_network, circuit_pole_groups, solve_statics
 from ..validation import real_array
 from .eddy_network import EDDY_NETWORK_MODES, EddyNetworkFit, fit_eddy_network
+from .motion_eddy import detailed_frequency_response, fit_motion_eddy
 from .parameters import eddy_resistance
 from .transient import transient_point
 
@@ -56,12 +60,26 @@ REQUIRED_VARIABLES = ("force_N", "inductance_H", "dL_ds_H_per_m", "resistance_oh
 
 
 def _version() -> str:
-    from .. import __version__
+    from .._version import __version__
 
     return __version__
 
 
-def _grid(values: Any, what: str, unit: str, *, positive: bool) -> np.ndarray:
+def check_grid(values: Any, what: str, unit: str, *, positive: bool) -> np.ndarray:
+    """A map grid axis as a float array: 1-D, at least 4 points, finite, strictly increasing
+    (and > 0 with ``positive``); otherwise InputError naming ``what`` and ``unit``.
+
+    Parameters
+    ----------
+    values : array_like
+        The axis values [``unit``].
+    what : str
+        Its name in messages (``"gap"``, ``"current"``).
+    unit : str
+        Its unit in messages.
+    positive : bool
+        Require every value > 0.
+    """
     arr = real_array(values, f"{what} grid", unit, finite=False)
     if arr.ndim != 1 or arr.size < 4:
         raise InputError(f"{what} grid must be 1-D with at least 4 points (cubic interpolation), "
@@ -332,7 +350,7 @@ _FIT_SAMPLES_PER_TAU = 50
 _FIT_RTOL, _FIT_ATOL = 1e-9, 1e-11
 
 
-class _StepRun:
+class StepRun:
     """One IDAS run of the flux DAE under constant voltages with an output grid.
 
     The flux model's ``simulate`` restarts IDAS at every output interval (its inputs may
@@ -344,13 +362,20 @@ class _StepRun:
     ``[0, 1]`` with the duration ``T`` as a parameter.  Compiled once per network.
     """
 
-    def __init__(self, net: Network, n_out: int, tau: np.ndarray | None = None) -> None:
+    def __init__(self, net: Network, n_out: int, tau: np.ndarray | None = None,
+                 params: Any = None, topology: Network | None = None) -> None:
+        """``params``: CasADi symbols that ``net``'s elements contain (calibration
+        factors, :mod:`maglevkit.calibration`), appended to the DAE's parameters (``dae``
+        attribute; the IDAS ``integrator`` is not built then); ``topology``: a numeric
+        network of the same topology and eddy elements for ``D``, ``K``, ``Q`` (default
+        ``net``)."""
         import casadi as ca
 
         from ..circuit.assembly import assemble
-        from ..models.flux import _dae
+        from ..models.flux import flux_dae
 
-        d = _dae(net, "idas", _FIT_RTOL, _FIT_ATOL, 20000, 2, 3)
+        d = flux_dae(topology if topology is not None else net, "idas", _FIT_RTOL, _FIT_ATOL,
+                     20000, 2, 3)
         eq = assemble(net)
         y = ca.SX.sym("y", d.n_diff)
         U = ca.SX.sym("U", d.n_circuits)
@@ -358,8 +383,8 @@ class _StepRun:
         hv = ca.vertcat(-eq.residual, U - net.resistances * eq.I)
         ydot = ca.mtimes(ca.DM(np.linalg.pinv(d.K)), hv)
         alg = ca.vertcat(ca.mtimes(ca.DM(d.D), eq.x) - y, ca.mtimes(ca.DM(d.Q), hv))
-        dae = {"x": y, "z": ca.vertcat(eq.x, eq.I), "p": ca.vertcat(T, U, eq.s),
-               "ode": T * ydot, "alg": alg}
+        p = ca.vertcat(T, U, eq.s) if params is None else ca.vertcat(T, U, eq.s, params)
+        dae = {"x": y, "z": ca.vertcat(eq.x, eq.I), "p": p, "ode": T * ydot, "alg": alg}
         self.tau = np.linspace(0.0, 1.0, n_out + 1)[1:] if tau is None else tau
         # absolute tolerances for every IDAS unknown (y, then z = (x, I)): the flux
         # model's nominal scales without its gap states
@@ -369,16 +394,19 @@ class _StepRun:
         opts: dict[str, Any] = {"reltol": _FIT_RTOL,
                                 "abstolv": list(_FIT_ATOL * nominal),
                                 "max_num_steps": 100000, "disable_internal_warnings": True}
-        self.integrator = ca.integrator("maglevkit_step_fit", "idas", dae, 0.0, self.tau, opts)
+        self.dae = dae
         self.D, self.n_loops = d.D, d.n_loops
+        if params is not None:
+            return
+        self.integrator = ca.integrator("maglevkit_step_fit", "idas", dae, 0.0, self.tau, opts)
 
 
-def _step_run(net: Network, n_out: int) -> _StepRun:
+def _step_run(net: Network, n_out: int) -> StepRun:
     key = ("reduction_step_fit", n_out)
-    run = net._cache.get(key)
+    run = net.cache.get(key)
     if run is None:
-        run = _StepRun(net, n_out)
-        net._cache[key] = run
+        run = StepRun(net, n_out)
+        net.cache[key] = run
     return run  # type: ignore[no-any-return]
 
 
@@ -389,7 +417,7 @@ def _fitted_eddy_resistance(net: Network, gap: float, current: float) -> np.ndar
     (paper Sec. IV-B): circuit ``j`` at ``current`` [A] and every gap at ``gap`` [m] gets
     a voltage step ``dU = R_el dI_inf``; ``log(dI_inf - dI(t))`` is fitted by a straight
     line over the samples with ``2 % < remaining < 98 %``; its intercept gives the jump
-    ``dI_0`` and ``R_ec = dU / dI_0 - R_el``.  The step is one IDAS run (:class:`_StepRun`)
+    ``dI_0`` and ``R_ec = dU / dI_0 - R_el``.  The step is one IDAS run (:class:`StepRun`)
     instead of 300 restarted intervals: TR09 standard 4.1 -> 0.26 s per build; the value
     moved by +0.13 % (TR09) and +0.25 % (U-magnet) towards the converged (rtol 1e-12)
     value, which it now matches within 1e-4 (docs/decisions.md).
@@ -460,10 +488,10 @@ def _eddy_network_steps(net: Network, gap: float, current: float
     s0 = np.asarray(sol.gaps_m, dtype=float).ravel()
     R = net.resistances
     key = ("reduction_step_network", _NET_LOG_SAMPLES, _NET_LIN_SAMPLES)
-    run = net._cache.get(key)
+    run = net.cache.get(key)
     if run is None:
-        run = _StepRun(net, 0, tau=_network_grid())
-        net._cache[key] = run
+        run = StepRun(net, 0, tau=_network_grid())
+        net.cache[key] = run
     ltilde = np.array([float(sol.differential_inductance_H[j, j]) for j in range(nc)])
     times, responses = [], []
     for j in range(nc):
@@ -569,6 +597,95 @@ def _store_eddy_network(ds: Any, net: Network, gap: float, current: float,
                        "L~/R_el), relative to the step's final value"})
 
 
+def _store_motion_eddy(ds: Any, net: Network, gap: float, current: float,
+                       r_ec_fit: np.ndarray, groups: dict[str, tuple[str, ...]]) -> None:
+    """Add the ``motion_eddy_*`` variables: the shielded-gap ladder of
+    :mod:`maglevkit.reduction.motion_eddy` (docs/reduction.md, "Gap motion")."""
+    nc = len(net.circuits)
+    r_a = np.full(nc, np.nan)
+    l_u = np.full(nc, np.nan)
+    r_2 = np.full(nc, np.nan)
+    rms = np.full(nc, np.nan)
+    if net.has_eddy_currents:
+        responses = detailed_frequency_response(net, gap=gap, current=current, groups=groups)
+        r_jump = eddy_resistance(net, gap=gap, current=current)
+        for j, resp in enumerate(responses):
+            fit = fit_motion_eddy(resp, r_el=float(net.resistances[j]),
+                                  r_ec_jump=float(r_jump[j]), r_ec_fit=float(r_ec_fit[j]))
+            r_a[j], l_u[j] = fit.jump_resistance_ohm, fit.unshielded_inductance_H
+            r_2[j], rms[j] = fit.shielding_resistance_ohm, fit.rms_residual
+    where = (f"fitted to the detailed model's small-signal gap -> current and voltage -> "
+             f"current responses (0.1 Hz - 1 kHz) at s = {gap!r} m, I = {current!r} A; NaN: "
+             "no eddy currents")
+    ds["motion_eddy_jump_resistance_ohm"] = ("circuit", r_a, {
+        "units": "ohm", "long_name": "shunt R_a of the shielded-gap ladder (current jump)",
+        "description": where})
+    ds["motion_eddy_unshielded_inductance_H"] = ("circuit", l_u, {
+        "units": "H", "long_name": "unshielded series inductance L_u of the shielded-gap "
+                                   "ladder", "description": where})
+    ds["motion_eddy_shielding_resistance_ohm"] = ("circuit", r_2, {
+        "units": "ohm", "long_name": "shielding eddy resistance R_2 of the gap section",
+        "description": where})
+    ds["motion_eddy_fit_rms"] = ("circuit", rms, {
+        "units": "1", "long_name": "RMS relative residual of the shielded-gap ladder's fit",
+        "description": "over both responses and 60 frequencies, each relative to the "
+                       "detailed response's modulus"})
+
+MAP_UNITS = {"force_N": "N", "inductance_H": "H", "dL_ds_H_per_m": "H/m",
+             "flux_linkage_Wb": "Wb", "apparent_inductance_H": "H",
+             "inductance_transient_H": "H", "dL_ds_transient_H_per_m": "H/m",
+             "inductance_relative_difference": "1", "dL_ds_relative_difference": "1",
+             "eddy_resistance_step_ohm": "ohm"}
+"""Units of the (circuit, gap, current) map variables."""
+MAP_LONG_NAMES = {
+    "force_N": "force of the circuit's poles F(s, I)",
+    "inductance_H": "differential inductance L~ = dL/dI I + L",
+    "dL_ds_H_per_m": "gap derivative of the inductance dL/ds",
+    "flux_linkage_Wb": "flux linkage psi",
+    "apparent_inductance_H": "inductance L = psi / I",
+    "inductance_transient_H": "L~ from voltage-step time constants (paper IV-B)",
+    "dL_ds_transient_H_per_m": "dL/ds from the virtual control law U = R_el I on a "
+                               "gap ramp (paper IV-B)",
+    "inductance_relative_difference": "L~ transient / statics - 1",
+    "dL_ds_relative_difference": "dL/ds transient / statics - 1",
+    "eddy_resistance_step_ohm": "R_ec implied by a single-exponential fit of the "
+                                "voltage step (slow mode)"}
+"""Long names of the (circuit, gap, current) map variables."""
+
+
+def maps_dataset(data: dict[str, np.ndarray], *, circuits: Sequence[str], gaps_m: np.ndarray,
+                 currents_A: np.ndarray, resistance_ohm: np.ndarray) -> xr.Dataset:
+    """The maps' dataset layout: variables ``(circuit, gap, current)`` with units, the
+    coordinates and ``resistance_ohm``; shared by :func:`build_maps` and the table import
+    (:mod:`maglevkit.reduction.tables_in`).
+
+    Parameters
+    ----------
+    data : dict
+        Variable name (a key of :data:`MAP_UNITS`) -> array (circuit, gap, current).
+    circuits : sequence of str
+        Circuit names.
+    gaps_m, currents_A : ndarray
+        The grid [m], [A].
+    resistance_ohm : ndarray
+        ``R_el`` per circuit [ohm].
+    """
+    import xarray as xr
+
+    dims = ("circuit", "gap", "current")
+    ds = xr.Dataset(
+        {k: (dims, v, {"units": MAP_UNITS[k], "long_name": MAP_LONG_NAMES[k]})
+         for k, v in data.items()},
+        coords={"circuit": list(circuits),
+                "gap": ("gap", gaps_m, {"units": "m", "long_name": "substitute air gap s"}),
+                "current": ("current", currents_A, {"units": "A",
+                                                    "long_name": "circuit current I_L"})},
+    )
+    ds["resistance_ohm"] = ("circuit", np.asarray(resistance_ohm, dtype=float),
+                            {"units": "ohm", "long_name": "ohmic resistance R_el"})
+    return ds
+
+
 def build_maps(model: Any, *, gaps: Any, currents: Any, executor: Any = "auto",
                progress: bool = True, method: str = "statics",
                eddy_reference: Any = None) -> CharacteristicMaps:
@@ -611,9 +728,10 @@ def build_maps(model: Any, *, gaps: Any, currents: Any, executor: Any = "auto",
         the step response implies (its slow mode; see docs/reduction.md).
 
     eddy_reference : (gap_m, current_A) or None
-        Where the step-response identifications (``eddy_resistance_fit_ohm`` and the eddy
-        network ``eddy_network_*``) run: a point inside the grid, e.g. the operating point
-        of the scenarios the current model will run.  None (default): the maps' reference
+        Where the step-response identifications (``eddy_resistance_fit_ohm``, the eddy
+        network ``eddy_network_*`` and the shielded-gap ladder ``motion_eddy_*``) run: a
+        point inside the grid, e.g. the operating point of the scenarios the current model
+        will run.  None (default): the maps' reference
         point, the grid centre gap and ``max(I_mid, I_max/2)`` (docs/reduction.md, "More
         eddy modes": the identification point matters).
 
@@ -624,8 +742,8 @@ def build_maps(model: Any, *, gaps: Any, currents: Any, executor: Any = "auto",
     if method not in METHODS:
         raise InputError(f"method = {method!r}; use one of {list(METHODS)}")
     net = as_network(model)
-    g = _grid(gaps, "gap", "m", positive=True)
-    c = _grid(currents, "current", "A", positive=False)
+    g = check_grid(gaps, "gap", "m", positive=True)
+    c = check_grid(currents, "current", "A", positive=False)
     ref_gap, ref_current = float(g[g.size // 2]), float(max(c[c.size // 2], c[-1] / 2))
     eddy_gap, eddy_current = _eddy_point(eddy_reference, g, c, ref_gap, ref_current)
     groups = circuit_pole_groups(net, gap=ref_gap, current=ref_current)
@@ -654,23 +772,6 @@ def build_maps(model: Any, *, gaps: Any, currents: Any, executor: Any = "auto",
                 stop_pool(ex)
     names = list(rows[0])
     data = {k: np.stack([r[k] for r in rows], axis=1) for k in names}  # (circuit, gap, current)
-    units = {"force_N": "N", "inductance_H": "H", "dL_ds_H_per_m": "H/m",
-             "flux_linkage_Wb": "Wb", "apparent_inductance_H": "H",
-             "inductance_transient_H": "H", "dL_ds_transient_H_per_m": "H/m",
-             "inductance_relative_difference": "1", "dL_ds_relative_difference": "1",
-             "eddy_resistance_step_ohm": "ohm"}
-    long = {"force_N": "force of the circuit's poles F(s, I)",
-            "inductance_H": "differential inductance L~ = dL/dI I + L",
-            "dL_ds_H_per_m": "gap derivative of the inductance dL/ds",
-            "flux_linkage_Wb": "flux linkage psi",
-            "apparent_inductance_H": "inductance L = psi / I",
-            "inductance_transient_H": "L~ from voltage-step time constants (paper IV-B)",
-            "dL_ds_transient_H_per_m": "dL/ds from the virtual control law U = R_el I on a "
-                                       "gap ramp (paper IV-B)",
-            "inductance_relative_difference": "L~ transient / statics - 1",
-            "dL_ds_relative_difference": "dL/ds transient / statics - 1",
-            "eddy_resistance_step_ohm": "R_ec implied by a single-exponential fit of the "
-                                        "voltage step (slow mode)"}
     if method != "statics":
         shape = (len(net.circuits), g.size, c.size)
         tdata = {k: np.stack([t[k] for t in trans], axis=1).reshape(shape) for k in trans[0]}
@@ -684,17 +785,8 @@ def build_maps(model: Any, *, gaps: Any, currents: Any, executor: Any = "auto",
             data["dL_ds_relative_difference"] = (tdata["dL_ds_H_per_m"] / data["dL_ds_H_per_m"]
                                                  - 1)
         data["eddy_resistance_step_ohm"] = tdata["eddy_resistance_step_ohm"]
-    import xarray as xr
-
-    dims = ("circuit", "gap", "current")
-    ds = xr.Dataset(
-        {k: (dims, v, {"units": units[k], "long_name": long[k]}) for k, v in data.items()},
-        coords={"circuit": list(net.circuit_names),
-                "gap": ("gap", g, {"units": "m", "long_name": "substitute air gap s"}),
-                "current": ("current", c, {"units": "A", "long_name": "circuit current I_L"})},
-    )
-    ds["resistance_ohm"] = ("circuit", net.resistances, {"units": "ohm",
-                                                         "long_name": "ohmic resistance R_el"})
+    ds = maps_dataset(data, circuits=net.circuit_names, gaps_m=g, currents_A=c,
+                      resistance_ohm=net.resistances)
     r_ec = eddy_resistance(net, gap=ref_gap, current=ref_current)
     # R_ec depends on the operating point only through the iron's differential
     # reluctances (and not at all when every loop carries an eddy element): its spread
@@ -719,6 +811,8 @@ def build_maps(model: Any, *, gaps: Any, currents: Any, executor: Any = "auto",
                        "current-based model uses it by default (docs/decisions.md)"})
     _store_eddy_network(ds, net, eddy_gap, eddy_current,
                         np.asarray(ds["eddy_resistance_fit_ohm"].values, dtype=float))
+    _store_motion_eddy(ds, net, eddy_gap, eddy_current,
+                       np.asarray(ds["eddy_resistance_fit_ohm"].values, dtype=float), groups)
     magnet_name = getattr(model, "name", net.name)
     params = getattr(model, "parameters", None)
     ds.attrs.update({

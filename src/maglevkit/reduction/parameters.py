@@ -34,8 +34,8 @@ import numpy as np
 
 from ..circuit.assembly import assemble
 from ..circuit.network import Network
-from ..errors import InputError
-from ..models.flux import DEFAULT_ATOL, DEFAULT_RTOL, _dae
+from ..errors import InputError, SolverError
+from ..models.flux import DEFAULT_ATOL, DEFAULT_RTOL, flux_dae
 from ..models.statics import as_network, solve_statics
 
 __all__ = ["current_jump_admittance", "eddy_resistance"]
@@ -43,18 +43,18 @@ __all__ = ["current_jump_admittance", "eddy_resistance"]
 
 def _jacobians(net: Network) -> ca.Function:
     """``(x, s, I) -> (dr/dx, dr/dI)`` of the static loop law (cached on the network)."""
-    f = net._cache.get("reduction_jacobians")
+    f = net.cache.get("reduction_jacobians")
     if f is None:
         eq = assemble(net)
         f = ca.Function("r_jac", [eq.x, eq.s, eq.I],
                         [ca.jacobian(eq.residual, eq.x), ca.jacobian(eq.residual, eq.I)])
-        net._cache["reduction_jacobians"] = f
+        net.cache["reduction_jacobians"] = f
     return f  # type: ignore[no-any-return]
 
 
 def _structure(net: Network) -> Any:
     # The flux model's DAE matrices D, Q (same setup as FluxModel's defaults, so cached).
-    return _dae(net, "idas", DEFAULT_RTOL, DEFAULT_ATOL, 20000, 2, 3)
+    return flux_dae(net, "idas", DEFAULT_RTOL, DEFAULT_ATOL, 20000, 2, 3)
 
 
 def current_jump_admittance(model: Any, *, gap: Any, current: Any) -> np.ndarray:
@@ -72,7 +72,15 @@ def current_jump_admittance(model: Any, *, gap: Any, current: Any) -> np.ndarray
     Returns
     -------
     ndarray (n_circuits, n_circuits)
-        ``Y[i, j] = dI_i / dU_j`` at the static operating point (at rest).
+        ``Y[i, j] = dI_i / dU_j`` at the static operating point (at rest); zeros without
+        eddy-current elements.
+
+    Raises
+    ------
+    InputError
+        Bad inputs, or more than one operating point.
+    SolverError
+        If the statics cannot be solved.
     """
     net = as_network(model)
     sol = solve_statics(net, gaps=gap, currents=current)
@@ -100,6 +108,29 @@ def eddy_resistance(model: Any, *, gap: Any, current: Any) -> np.ndarray:
     resistance that, in series with ``R_el`` (paper Fig. 8), gives the detailed model's
     instantaneous current jump under a voltage step of circuit ``j`` (other voltages
     held).  ``inf`` where the circuit sees no eddy currents (``Y_jj = 0``).
+
+    Parameters
+    ----------
+    model : Magnet, Network or FluxModel
+        The detailed model (with eddy-current elements for a finite result).
+    gap : float, sequence or mapping
+        Gap(s) [m] of one operating point, > 0 (scalar: all gaps equal; keyword only).
+    current : float, sequence or mapping
+        Circuit current(s) [A] of the operating point (scalar: every circuit; keyword
+        only).
+
+    Returns
+    -------
+    ndarray (n_circuits,)
+        ``R_ec`` [ohm] per circuit (``inf`` without eddy currents).
+
+    Raises
+    ------
+    InputError
+        Bad inputs, more than one operating point, or a non-positive or non-finite
+        ``Y_jj`` (a network that is not passive).
+    SolverError
+        If the statics cannot be solved, or ``Y_jj > 1 / R_el`` (a negative ``R_ec``).
     """
     net = as_network(model)
     y = current_jump_admittance(net, gap=gap, current=current)
@@ -112,5 +143,15 @@ def eddy_resistance(model: Any, *, gap: Any, current: Any) -> np.ndarray:
             raise InputError(f"circuit {net.circuit_names[j]!r}: current-jump admittance "
                              f"{yjj!r} S is not a positive number; the network is not passive")
         else:
-            out[j] = 1.0 / yjj - float(net.resistances[j])
+            r_el = float(net.resistances[j])
+            out[j] = 1.0 / yjj - r_el
+            if out[j] < 0.0:
+                # Y_jj > 1/R_el: a current jump larger than the coil resistance alone allows
+                raise SolverError(
+                    f"eddy_resistance: negative R_ec = {out[j]:.6g} ohm for circuit "
+                    f"{net.circuit_names[j]!r}",
+                    state={"gap_m": gap, "current_A": current},
+                    reason=f"current-jump admittance Y_jj = {yjj:.9g} S exceeds 1/R_el = "
+                           f"{1.0 / r_el:.9g} S (R_el = {r_el:g} ohm); R_ec must be >= 0 "
+                           "for a passive network (rounding or a non-passive model)")
     return out

@@ -13,7 +13,17 @@ DIFFERENCE_VARIABLES = (("inductance_relative_difference", "L~ transient / stati
 
 
 def has_method_differences(maps: Any) -> bool:
-    """True if the maps carry the relative differences of the two methods."""
+    """True if the maps carry the relative differences of the two methods.
+
+    Parameters
+    ----------
+    maps : CharacteristicMaps
+        Maps built with both the statics and the transient method.
+
+    Returns
+    -------
+    bool
+    """
     return all(name in maps.dataset.data_vars for name, _ in DIFFERENCE_VARIABLES)
 
 

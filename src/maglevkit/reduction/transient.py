@@ -27,7 +27,6 @@ differs from the limit by 6e-4 relative, at 1e-4 A by < 1e-5 (measured).
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 from typing import Any
 
@@ -40,6 +39,7 @@ from ..errors import InputError, SolverError
 from ..models.experiments import differential_inductance_from_step
 from ..models.flux import FluxModel
 from ..models.statics import as_network, solve_statics
+from ..validation import real_number, whole_number
 
 __all__ = ["RampEstimate", "RampResponse", "dl_ds_from_ramp", "flux_held_ramp", "transient_point"]
 
@@ -55,8 +55,11 @@ class RampResponse:
     Attributes
     ----------
     time_s : ndarray (n,)
+        Sample times [s], from 0 to the ramp duration.
     gaps_m : ndarray (n, n_gaps)
+        Gap of every gap input [m].
     currents_A : ndarray (n, n_circuits)
+        Circuit currents [A].
     flux_linkage_Wb : ndarray (n, n_circuits)
         Constant up to the integrator's rounding (the law is exact).
     """
@@ -84,6 +87,7 @@ class RampEstimate:
     fit_rms : float
         RMS residual of the cubic fit of ``ln I`` (relative current deviation).
     response : RampResponse
+        The simulated ramp.
     """
 
     dL_ds_H_per_m: float
@@ -97,14 +101,14 @@ class RampEstimate:
 class _HeldRamp:
     """Compiled DAE of the flux model with ``U = R_el I`` substituted (cached on the network).
 
-    It reuses the flux model's structure (``D``, ``K``, ``Q`` of ``_FluxDAE``) and only
+    It reuses the flux model's structure (``D``, ``K``, ``Q`` of ``FluxDAE``) and only
     replaces the Faraday rows ``U - R I`` of ``h`` by zero.  Time is normalised to
     ``[0, 1]``; parameters are the duration ``T`` and the gap change ``Delta s`` per gap.
     """
 
     def __init__(self, net: Network, n_out: int) -> None:
         fm = FluxModel(net, rtol=RTOL, atol=ATOL, compiled="never")   # matrices only
-        d = fm._dae
+        d = fm.dae
         eq = assemble(net)
         nc, ng = d.n_circuits, d.n_gaps
         y = ca.SX.sym("y", d.n_diff)
@@ -126,10 +130,10 @@ class _HeldRamp:
 
 def _held(net: Network, n_out: int) -> _HeldRamp:
     key = ("reduction_held_ramp", n_out)
-    obj = net._cache.get(key)
+    obj = net.cache.get(key)
     if obj is None:
         obj = _HeldRamp(net, n_out)
-        net._cache[key] = obj
+        net.cache[key] = obj
     return obj  # type: ignore[no-any-return]
 
 
@@ -139,12 +143,40 @@ def flux_held_ramp(model: Any, *, gap: Any, current: Any, gap_change: Any, durat
 
     Starts at rest at the static operating point (``gap`` [m], ``current`` [A]) and moves
     every gap linearly by ``gap_change`` [m] (scalar or per gap) over ``duration`` [s].
+
+    Parameters
+    ----------
+    model : Magnet, Network or FluxModel
+        The detailed model (its network is used).
+    gap : float, sequence or mapping
+        Gap(s) [m] of one operating point at the start, > 0 (scalar: all gaps equal;
+        keyword only, like all that follow).
+    current : float, sequence or mapping
+        Circuit current(s) [A] at the start (scalar: every circuit).
+    gap_change : float or array_like (n_gaps,)
+        Change of each gap over the ramp [m] (scalar: every gap); finite, and the gaps
+        must stay > 0.
+    duration : float
+        Ramp time [s], finite and > 0.
+    samples : int, default 201
+        Output samples including the start (integer >= 10); one compiled integrator is
+        cached on the network per value.
+
+    Returns
+    -------
+    RampResponse
+
+    Raises
+    ------
+    InputError
+        ``duration`` or ``samples`` out of range, more than one operating point, bad
+        gaps or currents, or a ``gap_change`` that is not finite or closes a gap.
+    SolverError
+        If the statics or the integration fail.
     """
     net = as_network(model)
-    if not (isinstance(duration, (int, float)) and math.isfinite(duration) and duration > 0.0):
-        raise InputError(f"duration = {duration!r} s must be a finite number > 0")
-    if not (isinstance(samples, int) and samples >= 10):
-        raise InputError(f"samples = {samples!r} must be an integer >= 10")
+    duration = real_number(duration, "duration", "s", positive=True)
+    samples = whole_number(samples, "samples", minimum=10)
     sol = solve_statics(net, gaps=gap, currents=current)
     if sol.shape != ():
         raise InputError("flux_held_ramp takes one operating point")
@@ -176,10 +208,14 @@ def dl_ds_from_ramp(model: Any, *, gap: float, current: float, circuit: int = 0,
 
     Parameters
     ----------
+    model : Magnet, Network or FluxModel
+        The detailed model (its network is used).
     gap, current : float
-        Operating point: every gap at ``gap`` [m], every circuit at ``current`` [A].
+        Operating point: every gap at ``gap`` [m] (> 0), every circuit at ``current``
+        [A] (finite, >= 0: the maps are even in the current).  Keyword only, like all
+        that follow.
     circuit : int
-        Index of the circuit.
+        Index of the circuit, ``0 .. n_circuits - 1``.
     poles : sequence of int, optional
         Indices of the gap inputs that move (the circuit's own poles); default all.
     inductance : float, optional
@@ -187,23 +223,51 @@ def dl_ds_from_ramp(model: Any, *, gap: float, current: float, circuit: int = 0,
         (:func:`~maglevkit.models.experiments.differential_inductance_from_step`), which
         keeps the method independent of the statics' sensitivities.
     relative_gap_change : float
-        Ramp length as a fraction of the gap (the cubic fit removes the curvature).
+        Ramp length as a fraction of the gap, in (0, 0.2] (default 0.02; the cubic fit
+        removes the curvature).
     duration : float, optional
         Ramp time [s]; default ``50 L~/R_el`` (slow compared with the eddy currents).
     zero_current : float
-        Current [A] used when ``current == 0`` (the limit ``I -> 0``, see module doc).
+        Current [A], > 0, used when ``current == 0`` (the limit ``I -> 0``, see module
+        doc; default 1e-4 A).
+    samples : int
+        Output samples of the ramp (integer >= 10, default 201).
+
+    Returns
+    -------
+    RampEstimate
+
+    Raises
+    ------
+    InputError
+        Any of the above out of range, or bad inputs of the experiments.
+    SolverError
+        If the current changes sign on the ramp, or an experiment fails.
     """
     net = as_network(model)
     nc = len(net.circuits)
-    if not (isinstance(circuit, int) and 0 <= circuit < nc):
+    circuit = whole_number(circuit, "circuit", minimum=0)
+    if circuit >= nc:
         raise InputError(f"circuit = {circuit!r} must be an index in 0..{nc - 1}")
-    if not (isinstance(relative_gap_change, (int, float)) and 0.0 < relative_gap_change <= 0.2):
+    relative_gap_change = real_number(relative_gap_change, "relative_gap_change")
+    if not 0.0 < relative_gap_change <= 0.2:
         raise InputError(f"relative_gap_change = {relative_gap_change!r} must lie in (0, 0.2]")
-    if not (isinstance(current, (int, float)) and math.isfinite(current) and current >= 0.0):
+    current = real_number(current, "current", "A")
+    if current < 0.0:
         raise InputError(f"current = {current!r} A must be a finite number >= 0 (maps are even "
                          "in the current)")
-    if not (isinstance(zero_current, (int, float)) and zero_current > 0.0):
-        raise InputError(f"zero_current = {zero_current!r} A must be > 0")
+    zero_current = real_number(zero_current, "zero_current", "A", positive=True)
+    ng = len(net.gap_names)
+    if poles is None:
+        idx = list(range(ng))
+    else:
+        if isinstance(poles, (str, bytes)) or not hasattr(poles, "__iter__"):
+            raise InputError(f"poles = {poles!r}: expected a sequence of gap-input indices "
+                             f"in 0..{ng - 1}")
+        idx = [whole_number(k, "poles", minimum=0) for k in poles]
+        if not idx or max(idx) >= ng or len(set(idx)) != len(idx):
+            raise InputError(f"poles = {list(poles)!r}: expected at least one distinct "
+                             f"gap-input index in 0..{ng - 1} (or None: all gaps)")
     i_exp = float(current) if current > 0.0 else float(zero_current)
     if inductance is None:
         inductance = differential_inductance_from_step(net, gap=gap, current=i_exp,
@@ -211,8 +275,6 @@ def dl_ds_from_ramp(model: Any, *, gap: float, current: float, circuit: int = 0,
     r_el = float(net.resistances[circuit])
     if duration is None:
         duration = 50.0 * inductance / r_el
-    ng = len(net.gap_names)
-    idx = list(range(ng)) if poles is None else [int(k) for k in poles]
     change = np.zeros(ng)
     change[idx] = relative_gap_change * gap
     resp = flux_held_ramp(net, gap=gap, current=i_exp, gap_change=change, duration=duration,
@@ -242,6 +304,26 @@ def transient_point(key: str, net: Network, s: float, current: float,
 
     Returns per circuit: ``L~`` from a voltage step, ``dL/ds`` from the flux-held ramp of
     the circuit's own poles (``poles[j]``), and the step's slow-mode ``R_ec``.
+
+    Parameters
+    ----------
+    key : str
+        Identifies the network in this worker process (the first network given for a
+        key is kept and reused, with its compiled functions).
+    net : Network
+        The detailed magnet's network.
+    s : float
+        Gap of every pole [m].
+    current : float
+        Current of every circuit [A], >= 0.
+    poles : tuple of tuple of int
+        Per circuit, the indices of its own gap inputs (moved by its ramp).
+
+    Returns
+    -------
+    dict of str to ndarray (n_circuits,)
+        ``"inductance_H"`` [H], ``"dL_ds_H_per_m"`` [H/m], ``"eddy_resistance_step_ohm"``
+        [ohm].
     """
     net = _WORKER_NETWORKS.setdefault(key, net)
     nc = len(net.circuits)

@@ -109,7 +109,21 @@ def _base(params: Mapping[str, Any], key: str, status: str, error: str) -> Any:
 
 
 def error_case(params: Mapping[str, Any], key: str, error: str) -> Any:
-    """The Dataset of a failed case (status ``"error"`` and the error text)."""
+    """The Dataset of a failed case (status ``"error"`` and the error text).
+
+    Parameters
+    ----------
+    params : mapping
+        The case's full parameter set (stored as ``param_*`` attributes).
+    key : str
+        The case key.
+    error : str
+        The error text, ``"TypeName: message"``.
+
+    Returns
+    -------
+    xarray.Dataset
+    """
     return _base(params, key, "error", error)
 
 
@@ -118,6 +132,24 @@ def run_case(job: VehicleJob, params: Mapping[str, Any], key: str) -> Any:
 
     Never raises for an error of the case itself (any ``Exception``): it is returned as
     ``status = "error"`` with ``"TypeName: message"``.
+
+    Parameters
+    ----------
+    job : VehicleJob
+        The sweep's base job (vehicle file, duration [s], step [s], guideway,
+        irregularity, time series to keep).
+    params : mapping
+        The case's full parameter set (every name of
+        :data:`~maglevkit.sweep.PARAMETERS`: ``speed`` [m/s], ``seed``, ``failure``,
+        ``payload`` [kg], ``resistance_scale``, ``eddy_resistance_scale``).
+    key : str
+        The case key, stored in the Dataset's attributes.
+
+    Returns
+    -------
+    xarray.Dataset
+        Status, error text, summary scalars (:data:`SUMMARY_UNITS`), per-circuit and
+        per-comfort-point values, and the requested time series.
     """
     try:
         return _run(job, params, key)

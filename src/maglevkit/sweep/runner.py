@@ -58,7 +58,23 @@ class SweepResult:
     n_failed: int
 
     def to_netcdf(self, path: str | Path) -> Path:
-        """Write the dataset (the folder must exist: nothing is created silently)."""
+        """Write the dataset (the folder must exist: nothing is created silently).
+
+        Parameters
+        ----------
+        path : str or Path
+            Target netCDF file; written atomically (a temporary file, then renamed).
+
+        Returns
+        -------
+        Path
+            ``path``.
+
+        Raises
+        ------
+        InputError
+            The parent folder does not exist.
+        """
         p = Path(path)
         if not p.parent.is_dir():
             raise InputError(f"cannot write {str(p)!r}: the directory {str(p.parent)!r} does "
@@ -68,7 +84,20 @@ class SweepResult:
 
 
 def case_path(resume_dir: str | Path, key: str) -> Path:
-    """File of the stored case ``key`` in ``resume_dir``."""
+    """File of the stored case ``key`` in ``resume_dir``.
+
+    Parameters
+    ----------
+    resume_dir : str or Path
+        Folder of the stored cases (not checked or created here).
+    key : str
+        The case key (:meth:`~maglevkit.sweep.SweepSpec.case_key`).
+
+    Returns
+    -------
+    Path
+        ``resume_dir / f"{key}.nc"``.
+    """
     return Path(resume_dir) / f"{key}.nc"
 
 
@@ -151,6 +180,8 @@ def run_sweep(spec: SweepSpec, *, executor: Any = None, workers: int | None = No
         Run stored failed cases again (default: they are loaded like the others).
     progress : bool
         Progress on ``stream`` (default stderr): a bar on a terminal, lines in logs.
+    stream : text file, optional
+        Where the progress goes (default: ``sys.stderr``).
     on_case : callable, optional
         Called as ``on_case(index, dataset)`` in this process after each case arrives
         (and is stored).
@@ -158,6 +189,12 @@ def run_sweep(spec: SweepSpec, *, executor: Any = None, workers: int | None = No
     Returns
     -------
     SweepResult
+
+    Raises
+    ------
+    InputError
+        ``spec`` not a :class:`~maglevkit.sweep.SweepSpec`, ``workers`` not a whole
+        number >= 1, or a resume folder that is a file or whose parent does not exist.
 
     Notes
     -----
@@ -261,10 +298,22 @@ def assemble(spec: SweepSpec, results: list[Any]) -> Any:
     Dimensions: the swept parameters (in :data:`~maglevkit.sweep.PARAMETERS` order), then
     ``circuit``, ``comfort_point`` and ``time`` for the per-case arrays.  Values a case
     lacks (a failed case, a run too short for comfort figures) are NaN, text ``""``.
+
+    Parameters
+    ----------
+    spec : SweepSpec
+        The sweep the cases belong to (gives the dimensions and fixed parameters).
+    results : list of xarray.Dataset
+        One Dataset per case (from :func:`~maglevkit.sweep.run_case` or the resume
+        folder), in :meth:`SweepSpec.cases` order, ``spec.n_cases`` of them.
+
+    Returns
+    -------
+    xarray.Dataset
     """
     import xarray as xr
 
-    from .. import __version__
+    from .._version import __version__
 
     dims = list(spec.swept)
     shape = spec.shape

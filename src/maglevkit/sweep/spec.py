@@ -60,7 +60,21 @@ TIME_SERIES_VARIABLES = ("gap", "current", "voltage", "force", "guideway_deflect
 
 @dataclass(frozen=True)
 class SweepParameter:
-    """One sweepable parameter: name, kind, unit, default and meaning."""
+    """One sweepable parameter: name, kind, unit, default and meaning.
+
+    Parameters
+    ----------
+    name : str
+        Key in the sweep file (``[parameters]`` or the job table), e.g. ``"speed"``.
+    kind : type
+        Python type of a value: ``float``, ``int`` or ``str``.
+    unit : str
+        SI unit of a value (``"1"``: dimensionless, ``""``: text).
+    default : object
+        Value when the file gives none (``None`` for ``payload``: the vehicle file's).
+    description : str
+        Meaning and allowed range (used in error messages).
+    """
 
     name: str
     kind: type
@@ -154,12 +168,15 @@ class SweepSpec:
     Attributes
     ----------
     name : str
+        The sweep's name (``[sweep] name``, default the file's stem).
     job : VehicleJob
+        The base job every case runs.
     swept : dict
         Swept parameter -> tuple of values (in :data:`PARAMETERS` order).
     fixed : dict
         Every other parameter -> its value.
     source : str
+        File path or bundled name (for messages).
     """
 
     name: str
@@ -184,7 +201,7 @@ class SweepSpec:
 
     def case_key(self, params: Mapping[str, Any]) -> str:
         """Hash of the job, the case's parameters and the format (its stored file's name)."""
-        from .. import __version__
+        from .._version import __version__
 
         blob = json.dumps({"format": SWEEP_FORMAT, "maglevkit": __version__,
                            "job": self.job.key_data(),
@@ -202,6 +219,16 @@ def bundled_sweeps() -> tuple[str, ...]:
 
 def load_sweep(source: str | Path) -> SweepSpec:
     """Load a sweep file by path or bundled name (see :func:`bundled_sweeps`).
+
+    Parameters
+    ----------
+    source : str or Path
+        Path of a TOML sweep file, or the name of a bundled one.  A relative vehicle
+        file in it is taken relative to the sweep file's folder.
+
+    Returns
+    -------
+    SweepSpec
 
     Raises
     ------
@@ -282,8 +309,33 @@ def parse_sweep(parameters: Mapping[str, Any], source: str = "parameters", *,
                 base_dir: Path | None = None) -> SweepSpec:
     """Validate a parsed sweep TOML dictionary (see the module docstring).
 
-    ``base_dir``: folder that relative vehicle file paths are relative to (the sweep
-    file's folder; None: the current directory).
+    Loads the vehicle file and its magnets' equivalent circuits (to check failures and
+    hash them into the case keys), but builds no maps.
+
+    Parameters
+    ----------
+    parameters : mapping
+        The parsed file: tables ``sweep``, ``vehicle`` and ``parameters`` (required)
+        and ``output`` (optional).
+    source : str, default "parameters"
+        Label for error messages; its stem is the sweep's default name.
+    base_dir : Path, optional
+        Folder that relative vehicle file paths are relative to (the sweep file's
+        folder; None: the current directory).  Keyword only.
+
+    Returns
+    -------
+    SweepSpec
+
+    Raises
+    ------
+    ParameterFileError
+        Unknown or missing tables or keys; values of the wrong type, sign or range
+        (speeds in 0 ... 250 m/s, seeds whole numbers >= 0, payload >= 0 kg, scales
+        > 0); empty or repeated lists; a parameter both fixed and swept; a duration that
+        is not a whole number of steps or shorter than two; an unknown vehicle file,
+        failure circuit or failure time outside the run; a bad irregularity, a seed in
+        it, or a swept seed without a random irregularity.
     """
     def bad(msg: str) -> ParameterFileError:
         return ParameterFileError(f"{source}: {msg}")

@@ -1,6 +1,7 @@
 """Mechanical models the magnets are coupled to, and what a vehicle run is judged by.
 
-* :mod:`~maglevkit.vehicle.heave`: a rigid heave mass under one magnet (gap-control studies).
+* :mod:`maglevkit.plant` (re-exported here): a rigid heave mass under one magnet and gravity
+  (gap-control studies; below :mod:`maglevkit.control`, which uses it).
 * :mod:`~maglevkit.vehicle.guideway`: simply supported Euler-Bernoulli spans in modal form,
   chained into a periodically pillared guideway with a moving system boundary.
 * :mod:`~maglevkit.vehicle.irregularities`: deterministic and random guideway irregularities.
@@ -8,21 +9,31 @@
 * :mod:`~maglevkit.vehicle.data`: the guideway parameter file.
 * :mod:`~maglevkit.vehicle.train`: the vehicle (train) parameter file and its layout.
 * :mod:`~maglevkit.vehicle.mechanics`: the train's heave-pitch multibody model.
+* :mod:`~maglevkit.vehicle.multibody`: planar rigid bodies, spring-dampers and force
+  points turned into linear equations of motion (NumPy, CasADi; checked by sympy).
+* :mod:`~maglevkit.vehicle.crosssection`: the cross-section vehicle's mechanics (car
+  body, levitation chassis, air springs, magnet force points; curves) and its file.
 * :mod:`~maglevkit.vehicle.simulation`: vehicle runs (magnet bank, gap controllers,
   guideway, irregularities, failures).
 """
 
 from __future__ import annotations
 
+from ..plant import STANDARD_GRAVITY, HeaveMass, HeaveState
 from .comfort import (
     iso2631_weighted_rms,
     iso2631_wk,
     sperling_index,
     sperling_weighting,
 )
+from .crosssection import (
+    CrossSectionData,
+    CrossSectionMechanics,
+    load_cross_section,
+    track_field_m_per_s2,
+)
 from .data import GuidewayData, load_guideway
 from .guideway import BeamSpan, Guideway, GuidewayDeflection, GuidewayState
-from .heave import STANDARD_GRAVITY, HeaveMass, HeaveState
 from .irregularities import (
     GermanTrackPSD,
     HarmonicProfile,
@@ -34,6 +45,7 @@ from .irregularities import (
     TabulatedProfile,
 )
 from .mechanics import VehicleMechanics
+from .multibody import ForcePoint, PlanarMultibody, RigidBody, SpringDamper
 from .simulation import Failure, VehicleModel, VehicleRun, run_vehicle
 from .train import TrainData, load_vehicle
 
@@ -62,6 +74,14 @@ __all__ = [
     "TrainData",
     "load_vehicle",
     "VehicleMechanics",
+    "PlanarMultibody",
+    "RigidBody",
+    "SpringDamper",
+    "ForcePoint",
+    "CrossSectionData",
+    "CrossSectionMechanics",
+    "load_cross_section",
+    "track_field_m_per_s2",
     "VehicleModel",
     "VehicleRun",
     "Failure",

@@ -82,7 +82,23 @@ def _freqs(frequency_Hz: Any) -> np.ndarray:
 
 def iso2631_wk(frequency_Hz: Any) -> np.ndarray:
     """Complex frequency response of ``Wk`` at frequencies [Hz] (``|Wk|`` is the weighting
-    factor of ISO 2631-1 Table 3)."""
+    factor of ISO 2631-1 Table 3).
+
+    Parameters
+    ----------
+    frequency_Hz : float or array_like
+        Frequencies f [Hz], finite and >= 0.
+
+    Returns
+    -------
+    ndarray of complex
+        ``Wk(j 2 pi f)`` [-], same shape as ``frequency_Hz`` (0 at f = 0).
+
+    Raises
+    ------
+    InputError
+        Frequencies that are not finite real numbers >= 0.
+    """
     s = 2j * math.pi * _freqs(frequency_Hz)
     h = np.ones_like(s)
     for b, a in iso2631_wk_sections():
@@ -91,7 +107,23 @@ def iso2631_wk(frequency_Hz: Any) -> np.ndarray:
 
 
 def sperling_weighting(frequency_Hz: Any) -> np.ndarray:
-    """Sperling's vertical comfort weighting ``B(f)`` [-] at frequencies [Hz]."""
+    """Sperling's vertical comfort weighting ``B(f)`` [-] at frequencies [Hz].
+
+    Parameters
+    ----------
+    frequency_Hz : float or array_like
+        Frequencies f [Hz], finite and >= 0.
+
+    Returns
+    -------
+    ndarray
+        ``B(f)`` [-], same shape as ``frequency_Hz`` (0 at f = 0).
+
+    Raises
+    ------
+    InputError
+        Frequencies that are not finite real numbers >= 0.
+    """
     f = _freqs(frequency_Hz)
     return 0.588 * np.sqrt((1.911 * f ** 2 + (0.25 * f ** 2) ** 2)
                            / ((1 - 0.277 * f ** 2) ** 2 + (1.563 * f - 0.0368 * f ** 3) ** 2))
@@ -117,8 +149,8 @@ def iso2631_weighted_rms(acceleration: Any, sample_rate_Hz: float, *,
     acceleration : array_like (n,)
         Vertical acceleration [m/s^2], equally sampled.
     sample_rate_Hz : float
-        Sampling rate [Hz].
-    method : {"fft", "filter"}
+        Sampling rate [Hz], > 0.
+    method : {"fft", "filter"}, default "fft"
         "fft": the record's spectrum times ``|Wk(f)|`` (zero phase; the record is treated
         as periodic); "filter": the four sections, bilinear-transformed, run causally
         over the record (as a measuring instrument would; start-up transient included).
@@ -145,6 +177,25 @@ def sperling_index(acceleration: Any, sample_rate_Hz: float) -> float:
     Rough scale (Sperling): 1 just noticeable, 2 clearly noticeable, 2.5 more
     pronounced but not unpleasant, 3 strong, irregular but tolerable, 3.25 very irregular,
     3.5 extremely irregular, unpleasant, 4 extremely unpleasant.
+
+    Parameters
+    ----------
+    acceleration : array_like (n,)
+        Vertical acceleration [m/s^2], equally sampled, finite, at least 8 samples.  The
+        record is weighted in the frequency domain (treated as periodic).
+    sample_rate_Hz : float
+        Sampling rate [Hz], > 0.
+
+    Returns
+    -------
+    float
+        ``Wz`` [-].
+
+    Raises
+    ------
+    InputError
+        A record that is not a finite 1-D array of >= 8 samples, or a sampling rate that
+        is not finite and > 0.
     """
     a, fs = _signal(acceleration, sample_rate_Hz)
     f = np.fft.rfftfreq(a.size, 1.0 / fs)
@@ -158,6 +209,23 @@ def sperling_sine_index(amplitude_m_per_s2: Any, frequency_Hz: Any) -> np.ndarra
     ``a`` is the acceleration amplitude in cm/s^2 (converted from the m/s^2 given here);
     the vertical frequency factor is ``F = 0.325 f^2`` (0.5-5.9 Hz), ``400 / f^2``
     (5.9-20 Hz), ``1`` (above 20 Hz).  Defined for 0.5 Hz <= f.
+
+    Parameters
+    ----------
+    amplitude_m_per_s2 : float or array_like
+        Acceleration amplitude [m/s^2] (its magnitude is used).
+    frequency_Hz : float or array_like
+        Frequency [Hz], >= 0.5; broadcast against the amplitude.
+
+    Returns
+    -------
+    ndarray
+        ``Wz`` [-].
+
+    Raises
+    ------
+    InputError
+        Non-finite values, or a frequency below 0.5 Hz.
     """
     a = real_array(amplitude_m_per_s2, "amplitude_m_per_s2", "m/s^2") * 100.0
     f = _freqs(frequency_Hz)

@@ -68,13 +68,56 @@ class GuidewayData:
 
     def guideway(self, *, n_spans: int = 3, moving_boundary: bool = True, rigid: bool = False,
                  origin_m: float = 0.0) -> Guideway:
-        """A :class:`Guideway` of these spans (see there for the options)."""
+        """A :class:`Guideway` of these spans (see there for the options).
+
+        Parameters
+        ----------
+        n_spans : int, default 3
+            Number of integrated spans (>= 1): the moving window, or the whole guideway
+            without the moving boundary.
+        moving_boundary : bool, default True
+            Recycle spans every load has left (an infinitely long guideway).
+        rigid : bool, default False
+            A rigid guideway (no deflection).
+        origin_m : float, default 0.0
+            Position of pier 0 [m].
+
+        Returns
+        -------
+        Guideway
+
+        Raises
+        ------
+        ParameterError
+            ``n_spans`` not a whole number >= 1 or a non-finite ``origin_m``.
+        InputError
+            ``moving_boundary`` or ``rigid`` not True/False.
+        """
         return Guideway(self.span, n_spans=n_spans, moving_boundary=moving_boundary, rigid=rigid,
                         origin_m=origin_m)
 
 
 def parse_guideway(parameters: Mapping[str, Any], source: str = "parameters") -> GuidewayData:
-    """Validate a parsed guideway TOML dictionary."""
+    """Validate a parsed guideway TOML dictionary.
+
+    Parameters
+    ----------
+    parameters : mapping
+        The parsed file: a ``guideway`` table (keys ``span_length`` [m],
+        ``mass_per_length`` [kg/m], ``bending_stiffness`` [N m^2], ``damping_ratio`` [-],
+        ``modes``) and an optional ``provenance`` table.
+    source : str, default "parameters"
+        Label for error messages and :attr:`GuidewayData.source`.
+
+    Returns
+    -------
+    GuidewayData
+
+    Raises
+    ------
+    ParameterFileError
+        Missing or unknown tables or keys, or invalid values.
+    """
     if not isinstance(parameters, Mapping) or "guideway" not in parameters:
         raise ParameterFileError(f"{source}: missing the [guideway] table")
     unknown = sorted(set(parameters) - {"guideway", "provenance"})
@@ -99,6 +142,15 @@ def bundled_guideways() -> list[str]:
 
 def load_guideway(source: str | Path = "guideway") -> GuidewayData:
     """Load a guideway file by path or bundled name (default: the bundled ``guideway``).
+
+    Parameters
+    ----------
+    source : str or Path, default "guideway"
+        Path of a TOML file, or the name of a bundled file (:func:`bundled_guideways`).
+
+    Returns
+    -------
+    GuidewayData
 
     Raises
     ------

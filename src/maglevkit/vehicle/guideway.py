@@ -33,8 +33,8 @@ import numpy as np
 import scipy.linalg
 
 from ..errors import InputError, OutOfRangeError, ParameterError
+from ..plant import STANDARD_GRAVITY
 from ..validation import flag, real_array, real_number, whole_number
-from .heave import STANDARD_GRAVITY
 
 __all__ = ["BeamSpan", "Guideway", "GuidewayState", "GuidewayDeflection"]
 
@@ -129,15 +129,48 @@ class BeamSpan:
         return 0.5 * self.mass_per_length_kg_per_m * self.length_m
 
     def speed_parameter(self, speed_m_per_s: float) -> float:
-        """Fryba's speed parameter ``alpha = v / (2 f_1 L)`` [-] (1 = critical speed)."""
+        """Fryba's speed parameter ``alpha = v / (2 f_1 L)`` [-] (1 = critical speed).
+
+        Parameters
+        ----------
+        speed_m_per_s : float
+            Speed of the moving load [m/s] (not checked).
+
+        Returns
+        -------
+        float
+            ``alpha`` [-], with ``f_1`` the first natural frequency [Hz].
+        """
         return float(speed_m_per_s) / (2.0 * float(self.natural_frequencies_Hz[0]) * self.length_m)
 
     def static_midspan_deflection_m(self, force_N: float) -> float:
-        """Exact static midspan deflection under a midspan point force, ``F L^3 / (48 EI)``."""
+        """Exact static midspan deflection under a midspan point force, ``F L^3 / (48 EI)``.
+
+        Parameters
+        ----------
+        force_N : float
+            Point force at midspan [N], positive downward (not checked).
+
+        Returns
+        -------
+        float
+            Midspan deflection [m], positive downward.
+        """
         return float(force_N) * self.length_m ** 3 / (48.0 * self.bending_stiffness_N_m2)
 
     def self_weight_sag_m(self, gravity: float = STANDARD_GRAVITY) -> float:
-        """Exact static midspan sag under the span's own weight, ``5 m g L^4 / (384 EI)`` [m]."""
+        """Exact static midspan sag under the span's own weight, ``5 m g L^4 / (384 EI)`` [m].
+
+        Parameters
+        ----------
+        gravity : float, default STANDARD_GRAVITY
+            Gravitational acceleration g [m/s^2] (9.80665; not checked).
+
+        Returns
+        -------
+        float
+            Midspan sag [m], positive downward.
+        """
         return 5.0 * self.mass_per_length_kg_per_m * gravity * self.length_m ** 4 / (
             384.0 * self.bending_stiffness_N_m2)
 
@@ -157,7 +190,18 @@ class BeamSpan:
         return np.sin(arg), self._k * np.cos(arg)
 
     def static_modal_displacement(self, modal_force_N: Any) -> np.ndarray:
-        """Static modal response ``q_j = Q_j / (M omega_j^2)`` [m] to generalised forces [N]."""
+        """Static modal response ``q_j = Q_j / (M omega_j^2)`` [m] to generalised forces [N].
+
+        Parameters
+        ----------
+        modal_force_N : array_like (..., n_modes)
+            Generalised forces ``Q_j`` [N], modes on the last axis (not checked).
+
+        Returns
+        -------
+        ndarray (..., n_modes)
+            Modal displacements ``q_j`` [m].
+        """
         return np.asarray(modal_force_N, dtype=float) / (
             self.modal_mass_kg * self.natural_frequencies_rad_per_s ** 2)
 
@@ -203,6 +247,17 @@ class BeamSpan:
 
         ``Ad = exp(A dt)``, ``Bd = int_0^dt exp(A s) ds B`` (zero-order hold), computed
         from the matrix exponential of the augmented matrix ``[[A, B], [0, 0]] dt``.
+
+        Parameters
+        ----------
+        dt_s : float
+            Step [s], finite and > 0 (``InputError`` otherwise).
+
+        Returns
+        -------
+        (Ad, Bd) : ndarray (2 n_modes, 2 n_modes) and (2 n_modes, n_modes)
+            Read-only matrices for the state ``x = [q; q']`` ([m], [m/s]) and generalised
+            forces ``Q`` [N]; cached per span and step.
         """
         dt = _check_dt(dt_s)
         return _discretize_cached(self.length_m, self.bending_stiffness_N_m2,
@@ -267,6 +322,7 @@ class GuidewayDeflection:
     Attributes
     ----------
     position_m : ndarray
+        Positions along the guideway [m].
     deflection_m : ndarray
         ``w(x, t)`` [m].
     slope : ndarray
@@ -281,7 +337,18 @@ class GuidewayDeflection:
     rate_m_per_s: np.ndarray
 
     def moving_rate_m_per_s(self, speed_m_per_s: Any) -> np.ndarray:
-        """Rate seen by a point moving at ``v``: ``dw/dt + v dw/dx`` [m/s]."""
+        """Rate seen by a point moving at ``v``: ``dw/dt + v dw/dx`` [m/s].
+
+        Parameters
+        ----------
+        speed_m_per_s : float or array_like
+            Speed ``v`` of the moving point [m/s] (broadcast against the positions).
+
+        Returns
+        -------
+        ndarray
+            ``dw/dt + v dw/dx`` [m/s] at each position.
+        """
         return self.rate_m_per_s + np.asarray(speed_m_per_s, dtype=float) * self.slope
 
 
@@ -323,7 +390,19 @@ class Guideway:
         return (f"Guideway(L={self.span.length_m} m, {kind}, {self.n_spans} spans, {mode})")
 
     def spans_needed(self, load_extent_m: float) -> int:
-        """Smallest window that always covers loads spread over ``load_extent_m`` [m]."""
+        """Smallest window that always covers loads spread over ``load_extent_m`` [m].
+
+        Parameters
+        ----------
+        load_extent_m : float
+            Distance from the rearmost to the foremost load [m], >= 0
+            (``InputError`` otherwise).
+
+        Returns
+        -------
+        int
+            ``floor(extent / L) + 2`` spans (1 for a single point load).
+        """
         load_extent_m = real_number(load_extent_m, "load_extent_m", "m", nonnegative=True)
         return int(math.floor(load_extent_m / self.span.length_m)) + 2 if load_extent_m > 0 else 1
 
@@ -333,6 +412,25 @@ class Guideway:
 
         With the moving boundary start it at the rearmost load,
         ``first_span=int(guideway.span_index(x_rear))``; the window then follows the loads.
+
+        Parameters
+        ----------
+        first_span : int, default 0
+            Index of the rearmost integrated span (span ``k`` starts at
+            ``origin_m + k L``); keyword only.
+        time_s : float, default 0.0
+            Time of the state [s].
+
+        Returns
+        -------
+        GuidewayState
+            Zero modal displacements and velocities (shape ``(n_spans, n_modes)``; no
+            modes for a rigid guideway).
+
+        Raises
+        ------
+        InputError
+            ``first_span`` not a whole number or ``time_s`` not a finite real number.
         """
         first_span = whole_number(first_span, "first_span")
         time_s = real_number(time_s, "time_s", "s")
@@ -340,7 +438,18 @@ class Guideway:
         return GuidewayState(time_s, first_span, z, z.copy())
 
     def span_index(self, position_m: Any) -> np.ndarray:
-        """Index ``k`` of the span each position lies on (a pier belongs to the span ahead)."""
+        """Index ``k`` of the span each position lies on (a pier belongs to the span ahead).
+
+        Parameters
+        ----------
+        position_m : float or array_like
+            Positions along the guideway [m] (not checked: NaN gives a meaningless index).
+
+        Returns
+        -------
+        ndarray of int
+            ``floor((x - origin_m) / L)``, same shape as ``position_m``.
+        """
         x = np.asarray(position_m, dtype=float)
         return np.floor((x - self.origin_m) / self.span.length_m).astype(int)
 
@@ -374,6 +483,19 @@ class Guideway:
 
         Spans behind it are reset to rest and reused ahead (moving boundary only; a
         window never moves backwards).
+
+        Parameters
+        ----------
+        state : GuidewayState
+            The current state.
+        rear_position_m : float
+            Position of the rearmost load [m].
+
+        Returns
+        -------
+        GuidewayState
+            The state with the moved window; ``state`` itself when the window does not
+            move, without the moving boundary, or for a rigid guideway.
         """
         if not self.moving_boundary or self.rigid:
             return state
@@ -400,6 +522,13 @@ class Guideway:
     def influence(self, state: GuidewayState, positions_m: Any) -> tuple[np.ndarray, np.ndarray]:
         """Modal influence matrices of point loads at ``positions_m``.
 
+        Parameters
+        ----------
+        state : GuidewayState
+            Gives the window of integrated spans.
+        positions_m : float or array_like (n_points,)
+            Load positions [m]; each must lie on an integrated span.
+
         Returns
         -------
         (phi, dphi_dx) : ndarray (n_spans, n_modes, n_points) each
@@ -407,6 +536,14 @@ class Guideway:
             ``r``, else 0; so ``Q = phi @ F`` are the generalised forces of point forces
             ``F`` and ``w = einsum('rj,rjp->p', q, phi)`` the deflections.  Constant over a
             step for loads held in place; the CasADi vehicle model takes them as inputs.
+
+        Raises
+        ------
+        InputError
+            Positions not finite real numbers, or not a scalar or 1-D sequence.
+        OutOfRangeError
+            A position on a span behind the window (recycled, or not part of the guideway)
+            or ahead of it.
         """
         x = self._positions(positions_m)
         nm = self.n_modes
@@ -422,7 +559,29 @@ class Guideway:
         return phi, dphi
 
     def modal_forces(self, state: GuidewayState, positions_m: Any, forces_N: Any) -> np.ndarray:
-        """Generalised forces (n_spans, n_modes) [N] of point forces (positive downward)."""
+        """Generalised forces (n_spans, n_modes) [N] of point forces (positive downward).
+
+        Parameters
+        ----------
+        state : GuidewayState
+            Gives the window of integrated spans.
+        positions_m : float or array_like (n_points,)
+            Load positions [m]; each must lie on an integrated span.
+        forces_N : float or array_like (n_points,)
+            Point forces [N], positive downward: one for all positions or one per position.
+
+        Returns
+        -------
+        ndarray (n_spans, n_modes)
+            ``Q_j = sum_k F_k sin(k_j xi_k)`` [N] per ring-buffer row.
+
+        Raises
+        ------
+        InputError
+            Non-finite or wrongly shaped positions or forces.
+        OutOfRangeError
+            A position outside the integrated spans.
+        """
         x = self._positions(positions_m)
         f = real_array(forces_N, "forces_N", "N")
         if f.ndim > 1 or f.size not in (1, x.size):
@@ -439,7 +598,28 @@ class Guideway:
 
     def deflection(self, state: GuidewayState, positions_m: Any) -> GuidewayDeflection:
         """Deflection, slope and rate at ``positions_m`` (on integrated spans, or ahead of
-        the window with the moving boundary, where the spans are at rest)."""
+        the window with the moving boundary, where the spans are at rest).
+
+        Parameters
+        ----------
+        state : GuidewayState
+            The state to evaluate.
+        positions_m : float or array_like (n_points,)
+            Positions [m].
+
+        Returns
+        -------
+        GuidewayDeflection
+            Deflection [m] (positive downward), slope [m/m] and rate [m/s]; zeros for a
+            rigid guideway.
+
+        Raises
+        ------
+        InputError
+            Positions not finite real numbers, or not a scalar or 1-D sequence.
+        OutOfRangeError
+            A position behind the window, or ahead of it without the moving boundary.
+        """
         x = self._positions(positions_m)
         zero = np.zeros_like(x)
         if self.n_modes == 0:
@@ -453,7 +633,18 @@ class Guideway:
                                   (qd * s).sum(axis=1))
 
     def midspan_deflection_m(self, state: GuidewayState) -> np.ndarray:
-        """Midspan deflection of every integrated span, ordered from the rearmost [m]."""
+        """Midspan deflection of every integrated span, ordered from the rearmost [m].
+
+        Parameters
+        ----------
+        state : GuidewayState
+            The state to evaluate.
+
+        Returns
+        -------
+        ndarray (n_spans,)
+            Midspan deflections [m], positive downward (zeros for a rigid guideway).
+        """
         spans = state.first_span + np.arange(self.n_spans)
         if self.n_modes == 0:
             return np.zeros(self.n_spans)
@@ -469,6 +660,7 @@ class Guideway:
         Parameters
         ----------
         state : GuidewayState
+            The state at the start of the step.
         dt_s : float
             Step [s] (> 0).
         positions_m : array_like

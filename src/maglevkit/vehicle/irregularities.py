@@ -65,15 +65,47 @@ def _seed(value: Any, what: str = "seed") -> int:
         raise ParameterError(str(exc)) from None
 
 
+def _band(omega_min: Any, omega_max: Any, *, zero_ok: bool) -> tuple[float, float]:
+    """A band ``[omega_min, omega_max]`` [rad/m] of a PSD integral, checked (InputError)."""
+    lo = real_number(omega_min, "omega_min", "rad/m", nonnegative=zero_ok, positive=not zero_ok)
+    hi = real_number(omega_max, "omega_max", "rad/m", positive=True)
+    if not hi > lo:
+        raise InputError(f"omega_max = {hi:g} rad/m must be > omega_min = {lo:g} rad/m (a "
+                         "reversed or empty band)")
+    return lo, hi
+
+
 class Profile:
     """Base class: an irregularity profile ``r(x)`` [m], positive downward."""
 
     def elevation_m(self, position_m: Any) -> np.ndarray:  # pragma: no cover - abstract
-        """Irregularity ``r(x)`` [m] at positions [m]."""
+        """Irregularity ``r(x)`` [m] at positions [m], positive downward.
+
+        Parameters
+        ----------
+        position_m : float or array_like
+            Positions along the guideway [m], finite.
+
+        Returns
+        -------
+        ndarray
+            ``r(x)`` [m], same shape as ``position_m``.
+        """
         raise NotImplementedError
 
     def slope(self, position_m: Any) -> np.ndarray:  # pragma: no cover - abstract
-        """``dr/dx`` [m/m] at positions [m] (steps contribute nothing: a jump has no rate)."""
+        """``dr/dx`` [m/m] at positions [m] (steps contribute nothing: a jump has no rate).
+
+        Parameters
+        ----------
+        position_m : float or array_like
+            Positions along the guideway [m], finite.
+
+        Returns
+        -------
+        ndarray
+            ``dr/dx`` [m/m], same shape as ``position_m``.
+        """
         raise NotImplementedError
 
     def on_paths(self, positions_m: np.ndarray, *, start_m: np.ndarray, step_m: float
@@ -81,7 +113,22 @@ class Profile:
         """Elevation [m] and slope [-] at ``positions_m`` (n_steps, n_points), points
         that move at a constant speed: ``positions_m[k, j] = start_m[j] + k step_m`` (up
         to rounding).  The default evaluates :meth:`elevation_m` and :meth:`slope` at
-        ``positions_m``; profiles with a faster way for such paths override it."""
+        ``positions_m``; profiles with a faster way for such paths override it.
+
+        Parameters
+        ----------
+        positions_m : array_like (n_steps, n_points)
+            Positions [m] of the points at every step.
+        start_m : array_like (n_points,)
+            Position of each point at step 0 [m] (keyword only; used by the overrides).
+        step_m : float
+            Distance travelled per step [m] (speed times time step; keyword only).
+
+        Returns
+        -------
+        (elevation_m, slope) : ndarray (n_steps, n_points) each
+            ``r`` [m] and ``dr/dx`` [m/m].
+        """
         x = np.asarray(positions_m, dtype=float)
         return (np.asarray(self.elevation_m(x.ravel())).reshape(x.shape),
                 np.asarray(self.slope(x.ravel())).reshape(x.shape))
@@ -99,7 +146,26 @@ class Profile:
         (cubic Hermite interpolation of elevation and slope).
 
         For smooth profiles only: the interpolation rounds off steps (:class:`JointSteps`,
-        the kinks of :class:`SpanSag` at the piers); evaluate those directly (cheap)."""
+        the kinks of :class:`SpanSag` at the piers); evaluate those directly (cheap).
+
+        Parameters
+        ----------
+        start_m, stop_m : float
+            First and last position of the table [m], finite, ``stop_m > start_m``.
+        step_m : float
+            Sample spacing [m], > 0.  The table runs on to the first sample at or beyond
+            ``stop_m``.
+
+        Returns
+        -------
+        TabulatedProfile
+            Positions outside the table raise :class:`~maglevkit.errors.OutOfRangeError`.
+
+        Raises
+        ------
+        ParameterError
+            Non-finite bounds, ``step_m <= 0`` or ``stop_m <= start_m``.
+        """
         a, b = _finite("start_m", start_m, "m"), _finite("stop_m", stop_m, "m")
         h = _finite("step_m", step_m, "m", positive=True)
         if b <= a:
@@ -111,20 +177,66 @@ class Profile:
 
 @dataclass(frozen=True, eq=False)
 class SumProfile(Profile):
-    """The sum of several profiles."""
+    """The sum of several profiles (what ``profile_a + profile_b`` gives).
+
+    Parameters
+    ----------
+    parts : tuple of Profile
+        The summed profiles.
+    """
 
     parts: tuple[Profile, ...]
 
     def elevation_m(self, position_m: Any) -> np.ndarray:
+        """Sum of the parts' elevations [m].
+
+        Parameters
+        ----------
+        position_m : float or array_like
+            Positions along the guideway [m], finite.
+
+        Returns
+        -------
+        ndarray
+            ``r(x)`` [m], same shape as ``position_m``.
+        """
         x = _x(position_m)
         return sum((p.elevation_m(x) for p in self.parts), np.zeros_like(x))
 
     def slope(self, position_m: Any) -> np.ndarray:
+        """Sum of the parts' slopes [m/m].
+
+        Parameters
+        ----------
+        position_m : float or array_like
+            Positions along the guideway [m], finite.
+
+        Returns
+        -------
+        ndarray
+            ``dr/dx`` [m/m], same shape as ``position_m``.
+        """
         x = _x(position_m)
         return sum((p.slope(x) for p in self.parts), np.zeros_like(x))
 
     def on_paths(self, positions_m: np.ndarray, *, start_m: np.ndarray, step_m: float
                  ) -> tuple[np.ndarray, np.ndarray]:
+        """Sum of the parts' :meth:`Profile.on_paths` (each part's fast path).
+
+        Parameters
+        ----------
+        positions_m : array_like (n_steps, n_points)
+            Positions [m] of the points at every step.
+        start_m : array_like (n_points,)
+            Position of each point at step 0 [m].
+        step_m : float
+            Distance travelled per step [m].
+
+        Returns
+        -------
+        (elevation_m, slope) : ndarray (n_steps, n_points) each
+            ``r`` [m] and ``dr/dx`` [m/m].
+        """
         x = np.asarray(positions_m, dtype=float)
         r, rx = np.zeros_like(x), np.zeros_like(x)
         for p in self.parts:
@@ -158,6 +270,12 @@ class SpanSag(Profile):
     origin_m : float
         Position of a pier [m].
     shape : {"uniform_load", "half_sine"}
+        Deflection line between the piers (default ``"uniform_load"``).
+
+    Raises
+    ------
+    ParameterError
+        Non-finite values, ``span_length_m <= 0`` or an unknown ``shape``.
     """
 
     amplitude_m: float
@@ -208,8 +326,15 @@ class JointSteps(Profile):
     origin_m : float
         Position of a joint [m].
     pattern : {"alternating", "random"}
+        How the pack offsets alternate (default ``"alternating"``).
     seed : int
-        Seed of the random offsets.
+        Seed of the random offsets (whole number >= 0; default 0).
+
+    Raises
+    ------
+    ParameterError
+        Non-finite values, ``step_m < 0``, ``pitch_m <= 0``, an unknown ``pattern`` or a
+        bad seed.
     """
 
     step_m: float
@@ -228,10 +353,38 @@ class JointSteps(Profile):
         object.__setattr__(self, "seed", _seed(self.seed))
 
     def pack_index(self, position_m: Any) -> np.ndarray:
-        """Index ``n`` of the stator pack at each position."""
+        """Index ``n`` of the stator pack at each position.
+
+        Parameters
+        ----------
+        position_m : float or array_like
+            Positions along the guideway [m], finite.
+
+        Returns
+        -------
+        ndarray of int64
+            ``floor((x - origin_m) / pitch_m)``, same shape as ``position_m``.
+        """
         return np.floor((_x(position_m) - self.origin_m) / self.pitch_m).astype(np.int64)
 
     def elevation_m(self, position_m: Any) -> np.ndarray:
+        """Irregularity ``r(x)`` [m] at positions [m], positive downward.
+
+        Parameters
+        ----------
+        position_m : float or array_like
+            Positions along the guideway [m], finite.
+
+        Returns
+        -------
+        ndarray
+            ``r(x)`` [m], same shape as ``position_m``.
+
+        Raises
+        ------
+        InputError
+            Positions that are not finite real numbers.
+        """
         n = self.pack_index(position_m)
         if self.pattern == "alternating":
             return np.where(n % 2 == 0, 0.5, -0.5) * self.step_m
@@ -240,6 +393,23 @@ class JointSteps(Profile):
         return (u - 0.5) * self.step_m
 
     def slope(self, position_m: Any) -> np.ndarray:
+        """``dr/dx`` [m/m] at positions [m]: zero (a step has no rate).
+
+        Parameters
+        ----------
+        position_m : float or array_like
+            Positions along the guideway [m], finite.
+
+        Returns
+        -------
+        ndarray
+            ``dr/dx`` [m/m], same shape as ``position_m``.
+
+        Raises
+        ------
+        InputError
+            Positions that are not finite real numbers.
+        """
         return np.zeros_like(_x(position_m))
 
 
@@ -257,7 +427,22 @@ def _hash_uniform(seed: int, n: np.ndarray) -> np.ndarray:
 @dataclass(frozen=True, eq=False)
 class HarmonicProfile(Profile):
     """``r = A sin(2 pi (x - x0) / lambda)``: e.g. the stator-pack (1.032 m) or pole-pitch
-    (0.258 m) periodicity."""
+    (0.258 m) periodicity.
+
+    Parameters
+    ----------
+    amplitude_m : float
+        Amplitude A [m] (finite; negative flips the sign).
+    wavelength_m : float
+        Wavelength lambda [m], > 0; default the stator-pack length 1.032 m.
+    origin_m : float
+        Position x0 of a zero crossing with positive slope [m] (default 0).
+
+    Raises
+    ------
+    ParameterError
+        Non-finite values or ``wavelength_m <= 0``.
+    """
 
     amplitude_m: float
     wavelength_m: float = STATOR_PACK_LENGTH_M
@@ -269,10 +454,44 @@ class HarmonicProfile(Profile):
         _finite("origin_m", self.origin_m, "m")
 
     def elevation_m(self, position_m: Any) -> np.ndarray:
+        """Irregularity ``r(x)`` [m] at positions [m], positive downward.
+
+        Parameters
+        ----------
+        position_m : float or array_like
+            Positions along the guideway [m], finite.
+
+        Returns
+        -------
+        ndarray
+            ``r(x)`` [m], same shape as ``position_m``.
+
+        Raises
+        ------
+        InputError
+            Positions that are not finite real numbers.
+        """
         k = 2 * math.pi / self.wavelength_m
         return self.amplitude_m * np.sin(k * (_x(position_m) - self.origin_m))
 
     def slope(self, position_m: Any) -> np.ndarray:
+        """``dr/dx`` [m/m] at positions [m].
+
+        Parameters
+        ----------
+        position_m : float or array_like
+            Positions along the guideway [m], finite.
+
+        Returns
+        -------
+        ndarray
+            ``dr/dx`` [m/m], same shape as ``position_m``.
+
+        Raises
+        ------
+        InputError
+            Positions that are not finite real numbers.
+        """
         k = 2 * math.pi / self.wavelength_m
         return self.amplitude_m * k * np.cos(k * (_x(position_m) - self.origin_m))
 
@@ -291,6 +510,21 @@ class GermanTrackPSD:
     2020; Lei, High Speed Railway Track Dynamics, 2017); a maglev guideway is smoother at
     long and rougher at short wavelengths (Shi et al., J. Zhejiang Univ. Sci. A 15 (2014)
     385-394), so scale ``A_v`` to the case.
+
+    Parameters
+    ----------
+    A_v_m_rad : float
+        Roughness coefficient ``A_v`` [m rad], > 0.
+    omega_c_rad_per_m : float
+        Cut-off spatial frequency ``Omega_c`` [rad/m], > 0.
+    omega_r_rad_per_m : float
+        Second corner spatial frequency ``Omega_r`` [rad/m], > 0 and different from
+        ``omega_c_rad_per_m``.
+
+    Raises
+    ------
+    ParameterError
+        Values not finite and > 0, or ``omega_r_rad_per_m == omega_c_rad_per_m``.
     """
 
     A_v_m_rad: float = 4.032e-7
@@ -310,7 +544,25 @@ class GermanTrackPSD:
         return self.A_v_m_rad * c * c / ((w2 + r * r) * (w2 + c * c))
 
     def variance_m2(self, omega_min: float, omega_max: float) -> float:
-        """Exact ``int S dOmega`` over ``[omega_min, omega_max]`` [m^2] (partial fractions)."""
+        """Exact ``int S dOmega`` over ``[omega_min, omega_max]`` [m^2] (partial fractions).
+
+        Parameters
+        ----------
+        omega_min, omega_max : float
+            Band of spatial angular frequencies [rad/m], finite,
+            ``0 <= omega_min < omega_max``.
+
+        Returns
+        -------
+        float
+            Variance [m^2] of the profile components in the band.
+
+        Raises
+        ------
+        InputError
+            A band that is not finite, starts below 0, or is reversed or empty.
+        """
+        omega_min, omega_max = _band(omega_min, omega_max, zero_ok=True)
         c, r = self.omega_c_rad_per_m, self.omega_r_rad_per_m
 
         def prim(w: float) -> float:
@@ -321,7 +573,23 @@ class GermanTrackPSD:
 
 @dataclass(frozen=True)
 class PowerLawPSD:
-    """One-sided power-law PSD ``S(Omega) = S0 (Omega / Omega0)^(-n)`` [m^2/(rad/m)]."""
+    """One-sided power-law PSD ``S(Omega) = S0 (Omega / Omega0)^(-n)`` [m^2/(rad/m)].
+
+    Parameters
+    ----------
+    S0_m2_per_rad_per_m : float
+        PSD ``S0`` at the reference frequency [m^2/(rad/m)], > 0.
+    exponent : float
+        Exponent n [-] (finite; default 2).
+    omega0_rad_per_m : float
+        Reference spatial frequency ``Omega0`` [rad/m], > 0 (default 1).
+
+    Raises
+    ------
+    ParameterError
+        ``S0_m2_per_rad_per_m`` or ``omega0_rad_per_m`` not finite and > 0, or a
+        non-finite ``exponent``.
+    """
 
     S0_m2_per_rad_per_m: float
     exponent: float = 2.0
@@ -337,8 +605,32 @@ class PowerLawPSD:
         return self.S0_m2_per_rad_per_m * (w / self.omega0_rad_per_m) ** (-self.exponent)
 
     def variance_m2(self, omega_min: float, omega_max: float) -> float:
-        """Exact ``int S dOmega`` over ``[omega_min, omega_max]`` [m^2]."""
+        """Exact ``int S dOmega`` over ``[omega_min, omega_max]`` [m^2].
+
+        Parameters
+        ----------
+        omega_min, omega_max : float
+            Band of spatial angular frequencies [rad/m], finite,
+            ``0 <= omega_min < omega_max``; ``omega_min = 0`` only for ``exponent < 1``
+            (the integral diverges at 0 otherwise).
+
+        Returns
+        -------
+        float
+            Variance [m^2] of the profile components in the band.
+
+        Raises
+        ------
+        InputError
+            A band that is not finite, starts below 0, or is reversed or empty; or
+            ``omega_min = 0`` with ``exponent >= 1``.
+        """
+        omega_min, omega_max = _band(omega_min, omega_max, zero_ok=True)
         s0, n, w0 = self.S0_m2_per_rad_per_m, self.exponent, self.omega0_rad_per_m
+        if omega_min == 0.0 and n >= 1.0:
+            raise InputError(f"omega_min = 0 rad/m: the variance of a power law with "
+                             f"exponent = {n:g} >= 1 diverges at 0; allowed: omega_min > 0 "
+                             "(or an exponent < 1)")
         if n == 1.0:
             return s0 * w0 * math.log(omega_max / omega_min)
         return s0 * w0 ** n * (omega_max ** (1 - n) - omega_min ** (1 - n)) / (1 - n)
@@ -432,9 +724,43 @@ class RandomProfile(Profile):
         return out.reshape(x.shape)
 
     def elevation_m(self, position_m: Any) -> np.ndarray:
+        """Irregularity ``r(x)`` [m] at positions [m], positive downward.
+
+        Parameters
+        ----------
+        position_m : float or array_like
+            Positions along the guideway [m], finite.
+
+        Returns
+        -------
+        ndarray
+            ``r(x)`` [m], same shape as ``position_m``.
+
+        Raises
+        ------
+        InputError
+            Positions that are not finite real numbers.
+        """
         return self._sum(position_m, False)
 
     def slope(self, position_m: Any) -> np.ndarray:
+        """``dr/dx`` [m/m] at positions [m].
+
+        Parameters
+        ----------
+        position_m : float or array_like
+            Positions along the guideway [m], finite.
+
+        Returns
+        -------
+        ndarray
+            ``dr/dx`` [m/m], same shape as ``position_m``.
+
+        Raises
+        ------
+        InputError
+            Positions that are not finite real numbers.
+        """
         return self._sum(position_m, True)
 
     def on_paths(self, positions_m: np.ndarray, *, start_m: np.ndarray, step_m: float
@@ -469,7 +795,23 @@ class RandomProfile(Profile):
 @dataclass(frozen=True, eq=False)
 class TabulatedProfile(Profile):
     """A profile sampled at increasing positions, cubic-Hermite interpolated (elevation
-    and slope given at the samples); positions outside the table raise."""
+    and slope given at the samples); positions outside the table raise.
+
+    Parameters
+    ----------
+    position_m : array_like (n,)
+        Sample positions [m], finite, strictly increasing, n >= 2.
+    values_m : array_like (n,)
+        Irregularity ``r`` at the samples [m].
+    slopes : array_like (n,)
+        ``dr/dx`` at the samples [m/m].
+
+    Raises
+    ------
+    ParameterError
+        Arrays not 1-D and equally long (>= 2), non-finite values, or positions not
+        strictly increasing.
+    """
 
     position_m: np.ndarray
     values_m: np.ndarray
@@ -496,7 +838,45 @@ class TabulatedProfile(Profile):
         return x
 
     def elevation_m(self, position_m: Any) -> np.ndarray:
+        """Irregularity ``r(x)`` [m] at positions [m], positive downward.
+
+        Parameters
+        ----------
+        position_m : float or array_like
+            Positions along the guideway [m], finite.
+
+        Returns
+        -------
+        ndarray
+            ``r(x)`` [m], same shape as ``position_m``.
+
+        Raises
+        ------
+        InputError
+            Positions that are not finite real numbers.
+        OutOfRangeError
+            A position outside the tabulated range.
+        """
         return np.asarray(self._interp(self._check(position_m)), dtype=float)
 
     def slope(self, position_m: Any) -> np.ndarray:
+        """``dr/dx`` [m/m] at positions [m].
+
+        Parameters
+        ----------
+        position_m : float or array_like
+            Positions along the guideway [m], finite.
+
+        Returns
+        -------
+        ndarray
+            ``dr/dx`` [m/m], same shape as ``position_m``.
+
+        Raises
+        ------
+        InputError
+            Positions that are not finite real numbers.
+        OutOfRangeError
+            A position outside the tabulated range.
+        """
         return np.asarray(self._interp(self._check(position_m), 1), dtype=float)

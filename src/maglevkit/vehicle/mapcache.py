@@ -5,7 +5,8 @@ neighbour of a failed circuit carries up to about twice its share; a closing gap
 the skids): gaps 2-22 mm in 1 mm steps, currents 0-100 A in 2 A steps.  They are written
 to netCDF under ``<cache>/vehicle-maps/`` (``<cache>`` = ``$MAGLEVKIT_CACHE_DIR``, else
 ``$XDG_CACHE_HOME/maglevkit`` or ``~/.cache/maglevkit``) or a directory you give, named
-by the magnet's network hash and the grid, and checked against the magnet when read.
+by the magnet's network hash and the grid (values and shapes), and checked against the
+magnet and the grid when read (a file on another grid is rebuilt).
 """
 
 from __future__ import annotations
@@ -17,6 +18,7 @@ from typing import Any
 import numpy as np
 
 from ..errors import InputError
+from ..validation import real_array
 
 __all__ = ["VEHICLE_MAP_GAPS_M", "VEHICLE_MAP_CURRENTS_A", "vehicle_maps", "maps_path"]
 
@@ -28,11 +30,35 @@ VEHICLE_MAP_CURRENTS_A = np.linspace(0.0, 100.0, 51)
 
 def maps_path(magnet: Any, gaps: np.ndarray, currents: np.ndarray,
               cache_dir: str | Path | None = None) -> Path:
-    """Where the maps of ``magnet`` on this grid are cached."""
+    """Where the maps of ``magnet`` on this grid are cached.
+
+    Parameters
+    ----------
+    magnet : Magnet
+        The magnet (its name and network hash name the file).
+    gaps : ndarray
+        Gap grid [m] (its values and shape are hashed).
+    currents : ndarray
+        Current grid [A] (its values and shape are hashed, separately from the gaps).
+    cache_dir : str or Path, optional
+        Directory of the cached files (default: ``<cache>/vehicle-maps``, see the module
+        docstring).  Not created here.
+
+    Returns
+    -------
+    Path
+        ``<dir>/<magnet name>-<network hash>-<grid hash>.nc``.
+    """
     from ..models.compiled import cache_directory
     from ..reduction.maps import network_hash
 
-    grid = hashlib.sha256(np.concatenate([gaps, currents]).tobytes()).hexdigest()[:10]
+    h = hashlib.sha256()
+    for label, arr in (("gaps", gaps), ("currents", currents)):
+        a = np.ascontiguousarray(arr, dtype=np.float64)
+        # name and shape first: [g1, g2] + [c1, c2, c3] and [g1, g2, c1] + [c2, c3] differ
+        h.update(f"{label}{a.shape};".encode())
+        h.update(a.tobytes())
+    grid = h.hexdigest()[:10]
     base = Path(cache_dir) if cache_dir is not None else cache_directory() / "vehicle-maps"
     name = "".join(ch if ch.isalnum() or ch in "-_" else "_" for ch in magnet.name)[:40]
     return base / f"{name}-{network_hash(magnet.network)[:16]}-{grid}.nc"
@@ -56,6 +82,7 @@ def vehicle_maps(magnet: Any, *, cache_dir: str | Path | None = None,
     Parameters
     ----------
     magnet : Magnet
+        The magnet whose maps are wanted.
     cache_dir : path, optional
         Directory of the cached netCDF files (default: the user's cache, see module doc).
     gaps, currents : array_like, optional
@@ -66,16 +93,22 @@ def vehicle_maps(magnet: Any, *, cache_dir: str | Path | None = None,
     Returns
     -------
     CharacteristicMaps
+        Read from the cache (checked against the magnet and the grid), or built and
+        then written there (atomically, creating the directory).  A cached file on
+        another grid (a stale file under this name) is rebuilt and replaced.
     """
     from ..reduction.maps import build_maps, load_maps
 
-    g = VEHICLE_MAP_GAPS_M if gaps is None else np.asarray(gaps, dtype=float)
-    c = VEHICLE_MAP_CURRENTS_A if currents is None else np.asarray(currents, dtype=float)
+    g = VEHICLE_MAP_GAPS_M if gaps is None else real_array(gaps, "gaps", "m")
+    c = VEHICLE_MAP_CURRENTS_A if currents is None else real_array(currents, "currents", "A")
     if cache_dir is not None:
         _check_cache_dir(Path(cache_dir))
     path = maps_path(magnet, g, c, cache_dir)
     if path.is_file():
-        return load_maps(path, magnet=magnet)
+        cached = load_maps(path, magnet=magnet)
+        if (cached.gaps_m.shape == g.shape and cached.currents_A.shape == c.shape
+                and np.array_equal(cached.gaps_m, g) and np.array_equal(cached.currents_A, c)):
+            return cached
     maps = build_maps(magnet, gaps=g, currents=c, progress=progress)
     # the user's cache may be created with its parents; a folder given (cache_dir,
     # --maps-cache) only as its last level, as every other output folder

@@ -41,7 +41,8 @@ import numpy as np
 import scipy.linalg
 
 from ..errors import InputError
-from .heave import STANDARD_GRAVITY
+from ..plant import STANDARD_GRAVITY
+from ..validation import describe, real_array, real_number
 from .train import TrainData
 
 __all__ = ["VehicleMechanics", "ForceElement", "derive_sympy"]
@@ -54,6 +55,20 @@ class ForceElement:
     Its compression is ``Delta = u_a(xi_a) - u_b(xi_b)`` (``a`` above ``b``: the car body
     above a frame, or the front car body's rear end above the next one's front end);
     force ``k Delta + c Delta'`` pushes ``a`` up and ``b`` down.
+
+    Parameters
+    ----------
+    name : str
+        Label, e.g. ``"spring1.2"`` or ``"joint1"``.
+    body_a, body_b : int
+        Body indices (car bodies first, then frames; see
+        :attr:`VehicleMechanics.body_names`).
+    xi_a_m, xi_b_m : float
+        Train coordinates of the attachment points [m] (distance behind the nose).
+    stiffness_N_per_m : float
+        Vertical stiffness k [N/m].
+    damping_N_s_per_m : float
+        Vertical damping c [N s/m].
     """
 
     name: str
@@ -71,17 +86,31 @@ class VehicleMechanics:
     Parameters
     ----------
     train : TrainData
+        Masses, inertias, positions, air springs and joints of the train
+        (from :func:`~maglevkit.vehicle.load_vehicle`).
     force_points_m : sequence of float
-        Train coordinates ``xi`` [m] where magnet forces act (circuit centres or poles).
+        Train coordinates ``xi`` [m] where magnet forces act (circuit centres or poles);
+        finite, one per force point.
     force_frames : sequence of int
-        Frame index (0-based, nose first) carrying each force point.
+        Frame index (0-based, nose first) carrying each force point, in
+        ``0 .. n_frames - 1``.
+    gravity : float, default STANDARD_GRAVITY
+        Gravitational acceleration g [m/s^2] (9.80665; not checked; keyword only).
+
+    Raises
+    ------
+    InputError
+        ``train`` not a :class:`TrainData`, points and frames of different lengths or
+        non-finite points, or a frame index out of range.
 
     Attributes
     ----------
     body_names : tuple of str
         ``"car1" ... , "frame1" ...`` (car bodies first, then frames).
     body_centres_m, body_mass_kg, body_inertia_kg_m2 : ndarray (n_bodies,)
+        Centre of mass ``xi_b`` [m], mass [kg] and pitch inertia [kg m^2] of each body.
     elements : tuple of ForceElement
+        Air springs (every frame, nose first) then the inter-car joints.
     M, C, K : ndarray (n_dof, n_dof)
         Mass [kg, kg m^2], damping and stiffness matrices.
     Q_gravity : ndarray (n_dof,)
@@ -134,7 +163,20 @@ class VehicleMechanics:
 
     # ------------------------------------------------------------------ assembly
     def point_jacobian(self, body: int, xi_m: Any) -> np.ndarray:
-        """``d u(xi) / dq`` of body points (small angles): (n_points, n_dof)."""
+        """``d u(xi) / dq`` of body points (small angles): (n_points, n_dof).
+
+        Parameters
+        ----------
+        body : int
+            Body index (car bodies first, then frames).
+        xi_m : float or array_like
+            Train coordinates of the points [m] (distance behind the nose; not checked).
+
+        Returns
+        -------
+        ndarray (n_points, n_dof)
+            1 in the body's heave column, ``xi - xi_b`` [m] in its pitch column.
+        """
         x = np.atleast_1d(np.asarray(xi_m, dtype=float))
         jac = np.zeros((x.size, self.n_dof))
         jac[:, 2 * body] = 1.0
@@ -165,12 +207,38 @@ class VehicleMechanics:
         return tuple(f"{b}.{c}" for b in self.body_names for c in ("z", "theta"))
 
     def element_compressions(self, q: np.ndarray) -> np.ndarray:
-        """Compression ``Delta_e`` of every force element [m] (axis -1 over elements)."""
+        """Compression ``Delta_e`` of every force element [m] (axis -1 over elements).
+
+        Parameters
+        ----------
+        q : array_like (..., n_dof)
+            Generalised displacements ``[z_1, theta_1, ...]`` [m, rad].
+
+        Returns
+        -------
+        ndarray (..., n_elements)
+            Compressions [m], in the order of :attr:`elements`.
+        """
         return np.asarray(q) @ self._element_g.T
 
     def energy_J(self, q: np.ndarray, q_dot: np.ndarray) -> np.ndarray:
         """Kinetic energy plus spring energy, ``sum m z'^2/2 + J theta'^2/2 + sum k Delta^2/2``,
-        from the bodies and elements one by one (not from ``K``) [J]."""
+        from the bodies and elements one by one (not from ``K``) [J].
+
+        Gravity's potential is not included.
+
+        Parameters
+        ----------
+        q : array_like (..., n_dof)
+            Generalised displacements [m, rad].
+        q_dot : array_like (..., n_dof)
+            Generalised velocities [m/s, rad/s].
+
+        Returns
+        -------
+        ndarray (...)
+            Energy [J].
+        """
         q, qd = np.asarray(q), np.asarray(q_dot)
         kin = 0.5 * (qd[..., 0::2] ** 2 @ self.body_mass_kg + qd[..., 1::2] ** 2
                      @ self.body_inertia_kg_m2)
@@ -178,7 +246,18 @@ class VehicleMechanics:
         return kin + 0.5 * (self.element_compressions(q) ** 2 @ k)
 
     def state_matrices(self, *, damping: bool = True) -> tuple[np.ndarray, np.ndarray]:
-        """``x' = A x + Bq Q`` with ``x = [q; q']`` and generalised forces ``Q`` (n_dof)."""
+        """``x' = A x + Bq Q`` with ``x = [q; q']`` and generalised forces ``Q`` (n_dof).
+
+        Parameters
+        ----------
+        damping : bool, default True
+            Include the dampers (``-M^-1 C`` block); False: the undamped system.
+
+        Returns
+        -------
+        (A, Bq) : ndarray (2 n_dof, 2 n_dof) and (2 n_dof, n_dof)
+            ``Q`` in [N] (heave rows) and [N m] (pitch rows).
+        """
         n = self.n_dof
         minv = np.diag(1.0 / np.diag(self.M))
         a = np.zeros((2 * n, 2 * n))
@@ -192,9 +271,26 @@ class VehicleMechanics:
 
     def discretize(self, dt_s: float, *, damping: bool = True) -> tuple[np.ndarray, np.ndarray]:
         """Exact zero-order-hold discretisation ``x+ = Ad x + Bd Q`` for forces held over
-        ``dt_s`` (matrix exponential of ``[[A, Bq], [0, 0]] dt``)."""
-        if not (isinstance(dt_s, (int, float)) and np.isfinite(dt_s) and dt_s > 0):
-            raise InputError(f"dt_s = {dt_s!r} must be a finite number > 0")
+        ``dt_s`` (matrix exponential of ``[[A, Bq], [0, 0]] dt``).
+
+        Parameters
+        ----------
+        dt_s : float
+            Step [s], finite and > 0.
+        damping : bool, default True
+            Include the dampers (as :meth:`state_matrices`).
+
+        Returns
+        -------
+        (Ad, Bd) : ndarray (2 n_dof, 2 n_dof) and (2 n_dof, n_dof)
+
+        Raises
+        ------
+        InputError
+            ``dt_s`` not a finite real number > 0 (Python or NumPy floats and ints; not
+            a bool).
+        """
+        dt_s = real_number(dt_s, "dt_s", "s", positive=True)
         a, bq = self.state_matrices(damping=damping)
         n2, n = bq.shape
         aug = np.zeros((n2 + n, n2 + n))
@@ -204,7 +300,22 @@ class VehicleMechanics:
         return e[:n2, :n2].copy(), e[:n2, n2:].copy()
 
     def accelerations(self, q: np.ndarray, q_dot: np.ndarray, forces_N: np.ndarray) -> np.ndarray:
-        """``q''`` from the equations of motion (forces: upward magnet forces per point)."""
+        """``q''`` from the equations of motion (forces: upward magnet forces per point).
+
+        Parameters
+        ----------
+        q : array_like (..., n_dof)
+            Generalised displacements [m, rad].
+        q_dot : array_like (..., n_dof)
+            Generalised velocities [m/s, rad/s].
+        forces_N : array_like (..., n_points)
+            Upward (attractive) magnet force at each force point [N].
+
+        Returns
+        -------
+        ndarray (..., n_dof)
+            ``q''`` [m/s^2, rad/s^2] (heave positive downward).  Inputs are not checked.
+        """
         rhs = (self.Q_gravity - np.asarray(q) @ self.K.T - np.asarray(q_dot) @ self.C.T
                - np.asarray(forces_N) @ self.B.T)
         return rhs / np.diag(self.M)
@@ -232,20 +343,44 @@ class VehicleMechanics:
         moment balance, with weights ``w_p`` (the number of poles a point stands for, so
         that equal poles carry equal forces).
 
+        Parameters
+        ----------
+        pole_weights : array_like (n_points,)
+            Weight ``w_p`` [-] of each force point, finite and > 0.
+
         Returns
         -------
         (q, forces_N) : ndarray (n_dof,), ndarray (n_points,)
             The equilibrium displacements and the upward force at every point [N].
+
+        Raises
+        ------
+        InputError
+            ``pole_weights`` not finite numbers > 0, one per force point; or a frame
+            with fewer than two force points at different positions (its force and
+            moment balance has no solution).
         """
+        npts = self.B.shape[1]
+        w = real_array(pole_weights, "pole_weights")
+        if w.shape != (npts,) or not np.all(w > 0.0):
+            raise InputError(f"pole_weights = {describe(pole_weights)}: expected {npts} "
+                             "numbers > 0, one per force point")
         nc = 2 * self.n_sections
+        cols_of = [np.flatnonzero(self.force_bodies == self.n_sections + f)
+                   for f in range(self.n_frames)]
+        for f, cols in enumerate(cols_of):
+            xs = np.unique(self.force_points_m[cols])
+            if xs.size < 2:
+                raise InputError(f"static_trim: {self.body_names[self.n_sections + f]} has "
+                                 f"force points at {xs.tolist()} m; each frame needs at "
+                                 "least two force points at different positions "
+                                 "(force_points_m, force_frames)")
         q = np.zeros(self.n_dof)
         q[:nc] = np.linalg.solve(self.K[:nc, :nc], self.Q_gravity[:nc])
         need = self.Q_gravity - self.K @ q            # = B F on the frame rows
-        w = np.asarray(pole_weights, dtype=float)
-        forces = np.zeros(self.B.shape[1])
-        for f in range(self.n_frames):
+        forces = np.zeros(npts)
+        for f, cols in enumerate(cols_of):
             rows = slice(nc + 2 * f, nc + 2 * f + 2)
-            cols = np.flatnonzero(self.force_bodies == self.n_sections + f)
             a = self.B[rows, cols]
             lam = np.linalg.solve(a @ (w[cols, None] * a.T), need[rows])
             forces[cols] = w[cols] * (a.T @ lam)
@@ -259,6 +394,12 @@ def derive_sympy(mech: VehicleMechanics) -> dict[str, np.ndarray]:
     frame, exact rotation about the pitch axis), ``V = sum k Delta^2/2`` with the exact
     vertical displacement of the attachment points, gravity, dampers and magnet forces as
     point forces; then linearised at ``q = q' = 0``.
+
+    Parameters
+    ----------
+    mech : VehicleMechanics
+        The model whose bodies, elements and force points are rederived (slow for many
+        bodies: symbolic differentiation).
 
     Returns
     -------

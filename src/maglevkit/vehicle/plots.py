@@ -13,7 +13,25 @@ __all__ = ["plot_vehicle_run"]
 
 def plot_vehicle_run(dataset: Any, directory: str | Path) -> list[Path]:
     """Write ``gaps_currents.png``, ``car_body_acceleration.png`` and
-    ``guideway_deflection.png`` into ``directory``; returns the paths."""
+    ``guideway_deflection.png`` into ``directory``; returns the paths.
+
+    Parameters
+    ----------
+    dataset : xarray.Dataset
+        The dataset of a vehicle run (``VehicleRun.dataset``).
+    directory : str or Path
+        Output folder; created if missing (its parent must exist).
+
+    Returns
+    -------
+    list of Path
+        The written figures.
+
+    Raises
+    ------
+    InputError
+        The parent of a missing ``directory`` does not exist.
+    """
     import matplotlib
 
     matplotlib.use("Agg")

@@ -31,8 +31,8 @@ from typing import Any
 import numpy as np
 
 from ..errors import InputError, MaglevkitError, OutOfRangeError, ParameterFileError, SolverError
+from ..plant import STANDARD_GRAVITY
 from .guideway import Guideway
-from .heave import STANDARD_GRAVITY
 from .mechanics import VehicleMechanics
 from .train import TrainData
 
@@ -767,7 +767,7 @@ class VehicleModel:
     def _compiled_step(self, dt: float) -> tuple[Any, Any, int]:
         """(compiled block function, layout, steps per block), built and compiled (or
         loaded from the disk cache) once per ``dt``."""
-        from ..models.compiled import _FLAGS, compile_function, compile_library
+        from ..models.compiled import DEFAULT_FLAGS, compile_function, compile_library
 
         hit = self._step_functions.get(dt)
         if hit is None:
@@ -775,14 +775,15 @@ class VehicleModel:
             lanes = None if self.fine else self.bank.compiled_step_library(dt)
             if lanes is not None:
                 # the bank's SIMD-lane step (its own library) called from the vehicle's
-                # generated C, linked against that library
+                # generated C, linked against that library; both in the default cache
+                # directory (the bank above is built without a cache_dir)
                 ext, lib = lanes
                 vs = self._step_function(dt, ext)
                 bf = vs.block_function
                 try:
                     funcs, _ = compile_library(
-                        bf.name(), [bf], mode="always", cache_dir=self.bank._cache_dir,
-                        flags=(*_FLAGS, "-Wl,--no-as-needed", str(lib),
+                        bf.name(), [bf], mode="always", cache_dir=None,
+                        flags=(*DEFAULT_FLAGS, "-Wl,--no-as-needed", str(lib),
                                f"-Wl,-rpath,{lib.parent}"))
                     f = funcs[0]
                 except SolverError:          # e.g. a linker without these options:

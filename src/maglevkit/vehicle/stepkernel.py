@@ -46,6 +46,25 @@ class StepLayout:
 
     ``state`` and ``record`` map a name to a slice of ``S`` and ``R``; ``n_state``,
     ``n_step_inputs``, ``n_record`` are their sizes.
+
+    Attributes
+    ----------
+    n_dof : int
+        Degrees of freedom of the mechanics (heave and pitch of every body).
+    n_circuits : int
+        Circuits of the magnet bank (one force point each).
+    n_spans : int
+        Guideway spans in the ring buffer (0 for a rigid guideway).
+    n_modes : int
+        Sine modes per span (0 for a rigid guideway).
+    state : dict of str to slice
+        Parts of the state vector ``S`` (``"x_mech"``, ``"guideway"``, ``"I_L"``,
+        ``"psi_hat"``, ``"integral"``, ``"current"``, ``"force"``).
+    step_inputs : dict of str to slice
+        Parts of the per-step input ``P`` (``"x"``, ``"r"``, ``"r_x"``, ``"t"``,
+        ``"keep"``).
+    record : dict of str to slice
+        Parts of the record ``R`` of a step.
     """
 
     n_dof: int
@@ -98,7 +117,9 @@ class VehicleStepFunction:
         ``block_steps`` steps in one call: ``(S, P, C) -> (S_next, R)`` with ``P`` and
         ``R`` one column per step (the rows of C-ordered ``(steps, n)`` arrays).
     block_steps : int
+        Steps per call of ``block_function``.
     layout : StepLayout
+        Where each quantity sits in the state, step-input and record vectors.
     parts : dict of casadi.Function
         ``"guideway_in"`` (deflection, rate at the loads; gaps), ``"controllers"``
         (voltages), ``"magnets"`` (the bank's step), ``"controller_update"``,
@@ -134,6 +155,55 @@ def build_vehicle_step(*, bank_step: Any, dt: float, nominal_gap_m: float, sides
     integral projection, the mode shapes at midspan.  ``wavenumbers`` may be empty (rigid
     guideway).  ``block_steps`` steps are chained in the block function (one call from
     Python per block: the per-call cost of binding buffers is ~1-2 us, a step ~40 us).
+
+    Parameters
+    ----------
+    bank_step : casadi.Function
+        The bank's step (:meth:`MagnetBank.step_function`): inputs ``I_L``, ``s``, ``U``,
+        ``sdot``, ``h``; outputs ``I_L_next``, ``I``, ``F``, ``n_bad``.
+    dt : float
+        Time step [s].
+    nominal_gap_m : float
+        Nominal gap ``s0`` [m] (gap at zero displacement; the controllers' reference).
+    sides : float
+        Magnets per lumped position (the bank's force times ``sides`` acts on the frame).
+    span_length_m, origin_m : float
+        Span length L [m] and position of pier 0 [m].
+    wavenumbers : ndarray (n_modes,)
+        ``k_j = j pi / L`` [rad/m] (empty: rigid guideway).
+    guideway_ad, guideway_bd : ndarray
+        Span ZOH matrices (:meth:`BeamSpan.discretize`), (2 n_modes, 2 n_modes) and
+        (2 n_modes, n_modes).
+    n_spans : int
+        Spans in the ring buffer.
+    mech_ad, mech_bd : ndarray
+        Mechanics ZOH matrices (:meth:`VehicleMechanics.discretize`).
+    gravity_force : ndarray (n_dof,)
+        Generalised gravity ``Q_g`` [N, N m].
+    force_matrix : ndarray (n_dof, n_circuits)
+        ``B`` of the force points (its transpose maps ``q`` to the gap changes [m]).
+    gains : dict of str to ndarray (n_circuits,)
+        Gap-controller gains ``kp_per_m``, ``kd_s_per_m``, ``ki_per_m_s``,
+        ``kflux_per_s`` (see :class:`~maglevkit.control.GapController`).
+    flux_bias_Wb : ndarray (n_circuits,)
+        Bias flux linkage ``psi_0`` [Wb].
+    resistance_ohm, eddy_resistance_ohm : ndarray (n_circuits,)
+        ``R_el`` and ``R_ec`` [ohm] (the chopper keeps ``U >= -R_ec I_L``).
+    voltage_limit_V : float
+        ``|U| <= U_max`` [V].
+    integral_projection : ndarray (n_circuits, n_circuits)
+        Maps the gap errors [m] to the integrators' inputs.
+    midspan_shape : ndarray (n_modes,)
+        Mode shapes at midspan (for the recorded midspan deflection).
+    block_steps : int, default 10
+        Steps chained in ``block_function``.
+    name : str, default "maglevkit_vehicle_step"
+        Name of the CasADi function (and of its compiled library).
+
+    Returns
+    -------
+    VehicleStepFunction
+        Not compiled here (the caller compiles it).  Inputs are not checked.
     """
     kk = np.asarray(wavenumbers, dtype=float).ravel()
     nm = kk.size

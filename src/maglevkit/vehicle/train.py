@@ -133,8 +133,16 @@ class TrainData:
     Attributes
     ----------
     name : str
+        Vehicle name.
     n_sections, n_frames_per_section, magnets_per_side : int
+        Sections (car bodies), levitation frames per section and magnet positions per
+        side of a section (a multiple of the frames per section).
     section_length_m, nominal_gap_m, touchdown_gap_m : float
+        Section length [m], nominal gap [m] and the gap at or below which a magnet counts
+        as closed onto the stator [m] (``touchdown_gap_m < nominal_gap_m``).
+    landing_gap_m : float
+        Gap at or above which the frame's skids sit on the slide rail [m]
+        (``> nominal_gap_m``); a vehicle run stops at either limit.
     standard_magnet, bow_magnet : str
         Magnet files (bundled names or paths).
     car_body_mass_kg, car_body_pitch_inertia_kg_m2, payload_kg : float
@@ -146,9 +154,15 @@ class TrainData:
     spring_positions_m : tuple of float
         Air springs relative to the frame centre (train coordinate) [m].
     joint_stiffness_N_per_m, joint_damping_N_s_per_m : float
+        Vertical stiffness [N/m] and damping [N s/m] of the joint between two sections.
     control_bandwidth_Hz, control_damping, flux_bandwidth_Hz, voltage_limit_V : float
+        Gap-controller design of every circuit: gap-loop natural frequency [Hz], damping
+        ratio [-] (in (0, 5)), flux-loop bandwidth [Hz] and voltage limit [V] (see
+        :func:`~maglevkit.control.design_gap_controller`).
     provenance : dict
+        ``"table.key" -> tag/source``.
     source : str
+        File path or bundled name.
     sides : int
         Magnets per lumped position (2: left and right).
     """
@@ -345,6 +359,15 @@ def bundled_vehicles() -> list[str]:
 
 def load_vehicle(source: str | Path = "tr09") -> TrainData:
     """Load a vehicle file by path or bundled name (default: the bundled ``tr09``).
+
+    Parameters
+    ----------
+    source : str or Path, default "tr09"
+        Path of a TOML file, or the name of a bundled file (:func:`bundled_vehicles`).
+
+    Returns
+    -------
+    TrainData
 
     Raises
     ------

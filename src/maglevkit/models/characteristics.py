@@ -1,4 +1,8 @@
-"""Characteristic numbers of a magnet from its statics: saturation knee and circuit coupling."""
+"""Characteristic numbers of a magnet from its statics: saturation knee and circuit coupling.
+
+(In :mod:`maglevkit.models`, not :mod:`maglevkit.magnets`: they solve the statics, which
+sit a layer above the magnets.)
+"""
 
 from __future__ import annotations
 
@@ -7,8 +11,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import InputError
-from ..models.statics import solve_statics
-from .base import Magnet
+from ..magnets.base import Magnet
+from ..validation import real_number, whole_number
+from .statics import solve_statics
 
 __all__ = ["saturation_knee", "coupling_ratios", "nominal_point", "force_exponent", "Coupling",
            "KNEE_EXPONENT"]
@@ -20,6 +25,16 @@ KNEE_EXPONENT = 1.8
 
 def nominal_point(magnet: Magnet) -> tuple[float, float]:
     """``(nominal_gap [m], nominal_current [A])`` from the file's ``[operating]`` table.
+
+    Parameters
+    ----------
+    magnet : Magnet
+        A magnet loaded from a parameter file.
+
+    Returns
+    -------
+    (gap_m, current_A) : tuple of float
+        Nominal gap [m] and nominal current [A].
 
     Raises
     ------
@@ -37,6 +52,27 @@ def force_exponent(magnet: Magnet, *, gap: float, currents: np.ndarray) -> np.nd
     """Local exponent ``n = d ln F / d ln I = I (dF/dI) / F`` of the total force.
 
     Every circuit carries the same current; exact ``dF/dI`` from the statics.
+
+    Parameters
+    ----------
+    magnet : Magnet
+        The magnet (or network; anything :func:`~maglevkit.models.solve_statics` takes).
+    gap : float
+        Gap of every pole [m], > 0 (keyword only).
+    currents : array_like (n,)
+        Currents [A], each > 0, applied to every circuit at once (keyword only).
+
+    Returns
+    -------
+    ndarray (n,)
+        ``n`` [-] at each current: 2 for an unsaturated magnet, falling with saturation.
+
+    Raises
+    ------
+    InputError
+        A current <= 0, or a bad gap (from the statics).
+    SolverError
+        If the statics cannot be solved.
     """
     cur = np.asarray(currents, dtype=float)
     if np.any(cur <= 0.0):
@@ -60,17 +96,26 @@ def saturation_knee(magnet: Magnet, *, gap: float | None = None,
     exponent : float
         Threshold in (0, 2); default :data:`KNEE_EXPONENT`.
     max_current : float, optional
-        Upper end of the scan [A]; default 4 x the nominal current.
+        Upper end of the scan [A], finite and > 0; default 4 x the nominal current.
     points : int
-        Scan resolution; the crossing is interpolated linearly.
+        Scan resolution, a whole number >= 2 (currents ``max_current / points ...
+        max_current``); the crossing is interpolated linearly.
+
+    Returns
+    -------
+    float
+        I0 [A].
 
     Raises
     ------
     InputError
         Bad arguments, or no knee within the scanned range.
     """
-    if not 0.0 < exponent < 2.0:
+    if not 0.0 < real_number(exponent, "exponent") < 2.0:
         raise InputError(f"exponent = {exponent!r} must lie in (0, 2)")
+    points = whole_number(points, "points", minimum=2)
+    if max_current is not None:
+        max_current = real_number(max_current, "max_current", "A", positive=True)
     scan = "max_current"
     if gap is None or max_current is None:
         s0, i0 = nominal_point(magnet)
@@ -101,6 +146,8 @@ class Coupling:
 
     Attributes
     ----------
+    circuit_names : tuple of str
+        The circuits, in the order of the matrix rows and columns.
     inductance_H : ndarray (n_circuits, n_circuits)
         ``dpsi_i / dI_j`` [H].
     ratio : ndarray (n_circuits, n_circuits)
@@ -124,6 +171,27 @@ def coupling_ratios(magnet: Magnet, *, gap: float | None = None,
     """Mutual/self differential-inductance ratios of the circuits (statics, uniform gap).
 
     Defaults: nominal gap and current of the parameter file.
+
+    Parameters
+    ----------
+    magnet : Magnet
+        The magnet.
+    gap : float, optional
+        Gap of every pole [m], > 0; default the nominal gap (keyword only).
+    current : float, optional
+        Current of every circuit [A]; default the nominal current (keyword only).
+
+    Returns
+    -------
+    Coupling
+
+    Raises
+    ------
+    InputError
+        A default needed but no ``[operating]`` table in the magnet's file, or a bad gap
+        or current (from the statics).
+    SolverError
+        If the statics cannot be solved.
     """
     if gap is None or current is None:
         s0, i0 = nominal_point(magnet)

@@ -1,0 +1,177 @@
+"""Reduced vs detailed model under gap motion (TR09 standard magnet, constant voltage).
+
+A gap sine 10 +- 1 mm at 5 .. 200 Hz at the voltage of 34 A: amplitude and phase (against
+the gap) of the coil current and the magnet force, detailed vs eq. 8 (the paper's Fig. 8,
+one R_ec) vs the shielded-gap ladder (``CurrentModel(maps, motion_eddy=True)``), and the
+errors relative to the signal's variation (``RMS(reduced - detailed) / RMS(detailed -
+mean)``, the AC error of ``maglevkit.compare``).  Then the other standard scenarios (voltage
+steps, ramp, closed loop), so that the extension is seen not to cost elsewhere.
+
+``python benchmarks/bench_gap_motion.py --figure docs/figures/gap-motion-bode.png`` draws
+the Bode plot of gap -> current and gap -> force from the linearised models.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import time
+from typing import Any
+
+import numpy as np
+
+import maglevkit as mk
+from maglevkit.compare import compare_models, standard_scenarios
+
+TITLE = "Gap motion: reduced vs detailed model (TR09 standard, gap sine 10 +- 1 mm)"
+
+MAGNET, GAP, CURRENT, AMPLITUDE = "tr09-standard", 0.010, 34.0, 1e-3
+FREQUENCIES = (5.0, 20.0, 50.0, 100.0, 200.0)
+GRID = (np.linspace(0.005, 0.016, 12), np.linspace(0.0, 80.0, 41))
+
+
+def models() -> tuple[mk.Magnet, mk.FluxModel, mk.CurrentModel, mk.CurrentModel]:
+    """The magnet, its detailed model, eq. 8 and the shielded-gap ladder."""
+    mag = mk.load_magnet(MAGNET)
+    maps = mk.build_maps(mag, gaps=GRID[0], currents=GRID[1], progress=False)
+    return (mag, mk.FluxModel(mag), mk.CurrentModel(maps),
+            mk.CurrentModel(maps, motion_eddy=True))
+
+
+def _fundamental(t: np.ndarray, y: np.ndarray, f: float) -> complex:
+    """Complex amplitude of ``y`` at ``f`` against ``sin(2 pi f t)`` (least squares with
+    an offset and a drift)."""
+    w = 2 * math.pi * f
+    a = np.column_stack([np.ones_like(t), t, np.sin(w * t), np.cos(w * t)])
+    c, *_ = np.linalg.lstsq(a, y, rcond=None)
+    return complex(c[2], c[3])          # y ~ Re(X e^{i w t}) / i: amplitude |X|, phase arg X
+
+
+def _ac_error(ref: np.ndarray, red: np.ndarray) -> float:
+    return float(np.sqrt(np.mean((red - ref) ** 2)) / np.sqrt(np.mean((ref - ref.mean()) ** 2)))
+
+
+def sweep(fm: mk.FluxModel, reduced: dict[str, mk.CurrentModel],
+          frequencies: tuple[float, ...] = FREQUENCIES) -> list[dict[str, Any]]:
+    """Per frequency: the detailed and reduced fundamentals and AC errors (circuit 0's
+    current, the magnet force), on the grid of ``maglevkit.compare.standard_scenarios``
+    (duration ``max(2/f, 0.1 s)``, step ``min(1/(100 f), 1 ms)``)."""
+    u0 = fm.resistances * CURRENT
+    rows = []
+    for f in frequencies:
+        dur, dt = max(2.0 / f, 0.1), min(1.0 / (100 * f), 1e-3)
+
+        def gaps(t: Any, f: float = f) -> Any:
+            return GAP + AMPLITUDE * np.sin(2 * np.pi * f * t)
+
+        t0 = time.perf_counter()
+        det = mk.simulate(fm, (0.0, dur), dt=dt, gaps=gaps, voltages=u0)
+        wall = time.perf_counter() - t0
+        t = det.time_s
+        last = t >= t[-1] - 1.0 / f * max(1, math.floor(f * dur / 2))   # the last half
+        cd, fd = det.currents_A[:, 0], det.pole_force_N.sum(axis=1)
+        row: dict[str, Any] = {"f": f, "wall_detailed_s": wall,
+                               "detailed": (_fundamental(t[last], cd[last], f),
+                                            _fundamental(t[last], fd[last], f))}
+        for name, model in reduced.items():
+            res = mk.simulate(model, (0.0, dur), dt=dt, gaps=gaps, voltages=u0)
+            cr, fr = res.currents_A[:, 0], res.force_N
+            row[name] = (_fundamental(t[last], cr[last], f), _fundamental(t[last], fr[last], f),
+                         _ac_error(cd, cr), _ac_error(fd, fr))
+        rows.append(row)
+    return rows
+
+
+def _amp_phase(z: complex, scale: float = 1.0) -> str:
+    return f"{abs(z) * scale:.3g}, {math.degrees(math.atan2(z.imag, z.real)):+.1f} deg"
+
+
+def run() -> str:
+    mag, fm, eq8, ladder = models()
+    rows = sweep(fm, {"eq8": eq8, "ladder": ladder})
+    r_a = eq8.maps.dataset["motion_eddy_jump_resistance_ohm"].values[0]
+    l_u = eq8.maps.dataset["motion_eddy_unshielded_inductance_H"].values[0]
+    r_2 = eq8.maps.dataset["motion_eddy_shielding_resistance_ohm"].values[0]
+    out = [f"Maps {GRID[0].size} x {GRID[1].size} (statics); ladder identified at the maps' "
+           f"reference point: R_a = {r_a:.3f} ohm, L_u = {l_u * 1e3:.2f} mH, R_2 = {r_2:.2f} "
+           f"ohm (eq. 8: R_ec = {eq8.eddy_resistance_ohm[0]:.3f} ohm).  Current of circuit "
+           f"'{eq8.circuit_names[0]}', force of the magnet; amplitude and phase against the "
+           "gap's sine (fundamental over the last half of the run); error = RMS(reduced - "
+           "detailed)/RMS(detailed - mean) over the run.", "",
+           "| f | detailed current | eq. 8 current | ladder current | eq. 8 error | ladder "
+           "error | detailed force | eq. 8 force | ladder force | eq. 8 error | ladder error |",
+           "|---|---|---|---|---|---|---|---|---|---|---|"]
+    for r in rows:
+        (cd, fd), e, lad = r["detailed"], r["eq8"], r["ladder"]
+        out.append(f"| {r['f']:g} Hz | {_amp_phase(cd)} A | {_amp_phase(e[0])} A | "
+                   f"{_amp_phase(lad[0])} A | {100 * e[2]:.1f} % | {100 * lad[2]:.1f} % | "
+                   f"{_amp_phase(fd, 1e-3)} kN | {_amp_phase(e[1], 1e-3)} kN | "
+                   f"{_amp_phase(lad[1], 1e-3)} kN | {100 * e[3]:.1f} % | {100 * lad[3]:.1f} % |")
+    keep = ("voltage step up", "voltage step down", "gap ramp", "closed loop")
+    scen = [s for s in standard_scenarios(mag, gap_m=GAP, current_A=CURRENT) if s.name in keep]
+    res = {name: compare_models(fm, model, scen, gap_m=GAP, current_A=CURRENT)
+           for name, model in (("eq8", eq8), ("ladder", ladder))}
+    out += ["", "Other standard scenarios (`maglevkit.compare`, 10 mm / 34 A), AC error of "
+            "current / force, largest over circuits:", "",
+            "| scenario | eq. 8 | ladder |", "|---|---|---|"]
+    for k, s in enumerate(scen):
+        a, b = res["eq8"][k], res["ladder"][k]
+        out.append(f"| {s.name} | {100 * np.max(a.current_error_ac):.2f} / "
+                   f"{100 * np.max(a.force_error_ac):.2f} % | {100 * np.max(b.current_error_ac):.2f}"
+                   f" / {100 * np.max(b.force_error_ac):.2f} % |")
+    return "\n".join(out)
+
+
+def bode(path: str) -> None:
+    """Bode plot of gap -> current and gap -> force: detailed (linearised DAE), eq. 8 and
+    the ladder (``CurrentModel.linearize``), every pole moving, at 10 mm / 34 A."""
+    from maglevkit.plotting import plt, save
+    from maglevkit.reduction.motion_eddy import detailed_frequency_response
+
+    mag, _, eq8, ladder = models()
+    f = np.geomspace(0.5, 1000.0, 120)
+    everything = {c: tuple(mag.network.gap_names) for c in mag.network.circuit_names}
+    det = detailed_frequency_response(mag.network, gap=GAP, current=CURRENT,
+                                      frequencies_Hz=f, groups=everything)[0]
+    curves = {"detailed (flux DAE)": (det.gap_to_current_A_per_m, det.gap_to_force_N_per_m)}
+    for label, model in (("eq. 8 (paper, one R_ec)", eq8),
+                         ("shielded-gap ladder (motion_eddy)", ladder)):
+        lin = model.linearize(gap_m=GAP, current_A=CURRENT)
+        eg = lin.E_gap_A_per_m_s.sum(axis=1)
+        er = lin.E_gap_rate_A_per_m.sum(axis=1)
+        cur, force = [], []
+        for fk in f:
+            p = 2j * np.pi * fk
+            x = np.linalg.solve(p * np.eye(lin.A_per_s.shape[0]) - lin.A_per_s, eg + p * er)
+            cur.append((lin.C_current @ x)[0])
+            force.append((lin.C_force_N_per_A @ x).sum() + lin.D_force_gap_N_per_m.sum())
+        curves[label] = (np.array(cur), np.array(force))
+    fig, ax = plt.subplots(2, 2, figsize=(11, 7), sharex=True)
+    styles = ("k-", "C3--", "C0-.")
+    for (label, (cur, force)), st in zip(curves.items(), styles, strict=True):
+        for col, (h, scale) in enumerate(((cur, 1e-3), (force, 1e-6))):
+            ax[0, col].loglog(f, np.abs(h) * scale, st, label=label)
+            ax[1, col].semilogx(f, np.degrees(np.unwrap(np.angle(h))), st, label=label)
+    ax[0, 0].set_ylabel("|dI/ds| [A/mm]")
+    ax[0, 1].set_ylabel("|dF/ds| [kN/mm]")
+    ax[1, 0].set_ylabel("phase of dI/ds [deg]")
+    ax[1, 1].set_ylabel("phase of dF/ds [deg]")
+    for a in ax[1]:
+        a.set_xlabel("frequency [Hz]")
+    for a in ax.ravel():
+        a.grid(True, which="both", alpha=0.3)
+    ax[0, 0].legend(loc="lower left", fontsize=8)
+    fig.suptitle(f"{MAGNET}: gap -> coil current ('{eq8.circuit_names[0]}') and gap -> magnet "
+                 f"force, every pole moving, {GAP * 1e3:g} mm / {CURRENT:g} A, constant voltage")
+    fig.tight_layout()
+    save(fig, path)
+
+
+if __name__ == "__main__":
+    ap = argparse.ArgumentParser(description=__doc__)
+    ap.add_argument("--figure", default="", help="write the Bode plot (PNG) here and stop")
+    args = ap.parse_args()
+    if args.figure:
+        bode(args.figure)
+    else:
+        print(run())

@@ -1,0 +1,747 @@
+"""Calibrate a magnet's uncertain network parameters to measured statics (issue 25, part 2).
+
+The equivalent circuit's uncertain factors are applied as element wrappers (one law, used
+both with numbers -- the calibrated network -- and with CasADi symbols -- the exact
+parameter derivatives):
+
+=========================  =======  ================================================
+parameter                  nominal  effect
+=========================  =======  ================================================
+``leakage_factor``         1        scales every leakage permeance (gap-independent
+                                    :class:`~maglevkit.circuit.LeakagePermeance` and the
+                                    gap-dependent :class:`~maglevkit.circuit.GapLeakage`)
+``fringing_factor``        1        scales the fringing permeance of the air gaps (the
+                                    fringe-edge part of :class:`~maglevkit.circuit.AirGap`,
+                                    :class:`~maglevkit.circuit.elements.FringePermeance`)
+``gap_offset_m``           0        added to every gap: ``s_eff = s + delta`` [m]
+                                    (coating, rail tolerance, gap sensor offset)
+``iron_field_scale``       1        scales ``H(B)`` of every iron path (B-H curve
+                                    stretched along H: permeability / k)
+``iron_saturation_scale``  1        scales the B axis of every iron path:
+                                    ``V_m = l H(B/k)`` (saturation flux density x k)
+=========================  =======  ================================================
+
+``R_el`` does not enter the statics (static data cannot determine it) and is not fitted.
+
+:func:`calibrate` fits a chosen subset by bounded least squares (SciPy ``least_squares``,
+trust-region reflective) on the relative residuals ``(model - data)/|data|`` of the force
+and/or flux linkage, with the exact Jacobian: the statics are a CasADi ``rootfinder`` of
+the network's loop law ``r(x; s, I, p) = 0``, whose parameter sensitivities CasADi
+computes by the implicit function theorem, ``dx/dp = -(dr/dx)^-1 dr/dp``.  Reported:
+residuals per point, values with 95 % confidence intervals from the Jacobian
+(``cov = s^2 (J^T J)^-1``, ``s^2 = SSR/(m - n)``, Student t), the singular values of the
+parameter-scaled Jacobian with the parameters the data cannot determine, and a held-out
+check.  See docs/magnets.md, "Calibration".
+"""
+
+from __future__ import annotations
+
+import hashlib
+import math
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field, replace
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from .circuit.elements import (
+    AirGap,
+    Element,
+    FringePermeance,
+    GapLeakage,
+    IronPath,
+    LeakagePermeance,
+    LinearElement,
+    fringe_per_mu0,
+)
+from .circuit.network import Network
+from .errors import DataError, InputError, SolverError
+from .materials import MU0
+
+__all__ = ["PARAMETERS", "DEFAULT_PARAMETERS", "Calibration", "StaticPoints", "calibrate",
+           "calibrated_network", "parameter_sensitivities", "read_points",
+           "step_response_sensitivities",
+           "write_calibrated_toml", "load_calibrated_magnet"]
+
+
+@dataclass(frozen=True)
+class ParameterSpec:
+    """A calibratable parameter: nominal value, bounds and the scale used for identifiability
+    (singular values of the Jacobian scaled by it) [unit of the parameter]."""
+
+    nominal: float
+    lower: float
+    upper: float
+    scale: float
+    unit: str
+    description: str
+
+
+PARAMETERS: dict[str, ParameterSpec] = {
+    "leakage_factor": ParameterSpec(1.0, 0.2, 5.0, 1.0, "1", "scales every leakage permeance"),
+    "fringing_factor": ParameterSpec(1.0, 0.0, 5.0, 1.0, "1",
+                                     "scales the air gaps' fringing permeance"),
+    "gap_offset_m": ParameterSpec(0.0, -2e-3, 2e-3, 1e-3, "m", "added to every gap"),
+    "iron_field_scale": ParameterSpec(1.0, 0.1, 10.0, 1.0, "1",
+                                      "scales H(B) of the iron (permeability / k)"),
+    "iron_saturation_scale": ParameterSpec(1.0, 0.5, 1.5, 0.1, "1",
+                                           "scales the B axis of the iron's B-H curve"),
+}
+"""The documented parameter set (module docstring)."""
+
+DEFAULT_PARAMETERS = ("leakage_factor", "fringing_factor", "gap_offset_m", "iron_field_scale",
+                      "iron_saturation_scale")
+"""Fitted without ``parameters=``: the whole set (all act on the statics)."""
+
+
+# ---------------------------------------------------------------------------- the one law
+@dataclass(frozen=True)
+class CalibratedLinear(LinearElement):
+    """A linear element with calibration factors (numbers or CasADi symbols).
+
+    ``G = k_leak G_inner(s + delta)`` for leakage, ``k_fringe G_inner(s + delta)`` for
+    fringe elements, and for an air gap ``G_inner(s + delta) + (k_fringe - 1) G_fringe``.
+    """
+
+    inner: LinearElement = field(default=None)  # type: ignore[assignment]
+    leakage: Any = 1.0
+    fringing: Any = 1.0
+    offset: Any = 0.0
+
+    @property
+    def gap(self) -> str | None:
+        return self.inner.gap
+
+    @property
+    def area(self) -> float | None:
+        return self.inner.area
+
+    def permeance(self, gap: Any = None) -> Any:
+        el = self.inner
+        g = None if gap is None or el.gap is None else gap + self.offset
+        base = el.permeance(g)
+        if isinstance(el, (LeakagePermeance, GapLeakage)):
+            return self.leakage * base
+        if isinstance(el, FringePermeance):
+            return self.fringing * base
+        if isinstance(el, AirGap) and el.fringe_edges:
+            s = el.effective_gap(g)
+            fringe = sum(MU0 * fringe_per_mu0(w, r, s) for w, r in el.fringe_edges)
+            return base + (self.fringing - 1.0) * fringe
+        return base
+
+
+@dataclass(frozen=True)
+class CalibratedIron(Element):
+    """An iron path with calibration factors: ``V_m = k_H l H(phi/(A k_B))``."""
+
+    inner: IronPath = field(default=None)  # type: ignore[assignment]
+    field_scale: Any = 1.0
+    saturation_scale: Any = 1.0
+
+    @property
+    def area(self) -> float | None:
+        return self.inner.area
+
+    def mmf_drop(self, flux: Any, gap: Any = None) -> Any:
+        return self.field_scale * self.inner.mmf_drop(flux / self.saturation_scale)
+
+    def energy(self, flux: Any, gap: Any = None) -> Any:
+        # int_0^phi k_H V(phi'/k_B) dphi' = k_H k_B W_inner(phi/k_B)
+        return (self.field_scale * self.saturation_scale
+                * self.inner.energy(np.asarray(flux, dtype=float) / self.saturation_scale))
+
+
+def calibrated_network(model: Any, values: Mapping[str, Any]) -> Network:
+    """The network of ``model`` with the calibration ``values`` applied (module docstring).
+
+    ``values`` maps parameter names of :data:`PARAMETERS` to numbers (or CasADi symbols);
+    missing ones stay nominal.  With nominal values the statics equal the original's.
+    """
+    from .models.statics import as_network
+
+    net = as_network(model)
+    unknown = sorted(set(values) - set(PARAMETERS))
+    if unknown:
+        raise InputError(f"unknown calibration parameter(s) {unknown}; the documented set: "
+                         f"{list(PARAMETERS)}")
+    v = {k: values.get(k, spec.nominal) for k, spec in PARAMETERS.items()}
+
+    def wrap(el: Element) -> Element:
+        if isinstance(el, LinearElement):
+            return CalibratedLinear(el.name, inner=el, leakage=v["leakage_factor"],
+                                    fringing=v["fringing_factor"], offset=v["gap_offset_m"])
+        if isinstance(el, IronPath):
+            return CalibratedIron(el.name, inner=el, field_scale=v["iron_field_scale"],
+                                  saturation_scale=v["iron_saturation_scale"])
+        return el
+
+    branches = tuple(replace(b, elements=tuple(wrap(e) for e in b.elements))
+                     for b in net.branches)
+    return Network(branches, net.circuits, name=net.name)
+
+
+# ---------------------------------------------------------------------------- data
+@dataclass(frozen=True)
+class StaticPoints:
+    """Measured statics: force and/or flux linkage per circuit at (gap, current) points.
+
+    Attributes
+    ----------
+    gap_m, current_A : ndarray (n,)
+        All gaps at ``gap_m`` [m], every circuit at ``current_A`` [A].
+    force_N, flux_linkage_Wb : ndarray (n, n_circuits) or None
+        Measured circuit force [N] (attraction positive) and flux linkage [Wb].
+    circuits : tuple of str
+    rows : ndarray (n,) of int
+        File rows (line numbers).
+    source, sha256 : str
+        File and the SHA-256 of its bytes.
+    """
+
+    gap_m: np.ndarray
+    current_A: np.ndarray
+    force_N: np.ndarray | None
+    flux_linkage_Wb: np.ndarray | None
+    circuits: tuple[str, ...]
+    rows: np.ndarray
+    source: str = "<memory>"
+    sha256: str = ""
+
+    def subset(self, mask: np.ndarray) -> StaticPoints:
+        return replace(self, gap_m=self.gap_m[mask], current_A=self.current_A[mask],
+                       force_N=None if self.force_N is None else self.force_N[mask],
+                       flux_linkage_Wb=None if self.flux_linkage_Wb is None
+                       else self.flux_linkage_Wb[mask], rows=self.rows[mask])
+
+
+def read_points(path: str | Path) -> StaticPoints:
+    """Measured statics from a CSV in the table format of
+    :func:`~maglevkit.reduction.tables_in.read_table` (columns ``gap_m``, ``current_A``,
+    ``force_N`` and/or ``flux_linkage_Wb`` with ``_<circuit>`` suffixes), any points (no
+    grid needed); the same checks of columns and cells, naming the row."""
+    from .reduction.tables_in import read_rows
+
+    rows = read_rows(path)
+    n = rows.lines.size
+    arrays: dict[str, np.ndarray | None] = {}
+    for q in ("force_N", "flux_linkage_Wb"):
+        if (q, rows.circuit_keys[0]) in rows.columns:
+            arrays[q] = np.stack([rows.columns[(q, c)] for c in rows.circuit_keys], axis=1)
+        else:
+            arrays[q] = None
+    if np.any(rows.current_A <= 0.0):
+        i = int(np.argmax(rows.current_A <= 0.0))
+        raise DataError(f"{rows.source}: row {rows.lines[i]}: current_A = "
+                        f"{rows.current_A[i]:g}; calibration points need I > 0 A (relative "
+                        "residuals; F = psi = 0 at 0 A)")
+    return StaticPoints(gap_m=rows.gap_m, current_A=rows.current_A, force_N=arrays["force_N"],
+                        flux_linkage_Wb=arrays["flux_linkage_Wb"], circuits=rows.circuits,
+                        rows=rows.lines if n else np.zeros(0, dtype=int), source=rows.source,
+                        sha256=rows.sha256)
+
+
+# ---------------------------------------------------------------------------- exact statics
+class _ParametricStatics:
+    """CasADi statics of a network with symbolic calibration parameters.
+
+    ``evaluate(names, values, s, I, x0)`` returns the circuit forces, flux linkages, their
+    exact Jacobians w.r.t. the named parameters and the loop fluxes (warm start).
+    """
+
+    def __init__(self, model: Any, names: Sequence[str],
+                 pole_groups: Mapping[str, Sequence[str]]) -> None:
+        import casadi as ca
+
+        from .circuit.assembly import assemble
+        from .models.statics import as_network
+
+        base = as_network(model)
+        self.names = tuple(names)
+        p = ca.SX.sym("p", len(self.names))
+        net = calibrated_network(base, {n: p[k] for k, n in enumerate(self.names)})
+        eq = assemble(net)
+        gi = {g: k for k, g in enumerate(net.gap_names)}
+        groups = np.zeros((len(net.circuits), len(gi)))
+        for j, c in enumerate(net.circuit_names):
+            for g in pole_groups[c]:
+                groups[j, gi[g]] = 1.0
+        force = ca.mtimes(ca.DM(groups), eq.force)
+        par = ca.vertcat(eq.s, eq.I, p)
+        g_fun = ca.Function("calibration_residual", [eq.x, par], [eq.residual])
+        rf = ca.rootfinder("calibration_statics", "newton", g_fun,
+                           {"abstol": 1e-9, "abstolStep": 1e-14, "max_iter": 60,
+                            "error_on_fail": True})
+        X0 = ca.MX.sym("x0", eq.x.numel())
+        SI = ca.MX.sym("s_I", eq.s.numel() + eq.I.numel())
+        pp = ca.MX.sym("p", p.numel())
+        P = ca.vertcat(SI, pp)
+        xs = rf(X0, P)
+        outs = ca.Function("calibration_outputs", [eq.x, par], [force, eq.psi])
+        f_mx, psi_mx = outs(xs, P)
+        inner = ca.Function("calibration_statics_inner", [X0, SI, pp],
+                               [f_mx, psi_mx, ca.jacobian(f_mx, pp), ca.jacobian(psi_mx, pp),
+                                xs])
+        self.fun = lambda x0, par: inner(x0, par[:-p.numel()], par[-p.numel():])
+        self.n_gaps, self.n_circuits = eq.s.numel(), eq.I.numel()
+        self.network = base
+
+    def evaluate(self, values: np.ndarray, gap: float, current: float, x0: np.ndarray
+                 ) -> tuple[np.ndarray, ...]:
+        par = np.concatenate((np.full(self.n_gaps, gap), np.full(self.n_circuits, current),
+                              values))
+        try:
+            f, psi, jf, jpsi, xs = self.fun(x0, par)
+        except RuntimeError as exc:
+            raise SolverError("the calibration statics did not converge",
+                              state={"gap_m": gap, "current_A": current,
+                                     **dict(zip(self.names, values, strict=True))},
+                              reason=str(exc).splitlines()[-1][-200:]) from None
+        return (np.asarray(f).ravel(), np.asarray(psi).ravel(), np.asarray(jf),
+                np.asarray(jpsi), np.asarray(xs).ravel())
+
+
+def _start(model: Any, values: Mapping[str, float], gap: np.ndarray, current: np.ndarray
+           ) -> np.ndarray:
+    """Loop fluxes of the (numeric) calibrated network at every point (solve_statics)."""
+    from .models.statics import solve_statics
+
+    net = calibrated_network(model, values)
+    ng, nc = len(net.gap_names), len(net.circuits)
+    sol = solve_statics(net, gaps=np.repeat(gap[:, None], ng, axis=1),
+                        currents=np.repeat(current[:, None], nc, axis=1))
+    return np.asarray(sol.loop_flux_Wb, dtype=float).reshape(gap.size, -1)
+
+
+def parameter_sensitivities(model: Any, values: Mapping[str, float], *, gap_m: float,
+                            current_A: float) -> dict[str, np.ndarray]:
+    """Circuit force and flux linkage at one point and their exact derivatives w.r.t. the
+    calibration parameters ``values`` (names -> values).
+
+    Returns
+    -------
+    dict
+        ``force_N`` (n_c,), ``flux_linkage_Wb`` (n_c,), ``dforce_dp`` and ``dpsi_dp``
+        (n_c, n_p) in the order of ``values``.
+    """
+    names = _names(values)
+    groups = _groups(model)
+    ps = _ParametricStatics(model, names, groups)
+    v = np.array([float(values[n]) for n in names])
+    x0 = _start(model, values, np.array([gap_m]), np.array([current_A]))[0]
+    f, psi, jf, jpsi, _ = ps.evaluate(v, gap_m, current_A, x0)
+    return {"force_N": f, "flux_linkage_Wb": psi, "dforce_dp": jf, "dpsi_dp": jpsi}
+
+
+_STEP_SUBSTEPS = 40
+"""Radau (order 5, 3 points) steps per output interval of the step response (plus 40
+geometric ones from 1e-6 of the window to the first output, for the fast eddy modes);
+measured: the response equals the adaptive IDAS one (``simulate``, rtol 1e-10) to 3.4e-10."""
+
+
+def step_response_sensitivities(model: Any, values: Mapping[str, float], *, gap_m: float,
+                                current_A: float, voltage_step_V: float, times_s: Any,
+                                circuit: int = 0) -> dict[str, np.ndarray]:
+    """A voltage step of the detailed (flux) model and its exact parameter derivatives.
+
+    The magnet rests at the statics of ``(gap_m, current_A)`` (every circuit at
+    ``current_A``, held by ``U = R_el I``); at ``t = 0`` circuit ``circuit``'s voltage
+    steps by ``voltage_step_V``.  The flux DAE of the ``R_ec`` fit
+    (:class:`~maglevkit.reduction.maps.StepRun`) with the calibration factors as symbolic
+    parameters, integrated by Radau collocation (fixed steps, :data:`_STEP_SUBSTEPS`) so
+    that CasADi's AD differentiates the discrete solution exactly; the initial state is
+    the parametric statics and the algebraic states just after the step are solved
+    consistently (rootfinders, implicit function theorem), so ``d I(t)/d p`` includes the
+    operating point's dependence.  (IDAS forward sensitivities failed in IDACalcIC /
+    with error-test failures at t = 0 on this DAE.)  Eddy conductances are not
+    calibration parameters.
+
+    Parameters
+    ----------
+    times_s : array_like
+        Increasing sample times > 0 [s].
+    circuit : int
+        Index of the stepped circuit.
+
+    Returns
+    -------
+    dict
+        ``current_A`` (n_t,) coil current of the stepped circuit and ``dcurrent_dp``
+        (n_t, n_p) in the order of ``values``.
+    """
+    import casadi as ca
+
+    from .circuit.assembly import assemble
+    from .models.statics import as_network
+    from .reduction.maps import StepRun
+
+    names = _names(values)
+    base = as_network(model)
+    t = np.asarray(times_s, dtype=float)
+    if t.ndim != 1 or t.size < 1 or t[0] <= 0.0 or np.any(np.diff(t) <= 0.0):
+        raise InputError("times_s must be increasing sample times > 0 s")
+    nc, ng = len(base.circuits), len(base.gap_names)
+    if isinstance(circuit, bool) or not isinstance(circuit, int) or not 0 <= circuit < nc:
+        raise InputError(f"circuit = {circuit!r} must be an index in 0..{nc - 1}")
+    p = ca.SX.sym("p", len(names))
+    pnet = calibrated_network(base, {n: p[k] for k, n in enumerate(names)})
+    duration = float(t[-1])
+    run = StepRun(pnet, 0, tau=t / duration, params=p, topology=base)
+    eq = assemble(pnet)
+    g_fun = ca.Function("step_statics_residual", [eq.x, ca.vertcat(eq.s, eq.I, p)],
+                        [eq.residual])
+    rf = ca.rootfinder("step_statics", "newton", g_fun,
+                       {"abstol": 1e-10, "abstolStep": 1e-15, "max_iter": 60,
+                        "error_on_fail": True})
+    P = ca.MX.sym("p", len(names))
+    X0 = ca.MX.sym("x0", eq.x.numel())
+    s_vec = np.full(ng, float(gap_m))
+    i_vec = np.full(nc, float(current_A))
+    x0 = rf(X0, ca.vertcat(ca.DM(s_vec), ca.DM(i_vec), P))
+    u = base.resistances * i_vec
+    u[circuit] += float(voltage_step_V)
+    # consistent algebraic states just after the step: the differential states (flux
+    # linkages, eddy fluxes) are continuous, (x, I) jump (eddy currents), alg(y, z) = 0
+    dae = run.dae
+    alg = ca.Function("step_alg", [dae["z"], ca.vertcat(dae["x"], dae["p"])], [dae["alg"]])
+    rz = ca.rootfinder("step_consistent", "newton", alg,
+                       {"abstol": 1e-10, "abstolStep": 1e-15, "max_iter": 60,
+                        "error_on_fail": True})
+    y0 = ca.mtimes(ca.DM(run.D), x0)
+    pars = ca.vertcat(duration, ca.DM(u), ca.DM(s_vec), P)
+    z0 = rz(ca.vertcat(x0, ca.DM(i_vec)), ca.vertcat(y0, pars))
+    grid = np.concatenate(([0.0], t / duration))
+    # the fast eddy modes start at t = 0: geometric steps there, then the output intervals
+    # in _STEP_SUBSTEPS equal steps each
+    fine = np.unique(np.concatenate([np.geomspace(1e-6, grid[1], 40)] + [
+        np.linspace(a, b, _STEP_SUBSTEPS + 1) for a, b in zip(grid[:-1], grid[1:],
+                                                               strict=True)]))
+    colloc = ca.integrator("step_collocation", "collocation", dae, 0.0, list(fine[1:]),
+                           {"collocation_scheme": "radau", "interpolation_order": 3,
+                            # Newton to 1e-9 on residuals of magnetic voltages up to
+                            # ~1e4 A: 1e-11 and the default 1e-12 failed (rounding)
+                            "number_of_finite_elements": 1, "rootfinder": "newton",
+                            "rootfinder_options": {"abstol": 1e-9, "abstolStep": 1e-14,
+                                                   "max_iter": 50}})
+    res = colloc(x0=y0, z0=z0, p=pars)
+    keep = [int(np.searchsorted(fine, v)) - 1 for v in grid[1:]]
+    res = {"zf": res["zf"][:, keep]}
+    cur = res["zf"][run.n_loops + circuit, :].T
+    fun = ca.Function("step_sensitivities", [X0, P], [cur, ca.jacobian(cur, P)])
+    v = np.array([float(values[n]) for n in names])
+    guess = _start(base, dict(values), np.array([float(gap_m)]), np.array([float(current_A)]))[0]
+    try:
+        out, jac = fun(guess, v)
+    except RuntimeError as exc:
+        raise SolverError("the voltage step with parameter sensitivities failed",
+                          state={"gap_m": gap_m, "current_A": current_A},
+                          reason=str(exc).splitlines()[-1][-200:]) from None
+    return {"current_A": np.asarray(out).ravel(), "dcurrent_dp": np.asarray(jac)}
+
+
+def _names(values: Any) -> tuple[str, ...]:
+    names = tuple(values)
+    unknown = [n for n in names if n not in PARAMETERS]
+    if unknown or not names or len(set(names)) != len(names):
+        raise InputError(f"calibration parameters {list(names)}: give distinct names from "
+                         f"the documented set {list(PARAMETERS)} (unknown: {unknown})")
+    return names
+
+
+def _groups(model: Any) -> dict[str, tuple[str, ...]]:
+    from .models.statics import as_network, circuit_pole_groups
+
+    net = as_network(model)
+    return circuit_pole_groups(net, gap=0.01, current=10.0)
+
+
+# ---------------------------------------------------------------------------- the fit
+@dataclass(frozen=True)
+class Calibration:
+    """Result of :func:`calibrate`.
+
+    Attributes
+    ----------
+    parameters : tuple of str
+        The fitted parameters.
+    values : dict
+        Fitted value per parameter (unit of :data:`PARAMETERS`).
+    confidence_95 : dict
+        Half-width of the 95 % confidence interval per parameter (inf: not determined).
+    singular_values : ndarray
+        Of the Jacobian with columns scaled by the parameters' scales, descending.
+    undetermined : tuple of str
+        Parameters the data cannot determine (a confidence half-width above the
+        parameter's scale, or a near-null direction of the Jacobian).
+    residual_rms : float
+        RMS of the relative fit residuals.
+    points : list of dict
+        Per fitted point: gap, current, row, circuit, quantity, data, model, relative error.
+    holdout : list of dict
+        The same for the held-out points (empty without).
+    bounds_active : tuple of str
+        Parameters that ended on a bound (their confidence interval is not meaningful).
+    data_sha256 : str
+        SHA-256 of the data file.
+    """
+
+    parameters: tuple[str, ...]
+    values: dict[str, float]
+    confidence_95: dict[str, float]
+    singular_values: np.ndarray
+    undetermined: tuple[str, ...]
+    residual_rms: float
+    points: list[dict[str, Any]]
+    holdout: list[dict[str, Any]]
+    bounds_active: tuple[str, ...]
+    data_sha256: str
+    nominal_points: list[dict[str, Any]] = field(default_factory=list)
+    nominal_holdout: list[dict[str, Any]] = field(default_factory=list)
+
+    def max_error(self, which: str = "holdout", quantity: str | None = None) -> float:
+        rows = getattr(self, which)
+        vals = [abs(r["relative_error"]) for r in rows if quantity in (None, r["quantity"])]
+        return max(vals) if vals else math.nan
+
+
+def _model_points(ps: _ParametricStatics, values: np.ndarray, data: StaticPoints,
+                  x0: np.ndarray) -> tuple[np.ndarray, np.ndarray, list[tuple[int, int, str]]]:
+    """Relative residuals, their Jacobian and (point, circuit, quantity) per residual."""
+    res, jac, keys = [], [], []
+    for k in range(data.gap_m.size):
+        f, psi, jf, jpsi, xs = ps.evaluate(values, float(data.gap_m[k]),
+                                           float(data.current_A[k]), x0[k])
+        x0[k] = xs
+        for q, model, dmodel, meas in (("force_N", f, jf, data.force_N),
+                                       ("flux_linkage_Wb", psi, jpsi, data.flux_linkage_Wb)):
+            if meas is None:
+                continue
+            for j in range(meas.shape[1]):
+                scale = abs(float(meas[k, j]))
+                res.append((model[j] - meas[k, j]) / scale)
+                jac.append(dmodel[j] / scale)
+                keys.append((k, j, q))
+    return np.array(res), np.array(jac), keys
+
+
+def _report(res: np.ndarray, keys: list[tuple[int, int, str]], data: StaticPoints
+            ) -> list[dict[str, Any]]:
+    out = []
+    for r, (k, j, q) in zip(res, keys, strict=True):
+        meas = (data.force_N if q == "force_N" else data.flux_linkage_Wb)
+        assert meas is not None
+        out.append({"gap_m": float(data.gap_m[k]), "current_A": float(data.current_A[k]),
+                    "row": int(data.rows[k]), "circuit": data.circuits[j], "quantity": q,
+                    "data": float(meas[k, j]), "model": float(meas[k, j]) * (1.0 + float(r)),
+                    "relative_error": float(r)})
+    return out
+
+
+def calibrate(magnet: Any, data: str | Path | StaticPoints, *,
+              parameters: Sequence[str] | None = None,
+              holdout_gaps_m: Sequence[float] = (),
+              initial: Mapping[str, float] | None = None) -> Calibration:
+    """Fit calibration parameters of ``magnet`` to measured statics (module docstring).
+
+    Parameters
+    ----------
+    magnet : Magnet
+        The magnet (its network) to calibrate.
+    data : path or StaticPoints
+        Measured force and/or flux linkage (:func:`read_points`), every circuit at the
+        point's current, all gaps at its gap.
+    parameters : sequence of str, optional
+        Names from :data:`PARAMETERS` (default :data:`DEFAULT_PARAMETERS`).
+    holdout_gaps_m : sequence of float
+        Gaps [m] whose points are left out of the fit and reported as the held-out check.
+    initial : mapping, optional
+        Start values (default: nominal).
+
+    Returns
+    -------
+    Calibration
+    """
+    from scipy.optimize import least_squares
+    from scipy.stats import t as student_t
+
+    names = _names(DEFAULT_PARAMETERS if parameters is None else parameters)
+    pts = data if isinstance(data, StaticPoints) else read_points(data)
+    from .models.statics import as_network
+
+    net = as_network(magnet)
+    if tuple(sorted(pts.circuits)) != tuple(sorted(net.circuit_names)):
+        if len(pts.circuits) == 1 and len(net.circuits) == 1:
+            pts = replace(pts, circuits=tuple(net.circuit_names))
+        else:
+            raise DataError(f"{pts.source}: the data's circuits {list(pts.circuits)} are not "
+                            f"the magnet's {list(net.circuit_names)}")
+    order = [pts.circuits.index(c) for c in net.circuit_names]
+    pts = replace(pts, circuits=tuple(net.circuit_names),
+                  force_N=None if pts.force_N is None else pts.force_N[:, order],
+                  flux_linkage_Wb=None if pts.flux_linkage_Wb is None
+                  else pts.flux_linkage_Wb[:, order])
+    hold = np.zeros(pts.gap_m.size, dtype=bool)
+    for g in holdout_gaps_m:
+        hit = np.isclose(pts.gap_m, float(g), rtol=1e-9, atol=1e-12)
+        if not hit.any():
+            raise InputError(f"holdout gap {float(g)!r} m: no data point at that gap; gaps in "
+                             f"the data: {sorted(set(pts.gap_m.tolist()))}")
+        hold |= hit
+    fit_pts, test_pts = pts.subset(~hold), pts.subset(hold)
+    specs = [PARAMETERS[n] for n in names]
+    n_res = fit_pts.gap_m.size * len(net.circuits) * (
+        (fit_pts.force_N is not None) + (fit_pts.flux_linkage_Wb is not None))
+    if n_res <= len(names):
+        raise DataError(f"{pts.source}: {n_res} fitted residuals for {len(names)} parameters; "
+                        "the fit needs more data points than parameters")
+    groups = _groups(net)
+    ps = _ParametricStatics(net, names, groups)
+    start = dict(initial or {})
+    p0 = np.array([float(start.get(n, s.nominal)) for n, s in zip(names, specs, strict=True)])
+    lo = np.array([s.lower for s in specs])
+    hi = np.array([s.upper for s in specs])
+    if np.any(p0 < lo) or np.any(p0 > hi):
+        raise InputError(f"initial values {dict(zip(names, p0, strict=True))} lie outside "
+                         f"the bounds {dict(zip(names, zip(lo, hi, strict=True), strict=True))}")
+    x0 = _start(net, dict(zip(names, p0, strict=True)), fit_pts.gap_m, fit_pts.current_A)
+    nominal_res, _, nominal_keys = _model_points(ps, p0, fit_pts, x0.copy())
+    cache: dict[bytes, tuple[np.ndarray, np.ndarray]] = {}
+
+    def evaluate(p: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        key = p.tobytes()
+        if key not in cache:
+            r, jac, _ = _model_points(ps, p, fit_pts, x0)
+            cache.clear()
+            cache[key] = (r, jac)
+        return cache[key]
+
+    sol = least_squares(lambda p: evaluate(p)[0], p0, jac=lambda p: evaluate(p)[1],
+                        bounds=(lo, hi), x_scale=np.array([s.scale for s in specs]),
+                        method="trf", xtol=1e-12, ftol=1e-12, gtol=1e-12, max_nfev=200)
+    p = sol.x
+    res, jac, keys = _model_points(ps, p, fit_pts, x0)
+    m, n = res.size, p.size
+    scales = np.array([s.scale for s in specs])
+    sv = np.linalg.svd(jac * scales, compute_uv=False)
+    dof = max(m - n, 1)
+    s2 = float(res @ res) / dof
+    jtj = jac.T @ jac
+    tq = float(student_t.ppf(0.975, dof))
+    try:
+        cov = s2 * np.linalg.inv(jtj) if sv[-1] > 1e-10 * sv[0] else None
+    except np.linalg.LinAlgError:
+        cov = None
+    half = (np.full(n, np.inf) if cov is None
+            else tq * np.sqrt(np.maximum(np.diag(cov), 0.0)))
+    undetermined = tuple(nm for nm, h, sc in zip(names, half, scales, strict=True)
+                         if not h < sc)
+    if cov is None:
+        _, _, vt = np.linalg.svd(jac * scales)
+        null = vt[-1]
+        undetermined = tuple(sorted(set(undetermined) | {names[int(np.argmax(np.abs(null)))]}))
+    active = tuple(nm for nm, v, a, b in zip(names, p, lo, hi, strict=True)
+                   if v <= a + 1e-9 * max(1.0, abs(a)) or v >= b - 1e-9 * max(1.0, abs(b)))
+    holdout: list[dict[str, Any]] = []
+    nominal_hold: list[dict[str, Any]] = []
+    if test_pts.gap_m.size:
+        xt = _start(net, dict(zip(names, p, strict=True)), test_pts.gap_m, test_pts.current_A)
+        hres, _, hkeys = _model_points(ps, p, test_pts, xt)
+        holdout = _report(hres, hkeys, test_pts)
+        xn = _start(net, dict(zip(names, p0, strict=True)), test_pts.gap_m, test_pts.current_A)
+        nres, _, nkeys = _model_points(ps, p0, test_pts, xn)
+        nominal_hold = _report(nres, nkeys, test_pts)
+    return Calibration(
+        parameters=names, values={nm: float(v) for nm, v in zip(names, p, strict=True)},
+        confidence_95={nm: float(h) for nm, h in zip(names, half, strict=True)},
+        singular_values=sv, undetermined=undetermined,
+        residual_rms=float(np.sqrt(np.mean(res**2))), points=_report(res, keys, fit_pts),
+        holdout=holdout, bounds_active=active, data_sha256=pts.sha256,
+        nominal_points=_report(nominal_res, nominal_keys, fit_pts),
+        nominal_holdout=nominal_hold)
+
+
+# ---------------------------------------------------------------------------- TOML out/in
+def _toml_value(v: Any) -> str:
+    if isinstance(v, bool):
+        return "true" if v else "false"
+    if isinstance(v, (int, float)):
+        return repr(float(v)) if isinstance(v, float) else str(v)
+    if isinstance(v, str):
+        return '"' + v.replace("\\", "\\\\").replace('"', '\\"') + '"'
+    if isinstance(v, (list, tuple)):
+        return "[" + ", ".join(_toml_value(x) for x in v) + "]"
+    raise InputError(f"cannot write {v!r} to TOML")
+
+
+def _toml(tables: Mapping[str, Any], prefix: str = "") -> list[str]:
+    lines: list[str] = []
+    scalars = {k: v for k, v in tables.items() if not isinstance(v, Mapping)}
+    subs = {k: v for k, v in tables.items() if isinstance(v, Mapping)}
+    if prefix and scalars:
+        lines.append(f"[{prefix}]")
+    for k, v in scalars.items():
+        key = k if k.replace("_", "").isalnum() else _toml_value(k)
+        lines.append(f"{key} = {_toml_value(v)}")
+    if scalars:
+        lines.append("")
+    for k, v in subs.items():
+        name = k if k.replace("_", "").replace("-", "").isalnum() else _toml_value(k)
+        lines += _toml(v, f"{prefix}.{name}" if prefix else name)
+    return lines
+
+
+def write_calibrated_toml(magnet: Any, result: Calibration, path: str | Path, *,
+                          data_source: str = "") -> Path:
+    """Write the magnet's parameter file with a ``[calibration]`` table: the fitted values
+    (each tagged ``calibrated`` in ``[calibration.provenance]``, with the data file's
+    SHA-256), their 95 % half-widths and the parameters the data did not determine.
+
+    Load it with :func:`load_calibrated_magnet`.
+    """
+    params = getattr(magnet, "parameters", None)
+    if not isinstance(params, Mapping):
+        raise InputError("write_calibrated_toml needs a Magnet loaded from a parameter file")
+    doc = {k: v for k, v in params.items() if k != "calibration"}
+    tag = (f"calibrated: least squares on {Path(data_source).name or 'data'} "
+           f"(sha256 {result.data_sha256})")
+    doc["calibration"] = {
+        **{k: v for k, v in result.values.items()},
+        "data_sha256": result.data_sha256,
+        "residual_rms": result.residual_rms,
+        "undetermined": list(result.undetermined),
+        "confidence_95": dict(result.confidence_95),
+        "provenance": {k: tag for k in result.values},
+    }
+    p = Path(path)
+    header = (f"# {getattr(magnet, 'name', 'magnet')}: calibrated with maglevkit "
+              "(maglevkit.calibration); load with maglevkit.calibration.load_calibrated_magnet\n")
+    p.write_text(header + "\n".join(_toml(doc)) + "\n")
+    return p
+
+
+def load_calibrated_magnet(path: str | Path, **options: Any) -> Any:
+    """A magnet from a file of :func:`write_calibrated_toml`: the magnet its parameters
+    build, with the ``[calibration]`` values applied to its network."""
+    import tomllib
+
+    from .magnets import build_magnet
+    from .magnets.base import ModelOptions
+
+    p = Path(path)
+    try:
+        doc = tomllib.loads(p.read_text())
+    except (OSError, tomllib.TOMLDecodeError) as exc:
+        raise DataError(f"{p}: cannot read the calibrated magnet: {exc}") from None
+    cal = doc.pop("calibration", None)
+    if not isinstance(cal, Mapping):
+        raise DataError(f"{p}: no [calibration] table (write it with write_calibrated_toml)")
+    values = {k: float(v) for k, v in cal.items() if k in PARAMETERS}
+    mag = build_magnet(doc, options=ModelOptions(**options) if options else None,
+                       source=str(p))
+    return replace(mag, network=calibrated_network(mag, values))
+
+
+def data_hash(path: str | Path) -> str:
+    """SHA-256 of a file's bytes."""
+    return hashlib.sha256(Path(path).read_bytes()).hexdigest()

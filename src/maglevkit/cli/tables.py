@@ -1,0 +1,232 @@
+"""``maglevkit maps import`` (maps from measured or FEM tables) and ``maglevkit calibrate``
+(a magnet's uncertain factors fitted to measured statics)."""
+
+from __future__ import annotations
+
+import warnings
+from pathlib import Path
+from typing import Annotated, Any
+
+import typer
+
+from ..errors import MaglevkitError
+from ._app import (
+    ForceOption,
+    FormatOption,
+    OutputFormat,
+    add_columns,
+    app,
+    console,
+    fail,
+    info,
+    load_magnet_or_exit,
+    new_table,
+    output_file,
+    parse_values,
+    print_records,
+    writing,
+)
+from .maps import maps_app
+
+
+def _ohms(text: str | None, option: str) -> Any:
+    if text is None:
+        return None
+    try:
+        vals = [float(v) for v in text.split(",") if v.strip()]
+    except ValueError:
+        raise fail(f"{option} {text!r}: give one resistance in ohm, or one per circuit "
+                   "separated by commas (inf: no eddy currents)") from None
+    if not vals:
+        raise fail(f"{option} {text!r}: no value")
+    return vals[0] if len(vals) == 1 else vals
+
+
+def _read_step(path: Path) -> tuple[Any, Any]:
+    """``time_s``, ``current_A`` columns of a measured voltage step (CSV)."""
+    import csv
+
+    import numpy as np
+
+    from ..errors import DataError
+
+    if not path.is_file():
+        raise DataError(f"--voltage-step {str(path)!r} does not exist")
+    with path.open(newline="", encoding="utf-8-sig") as fh:
+        rows = [r for r in csv.reader(fh) if r and not r[0].lstrip().startswith("#")]
+    if not rows or [h.strip() for h in rows[0]] != ["time_s", "current_A"]:
+        raise DataError(f"{path}: a voltage step needs the columns time_s, current_A, got "
+                        f"{rows[0] if rows else 'an empty file'}")
+    data = np.empty((len(rows) - 1, 2))
+    for i, r in enumerate(rows[1:]):
+        try:
+            data[i] = [float(r[0]), float(r[1])]
+        except (ValueError, IndexError):
+            raise DataError(f"{path}: data row {i + 1} ({r}) is not two numbers") from None
+    return data[:, 0], data[:, 1]
+
+
+@maps_app.command("import", short_help="Maps from a table of psi(s, I) and/or F(s, I) (CSV, "
+                                       "netCDF).")
+def import_table(
+    data: Annotated[Path, typer.Argument(metavar="DATA", help="CSV (gap_m, current_A, force_N and/or "
+                                              "flux_linkage_Wb[_<circuit>]) or netCDF table.")],
+    output: Annotated[Path, typer.Option("-o", "--output", help="netCDF maps file to write.")]
+    = Path("maps.nc"),
+    resistance: Annotated[str | None, typer.Option(help="R_el [ohm], one value or one per "
+                                                        "circuit (comma list); default: the "
+                                                        "magnet's.")] = None,
+    eddy_resistance: Annotated[str | None, typer.Option(help="R_ec [ohm], one value or one per "
+                                                             "circuit; inf: no eddy currents "
+                                                             "(default).")] = None,
+    voltage_step: Annotated[Path | None, typer.Option(help="Measured voltage step (CSV: "
+                                                           "time_s, current_A; step at t = 0) "
+                                                           "giving R_ec (one circuit).")] = None,
+    step_voltage: Annotated[float | None, typer.Option(help="The step's voltage change [V] "
+                                                            "(with --voltage-step).")] = None,
+    magnet: Annotated[str | None, typer.Option(help="The magnet the table describes (bundled "
+                                                    "name or TOML): circuit and gap names, "
+                                                    "R_el.")] = None,
+    name: Annotated[str | None, typer.Option(help="Name stored in the maps.")] = None,
+    reciprocity_tolerance: Annotated[float, typer.Option(help="Largest relative co-energy "
+                                                              "reciprocity residual accepted.")]
+    = 0.1,
+    force: ForceOption = False,
+) -> None:
+    """Build characteristic maps from a table: L~ and dL/ds from the flux linkage's spline,
+    the force from the table or by co-energy; checks reciprocity, monotonicity and the grid
+    (docs/reduction.md, "Maps from tables").  Warnings name the gap, current and row.
+
+    \b
+    Example:
+      maglevkit maps import measured.csv --magnet tr09-standard -o maps.nc
+    """
+    from ..reduction.tables_in import eddy_resistance_from_step, maps_from_table, table_report
+
+    output_file(output, "--output", force=force)
+    mag = load_magnet_or_exit(magnet) if magnet is not None else None
+    r_el = _ohms(resistance, "--resistance")
+    r_ec = _ohms(eddy_resistance, "--eddy-resistance")
+    if (voltage_step is None) != (step_voltage is None):
+        raise fail("--voltage-step and --step-voltage go together (the measured step and its "
+                   "voltage change [V])")
+    if voltage_step is not None and r_ec is not None:
+        raise fail("give R_ec either as --eddy-resistance or from --voltage-step, not both")
+    with warnings.catch_warnings():
+        warnings.simplefilter("always")
+        try:
+            if voltage_step is not None:
+                if r_el is None and mag is None:
+                    raise fail("--voltage-step needs R_el: give --resistance or --magnet")
+                r_step = r_el if r_el is not None else float(
+                    mag.network.resistances[0])  # type: ignore[union-attr]
+                if isinstance(r_step, list):
+                    raise fail("--voltage-step identifies one circuit: give one --resistance")
+                t, i = _read_step(voltage_step)
+                ident = eddy_resistance_from_step(t, i, voltage_step_V=float(step_voltage or 0.0),
+                                                  resistance_ohm=float(r_step))
+                r_ec = ident.eddy_resistance_ohm
+                info(f"voltage step: tau = {ident.time_constant_s:.6g} s, L~ = "
+                     f"{ident.inductance_H:.6g} H, R_ec = {r_ec:.6g} ohm")
+            maps = maps_from_table(data, resistance_ohm=r_el,
+                                   eddy_resistance_ohm=float("inf") if r_ec is None else r_ec,
+                                   magnet=mag, name=name,
+                                   reciprocity_tolerance=reciprocity_tolerance)
+        except MaglevkitError as exc:
+            raise fail(exc) from None
+    with writing(output, "--output"):
+        path = maps.to_netcdf(output)
+    rep = table_report(maps)
+    console.print(f"maps of {maps.dataset.attrs['magnet_name']!r} (imported table): circuits "
+                  f"{', '.join(maps.circuits)}; {maps.gaps_m.size} gaps x "
+                  f"{maps.currents_A.size} currents; force {rep.force_from}")
+    for c, v in rep.reciprocity_max.items():
+        if v == v:   # not NaN
+            console.print(f"reciprocity residual {c}: max {100 * v:.3g} % at "
+                          f"{rep.reciprocity_worst[c]}")
+    info(f"wrote {path}")
+
+
+@app.command("calibrate", short_help="Fit a magnet's network factors to measured statics.")
+def calibrate_cmd(
+    magnet: Annotated[str, typer.Argument(metavar="MAGNET",
+                                          help="Magnet TOML file or bundled name.")],
+    data: Annotated[Path, typer.Argument(metavar="DATA", help="Measured statics, CSV (gap_m, current_A, "
+                                              "force_N and/or flux_linkage_Wb[_<circuit>]).")],
+    output: Annotated[Path, typer.Option("-o", "--output", help="Calibrated magnet TOML to "
+                                                                "write.")]
+    = Path("calibrated.toml"),
+    params: Annotated[str | None, typer.Option("--params", help="Parameters to fit (comma "
+                                                                "list; default: the whole "
+                                                                "documented set).")] = None,
+    holdout_gaps: Annotated[str | None, typer.Option("--holdout-gaps", help="Gaps [m] left out "
+                                                                           "of the fit and "
+                                                                           "reported (comma "
+                                                                           "list).")] = None,
+    fmt: FormatOption = OutputFormat.table,
+    force: ForceOption = False,
+) -> None:
+    """Calibrate the magnet's leakage and fringing factors, gap offset and iron B-H scalings
+    to measured force and/or flux linkage (bounded least squares, exact derivatives).
+
+    Prints the values with 95 % confidence intervals, the parameters the data cannot
+    determine, and the relative error per point (fitted and held out); --format csv or json
+    prints the per-point errors.  Writes the magnet file with a [calibration] table
+    (values tagged calibrated, with the data file's SHA-256).
+
+    \b
+    Example:
+      maglevkit calibrate tr09-standard measured.csv -o tr09-calibrated.toml
+    """
+    from ..calibration import PARAMETERS, calibrate, write_calibrated_toml
+
+    output_file(output, "--output", force=force)
+    names = None
+    if params is not None:
+        names = [p.strip() for p in params.split(",") if p.strip()]
+        unknown = [p for p in names if p not in PARAMETERS]
+        if unknown or not names:
+            raise fail(f"--params {params!r}: unknown {unknown}; choose from "
+                       f"{', '.join(PARAMETERS)}")
+    gaps = list(parse_values(holdout_gaps, "--holdout-gaps", "m")) if holdout_gaps else []
+    mag = load_magnet_or_exit(magnet)
+    with warnings.catch_warnings():
+        warnings.simplefilter("always")
+        try:
+            res = calibrate(mag, data, parameters=names, holdout_gaps_m=gaps)
+        except MaglevkitError as exc:
+            raise fail(exc) from None
+    with writing(output, "--output"):
+        write_calibrated_toml(mag, res, output, data_source=str(data))
+    records = [{"set": which, "gap_m": r["gap_m"], "current_A": r["current_A"],
+                "row": r["row"], "circuit": r["circuit"], "quantity": r["quantity"],
+                "data": r["data"], "model": r["model"],
+                "relative_error_pct": 100.0 * r["relative_error"]}
+               for which, rows in (("fit", res.points), ("holdout", res.holdout)) for r in rows]
+    table = new_table(title="relative error per point (model - data)/data")
+    add_columns(table, ["set", "gap [m]", "I [A]", "row", "quantity", "data", "model",
+                        "error [%]"], left=["set", "quantity"])
+    for r in records:
+        table.add_row(r["set"], f"{r['gap_m']:g}", f"{r['current_A']:g}", str(r["row"]),
+                      r["quantity"], f"{r['data']:.6g}", f"{r['model']:.6g}",
+                      f"{r['relative_error_pct']:+.2f}")
+    meta = {"values": res.values, "confidence_95": res.confidence_95,
+            "undetermined": list(res.undetermined), "bounds_active": list(res.bounds_active),
+            "singular_values": res.singular_values.tolist(), "data_sha256": res.data_sha256}
+    if fmt == OutputFormat.table:
+        for name in res.parameters:
+            unit = "" if PARAMETERS[name].unit == "1" else f" {PARAMETERS[name].unit}"
+            console.print(f"{name} = {res.values[name]:.6g} +- {res.confidence_95[name]:.3g}"
+                          f"{unit} (95 %)"
+                          + ("  NOT DETERMINED by the data" if name in res.undetermined else "")
+                          + ("  at a bound" if name in res.bounds_active else ""))
+        console.print("singular values (scaled Jacobian): "
+                      + ", ".join(f"{v:.3g}" for v in res.singular_values))
+        console.print(f"fit: rms {100 * res.residual_rms:.2f} %, max "
+                      f"{100 * res.max_error('points'):.2f} %"
+                      + (f"; held out: max {100 * res.max_error('holdout'):.2f} % (force "
+                         f"{100 * res.max_error('holdout', 'force_N'):.2f} %, flux linkage "
+                         f"{100 * res.max_error('holdout', 'flux_linkage_Wb'):.2f} %)"
+                         if res.holdout else ""))
+    print_records(records, fmt, table, meta)
+    info(f"wrote {output}")

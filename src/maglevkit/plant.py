@@ -1,0 +1,110 @@
+"""The simplest mechanical plant a magnet is coupled to, and gravity.
+
+A rigid mass moving in heave under gravity, the magnet force and an external force (the
+magnet's share of a vehicle, for gap-control studies).  It sits below both
+:mod:`maglevkit.control` (which designs and runs controllers on it) and
+:mod:`maglevkit.vehicle` (whose mechanics use the same gravity); ``maglevkit.vehicle``
+re-exports its names.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from .errors import ParameterError
+from .validation import real_number
+
+__all__ = ["HeaveMass", "HeaveState", "STANDARD_GRAVITY"]
+
+STANDARD_GRAVITY = 9.80665
+"""m/s^2"""
+
+
+@dataclass(frozen=True)
+class HeaveState:
+    """Gap [m] and gap rate [m/s] of the heave mass (the gap grows downwards).
+
+    Parameters
+    ----------
+    gap_m : float
+        Air gap s [m] (not checked here; :func:`~maglevkit.control.closed_loop` stops
+        when it would reach 0).
+    gap_rate_m_per_s : float
+        Gap rate ds/dt [m/s], > 0 when the gap opens.
+    """
+
+    gap_m: float
+    gap_rate_m_per_s: float
+
+
+@dataclass(frozen=True)
+class HeaveMass:
+    """Rigid mass under an attracting magnet: ``m s'' = m g + F_ext - F_mag``.
+
+    The gap ``s`` grows when the mass moves away from the rail (downwards for a
+    levitation magnet), so gravity opens the gap and the magnet force closes it.
+
+    Parameters
+    ----------
+    mass_kg : float
+        Carried mass [kg] (> 0).
+    gravity : float
+        Gravitational acceleration [m/s^2] (>= 0; 0 for a guidance magnet).
+    """
+
+    mass_kg: float
+    gravity: float = STANDARD_GRAVITY
+
+    def __post_init__(self) -> None:
+        real_number(self.mass_kg, "mass_kg", "kg", positive=True, error=ParameterError)
+        real_number(self.gravity, "gravity", "m/s^2", nonnegative=True, error=ParameterError)
+
+    def acceleration(self, magnet_force_N: float, external_force_N: float = 0.0) -> float:
+        """Gap acceleration [m/s^2]: ``g + (F_ext - F_mag) / m``.
+
+        Parameters
+        ----------
+        magnet_force_N : float
+            Attractive magnet force [N] (closes the gap).
+        external_force_N : float, default 0.0
+            External force on the mass [N], positive opening the gap (like gravity).
+
+        Returns
+        -------
+        float
+            ``s''`` [m/s^2] (> 0: the gap opens faster).  The forces are not checked here
+            (they are in :meth:`step`).
+        """
+        return self.gravity + (external_force_N - magnet_force_N) / self.mass_kg
+
+    def step(self, state: HeaveState, dt: float, magnet_force_N: float,
+             external_force_N: float = 0.0) -> HeaveState:
+        """Advance by ``dt`` [s] with forces held constant (exact for constant acceleration).
+
+        Parameters
+        ----------
+        state : HeaveState
+            Gap [m] and gap rate [m/s] at the start of the step.
+        dt : float
+            Step [s], finite and > 0.
+        magnet_force_N : float
+            Attractive magnet force [N], held over the step.
+        external_force_N : float, default 0.0
+            External force [N], positive opening the gap, held over the step.
+
+        Returns
+        -------
+        HeaveState
+            Gap and gap rate at the end of the step.
+
+        Raises
+        ------
+        InputError
+            ``dt`` not finite and > 0, or a force that is not a finite real number.
+        """
+        real_number(dt, "dt", "s", positive=True)
+        real_number(magnet_force_N, "magnet_force_N", "N")
+        real_number(external_force_N, "external_force_N", "N")
+        a = self.acceleration(magnet_force_N, external_force_N)
+        return HeaveState(state.gap_m + state.gap_rate_m_per_s * dt + 0.5 * a * dt * dt,
+                          state.gap_rate_m_per_s + a * dt)

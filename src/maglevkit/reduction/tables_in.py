@@ -1,0 +1,911 @@
+"""Characteristic maps from tabulated data: measured or FEM ``psi(s, I)`` and/or ``F(s, I)``.
+
+A table gives, per electric circuit and on a rectangular, equidistant gap x current grid,
+the flux linkage ``psi`` [Wb] and/or the force ``F`` [N] of the circuit's poles (all gaps
+equal to ``s``, every circuit at ``I``: the maps' convention, :mod:`maglevkit.reduction.maps`).
+:func:`maps_from_table` derives what the reduced model (paper eq. 8) needs:
+
+* ``L~ = dpsi/dI`` and ``dL/ds = (dpsi/ds)/I`` at the grid points, from the tensor-product
+  cubic interpolating spline of ``psi`` (not-a-knot; the same interpolant the current model
+  puts through its maps).  On a grid row ``s = s_k`` that spline is the 1-D spline of the
+  row, so the derivatives at the nodes are 1-D spline derivatives along one axis.
+* ``I -> 0``: ``psi`` is odd in ``I`` (``F`` even), so a current grid that starts at 0 A is
+  mirrored to negative currents before the spline is fitted; the spline then honours the
+  symmetry, ``L~(s, 0)`` is its slope at 0 and ``dL/ds(s, 0) = d^2 psi/(ds dI)`` at 0 (the
+  limit of ``(dpsi/ds)/I``), as in :func:`~maglevkit.reduction.build_maps`.
+* ``F`` from ``psi`` when no force is given: co-energy ``W'(s, I) = int_0^I psi di`` (the
+  spline's exact antiderivative) and ``F = -dW'/ds`` (attraction-positive).  Exact for one
+  circuit; with several circuits it is exact for their sum and per circuit when they do
+  not couple or are alike (the table holds only the symmetric path ``I_1 = ... = I``).
+* ``psi`` from ``F`` is **not** possible: ``F`` fixes ``dpsi/ds = -dF/dI`` and so ``psi``
+  only up to a function of the current (e.g. the leakage flux at a reference gap); a table
+  without ``psi`` is refused.
+* ``R_el`` and ``R_ec``: given values, or ``R_ec`` from a measured voltage step
+  (:func:`eddy_resistance_from_step`, the paper's time-constant identification).
+
+Consistency checks (:class:`TableReport`): co-energy reciprocity ``dF/dI = -dpsi/ds``
+(attraction-positive ``F``) where both are given, monotonicity (``psi`` rising with ``I``
+is required, since eq. 8 divides by ``L~``; ``psi`` and ``F`` falling with ``s`` and ``F``
+rising with ``I`` are expected) and grid coverage.  Failures name the gap, the current and
+the table row.  See docs/reduction.md, "Maps from tables".
+"""
+
+from __future__ import annotations
+
+import csv
+import hashlib
+import json
+import math
+import re
+import warnings
+from collections.abc import Mapping, Sequence
+from dataclasses import asdict, dataclass, field, replace
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from .._version import __version__
+from ..errors import DataError, DataWarning, InputError, PlausibilityWarning
+from ..validation import real_number
+from .maps import MAPS_FORMAT, CharacteristicMaps, check_grid, maps_dataset
+
+__all__ = ["GridTable", "TableReport", "TableRows", "eddy_resistance_from_step",
+           "maps_from_table", "read_rows", "read_table", "RECIPROCITY_TOLERANCE"]
+
+QUANTITIES = ("force_N", "flux_linkage_Wb")
+"""The tabulated quantities (CSV column prefixes and netCDF variable names)."""
+
+RECIPROCITY_TOLERANCE = 0.1
+"""Default largest relative reciprocity residual ``|F - F_coenergy(psi)| / scale``
+(``F_coenergy = -d/ds int_0^I psi di``, ``scale = max(|F|, 1 % of max |F|)``) before a
+table is refused; above half of it a :class:`DataWarning` names the worst points.
+Measured: our own statics written as a table meet it to 0.024 (U-magnet, 17 x 33 grid,
+4-20 mm, 0-80 A; worst at 5 mm, 2.5 A, where the iron's initial-permeability knee lies
+below the grid's 2.5 A step) and to 3e-3 at currents >= 10 A; a force 30 % off (another
+magnet) or a unit slip (x 1000) is refused, a force 7 % off is warned."""
+
+RECIPROCITY_FLOOR = 0.01
+"""The reciprocity residual's scale is at least this fraction of the map's largest force
+(near 0 A the force vanishes and a relative error says nothing)."""
+
+_GAP_PLAUSIBLE_M = (1e-4, 0.1)
+"""Gaps outside this range [m] get a PlausibilityWarning (EMS gaps are ~ 4-20 mm): 4
+typed for 4 mm is 4 m, 4e-6 a gap in km."""
+
+MIRROR_CURRENTS = False
+"""Whether the current axis is mirrored to ``-I`` (odd psi, even F) before the spline is
+fitted.  Decided by measurement (docs/decisions.md): no.  ``psi`` is odd in ``I`` but not
+smooth at 0 when the iron's permeability rises from its initial value (Roschke law:
+``L = L0 + O(|I|)``), and the mirrored spline forces ``psi''(0) = 0``: on the U-magnet's
+17 x 33 table it put ``L~(4 mm, 0 A)`` 28 % off; the one-sided not-a-knot spline does not."""
+
+_MAX_LISTED = 5
+"""Grid points named in one message (then "and N more")."""
+
+
+# ---------------------------------------------------------------------------- the table
+@dataclass(frozen=True)
+class GridTable:
+    """Tabulated ``F(s, I)`` and/or ``psi(s, I)`` per circuit on a rectangular grid.
+
+    Attributes
+    ----------
+    gaps_m : ndarray (n_gaps,)
+        Gap grid [m], increasing.
+    currents_A : ndarray (n_currents,)
+        Current grid [A], increasing, >= 0.
+    circuits : tuple of str
+        Circuit names (``_<circuit>`` column suffixes; ``("coil",)`` without suffix).
+    force_N : ndarray (n_circuits, n_gaps, n_currents) or None
+        Force of each circuit's poles [N], attraction positive.
+    flux_linkage_Wb : ndarray (n_circuits, n_gaps, n_currents) or None
+        Flux linkage of each circuit [Wb].
+    rows : ndarray (n_gaps, n_currents) of int
+        The file row (line number, header = 1) of each grid point; 0 if not from a CSV.
+    source : str
+        Where the data came from (file path or ``"<memory>"``).
+    sha256 : str
+        SHA-256 of the file's bytes (of the arrays for an in-memory table).
+    """
+
+    gaps_m: np.ndarray
+    currents_A: np.ndarray
+    circuits: tuple[str, ...]
+    force_N: np.ndarray | None
+    flux_linkage_Wb: np.ndarray | None
+    rows: np.ndarray
+    source: str = "<memory>"
+    sha256: str = ""
+
+    def where(self, k: int, m: int) -> str:
+        """``gap ... m, current ... A (row r)`` of grid point ``(k, m)``."""
+        row = int(self.rows[k, m])
+        text = f"gap {self.gaps_m[k]:.6g} m, current {self.currents_A[m]:.6g} A"
+        return text + (f" (row {row})" if row else "")
+
+    def quantity(self, name: str) -> np.ndarray | None:
+        return self.force_N if name == "force_N" else self.flux_linkage_Wb
+
+
+def _listed(table: GridTable, points: Sequence[tuple[int, int]], circuit: str | None) -> str:
+    head = ", ".join(table.where(k, m) for k, m in points[:_MAX_LISTED])
+    more = f" and {len(points) - _MAX_LISTED} more" if len(points) > _MAX_LISTED else ""
+    who = f"circuit {circuit!r}: " if circuit is not None and len(table.circuits) > 1 else ""
+    return f"{who}{head}{more}"
+
+
+_COLUMN = re.compile(r"^(force_N|flux_linkage_Wb)(?:_([A-Za-z0-9][A-Za-z0-9_.-]*))?$")
+_ALLOWED = ("gap_m, current_A, force_N and/or flux_linkage_Wb (one column each per circuit "
+            "with a _<circuit> suffix when there are several)")
+
+
+def _hint(name: str) -> str:
+    low = name.lower()
+    if low.startswith("gap") and low != "gap_m":
+        return " (give the gap in metres as gap_m)"
+    if low.startswith(("current", "i_")) and low != "current_a":
+        return " (give the current in amperes as current_A)"
+    if low.startswith(("force", "f_")):
+        return " (give the force in newtons as force_N[_<circuit>])"
+    if low.startswith(("flux", "psi")):
+        return " (give the flux linkage in webers as flux_linkage_Wb[_<circuit>])"
+    return ""
+
+
+def _columns(header: list[str], source: str) -> tuple[dict[str, int], dict[tuple[str, str], int],
+                                                    tuple[str, ...]]:
+    """Parse the header: (gap/current index, (quantity, circuit) -> index, circuits)."""
+    names = [h.strip() for h in header]
+    seen: dict[str, int] = {}
+    for i, n in enumerate(names):
+        if n in seen:
+            raise DataError(f"{source}: column {n!r} appears twice (columns {seen[n] + 1} and "
+                            f"{i + 1})")
+        seen[n] = i
+    base: dict[str, int] = {n: seen[n] for n in ("gap_m", "current_A") if n in seen}
+    missing = [n for n in ("gap_m", "current_A") if n not in seen]
+    data: dict[tuple[str, str], int] = {}
+    suffixed: list[bool] = []
+    for i, n in enumerate(names):
+        if n in ("gap_m", "current_A"):
+            continue
+        m = _COLUMN.match(n)
+        if m is None:
+            raise DataError(f"{source}: unknown column {n!r} (column {i + 1}){_hint(n)}; "
+                            f"allowed: {_ALLOWED}")
+        suffixed.append(m.group(2) is not None)
+        data[(m.group(1), m.group(2) or "")] = i
+    if missing:
+        raise DataError(f"{source}: the table lacks column(s) {missing}; columns: {_ALLOWED}")
+    if not data:
+        raise DataError(f"{source}: the table has no force_N or flux_linkage_Wb column; "
+                        f"columns: {_ALLOWED}")
+    if any(suffixed) and not all(suffixed):
+        raise DataError(f"{source}: columns with and without a _<circuit> suffix are mixed "
+                        f"({[names[i] for i in data.values()]}); with several circuits every "
+                        "force_N/flux_linkage_Wb column carries its circuit's suffix")
+    circuits = tuple(dict.fromkeys(c for _, c in data))
+    for q in QUANTITIES:
+        have = [c for c in circuits if (q, c) in data]
+        if have and len(have) != len(circuits):
+            lack = [c for c in circuits if (q, c) not in data]
+            raise DataError(f"{source}: {q} is given for circuit(s) {have} but not for {lack}; "
+                            "give each quantity for every circuit or for none")
+    return base, data, circuits
+
+
+def _key(value: float) -> float:
+    """Grid coordinate as a key: 12 significant digits (0.1 + 0.2 and 0.3 are one gap)."""
+    return float(f"{value:.12g}")
+
+
+@dataclass(frozen=True)
+class TableRows:
+    """The rows of a CSV table, checked cell by cell (:func:`read_rows`).
+
+    Attributes
+    ----------
+    gap_m, current_A : ndarray (n,)
+        Per row [m], [A].
+    columns : dict
+        ``(quantity, circuit suffix)`` -> values per row.
+    circuit_keys : tuple of str
+        The column suffixes (``""`` without).
+    circuits : tuple of str
+        Circuit names (``"coil"`` without suffix).
+    lines : ndarray (n,) of int
+        Line number of each row (header = 1).
+    source, sha256 : str
+        File and SHA-256 of its bytes.
+    """
+
+    gap_m: np.ndarray
+    current_A: np.ndarray
+    columns: dict[tuple[str, str], np.ndarray]
+    circuit_keys: tuple[str, ...]
+    circuits: tuple[str, ...]
+    lines: np.ndarray
+    source: str
+    sha256: str
+
+
+def read_rows(path: str | Path) -> TableRows:
+    """The rows of a CSV table (format of :func:`read_table`), any points: columns and
+    cells checked (numbers, finite, gap > 0, current >= 0, gap plausible), naming the row.
+    """
+    from ..errors import ParameterFileError
+
+    if not isinstance(path, (str, Path)):
+        raise InputError(f"a table needs a file path (str or Path), got {type(path).__name__}")
+    p = Path(path)
+    if not p.is_file():
+        raise ParameterFileError(f"table file {str(p)!r} does not exist")
+    raw = p.read_bytes()
+    return _parse_csv(p, raw, hashlib.sha256(raw).hexdigest())
+
+
+def read_table(path: str | Path) -> GridTable:
+    """Read a table of ``F(s, I)`` and/or ``psi(s, I)`` from CSV or netCDF.
+
+    CSV: a header row with ``gap_m`` [m], ``current_A`` [A] and ``force_N`` [N] and/or
+    ``flux_linkage_Wb`` [Wb] (with several circuits one column per circuit with a
+    ``_<circuit>`` suffix, e.g. ``force_N_front``); then one row per grid point, in any
+    order; lines starting with ``#`` are comments.  netCDF: variables ``force_N`` and/or
+    ``flux_linkage_Wb`` with dimensions ``(gap, current)`` or ``(circuit, gap, current)``
+    (e.g. a maglevkit maps file).
+
+    Parameters
+    ----------
+    path : str or Path
+        The table file (``.csv``, or ``.nc`` for netCDF).
+
+    Raises
+    ------
+    DataError
+        Unknown or missing columns, a cell that is not a finite number, a gap <= 0 or a
+        negative current, duplicate grid points, a grid that is not rectangular (each
+        naming the row).
+    ParameterFileError
+        The file does not exist or cannot be read.
+    """
+    from ..errors import ParameterFileError
+
+    if not isinstance(path, (str, Path)):
+        raise InputError(f"read_table needs a file path (str or Path), got {type(path).__name__}")
+    p = Path(path)
+    if not p.is_file():
+        raise ParameterFileError(f"table file {str(p)!r} does not exist")
+    raw = p.read_bytes()
+    digest = hashlib.sha256(raw).hexdigest()
+    if raw[:4] in (b"CDF\x01", b"CDF\x02", b"\x89HDF"):
+        return _read_netcdf(p, digest)
+    rows = _parse_csv(p, raw, digest)
+    return _assemble(rows.gap_m, rows.current_A, rows.columns, rows.circuit_keys, rows.lines,
+                     str(p), digest, checked=True)
+
+
+def _parse_csv(p: Path, raw: bytes, digest: str) -> TableRows:
+    try:
+        text = raw.decode("utf-8-sig")
+    except UnicodeDecodeError as exc:
+        raise DataError(f"{p}: not a UTF-8 text (CSV) file: {exc}") from None
+    reader = csv.reader(text.splitlines())
+    header: list[str] | None = None
+    records: list[tuple[int, list[str]]] = []
+    for line in reader:
+        if not line or not "".join(line).strip() or line[0].lstrip().startswith("#"):
+            continue
+        if header is None:
+            header = line
+        else:
+            records.append((reader.line_num, line))
+    if header is None:
+        raise DataError(f"{p}: the table is empty (expected a header row: {_ALLOWED})")
+    base, cols, circuits = _columns(header, str(p))
+    if not records:
+        raise DataError(f"{p}: the table has a header but no data rows")
+    n = len(header)
+    values = np.empty((len(records), n))
+    for r, (row, cells) in enumerate(records):
+        if len(cells) != n:
+            raise DataError(f"{p}: row {row} has {len(cells)} cells, the header {n}")
+        for i, cell in enumerate(cells):
+            name = header[i].strip()
+            try:
+                v = float(cell)
+            except ValueError:
+                raise DataError(f"{p}: row {row}, column {name}: {cell.strip()!r} is not a "
+                                "number") from None
+            if not math.isfinite(v):
+                raise DataError(f"{p}: row {row}, column {name}: {cell.strip()!r} is not a "
+                                "finite number (every grid point needs a value)")
+            values[r, i] = v
+    lines = np.array([row for row, _ in records])
+    gap, cur = values[:, base["gap_m"]], values[:, base["current_A"]]
+    _check_axes(gap, cur, lines, str(p))
+    return TableRows(gap_m=gap, current_A=cur, columns={k: values[:, i] for k, i in cols.items()},
+                     circuit_keys=circuits, circuits=tuple(c or "coil" for c in circuits),
+                     lines=lines, source=str(p), sha256=digest)
+
+
+def _check_axes(gap: np.ndarray, cur: np.ndarray, lines: np.ndarray, source: str) -> None:
+    """Gaps > 0 (plausible), currents >= 0, naming the row."""
+    def row(i: int) -> str:
+        return f"row {lines[i]}" if lines[i] else f"point {i}"
+
+    bad = np.nonzero(gap <= 0.0)[0]
+    if bad.size:
+        raise DataError(f"{source}: {row(bad[0])}: gap_m = {float(gap[bad[0]]):g} must be > 0 m")
+    bad = np.nonzero(cur < 0.0)[0]
+    if bad.size:
+        raise DataError(f"{source}: {row(bad[0])}: current_A = {float(cur[bad[0]]):g} must be "
+                        ">= 0 A (forces are even and flux linkages odd in the current: tabulate "
+                        "I >= 0)")
+    lo, hi = _GAP_PLAUSIBLE_M
+    odd = np.nonzero((gap < lo) | (gap > hi))[0]
+    if odd.size:
+        warnings.warn(f"{source}: {row(odd[0])}: gap_m = {float(gap[odd[0]]):g} m lies outside "
+                      f"{lo:g}-{hi:g} m (EMS air gaps are ~ 4-20 mm); is the gap in mm, not "
+                      "m? (gap_m is in metres)", PlausibilityWarning, stacklevel=4)
+
+
+def _assemble(gap: np.ndarray, cur: np.ndarray, cols: Mapping[tuple[str, str], np.ndarray],
+              circuits: tuple[str, ...], lines: np.ndarray, source: str,
+              digest: str, *, checked: bool = False) -> GridTable:
+    """Scattered rows -> a rectangular grid (checks duplicates, coverage, equidistance)."""
+    def row(i: int) -> str:
+        return f"row {lines[i]}" if lines[i] else f"point {i}"
+
+    if not checked:
+        _check_axes(gap, cur, lines, source)
+    gk = np.array([_key(v) for v in gap])
+    ck = np.array([_key(v) for v in cur])
+    seen: dict[tuple[float, float], int] = {}
+    for i, pt in enumerate(zip(gk, ck, strict=True)):
+        if pt in seen:
+            raise DataError(f"{source}: {row(i)} repeats the grid point gap {pt[0]:g} m, current "
+                            f"{pt[1]:g} A of {row(seen[pt])}; give every point once")
+        seen[pt] = i
+    gaps, currents = np.unique(gk), np.unique(ck)
+    if len(seen) != gaps.size * currents.size:
+        absent = [(g, c) for g in gaps for c in currents if (g, c) not in seen]
+        listed = ", ".join(f"(gap {g:g} m, current {c:g} A)" for g, c in absent[:_MAX_LISTED])
+        more = f" and {len(absent) - _MAX_LISTED} more" if len(absent) > _MAX_LISTED else ""
+        raise DataError(f"{source}: the grid is not rectangular: {len(absent)} of the "
+                        f"{gaps.size} x {currents.size} gap x current points are missing: "
+                        f"{listed}{more}")
+    for axis, what, unit, positive, col in ((gaps, "gap", "m", True, gk),
+                                            (currents, "current", "A", False, ck)):
+        try:
+            check_grid(axis, what, unit, positive=positive)
+        except InputError as exc:
+            where = ""
+            if axis.size > 2:
+                step = np.diff(axis)
+                k = int(np.argmax(np.abs(step - np.median(step))))
+                first = int(np.nonzero(col == axis[k + 1])[0][0])
+                where = (f"; the {what} step {axis[k]:g} -> {axis[k + 1]:g} {unit} (first at "
+                         f"{row(first)}) differs from the usual {float(np.median(step)):g} {unit}")
+            raise DataError(f"{source}: {exc}{where}; {what}s in the table: "
+                            f"{', '.join(f'{v:g}' for v in axis)} {unit}") from None
+    gi = {g: k for k, g in enumerate(gaps)}
+    ci = {c: k for k, c in enumerate(currents)}
+    index = (np.array([gi[g] for g in gk]), np.array([ci[c] for c in ck]))
+    rows = np.zeros((gaps.size, currents.size), dtype=int)
+    rows[index] = lines
+    arrays: dict[str, np.ndarray | None] = {}
+    for q in QUANTITIES:
+        if (q, circuits[0]) not in cols:
+            arrays[q] = None
+            continue
+        a = np.empty((len(circuits), gaps.size, currents.size))
+        for j, c in enumerate(circuits):
+            a[j][index] = cols[(q, c)]
+        arrays[q] = a
+    names = tuple(c or "coil" for c in circuits)
+    return GridTable(gaps_m=gaps, currents_A=currents, circuits=names, force_N=arrays["force_N"],
+                     flux_linkage_Wb=arrays["flux_linkage_Wb"], rows=rows, source=source,
+                     sha256=digest)
+
+
+def _read_netcdf(p: Path, digest: str) -> GridTable:
+    import xarray as xr
+
+    from ..errors import ParameterFileError
+
+    try:
+        with xr.open_dataset(p, engine="netcdf4") as ds:
+            ds.load()
+            data = ds
+    except (OSError, ValueError) as exc:
+        raise ParameterFileError(f"{p}: not a readable netCDF file: {exc}") from None
+    have = [q for q in QUANTITIES if q in data.data_vars]
+    if not have:
+        raise DataError(f"{p}: no variable force_N or flux_linkage_Wb (dimensions (gap, "
+                        f"current) or (circuit, gap, current)); variables: "
+                        f"{sorted(str(v) for v in data.data_vars)}")
+    for c in ("gap", "current"):
+        if c not in data.coords:
+            raise DataError(f"{p}: coordinate {c!r} missing (gap [m], current [A])")
+    gaps = np.asarray(data["gap"].values, dtype=float)
+    currents = np.asarray(data["current"].values, dtype=float)
+    circuits = tuple(str(c) for c in data["circuit"].values) if "circuit" in data.dims \
+        else ("",)
+    cols: dict[tuple[str, str], np.ndarray] = {}
+    for q in have:
+        v = data[q]
+        dims = ("circuit", "gap", "current") if "circuit" in v.dims else ("gap", "current")
+        if set(v.dims) != set(dims):
+            raise DataError(f"{p}: variable {q} has dimensions {v.dims}; expected {dims}")
+        arr = np.asarray(v.transpose(*dims).values, dtype=float)
+        arr = arr if arr.ndim == 3 else arr[None]
+        for j, c in enumerate(circuits):
+            bad = np.argwhere(~np.isfinite(arr[j]))
+            if bad.size:
+                k, m = bad[0]
+                raise DataError(f"{p}: {q} is not finite at gap {gaps[k]:g} m, current "
+                                f"{currents[m]:g} A" + (f" (circuit {c!r})" if c else ""))
+            cols[(q, c)] = arr[j].ravel()
+    gg, cc = np.meshgrid(gaps, currents, indexing="ij")
+    return _assemble(gg.ravel(), cc.ravel(), cols, circuits, np.zeros(gg.size, dtype=int),
+                     str(p), digest)
+
+
+# ---------------------------------------------------------------------------- derivatives
+class _Axes:
+    """Node derivatives and integrals of the tensor-product not-a-knot cubic spline.
+
+    Along the current the data are mirrored to ``-I`` (odd for ``psi``, even for ``F``)
+    when the grid starts at 0 A, so the spline honours the symmetry at ``I = 0``.
+    """
+
+    def __init__(self, gaps: np.ndarray, currents: np.ndarray) -> None:
+        self.s, self.i = gaps, currents
+        self.mirror = MIRROR_CURRENTS and currents[0] == 0.0
+        self.ie = np.concatenate((-currents[:0:-1], currents)) if self.mirror else currents
+
+    def _ext(self, y: np.ndarray, parity: int) -> np.ndarray:
+        return np.concatenate((parity * y[:, :0:-1], y), axis=1) if self.mirror else y
+
+    def d_current(self, y: np.ndarray, parity: int) -> np.ndarray:
+        """``dy/dI`` at the nodes; ``parity`` -1 for odd data (psi), +1 for even (F)."""
+        from scipy.interpolate import make_interp_spline
+
+        spl = make_interp_spline(self.ie, self._ext(y, parity).T, k=3)
+        return np.asarray(spl.derivative()(self.i)).T
+
+    def integral_current(self, y: np.ndarray, parity: int) -> np.ndarray:
+        """``int_0^I y di`` at the nodes (exact for the spline); needs a grid from 0 A."""
+        from scipy.interpolate import make_interp_spline
+
+        spl = make_interp_spline(self.ie, self._ext(y, parity).T, k=3).antiderivative()
+        return np.asarray(spl(self.i) - spl(0.0)).T
+
+    def d_gap(self, y: np.ndarray) -> np.ndarray:
+        """``dy/ds`` at the nodes."""
+        from scipy.interpolate import make_interp_spline
+
+        return np.asarray(make_interp_spline(self.s, y, k=3).derivative()(self.s))
+
+
+# ---------------------------------------------------------------------------- report
+@dataclass(frozen=True)
+class TableReport:
+    """What the consistency checks of :func:`maps_from_table` found.
+
+    Attributes
+    ----------
+    reciprocity_max : dict
+        Circuit -> largest relative reciprocity residual ``|dF/dI + dpsi/ds| / scale``
+        (NaN when the force was derived from ``psi``: reciprocal by construction).
+    reciprocity_worst : dict
+        Circuit -> where it is largest (gap, current, row).
+    force_from : str
+        ``"table"`` or ``"co-energy of psi"``.
+    messages : list of str
+        The warnings issued (monotonicity, coverage, reciprocity).
+    """
+
+    reciprocity_max: dict[str, float]
+    reciprocity_worst: dict[str, str]
+    force_from: str
+    messages: list[str] = field(default_factory=list)
+
+
+def _warn(messages: list[str], text: str) -> None:
+    messages.append(text)
+    warnings.warn(text, DataWarning, stacklevel=3)
+
+
+def _points(mask: np.ndarray) -> list[tuple[int, int]]:
+    return [(int(k), int(m)) for k, m in np.argwhere(mask)]
+
+
+def _monotonicity(table: GridTable, messages: list[str]) -> None:
+    """psi strictly rising in I (required); psi, F falling in s and F rising in I (warned)."""
+    psi, force = table.flux_linkage_Wb, table.force_N
+    for j, c in enumerate(table.circuits):
+        if psi is not None:
+            step = np.diff(psi[j], axis=1)
+            bad = _points(np.pad(step <= 0.0, ((0, 0), (1, 0))))
+            if bad:
+                raise DataError(f"{table.source}: the flux linkage does not rise with the "
+                                f"current at {_listed(table, bad, c)} (compared with the next "
+                                "lower current): L~ = dpsi/dI <= 0 there, and eq. 8 divides "
+                                "by L~; check the data (sign, units, column order)")
+            # |psi| falls as the gap opens (less permeance); tolerance: 1e-9 of the row's
+            # range for rounding in the file
+            tol = 1e-9 * np.ptp(psi[j])
+            bad = _points(np.pad(np.diff(psi[j], axis=0) > tol, ((1, 0), (0, 0))))
+            if bad:
+                _warn(messages, f"{table.source}: the flux linkage rises with the gap at "
+                                f"{_listed(table, bad, c)} (compared with the next smaller "
+                                "gap): dL/ds > 0 there, unusual for an attracting magnet")
+        if force is not None:
+            tol = 1e-9 * np.ptp(force[j])
+            bad = _points(np.pad(np.diff(force[j], axis=0) > tol, ((1, 0), (0, 0))))
+            if bad:
+                _warn(messages, f"{table.source}: the force rises with the gap at "
+                                f"{_listed(table, bad, c)} (compared with the next smaller gap)")
+            bad = _points(np.pad(np.diff(force[j], axis=1) < -tol, ((0, 0), (1, 0))))
+            if bad:
+                _warn(messages, f"{table.source}: the force falls with the current at "
+                                f"{_listed(table, bad, c)} (compared with the next lower "
+                                "current)")
+            bad = _points(force[j] < -tol)
+            if bad:
+                _warn(messages, f"{table.source}: the force is negative (repelling) at "
+                                f"{_listed(table, bad, c)}; force_N is attraction-positive")
+
+
+def _coenergy_force(axes: _Axes, psi: np.ndarray) -> np.ndarray:
+    """``F = -d/ds int_0^I psi di`` at the nodes (attraction-positive co-energy force)."""
+    return -axes.d_gap(axes.integral_current(psi, -1))
+
+
+def _reciprocity(table: GridTable, axes: _Axes, tolerance: float, messages: list[str]
+                 ) -> tuple[np.ndarray, dict[str, float], dict[str, str]]:
+    """Residual ``(F - F_coenergy(psi))/scale`` per point; refuse above ``tolerance``.
+
+    ``dF/dI = -dpsi/ds`` integrated from ``I = 0`` (where ``F = 0``) is
+    ``F = -d/ds int_0^I psi di``: the integral form needs no derivative of the (measured)
+    force and none at the grid's current edge, where the one-sided spline slope of an even
+    function is poorest.  ``scale = max(|F|, 1 % of max |F|)``.
+    """
+    assert table.force_N is not None and table.flux_linkage_Wb is not None
+    res = np.empty_like(table.force_N)
+    worst: dict[str, float] = {}
+    where: dict[str, str] = {}
+    for j, c in enumerate(table.circuits):
+        f = table.force_N[j]
+        fce = _coenergy_force(axes, table.flux_linkage_Wb[j])
+        scale = np.maximum(np.abs(f), RECIPROCITY_FLOOR * float(np.max(np.abs(f))))
+        res[j] = (f - fce) / np.where(scale > 0.0, scale, 1.0)
+        k, m = np.unravel_index(int(np.argmax(np.abs(res[j]))), res[j].shape)
+        worst[c], where[c] = float(abs(res[j][k, m])), table.where(int(k), int(m))
+        bad = _points(np.abs(res[j]) > tolerance)
+        if bad:
+            sel = np.abs(fce) > RECIPROCITY_FLOOR * float(np.max(np.abs(fce)))
+            with np.errstate(divide="ignore", invalid="ignore"):
+                ratio = float(np.median(f[sel] / fce[sel])) if np.any(sel) else math.nan
+            hint = ""
+            if math.isfinite(ratio) and (abs(ratio) > 300 or abs(ratio) < 1 / 300):
+                hint = (f"; the force is ~{ratio:.3g} x the co-energy force: a unit slip (gap "
+                        "in mm as m, mWb as Wb, kN as N)?")
+            raise DataError(f"{table.source}: force and flux linkage violate co-energy "
+                            f"reciprocity dF/dI = -dpsi/ds (F = -d/ds int_0^I psi di) by more "
+                            f"than {tolerance:g} (relative) at {_listed(table, bad, c)}; "
+                            f"largest {worst[c]:.3g} at {where[c]}{hint}.  Force and flux "
+                            "linkage of one magnet satisfy it; check the data, or drop the "
+                            "force columns to derive the force from psi")
+        if worst[c] > tolerance / 2:
+            loose = _points(np.abs(res[j]) > tolerance / 2)
+            _warn(messages, f"{table.source}: co-energy reciprocity dF/dI = -dpsi/ds holds only "
+                            f"to {worst[c]:.3g} (relative; worst at {where[c]}; above "
+                            f"{tolerance / 2:g} at {_listed(table, loose, c)})")
+    return res, worst, where
+
+
+# ---------------------------------------------------------------------------- maps
+def _per_circuit(value: Any, circuits: tuple[str, ...], what: str, *,
+                 allow_inf: bool = False) -> np.ndarray:
+    if isinstance(value, Mapping):
+        missing = [c for c in circuits if c not in value]
+        unknown = sorted(set(value) - set(circuits))
+        if missing or unknown:
+            raise InputError(f"{what}: give one value per circuit {list(circuits)} (missing "
+                             f"{missing}, unknown {unknown})")
+        value = [value[c] for c in circuits]
+    vals = np.atleast_1d(np.asarray(value, dtype=object))
+    if vals.size == 1:
+        vals = np.repeat(vals, len(circuits))
+    if vals.size != len(circuits):
+        raise InputError(f"{what}: expected {len(circuits)} values (circuits {list(circuits)}), "
+                         f"got {vals.size}")
+    out = np.empty(len(circuits))
+    for j, v in enumerate(vals):
+        if allow_inf and isinstance(v, (float, int, np.floating)) and v == math.inf:
+            out[j] = math.inf
+        else:
+            out[j] = real_number(v, f"{what} of circuit {circuits[j]!r}", "ohm", positive=True)
+    return out
+
+
+def maps_from_table(data: str | Path | GridTable, *, resistance_ohm: Any = None,
+                    eddy_resistance_ohm: Any = math.inf, magnet: Any = None,
+                    pole_groups: Mapping[str, Sequence[str]] | None = None,
+                    name: str | None = None,
+                    reciprocity_tolerance: float = RECIPROCITY_TOLERANCE) -> CharacteristicMaps:
+    """Characteristic maps from tabulated ``psi(s, I)`` and/or ``F(s, I)`` (module docstring).
+
+    Parameters
+    ----------
+    data : path or GridTable
+        A CSV or netCDF table (:func:`read_table`) or a table read already.
+    resistance_ohm : float, sequence or mapping
+        ``R_el`` per circuit [ohm] (one value for all).  Default: the magnet's, if
+        ``magnet`` is given; otherwise required.
+    eddy_resistance_ohm : float, sequence or mapping
+        ``R_ec`` per circuit [ohm] (default ``inf``: no eddy currents), e.g. from a
+        measured voltage step (:func:`eddy_resistance_from_step`).  Stored as both
+        ``eddy_resistance_ohm`` and ``eddy_resistance_fit_ohm`` (the current model's
+        default); no eddy network (``eddy_modes > 0`` is not available).
+    magnet : Magnet, optional
+        The magnet the table describes: its circuit names must match the table's; it gives
+        the pole groups and gap names (so scenarios written for the magnet run on the maps)
+        and the default ``R_el``.  The maps are *not* tied to its equivalent circuit
+        (``magnet_hash`` is the table's hash).
+    pole_groups : mapping, optional
+        Circuit -> names of the gap inputs (poles) it drives.  Default: the magnet's, or
+        one gap per circuit (``"gap"`` for one circuit, ``"gap_<circuit>"`` otherwise).
+    name : str, optional
+        The maps' ``magnet_name`` (default: the magnet's name or the file's stem).
+    reciprocity_tolerance : float
+        Largest relative residual of ``dF/dI = -dpsi/ds`` (:data:`RECIPROCITY_TOLERANCE`)
+        before the table is refused; warned above half of it.
+
+    Returns
+    -------
+    CharacteristicMaps
+        With ``force_N``, ``inductance_H``, ``dL_ds_H_per_m``, ``flux_linkage_Wb``,
+        ``apparent_inductance_H``, ``resistance_ohm``, ``eddy_resistance_ohm``,
+        ``eddy_resistance_fit_ohm`` and, when force and flux linkage are both given,
+        ``reciprocity_residual``.  The attribute ``table_report`` (JSON) holds the
+        :class:`TableReport`; :func:`table_report` returns it.
+
+    Raises
+    ------
+    DataError
+        Bad table (:func:`read_table`), no flux linkage, a flux linkage that does not rise
+        with the current, reciprocity violated beyond the tolerance, or a force to derive
+        from a grid that does not start at 0 A.
+    """
+    table = data if isinstance(data, GridTable) else read_table(data)
+    tol = real_number(reciprocity_tolerance, "reciprocity_tolerance", positive=True)
+    table, groups, gap_names, r_default, default_name = _identity(table, magnet, pole_groups)
+    circuits = table.circuits
+    if resistance_ohm is None:
+        if r_default is None:
+            raise InputError("resistance_ohm (R_el per circuit [ohm]) is required: a table "
+                             "holds no resistance (or give the magnet)")
+        resistance_ohm = r_default
+    r_el = _per_circuit(resistance_ohm, circuits, "resistance_ohm")
+    r_ec = _per_circuit(eddy_resistance_ohm, circuits, "eddy_resistance_ohm", allow_inf=True)
+    psi = table.flux_linkage_Wb
+    if psi is None:
+        raise DataError(f"{table.source}: the table has no flux_linkage_Wb: the reduced model "
+                        "needs L~ = dpsi/dI, and the force fixes the flux linkage only up to a "
+                        "function of the current (dpsi/ds = -dF/dI; the flux at a reference gap, "
+                        "e.g. the leakage, stays unknown); add flux_linkage_Wb columns")
+    messages: list[str] = []
+    g, c = table.gaps_m, table.currents_A
+    if c[0] > 0.0:
+        _warn(messages, f"{table.source}: the current grid starts at {c[0]:g} A, not 0 A: the "
+                        "reduced model cannot run below it (the maps' range)")
+    _monotonicity(table, messages)
+    axes = _Axes(g, c)
+    nc = len(circuits)
+    ltilde = np.stack([axes.d_current(psi[j], -1) for j in range(nc)])
+    dpsi_ds = np.stack([axes.d_gap(psi[j]) for j in range(nc)])
+    bad = [(j, _points(ltilde[j] <= 0.0)) for j in range(nc)]
+    for j, pts in bad:
+        if pts:
+            raise DataError(f"{table.source}: the spline through the flux linkage has a "
+                            f"slope L~ <= 0 at {_listed(table, pts, circuits[j])}; the data "
+                            "are too coarse or too noisy near there")
+    pos = c > 0.0
+    with np.errstate(divide="ignore", invalid="ignore"):
+        dlds = np.where(pos, dpsi_ds / np.where(pos, c, 1.0), np.nan)
+        lapp = np.where(pos, psi / np.where(pos, c, 1.0), np.nan)
+    if not pos[0]:
+        # I -> 0: the limit of (dpsi/ds)/I is d^2 psi/(ds dI) at 0 (odd-mirrored spline)
+        for j in range(nc):
+            dlds[j, :, 0] = axes.d_current(dpsi_ds[j], -1)[:, 0]
+            lapp[j, :, 0] = ltilde[j, :, 0]
+    residual = None
+    worst: dict[str, float] = {cc: math.nan for cc in circuits}
+    where = {cc: "" for cc in circuits}
+    if table.force_N is not None:
+        force = table.force_N
+        force_from = "table"
+        if c[0] == 0.0:
+            residual, worst, where = _reciprocity(table, axes, tol, messages)
+        else:
+            _warn(messages, f"{table.source}: reciprocity not checked: the co-energy needs "
+                            "the flux linkage from 0 A")
+    else:
+        if c[0] > 0.0:
+            raise DataError(f"{table.source}: deriving the force from the flux linkage needs "
+                            f"the co-energy from 0 A, but the currents start at {c[0]:g} A; "
+                            "add rows at 0 A or force_N columns")
+        force = np.stack([_coenergy_force(axes, psi[j]) for j in range(nc)])
+        force_from = "co-energy of psi"
+    report = TableReport(reciprocity_max=worst, reciprocity_worst=where, force_from=force_from,
+                         messages=messages)
+    ds = maps_dataset({"force_N": force, "inductance_H": ltilde, "dL_ds_H_per_m": dlds,
+                       "flux_linkage_Wb": psi, "apparent_inductance_H": lapp},
+                      circuits=circuits, gaps_m=g, currents_A=c, resistance_ohm=r_el)
+    given = ("given (eddy_resistance_ohm of maps_from_table; inf: no eddy currents), "
+             "e.g. from a measured voltage step")
+    ds["eddy_resistance_ohm"] = ("circuit", r_ec, {"units": "ohm", "long_name":
+                                                   "eddy-current resistance R_ec",
+                                                   "description": given})
+    ds["eddy_resistance_fit_ohm"] = ("circuit", r_ec.copy(), {
+        "units": "ohm", "long_name": "eddy-current resistance R_ec from the step time constant",
+        "description": given})
+    if residual is not None:
+        ds["reciprocity_residual"] = (("circuit", "gap", "current"), residual, {
+            "units": "1", "long_name": "(F - F_coenergy(psi)) / scale of the table",
+            "description": "co-energy reciprocity residual at the grid points, F_coenergy = "
+                           "-d/ds int_0^I psi di of the spline; scale max(|F|, 1 % of max |F|)"})
+    ds.attrs.update({
+        "format": MAPS_FORMAT,
+        "magnet_name": name or default_name,
+        "magnet_hash": table.sha256 or _array_hash(table),
+        "magnet_hash_kind": "sha256 of the imported table (file bytes)",
+        "magnet_parameter_hash": "",
+        "magnet_parameters": "",
+        "pole_groups": json.dumps(groups),
+        "gap_names": ",".join(gap_names),
+        "method": "imported table: L~ and dL/ds from the not-a-knot bicubic spline of psi "
+                  "(odd-mirrored in I); force " + ("from the table" if force_from == "table"
+                                                   else "by co-energy, -d/ds int_0^I psi di"),
+        "table_source": table.source,
+        "table_sha256": table.sha256,
+        "table_report": json.dumps(asdict(report)),
+        "maglevkit_version": __version__,
+        "conventions": "all gaps equal to s and every circuit at I (symmetric operation); "
+                       "force is attraction-positive",
+    })
+    return CharacteristicMaps(ds)
+
+
+def table_report(maps: CharacteristicMaps) -> TableReport:
+    """The consistency report stored in maps from :func:`maps_from_table`."""
+    raw = maps.dataset.attrs.get("table_report")
+    if raw is None:
+        raise InputError("these maps were not imported from a table (no table_report)")
+    d = json.loads(raw)
+    return TableReport(reciprocity_max={k: float(v) for k, v in d["reciprocity_max"].items()},
+                       reciprocity_worst=d["reciprocity_worst"], force_from=d["force_from"],
+                       messages=list(d["messages"]))
+
+
+def _array_hash(table: GridTable) -> str:
+    h = hashlib.sha256()
+    for a in (table.gaps_m, table.currents_A, table.force_N, table.flux_linkage_Wb):
+        if a is not None:
+            h.update(np.ascontiguousarray(a, dtype=float).tobytes())
+    return h.hexdigest()
+
+
+def _identity(table: GridTable, magnet: Any, pole_groups: Mapping[str, Sequence[str]] | None
+              ) -> tuple[GridTable, dict[str, tuple[str, ...]], tuple[str, ...], Any, str]:
+    """(table, pole groups, gap names, default R_el, default name) of the imported maps; a
+    one-circuit table takes the name of a one-circuit magnet's circuit."""
+    circuits = table.circuits
+    r_default = None
+    default_name = Path(table.source).stem if table.source != "<memory>" else "table"
+    if magnet is not None:
+        from ..models.statics import as_network, circuit_pole_groups
+
+        net = as_network(magnet)
+        if len(circuits) == 1 and len(net.circuits) == 1:
+            circuits = tuple(net.circuit_names)
+            table = replace(table, circuits=circuits)
+        if tuple(sorted(circuits)) != tuple(sorted(net.circuit_names)):
+            raise DataError(f"{table.source}: the table's circuits {list(circuits)} are not the "
+                            f"magnet's {list(net.circuit_names)} (column suffixes _<circuit>)")
+        order = [net.circuit_names.index(cc) for cc in circuits]
+        r_default = net.resistances[order]
+        mid_g = float(table.gaps_m[table.gaps_m.size // 2])
+        mid_c = float(max(table.currents_A[table.currents_A.size // 2], table.currents_A[-1] / 2))
+        groups0 = pole_groups or circuit_pole_groups(net, gap=mid_g, current=mid_c)
+        default_name = str(getattr(magnet, "name", net.name))
+        gap_names = tuple(net.gap_names)
+    else:
+        groups0 = pole_groups or ({circuits[0]: ("gap",)} if len(circuits) == 1 else
+                                  {cc: (f"gap_{cc}",) for cc in circuits})
+        gap_names = tuple(gname for cc in circuits for gname in groups0.get(cc, ()))
+    groups = {cc: tuple(str(x) for x in v) for cc, v in groups0.items()}
+    if set(groups) != set(circuits) or any(not v for v in groups.values()):
+        raise InputError(f"pole_groups must give every circuit {list(circuits)} at least one "
+                         f"gap name, got {dict(groups)}")
+    return table, groups, gap_names, r_default, default_name
+
+
+# ---------------------------------------------------------------------------- R_ec from a step
+@dataclass(frozen=True)
+class StepIdentification:
+    """``L~`` and ``R_ec`` from a measured voltage step (:func:`eddy_resistance_from_step`).
+
+    Attributes
+    ----------
+    inductance_H : float
+        ``L~ = tau R_el (1 - dI_0/dI_inf)`` [H].
+    eddy_resistance_ohm : float
+        ``R_ec = dU/dI_0 - R_el`` [ohm] (inf when no jump is seen).
+    time_constant_s : float
+        Fitted ``tau`` [s].
+    current_jump_A : float
+        ``dI_0`` [A], the jump the fit extrapolates to ``t = 0``.
+    fit_rms : float
+        RMS of the log-linear fit residual.
+    """
+
+    inductance_H: float
+    eddy_resistance_ohm: float
+    time_constant_s: float
+    current_jump_A: float
+    fit_rms: float
+
+
+def eddy_resistance_from_step(time_s: Any, current_A: Any, *, voltage_step_V: float,
+                              resistance_ohm: float) -> StepIdentification:
+    """``R_ec`` and ``L~`` from a measured current response to a voltage step (paper IV-B).
+
+    The magnet is held at a fixed gap at the current ``I(t < 0)`` (the first sample must be
+    at ``t <= 0``); at ``t = 0`` the voltage steps by ``voltage_step_V``.  Eq. 8 at fixed
+    gap is linear: ``dI(t) = dI_inf - (dI_inf - dI_0) exp(-t/tau)`` with ``dI_inf = dU/R_el``,
+    ``dI_0 = dU/(R_el + R_ec)``; ``log(dI_inf - dI)`` is fitted by a straight line over
+    the samples with ``2 % < remaining < 98 %`` (the procedure of
+    :func:`~maglevkit.models.experiments.differential_inductance_from_step`).
+
+    Parameters
+    ----------
+    time_s, current_A : array_like
+        Sample times [s] (increasing, the first <= 0) and coil currents [A].
+    voltage_step_V : float
+        The voltage step ``dU`` [V] (either sign).
+    resistance_ohm : float
+        ``R_el`` [ohm].
+    """
+    from ..models.experiments import fit_step_response
+
+    t = np.asarray(time_s, dtype=float)
+    i = np.asarray(current_A, dtype=float)
+    if t.ndim != 1 or t.shape != i.shape or t.size < 12:
+        raise DataError(f"the voltage step needs matching 1-D time_s and current_A with at least "
+                        f"12 samples, got shapes {t.shape} and {i.shape}")
+    bad = np.nonzero(~(np.isfinite(t) & np.isfinite(i)))[0]
+    if bad.size:
+        raise DataError(f"the voltage step's sample {bad[0]} is not finite "
+                        f"(t = {t[bad[0]]!r} s, I = {i[bad[0]]!r} A)")
+    if np.any(np.diff(t) <= 0.0) or t[0] > 0.0:
+        raise DataError("the voltage step's times must increase and start at t <= 0 (the "
+                        "current before the step)")
+    r = real_number(resistance_ohm, "resistance_ohm", "ohm", positive=True)
+    du = real_number(voltage_step_V, "voltage_step_V", "V")
+    if du == 0.0:
+        raise DataError("voltage_step_V = 0: no step")
+    before = i[t <= 0.0]
+    di_inf = du / r
+    sel = t > 0.0
+    fit = fit_step_response(t[sel], (i[sel] - before[-1]) / di_inf)
+    jump = fit.jump_fraction * di_inf
+    r_ec = math.inf if fit.jump_fraction <= 0.0 else r / fit.jump_fraction - r
+    return StepIdentification(
+        inductance_H=fit.time_constant_s * r * (1.0 - max(fit.jump_fraction, 0.0)),
+        eddy_resistance_ohm=r_ec, time_constant_s=fit.time_constant_s, current_jump_A=jump,
+        fit_rms=fit.rms)

@@ -1,0 +1,232 @@
+"""Calibration of a magnet's uncertain network factors to measured statics (issue 25,
+part 2): exact parameter derivatives, recovery from synthetic data, the FEM as
+measurement, identifiability, the calibrated TOML and the command line."""
+
+from __future__ import annotations
+
+import csv
+import hashlib
+from pathlib import Path
+
+import numpy as np
+import pytest
+import tomllib
+from typer.testing import CliRunner
+
+import maglevkit as mk
+from maglevkit.calibration import (
+    PARAMETERS,
+    StaticPoints,
+    calibrate,
+    calibrated_network,
+    load_calibrated_magnet,
+    parameter_sensitivities,
+    read_points,
+    write_calibrated_toml,
+)
+from maglevkit.cli import app
+from maglevkit.errors import DataError
+
+ROOT = Path(__file__).resolve().parents[1]
+FEM = ROOT / "benchmarks" / "results" / "u_magnet_fem_statics.csv"
+TRUE = {"leakage_factor": 1.15, "fringing_factor": 0.85, "gap_offset_m": 3e-4,
+        "iron_field_scale": 1.3, "iron_saturation_scale": 0.97}
+
+
+@pytest.fixture(scope="module")
+def magnet() -> mk.Magnet:
+    return mk.load_magnet("u-magnet", eddy_currents=False)
+
+
+def _statics(model: object, gaps: np.ndarray, currents: np.ndarray) -> tuple[np.ndarray, ...]:
+    sol = mk.solve_statics(model, gaps=np.c_[gaps, gaps], currents=currents[:, None])
+    return (np.asarray(sol.force_N, dtype=float).reshape(-1),
+            np.asarray(sol.flux_linkage_Wb, dtype=float).reshape(-1))
+
+
+def test_nominal_factors_leave_the_statics_unchanged(magnet: mk.Magnet) -> None:
+    g, c = np.array([0.004, 0.008, 0.020]), np.array([5.0, 40.0, 80.0])
+    f0, p0 = _statics(magnet, g, c)
+    f1, p1 = _statics(calibrated_network(magnet, {}), g, c)
+    np.testing.assert_array_equal(f0, f1)     # the same law, bit for bit
+    np.testing.assert_array_equal(p0, p1)
+
+
+@pytest.mark.parametrize(("gap", "current"), [(0.008, 40.0), (0.004, 80.0), (0.020, 5.0)])
+def test_parameter_derivatives_match_central_differences(magnet: mk.Magnet, gap: float,
+                                                         current: float) -> None:
+    d = parameter_sensitivities(magnet, TRUE, gap_m=gap, current_A=current)
+    f, p = _statics(calibrated_network(magnet, TRUE), np.array([gap]), np.array([current]))
+    assert d["force_N"][0] == pytest.approx(f[0], rel=1e-12)
+    assert d["flux_linkage_Wb"][0] == pytest.approx(p[0], rel=1e-12)
+    for k, name in enumerate(TRUE):
+        # central differences of the independent Newton solver (solve_statics) on the
+        # numeric calibrated network; h = 1e-4 of the parameter's scale: truncation
+        # ~h^2 ~ 1e-8, rounding ~1e-15/1e-4 ~ 1e-11 (measured agreement ~3e-9)
+        h = 1e-4 * PARAMETERS[name].scale
+        out = [_statics(calibrated_network(magnet, {**TRUE, name: TRUE[name] + sign * h}),
+                        np.array([gap]), np.array([current])) for sign in (1, -1)]
+        fd_f = (out[0][0][0] - out[1][0][0]) / (2 * h)
+        fd_p = (out[0][1][0] - out[1][1][0]) / (2 * h)
+        assert d["dforce_dp"][0, k] == pytest.approx(fd_f, rel=1e-6), name
+        assert d["dpsi_dp"][0, k] == pytest.approx(fd_p, rel=1e-6), name
+
+
+def test_recovers_known_parameters_within_their_confidence_intervals(
+        magnet: mk.Magnet) -> None:
+    g, c = (a.ravel() for a in np.meshgrid(np.arange(4, 21, 2) * 1e-3,
+                                           np.array([5.0, 10, 20, 40, 60, 80]), indexing="ij"))
+    f, p = _statics(calibrated_network(magnet, TRUE), g, c)
+    rng = np.random.default_rng(25)
+    inside, estimates = [], []
+    for _ in range(20):
+        # 0.3 % relative Gaussian noise on every force and flux linkage
+        pts = StaticPoints(gap_m=g, current_A=c,
+                           force_N=(f * (1 + 3e-3 * rng.standard_normal(f.size)))[:, None],
+                           flux_linkage_Wb=(p * (1 + 3e-3 * rng.standard_normal(p.size)))[:, None],
+                           circuits=("coil",), rows=np.zeros(g.size, dtype=int))
+        res = calibrate(magnet, pts)
+        assert res.undetermined == () and res.bounds_active == ()
+        inside += [abs(res.values[k] - TRUE[k]) <= res.confidence_95[k] for k in TRUE]
+        estimates.append([res.values[k] for k in TRUE])
+    # 95 % intervals: of 100 (parameter, run) pairs ~95 contain the truth (measured 97.5 %
+    # on 8 runs); P(fewer than 88 | p = 0.95) ~ 0.3 %
+    assert np.mean(inside) >= 0.88, np.mean(inside)
+    # and the ensemble mean is unbiased to well within one interval
+    mean = np.mean(estimates, axis=0)
+    half = np.array([res.confidence_95[k] for k in TRUE])
+    assert np.all(np.abs(mean - np.array(list(TRUE.values()))) < half / 2)
+
+
+def test_fem_as_measurement_fit_4_to_12_mm_held_out_16_and_20_mm(magnet: mk.Magnet) -> None:
+    res = calibrate(magnet, FEM, holdout_gaps_m=[0.016, 0.020])
+    assert {r["gap_m"] for r in res.points} == {0.004, 0.008, 0.012}
+    assert {r["gap_m"] for r in res.holdout} == {0.016, 0.020}
+    assert len(res.holdout) == 16 and all(r["row"] > 0 for r in res.holdout)
+    # the fit removes most of the lumped network's error on the fitted gaps (nominal: force
+    # 7.6 %, psi 7.3 %; calibrated 2.3 %, 2.6 %, measured) ...
+    assert res.max_error("points") < 0.5 * max(abs(r["relative_error"])
+                                               for r in res.nominal_points)
+    # ... and carries to the held-out gaps for the flux linkage (7.9 % -> 3.4 %), not for
+    # the force at 20 mm (6.0 % -> 6.2 %: the lumped fringe law's gap dependence; the
+    # issue's 2 % aim is not met by the lumped network, docs/magnets.md "Calibration")
+    nominal_psi = max(abs(r["relative_error"]) for r in res.nominal_holdout
+                      if r["quantity"] == "flux_linkage_Wb")
+    assert res.max_error("holdout", "flux_linkage_Wb") < 0.6 * nominal_psi
+    # 12 points cannot pin the iron's initial permeability: named, interval wider than it
+    assert "iron_field_scale" in res.undetermined
+    assert res.confidence_95["iron_field_scale"] > PARAMETERS["iron_field_scale"].scale
+
+
+def test_a_parameter_the_data_cannot_see_is_named(magnet: mk.Magnet) -> None:
+    # flux linkage at one gap in the linear range: the gap offset and the fringing factor
+    # both only change the gap permeance there -- one direction, two parameters
+    c = np.array([2.0, 4.0, 6.0, 8.0])
+    g = np.full(c.size, 0.010)
+    _, p = _statics(magnet, g, c)
+    pts = StaticPoints(gap_m=g, current_A=c, force_N=None, flux_linkage_Wb=p[:, None],
+                       circuits=("coil",), rows=np.arange(2, 6))
+    res = calibrate(magnet, pts, parameters=["fringing_factor", "gap_offset_m"])
+    assert set(res.undetermined) & {"fringing_factor", "gap_offset_m"}
+    assert res.singular_values[-1] < 1e-3 * res.singular_values[0]
+
+
+def test_calibrated_toml_round_trip(magnet: mk.Magnet, tmp_path: Path) -> None:
+    res = calibrate(magnet, FEM, parameters=["leakage_factor", "fringing_factor",
+                                             "iron_saturation_scale"])
+    out = write_calibrated_toml(magnet, res, tmp_path / "cal.toml", data_source=str(FEM))
+    doc = tomllib.loads(out.read_text())
+    sha = hashlib.sha256(FEM.read_bytes()).hexdigest()
+    assert doc["calibration"]["data_sha256"] == sha
+    for name, tag in doc["calibration"]["provenance"].items():
+        assert tag.startswith("calibrated") and sha in tag, name
+    loaded = load_calibrated_magnet(out, eddy_currents=False)
+    g, c = np.array([0.006, 0.014]), np.array([10.0, 60.0])
+    np.testing.assert_allclose(_statics(loaded, g, c),
+                               _statics(calibrated_network(magnet, res.values), g, c),
+                               rtol=1e-12)
+
+
+def test_bad_calibration_input(magnet: mk.Magnet, tmp_path: Path) -> None:
+    with pytest.raises(mk.InputError, match="unknown.*'leak'"):
+        calibrate(magnet, FEM, parameters=["leak"])
+    with pytest.raises(mk.InputError, match=r"holdout gap 0\.005 m: no data point"):
+        calibrate(magnet, FEM, holdout_gaps_m=[0.005])
+    bad = tmp_path / "z.csv"
+    with bad.open("w", newline="") as fh:
+        csv.writer(fh).writerows([["gap_m", "current_A", "force_N"], [0.01, 0, 0.0],
+                                  [0.01, 10, 100.0]])
+    with pytest.raises(DataError, match=r"row 2: current_A = 0; calibration points need I > 0"):
+        read_points(bad)
+
+
+def test_cli_calibrate(tmp_path: Path) -> None:
+    runner = CliRunner()
+    out = tmp_path / "c.toml"
+    res = runner.invoke(app, ["calibrate", "u-magnet", str(FEM), "-o", str(out), "--params",
+                              "leakage_factor,fringing_factor,iron_saturation_scale",
+                              "--holdout-gaps", "0.016,0.020"])
+    assert res.exit_code == 0, res.output
+    assert "fringing_factor = " in res.output and "held out: max" in res.output
+    assert "calibration" in tomllib.loads(out.read_text())
+    res = runner.invoke(app, ["calibrate", "u-magnet", str(FEM), "-o", str(out), "--params",
+                              "nonsense", "--force"])
+    assert res.exit_code == 2 and "Traceback" not in res.output and "nonsense" in res.output
+
+
+def test_voltage_step_response_and_its_parameter_derivatives() -> None:
+    from maglevkit.calibration import step_response_sensitivities
+
+    mag = mk.load_magnet("u-magnet")                 # with eddy currents: a current jump
+    vals = {"leakage_factor": 1.1, "iron_saturation_scale": 0.97}
+    times = np.linspace(0.002, 0.2, 12)
+    kw = {"gap_m": 0.01, "current_A": 20.0, "voltage_step_V": 8.0, "times_s": times}
+    d = step_response_sensitivities(mag, vals, **kw)
+    ref = mk.voltage_step_response(calibrated_network(mag, vals), gap=0.01, voltage=48.0,
+                                   initial_current=20.0, duration=0.2, dt=0.002, rtol=1e-10,
+                                   atol=1e-12)
+    idx = np.rint(times / 0.002).astype(int)
+    # the collocation run against the adaptive IDAS one: measured 3.4e-10
+    np.testing.assert_allclose(d["current_A"], ref.currents_A[idx, 0], rtol=1e-8)
+    for k, name in enumerate(vals):
+        h = 1e-4 * PARAMETERS[name].scale
+        out = [step_response_sensitivities(mag, {**vals, name: vals[name] + sg * h},
+                                           **kw)["current_A"] for sg in (1, -1)]
+        fd = (out[0] - out[1]) / (2 * h)
+        err = np.max(np.abs(d["dcurrent_dp"][:, k] - fd)) / np.max(np.abs(fd))
+        # measured 3-6e-6 (max over the samples relative to the largest derivative), the
+        # same for h = 1e-3, 1e-4 and 1e-5: the differences are converged and the AD
+        # derivative of the collocation run differs from them by that much (not the 1e-6
+        # of the statics; cause not found, docs/magnets.md)
+        assert err < 2e-5, (name, err)
+
+
+def test_two_circuit_magnet_from_a_suffixed_csv(tmp_path: Path) -> None:
+    """TR09 half magnets: per-circuit columns, forces summed over each circuit's poles."""
+    mag = mk.load_magnet("tr09-standard", eddy_currents=False)
+    true = {"leakage_factor": 1.2, "iron_saturation_scale": 0.95}
+    net = calibrated_network(mag, true)
+    g, c = (a.ravel() for a in np.meshgrid([0.008, 0.010, 0.012], [10.0, 25.0, 40.0],
+                                           indexing="ij"))
+    groups = mk.reduction.circuit_pole_groups(mag, gap=0.01, current=10.0)
+    gi = {n: k for k, n in enumerate(net.gap_names)}
+    sol = mk.solve_statics(net, gaps=np.repeat(g[:, None], len(gi), axis=1),
+                           currents=np.repeat(c[:, None], 2, axis=1))
+    path = tmp_path / "tr09.csv"
+    with path.open("w", newline="") as fh:
+        w = csv.writer(fh)
+        w.writerow(["gap_m", "current_A", "force_N_rear", "force_N_front",
+                    "flux_linkage_Wb_rear", "flux_linkage_Wb_front"])
+        for k in range(g.size):
+            f = {cn: sol.pole_force_N[k, [gi[p] for p in groups[cn]]].sum()
+                 for cn in ("front", "rear")}
+            j = {cn: net.circuit_names.index(cn) for cn in ("front", "rear")}
+            w.writerow([g[k], c[k], f["rear"], f["front"], sol.flux_linkage_Wb[k, j["rear"]],
+                        sol.flux_linkage_Wb[k, j["front"]]])
+    res = calibrate(mag, path, parameters=list(true))
+    # noise-free data of the model itself: the fit returns the truth to the solver's
+    # precision (measured 2e-14, residual rms 1e-14)
+    for name, value in true.items():
+        assert res.values[name] == pytest.approx(value, rel=1e-6), name
+    assert res.residual_rms < 1e-8
+    assert {r["circuit"] for r in res.points} == {"front", "rear"}

@@ -1,0 +1,226 @@
+"""The shielded-gap ladder (``CurrentModel(maps, motion_eddy=True)``): eq. 8 extended so
+that the motion-induced current passes through eddy dynamics (docs/reduction.md, "Gap
+motion").
+
+Closed forms (the ladder's transfer functions against the model's AD linearisation, the
+limit ``L_u -> 0`` against eq. 8, fit recovery), the default left unchanged, bad input, and
+the TR09 gap-sine sweep against the detailed model.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+import maglevkit as mk
+from maglevkit.models.current import eq8_shielded_gap_rhs
+from maglevkit.reduction.maps import CharacteristicMaps
+from maglevkit.reduction.motion_eddy import (
+    DetailedFrequencyResponse,
+    fit_motion_eddy,
+    ladder_frequency_response,
+)
+
+GAPS = np.linspace(0.006, 0.014, 5)
+CURRENTS = np.linspace(0.0, 40.0, 9)
+
+
+@pytest.fixture(scope="module")
+def u_maps() -> CharacteristicMaps:
+    return mk.build_maps(mk.load_magnet("u-magnet"), gaps=GAPS, currents=CURRENTS,
+                         progress=False)
+
+
+def _response(model: mk.CurrentModel, f: np.ndarray, gap: float, current: float
+              ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """gap -> coil current, gap -> circuit force, voltage -> coil current of circuit 0 from
+    ``linearize`` (every pole moving)."""
+    lin = model.linearize(gap_m=gap, current_A=current)
+    n = lin.A_per_s.shape[0]
+    eg, er = lin.E_gap_A_per_m_s.sum(axis=1), lin.E_gap_rate_A_per_m.sum(axis=1)
+    out = []
+    for fk in f:
+        p = 2j * np.pi * fk
+        xs = np.linalg.solve(p * np.eye(n) - lin.A_per_s, eg + p * er)
+        xu = np.linalg.solve(p * np.eye(n) - lin.A_per_s, lin.B_A_per_V_s[:, 0])
+        out.append(((lin.C_current @ xs)[0],
+                    (lin.C_force_N_per_A @ xs)[0] + lin.D_force_gap_N_per_m.sum(axis=1)[0],
+                    (lin.C_current @ xu)[0] + lin.D_current_A_per_V[0, 0]))
+    arr = np.array(out)
+    return arr[:, 0], arr[:, 1], arr[:, 2]
+
+
+def test_ladder_transfer_functions_match_the_linearised_ode(u_maps: CharacteristicMaps) -> None:
+    """``ladder_frequency_response`` (closed form) equals the AD linearisation of the ODE
+    that ``CurrentModel(motion_eddy=True)`` integrates, at a point off the grid nodes."""
+    gap, cur = 0.0093, 23.0
+    ladder = mk.CurrentModel(u_maps, motion_eddy=True)
+    eq8 = mk.CurrentModel(u_maps)
+    # L~ and k = dL/ds I_L of the maps' splines, from eq. 8's linearisation:
+    # A = -R_el/(a L~), E_gap_rate = -k/L~
+    lin8 = eq8.linearize(gap_m=gap, current_A=cur)
+    r_el = float(eq8.resistance_ohm[0])
+    a8 = 1.0 + r_el / float(eq8.eddy_resistance_ohm[0])
+    lt = -r_el / (a8 * float(lin8.A_per_s[0, 0]))
+    k = -float(lin8.E_gap_rate_A_per_m.sum()) * lt
+    ds = u_maps.dataset
+    f = np.geomspace(0.2, 2000.0, 25)
+    cs, _, cu = _response(ladder, f, gap, cur)
+    ms, _, mu = ladder_frequency_response(
+        f, ltilde=lt, dpsi_ds=k, r_el=r_el,
+        r_a=float(ds["motion_eddy_jump_resistance_ohm"].values[0]),
+        l_u=float(ds["motion_eddy_unshielded_inductance_H"].values[0]),
+        r_2=float(ds["motion_eddy_shielding_resistance_ohm"].values[0]))
+    # both are exact (AD vs algebra): rounding only
+    assert np.max(np.abs(cs / ms - 1.0)) < 1e-9
+    assert np.max(np.abs(cu / mu - 1.0)) < 1e-9
+    assert ladder.linearize(gap_m=gap, current_A=cur).A_per_s.shape == (2, 2)
+
+
+def test_vanishing_unshielded_inductance_gives_eq8() -> None:
+    """``L_u -> 0``: the ladder is eq. 8 with ``R_ec = R_a || R_2`` (transfer functions and
+    the right-hand side on its slow manifold)."""
+    lt, k, r_el, r_a, r_2 = 0.5, -1100.0, 1.3, 5.8, 14.0
+    r_ec = r_a * r_2 / (r_a + r_2)
+    a = 1.0 + r_el / r_ec
+    f = np.geomspace(0.1, 1000.0, 30)
+    p = 2j * np.pi * f
+    gs, _, gu = ladder_frequency_response(f, ltilde=lt, dpsi_ds=k, r_el=r_el, r_a=r_a,
+                                          l_u=1e-12, r_2=r_2)
+    eq8_s = -k * p / (a * (lt * p + r_el / a))
+    eq8_u = (1.0 - 1.0 / a) / r_el + 1.0 / (a * a * (lt * p + r_el / a))
+    # the neglected time constant L_u/(R_el/a + R_2) ~ 7e-14 s: relative effect < 1e-9
+    assert np.max(np.abs(gs / eq8_s - 1.0)) < 1e-9
+    assert np.max(np.abs(gu / eq8_u - 1.0)) < 1e-9
+    # on the slow manifold (dI_e/dt = 0 for L_u -> 0) dI_L/dt is eq. 8's
+    i_l, u, sd = 20.0, 30.0, 0.05
+    a_l = 1.0 + r_el / r_a
+    # I_e from V_A = V_m (no drop across L_u)
+    i_e = (u - r_el * i_l) / (a_l * r_2 + r_el)
+    d_il, _ = eq8_shielded_gap_rhs(i_l, i_e, u, sd, lt, k / i_l, r_el, a_l, r_2, 1e-12)
+    # L~ - L_u differs from L~ by 2e-12 relative
+    assert d_il == pytest.approx(((u - r_el * i_l) / a - k * sd) / lt, rel=1e-10)
+
+
+def test_fit_recovers_a_known_ladder() -> None:
+    lt, k, r_el = 0.54, -1140.0, 1.3
+    true = (5.77, 0.0226, 14.7)
+    f = np.geomspace(0.1, 1000.0, 60)
+    gs, il, gu = ladder_frequency_response(f, ltilde=lt, dpsi_ds=k, r_el=r_el, r_a=true[0],
+                                           l_u=true[1], r_2=true[2])
+    resp = DetailedFrequencyResponse(f, gs, il * 0.0, gu, lt, k)
+    fit = fit_motion_eddy(resp, r_el=r_el, r_ec_jump=5.0, r_ec_fit=4.0)
+    got = (fit.jump_resistance_ohm, fit.unshielded_inductance_H, fit.shielding_resistance_ohm)
+    # noise-free data: the fit stops at its tolerance (1e-12), far below 1e-6
+    assert np.allclose(got, true, rtol=1e-6)
+    assert fit.rms_residual < 1e-8 and fit.max_gap_error < 1e-7
+
+
+def _old(maps: CharacteristicMaps) -> CharacteristicMaps:
+    """The maps as the previous version stored them (no motion_eddy_* variables)."""
+    return CharacteristicMaps(maps.dataset.drop_vars(
+        [v for v in maps.dataset.data_vars if str(v).startswith("motion_eddy_")]))
+
+
+def test_default_is_unchanged(u_maps: CharacteristicMaps) -> None:
+    """motion_eddy=False (the default) and maps without the new variables give
+    bit-identical results."""
+    models = [mk.CurrentModel(u_maps), mk.CurrentModel(u_maps, motion_eddy=False),
+              mk.CurrentModel(_old(u_maps))]
+    runs = [mk.simulate(m, (0.0, 0.1), dt=1e-3,
+                        gaps=lambda t: 0.010 + 0.001 * np.sin(2 * np.pi * 5 * t),
+                        voltages=lambda t: 40.0 if t < 0.02 else 48.0, initial_currents=20.0)
+            for m in models]
+    for r in runs[1:]:
+        assert np.array_equal(r.currents_A, runs[0].currents_A)
+        assert np.array_equal(r.force_N, runs[0].force_N)
+        assert r.eddy_currents_A is None
+    assert models[0].max_step_s == 1e-3
+
+
+def test_motion_eddy_step_simulate_and_state(u_maps: CharacteristicMaps) -> None:
+    model = mk.CurrentModel(u_maps, motion_eddy=True)
+    st = model.initial_state(gaps=0.010, currents=20.0)
+    assert st.eddy_currents_A is not None and st.eddy_currents_A.shape == (1, 1)
+    assert np.all(st.eddy_currents_A == 0.0)
+    # steady state stays (I_e = 0, I = I_L)
+    st1, out = model.step(st, 1e-3, 20.0 * model.resistance_ohm)
+    assert out.currents_A[0] == pytest.approx(20.0, rel=1e-12)
+    assert abs(st1.eddy_currents_A[0, 0]) < 1e-12
+    # step and simulate agree (same compiled interval)
+    u = 22.0 * float(model.resistance_ohm[0])
+    res = mk.simulate(model, (0.0, 0.01), dt=1e-3, gaps=0.010, voltages=u,
+                      initial_state=st)
+    s = st
+    for _ in range(10):
+        s, o = model.step(s, 1e-3, u)
+    assert np.allclose(res.final_state.eddy_currents_A, s.eddy_currents_A, rtol=1e-12,
+                       atol=1e-15)
+    assert res.currents_A[-1, 0] == pytest.approx(o.currents_A[0], rel=1e-12)
+    assert res.eddy_currents_A is not None and res.eddy_currents_A.shape == (11, 1, 1)
+    # the jump of a voltage step is the shunt's, dU/(R_el + R_a)
+    lin = model.linearize(gap_m=0.010, current_A=20.0)
+    r_a = float(u_maps.dataset["motion_eddy_jump_resistance_ohm"].values[0])
+    assert lin.D_current_A_per_V[0, 0] == pytest.approx(
+        1.0 / (float(model.resistance_ohm[0]) + r_a), rel=1e-12)
+
+
+def test_bad_input(u_maps: CharacteristicMaps) -> None:
+    with pytest.raises(mk.InputError, match="motion_eddy = 'yes'.*False.*True"):
+        mk.CurrentModel(u_maps, motion_eddy="yes")  # type: ignore[arg-type]
+    with pytest.raises(mk.InputError, match="eddy_modes=1.*one of them"):
+        mk.CurrentModel(u_maps, motion_eddy=True, eddy_modes=1)
+    with pytest.raises(mk.InputError, match="eddy_resistance = 'jump'.*leave"):
+        mk.CurrentModel(u_maps, motion_eddy=True, eddy_resistance="jump")
+    with pytest.raises(mk.InputError, match="motion_eddy_.*rebuild"):
+        mk.CurrentModel(_old(u_maps), motion_eddy=True)
+    model = mk.CurrentModel(u_maps, motion_eddy=True)
+    with pytest.raises(mk.InputError, match="eddy state.*eddy_currents_A"):
+        model.step(mk.CurrentModel(u_maps).initial_state(gaps=0.01, currents=20.0), 1e-3, 40.0)
+    from maglevkit.models.bank import MagnetBank
+
+    with pytest.raises(mk.InputError, match="motion_eddy=True cannot be a bank member"):
+        MagnetBank({"m": model}, compiled="never")
+    no_eddy = mk.build_maps(mk.load_magnet("u-magnet", eddy_currents=False), gaps=GAPS,
+                            currents=CURRENTS, progress=False)
+    assert np.all(np.isnan(no_eddy.dataset["motion_eddy_unshielded_inductance_H"].values))
+    with pytest.raises(mk.InputError, match="no eddy currents.*motion_eddy=False"):
+        mk.CurrentModel(no_eddy, motion_eddy=True)
+
+
+def test_tr09_gap_sine_sweep_against_the_detailed_model() -> None:
+    """The issue's aims on tr09-standard (gap sine 10 +- 1 mm, constant voltage of 34 A):
+    current error relative to its variation <= 5 / 10 / 20 % at 5 / 50 / 200 Hz, phase
+    within 5 deg (measured 0.5 / 3.3 / 5.6 %, 0.4 / 0.6 / 2.9 deg; eq. 8: 4.9 / 43 / 161 %,
+    docs/decisions.md); the force error shrinks with it (measured 0.3 / 0.9 / 1.0 %)."""
+    mag = mk.load_magnet("tr09-standard")
+    maps = mk.build_maps(mag, gaps=np.linspace(0.005, 0.016, 12),
+                         currents=np.linspace(0.0, 80.0, 41), progress=False)
+    fm = mk.FluxModel(mag)
+    ladder = mk.CurrentModel(maps, motion_eddy=True)
+    u0 = fm.resistances * 34.0
+    for f, aim in ((5.0, 0.05), (50.0, 0.10), (200.0, 0.20)):
+        dur, dt = max(2.0 / f, 0.1), min(1.0 / (100 * f), 1e-3)
+
+        def gaps(t: np.ndarray, f: float = f) -> np.ndarray:
+            return 0.010 + 1e-3 * np.sin(2 * np.pi * f * t)
+
+        det = mk.simulate(fm, (0.0, dur), dt=dt, gaps=gaps, voltages=u0)
+        red = mk.simulate(ladder, (0.0, dur), dt=dt, gaps=gaps, voltages=u0)
+        cd, cr = det.currents_A, red.currents_A
+        err = np.sqrt(np.mean((cr - cd) ** 2)) / np.sqrt(np.mean((cd - cd.mean(0)) ** 2))
+        fd, fr = det.pole_force_N.sum(axis=1), red.force_N
+        err_f = np.sqrt(np.mean((fr - fd) ** 2)) / np.sqrt(np.mean((fd - fd.mean()) ** 2))
+        assert err <= aim, (f, err)
+        assert err_f <= 0.03, (f, err_f)      # measured <= 1.0 %, eq. 8 6.5-14 % above 50 Hz
+        t = det.time_s
+        last = t >= t[-1] - 1.0 / f * max(1, math.floor(f * dur / 2))
+        w = 2 * np.pi * f
+        basis = np.column_stack([np.ones(last.sum()), t[last], np.sin(w * t[last]),
+                                 np.cos(w * t[last])])
+        zd, zr = (np.linalg.lstsq(basis, y[last, 0], rcond=None)[0] for y in (cd, cr))
+        phase = math.degrees(math.atan2(zr[3], zr[2]) - math.atan2(zd[3], zd[2]))
+        if f <= 100.0:
+            assert abs(phase) <= 5.0, (f, phase)
