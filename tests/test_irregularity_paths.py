@@ -47,3 +47,47 @@ def test_random_profile_block_boundaries() -> None:
     ref = prof.elevation_m(x.ravel()).reshape(x.shape)
     err = np.abs(r - ref).max(axis=1) / np.abs(ref).max()
     assert err.max() <= 1e-11                      # measured ~1e-14, no growth over blocks
+
+
+def test_track_synthesis_equals_the_sums_on_each_path(monkeypatch: pytest.MonkeyPatch) -> None:
+    """The train's case (50 points over 75 m, 3000 steps of 0.111 m): the profile is
+    synthesised once on the track grid and interpolated; it agrees with the sums on each
+    point's own path (the previous method) to the interpolation bound."""
+    prof = parse_irregularity("random:0.3e-3:1", span_length_m=24.768)
+    assert isinstance(prof, RandomProfile)
+    start = 500.0 - np.sort(np.random.default_rng(0).uniform(0.0, 75.0, 50))
+    step = 400 / 3.6 * 1e-3
+    x = start[None, :] + step * np.arange(3000)[:, None]
+    calls = []
+    monkeypatch.setattr(RandomProfile, "_on_paths_phasors",
+                        lambda self, *a: calls.append(1))    # type: ignore[func-returns-value]
+    r, rx = prof.on_paths(x, start_m=start, step_m=step)
+    assert not calls                                    # the track grid was used
+    monkeypatch.undo()
+    r_ref, rx_ref = prof._on_paths_phasors(x, start, step)
+    # interpolation remainder bound 1e-13 of the RMS (TRACK_TOLERANCE); measured 6e-14
+    # (elevation) and 3e-13 (slope: the phases' rounding) of the largest value
+    assert np.max(np.abs(r - r_ref)) <= 1e-12 * np.max(np.abs(r_ref))
+    assert np.max(np.abs(rx - rx_ref)) <= 2e-12 * np.max(np.abs(rx_ref))
+    assert prof.track_spacing_m() > step                 # one grid node per step here
+
+
+@pytest.mark.parametrize("offset", [1e-12, 1e-6])
+def test_track_synthesis_at_positions_rounded_off_the_paths(offset: float) -> None:
+    """Positions a little off ``start + k step`` (a run's ``x0 + v t`` rounds to ~1e-13 m
+    off them): within 1e-12 m plus their rounding the elevation is corrected by slope x offset,
+    further off they are evaluated where they are; either way the direct sums at the
+    positions themselves are reproduced."""
+    prof = parse_irregularity("random:0.3e-3:2", span_length_m=24.768)
+    start = 300.0 - np.linspace(0.0, 75.0, 40)
+    step = 0.12
+    x = start[None, :] + step * np.arange(2000)[:, None]
+    x = x + np.random.default_rng(3).uniform(-offset, offset, x.shape)
+    r, rx = prof.on_paths(x, start_m=start, step_m=step)
+    sub = x[::37]
+    ref = prof.elevation_m(sub.ravel()).reshape(sub.shape)
+    ref_x = prof.slope(sub.ravel()).reshape(sub.shape)
+    # uncorrected, the 1e-6 m offsets would be |r'| 1e-6 ~ 3e-10 m, 1e-6 of the largest
+    # elevation; the bounds are those of the exact paths
+    assert np.max(np.abs(r[::37] - ref)) <= 1e-12 * np.max(np.abs(ref))
+    assert np.max(np.abs(rx[::37] - ref_x)) <= 2e-12 * np.max(np.abs(ref_x))

@@ -33,7 +33,6 @@ from typing import Any
 
 import casadi as ca
 import numpy as np
-from scipy import integrate
 
 from .errors import MaterialError
 from .validation import real_number
@@ -125,6 +124,8 @@ class Material(ABC):
 
     def energy_density(self, B: Any) -> np.ndarray:
         """Stored magnetic energy density ``w(B) = integral_0^B H dB`` [J/m^3] (NumPy)."""
+        from scipy import integrate  # lazily: importing it takes ~0.2 s
+
         b = np.asarray(B, dtype=float)
 
         def one(bb: float) -> float:
@@ -927,10 +928,11 @@ def normalise_name(name: str) -> str:
     return re.sub(r"[^0-9a-z]", "", name.lower())
 
 
-_REGISTRY: dict[str, SoftMagneticMaterial] = {
-    normalise_name(k): SoftMagneticMaterial(*v[:5], name=k, resistivity=v[5])
-    for k, v in _ROSCHKE.items()
-}
+_NAMES: dict[str, str] = {normalise_name(k): k for k in _ROSCHKE}
+_REGISTRY: dict[str, SoftMagneticMaterial] = {}
+"""The built-in records by normalised name, each built on its first use (building one
+finds its polarisation peak with scipy's ``brentq``; importing scipy.optimize with this
+module took ~0.4 s of every ``import maglevkit.vehicle``)."""
 
 
 def material_names() -> list[str]:
@@ -967,9 +969,14 @@ def get_material(name: str | Material) -> Material:
     if key == "ideal":
         return IdealIron()
     try:
-        return _REGISTRY[key]
+        canonical = _NAMES[key]
     except KeyError:
         raise MaterialError(
             f"unknown material {name!r}; built-in records are: {', '.join(material_names())}, "
             "or 'ideal' (or define a tabulated curve)"
         ) from None
+    mat = _REGISTRY.get(key)
+    if mat is None:
+        v = _ROSCHKE[canonical]
+        mat = _REGISTRY[key] = SoftMagneticMaterial(*v[:5], name=canonical, resistivity=v[5])
+    return mat

@@ -10,7 +10,19 @@ from typing import Annotated
 import typer
 
 from ..errors import MaglevkitError
-from ._app import ForceOption, app, fail, info, output_dir, output_file, writing
+from ._app import (
+    INTERRUPTED_EXIT_CODE,
+    ForceOption,
+    app,
+    fail,
+    info,
+    interrupted,
+    output_dir,
+    output_file,
+    writing,
+)
+
+__all__ = ["INTERRUPTED_EXIT_CODE", "run", "vehicle_app"]
 
 vehicle_app = typer.Typer(help="Vehicle runs: heave-pitch train on an elastic guideway.",
                           no_args_is_help=True, rich_markup_mode=None)
@@ -45,17 +57,36 @@ def run(
     = None,
     plot: Annotated[Path | None, typer.Option(help="Write figures (PNG) into this directory.")]
     = None,
-    progress: Annotated[bool, typer.Option(help="Progress bar on stderr.")] = True,
+    progress: Annotated[bool, typer.Option(
+        help="Progress on stderr (a bar on a terminal, plain lines with the ETA in logs).")]
+    = True,
     force: ForceOption = False,
 ) -> None:
     """Run the train at constant speed; report minimum gaps, peak currents, comfort and the
-    real-time factor (results on stdout, diagnostics on stderr).
+    real-time factor (results on stdout, diagnostics on stderr).  Ctrl-C stops the run:
+    "interrupted" on stderr, exit code 130, and with -o the run up to there is written.
 
     \b
     Example:
       maglevkit vehicle run tr09 --speed-kmh 400 --duration 1.5 -o run.nc
     """
-    from ..vehicle.simulation import VehicleModel, parse_failure, parse_irregularity
+    try:
+        _run(vehicle, speed_kmh, speed, duration, dt, irregularity, failure, rigid, magnets,
+             maps_cache, output, plot, progress, force)
+    except KeyboardInterrupt:
+        raise interrupted() from None
+
+
+def _run(vehicle: str, speed_kmh: float | None, speed: float | None, duration: float,
+         dt: float, irregularity: str, failure: list[str] | None, rigid: bool, magnets: str,
+         maps_cache: Path | None, output: Path | None, plot: Path | None, progress: bool,
+         force: bool) -> None:
+    from ..vehicle.simulation import (
+        VehicleModel,
+        VehicleRunInterrupted,
+        parse_failure,
+        parse_irregularity,
+    )
     from ..vehicle.train import load_vehicle
 
     output = output_file(output, "-o", formats=("nc",), force=force)   # netCDF, as sweep -o
@@ -92,6 +123,15 @@ def run(
             prof = parse_irregularity(irregularity, span_length_m=model.guideway.span.length_m)
         res = model.run(speed_m_per_s=speed_kmh / 3.6, duration_s=duration, dt_s=dt,
                         irregularity=prof, failures=fails, progress=progress)
+    except VehicleRunInterrupted as exc:
+        typer.echo(exc.run.report())
+        # the shared report (one "interrupted" line; a second Ctrl-C is ignored from here)
+        stop = interrupted(str(exc.run.dataset.attrs["interrupted"]))
+        if output is not None:
+            with writing(output, "-o"):
+                exc.run.to_netcdf(output)
+            info(f"wrote the run up to there to {output}")
+        raise stop from None
     except typer.BadParameter as exc:
         raise fail(str(exc)) from None
     except MaglevkitError as exc:

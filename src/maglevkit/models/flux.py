@@ -39,13 +39,10 @@ import math
 import os
 from collections.abc import Mapping
 from dataclasses import dataclass, field
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import casadi as ca
 import numpy as np
-import scipy.linalg as sla
-import scipy.sparse as sp
-import scipy.sparse.linalg as spla
 
 from ..circuit.assembly import assemble
 from ..circuit.network import Network
@@ -64,6 +61,9 @@ from .statics import (
     plausible_range,
     solve_statics,
 )
+
+if TYPE_CHECKING:   # scipy is imported where it is used (~0.2 s of every import otherwise)
+    import scipy.sparse as sp
 
 __all__ = [
     "DEFAULT_RTOL",
@@ -118,6 +118,8 @@ AUTO_COMPILE_SIZE = SPARSE_FORM_SIZE
 def _dm(a: Any, form: str) -> ca.DM:
     """A CasADi matrix of ``a``: sparse (structural zeros dropped) in the sparse form, dense
     (every entry, as earlier versions) in the dense form."""
+    import scipy.sparse as sp
+
     if form == "dense":
         return ca.DM(np.asarray(a))
     return ca.DM(sp.csc_matrix(a))
@@ -153,6 +155,9 @@ def _sparse_condition(J: sp.spmatrix) -> tuple[bool, float]:
     """``(singular, condition estimate)`` of a square sparse matrix: a sparse LU (singular
     if it fails or a pivot is below 1e-12 of the largest) and the 1-norm condition
     estimate ``||J||_1 ||J^-1||_1`` (Hager-Higham)."""
+    import scipy.sparse as sp
+    import scipy.sparse.linalg as spla
+
     Jc = sp.csc_matrix(J)
     if Jc.shape[0] == 0:
         return False, 1.0
@@ -277,6 +282,9 @@ class FluxDAE:
                  max_num_steps: int, radau_elements: int, radau_degree: int,
                  compiled: str = "never", cache_dir: str | None = None,
                  form: str = "auto") -> None:
+        import scipy.linalg as sla
+        import scipy.sparse as sp
+
         eq = assemble(network)
         self.network = network
         C, N = eq.C, eq.N
@@ -416,6 +424,8 @@ class FluxDAE:
     def Q(self) -> np.ndarray:
         """Left null space of ``K`` (rows): the balance combinations ``Q h = 0`` that fix
         the currents (dense; computed on first use in the sparse form)."""
+        import scipy.linalg as sla
+
         if self._Q is None:
             self._Q = sla.null_space(self.K.T).T
         return self._Q

@@ -25,6 +25,7 @@ from typing import IO, Any
 
 import numpy as np
 
+from .._files import write_netcdf_atomically
 from .._interrupt import sigint_blocked, stop_pool
 from ..errors import InputError
 from .cases import SUMMARY_UNITS, error_case, run_case
@@ -103,13 +104,7 @@ def case_path(resume_dir: str | Path, key: str) -> Path:
 
 def _write(ds: Any, path: Path) -> None:
     """Write netCDF atomically (temporary file in the same folder, then rename)."""
-    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
-    try:
-        ds.to_netcdf(tmp, engine="netcdf4")
-        os.replace(tmp, path)
-    finally:
-        if tmp.exists():
-            tmp.unlink()
+    write_netcdf_atomically(ds, path)
 
 
 def _load_case(path: Path, key: str) -> Any | None:

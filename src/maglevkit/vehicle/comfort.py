@@ -35,7 +35,6 @@ import math
 from typing import Any
 
 import numpy as np
-import scipy.signal
 
 from ..errors import InputError
 from ..validation import real_array, real_number
@@ -45,6 +44,7 @@ __all__ = [
     "iso2631_wk",
     "iso2631_wk_sections",
     "iso2631_weighted_rms",
+    "comfort_indices",
     "sperling_weighting",
     "sperling_index",
     "sperling_sine_index",
@@ -136,8 +136,34 @@ def _signal(acceleration: Any, sample_rate_Hz: float) -> tuple[np.ndarray, float
     return a, real_number(sample_rate_Hz, "sample_rate_Hz", "Hz", positive=True)
 
 
-def _weighted_fft(a: np.ndarray, fs: float, magnitude: np.ndarray) -> np.ndarray:
-    return np.fft.irfft(np.fft.rfft(a) * magnitude, n=a.size)
+def _weighted_rms(spectrum: np.ndarray, n: int, magnitude: np.ndarray) -> np.ndarray:
+    """RMS of the records ``irfft(spectrum * magnitude, n)`` (columns of ``spectrum``, the
+    ``rfft`` of ``n`` samples along axis 0), by Parseval:
+    ``mean(y^2) = sum_k c_k |Y_k|^2 / n^2`` with ``c_k = 2`` except ``c_0 = 1`` and, for
+    even ``n``, ``c_(n/2) = 1`` (no inverse transform; the same sum to rounding)."""
+    c = np.full(spectrum.shape[0], 2.0)
+    c[0] = 1.0
+    if n % 2 == 0:
+        c[-1] = 1.0
+    mag = np.asarray(magnitude, dtype=float).reshape((-1,) + (1,) * (spectrum.ndim - 1))
+    power = np.abs(spectrum * mag) ** 2
+    return np.sqrt(np.tensordot(c, power, axes=(0, 0)) / float(n) ** 2)
+
+
+def comfort_indices(acceleration: Any, sample_rate_Hz: float
+                    ) -> tuple[np.ndarray, np.ndarray]:
+    """ISO 2631-1 ``a_w`` [m/s^2] (frequency domain) and Sperling's ``Wz`` [-] of every
+    column of ``acceleration`` (n samples, m records) [m/s^2], one FFT per record:
+    :func:`iso2631_weighted_rms` and :func:`sperling_index` of each column."""
+    a = real_array(acceleration, "acceleration", "m/s^2")
+    if a.ndim != 2 or a.shape[0] < 8:
+        raise InputError("acceleration must be finite (n samples, m records), n >= 8 [m/s^2]")
+    fs = real_number(sample_rate_Hz, "sample_rate_Hz", "Hz", positive=True)
+    spec = np.fft.rfft(a, axis=0)
+    f = np.fft.rfftfreq(a.shape[0], 1.0 / fs)
+    wk = _weighted_rms(spec, a.shape[0], np.abs(iso2631_wk(f)))
+    wz = SPERLING_SCALE * _weighted_rms(spec, a.shape[0], sperling_weighting(f)) ** 0.3
+    return wk, wz
 
 
 def iso2631_weighted_rms(acceleration: Any, sample_rate_Hz: float, *,
@@ -157,9 +183,10 @@ def iso2631_weighted_rms(acceleration: Any, sample_rate_Hz: float, *,
     """
     a, fs = _signal(acceleration, sample_rate_Hz)
     if method == "fft":
-        f = np.fft.rfftfreq(a.size, 1.0 / fs)
-        y = _weighted_fft(a, fs, np.abs(iso2631_wk(f)))
-    elif method == "filter":
+        return float(comfort_indices(a[:, None], fs)[0][0])
+    if method == "filter":
+        import scipy.signal  # lazily: 0.6 s to import, only this method needs it
+
         y = a
         for b, den in iso2631_wk_sections():
             bz, az = scipy.signal.bilinear(b, den, fs)
@@ -198,9 +225,7 @@ def sperling_index(acceleration: Any, sample_rate_Hz: float) -> float:
         is not finite and > 0.
     """
     a, fs = _signal(acceleration, sample_rate_Hz)
-    f = np.fft.rfftfreq(a.size, 1.0 / fs)
-    y = _weighted_fft(a, fs, sperling_weighting(f))
-    return SPERLING_SCALE * float(np.sqrt(np.mean(y ** 2))) ** 0.3
+    return float(comfort_indices(a[:, None], fs)[1][0])
 
 
 def sperling_sine_index(amplitude_m_per_s2: Any, frequency_Hz: Any) -> np.ndarray:

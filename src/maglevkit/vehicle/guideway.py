@@ -30,7 +30,6 @@ from functools import lru_cache
 from typing import Any
 
 import numpy as np
-import scipy.linalg
 
 from ..errors import InputError, OutOfRangeError, ParameterError
 from ..plant import STANDARD_GRAVITY
@@ -282,6 +281,8 @@ def _discretize_cached(length: float, ei: float, m: float, zeta: tuple[float, ..
     aug = np.zeros((n2 + n, n2 + n))
     aug[:n2, :n2] = a * dt
     aug[:n2, n2:] = b * dt
+    import scipy.linalg
+
     e = scipy.linalg.expm(aug)
     ad, bd = e[:n2, :n2].copy(), e[:n2, n2:].copy()
     ad.setflags(write=False)

@@ -38,7 +38,6 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
-import scipy.linalg
 
 from ..errors import InputError
 from ..plant import STANDARD_GRAVITY
@@ -296,6 +295,8 @@ class VehicleMechanics:
         aug = np.zeros((n2 + n, n2 + n))
         aug[:n2, :n2] = a * dt_s
         aug[:n2, n2:] = bq * dt_s
+        import scipy.linalg
+
         e = scipy.linalg.expm(aug)
         return e[:n2, :n2].copy(), e[:n2, n2:].copy()
 

@@ -36,7 +36,8 @@ from .guideway import Guideway
 from .mechanics import VehicleMechanics
 from .train import TrainData
 
-__all__ = ["Failure", "VehicleRun", "VehicleModel", "run_vehicle", "parse_failure", "parse_irregularity"]
+__all__ = ["Failure", "VehicleRun", "VehicleModel", "VehicleRunInterrupted", "run_vehicle",
+           "parse_failure", "parse_irregularity"]
 
 
 @dataclass(frozen=True)
@@ -108,13 +109,15 @@ class VehicleRun:
     loop: str = "python"
 
     def to_netcdf(self, path: str | Path) -> Path:
-        """Write the run's Dataset (the folder must exist: nothing is created silently)."""
+        """Write the run's Dataset (the folder must exist: nothing is created silently),
+        atomically: an interrupted write leaves no damaged file."""
+        from .._files import write_netcdf_atomically
+
         p = Path(path)
         if not p.parent.is_dir():
             raise InputError(f"cannot write {str(p)!r}: the directory {str(p.parent)!r} does "
                              "not exist")
-        self.dataset.to_netcdf(p, engine="netcdf4")
-        return p
+        return write_netcdf_atomically(self.dataset, p)
 
     def report(self) -> str:
         """A short plain-text report."""
@@ -137,6 +140,8 @@ class VehicleRun:
                     else "frame down on its skids")
             lines.append(f"  TOUCHDOWN ({what}): circuit {c} at t = {t:.4f} s (gap "
                          f"{g * 1e3:.3f} mm); the run stopped there")
+        if ds.attrs.get("interrupted"):
+            lines.append(f"  INTERRUPTED ({ds.attrs['interrupted']})")
         for k, v in self.comfort.items():
             lines.append(f"  comfort {k}: ISO 2631 Wk a_w = {v['wk_rms_m_per_s2']:.4f} m/s^2, "
                          f"Sperling Wz = {v['sperling_wz']:.2f}")
@@ -383,7 +388,7 @@ class VehicleModel:
             :mod:`maglevkit.vehicle.irregularities`.
         failures : sequence of Failure
         progress : bool
-            A progress bar on stderr.
+            Progress on stderr: a bar on a terminal, plain lines with the ETA in logs.
         floor_points : sequence of float
             Car-body floor points for comfort, as fractions of the section length from its
             centre (negative: forward).
@@ -400,6 +405,17 @@ class VehicleModel:
         VehicleRun
             Its dataset has dims ``time``, ``circuit``, ``magnet``, ``section``, ``frame``,
             ``span``, ``floor_point``.
+
+        Raises
+        ------
+        VehicleRunInterrupted
+            Ctrl-C (``KeyboardInterrupt``) during the time loop, carrying the run up to the
+            last whole step (a plain ``KeyboardInterrupt`` before the first step).
+        OutOfRangeError
+            A circuit leaves its characteristic maps other than by a touchdown (a gap that
+            crosses the touchdown or landing gap within a step is reported as a touchdown
+            at the step's end, like one at a step's start), or the train leaves the
+            integrated spans.
         """
         import xarray as xr
 
@@ -530,8 +546,9 @@ class VehicleModel:
         timing = dict.fromkeys(("magnets", "mechanics", "guideway", "controllers", "other"), 0.0)
         touchdown: tuple[str, float, float, str] | None = None
         last = n_steps
+        interrupted = False
         if compiled_loop:
-            last, touchdown, wall, cpu = self._compiled_loop(
+            last, touchdown, wall, cpu, interrupted = self._compiled_loop(
                 dt=dt, v=v, times=times, xpath=xpath, r_all=r_all, rx_all=rx_all,
                 x_m=x_m, gstate=gstate, i_l=bstate.inductor_currents_A, psi_hat=psi_hat,
                 integ=integ, current=current, force=force_c, fail_t=fail_t, rec=rec,
@@ -556,108 +573,124 @@ class VehicleModel:
             half = 0.5 * v * dt
             fail_any = np.isfinite(fail_t)
             t_fail0 = float(fail_t.min()) if fail_any.any() else math.inf
-            for k in range(n_steps + 1):
-                t0 = clock()
-                t = times[k]
-                x_pts = xpath[k]
-                # guideway deflection at the points (and mode shapes at the mid-step positions)
-                if nm:
-                    if gw.moving_boundary:
-                        k_rear = int(gw.span_index(x_pts.min()))
-                        if k_rear > first:
-                            for kk_ in range(first, min(k_rear, first + n_sp)):
-                                gx[kk_ % n_sp] = 0.0
-                            first = k_rear
-                    x2 = np.concatenate([x_pts, x_pts + half])
-                    ks = np.floor((x2 - gw.origin_m) / span_l).astype(int)
-                    if ks.min() < first or ks.max() > first + n_sp - 1:
-                        raise OutOfRangeError(f"vehicle run at t = {t:.4f} s: the train left the "
-                                              f"integrated spans {first} ... {first + n_sp - 1}")
-                    rows2 = ks % n_sp
-                    arg = np.multiply.outer(x2 - (gw.origin_m + ks * span_l), kk)
-                    sn = np.sin(arg)
-                    rows = rows2[:npt]
-                    phi, dphi = sn[:npt], kk * np.cos(arg[:npt])
-                    qg = gx[rows]
-                    w = np.einsum("pj,pj->p", qg[:, :nm], phi)
-                    w_rate = (np.einsum("pj,pj->p", qg[:, nm:], phi)
-                              + v * np.einsum("pj,pj->p", qg[:, :nm], dphi))
-                else:
-                    w = w_rate = zeros_np
-                t1 = clock()
-                q, qd = x_m[:ndof], x_m[ndof:]
-                gaps_p = s0 + bt @ q - w - r_all[k]
-                rates_p = bt @ qd - w_rate - v * rx_all[k]
-                gaps_c = gaps_p if circ_avg is None else circ_avg @ gaps_p
-                rates_c = rates_p if circ_avg is None else circ_avg @ rates_p
-                # record the state at t_k
-                rec["gap"][k] = gaps_c
-                rec["current"][k] = current
-                rec["force"][k] = force_c
-                rec["deflection"][k] = w if circ_avg is None else circ_avg @ w
-                rec_q[k], rec_qd[k] = q, qd
-                rec_fp[k] = force_pts
-                if nm:
-                    rec_span[k] = first + span_ids
-                    rec_mid[k] = gx[(first + span_ids) % n_sp, :nm] @ mid_shape
-                gmin = float(gaps_c.min())
-                gmax = float(gaps_c.max())
-                if gmin <= tr.touchdown_gap_m or gmax >= tr.landing_gap_m:
-                    closed = gmin <= tr.touchdown_gap_m
-                    j = int(np.argmin(gaps_c) if closed else np.argmax(gaps_c))
-                    touchdown = (names[j], float(t), float(gaps_c[j]),
-                                 "closed" if closed else "landed")
-                    rec["voltage"][k] = np.nan
-                    last = k
-                    break
-                if k == n_steps:
-                    rec["voltage"][k] = rec["voltage"][k - 1]
-                    break
-                t3 = clock()
-                # controllers (flux cascade, every circuit at once)
-                rho = kp * (gaps_c - s0) + kd * rates_c + ki * integ
-                u = res * current + kf * (psi0 * (1.0 + rho) - psi_hat)
-                np.clip(u, -umax, umax, out=u)
-                # 2-quadrant chopper: the coil current cannot reverse.  Reduced model (eq. 8):
-                # I = (U + R_ec I_L) / (R_el + R_ec) >= 0  <=>  U >= -R_ec I_L
-                if self.fine:
-                    u = np.where((current < 1.0) & (u < 0.0), 0.0, u)
-                else:
-                    u = np.maximum(u, -r_ec * bstate.inductor_currents_A)
-                if t >= t_fail0:
-                    u = np.where(fail_t <= t, 0.0, u)
-                rec["voltage"][k] = u
-                t4 = clock()
-                try:
-                    bstate, out = bank.step(bstate, dt, u, gaps_p, rates_p, pole_forces=self.fine)
-                except MaglevkitError as exc:
-                    raise type(exc)(f"vehicle run at t = {t:.4f} s: {exc}") from None
-                t5 = clock()
-                new_current = out.currents_A
-                psi_hat += dt * (u - res * 0.5 * (current + new_current))
-                integ += proj @ ((gaps_c - s0) * dt)
-                new_pts = out.pole_force_N if self.fine else out.circuit_force_N
-                assert new_pts is not None
-                f_bar = (0.5 * sides) * (force_pts + new_pts)
-                t6 = clock()
-                x_m = ad_m @ x_m + bd_m @ (mech.Q_gravity - mech.B @ f_bar)
-                t7 = clock()
-                if nm:
-                    onehot = (rows2[npt:, None] == span_ids).astype(float)
-                    qmod = onehot.T @ (sn[npt:] * f_bar[:, None])
-                    gx = gx @ ad_gt + qmod @ bd_gt
-                t8 = clock()
-                current = new_current
-                force_c = out.circuit_force_N
-                force_pts = new_pts
-                timing["guideway"] += (t1 - t0) + (t8 - t7)
-                timing["other"] += (t3 - t1) + (t6 - t5)
-                timing["controllers"] += t4 - t3
-                timing["magnets"] += t5 - t4
-                timing["mechanics"] += t7 - t6
-                bar.update(k + 1)
+            k = 0
+            interrupted = False
+            try:
+                for k in range(n_steps + 1):
+                    t0 = clock()
+                    t = times[k]
+                    x_pts = xpath[k]
+                    # guideway deflection at the points (and mode shapes at the mid-step positions)
+                    if nm:
+                        if gw.moving_boundary:
+                            k_rear = int(gw.span_index(x_pts.min()))
+                            if k_rear > first:
+                                for kk_ in range(first, min(k_rear, first + n_sp)):
+                                    gx[kk_ % n_sp] = 0.0
+                                first = k_rear
+                        x2 = np.concatenate([x_pts, x_pts + half])
+                        ks = np.floor((x2 - gw.origin_m) / span_l).astype(int)
+                        if ks.min() < first or ks.max() > first + n_sp - 1:
+                            raise OutOfRangeError(f"vehicle run at t = {t:.4f} s: the train left the "
+                                                  f"integrated spans {first} ... {first + n_sp - 1}")
+                        rows2 = ks % n_sp
+                        arg = np.multiply.outer(x2 - (gw.origin_m + ks * span_l), kk)
+                        sn = np.sin(arg)
+                        rows = rows2[:npt]
+                        phi, dphi = sn[:npt], kk * np.cos(arg[:npt])
+                        qg = gx[rows]
+                        w = np.einsum("pj,pj->p", qg[:, :nm], phi)
+                        w_rate = (np.einsum("pj,pj->p", qg[:, nm:], phi)
+                                  + v * np.einsum("pj,pj->p", qg[:, :nm], dphi))
+                    else:
+                        w = w_rate = zeros_np
+                    t1 = clock()
+                    q, qd = x_m[:ndof], x_m[ndof:]
+                    gaps_p = s0 + bt @ q - w - r_all[k]
+                    rates_p = bt @ qd - w_rate - v * rx_all[k]
+                    gaps_c = gaps_p if circ_avg is None else circ_avg @ gaps_p
+                    rates_c = rates_p if circ_avg is None else circ_avg @ rates_p
+                    # record the state at t_k
+                    rec["gap"][k] = gaps_c
+                    rec["current"][k] = current
+                    rec["force"][k] = force_c
+                    rec["deflection"][k] = w if circ_avg is None else circ_avg @ w
+                    rec_q[k], rec_qd[k] = q, qd
+                    rec_fp[k] = force_pts
+                    if nm:
+                        rec_span[k] = first + span_ids
+                        rec_mid[k] = gx[(first + span_ids) % n_sp, :nm] @ mid_shape
+                    gmin = float(gaps_c.min())
+                    gmax = float(gaps_c.max())
+                    if gmin <= tr.touchdown_gap_m or gmax >= tr.landing_gap_m:
+                        closed = gmin <= tr.touchdown_gap_m
+                        j = int(np.argmin(gaps_c) if closed else np.argmax(gaps_c))
+                        touchdown = (names[j], float(t), float(gaps_c[j]),
+                                     "closed" if closed else "landed")
+                        rec["voltage"][k] = np.nan
+                        last = k
+                        break
+                    if k == n_steps:
+                        rec["voltage"][k] = rec["voltage"][k - 1]
+                        break
+                    t3 = clock()
+                    # controllers (flux cascade, every circuit at once)
+                    rho = kp * (gaps_c - s0) + kd * rates_c + ki * integ
+                    u = res * current + kf * (psi0 * (1.0 + rho) - psi_hat)
+                    np.clip(u, -umax, umax, out=u)
+                    # 2-quadrant chopper: the coil current cannot reverse.  Reduced model (eq. 8):
+                    # I = (U + R_ec I_L) / (R_el + R_ec) >= 0  <=>  U >= -R_ec I_L
+                    if self.fine:
+                        u = np.where((current < 1.0) & (u < 0.0), 0.0, u)
+                    else:
+                        u = np.maximum(u, -r_ec * bstate.inductor_currents_A)
+                    if t >= t_fail0:
+                        u = np.where(fail_t <= t, 0.0, u)
+                    rec["voltage"][k] = u
+                    t4 = clock()
+                    try:
+                        bstate, out = bank.step(bstate, dt, u, gaps_p, rates_p, pole_forces=self.fine)
+                    except MaglevkitError as exc:
+                        touchdown = self._touchdown_within_step(gaps_c, rates_c, dt,
+                                                            float(times[k + 1]))
+                        if touchdown is None:
+                            raise type(exc)(f"vehicle run at t = {t:.4f} s: {exc}") from None
+                        rec["voltage"][k] = np.nan
+                        last = k
+                        break
+                    t5 = clock()
+                    new_current = out.currents_A
+                    psi_hat += dt * (u - res * 0.5 * (current + new_current))
+                    integ += proj @ ((gaps_c - s0) * dt)
+                    new_pts = out.pole_force_N if self.fine else out.circuit_force_N
+                    assert new_pts is not None
+                    f_bar = (0.5 * sides) * (force_pts + new_pts)
+                    t6 = clock()
+                    x_m = ad_m @ x_m + bd_m @ (mech.Q_gravity - mech.B @ f_bar)
+                    t7 = clock()
+                    if nm:
+                        onehot = (rows2[npt:, None] == span_ids).astype(float)
+                        qmod = onehot.T @ (sn[npt:] * f_bar[:, None])
+                        gx = gx @ ad_gt + qmod @ bd_gt
+                    t8 = clock()
+                    current = new_current
+                    force_c = out.circuit_force_N
+                    force_pts = new_pts
+                    timing["guideway"] += (t1 - t0) + (t8 - t7)
+                    timing["other"] += (t3 - t1) + (t6 - t5)
+                    timing["controllers"] += t4 - t3
+                    timing["magnets"] += t5 - t4
+                    timing["mechanics"] += t7 - t6
+                    bar.update(k + 1)
+            except KeyboardInterrupt:
+                # keep the steps done: records up to the step before the one under way
+                interrupted = True
+                last = k - 1
+                if last < 1:
+                    bar.close(finished=False)
+                    raise
             wall = clock() - t_start
-            bar.close()
+            bar.close(finished=not interrupted)
             cpu = time.process_time() - cpu0
         n = last + 1
         times = times[:n]
@@ -723,7 +756,10 @@ class VehicleModel:
                                                                for f in failures),
                    "touchdown": "" if touchdown is None else
                                 f"{touchdown[3]}: {touchdown[0]}@{touchdown[1]:.6g} s "
-                                f"({touchdown[2]:.6g} m)"},
+                                f"({touchdown[2]:.6g} m)",
+                   "interrupted": "" if not interrupted else
+                                  f"Ctrl-C: the run stopped at t = {float(times[-1]):.6g} s "
+                                  f"of {n_steps * dt:.6g} s"},
         )
         gaps = rec["gap"][sl]
         min_gap = {m: float(gaps[:, [j for j, o in enumerate(member_of) if o == m]].min())
@@ -731,9 +767,12 @@ class VehicleModel:
         peak = {c: float(rec["current"][sl, j].max()) for j, c in enumerate(names)}
         comfort = self._comfort(acc_floor, times, dt, floor)
         sim_t = float(times[-1])
-        return VehicleRun(ds, min_gap, peak, touchdown, comfort, wall,
-                          sim_t / wall if wall > 0 else math.inf, timing, cpu,
-                          "compiled" if compiled_loop else "python")
+        result = VehicleRun(ds, min_gap, peak, touchdown, comfort, wall,
+                            sim_t / wall if wall > 0 else math.inf, timing, cpu,
+                            "compiled" if compiled_loop else "python")
+        if interrupted:
+            raise VehicleRunInterrupted(result)
+        return result
 
     # ------------------------------------------------------------------ compiled loop
     def step_function(self, dt_s: float = 1e-3) -> Any:
@@ -802,14 +841,16 @@ class VehicleModel:
                        rec: dict[str, np.ndarray], rec_q: np.ndarray, rec_qd: np.ndarray,
                        rec_fp: np.ndarray, rec_mid: np.ndarray, rec_span: np.ndarray,
                        timing: dict[str, float], progress: bool
-                       ) -> tuple[int, tuple[str, float, float, str] | None, float, float]:
+                       ) -> tuple[int, tuple[str, float, float, str] | None, float, float, bool]:
         """The time loop with one compiled call per block of steps; fills the records like
-        the NumPy loop.  Returns ``(last step, touchdown, wall time, CPU time)``.
+        the NumPy loop.  Returns ``(last step, touchdown, wall time, CPU time,
+        interrupted)``.
 
         Events are looked for after every block, in the NumPy loop's order per step: the
         loads leaving the integrated spans, touchdown, the end of the run, a circuit the
-        kernel flagged (diagnosed by the bank's own step, which raises).  Steps a block
-        computed after the event are discarded.
+        kernel flagged (a touchdown within the step, else diagnosed by the bank's own step,
+        which raises).  Steps a block computed after the event are discarded, and on
+        Ctrl-C the block under way.
         """
         from ..models.bank import BankState
 
@@ -876,55 +917,71 @@ class VehicleModel:
         clock = time.perf_counter
         t_start = clock()
         cpu0 = time.process_time()
-        for blk in range(n_rows // nb):
-            k0 = blk * nb
-            j = blk & 1
-            buf = bufs[j]
-            buf.set_arg(1, memoryview(p_all[k0:k0 + nb]))   # type: ignore[arg-type]
-            rows = r_all_rec[k0:k0 + nb]
-            buf.set_res(1, memoryview(rows))                 # type: ignore[arg-type]
-            tc = clock()
-            evals[j]()
-            t_call += clock() - tc
-            events = ((rows[:, i_min] <= td_gap) | (rows[:, i_max] >= land_gap)
-                      | (rows[:, i_bad] != 0))
-            end = k0 + nb > n_steps
-            if not (end or events.any() or k0 <= k_out < k0 + nb):
-                bar.update(k0 + nb)
-                continue
-            for k in range(k0, min(k0 + nb, n_steps + 1)):
-                row = r_all_rec[k]
-                if k == k_out:
-                    raise OutOfRangeError(f"vehicle run at t = {times[k]:.4f} s: the train left "
-                                          f"the integrated spans {first_k[k]} ... "
-                                          f"{first_k[k] + n_sp - 1}")
-                if row[i_min] <= td_gap or row[i_max] >= land_gap:
-                    gaps = row[rl["gap"]]
-                    if np.isfinite(gaps).all():
-                        closed = row[i_min] <= td_gap
-                        jj = int(np.argmin(gaps) if closed else np.argmax(gaps))
-                        touchdown = (names[jj], float(times[k]), float(gaps[jj]),
-                                     "closed" if closed else "landed")
-                        last = k
+        interrupted = False
+        k0 = 0
+        try:
+            for blk in range(n_rows // nb):
+                k0 = blk * nb
+                j = blk & 1
+                buf = bufs[j]
+                buf.set_arg(1, memoryview(p_all[k0:k0 + nb]))   # type: ignore[arg-type]
+                rows = r_all_rec[k0:k0 + nb]
+                buf.set_res(1, memoryview(rows))                 # type: ignore[arg-type]
+                tc = clock()
+                evals[j]()
+                t_call += clock() - tc
+                events = ((rows[:, i_min] <= td_gap) | (rows[:, i_max] >= land_gap)
+                          | (rows[:, i_bad] != 0))
+                end = k0 + nb > n_steps
+                if not (end or events.any() or k0 <= k_out < k0 + nb):
+                    bar.update(k0 + nb)
+                    continue
+                for k in range(k0, min(k0 + nb, n_steps + 1)):
+                    row = r_all_rec[k]
+                    if k == k_out:
+                        raise OutOfRangeError(f"vehicle run at t = {times[k]:.4f} s: the train left "
+                                              f"the integrated spans {first_k[k]} ... "
+                                              f"{first_k[k] + n_sp - 1}")
+                    if row[i_min] <= td_gap or row[i_max] >= land_gap:
+                        gaps = row[rl["gap"]]
+                        if np.isfinite(gaps).all():
+                            closed = row[i_min] <= td_gap
+                            jj = int(np.argmin(gaps) if closed else np.argmax(gaps))
+                            touchdown = (names[jj], float(times[k]), float(gaps[jj]),
+                                         "closed" if closed else "landed")
+                            last = k
+                            done = True
+                            break
+                    if k == n_steps:
                         done = True
                         break
-                if k == n_steps:
-                    done = True
+                    if row[i_bad]:       # out of the maps or not finite: a touchdown within
+                        touchdown = self._touchdown_within_step(    # the step, or diagnose
+                            row[rl["gap"]], row[rl["gap_rate"]], dt, float(times[k + 1]))
+                        if touchdown is not None:
+                            last = k
+                            done = True
+                            break
+                        state = BankState(float(times[k]), row[rl["I_L"]].copy(),
+                                          row[rl["gap"]].copy())
+                        try:
+                            bank.step(state, dt, row[rl["voltage"]].copy(), row[rl["gap"]].copy(),
+                                      row[rl["gap_rate"]].copy())
+                        except MaglevkitError as exc:
+                            raise type(exc)(f"vehicle run at t = {times[k]:.4f} s: {exc}") from None
+                if done:
                     break
-                if row[i_bad]:                  # out of the maps or not finite: diagnose
-                    state = BankState(float(times[k]), row[rl["I_L"]].copy(),
-                                      row[rl["gap"]].copy())
-                    try:
-                        bank.step(state, dt, row[rl["voltage"]].copy(), row[rl["gap"]].copy(),
-                                  row[rl["gap_rate"]].copy())
-                    except MaglevkitError as exc:
-                        raise type(exc)(f"vehicle run at t = {times[k]:.4f} s: {exc}") from None
-            if done:
-                break
-            bar.update(k0 + nb)
+                bar.update(k0 + nb)
+        except KeyboardInterrupt:
+            # keep the blocks done (their events checked); the block under way is dropped
+            interrupted = True
+            last = k0 - 1
+            if last < 1:
+                bar.close(finished=False)
+                raise
         wall = clock() - t_start
         cpu = time.process_time() - cpu0
-        bar.close()
+        bar.close(finished=not interrupted)
         timing.clear()
         timing["compiled step"] = t_call
         timing["other"] = max(wall - t_call, 0.0)
@@ -939,9 +996,26 @@ class VehicleModel:
                                              axis=1)
         if touchdown is not None:
             rec["voltage"][last] = np.nan
-        elif n_steps >= 1:
+        elif n_steps >= 1 and not interrupted:
             rec["voltage"][n_steps] = rec["voltage"][n_steps - 1]
-        return last, touchdown, wall, cpu
+        return last, touchdown, wall, cpu, interrupted
+
+    def _touchdown_within_step(self, gaps: np.ndarray, rates: np.ndarray, dt: float,
+                               t_end: float) -> tuple[str, float, float, str] | None:
+        """The touchdown inside the step of length ``dt`` ending at ``t_end`` [s] that made
+        the bank refuse it: the gaps move linearly over a step (as the bank integrates
+        them), so a gap whose end value ``s + s' dt`` is at or below the touchdown gap (at
+        or above the landing gap) has crossed it within the step.
+        ``(circuit, t_end, gap at t_end, kind)`` as :attr:`VehicleRun.touchdown`, or None
+        (then the refusal has another cause)."""
+        end = gaps + rates * dt
+        tr = self.train
+        closed, landed = end <= tr.touchdown_gap_m, end >= tr.landing_gap_m
+        if not (closed.any() or landed.any()):
+            return None
+        j = int(np.argmin(end) if closed.any() else np.argmax(end))
+        return (self.bank.circuit_names[j], t_end, float(end[j]),
+                "closed" if closed.any() else "landed")
 
     def mechanics_trim_forces(self) -> np.ndarray:
         """Downward force on the guideway at every force point at the trim [N] (both sides)."""
@@ -953,18 +1027,18 @@ class VehicleModel:
     @staticmethod
     def _comfort(acc: np.ndarray, times: np.ndarray, dt: float,
                  floor: np.ndarray) -> dict[str, dict[str, float]]:
-        from .comfort import iso2631_weighted_rms, sperling_index
+        from .comfort import comfort_indices
 
         out: dict[str, dict[str, float]] = {}
         if times.size < 64:
             return out
-        fs = 1.0 / dt
-        for s in range(acc.shape[1]):
+        n_sec, n_fp = acc.shape[1], floor.size
+        a = acc.reshape(acc.shape[0], n_sec * n_fp)
+        wk, wz = comfort_indices(a - a.mean(axis=0), 1.0 / dt)   # one FFT per record
+        for s in range(n_sec):
             for p, fp in enumerate(floor):
-                a = acc[:, s, p] - acc[:, s, p].mean()
-                out[f"car{s + 1}@{fp:+.2f}L"] = {
-                    "wk_rms_m_per_s2": float(iso2631_weighted_rms(a, fs)),
-                    "sperling_wz": float(sperling_index(a, fs))}
+                out[f"car{s + 1}@{fp:+.2f}L"] = {"wk_rms_m_per_s2": float(wk[s * n_fp + p]),
+                                                 "sperling_wz": float(wz[s * n_fp + p])}
         return out
 
 
@@ -980,28 +1054,51 @@ def _scaled_resistances(maps: Any, r_el: float, r_ec: float) -> Any:
 
 
 class _Progress:
-    """A minimal progress bar on stderr (rich, when enabled)."""
+    """Progress of a vehicle run on stderr (:class:`maglevkit._progress.ProgressReporter`:
+    a rich bar on a terminal, plain lines with the ETA in logs), fed every ~0.5 % of the
+    steps so that the time loop stays free of it."""
 
     def __init__(self, total: int, *, enabled: bool) -> None:
-        self.enabled = enabled
+        self.enabled = enabled and total > 0
         self.total = total
         self._next = 0
-        if enabled:
-            from rich.console import Console
-            from rich.progress import Progress
+        self._done = 0
+        self._rep: Any = None
+        if self.enabled:
+            from .._progress import ProgressReporter
 
-            self._p = Progress(transient=True, console=Console(stderr=True))
-            self._p.start()
-            self._task = self._p.add_task("vehicle run", total=total)
+            self._rep = ProgressReporter(total, "vehicle run (steps)")
+            self._rep.__enter__()
 
     def update(self, k: int) -> None:
         if self.enabled and k >= self._next:
-            self._p.update(self._task, completed=k)
+            k = min(k, self.total)
+            self._rep.advance(k - self._done)
+            self._done = k
             self._next = k + max(1, self.total // 200)
 
-    def close(self) -> None:
+    def close(self, finished: bool = True) -> None:
+        """Close the bar (``finished``: the closing ``done`` line in plain mode)."""
         if self.enabled:
-            self._p.stop()
+            self.enabled = False
+            if finished:
+                self._rep.advance(self.total - self._done)
+                self._rep.__exit__(None, None, None)
+            else:
+                self._rep.__exit__(KeyboardInterrupt, None, None)
+
+
+class VehicleRunInterrupted(KeyboardInterrupt):
+    """Ctrl-C during the time loop of :meth:`VehicleModel.run`: a ``KeyboardInterrupt``
+    carrying the run up to the last whole step (``run``, a :class:`VehicleRun` whose
+    dataset's ``interrupted`` attribute says where it stopped)."""
+
+    def __init__(self, run: VehicleRun) -> None:
+        super().__init__(run.dataset.attrs.get("interrupted", "interrupted"))
+        self.run = run
+
+    def __reduce__(self) -> tuple[Any, tuple[VehicleRun]]:
+        return (type(self), (self.run,))      # picklable (e.g. from a worker process)
 
 
 def run_vehicle(train: TrainData, *, speed_m_per_s: float, duration_s: float, dt_s: float = 1e-3,
