@@ -22,10 +22,10 @@ from pathlib import Path
 import numpy as np
 
 import maglevkit as mk
-from maglevkit.models import bank as bank_mod
-from maglevkit.models.bank import MagnetBank
-from maglevkit.models.current import _extend_axis, _extend_values
-from maglevkit.models.lanes import lane_target
+from maglevkit.reduced import bank as bank_mod
+from maglevkit.reduced.bank import MagnetBank
+from maglevkit.reduced.current import _extend_axis, _extend_values
+from maglevkit.reduced.lanes import lane_target
 
 TITLE = "Magnet bank: cost per circuit-step at 1 ms (RK4), against an independent C kernel"
 
@@ -176,7 +176,7 @@ def _accuracy(magnet_name: str) -> list[str]:
     fine_g, fine_i = np.linspace(0.005, 0.016, 23), np.linspace(0.0, 80.0, 81)
     fine = mk.build_maps(mag, gaps=fine_g, currents=fine_i, progress=False)
     coarse = mk.build_maps(mag, gaps=fine_g[::2], currents=fine_i[::2], progress=False)
-    from maglevkit.models.tables import cell_table
+    from maglevkit.reduced.tables import cell_table
 
     gs, gi = _extend_axis(coarse.gaps_m), _extend_axis(coarse.currents_A)
     mask = np.ones((fine_g.size, fine_i.size), dtype=bool)

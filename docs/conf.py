@@ -65,7 +65,8 @@ sphinx_gallery_conf = {
 # API reference: one page per public subpackage, listing its ``__all__``
 # ---------------------------------------------------------------------------------------
 API_MODULES = ("maglevkit", "maglevkit.materials", "maglevkit.circuit", "maglevkit.magnets",
-               "maglevkit.models", "maglevkit.reduction", "maglevkit.control", "maglevkit.vehicle",
+               "maglevkit.models", "maglevkit.reduction", "maglevkit.reduced", "maglevkit.control",
+               "maglevkit.vehicle",
                "maglevkit.export", "maglevkit.sweep", "maglevkit.errors")
 
 

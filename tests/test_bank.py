@@ -15,8 +15,8 @@ import maglevkit as mk
 from maglevkit.compare import standard_scenarios
 from maglevkit.errors import CompilationWarning, InputError, OutOfRangeError, SolverError
 from maglevkit.models import compiled as compiled_mod
-from maglevkit.models.bank import MagnetBank
-from maglevkit.models.tables import cell_table
+from maglevkit.reduced.bank import MagnetBank, StepFlag
+from maglevkit.reduced.tables import cell_table
 
 from .conftest import u_params
 
@@ -248,7 +248,8 @@ def test_solver_error_on_non_finite_state_carries_time_and_state(u_maps, monkeyp
     real = bank._kernel
 
     class Poisoned:
-        """The real compiled step, with a NaN current put into its result."""
+        """The real compiled step, with a NaN current put into its result and the
+        kernel's reason code for it (the diagnosis reads the codes)."""
 
         def __init__(self, call) -> None:  # type: ignore[no-untyped-def]
             self.call = call
@@ -257,6 +258,7 @@ def test_solver_error_on_non_finite_state_carries_time_and_state(u_maps, monkeyp
         def __call__(self, *args):  # type: ignore[no-untyped-def]
             x, c, f, mf, _, s_next = self.call(*args)
             x[:] = np.nan
+            self.res[8][:] = StepFlag.RESULT_NOT_FINITE
             return x, c, f, mf, 1.0, s_next
 
     def poisoned(dt: float) -> Poisoned:

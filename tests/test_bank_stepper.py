@@ -8,7 +8,7 @@ import pytest
 
 import maglevkit as mk
 from maglevkit.errors import InputError, OutOfRangeError
-from maglevkit.models.bank import MagnetBank
+from maglevkit.reduced.bank import MagnetBank
 
 GAPS = np.linspace(0.006, 0.016, 6)
 CURRENTS = np.linspace(0.0, 60.0, 7)
@@ -273,7 +273,7 @@ def test_bad_states_copies_and_pickling(u_maps) -> None:
     import copy
     import pickle
 
-    from maglevkit.models.bank import BankState
+    from maglevkit.reduced.bank import BankState
 
     bank = MagnetBank({"a": u_maps, "b": u_maps})
     bad = BankState(0.0, np.array([20.0]), np.array([0.01, 0.01]), ())

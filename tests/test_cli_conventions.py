@@ -164,7 +164,8 @@ def _fake_result(name: str, circuits: tuple[str, ...]) -> SimpleNamespace:
     return SimpleNamespace(scenario=SimpleNamespace(name=name), circuit_names=circuits,
                            current_error=np.full(n, 0.0123456), force_error=np.full(n, 0.0234567),
                            current_error_ac=np.full(n, 2.3945678), force_error_ac=np.full(n, 2.15),
-                           detailed_wall_s=12.3456, reduced_wall_s=0.0456, speedup=270.7)
+                           detailed_cpu_s=12.3456, reduced_cpu_s=0.0456, speedup=270.7,
+                           timing_runs=3)
 
 
 def test_tables_are_not_cut_off_a_terminal(monkeypatch: pytest.MonkeyPatch) -> None:
@@ -229,7 +230,7 @@ def test_simulate_and_compare_formats(small_maps: Path, tmp_path: Path) -> None:
     assert [r["scenario"] for r in rows_c] == ["s"]
     assert set(rows_c[0]) == {"scenario", "circuit", "current_nrms_percent",
                               "force_nrms_percent", "current_ac_percent", "force_ac_percent",
-                              "detailed_ms", "reduced_ms", "speedup"}
+                              "detailed_cpu_ms", "reduced_cpu_ms", "speedup"}
     assert 0.0 < float(rows_c[0]["current_nrms_percent"]) < 5.0
     assert float(rows_c[0]["speedup"]) > 0.0
 

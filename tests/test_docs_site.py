@@ -29,5 +29,5 @@ def test_docs_build_without_warnings(tmp_path: Path) -> None:
     html = tmp_path / "html"
     # the three parts of the site: guide, API reference from the docstrings, executed gallery
     assert (html / "reduction.html").exists()
-    assert (html / "api" / "generated" / "maglevkit.models.CurrentModel.html").exists()
+    assert (html / "api" / "generated" / "maglevkit.reduced.CurrentModel.html").exists()
     assert list((html / "_images").glob("sphx_glr_plot_*_001.png"))

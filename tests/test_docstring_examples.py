@@ -18,7 +18,7 @@ MODULES = sorted(
 
 
 def test_some_modules_have_examples() -> None:
-    assert "maglevkit.models.bank" in MODULES and "maglevkit.models.stepper" in MODULES
+    assert "maglevkit.reduced.bank" in MODULES and "maglevkit.reduced.stepper" in MODULES
 
 
 @pytest.mark.parametrize("name", MODULES)

@@ -19,7 +19,7 @@ from typer.testing import CliRunner
 
 import maglevkit as mk
 from maglevkit.cli import app
-from maglevkit.models.bank import MagnetBank
+from maglevkit.reduced.bank import MagnetBank
 
 runner = CliRunner()
 

@@ -1,4 +1,4 @@
-"""SIMD-lane code generation (models/lanes.py): the same numbers as CasADi, every lane width.
+"""SIMD-lane code generation (reduced/lanes.py): the same numbers as CasADi, every lane width.
 
 The lane kernel translates a CasADi function's algorithm instruction by instruction, so
 its results must equal CasADi's own evaluation bit for bit (same IEEE operations in the
@@ -21,9 +21,9 @@ import pytest
 
 import maglevkit as mk
 from maglevkit.errors import InputError
-from maglevkit.models.bank import MagnetBank
 from maglevkit.models.compiled import build_source, find_compiler
-from maglevkit.models.lanes import LaneInput, lane_source, lane_target
+from maglevkit.reduced.bank import MagnetBank
+from maglevkit.reduced.lanes import LaneInput, lane_source, lane_target
 
 pytestmark = pytest.mark.skipif(find_compiler() is None, reason="needs a C compiler")
 

@@ -286,7 +286,7 @@ def test_bad_input(split_maps: CharacteristicMaps) -> None:
     with pytest.raises(mk.InputError, match="no eddy_currents_A"):
         model.step(plain.initial_state(gaps=0.01, currents=20.0), 1e-3, 40.0)
     with pytest.raises(mk.InputError, match=r"expected shape \(1, 1\)"):
-        model.step(mk.models.current.CurrentModelState(0.0, np.array([20.0]),
+        model.step(mk.reduced.current.CurrentModelState(0.0, np.array([20.0]),
                                                        np.array([0.01, 0.01]), np.zeros((1, 2))),
                    1e-3, 40.0)
     with pytest.raises(mk.InputError, match="eddy_modes=0"):
@@ -364,7 +364,7 @@ def test_eddy_modes_follow_the_detailed_model(key: tuple) -> None:
                          eddy_reference=reference)
     results = compare_models(mk.FluxModel(mag), mk.CurrentModel(maps, eddy_modes=modes),
                              standard_scenarios(mag, gap_m=0.010, current_A=20.0),
-                             gap_m=0.010, current_A=20.0)
+                             gap_m=0.010, current_A=20.0, repeat=0)
     measured = MEASURED[key]
     assert {r.scenario.name for r in results} == set(measured)
     for r in results:

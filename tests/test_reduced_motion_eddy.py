@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 
 import maglevkit as mk
-from maglevkit.models.current import eq8_shielded_gap_rhs
+from maglevkit.reduced.current import eq8_shielded_gap_rhs
 from maglevkit.reduction.maps import CharacteristicMaps
 from maglevkit.reduction.motion_eddy import (
     DetailedFrequencyResponse,
@@ -179,7 +179,7 @@ def test_bad_input(u_maps: CharacteristicMaps) -> None:
     model = mk.CurrentModel(u_maps, motion_eddy=True)
     with pytest.raises(mk.InputError, match="eddy state.*eddy_currents_A"):
         model.step(mk.CurrentModel(u_maps).initial_state(gaps=0.01, currents=20.0), 1e-3, 40.0)
-    from maglevkit.models.bank import MagnetBank
+    from maglevkit.reduced.bank import MagnetBank
 
     with pytest.raises(mk.InputError, match="motion_eddy=True cannot be a bank member"):
         MagnetBank({"m": model}, compiled="never")

@@ -11,7 +11,7 @@ import pytest
 
 import maglevkit as mk
 from maglevkit.materials import MU0
-from maglevkit.models.current import CurrentModel
+from maglevkit.reduced.current import CurrentModel
 from maglevkit.reduction import build_maps, load_maps
 
 from .conftest import build_u

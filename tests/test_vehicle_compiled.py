@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 from maglevkit.errors import InputError, OutOfRangeError
-from maglevkit.models.bank import MagnetBank
+from maglevkit.reduced.bank import MagnetBank
 from maglevkit.vehicle import Guideway
 from maglevkit.vehicle.irregularities import HarmonicProfile, Profile
 from maglevkit.vehicle.simulation import Failure, VehicleModel, VehicleRun, parse_irregularity

@@ -67,16 +67,9 @@ if TYPE_CHECKING:  # the eager imports, for type checkers and IDEs
         material_names,
     )
     from .models import (
-        BankOutputs,
-        BankSimulation,
-        BankState,
-        BankStepper,
-        CurrentModel,
         FluxModel,
         FluxState,
         InductanceEstimate,
-        MagnetBank,
-        ReducedSimulation,
         Scenario,
         SimulationResult,
         StaticSolution,
@@ -87,6 +80,15 @@ if TYPE_CHECKING:  # the eager imports, for type checkers and IDEs
         pole_force_eq6,
         solve_statics,
         voltage_step_response,
+    )
+    from .reduced import (
+        BankOutputs,
+        BankSimulation,
+        BankState,
+        BankStepper,
+        CurrentModel,
+        MagnetBank,
+        ReducedSimulation,
     )
     from .reduction import CharacteristicMaps, build_maps, load_maps, maps_from_table
     from .simulation import simulate
@@ -116,16 +118,16 @@ _LAZY: dict[str, str] = {
     "TabulatedBH": ".materials",
     "get_material": ".materials",
     "material_names": ".materials",
-    "BankOutputs": ".models",
-    "BankSimulation": ".models",
-    "BankState": ".models",
-    "BankStepper": ".models",
-    "CurrentModel": ".models",
+    "BankOutputs": ".reduced",
+    "BankSimulation": ".reduced",
+    "BankState": ".reduced",
+    "BankStepper": ".reduced",
+    "CurrentModel": ".reduced",
     "FluxModel": ".models",
     "FluxState": ".models",
     "InductanceEstimate": ".models",
-    "MagnetBank": ".models",
-    "ReducedSimulation": ".models",
+    "MagnetBank": ".reduced",
+    "ReducedSimulation": ".reduced",
     "Scenario": ".models",
     "SimulationResult": ".models",
     "StaticSolution": ".models",
@@ -147,7 +149,7 @@ _LAZY: dict[str, str] = {
 
 _SUBPACKAGES = frozenset({"calibration", "circuit", "cli", "compare", "control", "errors",
                           "export", "figures", "magnets", "materials", "models", "plant",
-                          "plotting", "reduction", "simulation", "sweep", "validation",
+                          "plotting", "reduced", "reduction", "simulation", "sweep", "validation",
                           "vehicle"})
 
 

@@ -16,7 +16,10 @@ current by a few percent of its DC value, so e_y hides errors that e_y,AC shows)
 reported as undefined (NaN, printed "n/a (no variation)", :func:`format_ac_error`) when the
 detailed signal hardly moves: RMS(y_detailed - mean) < ``AC_MIN_RELATIVE_VARIATION`` x
 |mean(y_detailed)| (see there).
-Wall-clock times of both runs give the speed-up.  The standard set
+The speed-up is the ratio of the two models' CPU times (``time.process_time``), each the
+best of ``repeat`` runs after one untimed warm-up run (which compiles and fills caches and
+whose results are compared): warm, CPU, best of N, so that neither the first call's
+compilation nor other processes on the machine decide it.  The standard set
 (:func:`standard_scenarios`) around an operating point ``(s0, I0)``:
 
 * voltage steps up and down (+-20 % of ``R I0``) on every circuit;
@@ -34,6 +37,7 @@ import math
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
+from functools import partial
 from typing import Any
 
 import numpy as np
@@ -41,6 +45,7 @@ import numpy as np
 from .control import closed_loop, design_gap_controller
 from .errors import InputError
 from .models.flux import FluxModel
+from .models.signals import Ramp, Signal, Sine, Step
 from .models.statics import solve_statics
 from .plant import STANDARD_GRAVITY, HeaveMass
 from .simulation import simulate
@@ -93,6 +98,10 @@ class ComparisonResult:
     part (detailed signal minus its mean; NaN where the signal has no variation, i.e. its AC
     RMS is below ``AC_MIN_RELATIVE_VARIATION`` x its mean).  All dimensionless.
 
+    ``detailed_cpu_s`` and ``reduced_cpu_s`` are the CPU times of one run of each model [s]:
+    the best of ``timing_runs`` runs after an untimed warm-up run (NaN with
+    ``timing_runs = 0``, :func:`compare_models`'s ``repeat``).
+
     ``detailed_gap_m`` and ``reduced_gap_m`` (n_t,) are the gap of each run [m]: the heave
     mass's gap in a closed loop, the mean of the gap inputs in an open-loop run (the same
     input for both); ``reference_gap_m`` is the closed loop's gap reference (None in open
@@ -112,17 +121,19 @@ class ComparisonResult:
     force_error_range: np.ndarray
     current_error_ac: np.ndarray
     force_error_ac: np.ndarray
-    detailed_wall_s: float
-    reduced_wall_s: float
+    detailed_cpu_s: float
+    reduced_cpu_s: float
     extra: dict = field(default_factory=dict)
     detailed_gap_m: np.ndarray | None = None
     reduced_gap_m: np.ndarray | None = None
     reference_gap_m: np.ndarray | None = None
+    timing_runs: int = 1
 
     @property
     def speedup(self) -> float:
-        """Wall time of the detailed run over that of the reduced run."""
-        return self.detailed_wall_s / self.reduced_wall_s
+        """CPU time of the detailed run over that of the reduced run (each the best of
+        ``timing_runs`` warm runs; NaN when not timed)."""
+        return self.detailed_cpu_s / self.reduced_cpu_s
 
     @property
     def max_error(self) -> float:
@@ -229,23 +240,29 @@ def standard_scenarios(magnet: Any, *, gap_m: float, current_A: float) -> list[C
     tau = float(np.max(solve_statics(magnet, gaps=gap_m, currents=current_A)
                        .common_differential_inductance_H) / np.min(r))
     t_step = min(3.0 * tau, 1.5)
+    names = tuple(net.circuit_names)
+    # the inputs as Signals: sampled as arrays on the grid (a Python callable of t is
+    # called once per sample, which costs the reduced model more than its integration)
+
+    def volts(factors: np.ndarray) -> dict[str, Signal]:
+        """Voltages ``u0`` stepping to ``factors * u0`` at 1 % of the step scenario."""
+        return {c: Step(float(u0[j]), float(u0[j] * factors[j]), 0.01 * t_step)
+                for j, c in enumerate(names)}
+
     out = [
         ComparisonScenario("voltage step up", "+20 % voltage on every circuit at constant gap",
-                           t_step, t_step / 1000, gaps=gap_m,
-                           voltages=lambda t: u0 * (1.2 if t >= 0.01 * t_step else 1.0)),
+                           t_step, t_step / 1000, gaps=gap_m, voltages=volts(np.full(nc, 1.2))),
         ComparisonScenario("voltage step down", "-20 % voltage on every circuit",
-                           t_step, t_step / 1000, gaps=gap_m,
-                           voltages=lambda t: u0 * (0.8 if t >= 0.01 * t_step else 1.0)),
+                           t_step, t_step / 1000, gaps=gap_m, voltages=volts(np.full(nc, 0.8))),
     ]
     for f in (0.5, 5.0, 50.0):
         dur = max(2.0 / f, 0.1)
         out.append(ComparisonScenario(
             f"gap sine {f:g} Hz", f"gap {gap_m * 1e3:g} +- 1 mm at {f:g} Hz, constant voltage",
-            dur, min(1.0 / (f * 100), 1e-3),
-            gaps=lambda t, f=f: gap_m + 1e-3 * math.sin(2 * math.pi * f * t), voltages=u0))
+            dur, min(1.0 / (f * 100), 1e-3), gaps=Sine(gap_m, 1e-3, f), voltages=u0))
     out.append(ComparisonScenario(
         "gap ramp", "gap +2 mm in 0.1 s, then held; constant voltage", 0.3, 3e-4,
-        gaps=lambda t: gap_m + 2e-3 * min(max(t - 0.02, 0.0) / 0.1, 1.0), voltages=u0))
+        gaps=Ramp(gap_m, gap_m + 2e-3, 0.02, 0.12), voltages=u0))
     out.append(ComparisonScenario(
         "closed loop", "flux-cascade gap control, heave mass: +1 mm reference step at 0.05 s, "
         "+10 % load at 0.5 s", 1.0, 1e-3,
@@ -256,14 +273,26 @@ def standard_scenarios(magnet: Any, *, gap_m: float, current_A: float) -> list[C
         first[0] = 1.0
         out.append(ComparisonScenario(
             "coupling", "+20 % voltage on the first circuit only", t_step, t_step / 1000,
-            gaps=gap_m, voltages=lambda t: u0 * (1.0 + 0.2 * first * (t >= 0.01 * t_step)),
-            coupling=True))
+            gaps=gap_m, voltages=volts(1.0 + 0.2 * first), coupling=True))
     return out
 
 
+def _timed(run: Callable[[], Any], repeat: int) -> tuple[float, Any]:
+    """``run()``'s result and its CPU time [s]: one untimed warm-up run (compilation,
+    caches; its result is returned), then the best of ``repeat`` timed runs
+    (``time.process_time``; NaN for ``repeat = 0``)."""
+    result = run()
+    best = math.inf if repeat else math.nan
+    for _ in range(repeat):
+        c0 = time.process_time()
+        run()
+        best = min(best, time.process_time() - c0)
+    return best, result
+
+
 def compare_models(detailed: Any, reduced: Any, scenarios: list[ComparisonScenario], *,
-                   gap_m: float, current_A: float) -> list[ComparisonResult]:
-    """Run every scenario with both models and measure errors and wall times.
+                   gap_m: float, current_A: float, repeat: int = 3) -> list[ComparisonResult]:
+    """Run every scenario with both models and measure errors and CPU times.
 
     Parameters
     ----------
@@ -271,7 +300,16 @@ def compare_models(detailed: Any, reduced: Any, scenarios: list[ComparisonScenar
         The detailed model.
     reduced : CurrentModel
         The current-based model (its maps must belong to the same magnet).
+    scenarios : list of ComparisonScenario
+    gap_m, current_A : float
+        Operating point [m], [A] (closed loop: controller design and load).
+    repeat : int
+        Timed runs per model and scenario after the untimed warm-up run (default 3); the
+        best CPU time counts.  0: no timing (the times and speed-ups are NaN).
     """
+    if isinstance(repeat, bool) or not isinstance(repeat, int) or repeat < 0:
+        raise InputError(f"repeat = {repeat!r}; use a whole number >= 0 of timed runs (0: no "
+                         "timing)")
     fm = detailed if isinstance(detailed, FluxModel) else FluxModel(detailed)
     if tuple(reduced.circuit_names) != tuple(fm.circuit_names) or \
             tuple(reduced.gap_names) != tuple(fm.gap_names):
@@ -285,15 +323,15 @@ def compare_models(detailed: Any, reduced: Any, scenarios: list[ComparisonScenar
             veh = HeaveMass(force0 / STANDARD_GRAVITY)
             ctl = design_gap_controller(fm.network, mass_kg=veh.mass_kg, gap_m=gap_m,
                                         current_A=current_A)
-            runs = []
-            for model in (fm, reduced):
-                t0 = time.perf_counter()
-                res = closed_loop(model, veh, ctl, duration_s=sc.duration_s, dt_s=sc.dt_s,
-                                  initial_gap_m=gap_m, initial_current_A=current_A,
-                                  gap_reference=sc.gap_reference,
-                                  external_force=_scaled(sc.external_force_fraction, force0))
-                runs.append((time.perf_counter() - t0, res))
-            (wd, d), (wr, r) = runs
+            loads = _scaled(sc.external_force_fraction, force0)
+
+            def loop(model: Any, veh: HeaveMass = veh, ctl: Any = ctl,
+                     sc: ComparisonScenario = sc, loads: Any = loads) -> Any:
+                return closed_loop(model, veh, ctl, duration_s=sc.duration_s, dt_s=sc.dt_s,
+                                   initial_gap_m=gap_m, initial_current_A=current_A,
+                                   gap_reference=sc.gap_reference, external_force=loads)
+
+            (wd, d), (wr, r) = (_timed(partial(loop, model), repeat) for model in (fm, reduced))
             t = d.time_s
             fd = circuit_forces(d.pole_force_N, d.gap_names, groups, circuits)
             fr = circuit_forces(r.pole_force_N, r.gap_names, groups, circuits)
@@ -304,14 +342,12 @@ def compare_models(detailed: Any, reduced: Any, scenarios: list[ComparisonScenar
             gref: np.ndarray | None = (None if sc.gap_reference is None else
                                        np.array([sc.gap_reference(float(tk)) for tk in t]))
         else:
-            t0 = time.perf_counter()
-            ds = simulate(fm, (0.0, sc.duration_s), dt=sc.dt_s, gaps=sc.gaps,
-                          voltages=sc.voltages, initial_currents=sc.initial_current_A)
-            wd = time.perf_counter() - t0
-            t0 = time.perf_counter()
-            rs = simulate(reduced, (0.0, sc.duration_s), dt=sc.dt_s, gaps=sc.gaps,
-                          voltages=sc.voltages, initial_currents=sc.initial_current_A)
-            wr = time.perf_counter() - t0
+            wd, ds = _timed(partial(simulate, fm, (0.0, sc.duration_s), dt=sc.dt_s,
+                                    gaps=sc.gaps, voltages=sc.voltages,
+                                    initial_currents=sc.initial_current_A), repeat)
+            wr, rs = _timed(partial(simulate, reduced, (0.0, sc.duration_s), dt=sc.dt_s,
+                                    gaps=sc.gaps, voltages=sc.voltages,
+                                    initial_currents=sc.initial_current_A), repeat)
             t = ds.time_s
             fd = circuit_forces(ds.pole_force_N, ds.gap_names, groups, circuits)
             fr = rs.circuit_force_N
@@ -326,6 +362,7 @@ def compare_models(detailed: Any, reduced: Any, scenarios: list[ComparisonScenar
             scenario=sc, circuit_names=circuits, time_s=t, detailed_currents_A=cd,
             reduced_currents_A=cr, detailed_forces_N=fd, reduced_forces_N=fr,
             current_error=ce, force_error=fe, current_error_range=cer, force_error_range=fer,
-            current_error_ac=cea, force_error_ac=fea, detailed_wall_s=wd, reduced_wall_s=wr,
-            extra=extra, detailed_gap_m=gd, reduced_gap_m=gr, reference_gap_m=gref))
+            current_error_ac=cea, force_error_ac=fea, detailed_cpu_s=wd, reduced_cpu_s=wr,
+            extra=extra, detailed_gap_m=gd, reduced_gap_m=gr, reference_gap_m=gref,
+            timing_runs=repeat))
     return results

@@ -440,8 +440,8 @@ def plot_comparison(result: Any, path: str | Path, *, title: str = "") -> Path:
                          strict=True))
     fig.suptitle((title + "\n" if title else "") + f"{result.scenario.name}: "
                  f"{result.scenario.description}", fontsize=10)
-    note = (f"normalised RMS error {errs}; wall time detailed "
-            f"{result.detailed_wall_s * 1e3:.0f} ms, reduced {result.reduced_wall_s * 1e3:.1f} ms "
+    note = (f"normalised RMS error {errs}; CPU time (best warm run) detailed "
+            f"{result.detailed_cpu_s * 1e3:.0f} ms, reduced {result.reduced_cpu_s * 1e3:.2f} ms "
             f"(x{result.speedup:.0f})")
     if same:
         note += (f".\nCircuits {', '.join(names)} coincide (largest difference "

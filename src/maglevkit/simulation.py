@@ -1,7 +1,7 @@
 """One :func:`simulate` for every magnet model: flux model, reduced model, bank of circuits.
 
 It sits above the models it runs (the flux model in :mod:`maglevkit.models.flux`, the reduced
-:class:`~maglevkit.models.current.CurrentModel` and :class:`~maglevkit.models.bank.MagnetBank`)
+:class:`~maglevkit.reduced.current.CurrentModel` and :class:`~maglevkit.reduced.bank.MagnetBank`)
 so none of them has to import another to serve as the common entry point.
 """
 
@@ -11,9 +11,9 @@ from collections.abc import Mapping
 from typing import Any, overload
 
 from .errors import InputError
-from .models.bank import BankSimulation, MagnetBank
-from .models.current import CurrentModel, ReducedSimulation
 from .models.flux import SimulationResult, simulate_flux
+from .reduced.bank import BankSimulation, MagnetBank
+from .reduced.current import CurrentModel, ReducedSimulation
 from .validation import real_array
 
 __all__ = ["simulate"]
@@ -49,8 +49,8 @@ def simulate(model: Any, t: Any, *, gaps: Any, voltages: Any, gap_rates: Any = N
     Parameters
     ----------
     model : FluxModel, CurrentModel, MagnetBank, Magnet or Network
-        A :class:`~maglevkit.models.current.CurrentModel` or
-        :class:`~maglevkit.models.bank.MagnetBank` runs its own ``simulate`` with the same
+        A :class:`~maglevkit.reduced.current.CurrentModel` or
+        :class:`~maglevkit.reduced.bank.MagnetBank` runs its own ``simulate`` with the same
         inputs and conventions; anything else runs the flux model
         (:func:`~maglevkit.models.flux.simulate_flux`), where ``options`` (``saturation``,
         ``eddy_currents``, ``method``, ``rtol``, ``atol``, ...) build a

@@ -44,9 +44,9 @@ def demo(
     """
     from ..compare import compare_models, error_verdicts, standard_scenarios
     from ..figures import write_figures
-    from ..models.current import CurrentModel
     from ..models.statics import solve_statics
     from ..plotting import plot_comparison, plot_force_current, plot_maps
+    from ..reduced.current import CurrentModel
     from ..reduction import build_maps
     from .compare import comparison_table, plot_title, slug
     from .statics import write_statics_csv
@@ -115,8 +115,9 @@ def demo(
             console.print(f"neglected coupling: stepping only '{r.circuit_names[0]}' moves the "
                           f"other circuits' currents by NRMS {100 * r.current_error[1:].max():.3f} % "
                           "in the reduced model's blind spot")
-    console.print(f"speed-up of the reduced model (wall time, open-loop cases): median "
-                  f"{np.median(open_loop):.0f}x, range {min(open_loop):.0f}-{max(open_loop):.0f}x")
+    console.print(f"speed-up of the reduced model (CPU time, best of {results[0].timing_runs} "
+                  f"warm runs, open-loop cases): median {np.median(open_loop):.0f}x, range "
+                  f"{min(open_loop):.0f}-{max(open_loop):.0f}x")
     console.print(f"{len(written)} files in {out}/:")
     for p in written:
         console.print(f"  {p}")

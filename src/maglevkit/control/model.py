@@ -12,7 +12,7 @@ The disturbance model is any subset of ``"force"`` (``d_F`` [N], an unknown load
 mass), ``"voltage"`` (``d_U`` [V] per circuit, a voltage offset / resistance error),
 ``"gap_sensor"`` (``d_s`` [m]) and ``"current_sensor"`` (``d_I`` [A] per circuit).
 
-The eq. 8 expressions and map tables are the :class:`~maglevkit.models.bank.MagnetBank`'s
+The eq. 8 expressions and map tables are the :class:`~maglevkit.reduced.bank.MagnetBank`'s
 (its per-cell polynomial tables); here the table is an *input* of the compiled functions,
 passed by pointer, so that a call does not copy the ~40 000 table coefficients as an
 embedded constant would (measured: 28 ms against 0.03 ms for 20 intervals with Jacobians).
@@ -28,9 +28,9 @@ import casadi as ca
 import numpy as np
 
 from ..errors import InputError, ParameterError
-from ..models.bank import MagnetBank
 from ..models.compiled import compile_function
 from ..plant import STANDARD_GRAVITY
+from ..reduced.bank import MagnetBank
 from ..validation import real_number
 
 __all__ = ["DISTURBANCES", "MagnetHeaveModel"]
@@ -376,11 +376,11 @@ class MagnetHeaveModel:
             raise InputError(f"state must be {self.nx} finite values [I_L..., s, s']")
 
     def spline_rhs(self) -> tuple[ca.Function, ca.Function]:
-        """The same model with the single :class:`~maglevkit.models.current.CurrentModel`'s
+        """The same model with the single :class:`~maglevkit.reduced.current.CurrentModel`'s
         B-spline maps instead of the bank's cell tables (equal to rounding for the default
         bicubic tables): ``(x, u, d) -> xdot`` and ``(x, u, d) -> y`` (MX, no table input),
         for the IPOPT reference formulation."""
-        from ..models.current import CurrentModel
+        from ..reduced.current import CurrentModel
 
         cm = CurrentModel(self.bank.members[0][2])
         nc = self.n_circuits

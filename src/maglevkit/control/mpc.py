@@ -19,7 +19,7 @@ with ``P`` from the discrete Riccati equation of the linearisation at the design
   ``hpipm``, ``qpoases``, ``daqp``), iterated to a step below ``tol``;
 * ``"rti"``: the real-time iteration (Diehl et al. 2005): one such QP per sample;
 * ``"ipopt"``: the same OCP as an NLP for IPOPT (exact Hessian), with the single
-  :class:`~maglevkit.models.current.CurrentModel`'s B-spline maps, as the reference.
+  :class:`~maglevkit.reduced.current.CurrentModel`'s B-spline maps, as the reference.
 """
 
 from __future__ import annotations

@@ -197,6 +197,32 @@ static int check_current(Model *m, int j, double i, const char *where) {
     return 0;
 }
 
+/* the message of a step the kernel flagged: its reason code's bits in the order of
+   StepFlag.by_priority() (inputs, gap path, result, currents), each with the message of the
+   check above that names the value and the range */
+static void report_step_flags(Model *m, int j, int code, double s, double h, const char *where) {
+    if (code & STEP_FLAG_INPUT_NOT_FINITE) {
+        if (!is_finite(m->r[VR_U(j)])) {
+            fail(m, "circuit %s%s: voltage U = %g V is not finite", CIRCUIT_NAMES[j], where,
+                 m->r[VR_U(j)]);
+            return;
+        }
+        if (!is_finite(m->r[VR_SDOT(j)])) {
+            fail(m, "circuit %s%s: gap rate sdot = %g m/s is not finite", CIRCUIT_NAMES[j], where,
+                 m->r[VR_SDOT(j)]);
+            return;
+        }
+        if (check_gap(m, j, s, where)) return;
+    }
+    if (code & STEP_FLAG_GAP_OUT_OF_RANGE) {
+        if (check_gap(m, j, s, where) || check_gap(m, j, s + m->r[VR_SDOT(j)] * h, where)) return;
+    }
+    if (code & (STEP_FLAG_RESULT_NOT_FINITE | STEP_FLAG_CURRENT_OUT_OF_RANGE)) {
+        if (check_current(m, j, m->xs[j], where)) return;
+    }
+    fail(m, "circuit %s%s: the step was flagged (reason code %d)", CIRCUIT_NAMES[j], where, code);
+}
+
 static int check_parameters(Model *m) {
     int j;
     double h = m->r[VR_MAXSTEP];
@@ -564,7 +590,9 @@ fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunicationPoint,
         }
         snprintf(where, sizeof where, " in the RK4 sub-step ending at t = %.9g s", t0 + (double)(k + 1) * hs);
         for (j = 0; j < NC; ++j) {
-            if (check_current(m, j, m->xs[j], where)) {
+            /* the kernel's reason code (maglevkit.reduced.bank.StepFlag), not a check of our own */
+            if (m->bad[j] != 0.0) {
+                report_step_flags(m, j, (int)m->bad[j], sk[j], hs, where);
                 memcpy(m->x, x0, sizeof x0);   /* the state before the step */
                 return fmi2Error;
             }

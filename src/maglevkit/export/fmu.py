@@ -1,7 +1,7 @@
 """FMI 2.0 Co-Simulation FMU of the reduced current-based magnet model (eq. 8).
 
 :func:`export_fmu` writes a self-contained ``.fmu`` (a zip archive) of the reduced model
-of every circuit of a magnet (or of a :class:`~maglevkit.models.bank.MagnetBank` of
+of every circuit of a magnet (or of a :class:`~maglevkit.reduced.bank.MagnetBank` of
 reduced magnets)::
 
     modelDescription.xml            variables, units, ModelStructure
@@ -42,9 +42,9 @@ from xml.sax.saxutils import escape, quoteattr
 import numpy as np
 
 from ..errors import InputError, SolverError
-from ..models.bank import KERNEL_PARAMETERS, MagnetBank
 from ..models.compiled import cache_directory, find_compiler
-from ..models.current import CurrentModel
+from ..reduced.bank import KERNEL_PARAMETERS, MagnetBank, StepFlag
+from ..reduced.current import CurrentModel
 
 __all__ = ["FMI_HEADERS", "ExportedFmu", "export_fmu", "fmu_platform"]
 
@@ -132,7 +132,7 @@ def export_fmu(magnet_or_maps: Any, path: str | os.PathLike[str], *,
     ----------
     magnet_or_maps : CharacteristicMaps, CurrentModel, MagnetBank or mapping
         The magnet's reduced model: its maps (``R_el`` and ``R_ec`` from the maps, see
-        ``eddy_resistance``), a :class:`~maglevkit.models.current.CurrentModel` (its
+        ``eddy_resistance``), a :class:`~maglevkit.reduced.current.CurrentModel` (its
         resistances), a bank of reduced members with one gap input per circuit, or a
         mapping name -> maps/CurrentModel (a bank of several magnets).
     path : path
@@ -143,9 +143,9 @@ def export_fmu(magnet_or_maps: Any, path: str | os.PathLike[str], *,
         The FMU's description.
     eddy_resistance : {"fit", "jump"}
         Which ``R_ec`` of the maps becomes the parameters' start value (as
-        :class:`~maglevkit.models.current.CurrentModel`).
+        :class:`~maglevkit.reduced.current.CurrentModel`).
     interpolation : {"bicubic", "monotone", "bilinear"}
-        The maps' per-cell polynomials (:mod:`maglevkit.models.tables`); ``"bicubic"``
+        The maps' per-cell polynomials (:mod:`maglevkit.reduced.tables`); ``"bicubic"``
         equals ``CurrentModel``'s B-spline.
     max_substep_s : float
         Start value of the parameter ``max_substep`` [s]: the longest RK4 sub-step
@@ -417,6 +417,8 @@ def _config_header(ident: str, guid: str, circuits: tuple[str, ...], par: np.nda
         f"#define MK_STEP {ident}_step", f"#define MK_STEP_WORK {ident}_step_work",
         f"#define MK_OUT {ident}_out", f"#define MK_OUT_WORK {ident}_out_work",
         f"#define START_MAX_SUBSTEP {_c_double(max_substep)}",
+        "/* the kernel's reason codes (maglevkit.reduced.bank.StepFlag) */",
+        *(f"#define STEP_FLAG_{flag.name} {int(flag)}" for flag in StepFlag),
         "/* kernel parameters, one column of N_PAR per circuit (MagnetBank.circuit_parameters) */",
     ]
     text = "\n".join(lines) + "\n"

@@ -1,10 +1,10 @@
-"""Magnet models: statics of the equivalent circuit, flux-based DAE, current-based ODE.
+"""Magnet models: statics of the equivalent circuit and the flux-based DAE (the
+current-based model and the bank are in :mod:`maglevkit.reduced`).
 
 :func:`maglevkit.simulate` (one entry for every model) is in :mod:`maglevkit.simulation`,
 above the reduced models; :func:`simulate_flux` is its flux-model branch.
 """
 
-from .bank import BankOutputs, BankSimulation, BankState, MagnetBank
 from .characteristics import (
     KNEE_EXPONENT,
     Coupling,
@@ -13,7 +13,6 @@ from .characteristics import (
     nominal_point,
     saturation_knee,
 )
-from .current import CurrentModel, CurrentModelState, CurrentOutputs, ReducedSimulation
 from .experiments import (
     InductanceEstimate,
     differential_inductance_from_step,
@@ -32,29 +31,19 @@ from .flux import (
 from .scenario import Scenario, bundled_scenarios, load_scenario, parse_scenario
 from .signals import Constant, Ramp, Signal, Sine, Step, Tabulated, parse_signal
 from .statics import StaticSolution, coenergy, magnetic_energy, pole_force_eq6, solve_statics
-from .stepper import BankStepper
 
 __all__ = [
-    "BankOutputs",
-    "BankSimulation",
-    "BankState",
-    "BankStepper",
     "DEFAULT_ATOL",
     "DEFAULT_RTOL",
     "Constant",
     "Coupling",
     "KNEE_EXPONENT",
-    "CurrentModel",
-    "CurrentModelState",
-    "CurrentOutputs",
     "EnergyBalance",
     "FluxModel",
     "FluxOutputs",
     "FluxState",
     "InductanceEstimate",
-    "MagnetBank",
     "Ramp",
-    "ReducedSimulation",
     "Scenario",
     "Signal",
     "SimulationResult",

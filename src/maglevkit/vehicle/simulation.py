@@ -178,8 +178,8 @@ class VehicleModel:
                  magnets: str = "reduced", maps_cache: Any = None, compiled: str = "auto",
                  resistance_scale: float = 1.0, eddy_resistance_scale: float = 1.0) -> None:
         from ..magnets import load_magnet
-        from ..models.bank import MagnetBank
         from ..models.flux import FluxModel
+        from ..reduced.bank import MagnetBank
         from .data import load_guideway
         from .mapcache import vehicle_maps
 
@@ -852,7 +852,7 @@ class VehicleModel:
         which raises).  Steps a block computed after the event are discarded, and on
         Ctrl-C the block under way.
         """
-        from ..models.bank import BankState
+        from ..reduced.bank import BankState
 
         fun, lay, nb = self._compiled_step(dt)
         tr, gw, bank = self.train, self.guideway, self.bank

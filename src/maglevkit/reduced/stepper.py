@@ -1,6 +1,6 @@
 """In-place stepping of a magnet bank: the co-simulation loop without per-step objects.
 
-:meth:`MagnetBank.step <maglevkit.models.bank.MagnetBank.step>` returns new immutable
+:meth:`MagnetBank.step <maglevkit.reduced.bank.MagnetBank.step>` returns new immutable
 state and output objects and copies its inputs and outputs, which at 100 circuits costs
 about as much as the compiled arithmetic itself.  A :class:`BankStepper` binds the
 compiled step to arrays it owns: the caller writes voltages, gaps and gap rates into the
@@ -24,7 +24,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from ..errors import InputError
-from .inputs import check_step
+from ..models.inputs import check_step
 
 if TYPE_CHECKING:
     from .bank import BankState, MagnetBank
@@ -39,9 +39,9 @@ def _readonly(a: np.ndarray) -> np.ndarray:
 
 
 class BankStepper:
-    """Advance a :class:`~maglevkit.models.bank.MagnetBank` step by step in place.
+    """Advance a :class:`~maglevkit.reduced.bank.MagnetBank` step by step in place.
 
-    Made by :meth:`MagnetBank.stepper <maglevkit.models.bank.MagnetBank.stepper>` (which
+    Made by :meth:`MagnetBank.stepper <maglevkit.reduced.bank.MagnetBank.stepper>` (which
     compiles the bank's step for ``dt`` if that has not happened yet); one stepper per
     step length.  The input arrays (:attr:`voltages_V`, :attr:`gaps_m`,
     :attr:`gap_rates_m_per_s`) belong to the stepper and are written in place (assigning
@@ -117,7 +117,7 @@ class BankStepper:
         args = [self._il, self._g, self._u, self._gd, self._h]
         self._scratch = r = np.zeros_like(self._block)       # the same layout as the block
         self._res = [r[:nc], r[nc:2 * nc], r[2 * nc:3 * nc], r[3 * nc:3 * nc + nm],
-                     np.zeros(1), np.zeros(nc), np.zeros(nc), r[3 * nc + nm:]]
+                     np.zeros(1), np.zeros(nc), np.zeros(nc), r[3 * nc + nm:], np.zeros(nc)]
         buf: Any
         buf, self._eval = call.f.buffer()
         self._buf = buf                     # keeps the bound buffer alive

@@ -12,14 +12,14 @@ advanced by its own integrator (correct, not fast: for studies of the per-pole f
 distribution).
 
 Per reduced circuit ``j`` (paper eq. 8, Fig. 8; the same expression as
-:class:`~maglevkit.models.current.CurrentModel`)::
+:class:`~maglevkit.reduced.current.CurrentModel`)::
 
     dI_L/dt = [ (U - R_el I_L) / a  -  dL/ds(s, I_L) I_L ds/dt ] / L~(s, I_L),   a = 1 + R_el/R_ec
     I       = (U - U_L) / R_el,   U_L = (U - R_el I_L) / a                (coil current)
     F       = F(s, I_L)
 
 with ``L~``, ``dL/ds`` and ``F`` from per-cell polynomial tables of the maps
-(:mod:`maglevkit.models.tables`; ``"bicubic"`` reproduces the single model's B-spline to
+(:mod:`maglevkit.reduced.tables`; ``"bicubic"`` reproduces the single model's B-spline to
 rounding).  The same expressions are available as CasADi functions
 (:attr:`MagnetBank.ode_function`, :attr:`MagnetBank.output_function`) for vehicle
 models, linearisation and MPC.
@@ -27,6 +27,7 @@ models, linearisation and MPC.
 
 from __future__ import annotations
 
+import enum
 import hashlib
 import math
 import subprocess
@@ -34,14 +35,18 @@ import warnings
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
+from types import SimpleNamespace
 from typing import Any, TypeVar
 
 import casadi as ca
 import numpy as np
 
 from ..errors import InputError, OutOfRangeError, SolverError
+from ..models.compiled import COMPILE_MODES, build_source, cache_directory, compile_function, find_compiler
+from ..models.flux import FluxModel, FluxState
+from ..models.inputs import check_initial_choice, check_step, reject_bools, simulation_inputs
+from ..models.statics import circuit_pole_groups
 from ..validation import describe, flag
-from .compiled import COMPILE_MODES, build_source, cache_directory, compile_function, find_compiler
 from .current import (
     EXTRA_CELLS,
     CurrentModel,
@@ -50,14 +55,12 @@ from .current import (
     eq8_coil_current,
     eq8_rhs,
 )
-from .flux import FluxModel, FluxState
-from .inputs import check_initial_choice, check_step, reject_bools, simulation_inputs
 from .lanes import LaneInput, external_source, lane_source, lane_target
-from .statics import circuit_pole_groups
 from .stepper import BankStepper
 from .tables import INTERPOLATION_METHODS, cell_table
 
-__all__ = ["KERNEL_PARAMETERS", "BankOutputs", "BankSimulation", "BankState", "MagnetBank"]
+__all__ = ["KERNEL_PARAMETERS", "RUN_CHUNK", "BankOutputs", "BankRun", "BankSimulation",
+           "BankState", "MagnetBank", "StepFlag"]
 
 _MAP_VARIABLES = ("inductance_H", "dL_ds_H_per_m", "force_N")
 KERNEL_PARAMETERS = ("s0_m", "inv_ds_per_m", "cells_s", "i0_A", "inv_di_per_A", "cells_i",
@@ -66,6 +69,9 @@ KERNEL_PARAMETERS = ("s0_m", "inv_ds_per_m", "cells_s", "i0_A", "inv_di_per_A", 
 """Rows of :attr:`MagnetBank.circuit_parameters`: the circuit's grid, its table offset,
 ``R_el``, ``a = 1 + R_el/R_ec`` and the range bounds (with rounding allowances)."""
 _N_PAR = len(KERNEL_PARAMETERS)
+RUN_CHUNK = 1024
+"""Steps per call of the compiled time loop of :meth:`MagnetBank.run_steps` (longer runs
+take several calls)."""
 _T = TypeVar("_T")
 
 
@@ -123,7 +129,7 @@ class BankOutputs:
 @dataclass(frozen=True)
 class BankSimulation:
     """Time series of a bank simulation (SI units, axis 0 is time; conventions as
-    :class:`~maglevkit.models.current.ReducedSimulation`: outputs at ``t_k`` are left
+    :class:`~maglevkit.reduced.current.ReducedSimulation`: outputs at ``t_k`` are left
     limits, with the voltages held on ``[t_k-1, t_k)``).
 
     Attributes
@@ -154,6 +160,53 @@ class BankSimulation:
     final_state: BankState
 
 
+class StepFlag(enum.IntFlag):
+    """Why the compiled step flagged a circuit: the bits of the kernel's reason code.
+
+    The step (:meth:`MagnetBank.circuit_step_function`) returns, per circuit, the sum of
+    the reasons that hold (0: a good step); :meth:`MagnetBank.step` and the stepper turn
+    the code into the one message of each reason.
+    """
+
+    GAP_OUT_OF_RANGE = 1
+    """The gap path of the step leaves the map's gap range (or a gap is <= 0)."""
+    CURRENT_OUT_OF_RANGE = 2
+    """The current at the start or at a sub-step end leaves the map's current range."""
+    INPUT_NOT_FINITE = 4
+    """A voltage, gap or gap rate is NaN or infinite."""
+    RESULT_NOT_FINITE = 8
+    """The RK4 step gave a NaN or infinite current."""
+
+    @classmethod
+    def by_priority(cls) -> tuple[StepFlag, ...]:
+        """The order in which reasons are reported: inputs, gap path, result, currents."""
+        return (cls.INPUT_NOT_FINITE, cls.GAP_OUT_OF_RANGE, cls.RESULT_NOT_FINITE,
+                cls.CURRENT_OUT_OF_RANGE)
+
+
+@dataclass(frozen=True)
+class BankRun:
+    """The reduced circuits of a bank over a sequence of steps (:meth:`MagnetBank.run_steps`).
+
+    Row ``k`` holds the values at the end of step ``k`` (coil currents with that step's
+    voltages), as :meth:`MagnetBank.step` returns them.
+
+    Attributes
+    ----------
+    inductor_currents_A, currents_A, circuit_force_N : ndarray (n_steps, n_circuits)
+        ``I_L`` [A], coil currents [A] and circuit forces [N]; rows from ``n_good`` on are
+        NaN when the run stopped at a flagged step.
+    n_good : int
+        Steps completed (``n_steps`` unless ``stop_at_flag`` stopped the run at step
+        ``n_good``, which the kernel flagged: out of the maps or not finite).
+    """
+
+    inductor_currents_A: np.ndarray
+    currents_A: np.ndarray
+    circuit_force_N: np.ndarray
+    n_good: int
+
+
 @dataclass(frozen=True)
 class _Member:
     name: str
@@ -175,7 +228,7 @@ class MagnetBank:
     members : mapping or sequence of (name, model)
         The magnets, each named; a model is a
         :class:`~maglevkit.reduction.CharacteristicMaps` or a
-        :class:`~maglevkit.models.current.CurrentModel` (reduced member: its maps and
+        :class:`~maglevkit.reduced.current.CurrentModel` (reduced member: its maps and
         resistances) or a :class:`~maglevkit.models.flux.FluxModel` (detailed member).
         A single magnet is a bank of one.
     gap_inputs : {"circuit", "pole"}
@@ -184,7 +237,7 @@ class MagnetBank:
         ``"pole"``: one gap input per pole, as for the single models (a reduced circuit
         uses the mean of its poles' gaps).
     interpolation : {"bicubic", "monotone", "bilinear"}
-        How the maps are interpolated (:mod:`maglevkit.models.tables`); ``"bicubic"``
+        How the maps are interpolated (:mod:`maglevkit.reduced.tables`); ``"bicubic"``
         equals the single :class:`CurrentModel`.
     compiled : {"auto", "always", "never"}
         ``"auto"`` (default): generated C compiled by the system C compiler and cached on
@@ -203,7 +256,7 @@ class MagnetBank:
     codegen : {"lanes", "casadi"}
         How the compiled step is generated from the same CasADi function: ``"lanes"``
         (default) evaluates several circuits at once in SIMD lanes
-        (:mod:`maglevkit.models.lanes`: 4 with AVX2, else 2), ``"casadi"`` is CasADi's
+        (:mod:`maglevkit.reduced.lanes`: 4 with AVX2, else 2), ``"casadi"`` is CasADi's
         own code generation of the mapped function (one circuit after the other).  Both
         give the same numbers; ``"lanes"`` is ~3-5x faster at 100-1000 circuits
         (BENCHMARKS.md).  Where the lanes cannot be compiled or loaded, the bank uses
@@ -267,6 +320,8 @@ class MagnetBank:
         self._build_reduced()
         self._kernels: dict[int, _StepCall] = {}
         self._lanes: dict[int, tuple[ca.Function, Path]] = {}   # sub-steps -> (f, library)
+        self._lane_runs: dict[int, ca.Function] = {}    # sub-steps -> the compiled time loop
+        self._runs: dict[int, _RunCall] = {}
         self._last_dt: float = math.nan             # the last step length and its kernel
         self._last_call: _StepCall | None = None
         self.compiled: bool | None = None       # known after the first step
@@ -496,8 +551,9 @@ class MagnetBank:
         ``(I_L, s, U, sdot, h, p) -> (I_L', I, F, I_min, I_max, bad)``: ``substeps``
         classical RK4 sub-steps of eq. 8 over ``h`` [s] with the gap moving linearly from
         ``s`` at ``sdot``; ``I``, ``F`` at the end (gap ``s + sdot h``); ``I_min``/``I_max``
-        the extremes of ``I_L`` over the sub-step ends; ``bad`` is 1 when the gap path or a
-        sub-step current leaves the map range or a value is not finite.  ``p`` is one
+        the extremes of ``I_L`` over the sub-step ends; ``bad`` is the circuit's reason
+        code, a sum of :class:`StepFlag` bits (0: a good step; the gap path or a sub-step
+        current leaving the map range, an input or the result not finite).  ``p`` is one
         column of :attr:`circuit_parameters` (rows :data:`KERNEL_PARAMETERS`; change
         ``R_el`` and ``a`` there to tune the resistances).  The table of every distinct map
         is embedded as a constant.  :meth:`step` maps this function over the circuits.
@@ -544,9 +600,15 @@ class MagnetBank:
         def non_finite(v: Any) -> Any:
             return 1 - (ca.fabs(v) <= big)
 
-        bad = ((ca.fmin(s, se) < p[9]) + (ca.fmax(s, se) > p[10]) + (lo < p[11])
-               + (hi > p[12]) + non_finite(x) + non_finite(u) + non_finite(s)
-               + non_finite(sd) > 0)
+        def any_of(*conditions: Any) -> Any:
+            return sum(conditions[1:], conditions[0]) > 0
+
+        # the reason code (StepFlag): one bit per reason, 0 for a good step
+        bad = (float(StepFlag.GAP_OUT_OF_RANGE) * any_of(ca.fmin(s, se) < p[9], ca.fmax(s, se) > p[10])
+               + float(StepFlag.CURRENT_OUT_OF_RANGE) * any_of(lo < p[11], hi > p[12])
+               + float(StepFlag.INPUT_NOT_FINITE) * any_of(non_finite(u), non_finite(s),
+                                                    non_finite(sd))
+               + float(StepFlag.RESULT_NOT_FINITE) * non_finite(x))
         return ca.Function("bank_circuit_step", [i, s, u, sd, h, p],
                            [x, coil, force, lo, hi, bad],
                            ["I_L", "s", "U", "sdot", "h", "p"],
@@ -560,7 +622,8 @@ class MagnetBank:
         gap moves linearly (exact); ``I_min``/``I_max`` are the extremes of the
         current over the sub-step ends; ``n_bad`` counts circuits with a gap or current
         outside their map's range (start, end and every sub-step) or a non-finite value,
-        so that the caller checks one number (and diagnoses only when it is > 0).
+        so that the caller checks one number (and diagnoses only when it is > 0);
+        ``flags``: the reason code of every circuit (:class:`StepFlag` bits).
         Everything is inlined into one expression graph (no nested calls).  ``s_next``:
         the gaps at the end of the step, ``s + sdot h``.
         """
@@ -575,11 +638,12 @@ class MagnetBank:
         summ = ca.DM(ca.Sparsity.triplet(len(self._members), n, rows.tolist(), list(range(n))),
                      1.0)
         return ca.Function(f"maglevkit_bank_step{substeps}", [vi, vs, vu, vsd, vh],
-                           [r.T for r in res[:3]] + [ca.densify(ca.mtimes(summ, res[2].T)), ca.sum2(res[5])]
-                           + [res[3].T, res[4].T, vs + vsd * vh],
+                           [r.T for r in res[:3]]
+                           + [ca.densify(ca.mtimes(summ, res[2].T)), ca.sum2(res[5] > 0)]
+                           + [res[3].T, res[4].T, vs + vsd * vh, res[5].T],
                            ["I_L", "s", "U", "sdot", "h"],
                            ["I_L_next", "I", "F", "member_F", "n_bad", "I_L_min", "I_L_max",
-                            "s_next"])
+                            "s_next", "flags"])
 
     # ------------------------------------------------------------------ public model pieces
     @property
@@ -660,9 +724,128 @@ class MagnetBank:
         """
         return self._step_kernel(self._composable_substeps(dt, "step_function"))
 
+    def step_kernel(self, dt: float) -> ca.Function:
+        """The compiled step that :meth:`step` calls for steps of ``dt`` [s] (lanes or
+        CasADi code, or CasADi's virtual machine, by ``compiled`` and ``codegen``).
+
+        Inputs and outputs as :meth:`step_function` (``n_bad`` > 0: a circuit left its
+        maps or a value was not finite, ``flags`` says why per circuit; diagnose with
+        :meth:`step`).  Banks of reduced members with one gap input per circuit only.
+
+        Parameters
+        ----------
+        dt : float
+            Step length [s] (> 0); steps with the same RK4 sub-step count share a kernel.
+
+        Returns
+        -------
+        casadi.Function
+        """
+        self._composable_substeps(dt, "step_kernel")
+        return self._kernel(float(dt)).f
+
+    def run_steps(self, inductor_currents_A: Any, gaps_m: Any, voltages_V: Any,
+                  gap_rates_m_per_s: Any, dt_s: Any, *, time_s: float = 0.0,
+                  stop_at_flag: bool = False) -> BankRun:
+        """Advance every circuit over ``n_steps`` steps in one compiled time loop.
+
+        The same compiled step as :meth:`step` (bit-identical results) with the loop over
+        the steps in C (:mod:`.lanes`; without a compiler or with ``codegen="casadi"`` a
+        CasADi ``mapaccum`` of the step), :data:`RUN_CHUNK` steps per call.  Banks of
+        reduced members with one gap input per circuit only.
+
+        Parameters
+        ----------
+        inductor_currents_A : array (n_circuits,)
+            ``I_L`` at the start [A].
+        gaps_m, voltages_V, gap_rates_m_per_s : array (n_steps, n_circuits)
+            Gap at the start of each step [m], voltage held over it [V] and gap rate over it
+            [m/s] (the gap moves linearly); the caller keeps the gaps consistent
+            (``gaps_m[k + 1] = gaps_m[k] + gap_rates_m_per_s[k] dt_s[k]`` for a
+            continuous path).
+        dt_s : array (n_steps,)
+            Step lengths [s] (>= 0; a step of 0 s gives the outputs at its start).  Runs
+            of steps with the same RK4 sub-step count share one compiled loop.
+        time_s : float
+            Time at the start [s] (for messages).
+        stop_at_flag : bool
+            False (default): a step the kernel flags (out of the maps, non-finite) is
+            diagnosed as :meth:`step` diagnoses it (raises, or warns with
+            ``extrapolate``); True: the run stops there (``n_good``) for the caller to
+            handle.
+
+        Returns
+        -------
+        BankRun
+
+        Raises
+        ------
+        InputError
+            Not a bank of reduced members with circuit gap inputs, bad shapes or step
+            lengths.
+        OutOfRangeError, SolverError
+            As :meth:`step`.
+        """
+        if not self._fast:
+            raise InputError("run_steps needs a bank of reduced members only with "
+                             "gap_inputs='circuit'")
+        nc = self.n_circuits
+        x0 = np.asarray(inductor_currents_A, dtype=float)
+        s, u, sd = (np.ascontiguousarray(v, dtype=float) for v in (gaps_m, voltages_V,
+                                                                     gap_rates_m_per_s))
+        h = np.ascontiguousarray(dt_s, dtype=float).ravel()
+        n = h.size
+        if x0.shape != (nc,) or any(v.shape != (n, nc) for v in (s, u, sd)):
+            raise InputError(f"run_steps: expected I_L ({nc},) and gaps, voltages and gap "
+                             f"rates of shape ({n}, {nc}) for {n} steps")
+        if n and not (np.all(h >= 0) and np.all(np.isfinite(h))):
+            raise InputError("run_steps: dt_s must be finite and >= 0 s")
+        # the sub-step count of every step (a step of 0 s takes one: it changes nothing)
+        per = self._substep_counts(h)
+        out = [np.full((n, nc), np.nan) for _ in range(3)]
+        k, x, t = 0, x0, float(time_s)
+        while k < n:
+            run = self._run_call(int(per[k]))
+            same = np.flatnonzero(per[k:k + RUN_CHUNK] != per[k])
+            m = int(same[0]) if same.size else min(RUN_CHUNK, n - k)
+            res = run(x, s[k:k + m], u[k:k + m], sd[k:k + m], h[k:k + m])
+            done = res.n_done
+            for o, r in zip(out, res.rows, strict=True):
+                o[k:k + done] = r[:done]
+            t_k = t + float(np.sum(h[k:k + done]))
+            if done < m:                 # step k + done was flagged
+                if stop_at_flag:
+                    return BankRun(out[0], out[1], out[2], n_good=k + done)
+                j = k + done
+                self._diagnose(s[j], sd[j], x if done == 0 else out[0][j - 1], u[j],
+                               res.rows[0][done],
+                               SimpleNamespace(res=res.extremes),  # type: ignore[arg-type]
+                               t_k, t_k + h[j])
+                for o, r in zip(out, res.rows, strict=True):    # warned only: accept it
+                    o[j] = r[done]
+                done += 1
+                t_k += float(h[j])
+            k += done
+            t = t_k
+            x = out[0][k - 1]
+        return BankRun(out[0], out[1], out[2], n_good=n)
+
+    def _run_call(self, substeps: int) -> _RunCall:
+        call = self._runs.get(substeps)
+        if call is None:
+            self._kernel(self.max_step_s * substeps)         # compiles (lanes or CasADi)
+            loop = self._lane_runs.get(substeps)
+            call = _RunCall(loop, self._kernels[substeps].f, self._reduced_idx.size)
+            self._runs[substeps] = call
+        return call
+
+    def _substep_counts(self, dt: np.ndarray) -> np.ndarray:
+        """RK4 sub-steps of steps of ``dt`` [s] (at most ``max_step_s`` each; the rule)."""
+        return np.maximum(1, np.ceil(dt / self.max_step_s * (1 - 1e-12))).astype(int)
+
     def _substeps(self, dt: float) -> int:
-        """RK4 sub-steps of a step of ``dt`` [s] (at most ``max_step_s`` each)."""
-        return max(1, math.ceil(dt / self.max_step_s * (1 - 1e-12)))
+        """RK4 sub-steps of one step of ``dt`` [s] (:meth:`_substep_counts`)."""
+        return int(self._substep_counts(np.array([dt]))[0])
 
     def _composable_substeps(self, dt: float, what: str) -> int:
         """Sub-steps of ``dt`` for the step functions other models compose (banks of
@@ -720,16 +903,44 @@ class MagnetBank:
                 + f"  {name}_k(a, r);\n"
                 + f"  if (res[3]) {{ for (k = 0; k < {nm}; ++k) res[3][k] = 0.0;\n"
                 + f"    for (c = 0; c < {n}; ++c) res[3][member[c]] += r[2][c]; }}\n"
-                + f"  if (res[4]) {{ double nb = 0.0; for (c = 0; c < {n}; ++c) nb += r[5][c]; "
+                + f"  if (res[4]) {{ double nb = 0.0; for (c = 0; c < {n}; ++c) nb += r[5][c] != 0.0; "
                   "res[4][0] = nb; }\n"
-                + f"  if (res[7]) for (c = 0; c < {n}; ++c) res[7][c] = a[1][c] + a[3][c] * a[4][0];\n")
+                + f"  if (res[7]) for (c = 0; c < {n}; ++c) res[7][c] = a[1][c] + a[3][c] * a[4][0];\n"
+                + f"  if (res[8]) for (c = 0; c < {n}; ++c) res[8][c] = r[5][c];\n")
+        # the time loop around the same step (MagnetBank.run_steps): up to RUN_CHUNK steps,
+        # step k reads the state row k - 1 of its own output and writes row k; it stops
+        # after the first flagged step (n_done = the good steps before it; that step's
+        # rows, extremes and flags stay in the outputs for the diagnosis)
+        ch = RUN_CHUNK
+        loop = (f"  const double *a[5];\n  double *r[6];\n  long k, c, ns;\n"
+                f"  for (k = 0; k < 7; ++k) if (!res[k]) return 1;\n"
+                f"  ns = arg[5][0] > 0 ? (long) arg[5][0] : 0;\n  if (ns > {ch}) ns = {ch};\n"
+                f"  r[3] = res[4]; r[4] = res[5]; r[5] = res[6];\n"
+                f"  for (c = 0; c < {n}; ++c) r[5][c] = 0.0;\n"
+                f"  for (k = 0; k < ns; ++k) {{\n"
+                f"    double nb = 0.0;\n"
+                f"    a[0] = k ? res[0] + (k - 1) * {n} : arg[0];\n"
+                f"    for (c = 1; c < 4; ++c) a[c] = arg[c] + k * {n};\n"
+                f"    a[4] = arg[4] + k;\n"
+                f"    for (c = 0; c < 3; ++c) r[c] = res[c] + k * {n};\n"
+                f"    {name}_k(a, r);\n"
+                f"    for (c = 0; c < {n}; ++c) nb += r[5][c] != 0.0;\n"
+                f"    if (nb != 0.0) break;\n  }}\n"
+                f"  res[3][0] = (double) k;\n")
         code = ("#include <math.h>\n" + kernel
                 + external_source(name, inputs=[("I_L", n), ("s", n), ("U", n), ("sdot", n),
                                                 ("h", 1)],
                                   outputs=[("I_L_next", n), ("I", n), ("F", n), ("member_F", nm),
                                            ("n_bad", 1), ("I_L_min", n), ("I_L_max", n),
-                                           ("s_next", n)],
-                                  body=body, work=10 * n + 1))
+                                           ("s_next", n), ("flags", n)],
+                                  body=body, work=10 * n + 1)
+                + external_source(f"{name}_run", inputs=[("I_L0", n), ("s", n * ch),
+                                                         ("U", n * ch), ("sdot", n * ch),
+                                                         ("h", ch), ("n_steps", 1)],
+                                  outputs=[("I_L", n * ch), ("I", n * ch), ("F", n * ch),
+                                           ("n_done", 1), ("I_L_min", n), ("I_L_max", n),
+                                           ("bad", n)],
+                                  body=loop))
         digest = hashlib.sha256(code.encode()).hexdigest()[:16]
         name = f"maglevkit_bank_lanes{substeps}_{digest}"
         code = code.replace("MAGLEVKIT_LANES_NAME", name)
@@ -738,6 +949,7 @@ class MagnetBank:
             lib = build_source(name, code.encode(), cache=cache,
                                flags=("-O3", "-shared", "-fPIC", "-ffp-contract=off", *flags))
             f = ca.external(name, str(lib))
+            self._lane_runs[substeps] = ca.external(f"{name}_run", str(lib))
         except (OSError, RuntimeError, subprocess.SubprocessError):
             return None                  # the CasADi path reports (or raises) the failure
         self.compiled = True
@@ -860,33 +1072,52 @@ class MagnetBank:
 
     def _diagnose(self, s: np.ndarray, sd: np.ndarray, i0: np.ndarray, u: np.ndarray,
                   x: np.ndarray, call: _StepCall, t0: float, t1: float) -> None:
-        """The kernel flagged a circuit: raise (or warn) with the details."""
+        """The kernel flagged circuits: turn their reason codes (:class:`StepFlag`, the
+        kernel's ``flags``) into the error (or, extrapolating, the warning).
+
+        Reasons are taken in the order of :class:`StepFlag`'s priority (inputs first, then
+        the gap path, the result, the sub-step currents), each for every circuit that has
+        it; the message of each reason is written here once.
+        """
         lo, hi = call.res[5].copy(), call.res[6].copy()   # sub-step extremes of this call
-        for what, arr, unit in (("voltages", u, "V"), ("gaps", s, "m"), ("gap_rates", sd, "m/s")):
-            if not np.isfinite(arr).all():
-                k = int(np.argmax(~np.isfinite(arr)))
-                raise InputError(f"{what} must be finite: circuit "
-                                 f"{self.circuit_names[int(self._reduced_idx[k])]!r} has "
-                                 f"{float(arr[k])!r} {unit}")
+        flags = np.asarray(call.res[8], dtype=float).astype(int)
         se = s + sd * (t1 - t0)
-        if (s <= 0).any() or (se <= 0).any():
-            k = int(np.argmax((s <= 0) | (se <= 0)))
-            raise InputError(f"gaps must stay > 0 m over the step: circuit "
-                             f"{self.circuit_names[int(self._reduced_idx[k])]!r} from "
-                             f"{float(s[k])!r} m to {float(se[k])!r} m")
-        self._check_range(np.minimum(s, se), np.maximum(s, se), i0, i0,
-                          f" over the step t = {t0:.6g}..{t1:.6g} s")
-        bad = ~(np.isfinite(x) & np.isfinite(u) & np.isfinite(sd))
-        if bad.any():
-            k = int(np.argmax(bad))
-            j = int(self._reduced_idx[k])
-            raise SolverError(f"non-finite value in circuit {self.circuit_names[j]!r}",
-                              time=t0, state={"I_L_A": float(i0[k]), "gap_m": float(s[k]),
-                                              "gap_rate_m_per_s": float(sd[k]),
-                                              "voltage_V": float(u[k])},
-                              reason="the RK4 step gave a non-finite current (or an input "
-                                     "was not finite)")
-        self._check_range(se, se, lo, hi, f" in an RK4 sub-step within t = {t0:.6g}..{t1:.6g} s")
+        for reason in StepFlag.by_priority():
+            for k in np.flatnonzero(flags & reason):
+                self._flag_error(StepFlag(reason), int(k), s, se, sd, i0, u, lo, hi, t0, t1)
+
+    def _flag_error(self, reason: StepFlag, k: int, s: np.ndarray, se: np.ndarray,
+                    sd: np.ndarray, i0: np.ndarray, u: np.ndarray, lo: np.ndarray,
+                    hi: np.ndarray, t0: float, t1: float) -> None:
+        """The message of one reason code of reduced circuit ``k`` (raises, or returns after
+        an extrapolation warning)."""
+        name = self.circuit_names[int(self._reduced_idx[k])]
+        if reason is StepFlag.INPUT_NOT_FINITE:
+            for what, arr, unit in (("voltages", u, "V"), ("gaps", s, "m"),
+                                    ("gap_rates", sd, "m/s")):
+                if not math.isfinite(float(arr[k])):
+                    raise InputError(f"{what} must be finite: circuit {name!r} has "
+                                     f"{float(arr[k])!r} {unit}")
+        elif reason is StepFlag.GAP_OUT_OF_RANGE:
+            if s[k] <= 0 or se[k] <= 0:
+                raise InputError(f"gaps must stay > 0 m over the step: circuit {name!r} from "
+                                 f"{float(s[k])!r} m to {float(se[k])!r} m")
+            low, high = min(s[k], se[k]), max(s[k], se[k])
+            self._range_error(k, float(low if low < self._lo_s[k] else high), float(i0[k]),
+                              f" over the step t = {t0:.6g}..{t1:.6g} s")
+        elif reason is StepFlag.RESULT_NOT_FINITE:
+            raise SolverError(f"non-finite value in circuit {name!r}", time=t0,
+                              state={"I_L_A": float(i0[k]), "gap_m": float(s[k]),
+                                     "gap_rate_m_per_s": float(sd[k]),
+                                     "voltage_V": float(u[k])},
+                              reason="the RK4 step gave a non-finite current")
+        elif not self._lo_i[k] <= i0[k] <= self._hi_i[k]:   # CURRENT_OUT_OF_RANGE at the start
+            self._range_error(k, float(s[k]), float(i0[k]),
+                              f" over the step t = {t0:.6g}..{t1:.6g} s")
+        else:                                     # CURRENT_OUT_OF_RANGE in a sub-step
+            cur = lo[k] if lo[k] < self._lo_i[k] else hi[k]
+            self._range_error(k, float(se[k]), float(cur),
+                              f" in an RK4 sub-step within t = {t0:.6g}..{t1:.6g} s")
 
     # ------------------------------------------------------------------ stepping interface
     def initial_state(self, *, gaps: Any, currents: Any, time: float = 0.0) -> BankState:
@@ -1026,7 +1257,7 @@ class MagnetBank:
         return new_state, BankOutputs(t1, coil, i_next.copy(), force, member_force, pf)
 
     def stepper(self, state: BankState, dt: float) -> BankStepper:
-        """A :class:`~maglevkit.models.stepper.BankStepper` that advances the bank from
+        """A :class:`~maglevkit.reduced.stepper.BankStepper` that advances the bank from
         ``state`` in steps of ``dt`` [s] in place: the co-simulation loop of a vehicle
         model or controller without the per-step objects and copies of :meth:`step`
         (the same compiled function and checks, bit-identical results).
@@ -1160,6 +1391,70 @@ def _circuit_forces(pole_force: np.ndarray, member: _Member) -> np.ndarray:
     pi = {p: k for k, p in enumerate(member.poles)}
     return np.array([sum(pole_force[pi[p]] for p in member.pole_groups[c])
                      for c in member.circuits])
+
+
+@dataclass
+class _RunResult:
+    rows: tuple[np.ndarray, np.ndarray, np.ndarray]    # I_L, I, F (m, n_circuits)
+    n_done: int
+    extremes: list[Any]          # as _StepCall.res: [5], [6] the flagged step's I_L extremes,
+                                 # [8] its reason codes
+
+
+class _RunCall:
+    """Up to :data:`RUN_CHUNK` steps of the compiled step in one call: the lanes' C loop
+    through bound buffers, else a CasADi ``mapaccum`` of the step (padded with steps of
+    length 0, which change nothing)."""
+
+    def __init__(self, loop: ca.Function | None, step: ca.Function, n: int) -> None:
+        self.n = n
+        ch = RUN_CHUNK
+        if loop is not None:
+            buf: Any
+            buf, self.eval = loop.buffer()
+            self.buf = buf
+            self.args = [np.zeros(n), np.zeros((ch, n)), np.zeros((ch, n)), np.zeros((ch, n)),
+                         np.zeros(ch), np.zeros(1)]
+            self.res = [np.zeros((ch, n)), np.zeros((ch, n)), np.zeros((ch, n)), np.zeros(1),
+                        np.zeros(n), np.zeros(n), np.zeros(n)]
+            for i, a in enumerate(self.args):
+                buf.set_arg(i, memoryview(a.reshape(-1)))  # type: ignore[arg-type]
+            for i, r in enumerate(self.res):
+                buf.set_res(i, memoryview(r.reshape(-1)))  # type: ignore[arg-type]
+            self.acc = None
+        else:
+            self.acc = step.mapaccum("maglevkit_bank_run", ch)
+
+    def __call__(self, x0: np.ndarray, s: np.ndarray, u: np.ndarray, sd: np.ndarray,
+                 h: np.ndarray) -> _RunResult:
+        m = h.size
+        if self.acc is None:
+            a = self.args
+            a[0][:] = x0
+            a[1][:m] = s
+            a[2][:m] = u
+            a[3][:m] = sd
+            a[4][:m] = h
+            a[5][0] = m
+            self.eval()
+            r = self.res
+            done = int(r[3][0])
+            return _RunResult((r[0][:m], r[1][:m], r[2][:m]), done,
+                              [None] * 5 + [r[4].copy(), r[5].copy(), None, r[6].copy()])
+        ch = RUN_CHUNK
+        pad = ch - m
+        end = s[-1] + sd[-1] * h[-1]
+
+        def padded(v: np.ndarray, fill: np.ndarray) -> np.ndarray:
+            return np.vstack([v, np.broadcast_to(fill, (pad, self.n))]).T if pad else v.T
+
+        res = self.acc(x0, padded(s, end), padded(u, u[-1]), padded(sd, np.zeros(self.n)),
+                       np.concatenate([h, np.zeros(pad)])[None, :])
+        x, coil, force = (np.asarray(res[j]).T[:m] for j in range(3))
+        flags = np.asarray(res[4]).ravel()[:m]
+        done = int(np.argmax(flags != 0)) if (flags != 0).any() else m
+        lo, hi, flagged = (np.asarray(res[j])[:, min(done, m - 1)] for j in (5, 6, 8))
+        return _RunResult((x, coil, force), done, [None] * 5 + [lo, hi, None, flagged])
 
 
 class _StepCall:

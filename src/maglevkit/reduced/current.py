@@ -41,14 +41,15 @@ from __future__ import annotations
 import math
 import warnings
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, TypeVar
 
 import casadi as ca
 import numpy as np
 
 from ..errors import InputError, OutOfRangeError, SolverError
+from ..models.compiled import COMPILE_MODES
+from ..models.inputs import check_initial_choice, check_step, simulation_inputs
 from ..validation import flag, real_array
-from .inputs import check_initial_choice, check_step, simulation_inputs
 
 __all__ = ["CurrentModel", "CurrentModelLinearization", "CurrentModelState", "CurrentOutputs",
            "ReducedSimulation", "eq8_coil_current", "eq8_eddy_branch_rhs", "eq8_rhs",
@@ -258,16 +259,34 @@ class CurrentModel:
         shielding eddy current ``I_e`` (``eddy_currents_A``, shape ``(n_circuits, 1)``).
         Not with ``eddy_modes > 0`` or ``eddy_resistance``.
     jit : bool
-        Compile the RK4 interval to machine code with CasADi's JIT (needs a C compiler on
-        the ``PATH``; ~0.3 s once per sub-step count).  About 1.8x faster RK4 intervals;
-        off by default so that the package runs without a compiler.  :class:`SolverError`
-        if compilation fails.
+        Compile the B-spline RK4 interval (``lookup="bspline"``) to machine code with
+        CasADi's JIT (needs a C compiler on the ``PATH``; ~0.3 s once per sub-step count).
+        :class:`SolverError` if compilation fails.  Implies ``lookup="bspline"``.
+    lookup : {"tables", "bspline"}
+        How RK4 (``method="rk4"``, ``eddy_modes=0``) reads the maps in :meth:`step` and
+        :meth:`simulate`.  ``"tables"`` (default): the compiled per-cell tables of
+        :class:`~maglevkit.reduced.bank.MagnetBank` (the same bicubic function as the
+        B-spline, equal to it within 1e-12 relative on the standard scenarios,
+        docs/decisions.md), one compiled call per step and the whole time loop of
+        :meth:`simulate` in C.  ``"bspline"``: CasADi's B-spline interpolants evaluated
+        per interval.  Where the tables cannot follow (a step leaves the maps, with
+        ``extrapolate`` too, or is not finite) the call is redone on the B-spline path,
+        which raises or warns as before; maps on a grid that is not regular (or has fewer
+        than 4 points) stay on the B-splines.  :meth:`linearize`, :attr:`ode` and
+        :attr:`outputs_fun` (AD, MPC), ``method="cvodes"``, ``eddy_modes > 0`` and
+        ``motion_eddy=True`` always use the B-splines.
+    compiled : {"auto", "always", "never"}
+        How the tables are compiled (as :class:`~maglevkit.reduced.bank.MagnetBank`):
+        ``"auto"`` (default) by the system C compiler, cached on disk, falling back to
+        CasADi's virtual machine with a warning; ``"never"`` the virtual machine;
+        ``"always"`` a :class:`SolverError` if compiling fails.
     """
 
     def __init__(self, maps: Any, *, extrapolate: bool = False, method: str = "rk4",
                  rtol: float = 1e-8, atol: float = 1e-10, max_step_s: float = 1e-3,
                  eddy_resistance: str | None = None, jit: bool = False,
-                 eddy_modes: int = 0, motion_eddy: bool = False) -> None:
+                 eddy_modes: int = 0, motion_eddy: bool = False, lookup: str = "tables",
+                 compiled: str = "auto") -> None:
         if not (hasattr(maps, "dataset") and hasattr(maps, "variable")):
             hint = (" (load a maps file with maglevkit.load_maps first)"
                     if isinstance(maps, (str, bytes)) or hasattr(maps, "__fspath__") else "")
@@ -284,6 +303,13 @@ class CurrentModel:
         self.rtol, self.atol = rtol, atol
         self.max_step_s = float(max_step_s)
         self.jit = flag(jit, "jit")
+        if lookup not in ("tables", "bspline"):
+            raise InputError(f"lookup = {lookup!r}; use 'tables' (compiled cell tables) or "
+                             "'bspline' (CasADi interpolants)")
+        if compiled not in COMPILE_MODES:
+            raise InputError(f"compiled = {compiled!r}; use one of {list(COMPILE_MODES)}")
+        self.lookup = lookup
+        self.compiled = compiled
         self.circuit_names: tuple[str, ...] = maps.circuits
         groups = maps.pole_groups
         self.gap_names: tuple[str, ...] = tuple(
@@ -474,6 +500,12 @@ class CurrentModel:
         self._fused: dict[int, ca.Function] = {}
         self._step_calls: dict[int, Any] = {}
         self._lin_fun: ca.Function | None = None
+        # the table kernel (eq. 8 with one R_ec, RK4): a bank of this one magnet, built
+        # on first use
+        self._use_tables = (lookup == "tables" and method == "rk4" and not m and not self.jit
+                            and not self.motion_eddy)
+        self._bank: Any = None
+        self._table_steps: dict[float, _TableStep] = {}
 
     # ------------------------------------------------------------------ helpers
     @property
@@ -813,6 +845,10 @@ class CurrentModel:
         if not isinstance(state, CurrentModelState):
             raise InputError(f"state must be a CurrentModelState (from CurrentModel."
                              f"initial_state or step), got {type(state).__name__}")
+        if self._use_tables:
+            done = self._step_tables(state, dt, voltages, gaps, gap_rates)
+            if done is not None:
+                return done
         dt = check_step(dt)
         u = _per_circuit(voltages, self.circuit_names, "voltages")
         g = state.gaps_m if gaps is None else _per_gap(gaps, self.gap_names, positive=True)
@@ -852,6 +888,89 @@ class CurrentModel:
             self._check_range(x[self._sl][None, :], x[:nc][None, :], np.array([t1]))
         new = CurrentModelState(t1, x[:nc], g + gd * dt, self._eddy_of(x))   # None for eq. 8
         return new, CurrentOutputs(t1, coil, x[:nc].copy(), fc, self._share @ fc, float(fc.sum()))
+
+    # ------------------------------------------------------------------ table kernel
+    def _table_bank(self) -> Any:
+        """The bank of this one magnet whose compiled step and time loop the table path
+        runs (built on first use; its tables hold the same bicubic maps)."""
+        if self._bank is None:
+            from .bank import MagnetBank  # the bank builds on this module
+
+            try:
+                self._bank = MagnetBank({"magnet": self}, compiled=self.compiled,
+                                        max_step_s=self.max_step_s)
+            except InputError:
+                # maps the cell tables cannot hold (a grid that is not regular, or shorter
+                # than 4 points): the B-splines take them, as before
+                self._use_tables = False
+                return None
+        return self._bank
+
+    def _run_tables(self, times: np.ndarray, s: np.ndarray, u: np.ndarray, sd: np.ndarray,
+                    i0: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
+        """``I_L``, coil currents and circuit forces (n_t, n_c) on the grid from the
+        compiled time loop, or None where the tables cannot follow (a flagged step): then
+        the B-spline path runs.
+
+        Step 0 has length 0: it gives the outputs at ``t_0`` with ``u[0]``; step ``k``
+        runs from ``t_k-1`` with the substitute gap ``s[k-1]``, its rate and ``u[k-1]``.
+        """
+        bank = self._table_bank()
+        if bank is None:
+            return None
+        h = np.empty(times.size)
+        h[0] = 0.0
+        h[1:] = np.diff(times)
+        zero = np.zeros((1, self.n_circuits))
+        run = bank.run_steps(i0, np.vstack((s[:1], s[:-1])), np.vstack((u[:1], u[:-1])),
+                             np.vstack((zero, sd)), h, time_s=float(times[0]),
+                             stop_at_flag=True)
+        if run.n_good < times.size:
+            return None
+        return run.inductor_currents_A, run.currents_A, run.circuit_force_N
+
+    def _step_tables(self, state: CurrentModelState, dt: Any, voltages: Any, gaps: Any,
+                     gap_rates: Any) -> tuple[CurrentModelState, CurrentOutputs] | None:
+        """:meth:`step` on the compiled table kernel, or None (the caller then takes the
+        B-spline path, which validates, raises or warns): inputs other than finite
+        float arrays of the right shape are converted first; a step the kernel flags
+        (out of the maps, not finite) or gaps that are or become <= 0 give None."""
+        if state.eddy_currents_A is not None:
+            return None                        # not a state of this model: say so there
+        if not (type(dt) is float and 0.0 < dt < math.inf):
+            dt = check_step(dt)
+        nc, ng = self.n_circuits, len(self.gap_names)
+        u = (voltages if type(voltages) is np.ndarray and voltages.dtype == np.float64
+             and voltages.shape == (nc,) else _per_circuit(voltages, self.circuit_names,
+                                                           "voltages"))
+        g = (state.gaps_m if gaps is None else gaps if type(gaps) is np.ndarray
+             and gaps.dtype == np.float64 and gaps.shape == (ng,)
+             else _per_gap(gaps, self.gap_names, positive=True))
+        if type(gap_rates) is float:
+            gd = np.full(ng, gap_rates)
+        elif type(gap_rates) is np.ndarray and gap_rates.dtype == np.float64 and \
+                gap_rates.shape == (ng,):
+            gd = gap_rates
+        else:
+            gd = _per_gap(gap_rates, self.gap_names, positive=False)
+        call = self._table_steps.get(dt)
+        if call is None:
+            bank = self._table_bank()
+            if bank is None:
+                return None
+            call = _TableStep(bank.step_kernel(dt), self._avg, self._share)
+            if len(self._table_steps) > 16:
+                self._table_steps.clear()
+            self._table_steps[dt] = call
+        r = call(state.inductor_currents_A, g, u, gd, dt)
+        if r is None:
+            return None       # flagged: the B-spline path raises, warns or integrates
+        x, coil, force, pole, total, g1, x_out = r
+        t1 = state.time_s + dt
+        return (_new(CurrentModelState, time_s=t1, inductor_currents_A=x, gaps_m=g1,
+                     eddy_currents_A=None),
+                _new(CurrentOutputs, time_s=t1, currents_A=coil, inductor_currents_A=x_out,
+                     circuit_force_N=force, pole_force_N=pole, force_N=float(total[0])))
 
     def _integrate(self, t: np.ndarray, x0: np.ndarray, uu: np.ndarray
                    ) -> tuple[np.ndarray, tuple[np.ndarray, np.ndarray] | None]:
@@ -913,6 +1032,18 @@ class CurrentModel:
         s = self.substitute_gaps(g)
         self._check_range(s, np.broadcast_to(i0, s.shape), times)
         sd = self.substitute_gaps(secant)
+        if self._use_tables:
+            run = self._run_tables(times, s, u, sd, i0)
+            if run is not None:
+                il, coil_t, fc = run
+                final = CurrentModelState(float(times[-1]), il[-1].copy(), g[-1].copy(), None)
+                return ReducedSimulation(
+                    time_s=times, gaps_m=g, gap_rates_m_per_s=np.vstack((secant, secant[-1:])),
+                    voltages_V=np.vstack((u[:-1], u[-2:-1])), currents_A=coil_t,
+                    inductor_currents_A=il, circuit_force_N=fc,
+                    pole_force_N=fc @ self._share.T, force_N=fc.sum(axis=1),
+                    gap_names=self.gap_names, circuit_names=self.circuit_names,
+                    final_state=final)
         xs, outs = self._integrate(times, np.concatenate([i0, s[0], e0]),
                                    np.concatenate([u[:-1], sd], axis=1).T)
         nc = self.n_circuits
@@ -949,6 +1080,71 @@ def _jit_compile(f: ca.Function) -> ca.Function:
         raise SolverError("JIT compilation of the current model failed (jit=True needs a C "
                           "compiler such as gcc on the PATH; use jit=False otherwise)",
                           reason=_last_line(str(exc))) from None
+
+
+class _TableStep:
+    """One step on the bank's compiled table kernel with everything around it in one
+    CasADi call through bound NumPy buffers: substitute gaps and rates from the pole
+    values (``avg``), the end gaps, the pole forces (``share``), the total force and one
+    flag (the kernel's, plus pole gaps that are or become <= 0).
+
+    ``(I_L, pole gaps, U, pole gap rates, h)`` -> one new array holding ``I_L'`` twice
+    (state and outputs), ``I``, ``F``, the pole forces, the total force and the end pole
+    gaps, or None when the step is flagged.
+    """
+
+    def __init__(self, kernel: ca.Function, avg: np.ndarray, share: np.ndarray) -> None:
+        nc, ng = avg.shape
+        x, u = ca.MX.sym("I_L", nc), ca.MX.sym("U", nc)
+        g, gd, h = ca.MX.sym("gaps", ng), ca.MX.sym("gap_rates", ng), ca.MX.sym("h")
+        res = kernel.call({"I_L": x, "s": ca.mtimes(ca.DM(avg), g), "U": u,
+                           "sdot": ca.mtimes(ca.DM(avg), gd), "h": h})
+        g1 = g + gd * h
+        flag = res["n_bad"] + ca.sum1(g <= 0) + ca.sum1(g1 <= 0)
+        force = res["F"]
+        outs = [res["I_L_next"], res["I"], force, ca.mtimes(ca.DM(share), force),
+                res["member_F"], g1, res["I_L_next"], flag]
+        f = ca.Function("current_model_table_step", [x, g, u, gd, h], outs)
+        buf: Any
+        buf, self.eval = f.buffer()
+        self.buf = buf
+        self.args = [np.zeros(f.nnz_in(i)) for i in range(f.n_in())]
+        sizes = [f.nnz_out(i) for i in range(f.n_out() - 1)]
+        self.block = np.zeros(sum(sizes))
+        ends = np.cumsum([0, *sizes])
+        self.slices = [slice(int(a), int(b)) for a, b in zip(ends[:-1], ends[1:], strict=True)]
+        self.flag = np.zeros(1)
+        for i, a in enumerate(self.args):
+            buf.set_arg(i, memoryview(a))  # type: ignore[arg-type]
+        for i, sl in enumerate(self.slices):
+            buf.set_res(i, memoryview(self.block[sl]))  # type: ignore[arg-type]
+        buf.set_res(len(self.slices), memoryview(self.flag))  # type: ignore[arg-type]
+
+    def __call__(self, i: np.ndarray, g: np.ndarray, u: np.ndarray, gd: np.ndarray,
+                 h: float) -> list[np.ndarray] | None:
+        a = self.args
+        a[0][:] = i
+        a[1][:] = g
+        a[2][:] = u
+        a[3][:] = gd
+        a[4][0] = h
+        self.eval()
+        if self.flag[0]:
+            return None
+        b = self.block.copy()
+        return [b[sl] for sl in self.slices]
+
+
+_T = TypeVar("_T")
+
+
+def _new(cls: type[_T], **fields: Any) -> _T:
+    """A frozen dataclass instance with every field given, without the per-field
+    ``object.__setattr__`` of its generated ``__init__`` (the hot path of :meth:`step`);
+    equal to ``cls(**fields)`` and as frozen."""
+    obj = object.__new__(cls)
+    obj.__dict__.update(fields)
+    return obj
 
 
 class _PlainCall:
@@ -994,7 +1190,7 @@ def eq8_rhs(i_l: Any, u: Any, gap_rate: Any, ltilde: Any, dl_ds: Any, r_el: Any,
     """Eq. 8: ``dI_L/dt = [(U - R_el I_L)/a - dL/ds I_L ds/dt] / L~`` with ``a = 1 + R_el/R_ec``.
 
     Works element-wise on floats, NumPy arrays and CasADi expressions; the one expression
-    of eq. 8 that :class:`CurrentModel` and :class:`~maglevkit.models.bank.MagnetBank` use.
+    of eq. 8 that :class:`CurrentModel` and :class:`~maglevkit.reduced.bank.MagnetBank` use.
     """
     return ((u - r_el * i_l) / a - dl_ds * i_l * gap_rate) / ltilde
 

@@ -1,0 +1,251 @@
+"""CurrentModel on the bank's compiled cell tables vs its B-spline path (issue 22, item 2)."""
+
+from __future__ import annotations
+
+import warnings
+
+import numpy as np
+import pytest
+
+import maglevkit as mk
+from maglevkit.compare import standard_scenarios
+from maglevkit.errors import InputError, MaglevkitError, OutOfRangeError
+from maglevkit.models.inputs import sample_input
+from maglevkit.reduced.current import CurrentModel
+
+GAPS = np.linspace(0.006, 0.016, 6)
+CURRENTS = np.linspace(0.0, 60.0, 7)
+# The tables hold the same bicubic function as CasADi's B-spline (docs/bank.md: 4e-14
+# relative); the two paths differ only in rounding (map evaluation, and the bank's RK4
+# stage gaps s + sdot t against the B-spline path's gap state).  Measured largest
+# difference over the full standard scenarios of every bundled magnet: 3.7e-14 relative
+# (docs/decisions.md); bound 1e-12, the bank's own bound against CurrentModel.
+REL = 1e-12
+MAGNETS = ("u-magnet", "tr09-standard", "tr09-bow", "tr-guidance")    # every bundled one
+
+
+@pytest.fixture(scope="module")
+def all_maps() -> dict[str, tuple[mk.Magnet, mk.CharacteristicMaps]]:
+    out = {}
+    for name in MAGNETS:
+        mag = mk.load_magnet(name)
+        out[name] = (mag, mk.build_maps(mag, gaps=GAPS, currents=CURRENTS, progress=False))
+    return out
+
+
+def _rel(a: np.ndarray, b: np.ndarray) -> float:
+    return float(np.max(np.abs(a - b)) / max(np.max(np.abs(b)), 1e-300))
+
+
+def _no_bspline(monkeypatch: pytest.MonkeyPatch) -> None:
+    """Make the B-spline RK4 path fail, so that a passing call ran on the tables."""
+    def fail(*args: object, **kwargs: object) -> None:
+        raise AssertionError("the B-spline path ran")
+
+    monkeypatch.setattr(CurrentModel, "_integrate", fail)
+    monkeypatch.setattr(CurrentModel, "_step_call", fail)
+
+
+def _nominal(mag: mk.Magnet) -> tuple[float, float]:
+    """The magnet file's operating point; the U-magnet has none: 10 mm, 20 A (compare's)."""
+    s0, i0 = getattr(mag, "nominal_gap", None), getattr(mag, "nominal_current", None)
+    return (0.010, 20.0) if s0 is None or i0 is None else (float(s0), float(i0))
+
+
+@pytest.mark.parametrize("name", MAGNETS)
+def test_tables_equal_bspline_on_the_standard_scenarios(all_maps, name: str,
+                                                        monkeypatch: pytest.MonkeyPatch) -> None:
+    mag, maps = all_maps[name]
+    s0, i0 = _nominal(mag)
+    spline = CurrentModel(maps, lookup="bspline")
+    tables = CurrentModel(maps)
+    scenarios = [sc for sc in standard_scenarios(mag, gap_m=s0, current_A=i0) if sc.kind == "open"]
+    assert len(scenarios) >= 6
+    refs = []
+    for sc in scenarios:
+        span = (0.0, min(sc.duration_s, 0.3))
+        refs.append((sc, span, mk.simulate(spline, span, dt=sc.dt_s, gaps=sc.gaps,
+                                           voltages=sc.voltages, initial_currents=i0)))
+    _no_bspline(monkeypatch)
+    for sc, span, ref in refs:
+        res = mk.simulate(tables, span, dt=sc.dt_s, gaps=sc.gaps, voltages=sc.voltages,
+                          initial_currents=i0)
+        for field in ("currents_A", "inductor_currents_A", "circuit_force_N", "pole_force_N",
+                      "force_N"):
+            assert _rel(getattr(res, field), getattr(ref, field)) <= REL, (sc.name, field)
+        assert np.ptp(ref.currents_A) > 1e-3 * np.max(np.abs(ref.currents_A)), sc.name
+        assert res.final_state.time_s == ref.final_state.time_s
+        assert _rel(res.final_state.inductor_currents_A,
+                    ref.final_state.inductor_currents_A) <= REL
+
+
+@pytest.mark.parametrize("name", ["u-magnet", "tr09-standard"])
+def test_step_on_tables_equals_bspline_step(all_maps, name: str,
+                                            monkeypatch: pytest.MonkeyPatch) -> None:
+    mag, maps = all_maps[name]
+    s0, i0 = _nominal(mag)
+    spline = CurrentModel(maps, lookup="bspline")
+    tables = CurrentModel(maps)
+    sc = standard_scenarios(mag, gap_m=s0, current_A=i0)[3]          # gap sine 5 Hz
+    t = np.arange(0.0, 0.2 + 1e-9, 1e-3)
+    g = sample_input(sc.gaps, t, spline.gap_names, "gaps", "m")
+    u = mag.network.resistances * i0 * 1.1
+    refs = []
+    st = spline.initial_state(gaps=g[0], currents=i0)
+    for k in range(t.size - 1):
+        st, out = spline.step(st, 1e-3, u, gaps=g[k], gap_rates=(g[k + 1] - g[k]) / 1e-3)
+        refs.append(out)
+    _no_bspline(monkeypatch)
+    st = tables.initial_state(gaps=g[0], currents=i0)
+    for k in range(t.size - 1):
+        st, out = tables.step(st, 1e-3, u, gaps=g[k], gap_rates=(g[k + 1] - g[k]) / 1e-3)
+        ref = refs[k]
+        assert out.time_s == ref.time_s
+        assert _rel(out.currents_A, ref.currents_A) <= REL
+        assert _rel(out.circuit_force_N, ref.circuit_force_N) <= REL
+        assert _rel(out.pole_force_N, ref.pole_force_N) <= REL
+        assert out.force_N == pytest.approx(ref.force_N, rel=REL)
+    # the step's state and outputs are separate arrays
+    assert st.inductor_currents_A is not out.inductor_currents_A
+    assert np.array_equal(st.inductor_currents_A, out.inductor_currents_A)
+    assert st.gaps_m == pytest.approx(g[-1], rel=1e-12)
+
+
+def test_leaving_the_maps_gives_the_bspline_messages(all_maps) -> None:
+    _, maps = all_maps["u-magnet"]
+    tables, spline = CurrentModel(maps), CurrentModel(maps, lookup="bspline")
+    messages = []
+    for model in (tables, spline):
+        st = model.initial_state(gaps=0.010, currents=20.0)
+        with pytest.raises(MaglevkitError) as step_err:
+            model.step(st, 1e-3, 1e4)                       # the current leaves the maps
+        with pytest.raises(OutOfRangeError) as sim_err:
+            model.simulate(np.linspace(0.0, 0.05, 51), gaps=0.010,
+                           voltages=lambda t, r=model.resistance_ohm: 20.0 * r * (1 + 400 * t))
+        with pytest.raises(InputError) as nan_err:
+            model.step(st, 1e-3, np.array([np.nan]))
+        with pytest.raises(InputError) as neg_err:
+            model.step(st, 1e-3, 20.0, gaps=np.array([0.010, -0.001]))
+        messages.append([(type(e.value), str(e.value))
+                         for e in (step_err, sim_err, nan_err, neg_err)])
+    assert messages[0] == messages[1]
+    assert messages[0][0][0] is OutOfRangeError and "currents 0..60 A" in messages[0][0][1]
+
+
+def test_extrapolation_falls_back_to_the_bspline_path(all_maps) -> None:
+    _, maps = all_maps["u-magnet"]
+    tables = CurrentModel(maps, extrapolate=True)
+    spline = CurrentModel(maps, extrapolate=True, lookup="bspline")
+    res = []
+    for model in (tables, spline):
+        with pytest.warns(UserWarning, match="extrapolating"):
+            res.append(model.simulate(np.linspace(0.0, 0.02, 21), gaps=0.0165, voltages=20.0,
+                                      initial_currents=20.0))
+    assert np.array_equal(res[0].circuit_force_N, res[1].circuit_force_N)
+
+
+def test_tables_need_rk4_without_eddy_modes_and_a_known_lookup(all_maps) -> None:
+    _, maps = all_maps["u-magnet"]
+    with pytest.raises(InputError, match="lookup = 'fast'.*'tables'.*'bspline'"):
+        CurrentModel(maps, lookup="fast")
+    with pytest.raises(InputError, match="compiled = 'yes'"):
+        CurrentModel(maps, compiled="yes")
+    # CVODES keeps its own path and still agrees with RK4 on the tables
+    cv = CurrentModel(maps, method="cvodes")
+    rk = CurrentModel(maps)
+    a = cv.simulate(np.linspace(0.0, 0.05, 51), gaps=0.010, voltages=25.0, initial_currents=20.0)
+    b = rk.simulate(np.linspace(0.0, 0.05, 51), gaps=0.010, voltages=25.0, initial_currents=20.0)
+    # RK4 at 1 ms sub-steps stays within 3e-6 of CVODES (CurrentModel docstring)
+    assert _rel(b.currents_A, a.currents_A) <= 1e-5
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        CurrentModel(maps, compiled="never").simulate(np.linspace(0.0, 0.01, 11), gaps=0.010,
+                                                      voltages=25.0, initial_currents=20.0)
+
+
+@pytest.mark.parametrize("codegen", ["lanes", "casadi"])
+def test_bank_run_steps_equals_its_stepper_bit_for_bit(all_maps, codegen: str) -> None:
+    from maglevkit.reduced.bank import RUN_CHUNK, MagnetBank
+
+    maps = {"a": all_maps["tr09-standard"][1], "b": all_maps["u-magnet"][1]}
+    bank = MagnetBank(maps, codegen=codegen)
+    n = RUN_CHUNK + 300                     # two calls of the compiled loop
+    rng = np.random.default_rng(3)
+    t = np.arange(n + 1) * 1e-3
+    g = 0.010 + 1e-3 * np.sin(2 * np.pi * 5 * t)[:, None] * rng.uniform(0.5, 1.0, 3)
+    u = bank.resistance_ohm * rng.uniform(18.0, 30.0, (n, 3))
+    rates = np.diff(g, axis=0) / 1e-3
+    i0 = np.full(3, 20.0)
+    run = bank.run_steps(i0, g[:-1], u, rates, np.full(n, 1e-3))
+    stepper = bank.stepper(bank.initial_state(gaps=g[0], currents=i0), 1e-3)
+    for k in range(n):
+        stepper.advance(u[k], g[k], rates[k])
+        assert np.array_equal(run.inductor_currents_A[k], stepper.inductor_currents_A)
+        assert np.array_equal(run.currents_A[k], stepper.currents_A)
+        assert np.array_equal(run.circuit_force_N[k], stepper.circuit_force_N)
+    assert run.n_good == n
+    # steps of 2 ms take two RK4 sub-steps: a run of mixed lengths equals step() per step
+    h = np.where(np.arange(n) % 500 < 250, 1e-3, 2e-3)[:600]
+    mixed = bank.run_steps(i0, g[:600], u[:600], rates[:600] * 0.5, h)
+    state = bank.initial_state(gaps=g[0], currents=i0)
+    for k in range(600):
+        state, out = bank.step(state, float(h[k]), u[k], gaps=g[k], gap_rates=rates[k] * 0.5)
+        assert np.array_equal(mixed.circuit_force_N[k], out.circuit_force_N)
+    # a step that leaves the maps: step()'s diagnosis, or a stop at it
+    u_bad = u[:20].copy()
+    u_bad[12, 1] = 1e5
+    with pytest.raises(OutOfRangeError, match=r"member 'a', circuit .*RK4 sub-step within "
+                                              r"t = 0\.012\.\.0\.013 s"):
+        bank.run_steps(i0, g[:20], u_bad, rates[:20], np.full(20, 1e-3))
+    stop = bank.run_steps(i0, g[:20], u_bad, rates[:20], np.full(20, 1e-3), stop_at_flag=True)
+    assert stop.n_good == 12
+    assert np.array_equal(stop.circuit_force_N[:12], run.circuit_force_N[:12])
+    assert np.isnan(stop.circuit_force_N[12:]).all()
+    with pytest.raises(InputError, match=r"run_steps: expected I_L \(3,\)"):
+        bank.run_steps(i0, g[:20, :2], u[:20], rates[:20], np.full(20, 1e-3))
+
+
+def test_kernel_reason_codes_name_each_reason(all_maps) -> None:
+    from maglevkit.reduced.bank import MagnetBank, StepFlag
+
+    maps = all_maps["u-magnet"][1]
+    bank = MagnetBank({"a": maps, "b": maps, "c": maps, "d": maps})
+    f = bank.step_kernel(1e-3)
+    i = np.array([20.0, 20.0, 70.0, 20.0])          # c starts above the maps' 60 A
+    s = np.array([0.010, 0.030, 0.010, 0.010])      # b outside the 6-16 mm maps
+    u = bank.resistance_ohm * np.array([20.0, 20.0, 20.0, np.nan])    # d: NaN voltage
+    res = f.call({"I_L": i, "s": s, "U": u, "sdot": np.zeros(4), "h": 1e-3})
+    flags = np.asarray(res["flags"]).ravel()
+    assert flags[0] == 0
+    assert flags[1] == StepFlag.GAP_OUT_OF_RANGE
+    assert flags[2] == StepFlag.CURRENT_OUT_OF_RANGE
+    assert int(flags[3]) & StepFlag.INPUT_NOT_FINITE
+    assert float(res["n_bad"]) == 3                 # a count of circuits, not of reasons
+    # the step turns the codes into messages, inputs first
+    state = bank.initial_state(gaps=0.010, currents=20.0)
+    with pytest.raises(InputError, match=r"voltages must be finite: circuit 'd/coil'"):
+        bank.step(state, 1e-3, u)
+    with pytest.raises(OutOfRangeError, match=r"member 'b'.*over the step.*gap 0\.03 m"):
+        bank.step(state, 1e-3, u[0], gaps=s)
+    assert [int(r) for r in StepFlag.by_priority()] == [4, 1, 8, 2]
+
+
+def test_maps_the_tables_cannot_hold_stay_on_the_bsplines() -> None:
+    import dataclasses
+
+    mag = mk.load_magnet("u-magnet")
+    regular = mk.build_maps(mag, gaps=np.linspace(0.006, 0.016, 5), currents=CURRENTS,
+                            progress=False)
+    # as an old maps file on a grid that is not equidistant would load (build_maps refuses
+    # such grids now; load_maps does not check)
+    ds = regular.dataset.assign_coords(gap=[0.006, 0.008, 0.011, 0.013, 0.016])
+    maps = dataclasses.replace(regular, dataset=ds)
+    with pytest.raises(InputError, match="regular"):
+        mk.MagnetBank({"m": maps})
+    tables, spline = CurrentModel(maps), CurrentModel(maps, lookup="bspline")
+    runs = [m.simulate(np.linspace(0.0, 0.05, 51), gaps=0.010, voltages=25.0,
+                       initial_currents=20.0) for m in (tables, spline)]
+    assert np.array_equal(runs[0].currents_A, runs[1].currents_A)
+    st = tables.initial_state(gaps=0.010, currents=20.0)
+    st, out = tables.step(st, 1e-3, 25.0)
+    assert out.currents_A[0] == pytest.approx(runs[1].currents_A[1, 0], rel=1e-12)
