@@ -119,3 +119,8 @@ def stop_pool(pool: Executor, timeout_s: float = 5.0) -> None:
         if old is not None:
             signal.signal(signal.SIGINT, old)
     pool.shutdown(wait=False)
+    # let the pool's manager thread finish (it sees the dead workers at once): else its
+    # closing raced the interpreter's exit hook, "OSError: Bad file descriptor" on stderr
+    manager = getattr(pool, "_executor_manager_thread", None)
+    if manager is not None:
+        manager.join(timeout=timeout_s)
