@@ -26,17 +26,21 @@ from __future__ import annotations
 
 import argparse
 import math
+import sys
 import time
 from dataclasses import dataclass
 from pathlib import Path
 from types import SimpleNamespace
 
 import numpy as np
-import scipy.sparse.linalg as spla
 
 import maglevkit as mk
 
-MU0 = 4e-7 * math.pi
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from fem_common import MU0, Reluctivity, SPDSolver, cap, grid_1d, solve_nonlinear  # noqa: E402
+
+# old names (benchmarks/fem_u_magnet_transient.py imports them)
+_grid_1d, _cap, _SPDSolver = grid_1d, cap, SPDSolver
 
 # ---------------------------------------------------------------------------------------
 # geometry (u-magnet.toml) - x across the magnet (centred), y up; pole faces at y = 0
@@ -75,26 +79,6 @@ GEOM = Geometry()
 GEOM2 = Geometry(pole_width=0.025, leg_height=0.065, yoke_thickness=0.025, window_width=0.070,
                  coil_thickness=0.012, coil_height=0.045, coil_gap_to_pole_face=0.008,
                  rail_thickness=0.025, rail_width=0.150)
-
-
-def _grid_1d(points: np.ndarray, sizes: np.ndarray, lo: float, hi: float, hmax: float,
-             grade: float) -> np.ndarray:
-    """Graded 1-D grid on [lo, hi] containing all ``points`` (sizes ``sizes`` there).
-
-    Local target size ``h(x) = min(hmax, min_i(sizes_i + grade |x - points_i|))``; each
-    interval between consecutive break points gets ``ceil(int dx/h)`` cells, distributed
-    by inverting the cumulative ``int dx/h``.
-    """
-    brk = np.unique(np.concatenate([[lo, hi], points[(points > lo) & (points < hi)]]))
-    out = [np.array([lo])]
-    for a, b in zip(brk[:-1], brk[1:], strict=True):
-        t = np.linspace(a, b, 2001)
-        h = np.minimum(hmax, np.min(sizes[:, None] + grade * np.abs(t[None, :] - points[:, None]),
-                                    axis=0))
-        cum = np.concatenate([[0.0], np.cumsum(0.5 * (1 / h[1:] + 1 / h[:-1]) * np.diff(t))])
-        n = max(1, int(math.ceil(cum[-1] - 1e-9)))
-        out.append(np.interp(np.linspace(0, cum[-1], n + 1)[1:], cum, t))
-    return np.concatenate(out)
 
 
 def build_mesh(s: float, refine: int = 1, s_mesh: float | None = None, g: Geometry = GEOM):
@@ -138,17 +122,6 @@ def build_mesh(s: float, refine: int = 1, s_mesh: float | None = None, g: Geomet
     return MeshTri.init_tensor(x, y)
 
 
-def _cap(x: np.ndarray, lo: float, hi: float, h: float) -> np.ndarray:
-    """Subdivide cells of the sorted grid ``x`` inside [lo, hi] longer than ``h``."""
-    out = [x[:1]]
-    for a, b in zip(x[:-1], x[1:], strict=True):
-        n = 1
-        if a >= lo - 1e-12 and b <= hi + 1e-12 and b - a > h:
-            n = int(math.ceil((b - a) / h))
-        out.append(np.linspace(a, b, n + 1)[1:])
-    return np.concatenate(out)
-
-
 def regions(mesh, s: float, g: Geometry = GEOM) -> tuple[np.ndarray, np.ndarray]:
     """Per element of the half model (x >= 0): iron mask and coil sign (+1/-1/0).
 
@@ -182,41 +155,6 @@ def body_regions(mesh, s: float, g: Geometry = GEOM
 # ---------------------------------------------------------------------------------------
 
 
-class Reluctivity:
-    """nu(B) = H(B)/B of the material (or a constant mu_r), scaled by mu0 (nu_r)."""
-
-    def __init__(self, mu_r: float | None = None, material: str = "AISI 1008") -> None:
-        self.mu_r = mu_r
-        self.mat = mk.get_material(material)
-        # co-energy table w'(B) = B H - int_0^B H dB (for the virtual-work check)
-        b = np.concatenate([np.linspace(0.0, 3.0, 30001), np.linspace(3.0, 20.0, 3401)[1:]])
-        h = self._h(b)
-        w = np.concatenate([[0.0], np.cumsum(0.5 * (h[1:] + h[:-1]) * np.diff(b))])
-        self._b, self._wc = b, b * h - w
-
-    def _h(self, b: np.ndarray) -> np.ndarray:
-        if self.mu_r is not None:
-            return b / (MU0 * self.mu_r)
-        return np.asarray(self.mat.field_strength(b), dtype=float)
-
-    def nu_r(self, b: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Return mu0*nu(B) and mu0*(dnu/dB)/B (the Newton coefficient)."""
-        if self.mu_r is not None:
-            return np.full_like(b, 1.0 / self.mu_r), np.zeros_like(b)
-        bb = np.maximum(b, 1e-6)
-        db = 1e-6 * np.maximum(bb, 1e-2)
-        hp, hm = self._h(bb + db), self._h(bb - db)
-        h = self._h(bb)
-        nu = h / bb
-        dnu_db = ((hp - hm) / (2 * db) - nu) / bb       # d(H/B)/dB = (H' - H/B)/B
-        return MU0 * nu, MU0 * dnu_db / bb
-
-    def coenergy_density(self, b: np.ndarray) -> np.ndarray:
-        if self.mu_r is not None:
-            return b**2 / (2 * MU0 * self.mu_r)
-        return np.interp(b, self._b, self._wc)
-
-
 # ---------------------------------------------------------------------------------------
 # solver
 # ---------------------------------------------------------------------------------------
@@ -240,24 +178,11 @@ class FemResult:
     gap_split_Wb: tuple[float, float, float]  # mid-gap line flux: window side, pole, outside
 
 
-class _SPDSolver:
-    """Sparse direct solves of the symmetric positive definite Newton systems (SuperLU)."""
-
-    def __init__(self) -> None:
-        self.factorisations = 0
-
-    def solve(self, K, b: np.ndarray) -> np.ndarray:
-        lu = spla.splu(K.tocsc(), permc_spec="MMD_AT_PLUS_A", options={"SymmetricMode": True})
-        self.factorisations += 1
-        return lu.solve(b)
-
-
 def solve_full(s: float, current: float, *, refine: int = 1, mu_r: float | None = None,
                s_mesh: float | None = None, order: int = 2, tol: float = 1e-8,
                g: Geometry = GEOM, A0: np.ndarray | None = None,
                current_prev: float | None = None, verbose: bool = False) -> FemResult:
-    from skfem import Basis, BilinearForm, ElementTriP1, ElementTriP2, LinearForm, asm
-    from skfem.helpers import dot, grad
+    from skfem import Basis, ElementTriP1, ElementTriP2, LinearForm, asm
 
     mesh = build_mesh(s, refine, s_mesh, g)
     iron, sign = regions(mesh, s, g)
@@ -277,65 +202,17 @@ def solve_full(s: float, current: float, *, refine: int = 1, mu_r: float | None 
     bsign = asm(load, basis, sg=sgn_q)                 # int sign_k v over the coil sides
     rhs = jr * bsign
 
-    @BilinearForm
-    def jac(u, v, w):
-        return w.nu * dot(grad(u), grad(v)) + w.c * dot(w.ga, grad(u)) * dot(w.ga, grad(v))
-
-    @LinearForm
-    def resid(v, w):
-        return w.nu * dot(w.ga, grad(v))
-
     # A = 0 on the outer boundary; natural condition (B_y = 0) on the symmetry line x = 0
     D = basis.get_dofs(mesh.facets_satisfying(lambda p: p[0] > 1e-9, boundaries_only=True))
     free = np.setdiff1d(np.arange(basis.N), D.all())
     iron_q = np.repeat(iron[:, None], nqp, axis=1)
-
-    def coeffs(A: np.ndarray):
-        ga = basis.interpolate(A).grad
-        b = np.sqrt(ga[0] ** 2 + ga[1] ** 2)
-        nu_i, c_i = mat.nu_r(b)
-        nu = np.where(iron_q, nu_i, 1.0)
-        c = np.where(iron_q, c_i, 0.0)
-        return ga, b, nu, c
-
-    def residual(A: np.ndarray) -> tuple[np.ndarray, tuple]:
-        cf = coeffs(A)
-        r = asm(resid, basis, nu=cf[2], ga=cf[0]) - rhs
-        return r, cf
-
+    start = None
     if A0 is not None and A0.shape == (basis.N,):
-        A = A0 * (1.0 if current_prev is None or current_prev == 0 else current / current_prev)
-    else:
-        # start from a linear solution with mu_r = 1000 in the iron
-        nu0 = np.where(iron_q, 1e-3, 1.0)
-        K = asm(jac, basis, nu=nu0, c=np.zeros_like(nu0), ga=np.zeros((2, *nu0.shape)))
-        A = np.zeros(basis.N)
-        A[free] = _SPDSolver().solve(K[free][:, free], rhs[free])
-    rnorm0 = np.linalg.norm(rhs[free])
-    r, cf = residual(A)
-    rel = np.linalg.norm(r[free]) / rnorm0
-    it = 0
-    solver = _SPDSolver()
-    while rel > tol and it < 60:
-        it += 1
-        K = asm(jac, basis, nu=cf[2], c=cf[3], ga=cf[0])
-        dA = np.zeros(basis.N)
-        dA[free] = solver.solve(K[free][:, free], -r[free])
-        step = 1.0
-        while True:
-            An = A + step * dA
-            rn, cfn = residual(An)
-            reln = np.linalg.norm(rn[free]) / rnorm0
-            if reln < rel * (1 - 1e-4 * step) or step < 1 / 64:
-                break
-            step *= 0.5
-        A, r, cf, rel = An, rn, cfn, reln
-        if verbose:
-            print(f"  newton {it}: step {step:.3g} residual {rel:.3e}")
-    if rel > tol:
-        raise RuntimeError(f"Newton did not converge (s={s}, I={current}): residual {rel:.2e}")
-
-    ga, b, _, _ = cf
+        start = A0 * (1.0 if current_prev is None or current_prev == 0
+                      else current / current_prev)
+    sol = solve_nonlinear(basis, [(iron, mat)], rhs, free, tol=tol, A0=start)
+    it, rel, A = sol.iterations, sol.residual, sol.A
+    ga, b = sol.grad, sol.b
     dx = basis.dx
     sym = 2.0                                          # both halves
     psi = sym * g.depth * nside / area * float(bsign @ A)
@@ -366,7 +243,7 @@ def solve_full(s: float, current: float, *, refine: int = 1, mu_r: float | None 
     near = (cy > lo) & (cy < hi)
     f_line = sym * g.depth / (hi - lo) * float(np.sum((t_yy * dx)[near]))
     return FemResult(force, psi, coen, it, rel, int(basis.N), float(flux_gap), float(flux_leg),
-                     float(flux_yoke), float(flux_rail_iron), f_line, solver.factorisations, A,
+                     float(flux_yoke), float(flux_rail_iron), f_line, sol.factorisations, A,
                      split)
 
 

@@ -230,3 +230,30 @@ def test_two_circuit_magnet_from_a_suffixed_csv(tmp_path: Path) -> None:
         assert res.values[name] == pytest.approx(value, rel=1e-6), name
     assert res.residual_rms < 1e-8
     assert {r["circuit"] for r in res.points} == {"front", "rear"}
+
+
+def test_only_the_parameters_spanning_the_null_direction_are_undetermined(
+        magnet: mk.Magnet, monkeypatch: pytest.MonkeyPatch) -> None:
+    # flux linkage at one gap, into saturation: gap offset and fringing share one null
+    # direction (gap permeance), the iron's saturation scale is seen by the high currents
+    c = np.array([2.0, 4.0, 6.0, 8.0, 20.0, 40.0, 60.0, 80.0])
+    g = np.full(c.size, 0.010)
+    _, p = _statics(magnet, g, c)
+    pts = StaticPoints(gap_m=g, current_A=c, force_N=None, flux_linkage_Wb=p[:, None],
+                       circuits=("coil",), rows=np.arange(2, 2 + c.size))
+    names = ["fringing_factor", "gap_offset_m", "iron_saturation_scale"]
+    res = calibrate(magnet, pts, parameters=names)
+    assert set(res.undetermined) == {"fringing_factor", "gap_offset_m"}
+    # measured shares 0.09 / 0.91 / 8e-34
+    assert res.null_shares["gap_offset_m"] > 0.5 > res.null_shares["fringing_factor"] > 0.05
+    assert res.null_shares["iron_saturation_scale"] < 1e-6
+    assert np.isfinite(res.confidence_95["iron_saturation_scale"])
+    assert res.converged
+    import scipy.optimize
+
+    real = scipy.optimize.least_squares
+    monkeypatch.setattr(scipy.optimize, "least_squares",
+                        lambda *a, **k: real(*a, **{**k, "max_nfev": 1}))
+    with pytest.warns(mk.MaglevkitWarning, match="did not converge"):
+        res = calibrate(magnet, pts, parameters=names, initial={"iron_saturation_scale": 1.2})
+    assert not res.converged

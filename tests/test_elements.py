@@ -190,3 +190,18 @@ def test_kirchhoff_loop_law_by_hand_in_deep_saturation() -> None:
     assert float(up) == pytest.approx(float(sol.branch_flux("leakage_1")
                                             + sol.branch_flux("flank_left_1")), rel=1e-9)
     assert float(up) > 0
+
+
+def test_air_gap_fringe_permeance_is_its_share_of_the_permeance() -> None:
+    """One fringe law: the calibration's fringing factor scales AirGap.fringe_permeance."""
+    from maglevkit.calibration import CalibratedLinear
+
+    plain = mk.AirGap("g", gap_input="s", pole_area=0.01, slot_pitch=0.04, slot_opening=0.01)
+    edged = mk.AirGap("g", gap_input="s", pole_area=0.01, slot_pitch=0.04, slot_opening=0.01,
+                      fringe_edges=((0.2, 0.02), (0.1, 0.01)))
+    for s in (0.005, 0.012):
+        f = edged.fringe_permeance(s)
+        assert f > 0.0 and plain.fringe_permeance(s) == 0.0
+        assert edged.permeance(s) == pytest.approx(plain.permeance(s) + f, rel=1e-14)
+        cal = CalibratedLinear(name="g", inner=edged, fringing=1.5)
+        assert cal.permeance(s) == pytest.approx(edged.permeance(s) + 0.5 * f, rel=1e-14)

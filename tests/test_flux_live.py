@@ -14,6 +14,7 @@ import numpy as np
 import pytest
 
 import maglevkit as mk
+from maglevkit.errors import CompilationWarning
 from maglevkit.models import compiled as compiled_mod
 from maglevkit.models.signals import Sine
 
@@ -109,3 +110,80 @@ def test_a_voltage_or_gap_jump_restarts_with_consistent_currents(
 def test_live_step_option_is_checked(u_magnet: mk.Magnet) -> None:
     with pytest.raises(mk.InputError, match="live_step"):
         mk.FluxModel(u_magnet, compiled="never", live_step="yes")
+
+
+def test_a_live_library_that_does_not_load_falls_back_with_a_warning(
+        u_magnet: mk.Magnet, cache: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """A missing IDAS symbol (OSError from the loader) gives the restarting step and a
+    CompilationWarning, not a failure of the first step (own rtol: an own DAE)."""
+    from maglevkit.models import flux as flux_mod
+
+    def broken(*args: object, **kwargs: object) -> None:
+        raise OSError("undefined symbol: IDASetStopTime")
+
+    monkeypatch.setattr(flux_mod, "LiveIntegrator", broken)
+    fm = mk.FluxModel(u_magnet, compiled="always", cache_dir=cache, rtol=3.3e-7)
+    st = fm.initial_state(gaps=0.010, currents=I0)
+    with pytest.warns(CompilationWarning, match="undefined symbol.*restarts IDAS"):
+        st1, _ = fm.step(st, DT, float(fm.resistances[0]) * I0)
+    assert not fm.live_step and st1.time_s == pytest.approx(DT)
+
+
+def test_two_threads_stepping_one_model(models: dict[str, mk.FluxModel]) -> None:
+    """Threads take turns on the model's one IDAS memory: each thread's run equals the same
+    run alone (restarts where the other thread stepped in between)."""
+    import threading
+
+    fm, restart = models["live"], models["restart"]
+    u = float(fm.resistances[0]) * I0
+    results: dict[int, np.ndarray] = {}
+    errors: list[BaseException] = []
+
+    def run(j: int) -> None:
+        try:
+            st = fm.initial_state(gaps=0.009 + 0.002 * j, currents=I0)
+            for _ in range(150):
+                st, _ = fm.step(st, DT, (1.1 + 0.1 * j) * u)
+            results[j] = st.currents_A
+        except BaseException as exc:            # noqa: BLE001 - reported below
+            errors.append(exc)
+
+    threads = [threading.Thread(target=run, args=(j,)) for j in range(3)]
+    for th in threads:
+        th.start()
+    for th in threads:
+        th.join()
+    assert not errors, errors
+    for j in range(3):
+        st = restart.initial_state(gaps=0.009 + 0.002 * j, currents=I0)
+        for _ in range(150):
+            st, _ = restart.step(st, DT, (1.1 + 0.1 * j) * u)
+        np.testing.assert_allclose(results[j], st.currents_A, rtol=1e-4)
+
+
+def test_the_live_reason_quotes_physical_time() -> None:
+    from maglevkit.models.flux import _physical_time
+
+    msg = str(_physical_time(RuntimeError("At t = 3.5 and h = 1.2e-05, the corrector "
+                                          "convergence failed repeatedly"), 0.01, 1e-3))
+    assert msg.startswith("At t = 0.0135 s and h = 1.2e-08 s, the corrector")
+    msg = str(_physical_time(RuntimeError("The value tstop = 53 is behind current t = 57.5"),
+                             0.0, 1e-3))
+    assert msg == "The value tstop = 0.053 s is behind current t = 0.0575 s"
+
+
+def test_build_source_part_files_are_unique_per_call(tmp_path: Path,
+                                                     monkeypatch: pytest.MonkeyPatch) -> None:
+    import subprocess
+
+    outs: list[str] = []
+
+    def fake(cmd: list[str], **kwargs: object) -> subprocess.CompletedProcess[str]:
+        outs.append(cmd[cmd.index("-o") + 1])
+        return subprocess.CompletedProcess(cmd, 1, "", "error: boom")
+
+    monkeypatch.setattr(compiled_mod.subprocess, "run", fake)
+    for _ in range(2):
+        with pytest.raises(RuntimeError, match="boom"):
+            compiled_mod.build_source("x", b"int x;", cache=tmp_path)
+    assert len(set(outs)) == 2 and not list(tmp_path.iterdir())

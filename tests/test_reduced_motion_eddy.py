@@ -224,3 +224,18 @@ def test_tr09_gap_sine_sweep_against_the_detailed_model() -> None:
         phase = math.degrees(math.atan2(zr[3], zr[2]) - math.atan2(zd[3], zd[2]))
         if f <= 100.0:
             assert abs(phase) <= 5.0, (f, phase)
+
+
+def test_a_fit_that_does_not_converge_is_reported(monkeypatch: pytest.MonkeyPatch) -> None:
+    import scipy.optimize
+
+    lt, k, r_el = 0.54, -1140.0, 1.3
+    f = np.geomspace(0.1, 1000.0, 60)
+    gs, il, gu = ladder_frequency_response(f, ltilde=lt, dpsi_ds=k, r_el=r_el, r_a=5.77,
+                                           l_u=0.0226, r_2=14.7)
+    resp = DetailedFrequencyResponse(f, gs, il * 0.0, gu, lt, k)
+    real = scipy.optimize.least_squares
+    monkeypatch.setattr(scipy.optimize, "least_squares",
+                        lambda *a, **kw: real(*a, **{**kw, "max_nfev": 1}))
+    with pytest.warns(mk.MaglevkitWarning, match="ladder fit did not converge"):
+        fit_motion_eddy(resp, r_el=r_el, r_ec_jump=5.0, r_ec_fit=4.0)

@@ -38,6 +38,7 @@ from __future__ import annotations
 
 import hashlib
 import math
+import warnings
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field, replace
 from pathlib import Path
@@ -53,11 +54,9 @@ from .circuit.elements import (
     IronPath,
     LeakagePermeance,
     LinearElement,
-    fringe_per_mu0,
 )
 from .circuit.network import Network
-from .errors import DataError, InputError, SolverError
-from .materials import MU0
+from .errors import DataError, InputError, MaglevkitWarning, SolverError
 
 __all__ = ["PARAMETERS", "DEFAULT_PARAMETERS", "Calibration", "StaticPoints", "calibrate",
            "calibrated_network", "parameter_sensitivities", "read_points",
@@ -126,9 +125,7 @@ class CalibratedLinear(LinearElement):
         if isinstance(el, FringePermeance):
             return self.fringing * base
         if isinstance(el, AirGap) and el.fringe_edges:
-            s = el.effective_gap(g)
-            fringe = sum(MU0 * fringe_per_mu0(w, r, s) for w, r in el.fringe_edges)
-            return base + (self.fringing - 1.0) * fringe
+            return base + (self.fringing - 1.0) * el.fringe_permeance(g)
         return base
 
 
@@ -457,6 +454,17 @@ def _groups(model: Any) -> dict[str, tuple[str, ...]]:
 
 
 # ---------------------------------------------------------------------------- the fit
+NULL_RCOND = 1e-10
+"""Singular values of the scaled Jacobian below this fraction of the largest span its
+near-null directions (rounding of the exact parameter derivatives is ~1e-9 relative to the
+residuals, squared in ``J^T J``: 1e-10 in ``J`` itself separates rank loss from it)."""
+
+NULL_SHARE = 0.05
+"""A parameter with more than this share (sum of its squared components) of the near-null
+directions is named undetermined: the data fix it only together with the others there; a
+share below 5 % moves it by less than 5 % of the null direction's length."""
+
+
 @dataclass(frozen=True)
 class Calibration:
     """Result of :func:`calibrate`.
@@ -472,8 +480,9 @@ class Calibration:
     singular_values : ndarray
         Of the Jacobian with columns scaled by the parameters' scales, descending.
     undetermined : tuple of str
-        Parameters the data cannot determine (a confidence half-width above the
-        parameter's scale, or a near-null direction of the Jacobian).
+        Parameters the data cannot determine: a confidence half-width above the
+        parameter's scale, or a share above :data:`NULL_SHARE` of the Jacobian's near-null
+        directions (``null_shares``).
     residual_rms : float
         RMS of the relative fit residuals.
     points : list of dict
@@ -484,6 +493,14 @@ class Calibration:
         Parameters that ended on a bound (their confidence interval is not meaningful).
     data_sha256 : str
         SHA-256 of the data file.
+    nominal_points, nominal_holdout : list of dict
+        As ``points`` and ``holdout`` for the nominal (uncalibrated) parameters.
+    null_shares : dict
+        Per parameter, its share (sum of squared components, in the scaled parameters) of
+        the Jacobian's near-null directions; empty when the Jacobian has full rank.
+    converged : bool
+        Whether the least-squares solver met its tolerances (else it stopped at its
+        evaluation limit; a warning says so).
     """
 
     parameters: tuple[str, ...]
@@ -498,6 +515,8 @@ class Calibration:
     data_sha256: str
     nominal_points: list[dict[str, Any]] = field(default_factory=list)
     nominal_holdout: list[dict[str, Any]] = field(default_factory=list)
+    null_shares: dict[str, float] = field(default_factory=dict)
+    converged: bool = True
 
     def max_error(self, which: str = "holdout", quantity: str | None = None) -> float:
         rows = getattr(self, which)
@@ -619,27 +638,29 @@ def calibrate(magnet: Any, data: str | Path | StaticPoints, *,
     sol = least_squares(lambda p: evaluate(p)[0], p0, jac=lambda p: evaluate(p)[1],
                         bounds=(lo, hi), x_scale=np.array([s.scale for s in specs]),
                         method="trf", xtol=1e-12, ftol=1e-12, gtol=1e-12, max_nfev=200)
+    if sol.status <= 0:
+        warnings.warn(f"calibrate: the least-squares fit did not converge (status "
+                      f"{sol.status}: {sol.message}; {sol.nfev} evaluations): the values and "
+                      "intervals are those where it stopped", MaglevkitWarning, stacklevel=2)
     p = sol.x
     res, jac, keys = _model_points(ps, p, fit_pts, x0)
     m, n = res.size, p.size
     scales = np.array([s.scale for s in specs])
-    sv = np.linalg.svd(jac * scales, compute_uv=False)
+    _, sv, vt = np.linalg.svd(jac * scales, full_matrices=False)
     dof = max(m - n, 1)
     s2 = float(res @ res) / dof
-    jtj = jac.T @ jac
     tq = float(student_t.ppf(0.975, dof))
-    try:
-        cov = s2 * np.linalg.inv(jtj) if sv[-1] > 1e-10 * sv[0] else None
-    except np.linalg.LinAlgError:
-        cov = None
-    half = (np.full(n, np.inf) if cov is None
-            else tq * np.sqrt(np.maximum(np.diag(cov), 0.0)))
+    # near-null directions (relative singular value below NULL_RCOND): a parameter with a
+    # share of them above NULL_SHARE is undetermined (inf interval); the others get their
+    # interval from the pseudo-inverse on the determined subspace
+    null = vt[sv <= NULL_RCOND * sv[0]]
+    shares = np.sum(null**2, axis=0) if null.size else np.zeros(n)
+    keep = sv > NULL_RCOND * sv[0]
+    cov_scaled = s2 * (vt[keep].T / sv[keep] ** 2) @ vt[keep]
+    half = tq * np.sqrt(np.maximum(np.diag(cov_scaled), 0.0)) * scales
+    half = np.where(shares > NULL_SHARE, np.inf, half)
     undetermined = tuple(nm for nm, h, sc in zip(names, half, scales, strict=True)
                          if not h < sc)
-    if cov is None:
-        _, _, vt = np.linalg.svd(jac * scales)
-        null = vt[-1]
-        undetermined = tuple(sorted(set(undetermined) | {names[int(np.argmax(np.abs(null)))]}))
     active = tuple(nm for nm, v, a, b in zip(names, p, lo, hi, strict=True)
                    if v <= a + 1e-9 * max(1.0, abs(a)) or v >= b - 1e-9 * max(1.0, abs(b)))
     holdout: list[dict[str, Any]] = []
@@ -658,7 +679,10 @@ def calibrate(magnet: Any, data: str | Path | StaticPoints, *,
         residual_rms=float(np.sqrt(np.mean(res**2))), points=_report(res, keys, fit_pts),
         holdout=holdout, bounds_active=active, data_sha256=pts.sha256,
         nominal_points=_report(nominal_res, nominal_keys, fit_pts),
-        nominal_holdout=nominal_hold)
+        nominal_holdout=nominal_hold,
+        null_shares=({nm: float(v) for nm, v in zip(names, shares, strict=True)}
+                     if null.size else {}),
+        converged=sol.status > 0)
 
 
 # ---------------------------------------------------------------------------- TOML out/in

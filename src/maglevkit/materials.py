@@ -123,7 +123,22 @@ class Material(ABC):
         return ConstantPermeability(mu_r=mu, name=f"{self.name} (linear)", resistivity=self.resistivity)
 
     def energy_density(self, B: Any) -> np.ndarray:
-        """Stored magnetic energy density ``w(B) = integral_0^B H dB`` [J/m^3] (NumPy)."""
+        """Stored magnetic energy density ``w(B) = integral_0^B H dB`` [J/m^3] (NumPy).
+
+        This general form integrates :meth:`field_strength` numerically (adaptive
+        quadrature, relative tolerance 1e-13) point by point; subclasses with a closed
+        form override it.
+
+        Parameters
+        ----------
+        B : float or array_like
+            Flux density [T], any shape (NumPy only, no CasADi symbols).
+
+        Returns
+        -------
+        ndarray
+            ``w(B)`` [J/m^3], the shape of ``B`` (even in B, 0 at ``B = 0``).
+        """
         from scipy import integrate  # lazily: importing it takes ~0.2 s
 
         b = np.asarray(B, dtype=float)

@@ -14,6 +14,7 @@ from .errors import InputError
 from .models.flux import SimulationResult, simulate_flux
 from .reduced.bank import BankSimulation, MagnetBank
 from .reduced.current import CurrentModel, ReducedSimulation
+from .reduction.maps import CharacteristicMaps
 from .validation import real_array
 
 __all__ = ["simulate"]
@@ -85,6 +86,10 @@ def simulate(model: Any, t: Any, *, gaps: Any, voltages: Any, gap_rates: Any = N
     SolverError
         The integrator failed.
     """
+    if isinstance(model, CharacteristicMaps):
+        raise InputError("simulate: model is characteristic maps, which describe a magnet but "
+                         "do not run; build CurrentModel(maps) first (or MagnetBank for "
+                         "several) and simulate that")
     if isinstance(model, (CurrentModel, MagnetBank)):
         if initial_currents is not None:
             real_array(initial_currents if not isinstance(initial_currents, Mapping)

@@ -86,7 +86,24 @@ class NetworkEquations:
 
 
 def assemble(network: Network) -> NetworkEquations:
-    """Assemble (and cache on the network) the symbolic equations of ``network``."""
+    """Assemble (and cache on the network) the symbolic equations of ``network``.
+
+    Parameters
+    ----------
+    network : Network
+        The equivalent magnetic circuit.  The result is stored in ``network.cache`` under
+        ``"equations"``: a second call on the same network returns the same object.
+
+    Returns
+    -------
+    NetworkEquations
+
+    Raises
+    ------
+    TopologyError
+        The network has no air gap, or a gap-dependent element is not linear (its
+        permeance must not depend on the flux).
+    """
     cached = network.cache.get("equations")
     if cached is not None:
         return cached  # type: ignore[no-any-return]

@@ -43,6 +43,7 @@ __all__ = [
     "GapLayerPermeance",
     "EddyCurrent",
     "carter_coefficient",
+    "carter_slot_loss",
     "rectangle_torsion_constant",
 ]
 
@@ -108,9 +109,20 @@ def carter_coefficient(gap: Any, slot_pitch: float, slot_opening: float) -> Any:
         gap = real_array(gap, "gap", "m")
         if np.any(gap <= 0.0):
             raise InputError(f"carter_coefficient: gap = {gap.tolist()!r} m must be > 0")
+    return slot_pitch / (slot_pitch - carter_slot_loss(gap, slot_opening))
+
+
+def carter_slot_loss(gap: Any, slot_opening: float) -> Any:
+    """Face width [m] that one slot of opening ``b`` removes from a pole face at gap ``s``.
+
+    ``gamma s`` with ``gamma = (4/pi) [x atan(x) - ln sqrt(1 + x^2)]``, ``x = b / (2 s)``
+    (Carter): the flux through a face of width ``l`` with slots is that of a smooth face
+    of width ``l - gamma s`` per slot.  Exact for slots deeper than about half their
+    opening; ``0 < gamma s < b``.  Works on NumPy and CasADi inputs (no checks here).
+    """
     x = slot_opening / (2.0 * gap)
     gamma = (4.0 / math.pi) * (x * _atan(x) - 0.5 * _log(1.0 + x * x))
-    return slot_pitch / (slot_pitch - gamma * gap)
+    return gamma * gap
 
 
 @dataclass(frozen=True)
@@ -330,7 +342,12 @@ class AirGap(LinearElement):
     is the flux from recessed parts of the pole face (e.g. the grooves of a
     linear-generator winding) of area ``A_j`` and depth ``d_j``, which cross the groove
     and then the gap in series.  ``k_C`` is Carter's coefficient of a slotted stator
-    (1 when ``slot_pitch`` is 0).
+    (1 when ``slot_pitch`` is 0).  Slots in the pole face itself (``face_slots``, narrow
+    grooves deeper than half their opening, whose flux enters through the side walls)
+    are counted by Carter's slot loss instead: ``A`` is then the whole face and each
+    slot of length ``w_k`` and opening ``b_k`` subtracts ``w_k gamma(b_k/(2s)) s / s'``
+    (:func:`carter_slot_loss` at the true gap, so that with a slotted stator the two
+    slottings multiply as the product of their Carter factors).
 
     Parameters
     ----------
@@ -349,6 +366,9 @@ class AirGap(LinearElement):
     recesses : tuple of (float, float)
         ``(area A_j [m^2], depth d_j [m])`` of recessed pole-face parts, each > 0
         (empty: none).
+    face_slots : tuple of (float, float)
+        ``(slot length w_k [m], opening b_k [m])`` of slots in the pole face counted by
+        Carter's slot loss (their area is part of ``pole_area``; empty: none).
 
     Raises
     ------
@@ -362,6 +382,7 @@ class AirGap(LinearElement):
     slot_pitch: float = 0.0
     slot_opening: float = 0.0
     recesses: tuple[tuple[float, float], ...] = ()
+    face_slots: tuple[tuple[float, float], ...] = ()
 
     def __post_init__(self) -> None:
         owner = f"air gap {self.name!r}"
@@ -376,6 +397,13 @@ class AirGap(LinearElement):
         object.__setattr__(self, "recesses", recesses)
         for a, d in recesses:
             _positive(owner, recess_area=a, recess_depth=d)
+        slots = tuple((float(w), float(b)) for w, b in self.face_slots)
+        object.__setattr__(self, "face_slots", slots)
+        for w, b in slots:
+            _positive(owner, face_slot_length=w, face_slot_opening=b)
+        if sum(w * b for w, b in slots) >= self.pole_area:
+            raise ParameterError(f"{owner}: the face slots (length x opening) cover the "
+                                 "whole pole area; pole_area must include them")
         _nonnegative(owner, slot_pitch=self.slot_pitch, slot_opening=self.slot_opening)
         if self.slot_pitch > 0.0 and not 0.0 < self.slot_opening < self.slot_pitch:
             raise ParameterError(f"{owner}: slot_opening must lie in (0, slot_pitch) when a "
@@ -407,6 +435,28 @@ class AirGap(LinearElement):
             return carter_coefficient(gap, self.slot_pitch, self.slot_opening) * gap
         return gap
 
+    def fringe_permeance(self, gap: Any) -> Any:
+        """The fringe edges' share of :meth:`permeance` [H]: ``mu0 sum fringe_per_mu0(w, r,
+        k_C s)`` over ``fringe_edges`` (0 without).
+
+        Parameters
+        ----------
+        gap : float, array_like or CasADi
+            Mechanical air gap s [m], > 0.
+
+        Returns
+        -------
+        float, ndarray or CasADi
+            The fringe permeance [H].
+        """
+        return MU0 * self._add_fringe(0.0, self.effective_gap(gap))
+
+    def _add_fringe(self, g: Any, s: Any) -> Any:
+        """``g + sum fringe_per_mu0(w, r, s)`` over the fringe edges (``s`` effective)."""
+        for w, r in self.fringe_edges:
+            g = g + fringe_per_mu0(w, r, s)
+        return g
+
     def permeance(self, gap: Any = None) -> Any:
         """Permeance ``G(s)`` [H] of the gap (see the class docstring).
 
@@ -423,11 +473,11 @@ class AirGap(LinearElement):
         if gap is None:
             raise ParameterError(f"air gap {self.name!r}: needs a gap value")
         s = self.effective_gap(gap)
-        g = self.pole_area / s
-        for w, r in self.fringe_edges:
-            g = g + fringe_per_mu0(w, r, s)
+        g = self._add_fringe(self.pole_area / s, s)
         for a, d in self.recesses:
             g = g + a / (s + d)
+        for w, b in self.face_slots:
+            g = g - w * carter_slot_loss(gap, b) / s
         return MU0 * g
 
 
@@ -742,6 +792,13 @@ class FringePermeance(LinearElement):
         Edge length w [m], > 0.
     radius : float
         Flank height r [m] whose tubes reach the rail, > 0.
+    inner_radius : float
+        Flank height [m] where the tubes start (0: at the pole face): a strip
+        ``[inner_radius, radius]`` of the flank, ``(2 mu0 w/pi) ln((s + pi r/2) /
+        (s + pi r_i/2))``.
+    slot_pitch, slot_opening : float
+        Stator slot pitch and opening [m]: the gap is then Carter's ``k_C s``, as in
+        :class:`AirGap` (0: the true gap).
 
     Raises
     ------
@@ -752,12 +809,23 @@ class FringePermeance(LinearElement):
     gap_input: str = "s"
     width: float = 1.0
     radius: float = 1.0
+    inner_radius: float = 0.0
+    slot_pitch: float = 0.0
+    slot_opening: float = 0.0
 
     def __post_init__(self) -> None:
         owner = f"fringe permeance {self.name!r}"
         if not isinstance(self.gap_input, str) or not self.gap_input:
             raise ParameterError(f"{owner}: gap_input must be a non-empty name")
         _positive(owner, width=self.width, radius=self.radius)
+        _nonnegative(owner, inner_radius=self.inner_radius, slot_pitch=self.slot_pitch,
+                     slot_opening=self.slot_opening)
+        if self.inner_radius >= self.radius:
+            raise ParameterError(f"{owner}: inner_radius = {self.inner_radius!r} m must be "
+                                 f"smaller than radius = {self.radius!r} m")
+        if self.slot_pitch > 0.0 and not 0.0 < self.slot_opening < self.slot_pitch:
+            raise ParameterError(f"{owner}: slot_opening must lie in (0, slot_pitch) when a "
+                                 "slot pitch is given")
 
     @property
     def gap(self) -> str:
@@ -778,7 +846,12 @@ class FringePermeance(LinearElement):
         """
         if gap is None:
             raise ParameterError(f"fringe permeance {self.name!r}: needs a gap value")
-        return MU0 * fringe_per_mu0(self.width, self.radius, gap)
+        if self.slot_pitch > 0.0:
+            gap = carter_coefficient(gap, self.slot_pitch, self.slot_opening) * gap
+        g = fringe_per_mu0(self.width, self.radius, gap)
+        if self.inner_radius > 0.0:
+            g = g - fringe_per_mu0(self.width, self.inner_radius, gap)
+        return MU0 * g
 
 
 @dataclass(frozen=True)

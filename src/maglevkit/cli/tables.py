@@ -3,6 +3,7 @@
 
 from __future__ import annotations
 
+import math
 import warnings
 from pathlib import Path
 from typing import Annotated, Any
@@ -32,14 +33,32 @@ from .maps import maps_app
 def _ohms(text: str | None, option: str) -> Any:
     if text is None:
         return None
-    try:
-        vals = [float(v) for v in text.split(",") if v.strip()]
-    except ValueError:
-        raise fail(f"{option} {text!r}: give one resistance in ohm, or one per circuit "
-                   "separated by commas (inf: no eddy currents)") from None
+    eddy = option == "--eddy-resistance"
+    allowed = ("one resistance > 0 in ohm, or one per circuit separated by commas"
+               + (" (inf: no eddy currents)" if eddy else ""))
+    vals: list[float] = []
+    for k, item in enumerate(v.strip() for v in text.split(",")):
+        if not item:
+            continue
+        try:
+            val = float(item)
+        except ValueError:
+            raise fail(f"{option} {text!r}: value {k + 1}, {item!r}, is not a number; give "
+                       f"{allowed}") from None
+        if not (val > 0.0 and (math.isfinite(val) or (eddy and val == math.inf))):
+            raise fail(f"{option} {text!r}: value {k + 1}, {item!r}, is not a resistance "
+                       f"> 0{' (or inf)' if eddy else ''}; give {allowed}")
+        vals.append(val)
     if not vals:
-        raise fail(f"{option} {text!r}: no value")
+        raise fail(f"{option} {text!r}: no value; give {allowed}")
     return vals[0] if len(vals) == 1 else vals
+
+
+def _cli_names(exc: Exception) -> str:
+    """The library's keyword names in a message, as this command's options."""
+    return (str(exc).replace("eddy_resistance_ohm", "--eddy-resistance")
+            .replace("resistance_ohm", "--resistance")
+            .replace("reciprocity_tolerance", "--reciprocity-tolerance"))
 
 
 def _read_step(path: Path) -> tuple[Any, Any]:
@@ -133,7 +152,7 @@ def import_table(
                                    magnet=mag, name=name,
                                    reciprocity_tolerance=reciprocity_tolerance)
         except MaglevkitError as exc:
-            raise fail(exc) from None
+            raise fail(_cli_names(exc)) from None
     with writing(output, "--output"):
         path = maps.to_netcdf(output)
     rep = table_report(maps)

@@ -117,6 +117,9 @@ SWITCH_NAMES = ("saturation", "fringing", "leakage", "eddy_currents")
 OPTION_NAMES = (*SWITCH_NAMES, "eddy_model", "eddy_layers")
 #: Magnet kinds whose builder has the ``"ladder"`` eddy model.
 LADDER_KINDS = ("u_magnet",)
+#: Magnet kinds whose ``[magnet]`` table has the ``end_effects`` key (true: the terms of the
+#: finite extent across the 2-D cut; ``Magnet.with_options(end_effects=...)`` sets it).
+END_EFFECTS_KINDS = ("u_magnet", "levitation_magnet")
 
 #: Winding current density [A/m^2], averaged over the coil's cross-section, above which a
 #: current is reported as implausible (:class:`PlausibleRange`): at 100 A/mm^2 even a
@@ -157,7 +160,26 @@ class PlausibleRange:
     @classmethod
     def from_geometry(cls, *, gap_m: float, gap_basis: str, turns: float,
                       winding_area_m2: float, winding: str) -> PlausibleRange:
-        """Bounds from a pole dimension and one coil (``turns`` on ``winding_area_m2``)."""
+        """Bounds from a pole dimension and one coil (``turns`` on ``winding_area_m2``).
+
+        Parameters
+        ----------
+        gap_m : float
+            The largest plausible gap [m] (a pole dimension of the magnet).
+        gap_basis : str
+            What ``gap_m`` is, for the warning text (e.g. ``"the pole width"``).
+        turns : float
+            Turns of the coil [-].
+        winding_area_m2 : float
+            Copper cross-section of the coil's winding [m^2]; the current bound is
+            ``MAX_CURRENT_DENSITY_A_PER_M2 * winding_area_m2 / turns`` [A].
+        winding : str
+            Name of the winding, for the warning text.
+
+        Returns
+        -------
+        PlausibleRange
+        """
         current = MAX_CURRENT_DENSITY_A_PER_M2 * winding_area_m2 / turns
         basis = (f"{MAX_CURRENT_DENSITY_A_PER_M2 / 1e6:g} A/mm^2 in {winding} "
                  f"({winding_area_m2 * 1e6:.4g} mm^2, {turns:g} turns)")
@@ -168,6 +190,17 @@ class PlausibleRange:
         """Warn (:class:`PlausibilityWarning`) if gaps [m] or currents [A] exceed the bounds.
 
         ``gaps`` and ``currents`` are numbers or arrays of any shape (NaN ignored).
+
+        Parameters
+        ----------
+        gaps : float or array_like, optional
+            Gaps [m] to check against :attr:`max_gap_m`.
+        currents : float or array_like, optional
+            Currents [A] to check (by magnitude) against :attr:`max_current_A`.
+        where : str
+            Prefix of the warning text (what is being checked, e.g. a command or key).
+        stacklevel : int
+            Passed to :func:`warnings.warn` so the warning points at the caller's line.
         """
         prefix = f"{where}: " if where else ""
         if gaps is not None:
@@ -258,20 +291,32 @@ class Magnet:
         **changes : bool, str or int
             Any of ``saturation``, ``fringing``, ``leakage``, ``eddy_currents`` (bool),
             ``eddy_model`` (str), ``eddy_layers`` (int); see :class:`ModelOptions`.
+            ``end_effects`` (bool, kinds in :data:`END_EFFECTS_KINDS`) is a key of the
+            ``[magnet]`` table: it is set there, so ``parameters`` and
+            ``parameter_hash`` of the result show it.
 
         Raises
         ------
         InputError
-            An unknown switch name or a value that is not True/False.
+            An unknown switch name, a value that is not True/False, or ``end_effects``
+            for a kind without it.
         """
-        unknown = sorted(set(changes) - set(OPTION_NAMES))
+        unknown = sorted(set(changes) - {*OPTION_NAMES, "end_effects"})
         if unknown:
             raise InputError(f"with_options: unknown switch(es) {unknown}; the physics "
                              f"switches are {', '.join(SWITCH_NAMES)} (True or False), "
-                             f"eddy_model ({' or '.join(map(repr, EDDY_MODELS))}) and "
-                             f"eddy_layers (1 ... {max(LADDER_COEFFICIENTS)})")
+                             f"eddy_model ({' or '.join(map(repr, EDDY_MODELS))}), "
+                             f"eddy_layers (1 ... {max(LADDER_COEFFICIENTS)}) and "
+                             "end_effects (True or False)")
+        params = self.parameters
+        if "end_effects" in changes:
+            ends = flag(changes.pop("end_effects"), "end_effects")
+            if self.kind not in END_EFFECTS_KINDS:
+                raise InputError(f"with_options: end_effects is not a key of kind "
+                                 f"{self.kind!r} (only of {', '.join(END_EFFECTS_KINDS)})")
+            params = {**params, "magnet": {**params["magnet"], "end_effects": ends}}
         opts = {**self.options.__dict__, **changes}
-        return _build(self.parameters, options=ModelOptions(**opts), source=self.source,
+        return _build(params, options=ModelOptions(**opts), source=self.source,
                       provenance=self.provenance, check_provenance=False)
 
 
@@ -495,6 +540,24 @@ def register_kind(kind: str, builder: Builder, tables: tuple[str, ...],
 def build_magnet(parameters: Mapping[str, Any], *, options: ModelOptions | None = None,
                  source: str = "", provenance: Mapping[str, str] | None = None) -> Magnet:
     """Build a :class:`Magnet` from a parsed parameter dictionary.
+
+    Parameters
+    ----------
+    parameters : mapping
+        The parsed parameter file: a ``[magnet]`` table with ``kind`` and the kind's
+        tables (lengths in m, currents in A, resistivities in ohm m, as in the bundled
+        TOML files).
+    options : ModelOptions, optional
+        Physics switches (saturation, eddy currents, ...); default all on.
+    source : str
+        Where the parameters came from (a file name), used in messages.
+    provenance : mapping of str to str, optional
+        Extra ``"table.key"`` -> provenance tag entries (``[P]``, ``[R]``, ``[E]`` ...),
+        merged under the ``[provenance]`` table of ``parameters`` (which wins).
+
+    Returns
+    -------
+    Magnet
 
     Raises
     ------

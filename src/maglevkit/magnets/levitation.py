@@ -5,28 +5,49 @@ circuits) are the same builder; which pole feeds which circuit is a parameter.
 Longitudinal cut (x along the track, poles hang under the stator, see docs/magnets.md)::
 
         S1 --stator-- S2 --stator-- S3 ...      stator yoke (laminated long-stator pack)
-        |             |             |
-       gap1          gap2          gap3         air gap + stator teeth (one gap input each)
-        |             |             |
-        H1 ==leak_pp== H2 ==leak_pp== H3 ...    pole heads (pole face level)
-        |  \\          |  \\          |
-      core1 leak_pb  core2 leak_pb core3        pole cores with coils, polarity + - + ...
-        |  /          |  /          |
+        |  \\          |  \\
+       gap  window   gap  window                face teeth / the window's teeth (W -> S)
+        |    W1       |    W2
+        |   /  \\      |
+        H1 fringe \\   H2 ...                    pole heads (pole face level)
+        |         flank_j                       flank strips along the coil (C_j -> W)
+      core_0      |
+        C1_1 ==leak_pp_1== C2_1 ...             coil nodes along the core (K of them)
+      core_1 ...
         K1 ---back--- K2 ---back--- K3 ...      pole back (solid)
 
-Per pole k: ``core_k`` (K_k -> H_k, coil, saturable, eddy currents), ``gap_k``
-(H_k -> S_k: air gap with Carter's coefficient of the stator slots, the recessed
-linear-generator grooves of the pole face and the fringing flanks, in series with the
-saturable stator teeth), ``leak_pb_k`` (H_k -> K_k: leakage around the coil back into
-the pole back).  Between neighbours: ``back_k`` (K_k -> K_k+1), ``stator_k``
-(S_k -> S_k+1), ``leak_pp_k`` (H_k -> H_k+1).  The paper's Fig. 3 flux paths map to:
-nominal flux -> the ``pole_area / s'`` term, LIG flux -> the groove term
-``A_g / (s' + d_g)``, notch flux into the stator slots -> Carter's coefficient, leakage
--> ``leak_pp``/``leak_pb``.  All formulas and their sources: docs/magnets.md.
+``flux_paths = "paper"`` (default) is the former network: one core branch ``core_k`` with
+the whole coil, the flank fringing in the gap branch, the grooves' bottom in series with the
+gap, the window leakage ``leak_pp_k`` at the coil's energy-equivalent height ``h_c/3``.
+``flux_paths = "split"`` (the paths a 2-D FEM led to, docs/validation_fem.md) is drawn
+above.  Per pole k: the core split along its coil into ``coil_segments`` (K, default 3)
+strips as the U-magnet's legs, ``core_k_j`` (K_k -> C_k_K ... C_k_1 -> H_k, each segment with the
+turns of the coil it holds, saturable, eddy currents); ``gap_k`` (H_k -> S_k: air gap of the
+face with Carter's coefficient of the stator slots and the recessed linear-generator
+grooves as slots of the face, in series with the saturable stator teeth under the face);
+``fringe_k`` (H_k -> W_k: the flanks below the coil facing the neighbours) and
+``flank_k_j`` (C_k_j -> W_k: Roters quarter circles from each coil strip of the flank to the
+face level and across the gap), both landing on the window's teeth ``window_k`` (W_k ->
+S_k); ``leak_pb_k`` (H_k -> K_k: leakage around the coil back into the pole back).  Between
+neighbours: ``back_k`` (K_k -> K_k+1), ``stator_k`` (S_k -> S_k+1), ``leak_pp_k`` (H_k ->
+H_k+1) and ``leak_pp_k_j`` (C_k_j -> C_k+1_j).  The paper's Fig. 3 flux paths map to:
+nominal flux -> the face term ``A / s'``, LIG flux -> the grooves' Carter slot loss,
+notch flux into the stator slots -> Carter's coefficient, leakage -> ``leak_pp``,
+``leak_pb``, the flank strips.  All formulas, their sources and the 2-D FEM check that
+shaped them: docs/magnets.md, docs/validation_fem.md.
 
 End poles are built like the inner poles (same core, coil and turns); they differ only
 in having one neighbour, so their outer flank leaks into the pole back (extra
 ``leak_pb`` length) instead of to a neighbour pole.
+
+``end_effects`` (``[magnet]`` key, default true) keeps the terms that exist only because
+the magnet has a finite width across the track: the fringing of the two pole-face edges
+along the track (onto the stator's overhang) and the leakage around the coil's two
+across-track sides into the pole back.  ``end_effects = false`` leaves them out: the
+network is then a longitudinal cut of depth ``pole_width`` (the end poles' outer-side
+leakage over that depth), the like-for-like partner of a 2-D field solution.  The
+material cross-sections (stator yoke ``width``, pole back ``back_width``) and the eddy
+elements are unchanged.
 """
 
 from __future__ import annotations
@@ -35,7 +56,14 @@ import math
 from collections.abc import Mapping
 from typing import Any
 
-from ..circuit.elements import AirGap, EddyCurrent, Element, IronPath, LeakagePermeance
+from ..circuit.elements import (
+    AirGap,
+    EddyCurrent,
+    Element,
+    FringePermeance,
+    IronPath,
+    LeakagePermeance,
+)
 from ..circuit.network import Branch, Circuit, Coil, Network
 from ..errors import ParameterFileError
 from ..materials import MU0, Material
@@ -71,7 +99,11 @@ MAGNET_SCHEMA = {
     "lig_groove_depth": Schema(float, unit="m"),
     "material": Schema(str),
     "resistivity": Schema(float, required=False, unit="ohm m"),
+    "end_effects": Schema(bool, required=False, default=True),
+    "flux_paths": Schema(str, required=False, default="paper"),
+    "coil_segments": Schema(int, required=False, default=3, unit="-"),
 }
+FLUX_PATHS = ("paper", "split")
 CIRCUITS_SCHEMA = {
     "names": Schema(list),
     "assignment": Schema(list),
@@ -87,7 +119,17 @@ STATOR_SCHEMA = {
 
 
 def pole_gap_names(poles: int) -> tuple[str, ...]:
-    """Gap input names ``("p01", "p02", ...)`` of a magnet with ``poles`` poles."""
+    """Gap input names ``("p01", "p02", ...)`` of a magnet with ``poles`` poles.
+
+    Parameters
+    ----------
+    poles : int
+        Number of poles.
+
+    Returns
+    -------
+    tuple of str
+    """
     return tuple(f"p{k:02d}" for k in range(1, poles + 1))
 
 
@@ -158,50 +200,124 @@ def build_levitation_magnet(params: Mapping[str, Any], materials: Mapping[str, M
     gaps = pole_gap_names(poles)
 
     # ---- air gap of one pole: face teeth, LIG grooves, flanks; Carter for the stator slots
-    face_area = (lp - ng * bg) * wp
-    grooves = ((ng * bg * wp, dg),) if ng > 0 else ()
+    # LIG grooves: deeper than half their width (the bundled files: 20 mm x 10 mm), their
+    # flux enters through the side walls as into a slot: Carter's slot loss on the whole
+    # face; shallow ones: the groove bottom in series with the gap
+    if m["flux_paths"] not in FLUX_PATHS:
+        raise ParameterFileError(f"[magnet] flux_paths = {m['flux_paths']!r}: expected one of "
+                                 f"{', '.join(map(repr, FLUX_PATHS))}")
+    split = m["flux_paths"] == "split"
+    if not split and "coil_segments" in params["magnet"]:
+        raise ParameterFileError("[magnet] coil_segments applies to flux_paths = \"split\" "
+                                 "only; remove it or set flux_paths = \"split\"")
+    deep = split and dg >= 0.5 * bg
+    face_area = (lp - (0 if deep else ng) * bg) * wp
+    grooves = ((ng * bg * wp, dg),) if ng > 0 and not deep else ()
+    face_slots = ((wp, bg),) * ng if deep else ()
     overhang = 0.5 * (st["width"] - wp)
+    ends = m["end_effects"]       # across-track terms (a 2-D longitudinal cut has none)
+    # fringing of the two flanks facing the neighbour poles: a branch of its own, whose
+    # flux lands on the stator beside the pole face and rises in the teeth there (the
+    # window's teeth), not in the teeth under the face; the along-track edges (end
+    # effects) land on the overhang of the face's own teeth and stay in the gap branch
     edges: list[tuple[float, float]] = []
-    if options.fringing:
+    if options.fringing and not split:
         edges += [(wp, hf), (wp, hf)]                         # flanks facing the neighbours
-        if overhang > 0.0:
-            r = min(hf, overhang)                             # limited by the stator edge
-            edges += [(lp, r), (lp, r)]
-    tooth_area = lp * wp * (1.0 - st["slot_opening"] / st["slot_pitch"])
+    if options.fringing and ends and overhang > 0.0:
+        r = min(hf, overhang)                                 # limited by the stator edge
+        edges += [(lp, r), (lp, r)]
+    teeth_share = 1.0 - st["slot_opening"] / st["slot_pitch"]
+    tooth_area = lp * wp * teeth_share
+    window_teeth = (tau - lp) * wp * teeth_share
     core_len = hcore + 0.5 * hb
     stator_area = st["yoke_height"] * st["width"]
+    # the core split along the coil (as the U-magnet's legs): nodes C_j at the depths
+    # y_j = h_f + (j - 1/2) h below the face, h = h_c/K; segments from the face up: tip
+    # (to C_1), K - 1 coil strips, top (C_K to the pole back's mid-line); turns in
+    # proportion to the coil they hold, so leakage can leave part-way along the winding
+    nseg = m["coil_segments"] if split else 1
+    if not 1 <= nseg <= 12:
+        raise ParameterFileError(f"[magnet] coil_segments = {nseg}: allowed are 1 ... 12 "
+                                 "strips along the coil")
+    h = hc / nseg
+    y_nodes = [hf + (j + 0.5) * h for j in range(nseg)]
+    seg_len = [y_nodes[0], *([h] * (nseg - 1)), core_len - y_nodes[-1]]
+    seg_turns = [0.5 / nseg, *([1.0 / nseg] * (nseg - 1)), 0.5 / nseg]
+    if not split:                          # "paper": one core branch with the whole coil
+        seg_len, seg_turns = [core_len], [1.0]
 
     # ---- leakage estimates (Roters' method, docs/magnets.md)
-    # neighbour poles: parallel faces across the window; the MMF rises linearly along
-    # the coil (energy-equivalent height h_c/3) and is full on the flank above it
-    g_pp = MU0 * wp * (hc / 3.0 + hf) / window
+    # neighbour poles: parallel faces across the window, flank below the coil (between the
+    # heads) and one coil strip each (between the C_j): the MMF across the window falls
+    # along the coil because the nodes see the turns below them (energy: h_c/3 as K -> oo)
+    g_pp_face = MU0 * wp * hf / window
+    g_pp_strip = MU0 * wp * h / window
+    if not split:                          # energy-equivalent height h_c/3 of the coil
+        g_pp_face = MU0 * wp * (hc / 3.0 + hf) / window
+    # flanks facing the window, per coil strip [y - h/2, y + h/2]: Roters' quarter circles
+    # to the face level and on across the gap to the stator (a fringe strip), while the
+    # circle lands before the window's centre plane (y <= window/2; beyond it the window
+    # leakage takes over); both flanks of every pole (an end pole's outer flank faces the
+    # stator beyond the magnet)
+    strips = [(y - 0.5 * h, min(y + 0.5 * h, 0.5 * window)) for y in y_nodes
+              if y - 0.5 * h < 0.5 * window] if split else []
     # around the coil into the own pole back: half hollow cylinders around the coil's
     # cross-section (inner radius h_c/2, radial extent t_c) along the coil sides that do
     # not face a neighbour pole: both across-track sides, plus the outer side of an end pole
+    # (without end effects only the end pole's outer side, over the cut's depth wp)
     side = lp + 2.0 * tc
 
     def g_pb(k: int) -> float:
-        length = 2.0 * side + (wp + 2.0 * tc) * ((k == 0) + (k == poles - 1))
+        end_side = wp + 2.0 * tc if ends else wp
+        length = 2.0 * side * ends + end_side * ((k == 0) + (k == poles - 1))
         return MU0 * length * math.log(1.0 + tc / (0.5 * hc)) / math.pi
 
     rho = resistivity(m["resistivity"], core_mat, "magnet") if options.eddy_currents else 0.0
+    slots = {"slot_pitch": st["slot_pitch"], "slot_opening": st["slot_opening"]}
+
+    def chain(k: int) -> list[str]:
+        """Nodes of pole k's core from the face to the pole back."""
+        inner = [f"C{k + 1}_{j + 1}" for j in range(nseg)] if split else []
+        return [f"H{k + 1}", *inner, f"K{k + 1}"]
 
     branches: list[Branch] = []
+    coil_turns: list[list[tuple[str, float]]] = []
     for k in range(poles):
         p = gaps[k]
-        core: list[Element] = [IronPath(f"iron_core_{p}", core_len, lp * wp, core_mat)]
-        if options.eddy_currents:
-            core.append(EddyCurrent.solid_rectangular(f"eddy_core_{p}", lp, wp, core_len, rho))
-        branches.append(Branch(f"core_{p}", f"K{k + 1}", f"H{k + 1}", tuple(core)))
+        nodes = chain(k)
+        turns = []
+        for j in range(len(seg_len)):
+            name = f"core_{p}_{j}" if split else f"core_{p}"
+            core: list[Element] = [IronPath(f"iron_{name}", seg_len[j], lp * wp, core_mat)]
+            if options.eddy_currents:
+                # every segment carries the eddy currents of its own length
+                core.append(EddyCurrent.solid_rectangular(f"eddy_{name}", lp, wp, seg_len[j],
+                                                          rho))
+            branches.append(Branch(name, nodes[j + 1], nodes[j], tuple(core)))
+            turns.append((name, seg_turns[j]))
+        coil_turns.append(turns)
         branches.append(Branch(f"gap_{p}", f"H{k + 1}", f"S{k + 1}", (
             AirGap(f"gap_{p}", gap_input=p, pole_area=face_area, fringe_edges=tuple(edges),
-                   slot_pitch=st["slot_pitch"], slot_opening=st["slot_opening"],
-                   recesses=grooves),
+                   recesses=grooves, face_slots=face_slots, **slots),
             IronPath(f"iron_teeth_{p}", st["slot_depth"], tooth_area, stator_mat),
         )))
+        if split and (options.fringing or options.leakage):
+            # the window's teeth beside the face carry what lands there
+            branches.append(Branch(f"window_{p}", f"W{k + 1}", f"S{k + 1}", (
+                IronPath(f"iron_window_teeth_{p}", st["slot_depth"], window_teeth, stator_mat),)))
+        if split and options.fringing:
+            branches.append(Branch(f"fringe_{p}", f"H{k + 1}", f"W{k + 1}", (
+                FringePermeance(f"fringe_{p}", gap_input=p, width=2.0 * wp, radius=hf,
+                                **slots),)))
         if options.leakage:
-            branches.append(Branch(f"leak_pb_{p}", f"H{k + 1}", f"K{k + 1}",
-                                   (LeakagePermeance(f"leak_pb_{p}", g_pb(k)),)))
+            for j, (y0, y1) in enumerate(strips):
+                name = f"flank_{p}_{j + 1}"
+                branches.append(Branch(name, nodes[j + 1], f"W{k + 1}", (
+                    FringePermeance(name, gap_input=p, width=2.0 * wp, radius=y1,
+                                    inner_radius=y0, **slots),)))
+            if g_pb(k) > 0.0:
+                branches.append(Branch(f"leak_pb_{p}", f"H{k + 1}", f"K{k + 1}",
+                                       (LeakagePermeance(f"leak_pb_{p}", g_pb(k)),)))
     for k in range(poles - 1):
         q = f"{gaps[k]}_{gaps[k + 1]}"
         back: list[Element] = [IronPath(f"iron_back_{q}", tau, hb * wb, core_mat)]
@@ -212,14 +328,20 @@ def build_levitation_magnet(params: Mapping[str, Any], materials: Mapping[str, M
                                (IronPath(f"iron_stator_{q}", tau, stator_area, stator_mat),)))
         if options.leakage:
             branches.append(Branch(f"leak_pp_{q}", f"H{k + 1}", f"H{k + 2}",
-                                   (LeakagePermeance(f"leak_pp_{q}", g_pp),)))
+                                   (LeakagePermeance(f"leak_pp_{q}", g_pp_face),)))
+            for j in range(nseg if split else 0):
+                branches.append(Branch(f"leak_pp_{q}_{j + 1}", chain(k)[j + 1],
+                                       chain(k + 1)[j + 1],
+                                       (LeakagePermeance(f"leak_pp_{q}_{j + 1}", g_pp_strip),)))
 
     # Alternating polarity: pole 1 drives flux up (towards the stator), pole 2 down, ...
     circuits = []
+    n = m["turns_per_pole"]
     for i, cname in enumerate(names):
-        coils = tuple(Coil(f"core_{gaps[k]}", m["turns_per_pole"], 1 if k % 2 == 0 else -1)
-                      for k in range(poles) if assign[k] == i + 1)
-        circuits.append(Circuit(cname, m["resistance_per_pole"] * len(coils), coils))
+        coils = tuple(Coil(seg, n * share, 1 if k % 2 == 0 else -1, pole=gaps[k] if split else None)
+                      for k in range(poles) if assign[k] == i + 1 for seg, share in coil_turns[k])
+        npoles = sum(1 for a in assign if a == i + 1)
+        circuits.append(Circuit(cname, m["resistance_per_pole"] * npoles, coils))
     return m["name"], Network(tuple(branches), tuple(circuits), name=m["name"])
 
 

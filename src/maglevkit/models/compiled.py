@@ -207,13 +207,18 @@ def build_source(name: str, code: bytes, *, cache: Path, flags: Sequence[str] = 
         with tempfile.TemporaryDirectory(prefix="maglevkit-cc-") as tmp:
             src = Path(tmp) / f"{name}.c"
             src.write_bytes(code)
-            part = cache / f".{lib.name}.{os.getpid()}.tmp"
-            proc = subprocess.run([cc, *flags, str(src), "-o", str(part), "-lm"],
-                                  capture_output=True, text=True, timeout=600)
-            if proc.returncode != 0:
+            # unique per call (threads of one process too): builders never share a part file
+            fd, name_part = tempfile.mkstemp(prefix=f".{lib.name}.", suffix=".tmp", dir=cache)
+            os.close(fd)
+            part = Path(name_part)
+            try:
+                proc = subprocess.run([cc, *flags, str(src), "-o", str(part), "-lm"],
+                                      capture_output=True, text=True, timeout=600)
+                if proc.returncode != 0:
+                    raise RuntimeError(f"{Path(cc).name} failed: {_last_line(proc.stderr)}")
+                os.replace(part, lib)    # atomic: concurrent builders never see half a file
+            finally:
                 part.unlink(missing_ok=True)
-                raise RuntimeError(f"{Path(cc).name} failed: {_last_line(proc.stderr)}")
-            os.replace(part, lib)        # atomic: concurrent builders never see half a file
     return lib
 
 

@@ -37,6 +37,10 @@ from __future__ import annotations
 
 import math
 import os
+import re
+import subprocess
+import threading
+import warnings
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
@@ -46,7 +50,7 @@ import numpy as np
 
 from ..circuit.assembly import assemble
 from ..circuit.network import Network
-from ..errors import InputError, SolverError, TopologyError
+from ..errors import CompilationWarning, InputError, SolverError, TopologyError
 from ..magnets.base import PlausibleRange
 from ..materials import MU0
 from ..validation import flag, optional_flag, real_array, real_number, whole_number
@@ -247,6 +251,22 @@ class EnergyBalance:
     """Energy bookkeeping of a simulation [J].
 
     ``electrical = ohmic + eddy + magnetic_change + mechanical + residual``.
+
+    Attributes
+    ----------
+    electrical_J : float
+        Electrical energy fed into the circuits, the integral of ``U I`` [J].
+    ohmic_J : float
+        Ohmic loss in the windings, the integral of ``R I^2`` [J].
+    eddy_J : float
+        Eddy-current loss in the eddy branches [J] (0 without eddy currents).
+    magnetic_change_J : float
+        Change of the stored magnetic energy (air gaps and iron) [J].
+    mechanical_J : float
+        Mechanical work done by the magnet's force on the moving gaps [J].
+    residual_J : float
+        What the other terms leave unexplained [J]: the integration error of the
+        balance (small against the largest term, see :attr:`relative_residual`).
     """
 
     electrical_J: float
@@ -540,16 +560,25 @@ class FluxDAE:
         ``method="radau"``, or no IDAS library to link against."""
         if self._live_parts is None:
             return None
-        if self._live_lib is False:
-            self._live_lib = live_library(*self._live_parts)
-        if self._live_lib is None:
+        try:
+            if self._live_lib is False:
+                self._live_lib = live_library(*self._live_parts)
+            if self._live_lib is None:
+                return None
+            opts = self._idas_opts
+            nz = len(opts["abstolv"]) - self.n_diff        # loop fluxes, currents, balance
+            return LiveIntegrator(self._live_lib, self.n_diff, nz, self.n_circuits, self.n_u,
+                                  4 + self.n_gaps,
+                                  opts["reltol"], np.asarray(opts["abstolv"]),
+                                  opts["max_num_steps"])
+        except (OSError, RuntimeError, AttributeError, subprocess.SubprocessError) as exc:
+            # a library that does not load (a missing symbol), lacks an entry point or
+            # cannot set IDAS up: the restarting step works without it
+            self._live_lib = None
+            warnings.warn(f"the live IDAS step is unavailable ({type(exc).__name__}: "
+                          f"{str(exc).strip()[:200]}); FluxModel.step restarts IDAS every call",
+                          CompilationWarning, stacklevel=3)
             return None
-        opts = self._idas_opts
-        nz = len(opts["abstolv"]) - self.n_diff        # loop fluxes, currents, balance
-        return LiveIntegrator(self._live_lib, self.n_diff, nz, self.n_circuits, self.n_u,
-                              4 + self.n_gaps,
-                              opts["reltol"], np.asarray(opts["abstolv"]),
-                              opts["max_num_steps"])
 
     def chunk(self, n: int) -> ca.Function:
         """IDAS over ``n`` hold intervals without restart: ``(w0, U, P) -> (W, Q, O)``.
@@ -672,6 +701,19 @@ def check_options(options: Mapping[str, Any], where: str) -> None:
                          f"{', '.join(FLUX_MODEL_OPTIONS)}")
 
 
+def _physical_time(exc: Exception, t_restart: float, dt: float) -> RuntimeError:
+    """The live integrator's IDAS message with its normalised times ``t``, ``tstop``,
+    ``tout`` (intervals of ``dt`` since the restart at ``t_restart``) and step ``h`` in
+    seconds."""
+    def sec(m: re.Match[str]) -> str:
+        v = float(m.group(2))
+        phys = v * dt if m.group(1) == "h" else t_restart + v * dt
+        return f"{m.group(1)} = {phys:.9g} s"
+
+    num = r"([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)"
+    return RuntimeError(re.sub(r"\b(tstop|tout|t|h)\s*=\s*" + num, sec, str(exc)))
+
+
 def _vec(value: Any, n: int, what: str, unit: str, names: tuple[str, ...]) -> np.ndarray:
     """A finite float vector of length n from a scalar, sequence or mapping."""
     if isinstance(value, Mapping):
@@ -741,6 +783,22 @@ class FluxModel:
         (:mod:`maglevkit.models.flux_live`; compiled IDAS on the dense form, else ignored).
         False restarts CasADi's integrator on every call (the behaviour before).
 
+    Other Parameters
+    ----------------
+    radau_elements : int, default 2
+        ``method="radau"`` only: collocation elements per integrator call (per hold
+        interval), a whole number >= 1.
+    radau_degree : int, default 3
+        ``method="radau"`` only: degree of the Radau IIA collocation polynomial, 1..9.
+
+    Raises
+    ------
+    InputError
+        ``rtol`` or ``atol`` outside (0, 1), a step limit, element count or degree that is
+        not a whole number in range, an unknown ``method`` or ``compiled``, a ``cache_dir``
+        that is not a path, or switches that are neither bool nor None.  (A bare
+        Network ignores ``True`` switches: it can only have effects switched off.)
+
     Attributes
     ----------
     compiled : bool
@@ -792,6 +850,8 @@ class FluxModel:
         self._live: LiveIntegrator | None | bool = None if flag(live_step, "live_step") else False
         self._live_last: tuple[Any, ...] | None = None
         self._live_next: tuple[Any, ...] | None = None
+        # one IDAS memory per model: threads stepping the model take turns
+        self._live_lock = threading.Lock()
         self._options = {"method": method, "rtol": self.rtol, "atol": self.atol,
                          "max_num_steps": max_num_steps, "radau_elements": radau_elements,
                          "radau_degree": radau_degree, "compiled": compiled,
@@ -833,7 +893,9 @@ class FluxModel:
         """Whether :meth:`step` keeps an IDAS integrator alive between calls (the option,
         where this model supports it; builds the integrator's library on first use)."""
         if self._live is None:
-            self._live = self._dae.live_integrator() or False
+            with self._live_lock:            # threads' first steps make one integrator
+                if self._live is None:
+                    self._live = self._dae.live_integrator() or False
         return self._live is not False
 
     @property
@@ -849,7 +911,13 @@ class FluxModel:
 
     def __getstate__(self) -> dict[str, Any]:
         # the live integrator (C memory) stays behind; a copy makes its own on first step
-        return {**self.__dict__, "_live": None, "_live_last": None, "_live_next": None}
+        state = {**self.__dict__, "_live": None, "_live_last": None, "_live_next": None}
+        state.pop("_live_lock", None)
+        return state
+
+    def __setstate__(self, state: dict[str, Any]) -> None:
+        self.__dict__.update(state)
+        self._live_lock = threading.Lock()
 
     def with_options(self, **changes: Any) -> FluxModel:
         """A model of the same network with other solver options (method, rtol, atol, ...)."""
@@ -867,6 +935,32 @@ class FluxModel:
 
         The fluxes come from :func:`solve_statics`; the state is at rest (no eddy
         currents), consistent with the voltages ``U = R I`` and zero gap rates.
+
+        Parameters
+        ----------
+        gaps : float, array_like (n_gaps,) or mapping
+            Gaps [m], each > 0: one value for all, one per gap input (:attr:`gap_names`),
+            or ``{gap name: value}`` with every name.  One operating point only.
+        currents : float, array_like (n_circuits,) or mapping
+            Circuit currents [A], same forms per circuit (:attr:`circuit_names`).
+        time : float, default 0.0
+            Time of the state [s], a finite real number.
+
+        Returns
+        -------
+        FluxState
+
+        Raises
+        ------
+        InputError
+            Bad gaps or currents (wrong count or names, not finite, a gap <= 0, more than
+            one operating point) or a bad ``time``.
+
+        Warns
+        -----
+        PlausibilityWarning
+            Gaps or currents beyond the magnet's plausible range (models built from a
+            Magnet).
         """
         return self._initial_state(gaps, currents, time, where="FluxModel.initial_state")
 
@@ -909,7 +1003,23 @@ class FluxModel:
                              f"currents {np.asarray(state.currents_A).tolist()})")
 
     def outputs(self, state: FluxState) -> FluxOutputs:
-        """Outputs at ``state`` (with the inputs stored in the state)."""
+        """Outputs at ``state`` (with the inputs stored in the state).
+
+        Parameters
+        ----------
+        state : FluxState
+            A finite state of this model (from :meth:`initial_state` or :meth:`step`); its
+            ``voltages_V`` [V] and ``gap_rates_m_per_s`` [m/s] are the inputs used.
+
+        Returns
+        -------
+        FluxOutputs
+
+        Raises
+        ------
+        InputError
+            ``state`` not a FluxState, of another model's shapes, or not finite.
+        """
         self._check_state(state)
         o = np.asarray(self._dae.output_fun(state._vector(), state.voltages_V,
                                             state.gap_rates_m_per_s)).ravel()
@@ -982,7 +1092,9 @@ class FluxModel:
         state the last call returned, with the same ``dt`` and voltages and the gaps where
         that step ended, integrates on (as ``simulate`` does across hold intervals); any
         other call restarts IDAS from ``state`` with consistent algebraic variables.  Both
-        agree with a restart per call to the integrator's accuracy.
+        agree with a restart per call to the integrator's accuracy.  Threads stepping one
+        model take turns on its integrator (a per-model lock); a live library that does not
+        load falls back to the restarting step with a ``CompilationWarning``.
         """
         d = self._dae
         self._check_state(state)
@@ -1001,13 +1113,22 @@ class FluxModel:
         if self.plausible_range is not None and gaps is not None:
             self.plausible_range.check(gaps=(s0, s0 + rate * dt), where="FluxModel.step")
         if self.live_step:
-            assert isinstance(self._live, LiveIntegrator)
-            wf, q, o = self._step_live(self._live, state, dt, U, rate, s0, w)
-        else:
-            try:
-                wf, q, o = d.step_fun(w, np.concatenate(((dt,), U, rate)))
-            except RuntimeError as exc:
-                raise self._fail(exc, state.time_s, w, U, rate, dt) from None
+            with self._live_lock:
+                return self._step_live_locked(state, dt, U, rate, s0, w)
+        try:
+            wf, q, o = d.step_fun(w, np.concatenate(((dt,), U, rate)))
+        except RuntimeError as exc:
+            raise self._fail(exc, state.time_s, w, U, rate, dt) from None
+        return self._finish_step(state, dt, U, rate, w, wf, q, o)
+
+    def _step_live_locked(self, state: FluxState, dt: float, U: np.ndarray, rate: np.ndarray,
+                          s0: np.ndarray, w: np.ndarray) -> tuple[FluxState, FluxOutputs]:
+        assert isinstance(self._live, LiveIntegrator)
+        wf, q, o = self._step_live(self._live, state, dt, U, rate, s0, w)
+        return self._finish_step(state, dt, U, rate, w, wf, q, o)
+
+    def _finish_step(self, state: FluxState, dt: float, U: np.ndarray, rate: np.ndarray,
+                     w: np.ndarray, wf: Any, q: Any, o: Any) -> tuple[FluxState, FluxOutputs]:
         wf = np.asarray(wf).ravel()
         o = np.asarray(o).ravel()
         if not (np.all(np.isfinite(wf)) and np.all(np.isfinite(o))):
@@ -1038,12 +1159,14 @@ class FluxModel:
                 live.reinit(0.0, w[:r], np.concatenate((w[nx:], v0)), U,
                             np.concatenate(((dt,), s0, rate, (0.0,))))
             except RuntimeError as exc:
-                raise self._fail(exc, state.time_s, w, U, rate, dt) from None
+                raise self._fail(_physical_time(exc, state.time_s, dt), state.time_s, w, U,
+                                 rate, dt) from None
         k = last[3]
         try:
             y, q = live.step(k + 1.0, np.concatenate(((dt,), s0, rate, (float(k),))))
         except RuntimeError as exc:
-            raise self._fail(exc, state.time_s, w, U, rate, dt) from None
+            raise self._fail(_physical_time(exc, state.time_s - k * dt, dt), state.time_s,
+                             w, U, rate, dt) from None
         wf = np.concatenate((y[:r], s0 + rate * dt, y[r:r + d.n_loops + d.n_circuits]))
         o = np.asarray(d.output_fun(wf, U, rate)).ravel()
         self._live_next = (dt, U.copy(), k + 1, q.copy())
@@ -1148,6 +1271,57 @@ class SimulationResult:
     Values at ``time_s[k]`` are left limits (before the inputs change at ``t_k``);
     ``voltages_V[k]`` and ``gap_rates_m_per_s[k]`` are the inputs held on
     ``[t_k, t_{k+1})`` (the last row repeats the previous one).
+
+    Attributes
+    ----------
+    time_s : ndarray (n_t,)
+        Sample times [s].
+    gaps_m : ndarray (n_t, n_gaps)
+        Gap inputs [m].
+    gap_rates_m_per_s : ndarray (n_t, n_gaps)
+        Gap rates [m/s] held on each interval.
+    voltages_V : ndarray (n_t, n_circuits)
+        Circuit voltages [V] held on each interval.
+    currents_A : ndarray (n_t, n_circuits)
+        Circuit currents [A].
+    flux_linkage_Wb : ndarray (n_t, n_circuits)
+        Circuit flux linkages [Wb].
+    eta_Wb : ndarray (n_t, n_circuits)
+        Sums of the coil-core fluxes of each circuit [Wb].
+    pole_force_N : ndarray (n_t, n_gaps)
+        Force per gap input [N], attraction positive.
+    force_N : ndarray (n_t,)
+        Total force [N].
+    branch_flux_Wb : ndarray (n_t, n_branches)
+        All branch fluxes [Wb] (:attr:`branch_names`).
+    eddy_flux_Wb : ndarray (n_t, n_eddy)
+        Fluxes of the eddy branches [Wb] (no columns without eddy currents).
+    eddy_mmf_A : ndarray (n_t, n_eddy)
+        Eddy-current MMFs ``G_ec dphi/dt`` of the eddy branches [A].
+    differential_state : ndarray (n_t, n_diff)
+        The DAE's differential states ``y = D x``: flux linkages, then eddy fluxes [Wb].
+    electrical_energy_J : ndarray (n_t,)
+        Electrical energy fed in since ``time_s[0]`` [J] (cumulative).
+    ohmic_loss_J : ndarray (n_t,)
+        Cumulative ohmic loss [J].
+    eddy_loss_J : ndarray (n_t,)
+        Cumulative eddy-current loss [J].
+    mechanical_work_J : ndarray (n_t,)
+        Cumulative mechanical work of the magnet's force on the moving gaps [J].
+    gap_names : tuple of str
+        Column order of the gap arrays.
+    circuit_names : tuple of str
+        Column order of the circuit arrays.
+    branch_names : tuple of str
+        Column order of ``branch_flux_Wb``.
+    eddy_branch_names : tuple of str
+        Column order of the eddy arrays.
+    final_state : FluxState
+        State at ``time_s[-1]``, to continue with :meth:`FluxModel.step` or as
+        ``initial_state`` of another simulation.
+    network : Network
+        The simulated equivalent circuit (for the magnetic energy; not in ``repr`` or
+        comparisons).
     """
 
     time_s: np.ndarray
@@ -1175,11 +1349,37 @@ class SimulationResult:
     network: Network = field(repr=False, compare=False)
 
     def magnetic_energy_J(self, index: int = -1) -> float:
-        """Stored magnetic energy [J] at sample ``index`` (iron by quadrature)."""
+        """Stored magnetic energy [J] at sample ``index`` (iron by quadrature).
+
+        Parameters
+        ----------
+        index : int, default -1
+            Sample index into the time axis (NumPy indexing: negative counts from the end;
+            out of range raises ``IndexError``).
+
+        Returns
+        -------
+        float
+            Energy stored in the air gaps and the iron [J].
+        """
         return magnetic_energy(self.network, self.branch_flux_Wb[index], self.gaps_m[index])
 
     def energy_balance(self, start: int = 0, stop: int = -1) -> EnergyBalance:
-        """Energy balance between samples ``start`` and ``stop``."""
+        """Energy balance between samples ``start`` and ``stop``.
+
+        Parameters
+        ----------
+        start : int, default 0
+            Sample index where the balance starts.
+        stop : int, default -1
+            Sample index where it ends (NumPy indexing; default the last sample).  Each
+            term is the value at ``stop`` minus that at ``start``, so ``stop`` before
+            ``start`` gives the negated balance.
+
+        Returns
+        -------
+        EnergyBalance
+        """
         def d(a: np.ndarray) -> float:
             return float(a[stop] - a[start])
 

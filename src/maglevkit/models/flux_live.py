@@ -26,6 +26,8 @@ from __future__ import annotations
 
 import ctypes
 import os
+import subprocess
+import sys
 from pathlib import Path
 from typing import Any
 
@@ -190,6 +192,8 @@ static void fx_err(int code, const char *module, const char *function, char *msg
   strncpy(s->msg, msg, sizeof(s->msg) - 1);
 }
 
+void fx_free(void *data);
+
 static long long int fx_max(long long int a, long long int b) { return a > b ? a : b; }
 
 void *fx_new(long int nx, long int nz, long int np, long int nu, long int nq, double rtol,
@@ -197,6 +201,7 @@ void *fx_new(long int nx, long int nz, long int np, long int nu, long int nq, do
   fx_session *s = (fx_session *)calloc(1, sizeof(fx_session));
   long long int a, r, i, w, sa = 0, sr = 0, si = 0, sw = 0;
   long int k;
+  if (!s) return 0;
   s->nx = nx; s->nz = nz; s->nn = nx + nz; s->np = np; s->nu = nu; s->nq = nq;
   FX_DAE_work(&a, &r, &i, &w); sa = fx_max(sa, a); sr = fx_max(sr, r); si = fx_max(si, i);
   sw = fx_max(sw, w);
@@ -218,9 +223,14 @@ void *fx_new(long int nx, long int nz, long int np, long int nu, long int nq, do
     const long long int *sp = FX_JAC_sparsity_out(k);
     s->sp[k] = sp;
     s->J[k] = (double *)calloc(sp[2 + sp[1]] + 1, sizeof(double));
+    if (!s->J[k]) { fx_free(s); return 0; }
+  }
+  if (!s->arg || !s->res || !s->iw || !s->w || !s->p || !s->u || !s->M || !s->piv) {
+    fx_free(s); return 0;
   }
   s->yy = N_VNew_Serial(s->nn); s->yp = N_VNew_Serial(s->nn);
   s->q = N_VNew_Serial(nq); s->id = N_VNew_Serial(s->nn); s->atol = N_VNew_Serial(s->nn);
+  if (!s->yy || !s->yp || !s->q || !s->id || !s->atol) { fx_free(s); return 0; }
   memset(NVD(s->yy), 0, sizeof(double) * s->nn); memset(NVD(s->yp), 0, sizeof(double) * s->nn);
   memset(NVD(s->q), 0, sizeof(double) * nq);
   for (k = 0; k < s->nn; ++k) { NVD(s->id)[k] = k < nx ? 1.0 : 0.0; NVD(s->atol)[k] = atol[k]; }
@@ -229,8 +239,10 @@ void *fx_new(long int nx, long int nz, long int np, long int nu, long int nq, do
       || IDASetErrHandlerFn(s->mem, fx_err, s) || IDASVtolerances(s->mem, rtol, s->atol)
       || IDASetMaxNumSteps(s->mem, max_steps) || IDASetId(s->mem, s->id)
       || IDASpgmr(s->mem, 5) || IDASpilsSetPreconditioner(s->mem, fx_pset, fx_psol)
-      || IDAQuadInit(s->mem, fx_quad, s->q))
+      || IDAQuadInit(s->mem, fx_quad, s->q)) {
+    fx_free(s);                      /* no leak of the half-built session */
     return 0;
+  }
   return s;
 }
 
@@ -275,8 +287,11 @@ void fx_free(void *data) {
   int k;
   if (!s) return;
   if (s->mem) IDAFree(&s->mem);
-  N_VDestroy_Serial(s->yy); N_VDestroy_Serial(s->yp); N_VDestroy_Serial(s->q);
-  N_VDestroy_Serial(s->id); N_VDestroy_Serial(s->atol);
+  if (s->yy) N_VDestroy_Serial(s->yy);
+  if (s->yp) N_VDestroy_Serial(s->yp);
+  if (s->q) N_VDestroy_Serial(s->q);
+  if (s->id) N_VDestroy_Serial(s->id);
+  if (s->atol) N_VDestroy_Serial(s->atol);
   for (k = 0; k < 4; ++k) free(s->J[k]);
   free(s->arg); free(s->res); free(s->iw); free(s->w); free(s->p); free(s->u); free(s->M);
   free(s->piv); free(s);
@@ -321,12 +336,15 @@ def live_library(dae_f: ca.Function, jac_f: ca.Function, quad_f: ca.Function,
                       f"#define {k}_sparsity_out {v}_sparsity_out\n" for k, v in names.items())
     defines += f"#define FX_QUAD_N {quad_f.numel_out(0)}\n"
     code = (cg.dump() + "\n" + defines + _DRIVER).encode()
-    flags = (*flags, "-Wl,--no-as-needed", *map(str, libs),
+    # -z defs (GNU ld, Linux): a symbol the IDAS libraries lack fails the link here, not
+    # the first step at run time
+    defs = ("-Wl,-z,defs",) if sys.platform.startswith("linux") else ()
+    flags = (*flags, *defs, "-Wl,--no-as-needed", *map(str, libs),
              f"-Wl,-rpath,{libs[0].parent}")
     cache = Path(cache_dir) if cache_dir is not None else cache_directory()
     try:
         return build_source("maglevkit_flux_live", code, cache=cache, flags=flags)
-    except (OSError, RuntimeError):
+    except (OSError, RuntimeError, subprocess.SubprocessError):
         return None
 
 

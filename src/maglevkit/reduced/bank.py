@@ -135,14 +135,23 @@ class BankSimulation:
     Attributes
     ----------
     time_s : ndarray (n_t,)
+        Sample times [s].
     gaps_m : ndarray (n_t, n_gaps)
+        Gap inputs [m] (one per circuit or per pole, ``gap_names``).
     voltages_V : ndarray (n_t, n_circuits)
-        Voltages held on ``[t_k, t_k+1)`` (the last row repeats the previous one).
+        Voltages [V] held on ``[t_k, t_k+1)`` (the last row repeats the previous one).
     currents_A, inductor_currents_A, circuit_force_N : ndarray (n_t, n_circuits)
+        Coil currents [A], inductor currents ``I_L`` [A] (NaN for detailed members) and
+        circuit forces [N].
     member_force_N : ndarray (n_t, n_members)
+        Total force of each magnet [N].
     pole_force_N : ndarray (n_t, n_poles)
+        Force per pole [N].
     circuit_names, gap_names, pole_names, member_names : tuple of str
+        Column orders of the arrays.
     final_state : BankState
+        State at ``time_s[-1]`` (to continue with :meth:`MagnetBank.step` or a new
+        ``simulate``).
     """
 
     time_s: np.ndarray
@@ -557,6 +566,20 @@ class MagnetBank:
         column of :attr:`circuit_parameters` (rows :data:`KERNEL_PARAMETERS`; change
         ``R_el`` and ``a`` there to tune the resistances).  The table of every distinct map
         is embedded as a constant.  :meth:`step` maps this function over the circuits.
+
+        Parameters
+        ----------
+        substeps : int, default 1
+            Number of equal RK4 sub-steps over ``h``, a whole number >= 1 (no bools).
+
+        Returns
+        -------
+        casadi.Function
+
+        Raises
+        ------
+        InputError
+            ``substeps`` not a whole number >= 1.
         """
         if not (isinstance(substeps, int) and not isinstance(substeps, bool) and substeps >= 1):
             raise InputError(f"substeps = {substeps!r} must be a whole number >= 1")
@@ -687,6 +710,27 @@ class MagnetBank:
         ``table`` is :attr:`table` as a CasADi symbol (a function input, so that CasADi's
         virtual machine does not copy the constant on every call) or as a constant.  The
         same expressions as :attr:`ode_function` and the compiled step.
+
+        Parameters
+        ----------
+        k : int
+            Column of the reduced circuit in :attr:`circuit_parameters` (0-based index over
+            the bank's reduced circuits, not checked beyond NumPy's indexing).
+        i_l : casadi.MX
+            Inductor current ``I_L`` [A].
+        s : casadi.MX
+            Substitute gap [m].
+        u : casadi.MX
+            Circuit voltage [V].
+        gap_rate : casadi.MX
+            Substitute gap rate ``ds/dt`` [m/s].
+        table : casadi.MX or DM
+            The bank's map table (:attr:`table`), symbolic or constant.
+
+        Returns
+        -------
+        tuple of casadi.MX
+            ``dI_L/dt`` [A/s], coil current ``I`` [A], force ``F`` [N] and ``L~`` [H].
         """
         p = ca.DM(self._par[:, k])
         return self._circuit_expressions(i_l, s, u, gap_rate, p, table)
@@ -721,6 +765,21 @@ class MagnetBank:
         ``I_L_next``, ``I``, ``F``, ``member_F``, ``n_bad`` (count of circuits out of
         range or not finite; diagnose with :meth:`step`) and more; address them by
         name.  Only for banks of reduced members with one gap input per circuit.
+
+        Parameters
+        ----------
+        dt : float
+            Step length [s], finite and > 0; it sets the RK4 sub-step count
+            (``ceil(dt / max_step_s)``), while the function's ``h`` input is the step used.
+
+        Returns
+        -------
+        casadi.Function
+
+        Raises
+        ------
+        InputError
+            A bad ``dt``, or a bank with detailed members or ``gap_inputs="pole"``.
         """
         return self._step_kernel(self._composable_substeps(dt, "step_function"))
 
@@ -964,6 +1023,21 @@ class MagnetBank:
         The function has the inputs and outputs of :meth:`step_function`; a larger
         CasADi function that calls it can be generated as C and compiled when linked
         against the library (the vehicle's compiled step does this).
+
+        Parameters
+        ----------
+        dt : float
+            Step length [s], finite and > 0 (sets the RK4 sub-step count as in
+            :meth:`step_function`).
+
+        Returns
+        -------
+        (casadi.Function, pathlib.Path) or None
+
+        Raises
+        ------
+        InputError
+            A bad ``dt``, or a bank with detailed members or ``gap_inputs="pole"``.
         """
         n = self._composable_substeps(dt, "compiled_step_library")
         if self.codegen != "lanes":
@@ -992,11 +1066,35 @@ class MagnetBank:
                         else self._pole_slices, strict=True))
 
     def circuit_gaps(self, gaps: np.ndarray) -> np.ndarray:
-        """Substitute gap of every circuit [m] from the gap inputs."""
+        """Substitute gap of every circuit [m] from the gap inputs.
+
+        Parameters
+        ----------
+        gaps : ndarray (n_gaps,)
+            The bank's gap inputs [m] (:attr:`gap_names`); not checked.
+
+        Returns
+        -------
+        ndarray (n_circuits,)
+            ``gaps`` itself with ``gap_inputs="circuit"``, else the mean of every circuit's
+            pole gaps.
+        """
         return gaps if self.gap_inputs == "circuit" else self._avg @ gaps
 
     def pole_gaps(self, gaps: np.ndarray) -> np.ndarray:
-        """Gap of every pole [m] from the gap inputs."""
+        """Gap of every pole [m] from the gap inputs.
+
+        Parameters
+        ----------
+        gaps : ndarray (n_gaps,)
+            The bank's gap inputs [m] (:attr:`gap_names`); not checked.
+
+        Returns
+        -------
+        ndarray (n_poles,)
+            With ``gap_inputs="circuit"`` every pole gets its circuit's gap; with
+            ``"pole"`` ``gaps`` itself.
+        """
         return (self._share > 0).astype(float) @ gaps if self.gap_inputs == "circuit" else gaps
 
     # ------------------------------------------------------------------ input handling
@@ -1122,7 +1220,33 @@ class MagnetBank:
     # ------------------------------------------------------------------ stepping interface
     def initial_state(self, *, gaps: Any, currents: Any, time: float = 0.0) -> BankState:
         """The steady state at ``gaps`` [m] (per gap input, or a scalar) with coil currents
-        ``currents`` [A] (per circuit, or a scalar)."""
+        ``currents`` [A] (per circuit, or a scalar).
+
+        Parameters
+        ----------
+        gaps : float, array_like (n_gaps,) or mapping
+            Gap inputs [m], each > 0: one value for all, one per gap input
+            (:attr:`gap_names`), or a mapping naming every gap input exactly once.
+        currents : float, array_like (n_circuits,) or mapping
+            Coil currents [A], same forms per circuit (:attr:`circuit_names`); detailed
+            members start at their static operating point with these currents.
+        time : float, default 0.0
+            Time of the state [s], finite (no bools).
+
+        Returns
+        -------
+        BankState
+            ``inductor_currents_A`` is NaN for the circuits of detailed members.
+
+        Raises
+        ------
+        InputError
+            Wrong count, unknown or missing names, non-finite values, a gap <= 0, or a bad
+            ``time``.
+        OutOfRangeError
+            A reduced circuit's substitute gap or current outside its maps (without
+            ``extrapolate``).
+        """
         g = self._vector(gaps, self.gap_names, "gaps", "m")
         if (g <= 0).any():
             j = int(np.argmax(g <= 0))
@@ -1262,6 +1386,23 @@ class MagnetBank:
         model or controller without the per-step objects and copies of :meth:`step`
         (the same compiled function and checks, bit-identical results).
 
+        Parameters
+        ----------
+        state : BankState
+            Start state of this bank (from :meth:`initial_state`, :meth:`step` or another
+            stepper's ``state``).
+        dt : float
+            Step length [s], finite and > 0.
+
+        Returns
+        -------
+        BankStepper
+
+        Raises
+        ------
+        InputError
+            ``state`` not a state of this bank, or a bad ``dt``.
+
         Examples
         --------
         >>> import numpy as np
@@ -1287,6 +1428,47 @@ class MagnetBank:
         first gaps.  Every interval is one :meth:`step` (for banks of reduced members
         with one gap per circuit, through :meth:`stepper`: the same compiled function,
         without the per-step objects).
+
+        Parameters
+        ----------
+        t : (t0, tf), [t0, tf] or array_like
+            A time span [s] (sampled with ``dt``) or an explicit strictly increasing grid [s].
+        gaps : float, sequence, mapping, Signal, callable or array
+            Gap inputs [m] (one per circuit or per pole, :attr:`gap_names`), > 0 at every
+            sample: constant, per gap, gap name -> value, a function of time [s] or an
+            array (n_t, n_gaps) on the grid.
+        voltages : same forms as ``gaps``
+            Circuit voltages [V] (:attr:`circuit_names`); zero-order hold on each interval.
+        gap_rates : same forms as ``gaps``, optional
+            Gap rates [m/s]; only checked against the secants of the sampled gaps (the
+            secants drive the model). None: no check.
+        dt : float, optional
+            Grid step [s] of a time span (None: 1e-4 s, or ``tf - t0`` if shorter); must
+            be None with an explicit grid.
+        initial_currents : float, array_like (n_circuits,) or mapping, optional
+            Start from the steady state at the first gaps with these coil currents [A]
+            instead of ``U(t0) / R_el``. Not together with ``initial_state``.
+        initial_state : BankState, optional
+            Start from this state of the bank (e.g. a previous run's ``final_state``); the
+            steps take their gaps from ``gaps``. Not together with ``initial_currents``.
+        gap_rate_tolerance : float, default 0.02
+            Allowed disagreement of ``gap_rates`` with the gap secants [-], relative to the
+            largest rate (plus 1 um/s), >= 0.
+
+        Returns
+        -------
+        BankSimulation
+
+        Raises
+        ------
+        InputError
+            Bad grid (or ``dt`` with an explicit grid), inputs of the wrong shape or
+            names, non-finite values, gaps <= 0, gap rates that disagree with the gaps, or
+            both initial choices given.
+        OutOfRangeError
+            A reduced circuit leaves its maps (see ``extrapolate``).
+        SolverError
+            Non-finite results or a detailed member's integrator failing.
         """
         times, g, u, rates = simulation_inputs(
             t, dt, gaps=gaps, voltages=voltages, gap_rates=gap_rates, gap_names=self.gap_names,
@@ -1345,7 +1527,27 @@ class MagnetBank:
 
     def outputs(self, state: BankState, voltages: Any = None) -> BankOutputs:
         """Outputs at ``state`` with ``voltages`` [V] (default: the steady-state voltages
-        ``R_el I_L``; for detailed members their state's own currents)."""
+        ``R_el I_L``; for detailed members their state's own currents).
+
+        Parameters
+        ----------
+        state : BankState
+            State of this bank; not checked against the bank here.
+        voltages : float, array_like (n_circuits,), mapping or None, default None
+            Circuit voltages [V], finite: one for all, one per circuit, or circuit name ->
+            value.  They set the reduced circuits' coil currents ``I = (U - U_L) / R_el``;
+            detailed members ignore them (their outputs come from their state).
+
+        Returns
+        -------
+        BankOutputs
+            With ``pole_force_N`` filled in.
+
+        Raises
+        ------
+        InputError
+            Voltages of the wrong count or names, or not finite.
+        """
         u = (self.resistance_ohm * np.where(np.isnan(state.inductor_currents_A), 0.0,
                                             state.inductor_currents_A)
              if voltages is None else self._vector(voltages, self.circuit_names, "voltages", "V"))

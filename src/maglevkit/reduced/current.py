@@ -88,13 +88,17 @@ class CurrentOutputs:
     Attributes
     ----------
     time_s : float
+        Time [s].
     currents_A : ndarray (n_circuits,)
         Coil currents [A] (with the voltages of the step just taken).
     inductor_currents_A : ndarray (n_circuits,)
+        Currents ``I_L`` through the inductors ``L~`` [A] (the ODE states, a copy).
     circuit_force_N : ndarray (n_circuits,)
+        Force of each circuit's poles [N], attraction positive.
     pole_force_N : ndarray (n_gaps,)
         Circuit force shared equally by the circuit's poles [N].
     force_N : float
+        Total force of the magnet [N].
     """
 
     time_s: float
@@ -117,10 +121,23 @@ class ReducedSimulation:
     Attributes
     ----------
     time_s : ndarray (n_t,)
+        Sample times [s].
     gaps_m, gap_rates_m_per_s : ndarray (n_t, n_gaps)
+        Pole gaps [m] and the gap rates [m/s] held on each interval (the gaps' secants).
     voltages_V, currents_A, inductor_currents_A, circuit_force_N : ndarray (n_t, n_circuits)
+        Circuit voltages [V], coil currents [A], inductor currents ``I_L`` [A] and circuit
+        forces [N].
     pole_force_N : ndarray (n_t, n_gaps)
+        Circuit forces shared equally by each circuit's poles [N].
     force_N : ndarray (n_t,)
+        Total force [N].
+    gap_names : tuple of str
+        Names of the pole gaps, the order of the ``n_gaps`` columns.
+    circuit_names : tuple of str
+        Names of the circuits, the order of the ``n_circuits`` columns.
+    final_state : CurrentModelState
+        State at ``time_s[-1]``, to continue with :meth:`CurrentModel.step` or as
+        ``initial_state`` of another :meth:`CurrentModel.simulate`.
     eddy_currents_A : ndarray (n_t, n_circuits, m) or None
         Eddy-branch currents ``I_k`` [A] with ``eddy_modes = m > 0``, the shielding eddy
         current ``I_e`` (``m = 1``) with ``motion_eddy=True``, else None.
@@ -513,7 +530,19 @@ class CurrentModel:
         return len(self.circuit_names)
 
     def substitute_gaps(self, gaps: np.ndarray) -> np.ndarray:
-        """Mean gap per circuit [m] from pole gaps (..., n_gaps)."""
+        """Mean gap per circuit [m] from pole gaps (..., n_gaps).
+
+        Parameters
+        ----------
+        gaps : array_like (..., n_gaps)
+            Pole gaps [m] in the order of ``gap_names``; leading axes (e.g. time) are kept.
+            Not checked (no range or sign check).
+
+        Returns
+        -------
+        ndarray (..., n_circuits)
+            Substitute gap ``s`` of every circuit [m]: the mean of its poles' gaps.
+        """
         return np.asarray(gaps) @ self._avg.T
 
     def _outs(self, x: Any, u: Any) -> Any:
@@ -739,7 +768,31 @@ class CurrentModel:
     # ------------------------------------------------------------------ stepping interface
     def initial_state(self, *, gaps: Any, currents: Any, time: float = 0.0) -> CurrentModelState:
         """The steady state at ``gaps`` [m] with coil currents ``currents`` [A] (``I_L = I``;
-        with eddy modes ``I_k = 0``)."""
+        with eddy modes ``I_k = 0``).
+
+        Parameters
+        ----------
+        gaps : float, array_like (n_gaps,) or mapping
+            Pole gaps [m], each > 0: one value for all, one per gap in the order of
+            ``gap_names``, or a mapping gap name -> value naming every gap exactly once.
+        currents : float, array_like (n_circuits,) or mapping
+            Coil currents [A], same forms per circuit (``circuit_names``).
+        time : float, default 0.0
+            Time of the state [s], finite.
+
+        Returns
+        -------
+        CurrentModelState
+
+        Raises
+        ------
+        InputError
+            Wrong count, unknown or missing names, non-finite values, a gap <= 0 or a
+            non-finite ``time``.
+        OutOfRangeError
+            Substitute gaps or currents outside the maps (with ``extrapolate=True`` only
+            beyond the extrapolation band; inside it a warning).
+        """
         g = _per_gap(gaps, self.gap_names, positive=True)
         i = _per_circuit(currents, self.circuit_names, "currents")
         if not math.isfinite(time):
@@ -753,7 +806,27 @@ class CurrentModel:
 
     def outputs(self, state: CurrentModelState, voltages: Any = None) -> CurrentOutputs:
         """Outputs at ``state`` with ``voltages`` [V] applied (default: the steady-state
-        voltages ``R_el I_L``, as in :meth:`initial_state`)."""
+        voltages ``R_el I_L``, as in :meth:`initial_state`).
+
+        Parameters
+        ----------
+        state : CurrentModelState
+            State of this model (from :meth:`initial_state`, :meth:`step` or a
+            simulation's ``final_state``); not range-checked here.
+        voltages : float, array_like (n_circuits,), mapping or None, default None
+            Circuit voltages [V] (one for all, one per circuit, or circuit name -> value);
+            they set the coil current ``I = (U - U_L) / R_el``. None: ``R_el I_L``.
+
+        Returns
+        -------
+        CurrentOutputs
+            Coil currents, circuit, pole and total forces at ``state.time_s``.
+
+        Raises
+        ------
+        InputError
+            Voltages of the wrong count or names, or not finite.
+        """
         u = (self.resistance_ohm * state.inductor_currents_A if voltages is None
              else _per_circuit(voltages, self.circuit_names, "voltages"))
         x = np.concatenate([state.inductor_currents_A, self.substitute_gaps(state.gaps_m),
@@ -841,6 +914,36 @@ class CurrentModel:
 
         Same contract as :meth:`maglevkit.models.flux.FluxModel.step`: ``gaps`` [m] at the
         start of the step (None keeps the state's), ``gap_rates`` [m/s] over the step.
+
+        Parameters
+        ----------
+        state : CurrentModelState
+            State at the start of the step.
+        dt : float
+            Step length [s], finite and > 0.
+        voltages : float, array_like (n_circuits,) or mapping
+            Circuit voltages [V], held over the step: one for all, one per circuit in the
+            order of ``circuit_names``, or circuit name -> value.
+        gaps : float, array_like (n_gaps,), mapping or None, default None
+            Pole gaps [m] at the start of the step, each > 0 (same forms per gap); None
+            keeps ``state.gaps_m``.
+        gap_rates : float, array_like (n_gaps,) or mapping, default 0.0
+            Gap rates [m/s], constant over the step; the gaps at the end,
+            ``gaps + gap_rates * dt``, must stay > 0.
+
+        Returns
+        -------
+        (CurrentModelState, CurrentOutputs)
+            State and outputs at ``state.time_s + dt``.
+
+        Raises
+        ------
+        InputError
+            A bad ``dt``, inputs of the wrong count or names, non-finite values, or gaps
+            that are or become <= 0.
+        OutOfRangeError
+            The substitute gap path or the currents (including RK4 sub-step states) leave
+            the maps (see ``extrapolate``).
         """
         if not isinstance(state, CurrentModelState):
             raise InputError(f"state must be a CurrentModelState (from CurrentModel."
@@ -1017,6 +1120,44 @@ class CurrentModel:
 
         Gaps move linearly between samples, voltages are held from each sample to the
         next; the default initial state is the steady state ``I = U(t0) / R_el``.
+
+        Parameters
+        ----------
+        t : (t0, tf), [t0, tf] or array_like
+            A time span [s] (sampled with ``dt``) or an explicit strictly increasing grid [s].
+        gaps : float, sequence, mapping, Signal, callable or array
+            Pole gaps [m], > 0 at every sample (constant, per gap, gap name -> value, a
+            function of time [s] or an array (n_t, n_gaps) on the grid).
+        voltages : same forms as ``gaps``
+            Circuit voltages [V], one per circuit; zero-order hold on each interval.
+        gap_rates : same forms as ``gaps``, optional
+            Gap rates [m/s]; only checked against the secants of the sampled gaps (the
+            secants drive the model). None: no check.
+        dt : float, optional
+            Grid step [s] of a time span (None: 1e-4 s, or ``tf - t0`` if shorter); must
+            be None with an explicit grid.
+        initial_currents : float, array_like (n_circuits,) or mapping, optional
+            Start from the steady state with these coil currents [A] instead of
+            ``U(t0) / R_el``. Not together with ``initial_state``.
+        initial_state : CurrentModelState, optional
+            Start from this state (e.g. a previous run's ``final_state``); its gaps are not
+            used (the ``gaps`` input gives them). Not together with ``initial_currents``.
+        gap_rate_tolerance : float, default 0.02
+            Allowed disagreement of ``gap_rates`` with the gap secants [-], relative to the
+            largest rate (plus 1 um/s), >= 0.
+
+        Returns
+        -------
+        ReducedSimulation
+
+        Raises
+        ------
+        InputError
+            Bad grid (or ``dt`` with an explicit grid), inputs of the wrong shape or
+            names, non-finite values, gaps <= 0, gap rates that disagree with the gaps, or
+            both initial choices given.
+        OutOfRangeError
+            Substitute gaps or currents leave the maps during the run (see ``extrapolate``).
         """
         times, g, u, secant = simulation_inputs(
             t, dt, gaps=gaps, voltages=voltages, gap_rates=gap_rates, gap_names=self.gap_names,
@@ -1238,8 +1379,12 @@ def _motion_eddy_ladder(maps: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
              "motion_eddy_unshielded_inductance_H")
     missing = [n for n in names if n not in ds]
     if missing:
-        raise InputError(f"these maps have no shielded-gap ladder ({', '.join(missing)}); "
-                         "rebuild them with this version (build_maps) to use motion_eddy=True")
+        raise InputError(
+            "maps imported from a table (maps_from_table) cannot carry the shielded-gap ladder "
+            "(it is fitted to the detailed flux model's frequency response, which a table does "
+            "not have); use motion_eddy=False" if "table_report" in ds.attrs else
+            f"these maps have no shielded-gap ladder ({', '.join(missing)}); rebuild them with "
+            "this version (build_maps) to use motion_eddy=True")
     r_a, r_2, l_u = (np.asarray(ds[n].values, dtype=float) for n in names)
     if not (np.all(np.isfinite(r_a)) and np.all(np.isfinite(r_2)) and np.all(np.isfinite(l_u))
             and np.all(r_a > 0) and np.all(r_2 > 0) and np.all(l_u > 0)):

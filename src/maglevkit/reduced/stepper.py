@@ -48,6 +48,21 @@ class BankStepper:
     to the attribute copies into them); the output arrays are read-only views that always
     show the last good step.  All keep their identity, so they may be bound once.
 
+    Parameters
+    ----------
+    bank : MagnetBank
+        The bank to advance.
+    state : BankState
+        Start state of ``bank``.  The inputs start at its steady state: voltages
+        ``R_el I`` [V], its gaps [m] and zero gap rates [m/s].
+    dt : float
+        Step length [s], finite and > 0 (fixed for the stepper's life).
+
+    Raises
+    ------
+    InputError
+        ``state`` not a state of ``bank``, or a bad ``dt``.
+
     Attributes
     ----------
     bank : MagnetBank

@@ -149,6 +149,20 @@ class CharacteristicMaps:
     """Characteristic maps of a magnet (an :class:`xarray.Dataset` with units).
 
     Use :func:`build_maps` to compute and :func:`load_maps` / :meth:`to_netcdf` to store.
+
+    Parameters
+    ----------
+    dataset : xarray.Dataset
+        The maps: data variables over the coordinates ``circuit``, ``gap`` [m] and
+        ``current`` [A] (e.g. ``force_N`` [N], ``inductance_H`` [H], ``dL_ds_H_per_m``
+        [H/m], ``flux_linkage_Wb`` [Wb]) and attributes such as ``magnet_hash`` and
+        ``pole_groups``.  Kept as given (not copied, its contents not validated here:
+        :func:`load_maps` checks files).
+
+    Raises
+    ------
+    InputError
+        ``dataset`` is not an :class:`xarray.Dataset`.
     """
 
     dataset: xr.Dataset
@@ -183,7 +197,27 @@ class CharacteristicMaps:
         return {k: tuple(v) for k, v in raw.items()}
 
     def variable(self, name: str, circuit: str) -> np.ndarray:
-        """A map (gap x current) of one circuit as a NumPy array."""
+        """A map (gap x current) of one circuit as a NumPy array.
+
+        Parameters
+        ----------
+        name : str
+            Name of a data variable of the dataset, e.g. ``"force_N"`` [N],
+            ``"inductance_H"`` [H] or ``"dL_ds_H_per_m"`` [H/m].
+        circuit : str
+            One of :attr:`circuits`.
+
+        Returns
+        -------
+        ndarray (n_gaps, n_currents)
+            The map's values in its own unit (float64), on :attr:`gaps_m` x
+            :attr:`currents_A`.
+
+        Raises
+        ------
+        InputError
+            Unknown circuit or map name (the message lists the known ones).
+        """
         if circuit not in self.circuits:
             raise InputError(f"no circuit {circuit!r} in these maps; circuits: {list(self.circuits)}")
         if name not in self.dataset.data_vars:
@@ -191,7 +225,19 @@ class CharacteristicMaps:
         return np.asarray(self.dataset[name].sel(circuit=circuit).values, dtype=float)
 
     def to_netcdf(self, path: str | Path) -> Path:
-        """Write the maps to a netCDF file (lossless: float64 throughout)."""
+        """Write the maps to a netCDF file (lossless: float64 throughout).
+
+        Parameters
+        ----------
+        path : str or path-like
+            File to write (netCDF4 engine); missing parent folders are created and an
+            existing file is overwritten.
+
+        Returns
+        -------
+        pathlib.Path
+            ``path`` as a Path.
+        """
         p = Path(path)
         p.parent.mkdir(parents=True, exist_ok=True)
         self.dataset.to_netcdf(p, engine="netcdf4")
@@ -204,6 +250,17 @@ class CharacteristicMaps:
         the equivalent circuit (:func:`model_hash`), so maps built from a Magnet are
         accepted for ``FluxModel(magnet)`` and vice versa, and refused for another magnet
         or other physics switches (saturation, eddy currents, ...).
+
+        Parameters
+        ----------
+        magnet : Magnet, FluxModel or Network
+            The detailed model the maps should belong to.
+
+        Raises
+        ------
+        ParameterFileError
+            The maps belong to another equivalent circuit (or are a file of an earlier
+            version that stored another hash).
         """
         h = model_hash(magnet)
         if h == self.magnet_hash:
@@ -235,7 +292,30 @@ def model_hash(model: Any) -> str:
 
 
 def load_maps(path: str | Path, *, magnet: Any = None) -> CharacteristicMaps:
-    """Read maps from netCDF; with ``magnet``, check that they belong to it."""
+    """Read maps from netCDF; with ``magnet``, check that they belong to it.
+
+    Parameters
+    ----------
+    path : str or path-like
+        A maps file written by :meth:`CharacteristicMaps.to_netcdf` (``maglevkit maps
+        build``).  It is read into memory completely and closed.
+    magnet : Magnet, FluxModel, Network or None, default None
+        If given, :meth:`CharacteristicMaps.check_magnet` checks that the maps were built
+        from this model.
+
+    Returns
+    -------
+    CharacteristicMaps
+
+    Raises
+    ------
+    InputError
+        ``path`` is not a str or path-like.
+    ParameterFileError
+        The file does not exist, is not readable netCDF, is not a maglevkit maps file
+        (``format`` attribute), lacks a required variable or coordinate, or belongs to
+        another magnet.
+    """
     if not isinstance(path, (str, os.PathLike)):
         raise InputError(f"load_maps needs the path of a maps file (str or Path), got "
                          f"{type(path).__name__}")

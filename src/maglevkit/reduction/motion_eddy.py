@@ -38,12 +38,13 @@ current) at one operating point: the detailed DAE is linearised there
 
 from __future__ import annotations
 
+import warnings
 from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
-from ..errors import SolverError
+from ..errors import MaglevkitWarning, SolverError
 
 __all__ = ["DetailedFrequencyResponse", "MotionEddyFit", "detailed_frequency_response",
            "fit_motion_eddy", "ladder_frequency_response",
@@ -305,6 +306,11 @@ def fit_motion_eddy(response: DetailedFrequencyResponse, *, r_el: float, r_ec_ju
             if best is None or sol.cost < best.cost:
                 best = sol
     assert best is not None
+    if best.status <= 0:
+        warnings.warn(f"the motion-eddy ladder fit did not converge (status {best.status}: "
+                      f"{best.message}; {best.nfev} evaluations): its R_a, L_u, R_2 are those "
+                      "where it stopped (see its relative rms residual)", MaglevkitWarning,
+                      stacklevel=2)
     r_a, l_u, r_2 = unpack(best.x)
     ms, _, mu = ladder_frequency_response(f, ltilde=lt, dpsi_ds=k, r_el=r_el, r_a=r_a,
                                           l_u=l_u, r_2=r_2)

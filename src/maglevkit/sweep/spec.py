@@ -200,7 +200,30 @@ class SweepSpec:
             yield {**self.fixed, **dict(zip(names, combo, strict=True))}
 
     def case_key(self, params: Mapping[str, Any]) -> str:
-        """Hash of the job, the case's parameters and the format (its stored file's name)."""
+        """Hash of the job, the case's parameters and the format (its stored file's name).
+
+        Parameters
+        ----------
+        params : mapping
+            One case's full parameter set, as :meth:`cases` yields it: a value for every
+            sweep parameter (:data:`PARAMETERS`, e.g. ``speed`` [m/s], ``seed``,
+            ``failure``), JSON-serialisable and finite; other keys are ignored.
+
+        Returns
+        -------
+        str
+            24 hex digits of a SHA-256 over the sweep format, the maglevkit version, the
+            job and the case: a new version or job gives new keys.
+
+        Raises
+        ------
+        KeyError
+            A sweep parameter missing from ``params``.
+        ValueError
+            NaN or infinite values (``json.dumps(allow_nan=False)``).
+        TypeError
+            Values JSON cannot encode.
+        """
         from .._version import __version__
 
         blob = json.dumps({"format": SWEEP_FORMAT, "maglevkit": __version__,

@@ -304,9 +304,47 @@ class SpanSag(Profile):
         return (self.amplitude_m * 3.2 / self.span_length_m) * (1.0 + xi * xi * (4.0 * xi - 6.0))
 
     def elevation_m(self, position_m: Any) -> np.ndarray:
+        """Sag ``r(x)`` [m] at positions [m], positive downward (0 at the piers).
+
+        Parameters
+        ----------
+        position_m : float or array_like
+            Positions along the guideway [m], finite; any position (the profile repeats
+            every ``span_length_m`` from ``origin_m``).
+
+        Returns
+        -------
+        ndarray
+            ``r(x)`` [m], same shape as ``position_m``.
+
+        Raises
+        ------
+        InputError
+            Positions that are not finite real numbers.
+        """
         return self._value(self._xi(position_m))
 
     def slope(self, position_m: Any) -> np.ndarray:
+        """``dr/dx`` [m/m] at positions [m].
+
+        At a pier (``xi = 0``) the slope is that of the span starting there (the right-hand
+        side of the kink).
+
+        Parameters
+        ----------
+        position_m : float or array_like
+            Positions along the guideway [m], finite.
+
+        Returns
+        -------
+        ndarray
+            ``dr/dx`` [m/m], same shape as ``position_m``.
+
+        Raises
+        ------
+        InputError
+            Positions that are not finite real numbers.
+        """
         return self._slope(self._xi(position_m))
 
     def on_paths(self, positions_m: np.ndarray, *, start_m: np.ndarray, step_m: float
@@ -809,6 +847,23 @@ class RandomProfile(Profile):
         the sums are taken on the paths themselves (:meth:`_on_paths_phasors`); positions
         further off ``start_m + k step_m`` than their rounding are evaluated where they are
         (:meth:`elevation_m`, :meth:`slope`).
+
+        Parameters
+        ----------
+        positions_m : array_like (n_steps, n_points)
+            Positions [m] of the points at every step, ideally
+            ``start_m[j] + k step_m``.  Other shapes, or paths that do not match
+            ``start_m`` and ``step_m``, are evaluated point by point (the base method).
+        start_m : array_like (n_points,)
+            Position of each point at step 0 [m] (keyword only).
+        step_m : float
+            Distance travelled per step [m] (speed times time step; keyword only); 0 for a
+            standing train.
+
+        Returns
+        -------
+        (elevation_m, slope) : ndarray (n_steps, n_points) each
+            ``r`` [m] and ``dr/dx`` [m/m].
         """
         x = np.asarray(positions_m, dtype=float)
         start = np.asarray(start_m, dtype=float).ravel()

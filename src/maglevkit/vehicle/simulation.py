@@ -43,7 +43,19 @@ __all__ = ["Failure", "VehicleRun", "VehicleModel", "VehicleRunInterrupted", "ru
 @dataclass(frozen=True)
 class Failure:
     """Circuit ``circuit`` (a bank circuit name, e.g. ``"s2m4/front"``) switched off
-    (voltage 0) from ``time_s`` [s] on."""
+    (voltage 0) from ``time_s`` [s] on.
+
+    Parameters
+    ----------
+    circuit : str
+        Name of the circuit, ``"<magnet>/<circuit>"`` as in the vehicle bank's
+        ``circuit_names``; :meth:`VehicleModel.run` refuses unknown names
+        (:class:`InputError`).
+    time_s : float
+        Run time [s] from which the circuit's voltage is 0 (a time at or before the start
+        fails it from the first step).  Not checked here; :func:`parse_failure` requires
+        a finite value >= 0.  Of several failures of one circuit the earliest counts.
+    """
 
     circuit: str
     time_s: float
@@ -110,7 +122,23 @@ class VehicleRun:
 
     def to_netcdf(self, path: str | Path) -> Path:
         """Write the run's Dataset (the folder must exist: nothing is created silently),
-        atomically: an interrupted write leaves no damaged file."""
+        atomically: an interrupted write leaves no damaged file.
+
+        Parameters
+        ----------
+        path : str or path-like
+            The netCDF file to write; an existing file is replaced.
+
+        Returns
+        -------
+        pathlib.Path
+            The written file.
+
+        Raises
+        ------
+        InputError
+            The parent directory of ``path`` does not exist.
+        """
         from .._files import write_netcdf_atomically
 
         p = Path(path)
@@ -387,6 +415,8 @@ class VehicleModel:
             Guideway irregularity ``r(x)`` (positive downward), see
             :mod:`maglevkit.vehicle.irregularities`.
         failures : sequence of Failure
+            Circuits switched off (voltage 0) from a time on; every circuit must be one of
+            the bank's (else :class:`InputError`).
         progress : bool
             Progress on stderr: a bar on a terminal, plain lines with the ETA in logs.
         floor_points : sequence of float
@@ -778,7 +808,23 @@ class VehicleModel:
     def step_function(self, dt_s: float = 1e-3) -> Any:
         """The vehicle step for steps of ``dt_s`` [s] as one CasADi function (uncompiled),
         with its layout and parts (:class:`maglevkit.vehicle.stepkernel.VehicleStepFunction`);
-        reduced magnets only."""
+        reduced magnets only.
+
+        Parameters
+        ----------
+        dt_s : float, default 1e-3
+            Step length [s], finite and > 0; the guideway and mechanics are discretised
+            for it and the bank's RK4 sub-step count follows from it.
+
+        Returns
+        -------
+        VehicleStepFunction
+
+        Raises
+        ------
+        InputError
+            A bad ``dt_s``, or a model with ``magnets="detailed"``.
+        """
         return self._step_function(float(dt_s), self.bank.step_function(float(dt_s)))
 
     def _step_function(self, dt: float, bank_step: Any) -> Any:
@@ -1105,7 +1151,45 @@ def run_vehicle(train: TrainData, *, speed_m_per_s: float, duration_s: float, dt
                 rigid: bool = False, irregularity: Any = None, failures: Sequence[Failure] = (),
                 magnets: str = "reduced", maps_cache: Any = None, progress: bool = False
                 ) -> VehicleRun:
-    """Build a :class:`VehicleModel` and run it (see :meth:`VehicleModel.run`)."""
+    """Build a :class:`VehicleModel` and run it (see :meth:`VehicleModel.run`).
+
+    Parameters
+    ----------
+    train : TrainData
+        The vehicle (from :func:`~maglevkit.vehicle.load_vehicle`).
+    speed_m_per_s : float
+        Constant speed [m/s], finite and >= 0.
+    duration_s : float
+        Run length [s], finite, > 0 and at least two steps.
+    dt_s : float, default 1e-3
+        Fixed time step [s], finite and > 0.
+    rigid : bool, default False
+        Run on a rigid guideway instead of the flexible spans.
+    irregularity : Profile or None, default None
+        Guideway irregularity ``r(x)`` [m] (positive downward), see
+        :mod:`maglevkit.vehicle.irregularities`; None: a smooth guideway.
+    failures : sequence of Failure, default ()
+        Circuits switched off (voltage 0) from a time on.
+    magnets : {"reduced", "detailed"}, default "reduced"
+        Reduced current-based magnets (one force per circuit) or detailed flux-based ones
+        (one gap and force per pole; only the Python loop).
+    maps_cache : path or None, default None
+        Directory of the cached characteristic maps (None: the default cache,
+        :mod:`maglevkit.vehicle.mapcache`).
+    progress : bool, default False
+        Progress on stderr.
+
+    Returns
+    -------
+    VehicleRun
+
+    Raises
+    ------
+    InputError
+        Bad arguments (see :class:`VehicleModel` and :meth:`VehicleModel.run`).
+    OutOfRangeError, VehicleRunInterrupted
+        As :meth:`VehicleModel.run`.
+    """
     model = VehicleModel(train, rigid=rigid, magnets=magnets, maps_cache=maps_cache)
     return model.run(speed_m_per_s=speed_m_per_s, duration_s=duration_s, dt_s=dt_s,
                      irregularity=irregularity, failures=failures, progress=progress)
