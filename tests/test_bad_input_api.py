@@ -364,7 +364,8 @@ def test_absurd_dimension_is_a_solver_error_not_a_casadi_traceback() -> None:
     # was: RuntimeError "Evaluation failed" from CasADi
     p = _params("tr09-standard")
     p["magnet"]["pole_pitch"] = 1e30
-    m = mk.build_magnet(p)
+    with pytest.warns(mk.PlausibilityWarning, match=r"\[magnet\] pole_pitch = 1e\+30 m"):
+        m = mk.build_magnet(p)
     with pytest.raises(mk.SolverError, match=r"could not be evaluated \(non-finite numbers\); "
                                              r"check the magnet's dimensions") as info:
         mk.solve_statics(m, gaps=0.01, currents=30.0)

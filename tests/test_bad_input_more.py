@@ -74,7 +74,7 @@ def test_vehicle_cli_refuses_a_missing_output_folder_before_running(tmp_path) ->
     import sys
 
     out = subprocess.run([sys.executable, "-c", "from maglevkit.cli import main; main()",
-                          "vehicle", "run", "--speed", "100", "--duration", "0.01",
+                          "vehicle", "run", "--speed-kmh", "100", "--duration", "0.01",
                           "-o", str(tmp_path / "missing" / "x.nc")],
                          capture_output=True, text=True, cwd=tmp_path, timeout=300)
     assert out.returncode == 2
@@ -82,7 +82,7 @@ def test_vehicle_cli_refuses_a_missing_output_folder_before_running(tmp_path) ->
     assert "setting up" not in out.stderr            # refused before any work
     assert not (tmp_path / "missing").exists()
     bad = subprocess.run([sys.executable, "-c", "from maglevkit.cli import main; main()",
-                          "vehicle", "run", "--speed", "-5", "--duration", "0.01"],
+                          "vehicle", "run", "--speed-kmh", "-5", "--duration", "0.01"],
                          capture_output=True, text=True, cwd=tmp_path, timeout=300)
-    assert bad.returncode == 2 and bad.stderr.startswith("error: --speed")
+    assert bad.returncode == 2 and bad.stderr.startswith("error: --speed-kmh -5")
     assert "[bold" not in bad.stderr                  # no raw markup

@@ -170,7 +170,7 @@ def test_cli_calibrate(tmp_path: Path) -> None:
     assert "fringing_factor = " in res.output and "held out: max" in res.output
     assert "calibration" in tomllib.loads(out.read_text())
     res = runner.invoke(app, ["calibrate", "u-magnet", str(FEM), "-o", str(out), "--params",
-                              "nonsense"])
+                              "nonsense", "--force"])
     assert res.exit_code == 2 and "Traceback" not in res.output and "nonsense" in res.output
 
 

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import csv
+import json
 from pathlib import Path
 
 import numpy as np
@@ -86,15 +87,29 @@ def test_demo_runs_the_whole_chain(tmp_path: Path) -> None:
                  "compare-closed-loop.png"):
         assert (tmp_path / name).stat().st_size > 1000, name
     assert "largest normalised RMS error" in res.output and "speed-up" in res.output
+    # issue 27: the headline numbers come with what they mean
+    assert "; acceptance limit 2 %: met" in res.output
+    assert "not an acceptance metric but the error relative to how much the signal moves" \
+        in res.output
 
 
 def test_compare_cli_with_a_scenario_file(tmp_path: Path) -> None:
     nc = tmp_path / "m.nc"
     assert runner.invoke(app, ["maps", "build", "u-magnet", "-o", str(nc)]).exit_code == 0
+    # issue 27: --gap/--current were ignored with --scenario (the JSON header claimed them)
     res = runner.invoke(app, ["compare", "u-magnet", str(nc), "--scenario", "step", "--gap",
-                              "0.01", "--current", "10", "--out", str(tmp_path)])
+                              "10", "--current", "33.5", "--format", "json"])
+    assert res.exit_code == 2 and res.stdout == ""
+    assert "--gap 10 and --current 33.5 with --scenario 'step': a scenario file sets its own" \
+        in " ".join(res.stderr.split())
+    res = runner.invoke(app, ["compare", "u-magnet", str(nc), "--scenario", "step",
+                              "--out", str(tmp_path), "--format", "json"])
     assert res.exit_code == 0, res.output
     assert (tmp_path / "compare-step.png").is_file()
+    header = json.loads(res.stdout)
+    assert header["scenario"] == "step" and "gap_m" not in header
+    # progress on stderr while it runs
+    assert "compare: scenario 1/1 step ..." in res.stderr and "done in" in res.stderr
     res = runner.invoke(app, ["compare", "tr09-standard", str(nc), "--gap", "0.01",
                               "--current", "10"])
     assert res.exit_code == 2 and "belong to magnet" in res.output

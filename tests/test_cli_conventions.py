@@ -224,7 +224,7 @@ def test_simulate_and_compare_formats(small_maps: Path, tmp_path: Path) -> None:
                                          "energy_mechanical"))
     assert parts == pytest.approx(rows["energy_in"]["end"], rel=1e-3)
     res = runner.invoke(app, ["compare", "u-magnet", str(small_maps), "--scenario", str(scen),
-                              "--gap", "0.01", "--current", "10", "--format", "csv"])
+                              "--format", "csv"])
     assert res.exit_code == 0, res.output
     rows_c = list(csv.DictReader(io.StringIO(res.stdout)))
     assert [r["scenario"] for r in rows_c] == ["s"]

@@ -212,7 +212,8 @@ def test_cli_maps_build_method_and_difference_plots(both_maps, tmp_path) -> None
     tr = mk.load_maps(nc, magnet=mk.load_magnet("u-magnet"))
     assert "transient" in tr.dataset.attrs["method"]
     _assert_transient_equals_both(tr, both_maps)
-    res = runner.invoke(app, ["maps", "build", "u-magnet", "-o", str(nc), "--method", "fit"])
+    res = runner.invoke(app, ["maps", "build", "u-magnet", "-o", str(tmp_path / "f.nc"),
+                              "--method", "fit"])
     assert res.exit_code == 2 and "--method" in res.output
     # plot: maps of method "both" also get the per-point relative differences
     both_nc = both_maps.to_netcdf(tmp_path / "both.nc")

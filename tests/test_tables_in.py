@@ -349,11 +349,12 @@ def test_cli_import(own_csv: Path, tmp_path: Path) -> None:
     maps = mk.load_maps(out)
     assert maps.dataset["eddy_resistance_fit_ohm"].values[0] == 8.8
     bad = _small(tmp_path, lambda r: _set(r, 4, 2, "nan"))
-    res = runner.invoke(app, ["maps", "import", str(bad), "-o", str(out), "--resistance", "2"])
+    res = runner.invoke(app, ["maps", "import", str(bad), "-o", str(out), "--resistance", "2",
+                              "--force"])
     assert res.exit_code == 2 and "Traceback" not in res.output
     lines = [ln for ln in res.output.splitlines() if ln.strip()]
     assert len(lines) == 1 and lines[0].startswith("error: ") and "row 6" in lines[0]
-    res = runner.invoke(app, ["maps", "import", str(own_csv), "-o", str(out)])
+    res = runner.invoke(app, ["maps", "import", str(own_csv), "-o", str(out), "--force"])
     assert res.exit_code == 2 and "--resistance (R_el per circuit [ohm]) is required" in res.output
     assert not math.isnan(float(maps.dataset["reciprocity_residual"].max()))
 
@@ -385,7 +386,7 @@ def test_cli_import_with_a_measured_voltage_step(own_csv: Path, tmp_path: Path) 
     assert mk.load_maps(out).dataset["eddy_resistance_fit_ohm"].values[0] == pytest.approx(
         r_ec, rel=1e-8)
     res = CliRunner().invoke(app, ["maps", "import", str(own_csv), "-o", str(out), "--magnet",
-                                   "u-magnet", "--voltage-step", str(step)])
+                                   "u-magnet", "--voltage-step", str(step), "--force"])
     assert res.exit_code == 2 and "--step-voltage" in res.output
 
 

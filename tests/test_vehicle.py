@@ -371,7 +371,7 @@ def test_cli_vehicle_run(tmp_path: Any) -> None:
 
     runner = CliRunner()
     out = tmp_path / "run.nc"
-    r = runner.invoke(app, ["vehicle", "run", "--speed", "0", "--duration", "0.2", "--rigid",
+    r = runner.invoke(app, ["vehicle", "run", "--speed-kmh", "0", "--duration", "0.2", "--rigid",
                             "-o", str(out), "--no-progress"])
     assert r.exit_code == 0, r.output
     assert "minimum gap 10.000 mm" in r.stdout
@@ -382,7 +382,7 @@ def test_cli_vehicle_run(tmp_path: Any) -> None:
     for args, msg in ((["--failure", "s9m9/x@0.1"], "no circuit"),
                       (["--failure", "oops"], "CIRCUIT@T"),
                       (["--irregularity", "bumps:1"], "irregularity"),
-                      (["--speed", "-5"], "speed")):
+                      (["--speed-kmh", "-5"], "--speed-kmh -5")):
         r = runner.invoke(app, ["vehicle", "run", "--duration", "0.1", "--rigid",
                                 "--no-progress", *args])
         assert r.exit_code == 2, (args, r.output)

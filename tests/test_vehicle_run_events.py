@@ -120,7 +120,7 @@ def test_cli_ctrl_c_writes_the_partial_run(monkeypatch: pytest.MonkeyPatch,
 
     monkeypatch.setattr(ProgressReporter, "advance", _ctrl_c_after(100))
     out = tmp_path / "run.nc"
-    r = CliRunner().invoke(app, ["vehicle", "run", "--speed", "400", "--duration", "0.3",
+    r = CliRunner().invoke(app, ["vehicle", "run", "--speed-kmh", "400", "--duration", "0.3",
                                  "-o", str(out)])
     assert r.exit_code == 130, r.output
     assert "interrupted: Ctrl-C: the run stopped at t = " in r.stderr
@@ -138,7 +138,7 @@ def test_cli_touchdown_inside_a_step_reports_and_writes(tmp_path: Path) -> None:
     from maglevkit.cli import app
 
     out = tmp_path / "td.nc"
-    r = CliRunner().invoke(app, ["vehicle", "run", "--speed", "400", "--duration", "0.2",
+    r = CliRunner().invoke(app, ["vehicle", "run", "--speed-kmh", "400", "--duration", "0.2",
                                  "--irregularity", "random:3e-3", "--no-progress",
                                  "-o", str(out)])
     assert r.exit_code == 0, r.output

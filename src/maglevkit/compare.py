@@ -50,7 +50,8 @@ from .models.statics import solve_statics
 from .plant import STANDARD_GRAVITY, HeaveMass
 from .simulation import simulate
 
-__all__ = ["AC_MIN_RELATIVE_VARIATION", "ComparisonScenario", "ComparisonResult",
+__all__ = ["AC_MIN_RELATIVE_VARIATION", "ACCEPTANCE_NRMS", "error_verdicts",
+           "ComparisonScenario", "ComparisonResult",
            "standard_scenarios", "compare_models", "circuit_forces", "format_ac_error"]
 
 #: Smallest variation of a detailed signal, RMS(y - mean(y)) / |mean(y)|, for which the
@@ -152,6 +153,38 @@ class ComparisonResult:
             for n, ci, fi, ca, fa in zip(self.circuit_names, self.current_error,
                                          self.force_error, self.current_error_ac,
                                          self.force_error_ac, strict=True))
+
+
+ACCEPTANCE_NRMS = 0.02
+"""The acceptance limit of the normalised RMS error ``RMS(diff)/RMS(detailed)`` (2 %)."""
+
+#: Upper bounds of the AC-normalised error and what they mean (docs/reduction.md,
+#: "AC-normalised error and the frequency limit of one R_ec": a few percent up to ~5 Hz,
+#: tens of percent at 50 Hz, where one eddy time constant is too few).
+AC_VERDICTS = ((0.05, "the reduced model follows the signal's variation closely"),
+               (0.20, "the reduced model follows the signal's variation approximately"),
+               (math.inf, "the reduced model follows only the trend of the signal's "
+                          "variation: trust its variations in this case to tens of percent "
+                          "(one eddy time constant; more with CurrentModel(eddy_modes=...))"))
+
+
+def error_verdicts(nrms: float, ac: float) -> tuple[str, str]:
+    """What a largest NRMS and AC-normalised error (fractions) mean, for reports.
+
+    Returns
+    -------
+    (str, str)
+        The NRMS against the acceptance limit :data:`ACCEPTANCE_NRMS`; the AC error's
+        meaning (not an acceptance metric: the error relative to how much the signal
+        moves; bands of :data:`AC_VERDICTS`).
+    """
+    met = "met" if nrms <= ACCEPTANCE_NRMS else "NOT met"
+    first = f"acceptance limit {100 * ACCEPTANCE_NRMS:g} %: {met}"
+    if not math.isfinite(ac):
+        return first, "no variation to compare with"
+    text = next(t for bound, t in AC_VERDICTS if ac <= bound)
+    return first, (f"not an acceptance metric but the error relative to how much the signal "
+                   f"moves; {100 * ac:.3g} % means {text}")
 
 
 def format_ac_error(value: float, *, digits: int = 2, suffix: str = " %",

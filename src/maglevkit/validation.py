@@ -21,15 +21,17 @@ from __future__ import annotations
 
 import math
 import numbers
-from collections.abc import Sequence
+import warnings
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
-from .errors import InputError, MaglevkitError
+from .errors import InputError, MaglevkitError, PlausibilityWarning
 
 __all__ = ["real_number", "real_array", "whole_number", "flag", "optional_flag",
-           "describe"]
+           "describe", "Plausible", "check_plausible"]
 
 
 def describe(value: Any) -> str:
@@ -257,3 +259,99 @@ def optional_flag(value: Any, what: str) -> bool | None:
     bool or None
     """
     return None if value is None else flag(value, what)
+
+
+# ---------------------------------------------------------------- plausible file values
+@dataclass(frozen=True)
+class Plausible:
+    """The plausible magnitudes of one dimensional key of a parameter file.
+
+    A value outside ``low ... high`` (its magnitude; zero is always plausible, a unit
+    slip cannot produce it) is almost always a unit slip (mm typed into a metre key,
+    tonnes into a kilogram key) and raises a :class:`PlausibilityWarning` from
+    :func:`check_plausible`.  The ranges are chosen so that every bundled file lies
+    inside and the same file with any one value multiplied by 1000 or by 1/1000 lies
+    outside (docs/decisions.md, "Plausible ranges of file values").
+    """
+
+    low: float
+    high: float
+    unit: str
+
+    def __post_init__(self) -> None:
+        if not 0.0 < self.low < self.high:
+            raise ValueError(f"Plausible range {self.low} ... {self.high}: need 0 < low < high")
+
+
+#: The unit a value 1000 times too large / too small was most likely typed in, per SI unit.
+_SLIP_UNITS = {
+    "m": ("mm", "km"), "kg": ("g", "t (tonnes)"), "A": ("mA", "kA"), "ohm": ("mohm", "kohm"),
+    "s": ("ms", "ks"), "Hz": ("mHz", "kHz"), "V": ("mV", "kV"), "N/m": ("N/km", "kN/m or N/mm"),
+    "N s/m": ("N s/km", "kN s/m or N s/mm"), "kg/m": ("g/m or kg/km", "t/m or kg/mm"),
+    "kg m^2": ("g m^2", "t m^2"), "N m^2": ("N mm^2 / 1000", "kN m^2"),
+    "ohm m": ("mohm m", "kohm m"), "m/s": ("mm/s", "km/s"),
+}
+
+
+def _slip(value: float, rng: Plausible) -> str:
+    """The likely unit slip of a magnitude outside ``rng`` (empty if none is likely)."""
+    big, small = _SLIP_UNITS.get(rng.unit, (f"milli-{rng.unit}", f"kilo-{rng.unit}"))
+    if value > rng.high and rng.low <= value / 1000.0 <= rng.high:
+        return f"1000 times too large: typed in {big} instead of {rng.unit}?"
+    if value < rng.low and rng.low <= value * 1000.0 <= rng.high:
+        return f"1000 times too small: typed in {small} instead of {rng.unit}?"
+    return f"check its unit ({rng.unit})"
+
+
+def check_plausible(values: Mapping[str, Any], ranges: Mapping[str, Plausible],
+                    source: str = "", *, stacklevel: int = 3) -> list[str]:
+    """Warn about every file value outside its plausible range; the one such check.
+
+    Parameters
+    ----------
+    values : mapping
+        The parsed file: ``{table: {key: value}}``.  Keys of ``ranges`` missing from it,
+        and values that are not numbers (checked elsewhere), are skipped; a list is
+        checked element by element.
+    ranges : mapping
+        ``"table.key" -> Plausible``: the one table of ranges of a file kind.
+    source : str
+        The file's label for the message.
+
+    Returns
+    -------
+    list of str
+        The ``"table.key"`` names warned about (for tests and callers).
+
+    Warns
+    -----
+    PlausibilityWarning
+        One per implausible key, naming the key, the value, the unit the key expects, the
+        plausible range and the likely slip.
+    """
+    flagged: list[str] = []
+    prefix = f"{source}: " if source else ""
+    for name, rng in ranges.items():
+        table, _, key = name.partition(".")
+        tab = values.get(table)
+        if not isinstance(tab, Mapping) or key not in tab:
+            continue
+        raw = tab[key]
+        items = raw if isinstance(raw, list) else [raw]
+        for item in items:
+            if _is_bool(item) or not isinstance(item, numbers.Real):
+                continue
+            try:
+                mag = abs(float(item))
+            except OverflowError:   # an integer beyond float: the file's own check refuses it
+                continue
+            if mag == 0.0 or not math.isfinite(mag) or rng.low <= mag <= rng.high:
+                continue
+            side = "above" if mag > rng.high else "below"
+            warnings.warn(
+                f"{prefix}[{table}] {key} = {item!r} {rng.unit} is {side} the plausible range "
+                f"{rng.low:g} ... {rng.high:g} {rng.unit} ({key} is in {rng.unit}); "
+                f"{_slip(mag, rng)}", PlausibilityWarning, stacklevel=stacklevel)
+            flagged.append(name)
+            break
+    return flagged

@@ -14,6 +14,7 @@ Conventions (docs/decisions.md, "Command-line conventions"):
 
 from __future__ import annotations
 
+import contextlib
 import csv
 import io
 import json
@@ -30,6 +31,7 @@ import typer
 from rich.console import Console, ConsoleDimensions
 from rich.table import Table
 from rich.text import Text
+from typer.exceptions import TyperException
 
 from ..errors import MaglevkitError
 
@@ -108,6 +110,27 @@ def fail(exc: Exception | str) -> typer.Exit:
     return typer.Exit(code=2)
 
 
+INTERRUPTED_EXIT_CODE = 130
+"""Exit code after Ctrl-C / SIGINT (128 + SIGINT, the shell convention)."""
+
+
+_INTERRUPT_REPORTED = False
+
+
+def interrupted(detail: str = "") -> typer.Exit:
+    """Print ``interrupted[: detail]`` on stderr and return the exit with code 130."""
+    import signal
+
+    # a second Ctrl-C while reporting gave a traceback: the exit is on its way
+    global _INTERRUPT_REPORTED
+
+    with contextlib.suppress(ValueError):   # (not in the main thread)
+        signal.signal(signal.SIGINT, signal.SIG_IGN)
+    err_console.print(f"interrupted{': ' + detail if detail else ''}")
+    _INTERRUPT_REPORTED = True
+    return typer.Exit(code=INTERRUPTED_EXIT_CODE)
+
+
 def info(message: str) -> None:
     """A diagnostic line (e.g. ``wrote FILE``) on stderr."""
     err_console.print(message)
@@ -156,17 +179,26 @@ def plot_formats() -> tuple[str, ...]:
     return tuple(sorted(FigureCanvasBase.get_supported_filetypes()))
 
 
+ForceOption = Annotated[bool, typer.Option(
+    "--force", help="Overwrite existing output files (without it an existing file is an "
+                    "error, reported before the computation).")]
+
+
 def output_file(path: Path | None, option: str, *,
-                formats: Sequence[str] | None = None) -> Path | None:
+                formats: Sequence[str] | None = None, force: bool = True) -> Path | None:
     """Check an output file before the computation (None passes through).
 
-    Refuses a directory, a missing parent directory (nothing is created silently) and,
-    with ``formats``, a suffix outside them.  Raises the CLI's error exit (code 2).
+    Refuses a directory, a missing parent directory (nothing is created silently), with
+    ``formats`` a suffix outside them and, with ``force=False``, an existing file (the
+    command's ``--force`` overwrites).  Raises the CLI's error exit (code 2).
     """
     if path is None:
         return None
     if path.is_dir():
         raise fail(f"{option} {str(path)!r} is a directory; give a file name")
+    if not force and path.exists():
+        raise fail(f"{option} {str(path)!r} exists; add --force to overwrite it, or give "
+                   "another name (nothing was computed)")
     parent = path.parent
     if not parent.is_dir():
         raise fail(f"{option} {str(path)!r}: the directory {str(parent)!r} does not exist; "
@@ -180,11 +212,11 @@ def output_file(path: Path | None, option: str, *,
     return path
 
 
-def plot_file(path: Path | None, option: str = "--plot") -> Path | None:
+def plot_file(path: Path | None, option: str = "--plot", *, force: bool = True) -> Path | None:
     """:func:`output_file` for a figure: the suffix must be a matplotlib format."""
     if path is None:
         return None
-    return output_file(path, option, formats=plot_formats())
+    return output_file(path, option, formats=plot_formats(), force=force)
 
 
 def output_dir(path: Path, option: str) -> Path:
@@ -271,11 +303,38 @@ def _one_line_warning(message: Warning | str, category: type[Warning], filename:
     sys.stderr.write(f"warning: {message}\n")
 
 
+def _usage_error(exc: Exception) -> int:
+    """Print a usage error as the one-line ``error: ...`` of the commands; the exit code.
+
+    Plain ``maglevkit`` (or a group without its command) prints the help on stdout, rc 0.
+    """
+    ctx = getattr(exc, "ctx", None)
+    if type(exc).__name__ == "NoArgsIsHelpError" and ctx is not None:
+        sys.stdout.write(ctx.get_help() + "\n")
+        return 0
+    text = exc.format_message() if hasattr(exc, "format_message") else str(exc)
+    where = f" (see {ctx.command_path} --help)" if ctx is not None else ""
+    fail(f"{text}{where}")
+    return int(getattr(exc, "exit_code", 2))
+
+
 def main() -> None:  # pragma: no cover - console entry point
     import warnings
 
     warnings.showwarning = _one_line_warning
     try:
-        app()
+        # not standalone: a Ctrl-C outside the commands' own handling (while starting,
+        # importing, loading) ends with rc 130 and the "interrupted" line too, not silently
+        rc = app(prog_name="maglevkit", standalone_mode=False)
     except MaglevkitError as exc:   # a safety net: the commands catch their own errors
         raise SystemExit(fail(exc).exit_code) from None
+    except KeyboardInterrupt:
+        rc = INTERRUPTED_EXIT_CODE
+    except typer.Abort:             # end of input at a prompt
+        sys.stderr.write("Aborted!\n")
+        raise SystemExit(1) from None
+    except TyperException as exc:   # usage errors: one line, as every other error
+        raise SystemExit(_usage_error(exc)) from None
+    if rc == INTERRUPTED_EXIT_CODE and not _INTERRUPT_REPORTED:
+        interrupted()
+    raise SystemExit(rc if isinstance(rc, int) else 0)

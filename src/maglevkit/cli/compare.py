@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import re
+import time
 from pathlib import Path
 from typing import Annotated
 
@@ -99,11 +100,13 @@ def slug(text: str) -> str:
 
 @app.command(short_help="Detailed vs reduced model: errors and speed-up per scenario.")
 def compare(
-    magnet: Annotated[str, typer.Argument(help="Magnet TOML file or bundled name.")],
-    maps_file: Annotated[Path, typer.Argument(help="netCDF maps of this magnet "
+    magnet: Annotated[str, typer.Argument(metavar="MAGNET", help="Magnet TOML file or bundled name.")],
+    maps_file: Annotated[Path, typer.Argument(metavar="MAPS_FILE", help="netCDF maps of this magnet "
                                                    "(maglevkit maps build).")],
     scenario: Annotated[str | None, typer.Option(help="Scenario TOML file or bundled name; "
-                                                      "default: the standard set.")] = None,
+                                                      "default: the standard set (not with "
+                                                      "--gap/--current: the file sets its "
+                                                      "own).")] = None,
     gap: Annotated[float | None, typer.Option(help="Operating gap [m] (default: nominal).")]
     = None,
     current: Annotated[float | None, typer.Option(help="Operating current [A] "
@@ -120,16 +123,27 @@ def compare(
     Prints NRMS and AC-normalised errors, CPU times (best of --repeat warm runs) and the
     speed-up per scenario and
     circuit; --format csv or json prints the same columns with unit-suffixed keys.
+
+    \b
+    Example:
+      maglevkit compare tr09-standard maps.nc --out compare-figures
     """
     from ..compare import ComparisonScenario, compare_models, standard_scenarios
     from ..models.scenario import load_scenario
     from ..reduced.current import CurrentModel
     from ..reduction import load_maps
 
+    if scenario is not None and (gap is not None or current is not None):
+        given = " and ".join(f"{o} {v:g}" for o, v in (("--gap", gap), ("--current", current))
+                             if v is not None)
+        raise fail(f"{given} with --scenario {scenario!r}: a scenario file sets its own gaps "
+                   "and initial current ([gaps], [scenario] initial_current); --gap and "
+                   "--current set the operating point of the standard scenarios only: "
+                   "leave them out or edit the scenario file")
     mag = load_magnet_or_exit(magnet)
     s0 = gap if gap is not None else getattr(mag, "nominal_gap", None)
     i0 = current if current is not None else getattr(mag, "nominal_current", None)
-    if s0 is None or i0 is None:
+    if scenario is None and (s0 is None or i0 is None):
         raise fail(f"magnet {mag.name!r}: give --gap and --current (the magnet file has no "
                    "[operating] table)")
     if out is not None:
@@ -137,7 +151,9 @@ def compare(
     try:
         maps = load_maps(maps_file, magnet=mag)
         if scenario is None:
+            assert s0 is not None and i0 is not None   # checked above
             cases = standard_scenarios(mag, gap_m=s0, current_A=i0)
+            meta = {"magnet": mag.name, "gap_m": s0, "current_A": i0}
         else:
             sc = load_scenario(scenario)
             cases = [ComparisonScenario(
@@ -145,13 +161,23 @@ def compare(
                 gaps=sc.inputs_for(mag.network.gap_names, "gaps"),
                 voltages=sc.inputs_for(mag.network.circuit_names, "voltages"),
                 initial_current_A=sc.initial_current_A)]
-        results = compare_models(mag, CurrentModel(maps), cases, gap_m=s0, current_A=i0,
-                                 repeat=repeat)
+            # the file's own operating point; the header names the file, not a gap it
+            # did not run at (issue 27: "gap_m": 10.0 was printed for --gap 10)
+            meta = {"magnet": mag.name, "scenario": str(scenario)}
+        reduced = CurrentModel(maps)
+        results = []
+        start = time.monotonic()
+        for k, case in enumerate(cases, 1):
+            # progress on stderr: the standard set takes ~30 s
+            info(f"compare: scenario {k}/{len(cases)} {case.name} ...")
+            results += compare_models(mag, reduced, [case],
+                                      gap_m=s0 if s0 is not None else 0.0,
+                                      current_A=i0 if i0 is not None else 0.0, repeat=repeat)
+        info(f"compare: {len(cases)} scenario(s) done in {time.monotonic() - start:.1f} s")
     except MaglevkitError as exc:
         raise fail(exc) from None
     print_records(comparison_records(results) if fmt != OutputFormat.table else [], fmt,
-                  comparison_table(results, f"{mag.name}: detailed vs reduced"),
-                  meta={"magnet": mag.name, "gap_m": s0, "current_A": i0})
+                  comparison_table(results, f"{mag.name}: detailed vs reduced"), meta=meta)
     if out is not None:
         from ..plotting import plot_comparison
 

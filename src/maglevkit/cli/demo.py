@@ -37,8 +37,12 @@ def demo(
     """Run statics, figures, maps and the detailed-vs-reduced comparison; print a report.
 
     The report goes to stdout, the progress of the maps to stderr.
+
+    \b
+    Example:
+      maglevkit demo --quick --out demo
     """
-    from ..compare import compare_models, standard_scenarios
+    from ..compare import compare_models, error_verdicts, standard_scenarios
     from ..figures import write_figures
     from ..models.statics import solve_statics
     from ..plotting import plot_comparison, plot_force_current, plot_maps
@@ -99,11 +103,13 @@ def demo(
     worst = max(main, key=lambda r: r.max_error)
     open_loop = [r.speedup for r in main if r.scenario.kind == "open"]
     _rule("report")
-    console.print(f"largest normalised RMS error (coupling case excluded): "
-                  f"{100 * worst.max_error:.2f} % ({worst.scenario.name})")
     worst_ac = max(main, key=lambda r: r.max_error_ac)
+    nrms_verdict, ac_verdict = error_verdicts(worst.max_error, worst_ac.max_error_ac)
+    console.print(f"largest normalised RMS error (coupling case excluded): "
+                  f"{100 * worst.max_error:.2f} % ({worst.scenario.name}); {nrms_verdict}")
     console.print(f"largest AC-normalised error (RMS over the signal's variation): "
-                  f"{100 * worst_ac.max_error_ac:.2f} % ({worst_ac.scenario.name})")
+                  f"{100 * worst_ac.max_error_ac:.2f} % ({worst_ac.scenario.name}); "
+                  f"{ac_verdict}")
     for r in results:
         if r.scenario.coupling:
             console.print(f"neglected coupling: stepping only '{r.circuit_names[0]}' moves the "

@@ -2,13 +2,14 @@
 
 from __future__ import annotations
 
+import math
 from pathlib import Path
 from typing import Annotated
 
 import typer
 
 from ..errors import MaglevkitError
-from ._app import app, console, fail, info, load_magnet_or_exit, output_file
+from ._app import ForceOption, app, console, fail, info, load_magnet_or_exit, output_file
 
 export_app = typer.Typer(help="Export the reduced magnet model for other simulation tools.",
                          no_args_is_help=True, rich_markup_mode=None)
@@ -19,9 +20,9 @@ app.add_typer(export_app, name="export",
 @export_app.command("fmu", short_help="FMI 2.0 co-simulation FMU of the reduced model (C, no "
                                       "Python needed).")
 def fmu(
-    magnet: Annotated[str, typer.Argument(help="Magnet TOML file or bundled name (the maps "
+    magnet: Annotated[str, typer.Argument(metavar="MAGNET", help="Magnet TOML file or bundled name (the maps "
                                                "must belong to it).")],
-    maps_file: Annotated[Path, typer.Argument(help="netCDF maps of this magnet "
+    maps_file: Annotated[Path, typer.Argument(metavar="MAPS_FILE", help="netCDF maps of this magnet "
                                                    "(maglevkit maps build).")],
     output: Annotated[Path, typer.Option("-o", "--output", help="FMU file to write (.fmu; its "
                                                                 "folder must exist).")]
@@ -42,13 +43,20 @@ def fmu(
     current: Annotated[float | None, typer.Option(
         help="Start value of the initial currents I0 [A] (default: nominal, as --gap).")]
     = None,
+    force: ForceOption = False,
 ) -> None:
     """Write an FMI 2.0 co-simulation FMU of the reduced model (paper eq. 8) of every
     circuit: inputs voltages, gaps and gap rates; outputs coil currents and forces;
     R_el and R_ec as parameters; the maps embedded as C arrays; compiled by the system C
     compiler.  See docs/fmu.md.
+
+    \b
+    Example:
+      maglevkit export fmu tr09-standard maps.nc -o tr09.fmu
     """
-    output_file(output, "--output")
+    if not (math.isfinite(max_substep) and max_substep > 0):   # was named max_substep_s
+        raise fail(f"--max-substep {max_substep:g}: must be a finite number of seconds > 0")
+    output_file(output, "--output", force=force)
     if output.suffix.lower() != ".fmu":
         raise fail(f"--output {str(output)!r}: an FMU file must end in .fmu")
     from ..export import export_fmu

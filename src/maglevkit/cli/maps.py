@@ -8,12 +8,15 @@ from typing import Annotated, Any
 
 import typer
 
+from .._interrupt import deferred_sigint, stop_pool
 from ..errors import InputError, MaglevkitError
 from ._app import (
+    ForceOption,
     app,
     console,
     fail,
     info,
+    interrupted,
     load_magnet_or_exit,
     output_dir,
     output_file,
@@ -76,7 +79,7 @@ def connect_scheduler(address: str, timeout_s: float) -> Any:
 
 @maps_app.command("build", short_help="Compute the maps on a regular grid (netCDF).")
 def build(
-    magnet: Annotated[str, typer.Argument(help="Magnet TOML file or bundled name.")],
+    magnet: Annotated[str, typer.Argument(metavar="MAGNET", help="Magnet TOML file or bundled name.")],
     output: Annotated[Path, typer.Option("-o", "--output", help="netCDF file to write (its "
                                                                 "folder must exist).")]
     = Path("maps.nc"),
@@ -97,11 +100,16 @@ def build(
     scheduler_timeout: Annotated[float, typer.Option(help="Seconds to wait for the scheduler "
                                                           "before giving up.")]
     = SCHEDULER_TIMEOUT_S,
+    force: ForceOption = False,
 ) -> None:
     """Compute the maps of a magnet on a regular grid and store them as netCDF.
 
     Progress goes to stderr: a progress bar on a terminal, otherwise a plain line with
     the ETA every 10 % (at least every 10 s).
+
+    \b
+    Example:
+      maglevkit maps build tr09-standard -o maps.nc
     """
     from concurrent.futures import ProcessPoolExecutor
 
@@ -109,7 +117,7 @@ def build(
         raise typer.BadParameter("--workers must be >= 1")
     g = parse_values(gaps, "--gaps", "m")
     c = parse_values(currents, "--currents", "A")
-    output_file(output, "--output")
+    output_file(output, "--output", force=force)
     client = None
     if scheduler:   # before the heavy imports: an unreachable scheduler fails at once
         try:
@@ -125,6 +133,7 @@ def build(
             client.close()
         raise typer.BadParameter(f"--method {method!r}: use one of {', '.join(METHODS)}")
     pool = None
+    built = False
     try:
         mag = load_magnet_or_exit(magnet)
         executor: object
@@ -137,13 +146,24 @@ def build(
             executor = pool
         else:
             executor = None
-        maps = build_maps(mag, gaps=g, currents=c, executor=executor, progress=True,
-                          method=method)
+        with deferred_sigint() as sig:
+            try:
+                maps = build_maps(mag, gaps=g, currents=c, executor=executor, progress=True,
+                                  method=method)
+            except BaseException as exc:
+                # a Ctrl-C, or whatever failure CasADi made of it (a second Ctrl-C)
+                if sig.requested or isinstance(exc, KeyboardInterrupt):
+                    raise interrupted(f"no maps written to {str(output)!r}") from None
+                raise
+        built = True
     except MaglevkitError as exc:
         raise fail(exc) from None
     finally:
         if pool is not None:
-            pool.shutdown()
+            if built:
+                pool.shutdown()
+            else:   # interrupted or failed: stop the workers, do not run the rest
+                stop_pool(pool)
         if client is not None:
             client.close()
     with writing(output, "--output"):
@@ -155,18 +175,24 @@ def build(
             worst = float(abs(maps.dataset[name]).max())
             console.print(f"max |{name}| = {100 * worst:.3f} %")
     info(f"wrote {path}")
+    info(f"next: maglevkit compare {magnet} {path} (detailed vs reduced), or maglevkit maps "
+         f"plot {path}")
 
 
 @maps_app.command("plot", short_help="Plot the maps (the paper's Fig. 9 analog, PNG).")
 def plot(
-    maps_file: Annotated[Path, typer.Argument(help="netCDF maps file.")],
+    maps_file: Annotated[Path, typer.Argument(metavar="MAPS_FILE", help="netCDF maps file.")],
     out: Annotated[Path, typer.Option(help="Folder for the PNG files (created inside an "
                                            "existing directory).")] = Path("out"),
 ) -> None:
     """Plot the maps (the paper's Fig. 9): one PNG per circuit.
 
-    Maps built with ``--method both`` also get the per-point relative differences of the
-    transient and statics methods (``maps_difference_<circuit>.png``).
+    Maps built with --method both also get the per-point relative differences of the
+    transient and statics methods (maps_difference_<circuit>.png).
+
+    \b
+    Example:
+      maglevkit maps plot maps.nc --out maps-figures
     """
     from ..reduction import load_maps
     from ..reduction.plots import has_method_differences

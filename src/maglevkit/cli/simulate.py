@@ -10,6 +10,7 @@ import typer
 
 from ..errors import MaglevkitError
 from ._app import (
+    ForceOption,
     FormatOption,
     OutputFormat,
     add_columns,
@@ -66,7 +67,7 @@ def simulation_summary(res) -> list[dict[str, Any]]:  # type: ignore[no-untyped-
 
 @app.command(short_help="Transient of the detailed flux-based model under a scenario.")
 def simulate(
-    magnet: Annotated[str, typer.Argument(help="Magnet TOML file or bundled name "
+    magnet: Annotated[str, typer.Argument(metavar="MAGNET", help="Magnet TOML file or bundled name "
                                                "(e.g. u-magnet).")],
     scenario: Annotated[str, typer.Option(help="Scenario TOML file or bundled name (e.g. step).")]
     = "step",
@@ -77,18 +78,23 @@ def simulate(
                                                    "SVG, ... by the file suffix).")]
     = None,
     fmt: FormatOption = OutputFormat.table,
+    force: ForceOption = False,
 ) -> None:
     """Simulate the flux-based dynamic model (paper eqs. 4-7) under a scenario's signals.
 
     Prints a summary (currents, force, energy balance); --format csv or json prints it as
     records (quantity, unit, start, end, max).
+
+    \b
+    Example:
+      maglevkit simulate u-magnet --scenario step --csv run.csv
     """
     from ..models.flux import FluxModel
     from ..models.flux import simulate_flux as run_simulation
     from ..models.scenario import load_scenario
 
-    output_file(csv_path, "--csv")
-    plot_file(plot)
+    output_file(csv_path, "--csv", force=force)
+    plot_file(plot, force=force)
     try:
         sc = load_scenario(scenario)
     except MaglevkitError as exc:

@@ -10,6 +10,7 @@ import typer
 
 from ..errors import MaglevkitError
 from ._app import (
+    ForceOption,
     FormatOption,
     OutputFormat,
     add_columns,
@@ -70,7 +71,8 @@ def write_statics_csv(sol, path: Path) -> None:  # type: ignore[no-untyped-def]
 
 @app.command(short_help="Force, flux linkage and inductance on a gap x current grid.")
 def statics(
-    magnet: Annotated[str, typer.Argument(help="Magnet TOML file or bundled name (e.g. u-magnet).")],
+    magnet: Annotated[str, typer.Argument(
+        metavar="MAGNET", help="Magnet TOML file or bundled name (e.g. u-magnet).")],
     gaps: Annotated[str, typer.Option(help="Gaps [m]: start:stop:count or a comma list.")]
     = "0.004:0.020:9",
     currents: Annotated[str, typer.Option(help="Currents [A] (every circuit): start:stop:count "
@@ -86,18 +88,23 @@ def statics(
     fringing: Annotated[bool, typer.Option(help="Fringing permeances at the pole edges.")] = True,
     leakage: Annotated[bool, typer.Option(help="Leakage permeances.")] = True,
     fmt: FormatOption = OutputFormat.table,
+    force: ForceOption = False,
 ) -> None:
     """Solve the magnet's statics on a gap x current grid (same current in every circuit).
 
     Prints the total force at (up to) three currents as a table; --format csv or json
     prints the whole grid instead (the columns of --csv).
+
+    \b
+    Example:
+      maglevkit statics u-magnet --gaps 0.006:0.014:5 --currents 0:40:9 --csv s.csv
     """
     from ..models.statics import solve_statics
 
     g = parse_values(gaps, "--gaps", "m")
     c = parse_values(currents, "--currents", "A")
-    output_file(csv_path, "--csv")
-    plot_file(plot)
+    output_file(csv_path, "--csv", force=force)
+    plot_file(plot, force=force)
     mag = load_magnet_or_exit(magnet, saturation=saturation, fringing=fringing, leakage=leakage,
                               eddy_currents=False)
     try:

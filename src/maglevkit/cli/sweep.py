@@ -3,16 +3,26 @@
 from __future__ import annotations
 
 import os
+import signal
 from pathlib import Path
 from typing import Annotated, Any
 
 import typer
 
 from ..errors import MaglevkitError
-from ._app import app, console, fail, info, output_file, writing
+from ._app import (
+    INTERRUPTED_EXIT_CODE,
+    ForceOption,
+    app,
+    console,
+    fail,
+    info,
+    interrupted,
+    output_file,
+    writing,
+)
 
-INTERRUPTED_EXIT_CODE = 130
-"""Exit code after Ctrl-C / SIGINT (128 + SIGINT, the shell convention)."""
+__all__ = ["INTERRUPTED_EXIT_CODE", "sweep"]
 
 
 def _resume_folder(path: Path) -> Path:
@@ -26,7 +36,7 @@ def _resume_folder(path: Path) -> Path:
 
 @app.command("sweep", short_help="Scenario sweeps of vehicle runs into one netCDF dataset.")
 def sweep(
-    sweep_file: Annotated[str, typer.Argument(help="Sweep TOML file or bundled name.")],
+    sweep_file: Annotated[str, typer.Argument(metavar="SWEEP_FILE", help="Sweep TOML file or bundled name.")],
     output: Annotated[Path, typer.Option("-o", "--output", help="netCDF file to write (its "
                                                                 "folder must exist).")],
     workers: Annotated[int | None, typer.Option(help="Local worker processes (default: the "
@@ -42,16 +52,21 @@ def sweep(
              "a rerun skips the cases stored there.")] = None,
     retry_failed: Annotated[bool, typer.Option(help="Run stored failed cases again.")] = False,
     progress: Annotated[bool, typer.Option(help="Progress on stderr.")] = True,
+    force: ForceOption = False,
 ) -> None:
     """Run every combination of a sweep file's parameters and write one netCDF dataset
     (a coordinate per swept parameter; summary per case, errors of failed cases).
 
     Cases are stored one file each in the resume folder as they finish; interrupt (Ctrl-C)
     and run the same command again to continue.  Results on stdout, progress on stderr.
+
+    \b
+    Example:
+      maglevkit sweep vehicle-speeds -o sweep.nc --workers 2
     """
     from ..sweep import load_sweep, run_sweep
 
-    output_file(output, "-o", formats=("nc",))
+    output_file(output, "-o", formats=("nc",), force=force)
     folder = _resume_folder(resume_dir if resume_dir is not None
                             else output.with_suffix(".cases"))
     if workers is not None and workers < 1:
@@ -90,10 +105,11 @@ def sweep(
         except KeyboardInterrupt:
             from ..sweep import case_path
 
+            # a second Ctrl-C while counting is ignored: the exit is on its way
+            signal.signal(signal.SIGINT, signal.SIG_IGN)
             stored = sum(case_path(folder, spec.case_key(c)).is_file() for c in spec.cases())
-            info(f"interrupted: {stored} of {spec.n_cases} cases stored in {folder}; run the "
-                 "same command again to resume")
-            raise typer.Exit(code=INTERRUPTED_EXIT_CODE) from None
+            raise interrupted(f"{stored} of {spec.n_cases} cases stored in {folder}; run the "
+                              "same command again to resume") from None
     except MaglevkitError as exc:
         raise fail(exc) from None
     finally:
@@ -109,6 +125,8 @@ def sweep(
         res.to_netcdf(output)
     _report(res)
     info(f"wrote {output}")
+    info(f"next: xarray.open_dataset({str(output)!r}) (one coordinate per swept parameter; "
+         "docs/sweep.md)")
 
 
 def _report(res: Any) -> None:

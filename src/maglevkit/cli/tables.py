@@ -12,6 +12,7 @@ import typer
 
 from ..errors import MaglevkitError
 from ._app import (
+    ForceOption,
     FormatOption,
     OutputFormat,
     add_columns,
@@ -87,7 +88,7 @@ def _read_step(path: Path) -> tuple[Any, Any]:
 @maps_app.command("import", short_help="Maps from a table of psi(s, I) and/or F(s, I) (CSV, "
                                        "netCDF).")
 def import_table(
-    data: Annotated[Path, typer.Argument(help="CSV (gap_m, current_A, force_N and/or "
+    data: Annotated[Path, typer.Argument(metavar="DATA", help="CSV (gap_m, current_A, force_N and/or "
                                               "flux_linkage_Wb[_<circuit>]) or netCDF table.")],
     output: Annotated[Path, typer.Option("-o", "--output", help="netCDF maps file to write.")]
     = Path("maps.nc"),
@@ -109,14 +110,19 @@ def import_table(
     reciprocity_tolerance: Annotated[float, typer.Option(help="Largest relative co-energy "
                                                               "reciprocity residual accepted.")]
     = 0.1,
+    force: ForceOption = False,
 ) -> None:
     """Build characteristic maps from a table: L~ and dL/ds from the flux linkage's spline,
     the force from the table or by co-energy; checks reciprocity, monotonicity and the grid
     (docs/reduction.md, "Maps from tables").  Warnings name the gap, current and row.
+
+    \b
+    Example:
+      maglevkit maps import measured.csv --magnet tr09-standard -o maps.nc
     """
     from ..reduction.tables_in import eddy_resistance_from_step, maps_from_table, table_report
 
-    output_file(output, "--output")
+    output_file(output, "--output", force=force)
     mag = load_magnet_or_exit(magnet) if magnet is not None else None
     r_el = _ohms(resistance, "--resistance")
     r_ec = _ohms(eddy_resistance, "--eddy-resistance")
@@ -162,8 +168,9 @@ def import_table(
 
 @app.command("calibrate", short_help="Fit a magnet's network factors to measured statics.")
 def calibrate_cmd(
-    magnet: Annotated[str, typer.Argument(help="Magnet TOML file or bundled name.")],
-    data: Annotated[Path, typer.Argument(help="Measured statics, CSV (gap_m, current_A, "
+    magnet: Annotated[str, typer.Argument(metavar="MAGNET",
+                                          help="Magnet TOML file or bundled name.")],
+    data: Annotated[Path, typer.Argument(metavar="DATA", help="Measured statics, CSV (gap_m, current_A, "
                                               "force_N and/or flux_linkage_Wb[_<circuit>]).")],
     output: Annotated[Path, typer.Option("-o", "--output", help="Calibrated magnet TOML to "
                                                                 "write.")]
@@ -176,6 +183,7 @@ def calibrate_cmd(
                                                                            "reported (comma "
                                                                            "list).")] = None,
     fmt: FormatOption = OutputFormat.table,
+    force: ForceOption = False,
 ) -> None:
     """Calibrate the magnet's leakage and fringing factors, gap offset and iron B-H scalings
     to measured force and/or flux linkage (bounded least squares, exact derivatives).
@@ -184,10 +192,14 @@ def calibrate_cmd(
     determine, and the relative error per point (fitted and held out); --format csv or json
     prints the per-point errors.  Writes the magnet file with a [calibration] table
     (values tagged calibrated, with the data file's SHA-256).
+
+    \b
+    Example:
+      maglevkit calibrate tr09-standard measured.csv -o tr09-calibrated.toml
     """
     from ..calibration import PARAMETERS, calibrate, write_calibrated_toml
 
-    output_file(output, "--output")
+    output_file(output, "--output", force=force)
     names = None
     if params is not None:
         names = [p.strip() for p in params.split(",") if p.strip()]

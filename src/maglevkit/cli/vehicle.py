@@ -2,16 +2,27 @@
 
 from __future__ import annotations
 
+import math
+import warnings
 from pathlib import Path
 from typing import Annotated
 
 import typer
 
 from ..errors import MaglevkitError
-from ._app import app, fail, info, output_dir, output_file, writing
+from ._app import (
+    INTERRUPTED_EXIT_CODE,
+    ForceOption,
+    app,
+    fail,
+    info,
+    interrupted,
+    output_dir,
+    output_file,
+    writing,
+)
 
-INTERRUPTED_EXIT_CODE = 130
-"""Exit code after Ctrl-C (128 + SIGINT), as the shells report it."""
+__all__ = ["INTERRUPTED_EXIT_CODE", "run", "vehicle_app"]
 
 vehicle_app = typer.Typer(help="Vehicle runs: heave-pitch train on an elastic guideway.",
                           no_args_is_help=True, rich_markup_mode=None)
@@ -21,14 +32,20 @@ app.add_typer(vehicle_app, name="vehicle",
 
 @vehicle_app.command("run", short_help="Run the train at constant speed; report gaps, currents, comfort.")
 def run(
-    vehicle: Annotated[str, typer.Argument(help="Vehicle TOML file or bundled name.")] = "tr09",
-    speed: Annotated[float, typer.Option(help="Speed [km/h].")] = 0.0,
+    vehicle: Annotated[str, typer.Argument(
+        metavar="VEHICLE", help="Vehicle TOML file or bundled name.")] = "tr09",
+    speed_kmh: Annotated[float | None, typer.Option(
+        "--speed-kmh", help="Speed [km/h] (0 ... 2000; sweep files give speed in m/s).")]
+    = None,
+    speed: Annotated[float | None, typer.Option(
+        "--speed", help="Deprecated: the speed in km/h; use --speed-kmh.")] = None,
     duration: Annotated[float, typer.Option(help="Simulated time [s].")] = 1.0,
     dt: Annotated[float, typer.Option(help="Time step [s].")] = 1e-3,
     irregularity: Annotated[str, typer.Option(
         help="Guideway irregularity: sag:A, joints:H, random:RMS[:SEED] (metres), joined by '+', "
              "or none.")] = "none",
     failure: Annotated[list[str] | None, typer.Option(
+        metavar="CIRCUIT@T",
         help="CIRCUIT@T: switch a circuit off at T seconds (e.g. s2m4/front@0.5); repeatable.")]
     = None,
     rigid: Annotated[bool, typer.Option(help="Rigid guideway instead of the elastic spans.")] = False,
@@ -43,21 +60,27 @@ def run(
     progress: Annotated[bool, typer.Option(
         help="Progress on stderr (a bar on a terminal, plain lines with the ETA in logs).")]
     = True,
+    force: ForceOption = False,
 ) -> None:
     """Run the train at constant speed; report minimum gaps, peak currents, comfort and the
     real-time factor (results on stdout, diagnostics on stderr).  Ctrl-C stops the run:
-    "interrupted" on stderr, exit code 130, and with -o the run up to there is written."""
+    "interrupted" on stderr, exit code 130, and with -o the run up to there is written.
+
+    \b
+    Example:
+      maglevkit vehicle run tr09 --speed-kmh 400 --duration 1.5 -o run.nc
+    """
     try:
-        _run(vehicle, speed, duration, dt, irregularity, failure, rigid, magnets, maps_cache,
-             output, plot, progress)
+        _run(vehicle, speed_kmh, speed, duration, dt, irregularity, failure, rigid, magnets,
+             maps_cache, output, plot, progress, force)
     except KeyboardInterrupt:
-        info("interrupted")
-        raise typer.Exit(code=INTERRUPTED_EXIT_CODE) from None
+        raise interrupted() from None
 
 
-def _run(vehicle: str, speed: float, duration: float, dt: float, irregularity: str,
-         failure: list[str] | None, rigid: bool, magnets: str, maps_cache: Path | None,
-         output: Path | None, plot: Path | None, progress: bool) -> None:
+def _run(vehicle: str, speed_kmh: float | None, speed: float | None, duration: float,
+         dt: float, irregularity: str, failure: list[str] | None, rigid: bool, magnets: str,
+         maps_cache: Path | None, output: Path | None, plot: Path | None, progress: bool,
+         force: bool) -> None:
     from ..vehicle.simulation import (
         VehicleModel,
         VehicleRunInterrupted,
@@ -66,12 +89,31 @@ def _run(vehicle: str, speed: float, duration: float, dt: float, irregularity: s
     )
     from ..vehicle.train import load_vehicle
 
-    output = output_file(output, "-o")
+    output = output_file(output, "-o", formats=("nc",), force=force)   # netCDF, as sweep -o
     if plot is not None:
         plot = output_dir(plot, "--plot")
     try:
-        if not (speed >= 0 and speed < 2000):
-            raise typer.BadParameter(f"--speed {speed} km/h must be in 0 ... 2000")
+        # the unit in the option's name: sweep files' speed is in m/s (issue 27)
+        opt = "--speed-kmh"
+        if speed is not None:
+            if speed_kmh is not None:
+                raise typer.BadParameter("give --speed-kmh only (--speed is its deprecated "
+                                         "old name)")
+            warnings.warn("--speed is deprecated and will be removed: use --speed-kmh (the "
+                          "same value, km/h; sweep files give speed in m/s)",
+                          FutureWarning, stacklevel=1)   # shown to users
+            opt, speed_kmh = "--speed", speed
+        speed_kmh = 0.0 if speed_kmh is None else speed_kmh
+        if not (speed_kmh >= 0 and speed_kmh < 2000):
+            raise typer.BadParameter(f"{opt} {speed_kmh} km/h must be in 0 ... 2000")
+        # the options' names, not the API's (duration_s, dt_s)
+        for opt, value in (("--duration", duration), ("--dt", dt)):
+            if not (math.isfinite(value) and value > 0):
+                raise typer.BadParameter(f"{opt} {value:g}: must be a finite number of "
+                                         "seconds > 0")
+        if duration < 2 * dt:
+            raise typer.BadParameter(f"--duration {duration:g} s is less than two steps of "
+                                     f"--dt {dt:g} s")
         train = load_vehicle(vehicle)
         fails = [parse_failure(f) for f in (failure or [])]
         prof = parse_irregularity(irregularity, span_length_m=train.section_length_m)
@@ -79,16 +121,17 @@ def _run(vehicle: str, speed: float, duration: float, dt: float, irregularity: s
         model = VehicleModel(train, rigid=rigid, magnets=magnets, maps_cache=maps_cache)
         if prof is not None and not rigid:
             prof = parse_irregularity(irregularity, span_length_m=model.guideway.span.length_m)
-        res = model.run(speed_m_per_s=speed / 3.6, duration_s=duration, dt_s=dt,
+        res = model.run(speed_m_per_s=speed_kmh / 3.6, duration_s=duration, dt_s=dt,
                         irregularity=prof, failures=fails, progress=progress)
     except VehicleRunInterrupted as exc:
         typer.echo(exc.run.report())
-        info(f"interrupted: {exc.run.dataset.attrs['interrupted']}")
+        # the shared report (one "interrupted" line; a second Ctrl-C is ignored from here)
+        stop = interrupted(str(exc.run.dataset.attrs["interrupted"]))
         if output is not None:
             with writing(output, "-o"):
                 exc.run.to_netcdf(output)
             info(f"wrote the run up to there to {output}")
-        raise typer.Exit(code=INTERRUPTED_EXIT_CODE) from None
+        raise stop from None
     except typer.BadParameter as exc:
         raise fail(str(exc)) from None
     except MaglevkitError as exc:
@@ -101,5 +144,7 @@ def _run(vehicle: str, speed: float, duration: float, dt: float, irregularity: s
     if plot is not None:
         from ..vehicle.plots import plot_vehicle_run
 
-        for p in plot_vehicle_run(res.dataset, plot):
+        with writing(plot, "--plot"):
+            written = plot_vehicle_run(res.dataset, plot)
+        for p in written:
             info(f"wrote {p}")

@@ -37,9 +37,10 @@ from ..errors import (
 )
 from ..materials import Material, TabulatedBH, get_material, normalise_name, read_bh_csv
 from ..parameter_files import bundled_files, read_parameter_file
-from ..validation import flag
+from ..validation import Plausible, check_plausible, flag
 
 __all__ = [
+    "MAGNET_PLAUSIBLE",
     "MAX_CURRENT_DENSITY_A_PER_M2",
     "OPTION_NAMES",
     "Magnet",
@@ -357,6 +358,12 @@ def _number(v: Any, sc: Schema, key: str, where: str) -> float | int:
         expected = ("a whole number" if sc.kind is int
                     else "a number (a whole count)" if whole else f"a number [{sc.unit}]")
         raise ParameterFileError(f"[{where}] {key} = {v!r}: expected {expected}")
+    if isinstance(v, int) and abs(v) > 2 ** 53:
+        # beyond float (was: OverflowError) or beyond exact counts; not all its digits
+        text = str(v)
+        shown = text if len(text) <= 20 else f"{text[:8]}...{text[-4:]} ({len(text)} digits)"
+        raise ParameterFileError(f"[{where}] {key} = {shown}{unit}: too large (at most "
+                                 f"2^53 = {2 ** 53})")
     if not math.isfinite(v):
         raise ParameterFileError(f"[{where}] {key} = {v!r}: must be finite")
     if whole and not float(v).is_integer():
@@ -400,6 +407,39 @@ def take(table: Any, schema: Mapping[str, Schema], where: str) -> dict[str, Any]
                 raise ParameterFileError(f"[{where}] {key} = {v!r}: expected a list")
         out[key] = v
     return out
+
+
+def _lengths(low: float, high: float, *names: str) -> dict[str, Plausible]:
+    return {name: Plausible(low, high, "m") for name in names}
+
+
+#: The plausible magnitudes of every dimensional key of a magnet file, of all kinds
+#: (``"table.key"``; :func:`~maglevkit.validation.check_plausible`).  Sizes of iron parts
+#: and coils 2 mm ... 3 m, clearances and grooves 0.2 mm ... 0.5 m, resistances
+#: 5 mohm ... 100 ohm, nominal gaps 1 ... 100 mm, nominal currents 0.3 ... 3000 A: every
+#: bundled file lies inside, the same file with one value times 1000 or 1/1000 outside.
+MAGNET_PLAUSIBLE: dict[str, Plausible] = {
+    **_lengths(2e-3, 3.0, *(f"magnet.{k}" for k in (
+        "pole_width", "leg_height", "yoke_thickness", "window_width", "coil_thickness",
+        "coil_height", "pole_length", "core_height", "back_height", "back_width",
+        "pole_bar_height", "pole_bar_thickness", "pole_bar_distance", "leg_length",
+        "leg_thickness", "yoke_width"))),
+    **_lengths(5e-3, 5.0, "magnet.depth"),
+    **_lengths(0.02, 2.0, "magnet.pole_pitch"),
+    **_lengths(0.05, 10.0, "magnet.section_length"),
+    **_lengths(2e-4, 0.5, "magnet.coil_gap_to_pole_face", "magnet.coil_to_face",
+               "magnet.lig_groove_width", "magnet.lig_groove_depth"),
+    **_lengths(5e-5, 5e-3, "magnet.sheet_thickness"),
+    **_lengths(5e-3, 5.0, "magnet.air_margin"),
+    **_lengths(2e-3, 3.0, "rail.thickness", "rail.width", "rail.height", "stator.slot_pitch",
+               "stator.slot_opening", "stator.slot_depth", "stator.yoke_height",
+               "stator.width"),
+    **{f"magnet.{k}": Plausible(5e-3, 100.0, "ohm")
+       for k in ("resistance", "resistance_per_pole", "resistance_per_yoke")},
+    **{f"{t}.resistivity": Plausible(1e-8, 1e-5, "ohm m") for t in ("magnet", "rail")},
+    **_lengths(1e-3, 0.1, "operating.nominal_gap"),
+    "operating.nominal_current": Plausible(0.3, 3000.0, "A"),
+}
 
 
 OPERATING_SCHEMA = {
@@ -529,6 +569,9 @@ def build_magnet(parameters: Mapping[str, Any], *, options: ModelOptions | None 
     ProvenanceWarning
         No ``[provenance]`` table, values without an entry in it (listed by name), or
         entries whose tag does not start with ``[P]``, ``[R]`` or ``[E]``.
+    PlausibilityWarning
+        A dimensional value outside its plausible range (:data:`MAGNET_PLAUSIBLE`; most
+        likely a unit slip such as mm typed into a metre key), naming the key.
     """
     return _build(parameters, options=options, source=source, provenance=provenance,
                   check_provenance=True)
@@ -566,10 +609,20 @@ def _build(parameters: Mapping[str, Any], *, options: ModelOptions | None, sourc
         raise ParameterFileError("[provenance] must map 'table.key' to a tag string")
     if "operating" in parameters:
         take(parameters["operating"], OPERATING_SCHEMA, "operating")
+    if check_provenance:   # a first build (not with_options): warn once, before the builder
+        # can refuse the value without naming its key (a unit slip is the likely cause)
+        check_plausible(parameters, MAGNET_PLAUSIBLE, source or "parameters", stacklevel=4)
     try:
         name, network = builder(parameters, materials, options)
     except (ParameterError, MaterialError) as exc:
-        raise ParameterFileError(f"{source or 'parameters'}: {exc}") from None
+        hint = ""
+        if "eddy-current element" in str(exc):
+            # the element is internal: say which file values make it
+            hint = ("; an eddy-current element's conductance comes from the material's "
+                    "resistivity and the section and length of its iron part: one of those "
+                    "values is absurd (a warning above names the key when one lies outside "
+                    "its plausible range)")
+        raise ParameterFileError(f"{source or 'parameters'}: {exc}{hint}") from None
     # After the builder, so that a missing or misspelt value is reported as such rather
     # than as a provenance entry that names nothing.
     for key, tag in raw_prov.items():
@@ -662,6 +715,8 @@ def load_magnet(source: str | Path, *, saturation: bool = True, fringing: bool =
     -----
     ProvenanceWarning
         The file lacks provenance entries (see :func:`build_magnet`).
+    PlausibilityWarning
+        A dimensional value far outside its plausible range (see :func:`build_magnet`).
     """
     options = ModelOptions(saturation=saturation, fringing=fringing, leakage=leakage,
                            eddy_currents=eddy_currents, eddy_model=eddy_model,

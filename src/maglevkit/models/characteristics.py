@@ -116,18 +116,24 @@ def saturation_knee(magnet: Magnet, *, gap: float | None = None,
     points = whole_number(points, "points", minimum=2)
     if max_current is not None:
         max_current = real_number(max_current, "max_current", "A", positive=True)
+    scan = "max_current"
     if gap is None or max_current is None:
         s0, i0 = nominal_point(magnet)
         gap = s0 if gap is None else gap
-        max_current = 4.0 * i0 if max_current is None else max_current
+        if max_current is None:
+            max_current = 4.0 * i0
+            scan = f"4 x the file's [operating] nominal_current = {i0:g} A"
     cur = np.linspace(max_current / points, max_current, points)
     n = force_exponent(magnet, gap=gap, currents=cur)
     below = np.nonzero(n < exponent)[0]
     # skip the low-current region (finite iron permeability rising with B)
     below = below[cur[below] > 0.05 * max_current]
     if below.size == 0:
-        raise InputError(f"no saturation knee up to {max_current:g} A at gap {gap:g} m "
-                         f"(d ln F/d ln I stays >= {exponent}); raise max_current")
+        raise InputError(f"no saturation knee up to {max_current:g} A ({scan}) at gap "
+                         f"{gap:g} m (d ln F/d ln I stays >= {exponent}): the magnet does "
+                         "not saturate there; check the magnet file's [operating] "
+                         "nominal_current and its dimensions for a unit slip"
+                         + (", or raise max_current" if scan == "max_current" else ""))
     j = int(below[0])
     if j == 0:
         return float(cur[0])

@@ -295,7 +295,7 @@ class _StaticSolver:
         self.rootfinder = ca.rootfinder(
             "statics_newton", "newton", resid_fun,
             {"abstol": 1e-13, "abstolStep": 1e-16, "max_iter": 80, "error_on_fail": False,
-             "line_search": True},
+             "line_search": True, "show_eval_warnings": False},
         )
         self.residual_fun = resid_fun
 
@@ -346,7 +346,9 @@ class _StaticSolver:
         except RuntimeError as exc:
             raise self._evaluation_error(exc, s, I) from None
         res = out[1].ravel()
-        bad = np.nonzero(~(res <= _RESIDUAL_TOL))[0]
+        # a NaN state can come with a residual of -inf (which is <= the tolerance)
+        bad = np.nonzero(~(np.abs(res) <= _RESIDUAL_TOL)
+                         | ~np.isfinite(out[0]).all(axis=0))[0]
         for j in (int(v) for v in bad):
             xj = self._continuation(s[:, j], I[:, j])
             outs = self.post(xj, s[:, j], I[:, j])
@@ -355,7 +357,22 @@ class _StaticSolver:
             for k, v in enumerate(outs):
                 arr = np.asarray(v)
                 _assign_column(out[2 + k], arr, j, m)
+        finite = np.ones(m, dtype=bool)
+        for v in out[2:]:   # the results (flux, force, derivatives) of every point
+            finite &= np.isfinite(v.reshape(v.shape[0], m, -1)).all(axis=(0, 2))
+        if not finite.all():
+            j = int(np.argmin(finite))
+            raise SolverError(
+                f"the network equations of {self.network.name!r} gave a non-finite result "
+                "(NaN or inf); check the magnet's dimensions and the operating point for "
+                "absurd values", state=self._point_state(s[:, j], I[:, j]),
+                reason="non-finite flux, force or derivative")
         return out
+
+    def _point_state(self, s: np.ndarray, I: np.ndarray) -> dict[str, float]:
+        state = dict(zip((f"gap[{g}]" for g in self.network.gap_names), s, strict=True))
+        state.update(zip((f"I[{c}]" for c in self.network.circuit_names), I, strict=True))
+        return state
 
     def _evaluation_error(self, exc: RuntimeError, s: np.ndarray, I: np.ndarray) -> SolverError:
         """SolverError for a failed evaluation of the compiled network equations.

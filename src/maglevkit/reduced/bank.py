@@ -46,6 +46,7 @@ from ..models.compiled import COMPILE_MODES, build_source, cache_directory, comp
 from ..models.flux import FluxModel, FluxState
 from ..models.inputs import check_initial_choice, check_step, reject_bools, simulation_inputs
 from ..models.statics import circuit_pole_groups
+from ..validation import describe, flag
 from .current import (
     EXTRA_CELLS,
     CurrentModel,
@@ -304,8 +305,7 @@ class MagnetBank:
         if not (isinstance(max_step_s, (int, float)) and math.isfinite(max_step_s)
                 and max_step_s > 0):
             raise InputError(f"max_step_s = {max_step_s!r} must be a finite number > 0")
-        if not isinstance(extrapolate, bool):
-            raise InputError(f"extrapolate = {extrapolate!r} must be True or False")
+        flag(extrapolate, "extrapolate")
         self.gap_inputs = gap_inputs
         self.interpolation = interpolation
         self.compiled_mode = compiled
@@ -313,6 +313,9 @@ class MagnetBank:
         self.max_step_s = float(max_step_s)
         self.extrapolate = extrapolate
         self._cache_dir = cache_dir
+        if not isinstance(members, (Mapping, Sequence)) or isinstance(members, (str, bytes)):
+            raise InputError(f"members = {describe(members)}: expected a mapping of names to "
+                             "magnets or maps, or a list of (name, magnet or maps) pairs")
         pairs = list(members.items()) if isinstance(members, Mapping) else list(members)
         if not pairs:
             raise InputError("a magnet bank needs at least one member")

@@ -49,7 +49,7 @@ import numpy as np
 from ..errors import InputError, OutOfRangeError, SolverError
 from ..models.compiled import COMPILE_MODES
 from ..models.inputs import check_initial_choice, check_step, simulation_inputs
-from ..validation import real_array
+from ..validation import flag, real_array
 
 __all__ = ["CurrentModel", "CurrentModelLinearization", "CurrentModelState", "CurrentOutputs",
            "ReducedSimulation", "eq8_coil_current", "eq8_eddy_branch_rhs", "eq8_rhs",
@@ -314,11 +314,12 @@ class CurrentModel:
         if not (math.isfinite(max_step_s) and max_step_s > 0):
             raise InputError(f"max_step_s = {max_step_s!r} must be a finite number > 0")
         self.maps = maps
-        self.extrapolate = extrapolate
+        # one flag check everywhere: "no" would be truthy (MagnetBank, load_magnet refuse it)
+        self.extrapolate = flag(extrapolate, "extrapolate")
         self.method = method
         self.rtol, self.atol = rtol, atol
         self.max_step_s = float(max_step_s)
-        self.jit = bool(jit)
+        self.jit = flag(jit, "jit")
         if lookup not in ("tables", "bspline"):
             raise InputError(f"lookup = {lookup!r}; use 'tables' (compiled cell tables) or "
                              "'bspline' (CasADi interpolants)")
@@ -944,6 +945,9 @@ class CurrentModel:
             The substitute gap path or the currents (including RK4 sub-step states) leave
             the maps (see ``extrapolate``).
         """
+        if not isinstance(state, CurrentModelState):
+            raise InputError(f"state must be a CurrentModelState (from CurrentModel."
+                             f"initial_state or step), got {type(state).__name__}")
         if self._use_tables:
             done = self._step_tables(state, dt, voltages, gaps, gap_rates)
             if done is not None:

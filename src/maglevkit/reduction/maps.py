@@ -347,8 +347,9 @@ def load_maps(path: str | Path, *, magnet: Any = None) -> CharacteristicMaps:
 
 def _run_tasks(fn: Callable[..., dict[str, np.ndarray]], args: Sequence[tuple],
                executor: Executor | None, progress: bool, label: str) -> list[dict[str, np.ndarray]]:
-    from concurrent.futures import as_completed
+    from concurrent.futures import FIRST_COMPLETED, wait
 
+    from .._interrupt import check_interrupt
     from .._progress import ProgressReporter
 
     results: list[dict[str, np.ndarray] | None] = [None] * len(args)
@@ -356,15 +357,22 @@ def _run_tasks(fn: Callable[..., dict[str, np.ndarray]], args: Sequence[tuple],
     with reporter if reporter is not None else contextlib.nullcontext():
         if executor is None:
             for i, a in enumerate(args):
+                check_interrupt()     # a deferred Ctrl-C (CLI): between points, not in CasADi
                 results[i] = fn(*a)
                 if reporter is not None:
                     reporter.advance()
         else:
             futures: dict[Future, int] = {executor.submit(fn, *a): i for i, a in enumerate(args)}
-            for fut in as_completed(futures):
-                results[futures[fut]] = fut.result()
-                if reporter is not None:
-                    reporter.advance()
+            waiting = set(futures)
+            while waiting:
+                # short waits: a deferred Ctrl-C is acted on within 0.2 s, not after the
+                # next point (this process is not inside CasADi here)
+                done, waiting = wait(waiting, timeout=0.2, return_when=FIRST_COMPLETED)
+                check_interrupt()
+                for fut in done:
+                    results[futures[fut]] = fut.result()
+                    if reporter is not None:
+                        reporter.advance()
     return [r for r in results if r is not None]
 
 
@@ -820,6 +828,7 @@ def build_maps(model: Any, *, gaps: Any, currents: Any, executor: Any = "auto",
     eddy_gap, eddy_current = _eddy_point(eddy_reference, g, c, ref_gap, ref_current)
     groups = circuit_pole_groups(net, gap=ref_gap, current=ref_current)
     ex, owned = _as_executor(executor, method, g.size * c.size)
+    done = False
     try:
         # "auto" runs the statics rows in this process even when it starts a pool for the
         # transient points (statics rows are cheaper than a worker's compile, see above)
@@ -832,9 +841,15 @@ def build_maps(model: Any, *, gaps: Any, currents: Any, executor: Any = "auto",
             key = network_hash(net)
             points = [(key, net, float(s), float(i), poles) for s in g for i in c]
             trans = _run_tasks(transient_point, points, ex, progress, "transient maps")
+        done = True
     finally:
         if owned and ex is not None:
-            ex.shutdown()
+            if done:
+                ex.shutdown()
+            else:   # interrupted or failed: do not wait for (or run) the remaining points
+                from .._interrupt import stop_pool
+
+                stop_pool(ex)
     names = list(rows[0])
     data = {k: np.stack([r[k] for r in rows], axis=1) for k in names}  # (circuit, gap, current)
     if method != "statics":

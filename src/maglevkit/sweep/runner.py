@@ -26,6 +26,7 @@ from typing import IO, Any
 import numpy as np
 
 from .._files import write_netcdf_atomically
+from .._interrupt import sigint_blocked, stop_pool
 from ..errors import InputError
 from .cases import SUMMARY_UNITS, error_case, run_case
 from .spec import PARAMETERS, SWEEP_FORMAT, SweepSpec
@@ -130,15 +131,25 @@ def _as_executor(executor: Any, workers: int | None) -> tuple[Executor | None, b
             return None, False
         import multiprocessing
 
-        # spawn: fresh interpreters (no fork of a process with threads, e.g. a dask client)
-        return ProcessPoolExecutor(max_workers=n,
-                                   mp_context=multiprocessing.get_context("spawn")), True
+        # spawn: fresh interpreters (no fork of a process with threads, e.g. a dask client);
+        # the workers ignore SIGINT: Ctrl-C is this process's to handle, and it stops them
+        # (a worker interrupted mid-case, or waited for, left the main process hanging)
+        return ProcessPoolExecutor(max_workers=n, mp_context=multiprocessing.get_context("spawn"),
+                                   initializer=_ignore_sigint), True
     if hasattr(executor, "get_executor") and not isinstance(executor, Executor):
         return executor.get_executor(), False      # a dask.distributed Client
     if isinstance(executor, Executor):
         return executor, False
     raise InputError("executor must be None (a local process pool), a concurrent.futures."
                      f"Executor or a dask.distributed Client, got {type(executor).__name__}")
+
+
+def _ignore_sigint() -> None:
+    """Initializer of the local pool's workers: SIGINT (Ctrl-C to the process group) is
+    ignored there; the main process stops the workers (:func:`~maglevkit._interrupt.stop_pool`)."""
+    import signal
+
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
 
 
 def run_sweep(spec: SweepSpec, *, executor: Any = None, workers: int | None = None,
@@ -223,6 +234,7 @@ def run_sweep(spec: SweepSpec, *, executor: Any = None, workers: int | None = No
     reporter: Any = ProgressReporter(len(pending), f"sweep {spec.name}", stream=stream) \
         if progress and pending else contextlib.nullcontext()
     pool, owned = _as_executor(executor, workers) if pending else (None, False)
+    stop_now = False
     try:
         with reporter:
             if pool is None:
@@ -231,8 +243,9 @@ def run_sweep(spec: SweepSpec, *, executor: Any = None, workers: int | None = No
                     if progress:
                         reporter.advance()
             else:
-                futures: dict[Future[Any], int] = {
-                    pool.submit(run_case, spec.job, cases[i], keys[i]): i for i in pending}
+                with sigint_blocked():   # the workers start with SIGINT blocked
+                    futures: dict[Future[Any], int] = {
+                        pool.submit(run_case, spec.job, cases[i], keys[i]): i for i in pending}
                 try:
                     for fut in as_completed(futures):
                         i = futures[fut]
@@ -246,12 +259,17 @@ def run_sweep(spec: SweepSpec, *, executor: Any = None, workers: int | None = No
                         if progress:
                             reporter.advance()
                 except BaseException:
-                    for f in futures:
-                        f.cancel()
+                    stop_now = True      # interrupted (Ctrl-C) or failed: stop at once
+                    if not owned:        # (our own pool's futures fail with it: a cancelled
+                        for f in futures:  # one made its manager thread raise in 3.11)
+                            f.cancel()
                     raise
     finally:
         if owned and pool is not None:
-            pool.shutdown(wait=True, cancel_futures=True)
+            if stop_now:
+                stop_pool(pool)
+            else:
+                pool.shutdown(wait=True, cancel_futures=True)
     ds = assemble(spec, results)
     n_failed = int((ds["status"].values != "ok").sum())
     return SweepResult(ds, len(cases), len(pending), n_reused, n_failed)

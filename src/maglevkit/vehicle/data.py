@@ -25,10 +25,11 @@ from typing import Any
 from ..errors import ParameterError, ParameterFileError
 from ..magnets.base import Schema, take
 from ..parameter_files import bundled_files, parse_provenance, read_parameter_file
+from ..validation import Plausible, check_plausible
 from .guideway import BeamSpan, Guideway
 
 __all__ = ["GuidewayData", "load_guideway", "parse_guideway", "bundled_guideways",
-           "GUIDEWAY_SCHEMA"]
+           "GUIDEWAY_SCHEMA", "GUIDEWAY_PLAUSIBLE"]
 
 GUIDEWAY_SCHEMA = {
     "span_length": Schema(float, unit="m"),
@@ -36,6 +37,14 @@ GUIDEWAY_SCHEMA = {
     "bending_stiffness": Schema(float, unit="N m^2"),
     "damping_ratio": Schema(float, unit="-", check="nonnegative"),
     "modes": Schema(int, unit="-"),
+}
+
+#: The plausible magnitudes of every dimensional key of a guideway file
+#: (:func:`~maglevkit.validation.check_plausible`; docs/decisions.md).
+GUIDEWAY_PLAUSIBLE: dict[str, Plausible] = {
+    "guideway.span_length": Plausible(2.0, 200.0, "m"),
+    "guideway.mass_per_length": Plausible(100.0, 1e5, "kg/m"),
+    "guideway.bending_stiffness": Plausible(1e8, 1e13, "N m^2"),
 }
 
 
@@ -116,6 +125,7 @@ def parse_guideway(parameters: Mapping[str, Any], source: str = "parameters") ->
         raise ParameterFileError(f"{source}: unknown table(s) {unknown}; a guideway file may have: "
                                  "guideway, provenance")
     g = take(parameters["guideway"], GUIDEWAY_SCHEMA, "guideway")
+    check_plausible({"guideway": g}, GUIDEWAY_PLAUSIBLE, source, stacklevel=3)
     try:
         span = BeamSpan(g["span_length"], g["bending_stiffness"], g["mass_per_length"],
                         n_modes=g["modes"], damping_ratio=g["damping_ratio"])

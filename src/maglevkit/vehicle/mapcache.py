@@ -17,6 +17,7 @@ from typing import Any
 
 import numpy as np
 
+from ..errors import InputError
 from ..validation import real_array
 
 __all__ = ["VEHICLE_MAP_GAPS_M", "VEHICLE_MAP_CURRENTS_A", "vehicle_maps", "maps_path"]
@@ -63,6 +64,17 @@ def maps_path(magnet: Any, gaps: np.ndarray, currents: np.ndarray,
     return base / f"{name}-{network_hash(magnet.network)[:16]}-{grid}.nc"
 
 
+def _check_cache_dir(base: Path) -> None:
+    """A given maps cache folder: an existing folder, or a new one in an existing folder."""
+    if base.exists() and not base.is_dir():
+        raise InputError(f"maps cache (cache_dir, --maps-cache) {str(base)!r} is a file, not "
+                         "a folder")
+    if not base.exists() and not base.parent.is_dir():
+        raise InputError(f"maps cache (cache_dir, --maps-cache) {str(base)!r}: the directory "
+                         f"{str(base.parent)!r} does not exist; create it first (only the last "
+                         "folder is created)")
+
+
 def vehicle_maps(magnet: Any, *, cache_dir: str | Path | None = None,
                  gaps: Any = None, currents: Any = None, progress: bool = False) -> Any:
     """The characteristic maps of ``magnet`` on the vehicle grid, from the cache or built.
@@ -89,6 +101,8 @@ def vehicle_maps(magnet: Any, *, cache_dir: str | Path | None = None,
 
     g = VEHICLE_MAP_GAPS_M if gaps is None else real_array(gaps, "gaps", "m")
     c = VEHICLE_MAP_CURRENTS_A if currents is None else real_array(currents, "currents", "A")
+    if cache_dir is not None:
+        _check_cache_dir(Path(cache_dir))
     path = maps_path(magnet, g, c, cache_dir)
     if path.is_file():
         cached = load_maps(path, magnet=magnet)
@@ -96,7 +110,9 @@ def vehicle_maps(magnet: Any, *, cache_dir: str | Path | None = None,
                 and np.array_equal(cached.gaps_m, g) and np.array_equal(cached.currents_A, c)):
             return cached
     maps = build_maps(magnet, gaps=g, currents=c, progress=progress)
-    path.parent.mkdir(parents=True, exist_ok=True)
+    # the user's cache may be created with its parents; a folder given (cache_dir,
+    # --maps-cache) only as its last level, as every other output folder
+    path.parent.mkdir(parents=cache_dir is None, exist_ok=True)
     tmp = path.with_suffix(f".tmp{np.random.default_rng().integers(1 << 30)}.nc")
     maps.to_netcdf(tmp)
     tmp.replace(path)

@@ -30,7 +30,7 @@ from typing import Any
 
 import numpy as np
 
-from ..errors import InputError, MaglevkitError, OutOfRangeError, SolverError
+from ..errors import InputError, MaglevkitError, OutOfRangeError, ParameterFileError, SolverError
 from ..plant import STANDARD_GRAVITY
 from .guideway import Guideway
 from .mechanics import VehicleMechanics
@@ -220,6 +220,12 @@ class VehicleModel:
         kinds = {"standard": load_magnet(train.standard_magnet), "bow": load_magnet(train.bow_magnet)}
         self.magnets = kinds
         for kind, mag in kinds.items():
+            if mag.kind != "levitation_magnet":   # was: KeyError 'poles'
+                source = train.standard_magnet if kind == "standard" else train.bow_magnet
+                raise ParameterFileError(
+                    f"{train.source or 'vehicle file'}: [vehicle] {kind}_magnet = {source!r} is "
+                    f"a {mag.kind!r} magnet; a vehicle's magnets must be levitation magnets "
+                    "(kind = \"levitation_magnet\", e.g. the bundled tr09-standard and tr09-bow)")
             par = mag.parameters["magnet"]
             length = float(par["poles"]) * float(par["pole_pitch"])
             if abs(length - train.magnet_length_m) > 1e-3:
@@ -473,6 +479,15 @@ class VehicleModel:
                 raise InputError(f"failure: no circuit {f.circuit!r}; circuits are e.g. "
                                  f"{', '.join(names[:3])} ... {names[-1]} (magnet/circuit)")
             fail_t[names.index(f.circuit)] = min(fail_t[names.index(f.circuit)], f.time_s)
+            if f.time_s > n_steps * dt_s:   # was ignored without a note
+                import warnings
+
+                from ..errors import MaglevkitWarning
+
+                warnings.warn(f"failure {f.circuit}@{f.time_s:g}: {f.time_s:g} s is after the "
+                              f"end of the run ({n_steps * dt_s:g} s, --duration); the "
+                              "circuit does not fail in this run", MaglevkitWarning,
+                              stacklevel=2)
         v = float(speed_m_per_s)
         dt = float(dt_s)
         s0 = tr.nominal_gap_m

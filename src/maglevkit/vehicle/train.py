@@ -32,9 +32,10 @@ import numpy as np
 from ..errors import ParameterFileError
 from ..magnets.base import Schema, take
 from ..parameter_files import bundled_files, parse_provenance, read_parameter_file
+from ..validation import Plausible, check_plausible
 
 __all__ = ["TrainData", "MagnetSlot", "bundled_vehicles", "load_vehicle", "parse_vehicle",
-           "VEHICLE_SCHEMA"]
+           "VEHICLE_SCHEMA", "VEHICLE_PLAUSIBLE"]
 
 VEHICLE_SCHEMA: dict[str, dict[str, Schema]] = {
     "vehicle": {
@@ -74,6 +75,31 @@ VEHICLE_SCHEMA: dict[str, dict[str, Schema]] = {
         "flux_bandwidth": Schema(float, unit="Hz"),
         "voltage_limit": Schema(float, unit="V"),
     },
+}
+
+
+#: The plausible magnitudes of every dimensional key of a vehicle file
+#: (:func:`~maglevkit.validation.check_plausible`): the bundled ``tr09`` lies inside, the
+#: same file with one value times 1000 or 1/1000 outside (docs/decisions.md).
+VEHICLE_PLAUSIBLE: dict[str, Plausible] = {
+    "vehicle.section_length": Plausible(2.0, 200.0, "m"),
+    "vehicle.nominal_gap": Plausible(1e-3, 0.1, "m"),
+    "vehicle.touchdown_gap": Plausible(1e-4, 0.05, "m"),
+    "vehicle.landing_gap": Plausible(1e-3, 0.2, "m"),
+    "car_body.mass": Plausible(1e3, 1e6, "kg"),
+    "car_body.pitch_inertia": Plausible(1e4, 1e9, "kg m^2"),
+    "car_body.payload": Plausible(50.0, 1e5, "kg"),
+    "frame.mass": Plausible(50.0, 2e4, "kg"),
+    "frame.pitch_inertia": Plausible(50.0, 1e6, "kg m^2"),
+    "frame.magnet_mass": Plausible(20.0, 1e4, "kg"),
+    "secondary.stiffness": Plausible(1e3, 1e7, "N/m"),
+    "secondary.damping": Plausible(100.0, 1e6, "N s/m"),
+    "secondary.positions": Plausible(0.05, 50.0, "m"),
+    "joint.stiffness": Plausible(1e4, 1e8, "N/m"),
+    "joint.damping": Plausible(500.0, 5e6, "N s/m"),
+    "control.bandwidth": Plausible(0.1, 200.0, "Hz"),
+    "control.flux_bandwidth": Plausible(1.0, 5000.0, "Hz"),
+    "control.voltage_limit": Plausible(10.0, 2e4, "V"),
 }
 
 
@@ -253,7 +279,20 @@ def _check(cond: bool, msg: str, source: str) -> None:
 
 
 def parse_vehicle(parameters: Mapping[str, Any], source: str = "parameters") -> TrainData:
-    """Validate a parsed vehicle TOML dictionary (see the module docstring)."""
+    """Validate a parsed vehicle TOML dictionary (see the module docstring).
+
+    Raises
+    ------
+    ParameterFileError
+        Unknown or missing tables and keys, bad values, a standard magnet that is not a
+        levitation magnet.
+
+    Warns
+    -----
+    PlausibilityWarning
+        A dimensional value outside its plausible range (:data:`VEHICLE_PLAUSIBLE`; most
+        likely a unit slip such as tonnes typed into a kilogram key), naming the key.
+    """
     if not isinstance(parameters, Mapping):
         raise ParameterFileError(f"{source}: a vehicle file must be a TOML table")
     allowed = set(VEHICLE_SCHEMA) | {"provenance"}
@@ -270,6 +309,8 @@ def parse_vehicle(parameters: Mapping[str, Any], source: str = "parameters") -> 
             t[table] = take(parameters[table], schema, table)
         except ParameterFileError as exc:
             raise ParameterFileError(f"{source}: {exc}") from None
+    # before the cross-checks, which can refuse a slipped value without naming its unit
+    check_plausible(t, VEHICLE_PLAUSIBLE, source, stacklevel=3)
     v = t["vehicle"]
     _check(v["sections"] >= 1, f"[vehicle] sections = {v['sections']} must be >= 1", source)
     _check(v["frames_per_section"] >= 1 and v["magnets_per_side"] % v["frames_per_section"] == 0,

@@ -1,0 +1,141 @@
+"""``maglevkit list`` and ``maglevkit template``: what is bundled, and a file to start from."""
+
+from __future__ import annotations
+
+import sys
+from enum import Enum
+from typing import Annotated, Any
+
+import typer
+
+from ._app import app, console, fail, info
+
+
+class Kind(str, Enum):
+    """The kinds of parameter file."""
+
+    magnets = "magnets"
+    vehicles = "vehicles"
+    guideways = "guideways"
+    scenarios = "scenarios"
+    sweeps = "sweeps"
+
+
+#: kind -> (folder under maglevkit/data, top-level table that marks the kind, title key)
+_KINDS: dict[str, tuple[str, str | None, tuple[str, str] | None]] = {
+    "magnets": ("", "magnet", ("magnet", "name")),
+    "vehicles": ("vehicle", "vehicle", ("vehicle", "name")),
+    "guideways": ("vehicle", "guideway", None),
+    "scenarios": ("scenarios", None, None),
+    "sweeps": ("sweeps", None, ("sweep", "name")),
+}
+#: the commands that take each kind (the next step after listing)
+_USE = {"magnets": "maglevkit statics NAME", "vehicles": "maglevkit vehicle run NAME",
+        "guideways": "load_guideway(NAME) (Python)",
+        "scenarios": "maglevkit simulate MAGNET --scenario NAME",
+        "sweeps": "maglevkit sweep NAME -o sweep.nc"}
+#: magnet kinds ([magnet] kind) -> the bundled file a template is made from
+MAGNET_KIND_EXAMPLES = {"u_magnet": "u-magnet", "levitation_magnet": "tr09-standard",
+                        "guidance_magnet": "tr-guidance"}
+
+
+def _text(folder: str, name: str) -> str:
+    from importlib import resources
+
+    base = resources.files("maglevkit") / "data"
+    return (base / folder / f"{name}.toml" if folder else base / f"{name}.toml").read_text()
+
+
+def _names(kind: str) -> list[str]:
+    from ..parameter_files import bundled_files
+
+    folder, table, _ = _KINDS[kind]
+    return bundled_files(folder, table=table)
+
+
+def _title(kind: str, name: str) -> str:
+    """A one-line description: the file's name key, else its first comment line."""
+    if sys.version_info >= (3, 11):
+        import tomllib
+    else:  # pragma: no cover
+        import tomli as tomllib
+
+    folder, _, key = _KINDS[kind]
+    text = _text(folder, name)
+    if key is not None:
+        value: Any = tomllib.loads(text).get(key[0], {}).get(key[1])
+        if isinstance(value, str) and value:
+            return value
+    for line in text.splitlines():
+        if line.startswith("#"):     # its first phrase
+            return line.lstrip("# ").split(": ")[0].split(". ")[0].rstrip(".:")
+    return ""
+
+
+@app.command("list", short_help="List the bundled magnets, vehicles, guideways, scenarios, "
+                                "sweeps.")
+def list_files(
+    kind: Annotated[Kind | None, typer.Argument(metavar="KIND",
+        help="Which kind to list (default: all).", case_sensitive=False)] = None,
+) -> None:
+    """List the parameter files bundled with maglevkit (name and description, on stdout).
+
+    A name can be given wherever a file is expected; `maglevkit template` writes a
+    commented copy to start your own from.
+
+    \b
+    Example:
+      maglevkit list magnets
+    """
+    kinds = [kind.value] if kind is not None else list(_KINDS)
+    for k in kinds:
+        if len(kinds) > 1:
+            console.print(f"{k}:")
+        for name in _names(k):
+            title = _title(k, name)
+            console.print(f"  {name:<16} {title}" if title else f"  {name}")
+    if len(kinds) == 1:
+        info(f"next: {_USE[kinds[0]]}, or maglevkit template {kinds[0][:-1]} NAME > my.toml")
+
+
+@app.command("template", short_help="Print a commented parameter file to start from.")
+def template(
+    kind: Annotated[str, typer.Argument(metavar="KIND",
+        help="magnet, vehicle, guideway, scenario or sweep.")],
+    name: Annotated[str | None, typer.Argument(metavar="NAME",
+        help="For a magnet: its kind (u_magnet, levitation_magnet, guidance_magnet) or a "
+             "bundled name; otherwise a bundled name (default: the first).")] = None,
+) -> None:
+    """Print a commented parameter file of KIND on stdout (SI units, every key with its
+    unit and provenance tag), made from a bundled example: redirect it into a file and
+    edit the values.
+
+    \b
+    Example:
+      maglevkit template magnet u_magnet > my-magnet.toml
+    """
+    kinds = {k[:-1]: k for k in _KINDS}
+    plural = kinds.get(kind.lower().rstrip("s")) if kind else None
+    if plural is None:
+        raise fail(f"KIND {kind!r}: use one of {', '.join(kinds)}")
+    names = _names(plural)
+    source = name if name is not None else names[0]
+    if plural == "magnets" and source in MAGNET_KIND_EXAMPLES:
+        source = MAGNET_KIND_EXAMPLES[source]
+    if source not in names:
+        extra = (f"a magnet kind ({', '.join(MAGNET_KIND_EXAMPLES)}) or "
+                 if plural == "magnets" else "")
+        raise fail(f"NAME {source!r}: use {extra}a bundled {plural[:-1]} "
+                   f"({', '.join(names)})")
+    folder = _KINDS[plural][0]
+    header = (f"# maglevkit {plural[:-1]} template, made from the bundled {source!r} "
+              "(maglevkit template).\n"
+              "# Edit the values (SI units: m, kg, s, A, V, ohm, m/s)")
+    if plural in ("magnets", "vehicles", "guideways"):
+        header += (" and their [provenance] tags\n# ([P] published, [R] widely quoted, [E] "
+                   "estimate); values outside a plausible range\n# warn with the key's unit "
+                   "and the likely unit slip.\n")
+    else:
+        header += ".\n"
+    sys.stdout.write(header + _text(folder, source))
+    sys.stdout.flush()
