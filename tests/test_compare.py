@@ -153,3 +153,23 @@ def test_timing_is_warm_cpu_best_of_repeat() -> None:
     # the warm-up run's results are those compared: equal to the untimed comparison
     assert np.array_equal(timed.reduced_currents_A, untimed.reduced_currents_A)
     assert np.array_equal(timed.current_error, untimed.current_error)
+
+
+def test_cli_compare_has_the_extrapolate_option_its_message_recommends() -> None:
+    # the out-of-range message names --extrapolate for command-line users (issue 27)
+    from typer.testing import CliRunner
+
+    from maglevkit.cli import app
+
+    r = CliRunner().invoke(app, ["compare", "--help"])
+    assert r.exit_code == 0 and "--extrapolate" in r.output
+    import numpy as np
+
+    import maglevkit as mk
+
+    maps = mk.build_maps(mk.load_magnet("u-magnet"), gaps=np.linspace(0.004, 0.02, 5),
+                         currents=np.linspace(0.0, 80.0, 5), progress=False)
+    model = mk.CurrentModel(maps)
+    state = model.initial_state(gaps=0.010, currents=20.0)
+    with pytest.raises(mk.OutOfRangeError, match="--extrapolate"):
+        model.step(state, 1e-3, 40.0, gaps=0.05, gap_rates=0.0)   # 50 mm: far outside

@@ -13,6 +13,7 @@ from __future__ import annotations
 import copy
 import sys
 from importlib import resources
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -394,3 +395,32 @@ def test_cli_vehicle_run(tmp_path: Any) -> None:
 def test_vehicle_guideway_default_window() -> None:
     gw = load_guideway().guideway(n_spans=1)
     assert gw.spans_needed(load_vehicle().length_m) == 5
+
+
+def test_guideway_file_on_the_api_and_the_cli(tmp_path: Any) -> None:
+    # a user's guideway file (longer spans, stiffer girder) reaches the model's guideway;
+    # the CLI's --guideway takes the same file and names a bad one (issue 27: the options
+    # the messages recommend exist)
+    from maglevkit.cli import app
+
+    text = (Path(__file__).resolve().parents[1] / "src/maglevkit/data/vehicle/guideway.toml"
+            ).read_text()
+    text = text.replace("span_length = 24.768", "span_length = 30.96")
+    text = text.replace("bending_stiffness = 4.0e10", "bending_stiffness = 8.0e10")
+    path = tmp_path / "long-spans.toml"
+    path.write_text(text)
+    model = VehicleModel(load_vehicle(), guideway=load_guideway(path))
+    assert model.guideway.span.length_m == pytest.approx(30.96, rel=1e-12)
+    default = VehicleModel(load_vehicle())
+    assert default.guideway.span.length_m == pytest.approx(24.768, rel=1e-12)
+    # the moving window covers the train on the longer spans too (fewer spans needed)
+    assert model.guideway.n_spans * 30.96 >= load_vehicle().length_m
+    with pytest.raises(InputError, match="guideway"):
+        VehicleModel(load_vehicle(), guideway="long-spans.toml")
+    runner = CliRunner()
+    r = runner.invoke(app, ["vehicle", "run", "--duration", "0.02", "--no-progress",
+                            "--speed-kmh", "100", "--guideway", str(path)])
+    assert r.exit_code == 0, r.output
+    r = runner.invoke(app, ["vehicle", "run", "--duration", "0.02", "--no-progress",
+                            "--guideway", str(tmp_path / "missing.toml")])
+    assert r.exit_code == 2 and "missing.toml" in r.output and "Traceback" not in r.output

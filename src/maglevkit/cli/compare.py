@@ -116,6 +116,9 @@ def compare(
     repeat: Annotated[int, typer.Option(min=1, help="Timed runs per model and scenario after "
                                                     "a warm-up run; the best CPU time counts.")]
     = 3,
+    extrapolate: Annotated[bool, typer.Option(
+        help="Let the reduced model extrapolate beyond its maps' grid (warned) instead of "
+             "stopping with an error.")] = False,
     fmt: FormatOption = OutputFormat.table,
 ) -> None:
     """Run the detailed flux-based and the reduced current-based model side by side.
@@ -164,7 +167,7 @@ def compare(
             # the file's own operating point; the header names the file, not a gap it
             # did not run at (issue 27: "gap_m": 10.0 was printed for --gap 10)
             meta = {"magnet": mag.name, "scenario": str(scenario)}
-        reduced = CurrentModel(maps)
+        reduced = CurrentModel(maps, extrapolate=extrapolate)
         results = []
         start = time.monotonic()
         for k, case in enumerate(cases, 1):

@@ -49,6 +49,10 @@ def run(
         help="CIRCUIT@T: switch a circuit off at T seconds (e.g. s2m4/front@0.5); repeatable.")]
     = None,
     rigid: Annotated[bool, typer.Option(help="Rigid guideway instead of the elastic spans.")] = False,
+    guideway: Annotated[str | None, typer.Option(
+        metavar="NAME|FILE",
+        help="Guideway file (spans, girder data) or bundled name; default the bundled "
+             "'guideway' (see: maglevkit list guideways).")] = None,
     magnets: Annotated[str, typer.Option(
         help="reduced (one force per circuit) or detailed (flux models, per pole; slow).")]
     = "reduced",
@@ -72,7 +76,7 @@ def run(
     """
     try:
         _run(vehicle, speed_kmh, speed, duration, dt, irregularity, failure, rigid, magnets,
-             maps_cache, output, plot, progress, force)
+             maps_cache, output, plot, progress, force, guideway)
     except KeyboardInterrupt:
         raise interrupted() from None
 
@@ -80,7 +84,8 @@ def run(
 def _run(vehicle: str, speed_kmh: float | None, speed: float | None, duration: float,
          dt: float, irregularity: str, failure: list[str] | None, rigid: bool, magnets: str,
          maps_cache: Path | None, output: Path | None, plot: Path | None, progress: bool,
-         force: bool) -> None:
+         force: bool, guideway: str | None = None) -> None:
+    from ..vehicle.data import load_guideway
     from ..vehicle.simulation import (
         VehicleModel,
         VehicleRunInterrupted,
@@ -118,7 +123,9 @@ def _run(vehicle: str, speed_kmh: float | None, speed: float | None, duration: f
         fails = [parse_failure(f) for f in (failure or [])]
         prof = parse_irregularity(irregularity, span_length_m=train.section_length_m)
         info(f"setting up {train.name} (maps, controllers) ...")
-        model = VehicleModel(train, rigid=rigid, magnets=magnets, maps_cache=maps_cache)
+        track = load_guideway(guideway) if guideway is not None else None
+        model = VehicleModel(train, guideway=track, rigid=rigid, magnets=magnets,
+                             maps_cache=maps_cache)
         if prof is not None and not rigid:
             prof = parse_irregularity(irregularity, span_length_m=model.guideway.span.length_m)
         res = model.run(speed_m_per_s=speed_kmh / 3.6, duration_s=duration, dt_s=dt,

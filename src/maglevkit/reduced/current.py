@@ -606,7 +606,8 @@ class CurrentModel:
             msg += (f"; linear extrapolation reaches only {EXTRA_CELLS} grid cells beyond the "
                     "maps")
         raise OutOfRangeError("outside the characteristic maps: " + msg
-                              + " (rebuild the maps on a larger grid, or pass extrapolate=True)")
+                              + " (rebuild the maps on a larger grid, or pass extrapolate=True; on the "
+                                 "command line: --extrapolate)")
 
     def _check_substeps(self, lo: np.ndarray, hi: np.ndarray, t0: float, t1: float) -> None:
         """Range check of the RK4 sub-step states of one interval from their extremes.

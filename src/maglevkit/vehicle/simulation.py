@@ -182,9 +182,11 @@ class VehicleModel:
     Parameters
     ----------
     train : TrainData
-    guideway : Guideway, optional
-        Default: the bundled guideway file's spans with a moving system boundary of the
-        window the train needs; ``rigid=True`` for a rigid guideway.
+    guideway : Guideway or GuidewayData, optional
+        A :class:`Guideway` is used as it is.  A parsed guideway file
+        (:func:`~maglevkit.vehicle.load_guideway`) gives its spans with a moving system
+        boundary of the window the train needs, as the default does with the bundled
+        file; ``rigid=True`` makes either rigid.
     rigid : bool
         Use a rigid guideway (ignored when ``guideway`` is given).
     magnets : {"reduced", "detailed"}
@@ -202,13 +204,13 @@ class VehicleModel:
         only (``magnets="reduced"``).
     """
 
-    def __init__(self, train: TrainData, *, guideway: Guideway | None = None, rigid: bool = False,
+    def __init__(self, train: TrainData, *, guideway: Any = None, rigid: bool = False,
                  magnets: str = "reduced", maps_cache: Any = None, compiled: str = "auto",
                  resistance_scale: float = 1.0, eddy_resistance_scale: float = 1.0) -> None:
         from ..magnets import load_magnet
         from ..models.flux import FluxModel
         from ..reduced.bank import MagnetBank
-        from .data import load_guideway
+        from .data import GuidewayData, load_guideway
         from .mapcache import vehicle_maps
 
         if not isinstance(train, TrainData):
@@ -301,12 +303,13 @@ class VehicleModel:
         self.mechanics = VehicleMechanics(train, self.point_xi_m.tolist(), frames.tolist())
         self._weights = weights
         # guideway
-        if guideway is None:
-            data = load_guideway()
+        if guideway is None or isinstance(guideway, GuidewayData):
+            data = load_guideway() if guideway is None else guideway
             gw0 = data.guideway(n_spans=1, rigid=rigid)
             guideway = data.guideway(n_spans=gw0.spans_needed(train.length_m), rigid=rigid)
         if not isinstance(guideway, Guideway):
-            raise InputError(f"guideway must be a Guideway, got {type(guideway).__name__}")
+            raise InputError(f"guideway must be a Guideway or a guideway file's data "
+                             f"(load_guideway), got {type(guideway).__name__}")
         self.guideway = guideway
         # trim: forces per point, per circuit; trim currents
         self.trim_q, point_force = self.mechanics.static_trim(weights)
@@ -1149,8 +1152,8 @@ class VehicleRunInterrupted(KeyboardInterrupt):
 
 def run_vehicle(train: TrainData, *, speed_m_per_s: float, duration_s: float, dt_s: float = 1e-3,
                 rigid: bool = False, irregularity: Any = None, failures: Sequence[Failure] = (),
-                magnets: str = "reduced", maps_cache: Any = None, progress: bool = False
-                ) -> VehicleRun:
+                magnets: str = "reduced", maps_cache: Any = None, progress: bool = False,
+                guideway: Any = None) -> VehicleRun:
     """Build a :class:`VehicleModel` and run it (see :meth:`VehicleModel.run`).
 
     Parameters
@@ -1178,6 +1181,8 @@ def run_vehicle(train: TrainData, *, speed_m_per_s: float, duration_s: float, dt
         :mod:`maglevkit.vehicle.mapcache`).
     progress : bool, default False
         Progress on stderr.
+    guideway : Guideway or GuidewayData, optional
+        The guideway (see :class:`VehicleModel`); default the bundled guideway file.
 
     Returns
     -------
@@ -1190,7 +1195,8 @@ def run_vehicle(train: TrainData, *, speed_m_per_s: float, duration_s: float, dt
     OutOfRangeError, VehicleRunInterrupted
         As :meth:`VehicleModel.run`.
     """
-    model = VehicleModel(train, rigid=rigid, magnets=magnets, maps_cache=maps_cache)
+    model = VehicleModel(train, guideway=guideway, rigid=rigid, magnets=magnets,
+                         maps_cache=maps_cache)
     return model.run(speed_m_per_s=speed_m_per_s, duration_s=duration_s, dt_s=dt_s,
                      irregularity=irregularity, failures=failures, progress=progress)
 
