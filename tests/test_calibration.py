@@ -168,6 +168,7 @@ def test_cli_calibrate(tmp_path: Path) -> None:
                               "--holdout-gaps", "0.016,0.020"])
     assert res.exit_code == 0, res.output
     assert "fringing_factor = " in res.output and "held out: max" in res.output
+    assert f"next: maglevkit statics {out}" in res.stderr
     assert "calibration" in tomllib.loads(out.read_text())
     res = runner.invoke(app, ["calibrate", "u-magnet", str(FEM), "-o", str(out), "--params",
                               "nonsense", "--force"])

@@ -387,6 +387,7 @@ def test_list_and_template(tmp_path: Path) -> None:
         res = runner.invoke(app, ["template", kind, *([name] if name else [])])
         assert res.exit_code == 0, res.output
         assert res.stdout.startswith(f"# maglevkit {kind} template, made from the bundled")
+        assert "next: save it" in res.stderr   # the one-line next step, on stderr
         path = tmp_path / f"{kind}-{name}.toml"
         path.write_text(res.stdout)
         import warnings as _w

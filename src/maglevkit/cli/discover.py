@@ -31,7 +31,7 @@ _KINDS: dict[str, tuple[str, str | None, tuple[str, str] | None]] = {
 }
 #: the commands that take each kind (the next step after listing)
 _USE = {"magnets": "maglevkit statics NAME", "vehicles": "maglevkit vehicle run NAME",
-        "guideways": "load_guideway(NAME) (Python)",
+        "guideways": "maglevkit vehicle run --guideway NAME",
         "scenarios": "maglevkit simulate MAGNET --scenario NAME",
         "sweeps": "maglevkit sweep NAME -o sweep.nc"}
 #: magnet kinds ([magnet] kind) -> the bundled file a template is made from
@@ -139,3 +139,6 @@ def template(
         header += ".\n"
     sys.stdout.write(header + _text(folder, source))
     sys.stdout.flush()
+    use = _USE[plural].replace("NAME", "FILE")
+    info(f"next: save it (maglevkit template {plural[:-1]} {source} > my.toml), edit it, "
+         f"then {use}")

@@ -164,6 +164,8 @@ def import_table(
             console.print(f"reciprocity residual {c}: max {100 * v:.3g} % at "
                           f"{rep.reciprocity_worst[c]}")
     info(f"wrote {path}")
+    info(f"next: mk.CurrentModel(mk.load_maps({str(path)!r})) in Python, or maglevkit export "
+         f"fmu MAGNET {path} -o magnet.fmu")
 
 
 @app.command("calibrate", short_help="Fit a magnet's network factors to measured statics.")
@@ -249,3 +251,5 @@ def calibrate_cmd(
                          if res.holdout else ""))
     print_records(records, fmt, table, meta)
     info(f"wrote {output}")
+    info(f"next: maglevkit statics {output} (the calibrated magnet), or maglevkit maps build "
+         f"{output} -o maps.nc")
