@@ -4,6 +4,7 @@ numbers, unstable results reported as bad input (each test names the finding it 
 from __future__ import annotations
 
 import re
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -311,3 +312,43 @@ def test_heave_model_mass_and_gravity_refuse_bools() -> None:
         MagnetHeaveModel(None, mass_kg=True)
     with pytest.raises(mk.ParameterError, match=r"gravity \[m/s\^2\] = -1.0: must be >= 0"):
         MagnetHeaveModel(None, mass_kg=100.0, gravity=-1.0)
+
+
+def test_failure_time_checked_at_construction() -> None:
+    # a NaN failure time never failed the circuit (min(inf, nan) is inf in the run)
+    from maglevkit.vehicle.simulation import Failure
+
+    assert Failure("s2m4/front", 0.5).time_s == 0.5
+    for bad in (float("nan"), -1.0, True, "0.5"):
+        with pytest.raises(mk.InputError, match="time_s"):
+            Failure("s2m4/front", bad)   # type: ignore[arg-type]
+    with pytest.raises(mk.InputError, match="circuit"):
+        Failure("", 0.5)
+
+
+def test_load_maps_without_its_identity_attributes(tmp_path: Path) -> None:
+    # a maps file without magnet_hash / pole_groups was a KeyError on first use
+    import numpy as np
+
+    import maglevkit as mk
+    from maglevkit.errors import ParameterFileError
+
+    maps = mk.build_maps(mk.load_magnet("u-magnet"), gaps=np.linspace(0.004, 0.02, 5),
+                         currents=np.linspace(0.0, 80.0, 5), progress=False)
+    ds = maps.dataset.copy()
+    del ds.attrs["magnet_hash"]
+    path = tmp_path / "m.nc"
+    ds.to_netcdf(path)
+    with pytest.raises(ParameterFileError, match="attribute magnet_hash"):
+        mk.load_maps(path)
+
+
+def test_mpc_refuses_bools_as_numbers() -> None:
+    from maglevkit.control.mpc import OffsetFreeMPC
+    from maglevkit.errors import ParameterError
+
+    for kw, name in (({"horizon": True}, "horizon"), ({"substeps": True}, "substeps"),
+                     ({"sample_time_s": True}, "sample_time_s")):
+        args = {"gap_ref_m": 0.01, "sample_time_s": 1e-3, **kw}
+        with pytest.raises(ParameterError, match=name):
+            OffsetFreeMPC(None, **args)   # type: ignore[arg-type]  # checked before the model

@@ -73,7 +73,8 @@ class MPCWeights:
     def __post_init__(self) -> None:
         for k in ("gap_m", "gap_rate_m_per_s", "current_A", "voltage_V", "soft_constraint"):
             v = getattr(self, k)
-            if not (isinstance(v, (int, float)) and math.isfinite(v) and v > 0):
+            if isinstance(v, bool) or not (isinstance(v, (int, float)) and math.isfinite(v)
+                                           and v > 0):
                 raise ParameterError(f"MPCWeights.{k} = {v!r} must be a finite number > 0")
 
 
@@ -132,13 +133,15 @@ class OffsetFreeMPC:
             raise ParameterError(f"solver = {solver!r}; use one of {list(SOLVERS)}")
         if qp_solver not in QP_SOLVERS:
             raise ParameterError(f"qp_solver = {qp_solver!r}; use one of {list(QP_SOLVERS)}")
-        if not (isinstance(horizon, int) and horizon >= 1):
+        # bools are ints to Python, not horizons (True would be a horizon of 1)
+        if isinstance(horizon, bool) or not (isinstance(horizon, int) and horizon >= 1):
             raise ParameterError(f"horizon = {horizon!r} must be an integer >= 1")
-        if not (isinstance(substeps, int) and substeps >= 1):
+        if isinstance(substeps, bool) or not (isinstance(substeps, int) and substeps >= 1):
             raise ParameterError(f"substeps = {substeps!r} must be an integer >= 1")
         for name, v in (("sample_time_s", sample_time_s), ("voltage_limit_V", voltage_limit_V),
                         ("gap_ref_m", gap_ref_m)):
-            if not (isinstance(v, (int, float)) and math.isfinite(v) and v > 0):
+            if isinstance(v, bool) or not (isinstance(v, (int, float)) and math.isfinite(v)
+                                           and v > 0):
                 raise ParameterError(f"{name} = {v!r} must be a finite number > 0")
         self.model = model
         self.solver = solver

@@ -313,8 +313,8 @@ def load_maps(path: str | Path, *, magnet: Any = None) -> CharacteristicMaps:
         ``path`` is not a str or path-like.
     ParameterFileError
         The file does not exist, is not readable netCDF, is not a maglevkit maps file
-        (``format`` attribute), lacks a required variable or coordinate, or belongs to
-        another magnet.
+        (``format`` attribute), lacks a required variable, coordinate or attribute
+        (``magnet_hash``, ``pole_groups``), or belongs to another magnet.
     """
     if not isinstance(path, (str, os.PathLike)):
         raise InputError(f"load_maps needs the path of a maps file (str or Path), got "
@@ -335,6 +335,8 @@ def load_maps(path: str | Path, *, magnet: Any = None) -> CharacteristicMaps:
                                  f"{data.attrs.get('format')!r}, expected {MAPS_FORMAT!r})")
     missing = [v for v in REQUIRED_VARIABLES if v not in data.data_vars]
     missing += [f"coordinate {c}" for c in ("circuit", "gap", "current") if c not in data.coords]
+    # the attributes the maps read: the magnet's identity and the circuits' poles
+    missing += [f"attribute {a}" for a in ("magnet_hash", "pole_groups") if a not in data.attrs]
     if missing:
         raise ParameterFileError(f"{p}: the maps file lacks {', '.join(missing)} (every maps "
                                  f"file has {', '.join(REQUIRED_VARIABLES)}); rebuild it with "

@@ -52,13 +52,22 @@ class Failure:
         ``circuit_names``; :meth:`VehicleModel.run` refuses unknown names
         (:class:`InputError`).
     time_s : float
-        Run time [s] from which the circuit's voltage is 0 (a time at or before the start
-        fails it from the first step).  Not checked here; :func:`parse_failure` requires
-        a finite value >= 0.  Of several failures of one circuit the earliest counts.
+        Run time [s] from which the circuit's voltage is 0, a finite number >= 0 (0: from
+        the first step); otherwise InputError (a NaN time would never fail the circuit).
+        Of several failures of one circuit the earliest counts.
     """
 
     circuit: str
     time_s: float
+
+    def __post_init__(self) -> None:
+        from ..validation import real_number
+
+        if not isinstance(self.circuit, str) or not self.circuit:
+            raise InputError(f"failure circuit = {self.circuit!r}: expected a circuit name "
+                             "such as 's2m4/front'")
+        object.__setattr__(self, "time_s", real_number(self.time_s, f"failure {self.circuit!r} "
+                                                       "time_s", "s", nonnegative=True))
 
 
 def parse_failure(text: str) -> Failure:
