@@ -253,6 +253,7 @@ def test_the_demo_errors_get_a_verdict() -> None:
     assert nrms == "acceptance limit 2 %: met"
     assert "42.7 % means the reduced model follows only the trend" in ac
     assert "tens of percent" in ac
+    assert "motion_eddy=True" in ac        # the remedy for gap motion, not eddy_modes
     assert error_verdicts(0.03, 0.01)[0] == "acceptance limit 2 %: NOT met"
     assert "follows the signal's variation closely" in error_verdicts(0.01, 0.01)[1]
     assert "approximately" in error_verdicts(0.01, 0.1)[1]

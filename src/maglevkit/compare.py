@@ -160,12 +160,15 @@ ACCEPTANCE_NRMS = 0.02
 
 #: Upper bounds of the AC-normalised error and what they mean (docs/reduction.md,
 #: "AC-normalised error and the frequency limit of one R_ec": a few percent up to ~5 Hz,
-#: tens of percent at 50 Hz, where one eddy time constant is too few).
+#: tens of percent at 50 Hz, where one eddy time constant is too few; "Gap motion": the
+#: shielded-gap ladder for gap motion).
 AC_VERDICTS = ((0.05, "the reduced model follows the signal's variation closely"),
                (0.20, "the reduced model follows the signal's variation approximately"),
                (math.inf, "the reduced model follows only the trend of the signal's "
                           "variation: trust its variations in this case to tens of percent "
-                          "(one eddy time constant; more with CurrentModel(eddy_modes=...))"))
+                          "(eq. 8's one eddy resistor passes gap motion without eddy "
+                          "dynamics: CurrentModel(maps, motion_eddy=True) follows gap motion, "
+                          "CurrentModel(maps, eddy_modes=m) voltage steps in diffusing iron)"))
 
 
 def error_verdicts(nrms: float, ac: float) -> tuple[str, str]:
