@@ -118,9 +118,11 @@ def stop_pool(pool: Executor, timeout_s: float = 5.0) -> None:
     finally:
         if old is not None:
             signal.signal(signal.SIGINT, old)
-    pool.shutdown(wait=False)
     # let the pool's manager thread finish (it sees the dead workers at once): else its
-    # closing raced the interpreter's exit hook, "OSError: Bad file descriptor" on stderr
+    # closing raced the interpreter's exit hook, "OSError: Bad file descriptor" on stderr.
+    # Taken before ``shutdown``, which sets the attribute to None (so a join after it
+    # never happened and the race stayed, seen once in CI).
     manager = getattr(pool, "_executor_manager_thread", None)
+    pool.shutdown(wait=False)
     if manager is not None:
         manager.join(timeout=timeout_s)
