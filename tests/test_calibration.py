@@ -132,19 +132,74 @@ def test_a_parameter_the_data_cannot_see_is_named(magnet: mk.Magnet) -> None:
 
 
 def test_calibrated_toml_round_trip(magnet: mk.Magnet, tmp_path: Path) -> None:
-    res = calibrate(magnet, FEM, parameters=["leakage_factor", "fringing_factor",
-                                             "iron_saturation_scale"])
-    out = write_calibrated_toml(magnet, res, tmp_path / "cal.toml", data_source=str(FEM))
+    """calibrate on synthetic data -> write -> load_magnet: the loaded magnet is the
+    calibrated one (statics), with its provenance and the data's hash visible."""
+    g, c = (a.ravel() for a in np.meshgrid([0.004, 0.008, 0.012, 0.016], [10.0, 40.0, 80.0],
+                                           indexing="ij"))
+    true = {k: TRUE[k] for k in ("leakage_factor", "fringing_factor", "iron_saturation_scale")}
+    f, p = _statics(calibrated_network(magnet, true), g, c)
+    data = tmp_path / "synthetic.csv"
+    with data.open("w", newline="") as fh:
+        w = csv.writer(fh)
+        w.writerow(["gap_m", "current_A", "force_N", "flux_linkage_Wb"])
+        rng = np.random.default_rng(7)     # 0.2 % noise: the fit is not the truth
+        w.writerows([gk, ck, fk * (1 + 2e-3 * rng.standard_normal()),
+                     pk * (1 + 2e-3 * rng.standard_normal())]
+                    for gk, ck, fk, pk in zip(g, c, f, p, strict=True))
+    res = calibrate(magnet, data, parameters=list(true))
+    out = write_calibrated_toml(magnet, res, tmp_path / "cal.toml", data_source=str(data))
     doc = tomllib.loads(out.read_text())
-    sha = hashlib.sha256(FEM.read_bytes()).hexdigest()
+    sha = hashlib.sha256(data.read_bytes()).hexdigest()
     assert doc["calibration"]["data_sha256"] == sha
-    for name, tag in doc["calibration"]["provenance"].items():
-        assert tag.startswith("calibrated") and sha in tag, name
-    loaded = load_calibrated_magnet(out, eddy_currents=False)
-    g, c = np.array([0.006, 0.014]), np.array([10.0, 60.0])
-    np.testing.assert_allclose(_statics(loaded, g, c),
-                               _statics(calibrated_network(magnet, res.values), g, c),
+    loaded = mk.load_magnet(out, eddy_currents=False)
+    assert loaded.calibration == res.values
+    assert loaded.name.endswith("(calibrated)")
+    assert loaded.provenance["calibration.data_sha256"] == sha
+    for name in true:
+        tag = loaded.provenance[f"calibration.{name}"]
+        assert tag.startswith("calibrated") and sha in tag and "synthetic.csv" in tag, name
+    assert loaded.parameter_hash != magnet.parameter_hash     # maps are not shared
+    gt, ct = np.array([0.006, 0.014, 0.020]), np.array([10.0, 60.0, 25.0])
+    # the loaded file's statics equal the fitted model's: the same law, bit for bit up to
+    # the value's repr round trip through TOML (exact for floats)
+    np.testing.assert_allclose(_statics(loaded, gt, ct),
+                               _statics(calibrated_network(magnet, res.values), gt, ct),
                                rtol=1e-12)
+    # ... and differ from the uncalibrated magnet's by the calibration (>= 1 %)
+    assert np.max(np.abs(_statics(loaded, gt, ct)[0] / _statics(magnet, gt, ct)[0] - 1)) > 0.01
+    # rebuilt with other switches, the factors stay (with_options re-reads the table);
+    # without saturation the iron wrapper is linearised like an IronPath
+    lin = loaded.with_options(saturation=False)
+    assert lin.calibration == res.values
+    np.testing.assert_allclose(
+        _statics(lin, gt, ct),
+        _statics(calibrated_network(magnet.with_options(saturation=False), res.values), gt,
+                 ct), rtol=1e-12)
+    assert load_calibrated_magnet(out, eddy_currents=False).calibration == res.values
+    # the command line reads it too (the command `calibrate` suggests next)
+    cli = CliRunner().invoke(app, ["statics", str(out), "--gaps", "0.01", "--currents", "20"])
+    assert cli.exit_code == 0 and "(calibrated)" in cli.output, cli.output
+    # factors do not compose: calibrating the calibrated magnet is refused
+    with pytest.raises(mk.InputError, match="already carries calibration factors"):
+        calibrate(loaded, data, parameters=list(true))
+
+
+@pytest.mark.parametrize(("edit", "match"), [
+    ("leakage_factor = 1.05\nleak = 2.0", r"\[calibration\]: unknown key\(s\) \['leak'\]"),
+    ("leakage_factor = 9.0", r"leakage_factor = 9\.0: expected a number in \[0\.2, 5\]"),
+    ("leakage_factor = 'x'", r"leakage_factor = 'x'"),
+    ("leakage_factor = 1.05\n[calibration.provenance]\nleakage_factor = '[E] guess'",
+     r"\['leakage_factor'\] lack a 'calibrated \.\.\.' tag"),
+    ("leakage_factor = 1.05\n[calibration.provenance]\nleakage_factor = 'calibrated'\n"
+     "gap_offset_m = 'calibrated'", r"\['gap_offset_m'\] name no factor"),
+])
+def test_a_bad_calibration_table_is_refused_naming_the_key(tmp_path: Path, edit: str,
+                                                            match: str) -> None:
+    src = (ROOT / "src" / "maglevkit" / "data" / "u-magnet.toml").read_text()
+    path = tmp_path / "bad.toml"
+    path.write_text(src + "\n[calibration]\n" + edit + "\n")
+    with pytest.raises(mk.ParameterFileError, match=match):
+        mk.load_magnet(path)
 
 
 def test_bad_calibration_input(magnet: mk.Magnet, tmp_path: Path) -> None:

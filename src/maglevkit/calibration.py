@@ -46,15 +46,7 @@ from typing import Any
 
 import numpy as np
 
-from .circuit.elements import (
-    AirGap,
-    Element,
-    FringePermeance,
-    GapLeakage,
-    IronPath,
-    LeakagePermeance,
-    LinearElement,
-)
+from .circuit.factors import PARAMETERS, with_factors
 from .circuit.network import Network
 from .errors import DataError, InputError, MaglevkitWarning, SolverError
 
@@ -64,119 +56,28 @@ __all__ = ["PARAMETERS", "DEFAULT_PARAMETERS", "Calibration", "StaticPoints", "c
            "write_calibrated_toml", "load_calibrated_magnet"]
 
 
-@dataclass(frozen=True)
-class ParameterSpec:
-    """A calibratable parameter: nominal value, bounds and the scale used for identifiability
-    (singular values of the Jacobian scaled by it) [unit of the parameter]."""
-
-    nominal: float
-    lower: float
-    upper: float
-    scale: float
-    unit: str
-    description: str
-
-
-PARAMETERS: dict[str, ParameterSpec] = {
-    "leakage_factor": ParameterSpec(1.0, 0.2, 5.0, 1.0, "1", "scales every leakage permeance"),
-    "fringing_factor": ParameterSpec(1.0, 0.0, 5.0, 1.0, "1",
-                                     "scales the air gaps' fringing permeance"),
-    "gap_offset_m": ParameterSpec(0.0, -2e-3, 2e-3, 1e-3, "m", "added to every gap"),
-    "iron_field_scale": ParameterSpec(1.0, 0.1, 10.0, 1.0, "1",
-                                      "scales H(B) of the iron (permeability / k)"),
-    "iron_saturation_scale": ParameterSpec(1.0, 0.5, 1.5, 0.1, "1",
-                                           "scales the B axis of the iron's B-H curve"),
-}
-"""The documented parameter set (module docstring)."""
-
 DEFAULT_PARAMETERS = ("leakage_factor", "fringing_factor", "gap_offset_m", "iron_field_scale",
                       "iron_saturation_scale")
 """Fitted without ``parameters=``: the whole set (all act on the statics)."""
 
 
 # ---------------------------------------------------------------------------- the one law
-@dataclass(frozen=True)
-class CalibratedLinear(LinearElement):
-    """A linear element with calibration factors (numbers or CasADi symbols).
-
-    ``G = k_leak G_inner(s + delta)`` for leakage, ``k_fringe G_inner(s + delta)`` for
-    fringe elements, and for an air gap ``G_inner(s + delta) + (k_fringe - 1) G_fringe``.
-    """
-
-    inner: LinearElement = field(default=None)  # type: ignore[assignment]
-    leakage: Any = 1.0
-    fringing: Any = 1.0
-    offset: Any = 0.0
-
-    @property
-    def gap(self) -> str | None:
-        return self.inner.gap
-
-    @property
-    def area(self) -> float | None:
-        return self.inner.area
-
-    def permeance(self, gap: Any = None) -> Any:
-        el = self.inner
-        g = None if gap is None or el.gap is None else gap + self.offset
-        base = el.permeance(g)
-        if isinstance(el, (LeakagePermeance, GapLeakage)):
-            return self.leakage * base
-        if isinstance(el, FringePermeance):
-            return self.fringing * base
-        if isinstance(el, AirGap) and el.fringe_edges:
-            return base + (self.fringing - 1.0) * el.fringe_permeance(g)
-        return base
-
-
-@dataclass(frozen=True)
-class CalibratedIron(Element):
-    """An iron path with calibration factors: ``V_m = k_H l H(phi/(A k_B))``."""
-
-    inner: IronPath = field(default=None)  # type: ignore[assignment]
-    field_scale: Any = 1.0
-    saturation_scale: Any = 1.0
-
-    @property
-    def area(self) -> float | None:
-        return self.inner.area
-
-    def mmf_drop(self, flux: Any, gap: Any = None) -> Any:
-        return self.field_scale * self.inner.mmf_drop(flux / self.saturation_scale)
-
-    def energy(self, flux: Any, gap: Any = None) -> Any:
-        # int_0^phi k_H V(phi'/k_B) dphi' = k_H k_B W_inner(phi/k_B)
-        return (self.field_scale * self.saturation_scale
-                * self.inner.energy(np.asarray(flux, dtype=float) / self.saturation_scale))
-
-
 def calibrated_network(model: Any, values: Mapping[str, Any]) -> Network:
-    """The network of ``model`` with the calibration ``values`` applied (module docstring).
+    """The network of ``model`` with the calibration ``values`` applied
+    (:func:`maglevkit.circuit.factors.with_factors`, the one law).
 
-    ``values`` maps parameter names of :data:`PARAMETERS` to numbers (or CasADi symbols);
-    missing ones stay nominal.  With nominal values the statics equal the original's.
+    Parameters
+    ----------
+    model : Magnet or Network
+        The uncalibrated magnet or network.
+    values : mapping
+        Parameter names of :data:`PARAMETERS` to numbers (unit of the parameter) or CasADi
+        symbols; missing ones stay nominal.  With nominal values the statics equal the
+        original's.
     """
     from .models.statics import as_network
 
-    net = as_network(model)
-    unknown = sorted(set(values) - set(PARAMETERS))
-    if unknown:
-        raise InputError(f"unknown calibration parameter(s) {unknown}; the documented set: "
-                         f"{list(PARAMETERS)}")
-    v = {k: values.get(k, spec.nominal) for k, spec in PARAMETERS.items()}
-
-    def wrap(el: Element) -> Element:
-        if isinstance(el, LinearElement):
-            return CalibratedLinear(el.name, inner=el, leakage=v["leakage_factor"],
-                                    fringing=v["fringing_factor"], offset=v["gap_offset_m"])
-        if isinstance(el, IronPath):
-            return CalibratedIron(el.name, inner=el, field_scale=v["iron_field_scale"],
-                                  saturation_scale=v["iron_saturation_scale"])
-        return el
-
-    branches = tuple(replace(b, elements=tuple(wrap(e) for e in b.elements))
-                     for b in net.branches)
-    return Network(branches, net.circuits, name=net.name)
+    return with_factors(as_network(model), values)
 
 
 # ---------------------------------------------------------------------------- data
@@ -721,7 +622,18 @@ def write_calibrated_toml(magnet: Any, result: Calibration, path: str | Path, *,
     (each tagged ``calibrated`` in ``[calibration.provenance]``, with the data file's
     SHA-256), their 95 % half-widths and the parameters the data did not determine.
 
-    Load it with :func:`load_calibrated_magnet`.
+    :func:`~maglevkit.load_magnet` applies the values when it loads the file.
+
+    Parameters
+    ----------
+    magnet : Magnet
+        The uncalibrated magnet (loaded from a parameter file) the fit was made on.
+    result : Calibration
+        The fit (:func:`calibrate`).
+    path : str or path
+        The file to write.
+    data_source : str
+        The fitted data file (its name goes into the provenance tags).
     """
     params = getattr(magnet, "parameters", None)
     if not isinstance(params, Mapping):
@@ -739,31 +651,33 @@ def write_calibrated_toml(magnet: Any, result: Calibration, path: str | Path, *,
     }
     p = Path(path)
     header = (f"# {getattr(magnet, 'name', 'magnet')}: calibrated with maglevkit "
-              "(maglevkit.calibration); load with maglevkit.calibration.load_calibrated_magnet\n")
+              "(maglevkit.calibration); maglevkit.load_magnet and every command taking MAGNET "
+              "apply the [calibration] factors\n")
     p.write_text(header + "\n".join(_toml(doc)) + "\n")
     return p
 
 
 def load_calibrated_magnet(path: str | Path, **options: Any) -> Any:
-    """A magnet from a file of :func:`write_calibrated_toml`: the magnet its parameters
-    build, with the ``[calibration]`` values applied to its network."""
-    import tomllib
+    """A magnet from a file of :func:`write_calibrated_toml`, refusing a file without a
+    ``[calibration]`` table.
 
-    from .magnets import build_magnet
-    from .magnets.base import ModelOptions
+    :func:`~maglevkit.load_magnet` (and every command taking ``MAGNET``) reads the table
+    itself and applies the factors; this only insists that the file is calibrated.
 
-    p = Path(path)
-    try:
-        doc = tomllib.loads(p.read_text())
-    except (OSError, tomllib.TOMLDecodeError) as exc:
-        raise DataError(f"{p}: cannot read the calibrated magnet: {exc}") from None
-    cal = doc.pop("calibration", None)
-    if not isinstance(cal, Mapping):
-        raise DataError(f"{p}: no [calibration] table (write it with write_calibrated_toml)")
-    values = {k: float(v) for k, v in cal.items() if k in PARAMETERS}
-    mag = build_magnet(doc, options=ModelOptions(**options) if options else None,
-                       source=str(p))
-    return replace(mag, network=calibrated_network(mag, values))
+    Parameters
+    ----------
+    path : str or path
+        The calibrated parameter file.
+    **options
+        Physics switches of :func:`~maglevkit.load_magnet`.
+    """
+    from .magnets import load_magnet
+
+    mag = load_magnet(path, **options)
+    if "calibration" not in mag.parameters:
+        raise DataError(f"{path}: no [calibration] table (write it with "
+                        "write_calibrated_toml)")
+    return mag
 
 
 def data_hash(path: str | Path) -> str:

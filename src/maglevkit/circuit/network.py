@@ -452,6 +452,8 @@ class Network:
                 return None
             if not saturation and isinstance(el, IronPath):
                 return replace(el, material=el.material.linearized())
+            if not saturation and callable(getattr(el, "linearized", None)):
+                return el.linearized()  # type: ignore[attr-defined, no-any-return]
             return el
 
         branches = []

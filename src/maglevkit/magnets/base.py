@@ -25,6 +25,7 @@ from typing import Any
 
 import numpy as np
 
+from ..circuit.factors import PARAMETERS, with_factors
 from ..circuit.ladder import EDDY_MODELS, LADDER_COEFFICIENTS
 from ..circuit.network import Network
 from ..errors import (
@@ -49,6 +50,8 @@ __all__ = [
     "load_magnet",
     "build_magnet",
     "bundled_magnets",
+    "read_calibration",
+    "CALIBRATION_KEYS",
     "resistivity",
     "register_kind",
     "Schema",
@@ -275,6 +278,15 @@ class Magnet:
         """Nominal circuit current [A] from the file's ``[operating]`` table (None if not given)."""
         op = self.parameters.get("operating")
         return None if op is None else float(op["nominal_current"])
+
+    @property
+    def calibration(self) -> dict[str, float]:
+        """The calibration factors applied to the network (from the file's
+        ``[calibration]`` table; empty for an uncalibrated magnet).  Their tags and the
+        fitted data's SHA-256 are in :attr:`provenance` (``"calibration.NAME"``,
+        ``"calibration.data_sha256"``)."""
+        table = self.parameters.get("calibration")
+        return {k: float(v) for k, v in (table or {}).items() if k in PARAMETERS}
 
     @property
     def parameter_hash(self) -> str:
@@ -597,7 +609,7 @@ def _build(parameters: Mapping[str, Any], *, options: ModelOptions | None, sourc
     if options.eddy_model != "lumped" and kind not in LADDER_KINDS:
         raise InputError(f"eddy_model = {options.eddy_model!r} is not available for kind "
                          f"{kind!r} (only for {', '.join(LADDER_KINDS)}); use 'lumped'")
-    allowed = {"magnet", "materials", "provenance", "operating", *tables}
+    allowed = {"magnet", "materials", "provenance", "operating", "calibration", *tables}
     unknown = sorted(set(parameters) - allowed)
     if unknown:
         raise ParameterFileError(f"unknown table(s) {unknown}; a {kind!r} file may have: "
@@ -609,6 +621,7 @@ def _build(parameters: Mapping[str, Any], *, options: ModelOptions | None, sourc
         raise ParameterFileError("[provenance] must map 'table.key' to a tag string")
     if "operating" in parameters:
         take(parameters["operating"], OPERATING_SCHEMA, "operating")
+    factors, factor_tags = read_calibration(parameters.get("calibration"), source)
     if check_provenance:   # a first build (not with_options): warn once, before the builder
         # can refuse the value without naming its key (a unit slip is the likely cause)
         check_plausible(parameters, MAGNET_PLAUSIBLE, source or "parameters", stacklevel=4)
@@ -639,6 +652,11 @@ def _build(parameters: Mapping[str, Any], *, options: ModelOptions | None, sourc
     # The physics switches hold for every kind, whether or not its builder reads them.
     network = network.with_options(saturation=options.saturation,
                                    eddy_currents=options.eddy_currents)
+    if factors:   # a calibrated file: its fitted factors on the built network
+        network = with_factors(network, factors,
+                               where=f"{source or 'parameters'}: [calibration]")
+        prov.update(factor_tags)
+        name = f"{name} (calibrated)"
     ranges = _RANGES.get(kind)
     return Magnet(name=name, kind=kind, network=network, parameters=_plain(parameters),
                   provenance=prov, options=options, source=source,
@@ -654,8 +672,10 @@ def _warn_provenance(parameters: Mapping[str, Any], raw_prov: Mapping[str, Any],
     ``magnet.name``.
     """
     label = source or "parameters"
+    # [calibration] carries its own provenance ([calibration.provenance], read_calibration)
     needed = [f"{table}.{key}" for table, values in parameters.items()
-              if table != "provenance" and isinstance(values, Mapping) for key in values
+              if table not in ("provenance", "calibration") and isinstance(values, Mapping)
+              for key in values
               if not (table == "magnet" and key in ("kind", "name"))]
     missing = [k for k in needed if k not in raw_prov]
     if "provenance" not in parameters:
@@ -671,6 +691,74 @@ def _warn_provenance(parameters: Mapping[str, Any], raw_prov: Mapping[str, Any],
     if bad:
         warnings.warn(f"{label}: [provenance] tag(s) of {', '.join(map(str, bad))} do not start "
                       f"with {', '.join(PROVENANCE_TAGS)}", ProvenanceWarning, stacklevel=4)
+
+
+CALIBRATION_KEYS = ("data_sha256", "residual_rms", "undetermined", "confidence_95",
+                    "provenance")
+"""Keys of a ``[calibration]`` table besides the factors of
+:data:`~maglevkit.circuit.factors.PARAMETERS` (written by
+:func:`maglevkit.calibration.write_calibrated_toml`)."""
+
+
+def read_calibration(table: Any, source: str = "") -> tuple[dict[str, float], dict[str, str]]:
+    """The factors of a parameter file's ``[calibration]`` table and their provenance.
+
+    Parameters
+    ----------
+    table : mapping or None
+        The ``[calibration]`` table (None: an uncalibrated file): factor names of
+        :data:`~maglevkit.circuit.factors.PARAMETERS` with their values (unit of the
+        factor), ``data_sha256`` (the fitted data file's SHA-256), ``residual_rms``,
+        ``undetermined``, ``[calibration.confidence_95]`` and ``[calibration.provenance]``
+        (a ``calibrated ...`` tag per factor).
+    source : str
+        The file, for messages.
+
+    Returns
+    -------
+    factors : dict
+        Factor name -> value.
+    provenance : dict
+        ``"calibration.NAME"`` -> tag, per factor.
+
+    Raises
+    ------
+    ParameterFileError
+        An unknown key, a value that is not a finite number within the factor's bounds, a
+        provenance entry for no factor, or a factor without a ``calibrated`` tag.
+    """
+    if table is None:
+        return {}, {}
+    where = f"{source or 'parameters'}: [calibration]"
+    if not isinstance(table, Mapping):
+        raise ParameterFileError(f"{where} must be a table")
+    unknown = sorted(set(table) - set(PARAMETERS) - set(CALIBRATION_KEYS))
+    if unknown:
+        raise ParameterFileError(f"{where}: unknown key(s) {unknown}; allowed are the factors "
+                                 f"{', '.join(PARAMETERS)} and {', '.join(CALIBRATION_KEYS)}")
+    factors: dict[str, float] = {}
+    for name in (k for k in table if k in PARAMETERS):
+        v, spec = table[name], PARAMETERS[name]
+        if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v) \
+                or not spec.lower <= v <= spec.upper:
+            raise ParameterFileError(f"{where} {name} = {v!r}: expected a number in "
+                                     f"[{spec.lower:g}, {spec.upper:g}] {spec.unit}")
+        factors[name] = float(v)
+    tags = table.get("provenance", {})
+    if not isinstance(tags, Mapping):
+        raise ParameterFileError(f"{where}.provenance must map factor names to tags")
+    stray = sorted(set(tags) - set(factors))
+    if stray:
+        raise ParameterFileError(f"{where}.provenance: {stray} name no factor of the table")
+    untagged = sorted(n for n in factors if not str(tags.get(n, "")).startswith("calibrated"))
+    if untagged:
+        raise ParameterFileError(f"{where}: factor(s) {untagged} lack a 'calibrated ...' tag "
+                                 "in [calibration.provenance] (which data fixed them?)")
+    sha = table.get("data_sha256", "")
+    prov = {f"calibration.{n}": str(tags[n]) for n in factors}
+    if sha:
+        prov["calibration.data_sha256"] = str(sha)
+    return factors, prov
 
 
 def _plain(obj: Any) -> Any:
