@@ -238,6 +238,53 @@ geometric ones from 1e-6 of the window to the first output, for the fast eddy mo
 measured: the response equals the adaptive IDAS one (``simulate``, rtol 1e-10) to 3.4e-10."""
 
 
+_STEP_ABSTOL = 1e-11
+"""Newton tolerance of the step response's rootfinders on the scaled DAE (relative to
+each unknown's scale: every residual row is O(1) per relative change of the unknowns);
+measured (U-magnet, 10 mm, 20 A, +8 V): derivatives against central differences
+1.8e-8 / 2.2e-8 (Richardson-extrapolated 3.0e-8 / 3.8e-8) with 1e-11; unscaled with 1e-9
+they were 3-6e-6 off for every difference step.  The response moves by 1.2e-10."""
+
+
+def _scaled_step_dae(run: Any, base: Network, *, gap_m: float, current_A: float,
+                     u: np.ndarray, duration: float, names: Sequence[str]
+                     ) -> tuple[dict[str, Any], np.ndarray, np.ndarray]:
+    """The step DAE of ``run`` in unknowns divided by their size at the nominal network's
+    operating point (floored at 1e-3 of the largest of their kind) and algebraic rows
+    divided by their largest entry of the scaled Jacobian there.
+
+    The scales come from the nominal (uncalibrated) network, not the parameter values, so
+    that the discrete scheme is the same function of the parameters (finite differences
+    see the same scheme).  Returns the DAE dict, the scales of ``y`` and of ``z = (x, I)``.
+    """
+    import casadi as ca
+
+    dae = run.dae
+    x_num = _start(base, {}, np.array([gap_m]), np.array([current_A]))[0]
+    i_num = np.full(len(base.circuits), current_A)
+
+    def floor(a: np.ndarray) -> np.ndarray:
+        a = np.abs(a)
+        return np.maximum(a, 1e-3 * max(float(a.max()), 1e-300))
+
+    y_num = run.D @ x_num
+    y_scale = floor(y_num)
+    z_scale = np.concatenate((floor(x_num), floor(i_num)))
+    ys = ca.SX.sym("y_scaled", dae["x"].numel())
+    zs = ca.SX.sym("z_scaled", dae["z"].numel())
+    ode, alg = ca.substitute([dae["ode"], dae["alg"]], [dae["x"], dae["z"]],
+                             [ca.DM(y_scale) * ys, ca.DM(z_scale) * zs])
+    # at the nominal factors (the statics x_num hold for the nominal network)
+    nominal_p = np.concatenate(([duration], u, np.full(len(base.gap_names), gap_m),
+                                [PARAMETERS[n].nominal for n in names]))
+    jac = ca.Function("step_alg_jacobian", [zs, ys, dae["p"]], [ca.jacobian(alg, zs)])
+    rows = np.max(np.abs(np.asarray(jac(np.concatenate((x_num, i_num)) / z_scale,
+                                        y_num / y_scale, nominal_p))), axis=1)
+    rows = np.where(rows > 0.0, rows, 1.0)
+    return ({"x": ys, "z": zs, "p": dae["p"], "ode": ode / ca.DM(y_scale),
+             "alg": alg / ca.DM(rows)}, y_scale, z_scale)
+
+
 def step_response_sensitivities(model: Any, values: Mapping[str, float], *, gap_m: float,
                                 current_A: float, voltage_step_V: float, times_s: Any,
                                 circuit: int = 0) -> dict[str, np.ndarray]:
@@ -299,16 +346,21 @@ def step_response_sensitivities(model: Any, values: Mapping[str, float], *, gap_
     x0 = rf(X0, ca.vertcat(ca.DM(s_vec), ca.DM(i_vec), P))
     u = base.resistances * i_vec
     u[circuit] += float(voltage_step_V)
+    pars = ca.vertcat(duration, ca.DM(u), ca.DM(s_vec), P)
+    # The DAE in scaled unknowns and equations (_scaled_step_dae): the collocation's Newton
+    # stops on an absolute residual, and unscaled its 1e-9 was ~1e-6 of the eddy fluxes
+    # (~3e-3 Wb): the derivatives of that inexact root were off by 3-6e-6 (measured)
+    dae, y_scale, z_scale = _scaled_step_dae(run, base, gap_m=float(gap_m),
+                                             current_A=float(current_A), u=u,
+                                             duration=duration, names=names)
     # consistent algebraic states just after the step: the differential states (flux
     # linkages, eddy fluxes) are continuous, (x, I) jump (eddy currents), alg(y, z) = 0
-    dae = run.dae
     alg = ca.Function("step_alg", [dae["z"], ca.vertcat(dae["x"], dae["p"])], [dae["alg"]])
     rz = ca.rootfinder("step_consistent", "newton", alg,
-                       {"abstol": 1e-10, "abstolStep": 1e-15, "max_iter": 60,
+                       {"abstol": _STEP_ABSTOL, "abstolStep": 1e-15, "max_iter": 60,
                         "error_on_fail": True})
-    y0 = ca.mtimes(ca.DM(run.D), x0)
-    pars = ca.vertcat(duration, ca.DM(u), ca.DM(s_vec), P)
-    z0 = rz(ca.vertcat(x0, ca.DM(i_vec)), ca.vertcat(y0, pars))
+    y0 = ca.mtimes(ca.DM(run.D), x0) / ca.DM(y_scale)
+    z0 = rz(ca.vertcat(x0, ca.DM(i_vec)) / ca.DM(z_scale), ca.vertcat(y0, pars))
     grid = np.concatenate(([0.0], t / duration))
     # the fast eddy modes start at t = 0: geometric steps there, then the output intervals
     # in _STEP_SUBSTEPS equal steps each
@@ -317,15 +369,13 @@ def step_response_sensitivities(model: Any, values: Mapping[str, float], *, gap_
                                                                strict=True)]))
     colloc = ca.integrator("step_collocation", "collocation", dae, 0.0, list(fine[1:]),
                            {"collocation_scheme": "radau", "interpolation_order": 3,
-                            # Newton to 1e-9 on residuals of magnetic voltages up to
-                            # ~1e4 A: 1e-11 and the default 1e-12 failed (rounding)
                             "number_of_finite_elements": 1, "rootfinder": "newton",
-                            "rootfinder_options": {"abstol": 1e-9, "abstolStep": 1e-14,
-                                                   "max_iter": 50}})
+                            "rootfinder_options": {"abstol": _STEP_ABSTOL,
+                                                   "abstolStep": 1e-14, "max_iter": 50}})
     res = colloc(x0=y0, z0=z0, p=pars)
     keep = [int(np.searchsorted(fine, v)) - 1 for v in grid[1:]]
     res = {"zf": res["zf"][:, keep]}
-    cur = res["zf"][run.n_loops + circuit, :].T
+    cur = res["zf"][run.n_loops + circuit, :].T * float(z_scale[run.n_loops + circuit])
     fun = ca.Function("step_sensitivities", [X0, P], [cur, ca.jacobian(cur, P)])
     v = np.array([float(values[n]) for n in names])
     guess = _start(base, dict(values), np.array([float(gap_m)]), np.array([float(current_A)]))[0]
