@@ -215,6 +215,59 @@ def test_bad_calibration_input(magnet: mk.Magnet, tmp_path: Path) -> None:
         read_points(bad)
 
 
+def _fem_rows() -> tuple[list[str], list[list[str]]]:
+    lines = [ln for ln in FEM.read_text().splitlines() if not ln.startswith("#")]
+    return lines[0].split(","), [ln.split(",") for ln in lines[1:]]
+
+
+def _fem_edit(tmp_path: Path, edit=None, header=None) -> Path:  # type: ignore[no-untyped-def]
+    head, rows = _fem_rows()
+    rows = edit(rows) if edit is not None else rows
+    path = tmp_path / "bad.csv"
+    with path.open("w", newline="") as fh:
+        csv.writer(fh).writerows([header or head, *rows])
+    return path
+
+
+def _scale_column(rows, col, factor):  # type: ignore[no-untyped-def]
+    return [[*r[:col], repr(float(r[col]) * factor), *r[col + 1:]] for r in rows]
+
+
+@pytest.mark.parametrize(("edit", "header", "message"), [
+    # the CSV rows are file lines: the header is line 1, the first point line 2
+    (lambda r: [*r[:4], [r[4][0], r[4][1], "nan", r[4][3]], *r[5:]], None,
+     r"row 6, column force_N: 'nan' is not a finite number"),
+    (None, ["gap_m", "current_A", "force_N", "psi"], r"unknown column 'psi' \(column 4\)"),
+    # force in kN: the nominal magnet's force is ~1000x the data
+    (lambda r: _scale_column(r, 2, 1e-3), None,
+     r"force_N is 0\.00\d+ x the nominal magnet's \(median over its 20 points, first at "
+     r"row 2\).*unit slip"),
+    # flux linkage in mWb
+    (lambda r: _scale_column(r, 3, 1e3), None, r"flux_linkage_Wb is 1\.0\de\+03 x"),
+])
+def test_bad_calibration_data_name_the_row(magnet: mk.Magnet, tmp_path: Path, edit, header,
+                                           message) -> None:  # type: ignore[no-untyped-def]
+    path = _fem_edit(tmp_path, edit, header)
+    with pytest.raises(DataError, match=message):
+        calibrate(magnet, path, parameters=["leakage_factor", "iron_saturation_scale"])
+
+
+def test_gap_in_mm_and_a_repeated_point_in_calibration_data(magnet: mk.Magnet,
+                                                            tmp_path: Path) -> None:
+    # gaps in mm: warned naming the row, then refused as a unit slip (no force at 4 m)
+    path = _fem_edit(tmp_path, lambda r: _scale_column(r, 0, 1e3))
+    with pytest.warns(mk.PlausibilityWarning, match=r"row 2: gap_m = 4 m .* in mm"), \
+            pytest.raises(DataError, match=r"force_N is .* x the nominal magnet's"):
+        calibrate(magnet, path, parameters=["leakage_factor"])
+    # a point given twice: warned naming both rows, both fitted (scattered points need no
+    # grid, so there is no "non-rectangular" case for calibration data)
+    path = _fem_edit(tmp_path, lambda r: [*r, r[2]])
+    with pytest.warns(mk.DataWarning, match=r"row 22 repeats the point gap 0\.004 m, current "
+                                            r"40 A of row 4"):
+        pts = read_points(path)
+    assert pts.gap_m.size == 21
+
+
 def test_cli_calibrate(tmp_path: Path) -> None:
     runner = CliRunner()
     out = tmp_path / "c.toml"

@@ -48,7 +48,7 @@ import numpy as np
 
 from .circuit.factors import PARAMETERS, with_factors
 from .circuit.network import Network
-from .errors import DataError, InputError, MaglevkitWarning, SolverError
+from .errors import DataError, DataWarning, InputError, MaglevkitWarning, SolverError
 
 __all__ = ["PARAMETERS", "DEFAULT_PARAMETERS", "Calibration", "StaticPoints", "calibrate",
            "calibrated_network", "parameter_sensitivities", "read_points",
@@ -134,6 +134,15 @@ def read_points(path: str | Path) -> StaticPoints:
         raise DataError(f"{rows.source}: row {rows.lines[i]}: current_A = "
                         f"{rows.current_A[i]:g}; calibration points need I > 0 A (relative "
                         "residuals; F = psi = 0 at 0 A)")
+    seen: dict[tuple[float, float], int] = {}
+    for k, key in enumerate(zip(rows.gap_m.tolist(), rows.current_A.tolist(), strict=True)):
+        if key in seen:
+            warnings.warn(f"{rows.source}: row {rows.lines[k]} repeats the point gap "
+                          f"{key[0]:g} m, current {key[1]:g} A of row {rows.lines[seen[key]]}; "
+                          "both are fitted (a repeated measurement weighs the point twice; "
+                          "delete the row if it is a copy)", DataWarning, stacklevel=2)
+            break
+        seen[key] = k
     return StaticPoints(gap_m=rows.gap_m, current_A=rows.current_A, force_N=arrays["force_N"],
                         flux_linkage_Wb=arrays["flux_linkage_Wb"], circuits=rows.circuits,
                         rows=rows.lines if n else np.zeros(0, dtype=int), source=rows.source,
@@ -495,6 +504,31 @@ def _model_points(ps: _ParametricStatics, values: np.ndarray, data: StaticPoints
     return np.array(res), np.array(jac), keys
 
 
+UNIT_SLIP_RATIO = 10.0
+"""Data off the nominal model by more than this factor (median over a quantity's points)
+are refused as a unit slip: the documented factors move the statics by tens of percent,
+not by a factor 10 (kN for N, mWb for Wb are a factor 1000)."""
+
+
+def _check_units(res: np.ndarray, keys: list[tuple[int, int, str]], data: StaticPoints
+                 ) -> None:
+    """Refuse data whose median ratio to the nominal model is beyond
+    :data:`UNIT_SLIP_RATIO`, naming the quantity and its first row."""
+    for q, unit in (("force_N", "N"), ("flux_linkage_Wb", "Wb")):
+        idx = [n for n, key in enumerate(keys) if key[2] == q]
+        if not idx:
+            continue
+        # res = model/data - 1: data/model = 1/(1 + res)
+        ratio = float(np.median(1.0 / (1.0 + res[idx])))
+        if not 1.0 / UNIT_SLIP_RATIO < ratio < UNIT_SLIP_RATIO:
+            k = keys[idx[0]][0]
+            raise DataError(f"{data.source}: {q} is {ratio:.3g} x the nominal magnet's "
+                            f"(median over its {len(idx)} points, first at row "
+                            f"{int(data.rows[k])}); the factors move the statics by tens of "
+                            f"percent: a unit slip (the column is in {unit}; gaps in m, "
+                            "currents in A) or another magnet")
+
+
 def _report(res: np.ndarray, keys: list[tuple[int, int, str]], data: StaticPoints
             ) -> list[dict[str, Any]]:
     out = []
@@ -576,6 +610,7 @@ def calibrate(magnet: Any, data: str | Path | StaticPoints, *,
                          f"the bounds {dict(zip(names, zip(lo, hi, strict=True), strict=True))}")
     x0 = _start(net, dict(zip(names, p0, strict=True)), fit_pts.gap_m, fit_pts.current_A)
     nominal_res, _, nominal_keys = _model_points(ps, p0, fit_pts, x0.copy())
+    _check_units(nominal_res, nominal_keys, fit_pts)
     cache: dict[bytes, tuple[np.ndarray, np.ndarray]] = {}
 
     def evaluate(p: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
