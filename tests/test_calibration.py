@@ -29,6 +29,7 @@ from maglevkit.errors import DataError
 
 ROOT = Path(__file__).resolve().parents[1]
 FEM = ROOT / "benchmarks" / "results" / "u_magnet_fem_statics.csv"
+FEM_2MM = ROOT / "benchmarks" / "results" / "u_magnet_fem_statics_2mm.csv"
 TRUE = {"leakage_factor": 1.15, "fringing_factor": 0.85, "gap_offset_m": 3e-4,
         "iron_field_scale": 1.3, "iron_saturation_scale": 0.97}
 
@@ -116,6 +117,29 @@ def test_fem_as_measurement_fit_4_to_12_mm_held_out_16_and_20_mm(magnet: mk.Magn
     # 12 points cannot pin the iron's initial permeability: named, interval wider than it
     assert "iron_field_scale" in res.undetermined
     assert res.confidence_95["iron_field_scale"] > PARAMETERS["iron_field_scale"].scale
+
+
+def test_fem_every_2_mm_fit_4_to_12_mm_held_out_14_to_20_mm(magnet: mk.Magnet) -> None:
+    """The issue's held-out split on the FEM solved every 2 mm
+    (benchmarks/fem_u_magnet_calibration.py): the lumped network's best documented set
+    (leakage and the iron's B axis) carries to 14-20 mm, but not to 2 %."""
+    res = calibrate(magnet, FEM_2MM, parameters=["leakage_factor", "iron_saturation_scale"],
+                    holdout_gaps_m=[0.014, 0.016, 0.018, 0.020])
+    assert {round(r["gap_m"] * 1e3) for r in res.holdout} == {14, 16, 18, 20}
+    assert len(res.points) == 40 and len(res.holdout) == 32
+    assert res.undetermined == () and res.bounds_active == ()
+    nominal = {q: max(abs(r["relative_error"]) for r in res.nominal_holdout
+                      if r["quantity"] == q) for q in ("force_N", "flux_linkage_Wb")}
+    # measured: nominal held out 6.9 % / 7.9 %, calibrated 4.35 % / 3.61 % (force at
+    # 20 mm: the lumped fringe law's gap dependence; psi at 80 A: the saturation shape);
+    # bounds with ~0.2 pp margin for solver rounding across platforms
+    assert res.max_error("holdout", "force_N") < 4.6e-2 < nominal["force_N"]
+    assert res.max_error("holdout", "flux_linkage_Wb") < 3.8e-2 < nominal["flux_linkage_Wb"]
+    # the held-out force error grows with the gap at 5 A (+0.6 % at 14 mm, +4.0 % at 20 mm):
+    # a structural error of the lumped tubes, not noise
+    low = {round(r["gap_m"] * 1e3): r["relative_error"] for r in res.holdout
+           if r["quantity"] == "force_N" and r["current_A"] == 5.0}
+    assert low[14] < low[16] < low[18] < low[20]
 
 
 def test_a_parameter_the_data_cannot_see_is_named(magnet: mk.Magnet) -> None:

@@ -1,0 +1,136 @@
+"""The U-magnet's 2-D FEM as "measurement" for the calibration's held-out check (issue 25).
+
+Extends the FEM statics of ``benchmarks/results/u_magnet_fem_statics.csv`` (4-20 mm in
+4 mm steps, docs/validation_fem.md sec. 1) to every 2 mm from 4 to 20 mm at the same
+currents (5, 20, 40, 80 A) with the same solver (``fem_u_magnet.solve_fem``: P2, Newton to
+1e-8, Maxwell stress over the gap band), writes
+``benchmarks/results/u_magnet_fem_statics_2mm.csv`` and fits the network factors on
+4-12 mm, reporting the error at the held-out 14-20 mm for several parameter sets and
+networks (docs/magnets.md, "Calibration").
+
+``python benchmarks/fem_u_magnet_calibration.py [--fem-only] [--networks lumped,cells]``
+(needs the optional extra ``validation``, scikit-fem; ~20 s per FEM point).
+"""
+
+from __future__ import annotations
+
+import argparse
+import csv
+import json
+import sys
+import time
+import warnings
+from pathlib import Path
+
+import numpy as np
+
+import maglevkit as mk
+from maglevkit.calibration import calibrate
+from maglevkit.magnets import build_magnet
+from maglevkit.parameter_files import read_parameter_file
+
+HERE = Path(__file__).resolve().parent
+OLD = HERE / "results" / "u_magnet_fem_statics.csv"
+OUT = HERE / "results" / "u_magnet_fem_statics_2mm.csv"
+GAPS_MM = (4, 6, 8, 10, 12, 14, 16, 18, 20)
+CURRENTS_A = (5.0, 20.0, 40.0, 80.0)
+FIT_MM, HOLD_MM = (4, 6, 8, 10, 12), (14, 16, 18, 20)
+NETWORKS = {"lumped": {}, "tubes": {"discretisation": "grid"},
+            "cells": {"discretisation": "grid", "air_model": "cells"}}
+SETS = {
+    "lumped": [("leakage_factor", "fringing_factor", "gap_offset_m", "iron_field_scale",
+                "iron_saturation_scale"),
+               ("iron_saturation_scale",),
+               ("leakage_factor", "iron_saturation_scale"),
+               ("fringing_factor", "iron_saturation_scale"),
+               ("leakage_factor", "fringing_factor", "iron_saturation_scale"),
+               ("leakage_factor", "gap_offset_m", "iron_saturation_scale")],
+    "tubes": [("leakage_factor", "iron_saturation_scale"),
+              ("leakage_factor", "fringing_factor", "iron_saturation_scale")],
+    # the cell network has no leakage or fringe elements: only the gap and iron factors act
+    "cells": [("iron_field_scale", "iron_saturation_scale"),
+              ("gap_offset_m", "iron_saturation_scale"), ("iron_saturation_scale",)],
+}
+
+
+def fem_table() -> None:
+    """Write OUT: the old file's points plus the missing 2 mm gaps (solved here)."""
+    sys.path.insert(0, str(HERE))
+    import fem_u_magnet  # noqa: PLC0415 (optional dependency scikit-fem)
+
+    known = {}
+    with OLD.open() as fh:
+        for row in csv.DictReader(ln for ln in fh if not ln.startswith("#")):
+            known[(round(float(row["gap_m"]) * 1e3), float(row["current_A"]))] = (
+                row["force_N"], row["flux_linkage_Wb"])
+    rows = []
+    for g in GAPS_MM:
+        for i in CURRENTS_A:
+            if (g, i) not in known:
+                t = time.time()
+                f, psi = fem_u_magnet.solve_fem(g * 1e-3, i)
+                known[(g, i)] = (f"{f:.1f}", f"{psi:.4f}")
+                print(f"FEM {g} mm {i:g} A: {f:.1f} N {psi:.4f} Wb "
+                      f"({time.time() - t:.0f} s)", flush=True)
+            rows.append([f"{g * 1e-3:g}", f"{i:g}", *known[(g, i)]])
+    with OUT.open("w", newline="") as fh:
+        fh.write("# U-magnet (src/maglevkit/data/u-magnet.toml, AISI 1008), 2-D FEM statics: "
+                 "force on the rail and coil flux linkage\n# benchmarks/fem_u_magnet_"
+                 "calibration.py: the 4 mm grid of u_magnet_fem_statics.csv plus 6-18 mm "
+                 "solved by fem_u_magnet.solve_fem (same mesh and solver)\n")
+        w = csv.writer(fh)
+        w.writerow(["gap_m", "current_A", "force_N", "flux_linkage_Wb"])
+        w.writerows(rows)
+
+
+def fits(networks: list[str]) -> list[dict]:
+    """Fit every parameter set of SETS on FIT_MM, held out HOLD_MM."""
+    warnings.simplefilter("ignore")
+    params, _ = read_parameter_file("u-magnet", what="magnet")
+    out = []
+    for net in networks:
+        p = {**params, "magnet": {**params["magnet"], **NETWORKS[net]}}
+        mag = build_magnet(p, options=mk.ModelOptions(eddy_currents=False))
+        for names in SETS[net]:
+            t = time.time()
+            r = calibrate(mag, OUT, parameters=list(names),
+                          holdout_gaps_m=[g * 1e-3 for g in HOLD_MM])
+
+            def mx(rows: list[dict], q: str) -> float:
+                return round(100 * max(abs(x["relative_error"]) for x in rows
+                                       if x["quantity"] == q), 2)
+
+            rec = {"network": net, "parameters": names,
+                   "values": {k: float(f"{v:.5g}") for k, v in r.values.items()},
+                   "ci95": {k: float(f"{v:.3g}") for k, v in r.confidence_95.items()},
+                   "singular_values": [float(f"{v:.3g}") for v in r.singular_values],
+                   "undetermined": r.undetermined, "bounds_active": r.bounds_active,
+                   "nominal_fit_pct": (mx(r.nominal_points, "force_N"),
+                                       mx(r.nominal_points, "flux_linkage_Wb")),
+                   "nominal_holdout_pct": (mx(r.nominal_holdout, "force_N"),
+                                           mx(r.nominal_holdout, "flux_linkage_Wb")),
+                   "fit_pct": (mx(r.points, "force_N"), mx(r.points, "flux_linkage_Wb")),
+                   "holdout_pct": (mx(r.holdout, "force_N"),
+                                   mx(r.holdout, "flux_linkage_Wb")),
+                   "holdout": [(x["gap_m"], x["current_A"], x["quantity"],
+                                round(100 * x["relative_error"], 2)) for x in r.holdout],
+                   "seconds": round(time.time() - t, 1)}
+            print(json.dumps(rec), flush=True)
+            out.append(rec)
+    return out
+
+
+def main(argv: list[str] | None = None) -> None:
+    ap = argparse.ArgumentParser(description=(__doc__ or "").splitlines()[0])
+    ap.add_argument("--fem-only", action="store_true", help="only write the FEM table")
+    ap.add_argument("--networks", default="lumped,tubes,cells")
+    a = ap.parse_args(argv)
+    if not OUT.exists():
+        fem_table()
+    if not a.fem_only:
+        fits([n for n in a.networks.split(",") if n])
+    np.seterr(all="ignore")
+
+
+if __name__ == "__main__":
+    main()
