@@ -47,9 +47,11 @@ SETS = {
                ("leakage_factor", "gap_offset_m", "iron_saturation_scale")],
     "tubes": [("leakage_factor", "iron_saturation_scale"),
               ("leakage_factor", "fringing_factor", "iron_saturation_scale")],
-    # the cell network has no leakage or fringe elements: only the gap and iron factors act
+    # (leakage_factor scales every air cell outside the gap there, fringing_factor nothing)
     "cells": [("iron_field_scale", "iron_saturation_scale"),
-              ("gap_offset_m", "iron_saturation_scale"), ("iron_saturation_scale",)],
+              ("gap_offset_m", "iron_saturation_scale"),
+              ("leakage_factor", "iron_saturation_scale"),
+              ("leakage_factor", "iron_field_scale", "iron_saturation_scale")],
 }
 
 
@@ -83,7 +85,7 @@ def fem_table() -> None:
         w.writerows(rows)
 
 
-def fits(networks: list[str]) -> list[dict]:
+def fits(networks: list[str], sets: list[tuple[str, ...]] | None = None) -> list[dict]:
     """Fit every parameter set of SETS on FIT_MM, held out HOLD_MM."""
     warnings.simplefilter("ignore")
     params, _ = read_parameter_file("u-magnet", what="magnet")
@@ -91,7 +93,7 @@ def fits(networks: list[str]) -> list[dict]:
     for net in networks:
         p = {**params, "magnet": {**params["magnet"], **NETWORKS[net]}}
         mag = build_magnet(p, options=mk.ModelOptions(eddy_currents=False))
-        for names in SETS[net]:
+        for names in sets or SETS[net]:
             t = time.time()
             r = calibrate(mag, OUT, parameters=list(names),
                           holdout_gaps_m=[g * 1e-3 for g in HOLD_MM])
@@ -124,11 +126,15 @@ def main(argv: list[str] | None = None) -> None:
     ap = argparse.ArgumentParser(description=(__doc__ or "").splitlines()[0])
     ap.add_argument("--fem-only", action="store_true", help="only write the FEM table")
     ap.add_argument("--networks", default="lumped,tubes,cells")
+    ap.add_argument("--sets", default="", help=(
+        "only these parameter sets, e.g. 'leakage_factor,iron_saturation_scale;"
+        "iron_saturation_scale' (default: SETS of each network)"))
     a = ap.parse_args(argv)
     if not OUT.exists():
         fem_table()
     if not a.fem_only:
-        fits([n for n in a.networks.split(",") if n])
+        sets = [tuple(x.split(",")) for x in a.sets.split(";") if x]
+        fits([n for n in a.networks.split(",") if n], sets or None)
     np.seterr(all="ignore")
 
 

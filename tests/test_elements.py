@@ -194,7 +194,7 @@ def test_kirchhoff_loop_law_by_hand_in_deep_saturation() -> None:
 
 def test_air_gap_fringe_permeance_is_its_share_of_the_permeance() -> None:
     """One fringe law: the calibration's fringing factor scales AirGap.fringe_permeance."""
-    from maglevkit.calibration import CalibratedLinear
+    from maglevkit.circuit.factors import CalibratedLinear
 
     plain = mk.AirGap("g", gap_input="s", pole_area=0.01, slot_pitch=0.04, slot_opening=0.01)
     edged = mk.AirGap("g", gap_input="s", pole_area=0.01, slot_pitch=0.04, slot_opening=0.01,
