@@ -142,6 +142,28 @@ def test_fem_every_2_mm_fit_4_to_12_mm_held_out_14_to_20_mm(magnet: mk.Magnet) -
     assert low[14] < low[16] < low[18] < low[20]
 
 
+@pytest.mark.slow
+def test_fem_held_out_14_to_20_mm_within_2_percent_on_the_cell_network() -> None:
+    """The issue's aim met on the U-magnet's cell network (discretisation = "grid",
+    air_model = "cells") as calibration base: ~4-7 min (2812 branches, exact Jacobians)."""
+    from maglevkit.magnets import build_magnet
+    from maglevkit.parameter_files import read_parameter_file
+
+    params, _ = read_parameter_file("u-magnet", what="magnet")
+    params = {**params, "magnet": {**params["magnet"], "discretisation": "grid",
+                                   "air_model": "cells"}}
+    mag = build_magnet(params, options=mk.ModelOptions(eddy_currents=False))
+    res = calibrate(mag, FEM_2MM, parameters=["leakage_factor", "iron_saturation_scale"],
+                    holdout_gaps_m=[0.014, 0.016, 0.018, 0.020])
+    assert res.undetermined == () and res.bounds_active == ()
+    # measured: leakage_factor 1.079 +- 0.011 (the air cells outside the gap), k_B
+    # 0.998 +- 0.002; held out max 1.24 % force, 0.62 % psi (nominal 2.72 / 2.44 %)
+    assert res.max_error("holdout", "force_N") < 0.02
+    assert res.max_error("holdout", "flux_linkage_Wb") < 0.02
+    assert res.max_error("holdout") < max(abs(r["relative_error"])
+                                          for r in res.nominal_holdout)
+
+
 def test_a_parameter_the_data_cannot_see_is_named(magnet: mk.Magnet) -> None:
     # flux linkage at one gap in the linear range: the gap offset and the fringing factor
     # both only change the gap permeance there -- one direction, two parameters
