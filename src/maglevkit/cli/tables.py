@@ -193,7 +193,8 @@ def calibrate_cmd(
     Prints the values with 95 % confidence intervals, the parameters the data cannot
     determine, and the relative error per point (fitted and held out); --format csv or json
     prints the per-point errors.  Writes the magnet file with a [calibration] table
-    (values tagged calibrated, with the data file's SHA-256).
+    (values tagged calibrated, with the data file's SHA-256); every command taking MAGNET
+    loads that file with the factors applied.
 
     \b
     Example:
