@@ -41,7 +41,7 @@ SETS = {
     "lumped": [("leakage_factor", "fringing_factor", "gap_offset_m", "iron_field_scale",
                 "iron_saturation_scale"),
                ("iron_saturation_scale",),
-               ("leakage_factor", "iron_saturation_scale"),
+               ("leakage_factor",), ("leakage_factor", "iron_saturation_scale"),
                ("fringing_factor", "iron_saturation_scale"),
                ("leakage_factor", "fringing_factor", "iron_saturation_scale"),
                ("leakage_factor", "gap_offset_m", "iron_saturation_scale")],
