@@ -3,6 +3,7 @@ damping from the magnet's absolute velocity, freewheeling diodes), measured agai
 aims; the findings are in docs/decisions.md ("A realistic default run").
 
     PYTHONPATH=src python tools/realism_pier_crossing.py smooth [DURATION_S]
+    PYTHONPATH=src python tools/realism_pier_crossing.py ablation [DURATION_S]
     PYTHONPATH=src python tools/realism_pier_crossing.py rough SEEDS [DURATION_S]
     PYTHONPATH=src python tools/realism_pier_crossing.py figure OUT.png
 
@@ -29,15 +30,17 @@ FAILED = "s1m7/front"
 
 
 def model(which: str, *, loop_compiled: bool = True) -> VehicleModel:
-    """The train ``"before"`` or ``"after"`` the realism changes."""
+    """The train ``"before"`` or ``"after"`` the realism changes, or ``"after"`` without
+    one of them (``"no-precamber"``, ``"no-blend"``, ``"no-diode"``)."""
     train = load_vehicle()
     data = load_guideway()
-    if which == "before":
+    if which in ("before", "no-blend"):
         train = dataclasses.replace(train, control_velocity_blend=0.0)
+    if which in ("before", "no-precamber"):
         data = dataclasses.replace(data, span=dataclasses.replace(data.span, precamber_m=0.0))
     gw0 = data.guideway(n_spans=1)
     gw = data.guideway(n_spans=gw0.spans_needed(train.length_m))
-    return VehicleModel(train, guideway=gw, freewheel=which == "after",
+    return VehicleModel(train, guideway=gw, freewheel=which not in ("before", "no-diode"),
                         compiled="auto" if loop_compiled else "never")
 
 
@@ -58,12 +61,15 @@ def metrics(res: Any, m: VehicleModel) -> dict[str, float]:
             "touchdown": str(res.touchdown)}
 
 
-def smooth(duration: float) -> None:
-    for which in ("before", "after"):
+def smooth(duration: float, cases: tuple[str, ...] = ("before", "after")) -> None:
+    for which in cases:
         m = model(which)
-        t0 = time.perf_counter()
-        res = m.run(speed_m_per_s=400 / 3.6, duration_s=duration)
-        print(which, f"{time.perf_counter() - t0:.1f}s", metrics(res, m), flush=True)
+        for kmh in (400.0, 500.0):
+            t0 = time.perf_counter()
+            res = m.run(speed_m_per_s=kmh / 3.6, duration_s=duration)
+            print(which, f"{kmh:.0f} km/h", f"{time.perf_counter() - t0:.1f}s",
+                  {k: (round(v, 3) if isinstance(v, float) else v)
+                   for k, v in metrics(res, m).items()}, flush=True)
 
 
 def rough(seeds: list[int], duration: float) -> None:
@@ -113,6 +119,9 @@ if __name__ == "__main__":
     what = sys.argv[1]
     if what == "smooth":
         smooth(float(sys.argv[2]) if len(sys.argv) > 2 else 3.0)
+    elif what == "ablation":
+        smooth(float(sys.argv[2]) if len(sys.argv) > 2 else 3.0,
+               ("no-precamber", "no-blend", "no-diode"))
     elif what == "rough":
         rough([int(s) for s in sys.argv[2].split(",")],
               float(sys.argv[3]) if len(sys.argv) > 3 else 12.0)
