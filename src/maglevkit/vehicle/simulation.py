@@ -5,12 +5,16 @@ Per time step ``t_k -> t_k + dt`` (fixed step, sample-and-hold controllers)::
     x_p      = x_nose(t_k) - xi_p                       force points on the guideway
     s_p      = s_0 + u_p - w(x_p) - r(x_p)              gap (u_p = B_p^T q: frame point)
     s_p'     = u_p' - (w_t + v w_x)(x_p) - v r_x(x_p)   gap rate (moving-load term v w_x)
-    U        = controllers(s, s', I, psi_hat)           one vectorised flux cascade per circuit
+    U        = controllers(s, s', u', I, psi_hat)       one vectorised flux cascade per circuit
+                                                        (damping from s' and u', velocity_blend)
     I, F     = bank.step(U, s, s')                      all circuits, one call
     q, q'    <- exact ZOH step of M q'' + C q' + K q = Q_g - B F_bar
     guideway <- exact ZOH step with F_bar at the mid-step positions
     F_bar    = (F(t_k) + F(t_k+1)) / 2 x sides          (both sides' magnets per lumped line)
 
+``r`` is the irregularity plus the girders' precamber (``Guideway.built_in_profile``),
+evaluated once along the points' paths.  The bank's freewheeling diodes keep the coil
+currents >= 0 within a step (``freewheel``).
 Coarse distribution (default): one gap and one force per circuit at the circuit's centre,
 reduced models (maps).  Fine distribution (``magnets="detailed"``): the detailed flux-based
 models with one gap and one force per pole.  Failures switch a circuit's voltage to 0 from
