@@ -53,6 +53,7 @@ from .current import (
     _extend_axis,
     _extend_values,
     eq8_coil_current,
+    eq8_freewheel_voltage,
     eq8_rhs,
 )
 from .lanes import LaneInput, external_source, lane_source, lane_target
@@ -270,6 +271,12 @@ class MagnetBank:
         give the same numbers; ``"lanes"`` is ~3-5x faster at 100-1000 circuits
         (BENCHMARKS.md).  Where the lanes cannot be compiled or loaded, the bank uses
         the ``"casadi"`` code without a warning.
+    freewheel : bool
+        ``False`` (default): the reduced circuits take the voltages as given (eq. 8);
+        ``True``: behind a two-quadrant chopper with freewheeling diodes, the coil
+        current cannot go below zero within a step (every RK4 stage applies
+        :func:`~maglevkit.reduced.current.eq8_freewheel_voltage`, ``U_eff = max(U,
+        -R_ec I_L)``; the outputs' coil currents too).  The vehicle runs turn it on.
 
     Examples
     --------
@@ -289,7 +296,7 @@ class MagnetBank:
                  gap_inputs: str = "circuit", interpolation: str = "bicubic",
                  compiled: str = "auto", eddy_resistance: str = "fit", max_step_s: float = 1e-3,
                  extrapolate: bool = False, cache_dir: Any = None,
-                 codegen: str = "lanes") -> None:
+                 codegen: str = "lanes", freewheel: bool = False) -> None:
         if compiled not in COMPILE_MODES:
             raise InputError(f"compiled = {compiled!r}; use one of {list(COMPILE_MODES)}")
         if codegen not in ("lanes", "casadi"):
@@ -306,6 +313,7 @@ class MagnetBank:
                 and max_step_s > 0):
             raise InputError(f"max_step_s = {max_step_s!r} must be a finite number > 0")
         flag(extrapolate, "extrapolate")
+        self.freewheel = flag(freewheel, "freewheel")
         self.gap_inputs = gap_inputs
         self.interpolation = interpolation
         self.compiled_mode = compiled
@@ -543,6 +551,8 @@ class MagnetBank:
         """Eq. 8 of one circuit as MX expressions: ``(dI_L/dt, I, F, L~)``."""
         lt, dl, f = self._lookup(self._gap_cell(s, p) if cell is None else cell, i, p, table)
         r_el, a = p[7], p[8]
+        if self.freewheel:
+            u = eq8_freewheel_voltage(i, u, r_el, a)
         return eq8_rhs(i, u, sd, lt, dl, r_el, a), eq8_coil_current(i, u, r_el, a), f, lt
 
     def _make_circuit_kernel(self) -> dict[str, ca.Function]:
@@ -593,7 +603,8 @@ class MagnetBank:
         def f(x: Any, cell: tuple[Any, Any]) -> Any:
             # the stages need L~ and dL/ds only (the gather of F would be wasted)
             lt, dl = self._lookup(cell, x, p, table, maps=(0, 1))
-            return eq8_rhs(x, u, sd, lt, dl, r_el, a)
+            return eq8_rhs(x, eq8_freewheel_voltage(x, u, r_el, a) if self.freewheel else u,
+                           sd, lt, dl, r_el, a)
 
         x: Any = i
         lo: Any = i
@@ -614,7 +625,8 @@ class MagnetBank:
             hi = ca.fmax(hi, x)
             cell_start = cell_end
         se = s + sd * h
-        coil = eq8_coil_current(x, u, r_el, a)
+        coil = eq8_coil_current(x, eq8_freewheel_voltage(x, u, r_el, a) if self.freewheel
+                                else u, r_el, a)
         force = self._lookup(self._gap_cell(se, p), x, p, table, maps=(2,))[0]
         # range flags (p[9:13] = gap and current bounds incl. rounding allowances);
         # |v| <= DBL_MAX is false for NaN and inf (x - x would be simplified to 0)

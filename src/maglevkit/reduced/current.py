@@ -52,7 +52,7 @@ from ..models.inputs import check_initial_choice, check_step, simulation_inputs
 from ..validation import flag, real_array
 
 __all__ = ["CurrentModel", "CurrentModelLinearization", "CurrentModelState", "CurrentOutputs",
-           "ReducedSimulation", "eq8_coil_current", "eq8_eddy_branch_rhs", "eq8_rhs",
+           "ReducedSimulation", "eq8_coil_current", "eq8_eddy_branch_rhs", "eq8_freewheel_voltage", "eq8_rhs",
            "eq8_shielded_gap_rhs"]
 
 
@@ -1340,6 +1340,40 @@ def eq8_rhs(i_l: Any, u: Any, gap_rate: Any, ltilde: Any, dl_ds: Any, r_el: Any,
 def eq8_coil_current(i_l: Any, u: Any, r_el: Any, a: Any) -> Any:
     """Coil current of Fig. 8: ``I = (U - U_L)/R_el`` with ``U_L = (U - R_el I_L)/a``."""
     return (u - (u - r_el * i_l) / a) / r_el
+
+
+def eq8_freewheel_voltage(i_l: Any, u: Any, r_el: Any, a: Any) -> Any:
+    """Eq. 8's terminal voltage behind a two-quadrant chopper with freewheeling diodes.
+
+    The chopper drives the coil current ``I = (U/R_ec + I_L)/a`` (Fig. 8) but cannot
+    reverse it: where the commanded ``U`` would make ``I < 0`` the diodes block and the
+    terminal voltage is the one that gives ``I = 0``, ``U = -R_ec I_L``, so that
+    ``U_eff = max(U, -R_ec I_L)`` with ``R_ec = R_el/(a - 1)``.  With ``I = 0`` the flux
+    then decays through the eddy-current path alone (``L~ dI_L/dt = -R_ec I_L`` at a fixed
+    gap), and ``I_L`` never crosses zero.  Without an eddy path (``a = 1``, ``I = I_L``)
+    the diodes hold ``I_L`` at zero once it is there (``U_eff = max(U, 0)`` for
+    ``I_L <= 0``).  Evaluated inside every RK4 stage, the limit holds within a step, not
+    only at the sample instants.
+
+    Parameters
+    ----------
+    i_l : float or CasADi
+        Inductor current ``I_L`` [A].
+    u : float or CasADi
+        Commanded terminal voltage ``U`` [V].
+    r_el : float or CasADi
+        Coil resistance ``R_el`` [ohm].
+    a : float or CasADi
+        ``1 + R_el/R_ec`` [-] (1: no eddy path).
+
+    Returns
+    -------
+    CasADi expression (or float for float inputs)
+        The applied voltage ``U_eff`` [V] (CasADi ``fmax``/``if_else``).
+    """
+    floor = ca.if_else(a > 1, -r_el * i_l / ca.fmax(a - 1, 1e-300),
+                       ca.if_else(i_l > 0, -ca.inf, 0.0))
+    return ca.fmax(u, floor)
 
 
 def eq8_eddy_branch_rhs(i_k: Any, u_l: Any, r_k: Any, l_k: Any) -> Any:
