@@ -715,6 +715,22 @@ def _toml(tables: Mapping[str, Any], prefix: str = "") -> list[str]:
     return lines
 
 
+def toml_text(tables: Mapping[str, Any]) -> str:
+    """TOML text of nested tables of numbers, strings, bools and lists (the writer of the
+    calibrated and the optimised magnet files, :mod:`maglevkit.design`).
+
+    Parameters
+    ----------
+    tables : mapping
+        Top-level scalars and (nested) tables.
+
+    Returns
+    -------
+    str
+    """
+    return "\n".join(_toml(tables)) + "\n"
+
+
 def write_calibrated_toml(magnet: Any, result: Calibration, path: str | Path, *,
                           data_source: str = "") -> Path:
     """Write the magnet's parameter file with a ``[calibration]`` table: the fitted values
