@@ -177,8 +177,8 @@ def read_design_spec(source: str | Path | Mapping[str, Any], *, base_dir: str | 
 
     Parameters
     ----------
-    source : path or mapping
-        The spec file, or its parsed TOML.
+    source : str, path or mapping
+        A bundled spec name (``maglevkit list designs``), a spec file, or its parsed TOML.
     base_dir : path
         Folder that a relative ``magnet`` path is taken from when ``source`` is a mapping.
 
@@ -194,17 +194,17 @@ def read_design_spec(source: str | Path | Mapping[str, Any], *, base_dir: str | 
     """
     from .magnets import load_magnet
 
+    from .parameter_files import read_parameter_file
+
     if isinstance(source, Mapping):
         doc, label, folder = dict(source), "<memory>", Path(base_dir)
     else:
-        path = Path(source)
-        if not path.is_file():
-            raise DesignSpecError(f"design spec {str(path)!r} does not exist")
         try:
-            doc = tomllib.loads(path.read_text())
-        except tomllib.TOMLDecodeError as exc:
-            raise DesignSpecError(f"{path}: not valid TOML: {exc}") from None
-        label, folder = str(path), path.parent
+            doc, label = read_parameter_file(source, what="design spec", folder="designs",
+                                             table="design")
+        except MaglevkitError as exc:
+            raise DesignSpecError(str(exc)) from None
+        folder = Path(label).parent if Path(label).suffix == ".toml" else Path(base_dir)
     unknown = sorted(set(doc) - {"design", "variables", "requirements", "coil", "provenance"})
     if unknown:
         raise DesignSpecError(f"unknown table(s) {unknown}; allowed: design, variables, "
@@ -968,22 +968,28 @@ def plot_pareto(front: Sequence[DesignResult], path: str | Path, *, title: str =
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    from .plotting import save
+    from .plotting import place_legend, save
 
     ok = [r for r in front if r.success]
-    fig, ax = plt.subplots(figsize=(6.4, 4.4))
+    if not ok:
+        raise InputError("plot_pareto: no converged design on the front")
+    # label each point with the two variables that change most along the front
+    names = list(ok[0].values)
+    spread = {n: np.ptp([r.values[n] for r in ok]) / max(abs(ok[0].values[n]), 1e-12)
+              for n in names}
+    shown = sorted(names, key=lambda n: -spread[n])[:2]
+    fig, ax = plt.subplots(figsize=(7.0, 4.6))
     ax.plot([r.power_W for r in ok], [r.mass_kg for r in ok], "o-", color="C0",
             label="Pareto-optimal designs (epsilon constraint)")
     for r in ok:
-        ax.annotate(", ".join(f"{k}={v * 1e3:.1f} mm" if VARIABLES[k] == "m"
-                              else f"{k}={v:.0f}" for k, v in list(r.values.items())[:2]),
-                    (r.power_W, r.mass_kg), textcoords="offset points", xytext=(6, 4),
+        ax.annotate(", ".join(f"{k} {r.values[k] * 1e3:.1f} mm" if VARIABLES[k] == "m"
+                              else f"{k} {r.values[k]:.0f}" for k in shown),
+                    (r.power_W, r.mass_kg), textcoords="offset points", xytext=(7, 3),
                     fontsize=7, color="0.3")
+    ax.margins(x=0.35, y=0.08)
     ax.set_xlabel("resistive power at the nominal point R I_n^2 [W]")
     ax.set_ylabel("magnet mass (iron + copper) [kg]")
     ax.grid(True, alpha=0.3)
     ax.set_title(title or f"Pareto front: {Path(front[0].spec.source).name}")
-    ax.legend(loc="upper right", fontsize=8)
-    out = save(fig, path)
-    plt.close(fig)
-    return out
+    place_legend(ax)
+    return save(fig, path)
