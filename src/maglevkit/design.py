@@ -45,7 +45,6 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-import tomllib
 
 from .errors import InputError, MaglevkitError, MaglevkitWarning, ParameterFileError
 
@@ -193,7 +192,6 @@ def read_design_spec(source: str | Path | Mapping[str, Any], *, base_dir: str | 
         exclude nothing feasible, a base magnet that is not a lumped U-magnet.
     """
     from .magnets import load_magnet
-
     from .parameter_files import read_parameter_file
 
     if isinstance(source, Mapping):
@@ -631,42 +629,40 @@ def evaluate_design(spec: DesignSpec, values: Mapping[str, float] | None = None,
 
 
 # ---------------------------------------------------------------------------- the NLP
-def design_magnet(spec: DesignSpec, *, objective: str | None = None,
-                  max_power_W: float | None = None, max_mass_kg: float | None = None,
-                  initial: Mapping[str, float] | None = None) -> DesignResult:
-    """Optimise the design (module docstring): IPOPT on the simultaneous NLP.
+@dataclass(frozen=True)
+class _Setup:
+    """The NLP of one spec (and start): IPOPT solver, bounds, constraint rows, scalings."""
 
-    Parameters
-    ----------
-    spec : DesignSpec
-        The design problem (:func:`read_design_spec`).
-    objective : str, optional
-        Overrides ``spec.objective`` (one of :data:`OBJECTIVES`).
-    max_power_W : float, optional
-        Extra constraint ``R I_n^2 <= max_power_W`` [W] (epsilon-constraint sweeps).
-    max_mass_kg : float, optional
-        Extra constraint ``mass <= max_mass_kg`` [kg].
-    initial : mapping, optional
-        Start values [m, turns -] (default: the base magnet's, clipped into the bounds).
+    names: tuple[str, ...]
+    lo: np.ndarray
+    hi: np.ndarray
+    vscale: np.ndarray
+    n_loops: int
+    rows: list[tuple[str, Any, float, str, str, float]]
+    solver: Any
+    z0: np.ndarray
+    lbz: np.ndarray
+    ubz: np.ndarray
+    lbg: np.ndarray
+    ubg: np.ndarray
+    report: Any
+    mass0: float
+    power0: float
+    iron_names: tuple[str, ...]
 
-    Returns
-    -------
-    DesignResult
 
-    Raises
-    ------
-    InputError
-        An unknown objective, a non-positive cap, start values outside the bounds.
-    """
+_SETUPS: dict[tuple[int, tuple[tuple[str, float], ...]], tuple[DesignSpec, _Setup]] = {}
+"""The last few NLPs built (by spec identity and start): a Pareto sweep re-solves one NLP
+with other caps and objective weights instead of re-deriving it (1-2 s each)."""
+
+
+def _setup(spec: DesignSpec, initial: Mapping[str, float] | None) -> _Setup:
     import casadi as ca
 
-    obj = spec.objective if objective is None else objective
-    if obj not in OBJECTIVES:
-        raise InputError(f"objective = {obj!r}: expected one of {list(OBJECTIVES)}")
-    for key, cap in (("max_power_W", max_power_W), ("max_mass_kg", max_mass_kg)):
-        if cap is not None and not (isinstance(cap, (int, float)) and not isinstance(cap, bool)
-                                    and math.isfinite(cap) and cap > 0.0):
-            raise InputError(f"{key} = {cap!r}: expected a finite number > 0")
+    key = (id(spec), tuple(sorted((initial or {}).items())))
+    hit = _SETUPS.get(key)
+    if hit is not None and hit[0] is spec:
+        return hit[1]
     pb = _Problem(spec)
     req, coil = spec.requirements, spec.coil
     names = pb.names
@@ -674,7 +670,7 @@ def design_magnet(spec: DesignSpec, *, objective: str | None = None,
     hi = np.array([spec.variables[n][1] for n in names])
     start = {n: float(np.clip(pb.base_geometry[n] if n != "turns" else pb.turns0, a, b))
              for n, a, b in zip(names, lo, hi, strict=True)}
-    if initial is not None:
+    if initial:
         for n, v in initial.items():
             if n not in spec.variables or not lo[names.index(n)] <= v <= hi[names.index(n)]:
                 raise InputError(f"initial {n} = {v!r}: not a design variable within its "
@@ -745,10 +741,6 @@ def design_magnet(spec: DesignSpec, *, objective: str | None = None,
             ("magnet_fits_rail", ("window_width", "pole_width")))):
         if any(n in names for n in needs):
             rows.append((name, geo_v[k], GEOMETRY_MARGIN_M, ">=", "m", 0.01))
-    if max_power_W is not None:
-        rows.append(("max_power", power, float(max_power_W), "<=", "W", float(max_power_W)))
-    if max_mass_kg is not None:
-        rows.append(("max_mass", mass, float(max_mass_kg), "<=", "kg", float(max_mass_kg)))
     g_parts = [rn / mmf, rr / mmf]
     lbg = [np.zeros(2 * nl)]
     ubg = [np.zeros(2 * nl)]
@@ -757,11 +749,16 @@ def design_magnet(spec: DesignSpec, *, objective: str | None = None,
         lbg.append(np.array([0.0 if sense in ("==", ">=") else -np.inf]))
         ubg.append(np.array([0.0 if sense in ("==", "<=") else np.inf]))
     z = ca.vertcat(w, i_s, xn_s, xr_s)
-    mass0, power0 = ev0["mass_kg"], max(ev0.get("power_W", 0.0), 1e-9)
-    if not math.isfinite(power0):
+    mass0, power0 = ev0["mass_kg"], ev0.get("power_W", math.nan)
+    if not (math.isfinite(power0) and power0 > 0.0):
         power0 = float(pb.laws_fun(p0)[0]) * i_n0**2
-    f_obj = mass / mass0 if obj == "mass" else power / power0
-    nlp = {"x": z, "f": f_obj, "g": ca.vertcat(*g_parts)}
+    # the caps of the epsilon-constraint sweeps: always in g, open unless given
+    g_parts += [mass / mass0, power / power0]
+    lbg.append(np.full(2, -np.inf))
+    ubg.append(np.full(2, np.inf))
+    weights = ca.SX.sym("weights", 2)           # (mass, power): the objective's choice
+    f_obj = weights[0] * mass / mass0 + weights[1] * power / power0
+    nlp = {"x": z, "p": weights, "f": f_obj, "g": ca.vertcat(*g_parts)}
     solver = ca.nlpsol("design", "ipopt", nlp, {
         "ipopt.print_level": 0, "print_time": False, "ipopt.sb": "yes",
         "ipopt.tol": 1e-10, "ipopt.max_iter": 500, "ipopt.bound_relax_factor": 0.0,
@@ -769,15 +766,71 @@ def design_magnet(spec: DesignSpec, *, objective: str | None = None,
     z0 = np.concatenate((p0 / vscale, [i_n0 / iscale], x_n0 / xscale, x_r0 / xscale))
     lbz = np.concatenate((lo / vscale, [0.0], np.full(2 * nl, -np.inf)))
     ubz = np.concatenate((hi / vscale, [np.inf], np.full(2 * nl, np.inf)))
-    sol = solver(x0=z0, lbx=lbz, ubx=ubz, lbg=np.concatenate(lbg), ubg=np.concatenate(ubg))
+    report = ca.Function("design_report", [z], [ca.vertcat(*[e for _, e, *_ in rows]), mass,
+                                                power, resistance, i_n, i_res])
+    out = _Setup(names=names, lo=lo, hi=hi, vscale=vscale, n_loops=nl, rows=rows,
+                 solver=solver, z0=z0, lbz=lbz, ubz=ubz, lbg=np.concatenate(lbg),
+                 ubg=np.concatenate(ubg), report=report, mass0=mass0, power0=power0,
+                 iron_names=pb.iron_names)
+    _SETUPS[key] = (spec, out)
+    while len(_SETUPS) > 4:
+        _SETUPS.pop(next(iter(_SETUPS)))
+    return out
+
+
+def design_magnet(spec: DesignSpec, *, objective: str | None = None,
+                  max_power_W: float | None = None, max_mass_kg: float | None = None,
+                  initial: Mapping[str, float] | None = None) -> DesignResult:
+    """Optimise the design (module docstring): IPOPT on the simultaneous NLP.
+
+    Parameters
+    ----------
+    spec : DesignSpec
+        The design problem (:func:`read_design_spec`).
+    objective : str, optional
+        Overrides ``spec.objective`` (one of :data:`OBJECTIVES`).
+    max_power_W : float, optional
+        Extra constraint ``R I_n^2 <= max_power_W`` [W] (epsilon-constraint sweeps).
+    max_mass_kg : float, optional
+        Extra constraint ``mass <= max_mass_kg`` [kg].
+    initial : mapping, optional
+        Start values [m, turns -] (default: the base magnet's, clipped into the bounds).
+
+    Returns
+    -------
+    DesignResult
+
+    Raises
+    ------
+    InputError
+        An unknown objective, a non-positive cap, start values outside the bounds.
+    """
+
+    obj = spec.objective if objective is None else objective
+    if obj not in OBJECTIVES:
+        raise InputError(f"objective = {obj!r}: expected one of {list(OBJECTIVES)}")
+    for key, cap in (("max_power_W", max_power_W), ("max_mass_kg", max_mass_kg)):
+        if cap is not None and not (isinstance(cap, (int, float)) and not isinstance(cap, bool)
+                                    and math.isfinite(cap) and cap > 0.0):
+            raise InputError(f"{key} = {cap!r}: expected a finite number > 0")
+    st = _setup(spec, initial)
+    names, lo, hi, nl, rows = st.names, st.lo, st.hi, st.n_loops, st.rows
+    req = spec.requirements
+    bmax = req["max_flux_density_T"]
+    ubg = st.ubg.copy()
+    if max_mass_kg is not None:
+        ubg[-2] = float(max_mass_kg) / st.mass0
+    if max_power_W is not None:
+        ubg[-1] = float(max_power_W) / st.power0
+    solver = st.solver
+    sol = solver(x0=st.z0, lbx=st.lbz, ubx=st.ubz, lbg=st.lbg, ubg=ubg,
+                 p=[1.0, 0.0] if obj == "mass" else [0.0, 1.0])
     stats = solver.stats()
     zs = np.asarray(sol["x"]).ravel()
     lam = np.asarray(sol["lam_g"]).ravel()[2 * nl:]
-    pv = zs[:len(names)] * vscale
+    pv = zs[:len(names)] * st.vscale
     values = {n: float(v) for n, v in zip(names, pv, strict=True)}
-    fun = ca.Function("design_report", [z], [ca.vertcat(*[e for _, e, *_ in rows]), mass,
-                                             power, resistance, i_n, i_res])
-    rv, mass_v, power_v, r_v, in_v, ir_v = (np.asarray(a).ravel() for a in fun(zs))
+    rv, mass_v, power_v, r_v, in_v, ir_v = (np.asarray(a).ravel() for a in st.report(zs))
     constraints: dict[str, DesignConstraint] = {}
     b_rows = [k for k, r in enumerate(rows) if r[0].startswith("flux_density:")]
     for k, (name, _, bound, sense, unit, scale) in enumerate(rows):
@@ -787,6 +840,13 @@ def design_magnet(spec: DesignSpec, *, objective: str | None = None,
         active = bool(sense == "==" or slack <= ACTIVE_TOL * scale)
         constraints[name] = DesignConstraint(name, float(rv[k]), bound, sense, unit, active,
                                              float(lam[k]))
+    for name, cap, val, unit in (("max_mass", max_mass_kg, mass_v[0], "kg"),
+                                 ("max_power", max_power_W, power_v[0], "W")):
+        if cap is not None:
+            constraints[name] = DesignConstraint(
+                name, float(val), float(cap), "<=", unit,
+                bool(cap - val <= ACTIVE_TOL * cap),
+                float(lam[len(rows) + (0 if name == "max_mass" else 1)]))
     lam_x = np.asarray(sol["lam_x"]).ravel()
     for k, n in enumerate(names):
         unit = VARIABLES[n]
