@@ -956,7 +956,7 @@ def write_design_toml(result: DesignResult, path: str | Path) -> Path:
     -------
     Path
     """
-    from .calibration import toml_text
+    from .parameter_files import toml_text
 
     spec = result.spec
     tag = (f"optimised: maglevkit design ({result.objective} minimised, spec "

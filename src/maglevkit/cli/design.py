@@ -55,8 +55,14 @@ def design(
     Example:
       maglevkit design u-magnet-design -o design.toml --pareto front.png
     """
-    from ..design import OBJECTIVES, design_magnet, pareto_front, plot_pareto, \
-        read_design_spec, write_design_toml
+    from ..design import (
+        OBJECTIVES,
+        design_magnet,
+        pareto_front,
+        plot_pareto,
+        read_design_spec,
+        write_design_toml,
+    )
 
     output_file(output, "--output", formats=("toml",), force=force)
     plot_file(pareto, "--pareto", force=force)

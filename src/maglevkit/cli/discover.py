@@ -76,7 +76,7 @@ def _title(kind: str, name: str) -> str:
 
 
 @app.command("list", short_help="List the bundled magnets, vehicles, guideways, scenarios, "
-                                "sweeps, design specs.")
+                                "sweeps.")
 def list_files(
     kind: Annotated[Kind | None, typer.Argument(metavar="KIND",
         help="Which kind to list (default: all).", case_sensitive=False)] = None,
