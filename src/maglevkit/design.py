@@ -1028,7 +1028,7 @@ def plot_pareto(front: Sequence[DesignResult], path: str | Path, *, title: str =
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    from .plotting import place_legend, save
+    from .plotting import save
 
     ok = [r for r in front if r.success]
     if not ok:
@@ -1040,16 +1040,19 @@ def plot_pareto(front: Sequence[DesignResult], path: str | Path, *, title: str =
     shown = sorted(names, key=lambda n: -spread[n])[:2]
     fig, ax = plt.subplots(figsize=(7.0, 4.6))
     ax.plot([r.power_W for r in ok], [r.mass_kg for r in ok], "o-", color="C0",
-            label="Pareto-optimal designs (epsilon constraint)")
+            label="Pareto-optimal designs\n(epsilon constraint)")
     for r in ok:
         ax.annotate(", ".join(f"{k} {r.values[k] * 1e3:.1f} mm" if VARIABLES[k] == "m"
                               else f"{k} {r.values[k]:.0f}" for k in shown),
                     (r.power_W, r.mass_kg), textcoords="offset points", xytext=(7, 3),
                     fontsize=7, color="0.3")
-    ax.margins(x=0.35, y=0.08)
+    pw = [r.power_W for r in ok]
+    span = max(max(pw) - min(pw), 1e-9 * max(pw))
+    ax.set_xlim(min(pw) - 0.06 * span, max(pw) + 0.45 * span)     # room for the labels
+    ax.margins(y=0.08)
     ax.set_xlabel("resistive power at the nominal point R I_n^2 [W]")
     ax.set_ylabel("magnet mass (iron + copper) [kg]")
     ax.grid(True, alpha=0.3)
     ax.set_title(title or f"Pareto front: {Path(front[0].spec.source).name}")
-    place_legend(ax)
+    ax.legend(loc="upper right", fontsize=8)     # the labels run right of the points
     return save(fig, path)
