@@ -271,3 +271,34 @@ def test_pareto_front_trades_mass_for_power() -> None:
     # from the minimum-power end to the minimum-mass end: power rises, mass falls
     assert power == sorted(power) and mass == sorted(mass, reverse=True)
     assert front[0].constraints["max_power"].active
+
+
+def test_bundled_spec_is_listed_and_its_template_reads(tmp_path: Path) -> None:
+    res = runner.invoke(app, ["list", "designs"])
+    assert res.exit_code == 0 and "u-magnet-design" in res.stdout
+    res = runner.invoke(app, ["template", "design"])
+    assert res.exit_code == 0, res.output
+    path = tmp_path / "spec.toml"
+    path.write_text(res.stdout)
+    spec = read_design_spec(path)
+    assert spec.objective == "mass" and "pole_width" in spec.variables
+    assert spec.provenance["requirements.force_N"].startswith("[E]")
+
+
+def test_spec_magnet_path_is_relative_to_the_spec_and_infeasible_is_refused(
+        tmp_path: Path) -> None:
+    from maglevkit.parameter_files import toml_text
+
+    (tmp_path / "sub").mkdir()
+    mag = load_magnet("u-magnet")
+    (tmp_path / "sub" / "mine.toml").write_text(toml_text(dict(mag.parameters)))
+    doc = example_doc()
+    doc["design"]["magnet"] = "mine.toml"
+    doc["requirements"]["force_N"] = 50000.0        # far beyond what the bounds allow
+    (tmp_path / "sub" / "spec.toml").write_text(toml_text(doc))
+    spec = read_design_spec(tmp_path / "sub" / "spec.toml")
+    assert spec.magnet.parameters["magnet"] == mag.parameters["magnet"]
+    out = tmp_path / "d.toml"
+    res = runner.invoke(app, ["design", str(tmp_path / "sub" / "spec.toml"), "-o", str(out)])
+    assert res.exit_code == 2 and "IPOPT did not converge" in res.stderr
+    assert not out.exists() and "Traceback" not in res.output

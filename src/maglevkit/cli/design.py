@@ -3,12 +3,13 @@
 from __future__ import annotations
 
 import math
+import warnings
 from pathlib import Path
 from typing import Annotated
 
 import typer
 
-from ..errors import MaglevkitError
+from ..errors import MaglevkitError, MaglevkitWarning
 from ._app import (
     ForceOption,
     FormatOption,
@@ -72,7 +73,10 @@ def design(
         raise fail(f"--pareto-points {pareto_points}: at least 2")
     try:
         problem = read_design_spec(spec)
-        result = design_magnet(problem, objective=objective)
+        with warnings.catch_warnings():     # non-convergence: the error below says it
+            warnings.filterwarnings("ignore", message="design_magnet: IPOPT",
+                                    category=MaglevkitWarning)
+            result = design_magnet(problem, objective=objective)
     except MaglevkitError as exc:
         raise fail(exc) from None
     records = []
