@@ -36,9 +36,11 @@ def example_doc() -> dict[str, Any]:
 def two_variable_doc() -> dict[str, Any]:
     """Pole width and coil height of the bundled U-magnet (coil thickness 15 mm, leg 70 mm
     fixed); 10 A/mm^2 continuous makes the optimum interior: the iron's 1.5 T fixes the pole
-    width, the current density the coil height."""
+    width, the current density the coil height.  A current ramp of 100 A/s puts L~ into the
+    (inactive) voltage bound, which the re-solved statics check."""
     doc = example_doc()
     doc["requirements"]["current_density_A_per_m2"] = 10e6
+    doc["requirements"]["current_rate_A_per_s"] = 100.0     # L~ enters the voltage bound
     doc["variables"] = {"pole_width": [0.015, 0.040], "coil_height": [0.020, 0.060]}
     return doc
 

@@ -962,13 +962,14 @@ def write_design_toml(result: DesignResult, path: str | Path) -> Path:
     tag = (f"optimised: maglevkit design ({result.objective} minimised, spec "
            f"{Path(spec.source).name}; active: {', '.join(result.active) or 'none'})")
     params = design_parameters(spec, result.values, provenance=tag)
+    params["magnet"]["name"] = f"{params['magnet'].get('name', 'magnet')} (optimised)"
     params["operating"] = {"nominal_gap": spec.requirements["nominal_gap_m"],
                            "nominal_current": result.nominal_current_A}
     prov = dict(params.get("provenance", {}))
     prov["operating.nominal_gap"] = f"[E] {tag}"
     prov["operating.nominal_current"] = f"[E] {tag}"
     params["provenance"] = prov
-    header = [f"# {params['magnet'].get('name', 'magnet')}: optimised with maglevkit design "
+    header = [f"# {params['magnet']['name']}: written by maglevkit design "
               f"(IPOPT {result.status}, {result.iterations} iterations)",
               f"# objective {result.objective} = {result.objective_value:.6g} "
               f"({'kg' if result.objective == 'mass' else 'W'}); mass {result.mass_kg:.6g} kg, "
