@@ -304,3 +304,27 @@ def test_spec_magnet_path_is_relative_to_the_spec_and_infeasible_is_refused(
     res = runner.invoke(app, ["design", str(tmp_path / "sub" / "spec.toml"), "-o", str(out)])
     assert res.exit_code == 2 and "IPOPT did not converge" in res.stderr
     assert not out.exists() and "Traceback" not in res.output
+
+
+@pytest.mark.parametrize(("name", "key"), [
+    ("current_density", "current_density_A_per_m2"),
+    pytest.param("flux_density", "max_flux_density_T", marks=pytest.mark.slow)])
+def test_shadow_prices_match_re_solved_optima(two_variable: tuple[Any, Any], name: str,
+                                              key: str) -> None:
+    # the reported d(mass)/d(bound) of an active constraint (from IPOPT's multipliers, i.e.
+    # the NLP's exact derivatives) against re-solving with the bound moved by +-0.5 %:
+    # central difference, curvature error ~(5e-3)^2 relative, IPOPT's 1e-10 negligible
+    spec, res = two_variable
+    c = res.constraints[name]
+    assert c.active and c.sensitivity < 0.0          # a looser limit: a lighter magnet
+    masses = []
+    for f in (1.005, 0.995):
+        doc = two_variable_doc()
+        doc["requirements"][key] *= f
+        masses.append(design_magnet(read_design_spec(doc)).mass_kg)
+    fd = (masses[0] - masses[1]) / (0.01 * c.bound)
+    assert c.sensitivity == pytest.approx(fd, rel=1e-3), name
+    # an inactive constraint costs nothing: its elasticity (d ln m / d ln bound) is ~0
+    for other in ("voltage", "force_reserve"):
+        o = res.constraints[other]
+        assert not o.active and abs(o.sensitivity * o.bound / res.mass_kg) < 1e-6, other

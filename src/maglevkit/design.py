@@ -439,8 +439,10 @@ class DesignConstraint:
     unit : str
     active : bool
         Equality, or relative slack at most :data:`ACTIVE_TOL`.
-    multiplier : float
-        IPOPT's Lagrange multiplier (scaled problem; 0 for an inactive constraint).
+    sensitivity : float
+        ``d(objective)/d(bound)`` at the optimum [objective unit per constraint unit], from
+        IPOPT's Lagrange multiplier (the shadow price: what relaxing the bound by one unit
+        saves; ~0 for an inactive constraint).
     detail : str
         For ``flux_density``: the iron path with the peak.
     """
@@ -451,7 +453,7 @@ class DesignConstraint:
     sense: str
     unit: str
     active: bool
-    multiplier: float = 0.0
+    sensitivity: float = 0.0
     detail: str = ""
 
     @property
@@ -832,6 +834,9 @@ def design_magnet(spec: DesignSpec, *, objective: str | None = None,
     values = {n: float(v) for n, v in zip(names, pv, strict=True)}
     rv, mass_v, power_v, r_v, in_v, ir_v = (np.asarray(a).ravel() for a in st.report(zs))
     constraints: dict[str, DesignConstraint] = {}
+    # shadow prices: g = (expr - bound)/scale in [lbg, ubg] and grad f + J^T lam_g +
+    # lam_x = 0 (CasADi's signs), so d f*/d bound = -lam_g/scale (objective / its reference)
+    ref = st.mass0 if obj == "mass" else st.power0
     b_rows = [k for k, r in enumerate(rows) if r[0].startswith("flux_density:")]
     for k, (name, _, bound, sense, unit, scale) in enumerate(rows):
         if k in b_rows:
@@ -839,14 +844,15 @@ def design_magnet(spec: DesignSpec, *, objective: str | None = None,
         slack = (rv[k] - bound) if sense == ">=" else (bound - rv[k])
         active = bool(sense == "==" or slack <= ACTIVE_TOL * scale)
         constraints[name] = DesignConstraint(name, float(rv[k]), bound, sense, unit, active,
-                                             float(lam[k]))
+                                             float(-lam[k] / scale * ref))
     for name, cap, val, unit in (("max_mass", max_mass_kg, mass_v[0], "kg"),
                                  ("max_power", max_power_W, power_v[0], "W")):
         if cap is not None:
             constraints[name] = DesignConstraint(
                 name, float(val), float(cap), "<=", unit,
                 bool(cap - val <= ACTIVE_TOL * cap),
-                float(lam[len(rows) + (0 if name == "max_mass" else 1)]))
+                float(-lam[len(rows) + (0 if name == "max_mass" else 1)] * ref
+                      / (st.mass0 if name == "max_mass" else st.power0)))
     lam_x = np.asarray(sol["lam_x"]).ravel()
     for k, n in enumerate(names):
         unit = VARIABLES[n]
@@ -854,14 +860,14 @@ def design_magnet(spec: DesignSpec, *, objective: str | None = None,
             slack = pv[k] - bound if sense == ">=" else bound - pv[k]
             constraints[f"{n}_{side}"] = DesignConstraint(
                 f"{n}_{side}", float(pv[k]), float(bound), sense, unit,
-                bool(slack <= ACTIVE_TOL * bound), float(lam_x[k]) if bool(
-                    slack <= ACTIVE_TOL * bound) else 0.0, "variable bound")
+                bool(slack <= ACTIVE_TOL * bound), float(-lam_x[k] / st.vscale[k] * ref)
+                if slack <= ACTIVE_TOL * bound else 0.0, "variable bound")
     kb = max(b_rows, key=lambda k: rv[k])
     b_peak = math.sqrt(max(float(rv[kb]), 0.0))
     constraints["flux_density"] = DesignConstraint(
         "flux_density", b_peak, bmax, "<=", "T",
         bool(any(bmax**2 - rv[k] <= ACTIVE_TOL * bmax**2 for k in b_rows)),
-        float(sum(lam[k] for k in b_rows)), rows[kb][0].split(":", 1)[1])
+        float(-2.0 * ref / bmax * sum(lam[k] for k in b_rows)), rows[kb][0].split(":", 1)[1])
     status = str(stats.get("return_status", ""))
     success = status in ("Solve_Succeeded", "Solved_To_Acceptable_Level")
     if not success:

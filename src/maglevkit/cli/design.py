@@ -86,10 +86,12 @@ def design(
         records.append({"constraint": c.name, "value": c.value, "sense": c.sense,
                         "bound": c.bound, "unit": c.unit, "slack": c.slack,
                         "active": "yes" if c.active else "no",
+                        "d_objective_d_bound": c.sensitivity,
                         "detail": c.detail})
     table = new_table("constraints at the optimum (variable bounds: the active ones)")
     add_columns(table, ["constraint", "value", "sense", "bound", "unit", "slack", "active",
-                        "detail"], left=("constraint", "sense", "unit", "active", "detail"))
+                        "d objective/d bound", "detail"],
+                left=("constraint", "sense", "unit", "active", "detail"))
     for r in records:
         table.add_row(*(f"{v:.6g}" if isinstance(v, float) else str(v) for v in r.values()))
     meta = {"objective": result.objective, "objective_value": result.objective_value,
