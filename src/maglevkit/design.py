@@ -221,9 +221,7 @@ def read_design_spec(source: str | Path | Mapping[str, Any], *, base_dir: str | 
     name = design["magnet"]
     ref = folder / name if name.endswith(".toml") and not Path(name).is_absolute() else name
     try:
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore", MaglevkitWarning)
-            magnet = load_magnet(ref)
+        magnet = load_magnet(ref)       # its provenance and plausibility warnings show
     except MaglevkitError as exc:
         raise DesignSpecError(f"[design] magnet = {name!r}: {exc}") from None
     params = magnet.parameters
