@@ -58,7 +58,7 @@ from .multibody import ForcePoint, PlanarMultibody, RigidBody, SpringDamper
 
 __all__ = ["CrossSectionData", "CrossSectionMechanics", "CROSS_SECTION_SCHEMA",
            "CROSS_SECTION_TAGS", "bundled_cross_sections", "load_cross_section",
-           "parse_cross_section", "track_field_m_per_s2"]
+           "parse_cross_section", "track_field_m_per_s2", "track_field_path"]
 
 #: Provenance tags of a cross-section file: published, widely quoted, derived, estimate.
 CROSS_SECTION_TAGS = ("[P]", "[R]", "[D]", "[E]")
@@ -368,9 +368,38 @@ def track_field_m_per_s2(speed_m_per_s: float, curve_radius_m: float = math.inf,
     if not abs(c) < 0.3:
         raise InputError(f"superelevation_rad = {superelevation_rad!r} rad: must be in "
                          "(-0.3, 0.3) rad")
-    centripetal = 0.0 if math.isinf(r) else v * v / r
-    return np.array([centripetal * math.cos(c) - g * math.sin(c),
-                     centripetal * math.sin(c) + g * math.cos(c)])
+    return track_field_path(v, 0.0 if math.isinf(r) else 1.0 / r, c, gravity_m_per_s2=g)
+
+
+def track_field_path(speed_m_per_s: float, curvature_per_m: Any, superelevation_rad: Any, *,
+                     gravity_m_per_s2: float = STANDARD_GRAVITY) -> np.ndarray:
+    """The field of :func:`track_field_m_per_s2` along a path (arrays; inputs not checked).
+
+    ``a_y = v^2 kappa cos(c) - g sin(c)``, ``a_z = v^2 kappa sin(c) + g cos(c)`` with the
+    curvature ``kappa = 1/R`` (0 on a straight track; a transition curve ramps it).
+
+    Parameters
+    ----------
+    speed_m_per_s : float
+        Speed v [m/s].
+    curvature_per_m : array_like
+        Curvature ``1/R`` [1/m] (positive: a left-hand curve).
+    superelevation_rad : array_like
+        Superelevation ``c`` [rad].
+    gravity_m_per_s2 : float, default STANDARD_GRAVITY
+        g [m/s^2] (keyword only).
+
+    Returns
+    -------
+    ndarray (..., 2)
+        ``(a_y, a_z)`` [m/s^2] over the broadcast shape of the inputs.
+    """
+    kappa = np.asarray(curvature_per_m, dtype=float)
+    c = np.asarray(superelevation_rad, dtype=float)
+    cen = speed_m_per_s * speed_m_per_s * kappa
+    g = gravity_m_per_s2
+    return np.stack(np.broadcast_arrays(cen * np.cos(c) - g * np.sin(c),
+                                        cen * np.sin(c) + g * np.cos(c)), axis=-1)
 
 
 class CrossSectionMechanics:

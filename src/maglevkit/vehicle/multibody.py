@@ -453,6 +453,37 @@ class PlanarMultibody:
         bq[n:] = minv
         return a, bq
 
+    def discretize(self, dt_s: float, *, damping: bool = True) -> tuple[np.ndarray, np.ndarray]:
+        """Exact zero-order-hold step ``x+ = Ad x + Bd Q`` for generalised forces held over
+        ``dt_s``: ``[Ad Bd] = expm([[A, Bq], [0, 0]] dt)`` of :meth:`state_matrices`.
+
+        Parameters
+        ----------
+        dt_s : float
+            Step [s], finite and > 0.
+        damping : bool, default True
+            Include the dampers.
+
+        Returns
+        -------
+        (Ad, Bd) : ndarray (2 n_dof, 2 n_dof), ndarray (2 n_dof, n_dof)
+
+        Raises
+        ------
+        InputError
+            ``dt_s`` not a finite number > 0.
+        """
+        import scipy.linalg
+
+        dt_s = real_number(dt_s, "dt_s", "s", positive=True)
+        a, bq = self.state_matrices(damping=damping)
+        n2, n = bq.shape
+        aug = np.zeros((n2 + n, n2 + n))
+        aug[:n2, :n2] = a * dt_s
+        aug[:n2, n2:] = bq * dt_s
+        e = scipy.linalg.expm(aug)
+        return e[:n2, :n2].copy(), e[:n2, n2:].copy()
+
     def preload_stiffness(self, element_forces_N: Any, forces_N: Any) -> np.ndarray:
         """Stiffness of static preloads about an operating point with level bodies.
 

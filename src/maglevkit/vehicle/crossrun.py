@@ -1,0 +1,743 @@
+"""Runs of the cross-section vehicle: magnets through the bank, gap controllers, scenarios.
+
+The mechanics (:mod:`maglevkit.vehicle.crosssection`) get their four force points from a
+:class:`~maglevkit.reduced.bank.MagnetBank` of four magnets: the levitation magnets left
+and right (``tr09-standard``: vertical gap to the stator underside) and the guidance
+magnets left and right (``tr-guidance``: lateral gap to the side rail).  Reduced models
+(eq. 8 on characteristic maps built once and cached, :mod:`maglevkit.vehicle.mapcache`)
+by default; ``magnets="detailed"`` puts the flux-based models into the same bank.
+
+Control: one :class:`~maglevkit.control.cascade.CascadeController` per magnet through the
+shared :class:`~maglevkit.control.interface.Controller` interface, every sample
+(``dt_s``):
+
+* levitation, per side: its own gap and gap rate;
+* guidance, per side, **differential operation**: both magnets run about a bias current
+  ``I_b`` (their bias forces cancel) and see the *differential* gap
+  ``s_0 + (s_own - s_other)/2`` (the chassis' lateral position), so one pulls harder
+  exactly when the other lets go, and their integral actions act on the lateral position
+  only (two integrators on gaps whose sum a rail offset may change would wind up against
+  each other).
+
+Plant per step (``t_k -> t_k + dt``), in this order: gaps and rates from the mechanics and
+the guideway (irregularities, rail offsets) at ``t_k``; controller voltages, failed
+circuits at 0 V, the 2-quadrant chopper ``U >= -R_ec I_L`` (the coil current cannot
+reverse); the bank's step with the gaps moving linearly; the mechanics' exact zero-order
+hold step with the mean of the start and end forces, the track's acceleration field and
+the crosswind at mid-step.
+
+Gaps (``z`` down, ``y`` right; ``Delta s = gap_matrix q`` of the force points)::
+
+    levitation   s = s_0 + Delta s - r_z(x)          (r_z: stator lower, positive down)
+    guidance     s_left  = s_0 + Delta s_left  + r_y(x)
+                 s_right = s_0 + Delta s_right - r_y(x)   (r_y: rails shifted to the right)
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from ..errors import InputError
+from ..plant import STANDARD_GRAVITY
+from ..validation import real_number
+from .crosssection import CrossSectionData, CrossSectionMechanics, track_field_path
+from .simulation import Failure
+
+__all__ = ["CrossSectionModel", "CrossSectionRun", "TransitionCurve", "Crosswind",
+           "LATERAL_ALIGNMENT_PSD", "parse_curve", "parse_crosswind"]
+
+#: One-sided PSD of the lateral alignment (German high-speed track, "low irregularity":
+#: ``A_a = 2.119e-7 m rad``, the corner frequencies of the vertical spectrum; Zhai,
+#: Vehicle-Track Coupled Dynamics, 2020) in the parameters of
+#: :class:`~maglevkit.vehicle.irregularities.GermanTrackPSD`.
+LATERAL_ALIGNMENT_PSD = {"A_v_m_rad": 2.119e-7, "omega_c_rad_per_m": 0.8246,
+                         "omega_r_rad_per_m": 0.0206}
+
+SIDES = ("left", "right")
+
+
+@dataclass(frozen=True)
+class TransitionCurve:
+    """A curve entered through a transition of length ``transition_m``.
+
+    From ``start_m`` the curvature ``1/R`` and the superelevation ``c`` ramp linearly with
+    the distance (a clothoid with a linear cant ramp) to their full values at
+    ``start_m + transition_m``, constant after.  The track's acceleration field follows
+    :func:`~maglevkit.vehicle.crosssection.track_field_path` at every point
+    (quasi-steady: the roll rate ``v dc/dx`` of the track plane in the transition and its
+    jumps at the ramp's ends are left out).
+
+    Parameters
+    ----------
+    radius_m : float
+        Radius R of the full curve [m], ``|R| >= 1`` (positive: a left-hand curve, outward
+        ``+y``), or ``inf`` (straight).
+    superelevation_rad : float
+        Full superelevation c [rad], ``|c| < 0.3``.
+    transition_m : float
+        Length of the transition [m], >= 0 (0: the curve starts at once).
+    start_m : float, default 0
+        Distance travelled at the transition's start [m], >= 0.
+    """
+
+    radius_m: float
+    superelevation_rad: float
+    transition_m: float
+    start_m: float = 0.0
+
+    def __post_init__(self) -> None:
+        r = self.radius_m
+        if not (isinstance(r, (int, float)) and not isinstance(r, bool)
+                and (math.isinf(r) or (math.isfinite(r) and abs(r) >= 1.0))):
+            raise InputError(f"curve radius_m = {r!r} m: expected |R| >= 1 m or inf")
+        c = real_number(self.superelevation_rad, "curve superelevation_rad", "rad")
+        if not abs(c) < 0.3:
+            raise InputError(f"curve superelevation_rad = {c!r} rad: must be in (-0.3, 0.3) "
+                             "rad (17 deg)")
+        real_number(self.transition_m, "curve transition_m", "m", nonnegative=True)
+        real_number(self.start_m, "curve start_m", "m", nonnegative=True)
+
+    def ramp(self, distance_m: Any) -> np.ndarray:
+        """Share ``0 ... 1`` of the full curve at the distances travelled [m] (-).
+
+        Parameters
+        ----------
+        distance_m : array_like
+            Distance travelled [m].
+
+        Returns
+        -------
+        ndarray
+            0 before the transition, 1 after it, linear in between.
+        """
+        x = np.asarray(distance_m, dtype=float) - self.start_m
+        if self.transition_m == 0:
+            return (x >= 0).astype(float)
+        return np.clip(x / self.transition_m, 0.0, 1.0)
+
+    def field(self, speed_m_per_s: float, distance_m: Any) -> np.ndarray:
+        """Acceleration field ``(a_y, a_z)`` [m/s^2] at the distances [m], shape (..., 2).
+
+        Parameters
+        ----------
+        speed_m_per_s : float
+            Speed [m/s].
+        distance_m : array_like
+            Distance travelled [m].
+
+        Returns
+        -------
+        ndarray (..., 2)
+        """
+        share = self.ramp(distance_m)
+        kappa = 0.0 if math.isinf(self.radius_m) else 1.0 / self.radius_m
+        return track_field_path(speed_m_per_s, share * kappa, share * self.superelevation_rad)
+
+
+@dataclass(frozen=True)
+class Crosswind:
+    """A crosswind gust on the car body: a lateral force and its roll moment.
+
+    Shape ``"1-cosine"`` (the discrete gust of the airworthiness codes, e.g. EASA CS-25.341:
+    ``U(t) = U_max/2 (1 - cos(pi t / H))`` up to the peak at ``t = H``), here rising over
+    ``rise_s``, held for ``hold_s`` and falling back symmetrically, applied to the force::
+
+        F(t) = F_max g(t),   g = (1 - cos(pi tau / T_r))/2 on the ramps,  1 on the plateau
+
+    ``"step"``: ``F_max`` from ``start_s`` on (a constant lateral force).  The force acts
+    along ``+y`` (to the right) at the height ``z_cp`` of the centre of pressure, so its
+    roll moment about the car body's centre of mass is ``F (z_c - z_cp)``.
+
+    Parameters
+    ----------
+    peak_force_N : float
+        F_max [N], finite (negative: wind from the right).
+    rise_s : float, default 0.5
+        Rise time T_r [s], > 0 (``"1-cosine"``).
+    hold_s : float, default 1.0
+        Plateau [s], >= 0 (``"1-cosine"``).
+    start_s : float, default 0.5
+        Start time [s], >= 0.
+    shape : {"1-cosine", "step"}
+        Time shape.
+    pressure_height_m : float, default 0.3
+        Height of the centre of pressure above the car body's centre of mass [m] [E].
+    """
+
+    peak_force_N: float
+    rise_s: float = 0.5
+    hold_s: float = 1.0
+    start_s: float = 0.5
+    shape: str = "1-cosine"
+    pressure_height_m: float = 0.3
+
+    def __post_init__(self) -> None:
+        real_number(self.peak_force_N, "crosswind peak_force_N", "N")
+        real_number(self.rise_s, "crosswind rise_s", "s", positive=True)
+        real_number(self.hold_s, "crosswind hold_s", "s", nonnegative=True)
+        real_number(self.start_s, "crosswind start_s", "s", nonnegative=True)
+        real_number(self.pressure_height_m, "crosswind pressure_height_m", "m")
+        if self.shape not in ("1-cosine", "step"):
+            raise InputError(f"crosswind shape = {self.shape!r}; allowed: '1-cosine', 'step'")
+
+    def force_N(self, time_s: Any) -> np.ndarray:
+        """Lateral force ``F(t)`` [N] at the times [s].
+
+        Parameters
+        ----------
+        time_s : array_like
+            Times [s].
+
+        Returns
+        -------
+        ndarray
+            Force along ``+y`` [N].
+        """
+        t = np.asarray(time_s, dtype=float) - self.start_s
+        if self.shape == "step":
+            return np.where(t >= 0, self.peak_force_N, 0.0)
+        tr, th = self.rise_s, self.hold_s
+        up = 0.5 * (1 - np.cos(np.pi * np.clip(t, 0, tr) / tr))
+        down = 0.5 * (1 - np.cos(np.pi * np.clip(2 * tr + th - t, 0, tr) / tr))
+        return self.peak_force_N * np.minimum(up, down)
+
+
+def _numbers(text: str, what: str, example: str) -> list[float]:
+    try:
+        vals = [float(v) for v in str(text).split(":")]
+    except ValueError:
+        raise InputError(f"{what} = {text!r}: expected numbers separated by ':', e.g. "
+                         f"{example}") from None
+    if not all(math.isfinite(v) for v in vals):
+        raise InputError(f"{what} = {text!r}: values must be finite numbers, e.g. {example}")
+    return vals
+
+
+def parse_curve(text: str) -> TransitionCurve:
+    """``"RADIUS_M:SUPERELEVATION_DEG:TRANSITION_M[:START_M]"`` -> :class:`TransitionCurve`.
+
+    Parameters
+    ----------
+    text : str
+        E.g. ``"4000:12:300"`` (R = 4000 m, 12 deg, 300 m transition from the start).
+
+    Returns
+    -------
+    TransitionCurve
+
+    Raises
+    ------
+    InputError
+        Not three or four numbers, or values out of range (named).
+    """
+    vals = _numbers(text, "--curve", "4000:12:300")
+    if len(vals) not in (3, 4):
+        raise InputError(f"--curve = {text!r}: expected RADIUS_M:SUPERELEVATION_DEG:"
+                         "TRANSITION_M[:START_M], e.g. 4000:12:300")
+    return TransitionCurve(vals[0], math.radians(vals[1]), vals[2],
+                           vals[3] if len(vals) == 4 else 0.0)
+
+
+def parse_crosswind(text: str) -> Crosswind:
+    """``"PEAK_N[:RISE_S[:HOLD_S[:START_S[:SHAPE]]]]"`` -> :class:`Crosswind`.
+
+    Parameters
+    ----------
+    text : str
+        E.g. ``"8000:0.5:1:0.5"`` or ``"5000:0.5:0:0.2:step"`` (shape ``1-cosine`` or
+        ``step``).
+
+    Returns
+    -------
+    Crosswind
+
+    Raises
+    ------
+    InputError
+        Bad numbers, a bad shape or values out of range (named).
+    """
+    parts = str(text).split(":")
+    shape = "1-cosine"
+    if parts and parts[-1] in ("1-cosine", "step"):
+        shape = parts.pop()
+    if not 1 <= len(parts) <= 4:
+        raise InputError(f"--crosswind = {text!r}: expected PEAK_N[:RISE_S[:HOLD_S[:START_S"
+                         "]]][:SHAPE], SHAPE 1-cosine or step, e.g. 8000:0.5:1:0.5")
+    vals = _numbers(":".join(parts), "--crosswind", "8000:0.5:1:0.5")
+    names = ("peak_force_N", "rise_s", "hold_s", "start_s")
+    return Crosswind(**dict(zip(names, vals, strict=False)), shape=shape)
+
+
+@dataclass(frozen=True)
+class CrossSectionRun:
+    """Result of a cross-section run.
+
+    Attributes
+    ----------
+    dataset : xarray.Dataset
+        Time series, units in the attributes (see :meth:`CrossSectionModel.run`).
+    min_gap_m : dict
+        Minimum gap per magnet [m].
+    touchdown : tuple or None
+        ``(circuit, time_s, gap_m, kind)`` of the first gap at or below the touchdown gap
+        (``"closed"``) or at or above the landing gap (``"open"``), or None.
+    comfort : dict
+        ``"lateral"``: ISO 2631-1 ``Wd`` RMS and Sperling ``Wz``; ``"vertical"``: ``Wk``
+        RMS and ``Wz`` of the car body's accelerations (mean removed).
+    wall_time_s : float
+        Time spent in the time loop [s].
+    real_time_factor : float
+        Simulated time / wall time of the loop.
+    """
+
+    dataset: Any
+    min_gap_m: dict[str, float]
+    touchdown: tuple[str, float, float, str] | None
+    comfort: dict[str, dict[str, float]] = field(default_factory=dict)
+    wall_time_s: float = math.nan
+    real_time_factor: float = math.nan
+
+    def to_netcdf(self, path: str | Path) -> Path:
+        """Write the dataset to netCDF (atomically) and return the path.
+
+        Parameters
+        ----------
+        path : str or Path
+            Target file.
+
+        Returns
+        -------
+        Path
+        """
+        p = Path(path)
+        tmp = p.with_name(p.name + ".tmp")
+        self.dataset.to_netcdf(tmp)
+        tmp.replace(p)
+        return p
+
+    def report(self) -> str:
+        """A short plain-text report."""
+        ds = self.dataset
+        lines = [f"{ds.attrs['vehicle']}: {float(ds.attrs['speed_m_per_s']) * 3.6:.0f} km/h, "
+                 f"{float(ds.time[-1]):.3g} s simulated ({self.real_time_factor:.1f}x real "
+                 "time)"]
+        for k, v in self.min_gap_m.items():
+            lines.append(f"  minimum {k} gap {v * 1e3:.3f} mm")
+        if self.touchdown is None:
+            lines.append(f"  no touchdown (gaps stayed within "
+                         f"{float(ds.attrs['touchdown_gap_m']) * 1e3:g} ... "
+                         f"{float(ds.attrs['landing_gap_m']) * 1e3:g} mm)")
+        else:
+            c, t, g, kind = self.touchdown
+            lines.append(f"  TOUCHDOWN ({kind}): circuit {c} at t = {t:.4f} s (gap "
+                         f"{g * 1e3:.3f} mm); the run stopped there")
+        for k, v in self.comfort.items():
+            lines.append(f"  comfort {k}: ISO 2631 a_w = {v['weighted_rms_m_per_s2']:.4f} "
+                         f"m/s^2, Sperling Wz = {v['sperling_wz']:.2f}")
+        return "\n".join(lines)
+
+
+class CrossSectionModel:
+    """The cross-section vehicle with its magnets and gap controllers (module docstring).
+
+    Parameters
+    ----------
+    data : CrossSectionData, optional
+        The vehicle (default: the bundled ``tr09-cross-section``).
+    levitation_magnet, guidance_magnet : str, default "tr09-standard", "tr-guidance"
+        Magnet files (bundled names or paths); each must be as long as the slice.
+    magnets : {"reduced", "detailed"}
+        Reduced current-based models on cached maps, or the detailed flux-based models.
+    maps_cache : path, optional
+        Directory of the cached maps (:mod:`maglevkit.vehicle.mapcache`).
+    compiled : {"auto", "always", "never"}
+        Passed to the bank.
+    nominal_gap_m : float, default 0.010
+        Nominal gap of levitation and guidance magnets [m] [P 10 mm].
+    guidance_bias_current_A : float, default 20.0
+        Bias current of both guidance magnets [A] [E] (their bias forces cancel).
+    bandwidth_Hz, damping : float, default 5.0, 0.7
+        Gap loops' natural frequency [Hz] and damping ratio [-] [E] (as the heave-pitch
+        train's file).
+    flux_bandwidth_Hz : float, default 30.0
+        Flux loops' bandwidth [Hz] [E].
+    voltage_limit_V : float, default 440.0
+        Chopper supply ``|U| <= U_max`` [V] [P].
+    touchdown_gap_m, landing_gap_m : float, default 0.002, 0.020
+        A gap at or below ``touchdown_gap_m`` (magnet on its rail) or at or above
+        ``landing_gap_m`` stops the run [m] [E].
+
+    Raises
+    ------
+    InputError
+        Bad options (named), magnets of the wrong kind or length.
+    """
+
+    def __init__(self, data: CrossSectionData | None = None, *,
+                 levitation_magnet: str = "tr09-standard", guidance_magnet: str = "tr-guidance",
+                 magnets: str = "reduced", maps_cache: Any = None, compiled: str = "auto",
+                 nominal_gap_m: float = 0.010, guidance_bias_current_A: float = 20.0,
+                 bandwidth_Hz: float = 5.0, damping: float = 0.7,
+                 flux_bandwidth_Hz: float = 30.0, voltage_limit_V: float = 440.0,
+                 touchdown_gap_m: float = 0.002, landing_gap_m: float = 0.020) -> None:
+        from ..control import design_gap_controller
+        from ..magnets import load_magnet
+        from ..models.flux import FluxModel
+        from ..reduced.bank import MagnetBank
+        from .crosssection import load_cross_section
+        from .mapcache import vehicle_maps
+
+        self.data = d = load_cross_section() if data is None else data
+        self.mechanics = CrossSectionMechanics(d)
+        if magnets not in ("reduced", "detailed"):
+            raise InputError(f"magnets = {magnets!r}; use 'reduced' or 'detailed'")
+        self.s0 = real_number(nominal_gap_m, "nominal_gap_m", "m", positive=True)
+        self.bias_A = real_number(guidance_bias_current_A, "guidance_bias_current_A", "A",
+                                  positive=True)
+        self.touchdown_gap_m = real_number(touchdown_gap_m, "touchdown_gap_m", "m",
+                                           positive=True)
+        self.landing_gap_m = real_number(landing_gap_m, "landing_gap_m", "m", positive=True)
+        if not self.touchdown_gap_m < self.s0 < self.landing_gap_m:
+            raise InputError(f"touchdown_gap_m = {touchdown_gap_m!r} m, nominal_gap_m = "
+                             f"{nominal_gap_m!r} m, landing_gap_m = {landing_gap_m!r} m: "
+                             "must increase in that order")
+        kinds = {"levitation": load_magnet(levitation_magnet),
+                 "guidance": load_magnet(guidance_magnet)}
+        want = {"levitation": "levitation_magnet", "guidance": "guidance_magnet"}
+        for kind, mag in kinds.items():
+            if mag.kind != want[kind]:
+                raise InputError(f"{kind}_magnet = {mag.name!r} is a {mag.kind!r} magnet; "
+                                 f"expected a {want[kind]!r}")
+        par = kinds["levitation"].parameters["magnet"]
+        length = {"levitation": float(par["poles"]) * float(par["pole_pitch"]),
+                  "guidance": float(kinds["guidance"].parameters["magnet"]["section_length"])
+                  * len(kinds["guidance"].circuit_names)}
+        for kind, ln in length.items():
+            if abs(ln - d.slice_length_m) > 1e-3:
+                raise InputError(f"{kind} magnet {kinds[kind].name!r} is {ln:.4f} m long, "
+                                 f"but the slice is {d.slice_length_m:.4f} m")
+        self.magnets = kinds
+        self.maps = {k: vehicle_maps(m, cache_dir=maps_cache) for k, m in kinds.items()}
+        self.member_names = tuple(f"{k}_{s}" for k in ("levitation", "guidance") for s in SIDES)
+        members = [(n, FluxModel(kinds[n.split("_")[0]]) if magnets == "detailed"
+                    else self.maps[n.split("_")[0]]) for n in self.member_names]
+        self.bank = MagnetBank(members, gap_inputs="circuit", compiled=compiled)
+        self.magnet_kind = magnets
+        # circuits of each member, in the bank's order
+        sl = self.bank.circuit_slices
+        self.circuit_slices = [sl[n] for n in self.member_names]
+        # trim on a straight level track: guidance magnets at the bias current, the
+        # levitation magnets carry the rest (both circuits of a magnet at one current)
+        self.guidance_bias_force_N = self._force("guidance", self.s0, self.bias_A)
+        self.trim_field = track_field_path(0.0, 0.0, 0.0)
+        q, forces = self.mechanics.static_trim(self.trim_field,
+                                               guidance_bias_N=self.guidance_bias_force_N)
+        self.trim_q, self.trim_force_N = q, forces
+        self.trim_current_A = np.array([self._current("levitation", forces[0]),
+                                        self._current("levitation", forces[1]),
+                                        self.bias_A, self.bias_A])
+        g = STANDARD_GRAVITY
+        lev = design_gap_controller(kinds["levitation"], mass_kg=forces[0] / g, gap_m=self.s0,
+                                    current_A=float(self.trim_current_A[0]),
+                                    bandwidth_hz=bandwidth_Hz, damping=damping,
+                                    flux_bandwidth_hz=flux_bandwidth_Hz,
+                                    voltage_limit_V=voltage_limit_V)
+        # differential pair: each guidance magnet moves half the slice laterally
+        gui = design_gap_controller(kinds["guidance"], mass_kg=0.5 * d.total_mass_kg,
+                                    gap_m=self.s0, current_A=self.bias_A,
+                                    bandwidth_hz=bandwidth_Hz, damping=damping,
+                                    flux_bandwidth_hz=flux_bandwidth_Hz,
+                                    voltage_limit_V=voltage_limit_V)
+        self.designs = {"levitation": lev, "guidance": gui}
+        self.voltage_limit_V = float(voltage_limit_V)
+
+    # ------------------------------------------------------------------ statics helpers
+    def _spline(self, kind: str, var: str, circuit: str) -> Any:
+        from scipy.interpolate import RectBivariateSpline
+
+        m = self.maps[kind]
+        return RectBivariateSpline(m.gaps_m, m.currents_A, m.variable(var, circuit))
+
+    def _force(self, kind: str, gap: float, current: float) -> float:
+        """Force of a magnet of ``kind`` [N] with every circuit at ``current`` (maps)."""
+        return sum(float(self._spline(kind, "force_N", c)(gap, current)[0, 0])
+                   for c in self.magnets[kind].circuit_names)
+
+    def _current(self, kind: str, force: float) -> float:
+        from scipy.optimize import brentq
+
+        c = self.maps[kind].currents_A
+        fmax = self._force(kind, self.s0, float(c[-1]))
+        if not 0 < force < fmax:
+            raise InputError(f"the {kind} magnet would have to carry {force:.5g} N at the "
+                             f"nominal gap; its maps reach {fmax:.5g} N")
+        return float(brentq(lambda i: self._force(kind, self.s0, i) - force, c[0], c[-1],
+                            xtol=1e-10))
+
+    def _flux(self, kind: str, current: float) -> np.ndarray:
+        return np.array([float(self._spline(kind, "flux_linkage_Wb", c)(self.s0, current)[0, 0])
+                         for c in self.magnets[kind].circuit_names])
+
+    def controllers(self) -> list[Any]:
+        """Fresh controllers of the four magnets (levitation left, right, guidance left,
+        right), each a :class:`~maglevkit.control.cascade.CascadeController` whose flux
+        estimate starts at its magnet's trim flux (from the maps).
+
+        Returns
+        -------
+        list of CascadeController
+        """
+        from ..control import CascadeController
+
+        out = []
+        for j, name in enumerate(self.member_names):
+            kind = name.split("_")[0]
+            out.append(CascadeController(self.designs[kind], initial_flux_Wb=self._flux(
+                kind, float(self.trim_current_A[j]))))
+        return out
+
+    def discretize(self, dt_s: float, *, damping: bool = True) -> tuple[np.ndarray, np.ndarray]:
+        """Exact zero-order-hold step ``x+ = Ad x + Bd Q`` of the mechanics
+        (:meth:`PlanarMultibody.discretize`).
+
+        Parameters
+        ----------
+        dt_s : float
+            Step [s], > 0.
+        damping : bool, default True
+            Include the air springs' dampers.
+
+        Returns
+        -------
+        (Ad, Bd) : ndarray (12, 12), ndarray (12, 6)
+        """
+        return self.mechanics.system.discretize(dt_s, damping=damping)
+
+    # ------------------------------------------------------------------ the run
+    def run(self, *, speed_m_per_s: float, duration_s: float, dt_s: float = 1e-3,
+            curve: TransitionCurve | None = None, crosswind: Crosswind | None = None,
+            vertical: Any = None, lateral: Any = None,
+            failures: Sequence[Failure] = ()) -> CrossSectionRun:
+        """Simulate the slice at constant speed from the straight-level trim.
+
+        Parameters
+        ----------
+        speed_m_per_s : float
+            Speed v [m/s], >= 0.
+        duration_s : float
+            Simulated time [s], > 0.
+        dt_s : float, default 1e-3
+            Time step and controller sample time [s], > 0.
+        curve : TransitionCurve, optional
+            Curve entry (default: straight level track).
+        crosswind : Crosswind, optional
+            Gust on the car body.
+        vertical, lateral : Profile, optional
+            Stator (vertical, positive down) and guidance-rail (lateral, positive to the
+            right) irregularities [m] over the distance travelled (e.g. ``JointSteps``
+            with the girder length for rail offsets at girder joints).
+        failures : sequence of Failure
+            Circuits (``"levitation_left/front"``, ... :attr:`MagnetBank.circuit_names`)
+            switched to 0 V from their time on.
+
+        Returns
+        -------
+        CrossSectionRun
+            Dataset variables over ``time``: ``levitation_gap``, ``levitation_force``,
+            ``levitation_current`` (``levitation_circuit``), ``guidance_gap``,
+            ``guidance_force``, ``guidance_current`` (``guidance_circuit``),
+            ``voltage`` (``circuit``), ``car_body_lateral_acceleration``,
+            ``car_body_vertical_acceleration``, ``car_body_roll_acceleration``,
+            displacements ``car_body_y``, ... ``chassis_phi``, ``field_a_y``, ``field_a_z``,
+            ``crosswind_force``; SI units in the attributes.
+
+        Raises
+        ------
+        InputError
+            Bad options (named), unknown failure circuits, non-finite irregularities.
+        OutOfRangeError
+            A circuit leaving its maps (from the bank).
+        """
+        import xarray as xr
+
+        from ..control import Measurement
+        from .comfort import comfort_indices, lateral_comfort_indices
+
+        v = real_number(speed_m_per_s, "speed_m_per_s", "m/s", nonnegative=True)
+        dur = real_number(duration_s, "duration_s", "s", positive=True)
+        dt = real_number(dt_s, "dt_s", "s", positive=True)
+        n = int(round(dur / dt))
+        if n < 1:
+            raise InputError(f"duration_s = {duration_s!r} s is shorter than one step "
+                             f"dt_s = {dt_s!r} s")
+        if curve is not None and not isinstance(curve, TransitionCurve):
+            raise InputError(f"curve must be a TransitionCurve, got {type(curve).__name__}")
+        if crosswind is not None and not isinstance(crosswind, Crosswind):
+            raise InputError(f"crosswind must be a Crosswind, got {type(crosswind).__name__}")
+        bank = self.bank
+        names = bank.circuit_names
+        fail_t = np.full(bank.n_circuits, np.inf)
+        for f in failures:
+            if not isinstance(f, Failure):
+                raise InputError(f"failures must be Failure objects, got {type(f).__name__}")
+            if f.circuit not in names:
+                raise InputError(f"failure circuit {f.circuit!r} is not a circuit of the "
+                                 f"cross-section; allowed: {', '.join(names)}")
+            k = names.index(f.circuit)
+            fail_t[k] = min(fail_t[k], f.time_s)
+        s = self.mechanics.system
+        t = np.arange(n + 1) * dt
+        xs, xmid = v * t, v * (t + 0.5 * dt)
+        field_mid = (curve.field(v, xmid) if curve is not None
+                     else np.broadcast_to(self.trim_field, (n + 1, 2)))
+        # irregularities at every step start: (elevation, slope) along the path
+        rz = np.zeros(n + 1)
+        rz_x = np.zeros(n + 1)
+        ry = np.zeros(n + 1)
+        ry_x = np.zeros(n + 1)
+        for what, prof, val, slope in (("vertical", vertical, rz, rz_x),
+                                       ("lateral", lateral, ry, ry_x)):
+            if prof is None:
+                continue
+            val[:] = prof(xs)
+            slope[:] = prof.slope(xs)
+            if not (np.isfinite(val).all() and np.isfinite(slope).all()):
+                raise InputError(f"the {what} irregularity gives non-finite values")
+        # crosswind: generalised force of a lateral force at the centre of pressure
+        q_ext = np.zeros((n + 1, s.n_dof))
+        wind = np.zeros(n + 1)
+        if crosswind is not None:
+            d = self.data
+            z_cp = d.car_body_centre_z_m - crosswind.pressure_height_m
+            col = s.point_jacobian("car_body", (0.0, z_cp))[0]
+            wind = crosswind.force_N(t + 0.5 * dt)
+            q_ext = wind[:, None] * col[None, :]
+        ad, bd = self.discretize(dt)
+        nq = s.n_dof
+        x = np.concatenate([self.trim_q, np.zeros(nq)])
+        gm = s.gap_matrix
+        sign_y = np.array([0.0, 0.0, 1.0, -1.0])        # rail shift r_y opens left, closes right
+        sign_z = np.array([-1.0, -1.0, 0.0, 0.0])       # stator lower closes levitation gaps
+        state = bank.initial_state(gaps=self.s0, currents=np.repeat(self.trim_current_A, 2))
+        stepper = bank.stepper(state, dt)
+        ctl = self.controllers()
+        # chopper bound per circuit: -R_ec I_L (none for detailed members, NaN R_ec)
+        r_ec = np.where(np.isnan(bank.eddy_resistance_ohm), 0.0, bank.eddy_resistance_ohm)
+        chop = ~np.isnan(bank.eddy_resistance_ohm)
+        nc = bank.n_circuits
+        rec_gap = np.empty((n + 1, 4))
+        rec_force = np.empty((n + 1, nc))
+        rec_cur = np.empty((n + 1, nc))
+        rec_u = np.zeros((n + 1, nc))
+        rec_x = np.empty((n + 1, 2 * nq))
+        rec_acc = np.empty((n + 1, nq))
+        gap_circ = np.repeat(np.arange(4), 2)
+        touchdown = None
+        last = n
+        force = stepper.member_force_N.copy()
+        t0 = time.perf_counter()
+        for k in range(n + 1):
+            q, qd = x[:nq], x[nq:]
+            gaps = self.s0 + gm @ q + sign_z * rz[k] + sign_y * ry[k]
+            rates = gm @ qd + v * (sign_z * rz_x[k] + sign_y * ry_x[k])
+            rec_gap[k] = gaps
+            rec_x[k] = x
+            rec_force[k] = stepper.circuit_force_N
+            rec_cur[k] = stepper.currents_A
+            rec_acc[k] = s.accelerations(q, qd, force, field_mid[k], q_ext[k])
+            lo, hi = gaps.min(), gaps.max()
+            if lo <= self.touchdown_gap_m or hi >= self.landing_gap_m:
+                j = int(np.argmin(gaps)) if lo <= self.touchdown_gap_m else int(np.argmax(gaps))
+                touchdown = (self.member_names[j], float(t[k]), float(gaps[j]),
+                             "closed" if lo <= self.touchdown_gap_m else "open")
+                last = k
+                break
+            if k == n:
+                break
+            # controllers: levitation on their own gaps, guidance on the differential gap
+            diff = 0.5 * (gaps[2] - gaps[3])
+            diff_rate = 0.5 * (rates[2] - rates[3])
+            meas_g = (gaps[0], gaps[1], self.s0 + diff, self.s0 - diff)
+            meas_r = (rates[0], rates[1], diff_rate, -diff_rate)
+            cur = stepper.currents_A
+            u = np.empty(nc)
+            for j, c in enumerate(ctl):
+                m = Measurement(float(t[k]), float(meas_g[j]), float(meas_r[j]),
+                                cur[2 * j:2 * j + 2], self.s0)
+                if k == 0:
+                    c.reset(m, sample_time_s=dt)
+                u[2 * j:2 * j + 2] = c.update(m)
+            u[fail_t <= t[k]] = 0.0
+            # 2-quadrant chopper: coil current (U + R_ec I_L)/(R_el + R_ec) >= 0
+            il = stepper.inductor_currents_A
+            u[chop] = np.maximum(u[chop], -r_ec[chop] * il[chop])
+            rec_u[k] = u
+            f_start = force
+            stepper.advance(voltages=u, gaps=gaps[gap_circ], gap_rates=rates[gap_circ])
+            force = stepper.member_force_N.copy()
+            qgen = s.B @ (0.5 * (f_start + force)) + s.G @ field_mid[k] + s.Q_preload + q_ext[k]
+            x = ad @ x + bd @ qgen
+        wall = time.perf_counter() - t0
+        m = last + 1
+        tt = t[:m]
+        lev_c = [f"{sd}/{c}" for sd in SIDES for c in self.magnets["levitation"].circuit_names]
+        gui_c = [f"{sd}/{c}" for sd in SIDES for c in self.magnets["guidance"].circuit_names]
+        cg = rec_gap[:m][:, gap_circ]
+        ds = xr.Dataset(coords={"time": ("time", tt, {"units": "s"}),
+                                "levitation_circuit": lev_c, "guidance_circuit": gui_c,
+                                "circuit": list(names)})
+
+        def put(name: str, dims: tuple[str, ...], val: np.ndarray, units: str,
+                desc: str) -> None:
+            ds[name] = (dims, val, {"units": units, "description": desc})
+
+        put("levitation_gap", ("time", "levitation_circuit"), cg[:, :4], "m",
+            "vertical gap of each levitation circuit to the stator underside")
+        put("guidance_gap", ("time", "guidance_circuit"), cg[:, 4:], "m",
+            "lateral gap of each guidance circuit to its side rail")
+        put("levitation_force", ("time", "levitation_circuit"), rec_force[:m, :4], "N",
+            "attraction force of each levitation circuit (upward on the chassis)")
+        put("guidance_force", ("time", "guidance_circuit"), rec_force[:m, 4:], "N",
+            "attraction force of each guidance circuit (towards its rail)")
+        put("levitation_current", ("time", "levitation_circuit"), rec_cur[:m, :4], "A",
+            "coil current")
+        put("guidance_current", ("time", "guidance_circuit"), rec_cur[:m, 4:], "A",
+            "coil current")
+        put("voltage", ("time", "circuit"), rec_u[:m], "V", "circuit voltage held over the step")
+        for i, dof in enumerate(s.dof_names):
+            body, kind = dof.split(".")
+            put(f"{body}_{kind}", ("time",), rec_x[:m, i], "rad" if kind == "phi" else "m",
+                f"{body} {kind} displacement from the design position (z down, y right)")
+        put("car_body_lateral_acceleration", ("time",), rec_acc[:m, 0], "m/s^2",
+            "car body centre, in the track plane (y, right)")
+        put("car_body_vertical_acceleration", ("time",), rec_acc[:m, 1], "m/s^2",
+            "car body centre, normal to the track plane (z, down)")
+        put("car_body_roll_acceleration", ("time",), rec_acc[:m, 2], "rad/s^2", "car body")
+        put("field_a_y", ("time",), field_mid[:m, 0], "m/s^2",
+            "track field along y (centrifugal and gravity in the banked plane), mid-step")
+        put("field_a_z", ("time",), field_mid[:m, 1], "m/s^2", "track field along z, mid-step")
+        put("crosswind_force", ("time",), wind[:m], "N", "lateral gust force on the car body")
+        ds.attrs.update({"vehicle": self.data.name, "speed_m_per_s": v, "dt_s": dt,
+                         "nominal_gap_m": self.s0, "touchdown_gap_m": self.touchdown_gap_m,
+                         "landing_gap_m": self.landing_gap_m, "magnets": self.magnet_kind,
+                         "guidance_bias_current_A": self.bias_A})
+        min_gap = {"levitation": float(cg[:, :4].min()), "guidance": float(cg[:, 4:].min())}
+        comfort: dict[str, dict[str, float]] = {}
+        if m >= 64:
+            lat = rec_acc[:m, :1] - rec_acc[:m, :1].mean()
+            ver = rec_acc[:m, 1:2] - rec_acc[:m, 1:2].mean()
+            wd, wz_y = lateral_comfort_indices(lat, 1.0 / dt)
+            wk, wz_z = comfort_indices(ver, 1.0 / dt)
+            comfort = {"lateral": {"weighted_rms_m_per_s2": float(wd[0]),
+                                   "sperling_wz": float(wz_y[0])},
+                       "vertical": {"weighted_rms_m_per_s2": float(wk[0]),
+                                    "sperling_wz": float(wz_z[0])}}
+        return CrossSectionRun(ds, min_gap, touchdown, comfort, wall,
+                               float(tt[-1]) / wall if wall > 0 else math.inf)
