@@ -338,9 +338,9 @@ class CrossSectionRun:
             c, t, g, kind = self.touchdown
             lines.append(f"  TOUCHDOWN ({kind}): circuit {c} at t = {t:.4f} s (gap "
                          f"{g * 1e3:.3f} mm); the run stopped there")
-        for k, v in self.comfort.items():
-            lines.append(f"  comfort {k}: ISO 2631 a_w = {v['weighted_rms_m_per_s2']:.4f} "
-                         f"m/s^2, Sperling Wz = {v['sperling_wz']:.2f}")
+        for k, c in self.comfort.items():
+            lines.append(f"  comfort {k}: ISO 2631 a_w = {c['weighted_rms_m_per_s2']:.4f} "
+                         f"m/s^2, Sperling Wz = {c['sperling_wz']:.2f}")
         return "\n".join(lines)
 
 
@@ -669,11 +669,11 @@ class CrossSectionModel:
             cur = stepper.currents_A
             u = np.empty(nc)
             for j, c in enumerate(ctl):
-                m = Measurement(float(t[k]), float(meas_g[j]), float(meas_r[j]),
-                                cur[2 * j:2 * j + 2], self.s0)
+                meas = Measurement(float(t[k]), float(meas_g[j]), float(meas_r[j]),
+                                   cur[2 * j:2 * j + 2], self.s0)
                 if k == 0:
-                    c.reset(m, sample_time_s=dt)
-                u[2 * j:2 * j + 2] = c.update(m)
+                    c.reset(meas, sample_time_s=dt)
+                u[2 * j:2 * j + 2] = c.update(meas)
             u[fail_t <= t[k]] = 0.0
             # 2-quadrant chopper: coil current (U + R_ec I_L)/(R_el + R_ec) >= 0
             il = stepper.inductor_currents_A
