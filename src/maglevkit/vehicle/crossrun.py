@@ -338,9 +338,9 @@ class CrossSectionRun:
             c, t, g, kind = self.touchdown
             lines.append(f"  TOUCHDOWN ({kind}): circuit {c} at t = {t:.4f} s (gap "
                          f"{g * 1e3:.3f} mm); the run stopped there")
-        for name, c in self.comfort.items():
-            lines.append(f"  comfort {name}: ISO 2631 a_w = {c['weighted_rms_m_per_s2']:.4f} "
-                         f"m/s^2, Sperling Wz = {c['sperling_wz']:.2f}")
+        for name, ci in self.comfort.items():
+            lines.append(f"  comfort {name}: ISO 2631 a_w = {ci['weighted_rms_m_per_s2']:.4f} "
+                         f"m/s^2, Sperling Wz = {ci['sperling_wz']:.2f}")
         return "\n".join(lines)
 
 
