@@ -241,8 +241,11 @@ def parse_curve(text: str) -> TransitionCurve:
     if len(vals) not in (3, 4):
         raise InputError(f"--curve = {text!r}: expected RADIUS_M:SUPERELEVATION_DEG:"
                          "TRANSITION_M[:START_M], e.g. 4000:12:300")
-    return TransitionCurve(vals[0], math.radians(vals[1]), vals[2],
-                           vals[3] if len(vals) == 4 else 0.0)
+    try:
+        return TransitionCurve(vals[0], math.radians(vals[1]), vals[2],
+                               vals[3] if len(vals) == 4 else 0.0)
+    except InputError as exc:
+        raise InputError(f"--curve = {text!r}: {exc}") from None
 
 
 def parse_crosswind(text: str) -> Crosswind:
@@ -272,7 +275,10 @@ def parse_crosswind(text: str) -> Crosswind:
                          "]]][:SHAPE], SHAPE 1-cosine or step, e.g. 8000:0.5:1:0.5")
     vals = _numbers(":".join(parts), "--crosswind", "8000:0.5:1:0.5")
     names = ("peak_force_N", "rise_s", "hold_s", "start_s")
-    return Crosswind(**dict(zip(names, vals, strict=False)), shape=shape)
+    try:
+        return Crosswind(**dict(zip(names, vals, strict=False)), shape=shape)
+    except InputError as exc:
+        raise InputError(f"--crosswind = {text!r}: {exc}") from None
 
 
 @dataclass(frozen=True)
