@@ -65,6 +65,7 @@ def plot_cross_section_run(dataset: Any, directory: str | Path, *,
                 a.plot(t, ds[var].values[:, j] * scale, color=colour, ls=ls, lw=1.0,
                        label=str(c))
             a.set_ylabel(f"{kind} {var.split('_')[1]} [{unit}]")
+            a.ticklabel_format(axis="y", useOffset=False)
             a.grid(alpha=0.3)
         g = ds[f"{kind}_gap"].values * 1e3
         ax[0, col].set_title(f"{kind}: minimum gap {g.min():.2f} mm (limits {lo:g} / {hi:g} "
