@@ -177,3 +177,33 @@ def test_iso2631_wd_table_and_lateral_sperling() -> None:
     b_y = 0.737 / 0.588 * float(sperling_weighting(f0))
     assert wz[0] == pytest.approx((100 * math.sqrt(2) * amp / math.sqrt(2) * b_y) ** 0.3,
                                   rel=1e-9)
+
+
+def test_cli_runs_the_cross_section_and_names_bad_options(tmp_path: object) -> None:
+    from pathlib import Path
+
+    import xarray as xr
+    from typer.testing import CliRunner
+
+    from maglevkit.cli import app
+
+    runner = CliRunner()
+    out = Path(str(tmp_path)) / "x.nc"
+    res = runner.invoke(app, ["vehicle", "run", "--vehicle", "tr09-cross-section",
+                              "--speed-kmh", "400", "--duration", "0.3", "--curve",
+                              "4000:12:50", "--crosswind", "5000:0.1:0:0.05", "-o", str(out)])
+    assert res.exit_code == 0, res.output
+    assert "minimum guidance gap" in res.output
+    ds = xr.load_dataset(out)
+    for v in ("levitation_gap", "guidance_gap", "levitation_force", "guidance_force"):
+        assert ds[v].attrs["units"] in ("m", "N")
+    assert ds.car_body_lateral_acceleration.attrs["units"] == "m/s^2"
+    # --curve on the heave-pitch train, a bad superelevation, a bad gust: one-line errors
+    for args, word in ((["--curve", "4000:12:300"], "--curve"),
+                       (["--vehicle", "tr09-cross-section", "--curve", "4000:40:300"],
+                        "--curve"),
+                       (["--vehicle", "tr09-cross-section", "--crosswind", "1:x"],
+                        "--crosswind")):
+        res = runner.invoke(app, ["vehicle", "run", *args])
+        assert res.exit_code == 2
+        assert word in res.output and "Traceback" not in res.output
