@@ -207,3 +207,27 @@ def test_cli_runs_the_cross_section_and_names_bad_options(tmp_path: object) -> N
         res = runner.invoke(app, ["vehicle", "run", *args])
         assert res.exit_code == 2
         assert word in res.output and "Traceback" not in res.output
+
+
+def test_irregularities_rail_offsets_and_a_touchdown_event(model: CrossSectionModel) -> None:
+    from maglevkit.vehicle.crossrun import LATERAL_ALIGNMENT_PSD
+    from maglevkit.vehicle.irregularities import GermanTrackPSD, JointSteps, RandomProfile
+
+    lo, hi = 2 * np.pi / 100, 2 * np.pi / 1.0
+    base = GermanTrackPSD(**LATERAL_ALIGNMENT_PSD)
+    psd = GermanTrackPSD(A_v_m_rad=base.A_v_m_rad * (0.3e-3) ** 2 / base.variance_m2(lo, hi))
+    lateral = (RandomProfile(psd, lo, hi, seed=1)
+               + JointSteps(0.5e-3, pitch_m=24.768, pattern="random"))
+    run = model.run(speed_m_per_s=400 / 3.6, duration_s=0.6, lateral=lateral)
+    ds = run.dataset
+    assert run.touchdown is None
+    # the rail moves the guidance gaps in opposite directions (the chassis follows it)
+    g = ds.guidance_gap.values
+    assert float(np.abs(g[:, 0] - 0.010).max()) > 1e-5
+    # the unscaled railway spectrum (several mm RMS) closes a levitation gap: reported as
+    # a touchdown at the step where the gap reaches 2 mm, not a map-range error
+    run = model.run(speed_m_per_s=400 / 3.6, duration_s=0.5,
+                    vertical=RandomProfile(GermanTrackPSD(), lo, hi, seed=2))
+    assert run.touchdown is not None and run.touchdown[3] == "closed"
+    assert run.touchdown[2] <= model.touchdown_gap_m
+    assert "TOUCHDOWN" in run.report()

@@ -658,11 +658,18 @@ class CrossSectionModel:
             rec_force[k] = stepper.circuit_force_N
             rec_cur[k] = stepper.currents_A
             rec_acc[k] = s.accelerations(q, qd, force, field_mid[k], q_ext[k])
-            lo, hi = gaps.min(), gaps.max()
-            if lo <= self.touchdown_gap_m or hi >= self.landing_gap_m:
-                j = int(np.argmin(gaps)) if lo <= self.touchdown_gap_m else int(np.argmax(gaps))
-                touchdown = (self.member_names[j], float(t[k]), float(gaps[j]),
-                             "closed" if lo <= self.touchdown_gap_m else "open")
+            # a gap at a limit now, or crossing it within the coming step on the linear
+            # path the bank moves it along (the maps start at the touchdown gap)
+            ends = gaps + rates * dt if k < n else gaps
+            for probe, when in ((gaps, t[k]), (ends, t[k] + dt)):
+                lo, hi = probe.min(), probe.max()
+                if lo <= self.touchdown_gap_m or hi >= self.landing_gap_m:
+                    closed = bool(lo <= self.touchdown_gap_m)
+                    j = int(np.argmin(probe)) if closed else int(np.argmax(probe))
+                    touchdown = (self.member_names[j], float(when), float(probe[j]),
+                                 "closed" if closed else "open")
+                    break
+            if touchdown is not None:
                 last = k
                 break
             if k == n:
