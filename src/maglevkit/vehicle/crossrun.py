@@ -530,7 +530,7 @@ class CrossSectionModel:
     def run(self, *, speed_m_per_s: float, duration_s: float, dt_s: float = 1e-3,
             curve: TransitionCurve | None = None, crosswind: Crosswind | None = None,
             vertical: Any = None, lateral: Any = None,
-            failures: Sequence[Failure] = ()) -> CrossSectionRun:
+            failures: Sequence[Failure] = (), loop: str = "auto") -> CrossSectionRun:
         """Simulate the slice at constant speed from the straight-level trim.
 
         Parameters
@@ -552,6 +552,12 @@ class CrossSectionModel:
         failures : sequence of Failure
             Circuits (``"levitation_left/front"``, ... :attr:`MagnetBank.circuit_names`)
             switched to 0 V from their time on.
+        loop : {"auto", "compiled", "python"}
+            ``"python"``: the NumPy loop with the controllers through the
+            :class:`~maglevkit.control.interface.Controller` interface (the reference);
+            ``"compiled"``: the same step as one compiled CasADi function per block of
+            steps (:meth:`compiled_step`; reduced magnets only); ``"auto"`` (default):
+            compiled for reduced magnets, else the NumPy loop.
 
         Returns
         -------
@@ -571,11 +577,6 @@ class CrossSectionModel:
         OutOfRangeError
             A circuit leaving its maps (from the bank).
         """
-        import xarray as xr
-
-        from ..control import Measurement
-        from .comfort import comfort_indices, lateral_comfort_indices
-
         v = real_number(speed_m_per_s, "speed_m_per_s", "m/s", nonnegative=True)
         dur = real_number(duration_s, "duration_s", "s", positive=True)
         dt = real_number(dt_s, "dt_s", "s", positive=True)
@@ -625,12 +626,35 @@ class CrossSectionModel:
             col = s.point_jacobian("car_body", (0.0, z_cp))[0]
             wind = crosswind.force_N(t + 0.5 * dt)
             q_ext = wind[:, None] * col[None, :]
+        if loop not in ("auto", "compiled", "python"):
+            raise InputError(f"loop = {loop!r}; allowed: 'auto', 'compiled', 'python'")
+        if loop == "compiled" and self.magnet_kind != "reduced":
+            raise InputError("loop = 'compiled' needs reduced magnets (magnets='reduced')")
+        use_compiled = loop == "compiled" or (loop == "auto" and self.magnet_kind == "reduced")
+        sign_y = np.array([0.0, 0.0, 1.0, -1.0])        # rail shift r_y opens left, closes right
+        sign_z = np.array([-1.0, -1.0, 0.0, 0.0])       # stator lower closes levitation gaps
+        # per magnet: r enters the gap as -r (as the heave-pitch step's irregularity)
+        r_mag = -(np.outer(rz, sign_z) + np.outer(ry, sign_y))
+        rx_mag = -(np.outer(rz_x, sign_z) + np.outer(ry_x, sign_y))
+        if use_compiled:
+            out = self._compiled_loop(dt, v, t, r_mag, rx_mag, field_mid, q_ext, fail_t, n)
+        else:
+            out = self._python_loop(dt, v, t, r_mag, rx_mag, field_mid, q_ext, fail_t, n)
+        rec_gap, rec_force, rec_cur, rec_u, rec_x, rec_acc, touchdown, last, wall = out
+        return self._result(v, dt, t, rec_gap, rec_force, rec_cur, rec_u, rec_x, rec_acc,
+                            touchdown, last, wall, field_mid, wind)
+
+    def _python_loop(self, dt: float, v: float, t: np.ndarray, r_mag: np.ndarray,
+                     rx_mag: np.ndarray, field_mid: np.ndarray, q_ext: np.ndarray,
+                     fail_t: np.ndarray, n: int) -> tuple[Any, ...]:
+        from ..control import Measurement
+
+        s = self.mechanics.system
+        bank = self.bank
         ad, bd = self.discretize(dt)
         nq = s.n_dof
         x = np.concatenate([self.trim_q, np.zeros(nq)])
         gm = s.gap_matrix
-        sign_y = np.array([0.0, 0.0, 1.0, -1.0])        # rail shift r_y opens left, closes right
-        sign_z = np.array([-1.0, -1.0, 0.0, 0.0])       # stator lower closes levitation gaps
         state = bank.initial_state(gaps=self.s0, currents=np.repeat(self.trim_current_A, 2))
         stepper = bank.stepper(state, dt)
         ctl = self.controllers()
@@ -651,8 +675,8 @@ class CrossSectionModel:
         t0 = time.perf_counter()
         for k in range(n + 1):
             q, qd = x[:nq], x[nq:]
-            gaps = self.s0 + gm @ q + sign_z * rz[k] + sign_y * ry[k]
-            rates = gm @ qd + v * (sign_z * rz_x[k] + sign_y * ry_x[k])
+            gaps = self.s0 + gm @ q - r_mag[k]
+            rates = gm @ qd - v * rx_mag[k]
             rec_gap[k] = gaps
             rec_x[k] = x
             rec_force[k] = stepper.circuit_force_N
@@ -679,7 +703,7 @@ class CrossSectionModel:
             diff_rate = 0.5 * (rates[2] - rates[3])
             meas_g = (gaps[0], gaps[1], self.s0 + diff, self.s0 - diff)
             meas_r = (rates[0], rates[1], diff_rate, -diff_rate)
-            cur = stepper.currents_A
+            cur = stepper.currents_A.copy()     # a view would change with the step
             u = np.empty(nc)
             for j, c in enumerate(ctl):
                 meas = Measurement(float(t[k]), float(meas_g[j]), float(meas_r[j]),
@@ -687,10 +711,11 @@ class CrossSectionModel:
                 if k == 0:
                     c.reset(meas, sample_time_s=dt)
                 u[2 * j:2 * j + 2] = c.update(meas)
-            u[fail_t <= t[k]] = 0.0
-            # 2-quadrant chopper: coil current (U + R_ec I_L)/(R_el + R_ec) >= 0
+            # 2-quadrant chopper: coil current (U + R_ec I_L)/(R_el + R_ec) >= 0; then the
+            # failed circuits at 0 V (the compiled step's order)
             il = stepper.inductor_currents_A
             u[chop] = np.maximum(u[chop], -r_ec[chop] * il[chop])
+            u[fail_t <= t[k]] = 0.0
             rec_u[k] = u
             f_start = force
             stepper.advance(voltages=u, gaps=gaps[gap_circ], gap_rates=rates[gap_circ])
@@ -698,6 +723,259 @@ class CrossSectionModel:
             qgen = s.B @ (0.5 * (f_start + force)) + s.G @ field_mid[k] + s.Q_preload + q_ext[k]
             x = ad @ x + bd @ qgen
         wall = time.perf_counter() - t0
+        return rec_gap, rec_force, rec_cur, rec_u, rec_x, rec_acc, touchdown, last, wall
+
+    # ------------------------------------------------------------------ compiled step
+    def compiled_step(self, dt_s: float = 1e-3, *, block_steps: int = 50,
+                      lanes: bool = True) -> dict[str, Any]:
+        """The run's step as one CasADi function, chained ``block_steps`` times.
+
+        The same step as the NumPy loop of :meth:`run` (``loop="python"``), in the same
+        order: gaps ``s = s_0 + gap_matrix q - r``, rates; the controllers' voltages, the
+        chopper and the failures; the bank's step (:meth:`MagnetBank.step_function`); the
+        flux estimates and integrators; the mechanics' exact ZOH step with
+        ``Q = B S F_bar + Q_pre + Q_t`` (``S`` sums a magnet's circuits, ``Q_t = G a +
+        Q_wind`` at mid-step, a per-step input).  The controllers and their update are the
+        heave-pitch step's CasADi functions (:func:`~maglevkit.vehicle.stepkernel.
+        build_vehicle_step` ``parts``), not a copy of the cascade law: per circuit, the
+        guidance integrators fed the differential gap error ``(s_own - s_other)/2``
+        through the integral matrix.  Per circuit, with every gap sum of a guidance pair
+        ``2 s_0`` (a rigid chassis and one rail profile for both rails), the guidance
+        controllers' own gaps equal the NumPy loop's differential gaps.
+
+        Parameters
+        ----------
+        dt_s : float, default 1e-3
+            Step [s], > 0.
+        block_steps : int, default 50
+            Steps per call (keyword only).
+        lanes : bool, default True
+            Call the bank's SIMD-lane library (:meth:`MagnetBank.compiled_step_library`)
+            where it exists; False: the bank's CasADi step function (keyword only).
+
+        Returns
+        -------
+        dict
+            ``"block"``: ``(S, P, C) -> (S_next, R)`` (``P``, ``R`` one column per step);
+            ``"state"``, ``"inputs"``, ``"record"``: slices of ``S``, ``P``, ``R``.
+        """
+        import casadi as ca
+
+        from .stepkernel import build_vehicle_step
+
+        bank = self.bank
+        if self.magnet_kind != "reduced":
+            raise InputError("the compiled cross-section step needs reduced magnets")
+        s = self.mechanics.system
+        nq, nc = s.n_dof, bank.n_circuits
+        dt = real_number(dt_s, "dt_s", "s", positive=True)
+        lib = bank.compiled_step_library(dt) if lanes else None
+        bank_step = lib[0] if lib is not None else bank.step_function(dt)
+        circ = np.repeat(np.arange(4), 2)
+        gm = s.gap_matrix[circ]                            # (nc, nq): every circuit's gap
+        ad, bd = self.discretize(dt)
+        designs = [self.designs[n.split("_")[0]] for n in self.member_names]
+        gains = {k: np.array([getattr(designs[c], k) for c in circ])
+                 for k in ("kp_per_m", "kd_s_per_m", "ki_per_m_s", "kflux_per_s")}
+        psi0 = np.concatenate([np.asarray(d.flux_bias_Wb) for d in designs])
+        res = np.concatenate([np.asarray(d.resistances_ohm) for d in designs])
+        integ = np.eye(nc)
+        for a, b in ((4, 6), (5, 7)):                     # guidance pairs left/right
+            integ[a, a] = integ[b, b] = 0.5
+            integ[a, b] = integ[b, a] = -0.5
+        parts = build_vehicle_step(
+            bank_step=bank_step, dt=dt, nominal_gap_m=self.s0, sides=1.0,
+            span_length_m=1.0, origin_m=0.0, wavenumbers=np.zeros(0),
+            guideway_ad=np.zeros((0, 0)), guideway_bd=np.zeros((0, 0)), n_spans=0,
+            mech_ad=ad, mech_bd=bd, gravity_force=np.zeros(nq), force_matrix=-gm.T,
+            gains=gains, flux_bias_Wb=psi0, resistance_ohm=res,
+            eddy_resistance_ohm=bank.eddy_resistance_ohm,
+            voltage_limit_V=self.voltage_limit_V, integral_projection=integ,
+            midspan_shape=np.zeros(0), block_steps=1).parts
+        f_ctl, f_upd = parts["controllers"], parts["controller_update"]
+
+        def pack(items: list[tuple[str, int]]) -> dict[str, slice]:
+            out, k = {}, 0
+            for name, size in items:
+                out[name] = slice(k, k + size)
+                k += size
+            return out
+
+        st = pack([("x", 2 * nq), ("I_L", nc), ("psi_hat", nc), ("integral", nc),
+                   ("current", nc), ("force", nc)])
+        pi = pack([("r", nc), ("r_x", nc), ("Q_t", nq), ("t", 1)])
+        rc = pack([("gap", nc), ("gap_rate", nc), ("current", nc), ("force", nc),
+                   ("I_L", nc), ("x", 2 * nq), ("voltage", nc), ("n_bad", 1)])
+        S, P, C = (ca.MX.sym("S", st["force"].stop), ca.MX.sym("P", pi["t"].stop),
+                   ca.MX.sym("C", 1 + nc))
+        x, il, psi, itg, cur, frc = (S[st[k]] for k in ("x", "I_L", "psi_hat", "integral",
+                                                         "current", "force"))
+        v, fail_t = C[0], C[1:]
+        q, qd = x[:nq], x[nq:]
+        gmd = ca.DM(gm)
+        gaps = self.s0 + ca.mtimes(gmd, q) - P[pi["r"]]
+        rates = ca.mtimes(gmd, qd) - v * P[pi["r_x"]]
+        u = f_ctl.call({"gap": gaps, "gap_rate": rates, "I_L": il, "current": cur,
+                        "psi_hat": psi, "integral": itg, "t": P[pi["t"]],
+                        "fail_t": fail_t})["U"]
+        bout = bank_step.call({"I_L": il, "s": gaps, "U": u, "sdot": rates, "h": ca.MX(dt)})
+        il_n, cur_n, frc_n, n_bad = (bout[k] for k in ("I_L_next", "I", "F", "n_bad"))
+        upd = f_upd.call({"psi_hat": psi, "integral": itg, "U": u, "current": cur,
+                          "current_next": cur_n, "gap": gaps})
+        summ = np.zeros((4, nc))
+        summ[circ, np.arange(nc)] = 1.0
+        bmat = ca.DM(s.B @ summ)                          # circuit forces -> Q
+        qgen = (ca.mtimes(bmat, 0.5 * (frc + frc_n)) + ca.DM(s.Q_preload) + P[pi["Q_t"]])
+        x_n = ca.mtimes(ca.DM(ad), x) + ca.mtimes(ca.DM(bd), qgen)
+        s_next = ca.vertcat(x_n, il_n, upd["psi_hat_next"], upd["integral_next"], cur_n, frc_n)
+        rec = ca.vertcat(gaps, rates, cur, frc, il, x, u, n_bad)
+        step = ca.Function("maglevkit_cross_section_step", [S, P, C], [s_next, rec])
+        nb = int(block_steps)
+        sb, pb = ca.MX.sym("S", S.shape[0]), ca.MX.sym("P", P.shape[0], nb)
+        sv: Any = sb
+        recs = []
+        for j in range(nb):
+            sv, r_j = step(sv, pb[:, j], C)
+            recs.append(r_j)
+        block = ca.Function(f"maglevkit_cross_section_step{nb}", [sb, pb, C],
+                            [sv, ca.horzcat(*recs)], ["S", "P", "C"], ["S_next", "R"])
+        return {"block": block, "state": st, "inputs": pi, "record": rc, "block_steps": nb,
+                "lanes": lib}
+
+    def _compiled_block(self, dt: float) -> dict[str, Any]:
+        from ..errors import SolverError
+        from ..models.compiled import DEFAULT_FLAGS, compile_function, compile_library
+
+        cache = getattr(self, "_compiled_cache", None)
+        if cache is None:
+            cache = self._compiled_cache = {}
+        hit = cache.get(dt)
+        if hit is None:
+            hit = self.compiled_step(dt)
+            f = None
+            if hit["lanes"] is not None:
+                lib = hit["lanes"][1]
+                try:
+                    funcs, _ = compile_library(
+                        hit["block"].name(), [hit["block"]], mode="always", cache_dir=None,
+                        flags=(*DEFAULT_FLAGS, "-Wl,--no-as-needed", str(lib),
+                               f"-Wl,-rpath,{lib.parent}"))
+                    f = funcs[0]
+                except SolverError:
+                    f = None
+            if f is None:
+                if hit["lanes"] is not None:      # rebuild on the bank's CasADi step
+                    hit = self.compiled_step(dt, lanes=False)
+                f, _ = compile_function(hit["block"], mode=self.bank.compiled_mode)
+            hit["compiled"] = f
+            cache[dt] = hit
+        return hit
+
+    def _compiled_loop(self, dt: float, v: float, t: np.ndarray, r_mag: np.ndarray,
+                       rx_mag: np.ndarray, field_mid: np.ndarray, q_ext: np.ndarray,
+                       fail_t: np.ndarray, n: int) -> tuple[Any, ...]:
+        from ..errors import SolverError
+        from ..reduced.bank import BankState
+
+        s = self.mechanics.system
+        bank = self.bank
+        nq = s.n_dof
+        hit = self._compiled_block(dt)
+        fun, st, pi, rc, nb = (hit["compiled"], hit["state"], hit["inputs"], hit["record"],
+                               hit["block_steps"])
+        circ = np.repeat(np.arange(4), 2)
+        n_rows = -(-(n + 1) // nb) * nb
+        p_all = np.zeros((n_rows, pi["t"].stop))
+        p_all[:n + 1, pi["r"]] = r_mag[:, circ]
+        p_all[:n + 1, pi["r_x"]] = rx_mag[:, circ]
+        p_all[:n + 1, pi["Q_t"]] = field_mid @ s.G.T + q_ext
+        p_all[:n + 1, pi["t"].start] = t
+        p_all[n + 1:, pi["t"].start] = t[-1] + dt * np.arange(1, n_rows - n)
+        state0 = bank.initial_state(gaps=self.s0, currents=np.repeat(self.trim_current_A, 2))
+        out0 = bank.outputs(state0)
+        sv = [np.zeros(st["force"].stop), np.zeros(st["force"].stop)]
+        sv[0][st["x"]] = np.concatenate([self.trim_q, np.zeros(nq)])
+        sv[0][st["I_L"]] = state0.inductor_currents_A
+        flux = [self._flux(n_.split("_")[0], float(self.trim_current_A[j]))
+                for j, n_ in enumerate(self.member_names)]
+        sv[0][st["psi_hat"]] = np.concatenate(flux)
+        sv[0][st["current"]] = out0.currents_A
+        sv[0][st["force"]] = out0.circuit_force_N
+        consts = np.concatenate([[v], fail_t])
+        rec = np.empty((n_rows, rc["n_bad"].stop))
+        bufs, evals = [], []
+        for j in (0, 1):
+            buf, ev = fun.buffer()
+            buf.set_arg(0, memoryview(sv[j]))            # type: ignore[arg-type]
+            buf.set_res(0, memoryview(sv[1 - j]))        # type: ignore[arg-type]
+            buf.set_arg(2, memoryview(consts))           # type: ignore[arg-type]
+            bufs.append(buf)
+            evals.append(ev)
+        g_sl, r_sl, b_sl = rc["gap"], rc["gap_rate"], rc["n_bad"].start
+        lo_lim, hi_lim = self.touchdown_gap_m, self.landing_gap_m
+        touchdown = None
+        last = n
+        t0 = time.perf_counter()
+        for blk in range(n_rows // nb):
+            k0 = blk * nb
+            j = blk & 1
+            bufs[j].set_arg(1, memoryview(p_all[k0:k0 + nb]))    # type: ignore[arg-type]
+            rows = rec[k0:k0 + nb]
+            bufs[j].set_res(1, memoryview(rows))                  # type: ignore[arg-type]
+            evals[j]()
+            gaps, rates = rows[:, g_sl], rows[:, r_sl]
+            ends = gaps + rates * dt
+            events = ((gaps.min(axis=1) <= lo_lim) | (gaps.max(axis=1) >= hi_lim)
+                      | (ends.min(axis=1) <= lo_lim) | (ends.max(axis=1) >= hi_lim)
+                      | (rows[:, b_sl] != 0))
+            if not events[:max(0, min(nb, n + 1 - k0))].any():
+                continue
+            for k in range(k0, min(k0 + nb, n + 1)):
+                g = rec[k, g_sl][::2]                              # one gap per magnet
+                e = g + rec[k, r_sl][::2] * dt if k < n else g
+                for probe, when in ((g, t[k]), (e, t[k] + dt)):
+                    lo, hi = probe.min(), probe.max()
+                    if lo <= lo_lim or hi >= hi_lim:
+                        closed = bool(lo <= lo_lim)
+                        jj = int(np.argmin(probe)) if closed else int(np.argmax(probe))
+                        touchdown = (self.member_names[jj], float(when), float(probe[jj]),
+                                     "closed" if closed else "open")
+                        break
+                if touchdown is not None:
+                    last = k
+                    break
+                if k < n and rec[k, b_sl] != 0:
+                    # the bank names member, circuit, gap, current and range (same inputs)
+                    bank.step(BankState(float(t[k]), rec[k, rc["I_L"]].copy(),
+                                        rec[k, g_sl].copy()), dt, rec[k, rc["voltage"]],
+                              rec[k, g_sl], rec[k, r_sl])
+                    raise SolverError(f"cross-section run at t = {t[k]:.4f} s: the compiled "
+                                      "step flagged the magnets, the bank's step did not; "
+                                      "rerun with loop='python'")
+            if touchdown is not None:
+                break
+        wall = time.perf_counter() - t0
+        m = last + 1
+        rx = rec[:m, rc["x"]]
+        frc = rec[:m, rc["force"]]
+        member = frc.reshape(m, 4, 2).sum(axis=2)
+        acc = s.accelerations(rx[:, :nq], rx[:, nq:], member, field_mid[:m], q_ext[:m])
+        u = rec[:m, rc["voltage"]].copy()
+        u[-1] = 0.0                  # the last record's step is not taken (as the NumPy loop)
+        return (rec[:m, g_sl][:, ::2], frc, rec[:m, rc["current"]], u, rx, acc, touchdown,
+                last, wall)
+
+    def _result(self, v: float, dt: float, t: np.ndarray, rec_gap: np.ndarray,
+                rec_force: np.ndarray, rec_cur: np.ndarray, rec_u: np.ndarray,
+                rec_x: np.ndarray, rec_acc: np.ndarray, touchdown: Any, last: int,
+                wall: float, field_mid: np.ndarray, wind: np.ndarray) -> CrossSectionRun:
+        import xarray as xr
+
+        from .comfort import comfort_indices, lateral_comfort_indices
+
+        s = self.mechanics.system
+        names = self.bank.circuit_names
+        gap_circ = np.repeat(np.arange(4), 2)
         m = last + 1
         tt = t[:m]
         lev_c = [f"{sd}/{c}" for sd in SIDES for c in self.magnets["levitation"].circuit_names]
