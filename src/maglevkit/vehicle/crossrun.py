@@ -463,6 +463,7 @@ class CrossSectionModel:
                                     voltage_limit_V=voltage_limit_V)
         self.designs = {"levitation": lev, "guidance": gui}
         self.voltage_limit_V = float(voltage_limit_V)
+        self._compiled_cache: dict[float, dict[str, Any]] = {}
 
     # ------------------------------------------------------------------ statics helpers
     def _spline(self, kind: str, var: str, circuit: str) -> Any:
@@ -846,9 +847,7 @@ class CrossSectionModel:
         from ..errors import SolverError
         from ..models.compiled import DEFAULT_FLAGS, compile_function, compile_library
 
-        cache = getattr(self, "_compiled_cache", None)
-        if cache is None:
-            cache = self._compiled_cache = {}
+        cache: dict[float, dict[str, Any]] = self._compiled_cache
         hit = cache.get(dt)
         if hit is None:
             hit = self.compiled_step(dt)
