@@ -191,7 +191,9 @@ def test_cli_runs_the_cross_section_and_names_bad_options(tmp_path: object) -> N
     out = Path(str(tmp_path)) / "x.nc"
     res = runner.invoke(app, ["vehicle", "run", "--vehicle", "tr09-cross-section",
                               "--speed-kmh", "400", "--duration", "0.3", "--curve",
-                              "4000:12:50", "--crosswind", "5000:0.1:0:0.05", "-o", str(out)])
+                              "4000:12:50", "--crosswind", "5000:0.1:0:0.05",
+                              "--irregularity", "random:0.2e-3:3",
+                              "--lateral", "random:0.2e-3:1+girders:0.5e-3", "-o", str(out)])
     assert res.exit_code == 0, res.output
     assert "minimum guidance gap" in res.output
     ds = xr.load_dataset(out)
@@ -203,7 +205,10 @@ def test_cli_runs_the_cross_section_and_names_bad_options(tmp_path: object) -> N
                        (["--vehicle", "tr09-cross-section", "--curve", "4000:40:300"],
                         "--curve"),
                        (["--vehicle", "tr09-cross-section", "--crosswind", "1:x"],
-                        "--crosswind")):
+                        "--crosswind"),
+                       (["--vehicle", "tr09-cross-section", "--lateral", "girders:-1"],
+                        "--lateral"),
+                       (["--vehicle", "tr09-cross-section", "--rigid"], "--rigid")):
         res = runner.invoke(app, ["vehicle", "run", *args])
         assert res.exit_code == 2
         assert word in res.output and "Traceback" not in res.output

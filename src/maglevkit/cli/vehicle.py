@@ -77,6 +77,11 @@ def run(
         metavar="PEAK_N[:RISE_S[:HOLD_S[:START_S]]][:SHAPE]",
         help="Cross-section only: lateral gust force on the car body, SHAPE 1-cosine "
              "(default) or step.")] = None,
+    lateral: Annotated[str | None, typer.Option(
+        metavar="SPEC",
+        help="Cross-section only: guidance-rail irregularity random:RMS[:SEED] (alignment "
+             "spectrum), girders:H[:SEED] (rail offsets at girder joints), joined by '+'; "
+             "--irregularity is then the stator's (vertical).")] = None,
 ) -> None:
     """Run the train at constant speed; report minimum gaps, peak currents, comfort and the
     real-time factor (results on stdout, diagnostics on stderr).  Ctrl-C stops the run:
@@ -89,9 +94,13 @@ def run(
       maglevkit vehicle run tr09 --speed-kmh 400 --duration 1.5 -o run.nc
       maglevkit vehicle run --vehicle tr09-cross-section --speed-kmh 400 --curve 4000:12:300
     """
-    if _cross_section_requested(vehicle, vehicle_option, curve, crosswind):
+    if _cross_section_requested(vehicle, vehicle_option, curve, crosswind, lateral):
+        if guideway is not None or rigid:
+            raise fail("--guideway/--rigid: the cross-section model runs on a rigid "
+                       "guideway; leave them out")
         _run_cross_section(vehicle_option or vehicle, speed_kmh, duration, dt, failure,
-                           magnets, maps_cache, output, plot, force, curve, crosswind)
+                           magnets, maps_cache, output, plot, force, curve, crosswind,
+                           irregularity, lateral)
         return
     if vehicle_option is not None:
         vehicle = vehicle_option
@@ -180,7 +189,7 @@ def _run(vehicle: str, speed_kmh: float | None, speed: float | None, duration: f
 
 # ---------------------------------------------------------------- cross-section (issue 24)
 def _cross_section_requested(vehicle: str, vehicle_option: str | None, curve: str | None,
-                             crosswind: str | None) -> bool:
+                             crosswind: str | None, lateral: str | None = None) -> bool:
     """True when the vehicle named is a cross-section file; --curve/--crosswind need one."""
     from ..vehicle.crosssection import bundled_cross_sections
 
@@ -196,7 +205,8 @@ def _cross_section_requested(vehicle: str, vehicle_option: str | None, curve: st
         except (OSError, ValueError, UnicodeDecodeError):
             is_xsec = False
     if not is_xsec:
-        for opt, val in (("--curve", curve), ("--crosswind", crosswind)):
+        for opt, val in (("--curve", curve), ("--crosswind", crosswind),
+                         ("--lateral", lateral)):
             if val is not None:
                 raise fail(f"{opt} {val!r}: needs a cross-section vehicle (--vehicle "
                            f"tr09-cross-section); {name!r} is a heave-pitch train")
@@ -206,10 +216,17 @@ def _cross_section_requested(vehicle: str, vehicle_option: str | None, curve: st
 def _run_cross_section(name: str, speed_kmh: float | None, duration: float, dt: float,
                        failure: list[str] | None, magnets: str, maps_cache: Path | None,
                        output: Path | None, plot: Path | None, force: bool,
-                       curve: str | None, crosswind: str | None) -> None:
-    from ..vehicle.crossrun import CrossSectionModel, parse_crosswind, parse_curve
+                       curve: str | None, crosswind: str | None, irregularity: str = "none",
+                       lateral: str | None = None) -> None:
+    from ..vehicle.crossrun import (
+        CrossSectionModel,
+        parse_crosswind,
+        parse_curve,
+        parse_lateral,
+    )
     from ..vehicle.crosssection import load_cross_section
-    from ..vehicle.simulation import parse_failure
+    from ..vehicle.data import load_guideway
+    from ..vehicle.simulation import parse_failure, parse_irregularity
 
     output = output_file(output, "-o", formats=("nc",), force=force)
     if plot is not None:
@@ -229,10 +246,14 @@ def _run_cross_section(name: str, speed_kmh: float | None, duration: float, dt: 
         fails = [parse_failure(f) for f in (failure or [])]
         crv = parse_curve(curve) if curve is not None else None
         gust = parse_crosswind(crosswind) if crosswind is not None else None
+        girder = load_guideway().span.length_m
+        vert = parse_irregularity(irregularity, span_length_m=girder)
+        lat = parse_lateral(lateral, girder_length_m=girder) if lateral is not None else None
         info(f"setting up {data.name} (maps, controllers) ...")
         model = CrossSectionModel(data, magnets=magnets, maps_cache=maps_cache)
         res = model.run(speed_m_per_s=speed_kmh / 3.6, duration_s=duration, dt_s=dt,
-                        curve=crv, crosswind=gust, failures=fails)
+                        curve=crv, crosswind=gust, failures=fails, vertical=vert,
+                        lateral=lat)
     except typer.BadParameter as exc:
         raise fail(str(exc)) from None
     except MaglevkitError as exc:

@@ -51,7 +51,7 @@ from .crosssection import CrossSectionData, CrossSectionMechanics, track_field_p
 from .simulation import Failure
 
 __all__ = ["CrossSectionModel", "CrossSectionRun", "TransitionCurve", "Crosswind",
-           "LATERAL_ALIGNMENT_PSD", "parse_curve", "parse_crosswind"]
+           "LATERAL_ALIGNMENT_PSD", "parse_curve", "parse_crosswind", "parse_lateral"]
 
 #: One-sided PSD of the lateral alignment (German high-speed track, "low irregularity":
 #: ``A_a = 2.119e-7 m rad``, the corner frequencies of the vertical spectrum; Zhai,
@@ -279,6 +279,66 @@ def parse_crosswind(text: str) -> Crosswind:
         return Crosswind(**dict(zip(names, vals, strict=False)), shape=shape)
     except InputError as exc:
         raise InputError(f"--crosswind = {text!r}: {exc}") from None
+
+
+def parse_lateral(text: str, *, girder_length_m: float = 24.768) -> Any:
+    """A lateral guidance-rail irregularity from a short spec (parts joined by ``+``):
+
+    * ``random:RMS[:SEED]`` - random alignment of the German track spectrum's shape
+      (:data:`LATERAL_ALIGNMENT_PSD`) over wavelengths 1-100 m, scaled to ``RMS`` [m];
+    * ``girders:H[:SEED]`` - each girder's rails offset by a seeded uniform value in
+      ``[-H/2, H/2]`` [m] (steps at the girder joints, ``girder_length_m`` apart);
+    * ``none``.
+
+    Parameters
+    ----------
+    text : str
+        E.g. ``"random:0.3e-3:1+girders:0.5e-3"``.
+    girder_length_m : float, default 24.768
+        Girder (span) length [m] (keyword only).
+
+    Returns
+    -------
+    Profile or None
+
+    Raises
+    ------
+    InputError
+        Unknown parts or bad numbers (naming ``--lateral`` and the allowed forms).
+    """
+    from .irregularities import GermanTrackPSD, JointSteps, RandomProfile
+
+    prof: Any = None
+    parts = [p.strip() for p in str(text).split("+") if p.strip()]
+    if not parts:
+        raise InputError("--lateral: empty spec; use e.g. random:0.3e-3+girders:0.5e-3 or none")
+    for p in parts:
+        if p == "none":
+            continue
+        kind, _, rest = p.partition(":")
+        try:
+            nums = [float(x) for x in rest.split(":")] if rest else []
+        except ValueError:
+            nums = []
+        ok = (len(nums) in (1, 2) and all(math.isfinite(x) for x in nums) and nums[0] > 0
+              and (len(nums) == 1 or (nums[1] >= 0 and nums[1] == int(nums[1]))))
+        if not ok or kind not in ("random", "girders"):
+            raise InputError(f"--lateral part {p!r}: use random:RMS[:SEED], girders:H[:SEED] "
+                             "(metres, RMS and H > 0, SEED a whole number) or none, joined "
+                             "by '+'")
+        seed = int(nums[1]) if len(nums) == 2 else 0
+        if kind == "random":
+            lo, hi = 2 * np.pi / 100.0, 2 * np.pi / 1.0
+            base = GermanTrackPSD(**LATERAL_ALIGNMENT_PSD)
+            psd = GermanTrackPSD(A_v_m_rad=base.A_v_m_rad * nums[0] ** 2
+                                 / base.variance_m2(lo, hi),
+                                 omega_c_rad_per_m=base.omega_c_rad_per_m,
+                                 omega_r_rad_per_m=base.omega_r_rad_per_m)
+            new: Any = RandomProfile(psd, lo, hi, seed=seed)
+        else:
+            new = JointSteps(nums[0], pitch_m=girder_length_m, pattern="random", seed=seed)
+        prof = new if prof is None else prof + new
+    return prof
 
 
 @dataclass(frozen=True)
