@@ -262,3 +262,20 @@ def test_compiled_step_equals_the_numpy_loop(model: CrossSectionModel) -> None:
         assert np.abs(x - y).max() <= 1e-10 * max(np.abs(x).max(), 1e-30), v
     with pytest.raises(InputError, match="loop"):
         model.run(speed_m_per_s=1.0, duration_s=0.01, loop="fast")
+
+
+@pytest.mark.slow
+def test_detailed_magnets_in_the_bank_hold_the_trim() -> None:
+    """The flux-based models in the same bank (NumPy loop): the reduced model's trim
+    currents give the same forces to the maps' interpolation (1e-3), and 10 ms of a
+    straight run stay at the trim."""
+    m = CrossSectionModel(magnets="detailed")
+    run = m.run(speed_m_per_s=400 / 3.6, duration_s=0.01)
+    ds = run.dataset
+    assert run.touchdown is None
+    lev = ds.levitation_force.values[-1].sum()
+    assert lev == pytest.approx(m.data.total_mass_kg * G0, rel=1e-3)
+    np.testing.assert_allclose(ds.guidance_force.values[-1], m.guidance_bias_force_N / 2,
+                               rtol=1e-3)
+    with pytest.raises(InputError, match="reduced"):
+        m.run(speed_m_per_s=1.0, duration_s=0.01, loop="compiled")
