@@ -98,9 +98,12 @@ def run(
         if guideway is not None or rigid:
             raise fail("--guideway/--rigid: the cross-section model runs on a rigid "
                        "guideway; leave them out")
-        _run_cross_section(vehicle_option or vehicle, speed_kmh, duration, dt, failure,
-                           magnets, maps_cache, output, plot, force, curve, crosswind,
-                           irregularity, lateral)
+        try:
+            _run_cross_section(vehicle_option or vehicle, speed_kmh, duration, dt, failure,
+                               magnets, maps_cache, output, plot, force, curve, crosswind,
+                               irregularity, lateral)
+        except KeyboardInterrupt:
+            raise interrupted() from None
         return
     if vehicle_option is not None:
         vehicle = vehicle_option
