@@ -20,11 +20,14 @@ shared :class:`~maglevkit.control.interface.Controller` interface, every sample
   each other).
 
 Plant per step (``t_k -> t_k + dt``), in this order: gaps and rates from the mechanics and
-the guideway (irregularities, rail offsets) at ``t_k``; controller voltages, failed
-circuits at 0 V, the 2-quadrant chopper ``U >= -R_ec I_L`` (the coil current cannot
-reverse); the bank's step with the gaps moving linearly; the mechanics' exact zero-order
+the guideway (irregularities, rail offsets) at ``t_k``; controller voltages, the
+2-quadrant chopper ``U >= -R_ec I_L`` (the coil current cannot reverse), failed circuits
+at 0 V; the bank's step with the gaps moving linearly; the mechanics' exact zero-order
 hold step with the mean of the start and end forces, the track's acceleration field and
-the crosswind at mid-step.
+the crosswind at mid-step.  Two implementations: the NumPy loop with the controller
+objects (the reference) and the same step compiled (:meth:`CrossSectionModel.
+compiled_step`, the default for reduced magnets; equal to the reference to ~1e-13 while
+the chopper does not clamp).
 
 Gaps (``z`` down, ``y`` right; ``Delta s = gap_matrix q`` of the force points)::
 
