@@ -5,9 +5,11 @@ circuits) are the same builder; which pole feeds which circuit is a parameter.
 Longitudinal cut (x along the track, poles hang under the stator, see docs/magnets.md)::
 
         S1 --stator-- S2 --stator-- S3 ...      stator yoke (laminated long-stator pack)
-        |  \\          |  \\
-       gap  window   gap  window                face teeth / the window's teeth (W -> S)
-        |    W1       |    W2
+       ||  \\         ||  \\
+   teeth|slots window ...                       face teeth || their slots' air (T -> S),
+       T1    W1       T2   W2                   the window's teeth and slots (W -> S)
+        |                                       tooth tips
+       gap                                      air gap of the face (H -> T)
         |   /  \\      |
         H1 fringe \\   H2 ...                    pole heads (pole face level)
         |         flank_j                       flank strips along the coil (C_j -> W)
@@ -22,13 +24,17 @@ gap, the window leakage ``leak_pp_k`` at the coil's energy-equivalent height ``h
 ``flux_paths = "split"`` (the paths a 2-D FEM led to, docs/validation_fem.md) is drawn
 above.  Per pole k: the core split along its coil into ``coil_segments`` (K, default 3)
 strips as the U-magnet's legs, ``core_k_j`` (K_k -> C_k_K ... C_k_1 -> H_k, each segment with the
-turns of the coil it holds, saturable, eddy currents); ``gap_k`` (H_k -> S_k: air gap of the
+turns of the coil it holds, saturable, eddy currents; the core ends at the pole back's
+underside, as ``back_k`` already crosses the junction); ``gap_k`` (H_k -> T_k: air gap of the
 face with Carter's coefficient of the stator slots and the recessed linear-generator
-grooves as slots of the face, in series with the saturable stator teeth under the face);
+grooves as slots of the face) to the tooth tips, then ``teeth_k`` (T_k -> S_k: the saturable
+stator teeth under the face) and in parallel ``slots_k`` (T_k -> S_k: the air of their
+slots, the apparent tooth flux density of machine design);
 ``fringe_k`` (H_k -> W_k: the flanks below the coil facing the neighbours) and
 ``flank_k_j`` (C_k_j -> W_k: Roters quarter circles from each coil strip of the flank to the
 face level and across the gap), both landing on the window's teeth ``window_k`` (W_k ->
-S_k); ``leak_pb_k`` (H_k -> K_k: leakage around the coil back into the pole back).  Between
+S_k, with their slots' air ``window_slots_k``); ``leak_pb_k`` (H_k -> K_k: leakage around
+the coil back into the pole back).  Between
 neighbours: ``back_k`` (K_k -> K_k+1), ``stator_k`` (S_k -> S_k+1), ``leak_pp_k`` (H_k ->
 H_k+1) and ``leak_pp_k_j`` (C_k_j -> C_k+1_j).  The paper's Fig. 3 flux paths map to:
 nominal flux -> the face term ``A / s'``, LIG flux -> the grooves' Carter slot loss,
