@@ -31,7 +31,11 @@ Outputs per (s, I, offset): total force by the Maxwell stress averaged over the 
 air band of the gap (all horizontal lines through it), flux linkage per circuit, the
 differential inductance of a circuit with both currents changing together (exact, from
 the Newton tangent: ``dA/dI = K_t^-1 dJ/dI``), pole forces (the band stress over each
-pole pitch), and the fluxes of the iron regions (from differences of A).
+pole pitch), the fluxes of the iron regions (from differences of A) and their derivatives
+in the current (``dflux``, from the tangent's dA/dI), and the magnetic potential drops
+along lines through junction, core, gap, tooth, pole back and yoke with their current
+derivatives (``mmf``; ``--diagnose S_MM I_A`` records one point at the grid's stator
+positions into ``benchmarks/results/fem_tr09_diagnosis.json``).
 
 ``python benchmarks/fem_tr09.py`` runs the convergence study and the grid and writes
 ``benchmarks/results/fem_tr09_*.json``; ``--compare`` prints the network against them.
