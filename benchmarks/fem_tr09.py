@@ -572,7 +572,7 @@ def densities(magnet: mk.Magnet, data: dict, s: float, current: float) -> list[d
             "core": (fem("core", g.lp * d),
                      core_flux(p, g.hf + 0.5 * g.hc - 1e-9) / (g.lp * d)),
             "shoe": (fem("shoe", g.lp * d), core_flux(p, 0.5 * g.hf) / (g.lp * d)),
-            "teeth": (fem("tooth_max_B", None), abs(net[f"gap_{p}"]) / teeth),
+            "teeth": (fem("tooth_max_B", None), abs(net.get(f"teeth_{p}", net[f"gap_{p}"])) / teeth),
             "tips": (fem("tip_max_B", None), float("nan")),
             "back": (fem("back", g.hb * d),
                      abs(net.get(f"back_{p}_{q}", float("nan"))) / (g.hb * d)),
