@@ -28,7 +28,7 @@ import casadi as ca
 import numpy as np
 
 from ..errors import InputError, ParameterError
-from ..models.compiled import compile_function
+from ..models.compiled import BoundCall, compile_function
 from ..plant import STANDARD_GRAVITY
 from ..reduced.bank import MagnetBank
 from ..validation import real_number
@@ -401,19 +401,13 @@ class _TableCall:
     bound once by pointer (a per-call conversion of the 40 000 coefficients costs 1-20 ms)."""
 
     def __init__(self, f: ca.Function, table: np.ndarray) -> None:
-        buf: Any
-        buf, self._eval = f.buffer()
-        self._buf = buf
         self.function = f
         n = f.n_in()
         self._table = np.ascontiguousarray(table, dtype=float)
-        self._args = [np.zeros(f.nnz_in(i)) for i in range(n - 1)]
-        self._res = [np.zeros(f.nnz_out(i)) for i in range(f.n_out())]
-        for i, a in enumerate(self._args):
-            buf.set_arg(i, memoryview(a))  # type: ignore[arg-type]
-        buf.set_arg(n - 1, memoryview(self._table))  # type: ignore[arg-type]
-        for i, r in enumerate(self._res):
-            buf.set_res(i, memoryview(r))  # type: ignore[arg-type]
+        self._bound = BoundCall(f, args={n - 1: self._table})
+        self._eval = self._bound.eval
+        self._args = self._bound.args[:n - 1]
+        self._res = self._bound.res
         self.sparsity_out = [f.sparsity_out(i) for i in range(f.n_out())]
 
     def __call__(self, *args: Any) -> list[np.ndarray]:

@@ -42,7 +42,14 @@ import casadi as ca
 import numpy as np
 
 from ..errors import InputError, OutOfRangeError, SolverError
-from ..models.compiled import COMPILE_MODES, build_source, cache_directory, compile_function, find_compiler
+from ..models.compiled import (
+    COMPILE_MODES,
+    BoundCall,
+    build_source,
+    cache_directory,
+    compile_function,
+    find_compiler,
+)
 from ..models.flux import FluxModel, FluxState
 from ..models.inputs import check_initial_choice, check_step, reject_bools, simulation_inputs
 from ..models.statics import circuit_pole_groups
@@ -1612,17 +1619,14 @@ class _RunCall:
         self.n = n
         ch = RUN_CHUNK
         if loop is not None:
-            buf: Any
-            buf, self.eval = loop.buffer()
-            self.buf = buf
-            self.args = [np.zeros(n), np.zeros((ch, n)), np.zeros((ch, n)), np.zeros((ch, n)),
-                         np.zeros(ch), np.zeros(1)]
-            self.res = [np.zeros((ch, n)), np.zeros((ch, n)), np.zeros((ch, n)), np.zeros(1),
-                        np.zeros(n), np.zeros(n), np.zeros(n)]
-            for i, a in enumerate(self.args):
-                buf.set_arg(i, memoryview(a.reshape(-1)))  # type: ignore[arg-type]
-            for i, r in enumerate(self.res):
-                buf.set_res(i, memoryview(r.reshape(-1)))  # type: ignore[arg-type]
+            # the blocks (steps, circuits) are bound row-major: the loop's layout
+            blocks = [np.zeros((ch, n)), np.zeros((ch, n)), np.zeros((ch, n))]
+            bound = BoundCall(loop, args={1: blocks[0], 2: blocks[1], 3: blocks[2]},
+                              res={0: np.zeros((ch, n)), 1: np.zeros((ch, n)),
+                                   2: np.zeros((ch, n))})
+            self.bound = bound
+            self.eval = bound.eval
+            self.args, self.res = bound.args, bound.res
             self.acc = None
         else:
             self.acc = step.mapaccum("maglevkit_bank_run", ch)
@@ -1667,16 +1671,10 @@ class _StepCall:
     """
 
     def __init__(self, f: ca.Function) -> None:
-        buf: Any
         self.f = f
-        buf, self.eval = f.buffer()
-        self.buf = buf
-        self.args = [np.zeros(f.nnz_in(i)) for i in range(f.n_in())]
-        self.res = [np.zeros(f.nnz_out(i)) for i in range(f.n_out())]
-        for i, a in enumerate(self.args):
-            buf.set_arg(i, memoryview(a))  # type: ignore[arg-type]
-        for i, r in enumerate(self.res):
-            buf.set_res(i, memoryview(r))  # type: ignore[arg-type]
+        self.bound = BoundCall(f)
+        self.eval = self.bound.eval
+        self.args, self.res = self.bound.args, self.bound.res
 
     def __call__(self, i: np.ndarray, s: np.ndarray, u: np.ndarray, sd: np.ndarray, h: float
                  ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, float, np.ndarray]:

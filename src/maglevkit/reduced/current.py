@@ -47,7 +47,7 @@ import casadi as ca
 import numpy as np
 
 from ..errors import InputError, OutOfRangeError, SolverError
-from ..models.compiled import COMPILE_MODES
+from ..models.compiled import COMPILE_MODES, BoundCall
 from ..models.inputs import check_initial_choice, check_step, simulation_inputs
 from ..validation import flag, real_array
 
@@ -726,7 +726,7 @@ class CurrentModel:
         key = max(1, math.ceil(h / self.max_step_s * (1 - 1e-12))) if self.method == "rk4" else 0
         call = self._step_calls.get(key)
         if call is None:
-            call = _BufferedCall(self._fused_step(h)) if key else _PlainCall(self._fused_step(h))
+            call = BoundCall(self._fused_step(h)) if key else _PlainCall(self._fused_step(h))
             self._step_calls[key] = call
         return call
 
@@ -1247,20 +1247,16 @@ class _TableStep:
         outs = [res["I_L_next"], res["I"], force, ca.mtimes(ca.DM(share), force),
                 res["member_F"], g1, res["I_L_next"], flag]
         f = ca.Function("current_model_table_step", [x, g, u, gd, h], outs)
-        buf: Any
-        buf, self.eval = f.buffer()
-        self.buf = buf
-        self.args = [np.zeros(f.nnz_in(i)) for i in range(f.n_in())]
         sizes = [f.nnz_out(i) for i in range(f.n_out() - 1)]
         self.block = np.zeros(sum(sizes))
         ends = np.cumsum([0, *sizes])
         self.slices = [slice(int(a), int(b)) for a, b in zip(ends[:-1], ends[1:], strict=True)]
         self.flag = np.zeros(1)
-        for i, a in enumerate(self.args):
-            buf.set_arg(i, memoryview(a))  # type: ignore[arg-type]
-        for i, sl in enumerate(self.slices):
-            buf.set_res(i, memoryview(self.block[sl]))  # type: ignore[arg-type]
-        buf.set_res(len(self.slices), memoryview(self.flag))  # type: ignore[arg-type]
+        bind = {i: self.block[sl] for i, sl in enumerate(self.slices)}
+        bind[len(self.slices)] = self.flag
+        self.bound = BoundCall(f, res=bind)
+        self.args = self.bound.args
+        self.eval = self.bound.eval
 
     def __call__(self, i: np.ndarray, g: np.ndarray, u: np.ndarray, gd: np.ndarray,
                  h: float) -> list[np.ndarray] | None:
@@ -1297,31 +1293,6 @@ class _PlainCall:
 
     def __call__(self, *args: Any) -> list[np.ndarray]:
         return [np.asarray(r, dtype=float).ravel() for r in self.f(*args)]
-
-
-class _BufferedCall:
-    """Evaluate a CasADi function through bound NumPy buffers (no per-call conversion).
-
-    Used for the fixed-step RK4 step, which cannot fail inside CasADi; non-finite results
-    are checked by the caller.
-    """
-
-    def __init__(self, f: ca.Function) -> None:
-        buf: Any
-        buf, self.eval = f.buffer()
-        self.buf = buf
-        self.args = [np.zeros(f.nnz_in(i)) for i in range(f.n_in())]
-        self.res = [np.zeros(f.nnz_out(i)) for i in range(f.n_out())]
-        for i, a in enumerate(self.args):
-            buf.set_arg(i, memoryview(a))  # type: ignore[arg-type]
-        for i, r in enumerate(self.res):
-            buf.set_res(i, memoryview(r))  # type: ignore[arg-type]
-
-    def __call__(self, *args: Any) -> list[np.ndarray]:
-        for a, v in zip(self.args, args, strict=True):
-            a[:] = v
-        self.eval()
-        return [r.copy() for r in self.res]
 
 
 EXTRA_CELLS = 3

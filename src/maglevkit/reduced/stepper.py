@@ -24,6 +24,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from ..errors import InputError
+from ..models.compiled import BoundCall
 from ..models.inputs import check_step
 
 if TYPE_CHECKING:
@@ -133,13 +134,9 @@ class BankStepper:
         self._scratch = r = np.zeros_like(self._block)       # the same layout as the block
         self._res = [r[:nc], r[nc:2 * nc], r[2 * nc:3 * nc], r[3 * nc:3 * nc + nm],
                      np.zeros(1), np.zeros(nc), np.zeros(nc), r[3 * nc + nm:], np.zeros(nc)]
-        buf: Any
-        buf, self._eval = call.f.buffer()
-        self._buf = buf                     # keeps the bound buffer alive
-        for i, a in enumerate(args):
-            buf.set_arg(i, memoryview(a))  # type: ignore[arg-type]
-        for i, r in enumerate(self._res):
-            buf.set_res(i, memoryview(r))  # type: ignore[arg-type]
+        self._buf = BoundCall(call.f, args=dict(enumerate(args)),    # keeps the arrays alive
+                              res=dict(enumerate(self._res)))
+        self._eval = self._buf.eval
         self._n_bad = self._res[4]
 
     # ------------------------------------------------------------------ inputs
