@@ -24,7 +24,7 @@ import numpy as np
 import maglevkit as mk
 from maglevkit.reduced import bank as bank_mod
 from maglevkit.reduced.bank import MagnetBank
-from maglevkit.reduced.current import _extend_axis, _extend_values
+from maglevkit.reduced.core import extend_axis, extend_values
 from maglevkit.reduced.lanes import lane_target
 
 TITLE = "Magnet bank: cost per circuit-step at 1 ms (RK4), against an independent C kernel"
@@ -104,12 +104,12 @@ class _Baseline:
     """The independent C kernel for ``n`` copies of the given maps' circuits."""
 
     def __init__(self, maps: mk.CharacteristicMaps, n: int, lib: ctypes.CDLL) -> None:
-        gs, gi = _extend_axis(maps.gaps_m), _extend_axis(maps.currents_A)
+        gs, gi = extend_axis(maps.gaps_m), extend_axis(maps.currents_A)
         tabs, pars = [], []
         r_el = maps.dataset["resistance_ohm"].values
         r_ec = maps.dataset["eddy_resistance_fit_ohm"].values
         for j, c in enumerate(maps.circuits):
-            vals = np.stack([_extend_values(_extend_values(maps.variable(v, c), axis=0), axis=1)
+            vals = np.stack([extend_values(extend_values(maps.variable(v, c), axis=0), axis=1)
                              for v in ("inductance_H", "dL_ds_H_per_m", "force_N")])
             tabs.append(_baseline_table(gs, gi, vals).ravel())
             pars.append([gs[0], 1 / (gs[1] - gs[0]), gi[0], 1 / (gi[1] - gi[0]), r_el[j],
@@ -178,7 +178,7 @@ def _accuracy(magnet_name: str) -> list[str]:
     coarse = mk.build_maps(mag, gaps=fine_g[::2], currents=fine_i[::2], progress=False)
     from maglevkit.reduced.tables import cell_table
 
-    gs, gi = _extend_axis(coarse.gaps_m), _extend_axis(coarse.currents_A)
+    gs, gi = extend_axis(coarse.gaps_m), extend_axis(coarse.currents_A)
     mask = np.ones((fine_g.size, fine_i.size), dtype=bool)
     mask[::2, ::2] = False
     G, II = np.meshgrid(fine_g, fine_i, indexing="ij")
@@ -188,7 +188,7 @@ def _accuracy(magnet_name: str) -> list[str]:
         for v in ("inductance_H", "dL_ds_H_per_m", "force_N"):
             worst = 0.0
             for c in coarse.circuits:
-                vals = _extend_values(_extend_values(coarse.variable(v, c), axis=0), axis=1)
+                vals = extend_values(extend_values(coarse.variable(v, c), axis=0), axis=1)
                 tab = cell_table(gs, gi, vals[None], method=method)
                 est = tab.evaluate(G[mask], II[mask])[..., 0]
                 ref = fine.variable(v, c)[mask]

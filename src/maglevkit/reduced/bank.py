@@ -34,9 +34,10 @@ import subprocess
 import warnings
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
+from functools import partial
 from pathlib import Path
 from types import SimpleNamespace
-from typing import Any, TypeVar
+from typing import TYPE_CHECKING, Any, TypeVar
 
 import casadi as ca
 import numpy as np
@@ -54,17 +55,18 @@ from ..models.flux import FluxModel, FluxState
 from ..models.inputs import check_initial_choice, check_step, reject_bools, simulation_inputs
 from ..models.statics import circuit_pole_groups
 from ..validation import describe, flag
+from .core import EXTRA_CELLS, ReducedCore, extend_axis, extend_values, rk4_substep, substep_counts
 from .current import (
-    EXTRA_CELLS,
     CurrentModel,
-    _extend_axis,
-    _extend_values,
     eq8_coil_current,
     eq8_rhs,
 )
 from .lanes import LaneInput, external_source, lane_source, lane_target
 from .stepper import BankStepper
 from .tables import INTERPOLATION_METHODS, cell_table
+
+if TYPE_CHECKING:
+    from ..reduction.maps import CharacteristicMaps
 
 __all__ = ["KERNEL_PARAMETERS", "RUN_CHUNK", "BankOutputs", "BankRun", "BankSimulation",
            "BankState", "MagnetBank", "StepFlag"]
@@ -230,7 +232,8 @@ class _Member:
     circuits: tuple[str, ...]         # the member's own circuit names
     poles: tuple[str, ...]            # its pole (gap input) names
     pole_groups: dict[str, tuple[str, ...]]
-    maps: Any = None
+    maps: CharacteristicMaps | None = None
+    core: ReducedCore | None = None   # reduced members: the facts of their maps
     resistance_ohm: np.ndarray | None = None
     eddy_resistance_ohm: np.ndarray | None = None
     model: FluxModel | None = None
@@ -373,27 +376,17 @@ class MagnetBank:
                                  "cannot be a bank member (the bank advances eq. 8 with one "
                                  "state per circuit); use CurrentModel(maps) or the model on "
                                  "its own")
-            maps = model.maps
-            r_el, r_ec = model.resistance_ohm, model.eddy_resistance_ohm
+            core = model.core
         elif hasattr(model, "dataset") and hasattr(model, "variable"):
-            maps = model
-            var = "eddy_resistance_fit_ohm" if eddy_resistance == "fit" else "eddy_resistance_ohm"
-            if var not in maps.dataset:
-                raise InputError(f"member {name!r}: these maps have no {var!r}; rebuild them "
-                                 "with this version")
-            r_el = np.asarray(maps.dataset["resistance_ohm"].values, dtype=float)
-            r_ec = np.asarray(maps.dataset[var].values, dtype=float)
+            core = ReducedCore.from_maps(model, eddy_resistance=eddy_resistance,
+                                         what=f"member {name!r}: ")
         else:
             raise InputError(f"member {name!r}: a model must be CharacteristicMaps, a "
                              f"CurrentModel or a FluxModel, got {type(model).__name__}")
-        groups = maps.pole_groups
-        circuits = tuple(maps.circuits)
-        attr = maps.dataset.attrs.get("gap_names")
-        poles = (tuple(str(attr).split(",")) if attr
-                 else tuple(g for c in circuits for g in groups[c]))
-        return _Member(name, "reduced", circuits, poles, groups, maps=maps,
-                       resistance_ohm=np.asarray(r_el, dtype=float),
-                       eddy_resistance_ohm=np.asarray(r_ec, dtype=float))
+        return _Member(name, "reduced", core.circuit_names, core.gap_names,
+                       dict(core.pole_groups), maps=core.maps, core=core,
+                       resistance_ohm=core.resistance_ohm,
+                       eddy_resistance_ohm=core.eddy_resistance_ohm)
 
     def _layout(self) -> None:
         circuits: list[str] = []
@@ -468,7 +461,8 @@ class MagnetBank:
             if m.kind != "reduced":
                 continue
             maps = m.maps
-            gs, gi = _extend_axis(maps.gaps_m), _extend_axis(maps.currents_A)
+            assert maps is not None
+            gs, gi = extend_axis(maps.gaps_m), extend_axis(maps.currents_A)
             for j, c in enumerate(m.circuits):
                 if (id(maps), c) not in by_object:       # xarray access is ~1 ms a map
                     by_object[(id(maps), c)] = [maps.variable(v, c) for v in _MAP_VARIABLES]
@@ -481,7 +475,7 @@ class MagnetBank:
                         if not np.all(np.isfinite(arr)):
                             raise InputError(f"member {m.name!r}: map {v!r} of circuit {c!r} has "
                                              "non-finite values; rebuild the maps")
-                    ext = np.stack([_extend_values(_extend_values(a, axis=0), axis=1)
+                    ext = np.stack([extend_values(extend_values(a, axis=0), axis=1)
                                     for a in values])
                     tab = cell_table(gs, gi, ext, method=self.interpolation)
                     # layout per cell: map-major, then the (d+1)^2 coefficients t^p w^q
@@ -490,9 +484,9 @@ class MagnetBank:
                     size += tab.coefficients.size
                 offset, (s0, ds_, i0, di_), (cs_, ci_) = known[key]
                 assert m.resistance_ohm is not None and m.eddy_resistance_ohm is not None
+                assert m.core is not None
                 r_el = float(m.resistance_ohm[j])
-                r_ec = float(m.eddy_resistance_ohm[j])
-                a = 1.0 if math.isinf(r_ec) else 1.0 + r_el / r_ec
+                a = float(m.core.a[j])
                 self._par[:9, k] = (s0, 1.0 / ds_, cs_, i0, 1.0 / di_, ci_, offset, r_el, a)
                 self._bounds[:, k] = (maps.gaps_m[0], maps.gaps_m[-1], maps.currents_A[0],
                                       maps.currents_A[-1])
@@ -612,11 +606,8 @@ class MagnetBank:
             sk = s + sd * (k * hs)
             cell_mid = self._gap_cell(sk + sd * (hs / 2), p)
             cell_end = self._gap_cell(sk + sd * hs, p)
-            k1 = f(x, cell_start)
-            k2 = f(x + hs / 2 * k1, cell_mid)
-            k3 = f(x + hs / 2 * k2, cell_mid)
-            k4 = f(x + hs * k3, cell_end)
-            x = x + hs / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
+            x = rk4_substep(x, hs, partial(f, cell=cell_start), partial(f, cell=cell_mid),
+                            partial(f, cell=cell_end))
             lo = ca.fmin(lo, x)
             hi = ca.fmax(hi, x)
             cell_start = cell_end
@@ -907,7 +898,7 @@ class MagnetBank:
 
     def _substep_counts(self, dt: np.ndarray) -> np.ndarray:
         """RK4 sub-steps of steps of ``dt`` [s] (at most ``max_step_s`` each; the rule)."""
-        return np.maximum(1, np.ceil(dt / self.max_step_s * (1 - 1e-12))).astype(int)
+        return substep_counts(dt, self.max_step_s)
 
     def _substeps(self, dt: float) -> int:
         """RK4 sub-steps of one step of ``dt`` [s] (:meth:`_substep_counts`)."""
