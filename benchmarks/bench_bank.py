@@ -220,7 +220,7 @@ def _size_row(maps: mk.CharacteristicMaps, n: int, lib: ctypes.CDLL, cache: Path
     sd = np.zeros(nc)
 
     def bank_step() -> None:
-        state[0], _ = bank.step(state[0], DT, u, gap_rates=sd)
+        state[0], _ = bank.step(state[0], DT, u, gap_rates_m_per_s=sd)
 
     t_bank = _per_step(bank_step, steps)
     # the in-place stepper: voltages, gaps and gap rates written in every step (as a
@@ -229,7 +229,7 @@ def _size_row(maps: mk.CharacteristicMaps, n: int, lib: ctypes.CDLL, cache: Path
     g_in = np.full(nc, 0.010)
 
     def stepper_step() -> None:
-        stepper.advance(voltages=u, gaps=g_in, gap_rates=sd)
+        stepper.advance(voltages_V=u, gaps_m=g_in, gap_rates_m_per_s=sd)
 
     t_stepper = _per_step(stepper_step, steps)
     # the same step through CasADi's own code generation, and lanes 2 wide (what a
@@ -242,12 +242,12 @@ def _size_row(maps: mk.CharacteristicMaps, n: int, lib: ctypes.CDLL, cache: Path
         try:
             b2 = MagnetBank(members, compiled="always", cache_dir=cache, codegen=codegen)
             st2 = [b2.initial_state(gaps=0.010, currents=33.5)]
-            b2.step(st2[0], DT, u, gap_rates=sd)
+            b2.step(st2[0], DT, u, gap_rates_m_per_s=sd)
         finally:
             bank_mod.lane_target = orig
 
         def other_step(b2: MagnetBank = b2, st2: list = st2) -> None:
-            st2[0], _ = b2.step(st2[0], DT, u, gap_rates=sd)
+            st2[0], _ = b2.step(st2[0], DT, u, gap_rates_m_per_s=sd)
 
         other[key] = _per_step(other_step, steps)
     with warnings.catch_warnings():
@@ -256,7 +256,7 @@ def _size_row(maps: mk.CharacteristicMaps, n: int, lib: ctypes.CDLL, cache: Path
     ist = [interp.initial_state(gaps=0.010, currents=33.5)]
 
     def interp_step() -> None:
-        ist[0], _ = interp.step(ist[0], DT, u, gap_rates=sd)
+        ist[0], _ = interp.step(ist[0], DT, u, gap_rates_m_per_s=sd)
 
     t_interp = _per_step(interp_step, max(5, steps // 50))
     base = _Baseline(maps, nc, lib)
@@ -267,7 +267,7 @@ def _size_row(maps: mk.CharacteristicMaps, n: int, lib: ctypes.CDLL, cache: Path
     rate = rng.uniform(-0.05, 0.05, nc)
     volts = rng.uniform(0.0, 100.0, nc)
     xb = base.step(x, s, volts, rate, DT)
-    _, ob = bank.step(bank.initial_state(gaps=s, currents=x), DT, volts, gap_rates=rate)
+    _, ob = bank.step(bank.initial_state(gaps=s, currents=x), DT, volts, gap_rates_m_per_s=rate)
     agree = float(np.max(np.abs(xb - ob.inductor_currents_A) / np.abs(xb)))
     t_base = _per_step(lambda: base.step(x, s, u, sd, DT), steps)
     loop_txt = "-"
@@ -278,7 +278,7 @@ def _size_row(maps: mk.CharacteristicMaps, n: int, lib: ctypes.CDLL, cache: Path
 
         def loop() -> None:
             for k, m in enumerate(singles):
-                sst[k], _ = m.step(sst[k], DT, us, gaps=0.010, gap_rates=0.0)
+                sst[k], _ = m.step(sst[k], DT, us, gaps_m=0.010, gap_rates_m_per_s=0.0)
 
         t_loop = _per_step(loop, max(20, steps // 20))
         loop_txt = f"{t_loop / nc * 1e9:.0f}"
@@ -318,7 +318,7 @@ def run() -> str:
         "output objects per call) with the default compiled kernel "
         f"(`codegen='lanes'`: {lane_target()[0]} circuits per SIMD vector on this "
         "machine), *stepper* the same kernel through `MagnetBank.stepper` "
-        "(`BankStepper.advance(voltages=, gaps=, gap_rates=)`: inputs copied into bound "
+        "(`BankStepper.advance(voltages_V=, gaps_m=, gap_rates_m_per_s=)`: inputs copied into bound "
         "buffers, outputs left in alternating buffers), *2 lanes* the same generator "
         "forced to 2-wide vectors (what a processor "
         "without AVX2 gets), *CasADi C* CasADi's own code generation of the same function "

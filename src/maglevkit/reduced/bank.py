@@ -54,8 +54,8 @@ from ..models.compiled import (
 from ..models.flux import FluxModel, FluxState
 from ..models.inputs import check_initial_choice, check_step, reject_bools, simulation_inputs
 from ..models.statics import circuit_pole_groups
-from ..validation import describe, flag
-from .core import EXTRA_CELLS, ReducedCore, extend_axis, extend_values, rk4_substep, substep_counts
+from ..validation import describe, flag, renamed_keywords
+from .core import EXTRA_CELLS, ReducedCore, extend_values, rk4_substep, substep_counts
 from .current import (
     CurrentModel,
     eq8_coil_current,
@@ -290,7 +290,7 @@ class MagnetBank:
     ...                      currents=np.linspace(0, 60, 13), progress=False)
     >>> bank = mk.MagnetBank({f"m{k}": maps for k in range(4)}, compiled="never")
     >>> state = bank.initial_state(gaps=0.010, currents=20.0)
-    >>> state, out = bank.step(state, 1e-3, voltages=bank.resistance_ohm * 20.0)
+    >>> state, out = bank.step(state, 1e-3, voltages_V=bank.resistance_ohm * 20.0)
     >>> out.circuit_force_N.shape
     (4,)
     """
@@ -411,6 +411,9 @@ class MagnetBank:
         # share: circuit force -> pole forces (equal shares); avg: pole gaps -> circuit gap
         share = np.zeros((npl, nc))
         for m, cs, ps in zip(self._members, self._circuit_slices, self._pole_slices, strict=True):
+            if m.core is not None:              # a reduced member: its core's share matrix
+                share[ps, cs] = m.core.share
+                continue
             pi = {p: ps.start + j for j, p in enumerate(m.poles)}
             for j, c in enumerate(m.circuits):
                 for p in m.pole_groups[c]:
@@ -451,6 +454,7 @@ class MagnetBank:
         self._par = np.zeros((_N_PAR, n))
         self._bounds = np.zeros((4, n))            # s_lo, s_hi, i_lo, i_hi (map ranges)
         self._spline_bounds = np.zeros((4, n))     # the same extended by EXTRA_CELLS cells
+        tol = np.zeros((2, n))                     # rounding allowances: gap, current
         tables: list[np.ndarray] = []
         known: dict[tuple, tuple[int, tuple[float, float, float, float], tuple[int, int]]] = {}
         by_object: dict[tuple[int, str], list[np.ndarray]] = {}
@@ -461,14 +465,14 @@ class MagnetBank:
             if m.kind != "reduced":
                 continue
             maps = m.maps
-            assert maps is not None
-            gs, gi = extend_axis(maps.gaps_m), extend_axis(maps.currents_A)
+            assert maps is not None and m.core is not None
+            gs, gi = m.core.extended_gaps_m, m.core.extended_currents_A
             for j, c in enumerate(m.circuits):
                 if (id(maps), c) not in by_object:       # xarray access is ~1 ms a map
                     by_object[(id(maps), c)] = [maps.variable(v, c) for v in _MAP_VARIABLES]
                 values = by_object[(id(maps), c)]
                 # maps are stored once however many circuits use them
-                key = (maps.gaps_m.tobytes(), maps.currents_A.tobytes(),
+                key = (m.core.gaps_m.tobytes(), m.core.currents_A.tobytes(),
                        *(v.tobytes() for v in values))
                 if key not in known:
                     for v, arr in zip(_MAP_VARIABLES, values, strict=True):
@@ -483,22 +487,21 @@ class MagnetBank:
                     known[key] = (size, (tab.s0_m, tab.ds_m, tab.i0_A, tab.di_A), tab.n_cells)
                     size += tab.coefficients.size
                 offset, (s0, ds_, i0, di_), (cs_, ci_) = known[key]
-                assert m.resistance_ohm is not None and m.eddy_resistance_ohm is not None
-                assert m.core is not None
+                assert m.resistance_ohm is not None
+                core = m.core
                 r_el = float(m.resistance_ohm[j])
-                a = float(m.core.a[j])
+                a = float(core.a[j])
                 self._par[:9, k] = (s0, 1.0 / ds_, cs_, i0, 1.0 / di_, ci_, offset, r_el, a)
-                self._bounds[:, k] = (maps.gaps_m[0], maps.gaps_m[-1], maps.currents_A[0],
-                                      maps.currents_A[-1])
+                self._bounds[:, k] = (*core.gap_range_m, *core.current_range_A)
+                tol[:, k] = (core.gap_tolerance_m, core.current_tolerance_A)
                 self._spline_bounds[:, k] = (gs[0], gs[-1], gi[0], gi[-1])
                 k += 1
         self._table = np.concatenate(tables) if tables else np.zeros(1)
         self.n_distinct_maps = len(tables)
         """How many distinct circuit maps the bank stores (shared when equal)."""
         b = self._bounds
-        # rounding allowances of the range checks (as CurrentModel)
-        tol_s = 1e-12 * np.abs(b[1])
-        tol_i = 1e-9 * np.maximum(1.0, np.abs(b[3]))
+        # rounding allowances of the range checks (the cores', as CurrentModel's)
+        tol_s, tol_i = tol
         self._lo_s, self._hi_s = b[0] - tol_s, b[1] + tol_s
         self._lo_i, self._hi_i = b[2] - tol_i, b[3] + tol_i
         self._par[9:13] = (self._lo_s, self._hi_s, self._lo_i, self._hi_i)
@@ -1273,21 +1276,25 @@ class MagnetBank:
             raise InputError("state must be a BankState of this bank (from initial_state, step "
                              "or a stepper's state)")
 
-    def step(self, state: BankState, dt: float, voltages: Any, gaps: Any = None,
-             gap_rates: Any = 0.0, *, pole_forces: bool = False) -> tuple[BankState, BankOutputs]:
+    @renamed_keywords(dt="dt_s", voltages="voltages_V", gaps="gaps_m", gap_rates="gap_rates_m_per_s")
+    def step(self, state: BankState, dt_s: float, voltages_V: Any, gaps_m: Any = None,
+             gap_rates_m_per_s: Any = 0.0, *, pole_forces: bool = False) -> tuple[BankState, BankOutputs]:
         """Advance every member by ``dt`` [s] with constant voltages and linearly moving gaps.
+
+        The old keyword names ``dt``, ``voltages``, ``gaps``, ``gap_rates`` still work as
+        deprecated aliases (a ``DeprecationWarning`` names the new one).
 
         Parameters
         ----------
         state : BankState
             From :meth:`initial_state` or a previous step.
-        dt : float
+        dt_s : float
             Step length [s] (> 0).
-        voltages : float or array (n_circuits,)
+        voltages_V : float or array (n_circuits,)
             Circuit voltages [V], held over the step.
-        gaps : float, array (n_gaps,) or None
+        gaps_m : float, array (n_gaps,) or None
             Gap inputs [m] at the start of the step (None keeps the state's).
-        gap_rates : float or array (n_gaps,)
+        gap_rates_m_per_s : float or array (n_gaps,)
             Gap rates [m/s] over the step.
         pole_forces : bool
             Also return the per-pole force distribution.
@@ -1309,6 +1316,7 @@ class MagnetBank:
             Non-finite results (with time, state and reason) or a detailed member's
             integrator failing.
         """
+        dt, voltages, gaps, gap_rates = dt_s, voltages_V, gaps_m, gap_rates_m_per_s
         self._check_state(state)
         if not (type(dt) is float and 0.0 < dt < math.inf):
             dt = check_step(dt)
@@ -1363,7 +1371,7 @@ class MagnetBank:
             if m.kind != "detailed":
                 continue
             assert m.model is not None
-            new, out = m.model.step(states[k], dt, u[cs], gaps=pg[ps], gap_rates=pgd[ps])
+            new, out = m.model.step(states[k], dt, u[cs], pg[ps], pgd[ps])
             states[k] = new
             coil[cs] = out.currents_A
             force[cs] = _circuit_forces(out.pole_force_N, m)
@@ -1378,18 +1386,22 @@ class MagnetBank:
         new_state = BankState(t1, i_next, g1, tuple(states))
         return new_state, BankOutputs(t1, coil, i_next.copy(), force, member_force, pf)
 
-    def stepper(self, state: BankState, dt: float) -> BankStepper:
+    @renamed_keywords(dt="dt_s")
+    def stepper(self, state: BankState, dt_s: float) -> BankStepper:
         """A :class:`~maglevkit.reduced.stepper.BankStepper` that advances the bank from
         ``state`` in steps of ``dt`` [s] in place: the co-simulation loop of a vehicle
         model or controller without the per-step objects and copies of :meth:`step`
         (the same compiled function and checks, bit-identical results).
+
+        The old keyword name ``dt`` still works as a deprecated alias (a
+        ``DeprecationWarning`` names the new one).
 
         Parameters
         ----------
         state : BankState
             Start state of this bank (from :meth:`initial_state`, :meth:`step` or another
             stepper's ``state``).
-        dt : float
+        dt_s : float
             Step length [s], finite and > 0.
 
         Returns
@@ -1408,11 +1420,12 @@ class MagnetBank:
         >>> maps = mk.build_maps(mk.load_magnet("u-magnet"), gaps=np.linspace(0.006, 0.016, 6),
         ...                      currents=np.linspace(0, 60, 13), progress=False)
         >>> bank = mk.MagnetBank({"a": maps, "b": maps}, compiled="never")
-        >>> stepper = bank.stepper(bank.initial_state(gaps=0.010, currents=20.0), dt=1e-3)
-        >>> stepper.advance(voltages=45.0, gap_rates=0.0)
+        >>> stepper = bank.stepper(bank.initial_state(gaps=0.010, currents=20.0), dt_s=1e-3)
+        >>> stepper.advance(voltages_V=45.0, gap_rates_m_per_s=0.0)
         >>> bool(stepper.inductor_currents_A[0] > 20.0)
         True
         """
+        dt = dt_s
         return BankStepper(self, state, dt)
 
     def simulate(self, t: Any, *, gaps: Any, voltages: Any, gap_rates: Any = None,
@@ -1500,8 +1513,8 @@ class MagnetBank:
             state = stepper.state
         else:
             for k in range(nt - 1):
-                state, o = self.step(state, float(steps[k]), u[k], gaps=g[k],
-                                     gap_rates=rates[k], pole_forces=True)
+                state, o = self.step(state, float(steps[k]), u[k], g[k], rates[k],
+                                     pole_forces=True)
                 cur[k + 1], il[k + 1], fc[k + 1] = (o.currents_A, o.inductor_currents_A,
                                                     o.circuit_force_N)
                 assert o.pole_force_N is not None

@@ -41,7 +41,7 @@ from __future__ import annotations
 import math
 import warnings
 from dataclasses import dataclass
-from typing import Any, TypeVar
+from typing import TYPE_CHECKING, Any, TypeVar
 
 import casadi as ca
 import numpy as np
@@ -49,8 +49,11 @@ import numpy as np
 from ..errors import InputError, OutOfRangeError, SolverError
 from ..models.compiled import COMPILE_MODES, BoundCall
 from ..models.inputs import check_initial_choice, check_step, simulation_inputs
-from ..validation import flag, real_array
-from .core import EXTRA_CELLS, ReducedCore, eq8_a, extend_axis, extend_values, rk4_substep, substep_count
+from ..validation import flag, real_array, renamed_keywords
+from .core import EXTRA_CELLS, ReducedCore, eq8_a, extend_values, rk4_substep, substep_count
+
+if TYPE_CHECKING:
+    from ..reduction.maps import CharacteristicMaps
 
 __all__ = ["CurrentModel", "CurrentModelLinearization", "CurrentModelState", "CurrentOutputs",
            "ReducedSimulation", "eq8_coil_current", "eq8_eddy_branch_rhs", "eq8_rhs",
@@ -300,7 +303,7 @@ class CurrentModel:
         ``"always"`` a :class:`SolverError` if compiling fails.
     """
 
-    def __init__(self, maps: Any, *, extrapolate: bool = False, method: str = "rk4",
+    def __init__(self, maps: CharacteristicMaps, *, extrapolate: bool = False, method: str = "rk4",
                  rtol: float = 1e-8, atol: float = 1e-10, max_step_s: float = 1e-3,
                  eddy_resistance: str | None = None, jit: bool = False,
                  eddy_modes: int = 0, motion_eddy: bool = False, lookup: str = "tables",
@@ -419,8 +422,8 @@ class CurrentModel:
         # linearly (edge slope) by EXTRA_CELLS grid cells on every side before the spline
         # is fitted: the integrator stays well-defined just outside the range, while the
         # range checks on every returned sample still raise (or warn with extrapolate).
-        grid_s = extend_axis(maps.gaps_m)
-        grid_i = extend_axis(maps.currents_A)
+        grid_s = core.extended_gaps_m
+        grid_i = core.extended_currents_A
         self._spline_range = ((float(grid_s[0]), float(grid_s[-1])),
                               (float(grid_i[0]), float(grid_i[-1])))
 
@@ -898,26 +901,30 @@ class CurrentModel:
             self._lin_fun = f
         return f
 
-    def step(self, state: CurrentModelState, dt: float, voltages: Any, gaps: Any = None,
-             gap_rates: Any = 0.0) -> tuple[CurrentModelState, CurrentOutputs]:
+    @renamed_keywords(dt="dt_s", voltages="voltages_V", gaps="gaps_m", gap_rates="gap_rates_m_per_s")
+    def step(self, state: CurrentModelState, dt_s: float, voltages_V: Any, gaps_m: Any = None,
+             gap_rates_m_per_s: Any = 0.0) -> tuple[CurrentModelState, CurrentOutputs]:
         """Advance by ``dt`` [s] with constant voltages [V] and linearly moving gaps.
 
         Same contract as :meth:`maglevkit.models.flux.FluxModel.step`: ``gaps`` [m] at the
         start of the step (None keeps the state's), ``gap_rates`` [m/s] over the step.
 
+        The old keyword names ``dt``, ``voltages``, ``gaps``, ``gap_rates`` still work as
+        deprecated aliases (a ``DeprecationWarning`` names the new one).
+
         Parameters
         ----------
         state : CurrentModelState
             State at the start of the step.
-        dt : float
+        dt_s : float
             Step length [s], finite and > 0.
-        voltages : float, array_like (n_circuits,) or mapping
+        voltages_V : float, array_like (n_circuits,) or mapping
             Circuit voltages [V], held over the step: one for all, one per circuit in the
             order of ``circuit_names``, or circuit name -> value.
-        gaps : float, array_like (n_gaps,), mapping or None, default None
+        gaps_m : float, array_like (n_gaps,), mapping or None, default None
             Pole gaps [m] at the start of the step, each > 0 (same forms per gap); None
             keeps ``state.gaps_m``.
-        gap_rates : float, array_like (n_gaps,) or mapping, default 0.0
+        gap_rates_m_per_s : float, array_like (n_gaps,) or mapping, default 0.0
             Gap rates [m/s], constant over the step; the gaps at the end,
             ``gaps + gap_rates * dt``, must stay > 0.
 
@@ -935,6 +942,7 @@ class CurrentModel:
             The substitute gap path or the currents (including RK4 sub-step states) leave
             the maps (see ``extrapolate``).
         """
+        dt, voltages, gaps, gap_rates = dt_s, voltages_V, gaps_m, gap_rates_m_per_s
         if not isinstance(state, CurrentModelState):
             raise InputError(f"state must be a CurrentModelState (from CurrentModel."
                              f"initial_state or step), got {type(state).__name__}")
@@ -1329,7 +1337,7 @@ def eq8_shielded_gap_rhs(i_l: Any, i_e: Any, u: Any, gap_rate: Any, ltilde: Any,
     return d_il, (v_a - v_m) / l_u - d_il
 
 
-def _motion_eddy_ladder(maps: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def _motion_eddy_ladder(maps: CharacteristicMaps) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """``R_a``, ``R_2`` [ohm] and ``L_u`` [H] (n_c,) of the maps' shielded-gap ladder."""
     ds = maps.dataset
     names = ("motion_eddy_jump_resistance_ohm", "motion_eddy_shielding_resistance_ohm",
@@ -1365,7 +1373,7 @@ def _check_eddy_modes(value: Any) -> int:
     return int(value)
 
 
-def _eddy_network(maps: Any, m: int) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+def _eddy_network(maps: CharacteristicMaps, m: int) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """``R_0`` (n_c,), ``R_k``, ``L_k`` (n_c, m) and ``L~_ref`` (n_c,) of the maps' fitted
     eddy network with ``m`` branches."""
     ds = maps.dataset
