@@ -782,7 +782,7 @@ class CrossSectionModel:
             u[fail_t <= t[k]] = 0.0
             rec_u[k] = u
             f_start = force
-            stepper.advance(voltages=u, gaps=gaps[gap_circ], gap_rates=rates[gap_circ])
+            stepper.advance(voltages_V=u, gaps_m=gaps[gap_circ], gap_rates_m_per_s=rates[gap_circ])
             force = stepper.member_force_N.copy()
             qgen = s.B @ (0.5 * (f_start + force)) + s.G @ field_mid[k] + s.Q_preload + q_ext[k]
             x = ad @ x + bd @ qgen
