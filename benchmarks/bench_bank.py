@@ -24,7 +24,7 @@ import numpy as np
 import maglevkit as mk
 from maglevkit.reduced import bank as bank_mod
 from maglevkit.reduced.bank import MagnetBank
-from maglevkit.reduced.current import _extend_axis, _extend_values
+from maglevkit.reduced.core import extend_axis, extend_values
 from maglevkit.reduced.lanes import lane_target
 
 TITLE = "Magnet bank: cost per circuit-step at 1 ms (RK4), against an independent C kernel"
@@ -104,12 +104,12 @@ class _Baseline:
     """The independent C kernel for ``n`` copies of the given maps' circuits."""
 
     def __init__(self, maps: mk.CharacteristicMaps, n: int, lib: ctypes.CDLL) -> None:
-        gs, gi = _extend_axis(maps.gaps_m), _extend_axis(maps.currents_A)
+        gs, gi = extend_axis(maps.gaps_m), extend_axis(maps.currents_A)
         tabs, pars = [], []
         r_el = maps.dataset["resistance_ohm"].values
         r_ec = maps.dataset["eddy_resistance_fit_ohm"].values
         for j, c in enumerate(maps.circuits):
-            vals = np.stack([_extend_values(_extend_values(maps.variable(v, c), axis=0), axis=1)
+            vals = np.stack([extend_values(extend_values(maps.variable(v, c), axis=0), axis=1)
                              for v in ("inductance_H", "dL_ds_H_per_m", "force_N")])
             tabs.append(_baseline_table(gs, gi, vals).ravel())
             pars.append([gs[0], 1 / (gs[1] - gs[0]), gi[0], 1 / (gi[1] - gi[0]), r_el[j],
@@ -178,7 +178,7 @@ def _accuracy(magnet_name: str) -> list[str]:
     coarse = mk.build_maps(mag, gaps=fine_g[::2], currents=fine_i[::2], progress=False)
     from maglevkit.reduced.tables import cell_table
 
-    gs, gi = _extend_axis(coarse.gaps_m), _extend_axis(coarse.currents_A)
+    gs, gi = extend_axis(coarse.gaps_m), extend_axis(coarse.currents_A)
     mask = np.ones((fine_g.size, fine_i.size), dtype=bool)
     mask[::2, ::2] = False
     G, II = np.meshgrid(fine_g, fine_i, indexing="ij")
@@ -188,7 +188,7 @@ def _accuracy(magnet_name: str) -> list[str]:
         for v in ("inductance_H", "dL_ds_H_per_m", "force_N"):
             worst = 0.0
             for c in coarse.circuits:
-                vals = _extend_values(_extend_values(coarse.variable(v, c), axis=0), axis=1)
+                vals = extend_values(extend_values(coarse.variable(v, c), axis=0), axis=1)
                 tab = cell_table(gs, gi, vals[None], method=method)
                 est = tab.evaluate(G[mask], II[mask])[..., 0]
                 ref = fine.variable(v, c)[mask]
@@ -220,7 +220,7 @@ def _size_row(maps: mk.CharacteristicMaps, n: int, lib: ctypes.CDLL, cache: Path
     sd = np.zeros(nc)
 
     def bank_step() -> None:
-        state[0], _ = bank.step(state[0], DT, u, gap_rates=sd)
+        state[0], _ = bank.step(state[0], DT, u, gap_rates_m_per_s=sd)
 
     t_bank = _per_step(bank_step, steps)
     # the in-place stepper: voltages, gaps and gap rates written in every step (as a
@@ -229,7 +229,7 @@ def _size_row(maps: mk.CharacteristicMaps, n: int, lib: ctypes.CDLL, cache: Path
     g_in = np.full(nc, 0.010)
 
     def stepper_step() -> None:
-        stepper.advance(voltages=u, gaps=g_in, gap_rates=sd)
+        stepper.advance(voltages_V=u, gaps_m=g_in, gap_rates_m_per_s=sd)
 
     t_stepper = _per_step(stepper_step, steps)
     # the same step through CasADi's own code generation, and lanes 2 wide (what a
@@ -242,12 +242,12 @@ def _size_row(maps: mk.CharacteristicMaps, n: int, lib: ctypes.CDLL, cache: Path
         try:
             b2 = MagnetBank(members, compiled="always", cache_dir=cache, codegen=codegen)
             st2 = [b2.initial_state(gaps=0.010, currents=33.5)]
-            b2.step(st2[0], DT, u, gap_rates=sd)
+            b2.step(st2[0], DT, u, gap_rates_m_per_s=sd)
         finally:
             bank_mod.lane_target = orig
 
         def other_step(b2: MagnetBank = b2, st2: list = st2) -> None:
-            st2[0], _ = b2.step(st2[0], DT, u, gap_rates=sd)
+            st2[0], _ = b2.step(st2[0], DT, u, gap_rates_m_per_s=sd)
 
         other[key] = _per_step(other_step, steps)
     with warnings.catch_warnings():
@@ -256,7 +256,7 @@ def _size_row(maps: mk.CharacteristicMaps, n: int, lib: ctypes.CDLL, cache: Path
     ist = [interp.initial_state(gaps=0.010, currents=33.5)]
 
     def interp_step() -> None:
-        ist[0], _ = interp.step(ist[0], DT, u, gap_rates=sd)
+        ist[0], _ = interp.step(ist[0], DT, u, gap_rates_m_per_s=sd)
 
     t_interp = _per_step(interp_step, max(5, steps // 50))
     base = _Baseline(maps, nc, lib)
@@ -267,7 +267,7 @@ def _size_row(maps: mk.CharacteristicMaps, n: int, lib: ctypes.CDLL, cache: Path
     rate = rng.uniform(-0.05, 0.05, nc)
     volts = rng.uniform(0.0, 100.0, nc)
     xb = base.step(x, s, volts, rate, DT)
-    _, ob = bank.step(bank.initial_state(gaps=s, currents=x), DT, volts, gap_rates=rate)
+    _, ob = bank.step(bank.initial_state(gaps=s, currents=x), DT, volts, gap_rates_m_per_s=rate)
     agree = float(np.max(np.abs(xb - ob.inductor_currents_A) / np.abs(xb)))
     t_base = _per_step(lambda: base.step(x, s, u, sd, DT), steps)
     loop_txt = "-"
@@ -278,7 +278,7 @@ def _size_row(maps: mk.CharacteristicMaps, n: int, lib: ctypes.CDLL, cache: Path
 
         def loop() -> None:
             for k, m in enumerate(singles):
-                sst[k], _ = m.step(sst[k], DT, us, gaps=0.010, gap_rates=0.0)
+                sst[k], _ = m.step(sst[k], DT, us, gaps_m=0.010, gap_rates_m_per_s=0.0)
 
         t_loop = _per_step(loop, max(20, steps // 20))
         loop_txt = f"{t_loop / nc * 1e9:.0f}"
@@ -318,7 +318,7 @@ def run() -> str:
         "output objects per call) with the default compiled kernel "
         f"(`codegen='lanes'`: {lane_target()[0]} circuits per SIMD vector on this "
         "machine), *stepper* the same kernel through `MagnetBank.stepper` "
-        "(`BankStepper.advance(voltages=, gaps=, gap_rates=)`: inputs copied into bound "
+        "(`BankStepper.advance(voltages_V=, gaps_m=, gap_rates_m_per_s=)`: inputs copied into bound "
         "buffers, outputs left in alternating buffers), *2 lanes* the same generator "
         "forced to 2-wide vectors (what a processor "
         "without AVX2 gets), *CasADi C* CasADi's own code generation of the same function "

@@ -53,7 +53,7 @@ def _stepping(fm: mk.FluxModel, mag: mk.Magnet, i0: float) -> float:
     st = fm.initial_state(gaps=s[0], currents=i0)
     t0 = _cpu()
     for k in range(n):
-        st, _out = fm.step(st, DT, volts(t[k]), gaps=s[k], gap_rates=(s[k + 1] - s[k]) / DT)
+        st, _out = fm.step(st, DT, volts(t[k]), gaps_m=s[k], gap_rates_m_per_s=(s[k + 1] - s[k]) / DT)
     return _cpu() - t0
 
 

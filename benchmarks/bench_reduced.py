@@ -57,7 +57,7 @@ def _stepping(model: Any, mag: mk.Magnet, s0: float, i0: float) -> Callable[[], 
     def run() -> None:
         st = model.initial_state(gaps=s[0], currents=i0)
         for k in range(n):
-            st, _ = model.step(st, DT, u[k], gaps=s[k], gap_rates=rates[k])
+            st, _ = model.step(st, DT, u[k], gaps_m=s[k], gap_rates_m_per_s=rates[k])
     return run
 
 

@@ -146,7 +146,7 @@ def part_times(model: VehicleModel, speed: float, dt: float = 1e-3) -> dict[str,
     out["block per step"] = t_block / vs.block_steps
     xm, gx, il = s[st["x_mech"]], s[st["guideway"]], s[st["I_L"]]
     cur, psi, integ = s[st["current"]], s[st["psi_hat"]], s[st["integral"]]
-    t_in, (gap, rate, _, _) = _time_calls(parts["guideway_in"], [xm, gx, p[sp["x"]], p[sp["r"]],
+    t_in, (gap, rate, _, _, _) = _time_calls(parts["guideway_in"], [xm, gx, p[sp["x"]], p[sp["r"]],
                                                                  p[sp["r_x"]], [speed]])
     t_ctl, (u,) = _time_calls(parts["controllers"], [gap, rate, il, cur, psi, integ, [0.0],
                                                      c[1:]])

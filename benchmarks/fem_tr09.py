@@ -31,7 +31,11 @@ Outputs per (s, I, offset): total force by the Maxwell stress averaged over the 
 air band of the gap (all horizontal lines through it), flux linkage per circuit, the
 differential inductance of a circuit with both currents changing together (exact, from
 the Newton tangent: ``dA/dI = K_t^-1 dJ/dI``), pole forces (the band stress over each
-pole pitch), and the fluxes of the iron regions (from differences of A).
+pole pitch), the fluxes of the iron regions (from differences of A) and their derivatives
+in the current (``dflux``, from the tangent's dA/dI), and the magnetic potential drops
+along lines through junction, core, gap, tooth, pole back and yoke with their current
+derivatives (``mmf``; ``--diagnose S_MM I_A`` records one point at the grid's stator
+positions into ``benchmarks/results/fem_tr09_diagnosis.json``).
 
 ``python benchmarks/fem_tr09.py`` runs the convergence study and the grid and writes
 ``benchmarks/results/fem_tr09_*.json``; ``--compare`` prints the network against them.
@@ -222,6 +226,8 @@ class Point:
     pole_force_N: list[float]       # poles 1..12 (band stress over each pole pitch)
     flux: dict                      # region fluxes [Wb] per pole / segment
     seconds: float
+    dflux: dict | None = None       # their derivatives [Wb/A] (both currents together)
+    mmf: dict | None = None         # potential drops [A] and their dI [A/A] along lines
 
 
 def solve(g: Geometry, s: float, current: float, offset: float = 0.0, *, refine: float = 1.0,
@@ -290,9 +296,63 @@ def solve(g: Geometry, s: float, current: float, offset: float = 0.0, *, refine:
     del b2, iron_all
     coen = sym * d * float(np.sum(wc * dx))
     flux = region_fluxes(basis, A, g, s, offset, half)
+    dflux = region_fluxes(basis, dA, g, s, offset, half)
+    # H and dH/dI per element (element means): mu0 H = nu B, mu0 dH = nu dB + c (B.dB) B
+    # with the Newton coefficients (nu, c) of fem_common.solve_nonlinear
+    dga = basis.interpolate(dA).grad
+    cc = np.zeros_like(sol.b)
+    for (mask, mat) in parts:
+        q = np.repeat(mask[:, None], nqp, axis=1)
+        cc = np.where(q, mat.nu_r(sol.b)[1], cc)
+    bx, by, dbx, dby = ga[1], -ga[0], dga[1], -dga[0]
+    bdb = bx * dbx + by * dby
+    fields = {"mmf": ((sol.nu * bx).mean(axis=1) / MU0, (sol.nu * by).mean(axis=1) / MU0),
+              "dmmf": ((sol.nu * dbx + cc * bdb * bx).mean(axis=1) / MU0,
+                       (sol.nu * dby + cc * bdb * by).mean(axis=1) / MU0)}
+    mmf = {tag: mmf_drops(mesh, hxy, g, s, offset, half) for tag, hxy in fields.items()}
     pt = Point(s, current, offset, bool(half), int(basis.N), sol.iterations, force, psi, L, coen,
-               pf, flux, time.time() - t0)
+               pf, flux, time.time() - t0, dflux, mmf)
     return pt, A
+
+
+def mmf_drops(mesh, hxy: tuple[np.ndarray, np.ndarray], g: Geometry, s: float,  # type: ignore[no-untyped-def]
+              offset: float, half: bool, n: int = 400) -> dict:
+    """Magnetic potential drops ``int H . dl`` [A] (absolute values) per pole along
+    straight lines, H = nu B from each element's mean field (midpoint rule on ``n``
+    points per line; ``hxy`` the element means of H, or of dH/dI for the incremental
+    drops).  With c the pole centre, ``y_b`` the pole back's mid-line, ``y_t``
+    the tooth tips (``s``), ``y_y`` the yoke's mid-line: ``corner`` (c, y_b) -> (c,
+    -core_height); ``core`` (c, -core_height) -> (c, 0) (the core above and along the
+    coil and the shoe); ``gap`` (c, 0) -> (c_t, y_t), c_t the centre of the tooth nearest
+    to the pole centre; ``teeth`` (c_t, y_t) -> (c_t, y_y); ``back`` (c, y_b) -> (c + tau/2,
+    y_b); ``yoke`` (c, y_y) -> (c + tau/2, y_y).  Between the face and the yoke no current
+    flows, so ``gap + teeth`` does not depend on the path."""
+    find = mesh.element_finder()
+    hx, hy = hxy
+    xc = g.centres()
+    keep = [k for k in range(g.poles) if not half or xc[k] > 0]
+    slots = g.slots(offset, xc[0] - g.tau, xc[-1] + g.tau)
+    tooth_c = np.array([0.5 * (slots[i][1] + slots[i + 1][0]) for i in range(len(slots) - 1)])
+    yb, yy = -g.hcore - 0.5 * g.hb, s + g.slot_depth + 0.5 * g.yoke
+
+    def drop(p: tuple[float, float], q: tuple[float, float]) -> float:
+        t = (np.arange(n) + 0.5) / n
+        x, y = p[0] + t * (q[0] - p[0]), p[1] + t * (q[1] - p[1])
+        e = find(x, y)
+        return float(np.sum(hx[e] * (q[0] - p[0]) + hy[e] * (q[1] - p[1])) / n)
+
+    out: dict[str, dict[str, float]] = {}
+    for k in keep:
+        c = xc[k]
+        ct = float(tooth_c[np.argmin(np.abs(tooth_c - c))])
+        vals = {"corner": drop((c, yb), (c, -g.hcore)), "core": drop((c, -g.hcore), (c, 0.0)),
+                "gap": drop((c, 0.0), (ct, s)), "teeth": drop((ct, s), (ct, yy))}
+        if k + 1 < g.poles:
+            vals["back"] = drop((c, yb), (c + 0.5 * g.tau, yb))
+            vals["yoke"] = drop((c, yy), (c + 0.5 * g.tau, yy))
+        for tag, v in vals.items():
+            out.setdefault(tag, {})[str(k + 1)] = v
+    return out
 
 
 def region_fluxes(basis, A: np.ndarray, g: Geometry, s: float, offset: float,  # type: ignore[no-untyped-def]
@@ -301,8 +361,10 @@ def region_fluxes(basis, A: np.ndarray, g: Geometry, s: float, offset: float,  #
     ``core`` at mid-coil height, ``shoe`` between coil and face, ``face`` just below the
     face, ``gap`` at mid-gap over the pole pitch (window centre to window centre),
     ``back`` in the pole back at each window centre, ``yoke`` in the stator yoke there,
-    ``tooth_max`` the largest tooth flux at mid-tooth height within the pole pitch and
-    ``tooth_tip_max`` at the tooth tips."""
+    ``tooth_max_B`` the largest tooth flux density at mid-tooth height within the pole
+    pitch and ``tip_max_B`` at the tooth tips, ``teeth`` the sum of the tooth fluxes at
+    mid-tooth height over the pole pitch (its three teeth) and ``tooth_mid`` the flux of
+    the tooth nearest to the pole centre there."""
     xc = g.centres()
     keep = [k for k in range(g.poles) if not half or xc[k] > 0]
     eps = 1e-7
@@ -337,7 +399,7 @@ def region_fluxes(basis, A: np.ndarray, g: Geometry, s: float, offset: float,  #
             if c - 0.5 * g.tau <= m < c + 0.5 * g.tau and (not half or a > 0):
                 for tag, y in (("tooth", s + 0.5 * g.slot_depth), ("tip", s + eps)):
                     pts.extend([(a + eps, y), (b - eps, y)])
-                    tooth_tags.append((tag, k, b - a))
+                    tooth_tags.append((tag, k, b - a, abs(m - c)))
     P = np.array(pts).T
     val = basis.probes(P) @ A
     d = g.depth
@@ -345,11 +407,18 @@ def region_fluxes(basis, A: np.ndarray, g: Geometry, s: float, offset: float,  #
     for i, (tag, k) in enumerate(tags):
         out.setdefault(tag, {})[k + 1] = d * abs(val[2 * i + 1] - val[2 * i])
     base = 2 * len(tags)
-    for j, (tag, k, w) in enumerate(tooth_tags):
+    nearest: dict[int, float] = {}
+    for j, (tag, k, w, dc) in enumerate(tooth_tags):
         phi = d * abs(val[base + 2 * j + 1] - val[base + 2 * j])
         key = f"{tag}_max_B"
         out.setdefault(key, {})
         out[key][k + 1] = max(out[key].get(k + 1, 0.0), phi / (d * w))
+        if tag == "tooth":
+            out.setdefault("teeth", {})
+            out["teeth"][k + 1] = out["teeth"].get(k + 1, 0.0) + phi
+            if dc < nearest.get(k, math.inf):
+                nearest[k] = dc
+                out.setdefault("tooth_mid", {})[k + 1] = phi
     return {tag: {str(k): v for k, v in vals.items()} for tag, vals in out.items()}
 
 
@@ -503,7 +572,7 @@ def densities(magnet: mk.Magnet, data: dict, s: float, current: float) -> list[d
             "core": (fem("core", g.lp * d),
                      core_flux(p, g.hf + 0.5 * g.hc - 1e-9) / (g.lp * d)),
             "shoe": (fem("shoe", g.lp * d), core_flux(p, 0.5 * g.hf) / (g.lp * d)),
-            "teeth": (fem("tooth_max_B", None), abs(net[f"gap_{p}"]) / teeth),
+            "teeth": (fem("tooth_max_B", None), abs(net.get(f"teeth_{p}", net[f"gap_{p}"])) / teeth),
             "tips": (fem("tip_max_B", None), float("nan")),
             "back": (fem("back", g.hb * d),
                      abs(net.get(f"back_{p}_{q}", float("nan"))) / (g.hb * d)),
@@ -532,6 +601,9 @@ def main(argv: list[str] | None = None) -> None:
     ap.add_argument("--grid", action="store_true", help="the gap x current x offset grid")
     ap.add_argument("--compare", action="store_true", help="network vs the recorded grid")
     ap.add_argument("--convergence", action="store_true", help="mesh, order, box, half model")
+    ap.add_argument("--diagnose", nargs=2, type=float, metavar=("S_MM", "I_A"),
+                    help="one point at the grid's stator positions with the incremental "
+                         "region fluxes, into fem_tr09_diagnosis.json")
     args = ap.parse_args(argv)
     mag = cut_magnet(args.magnet, args.flux_paths)
     g = Geometry.from_magnet(mag)
@@ -552,6 +624,9 @@ def main(argv: list[str] | None = None) -> None:
         run(g, "convergence", [(0.010, 80.0, 0.0)], refine=1.4, order=1)
         run(g, "convergence", [(0.010, 80.0, 0.0)], refine=GRID_REFINE, box=1.5)
         run(g, "convergence", [(0.010, 80.0, 0.0215)], refine=GRID_REFINE, half=False)
+    if args.diagnose:
+        sd, idiag = args.diagnose
+        run(g, "diagnosis", [(sd * 1e-3, idiag, o) for o in OFFSETS], refine=GRID_REFINE)
     if args.grid:
         order = (10.0, 20.0, 6.0)                # the most telling gaps first
         pts = [(s * 1e-3, i, o) for s in order for o in OFFSETS for i in CURRENTS_A]

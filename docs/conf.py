@@ -65,8 +65,9 @@ sphinx_gallery_conf = {
 # API reference: one page per public subpackage, listing its ``__all__``
 # ---------------------------------------------------------------------------------------
 API_MODULES = ("maglevkit", "maglevkit.materials", "maglevkit.circuit", "maglevkit.magnets",
-               "maglevkit.models", "maglevkit.reduction", "maglevkit.reduced", "maglevkit.control",
-               "maglevkit.vehicle",
+               "maglevkit.models", "maglevkit.reduction", "maglevkit.reduced",
+               "maglevkit.simulation", "maglevkit.plant", "maglevkit.calibration",
+               "maglevkit.design", "maglevkit.control", "maglevkit.vehicle", "maglevkit.compare",
                "maglevkit.export", "maglevkit.sweep", "maglevkit.errors")
 
 

@@ -209,7 +209,7 @@ def test_flux_model_step_and_state_inputs(u_lin: mk.Magnet) -> None:
     with pytest.raises(mk.InputError, match=r"voltages \[V\] = '20' \(str\) is a string"):
         fm.step(st, 1e-4, "20")
     with pytest.raises(mk.InputError, match=r"gaps \[m\] = True \(bool\) is a bool"):
-        fm.step(st, 1e-4, 20.0, gaps=True)
+        fm.step(st, 1e-4, 20.0, gaps_m=True)
     with pytest.raises(mk.InputError, match=r"dt \[s\] = True \(bool\)"):
         fm.step(st, True, 20.0)
 
@@ -295,7 +295,7 @@ def test_flux_model_and_simulate_warn(u_lin: mk.Magnet) -> None:
         fm.initial_state(gaps=0.01, currents=1000.0)
     st = fm.initial_state(gaps=0.01, currents=10.0)
     with pytest.warns(mk.PlausibilityWarning, match=r"FluxModel.step: gap 5 m"):
-        fm.step(st, 1e-4, 20.0, gaps=5.0)
+        fm.step(st, 1e-4, 20.0, gaps_m=5.0)
     with pytest.warns(mk.PlausibilityWarning, match=r"simulate: gap 10 m"):
         mk.simulate(fm.with_options(rtol=1e-5), (0.0, 1e-3), dt=1e-3, gaps=10.0, voltages=1.0)
     # the voltages drive the currents: 1e4 V on 2 ohm is 5 kA at steady state; after

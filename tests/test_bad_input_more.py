@@ -21,9 +21,9 @@ def test_far_outside_the_maps_is_out_of_range_not_a_solver_error(model) -> None:
     # 20 mm on 8-12 mm maps: refused before integrating (the spline would be evaluated
     # far beyond its extension and the state would become non-finite)
     with pytest.raises(OutOfRangeError, match=r"start of the step.*gap 0\.02 m.*0\.008\.\.0\.012"):
-        model.step(state, 1e-3, 20.0, gaps=0.02)
+        model.step(state, 1e-3, 20.0, gaps_m=0.02)
     with pytest.raises(OutOfRangeError, match=r"end of the step.*gap 1\.01 m"):
-        model.step(state, 1e-3, 20.0, gap_rates=1e3)
+        model.step(state, 1e-3, 20.0, gap_rates_m_per_s=1e3)
 
 
 def test_a_path_instead_of_maps_is_an_input_error() -> None:

@@ -120,8 +120,8 @@ def test_compiled_equals_interpreted(u_maps, guidance_maps) -> None:
     for _ in range(50):
         u = rng.uniform(5, 60, 3)
         rate = rng.uniform(-0.02, 0.02, 3)
-        sf, of = fast.step(sf, 1e-3, u, gap_rates=rate)
-        ss, os_ = slow.step(ss, 1e-3, u, gap_rates=rate)
+        sf, of = fast.step(sf, 1e-3, u, gap_rates_m_per_s=rate)
+        ss, os_ = slow.step(ss, 1e-3, u, gap_rates_m_per_s=rate)
     # same IEEE arithmetic (no -ffast-math); bound for FMA contraction on other CPUs
     assert _rel(of.inductor_currents_A, os_.inductor_currents_A) <= REL
     assert _rel(of.circuit_force_N, os_.circuit_force_N) <= REL
@@ -140,10 +140,10 @@ def test_detailed_members_equal_their_own_steps(u_magnet, u_maps) -> None:
     rate = np.array([0.01, 0.01, -0.005, -0.005, 0.0, 0.0])
     for k in range(20):
         u = np.array([25.0, 30.0, 35.0]) + k
-        state, out = bank.step(state, 1e-3, u, gap_rates=rate, pole_forces=True)
-        s1, o1 = fm1.step(s1, 1e-3, u[0], gap_rates=rate[:2])
-        sr, orr = single.step(sr, 1e-3, u[1], gap_rates=rate[2:4])
-        s2, o2 = fm2.step(s2, 1e-3, u[2], gap_rates=rate[4:])
+        state, out = bank.step(state, 1e-3, u, gap_rates_m_per_s=rate, pole_forces=True)
+        s1, o1 = fm1.step(s1, 1e-3, u[0], gap_rates_m_per_s=rate[:2])
+        sr, orr = single.step(sr, 1e-3, u[1], gap_rates_m_per_s=rate[2:4])
+        s2, o2 = fm2.step(s2, 1e-3, u[2], gap_rates_m_per_s=rate[4:])
     assert _rel(out.currents_A, np.array([o1.currents_A[0], orr.currents_A[0],
                                           o2.currents_A[0]])) <= REL
     assert out.pole_force_N is not None
@@ -164,8 +164,8 @@ def test_gap_inputs_pole_mode_averages_like_the_single_model(tr09_maps) -> None:
     g = np.linspace(0.009, 0.011, 12)
     sb = bank.initial_state(gaps=g, currents=30.0)
     ss = single.initial_state(gaps=g, currents=30.0)
-    sb, ob = bank.step(sb, 1e-3, 40.0, gap_rates=np.full(12, 0.01), pole_forces=True)
-    ss, os_ = single.step(ss, 1e-3, 40.0, gap_rates=0.01)
+    sb, ob = bank.step(sb, 1e-3, 40.0, gap_rates_m_per_s=np.full(12, 0.01), pole_forces=True)
+    ss, os_ = single.step(ss, 1e-3, 40.0, gap_rates_m_per_s=0.01)
     assert _rel(ob.circuit_force_N, os_.circuit_force_N) <= REL
     assert ob.pole_force_N is not None
     assert _rel(ob.pole_force_N, os_.pole_force_N) <= REL
@@ -177,9 +177,9 @@ def test_range_checked_before_integrating_names_member_and_range(u_maps) -> None
     # far outside: 50 mm on 6-16 mm maps, and a gap rate that leaves the maps in the step
     with pytest.raises(OutOfRangeError, match=r"member 'rear', circuit 'coil'.*gap 0\.05 m.*"
                                               r"maps cover gaps 0\.006\.\.0\.016 m"):
-        bank.step(state, 1e-3, 20.0, gaps=np.array([0.010, 0.05]))
+        bank.step(state, 1e-3, 20.0, gaps_m=np.array([0.010, 0.05]))
     with pytest.raises(OutOfRangeError, match=r"member 'front'.*over the step"):
-        bank.step(state, 1e-3, 20.0, gap_rates=np.array([1e3, 0.0]))
+        bank.step(state, 1e-3, 20.0, gap_rates_m_per_s=np.array([1e3, 0.0]))
     # a current that leaves the maps inside the step (huge voltage)
     with pytest.raises(OutOfRangeError, match=r"RK4 sub-step.*currents 0\.\.60 A"):
         bank.step(state, 1e-3, np.array([20.0, 1e6]))
@@ -191,9 +191,9 @@ def test_extrapolation_warns_within_three_cells(u_maps) -> None:
     bank = MagnetBank({"m": u_maps}, extrapolate=True, compiled="never")
     state = bank.initial_state(gaps=0.010, currents=20.0)
     with pytest.warns(UserWarning, match="extrapolating"):
-        bank.step(state, 1e-3, 20.0, gaps=0.017)
+        bank.step(state, 1e-3, 20.0, gaps_m=0.017)
     with pytest.raises(OutOfRangeError, match="three|3 grid cells"):
-        bank.step(state, 1e-3, 20.0, gaps=0.030)
+        bank.step(state, 1e-3, 20.0, gaps_m=0.030)
 
 
 @pytest.mark.parametrize("bad", [np.nan, np.inf])
@@ -203,9 +203,9 @@ def test_non_finite_inputs_name_the_magnet(u_maps, bad: float) -> None:
     with pytest.raises(InputError, match=r"voltages must be finite.*'right/coil'"):
         bank.step(state, 1e-3, np.array([20.0, bad]))
     with pytest.raises(InputError, match=r"gaps must be finite.*'left/coil'"):
-        bank.step(state, 1e-3, 20.0, gaps=np.array([bad, 0.01]))
+        bank.step(state, 1e-3, 20.0, gaps_m=np.array([bad, 0.01]))
     with pytest.raises(InputError, match=r"gap_rates must be finite.*'left/coil'"):
-        bank.step(state, 1e-3, 20.0, gap_rates=np.array([bad, 0.0]))
+        bank.step(state, 1e-3, 20.0, gap_rates_m_per_s=np.array([bad, 0.0]))
     with pytest.raises(InputError, match=r"gaps must be finite.*'right/coil'"):
         bank.initial_state(gaps=np.array([0.01, bad]), currents=20.0)
 
@@ -239,7 +239,7 @@ def test_bad_construction_and_inputs(u_maps) -> None:
     with pytest.raises(InputError, match=r"gaps must stay > 0 m"):
         MagnetBank({"m": u_maps}, gap_inputs="pole").step(
             MagnetBank({"m": u_maps}, gap_inputs="pole").initial_state(gaps=0.01, currents=10.0),
-            1e-3, 10.0, gap_rates=-20.0)
+            1e-3, 10.0, gap_rates_m_per_s=-20.0)
 
 
 def test_solver_error_on_non_finite_state_carries_time_and_state(u_maps, monkeypatch) -> None:

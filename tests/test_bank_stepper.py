@@ -43,8 +43,8 @@ def _same_run(bank: MagnetBank, n: int = 40, seed: int = 3) -> None:
     state = bank.initial_state(gaps=0.010, currents=20.0)
     stepper = bank.stepper(state, 1e-3)
     for u, g, r in _drive(bank, n, seed):
-        state, out = bank.step(state, 1e-3, u, gaps=g, gap_rates=r, pole_forces=True)
-        stepper.advance(voltages=u, gaps=g, gap_rates=r)
+        state, out = bank.step(state, 1e-3, u, gaps_m=g, gap_rates_m_per_s=r, pole_forces=True)
+        stepper.advance(voltages_V=u, gaps_m=g, gap_rates_m_per_s=r)
         assert stepper.time_s == state.time_s
         np.testing.assert_array_equal(stepper.currents_A, out.currents_A)
         np.testing.assert_array_equal(stepper.inductor_currents_A, out.inductor_currents_A)
@@ -90,8 +90,8 @@ def test_stepper_equals_single_current_model(u_maps) -> None:
         u = 40.0 + 10.0 * np.sin(0.1 * k)
         g = 0.010 + 0.001 * np.sin(0.05 * k)
         rate = 0.001 * 0.05 / 1e-3 * np.cos(0.05 * k)
-        stepper.advance(voltages=u, gaps=g, gap_rates=rate)
-        ss, os_ = single.step(ss, 1e-3, u, gaps=g, gap_rates=rate)
+        stepper.advance(voltages_V=u, gaps_m=g, gap_rates_m_per_s=rate)
+        ss, os_ = single.step(ss, 1e-3, u, gaps_m=g, gap_rates_m_per_s=rate)
         seen.append(stepper.currents_A[0])
     assert stepper.currents_A[0] == pytest.approx(os_.currents_A[0], rel=1e-12)
     assert stepper.circuit_force_N[0] == pytest.approx(os_.force_N, rel=1e-12)
@@ -101,22 +101,22 @@ def test_stepper_equals_single_current_model(u_maps) -> None:
 def test_failed_step_leaves_the_stepper_at_the_last_good_step(u_maps) -> None:
     bank = MagnetBank({"front": u_maps, "rear": u_maps})
     stepper = bank.stepper(bank.initial_state(gaps=0.010, currents=20.0), 1e-3)
-    stepper.advance(voltages=45.0)
+    stepper.advance(voltages_V=45.0)
     before = (stepper.time_s, stepper.inductor_currents_A.copy(), stepper.currents_A.copy(),
               stepper.circuit_force_N.copy(), stepper.gaps_m.copy())
     with pytest.raises(OutOfRangeError, match=r"member 'rear'.*RK4 sub-step.*currents 0\.\.60 A"):
-        stepper.advance(voltages=np.array([45.0, 1e6]))
+        stepper.advance(voltages_V=np.array([45.0, 1e6]))
     after = (stepper.time_s, stepper.inductor_currents_A, stepper.currents_A,
              stepper.circuit_force_N, stepper.gaps_m)
     assert after[0] == before[0]
     for a, b in zip(after[1:], before[1:], strict=True):
         np.testing.assert_array_equal(a, b)
     with pytest.raises(OutOfRangeError, match=r"member 'front'.*gap 0\.05 m"):
-        stepper.advance(voltages=45.0, gaps=np.array([0.05, 0.010]))
+        stepper.advance(voltages_V=45.0, gaps_m=np.array([0.05, 0.010]))
     with pytest.raises(InputError, match=r"voltages must be finite.*'rear/coil'"):
-        stepper.advance(voltages=np.array([45.0, np.nan]), gaps=0.010)
+        stepper.advance(voltages_V=np.array([45.0, np.nan]), gaps_m=0.010)
     # after the refusals it goes on from where it was
-    stepper.advance(voltages=45.0, gaps=0.010)
+    stepper.advance(voltages_V=45.0, gaps_m=0.010)
     assert stepper.time_s == pytest.approx(2e-3, abs=1e-15)
 
 
@@ -132,11 +132,11 @@ def test_stepper_bad_input(u_maps) -> None:
         other.stepper(state, 1e-3)
     stepper = bank.stepper(state, 1e-3)
     with pytest.raises(InputError, match=r"voltages: expected 2 values"):
-        stepper.advance(voltages=[1.0, 2.0, 3.0])
+        stepper.advance(voltages_V=[1.0, 2.0, 3.0])
     with pytest.raises(InputError, match="bool"):
-        stepper.advance(gap_rates=True)
+        stepper.advance(gap_rates_m_per_s=True)
     with pytest.raises(InputError, match=r"gaps must be numbers"):
-        stepper.advance(gaps="10 mm")
+        stepper.advance(gaps_m="10 mm")
     # outputs are the stepper's own buffers: read-only
     with pytest.raises(ValueError, match="read-only"):
         stepper.currents_A[0] = 1.0
@@ -159,7 +159,7 @@ def test_simulate_in_place_equals_a_loop_of_steps(u_maps, guidance_maps) -> None
         rates = (gaps[1:] - gaps[:-1]) / np.diff(times)[:, None]
         for k in range(times.size - 1):
             state, out = bank.step(state, float(times[k + 1] - times[k]), volts[k],
-                                   gaps=gaps[k], gap_rates=rates[k], pole_forces=True)
+                                   gaps_m=gaps[k], gap_rates_m_per_s=rates[k], pole_forces=True)
             np.testing.assert_array_equal(res.currents_A[k + 1], out.currents_A)
             np.testing.assert_array_equal(res.circuit_force_N[k + 1], out.circuit_force_N)
             assert out.pole_force_N is not None
@@ -183,7 +183,7 @@ def test_arrays_keep_their_identity_and_bound_references_see_every_step(u_maps) 
         volts[:] = 45.0 + k
         rates[:] = 0.01 * (-1) ** k
         bound.advance()
-        ref.advance(voltages=45.0 + k, gaps=0.0105 + 0.0005 * k, gap_rates=0.01 * (-1) ** k)
+        ref.advance(voltages_V=45.0 + k, gaps_m=0.0105 + 0.0005 * k, gap_rates_m_per_s=0.01 * (-1) ** k)
         np.testing.assert_array_equal(force, ref.circuit_force_N)
         np.testing.assert_array_equal(current, ref.currents_A)
     assert bound.gaps_m is gaps and bound.voltages_V is volts and bound.circuit_force_N is force
@@ -199,7 +199,7 @@ def test_assignment_copies_into_the_inputs_and_typos_are_refused(u_maps) -> None
     by_attr.gaps_m = [0.011, 0.011]
     assert by_attr.voltages_V is volts and volts[0] == 60.0
     by_attr.advance()
-    by_arg.advance(voltages=60.0, gaps=0.011, gap_rates=0.01)
+    by_arg.advance(voltages_V=60.0, gaps_m=0.011, gap_rates_m_per_s=0.01)
     np.testing.assert_array_equal(by_attr.inductor_currents_A, by_arg.inductor_currents_A)
     assert by_attr.inductor_currents_A[0] > 20.1      # the 60 V step took effect
     with pytest.raises(AttributeError):
@@ -213,13 +213,13 @@ def test_assignment_copies_into_the_inputs_and_typos_are_refused(u_maps) -> None
 def test_refused_or_failed_advance_changes_nothing_of_the_state(u_maps) -> None:
     bank = MagnetBank({"a": u_maps, "b": u_maps})
     sp = bank.stepper(bank.initial_state(gaps=0.010, currents=20.0), 1e-3)
-    sp.advance(voltages=45.0)
+    sp.advance(voltages_V=45.0)
     good_gaps = sp.gaps_m.copy()
     with pytest.raises(InputError, match="gaps must be numbers"):
-        sp.advance(voltages=50.0, gaps="x")
+        sp.advance(voltages_V=50.0, gaps_m="x")
     assert sp.voltages_V[0] == 45.0                  # nothing of a refused call is written
     with pytest.raises(OutOfRangeError, match=r"member 'a'.*gap 0\.05 m"):
-        sp.advance(gaps=np.array([0.05, 0.010]))
+        sp.advance(gaps_m=np.array([0.05, 0.010]))
     np.testing.assert_array_equal(sp.gaps_m, good_gaps)      # reset to the last good state
     np.testing.assert_array_equal(sp.state.gaps_m, good_gaps)
     sp.advance()                                     # and it goes on without new gaps
@@ -239,7 +239,7 @@ def test_non_fast_path_failure_and_initial_voltages(u_magnet, u_maps) -> None:
     np.testing.assert_allclose(sp.currents_A, 20.0, rtol=1e-5)
     before = (sp.time_s, sp.currents_A.copy(), sp.gaps_m.copy())
     with pytest.raises(OutOfRangeError, match=r"member 'r'"):
-        sp.advance(gaps=np.array([0.010, 0.05]))
+        sp.advance(gaps_m=np.array([0.010, 0.05]))
     assert sp.time_s == before[0]
     np.testing.assert_array_equal(sp.currents_A, before[1])
     np.testing.assert_array_equal(sp.gaps_m, before[2])
@@ -251,7 +251,7 @@ def test_messages_match_step_and_several_sub_steps(u_maps) -> None:
     sp = bank.stepper(st0, 1e-3)                     # 3 RK4 sub-steps per step
     msgs = []
     for call in (lambda: bank.step(st0, 1e-3, np.array([40.0, np.nan])),
-                 lambda: sp.advance(voltages=np.array([40.0, np.nan]))):
+                 lambda: sp.advance(voltages_V=np.array([40.0, np.nan]))):
         with pytest.raises(InputError) as err:
             call()
         msgs.append(str(err.value))
@@ -265,7 +265,7 @@ def test_messages_match_step_and_several_sub_steps(u_maps) -> None:
     sp2 = bank.stepper(st0, 1e-3)
     for volts in ([45, 46], np.array([45.0, 47.0], dtype=np.float32), 44):
         state, out = bank.step(state, 1e-3, np.asarray(volts, dtype=float) * np.ones(2))
-        sp2.advance(voltages=volts)
+        sp2.advance(voltages_V=volts)
         np.testing.assert_array_equal(sp2.inductor_currents_A, out.inductor_currents_A)
 
 
@@ -282,10 +282,10 @@ def test_bad_states_copies_and_pickling(u_maps) -> None:
     with pytest.raises(InputError, match="BankState of this bank"):
         bank.step(bad, 1e-3, 40.0)
     sp = bank.stepper(bank.initial_state(gaps=0.010, currents=20.0), 1e-3)
-    sp.advance(voltages=45.0)
+    sp.advance(voltages_V=45.0)
     twin = copy.copy(sp)
     deep = copy.deepcopy(sp)
-    sp.advance(voltages=60.0)                        # the copies do not move with it
+    sp.advance(voltages_V=60.0)                        # the copies do not move with it
     twin.advance()
     deep.advance()
     np.testing.assert_array_equal(twin.inductor_currents_A, deep.inductor_currents_A)
@@ -302,9 +302,9 @@ def test_extrapolation_is_reported_once_per_circuit(u_maps) -> None:
     with warnings.catch_warnings(record=True) as seen:
         warnings.simplefilter("always")
         for _ in range(20):
-            sp.advance(voltages=40.0, gaps=0.0165)
+            sp.advance(voltages_V=40.0, gaps_m=0.0165)
     texts = [str(w.message) for w in seen]
     assert len(texts) == 2 and all("reported once per circuit" in t for t in texts)
     with pytest.raises(OutOfRangeError) as err:
-        sp.advance(gaps=0.030)
+        sp.advance(gaps_m=0.030)
     assert "extrapolate=True" not in str(err.value)

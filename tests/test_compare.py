@@ -172,4 +172,4 @@ def test_cli_compare_has_the_extrapolate_option_its_message_recommends() -> None
     model = mk.CurrentModel(maps)
     state = model.initial_state(gaps=0.010, currents=20.0)
     with pytest.raises(mk.OutOfRangeError, match="--extrapolate"):
-        model.step(state, 1e-3, 40.0, gaps=0.05, gap_rates=0.0)   # 50 mm: far outside
+        model.step(state, 1e-3, 40.0, gaps_m=0.05, gap_rates_m_per_s=0.0)   # 50 mm: far outside

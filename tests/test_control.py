@@ -76,8 +76,8 @@ def test_without_control_the_magnet_is_unstable(u_setup) -> None:  # type: ignor
     with pytest.raises(mk.OutOfRangeError, match=r"substitute gap 0\.020"):
         for _ in range(1000):
             force = out.force_N
-            st, out = reduced.step(st, 1e-3, 40.0, gaps=mech.gap_m,
-                                   gap_rates=mech.gap_rate_m_per_s)
+            st, out = reduced.step(st, 1e-3, 40.0, gaps_m=mech.gap_m,
+                                   gap_rates_m_per_s=mech.gap_rate_m_per_s)
             mech = veh.step(mech, 1e-3, force)
 
 

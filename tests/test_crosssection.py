@@ -145,7 +145,7 @@ def test_cross_section_matrices_against_sympy() -> None:
     # preload stiffness; sympy with the same element and point forces agrees
     a = track_field_m_per_s2(450 / 3.6, 4000.0, math.radians(12.0))
     q, forces = mech.static_trim(a, guidance_bias_N=2e4)
-    fe = s.stiffness_N_per_m * s.element_deflections(q)
+    fe = s.stiffness_N_per_m * s.element_deflections(q) + s.preload_N
     ref = derive_sympy(s, element_forces_N=fe, forces_N=forces)
     k_lin = mech.linearised_stiffness(a, guidance_bias_N=2e4)
     np.testing.assert_allclose(k_lin, ref["K"], rtol=0, atol=1e-12 * np.abs(ref["K"]).max())
@@ -193,7 +193,7 @@ def test_energy_conserved_without_damping() -> None:
     minv = 1.0 / np.diag(s.M)
 
     def rhs(_t: float, x: np.ndarray) -> np.ndarray:
-        return np.concatenate([x[n:], minv * (s.G @ a - s.K @ x[:n])])
+        return np.concatenate([x[n:], minv * (s.G @ a + s.Q_preload - s.K @ x[:n])])
 
     sol = scipy.integrate.solve_ivp(rhs, (0, 10.0), np.concatenate([q0, qd0]), method="DOP853",
                                     rtol=1e-11, atol=1e-14, t_eval=np.linspace(0, 10, 501))
@@ -205,10 +205,11 @@ def test_energy_conserved_without_damping() -> None:
     damped = mech.with_magnet_springs(2.0e6, 1.5e6, levitation_damping_N_s_per_m=3e3,
                                       guidance_damping_N_s_per_m=3e3)
     a_mat, _ = damped.state_matrices()
-    q_eq = np.linalg.solve(damped.K, damped.G @ a)
+    q_eq = np.linalg.solve(damped.K, damped.G @ a + damped.Q_preload)
     x0 = np.concatenate([q0 + q_eq, qd0])
     sol = scipy.integrate.solve_ivp(lambda _t, x: a_mat @ x + np.concatenate(
-        [np.zeros(n), minv * (damped.G @ a)]), (0, 10.0), x0, method="DOP853", rtol=1e-10,
+        [np.zeros(n), minv * (damped.G @ a + damped.Q_preload)]), (0, 10.0), x0,
+        method="DOP853", rtol=1e-10,
         atol=1e-14)
     e_eq = float(damped.energy_J(q_eq, np.zeros(n), a))
     e_end = float(damped.energy_J(sol.y[:n, -1], sol.y[n:, -1], a))
@@ -254,16 +255,23 @@ def test_static_equilibrium_straight_level_track() -> None:
     # symmetric vehicle: centred and level (exact zeros up to rounding of the solve)
     for d in ("car_body.y", "car_body.phi"):
         assert abs(q[names.index(d)]) < 1e-14
-    # car body on its air springs: sag m g / (2 k_z)
-    sag = data.loaded_car_body_mass_kg * G0 / (2 * data.spring_vertical_stiffness_N_per_m)
-    assert q[names.index("car_body.z")] == pytest.approx(sag, rel=1e-12)
+    # the air springs' preload (m g / 2 each) carries the car body at its design position:
+    # no sag m g / (2 k_z) (243 mm on the linear stiffness); each spring's force, from
+    # its deflection and preload, is half the loaded car body's weight
+    assert abs(q[names.index("car_body.z")]) < 1e-15
+    s0 = mech.system
+    spring = s0.stiffness_N_per_m * s0.element_deflections(q) + s0.preload_N
+    half = 0.5 * data.loaded_car_body_mass_kg * G0
+    for k, e in enumerate(s0.elements):
+        want = half if e.direction == "z" else 0.0
+        assert spring[k] == pytest.approx(want, rel=1e-12, abs=1e-9)
     # levitation left = right, together the weight; guidance both at the bias
     assert f[0] == pytest.approx(f[1], rel=1e-12)
     assert f[0] + f[1] == pytest.approx(weight, rel=1e-12)
     np.testing.assert_allclose(f[2:], [1.5e4, 1.5e4], rtol=1e-12)
     # the free suspension (magnets as springs) settles centred too
     s = mech.with_magnet_springs(2.0e6, 1.5e6)
-    q_free = np.linalg.solve(s.K, s.G @ a)
+    q_free = np.linalg.solve(s.K, s.G @ a + s.Q_preload)
     for d in ("car_body.y", "car_body.phi", "chassis.y", "chassis.phi"):
         assert abs(q_free[names.index(d)]) < 1e-15
 
@@ -293,7 +301,7 @@ def test_quasi_steady_curve_force_balance(speed_kmh: float) -> None:
     # through the free suspension instead (magnets as springs, element by element): the
     # guidance springs' forces, from their deflections, balance the same load
     s = mech.with_magnet_springs(2.0e6, 1.5e6)
-    q_free = np.linalg.solve(s.K, s.G @ a)
+    q_free = np.linalg.solve(s.K, s.G @ a + s.Q_preload)
     defl = s.element_deflections(q_free)
     k = np.array([e.stiffness_N_per_m for e in s.elements])
     force = dict(zip([e.name for e in s.elements], k * defl, strict=True))

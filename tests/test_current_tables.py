@@ -93,12 +93,12 @@ def test_step_on_tables_equals_bspline_step(all_maps, name: str,
     refs = []
     st = spline.initial_state(gaps=g[0], currents=i0)
     for k in range(t.size - 1):
-        st, out = spline.step(st, 1e-3, u, gaps=g[k], gap_rates=(g[k + 1] - g[k]) / 1e-3)
+        st, out = spline.step(st, 1e-3, u, gaps_m=g[k], gap_rates_m_per_s=(g[k + 1] - g[k]) / 1e-3)
         refs.append(out)
     _no_bspline(monkeypatch)
     st = tables.initial_state(gaps=g[0], currents=i0)
     for k in range(t.size - 1):
-        st, out = tables.step(st, 1e-3, u, gaps=g[k], gap_rates=(g[k + 1] - g[k]) / 1e-3)
+        st, out = tables.step(st, 1e-3, u, gaps_m=g[k], gap_rates_m_per_s=(g[k + 1] - g[k]) / 1e-3)
         ref = refs[k]
         assert out.time_s == ref.time_s
         assert _rel(out.currents_A, ref.currents_A) <= REL
@@ -125,7 +125,7 @@ def test_leaving_the_maps_gives_the_bspline_messages(all_maps) -> None:
         with pytest.raises(InputError) as nan_err:
             model.step(st, 1e-3, np.array([np.nan]))
         with pytest.raises(InputError) as neg_err:
-            model.step(st, 1e-3, 20.0, gaps=np.array([0.010, -0.001]))
+            model.step(st, 1e-3, 20.0, gaps_m=np.array([0.010, -0.001]))
         messages.append([(type(e.value), str(e.value))
                          for e in (step_err, sim_err, nan_err, neg_err)])
     assert messages[0] == messages[1]
@@ -189,7 +189,7 @@ def test_bank_run_steps_equals_its_stepper_bit_for_bit(all_maps, codegen: str) -
     mixed = bank.run_steps(i0, g[:600], u[:600], rates[:600] * 0.5, h)
     state = bank.initial_state(gaps=g[0], currents=i0)
     for k in range(600):
-        state, out = bank.step(state, float(h[k]), u[k], gaps=g[k], gap_rates=rates[k] * 0.5)
+        state, out = bank.step(state, float(h[k]), u[k], gaps_m=g[k], gap_rates_m_per_s=rates[k] * 0.5)
         assert np.array_equal(mixed.circuit_force_N[k], out.circuit_force_N)
     # a step that leaves the maps: step()'s diagnosis, or a stop at it
     u_bad = u[:20].copy()
@@ -226,7 +226,7 @@ def test_kernel_reason_codes_name_each_reason(all_maps) -> None:
     with pytest.raises(InputError, match=r"voltages must be finite: circuit 'd/coil'"):
         bank.step(state, 1e-3, u)
     with pytest.raises(OutOfRangeError, match=r"member 'b'.*over the step.*gap 0\.03 m"):
-        bank.step(state, 1e-3, u[0], gaps=s)
+        bank.step(state, 1e-3, u[0], gaps_m=s)
     assert [int(r) for r in StepFlag.by_priority()] == [4, 1, 8, 2]
 
 

@@ -75,9 +75,9 @@ def test_compiled_and_interpreted_trajectories_agree(models: tuple[mk.FluxModel,
     sc = sr = fc.initial_state(gaps=0.010, currents=20.0)
     sv = fv.initial_state(gaps=0.010, currents=20.0)
     for _ in range(5):
-        sc, oc = fc.step(sc, 1e-3, 80.0, gaps=sc.gaps_m, gap_rates=0.01)
-        sr, orr = fr.step(sr, 1e-3, 80.0, gaps=sr.gaps_m, gap_rates=0.01)
-        sv, ov = fv.step(sv, 1e-3, 80.0, gaps=sv.gaps_m, gap_rates=0.01)
+        sc, oc = fc.step(sc, 1e-3, 80.0, gaps_m=sc.gaps_m, gap_rates_m_per_s=0.01)
+        sr, orr = fr.step(sr, 1e-3, 80.0, gaps_m=sr.gaps_m, gap_rates_m_per_s=0.01)
+        sv, ov = fv.step(sv, 1e-3, 80.0, gaps_m=sv.gaps_m, gap_rates_m_per_s=0.01)
     assert fc.live_step and not fr.live_step
     np.testing.assert_allclose(orr.currents_A, ov.currents_A, rtol=1e-12)
     np.testing.assert_allclose(orr.pole_force_N, ov.pole_force_N, rtol=1e-12)

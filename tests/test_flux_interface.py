@@ -33,7 +33,7 @@ def test_step_equals_simulate(fm: mk.FluxModel) -> None:
     st = fm.initial_state(gaps=gaps[0], currents=10.0)
     for k in range(n):
         rate = (gaps[k + 1] - gaps[k]) / dt
-        st, out = fm.step(st, dt, 50.0, gaps=gaps[k], gap_rates=rate)
+        st, out = fm.step(st, dt, 50.0, gaps_m=gaps[k], gap_rates_m_per_s=rate)
     # step restarts IDAS at every interval (consistent re-initialisation, order 1 again),
     # simulate runs through intervals of equal voltages without restart, so the two agree
     # to the integrator's accuracy, not bit for bit: measured 2.1e-5 relative in the
@@ -134,9 +134,9 @@ def test_nan_and_shape_errors_in_array_inputs(fm: mk.FluxModel) -> None:
 def test_step_rejects_nan_gap_and_foreign_state(u_magnet: mk.Magnet, fm: mk.FluxModel) -> None:
     st = fm.initial_state(gaps=0.01, currents=10.0)
     with pytest.raises(InputError, match="gaps must be finite"):
-        fm.step(st, 1e-3, 20.0, gaps=[float("nan"), 0.01])
+        fm.step(st, 1e-3, 20.0, gaps_m=[float("nan"), 0.01])
     with pytest.raises(InputError, match="gap_rates must be finite"):
-        fm.step(st, 1e-3, 20.0, gap_rates=[0.0, float("nan")])
+        fm.step(st, 1e-3, 20.0, gap_rates_m_per_s=[0.0, float("nan")])
     # a state of the eddy-current model given to the eddy-free model (finding: used to
     # be mis-sliced into a SolverError)
     plain = mk.FluxModel(u_magnet, eddy_currents=False)
@@ -168,7 +168,7 @@ def test_dt_types_and_bools(fm: mk.FluxModel) -> None:
     with pytest.raises(InputError, match="bool"):
         fm.step(st, 1e-3, True)
     with pytest.raises(InputError, match="bool"):
-        fm.step(st, 1e-3, 20.0, gaps=[True, 0.01])
+        fm.step(st, 1e-3, 20.0, gaps_m=[True, 0.01])
     with pytest.raises(InputError, match="bool"):
         mk.simulate(fm, (0.0, 0.01), dt=1e-3, gaps=0.01, voltages=True)
     with pytest.raises(InputError, match="dt"):
@@ -226,7 +226,7 @@ def test_step_bad_inputs(fm: mk.FluxModel) -> None:
     with pytest.raises(InputError, match="shape"):
         fm.step(st, 1e-3, [1.0, 2.0])
     with pytest.raises(InputError, match="> 0"):
-        fm.step(st, 1e-3, 20.0, gaps=0.001, gap_rates=-2.0)    # would close to -1 mm
+        fm.step(st, 1e-3, 20.0, gaps_m=0.001, gap_rates_m_per_s=-2.0)    # would close to -1 mm
     with pytest.raises(InputError, match=r"gap = -0.01 m is not allowed; gaps must be > 0 m"):
         fm.initial_state(gaps=[0.01, -0.01], currents=1.0)
     with pytest.raises(InputError, match=r"rtol = 0.0 must lie in \(0, 1\)"):

@@ -49,8 +49,8 @@ def _run(fm: mk.FluxModel) -> np.ndarray:
     st = fm.initial_state(gaps=s[0], currents=I0)
     rows = []
     for k in range(N):
-        st, out = fm.step(st, DT, u0 * (1.2 if k >= 20 else 1.0), gaps=s[k],
-                          gap_rates=(s[k + 1] - s[k]) / DT)
+        st, out = fm.step(st, DT, u0 * (1.2 if k >= 20 else 1.0), gaps_m=s[k],
+                          gap_rates_m_per_s=(s[k + 1] - s[k]) / DT)
         rows.append(np.concatenate((st.currents_A, [out.force_N], st.differential_state,
                                     st.energy_J)))
     return np.array(rows)
@@ -97,7 +97,7 @@ def test_a_voltage_or_gap_jump_restarts_with_consistent_currents(
     the restarting step to the integrator's accuracy, not the continuation's."""
     live, restart = models["live"], models["restart"]
     u = float(live.resistances[0]) * I0
-    for kwargs in ({"voltages": 1.5 * u}, {"voltages": u, "gaps": 0.011}):
+    for kwargs in ({"voltages_V": 1.5 * u}, {"voltages_V": u, "gaps_m": 0.011}):
         a = live.initial_state(gaps=0.010, currents=I0)
         a, _ = live.step(a, DT, u)
         b, _ = live.step(a, DT, **kwargs)

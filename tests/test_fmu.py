@@ -187,7 +187,7 @@ def test_sub_steps_with_a_moving_gap_equal_the_bank_step(fmu: Any, maps: mk.Char
     for _ in range(20):
         sl.fmu.doStep(t, 2.5e-3)
         t += 2.5e-3
-        state, out = bank.step(state, 2.5e-3, [50.0, 40.0], gap_rates=[0.05, -0.03])
+        state, out = bank.step(state, 2.5e-3, [50.0, 40.0], gap_rates_m_per_s=[0.05, -0.03])
         got = np.array(sl.get("front.I", "rear.I", "front.F", "rear.F"))
         ref = np.concatenate([out.currents_A, out.circuit_force_N])
         worst = max(worst, float(np.max(np.abs(got - ref) / np.abs(ref))))

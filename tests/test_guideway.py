@@ -382,7 +382,7 @@ def test_bundled_guideway_file_and_self_weight_sag() -> None:
     assert span.length_m == pytest.approx(24.768)
     assert set(data.provenance) == {f"guideway.{k}" for k in
                                     ("span_length", "mass_per_length", "bending_stiffness",
-                                     "damping_ratio", "modes")}
+                                     "damping_ratio", "modes", "precamber")}
     assert all(tag[:3] in ("[P]", "[R]", "[D]", "[E]") for tag in data.provenance.values())
     # 5 m g L^4 / (384 EI) with 7.5 t/m, EI = 4e10 N m^2 on 24.768 m: 9.01 mm.  (The
     # published ~2.7 mm on 24 m is 3.3x smaller; see docs/vehicle.md.)

@@ -24,13 +24,9 @@ else:  # pragma: no cover
 PACKAGE = Path(maglevkit.__file__).parent
 PYPROJECT = Path(__file__).resolve().parents[1] / "pyproject.toml"
 
-#: Private names still imported across modules, to go with the reduced-circuit core
-#: (issue 22 item 1: the files moved into reduced/, the core that holds the grids is not
-#: written yet): the bank reads the current model's map-extension helpers.
-KNOWN_PRIVATE = {
-    ("maglevkit.reduced.bank", "maglevkit.reduced.current._extend_axis"),
-    ("maglevkit.reduced.bank", "maglevkit.reduced.current._extend_values"),
-}
+#: Private names still imported across modules (none since the reduced-circuit core,
+#: issue 22 item 1, holds the map-extension helpers).
+KNOWN_PRIVATE: set[tuple[str, str]] = set()
 
 
 @dataclass(frozen=True)

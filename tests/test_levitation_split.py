@@ -45,14 +45,15 @@ def test_network_shape_and_names(std: mk.Magnet) -> None:
     net = std.network
     assert net.gap_names == pole_gap_names(12)
     assert net.circuit_names == ("front", "rear")
-    # per pole: K + 1 = 4 core segments (coil_segments K = 3), gap, window teeth, flank
-    # fringe, 2 flank strips (the strips whose quarter circles land before the window's
-    # centre plane: y0 = 15 and 48.3 mm < 69 mm), pole-back leakage; per neighbour pair:
-    # pole back, stator, leakage between the heads and per coil strip (3); nodes per
-    # pole: head, 3 coil nodes, pole back, stator, window teeth
-    per_pole, per_pair = 4 + 1 + 1 + 1 + 2 + 1, 1 + 1 + 1 + 3
-    assert len(net.branches) == 12 * per_pole + 11 * per_pair == 186
-    assert len(net.nodes) == 12 * 7 and net.n_loops == 186 - 84 + 1
+    # per pole: K + 1 = 4 core segments (coil_segments K = 3), gap, teeth and their slots'
+    # air under the face, window teeth and their slots' air, flank fringe, 2 flank strips
+    # (the strips whose quarter circles land before the window's centre plane: y0 = 15
+    # and 48.3 mm < 69 mm), pole-back leakage; per neighbour pair: pole back, stator,
+    # leakage between the heads and per coil strip (3); nodes per pole: head, 3 coil
+    # nodes, pole back, stator, window teeth, tooth tips
+    per_pole, per_pair = 4 + 1 + 2 + 2 + 1 + 2 + 1, 1 + 1 + 1 + 3
+    assert len(net.branches) == 12 * per_pole + 11 * per_pair == 222
+    assert len(net.nodes) == 12 * 8 and net.n_loops == 222 - 96 + 1
     # each circuit drives 6 poles with alternating polarity; every pole's winding is
     # spread over its 4 core segments, whose turns add up to turns_per_pole
     N = net.turns_matrix
@@ -123,7 +124,15 @@ def test_leakage_permeances_against_roters() -> None:
             if isinstance(e, mk.LeakagePermeance)}
     pp = {k: v for k, v in leak.items() if k.startswith("leak_pp_")}
     pb = {k: v for k, v in leak.items() if k.startswith("leak_pb_")}
-    assert len(pp) == 11 * 4 and len(pb) == 12 and len(leak) == 44 + 12
+    slots = {k: v for k, v in leak.items() if "slots_" in k}
+    assert len(pp) == 11 * 4 and len(pb) == 12 and len(slots) == 24
+    assert len(leak) == 44 + 12 + 24
+    # the slots' air beside the teeth: mu0 (footprint x wp x b/tau_s) / slot depth, the
+    # footprint being the pole length under the face and the window beside it
+    share = st["slot_opening"] / st["slot_pitch"]
+    for name, v in slots.items():
+        footprint = window if name.startswith("window_") else lp
+        assert v == pytest.approx(MU0 * footprint * wp * share / st["slot_depth"], rel=1e-12)
     for name, v in pp.items():
         strip = name.count("_") == 4                   # leak_pp_pXX_pYY_j
         assert v == pytest.approx(g_pp_strip if strip else g_pp_face, rel=1e-12)
@@ -182,14 +191,61 @@ def test_eddy_elements_in_pole_cores_and_back_only(std: mk.Magnet) -> None:
     n_eddy = sum(isinstance(e, mk.EddyCurrent) for br in std.network.branches for e in br.elements)
     assert n_eddy == 12 * 4 + 11       # exactly one per core segment and pole-back segment
     # the segments of a core carry, together, the eddy conductance of the whole core (the
-    # element's conductance is proportional to its length)
+    # element's conductance is proportional to its length), from the face to the pole
+    # back's underside (the junction belongs to the pole back's path)
     m = std.parameters["magnet"]
     whole = mk.EddyCurrent.solid_rectangular("c", m["pole_length"], m["pole_width"],
-                                             m["core_height"] + 0.5 * m["back_height"],
-                                             9.0e-8)
+                                             m["core_height"], 9.0e-8)
     parts = [mk.EddyCurrent.solid_rectangular("c", m["pole_length"], m["pole_width"],
                                               e.length, 9.0e-8)
              for br in std.network.branches if br.name.startswith("core_p01_")
              for e in br.elements if isinstance(e, mk.IronPath)]
     assert sum(e.conductance for e in parts) == pytest.approx(whole.conductance, rel=1e-12)
     assert not std.with_options(eddy_currents=False).network.has_eddy_currents
+
+
+def test_teeth_and_slot_air_share_one_mmf_deep_in_saturation(std: mk.Magnet) -> None:
+    """At 10 mm / 100 A (teeth ~2.1 T, where M700-100A's differential permeability is
+    ~2 mu0) the face flux splits between the teeth and the air of their slots at one
+    magnetic potential drop: the apparent tooth flux density of machine design,
+    ``phi = A_t B(H) + mu0 H A_slot`` with ``H`` the teeth's field (closed form, from
+    the material's B-H law alone); the tooth-tip node conserves flux; and the core's
+    length is the core height (the junction counted once, in the pole back)."""
+    mag = std.with_options(eddy_currents=False)
+    net = mag.network
+    sol = mk.solve_statics(mag, gaps=0.010, currents=[100.0, 100.0])
+    flux = dict(zip(sol.branch_names, np.ravel(sol.branch_flux_Wb), strict=True))
+    st = mag.parameters["stator"]
+    el = {e.name: e for br in net.branches for e in br.elements}
+    for p in pole_gap_names(12):
+        teeth, slot = el[f"iron_teeth_{p}"], el[f"slots_{p}"]
+        # Kirchhoff at the tooth tips: gap = teeth + slots (the solver's loop fluxes)
+        assert flux[f"gap_{p}"] == pytest.approx(flux[f"teeth_{p}"] + flux[f"slots_{p}"],
+                                                 rel=1e-9)
+        b = flux[f"teeth_{p}"] / teeth.cross_section
+        h = float(teeth.material.field_strength(abs(b)))
+        # the slots' air at the teeth's field: B_air = mu0 H over the slots' area
+        a_slot = slot.value * st["slot_depth"] / MU0
+        assert abs(flux[f"slots_{p}"]) == pytest.approx(MU0 * h * a_slot, rel=1e-9)
+    # deep in saturation the slots carry a few % of the face flux, far more of its
+    # increment: mu0 A_slot against mu_diff(2.1 T) A_t ~ 2 mu0 A_t
+    share = abs(flux["slots_p09"] / flux["gap_p09"])
+    assert 0.01 < share < 0.1
+    m = mag.parameters["magnet"]
+    lengths = sum(e.length for br in net.branches if br.name.startswith("core_p01_")
+                  for e in br.elements if isinstance(e, mk.IronPath))
+    assert lengths == pytest.approx(m["core_height"], rel=1e-12)
+
+
+def test_split_network_reciprocity_by_ad_in_saturation(std: mk.Magnet) -> None:
+    """Co-energy reciprocity ``dF_k/dI_j = -dpsi_j/ds_k`` (both from CasADi's AD of the
+    network) at a knee point and deep in saturation, per pole and circuit: a check that
+    the new parallel branches enter the co-energy consistently."""
+    mag = std.with_options(eddy_currents=False)
+    for s, i in ((0.010, 50.0), (0.006, 100.0)):
+        sol = mk.solve_statics(mag, gaps=s, currents=[i, 0.8 * i])
+        df_di = np.asarray(sol.dforce_dcurrent_N_per_A)        # (gaps, circuits)
+        dpsi_ds = np.asarray(sol.dpsi_dgap_Wb_per_m)           # (circuits, gaps)
+        scale = np.max(np.abs(df_di))
+        # round-off of the Newton solution (1e-12) and of the AD Jacobians
+        assert np.max(np.abs(df_di + dpsi_ds.T)) < 1e-7 * scale

@@ -140,8 +140,8 @@ def test_current_model_virtual_control_law_isolates_dl_ds(ideal_maps) -> None:  
     state = model.initial_state(gaps=s0, currents=i0)
     currents = [i0]
     for k in range(t.size - 1):
-        state, out = model.step(state, t[k + 1] - t[k], voltages=R_EL * state.inductor_currents_A,
-                                gaps=gaps[k], gap_rates=sdot)
+        state, out = model.step(state, t[k + 1] - t[k], voltages_V=R_EL * state.inductor_currents_A,
+                                gaps_m=gaps[k], gap_rates_m_per_s=sdot)
         currents.append(float(out.currents_A[0]))
     # The control law is applied with a zero-order hold: psi drifts by about
     # (R/L) (dt/2) (Delta I / I) = (2/0.113) (5e-5) (0.83) = 0.07 % over the ramp; the
@@ -161,10 +161,10 @@ def test_current_model_refuses_to_leave_its_maps(ideal_maps) -> None:  # type: i
         CurrentModel(ideal_maps, extrapolate=True).simulate(t, gaps=0.021, voltages=1.0,
                                                             initial_currents=0.0)
     with pytest.raises(mk.InputError, match="gaps must be > 0"):
-        model.step(model.initial_state(gaps=0.01, currents=1.0), 1e-3, voltages=2.0, gaps=-0.01)
+        model.step(model.initial_state(gaps=0.01, currents=1.0), 1e-3, voltages_V=2.0, gaps_m=-0.01)
     with pytest.raises(mk.InputError, match="expected 1 values"):
-        model.step(model.initial_state(gaps=0.01, currents=1.0), 1e-3, voltages=[2.0, 2.0],
-                   gaps=0.01)
+        model.step(model.initial_state(gaps=0.01, currents=1.0), 1e-3, voltages_V=[2.0, 2.0],
+                   gaps_m=0.01)
 
 
 def test_dask_local_cluster_gives_identical_maps(u_magnet: mk.Magnet, u_maps) -> None:  # type: ignore[no-untyped-def]
@@ -217,7 +217,7 @@ def _check_step_vs_simulate(model: CurrentModel, rel: float) -> None:
     state = model.initial_state(gaps=gaps[0], currents=15.0)
     for k in range(t.size - 1):
         rate = (gaps[k + 1] - gaps[k]) / (t[k + 1] - t[k])
-        state, out = model.step(state, t[k + 1] - t[k], volts[k], gaps=gaps[k], gap_rates=rate)
+        state, out = model.step(state, t[k + 1] - t[k], volts[k], gaps_m=gaps[k], gap_rates_m_per_s=rate)
         assert out.currents_A[0] == pytest.approx(res.currents_A[k + 1, 0], rel=rel)
         assert out.force_N == pytest.approx(res.force_N[k + 1], rel=rel)
     assert res.final_state.inductor_currents_A[0] == pytest.approx(
@@ -472,7 +472,7 @@ def test_range_is_checked_in_rk4_sub_steps(ideal_maps) -> None:  # type: ignore[
     state = model.initial_state(gaps=0.0041, currents=66.0)
     rate = (0.0199 - 0.0041) / 0.1
     with pytest.raises(mk.OutOfRangeError, match="RK4 sub-step"):
-        model.step(state, 0.1, 0.0, gap_rates=rate)
+        model.step(state, 0.1, 0.0, gap_rates_m_per_s=rate)
     with pytest.raises(mk.OutOfRangeError, match="RK4 sub-step"):
         model.simulate((0.0, 0.1), dt=0.1, gaps=lambda t: 0.0041 + rate * t, voltages=0.0,
                        initial_currents=66.0)

@@ -117,7 +117,7 @@ def test_default_eddy_resistance_against_an_independent_tail_fit(u_magnet: mk.Ma
     assert 1.015 < fit_lib / r_tail < 1.04, (fit_lib, r_tail)
     model = mk.CurrentModel(maps)
     _, out = model.step(model.initial_state(gaps=s, currents=i0), 1e-7, r_el * (i0 + di_inf),
-                        gaps=s, gap_rates=0.0)
+                        gaps_m=s, gap_rates_m_per_s=0.0)
     r_model = r_el * di_inf / float(out.currents_A[0] - i0) - r_el
     assert 1.015 < r_model / r_tail < 1.04, (r_model, r_tail)
     lin = model.linearize(gap_m=s, current_A=i0)

@@ -154,8 +154,11 @@ def recorded_run() -> dict[str, Any]:
     ds = res.dataset
     x = (float(ds.attrs["nose_position_at_t0_m"]) + V_RUN * ds.time.values[:, None]
          - model.circuit_xi_m[None, :])                # circuit positions on the guideway
+    # r: the irregularity plus the girders' built-in precamber (the bundled guideway
+    # file's; the run adds it to the irregularity, as a camber is the same term of the gap)
+    full = prof + model.guideway.built_in_profile
     return {"model": model, "run": res, "gaps": gaps, "rates": rates, "x": x,
-            "r": prof.elevation_m(x), "r_x": prof.slope(x)}
+            "r": full.elevation_m(x), "r_x": full.slope(x)}
 
 
 def test_gap_rate_is_the_time_derivative_of_the_gap(recorded_run: dict[str, Any]) -> None:

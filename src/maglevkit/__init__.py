@@ -147,7 +147,7 @@ _LAZY: dict[str, str] = {
 }
 """Public name -> the submodule that defines it (imported on first access)."""
 
-_SUBPACKAGES = frozenset({"calibration", "circuit", "cli", "compare", "control", "errors",
+_SUBPACKAGES = frozenset({"calibration", "circuit", "cli", "compare", "control", "design", "errors",
                           "export", "figures", "magnets", "materials", "models", "plant",
                           "plotting", "reduced", "reduction", "simulation", "sweep", "validation",
                           "vehicle"})

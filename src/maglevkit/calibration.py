@@ -49,6 +49,7 @@ import numpy as np
 from .circuit.factors import PARAMETERS, with_factors
 from .circuit.network import Network
 from .errors import DataError, DataWarning, InputError, MaglevkitWarning, SolverError
+from .parameter_files import toml_text
 
 __all__ = ["PARAMETERS", "DEFAULT_PARAMETERS", "Calibration", "StaticPoints", "calibrate",
            "calibrated_network", "parameter_sensitivities", "read_points",
@@ -672,35 +673,6 @@ def calibrate(magnet: Any, data: str | Path | StaticPoints, *,
 
 
 # ---------------------------------------------------------------------------- TOML out/in
-def _toml_value(v: Any) -> str:
-    if isinstance(v, bool):
-        return "true" if v else "false"
-    if isinstance(v, (int, float)):
-        return repr(float(v)) if isinstance(v, float) else str(v)
-    if isinstance(v, str):
-        return '"' + v.replace("\\", "\\\\").replace('"', '\\"') + '"'
-    if isinstance(v, (list, tuple)):
-        return "[" + ", ".join(_toml_value(x) for x in v) + "]"
-    raise InputError(f"cannot write {v!r} to TOML")
-
-
-def _toml(tables: Mapping[str, Any], prefix: str = "") -> list[str]:
-    lines: list[str] = []
-    scalars = {k: v for k, v in tables.items() if not isinstance(v, Mapping)}
-    subs = {k: v for k, v in tables.items() if isinstance(v, Mapping)}
-    if prefix and scalars:
-        lines.append(f"[{prefix}]")
-    for k, v in scalars.items():
-        key = k if k.replace("_", "").isalnum() else _toml_value(k)
-        lines.append(f"{key} = {_toml_value(v)}")
-    if scalars:
-        lines.append("")
-    for k, v in subs.items():
-        name = k if k.replace("_", "").replace("-", "").isalnum() else _toml_value(k)
-        lines += _toml(v, f"{prefix}.{name}" if prefix else name)
-    return lines
-
-
 def write_calibrated_toml(magnet: Any, result: Calibration, path: str | Path, *,
                           data_source: str = "") -> Path:
     """Write the magnet's parameter file with a ``[calibration]`` table: the fitted values
@@ -738,7 +710,7 @@ def write_calibrated_toml(magnet: Any, result: Calibration, path: str | Path, *,
     header = (f"# {getattr(magnet, 'name', 'magnet')}: calibrated with maglevkit "
               "(maglevkit.calibration); maglevkit.load_magnet and every command taking MAGNET "
               "apply the [calibration] factors\n")
-    p.write_text(header + "\n".join(_toml(doc)) + "\n")
+    p.write_text(header + toml_text(doc))
     return p
 
 

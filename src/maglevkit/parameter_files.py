@@ -22,7 +22,7 @@ if sys.version_info >= (3, 11):
 else:  # pragma: no cover
     import tomli as tomllib
 
-__all__ = ["bundled_files", "parse_provenance", "read_parameter_file"]
+__all__ = ["bundled_files", "parse_provenance", "read_parameter_file", "toml_text"]
 
 
 def _folder(folder: str) -> Any:
@@ -140,3 +140,56 @@ def parse_provenance(parameters: Mapping[str, Any], tables: Collection[str],
             raise ParameterFileError(f"{source}: [provenance] {key!r} must be a string")
         prov[str(key)] = tag
     return prov
+
+
+# ---------------------------------------------------------------------------- writing
+def _toml_value(v: Any) -> str:
+    if isinstance(v, bool):
+        return "true" if v else "false"
+    if isinstance(v, (int, float)):
+        return repr(float(v)) if isinstance(v, float) else str(v)
+    if isinstance(v, str):
+        return '"' + v.replace("\\", "\\\\").replace('"', '\\"') + '"'
+    if isinstance(v, (list, tuple)):
+        return "[" + ", ".join(_toml_value(x) for x in v) + "]"
+    raise InputError(f"cannot write {v!r} to TOML")
+
+
+def _toml(tables: Mapping[str, Any], prefix: str = "") -> list[str]:
+    lines: list[str] = []
+    scalars = {k: v for k, v in tables.items() if not isinstance(v, Mapping)}
+    subs = {k: v for k, v in tables.items() if isinstance(v, Mapping)}
+    if prefix and scalars:
+        lines.append(f"[{prefix}]")
+    for k, v in scalars.items():
+        key = k if k.replace("_", "").isalnum() else _toml_value(k)
+        lines.append(f"{key} = {_toml_value(v)}")
+    if scalars:
+        lines.append("")
+    for k, v in subs.items():
+        name = k if k.replace("_", "").replace("-", "").isalnum() else _toml_value(k)
+        lines += _toml(v, f"{prefix}.{name}" if prefix else name)
+    return lines
+
+
+def toml_text(tables: Mapping[str, Any]) -> str:
+    """TOML text of nested tables of numbers, strings, bools and lists: the one writer of
+    the parameter files maglevkit writes (calibrated and optimised magnets).
+
+    Parameters
+    ----------
+    tables : mapping
+        Top-level scalars and (nested) tables; values are numbers, strings, bools or lists
+        of them.
+
+    Returns
+    -------
+    str
+        The TOML text (ends with a newline).
+
+    Raises
+    ------
+    InputError
+        A value TOML cannot hold here (e.g. None).
+    """
+    return "\n".join(_toml(tables)) + "\n"

@@ -19,19 +19,22 @@ and what is allowed.  The module sits below every other layer (it needs only num
 
 from __future__ import annotations
 
+import functools
 import math
 import numbers
 import warnings
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, TypeVar, cast
 
 import numpy as np
 
 from .errors import InputError, MaglevkitError, PlausibilityWarning
 
-__all__ = ["real_number", "real_array", "whole_number", "flag", "optional_flag",
-           "describe", "Plausible", "check_plausible"]
+_F = TypeVar("_F", bound=Callable[..., Any])
+
+__all__ = ["renamed_keywords", "real_number", "real_array", "whole_number", "flag",
+           "optional_flag", "describe", "Plausible", "check_plausible"]
 
 
 def describe(value: Any) -> str:
@@ -355,3 +358,47 @@ def check_plausible(values: Mapping[str, Any], ranges: Mapping[str, Plausible],
             flagged.append(name)
             break
     return flagged
+
+
+def renamed_keywords(**renames: str) -> Callable[[_F], _F]:
+    """Decorator: keep old (unit-less) keyword names of a function as deprecated aliases.
+
+    ``@renamed_keywords(dt="dt_s", gaps="gaps_m")`` lets callers still write ``dt=...``:
+    the value is passed on as ``dt_s`` with a :class:`DeprecationWarning` that names the
+    new keyword.  Giving both names is an :class:`~maglevkit.errors.InputError`.  Calls
+    without an old name pay one set test.
+
+    Parameters
+    ----------
+    **renames : str
+        Old keyword name -> new keyword name.
+
+    Returns
+    -------
+    callable
+        The decorator (it keeps the function's name, docstring and signature).
+    """
+    old_names = frozenset(renames)
+
+    def decorate(fn: _F) -> _F:
+        where = fn.__qualname__
+
+        @functools.wraps(fn)
+        def wrapper(*args: Any, **kwargs: Any) -> Any:
+            if kwargs and not old_names.isdisjoint(kwargs):
+                found = [old for old in renames if old in kwargs]
+                for old in found:
+                    new = renames[old]
+                    if new in kwargs:
+                        raise InputError(f"{where}: give {new}= only ({old}= is its "
+                                         "deprecated name)")
+                    kwargs[new] = kwargs.pop(old)
+                # one warning per call, naming every old keyword and its new name
+                warnings.warn(f"{where}: " + "; ".join(f"{old}= is deprecated, use "
+                                                       f"{renames[old]}=" for old in found)
+                              + " (same values and units)", DeprecationWarning, stacklevel=2)
+            return fn(*args, **kwargs)
+
+        return cast(_F, wrapper)
+
+    return decorate

@@ -33,6 +33,7 @@ from ..materials import MU0, Material, get_material
 from ..validation import real_array
 
 __all__ = [
+    "symbolic",
     "Element",
     "LinearElement",
     "IronPath",
@@ -48,8 +49,30 @@ __all__ = [
 ]
 
 
+def symbolic(value: Any) -> bool:
+    """Whether ``value`` is a CasADi symbolic expression (``SX`` or ``MX``).
+
+    Element geometry may be symbolic when a builder is evaluated with CasADi symbols (the
+    design optimisation's exact geometry derivatives, :mod:`maglevkit.design`); the range
+    checks then apply to the numbers the symbols later take (the optimiser's bounds and
+    constraints), not here.
+
+    Parameters
+    ----------
+    value : object
+        Any value (a geometry number [m, m^2, H] or a CasADi expression).
+
+    Returns
+    -------
+    bool
+    """
+    return isinstance(value, (ca.SX, ca.MX))
+
+
 def _positive(owner: str, **values: float) -> None:
     for key, v in values.items():
+        if symbolic(v):
+            continue
         if not isinstance(v, (int, float)) or isinstance(v, bool):
             raise ParameterError(f"{owner}: {key} must be a number, got {v!r}")
         if not (math.isfinite(v) and v > 0.0):
@@ -58,6 +81,8 @@ def _positive(owner: str, **values: float) -> None:
 
 def _nonnegative(owner: str, **values: float) -> None:
     for key, v in values.items():
+        if symbolic(v):
+            continue
         if not isinstance(v, (int, float)) or isinstance(v, bool):
             raise ParameterError(f"{owner}: {key} must be a number, got {v!r}")
         if not (math.isfinite(v) and v >= 0.0):
@@ -389,7 +414,8 @@ class AirGap(LinearElement):
         if not isinstance(self.gap_input, str) or not self.gap_input:
             raise ParameterError(f"{owner}: gap_input must be a non-empty name")
         _positive(owner, pole_area=self.pole_area)
-        edges = tuple((float(w), float(r)) for w, r in self.fringe_edges)
+        edges = tuple((w if symbolic(w) else float(w), r if symbolic(r) else float(r))
+                      for w, r in self.fringe_edges)
         object.__setattr__(self, "fringe_edges", edges)
         for w, r in edges:
             _positive(owner, fringe_edge_length=w, fringe_radius=r)
@@ -401,7 +427,7 @@ class AirGap(LinearElement):
         object.__setattr__(self, "face_slots", slots)
         for w, b in slots:
             _positive(owner, face_slot_length=w, face_slot_opening=b)
-        if sum(w * b for w, b in slots) >= self.pole_area:
+        if slots and sum(w * b for w, b in slots) >= self.pole_area:
             raise ParameterError(f"{owner}: the face slots (length x opening) cover the "
                                  "whole pole area; pole_area must include them")
         _nonnegative(owner, slot_pitch=self.slot_pitch, slot_opening=self.slot_opening)
@@ -618,7 +644,9 @@ class LeakagePermeance(LinearElement):
         """
         _positive(f"leakage {name!r}", length=length, inner_radius=inner_radius,
                   thickness=thickness)
-        return cls(name, MU0 * length * math.log(1.0 + thickness / inner_radius) / math.pi)
+        ratio = 1.0 + thickness / inner_radius
+        log = ca.log(ratio) if symbolic(ratio) else math.log(ratio)
+        return cls(name, MU0 * length * log / math.pi)
 
     @classmethod
     def quarter_hollow_cylinder(cls, name: str, length: float, inner_radius: float,

@@ -7,6 +7,7 @@ from __future__ import annotations
 
 from . import compare as _compare  # noqa: F401,E402  (registers commands)
 from . import demo as _demo  # noqa: F401,E402
+from . import design as _design  # noqa: F401,E402
 from . import discover as _discover  # noqa: F401,E402
 from . import export as _export  # noqa: F401,E402
 from . import figures as _figures  # noqa: F401,E402

@@ -19,6 +19,7 @@ class Kind(str, Enum):
     guideways = "guideways"
     scenarios = "scenarios"
     sweeps = "sweeps"
+    designs = "designs"
 
 
 #: kind -> (folder under maglevkit/data, top-level table that marks the kind, title key)
@@ -28,12 +29,14 @@ _KINDS: dict[str, tuple[str, str | None, tuple[str, str] | None]] = {
     "guideways": ("vehicle", "guideway", None),
     "scenarios": ("scenarios", None, None),
     "sweeps": ("sweeps", None, ("sweep", "name")),
+    "designs": ("designs", "design", None),
 }
 #: the commands that take each kind (the next step after listing)
 _USE = {"magnets": "maglevkit statics NAME", "vehicles": "maglevkit vehicle run NAME",
         "guideways": "maglevkit vehicle run --guideway NAME",
         "scenarios": "maglevkit simulate MAGNET --scenario NAME",
-        "sweeps": "maglevkit sweep NAME -o sweep.nc"}
+        "sweeps": "maglevkit sweep NAME -o sweep.nc",
+        "designs": "maglevkit design NAME -o design.toml"}
 #: magnet kinds ([magnet] kind) -> the bundled file a template is made from
 MAGNET_KIND_EXAMPLES = {"u_magnet": "u-magnet", "levitation_magnet": "tr09-standard",
                         "guidance_magnet": "tr-guidance"}
@@ -101,7 +104,7 @@ def list_files(
 @app.command("template", short_help="Print a commented parameter file to start from.")
 def template(
     kind: Annotated[str, typer.Argument(metavar="KIND",
-        help="magnet, vehicle, guideway, scenario or sweep.")],
+        help="magnet, vehicle, guideway, scenario, sweep or design.")],
     name: Annotated[str | None, typer.Argument(metavar="NAME",
         help="For a magnet: its kind (u_magnet, levitation_magnet, guidance_magnet) or a "
              "bundled name; otherwise a bundled name (default: the first).")] = None,

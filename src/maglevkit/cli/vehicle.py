@@ -65,15 +65,48 @@ def run(
         help="Progress on stderr (a bar on a terminal, plain lines with the ETA in logs).")]
     = True,
     force: ForceOption = False,
+    vehicle_option: Annotated[str | None, typer.Option(
+        "--vehicle", metavar="NAME|FILE",
+        help="Vehicle file or bundled name (as VEHICLE); a cross-section file (e.g. "
+             "tr09-cross-section) runs the cross-section model.")] = None,
+    curve: Annotated[str | None, typer.Option(
+        metavar="RADIUS_M:SUPERELEVATION_DEG:TRANSITION_M",
+        help="Cross-section only: enter a curve through a transition of that length "
+             "(optional 4th value: its start [m]).")] = None,
+    crosswind: Annotated[str | None, typer.Option(
+        metavar="PEAK_N[:RISE_S[:HOLD_S[:START_S]]][:SHAPE]",
+        help="Cross-section only: lateral gust force on the car body, SHAPE 1-cosine "
+             "(default) or step.")] = None,
+    lateral: Annotated[str | None, typer.Option(
+        metavar="SPEC",
+        help="Cross-section only: guidance-rail irregularity random:RMS[:SEED] (alignment "
+             "spectrum), girders:H[:SEED] (rail offsets at girder joints), joined by '+'; "
+             "--irregularity is then the stator's (vertical).")] = None,
 ) -> None:
     """Run the train at constant speed; report minimum gaps, peak currents, comfort and the
     real-time factor (results on stdout, diagnostics on stderr).  Ctrl-C stops the run:
     "interrupted" on stderr, exit code 130, and with -o the run up to there is written.
+    A cross-section vehicle (--vehicle tr09-cross-section) runs one slice across the track
+    with levitation and guidance magnets, curves and crosswind.
 
     \b
     Example:
       maglevkit vehicle run tr09 --speed-kmh 400 --duration 1.5 -o run.nc
+      maglevkit vehicle run --vehicle tr09-cross-section --speed-kmh 400 --curve 4000:12:300
     """
+    if _cross_section_requested(vehicle, vehicle_option, curve, crosswind, lateral):
+        if guideway is not None or rigid:
+            raise fail("--guideway/--rigid: the cross-section model runs on a rigid "
+                       "guideway; leave them out")
+        try:
+            _run_cross_section(vehicle_option or vehicle, speed_kmh, duration, dt, failure,
+                               magnets, maps_cache, output, plot, force, curve, crosswind,
+                               irregularity, lateral)
+        except KeyboardInterrupt:
+            raise interrupted() from None
+        return
+    if vehicle_option is not None:
+        vehicle = vehicle_option
     try:
         _run(vehicle, speed_kmh, speed, duration, dt, irregularity, failure, rigid, magnets,
              maps_cache, output, plot, progress, force, guideway)
@@ -153,5 +186,90 @@ def _run(vehicle: str, speed_kmh: float | None, speed: float | None, duration: f
 
         with writing(plot, "--plot"):
             written = plot_vehicle_run(res.dataset, plot)
+        for p in written:
+            info(f"wrote {p}")
+
+
+# ---------------------------------------------------------------- cross-section (issue 24)
+def _cross_section_requested(vehicle: str, vehicle_option: str | None, curve: str | None,
+                             crosswind: str | None, lateral: str | None = None) -> bool:
+    """True when the vehicle named is a cross-section file; --curve/--crosswind need one."""
+    from ..vehicle.crosssection import bundled_cross_sections
+
+    name = vehicle_option or vehicle
+    is_xsec = name in bundled_cross_sections()
+    if not is_xsec and Path(name).is_file():
+        try:
+            import tomllib
+        except ImportError:  # pragma: no cover - Python 3.10
+            import tomli as tomllib  # type: ignore[no-redef]
+        try:
+            is_xsec = "cross_section" in tomllib.loads(Path(name).read_text())
+        except (OSError, ValueError, UnicodeDecodeError):
+            is_xsec = False
+    if not is_xsec:
+        for opt, val in (("--curve", curve), ("--crosswind", crosswind),
+                         ("--lateral", lateral)):
+            if val is not None:
+                raise fail(f"{opt} {val!r}: needs a cross-section vehicle (--vehicle "
+                           f"tr09-cross-section); {name!r} is a heave-pitch train")
+    return is_xsec
+
+
+def _run_cross_section(name: str, speed_kmh: float | None, duration: float, dt: float,
+                       failure: list[str] | None, magnets: str, maps_cache: Path | None,
+                       output: Path | None, plot: Path | None, force: bool,
+                       curve: str | None, crosswind: str | None, irregularity: str = "none",
+                       lateral: str | None = None) -> None:
+    from ..vehicle.crossrun import (
+        CrossSectionModel,
+        parse_crosswind,
+        parse_curve,
+        parse_lateral,
+    )
+    from ..vehicle.crosssection import load_cross_section
+    from ..vehicle.data import load_guideway
+    from ..vehicle.simulation import parse_failure, parse_irregularity
+
+    output = output_file(output, "-o", formats=("nc",), force=force)
+    if plot is not None:
+        plot = output_dir(plot, "--plot")
+    try:
+        speed_kmh = 0.0 if speed_kmh is None else speed_kmh
+        if not (speed_kmh >= 0 and speed_kmh < 2000):
+            raise typer.BadParameter(f"--speed-kmh {speed_kmh} km/h must be in 0 ... 2000")
+        for opt, value in (("--duration", duration), ("--dt", dt)):
+            if not (math.isfinite(value) and value > 0):
+                raise typer.BadParameter(f"{opt} {value:g}: must be a finite number of "
+                                         "seconds > 0")
+        if duration < 2 * dt:
+            raise typer.BadParameter(f"--duration {duration:g} s is less than two steps of "
+                                     f"--dt {dt:g} s")
+        data = load_cross_section(name)
+        fails = [parse_failure(f) for f in (failure or [])]
+        crv = parse_curve(curve) if curve is not None else None
+        gust = parse_crosswind(crosswind) if crosswind is not None else None
+        girder = load_guideway().span.length_m
+        vert = parse_irregularity(irregularity, span_length_m=girder)
+        lat = parse_lateral(lateral, girder_length_m=girder) if lateral is not None else None
+        info(f"setting up {data.name} (maps, controllers) ...")
+        model = CrossSectionModel(data, magnets=magnets, maps_cache=maps_cache)
+        res = model.run(speed_m_per_s=speed_kmh / 3.6, duration_s=duration, dt_s=dt,
+                        curve=crv, crosswind=gust, failures=fails, vertical=vert,
+                        lateral=lat)
+    except typer.BadParameter as exc:
+        raise fail(str(exc)) from None
+    except MaglevkitError as exc:
+        raise fail(exc) from None
+    typer.echo(res.report())
+    if output is not None:
+        with writing(output, "-o"):
+            res.to_netcdf(output)
+        info(f"wrote {output}")
+    if plot is not None:
+        from ..vehicle.crossplots import plot_cross_section_run
+
+        with writing(plot, "--plot"):
+            written = plot_cross_section_run(res.dataset, plot)
         for p in written:
             info(f"wrote {p}")

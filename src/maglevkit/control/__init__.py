@@ -9,7 +9,7 @@
 * :mod:`~maglevkit.control.loop`: :func:`closed_loop` with a heave mass.
 """
 
-from .cascade import CascadeController, GapController, design_gap_controller
+from .cascade import CascadeController, GapController, damping_input, design_gap_controller
 from .interface import Controller, Measurement
 from .loop import ClosedLoopResult, closed_loop
 
@@ -20,5 +20,6 @@ __all__ = [
     "GapController",
     "Measurement",
     "closed_loop",
+    "damping_input",
     "design_gap_controller",
 ]

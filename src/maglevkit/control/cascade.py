@@ -4,7 +4,8 @@ Inner loop on the flux linkage, outer PID loop on the gap::
 
     psi_hat' = U - R I                         (flux estimate from Faraday's law, eq. 3)
     e        = s - s_ref                       (gap too large -> more flux)
-    rho      = k_p (s - s_0 - b (s_ref - s_0)) + k_d ds/dt + k_i int e dt
+    rho      = k_p (s - s_0 - b (s_ref - s_0)) + k_d d + k_i int e dt
+    d        = (1 - beta) ds/dt + beta u'        (damping input; beta = velocity_blend)
     psi_ref  = psi_0 (1 + rho)                 (every circuit, relative to its bias flux)
     U_j      = R_j I_j + k_psi (psi_ref,j - psi_hat,j),   |U_j| <= U_max (chopper limit)
 
@@ -22,6 +23,13 @@ gets the natural frequency ``omega`` and damping ``zeta``; ``k_i = k_p omega / 5
 :class:`CascadeController` is the sampled-data form (the shared controller interface,
 :class:`~maglevkit.control.interface.Controller`): it integrates the flux estimate and the
 error integral between samples.
+
+The damping input ``d`` blends the measured gap rate ``ds/dt`` with the magnet's absolute
+vertical velocity ``u'`` (positive downward, as the gap; in an EMS vehicle from an
+accelerometer, in the vehicle model the frame state): :func:`damping_input`.  On a rigid,
+even track the two are equal (``s = s_0 + u``); on an elastic guideway the gap rate jumps
+at every pier by ``v`` times the slope change there, which ``beta = 0`` (the default) feeds
+straight into the flux demand (docs/vehicle.md, "Gap-controller damping").
 """
 
 from __future__ import annotations
@@ -38,7 +46,33 @@ from ..models.statics import solve_statics
 from ..validation import real_number
 from .interface import Measurement
 
-__all__ = ["CascadeController", "GapController", "design_gap_controller"]
+__all__ = ["CascadeController", "GapController", "damping_input", "design_gap_controller"]
+
+
+def damping_input(gap_rate_m_per_s: Any, absolute_velocity_m_per_s: Any,
+                  velocity_blend: Any) -> Any:
+    """The cascade's damping input ``d = (1 - beta) ds/dt + beta u'`` [m/s].
+
+    Element-wise on floats, NumPy arrays and CasADi expressions: the one expression that
+    :class:`GapController` and the vehicle models' vectorised cascades evaluate.
+
+    Parameters
+    ----------
+    gap_rate_m_per_s : float, array_like or CasADi
+        Measured gap rate ``ds/dt`` [m/s] (> 0: the gap opens).
+    absolute_velocity_m_per_s : float, array_like or CasADi
+        The magnet's absolute vertical velocity ``u'`` [m/s], positive downward (the
+        direction that opens the gap).
+    velocity_blend : float, array_like or CasADi
+        ``beta`` in [0, 1] [-]: 0 the gap rate only, 1 the absolute velocity only (not
+        checked here; :class:`GapController` checks its own).
+
+    Returns
+    -------
+    float, ndarray or CasADi
+        ``d`` [m/s]; ``beta = 0`` returns the gap rate bit for bit.
+    """
+    return gap_rate_m_per_s + velocity_blend * (absolute_velocity_m_per_s - gap_rate_m_per_s)
 
 
 @dataclass(frozen=True)
@@ -64,6 +98,9 @@ class GapController:
     setpoint_weight : float
         Set-point weight b of the proportional term (0: I-PD form, reference changes act
         through the integrator only and do not kick the flux; 1: plain PID).
+    velocity_blend : float
+        ``beta`` in [0, 1] [-]: the share of the magnet's absolute velocity in the damping
+        input (:func:`damping_input`; 0: the gap rate only).
     """
 
     gap_ref_m: float
@@ -76,11 +113,15 @@ class GapController:
     resistances_ohm: tuple[float, ...]
     voltage_limit_V: float = 440.0
     setpoint_weight: float = 0.0
+    velocity_blend: float = 0.0
 
     def __post_init__(self) -> None:
         for k in ("gap_ref_m", "bias_current_A", "kp_per_m", "kd_s_per_m", "ki_per_m_s",
-                  "kflux_per_s", "voltage_limit_V", "setpoint_weight"):
+                  "kflux_per_s", "voltage_limit_V", "setpoint_weight", "velocity_blend"):
             real_number(getattr(self, k), k, error=ParameterError)
+        if not 0.0 <= self.velocity_blend <= 1.0:
+            raise ParameterError(f"velocity_blend = {self.velocity_blend!r}: allowed 0 ... 1 "
+                                 "(0: damping from the gap rate, 1: from the absolute velocity)")
         if self.gap_ref_m <= 0 or self.voltage_limit_V <= 0 or self.kflux_per_s <= 0:
             raise ParameterError("gap_ref_m, voltage_limit_V and kflux_per_s must be > 0")
         if len(self.flux_bias_Wb) != len(self.resistances_ohm):
@@ -88,7 +129,8 @@ class GapController:
 
     def voltages(self, gap_m: float, gap_rate_m_per_s: float, integral_m_s: float,
                  currents_A: np.ndarray, flux_estimate_Wb: np.ndarray,
-                 gap_ref_m: float | None = None) -> np.ndarray:
+                 gap_ref_m: float | None = None, *,
+                 absolute_velocity_m_per_s: float | None = None) -> np.ndarray:
         """Circuit voltages [V] from the measured gap, gap rate, error integral, currents
         and the flux estimate.
 
@@ -108,6 +150,10 @@ class GapController:
             Gap reference [m] for this sample; ``None`` (default): the design gap
             :attr:`gap_ref_m`.  Acts through the proportional term only with the weight
             :attr:`setpoint_weight` (and through ``integral_m_s``, which the caller keeps).
+        absolute_velocity_m_per_s : float, optional
+            The magnet's absolute vertical velocity [m/s], positive downward, blended into
+            the damping input by :attr:`velocity_blend` (:func:`damping_input`); ``None``
+            (default): the gap rate stands for it (exact on a rigid, even track).
 
         Returns
         -------
@@ -122,7 +168,10 @@ class GapController:
         ref = self.gap_ref_m if gap_ref_m is None else gap_ref_m
         s0 = self.gap_ref_m
         rho = (self.kp_per_m * (gap_m - s0 - self.setpoint_weight * (ref - s0))
-               + self.kd_s_per_m * gap_rate_m_per_s + self.ki_per_m_s * integral_m_s)
+               + self.kd_s_per_m * damping_input(
+                   gap_rate_m_per_s, gap_rate_m_per_s if absolute_velocity_m_per_s is None
+                   else absolute_velocity_m_per_s, self.velocity_blend)
+               + self.ki_per_m_s * integral_m_s)
         psi_ref = np.asarray(self.flux_bias_Wb) * (1.0 + rho)
         r = np.asarray(self.resistances_ohm)
         u = r * np.asarray(currents_A) + self.kflux_per_s * (psi_ref - flux_estimate_Wb)
@@ -132,7 +181,8 @@ class GapController:
 def design_gap_controller(magnet: Any, *, mass_kg: float, gap_m: float, current_A: float,
                           bandwidth_hz: float = 5.0, damping: float = 0.7,
                           flux_bandwidth_hz: float = 30.0,
-                          voltage_limit_V: float = 440.0) -> GapController:
+                          voltage_limit_V: float = 440.0,
+                          velocity_blend: float = 0.0) -> GapController:
     """Place the gains from the linearised magnet at ``(gap_m, current_A)`` (all gaps equal,
     every circuit at the same current; exact statics sensitivities).
 
@@ -158,6 +208,10 @@ def design_gap_controller(magnet: Any, *, mass_kg: float, gap_m: float, current_
         above ``bandwidth_hz``.
     voltage_limit_V : float, default 440.0
         Actuator limit ``|U| <= U_max`` [V], > 0 (chopper supply).
+    velocity_blend : float, default 0.0
+        Share ``beta`` in [0, 1] [-] of the magnet's absolute velocity in the damping
+        input (:func:`damping_input`); the gains do not depend on it (on the rigid track
+        of the design the two velocities are equal).
 
     Returns
     -------
@@ -209,7 +263,8 @@ def design_gap_controller(magnet: Any, *, mass_kg: float, gap_m: float, current_
     return GapController(gap_m, tuple(float(v) for v in psi0), float(current_A), kp, kd,
                          kp * omega / 5.0,
                          2 * math.pi * flux_bandwidth_hz,
-                         tuple(float(v) for v in net.resistances), voltage_limit_V)
+                         tuple(float(v) for v in net.resistances), voltage_limit_V,
+                         velocity_blend=velocity_blend)
 
 
 
@@ -305,7 +360,8 @@ class CascadeController:
             self._integral += (prev.gap_m - prev.gap_ref_m) * self._dt
         u = self.design.voltages(measurement.gap_m, measurement.gap_rate_m_per_s,
                                  self._integral, i_now, self.flux_estimate_Wb,
-                                 measurement.gap_ref_m)
+                                 measurement.gap_ref_m,
+                                 absolute_velocity_m_per_s=measurement.absolute_velocity_m_per_s)
         self._last = (measurement, u)
         return u
 

@@ -34,6 +34,10 @@ class Measurement:
         the voltages last applied).
     gap_ref_m : float
         Gap reference [m] for this sample.
+    absolute_velocity_m_per_s : float or None
+        The magnet's absolute vertical velocity [m/s], positive downward (the direction
+        that opens the gap), e.g. from an accelerometer; None (default): not measured
+        (controllers that use it take the gap rate instead, exact on a rigid, even track).
     """
 
     time_s: float
@@ -41,6 +45,7 @@ class Measurement:
     gap_rate_m_per_s: float
     currents_A: np.ndarray
     gap_ref_m: float
+    absolute_velocity_m_per_s: float | None = None
 
 
 @runtime_checkable

@@ -252,7 +252,8 @@ def closed_loop(model: Any, vehicle: HeaveMass, controller: GapController | Cont
                 reason="the closed loop is unstable for this case (controller, "
                        "reference or disturbance)")
         force = float(out.force_N)
-        st, out = model.step(st, dt_s, u, gaps=mech.gap_m, gap_rates=mech.gap_rate_m_per_s)
+        st, out = model.step(st, dt_s, u, gaps_m=mech.gap_m,
+                             gap_rates_m_per_s=mech.gap_rate_m_per_s)
         mech = vehicle.step(mech, dt_s, force, ext(t))
         S[k + 1], V[k + 1], I[k + 1], P[k + 1] = (
             mech.gap_m, mech.gap_rate_m_per_s, out.currents_A, out.pole_force_N)

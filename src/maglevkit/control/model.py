@@ -22,16 +22,20 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import casadi as ca
 import numpy as np
 
 from ..errors import InputError, ParameterError
-from ..models.compiled import compile_function
+from ..models.compiled import BoundCall, compile_function
 from ..plant import STANDARD_GRAVITY
 from ..reduced.bank import MagnetBank
+from ..reduced.core import rk4_substep
 from ..validation import real_number
+
+if TYPE_CHECKING:
+    from ..reduction.maps import CharacteristicMaps
 
 __all__ = ["DISTURBANCES", "MagnetHeaveModel"]
 
@@ -64,7 +68,8 @@ class MagnetHeaveModel:
         (or a single string), or maps that are not those of exactly one reduced magnet.
     """
 
-    def __init__(self, maps: Any, *, mass_kg: float, gravity: float = STANDARD_GRAVITY,
+    def __init__(self, maps: CharacteristicMaps | MagnetBank, *, mass_kg: float,
+                 gravity: float = STANDARD_GRAVITY,
                  disturbances: Sequence[str] = ("force", "voltage"),
                  compiled: str = "auto") -> None:
         mass_kg = real_number(mass_kg, "mass_kg", "kg", positive=True, error=ParameterError)
@@ -179,11 +184,7 @@ class MagnetHeaveModel:
 
         xk: Any = x
         for _ in range(substeps):
-            k1 = f(xk)
-            k2 = f(xk + hs / 2 * k1)
-            k3 = f(xk + hs / 2 * k2)
-            k4 = f(xk + hs * k3)
-            xk = xk + hs / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
+            xk = rk4_substep(xk, hs, f)
         if not jacobians:
             return ca.Function("mpc_rk4", [x, u, d, T], [xk], ["x", "u", "d", "table"], ["xf"])
         y = self.expressions(x, u, d, T)[1]
@@ -401,19 +402,13 @@ class _TableCall:
     bound once by pointer (a per-call conversion of the 40 000 coefficients costs 1-20 ms)."""
 
     def __init__(self, f: ca.Function, table: np.ndarray) -> None:
-        buf: Any
-        buf, self._eval = f.buffer()
-        self._buf = buf
         self.function = f
         n = f.n_in()
         self._table = np.ascontiguousarray(table, dtype=float)
-        self._args = [np.zeros(f.nnz_in(i)) for i in range(n - 1)]
-        self._res = [np.zeros(f.nnz_out(i)) for i in range(f.n_out())]
-        for i, a in enumerate(self._args):
-            buf.set_arg(i, memoryview(a))  # type: ignore[arg-type]
-        buf.set_arg(n - 1, memoryview(self._table))  # type: ignore[arg-type]
-        for i, r in enumerate(self._res):
-            buf.set_res(i, memoryview(r))  # type: ignore[arg-type]
+        self._bound = BoundCall(f, args={n - 1: self._table})
+        self._eval = self._bound.eval
+        self._args = self._bound.args[:n - 1]
+        self._res = self._bound.res
         self.sparsity_out = [f.sparsity_out(i) for i in range(f.n_out())]
 
     def __call__(self, *args: Any) -> list[np.ndarray]:

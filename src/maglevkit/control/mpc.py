@@ -35,6 +35,7 @@ import numpy as np
 import scipy.linalg
 
 from ..errors import InputError, ParameterError, SolverError
+from ..reduced.core import rk4_substep
 from .interface import Measurement
 from .model import MagnetHeaveModel
 from .observers import ExtendedKalmanFilter
@@ -353,11 +354,7 @@ class OffsetFreeMPC:
             hs = self.interval_s / substeps
             xk: Any = xs
             for _ in range(substeps):
-                k1 = rhs(xk, us, ds)
-                k2 = rhs(xk + hs / 2 * k1, us, ds)
-                k3 = rhs(xk + hs / 2 * k2, us, ds)
-                k4 = rhs(xk + hs * k3, us, ds)
-                xk = xk + hs / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
+                xk = rk4_substep(xk, hs, lambda v: rhs(v, us, ds))
             F = ca.Function("interval", [xs, us, ds], [xk])
             dv = p[nx:nx + nd]
             J, g = self._problem(w, p, lambda k, x, u: F(x, u, dv))

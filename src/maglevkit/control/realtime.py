@@ -39,6 +39,7 @@ import casadi as ca
 import numpy as np
 
 from ..errors import ParameterError, SolverError
+from ..models.compiled import BoundCall
 from .interface import Measurement
 from .model import MagnetHeaveModel
 from .mpc import MPCWeights, OffsetFreeMPC
@@ -69,29 +70,6 @@ def _quiet_stdout() -> Iterator[None]:
     finally:
         os.dup2(saved, 1)
         os.close(saved)
-
-
-class _Buffers:
-    """A CasADi function called through preallocated NumPy arrays bound by pointer:
-    ``args[i]``/``res[i]`` are the nonzeros of input/output ``i`` (column-major)."""
-
-    def __init__(self, f: ca.Function, bound: Mapping[int, np.ndarray] | None = None,
-                 bound_res: Mapping[int, np.ndarray] | None = None) -> None:
-        buf: Any
-        buf, self.eval = f.buffer()
-        self.buf = buf
-        self.function = f
-        bound, bres = dict(bound or {}), dict(bound_res or {})
-        self.args = [bound[i] if i in bound else np.zeros(f.nnz_in(i)) for i in range(f.n_in())]
-        self.res = [bres[i] if i in bres else np.zeros(f.nnz_out(i)) for i in range(f.n_out())]
-        for i, a in enumerate(self.args + self.res):
-            n = f.nnz_in(i) if i < f.n_in() else f.nnz_out(i - f.n_in())
-            if a.shape != (n,) or a.dtype != np.float64 or not a.flags["C_CONTIGUOUS"]:
-                raise SolverError(f"buffer {i} of {f.name()!r} must be {n} contiguous floats")
-        for i, a in enumerate(self.args):
-            buf.set_arg(i, memoryview(a))  # type: ignore[arg-type]
-        for i, r in enumerate(self.res):
-            buf.set_res(i, memoryview(r))  # type: ignore[arg-type]
 
 
 class RealTimeMPC(OffsetFreeMPC):
@@ -312,11 +290,11 @@ class RealTimeMPC(OffsetFreeMPC):
             res = {0: b[0], 1: b[1], 2: b[2], 3: b[3], 4: b[4], 5: self._p_arr,
                    6: self._status}
             res.update({7 + j: qpdata[j] for j in range(7)})
-            self._prep.append(_Buffers(compiled, args, res))
+            self._prep.append(BoundCall(compiled, args=args, res=res))
         names = ("h", "g", "a", "lba", "uba", "lbx", "ubx")
         with _quiet_stdout():
-            self._qpb = _Buffers(solver, {solver.index_in(n): qpdata[j]
-                                          for j, n in enumerate(names)}, {qz: self._z})
+            self._qpb = BoundCall(solver, args={solver.index_in(n): qpdata[j]
+                                                for j, n in enumerate(names)}, res={qz: self._z})
         self._sref, self._ig = shared_in[4], shared_in[5]
         self._cold, self._given, self._use_given = shared_in[10], shared_in[11], shared_in[12]
         self._k = 0
@@ -421,7 +399,7 @@ class RealTimeMPC(OffsetFreeMPC):
         self._qpb.eval()
         t2 = time.perf_counter()
         z = self._z
-        if self._qpb.buf.ret() != 0 or not math.isfinite(z.sum()):
+        if self._qpb.buffer.ret() != 0 or not math.isfinite(z.sum()):
             self._qp_failed(measurement.time_s)
         u = self._u
         nx, nu = self.model.nx, self.model.nu
@@ -442,7 +420,7 @@ class RealTimeMPC(OffsetFreeMPC):
         self._u_prev = u
         return u.copy()
 
-    def _target_fallback(self, measurement: Measurement, prep: _Buffers) -> None:
+    def _target_fallback(self, measurement: Measurement, prep: BoundCall) -> None:
         """The compiled Newton did not converge: the Python Newton's target (or its
         SolverError), then the same compiled call with that target given."""
         m = self.model
@@ -465,7 +443,7 @@ class RealTimeMPC(OffsetFreeMPC):
         p = self._p_arr
         raise SolverError("the MPC's condensed QP failed", time=time_s,
                           state={"x_hat": p[:m.nx].copy(), "d_hat": p[m.nx:m.nx + m.nd].copy()},
-                          reason=str(self._qpb.buf.stats().get("return_status", "unknown")))
+                          reason=str(self._qpb.buffer.stats().get("return_status", "unknown")))
 
     def current_solution(self) -> np.ndarray:
         """The scaled decision vector after the last update (``w + E z + e``)."""

@@ -36,7 +36,7 @@ from collections.abc import Mapping
 from dataclasses import dataclass
 from importlib import resources
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any, Union
 from xml.sax.saxutils import escape, quoteattr
 
 import numpy as np
@@ -45,6 +45,13 @@ from ..errors import InputError, SolverError
 from ..models.compiled import cache_directory, find_compiler
 from ..reduced.bank import KERNEL_PARAMETERS, MagnetBank, StepFlag
 from ..reduced.current import CurrentModel
+
+if TYPE_CHECKING:
+    from ..reduction.maps import CharacteristicMaps
+
+#: What :func:`export_fmu` takes: maps, a current model, a bank or a mapping of the first two.
+ReducedSource = Union["CharacteristicMaps", CurrentModel, MagnetBank,
+                      Mapping[str, Union["CharacteristicMaps", CurrentModel]]]
 
 __all__ = ["FMI_HEADERS", "ExportedFmu", "export_fmu", "fmu_platform"]
 
@@ -120,7 +127,7 @@ def fmu_platform() -> tuple[str, str]:
     raise InputError(f"FMU export builds binaries for Linux and macOS only, not {sys.platform!r}")
 
 
-def export_fmu(magnet_or_maps: Any, path: str | os.PathLike[str], *,
+def export_fmu(magnet_or_maps: ReducedSource, path: str | os.PathLike[str], *,
                model_identifier: str | None = None, description: str | None = None,
                eddy_resistance: str = "fit", interpolation: str = "bicubic",
                max_substep_s: float = 1e-3, start_gaps_m: Any = None,
@@ -254,7 +261,7 @@ def _target_path(path: Any) -> Path:
     return p
 
 
-def _as_bank(model: Any, eddy_resistance: str, interpolation: str) -> tuple[MagnetBank, str]:
+def _as_bank(model: ReducedSource, eddy_resistance: str, interpolation: str) -> tuple[MagnetBank, str]:
     """The bank to export and a default model name."""
     if isinstance(model, MagnetBank):
         kinds = {name: kind for name, kind, _ in model.members}

@@ -5,9 +5,11 @@ circuits) are the same builder; which pole feeds which circuit is a parameter.
 Longitudinal cut (x along the track, poles hang under the stator, see docs/magnets.md)::
 
         S1 --stator-- S2 --stator-- S3 ...      stator yoke (laminated long-stator pack)
-        |  \\          |  \\
-       gap  window   gap  window                face teeth / the window's teeth (W -> S)
-        |    W1       |    W2
+       ||  \\         ||  \\
+   teeth|slots window ...                       face teeth || their slots' air (T -> S),
+       T1    W1       T2   W2                   the window's teeth and slots (W -> S)
+        |                                       tooth tips
+       gap                                      air gap of the face (H -> T)
         |   /  \\      |
         H1 fringe \\   H2 ...                    pole heads (pole face level)
         |         flank_j                       flank strips along the coil (C_j -> W)
@@ -22,13 +24,17 @@ gap, the window leakage ``leak_pp_k`` at the coil's energy-equivalent height ``h
 ``flux_paths = "split"`` (the paths a 2-D FEM led to, docs/validation_fem.md) is drawn
 above.  Per pole k: the core split along its coil into ``coil_segments`` (K, default 3)
 strips as the U-magnet's legs, ``core_k_j`` (K_k -> C_k_K ... C_k_1 -> H_k, each segment with the
-turns of the coil it holds, saturable, eddy currents); ``gap_k`` (H_k -> S_k: air gap of the
+turns of the coil it holds, saturable, eddy currents; the core ends at the pole back's
+underside, as ``back_k`` already crosses the junction); ``gap_k`` (H_k -> T_k: air gap of the
 face with Carter's coefficient of the stator slots and the recessed linear-generator
-grooves as slots of the face, in series with the saturable stator teeth under the face);
+grooves as slots of the face) to the tooth tips, then ``teeth_k`` (T_k -> S_k: the saturable
+stator teeth under the face) and in parallel ``slots_k`` (T_k -> S_k: the air of their
+slots, the apparent tooth flux density of machine design);
 ``fringe_k`` (H_k -> W_k: the flanks below the coil facing the neighbours) and
 ``flank_k_j`` (C_k_j -> W_k: Roters quarter circles from each coil strip of the flank to the
 face level and across the gap), both landing on the window's teeth ``window_k`` (W_k ->
-S_k); ``leak_pb_k`` (H_k -> K_k: leakage around the coil back into the pole back).  Between
+S_k, with their slots' air ``window_slots_k``); ``leak_pb_k`` (H_k -> K_k: leakage around
+the coil back into the pole back).  Between
 neighbours: ``back_k`` (K_k -> K_k+1), ``stator_k`` (S_k -> S_k+1), ``leak_pp_k`` (H_k ->
 H_k+1) and ``leak_pp_k_j`` (C_k_j -> C_k+1_j).  The paper's Fig. 3 flux paths map to:
 nominal flux -> the face term ``A / s'``, LIG flux -> the grooves' Carter slot loss,
@@ -229,7 +235,19 @@ def build_levitation_magnet(params: Mapping[str, Any], materials: Mapping[str, M
     teeth_share = 1.0 - st["slot_opening"] / st["slot_pitch"]
     tooth_area = lp * wp * teeth_share
     window_teeth = (tau - lp) * wp * teeth_share
-    core_len = hcore + 0.5 * hb
+    # "split": the air of the stator slots beside the teeth, in parallel with them (the
+    # apparent tooth flux density of machine design: B_app = B_t + mu0 H_t A_slot/A_tooth),
+    # a permeance mu0 A_slots / slot_depth over the slots' share of the footprint
+    slot_share = 1.0 - teeth_share
+
+    def slot_air(name: str, footprint: float) -> LeakagePermeance:
+        return LeakagePermeance(name, MU0 * footprint * wp * slot_share / st["slot_depth"])
+
+    # the core runs from the face to the pole back's mid-line ("paper") or to the pole
+    # back's underside ("split"): the back's branch runs from core centre to core centre
+    # along the back's mid-line and so already crosses the junction of core and back;
+    # the core's half back height counted it twice (2-D FEM, docs/validation_fem.md)
+    core_len = hcore if split else hcore + 0.5 * hb
     stator_area = st["yoke_height"] * st["width"]
     # the core split along the coil (as the U-magnet's legs): nodes C_j at the depths
     # y_j = h_f + (j - 1/2) h below the face, h = h_c/K; segments from the face up: tip
@@ -296,15 +314,24 @@ def build_levitation_magnet(params: Mapping[str, Any], materials: Mapping[str, M
             branches.append(Branch(name, nodes[j + 1], nodes[j], tuple(core)))
             turns.append((name, seg_turns[j]))
         coil_turns.append(turns)
-        branches.append(Branch(f"gap_{p}", f"H{k + 1}", f"S{k + 1}", (
-            AirGap(f"gap_{p}", gap_input=p, pole_area=face_area, fringe_edges=tuple(edges),
-                   recesses=grooves, face_slots=face_slots, **slots),
-            IronPath(f"iron_teeth_{p}", st["slot_depth"], tooth_area, stator_mat),
-        )))
+        air_gap = AirGap(f"gap_{p}", gap_input=p, pole_area=face_area, fringe_edges=tuple(edges),
+                         recesses=grooves, face_slots=face_slots, **slots)
+        teeth = IronPath(f"iron_teeth_{p}", st["slot_depth"], tooth_area, stator_mat)
+        if split:
+            # face -> tooth tips T_k, then the teeth under the face and their slots' air
+            # in parallel up to the yoke
+            branches += [Branch(f"gap_{p}", f"H{k + 1}", f"T{k + 1}", (air_gap,)),
+                         Branch(f"teeth_{p}", f"T{k + 1}", f"S{k + 1}", (teeth,)),
+                         Branch(f"slots_{p}", f"T{k + 1}", f"S{k + 1}",
+                                (slot_air(f"slots_{p}", lp),))]
+        else:
+            branches.append(Branch(f"gap_{p}", f"H{k + 1}", f"S{k + 1}", (air_gap, teeth)))
         if split and (options.fringing or options.leakage):
-            # the window's teeth beside the face carry what lands there
-            branches.append(Branch(f"window_{p}", f"W{k + 1}", f"S{k + 1}", (
-                IronPath(f"iron_window_teeth_{p}", st["slot_depth"], window_teeth, stator_mat),)))
+            # the window's teeth beside the face carry what lands there (and their slots)
+            branches += [Branch(f"window_{p}", f"W{k + 1}", f"S{k + 1}", (
+                IronPath(f"iron_window_teeth_{p}", st["slot_depth"], window_teeth, stator_mat),)),
+                Branch(f"window_slots_{p}", f"W{k + 1}", f"S{k + 1}",
+                       (slot_air(f"window_slots_{p}", tau - lp),))]
         if split and options.fringing:
             branches.append(Branch(f"fringe_{p}", f"H{k + 1}", f"W{k + 1}", (
                 FringePermeance(f"fringe_{p}", gap_input=p, width=2.0 * wp, radius=hf,

@@ -69,6 +69,8 @@ from collections.abc import Callable, Mapping
 from dataclasses import replace
 from typing import Any
 
+import casadi as ca
+
 from ..circuit.elements import (
     AirGap,
     EddyCurrent,
@@ -78,6 +80,7 @@ from ..circuit.elements import (
     IronPath,
     LeakagePermeance,
     rectangle_torsion_constant,
+    symbolic,
 )
 from ..circuit.ladder import ladder_branches
 from ..circuit.network import Branch, Circuit, Coil, Network
@@ -215,66 +218,10 @@ def build_u_magnet(params: Mapping[str, Any], materials: Mapping[str, Material],
     core = resolve_material(m["material"], materials, "magnet")
     rail_mat = resolve_material(r["material"], materials, "rail")
 
-    area = wp * d
-    c = ww + wp
-    overhang = 0.5 * (r["width"] - span)
-    edges: list[tuple[float, float]] = []
-    if options.fringing:
-        edges.append((d, gcp))                            # inner flank, towards the window
-        if overhang > 0.0:
-            edges.append((d, min(gcp, overhang)))         # outer flank, limited by the rail edge
-        if m["end_effects"]:
-            edges += [(wp, gcp), (wp, gcp)]               # the two depth-wise ends
-
-    def gap(name: str) -> AirGap:
-        return AirGap(name, gap_input=name.removeprefix("gap_"), pole_area=area,
-                      fringe_edges=tuple(edges))
-
-    leg_len = hl + 0.5 * ty
-    rail_len = c + r["thickness"]
-    K = m["coil_segments"]
-    h = hc / K
-    y_nodes = [gcp + (k + 0.5) * h for k in range(K)]
-    # leg segments from the pole face up: tip (to the first node), K - 1 coil strips,
-    # top (last node to the yoke's mid-line); turns in proportion to the coil they hold
-    seg_len = [y_nodes[0], *([h] * (K - 1)), leg_len - y_nodes[-1]]
-    half = 0.5 * m["turns"]
-    seg_turns = [half * 0.5 / K, *([half / K] * (K - 1)), half * 0.5 / K]
     rho_core = rho_rail = 0.0
     if options.eddy_currents:
         rho_core = resistivity(m["resistivity"], core, "magnet")
         rho_rail = resistivity(r["resistivity"], rail_mat, "rail")
-
-    def eddy(name: str, width: float, length: float, rho: float,
-             solid: bool) -> tuple[Element, ...]:
-        if not options.eddy_currents:
-            return ()
-        if m["laminated"] and not solid:
-            return (EddyCurrent.laminated(name, width * d, length, rho, m["sheet_thickness"]),)
-        return (EddyCurrent.solid_rectangular(name, width, d, length, rho),)
-
-    def part(name: str, start: str, end: str, iron: IronPath, width: float,
-             solid: bool = False) -> list[Branch]:
-        """Branches of one iron part (flux along it, section ``width`` x depth)."""
-        rho = rho_rail if solid else rho_core
-        if not options.eddy_currents or options.eddy_model == "lumped":
-            return [Branch(name, start, end, (iron, *eddy(f"eddy_{name}", width, iron.length,
-                                                          rho, solid)))]
-        if m["laminated"] and not solid:       # diffusion across each sheet
-            return ladder_branches(name, start, end, iron, thickness=m["sheet_thickness"],
-                                   resistivity=rho, layers=options.eddy_layers)
-        # solid bar: slab across the width; with end_effects the Saint-Venant factor of
-        # the finite depth (the eddy currents close within the depth), else the 2-D slab
-        factor = (rectangle_torsion_constant(width, d) / (d * width**3 / 3.0)
-                  if m["end_effects"] else 1.0)
-        if solid and options.eddy_model == "ladder_split":
-            # rail split under and between the poles: the flux enters the rail over each
-            # pole face (rising linearly across it), runs uniform between the poles and
-            # hardly reaches the overhangs: eddy length ww + 2 wp/3 (docs/equations.md 1b)
-            factor *= (ww + 2.0 * wp / 3.0) / iron.length
-        return ladder_branches(name, start, end, iron, thickness=width, resistivity=rho,
-                               layers=options.eddy_layers, factor=factor)
-
     if m["discretisation"] == "grid":
         if options.eddy_currents and options.eddy_model == "ladder_split":
             raise ParameterFileError(
@@ -311,6 +258,106 @@ def build_u_magnet(params: Mapping[str, Any], materials: Mapping[str, Material],
         circuit = Circuit("coil", m["resistance"], tuple(grid_coils))
         return m["name"], Network(tuple(grid_branches), (circuit,), name=m["name"])
 
+    return m["name"], lumped_network(m, r, core, rail_mat, options)
+
+
+def lumped_network(m: Mapping[str, Any], r: Mapping[str, Any], core: Material,
+                   rail_mat: Material, options: ModelOptions) -> Network:
+    """The lumped U-magnet network (``discretisation = "lumped"``, module docstring).
+
+    The one builder of the lumped network: :func:`build_u_magnet` calls it with the
+    checked numbers of a parameter file, the design optimisation (:mod:`maglevkit.design`)
+    with CasADi symbols for the geometry it varies (exact geometry derivatives; the
+    geometry checks of :func:`build_u_magnet` are then the optimiser's constraints, and
+    the two branches whose existence depends on the geometry -- the outer-flank fringe and
+    the window-flank leakage -- are kept with their extent clipped at 0, which gives the
+    same permeance as leaving them out).
+
+    Parameters
+    ----------
+    m : mapping
+        The checked ``[magnet]`` table (:data:`MAGNET_SCHEMA`; lengths [m], ``turns`` [-],
+        ``resistance`` [ohm]); geometry entries may be CasADi ``SX`` symbols.
+    r : mapping
+        The checked ``[rail]`` table (``thickness``, ``width`` [m]).
+    core, rail_mat : Material
+        The magnet's and the rail's iron.
+    options : ModelOptions
+        Physics switches.
+
+    Returns
+    -------
+    Network
+        The equivalent magnetic circuit (one circuit ``"coil"``).
+    """
+
+    wp, hl, ty = m["pole_width"], m["leg_height"], m["yoke_thickness"]
+    ww, hc, gcp = m["window_width"], m["coil_height"], m["coil_gap_to_pole_face"]
+    d = m["depth"]
+    span = ww + 2.0 * wp
+    area = wp * d
+    c = ww + wp
+    overhang = 0.5 * (r["width"] - span)
+    edges: list[tuple[float, float]] = []
+    if options.fringing:
+        edges.append((d, gcp))                            # inner flank, towards the window
+        if symbolic(overhang):      # design: the clipped radius (0 without overhang: no fringe)
+            edges.append((d, ca.fmax(0.0, ca.fmin(gcp, overhang))))
+        elif overhang > 0.0:
+            edges.append((d, min(gcp, overhang)))         # outer flank, limited by the rail edge
+        if m["end_effects"]:
+            edges += [(wp, gcp), (wp, gcp)]               # the two depth-wise ends
+
+    def gap(name: str) -> AirGap:
+        return AirGap(name, gap_input=name.removeprefix("gap_"), pole_area=area,
+                      fringe_edges=tuple(edges))
+
+    leg_len = hl + 0.5 * ty
+    rail_len = c + r["thickness"]
+    K = m["coil_segments"]
+    h = hc / K
+    y_nodes = [gcp + (k + 0.5) * h for k in range(K)]
+    # leg segments from the pole face up: tip (to the first node), K - 1 coil strips,
+    # top (last node to the yoke's mid-line); turns in proportion to the coil they hold
+    seg_len = [y_nodes[0], *([h] * (K - 1)), leg_len - y_nodes[-1]]
+    half = 0.5 * m["turns"]
+    seg_turns = [half * 0.5 / K, *([half / K] * (K - 1)), half * 0.5 / K]
+
+    def eddy(name: str, width: float, length: float, rho: float,
+             solid: bool) -> tuple[Element, ...]:
+        if not options.eddy_currents:
+            return ()
+        if m["laminated"] and not solid:
+            return (EddyCurrent.laminated(name, width * d, length, rho, m["sheet_thickness"]),)
+        return (EddyCurrent.solid_rectangular(name, width, d, length, rho),)
+
+    def part(name: str, start: str, end: str, iron: IronPath, width: float,
+             solid: bool = False) -> list[Branch]:
+        """Branches of one iron part (flux along it, section ``width`` x depth)."""
+        rho = rho_rail if solid else rho_core
+        if not options.eddy_currents or options.eddy_model == "lumped":
+            return [Branch(name, start, end, (iron, *eddy(f"eddy_{name}", width, iron.length,
+                                                          rho, solid)))]
+        if m["laminated"] and not solid:       # diffusion across each sheet
+            return ladder_branches(name, start, end, iron, thickness=m["sheet_thickness"],
+                                   resistivity=rho, layers=options.eddy_layers)
+        # solid bar: slab across the width; with end_effects the Saint-Venant factor of
+        # the finite depth (the eddy currents close within the depth), else the 2-D slab
+        factor = (rectangle_torsion_constant(width, d) / (d * width**3 / 3.0)
+                  if m["end_effects"] else 1.0)
+        if solid and options.eddy_model == "ladder_split":
+            # rail split under and between the poles: the flux enters the rail over each
+            # pole face (rising linearly across it), runs uniform between the poles and
+            # hardly reaches the overhangs: eddy length ww + 2 wp/3 (docs/equations.md 1b)
+            factor *= (ww + 2.0 * wp / 3.0) / iron.length
+        return ladder_branches(name, start, end, iron, thickness=width, resistivity=rho,
+                               layers=options.eddy_layers, factor=factor)
+
+    rho_core = rho_rail = 0.0
+    if options.eddy_currents:
+        rho_core = resistivity(m["resistivity"], core, "magnet")
+        rho_rail = resistivity(r["resistivity"], rail_mat, "rail")
+
     left = ["PL", *(f"L{k + 1}" for k in range(K)), "YL"]
     right = ["PR", *(f"R{k + 1}" for k in range(K)), "YR"]
     branches: list[Branch] = []
@@ -342,7 +389,10 @@ def build_u_magnet(params: Mapping[str, Any], materials: Mapping[str, Material],
         for k, y in enumerate(y_nodes):
             y0, y1 = y - 0.5 * h, y + 0.5 * h
             g = LeakagePermeance.quarter_hollow_cylinder("o", widths, y0, h).value   # outer
-            if y0 < 0.5 * ww:                                                       # window
+            if symbolic(y0) or symbolic(ww):        # design: the clipped window strip
+                g += LeakagePermeance.quarter_hollow_cylinder(
+                    "i", d, y0, ca.fmax(0.0, ca.fmin(y1, 0.5 * ww) - y0)).value
+            elif y0 < 0.5 * ww:                                                     # window
                 g += LeakagePermeance.quarter_hollow_cylinder(
                     "i", d, y0, min(y1, 0.5 * ww) - y0).value
             branches.append(Branch(f"flank_left_{k + 1}", left[k + 1], "RL",
@@ -350,7 +400,7 @@ def build_u_magnet(params: Mapping[str, Any], materials: Mapping[str, Material],
             branches.append(Branch(f"flank_right_{k + 1}", "RR", right[k + 1],
                                    (LeakagePermeance(f"flank_right_{k + 1}", g),)))
     circuit = Circuit("coil", m["resistance"], tuple(coils))
-    return m["name"], Network(tuple(branches), (circuit,), name=m["name"])
+    return Network(tuple(branches), (circuit,), name=m["name"])
 
 
 # ----------------------------------------------------------------------------------------

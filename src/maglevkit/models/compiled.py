@@ -10,6 +10,11 @@ CasADi's virtual machine.  ``compile_library(name, functions)`` does the same fo
 functions in one C file (one compiler run), e.g. a DAE and the residual, Jacobian and
 quadrature functions an integrator looks up in the DAE's library.
 
+``BoundCall(f)`` is the one place that binds a CasADi function's input and output
+buffers to NumPy arrays (``Function.buffer``, ``set_arg``/``set_res`` by pointer) so
+that it is called in place with no per-call conversion: the hot loops of the reduced
+models, the bank, its stepper and the controllers call ``bound.eval()``.
+
 Cache directory: ``$MAGLEVKIT_CACHE_DIR``, else ``$XDG_CACHE_HOME/maglevkit``, else
 ``~/.cache/maglevkit``.  The compiler: ``$CC``, else ``cc``, else ``gcc``.
 """
@@ -24,14 +29,17 @@ import subprocess
 import sys
 import tempfile
 import warnings
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from pathlib import Path
+from typing import Any
 
 import casadi as ca
+import numpy as np
 
 from ..errors import CompilationWarning, SolverError
 
-__all__ = ["COMPILE_MODES", "DEFAULT_FLAGS", "build_source", "cache_directory", "compile_function",
+__all__ = ["COMPILE_MODES", "DEFAULT_FLAGS", "BoundCall", "build_source", "cache_directory",
+           "compile_function",
            "compile_library", "find_compiler"]
 
 COMPILE_MODES = ("auto", "always", "never")
@@ -225,3 +233,119 @@ def build_source(name: str, code: bytes, *, cache: Path, flags: Sequence[str] = 
 def _last_line(text: str) -> str:
     lines = [ln for ln in text.splitlines() if ln.strip()]
     return lines[-1] if lines else text
+
+
+class BoundCall:
+    """A CasADi function bound once to NumPy arrays by pointer and called in place.
+
+    ``args[i]`` and ``res[i]`` hold the nonzeros of input and output ``i`` (column-major,
+    as CasADi stores them); write the inputs into ``args``, call :meth:`eval` (CasADi's
+    buffer evaluation: no conversion, no allocation), read ``res``.  Arrays passed in
+    ``args``/``res`` are bound as they are (any shape whose C-order flattening is the
+    nonzeros, e.g. a ``(steps, n)`` block, or a slice of a larger block); the others are
+    new zero arrays of shape ``(nnz,)``.  The object keeps every bound array alive.
+
+    Parameters
+    ----------
+    f : casadi.Function
+        The function to bind (compiled or not).
+    args : mapping int -> numpy.ndarray, optional
+        Arrays to bind as inputs, by input index (units those of ``f``'s inputs).
+    res : mapping int -> numpy.ndarray, optional
+        Arrays to bind as outputs, by output index (units those of ``f``'s outputs).
+    unbound : sequence of int, optional
+        Inputs left unbound here (the caller binds them later with :meth:`bind_arg`,
+        e.g. one block of a long input array per call); their ``args`` entry is None.
+    unbound_res : sequence of int, optional
+        Outputs left unbound here (bound later with :meth:`bind_res`); their ``res``
+        entry is None.
+
+    Raises
+    ------
+    SolverError
+        A given array is not C-contiguous float64 with as many elements as the nonzeros of
+        its input or output (names the function, the buffer and what it needs).
+
+    Attributes
+    ----------
+    function : casadi.Function
+        ``f``.
+    eval : callable
+        Evaluate ``f`` in place (no arguments, returns None).
+    args, res : list of numpy.ndarray
+        The bound input and output arrays.
+    buffer : casadi.FunctionBuffer
+        CasADi's buffer object (``ret()``, ``stats()`` of the last evaluation).
+    """
+
+    __slots__ = ("function", "eval", "args", "res", "buffer")
+
+    def __init__(self, f: ca.Function, *, args: Mapping[int, np.ndarray] | None = None,
+                 res: Mapping[int, np.ndarray] | None = None,
+                 unbound: Sequence[int] = (), unbound_res: Sequence[int] = ()) -> None:
+        buf: Any
+        buf, self.eval = f.buffer()
+        self.buffer = buf
+        self.function = f
+        given_a, given_r = dict(args or {}), dict(res or {})
+        self.args: list[Any] = []
+        for i in range(f.n_in()):
+            if i in unbound:
+                self.args.append(None)
+                continue
+            a = given_a.get(i)
+            a = np.zeros(f.nnz_in(i)) if a is None else a
+            self.bind_arg(i, a)
+            self.args.append(a)
+        self.res: list[Any] = []
+        for i in range(f.n_out()):
+            if i in unbound_res:
+                self.res.append(None)
+                continue
+            r = given_r.get(i)
+            r = np.zeros(f.nnz_out(i)) if r is None else r
+            self.bind_res(i, r)
+            self.res.append(r)
+
+    def bind_arg(self, i: int, a: np.ndarray) -> None:
+        """Bind input ``i`` to array ``a`` (C-contiguous float64, as many elements as its
+        nonzeros; the caller keeps ``a`` alive while it is bound).
+
+        Parameters
+        ----------
+        i : int
+            Input index.
+        a : numpy.ndarray
+            The array (units those of the input).
+        """
+        _check_buffer(self.function, f"input {i}", a, self.function.nnz_in(i))
+        self.buffer.set_arg(i, memoryview(a.reshape(-1)))  # type: ignore[arg-type]
+
+    def bind_res(self, i: int, r: np.ndarray) -> None:
+        """Bind output ``i`` to array ``r`` (as :meth:`bind_arg`).
+
+        Parameters
+        ----------
+        i : int
+            Output index.
+        r : numpy.ndarray
+            The array (units those of the output).
+        """
+        _check_buffer(self.function, f"output {i}", r, self.function.nnz_out(i))
+        self.buffer.set_res(i, memoryview(r.reshape(-1)))  # type: ignore[arg-type]
+
+    def __call__(self, *args: Any) -> list[np.ndarray]:
+        """Copy ``args`` into the bound inputs, evaluate, return copies of the outputs
+        (a convenience; hot loops write ``args`` and call :attr:`eval` themselves)."""
+        for a, v in zip(self.args, args, strict=True):
+            a[:] = v
+        self.eval()
+        return [r.copy() for r in self.res]
+
+
+def _check_buffer(f: ca.Function, what: str, a: np.ndarray, n: int) -> None:
+    if (not isinstance(a, np.ndarray) or a.size != n or a.dtype != np.float64
+            or not a.flags["C_CONTIGUOUS"]):
+        raise SolverError(f"{what} of {f.name()!r} must be bound to {n} contiguous float64 "
+                          f"values, not {getattr(a, 'shape', type(a).__name__)} "
+                          f"{getattr(a, 'dtype', '')}".rstrip())

@@ -53,7 +53,7 @@ from ..circuit.network import Network
 from ..errors import CompilationWarning, InputError, SolverError, TopologyError
 from ..magnets.base import PlausibleRange
 from ..materials import MU0
-from ..validation import flag, optional_flag, real_array, real_number, whole_number
+from ..validation import flag, optional_flag, real_array, real_number, renamed_keywords, whole_number
 from .compiled import COMPILE_MODES, compile_library
 from .flux_live import LiveIntegrator, live_library
 from .inputs import check_step, gap_secants, sample_input, time_grid
@@ -1054,22 +1054,26 @@ class FluxModel:
         return SolverError(f"flux model ({self.method}) failed on the step of {dt:.6g} s",
                            time=t, state=st, reason=reason[:400])
 
-    def step(self, state: FluxState, dt: float, voltages: Any, gaps: Any = None,
-             gap_rates: Any = 0.0) -> tuple[FluxState, FluxOutputs]:
+    @renamed_keywords(dt="dt_s", voltages="voltages_V", gaps="gaps_m", gap_rates="gap_rates_m_per_s")
+    def step(self, state: FluxState, dt_s: float, voltages_V: Any, gaps_m: Any = None,
+             gap_rates_m_per_s: Any = 0.0) -> tuple[FluxState, FluxOutputs]:
         """Advance ``state`` by ``dt`` [s] with constant voltages and gap rates.
+
+        The old keyword names ``dt``, ``voltages``, ``gaps``, ``gap_rates`` still work as
+        deprecated aliases (a ``DeprecationWarning`` names the new one).
 
         Parameters
         ----------
         state : FluxState
             From :meth:`initial_state` or a previous :meth:`step`.
-        dt : float
+        dt_s : float
             Step length [s] (> 0).
-        voltages : float, sequence or mapping
+        voltages_V : float, sequence or mapping
             Circuit voltages [V], held constant over the step (zero-order hold).
-        gaps : float, sequence, mapping or None
+        gaps_m : float, sequence, mapping or None
             Gaps [m] at the start of the step (e.g. from a mechanical model); None keeps
             the state's gaps.  Flux linkages are continuous; currents adapt.
-        gap_rates : float, sequence or mapping
+        gap_rates_m_per_s : float, sequence or mapping
             Gap rates [m/s] over the step (gaps move linearly).
 
         Returns
@@ -1096,6 +1100,7 @@ class FluxModel:
         model take turns on its integrator (a per-model lock); a live library that does not
         load falls back to the restarting step with a ``CompilationWarning``.
         """
+        dt, voltages, gaps, gap_rates = dt_s, voltages_V, gaps_m, gap_rates_m_per_s
         d = self._dae
         self._check_state(state)
         dt = check_step(dt)

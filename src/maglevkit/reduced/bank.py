@@ -34,30 +34,40 @@ import subprocess
 import warnings
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
+from functools import partial
 from pathlib import Path
 from types import SimpleNamespace
-from typing import Any, TypeVar
+from typing import TYPE_CHECKING, Any, TypeVar
 
 import casadi as ca
 import numpy as np
 
 from ..errors import InputError, OutOfRangeError, SolverError
-from ..models.compiled import COMPILE_MODES, build_source, cache_directory, compile_function, find_compiler
+from ..models.compiled import (
+    COMPILE_MODES,
+    BoundCall,
+    build_source,
+    cache_directory,
+    compile_function,
+    find_compiler,
+)
 from ..models.flux import FluxModel, FluxState
 from ..models.inputs import check_initial_choice, check_step, reject_bools, simulation_inputs
 from ..models.statics import circuit_pole_groups
-from ..validation import describe, flag
+from ..validation import describe, flag, renamed_keywords
+from .core import EXTRA_CELLS, ReducedCore, extend_values, rk4_substep, substep_counts
 from .current import (
-    EXTRA_CELLS,
     CurrentModel,
-    _extend_axis,
-    _extend_values,
     eq8_coil_current,
+    eq8_freewheel_voltage,
     eq8_rhs,
 )
 from .lanes import LaneInput, external_source, lane_source, lane_target
 from .stepper import BankStepper
 from .tables import INTERPOLATION_METHODS, cell_table
+
+if TYPE_CHECKING:
+    from ..reduction.maps import CharacteristicMaps
 
 __all__ = ["KERNEL_PARAMETERS", "RUN_CHUNK", "BankOutputs", "BankRun", "BankSimulation",
            "BankState", "MagnetBank", "StepFlag"]
@@ -223,7 +233,8 @@ class _Member:
     circuits: tuple[str, ...]         # the member's own circuit names
     poles: tuple[str, ...]            # its pole (gap input) names
     pole_groups: dict[str, tuple[str, ...]]
-    maps: Any = None
+    maps: CharacteristicMaps | None = None
+    core: ReducedCore | None = None   # reduced members: the facts of their maps
     resistance_ohm: np.ndarray | None = None
     eddy_resistance_ohm: np.ndarray | None = None
     model: FluxModel | None = None
@@ -270,6 +281,12 @@ class MagnetBank:
         give the same numbers; ``"lanes"`` is ~3-5x faster at 100-1000 circuits
         (BENCHMARKS.md).  Where the lanes cannot be compiled or loaded, the bank uses
         the ``"casadi"`` code without a warning.
+    freewheel : bool
+        ``False`` (default): the reduced circuits take the voltages as given (eq. 8);
+        ``True``: behind a two-quadrant chopper with freewheeling diodes, the coil
+        current cannot go below zero within a step (every RK4 stage applies
+        :func:`~maglevkit.reduced.current.eq8_freewheel_voltage`, ``U_eff = max(U,
+        -R_ec I_L)``; the outputs' coil currents too).  The vehicle runs turn it on.
 
     Examples
     --------
@@ -280,7 +297,7 @@ class MagnetBank:
     ...                      currents=np.linspace(0, 60, 13), progress=False)
     >>> bank = mk.MagnetBank({f"m{k}": maps for k in range(4)}, compiled="never")
     >>> state = bank.initial_state(gaps=0.010, currents=20.0)
-    >>> state, out = bank.step(state, 1e-3, voltages=bank.resistance_ohm * 20.0)
+    >>> state, out = bank.step(state, 1e-3, voltages_V=bank.resistance_ohm * 20.0)
     >>> out.circuit_force_N.shape
     (4,)
     """
@@ -289,7 +306,7 @@ class MagnetBank:
                  gap_inputs: str = "circuit", interpolation: str = "bicubic",
                  compiled: str = "auto", eddy_resistance: str = "fit", max_step_s: float = 1e-3,
                  extrapolate: bool = False, cache_dir: Any = None,
-                 codegen: str = "lanes") -> None:
+                 codegen: str = "lanes", freewheel: bool = False) -> None:
         if compiled not in COMPILE_MODES:
             raise InputError(f"compiled = {compiled!r}; use one of {list(COMPILE_MODES)}")
         if codegen not in ("lanes", "casadi"):
@@ -306,6 +323,7 @@ class MagnetBank:
                 and max_step_s > 0):
             raise InputError(f"max_step_s = {max_step_s!r} must be a finite number > 0")
         flag(extrapolate, "extrapolate")
+        self.freewheel = flag(freewheel, "freewheel")
         self.gap_inputs = gap_inputs
         self.interpolation = interpolation
         self.compiled_mode = compiled
@@ -366,27 +384,17 @@ class MagnetBank:
                                  "cannot be a bank member (the bank advances eq. 8 with one "
                                  "state per circuit); use CurrentModel(maps) or the model on "
                                  "its own")
-            maps = model.maps
-            r_el, r_ec = model.resistance_ohm, model.eddy_resistance_ohm
+            core = model.core
         elif hasattr(model, "dataset") and hasattr(model, "variable"):
-            maps = model
-            var = "eddy_resistance_fit_ohm" if eddy_resistance == "fit" else "eddy_resistance_ohm"
-            if var not in maps.dataset:
-                raise InputError(f"member {name!r}: these maps have no {var!r}; rebuild them "
-                                 "with this version")
-            r_el = np.asarray(maps.dataset["resistance_ohm"].values, dtype=float)
-            r_ec = np.asarray(maps.dataset[var].values, dtype=float)
+            core = ReducedCore.from_maps(model, eddy_resistance=eddy_resistance,
+                                         what=f"member {name!r}: ")
         else:
             raise InputError(f"member {name!r}: a model must be CharacteristicMaps, a "
                              f"CurrentModel or a FluxModel, got {type(model).__name__}")
-        groups = maps.pole_groups
-        circuits = tuple(maps.circuits)
-        attr = maps.dataset.attrs.get("gap_names")
-        poles = (tuple(str(attr).split(",")) if attr
-                 else tuple(g for c in circuits for g in groups[c]))
-        return _Member(name, "reduced", circuits, poles, groups, maps=maps,
-                       resistance_ohm=np.asarray(r_el, dtype=float),
-                       eddy_resistance_ohm=np.asarray(r_ec, dtype=float))
+        return _Member(name, "reduced", core.circuit_names, core.gap_names,
+                       dict(core.pole_groups), maps=core.maps, core=core,
+                       resistance_ohm=core.resistance_ohm,
+                       eddy_resistance_ohm=core.eddy_resistance_ohm)
 
     def _layout(self) -> None:
         circuits: list[str] = []
@@ -411,6 +419,9 @@ class MagnetBank:
         # share: circuit force -> pole forces (equal shares); avg: pole gaps -> circuit gap
         share = np.zeros((npl, nc))
         for m, cs, ps in zip(self._members, self._circuit_slices, self._pole_slices, strict=True):
+            if m.core is not None:              # a reduced member: its core's share matrix
+                share[ps, cs] = m.core.share
+                continue
             pi = {p: ps.start + j for j, p in enumerate(m.poles)}
             for j, c in enumerate(m.circuits):
                 for p in m.pole_groups[c]:
@@ -451,6 +462,7 @@ class MagnetBank:
         self._par = np.zeros((_N_PAR, n))
         self._bounds = np.zeros((4, n))            # s_lo, s_hi, i_lo, i_hi (map ranges)
         self._spline_bounds = np.zeros((4, n))     # the same extended by EXTRA_CELLS cells
+        tol = np.zeros((2, n))                     # rounding allowances: gap, current
         tables: list[np.ndarray] = []
         known: dict[tuple, tuple[int, tuple[float, float, float, float], tuple[int, int]]] = {}
         by_object: dict[tuple[int, str], list[np.ndarray]] = {}
@@ -461,20 +473,21 @@ class MagnetBank:
             if m.kind != "reduced":
                 continue
             maps = m.maps
-            gs, gi = _extend_axis(maps.gaps_m), _extend_axis(maps.currents_A)
+            assert maps is not None and m.core is not None
+            gs, gi = m.core.extended_gaps_m, m.core.extended_currents_A
             for j, c in enumerate(m.circuits):
                 if (id(maps), c) not in by_object:       # xarray access is ~1 ms a map
                     by_object[(id(maps), c)] = [maps.variable(v, c) for v in _MAP_VARIABLES]
                 values = by_object[(id(maps), c)]
                 # maps are stored once however many circuits use them
-                key = (maps.gaps_m.tobytes(), maps.currents_A.tobytes(),
+                key = (m.core.gaps_m.tobytes(), m.core.currents_A.tobytes(),
                        *(v.tobytes() for v in values))
                 if key not in known:
                     for v, arr in zip(_MAP_VARIABLES, values, strict=True):
                         if not np.all(np.isfinite(arr)):
                             raise InputError(f"member {m.name!r}: map {v!r} of circuit {c!r} has "
                                              "non-finite values; rebuild the maps")
-                    ext = np.stack([_extend_values(_extend_values(a, axis=0), axis=1)
+                    ext = np.stack([extend_values(extend_values(a, axis=0), axis=1)
                                     for a in values])
                     tab = cell_table(gs, gi, ext, method=self.interpolation)
                     # layout per cell: map-major, then the (d+1)^2 coefficients t^p w^q
@@ -482,22 +495,21 @@ class MagnetBank:
                     known[key] = (size, (tab.s0_m, tab.ds_m, tab.i0_A, tab.di_A), tab.n_cells)
                     size += tab.coefficients.size
                 offset, (s0, ds_, i0, di_), (cs_, ci_) = known[key]
-                assert m.resistance_ohm is not None and m.eddy_resistance_ohm is not None
+                assert m.resistance_ohm is not None
+                core = m.core
                 r_el = float(m.resistance_ohm[j])
-                r_ec = float(m.eddy_resistance_ohm[j])
-                a = 1.0 if math.isinf(r_ec) else 1.0 + r_el / r_ec
+                a = float(core.a[j])
                 self._par[:9, k] = (s0, 1.0 / ds_, cs_, i0, 1.0 / di_, ci_, offset, r_el, a)
-                self._bounds[:, k] = (maps.gaps_m[0], maps.gaps_m[-1], maps.currents_A[0],
-                                      maps.currents_A[-1])
+                self._bounds[:, k] = (*core.gap_range_m, *core.current_range_A)
+                tol[:, k] = (core.gap_tolerance_m, core.current_tolerance_A)
                 self._spline_bounds[:, k] = (gs[0], gs[-1], gi[0], gi[-1])
                 k += 1
         self._table = np.concatenate(tables) if tables else np.zeros(1)
         self.n_distinct_maps = len(tables)
         """How many distinct circuit maps the bank stores (shared when equal)."""
         b = self._bounds
-        # rounding allowances of the range checks (as CurrentModel)
-        tol_s = 1e-12 * np.abs(b[1])
-        tol_i = 1e-9 * np.maximum(1.0, np.abs(b[3]))
+        # rounding allowances of the range checks (the cores', as CurrentModel's)
+        tol_s, tol_i = tol
         self._lo_s, self._hi_s = b[0] - tol_s, b[1] + tol_s
         self._lo_i, self._hi_i = b[2] - tol_i, b[3] + tol_i
         self._par[9:13] = (self._lo_s, self._hi_s, self._lo_i, self._hi_i)
@@ -543,6 +555,8 @@ class MagnetBank:
         """Eq. 8 of one circuit as MX expressions: ``(dI_L/dt, I, F, L~)``."""
         lt, dl, f = self._lookup(self._gap_cell(s, p) if cell is None else cell, i, p, table)
         r_el, a = p[7], p[8]
+        if self.freewheel:
+            u = eq8_freewheel_voltage(i, u, r_el, a)
         return eq8_rhs(i, u, sd, lt, dl, r_el, a), eq8_coil_current(i, u, r_el, a), f, lt
 
     def _make_circuit_kernel(self) -> dict[str, ca.Function]:
@@ -593,7 +607,8 @@ class MagnetBank:
         def f(x: Any, cell: tuple[Any, Any]) -> Any:
             # the stages need L~ and dL/ds only (the gather of F would be wasted)
             lt, dl = self._lookup(cell, x, p, table, maps=(0, 1))
-            return eq8_rhs(x, u, sd, lt, dl, r_el, a)
+            return eq8_rhs(x, eq8_freewheel_voltage(x, u, r_el, a) if self.freewheel else u,
+                           sd, lt, dl, r_el, a)
 
         x: Any = i
         lo: Any = i
@@ -605,16 +620,14 @@ class MagnetBank:
             sk = s + sd * (k * hs)
             cell_mid = self._gap_cell(sk + sd * (hs / 2), p)
             cell_end = self._gap_cell(sk + sd * hs, p)
-            k1 = f(x, cell_start)
-            k2 = f(x + hs / 2 * k1, cell_mid)
-            k3 = f(x + hs / 2 * k2, cell_mid)
-            k4 = f(x + hs * k3, cell_end)
-            x = x + hs / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
+            x = rk4_substep(x, hs, partial(f, cell=cell_start), partial(f, cell=cell_mid),
+                            partial(f, cell=cell_end))
             lo = ca.fmin(lo, x)
             hi = ca.fmax(hi, x)
             cell_start = cell_end
         se = s + sd * h
-        coil = eq8_coil_current(x, u, r_el, a)
+        coil = eq8_coil_current(x, eq8_freewheel_voltage(x, u, r_el, a) if self.freewheel
+                                else u, r_el, a)
         force = self._lookup(self._gap_cell(se, p), x, p, table, maps=(2,))[0]
         # range flags (p[9:13] = gap and current bounds incl. rounding allowances);
         # |v| <= DBL_MAX is false for NaN and inf (x - x would be simplified to 0)
@@ -900,7 +913,7 @@ class MagnetBank:
 
     def _substep_counts(self, dt: np.ndarray) -> np.ndarray:
         """RK4 sub-steps of steps of ``dt`` [s] (at most ``max_step_s`` each; the rule)."""
-        return np.maximum(1, np.ceil(dt / self.max_step_s * (1 - 1e-12))).astype(int)
+        return substep_counts(dt, self.max_step_s)
 
     def _substeps(self, dt: float) -> int:
         """RK4 sub-steps of one step of ``dt`` [s] (:meth:`_substep_counts`)."""
@@ -1275,21 +1288,25 @@ class MagnetBank:
             raise InputError("state must be a BankState of this bank (from initial_state, step "
                              "or a stepper's state)")
 
-    def step(self, state: BankState, dt: float, voltages: Any, gaps: Any = None,
-             gap_rates: Any = 0.0, *, pole_forces: bool = False) -> tuple[BankState, BankOutputs]:
+    @renamed_keywords(dt="dt_s", voltages="voltages_V", gaps="gaps_m", gap_rates="gap_rates_m_per_s")
+    def step(self, state: BankState, dt_s: float, voltages_V: Any, gaps_m: Any = None,
+             gap_rates_m_per_s: Any = 0.0, *, pole_forces: bool = False) -> tuple[BankState, BankOutputs]:
         """Advance every member by ``dt`` [s] with constant voltages and linearly moving gaps.
+
+        The old keyword names ``dt``, ``voltages``, ``gaps``, ``gap_rates`` still work as
+        deprecated aliases (a ``DeprecationWarning`` names the new one).
 
         Parameters
         ----------
         state : BankState
             From :meth:`initial_state` or a previous step.
-        dt : float
+        dt_s : float
             Step length [s] (> 0).
-        voltages : float or array (n_circuits,)
+        voltages_V : float or array (n_circuits,)
             Circuit voltages [V], held over the step.
-        gaps : float, array (n_gaps,) or None
+        gaps_m : float, array (n_gaps,) or None
             Gap inputs [m] at the start of the step (None keeps the state's).
-        gap_rates : float or array (n_gaps,)
+        gap_rates_m_per_s : float or array (n_gaps,)
             Gap rates [m/s] over the step.
         pole_forces : bool
             Also return the per-pole force distribution.
@@ -1311,6 +1328,7 @@ class MagnetBank:
             Non-finite results (with time, state and reason) or a detailed member's
             integrator failing.
         """
+        dt, voltages, gaps, gap_rates = dt_s, voltages_V, gaps_m, gap_rates_m_per_s
         self._check_state(state)
         if not (type(dt) is float and 0.0 < dt < math.inf):
             dt = check_step(dt)
@@ -1365,7 +1383,7 @@ class MagnetBank:
             if m.kind != "detailed":
                 continue
             assert m.model is not None
-            new, out = m.model.step(states[k], dt, u[cs], gaps=pg[ps], gap_rates=pgd[ps])
+            new, out = m.model.step(states[k], dt, u[cs], pg[ps], pgd[ps])
             states[k] = new
             coil[cs] = out.currents_A
             force[cs] = _circuit_forces(out.pole_force_N, m)
@@ -1380,18 +1398,22 @@ class MagnetBank:
         new_state = BankState(t1, i_next, g1, tuple(states))
         return new_state, BankOutputs(t1, coil, i_next.copy(), force, member_force, pf)
 
-    def stepper(self, state: BankState, dt: float) -> BankStepper:
+    @renamed_keywords(dt="dt_s")
+    def stepper(self, state: BankState, dt_s: float) -> BankStepper:
         """A :class:`~maglevkit.reduced.stepper.BankStepper` that advances the bank from
         ``state`` in steps of ``dt`` [s] in place: the co-simulation loop of a vehicle
         model or controller without the per-step objects and copies of :meth:`step`
         (the same compiled function and checks, bit-identical results).
+
+        The old keyword name ``dt`` still works as a deprecated alias (a
+        ``DeprecationWarning`` names the new one).
 
         Parameters
         ----------
         state : BankState
             Start state of this bank (from :meth:`initial_state`, :meth:`step` or another
             stepper's ``state``).
-        dt : float
+        dt_s : float
             Step length [s], finite and > 0.
 
         Returns
@@ -1410,11 +1432,12 @@ class MagnetBank:
         >>> maps = mk.build_maps(mk.load_magnet("u-magnet"), gaps=np.linspace(0.006, 0.016, 6),
         ...                      currents=np.linspace(0, 60, 13), progress=False)
         >>> bank = mk.MagnetBank({"a": maps, "b": maps}, compiled="never")
-        >>> stepper = bank.stepper(bank.initial_state(gaps=0.010, currents=20.0), dt=1e-3)
-        >>> stepper.advance(voltages=45.0, gap_rates=0.0)
+        >>> stepper = bank.stepper(bank.initial_state(gaps=0.010, currents=20.0), dt_s=1e-3)
+        >>> stepper.advance(voltages_V=45.0, gap_rates_m_per_s=0.0)
         >>> bool(stepper.inductor_currents_A[0] > 20.0)
         True
         """
+        dt = dt_s
         return BankStepper(self, state, dt)
 
     def simulate(self, t: Any, *, gaps: Any, voltages: Any, gap_rates: Any = None,
@@ -1502,8 +1525,8 @@ class MagnetBank:
             state = stepper.state
         else:
             for k in range(nt - 1):
-                state, o = self.step(state, float(steps[k]), u[k], gaps=g[k],
-                                     gap_rates=rates[k], pole_forces=True)
+                state, o = self.step(state, float(steps[k]), u[k], g[k], rates[k],
+                                     pole_forces=True)
                 cur[k + 1], il[k + 1], fc[k + 1] = (o.currents_A, o.inductor_currents_A,
                                                     o.circuit_force_N)
                 assert o.pole_force_N is not None
@@ -1612,17 +1635,14 @@ class _RunCall:
         self.n = n
         ch = RUN_CHUNK
         if loop is not None:
-            buf: Any
-            buf, self.eval = loop.buffer()
-            self.buf = buf
-            self.args = [np.zeros(n), np.zeros((ch, n)), np.zeros((ch, n)), np.zeros((ch, n)),
-                         np.zeros(ch), np.zeros(1)]
-            self.res = [np.zeros((ch, n)), np.zeros((ch, n)), np.zeros((ch, n)), np.zeros(1),
-                        np.zeros(n), np.zeros(n), np.zeros(n)]
-            for i, a in enumerate(self.args):
-                buf.set_arg(i, memoryview(a.reshape(-1)))  # type: ignore[arg-type]
-            for i, r in enumerate(self.res):
-                buf.set_res(i, memoryview(r.reshape(-1)))  # type: ignore[arg-type]
+            # the blocks (steps, circuits) are bound row-major: the loop's layout
+            blocks = [np.zeros((ch, n)), np.zeros((ch, n)), np.zeros((ch, n))]
+            bound = BoundCall(loop, args={1: blocks[0], 2: blocks[1], 3: blocks[2]},
+                              res={0: np.zeros((ch, n)), 1: np.zeros((ch, n)),
+                                   2: np.zeros((ch, n))})
+            self.bound = bound
+            self.eval = bound.eval
+            self.args, self.res = bound.args, bound.res
             self.acc = None
         else:
             self.acc = step.mapaccum("maglevkit_bank_run", ch)
@@ -1667,16 +1687,10 @@ class _StepCall:
     """
 
     def __init__(self, f: ca.Function) -> None:
-        buf: Any
         self.f = f
-        buf, self.eval = f.buffer()
-        self.buf = buf
-        self.args = [np.zeros(f.nnz_in(i)) for i in range(f.n_in())]
-        self.res = [np.zeros(f.nnz_out(i)) for i in range(f.n_out())]
-        for i, a in enumerate(self.args):
-            buf.set_arg(i, memoryview(a))  # type: ignore[arg-type]
-        for i, r in enumerate(self.res):
-            buf.set_res(i, memoryview(r))  # type: ignore[arg-type]
+        self.bound = BoundCall(f)
+        self.eval = self.bound.eval
+        self.args, self.res = self.bound.args, self.bound.res
 
     def __call__(self, i: np.ndarray, s: np.ndarray, u: np.ndarray, sd: np.ndarray, h: float
                  ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, float, np.ndarray]:

@@ -41,18 +41,22 @@ from __future__ import annotations
 import math
 import warnings
 from dataclasses import dataclass
-from typing import Any, TypeVar
+from typing import TYPE_CHECKING, Any, TypeVar
 
 import casadi as ca
 import numpy as np
 
 from ..errors import InputError, OutOfRangeError, SolverError
-from ..models.compiled import COMPILE_MODES
+from ..models.compiled import COMPILE_MODES, BoundCall
 from ..models.inputs import check_initial_choice, check_step, simulation_inputs
-from ..validation import flag, real_array
+from ..validation import flag, real_array, renamed_keywords
+from .core import EXTRA_CELLS, ReducedCore, eq8_a, extend_values, rk4_substep, substep_count
+
+if TYPE_CHECKING:
+    from ..reduction.maps import CharacteristicMaps
 
 __all__ = ["CurrentModel", "CurrentModelLinearization", "CurrentModelState", "CurrentOutputs",
-           "ReducedSimulation", "eq8_coil_current", "eq8_eddy_branch_rhs", "eq8_rhs",
+           "ReducedSimulation", "eq8_coil_current", "eq8_eddy_branch_rhs", "eq8_freewheel_voltage", "eq8_rhs",
            "eq8_shielded_gap_rhs"]
 
 
@@ -299,7 +303,7 @@ class CurrentModel:
         ``"always"`` a :class:`SolverError` if compiling fails.
     """
 
-    def __init__(self, maps: Any, *, extrapolate: bool = False, method: str = "rk4",
+    def __init__(self, maps: CharacteristicMaps, *, extrapolate: bool = False, method: str = "rk4",
                  rtol: float = 1e-8, atol: float = 1e-10, max_step_s: float = 1e-3,
                  eddy_resistance: str | None = None, jit: bool = False,
                  eddy_modes: int = 0, motion_eddy: bool = False, lookup: str = "tables",
@@ -327,31 +331,27 @@ class CurrentModel:
             raise InputError(f"compiled = {compiled!r}; use one of {list(COMPILE_MODES)}")
         self.lookup = lookup
         self.compiled = compiled
-        self.circuit_names: tuple[str, ...] = maps.circuits
-        groups = maps.pole_groups
-        self.gap_names: tuple[str, ...] = tuple(
-            maps.dataset.attrs.get("gap_names", "").split(",")) if maps.dataset.attrs.get(
-            "gap_names") else tuple(g for c in self.circuit_names for g in groups[c])
-        gi = {g: k for k, g in enumerate(self.gap_names)}
-        nc, ng = len(self.circuit_names), len(self.gap_names)
-        # averaging matrix: substitute gap per circuit = mean of its poles' gaps
-        self._avg = np.zeros((nc, ng))
-        for j, c in enumerate(self.circuit_names):
-            for g in groups[c]:
-                self._avg[j, gi[g]] = 1.0 / len(groups[c])
-        self._share = (self._avg > 0).T / np.maximum((self._avg > 0).sum(axis=1), 1)  # (ng, nc)
-        self.gap_range = (float(maps.gaps_m[0]), float(maps.gaps_m[-1]))
-        self.current_range = (float(maps.currents_A[0]), float(maps.currents_A[-1]))
+        m = _check_eddy_modes(eddy_modes)
+        # the facts of the maps, derived once (names, pole groups, averaging and share
+        # matrices, R_el, eq. 8's R_ec and a, grids, ranges and their allowances); the eddy
+        # extensions replace R_ec below
+        eq8 = not m and not motion_eddy
+        core = ReducedCore.from_maps(maps, eddy_resistance=eddy_resistance if eq8 else "fit")
+        #: the reduced circuits' core (:class:`~maglevkit.reduced.core.ReducedCore`)
+        self.core = core
+        self.circuit_names: tuple[str, ...] = core.circuit_names
+        self.gap_names: tuple[str, ...] = core.gap_names
+        nc = core.n_circuits
+        self._avg = core.averaging           # pole gaps -> substitute gap per circuit
+        self._share = core.share             # circuit force -> pole forces, (ng, nc)
+        self.gap_range = core.gap_range_m
+        self.current_range = core.current_range_A
         # rounding allowances of every range check, and the bounds of the state [I_L; s]
         # they give (sub-step check)
-        self._tol_s = tol_s = 1e-12 * self.gap_range[1]
-        self._tol_i = tol_i = 1e-9 * max(1.0, self.current_range[1])
-        self._lower = np.concatenate([np.full(nc, self.current_range[0] - tol_i),
-                                      np.full(nc, self.gap_range[0] - tol_s)])
-        self._upper = np.concatenate([np.full(nc, self.current_range[1] + tol_i),
-                                      np.full(nc, self.gap_range[1] + tol_s)])
-        r_el = np.asarray(maps.dataset["resistance_ohm"].values, dtype=float)
-        m = _check_eddy_modes(eddy_modes)
+        self._tol_s = core.gap_tolerance_m
+        self._tol_i = core.current_tolerance_A
+        self._lower, self._upper = core.state_bounds()
+        r_el = core.resistance_ohm
         self.eddy_modes = m
         if not isinstance(motion_eddy, (bool, np.bool_)):
             raise InputError(f"motion_eddy = {motion_eddy!r}; use False (eq. 8, the default) "
@@ -374,19 +374,12 @@ class CurrentModel:
                                  "place: leave eddy_resistance out")
             r_ec, r_k, l_k, l_ref = _eddy_network(maps, m)
         else:
-            var = {None: "eddy_resistance_fit_ohm", "fit": "eddy_resistance_fit_ohm",
-                   "jump": "eddy_resistance_ohm"}.get(eddy_resistance)
-            if var is None:
-                raise InputError(f"eddy_resistance = {eddy_resistance!r}; use 'fit' or 'jump' "
-                                 "(or None: the fit)")
-            if var not in maps.dataset:
-                raise InputError(f"these maps have no {var!r}; rebuild them with this version")
-            r_ec = np.asarray(maps.dataset[var].values, dtype=float)
+            r_ec = core.eddy_resistance_ohm
         self.resistance_ohm = r_el
         #: ``R_ec`` of eq. 8, the eddy network's ``R_0`` with ``eddy_modes > 0``, the
         #: ladder's shunt ``R_a`` with ``motion_eddy``
         self.eddy_resistance_ohm = r_ec
-        a = 1.0 + np.where(np.isinf(r_ec), 0.0, r_el / np.where(np.isinf(r_ec), 1.0, r_ec))
+        a = core.a if eq8 else eq8_a(r_el, r_ec)
         # extra (eddy) states per circuit: the m branch currents, or the ladder's I_e
         n_e = m if m else (1 if self.motion_eddy else 0)
         self._n_e = n_e
@@ -429,8 +422,8 @@ class CurrentModel:
         # linearly (edge slope) by EXTRA_CELLS grid cells on every side before the spline
         # is fitted: the integrator stays well-defined just outside the range, while the
         # range checks on every returned sample still raise (or warn with extrapolate).
-        grid_s = _extend_axis(maps.gaps_m)
-        grid_i = _extend_axis(maps.currents_A)
+        grid_s = core.extended_gaps_m
+        grid_i = core.extended_currents_A
         self._spline_range = ((float(grid_s[0]), float(grid_s[-1])),
                               (float(grid_i[0]), float(grid_i[-1])))
 
@@ -443,7 +436,7 @@ class CurrentModel:
                 if not np.all(np.isfinite(values)):
                     raise InputError(f"map {var!r} of circuit {self.circuit_names[j]!r} has "
                                      "non-finite values; rebuild the maps")
-                data.append(_extend_values(_extend_values(values, axis=0), axis=1)
+                data.append(extend_values(extend_values(values, axis=0), axis=1)
                             .ravel(order="F"))
             return ca.interpolant(f"maps_{j}", "bspline", [grid_s, grid_i],
                                   np.stack(data, axis=1).ravel())
@@ -657,12 +650,11 @@ class CurrentModel:
                 xk = x
                 lo: Any = None
                 hi: Any = None
+                def rhs(v: Any) -> Any:
+                    return self._rhs(v, u)
+
                 for _ in range(substeps):
-                    k1 = self._rhs(xk, u)
-                    k2 = self._rhs(xk + hs / 2 * k1, u)
-                    k3 = self._rhs(xk + hs / 2 * k2, u)
-                    k4 = self._rhs(xk + hs * k3, u)
-                    xk = xk + hs / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
+                    xk = rk4_substep(xk, hs, rhs)
                     # element-wise extremes of the sub-step end states (incl. the last):
                     # the range check covers every RK4 sub-step, not only interval ends
                     lo = xk if lo is None else ca.fmin(lo, xk)
@@ -702,13 +694,13 @@ class CurrentModel:
     def _interval(self, x0: np.ndarray, u: np.ndarray, h: float) -> np.ndarray:
         """Integrate one interval of length ``h`` with held controls ``u``."""
         if self.method == "rk4":
-            n = max(1, math.ceil(h / self.max_step_s * (1 - 1e-12)))
+            n = substep_count(h, self.max_step_s)
             return np.asarray(self._rk4_function(n, 1)(x0, u, h)[0]).ravel()
         return np.asarray(self._cvodes_interval(x0, u, h)).ravel()
 
     def _fused_step(self, h: float) -> ca.Function:
         """One compiled call per step: ``(x0, u, h) -> (x1, coil currents, circuit forces)``."""
-        n = max(1, math.ceil(h / self.max_step_s * (1 - 1e-12))) if self.method == "rk4" else 0
+        n = substep_count(h, self.max_step_s) if self.method == "rk4" else 0
         if n:
             return self._rk4_function(n, 1)
         f = self._fused.get(n)
@@ -723,10 +715,10 @@ class CurrentModel:
 
     def _step_call(self, h: float) -> Any:
         """The fused step as a low-overhead call (CasADi buffer: ~5 us instead of ~50 us)."""
-        key = max(1, math.ceil(h / self.max_step_s * (1 - 1e-12))) if self.method == "rk4" else 0
+        key = substep_count(h, self.max_step_s) if self.method == "rk4" else 0
         call = self._step_calls.get(key)
         if call is None:
-            call = _BufferedCall(self._fused_step(h)) if key else _PlainCall(self._fused_step(h))
+            call = BoundCall(self._fused_step(h)) if key else _PlainCall(self._fused_step(h))
             self._step_calls[key] = call
         return call
 
@@ -909,26 +901,30 @@ class CurrentModel:
             self._lin_fun = f
         return f
 
-    def step(self, state: CurrentModelState, dt: float, voltages: Any, gaps: Any = None,
-             gap_rates: Any = 0.0) -> tuple[CurrentModelState, CurrentOutputs]:
+    @renamed_keywords(dt="dt_s", voltages="voltages_V", gaps="gaps_m", gap_rates="gap_rates_m_per_s")
+    def step(self, state: CurrentModelState, dt_s: float, voltages_V: Any, gaps_m: Any = None,
+             gap_rates_m_per_s: Any = 0.0) -> tuple[CurrentModelState, CurrentOutputs]:
         """Advance by ``dt`` [s] with constant voltages [V] and linearly moving gaps.
 
         Same contract as :meth:`maglevkit.models.flux.FluxModel.step`: ``gaps`` [m] at the
         start of the step (None keeps the state's), ``gap_rates`` [m/s] over the step.
 
+        The old keyword names ``dt``, ``voltages``, ``gaps``, ``gap_rates`` still work as
+        deprecated aliases (a ``DeprecationWarning`` names the new one).
+
         Parameters
         ----------
         state : CurrentModelState
             State at the start of the step.
-        dt : float
+        dt_s : float
             Step length [s], finite and > 0.
-        voltages : float, array_like (n_circuits,) or mapping
+        voltages_V : float, array_like (n_circuits,) or mapping
             Circuit voltages [V], held over the step: one for all, one per circuit in the
             order of ``circuit_names``, or circuit name -> value.
-        gaps : float, array_like (n_gaps,), mapping or None, default None
+        gaps_m : float, array_like (n_gaps,), mapping or None, default None
             Pole gaps [m] at the start of the step, each > 0 (same forms per gap); None
             keeps ``state.gaps_m``.
-        gap_rates : float, array_like (n_gaps,) or mapping, default 0.0
+        gap_rates_m_per_s : float, array_like (n_gaps,) or mapping, default 0.0
             Gap rates [m/s], constant over the step; the gaps at the end,
             ``gaps + gap_rates * dt``, must stay > 0.
 
@@ -946,6 +942,7 @@ class CurrentModel:
             The substitute gap path or the currents (including RK4 sub-step states) leave
             the maps (see ``extrapolate``).
         """
+        dt, voltages, gaps, gap_rates = dt_s, voltages_V, gaps_m, gap_rates_m_per_s
         if not isinstance(state, CurrentModelState):
             raise InputError(f"state must be a CurrentModelState (from CurrentModel."
                              f"initial_state or step), got {type(state).__name__}")
@@ -1089,7 +1086,7 @@ class CurrentModel:
         try:
             if self.method == "rk4":
                 h = np.diff(t)
-                n = max(1, math.ceil(float(h.max()) / self.max_step_s * (1 - 1e-12)))
+                n = substep_count(float(h.max()), self.max_step_s)
                 xf, coil, force, lo, hi = self._rk4_run(n, x0, uu, h)
                 if not np.isfinite(xf).all():
                     raise RuntimeError("non-finite state in the RK4 integration")
@@ -1247,20 +1244,16 @@ class _TableStep:
         outs = [res["I_L_next"], res["I"], force, ca.mtimes(ca.DM(share), force),
                 res["member_F"], g1, res["I_L_next"], flag]
         f = ca.Function("current_model_table_step", [x, g, u, gd, h], outs)
-        buf: Any
-        buf, self.eval = f.buffer()
-        self.buf = buf
-        self.args = [np.zeros(f.nnz_in(i)) for i in range(f.n_in())]
         sizes = [f.nnz_out(i) for i in range(f.n_out() - 1)]
         self.block = np.zeros(sum(sizes))
         ends = np.cumsum([0, *sizes])
         self.slices = [slice(int(a), int(b)) for a, b in zip(ends[:-1], ends[1:], strict=True)]
         self.flag = np.zeros(1)
-        for i, a in enumerate(self.args):
-            buf.set_arg(i, memoryview(a))  # type: ignore[arg-type]
-        for i, sl in enumerate(self.slices):
-            buf.set_res(i, memoryview(self.block[sl]))  # type: ignore[arg-type]
-        buf.set_res(len(self.slices), memoryview(self.flag))  # type: ignore[arg-type]
+        bind = {i: self.block[sl] for i, sl in enumerate(self.slices)}
+        bind[len(self.slices)] = self.flag
+        self.bound = BoundCall(f, res=bind)
+        self.args = self.bound.args
+        self.eval = self.bound.eval
 
     def __call__(self, i: np.ndarray, g: np.ndarray, u: np.ndarray, gd: np.ndarray,
                  h: float) -> list[np.ndarray] | None:
@@ -1299,35 +1292,6 @@ class _PlainCall:
         return [np.asarray(r, dtype=float).ravel() for r in self.f(*args)]
 
 
-class _BufferedCall:
-    """Evaluate a CasADi function through bound NumPy buffers (no per-call conversion).
-
-    Used for the fixed-step RK4 step, which cannot fail inside CasADi; non-finite results
-    are checked by the caller.
-    """
-
-    def __init__(self, f: ca.Function) -> None:
-        buf: Any
-        buf, self.eval = f.buffer()
-        self.buf = buf
-        self.args = [np.zeros(f.nnz_in(i)) for i in range(f.n_in())]
-        self.res = [np.zeros(f.nnz_out(i)) for i in range(f.n_out())]
-        for i, a in enumerate(self.args):
-            buf.set_arg(i, memoryview(a))  # type: ignore[arg-type]
-        for i, r in enumerate(self.res):
-            buf.set_res(i, memoryview(r))  # type: ignore[arg-type]
-
-    def __call__(self, *args: Any) -> list[np.ndarray]:
-        for a, v in zip(self.args, args, strict=True):
-            a[:] = v
-        self.eval()
-        return [r.copy() for r in self.res]
-
-
-EXTRA_CELLS = 3
-"""Grid cells by which the maps are continued linearly beyond their range."""
-
-
 def eq8_rhs(i_l: Any, u: Any, gap_rate: Any, ltilde: Any, dl_ds: Any, r_el: Any, a: Any) -> Any:
     """Eq. 8: ``dI_L/dt = [(U - R_el I_L)/a - dL/ds I_L ds/dt] / L~`` with ``a = 1 + R_el/R_ec``.
 
@@ -1340,6 +1304,40 @@ def eq8_rhs(i_l: Any, u: Any, gap_rate: Any, ltilde: Any, dl_ds: Any, r_el: Any,
 def eq8_coil_current(i_l: Any, u: Any, r_el: Any, a: Any) -> Any:
     """Coil current of Fig. 8: ``I = (U - U_L)/R_el`` with ``U_L = (U - R_el I_L)/a``."""
     return (u - (u - r_el * i_l) / a) / r_el
+
+
+def eq8_freewheel_voltage(i_l: Any, u: Any, r_el: Any, a: Any) -> Any:
+    """Eq. 8's terminal voltage behind a two-quadrant chopper with freewheeling diodes.
+
+    The chopper drives the coil current ``I = (U/R_ec + I_L)/a`` (Fig. 8) but cannot
+    reverse it: where the commanded ``U`` would make ``I < 0`` the diodes block and the
+    terminal voltage is the one that gives ``I = 0``, ``U = -R_ec I_L``, so that
+    ``U_eff = max(U, -R_ec I_L)`` with ``R_ec = R_el/(a - 1)``.  With ``I = 0`` the flux
+    then decays through the eddy-current path alone (``L~ dI_L/dt = -R_ec I_L`` at a fixed
+    gap), and ``I_L`` never crosses zero.  Without an eddy path (``a = 1``, ``I = I_L``)
+    the diodes hold ``I_L`` at zero once it is there (``U_eff = max(U, 0)`` for
+    ``I_L <= 0``).  Evaluated inside every RK4 stage, the limit holds within a step, not
+    only at the sample instants.
+
+    Parameters
+    ----------
+    i_l : float or CasADi
+        Inductor current ``I_L`` [A].
+    u : float or CasADi
+        Commanded terminal voltage ``U`` [V].
+    r_el : float or CasADi
+        Coil resistance ``R_el`` [ohm].
+    a : float or CasADi
+        ``1 + R_el/R_ec`` [-] (1: no eddy path).
+
+    Returns
+    -------
+    CasADi expression (or float for float inputs)
+        The applied voltage ``U_eff`` [V] (CasADi ``fmax``/``if_else``).
+    """
+    floor = ca.if_else(a > 1, -r_el * i_l / ca.fmax(a - 1, 1e-300),
+                       ca.if_else(i_l > 0, -ca.inf, 0.0))
+    return ca.fmax(u, floor)
 
 
 def eq8_eddy_branch_rhs(i_k: Any, u_l: Any, r_k: Any, l_k: Any) -> Any:
@@ -1373,7 +1371,7 @@ def eq8_shielded_gap_rhs(i_l: Any, i_e: Any, u: Any, gap_rate: Any, ltilde: Any,
     return d_il, (v_a - v_m) / l_u - d_il
 
 
-def _motion_eddy_ladder(maps: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def _motion_eddy_ladder(maps: CharacteristicMaps) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """``R_a``, ``R_2`` [ohm] and ``L_u`` [H] (n_c,) of the maps' shielded-gap ladder."""
     ds = maps.dataset
     names = ("motion_eddy_jump_resistance_ohm", "motion_eddy_shielding_resistance_ohm",
@@ -1409,7 +1407,7 @@ def _check_eddy_modes(value: Any) -> int:
     return int(value)
 
 
-def _eddy_network(maps: Any, m: int) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+def _eddy_network(maps: CharacteristicMaps, m: int) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """``R_0`` (n_c,), ``R_k``, ``L_k`` (n_c, m) and ``L~_ref`` (n_c,) of the maps' fitted
     eddy network with ``m`` branches."""
     ds = maps.dataset
@@ -1434,20 +1432,6 @@ def _eddy_network(maps: Any, m: int) -> tuple[np.ndarray, np.ndarray, np.ndarray
         raise InputError("these maps have no eddy network to use (the magnet has no eddy "
                          "currents, or the fit failed); use eddy_modes=0")
     return r0, r_k, l_k, l_ref
-
-
-def _extend_axis(axis: np.ndarray) -> np.ndarray:
-    d = axis[1] - axis[0]
-    k = np.arange(1, EXTRA_CELLS + 1)
-    return np.concatenate([axis[0] - d * k[::-1], axis, axis[-1] + d * k])
-
-
-def _extend_values(values: np.ndarray, *, axis: int) -> np.ndarray:
-    v = np.moveaxis(values, axis, 0)
-    k = np.arange(1, EXTRA_CELLS + 1)[:, None]
-    lo = v[0] - (v[1] - v[0]) * k[::-1]
-    hi = v[-1] + (v[-1] - v[-2]) * k
-    return np.moveaxis(np.concatenate([lo, v, hi], axis=0), 0, axis)
 
 
 def _last_line(text: str) -> str:

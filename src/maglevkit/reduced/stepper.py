@@ -24,7 +24,9 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from ..errors import InputError
+from ..models.compiled import BoundCall
 from ..models.inputs import check_step
+from ..validation import renamed_keywords
 
 if TYPE_CHECKING:
     from .bank import BankState, MagnetBank
@@ -81,7 +83,7 @@ class BankStepper:
     >>> maps = mk.build_maps(magnet, gaps=np.linspace(0.006, 0.016, 6),
     ...                      currents=np.linspace(0, 60, 13), progress=False)
     >>> bank = mk.MagnetBank({f"m{k}": maps for k in range(4)}, compiled="never")
-    >>> stepper = bank.stepper(bank.initial_state(gaps=0.010, currents=20.0), dt=1e-3)
+    >>> stepper = bank.stepper(bank.initial_state(gaps=0.010, currents=20.0), dt_s=1e-3)
     >>> force = stepper.circuit_force_N            # bound once, always the last step's
     >>> for k in range(10):
     ...     stepper.voltages_V[:] = bank.resistance_ohm * 21.0   # e.g. from a controller
@@ -133,13 +135,9 @@ class BankStepper:
         self._scratch = r = np.zeros_like(self._block)       # the same layout as the block
         self._res = [r[:nc], r[nc:2 * nc], r[2 * nc:3 * nc], r[3 * nc:3 * nc + nm],
                      np.zeros(1), np.zeros(nc), np.zeros(nc), r[3 * nc + nm:], np.zeros(nc)]
-        buf: Any
-        buf, self._eval = call.f.buffer()
-        self._buf = buf                     # keeps the bound buffer alive
-        for i, a in enumerate(args):
-            buf.set_arg(i, memoryview(a))  # type: ignore[arg-type]
-        for i, r in enumerate(self._res):
-            buf.set_res(i, memoryview(r))  # type: ignore[arg-type]
+        self._buf = BoundCall(call.f, args=dict(enumerate(args)),    # keeps the arrays alive
+                              res=dict(enumerate(self._res)))
+        self._eval = self._buf.eval
         self._n_bad = self._res[4]
 
     # ------------------------------------------------------------------ inputs
@@ -256,17 +254,21 @@ class BankStepper:
         self._dt = dt
         self._h[0] = dt
 
-    def advance(self, voltages: Any = None, gaps: Any = None, gap_rates: Any = None) -> None:
+    @renamed_keywords(voltages="voltages_V", gaps="gaps_m", gap_rates="gap_rates_m_per_s")
+    def advance(self, voltages_V: Any = None, gaps_m: Any = None, gap_rates_m_per_s: Any = None) -> None:
         """Advance every circuit by :attr:`dt_s` (constant voltages, linearly moving gaps).
+
+        The old keyword names ``voltages``, ``gaps``, ``gap_rates`` still work as deprecated
+        aliases (a ``DeprecationWarning`` names the new one).
 
         Parameters
         ----------
-        voltages : float or array (n_circuits,), optional
+        voltages_V : float or array (n_circuits,), optional
             Written into :attr:`voltages_V` first [V] (None: use what is there).
-        gaps : float or array (n_gaps,), optional
+        gaps_m : float or array (n_gaps,), optional
             Written into :attr:`gaps_m` first [m] (None: continue from the last step's
             end gaps, or what the caller wrote there).
-        gap_rates : float or array (n_gaps,), optional
+        gap_rates_m_per_s : float or array (n_gaps,), optional
             Written into :attr:`gap_rates_m_per_s` first [m/s] (None: keep them).
 
         All three are converted before any is written, so an argument that is refused
@@ -279,6 +281,7 @@ class BankStepper:
             stays at the last good step: time, state and outputs unchanged, gap inputs
             reset to the state's gaps (voltages and gap rates stay as written).
         """
+        voltages, gaps, gap_rates = voltages_V, gaps_m, gap_rates_m_per_s
         bank = self._bank
         if voltages is not None or gaps is not None or gap_rates is not None:
             self._write_inputs(voltages, gaps, gap_rates)

@@ -29,6 +29,7 @@ relative differences.  ``R_ec`` comes from the detailed DAE analytically
 from __future__ import annotations
 
 import contextlib
+import functools
 import json
 import os
 from collections.abc import Callable, Sequence
@@ -51,8 +52,8 @@ from .transient import transient_point
 if TYPE_CHECKING:  # xarray is imported where it is used (0.45 s of start-up otherwise)
     import xarray as xr
 
-__all__ = ["CharacteristicMaps", "build_maps", "circuit_pole_groups", "load_maps", "model_hash",
-           "network_hash"]
+__all__ = ["CharacteristicMaps", "build_maps", "circuit_pole_groups", "law_hash", "load_maps",
+           "model_hash", "network_hash"]
 
 MAPS_FORMAT = "maglevkit-maps/1"
 REQUIRED_VARIABLES = ("force_N", "inductance_H", "dL_ds_H_per_m", "resistance_ohm")
@@ -279,6 +280,44 @@ def network_hash(net: Network) -> str:
     import hashlib
 
     return hashlib.sha256(repr((net.branches, net.circuits)).encode()).hexdigest()
+
+
+LAW_PACKAGES = ("materials.py", "circuit", "magnets", "models", "reduction")
+"""The modules and subpackages whose code makes a map from a network (materials, elements'
+laws, statics, DAE, reduction): :func:`law_hash` covers their source."""
+
+
+@functools.cache
+def law_hash(root: str | Path | None = None) -> str:
+    """SHA-256 of the source that turns a network into maps (the laws, not the data).
+
+    :func:`network_hash` covers a network's elements and parameters, not the code of their
+    laws: cached maps built by an older maglevkit whose permeance or statics code has since
+    changed would be taken for current.  Persistent caches (the vehicle maps cache) key on
+    both.  Any edit to those files (a docstring too) changes it, which only costs a rebuild.
+
+    Parameters
+    ----------
+    root : str or path-like, optional
+        The package directory to hash (default: this installed ``maglevkit``); the files
+        entries of :data:`LAW_PACKAGES` under it (a module, or a package's ``**/*.py`` in
+        sorted order), with their relative paths.
+
+    Returns
+    -------
+    str
+        Hex digest.
+    """
+    import hashlib
+
+    base = Path(root) if root is not None else Path(__file__).resolve().parents[1]
+    h = hashlib.sha256()
+    for entry in LAW_PACKAGES:
+        path = base / entry
+        for f in [path] if path.is_file() else sorted(path.rglob("*.py")):
+            h.update(f.relative_to(base).as_posix().encode() + b"\0")
+            h.update(f.read_bytes())
+    return h.hexdigest()
 
 
 def model_hash(model: Any) -> str:

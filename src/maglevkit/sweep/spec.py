@@ -315,7 +315,7 @@ def _check_failure(text: str, where: str, circuits: tuple[str, ...], duration: f
 def _vehicle_identity(vehicle_file: str) -> tuple[float, tuple[str, ...], str]:
     """Payload, bank circuit names and the identity hash of a vehicle file (no maps built)."""
     from ..magnets import load_magnet
-    from ..reduction.maps import network_hash
+    from ..reduction.maps import law_hash, network_hash
     from ..vehicle.train import load_vehicle
 
     train = load_vehicle(vehicle_file)
@@ -325,6 +325,7 @@ def _vehicle_identity(vehicle_file: str) -> tuple[float, tuple[str, ...], str]:
     h = hashlib.sha256(repr(dataclasses.replace(train, source="")).encode())
     for kind in ("standard", "bow"):
         h.update(network_hash(kinds[kind].network).encode())
+    h.update(law_hash().encode())           # results of another maglevkit's laws differ
     return train.payload_kg, names, h.hexdigest()
 
 

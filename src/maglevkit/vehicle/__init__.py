@@ -15,6 +15,8 @@
   body, levitation chassis, air springs, magnet force points; curves) and its file.
 * :mod:`~maglevkit.vehicle.simulation`: vehicle runs (magnet bank, gap controllers,
   guideway, irregularities, failures).
+* :mod:`~maglevkit.vehicle.crossrun`: cross-section runs (levitation and guidance magnets
+  through the bank, gap controllers, curves, crosswind, irregularities, failures).
 """
 
 from __future__ import annotations
@@ -26,6 +28,7 @@ from .comfort import (
     sperling_index,
     sperling_weighting,
 )
+from .crossrun import CrossSectionModel, CrossSectionRun, Crosswind, TransitionCurve
 from .crosssection import (
     CrossSectionData,
     CrossSectionMechanics,
@@ -82,6 +85,10 @@ __all__ = [
     "CrossSectionMechanics",
     "load_cross_section",
     "track_field_m_per_s2",
+    "CrossSectionModel",
+    "CrossSectionRun",
+    "Crosswind",
+    "TransitionCurve",
     "VehicleModel",
     "VehicleRun",
     "Failure",

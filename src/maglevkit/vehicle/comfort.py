@@ -40,8 +40,11 @@ from ..errors import InputError
 from ..validation import real_array, real_number
 
 __all__ = [
+    "WD_PARAMETERS",
     "WK_PARAMETERS",
+    "iso2631_wd",
     "iso2631_wk",
+    "lateral_comfort_indices",
     "iso2631_wk_sections",
     "iso2631_weighted_rms",
     "comfort_indices",
@@ -54,6 +57,16 @@ WK_PARAMETERS = {"f1": 0.4, "Q1": 1 / math.sqrt(2), "f2": 100.0, "Q2": 1 / math.
                  "f3": 12.5, "f4": 12.5, "Q4": 0.63, "f5": 2.37, "Q5": 0.91, "f6": 3.35,
                  "Q6": 0.91, "K": 1.0}
 """ISO 2631-1:1997 Table A.1 / ISO 8041 parameters of the ``Wk`` weighting [Hz, -]."""
+
+WD_PARAMETERS = {"f1": 0.4, "Q1": 1 / math.sqrt(2), "f2": 100.0, "Q2": 1 / math.sqrt(2),
+                 "f3": 2.0, "f4": 2.0, "Q4": 0.63, "K": 1.0}
+"""ISO 2631-1:1997 Table A.1 / ISO 8041 parameters of the ``Wd`` weighting (horizontal
+acceleration, seated, standing, recumbent): the band limits of ``Wk``, an a-v transition
+at 2 Hz and no upward step [Hz, -]."""
+
+SPERLING_LATERAL_FACTOR = 0.737 / 0.588
+"""Sperling's horizontal weighting is the vertical one with 0.737 in place of 0.588
+(Sperling's frequency factor ``F_y = 1.25 F_z``; Garg and Dukkipati 1984)."""
 
 SPERLING_SCALE = (100.0 * math.sqrt(2.0)) ** 0.3
 """``Wz = SPERLING_SCALE a_B^0.3`` with the B-weighted RMS ``a_B`` in m/s^2 (about 4.42)."""
@@ -104,6 +117,72 @@ def iso2631_wk(frequency_Hz: Any) -> np.ndarray:
     for b, a in iso2631_wk_sections():
         h = h * np.polyval(b, s) / np.polyval(a, s)
     return WK_PARAMETERS["K"] * h
+
+
+def iso2631_wd(frequency_Hz: Any) -> np.ndarray:
+    """Complex frequency response of ``Wd`` (ISO 2631-1, horizontal) at frequencies [Hz]::
+
+        Wd = H_h H_l H_t,   H_t = (1 + s/w3) / (1 + s/(Q4 w4) + s^2/w4^2),  f3 = f4 = 2 Hz
+
+    with the band-limiting ``H_h``, ``H_l`` of ``Wk`` (:data:`WD_PARAMETERS`).
+
+    Parameters
+    ----------
+    frequency_Hz : float or array_like
+        Frequencies f [Hz], finite and >= 0.
+
+    Returns
+    -------
+    ndarray of complex
+        ``Wd(j 2 pi f)`` [-], same shape as ``frequency_Hz`` (0 at f = 0).
+
+    Raises
+    ------
+    InputError
+        Frequencies that are not finite real numbers >= 0.
+    """
+    p = WD_PARAMETERS
+    s = 2j * math.pi * _freqs(frequency_Hz)
+    w1, w2, w3, w4 = (2 * math.pi * p[k] for k in ("f1", "f2", "f3", "f4"))
+    h = (s * s / (s * s + w1 / p["Q1"] * s + w1 * w1)
+         * w2 * w2 / (s * s + w2 / p["Q2"] * s + w2 * w2)
+         * (1 + s / w3) / (1 + s / (p["Q4"] * w4) + s * s / (w4 * w4)))
+    return p["K"] * h
+
+
+def lateral_comfort_indices(acceleration: Any, sample_rate_Hz: float
+                            ) -> tuple[np.ndarray, np.ndarray]:
+    """ISO 2631-1 ``Wd``-weighted RMS [m/s^2] and Sperling's lateral ``Wz`` [-] of every
+    column of a lateral acceleration record, one FFT per record (as
+    :func:`comfort_indices` with the horizontal weightings: ``Wd`` and ``B_y =
+    SPERLING_LATERAL_FACTOR B``).
+
+    Parameters
+    ----------
+    acceleration : array_like (n, m)
+        Lateral accelerations [m/s^2], n >= 8 samples of m records, finite.
+    sample_rate_Hz : float
+        Sampling rate [Hz], > 0.
+
+    Returns
+    -------
+    (a_wd, wz) : ndarray (m,), ndarray (m,)
+        Weighted RMS [m/s^2] and Sperling index [-] per record.
+
+    Raises
+    ------
+    InputError
+        A record that is not finite (n, m) with n >= 8, or a bad sampling rate.
+    """
+    a = real_array(acceleration, "acceleration", "m/s^2")
+    if a.ndim != 2 or a.shape[0] < 8:
+        raise InputError("acceleration must be finite (n samples, m records), n >= 8 [m/s^2]")
+    fs = real_number(sample_rate_Hz, "sample_rate_Hz", "Hz", positive=True)
+    spec = np.fft.rfft(a, axis=0)
+    f = np.fft.rfftfreq(a.shape[0], 1.0 / fs)
+    wd = _weighted_rms(spec, a.shape[0], np.abs(iso2631_wd(f)))
+    b = SPERLING_LATERAL_FACTOR * sperling_weighting(f)
+    return wd, SPERLING_SCALE * _weighted_rms(spec, a.shape[0], b) ** 0.3
 
 
 def sperling_weighting(frequency_Hz: Any) -> np.ndarray:

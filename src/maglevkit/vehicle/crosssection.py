@@ -8,7 +8,10 @@ A slice of the vehicle across the track (the paper's cross-section model, Sec. V
   magnets), each with lateral ``y``, vertical ``z`` (down) and roll ``phi`` displacements
   (``phi > 0`` lowers the right side);
 * two **air springs**, left and right, between car body and chassis, each a vertical and a
-  lateral spring-damper at ``(-+y_a, z_a)``;
+  lateral spring-damper at ``(-+y_a, z_a)``; each vertical one carries a static preload,
+  half the loaded car body's weight ``m_c g / 2`` (the air pressure a levelling valve
+  sets), so that on a straight level track the car body sits at its design position
+  (``q = 0``) instead of sagging ``m_c g / (2 k_z)`` on the linear stiffness;
 * four **force points** on the chassis: the levitation magnets under the stator, left and
   right (force upward, direction ``-z``), and the guidance magnets outboard of the
   guidance rails, left and right (the left one pulls the chassis to the right, ``+y``, the
@@ -55,7 +58,7 @@ from .multibody import ForcePoint, PlanarMultibody, RigidBody, SpringDamper
 
 __all__ = ["CrossSectionData", "CrossSectionMechanics", "CROSS_SECTION_SCHEMA",
            "CROSS_SECTION_TAGS", "bundled_cross_sections", "load_cross_section",
-           "parse_cross_section", "track_field_m_per_s2"]
+           "parse_cross_section", "track_field_m_per_s2", "track_field_path"]
 
 #: Provenance tags of a cross-section file: published, widely quoted, derived, estimate.
 CROSS_SECTION_TAGS = ("[P]", "[R]", "[D]", "[E]")
@@ -365,9 +368,38 @@ def track_field_m_per_s2(speed_m_per_s: float, curve_radius_m: float = math.inf,
     if not abs(c) < 0.3:
         raise InputError(f"superelevation_rad = {superelevation_rad!r} rad: must be in "
                          "(-0.3, 0.3) rad")
-    centripetal = 0.0 if math.isinf(r) else v * v / r
-    return np.array([centripetal * math.cos(c) - g * math.sin(c),
-                     centripetal * math.sin(c) + g * math.cos(c)])
+    return track_field_path(v, 0.0 if math.isinf(r) else 1.0 / r, c, gravity_m_per_s2=g)
+
+
+def track_field_path(speed_m_per_s: float, curvature_per_m: Any, superelevation_rad: Any, *,
+                     gravity_m_per_s2: float = STANDARD_GRAVITY) -> np.ndarray:
+    """The field of :func:`track_field_m_per_s2` along a path (arrays; inputs not checked).
+
+    ``a_y = v^2 kappa cos(c) - g sin(c)``, ``a_z = v^2 kappa sin(c) + g cos(c)`` with the
+    curvature ``kappa = 1/R`` (0 on a straight track; a transition curve ramps it).
+
+    Parameters
+    ----------
+    speed_m_per_s : float
+        Speed v [m/s].
+    curvature_per_m : array_like
+        Curvature ``1/R`` [1/m] (positive: a left-hand curve).
+    superelevation_rad : array_like
+        Superelevation ``c`` [rad].
+    gravity_m_per_s2 : float, default STANDARD_GRAVITY
+        g [m/s^2] (keyword only).
+
+    Returns
+    -------
+    ndarray (..., 2)
+        ``(a_y, a_z)`` [m/s^2] over the broadcast shape of the inputs.
+    """
+    kappa = np.asarray(curvature_per_m, dtype=float)
+    c = np.asarray(superelevation_rad, dtype=float)
+    cen = speed_m_per_s * speed_m_per_s * kappa
+    g = gravity_m_per_s2
+    return np.stack(np.broadcast_arrays(cen * np.cos(c) - g * np.sin(c),
+                                        cen * np.sin(c) + g * np.cos(c)), axis=-1)
 
 
 class CrossSectionMechanics:
@@ -390,6 +422,10 @@ class CrossSectionMechanics:
         points ``levitation_{left,right}``, ``guidance_{left,right}``.
     point_names : tuple of str
         The force points in the order of ``F``.
+    air_spring_preload_N : float
+        Static force of each vertical air spring, ``m_c g / 2`` [N] (``m_c`` the loaded
+        car body, ``g`` standard gravity): the car body's design position is the
+        equilibrium on a straight level track.
     """
 
     point_names = ("levitation_left", "levitation_right", "guidance_left", "guidance_right")
@@ -404,12 +440,15 @@ class CrossSectionMechanics:
                   RigidBody("chassis", d.chassis_mass_kg, d.chassis_roll_inertia_kg_m2,
                             (0.0, d.chassis_centre_z_m))]
         elements = []
+        #: static force of each vertical air spring [N]: half the loaded car body's weight
+        self.air_spring_preload_N = 0.5 * d.loaded_car_body_mass_kg * STANDARD_GRAVITY
         for side, sign in (("left", -1.0), ("right", 1.0)):
             pt = (sign * d.spring_y_m, d.spring_z_m)
             # car body (a) above the chassis (b): e = +z, compression pushes a up, b down
             elements.append(SpringDamper(f"air_spring_{side}.z", "car_body", pt, "chassis", pt,
                                          "z", d.spring_vertical_stiffness_N_per_m,
-                                         d.spring_vertical_damping_N_s_per_m))
+                                         d.spring_vertical_damping_N_s_per_m,
+                                         self.air_spring_preload_N))
             elements.append(SpringDamper(f"air_spring_{side}.y", "car_body", pt, "chassis", pt,
                                          "y", d.spring_lateral_stiffness_N_per_m,
                                          d.spring_lateral_damping_N_s_per_m))
@@ -472,9 +511,9 @@ class CrossSectionMechanics:
 
         The gap controllers hold the chassis at ``y = z = phi = 0``; the car body settles
         on the air springs.  Unknowns: ``q`` and the four magnet forces; equations: the
-        static balance ``K q = B F + G a``, the three chassis coordinates zero, and the
-        guidance magnets' sum ``F_gl + F_gr = 2 F_bias`` (differential operation about a
-        bias force).
+        static balance ``K q = B F + G a + Q_pre`` (air-spring preloads), the three chassis
+        coordinates zero, and the guidance magnets' sum ``F_gl + F_gr = 2 F_bias``
+        (differential operation about a bias force).
 
         Parameters
         ----------
@@ -505,7 +544,7 @@ class CrossSectionMechanics:
         rhs = np.zeros(n + 4)
         lhs[:n, :n] = s.K
         lhs[:n, n:] = -s.B
-        rhs[:n] = s.G @ a
+        rhs[:n] = s.G @ a + s.Q_preload
         for i, d in enumerate(("y", "z", "phi")):
             lhs[n + i, s.dof_names.index(f"chassis.{d}")] = 1.0
         lhs[n + 3, n + 2:n + 4] = 1.0
@@ -536,5 +575,5 @@ class CrossSectionMechanics:
         """
         q, forces = self.static_trim(field_m_per_s2, guidance_bias_N=guidance_bias_N)
         s = self.system
-        element_forces = s.stiffness_N_per_m * s.element_deflections(q)
+        element_forces = s.stiffness_N_per_m * s.element_deflections(q) + s.preload_N
         return s.K + s.preload_stiffness(element_forces, forces)

@@ -8,6 +8,7 @@
     bending_stiffness = 4.0e10    # N m^2
     damping_ratio = 0.01          # - (every mode)
     modes = 5                     # sine modes per span
+    precamber = 2.7e-3            # m, built-in midspan camber (optional, default 0)
     [provenance]
     "guideway.span_length" = "[R] ..."
 
@@ -37,6 +38,7 @@ GUIDEWAY_SCHEMA = {
     "bending_stiffness": Schema(float, unit="N m^2"),
     "damping_ratio": Schema(float, unit="-", check="nonnegative"),
     "modes": Schema(int, unit="-"),
+    "precamber": Schema(float, unit="m", required=False, default=0.0),
 }
 
 #: The plausible magnitudes of every dimensional key of a guideway file
@@ -105,7 +107,8 @@ def parse_guideway(parameters: Mapping[str, Any], source: str = "parameters") ->
     parameters : mapping
         The parsed file: a ``guideway`` table (keys ``span_length`` [m],
         ``mass_per_length`` [kg/m], ``bending_stiffness`` [N m^2], ``damping_ratio`` [-],
-        ``modes``) and an optional ``provenance`` table.
+        ``modes``, optional ``precamber`` [m]: the girders' built-in midspan camber
+        along the uniform-load line, default 0) and an optional ``provenance`` table.
     source : str, default "parameters"
         Label for error messages and :attr:`GuidewayData.source`.
 
@@ -128,7 +131,8 @@ def parse_guideway(parameters: Mapping[str, Any], source: str = "parameters") ->
     check_plausible({"guideway": g}, GUIDEWAY_PLAUSIBLE, source, stacklevel=3)
     try:
         span = BeamSpan(g["span_length"], g["bending_stiffness"], g["mass_per_length"],
-                        n_modes=g["modes"], damping_ratio=g["damping_ratio"])
+                        n_modes=g["modes"], damping_ratio=g["damping_ratio"],
+                        precamber_m=g["precamber"])
     except ParameterError as exc:
         raise ParameterFileError(f"{source}: {exc}") from None
     prov = parse_provenance(parameters, ("guideway",), source)

@@ -66,6 +66,11 @@ class BeamSpan:
     damping_ratio : float or sequence of float
         Modal damping ratio ``zeta_j`` [-], one value for all modes or one per mode
         (each >= 0; 0 = undamped).
+    precamber_m : float
+        Built-in upward camber of the unloaded girder at midspan [m] (finite; 0: a
+        straight girder), along the uniform-load deflection line, so that a uniform load
+        ``q`` with ``5 q L^4 / (384 EI) = precamber_m`` leaves the girder straight
+        (:meth:`uniform_load_midspan_deflection_m`, :attr:`Guideway.built_in_profile`).
     """
 
     length_m: float
@@ -73,6 +78,7 @@ class BeamSpan:
     mass_per_length_kg_per_m: float
     n_modes: int = 5
     damping_ratio: float | tuple[float, ...] = 0.01
+    precamber_m: float = 0.0
     _zeta: np.ndarray = field(init=False, repr=False, compare=False)
     _k: np.ndarray = field(init=False, repr=False, compare=False)
     _omega: np.ndarray = field(init=False, repr=False, compare=False)
@@ -82,6 +88,8 @@ class BeamSpan:
                            ("mass_per_length_kg_per_m", "kg/m")):
             object.__setattr__(self, name, _positive(name, getattr(self, name), unit))
         object.__setattr__(self, "n_modes", _count("n_modes", self.n_modes, 1))
+        object.__setattr__(self, "precamber_m", real_number(self.precamber_m, "precamber_m",
+                                                            "m", error=ParameterError))
         d = self.damping_ratio
         if isinstance(d, Sequence) and not isinstance(d, str):
             if len(d) != self.n_modes:
@@ -157,6 +165,22 @@ class BeamSpan:
         """
         return float(force_N) * self.length_m ** 3 / (48.0 * self.bending_stiffness_N_m2)
 
+    def uniform_load_midspan_deflection_m(self, load_N_per_m: float) -> float:
+        """Exact static midspan deflection under a uniform load, ``5 q L^4 / (384 EI)`` [m].
+
+        Parameters
+        ----------
+        load_N_per_m : float
+            Uniform load ``q`` over the whole span [N/m], positive downward (not checked).
+
+        Returns
+        -------
+        float
+            Midspan deflection [m], positive downward.
+        """
+        return 5.0 * float(load_N_per_m) * self.length_m ** 4 / (
+            384.0 * self.bending_stiffness_N_m2)
+
     def self_weight_sag_m(self, gravity: float = STANDARD_GRAVITY) -> float:
         """Exact static midspan sag under the span's own weight, ``5 m g L^4 / (384 EI)`` [m].
 
@@ -170,8 +194,7 @@ class BeamSpan:
         float
             Midspan sag [m], positive downward.
         """
-        return 5.0 * self.mass_per_length_kg_per_m * gravity * self.length_m ** 4 / (
-            384.0 * self.bending_stiffness_N_m2)
+        return self.uniform_load_midspan_deflection_m(self.mass_per_length_kg_per_m * gravity)
 
     def mode_shapes(self, local_x_m: Any) -> tuple[np.ndarray, np.ndarray]:
         """Mode shapes ``sin(k_j xi)`` and their slopes ``k_j cos(k_j xi)`` [1/m].
@@ -389,6 +412,24 @@ class Guideway:
         kind = "rigid" if self.rigid else f"{self.n_modes} modes"
         mode = "moving boundary" if self.moving_boundary else "fixed"
         return (f"Guideway(L={self.span.length_m} m, {kind}, {self.n_spans} spans, {mode})")
+
+    @property
+    def built_in_profile(self) -> Any:
+        """The girders' built-in shape as a guideway profile, or None.
+
+        The precamber of :attr:`BeamSpan.precamber_m` as a camber of every span along the
+        uniform-load deflection line (:class:`~maglevkit.vehicle.irregularities.SpanSag`
+        with amplitude ``-precamber_m``, positive downward like an irregularity ``r``):
+        in the gap ``s = s_0 + u - w - r`` a built-in camber and an irregularity are the
+        same term, so a vehicle run adds this profile to its irregularity once, where it
+        evaluates the profile along the paths of the force points.  None for a straight
+        girder or a rigid guideway (an ideal, even track).
+        """
+        if self.rigid or self.span.precamber_m == 0.0:
+            return None
+        from .irregularities import SpanSag
+
+        return SpanSag(-self.span.precamber_m, self.span.length_m, origin_m=self.origin_m)
 
     def spans_needed(self, load_extent_m: float) -> int:
         """Smallest window that always covers loads spread over ``load_extent_m`` [m].

@@ -47,12 +47,15 @@ def maps_path(magnet: Any, gaps: np.ndarray, currents: np.ndarray,
     Returns
     -------
     Path
-        ``<dir>/<magnet name>-<network hash>-<grid hash>.nc``.
+        ``<dir>/<magnet name>-<network hash>-<grid hash>.nc``; the grid hash also covers
+        :func:`~maglevkit.reduction.maps.law_hash` (the code that builds maps).
     """
     from ..models.compiled import cache_directory
-    from ..reduction.maps import network_hash
+    from ..reduction.maps import law_hash, network_hash
 
     h = hashlib.sha256()
+    # the code of the laws too: maps cached by an older maglevkit are not taken for current
+    h.update(law_hash().encode())
     for label, arr in (("gaps", gaps), ("currents", currents)):
         a = np.ascontiguousarray(arr, dtype=np.float64)
         # name and shape first: [g1, g2] + [c1, c2, c3] and [g1, g2, c1] + [c2, c3] differ

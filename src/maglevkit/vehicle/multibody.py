@@ -118,6 +118,10 @@ class SpringDamper:
         Stiffness k [N/m], >= 0.
     damping_N_s_per_m : float
         Damping c [N s/m], >= 0.
+    preload_N : float, default 0
+        Static force ``f_0`` at zero deflection [N] (an air spring's pressure carrying its
+        share of the weight): the element force is ``f_0 + k Delta + c Delta'``, its
+        potential ``f_0 Delta + k Delta^2/2``.
     """
 
     name: str
@@ -128,6 +132,7 @@ class SpringDamper:
     direction: str
     stiffness_N_per_m: float
     damping_N_s_per_m: float
+    preload_N: float = 0.0
 
 
 @dataclass(frozen=True)
@@ -197,6 +202,11 @@ class PlanarMultibody:
         Generalised force of a unit acceleration field ``(a_y, a_z)`` [kg, kg m].
     gap_matrix : ndarray (n_points, n_dof)
         Change of each force point's air gap per unit ``q``: ``s - s_0 = gap_matrix q``.
+    preload_N : ndarray (n_elements,)
+        The elements' static forces ``f_0`` [N].
+    Q_preload : ndarray (n_dof,)
+        Their generalised force ``-sum_e f_0,e g_e`` [N, N m] (in every evaluation of
+        ``Q``).
     """
 
     def __init__(self, bodies: Sequence[RigidBody], elements: Sequence[SpringDamper],
@@ -240,6 +250,7 @@ class PlanarMultibody:
                         nonnegative=True)
             real_number(e.damping_N_s_per_m, f"element {e.name!r} damping", "N s/m",
                         nonnegative=True)
+            real_number(e.preload_N, f"element {e.name!r} preload_N", "N")
         for p in self.force_points:
             if p.body is None:
                 raise InputError(f"force point {p.name!r}: body None; a force point needs a "
@@ -317,11 +328,15 @@ class PlanarMultibody:
                 fp.body, fp.point_m)
         self.gap_matrix = -self.B.T.copy()
         self.stiffness_N_per_m = np.array([e.stiffness_N_per_m for e in self.elements])
+        self.preload_N = np.array([e.preload_N for e in self.elements], dtype=float)
+        # the preloads' generalised force: f_0 acts on a along -e and on b along +e
+        self.Q_preload = -self.element_matrix.T @ self.preload_N
 
     # ------------------------------------------------------------------ NumPy
     def generalised_forces(self, q: Any, q_dot: Any, forces_N: Any, field_m_per_s2: Any,
                            external: Any = 0.0) -> np.ndarray:
-        """``Q = -K q - C q' + B F + G a + Q_ext`` (NumPy; inputs not checked).
+        """``Q = -K q - C q' + B F + G a + Q_pre + Q_ext`` (NumPy; inputs not checked;
+        ``Q_pre = -sum_e f_0,e g_e`` the elements' preloads, :attr:`Q_preload`).
 
         Parameters
         ----------
@@ -341,7 +356,7 @@ class PlanarMultibody:
         """
         return (-np.asarray(q) @ self.K.T - np.asarray(q_dot) @ self.C.T
                 + np.asarray(forces_N) @ self.B.T + np.asarray(field_m_per_s2) @ self.G.T
-                + external)
+                + self.Q_preload + external)
 
     def accelerations(self, q: Any, q_dot: Any, forces_N: Any, field_m_per_s2: Any,
                       external: Any = 0.0) -> np.ndarray:
@@ -385,8 +400,9 @@ class PlanarMultibody:
         """Kinetic plus potential energy, body by body and element by element (not from
         ``M`` and ``K``) [J].
 
-        ``T = sum (m y'^2 + m z'^2 + J phi'^2)/2``, ``V = sum_e k_e Delta_e^2/2
-        - sum_b m_b a . (y_b, z_b)`` (the field's potential; gravity ``a = (0, g)``).
+        ``T = sum (m y'^2 + m z'^2 + J phi'^2)/2``, ``V = sum_e (f_0,e Delta_e + k_e
+        Delta_e^2/2) - sum_b m_b a . (y_b, z_b)`` (preloads; the field's potential; gravity
+        ``a = (0, g)``).
 
         Parameters
         ----------
@@ -403,7 +419,8 @@ class PlanarMultibody:
         q, qd = np.asarray(q, dtype=float), np.asarray(q_dot, dtype=float)
         a = np.asarray(field_m_per_s2, dtype=float)
         kin = np.zeros(q.shape[:-1])
-        pot = 0.5 * (self.element_deflections(q) ** 2 @ self.stiffness_N_per_m)
+        defl = self.element_deflections(q)
+        pot = 0.5 * (defl ** 2 @ self.stiffness_N_per_m) + defl @ self.preload_N
         for b, body in enumerate(self.bodies):
             for d, c in self._cols[b].items():
                 if d == "phi":
@@ -435,6 +452,37 @@ class PlanarMultibody:
         bq = np.zeros((2 * n, n))
         bq[n:] = minv
         return a, bq
+
+    def discretize(self, dt_s: float, *, damping: bool = True) -> tuple[np.ndarray, np.ndarray]:
+        """Exact zero-order-hold step ``x+ = Ad x + Bd Q`` for generalised forces held over
+        ``dt_s``: ``[Ad Bd] = expm([[A, Bq], [0, 0]] dt)`` of :meth:`state_matrices`.
+
+        Parameters
+        ----------
+        dt_s : float
+            Step [s], finite and > 0.
+        damping : bool, default True
+            Include the dampers.
+
+        Returns
+        -------
+        (Ad, Bd) : ndarray (2 n_dof, 2 n_dof), ndarray (2 n_dof, n_dof)
+
+        Raises
+        ------
+        InputError
+            ``dt_s`` not a finite number > 0.
+        """
+        import scipy.linalg
+
+        dt_s = real_number(dt_s, "dt_s", "s", positive=True)
+        a, bq = self.state_matrices(damping=damping)
+        n2, n = bq.shape
+        aug = np.zeros((n2 + n, n2 + n))
+        aug[:n2, :n2] = a * dt_s
+        aug[:n2, n2:] = bq * dt_s
+        e = scipy.linalg.expm(aug)
+        return e[:n2, :n2].copy(), e[:n2, n2:].copy()
 
     def preload_stiffness(self, element_forces_N: Any, forces_N: Any) -> np.ndarray:
         """Stiffness of static preloads about an operating point with level bodies.
@@ -532,7 +580,8 @@ class PlanarMultibody:
         q, qd = ca.SX.sym("q", n), ca.SX.sym("q_dot", n)
         f, a, qe = ca.SX.sym("F", npt), ca.SX.sym("a", 2), ca.SX.sym("Q_ext", n)
         gen = (-ca.mtimes(ca.DM(self.K), q) - ca.mtimes(ca.DM(self.C), qd)
-               + ca.mtimes(ca.DM(self.B), f) + ca.mtimes(ca.DM(self.G), a) + qe)
+               + ca.mtimes(ca.DM(self.B), f) + ca.mtimes(ca.DM(self.G), a)
+               + ca.DM(self.Q_preload) + qe)
         minv = ca.DM(1.0 / np.diag(self.M))
         ins, names = [q, qd, f, a, qe], ["q", "q_dot", "F", "a", "Q_ext"]
         return {

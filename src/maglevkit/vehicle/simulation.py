@@ -5,12 +5,16 @@ Per time step ``t_k -> t_k + dt`` (fixed step, sample-and-hold controllers)::
     x_p      = x_nose(t_k) - xi_p                       force points on the guideway
     s_p      = s_0 + u_p - w(x_p) - r(x_p)              gap (u_p = B_p^T q: frame point)
     s_p'     = u_p' - (w_t + v w_x)(x_p) - v r_x(x_p)   gap rate (moving-load term v w_x)
-    U        = controllers(s, s', I, psi_hat)           one vectorised flux cascade per circuit
+    U        = controllers(s, s', u', I, psi_hat)       one vectorised flux cascade per circuit
+                                                        (damping from s' and u', velocity_blend)
     I, F     = bank.step(U, s, s')                      all circuits, one call
     q, q'    <- exact ZOH step of M q'' + C q' + K q = Q_g - B F_bar
     guideway <- exact ZOH step with F_bar at the mid-step positions
     F_bar    = (F(t_k) + F(t_k+1)) / 2 x sides          (both sides' magnets per lumped line)
 
+``r`` is the irregularity plus the girders' precamber (``Guideway.built_in_profile``),
+evaluated once along the points' paths.  The bank's freewheeling diodes keep the coil
+currents >= 0 within a step (``freewheel``).
 Coarse distribution (default): one gap and one force per circuit at the circuit's centre,
 reduced models (maps).  Fine distribution (``magnets="detailed"``): the detailed flux-based
 models with one gap and one force per pole.  Failures switch a circuit's voltage to 0 from
@@ -211,11 +215,17 @@ class VehicleModel:
         plant and what the controllers' flux estimate and chopper limit use (both read the
         bank's resistances); the gains stay designed on the nominal magnet.  Reduced models
         only (``magnets="reduced"``).
+    freewheel : bool
+        The choppers' freewheeling diodes in the plant (default True): a reduced circuit's
+        coil current cannot go below zero within a step (:class:`MagnetBank` option
+        ``freewheel``); False: eq. 8 with the held voltages, the chopper limit
+        ``U >= -R_ec I_L`` of the controllers holding at the sample instants only.
     """
 
     def __init__(self, train: TrainData, *, guideway: Any = None, rigid: bool = False,
                  magnets: str = "reduced", maps_cache: Any = None, compiled: str = "auto",
-                 resistance_scale: float = 1.0, eddy_resistance_scale: float = 1.0) -> None:
+                 resistance_scale: float = 1.0, eddy_resistance_scale: float = 1.0,
+                 freewheel: bool = True) -> None:
         from ..magnets import load_magnet
         from ..models.flux import FluxModel
         from ..reduced.bank import MagnetBank
@@ -260,7 +270,7 @@ class VehicleModel:
         for s in self.slots:
             members.append((s.name, FluxModel(kinds[s.kind]) if self.fine else self.maps[s.kind]))
         self.bank = MagnetBank(members, gap_inputs="pole" if self.fine else "circuit",
-                               compiled=compiled)
+                               compiled=compiled, freewheel=freewheel)
         bank = self.bank
         # pole and circuit positions (train coordinate), frame of every circuit
         pole_xi: list[float] = []
@@ -461,6 +471,7 @@ class VehicleModel:
         """
         import xarray as xr
 
+        from ..control import damping_input
         from ..models.inputs import reject_bools
 
         for name, v in (("speed_m_per_s", speed_m_per_s), ("duration_s", duration_s),
@@ -512,6 +523,9 @@ class VehicleModel:
         times = np.arange(n_steps + 1) * dt
         # irregularities at every point and step (vectorised once)
         xpath = x_nose0 + v * times[:, None] - xi[None, :]
+        built_in = gw.built_in_profile          # the girders' precamber: part of r(x)
+        if built_in is not None:
+            irregularity = built_in if irregularity is None else irregularity + built_in
         if irregularity is not None:
             r_all, rx_all = irregularity.on_paths(xpath, start_m=x_nose0 - xi, step_m=v * dt)
         else:
@@ -569,6 +583,7 @@ class VehicleModel:
         # controllers (vectorised over circuits)
         g = self.gains
         kp, kd, ki, kf = g["kp_per_m"], g["kd_s_per_m"], g["ki_per_m_s"], g["kflux_per_s"]
+        blend = tr.control_velocity_blend
         psi0 = self.flux_bias_Wb
         res = bank.resistance_ohm
         umax = tr.voltage_limit_V
@@ -677,7 +692,10 @@ class VehicleModel:
                         break
                     t3 = clock()
                     # controllers (flux cascade, every circuit at once)
-                    rho = kp * (gaps_c - s0) + kd * rates_c + ki * integ
+                    vel_p = bt @ qd          # the force points' absolute velocity
+                    vel_c = vel_p if circ_avg is None else circ_avg @ vel_p
+                    rho = (kp * (gaps_c - s0) + kd * damping_input(rates_c, vel_c, blend)
+                           + ki * integ)
                     u = res * current + kf * (psi0 * (1.0 + rho) - psi_hat)
                     np.clip(u, -umax, umax, out=u)
                     # 2-quadrant chopper: the coil current cannot reverse.  Reduced model (eq. 8):
@@ -858,6 +876,7 @@ class VehicleModel:
             flux_bias_Wb=self.flux_bias_Wb, resistance_ohm=self.bank.resistance_ohm,
             eddy_resistance_ohm=self.eddy_resistance_ohm,
             voltage_limit_V=self.train.voltage_limit_V,
+            velocity_blend=self.train.control_velocity_blend,
             integral_projection=self.integral_projection,
             midspan_shape=span.mode_shapes(0.5 * span.length_m)[0] if nm else np.zeros(0))
 

@@ -8,6 +8,7 @@ It is the same arithmetic as the NumPy loop of ``simulation.py`` (the reference,
 
     gaps      s = s0 + B^T q - w(x) - r,   s' = B^T q' - (w_t + v w_x)(x) - v r_x
     control   U = clip(R I + k_psi (psi0 (1 + rho) - psi_hat)), U >= -R_ec I_L, failures
+              (rho's damping input blends s' with the points' velocity B^T q')
     magnets   the bank's own step function (MagnetBank.step_function: RK4 of eq. 8)
     control   psi_hat += dt (U - R (I + I+)/2),   e_I += P (s - s0) dt
     mechanics x+ = Ad x + Bd (Q_g - B F_bar),     F_bar = sides (F + F+)/2
@@ -36,6 +37,8 @@ from typing import Any
 
 import casadi as ca
 import numpy as np
+
+from ..control import damping_input
 
 __all__ = ["StepLayout", "VehicleStepFunction", "build_vehicle_step"]
 
@@ -145,6 +148,7 @@ def build_vehicle_step(*, bank_step: Any, dt: float, nominal_gap_m: float, sides
                        flux_bias_Wb: np.ndarray, resistance_ohm: np.ndarray,
                        eddy_resistance_ohm: np.ndarray, voltage_limit_V: float,
                        integral_projection: np.ndarray, midspan_shape: np.ndarray,
+                       velocity_blend: float = 0.0,
                        block_steps: int = 10, name: str = "maglevkit_vehicle_step"
                        ) -> VehicleStepFunction:
     """Compose the vehicle step function (see the module docstring).
@@ -195,6 +199,9 @@ def build_vehicle_step(*, bank_step: Any, dt: float, nominal_gap_m: float, sides
         Maps the gap errors [m] to the integrators' inputs.
     midspan_shape : ndarray (n_modes,)
         Mode shapes at midspan (for the recorded midspan deflection).
+    velocity_blend : float, default 0.0
+        Share [-] of the force points' absolute velocity ``B^T q'`` in the cascade's
+        damping input (:func:`~maglevkit.control.damping_input`; 0: the gap rate).
     block_steps : int, default 10
         Steps chained in ``block_function``.
     name : str, default "maglevkit_vehicle_step"
@@ -254,8 +261,9 @@ def build_vehicle_step(*, bank_step: Any, dt: float, nominal_gap_m: float, sides
     gaps = s0 + ca.mtimes(bt, q) - w - r
     rates = ca.mtimes(bt, qd) - w_rate - v * rx
     f_in = ca.Function("vehicle_guideway_in", [x_m, gx_flat, xp, r, rx, v],
-                       [gaps, rates, w, mid], ["x_mech", "guideway", "x", "r", "r_x", "v"],
-                       ["gap", "gap_rate", "w", "midspan"])
+                       [gaps, rates, w, mid, ca.mtimes(bt, qd)],
+                       ["x_mech", "guideway", "x", "r", "r_x", "v"],
+                       ["gap", "gap_rate", "w", "midspan", "velocity"])
 
     # ---- controllers: flux cascade of every circuit, chopper, failures
     g_s, g_r, i_l, cur, psi, integ, t, fail_t = (
@@ -318,8 +326,10 @@ def build_vehicle_step(*, bank_step: Any, dt: float, nominal_gap_m: float, sides
     if nm:    # spans recycled by the moving boundary at this step: rows reset to rest
         s_gx = ca.reshape(ca.reshape(s_gx, 2 * nm, n_sp) * ca.repmat(p_keep.T, 2 * nm, 1),
                           n_sp * 2 * nm, 1)
-    gap_k, rate_k, w_k, mid_k = f_in(s_xm, s_gx, p_x, p_r, p_rx, c_v)
-    u_k = f_ctl(gap_k, rate_k, s_il, s_cur, s_psi, s_int, p_t, c_fail)
+    gap_k, rate_k, w_k, mid_k, vel_k = f_in(s_xm, s_gx, p_x, p_r, p_rx, c_v)
+    damp_k = rate_k if velocity_blend == 0.0 else damping_input(rate_k, vel_k,
+                                                                float(velocity_blend))
+    u_k = f_ctl(gap_k, damp_k, s_il, s_cur, s_psi, s_int, p_t, c_fail)
     bout = bank_step.call({"I_L": s_il, "s": gap_k, "U": u_k, "sdot": rate_k, "h": ca.MX(dt)})
     il_next, cur_next, force_next, n_bad = (bout[k] for k in ("I_L_next", "I", "F", "n_bad"))
     psi_n, int_n = f_upd(s_psi, s_int, u_k, s_cur, cur_next, gap_k)

@@ -9,7 +9,7 @@ guideway files (see ``maglevkit/data/vehicle/tr09.toml``, bundled as ``"tr09"``)
     [frame]      mass, pitch_inertia, magnet_mass
     [secondary]  stiffness, damping, positions
     [joint]      stiffness, damping
-    [control]    bandwidth, damping, flux_bandwidth, voltage_limit
+    [control]    bandwidth, damping, flux_bandwidth, voltage_limit, velocity_blend (optional)
 
 Unknown or missing keys and bad values raise :class:`~maglevkit.errors.ParameterFileError`
 naming the key.  Train coordinate ``xi`` [m]: distance behind the train's nose (positive
@@ -74,6 +74,7 @@ VEHICLE_SCHEMA: dict[str, dict[str, Schema]] = {
         "damping": Schema(float, unit="-"),
         "flux_bandwidth": Schema(float, unit="Hz"),
         "voltage_limit": Schema(float, unit="V"),
+        "velocity_blend": Schema(float, unit="-", required=False, default=0.0),
     },
 }
 
@@ -159,6 +160,10 @@ class TrainData:
         Gap-controller design of every circuit: gap-loop natural frequency [Hz], damping
         ratio [-] (in (0, 5)), flux-loop bandwidth [Hz] and voltage limit [V] (see
         :func:`~maglevkit.control.design_gap_controller`).
+    control_velocity_blend : float
+        Share ``beta`` in [0, 1] [-] of the magnet's absolute velocity in the gap
+        controllers' damping input (:func:`~maglevkit.control.damping_input`; key
+        ``velocity_blend`` of ``[control]``, default 0: the gap rate only).
     provenance : dict
         ``"table.key" -> tag/source``.
     source : str
@@ -195,6 +200,7 @@ class TrainData:
     provenance: Mapping[str, str] = field(default_factory=dict)
     source: str = ""
     sides: int = 2
+    control_velocity_blend: float = 0.0
 
     # ------------------------------------------------------------------ derived layout
     @property
@@ -333,6 +339,9 @@ def parse_vehicle(parameters: Mapping[str, Any], source: str = "parameters") -> 
            f"{v['nominal_gap']} m", source)
     c = t["control"]
     _check(0 < c["damping"] < 5, f"[control] damping = {c['damping']} must be in (0, 5)", source)
+    _check(0 <= c["velocity_blend"] <= 1, f"[control] velocity_blend = {c['velocity_blend']} "
+           "must be in [0, 1] (0: damping from the gap rate, 1: from the absolute velocity)",
+           source)
     prov = parse_provenance(parameters, VEHICLE_SCHEMA, source)
     cb, fr, se, jo = t["car_body"], t["frame"], t["secondary"], t["joint"]
     return TrainData(
@@ -349,7 +358,7 @@ def parse_vehicle(parameters: Mapping[str, Any], source: str = "parameters") -> 
         joint_stiffness_N_per_m=jo["stiffness"], joint_damping_N_s_per_m=jo["damping"],
         control_bandwidth_Hz=c["bandwidth"], control_damping=c["damping"],
         flux_bandwidth_Hz=c["flux_bandwidth"], voltage_limit_V=c["voltage_limit"],
-        provenance=prov, source=source)
+        control_velocity_blend=c["velocity_blend"], provenance=prov, source=source)
 
 
 def bundled_vehicles() -> list[str]:

@@ -1,0 +1,1063 @@
+"""Design optimisation of a magnet's geometry and coil (issue 25, part 3; docs/design.md).
+
+A U-magnet's geometry and turns (a user-chosen subset of :data:`VARIABLES`, with bounds)
+are optimised for an objective -- magnet mass (iron + copper) or resistive power at the
+nominal operating point -- under constraints from a design spec (:func:`read_design_spec`):
+
+* ``force_nominal``: the circuit force at ``nominal_gap_m`` equals ``force_N``; the
+  current that holds it is the nominal current ``I_n`` (an optimisation variable);
+* ``force_reserve``: at ``reserve_gap_m`` the coil at the peak current density
+  ``peak_current_density_A_per_m2`` pulls at least ``reserve_factor * force_N``;
+* ``flux_density``: ``|B|`` in every iron path of the magnet (legs, yoke; not the rail)
+  at the nominal point is at most ``max_flux_density_T``;
+* ``current_density``: ``(N/2) I_n / (k_fill h_c t_c)`` at most
+  ``current_density_A_per_m2`` (continuous rating);
+* ``voltage``: ``U = R I_n + L~ dI/dt + |dpsi/ds| v`` at most ``supply_voltage_V``, with
+  ``L~ = dpsi/dI`` and ``dpsi/ds`` of the statics at the nominal point, ``v =
+  gap_rate_m_per_s`` and ``dI/dt = current_rate_A_per_s``: the chopper must hold the
+  current against the gap moving at ``v`` while ramping it at ``dI/dt``;
+* geometry: the coil fits its leg (``coil_height + coil_gap_to_pole_face <= leg_height``),
+  the two coils fit the window (``2 coil_thickness + window_clearance_m <=
+  window_width``), the magnet fits its rail (``window_width + 2 pole_width <=
+  rail.width``); each only when a variable enters it.
+
+Gradients are exact (CasADi AD) by the *simultaneous* approach: the loop fluxes of the
+network at the two static points are NLP variables and the network's loop law
+``r(x; s, I, p) = 0`` (:func:`maglevkit.circuit.assembly.assemble` of the one U-magnet
+builder :func:`maglevkit.magnets.u_magnet.lumped_network`, evaluated with CasADi symbols
+for the geometry) is an equality constraint; ``L~`` and ``dpsi/ds`` are the implicit
+derivatives ``psi_x (-r_x^-1 r_(I,s))``.  IPOPT (``nlpsol("ipopt")``) solves the NLP.
+:func:`design_sensitivities` gives the same statics' exact design derivatives by the
+nested route (CasADi ``rootfinder``, implicit function theorem), as calibration does.
+
+The winding (both legs in series, ``N/2`` turns each): mean turn ``l_t = 2 (w_p + d) +
+pi t_c``, ``R = rho_cu N^2 l_t / (2 k_fill h_c t_c)``, copper mass ``2 k_fill h_c t_c l_t
+rho_m,cu``; iron mass ``(2 w_p h_l + (w_w + 2 w_p) t_y) d rho_m,fe``.
+"""
+
+from __future__ import annotations
+
+import math
+import warnings
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field, replace
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from .errors import InputError, MaglevkitError, MaglevkitWarning, ParameterFileError
+
+__all__ = ["VARIABLES", "OBJECTIVES", "DesignSpec", "DesignConstraint", "DesignResult",
+           "DesignSpecError", "read_design_spec", "design_magnet", "design_parameters",
+           "design_sensitivities", "evaluate_design", "write_design_toml", "pareto_front",
+           "plot_pareto"]
+
+
+class DesignSpecError(ParameterFileError):
+    """A design spec is malformed: unknown, missing or bad keys (the message names the key,
+    its value and what is allowed)."""
+
+
+VARIABLES: dict[str, str] = {
+    "pole_width": "m",
+    "depth": "m",
+    "leg_height": "m",
+    "yoke_thickness": "m",
+    "window_width": "m",
+    "coil_thickness": "m",
+    "coil_height": "m",
+    "turns": "-",
+}
+"""Design variables (keys of the U-magnet's ``[magnet]`` table) and their units.  ``turns``
+is optimised as a real number and rounded in the written file (the result reports the
+statics of the rounded design too)."""
+
+OBJECTIVES = ("mass", "power")
+"""``mass``: iron + copper [kg]; ``power``: ``R I_n^2`` at the nominal point [W]."""
+
+# spec keys: (unit, default or None = required, lower bound (exclusive?), description)
+_REQUIREMENTS: dict[str, tuple[str, float | None, float, bool]] = {
+    "nominal_gap_m": ("m", None, 0.0, True),
+    "force_N": ("N", None, 0.0, True),
+    "reserve_gap_m": ("m", None, 0.0, True),
+    "reserve_factor": ("-", 1.0, 0.0, True),
+    "max_flux_density_T": ("T", None, 0.0, True),
+    "current_density_A_per_m2": ("A/m^2", None, 0.0, True),
+    "peak_current_density_A_per_m2": ("A/m^2", None, 0.0, True),
+    "supply_voltage_V": ("V", None, 0.0, True),
+    "gap_rate_m_per_s": ("m/s", 0.0, 0.0, False),
+    "current_rate_A_per_s": ("A/s", 0.0, 0.0, False),
+    "window_clearance_m": ("m", 0.002, 0.0, True),
+}
+_COIL: dict[str, tuple[str, float | None, float, bool]] = {
+    "copper_resistivity_ohm_m": ("ohm m", 1.72e-8, 0.0, True),
+    "fill_factor": ("-", 0.6, 0.0, True),
+    "iron_density_kg_per_m3": ("kg/m^3", 7850.0, 0.0, True),
+    "copper_density_kg_per_m3": ("kg/m^3", 8960.0, 0.0, True),
+}
+COIL_DEFAULTS = {k: v[1] for k, v in _COIL.items()}
+"""Defaults of the ``[coil]`` table: annealed copper at 20 C (1.72e-8 ohm m, 8960 kg/m^3),
+steel 7850 kg/m^3, copper fill factor 0.6 of the winding cross-section (an estimate for
+round wire)."""
+
+GEOMETRY_MARGIN_M = 1e-9
+"""The geometry constraints hold with this margin [m], so that the written file passes the
+loader's strict checks (IPOPT meets constraints to ~1e-10 m here, from either side)."""
+
+ACTIVE_TOL = 1e-6
+"""A constraint is reported active when its relative slack (slack / its bound) is at most
+this: IPOPT stops at a relative tolerance of 1e-10 here, so a slack of 1e-6 is far from
+rounding and far below any margin a user would call slack."""
+
+
+@dataclass(frozen=True)
+class DesignSpec:
+    """A design problem (:func:`read_design_spec`).
+
+    Attributes
+    ----------
+    magnet : Magnet
+        The base U-magnet (its fixed geometry, material, rail; start of the search).
+    objective : str
+        One of :data:`OBJECTIVES`.
+    variables : dict
+        Design variable -> (lower, upper) bounds [m, turns -].
+    requirements : dict
+        The ``[requirements]`` values (SI, module docstring).
+    coil : dict
+        The ``[coil]`` values (resistivity [ohm m], fill factor [-], densities [kg/m^3]).
+    provenance : dict
+        ``"table.key"`` -> tag of the spec's values.
+    source : str
+        The spec file.
+    """
+
+    magnet: Any
+    objective: str
+    variables: dict[str, tuple[float, float]]
+    requirements: dict[str, float]
+    coil: dict[str, float]
+    provenance: dict[str, str] = field(default_factory=dict)
+    source: str = "<memory>"
+
+
+def _number(table: Mapping[str, Any], key: str, where: str,
+            schema: tuple[str, float | None, float, bool]) -> float:
+    unit, default, lower, strict = schema
+    if key not in table:
+        if default is None:
+            raise DesignSpecError(f"[{where}] missing required key {key!r} [{unit}]")
+        return float(default)
+    v = table[key]
+    if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v):
+        raise DesignSpecError(f"[{where}] {key} = {v!r}: expected a finite number [{unit}]")
+    if (v <= lower) if strict else (v < lower):
+        raise DesignSpecError(f"[{where}] {key} = {v!r} [{unit}]: must be "
+                              f"{'>' if strict else '>='} {lower:g}")
+    return float(v)
+
+
+def _table(doc: Mapping[str, Any], name: str) -> Mapping[str, Any]:
+    t = doc.get(name, {})
+    if not isinstance(t, Mapping):
+        raise DesignSpecError(f"[{name}] must be a table")
+    return t
+
+
+def read_design_spec(source: str | Path | Mapping[str, Any], *, base_dir: str | Path = "."
+                     ) -> DesignSpec:
+    """Read and check a design spec (TOML file or its parsed contents).
+
+    Tables: ``[design]`` (``magnet``: a bundled name or a parameter file, relative to the
+    spec; ``objective``), ``[variables]`` (``name = [lower, upper]`` per design variable
+    of :data:`VARIABLES`), ``[requirements]`` (module docstring), optional ``[coil]``
+    (:data:`COIL_DEFAULTS`) and ``[provenance]`` (``"table.key" = "[E] ..."``).
+
+    Parameters
+    ----------
+    source : str, path or mapping
+        A bundled spec name (``maglevkit list designs``), a spec file, or its parsed TOML.
+    base_dir : path
+        Folder that a relative ``magnet`` path is taken from when ``source`` is a mapping.
+
+    Returns
+    -------
+    DesignSpec
+
+    Raises
+    ------
+    DesignSpecError
+        Unknown, missing or bad keys (named with their table), bounds that are empty or
+        exclude nothing feasible, a base magnet that is not a lumped U-magnet.
+    """
+    from .magnets import load_magnet
+    from .parameter_files import read_parameter_file
+
+    if isinstance(source, Mapping):
+        doc, label, folder = dict(source), "<memory>", Path(base_dir)
+    else:
+        try:
+            doc, label = read_parameter_file(source, what="design spec", folder="designs",
+                                             table="design")
+        except MaglevkitError as exc:
+            raise DesignSpecError(str(exc)) from None
+        folder = Path(label).parent if Path(label).suffix == ".toml" else Path(base_dir)
+    unknown = sorted(set(doc) - {"design", "variables", "requirements", "coil", "provenance"})
+    if unknown:
+        raise DesignSpecError(f"unknown table(s) {unknown}; allowed: design, variables, "
+                              "requirements, coil, provenance")
+    design = _table(doc, "design")
+    bad = sorted(set(design) - {"magnet", "objective"})
+    if bad:
+        raise DesignSpecError(f"[design] unknown key(s) {bad}; allowed: magnet, objective")
+    if "magnet" not in design or not isinstance(design["magnet"], str):
+        raise DesignSpecError("[design] magnet: expected a bundled magnet name (e.g. "
+                              "\"u-magnet\") or a parameter file path")
+    objective = design.get("objective", "mass")
+    if objective not in OBJECTIVES:
+        raise DesignSpecError(f"[design] objective = {objective!r}: expected one of "
+                              f"{list(OBJECTIVES)}")
+    name = design["magnet"]
+    ref = folder / name if name.endswith(".toml") and not Path(name).is_absolute() else name
+    try:
+        magnet = load_magnet(ref)       # its provenance and plausibility warnings show
+    except MaglevkitError as exc:
+        raise DesignSpecError(f"[design] magnet = {name!r}: {exc}") from None
+    params = magnet.parameters
+    if params["magnet"].get("kind") != "u_magnet" or \
+            params["magnet"].get("discretisation", "lumped") != "lumped":
+        raise DesignSpecError(f"[design] magnet = {name!r}: design optimisation supports the "
+                              "lumped U-magnet (kind = \"u_magnet\", discretisation = "
+                              "\"lumped\") only")
+    variables: dict[str, tuple[float, float]] = {}
+    vt = _table(doc, "variables")
+    if not vt:
+        raise DesignSpecError(f"[variables] is empty: give at least one of {list(VARIABLES)} "
+                              "as name = [lower, upper]")
+    for key, b in vt.items():
+        if key not in VARIABLES:
+            raise DesignSpecError(f"[variables] unknown design variable {key!r}; the "
+                                  f"documented set: {list(VARIABLES)}")
+        if (not isinstance(b, list) or len(b) != 2
+                or any(isinstance(x, bool) or not isinstance(x, (int, float))
+                       or not math.isfinite(x) for x in b)):
+            raise DesignSpecError(f"[variables] {key} = {b!r}: expected [lower, upper] "
+                                  f"[{VARIABLES[key]}]")
+        lo, hi = float(b[0]), float(b[1])
+        if not 0.0 < lo < hi:
+            raise DesignSpecError(f"[variables] {key} = {b!r}: expected 0 < lower < upper "
+                                  f"[{VARIABLES[key]}]")
+        if key == "turns" and lo < 2.0:
+            raise DesignSpecError(f"[variables] turns = {b!r}: at least 2 turns (one per leg)")
+        variables[key] = (lo, hi)
+    rt = _table(doc, "requirements")
+    bad = sorted(set(rt) - set(_REQUIREMENTS))
+    if bad:
+        raise DesignSpecError(f"[requirements] unknown key(s) {bad}; allowed: "
+                              f"{', '.join(_REQUIREMENTS)}")
+    req = {k: _number(rt, k, "requirements", s) for k, s in _REQUIREMENTS.items()}
+    ct = _table(doc, "coil")
+    bad = sorted(set(ct) - set(_COIL))
+    if bad:
+        raise DesignSpecError(f"[coil] unknown key(s) {bad}; allowed: {', '.join(_COIL)}")
+    coil = {k: _number(ct, k, "coil", s) for k, s in _COIL.items()}
+    if coil["fill_factor"] > 1.0:
+        raise DesignSpecError(f"[coil] fill_factor = {coil['fill_factor']!r}: must be <= 1")
+    prov = _table(doc, "provenance")
+    for k, v in prov.items():
+        if not isinstance(v, str) or not v.startswith(("[P]", "[R]", "[E]")):
+            raise DesignSpecError(f"[provenance] {k!r} = {v!r}: expected a tag starting "
+                                  "with [P], [R] or [E]")
+    return DesignSpec(magnet=magnet, objective=objective, variables=variables,
+                      requirements=req, coil=coil, provenance=dict(prov), source=label)
+
+
+# ---------------------------------------------------------------------------- the problem
+def _coil_laws(g: Mapping[str, Any], turns: Any, coil: Mapping[str, float]
+               ) -> dict[str, Any]:
+    """Winding resistance, masses and winding area from geometry (numbers or CasADi)."""
+    wp, d, hl, ty = g["pole_width"], g["depth"], g["leg_height"], g["yoke_thickness"]
+    ww, tc, hc = g["window_width"], g["coil_thickness"], g["coil_height"]
+    k = coil["fill_factor"]
+    mean_turn = 2.0 * (wp + d) + math.pi * tc
+    area = hc * tc                                           # one leg's coil section
+    resistance = coil["copper_resistivity_ohm_m"] * turns**2 * mean_turn / (2.0 * k * area)
+    iron = (2.0 * wp * hl + (ww + 2.0 * wp) * ty) * d * coil["iron_density_kg_per_m3"]
+    copper = 2.0 * k * area * mean_turn * coil["copper_density_kg_per_m3"]
+    return {"resistance_ohm": resistance, "iron_mass_kg": iron, "copper_mass_kg": copper,
+            "mass_kg": iron + copper, "coil_area_m2": area}
+
+
+class _Problem:
+    """The symbolic statics of the U-magnet with the design variables as CasADi symbols."""
+
+    def __init__(self, spec: DesignSpec) -> None:
+        import casadi as ca
+
+        from .circuit.assembly import assemble
+        from .circuit.elements import IronPath
+        from .magnets.base import take
+        from .magnets.u_magnet import MAGNET_SCHEMA, RAIL_SCHEMA, lumped_network
+        from .models.statics import circuit_pole_groups
+
+        self.spec = spec
+        base = spec.magnet
+        m = take(base.parameters["magnet"], MAGNET_SCHEMA, "magnet")
+        r = take(base.parameters["rail"], RAIL_SCHEMA, "rail")
+        self.base_geometry = {k: m[k] for k in VARIABLES} | {
+            "coil_gap_to_pole_face": m["coil_gap_to_pole_face"]}
+        self.rail = r
+        self.names = tuple(spec.variables)
+        self.p = ca.SX.sym("p", len(self.names))
+        g: dict[str, Any] = dict(m)
+        for k, n in enumerate(self.names):
+            if n != "turns":
+                g[n] = self.p[k]
+        self.geometry = g
+        self.turns0 = float(m["turns"])
+        self.turns = (self.p[self.names.index("turns")] if "turns" in self.names
+                      else self.turns0)
+        irons = {el.name: el for b in base.network.branches for el in b.elements
+                 if isinstance(el, IronPath)}
+        core, rail_mat = irons["iron_yoke"].material, irons["iron_rail"].material
+        options = replace(base.options, eddy_currents=False)
+        net = lumped_network(g, r, core, rail_mat, options)
+        eq = assemble(net)
+        self.n_loops = eq.x.numel()
+        groups = circuit_pole_groups(base.network, gap=0.01, current=10.0)
+        gi = {gname: k for k, gname in enumerate(net.gap_names)}
+        sel = np.zeros((1, len(gi)))
+        for gname in groups[net.circuit_names[0]]:
+            sel[0, gi[gname]] = 1.0
+        force = ca.mtimes(ca.DM(sel), eq.force)
+        psi = eq.psi[0]
+        s = ca.SX.sym("s")
+        current = ca.SX.sym("I")
+        subs_from = ca.vertcat(eq.s, eq.I)
+        subs_to = ca.vertcat(ca.repmat(s, eq.s.numel(), 1), current)
+        res, force, psi = (ca.substitute(e, subs_from, subs_to)
+                           for e in (eq.residual, force, psi))
+        # implicit derivatives at r = 0: dx/dq = -r_x^-1 r_q, q = (I, s)
+        q = ca.vertcat(current, s)
+        dxdq = -ca.solve(ca.jacobian(res, eq.x), ca.jacobian(res, q))
+        dpsi = ca.jacobian(psi, eq.x) @ dxdq + ca.jacobian(psi, q)
+        flux_b = ca.substitute(eq.phi, subs_from, subs_to)
+        b_names, b_expr = [], []
+        for j, br in enumerate(net.branches):
+            for el in br.elements:
+                if isinstance(el, IronPath) and el.name != "iron_rail":
+                    b_names.append(el.name)
+                    b_expr.append(flux_b[j] / el.cross_section)
+        self.iron_names = tuple(b_names)
+        # statics of the network with turns0 at the effective current I N / N0
+        self.point = ca.Function("design_point", [eq.x, s, current, self.p],
+                                 [res, force, psi, dpsi[0], dpsi[1], ca.vertcat(*b_expr)],
+                                 ["x", "s", "I", "p"], ["r", "F", "psi", "L", "dpsi_ds", "B"])
+        self.residual = ca.Function("design_residual", [eq.x, ca.vertcat(s, current, self.p)],
+                                    [res])
+        self.outputs = ca.Function("design_outputs", [eq.x, ca.vertcat(s, current, self.p)],
+                                   [force, psi])
+        self.laws = _coil_laws({**g, **{n: self.p[k] for k, n in enumerate(self.names)
+                                        if n != "turns"}}, self.turns, spec.coil)
+        self.laws_fun = ca.Function("design_laws", [self.p],
+                                    [self.laws[k] for k in ("resistance_ohm", "mass_kg",
+                                                            "coil_area_m2")])
+
+    def value_vector(self, values: Mapping[str, float]) -> np.ndarray:
+        return np.array([float(values[n]) for n in self.names])
+
+
+def design_parameters(spec: DesignSpec, values: Mapping[str, float], *,
+                      provenance: str = "") -> dict[str, Any]:
+    """The magnet parameter file (as a dict) of a design: the base magnet's parameters with
+    the design ``values`` (turns rounded to a whole number) and the winding resistance of
+    the coil geometry (module docstring).
+
+    Parameters
+    ----------
+    spec : DesignSpec
+        The design problem.
+    values : mapping
+        Design variable -> value [m, turns -]; missing variables keep the base value.
+    provenance : str
+        Tag (after ``[E] ``) for every changed value; empty: keep the base's tags.
+
+    Returns
+    -------
+    dict
+        TOML-ready parameters (``magnet``, ``rail``, ``provenance`` ...).
+    """
+    unknown = sorted(set(values) - set(VARIABLES))
+    if unknown:
+        raise InputError(f"design values: unknown variable(s) {unknown}; the documented set: "
+                         f"{list(VARIABLES)}")
+    params = {k: (dict(v) if isinstance(v, Mapping) else v)
+              for k, v in spec.magnet.parameters.items()}
+    mag = params["magnet"]
+    for k, v in values.items():
+        mag[k] = int(round(float(v))) if k == "turns" else float(v)
+    g = {k: mag[k] for k in VARIABLES}
+    mag["resistance"] = float(_coil_laws(g, float(mag["turns"]), spec.coil)["resistance_ohm"])
+    if provenance:
+        prov = dict(params.get("provenance", {}))
+        for k in (*values, "resistance"):
+            prov[f"magnet.{k}"] = f"[E] {provenance}"
+        params["provenance"] = prov
+    return params
+
+
+def _build(spec: DesignSpec, values: Mapping[str, float]) -> Any:
+    from .magnets import build_magnet
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", MaglevkitWarning)
+        return build_magnet(design_parameters(spec, values), options=replace(
+            spec.magnet.options, eddy_currents=False), source=spec.source)
+
+
+# ---------------------------------------------------------------------------- result
+@dataclass(frozen=True)
+class DesignConstraint:
+    """One constraint at the optimum.
+
+    Attributes
+    ----------
+    name : str
+        ``force_nominal``, ``force_reserve``, ``flux_density``, ``current_density``,
+        ``voltage``, ``coil_fits_leg``, ``coils_fit_window``, ``magnet_fits_rail``,
+        ``max_power``, ``max_mass``, or ``<variable>_lower`` / ``<variable>_upper`` (the
+        variable bounds).
+    value : float
+        The constrained quantity [unit].
+    bound : float
+        Its limit [unit].
+    sense : str
+        ``"=="``, ``"<="`` or ``">="`` (value sense bound).
+    unit : str
+    active : bool
+        Equality, or relative slack at most :data:`ACTIVE_TOL`.
+    sensitivity : float
+        ``d(objective)/d(bound)`` at the optimum [objective unit per constraint unit], from
+        IPOPT's Lagrange multiplier (the shadow price: what relaxing the bound by one unit
+        saves; ~0 for an inactive constraint).
+    detail : str
+        For ``flux_density``: the iron path with the peak.
+    """
+
+    name: str
+    value: float
+    bound: float
+    sense: str
+    unit: str
+    active: bool
+    sensitivity: float = 0.0
+    detail: str = ""
+
+    @property
+    def slack(self) -> float:
+        """Distance to the bound in the feasible direction [unit] (negative: violated)."""
+        if self.sense == ">=":
+            return self.value - self.bound
+        if self.sense == "<=":
+            return self.bound - self.value
+        return -abs(self.value - self.bound)
+
+
+@dataclass(frozen=True)
+class DesignResult:
+    """Result of :func:`design_magnet`.
+
+    Attributes
+    ----------
+    spec : DesignSpec
+    values : dict
+        Optimal design variables [m, turns -] (``turns`` unrounded).
+    objective : str
+        The objective minimised.
+    objective_value : float
+        Its value [kg or W].
+    mass_kg, power_W, resistance_ohm, nominal_current_A, reserve_current_A : float
+        Magnet mass, ``R I_n^2``, winding resistance, nominal current, the current at the
+        peak current density.
+    constraints : dict
+        Name -> :class:`DesignConstraint`.
+    status : str
+        IPOPT's return status.
+    success : bool
+        IPOPT converged (``Solve_Succeeded`` or ``Solved_To_Acceptable_Level``).
+    iterations : int
+        IPOPT iterations.
+    """
+
+    spec: DesignSpec
+    values: dict[str, float]
+    objective: str
+    objective_value: float
+    mass_kg: float
+    power_W: float
+    resistance_ohm: float
+    nominal_current_A: float
+    reserve_current_A: float
+    constraints: dict[str, DesignConstraint]
+    status: str
+    success: bool
+    iterations: int
+
+    @property
+    def active(self) -> tuple[str, ...]:
+        """Names of the active constraints."""
+        return tuple(n for n, c in self.constraints.items() if c.active)
+
+
+# ---------------------------------------------------------------------------- evaluation
+def _nominal_current(magnet: Any, gap_m: float, force_N: float, i_hi: float) -> float:
+    """Current holding ``force_N`` at ``gap_m`` (force monotone in I: bisection on a grid,
+    then Newton with the exact dF/dI of the statics)."""
+    from .models.statics import solve_statics
+
+    grid = np.linspace(0.0, i_hi, 41)[1:]
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", MaglevkitWarning)
+        f = np.asarray(solve_statics(magnet, gaps=np.array([gap_m]), currents=grid,
+                                     grid=True).force_N)[0]
+        if f[-1] < force_N:
+            return math.nan
+        k = int(np.argmax(f >= force_N))
+        lo = grid[k - 1] if k else 0.0
+        f_lo = f[k - 1] if k else 0.0
+        i = lo + (force_N - f_lo) / (f[k] - f_lo) * (grid[k] - lo)
+        for _ in range(30):
+            sol = solve_statics(magnet, gaps=gap_m, currents=i)
+            fi = float(np.asarray(sol.force_N))
+            dfdi = float(np.sum(np.asarray(sol.dforce_dcurrent_N_per_A)))
+            step = (fi - force_N) / dfdi
+            i -= step
+            if abs(step) <= 1e-12 * i:
+                break
+    return float(i)
+
+
+def evaluate_design(spec: DesignSpec, values: Mapping[str, float] | None = None, *,
+                    magnet: Any = None) -> dict[str, Any]:
+    """Re-solve a design's statics independently of the optimiser and return its
+    constrained quantities (module docstring).
+
+    The magnet is built by the ordinary loader path (:func:`design_parameters`, then
+    :func:`~maglevkit.magnets.build_magnet`) or given, and its statics solved with
+    :func:`~maglevkit.models.statics.solve_statics`; the nominal current is the root of
+    ``F(nominal_gap, I) = force_N``.
+
+    Parameters
+    ----------
+    spec : DesignSpec
+        The design problem (requirements, coil data).
+    values : mapping, optional
+        Design variable -> value [m, turns -] (``turns`` rounded); ignored with ``magnet``.
+    magnet : Magnet, optional
+        A magnet to evaluate instead (e.g. loaded from a written design file).
+
+    Returns
+    -------
+    dict
+        ``nominal_current_A``, ``reserve_current_A``, ``force_reserve_N``,
+        ``flux_density_T`` (peak |B| in the magnet's iron at the nominal point),
+        ``flux_density_path``, ``current_density_A_per_m2``, ``voltage_V``,
+        ``resistance_ohm``, ``mass_kg``, ``power_W``, the geometry slacks
+        ``coil_fits_leg_m``, ``coils_fit_window_m``, ``magnet_fits_rail_m`` [m] and
+        ``feasible`` (all constraints met; a nominal current that cannot be reached is
+        infeasible).
+    """
+    from .circuit.elements import IronPath
+    from .models.statics import solve_statics
+
+    mag = magnet if magnet is not None else _build(spec, values or {})
+    mg = mag.parameters["magnet"]
+    g = {k: float(mg[k]) for k in VARIABLES}
+    turns = float(mg["turns"])
+    req, coil = spec.requirements, spec.coil
+    laws = _coil_laws(g, turns, coil)
+    i_res = 2.0 * req["peak_current_density_A_per_m2"] * coil["fill_factor"] \
+        * laws["coil_area_m2"] / turns
+    out: dict[str, Any] = {"resistance_ohm": float(mg["resistance"]),
+                           "mass_kg": float(laws["mass_kg"]), "reserve_current_A": i_res}
+    i_n = _nominal_current(mag, req["nominal_gap_m"], req["force_N"], 3.0 * i_res)
+    out["nominal_current_A"] = i_n
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", MaglevkitWarning)
+        f_r = float(np.asarray(solve_statics(mag, gaps=req["reserve_gap_m"],
+                                             currents=i_res).force_N))
+        out["force_reserve_N"] = f_r
+        if math.isfinite(i_n):
+            sol = solve_statics(mag, gaps=req["nominal_gap_m"], currents=i_n)
+            phi = np.asarray(sol.branch_flux_Wb).ravel()
+            best, where = 0.0, ""
+            for j, br in enumerate(mag.network.branches):
+                for el in br.elements:
+                    if isinstance(el, IronPath) and el.name != "iron_rail":
+                        b = abs(phi[j]) / el.cross_section
+                        if b > best:
+                            best, where = b, el.name
+            ldiff = float(np.asarray(sol.differential_inductance_H).ravel()[0])
+            dpsi = float(np.sum(np.asarray(sol.dpsi_dgap_Wb_per_m)))
+            r_el = out["resistance_ohm"]
+            out.update(flux_density_T=best, flux_density_path=where,
+                       voltage_V=r_el * i_n + ldiff * req["current_rate_A_per_s"]
+                       + abs(dpsi) * req["gap_rate_m_per_s"],
+                       current_density_A_per_m2=0.5 * turns * i_n
+                       / (coil["fill_factor"] * laws["coil_area_m2"]),
+                       power_W=r_el * i_n**2)
+        else:
+            out.update(flux_density_T=math.nan, flux_density_path="", voltage_V=math.nan,
+                       current_density_A_per_m2=math.nan, power_W=math.nan)
+    out["coil_fits_leg_m"] = g["leg_height"] - g["coil_height"] - float(
+        mg["coil_gap_to_pole_face"])
+    out["coils_fit_window_m"] = g["window_width"] - 2.0 * g["coil_thickness"] \
+        - req["window_clearance_m"]
+    out["magnet_fits_rail_m"] = float(mag.parameters["rail"]["width"]) - g["window_width"] \
+        - 2.0 * g["pole_width"]
+    rel = 1e-6
+    out["feasible"] = bool(
+        math.isfinite(i_n)
+        and f_r >= req["reserve_factor"] * req["force_N"] * (1 - rel)
+        and out["flux_density_T"] <= req["max_flux_density_T"] * (1 + rel)
+        and out["current_density_A_per_m2"] <= req["current_density_A_per_m2"] * (1 + rel)
+        and out["voltage_V"] <= req["supply_voltage_V"] * (1 + rel)
+        and min(out["coil_fits_leg_m"], out["coils_fit_window_m"],
+                out["magnet_fits_rail_m"]) >= -1e-12)
+    return out
+
+
+# ---------------------------------------------------------------------------- the NLP
+@dataclass(frozen=True)
+class _Setup:
+    """The NLP of one spec (and start): IPOPT solver, bounds, constraint rows, scalings."""
+
+    names: tuple[str, ...]
+    lo: np.ndarray
+    hi: np.ndarray
+    vscale: np.ndarray
+    n_loops: int
+    rows: list[tuple[str, Any, float, str, str, float]]
+    solver: Any
+    z0: np.ndarray
+    lbz: np.ndarray
+    ubz: np.ndarray
+    lbg: np.ndarray
+    ubg: np.ndarray
+    report: Any
+    mass0: float
+    power0: float
+    iron_names: tuple[str, ...]
+
+
+_SETUPS: dict[tuple[int, tuple[tuple[str, float], ...]], tuple[DesignSpec, _Setup]] = {}
+"""The last few NLPs built (by spec identity and start): a Pareto sweep re-solves one NLP
+with other caps and objective weights instead of re-deriving it (1-2 s each)."""
+
+
+def _setup(spec: DesignSpec, initial: Mapping[str, float] | None) -> _Setup:
+    import casadi as ca
+
+    key = (id(spec), tuple(sorted((initial or {}).items())))
+    hit = _SETUPS.get(key)
+    if hit is not None and hit[0] is spec:
+        return hit[1]
+    pb = _Problem(spec)
+    req, coil = spec.requirements, spec.coil
+    names = pb.names
+    lo = np.array([spec.variables[n][0] for n in names])
+    hi = np.array([spec.variables[n][1] for n in names])
+    start = {n: float(np.clip(pb.base_geometry[n] if n != "turns" else pb.turns0, a, b))
+             for n, a, b in zip(names, lo, hi, strict=True)}
+    if initial:
+        for n, v in initial.items():
+            if n not in spec.variables or not lo[names.index(n)] <= v <= hi[names.index(n)]:
+                raise InputError(f"initial {n} = {v!r}: not a design variable within its "
+                                 f"bounds {spec.variables.get(n)}")
+            start[n] = float(v)
+    if "turns" in start:
+        start["turns"] = float(round(start["turns"]))
+    ev0 = evaluate_design(spec, start)
+    p0 = pb.value_vector(start)
+    i_res0 = ev0["reserve_current_A"]
+    i_n0 = ev0["nominal_current_A"]
+    if not math.isfinite(i_n0):
+        i_n0 = i_res0
+    # start loop fluxes: the base-start magnet's statics (numeric network)
+    from .models.statics import solve_statics
+
+    mag0 = _build(spec, start)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", MaglevkitWarning)
+        x_n0 = np.asarray(solve_statics(mag0, gaps=req["nominal_gap_m"],
+                                        currents=i_n0).loop_flux_Wb, dtype=float).ravel()
+        x_r0 = np.asarray(solve_statics(mag0, gaps=req["reserve_gap_m"],
+                                        currents=i_res0).loop_flux_Wb, dtype=float).ravel()
+    # scaling: variables by their upper bounds, fluxes by the start's largest loop flux,
+    # currents by the start's nominal current, loop laws by the nominal MMF
+    vscale = hi.copy()
+    xscale = max(float(np.max(np.abs(x_r0))), 1e-9)
+    iscale = max(i_n0, 1e-9)
+    mmf = max(0.5 * pb.turns0 * i_n0, 1.0)
+    nl = pb.n_loops
+    w = ca.SX.sym("w", len(names))
+    i_s = ca.SX.sym("i_n")
+    xn_s = ca.SX.sym("x_n", nl)
+    xr_s = ca.SX.sym("x_r", nl)
+    p = w * vscale
+    turns = p[names.index("turns")] if "turns" in names else pb.turns0
+    i_n = i_s * iscale
+    resistance, mass, area = pb.laws_fun(p)
+    i_res = 2.0 * req["peak_current_density_A_per_m2"] * coil["fill_factor"] * area / turns
+    eff = turns / pb.turns0                 # the network carries turns0: I_eff = I N / N0
+    rn, f_n, _, l_n, dpsi_n, b_n = pb.point(xn_s * xscale, req["nominal_gap_m"], i_n * eff, p)
+    rr, f_r, *_ = pb.point(xr_s * xscale, req["reserve_gap_m"], i_res * eff, p)
+    voltage = (resistance * i_n + eff**2 * l_n * req["current_rate_A_per_s"]
+               + eff * ca.fabs(dpsi_n) * req["gap_rate_m_per_s"])
+    power = resistance * i_n**2
+    j_n = 0.5 * turns * i_n / (coil["fill_factor"] * area)
+    gsym = pb.geometry
+    geo_fun = ca.Function("design_geometry", [pb.p], [ca.vertcat(
+        gsym["leg_height"] - gsym["coil_height"] - gsym["coil_gap_to_pole_face"],
+        gsym["window_width"] - 2.0 * gsym["coil_thickness"] - req["window_clearance_m"],
+        pb.rail["width"] - gsym["window_width"] - 2.0 * gsym["pole_width"])])
+    geo_v = geo_fun(p)
+    rows: list[tuple[str, Any, float, str, str, float]] = []   # name, expr, bound, sense, unit, scale
+    f_req = req["force_N"]
+    rows.append(("force_nominal", f_n, f_req, "==", "N", f_req))
+    rows.append(("force_reserve", f_r, req["reserve_factor"] * f_req, ">=", "N", f_req))
+    bmax = req["max_flux_density_T"]
+    for k in range(b_n.numel()):
+        rows.append((f"flux_density:{pb.iron_names[k]}", b_n[k] ** 2, bmax**2, "<=", "T^2",
+                     bmax**2))
+    rows.append(("current_density", j_n, req["current_density_A_per_m2"], "<=", "A/m^2",
+                 req["current_density_A_per_m2"]))
+    rows.append(("voltage", voltage, req["supply_voltage_V"], "<=", "V",
+                 req["supply_voltage_V"]))
+    for k, (name, needs) in enumerate((
+            ("coil_fits_leg", ("leg_height", "coil_height")),
+            ("coils_fit_window", ("window_width", "coil_thickness")),
+            ("magnet_fits_rail", ("window_width", "pole_width")))):
+        if any(n in names for n in needs):
+            rows.append((name, geo_v[k], GEOMETRY_MARGIN_M, ">=", "m", 0.01))
+    g_parts = [rn / mmf, rr / mmf]
+    lbg = [np.zeros(2 * nl)]
+    ubg = [np.zeros(2 * nl)]
+    for _, expr, bound, sense, _, scale in rows:
+        g_parts.append((expr - bound) / scale)
+        lbg.append(np.array([0.0 if sense in ("==", ">=") else -np.inf]))
+        ubg.append(np.array([0.0 if sense in ("==", "<=") else np.inf]))
+    z = ca.vertcat(w, i_s, xn_s, xr_s)
+    mass0, power0 = ev0["mass_kg"], ev0.get("power_W", math.nan)
+    if not (math.isfinite(power0) and power0 > 0.0):
+        power0 = float(pb.laws_fun(p0)[0]) * i_n0**2
+    # the caps of the epsilon-constraint sweeps: always in g, open unless given
+    g_parts += [mass / mass0, power / power0]
+    lbg.append(np.full(2, -np.inf))
+    ubg.append(np.full(2, np.inf))
+    weights = ca.SX.sym("weights", 2)           # (mass, power): the objective's choice
+    f_obj = weights[0] * mass / mass0 + weights[1] * power / power0
+    nlp = {"x": z, "p": weights, "f": f_obj, "g": ca.vertcat(*g_parts)}
+    solver = ca.nlpsol("design", "ipopt", nlp, {
+        "ipopt.print_level": 0, "print_time": False, "ipopt.sb": "yes",
+        "ipopt.tol": 1e-10, "ipopt.max_iter": 500, "ipopt.bound_relax_factor": 0.0,
+        "error_on_fail": False})
+    z0 = np.concatenate((p0 / vscale, [i_n0 / iscale], x_n0 / xscale, x_r0 / xscale))
+    lbz = np.concatenate((lo / vscale, [0.0], np.full(2 * nl, -np.inf)))
+    ubz = np.concatenate((hi / vscale, [np.inf], np.full(2 * nl, np.inf)))
+    report = ca.Function("design_report", [z], [ca.vertcat(*[e for _, e, *_ in rows]), mass,
+                                                power, resistance, i_n, i_res])
+    out = _Setup(names=names, lo=lo, hi=hi, vscale=vscale, n_loops=nl, rows=rows,
+                 solver=solver, z0=z0, lbz=lbz, ubz=ubz, lbg=np.concatenate(lbg),
+                 ubg=np.concatenate(ubg), report=report, mass0=mass0, power0=power0,
+                 iron_names=pb.iron_names)
+    _SETUPS[key] = (spec, out)
+    while len(_SETUPS) > 4:
+        _SETUPS.pop(next(iter(_SETUPS)))
+    return out
+
+
+def design_magnet(spec: DesignSpec, *, objective: str | None = None,
+                  max_power_W: float | None = None, max_mass_kg: float | None = None,
+                  initial: Mapping[str, float] | None = None) -> DesignResult:
+    """Optimise the design (module docstring): IPOPT on the simultaneous NLP.
+
+    Parameters
+    ----------
+    spec : DesignSpec
+        The design problem (:func:`read_design_spec`).
+    objective : str, optional
+        Overrides ``spec.objective`` (one of :data:`OBJECTIVES`).
+    max_power_W : float, optional
+        Extra constraint ``R I_n^2 <= max_power_W`` [W] (epsilon-constraint sweeps).
+    max_mass_kg : float, optional
+        Extra constraint ``mass <= max_mass_kg`` [kg].
+    initial : mapping, optional
+        Start values [m, turns -] (default: the base magnet's, clipped into the bounds).
+
+    Returns
+    -------
+    DesignResult
+
+    Raises
+    ------
+    InputError
+        An unknown objective, a non-positive cap, start values outside the bounds.
+    """
+
+    obj = spec.objective if objective is None else objective
+    if obj not in OBJECTIVES:
+        raise InputError(f"objective = {obj!r}: expected one of {list(OBJECTIVES)}")
+    for key, cap in (("max_power_W", max_power_W), ("max_mass_kg", max_mass_kg)):
+        if cap is not None and not (isinstance(cap, (int, float)) and not isinstance(cap, bool)
+                                    and math.isfinite(cap) and cap > 0.0):
+            raise InputError(f"{key} = {cap!r}: expected a finite number > 0")
+    st = _setup(spec, initial)
+    names, lo, hi, nl, rows = st.names, st.lo, st.hi, st.n_loops, st.rows
+    req = spec.requirements
+    bmax = req["max_flux_density_T"]
+    ubg = st.ubg.copy()
+    if max_mass_kg is not None:
+        ubg[-2] = float(max_mass_kg) / st.mass0
+    if max_power_W is not None:
+        ubg[-1] = float(max_power_W) / st.power0
+    solver = st.solver
+    sol = solver(x0=st.z0, lbx=st.lbz, ubx=st.ubz, lbg=st.lbg, ubg=ubg,
+                 p=[1.0, 0.0] if obj == "mass" else [0.0, 1.0])
+    stats = solver.stats()
+    zs = np.asarray(sol["x"]).ravel()
+    lam = np.asarray(sol["lam_g"]).ravel()[2 * nl:]
+    pv = zs[:len(names)] * st.vscale
+    values = {n: float(v) for n, v in zip(names, pv, strict=True)}
+    rv, mass_v, power_v, r_v, in_v, ir_v = (np.asarray(a).ravel() for a in st.report(zs))
+    constraints: dict[str, DesignConstraint] = {}
+    # shadow prices: g = (expr - bound)/scale in [lbg, ubg] and grad f + J^T lam_g +
+    # lam_x = 0 (CasADi's signs), so d f*/d bound = -lam_g/scale (objective / its reference)
+    ref = st.mass0 if obj == "mass" else st.power0
+    b_rows = [k for k, r in enumerate(rows) if r[0].startswith("flux_density:")]
+    for k, (name, _, bound, sense, unit, scale) in enumerate(rows):
+        if k in b_rows:
+            continue
+        slack = (rv[k] - bound) if sense == ">=" else (bound - rv[k])
+        active = bool(sense == "==" or slack <= ACTIVE_TOL * scale)
+        constraints[name] = DesignConstraint(name, float(rv[k]), bound, sense, unit, active,
+                                             float(-lam[k] / scale * ref))
+    for name, cap, val, unit in (("max_mass", max_mass_kg, mass_v[0], "kg"),
+                                 ("max_power", max_power_W, power_v[0], "W")):
+        if cap is not None:
+            constraints[name] = DesignConstraint(
+                name, float(val), float(cap), "<=", unit,
+                bool(cap - val <= ACTIVE_TOL * cap),
+                float(-lam[len(rows) + (0 if name == "max_mass" else 1)] * ref
+                      / (st.mass0 if name == "max_mass" else st.power0)))
+    lam_x = np.asarray(sol["lam_x"]).ravel()
+    for k, n in enumerate(names):
+        unit = VARIABLES[n]
+        for side, bound, sense in (("lower", lo[k], ">="), ("upper", hi[k], "<=")):
+            slack = pv[k] - bound if sense == ">=" else bound - pv[k]
+            constraints[f"{n}_{side}"] = DesignConstraint(
+                f"{n}_{side}", float(pv[k]), float(bound), sense, unit,
+                bool(slack <= ACTIVE_TOL * bound), float(-lam_x[k] / st.vscale[k] * ref)
+                if slack <= ACTIVE_TOL * bound else 0.0, "variable bound")
+    kb = max(b_rows, key=lambda k: rv[k])
+    b_peak = math.sqrt(max(float(rv[kb]), 0.0))
+    constraints["flux_density"] = DesignConstraint(
+        "flux_density", b_peak, bmax, "<=", "T",
+        bool(any(bmax**2 - rv[k] <= ACTIVE_TOL * bmax**2 for k in b_rows)),
+        float(-2.0 * ref / bmax * sum(lam[k] for k in b_rows)), rows[kb][0].split(":", 1)[1])
+    status = str(stats.get("return_status", ""))
+    success = status in ("Solve_Succeeded", "Solved_To_Acceptable_Level")
+    if not success:
+        warnings.warn(f"design_magnet: IPOPT did not converge ({status}); the values are "
+                      "where it stopped", MaglevkitWarning, stacklevel=2)
+    return DesignResult(
+        spec=spec, values=values, objective=obj,
+        objective_value=float(mass_v[0] if obj == "mass" else power_v[0]),
+        mass_kg=float(mass_v[0]), power_W=float(power_v[0]), resistance_ohm=float(r_v[0]),
+        nominal_current_A=float(in_v[0]), reserve_current_A=float(ir_v[0]),
+        constraints=constraints, status=status, success=success,
+        iterations=int(stats.get("iter_count", -1)))
+
+
+# ---------------------------------------------------------------------------- gradients
+def design_sensitivities(spec: DesignSpec, values: Mapping[str, float], *, gap_m: float,
+                         current_A: float) -> dict[str, Any]:
+    """Circuit force and flux linkage of a design at one point and their exact derivatives
+    with respect to the design variables (nested route: CasADi ``rootfinder`` of the loop
+    law, implicit function theorem ``dx/dp = -r_x^-1 r_p``).
+
+    Parameters
+    ----------
+    spec : DesignSpec
+        The design problem (its variables define ``p``).
+    values : mapping
+        Design variable -> value [m, turns -] (every variable of the spec).
+    gap_m : float
+        Gap of both poles [m].
+    current_A : float
+        Coil current [A].
+
+    Returns
+    -------
+    dict
+        ``force_N``, ``flux_linkage_Wb`` (floats), ``dforce_dp`` [N per unit] and
+        ``dpsi_dp`` [Wb per unit] (dicts over the variables).
+    """
+    import casadi as ca
+
+    from .models.statics import solve_statics
+
+    pb = _Problem(spec)
+    missing = [n for n in pb.names if n not in values]
+    if missing:
+        raise InputError(f"design_sensitivities: values for {missing} missing")
+    v = pb.value_vector(values)
+    mag = _build(spec, values)
+    turns_r = float(mag.parameters["magnet"]["turns"])
+    n_val = float(values["turns"]) if "turns" in pb.names else pb.turns0
+    if abs(n_val - turns_r) > 0.0:
+        # start fluxes from the rounded magnet at the same ampere-turns
+        cur0 = current_A * n_val / turns_r
+    else:
+        cur0 = current_A
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", MaglevkitWarning)
+        x0 = np.asarray(solve_statics(mag, gaps=gap_m, currents=cur0).loop_flux_Wb,
+                        dtype=float).ravel()
+    rf = ca.rootfinder("design_statics", "newton", pb.residual,
+                       {"abstol": 1e-10, "abstolStep": 1e-16, "max_iter": 60,
+                        "error_on_fail": True})
+    P = ca.MX.sym("p", len(pb.names))
+    turns = P[pb.names.index("turns")] if "turns" in pb.names else pb.turns0
+    par = ca.vertcat(gap_m, current_A * turns / pb.turns0, P)
+    xs = rf(ca.DM(x0), par)
+    f, psi = pb.outputs(xs, par)
+    psi = psi * turns / pb.turns0
+    fun = ca.Function("design_sens", [P], [f, psi, ca.jacobian(f, P), ca.jacobian(psi, P)])
+    f_v, psi_v, jf, jpsi = (np.asarray(a) for a in fun(v))
+    return {"force_N": float(f_v.ravel()[0]), "flux_linkage_Wb": float(psi_v.ravel()[0]),
+            "dforce_dp": {n: float(jf.ravel()[k]) for k, n in enumerate(pb.names)},
+            "dpsi_dp": {n: float(jpsi.ravel()[k]) for k, n in enumerate(pb.names)}}
+
+
+# ---------------------------------------------------------------------------- output
+def write_design_toml(result: DesignResult, path: str | Path) -> Path:
+    """Write the optimum as a magnet parameter file (loadable by
+    :func:`~maglevkit.magnets.load_magnet`): the base magnet with the optimal values
+    (``turns`` rounded), the coil's resistance, every changed value tagged ``[E] optimised:
+    ...`` in ``[provenance]``, the operating point in ``[operating]``, and a comment header
+    with the objective, the active constraints and IPOPT's status.
+
+    Parameters
+    ----------
+    result : DesignResult
+        The optimum.
+    path : path
+        The file to write.
+
+    Returns
+    -------
+    Path
+    """
+    from .parameter_files import toml_text
+
+    spec = result.spec
+    tag = (f"optimised: maglevkit design ({result.objective} minimised, spec "
+           f"{Path(spec.source).name}; active: {', '.join(result.active) or 'none'})")
+    params = design_parameters(spec, result.values, provenance=tag)
+    params["magnet"]["name"] = f"{params['magnet'].get('name', 'magnet')} (optimised)"
+    params["operating"] = {"nominal_gap": spec.requirements["nominal_gap_m"],
+                           "nominal_current": result.nominal_current_A}
+    prov = dict(params.get("provenance", {}))
+    prov["operating.nominal_gap"] = f"[E] {tag}"
+    prov["operating.nominal_current"] = f"[E] {tag}"
+    params["provenance"] = prov
+    header = [f"# {params['magnet']['name']}: written by maglevkit design "
+              f"(IPOPT {result.status}, {result.iterations} iterations)",
+              f"# objective {result.objective} = {result.objective_value:.6g} "
+              f"({'kg' if result.objective == 'mass' else 'W'}); mass {result.mass_kg:.6g} kg, "
+              f"power {result.power_W:.6g} W at {result.nominal_current_A:.6g} A",
+              f"# active constraints: {', '.join(result.active) or 'none'}"]
+    p = Path(path)
+    p.write_text("\n".join(header) + "\n" + toml_text(params))
+    return p
+
+
+# ---------------------------------------------------------------------------- Pareto front
+def pareto_front(spec: DesignSpec, *, points: int = 7) -> list[DesignResult]:
+    """Mass vs resistive power: the epsilon-constraint sweep (minimum mass subject to
+    ``R I_n^2 <= P_k`` for ``points`` caps between the minimum-power design's power and
+    the minimum-mass design's).
+
+    Parameters
+    ----------
+    spec : DesignSpec
+        The design problem.
+    points : int
+        Designs on the front (>= 2), the two end points included.
+
+    Returns
+    -------
+    list of DesignResult
+        From the minimum-power end to the minimum-mass end.
+    """
+    if isinstance(points, bool) or not isinstance(points, int) or points < 2:
+        raise InputError(f"points = {points!r}: expected an integer >= 2")
+    low_p = design_magnet(spec, objective="power")
+    low_m = design_magnet(spec, objective="mass")
+    caps = np.linspace(low_p.power_W, low_m.power_W, points)
+    front = [design_magnet(spec, objective="mass", max_power_W=float(c) * (1 + 1e-9))
+             for c in caps[:-1]]
+    return [*front, low_m]
+
+
+def plot_pareto(front: Sequence[DesignResult], path: str | Path, *, title: str = "") -> Path:
+    """Figure of the Pareto front (mass over resistive power), PNG.
+
+    Parameters
+    ----------
+    front : sequence of DesignResult
+        The designs (:func:`pareto_front`).
+    path : path
+        The PNG file.
+    title : str
+        Figure title (default: the spec's name).
+
+    Returns
+    -------
+    Path
+    """
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from .plotting import save
+
+    ok = [r for r in front if r.success]
+    if not ok:
+        raise InputError("plot_pareto: no converged design on the front")
+    # label each point with the two variables that change most along the front
+    names = list(ok[0].values)
+    spread = {n: np.ptp([r.values[n] for r in ok]) / max(abs(ok[0].values[n]), 1e-12)
+              for n in names}
+    shown = sorted(names, key=lambda n: -spread[n])[:2]
+    fig, ax = plt.subplots(figsize=(7.0, 4.6))
+    ax.plot([r.power_W for r in ok], [r.mass_kg for r in ok], "o-", color="C0",
+            label="Pareto-optimal designs\n(epsilon constraint)")
+    for r in ok:
+        ax.annotate(", ".join(f"{k} {r.values[k] * 1e3:.1f} mm" if VARIABLES[k] == "m"
+                              else f"{k} {r.values[k]:.0f}" for k in shown),
+                    (r.power_W, r.mass_kg), textcoords="offset points", xytext=(7, 3),
+                    fontsize=7, color="0.3")
+    pw = [r.power_W for r in ok]
+    span = max(max(pw) - min(pw), 1e-9 * max(pw))
+    ax.set_xlim(min(pw) - 0.06 * span, max(pw) + 0.45 * span)     # room for the labels
+    ax.margins(y=0.08)
+    ax.set_xlabel("resistive power at the nominal point R I_n^2 [W]")
+    ax.set_ylabel("magnet mass (iron + copper) [kg]")
+    ax.grid(True, alpha=0.3)
+    ax.set_title(title or f"Pareto front: {Path(front[0].spec.source).name}")
+    ax.legend(loc="upper right", fontsize=8)     # the labels run right of the points
+    return save(fig, path)

@@ -1,0 +1,327 @@
+"""The reduced circuits of one set of maps, derived once: :class:`ReducedCore`.
+
+Every consumer of the reduced model (:class:`~maglevkit.reduced.current.CurrentModel`,
+:class:`~maglevkit.reduced.bank.MagnetBank` and its stepper, the control model of
+:mod:`maglevkit.control.model`, the FMU export) needs the same facts of the maps: the
+circuit and gap names, which poles a circuit drives, the averaging matrix (pole gaps ->
+the circuit's substitute gap) and the share matrix (circuit force -> equal pole shares),
+``R_el``, the chosen ``R_ec`` (``"fit"`` or ``"jump"``), ``a = 1 + R_el/R_ec`` of eq. 8,
+the grids continued by :data:`EXTRA_CELLS` cells, the map ranges with their rounding
+allowances, and the RK4 sub-step rule.  :meth:`ReducedCore.from_maps` derives them once;
+nobody else re-derives them.
+
+The one RK4 step (:func:`rk4_substep`) is written here too: every RK4 of the reduced
+model (the B-spline interval of ``CurrentModel``, the bank's table kernel, the control
+model's discretisation and the MPC's reference formulation) advances its right-hand side
+with it, so a change of the scheme lands in one place.  Eq. 8 itself is
+:func:`~maglevkit.reduced.current.eq8_rhs`.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from ..errors import InputError
+
+if TYPE_CHECKING:
+    from ..reduction.maps import CharacteristicMaps
+
+__all__ = ["EDDY_RESISTANCE_CHOICES", "EXTRA_CELLS", "ReducedCore", "eq8_a", "extend_axis",
+           "extend_values", "rk4_substep", "substep_count", "substep_counts"]
+
+EXTRA_CELLS = 3
+"""Grid cells by which the maps are continued linearly beyond their range."""
+
+#: ``eddy_resistance`` option -> the maps' variable holding that ``R_ec``
+EDDY_RESISTANCE_CHOICES = {"fit": "eddy_resistance_fit_ohm", "jump": "eddy_resistance_ohm"}
+
+#: relative rounding allowance of the gap range checks (times the largest gap)
+GAP_TOLERANCE = 1e-12
+#: relative rounding allowance of the current range checks (times max(1 A, largest current))
+CURRENT_TOLERANCE = 1e-9
+
+
+def extend_axis(axis: np.ndarray) -> np.ndarray:
+    """A grid axis continued by :data:`EXTRA_CELLS` cells of its first/last spacing.
+
+    Parameters
+    ----------
+    axis : numpy.ndarray
+        Increasing grid values (gaps [m] or currents [A]), at least two.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``2 * EXTRA_CELLS`` values longer, in the unit of ``axis``.
+    """
+    d = axis[1] - axis[0]
+    k = np.arange(1, EXTRA_CELLS + 1)
+    return np.concatenate([axis[0] - d * k[::-1], axis, axis[-1] + d * k])
+
+
+def extend_values(values: np.ndarray, *, axis: int) -> np.ndarray:
+    """Map values continued linearly (edge slope) by :data:`EXTRA_CELLS` cells along ``axis``.
+
+    Parameters
+    ----------
+    values : numpy.ndarray
+        A map on the grid (any unit).
+    axis : int
+        The axis to extend.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``values`` with ``EXTRA_CELLS`` more entries on both ends of ``axis``.
+    """
+    v = np.moveaxis(values, axis, 0)
+    k = np.arange(1, EXTRA_CELLS + 1)[:, None]
+    lo = v[0] - (v[1] - v[0]) * k[::-1]
+    hi = v[-1] + (v[-1] - v[-2]) * k
+    return np.moveaxis(np.concatenate([lo, v, hi], axis=0), 0, axis)
+
+
+def substep_counts(dt_s: Any, max_step_s: float) -> np.ndarray:
+    """The RK4 sub-step rule: ``max(1, ceil(dt / max_step_s))`` sub-steps per step.
+
+    A step a few rounding units longer than a whole multiple of ``max_step_s`` does not
+    get an extra sub-step (the relative allowance 1e-12).
+
+    Parameters
+    ----------
+    dt_s : float or array_like
+        Step lengths [s].
+    max_step_s : float
+        Longest RK4 sub-step [s].
+
+    Returns
+    -------
+    numpy.ndarray of int
+        Sub-steps per step (the shape of ``dt_s``).
+    """
+    return np.maximum(1, np.ceil(np.asarray(dt_s, dtype=float) / max_step_s
+                                 * (1 - 1e-12))).astype(int)
+
+
+def substep_count(dt_s: float, max_step_s: float) -> int:
+    """:func:`substep_counts` of one step length.
+
+    Parameters
+    ----------
+    dt_s : float
+        Step length [s].
+    max_step_s : float
+        Longest RK4 sub-step [s].
+
+    Returns
+    -------
+    int
+        Sub-steps of the step.
+    """
+    return max(1, math.ceil(dt_s / max_step_s * (1 - 1e-12)))
+
+
+def rk4_substep(x: Any, hs: Any, rhs_start: Callable[[Any], Any],
+                rhs_mid: Callable[[Any], Any] | None = None,
+                rhs_end: Callable[[Any], Any] | None = None) -> Any:
+    """One classical Runge-Kutta (RK4) step of ``dx/dt = rhs(x)``: the one RK4 of the
+    reduced model.
+
+    ``k1 = rhs_start(x)``, ``k2 = rhs_mid(x + hs/2 k1)``, ``k3 = rhs_mid(x + hs/2 k2)``,
+    ``k4 = rhs_end(x + hs k3)``, ``x + hs/6 (k1 + 2 k2 + 2 k3 + k4)``.  Inputs that move
+    over the step (the bank's gaps ``s + sdot t``) enter through the three stage
+    functions (start, middle, end); for held inputs give ``rhs_start`` only.
+
+    Parameters
+    ----------
+    x : CasADi expression, float or numpy.ndarray
+        State at the start of the step (its unit; e.g. ``I_L`` [A]).
+    hs : CasADi expression or float
+        Step length [s].
+    rhs_start : callable
+        ``x -> dx/dt`` with the inputs at the start of the step (unit of ``x`` per s).
+    rhs_mid, rhs_end : callable, optional
+        The same at the middle and at the end of the step (default ``rhs_start``).
+
+    Returns
+    -------
+    same type as ``x``
+        The state after ``hs``.
+    """
+    mid = rhs_start if rhs_mid is None else rhs_mid
+    end = rhs_start if rhs_end is None else rhs_end
+    k1 = rhs_start(x)
+    k2 = mid(x + hs / 2 * k1)
+    k3 = mid(x + hs / 2 * k2)
+    k4 = end(x + hs * k3)
+    return x + hs / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
+
+
+@dataclass(frozen=True, eq=False)
+class ReducedCore:
+    """The facts of eq. 8's reduced circuits of one set of maps, derived once.
+
+    Build it with :meth:`from_maps`.  Arrays are read-only.
+
+    Parameters
+    ----------
+    maps : CharacteristicMaps
+        The maps.
+    eddy_resistance : {"fit", "jump"}
+        Which ``R_ec`` of the maps eq. 8 uses.
+    circuit_names : tuple of str
+        Circuits (the maps' order).
+    gap_names : tuple of str
+        Gap inputs (poles) in input order.
+    pole_groups : mapping str -> tuple of str
+        Circuit -> the poles it drives.
+    averaging : numpy.ndarray (n_circuits, n_gaps)
+        Pole gaps [m] -> the circuit's substitute gap [m] (the mean of its poles).
+    share : numpy.ndarray (n_gaps, n_circuits)
+        Circuit force [N] -> pole forces [N] (equal shares).
+    resistance_ohm : numpy.ndarray (n_circuits,)
+        ``R_el`` [ohm].
+    eddy_resistance_ohm : numpy.ndarray (n_circuits,)
+        The chosen ``R_ec`` [ohm] (inf: no eddy branch).
+    a : numpy.ndarray (n_circuits,)
+        ``1 + R_el/R_ec`` of eq. 8 (1 where ``R_ec`` is infinite) [-].
+    gaps_m, currents_A : numpy.ndarray
+        The maps' grids [m], [A].
+    extended_gaps_m, extended_currents_A : numpy.ndarray
+        The grids continued by :data:`EXTRA_CELLS` cells (:func:`extend_axis`) [m], [A].
+    gap_range_m, current_range_A : (float, float)
+        The maps' ranges [m], [A].
+    gap_tolerance_m, current_tolerance_A : float
+        Rounding allowances of the range checks [m], [A].
+    """
+
+    maps: CharacteristicMaps
+    eddy_resistance: str
+    circuit_names: tuple[str, ...]
+    gap_names: tuple[str, ...]
+    pole_groups: Mapping[str, tuple[str, ...]]
+    averaging: np.ndarray
+    share: np.ndarray
+    resistance_ohm: np.ndarray
+    eddy_resistance_ohm: np.ndarray
+    a: np.ndarray
+    gaps_m: np.ndarray
+    currents_A: np.ndarray
+    extended_gaps_m: np.ndarray
+    extended_currents_A: np.ndarray
+    gap_range_m: tuple[float, float]
+    current_range_A: tuple[float, float]
+    gap_tolerance_m: float
+    current_tolerance_A: float
+
+    @classmethod
+    def from_maps(cls, maps: CharacteristicMaps, *, eddy_resistance: str | None = "fit",
+                  what: str = "") -> ReducedCore:
+        """Derive the core of ``maps``.
+
+        Parameters
+        ----------
+        maps : CharacteristicMaps
+            The maps.
+        eddy_resistance : {"fit", "jump"} or None
+            Which ``R_ec`` eq. 8 uses (None: ``"fit"``).
+        what : str, optional
+            Prefix of error messages (e.g. ``"member 'm1': "``).
+
+        Returns
+        -------
+        ReducedCore
+
+        Raises
+        ------
+        InputError
+            An unknown ``eddy_resistance``, or maps without that ``R_ec``.
+        """
+        choice = "fit" if eddy_resistance is None else eddy_resistance
+        var = EDDY_RESISTANCE_CHOICES.get(choice) if isinstance(choice, str) else None
+        if var is None:
+            raise InputError(f"{what}eddy_resistance = {eddy_resistance!r}; use 'fit' or "
+                             "'jump' (or None: the fit)")
+        circuits = tuple(maps.circuits)
+        groups = maps.pole_groups
+        attr = maps.dataset.attrs.get("gap_names")
+        gap_names = (tuple(str(attr).split(",")) if attr
+                     else tuple(g for c in circuits for g in groups[c]))
+        gi = {g: k for k, g in enumerate(gap_names)}
+        nc, ng = len(circuits), len(gap_names)
+        avg = np.zeros((nc, ng))
+        for j, c in enumerate(circuits):
+            for g in groups[c]:
+                avg[j, gi[g]] = 1.0 / len(groups[c])
+        share = (avg > 0).T / np.maximum((avg > 0).sum(axis=1), 1)
+        r_el = np.asarray(maps.dataset["resistance_ohm"].values, dtype=float)
+        if var not in maps.dataset:
+            raise InputError(f"{what}these maps have no {var!r}; rebuild them with this version")
+        r_ec = np.asarray(maps.dataset[var].values, dtype=float)
+        gs, gi_ = maps.gaps_m, maps.currents_A
+        gap_range = (float(gs[0]), float(gs[-1]))
+        current_range = (float(gi_[0]), float(gi_[-1]))
+        arrays = dict(averaging=avg, share=share, resistance_ohm=r_el, eddy_resistance_ohm=r_ec,
+                      a=eq8_a(r_el, r_ec), gaps_m=gs, currents_A=gi_,
+                      extended_gaps_m=extend_axis(gs), extended_currents_A=extend_axis(gi_))
+        for v in arrays.values():
+            v.flags.writeable = False
+        return cls(maps=maps, eddy_resistance=choice, circuit_names=circuits,
+                   gap_names=gap_names, pole_groups=groups,
+                   gap_range_m=gap_range, current_range_A=current_range,
+                   gap_tolerance_m=GAP_TOLERANCE * gap_range[1],
+                   current_tolerance_A=CURRENT_TOLERANCE * max(1.0, current_range[1]),
+                   **arrays)
+
+    @property
+    def n_circuits(self) -> int:
+        """Number of circuits."""
+        return len(self.circuit_names)
+
+    @property
+    def n_gaps(self) -> int:
+        """Number of gap inputs (poles)."""
+        return len(self.gap_names)
+
+    def state_bounds(self) -> tuple[np.ndarray, np.ndarray]:
+        """Lower and upper bounds of the state ``[I_L [A]; s [m]]`` with the rounding
+        allowances (the range check of every RK4 sub-step).
+
+        Returns
+        -------
+        (numpy.ndarray, numpy.ndarray)
+            Each ``2 n_circuits`` long: currents [A] then gaps [m].
+        """
+        nc = self.n_circuits
+        ti, ts = self.current_tolerance_A, self.gap_tolerance_m
+        lo = np.concatenate([np.full(nc, self.current_range_A[0] - ti),
+                             np.full(nc, self.gap_range_m[0] - ts)])
+        hi = np.concatenate([np.full(nc, self.current_range_A[1] + ti),
+                             np.full(nc, self.gap_range_m[1] + ts)])
+        return lo, hi
+
+
+def eq8_a(r_el: Any, r_ec: Any) -> Any:
+    """``a = 1 + R_el/R_ec`` of eq. 8 (1 where ``R_ec`` is infinite: no eddy branch).
+
+    Parameters
+    ----------
+    r_el : float or numpy.ndarray
+        ``R_el`` [ohm].
+    r_ec : float or numpy.ndarray
+        ``R_ec`` [ohm].
+
+    Returns
+    -------
+    float or numpy.ndarray
+        ``a`` [-] (a float for float inputs).
+    """
+    if np.ndim(r_el) == 0 and np.ndim(r_ec) == 0:
+        return 1.0 if math.isinf(float(r_ec)) else 1.0 + float(r_el) / float(r_ec)
+    r_el, r_ec = np.asarray(r_el, dtype=float), np.asarray(r_ec, dtype=float)
+    return 1.0 + np.where(np.isinf(r_ec), 0.0, r_el / np.where(np.isinf(r_ec), 1.0, r_ec))

@@ -1,0 +1,1096 @@
+"""Runs of the cross-section vehicle: magnets through the bank, gap controllers, scenarios.
+
+The mechanics (:mod:`maglevkit.vehicle.crosssection`) get their four force points from a
+:class:`~maglevkit.reduced.bank.MagnetBank` of four magnets: the levitation magnets left
+and right (``tr09-standard``: vertical gap to the stator underside) and the guidance
+magnets left and right (``tr-guidance``: lateral gap to the side rail).  Reduced models
+(eq. 8 on characteristic maps built once and cached, :mod:`maglevkit.vehicle.mapcache`)
+by default; ``magnets="detailed"`` puts the flux-based models into the same bank.
+
+Control: one :class:`~maglevkit.control.cascade.CascadeController` per magnet through the
+shared :class:`~maglevkit.control.interface.Controller` interface, every sample
+(``dt_s``):
+
+* levitation, per side: its own gap and gap rate;
+* guidance, per side, **differential operation**: both magnets run about a bias current
+  ``I_b`` (their bias forces cancel) and see the *differential* gap
+  ``s_0 + (s_own - s_other)/2`` (the chassis' lateral position), so one pulls harder
+  exactly when the other lets go, and their integral actions act on the lateral position
+  only (two integrators on gaps whose sum a rail offset may change would wind up against
+  each other).
+
+Plant per step (``t_k -> t_k + dt``), in this order: gaps and rates from the mechanics and
+the guideway (irregularities, rail offsets) at ``t_k``; controller voltages, the
+2-quadrant chopper ``U >= -R_ec I_L`` (the coil current cannot reverse), failed circuits
+at 0 V; the bank's step with the gaps moving linearly; the mechanics' exact zero-order
+hold step with the mean of the start and end forces, the track's acceleration field and
+the crosswind at mid-step.  Two implementations: the NumPy loop with the controller
+objects (the reference) and the same step compiled (:meth:`CrossSectionModel.
+compiled_step`, the default for reduced magnets; equal to the reference to ~1e-13 while
+the chopper does not clamp).
+
+Gaps (``z`` down, ``y`` right; ``Delta s = gap_matrix q`` of the force points)::
+
+    levitation   s = s_0 + Delta s - r_z(x)          (r_z: stator lower, positive down)
+    guidance     s_left  = s_0 + Delta s_left  + r_y(x)
+                 s_right = s_0 + Delta s_right - r_y(x)   (r_y: rails shifted to the right)
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from ..errors import InputError
+from ..plant import STANDARD_GRAVITY
+from ..validation import real_number
+from .crosssection import CrossSectionData, CrossSectionMechanics, track_field_path
+from .simulation import Failure
+
+__all__ = ["CrossSectionModel", "CrossSectionRun", "TransitionCurve", "Crosswind",
+           "LATERAL_ALIGNMENT_PSD", "parse_curve", "parse_crosswind", "parse_lateral"]
+
+#: One-sided PSD of the lateral alignment (German high-speed track, "low irregularity":
+#: ``A_a = 2.119e-7 m rad``, the corner frequencies of the vertical spectrum; Zhai,
+#: Vehicle-Track Coupled Dynamics, 2020) in the parameters of
+#: :class:`~maglevkit.vehicle.irregularities.GermanTrackPSD`.
+LATERAL_ALIGNMENT_PSD = {"A_v_m_rad": 2.119e-7, "omega_c_rad_per_m": 0.8246,
+                         "omega_r_rad_per_m": 0.0206}
+
+SIDES = ("left", "right")
+
+
+@dataclass(frozen=True)
+class TransitionCurve:
+    """A curve entered through a transition of length ``transition_m``.
+
+    From ``start_m`` the curvature ``1/R`` and the superelevation ``c`` ramp linearly with
+    the distance (a clothoid with a linear cant ramp) to their full values at
+    ``start_m + transition_m``, constant after.  The track's acceleration field follows
+    :func:`~maglevkit.vehicle.crosssection.track_field_path` at every point
+    (quasi-steady: the roll rate ``v dc/dx`` of the track plane in the transition and its
+    jumps at the ramp's ends are left out).
+
+    Parameters
+    ----------
+    radius_m : float
+        Radius R of the full curve [m], ``|R| >= 1`` (positive: a left-hand curve, outward
+        ``+y``), or ``inf`` (straight).
+    superelevation_rad : float
+        Full superelevation c [rad], ``|c| < 0.3``.
+    transition_m : float
+        Length of the transition [m], >= 0 (0: the curve starts at once).
+    start_m : float, default 0
+        Distance travelled at the transition's start [m], >= 0.
+    """
+
+    radius_m: float
+    superelevation_rad: float
+    transition_m: float
+    start_m: float = 0.0
+
+    def __post_init__(self) -> None:
+        r = self.radius_m
+        if not (isinstance(r, (int, float)) and not isinstance(r, bool)
+                and (math.isinf(r) or (math.isfinite(r) and abs(r) >= 1.0))):
+            raise InputError(f"curve radius_m = {r!r} m: expected |R| >= 1 m or inf")
+        c = real_number(self.superelevation_rad, "curve superelevation_rad", "rad")
+        if not abs(c) < 0.3:
+            raise InputError(f"curve superelevation_rad = {c!r} rad: must be in (-0.3, 0.3) "
+                             "rad (17 deg)")
+        real_number(self.transition_m, "curve transition_m", "m", nonnegative=True)
+        real_number(self.start_m, "curve start_m", "m", nonnegative=True)
+
+    def ramp(self, distance_m: Any) -> np.ndarray:
+        """Share ``0 ... 1`` of the full curve at the distances travelled [m] (-).
+
+        Parameters
+        ----------
+        distance_m : array_like
+            Distance travelled [m].
+
+        Returns
+        -------
+        ndarray
+            0 before the transition, 1 after it, linear in between.
+        """
+        x = np.asarray(distance_m, dtype=float) - self.start_m
+        if self.transition_m == 0:
+            return (x >= 0).astype(float)
+        return np.clip(x / self.transition_m, 0.0, 1.0)
+
+    def field(self, speed_m_per_s: float, distance_m: Any) -> np.ndarray:
+        """Acceleration field ``(a_y, a_z)`` [m/s^2] at the distances [m], shape (..., 2).
+
+        Parameters
+        ----------
+        speed_m_per_s : float
+            Speed [m/s].
+        distance_m : array_like
+            Distance travelled [m].
+
+        Returns
+        -------
+        ndarray (..., 2)
+        """
+        share = self.ramp(distance_m)
+        kappa = 0.0 if math.isinf(self.radius_m) else 1.0 / self.radius_m
+        return track_field_path(speed_m_per_s, share * kappa, share * self.superelevation_rad)
+
+
+@dataclass(frozen=True)
+class Crosswind:
+    """A crosswind gust on the car body: a lateral force and its roll moment.
+
+    Shape ``"1-cosine"`` (the discrete gust of the airworthiness codes, e.g. EASA CS-25.341:
+    ``U(t) = U_max/2 (1 - cos(pi t / H))`` up to the peak at ``t = H``), here rising over
+    ``rise_s``, held for ``hold_s`` and falling back symmetrically, applied to the force::
+
+        F(t) = F_max g(t),   g = (1 - cos(pi tau / T_r))/2 on the ramps,  1 on the plateau
+
+    ``"step"``: ``F_max`` from ``start_s`` on (a constant lateral force).  The force acts
+    along ``+y`` (to the right) at the height ``z_cp`` of the centre of pressure, so its
+    roll moment about the car body's centre of mass is ``F (z_c - z_cp)``.
+
+    Parameters
+    ----------
+    peak_force_N : float
+        F_max [N], finite (negative: wind from the right).
+    rise_s : float, default 0.5
+        Rise time T_r [s], > 0 (``"1-cosine"``).
+    hold_s : float, default 1.0
+        Plateau [s], >= 0 (``"1-cosine"``).
+    start_s : float, default 0.5
+        Start time [s], >= 0.
+    shape : {"1-cosine", "step"}
+        Time shape.
+    pressure_height_m : float, default 0.3
+        Height of the centre of pressure above the car body's centre of mass [m] [E].
+    """
+
+    peak_force_N: float
+    rise_s: float = 0.5
+    hold_s: float = 1.0
+    start_s: float = 0.5
+    shape: str = "1-cosine"
+    pressure_height_m: float = 0.3
+
+    def __post_init__(self) -> None:
+        real_number(self.peak_force_N, "crosswind peak_force_N", "N")
+        real_number(self.rise_s, "crosswind rise_s", "s", positive=True)
+        real_number(self.hold_s, "crosswind hold_s", "s", nonnegative=True)
+        real_number(self.start_s, "crosswind start_s", "s", nonnegative=True)
+        real_number(self.pressure_height_m, "crosswind pressure_height_m", "m")
+        if self.shape not in ("1-cosine", "step"):
+            raise InputError(f"crosswind shape = {self.shape!r}; allowed: '1-cosine', 'step'")
+
+    def force_N(self, time_s: Any) -> np.ndarray:
+        """Lateral force ``F(t)`` [N] at the times [s].
+
+        Parameters
+        ----------
+        time_s : array_like
+            Times [s].
+
+        Returns
+        -------
+        ndarray
+            Force along ``+y`` [N].
+        """
+        t = np.asarray(time_s, dtype=float) - self.start_s
+        if self.shape == "step":
+            return np.where(t >= 0, self.peak_force_N, 0.0)
+        tr, th = self.rise_s, self.hold_s
+        up = 0.5 * (1 - np.cos(np.pi * np.clip(t, 0, tr) / tr))
+        down = 0.5 * (1 - np.cos(np.pi * np.clip(2 * tr + th - t, 0, tr) / tr))
+        return self.peak_force_N * np.minimum(up, down)
+
+
+def _numbers(text: str, what: str, example: str) -> list[float]:
+    try:
+        vals = [float(v) for v in str(text).split(":")]
+    except ValueError:
+        raise InputError(f"{what} = {text!r}: expected numbers separated by ':', e.g. "
+                         f"{example}") from None
+    if not all(math.isfinite(v) for v in vals):
+        raise InputError(f"{what} = {text!r}: values must be finite numbers, e.g. {example}")
+    return vals
+
+
+def parse_curve(text: str) -> TransitionCurve:
+    """``"RADIUS_M:SUPERELEVATION_DEG:TRANSITION_M[:START_M]"`` -> :class:`TransitionCurve`.
+
+    Parameters
+    ----------
+    text : str
+        E.g. ``"4000:12:300"`` (R = 4000 m, 12 deg, 300 m transition from the start).
+
+    Returns
+    -------
+    TransitionCurve
+
+    Raises
+    ------
+    InputError
+        Not three or four numbers, or values out of range (named).
+    """
+    vals = _numbers(text, "--curve", "4000:12:300")
+    if len(vals) not in (3, 4):
+        raise InputError(f"--curve = {text!r}: expected RADIUS_M:SUPERELEVATION_DEG:"
+                         "TRANSITION_M[:START_M], e.g. 4000:12:300")
+    try:
+        return TransitionCurve(vals[0], math.radians(vals[1]), vals[2],
+                               vals[3] if len(vals) == 4 else 0.0)
+    except InputError as exc:
+        raise InputError(f"--curve = {text!r}: {exc}") from None
+
+
+def parse_crosswind(text: str) -> Crosswind:
+    """``"PEAK_N[:RISE_S[:HOLD_S[:START_S[:SHAPE]]]]"`` -> :class:`Crosswind`.
+
+    Parameters
+    ----------
+    text : str
+        E.g. ``"8000:0.5:1:0.5"`` or ``"5000:0.5:0:0.2:step"`` (shape ``1-cosine`` or
+        ``step``).
+
+    Returns
+    -------
+    Crosswind
+
+    Raises
+    ------
+    InputError
+        Bad numbers, a bad shape or values out of range (named).
+    """
+    parts = str(text).split(":")
+    shape = "1-cosine"
+    if parts and parts[-1] in ("1-cosine", "step"):
+        shape = parts.pop()
+    if not 1 <= len(parts) <= 4:
+        raise InputError(f"--crosswind = {text!r}: expected PEAK_N[:RISE_S[:HOLD_S[:START_S"
+                         "]]][:SHAPE], SHAPE 1-cosine or step, e.g. 8000:0.5:1:0.5")
+    vals = _numbers(":".join(parts), "--crosswind", "8000:0.5:1:0.5")
+    names = ("peak_force_N", "rise_s", "hold_s", "start_s")
+    try:
+        return Crosswind(**dict(zip(names, vals, strict=False)), shape=shape)
+    except InputError as exc:
+        raise InputError(f"--crosswind = {text!r}: {exc}") from None
+
+
+def parse_lateral(text: str, *, girder_length_m: float = 24.768) -> Any:
+    """A lateral guidance-rail irregularity from a short spec (parts joined by ``+``):
+
+    * ``random:RMS[:SEED]`` - random alignment of the German track spectrum's shape
+      (:data:`LATERAL_ALIGNMENT_PSD`) over wavelengths 1-100 m, scaled to ``RMS`` [m];
+    * ``girders:H[:SEED]`` - each girder's rails offset by a seeded uniform value in
+      ``[-H/2, H/2]`` [m] (steps at the girder joints, ``girder_length_m`` apart);
+    * ``none``.
+
+    Parameters
+    ----------
+    text : str
+        E.g. ``"random:0.3e-3:1+girders:0.5e-3"``.
+    girder_length_m : float, default 24.768
+        Girder (span) length [m] (keyword only).
+
+    Returns
+    -------
+    Profile or None
+
+    Raises
+    ------
+    InputError
+        Unknown parts or bad numbers (naming ``--lateral`` and the allowed forms).
+    """
+    from .irregularities import GermanTrackPSD, JointSteps, RandomProfile
+
+    prof: Any = None
+    parts = [p.strip() for p in str(text).split("+") if p.strip()]
+    if not parts:
+        raise InputError("--lateral: empty spec; use e.g. random:0.3e-3+girders:0.5e-3 or none")
+    for p in parts:
+        if p == "none":
+            continue
+        kind, _, rest = p.partition(":")
+        try:
+            nums = [float(x) for x in rest.split(":")] if rest else []
+        except ValueError:
+            nums = []
+        ok = (len(nums) in (1, 2) and all(math.isfinite(x) for x in nums) and nums[0] > 0
+              and (len(nums) == 1 or (nums[1] >= 0 and nums[1] == int(nums[1]))))
+        if not ok or kind not in ("random", "girders"):
+            raise InputError(f"--lateral part {p!r}: use random:RMS[:SEED], girders:H[:SEED] "
+                             "(metres, RMS and H > 0, SEED a whole number) or none, joined "
+                             "by '+'")
+        seed = int(nums[1]) if len(nums) == 2 else 0
+        if kind == "random":
+            lo, hi = 2 * np.pi / 100.0, 2 * np.pi / 1.0
+            base = GermanTrackPSD(**LATERAL_ALIGNMENT_PSD)
+            psd = GermanTrackPSD(A_v_m_rad=base.A_v_m_rad * nums[0] ** 2
+                                 / base.variance_m2(lo, hi),
+                                 omega_c_rad_per_m=base.omega_c_rad_per_m,
+                                 omega_r_rad_per_m=base.omega_r_rad_per_m)
+            new: Any = RandomProfile(psd, lo, hi, seed=seed)
+        else:
+            new = JointSteps(nums[0], pitch_m=girder_length_m, pattern="random", seed=seed)
+        prof = new if prof is None else prof + new
+    return prof
+
+
+@dataclass(frozen=True)
+class CrossSectionRun:
+    """Result of a cross-section run.
+
+    Attributes
+    ----------
+    dataset : xarray.Dataset
+        Time series, units in the attributes (see :meth:`CrossSectionModel.run`).
+    min_gap_m : dict
+        Minimum gap per magnet [m].
+    touchdown : tuple or None
+        ``(circuit, time_s, gap_m, kind)`` of the first gap at or below the touchdown gap
+        (``"closed"``) or at or above the landing gap (``"open"``), or None.
+    comfort : dict
+        ``"lateral"``: ISO 2631-1 ``Wd`` RMS and Sperling ``Wz``; ``"vertical"``: ``Wk``
+        RMS and ``Wz`` of the car body's accelerations (mean removed).
+    wall_time_s : float
+        Time spent in the time loop [s].
+    real_time_factor : float
+        Simulated time / wall time of the loop.
+    """
+
+    dataset: Any
+    min_gap_m: dict[str, float]
+    touchdown: tuple[str, float, float, str] | None
+    comfort: dict[str, dict[str, float]] = field(default_factory=dict)
+    wall_time_s: float = math.nan
+    real_time_factor: float = math.nan
+
+    def to_netcdf(self, path: str | Path) -> Path:
+        """Write the dataset to netCDF (atomically) and return the path.
+
+        Parameters
+        ----------
+        path : str or Path
+            Target file.
+
+        Returns
+        -------
+        Path
+        """
+        p = Path(path)
+        tmp = p.with_name(p.name + ".tmp")
+        self.dataset.to_netcdf(tmp)
+        tmp.replace(p)
+        return p
+
+    def report(self) -> str:
+        """A short plain-text report."""
+        ds = self.dataset
+        lines = [f"{ds.attrs['vehicle']}: {float(ds.attrs['speed_m_per_s']) * 3.6:.0f} km/h, "
+                 f"{float(ds.time[-1]):.3g} s simulated ({self.real_time_factor:.1f}x real "
+                 "time)"]
+        for k, v in self.min_gap_m.items():
+            lines.append(f"  minimum {k} gap {v * 1e3:.3f} mm")
+        if self.touchdown is None:
+            lines.append(f"  no touchdown (gaps stayed within "
+                         f"{float(ds.attrs['touchdown_gap_m']) * 1e3:g} ... "
+                         f"{float(ds.attrs['landing_gap_m']) * 1e3:g} mm)")
+        else:
+            c, t, g, kind = self.touchdown
+            lines.append(f"  TOUCHDOWN ({kind}): circuit {c} at t = {t:.4f} s (gap "
+                         f"{g * 1e3:.3f} mm); the run stopped there")
+        for name, ci in self.comfort.items():
+            lines.append(f"  comfort {name}: ISO 2631 a_w = {ci['weighted_rms_m_per_s2']:.4f} "
+                         f"m/s^2, Sperling Wz = {ci['sperling_wz']:.2f}")
+        return "\n".join(lines)
+
+
+class CrossSectionModel:
+    """The cross-section vehicle with its magnets and gap controllers (module docstring).
+
+    Parameters
+    ----------
+    data : CrossSectionData, optional
+        The vehicle (default: the bundled ``tr09-cross-section``).
+    levitation_magnet, guidance_magnet : str, default "tr09-standard", "tr-guidance"
+        Magnet files (bundled names or paths); each must be as long as the slice.
+    magnets : {"reduced", "detailed"}
+        Reduced current-based models on cached maps, or the detailed flux-based models.
+    maps_cache : path, optional
+        Directory of the cached maps (:mod:`maglevkit.vehicle.mapcache`).
+    compiled : {"auto", "always", "never"}
+        Passed to the bank.
+    nominal_gap_m : float, default 0.010
+        Nominal gap of levitation and guidance magnets [m] [P 10 mm].
+    guidance_bias_current_A : float, default 20.0
+        Bias current of both guidance magnets [A] [E] (their bias forces cancel).
+    bandwidth_Hz, damping : float, default 5.0, 0.7
+        Gap loops' natural frequency [Hz] and damping ratio [-] [E] (as the heave-pitch
+        train's file).
+    flux_bandwidth_Hz : float, default 30.0
+        Flux loops' bandwidth [Hz] [E].
+    voltage_limit_V : float, default 440.0
+        Chopper supply ``|U| <= U_max`` [V] [P].
+    touchdown_gap_m, landing_gap_m : float, default 0.002, 0.020
+        A gap at or below ``touchdown_gap_m`` (magnet on its rail) or at or above
+        ``landing_gap_m`` stops the run [m] [E].
+
+    Raises
+    ------
+    InputError
+        Bad options (named), magnets of the wrong kind or length.
+    """
+
+    def __init__(self, data: CrossSectionData | None = None, *,
+                 levitation_magnet: str = "tr09-standard", guidance_magnet: str = "tr-guidance",
+                 magnets: str = "reduced", maps_cache: Any = None, compiled: str = "auto",
+                 nominal_gap_m: float = 0.010, guidance_bias_current_A: float = 20.0,
+                 bandwidth_Hz: float = 5.0, damping: float = 0.7,
+                 flux_bandwidth_Hz: float = 30.0, voltage_limit_V: float = 440.0,
+                 touchdown_gap_m: float = 0.002, landing_gap_m: float = 0.020) -> None:
+        from ..control import design_gap_controller
+        from ..magnets import load_magnet
+        from ..models.flux import FluxModel
+        from ..reduced.bank import MagnetBank
+        from .crosssection import load_cross_section
+        from .mapcache import vehicle_maps
+
+        self.data = d = load_cross_section() if data is None else data
+        self.mechanics = CrossSectionMechanics(d)
+        if magnets not in ("reduced", "detailed"):
+            raise InputError(f"magnets = {magnets!r}; use 'reduced' or 'detailed'")
+        self.s0 = real_number(nominal_gap_m, "nominal_gap_m", "m", positive=True)
+        self.bias_A = real_number(guidance_bias_current_A, "guidance_bias_current_A", "A",
+                                  positive=True)
+        self.touchdown_gap_m = real_number(touchdown_gap_m, "touchdown_gap_m", "m",
+                                           positive=True)
+        self.landing_gap_m = real_number(landing_gap_m, "landing_gap_m", "m", positive=True)
+        if not self.touchdown_gap_m < self.s0 < self.landing_gap_m:
+            raise InputError(f"touchdown_gap_m = {touchdown_gap_m!r} m, nominal_gap_m = "
+                             f"{nominal_gap_m!r} m, landing_gap_m = {landing_gap_m!r} m: "
+                             "must increase in that order")
+        kinds = {"levitation": load_magnet(levitation_magnet),
+                 "guidance": load_magnet(guidance_magnet)}
+        want = {"levitation": "levitation_magnet", "guidance": "guidance_magnet"}
+        for kind, mag in kinds.items():
+            if mag.kind != want[kind]:
+                raise InputError(f"{kind}_magnet = {mag.name!r} is a {mag.kind!r} magnet; "
+                                 f"expected a {want[kind]!r}")
+        par = kinds["levitation"].parameters["magnet"]
+        length = {"levitation": float(par["poles"]) * float(par["pole_pitch"]),
+                  "guidance": float(kinds["guidance"].parameters["magnet"]["section_length"])
+                  * len(kinds["guidance"].circuit_names)}
+        for kind, ln in length.items():
+            if abs(ln - d.slice_length_m) > 1e-3:
+                raise InputError(f"{kind} magnet {kinds[kind].name!r} is {ln:.4f} m long, "
+                                 f"but the slice is {d.slice_length_m:.4f} m")
+        self.magnets = kinds
+        self.maps = {k: vehicle_maps(m, cache_dir=maps_cache) for k, m in kinds.items()}
+        self.member_names = tuple(f"{k}_{s}" for k in ("levitation", "guidance") for s in SIDES)
+        members = [(n, FluxModel(kinds[n.split("_")[0]]) if magnets == "detailed"
+                    else self.maps[n.split("_")[0]]) for n in self.member_names]
+        self.bank = MagnetBank(members, gap_inputs="circuit", compiled=compiled)
+        self.magnet_kind = magnets
+        # circuits of each member, in the bank's order
+        sl = self.bank.circuit_slices
+        self.circuit_slices = [sl[n] for n in self.member_names]
+        # trim on a straight level track: guidance magnets at the bias current, the
+        # levitation magnets carry the rest (both circuits of a magnet at one current)
+        self.guidance_bias_force_N = self._force("guidance", self.s0, self.bias_A)
+        self.trim_field = track_field_path(0.0, 0.0, 0.0)
+        q, forces = self.mechanics.static_trim(self.trim_field,
+                                               guidance_bias_N=self.guidance_bias_force_N)
+        self.trim_q, self.trim_force_N = q, forces
+        self.trim_current_A = np.array([self._current("levitation", forces[0]),
+                                        self._current("levitation", forces[1]),
+                                        self.bias_A, self.bias_A])
+        g = STANDARD_GRAVITY
+        lev = design_gap_controller(kinds["levitation"], mass_kg=forces[0] / g, gap_m=self.s0,
+                                    current_A=float(self.trim_current_A[0]),
+                                    bandwidth_hz=bandwidth_Hz, damping=damping,
+                                    flux_bandwidth_hz=flux_bandwidth_Hz,
+                                    voltage_limit_V=voltage_limit_V)
+        # differential pair: each guidance magnet moves half the slice laterally
+        gui = design_gap_controller(kinds["guidance"], mass_kg=0.5 * d.total_mass_kg,
+                                    gap_m=self.s0, current_A=self.bias_A,
+                                    bandwidth_hz=bandwidth_Hz, damping=damping,
+                                    flux_bandwidth_hz=flux_bandwidth_Hz,
+                                    voltage_limit_V=voltage_limit_V)
+        self.designs = {"levitation": lev, "guidance": gui}
+        self.voltage_limit_V = float(voltage_limit_V)
+        self._compiled_cache: dict[float, dict[str, Any]] = {}
+
+    # ------------------------------------------------------------------ statics helpers
+    def _spline(self, kind: str, var: str, circuit: str) -> Any:
+        from scipy.interpolate import RectBivariateSpline
+
+        m = self.maps[kind]
+        return RectBivariateSpline(m.gaps_m, m.currents_A, m.variable(var, circuit))
+
+    def _force(self, kind: str, gap: float, current: float) -> float:
+        """Force of a magnet of ``kind`` [N] with every circuit at ``current`` (maps)."""
+        return sum(float(self._spline(kind, "force_N", c)(gap, current)[0, 0])
+                   for c in self.magnets[kind].circuit_names)
+
+    def _current(self, kind: str, force: float) -> float:
+        from scipy.optimize import brentq
+
+        c = self.maps[kind].currents_A
+        fmax = self._force(kind, self.s0, float(c[-1]))
+        if not 0 < force < fmax:
+            raise InputError(f"the {kind} magnet would have to carry {force:.5g} N at the "
+                             f"nominal gap; its maps reach {fmax:.5g} N")
+        return float(brentq(lambda i: self._force(kind, self.s0, i) - force, c[0], c[-1],
+                            xtol=1e-10))
+
+    def _flux(self, kind: str, current: float) -> np.ndarray:
+        return np.array([float(self._spline(kind, "flux_linkage_Wb", c)(self.s0, current)[0, 0])
+                         for c in self.magnets[kind].circuit_names])
+
+    def controllers(self) -> list[Any]:
+        """Fresh controllers of the four magnets (levitation left, right, guidance left,
+        right), each a :class:`~maglevkit.control.cascade.CascadeController` whose flux
+        estimate starts at its magnet's trim flux (from the maps).
+
+        Returns
+        -------
+        list of CascadeController
+        """
+        from ..control import CascadeController
+
+        out = []
+        for j, name in enumerate(self.member_names):
+            kind = name.split("_")[0]
+            out.append(CascadeController(self.designs[kind], initial_flux_Wb=self._flux(
+                kind, float(self.trim_current_A[j]))))
+        return out
+
+    def discretize(self, dt_s: float, *, damping: bool = True) -> tuple[np.ndarray, np.ndarray]:
+        """Exact zero-order-hold step ``x+ = Ad x + Bd Q`` of the mechanics
+        (:meth:`PlanarMultibody.discretize`).
+
+        Parameters
+        ----------
+        dt_s : float
+            Step [s], > 0.
+        damping : bool, default True
+            Include the air springs' dampers.
+
+        Returns
+        -------
+        (Ad, Bd) : ndarray (12, 12), ndarray (12, 6)
+        """
+        return self.mechanics.system.discretize(dt_s, damping=damping)
+
+    # ------------------------------------------------------------------ the run
+    def run(self, *, speed_m_per_s: float, duration_s: float, dt_s: float = 1e-3,
+            curve: TransitionCurve | None = None, crosswind: Crosswind | None = None,
+            vertical: Any = None, lateral: Any = None,
+            failures: Sequence[Failure] = (), loop: str = "auto") -> CrossSectionRun:
+        """Simulate the slice at constant speed from the straight-level trim.
+
+        Parameters
+        ----------
+        speed_m_per_s : float
+            Speed v [m/s], >= 0.
+        duration_s : float
+            Simulated time [s], > 0.
+        dt_s : float, default 1e-3
+            Time step and controller sample time [s], > 0.
+        curve : TransitionCurve, optional
+            Curve entry (default: straight level track).
+        crosswind : Crosswind, optional
+            Gust on the car body.
+        vertical, lateral : Profile, optional
+            Stator (vertical, positive down) and guidance-rail (lateral, positive to the
+            right) irregularities [m] over the distance travelled (e.g. ``JointSteps``
+            with the girder length for rail offsets at girder joints).
+        failures : sequence of Failure
+            Circuits (``"levitation_left/front"``, ... :attr:`MagnetBank.circuit_names`)
+            switched to 0 V from their time on.
+        loop : {"auto", "compiled", "python"}
+            ``"python"``: the NumPy loop with the controllers through the
+            :class:`~maglevkit.control.interface.Controller` interface (the reference);
+            ``"compiled"``: the same step as one compiled CasADi function per block of
+            steps (:meth:`compiled_step`; reduced magnets only); ``"auto"`` (default):
+            compiled for reduced magnets, else the NumPy loop.
+
+        Returns
+        -------
+        CrossSectionRun
+            Dataset variables over ``time``: ``levitation_gap``, ``levitation_force``,
+            ``levitation_current`` (``levitation_circuit``), ``guidance_gap``,
+            ``guidance_force``, ``guidance_current`` (``guidance_circuit``),
+            ``voltage`` (``circuit``), ``car_body_lateral_acceleration``,
+            ``car_body_vertical_acceleration``, ``car_body_roll_acceleration``,
+            displacements ``car_body_y``, ... ``chassis_phi``, ``field_a_y``, ``field_a_z``,
+            ``crosswind_force``; SI units in the attributes.
+
+        Raises
+        ------
+        InputError
+            Bad options (named), unknown failure circuits, non-finite irregularities.
+        OutOfRangeError
+            A circuit leaving its maps (from the bank).
+        """
+        v = real_number(speed_m_per_s, "speed_m_per_s", "m/s", nonnegative=True)
+        dur = real_number(duration_s, "duration_s", "s", positive=True)
+        dt = real_number(dt_s, "dt_s", "s", positive=True)
+        n = int(round(dur / dt))
+        if n < 1:
+            raise InputError(f"duration_s = {duration_s!r} s is shorter than one step "
+                             f"dt_s = {dt_s!r} s")
+        if curve is not None and not isinstance(curve, TransitionCurve):
+            raise InputError(f"curve must be a TransitionCurve, got {type(curve).__name__}")
+        if crosswind is not None and not isinstance(crosswind, Crosswind):
+            raise InputError(f"crosswind must be a Crosswind, got {type(crosswind).__name__}")
+        bank = self.bank
+        names = bank.circuit_names
+        fail_t = np.full(bank.n_circuits, np.inf)
+        for f in failures:
+            if not isinstance(f, Failure):
+                raise InputError(f"failures must be Failure objects, got {type(f).__name__}")
+            if f.circuit not in names:
+                raise InputError(f"failure circuit {f.circuit!r} is not a circuit of the "
+                                 f"cross-section; allowed: {', '.join(names)}")
+            k = names.index(f.circuit)
+            fail_t[k] = min(fail_t[k], f.time_s)
+        s = self.mechanics.system
+        t = np.arange(n + 1) * dt
+        xs, xmid = v * t, v * (t + 0.5 * dt)
+        field_mid = (curve.field(v, xmid) if curve is not None
+                     else np.broadcast_to(self.trim_field, (n + 1, 2)))
+        # irregularities at every step start: (elevation, slope) along the path
+        rz = np.zeros(n + 1)
+        rz_x = np.zeros(n + 1)
+        ry = np.zeros(n + 1)
+        ry_x = np.zeros(n + 1)
+        for what, prof, val, slope in (("vertical", vertical, rz, rz_x),
+                                       ("lateral", lateral, ry, ry_x)):
+            if prof is None:
+                continue
+            val[:] = prof(xs)
+            slope[:] = prof.slope(xs)
+            if not (np.isfinite(val).all() and np.isfinite(slope).all()):
+                raise InputError(f"the {what} irregularity gives non-finite values")
+        # crosswind: generalised force of a lateral force at the centre of pressure
+        q_ext = np.zeros((n + 1, s.n_dof))
+        wind = np.zeros(n + 1)
+        if crosswind is not None:
+            d = self.data
+            z_cp = d.car_body_centre_z_m - crosswind.pressure_height_m
+            col = s.point_jacobian("car_body", (0.0, z_cp))[0]
+            wind = crosswind.force_N(t + 0.5 * dt)
+            q_ext = wind[:, None] * col[None, :]
+        if loop not in ("auto", "compiled", "python"):
+            raise InputError(f"loop = {loop!r}; allowed: 'auto', 'compiled', 'python'")
+        if loop == "compiled" and self.magnet_kind != "reduced":
+            raise InputError("loop = 'compiled' needs reduced magnets (magnets='reduced')")
+        use_compiled = loop == "compiled" or (loop == "auto" and self.magnet_kind == "reduced")
+        sign_y = np.array([0.0, 0.0, 1.0, -1.0])        # rail shift r_y opens left, closes right
+        sign_z = np.array([-1.0, -1.0, 0.0, 0.0])       # stator lower closes levitation gaps
+        # per magnet: r enters the gap as -r (as the heave-pitch step's irregularity)
+        r_mag = -(np.outer(rz, sign_z) + np.outer(ry, sign_y))
+        rx_mag = -(np.outer(rz_x, sign_z) + np.outer(ry_x, sign_y))
+        if use_compiled:
+            out = self._compiled_loop(dt, v, t, r_mag, rx_mag, field_mid, q_ext, fail_t, n)
+        else:
+            out = self._python_loop(dt, v, t, r_mag, rx_mag, field_mid, q_ext, fail_t, n)
+        rec_gap, rec_force, rec_cur, rec_u, rec_x, rec_acc, touchdown, last, wall = out
+        return self._result(v, dt, t, rec_gap, rec_force, rec_cur, rec_u, rec_x, rec_acc,
+                            touchdown, last, wall, field_mid, wind)
+
+    def _python_loop(self, dt: float, v: float, t: np.ndarray, r_mag: np.ndarray,
+                     rx_mag: np.ndarray, field_mid: np.ndarray, q_ext: np.ndarray,
+                     fail_t: np.ndarray, n: int) -> tuple[Any, ...]:
+        from ..control import Measurement
+
+        s = self.mechanics.system
+        bank = self.bank
+        ad, bd = self.discretize(dt)
+        nq = s.n_dof
+        x = np.concatenate([self.trim_q, np.zeros(nq)])
+        gm = s.gap_matrix
+        state = bank.initial_state(gaps=self.s0, currents=np.repeat(self.trim_current_A, 2))
+        stepper = bank.stepper(state, dt)
+        ctl = self.controllers()
+        # chopper bound per circuit: -R_ec I_L (none for detailed members, NaN R_ec)
+        r_ec = np.where(np.isnan(bank.eddy_resistance_ohm), 0.0, bank.eddy_resistance_ohm)
+        chop = ~np.isnan(bank.eddy_resistance_ohm)
+        nc = bank.n_circuits
+        rec_gap = np.empty((n + 1, 4))
+        rec_force = np.empty((n + 1, nc))
+        rec_cur = np.empty((n + 1, nc))
+        rec_u = np.zeros((n + 1, nc))
+        rec_x = np.empty((n + 1, 2 * nq))
+        rec_acc = np.empty((n + 1, nq))
+        gap_circ = np.repeat(np.arange(4), 2)
+        touchdown = None
+        last = n
+        force = stepper.member_force_N.copy()
+        t0 = time.perf_counter()
+        for k in range(n + 1):
+            q, qd = x[:nq], x[nq:]
+            gaps = self.s0 + gm @ q - r_mag[k]
+            rates = gm @ qd - v * rx_mag[k]
+            rec_gap[k] = gaps
+            rec_x[k] = x
+            rec_force[k] = stepper.circuit_force_N
+            rec_cur[k] = stepper.currents_A
+            rec_acc[k] = s.accelerations(q, qd, force, field_mid[k], q_ext[k])
+            # a gap at a limit now, or crossing it within the coming step on the linear
+            # path the bank moves it along (the maps start at the touchdown gap)
+            ends = gaps + rates * dt if k < n else gaps
+            for probe, when in ((gaps, t[k]), (ends, t[k] + dt)):
+                lo, hi = probe.min(), probe.max()
+                if lo <= self.touchdown_gap_m or hi >= self.landing_gap_m:
+                    closed = bool(lo <= self.touchdown_gap_m)
+                    j = int(np.argmin(probe)) if closed else int(np.argmax(probe))
+                    touchdown = (self.member_names[j], float(when), float(probe[j]),
+                                 "closed" if closed else "open")
+                    break
+            if touchdown is not None:
+                last = k
+                break
+            if k == n:
+                break
+            # controllers: levitation on their own gaps, guidance on the differential gap
+            diff = 0.5 * (gaps[2] - gaps[3])
+            diff_rate = 0.5 * (rates[2] - rates[3])
+            meas_g = (gaps[0], gaps[1], self.s0 + diff, self.s0 - diff)
+            meas_r = (rates[0], rates[1], diff_rate, -diff_rate)
+            cur = stepper.currents_A.copy()     # a view would change with the step
+            u = np.empty(nc)
+            for j, c in enumerate(ctl):
+                meas = Measurement(float(t[k]), float(meas_g[j]), float(meas_r[j]),
+                                   cur[2 * j:2 * j + 2], self.s0)
+                if k == 0:
+                    c.reset(meas, sample_time_s=dt)
+                u[2 * j:2 * j + 2] = c.update(meas)
+            # 2-quadrant chopper: coil current (U + R_ec I_L)/(R_el + R_ec) >= 0; then the
+            # failed circuits at 0 V (the compiled step's order)
+            il = stepper.inductor_currents_A
+            u[chop] = np.maximum(u[chop], -r_ec[chop] * il[chop])
+            u[fail_t <= t[k]] = 0.0
+            rec_u[k] = u
+            f_start = force
+            stepper.advance(voltages_V=u, gaps_m=gaps[gap_circ], gap_rates_m_per_s=rates[gap_circ])
+            force = stepper.member_force_N.copy()
+            qgen = s.B @ (0.5 * (f_start + force)) + s.G @ field_mid[k] + s.Q_preload + q_ext[k]
+            x = ad @ x + bd @ qgen
+        wall = time.perf_counter() - t0
+        return rec_gap, rec_force, rec_cur, rec_u, rec_x, rec_acc, touchdown, last, wall
+
+    # ------------------------------------------------------------------ compiled step
+    def compiled_step(self, dt_s: float = 1e-3, *, block_steps: int = 50,
+                      lanes: bool = True) -> dict[str, Any]:
+        """The run's step as one CasADi function, chained ``block_steps`` times.
+
+        The same step as the NumPy loop of :meth:`run` (``loop="python"``), in the same
+        order: gaps ``s = s_0 + gap_matrix q - r``, rates; the controllers' voltages, the
+        chopper and the failures; the bank's step (:meth:`MagnetBank.step_function`); the
+        flux estimates and integrators; the mechanics' exact ZOH step with
+        ``Q = B S F_bar + Q_pre + Q_t`` (``S`` sums a magnet's circuits, ``Q_t = G a +
+        Q_wind`` at mid-step, a per-step input).  The controllers and their update are the
+        heave-pitch step's CasADi functions (:func:`~maglevkit.vehicle.stepkernel.
+        build_vehicle_step` ``parts``), not a copy of the cascade law: per circuit, the
+        guidance integrators fed the differential gap error ``(s_own - s_other)/2``
+        through the integral matrix.  Per circuit, with every gap sum of a guidance pair
+        ``2 s_0`` (a rigid chassis and one rail profile for both rails), the guidance
+        controllers' own gaps equal the NumPy loop's differential gaps.
+
+        Parameters
+        ----------
+        dt_s : float, default 1e-3
+            Step [s], > 0.
+        block_steps : int, default 50
+            Steps per call (keyword only).
+        lanes : bool, default True
+            Call the bank's SIMD-lane library (:meth:`MagnetBank.compiled_step_library`)
+            where it exists; False: the bank's CasADi step function (keyword only).
+
+        Returns
+        -------
+        dict
+            ``"block"``: ``(S, P, C) -> (S_next, R)`` (``P``, ``R`` one column per step);
+            ``"state"``, ``"inputs"``, ``"record"``: slices of ``S``, ``P``, ``R``.
+        """
+        import casadi as ca
+
+        from .stepkernel import build_vehicle_step
+
+        bank = self.bank
+        if self.magnet_kind != "reduced":
+            raise InputError("the compiled cross-section step needs reduced magnets")
+        s = self.mechanics.system
+        nq, nc = s.n_dof, bank.n_circuits
+        dt = real_number(dt_s, "dt_s", "s", positive=True)
+        lib = bank.compiled_step_library(dt) if lanes else None
+        bank_step = lib[0] if lib is not None else bank.step_function(dt)
+        circ = np.repeat(np.arange(4), 2)
+        gm = s.gap_matrix[circ]                            # (nc, nq): every circuit's gap
+        ad, bd = self.discretize(dt)
+        designs = [self.designs[n.split("_")[0]] for n in self.member_names]
+        gains = {k: np.array([getattr(designs[c], k) for c in circ])
+                 for k in ("kp_per_m", "kd_s_per_m", "ki_per_m_s", "kflux_per_s")}
+        psi0 = np.concatenate([np.asarray(d.flux_bias_Wb) for d in designs])
+        res = np.concatenate([np.asarray(d.resistances_ohm) for d in designs])
+        integ = np.eye(nc)
+        for a, b in ((4, 6), (5, 7)):                     # guidance pairs left/right
+            integ[a, a] = integ[b, b] = 0.5
+            integ[a, b] = integ[b, a] = -0.5
+        parts = build_vehicle_step(
+            bank_step=bank_step, dt=dt, nominal_gap_m=self.s0, sides=1.0,
+            span_length_m=1.0, origin_m=0.0, wavenumbers=np.zeros(0),
+            guideway_ad=np.zeros((0, 0)), guideway_bd=np.zeros((0, 0)), n_spans=0,
+            mech_ad=ad, mech_bd=bd, gravity_force=np.zeros(nq), force_matrix=-gm.T,
+            gains=gains, flux_bias_Wb=psi0, resistance_ohm=res,
+            eddy_resistance_ohm=bank.eddy_resistance_ohm,
+            voltage_limit_V=self.voltage_limit_V, integral_projection=integ,
+            midspan_shape=np.zeros(0), block_steps=1).parts
+        f_ctl, f_upd = parts["controllers"], parts["controller_update"]
+
+        def pack(items: list[tuple[str, int]]) -> dict[str, slice]:
+            out, k = {}, 0
+            for name, size in items:
+                out[name] = slice(k, k + size)
+                k += size
+            return out
+
+        st = pack([("x", 2 * nq), ("I_L", nc), ("psi_hat", nc), ("integral", nc),
+                   ("current", nc), ("force", nc)])
+        pi = pack([("r", nc), ("r_x", nc), ("Q_t", nq), ("t", 1)])
+        rc = pack([("gap", nc), ("gap_rate", nc), ("current", nc), ("force", nc),
+                   ("I_L", nc), ("x", 2 * nq), ("voltage", nc), ("n_bad", 1)])
+        S, P, C = (ca.MX.sym("S", st["force"].stop), ca.MX.sym("P", pi["t"].stop),
+                   ca.MX.sym("C", 1 + nc))
+        x, il, psi, itg, cur, frc = (S[st[k]] for k in ("x", "I_L", "psi_hat", "integral",
+                                                         "current", "force"))
+        v, fail_t = C[0], C[1:]
+        q, qd = x[:nq], x[nq:]
+        gmd = ca.DM(gm)
+        gaps = self.s0 + ca.mtimes(gmd, q) - P[pi["r"]]
+        rates = ca.mtimes(gmd, qd) - v * P[pi["r_x"]]
+        u = f_ctl.call({"gap": gaps, "gap_rate": rates, "I_L": il, "current": cur,
+                        "psi_hat": psi, "integral": itg, "t": P[pi["t"]],
+                        "fail_t": fail_t})["U"]
+        bout = bank_step.call({"I_L": il, "s": gaps, "U": u, "sdot": rates, "h": ca.MX(dt)})
+        il_n, cur_n, frc_n, n_bad = (bout[k] for k in ("I_L_next", "I", "F", "n_bad"))
+        upd = f_upd.call({"psi_hat": psi, "integral": itg, "U": u, "current": cur,
+                          "current_next": cur_n, "gap": gaps})
+        summ = np.zeros((4, nc))
+        summ[circ, np.arange(nc)] = 1.0
+        bmat = ca.DM(s.B @ summ)                          # circuit forces -> Q
+        qgen = (ca.mtimes(bmat, 0.5 * (frc + frc_n)) + ca.DM(s.Q_preload) + P[pi["Q_t"]])
+        x_n = ca.mtimes(ca.DM(ad), x) + ca.mtimes(ca.DM(bd), qgen)
+        s_next = ca.vertcat(x_n, il_n, upd["psi_hat_next"], upd["integral_next"], cur_n, frc_n)
+        rec = ca.vertcat(gaps, rates, cur, frc, il, x, u, n_bad)
+        step = ca.Function("maglevkit_cross_section_step", [S, P, C], [s_next, rec])
+        nb = int(block_steps)
+        sb, pb = ca.MX.sym("S", S.shape[0]), ca.MX.sym("P", P.shape[0], nb)
+        sv: Any = sb
+        recs = []
+        for j in range(nb):
+            sv, r_j = step(sv, pb[:, j], C)
+            recs.append(r_j)
+        block = ca.Function(f"maglevkit_cross_section_step{nb}", [sb, pb, C],
+                            [sv, ca.horzcat(*recs)], ["S", "P", "C"], ["S_next", "R"])
+        return {"block": block, "state": st, "inputs": pi, "record": rc, "block_steps": nb,
+                "lanes": lib}
+
+    def _compiled_block(self, dt: float) -> dict[str, Any]:
+        from ..errors import SolverError
+        from ..models.compiled import DEFAULT_FLAGS, compile_function, compile_library
+
+        cache: dict[float, dict[str, Any]] = self._compiled_cache
+        hit = cache.get(dt)
+        if hit is None:
+            hit = self.compiled_step(dt)
+            f = None
+            if hit["lanes"] is not None:
+                lib = hit["lanes"][1]
+                try:
+                    funcs, _ = compile_library(
+                        hit["block"].name(), [hit["block"]], mode="always", cache_dir=None,
+                        flags=(*DEFAULT_FLAGS, "-Wl,--no-as-needed", str(lib),
+                               f"-Wl,-rpath,{lib.parent}"))
+                    f = funcs[0]
+                except SolverError:
+                    f = None
+            if f is None:
+                if hit["lanes"] is not None:      # rebuild on the bank's CasADi step
+                    hit = self.compiled_step(dt, lanes=False)
+                f, _ = compile_function(hit["block"], mode=self.bank.compiled_mode)
+            hit["compiled"] = f
+            cache[dt] = hit
+        return hit
+
+    def _compiled_loop(self, dt: float, v: float, t: np.ndarray, r_mag: np.ndarray,
+                       rx_mag: np.ndarray, field_mid: np.ndarray, q_ext: np.ndarray,
+                       fail_t: np.ndarray, n: int) -> tuple[Any, ...]:
+        from ..errors import SolverError
+        from ..reduced.bank import BankState
+
+        s = self.mechanics.system
+        bank = self.bank
+        nq = s.n_dof
+        hit = self._compiled_block(dt)
+        fun, st, pi, rc, nb = (hit["compiled"], hit["state"], hit["inputs"], hit["record"],
+                               hit["block_steps"])
+        circ = np.repeat(np.arange(4), 2)
+        n_rows = -(-(n + 1) // nb) * nb
+        p_all = np.zeros((n_rows, pi["t"].stop))
+        p_all[:n + 1, pi["r"]] = r_mag[:, circ]
+        p_all[:n + 1, pi["r_x"]] = rx_mag[:, circ]
+        p_all[:n + 1, pi["Q_t"]] = field_mid @ s.G.T + q_ext
+        p_all[:n + 1, pi["t"].start] = t
+        p_all[n + 1:, pi["t"].start] = t[-1] + dt * np.arange(1, n_rows - n)
+        state0 = bank.initial_state(gaps=self.s0, currents=np.repeat(self.trim_current_A, 2))
+        out0 = bank.outputs(state0)
+        sv = [np.zeros(st["force"].stop), np.zeros(st["force"].stop)]
+        sv[0][st["x"]] = np.concatenate([self.trim_q, np.zeros(nq)])
+        sv[0][st["I_L"]] = state0.inductor_currents_A
+        flux = [self._flux(n_.split("_")[0], float(self.trim_current_A[j]))
+                for j, n_ in enumerate(self.member_names)]
+        sv[0][st["psi_hat"]] = np.concatenate(flux)
+        sv[0][st["current"]] = out0.currents_A
+        sv[0][st["force"]] = out0.circuit_force_N
+        consts = np.concatenate([[v], fail_t])
+        rec = np.empty((n_rows, rc["n_bad"].stop))
+        bufs, evals = [], []
+        for j in (0, 1):
+            buf, ev = fun.buffer()
+            buf.set_arg(0, memoryview(sv[j]))            # type: ignore[arg-type]
+            buf.set_res(0, memoryview(sv[1 - j]))        # type: ignore[arg-type]
+            buf.set_arg(2, memoryview(consts))           # type: ignore[arg-type]
+            bufs.append(buf)
+            evals.append(ev)
+        g_sl, r_sl, b_sl = rc["gap"], rc["gap_rate"], rc["n_bad"].start
+        lo_lim, hi_lim = self.touchdown_gap_m, self.landing_gap_m
+        touchdown = None
+        last = n
+        t0 = time.perf_counter()
+        for blk in range(n_rows // nb):
+            k0 = blk * nb
+            j = blk & 1
+            bufs[j].set_arg(1, memoryview(p_all[k0:k0 + nb]))    # type: ignore[arg-type]
+            rows = rec[k0:k0 + nb]
+            bufs[j].set_res(1, memoryview(rows))                  # type: ignore[arg-type]
+            evals[j]()
+            gaps, rates = rows[:, g_sl], rows[:, r_sl]
+            ends = gaps + rates * dt
+            events = ((gaps.min(axis=1) <= lo_lim) | (gaps.max(axis=1) >= hi_lim)
+                      | (ends.min(axis=1) <= lo_lim) | (ends.max(axis=1) >= hi_lim)
+                      | (rows[:, b_sl] != 0))
+            if not events[:max(0, min(nb, n + 1 - k0))].any():
+                continue
+            for k in range(k0, min(k0 + nb, n + 1)):
+                g = rec[k, g_sl][::2]                              # one gap per magnet
+                e = g + rec[k, r_sl][::2] * dt if k < n else g
+                for probe, when in ((g, t[k]), (e, t[k] + dt)):
+                    lo, hi = probe.min(), probe.max()
+                    if lo <= lo_lim or hi >= hi_lim:
+                        closed = bool(lo <= lo_lim)
+                        jj = int(np.argmin(probe)) if closed else int(np.argmax(probe))
+                        touchdown = (self.member_names[jj], float(when), float(probe[jj]),
+                                     "closed" if closed else "open")
+                        break
+                if touchdown is not None:
+                    last = k
+                    break
+                if k < n and rec[k, b_sl] != 0:
+                    # the bank names member, circuit, gap, current and range (same inputs)
+                    bank.step(BankState(float(t[k]), rec[k, rc["I_L"]].copy(),
+                                        rec[k, g_sl].copy()), dt, rec[k, rc["voltage"]],
+                              rec[k, g_sl], rec[k, r_sl])
+                    raise SolverError(f"cross-section run at t = {t[k]:.4f} s: the compiled "
+                                      "step flagged the magnets, the bank's step did not; "
+                                      "rerun with loop='python'")
+            if touchdown is not None:
+                break
+        wall = time.perf_counter() - t0
+        m = last + 1
+        rx = rec[:m, rc["x"]]
+        frc = rec[:m, rc["force"]]
+        member = frc.reshape(m, 4, 2).sum(axis=2)
+        acc = s.accelerations(rx[:, :nq], rx[:, nq:], member, field_mid[:m], q_ext[:m])
+        u = rec[:m, rc["voltage"]].copy()
+        u[-1] = 0.0                  # the last record's step is not taken (as the NumPy loop)
+        return (rec[:m, g_sl][:, ::2], frc, rec[:m, rc["current"]], u, rx, acc, touchdown,
+                last, wall)
+
+    def _result(self, v: float, dt: float, t: np.ndarray, rec_gap: np.ndarray,
+                rec_force: np.ndarray, rec_cur: np.ndarray, rec_u: np.ndarray,
+                rec_x: np.ndarray, rec_acc: np.ndarray, touchdown: Any, last: int,
+                wall: float, field_mid: np.ndarray, wind: np.ndarray) -> CrossSectionRun:
+        import xarray as xr
+
+        from .comfort import comfort_indices, lateral_comfort_indices
+
+        s = self.mechanics.system
+        names = self.bank.circuit_names
+        gap_circ = np.repeat(np.arange(4), 2)
+        m = last + 1
+        tt = t[:m]
+        lev_c = [f"{sd}/{c}" for sd in SIDES for c in self.magnets["levitation"].circuit_names]
+        gui_c = [f"{sd}/{c}" for sd in SIDES for c in self.magnets["guidance"].circuit_names]
+        cg = rec_gap[:m][:, gap_circ]
+        ds = xr.Dataset(coords={"time": ("time", tt, {"units": "s"}),
+                                "levitation_circuit": lev_c, "guidance_circuit": gui_c,
+                                "circuit": list(names)})
+
+        def put(name: str, dims: tuple[str, ...], val: np.ndarray, units: str,
+                desc: str) -> None:
+            ds[name] = (dims, val, {"units": units, "description": desc})
+
+        put("levitation_gap", ("time", "levitation_circuit"), cg[:, :4], "m",
+            "vertical gap of each levitation circuit to the stator underside")
+        put("guidance_gap", ("time", "guidance_circuit"), cg[:, 4:], "m",
+            "lateral gap of each guidance circuit to its side rail")
+        put("levitation_force", ("time", "levitation_circuit"), rec_force[:m, :4], "N",
+            "attraction force of each levitation circuit (upward on the chassis)")
+        put("guidance_force", ("time", "guidance_circuit"), rec_force[:m, 4:], "N",
+            "attraction force of each guidance circuit (towards its rail)")
+        put("levitation_current", ("time", "levitation_circuit"), rec_cur[:m, :4], "A",
+            "coil current")
+        put("guidance_current", ("time", "guidance_circuit"), rec_cur[:m, 4:], "A",
+            "coil current")
+        put("voltage", ("time", "circuit"), rec_u[:m], "V", "circuit voltage held over the step")
+        for i, dof in enumerate(s.dof_names):
+            body, kind = dof.split(".")
+            put(f"{body}_{kind}", ("time",), rec_x[:m, i], "rad" if kind == "phi" else "m",
+                f"{body} {kind} displacement from the design position (z down, y right)")
+        put("car_body_lateral_acceleration", ("time",), rec_acc[:m, 0], "m/s^2",
+            "car body centre, in the track plane (y, right)")
+        put("car_body_vertical_acceleration", ("time",), rec_acc[:m, 1], "m/s^2",
+            "car body centre, normal to the track plane (z, down)")
+        put("car_body_roll_acceleration", ("time",), rec_acc[:m, 2], "rad/s^2", "car body")
+        put("field_a_y", ("time",), field_mid[:m, 0], "m/s^2",
+            "track field along y (centrifugal and gravity in the banked plane), mid-step")
+        put("field_a_z", ("time",), field_mid[:m, 1], "m/s^2", "track field along z, mid-step")
+        put("crosswind_force", ("time",), wind[:m], "N", "lateral gust force on the car body")
+        ds.attrs.update({"vehicle": self.data.name, "speed_m_per_s": v, "dt_s": dt,
+                         "nominal_gap_m": self.s0, "touchdown_gap_m": self.touchdown_gap_m,
+                         "landing_gap_m": self.landing_gap_m, "magnets": self.magnet_kind,
+                         "guidance_bias_current_A": self.bias_A})
+        min_gap = {"levitation": float(cg[:, :4].min()), "guidance": float(cg[:, 4:].min())}
+        comfort: dict[str, dict[str, float]] = {}
+        if m >= 64:
+            lat = rec_acc[:m, :1] - rec_acc[:m, :1].mean()
+            ver = rec_acc[:m, 1:2] - rec_acc[:m, 1:2].mean()
+            wd, wz_y = lateral_comfort_indices(lat, 1.0 / dt)
+            wk, wz_z = comfort_indices(ver, 1.0 / dt)
+            comfort = {"lateral": {"weighted_rms_m_per_s2": float(wd[0]),
+                                   "sperling_wz": float(wz_y[0])},
+                       "vertical": {"weighted_rms_m_per_s2": float(wk[0]),
+                                    "sperling_wz": float(wz_z[0])}}
+        return CrossSectionRun(ds, min_gap, touchdown, comfort, wall,
+                               float(tt[-1]) / wall if wall > 0 else math.inf)
