@@ -232,6 +232,18 @@ def test_calibrated_toml_round_trip(magnet: mk.Magnet, tmp_path: Path) -> None:
     # factors do not compose: calibrating the calibrated magnet is refused
     with pytest.raises(mk.InputError, match="already carries calibration factors"):
         calibrate(loaded, data, parameters=list(true))
+    # the design rebuilds the network from the geometry: a calibrated base is refused
+    from importlib import resources
+
+    from maglevkit.design import DesignSpecError, read_design_spec
+    from maglevkit.parameter_files import toml_text
+
+    spec = tomllib.loads((resources.files("maglevkit") / "data" / "designs"
+                          / "u-magnet-design.toml").read_text())
+    spec["design"]["magnet"] = str(out)
+    (tmp_path / "spec.toml").write_text(toml_text(spec))
+    with pytest.raises(DesignSpecError, match=r"is calibrated .*give the uncalibrated file"):
+        read_design_spec(tmp_path / "spec.toml")
 
 
 @pytest.mark.parametrize(("edit", "match"), [

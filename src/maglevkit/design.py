@@ -230,6 +230,12 @@ def read_design_spec(source: str | Path | Mapping[str, Any], *, base_dir: str | 
         raise DesignSpecError(f"[design] magnet = {name!r}: design optimisation supports the "
                               "lumped U-magnet (kind = \"u_magnet\", discretisation = "
                               "\"lumped\") only")
+    if "calibration" in params:
+        # the design rebuilds the network from the geometry: the factors would be lost
+        raise DesignSpecError(f"[design] magnet = {name!r} is calibrated ([calibration] "
+                              f"{sorted(magnet.calibration)}); design optimisation rebuilds the "
+                              "network from the geometry without calibration factors: give "
+                              "the uncalibrated file")
     variables: dict[str, tuple[float, float]] = {}
     vt = _table(doc, "variables")
     if not vt:
