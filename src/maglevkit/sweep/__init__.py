@@ -1,8 +1,9 @@
 """Scenario sweeps: the Cartesian product of run parameters through an Executor.
 
 A sweep file (TOML, SI units; :mod:`maglevkit.sweep.spec`) names a base job, a vehicle
-run (:mod:`maglevkit.vehicle`), and the parameters to sweep: speeds, irregularity seeds,
-circuit failures, payloads, resistance scales.  :func:`run_sweep` runs every case through
+run (:mod:`maglevkit.vehicle`) or a cross-section run (``job = "cross-section"``), and the
+parameters to sweep: speeds, irregularity seeds, circuit failures, payloads, resistance
+scales; for the cross-section curves and crosswind gusts.  :func:`run_sweep` runs every case through
 a ``concurrent.futures.Executor`` (a local process pool by default, a
 ``dask.distributed`` client for a cluster), stores each case as it finishes (resumable),
 records failing cases with their error, and returns one :class:`xarray.Dataset` with a
@@ -23,17 +24,21 @@ from __future__ import annotations
 from .cases import SUMMARY_UNITS, TIMING_VARIABLES, run_case
 from .runner import SweepResult, assemble, case_path, run_sweep
 from .spec import (
+    CROSS_SECTION_PARAMETERS,
     PARAMETERS,
     SWEEP_FORMAT,
+    CrossSectionJob,
     SweepParameter,
     SweepSpec,
     VehicleJob,
     bundled_sweeps,
     load_sweep,
     parse_sweep,
+    scenario,
 )
 
 __all__ = [
+    "CROSS_SECTION_PARAMETERS",
     "PARAMETERS",
     "SWEEP_FORMAT",
     "SUMMARY_UNITS",
@@ -42,6 +47,7 @@ __all__ = [
     "SweepSpec",
     "SweepResult",
     "VehicleJob",
+    "CrossSectionJob",
     "assemble",
     "bundled_sweeps",
     "case_path",
@@ -49,4 +55,5 @@ __all__ = [
     "parse_sweep",
     "run_case",
     "run_sweep",
+    "scenario",
 ]

@@ -22,7 +22,7 @@ from typing import Any
 import numpy as np
 
 from ..errors import MaglevkitError
-from .spec import PARAMETERS, SWEEP_FORMAT, VehicleJob
+from .spec import CROSS_SECTION_PARAMETERS, PARAMETERS, SWEEP_FORMAT, CrossSectionJob, VehicleJob
 
 __all__ = ["run_case", "error_case", "TIMING_VARIABLES", "SUMMARY_UNITS"]
 
@@ -46,6 +46,18 @@ SUMMARY_UNITS = {
     "setup_time": ("s", "wall time to assemble the vehicle model (0: reused in this worker)"),
     "wall_time": ("s", "wall time of the run's time loop"),
     "real_time_factor": ("1", "simulated time / wall time of the time loop"),
+    # the cross-section job's
+    "min_levitation_gap": ("m", "smallest levitation gap (vertical, to the stator) over the run"),
+    "min_guidance_gap": ("m", "smallest guidance gap (lateral, to the side rail) over the run"),
+    "peak_lateral_acceleration": ("m/s^2", "largest |lateral acceleration| of the car body"),
+    "lateral_wd_rms": ("m/s^2", "ISO 2631-1 Wd-weighted RMS lateral car-body acceleration "
+                                "(NaN: run too short, < 64 samples)"),
+    "lateral_sperling_wz": ("1", "Sperling ride index Wz, lateral (NaN: run too short)"),
+    "vertical_wk_rms": ("m/s^2", "ISO 2631-1 Wk-weighted RMS vertical car-body acceleration "
+                                 "(NaN: run too short)"),
+    "vertical_sperling_wz": ("1", "Sperling ride index Wz, vertical (NaN: run too short)"),
+    "net_guidance_force_end": ("N", "net guidance force, right minus left magnet, at the end "
+                                    "of the run (in a steady curve m v^2/R cos c - m g sin c)"),
 }
 """Unit and meaning of every summary variable of a case."""
 
@@ -102,10 +114,11 @@ def _failures(text: str) -> list[Any]:
 def _base(params: Mapping[str, Any], key: str, status: str, error: str) -> Any:
     import xarray as xr
 
+    names = CROSS_SECTION_PARAMETERS if "curve_radius" in params else PARAMETERS
     return xr.Dataset(
         {"status": ((), status), "error": ((), error)},
         attrs={"format": SWEEP_FORMAT, "case_key": key,
-               **{f"param_{p.name}": params[p.name] for p in PARAMETERS}})
+               **{f"param_{p.name}": params[p.name] for p in names}})
 
 
 def error_case(params: Mapping[str, Any], key: str, error: str) -> Any:
@@ -127,7 +140,7 @@ def error_case(params: Mapping[str, Any], key: str, error: str) -> Any:
     return _base(params, key, "error", error)
 
 
-def run_case(job: VehicleJob, params: Mapping[str, Any], key: str) -> Any:
+def run_case(job: VehicleJob | CrossSectionJob, params: Mapping[str, Any], key: str) -> Any:
     """Run one case; return its Dataset (summary, optional time series, status, error).
 
     Never raises for an error of the case itself (any ``Exception``): it is returned as
@@ -135,13 +148,15 @@ def run_case(job: VehicleJob, params: Mapping[str, Any], key: str) -> Any:
 
     Parameters
     ----------
-    job : VehicleJob
+    job : VehicleJob or CrossSectionJob
         The sweep's base job (vehicle file, duration [s], step [s], guideway,
         irregularity, time series to keep).
     params : mapping
-        The case's full parameter set (every name of
-        :data:`~maglevkit.sweep.PARAMETERS`: ``speed`` [m/s], ``seed``, ``failure``,
-        ``payload`` [kg], ``resistance_scale``, ``eddy_resistance_scale``).
+        The case's full parameter set (every name of the job's parameters: for a
+        vehicle job :data:`~maglevkit.sweep.PARAMETERS`: ``speed`` [m/s], ``seed``,
+        ``failure``, ``payload`` [kg], ``resistance_scale``, ``eddy_resistance_scale``;
+        for a cross-section job :data:`~maglevkit.sweep.CROSS_SECTION_PARAMETERS`:
+        ``speed`` [m/s], ``curve_radius`` [m], ``curve_superelevation`` [rad], ...).
     key : str
         The case key, stored in the Dataset's attributes.
 
@@ -152,6 +167,8 @@ def run_case(job: VehicleJob, params: Mapping[str, Any], key: str) -> Any:
         per-comfort-point values, and the requested time series.
     """
     try:
+        if isinstance(job, CrossSectionJob):
+            return _run_cross_section(job, params, key)
         return _run(job, params, key)
     except Exception as exc:   # noqa: BLE001 - a failing case is a result, not a crash
         msg = " ".join(str(exc).split()) or "(no message)"
@@ -201,4 +218,103 @@ def _run(job: VehicleJob, params: Mapping[str, Any], key: str) -> Any:
             out[name] = (("time", "circuit"), full, {"units": ds[name].attrs.get("units", ""),
                                                      "long_name": ds[name].attrs.get(
                                                          "long_name", name)})
+    return out
+
+
+def _cross_section_model(job: CrossSectionJob) -> tuple[Any, float]:
+    """The cross-section model of a job (from this process's cache) and its setup time [s]."""
+    from ..vehicle.crossrun import CrossSectionModel
+    from ..vehicle.crosssection import load_cross_section
+
+    key = ("cross-section", job.vehicle_file, job.vehicle_sha256, job.magnets)
+    if key in _MODELS:
+        _MODELS.move_to_end(key)
+        known = _MODELS[key]
+        if isinstance(known, MaglevkitError):
+            raise known
+        return known, 0.0
+    t0 = time.perf_counter()
+    try:
+        model = CrossSectionModel(load_cross_section(job.vehicle_file), magnets=job.magnets)
+    except MaglevkitError as exc:
+        _remember(key, exc)
+        raise
+    _remember(key, model)
+    return model, time.perf_counter() - t0
+
+
+def _seeded(text: str, seed: int, kinds: tuple[str, ...]) -> str:
+    parts = [p.strip() for p in text.split("+") if p.strip()]
+    return "+".join(f"{p}:{seed}" if p.startswith(kinds) else p for p in parts)
+
+
+def _run_cross_section(job: CrossSectionJob, params: Mapping[str, Any], key: str) -> Any:
+    from ..vehicle.crossrun import parse_lateral
+    from ..vehicle.data import load_guideway
+    from ..vehicle.simulation import parse_irregularity
+    from .spec import scenario
+
+    model, setup = _cross_section_model(job)
+    seed = int(params["seed"])
+    girder = load_guideway().span.length_m
+    vertical = parse_irregularity(_seeded(job.irregularity, seed, ("random:",)),
+                                  span_length_m=girder)
+    lateral = parse_lateral(_seeded(job.lateral, seed, ("random:", "girders:")),
+                            girder_length_m=girder)
+    curve, wind = scenario(params)
+    res = model.run(speed_m_per_s=float(params["speed"]), duration_s=job.duration_s,
+                    dt_s=job.dt_s, curve=curve, crosswind=wind, vertical=vertical,
+                    lateral=lateral, failures=_failures(params["failure"]))
+    ds = res.dataset
+    series = {
+        "gap": np.concatenate([ds["levitation_gap"].values, ds["guidance_gap"].values], axis=1),
+        "current": np.concatenate([ds["levitation_current"].values,
+                                   ds["guidance_current"].values], axis=1),
+        "force": np.concatenate([ds["levitation_force"].values,
+                                 ds["guidance_force"].values], axis=1),
+        "voltage": ds["voltage"].values,
+    }
+    units = {"gap": "m", "current": "A", "force": "N", "voltage": "V"}
+    gap, cur, volt = series["gap"], series["current"], series["voltage"]
+    gf = ds["guidance_force"].values
+    half = gf.shape[1] // 2            # left circuits first, then right
+    comfort = res.comfort
+    nan = math.nan
+    out = _base(params, key, "ok", "")
+    scalars = {
+        "min_gap": float(gap.min()), "max_gap": float(gap.max()),
+        "min_levitation_gap": res.min_gap_m["levitation"],
+        "min_guidance_gap": res.min_gap_m["guidance"],
+        "max_current": float(cur.max()),
+        "max_abs_voltage": float(np.nanmax(np.abs(volt))) if np.isfinite(volt).any() else nan,
+        "touchdown_time": nan if res.touchdown is None else float(res.touchdown[1]),
+        "simulated_time": float(ds["time"].values[-1]),
+        "peak_lateral_acceleration": float(np.abs(
+            ds["car_body_lateral_acceleration"].values).max()),
+        "lateral_wd_rms": comfort.get("lateral", {}).get("weighted_rms_m_per_s2", nan),
+        "lateral_sperling_wz": comfort.get("lateral", {}).get("sperling_wz", nan),
+        "vertical_wk_rms": comfort.get("vertical", {}).get("weighted_rms_m_per_s2", nan),
+        "vertical_sperling_wz": comfort.get("vertical", {}).get("sperling_wz", nan),
+        "net_guidance_force_end": float(gf[-1, half:].sum() - gf[-1, :half].sum()),
+        "setup_time": setup, "wall_time": float(res.wall_time_s),
+        "real_time_factor": float(res.real_time_factor),
+    }
+    for name, value in scalars.items():
+        out[name] = ((), value)
+    td = res.touchdown
+    out["touchdown_circuit"] = ((), "" if td is None else td[0])
+    out["touchdown_kind"] = ((), "" if td is None else td[3])
+    circuits = [str(c) for c in ds["circuit"].values]
+    out = out.assign_coords(circuit=("circuit", circuits))
+    out["gap_min"] = ("circuit", gap.min(axis=0))
+    out["gap_max"] = ("circuit", gap.max(axis=0))
+    out["current_peak"] = ("circuit", cur.max(axis=0))
+    if job.time_series:
+        n = job.n_steps + 1
+        out = out.assign_coords(time=("time", np.arange(n) * job.dt_s))
+        for name in job.time_series:
+            full = np.full((n, len(circuits)), np.nan)
+            vals = series[name]
+            full[:vals.shape[0]] = vals
+            out[name] = (("time", "circuit"), full, {"units": units[name], "long_name": name})
     return out

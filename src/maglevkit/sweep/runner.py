@@ -29,7 +29,7 @@ from .._files import write_netcdf_atomically
 from .._interrupt import sigint_blocked, stop_pool
 from ..errors import InputError
 from .cases import SUMMARY_UNITS, error_case, run_case
-from .spec import PARAMETERS, SWEEP_FORMAT, SweepSpec
+from .spec import SWEEP_FORMAT, SweepSpec
 
 __all__ = ["SweepResult", "run_sweep", "assemble", "case_path"]
 
@@ -290,9 +290,10 @@ def _union(results: list[Any], dim: str) -> list[str]:
 def assemble(spec: SweepSpec, results: list[Any]) -> Any:
     """One Dataset from the case Datasets (in :meth:`SweepSpec.cases` order).
 
-    Dimensions: the swept parameters (in :data:`~maglevkit.sweep.PARAMETERS` order), then
-    ``circuit``, ``comfort_point`` and ``time`` for the per-case arrays.  Values a case
-    lacks (a failed case, a run too short for comfort figures) are NaN, text ``""``.
+    Dimensions: the swept parameters (in the order of the job's parameters,
+    :attr:`SweepSpec.parameters`), then ``circuit``, ``comfort_point`` (vehicle job) and
+    ``time`` for the per-case arrays.  Values a case lacks (a failed case, a run too short
+    for comfort figures) are NaN, text ``""``.
 
     Parameters
     ----------
@@ -313,8 +314,9 @@ def assemble(spec: SweepSpec, results: list[Any]) -> Any:
     dims = list(spec.swept)
     shape = spec.shape
     n = len(results)
-    inner = {"circuit": _union(results, "circuit"),
-             "comfort_point": _union(results, "comfort_point")}
+    inner = {"circuit": _union(results, "circuit")}
+    if spec.job.kind == "vehicle":
+        inner["comfort_point"] = _union(results, "comfort_point")
     if spec.job.time_series:
         inner["time"] = [str(t) for t in range(spec.job.n_steps + 1)]   # positions only
     index = {d: {c: j for j, c in enumerate(v)} for d, v in inner.items()}
@@ -346,7 +348,7 @@ def assemble(spec: SweepSpec, results: list[Any]) -> Any:
             arr = arr.astype(str)
         data[name] = arr.reshape(*shape, *full_shape[1:])
     coords: dict[str, Any] = {}
-    for p in PARAMETERS:
+    for p in spec.parameters:
         if p.name in spec.swept:
             vals = spec.swept[p.name]
             cattrs = {"long_name": p.description.split(" (")[0]}
@@ -355,9 +357,11 @@ def assemble(spec: SweepSpec, results: list[Any]) -> Any:
             coords[p.name] = (p.name, np.array(vals, dtype=str if p.kind is str else None),
                               cattrs)
     coords["circuit"] = ("circuit", np.array(inner["circuit"], dtype=str))
-    coords["comfort_point"] = ("comfort_point", np.array(inner["comfort_point"], dtype=str),
-                               {"long_name": "car N at the floor point (fraction of the section "
-                                             "length from its centre, negative forward)"})
+    if "comfort_point" in inner:
+        coords["comfort_point"] = ("comfort_point", np.array(inner["comfort_point"], dtype=str),
+                                   {"long_name": "car N at the floor point (fraction of the "
+                                                 "section length from its centre, negative "
+                                                 "forward)"})
     if spec.job.time_series:
         coords["time"] = ("time", np.arange(spec.job.n_steps + 1) * spec.job.dt_s,
                           {"units": "s"})
@@ -380,12 +384,10 @@ def assemble(spec: SweepSpec, results: list[Any]) -> Any:
     if not layout:      # no cases at all cannot happen (lists are non-empty); keep it safe
         variables["status"] = (tuple(dims), np.full(shape, "", dtype=str), {})
     job = spec.job
-    fixed = {f"fixed_{k}": (v if not (isinstance(v, float) and math.isnan(v)) else "nan")
-             for k, v in spec.fixed.items()}
+    fixed = {f"fixed_{k}": (v if not (isinstance(v, float) and not math.isfinite(v))
+                            else str(v)) for k, v in spec.fixed.items()}
     ds = xr.Dataset(variables, coords=coords, attrs={
         "format": SWEEP_FORMAT, "maglevkit": __version__, "sweep": spec.name,
-        "source": spec.source, "job": "vehicle", "vehicle_file": job.vehicle_file,
-        "duration_s": job.duration_s, "dt_s": job.dt_s, "rigid_guideway": int(job.rigid),
-        "irregularity": job.irregularity, "swept": ",".join(dims),
+        "source": spec.source, **job.dataset_attrs(), "swept": ",".join(dims),
         "fixed_parameters": json.dumps(dict(spec.fixed), sort_keys=True), **fixed})
     return ds

@@ -22,7 +22,14 @@ Example (``maglevkit/data/sweeps/vehicle-speeds.toml``)::
     [output]                   # optional
     time_series = []           # per-case (time, circuit) series to keep, e.g. ["gap"]
 
-The sweepable parameters are :data:`PARAMETERS`.  Each is given at most once: as a list
+A second job, ``job = "cross-section"``, runs the cross-section vehicle
+(:class:`~maglevkit.vehicle.crossrun.CrossSectionModel`) from a ``[cross_section]`` table
+(``file``, ``duration``, ``dt``, ``magnets``, ``irregularity``, ``lateral``) and sweeps
+its scenario, :data:`CROSS_SECTION_PARAMETERS` (speed, curve, crosswind, seed, failure);
+see ``maglevkit/data/sweeps/cross-section-curve.toml``.
+
+The sweepable parameters are :data:`PARAMETERS` (:data:`CROSS_SECTION_PARAMETERS` for
+the cross-section job).  Each is given at most once: as a list
 in ``[parameters]`` (swept; a coordinate of the result) or as a scalar in the job table
 (fixed; an attribute of the result); otherwise its default applies.  Unknown or missing
 keys, empty or repeated lists and values of the wrong type or sign raise
@@ -44,8 +51,9 @@ from typing import Any
 from ..errors import MaglevkitError, ParameterFileError
 from ..magnets.base import Schema, take
 
-__all__ = ["PARAMETERS", "SweepParameter", "SweepSpec", "VehicleJob", "load_sweep",
-           "parse_sweep", "bundled_sweeps", "SWEEP_FORMAT"]
+__all__ = ["PARAMETERS", "CROSS_SECTION_PARAMETERS", "SweepParameter", "SweepSpec",
+           "VehicleJob", "CrossSectionJob", "load_sweep", "parse_sweep", "bundled_sweeps",
+           "scenario", "SWEEP_FORMAT"]
 
 SWEEP_FORMAT = "maglevkit-sweep-1"
 """Format tag of the result and case files (part of every case key)."""
@@ -95,7 +103,34 @@ PARAMETERS: tuple[SweepParameter, ...] = (
 )
 """The sweepable parameters, in the order of the result's dimensions."""
 
+CROSS_SECTION_PARAMETERS: tuple[SweepParameter, ...] = (
+    PARAMETERS[0],
+    SweepParameter("curve_radius", float, "m", math.inf,
+                   "radius R of the full curve (|R| >= 1 m, positive: a left-hand curve; "
+                   "inf: straight)"),
+    SweepParameter("curve_superelevation", float, "rad", 0.0,
+                   "full superelevation of the curve (|c| < 0.3 rad; radians: 12 deg is "
+                   "0.2094)"),
+    SweepParameter("curve_transition", float, "m", 0.0,
+                   "length of the transition into the curve (>= 0; 0: the curve at once)"),
+    SweepParameter("curve_start", float, "m", 0.0,
+                   "distance travelled where the transition starts (>= 0)"),
+    SweepParameter("crosswind_force", float, "N", 0.0,
+                   "peak lateral gust force on the car body (0: no gust; negative: from "
+                   "the right)"),
+    SweepParameter("crosswind_shape", str, "", "1-cosine", "gust shape: 1-cosine or step"),
+    SweepParameter("crosswind_rise", float, "s", 0.5, "rise time of the gust (> 0)"),
+    SweepParameter("crosswind_hold", float, "s", 1.0, "plateau of the gust (>= 0)"),
+    SweepParameter("crosswind_start", float, "s", 0.5, "start time of the gust (>= 0)"),
+    PARAMETERS[1],
+    PARAMETERS[2],
+)
+"""The parameters of a cross-section sweep (``job = "cross-section"``), in the order of
+the result's dimensions.  ``seed`` seeds the random parts of both irregularities, failures
+name the cross-section's circuits (e.g. ``guidance_left/front@0.5``)."""
+
 _BY_NAME = {p.name: p for p in PARAMETERS}
+_ALL_BY_NAME = {p.name: p for p in (*PARAMETERS, *CROSS_SECTION_PARAMETERS)}
 
 _SWEEP_SCHEMA = {
     "name": Schema(str, required=False, default=""),
@@ -111,8 +146,20 @@ _VEHICLE_SCHEMA = {
 _OUTPUT_SCHEMA = {
     "time_series": Schema(list, required=False, default=[]),
 }
-_TABLES = ("sweep", "vehicle", "parameters", "output")
-JOBS = ("vehicle",)
+_CROSS_SECTION_SCHEMA = {
+    "file": Schema(str, required=False, default="tr09-cross-section"),
+    "duration": Schema(float, unit="s"),
+    "dt": Schema(float, required=False, unit="s", default=1e-3),
+    "magnets": Schema(str, required=False, default="reduced"),
+    "irregularity": Schema(str, required=False, default="none"),
+    "lateral": Schema(str, required=False, default="none"),
+}
+CROSS_SECTION_TIME_SERIES = ("gap", "current", "voltage", "force")
+"""The cross-section run's per-circuit variables a sweep can keep per case (``gap``: the
+levitation and guidance gaps in the bank's circuit order)."""
+_TABLES = ("sweep", "vehicle", "cross_section", "parameters", "output")
+JOBS = ("vehicle", "cross-section")
+_JOB_TABLE = {"vehicle": "vehicle", "cross-section": "cross_section"}
 
 
 @dataclass(frozen=True)
@@ -150,6 +197,9 @@ class VehicleJob:
     circuit_names: tuple[str, ...]
     default_payload_kg: float
 
+    kind = "vehicle"
+    parameters = PARAMETERS
+
     @property
     def n_steps(self) -> int:
         return int(round(self.duration_s / self.dt_s))
@@ -160,6 +210,70 @@ class VehicleJob:
                 "duration_s": self.duration_s, "dt_s": self.dt_s, "rigid": self.rigid,
                 "irregularity": self.irregularity, "time_series": list(self.time_series)}
 
+    def dataset_attrs(self) -> dict[str, Any]:
+        """The job's attributes of the sweep's result dataset."""
+        return {"job": "vehicle", "vehicle_file": self.vehicle_file,
+                "duration_s": self.duration_s, "dt_s": self.dt_s,
+                "rigid_guideway": int(self.rigid), "irregularity": self.irregularity}
+
+
+@dataclass(frozen=True)
+class CrossSectionJob:
+    """The base job of a cross-section sweep (``job = "cross-section"``).
+
+    Attributes
+    ----------
+    vehicle_file : str
+        Bundled cross-section name or an absolute path.
+    vehicle_sha256 : str
+        Hash of the parsed cross-section file, its magnets' equivalent circuits and the
+        laws (part of the case key).
+    duration_s, dt_s : float
+        Run length and step [s].
+    magnets : str
+        ``"reduced"`` or ``"detailed"`` magnet models.
+    irregularity : str
+        Vertical (stator) irregularity spec without seeds
+        (``maglevkit.vehicle.simulation.parse_irregularity``).
+    lateral : str
+        Lateral (guidance-rail) irregularity spec without seeds
+        (``maglevkit.vehicle.crossrun.parse_lateral``).
+    time_series : tuple of str
+        The run's (time, circuit) variables kept per case.
+    circuit_names : tuple of str
+        The cross-section's bank circuits (to check failures).
+    """
+
+    vehicle_file: str
+    vehicle_sha256: str
+    duration_s: float
+    dt_s: float
+    magnets: str
+    irregularity: str
+    lateral: str
+    time_series: tuple[str, ...]
+    circuit_names: tuple[str, ...]
+
+    kind = "cross-section"
+    parameters = CROSS_SECTION_PARAMETERS
+
+    @property
+    def n_steps(self) -> int:
+        return int(round(self.duration_s / self.dt_s))
+
+    def key_data(self) -> dict[str, Any]:
+        """What a case's result depends on besides its parameters (for the case key)."""
+        return {"job": "cross-section", "vehicle_sha256": self.vehicle_sha256,
+                "duration_s": self.duration_s, "dt_s": self.dt_s, "magnets": self.magnets,
+                "irregularity": self.irregularity, "lateral": self.lateral,
+                "time_series": list(self.time_series)}
+
+    def dataset_attrs(self) -> dict[str, Any]:
+        """The job's attributes of the sweep's result dataset."""
+        return {"job": "cross-section", "vehicle_file": self.vehicle_file,
+                "duration_s": self.duration_s, "dt_s": self.dt_s, "magnets": self.magnets,
+                "irregularity": self.irregularity, "lateral": self.lateral}
+
 
 @dataclass(frozen=True)
 class SweepSpec:
@@ -169,7 +283,7 @@ class SweepSpec:
     ----------
     name : str
         The sweep's name (``[sweep] name``, default the file's stem).
-    job : VehicleJob
+    job : VehicleJob or CrossSectionJob
         The base job every case runs.
     swept : dict
         Swept parameter -> tuple of values (in :data:`PARAMETERS` order).
@@ -180,10 +294,16 @@ class SweepSpec:
     """
 
     name: str
-    job: VehicleJob
+    job: VehicleJob | CrossSectionJob
     swept: Mapping[str, tuple[Any, ...]]
     fixed: Mapping[str, Any]
     source: str = ""
+
+    @property
+    def parameters(self) -> tuple[SweepParameter, ...]:
+        """The job's sweepable parameters (:data:`PARAMETERS` or
+        :data:`CROSS_SECTION_PARAMETERS`)."""
+        return self.job.parameters
 
     @property
     def shape(self) -> tuple[int, ...]:
@@ -206,8 +326,9 @@ class SweepSpec:
         ----------
         params : mapping
             One case's full parameter set, as :meth:`cases` yields it: a value for every
-            sweep parameter (:data:`PARAMETERS`, e.g. ``speed`` [m/s], ``seed``,
-            ``failure``), JSON-serialisable and finite; other keys are ignored.
+            sweep parameter of the job (:attr:`parameters`, e.g. ``speed`` [m/s], ``seed``,
+            ``failure``), JSON-serialisable and finite (an infinite ``curve_radius`` is
+            encoded as the text ``"inf"``); other keys are ignored.
 
         Returns
         -------
@@ -228,9 +349,17 @@ class SweepSpec:
 
         blob = json.dumps({"format": SWEEP_FORMAT, "maglevkit": __version__,
                            "job": self.job.key_data(),
-                           "case": {p.name: params[p.name] for p in PARAMETERS}},
+                           "case": {p.name: _key_value(params[p.name])
+                                    for p in self.parameters}},
                           sort_keys=True, allow_nan=False)
         return hashlib.sha256(blob.encode()).hexdigest()[:24]
+
+
+def _key_value(v: Any) -> Any:
+    """A parameter value for the case key: infinities as text (JSON has none)."""
+    if isinstance(v, float) and math.isinf(v):
+        return "inf" if v > 0 else "-inf"
+    return v
 
 
 def bundled_sweeps() -> tuple[str, ...]:
@@ -268,12 +397,17 @@ def load_sweep(source: str | Path) -> SweepSpec:
 
 def _value(name: str, v: Any, where: str) -> Any:
     """One value of a sweepable parameter, checked (``where`` names the key for errors)."""
-    p = _BY_NAME[name]
+    p = _ALL_BY_NAME[name]
     unit = f" [{p.unit}]" if p.unit not in ("", "1") else ""
+    if name == "curve_radius" and isinstance(v, float) and math.isinf(v):
+        return v
     if p.kind is str:
         if not isinstance(v, str) or not v.strip():
             raise ParameterFileError(f"{where} = {v!r}: expected a string: {p.description}")
-        return " ".join(v.split())
+        text = " ".join(v.split())
+        if name == "crosswind_shape":
+            scenario({name: text}, where)
+        return text
     if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v):
         what = "a whole number" if p.kind is int else f"a number{unit}"
         raise ParameterFileError(f"{where} = {v!r}: expected {what}: {p.description} "
@@ -290,10 +424,51 @@ def _value(name: str, v: Any, where: str) -> Any:
         raise ParameterFileError(f"{where} = {v!r} kg: must be >= 0")
     if name.endswith("_scale") and v <= 0:
         raise ParameterFileError(f"{where} = {v!r}: must be > 0 (a factor on the nominal value)")
+    if name.startswith(("curve_", "crosswind_")):
+        scenario({name: v}, where)
     return v
 
 
-def _check_failure(text: str, where: str, circuits: tuple[str, ...], duration: float) -> None:
+def scenario(params: Mapping[str, Any], where: str = "case") -> tuple[Any, Any]:
+    """The curve and the gust of a cross-section case, checked by their own classes.
+
+    Parameters
+    ----------
+    params : mapping
+        ``curve_*`` [m, rad] and ``crosswind_*`` [N, s, shape] values of
+        :data:`CROSS_SECTION_PARAMETERS`; missing ones take their defaults.
+    where : str, default "case"
+        Where the values come from (for error messages).
+
+    Returns
+    -------
+    (TransitionCurve or None, Crosswind or None)
+        None for a straight level track and for a zero gust force.
+
+    Raises
+    ------
+    ParameterFileError
+        A value out of range, naming ``where`` and what is allowed.
+    """
+    from ..vehicle.crossrun import Crosswind, TransitionCurve
+
+    def get(name: str) -> Any:
+        return params.get(name, _ALL_BY_NAME[name].default)
+
+    try:
+        curve = TransitionCurve(get("curve_radius"), get("curve_superelevation"),
+                                get("curve_transition"), get("curve_start"))
+        wind = Crosswind(get("crosswind_force"), rise_s=get("crosswind_rise"),
+                         hold_s=get("crosswind_hold"), start_s=get("crosswind_start"),
+                         shape=get("crosswind_shape"))
+    except MaglevkitError as exc:
+        raise ParameterFileError(f"{where}: {exc}") from None
+    straight = math.isinf(curve.radius_m) and curve.superelevation_rad == 0.0
+    return (None if straight else curve), (None if wind.peak_force_N == 0.0 else wind)
+
+
+def _check_failure(text: str, where: str, circuits: tuple[str, ...], duration: float,
+                   hint: str = "sNmK/front|rear|mid: section N, magnet K") -> None:
     from ..vehicle.simulation import parse_failure
 
     if text == "none":
@@ -306,7 +481,7 @@ def _check_failure(text: str, where: str, circuits: tuple[str, ...], duration: f
         if f.circuit not in circuits:
             raise ParameterFileError(
                 f"{where}: no circuit {f.circuit!r} in this vehicle; circuits are "
-                f"{circuits[0]} ... {circuits[-1]} (sNmK/front|rear|mid: section N, magnet K)")
+                f"{circuits[0]} ... {circuits[-1]} ({hint})")
         if f.time_s >= duration:
             raise ParameterFileError(f"{where}: failure time {f.time_s:g} s is not within the "
                                      f"run (duration {duration:g} s)")
@@ -369,13 +544,25 @@ def parse_sweep(parameters: Mapping[str, Any], source: str = "parameters", *,
     unknown = sorted(set(parameters) - set(_TABLES))
     if unknown:
         raise bad(f"unknown table(s) {unknown}; a sweep file may have: {', '.join(_TABLES)}")
-    for table in ("sweep", "vehicle", "parameters"):
-        if table not in parameters:
-            raise bad(f"missing the [{table}] table")
+    if "sweep" not in parameters:
+        raise bad("missing the [sweep] table")
     try:
         sw = take(parameters["sweep"], _SWEEP_SCHEMA, "sweep")
         if sw["job"] not in JOBS:
             raise ParameterFileError(f"[sweep] job = {sw['job']!r}: use one of {', '.join(JOBS)}")
+    except ParameterFileError as exc:
+        raise bad(str(exc)) from None
+    table = _JOB_TABLE[sw["job"]]
+    for other_job, other in _JOB_TABLE.items():
+        if other != table and other in parameters:
+            raise bad(f"a [{other}] table belongs to job = {other_job!r}; this sweep's job "
+                      f"{sw['job']!r} takes its base job from [{table}]")
+    for t in (table, "parameters"):
+        if t not in parameters:
+            raise bad(f"missing the [{t}] table")
+    if sw["job"] == "cross-section":
+        return _parse_cross_section(parameters, source, sw, bad, base_dir)
+    try:
         raw_job = parameters["vehicle"]
         if not isinstance(raw_job, Mapping):
             raise ParameterFileError("[vehicle] must be a table")
@@ -421,13 +608,7 @@ def parse_sweep(parameters: Mapping[str, Any], source: str = "parameters", *,
         raise bad(f"[vehicle] duration = {job['duration']} s is less than two steps of "
                   f"dt = {job['dt']} s")
     # the vehicle (cheap: the file and its magnets' circuits; no maps)
-    vfile = job["file"]
-    vpath = Path(vfile)
-    if vpath.suffix == ".toml" or vpath.exists() or (base_dir is not None
-                                                     and (base_dir / vpath).exists()):
-        if not vpath.is_absolute() and base_dir is not None:
-            vpath = base_dir / vpath
-        vfile = str(vpath.resolve())
+    vfile = _resolve_file(job["file"], base_dir)
     try:
         payload0, circuits, vhash = _vehicle_identity(vfile)
     except MaglevkitError as exc:
@@ -467,20 +648,170 @@ def parse_sweep(parameters: Mapping[str, Any], source: str = "parameters", *,
                      fixed=fixed, source=source)
 
 
-def _check_irregularity(text: str, seed_swept: bool, bad: Any) -> str:
+def _resolve_file(name: str, base_dir: Path | None) -> str:
+    """A vehicle file name as given (a bundled name) or as an absolute path (a file)."""
+    vpath = Path(name)
+    if vpath.suffix == ".toml" or vpath.exists() or (base_dir is not None
+                                                     and (base_dir / vpath).exists()):
+        if not vpath.is_absolute() and base_dir is not None:
+            vpath = base_dir / vpath
+        return str(vpath.resolve())
+    return name
+
+
+def _seeded_parts(text: str, key: str, table: str, seeded: tuple[str, ...], bad: Any) -> bool:
+    """Check that the seeded parts (``random:``, ...) of a spec carry no seed of their own;
+    True if there is one (a swept seed then changes something)."""
+    parts = [p.strip() for p in text.split("+") if p.strip()]
+    for p in parts:
+        if p.startswith(seeded) and len(p.split(":")) > 2:
+            kind = p.split(":")[0]
+            value = {"random": "RMS", "girders": "H"}.get(kind, "VALUE")
+            raise bad(f"[{table}] {key} = {text!r}: give {kind}:{value} without a seed; the "
+                      f"seed is the parameter 'seed' (fixed in [{table}] or swept)")
+    return any(p.startswith(seeded) for p in parts)
+
+
+def _check_irregularity(text: str, seed_swept: bool, bad: Any, table: str = "vehicle") -> str:
     """The irregularity spec, checked; its random parts must not carry their own seed."""
     from ..vehicle.simulation import parse_irregularity
 
-    parts = [p.strip() for p in text.split("+") if p.strip()]
-    for p in parts:
-        if p.startswith("random:") and len(p.split(":")) > 2:
-            raise bad(f"[vehicle] irregularity = {text!r}: give random:RMS without a seed; the "
-                      "seed is the parameter 'seed' (fixed in [vehicle] or swept)")
-    if seed_swept and not any(p.startswith("random:") for p in parts):
+    seeded = _seeded_parts(text, "irregularity", table, ("random:",), bad)
+    if table == "vehicle" and seed_swept and not seeded:
         raise bad(f"[parameters] seed is swept but [vehicle] irregularity = {text!r} has no "
                   "random part (random:RMS); the seed would change nothing")
     try:
         parse_irregularity(text, span_length_m=1.0)
     except MaglevkitError as exc:
-        raise bad(f"[vehicle] irregularity: {exc}") from None
+        raise bad(f"[{table}] irregularity: {exc}") from None
     return " ".join(text.split())
+
+
+def _cross_section_identity(vehicle_file: str) -> tuple[tuple[str, ...], str]:
+    """Bank circuit names and the identity hash of a cross-section file (no maps built)."""
+    from ..magnets import load_magnet
+    from ..reduction.maps import law_hash, network_hash
+    from ..vehicle.crossrun import CrossSectionModel
+    from ..vehicle.crosssection import load_cross_section
+
+    data = load_cross_section(vehicle_file)
+    h = hashlib.sha256(repr(dataclasses.replace(data, source="")).encode())
+    names: list[str] = []
+    for kind, member in CrossSectionModel.MEMBERS:
+        magnet = load_magnet(CrossSectionModel.DEFAULT_MAGNETS[kind])
+        names += [f"{member}/{c}" for c in magnet.circuit_names]
+        h.update(network_hash(magnet.network).encode())
+    h.update(law_hash().encode())
+    return tuple(names), h.hexdigest()
+
+
+def _parse_cross_section(parameters: Mapping[str, Any], source: str, sw: Mapping[str, Any],
+                         bad: Any, base_dir: Path | None) -> SweepSpec:
+    """The cross-section job of :func:`parse_sweep` (tables present, job checked)."""
+    names = {p.name: p for p in CROSS_SECTION_PARAMETERS}
+    try:
+        raw_job = parameters["cross_section"]
+        if not isinstance(raw_job, Mapping):
+            raise ParameterFileError("[cross_section] must be a table")
+        fixed_raw = {k: v for k, v in raw_job.items() if k in names}
+        unknown_keys = sorted(set(raw_job) - set(_CROSS_SECTION_SCHEMA) - set(names))
+        if unknown_keys:
+            raise ParameterFileError(
+                f"[cross_section]: unknown key(s) {unknown_keys}; allowed keys are: "
+                f"{', '.join(_CROSS_SECTION_SCHEMA)} and the parameters {', '.join(names)}")
+        job = take({k: v for k, v in raw_job.items() if k in _CROSS_SECTION_SCHEMA},
+                   _CROSS_SECTION_SCHEMA, "cross_section")
+        if job["magnets"] not in ("reduced", "detailed"):
+            raise ParameterFileError(f"[cross_section] magnets = {job['magnets']!r}: use "
+                                     "'reduced' or 'detailed'")
+        out = take(parameters.get("output", {}), _OUTPUT_SCHEMA, "output")
+        ts = out["time_series"]
+        if not all(isinstance(v, str) and v in CROSS_SECTION_TIME_SERIES for v in ts) or \
+                len(set(ts)) != len(ts):
+            raise ParameterFileError(f"[output] time_series = {ts!r}: a list of distinct names "
+                                     f"from {', '.join(CROSS_SECTION_TIME_SERIES)} (or [])")
+        swept_raw = parameters["parameters"]
+        if not isinstance(swept_raw, Mapping):
+            raise ParameterFileError("[parameters] must be a table of lists")
+        unknown_keys = sorted(set(swept_raw) - set(names))
+        if unknown_keys:
+            raise ParameterFileError(
+                f"[parameters]: unknown key(s) {unknown_keys}; allowed keys are: "
+                + ", ".join(f"{p.name} [{p.unit or 'text'}]" for p in CROSS_SECTION_PARAMETERS))
+        if not swept_raw:
+            raise ParameterFileError("[parameters] is empty: give at least one list, e.g. "
+                                     "speed = [55.6, 125.0] (m/s)")
+        both = sorted(set(swept_raw) & set(fixed_raw))
+        if both:
+            raise ParameterFileError(f"{both} given both in [cross_section] (fixed) and in "
+                                     "[parameters] (swept); give each once")
+    except ParameterFileError as exc:
+        raise bad(str(exc)) from None
+    from ..models.inputs import check_span
+
+    try:
+        check_span(0.0, job["duration"], job["dt"])
+    except MaglevkitError as exc:
+        raise bad(f"[cross_section] duration/dt: {exc}") from None
+    if int(round(job["duration"] / job["dt"])) < 2:
+        raise bad(f"[cross_section] duration = {job['duration']} s is less than two steps of "
+                  f"dt = {job['dt']} s")
+    vfile = _resolve_file(job["file"], base_dir)
+    try:
+        circuits, vhash = _cross_section_identity(vfile)
+    except MaglevkitError as exc:
+        raise bad(f"[cross_section] file = {job['file']!r}: {exc}") from None
+    swept: dict[str, tuple[Any, ...]] = {}
+    fixed: dict[str, Any] = {}
+    try:
+        for p in CROSS_SECTION_PARAMETERS:
+            if p.name in swept_raw:
+                vals = swept_raw[p.name]
+                if not isinstance(vals, list) or not vals:
+                    unit = f" [{p.unit}]" if p.unit not in ("", "1") else ""
+                    raise ParameterFileError(f"[parameters] {p.name} = {vals!r}: expected a "
+                                             f"non-empty list of values: {p.description}{unit}")
+                checked = tuple(_value(p.name, v, f"[parameters] {p.name}[{i}]")
+                                for i, v in enumerate(vals))
+                if len(set(checked)) != len(checked):
+                    raise ParameterFileError(f"[parameters] {p.name} = {vals!r}: repeated values "
+                                             "(each value once)")
+                swept[p.name] = checked
+            elif p.name in fixed_raw:
+                fixed[p.name] = _value(p.name, fixed_raw[p.name], f"[cross_section] {p.name}")
+            else:
+                fixed[p.name] = p.default
+        for i, v in enumerate(swept.get("failure", (fixed.get("failure"),))):
+            where = (f"[parameters] failure[{i}]" if "failure" in swept
+                     else "[cross_section] failure")
+            _check_failure(v, where, circuits, job["duration"],
+                           hint="MAGNET_SIDE/front|rear, e.g. guidance_left/front")
+    except ParameterFileError as exc:
+        raise bad(str(exc)) from None
+    irr = _check_irregularity(job["irregularity"], False, bad, table="cross_section")
+    lat = " ".join(job["lateral"].split())
+    seeded = _seeded_parts(irr, "irregularity", "cross_section", ("random:",), bad)
+    seeded = _seeded_parts(lat, "lateral", "cross_section", ("random:", "girders:"),
+                           bad) or seeded
+    if "seed" in swept and not seeded:
+        raise bad(f"[parameters] seed is swept but neither [cross_section] irregularity = "
+                  f"{irr!r} nor lateral = {lat!r} has a seeded part (random:RMS, girders:H); "
+                  "the seed would change nothing")
+    from ..vehicle.crossrun import parse_lateral
+
+    try:
+        parse_lateral(lat)
+    except MaglevkitError as exc:
+        raise bad(f"[cross_section] lateral: {exc}") from None
+    spec_job = CrossSectionJob(vehicle_file=vfile, vehicle_sha256=vhash,
+                               duration_s=job["duration"], dt_s=job["dt"],
+                               magnets=job["magnets"], irregularity=irr, lateral=lat,
+                               time_series=tuple(ts), circuit_names=circuits)
+    spec = SweepSpec(name=sw["name"] or Path(source).stem, job=spec_job, swept=swept,
+                     fixed=fixed, source=source)
+    try:     # every combination's curve and gust (e.g. a rise time with a shape)
+        for i, case in enumerate(spec.cases()):
+            scenario(case, f"case {i}")
+    except ParameterFileError as exc:
+        raise bad(str(exc)) from None
+    return spec

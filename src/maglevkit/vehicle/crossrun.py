@@ -449,6 +449,11 @@ class CrossSectionModel:
         Bad options (named), magnets of the wrong kind or length.
     """
 
+    DEFAULT_MAGNETS = {"levitation": "tr09-standard", "guidance": "tr-guidance"}
+    """Default magnet files of the two kinds (bundled names)."""
+    MEMBERS = tuple((k, f"{k}_{s}") for k in ("levitation", "guidance") for s in SIDES)
+    """``(kind, bank member name)`` of the four magnets, in the bank's order."""
+
     def __init__(self, data: CrossSectionData | None = None, *,
                  levitation_magnet: str = "tr09-standard", guidance_magnet: str = "tr-guidance",
                  magnets: str = "reduced", maps_cache: Any = None, compiled: str = "auto",
@@ -494,7 +499,7 @@ class CrossSectionModel:
                                  f"but the slice is {d.slice_length_m:.4f} m")
         self.magnets = kinds
         self.maps = {k: vehicle_maps(m, cache_dir=maps_cache) for k, m in kinds.items()}
-        self.member_names = tuple(f"{k}_{s}" for k in ("levitation", "guidance") for s in SIDES)
+        self.member_names = tuple(name for _, name in self.MEMBERS)
         members = [(n, FluxModel(kinds[n.split("_")[0]]) if magnets == "detailed"
                     else self.maps[n.split("_")[0]]) for n in self.member_names]
         self.bank = MagnetBank(members, gap_inputs="circuit", compiled=compiled)

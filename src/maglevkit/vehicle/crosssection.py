@@ -8,7 +8,8 @@ A slice of the vehicle across the track (the paper's cross-section model, Sec. V
   magnets), each with lateral ``y``, vertical ``z`` (down) and roll ``phi`` displacements
   (``phi > 0`` lowers the right side);
 * two **air springs**, left and right, between car body and chassis, each a vertical and a
-  lateral spring-damper at ``(-+y_a, z_a)``; each vertical one carries a static preload,
+  lateral spring-damper at ``(-+y_a, z_a)`` (the lateral damper, optionally, at its own
+  height ``z_d``: ``lateral_damper_z``); each vertical one carries a static preload,
   half the loaded car body's weight ``m_c g / 2`` (the air pressure a levelling valve
   sets), so that on a straight level track the car body sits at its design position
   (``q = 0``) instead of sagging ``m_c g / (2 k_z)`` on the linear stiffness;
@@ -33,7 +34,8 @@ The vehicle file (TOML, SI units, every value tagged in ``[provenance]``; bundle
     [car_body]      mass, payload, roll_inertia, centre_z
     [chassis]       mass, roll_inertia, centre_z
     [air_spring]    y, z, vertical_stiffness, vertical_damping, lateral_stiffness,
-                    lateral_damping                       (one spring; mirrored left/right)
+                    lateral_damping, lateral_damper_z (optional; default z)
+                                                          (one spring; mirrored left/right)
     [levitation]    y, z                                  (force point, mirrored)
     [guidance]      y, z                                  (force point, mirrored)
 """
@@ -89,6 +91,7 @@ CROSS_SECTION_SCHEMA: dict[str, dict[str, Schema]] = {
         "vertical_damping": Schema(float, unit="N s/m", check="nonnegative"),
         "lateral_stiffness": Schema(float, unit="N/m"),
         "lateral_damping": Schema(float, unit="N s/m", check="nonnegative"),
+        "lateral_damper_z": Schema(float, required=False, unit="m", check="any"),
     },
     "levitation": {
         "y": Schema(float, unit="m"),
@@ -120,6 +123,7 @@ _RANGES: dict[str, tuple[float, float]] = {
     "air_spring.vertical_damping": (0.0, 1e7),
     "air_spring.lateral_stiffness": (1e3, 1e8),
     "air_spring.lateral_damping": (0.0, 1e7),
+    "air_spring.lateral_damper_z": (-3.0, 1.0),
     "levitation.y": (0.1, 3.0),
     "levitation.z": (-1.0, 1.0),
     "guidance.y": (0.1, 3.0),
@@ -158,6 +162,9 @@ class CrossSectionData:
         ``"table.key" -> tag``.
     source : str
         File path or bundled name.
+    lateral_damper_z_m : float or None
+        Height ``z`` of the lateral dampers [m] (None: at the air springs' ``z``; see
+        :attr:`damper_z_m`).
     """
 
     name: str
@@ -184,6 +191,13 @@ class CrossSectionData:
     guidance_z_m: float
     provenance: Mapping[str, str] = field(default_factory=dict)
     source: str = ""
+    lateral_damper_z_m: float | None = None
+
+    @property
+    def damper_z_m(self) -> float:
+        """Height ``z`` of the lateral dampers [m]: ``lateral_damper_z_m``, else the air
+        springs' ``spring_z_m``."""
+        return self.spring_z_m if self.lateral_damper_z_m is None else self.lateral_damper_z_m
 
     @property
     def loaded_car_body_mass_kg(self) -> float:
@@ -249,7 +263,7 @@ def parse_cross_section(parameters: Mapping[str, Any],
     for key, (lo, hi) in _RANGES.items():
         table, k = key.split(".")
         v = t[table][k]
-        if not lo <= v <= hi:
+        if v is not None and not lo <= v <= hi:
             unit = CROSS_SECTION_SCHEMA[table][k].unit
             raise ParameterFileError(f"{source}: [{table}] {k} = {v!r} {unit} is outside the "
                                      f"plausible range [{lo:g}, {hi:g}] {unit} (a unit "
@@ -283,7 +297,7 @@ def parse_cross_section(parameters: Mapping[str, Any],
         spring_lateral_damping_N_s_per_m=sp["lateral_damping"],
         levitation_y_m=t["levitation"]["y"], levitation_z_m=t["levitation"]["z"],
         guidance_y_m=t["guidance"]["y"], guidance_z_m=t["guidance"]["z"],
-        provenance=prov, source=source)
+        provenance=prov, source=source, lateral_damper_z_m=sp["lateral_damper_z"])
 
 
 def bundled_cross_sections() -> list[str]:
@@ -418,8 +432,9 @@ class CrossSectionMechanics:
     Attributes
     ----------
     system : PlanarMultibody
-        Bodies ``car_body``, ``chassis``; elements ``air_spring_{left,right}.{z,y}``; force
-        points ``levitation_{left,right}``, ``guidance_{left,right}``.
+        Bodies ``car_body``, ``chassis``; elements ``air_spring_{left,right}.{z,y}`` (and
+        ``lateral_damper_{left,right}.y`` when the file puts the lateral dampers at their
+        own height); force points ``levitation_{left,right}``, ``guidance_{left,right}``.
     point_names : tuple of str
         The force points in the order of ``F``.
     air_spring_preload_N : float
@@ -449,9 +464,17 @@ class CrossSectionMechanics:
                                          "z", d.spring_vertical_stiffness_N_per_m,
                                          d.spring_vertical_damping_N_s_per_m,
                                          self.air_spring_preload_N))
-            elements.append(SpringDamper(f"air_spring_{side}.y", "car_body", pt, "chassis", pt,
-                                         "y", d.spring_lateral_stiffness_N_per_m,
-                                         d.spring_lateral_damping_N_s_per_m))
+            if d.damper_z_m == d.spring_z_m:
+                elements.append(SpringDamper(f"air_spring_{side}.y", "car_body", pt, "chassis",
+                                             pt, "y", d.spring_lateral_stiffness_N_per_m,
+                                             d.spring_lateral_damping_N_s_per_m))
+            else:       # the lateral damper at its own height (docs/cross_section.md)
+                elements.append(SpringDamper(f"air_spring_{side}.y", "car_body", pt, "chassis",
+                                             pt, "y", d.spring_lateral_stiffness_N_per_m, 0.0))
+                pd = (sign * d.spring_y_m, d.damper_z_m)
+                elements.append(SpringDamper(f"lateral_damper_{side}.y", "car_body", pd,
+                                             "chassis", pd, "y", 0.0,
+                                             d.spring_lateral_damping_N_s_per_m))
         points = [ForcePoint("levitation_left", "chassis", (-d.levitation_y_m, d.levitation_z_m),
                              "-z"),
                   ForcePoint("levitation_right", "chassis", (d.levitation_y_m, d.levitation_z_m),

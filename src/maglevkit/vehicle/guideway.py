@@ -34,6 +34,7 @@ import numpy as np
 from ..errors import InputError, OutOfRangeError, ParameterError
 from ..plant import STANDARD_GRAVITY
 from ..validation import flag, real_array, real_number, whole_number
+from .zoh import exact_zoh_step
 
 __all__ = ["BeamSpan", "Guideway", "GuidewayState", "GuidewayDeflection"]
 
@@ -300,14 +301,7 @@ def _discretize_cached(length: float, ei: float, m: float, zeta: tuple[float, ..
                        dt: float) -> tuple[np.ndarray, np.ndarray]:
     span = BeamSpan(length, ei, m, n_modes=len(zeta), damping_ratio=zeta)
     a, b = span.state_space()
-    n2, n = b.shape
-    aug = np.zeros((n2 + n, n2 + n))
-    aug[:n2, :n2] = a * dt
-    aug[:n2, n2:] = b * dt
-    import scipy.linalg
-
-    e = scipy.linalg.expm(aug)
-    ad, bd = e[:n2, :n2].copy(), e[:n2, n2:].copy()
+    ad, bd = exact_zoh_step(a, b, dt)
     ad.setflags(write=False)
     bd.setflags(write=False)
     return ad, bd

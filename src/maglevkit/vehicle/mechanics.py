@@ -43,6 +43,7 @@ from ..errors import InputError
 from ..plant import STANDARD_GRAVITY
 from ..validation import describe, real_array, real_number
 from .train import TrainData
+from .zoh import exact_zoh_step
 
 __all__ = ["VehicleMechanics", "ForceElement", "derive_sympy"]
 
@@ -291,14 +292,7 @@ class VehicleMechanics:
         """
         dt_s = real_number(dt_s, "dt_s", "s", positive=True)
         a, bq = self.state_matrices(damping=damping)
-        n2, n = bq.shape
-        aug = np.zeros((n2 + n, n2 + n))
-        aug[:n2, :n2] = a * dt_s
-        aug[:n2, n2:] = bq * dt_s
-        import scipy.linalg
-
-        e = scipy.linalg.expm(aug)
-        return e[:n2, :n2].copy(), e[:n2, n2:].copy()
+        return exact_zoh_step(a, bq, dt_s)
 
     def accelerations(self, q: np.ndarray, q_dot: np.ndarray, forces_N: np.ndarray) -> np.ndarray:
         """``q''`` from the equations of motion (forces: upward magnet forces per point).

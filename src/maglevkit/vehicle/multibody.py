@@ -60,6 +60,7 @@ import numpy as np
 
 from ..errors import InputError
 from ..validation import real_number
+from .zoh import exact_zoh_step
 
 __all__ = ["RigidBody", "SpringDamper", "ForcePoint", "PlanarMultibody", "derive_sympy",
            "DOF_KINDS", "DIRECTIONS"]
@@ -473,16 +474,9 @@ class PlanarMultibody:
         InputError
             ``dt_s`` not a finite number > 0.
         """
-        import scipy.linalg
-
         dt_s = real_number(dt_s, "dt_s", "s", positive=True)
         a, bq = self.state_matrices(damping=damping)
-        n2, n = bq.shape
-        aug = np.zeros((n2 + n, n2 + n))
-        aug[:n2, :n2] = a * dt_s
-        aug[:n2, n2:] = bq * dt_s
-        e = scipy.linalg.expm(aug)
-        return e[:n2, :n2].copy(), e[:n2, n2:].copy()
+        return exact_zoh_step(a, bq, dt_s)
 
     def preload_stiffness(self, element_forces_N: Any, forces_N: Any) -> np.ndarray:
         """Stiffness of static preloads about an operating point with level bodies.
