@@ -49,13 +49,14 @@ def test_network_shape_and_names(std: mk.Magnet) -> None:
     # air under the face, the stator yoke over the two half faces, per side (l, r) window
     # teeth and their slots' air, flank fringe, 2 flank strips (the strips whose quarter
     # circles land before the window's centre plane: y0 = 15 and 48.3 mm < 69 mm), one
-    # pole-back leakage; the two end poles' back end face to the stator beyond; per
+    # pole-back leakage; the two end poles' back end face to the stator beyond and a third
+    # flank strip on their outer side (no neighbour: strips along the whole coil); per
     # neighbour pair: pole back, stator (over the window), leakage between the heads and
     # per coil strip (3); nodes per pole: head, 3 coil nodes, pole back, stator at the
     # centre and at the two face edges, the two sides' window teeth, tooth tips
     per_pole, per_pair = 4 + 1 + 2 + 2 + 2 * (2 + 1 + 2) + 1, 1 + 1 + 1 + 3
-    assert len(net.branches) == 12 * per_pole + 2 + 11 * per_pair == 308
-    assert len(net.nodes) == 12 * 11 and net.n_loops == 308 - 132 + 1
+    assert len(net.branches) == 12 * per_pole + 2 * 2 + 11 * per_pair == 310
+    assert len(net.nodes) == 12 * 11 and net.n_loops == 310 - 132 + 1
     # each circuit drives 6 poles with alternating polarity; every pole's winding is
     # spread over its 4 core segments, whose turns add up to turns_per_pole
     N = net.turns_matrix
@@ -141,27 +142,38 @@ def test_leakage_permeances_against_roters() -> None:
     for name, v in pb.items():
         end = name in ("leak_pb_p01", "leak_pb_p12")
         assert v == pytest.approx(g_pb_end if end else g_pb_inner, rel=1e-12)
-    # the flank strips of pole 1 (each flank, wp, lands on its own side's window teeth):
-    # quarter circle from the flank at height y plus the gap at Carter's s', integrated
-    # over the strip: (2 mu0 wp/pi) ln((s' + pi y1/2)/(s' + pi y0/2)); strips 15-48.3 mm
-    # and 48.3-69 mm (the second ends at the window's centre plane)
+    # the flank strips of an inner pole (each flank, wp, lands on its own side's window
+    # teeth): quarter circle from the flank at height y plus the gap at Carter's s',
+    # integrated over the strip: (2 mu0 wp/pi) ln((s' + pi y1/2)/(s' + pi y0/2)); strips
+    # 15-48.3 mm and 48.3-69 mm (the second ends at the window's centre plane); the end
+    # pole's outer flank (pole 1, side l) has no neighbour: three strips along the coil,
+    # 15-48.3, 48.3-81.7, 81.7-115 mm
     sp = _carter_by_hand(0.010, st["slot_pitch"], st["slot_opening"]) * 0.010
-    bounds = [(hf, hf + h), (hf + h, 0.5 * window)]
+    inner = [(hf, hf + h), (hf + h, 0.5 * window)]
+    outer = [(hf + j * h, hf + (j + 1) * h) for j in range(3)]
     fringe = {e.name: e for br in net.branches for e in br.elements
               if isinstance(e, FringePermeance)}
-    flank = {k: e for k, e in fringe.items() if k.startswith("flank_p01_")}
-    assert sorted(flank) == ["flank_p01_1_l", "flank_p01_1_r", "flank_p01_2_l", "flank_p01_2_r"]
-    for j, (y0, y1) in enumerate(bounds, start=1):
-        hand = 2 * MU0 * wp / np.pi * np.log((sp + np.pi * y1 / 2) / (sp + np.pi * y0 / 2))
-        for side in "lr":
-            got = float(flank[f"flank_p01_{j}_{side}"].permeance(0.010))
-            assert got == pytest.approx(hand, rel=1e-12)
+    flank = {k: e for k, e in fringe.items() if k.startswith(("flank_p02_", "flank_p01_"))}
+    assert sorted(flank) == ["flank_p01_1_l", "flank_p01_1_r", "flank_p01_2_l", "flank_p01_2_r",
+                             "flank_p01_3_l", "flank_p02_1_l", "flank_p02_1_r",
+                             "flank_p02_2_l", "flank_p02_2_r"]
+
+    def roters(y0: float, y1: float) -> float:
+        return 2 * MU0 * wp / np.pi * np.log((sp + np.pi * y1 / 2) / (sp + np.pi * y0 / 2))
+
+    for j, (y0, y1) in enumerate(inner, start=1):
+        for name in (f"flank_p02_{j}_l", f"flank_p02_{j}_r", f"flank_p01_{j}_r"):
+            assert float(flank[name].permeance(0.010)) == pytest.approx(roters(y0, y1),
+                                                                        rel=1e-12)
+    for j, (y0, y1) in enumerate(outer, start=1):
+        assert float(flank[f"flank_p01_{j}_l"].permeance(0.010)) == pytest.approx(
+            roters(y0, y1), rel=1e-12)
     # the end poles' back end face (depth 130 ... 210 mm below the face; the quarter
     # circles clear the coil's outer corner at hypot(115, 45) = 123.5 mm < 130 mm) to the
     # stator beyond the magnet, one flank of width wp
     y0, y1 = m["core_height"], m["core_height"] + m["back_height"]
     assert np.hypot(hf + hc, tc) < y0
-    end = 2 * MU0 * wp / np.pi * np.log((sp + np.pi * y1 / 2) / (sp + np.pi * y0 / 2))
+    end = roters(y0, y1)
     assert sorted(k for k in fringe if k.startswith("end_")) == ["end_p01", "end_p12"]
     for k in ("end_p01", "end_p12"):
         assert float(fringe[k].permeance(0.010)) == pytest.approx(end, rel=1e-12)

@@ -287,9 +287,10 @@ def build_levitation_magnet(params: Mapping[str, Any], materials: Mapping[str, M
     # to the face level and on across the gap to the stator (a fringe strip), while the
     # circle lands before the window's centre plane (y <= window/2; beyond it the window
     # leakage takes over); both flanks of every pole (an end pole's outer flank faces the
-    # stator beyond the magnet)
+    # stator beyond the magnet, with no window centre plane: strips along the whole coil)
     strips = [(y - 0.5 * h, min(y + 0.5 * h, 0.5 * window)) for y in y_nodes
               if y - 0.5 * h < 0.5 * window] if split else []
+    outer_strips = [(y - 0.5 * h, y + 0.5 * h) for y in y_nodes] if split else []
     # around the coil into the own pole back: half hollow cylinders around the coil's
     # cross-section (inner radius h_c/2, radial extent t_c) along the coil sides that do
     # not face a neighbour pole: both across-track sides, plus the outer side of an end pole
@@ -344,6 +345,7 @@ def build_levitation_magnet(params: Mapping[str, Any], materials: Mapping[str, M
         # the two windows beside the face ("split" with the yoke split at the face edges:
         # each side its own window teeth and landing node; else one node for both)
         hands = ("l", "r") if yoke_split else ("",)
+        outer = {0: "l", poles - 1: "r"}.get(k) if yoke_split else None
         share = 1.0 / len(hands)
         for hand in hands:
             sfx, w_node = f"_{hand}" if hand else "", f"W{k + 1}{hand}"
@@ -359,12 +361,14 @@ def build_levitation_magnet(params: Mapping[str, Any], materials: Mapping[str, M
                     FringePermeance(f"fringe_{p}{sfx}", gap_input=p, width=2.0 * share * wp,
                                     radius=hf, **slots),)))
             if options.leakage:
-                for j, (y0, y1) in enumerate(strips):
+                # an end pole's outer flank has no neighbour and no window centre plane:
+                # its strips run along the whole coil
+                use = outer_strips if hand and hand == outer else strips
+                for j, (y0, y1) in enumerate(use):
                     name = f"flank_{p}_{j + 1}{sfx}"
                     branches.append(Branch(name, nodes[j + 1], w_node, (
                         FringePermeance(name, gap_input=p, width=2.0 * share * wp, radius=y1,
                                         inner_radius=y0, **slots),)))
-        outer = {0: "l", poles - 1: "r"}.get(k) if yoke_split else None
         if outer and options.leakage:
             # end pole: the back's end face, beyond the coil's outer side, to the stator
             # beyond the magnet (Roters' quarter circles centred on the face's outer edge,
