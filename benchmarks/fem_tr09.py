@@ -35,7 +35,10 @@ pole pitch), the fluxes of the iron regions (from differences of A) and their de
 in the current (``dflux``, from the tangent's dA/dI), and the magnetic potential drops
 along lines through junction, core, gap, tooth, pole back and yoke with their current
 derivatives (``mmf``; ``--diagnose S_MM I_A`` records one point at the grid's stator
-positions into ``benchmarks/results/fem_tr09_diagnosis.json``).
+positions into ``benchmarks/results/fem_tr09_diagnosis.json``; ``--core S_MM I_A`` the
+same with the fluxes across the core every 10 mm of its height and in thirds of its width,
+``core_y*`` and ``core_flank_lo``/``core_centre``/``core_flank_hi``, into
+``benchmarks/results/fem_tr09_core.json``).
 
 ``python benchmarks/fem_tr09.py`` runs the convergence study and the grid and writes
 ``benchmarks/results/fem_tr09_*.json``; ``--compare`` prints the network against them.
