@@ -42,24 +42,24 @@ def _fem():  # type: ignore[no-untyped-def]
 MARGIN = 0.3
 MEASURED = {
     # (s [mm], I [A]): (err F, err psi, err L); "split" with the stator yoke split at the
-    # face edges (window teeth per side), the end poles' back end face to the stator
-    # beyond the magnet and their outer flank strips along the whole coil
+    # face edges (window teeth per side), the end poles' back end face and underside to
+    # the stator beyond the magnet and their outer flank strips along the whole coil
     # (docs/validation_fem.md, 2026-12-02, continued)
-    (6.0, 10.0): (+1.3, +0.9, +1.0),
-    (6.0, 33.5): (+1.9, +1.2, +0.3),
-    (6.0, 50.0): (-1.2, -0.2, -7.1),
-    (6.0, 80.0): (-2.4, -1.1, -6.0),
-    (6.0, 100.0): (-2.2, -1.5, -9.1),
-    (10.0, 10.0): (+0.9, +1.0, +1.0),
+    (6.0, 10.0): (+1.3, +1.0, +1.0),
+    (6.0, 33.5): (+2.0, +1.3, +0.5),
+    (6.0, 50.0): (-1.0, +0.0, -6.4),
+    (6.0, 80.0): (-1.9, -0.8, -4.3),
+    (6.0, 100.0): (-1.6, -1.1, -6.9),
+    (10.0, 10.0): (+1.0, +1.0, +1.0),
     (10.0, 33.5): (+1.2, +1.1, +1.5),
-    (10.0, 50.0): (+1.3, +1.1, +0.1),
-    (10.0, 80.0): (-2.7, -0.5, -8.3),
-    (10.0, 100.0): (-4.2, -1.2, -9.6),
+    (10.0, 50.0): (+1.4, +1.2, +0.5),
+    (10.0, 80.0): (-2.3, -0.3, -7.2),
+    (10.0, 100.0): (-3.7, -0.9, -7.9),
     (20.0, 10.0): (+3.1, +0.6, +0.6),
     (20.0, 33.5): (+3.1, +0.6, +0.7),
-    (20.0, 50.0): (+3.2, +0.7, +0.9),
-    (20.0, 80.0): (+3.3, +0.7, +0.3),
-    (20.0, 100.0): (+2.9, +0.5, -2.4),
+    (20.0, 50.0): (+3.3, +0.7, +1.0),
+    (20.0, 80.0): (+3.4, +0.8, +0.8),
+    (20.0, 100.0): (+3.2, +0.7, -1.6),
 }
 
 
@@ -76,7 +76,7 @@ def test_network_against_recorded_fem() -> None:
             assert want - MARGIN <= got <= want + MARGIN, (key, name, got)
     # the aims (force and flux linkage within 3 %, L within 5 %) below the knee: every
     # point up to 33.5 A, at 10 mm up to 50 A and at 20 mm up to 100 A; flux linkage
-    # everywhere.  Known exceptions, measured: the force at 20 mm is +2.9 ... +3.3 %
+    # everywhere.  Known exceptions, measured: the force at 20 mm is +3.1 ... +3.4 %
     # (the air paths' share at large gaps; the iron's drop there now matches the FEM's
     # line integral, tests below), so it is held to 3.5 % there
     for (s, i), r in rows.items():
@@ -87,7 +87,7 @@ def test_network_against_recorded_fem() -> None:
     # L -15.5 ... -19 %; then -3.6 ... -5.3 %, -8.4 ... -12.3 %): force within 5 %, L within
     # 11 % -- the 3 % / 5 % aims are not met there
     for (s, i), r in rows.items():
-        assert abs(r["eF"]) < 5.0 and abs(r["eL"]) < 10.0, (s, i)
+        assert abs(r["eF"]) < 4.0 and abs(r["eL"]) < 8.5, (s, i)
 
 
 # The former network ("paper"): force, psi, L errors at three points (the issue's early
@@ -131,9 +131,9 @@ def test_fem_script_reproduces_a_recorded_point() -> None:
 # it in the core and the pole back) and the face teeth (the network's remaining excess).
 DIAGNOSIS = {
     # (s [mm], I [A]): {region: (FEM, network)}
-    (10.0, 100.0): {"junction+core": (3186, 3063), "gap+teeth": (16230, 16130)},
-    (6.0, 80.0): {"junction+core": (2941, 2501), "gap+teeth": (12678, 12795)},
-    (20.0, 33.5): {"junction+core": (153, 140), "gap+teeth": (6347, 6317)},
+    (10.0, 100.0): {"junction+core": (3186, 3058), "gap+teeth": (16230, 16125)},
+    (6.0, 80.0): {"junction+core": (2941, 2498), "gap+teeth": (12678, 12792)},
+    (20.0, 33.5): {"junction+core": (153, 140), "gap+teeth": (6347, 6314)},
 }
 
 

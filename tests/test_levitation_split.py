@@ -49,14 +49,15 @@ def test_network_shape_and_names(std: mk.Magnet) -> None:
     # air under the face, the stator yoke over the two half faces, per side (l, r) window
     # teeth and their slots' air, flank fringe, 2 flank strips (the strips whose quarter
     # circles land before the window's centre plane: y0 = 15 and 48.3 mm < 69 mm), one
-    # pole-back leakage; the two end poles' back end face to the stator beyond and a third
-    # flank strip on their outer side (no neighbour: strips along the whole coil); per
+    # pole-back leakage; the two end poles' back end face and back underside to the stator
+    # beyond and a third flank strip on their outer side (no neighbour: strips along the
+    # whole coil); per
     # neighbour pair: pole back, stator (over the window), leakage between the heads and
     # per coil strip (3); nodes per pole: head, 3 coil nodes, pole back, stator at the
     # centre and at the two face edges, the two sides' window teeth, tooth tips
     per_pole, per_pair = 4 + 1 + 2 + 2 + 2 * (2 + 1 + 2) + 1, 1 + 1 + 1 + 3
-    assert len(net.branches) == 12 * per_pole + 2 * 2 + 11 * per_pair == 310
-    assert len(net.nodes) == 12 * 11 and net.n_loops == 310 - 132 + 1
+    assert len(net.branches) == 12 * per_pole + 2 * 3 + 11 * per_pair == 312
+    assert len(net.nodes) == 12 * 11 and net.n_loops == 312 - 132 + 1
     # each circuit drives 6 poles with alternating polarity; every pole's winding is
     # spread over its 4 core segments, whose turns add up to turns_per_pole
     N = net.turns_matrix
@@ -177,6 +178,14 @@ def test_leakage_permeances_against_roters() -> None:
     assert sorted(k for k in fringe if k.startswith("end_")) == ["end_p01", "end_p12"]
     for k in ("end_p01", "end_p12"):
         assert float(fringe[k].permeance(0.010)) == pytest.approx(end, rel=1e-12)
+    # and the back's underside from its end to the window centre (u <= lp/2 + tau/2): half
+    # circles about the bottom corner, up beside the end (D = 210 mm) and across the gap,
+    # (mu0 wp/pi) ln((s' + D + pi u)/(s' + D))
+    depth, u = y1, 0.5 * lp + 0.5 * tau
+    under = MU0 * wp / np.pi * np.log((sp + depth + np.pi * u) / (sp + depth))
+    assert sorted(k for k in fringe if k.startswith("under_")) == ["under_p01", "under_p12"]
+    for k in ("under_p01", "under_p12"):
+        assert float(fringe[k].permeance(0.010)) == pytest.approx(under, rel=1e-12)
     # sanity of the magnitudes against the gap: each leakage is a few % of a pole's gap
     # permeance at 10 mm (~2.3e-6 H), so the leakage factor stays realistic (< 1.3)
     assert g_pp_strip < 0.1 * 2.3e-6 and g_pb_end < 0.1 * 2.3e-6

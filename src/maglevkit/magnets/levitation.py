@@ -377,6 +377,17 @@ def build_levitation_magnet(params: Mapping[str, Any], materials: Mapping[str, M
             branches.append(Branch(f"end_{p}", f"K{k + 1}", f"W{k + 1}{outer}", (
                 FringePermeance(f"end_{p}", gap_input=p, width=wp, radius=hcore + hb,
                                 inner_radius=r0, **slots),)))
+        if outer and options.leakage:
+            # end pole: the pole back's underside, from its end to the window centre (the
+            # part node K_k stands for, u <= l_p/2 + tau/2), around the end to the stator
+            # beyond: a half circle of radius u about the back's bottom corner, then straight
+            # up beside the end (depth D = core_height + back_height) and across the gap,
+            # length pi u + D + s': (mu0 w_p/pi) ln((s' + D + pi u)/(s' + D)), i.e. the
+            # fringe form of width w_p/2 between radii 2D/pi and 2D/pi + 2u
+            r_d = 2.0 * (hcore + hb) / math.pi
+            branches.append(Branch(f"under_{p}", f"K{k + 1}", f"W{k + 1}{outer}", (
+                FringePermeance(f"under_{p}", gap_input=p, width=0.5 * wp,
+                                radius=r_d + lp + tau, inner_radius=r_d, **slots),)))
         if options.leakage:
             if g_pb(k) > 0.0:
                 branches.append(Branch(f"leak_pb_{p}", f"H{k + 1}", f"K{k + 1}",
