@@ -37,11 +37,12 @@ side's window teeth ``window_k_x`` (W_kx -> S_kx, with their slots' air
 ``window_slots_k_x``), and the stator yoke over the half face ``yoke_k_x`` (S_k -> S_kx,
 ``l_p/2``: the face teeth feed the yoke at the pole centre S_k, the window's teeth at the
 face edge S_kx); ``leak_pb_k`` (H_k -> K_k: leakage around the coil back into the pole
-back); the two end poles also ``end_k`` (K_k -> W_kx on the outer side: Roters quarter
-circles from the pole back's end face, beyond the coil's outer side, to the stator beyond
-the magnet).  Between neighbours: ``back_k`` (K_k -> K_k+1), ``stator_k`` (S_kr ->
-S_k+1,l: the yoke over the window, ``tau - l_p``), ``leak_pp_k`` (H_k -> H_k+1) and
-``leak_pp_k_j`` (C_k_j -> C_k+1_j).  The paper's Fig. 3 flux paths map to:
+back); the two end poles also ``end_k`` and ``under_k`` (K_k -> W_kx on the outer side:
+Roters paths from the pole back's end face, beyond the coil's outer side, and from its
+underside around the end, to the stator beyond the magnet).  Between neighbours:
+``back_k`` (K_k -> K_k+1), ``stator_k`` (S_kr -> S_k+1,l: the yoke over the window,
+``tau - l_p``), ``leak_pp_k`` (H_k -> H_k+1) and ``leak_pp_k_j`` (C_k_j -> C_k+1_j).
+The paper's Fig. 3 flux paths map to:
 nominal flux -> the face term ``A / s'``, LIG flux -> the grooves' Carter slot loss,
 notch flux into the stator slots -> Carter's coefficient, leakage -> ``leak_pp``,
 ``leak_pb``, the flank strips.  All formulas, their sources and the 2-D FEM check that
