@@ -35,7 +35,10 @@ pole pitch), the fluxes of the iron regions (from differences of A) and their de
 in the current (``dflux``, from the tangent's dA/dI), and the magnetic potential drops
 along lines through junction, core, gap, tooth, pole back and yoke with their current
 derivatives (``mmf``; ``--diagnose S_MM I_A`` records one point at the grid's stator
-positions into ``benchmarks/results/fem_tr09_diagnosis.json``).
+positions into ``benchmarks/results/fem_tr09_diagnosis.json``; ``--core S_MM I_A`` the
+same with the fluxes across the core every 10 mm of its height and in thirds of its width,
+``core_y*`` and ``core_flank_lo``/``core_centre``/``core_flank_hi``, into
+``benchmarks/results/fem_tr09_core.json``).
 
 ``python benchmarks/fem_tr09.py`` runs the convergence study and the grid and writes
 ``benchmarks/results/fem_tr09_*.json``; ``--compare`` prints the network against them.
@@ -380,6 +383,15 @@ def region_fluxes(basis, A: np.ndarray, g: Geometry, s: float, offset: float,  #
         c = xc[k]
         a, b = c - 0.5 * g.lp + eps, c + 0.5 * g.lp - eps
         pair("core", k, (a, ymid), (b, ymid))
+        # along the core: every 10 mm from the face to the back's underside; across it at
+        # mid-coil: the outer thirds (flanks) and the centre third
+        for ymm in range(10, int(round(g.hcore * 1e3)) + 1, 10):
+            yy = -min(ymm * 1e-3, g.hcore - eps)
+            pair(f"core_y{ymm}", k, (a, yy), (b, yy))
+        third = (b - a) / 3.0
+        pair("core_flank_lo", k, (a, ymid), (a + third, ymid))
+        pair("core_centre", k, (a + third, ymid), (b - third, ymid))
+        pair("core_flank_hi", k, (b - third, ymid), (b, ymid))
         pair("shoe", k, (a, -0.5 * g.hf), (b, -0.5 * g.hf))
         pair("face", k, (a, -eps), (b, -eps))
         lo_w, hi_w = c - 0.5 * g.tau, c + 0.5 * g.tau
@@ -604,6 +616,9 @@ def main(argv: list[str] | None = None) -> None:
     ap.add_argument("--diagnose", nargs=2, type=float, metavar=("S_MM", "I_A"),
                     help="one point at the grid's stator positions with the incremental "
                          "region fluxes, into fem_tr09_diagnosis.json")
+    ap.add_argument("--core", nargs=2, type=float, metavar=("S_MM", "I_A"),
+                    help="one point at the grid's stator positions with the fluxes along "
+                         "the core's height and across its width, into fem_tr09_core.json")
     args = ap.parse_args(argv)
     mag = cut_magnet(args.magnet, args.flux_paths)
     g = Geometry.from_magnet(mag)
@@ -624,6 +639,9 @@ def main(argv: list[str] | None = None) -> None:
         run(g, "convergence", [(0.010, 80.0, 0.0)], refine=1.4, order=1)
         run(g, "convergence", [(0.010, 80.0, 0.0)], refine=GRID_REFINE, box=1.5)
         run(g, "convergence", [(0.010, 80.0, 0.0215)], refine=GRID_REFINE, half=False)
+    if args.core:
+        sd, idiag = args.core
+        run(g, "core", [(sd * 1e-3, idiag, o) for o in OFFSETS], refine=GRID_REFINE)
     if args.diagnose:
         sd, idiag = args.diagnose
         run(g, "diagnosis", [(sd * 1e-3, idiag, o) for o in OFFSETS], refine=GRID_REFINE)

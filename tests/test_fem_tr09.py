@@ -41,23 +41,25 @@ def _fem():  # type: ignore[no-untyped-def]
 # must re-measure it (and say why in docs/validation_fem.md).
 MARGIN = 0.3
 MEASURED = {
-    # (s [mm], I [A]): (err F, err psi, err L); "split" with the slots' air beside the
-    # teeth and the core ending at the pole back (docs/validation_fem.md, 2026-12-02)
-    (6.0, 10.0): (+1.2, +0.9, +0.9),
-    (6.0, 33.5): (+1.4, +1.0, -0.9),
-    (6.0, 50.0): (-2.0, -0.6, -8.2),
-    (6.0, 80.0): (-3.6, -1.8, -8.4),
-    (6.0, 100.0): (-3.7, -2.3, -12.3),
-    (10.0, 10.0): (+0.9, +0.9, +0.9),
-    (10.0, 33.5): (+1.1, +1.0, +1.3),
-    (10.0, 50.0): (+0.7, +0.8, -1.0),
-    (10.0, 80.0): (-3.6, -1.0, -9.8),
-    (10.0, 100.0): (-5.3, -1.8, -11.9),
-    (20.0, 10.0): (+3.0, +0.5, +0.5),
-    (20.0, 33.5): (+3.1, +0.6, +0.6),
-    (20.0, 50.0): (+3.2, +0.6, +0.8),
-    (20.0, 80.0): (+2.8, +0.4, -0.6),
-    (20.0, 100.0): (+2.2, +0.1, -3.3),
+    # (s [mm], I [A]): (err F, err psi, err L); "split" with the stator yoke split at the
+    # face edges (window teeth per side), the end poles' back end face and underside to
+    # the stator beyond the magnet and their outer flank strips along the whole coil
+    # (docs/validation_fem.md, 2026-12-02, continued)
+    (6.0, 10.0): (+1.3, +1.0, +1.0),
+    (6.0, 33.5): (+2.0, +1.3, +0.5),
+    (6.0, 50.0): (-1.0, +0.0, -6.4),
+    (6.0, 80.0): (-1.9, -0.8, -4.3),
+    (6.0, 100.0): (-1.6, -1.1, -6.9),
+    (10.0, 10.0): (+1.0, +1.0, +1.0),
+    (10.0, 33.5): (+1.2, +1.1, +1.5),
+    (10.0, 50.0): (+1.4, +1.2, +0.5),
+    (10.0, 80.0): (-2.3, -0.3, -7.2),
+    (10.0, 100.0): (-3.7, -0.9, -7.9),
+    (20.0, 10.0): (+3.1, +0.6, +0.6),
+    (20.0, 33.5): (+3.1, +0.6, +0.7),
+    (20.0, 50.0): (+3.3, +0.7, +1.0),
+    (20.0, 80.0): (+3.4, +0.8, +0.8),
+    (20.0, 100.0): (+3.2, +0.7, -1.6),
 }
 
 
@@ -74,17 +76,18 @@ def test_network_against_recorded_fem() -> None:
             assert want - MARGIN <= got <= want + MARGIN, (key, name, got)
     # the aims (force and flux linkage within 3 %, L within 5 %) below the knee: every
     # point up to 33.5 A, at 10 mm up to 50 A and at 20 mm up to 100 A; flux linkage
-    # everywhere.  Known exceptions, measured: the force at 20 mm is +3.0 ... +3.2 %
+    # everywhere.  Known exceptions, measured: the force at 20 mm is +3.1 ... +3.4 %
     # (the air paths' share at large gaps; the iron's drop there now matches the FEM's
     # line integral, tests below), so it is held to 3.5 % there
     for (s, i), r in rows.items():
         assert abs(r["epsi"]) < 3.0, (s, i)
         if i <= 33.5 or (s >= 10.0 and i <= 50.0) or s >= 20.0:
             assert abs(r["eF"]) < (3.5 if s >= 20.0 else 3.0) and abs(r["eL"]) < 5.0, (s, i)
-    # into deep saturation (6-10 mm, 80-100 A; before: force -6.8 ... -9.6 %, L -15.5 ...
-    # -19 %): force within 6 %, L within 13 % -- the 3 % / 5 % aims are not met there
+    # into deep saturation (6-10 mm, 80-100 A; first split network: force -6.8 ... -9.6 %,
+    # L -15.5 ... -19 %; then -3.6 ... -5.3 %, -8.4 ... -12.3 %): force within 5 %, L within
+    # 11 % -- the 3 % / 5 % aims are not met there
     for (s, i), r in rows.items():
-        assert abs(r["eF"]) < 6.0 and abs(r["eL"]) < 13.0, (s, i)
+        assert abs(r["eF"]) < 4.0 and abs(r["eL"]) < 8.5, (s, i)
 
 
 # The former network ("paper"): force, psi, L errors at three points (the issue's early
@@ -128,9 +131,9 @@ def test_fem_script_reproduces_a_recorded_point() -> None:
 # it in the core and the pole back) and the face teeth (the network's remaining excess).
 DIAGNOSIS = {
     # (s [mm], I [A]): {region: (FEM, network)}
-    (10.0, 100.0): {"junction+core": (3186, 3007), "gap+teeth": (16230, 16061)},
-    (6.0, 80.0): {"junction+core": (2941, 2442), "gap+teeth": (12678, 12720)},
-    (20.0, 33.5): {"junction+core": (153, 140), "gap+teeth": (6347, 6315)},
+    (10.0, 100.0): {"junction+core": (3186, 3058), "gap+teeth": (16230, 16125)},
+    (6.0, 80.0): {"junction+core": (2941, 2498), "gap+teeth": (12678, 12792)},
+    (20.0, 33.5): {"junction+core": (153, 140), "gap+teeth": (6347, 6314)},
 }
 
 

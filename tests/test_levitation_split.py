@@ -46,14 +46,18 @@ def test_network_shape_and_names(std: mk.Magnet) -> None:
     assert net.gap_names == pole_gap_names(12)
     assert net.circuit_names == ("front", "rear")
     # per pole: K + 1 = 4 core segments (coil_segments K = 3), gap, teeth and their slots'
-    # air under the face, window teeth and their slots' air, flank fringe, 2 flank strips
-    # (the strips whose quarter circles land before the window's centre plane: y0 = 15
-    # and 48.3 mm < 69 mm), pole-back leakage; per neighbour pair: pole back, stator,
-    # leakage between the heads and per coil strip (3); nodes per pole: head, 3 coil
-    # nodes, pole back, stator, window teeth, tooth tips
-    per_pole, per_pair = 4 + 1 + 2 + 2 + 1 + 2 + 1, 1 + 1 + 1 + 3
-    assert len(net.branches) == 12 * per_pole + 11 * per_pair == 222
-    assert len(net.nodes) == 12 * 8 and net.n_loops == 222 - 96 + 1
+    # air under the face, the stator yoke over the two half faces, per side (l, r) window
+    # teeth and their slots' air, flank fringe, 2 flank strips (the strips whose quarter
+    # circles land before the window's centre plane: y0 = 15 and 48.3 mm < 69 mm), one
+    # pole-back leakage; the two end poles' back end face and back underside to the stator
+    # beyond and a third flank strip on their outer side (no neighbour: strips along the
+    # whole coil); per
+    # neighbour pair: pole back, stator (over the window), leakage between the heads and
+    # per coil strip (3); nodes per pole: head, 3 coil nodes, pole back, stator at the
+    # centre and at the two face edges, the two sides' window teeth, tooth tips
+    per_pole, per_pair = 4 + 1 + 2 + 2 + 2 * (2 + 1 + 2) + 1, 1 + 1 + 1 + 3
+    assert len(net.branches) == 12 * per_pole + 2 * 3 + 11 * per_pair == 312
+    assert len(net.nodes) == 12 * 11 and net.n_loops == 312 - 132 + 1
     # each circuit drives 6 poles with alternating polarity; every pole's winding is
     # spread over its 4 core segments, whose turns add up to turns_per_pole
     N = net.turns_matrix
@@ -125,13 +129,13 @@ def test_leakage_permeances_against_roters() -> None:
     pp = {k: v for k, v in leak.items() if k.startswith("leak_pp_")}
     pb = {k: v for k, v in leak.items() if k.startswith("leak_pb_")}
     slots = {k: v for k, v in leak.items() if "slots_" in k}
-    assert len(pp) == 11 * 4 and len(pb) == 12 and len(slots) == 24
-    assert len(leak) == 44 + 12 + 24
+    assert len(pp) == 11 * 4 and len(pb) == 12 and len(slots) == 36
+    assert len(leak) == 44 + 12 + 36
     # the slots' air beside the teeth: mu0 (footprint x wp x b/tau_s) / slot depth, the
-    # footprint being the pole length under the face and the window beside it
+    # footprint being the pole length under the face and each side's half window
     share = st["slot_opening"] / st["slot_pitch"]
     for name, v in slots.items():
-        footprint = window if name.startswith("window_") else lp
+        footprint = 0.5 * window if name.startswith("window_") else lp
         assert v == pytest.approx(MU0 * footprint * wp * share / st["slot_depth"], rel=1e-12)
     for name, v in pp.items():
         strip = name.count("_") == 4                   # leak_pp_pXX_pYY_j
@@ -139,18 +143,49 @@ def test_leakage_permeances_against_roters() -> None:
     for name, v in pb.items():
         end = name in ("leak_pb_p01", "leak_pb_p12")
         assert v == pytest.approx(g_pb_end if end else g_pb_inner, rel=1e-12)
-    # the flank strips of pole 1 (both flanks, 2 wp): quarter circle from the flank at
-    # height y plus the gap at Carter's s', integrated over the strip:
-    # (2 mu0 2wp/pi) ln((s' + pi y1/2)/(s' + pi y0/2)); strips 15-48.3 mm and 48.3-69 mm
-    # (the second ends at the window's centre plane)
+    # the flank strips of an inner pole (each flank, wp, lands on its own side's window
+    # teeth): quarter circle from the flank at height y plus the gap at Carter's s',
+    # integrated over the strip: (2 mu0 wp/pi) ln((s' + pi y1/2)/(s' + pi y0/2)); strips
+    # 15-48.3 mm and 48.3-69 mm (the second ends at the window's centre plane); the end
+    # pole's outer flank (pole 1, side l) has no neighbour: three strips along the coil,
+    # 15-48.3, 48.3-81.7, 81.7-115 mm
     sp = _carter_by_hand(0.010, st["slot_pitch"], st["slot_opening"]) * 0.010
-    bounds = [(hf, hf + h), (hf + h, 0.5 * window)]
-    flank = {e.name: e for br in net.branches for e in br.elements
-             if isinstance(e, FringePermeance) and e.name.startswith("flank_p01_")}
-    assert sorted(flank) == ["flank_p01_1", "flank_p01_2"]
-    for j, (y0, y1) in enumerate(bounds, start=1):
-        hand = 2 * MU0 * 2 * wp / np.pi * np.log((sp + np.pi * y1 / 2) / (sp + np.pi * y0 / 2))
-        assert float(flank[f"flank_p01_{j}"].permeance(0.010)) == pytest.approx(hand, rel=1e-12)
+    inner = [(hf, hf + h), (hf + h, 0.5 * window)]
+    outer = [(hf + j * h, hf + (j + 1) * h) for j in range(3)]
+    fringe = {e.name: e for br in net.branches for e in br.elements
+              if isinstance(e, FringePermeance)}
+    flank = {k: e for k, e in fringe.items() if k.startswith(("flank_p02_", "flank_p01_"))}
+    assert sorted(flank) == ["flank_p01_1_l", "flank_p01_1_r", "flank_p01_2_l", "flank_p01_2_r",
+                             "flank_p01_3_l", "flank_p02_1_l", "flank_p02_1_r",
+                             "flank_p02_2_l", "flank_p02_2_r"]
+
+    def roters(y0: float, y1: float) -> float:
+        return 2 * MU0 * wp / np.pi * np.log((sp + np.pi * y1 / 2) / (sp + np.pi * y0 / 2))
+
+    for j, (y0, y1) in enumerate(inner, start=1):
+        for name in (f"flank_p02_{j}_l", f"flank_p02_{j}_r", f"flank_p01_{j}_r"):
+            assert float(flank[name].permeance(0.010)) == pytest.approx(roters(y0, y1),
+                                                                        rel=1e-12)
+    for j, (y0, y1) in enumerate(outer, start=1):
+        assert float(flank[f"flank_p01_{j}_l"].permeance(0.010)) == pytest.approx(
+            roters(y0, y1), rel=1e-12)
+    # the end poles' back end face (depth 130 ... 210 mm below the face; the quarter
+    # circles clear the coil's outer corner at hypot(115, 45) = 123.5 mm < 130 mm) to the
+    # stator beyond the magnet, one flank of width wp
+    y0, y1 = m["core_height"], m["core_height"] + m["back_height"]
+    assert np.hypot(hf + hc, tc) < y0
+    end = roters(y0, y1)
+    assert sorted(k for k in fringe if k.startswith("end_")) == ["end_p01", "end_p12"]
+    for k in ("end_p01", "end_p12"):
+        assert float(fringe[k].permeance(0.010)) == pytest.approx(end, rel=1e-12)
+    # and the back's underside from its end to the window centre (u <= lp/2 + tau/2): half
+    # circles about the bottom corner, up beside the end (D = 210 mm) and across the gap,
+    # (mu0 wp/pi) ln((s' + D + pi u)/(s' + D))
+    depth, u = y1, 0.5 * lp + 0.5 * tau
+    under = MU0 * wp / np.pi * np.log((sp + depth + np.pi * u) / (sp + depth))
+    assert sorted(k for k in fringe if k.startswith("under_")) == ["under_p01", "under_p12"]
+    for k in ("under_p01", "under_p12"):
+        assert float(fringe[k].permeance(0.010)) == pytest.approx(under, rel=1e-12)
     # sanity of the magnitudes against the gap: each leakage is a few % of a pole's gap
     # permeance at 10 mm (~2.3e-6 H), so the leakage factor stays realistic (< 1.3)
     assert g_pp_strip < 0.1 * 2.3e-6 and g_pb_end < 0.1 * 2.3e-6
@@ -159,9 +194,9 @@ def test_leakage_permeances_against_roters() -> None:
 def test_iron_is_saturable_and_teeth_are_loaded(std: mk.Magnet) -> None:
     net = std.network
     irons = [e for br in net.branches for e in br.elements if isinstance(e, mk.IronPath)]
-    # 12 x 4 core segments + 12 tooth groups under the faces + 12 in the windows + 11 back
-    # + 11 stator segments, all with a B-H curve
-    assert len(irons) == 48 + 12 + 12 + 11 + 11
+    # 12 x 4 core segments + 12 tooth groups under the faces + 2 x 12 in the windows
+    # + 2 x 12 yoke halves over the faces + 11 back + 11 stator segments, all with a B-H curve
+    assert len(irons) == 48 + 12 + 24 + 24 + 11 + 11
     assert all(e.material.saturates for e in irons)
     sol = mk.solve_statics(std, gaps=std.nominal_gap, currents=std.nominal_current)
     b_teeth = []

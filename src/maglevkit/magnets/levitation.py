@@ -4,10 +4,10 @@ Standard magnets (two 6-pole half magnets, two circuits) and bow magnets (three
 circuits) are the same builder; which pole feeds which circuit is a parameter.
 Longitudinal cut (x along the track, poles hang under the stator, see docs/magnets.md)::
 
-        S1 --stator-- S2 --stator-- S3 ...      stator yoke (laminated long-stator pack)
-       ||  \\         ||  \\
+   S1l-S1-S1r --stator-- S2l-S2-S2r ...         stator yoke (laminated long-stator pack)
+       ||     \\          ||   \\               ("split": nodes at the face edges too)
    teeth|slots window ...                       face teeth || their slots' air (T -> S),
-       T1    W1       T2   W2                   the window's teeth and slots (W -> S)
+       T1     W1r     W2l  T2                   the window's teeth and slots (W -> S)
         |                                       tooth tips
        gap                                      air gap of the face (H -> T)
         |   /  \\      |
@@ -30,13 +30,19 @@ face with Carter's coefficient of the stator slots and the recessed linear-gener
 grooves as slots of the face) to the tooth tips, then ``teeth_k`` (T_k -> S_k: the saturable
 stator teeth under the face) and in parallel ``slots_k`` (T_k -> S_k: the air of their
 slots, the apparent tooth flux density of machine design);
-``fringe_k`` (H_k -> W_k: the flanks below the coil facing the neighbours) and
-``flank_k_j`` (C_k_j -> W_k: Roters quarter circles from each coil strip of the flank to the
-face level and across the gap), both landing on the window's teeth ``window_k`` (W_k ->
-S_k, with their slots' air ``window_slots_k``); ``leak_pb_k`` (H_k -> K_k: leakage around
-the coil back into the pole back).  Between
-neighbours: ``back_k`` (K_k -> K_k+1), ``stator_k`` (S_k -> S_k+1), ``leak_pp_k`` (H_k ->
-H_k+1) and ``leak_pp_k_j`` (C_k_j -> C_k+1_j).  The paper's Fig. 3 flux paths map to:
+per side ``x`` (``l``, ``r``) of the pole: ``fringe_k_x`` (H_k -> W_kx: the flank below
+the coil facing that side) and ``flank_k_j_x`` (C_k_j -> W_kx: Roters quarter circles from
+each coil strip of the flank to the face level and across the gap), both landing on that
+side's window teeth ``window_k_x`` (W_kx -> S_kx, with their slots' air
+``window_slots_k_x``), and the stator yoke over the half face ``yoke_k_x`` (S_k -> S_kx,
+``l_p/2``: the face teeth feed the yoke at the pole centre S_k, the window's teeth at the
+face edge S_kx); ``leak_pb_k`` (H_k -> K_k: leakage around the coil back into the pole
+back); the two end poles also ``end_k`` and ``under_k`` (K_k -> W_kx on the outer side:
+Roters paths from the pole back's end face, beyond the coil's outer side, and from its
+underside around the end, to the stator beyond the magnet).  Between neighbours:
+``back_k`` (K_k -> K_k+1), ``stator_k`` (S_kr -> S_k+1,l: the yoke over the window,
+``tau - l_p``), ``leak_pp_k`` (H_k -> H_k+1) and ``leak_pp_k_j`` (C_k_j -> C_k+1_j).
+The paper's Fig. 3 flux paths map to:
 nominal flux -> the face term ``A / s'``, LIG flux -> the grooves' Carter slot loss,
 notch flux into the stator slots -> Carter's coefficient, leakage -> ``leak_pp``,
 ``leak_pb``, the flank strips.  All formulas, their sources and the 2-D FEM check that
@@ -249,6 +255,12 @@ def build_levitation_magnet(params: Mapping[str, Any], materials: Mapping[str, M
     # the core's half back height counted it twice (2-D FEM, docs/validation_fem.md)
     core_len = hcore if split else hcore + 0.5 * hb
     stator_area = st["yoke_height"] * st["width"]
+    # "split": the stator yoke carries a window's whole flux only between the face edges
+    # of neighbouring poles (tau - l_p); over each half face (l_p/2) it runs in a branch of
+    # its own from the pole centre, where the face teeth feed it, to the face edge, where
+    # the window's teeth of that side do (2-D FEM: an end pole's flux all returns one way
+    # and saturated the full-pitch branch, docs/validation_fem.md)
+    yoke_split = split
     # the core split along the coil (as the U-magnet's legs): nodes C_j at the depths
     # y_j = h_f + (j - 1/2) h below the face, h = h_c/K; segments from the face up: tip
     # (to C_1), K - 1 coil strips, top (C_K to the pole back's mid-line); turns in
@@ -276,9 +288,10 @@ def build_levitation_magnet(params: Mapping[str, Any], materials: Mapping[str, M
     # to the face level and on across the gap to the stator (a fringe strip), while the
     # circle lands before the window's centre plane (y <= window/2; beyond it the window
     # leakage takes over); both flanks of every pole (an end pole's outer flank faces the
-    # stator beyond the magnet)
+    # stator beyond the magnet, with no window centre plane: strips along the whole coil)
     strips = [(y - 0.5 * h, min(y + 0.5 * h, 0.5 * window)) for y in y_nodes
               if y - 0.5 * h < 0.5 * window] if split else []
+    outer_strips = [(y - 0.5 * h, y + 0.5 * h) for y in y_nodes] if split else []
     # around the coil into the own pole back: half hollow cylinders around the coil's
     # cross-section (inner radius h_c/2, radial extent t_c) along the coil sides that do
     # not face a neighbour pole: both across-track sides, plus the outer side of an end pole
@@ -326,22 +339,57 @@ def build_levitation_magnet(params: Mapping[str, Any], materials: Mapping[str, M
                                 (slot_air(f"slots_{p}", lp),))]
         else:
             branches.append(Branch(f"gap_{p}", f"H{k + 1}", f"S{k + 1}", (air_gap, teeth)))
-        if split and (options.fringing or options.leakage):
-            # the window's teeth beside the face carry what lands there (and their slots)
-            branches += [Branch(f"window_{p}", f"W{k + 1}", f"S{k + 1}", (
-                IronPath(f"iron_window_teeth_{p}", st["slot_depth"], window_teeth, stator_mat),)),
-                Branch(f"window_slots_{p}", f"W{k + 1}", f"S{k + 1}",
-                       (slot_air(f"window_slots_{p}", tau - lp),))]
-        if split and options.fringing:
-            branches.append(Branch(f"fringe_{p}", f"H{k + 1}", f"W{k + 1}", (
-                FringePermeance(f"fringe_{p}", gap_input=p, width=2.0 * wp, radius=hf,
-                                **slots),)))
+        if yoke_split:
+            for hand in ("l", "r"):
+                branches.append(Branch(f"yoke_{p}_{hand}", f"S{k + 1}", f"S{k + 1}{hand}", (
+                    IronPath(f"iron_yoke_{p}_{hand}", 0.5 * lp, stator_area, stator_mat),)))
+        # the two windows beside the face ("split" with the yoke split at the face edges:
+        # each side its own window teeth and landing node; else one node for both)
+        hands = ("l", "r") if yoke_split else ("",)
+        outer = {0: "l", poles - 1: "r"}.get(k) if yoke_split else None
+        share = 1.0 / len(hands)
+        for hand in hands:
+            sfx, w_node = f"_{hand}" if hand else "", f"W{k + 1}{hand}"
+            if split and (options.fringing or options.leakage):
+                # the window's teeth beside the face carry what lands there (and their slots)
+                branches += [Branch(f"window_{p}{sfx}", w_node, f"S{k + 1}{hand}", (
+                    IronPath(f"iron_window_teeth_{p}{sfx}", st["slot_depth"],
+                             share * window_teeth, stator_mat),)),
+                    Branch(f"window_slots_{p}{sfx}", w_node, f"S{k + 1}{hand}",
+                           (slot_air(f"window_slots_{p}{sfx}", share * (tau - lp)),))]
+            if split and options.fringing:
+                branches.append(Branch(f"fringe_{p}{sfx}", f"H{k + 1}", w_node, (
+                    FringePermeance(f"fringe_{p}{sfx}", gap_input=p, width=2.0 * share * wp,
+                                    radius=hf, **slots),)))
+            if options.leakage:
+                # an end pole's outer flank has no neighbour and no window centre plane:
+                # its strips run along the whole coil
+                use = outer_strips if hand and hand == outer else strips
+                for j, (y0, y1) in enumerate(use):
+                    name = f"flank_{p}_{j + 1}{sfx}"
+                    branches.append(Branch(name, nodes[j + 1], w_node, (
+                        FringePermeance(name, gap_input=p, width=2.0 * share * wp, radius=y1,
+                                        inner_radius=y0, **slots),)))
+        if outer and options.leakage:
+            # end pole: the back's end face, beyond the coil's outer side, to the stator
+            # beyond the magnet (Roters' quarter circles centred on the face's outer edge,
+            # from the depth where they clear the coil's corner to the back's underside)
+            r0 = max(hcore, math.hypot(hf + hc, tc))
+            branches.append(Branch(f"end_{p}", f"K{k + 1}", f"W{k + 1}{outer}", (
+                FringePermeance(f"end_{p}", gap_input=p, width=wp, radius=hcore + hb,
+                                inner_radius=r0, **slots),)))
+        if outer and options.leakage:
+            # end pole: the pole back's underside, from its end to the window centre (the
+            # part node K_k stands for, u <= l_p/2 + tau/2), around the end to the stator
+            # beyond: a half circle of radius u about the back's bottom corner, then straight
+            # up beside the end (depth D = core_height + back_height) and across the gap,
+            # length pi u + D + s': (mu0 w_p/pi) ln((s' + D + pi u)/(s' + D)), i.e. the
+            # fringe form of width w_p/2 between radii 2D/pi and 2D/pi + 2u
+            r_d = 2.0 * (hcore + hb) / math.pi
+            branches.append(Branch(f"under_{p}", f"K{k + 1}", f"W{k + 1}{outer}", (
+                FringePermeance(f"under_{p}", gap_input=p, width=0.5 * wp,
+                                radius=r_d + lp + tau, inner_radius=r_d, **slots),)))
         if options.leakage:
-            for j, (y0, y1) in enumerate(strips):
-                name = f"flank_{p}_{j + 1}"
-                branches.append(Branch(name, nodes[j + 1], f"W{k + 1}", (
-                    FringePermeance(name, gap_input=p, width=2.0 * wp, radius=y1,
-                                    inner_radius=y0, **slots),)))
             if g_pb(k) > 0.0:
                 branches.append(Branch(f"leak_pb_{p}", f"H{k + 1}", f"K{k + 1}",
                                        (LeakagePermeance(f"leak_pb_{p}", g_pb(k)),)))
@@ -351,8 +399,13 @@ def build_levitation_magnet(params: Mapping[str, Any], materials: Mapping[str, M
         if options.eddy_currents:
             back.append(EddyCurrent.solid_rectangular(f"eddy_back_{q}", hb, wb, tau, rho))
         branches.append(Branch(f"back_{q}", f"K{k + 1}", f"K{k + 2}", tuple(back)))
-        branches.append(Branch(f"stator_{q}", f"S{k + 1}", f"S{k + 2}",
-                               (IronPath(f"iron_stator_{q}", tau, stator_area, stator_mat),)))
+        if yoke_split:
+            branches.append(Branch(f"stator_{q}", f"S{k + 1}r", f"S{k + 2}l",
+                                   (IronPath(f"iron_stator_{q}", tau - lp, stator_area,
+                                             stator_mat),)))
+        else:
+            branches.append(Branch(f"stator_{q}", f"S{k + 1}", f"S{k + 2}",
+                                   (IronPath(f"iron_stator_{q}", tau, stator_area, stator_mat),)))
         if options.leakage:
             branches.append(Branch(f"leak_pp_{q}", f"H{k + 1}", f"H{k + 2}",
                                    (LeakagePermeance(f"leak_pp_{q}", g_pp_face),)))
