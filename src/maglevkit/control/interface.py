@@ -34,6 +34,11 @@ class Measurement:
         the voltages last applied).
     gap_ref_m : float
         Gap reference [m] for this sample.
+    applied_voltages_V : ndarray (n_circuits,) or None
+        The voltages the actuator actually applied over the last hold interval (their
+        mean) [V], when the plant may limit the commanded ones (a two-quadrant chopper
+        cannot drive a coil current below zero, a failed circuit gets none); None
+        (default): as commanded.  Observers integrate these instead of the commands.
     """
 
     time_s: float
@@ -41,6 +46,7 @@ class Measurement:
     gap_rate_m_per_s: float
     currents_A: np.ndarray
     gap_ref_m: float
+    applied_voltages_V: np.ndarray | None = None
 
 
 @runtime_checkable

@@ -59,7 +59,7 @@ def _model(job: VehicleJob, params: Mapping[str, Any]) -> tuple[Any, float]:
     from ..vehicle.train import load_vehicle
 
     key = (job.vehicle_file, job.vehicle_sha256, job.rigid, params["payload"],
-           params["resistance_scale"], params["eddy_resistance_scale"])
+           params["resistance_scale"], params["eddy_resistance_scale"], params["controller"])
     if key in _MODELS:
         _MODELS.move_to_end(key)
         known = _MODELS[key]
@@ -71,7 +71,8 @@ def _model(job: VehicleJob, params: Mapping[str, Any]) -> tuple[Any, float]:
         train = dataclasses.replace(load_vehicle(job.vehicle_file), payload_kg=params["payload"])
         model = VehicleModel(train, rigid=job.rigid,
                              resistance_scale=params["resistance_scale"],
-                             eddy_resistance_scale=params["eddy_resistance_scale"])
+                             eddy_resistance_scale=params["eddy_resistance_scale"],
+                             controller=params["controller"])
     except MaglevkitError as exc:
         _remember(key, exc)
         raise
@@ -141,7 +142,7 @@ def run_case(job: VehicleJob, params: Mapping[str, Any], key: str) -> Any:
     params : mapping
         The case's full parameter set (every name of
         :data:`~maglevkit.sweep.PARAMETERS`: ``speed`` [m/s], ``seed``, ``failure``,
-        ``payload`` [kg], ``resistance_scale``, ``eddy_resistance_scale``).
+        ``payload`` [kg], ``resistance_scale``, ``eddy_resistance_scale``, ``controller``).
     key : str
         The case key, stored in the Dataset's attributes.
 

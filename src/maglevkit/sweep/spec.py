@@ -92,6 +92,8 @@ PARAMETERS: tuple[SweepParameter, ...] = (
                    "payload per section (default: the vehicle file's)"),
     SweepParameter("resistance_scale", float, "1", 1.0, "factor on every coil's R_el (> 0)"),
     SweepParameter("eddy_resistance_scale", float, "1", 1.0, "factor on every R_ec (> 0)"),
+    SweepParameter("controller", str, "", "cascade",
+                   "gap controllers: 'cascade' (flux cascade) or 'mpc' (offset-free NMPC)"),
 )
 """The sweepable parameters, in the order of the result's dimensions."""
 
@@ -273,6 +275,8 @@ def _value(name: str, v: Any, where: str) -> Any:
     if p.kind is str:
         if not isinstance(v, str) or not v.strip():
             raise ParameterFileError(f"{where} = {v!r}: expected a string: {p.description}")
+        if name == "controller" and v.strip() not in ("cascade", "mpc"):
+            raise ParameterFileError(f"{where} = {v!r}: expected 'cascade' or 'mpc'")
         return " ".join(v.split())
     if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v):
         what = "a whole number" if p.kind is int else f"a number{unit}"
