@@ -26,9 +26,9 @@ def one_section() -> Any:
 
 def test_mpc_flies_one_section_over_the_bundled_irregularity(one_section: Any) -> None:
     """0.3 s at 400 km/h over sag 0.5 mm + random 0.3 mm, +10 % payload at 0.1 s, the NMPC
-    on all 18 circuits: no touchdown, gaps within +-1.5 mm (the cascade's own run stays
-    within +-1 mm here; measured NMPC extremes -1.1 / +0.7 mm on this run), every applied
-    voltage within the 440 V chopper limit, one update per circuit and sample."""
+    on all 18 circuits: no touchdown, gaps within +-1.5 mm (measured extremes on this run:
+    NMPC -1.02 / +0.72 mm, the cascade -1.17 / +0.68 mm), every applied voltage within the
+    440 V chopper limit, one update per circuit and sample."""
     model = VehicleModel(one_section, controller="mpc")
     assert model.controller_kind == "mpc" and len(model.circuit_controllers) == 18
     prof = parse_irregularity("sag:0.5e-3+random:0.3e-3",

@@ -8,8 +8,8 @@ docs/decisions.md and writes the figure ``docs/figures/vehicle-mpc-vs-cascade.pn
 
 Usage::
 
-    PYTHONPATH=src python tools/vehicle_mpc_vs_cascade.py [--sections 3] [--duration 3]
-        [--step 1.0] [--figure docs/figures/vehicle-mpc-vs-cascade.png]
+    PYTHONPATH=src python tools/vehicle_mpc_vs_cascade.py [--sections 3] [--duration 7]
+        [--step 1.0] [--settle 2.0] [--figure docs/figures/vehicle-mpc-vs-cascade.png]
 """
 
 from __future__ import annotations
@@ -57,9 +57,9 @@ def metrics(run, step_s: float, settle_s: float) -> dict[str, float]:
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--sections", type=int, default=3)
-    ap.add_argument("--duration", type=float, default=3.0)
+    ap.add_argument("--duration", type=float, default=7.0)
     ap.add_argument("--step", type=float, default=1.0)
-    ap.add_argument("--settle", type=float, default=1.0, help="transient after the step [s]")
+    ap.add_argument("--settle", type=float, default=2.0, help="transient after the step [s]")
     ap.add_argument("--figure", default="docs/figures/vehicle-mpc-vs-cascade.png")
     ap.add_argument("--json", default=None)
     a = ap.parse_args()

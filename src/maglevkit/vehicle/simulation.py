@@ -43,6 +43,10 @@ __all__ = ["Failure", "VehicleRun", "VehicleModel", "VehicleRunInterrupted", "ru
 #: controller in the vehicle loop"): the gap rate is the guideway's more than the magnet's
 #: and is left almost free, gap 1 mm against 200 V
 _VEHICLE_MPC_WEIGHTS = {"gap_m": 1e-3, "gap_rate_m_per_s": 1.0, "voltage_V": 200.0}
+#: disturbance model of the vehicle circuits' NMPC (MagnetHeaveModel.disturbances): no
+#: force disturbance, whose estimates drift apart on a frame (docs/vehicle.md); the load
+#: goes to the reference integral
+_VEHICLE_MPC_DISTURBANCES = ("voltage",)
 
 
 @dataclass(frozen=True)
@@ -523,15 +527,16 @@ class VehicleModel:
     def design_circuit_mpc(self, circuit: int, *, sample_time_s: float, horizon: int = 10,
                            **options: Any) -> Any:
         """The offset-free NMPC (real-time form) for one circuit of the vehicle, designed
-        from the plant's maps of that circuit and the circuit's share of the trim load.
+        from the plant's maps of that circuit, its frame's mass and its trim load.
 
         The prediction model (:class:`~maglevkit.control.model.MagnetHeaveModel`) is the
         circuit's own reduced model (the bank's maps of its magnet kind, that circuit
-        only: eq. 8 has no coupling between circuits) on a heave mass equal to the mean
-        trim force of the circuits of the same magnet kind and circuit name divided by
-        ``g`` (the cascade's design uses the same per-kind load), with the force and
-        voltage disturbances (offset-free); its reference is the nominal gap and its
-        voltage limit the train's chopper limit.
+        only: eq. 8 has no coupling between circuits) on the circuit's share of its
+        levitation frame's mass, loaded with its trim force (as the weight of that mass
+        under an equivalent gravity), means over the circuits of the same magnet kind and
+        circuit name; with a voltage disturbance (``disturbances`` adds others); its
+        reference is the nominal gap and its voltage limit the train's chopper limit
+        (docs/vehicle.md, "Any controller in the loop").
 
         Parameters
         ----------
@@ -543,7 +548,8 @@ class VehicleModel:
             Shooting intervals of the NMPC.
         **options
             Further keyword arguments of :class:`~maglevkit.control.realtime.RealTimeMPC`
-            (``qp_solver``, ``weights``, ``substeps``, ``observer_options``, ...).
+            (``qp_solver``, ``weights``, ``substeps``, ``observer_options``, ...), and
+            ``disturbances`` (the prediction model's, default ``("voltage",)``).
 
         Returns
         -------
@@ -568,6 +574,7 @@ class VehicleModel:
         from ..control.realtime import RealTimeMPC
 
         options = {"horizon": 10, "weights": MPCWeights(**_VEHICLE_MPC_WEIGHTS), **options}
+        dist = tuple(options.pop("disturbances", _VEHICLE_MPC_DISTURBANCES))
         nc = self.bank.n_circuits
         if isinstance(circuit, bool) or not isinstance(circuit, (int, np.integer)) or \
                 not 0 <= int(circuit) < nc:
@@ -577,7 +584,7 @@ class VehicleModel:
         j = int(circuit)
         member, cname = self.bank.circuit_names[j].split("/", 1)
         kind = self.circuit_kind[j]
-        key = (kind, cname)
+        key = (kind, cname, dist)
         shared = {} if shared is None else shared
         model = shared.get(key)
         if model is None:
@@ -598,7 +605,7 @@ class VehicleModel:
             mass = float(dyn.mean())
             model = MagnetHeaveModel(one, mass_kg=mass,
                                      gravity=float(self.trim_force_N[same].mean()) / mass,
-                                     compiled=self.bank.compiled_mode)
+                                     disturbances=dist, compiled=self.bank.compiled_mode)
             shared[key] = model
         return RealTimeMPC(model, gap_ref_m=self.train.nominal_gap_m,
                            sample_time_s=sample_time_s,
@@ -1366,7 +1373,11 @@ class VehicleModel:
             m = Measurement(float(t), float(gaps[j]), float(rates[j]), current[j:j + 1].copy(),
                             float(refs[j]), None if ua is None else ua[j:j + 1].copy())
             t0, c0 = clock(), cpu()
-            u = np.asarray(c.update(m), dtype=float).ravel()
+            try:
+                u = np.asarray(c.update(m), dtype=float).ravel()
+            except MaglevkitError as exc:
+                raise type(exc)(f"vehicle run at t = {t:.4f} s, controller of circuit "
+                                f"{self.bank.circuit_names[j]!r}: {exc}") from None
             times.append(clock() - t0)
             times_cpu.append(cpu() - c0)
             if u.size != 1 or not math.isfinite(float(u[0])):
