@@ -238,8 +238,9 @@ class VehicleModel:
         The gap controllers.  ``"cascade"``: the flux cascade on every circuit (vectorised,
         in the compiled step).  ``"mpc"``: the offset-free NMPC in its real-time form
         (:class:`~maglevkit.control.realtime.RealTimeMPC`) on every circuit, designed from
-        the plant's own maps and the circuit's share of the trim load
-        (:meth:`design_circuit_mpc`; reduced magnets only).  A mapping from circuit names
+        the plant's own maps, the circuit's share of its frame's mass and its trim load
+        (:meth:`design_circuit_mpc`; reduced magnets only); it gets its frame's rigid-body
+        fit of the gaps and the voltages the chopper applied (docs/vehicle.md).  A mapping from circuit names
         (``"s2m4/front"``) to :class:`~maglevkit.control.interface.Controller` objects:
         those circuits get these controllers (one object per circuit, called with that
         circuit's :class:`~maglevkit.control.interface.Measurement`: its gap [m], gap rate
@@ -503,7 +504,7 @@ class VehicleModel:
             self.reference_integral_time_s = tau
             self.controller_kind = "mpc"
             self.controller_sample_time_s = ts
-            designs: dict[tuple[str, str, int], Any] = {}
+            designs: dict[Any, Any] = {}
             for j in range(len(names)):
                 self.circuit_controllers[j] = self._circuit_mpc(j, ts, opts, designs)
             return
