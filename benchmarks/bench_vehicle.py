@@ -43,6 +43,7 @@ TITLE = "Vehicle model: 3-section train, reduced magnets, elastic guideway, 1 kH
 
 DURATION_S = 3.0
 PYTHON_DURATION_S = 1.0
+MPC_DURATION_S = 0.5
 SPEED_KMH = 400.0
 CALLS = 3000
 SECTIONS = (1, 2, 3, 5)
@@ -252,7 +253,29 @@ def run() -> str:
               "| part | us per step | share |", "|---|---|---|"]
     for k, t in shares.items():
         lines.append(f"| {k} | {1e6 * t:.1f} | {100 * t / tot:.0f} % |")
+    lines += ["", *mpc_lines(v, prof)]
     return "\n".join(lines)
+
+
+def mpc_lines(v: float, prof: Any) -> list[str]:
+    """The same train with the offset-free NMPC (real-time iteration) on every circuit,
+    2 ms sample, NumPy loop: real-time factor and the update times inside the vehicle."""
+    t0 = time.perf_counter()
+    model = VehicleModel(load_vehicle(), controller="mpc")
+    setup = time.perf_counter() - t0
+    r = model.run(speed_m_per_s=v, duration_s=MPC_DURATION_S, irregularity=prof)
+    nc = model.bank.n_circuits
+    wall, cpu = r.controller_update_time_s, r.controller_update_cpu_time_s
+    pw = np.percentile(wall, [50, 90, 99]) * 1e6
+    pc = np.percentile(cpu, [50, 90, 99]) * 1e6
+    per_sample = cpu.sum() / (wall.size / nc)
+    return [f"NMPC on every circuit ({nc} `RealTimeMPC`, N = 10, 2 ms sample, one call "
+            f"per circuit and sample; NumPy loop; {MPC_DURATION_S:g} s, set-up {setup:.1f} s):"
+            f" time loop {MPC_DURATION_S / r.cpu_time_s:.2f}x real time by CPU time "
+            f"({r.real_time_factor:.2f}x wall; aim >= 5x); update time per circuit, "
+            f"CPU median / p90 / p99 {pc[0]:.0f} / {pc[1]:.0f} / {pc[2]:.0f} us (wall "
+            f"{pw[0]:.0f} / {pw[1]:.0f} / {pw[2]:.0f} us); all circuits' updates "
+            f"{1e3 * per_sample:.2f} ms CPU per 2 ms sample."]
 
 
 if __name__ == "__main__":

@@ -57,6 +57,11 @@ def run(
         help="reduced (one force per circuit) or detailed (flux models, per pole; slow).")]
     = "reduced",
     maps_cache: Annotated[Path | None, typer.Option(help="Directory of the cached maps.")] = None,
+    controller: Annotated[str, typer.Option(
+        metavar="cascade|mpc",
+        help="Gap controllers: cascade (flux cascade, compiled step) or mpc (offset-free "
+             "NMPC, real-time iteration, one per circuit, 2 ms sample; NumPy loop, slower).")]
+    = "cascade",
     output: Annotated[Path | None, typer.Option("-o", "--output", help="Write the run (netCDF).")]
     = None,
     plot: Annotated[Path | None, typer.Option(help="Write figures (PNG) into this directory.")]
@@ -93,6 +98,7 @@ def run(
     Example:
       maglevkit vehicle run tr09 --speed-kmh 400 --duration 1.5 -o run.nc
       maglevkit vehicle run --vehicle tr09-cross-section --speed-kmh 400 --curve 4000:12:300
+      maglevkit vehicle run tr09 --speed-kmh 400 --duration 0.5 --controller mpc
     """
     if _cross_section_requested(vehicle, vehicle_option, curve, crosswind, lateral):
         if guideway is not None or rigid:
@@ -109,7 +115,7 @@ def run(
         vehicle = vehicle_option
     try:
         _run(vehicle, speed_kmh, speed, duration, dt, irregularity, failure, rigid, magnets,
-             maps_cache, output, plot, progress, force, guideway)
+             maps_cache, output, plot, progress, force, guideway, controller)
     except KeyboardInterrupt:
         raise interrupted() from None
 
@@ -117,7 +123,7 @@ def run(
 def _run(vehicle: str, speed_kmh: float | None, speed: float | None, duration: float,
          dt: float, irregularity: str, failure: list[str] | None, rigid: bool, magnets: str,
          maps_cache: Path | None, output: Path | None, plot: Path | None, progress: bool,
-         force: bool, guideway: str | None = None) -> None:
+         force: bool, guideway: str | None = None, controller: str = "cascade") -> None:
     from ..vehicle.data import load_guideway
     from ..vehicle.simulation import (
         VehicleModel,
@@ -149,6 +155,8 @@ def _run(vehicle: str, speed_kmh: float | None, speed: float | None, duration: f
             if not (math.isfinite(value) and value > 0):
                 raise typer.BadParameter(f"{opt} {value:g}: must be a finite number of "
                                          "seconds > 0")
+        if controller not in ("cascade", "mpc"):
+            raise typer.BadParameter(f"--controller {controller!r}: use cascade or mpc")
         if duration < 2 * dt:
             raise typer.BadParameter(f"--duration {duration:g} s is less than two steps of "
                                      f"--dt {dt:g} s")
@@ -158,7 +166,7 @@ def _run(vehicle: str, speed_kmh: float | None, speed: float | None, duration: f
         info(f"setting up {train.name} (maps, controllers) ...")
         track = load_guideway(guideway) if guideway is not None else None
         model = VehicleModel(train, guideway=track, rigid=rigid, magnets=magnets,
-                             maps_cache=maps_cache)
+                             maps_cache=maps_cache, controller=controller)
         if prof is not None and not rigid:
             prof = parse_irregularity(irregularity, span_length_m=model.guideway.span.length_m)
         res = model.run(speed_m_per_s=speed_kmh / 3.6, duration_s=duration, dt_s=dt,

@@ -38,6 +38,11 @@ class Measurement:
         The magnet's absolute vertical velocity [m/s], positive downward (the direction
         that opens the gap), e.g. from an accelerometer; None (default): not measured
         (controllers that use it take the gap rate instead, exact on a rigid, even track).
+    applied_voltages_V : ndarray (n_circuits,) or None
+        The voltages the actuator actually applied over the last hold interval (their
+        mean) [V], when the plant may limit the commanded ones (a two-quadrant chopper
+        cannot drive a coil current below zero, a failed circuit gets none); None
+        (default): as commanded.  Observers integrate these instead of the commands.
     """
 
     time_s: float
@@ -46,6 +51,7 @@ class Measurement:
     currents_A: np.ndarray
     gap_ref_m: float
     absolute_velocity_m_per_s: float | None = None
+    applied_voltages_V: np.ndarray | None = None
 
 
 @runtime_checkable

@@ -238,6 +238,9 @@ class OffsetFreeMPC:
     def update(self, measurement: Measurement) -> np.ndarray:
         """One sample: observer step, steady-state target for the reference, OCP solve.
 
+        The observer step integrates the previous output, or the measurement's
+        ``applied_voltages_V`` when given.
+
         Parameters
         ----------
         measurement : Measurement
@@ -257,7 +260,9 @@ class OffsetFreeMPC:
         m = self.model
         y = np.r_[measurement.gap_m, np.asarray(measurement.currents_A, dtype=float)]
         t0 = time.perf_counter()
-        z = self.observer.update(y, self._u_prev)
+        applied = measurement.applied_voltages_V
+        z = self.observer.update(y, self._u_prev if applied is None
+                                 else np.asarray(applied, dtype=float).reshape(m.nu))
         t1 = time.perf_counter()
         x_hat, d_hat = z[:m.nx], z[m.nx:]
         xt, ut = m.steady_state(measurement.gap_ref_m, d_hat,

@@ -359,6 +359,9 @@ class RealTimeMPC(OffsetFreeMPC):
     def update(self, measurement: Measurement) -> np.ndarray:
         """One sample: one compiled call (EKF step, target, QP data), one dense QP.
 
+        The EKF step integrates the previous output, or the measurement's
+        ``applied_voltages_V`` when given.
+
         The observer object's own ``state`` is not advanced (its step runs inside the
         compiled function); the estimates are in :meth:`diagnostics`.
 
@@ -380,6 +383,8 @@ class RealTimeMPC(OffsetFreeMPC):
         """
         t0 = time.perf_counter()
         c0 = time.thread_time()
+        if measurement.applied_voltages_V is not None:   # the EKF's input: what was applied
+            self._u[:] = measurement.applied_voltages_V
         self._y[0] = measurement.gap_m
         self._y[1:] = measurement.currents_A
         self._sref[0] = measurement.gap_ref_m

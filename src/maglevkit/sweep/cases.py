@@ -71,7 +71,7 @@ def _model(job: VehicleJob, params: Mapping[str, Any]) -> tuple[Any, float]:
     from ..vehicle.train import load_vehicle
 
     key = (job.vehicle_file, job.vehicle_sha256, job.rigid, params["payload"],
-           params["resistance_scale"], params["eddy_resistance_scale"])
+           params["resistance_scale"], params["eddy_resistance_scale"], params["controller"])
     if key in _MODELS:
         _MODELS.move_to_end(key)
         known = _MODELS[key]
@@ -83,7 +83,8 @@ def _model(job: VehicleJob, params: Mapping[str, Any]) -> tuple[Any, float]:
         train = dataclasses.replace(load_vehicle(job.vehicle_file), payload_kg=params["payload"])
         model = VehicleModel(train, rigid=job.rigid,
                              resistance_scale=params["resistance_scale"],
-                             eddy_resistance_scale=params["eddy_resistance_scale"])
+                             eddy_resistance_scale=params["eddy_resistance_scale"],
+                             controller=params["controller"])
     except MaglevkitError as exc:
         _remember(key, exc)
         raise
@@ -154,7 +155,7 @@ def run_case(job: VehicleJob | CrossSectionJob, params: Mapping[str, Any], key: 
     params : mapping
         The case's full parameter set (every name of the job's parameters: for a
         vehicle job :data:`~maglevkit.sweep.PARAMETERS`: ``speed`` [m/s], ``seed``,
-        ``failure``, ``payload`` [kg], ``resistance_scale``, ``eddy_resistance_scale``;
+        ``failure``, ``payload`` [kg], ``resistance_scale``, ``eddy_resistance_scale``, ``controller``;
         for a cross-section job :data:`~maglevkit.sweep.CROSS_SECTION_PARAMETERS`:
         ``speed`` [m/s], ``curve_radius`` [m], ``curve_superelevation`` [rad], ...).
     key : str

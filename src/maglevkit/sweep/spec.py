@@ -100,6 +100,8 @@ PARAMETERS: tuple[SweepParameter, ...] = (
                    "payload per section (default: the vehicle file's)"),
     SweepParameter("resistance_scale", float, "1", 1.0, "factor on every coil's R_el (> 0)"),
     SweepParameter("eddy_resistance_scale", float, "1", 1.0, "factor on every R_ec (> 0)"),
+    SweepParameter("controller", str, "", "cascade",
+                   "gap controllers: 'cascade' (flux cascade) or 'mpc' (offset-free NMPC)"),
 )
 """The sweepable parameters, in the order of the result's dimensions."""
 
@@ -404,6 +406,8 @@ def _value(name: str, v: Any, where: str) -> Any:
     if p.kind is str:
         if not isinstance(v, str) or not v.strip():
             raise ParameterFileError(f"{where} = {v!r}: expected a string: {p.description}")
+        if name == "controller" and v.strip() not in ("cascade", "mpc"):
+            raise ParameterFileError(f"{where} = {v!r}: expected 'cascade' or 'mpc'")
         text = " ".join(v.split())
         if name == "crosswind_shape":
             scenario({name: text}, where)

@@ -43,6 +43,15 @@ from .train import TrainData
 __all__ = ["Failure", "VehicleRun", "VehicleModel", "VehicleRunInterrupted", "run_vehicle",
            "parse_failure", "parse_irregularity"]
 
+#: cost weights of the vehicle circuits' NMPC (MPCWeights fields; docs/decisions.md, "Any
+#: controller in the vehicle loop"): the gap rate is the guideway's more than the magnet's
+#: and is left almost free, gap 1 mm against 200 V
+_VEHICLE_MPC_WEIGHTS = {"gap_m": 1e-3, "gap_rate_m_per_s": 1.0, "voltage_V": 200.0}
+#: disturbance model of the vehicle circuits' NMPC (MagnetHeaveModel.disturbances): no
+#: force disturbance, whose estimates drift apart on a frame (docs/vehicle.md); the load
+#: goes to the reference integral
+_VEHICLE_MPC_DISTURBANCES = ("voltage",)
+
 
 @dataclass(frozen=True)
 class Failure:
@@ -120,6 +129,11 @@ class VehicleRun:
         than the wall time).
     loop : str
         ``"compiled"`` or ``"python"``: which implementation of the step ran.
+    controller_update_time_s : ndarray
+        Wall time of every update of the controllers other than the vectorised cascade
+        [s] (one entry per circuit and sample; empty for the cascade).
+    controller_update_cpu_time_s : ndarray
+        The same updates' CPU (thread) time [s], less sensitive to a busy machine.
     """
 
     dataset: Any
@@ -132,6 +146,8 @@ class VehicleRun:
     timing_s: dict[str, float] = field(default_factory=dict)
     cpu_time_s: float = math.nan
     loop: str = "python"
+    controller_update_time_s: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    controller_update_cpu_time_s: np.ndarray = field(default_factory=lambda: np.zeros(0))
 
     def to_netcdf(self, path: str | Path) -> Path:
         """Write the run's Dataset (the folder must exist: nothing is created silently),
@@ -181,6 +197,13 @@ class VehicleRun:
                     else "frame down on its skids")
             lines.append(f"  TOUCHDOWN ({what}): circuit {c} at t = {t:.4f} s (gap "
                          f"{g * 1e3:.3f} mm); the run stopped there")
+        ut = self.controller_update_time_s
+        if ut.size:
+            p50, p99 = np.percentile(ut, [50, 99]) * 1e6
+            c50, c99 = np.percentile(self.controller_update_cpu_time_s, [50, 99]) * 1e6
+            lines.append(f"  controller: {ds.attrs.get('controller', '')}; {ut.size} updates, "
+                         f"median {p50:.0f} us, p99 {p99:.0f} us, max {ut.max() * 1e6:.0f} us "
+                         f"(wall time; CPU time median {c50:.0f} us, p99 {c99:.0f} us)")
         if ds.attrs.get("interrupted"):
             lines.append(f"  INTERRUPTED ({ds.attrs['interrupted']})")
         for k, v in self.comfort.items():
@@ -220,12 +243,38 @@ class VehicleModel:
         coil current cannot go below zero within a step (:class:`MagnetBank` option
         ``freewheel``); False: eq. 8 with the held voltages, the chopper limit
         ``U >= -R_ec I_L`` of the controllers holding at the sample instants only.
+    controller : {"cascade", "mpc"} or mapping of str to Controller, default "cascade"
+        The gap controllers.  ``"cascade"``: the flux cascade on every circuit (vectorised,
+        in the compiled step).  ``"mpc"``: the offset-free NMPC in its real-time form
+        (:class:`~maglevkit.control.realtime.RealTimeMPC`) on every circuit, designed from
+        the plant's own maps, the circuit's share of its frame's mass and its trim load
+        (:meth:`design_circuit_mpc`; reduced magnets only); it gets its frame's rigid-body
+        fit of the gaps and the voltages the chopper applied (docs/vehicle.md).  A mapping from circuit names
+        (``"s2m4/front"``) to :class:`~maglevkit.control.interface.Controller` objects:
+        those circuits get these controllers (one object per circuit, called with that
+        circuit's :class:`~maglevkit.control.interface.Measurement`: its gap [m], gap rate
+        [m/s], its current as a 1-element array [A], the nominal gap as reference; each
+        returns one voltage [V]), the others keep the cascade.  Controllers other than the
+        cascade run in the NumPy loop (``loop="python"``).
+    controller_sample_time_s : float, optional
+        Sample (hold) time [s] of the controllers given by ``controller`` (not the
+        cascade, which runs every step), a whole number of run steps.  Default: 2e-3 s
+        for ``"mpc"`` (docs/decisions.md, "Any controller in the vehicle loop"), the run's
+        step for a mapping.
+    mpc_options : mapping, optional
+        Keyword arguments for :meth:`design_circuit_mpc` (``horizon``, ``qp_solver``,
+        ``weights``, ...) with ``controller="mpc"``; and ``reference_integral_time_s``
+        [s] (default 0.5; None: off): the NMPC's gap reference of circuit ``j`` is
+        ``s0 - e_j / T``, ``e_j`` the integral of the frame-projected gap error (the
+        cascade's integral), which removes the mean gap error that the random
+        irregularity leaves (docs/decisions.md, "Any controller in the vehicle loop").
     """
 
     def __init__(self, train: TrainData, *, guideway: Any = None, rigid: bool = False,
                  magnets: str = "reduced", maps_cache: Any = None, compiled: str = "auto",
                  resistance_scale: float = 1.0, eddy_resistance_scale: float = 1.0,
-                 freewheel: bool = True) -> None:
+                 freewheel: bool = True, controller: Any = "cascade",
+                 controller_sample_time_s: float | None = None, mpc_options: Any = None) -> None:
         from ..magnets import load_magnet
         from ..models.flux import FluxModel
         from ..reduced.bank import MagnetBank
@@ -339,6 +388,7 @@ class VehicleModel:
         self.trim_current_A = self._trim_currents(circ_force)
         self._design_controllers()
         self._step_functions: dict[float, Any] = {}
+        self._set_controllers(controller, controller_sample_time_s, mpc_options)
 
     # ------------------------------------------------------------------ set-up helpers
     def _circuit_map(self, j: int, var: str) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -421,10 +471,161 @@ class VehicleModel:
         self.gains = {"kp_per_m": kp, "kd_s_per_m": kd, "ki_per_m_s": ki, "kflux_per_s": kf}
         self.flux_bias_Wb = psi0
 
+    def _set_controllers(self, controller: Any, sample_time_s: float | None,
+                         mpc_options: Any) -> None:
+        """``self.controller_kind`` ("cascade", "mpc", "custom") and
+        ``self.circuit_controllers`` (circuit index -> Controller, the circuits that do not
+        use the vectorised cascade)."""
+        from collections.abc import Mapping
+
+        from ..control.interface import Controller
+        from ..validation import real_number
+
+        names = self.bank.circuit_names
+        self.circuit_controllers: dict[int, Any] = {}
+        self.reference_integral_time_s: float | None = None
+        if sample_time_s is not None:
+            sample_time_s = real_number(sample_time_s, "controller_sample_time_s", "s",
+                                        positive=True)
+        if isinstance(controller, str):
+            if controller not in ("cascade", "mpc"):
+                raise InputError(f"controller = {controller!r}; use 'cascade', 'mpc' or a "
+                                 "mapping from circuit names to Controller objects")
+            if controller == "cascade":
+                if mpc_options is not None or sample_time_s is not None:
+                    raise InputError("mpc_options and controller_sample_time_s need "
+                                     "controller='mpc' or a mapping of controllers")
+                self.controller_kind = "cascade"
+                self.controller_sample_time_s: float | None = None
+                return
+            if self.fine:
+                raise InputError("controller = 'mpc' needs reduced magnets (magnets='reduced'): "
+                                 "the NMPC is designed from the reduced models' maps")
+            if mpc_options is not None and not isinstance(mpc_options, Mapping):
+                raise InputError(f"mpc_options must be a mapping of keyword arguments, got "
+                                 f"{type(mpc_options).__name__}")
+            ts = 2e-3 if sample_time_s is None else sample_time_s
+            opts = dict(mpc_options or {})
+            tau = opts.pop("reference_integral_time_s", 0.5)
+            if tau is not None:
+                tau = real_number(tau, "mpc_options['reference_integral_time_s']", "s",
+                                  positive=True)
+            self.reference_integral_time_s = tau
+            self.controller_kind = "mpc"
+            self.controller_sample_time_s = ts
+            designs: dict[Any, Any] = {}
+            for j in range(len(names)):
+                self.circuit_controllers[j] = self._circuit_mpc(j, ts, opts, designs)
+            return
+        if mpc_options is not None:
+            raise InputError("mpc_options needs controller='mpc'")
+        if not isinstance(controller, Mapping) or not controller:
+            raise InputError(f"controller = {controller!r}; use 'cascade', 'mpc' or a "
+                             "non-empty mapping from circuit names to Controller objects")
+        for key, ctl in controller.items():
+            if key not in names:
+                raise InputError(f"controller: no circuit {key!r}; circuits are e.g. "
+                                 f"{', '.join(names[:3])} ... {names[-1]} (magnet/circuit)")
+            if not isinstance(ctl, Controller):
+                raise InputError(f"controller[{key!r}] is a {type(ctl).__name__}, not a "
+                                 "Controller (reset, update, diagnostics, gap_ref_m, "
+                                 "voltage_limit_V: maglevkit.control.Controller)")
+            self.circuit_controllers[names.index(key)] = ctl
+        self.controller_kind = "custom"
+        self.controller_sample_time_s = sample_time_s
+
+    def design_circuit_mpc(self, circuit: int, *, sample_time_s: float, horizon: int = 10,
+                           **options: Any) -> Any:
+        """The offset-free NMPC (real-time form) for one circuit of the vehicle, designed
+        from the plant's maps of that circuit, its frame's mass and its trim load.
+
+        The prediction model (:class:`~maglevkit.control.model.MagnetHeaveModel`) is the
+        circuit's own reduced model (the bank's maps of its magnet kind, that circuit
+        only: eq. 8 has no coupling between circuits) on the circuit's share of its
+        levitation frame's mass, loaded with its trim force (as the weight of that mass
+        under an equivalent gravity), means over the circuits of the same magnet kind and
+        circuit name; with a voltage disturbance (``disturbances`` adds others); its
+        reference is the nominal gap and its voltage limit the train's chopper limit
+        (docs/vehicle.md, "Any controller in the loop").
+
+        Parameters
+        ----------
+        circuit : int
+            Index of the circuit in the bank (``bank.circuit_names``).
+        sample_time_s : float
+            Controller sample time [s], > 0.
+        horizon : int, default 10
+            Shooting intervals of the NMPC.
+        **options
+            Further keyword arguments of :class:`~maglevkit.control.realtime.RealTimeMPC`
+            (``qp_solver``, ``weights``, ``substeps``, ``observer_options``, ...), and
+            ``disturbances`` (the prediction model's, default ``("voltage",)``).
+
+        Returns
+        -------
+        RealTimeMPC
+            A new controller (own observer and QP state); circuits of the same kind and
+            name share the compiled functions (disk cache).
+
+        Raises
+        ------
+        InputError
+            ``circuit`` not a circuit index, or detailed magnets.
+        ParameterError
+            Bad NMPC options (from :class:`RealTimeMPC`).
+        """
+        return self._circuit_mpc(circuit, sample_time_s, {"horizon": horizon, **options}, None)
+
+    def _circuit_mpc(self, circuit: Any, sample_time_s: float, options: dict[str, Any],
+                     shared: dict[Any, Any] | None) -> Any:
+        """:meth:`design_circuit_mpc`, the prediction models shared through ``shared``."""
+        from ..control.model import MagnetHeaveModel
+        from ..control.mpc import MPCWeights
+        from ..control.realtime import RealTimeMPC
+
+        options = {"horizon": 10, "weights": MPCWeights(**_VEHICLE_MPC_WEIGHTS), **options}
+        dist = tuple(options.pop("disturbances", _VEHICLE_MPC_DISTURBANCES))
+        nc = self.bank.n_circuits
+        if isinstance(circuit, bool) or not isinstance(circuit, (int, np.integer)) or \
+                not 0 <= int(circuit) < nc:
+            raise InputError(f"circuit = {circuit!r} must be a circuit index 0..{nc - 1}")
+        if self.fine:
+            raise InputError("design_circuit_mpc needs reduced magnets (magnets='reduced')")
+        j = int(circuit)
+        member, cname = self.bank.circuit_names[j].split("/", 1)
+        kind = self.circuit_kind[j]
+        key = (kind, cname, dist)
+        shared = {} if shared is None else shared
+        model = shared.get(key)
+        if model is None:
+            from ..reduction.maps import CharacteristicMaps
+
+            maps = self.maps[kind]
+            one = CharacteristicMaps(maps.dataset.sel(circuit=[cname]))
+            same = [i for i, n in enumerate(self.bank.circuit_names)
+                    if self.circuit_kind[i] == kind and n.split("/", 1)[1] == cname]
+            # dynamic mass: the circuit's share of its levitation frame (frame and magnets,
+            # both sides); the car body rides on the ~1 Hz secondary springs and does not
+            # follow the gap loop.  The load: the circuit's trim force, as the weight of
+            # that mass under an equivalent gravity (docs/vehicle.md)
+            per_frame = np.bincount(self.circuit_frame, minlength=self.train.n_frames)
+            fr = self.circuit_frame[same]
+            dyn = self.mechanics.body_mass_kg[self.train.n_sections + fr] / (
+                self.train.sides * per_frame[fr])
+            mass = float(dyn.mean())
+            model = MagnetHeaveModel(one, mass_kg=mass,
+                                     gravity=float(self.trim_force_N[same].mean()) / mass,
+                                     disturbances=dist, compiled=self.bank.compiled_mode)
+            shared[key] = model
+        return RealTimeMPC(model, gap_ref_m=self.train.nominal_gap_m,
+                           sample_time_s=sample_time_s,
+                           voltage_limit_V=self.train.voltage_limit_V, **options)
+
     # ------------------------------------------------------------------ the run
     def run(self, *, speed_m_per_s: float, duration_s: float, dt_s: float = 1e-3,
             irregularity: Any = None, failures: Sequence[Failure] = (), progress: bool = False,
-            floor_points: Sequence[float] = (-0.4, 0.0, 0.4), loop: str = "auto") -> VehicleRun:
+            floor_points: Sequence[float] = (-0.4, 0.0, 0.4), loop: str = "auto",
+            payload_step_s: float | None = None, payload_fraction: float = 0.1) -> VehicleRun:
         """Simulate the train at constant speed.
 
         Parameters
@@ -450,7 +651,15 @@ class VehicleModel:
             (:mod:`maglevkit.vehicle.stepkernel`; reduced magnets only); ``"python"``, the
             NumPy loop (the reference; needed for detailed magnets); ``"auto"`` (default):
             compiled for reduced magnets unless the bank was made with
-            ``compiled="never"``.  Both give the same run to rounding.
+            ``compiled="never"``.  Both give the same run to rounding.  Controllers
+            other than the cascade (``controller`` of :class:`VehicleModel`) and a
+            payload step run in the NumPy loop.
+        payload_step_s : float, optional
+            Time [s] of a payload step: from then on every car body weighs
+            ``1 + payload_fraction`` times its own weight (an added load; the bodies'
+            inertia stays).  None (default): no step.
+        payload_fraction : float, default 0.1
+            The payload step as a fraction of each car body's weight [-], finite.
 
         Returns
         -------
@@ -488,6 +697,18 @@ class VehicleModel:
                              "detailed magnets run in the Python loop")
         compiled_loop = loop == "compiled" or (loop == "auto" and not self.fine
                                                and self.bank.compiled_mode != "never")
+        if payload_step_s is not None:
+            from ..validation import real_number
+
+            payload_step_s = real_number(payload_step_s, "payload_step_s", "s",
+                                         nonnegative=True)
+            payload_fraction = real_number(payload_fraction, "payload_fraction", "1")
+        if self.circuit_controllers or payload_step_s is not None:
+            if loop == "compiled":
+                raise InputError("loop = 'compiled' runs the cascade without payload steps; "
+                                 f"controller = {self.controller_kind!r} and payload steps run "
+                                 "in the NumPy loop (loop='python' or 'auto')")
+            compiled_loop = False
         n_steps = int(round(duration_s / dt_s))
         if n_steps < 2:
             raise InputError(f"duration_s = {duration_s} s is less than two steps of {dt_s} s")
@@ -601,6 +822,8 @@ class VehicleModel:
         rec_fp = np.empty((n_steps + 1, npt))
         minv = 1.0 / np.diag(mech.M)
         timing = dict.fromkeys(("magnets", "mechanics", "guideway", "controllers", "other"), 0.0)
+        ctl_times: list[float] = []
+        ctl_cpu: list[float] = []
         touchdown: tuple[str, float, float, str] | None = None
         last = n_steps
         interrupted = False
@@ -630,6 +853,13 @@ class VehicleModel:
             half = 0.5 * v * dt
             fail_any = np.isfinite(fail_t)
             t_fail0 = float(fail_t.min()) if fail_any.any() else math.inf
+            # controllers other than the vectorised cascade, sampled every `hold` steps
+            ext_idx, hold, u_ext, ext_ctl = self._start_controllers(
+                dt, gaps_p if circ_avg is None else circ_avg @ gaps_p,
+                self._initial_gap_rates(v, rx_all[0], xpath[0], gstate), current)
+            k_pay = (n_steps + 1 if payload_step_s is None
+                     else int(math.ceil(payload_step_s / dt - 1e-9)))
+            q_grav = mech.Q_gravity
             k = 0
             interrupted = False
             try:
@@ -691,12 +921,19 @@ class VehicleModel:
                         rec["voltage"][k] = rec["voltage"][k - 1]
                         break
                     t3 = clock()
+                    if ext_idx.size and k % hold == 0:
+                        self._sample_controllers(ext_ctl, ext_idx, u_ext, t, gaps_c, rates_c,
+                                                 current, ctl_times,
+                                                 rec["voltage"][max(k - hold, 0):k], integ,
+                                                 ctl_cpu)
                     # controllers (flux cascade, every circuit at once)
                     vel_p = bt @ qd          # the force points' absolute velocity
                     vel_c = vel_p if circ_avg is None else circ_avg @ vel_p
                     rho = (kp * (gaps_c - s0) + kd * damping_input(rates_c, vel_c, blend)
                            + ki * integ)
                     u = res * current + kf * (psi0 * (1.0 + rho) - psi_hat)
+                    if ext_idx.size:        # the other controllers' voltages, held
+                        u[ext_idx] = u_ext[ext_idx]
                     np.clip(u, -umax, umax, out=u)
                     # 2-quadrant chopper: the coil current cannot reverse.  Reduced model (eq. 8):
                     # I = (U + R_ec I_L) / (R_el + R_ec) >= 0  <=>  U >= -R_ec I_L
@@ -726,7 +963,9 @@ class VehicleModel:
                     assert new_pts is not None
                     f_bar = (0.5 * sides) * (force_pts + new_pts)
                     t6 = clock()
-                    x_m = ad_m @ x_m + bd_m @ (mech.Q_gravity - mech.B @ f_bar)
+                    if k == k_pay:
+                        q_grav = self._payload_gravity(payload_fraction)
+                    x_m = ad_m @ x_m + bd_m @ (q_grav - mech.B @ f_bar)
                     t7 = clock()
                     if nm:
                         onehot = (rows2[npt:, None] == span_ids).astype(float)
@@ -758,7 +997,13 @@ class VehicleModel:
         secs = tr.n_sections
         q_all = rec_q[sl]
         rec["force"] *= sides
-        qdd_all = minv * (mech.Q_gravity - q_all @ mech.K.T - rec_qd[sl] @ mech.C.T
+        q_g_all = np.repeat(mech.Q_gravity[None, :], n, axis=0)
+        if payload_step_s is not None:
+            # the mechanics' step k -> k+1 holds the load of step k (ZOH); the record
+            # row k is the state at t_k, whose acceleration sees the load from then on
+            q_g_all[times >= payload_step_s - 1e-9 * dt] = self._payload_gravity(
+                payload_fraction)
+        qdd_all = minv * (q_g_all - q_all @ mech.K.T - rec_qd[sl] @ mech.C.T
                           - (rec_fp[sl] * sides) @ mech.B.T)
         floor = np.asarray(floor_points, dtype=float)
         acc_floor = (qdd_all[:, 0:2 * secs:2, None]
@@ -812,6 +1057,12 @@ class VehicleModel:
                    "landing_gap_m": tr.landing_gap_m,
                    "magnets": "detailed (fine, per pole)" if self.fine else
                               "reduced (coarse, per circuit)",
+                   "controller": self.controller_kind + (
+                       "" if self.controller_sample_time_s is None else
+                       f" (sample time {self.controller_sample_time_s:g} s)"),
+                   "payload_step": "" if payload_step_s is None else
+                                   f"+{payload_fraction:g} x car-body weight at "
+                                   f"{payload_step_s:g} s",
                    "guideway": repr(gw), "failures": ", ".join(f"{f.circuit}@{f.time_s:g}"
                                                                for f in failures),
                    "touchdown": "" if touchdown is None else
@@ -829,7 +1080,8 @@ class VehicleModel:
         sim_t = float(times[-1])
         result = VehicleRun(ds, min_gap, peak, touchdown, comfort, wall,
                             sim_t / wall if wall > 0 else math.inf, timing, cpu,
-                            "compiled" if compiled_loop else "python")
+                            "compiled" if compiled_loop else "python",
+                            np.asarray(ctl_times, dtype=float), np.asarray(ctl_cpu, dtype=float))
         if interrupted:
             raise VehicleRunInterrupted(result)
         return result
@@ -1076,6 +1328,90 @@ class VehicleModel:
         elif n_steps >= 1 and not interrupted:
             rec["voltage"][n_steps] = rec["voltage"][n_steps - 1]
         return last, touchdown, wall, cpu, interrupted
+
+    def _start_controllers(self, dt: float, gaps: np.ndarray, rates: np.ndarray,
+                           current: np.ndarray) -> tuple[np.ndarray, int, np.ndarray, list[Any]]:
+        """Reset the controllers other than the cascade at the run's start: ``(their
+        circuit indices, steps per sample, held voltages, controllers)``."""
+        from ..control.interface import Measurement
+
+        ctls = self.circuit_controllers
+        idx = np.array(sorted(ctls), dtype=int)
+        ts = self.controller_sample_time_s
+        ts = dt if ts is None else ts
+        hold = int(round(ts / dt))
+        if hold < 1 or abs(hold * dt - ts) > 1e-9 * ts:
+            raise InputError(f"controller_sample_time_s = {ts:g} s must be a whole number of "
+                             f"run steps (dt_s = {dt:g} s)")
+        s0 = self.train.nominal_gap_m
+        if self.controller_kind == "mpc":
+            gaps, rates = s0 + self.integral_projection @ (gaps - s0), \
+                self.integral_projection @ rates
+        for j in idx.tolist():
+            ctls[j].reset(Measurement(0.0, float(gaps[j]), float(rates[j]),
+                                      current[j:j + 1].copy(), s0), sample_time_s=ts)
+        return idx, hold, np.zeros(self.bank.n_circuits), [ctls[j] for j in idx.tolist()]
+
+    def _initial_gap_rates(self, v: float, r_x: np.ndarray, x_pts: np.ndarray,
+                           gstate: Any) -> np.ndarray:
+        """Circuit gap rates [m/s] at the start (frames at rest): the guideway's and the
+        irregularity's motion under the circuits, ``-(w_t + v w_x) - v r_x``."""
+        rate = -v * r_x
+        if self.guideway.n_modes:
+            d = self.guideway.deflection(gstate, x_pts)
+            rate = rate - d.rate_m_per_s - v * d.slope
+        if self.fine:
+            rate = np.bincount(self.pole_circuit, weights=rate) / np.bincount(self.pole_circuit)
+        return np.asarray(rate, dtype=float)
+
+    def _sample_controllers(self, ctls: list[Any], idx: np.ndarray, u_out: np.ndarray,
+                            t: float, gaps: np.ndarray, rates: np.ndarray, current: np.ndarray,
+                            times: list[float], applied: np.ndarray,
+                            integral: np.ndarray, times_cpu: list[float]) -> None:
+        """One sample of the controllers ``ctls`` (circuits ``idx``): their voltages into
+        ``u_out``, each update's wall (CPU) time [s] appended to ``times``
+        (``times_cpu``); ``applied``: the
+        voltages applied since the last sample (rows), ``integral``: the projected gap
+        error integral [m s] (the NMPC's reference correction)."""
+        from ..control.interface import Measurement
+
+        s0 = self.train.nominal_gap_m
+        refs = np.full(gaps.size, s0)
+        if self.reference_integral_time_s is not None:
+            refs = refs - integral / self.reference_integral_time_s
+        if self.controller_kind == "mpc":
+            # what the circuit's frame can do: gaps and rates projected on the frame's
+            # heave and pitch (the cascade's integral projection), so that the offset-free
+            # estimates of a frame's circuits do not wind up against each other
+            proj = self.integral_projection
+            gaps = s0 + proj @ (gaps - s0)
+            rates = proj @ rates
+        clock, cpu = time.perf_counter, time.thread_time
+        ua = applied.mean(axis=0) if applied.shape[0] else None
+        for c, j in zip(ctls, idx.tolist(), strict=True):
+            m = Measurement(float(t), float(gaps[j]), float(rates[j]), current[j:j + 1].copy(),
+                            float(refs[j]), None if ua is None else ua[j:j + 1].copy())
+            t0, c0 = clock(), cpu()
+            try:
+                u = np.asarray(c.update(m), dtype=float).ravel()
+            except MaglevkitError as exc:
+                raise type(exc)(f"vehicle run at t = {t:.4f} s, controller of circuit "
+                                f"{self.bank.circuit_names[j]!r}: {exc}") from None
+            times.append(clock() - t0)
+            times_cpu.append(cpu() - c0)
+            if u.size != 1 or not math.isfinite(float(u[0])):
+                raise SolverError(f"the controller of circuit {self.bank.circuit_names[j]!r} "
+                                  f"returned {u!r} at t = {t:.4f} s; expected one finite "
+                                  "voltage [V]")
+            u_out[j] = u[0]
+
+    def _payload_gravity(self, fraction: float) -> np.ndarray:
+        """Generalised gravity with every car body ``1 + fraction`` times as heavy [N, N m]."""
+        mech = self.mechanics
+        q = mech.Q_gravity.copy()
+        nsec2 = 2 * self.train.n_sections
+        q[:nsec2] *= 1.0 + fraction
+        return q
 
     def _touchdown_within_step(self, gaps: np.ndarray, rates: np.ndarray, dt: float,
                                t_end: float) -> tuple[str, float, float, str] | None:
