@@ -163,7 +163,7 @@ def test_applied_voltages_feed_the_observer(one_section: Any) -> None:
         for n, c in enumerate(ctls):
             applied = (None if n == 0 or last[n] is None else
                        (last[n] if n == 1 else last[n] - 20.0))
-            u = c.update(Measurement(k * 2e-3, gap, 0.0, i0, 0.01, applied))
+            u = c.update(Measurement(k * 2e-3, gap, 0.0, i0, 0.01, applied_voltages_V=applied))
             outs[n].append(u)
             last[n] = u.copy()
     np.testing.assert_array_equal(np.array(outs[0]), np.array(outs[1]))
@@ -199,3 +199,13 @@ def test_sweep_varies_the_controller(tmp_path: Any) -> None:
     path.write_text(text.replace('"mpc"]', '"pid"]'))
     with pytest.raises(ParameterFileError, match="expected 'cascade' or 'mpc'"):
         load_sweep(path)
+
+
+def test_measurement_optional_channels_are_keyword_only() -> None:
+    """Two branches each added a sixth field to Measurement; a positional sixth value
+    filled the other one without a word (the applied voltages became the absolute
+    velocity).  The optional channels are keyword-only now."""
+    with pytest.raises(TypeError):
+        Measurement(0.0, 0.01, 0.0, np.zeros(1), 0.01, np.ones(1))  # type: ignore[misc]
+    m = Measurement(0.0, 0.01, 0.0, np.zeros(1), 0.01, applied_voltages_V=np.ones(1))
+    assert m.absolute_velocity_m_per_s is None and m.applied_voltages_V is not None

@@ -9,7 +9,7 @@ closed_loop` (and vehicle models, scenario sweeps) take any object with this int
 from __future__ import annotations
 
 from collections.abc import Mapping
-from dataclasses import dataclass
+from dataclasses import KW_ONLY, dataclass
 from typing import Protocol, runtime_checkable
 
 import numpy as np
@@ -50,6 +50,9 @@ class Measurement:
     gap_rate_m_per_s: float
     currents_A: np.ndarray
     gap_ref_m: float
+    # the optional channels by keyword only: two merged branches each added a sixth
+    # positional field, and a positional call silently filled the wrong one
+    _: KW_ONLY
     absolute_velocity_m_per_s: float | None = None
     applied_voltages_V: np.ndarray | None = None
 

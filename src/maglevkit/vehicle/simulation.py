@@ -1390,7 +1390,8 @@ class VehicleModel:
         ua = applied.mean(axis=0) if applied.shape[0] else None
         for c, j in zip(ctls, idx.tolist(), strict=True):
             m = Measurement(float(t), float(gaps[j]), float(rates[j]), current[j:j + 1].copy(),
-                            float(refs[j]), None if ua is None else ua[j:j + 1].copy())
+                            float(refs[j]),
+                            applied_voltages_V=None if ua is None else ua[j:j + 1].copy())
             t0, c0 = clock(), cpu()
             try:
                 u = np.asarray(c.update(m), dtype=float).ravel()
