@@ -47,8 +47,10 @@ from typing import Any
 import numpy as np
 
 from .errors import InputError, MaglevkitError, MaglevkitWarning, ParameterFileError
+from .magnets.base import MAGNET_PLAUSIBLE
+from .validation import Plausible, check_plausible, real_number
 
-__all__ = ["VARIABLES", "OBJECTIVES", "DesignSpec", "DesignConstraint", "DesignResult",
+__all__ = ["VARIABLES", "OBJECTIVES", "DESIGN_PLAUSIBLE", "DesignSpec", "DesignConstraint", "DesignResult",
            "DesignSpecError", "read_design_spec", "design_magnet", "design_parameters",
            "design_sensitivities", "evaluate_design", "write_design_toml", "pareto_front",
            "plot_pareto"]
@@ -97,6 +99,30 @@ _COIL: dict[str, tuple[str, float | None, float, bool]] = {
     "copper_density_kg_per_m3": ("kg/m^3", 8960.0, 0.0, True),
 }
 COIL_DEFAULTS = {k: v[1] for k, v in _COIL.items()}
+
+#: The plausible magnitudes of a design spec's dimensional keys
+#: (:func:`~maglevkit.validation.check_plausible`): a value outside is most likely a unit
+#: slip (mm typed into a metre key, kN into a newton key, A/mm^2 into A/m^2, gauss into
+#: tesla) and warns.  The bundled spec lies inside and the same spec with any one value
+#: times 1000 or 1/1000 outside; the variables' bounds take the magnet file's ranges.
+DESIGN_PLAUSIBLE: dict[str, Plausible] = {
+    "requirements.nominal_gap_m": Plausible(1e-3, 0.1, "m"),
+    "requirements.reserve_gap_m": Plausible(1e-3, 0.1, "m"),
+    "requirements.force_N": Plausible(1.0, 2e5, "N"),
+    "requirements.reserve_factor": Plausible(0.1, 10.0, "-"),
+    "requirements.max_flux_density_T": Plausible(0.1, 2.5, "T"),
+    "requirements.current_density_A_per_m2": Plausible(1e5, 1e8, "A/m^2"),
+    "requirements.peak_current_density_A_per_m2": Plausible(1e5, 1e8, "A/m^2"),
+    "requirements.supply_voltage_V": Plausible(1.0, 1e4, "V"),
+    "requirements.gap_rate_m_per_s": Plausible(1e-3, 10.0, "m/s"),
+    "requirements.window_clearance_m": Plausible(2e-4, 0.5, "m"),
+    "coil.copper_resistivity_ohm_m": Plausible(1e-8, 1e-5, "ohm m"),
+    "coil.fill_factor": Plausible(0.05, 1.0, "-"),
+    "coil.iron_density_kg_per_m3": Plausible(1e3, 3e4, "kg/m^3"),
+    "coil.copper_density_kg_per_m3": Plausible(1e3, 3e4, "kg/m^3"),
+    **{f"variables.{k}": MAGNET_PLAUSIBLE[f"magnet.{k}"] for k, u in VARIABLES.items()
+       if u == "m"},
+}
 """Defaults of the ``[coil]`` table: annealed copper at 20 C (1.72e-8 ohm m, 8960 kg/m^3),
 steel 7850 kg/m^3, copper fill factor 0.6 of the winding cross-section (an estimate for
 round wire)."""
@@ -190,6 +216,12 @@ def read_design_spec(source: str | Path | Mapping[str, Any], *, base_dir: str | 
     DesignSpecError
         Unknown, missing or bad keys (named with their table), bounds that are empty or
         exclude nothing feasible, a base magnet that is not a lumped U-magnet.
+
+    Warns
+    -----
+    PlausibilityWarning
+        A value outside its plausible range (:data:`DESIGN_PLAUSIBLE`: most likely a unit
+        slip), naming the key, its unit and the likely slip.
     """
     from .magnets import load_magnet
     from .parameter_files import read_parameter_file
@@ -269,6 +301,7 @@ def read_design_spec(source: str | Path | Mapping[str, Any], *, base_dir: str | 
         if not isinstance(v, str) or not v.startswith(("[P]", "[R]", "[E]")):
             raise DesignSpecError(f"[provenance] {k!r} = {v!r}: expected a tag starting "
                                   "with [P], [R] or [E]")
+    check_plausible(doc, DESIGN_PLAUSIBLE, label, stacklevel=3)
     return DesignSpec(magnet=magnet, objective=objective, variables=variables,
                       requirements=req, coil=coil, provenance=dict(prov), source=label)
 
@@ -387,6 +420,11 @@ def design_parameters(spec: DesignSpec, values: Mapping[str, float], *,
     -------
     dict
         TOML-ready parameters (``magnet``, ``rail``, ``provenance`` ...).
+
+    Raises
+    ------
+    InputError
+        An unknown variable, or a value that is not a finite number > 0 (named).
     """
     unknown = sorted(set(values) - set(VARIABLES))
     if unknown:
@@ -396,7 +434,8 @@ def design_parameters(spec: DesignSpec, values: Mapping[str, float], *,
               for k, v in spec.magnet.parameters.items()}
     mag = params["magnet"]
     for k, v in values.items():
-        mag[k] = int(round(float(v))) if k == "turns" else float(v)
+        x = real_number(v, f"design values {k}", VARIABLES[k], positive=True)
+        mag[k] = int(round(x)) if k == "turns" else x
     g = {k: mag[k] for k in VARIABLES}
     mag["resistance"] = float(_coil_laws(g, float(mag["turns"]), spec.coil)["resistance_ohm"])
     if provenance:

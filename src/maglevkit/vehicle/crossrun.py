@@ -49,12 +49,12 @@ import numpy as np
 
 from ..errors import InputError
 from ..plant import STANDARD_GRAVITY
-from ..validation import real_number
+from ..validation import Plausible, check_plausible, real_number
 from .crosssection import CrossSectionData, CrossSectionMechanics, track_field_path
 from .simulation import Failure
 
 __all__ = ["CrossSectionModel", "CrossSectionRun", "TransitionCurve", "Crosswind",
-           "LATERAL_ALIGNMENT_PSD", "parse_curve", "parse_crosswind", "parse_lateral"]
+           "LATERAL_ALIGNMENT_PSD", "SCENARIO_PLAUSIBLE", "parse_curve", "parse_crosswind", "parse_lateral"]
 
 #: One-sided PSD of the lateral alignment (German high-speed track, "low irregularity":
 #: ``A_a = 2.119e-7 m rad``, the corner frequencies of the vertical spectrum; Zhai,
@@ -64,6 +64,17 @@ LATERAL_ALIGNMENT_PSD = {"A_v_m_rad": 2.119e-7, "omega_c_rad_per_m": 0.8246,
                          "omega_r_rad_per_m": 0.0206}
 
 SIDES = ("left", "right")
+
+#: Plausible magnitudes of the scenario values (:func:`~maglevkit.validation.
+#: check_plausible`: outside, most likely a unit slip, e.g. a radius in km or a gust in kN;
+#: the value is used as given, with a :class:`~maglevkit.errors.PlausibilityWarning`).
+#: Rail irregularities above 10 mm exceed the nominal gap.
+SCENARIO_PLAUSIBLE: dict[str, Plausible] = {
+    "curve.radius_m": Plausible(100.0, 1e5, "m"),
+    "crosswind.peak_force_N": Plausible(100.0, 1e6, "N"),
+    "lateral.rms_m": Plausible(1e-5, 0.01, "m"),
+    "lateral.height_m": Plausible(1e-5, 0.01, "m"),
+}
 
 
 @dataclass(frozen=True)
@@ -106,6 +117,7 @@ class TransitionCurve:
                              "rad (17 deg)")
         real_number(self.transition_m, "curve transition_m", "m", nonnegative=True)
         real_number(self.start_m, "curve start_m", "m", nonnegative=True)
+        check_plausible({"curve": {"radius_m": r}}, SCENARIO_PLAUSIBLE, stacklevel=4)
 
     def ramp(self, distance_m: Any) -> np.ndarray:
         """Share ``0 ... 1`` of the full curve at the distances travelled [m] (-).
@@ -189,6 +201,8 @@ class Crosswind:
         real_number(self.pressure_height_m, "crosswind pressure_height_m", "m")
         if self.shape not in ("1-cosine", "step"):
             raise InputError(f"crosswind shape = {self.shape!r}; allowed: '1-cosine', 'step'")
+        check_plausible({"crosswind": {"peak_force_N": self.peak_force_N}},
+                        SCENARIO_PLAUSIBLE, stacklevel=4)
 
     def force_N(self, time_s: Any) -> np.ndarray:
         """Lateral force ``F(t)`` [N] at the times [s].
@@ -330,6 +344,8 @@ def parse_lateral(text: str, *, girder_length_m: float = 24.768) -> Any:
                              "(metres, RMS and H > 0, SEED a whole number) or none, joined "
                              "by '+'")
         seed = int(nums[1]) if len(nums) == 2 else 0
+        check_plausible({"lateral": {"rms_m" if kind == "random" else "height_m": nums[0]}},
+                        SCENARIO_PLAUSIBLE, "--lateral")
         if kind == "random":
             lo, hi = 2 * np.pi / 100.0, 2 * np.pi / 1.0
             base = GermanTrackPSD(**LATERAL_ALIGNMENT_PSD)

@@ -74,7 +74,8 @@ VEHICLE_SCHEMA: dict[str, dict[str, Schema]] = {
         "damping": Schema(float, unit="-"),
         "flux_bandwidth": Schema(float, unit="Hz"),
         "voltage_limit": Schema(float, unit="V"),
-        "velocity_blend": Schema(float, unit="-", required=False, default=0.0),
+        "velocity_blend": Schema(float, unit="-", check="nonnegative", required=False,
+                                 default=0.0),
     },
 }
 

@@ -1,0 +1,155 @@
+"""Regression tests of the review of design, cross-section and the realistic default run
+(review 1): documented values that were refused, unit slips that passed silently, values
+that reached the model unchecked.  All fast (no time loop, no optimisation)."""
+
+from __future__ import annotations
+
+import copy
+import math
+import warnings
+from importlib import resources
+from typing import Any
+
+import pytest
+import tomllib
+
+from maglevkit.design import DESIGN_PLAUSIBLE, evaluate_design, read_design_spec
+from maglevkit.errors import InputError, ParameterFileError, PlausibilityWarning
+from maglevkit.parameter_files import read_parameter_file
+from maglevkit.vehicle.crossrun import (
+    SCENARIO_PLAUSIBLE,
+    Crosswind,
+    TransitionCurve,
+    parse_lateral,
+)
+from maglevkit.vehicle.data import parse_guideway
+from maglevkit.vehicle.train import parse_vehicle
+
+
+def bundled(folder: str, name: str, table: str) -> dict[str, Any]:
+    doc, _ = read_parameter_file(name, what=table, folder=folder, table=table)
+    return copy.deepcopy(doc)
+
+
+def design_doc() -> dict[str, Any]:
+    text = (resources.files("maglevkit") / "data" / "designs" / "u-magnet-design.toml").read_text()
+    return tomllib.loads(text)
+
+
+# ------------------------------------------------------------ the realistic default run
+def test_guideway_precamber_zero_is_accepted_as_documented() -> None:
+    """docs/vehicle.md: `precamber` optional, default 0; a file stating 0 was refused
+    ("must be > 0").  0 now means no camber (no built-in profile); negative is refused."""
+    doc = bundled("vehicle", "guideway", "guideway")
+    doc["guideway"]["precamber"] = 0.0
+    g = parse_guideway(doc, "test")
+    assert g.span.precamber_m == 0.0
+    doc["guideway"]["precamber"] = -2.7e-3
+    with pytest.raises(ParameterFileError, match=r"precamber = -0.0027 m: must be >= 0"):
+        parse_guideway(doc, "test")
+
+
+def test_guideway_precamber_in_mm_warns() -> None:
+    """2.7 (mm typed into the metre key) closed every gap with an error naming a circuit,
+    not the key; it now warns with the key and the likely slip first."""
+    doc = bundled("vehicle", "guideway", "guideway")
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", PlausibilityWarning)
+        parse_guideway(doc, "test")                 # the bundled 2.7e-3 m: no warning
+    doc["guideway"]["precamber"] = 2.7
+    with pytest.warns(PlausibilityWarning, match=r"precamber = 2.7 m .*typed in mm"):
+        parse_guideway(doc, "test")
+
+
+def test_velocity_blend_zero_is_accepted_as_documented() -> None:
+    """docs/vehicle.md: velocity_blend in [0, 1], default 0 (the gap rate only); a file
+    stating 0 was refused ("must be > 0")."""
+    doc = bundled("vehicle", "tr09", "vehicle")
+    doc["control"]["velocity_blend"] = 0
+    assert parse_vehicle(doc, "test").control_velocity_blend == 0.0
+    doc["control"]["velocity_blend"] = -0.1
+    with pytest.raises(ParameterFileError, match=r"velocity_blend = -0.1: must be >= 0"):
+        parse_vehicle(doc, "test")
+
+
+# ----------------------------------------------------------------------------- design
+def test_design_plausible_ranges_catch_a_factor_1000_either_way() -> None:
+    """The claim of DESIGN_PLAUSIBLE: every bundled value lies inside its range and the
+    same value times 1000 or 1/1000 outside (so any such slip of one key warns)."""
+    doc = design_doc()
+    checked = 0
+    for name, rng in DESIGN_PLAUSIBLE.items():
+        table, _, key = name.partition(".")
+        if key not in doc.get(table, {}):
+            continue
+        raw = doc[table][key]
+        for v in (raw if isinstance(raw, list) else [raw]):
+            if v == 0:
+                continue
+            assert rng.low <= abs(v) <= rng.high, name
+            assert not rng.low <= abs(v) * 1000 <= rng.high, name
+            assert not rng.low <= abs(v) / 1000 <= rng.high, name
+            checked += 1
+    assert checked >= 15     # 10 requirements, 4 coil keys, the 4 variables' 8 bounds
+
+
+def test_design_spec_bundled_reads_without_plausibility_warning() -> None:
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", PlausibilityWarning)
+        read_design_spec(design_doc())
+
+
+@pytest.mark.parametrize(("table", "key", "value", "slip"), [
+    ("requirements", "force_N", 0.8, "too small"),                 # kN typed into N
+    ("requirements", "nominal_gap_m", 10.0, "typed in mm"),        # mm typed into m
+    ("requirements", "reserve_gap_m", 6.0, "typed in mm"),
+    ("requirements", "max_flux_density_T", 15000.0, "check its unit"),   # gauss
+    ("requirements", "current_density_A_per_m2", 5.0, "check its unit"),  # A/mm^2
+    ("requirements", "supply_voltage_V", 0.06, "too small"),       # kV
+    ("variables", "pole_width", [15.0, 50.0], "typed in mm"),
+])
+def test_design_spec_unit_slip_warns(table: str, key: str, value: Any, slip: str) -> None:
+    """These ran silently (0.8 N: a 3.5 kg magnet 'optimum'; 10 m gap: 500 IPOPT
+    iterations; 15000 T: an optimum as if there were no iron limit)."""
+    doc = design_doc()
+    doc[table][key] = value
+    with pytest.warns(PlausibilityWarning, match=rf"\[{table}\] {key} = .*{slip}"):
+        read_design_spec(doc)
+
+
+@pytest.mark.parametrize("bad", [math.nan, math.inf, "0.02", True, -0.02])
+def test_design_values_must_be_positive_numbers(bad: Any) -> None:
+    """A NaN pole width was reported as '[magnet] resistance = nan' (the wrong key) and a
+    string was converted silently; now the variable is named."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", PlausibilityWarning)
+        spec = read_design_spec(design_doc())
+    values = {"pole_width": bad, "coil_height": 0.05, "coil_thickness": 0.02,
+              "leg_height": 0.07}
+    with pytest.raises(InputError, match=r"design values pole_width \[m\]"):
+        evaluate_design(spec, values)
+
+
+# ----------------------------------------------------------------------- cross-section
+def test_scenario_unit_slips_warn() -> None:
+    """A radius in km (4 m at 400 km/h: 3000 m/s^2), a gust in kN (10 N: nothing happens)
+    and a rail irregularity in mm (0.3 m RMS: gap -507 mm at t = 0) ran without a word."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", PlausibilityWarning)
+        TransitionCurve(4000.0, math.radians(12.0), 300.0)
+        TransitionCurve(math.inf, 0.0, 0.0)
+        Crosswind(1.0e4)
+        Crosswind(0.0)
+        parse_lateral("random:0.3e-3:1+girders:0.5e-3")
+    with pytest.warns(PlausibilityWarning, match=r"radius_m = 4.0 m .*typed in km"):
+        TransitionCurve(4.0, math.radians(12.0), 300.0)
+    with pytest.warns(PlausibilityWarning, match=r"radius_m = 4000000.0 m .*typed in mm"):
+        TransitionCurve(4.0e6, math.radians(12.0), 300.0)
+    with pytest.warns(PlausibilityWarning, match=r"peak_force_N = 10.0 N .*too small"):
+        Crosswind(10.0)
+    with pytest.warns(PlausibilityWarning, match=r"--lateral: \[lateral\] rms_m = 0.3 m"):
+        parse_lateral("random:0.3:1")
+    with pytest.warns(PlausibilityWarning, match=r"--lateral: \[lateral\] height_m = 0.5 m"):
+        parse_lateral("girders:0.5")
+    assert set(SCENARIO_PLAUSIBLE) == {"curve.radius_m", "crosswind.peak_force_N",
+                                       "lateral.rms_m", "lateral.height_m"}
