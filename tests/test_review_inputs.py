@@ -153,3 +153,34 @@ def test_scenario_unit_slips_warn() -> None:
         parse_lateral("girders:0.5")
     assert set(SCENARIO_PLAUSIBLE) == {"curve.radius_m", "crosswind.peak_force_N",
                                        "lateral.rms_m", "lateral.height_m"}
+
+
+def test_cross_section_vehicle_is_listed_and_has_a_template(tmp_path: Any) -> None:
+    """docs/cross_section.md names tr09-cross-section as a bundled vehicle, but `list
+    vehicles` did not show it, `template vehicle tr09-cross-section` refused it and a
+    misspelt name listed 'bundled vehicles: tr09' only."""
+    from pathlib import Path
+
+    from typer.testing import CliRunner
+
+    from maglevkit.cli import app
+    from maglevkit.vehicle.crosssection import load_cross_section
+    from maglevkit.vehicle.train import load_vehicle
+
+    runner = CliRunner()
+    res = runner.invoke(app, ["list", "vehicles"])
+    assert res.exit_code == 0
+    assert "  tr09-cross-section TR09-type cross-section" in res.stdout
+    assert "  tr09 " in res.stdout
+    res = runner.invoke(app, ["template", "vehicle", "tr09-cross-section"])
+    assert res.exit_code == 0, res.output
+    path = Path(tmp_path) / "xs.toml"
+    path.write_text(res.stdout)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")          # a template loads without any warning
+        load_cross_section(path)
+    res = runner.invoke(app, ["template", "vehicle"])    # the default stays the train
+    assert "made from the bundled 'tr09'" in res.stdout
+    with pytest.raises(ParameterFileError, match=r"bundled cross-section vehicles .*: "
+                                                 r"tr09-cross-section"):
+        load_vehicle("tr09-cross-sectoin")
