@@ -184,3 +184,33 @@ def test_cross_section_vehicle_is_listed_and_has_a_template(tmp_path: Any) -> No
     with pytest.raises(ParameterFileError, match=r"bundled cross-section vehicles .*: "
                                                  r"tr09-cross-section"):
         load_vehicle("tr09-cross-sectoin")
+
+
+def test_design_file_with_rounded_turns_holds_the_required_force(tmp_path: Any) -> None:
+    """With `turns` a design variable the file got round(N) turns but the current of the
+    unrounded N: 311 turns at 29.80 A gave 799.2 N, not the 800 N required.  The written
+    current now keeps the optimum's ampere-turns (the statics depend on N I only)."""
+    from pathlib import Path
+
+    from maglevkit import load_magnet
+    from maglevkit.design import design_magnet, write_design_toml
+    from maglevkit.models.statics import solve_statics
+
+    doc = design_doc()
+    doc["variables"]["turns"] = [100.0, 2000.0]
+    spec = read_design_spec(doc)
+    res = design_magnet(spec)
+    assert res.success
+    n_opt = res.values["turns"]
+    assert abs(n_opt - round(n_opt)) > 0.05      # the rounding matters in this case
+    path = write_design_toml(res, Path(tmp_path) / "d.toml")
+    params = tomllib.loads(path.read_text())
+    n, i_n = params["magnet"]["turns"], params["operating"]["nominal_current"]
+    assert n == round(n_opt)
+    assert n * i_n == pytest.approx(n_opt * res.nominal_current_A, rel=1e-12)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", PlausibilityWarning)
+        sol = solve_statics(load_magnet(path), gaps=spec.requirements["nominal_gap_m"],
+                            currents=i_n)
+    # IPOPT's tolerance 1e-10 on the scaled force equality; the re-solve's own ~1e-12
+    assert float(sol.force_N) == pytest.approx(spec.requirements["force_N"], rel=1e-8)

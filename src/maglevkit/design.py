@@ -985,7 +985,9 @@ def write_design_toml(result: DesignResult, path: str | Path) -> Path:
     """Write the optimum as a magnet parameter file (loadable by
     :func:`~maglevkit.magnets.load_magnet`): the base magnet with the optimal values
     (``turns`` rounded), the coil's resistance, every changed value tagged ``[E] optimised:
-    ...`` in ``[provenance]``, the operating point in ``[operating]``, and a comment header
+    ...`` in ``[provenance]``, the operating point in ``[operating]`` (its current scaled by
+    ``N / round(N)``: the optimum's ampere-turns, on which the statics depend, with the
+    rounded turns), and a comment header
     with the objective, the active constraints and IPOPT's status.
 
     Parameters
@@ -1006,8 +1008,11 @@ def write_design_toml(result: DesignResult, path: str | Path) -> Path:
            f"{Path(spec.source).name}; active: {', '.join(result.active) or 'none'})")
     params = design_parameters(spec, result.values, provenance=tag)
     params["magnet"]["name"] = f"{params['magnet'].get('name', 'magnet')} (optimised)"
+    current = result.nominal_current_A
+    if "turns" in result.values:    # the same ampere-turns (so force, B, J) with the file's
+        current *= result.values["turns"] / params["magnet"]["turns"]     # rounded turns
     params["operating"] = {"nominal_gap": spec.requirements["nominal_gap_m"],
-                           "nominal_current": result.nominal_current_A}
+                           "nominal_current": current}
     prov = dict(params.get("provenance", {}))
     prov["operating.nominal_gap"] = f"[E] {tag}"
     prov["operating.nominal_current"] = f"[E] {tag}"
@@ -1016,7 +1021,7 @@ def write_design_toml(result: DesignResult, path: str | Path) -> Path:
               f"(IPOPT {result.status}, {result.iterations} iterations)",
               f"# objective {result.objective} = {result.objective_value:.6g} "
               f"({'kg' if result.objective == 'mass' else 'W'}); mass {result.mass_kg:.6g} kg, "
-              f"power {result.power_W:.6g} W at {result.nominal_current_A:.6g} A",
+              f"power {result.power_W:.6g} W at {current:.6g} A",
               f"# active constraints: {', '.join(result.active) or 'none'}"]
     p = Path(path)
     p.write_text("\n".join(header) + "\n" + toml_text(params))
