@@ -214,3 +214,17 @@ def test_design_file_with_rounded_turns_holds_the_required_force(tmp_path: Any) 
                             currents=i_n)
     # IPOPT's tolerance 1e-10 on the scaled force equality; the re-solve's own ~1e-12
     assert float(sol.force_N) == pytest.approx(spec.requirements["force_N"], rel=1e-8)
+
+
+def test_cross_section_refuses_the_deprecated_speed_option() -> None:
+    """`--speed 400` (the deprecated name of --speed-kmh) was ignored by the cross-section
+    run, which then went at 0 km/h without a word."""
+    from typer.testing import CliRunner
+
+    from maglevkit.cli import app
+
+    res = CliRunner().invoke(app, ["vehicle", "run", "--vehicle", "tr09-cross-section",
+                                   "--speed", "400", "--duration", "0.05"])
+    assert res.exit_code == 2
+    assert "--speed 400: use --speed-kmh for a cross-section run" in res.stderr
+    assert "Traceback" not in res.output

@@ -98,6 +98,9 @@ def run(
         if guideway is not None or rigid:
             raise fail("--guideway/--rigid: the cross-section model runs on a rigid "
                        "guideway; leave them out")
+        if speed is not None:       # was ignored: the run went at 0 km/h
+            raise fail(f"--speed {speed:g}: use --speed-kmh for a cross-section run (--speed "
+                       "is its deprecated old name)")
         try:
             _run_cross_section(vehicle_option or vehicle, speed_kmh, duration, dt, failure,
                                magnets, maps_cache, output, plot, force, curve, crosswind,
