@@ -228,3 +228,27 @@ def test_cross_section_refuses_the_deprecated_speed_option() -> None:
     assert res.exit_code == 2
     assert "--speed 400: use --speed-kmh for a cross-section run" in res.stderr
     assert "Traceback" not in res.output
+
+
+def test_cross_section_dataset_records_the_scenario(tmp_path: Any) -> None:
+    """The heave-pitch run's file names its failures and touchdown; the cross-section's
+    had none of its scenario (failures, curve, gust, irregularities, touchdown)."""
+    import xarray as xr
+
+    from maglevkit.vehicle.crossrun import CrossSectionModel
+    from maglevkit.vehicle.simulation import Failure
+
+    curve = TransitionCurve(4000.0, math.radians(12.0), 300.0)
+    gust = Crosswind(5.0e3, rise_s=0.1, hold_s=0.0, start_s=0.0)
+    run = CrossSectionModel().run(speed_m_per_s=100.0, duration_s=0.01, loop="python",
+                                  curve=curve, crosswind=gust,
+                                  failures=[Failure("guidance_left/front", 0.005)],
+                                  lateral=parse_lateral("girders:0.5e-3:3"))
+    path = run.to_netcdf(tmp_path / "x.nc")
+    with xr.open_dataset(path) as ds:
+        attrs = dict(ds.attrs)
+    assert attrs["failures"] == "guidance_left/front@0.005"
+    assert attrs["touchdown"] == ""
+    assert attrs["curve"] == repr(curve) and attrs["crosswind"] == repr(gust)
+    assert attrs["vertical_irregularity"] == ""
+    assert attrs["lateral_irregularity"].startswith("JointSteps(step_m=0.0005")

@@ -648,7 +648,10 @@ class CrossSectionModel:
             ``voltage`` (``circuit``), ``car_body_lateral_acceleration``,
             ``car_body_vertical_acceleration``, ``car_body_roll_acceleration``,
             displacements ``car_body_y``, ... ``chassis_phi``, ``field_a_y``, ``field_a_z``,
-            ``crosswind_force``; SI units in the attributes.
+            ``crosswind_force``; SI units in the attributes.  Dataset attributes: the
+            vehicle, speed, step, gaps, magnets and bias current, and the scenario
+            (``failures``, ``touchdown``, ``curve``, ``crosswind``,
+            ``vertical_irregularity``, ``lateral_irregularity``; "" when none).
 
         Raises
         ------
@@ -721,8 +724,20 @@ class CrossSectionModel:
         else:
             out = self._python_loop(dt, v, t, r_mag, rx_mag, field_mid, q_ext, fail_t, n)
         rec_gap, rec_force, rec_cur, rec_u, rec_x, rec_acc, touchdown, last, wall = out
-        return self._result(v, dt, t, rec_gap, rec_force, rec_cur, rec_u, rec_x, rec_acc,
-                            touchdown, last, wall, field_mid, wind)
+        res = self._result(v, dt, t, rec_gap, rec_force, rec_cur, rec_u, rec_x, rec_acc,
+                           touchdown, last, wall, field_mid, wind)
+        # the scenario in the file (as the heave-pitch run's attributes): a run can be read
+        # back and repeated from its netCDF alone
+        res.dataset.attrs.update({
+            "failures": ", ".join(f"{f.circuit}@{f.time_s:g}" for f in failures),
+            "touchdown": "" if touchdown is None else
+                         f"{touchdown[3]}: {touchdown[0]}@{touchdown[1]:.6g} s "
+                         f"({touchdown[2]:.6g} m)",
+            "curve": "" if curve is None else repr(curve),
+            "crosswind": "" if crosswind is None else repr(crosswind),
+            "vertical_irregularity": "" if vertical is None else repr(vertical),
+            "lateral_irregularity": "" if lateral is None else repr(lateral)})
+        return res
 
     def _python_loop(self, dt: float, v: float, t: np.ndarray, r_mag: np.ndarray,
                      rx_mag: np.ndarray, field_mid: np.ndarray, q_ext: np.ndarray,
