@@ -252,3 +252,15 @@ def test_cross_section_dataset_records_the_scenario(tmp_path: Any) -> None:
     assert attrs["curve"] == repr(curve) and attrs["crosswind"] == repr(gust)
     assert attrs["vertical_irregularity"] == ""
     assert attrs["lateral_irregularity"].startswith("JointSteps(step_m=0.0005")
+
+
+@pytest.mark.parametrize("option", ["vertical", "lateral"])
+def test_cross_section_irregularity_must_be_a_profile(option: str) -> None:
+    """A text spec passed where a Profile belongs raised "TypeError: 'str' object is not
+    callable"; now an InputError naming the option and the parser to use."""
+    from maglevkit.vehicle.crossrun import CrossSectionModel
+
+    with pytest.raises(InputError, match=rf"{option} = 'random:0.3e-3': expected an "
+                                         r"irregularity Profile .*parse_"):
+        CrossSectionModel().run(speed_m_per_s=100.0, duration_s=0.01, loop="python",
+                                **{option: "random:0.3e-3"})

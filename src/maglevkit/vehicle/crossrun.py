@@ -696,6 +696,11 @@ class CrossSectionModel:
                                        ("lateral", lateral, ry, ry_x)):
             if prof is None:
                 continue
+            if not (callable(prof) and callable(getattr(prof, "slope", None))):
+                raise InputError(f"{what} = {prof!r}: expected an irregularity Profile "
+                                 "(vehicle.irregularities; from a text spec: "
+                                 f"{'parse_irregularity' if what == 'vertical' else 'parse_lateral'}"
+                                 ") or None")
             val[:] = prof(xs)
             slope[:] = prof.slope(xs)
             if not (np.isfinite(val).all() and np.isfinite(slope).all()):
