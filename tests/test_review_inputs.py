@@ -264,3 +264,40 @@ def test_cross_section_irregularity_must_be_a_profile(option: str) -> None:
                                          r"irregularity Profile .*parse_"):
         CrossSectionModel().run(speed_m_per_s=100.0, duration_s=0.01, loop="python",
                                 **{option: "random:0.3e-3"})
+
+
+def test_cross_section_warns_of_a_scenario_the_run_never_reaches() -> None:
+    """`--curve 4000:12:300:1e6` (start in mm?) or a gust after the end ran as a straight,
+    calm run without a word."""
+    from maglevkit.errors import MaglevkitWarning
+    from maglevkit.vehicle.crossrun import CrossSectionModel
+
+    model = CrossSectionModel()
+    with pytest.warns(MaglevkitWarning, match=r"the curve starts at 1e\+06 m, but the run "
+                                              r"covers 1 m .*never enters it"):
+        model.run(speed_m_per_s=100.0, duration_s=0.01, loop="python",
+                  curve=TransitionCurve(4000.0, math.radians(12.0), 300.0, 1.0e6))
+    with pytest.warns(MaglevkitWarning, match=r"crosswind starts at 5 s, after the run's "
+                                              r"0.01 s"):
+        model.run(speed_m_per_s=100.0, duration_s=0.01, loop="python",
+                  crosswind=Crosswind(1.0e4, start_s=5.0))
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", MaglevkitWarning)     # reached: no warning
+        model.run(speed_m_per_s=100.0, duration_s=0.01, loop="python",
+                  curve=TransitionCurve(4000.0, math.radians(12.0), 300.0, 0.5),
+                  crosswind=Crosswind(1.0e4, start_s=0.0))
+
+
+def test_cross_section_standing_in_a_sudden_curve_is_not_warned() -> None:
+    """At 0 m/s a curve without transition from 0 m is entered at once (the field is the
+    banked plane's): no 'never enters' warning there."""
+    from maglevkit.errors import MaglevkitWarning
+    from maglevkit.vehicle.crossrun import CrossSectionModel
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", MaglevkitWarning)
+        run = CrossSectionModel().run(speed_m_per_s=0.0, duration_s=0.01, loop="python",
+                                      curve=TransitionCurve(4000.0, math.radians(12.0), 0.0))
+    # a_y = -g sin c on the banked plane at rest (track_field_path's law)
+    assert float(run.dataset["field_a_y"][0]) == pytest.approx(
+        -9.80665 * math.sin(math.radians(12.0)), rel=1e-12)

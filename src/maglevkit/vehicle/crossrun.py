@@ -40,6 +40,7 @@ from __future__ import annotations
 
 import math
 import time
+import warnings
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -47,7 +48,7 @@ from typing import Any
 
 import numpy as np
 
-from ..errors import InputError
+from ..errors import InputError, MaglevkitWarning
 from ..plant import STANDARD_GRAVITY
 from ..validation import Plausible, check_plausible, real_number
 from .crosssection import CrossSectionData, CrossSectionMechanics, track_field_path
@@ -659,6 +660,12 @@ class CrossSectionModel:
             Bad options (named), unknown failure circuits, non-finite irregularities.
         OutOfRangeError
             A circuit leaving its maps (from the bank).
+
+        Warns
+        -----
+        MaglevkitWarning
+            A curve that starts beyond the distance covered, a crosswind that starts after
+            the run (the run never reaches them).
         """
         v = real_number(speed_m_per_s, "speed_m_per_s", "m/s", nonnegative=True)
         dur = real_number(duration_s, "duration_s", "s", positive=True)
@@ -671,6 +678,14 @@ class CrossSectionModel:
             raise InputError(f"curve must be a TransitionCurve, got {type(curve).__name__}")
         if crosswind is not None and not isinstance(crosswind, Crosswind):
             raise InputError(f"crosswind must be a Crosswind, got {type(crosswind).__name__}")
+        # a scenario that the run never reaches is almost always a slip (km for m, ms for s)
+        if curve is not None and float(curve.ramp(v * dur)) == 0.0:
+            warnings.warn(f"the curve starts at {curve.start_m:g} m, but the run covers "
+                          f"{v * dur:g} m ({v:g} m/s for {dur:g} s): it never enters it",
+                          MaglevkitWarning, stacklevel=2)
+        if crosswind is not None and crosswind.start_s >= dur:
+            warnings.warn(f"the crosswind starts at {crosswind.start_s:g} s, after the run's "
+                          f"{dur:g} s: it never blows", MaglevkitWarning, stacklevel=2)
         bank = self.bank
         names = bank.circuit_names
         fail_t = np.full(bank.n_circuits, np.inf)
