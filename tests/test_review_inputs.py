@@ -301,3 +301,15 @@ def test_cross_section_standing_in_a_sudden_curve_is_not_warned() -> None:
     # a_y = -g sin c on the banked plane at rest (track_field_path's law)
     assert float(run.dataset["field_a_y"][0]) == pytest.approx(
         -9.80665 * math.sin(math.radians(12.0)), rel=1e-12)
+
+
+def test_design_provenance_of_a_key_the_spec_does_not_give() -> None:
+    """A misspelt provenance key ("requirements.forse_N") was accepted and the real key
+    lost its tag without a word."""
+    from maglevkit.design import DesignSpecError
+
+    doc = design_doc()
+    doc["provenance"]["requirements.forse_N"] = doc["provenance"].pop("requirements.force_N")
+    with pytest.raises(DesignSpecError, match=r"\[provenance\] 'requirements.forse_N': tags "
+                                              r"a key the spec does not give"):
+        read_design_spec(doc)

@@ -301,6 +301,12 @@ def read_design_spec(source: str | Path | Mapping[str, Any], *, base_dir: str | 
         if not isinstance(v, str) or not v.startswith(("[P]", "[R]", "[E]")):
             raise DesignSpecError(f"[provenance] {k!r} = {v!r}: expected a tag starting "
                                   "with [P], [R] or [E]")
+        table, _, key = k.partition(".")
+        if table not in ("design", "variables", "requirements", "coil") \
+                or not isinstance(doc.get(table), Mapping) or key not in doc[table]:
+            raise DesignSpecError(f"[provenance] {k!r}: tags a key the spec does not give; "
+                                  "expected \"table.key\" of one of its values (e.g. "
+                                  "\"requirements.force_N\")")
     check_plausible(doc, DESIGN_PLAUSIBLE, label, stacklevel=3)
     return DesignSpec(magnet=magnet, objective=objective, variables=variables,
                       requirements=req, coil=coil, provenance=dict(prov), source=label)
