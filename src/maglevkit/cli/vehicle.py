@@ -85,9 +85,10 @@ def run(
 ) -> None:
     """Run the train at constant speed; report minimum gaps, peak currents, comfort and the
     real-time factor (results on stdout, diagnostics on stderr).  Ctrl-C stops the run:
-    "interrupted" on stderr, exit code 130, and with -o the run up to there is written.
-    A cross-section vehicle (--vehicle tr09-cross-section) runs one slice across the track
-    with levitation and guidance magnets, curves and crosswind.
+    "interrupted" on stderr, exit code 130, and with -o the run up to there is written
+    (the train; an interrupted cross-section run writes no file).  A cross-section
+    vehicle (--vehicle tr09-cross-section) runs one slice across the track with levitation
+    and guidance magnets, curves and crosswind.
 
     \b
     Example:
