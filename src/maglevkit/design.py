@@ -47,8 +47,10 @@ from typing import Any
 import numpy as np
 
 from .errors import InputError, MaglevkitError, MaglevkitWarning, ParameterFileError
+from .magnets.base import MAGNET_PLAUSIBLE
+from .validation import Plausible, check_plausible, real_number
 
-__all__ = ["VARIABLES", "OBJECTIVES", "DesignSpec", "DesignConstraint", "DesignResult",
+__all__ = ["VARIABLES", "OBJECTIVES", "DESIGN_PLAUSIBLE", "DesignSpec", "DesignConstraint", "DesignResult",
            "DesignSpecError", "read_design_spec", "design_magnet", "design_parameters",
            "design_sensitivities", "evaluate_design", "write_design_toml", "pareto_front",
            "plot_pareto"]
@@ -97,6 +99,30 @@ _COIL: dict[str, tuple[str, float | None, float, bool]] = {
     "copper_density_kg_per_m3": ("kg/m^3", 8960.0, 0.0, True),
 }
 COIL_DEFAULTS = {k: v[1] for k, v in _COIL.items()}
+
+#: The plausible magnitudes of a design spec's dimensional keys
+#: (:func:`~maglevkit.validation.check_plausible`): a value outside is most likely a unit
+#: slip (mm typed into a metre key, kN into a newton key, A/mm^2 into A/m^2, gauss into
+#: tesla) and warns.  The bundled spec lies inside and the same spec with any one value
+#: times 1000 or 1/1000 outside; the variables' bounds take the magnet file's ranges.
+DESIGN_PLAUSIBLE: dict[str, Plausible] = {
+    "requirements.nominal_gap_m": Plausible(1e-3, 0.1, "m"),
+    "requirements.reserve_gap_m": Plausible(1e-3, 0.1, "m"),
+    "requirements.force_N": Plausible(1.0, 2e5, "N"),
+    "requirements.reserve_factor": Plausible(0.1, 10.0, "-"),
+    "requirements.max_flux_density_T": Plausible(0.1, 2.5, "T"),
+    "requirements.current_density_A_per_m2": Plausible(1e5, 1e8, "A/m^2"),
+    "requirements.peak_current_density_A_per_m2": Plausible(1e5, 1e8, "A/m^2"),
+    "requirements.supply_voltage_V": Plausible(1.0, 1e4, "V"),
+    "requirements.gap_rate_m_per_s": Plausible(1e-3, 10.0, "m/s"),
+    "requirements.window_clearance_m": Plausible(2e-4, 0.5, "m"),
+    "coil.copper_resistivity_ohm_m": Plausible(1e-8, 1e-5, "ohm m"),
+    "coil.fill_factor": Plausible(0.05, 1.0, "-"),
+    "coil.iron_density_kg_per_m3": Plausible(1e3, 3e4, "kg/m^3"),
+    "coil.copper_density_kg_per_m3": Plausible(1e3, 3e4, "kg/m^3"),
+    **{f"variables.{k}": MAGNET_PLAUSIBLE[f"magnet.{k}"] for k, u in VARIABLES.items()
+       if u == "m"},
+}
 """Defaults of the ``[coil]`` table: annealed copper at 20 C (1.72e-8 ohm m, 8960 kg/m^3),
 steel 7850 kg/m^3, copper fill factor 0.6 of the winding cross-section (an estimate for
 round wire)."""
@@ -190,6 +216,12 @@ def read_design_spec(source: str | Path | Mapping[str, Any], *, base_dir: str | 
     DesignSpecError
         Unknown, missing or bad keys (named with their table), bounds that are empty or
         exclude nothing feasible, a base magnet that is not a lumped U-magnet.
+
+    Warns
+    -----
+    PlausibilityWarning
+        A value outside its plausible range (:data:`DESIGN_PLAUSIBLE`: most likely a unit
+        slip), naming the key, its unit and the likely slip.
     """
     from .magnets import load_magnet
     from .parameter_files import read_parameter_file
@@ -275,6 +307,13 @@ def read_design_spec(source: str | Path | Mapping[str, Any], *, base_dir: str | 
         if not isinstance(v, str) or not v.startswith(("[P]", "[R]", "[E]")):
             raise DesignSpecError(f"[provenance] {k!r} = {v!r}: expected a tag starting "
                                   "with [P], [R] or [E]")
+        table, _, key = k.partition(".")
+        if table not in ("design", "variables", "requirements", "coil") \
+                or not isinstance(doc.get(table), Mapping) or key not in doc[table]:
+            raise DesignSpecError(f"[provenance] {k!r}: tags a key the spec does not give; "
+                                  "expected \"table.key\" of one of its values (e.g. "
+                                  "\"requirements.force_N\")")
+    check_plausible(doc, DESIGN_PLAUSIBLE, label, stacklevel=3)
     return DesignSpec(magnet=magnet, objective=objective, variables=variables,
                       requirements=req, coil=coil, provenance=dict(prov), source=label)
 
@@ -393,6 +432,11 @@ def design_parameters(spec: DesignSpec, values: Mapping[str, float], *,
     -------
     dict
         TOML-ready parameters (``magnet``, ``rail``, ``provenance`` ...).
+
+    Raises
+    ------
+    InputError
+        An unknown variable, or a value that is not a finite number > 0 (named).
     """
     unknown = sorted(set(values) - set(VARIABLES))
     if unknown:
@@ -402,7 +446,8 @@ def design_parameters(spec: DesignSpec, values: Mapping[str, float], *,
               for k, v in spec.magnet.parameters.items()}
     mag = params["magnet"]
     for k, v in values.items():
-        mag[k] = int(round(float(v))) if k == "turns" else float(v)
+        x = real_number(v, f"design values {k}", VARIABLES[k], positive=True)
+        mag[k] = int(round(x)) if k == "turns" else x
     g = {k: mag[k] for k in VARIABLES}
     mag["resistance"] = float(_coil_laws(g, float(mag["turns"]), spec.coil)["resistance_ohm"])
     if provenance:
@@ -952,7 +997,9 @@ def write_design_toml(result: DesignResult, path: str | Path) -> Path:
     """Write the optimum as a magnet parameter file (loadable by
     :func:`~maglevkit.magnets.load_magnet`): the base magnet with the optimal values
     (``turns`` rounded), the coil's resistance, every changed value tagged ``[E] optimised:
-    ...`` in ``[provenance]``, the operating point in ``[operating]``, and a comment header
+    ...`` in ``[provenance]``, the operating point in ``[operating]`` (its current scaled by
+    ``N / round(N)``: the optimum's ampere-turns, on which the statics depend, with the
+    rounded turns), and a comment header
     with the objective, the active constraints and IPOPT's status.
 
     Parameters
@@ -973,8 +1020,11 @@ def write_design_toml(result: DesignResult, path: str | Path) -> Path:
            f"{Path(spec.source).name}; active: {', '.join(result.active) or 'none'})")
     params = design_parameters(spec, result.values, provenance=tag)
     params["magnet"]["name"] = f"{params['magnet'].get('name', 'magnet')} (optimised)"
+    current = result.nominal_current_A
+    if "turns" in result.values:    # the same ampere-turns (so force, B, J) with the file's
+        current *= result.values["turns"] / params["magnet"]["turns"]     # rounded turns
     params["operating"] = {"nominal_gap": spec.requirements["nominal_gap_m"],
-                           "nominal_current": result.nominal_current_A}
+                           "nominal_current": current}
     prov = dict(params.get("provenance", {}))
     prov["operating.nominal_gap"] = f"[E] {tag}"
     prov["operating.nominal_current"] = f"[E] {tag}"
@@ -983,7 +1033,7 @@ def write_design_toml(result: DesignResult, path: str | Path) -> Path:
               f"(IPOPT {result.status}, {result.iterations} iterations)",
               f"# objective {result.objective} = {result.objective_value:.6g} "
               f"({'kg' if result.objective == 'mass' else 'W'}); mass {result.mass_kg:.6g} kg, "
-              f"power {result.power_W:.6g} W at {result.nominal_current_A:.6g} A",
+              f"power {result.power_W:.6g} W at {current:.6g} A",
               f"# active constraints: {', '.join(result.active) or 'none'}"]
     p = Path(path)
     p.write_text("\n".join(header) + "\n" + toml_text(params))

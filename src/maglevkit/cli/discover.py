@@ -31,6 +31,8 @@ _KINDS: dict[str, tuple[str, str | None, tuple[str, str] | None]] = {
     "sweeps": ("sweeps", None, ("sweep", "name")),
     "designs": ("designs", "design", None),
 }
+#: further top-level tables that mark a kind (the cross-section vehicles are vehicles too)
+_MORE_TABLES: dict[str, tuple[str, ...]] = {"vehicles": ("cross_section",)}
 #: the commands that take each kind (the next step after listing)
 _USE = {"magnets": "maglevkit statics NAME", "vehicles": "maglevkit vehicle run NAME",
         "guideways": "maglevkit vehicle run --guideway NAME",
@@ -53,7 +55,10 @@ def _names(kind: str) -> list[str]:
     from ..parameter_files import bundled_files
 
     folder, table, _ = _KINDS[kind]
-    return bundled_files(folder, table=table)
+    names = set(bundled_files(folder, table=table))
+    for more in _MORE_TABLES.get(kind, ()):
+        names.update(bundled_files(folder, table=more))
+    return sorted(names)
 
 
 def _title(kind: str, name: str) -> str:
@@ -66,9 +71,11 @@ def _title(kind: str, name: str) -> str:
     folder, _, key = _KINDS[kind]
     text = _text(folder, name)
     if key is not None:
-        value: Any = tomllib.loads(text).get(key[0], {}).get(key[1])
-        if isinstance(value, str) and value:
-            return value
+        doc = tomllib.loads(text)
+        for table in (key[0], *_MORE_TABLES.get(kind, ())):
+            value: Any = doc.get(table, {}).get(key[1])
+            if isinstance(value, str) and value:
+                return value
     for line in text.splitlines():
         if line.startswith("#"):     # its first phrase
             return line.lstrip("# ").split(": ")[0].split(". ")[0].rstrip(".:")

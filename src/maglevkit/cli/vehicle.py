@@ -90,9 +90,10 @@ def run(
 ) -> None:
     """Run the train at constant speed; report minimum gaps, peak currents, comfort and the
     real-time factor (results on stdout, diagnostics on stderr).  Ctrl-C stops the run:
-    "interrupted" on stderr, exit code 130, and with -o the run up to there is written.
-    A cross-section vehicle (--vehicle tr09-cross-section) runs one slice across the track
-    with levitation and guidance magnets, curves and crosswind.
+    "interrupted" on stderr, exit code 130, and with -o the run up to there is written
+    (the train; an interrupted cross-section run writes no file).  A cross-section
+    vehicle (--vehicle tr09-cross-section) runs one slice across the track with levitation
+    and guidance magnets, curves and crosswind.
 
     \b
     Example:
@@ -104,6 +105,9 @@ def run(
         if guideway is not None or rigid:
             raise fail("--guideway/--rigid: the cross-section model runs on a rigid "
                        "guideway; leave them out")
+        if speed is not None:       # was ignored: the run went at 0 km/h
+            raise fail(f"--speed {speed:g}: use --speed-kmh for a cross-section run (--speed "
+                       "is its deprecated old name)")
         try:
             _run_cross_section(vehicle_option or vehicle, speed_kmh, duration, dt, failure,
                                magnets, maps_cache, output, plot, force, curve, crosswind,

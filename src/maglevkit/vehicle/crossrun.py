@@ -40,6 +40,7 @@ from __future__ import annotations
 
 import math
 import time
+import warnings
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -47,14 +48,14 @@ from typing import Any
 
 import numpy as np
 
-from ..errors import InputError
+from ..errors import InputError, MaglevkitWarning
 from ..plant import STANDARD_GRAVITY
-from ..validation import real_number
+from ..validation import Plausible, check_plausible, real_number
 from .crosssection import CrossSectionData, CrossSectionMechanics, track_field_path
 from .simulation import Failure
 
 __all__ = ["CrossSectionModel", "CrossSectionRun", "TransitionCurve", "Crosswind",
-           "LATERAL_ALIGNMENT_PSD", "parse_curve", "parse_crosswind", "parse_lateral"]
+           "LATERAL_ALIGNMENT_PSD", "SCENARIO_PLAUSIBLE", "parse_curve", "parse_crosswind", "parse_lateral"]
 
 #: One-sided PSD of the lateral alignment (German high-speed track, "low irregularity":
 #: ``A_a = 2.119e-7 m rad``, the corner frequencies of the vertical spectrum; Zhai,
@@ -64,6 +65,17 @@ LATERAL_ALIGNMENT_PSD = {"A_v_m_rad": 2.119e-7, "omega_c_rad_per_m": 0.8246,
                          "omega_r_rad_per_m": 0.0206}
 
 SIDES = ("left", "right")
+
+#: Plausible magnitudes of the scenario values (:func:`~maglevkit.validation.
+#: check_plausible`: outside, most likely a unit slip, e.g. a radius in km or a gust in kN;
+#: the value is used as given, with a :class:`~maglevkit.errors.PlausibilityWarning`).
+#: Rail irregularities above 10 mm exceed the nominal gap.
+SCENARIO_PLAUSIBLE: dict[str, Plausible] = {
+    "curve.radius_m": Plausible(100.0, 1e5, "m"),
+    "crosswind.peak_force_N": Plausible(100.0, 1e6, "N"),
+    "lateral.rms_m": Plausible(1e-5, 0.01, "m"),
+    "lateral.height_m": Plausible(1e-5, 0.01, "m"),
+}
 
 
 @dataclass(frozen=True)
@@ -106,6 +118,7 @@ class TransitionCurve:
                              "rad (17 deg)")
         real_number(self.transition_m, "curve transition_m", "m", nonnegative=True)
         real_number(self.start_m, "curve start_m", "m", nonnegative=True)
+        check_plausible({"curve": {"radius_m": r}}, SCENARIO_PLAUSIBLE, stacklevel=4)
 
     def ramp(self, distance_m: Any) -> np.ndarray:
         """Share ``0 ... 1`` of the full curve at the distances travelled [m] (-).
@@ -189,6 +202,8 @@ class Crosswind:
         real_number(self.pressure_height_m, "crosswind pressure_height_m", "m")
         if self.shape not in ("1-cosine", "step"):
             raise InputError(f"crosswind shape = {self.shape!r}; allowed: '1-cosine', 'step'")
+        check_plausible({"crosswind": {"peak_force_N": self.peak_force_N}},
+                        SCENARIO_PLAUSIBLE, stacklevel=4)
 
     def force_N(self, time_s: Any) -> np.ndarray:
         """Lateral force ``F(t)`` [N] at the times [s].
@@ -330,6 +345,8 @@ def parse_lateral(text: str, *, girder_length_m: float = 24.768) -> Any:
                              "(metres, RMS and H > 0, SEED a whole number) or none, joined "
                              "by '+'")
         seed = int(nums[1]) if len(nums) == 2 else 0
+        check_plausible({"lateral": {"rms_m" if kind == "random" else "height_m": nums[0]}},
+                        SCENARIO_PLAUSIBLE, "--lateral")
         if kind == "random":
             lo, hi = 2 * np.pi / 100.0, 2 * np.pi / 1.0
             base = GermanTrackPSD(**LATERAL_ALIGNMENT_PSD)
@@ -637,7 +654,10 @@ class CrossSectionModel:
             ``voltage`` (``circuit``), ``car_body_lateral_acceleration``,
             ``car_body_vertical_acceleration``, ``car_body_roll_acceleration``,
             displacements ``car_body_y``, ... ``chassis_phi``, ``field_a_y``, ``field_a_z``,
-            ``crosswind_force``; SI units in the attributes.
+            ``crosswind_force``; SI units in the attributes.  Dataset attributes: the
+            vehicle, speed, step, gaps, magnets and bias current, and the scenario
+            (``failures``, ``touchdown``, ``curve``, ``crosswind``,
+            ``vertical_irregularity``, ``lateral_irregularity``; "" when none).
 
         Raises
         ------
@@ -645,6 +665,12 @@ class CrossSectionModel:
             Bad options (named), unknown failure circuits, non-finite irregularities.
         OutOfRangeError
             A circuit leaving its maps (from the bank).
+
+        Warns
+        -----
+        MaglevkitWarning
+            A curve that starts beyond the distance covered, a crosswind that starts after
+            the run (the run never reaches them).
         """
         v = real_number(speed_m_per_s, "speed_m_per_s", "m/s", nonnegative=True)
         dur = real_number(duration_s, "duration_s", "s", positive=True)
@@ -657,6 +683,14 @@ class CrossSectionModel:
             raise InputError(f"curve must be a TransitionCurve, got {type(curve).__name__}")
         if crosswind is not None and not isinstance(crosswind, Crosswind):
             raise InputError(f"crosswind must be a Crosswind, got {type(crosswind).__name__}")
+        # a scenario that the run never reaches is almost always a slip (km for m, ms for s)
+        if curve is not None and float(curve.ramp(v * dur)) == 0.0:
+            warnings.warn(f"the curve starts at {curve.start_m:g} m, but the run covers "
+                          f"{v * dur:g} m ({v:g} m/s for {dur:g} s): it never enters it",
+                          MaglevkitWarning, stacklevel=2)
+        if crosswind is not None and crosswind.start_s >= dur:
+            warnings.warn(f"the crosswind starts at {crosswind.start_s:g} s, after the run's "
+                          f"{dur:g} s: it never blows", MaglevkitWarning, stacklevel=2)
         bank = self.bank
         names = bank.circuit_names
         fail_t = np.full(bank.n_circuits, np.inf)
@@ -682,6 +716,11 @@ class CrossSectionModel:
                                        ("lateral", lateral, ry, ry_x)):
             if prof is None:
                 continue
+            if not (callable(prof) and callable(getattr(prof, "slope", None))):
+                raise InputError(f"{what} = {prof!r}: expected an irregularity Profile "
+                                 "(vehicle.irregularities; from a text spec: "
+                                 f"{'parse_irregularity' if what == 'vertical' else 'parse_lateral'}"
+                                 ") or None")
             val[:] = prof(xs)
             slope[:] = prof.slope(xs)
             if not (np.isfinite(val).all() and np.isfinite(slope).all()):
@@ -710,8 +749,20 @@ class CrossSectionModel:
         else:
             out = self._python_loop(dt, v, t, r_mag, rx_mag, field_mid, q_ext, fail_t, n)
         rec_gap, rec_force, rec_cur, rec_u, rec_x, rec_acc, touchdown, last, wall = out
-        return self._result(v, dt, t, rec_gap, rec_force, rec_cur, rec_u, rec_x, rec_acc,
-                            touchdown, last, wall, field_mid, wind)
+        res = self._result(v, dt, t, rec_gap, rec_force, rec_cur, rec_u, rec_x, rec_acc,
+                           touchdown, last, wall, field_mid, wind)
+        # the scenario in the file (as the heave-pitch run's attributes): a run can be read
+        # back and repeated from its netCDF alone
+        res.dataset.attrs.update({
+            "failures": ", ".join(f"{f.circuit}@{f.time_s:g}" for f in failures),
+            "touchdown": "" if touchdown is None else
+                         f"{touchdown[3]}: {touchdown[0]}@{touchdown[1]:.6g} s "
+                         f"({touchdown[2]:.6g} m)",
+            "curve": "" if curve is None else repr(curve),
+            "crosswind": "" if crosswind is None else repr(crosswind),
+            "vertical_irregularity": "" if vertical is None else repr(vertical),
+            "lateral_irregularity": "" if lateral is None else repr(lateral)})
+        return res
 
     def _python_loop(self, dt: float, v: float, t: np.ndarray, r_mag: np.ndarray,
                      rx_mag: np.ndarray, field_mid: np.ndarray, q_ext: np.ndarray,

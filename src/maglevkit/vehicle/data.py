@@ -38,7 +38,7 @@ GUIDEWAY_SCHEMA = {
     "bending_stiffness": Schema(float, unit="N m^2"),
     "damping_ratio": Schema(float, unit="-", check="nonnegative"),
     "modes": Schema(int, unit="-"),
-    "precamber": Schema(float, unit="m", required=False, default=0.0),
+    "precamber": Schema(float, unit="m", check="nonnegative", required=False, default=0.0),
 }
 
 #: The plausible magnitudes of every dimensional key of a guideway file
@@ -47,6 +47,8 @@ GUIDEWAY_PLAUSIBLE: dict[str, Plausible] = {
     "guideway.span_length": Plausible(2.0, 200.0, "m"),
     "guideway.mass_per_length": Plausible(100.0, 1e5, "kg/m"),
     "guideway.bending_stiffness": Plausible(1e8, 1e13, "N m^2"),
+    # built-in camber: mm on real spans (2.7 mm bundled); 0 (none) is always plausible
+    "guideway.precamber": Plausible(1e-4, 0.05, "m"),
 }
 
 

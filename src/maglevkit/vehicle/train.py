@@ -74,7 +74,8 @@ VEHICLE_SCHEMA: dict[str, dict[str, Schema]] = {
         "damping": Schema(float, unit="-"),
         "flux_bandwidth": Schema(float, unit="Hz"),
         "voltage_limit": Schema(float, unit="V"),
-        "velocity_blend": Schema(float, unit="-", required=False, default=0.0),
+        "velocity_blend": Schema(float, unit="-", check="nonnegative", required=False,
+                                 default=0.0),
     },
 }
 
@@ -383,6 +384,15 @@ def load_vehicle(source: str | Path = "tr09") -> TrainData:
     ParameterFileError
         Missing file, TOML syntax error, unknown/missing keys or invalid values.
     """
-    params, label = read_parameter_file(source, what="vehicle", folder="vehicle",
-                                        table="vehicle")
+    try:
+        params, label = read_parameter_file(source, what="vehicle", folder="vehicle",
+                                            table="vehicle")
+    except ParameterFileError as exc:
+        path = Path(str(source))
+        if path.suffix == ".toml" or path.exists():
+            raise
+        # a name: say that the cross-section vehicles are bundled too (another loader)
+        xsec = bundled_files("vehicle", table="cross_section")
+        raise ParameterFileError(f"{exc}; bundled cross-section vehicles (--vehicle NAME, "
+                                 f"load_cross_section): {', '.join(xsec)}") from None
     return parse_vehicle(params, label)
