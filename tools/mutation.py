@@ -336,6 +336,11 @@ MUTATIONS: tuple[Mutation, ...] = (
              'work[outs[0]] = [src_el[j] if j >= 0 else "(0.0)" for j in nz]',
              'work[outs[0]] = [src_el[min(j + 1, len(src_el) - 1)] if j >= 0 else "(0.0)" for j in nz]',
              ("tests/test_lanes.py::test_lane_kernel_equals_casadi_bit_for_bit",)),
+    # ------------------------------------------------------------------ chopper bound (plant)
+    Mutation("chopper: bound -R_ec I_L with the sign lost", "src/maglevkit/plant.py",
+             "low = -eddy_resistance_ohm * inductor_current_A",
+             "low = eddy_resistance_ohm * inductor_current_A",
+             ("tests/test_chopper.py::test_bound_makes_the_coil_current_non_negative_and_leaves_allowed_commands",)),
     # ------------------------------------------------------------------ guideway (spans)
     Mutation("guideway: modal mass m L/2 x1.05", GW,
              "return 0.5 * self.mass_per_length_kg_per_m * self.length_m",

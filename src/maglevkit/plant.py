@@ -10,11 +10,15 @@ re-exports its names.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
+
+import casadi as ca
+import numpy as np
 
 from .errors import ParameterError
 from .validation import real_number
 
-__all__ = ["HeaveMass", "HeaveState", "STANDARD_GRAVITY"]
+__all__ = ["HeaveMass", "HeaveState", "STANDARD_GRAVITY", "chopper_floor"]
 
 STANDARD_GRAVITY = 9.80665
 """m/s^2"""
@@ -108,3 +112,37 @@ class HeaveMass:
         a = self.acceleration(magnet_force_N, external_force_N)
         return HeaveState(state.gap_m + state.gap_rate_m_per_s * dt + 0.5 * a * dt * dt,
                           state.gap_rate_m_per_s + a * dt)
+
+
+def chopper_floor(u: Any, inductor_current_A: Any, eddy_resistance_ohm: Any) -> Any:
+    """The two-quadrant chopper's bound on a reduced circuit's commanded voltage.
+
+    The chopper cannot reverse the coil current.  With eq. 8's circuit (Fig. 8 of the
+    paper: coil resistance ``R_el`` in series, the eddy branch ``R_ec`` parallel to the
+    inductance) the coil current is ``I = (U + R_ec I_L) / (R_el + R_ec)``, so ``I >= 0``
+    is ``U >= -R_ec I_L``, and a command below that is raised to it.  The one place the
+    vehicle loops (the NumPy loops and the compiled step) take this bound from; the
+    plant's own freewheeling diodes inside the RK4 stages are
+    :func:`~maglevkit.reduced.current.eq8_freewheel_voltage`, the same law in eq. 8's
+    parameters.
+
+    Parameters
+    ----------
+    u : ndarray or CasADi
+        Commanded voltages [V].
+    inductor_current_A : ndarray or CasADi
+        Inductor currents ``I_L`` [A] (eq. 8's state).
+    eddy_resistance_ohm : ndarray or CasADi
+        ``R_ec`` [ohm] per circuit.
+
+    Returns
+    -------
+    ndarray or CasADi
+        ``u`` where ``u >= -R_ec I_L``, else ``-R_ec I_L``; chosen by a comparison (not
+        ``max``), so that a NaN command stays NaN in NumPy and in CasADi alike and the
+        bank names the same culprit on every path.
+    """
+    low = -eddy_resistance_ohm * inductor_current_A
+    if isinstance(u, (ca.SX, ca.MX)) or isinstance(low, (ca.SX, ca.MX)):
+        return ca.if_else(u < low, low, u)
+    return np.where(u < low, low, u)

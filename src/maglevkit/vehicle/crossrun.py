@@ -49,7 +49,7 @@ from typing import Any
 import numpy as np
 
 from ..errors import InputError, MaglevkitWarning
-from ..plant import STANDARD_GRAVITY
+from ..plant import STANDARD_GRAVITY, chopper_floor
 from ..validation import Plausible, check_plausible, real_number
 from .crosssection import CrossSectionData, CrossSectionMechanics, track_field_path
 from .simulation import Failure
@@ -834,7 +834,7 @@ class CrossSectionModel:
             # 2-quadrant chopper: coil current (U + R_ec I_L)/(R_el + R_ec) >= 0; then the
             # failed circuits at 0 V (the compiled step's order)
             il = stepper.inductor_currents_A
-            u[chop] = np.maximum(u[chop], -r_ec[chop] * il[chop])
+            u[chop] = chopper_floor(u[chop], il[chop], r_ec[chop])
             u[fail_t <= t[k]] = 0.0
             rec_u[k] = u
             f_start = force

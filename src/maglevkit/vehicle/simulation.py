@@ -35,7 +35,7 @@ from typing import Any
 import numpy as np
 
 from ..errors import InputError, MaglevkitError, OutOfRangeError, ParameterFileError, SolverError
-from ..plant import STANDARD_GRAVITY
+from ..plant import STANDARD_GRAVITY, chopper_floor
 from .guideway import Guideway
 from .mechanics import VehicleMechanics
 from .train import TrainData
@@ -940,7 +940,7 @@ class VehicleModel:
                     if self.fine:
                         u = np.where((current < 1.0) & (u < 0.0), 0.0, u)
                     else:
-                        u = np.maximum(u, -r_ec * bstate.inductor_currents_A)
+                        u = chopper_floor(u, bstate.inductor_currents_A, r_ec)
                     if t >= t_fail0:
                         u = np.where(fail_t <= t, 0.0, u)
                     rec["voltage"][k] = u

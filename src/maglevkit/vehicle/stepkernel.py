@@ -39,6 +39,7 @@ import casadi as ca
 import numpy as np
 
 from ..control import damping_input
+from ..plant import chopper_floor
 
 __all__ = ["StepLayout", "VehicleStepFunction", "build_vehicle_step"]
 
@@ -280,8 +281,7 @@ def build_vehicle_step(*, bank_step: Any, dt: float, nominal_gap_m: float, sides
     # maximum in the reference loop: the bank then names the same culprit)
     u = ca.if_else(u < -umax, -umax, ca.if_else(u > umax, umax, u))
     # 2-quadrant chopper: the reduced model's coil current (U + R_ec I_L)/(R_el + R_ec) >= 0
-    u_low = -r_ec * i_l
-    u = ca.if_else(u < u_low, u_low, u)
+    u = chopper_floor(u, i_l, r_ec)
     u = ca.if_else(fail_t <= t, 0.0, u)
     f_ctl = ca.Function("vehicle_controllers", [g_s, g_r, i_l, cur, psi, integ, t, fail_t], [u],
                         ["gap", "gap_rate", "I_L", "current", "psi_hat", "integral", "t",
