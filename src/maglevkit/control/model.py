@@ -87,6 +87,13 @@ class MagnetHeaveModel:
         if len(bank.member_names) != 1 or bank.members[0][1] != "reduced":
             raise ParameterError("the prediction model needs the maps of exactly one magnet "
                                  "(a bank of one reduced member)")
+        if bank.motion_eddy:
+            # its observer, prediction and linearisation are written for eq. 8's one state
+            # per circuit; the ladder's I_e would be dropped silently
+            raise ParameterError("the prediction model carries eq. 8 (one state I_L per "
+                                 "circuit); a magnet with motion_eddy=True has a second state "
+                                 "(the shielding eddy current I_e) that its observer and "
+                                 "prediction do not have yet: give the maps (eq. 8)")
         self.bank = bank
         self.mass_kg = float(mass_kg)
         self.gravity = float(gravity)

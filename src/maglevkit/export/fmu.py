@@ -275,6 +275,7 @@ def _as_bank(model: ReducedSource, eddy_resistance: str, interpolation: str) -> 
         if model.interpolation != interpolation and interpolation != "bicubic":
             raise InputError(f"interpolation = {interpolation!r} differs from the bank's "
                              f"{model.interpolation!r}; build the bank with it instead")
+        _refuse_motion_eddy(model)
         name = model.member_names[0] if len(model.member_names) == 1 else "magnet_bank"
         return model, name
     if isinstance(model, Mapping):
@@ -296,7 +297,16 @@ def _as_bank(model: ReducedSource, eddy_resistance: str, interpolation: str) -> 
                          f"{type(model).__name__}{hint}")
     bank = MagnetBank(members, interpolation=interpolation, eddy_resistance=eddy_resistance,
                       compiled="never")
+    _refuse_motion_eddy(bank)
     return bank, name
+
+
+def _refuse_motion_eddy(bank: MagnetBank) -> None:
+    if bank.motion_eddy:
+        raise InputError("export_fmu: the bank has shielded-gap ladder members "
+                         "(motion_eddy=True), whose second state per circuit (I_e) the FMU's "
+                         "C code does not carry yet; export CurrentModel(maps) or maps "
+                         "(eq. 8)")
 
 
 def _is_reduced(model: Any) -> bool:

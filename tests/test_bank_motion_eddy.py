@@ -1,0 +1,172 @@
+"""The bank with shielded-gap ladder members (``motion_eddy``): the same law as
+``CurrentModel(maps, motion_eddy=True)`` (docs/bank.md, "Shielded-gap ladder members").
+
+The reference is the single model, which integrates the same ladder with its own RK4 on
+CasADi B-splines (the bank: per-cell bicubic tables, equal to the B-spline to rounding);
+mixed banks against their members on their own; the eq. 8 layout left as it was; refusals.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import maglevkit as mk
+from maglevkit.errors import InputError, ParameterError
+from maglevkit.export import export_fmu
+from maglevkit.reduced.bank import MOTION_EDDY_PARAMETERS, MagnetBank
+from maglevkit.reduced.core import MotionEddyLadder
+
+GAPS = np.linspace(0.006, 0.014, 5)
+CURRENTS = np.linspace(0.0, 40.0, 9)
+DT = 2e-4          # 2 RK4 sub-steps of the u-magnet ladder's ~1.4e-4 s limit
+# bicubic tables vs B-splines agree to ~4e-14 relative (docs/decisions.md, "The reduced
+# model's compiled tables"); 200 steps accumulate at most a few 1e-14 A on ~20 A
+TOL_A = 1e-12
+TOL_REL_F = 1e-12
+
+
+@pytest.fixture(scope="module")
+def u_maps() -> mk.CharacteristicMaps:
+    return mk.build_maps(mk.load_magnet("u-magnet"), gaps=GAPS, currents=CURRENTS,
+                         progress=False)
+
+
+def _gap_sine(k: int, f_hz: float = 50.0) -> tuple[float, float]:
+    """Gap at the start of step ``k`` [m] and its secant rate over the step [m/s]."""
+    t0, t1 = k * DT, (k + 1) * DT
+    g0 = 0.010 + 0.001 * np.sin(2 * np.pi * f_hz * t0)
+    g1 = 0.010 + 0.001 * np.sin(2 * np.pi * f_hz * t1)
+    return g0, (g1 - g0) / DT
+
+
+@pytest.mark.parametrize("compiled", ["never", "auto"])
+def test_bank_of_one_ladder_member_equals_current_model(u_maps, compiled: str) -> None:
+    """Step and stepper of a bank of one ``CurrentModel(maps, motion_eddy=True)`` follow
+    the model itself under a 50 Hz gap sine at constant voltage: I_L, I_e, the coil current
+    and the force to 1e-12 (the two lookups' rounding), the stepper equal to the step bit
+    for bit (the same compiled function)."""
+    cm = mk.CurrentModel(u_maps, motion_eddy=True)
+    bank = MagnetBank({"m": cm}, compiled=compiled)
+    assert bank.motion_eddy and bank.max_step_s == cm.max_step_s
+    st = bank.initial_state(gaps=0.010, currents=20.0)
+    assert st.eddy_currents_A is not None and np.all(st.eddy_currents_A == 0.0)
+    cs = cm.initial_state(gaps=0.010, currents=20.0)
+    stepper = bank.stepper(st, DT)
+    u = float(bank.resistance_ohm[0]) * 20.0
+    ng = len(cm.gap_names)
+    for k in range(200):
+        g0, gd = _gap_sine(k)
+        st, out = bank.step(st, DT, u, g0, gd)
+        stepper.advance(u, g0, gd)
+        cs, co = cm.step(cs, DT, u, np.full(ng, g0), np.full(ng, gd))
+        assert cs.eddy_currents_A is not None and st.eddy_currents_A is not None
+        assert abs(st.inductor_currents_A[0] - cs.inductor_currents_A[0]) < TOL_A
+        assert abs(st.eddy_currents_A[0] - cs.eddy_currents_A[0, 0]) < TOL_A
+        assert abs(out.currents_A[0] - co.currents_A[0]) < TOL_A
+        assert abs(out.circuit_force_N[0] / co.circuit_force_N[0] - 1.0) < TOL_REL_F
+        assert np.array_equal(stepper.inductor_currents_A, st.inductor_currents_A)
+        assert np.array_equal(stepper.eddy_currents_A, st.eddy_currents_A)
+        assert np.array_equal(stepper.currents_A, out.currents_A)
+    # the shielding current is really there (not a ladder that stayed at rest): at 50 Hz
+    # its amplitude on the u-magnet is a few 10 mA
+    assert abs(cs.eddy_currents_A[0, 0]) > 1e-3
+    assert np.array_equal(stepper.state.eddy_currents_A, st.eddy_currents_A)
+
+
+def test_bank_option_and_simulate_equal_current_model(u_maps) -> None:
+    """``MagnetBank(maps, motion_eddy=True)`` builds the same ladder as a CurrentModel
+    member, and ``simulate`` (stepper path) follows ``CurrentModel.simulate``."""
+    bank = MagnetBank({"m": u_maps}, motion_eddy=True, compiled="never")
+    cm = mk.CurrentModel(u_maps, motion_eddy=True)
+    t = np.arange(0, 101) * DT
+    gaps = 0.010 + 0.001 * np.sin(2 * np.pi * 50.0 * t)
+    u = float(bank.resistance_ohm[0]) * 20.0
+    sim = bank.simulate(t, gaps=gaps[:, None], voltages=u)
+    ref = cm.simulate(t, gaps=np.repeat(gaps[:, None], len(cm.gap_names), axis=1),
+                      voltages=u)
+    assert sim.eddy_currents_A is not None and ref.eddy_currents_A is not None
+    assert np.max(np.abs(sim.inductor_currents_A[:, 0] - ref.inductor_currents_A[:, 0])) < TOL_A
+    assert np.max(np.abs(sim.eddy_currents_A[:, 0] - ref.eddy_currents_A[:, 0, 0])) < TOL_A
+    assert np.max(np.abs(sim.currents_A[:, 0] - ref.currents_A[:, 0])) < TOL_A
+    assert np.array_equal(sim.final_state.eddy_currents_A, sim.eddy_currents_A[-1])
+    # the parameter rows of the ladder: flag, R_2, L_u of the maps
+    par = bank.circuit_parameters
+    lad = MotionEddyLadder.from_maps(u_maps, resistance_ohm=bank.resistance_ohm)
+    assert par.shape[0] == 13 + len(MOTION_EDDY_PARAMETERS)
+    assert tuple(par[13:, 0]) == (1.0, lad.shielding_resistance_ohm[0],
+                                  lad.unshielded_inductance_H[0])
+    assert bank.eddy_resistance_ohm[0] == lad.jump_resistance_ohm[0]
+
+
+@pytest.mark.parametrize("gap_inputs", ["circuit", "pole"])
+def test_mixed_bank_equals_its_members_on_their_own(u_maps, gap_inputs: str) -> None:
+    """A bank of a ladder member and an eq. 8 member: each circuit follows its own law.
+    The ladder circuit equals CurrentModel(motion_eddy=True); the eq. 8 circuit equals a
+    bank of eq. 8 alone with the same (ladder-limited) sub-step and keeps I_e = 0.  With
+    one gap input per pole the bank takes its general path (step, not the fast kernel)."""
+    cm = mk.CurrentModel(u_maps, motion_eddy=True)
+    bank = MagnetBank({"ladder": cm, "eq8": u_maps}, compiled="never", gap_inputs=gap_inputs)
+    eq8 = MagnetBank({"eq8": u_maps}, compiled="never", max_step_s=bank.max_step_s)
+    assert bank.max_step_s == cm.max_step_s and not eq8.motion_eddy
+    st = bank.initial_state(gaps=0.010, currents=20.0)
+    s8 = eq8.initial_state(gaps=0.010, currents=20.0)
+    cs = cm.initial_state(gaps=0.010, currents=20.0)
+    u = float(bank.resistance_ohm[0]) * 20.0
+    ng = len(cm.gap_names)
+    for k in range(100):
+        g0, gd = _gap_sine(k)
+        st, out = bank.step(st, DT, u, np.full(bank.n_gaps, g0), np.full(bank.n_gaps, gd))
+        s8, o8 = eq8.step(s8, DT, u, g0, gd)
+        cs, co = cm.step(cs, DT, u, np.full(ng, g0), np.full(ng, gd))
+        assert abs(st.inductor_currents_A[0] - cs.inductor_currents_A[0]) < TOL_A
+        assert abs(out.currents_A[0] - co.currents_A[0]) < TOL_A
+        # the eq. 8 circuit: the same arithmetic (if_else picks eq. 8 exactly), only the
+        # ladder's zero I_e added to I_L in the coil current
+        assert abs(st.inductor_currents_A[1] - s8.inductor_currents_A[0]) < TOL_A
+        assert abs(out.currents_A[1] - o8.currents_A[0]) < TOL_A
+        assert st.eddy_currents_A is not None and st.eddy_currents_A[1] == 0.0
+    # and the ladder circuit differs from eq. 8 (the point of it)
+    assert abs(st.inductor_currents_A[0] - st.inductor_currents_A[1]) > 1e-3
+
+
+def test_eq8_banks_keep_their_layout(u_maps) -> None:
+    """Without ladder members nothing changes: no eddy state, 13 parameter rows, the
+    kernel's five inputs and nine outputs."""
+    bank = MagnetBank({"m": u_maps}, compiled="never")
+    assert not bank.motion_eddy
+    st = bank.initial_state(gaps=0.010, currents=20.0)
+    assert st.eddy_currents_A is None
+    assert bank.circuit_parameters.shape[0] == 13
+    f = bank.step_function(1e-3)
+    assert (f.n_in(), f.n_out()) == (5, 9)
+    st, _ = bank.step(st, 1e-3, 20.0 * bank.resistance_ohm, 0.01, 0.01)
+    assert st.eddy_currents_A is None and bank.stepper(st, 1e-3).eddy_currents_A is None
+    lad = MagnetBank({"m": u_maps}, motion_eddy=True, compiled="never").step_function(1e-3)
+    assert (lad.n_in(), lad.n_out()) == (6, 10)
+    assert lad.name_in(5) == "I_e" and lad.name_out(9) == "I_e_next"
+
+
+def test_refusals(u_maps, tmp_path) -> None:
+    cm = mk.CurrentModel(u_maps, motion_eddy=True)
+    with pytest.raises(InputError, match="freewheel=True with shielded-gap ladder"):
+        MagnetBank({"m": cm}, freewheel=True, compiled="never")
+    with pytest.raises(InputError, match="motion_eddy = 'yes'"):
+        MagnetBank({"m": u_maps}, motion_eddy="yes", compiled="never")  # type: ignore[arg-type]
+    bank = MagnetBank({"m": cm}, compiled="never")
+    st = bank.initial_state(gaps=0.010, currents=20.0)
+    with pytest.raises(InputError, match="run_steps.*motion_eddy.*step or stepper"):
+        bank.run_steps(st.inductor_currents_A, np.full((2, 1), 0.01), np.full((2, 1), 40.0),
+                       np.zeros((2, 1)), np.full(2, 1e-3))
+    with pytest.raises(InputError, match="circuit_expressions.*ode_function"):
+        bank.circuit_expressions(0, 20.0, 0.01, 40.0, 0.0, bank.table)
+    eq8_state = MagnetBank({"m": u_maps}, compiled="never").initial_state(gaps=0.01,
+                                                                          currents=20.0)
+    with pytest.raises(InputError, match="eddy_currents_A of shape"):
+        bank.step(eq8_state, 1e-3, 40.0)
+    with pytest.raises(InputError, match="FMU's C code does not carry"):
+        export_fmu(cm, tmp_path / "unused.fmu")
+    from maglevkit.control.model import MagnetHeaveModel
+
+    with pytest.raises(ParameterError, match="motion_eddy=True has a second state"):
+        MagnetHeaveModel(bank, mass_kg=100.0)
