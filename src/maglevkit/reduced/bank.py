@@ -77,8 +77,8 @@ from .tables import INTERPOLATION_METHODS, cell_table
 if TYPE_CHECKING:
     from ..reduction.maps import CharacteristicMaps
 
-__all__ = ["KERNEL_PARAMETERS", "MOTION_EDDY_PARAMETERS", "RUN_CHUNK", "BankOutputs", "BankRun", "BankSimulation",
-           "BankState", "MagnetBank", "StepFlag"]
+__all__ = ["KERNEL_PARAMETERS", "MOTION_EDDY_PARAMETERS", "RUN_CHUNK", "BankOutputs", "BankRun",
+           "BankSimulation", "BankState", "MagnetBank", "StepFlag"]
 
 _MAP_VARIABLES = ("inductance_H", "dL_ds_H_per_m", "force_N")
 KERNEL_PARAMETERS = ("s0_m", "inv_ds_per_m", "cells_s", "i0_A", "inv_di_per_A", "cells_i",

@@ -31,8 +31,8 @@ from ..errors import InputError
 if TYPE_CHECKING:
     from ..reduction.maps import CharacteristicMaps
 
-__all__ = ["EDDY_RESISTANCE_CHOICES", "EXTRA_CELLS", "MotionEddyLadder", "ReducedCore", "eq8_a", "extend_axis",
-           "extend_values", "rk4_substep", "substep_count", "substep_counts"]
+__all__ = ["EDDY_RESISTANCE_CHOICES", "EXTRA_CELLS", "MotionEddyLadder", "ReducedCore", "eq8_a",
+           "extend_axis", "extend_values", "rk4_substep", "substep_count", "substep_counts"]
 
 EXTRA_CELLS = 3
 """Grid cells by which the maps are continued linearly beyond their range."""
