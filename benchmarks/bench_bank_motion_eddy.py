@@ -1,8 +1,8 @@
 """The bank with shielded-gap ladder members (``motion_eddy``): cost and accuracy.
 
 Cost: the in-place stepper at 100 circuits (50 TR09 standard magnets) at 1 ms, eq. 8
-(lanes, the default; and CasADi's generated C, the code the ladder bank runs) against the
-ladder, in ns per circuit-step (CPU time, best of 5; run pinned, ``taskset -c 0``).
+against the ladder, each through the SIMD lanes (the default) and CasADi's generated C,
+in ns per circuit-step (CPU time, best of 5; run pinned, ``taskset -c 0``).
 
 Accuracy: the gap-sine sweep of ``bench_gap_motion`` (TR09 standard, 10 +- 1 mm, constant
 voltage of 34 A) through a bank of one ladder member, against the detailed model and
@@ -60,7 +60,9 @@ def cost(maps: mk.CharacteristicMaps, cache: Path) -> list[str]:
     rows = []
     for label, opts in (("eq. 8, lanes (default)", {}),
                         ("eq. 8, CasADi C", {"codegen": "casadi"}),
-                        ("ladder (motion_eddy), CasADi C", {"motion_eddy": True})):
+                        ("ladder (motion_eddy), lanes (default)", {"motion_eddy": True}),
+                        ("ladder (motion_eddy), CasADi C", {"motion_eddy": True,
+                                                           "codegen": "casadi"})):
         bank = MagnetBank(members, compiled="always", cache_dir=cache, **opts)
         st = bank.initial_state(gaps=0.010, currents=33.5)
         nc = bank.n_circuits

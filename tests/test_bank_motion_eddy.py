@@ -221,3 +221,34 @@ def test_fmu_of_a_ladder_member_equals_the_bank(u_maps, tmp_path) -> None:
     assert worst <= 1e-12
     # and the ladder was at work: I_e moved, so eq. 8 would differ
     assert st.eddy_currents_A is not None and abs(st.eddy_currents_A[0]) > 1e-3
+
+
+def test_ladder_lanes_equal_casadi_code_and_the_virtual_machine(u_maps) -> None:
+    """With a compiler, a ladder bank runs the SIMD lanes (its RK4 over the pair
+    ``(I_L, I_e)`` is a scalar graph); lanes, CasADi's C and the virtual machine give the
+    same numbers bit for bit (the lanes translate the graph instruction by instruction,
+    compiled without contraction), in a mixed bank of three."""
+    from maglevkit.models.compiled import find_compiler
+
+    if find_compiler() is None:
+        pytest.skip("no C compiler")
+    cm = mk.CurrentModel(u_maps, motion_eddy=True)
+    members = {"l": cm, "e": u_maps, "l2": cm}
+    banks = [MagnetBank(members, compiled="never"), MagnetBank(members, compiled="auto"),
+             MagnetBank(members, compiled="auto", codegen="casadi")]
+    assert banks[1].compiled_step_library(DT) is not None
+    assert banks[2].compiled_step_library(DT) is None
+    states = [b.initial_state(gaps=0.010, currents=20.0) for b in banks]
+    u = float(banks[0].resistance_ohm[0]) * 20.0
+    for k in range(60):
+        g0, gd = _gap_sine(k)
+        outs = []
+        for j, b in enumerate(banks):
+            states[j], o = b.step(states[j], DT, u, g0, gd)
+            outs.append(o)
+        for j in (1, 2):
+            assert np.array_equal(states[j].inductor_currents_A, states[0].inductor_currents_A)
+            assert np.array_equal(states[j].eddy_currents_A, states[0].eddy_currents_A)
+            assert np.array_equal(outs[j].currents_A, outs[0].currents_A)
+            assert np.array_equal(outs[j].circuit_force_N, outs[0].circuit_force_N)
+    assert states[0].eddy_currents_A is not None and states[0].eddy_currents_A[1] == 0.0

@@ -732,9 +732,11 @@ class MagnetBank:
 
         def f(x: Any, cell: tuple[Any, Any]) -> Any:
             lt, dl = self._lookup(cell, x[0], p, table, maps=(0, 1))
-            return ca.vertcat(*self._ladder_rhs(x[0], x[1], u, sd, lt, dl, p))
+            return _Pair(*self._ladder_rhs(x[0], x[1], u, sd, lt, dl, p))
 
-        x: Any = ca.vertcat(i, ie)
+        # the state as a pair of scalars (not a vertcat), so that the graph stays scalar
+        # and the SIMD lanes translate it; the arithmetic per component is the same
+        x: Any = _Pair(i, ie)
         lo: Any = i
         hi: Any = i
         cell_start = self._gap_cell(s, p)
@@ -1093,9 +1095,7 @@ class MagnetBank:
         hit = self._lanes.get(substeps)
         if hit is not None:
             return hit[0]
-        if self.compiled_mode == "never" or find_compiler() is None or self.motion_eddy:
-            # (the lanes' C wrapper carries eq. 8's one state per circuit: ladder banks
-            # take CasADi's generated C)
+        if self.compiled_mode == "never" or find_compiler() is None:
             return None
         n = int(self._reduced_idx.size)
         nm = len(self._members)
@@ -1103,22 +1103,29 @@ class MagnetBank:
         # the C names carry a hash of the source (written with a placeholder name first),
         # so that libraries of different banks never share a symbol
         name = "MAGLEVKIT_LANES_NAME"
+        me = self.motion_eddy
         try:
             kernel = lane_source(self.circuit_step_function(substeps), name=f"{name}_k", n=n,
                                  inputs=[LaneInput("instance")] * 4
-                                 + [LaneInput("shared"), LaneInput("baked", self._par)],
+                                 + [LaneInput("shared"), LaneInput("baked", self._par)]
+                                 + [LaneInput("instance")] * me,
                                  width=width, avx2=avx2)
         except (NotImplementedError, ValueError, KeyError, IndexError):  # pragma: no cover
             return None                  # a graph the generator does not translate
         members = self._member_of[self._reduced_idx]
+        # a ladder bank (motion_eddy): input 5 I_e (zeros at w + 10n + 1 when absent) and
+        # output 9 I_e_next (the kernel's seventh output; scratch at w + 11n + 1)
+        ladder = (f"  a[5] = arg[5];\n  if (!a[5]) {{ double *z = w + {10 * n + 1}; "
+                  f"for (c = 0; c < {n}; ++c) z[c] = 0.0; a[5] = z; }}\n"
+                  f"  r[6] = res[9] ? res[9] : w + {11 * n + 1};\n") if me else ""
         body = (f"  static const int member[{n}] = {{{','.join(str(int(m)) for m in members)}}};\n"
-                "  const double *a[5];\n  double *r[6];\n  long c;\n  int k;\n"
+                f"  const double *a[{5 + me}];\n  double *r[{6 + me}];\n  long c;\n  int k;\n"
                 f"  for (k = 0; k < 4; ++k) {{ a[k] = arg[k]; if (!a[k]) {{ double *z = w + "
                 f"{6 * n} + k * {n}; for (c = 0; c < {n}; ++c) z[c] = 0.0; a[k] = z; }} }}\n"
                 f"  a[4] = arg[4] ? arg[4] : w + {10 * n};\n  w[{10 * n}] = 0.0;\n"
                 + "".join(f"  r[{j}] = res[{o}] ? res[{o}] : w + {j * n};\n"
                           for j, o in enumerate((0, 1, 2, 5, 6)))
-                + f"  r[5] = w + {5 * n};\n"
+                + f"  r[5] = w + {5 * n};\n" + ladder
                 + f"  {name}_k(a, r);\n"
                 + f"  if (res[3]) {{ for (k = 0; k < {nm}; ++k) res[3][k] = 0.0;\n"
                 + f"    for (c = 0; c < {n}; ++c) res[3][member[c]] += r[2][c]; }}\n"
@@ -1148,18 +1155,20 @@ class MagnetBank:
                 f"  res[3][0] = (double) k;\n")
         code = ("#include <math.h>\n" + kernel
                 + external_source(name, inputs=[("I_L", n), ("s", n), ("U", n), ("sdot", n),
-                                                ("h", 1)],
+                                                ("h", 1)] + [("I_e", n)] * me,
                                   outputs=[("I_L_next", n), ("I", n), ("F", n), ("member_F", nm),
                                            ("n_bad", 1), ("I_L_min", n), ("I_L_max", n),
-                                           ("s_next", n), ("flags", n)],
-                                  body=body, work=10 * n + 1)
-                + external_source(f"{name}_run", inputs=[("I_L0", n), ("s", n * ch),
-                                                         ("U", n * ch), ("sdot", n * ch),
-                                                         ("h", ch), ("n_steps", 1)],
-                                  outputs=[("I_L", n * ch), ("I", n * ch), ("F", n * ch),
-                                           ("n_done", 1), ("I_L_min", n), ("I_L_max", n),
-                                           ("bad", n)],
-                                  body=loop))
+                                           ("s_next", n), ("flags", n)]
+                                  + [("I_e_next", n)] * me,
+                                  body=body, work=(12 if me else 10) * n + 1))
+        if not me:                       # (run_steps refuses ladder banks)
+            code += external_source(f"{name}_run", inputs=[("I_L0", n), ("s", n * ch),
+                                                           ("U", n * ch), ("sdot", n * ch),
+                                                           ("h", ch), ("n_steps", 1)],
+                                    outputs=[("I_L", n * ch), ("I", n * ch), ("F", n * ch),
+                                             ("n_done", 1), ("I_L_min", n), ("I_L_max", n),
+                                             ("bad", n)],
+                                    body=loop)
         digest = hashlib.sha256(code.encode()).hexdigest()[:16]
         name = f"maglevkit_bank_lanes{substeps}_{digest}"
         code = code.replace("MAGLEVKIT_LANES_NAME", name)
@@ -1168,7 +1177,8 @@ class MagnetBank:
             lib = build_source(name, code.encode(), cache=cache,
                                flags=("-O3", "-shared", "-fPIC", "-ffp-contract=off", *flags))
             f = ca.external(name, str(lib))
-            self._lane_runs[substeps] = ca.external(f"{name}_run", str(lib))
+            if not me:
+                self._lane_runs[substeps] = ca.external(f"{name}_run", str(lib))
         except (OSError, RuntimeError, subprocess.SubprocessError):
             return None                  # the CasADi path reports (or raises) the failure
         self.compiled = True
@@ -1774,6 +1784,25 @@ class MagnetBank:
         return BankOutputs(state.time_s, coil, state.inductor_currents_A.copy(), force,
                            np.bincount(self._member_of, weights=force,
                                        minlength=len(self._members)), pf)
+
+
+class _Pair:
+    """Two scalar expressions added and scaled component by component: the ladder's state
+    ``(I_L, I_e)`` for :func:`rk4_substep` without a vertcat (a scalar graph)."""
+
+    __slots__ = ("v",)
+
+    def __init__(self, *v: Any) -> None:
+        self.v = v
+
+    def __add__(self, other: _Pair) -> _Pair:
+        return _Pair(*(a + b for a, b in zip(self.v, other.v, strict=True)))
+
+    def __rmul__(self, c: Any) -> _Pair:
+        return _Pair(*(c * a for a in self.v))
+
+    def __getitem__(self, k: int) -> Any:
+        return self.v[k]
 
 
 def _new(cls: type[_T], **fields: Any) -> _T:
