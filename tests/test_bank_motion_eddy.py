@@ -252,3 +252,29 @@ def test_ladder_lanes_equal_casadi_code_and_the_virtual_machine(u_maps) -> None:
             assert np.array_equal(outs[j].currents_A, outs[0].currents_A)
             assert np.array_equal(outs[j].circuit_force_N, outs[0].circuit_force_N)
     assert states[0].eddy_currents_A is not None and states[0].eddy_currents_A[1] == 0.0
+
+
+def test_cli_exports_the_ladder(u_maps, tmp_path) -> None:
+    """``maglevkit export fmu ... --motion-eddy`` builds the ladder FMU (MOTION_EDDY 1 in
+    its config, max_substep at the ladder's stable step); without the flag eq. 8."""
+    import zipfile
+
+    from typer.testing import CliRunner
+
+    from maglevkit.cli import app
+
+    maps_file = u_maps.to_netcdf(tmp_path / "u.nc")
+    runner = CliRunner()
+    for extra, expect in (([], "#define MOTION_EDDY 0"), (["--motion-eddy"],
+                                                          "#define MOTION_EDDY 1")):
+        out = tmp_path / f"u{len(extra)}.fmu"
+        res = runner.invoke(app, ["export", "fmu", "u-magnet", str(maps_file), "-o", str(out),
+                                  *extra])
+        assert res.exit_code == 0, res.output
+        with zipfile.ZipFile(out) as zf:
+            config = zf.read("sources/config.h").decode()
+        assert expect in config
+    assert repr(mk.CurrentModel(u_maps, motion_eddy=True).max_step_s) in config
+    with pytest.raises(InputError, match="motion_eddy=True applies to members given as maps"):
+        export_fmu(MagnetBank({"m": u_maps}, compiled="never"), tmp_path / "x.fmu",
+                   motion_eddy=True)

@@ -51,6 +51,7 @@ from ..errors import InputError, SolverError
 from ..models.compiled import cache_directory, find_compiler
 from ..reduced.bank import KERNEL_PARAMETERS, MagnetBank, StepFlag
 from ..reduced.current import CurrentModel
+from ..validation import flag
 
 if TYPE_CHECKING:
     from ..reduction.maps import CharacteristicMaps
@@ -138,7 +139,7 @@ def export_fmu(magnet_or_maps: ReducedSource, path: str | os.PathLike[str], *,
                eddy_resistance: str = "fit", interpolation: str = "bicubic",
                max_substep_s: float = 1e-3, start_gaps_m: Any = None,
                initial_currents_A: Any = None, stop_time_s: float = 1.0,
-               step_size_s: float = 1e-3) -> ExportedFmu:
+               step_size_s: float = 1e-3, motion_eddy: bool = False) -> ExportedFmu:
     """Write an FMI 2.0 Co-Simulation FMU of the reduced model of every circuit (eq. 8).
 
     Parameters
@@ -171,6 +172,11 @@ def export_fmu(magnet_or_maps: ReducedSource, path: str | os.PathLike[str], *,
         the steady-state ``R_el I0``).
     stop_time_s, step_size_s : float
         The DefaultExperiment [s].
+    motion_eddy : bool
+        ``True``: members given as maps carry the shielded-gap ladder
+        (``MagnetBank(..., motion_eddy=True)``: a second state per circuit inside the FMU);
+        a ``CurrentModel`` member keeps its own choice, a bank its own (then leave this
+        ``False``).
 
     Returns
     -------
@@ -193,7 +199,9 @@ def export_fmu(magnet_or_maps: ReducedSource, path: str | os.PathLike[str], *,
             raise InputError(f"{name} = {value!r} must be a finite number of seconds > 0")
     if description is not None and not isinstance(description, str):
         raise InputError(f"description = {description!r} must be a string")
-    bank, default_name = _as_bank(magnet_or_maps, eddy_resistance, interpolation)
+    flag(motion_eddy, "motion_eddy")
+    bank, default_name = _as_bank(magnet_or_maps, eddy_resistance, interpolation,
+                                  bool(motion_eddy))
     if bank.motion_eddy:
         # the ladder's stable RK4 step (MotionEddyLadder.max_step_s), as the bank limits it
         max_substep_s = min(float(max_substep_s), bank.max_step_s)
@@ -272,9 +280,13 @@ def _target_path(path: Any) -> Path:
     return p
 
 
-def _as_bank(model: ReducedSource, eddy_resistance: str, interpolation: str) -> tuple[MagnetBank, str]:
+def _as_bank(model: ReducedSource, eddy_resistance: str, interpolation: str,
+             motion_eddy: bool = False) -> tuple[MagnetBank, str]:
     """The bank to export and a default model name."""
     if isinstance(model, MagnetBank):
+        if motion_eddy:
+            raise InputError("motion_eddy=True applies to members given as maps; a bank has "
+                             "chosen already (build it with MagnetBank(..., motion_eddy=True))")
         kinds = {name: kind for name, kind, _ in model.members}
         detailed = [n for n, k in kinds.items() if k != "reduced"]
         if detailed:
@@ -309,7 +321,7 @@ def _as_bank(model: ReducedSource, eddy_resistance: str, interpolation: str) -> 
                          f"CurrentModel, a MagnetBank or a mapping of them, got "
                          f"{type(model).__name__}{hint}")
     bank = MagnetBank(members, interpolation=interpolation, eddy_resistance=eddy_resistance,
-                      compiled="never")
+                      compiled="never", motion_eddy=motion_eddy)
     return bank, name
 
 
