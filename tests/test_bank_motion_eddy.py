@@ -8,11 +8,13 @@ mixed banks against their members on their own; the eq. 8 layout left as it was;
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 import pytest
 
 import maglevkit as mk
-from maglevkit.errors import InputError, ParameterError
+from maglevkit.errors import InputError
 from maglevkit.export import export_fmu
 from maglevkit.reduced.bank import MOTION_EDDY_PARAMETERS, MagnetBank
 from maglevkit.reduced.core import MotionEddyLadder
@@ -162,7 +164,7 @@ def test_refusals(u_maps, tmp_path) -> None:
     with pytest.raises(InputError, match="run_steps.*motion_eddy.*step or stepper"):
         bank.run_steps(st.inductor_currents_A, np.full((2, 1), 0.01), np.full((2, 1), 40.0),
                        np.zeros((2, 1)), np.full(2, 1e-3))
-    with pytest.raises(InputError, match="circuit_expressions.*ode_function"):
+    with pytest.raises(InputError, match="circuit_expressions.*ladder_expressions"):
         bank.circuit_expressions(0, 20.0, 0.01, 40.0, 0.0, bank.table)
     eq8_state = MagnetBank({"m": u_maps}, compiled="never").initial_state(gaps=0.01,
                                                                           currents=20.0)
@@ -171,10 +173,9 @@ def test_refusals(u_maps, tmp_path) -> None:
     with pytest.raises(InputError, match="freewheel=False"):
         export_fmu(MagnetBank({"m": u_maps}, freewheel=True, compiled="never"),
                    tmp_path / "unused.fmu")
-    from maglevkit.control.model import MagnetHeaveModel
-
-    with pytest.raises(ParameterError, match="motion_eddy=True has a second state"):
-        MagnetHeaveModel(bank, mass_kg=100.0)
+    with pytest.raises(InputError, match="ladder_expressions needs a bank with"):
+        MagnetBank({"m": u_maps}, compiled="never").ladder_expressions(
+            0, 20.0, 0.0, 0.01, 40.0, 0.0, bank.table)
 
 
 def test_fmu_of_a_ladder_member_equals_the_bank(u_maps, tmp_path) -> None:
@@ -278,3 +279,86 @@ def test_cli_exports_the_ladder(u_maps, tmp_path) -> None:
     with pytest.raises(InputError, match="motion_eddy=True applies to members given as maps"):
         export_fmu(MagnetBank({"m": u_maps}, compiled="never"), tmp_path / "x.fmu",
                    motion_eddy=True)
+
+
+# ---------------------------------------------------------------- the MPC's model
+S0 = 0.010
+
+
+@pytest.fixture(scope="module")
+def heave():  # type: ignore[no-untyped-def]
+    """A ladder magnet on a heave mass carrying it at 10 mm / 20 A (maps as tests/test_mpc.py)."""
+    from maglevkit.control.model import MagnetHeaveModel
+    from maglevkit.vehicle import STANDARD_GRAVITY, HeaveMass
+
+    mag = mk.load_magnet("u-magnet")
+    maps = mk.build_maps(mag, gaps=np.linspace(0.004, 0.02, 17),
+                         currents=np.linspace(0, 80, 33), progress=False)
+    f0 = float(mk.solve_statics(mag, gaps=S0, currents=20.0).force_N)
+    veh = HeaveMass(f0 / STANDARD_GRAVITY)
+    cm = mk.CurrentModel(maps, motion_eddy=True)
+    return cm, veh, f0, MagnetHeaveModel(cm, mass_kg=veh.mass_kg, compiled="never")
+
+
+def test_heave_model_carries_the_ladder(heave) -> None:  # type: ignore[no-untyped-def]
+    """State ``[I_L, s, s', I_e]``: the steady state has I_e = 0 and no rates; the
+    right-hand side and measurement equal the single CurrentModel's ladder (B-splines,
+    ``spline_rhs``) off equilibrium; the RK4 sub-steps follow the ladder's stable step."""
+    cm, veh, f0, model = heave
+    assert (model.nx, model.n_eddy) == (4, 1)
+    xs, us = model.steady_state(S0)
+    assert xs[3] == 0.0 and xs[2] == 0.0
+    d0 = np.zeros(model.nd)
+    r = np.asarray(model.rhs(xs, us, d0, model.table)).ravel()
+    # equilibrium: the force balance is solved to 1e-10 A (Newton), so the acceleration is
+    # ~1e-10 of g x dF/dI / F; the currents' rates vanish to rounding
+    assert np.all(np.abs(r[[0, 3]]) < 1e-9) and abs(r[1]) == 0.0 and abs(r[2]) < 1e-6
+    x = np.r_[23.0, S0 + 4e-4, -0.02, 0.3]
+    u = np.r_[35.0]
+    rhs, meas = model.spline_rhs()
+    ref, ym = np.asarray(rhs(x, u, d0)).ravel(), np.asarray(meas(x, u, d0)).ravel()
+    got = np.asarray(model.rhs(x, u, d0, model.table)).ravel()
+    y = np.asarray(model.measurement(x, u, d0, model.table)).ravel()
+    # bicubic tables vs B-splines: ~4e-14 relative
+    assert np.max(np.abs(got - ref) / np.maximum(np.abs(ref), 1.0)) < 1e-11
+    assert np.max(np.abs(y - ym) / np.maximum(np.abs(ym), 1e-3)) < 1e-11
+    # and the ladder's rates are CurrentModel's own ODE
+    di, de = (np.asarray(v).ravel() for v in cm.ode(x[0], u, x[1], x[2], x[3]))
+    assert abs(got[0] / di[0] - 1.0) < 1e-11 and abs(got[3] / de[0] - 1.0) < 1e-11
+    assert model.rk4_substeps(2e-3, 1) == math.ceil(2e-3 / cm.max_step_s)
+
+
+def test_sqp_and_ipopt_peer_agree_on_the_ladder(heave) -> None:  # type: ignore[no-untyped-def]
+    """The OCP from a disturbed state with I_e != 0: Gauss-Newton SQP on the bank's tables
+    against IPOPT on CurrentModel's B-splines (as tests/test_mpc.py does for eq. 8)."""
+    from maglevkit.control.mpc import OffsetFreeMPC
+
+    _, _, _, model = heave
+    opts = dict(gap_ref_m=S0, sample_time_s=1e-3, horizon=10, interval_s=2e-3)
+    x0 = np.r_[22.0, S0 + 5e-4, -0.01, 0.2]
+    sqp = OffsetFreeMPC(model, solver="sqp", **opts).solve_ocp(x0, [30.0, 1.0])
+    ipo = OffsetFreeMPC(model, solver="ipopt", **opts).solve_ocp(x0, [30.0, 1.0])
+    # measured 2e-9 V and 2e-15 m (x0 without I_e); bounds as tests/test_mpc.py
+    assert np.max(np.abs(sqp["inputs_V"] - ipo["inputs_V"])) < 1e-3
+    assert np.max(np.abs(sqp["states"][:, 1] - ipo["states"][:, 1])) < 1e-9
+    assert sqp["states"].shape[1] == 4
+
+
+@pytest.mark.slow
+def test_offset_free_mpc_on_a_ladder_plant(heave) -> None:  # type: ignore[no-untyped-def]
+    """+10 % load on the ladder plant (CurrentModel(maps, motion_eddy=True)), the MPC's
+    model and observer carrying I_e: the gap returns to the reference (< 1 um, the
+    issue-14 bound; measured 6e-16 m)."""
+    from maglevkit.control import closed_loop
+    from maglevkit.control.model import MagnetHeaveModel
+    from maglevkit.control.mpc import OffsetFreeMPC
+
+    cm, veh, f0, _ = heave
+    model = MagnetHeaveModel(cm, mass_kg=veh.mass_kg)
+    ctl = OffsetFreeMPC(model, gap_ref_m=S0, sample_time_s=1e-3, horizon=20,
+                        interval_s=2e-3, solver="sqp")
+    r = closed_loop(cm, veh, ctl, duration_s=0.3, dt_s=1e-3, initial_gap_m=S0,
+                    initial_current_A=ctl.design_state[0],
+                    external_force=lambda t: 0.1 * f0 if t >= 0.02 else 0.0)
+    assert abs(r.gap_m[-1] - S0) < 1e-6
+    assert np.max(np.abs(r.gap_m - S0)) < 2e-4

@@ -845,6 +845,50 @@ class MagnetBank:
         return tuple((m.name, m.kind, m.maps if m.kind == "reduced" else m.model)
                      for m in self._members)
 
+    def ladder_expressions(self, k: int, i_l: Any, i_e: Any, s: Any, u: Any, gap_rate: Any,
+                           table: Any) -> tuple[Any, Any, Any, Any, Any]:
+        """The law of reduced circuit ``k`` of a bank with ladder members (``motion_eddy``)
+        as CasADi expressions ``(dI_L/dt, dI_e/dt, I, F, L~)``: the shielded-gap ladder in
+        ladder circuits, eq. 8 with ``dI_e/dt = 0`` in the others (the kernel's own
+        expressions; :meth:`circuit_expressions` is eq. 8's).
+
+        Parameters
+        ----------
+        k : int
+            Column of the reduced circuit in :attr:`circuit_parameters`.
+        i_l : casadi.MX
+            Inductor current ``I_L`` [A].
+        i_e : casadi.MX
+            Shielding eddy current ``I_e`` [A].
+        s : casadi.MX
+            Substitute gap [m].
+        u : casadi.MX
+            Circuit voltage [V].
+        gap_rate : casadi.MX
+            Substitute gap rate ``ds/dt`` [m/s].
+        table : casadi.MX or DM
+            The bank's map table (:attr:`table`), symbolic or constant.
+
+        Returns
+        -------
+        tuple of casadi.MX
+            ``dI_L/dt`` [A/s], ``dI_e/dt`` [A/s], coil current ``I`` [A], force ``F`` [N]
+            and ``L~`` [H].
+
+        Raises
+        ------
+        InputError
+            A bank without ladder members (use :meth:`circuit_expressions`).
+        """
+        if not self.motion_eddy:
+            raise InputError("ladder_expressions needs a bank with shielded-gap ladder "
+                             "members (motion_eddy); this bank is eq. 8's: use "
+                             "circuit_expressions")
+        p = ca.DM(self._par[:, k])
+        lt, dl, f = self._lookup(self._gap_cell(s, p), i_l, p, table)
+        d_il, d_ie = self._ladder_rhs(i_l, i_e, u, gap_rate, lt, dl, p)
+        return d_il, d_ie, eq8_coil_current(i_l + i_e, u, p[7], p[8]), f, lt
+
     def circuit_expressions(self, k: int, i_l: Any, s: Any, u: Any, gap_rate: Any,
                             table: Any) -> tuple[Any, Any, Any, Any]:
         """Eq. 8 of reduced circuit ``k`` as CasADi expressions ``(dI_L/dt, I, F, L~)``.
@@ -877,7 +921,7 @@ class MagnetBank:
         if self.motion_eddy:
             raise InputError("circuit_expressions is eq. 8's one state per circuit; this bank "
                              "has shielded-gap ladder members (motion_eddy) with a second "
-                             "state: use ode_function and output_function (inputs I_e)")
+                             "state: use ladder_expressions")
         p = ca.DM(self._par[:, k])
         return self._circuit_expressions(i_l, s, u, gap_rate, p, table)
 
