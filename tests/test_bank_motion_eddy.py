@@ -362,3 +362,26 @@ def test_offset_free_mpc_on_a_ladder_plant(heave) -> None:  # type: ignore[no-un
                     external_force=lambda t: 0.1 * f0 if t >= 0.02 else 0.0)
     assert abs(r.gap_m[-1] - S0) < 1e-6
     assert np.max(np.abs(r.gap_m - S0)) < 2e-4
+
+
+def test_ladder_member_beside_a_detailed_member(u_maps) -> None:
+    """A ladder member and a detailed FluxModel member: the general path (step) and the
+    stepper behind it agree exactly; I_e is NaN for the detailed member's circuit and the
+    ladder circuit's equals the ladder bank of one."""
+    cm = mk.CurrentModel(u_maps, motion_eddy=True)
+    bank = MagnetBank({"l": cm, "d": mk.FluxModel(mk.load_magnet("u-magnet"))},
+                      compiled="never")
+    alone = MagnetBank({"l": cm}, compiled="never")
+    st = bank.initial_state(gaps=0.010, currents=20.0)
+    sa = alone.initial_state(gaps=0.010, currents=20.0)
+    assert st.eddy_currents_A is not None
+    assert st.eddy_currents_A[0] == 0.0 and np.isnan(st.eddy_currents_A[1])
+    stepper = bank.stepper(st, 1e-3)
+    u = float(bank.resistance_ohm[0]) * 21.0
+    for _ in range(3):
+        st, out = bank.step(st, 1e-3, u, 0.010, 0.02)
+        sa, _ = alone.step(sa, 1e-3, u, 0.010, 0.02)
+        stepper.advance(u, 0.010, 0.02)
+    assert np.array_equal(stepper.eddy_currents_A, st.eddy_currents_A, equal_nan=True)
+    assert np.array_equal(stepper.currents_A, out.currents_A)
+    assert st.eddy_currents_A[0] == sa.eddy_currents_A[0] and abs(sa.eddy_currents_A[0]) > 1e-2

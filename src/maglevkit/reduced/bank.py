@@ -823,7 +823,8 @@ class MagnetBank:
         """(13, n_reduced) parameter column ``p`` of every reduced circuit for
         :meth:`circuit_step_function` and :attr:`circuit_output_function` (rows
         :data:`KERNEL_PARAMETERS`: grid, table offset, ``R_el`` [ohm], ``a = 1 + R_el/R_ec``
-        and the range bounds with their rounding allowances)."""
+        and the range bounds with their rounding allowances; in a bank with ladder members
+        16 rows, :data:`MOTION_EDDY_PARAMETERS` appended)."""
         return self._par.copy()
 
     @property
@@ -965,7 +966,9 @@ class MagnetBank:
         ``U``, ``sdot`` (arrays over the circuits), ``h`` (= ``dt``) and outputs named
         ``I_L_next``, ``I``, ``F``, ``member_F``, ``n_bad`` (count of circuits out of
         range or not finite; diagnose with :meth:`step`) and more; address them by
-        name.  Only for banks of reduced members with one gap input per circuit.
+        name.  Only for banks of reduced members with one gap input per circuit.  A bank
+        with ladder members (:attr:`motion_eddy`) has one more input, ``I_e``, and one
+        more output, ``I_e_next``, after the others.
 
         Parameters
         ----------
