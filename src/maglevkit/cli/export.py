@@ -43,12 +43,16 @@ def fmu(
     current: Annotated[float | None, typer.Option(
         help="Start value of the initial currents I0 [A] (default: nominal, as --gap).")]
     = None,
+    motion_eddy: Annotated[bool, typer.Option(
+        "--motion-eddy", help="Carry the shielded-gap ladder (a second state per circuit, "
+                              "for gap motion; docs/bank.md) instead of eq. 8.")] = False,
     force: ForceOption = False,
 ) -> None:
     """Write an FMI 2.0 co-simulation FMU of the reduced model (paper eq. 8) of every
     circuit: inputs voltages, gaps and gap rates; outputs coil currents and forces;
     R_el and R_ec as parameters; the maps embedded as C arrays; compiled by the system C
-    compiler.  See docs/fmu.md.
+    compiler.  --motion-eddy exports the shielded-gap ladder instead (our extension of
+    eq. 8 for gap motion; its maps need the motion_eddy_* variables).  See docs/fmu.md.
 
     \b
     Example:
@@ -81,7 +85,7 @@ def fmu(
         result = export_fmu(maps, output, model_identifier=model_identifier,
                             eddy_resistance=eddy_resistance, interpolation=interpolation,
                             max_substep_s=max_substep, start_gaps_m=gap,
-                            initial_currents_A=current)
+                            initial_currents_A=current, motion_eddy=motion_eddy)
     except MaglevkitError as exc:
         raise fail(exc) from None
     console.print(f"FMU (FMI 2.0 co-simulation) {result.model_identifier!r} of {mag.name!r}: "

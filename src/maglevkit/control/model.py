@@ -31,7 +31,7 @@ from ..errors import InputError, ParameterError
 from ..models.compiled import BoundCall, compile_function
 from ..plant import STANDARD_GRAVITY
 from ..reduced.bank import MagnetBank
-from ..reduced.core import rk4_substep
+from ..reduced.core import rk4_substep, substep_count
 from ..validation import real_number
 
 if TYPE_CHECKING:
@@ -94,7 +94,10 @@ class MagnetHeaveModel:
         self.compiled_mode = compiled
         nc = self.n_circuits = bank.n_circuits
         self.circuit_names = bank.circuit_names
-        self.nx = nc + 2
+        #: the shielding eddy currents I_e in the state (a magnet with the shielded-gap
+        #: ladder, ``motion_eddy``): n_c, else 0; they follow ``[I_L, s, s']``
+        self.n_eddy = nc if bank.motion_eddy else 0
+        self.nx = nc + 2 + self.n_eddy
         self.nu = nc
         self.ny = nc + 1
         sizes = {"force": 1, "voltage": nc, "gap_sensor": 1, "current_sensor": nc}
@@ -140,17 +143,43 @@ class MagnetHeaveModel:
         nc = self.n_circuits
         s, v = x[nc], x[nc + 1]
         ueff = u + self.disturbance(d, "voltage")
-        rhs, coil, force = [], [], 0
+        rhs, coil, force, eddy = [], [], 0, []
         for j in range(nc):
-            r, c, f, _ = self.bank.circuit_expressions(j, x[j], s, ueff[j], v, table)
+            if self.n_eddy:          # the shielded-gap ladder: I_e after [I_L, s, s']
+                r, e, c, f, _ = self.bank.ladder_expressions(j, x[j], x[nc + 2 + j], s,
+                                                             ueff[j], v, table)
+                eddy.append(e)
+            else:
+                r, c, f, _ = self.bank.circuit_expressions(j, x[j], s, ueff[j], v, table)
             rhs.append(r)
             coil.append(c)
             force = force + f
         acc = self.gravity + (self.disturbance(d, "force") - force) / self.mass_kg
-        xdot = ca.vertcat(*rhs, v, acc)
+        xdot = ca.vertcat(*rhs, v, acc, *eddy)
         y = ca.vertcat(s + self.disturbance(d, "gap_sensor"), ca.vertcat(*coil)
                        + self.disturbance(d, "current_sensor"))
         return xdot, y, force
+
+    def rk4_substeps(self, h: float, substeps: int) -> int:
+        """RK4 steps over an interval of ``h`` [s]: ``substeps``, and with the shielded-gap
+        ladder (``n_eddy > 0``) at least the count its stable step needs
+        (``ceil(h / bank.max_step_s)``, :class:`~maglevkit.reduced.core.MotionEddyLadder`).
+
+        Parameters
+        ----------
+        h : float
+            Interval [s], > 0.
+        substeps : int
+            The requested count, >= 1.
+
+        Returns
+        -------
+        int
+            The count used.
+        """
+        if not self.n_eddy:
+            return substeps
+        return max(substeps, substep_count(h, self.bank.max_step_s))
 
     def discrete(self, h: float, substeps: int, *, jacobians: bool = False) -> ca.Function:
         """RK4 over ``h`` [s] in ``substeps`` steps: ``(x, u, d, table) -> x+`` and, with
@@ -165,7 +194,8 @@ class MagnetHeaveModel:
         h : float
             Interval [s], > 0 (not checked).
         substeps : int
-            Number of RK4 steps in the interval, >= 1 (not checked).
+            Number of RK4 steps in the interval, >= 1 (not checked; raised to the ladder's
+            stable count with ``n_eddy > 0``, :meth:`rk4_substeps`).
         jacobians : bool, default False
             Also return the Jacobians and the measurement (keyword only).
 
@@ -177,6 +207,7 @@ class MagnetHeaveModel:
         """
         x, u, d = ca.MX.sym("x", self.nx), ca.MX.sym("u", self.nu), ca.MX.sym("d", self.nd)
         T = ca.MX.sym("table", self.table.size)
+        substeps = self.rk4_substeps(h, substeps)
         hs = h / substeps
 
         def f(xx: Any) -> Any:
@@ -259,7 +290,8 @@ class MagnetHeaveModel:
             i -= step
             i = min(max(i, self.current_range_A[0]), self.current_range_A[1])
             if abs(step) < 1e-10 * max(1.0, abs(i)):
-                x = np.concatenate([np.full(nc, i), [s, 0.0]])
+                # (the ladder's steady state has I_e = 0)
+                x = np.concatenate([np.full(nc, i), [s, 0.0], np.zeros(self.n_eddy)])
                 u = self.resistance_ohm * i - dd.get("voltage", np.zeros(nc))
                 return x, u
         raise SolverError("no equilibrium current for the gap reference within the maps",
@@ -272,7 +304,7 @@ class MagnetHeaveModel:
         if f is None:
             s, i = ca.MX.sym("s"), ca.MX.sym("i")
             T = ca.MX.sym("table", self.table.size)
-            x = ca.vertcat(ca.repmat(i, self.n_circuits, 1), s, 0)
+            x = ca.vertcat(ca.repmat(i, self.n_circuits, 1), s, 0, ca.DM.zeros(self.n_eddy))
             F = self.force(x, T)
             f = self.compile(ca.Function("mpc_force_slope", [s, i, T],
                                          [F, ca.jacobian(F, i)]))
@@ -374,7 +406,8 @@ class MagnetHeaveModel:
             Wrong shape or non-finite values.
         """
         if x.shape != (self.nx,) or not np.isfinite(x).all():
-            raise InputError(f"state must be {self.nx} finite values [I_L..., s, s']")
+            raise InputError(f"state must be {self.nx} finite values [I_L..., s, s'"
+                             + (", I_e...]" if self.n_eddy else "]"))
 
     def spline_rhs(self) -> tuple[ca.Function, ca.Function]:
         """The same model with the single :class:`~maglevkit.reduced.current.CurrentModel`'s
@@ -383,17 +416,24 @@ class MagnetHeaveModel:
         for the IPOPT reference formulation."""
         from ..reduced.current import CurrentModel
 
-        cm = CurrentModel(self.bank.members[0][2])
+        cm = CurrentModel(self.bank.members[0][2], motion_eddy=bool(self.n_eddy))
         nc = self.n_circuits
         x, u, d = ca.MX.sym("x", self.nx), ca.MX.sym("u", self.nu), ca.MX.sym("d", self.nd)
         s, v = x[nc], x[nc + 1]
         ueff = u + self.disturbance(d, "voltage")
         sv = ca.repmat(s, nc, 1)
-        didt = cm.ode(x[:nc], ueff, sv, ca.repmat(v, nc, 1))
-        coil, force, _ = cm.outputs_fun(x[:nc], ueff, sv)
+        if self.n_eddy:
+            ie = x[nc + 2:]
+            didt, dedt = cm.ode(x[:nc], ueff, sv, ca.repmat(v, nc, 1), ie)
+            coil, force, _ = cm.outputs_fun(x[:nc], ueff, sv, ie)
+            tail = [dedt]
+        else:
+            didt = cm.ode(x[:nc], ueff, sv, ca.repmat(v, nc, 1))
+            coil, force, _ = cm.outputs_fun(x[:nc], ueff, sv)
+            tail = []
         acc = self.gravity + (self.disturbance(d, "force") - ca.sum1(force)) / self.mass_kg
         y = ca.vertcat(s + self.disturbance(d, "gap_sensor"), coil + self.disturbance(d, "current_sensor"))
-        return (ca.Function("spline_rhs", [x, u, d], [ca.vertcat(didt, v, acc)]),
+        return (ca.Function("spline_rhs", [x, u, d], [ca.vertcat(didt, v, acc, *tail)]),
                 ca.Function("spline_meas", [x, u, d], [y]))
 
 

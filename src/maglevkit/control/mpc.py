@@ -169,14 +169,15 @@ class OffsetFreeMPC:
         self.max_iter = 1 if solver == "rti" else int(max_iter)
         self.tol = float(tol)
         nx, nu, nc = model.nx, model.nu, model.n_circuits
-        self._sx = np.r_[np.full(nc, 10.0), 1e-3, 1e-2]
+        ne = model.n_eddy                   # the ladder's I_e (motion_eddy), after [I_L, s, s']
+        self._sx = np.r_[np.full(nc, 10.0), 1e-3, 1e-2, np.full(ne, 1.0)]
         self._su = np.full(nu, 100.0)
         # design point, detectability, terminal cost
         self.design_state, self.design_input = model.steady_state(self._gap_ref)
         model.check_detectability(self.design_state, self.design_input, h=self.sample_time_s)
         w = self.weights
         self._Q = np.diag(np.r_[np.full(nc, 1 / w.current_A**2), 1 / w.gap_m**2,
-                                1 / w.gap_rate_m_per_s**2])
+                                1 / w.gap_rate_m_per_s**2, np.full(ne, 1 / w.current_A**2)])
         self._R = np.eye(nu) / w.voltage_V**2
         lin = model.linearize(self.design_state, self.design_input, h=self.interval_s,
                               substeps=substeps)
@@ -328,8 +329,11 @@ class OffsetFreeMPC:
         nx, nu, nc = m.nx, m.nu, m.n_circuits
         _, nw, blk = self._layout()
         lbw, ubw = np.full(nw, -np.inf), np.full(nw, np.inf)
-        xlo = np.r_[np.full(nc, m.current_range_A[0]), m.gap_range_m[0], -np.inf] / self._sx
-        xhi = np.r_[np.full(nc, m.current_range_A[1]), m.gap_range_m[1], np.inf] / self._sx
+        ne = m.n_eddy
+        xlo = np.r_[np.full(nc, m.current_range_A[0]), m.gap_range_m[0], -np.inf,
+                    np.full(ne, -np.inf)] / self._sx
+        xhi = np.r_[np.full(nc, m.current_range_A[1]), m.gap_range_m[1], np.inf,
+                    np.full(ne, np.inf)] / self._sx
         for k in range(N + 1):
             if k >= 1:
                 lbw[k * blk:k * blk + nx], ubw[k * blk:k * blk + nx] = xlo, xhi
@@ -356,6 +360,7 @@ class OffsetFreeMPC:
         if self.solver == "ipopt":
             rhs, _ = m.spline_rhs()
             xs, us, ds = ca.MX.sym("x", nx), ca.MX.sym("u", m.nu), ca.MX.sym("d", nd)
+            substeps = m.rk4_substeps(self.interval_s, substeps)
             hs = self.interval_s / substeps
             xk: Any = xs
             for _ in range(substeps):

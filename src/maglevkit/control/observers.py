@@ -60,7 +60,8 @@ class ExtendedKalmanFilter:
         self.model = model
         self.sample_time_s = float(sample_time_s)
         nx, nd, ny, nc = model.nx, model.nd, model.ny, model.n_circuits
-        q = (np.r_[np.full(nc, 0.05), 1e-7, 1e-4] if process_std is None
+        q = (np.r_[np.full(nc, 0.05), 1e-7, 1e-4, np.full(model.n_eddy, 0.05)]
+             if process_std is None
              else np.asarray(process_std, dtype=float).reshape(nx))
         defaults = {"force": [20.0], "voltage": [0.5] * nc, "gap_sensor": [1e-5],
                     "current_sensor": [0.05] * nc}
@@ -124,7 +125,7 @@ class ExtendedKalmanFilter:
             nc = m.n_circuits
             big = {"force": [0.1 * m.mass_kg * m.gravity], "voltage": [10.0] * nc,
                    "gap_sensor": [1e-3], "current_sensor": [1.0] * nc}
-            sd = np.r_[np.full(nc, 1.0), 1e-3, 1e-2,
+            sd = np.r_[np.full(nc, 1.0), 1e-3, 1e-2, np.full(m.n_eddy, 1.0),
                        [v for dname in m.disturbances for v in big[dname]]]
             self.covariance = np.diag(sd ** 2)
         else:

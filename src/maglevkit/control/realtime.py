@@ -207,7 +207,7 @@ class RealTimeMPC(OffsetFreeMPC):
         s = sref - m.disturbance(dh, "gap_sensor")
         load = m.mass_kg * m.gravity + m.disturbance(dh, "force")
         i_s = ca.MX.sym("i")
-        x = ca.vertcat(ca.repmat(i_s, nc, 1), s, 0)
+        x = ca.vertcat(ca.repmat(i_s, nc, 1), s, 0, ca.DM.zeros(m.n_eddy))
         # the force expression inlined (m.force is a Function: AD through a nested call
         # clears a 40 000-entry zero seed for the table, measured 28 us per target)
         F = m.expressions(x, ca.MX.zeros(m.nu), dh, T)[2]
@@ -222,7 +222,7 @@ class RealTimeMPC(OffsetFreeMPC):
             step = ca.if_else(df > 0, (f - load) / df, 0)
             i = ca.fmin(ca.fmax(i - step, lo), hi)
         step = ca.if_else(bad > 0, np.nan, step)
-        xt = ca.vertcat(ca.repmat(i, nc, 1), s, 0)
+        xt = ca.vertcat(ca.repmat(i, nc, 1), s, 0, ca.DM.zeros(m.n_eddy))
         ut = ca.DM(m.resistance_ohm) * i - m.disturbance(dh, "voltage")
         return ca.Function("mpc_rti_target", [dh, sref, ig, T], [xt, ut, step])
 

@@ -16,6 +16,9 @@
      every sub-step end) or non-finite: fmi2Error and a log message naming the circuit,
      the value and the range; the state is left as it was before the step.  Nothing is
      clamped.
+   - with MOTION_EDDY (config.h) every circuit carries a second state, the shielding eddy
+     current I_e of the shielded-gap ladder (0 in eq. 8 circuits; started at 0, the
+     steady state), advanced and restored with I_L.
 */
 
 #include <float.h>
@@ -54,6 +57,9 @@ typedef struct {
     double s_now[NC];         /* the gap now [m]: as set, moved by sdot over each step */
     double par[NC * N_PAR];   /* kernel parameters (column per circuit) */
     double xs[NC], coil[NC], force[NC], lo[NC], hi[NC], bad[NC], lt[NC];
+#if MOTION_EDDY
+    double xe[NC], xes[NC];   /* I_e, the ladder's second state [A], and its step result */
+#endif
     double s_arg[NC], h_arg;
     const casadi_real **arg;
     casadi_real **res;
@@ -122,6 +128,9 @@ static void set_defaults(Model *m) {
         m->r[VR_I0(j)] = START_I0[j];
         m->s_now[j] = START_S[j];
         m->x[j] = START_I0[j];
+#if MOTION_EDDY
+        m->xe[j] = 0.0;
+#endif
     }
     m->r[VR_MAXSTEP] = START_MAX_SUBSTEP;
     memcpy(m->par, PAR0, sizeof m->par);
@@ -153,6 +162,10 @@ static int eval_step(Model *m, const double *s, double h) {
     m->res[3] = m->lo;
     m->res[4] = m->hi;
     m->res[5] = m->bad;
+#if MOTION_EDDY
+    m->arg[6] = m->xe;
+    m->res[6] = m->xes;
+#endif
     return MK_STEP(m->arg, m->res, m->iw, m->w, 0);
 }
 
@@ -161,6 +174,9 @@ static int eval_outputs(Model *m) {
     m->arg[1] = m->s_now;
     m->arg[2] = m->r + VR_U(0);
     m->arg[3] = m->par;
+#if MOTION_EDDY
+    m->arg[4] = m->xe;
+#endif
     m->res[0] = m->coil;
     m->res[1] = m->force;
     m->res[2] = m->lt;
@@ -367,6 +383,9 @@ fmi2Status fmi2ExitInitializationMode(fmi2Component c) {
     if (m->state != ST_INIT)
         return refuse(m, "fmi2ExitInitializationMode", "only allowed in initialization mode");
     for (j = 0; j < NC; ++j) m->x[j] = m->r[VR_I0(j)];
+#if MOTION_EDDY
+    for (j = 0; j < NC; ++j) m->xe[j] = 0.0;   /* the steady state of the ladder */
+#endif
     if (check_parameters(m) || check_inputs(m, " at initialization")) return fmi2Error;
     update_parameters(m);
     m->state = ST_STEP;
@@ -557,6 +576,9 @@ fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunicationPoint,
                       fmi2Real communicationStepSize, fmi2Boolean noSetFMUStatePriorToCurrentPoint) {
     Model *m = (Model *)c;
     double h = communicationStepSize, t0, hs, x0[NC], s0[NC], sk[NC];
+#if MOTION_EDDY
+    double e0[NC];
+#endif
     char where[160];
     long n, k;
     int j;
@@ -577,6 +599,9 @@ fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunicationPoint,
         s0[j] = m->s_now[j];
         if (check_gap(m, j, s0[j] + m->r[VR_SDOT(j)] * h, where)) return fmi2Error;
         x0[j] = m->x[j];
+#if MOTION_EDDY
+        e0[j] = m->xe[j];
+#endif
     }
     /* RK4 sub-steps of at most max_substep (the rule of maglevkit's models) */
     n = (long)ceil(h / m->r[VR_MAXSTEP] * (1.0 - 1e-12));
@@ -586,6 +611,9 @@ fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunicationPoint,
         for (j = 0; j < NC; ++j) sk[j] = s0[j] + m->r[VR_SDOT(j)] * ((double)k * hs);
         if (eval_step(m, sk, hs)) {
             memcpy(m->x, x0, sizeof x0);
+#if MOTION_EDDY
+            memcpy(m->xe, e0, sizeof e0);
+#endif
             return fail(m, "fmi2DoStep at t = %.9g s: the model evaluation failed", t0);
         }
         snprintf(where, sizeof where, " in the RK4 sub-step ending at t = %.9g s", t0 + (double)(k + 1) * hs);
@@ -594,10 +622,16 @@ fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunicationPoint,
             if (m->bad[j] != 0.0) {
                 report_step_flags(m, j, (int)m->bad[j], sk[j], hs, where);
                 memcpy(m->x, x0, sizeof x0);   /* the state before the step */
+#if MOTION_EDDY
+                memcpy(m->xe, e0, sizeof e0);
+#endif
                 return fmi2Error;
             }
         }
         memcpy(m->x, m->xs, sizeof m->xs);
+#if MOTION_EDDY
+        memcpy(m->xe, m->xes, sizeof m->xes);
+#endif
     }
     for (j = 0; j < NC; ++j) m->s_now[j] = s0[j] + m->r[VR_SDOT(j)] * h;
     m->time = t0 + h;

@@ -18,6 +18,12 @@ so the FMU computes what :meth:`MagnetBank.step` computes: same RK4 sub-steps of
 most ``max_substep`` (default 1 ms), same linear gap path over a step, same tables.
 The FMU runs without Python, CasADi or maglevkit.  Variables and conventions:
 ``docs/fmu.md``.
+
+Members with the shielded-gap ladder (``CurrentModel(maps, motion_eddy=True)`` or
+``MagnetBank(..., motion_eddy=True)``) are exported with their second state per circuit,
+the shielding eddy current ``I_e``, inside the FMU (the same kernel as the bank's; the
+parameter ``R_ec`` of a ladder circuit is its shunt ``R_a``, and ``max_substep`` starts at
+most at the ladder's stable RK4 step, as the bank limits it).
 """
 
 from __future__ import annotations
@@ -45,6 +51,7 @@ from ..errors import InputError, SolverError
 from ..models.compiled import cache_directory, find_compiler
 from ..reduced.bank import KERNEL_PARAMETERS, MagnetBank, StepFlag
 from ..reduced.current import CurrentModel
+from ..validation import flag
 
 if TYPE_CHECKING:
     from ..reduction.maps import CharacteristicMaps
@@ -132,7 +139,7 @@ def export_fmu(magnet_or_maps: ReducedSource, path: str | os.PathLike[str], *,
                eddy_resistance: str = "fit", interpolation: str = "bicubic",
                max_substep_s: float = 1e-3, start_gaps_m: Any = None,
                initial_currents_A: Any = None, stop_time_s: float = 1.0,
-               step_size_s: float = 1e-3) -> ExportedFmu:
+               step_size_s: float = 1e-3, motion_eddy: bool = False) -> ExportedFmu:
     """Write an FMI 2.0 Co-Simulation FMU of the reduced model of every circuit (eq. 8).
 
     Parameters
@@ -156,13 +163,20 @@ def export_fmu(magnet_or_maps: ReducedSource, path: str | os.PathLike[str], *,
         equals ``CurrentModel``'s B-spline.
     max_substep_s : float
         Start value of the parameter ``max_substep`` [s]: the longest RK4 sub-step
-        (``ceil(h / max_substep)`` sub-steps per communication step ``h``).
+        (``ceil(h / max_substep)`` sub-steps per communication step ``h``); with
+        shielded-gap ladder members at most the bank's ``max_step_s`` (the ladder's
+        stable step).
     start_gaps_m, initial_currents_A : float or array (n_circuits,), optional
         Start values of the gap inputs [m] and of the initial currents ``I0`` [A]
         (default: the middle of each circuit's map range; the voltage inputs start at
         the steady-state ``R_el I0``).
     stop_time_s, step_size_s : float
         The DefaultExperiment [s].
+    motion_eddy : bool
+        ``True``: members given as maps carry the shielded-gap ladder
+        (``MagnetBank(..., motion_eddy=True)``: a second state per circuit inside the FMU);
+        a ``CurrentModel`` member keeps its own choice, a bank its own (then leave this
+        ``False``).
 
     Returns
     -------
@@ -185,7 +199,12 @@ def export_fmu(magnet_or_maps: ReducedSource, path: str | os.PathLike[str], *,
             raise InputError(f"{name} = {value!r} must be a finite number of seconds > 0")
     if description is not None and not isinstance(description, str):
         raise InputError(f"description = {description!r} must be a string")
-    bank, default_name = _as_bank(magnet_or_maps, eddy_resistance, interpolation)
+    flag(motion_eddy, "motion_eddy")
+    bank, default_name = _as_bank(magnet_or_maps, eddy_resistance, interpolation,
+                                  bool(motion_eddy))
+    if bank.motion_eddy:
+        # the ladder's stable RK4 step (MotionEddyLadder.max_step_s), as the bank limits it
+        max_substep_s = min(float(max_substep_s), bank.max_step_s)
     ident = _model_identifier(model_identifier, default_name)
     cc = find_compiler()
     if cc is None:
@@ -261,9 +280,13 @@ def _target_path(path: Any) -> Path:
     return p
 
 
-def _as_bank(model: ReducedSource, eddy_resistance: str, interpolation: str) -> tuple[MagnetBank, str]:
+def _as_bank(model: ReducedSource, eddy_resistance: str, interpolation: str,
+             motion_eddy: bool = False) -> tuple[MagnetBank, str]:
     """The bank to export and a default model name."""
     if isinstance(model, MagnetBank):
+        if motion_eddy:
+            raise InputError("motion_eddy=True applies to members given as maps; a bank has "
+                             "chosen already (build it with MagnetBank(..., motion_eddy=True))")
         kinds = {name: kind for name, kind, _ in model.members}
         detailed = [n for n, k in kinds.items() if k != "reduced"]
         if detailed:
@@ -275,6 +298,9 @@ def _as_bank(model: ReducedSource, eddy_resistance: str, interpolation: str) -> 
         if model.interpolation != interpolation and interpolation != "bicubic":
             raise InputError(f"interpolation = {interpolation!r} differs from the bank's "
                              f"{model.interpolation!r}; build the bank with it instead")
+        if model.freewheel:
+            raise InputError("export a bank with freewheel=False: the FMU takes the voltages "
+                             "as given (eq. 8)")
         name = model.member_names[0] if len(model.member_names) == 1 else "magnet_bank"
         return model, name
     if isinstance(model, Mapping):
@@ -295,7 +321,7 @@ def _as_bank(model: ReducedSource, eddy_resistance: str, interpolation: str) -> 
                          f"CurrentModel, a MagnetBank or a mapping of them, got "
                          f"{type(model).__name__}{hint}")
     bank = MagnetBank(members, interpolation=interpolation, eddy_resistance=eddy_resistance,
-                      compiled="never")
+                      compiled="never", motion_eddy=motion_eddy)
     return bank, name
 
 
@@ -374,19 +400,22 @@ def _generate_model_code(bank: MagnetBank, ident: str, src: Path) -> None:
     as an input (``R_el``, ``a`` tunable); the tables are constant C arrays."""
     import casadi as ca
 
-    n = bank.circuit_parameters.shape[1]
-    npar = len(KERNEL_PARAMETERS)
+    npar, n = bank.circuit_parameters.shape
     one = bank.circuit_step_function(1)
     vi, vs, vu, vsd = (ca.MX.sym(nm, n) for nm in ("I_L", "s", "U", "sdot"))
     vh = ca.MX.sym("h")
     vp = ca.MX.sym("p", npar, n)
-    res = one.map(n, "serial")(vi.T, vs.T, vu.T, vsd.T, vh, vp)
-    step = ca.Function(f"{ident}_step", [vi, vs, vu, vsd, vh, vp], [r.T for r in res],
-                       ["I_L", "s", "U", "sdot", "h", "p"],
-                       ["I_L_next", "I", "F", "I_L_min", "I_L_max", "bad"])
-    out_res = bank.circuit_output_function.map(n, "serial")(vi.T, vs.T, vu.T, vp)
-    out = ca.Function(f"{ident}_out", [vi, vs, vu, vp], [r.T for r in out_res],
-                      ["I_L", "s", "U", "p"], ["I", "F", "Ltilde"])
+    # shielded-gap ladder members: one more input and output, I_e (MagnetBank)
+    ve = [ca.MX.sym("I_e", n)] if bank.motion_eddy else []
+    res = one.map(n, "serial")(vi.T, vs.T, vu.T, vsd.T, vh, vp, *(v.T for v in ve))
+    step = ca.Function(f"{ident}_step", [vi, vs, vu, vsd, vh, vp, *ve], [r.T for r in res],
+                       ["I_L", "s", "U", "sdot", "h", "p"] + ["I_e"] * len(ve),
+                       ["I_L_next", "I", "F", "I_L_min", "I_L_max", "bad"]
+                       + ["I_e_next"] * len(ve))
+    out_res = bank.circuit_output_function.map(n, "serial")(vi.T, vs.T, vu.T, vp,
+                                                            *(v.T for v in ve))
+    out = ca.Function(f"{ident}_out", [vi, vs, vu, vp, *ve], [r.T for r in out_res],
+                      ["I_L", "s", "U", "p"] + ["I_e"] * len(ve), ["I", "F", "Ltilde"])
     cg = ca.CodeGenerator("model.c", {"with_header": True})
     cg.add(step)
     cg.add(out)
@@ -419,7 +448,9 @@ def _config_header(ident: str, guid: str, circuits: tuple[str, ...], par: np.nda
         "/* Generated by maglevkit.export.export_fmu: sizes, ranges and start values. */",
         "#ifndef MAGLEVKIT_FMU_CONFIG_H", "#define MAGLEVKIT_FMU_CONFIG_H", "#include <math.h>",
         f'#define MODEL_IDENTIFIER "{ident}"', f'#define MODEL_GUID "{guid}"',
-        f"#define NC {nc}", f"#define N_PAR {len(KERNEL_PARAMETERS)}",
+        f"#define NC {nc}", f"#define N_PAR {par.shape[0]}",
+        "/* 1: shielded-gap ladder circuits (MagnetBank.motion_eddy), state I_e too */",
+        f"#define MOTION_EDDY {1 if par.shape[0] > len(KERNEL_PARAMETERS) else 0}",
         f"#define PAR_R_EL {rows['resistance_ohm']}", f"#define PAR_A {rows['a']}",
         f"#define MK_STEP {ident}_step", f"#define MK_STEP_WORK {ident}_step_work",
         f"#define MK_OUT {ident}_out", f"#define MK_OUT_WORK {ident}_out_work",
@@ -502,7 +533,8 @@ def _model_description(ident: str, names: dict[str, list[str]], circuits: tuple[
             f"circuit {c}: ohmic coil resistance R_el", float(r_el[j]))
     for j, c in enumerate(circuits):
         var(names["R_ec"][j], "parameter", "tunable", "exact", "Ohm",
-            f"circuit {c}: equivalent eddy-current resistance R_ec (INF: none)", float(r_ec[j]))
+            f"circuit {c}: equivalent eddy-current resistance R_ec (INF: none; the shunt R_a "
+            "of a shielded-gap ladder circuit)", float(r_ec[j]))
     for j, c in enumerate(circuits):
         var(names["I0"][j], "parameter", "fixed", "exact", "A",
             f"circuit {c}: initial inductor current I_L(t0) (the coil current in steady state)",

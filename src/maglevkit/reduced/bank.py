@@ -55,12 +55,20 @@ from ..models.flux import FluxModel, FluxState
 from ..models.inputs import check_initial_choice, check_step, reject_bools, simulation_inputs
 from ..models.statics import circuit_pole_groups
 from ..validation import describe, flag, renamed_keywords
-from .core import EXTRA_CELLS, ReducedCore, extend_values, rk4_substep, substep_counts
+from .core import (
+    EXTRA_CELLS,
+    MotionEddyLadder,
+    ReducedCore,
+    extend_values,
+    rk4_substep,
+    substep_counts,
+)
 from .current import (
     CurrentModel,
     eq8_coil_current,
     eq8_freewheel_voltage,
     eq8_rhs,
+    eq8_shielded_gap_rhs,
 )
 from .lanes import LaneInput, external_source, lane_source, lane_target
 from .stepper import BankStepper
@@ -69,8 +77,8 @@ from .tables import INTERPOLATION_METHODS, cell_table
 if TYPE_CHECKING:
     from ..reduction.maps import CharacteristicMaps
 
-__all__ = ["KERNEL_PARAMETERS", "RUN_CHUNK", "BankOutputs", "BankRun", "BankSimulation",
-           "BankState", "MagnetBank", "StepFlag"]
+__all__ = ["KERNEL_PARAMETERS", "MOTION_EDDY_PARAMETERS", "RUN_CHUNK", "BankOutputs", "BankRun",
+           "BankSimulation", "BankState", "MagnetBank", "StepFlag"]
 
 _MAP_VARIABLES = ("inductance_H", "dL_ds_H_per_m", "force_N")
 KERNEL_PARAMETERS = ("s0_m", "inv_ds_per_m", "cells_s", "i0_A", "inv_di_per_A", "cells_i",
@@ -79,6 +87,11 @@ KERNEL_PARAMETERS = ("s0_m", "inv_ds_per_m", "cells_s", "i0_A", "inv_di_per_A", 
 """Rows of :attr:`MagnetBank.circuit_parameters`: the circuit's grid, its table offset,
 ``R_el``, ``a = 1 + R_el/R_ec`` and the range bounds (with rounding allowances)."""
 _N_PAR = len(KERNEL_PARAMETERS)
+MOTION_EDDY_PARAMETERS = ("motion_eddy", "shielding_resistance_ohm", "unshielded_inductance_H")
+"""Rows appended to :attr:`MagnetBank.circuit_parameters` in a bank with shielded-gap
+ladder members (:attr:`MagnetBank.motion_eddy`): 1 for a ladder circuit, 0 for an eq. 8
+one; the ladder's ``R_2`` [ohm] and ``L_u`` [H] (1 H for eq. 8 circuits, unused).  In
+ladder circuits the row ``a`` holds ``1 + R_el/R_a``."""
 RUN_CHUNK = 1024
 """Steps per call of the compiled time loop of :meth:`MagnetBank.run_steps` (longer runs
 take several calls)."""
@@ -100,12 +113,17 @@ class BankState:
         :attr:`MagnetBank.gap_names`).
     member_states : tuple of FluxState
         States of the detailed members, in member order.
+    eddy_currents_A : ndarray (n_circuits,) or None
+        The shielding eddy current ``I_e`` [A] of every circuit in a bank with
+        shielded-gap ladder members (:attr:`MagnetBank.motion_eddy`; 0 for eq. 8
+        circuits, NaN for detailed members); None in banks without them.
     """
 
     time_s: float
     inductor_currents_A: np.ndarray
     gaps_m: np.ndarray
     member_states: tuple[FluxState, ...] = ()
+    eddy_currents_A: np.ndarray | None = None
 
 
 @dataclass(frozen=True)
@@ -162,6 +180,8 @@ class BankSimulation:
     final_state : BankState
         State at ``time_s[-1]`` (to continue with :meth:`MagnetBank.step` or a new
         ``simulate``).
+    eddy_currents_A : ndarray (n_t, n_circuits) or None
+        The shielding eddy currents ``I_e`` [A] in a bank with ladder members, else None.
     """
 
     time_s: np.ndarray
@@ -177,6 +197,7 @@ class BankSimulation:
     pole_names: tuple[str, ...]
     member_names: tuple[str, ...]
     final_state: BankState
+    eddy_currents_A: np.ndarray | None = None
 
 
 class StepFlag(enum.IntFlag):
@@ -238,6 +259,7 @@ class _Member:
     resistance_ohm: np.ndarray | None = None
     eddy_resistance_ohm: np.ndarray | None = None
     model: FluxModel | None = None
+    ladder: MotionEddyLadder | None = None   # the shielded-gap ladder (motion_eddy)
 
 
 class MagnetBank:
@@ -287,6 +309,13 @@ class MagnetBank:
         current cannot go below zero within a step (every RK4 stage applies
         :func:`~maglevkit.reduced.current.eq8_freewheel_voltage`, ``U_eff = max(U,
         -R_ec I_L)``; the outputs' coil currents too).  The vehicle runs turn it on.
+    motion_eddy : bool
+        ``False`` (default): members given as maps follow eq. 8; ``True``: they carry the
+        shielded-gap ladder (as ``CurrentModel(maps, motion_eddy=True)``; a member given
+        as a ``CurrentModel`` keeps its own choice).  Ladder circuits carry a second state,
+        the shielding eddy current ``I_e`` (:attr:`BankState.eddy_currents_A`); the RK4
+        sub-step is limited to the ladder's stable step
+        (:class:`~maglevkit.reduced.core.MotionEddyLadder`).  Not with ``freewheel``.
 
     Examples
     --------
@@ -306,7 +335,8 @@ class MagnetBank:
                  gap_inputs: str = "circuit", interpolation: str = "bicubic",
                  compiled: str = "auto", eddy_resistance: str = "fit", max_step_s: float = 1e-3,
                  extrapolate: bool = False, cache_dir: Any = None,
-                 codegen: str = "lanes", freewheel: bool = False) -> None:
+                 codegen: str = "lanes", freewheel: bool = False,
+                 motion_eddy: bool = False) -> None:
         if compiled not in COMPILE_MODES:
             raise InputError(f"compiled = {compiled!r}; use one of {list(COMPILE_MODES)}")
         if codegen not in ("lanes", "casadi"):
@@ -337,7 +367,18 @@ class MagnetBank:
         pairs = list(members.items()) if isinstance(members, Mapping) else list(members)
         if not pairs:
             raise InputError("a magnet bank needs at least one member")
-        self._members = tuple(self._member(p, eddy_resistance) for p in pairs)
+        flag(motion_eddy, "motion_eddy")
+        self._members = tuple(self._member(p, eddy_resistance, bool(motion_eddy)) for p in pairs)
+        ladders = [m.ladder for m in self._members if m.ladder is not None]
+        self.motion_eddy = bool(ladders)
+        """Whether some member carries the shielded-gap ladder (two states per circuit)."""
+        if self.motion_eddy and self.freewheel:
+            raise InputError("freewheel=True with shielded-gap ladder members (motion_eddy): "
+                             "the chopper's diode limit is written for eq. 8's one state per "
+                             "circuit; use freewheel=False or members without motion_eddy")
+        if ladders:
+            # the ladder's stable RK4 sub-step (CurrentModel limits its own the same way)
+            self.max_step_s = min([self.max_step_s] + [lad.max_step_s for lad in ladders])
         names = [m.name for m in self._members]
         dup = sorted({n for n in names if names.count(n) > 1})
         if dup:
@@ -356,7 +397,7 @@ class MagnetBank:
 
     # ------------------------------------------------------------------ construction
     @staticmethod
-    def _member(pair: Any, eddy_resistance: str) -> _Member:
+    def _member(pair: Any, eddy_resistance: str, motion_eddy: bool = False) -> _Member:
         try:
             name, model = pair
         except (TypeError, ValueError):
@@ -378,23 +419,23 @@ class MagnetBank:
                                  f"{model.eddy_modes} cannot be a bank member (the bank "
                                  "advances eq. 8 with one R_ec per circuit); use "
                                  "CurrentModel(maps) or the model on its own")
-            if getattr(model, "motion_eddy", False):
-                # the same: the shielded-gap ladder's second state per circuit
-                raise InputError(f"member {name!r}: a CurrentModel with motion_eddy=True "
-                                 "cannot be a bank member (the bank advances eq. 8 with one "
-                                 "state per circuit); use CurrentModel(maps) or the model on "
-                                 "its own")
             core = model.core
+            motion_eddy = bool(getattr(model, "motion_eddy", False))
         elif hasattr(model, "dataset") and hasattr(model, "variable"):
             core = ReducedCore.from_maps(model, eddy_resistance=eddy_resistance,
                                          what=f"member {name!r}: ")
         else:
             raise InputError(f"member {name!r}: a model must be CharacteristicMaps, a "
                              f"CurrentModel or a FluxModel, got {type(model).__name__}")
+        ladder = (MotionEddyLadder.from_maps(core.maps, resistance_ohm=core.resistance_ohm,
+                                             what=f"member {name!r}: ")
+                  if motion_eddy else None)
         return _Member(name, "reduced", core.circuit_names, core.gap_names,
                        dict(core.pole_groups), maps=core.maps, core=core,
                        resistance_ohm=core.resistance_ohm,
-                       eddy_resistance_ohm=core.eddy_resistance_ohm)
+                       eddy_resistance_ohm=(core.eddy_resistance_ohm if ladder is None
+                                            else ladder.jump_resistance_ohm),
+                       ladder=ladder)
 
     def _layout(self) -> None:
         circuits: list[str] = []
@@ -459,7 +500,8 @@ class MagnetBank:
         """Per-cell tables (one per distinct map), kernel parameters and range bounds."""
         idx = self._reduced_idx
         n = idx.size
-        self._par = np.zeros((_N_PAR, n))
+        n_par = _N_PAR + (len(MOTION_EDDY_PARAMETERS) if self.motion_eddy else 0)
+        self._par = np.zeros((n_par, n))
         self._bounds = np.zeros((4, n))            # s_lo, s_hi, i_lo, i_hi (map ranges)
         self._spline_bounds = np.zeros((4, n))     # the same extended by EXTRA_CELLS cells
         tol = np.zeros((2, n))                     # rounding allowances: gap, current
@@ -498,8 +540,13 @@ class MagnetBank:
                 assert m.resistance_ohm is not None
                 core = m.core
                 r_el = float(m.resistance_ohm[j])
-                a = float(core.a[j])
+                lad = m.ladder
+                a = float(core.a[j] if lad is None else lad.a[j])
                 self._par[:9, k] = (s0, 1.0 / ds_, cs_, i0, 1.0 / di_, ci_, offset, r_el, a)
+                if self.motion_eddy:
+                    self._par[_N_PAR:, k] = ((0.0, 0.0, 1.0) if lad is None else
+                                             (1.0, float(lad.shielding_resistance_ohm[j]),
+                                              float(lad.unshielded_inductance_H[j])))
                 self._bounds[:, k] = (*core.gap_range_m, *core.current_range_A)
                 tol[:, k] = (core.gap_tolerance_m, core.current_tolerance_A)
                 self._spline_bounds[:, k] = (gs[0], gs[-1], gi[0], gi[-1])
@@ -559,10 +606,32 @@ class MagnetBank:
             u = eq8_freewheel_voltage(i, u, r_el, a)
         return eq8_rhs(i, u, sd, lt, dl, r_el, a), eq8_coil_current(i, u, r_el, a), f, lt
 
+    def _ladder_rhs(self, i: Any, ie: Any, u: Any, sd: Any, lt: Any, dl: Any,
+                    p: Any) -> tuple[Any, Any]:
+        """``(dI_L/dt, dI_e/dt)`` of one circuit of a bank with ladder members: the
+        shielded-gap ladder (:func:`eq8_shielded_gap_rhs`) where ``p``'s row
+        ``motion_eddy`` is 1, else eq. 8 with ``dI_e/dt = 0`` (CasADi ``if_else``
+        selects one of the two exactly)."""
+        r_el, a = p[7], p[8]
+        me, r_2, l_u = p[_N_PAR], p[_N_PAR + 1], p[_N_PAR + 2]
+        d_il, d_ie = eq8_shielded_gap_rhs(i, ie, u, sd, lt, dl, r_el, a, r_2, l_u)
+        return (ca.if_else(me > 0, d_il, eq8_rhs(i, u, sd, lt, dl, r_el, a)),
+                ca.if_else(me > 0, d_ie, 0.0))
+
     def _make_circuit_kernel(self) -> dict[str, ca.Function]:
         """Single-circuit functions: right-hand side, outputs (MX, table embedded)."""
         table = ca.MX(ca.DM(self._table))
         i, s, u, sd = (ca.MX.sym(n) for n in ("I_L", "s", "U", "sdot"))
+        if self.motion_eddy:
+            p = ca.MX.sym("p", _N_PAR + len(MOTION_EDDY_PARAMETERS))
+            ie = ca.MX.sym("I_e")
+            lt, dl, f = self._lookup(self._gap_cell(s, p), i, p, table)
+            d_il, d_ie = self._ladder_rhs(i, ie, u, sd, lt, dl, p)
+            # the coil current of Fig. 8 with I_L + I_e through R_a's node (I_e = 0 in
+            # eq. 8 circuits)
+            coil = eq8_coil_current(i + ie, u, p[7], p[8])
+            return {"rhs": ca.Function("bank_circuit_rhs", [i, s, u, sd, p, ie], [d_il, d_ie]),
+                    "out": ca.Function("bank_circuit_out", [i, s, u, p, ie], [coil, f, lt])}
         p = ca.MX.sym("p", _N_PAR)
         rhs, coil, f, lt = self._circuit_expressions(i, s, u, sd, p, table)
         return {"rhs": ca.Function("bank_circuit_rhs", [i, s, u, sd, p], [rhs]),
@@ -597,6 +666,8 @@ class MagnetBank:
         """
         if not (isinstance(substeps, int) and not isinstance(substeps, bool) and substeps >= 1):
             raise InputError(f"substeps = {substeps!r} must be a whole number >= 1")
+        if self.motion_eddy:
+            return self._ladder_step_function(substeps)
         table = ca.MX(ca.DM(self._table))
         i, s, u, sd, h = (ca.MX.sym(n) for n in ("I_L", "s", "U", "sdot", "h"))
         p = ca.MX.sym("p", _N_PAR)
@@ -650,6 +721,55 @@ class MagnetBank:
                            ["I_L", "s", "U", "sdot", "h", "p"],
                            ["I_L_next", "I", "F", "I_L_min", "I_L_max", "bad"])
 
+    def _ladder_step_function(self, substeps: int) -> ca.Function:
+        """:meth:`circuit_step_function` of a bank with ladder members: the state
+        ``[I_L; I_e]`` of every circuit (``I_e`` stays 0 in eq. 8 circuits), one more
+        input ``I_e`` and output ``I_e_next`` after the others."""
+        table = ca.MX(ca.DM(self._table))
+        i, s, u, sd, h, ie = (ca.MX.sym(n) for n in ("I_L", "s", "U", "sdot", "h", "I_e"))
+        p = ca.MX.sym("p", _N_PAR + len(MOTION_EDDY_PARAMETERS))
+        hs = h / substeps
+
+        def f(x: Any, cell: tuple[Any, Any]) -> Any:
+            lt, dl = self._lookup(cell, x[0], p, table, maps=(0, 1))
+            return _Pair(*self._ladder_rhs(x[0], x[1], u, sd, lt, dl, p))
+
+        # the state as a pair of scalars (not a vertcat), so that the graph stays scalar
+        # and the SIMD lanes translate it; the arithmetic per component is the same
+        x: Any = _Pair(i, ie)
+        lo: Any = i
+        hi: Any = i
+        cell_start = self._gap_cell(s, p)
+        for k in range(substeps):
+            sk = s + sd * (k * hs)
+            cell_mid = self._gap_cell(sk + sd * (hs / 2), p)
+            cell_end = self._gap_cell(sk + sd * hs, p)
+            x = rk4_substep(x, hs, partial(f, cell=cell_start), partial(f, cell=cell_mid),
+                            partial(f, cell=cell_end))
+            lo = ca.fmin(lo, x[0])
+            hi = ca.fmax(hi, x[0])
+            cell_start = cell_end
+        se = s + sd * h
+        coil = eq8_coil_current(x[0] + x[1], u, p[7], p[8])
+        force = self._lookup(self._gap_cell(se, p), x[0], p, table, maps=(2,))[0]
+        big = float(np.finfo(float).max)
+
+        def non_finite(v: Any) -> Any:
+            return 1 - (ca.fabs(v) <= big)
+
+        def any_of(*conditions: Any) -> Any:
+            return sum(conditions[1:], conditions[0]) > 0
+
+        bad = (float(StepFlag.GAP_OUT_OF_RANGE) * any_of(ca.fmin(s, se) < p[9], ca.fmax(s, se) > p[10])
+               + float(StepFlag.CURRENT_OUT_OF_RANGE) * any_of(lo < p[11], hi > p[12])
+               + float(StepFlag.INPUT_NOT_FINITE) * any_of(non_finite(u), non_finite(s),
+                                                    non_finite(sd))
+               + float(StepFlag.RESULT_NOT_FINITE) * any_of(non_finite(x[0]), non_finite(x[1])))
+        return ca.Function("bank_circuit_step", [i, s, u, sd, h, p, ie],
+                           [x[0], coil, force, lo, hi, bad, x[1]],
+                           ["I_L", "s", "U", "sdot", "h", "p", "I_e"],
+                           ["I_L_next", "I", "F", "I_L_min", "I_L_max", "bad", "I_e_next"])
+
     def _step_kernel(self, substeps: int) -> ca.Function:
         """One RK4 step of every reduced circuit: ``(I_L, s, U, sdot, h) -> (I_L', I, F,
         I_min, I_max, n_bad)``.
@@ -668,18 +788,27 @@ class MagnetBank:
         mapped = one.map(n, "serial")
         vi, vs, vu, vsd = (ca.MX.sym(nm, n) for nm in ("I_L", "s", "U", "sdot"))
         vh = ca.MX.sym("h")
-        res = mapped(vi.T, vs.T, vu.T, vsd.T, vh, ca.DM(self._par))
+        if self.motion_eddy:
+            ve = ca.MX.sym("I_e", n)
+            res = mapped(vi.T, vs.T, vu.T, vsd.T, vh, ca.DM(self._par), ve.T)
+        else:
+            res = mapped(vi.T, vs.T, vu.T, vsd.T, vh, ca.DM(self._par))
         # member totals of the reduced circuits' forces (sparse 0/1 matrix)
         rows = self._member_of[self._reduced_idx]
         summ = ca.DM(ca.Sparsity.triplet(len(self._members), n, rows.tolist(), list(range(n))),
                      1.0)
+        outs = ([r.T for r in res[:3]]
+                + [ca.densify(ca.mtimes(summ, res[2].T)), ca.sum2(res[5] > 0)]
+                + [res[3].T, res[4].T, vs + vsd * vh, res[5].T])
+        names = ["I_L_next", "I", "F", "member_F", "n_bad", "I_L_min", "I_L_max", "s_next",
+                 "flags"]
+        if self.motion_eddy:
+            # the ladder's second state after the others (the layout of eq. 8 banks stays)
+            return ca.Function(f"maglevkit_bank_step{substeps}", [vi, vs, vu, vsd, vh, ve],
+                               outs + [res[6].T], ["I_L", "s", "U", "sdot", "h", "I_e"],
+                               names + ["I_e_next"])
         return ca.Function(f"maglevkit_bank_step{substeps}", [vi, vs, vu, vsd, vh],
-                           [r.T for r in res[:3]]
-                           + [ca.densify(ca.mtimes(summ, res[2].T)), ca.sum2(res[5] > 0)]
-                           + [res[3].T, res[4].T, vs + vsd * vh, res[5].T],
-                           ["I_L", "s", "U", "sdot", "h"],
-                           ["I_L_next", "I", "F", "member_F", "n_bad", "I_L_min", "I_L_max",
-                            "s_next", "flags"])
+                           outs, ["I_L", "s", "U", "sdot", "h"], names)
 
     # ------------------------------------------------------------------ public model pieces
     @property
@@ -694,7 +823,8 @@ class MagnetBank:
         """(13, n_reduced) parameter column ``p`` of every reduced circuit for
         :meth:`circuit_step_function` and :attr:`circuit_output_function` (rows
         :data:`KERNEL_PARAMETERS`: grid, table offset, ``R_el`` [ohm], ``a = 1 + R_el/R_ec``
-        and the range bounds with their rounding allowances)."""
+        and the range bounds with their rounding allowances; in a bank with ladder members
+        16 rows, :data:`MOTION_EDDY_PARAMETERS` appended)."""
         return self._par.copy()
 
     @property
@@ -715,6 +845,50 @@ class MagnetBank:
         ``"detailed"`` (model: its FluxModel)."""
         return tuple((m.name, m.kind, m.maps if m.kind == "reduced" else m.model)
                      for m in self._members)
+
+    def ladder_expressions(self, k: int, i_l: Any, i_e: Any, s: Any, u: Any, gap_rate: Any,
+                           table: Any) -> tuple[Any, Any, Any, Any, Any]:
+        """The law of reduced circuit ``k`` of a bank with ladder members (``motion_eddy``)
+        as CasADi expressions ``(dI_L/dt, dI_e/dt, I, F, L~)``: the shielded-gap ladder in
+        ladder circuits, eq. 8 with ``dI_e/dt = 0`` in the others (the kernel's own
+        expressions; :meth:`circuit_expressions` is eq. 8's).
+
+        Parameters
+        ----------
+        k : int
+            Column of the reduced circuit in :attr:`circuit_parameters`.
+        i_l : casadi.MX
+            Inductor current ``I_L`` [A].
+        i_e : casadi.MX
+            Shielding eddy current ``I_e`` [A].
+        s : casadi.MX
+            Substitute gap [m].
+        u : casadi.MX
+            Circuit voltage [V].
+        gap_rate : casadi.MX
+            Substitute gap rate ``ds/dt`` [m/s].
+        table : casadi.MX or DM
+            The bank's map table (:attr:`table`), symbolic or constant.
+
+        Returns
+        -------
+        tuple of casadi.MX
+            ``dI_L/dt`` [A/s], ``dI_e/dt`` [A/s], coil current ``I`` [A], force ``F`` [N]
+            and ``L~`` [H].
+
+        Raises
+        ------
+        InputError
+            A bank without ladder members (use :meth:`circuit_expressions`).
+        """
+        if not self.motion_eddy:
+            raise InputError("ladder_expressions needs a bank with shielded-gap ladder "
+                             "members (motion_eddy); this bank is eq. 8's: use "
+                             "circuit_expressions")
+        p = ca.DM(self._par[:, k])
+        lt, dl, f = self._lookup(self._gap_cell(s, p), i_l, p, table)
+        d_il, d_ie = self._ladder_rhs(i_l, i_e, u, gap_rate, lt, dl, p)
+        return d_il, d_ie, eq8_coil_current(i_l + i_e, u, p[7], p[8]), f, lt
 
     def circuit_expressions(self, k: int, i_l: Any, s: Any, u: Any, gap_rate: Any,
                             table: Any) -> tuple[Any, Any, Any, Any]:
@@ -745,6 +919,10 @@ class MagnetBank:
         tuple of casadi.MX
             ``dI_L/dt`` [A/s], coil current ``I`` [A], force ``F`` [N] and ``L~`` [H].
         """
+        if self.motion_eddy:
+            raise InputError("circuit_expressions is eq. 8's one state per circuit; this bank "
+                             "has shielded-gap ladder members (motion_eddy) with a second "
+                             "state: use ladder_expressions")
         p = ca.DM(self._par[:, k])
         return self._circuit_expressions(i_l, s, u, gap_rate, p, table)
 
@@ -756,6 +934,11 @@ class MagnetBank:
         n = self._reduced_idx.size
         vi, vu, vs, vsd = (ca.MX.sym(nm, n) for nm in ("I_L", "U", "s", "sdot"))
         f = self._circuit_kernel["rhs"].map(n, "serial")
+        if self.motion_eddy:
+            ve = ca.MX.sym("I_e", n)
+            d_il, d_ie = f(vi.T, vs.T, vu.T, vsd.T, ca.DM(self._par), ve.T)
+            return ca.Function("maglevkit_bank_ode", [vi, vu, vs, vsd, ve], [d_il.T, d_ie.T],
+                               ["I_L", "U", "s", "sdot", "I_e"], ["dI_L", "dI_e"])
         return ca.Function("maglevkit_bank_ode", [vi, vu, vs, vsd],
                            [f(vi.T, vs.T, vu.T, vsd.T, ca.DM(self._par)).T],
                            ["I_L", "U", "s", "sdot"], ["dI_L"])
@@ -765,6 +948,12 @@ class MagnetBank:
         """Outputs of every reduced circuit: ``(I_L, U, s) -> (I, F, L~)`` (CasADi)."""
         n = self._reduced_idx.size
         vi, vu, vs = (ca.MX.sym(nm, n) for nm in ("I_L", "U", "s"))
+        if self.motion_eddy:
+            ve = ca.MX.sym("I_e", n)
+            res = self._circuit_kernel["out"].map(n, "serial")(vi.T, vs.T, vu.T,
+                                                                ca.DM(self._par), ve.T)
+            return ca.Function("maglevkit_bank_outputs", [vi, vu, vs, ve], [r.T for r in res],
+                               ["I_L", "U", "s", "I_e"], ["I", "F", "Ltilde"])
         res = self._circuit_kernel["out"].map(n, "serial")(vi.T, vs.T, vu.T, ca.DM(self._par))
         return ca.Function("maglevkit_bank_outputs", [vi, vu, vs], [r.T for r in res],
                            ["I_L", "U", "s"], ["I", "F", "Ltilde"])
@@ -777,7 +966,9 @@ class MagnetBank:
         ``U``, ``sdot`` (arrays over the circuits), ``h`` (= ``dt``) and outputs named
         ``I_L_next``, ``I``, ``F``, ``member_F``, ``n_bad`` (count of circuits out of
         range or not finite; diagnose with :meth:`step`) and more; address them by
-        name.  Only for banks of reduced members with one gap input per circuit.
+        name.  Only for banks of reduced members with one gap input per circuit.  A bank
+        with ladder members (:attr:`motion_eddy`) has one more input, ``I_e``, and one
+        more output, ``I_e_next``, after the others.
 
         Parameters
         ----------
@@ -861,6 +1052,9 @@ class MagnetBank:
         if not self._fast:
             raise InputError("run_steps needs a bank of reduced members only with "
                              "gap_inputs='circuit'")
+        if self.motion_eddy:
+            raise InputError("run_steps carries eq. 8's one state per circuit; this bank has "
+                             "shielded-gap ladder members (motion_eddy): use step or stepper")
         nc = self.n_circuits
         x0 = np.asarray(inductor_currents_A, dtype=float)
         s, u, sd = (np.ascontiguousarray(v, dtype=float) for v in (gaps_m, voltages_V,
@@ -956,22 +1150,29 @@ class MagnetBank:
         # the C names carry a hash of the source (written with a placeholder name first),
         # so that libraries of different banks never share a symbol
         name = "MAGLEVKIT_LANES_NAME"
+        me = self.motion_eddy
         try:
             kernel = lane_source(self.circuit_step_function(substeps), name=f"{name}_k", n=n,
                                  inputs=[LaneInput("instance")] * 4
-                                 + [LaneInput("shared"), LaneInput("baked", self._par)],
+                                 + [LaneInput("shared"), LaneInput("baked", self._par)]
+                                 + [LaneInput("instance")] * me,
                                  width=width, avx2=avx2)
         except (NotImplementedError, ValueError, KeyError, IndexError):  # pragma: no cover
             return None                  # a graph the generator does not translate
         members = self._member_of[self._reduced_idx]
+        # a ladder bank (motion_eddy): input 5 I_e (zeros at w + 10n + 1 when absent) and
+        # output 9 I_e_next (the kernel's seventh output; scratch at w + 11n + 1)
+        ladder = (f"  a[5] = arg[5];\n  if (!a[5]) {{ double *z = w + {10 * n + 1}; "
+                  f"for (c = 0; c < {n}; ++c) z[c] = 0.0; a[5] = z; }}\n"
+                  f"  r[6] = res[9] ? res[9] : w + {11 * n + 1};\n") if me else ""
         body = (f"  static const int member[{n}] = {{{','.join(str(int(m)) for m in members)}}};\n"
-                "  const double *a[5];\n  double *r[6];\n  long c;\n  int k;\n"
+                f"  const double *a[{5 + me}];\n  double *r[{6 + me}];\n  long c;\n  int k;\n"
                 f"  for (k = 0; k < 4; ++k) {{ a[k] = arg[k]; if (!a[k]) {{ double *z = w + "
                 f"{6 * n} + k * {n}; for (c = 0; c < {n}; ++c) z[c] = 0.0; a[k] = z; }} }}\n"
                 f"  a[4] = arg[4] ? arg[4] : w + {10 * n};\n  w[{10 * n}] = 0.0;\n"
                 + "".join(f"  r[{j}] = res[{o}] ? res[{o}] : w + {j * n};\n"
                           for j, o in enumerate((0, 1, 2, 5, 6)))
-                + f"  r[5] = w + {5 * n};\n"
+                + f"  r[5] = w + {5 * n};\n" + ladder
                 + f"  {name}_k(a, r);\n"
                 + f"  if (res[3]) {{ for (k = 0; k < {nm}; ++k) res[3][k] = 0.0;\n"
                 + f"    for (c = 0; c < {n}; ++c) res[3][member[c]] += r[2][c]; }}\n"
@@ -1001,18 +1202,20 @@ class MagnetBank:
                 f"  res[3][0] = (double) k;\n")
         code = ("#include <math.h>\n" + kernel
                 + external_source(name, inputs=[("I_L", n), ("s", n), ("U", n), ("sdot", n),
-                                                ("h", 1)],
+                                                ("h", 1)] + [("I_e", n)] * me,
                                   outputs=[("I_L_next", n), ("I", n), ("F", n), ("member_F", nm),
                                            ("n_bad", 1), ("I_L_min", n), ("I_L_max", n),
-                                           ("s_next", n), ("flags", n)],
-                                  body=body, work=10 * n + 1)
-                + external_source(f"{name}_run", inputs=[("I_L0", n), ("s", n * ch),
-                                                         ("U", n * ch), ("sdot", n * ch),
-                                                         ("h", ch), ("n_steps", 1)],
-                                  outputs=[("I_L", n * ch), ("I", n * ch), ("F", n * ch),
-                                           ("n_done", 1), ("I_L_min", n), ("I_L_max", n),
-                                           ("bad", n)],
-                                  body=loop))
+                                           ("s_next", n), ("flags", n)]
+                                  + [("I_e_next", n)] * me,
+                                  body=body, work=(12 if me else 10) * n + 1))
+        if not me:                       # (run_steps refuses ladder banks)
+            code += external_source(f"{name}_run", inputs=[("I_L0", n), ("s", n * ch),
+                                                           ("U", n * ch), ("sdot", n * ch),
+                                                           ("h", ch), ("n_steps", 1)],
+                                    outputs=[("I_L", n * ch), ("I", n * ch), ("F", n * ch),
+                                             ("n_done", 1), ("I_L_min", n), ("I_L_max", n),
+                                             ("bad", n)],
+                                    body=loop)
         digest = hashlib.sha256(code.encode()).hexdigest()[:16]
         name = f"maglevkit_bank_lanes{substeps}_{digest}"
         code = code.replace("MAGLEVKIT_LANES_NAME", name)
@@ -1021,7 +1224,8 @@ class MagnetBank:
             lib = build_source(name, code.encode(), cache=cache,
                                flags=("-O3", "-shared", "-fPIC", "-ffp-contract=off", *flags))
             f = ca.external(name, str(lib))
-            self._lane_runs[substeps] = ca.external(f"{name}_run", str(lib))
+            if not me:
+                self._lane_runs[substeps] = ca.external(f"{name}_run", str(lib))
         except (OSError, RuntimeError, subprocess.SubprocessError):
             return None                  # the CasADi path reports (or raises) the failure
         self.compiled = True
@@ -1278,7 +1482,9 @@ class MagnetBank:
                 assert m.model is not None
                 states.append(m.model.initial_state(gaps=pg[ps], currents=i[cs], time=float(time)))
                 i[cs] = np.nan
-        return BankState(float(time), i, g.copy(), tuple(states))
+        # the steady state of the ladder has no shielding current (I_e = V_m/R_2 = 0)
+        eddy = np.where(np.isnan(i), np.nan, 0.0) if self.motion_eddy else None
+        return BankState(float(time), i, g.copy(), tuple(states), eddy)
 
     def _check_state(self, state: Any) -> None:
         """``state`` is a BankState of this bank (type, array shapes, detailed members)."""
@@ -1287,6 +1493,14 @@ class MagnetBank:
                 or len(state.member_states) != self._n_detailed):
             raise InputError("state must be a BankState of this bank (from initial_state, step "
                              "or a stepper's state)")
+        e = state.eddy_currents_A
+        if self.motion_eddy != (e is not None) or (e is not None and e.shape != (self.n_circuits,)):
+            raise InputError("state must be a BankState of this bank: "
+                             + ("its ladder members (motion_eddy) need eddy_currents_A of shape "
+                                f"({self.n_circuits},)" if self.motion_eddy else
+                                "this bank has no ladder members, so eddy_currents_A must be "
+                                "None")
+                             + " (make it with initial_state, step or a stepper's state)")
 
     @renamed_keywords(dt="dt_s", voltages="voltages_V", gaps="gaps_m", gap_rates="gap_rates_m_per_s")
     def step(self, state: BankState, dt_s: float, voltages_V: Any, gaps_m: Any = None,
@@ -1347,12 +1561,12 @@ class MagnetBank:
             last = self._last_call
             call = last if last is not None and dt == self._last_dt else self._kernel(dt)
             x, coil, force, member_force, n_bad, g1 = call(state.inductor_currents_A, g, u, gd,
-                                                           dt)
+                                                           dt, state.eddy_currents_A)
             if n_bad:
                 self._diagnose(g, gd, state.inductor_currents_A, u, x, call, t0, t1)
             pf = self._share @ force if pole_forces else None
             return (_new(BankState, time_s=t1, inductor_currents_A=x, gaps_m=g1,
-                         member_states=()),
+                         member_states=(), eddy_currents_A=call.eddy_next()),
                     _new(BankOutputs, time_s=t1, currents_A=coil, inductor_currents_A=x.copy(),
                          circuit_force_N=force, member_force_N=member_force, pole_force_N=pf))
         g1 = g + gd * dt
@@ -1366,14 +1580,18 @@ class MagnetBank:
         i_next = np.full(nc, np.nan)
         member_force = np.zeros(len(self._members))
         ri = self._reduced_idx
+        e_next = None if state.eddy_currents_A is None else state.eddy_currents_A.copy()
         if ri.size:
             s, sd = self.circuit_gaps(g)[ri], self.circuit_gaps(gd)[ri]
             ur, ir = u[ri], state.inductor_currents_A[ri]
             call = self._kernel(dt)
-            x, c, f, member_force, n_bad, _ = call(ir, s, ur, sd, dt)
+            x, c, f, member_force, n_bad, _ = call(
+                ir, s, ur, sd, dt, None if e_next is None else e_next[ri])
             if n_bad:
                 self._diagnose(s, sd, ir, ur, x, call, t0, t1)
             i_next[ri], coil[ri], force[ri] = x, c, f
+            if e_next is not None:
+                e_next[ri] = call.eddy_next()
         states = list(state.member_states)
         pf_detailed: dict[int, np.ndarray] = {}
         pg, pgd = self.pole_gaps(g), self.pole_gaps(gd)
@@ -1395,7 +1613,7 @@ class MagnetBank:
             pf = self._share @ force
             for mi, v in pf_detailed.items():
                 pf[self._pole_slices[mi]] = v
-        new_state = BankState(t1, i_next, g1, tuple(states))
+        new_state = BankState(t1, i_next, g1, tuple(states), e_next)
         return new_state, BankOutputs(t1, coil, i_next.copy(), force, member_force, pf)
 
     @renamed_keywords(dt="dt_s")
@@ -1508,6 +1726,10 @@ class MagnetBank:
         o = self._outputs_at(state, u[0])
         cur[0], il[0], fc[0], pf[0] = o.currents_A, o.inductor_currents_A, o.circuit_force_N, \
             o.pole_force_N
+        ie = None
+        if state.eddy_currents_A is not None:
+            ie = np.empty((nt, nc))
+            ie[0] = state.eddy_currents_A
         steps = np.diff(times)
         if self._fast and nt > 1 and len({self._substeps(float(h))
                                           for h in np.unique(steps)}) == 1:
@@ -1521,6 +1743,8 @@ class MagnetBank:
                 cur[k + 1] = stepper.currents_A
                 il[k + 1] = stepper.inductor_currents_A
                 fc[k + 1] = stepper.circuit_force_N
+                if ie is not None:
+                    ie[k + 1] = stepper.eddy_currents_A
             pf[1:] = self._pole_forces_of(fc[1:])
             state = stepper.state
         else:
@@ -1531,12 +1755,15 @@ class MagnetBank:
                                                     o.circuit_force_N)
                 assert o.pole_force_N is not None
                 pf[k + 1] = o.pole_force_N
+                if ie is not None:
+                    ie[k + 1] = state.eddy_currents_A
         return BankSimulation(
             time_s=times, gaps_m=g, voltages_V=np.vstack((u[:-1], u[-2:-1])), currents_A=cur,
             inductor_currents_A=il, circuit_force_N=fc,
             member_force_N=np.add.reduceat(fc, self._member_starts, axis=1), pole_force_N=pf,
             circuit_names=self.circuit_names, gap_names=self.gap_names,
-            pole_names=self.pole_names, member_names=self.member_names, final_state=state)
+            pole_names=self.pole_names, member_names=self.member_names, final_state=state,
+            eddy_currents_A=ie)
 
     def _pole_forces_of(self, circuit_forces: np.ndarray) -> np.ndarray:
         """Per-pole forces of a time series of reduced circuit forces (n_t, n_circuits),
@@ -1571,6 +1798,7 @@ class MagnetBank:
         InputError
             Voltages of the wrong count or names, or not finite.
         """
+        # (steady state: I_e = 0 in the ladder circuits, so R_el I_L there too)
         u = (self.resistance_ohm * np.where(np.isnan(state.inductor_currents_A), 0.0,
                                             state.inductor_currents_A)
              if voltages is None else self._vector(voltages, self.circuit_names, "voltages", "V"))
@@ -1582,7 +1810,10 @@ class MagnetBank:
         ri = self._reduced_idx
         s = self.circuit_gaps(state.gaps_m)
         if ri.size:
-            c, f, _ = self.output_function(state.inductor_currents_A[ri], u[ri], s[ri])
+            e = state.eddy_currents_A
+            c, f, _ = (self.output_function(state.inductor_currents_A[ri], u[ri], s[ri])
+                       if e is None else
+                       self.output_function(state.inductor_currents_A[ri], u[ri], s[ri], e[ri]))
             coil[ri], force[ri] = np.asarray(c).ravel(), np.asarray(f).ravel()
         pf_detailed = {}
         k = 0
@@ -1600,6 +1831,25 @@ class MagnetBank:
         return BankOutputs(state.time_s, coil, state.inductor_currents_A.copy(), force,
                            np.bincount(self._member_of, weights=force,
                                        minlength=len(self._members)), pf)
+
+
+class _Pair:
+    """Two scalar expressions added and scaled component by component: the ladder's state
+    ``(I_L, I_e)`` for :func:`rk4_substep` without a vertcat (a scalar graph)."""
+
+    __slots__ = ("v",)
+
+    def __init__(self, *v: Any) -> None:
+        self.v = v
+
+    def __add__(self, other: _Pair) -> _Pair:
+        return _Pair(*(a + b for a, b in zip(self.v, other.v, strict=True)))
+
+    def __rmul__(self, c: Any) -> _Pair:
+        return _Pair(*(c * a for a in self.v))
+
+    def __getitem__(self, k: int) -> Any:
+        return self.v[k]
 
 
 def _new(cls: type[_T], **fields: Any) -> _T:
@@ -1692,7 +1942,8 @@ class _StepCall:
         self.eval = self.bound.eval
         self.args, self.res = self.bound.args, self.bound.res
 
-    def __call__(self, i: np.ndarray, s: np.ndarray, u: np.ndarray, sd: np.ndarray, h: float
+    def __call__(self, i: np.ndarray, s: np.ndarray, u: np.ndarray, sd: np.ndarray, h: float,
+                 eddy: np.ndarray | None = None
                  ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, float, np.ndarray]:
         a = self.args
         a[0][:] = i
@@ -1700,7 +1951,13 @@ class _StepCall:
         a[2][:] = u
         a[3][:] = sd
         a[4][0] = h
+        if eddy is not None:                 # a ladder bank's I_e (input 5)
+            a[5][:] = eddy
         self.eval()
         r = self.res
         return (r[0].copy(), r[1].copy(), r[2].copy(), r[3].copy(), float(r[4][0]),
                 r[7].copy())
+
+    def eddy_next(self) -> np.ndarray | None:
+        """A ladder bank's ``I_e`` after the last call (output 9; None in eq. 8 banks)."""
+        return self.res[9].copy() if len(self.res) > 9 else None

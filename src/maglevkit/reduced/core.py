@@ -31,8 +31,8 @@ from ..errors import InputError
 if TYPE_CHECKING:
     from ..reduction.maps import CharacteristicMaps
 
-__all__ = ["EDDY_RESISTANCE_CHOICES", "EXTRA_CELLS", "ReducedCore", "eq8_a", "extend_axis",
-           "extend_values", "rk4_substep", "substep_count", "substep_counts"]
+__all__ = ["EDDY_RESISTANCE_CHOICES", "EXTRA_CELLS", "MotionEddyLadder", "ReducedCore", "eq8_a",
+           "extend_axis", "extend_values", "rk4_substep", "substep_count", "substep_counts"]
 
 EXTRA_CELLS = 3
 """Grid cells by which the maps are continued linearly beyond their range."""
@@ -325,3 +325,98 @@ def eq8_a(r_el: Any, r_ec: Any) -> Any:
         return 1.0 if math.isinf(float(r_ec)) else 1.0 + float(r_el) / float(r_ec)
     r_el, r_ec = np.asarray(r_el, dtype=float), np.asarray(r_ec, dtype=float)
     return 1.0 + np.where(np.isinf(r_ec), 0.0, r_el / np.where(np.isinf(r_ec), 1.0, r_ec))
+
+
+@dataclass(frozen=True, eq=False)
+class MotionEddyLadder:
+    """The shielded-gap ladder of a set of maps (``motion_eddy=True``), read and checked once.
+
+    The ladder ``R_el`` -- shunt ``R_a`` -- series ``L_u`` -- shunt ``R_2 || L(s, I_L)``
+    (:mod:`maglevkit.reduction.motion_eddy`; the law is
+    :func:`~maglevkit.reduced.current.eq8_shielded_gap_rhs`).  Both
+    :class:`~maglevkit.reduced.current.CurrentModel` and
+    :class:`~maglevkit.reduced.bank.MagnetBank` take its parameters, its ``a`` and its RK4
+    sub-step limit from here.  Build it with :meth:`from_maps`.  Arrays are read-only.
+
+    Parameters
+    ----------
+    jump_resistance_ohm : numpy.ndarray (n_circuits,)
+        The shunt ``R_a`` [ohm] (takes eq. 8's ``R_ec`` place).
+    shielding_resistance_ohm : numpy.ndarray (n_circuits,)
+        ``R_2`` [ohm], the shielding eddy path of the gap section.
+    unshielded_inductance_H : numpy.ndarray (n_circuits,)
+        The series ``L_u`` [H].
+    a : numpy.ndarray (n_circuits,)
+        ``1 + R_el/R_a`` [-].
+    max_step_s : float
+        The longest stable RK4 sub-step [s]: ``1.5/lambda`` with ``lambda`` the Gershgorin
+        bound of the ladder's rates with the maps' smallest ``L~ - L_u``.
+    """
+
+    jump_resistance_ohm: np.ndarray
+    shielding_resistance_ohm: np.ndarray
+    unshielded_inductance_H: np.ndarray
+    a: np.ndarray
+    max_step_s: float
+
+    @classmethod
+    def from_maps(cls, maps: CharacteristicMaps, *, resistance_ohm: np.ndarray,
+                  what: str = "") -> MotionEddyLadder:
+        """Read the ladder of ``maps`` and check it.
+
+        Parameters
+        ----------
+        maps : CharacteristicMaps
+            The maps (with the ``motion_eddy_*`` variables of ``build_maps``).
+        resistance_ohm : numpy.ndarray (n_circuits,)
+            ``R_el`` of the maps' circuits [ohm].
+        what : str, optional
+            Prefix of error messages (e.g. ``"member 'm1': "``).
+
+        Returns
+        -------
+        MotionEddyLadder
+
+        Raises
+        ------
+        InputError
+            Maps without a ladder (imported from a table, built by an older version, or
+            of a magnet without eddy currents), or maps whose smallest ``L~`` is not above
+            ``L_u``.
+        """
+        ds = maps.dataset
+        names = ("motion_eddy_jump_resistance_ohm", "motion_eddy_shielding_resistance_ohm",
+                 "motion_eddy_unshielded_inductance_H")
+        missing = [n for n in names if n not in ds]
+        if missing:
+            raise InputError(what + (
+                "maps imported from a table (maps_from_table) cannot carry the shielded-gap "
+                "ladder (it is fitted to the detailed flux model's frequency response, which "
+                "a table does not have); use motion_eddy=False" if "table_report" in ds.attrs
+                else f"these maps have no shielded-gap ladder ({', '.join(missing)}); rebuild "
+                "them with this version (build_maps) to use motion_eddy=True"))
+        r_a, r_2, l_u = (np.array(ds[n].values, dtype=float) for n in names)
+        if not (np.all(np.isfinite(r_a)) and np.all(np.isfinite(r_2))
+                and np.all(np.isfinite(l_u)) and np.all(r_a > 0) and np.all(r_2 > 0)
+                and np.all(l_u > 0)):
+            raise InputError(f"{what}these maps have no shielded-gap ladder to use (the magnet "
+                             "has no eddy currents); use motion_eddy=False")
+        circuits = tuple(maps.circuits)
+        lt_min = np.array([float(np.min(maps.variable("inductance_H", c))) for c in circuits])
+        if np.any(lt_min <= l_u):
+            j = int(np.argmax(lt_min <= l_u))
+            raise InputError(f"{what}motion_eddy=True: the maps' smallest L~ of circuit "
+                             f"{circuits[j]!r}, {lt_min[j]:.4g} H, is not above "
+                             f"the ladder's L_u = {l_u[j]:.4g} H (the gap section would "
+                             "have no inductance left); use motion_eddy=False or maps "
+                             "that stay out of such deep saturation")
+        r_el = np.asarray(resistance_ohm, dtype=float)
+        a = eq8_a(r_el, r_a)
+        # RK4 stability: Gershgorin bound of the ladder's rates in (I_u, I_L) with the
+        # smallest L~ - L_u over the maps (module reduction.motion_eddy)
+        rate = float(np.max(np.maximum((r_el / a + 2.0 * r_2) / l_u,
+                                       2.0 * r_2 / (lt_min - l_u))))
+        for v in (r_a, r_2, l_u, a):
+            v.flags.writeable = False
+        return cls(jump_resistance_ohm=r_a, shielding_resistance_ohm=r_2,
+                   unshielded_inductance_H=l_u, a=a, max_step_s=1.5 / rate)

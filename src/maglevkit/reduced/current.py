@@ -50,7 +50,15 @@ from ..errors import InputError, OutOfRangeError, SolverError
 from ..models.compiled import COMPILE_MODES, BoundCall
 from ..models.inputs import check_initial_choice, check_step, simulation_inputs
 from ..validation import flag, real_array, renamed_keywords
-from .core import EXTRA_CELLS, ReducedCore, eq8_a, extend_values, rk4_substep, substep_count
+from .core import (
+    EXTRA_CELLS,
+    MotionEddyLadder,
+    ReducedCore,
+    eq8_a,
+    extend_values,
+    rk4_substep,
+    substep_count,
+)
 
 if TYPE_CHECKING:
     from ..reduction.maps import CharacteristicMaps
@@ -366,7 +374,9 @@ class CurrentModel:
                 raise InputError(f"eddy_resistance = {eddy_resistance!r} chooses eq. 8's single "
                                  "R_ec; with motion_eddy=True the ladder's fitted R_a and R_2 "
                                  "take its place: leave eddy_resistance out")
-            r_ec, r_2, l_u = _motion_eddy_ladder(maps)
+            ladder = MotionEddyLadder.from_maps(maps, resistance_ohm=r_el)
+            r_ec = ladder.jump_resistance_ohm
+            r_2, l_u = ladder.shielding_resistance_ohm, ladder.unshielded_inductance_H
         elif m:
             if eddy_resistance is not None:
                 raise InputError(f"eddy_resistance = {eddy_resistance!r} chooses eq. 8's single "
@@ -390,20 +400,8 @@ class CurrentModel:
         if self.motion_eddy:
             self._lower = np.concatenate([self._lower, np.full(nc, -np.inf)])
             self._upper = np.concatenate([self._upper, np.full(nc, np.inf)])
-            lt_min = np.array([float(np.min(maps.variable("inductance_H", c)))
-                               for c in self.circuit_names])
-            if np.any(lt_min <= l_u):
-                j = int(np.argmax(lt_min <= l_u))
-                raise InputError(f"motion_eddy=True: the maps' smallest L~ of circuit "
-                                 f"{self.circuit_names[j]!r}, {lt_min[j]:.4g} H, is not above "
-                                 f"the ladder's L_u = {l_u[j]:.4g} H (the gap section would "
-                                 "have no inductance left); use motion_eddy=False or maps "
-                                 "that stay out of such deep saturation")
-            # RK4 stability: Gershgorin bound of the ladder's rates in (I_u, I_L) with the
-            # smallest L~ - L_u over the maps (module reduction.motion_eddy)
-            rate = float(np.max(np.maximum((r_el / a + 2.0 * r_2) / l_u,
-                                           2.0 * r_2 / (lt_min - l_u))))
-            self.max_step_s = min(self.max_step_s, 1.5 / rate)
+            # RK4 stability (MotionEddyLadder.max_step_s)
+            self.max_step_s = min(self.max_step_s, ladder.max_step_s)
         if m:
             self._lower = np.concatenate([self._lower, np.full(nc * m, -np.inf)])
             self._upper = np.concatenate([self._upper, np.full(nc * m, np.inf)])
@@ -1369,27 +1367,6 @@ def eq8_shielded_gap_rhs(i_l: Any, i_e: Any, u: Any, gap_rate: Any, ltilde: Any,
     v_m = r_2 * i_e
     d_il = (v_m - dl_ds * i_l * gap_rate) / (ltilde - l_u)
     return d_il, (v_a - v_m) / l_u - d_il
-
-
-def _motion_eddy_ladder(maps: CharacteristicMaps) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """``R_a``, ``R_2`` [ohm] and ``L_u`` [H] (n_c,) of the maps' shielded-gap ladder."""
-    ds = maps.dataset
-    names = ("motion_eddy_jump_resistance_ohm", "motion_eddy_shielding_resistance_ohm",
-             "motion_eddy_unshielded_inductance_H")
-    missing = [n for n in names if n not in ds]
-    if missing:
-        raise InputError(
-            "maps imported from a table (maps_from_table) cannot carry the shielded-gap ladder "
-            "(it is fitted to the detailed flux model's frequency response, which a table does "
-            "not have); use motion_eddy=False" if "table_report" in ds.attrs else
-            f"these maps have no shielded-gap ladder ({', '.join(missing)}); rebuild them with "
-            "this version (build_maps) to use motion_eddy=True")
-    r_a, r_2, l_u = (np.asarray(ds[n].values, dtype=float) for n in names)
-    if not (np.all(np.isfinite(r_a)) and np.all(np.isfinite(r_2)) and np.all(np.isfinite(l_u))
-            and np.all(r_a > 0) and np.all(r_2 > 0) and np.all(l_u > 0)):
-        raise InputError("these maps have no shielded-gap ladder to use (the magnet has no "
-                         "eddy currents); use motion_eddy=False")
-    return r_a, r_2, l_u
 
 
 #: Whether the eddy branches' ``L_k`` scale with ``L~(s, I_L)/L~_ref`` (True) or stay at

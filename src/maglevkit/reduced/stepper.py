@@ -14,6 +14,10 @@ own: the same compiled function as :meth:`MagnetBank.step`, equal to it bit for 
 
 Banks with detailed members or one gap input per pole have no compiled fast path; their
 stepper runs :meth:`MagnetBank.step` behind the same interface.
+
+In a bank with shielded-gap ladder members (``MagnetBank.motion_eddy``) the state carries
+the shielding eddy currents ``I_e`` too (:attr:`BankStepper.eddy_currents_A`), bound and
+committed with the rest.
 """
 
 from __future__ import annotations
@@ -95,7 +99,7 @@ class BankStepper:
 
     __slots__ = ("_bank", "_dt", "_time", "_fast", "_u", "_g", "_gd", "_il", "_coil",
                  "_force", "_member", "_pole", "_views", "_state_gaps", "_state",
-                 "_buf", "_eval", "_res", "_n_bad", "_h", "_block", "_scratch")
+                 "_buf", "_eval", "_res", "_n_bad", "_h", "_block", "_scratch", "_ie")
 
     def __init__(self, bank: MagnetBank, state: BankState, dt: float) -> None:
         bank._check_state(state)
@@ -111,19 +115,25 @@ class BankStepper:
         self._gd = np.zeros(ng)
         self._time = float(state.time_s)
         self._fast = bank._fast
-        # state and outputs in one block [I_L | I | F | member F | gaps of the state], so
-        # that a good step is committed by one copy of the kernel's block of results
+        # state and outputs in one block [I_L | I | F | member F | gaps of the state
+        # (| I_e in a ladder bank)], so that a good step is committed by one copy of the
+        # kernel's block of results
         nm = len(bank.member_names)
+        eddy = state.eddy_currents_A
         self._block = np.concatenate([out.inductor_currents_A, out.currents_A,
-                                      out.circuit_force_N, out.member_force_N, state.gaps_m])
+                                      out.circuit_force_N, out.member_force_N, state.gaps_m]
+                                     + ([] if eddy is None else [eddy]))
+        ng0 = 3 * nc + nm + ng
         b = self._block
         self._il, self._coil = b[:nc], b[nc:2 * nc]
         self._force, self._member = b[2 * nc:3 * nc], b[3 * nc:3 * nc + nm]
-        self._state_gaps = b[3 * nc + nm:]           # the gaps of the last good state
+        self._state_gaps = b[3 * nc + nm:ng0]        # the gaps of the last good state
+        self._ie = None if eddy is None else b[ng0:]  # a ladder bank's I_e
         assert out.pole_force_N is not None
         self._pole = out.pole_force_N.copy()
         self._views = tuple(_readonly(a) for a in (self._il, self._coil, self._force,
-                                                   self._member))
+                                                   self._member)
+                            + (() if self._ie is None else (self._ie,)))
         if not self._fast:
             self._state = state
             return
@@ -134,7 +144,10 @@ class BankStepper:
         args = [self._il, self._g, self._u, self._gd, self._h]
         self._scratch = r = np.zeros_like(self._block)       # the same layout as the block
         self._res = [r[:nc], r[nc:2 * nc], r[2 * nc:3 * nc], r[3 * nc:3 * nc + nm],
-                     np.zeros(1), np.zeros(nc), np.zeros(nc), r[3 * nc + nm:], np.zeros(nc)]
+                     np.zeros(1), np.zeros(nc), np.zeros(nc), r[3 * nc + nm:ng0], np.zeros(nc)]
+        if self._ie is not None:                  # input 5 and output 9: I_e
+            args.append(self._ie)
+            self._res.append(r[ng0:])
         self._buf = BoundCall(call.f, args=dict(enumerate(args)),    # keeps the arrays alive
                               res=dict(enumerate(self._res)))
         self._eval = self._buf.eval
@@ -211,6 +224,12 @@ class BankStepper:
         return self._views[3]
 
     @property
+    def eddy_currents_A(self) -> np.ndarray | None:
+        """The shielding eddy currents ``I_e`` [A] of a bank with ladder members
+        (read-only; 0 in eq. 8 circuits, NaN for detailed members), else None."""
+        return self._views[4] if self._ie is not None else None
+
+    @property
     def pole_force_N(self) -> np.ndarray:
         """Force per pole [N] (a reduced circuit's force shared equally by its poles;
         a new array)."""
@@ -225,7 +244,8 @@ class BankStepper:
         from .bank import BankState
 
         members = () if self._fast else self._state.member_states
-        return BankState(self._time, self._il.copy(), self._state_gaps.copy(), members)
+        return BankState(self._time, self._il.copy(), self._state_gaps.copy(), members,
+                         None if self._ie is None else self._ie.copy())
 
     # ------------------------------------------------------------------ stepping
     def _convert(self, value: Any, names: tuple[str, ...], what: str, unit: str) -> np.ndarray:
@@ -293,7 +313,8 @@ class BankStepper:
             st = self._state
             try:
                 st, out = bank.step(BankState(st.time_s, st.inductor_currents_A,
-                                              self._g.copy(), st.member_states),
+                                              self._g.copy(), st.member_states,
+                                              st.eddy_currents_A),
                                     self._dt, self._u.copy(), None, self._gd.copy(),
                                     pole_forces=True)
             except BaseException:
@@ -304,6 +325,9 @@ class BankStepper:
             self._il[:], self._coil[:] = out.inductor_currents_A, out.currents_A
             self._force[:], self._member[:] = out.circuit_force_N, out.member_force_N
             self._pole[:] = out.pole_force_N
+            if self._ie is not None:
+                assert st.eddy_currents_A is not None
+                self._ie[:] = st.eddy_currents_A
             self._g[:] = st.gaps_m
             self._state_gaps[:] = st.gaps_m
             self._time = st.time_s

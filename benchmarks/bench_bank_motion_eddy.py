@@ -1,0 +1,142 @@
+"""The bank with shielded-gap ladder members (``motion_eddy``): cost and accuracy.
+
+Cost: the in-place stepper at 100 circuits (50 TR09 standard magnets) at 1 ms, eq. 8
+against the ladder, each through the SIMD lanes (the default) and CasADi's generated C,
+in ns per circuit-step (CPU time, best of 5; run pinned, ``taskset -c 0``).
+
+Accuracy: the gap-sine sweep of ``bench_gap_motion`` (TR09 standard, 10 +- 1 mm, constant
+voltage of 34 A) through a bank of one ladder member, against the detailed model and
+against ``CurrentModel(maps, motion_eddy=True)`` on its own.
+"""
+
+from __future__ import annotations
+
+import importlib.util
+import math
+import shutil
+import tempfile
+import time
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+import maglevkit as mk
+from maglevkit.reduced.bank import MagnetBank
+
+TITLE = "Bank with shielded-gap ladder members: cost per circuit-step and gap-sine accuracy"
+
+DT = 1e-3
+N_CIRCUITS = 100
+SWEEP = (5.0, 50.0, 200.0)
+
+
+def _gap_motion() -> Any:
+    """The module ``bench_gap_motion`` next to this file (its maps grid, fundamentals and
+    error measure, written once)."""
+    spec = importlib.util.spec_from_file_location(
+        "bench_gap_motion", Path(__file__).with_name("bench_gap_motion.py"))
+    assert spec is not None and spec.loader is not None
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    return mod
+
+
+def _per_step(fn: Any, steps: int) -> float:
+    """Best of 5 runs of CPU time per call [s]."""
+    fn()
+    best = math.inf
+    for _ in range(5):
+        t0 = time.process_time()
+        for _ in range(steps):
+            fn()
+        best = min(best, (time.process_time() - t0) / steps)
+    return best
+
+
+def cost(maps: mk.CharacteristicMaps, cache: Path) -> list[str]:
+    """Table rows: stepper ns per circuit-step at :data:`N_CIRCUITS` circuits."""
+    members = {f"m{k}": maps for k in range(N_CIRCUITS // len(maps.circuits))}
+    rows = []
+    for label, opts in (("eq. 8, lanes (default)", {}),
+                        ("eq. 8, CasADi C", {"codegen": "casadi"}),
+                        ("ladder (motion_eddy), lanes (default)", {"motion_eddy": True}),
+                        ("ladder (motion_eddy), CasADi C", {"motion_eddy": True,
+                                                           "codegen": "casadi"})):
+        bank = MagnetBank(members, compiled="always", cache_dir=cache, **opts)
+        st = bank.initial_state(gaps=0.010, currents=33.5)
+        nc = bank.n_circuits
+        u = bank.resistance_ohm * 33.5 * 1.05
+        stepper = bank.stepper(st, DT)
+        g, sd = np.full(nc, 0.010), np.zeros(nc)
+
+        def step(stepper: Any = stepper, u: np.ndarray = u, g: np.ndarray = g,
+                 sd: np.ndarray = sd) -> None:
+            stepper.advance(voltages_V=u, gaps_m=g, gap_rates_m_per_s=sd)
+
+        t = _per_step(step, 2000)
+        sub = max(1, math.ceil(DT / bank.max_step_s * (1 - 1e-12)))
+        rows.append(f"| {label} | {nc} | {sub} | {bank.max_step_s * 1e6:.0f} | "
+                    f"{t / nc * 1e9:.0f} | {t / nc / sub * 1e9:.0f} |")
+    return rows
+
+
+def sweep(gm: Any) -> list[str]:
+    """Table rows: the gap-sine sweep through the bank, against the detailed model and the
+    single ladder model."""
+    mag, fm, _, ladder = gm.models()
+    bank = MagnetBank({"m": ladder}, compiled="auto")
+    u0 = fm.resistances * gm.CURRENT
+    rows = []
+    for f in SWEEP:
+        dur, dt = max(2.0 / f, 0.1), min(1.0 / (100 * f), 1e-3)
+
+        def gaps(t: Any, f: float = f) -> Any:
+            return gm.GAP + gm.AMPLITUDE * np.sin(2 * np.pi * f * t)
+
+        det = mk.simulate(fm, (0.0, dur), dt=dt, gaps=gaps, voltages=u0)
+        single = mk.simulate(ladder, (0.0, dur), dt=dt, gaps=gaps, voltages=u0)
+        t = det.time_s
+        g = gaps(t)
+        res = bank.simulate(t, gaps=np.repeat(g[:, None], bank.n_gaps, axis=1),
+                            voltages=u0)
+        cd, fd = det.currents_A[:, 0], det.pole_force_N.sum(axis=1)
+        cb, fb = res.currents_A[:, 0], res.member_force_N[:, 0]
+        last = t >= t[-1] - 1.0 / f * max(1, math.floor(f * dur / 2))
+        zd, zb = gm._fundamental(t[last], cd[last], f), gm._fundamental(t[last], cb[last], f)
+        phase = math.degrees(math.atan2(zb.imag, zb.real) - math.atan2(zd.imag, zd.real))
+        diff = float(np.max(np.abs(cb - single.currents_A[:, 0])))
+        rows.append(f"| {f:g} Hz | {100 * gm._ac_error(cd, cb):.1f} % | "
+                    f"{100 * gm._ac_error(cd, single.currents_A[:, 0]):.1f} % | "
+                    f"{phase:+.1f} deg | {100 * gm._ac_error(fd, fb):.1f} % | {diff:.1e} A |")
+    return rows
+
+
+def run() -> str:
+    if shutil.which("cc") is None:
+        return "No C compiler on this machine: the compiled bank needs one."
+    gm = _gap_motion()
+    maps = mk.build_maps(mk.load_magnet(gm.MAGNET), gaps=gm.GRID[0], currents=gm.GRID[1],
+                         progress=False)
+    cache = Path(tempfile.mkdtemp(prefix="maglevkit-bench-cache-"))
+    try:
+        cost_rows = cost(maps, cache)
+    finally:
+        shutil.rmtree(cache, ignore_errors=True)
+    out = [f"Stepper at {DT * 1e3:g} ms, TR09 standard maps {gm.GRID[0].size} x "
+           f"{gm.GRID[1].size}, CPU time per step (best of 5) / circuits; the ladder limits "
+           "the RK4 sub-step to its stable step.", "",
+           "| bank | circuits | RK4 sub-steps | sub-step [us] | ns / circuit-step | "
+           "ns / circuit-sub-step |", "|---|---|---|---|---|---|", *cost_rows, "",
+           "Gap sine through a bank of one ladder member (error = RMS(bank - detailed) / "
+           "RMS(detailed - mean) of circuit 0's current; phase of its fundamental against "
+           "the detailed one; last column: largest difference bank - CurrentModel(maps, "
+           "motion_eddy=True) over the run):", "",
+           "| f | bank current error | CurrentModel current error | bank phase error | "
+           "bank force error | bank - CurrentModel |", "|---|---|---|---|---|---|",
+           *sweep(gm)]
+    return "\n".join(out)
+
+
+if __name__ == "__main__":
+    print(run())
