@@ -436,3 +436,29 @@ def test_circuit_expressions_with_the_table_as_input_equal_ode_function(u_maps,
     assert _rel(np.asarray(f(*args, bank.table)), np.asarray(bank.ode_function(*args))) == 0.0
     assert not bank.table.flags.writeable
     assert bank.map_ranges.shape == (4, 3) and bank.members[1][:2] == ("t", "reduced")
+
+
+def test_moving_gap_converges_with_rk4_order(u_maps) -> None:
+    """Independent of any second path (CurrentModel steps on the same kernel now): under
+    a gap ramp the bank's step must converge with RK4's order.  The stage gaps enter at
+    the sub-step's start, middle and end; taking the middle stages' gap at the start
+    (a mutation that the comparison with CurrentModel no longer sees) drops the order
+    to about 1.  Halving the step three times: errors e(h)/e(h/2) ~ 2^4 = 16; bound
+    2^3 leaves room for the tables' piecewise cubic cells."""
+    bank = MagnetBank({"u": u_maps}, compiled="never", max_step_s=1.0)   # 1 sub-step
+    r = float(u_maps.dataset["resistance_ohm"].values[0])
+    duration, rate, s0, i0 = 0.02, 0.15, 0.008, 20.0     # gap 8 -> 11 mm
+
+    def final_current(n: int) -> float:
+        dt = duration / n
+        state = bank.initial_state(gaps=s0, currents=i0)
+        for k in range(n):
+            state, _ = bank.step(state, dt, r * i0, s0 + rate * k * dt, rate)
+        return float(state.inductor_currents_A[0])
+
+    x = [final_current(n) for n in (10, 20, 40, 80)]
+    e = np.abs(np.diff(x))
+    ratios = e[:-1] / e[1:]
+    assert np.all(ratios > 8.0), ratios
+    assert abs(x[-1] - i0) > 1.0                        # the ramp moves the current
+    assert e[-1] > 1e-12                                # above round-off

@@ -32,7 +32,7 @@ import hashlib
 import math
 import subprocess
 import warnings
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from functools import partial
 from pathlib import Path
@@ -681,11 +681,26 @@ class MagnetBank:
             return eq8_rhs(x, eq8_freewheel_voltage(x, u, r_el, a) if self.freewheel else u,
                            sd, lt, dl, r_el, a)
 
-        x: Any = i
-        lo: Any = i
-        hi: Any = i
-        # the stage gaps of a sub-step: start, middle (k2 and k3 share it), end; the end
-        # of one sub-step is the start of the next
+        x, lo, hi = self._rk4_substeps(i, lambda v: v, f, s, sd, hs, substeps, p)
+        se = s + sd * h
+        coil = eq8_coil_current(x, eq8_freewheel_voltage(x, u, r_el, a) if self.freewheel
+                                else u, r_el, a)
+        force = self._lookup(self._gap_cell(se, p), x, p, table, maps=(2,))[0]
+        bad = _reason_code(s, se, sd, u, lo, hi, (x,), p)
+        return ca.Function("bank_circuit_step", [i, s, u, sd, h, p],
+                           [x, coil, force, lo, hi, bad],
+                           ["I_L", "s", "U", "sdot", "h", "p"],
+                           ["I_L_next", "I", "F", "I_L_min", "I_L_max", "bad"])
+
+    def _rk4_substeps(self, x: Any, current: Callable[[Any], Any], f: Callable[..., Any],
+                  s: Any, sd: Any, hs: Any, substeps: int, p: Any) -> tuple[Any, Any, Any]:
+        """The RK4 sub-steps of one circuit step, for eq. 8 and the ladder alike: the
+        state ``x`` after ``substeps`` steps of ``hs`` with the one RK4, ``f(x, cell=)``
+        evaluated at the stage gaps of each sub-step (start, middle (k2 and k3 share it),
+        end; the end of one sub-step is the start of the next), and the extremes of the
+        inductor current ``current(x)`` over the sub-step ends (the range flags)."""
+        lo: Any = current(x)
+        hi: Any = current(x)
         cell_start = self._gap_cell(s, p)
         for k in range(substeps):
             sk = s + sd * (k * hs)
@@ -693,33 +708,10 @@ class MagnetBank:
             cell_end = self._gap_cell(sk + sd * hs, p)
             x = rk4_substep(x, hs, partial(f, cell=cell_start), partial(f, cell=cell_mid),
                             partial(f, cell=cell_end))
-            lo = ca.fmin(lo, x)
-            hi = ca.fmax(hi, x)
+            lo = ca.fmin(lo, current(x))
+            hi = ca.fmax(hi, current(x))
             cell_start = cell_end
-        se = s + sd * h
-        coil = eq8_coil_current(x, eq8_freewheel_voltage(x, u, r_el, a) if self.freewheel
-                                else u, r_el, a)
-        force = self._lookup(self._gap_cell(se, p), x, p, table, maps=(2,))[0]
-        # range flags (p[9:13] = gap and current bounds incl. rounding allowances);
-        # |v| <= DBL_MAX is false for NaN and inf (x - x would be simplified to 0)
-        big = float(np.finfo(float).max)
-
-        def non_finite(v: Any) -> Any:
-            return 1 - (ca.fabs(v) <= big)
-
-        def any_of(*conditions: Any) -> Any:
-            return sum(conditions[1:], conditions[0]) > 0
-
-        # the reason code (StepFlag): one bit per reason, 0 for a good step
-        bad = (float(StepFlag.GAP_OUT_OF_RANGE) * any_of(ca.fmin(s, se) < p[9], ca.fmax(s, se) > p[10])
-               + float(StepFlag.CURRENT_OUT_OF_RANGE) * any_of(lo < p[11], hi > p[12])
-               + float(StepFlag.INPUT_NOT_FINITE) * any_of(non_finite(u), non_finite(s),
-                                                    non_finite(sd))
-               + float(StepFlag.RESULT_NOT_FINITE) * non_finite(x))
-        return ca.Function("bank_circuit_step", [i, s, u, sd, h, p],
-                           [x, coil, force, lo, hi, bad],
-                           ["I_L", "s", "U", "sdot", "h", "p"],
-                           ["I_L_next", "I", "F", "I_L_min", "I_L_max", "bad"])
+        return x, lo, hi
 
     def _ladder_step_function(self, substeps: int) -> ca.Function:
         """:meth:`circuit_step_function` of a bank with ladder members: the state
@@ -736,35 +728,11 @@ class MagnetBank:
 
         # the state as a pair of scalars (not a vertcat), so that the graph stays scalar
         # and the SIMD lanes translate it; the arithmetic per component is the same
-        x: Any = _Pair(i, ie)
-        lo: Any = i
-        hi: Any = i
-        cell_start = self._gap_cell(s, p)
-        for k in range(substeps):
-            sk = s + sd * (k * hs)
-            cell_mid = self._gap_cell(sk + sd * (hs / 2), p)
-            cell_end = self._gap_cell(sk + sd * hs, p)
-            x = rk4_substep(x, hs, partial(f, cell=cell_start), partial(f, cell=cell_mid),
-                            partial(f, cell=cell_end))
-            lo = ca.fmin(lo, x[0])
-            hi = ca.fmax(hi, x[0])
-            cell_start = cell_end
+        x, lo, hi = self._rk4_substeps(_Pair(i, ie), lambda v: v[0], f, s, sd, hs, substeps, p)
         se = s + sd * h
         coil = eq8_coil_current(x[0] + x[1], u, p[7], p[8])
         force = self._lookup(self._gap_cell(se, p), x[0], p, table, maps=(2,))[0]
-        big = float(np.finfo(float).max)
-
-        def non_finite(v: Any) -> Any:
-            return 1 - (ca.fabs(v) <= big)
-
-        def any_of(*conditions: Any) -> Any:
-            return sum(conditions[1:], conditions[0]) > 0
-
-        bad = (float(StepFlag.GAP_OUT_OF_RANGE) * any_of(ca.fmin(s, se) < p[9], ca.fmax(s, se) > p[10])
-               + float(StepFlag.CURRENT_OUT_OF_RANGE) * any_of(lo < p[11], hi > p[12])
-               + float(StepFlag.INPUT_NOT_FINITE) * any_of(non_finite(u), non_finite(s),
-                                                    non_finite(sd))
-               + float(StepFlag.RESULT_NOT_FINITE) * any_of(non_finite(x[0]), non_finite(x[1])))
+        bad = _reason_code(s, se, sd, u, lo, hi, (x[0], x[1]), p)
         return ca.Function("bank_circuit_step", [i, s, u, sd, h, p, ie],
                            [x[0], coil, force, lo, hi, bad, x[1]],
                            ["I_L", "s", "U", "sdot", "h", "p", "I_e"],
@@ -1831,6 +1799,29 @@ class MagnetBank:
         return BankOutputs(state.time_s, coil, state.inductor_currents_A.copy(), force,
                            np.bincount(self._member_of, weights=force,
                                        minlength=len(self._members)), pf)
+
+
+def _reason_code(s: Any, se: Any, sd: Any, u: Any, lo: Any, hi: Any, finals: tuple[Any, ...],
+                 p: Any) -> Any:
+    """A circuit step's reason code (:class:`StepFlag`, one bit per reason, 0 for a good
+    step), written once for eq. 8 and the ladder: gaps ``s`` (start) and ``se`` (end)
+    against ``p[9:11]``, the current's extremes ``lo``/``hi`` against ``p[11:13]`` (the
+    bounds incl. rounding allowances), non-finite inputs, non-finite results ``finals``.
+    ``|v| <= DBL_MAX`` is false for NaN and inf (``x - x`` would be simplified to 0)."""
+    big = float(np.finfo(float).max)
+
+    def non_finite(v: Any) -> Any:
+        return 1 - (ca.fabs(v) <= big)
+
+    def any_of(*conditions: Any) -> Any:
+        return sum(conditions[1:], conditions[0]) > 0
+
+    return (float(StepFlag.GAP_OUT_OF_RANGE) * any_of(ca.fmin(s, se) < p[9], ca.fmax(s, se) > p[10])
+            + float(StepFlag.CURRENT_OUT_OF_RANGE) * any_of(lo < p[11], hi > p[12])
+            + float(StepFlag.INPUT_NOT_FINITE) * any_of(non_finite(u), non_finite(s),
+                                                 non_finite(sd))
+            + float(StepFlag.RESULT_NOT_FINITE) * (non_finite(finals[0]) if len(finals) == 1
+                                                   else any_of(*map(non_finite, finals))))
 
 
 class _Pair:
