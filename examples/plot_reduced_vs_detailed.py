@@ -20,7 +20,7 @@ inputs = dict(gaps=lambda t: 0.010 + 0.0005 * np.sin(2 * np.pi * 5 * t),
 
 fig, (ax_i, ax_f) = plt.subplots(1, 2, figsize=(9, 3.6), layout="constrained")
 for model, style in ((mk.FluxModel(magnet), "-"), (mk.CurrentModel(maps), "--")):
-    res = mk.simulate(model, (0.0, 0.3), dt=1e-3, **inputs)
+    res = mk.simulate(model, (0.0, 0.3), dt_s=1e-3, **inputs)
     name = type(model).__name__
     ax_i.plot(res.time_s, res.currents_A[:, 0], style, label=name)
     ax_f.plot(res.time_s, res.force_N / 1e3, style, label=name)

@@ -332,7 +332,7 @@ def compare_models(detailed: Any, reduced: Any, scenarios: list[ComparisonScenar
                      sc: ComparisonScenario = sc, loads: Any = loads) -> Any:
                 return closed_loop(model, veh, ctl, duration_s=sc.duration_s, dt_s=sc.dt_s,
                                    initial_gap_m=gap_m, initial_current_A=current_A,
-                                   gap_reference=sc.gap_reference, external_force=loads)
+                                   gap_reference=sc.gap_reference, external_force_N=loads)
 
             (wd, d), (wr, r) = (_timed(partial(loop, model), repeat) for model in (fm, reduced))
             t = d.time_s
