@@ -82,6 +82,9 @@ class HeaveMass:
              external_force_N: float = 0.0) -> HeaveState:
         """Advance by ``dt`` [s] with forces held constant (exact for constant acceleration).
 
+        The old keyword name ``dt`` still works as a deprecated alias (a ``DeprecationWarning`` names the
+        new one).
+
         Parameters
         ----------
         state : HeaveState

@@ -49,6 +49,9 @@ def simulate(model: Any, t: Any, *, gaps_m: Any, voltages_V: Any,
              **options: Any) -> SimulationResult | ReducedSimulation | BankSimulation:
     """Simulate a magnet model on a time grid.
 
+    The old keyword names ``gaps``, ``voltages``, ``gap_rates``, ``dt``, ``initial_currents`` still work as
+    deprecated aliases (a ``DeprecationWarning`` names the new one).
+
     Parameters
     ----------
     model : FluxModel, CurrentModel, MagnetBank, Magnet or Network

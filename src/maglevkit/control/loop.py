@@ -136,6 +136,9 @@ def closed_loop(model: Any, vehicle: HeaveMass, controller: GapController | Cont
     at the current rate (its ``step``); the mass integrates with the magnet force held.
     Every pole sees the same gap.
 
+    The old keyword name ``external_force`` still works as a deprecated alias (a ``DeprecationWarning``
+    names the new one).
+
     Parameters
     ----------
     model : FluxModel or CurrentModel

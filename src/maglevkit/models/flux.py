@@ -937,6 +937,9 @@ class FluxModel:
         The fluxes come from :func:`solve_statics`; the state is at rest (no eddy
         currents), consistent with the voltages ``U = R I`` and zero gap rates.
 
+        The old keyword names ``gaps``, ``currents``, ``time`` still work as deprecated aliases (a
+        ``DeprecationWarning`` names the new one).
+
         Parameters
         ----------
         gaps_m : float, array_like (n_gaps,) or mapping
@@ -1428,6 +1431,9 @@ def simulate_flux(model: Any, t: Any, *, gaps_m: Any, voltages_V: Any,
                   **options: Any) -> SimulationResult:
     """Simulate the flux model on a time grid (the flux-model branch of
     :func:`maglevkit.simulate`, which also runs the reduced models).
+
+    The old keyword names ``gaps``, ``voltages``, ``gap_rates``, ``dt``, ``initial_currents`` still work as
+    deprecated aliases (a ``DeprecationWarning`` names the new one).
 
     Parameters
     ----------

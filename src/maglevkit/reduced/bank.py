@@ -1236,6 +1236,9 @@ class MagnetBank:
         """The steady state at ``gaps`` [m] (per gap input, or a scalar) with coil currents
         ``currents`` [A] (per circuit, or a scalar).
 
+        The old keyword names ``gaps``, ``currents``, ``time`` still work as deprecated aliases (a
+        ``DeprecationWarning`` names the new one).
+
         Parameters
         ----------
         gaps_m : float, array_like (n_gaps,) or mapping
@@ -1455,6 +1458,9 @@ class MagnetBank:
         first gaps.  Every interval is one :meth:`step` (for banks of reduced members
         with one gap per circuit, through :meth:`stepper`: the same compiled function,
         without the per-step objects).
+
+        The old keyword names ``gaps``, ``voltages``, ``gap_rates``, ``dt``, ``initial_currents`` still work
+        as deprecated aliases (a ``DeprecationWarning`` names the new one).
 
         Parameters
         ----------

@@ -764,6 +764,9 @@ class CurrentModel:
         """The steady state at ``gaps`` [m] with coil currents ``currents`` [A] (``I_L = I``;
         with eddy modes ``I_k = 0``).
 
+        The old keyword names ``gaps``, ``currents``, ``time`` still work as deprecated aliases (a
+        ``DeprecationWarning`` names the new one).
+
         Parameters
         ----------
         gaps_m : float, array_like (n_gaps,) or mapping
@@ -1122,6 +1125,9 @@ class CurrentModel:
 
         Gaps move linearly between samples, voltages are held from each sample to the
         next; the default initial state is the steady state ``I = U(t0) / R_el``.
+
+        The old keyword names ``gaps``, ``voltages``, ``gap_rates``, ``dt``, ``initial_currents`` still work
+        as deprecated aliases (a ``DeprecationWarning`` names the new one).
 
         Parameters
         ----------
