@@ -204,7 +204,7 @@ def _size_row(maps: mk.CharacteristicMaps, n: int, lib: ctypes.CDLL, cache: Path
     members = {f"m{k}": maps for k in range(max(1, n // 2))}
     t0 = time.perf_counter()
     bank = MagnetBank(members, compiled="always", cache_dir=cache)
-    st = bank.initial_state(gaps=0.010, currents=33.5)
+    st = bank.initial_state(gaps_m=0.010, currents_A=33.5)
     u = bank.resistance_ohm * 33.5 * 1.05
     t_build = time.perf_counter() - t0
     t0 = time.perf_counter()
@@ -241,7 +241,7 @@ def _size_row(maps: mk.CharacteristicMaps, n: int, lib: ctypes.CDLL, cache: Path
             bank_mod.lane_target = lambda target=target: target  # type: ignore[assignment]
         try:
             b2 = MagnetBank(members, compiled="always", cache_dir=cache, codegen=codegen)
-            st2 = [b2.initial_state(gaps=0.010, currents=33.5)]
+            st2 = [b2.initial_state(gaps_m=0.010, currents_A=33.5)]
             b2.step(st2[0], DT, u, gap_rates_m_per_s=sd)
         finally:
             bank_mod.lane_target = orig
@@ -253,7 +253,7 @@ def _size_row(maps: mk.CharacteristicMaps, n: int, lib: ctypes.CDLL, cache: Path
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         interp = MagnetBank(members, compiled="never")
-    ist = [interp.initial_state(gaps=0.010, currents=33.5)]
+    ist = [interp.initial_state(gaps_m=0.010, currents_A=33.5)]
 
     def interp_step() -> None:
         ist[0], _ = interp.step(ist[0], DT, u, gap_rates_m_per_s=sd)
@@ -267,13 +267,13 @@ def _size_row(maps: mk.CharacteristicMaps, n: int, lib: ctypes.CDLL, cache: Path
     rate = rng.uniform(-0.05, 0.05, nc)
     volts = rng.uniform(0.0, 100.0, nc)
     xb = base.step(x, s, volts, rate, DT)
-    _, ob = bank.step(bank.initial_state(gaps=s, currents=x), DT, volts, gap_rates_m_per_s=rate)
+    _, ob = bank.step(bank.initial_state(gaps_m=s, currents_A=x), DT, volts, gap_rates_m_per_s=rate)
     agree = float(np.max(np.abs(xb - ob.inductor_currents_A) / np.abs(xb)))
     t_base = _per_step(lambda: base.step(x, s, u, sd, DT), steps)
     loop_txt = "-"
     if nc <= 100:
         singles = [mk.CurrentModel(maps) for _ in range(max(1, nc // 2))]
-        sst = [m.initial_state(gaps=0.010, currents=33.5) for m in singles]
+        sst = [m.initial_state(gaps_m=0.010, currents_A=33.5) for m in singles]
         us = singles[0].resistance_ohm * 33.5 * 1.05
 
         def loop() -> None:

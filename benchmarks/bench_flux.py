@@ -41,7 +41,7 @@ def _scenario(mag: mk.Magnet, i0: float):  # type: ignore[no-untyped-def]
 def _simulate(fm: mk.FluxModel, mag: mk.Magnet, i0: float) -> float:
     gaps, volts = _scenario(mag, i0)
     t0 = _cpu()
-    mk.simulate(fm, (0.0, DURATION), dt=DT, gaps=gaps, voltages=volts, initial_currents=i0)
+    mk.simulate(fm, (0.0, DURATION), dt_s=DT, gaps_m=gaps, voltages_V=volts, initial_currents_A=i0)
     return _cpu() - t0
 
 
@@ -50,7 +50,7 @@ def _stepping(fm: mk.FluxModel, mag: mk.Magnet, i0: float) -> float:
     n = int(round(DURATION / DT))
     t = np.arange(n + 1) * DT
     s = gaps(t)
-    st = fm.initial_state(gaps=s[0], currents=i0)
+    st = fm.initial_state(gaps_m=s[0], currents_A=i0)
     t0 = _cpu()
     for k in range(n):
         st, _out = fm.step(st, DT, volts(t[k]), gaps_m=s[k], gap_rates_m_per_s=(s[k + 1] - s[k]) / DT)

@@ -65,7 +65,7 @@ def sweep(fm: mk.FluxModel, reduced: dict[str, mk.CurrentModel],
             return GAP + AMPLITUDE * np.sin(2 * np.pi * f * t)
 
         t0 = time.perf_counter()
-        det = mk.simulate(fm, (0.0, dur), dt=dt, gaps=gaps, voltages=u0)
+        det = mk.simulate(fm, (0.0, dur), dt_s=dt, gaps_m=gaps, voltages_V=u0)
         wall = time.perf_counter() - t0
         t = det.time_s
         last = t >= t[-1] - 1.0 / f * max(1, math.floor(f * dur / 2))   # the last half
@@ -74,7 +74,7 @@ def sweep(fm: mk.FluxModel, reduced: dict[str, mk.CurrentModel],
                                "detailed": (_fundamental(t[last], cd[last], f),
                                             _fundamental(t[last], fd[last], f))}
         for name, model in reduced.items():
-            res = mk.simulate(model, (0.0, dur), dt=dt, gaps=gaps, voltages=u0)
+            res = mk.simulate(model, (0.0, dur), dt_s=dt, gaps_m=gaps, voltages_V=u0)
             cr, fr = res.currents_A[:, 0], res.force_N
             row[name] = (_fundamental(t[last], cr[last], f), _fundamental(t[last], fr[last], f),
                          _ac_error(cd, cr), _ac_error(fd, fr))

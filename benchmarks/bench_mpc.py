@@ -81,7 +81,7 @@ def run() -> str:
         timed = _Timed(ctl)
         r = closed_loop(plant, veh, timed, duration_s=DURATION, dt_s=DT, initial_gap_m=S0,
                         initial_current_A=ctl.design_state[0],
-                        external_force=lambda t: 0.1 * f0 if t >= 0.02 else 0.0)
+                        external_force_N=lambda t: 0.1 * f0 if t >= 0.02 else 0.0)
         return r, timed
 
     rows, sqp_rows, ratio_rows = [], [], []

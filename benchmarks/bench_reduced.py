@@ -55,7 +55,7 @@ def _stepping(model: Any, mag: mk.Magnet, s0: float, i0: float) -> Callable[[], 
     rates = np.diff(s, axis=0) / DT
 
     def run() -> None:
-        st = model.initial_state(gaps=s[0], currents=i0)
+        st = model.initial_state(gaps_m=s[0], currents_A=i0)
         for k in range(n):
             st, _ = model.step(st, DT, u[k], gaps_m=s[k], gap_rates_m_per_s=rates[k])
     return run
@@ -72,7 +72,7 @@ def _bank_stepping(maps: mk.CharacteristicMaps, mag: mk.Magnet, s0: float,
     rates = np.diff(g, axis=0) / DT
 
     def run() -> None:
-        stepper = bank.stepper(bank.initial_state(gaps=g[0], currents=i0), DT)
+        stepper = bank.stepper(bank.initial_state(gaps_m=g[0], currents_A=i0), DT)
         for k in range(n):
             stepper.advance(u[k], g[k], rates[k])
     return run
@@ -90,8 +90,8 @@ def run() -> str:
         gaps, signals, volts = _case(mag, s0, i0)
 
         def sim(model: Any, voltages: Any, gaps: Any = gaps, i0: float = i0) -> Any:
-            return mk.simulate(model, (0, DURATION), dt=DT, gaps=gaps, voltages=voltages,
-                               initial_currents=i0)
+            return mk.simulate(model, (0, DURATION), dt_s=DT, gaps_m=gaps, voltages_V=voltages,
+                               initial_currents_A=i0)
 
         det = sim(fm, signals)
         t_det = _best(lambda fm=fm, signals=signals: sim(fm, signals), repeat=3)

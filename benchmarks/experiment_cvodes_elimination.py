@@ -49,7 +49,7 @@ def main(name: str) -> None:
     integ = ca.integrator("cv", "cvodes", {"x": xd, "p": p, "ode": ode}, 0.0, 1.0,
                           {"reltol": 1e-6, "abstol": 1e-10, "max_num_steps": 20000})
     i0 = 20.0 if name == "u-magnet" else 34.0
-    w0 = np.asarray(fm.initial_state(gaps=0.01, currents=i0)._vector(), dtype=float)
+    w0 = np.asarray(fm.initial_state(gaps_m=0.01, currents_A=i0)._vector(), dtype=float)
     wm, pm = ca.MX.sym("w", d.nw), ca.MX.sym("pp", 1 + nc + ng)
     nx = r + ng
     sol = integ(x0=wm[:nx], p=ca.vertcat(pm, wm[nx:]))

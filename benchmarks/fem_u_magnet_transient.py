@@ -587,8 +587,8 @@ def simulate_model(ref: dict, *, discretisation: str = "lumped", air_model: str 
     times = np.asarray(ref["time_s"])
     fm = mk.FluxModel(mag, rtol=1e-7, compiled="never" if discretisation != "lumped"
                       else "auto")
-    res = mk.simulate(fm, times, gaps=ref["gap_m"], voltages=mag.network.resistances[0]
-                      * ref["i1_A"], initial_currents=ref["i0_A"])
+    res = mk.simulate(fm, times, gaps_m=ref["gap_m"], voltages_V=mag.network.resistances[0]
+                      * ref["i1_A"], initial_currents_A=ref["i0_A"])
     return res
 
 

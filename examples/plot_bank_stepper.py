@@ -16,14 +16,14 @@ import maglevkit as mk
 maps = mk.build_maps(mk.load_magnet("u-magnet"), gaps=np.linspace(0.004, 0.020, 9),
                      currents=np.linspace(0.0, 80.0, 17), progress=False)
 bank = mk.MagnetBank({f"m{k}": maps for k in range(20)})
-state = bank.initial_state(gaps=0.010, currents=20.0)
-stepper = bank.stepper(state, dt=1e-3)
+state = bank.initial_state(gaps_m=0.010, currents_A=20.0)
+stepper = bank.stepper(state, dt_s=1e-3)
 
 scale = np.linspace(0.9, 1.1, 20)          # each circuit its own voltage
 time_s = np.arange(200) * 1e-3
 forces_N = np.empty((time_s.size, 20))
 for k in range(time_s.size):
-    stepper.advance(voltages=bank.resistance_ohm * 20.0 * scale, gaps=0.010, gap_rates=0.0)
+    stepper.advance(voltages_V=bank.resistance_ohm * 20.0 * scale, gaps_m=0.010, gap_rates_m_per_s=0.0)
     forces_N[k] = stepper.circuit_force_N
 
 fig, ax = plt.subplots(figsize=(6, 3.6), layout="constrained")

@@ -15,12 +15,12 @@ import maglevkit as mk
 magnet = mk.load_magnet("u-magnet")
 maps = mk.build_maps(magnet, gaps=np.linspace(0.004, 0.020, 9),
                      currents=np.linspace(0.0, 80.0, 17), progress=False)
-inputs = dict(gaps=lambda t: 0.010 + 0.0005 * np.sin(2 * np.pi * 5 * t),
-              voltages=lambda t: 40.0 if t < 0.05 else 50.0, initial_currents=20.0)
+inputs = dict(gaps_m=lambda t: 0.010 + 0.0005 * np.sin(2 * np.pi * 5 * t),
+              voltages_V=lambda t: 40.0 if t < 0.05 else 50.0, initial_currents_A=20.0)
 
 fig, (ax_i, ax_f) = plt.subplots(1, 2, figsize=(9, 3.6), layout="constrained")
 for model, style in ((mk.FluxModel(magnet), "-"), (mk.CurrentModel(maps), "--")):
-    res = mk.simulate(model, (0.0, 0.3), dt=1e-3, **inputs)
+    res = mk.simulate(model, (0.0, 0.3), dt_s=1e-3, **inputs)
     name = type(model).__name__
     ax_i.plot(res.time_s, res.currents_A[:, 0], style, label=name)
     ax_f.plot(res.time_s, res.force_N / 1e3, style, label=name)

@@ -54,7 +54,7 @@ def test_closed_loop_touchdown_is_a_solver_error_not_bad_input(u_lin) -> None:  
     # closes onto the rail; was: InputError (the inputs were fine, the run was unstable)
     f0 = float(mk.solve_statics(u_lin, gaps=0.01, currents=10.0).force_N)
     with pytest.raises(mk.SolverError, match=r"TOUCHDOWN.*at t = .* s; state: gap_m=") as exc:
-        _short_run(u_lin, duration_s=0.5, external_force=lambda t: -20 * f0)
+        _short_run(u_lin, duration_s=0.5, external_force_N=lambda t: -20 * f0)
     assert not isinstance(exc.value, mk.InputError)
     assert exc.value.time is not None and exc.value.time < 0.5
     assert exc.value.state["gap_m"] > 0.0

@@ -153,7 +153,7 @@ def test_numpy_bool_switch_is_a_bool(u_magnet: mk.Magnet) -> None:
 def test_simulate_refuses_bool_initial_currents(u_lin: mk.Magnet) -> None:
     # was: initial_currents=True ran at 1 A
     with pytest.raises(mk.InputError, match=r"initial_currents \[A\] = True \(bool\) is a bool"):
-        mk.simulate(u_lin, (0.0, 1e-3), dt=1e-4, gaps=0.01, voltages=1.0, initial_currents=True)
+        mk.simulate(u_lin, (0.0, 1e-3), dt_s=1e-4, gaps_m=0.01, voltages_V=1.0, initial_currents_A=True)
 
 
 @pytest.fixture(scope="module")
@@ -167,26 +167,26 @@ def small_maps() -> Any:
 def test_simulate_refuses_bool_initial_currents_for_the_reduced_model(small_maps: Any) -> None:
     cm = mk.CurrentModel(small_maps)
     with pytest.raises(mk.InputError, match=r"initial_currents \[A\] = True \(bool\) is a bool"):
-        mk.simulate(cm, (0.0, 1e-3), dt=1e-4, gaps=0.01, voltages=1.0, initial_currents=True)
+        mk.simulate(cm, (0.0, 1e-3), dt_s=1e-4, gaps_m=0.01, voltages_V=1.0, initial_currents_A=True)
 
 
 @pytest.mark.parametrize(("kwargs", "msg"), [
-    ({"gaps": "0.01"}, r"gaps \[m\] = '0.01' \(str\) is a string"),
-    ({"voltages": ["1.0"]}, r"voltages \[V\] = \['1.0'\] \(list\) contains a string"),
-    ({"voltages": lambda t: "1.0"}, r"the callable must return numbers \[V\].*is a string"),
-    ({"gaps": lambda t: True}, r"the callable must return numbers \[m\].*is a bool"),
-    ({"gap_rate_tolerance": "0.1", "gap_rates": 0.0}, r"gap_rate_tolerance = '0.1' \(str\)"),
+    ({"gaps_m": "0.01"}, r"gaps \[m\] = '0.01' \(str\) is a string"),
+    ({"voltages_V": ["1.0"]}, r"voltages \[V\] = \['1.0'\] \(list\) contains a string"),
+    ({"voltages_V": lambda t: "1.0"}, r"the callable must return numbers \[V\].*is a string"),
+    ({"gaps_m": lambda t: True}, r"the callable must return numbers \[m\].*is a bool"),
+    ({"gap_rate_tolerance": "0.1", "gap_rates_m_per_s": 0.0}, r"gap_rate_tolerance = '0.1' \(str\)"),
 ])
 def test_simulate_refuses_non_numbers(u_lin: mk.Magnet, kwargs: dict[str, Any], msg: str) -> None:
-    args: dict[str, Any] = {"gaps": 0.01, "voltages": 1.0, **kwargs}
+    args: dict[str, Any] = {"gaps_m": 0.01, "voltages_V": 1.0, **kwargs}
     with pytest.raises(mk.InputError, match=msg):
-        mk.simulate(u_lin, (0.0, 1e-3), dt=1e-4, **args)
+        mk.simulate(u_lin, (0.0, 1e-3), dt_s=1e-4, **args)
 
 
 def test_simulate_refuses_string_times(u_lin: mk.Magnet) -> None:
     with pytest.raises(mk.InputError, match=r"t \[s\] = \('0', '0.001'\) \(tuple\) contains a "
                                             r"string"):
-        mk.simulate(u_lin, ("0", "0.001"), dt=1e-4, gaps=0.01, voltages=1.0)
+        mk.simulate(u_lin, ("0", "0.001"), dt_s=1e-4, gaps_m=0.01, voltages_V=1.0)
 
 
 @pytest.mark.parametrize(("kwargs", "msg"), [
@@ -204,8 +204,8 @@ def test_flux_model_options(u_lin: mk.Magnet, kwargs: dict[str, Any], msg: str) 
 def test_flux_model_step_and_state_inputs(u_lin: mk.Magnet) -> None:
     fm = mk.FluxModel(u_lin)
     with pytest.raises(mk.InputError, match=r"time \[s\] = '0' \(str\)"):
-        fm.initial_state(gaps=0.01, currents=10.0, time="0")
-    st = fm.initial_state(gaps=0.01, currents=10.0)
+        fm.initial_state(gaps_m=0.01, currents_A=10.0, time_s="0")
+    st = fm.initial_state(gaps_m=0.01, currents_A=10.0)
     with pytest.raises(mk.InputError, match=r"voltages \[V\] = '20' \(str\) is a string"):
         fm.step(st, 1e-4, "20")
     with pytest.raises(mk.InputError, match=r"gaps \[m\] = True \(bool\) is a bool"):
@@ -219,7 +219,7 @@ def test_dt_longer_than_the_span_is_refused_like_in_scenario_files(u_lin: mk.Mag
     # was: dt = 1 s over a 0.01 s span silently returned the 2 samples [0, 0.01]
     msg = r"dt = 1 s exceeds the simulated span tf - t0 = 0.01 s"
     with pytest.raises(mk.InputError, match=msg):
-        mk.simulate(u_lin, (0.0, 0.01), dt=1.0, gaps=0.01, voltages=1.0)
+        mk.simulate(u_lin, (0.0, 0.01), dt_s=1.0, gaps_m=0.01, voltages_V=1.0)
     scenario = {"scenario": {"duration": 0.01, "dt": 1.0}, "voltages": {"all": 1.0},
                 "gaps": {"all": 0.01}}
     with pytest.raises(mk.ParameterFileError, match=r"\[scenario\] " + msg):
@@ -228,7 +228,7 @@ def test_dt_longer_than_the_span_is_refused_like_in_scenario_files(u_lin: mk.Mag
 
 def test_dt_equal_to_the_span_is_a_two_point_grid(u_lin: mk.Magnet) -> None:
     # the boundary of the rule: allowed in both places
-    res = mk.simulate(u_lin, (0.0, 1e-3), dt=1e-3, gaps=0.01, voltages=1.0)
+    res = mk.simulate(u_lin, (0.0, 1e-3), dt_s=1e-3, gaps_m=0.01, voltages_V=1.0)
     np.testing.assert_array_equal(res.time_s, [0.0, 1e-3])
     sc = parse_scenario({"scenario": {"duration": 1e-3, "dt": 1e-3}, "voltages": {"all": 1.0},
                          "gaps": {"all": 0.01}}, "s.toml")
@@ -292,16 +292,16 @@ def test_documented_grids_do_not_warn(u_magnet: mk.Magnet) -> None:
 def test_flux_model_and_simulate_warn(u_lin: mk.Magnet) -> None:
     fm = mk.FluxModel(u_lin)
     with pytest.warns(mk.PlausibilityWarning, match=r"FluxModel.initial_state: current 1000 A"):
-        fm.initial_state(gaps=0.01, currents=1000.0)
-    st = fm.initial_state(gaps=0.01, currents=10.0)
+        fm.initial_state(gaps_m=0.01, currents_A=1000.0)
+    st = fm.initial_state(gaps_m=0.01, currents_A=10.0)
     with pytest.warns(mk.PlausibilityWarning, match=r"FluxModel.step: gap 5 m"):
         fm.step(st, 1e-4, 20.0, gaps_m=5.0)
     with pytest.warns(mk.PlausibilityWarning, match=r"simulate: gap 10 m"):
-        mk.simulate(fm.with_options(rtol=1e-5), (0.0, 1e-3), dt=1e-3, gaps=10.0, voltages=1.0)
+        mk.simulate(fm.with_options(rtol=1e-5), (0.0, 1e-3), dt_s=1e-3, gaps_m=10.0, voltages_V=1.0)
     # the voltages drive the currents: 1e4 V on 2 ohm is 5 kA at steady state; after
     # 1 ms (tau = L/R ~ 30 ms) the current is far above 250 A already
     with pytest.warns(mk.PlausibilityWarning, match=r"the currents the voltages drive"):
-        mk.simulate(fm, (0.0, 1e-3), dt=1e-3, gaps=0.01, voltages=1e4, initial_currents=240.0)
+        mk.simulate(fm, (0.0, 1e-3), dt_s=1e-3, gaps_m=0.01, voltages_V=1e4, initial_currents_A=240.0)
 
 
 def test_bare_network_has_no_range() -> None:
@@ -382,7 +382,7 @@ def test_a_name_instead_of_a_magnet() -> None:
     with pytest.raises(mk.InputError, match=r"model = 'u-magnet.toml' is a name or path"):
         mk.FluxModel(Path("u-magnet.toml"))
     with pytest.raises(mk.InputError, match=msg):
-        mk.simulate("u-magnet", (0.0, 1e-3), gaps=0.01, voltages=1.0)
+        mk.simulate("u-magnet", (0.0, 1e-3), gaps_m=0.01, voltages_V=1.0)
 
 
 @pytest.mark.parametrize("call", [
@@ -471,7 +471,7 @@ def test_unknown_flux_model_options(u_lin: mk.Magnet) -> None:
     # was: TypeError from FluxModel.__init__
     msg = r"unknown option\(s\) \['bogus'\]; the FluxModel options are saturation, eddy_currents"
     with pytest.raises(mk.InputError, match=r"simulate: " + msg):
-        mk.simulate(u_lin, (0.0, 1e-3), gaps=0.01, voltages=1.0, bogus=1)
+        mk.simulate(u_lin, (0.0, 1e-3), gaps_m=0.01, voltages_V=1.0, bogus=1)
     with pytest.raises(mk.InputError, match=r"FluxModel.with_options: " + msg):
         mk.FluxModel(u_lin).with_options(bogus=1)
     with pytest.raises(mk.InputError, match=msg):

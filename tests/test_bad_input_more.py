@@ -17,7 +17,7 @@ def model(u_magnet: mk.Magnet) -> mk.CurrentModel:
 
 
 def test_far_outside_the_maps_is_out_of_range_not_a_solver_error(model) -> None:
-    state = model.initial_state(gaps=0.010, currents=20.0)
+    state = model.initial_state(gaps_m=0.010, currents_A=20.0)
     # 20 mm on 8-12 mm maps: refused before integrating (the spline would be evaluated
     # far beyond its extension and the state would become non-finite)
     with pytest.raises(OutOfRangeError, match=r"start of the step.*gap 0\.02 m.*0\.008\.\.0\.012"):
@@ -34,13 +34,13 @@ def test_a_path_instead_of_maps_is_an_input_error() -> None:
 
 
 def test_bools_and_strings_are_refused_by_the_current_model(model) -> None:
-    state = model.initial_state(gaps=0.010, currents=20.0)
+    state = model.initial_state(gaps_m=0.010, currents_A=20.0)
     with pytest.raises(InputError, match="voltages.*bool"):
         model.step(state, 1e-3, True)
     with pytest.raises(InputError, match="voltages.*string"):
         model.step(state, 1e-3, "1")
     with pytest.raises(InputError, match="initial_currents.*bool"):
-        model.simulate((0.0, 0.01), dt=1e-3, gaps=0.01, voltages=20.0, initial_currents=True)
+        model.simulate((0.0, 0.01), dt_s=1e-3, gaps_m=0.01, voltages_V=20.0, initial_currents_A=True)
 
 
 def test_maps_entry_points_refuse_wrong_types() -> None:

@@ -78,12 +78,12 @@ def _check_members_vs_single(bank: MagnetBank, members: dict, scenario, dt: floa
     factor = np.concatenate([np.full(len(m.circuits), 1.0 + 0.03 * k)
                              for k, m in enumerate(members.values())])
     volt = u_ref[:, None] / r_scenario * bank.resistance_ohm[None, :] * factor[None, :]
-    res = bank.simulate(times, gaps=np.repeat(gap[:, None], bank.n_gaps, axis=1), voltages=volt)
+    res = bank.simulate(times, gaps_m=np.repeat(gap[:, None], bank.n_gaps, axis=1), voltages_V=volt)
     sl = bank.circuit_slices
     for name, maps in members.items():
         single = mk.CurrentModel(maps)
-        ref = single.simulate(times, gaps=np.repeat(gap[:, None], len(single.gap_names), axis=1),
-                              voltages=volt[:, sl[name]])
+        ref = single.simulate(times, gaps_m=np.repeat(gap[:, None], len(single.gap_names), axis=1),
+                              voltages_V=volt[:, sl[name]])
         assert _rel(res.currents_A[:, sl[name]], ref.currents_A) <= REL, name
         assert _rel(res.inductor_currents_A[:, sl[name]], ref.inductor_currents_A) <= REL, name
         assert _rel(res.circuit_force_N[:, sl[name]], ref.circuit_force_N) <= REL, name
@@ -115,8 +115,8 @@ def test_compiled_equals_interpreted(u_maps, guidance_maps) -> None:
     fast = MagnetBank(members, compiled="auto")
     slow = MagnetBank(members, compiled="never")
     rng = np.random.default_rng(1)
-    sf = fast.initial_state(gaps=0.010, currents=rng.uniform(10, 40, 3))
-    ss = slow.initial_state(gaps=0.010, currents=sf.inductor_currents_A)
+    sf = fast.initial_state(gaps_m=0.010, currents_A=rng.uniform(10, 40, 3))
+    ss = slow.initial_state(gaps_m=0.010, currents_A=sf.inductor_currents_A)
     for _ in range(50):
         u = rng.uniform(5, 60, 3)
         rate = rng.uniform(-0.02, 0.02, 3)
@@ -132,11 +132,11 @@ def test_detailed_members_equal_their_own_steps(u_magnet, u_maps) -> None:
     fm2 = mk.FluxModel(u_magnet, eddy_currents=False)
     bank = MagnetBank({"d1": fm1, "r": u_maps, "d2": fm2}, gap_inputs="pole")
     assert bank.circuit_names == ("d1/coil", "r/coil", "d2/coil")
-    state = bank.initial_state(gaps=0.010, currents=20.0)
-    s1 = fm1.initial_state(gaps=0.010, currents=20.0)
-    s2 = fm2.initial_state(gaps=0.010, currents=20.0)
+    state = bank.initial_state(gaps_m=0.010, currents_A=20.0)
+    s1 = fm1.initial_state(gaps_m=0.010, currents_A=20.0)
+    s2 = fm2.initial_state(gaps_m=0.010, currents_A=20.0)
     single = mk.CurrentModel(u_maps)
-    sr = single.initial_state(gaps=0.010, currents=20.0)
+    sr = single.initial_state(gaps_m=0.010, currents_A=20.0)
     rate = np.array([0.01, 0.01, -0.005, -0.005, 0.0, 0.0])
     for k in range(20):
         u = np.array([25.0, 30.0, 35.0]) + k
@@ -162,8 +162,8 @@ def test_gap_inputs_pole_mode_averages_like_the_single_model(tr09_maps) -> None:
     single = mk.CurrentModel(tr09_maps)
     assert bank.n_gaps == 12
     g = np.linspace(0.009, 0.011, 12)
-    sb = bank.initial_state(gaps=g, currents=30.0)
-    ss = single.initial_state(gaps=g, currents=30.0)
+    sb = bank.initial_state(gaps_m=g, currents_A=30.0)
+    ss = single.initial_state(gaps_m=g, currents_A=30.0)
     sb, ob = bank.step(sb, 1e-3, 40.0, gap_rates_m_per_s=np.full(12, 0.01), pole_forces=True)
     ss, os_ = single.step(ss, 1e-3, 40.0, gap_rates_m_per_s=0.01)
     assert _rel(ob.circuit_force_N, os_.circuit_force_N) <= REL
@@ -173,7 +173,7 @@ def test_gap_inputs_pole_mode_averages_like_the_single_model(tr09_maps) -> None:
 
 def test_range_checked_before_integrating_names_member_and_range(u_maps) -> None:
     bank = MagnetBank({"front": u_maps, "rear": u_maps})
-    state = bank.initial_state(gaps=0.010, currents=20.0)
+    state = bank.initial_state(gaps_m=0.010, currents_A=20.0)
     # far outside: 50 mm on 6-16 mm maps, and a gap rate that leaves the maps in the step
     with pytest.raises(OutOfRangeError, match=r"member 'rear', circuit 'coil'.*gap 0\.05 m.*"
                                               r"maps cover gaps 0\.006\.\.0\.016 m"):
@@ -184,12 +184,12 @@ def test_range_checked_before_integrating_names_member_and_range(u_maps) -> None
     with pytest.raises(OutOfRangeError, match=r"RK4 sub-step.*currents 0\.\.60 A"):
         bank.step(state, 1e-3, np.array([20.0, 1e6]))
     with pytest.raises(OutOfRangeError, match=r"member 'front'.*current 70 A"):
-        bank.initial_state(gaps=0.010, currents=np.array([70.0, 20.0]))
+        bank.initial_state(gaps_m=0.010, currents_A=np.array([70.0, 20.0]))
 
 
 def test_extrapolation_warns_within_three_cells(u_maps) -> None:
     bank = MagnetBank({"m": u_maps}, extrapolate=True, compiled="never")
-    state = bank.initial_state(gaps=0.010, currents=20.0)
+    state = bank.initial_state(gaps_m=0.010, currents_A=20.0)
     with pytest.warns(UserWarning, match="extrapolating"):
         bank.step(state, 1e-3, 20.0, gaps_m=0.017)
     with pytest.raises(OutOfRangeError, match="three|3 grid cells"):
@@ -199,7 +199,7 @@ def test_extrapolation_warns_within_three_cells(u_maps) -> None:
 @pytest.mark.parametrize("bad", [np.nan, np.inf])
 def test_non_finite_inputs_name_the_magnet(u_maps, bad: float) -> None:
     bank = MagnetBank({"left": u_maps, "right": u_maps})
-    state = bank.initial_state(gaps=0.010, currents=20.0)
+    state = bank.initial_state(gaps_m=0.010, currents_A=20.0)
     with pytest.raises(InputError, match=r"voltages must be finite.*'right/coil'"):
         bank.step(state, 1e-3, np.array([20.0, bad]))
     with pytest.raises(InputError, match=r"gaps must be finite.*'left/coil'"):
@@ -207,7 +207,7 @@ def test_non_finite_inputs_name_the_magnet(u_maps, bad: float) -> None:
     with pytest.raises(InputError, match=r"gap_rates must be finite.*'left/coil'"):
         bank.step(state, 1e-3, 20.0, gap_rates_m_per_s=np.array([bad, 0.0]))
     with pytest.raises(InputError, match=r"gaps must be finite.*'right/coil'"):
-        bank.initial_state(gaps=np.array([0.01, bad]), currents=20.0)
+        bank.initial_state(gaps_m=np.array([0.01, bad]), currents_A=20.0)
 
 
 def test_bad_construction_and_inputs(u_maps) -> None:
@@ -225,9 +225,9 @@ def test_bad_construction_and_inputs(u_maps) -> None:
         MagnetBank({"m": u_maps}, gap_inputs="poles")
     with pytest.raises(InputError, match="compiled = 'yes'"):
         MagnetBank({"m": u_maps}, compiled="yes").step(
-            MagnetBank({"m": u_maps}).initial_state(gaps=0.01, currents=10.0), 1e-3, 10.0)
+            MagnetBank({"m": u_maps}).initial_state(gaps_m=0.01, currents_A=10.0), 1e-3, 10.0)
     bank = MagnetBank({"m": u_maps, "n": u_maps})
-    state = bank.initial_state(gaps=0.010, currents=20.0)
+    state = bank.initial_state(gaps_m=0.010, currents_A=20.0)
     with pytest.raises(InputError, match=r"voltages: expected 2 values"):
         bank.step(state, 1e-3, [1.0, 2.0, 3.0])
     with pytest.raises(InputError, match="bool"):
@@ -238,13 +238,13 @@ def test_bad_construction_and_inputs(u_maps) -> None:
         bank.step(object(), 1e-3, 20.0)  # type: ignore[arg-type]
     with pytest.raises(InputError, match=r"gaps must stay > 0 m"):
         MagnetBank({"m": u_maps}, gap_inputs="pole").step(
-            MagnetBank({"m": u_maps}, gap_inputs="pole").initial_state(gaps=0.01, currents=10.0),
+            MagnetBank({"m": u_maps}, gap_inputs="pole").initial_state(gaps_m=0.01, currents_A=10.0),
             1e-3, 10.0, gap_rates_m_per_s=-20.0)
 
 
 def test_solver_error_on_non_finite_state_carries_time_and_state(u_maps, monkeypatch) -> None:
     bank = MagnetBank({"m": u_maps}, compiled="never")
-    state = bank.initial_state(gaps=0.010, currents=20.0, time=0.5)
+    state = bank.initial_state(gaps_m=0.010, currents_A=20.0, time_s=0.5)
     real = bank._kernel
 
     class Poisoned:
@@ -303,7 +303,7 @@ def test_compiled_kernel_is_cached_on_disk(u_maps, tmp_path: Path) -> None:
     if compiled_mod.find_compiler() is None:
         pytest.skip("no C compiler on this machine")
     b1 = MagnetBank({"m": u_maps}, compiled="always", cache_dir=tmp_path)
-    st = b1.initial_state(gaps=0.01, currents=20.0)
+    st = b1.initial_state(gaps_m=0.01, currents_A=20.0)
     _, o1 = b1.step(st, 1e-3, 25.0)
     libs = sorted(tmp_path.glob("*.so"))
     assert len(libs) == 1 and b1.compiled is True
@@ -314,14 +314,14 @@ def test_compiled_kernel_is_cached_on_disk(u_maps, tmp_path: Path) -> None:
     assert np.array_equal(o1.currents_A, o2.currents_A)
     # a bank of other maps is another library
     MagnetBank({"m": u_maps, "n": u_maps}, compiled="always", cache_dir=tmp_path).step(
-        MagnetBank({"m": u_maps, "n": u_maps}).initial_state(gaps=0.01, currents=20.0), 1e-3, 25.0)
+        MagnetBank({"m": u_maps, "n": u_maps}).initial_state(gaps_m=0.01, currents_A=20.0), 1e-3, 25.0)
     assert len(list(tmp_path.glob("*.so"))) == 2
 
 
 def test_without_compiler_falls_back_with_a_warning(u_maps, monkeypatch, tmp_path) -> None:
     monkeypatch.setattr(compiled_mod, "find_compiler", lambda: None)
     bank = MagnetBank({"m": u_maps}, cache_dir=tmp_path)
-    st = bank.initial_state(gaps=0.01, currents=20.0)
+    st = bank.initial_state(gaps_m=0.01, currents_A=20.0)
     with pytest.warns(CompilationWarning, match="virtual machine"):
         _, out = bank.step(st, 1e-3, 25.0)
     assert bank.compiled is False
@@ -414,8 +414,8 @@ def test_interpolation_options_change_results_by_little(u_maps) -> None:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", CompilationWarning)
             bank = MagnetBank({"m": u_maps}, interpolation=method)
-            res = bank.simulate((0.0, 0.1), dt=1e-3, gaps=0.010,
-                                voltages=lambda t: 30.0 if t > 0.01 else 20.0)
+            res = bank.simulate((0.0, 0.1), dt_s=1e-3, gaps_m=0.010,
+                                voltages_V=lambda t: 30.0 if t > 0.01 else 20.0)
         if ref is None:
             ref = res
         else:

@@ -40,7 +40,7 @@ def _drive(bank: MagnetBank, n: int, seed: int) -> list[tuple[np.ndarray, np.nda
 def _same_run(bank: MagnetBank, n: int = 40, seed: int = 3) -> None:
     """The stepper and ``bank.step`` on the same inputs give identical arrays (the same
     compiled function on the same numbers: bit for bit, no tolerance)."""
-    state = bank.initial_state(gaps=0.010, currents=20.0)
+    state = bank.initial_state(gaps_m=0.010, currents_A=20.0)
     stepper = bank.stepper(state, 1e-3)
     for u, g, r in _drive(bank, n, seed):
         state, out = bank.step(state, 1e-3, u, gaps_m=g, gap_rates_m_per_s=r, pole_forces=True)
@@ -83,8 +83,8 @@ def test_stepper_equals_single_current_model(u_maps) -> None:
     single CurrentModel (bound 1e-12 as tests/test_bank.py: tables vs B-spline ~4e-14)."""
     bank = MagnetBank({"m": u_maps})
     single = mk.CurrentModel(u_maps)
-    stepper = bank.stepper(bank.initial_state(gaps=0.010, currents=20.0), 1e-3)
-    ss = single.initial_state(gaps=0.010, currents=20.0)
+    stepper = bank.stepper(bank.initial_state(gaps_m=0.010, currents_A=20.0), 1e-3)
+    ss = single.initial_state(gaps_m=0.010, currents_A=20.0)
     seen = []
     for k in range(100):
         u = 40.0 + 10.0 * np.sin(0.1 * k)
@@ -100,7 +100,7 @@ def test_stepper_equals_single_current_model(u_maps) -> None:
 
 def test_failed_step_leaves_the_stepper_at_the_last_good_step(u_maps) -> None:
     bank = MagnetBank({"front": u_maps, "rear": u_maps})
-    stepper = bank.stepper(bank.initial_state(gaps=0.010, currents=20.0), 1e-3)
+    stepper = bank.stepper(bank.initial_state(gaps_m=0.010, currents_A=20.0), 1e-3)
     stepper.advance(voltages_V=45.0)
     before = (stepper.time_s, stepper.inductor_currents_A.copy(), stepper.currents_A.copy(),
               stepper.circuit_force_N.copy(), stepper.gaps_m.copy())
@@ -122,7 +122,7 @@ def test_failed_step_leaves_the_stepper_at_the_last_good_step(u_maps) -> None:
 
 def test_stepper_bad_input(u_maps) -> None:
     bank = MagnetBank({"m": u_maps, "n": u_maps})
-    state = bank.initial_state(gaps=0.010, currents=20.0)
+    state = bank.initial_state(gaps_m=0.010, currents_A=20.0)
     with pytest.raises(InputError, match="BankState"):
         bank.stepper(object(), 1e-3)  # type: ignore[arg-type]
     with pytest.raises(InputError, match="dt"):
@@ -153,9 +153,9 @@ def test_simulate_in_place_equals_a_loop_of_steps(u_maps, guidance_maps) -> None
                                                              0.01 + 1.5e-3 * np.arange(6)])):
         gaps = 0.010 + 0.001 * np.sin(2 * np.pi * 10 * times)[:, None] * np.ones(bank.n_gaps)
         volts = np.outer(1.0 + 0.1 * np.cos(2 * np.pi * 7 * times), bank.resistance_ohm * 20.0)
-        res = bank.simulate(times, gaps=gaps, voltages=volts)
-        state = bank.initial_state(gaps=gaps[0], currents=volts[0] / bank.resistance_ohm,
-                                   time=float(times[0]))
+        res = bank.simulate(times, gaps_m=gaps, voltages_V=volts)
+        state = bank.initial_state(gaps_m=gaps[0], currents_A=volts[0] / bank.resistance_ohm,
+                                   time_s=float(times[0]))
         rates = (gaps[1:] - gaps[:-1]) / np.diff(times)[:, None]
         for k in range(times.size - 1):
             state, out = bank.step(state, float(times[k + 1] - times[k]), volts[k],
@@ -174,7 +174,7 @@ def test_arrays_keep_their_identity_and_bound_references_see_every_step(u_maps) 
     """A co-simulation binds the stepper's arrays once: writes into a kept gaps_m are used
     at every step and a kept output view shows every step's values (review finding)."""
     bank = MagnetBank({"a": u_maps, "b": u_maps})
-    st0 = bank.initial_state(gaps=0.010, currents=20.0)
+    st0 = bank.initial_state(gaps_m=0.010, currents_A=20.0)
     bound, ref = bank.stepper(st0, 1e-3), bank.stepper(st0, 1e-3)
     gaps, volts, rates = bound.gaps_m, bound.voltages_V, bound.gap_rates_m_per_s
     force, current = bound.circuit_force_N, bound.currents_A
@@ -191,7 +191,7 @@ def test_arrays_keep_their_identity_and_bound_references_see_every_step(u_maps) 
 
 def test_assignment_copies_into_the_inputs_and_typos_are_refused(u_maps) -> None:
     bank = MagnetBank({"a": u_maps, "b": u_maps})
-    st0 = bank.initial_state(gaps=0.010, currents=20.0)
+    st0 = bank.initial_state(gaps_m=0.010, currents_A=20.0)
     by_attr, by_arg = bank.stepper(st0, 1e-3), bank.stepper(st0, 1e-3)
     volts = by_attr.voltages_V
     by_attr.voltages_V = np.array([60.0, 60.0])      # assignment copies into the buffer
@@ -212,7 +212,7 @@ def test_assignment_copies_into_the_inputs_and_typos_are_refused(u_maps) -> None
 
 def test_refused_or_failed_advance_changes_nothing_of_the_state(u_maps) -> None:
     bank = MagnetBank({"a": u_maps, "b": u_maps})
-    sp = bank.stepper(bank.initial_state(gaps=0.010, currents=20.0), 1e-3)
+    sp = bank.stepper(bank.initial_state(gaps_m=0.010, currents_A=20.0), 1e-3)
     sp.advance(voltages_V=45.0)
     good_gaps = sp.gaps_m.copy()
     with pytest.raises(InputError, match="gaps must be numbers"):
@@ -231,7 +231,7 @@ def test_non_fast_path_failure_and_initial_voltages(u_magnet, u_maps) -> None:
     """Detailed members: the start voltages are the steady state R_el I of every circuit
     (a detailed magnet then holds its current), and a failed step keeps the state."""
     bank = MagnetBank({"d": mk.FluxModel(u_magnet, eddy_currents=False), "r": u_maps})
-    sp = bank.stepper(bank.initial_state(gaps=0.010, currents=20.0), 1e-3)
+    sp = bank.stepper(bank.initial_state(gaps_m=0.010, currents_A=20.0), 1e-3)
     np.testing.assert_allclose(sp.voltages_V, bank.resistance_ohm * 20.0, rtol=1e-9)
     for _ in range(5):
         sp.advance()
@@ -247,7 +247,7 @@ def test_non_fast_path_failure_and_initial_voltages(u_magnet, u_maps) -> None:
 
 def test_messages_match_step_and_several_sub_steps(u_maps) -> None:
     bank = MagnetBank({"a": u_maps, "b": u_maps}, max_step_s=4e-4)
-    st0 = bank.initial_state(gaps=0.010, currents=20.0)
+    st0 = bank.initial_state(gaps_m=0.010, currents_A=20.0)
     sp = bank.stepper(st0, 1e-3)                     # 3 RK4 sub-steps per step
     msgs = []
     for call in (lambda: bank.step(st0, 1e-3, np.array([40.0, np.nan])),
@@ -281,7 +281,7 @@ def test_bad_states_copies_and_pickling(u_maps) -> None:
         bank.stepper(bad, 1e-3)
     with pytest.raises(InputError, match="BankState of this bank"):
         bank.step(bad, 1e-3, 40.0)
-    sp = bank.stepper(bank.initial_state(gaps=0.010, currents=20.0), 1e-3)
+    sp = bank.stepper(bank.initial_state(gaps_m=0.010, currents_A=20.0), 1e-3)
     sp.advance(voltages_V=45.0)
     twin = copy.copy(sp)
     deep = copy.deepcopy(sp)
@@ -296,7 +296,7 @@ def test_bad_states_copies_and_pickling(u_maps) -> None:
 
 def test_extrapolation_is_reported_once_per_circuit(u_maps) -> None:
     bank = MagnetBank({"a": u_maps, "b": u_maps}, extrapolate=True)
-    sp = bank.stepper(bank.initial_state(gaps=0.0155, currents=20.0), 1e-3)
+    sp = bank.stepper(bank.initial_state(gaps_m=0.0155, currents_A=20.0), 1e-3)
     import warnings
 
     with warnings.catch_warnings(record=True) as seen:

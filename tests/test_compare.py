@@ -170,6 +170,6 @@ def test_cli_compare_has_the_extrapolate_option_its_message_recommends() -> None
     maps = mk.build_maps(mk.load_magnet("u-magnet"), gaps=np.linspace(0.004, 0.02, 5),
                          currents=np.linspace(0.0, 80.0, 5), progress=False)
     model = mk.CurrentModel(maps)
-    state = model.initial_state(gaps=0.010, currents=20.0)
+    state = model.initial_state(gaps_m=0.010, currents_A=20.0)
     with pytest.raises(mk.OutOfRangeError, match="--extrapolate"):
         model.step(state, 1e-3, 40.0, gaps_m=0.05, gap_rates_m_per_s=0.0)   # 50 mm: far outside

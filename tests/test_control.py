@@ -58,7 +58,7 @@ def test_flux_control_rejects_a_load_step_with_eddy_currents(u_magnet: mk.Magnet
     ctl = design_gap_controller(u_magnet, mass_kg=veh.mass_kg, gap_m=s0, current_A=i0)
     res = closed_loop(mk.FluxModel(u_magnet), veh, ctl, duration_s=0.8, dt_s=1e-3,
                       initial_gap_m=s0, initial_current_A=i0,
-                      external_force=lambda t: 0.1 * f0 if t >= 0.05 else 0.0)
+                      external_force_N=lambda t: 0.1 * f0 if t >= 0.05 else 0.0)
     assert res.gap_m.max() < s0 + 2e-3                  # peak deviation bounded (~1 mm)
     assert res.gap_m[-1] == pytest.approx(s0, abs=3e-5)  # integral action: back at 10 mm
     assert res.force_N[-1] == pytest.approx(1.1 * f0, rel=2e-3)
@@ -70,7 +70,7 @@ def test_without_control_the_magnet_is_unstable(u_setup) -> None:  # type: ignor
     mag, reduced = u_setup
     f0 = float(mk.solve_statics(mag, gaps=0.01, currents=20.0).force_N)
     veh = HeaveMass(f0 / STANDARD_GRAVITY * 1.01)
-    st = reduced.initial_state(gaps=0.01, currents=20.0)
+    st = reduced.initial_state(gaps_m=0.01, currents_A=20.0)
     mech = HeaveState(0.01, 0.0)
     out = reduced.outputs(st)
     with pytest.raises(mk.OutOfRangeError, match=r"substitute gap 0\.020"):

@@ -64,12 +64,12 @@ def test_tables_equal_bspline_on_the_standard_scenarios(all_maps, name: str,
     refs = []
     for sc in scenarios:
         span = (0.0, min(sc.duration_s, 0.3))
-        refs.append((sc, span, mk.simulate(spline, span, dt=sc.dt_s, gaps=sc.gaps,
-                                           voltages=sc.voltages, initial_currents=i0)))
+        refs.append((sc, span, mk.simulate(spline, span, dt_s=sc.dt_s, gaps_m=sc.gaps,
+                                           voltages_V=sc.voltages, initial_currents_A=i0)))
     _no_bspline(monkeypatch)
     for sc, span, ref in refs:
-        res = mk.simulate(tables, span, dt=sc.dt_s, gaps=sc.gaps, voltages=sc.voltages,
-                          initial_currents=i0)
+        res = mk.simulate(tables, span, dt_s=sc.dt_s, gaps_m=sc.gaps, voltages_V=sc.voltages,
+                          initial_currents_A=i0)
         for field in ("currents_A", "inductor_currents_A", "circuit_force_N", "pole_force_N",
                       "force_N"):
             assert _rel(getattr(res, field), getattr(ref, field)) <= REL, (sc.name, field)
@@ -91,12 +91,12 @@ def test_step_on_tables_equals_bspline_step(all_maps, name: str,
     g = sample_input(sc.gaps, t, spline.gap_names, "gaps", "m")
     u = mag.network.resistances * i0 * 1.1
     refs = []
-    st = spline.initial_state(gaps=g[0], currents=i0)
+    st = spline.initial_state(gaps_m=g[0], currents_A=i0)
     for k in range(t.size - 1):
         st, out = spline.step(st, 1e-3, u, gaps_m=g[k], gap_rates_m_per_s=(g[k + 1] - g[k]) / 1e-3)
         refs.append(out)
     _no_bspline(monkeypatch)
-    st = tables.initial_state(gaps=g[0], currents=i0)
+    st = tables.initial_state(gaps_m=g[0], currents_A=i0)
     for k in range(t.size - 1):
         st, out = tables.step(st, 1e-3, u, gaps_m=g[k], gap_rates_m_per_s=(g[k + 1] - g[k]) / 1e-3)
         ref = refs[k]
@@ -116,12 +116,12 @@ def test_leaving_the_maps_gives_the_bspline_messages(all_maps) -> None:
     tables, spline = CurrentModel(maps), CurrentModel(maps, lookup="bspline")
     messages = []
     for model in (tables, spline):
-        st = model.initial_state(gaps=0.010, currents=20.0)
+        st = model.initial_state(gaps_m=0.010, currents_A=20.0)
         with pytest.raises(MaglevkitError) as step_err:
             model.step(st, 1e-3, 1e4)                       # the current leaves the maps
         with pytest.raises(OutOfRangeError) as sim_err:
-            model.simulate(np.linspace(0.0, 0.05, 51), gaps=0.010,
-                           voltages=lambda t, r=model.resistance_ohm: 20.0 * r * (1 + 400 * t))
+            model.simulate(np.linspace(0.0, 0.05, 51), gaps_m=0.010,
+                           voltages_V=lambda t, r=model.resistance_ohm: 20.0 * r * (1 + 400 * t))
         with pytest.raises(InputError) as nan_err:
             model.step(st, 1e-3, np.array([np.nan]))
         with pytest.raises(InputError) as neg_err:
@@ -139,8 +139,8 @@ def test_extrapolation_falls_back_to_the_bspline_path(all_maps) -> None:
     res = []
     for model in (tables, spline):
         with pytest.warns(UserWarning, match="extrapolating"):
-            res.append(model.simulate(np.linspace(0.0, 0.02, 21), gaps=0.0165, voltages=20.0,
-                                      initial_currents=20.0))
+            res.append(model.simulate(np.linspace(0.0, 0.02, 21), gaps_m=0.0165, voltages_V=20.0,
+                                      initial_currents_A=20.0))
     assert np.array_equal(res[0].circuit_force_N, res[1].circuit_force_N)
 
 
@@ -153,14 +153,14 @@ def test_tables_need_rk4_without_eddy_modes_and_a_known_lookup(all_maps) -> None
     # CVODES keeps its own path and still agrees with RK4 on the tables
     cv = CurrentModel(maps, method="cvodes")
     rk = CurrentModel(maps)
-    a = cv.simulate(np.linspace(0.0, 0.05, 51), gaps=0.010, voltages=25.0, initial_currents=20.0)
-    b = rk.simulate(np.linspace(0.0, 0.05, 51), gaps=0.010, voltages=25.0, initial_currents=20.0)
+    a = cv.simulate(np.linspace(0.0, 0.05, 51), gaps_m=0.010, voltages_V=25.0, initial_currents_A=20.0)
+    b = rk.simulate(np.linspace(0.0, 0.05, 51), gaps_m=0.010, voltages_V=25.0, initial_currents_A=20.0)
     # RK4 at 1 ms sub-steps stays within 3e-6 of CVODES (CurrentModel docstring)
     assert _rel(b.currents_A, a.currents_A) <= 1e-5
     with warnings.catch_warnings():
         warnings.simplefilter("error")
-        CurrentModel(maps, compiled="never").simulate(np.linspace(0.0, 0.01, 11), gaps=0.010,
-                                                      voltages=25.0, initial_currents=20.0)
+        CurrentModel(maps, compiled="never").simulate(np.linspace(0.0, 0.01, 11), gaps_m=0.010,
+                                                      voltages_V=25.0, initial_currents_A=20.0)
 
 
 @pytest.mark.parametrize("codegen", ["lanes", "casadi"])
@@ -177,7 +177,7 @@ def test_bank_run_steps_equals_its_stepper_bit_for_bit(all_maps, codegen: str) -
     rates = np.diff(g, axis=0) / 1e-3
     i0 = np.full(3, 20.0)
     run = bank.run_steps(i0, g[:-1], u, rates, np.full(n, 1e-3))
-    stepper = bank.stepper(bank.initial_state(gaps=g[0], currents=i0), 1e-3)
+    stepper = bank.stepper(bank.initial_state(gaps_m=g[0], currents_A=i0), 1e-3)
     for k in range(n):
         stepper.advance(u[k], g[k], rates[k])
         assert np.array_equal(run.inductor_currents_A[k], stepper.inductor_currents_A)
@@ -187,7 +187,7 @@ def test_bank_run_steps_equals_its_stepper_bit_for_bit(all_maps, codegen: str) -
     # steps of 2 ms take two RK4 sub-steps: a run of mixed lengths equals step() per step
     h = np.where(np.arange(n) % 500 < 250, 1e-3, 2e-3)[:600]
     mixed = bank.run_steps(i0, g[:600], u[:600], rates[:600] * 0.5, h)
-    state = bank.initial_state(gaps=g[0], currents=i0)
+    state = bank.initial_state(gaps_m=g[0], currents_A=i0)
     for k in range(600):
         state, out = bank.step(state, float(h[k]), u[k], gaps_m=g[k], gap_rates_m_per_s=rates[k] * 0.5)
         assert np.array_equal(mixed.circuit_force_N[k], out.circuit_force_N)
@@ -222,7 +222,7 @@ def test_kernel_reason_codes_name_each_reason(all_maps) -> None:
     assert int(flags[3]) & StepFlag.INPUT_NOT_FINITE
     assert float(res["n_bad"]) == 3                 # a count of circuits, not of reasons
     # the step turns the codes into messages, inputs first
-    state = bank.initial_state(gaps=0.010, currents=20.0)
+    state = bank.initial_state(gaps_m=0.010, currents_A=20.0)
     with pytest.raises(InputError, match=r"voltages must be finite: circuit 'd/coil'"):
         bank.step(state, 1e-3, u)
     with pytest.raises(OutOfRangeError, match=r"member 'b'.*over the step.*gap 0\.03 m"):
@@ -243,9 +243,9 @@ def test_maps_the_tables_cannot_hold_stay_on_the_bsplines() -> None:
     with pytest.raises(InputError, match="regular"):
         mk.MagnetBank({"m": maps})
     tables, spline = CurrentModel(maps), CurrentModel(maps, lookup="bspline")
-    runs = [m.simulate(np.linspace(0.0, 0.05, 51), gaps=0.010, voltages=25.0,
-                       initial_currents=20.0) for m in (tables, spline)]
+    runs = [m.simulate(np.linspace(0.0, 0.05, 51), gaps_m=0.010, voltages_V=25.0,
+                       initial_currents_A=20.0) for m in (tables, spline)]
     assert np.array_equal(runs[0].currents_A, runs[1].currents_A)
-    st = tables.initial_state(gaps=0.010, currents=20.0)
+    st = tables.initial_state(gaps_m=0.010, currents_A=20.0)
     st, out = tables.step(st, 1e-3, 25.0)
     assert out.currents_A[0] == pytest.approx(runs[1].currents_A[1, 0], rel=1e-12)

@@ -50,9 +50,9 @@ def _run(mag: mk.Magnet, ref: dict) -> tuple[dict, float]:
     from fem_u_magnet_transient import body_energies, metrics
 
     fm = mk.FluxModel(mag, rtol=1e-7, compiled="never")
-    res = mk.simulate(fm, np.asarray(ref["time_s"]), gaps=ref["gap_m"],
-                      voltages=mag.network.resistances[0] * ref["i1_A"],
-                      initial_currents=ref["i0_A"])
+    res = mk.simulate(fm, np.asarray(ref["time_s"]), gaps_m=ref["gap_m"],
+                      voltages_V=mag.network.resistances[0] * ref["i1_A"],
+                      initial_currents_A=ref["i0_A"])
     return metrics(res.time_s, res.currents_A[:, 0], res.eddy_loss_J, ref), \
         body_energies(res)[1]
 
@@ -168,8 +168,8 @@ def test_air_cells_without_eddy_currents_rise_with_the_fem() -> None:
     mag = model_magnet(**CELLS, eddy_currents=False)
     fm = mk.FluxModel(mag, rtol=1e-7, compiled="never")
     tf, i_f = np.asarray(ref["time_s"]), np.asarray(ref["current_A"])
-    res = mk.simulate(fm, tf, gaps=ref["gap_m"], voltages=fm.resistances[0] * ref["i1_A"],
-                      initial_currents=ref["i0_A"])
+    res = mk.simulate(fm, tf, gaps_m=ref["gap_m"], voltages_V=fm.resistances[0] * ref["i1_A"],
+                      initial_currents_A=ref["i0_A"])
     i = res.currents_A[:, 0]
     t63 = rise_time(tf, i, ref["i0_A"], ref["i1_A"])
     t63_fem = rise_time(tf, i_f, ref["i0_A"], ref["i1_A"])

@@ -166,8 +166,8 @@ def test_no_current_jump_with_the_ladder() -> None:
 
 def test_energy_balance_with_the_ladder() -> None:
     mag = mk.load_magnet("u-magnet", eddy_model="ladder", eddy_layers=3)
-    res = mk.simulate(mk.FluxModel(mag, rtol=1e-8), (0.0, 0.04), dt=1e-3,
-                      gaps=lambda t: 0.010 - 0.05 * t, voltages=120.0, initial_currents=20.0)
+    res = mk.simulate(mk.FluxModel(mag, rtol=1e-8), (0.0, 0.04), dt_s=1e-3,
+                      gaps_m=lambda t: 0.010 - 0.05 * t, voltages_V=120.0, initial_currents_A=20.0)
     bal = res.energy_balance()
     # saturating step (20 -> 60 A) on a closing gap: measured relative residual 8.7e-8
     # at rtol 1e-8 (bound 10x); the eddy loss is a real term (measured 3.2 % of the
@@ -185,8 +185,8 @@ def _model_errors(ref: dict, times: np.ndarray, **kw: object) -> np.ndarray:
     """(model - FEM) current in units of the step at ``times`` (FEM linearly interpolated
     on its own grid; its steps there are <= 4 ms on a smooth response)."""
     mag = mk.load_magnet("u-magnet", **kw)
-    res = mk.simulate(mk.FluxModel(mag, rtol=1e-7), times, gaps=ref["gap_m"],
-                      voltages=2.0 * ref["i1_A"], initial_currents=ref["i0_A"])
+    res = mk.simulate(mk.FluxModel(mag, rtol=1e-7), times, gaps_m=ref["gap_m"],
+                      voltages_V=2.0 * ref["i1_A"], initial_currents_A=ref["i0_A"])
     fem = np.interp(times, np.asarray(ref["time_s"]), np.asarray(ref["current_A"]))
     return (res.currents_A[:, 0] - fem) / (ref["i1_A"] - ref["i0_A"])
 

@@ -288,8 +288,8 @@ def test_legend_placement_detects_a_crossing_segment() -> None:
 def test_simulate_figure_distinguishes_every_eddy_trace_and_keeps_legends_outside(
         monkeypatch: pytest.MonkeyPatch, tmp_path: Path) -> None:
     mag = mk.load_magnet("u-magnet")
-    res = mk.simulate(mk.FluxModel(mag), (0.0, 0.02), dt=1e-3, gaps=0.010,
-                      voltages=lambda t: 40.0 if t < 0.005 else 60.0, initial_currents=20.0)
+    res = mk.simulate(mk.FluxModel(mag), (0.0, 0.02), dt_s=1e-3, gaps_m=0.010,
+                      voltages_V=lambda t: 40.0 if t < 0.005 else 60.0, initial_currents_A=20.0)
     assert len(res.eddy_branch_names) == 14      # the 14 traces
     figs = _capture(monkeypatch)
     plotting.plot_simulation(res, tmp_path / "s.png")

@@ -49,9 +49,9 @@ def _standard(fm: mk.FluxModel) -> mk.SimulationResult:
     """The benchmark's standard scenario, shortened: gap 10 +- 1 mm at 5 Hz, +20 % voltage
     at 0.1 s, 0.3 s at a 1 ms hold, into saturation (34 A)."""
     u0 = float(fm.resistances[0]) * 34.0
-    return mk.simulate(fm, (0.0, 0.3), dt=1e-3, gaps=Sine(0.010, 0.001, 5.0),
-                       voltages=lambda t: u0 * (1.2 if t >= 0.1 else 1.0),
-                       initial_currents=34.0)
+    return mk.simulate(fm, (0.0, 0.3), dt_s=1e-3, gaps_m=Sine(0.010, 0.001, 5.0),
+                       voltages_V=lambda t: u0 * (1.2 if t >= 0.1 else 1.0),
+                       initial_currents_A=34.0)
 
 
 @needs_cc
@@ -72,8 +72,8 @@ def test_compiled_and_interpreted_trajectories_agree(models: tuple[mk.FluxModel,
     # the co-simulation step with CasADi's integrator restarted per call agrees as well;
     # the compiled model's default live integrator (tests/test_flux_live.py) to its accuracy
     fr = fc.with_options(live_step=False)
-    sc = sr = fc.initial_state(gaps=0.010, currents=20.0)
-    sv = fv.initial_state(gaps=0.010, currents=20.0)
+    sc = sr = fc.initial_state(gaps_m=0.010, currents_A=20.0)
+    sv = fv.initial_state(gaps_m=0.010, currents_A=20.0)
     for _ in range(5):
         sc, oc = fc.step(sc, 1e-3, 80.0, gaps_m=sc.gaps_m, gap_rates_m_per_s=0.01)
         sr, orr = fr.step(sr, 1e-3, 80.0, gaps_m=sr.gaps_m, gap_rates_m_per_s=0.01)
@@ -121,7 +121,7 @@ def test_second_model_loads_the_cached_library(magnet: mk.Magnet, flux_cache: Pa
     # loading takes code generation and dlopen only: measured 0.05-0.2 s on a loaded
     # machine, compiling about 5 s; 3 s would catch a recompile
     assert elapsed < 3.0
-    st, out = fm.step(fm.initial_state(gaps=0.01, currents=10.0), 1e-3, 40.0)
+    st, out = fm.step(fm.initial_state(gaps_m=0.01, currents_A=10.0), 1e-3, 40.0)
     assert out.currents_A[0] > 10.0
 
 
@@ -131,7 +131,7 @@ def test_fallback_without_compiler(magnet: mk.Magnet, tmp_path: Path,
     with pytest.warns(CompilationWarning, match="virtual machine"):
         fm = mk.FluxModel(build_u(), compiled="auto", cache_dir=tmp_path)
     assert not fm.compiled
-    st, out = fm.step(fm.initial_state(gaps=0.01, currents=10.0), 1e-3, 40.0)
+    st, out = fm.step(fm.initial_state(gaps_m=0.01, currents_A=10.0), 1e-3, 40.0)
     assert out.currents_A[0] > 10.0
     assert not list(tmp_path.iterdir())
     with pytest.raises(SolverError, match="C compiler"):

@@ -28,9 +28,9 @@ def test_step_equals_simulate(fm: mk.FluxModel) -> None:
     dt, n = 1e-3, 40
     t = np.arange(n + 1) * dt
     gaps = 0.01 + 0.002 * np.sin(30 * t)
-    res = mk.simulate(fm, t, gaps=np.column_stack((gaps, gaps)), voltages=50.0,
-                      initial_currents=10.0)
-    st = fm.initial_state(gaps=gaps[0], currents=10.0)
+    res = mk.simulate(fm, t, gaps_m=np.column_stack((gaps, gaps)), voltages_V=50.0,
+                      initial_currents_A=10.0)
+    st = fm.initial_state(gaps_m=gaps[0], currents_A=10.0)
     for k in range(n):
         rate = (gaps[k + 1] - gaps[k]) / dt
         st, out = fm.step(st, dt, 50.0, gaps_m=gaps[k], gap_rates_m_per_s=rate)
@@ -47,7 +47,7 @@ def test_step_equals_simulate(fm: mk.FluxModel) -> None:
 
 
 def test_outputs_named_and_shaped(fm: mk.FluxModel) -> None:
-    res = mk.simulate(fm, (0.0, 0.01), dt=1e-3, gaps=0.01, voltages=30.0)
+    res = mk.simulate(fm, (0.0, 0.01), dt_s=1e-3, gaps_m=0.01, voltages_V=30.0)
     n = res.time_s.size
     assert n == 11 and res.time_s[-1] == 0.01
     assert res.gaps_m.shape == (n, 2) and res.currents_A.shape == (n, 1)
@@ -71,9 +71,9 @@ def test_eta_is_sum_of_pole_core_fluxes(fm: mk.FluxModel) -> None:
     flux plus everything that left the leg on the way (window and flank leakage).
     Both are independent of how the model computes eta (a weight-matrix product).
     """
-    res = mk.simulate(fm, (0.0, 0.03), dt=5e-4,
-                      gaps={"left": Sine(0.010, 0.002, 40.0), "right": 0.011},
-                      voltages=Step(20.0, 60.0, 0.005), initial_currents=10.0)
+    res = mk.simulate(fm, (0.0, 0.03), dt_s=5e-4,
+                      gaps_m={"left": Sine(0.010, 0.002, 40.0), "right": 0.011},
+                      voltages_V=Step(20.0, 60.0, 0.005), initial_currents_A=10.0)
     b = {nm: res.branch_flux_Wb[:, j] for j, nm in enumerate(res.branch_names)}
     eta = res.eta_Wb[:, 0]
     assert np.ptp(eta) > 0.3 * eta.max()                 # a real transient, not a constant
@@ -93,23 +93,23 @@ def test_eta_is_sum_of_pole_core_fluxes(fm: mk.FluxModel) -> None:
 @pytest.mark.parametrize(
     ("kwargs", "match"),
     [
-        ({"voltages": float("nan")}, "finite"),
-        ({"gaps": 0.0}, "gap"),
-        ({"gaps": -0.01}, "gap"),
-        ({"voltages": [1.0, 2.0]}, "shape"),
-        ({"gaps": [0.01, 0.01, 0.01]}, "shape"),
-        ({"gaps": np.full((7, 2), 0.01)}, "time grid"),
-        ({"voltages": np.zeros((11, 3))}, "shape"),
-        ({"voltages": lambda t: [1.0, 2.0]}, "callable"),
-        ({"voltages": {"nope": 1.0}}, "unknown"),
-        ({"gaps": Sine(0.01, 0.001, 10.0), "gap_rates": 0.0}, "disagree"),
-        ({"gaps": Sine(0.01, -0.02, 50.0)}, "gap"),   # crosses 0 at t ~ 1.7 ms
+        ({"voltages_V": float("nan")}, "finite"),
+        ({"gaps_m": 0.0}, "gap"),
+        ({"gaps_m": -0.01}, "gap"),
+        ({"voltages_V": [1.0, 2.0]}, "shape"),
+        ({"gaps_m": [0.01, 0.01, 0.01]}, "shape"),
+        ({"gaps_m": np.full((7, 2), 0.01)}, "time grid"),
+        ({"voltages_V": np.zeros((11, 3))}, "shape"),
+        ({"voltages_V": lambda t: [1.0, 2.0]}, "callable"),
+        ({"voltages_V": {"nope": 1.0}}, "unknown"),
+        ({"gaps_m": Sine(0.01, 0.001, 10.0), "gap_rates_m_per_s": 0.0}, "disagree"),
+        ({"gaps_m": Sine(0.01, -0.02, 50.0)}, "gap"),   # crosses 0 at t ~ 1.7 ms
     ],
 )
 def test_bad_inputs_raise(fm: mk.FluxModel, kwargs: dict, match: str) -> None:
-    args = {"gaps": 0.01, "voltages": 30.0, **kwargs}
+    args = {"gaps_m": 0.01, "voltages_V": 30.0, **kwargs}
     with pytest.raises(InputError, match=match):
-        mk.simulate(fm, (0.0, 0.01), dt=1e-3, **args)
+        mk.simulate(fm, (0.0, 0.01), dt_s=1e-3, **args)
 
 
 def test_nan_and_shape_errors_in_array_inputs(fm: mk.FluxModel) -> None:
@@ -118,21 +118,21 @@ def test_nan_and_shape_errors_in_array_inputs(fm: mk.FluxModel) -> None:
     gaps = np.full((n, 2), 0.01)
     gaps[4, 1] = np.nan
     with pytest.raises(InputError, match=r"gaps is not finite at t = 0\.004 s"):
-        mk.simulate(fm, (0.0, 0.01), dt=1e-3, gaps=gaps, voltages=30.0)
+        mk.simulate(fm, (0.0, 0.01), dt_s=1e-3, gaps_m=gaps, voltages_V=30.0)
     volts = np.full((n, 1), 30.0)
     volts[7, 0] = np.inf
     with pytest.raises(InputError, match=r"voltages is not finite at t = 0\.007 s"):
-        mk.simulate(fm, (0.0, 0.01), dt=1e-3, gaps=0.01, voltages=volts)
+        mk.simulate(fm, (0.0, 0.01), dt_s=1e-3, gaps_m=0.01, voltages_V=volts)
     with pytest.raises(InputError, match=r"gap_rates array has shape \(7, 2\).*\(11, 2\)"):
-        mk.simulate(fm, (0.0, 0.01), dt=1e-3, gaps=0.01, voltages=30.0,
-                    gap_rates=np.zeros((7, 2)))
+        mk.simulate(fm, (0.0, 0.01), dt_s=1e-3, gaps_m=0.01, voltages_V=30.0,
+                    gap_rates_m_per_s=np.zeros((7, 2)))
     with pytest.raises(InputError, match="gap_rates array has shape"):
-        mk.simulate(fm, (0.0, 0.01), dt=1e-3, gaps=0.01, voltages=30.0,
-                    gap_rates=[0.0, 0.0, 0.0])
+        mk.simulate(fm, (0.0, 0.01), dt_s=1e-3, gaps_m=0.01, voltages_V=30.0,
+                    gap_rates_m_per_s=[0.0, 0.0, 0.0])
 
 
 def test_step_rejects_nan_gap_and_foreign_state(u_magnet: mk.Magnet, fm: mk.FluxModel) -> None:
-    st = fm.initial_state(gaps=0.01, currents=10.0)
+    st = fm.initial_state(gaps_m=0.01, currents_A=10.0)
     with pytest.raises(InputError, match="gaps must be finite"):
         fm.step(st, 1e-3, 20.0, gaps_m=[float("nan"), 0.01])
     with pytest.raises(InputError, match="gap_rates must be finite"):
@@ -146,15 +146,15 @@ def test_step_rejects_nan_gap_and_foreign_state(u_magnet: mk.Magnet, fm: mk.Flux
                        match=rf"differential_state has shape \({n_e},\).*expects \({n_p},\)"):
         plain.step(st, 1e-3, 20.0)
     with pytest.raises(InputError, match=rf"expects \({n_e},\)"):
-        fm.step(plain.initial_state(gaps=0.01, currents=10.0), 1e-3, 20.0)
+        fm.step(plain.initial_state(gaps_m=0.01, currents_A=10.0), 1e-3, 20.0)
     with pytest.raises(InputError, match="different model"):
-        mk.simulate(plain, (0.0, 0.01), dt=1e-3, gaps=0.01, voltages=20.0, initial_state=st)
+        mk.simulate(plain, (0.0, 0.01), dt_s=1e-3, gaps_m=0.01, voltages_V=20.0, initial_state=st)
     with pytest.raises(InputError, match="FluxState"):
         fm.step({"differential_state": st.differential_state}, 1e-3, 20.0)  # type: ignore[arg-type]
 
 
 def test_dt_types_and_bools(fm: mk.FluxModel) -> None:
-    st = fm.initial_state(gaps=0.01, currents=10.0)
+    st = fm.initial_state(gaps_m=0.01, currents_A=10.0)
     ref, out_ref = fm.step(st, 1e-3, 20.0)
     for dt in (np.float32(1e-3), np.float64(1e-3)):
         st1, out = fm.step(st, dt, 20.0)
@@ -170,10 +170,10 @@ def test_dt_types_and_bools(fm: mk.FluxModel) -> None:
     with pytest.raises(InputError, match="bool"):
         fm.step(st, 1e-3, 20.0, gaps_m=[True, 0.01])
     with pytest.raises(InputError, match="bool"):
-        mk.simulate(fm, (0.0, 0.01), dt=1e-3, gaps=0.01, voltages=True)
+        mk.simulate(fm, (0.0, 0.01), dt_s=1e-3, gaps_m=0.01, voltages_V=True)
     with pytest.raises(InputError, match="dt"):
-        mk.simulate(fm, (0.0, 0.01), dt=True, gaps=0.01, voltages=20.0)
-    res = mk.simulate(fm, (0.0, 0.002), dt=np.float32(1e-3), gaps=0.01, voltages=20.0)
+        mk.simulate(fm, (0.0, 0.01), dt_s=True, gaps_m=0.01, voltages_V=20.0)
+    res = mk.simulate(fm, (0.0, 0.002), dt_s=np.float32(1e-3), gaps_m=0.01, voltages_V=20.0)
     assert res.time_s.size == 3 and res.time_s[-1] == 0.002
 
 
@@ -182,29 +182,29 @@ def test_callable_exceptions_are_wrapped(fm: mk.FluxModel) -> None:
         return 1.0 / (t - 0.003) if t < 0.0025 else 1.0 / 0.0
 
     with pytest.raises(InputError, match=r"voltages.*ZeroDivisionError at t = 0\.003 s") as info:
-        mk.simulate(fm, (0.0, 0.01), dt=1e-3, gaps=0.01, voltages=bad)
+        mk.simulate(fm, (0.0, 0.01), dt_s=1e-3, gaps_m=0.01, voltages_V=bad)
     assert isinstance(info.value.__cause__, ZeroDivisionError)
 
     def key_error(t: float) -> float:
         return {}["x"]  # type: ignore[no-any-return]
 
     with pytest.raises(InputError, match=r"gaps\[left\].*KeyError at t = 0\.0 s") as info:
-        mk.simulate(fm, (0.0, 0.01), dt=1e-3, gaps={"left": key_error, "right": 0.01},
-                    voltages=20.0)
+        mk.simulate(fm, (0.0, 0.01), dt_s=1e-3, gaps_m={"left": key_error, "right": 0.01},
+                    voltages_V=20.0)
     assert isinstance(info.value.__cause__, KeyError)
 
 
 def test_time_span_rule(fm: mk.FluxModel) -> None:
     """A 2-element tuple or list is a span (t0, tf); an array is always an explicit grid."""
-    kw = {"gaps": 0.01, "voltages": 20.0}
-    assert mk.simulate(fm, (0.0, 0.01), dt=1e-3, **kw).time_s.size == 11
-    assert mk.simulate(fm, [0.0, 0.01], dt=1e-3, **kw).time_s.size == 11
+    kw = {"gaps_m": 0.01, "voltages_V": 20.0}
+    assert mk.simulate(fm, (0.0, 0.01), dt_s=1e-3, **kw).time_s.size == 11
+    assert mk.simulate(fm, [0.0, 0.01], dt_s=1e-3, **kw).time_s.size == 11
     grid = mk.simulate(fm, np.array([0.0, 0.01]), **kw).time_s
     np.testing.assert_array_equal(grid, [0.0, 0.01])
     np.testing.assert_array_equal(mk.simulate(fm, [0.0, 0.004, 0.01], **kw).time_s,
                                   [0.0, 0.004, 0.01])
     with pytest.raises(InputError, match="either dt"):
-        mk.simulate(fm, np.array([0.0, 0.01]), dt=1e-3, **kw)
+        mk.simulate(fm, np.array([0.0, 0.01]), dt_s=1e-3, **kw)
     with pytest.raises(InputError, match="tf must be > t0"):
         mk.simulate(fm, [0.01, 0.0], **kw)
 
@@ -212,13 +212,13 @@ def test_time_span_rule(fm: mk.FluxModel) -> None:
 def test_consistent_gap_rates_accepted(fm: mk.FluxModel) -> None:
     g = Sine(0.01, 0.001, 10.0)
     w = 2 * math.pi * 10.0
-    res = mk.simulate(fm, (0.0, 0.02), dt=1e-4, gaps=g, voltages=30.0,
-                      gap_rates=lambda t: 0.001 * w * math.cos(w * t))
+    res = mk.simulate(fm, (0.0, 0.02), dt_s=1e-4, gaps_m=g, voltages_V=30.0,
+                      gap_rates_m_per_s=lambda t: 0.001 * w * math.cos(w * t))
     assert res.gap_rates_m_per_s[0, 0] == pytest.approx(2 * math.pi * 0.01, rel=1e-3)
 
 
 def test_step_bad_inputs(fm: mk.FluxModel) -> None:
-    st = fm.initial_state(gaps=0.01, currents=10.0)
+    st = fm.initial_state(gaps_m=0.01, currents_A=10.0)
     with pytest.raises(InputError, match="dt"):
         fm.step(st, 0.0, 20.0)
     with pytest.raises(InputError, match="finite"):
@@ -228,7 +228,7 @@ def test_step_bad_inputs(fm: mk.FluxModel) -> None:
     with pytest.raises(InputError, match="> 0"):
         fm.step(st, 1e-3, 20.0, gaps_m=0.001, gap_rates_m_per_s=-2.0)    # would close to -1 mm
     with pytest.raises(InputError, match=r"gap = -0.01 m is not allowed; gaps must be > 0 m"):
-        fm.initial_state(gaps=[0.01, -0.01], currents=1.0)
+        fm.initial_state(gaps_m=[0.01, -0.01], currents_A=1.0)
     with pytest.raises(InputError, match=r"rtol = 0.0 must lie in \(0, 1\)"):
         mk.FluxModel(fm.network, rtol=0.0)
     with pytest.raises(InputError, match="method"):
@@ -237,9 +237,9 @@ def test_step_bad_inputs(fm: mk.FluxModel) -> None:
 
 def test_solver_failure_raises_with_time_and_state() -> None:
     fm = mk.FluxModel(loop_network(eddy=True), max_num_steps=2)
-    st = fm.initial_state(gaps=0.004, currents=0.0)
+    st = fm.initial_state(gaps_m=0.004, currents_A=0.0)
     with pytest.raises(SolverError) as info:
-        mk.simulate(fm, (0.0, 0.1), dt=0.05, gaps=0.004, voltages=30.0, initial_state=st)
+        mk.simulate(fm, (0.0, 0.1), dt_s=0.05, gaps_m=0.004, voltages_V=30.0, initial_state=st)
     err = info.value
     assert err.time == 0.0 and "gaps_m" in err.state and "psi[coil]" in err.state
     assert err.reason

@@ -19,8 +19,8 @@ def test_rl_step_response_matches_exponential() -> None:
     gap, U = 0.004, 30.0
     L = loop_inductance(gap)
     tau = L / R_EL
-    res = mk.simulate(loop_network(eddy=False), (0.0, 5 * tau), dt=tau / 50, gaps=gap,
-                      voltages=U, initial_currents=0.0)
+    res = mk.simulate(loop_network(eddy=False), (0.0, 5 * tau), dt_s=tau / 50, gaps_m=gap,
+                      voltages_V=U, initial_currents_A=0.0)
     exact = U / R_EL * (1.0 - np.exp(-res.time_s * R_EL / L))
     # simulate runs IDAS through the hold intervals (a restart every 128 intervals); with
     # rtol = 1e-6 the error measured 5.1e-6 of the final current over these 250 intervals
@@ -43,14 +43,14 @@ def test_one_eddy_element_first_order_with_jump() -> None:
     tau = L * (R_EL + r_ec) / (R_EL * r_ec)
     fm = mk.FluxModel(loop_network(eddy=True))
     assert fm.differential_state_names == ("psi[coil]",)   # the rank-deficient case
-    res = mk.simulate(fm, (0.0, 5 * tau), dt=tau / 50, gaps=gap, voltages=U,
-                      initial_currents=0.0)
+    res = mk.simulate(fm, (0.0, 5 * tau), dt_s=tau / 50, gaps_m=gap, voltages_V=U,
+                      initial_currents_A=0.0)
     t = res.time_s[1:]   # sample 0 is the left limit before the jump
     exact = U / R_EL - (U / R_EL - U / (R_EL + r_ec)) * np.exp(-t / tau)
     # same accumulated-restart error budget as above (measured ~6e-5)
     np.testing.assert_allclose(res.currents_A[1:, 0], exact, rtol=0, atol=2e-4 * U / R_EL)
     # the jump itself: right after the step the current is U/(R+R_ec)
-    st = fm.initial_state(gaps=gap, currents=0.0)
+    st = fm.initial_state(gaps_m=gap, currents_A=0.0)
     st1, out = fm.step(st, 1e-9 * tau, U)
     assert out.currents_A[0] == pytest.approx(U / (R_EL + r_ec), rel=1e-6)
     # eddy MMF = G dphi/dt = n I - Rm phi (Kirchhoff) at every sample
@@ -87,10 +87,10 @@ def test_radau_agrees_with_idas() -> None:
     gap, U = 0.004, 30.0
     tau = loop_inductance(gap) / R_EL
     net = loop_network(eddy=True)
-    a = mk.simulate(net, (0.0, 2 * tau), dt=tau / 100, gaps=gap, voltages=U,
-                    initial_currents=0.0)
-    b = mk.simulate(net, (0.0, 2 * tau), dt=tau / 100, gaps=gap, voltages=U,
-                    initial_currents=0.0, method="radau")
+    a = mk.simulate(net, (0.0, 2 * tau), dt_s=tau / 100, gaps_m=gap, voltages_V=U,
+                    initial_currents_A=0.0)
+    b = mk.simulate(net, (0.0, 2 * tau), dt_s=tau / 100, gaps_m=gap, voltages_V=U,
+                    initial_currents_A=0.0, method="radau")
     # Radau IIA (order 5, 2 elements per step of tau/100) is ~1e-9 accurate here; the
     # difference is IDAS's accumulated restart error (measured ~9e-5 at rtol 1e-6).
     np.testing.assert_allclose(b.currents_A, a.currents_A, rtol=0, atol=2e-4 * U / R_EL)
@@ -132,7 +132,7 @@ def test_two_time_constant_network_matches_matrix_exponential() -> None:
     taus = np.sort(-1.0 / lam.real)
     assert 1e-3 < taus[0] < 2e-3 and 8e-3 < taus[1] < 10e-3    # two distinct, both resolved
     T = 5.0 * taus[1]
-    res = mk.simulate(fm, (0.0, T), dt=T / 500, gaps=s, voltages=U, initial_currents=0.0)
+    res = mk.simulate(fm, (0.0, T), dt_s=T / 500, gaps_m=s, voltages_V=U, initial_currents_A=0.0)
     x_inf = -np.linalg.solve(A, b)
     x = np.array([x_inf - sla.expm(A * t) @ x_inf for t in res.time_s])
     i_exact = ((rc + rs) * x[:, 0] - rs * x[:, 1]) / n
@@ -169,7 +169,7 @@ def test_step_zero_order_hold_matches_exact_discrete_rl() -> None:
     rng = np.random.default_rng(3)
     volts = rng.uniform(-40.0, 60.0, 60)
     fm = mk.FluxModel(loop_network(eddy=False))
-    st = fm.initial_state(gaps=gap, currents=2.0)
+    st = fm.initial_state(gaps_m=gap, currents_A=2.0)
     i, e_in = 2.0, 0.0
     a = math.exp(-dt / tau)
     err_i = err_e = 0.0

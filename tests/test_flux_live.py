@@ -46,7 +46,7 @@ def _run(fm: mk.FluxModel) -> np.ndarray:
     t = np.arange(N + 1) * DT
     s = np.asarray(Sine(0.010, 1e-3, 20.0)(t), dtype=float)
     u0 = float(fm.resistances[0]) * I0
-    st = fm.initial_state(gaps=s[0], currents=I0)
+    st = fm.initial_state(gaps_m=s[0], currents_A=I0)
     rows = []
     for k in range(N):
         st, out = fm.step(st, DT, u0 * (1.2 if k >= 20 else 1.0), gaps_m=s[k],
@@ -81,7 +81,7 @@ def test_a_state_other_than_the_last_restarts(models: dict[str, mk.FluxModel],
     is bit-identical to a fresh model's first step from that state."""
     fm = models["live"]
     u = float(fm.resistances[0]) * I0
-    st0 = fm.initial_state(gaps=0.010, currents=I0)
+    st0 = fm.initial_state(gaps_m=0.010, currents_A=I0)
     st1, _ = fm.step(st0, DT, 1.1 * u)
     on, _ = fm.step(st1, DT, 1.1 * u)          # integrates on from st1
     again, _ = fm.step(st1, DT, 1.1 * u)       # st1 is no longer the last state: restart
@@ -98,7 +98,7 @@ def test_a_voltage_or_gap_jump_restarts_with_consistent_currents(
     live, restart = models["live"], models["restart"]
     u = float(live.resistances[0]) * I0
     for kwargs in ({"voltages_V": 1.5 * u}, {"voltages_V": u, "gaps_m": 0.011}):
-        a = live.initial_state(gaps=0.010, currents=I0)
+        a = live.initial_state(gaps_m=0.010, currents_A=I0)
         a, _ = live.step(a, DT, u)
         b, _ = live.step(a, DT, **kwargs)
         c, _ = restart.step(a, DT, **kwargs)
@@ -123,7 +123,7 @@ def test_a_live_library_that_does_not_load_falls_back_with_a_warning(
 
     monkeypatch.setattr(flux_mod, "LiveIntegrator", broken)
     fm = mk.FluxModel(u_magnet, compiled="always", cache_dir=cache, rtol=3.3e-7)
-    st = fm.initial_state(gaps=0.010, currents=I0)
+    st = fm.initial_state(gaps_m=0.010, currents_A=I0)
     with pytest.warns(CompilationWarning, match="undefined symbol.*restarts IDAS"):
         st1, _ = fm.step(st, DT, float(fm.resistances[0]) * I0)
     assert not fm.live_step and st1.time_s == pytest.approx(DT)
@@ -141,7 +141,7 @@ def test_two_threads_stepping_one_model(models: dict[str, mk.FluxModel]) -> None
 
     def run(j: int) -> None:
         try:
-            st = fm.initial_state(gaps=0.009 + 0.002 * j, currents=I0)
+            st = fm.initial_state(gaps_m=0.009 + 0.002 * j, currents_A=I0)
             for _ in range(150):
                 st, _ = fm.step(st, DT, (1.1 + 0.1 * j) * u)
             results[j] = st.currents_A
@@ -155,7 +155,7 @@ def test_two_threads_stepping_one_model(models: dict[str, mk.FluxModel]) -> None
         th.join()
     assert not errors, errors
     for j in range(3):
-        st = restart.initial_state(gaps=0.009 + 0.002 * j, currents=I0)
+        st = restart.initial_state(gaps_m=0.009 + 0.002 * j, currents_A=I0)
         for _ in range(150):
             st, _ = restart.step(st, DT, (1.1 + 0.1 * j) * u)
         np.testing.assert_allclose(results[j], st.currents_A, rtol=1e-4)

@@ -12,9 +12,9 @@ from maglevkit.models.signals import Ramp, Sine, Step
 
 def test_energy_balance_moving_gap_saturation_eddy(u_magnet: mk.Magnet) -> None:
     """E_in = E_ohm + E_eddy + Delta W + E_mech over a saturating transient, gap moving."""
-    res = mk.simulate(u_magnet, (0.0, 0.15), dt=2e-4,
-                      gaps={"left": Sine(0.010, 0.002, 15.0), "right": Sine(0.011, -0.0015, 7.0)},
-                      voltages=Step(20.0, 90.0, 0.01), initial_currents=10.0)
+    res = mk.simulate(u_magnet, (0.0, 0.15), dt_s=2e-4,
+                      gaps_m={"left": Sine(0.010, 0.002, 15.0), "right": Sine(0.011, -0.0015, 7.0)},
+                      voltages_V=Step(20.0, 90.0, 0.01), initial_currents_A=10.0)
     assert res.currents_A.max() > 35.0          # into saturation (dpsi/dI falls 3x at 40 A)
     eb = res.energy_balance()
     assert eb.eddy_J > 0.0 and abs(eb.mechanical_J) > 1e-3 * eb.electrical_J
@@ -26,8 +26,8 @@ def test_energy_balance_moving_gap_saturation_eddy(u_magnet: mk.Magnet) -> None:
 
 
 def test_energy_balance_moving_gap_radau(u_magnet: mk.Magnet) -> None:
-    res = mk.simulate(u_magnet, (0.0, 0.05), dt=2e-4, gaps=Sine(0.010, 0.002, 20.0),
-                      voltages=60.0, initial_currents=10.0, method="radau")
+    res = mk.simulate(u_magnet, (0.0, 0.05), dt_s=2e-4, gaps_m=Sine(0.010, 0.002, 20.0),
+                      voltages_V=60.0, initial_currents_A=10.0, method="radau")
     # fixed-step Radau IIA(5) at 0.2 ms: local errors ~1e-9, balance well within 1e-4
     assert res.energy_balance().relative_residual < 1e-4
 
@@ -36,10 +36,10 @@ def test_energy_balance_moving_gap_radau(u_magnet: mk.Magnet) -> None:
 def test_steady_state_reproduces_statics(u_magnet: mk.Magnet, eddy: bool) -> None:
     fm = mk.FluxModel(u_magnet, eddy_currents=eddy)
     gaps, i1 = [0.009, 0.012], 37.0
-    st = fm.initial_state(gaps=gaps, currents=12.0)
+    st = fm.initial_state(gaps_m=gaps, currents_A=12.0)
     # 2 s is ~13 slowest time constants (L~/R (1 + R/R_ec) <= 0.15 s here): e^-13 ~ 2e-6
-    res = mk.simulate(fm, (0.0, 2.0), dt=5e-3, gaps=gaps,
-                      voltages=fm.resistances * i1, initial_state=st)
+    res = mk.simulate(fm, (0.0, 2.0), dt_s=5e-3, gaps_m=gaps,
+                      voltages_V=fm.resistances * i1, initial_state=st)
     # the transient has died out: the current reached U/R and stopped moving (the last
     # 0.2 s change it by < 1e-7 relative; the remaining e^-13 transient and the IDAS
     # error (~1e-5 at rtol 1e-6) bound the first check)
@@ -67,10 +67,10 @@ def test_energy_balance_large_gap_motion(u_magnet: mk.Magnet) -> None:
     only ~3e-4 accurate on this run (measured residual 3.1e-4 E_mech), which the issue's
     1e-4-of-the-largest-term criterion cannot see.  So this test uses rtol = 1e-9.
     """
-    res = mk.simulate(u_magnet, (0.0, 0.12), dt=2e-4,
-                      gaps={"left": Ramp(0.014, 0.006, 0.01, 0.09),
+    res = mk.simulate(u_magnet, (0.0, 0.12), dt_s=2e-4,
+                      gaps_m={"left": Ramp(0.014, 0.006, 0.01, 0.09),
                             "right": Ramp(0.013, 0.007, 0.01, 0.09)},
-                      voltages=40.0, initial_currents=20.0, rtol=1e-9, atol=1e-11)
+                      voltages_V=40.0, initial_currents_A=20.0, rtol=1e-9, atol=1e-11)
     eb = res.energy_balance()
     assert eb.mechanical_J > 0.1 * eb.electrical_J > 0.0     # closing gaps: magnet does work
     # Residual relative to the mechanical work: measured 1.1e-6, bound 2e-5.  The magnetic
@@ -92,7 +92,7 @@ def test_solver_failure_mid_run_reports_time_state_reason() -> None:
     """A 1e12 V step at 5 ms: IDAS fails there; the error names time, state and reason."""
     fm = mk.FluxModel(mk.load_magnet("u-magnet"))
     with pytest.raises(SolverError) as info:
-        mk.simulate(fm, (0.0, 0.01), dt=1e-3, gaps=0.01, voltages=Step(20.0, 1e12, 0.005))
+        mk.simulate(fm, (0.0, 0.01), dt_s=1e-3, gaps_m=0.01, voltages_V=Step(20.0, 1e12, 0.005))
     err = info.value
     assert err.time == pytest.approx(0.005, abs=1e-12)     # start of the failing interval
     np.testing.assert_allclose(err.state["voltages_V"], [1e12])
@@ -245,7 +245,7 @@ def test_laminated_u_magnet_has_small_core_eddy_currents() -> None:
     for mag in (solid, lam):
         fm = mk.FluxModel(mag, rtol=1e-10, atol=1e-12)
         r_ec = float(eddy_resistance(mag, gap=0.01, current=0.0)[0])
-        _, out = fm.step(fm.initial_state(gaps=0.01, currents=0.0), 1e-12, dU)
+        _, out = fm.step(fm.initial_state(gaps_m=0.01, currents_A=0.0), 1e-12, dU)
         assert out.currents_A[0] == pytest.approx(dU / (r_el + r_ec), rel=1e-4)
         jumps.append(out.currents_A[0])
     # laminating the core cuts the jump (the winding's flux can no longer change without

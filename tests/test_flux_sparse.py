@@ -136,8 +136,8 @@ def test_sparse_form_trajectory_equals_the_dense_one(monkeypatch: pytest.MonkeyP
 
     def run() -> mk.SimulationResult:
         fm = mk.FluxModel(mag.network, rtol=1e-9, compiled="never")
-        return mk.simulate(fm, times, gaps=0.008, voltages=fm.resistances[0] * 45.0,
-                           initial_currents=20.0)
+        return mk.simulate(fm, times, gaps_m=0.008, voltages_V=fm.resistances[0] * 45.0,
+                           initial_currents_A=20.0)
 
     dense = run()
     monkeypatch.setattr(flux, "SPARSE_FORM_SIZE", 0)   # the cache key holds the form
@@ -163,8 +163,8 @@ def test_air_cell_network_builds_in_the_sparse_form() -> None:
     mag = build_magnet(params, options=ModelOptions(eddy_currents=False))
     fm = mk.FluxModel(mag, compiled="never")
     assert fm.dae.form == "sparse"
-    res = mk.simulate(fm, np.linspace(0.0, 0.004, 5), gaps=0.010,
-                      voltages=fm.resistances[0] * 20.0, initial_currents=20.0)
+    res = mk.simulate(fm, np.linspace(0.0, 0.004, 5), gaps_m=0.010,
+                      voltages_V=fm.resistances[0] * 20.0, initial_currents_A=20.0)
     np.testing.assert_allclose(res.currents_A[:, 0], 20.0, rtol=1e-6)
     sol = mk.solve_statics(mag, gaps=0.010, currents=20.0)
     np.testing.assert_allclose(res.flux_linkage_Wb[-1], sol.flux_linkage_Wb, rtol=1e-6)
@@ -182,8 +182,8 @@ def test_sparse_form_compiles_to_the_same_trajectory(monkeypatch: pytest.MonkeyP
     for mode in ("always", "never"):
         fm = mk.FluxModel(mag, compiled=mode, cache_dir=tmp_path)
         assert fm.dae.form == "sparse" and fm.compiled == (mode == "always")
-        runs.append(mk.simulate(fm, np.linspace(0.0, 0.05, 51), gaps=0.010,
-                                voltages=fm.resistances[0] * 30.0, initial_currents=10.0))
+        runs.append(mk.simulate(fm, np.linspace(0.0, 0.05, 51), gaps_m=0.010,
+                                voltages_V=fm.resistances[0] * 30.0, initial_currents_A=10.0))
     # as the dense form's compiled test: bit-identical measured, bound 1e-9 of the range
     np.testing.assert_allclose(runs[0].currents_A, runs[1].currents_A, rtol=0.0,
                                atol=1e-9 * 20.0)

@@ -124,8 +124,8 @@ def _compare_scenarios(magnet: mk.Magnet, maps: mk.CharacteristicMaps, path: Pat
         s = native.substitute_gaps(pole_gaps)
         sd = np.vstack([np.diff(s, axis=0) / np.diff(times)[:, None],
                         np.zeros((1, len(circuits)))])
-        ref = native.simulate(times, gaps=pole_gaps, voltages=u, initial_currents=current)
-        ref_bank = bank.simulate(times, gaps=s, voltages=u, initial_currents=current)
+        ref = native.simulate(times, gaps_m=pole_gaps, voltages_V=u, initial_currents_A=current)
+        ref_bank = bank.simulate(times, gaps_m=s, voltages_V=u, initial_currents_A=current)
         sig = np.zeros(times.size, dtype=[("time", float)] + [
             (f"{c}.{v}", float) for c in circuits for v in ("U", "s", "sdot")])
         sig["time"] = times
@@ -182,7 +182,7 @@ def test_sub_steps_with_a_moving_gap_equal_the_bank_step(fmu: Any, maps: mk.Char
            rear__U=40.0, front__sdot=0.05, rear__sdot=-0.03)
     sl.fmu.exitInitializationMode()
     bank = mk.MagnetBank({"m": maps}, compiled="never")
-    state = bank.initial_state(gaps=0.010, currents=33.5)
+    state = bank.initial_state(gaps_m=0.010, currents_A=33.5)
     t, worst = 0.0, 0.0
     for _ in range(20):
         sl.fmu.doStep(t, 2.5e-3)
@@ -305,7 +305,7 @@ def test_gap_outside_the_maps_is_an_fmi_error_with_a_log_line_not_a_clamp(
     sl.fmu.doStep(0.0, 1e-3)
     f_edge = sl.get("front.F")[0]
     ref = mk.CurrentModel(maps).outputs(
-        mk.CurrentModel(maps).initial_state(gaps=0.016, currents=sl.get("front.I_L")[0]))
+        mk.CurrentModel(maps).initial_state(gaps_m=0.016, currents_A=sl.get("front.I_L")[0]))
     assert abs(f_edge - ref.circuit_force_N[0]) <= 1e-12 * abs(f_edge)
     # 10 um beyond the edge at the end of the next step: an error, no clamped value
     sl.set(front__sdot=0.01, rear__sdot=0.0)

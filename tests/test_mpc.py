@@ -53,7 +53,7 @@ def test_offset_free_under_an_unknown_load(setup) -> None:  # type: ignore[no-un
     for name, m in (("offset-free", model), ("plain", plain)):
         ctl = _mpc(m)
         runs[name] = closed_loop(plant, veh, ctl, duration_s=0.5, dt_s=DT, initial_gap_m=S0,
-                                 initial_current_A=ctl.design_state[0], external_force=load)
+                                 initial_current_A=ctl.design_state[0], external_force_N=load)
     free, nominal = runs["offset-free"], runs["plain"]
     print("offset-free end error", free.gap_m[-1] - S0, "plain", nominal.gap_m[-1] - S0)
     # measured: 5e-18 m (the plant is the controller's model, the loop converges to its
@@ -78,7 +78,7 @@ def test_offset_free_on_the_detailed_plant(setup) -> None:  # type: ignore[no-un
     for name, m in (("offset-free", model), ("plain", plain)):
         ctl = _mpc(m)
         r = closed_loop(plant, veh, ctl, duration_s=0.6, dt_s=DT, initial_gap_m=S0,
-                        initial_current_A=ctl.design_state[0], external_force=load)
+                        initial_current_A=ctl.design_state[0], external_force_N=load)
         ends[name] = r.gap_m[-1] - S0
         assert np.all(np.abs(r.voltages_V) <= 440.0)
     print(ends)
@@ -96,11 +96,11 @@ def test_min_gap_constraint_in_a_large_disturbance(setup) -> None:  # type: igno
     drop = lambda t: -0.3 * f0 if t >= 0.02 else 0.0  # noqa: E731
     ctl = _mpc(model, min_gap_m=0.0099)
     mpc = closed_loop(plant, veh, ctl, duration_s=0.3, dt_s=DT, initial_gap_m=S0,
-                      initial_current_A=ctl.design_state[0], external_force=drop)
+                      initial_current_A=ctl.design_state[0], external_force_N=drop)
     design = design_gap_controller(mag, mass_kg=veh.mass_kg, gap_m=S0, current_A=20.0)
     cas = closed_loop(mk.CurrentModel(maps), veh, design, duration_s=0.3, dt_s=DT,
                       initial_gap_m=S0,
-                      initial_current_A=20.0, external_force=drop)
+                      initial_current_A=20.0, external_force_N=drop)
     for name, r in (("mpc", mpc), ("cascade", cas)):
         print(name, "min gap", r.gap_m.min(), "max dev", r.max_gap_deviation_m(),
               "IAE", r.iae_m_s(), "energy", r.energy_J())
@@ -122,7 +122,7 @@ def test_observer_converges_on_the_detailed_plant(setup) -> None:  # type: ignor
     design = design_gap_controller(mag, mass_kg=veh.mass_kg, gap_m=S0, current_A=20.0)
     r = closed_loop(mk.FluxModel(mag), veh, design, duration_s=0.4, dt_s=DT,
                     initial_gap_m=S0, initial_current_A=20.0,
-                    external_force=lambda t: 0.1 * f0 if t >= 0.02 else 0.0)
+                    external_force_N=lambda t: 0.1 * f0 if t >= 0.02 else 0.0)
     ekf = ExtendedKalmanFilter(model, sample_time_s=DT)
     ekf.reset(np.r_[17.0, S0 + 1e-3, 0.0])
     err = []

@@ -169,7 +169,7 @@ def _discharge(maps: mk.CharacteristicMaps, *, freewheel: bool, dt: float,
                duration: float, voltage_V: float = -440.0
                ) -> tuple[MagnetBank, np.ndarray, np.ndarray, float]:
     bank = MagnetBank({"m": maps}, compiled="never", freewheel=freewheel)
-    state = bank.initial_state(gaps=0.010, currents=33.5)
+    state = bank.initial_state(gaps_m=0.010, currents_A=33.5)
     i_l0 = state.inductor_currents_A.copy()
     u = voltage_V * np.ones(bank.n_circuits)
     il, coil = [i_l0], [bank.outputs(state, u).currents_A]
@@ -235,7 +235,7 @@ def test_freewheel_option_is_a_switch(tr09_maps) -> None:
     # off (default) and on equal while the current stays positive
     on = MagnetBank({"m": tr09_maps}, compiled="never", freewheel=True)
     off = MagnetBank({"m": tr09_maps}, compiled="never")
-    st = on.initial_state(gaps=0.010, currents=33.5)
+    st = on.initial_state(gaps_m=0.010, currents_A=33.5)
     u = on.resistance_ohm * 33.5 + 50.0
     assert np.array_equal(on.step(st, 1e-3, u)[1].currents_A, off.step(st, 1e-3, u)[1].currents_A)
 

@@ -86,7 +86,7 @@ def test_step_response_of_a_known_network_is_the_closed_form(r0: float, rk: list
     model = mk.CurrentModel(maps, eddy_modes=len(rk), max_step_s=MAX_STEP)
     t = np.linspace(0.0, 0.06, 121)
     # steady state at 10 A (20 V), then 20 + du V from t = 0 on
-    res = mk.simulate(model, t, gaps=0.01, voltages=20.0 + du, initial_currents=10.0)
+    res = mk.simulate(model, t, gaps_m=0.01, voltages_V=20.0 + du, initial_currents_A=10.0)
     exact = 10.0 + du * _state_space_step(t, ltilde=ltilde, r_el=r_el, r0=r0,
                                          rk=np.array(rk), lk=np.array(lk))
     # RK4 at 1 us against the matrix exponential; measured largest difference 6e-14 ..
@@ -213,31 +213,31 @@ def test_default_is_unchanged(split_maps: CharacteristicMaps) -> None:
     results: the default path builds eq. 8 exactly as before."""
     models = [mk.CurrentModel(split_maps), mk.CurrentModel(split_maps, eddy_modes=0),
               mk.CurrentModel(_old(split_maps))]
-    runs = [mk.simulate(m, (0.0, 0.1), dt=1e-3,
-                        gaps=lambda t: 0.010 + 0.001 * np.sin(2 * np.pi * 5 * t),
-                        voltages=lambda t: 40.0 if t < 0.02 else 48.0, initial_currents=20.0)
+    runs = [mk.simulate(m, (0.0, 0.1), dt_s=1e-3,
+                        gaps_m=lambda t: 0.010 + 0.001 * np.sin(2 * np.pi * 5 * t),
+                        voltages_V=lambda t: 40.0 if t < 0.02 else 48.0, initial_currents_A=20.0)
             for m in models]
     for r in runs[1:]:
         assert np.array_equal(r.currents_A, runs[0].currents_A)
         assert np.array_equal(r.force_N, runs[0].force_N)
         assert r.eddy_currents_A is None and r.final_state.eddy_currents_A is None
-    st = models[0].initial_state(gaps=0.01, currents=20.0)
+    st = models[0].initial_state(gaps_m=0.01, currents_A=20.0)
     assert st.eddy_currents_A is None
     assert models[0].linearize(gap_m=0.01, current_A=20.0).A_per_s.shape == (1, 1)
 
 
 def test_eddy_modes_step_simulate_and_state(split_maps: CharacteristicMaps) -> None:
     model = mk.CurrentModel(split_maps, eddy_modes=2)
-    st = model.initial_state(gaps=0.01, currents=20.0)
+    st = model.initial_state(gaps_m=0.01, currents_A=20.0)
     assert st.eddy_currents_A is not None and st.eddy_currents_A.shape == (1, 2)
     assert np.all(st.eddy_currents_A == 0.0)
-    res = mk.simulate(model, (0.0, 0.05), dt=1e-3, gaps=0.01,
-                      voltages=lambda t: 40.0 if t < 0.01 else 48.0, initial_currents=20.0)
+    res = mk.simulate(model, (0.0, 0.05), dt_s=1e-3, gaps_m=0.01,
+                      voltages_V=lambda t: 40.0 if t < 0.01 else 48.0, initial_currents_A=20.0)
     assert res.eddy_currents_A is not None and res.eddy_currents_A.shape == (51, 1, 2)
     # the branches carry part of the step and decay
     assert np.max(res.eddy_currents_A) > 0.01
     # step() continues a simulation from its final state exactly as simulate() does
-    more = mk.simulate(model, (0.05, 0.06), dt=1e-3, gaps=0.01, voltages=48.0,
+    more = mk.simulate(model, (0.05, 0.06), dt_s=1e-3, gaps_m=0.01, voltages_V=48.0,
                        initial_state=res.final_state)
     s = res.final_state
     for _ in range(10):
@@ -266,10 +266,10 @@ def test_rk4_sub_step_limit_is_accurate(split_maps: CharacteristicMaps) -> None:
     """RK4 at the sub-step limited by the fastest branch vs adaptive CVODES at rtol 1e-10:
     measured 2.6e-7 A on the 4 A step (m = 3, these maps: sub-step 61 us; 6.5e-8 of the
     step); bound 1e-6 of the step."""
-    kw = dict(gaps=0.01, voltages=lambda t: 40.0 if t < 0.02 else 48.0, initial_currents=20.0)
-    rk4 = mk.simulate(mk.CurrentModel(split_maps, eddy_modes=3), (0.0, 0.1), dt=1e-3, **kw)
+    kw = dict(gaps_m=0.01, voltages_V=lambda t: 40.0 if t < 0.02 else 48.0, initial_currents_A=20.0)
+    rk4 = mk.simulate(mk.CurrentModel(split_maps, eddy_modes=3), (0.0, 0.1), dt_s=1e-3, **kw)
     ref = mk.simulate(mk.CurrentModel(split_maps, eddy_modes=3, method="cvodes", rtol=1e-10,
-                                      atol=1e-12), (0.0, 0.1), dt=1e-3, **kw)
+                                      atol=1e-12), (0.0, 0.1), dt_s=1e-3, **kw)
     assert np.max(np.abs(rk4.currents_A - ref.currents_A)) < 1e-6 * 4.0
 
 
@@ -284,13 +284,13 @@ def test_bad_input(split_maps: CharacteristicMaps) -> None:
     model = mk.CurrentModel(split_maps, eddy_modes=1)
     plain = mk.CurrentModel(split_maps)
     with pytest.raises(mk.InputError, match="no eddy_currents_A"):
-        model.step(plain.initial_state(gaps=0.01, currents=20.0), 1e-3, 40.0)
+        model.step(plain.initial_state(gaps_m=0.01, currents_A=20.0), 1e-3, 40.0)
     with pytest.raises(mk.InputError, match=r"expected shape \(1, 1\)"):
         model.step(mk.reduced.current.CurrentModelState(0.0, np.array([20.0]),
                                                        np.array([0.01, 0.01]), np.zeros((1, 2))),
                    1e-3, 40.0)
     with pytest.raises(mk.InputError, match="eddy_modes=0"):
-        plain.outputs(model.initial_state(gaps=0.01, currents=20.0))
+        plain.outputs(model.initial_state(gaps_m=0.01, currents_A=20.0))
     # the bank must not drop the branch currents silently
     with pytest.raises(mk.InputError, match="eddy_modes=1 cannot be a bank member"):
         mk.MagnetBank({"a": model})

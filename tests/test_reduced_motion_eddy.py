@@ -129,9 +129,9 @@ def test_default_is_unchanged(u_maps: CharacteristicMaps) -> None:
     bit-identical results."""
     models = [mk.CurrentModel(u_maps), mk.CurrentModel(u_maps, motion_eddy=False),
               mk.CurrentModel(_old(u_maps))]
-    runs = [mk.simulate(m, (0.0, 0.1), dt=1e-3,
-                        gaps=lambda t: 0.010 + 0.001 * np.sin(2 * np.pi * 5 * t),
-                        voltages=lambda t: 40.0 if t < 0.02 else 48.0, initial_currents=20.0)
+    runs = [mk.simulate(m, (0.0, 0.1), dt_s=1e-3,
+                        gaps_m=lambda t: 0.010 + 0.001 * np.sin(2 * np.pi * 5 * t),
+                        voltages_V=lambda t: 40.0 if t < 0.02 else 48.0, initial_currents_A=20.0)
             for m in models]
     for r in runs[1:]:
         assert np.array_equal(r.currents_A, runs[0].currents_A)
@@ -142,7 +142,7 @@ def test_default_is_unchanged(u_maps: CharacteristicMaps) -> None:
 
 def test_motion_eddy_step_simulate_and_state(u_maps: CharacteristicMaps) -> None:
     model = mk.CurrentModel(u_maps, motion_eddy=True)
-    st = model.initial_state(gaps=0.010, currents=20.0)
+    st = model.initial_state(gaps_m=0.010, currents_A=20.0)
     assert st.eddy_currents_A is not None and st.eddy_currents_A.shape == (1, 1)
     assert np.all(st.eddy_currents_A == 0.0)
     # steady state stays (I_e = 0, I = I_L)
@@ -151,7 +151,7 @@ def test_motion_eddy_step_simulate_and_state(u_maps: CharacteristicMaps) -> None
     assert abs(st1.eddy_currents_A[0, 0]) < 1e-12
     # step and simulate agree (same compiled interval)
     u = 22.0 * float(model.resistance_ohm[0])
-    res = mk.simulate(model, (0.0, 0.01), dt=1e-3, gaps=0.010, voltages=u,
+    res = mk.simulate(model, (0.0, 0.01), dt_s=1e-3, gaps_m=0.010, voltages_V=u,
                       initial_state=st)
     s = st
     for _ in range(10):
@@ -178,7 +178,7 @@ def test_bad_input(u_maps: CharacteristicMaps) -> None:
         mk.CurrentModel(_old(u_maps), motion_eddy=True)
     model = mk.CurrentModel(u_maps, motion_eddy=True)
     with pytest.raises(mk.InputError, match="eddy state.*eddy_currents_A"):
-        model.step(mk.CurrentModel(u_maps).initial_state(gaps=0.01, currents=20.0), 1e-3, 40.0)
+        model.step(mk.CurrentModel(u_maps).initial_state(gaps_m=0.01, currents_A=20.0), 1e-3, 40.0)
     from maglevkit.reduced.bank import MagnetBank
 
     # the bank carries the ladder now (tests/test_bank_motion_eddy.py)
@@ -207,8 +207,8 @@ def test_tr09_gap_sine_sweep_against_the_detailed_model() -> None:
         def gaps(t: np.ndarray, f: float = f) -> np.ndarray:
             return 0.010 + 1e-3 * np.sin(2 * np.pi * f * t)
 
-        det = mk.simulate(fm, (0.0, dur), dt=dt, gaps=gaps, voltages=u0)
-        red = mk.simulate(ladder, (0.0, dur), dt=dt, gaps=gaps, voltages=u0)
+        det = mk.simulate(fm, (0.0, dur), dt_s=dt, gaps_m=gaps, voltages_V=u0)
+        red = mk.simulate(ladder, (0.0, dur), dt_s=dt, gaps_m=gaps, voltages_V=u0)
         cd, cr = det.currents_A, red.currents_A
         err = np.sqrt(np.mean((cr - cd) ** 2)) / np.sqrt(np.mean((cd - cd.mean(0)) ** 2))
         fd, fr = det.pole_force_N.sum(axis=1), red.force_N

@@ -122,7 +122,7 @@ def test_current_model_step_response_is_the_rl_law(ideal_maps) -> None:  # type:
     model = CurrentModel(ideal_maps)
     t = np.linspace(0.0, 0.5, 501)
     s0, u = 0.01, 20.0
-    res = mk.simulate(model, t, gaps=s0, voltages=u, initial_currents=0.0)
+    res = mk.simulate(model, t, gaps_m=s0, voltages_V=u, initial_currents_A=0.0)
     l_exact = MU0 * N_TURNS**2 * AREA / (2 * s0)
     exact = u / R_EL * (1 - np.exp(-t * R_EL / l_exact))
     # CVODES at rtol 1e-8 and the B-spline through exact grid values (s0 is a grid node):
@@ -137,7 +137,7 @@ def test_current_model_virtual_control_law_isolates_dl_ds(ideal_maps) -> None:  
     t = np.linspace(0.0, 0.1, 1001)
     s0, sdot, i0 = 0.006, 0.05, 10.0
     gaps = (s0 + sdot * t)[:, None] * np.ones((1, 2))
-    state = model.initial_state(gaps=s0, currents=i0)
+    state = model.initial_state(gaps_m=s0, currents_A=i0)
     currents = [i0]
     for k in range(t.size - 1):
         state, out = model.step(state, t[k + 1] - t[k], voltages_V=R_EL * state.inductor_currents_A,
@@ -154,16 +154,16 @@ def test_current_model_refuses_to_leave_its_maps(ideal_maps) -> None:  # type: i
     t = np.linspace(0.0, 0.5, 51)
     with pytest.raises(mk.OutOfRangeError, match="currents 0..80 A"):
         # 400 V / 2 ohm would settle at 200 A: leaves the 0..80 A map
-        model.simulate(t, gaps=0.01, voltages=400.0, initial_currents=0.0)
+        model.simulate(t, gaps_m=0.01, voltages_V=400.0, initial_currents_A=0.0)
     with pytest.raises(mk.OutOfRangeError, match="gaps 0.004..0.02 m"):
-        model.simulate(t, gaps=0.03, voltages=1.0, initial_currents=0.0)
+        model.simulate(t, gaps_m=0.03, voltages_V=1.0, initial_currents_A=0.0)
     with pytest.warns(UserWarning, match="extrapolating"):
-        CurrentModel(ideal_maps, extrapolate=True).simulate(t, gaps=0.021, voltages=1.0,
-                                                            initial_currents=0.0)
+        CurrentModel(ideal_maps, extrapolate=True).simulate(t, gaps_m=0.021, voltages_V=1.0,
+                                                            initial_currents_A=0.0)
     with pytest.raises(mk.InputError, match="gaps must be > 0"):
-        model.step(model.initial_state(gaps=0.01, currents=1.0), 1e-3, voltages_V=2.0, gaps_m=-0.01)
+        model.step(model.initial_state(gaps_m=0.01, currents_A=1.0), 1e-3, voltages_V=2.0, gaps_m=-0.01)
     with pytest.raises(mk.InputError, match="expected 1 values"):
-        model.step(model.initial_state(gaps=0.01, currents=1.0), 1e-3, voltages_V=[2.0, 2.0],
+        model.step(model.initial_state(gaps_m=0.01, currents_A=1.0), 1e-3, voltages_V=[2.0, 2.0],
                    gaps_m=0.01)
 
 
@@ -212,9 +212,9 @@ def _check_step_vs_simulate(model: CurrentModel, rel: float) -> None:
     t = np.linspace(0.0, 0.05, 51)
     gaps = 0.01 + 0.002 * np.sin(2 * np.pi * 20 * t)
     volts = np.where(t < 0.02, 30.0, 45.0)
-    res = mk.simulate(model, t, gaps=np.repeat(gaps[:, None], 2, axis=1), voltages=volts,
-                      initial_currents=15.0)
-    state = model.initial_state(gaps=gaps[0], currents=15.0)
+    res = mk.simulate(model, t, gaps_m=np.repeat(gaps[:, None], 2, axis=1), voltages_V=volts,
+                      initial_currents_A=15.0)
+    state = model.initial_state(gaps_m=gaps[0], currents_A=15.0)
     for k in range(t.size - 1):
         rate = (gaps[k + 1] - gaps[k]) / (t[k + 1] - t[k])
         state, out = model.step(state, t[k + 1] - t[k], volts[k], gaps_m=gaps[k], gap_rates_m_per_s=rate)
@@ -229,25 +229,25 @@ def _check_step_vs_simulate(model: CurrentModel, rel: float) -> None:
 def test_jit_compiled_current_model_matches_the_interpreted_one(u_maps) -> None:  # type: ignore[no-untyped-def]
     """Same arithmetic, compiled instead of interpreted: agreement to rounding (measured 0 on
     x86-64 with -O3, which does not reassociate floating point); bound 1e-12 relative."""
-    kw = {"gaps": lambda t: 0.01 + 0.002 * np.sin(2 * np.pi * 20 * t),
-          "voltages": lambda t: 30.0 if t < 0.02 else 45.0, "initial_currents": 15.0}
-    ref = mk.simulate(CurrentModel(u_maps), (0, 0.05), dt=1e-3, **kw)
+    kw = {"gaps_m": lambda t: 0.01 + 0.002 * np.sin(2 * np.pi * 20 * t),
+          "voltages_V": lambda t: 30.0 if t < 0.02 else 45.0, "initial_currents_A": 15.0}
+    ref = mk.simulate(CurrentModel(u_maps), (0, 0.05), dt_s=1e-3, **kw)
     jit = CurrentModel(u_maps, jit=True)
-    res = mk.simulate(jit, (0, 0.05), dt=1e-3, **kw)
+    res = mk.simulate(jit, (0, 0.05), dt_s=1e-3, **kw)
     np.testing.assert_allclose(res.currents_A, ref.currents_A, rtol=1e-12)
     np.testing.assert_allclose(res.force_N, ref.force_N, rtol=1e-12)
-    state, out = jit.step(jit.initial_state(gaps=0.01, currents=15.0), 1e-3, 45.0)
+    state, out = jit.step(jit.initial_state(gaps_m=0.01, currents_A=15.0), 1e-3, 45.0)
     assert np.isfinite(out.force_N) and state.inductor_currents_A[0] > 15.0
 
 
 def test_rk4_and_cvodes_agree_in_deep_saturation(u_maps) -> None:  # type: ignore[no-untyped-def]
     """Eq. 8 is not stiff (time constants >= ~5 ms on these maps); RK4 at 1 ms sub-steps vs
     CVODES at rtol 1e-11: measured 6.4e-7 relative; bound 2e-5."""
-    kw = {"gaps": 0.0045, "voltages": lambda t: 40.0 if t < 0.005 else 150.0,
-          "initial_currents": 20.0}
+    kw = {"gaps_m": 0.0045, "voltages_V": lambda t: 40.0 if t < 0.005 else 150.0,
+          "initial_currents_A": 20.0}
     ref = mk.simulate(CurrentModel(u_maps, method="cvodes", rtol=1e-11, atol=1e-12), (0, 0.1),
-                      dt=1e-3, **kw)
-    rk4 = mk.simulate(CurrentModel(u_maps), (0, 0.1), dt=1e-3, **kw)
+                      dt_s=1e-3, **kw)
+    rk4 = mk.simulate(CurrentModel(u_maps), (0, 0.1), dt_s=1e-3, **kw)
     assert ref.currents_A.max() > 60.0   # deep into saturation
     np.testing.assert_allclose(rk4.currents_A, ref.currents_A, rtol=0, atol=2e-5 * 75)
     np.testing.assert_allclose(rk4.force_N, ref.force_N, rtol=0, atol=2e-5 * ref.force_N.max())
@@ -469,14 +469,14 @@ def test_range_is_checked_in_rk4_sub_steps(ideal_maps) -> None:  # type: ignore[
     wins and I ends at 9.3 A, inside the range.  The end check alone passes; the sub-step
     check must raise."""
     model = CurrentModel(ideal_maps)
-    state = model.initial_state(gaps=0.0041, currents=66.0)
+    state = model.initial_state(gaps_m=0.0041, currents_A=66.0)
     rate = (0.0199 - 0.0041) / 0.1
     with pytest.raises(mk.OutOfRangeError, match="RK4 sub-step"):
         model.step(state, 0.1, 0.0, gap_rates_m_per_s=rate)
     with pytest.raises(mk.OutOfRangeError, match="RK4 sub-step"):
-        model.simulate((0.0, 0.1), dt=0.1, gaps=lambda t: 0.0041 + rate * t, voltages=0.0,
-                       initial_currents=66.0)
+        model.simulate((0.0, 0.1), dt_s=0.1, gaps_m=lambda t: 0.0041 + rate * t, voltages_V=0.0,
+                       initial_currents_A=66.0)
     # the same run on 5 ms samples: the interval ends see it (ordinary check)
     with pytest.raises(mk.OutOfRangeError, match="at t = "):
-        model.simulate(np.linspace(0.0, 0.1, 21), gaps=lambda t: 0.0041 + rate * t,
-                       voltages=0.0, initial_currents=66.0)
+        model.simulate(np.linspace(0.0, 0.1, 21), gaps_m=lambda t: 0.0041 + rate * t,
+                       voltages_V=0.0, initial_currents_A=66.0)

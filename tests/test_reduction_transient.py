@@ -101,10 +101,10 @@ def test_default_eddy_resistance_against_an_independent_tail_fit(u_magnet: mk.Ma
     fm = mk.FluxModel(u_magnet, rtol=1e-9, atol=1e-11)
     r_el = float(fm.resistances[0])
     di_inf = 1e-3 * i0
-    st = fm.initial_state(gaps=s, currents=i0)
+    st = fm.initial_state(gaps_m=s, currents_A=i0)
     tau0 = 0.0137                             # L~/R_el (statics), sizes the window only
-    res = mk.simulate(fm, (0.0, 6 * tau0), dt=tau0 / 25, gaps=st.gaps_m,
-                      voltages=r_el * (i0 + di_inf), initial_state=st)
+    res = mk.simulate(fm, (0.0, 6 * tau0), dt_s=tau0 / 25, gaps_m=st.gaps_m,
+                      voltages_V=r_el * (i0 + di_inf), initial_state=st)
     t, di = res.time_s, res.currents_A[:, 0] - i0
     sel = t >= 5e-3
 
@@ -116,7 +116,7 @@ def test_default_eddy_resistance_against_an_independent_tail_fit(u_magnet: mk.Ma
     r_tail = r_el * di_inf / (di_inf - amp) - r_el
     assert 1.015 < fit_lib / r_tail < 1.04, (fit_lib, r_tail)
     model = mk.CurrentModel(maps)
-    _, out = model.step(model.initial_state(gaps=s, currents=i0), 1e-7, r_el * (i0 + di_inf),
+    _, out = model.step(model.initial_state(gaps_m=s, currents_A=i0), 1e-7, r_el * (i0 + di_inf),
                         gaps_m=s, gap_rates_m_per_s=0.0)
     r_model = r_el * di_inf / float(out.currents_A[0] - i0) - r_el
     assert 1.015 < r_model / r_tail < 1.04, (r_model, r_tail)

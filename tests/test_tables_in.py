@@ -129,7 +129,7 @@ def test_force_from_psi_by_coenergy_matches_the_closed_form(tmp_path: Path) -> N
                                             "shielded-gap ladder.*motion_eddy=False"):
         mk.CurrentModel(maps, motion_eddy=True)
     with pytest.raises(mk.InputError, match=r"build CurrentModel\(maps\) first"):
-        mk.simulate(maps, [0.0, 0.01], gaps=0.01, voltages=1.0)
+        mk.simulate(maps, [0.0, 0.01], gaps_m=0.01, voltages_V=1.0)
 
 
 # ---------------------------------------------------------------- our own statics
@@ -176,7 +176,7 @@ def test_reduced_model_on_imported_maps_equals_built_maps(built: mk.Characterist
                 runs = [closed_loop(m, heave, ctl, duration_s=sc.duration_s, dt_s=sc.dt_s,
                                     initial_gap_m=0.01, initial_current_A=20.0,
                                     gap_reference=sc.gap_reference,
-                                    external_force=lambda t, f=sc.external_force_fraction:
+                                    external_force_N=lambda t, f=sc.external_force_fraction:
                                     force0 * f(t))
                         for m in (ref, model)]
                 eg = np.max(np.abs(runs[1].gap_m - runs[0].gap_m)) / np.ptp(runs[0].gap_m)
@@ -185,8 +185,8 @@ def test_reduced_model_on_imported_maps_equals_built_maps(built: mk.Characterist
                 # measured 4.6e-4 of the 1 mm reference step (0.46 um) and 9.8e-5 (current)
                 assert eg < 2e-3 and ei < 1e-3, (label, eg, ei)
                 continue
-            runs = [mk.simulate(m, (0.0, sc.duration_s), dt=sc.dt_s, gaps=sc.gaps,
-                                voltages=sc.voltages, initial_currents=sc.initial_current_A)
+            runs = [mk.simulate(m, (0.0, sc.duration_s), dt_s=sc.dt_s, gaps_m=sc.gaps,
+                                voltages_V=sc.voltages, initial_currents_A=sc.initial_current_A)
                     for m in (ref, model)]
             ei = np.max(np.abs(runs[1].currents_A - runs[0].currents_A)) / np.max(
                 np.abs(runs[0].currents_A))

@@ -3,6 +3,7 @@ that give the same numbers."""
 
 from __future__ import annotations
 
+import dataclasses
 import warnings
 
 import numpy as np
@@ -37,7 +38,7 @@ def test_helper_translates_warns_and_refuses_both() -> None:
 
 def test_current_model_step_old_names_equal_new(u_maps: mk.CharacteristicMaps) -> None:
     cm = mk.CurrentModel(u_maps)
-    st = cm.initial_state(gaps=0.010, currents=20.0)
+    st = cm.initial_state(gaps_m=0.010, currents_A=20.0)
     new, out_new = cm.step(st, dt_s=2e-3, voltages_V=50.0, gaps_m=0.0101,
                            gap_rates_m_per_s=0.05)
     with pytest.warns(DeprecationWarning, match=r"use voltages_V="):
@@ -49,7 +50,7 @@ def test_current_model_step_old_names_equal_new(u_maps: mk.CharacteristicMaps) -
 
 def test_bank_step_and_stepper_old_names_equal_new(u_maps: mk.CharacteristicMaps) -> None:
     bank = mk.MagnetBank({"a": u_maps, "b": u_maps})
-    st = bank.initial_state(gaps=0.010, currents=20.0)
+    st = bank.initial_state(gaps_m=0.010, currents_A=20.0)
     u = bank.resistance_ohm * 22.0
     _, o_new = bank.step(st, 1e-3, u, gaps_m=0.0101, gap_rates_m_per_s=0.01)
     with pytest.warns(DeprecationWarning, match=r"use gaps_m="):
@@ -66,3 +67,88 @@ def test_bank_step_and_stepper_old_names_equal_new(u_maps: mk.CharacteristicMaps
     assert np.array_equal(s_new.circuit_force_N, o_new.circuit_force_N)
     with pytest.raises(InputError, match=r"give voltages_V= only"):
         s_new.advance(voltages=u, voltages_V=u)
+
+
+# ---- the rest of item 7: simulate, initial_state, HeaveMass.step, closed_loop ----------------
+def test_simulate_old_names_equal_new(u_maps: mk.CharacteristicMaps) -> None:
+    """``mk.simulate`` and ``CurrentModel.simulate``: the old names give the same run, bit for
+    bit (the wrapper only renames), with one warning naming every new keyword."""
+    cm = mk.CurrentModel(u_maps)
+    new = dict(dt_s=1e-3, gaps_m=lambda t: 0.010 + 0.001 * t, voltages_V=45.0,
+               gap_rates_m_per_s=0.001, initial_currents_A=20.0)
+    old = dict(dt=1e-3, gaps=new["gaps_m"], voltages=45.0, gap_rates=0.001,
+               initial_currents=20.0)
+    ref = mk.simulate(cm, (0.0, 0.02), **new)
+    with pytest.warns(DeprecationWarning, match=r"simulate: gaps= is deprecated, use gaps_m=;.*"
+                                                r"initial_currents= is deprecated, use "
+                                                r"initial_currents_A="):
+        top = mk.simulate(cm, (0.0, 0.02), **old)
+    with pytest.warns(DeprecationWarning, match=r"CurrentModel.simulate: .*use dt_s="):
+        own = cm.simulate((0.0, 0.02), **old)
+    for res in (top, own):
+        assert np.array_equal(res.currents_A, ref.currents_A)
+        assert np.array_equal(res.force_N, ref.force_N)
+    with pytest.raises(InputError, match=r"give gaps_m= only"):
+        mk.simulate(cm, (0.0, 0.02), gaps=0.01, gaps_m=0.01, voltages_V=45.0)
+
+
+def test_bank_simulate_old_names_equal_new(u_maps: mk.CharacteristicMaps) -> None:
+    bank = mk.MagnetBank({"a": u_maps, "b": u_maps})
+    u = bank.resistance_ohm * 22.0
+    ref = mk.simulate(bank, (0.0, 0.01), dt_s=1e-3, gaps_m=0.010, voltages_V=u,
+                      initial_currents_A=20.0)
+    with pytest.warns(DeprecationWarning, match=r"MagnetBank.simulate: .*use voltages_V="):
+        old = bank.simulate((0.0, 0.01), dt=1e-3, gaps=0.010, voltages=u, initial_currents=20.0)
+    assert np.array_equal(old.currents_A, ref.currents_A)
+
+
+def test_initial_state_old_names_equal_new(u_magnet: mk.Magnet,
+                                           u_maps: mk.CharacteristicMaps) -> None:
+    """CurrentModel, MagnetBank and FluxModel: ``gaps``/``currents``/``time`` are aliases of
+    ``gaps_m``/``currents_A``/``time_s``."""
+    fm = mk.FluxModel(u_magnet.with_options(eddy_currents=False))
+    for model in (mk.CurrentModel(u_maps), mk.MagnetBank({"a": u_maps}), fm):
+        new = model.initial_state(gaps_m=0.011, currents_A=25.0, time_s=0.5)
+        with pytest.warns(DeprecationWarning, match=r"initial_state: gaps= is deprecated, use "
+                                                    r"gaps_m=; currents= .*use currents_A=; "
+                                                    r"time= .*use time_s="):
+            old = model.initial_state(gaps=0.011, currents=25.0, time=0.5)
+        assert old.time_s == new.time_s == 0.5
+        for field in dataclasses.fields(new):       # every array of the state, bit for bit
+            a, b = getattr(old, field.name), getattr(new, field.name)
+            if isinstance(a, np.ndarray) and a.dtype.kind == "f":
+                assert np.array_equal(a, b, equal_nan=True), field.name
+            else:
+                assert repr(a) == repr(b), field.name
+        with pytest.raises(InputError, match=r"give time_s= only"):
+            model.initial_state(gaps_m=0.011, currents_A=25.0, time=0.5, time_s=0.5)
+
+
+def test_heave_mass_step_old_dt_equals_new() -> None:
+    mass = mk.vehicle.HeaveMass(100.0)
+    st = mk.vehicle.HeaveState(0.01, 0.0)
+    new = mass.step(st, dt_s=1e-3, magnet_force_N=900.0)
+    with pytest.warns(DeprecationWarning, match=r"HeaveMass.step: dt= is deprecated, use dt_s="):
+        old = mass.step(st, dt=1e-3, magnet_force_N=900.0)
+    assert old == new
+
+
+def test_closed_loop_old_external_force_equals_new(u_magnet: mk.Magnet,
+                                                   u_maps: mk.CharacteristicMaps) -> None:
+    from maglevkit.control import closed_loop, design_gap_controller
+
+    s0, i0 = 0.01, 20.0
+    f0 = float(mk.solve_statics(u_magnet, gaps=s0, currents=i0).force_N)
+    veh = mk.vehicle.HeaveMass(f0 / mk.vehicle.STANDARD_GRAVITY)
+    ctl = design_gap_controller(u_magnet, mass_kg=veh.mass_kg, gap_m=s0, current_A=i0)
+    common = dict(duration_s=0.02, dt_s=1e-3, initial_gap_m=s0, initial_current_A=i0)
+    cm = mk.CurrentModel(u_maps)
+
+    def load(t: float) -> float:
+        return 0.1 * f0 if t >= 0.005 else 0.0
+
+    new = closed_loop(cm, veh, ctl, external_force_N=load, **common)
+    with pytest.warns(DeprecationWarning, match=r"closed_loop: external_force= is deprecated, "
+                                                r"use external_force_N="):
+        old = closed_loop(cm, veh, ctl, external_force=load, **common)
+    assert np.array_equal(old.gap_m, new.gap_m)

@@ -162,7 +162,7 @@ def test_bank_step_function_is_the_banks_step(model: VehicleModel) -> None:
     gaps = 0.010 + 1e-3 * rng.standard_normal(nc)
     rates = 0.02 * rng.standard_normal(nc)
     u = bank.resistance_ohm * model.trim_current_A + 50 * rng.standard_normal(nc)
-    state = bank.initial_state(gaps=gaps, currents=model.trim_current_A)
+    state = bank.initial_state(gaps_m=gaps, currents_A=model.trim_current_A)
     _, out = bank.step(state, 1e-3, u, gaps, rates)
     f = bank.step_function(1e-3)
     res = f(I_L=state.inductor_currents_A, s=gaps, U=u, sdot=rates, h=1e-3)

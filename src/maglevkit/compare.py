@@ -332,7 +332,7 @@ def compare_models(detailed: Any, reduced: Any, scenarios: list[ComparisonScenar
                      sc: ComparisonScenario = sc, loads: Any = loads) -> Any:
                 return closed_loop(model, veh, ctl, duration_s=sc.duration_s, dt_s=sc.dt_s,
                                    initial_gap_m=gap_m, initial_current_A=current_A,
-                                   gap_reference=sc.gap_reference, external_force=loads)
+                                   gap_reference=sc.gap_reference, external_force_N=loads)
 
             (wd, d), (wr, r) = (_timed(partial(loop, model), repeat) for model in (fm, reduced))
             t = d.time_s
@@ -345,12 +345,12 @@ def compare_models(detailed: Any, reduced: Any, scenarios: list[ComparisonScenar
             gref: np.ndarray | None = (None if sc.gap_reference is None else
                                        np.array([sc.gap_reference(float(tk)) for tk in t]))
         else:
-            wd, ds = _timed(partial(simulate, fm, (0.0, sc.duration_s), dt=sc.dt_s,
-                                    gaps=sc.gaps, voltages=sc.voltages,
-                                    initial_currents=sc.initial_current_A), repeat)
-            wr, rs = _timed(partial(simulate, reduced, (0.0, sc.duration_s), dt=sc.dt_s,
-                                    gaps=sc.gaps, voltages=sc.voltages,
-                                    initial_currents=sc.initial_current_A), repeat)
+            wd, ds = _timed(partial(simulate, fm, (0.0, sc.duration_s), dt_s=sc.dt_s,
+                                    gaps_m=sc.gaps, voltages_V=sc.voltages,
+                                    initial_currents_A=sc.initial_current_A), repeat)
+            wr, rs = _timed(partial(simulate, reduced, (0.0, sc.duration_s), dt_s=sc.dt_s,
+                                    gaps_m=sc.gaps, voltages_V=sc.voltages,
+                                    initial_currents_A=sc.initial_current_A), repeat)
             t = ds.time_s
             fd = circuit_forces(ds.pole_force_N, ds.gap_names, groups, circuits)
             fr = rs.circuit_force_N

@@ -388,8 +388,8 @@ def coupling_response(magnet: Magnet, *, step: float = 0.2) -> CouplingResponse:
     bump = np.zeros(len(r))
     bump[0] = step
     dur = 3.0 * tau
-    res = simulate(magnet, (0.0, dur), dt=dur / 600, gaps=s0,
-                   voltages=lambda t: u0 * (1.0 + bump * (t >= 0.02 * dur)), initial_currents=i0)
+    res = simulate(magnet, (0.0, dur), dt_s=dur / 600, gaps_m=s0,
+                   voltages_V=lambda t: u0 * (1.0 + bump * (t >= 0.02 * dur)), initial_currents_A=i0)
     rel = (res.currents_A - i0) / i0
     peak = np.max(np.abs(rel), axis=0)
     ratios = coupling_ratios(magnet, gap=s0, current=i0).ratio

@@ -16,7 +16,7 @@ import casadi as ca
 import numpy as np
 
 from .errors import ParameterError
-from .validation import real_number
+from .validation import real_number, renamed_keywords
 
 __all__ = ["HeaveMass", "HeaveState", "STANDARD_GRAVITY", "chopper_floor"]
 
@@ -81,15 +81,19 @@ class HeaveMass:
         """
         return self.gravity + (external_force_N - magnet_force_N) / self.mass_kg
 
-    def step(self, state: HeaveState, dt: float, magnet_force_N: float,
+    @renamed_keywords(dt="dt_s")
+    def step(self, state: HeaveState, dt_s: float, magnet_force_N: float,
              external_force_N: float = 0.0) -> HeaveState:
         """Advance by ``dt`` [s] with forces held constant (exact for constant acceleration).
+
+        The old keyword name ``dt`` still works as a deprecated alias (a ``DeprecationWarning`` names the
+        new one).
 
         Parameters
         ----------
         state : HeaveState
             Gap [m] and gap rate [m/s] at the start of the step.
-        dt : float
+        dt_s : float
             Step [s], finite and > 0.
         magnet_force_N : float
             Attractive magnet force [N], held over the step.
@@ -106,6 +110,7 @@ class HeaveMass:
         InputError
             ``dt`` not finite and > 0, or a force that is not a finite real number.
         """
+        dt = dt_s
         real_number(dt, "dt", "s", positive=True)
         real_number(magnet_force_N, "magnet_force_N", "N")
         real_number(external_force_N, "external_force_N", "N")

@@ -15,37 +15,42 @@ from .models.flux import SimulationResult, simulate_flux
 from .reduced.bank import BankSimulation, MagnetBank
 from .reduced.current import CurrentModel, ReducedSimulation
 from .reduction.maps import CharacteristicMaps
-from .validation import real_array
+from .validation import real_array, renamed_keywords
 
 __all__ = ["simulate"]
 
 
 @overload
-def simulate(model: CurrentModel, t: Any, *, gaps: Any, voltages: Any, gap_rates: Any = None,
-             dt: float | None = None, initial_currents: Any = None,
-             initial_state: Any = None, gap_rate_tolerance: float = 0.02,
+def simulate(model: CurrentModel, t: Any, *, gaps_m: Any, voltages_V: Any,
+             gap_rates_m_per_s: Any = None, dt_s: float | None = None,
+             initial_currents_A: Any = None, initial_state: Any = None, gap_rate_tolerance: float = 0.02,
              **options: Any) -> ReducedSimulation: ...
 
 
 @overload
-def simulate(model: MagnetBank, t: Any, *, gaps: Any, voltages: Any, gap_rates: Any = None,
-             dt: float | None = None, initial_currents: Any = None,
-             initial_state: Any = None, gap_rate_tolerance: float = 0.02,
+def simulate(model: MagnetBank, t: Any, *, gaps_m: Any, voltages_V: Any,
+             gap_rates_m_per_s: Any = None, dt_s: float | None = None,
+             initial_currents_A: Any = None, initial_state: Any = None, gap_rate_tolerance: float = 0.02,
              **options: Any) -> BankSimulation: ...
 
 
 @overload
-def simulate(model: Any, t: Any, *, gaps: Any, voltages: Any, gap_rates: Any = None,
-             dt: float | None = None, initial_currents: Any = None,
-             initial_state: Any = None, gap_rate_tolerance: float = 0.02,
+def simulate(model: Any, t: Any, *, gaps_m: Any, voltages_V: Any,
+             gap_rates_m_per_s: Any = None, dt_s: float | None = None,
+             initial_currents_A: Any = None, initial_state: Any = None, gap_rate_tolerance: float = 0.02,
              **options: Any) -> SimulationResult: ...
 
 
-def simulate(model: Any, t: Any, *, gaps: Any, voltages: Any, gap_rates: Any = None,
-             dt: float | None = None, initial_currents: Any = None,
-             initial_state: Any = None, gap_rate_tolerance: float = 0.02,
+@renamed_keywords(gaps="gaps_m", voltages="voltages_V", gap_rates="gap_rates_m_per_s", dt="dt_s",
+                  initial_currents="initial_currents_A")
+def simulate(model: Any, t: Any, *, gaps_m: Any, voltages_V: Any,
+             gap_rates_m_per_s: Any = None, dt_s: float | None = None,
+             initial_currents_A: Any = None, initial_state: Any = None, gap_rate_tolerance: float = 0.02,
              **options: Any) -> SimulationResult | ReducedSimulation | BankSimulation:
     """Simulate a magnet model on a time grid.
+
+    The old keyword names ``gaps``, ``voltages``, ``gap_rates``, ``dt``, ``initial_currents`` still work as
+    deprecated aliases (a ``DeprecationWarning`` names the new one).
 
     Parameters
     ----------
@@ -58,15 +63,15 @@ def simulate(model: Any, t: Any, *, gaps: Any, voltages: Any, gap_rates: Any = N
         :class:`~maglevkit.models.flux.FluxModel` (or change a given one).
     t : (t0, tf), [t0, tf] or array
         A time span [s] (with ``dt``) or an explicit increasing grid [s].
-    gaps : float, sequence, mapping, Signal, callable or array
+    gaps_m : float, sequence, mapping, Signal, callable or array
         Gaps [m]; they move linearly between samples.
-    voltages : same forms
+    voltages_V : same forms
         Circuit voltages [V]; zero-order hold on each interval.
-    gap_rates : same forms, optional
+    gap_rates_m_per_s : same forms, optional
         Gap rates [m/s], checked against the gaps' secants within ``gap_rate_tolerance``.
-    dt : float, optional
+    dt_s : float, optional
         Grid step [s] with a time span (default 1e-4 s).
-    initial_currents : float, sequence or mapping, optional
+    initial_currents_A : float, sequence or mapping, optional
         Start at the static operating point with these currents [A].
     initial_state : optional
         Start from this state of the same model instead.
@@ -91,15 +96,17 @@ def simulate(model: Any, t: Any, *, gaps: Any, voltages: Any, gap_rates: Any = N
                          "do not run; build CurrentModel(maps) first (or MagnetBank for "
                          "several) and simulate that")
     if isinstance(model, (CurrentModel, MagnetBank)):
-        if initial_currents is not None:
-            real_array(initial_currents if not isinstance(initial_currents, Mapping)
-                       else list(initial_currents.values()), "initial_currents", "A")
+        if initial_currents_A is not None:
+            real_array(initial_currents_A if not isinstance(initial_currents_A, Mapping)
+                       else list(initial_currents_A.values()), "initial_currents", "A")
         if options:
             raise InputError(f"options {sorted(options)} apply to the flux model; build the "
                              f"{type(model).__name__} with its own options instead")
-        return model.simulate(t, gaps=gaps, voltages=voltages, gap_rates=gap_rates, dt=dt,
-                              initial_currents=initial_currents, initial_state=initial_state,
+        return model.simulate(t, gaps_m=gaps_m, voltages_V=voltages_V,
+                              gap_rates_m_per_s=gap_rates_m_per_s, dt_s=dt_s,
+                              initial_currents_A=initial_currents_A, initial_state=initial_state,
                               gap_rate_tolerance=gap_rate_tolerance)
-    return simulate_flux(model, t, gaps=gaps, voltages=voltages, gap_rates=gap_rates, dt=dt,
-                         initial_currents=initial_currents, initial_state=initial_state,
+    return simulate_flux(model, t, gaps_m=gaps_m, voltages_V=voltages_V,
+                         gap_rates_m_per_s=gap_rates_m_per_s, dt_s=dt_s,
+                         initial_currents_A=initial_currents_A, initial_state=initial_state,
                          gap_rate_tolerance=gap_rate_tolerance, **options)

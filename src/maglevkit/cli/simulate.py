@@ -104,8 +104,8 @@ def simulate(
         fm = FluxModel(mag, **sc.solver_options)
         volts = sc.inputs_for(fm.circuit_names, "voltages")
         gaps = sc.inputs_for(fm.gap_names, "gaps")
-        res = run_simulation(fm, (0.0, sc.duration_s), dt=sc.dt_s, gaps=gaps, voltages=volts,
-                             initial_currents=sc.initial_current_A)
+        res = run_simulation(fm, (0.0, sc.duration_s), dt_s=sc.dt_s, gaps_m=gaps, voltages_V=volts,
+                             initial_currents_A=sc.initial_current_A)
     except MaglevkitError as exc:
         raise fail(exc) from None
     rows = simulation_summary(res)

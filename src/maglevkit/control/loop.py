@@ -13,7 +13,7 @@ import numpy as np
 from ..errors import InputError, SolverError
 from ..models.inputs import check_span
 from ..plant import HeaveMass, HeaveState
-from ..validation import real_number
+from ..validation import real_number, renamed_keywords
 from .cascade import CascadeController, GapController
 from .interface import Controller, Measurement
 
@@ -123,10 +123,11 @@ class ClosedLoopResult:
         return float(np.sum(0.5 * (p_start + p_end) * np.diff(self.time_s)))
 
 
+@renamed_keywords(external_force="external_force_N")
 def closed_loop(model: Any, vehicle: HeaveMass, controller: GapController | Controller, *,
                 duration_s: float, dt_s: float, initial_gap_m: float, initial_current_A: Any,
                 gap_reference: Callable[[float], float] | None = None,
-                external_force: Callable[[float], float] | None = None,
+                external_force_N: Callable[[float], float] | None = None,
                 initial_flux_Wb: Any = None) -> ClosedLoopResult:
     """Co-simulate magnet model, heave mass and controller at a fixed step ``dt_s`` [s].
 
@@ -134,6 +135,9 @@ def closed_loop(model: Any, vehicle: HeaveMass, controller: GapController | Cont
     the voltages; the magnet model integrates with the voltages held and the gaps moving
     at the current rate (its ``step``); the mass integrates with the magnet force held.
     Every pole sees the same gap.
+
+    The old keyword name ``external_force`` still works as a deprecated alias (a ``DeprecationWarning``
+    names the new one).
 
     Parameters
     ----------
@@ -155,7 +159,7 @@ def closed_loop(model: Any, vehicle: HeaveMass, controller: GapController | Cont
         Gap at the start [m], > 0 (every pole).
     initial_current_A : float or array (n_circuits,)
         Steady start: the model starts at rest at this gap and current [A].
-    gap_reference, external_force : callable t -> value, optional
+    gap_reference, external_force_N : callable t -> value, optional
         Gap reference [m] (default the controller's) and external force on the mass [N]
         (positive opens the gap, like gravity); both called with the time [s].
     initial_flux_Wb : array_like (n_circuits,), optional
@@ -181,6 +185,7 @@ def closed_loop(model: Any, vehicle: HeaveMass, controller: GapController | Cont
         closed loop is unstable for this case).  ``time`` and ``state`` (gap, gap rate)
         name the step.
     """
+    external_force = external_force_N
     duration_s = real_number(duration_s, "duration_s", "s", positive=True)
     dt_s = real_number(dt_s, "dt_s", "s", positive=True)
     real_number(initial_gap_m, "initial_gap_m", "m", positive=True)
@@ -212,7 +217,7 @@ def closed_loop(model: Any, vehicle: HeaveMass, controller: GapController | Cont
                          f"interface (reset, update, diagnostics), got {type(controller).__name__}")
     ref = gap_reference or (lambda t: ctl.gap_ref_m)
     ext = external_force or (lambda t: 0.0)
-    st = model.initial_state(gaps=initial_gap_m, currents=initial_current_A)
+    st = model.initial_state(gaps_m=initial_gap_m, currents_A=initial_current_A)
     out = model.outputs(st)
     mech = HeaveState(initial_gap_m, 0.0)
     nc, ng = len(model.circuit_names), len(model.gap_names)

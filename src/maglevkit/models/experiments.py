@@ -61,8 +61,8 @@ def voltage_step_response(model: Any, *, gap: Any, voltage: Any, initial_current
         FluxModel options (``saturation``, ``eddy_currents``, ``rtol``, ...).
     """
     fm = _model(model, options)
-    st = fm.initial_state(gaps=gap, currents=initial_current)
-    return simulate_flux(fm, (0.0, duration), dt=dt, gaps=st.gaps_m, voltages=voltage,
+    st = fm.initial_state(gaps_m=gap, currents_A=initial_current)
+    return simulate_flux(fm, (0.0, duration), dt_s=dt, gaps_m=st.gaps_m, voltages_V=voltage,
                     initial_state=st)
 
 
@@ -163,7 +163,7 @@ def differential_inductance_from_step(model: Any, *, gap: float, current: float,
     if isinstance(circuit, bool) or not isinstance(circuit, numbers.Integral) \
             or not 0 <= circuit < nc:
         raise InputError(f"circuit = {circuit!r} must be an index in 0..{nc - 1}")
-    st = fm.initial_state(gaps=gap, currents=current)
+    st = fm.initial_state(gaps_m=gap, currents_A=current)
     R = fm.resistances
     sol = solve_statics(fm.network, gaps=st.gaps_m, currents=st.currents_A)
     l_est = float(sol.differential_inductance_H[circuit, circuit])
@@ -173,7 +173,7 @@ def differential_inductance_from_step(model: Any, *, gap: float, current: float,
     U = R * st.currents_A
     U[circuit] += r_par * di_inf
     dt = tau_est / samples_per_tau
-    res = simulate_flux(fm, (0.0, n_tau * tau_est), dt=dt, gaps=st.gaps_m, voltages=U,
+    res = simulate_flux(fm, (0.0, n_tau * tau_est), dt_s=dt, gaps_m=st.gaps_m, voltages_V=U,
                    initial_state=st)
     di = res.currents_A[:, circuit] - st.currents_A[circuit]
     t = res.time_s

@@ -930,20 +930,24 @@ class FluxModel:
                 f"states={list(self.differential_state_names)})")
 
     # ------------------------------------------------------------------ states
-    def initial_state(self, *, gaps: Any, currents: Any, time: float = 0.0) -> FluxState:
+    @renamed_keywords(gaps="gaps_m", currents="currents_A", time="time_s")
+    def initial_state(self, *, gaps_m: Any, currents_A: Any, time_s: float = 0.0) -> FluxState:
         """Consistent steady state at ``gaps`` [m] and circuit ``currents`` [A].
 
         The fluxes come from :func:`solve_statics`; the state is at rest (no eddy
         currents), consistent with the voltages ``U = R I`` and zero gap rates.
 
+        The old keyword names ``gaps``, ``currents``, ``time`` still work as deprecated aliases (a
+        ``DeprecationWarning`` names the new one).
+
         Parameters
         ----------
-        gaps : float, array_like (n_gaps,) or mapping
+        gaps_m : float, array_like (n_gaps,) or mapping
             Gaps [m], each > 0: one value for all, one per gap input (:attr:`gap_names`),
             or ``{gap name: value}`` with every name.  One operating point only.
-        currents : float, array_like (n_circuits,) or mapping
+        currents_A : float, array_like (n_circuits,) or mapping
             Circuit currents [A], same forms per circuit (:attr:`circuit_names`).
-        time : float, default 0.0
+        time_s : float, default 0.0
             Time of the state [s], a finite real number.
 
         Returns
@@ -962,6 +966,7 @@ class FluxModel:
             Gaps or currents beyond the magnet's plausible range (models built from a
             Magnet).
         """
+        gaps, currents, time = gaps_m, currents_A, time_s
         return self._initial_state(gaps, currents, time, where="FluxModel.initial_state")
 
     def _initial_state(self, gaps: Any, currents: Any, time: Any, *,
@@ -1418,12 +1423,17 @@ class SimulationResult:
         return cols
 
 
-def simulate_flux(model: Any, t: Any, *, gaps: Any, voltages: Any, gap_rates: Any = None,
-                  dt: float | None = None, initial_currents: Any = None,
+@renamed_keywords(gaps="gaps_m", voltages="voltages_V", gap_rates="gap_rates_m_per_s",
+                  dt="dt_s", initial_currents="initial_currents_A")
+def simulate_flux(model: Any, t: Any, *, gaps_m: Any, voltages_V: Any,
+                  gap_rates_m_per_s: Any = None, dt_s: float | None = None, initial_currents_A: Any = None,
                   initial_state: Any = None, gap_rate_tolerance: float = 0.02,
                   **options: Any) -> SimulationResult:
     """Simulate the flux model on a time grid (the flux-model branch of
     :func:`maglevkit.simulate`, which also runs the reduced models).
+
+    The old keyword names ``gaps``, ``voltages``, ``gap_rates``, ``dt``, ``initial_currents`` still work as
+    deprecated aliases (a ``DeprecationWarning`` names the new one).
 
     Parameters
     ----------
@@ -1436,21 +1446,21 @@ def simulate_flux(model: Any, t: Any, *, gaps: Any, voltages: Any, gap_rates: An
         sequence of three or more times is an explicit increasing grid [s] (then no
         ``dt``; a two-point grid is ``np.array([t0, t1])``).  Inputs are sampled on the
         grid.
-    gaps : float, sequence, mapping, Signal, callable or array
+    gaps_m : float, sequence, mapping, Signal, callable or array
         Gaps [m]: constant (scalar or one value per gap), a Signal or ``f(t)`` (scalar
         or per-gap values), a mapping per gap name of any of these, or samples of shape
         ``(n_t, n_gaps)`` (``(n_t,)`` for one gap).  Between samples the gap moves
         linearly (rate = secant).
-    voltages : same forms
+    voltages_V : same forms
         Circuit voltages [V]; zero-order hold: ``U(t_k)`` on ``[t_k, t_{k+1})``.
-    gap_rates : same forms, optional
+    gap_rates_m_per_s : same forms, optional
         Gap rates [m/s].  If given, they must agree with the gaps: the trapezoidal mean
         of the rates over each interval may differ from the secant by at most
         ``gap_rate_tolerance`` times the largest rate (plus 1 um/s); otherwise InputError.
-    dt : float, optional
+    dt_s : float, optional
         Grid step [s] with a time span (default 1e-4 s); a real number > 0 (numpy scalars
         allowed, bools rejected).
-    initial_currents : float, sequence or mapping, optional
+    initial_currents_A : float, sequence or mapping, optional
         Start at the static operating point with these currents [A]; default the
         steady state ``U(t0) / R``.
     initial_state : FluxState, optional
@@ -1470,6 +1480,8 @@ def simulate_flux(model: Any, t: Any, *, gaps: Any, voltages: Any, gap_rates: An
     SolverError
         The integrator failed (time, state and reason in the exception).
     """
+    gaps, voltages, gap_rates, dt = gaps_m, voltages_V, gap_rates_m_per_s, dt_s
+    initial_currents = initial_currents_A
     if initial_currents is not None:
         real_array(initial_currents if not isinstance(initial_currents, Mapping)
                    else list(initial_currents.values()), "initial_currents", "A")

@@ -184,7 +184,7 @@ def parse_scenario(data: Mapping[str, Any], source: str = "scenario") -> Scenari
     i0 = _number(sc, "initial_current", "scenario", positive=False, required=False)
     assert duration is not None and dt is not None
     try:
-        check_span(0.0, duration, dt)   # the same rule as simulate((0, duration), dt=dt)
+        check_span(0.0, duration, dt)   # the same rule as simulate((0, duration), dt_s=dt)
     except InputError as exc:
         raise ParameterFileError(f"{source}: [scenario] {exc}") from None
     sigs: dict[str, dict[str, Signal]] = {}

@@ -325,7 +325,7 @@ class MagnetBank:
     >>> maps = mk.build_maps(magnet, gaps=np.linspace(0.006, 0.016, 6),
     ...                      currents=np.linspace(0, 60, 13), progress=False)
     >>> bank = mk.MagnetBank({f"m{k}": maps for k in range(4)}, compiled="never")
-    >>> state = bank.initial_state(gaps=0.010, currents=20.0)
+    >>> state = bank.initial_state(gaps_m=0.010, currents_A=20.0)
     >>> state, out = bank.step(state, 1e-3, voltages_V=bank.resistance_ohm * 20.0)
     >>> out.circuit_force_N.shape
     (4,)
@@ -1403,19 +1403,23 @@ class MagnetBank:
                               f" in an RK4 sub-step within t = {t0:.6g}..{t1:.6g} s")
 
     # ------------------------------------------------------------------ stepping interface
-    def initial_state(self, *, gaps: Any, currents: Any, time: float = 0.0) -> BankState:
+    @renamed_keywords(gaps="gaps_m", currents="currents_A", time="time_s")
+    def initial_state(self, *, gaps_m: Any, currents_A: Any, time_s: float = 0.0) -> BankState:
         """The steady state at ``gaps`` [m] (per gap input, or a scalar) with coil currents
         ``currents`` [A] (per circuit, or a scalar).
 
+        The old keyword names ``gaps``, ``currents``, ``time`` still work as deprecated aliases (a
+        ``DeprecationWarning`` names the new one).
+
         Parameters
         ----------
-        gaps : float, array_like (n_gaps,) or mapping
+        gaps_m : float, array_like (n_gaps,) or mapping
             Gap inputs [m], each > 0: one value for all, one per gap input
             (:attr:`gap_names`), or a mapping naming every gap input exactly once.
-        currents : float, array_like (n_circuits,) or mapping
+        currents_A : float, array_like (n_circuits,) or mapping
             Coil currents [A], same forms per circuit (:attr:`circuit_names`); detailed
             members start at their static operating point with these currents.
-        time : float, default 0.0
+        time_s : float, default 0.0
             Time of the state [s], finite (no bools).
 
         Returns
@@ -1432,6 +1436,7 @@ class MagnetBank:
             A reduced circuit's substitute gap or current outside its maps (without
             ``extrapolate``).
         """
+        gaps, currents, time = gaps_m, currents_A, time_s
         g = self._vector(gaps, self.gap_names, "gaps", "m")
         if (g <= 0).any():
             j = int(np.argmax(g <= 0))
@@ -1448,7 +1453,7 @@ class MagnetBank:
         for m, cs, ps in zip(self._members, self._circuit_slices, self._pole_slices, strict=True):
             if m.kind == "detailed":
                 assert m.model is not None
-                states.append(m.model.initial_state(gaps=pg[ps], currents=i[cs], time=float(time)))
+                states.append(m.model.initial_state(gaps_m=pg[ps], currents_A=i[cs], time_s=float(time)))
                 i[cs] = np.nan
         # the steady state of the ladder has no shielding current (I_e = V_m/R_2 = 0)
         eddy = np.where(np.isnan(i), np.nan, 0.0) if self.motion_eddy else None
@@ -1618,7 +1623,7 @@ class MagnetBank:
         >>> maps = mk.build_maps(mk.load_magnet("u-magnet"), gaps=np.linspace(0.006, 0.016, 6),
         ...                      currents=np.linspace(0, 60, 13), progress=False)
         >>> bank = mk.MagnetBank({"a": maps, "b": maps}, compiled="never")
-        >>> stepper = bank.stepper(bank.initial_state(gaps=0.010, currents=20.0), dt_s=1e-3)
+        >>> stepper = bank.stepper(bank.initial_state(gaps_m=0.010, currents_A=20.0), dt_s=1e-3)
         >>> stepper.advance(voltages_V=45.0, gap_rates_m_per_s=0.0)
         >>> bool(stepper.inductor_currents_A[0] > 20.0)
         True
@@ -1626,8 +1631,10 @@ class MagnetBank:
         dt = dt_s
         return BankStepper(self, state, dt)
 
-    def simulate(self, t: Any, *, gaps: Any, voltages: Any, gap_rates: Any = None,
-                 dt: float | None = None, initial_currents: Any = None,
+    @renamed_keywords(gaps="gaps_m", voltages="voltages_V", gap_rates="gap_rates_m_per_s",
+                      dt="dt_s", initial_currents="initial_currents_A")
+    def simulate(self, t: Any, *, gaps_m: Any, voltages_V: Any, gap_rates_m_per_s: Any = None,
+                 dt_s: float | None = None, initial_currents_A: Any = None,
                  initial_state: BankState | None = None,
                  gap_rate_tolerance: float = 0.02) -> BankSimulation:
         """Simulate on a time grid (inputs and conventions as :func:`maglevkit.simulate`).
@@ -1638,23 +1645,26 @@ class MagnetBank:
         with one gap per circuit, through :meth:`stepper`: the same compiled function,
         without the per-step objects).
 
+        The old keyword names ``gaps``, ``voltages``, ``gap_rates``, ``dt``, ``initial_currents`` still work
+        as deprecated aliases (a ``DeprecationWarning`` names the new one).
+
         Parameters
         ----------
         t : (t0, tf), [t0, tf] or array_like
             A time span [s] (sampled with ``dt``) or an explicit strictly increasing grid [s].
-        gaps : float, sequence, mapping, Signal, callable or array
+        gaps_m : float, sequence, mapping, Signal, callable or array
             Gap inputs [m] (one per circuit or per pole, :attr:`gap_names`), > 0 at every
             sample: constant, per gap, gap name -> value, a function of time [s] or an
             array (n_t, n_gaps) on the grid.
-        voltages : same forms as ``gaps``
+        voltages_V : same forms as ``gaps``
             Circuit voltages [V] (:attr:`circuit_names`); zero-order hold on each interval.
-        gap_rates : same forms as ``gaps``, optional
+        gap_rates_m_per_s : same forms as ``gaps``, optional
             Gap rates [m/s]; only checked against the secants of the sampled gaps (the
             secants drive the model). None: no check.
-        dt : float, optional
+        dt_s : float, optional
             Grid step [s] of a time span (None: 1e-4 s, or ``tf - t0`` if shorter); must
             be None with an explicit grid.
-        initial_currents : float, array_like (n_circuits,) or mapping, optional
+        initial_currents_A : float, array_like (n_circuits,) or mapping, optional
             Start from the steady state at the first gaps with these coil currents [A]
             instead of ``U(t0) / R_el``. Not together with ``initial_state``.
         initial_state : BankState, optional
@@ -1679,6 +1689,8 @@ class MagnetBank:
         SolverError
             Non-finite results or a detailed member's integrator failing.
         """
+        gaps, voltages, gap_rates, dt = gaps_m, voltages_V, gap_rates_m_per_s, dt_s
+        initial_currents = initial_currents_A
         times, g, u, rates = simulation_inputs(
             t, dt, gaps=gaps, voltages=voltages, gap_rates=gap_rates, gap_names=self.gap_names,
             circuit_names=self.circuit_names, gap_rate_tolerance=gap_rate_tolerance)
@@ -1687,7 +1699,7 @@ class MagnetBank:
             state = initial_state
         else:
             i0 = u[0] / self.resistance_ohm if initial_currents is None else initial_currents
-            state = self.initial_state(gaps=g[0], currents=i0, time=float(times[0]))
+            state = self.initial_state(gaps_m=g[0], currents_A=i0, time_s=float(times[0]))
         nt, nc = times.size, self.n_circuits
         cur, il, fc = (np.empty((nt, nc)) for _ in range(3))
         pf = np.empty((nt, len(self.pole_names)))

@@ -757,18 +757,22 @@ class CurrentModel:
         return np.array(out).T[:, 1:]
 
     # ------------------------------------------------------------------ stepping interface
-    def initial_state(self, *, gaps: Any, currents: Any, time: float = 0.0) -> CurrentModelState:
+    @renamed_keywords(gaps="gaps_m", currents="currents_A", time="time_s")
+    def initial_state(self, *, gaps_m: Any, currents_A: Any, time_s: float = 0.0) -> CurrentModelState:
         """The steady state at ``gaps`` [m] with coil currents ``currents`` [A] (``I_L = I``;
         with eddy modes ``I_k = 0``).
 
+        The old keyword names ``gaps``, ``currents``, ``time`` still work as deprecated aliases (a
+        ``DeprecationWarning`` names the new one).
+
         Parameters
         ----------
-        gaps : float, array_like (n_gaps,) or mapping
+        gaps_m : float, array_like (n_gaps,) or mapping
             Pole gaps [m], each > 0: one value for all, one per gap in the order of
             ``gap_names``, or a mapping gap name -> value naming every gap exactly once.
-        currents : float, array_like (n_circuits,) or mapping
+        currents_A : float, array_like (n_circuits,) or mapping
             Coil currents [A], same forms per circuit (``circuit_names``).
-        time : float, default 0.0
+        time_s : float, default 0.0
             Time of the state [s], finite.
 
         Returns
@@ -784,6 +788,7 @@ class CurrentModel:
             Substitute gaps or currents outside the maps (with ``extrapolate=True`` only
             beyond the extrapolation band; inside it a warning).
         """
+        gaps, currents, time = gaps_m, currents_A, time_s
         g = _per_gap(gaps, self.gap_names, positive=True)
         i = _per_circuit(currents, self.circuit_names, "currents")
         if not math.isfinite(time):
@@ -1108,8 +1113,10 @@ class CurrentModel:
                 self._check_substeps(lo[:, k], hi[:, k], float(t[k]), float(t[k + 1]))
         return xs, outs
 
-    def simulate(self, t: Any, *, gaps: Any, voltages: Any, gap_rates: Any = None,
-                 dt: float | None = None, initial_currents: Any = None,
+    @renamed_keywords(gaps="gaps_m", voltages="voltages_V", gap_rates="gap_rates_m_per_s",
+                      dt="dt_s", initial_currents="initial_currents_A")
+    def simulate(self, t: Any, *, gaps_m: Any, voltages_V: Any, gap_rates_m_per_s: Any = None,
+                 dt_s: float | None = None, initial_currents_A: Any = None,
                  initial_state: CurrentModelState | None = None,
                  gap_rate_tolerance: float = 0.02) -> ReducedSimulation:
         """Simulate on a time grid; same inputs and conventions as :func:`maglevkit.simulate`.
@@ -1117,22 +1124,25 @@ class CurrentModel:
         Gaps move linearly between samples, voltages are held from each sample to the
         next; the default initial state is the steady state ``I = U(t0) / R_el``.
 
+        The old keyword names ``gaps``, ``voltages``, ``gap_rates``, ``dt``, ``initial_currents`` still work
+        as deprecated aliases (a ``DeprecationWarning`` names the new one).
+
         Parameters
         ----------
         t : (t0, tf), [t0, tf] or array_like
             A time span [s] (sampled with ``dt``) or an explicit strictly increasing grid [s].
-        gaps : float, sequence, mapping, Signal, callable or array
+        gaps_m : float, sequence, mapping, Signal, callable or array
             Pole gaps [m], > 0 at every sample (constant, per gap, gap name -> value, a
             function of time [s] or an array (n_t, n_gaps) on the grid).
-        voltages : same forms as ``gaps``
+        voltages_V : same forms as ``gaps``
             Circuit voltages [V], one per circuit; zero-order hold on each interval.
-        gap_rates : same forms as ``gaps``, optional
+        gap_rates_m_per_s : same forms as ``gaps``, optional
             Gap rates [m/s]; only checked against the secants of the sampled gaps (the
             secants drive the model). None: no check.
-        dt : float, optional
+        dt_s : float, optional
             Grid step [s] of a time span (None: 1e-4 s, or ``tf - t0`` if shorter); must
             be None with an explicit grid.
-        initial_currents : float, array_like (n_circuits,) or mapping, optional
+        initial_currents_A : float, array_like (n_circuits,) or mapping, optional
             Start from the steady state with these coil currents [A] instead of
             ``U(t0) / R_el``. Not together with ``initial_state``.
         initial_state : CurrentModelState, optional
@@ -1155,6 +1165,8 @@ class CurrentModel:
         OutOfRangeError
             Substitute gaps or currents leave the maps during the run (see ``extrapolate``).
         """
+        gaps, voltages, gap_rates, dt = gaps_m, voltages_V, gap_rates_m_per_s, dt_s
+        initial_currents = initial_currents_A
         times, g, u, secant = simulation_inputs(
             t, dt, gaps=gaps, voltages=voltages, gap_rates=gap_rates, gap_names=self.gap_names,
             circuit_names=self.circuit_names, gap_rate_tolerance=gap_rate_tolerance)

@@ -87,7 +87,7 @@ class BankStepper:
     >>> maps = mk.build_maps(magnet, gaps=np.linspace(0.006, 0.016, 6),
     ...                      currents=np.linspace(0, 60, 13), progress=False)
     >>> bank = mk.MagnetBank({f"m{k}": maps for k in range(4)}, compiled="never")
-    >>> stepper = bank.stepper(bank.initial_state(gaps=0.010, currents=20.0), dt_s=1e-3)
+    >>> stepper = bank.stepper(bank.initial_state(gaps_m=0.010, currents_A=20.0), dt_s=1e-3)
     >>> force = stepper.circuit_force_N            # bound once, always the last step's
     >>> for k in range(10):
     ...     stepper.voltages_V[:] = bank.resistance_ohm * 21.0   # e.g. from a controller

@@ -775,7 +775,7 @@ class CrossSectionModel:
         nq = s.n_dof
         x = np.concatenate([self.trim_q, np.zeros(nq)])
         gm = s.gap_matrix
-        state = bank.initial_state(gaps=self.s0, currents=np.repeat(self.trim_current_A, 2))
+        state = bank.initial_state(gaps_m=self.s0, currents_A=np.repeat(self.trim_current_A, 2))
         stepper = bank.stepper(state, dt)
         ctl = self.controllers()
         # chopper bound per circuit: -R_ec I_L (none for detailed members, NaN R_ec)
@@ -1009,7 +1009,7 @@ class CrossSectionModel:
         p_all[:n + 1, pi["Q_t"]] = field_mid @ s.G.T + q_ext
         p_all[:n + 1, pi["t"].start] = t
         p_all[n + 1:, pi["t"].start] = t[-1] + dt * np.arange(1, n_rows - n)
-        state0 = bank.initial_state(gaps=self.s0, currents=np.repeat(self.trim_current_A, 2))
+        state0 = bank.initial_state(gaps_m=self.s0, currents_A=np.repeat(self.trim_current_A, 2))
         out0 = bank.outputs(state0)
         sv = [np.zeros(st["force"].stop), np.zeros(st["force"].stop)]
         sv[0][st["x"]] = np.concatenate([self.trim_q, np.zeros(nq)])

@@ -788,12 +788,12 @@ class VehicleModel:
         u_p = bt @ q
         gaps_p = s0 + u_p - d0 - r_all[0]
         if self.fine:
-            bstate = bank.initial_state(gaps=gaps_p, currents=self.trim_current_A)
+            bstate = bank.initial_state(gaps_m=gaps_p, currents_A=self.trim_current_A)
             circ_avg = np.zeros((nc, npt))
             circ_avg[self.pole_circuit, np.arange(npt)] = 1.0
             circ_avg /= circ_avg.sum(axis=1, keepdims=True)
         else:
-            bstate = bank.initial_state(gaps=gaps_p, currents=self.trim_current_A)
+            bstate = bank.initial_state(gaps_m=gaps_p, currents_A=self.trim_current_A)
             circ_avg = None
         out0 = bank.outputs(bstate)
         force_c = out0.circuit_force_N.copy()
