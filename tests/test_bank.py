@@ -451,7 +451,7 @@ def test_moving_gap_converges_with_rk4_order(u_maps) -> None:
 
     def final_current(n: int) -> float:
         dt = duration / n
-        state = bank.initial_state(gaps=s0, currents=i0)
+        state = bank.initial_state(gaps_m=s0, currents_A=i0)
         for k in range(n):
             state, _ = bank.step(state, dt, r * i0, s0 + rate * k * dt, rate)
         return float(state.inductor_currents_A[0])

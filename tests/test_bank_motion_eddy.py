@@ -51,9 +51,9 @@ def test_bank_of_one_ladder_member_equals_current_model(u_maps, compiled: str) -
     cm = mk.CurrentModel(u_maps, motion_eddy=True)
     bank = MagnetBank({"m": cm}, compiled=compiled)
     assert bank.motion_eddy and bank.max_step_s == cm.max_step_s
-    st = bank.initial_state(gaps=0.010, currents=20.0)
+    st = bank.initial_state(gaps_m=0.010, currents_A=20.0)
     assert st.eddy_currents_A is not None and np.all(st.eddy_currents_A == 0.0)
-    cs = cm.initial_state(gaps=0.010, currents=20.0)
+    cs = cm.initial_state(gaps_m=0.010, currents_A=20.0)
     stepper = bank.stepper(st, DT)
     u = float(bank.resistance_ohm[0]) * 20.0
     ng = len(cm.gap_names)
@@ -84,9 +84,9 @@ def test_bank_option_and_simulate_equal_current_model(u_maps) -> None:
     t = np.arange(0, 101) * DT
     gaps = 0.010 + 0.001 * np.sin(2 * np.pi * 50.0 * t)
     u = float(bank.resistance_ohm[0]) * 20.0
-    sim = bank.simulate(t, gaps=gaps[:, None], voltages=u)
-    ref = cm.simulate(t, gaps=np.repeat(gaps[:, None], len(cm.gap_names), axis=1),
-                      voltages=u)
+    sim = bank.simulate(t, gaps_m=gaps[:, None], voltages_V=u)
+    ref = cm.simulate(t, gaps_m=np.repeat(gaps[:, None], len(cm.gap_names), axis=1),
+                      voltages_V=u)
     assert sim.eddy_currents_A is not None and ref.eddy_currents_A is not None
     assert np.max(np.abs(sim.inductor_currents_A[:, 0] - ref.inductor_currents_A[:, 0])) < TOL_A
     assert np.max(np.abs(sim.eddy_currents_A[:, 0] - ref.eddy_currents_A[:, 0, 0])) < TOL_A
@@ -112,9 +112,9 @@ def test_mixed_bank_equals_its_members_on_their_own(u_maps, gap_inputs: str) -> 
     bank = MagnetBank({"ladder": cm, "eq8": u_maps}, compiled="never", gap_inputs=gap_inputs)
     eq8 = MagnetBank({"eq8": u_maps}, compiled="never", max_step_s=bank.max_step_s)
     assert bank.max_step_s == cm.max_step_s and not eq8.motion_eddy
-    st = bank.initial_state(gaps=0.010, currents=20.0)
-    s8 = eq8.initial_state(gaps=0.010, currents=20.0)
-    cs = cm.initial_state(gaps=0.010, currents=20.0)
+    st = bank.initial_state(gaps_m=0.010, currents_A=20.0)
+    s8 = eq8.initial_state(gaps_m=0.010, currents_A=20.0)
+    cs = cm.initial_state(gaps_m=0.010, currents_A=20.0)
     u = float(bank.resistance_ohm[0]) * 20.0
     ng = len(cm.gap_names)
     for k in range(100):
@@ -141,7 +141,7 @@ def test_eq8_banks_keep_their_layout(u_maps) -> None:
     kernel's five inputs and nine outputs."""
     bank = MagnetBank({"m": u_maps}, compiled="never")
     assert not bank.motion_eddy
-    st = bank.initial_state(gaps=0.010, currents=20.0)
+    st = bank.initial_state(gaps_m=0.010, currents_A=20.0)
     assert st.eddy_currents_A is None
     assert bank.circuit_parameters.shape[0] == 13
     f = bank.step_function(1e-3)
@@ -160,14 +160,14 @@ def test_refusals(u_maps, tmp_path) -> None:
     with pytest.raises(InputError, match="motion_eddy = 'yes'"):
         MagnetBank({"m": u_maps}, motion_eddy="yes", compiled="never")  # type: ignore[arg-type]
     bank = MagnetBank({"m": cm}, compiled="never")
-    st = bank.initial_state(gaps=0.010, currents=20.0)
+    st = bank.initial_state(gaps_m=0.010, currents_A=20.0)
     with pytest.raises(InputError, match="run_steps.*motion_eddy.*step or stepper"):
         bank.run_steps(st.inductor_currents_A, np.full((2, 1), 0.01), np.full((2, 1), 40.0),
                        np.zeros((2, 1)), np.full(2, 1e-3))
     with pytest.raises(InputError, match="circuit_expressions.*ladder_expressions"):
         bank.circuit_expressions(0, 20.0, 0.01, 40.0, 0.0, bank.table)
-    eq8_state = MagnetBank({"m": u_maps}, compiled="never").initial_state(gaps=0.01,
-                                                                          currents=20.0)
+    eq8_state = MagnetBank({"m": u_maps}, compiled="never").initial_state(gaps_m=0.01,
+                                                                          currents_A=20.0)
     with pytest.raises(InputError, match="eddy_currents_A of shape"):
         bank.step(eq8_state, 1e-3, 40.0)
     with pytest.raises(InputError, match="freewheel=False"):
@@ -204,7 +204,7 @@ def test_fmu_of_a_ladder_member_equals_the_bank(u_maps, tmp_path) -> None:
     u = float(bank.resistance_ohm[0]) * 20.0
     fmu.setReal([vr[u_name]], [u])
     fmu.exitInitializationMode()
-    st = bank.initial_state(gaps=0.010, currents=20.0)
+    st = bank.initial_state(gaps_m=0.010, currents_A=20.0)
     h = 5e-4
     worst = 0.0
     for k in range(80):
@@ -239,7 +239,7 @@ def test_ladder_lanes_equal_casadi_code_and_the_virtual_machine(u_maps) -> None:
              MagnetBank(members, compiled="auto", codegen="casadi")]
     assert banks[1].compiled_step_library(DT) is not None
     assert banks[2].compiled_step_library(DT) is None
-    states = [b.initial_state(gaps=0.010, currents=20.0) for b in banks]
+    states = [b.initial_state(gaps_m=0.010, currents_A=20.0) for b in banks]
     u = float(banks[0].resistance_ohm[0]) * 20.0
     for k in range(60):
         g0, gd = _gap_sine(k)
@@ -372,8 +372,8 @@ def test_ladder_member_beside_a_detailed_member(u_maps) -> None:
     bank = MagnetBank({"l": cm, "d": mk.FluxModel(mk.load_magnet("u-magnet"))},
                       compiled="never")
     alone = MagnetBank({"l": cm}, compiled="never")
-    st = bank.initial_state(gaps=0.010, currents=20.0)
-    sa = alone.initial_state(gaps=0.010, currents=20.0)
+    st = bank.initial_state(gaps_m=0.010, currents_A=20.0)
+    sa = alone.initial_state(gaps_m=0.010, currents_A=20.0)
     assert st.eddy_currents_A is not None
     assert st.eddy_currents_A[0] == 0.0 and np.isnan(st.eddy_currents_A[1])
     stepper = bank.stepper(st, 1e-3)
