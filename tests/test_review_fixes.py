@@ -17,3 +17,39 @@ def test_python_dash_m_runs_the_cli() -> None:
                          capture_output=True, text=True, timeout=120, check=False)
     assert out.returncode == 0, out.stderr
     assert "Usage: maglevkit" in out.stdout
+
+
+# ---------------------------------------------------------------- CLI output paths
+from typer.testing import CliRunner  # noqa: E402
+
+from maglevkit.cli import app  # noqa: E402
+
+runner = CliRunner()
+
+
+def test_output_may_not_be_the_input_even_with_force(tmp_path: Path) -> None:
+    """``design spec.toml -o spec.toml --force`` refuses (before reading), input unchanged."""
+    spec = tmp_path / "spec.toml"
+    spec.write_text("# a design spec\n")
+    res = runner.invoke(app, ["design", str(spec), "-o", str(spec), "--force"])
+    assert res.exit_code == 2
+    assert "input file" in res.output and "--output" in res.output
+    assert spec.read_text() == "# a design spec\n"
+    # the same file through another spelling of the path
+    other = tmp_path / "sub" / ".." / "spec.toml"
+    (tmp_path / "sub").mkdir()
+    res = runner.invoke(app, ["statics", str(spec), "--csv", str(other), "--force"])
+    assert res.exit_code == 2 and "input file" in res.output
+
+
+def test_plot_folder_is_not_created_by_a_failed_run(tmp_path: Path) -> None:
+    """``--plot DIR`` is checked before the run but created only when figures are written."""
+    folder = tmp_path / "figs"
+    res = runner.invoke(app, ["vehicle", "run", "tr09", "--duration", "0.001", "--dt", "0.001",
+                              "--plot", str(folder)])
+    assert res.exit_code == 2 and "--duration" in res.output
+    assert not folder.exists()
+    # a file in its place is still refused before the run
+    folder.write_text("x")
+    res = runner.invoke(app, ["vehicle", "run", "tr09", "--plot", str(folder)])
+    assert res.exit_code == 2 and "not a folder" in res.output

@@ -137,9 +137,10 @@ def _run(vehicle: str, speed_kmh: float | None, speed: float | None, duration: f
     )
     from ..vehicle.train import load_vehicle
 
-    output = output_file(output, "-o", formats=("nc",), force=force)   # netCDF, as sweep -o
-    if plot is not None:
-        plot = output_dir(plot, "--plot")
+    output = output_file(output, "-o", formats=("nc",), force=force,   # netCDF, as sweep -o
+                         inputs=(vehicle, guideway))
+    if plot is not None:   # checked now, created only when the figures are written
+        plot = output_dir(plot, "--plot", create=False)
     try:
         # the unit in the option's name: sweep files' speed is in m/s (issue 27)
         opt = "--speed-kmh"
@@ -196,6 +197,7 @@ def _run(vehicle: str, speed_kmh: float | None, speed: float | None, duration: f
     if plot is not None:
         from ..vehicle.plots import plot_vehicle_run
 
+        output_dir(plot, "--plot")
         with writing(plot, "--plot"):
             written = plot_vehicle_run(res.dataset, plot)
         for p in written:
@@ -243,9 +245,9 @@ def _run_cross_section(name: str, speed_kmh: float | None, duration: float, dt: 
     from ..vehicle.data import load_guideway
     from ..vehicle.simulation import parse_failure, parse_irregularity
 
-    output = output_file(output, "-o", formats=("nc",), force=force)
-    if plot is not None:
-        plot = output_dir(plot, "--plot")
+    output = output_file(output, "-o", formats=("nc",), force=force, inputs=(name,))
+    if plot is not None:   # checked now, created only when the figures are written
+        plot = output_dir(plot, "--plot", create=False)
     try:
         speed_kmh = 0.0 if speed_kmh is None else speed_kmh
         if not (speed_kmh >= 0 and speed_kmh < 2000):
@@ -281,6 +283,7 @@ def _run_cross_section(name: str, speed_kmh: float | None, duration: float, dt: 
     if plot is not None:
         from ..vehicle.crossplots import plot_cross_section_run
 
+        output_dir(plot, "--plot")
         with writing(plot, "--plot"):
             written = plot_cross_section_run(res.dataset, plot)
         for p in written:
