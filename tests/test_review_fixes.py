@@ -53,3 +53,21 @@ def test_plot_folder_is_not_created_by_a_failed_run(tmp_path: Path) -> None:
     folder.write_text("x")
     res = runner.invoke(app, ["vehicle", "run", "tr09", "--plot", str(folder)])
     assert res.exit_code == 2 and "not a folder" in res.output
+
+
+# ---------------------------------------------------------------- design_sensitivities
+def test_design_sensitivities_warns_on_gap_in_mm() -> None:
+    """``gap_m=10`` (mm typed as m) warns as solve_statics does; a negative gap is refused."""
+    import pytest
+
+    from maglevkit.design import design_sensitivities, read_design_spec
+    from maglevkit.errors import InputError, PlausibilityWarning
+    from tests.test_design import example_doc
+
+    spec = read_design_spec(example_doc())
+    values = {"pole_width": 0.027, "coil_height": 0.045, "coil_thickness": 0.014,
+              "leg_height": 0.068}
+    with pytest.warns(PlausibilityWarning, match="design_sensitivities: gap 10 m"):
+        design_sensitivities(spec, values, gap_m=10, current_A=14.0)
+    with pytest.raises(InputError, match="gap_m"):
+        design_sensitivities(spec, values, gap_m=-0.008, current_A=14.0)
