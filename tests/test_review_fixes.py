@@ -71,3 +71,75 @@ def test_design_sensitivities_warns_on_gap_in_mm() -> None:
         design_sensitivities(spec, values, gap_m=10, current_A=14.0)
     with pytest.raises(InputError, match="gap_m"):
         design_sensitivities(spec, values, gap_m=-0.008, current_A=14.0)
+
+
+# ---------------------------------------------------------------- run options
+def test_speed_in_kmh_typed_as_m_per_s_warns() -> None:
+    """400 m/s (1440 km/h, above the 160 m/s = 576 km/h bound) warns naming km/h; 111 m/s
+    (400 km/h) and 0 do not.  The check is the one both run methods call."""
+    import warnings
+
+    import pytest
+
+    from maglevkit.errors import PlausibilityWarning
+    from maglevkit.vehicle.simulation import check_run_speed
+
+    with pytest.warns(PlausibilityWarning, match=r"speed_m_per_s = 400(\.0)? m/s.*km/h"):
+        check_run_speed(400.0, "VehicleModel.run")
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        check_run_speed(400 / 3.6, "VehicleModel.run")
+        check_run_speed(0.0, "VehicleModel.run")
+
+
+def test_run_methods_warn_on_speed_before_running() -> None:
+    """Both ``run`` methods call the speed check before any work: with warnings as errors
+    the warning itself stops them (no simulation is started)."""
+    import warnings
+
+    import pytest
+
+    from maglevkit.errors import PlausibilityWarning
+    from maglevkit.vehicle import crossrun, simulation
+
+    for cls in (simulation.VehicleModel, crossrun.CrossSectionModel):
+        obj = cls.__new__(cls)   # the check comes first: no model needs to be built
+        with warnings.catch_warnings():
+            warnings.simplefilter("error", PlausibilityWarning)
+            with pytest.raises(PlausibilityWarning, match="speed_m_per_s = 400"):
+                obj.run(speed_m_per_s=400.0, duration_s=0.01, dt_s=1e-3)
+
+
+def test_irregularity_amplitude_in_mm_warns_naming_the_option() -> None:
+    """``random:0.3`` (0.3 mm typed as metres) warns naming --irregularity; 0.3e-3 does not."""
+    import warnings
+
+    import pytest
+
+    from maglevkit.errors import PlausibilityWarning
+    from maglevkit.vehicle.simulation import parse_irregularity
+
+    with pytest.warns(PlausibilityWarning, match=r"--irregularity.*random = 0.3 m"):
+        parse_irregularity("random:0.3", span_length_m=24.8)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        parse_irregularity("sag:0.5e-3+random:0.3e-3:7+joints:1e-4", span_length_m=24.8)
+
+
+def test_irregularity_closing_the_gap_is_refused_naming_the_option() -> None:
+    """``--irregularity random:0.3`` on the train: one warning naming the option, then a
+    clear error naming the irregularity (not a circuit's "gaps must be > 0")."""
+    import warnings
+
+    from maglevkit.errors import PlausibilityWarning
+
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        res = runner.invoke(app, ["vehicle", "run", "tr09", "--duration", "0.004",
+                                  "--irregularity", "random:0.3", "--no-progress"])
+    assert res.exit_code == 2
+    named = [w for w in caught if issubclass(w.category, PlausibilityWarning)
+             and "(--irregularity): [irregularity] random = 0.3 m" in str(w.message)]
+    assert len(named) == 1
+    assert "irregularity: the guideway profile closes the gap at t = 0" in res.output
+    assert "circuit" not in res.output

@@ -9,7 +9,7 @@ from typing import Annotated
 
 import typer
 
-from ..errors import MaglevkitError
+from ..errors import MaglevkitError, MaglevkitWarning
 from ._app import (
     INTERRUPTED_EXIT_CODE,
     ForceOption,
@@ -173,7 +173,10 @@ def _run(vehicle: str, speed_kmh: float | None, speed: float | None, duration: f
         model = VehicleModel(train, guideway=track, rigid=rigid, magnets=magnets,
                              maps_cache=maps_cache, controller=controller)
         if prof is not None and not rigid:
-            prof = parse_irregularity(irregularity, span_length_m=model.guideway.span.length_m)
+            with warnings.catch_warnings():   # its warnings were shown by the first parse
+                warnings.simplefilter("ignore", MaglevkitWarning)
+                prof = parse_irregularity(irregularity,
+                                          span_length_m=model.guideway.span.length_m)
         res = model.run(speed_m_per_s=speed_kmh / 3.6, duration_s=duration, dt_s=dt,
                         irregularity=prof, failures=fails, progress=progress)
     except VehicleRunInterrupted as exc:

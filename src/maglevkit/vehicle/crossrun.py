@@ -52,7 +52,7 @@ from ..errors import InputError, MaglevkitWarning
 from ..plant import STANDARD_GRAVITY
 from ..validation import Plausible, check_plausible, real_number
 from .crosssection import CrossSectionData, CrossSectionMechanics, track_field_path
-from .simulation import Failure
+from .simulation import Failure, check_run_speed
 
 __all__ = ["CrossSectionModel", "CrossSectionRun", "TransitionCurve", "Crosswind",
            "LATERAL_ALIGNMENT_PSD", "SCENARIO_PLAUSIBLE", "parse_curve", "parse_crosswind", "parse_lateral"]
@@ -673,6 +673,7 @@ class CrossSectionModel:
             the run (the run never reaches them).
         """
         v = real_number(speed_m_per_s, "speed_m_per_s", "m/s", nonnegative=True)
+        check_run_speed(v, "CrossSectionModel.run")
         dur = real_number(duration_s, "duration_s", "s", positive=True)
         dt = real_number(dt_s, "dt_s", "s", positive=True)
         n = int(round(dur / dt))

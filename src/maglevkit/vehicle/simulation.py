@@ -36,12 +36,46 @@ import numpy as np
 
 from ..errors import InputError, MaglevkitError, OutOfRangeError, ParameterFileError, SolverError
 from ..plant import STANDARD_GRAVITY
+from ..validation import Plausible, check_plausible
 from .guideway import Guideway
 from .mechanics import VehicleMechanics
 from .train import TrainData
 
 __all__ = ["Failure", "VehicleRun", "VehicleModel", "VehicleRunInterrupted", "run_vehicle",
-           "parse_failure", "parse_irregularity"]
+           "parse_failure", "parse_irregularity", "RUN_PLAUSIBLE", "check_run_speed"]
+
+#: Plausible magnitudes of the run options (:func:`~maglevkit.validation.check_plausible`:
+#: outside, most likely a unit slip; the value is used as given, with a
+#: :class:`~maglevkit.errors.PlausibilityWarning`).  Speed: the Transrapid's design speed
+#: is 500 km/h (139 m/s); above 160 m/s (576 km/h) a speed in km/h typed into the m/s
+#: option is far more likely than a real run.  Irregularity amplitudes (sag, joint steps,
+#: random RMS) above 10 mm exceed the nominal gap; below 1 um they are a slip too.
+RUN_PLAUSIBLE: dict[str, Plausible] = {
+    "run.speed_m_per_s": Plausible(0.01, 160.0, "m/s"),
+    "irregularity.sag": Plausible(1e-6, 0.01, "m"),
+    "irregularity.joints": Plausible(1e-6, 0.01, "m"),
+    "irregularity.random": Plausible(1e-6, 0.01, "m"),
+}
+
+
+def check_run_speed(speed_m_per_s: float, where: str) -> None:
+    """Warn about an implausible vehicle speed (:data:`RUN_PLAUSIBLE`, e.g. km/h as m/s).
+
+    Parameters
+    ----------
+    speed_m_per_s : float
+        The run's speed [m/s].
+    where : str
+        The caller, for the message (e.g. ``"VehicleModel.run"``).
+
+    Warns
+    -----
+    PlausibilityWarning
+        Above 160 m/s (576 km/h) or below 0.01 m/s (zero is plausible).
+    """
+    check_plausible({"run": {"speed_m_per_s": speed_m_per_s}},
+                    {"run.speed_m_per_s": RUN_PLAUSIBLE["run.speed_m_per_s"]}, where,
+                    stacklevel=4)
 
 #: cost weights of the vehicle circuits' NMPC (MPCWeights fields; docs/decisions.md, "Any
 #: controller in the vehicle loop"): the gap rate is the guideway's more than the magnet's
@@ -690,6 +724,7 @@ class VehicleModel:
                 raise InputError(f"{name} = {v!r} must be a finite number")
         if speed_m_per_s < 0 or duration_s <= 0 or dt_s <= 0:
             raise InputError("speed_m_per_s must be >= 0 and duration_s, dt_s > 0")
+        check_run_speed(speed_m_per_s, "VehicleModel.run")
         if loop not in ("auto", "compiled", "python"):
             raise InputError(f"loop = {loop!r}; use 'auto', 'compiled' or 'python'")
         if loop == "compiled" and self.fine:
@@ -787,6 +822,13 @@ class VehicleModel:
         # bank initial state
         u_p = bt @ q
         gaps_p = s0 + u_p - d0 - r_all[0]
+        if not np.all(gaps_p > 0):   # the irregularity closes the gap before the first step
+            k = int(np.argmin(np.where(np.isfinite(gaps_p), gaps_p, -np.inf)))
+            raise InputError(
+                f"irregularity: the guideway profile closes the gap at t = 0 (gap "
+                f"{gaps_p[k]:.4g} m at point {k}, irregularity r = {r_all[0][k]:.4g} m there, "
+                f"nominal gap {s0:g} m); irregularity amplitudes are in metres "
+                "(--irregularity sag:0.5e-3 is 0.5 mm): give a smaller amplitude")
         if self.fine:
             bstate = bank.initial_state(gaps=gaps_p, currents=self.trim_current_A)
             circ_avg = np.zeros((nc, npt))
@@ -1593,6 +1635,10 @@ def parse_irregularity(text: str, *, span_length_m: float) -> Any:
             nums = [float(x) for x in vals]
         except ValueError:
             raise InputError(f"irregularity part {p!r}: values must be numbers") from None
+        if kind in ("sag", "joints", "random") and nums:
+            check_plausible({"irregularity": {kind: nums[0]}},
+                            {f"irregularity.{kind}": RUN_PLAUSIBLE[f"irregularity.{kind}"]},
+                            f"irregularity {p!r} (--irregularity)", stacklevel=3)
         if kind == "sag" and len(nums) == 1:
             new: Any = SpanSag(nums[0], span_length_m)
         elif kind == "joints" and len(nums) == 1:
