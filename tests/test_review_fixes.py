@@ -143,3 +143,24 @@ def test_irregularity_closing_the_gap_is_refused_naming_the_option() -> None:
     assert len(named) == 1
     assert "irregularity: the guideway profile closes the gap at t = 0" in res.output
     assert "circuit" not in res.output
+
+
+# ---------------------------------------------------------------- BeamSpan = the guideway file
+def test_beamspan_precamber_checked_as_the_file() -> None:
+    """A negative precamber is refused (the file's ``nonnegative``), 2.7 (mm as m) warns
+    (the file's plausible range 0.1 mm ... 50 mm); 2.7e-3 and 0 pass silently."""
+    import warnings
+
+    import pytest
+
+    from maglevkit.errors import ParameterError, PlausibilityWarning
+    from maglevkit.vehicle.guideway import BeamSpan
+
+    with pytest.raises(ParameterError, match="precamber_m"):
+        BeamSpan(24.768, 4e10, 7500.0, precamber_m=-2.7e-3)
+    with pytest.warns(PlausibilityWarning, match=r"precamber_m = 2.7 m.*typed in mm"):
+        BeamSpan(24.768, 4e10, 7500.0, precamber_m=2.7)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        BeamSpan(24.768, 4e10, 7500.0, precamber_m=2.7e-3)
+        BeamSpan(24.768, 4e10, 7500.0)
