@@ -164,3 +164,28 @@ def test_beamspan_precamber_checked_as_the_file() -> None:
         warnings.simplefilter("error")
         BeamSpan(24.768, 4e10, 7500.0, precamber_m=2.7e-3)
         BeamSpan(24.768, 4e10, 7500.0)
+
+
+# ---------------------------------------------------------------- crosswind step
+def test_crosswind_step_with_ignored_rise_hold_warns_naming_the_option() -> None:
+    """``5000:0.5:1:step``: RISE/HOLD without START do nothing for a step -> a warning naming
+    --crosswind; ``5000:0.5:3:0.2:step`` (a hold for a step) too; the documented
+    ``5000:0.5:0:0.2:step`` and ``5000:step`` are silent and keep their meaning."""
+    import warnings
+
+    import pytest
+
+    from maglevkit.errors import MaglevkitWarning
+    from maglevkit.vehicle.crossrun import parse_crosswind
+
+    with pytest.warns(MaglevkitWarning, match=r"--crosswind = '5000:0.5:1:step'.*RISE_S and "
+                                              r"HOLD_S 0.5:1 s are ignored"):
+        cw = parse_crosswind("5000:0.5:1:step")
+    assert cw.shape == "step" and cw.start_s == 0.5      # the default start, unchanged
+    with pytest.warns(MaglevkitWarning, match=r"HOLD_S = 3 s is ignored"):
+        parse_crosswind("5000:0.5:3:0.2:step")
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        assert parse_crosswind("5000:0.5:0:0.2:step").start_s == 0.2
+        assert parse_crosswind("5000:step").peak_force_N == 5000.0
+        parse_crosswind("8000:0.5:1:0.5")

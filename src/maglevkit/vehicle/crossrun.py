@@ -273,7 +273,7 @@ def parse_crosswind(text: str) -> Crosswind:
     ----------
     text : str
         E.g. ``"8000:0.5:1:0.5"`` or ``"5000:0.5:0:0.2:step"`` (shape ``1-cosine`` or
-        ``step``).
+        ``step``; a step has no rise or hold: those slots only place ``START_S``).
 
     Returns
     -------
@@ -283,6 +283,12 @@ def parse_crosswind(text: str) -> Crosswind:
     ------
     InputError
         Bad numbers, a bad shape or values out of range (named).
+
+    Warns
+    -----
+    MaglevkitWarning
+        A step with RISE_S/HOLD_S but no START_S (they would be ignored), or with a
+        non-zero HOLD_S (a step does not end).
     """
     parts = str(text).split(":")
     shape = "1-cosine"
@@ -293,6 +299,18 @@ def parse_crosswind(text: str) -> Crosswind:
                          "]]][:SHAPE], SHAPE 1-cosine or step, e.g. 8000:0.5:1:0.5")
     vals = _numbers(":".join(parts), "--crosswind", "8000:0.5:1:0.5")
     names = ("peak_force_N", "rise_s", "hold_s", "start_s")
+    # a step has neither rise nor hold: those slots only place START_S (was silent)
+    if shape == "step" and len(vals) in (2, 3):
+        warnings.warn(f"--crosswind = {text!r}: the step shape has no rise or hold, so "
+                      f"{' and '.join(n.upper() for n in names[1:len(vals)])} "
+                      f"{':'.join(f'{v:g}' for v in vals[1:])} s are ignored; give "
+                      f"PEAK_N:step, or PEAK_N:0.5:0:START_S:step to set its start",
+                      MaglevkitWarning, stacklevel=2)
+    elif shape == "step" and len(vals) == 4 and vals[2] != 0.0:
+        warnings.warn(f"--crosswind = {text!r}: HOLD_S = {vals[2]:g} s is ignored: a step "
+                      "holds its force from START_S to the end of the run (use the 1-cosine "
+                      "shape for a gust that ends; for a step put 0 there)",
+                      MaglevkitWarning, stacklevel=2)
     try:
         return Crosswind(**dict(zip(names, vals, strict=False)), shape=shape)
     except InputError as exc:
