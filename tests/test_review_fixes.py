@@ -7,6 +7,8 @@ import subprocess
 import sys
 from pathlib import Path
 
+import pytest
+
 
 def test_python_dash_m_runs_the_cli() -> None:
     """``python -m maglevkit --help`` exits 0 and names the program ``maglevkit``."""
@@ -58,8 +60,6 @@ def test_plot_folder_is_not_created_by_a_failed_run(tmp_path: Path) -> None:
 # ---------------------------------------------------------------- design_sensitivities
 def test_design_sensitivities_warns_on_gap_in_mm() -> None:
     """``gap_m=10`` (mm typed as m) warns as solve_statics does; a negative gap is refused."""
-    import pytest
-
     from maglevkit.design import design_sensitivities, read_design_spec
     from maglevkit.errors import InputError, PlausibilityWarning
     from tests.test_design import example_doc
@@ -79,8 +79,6 @@ def test_speed_in_kmh_typed_as_m_per_s_warns() -> None:
     (400 km/h) and 0 do not.  The check is the one both run methods call."""
     import warnings
 
-    import pytest
-
     from maglevkit.errors import PlausibilityWarning
     from maglevkit.vehicle.simulation import check_run_speed
 
@@ -97,8 +95,6 @@ def test_run_methods_warn_on_speed_before_running() -> None:
     the warning itself stops them (no simulation is started)."""
     import warnings
 
-    import pytest
-
     from maglevkit.errors import PlausibilityWarning
     from maglevkit.vehicle import crossrun, simulation
 
@@ -113,8 +109,6 @@ def test_run_methods_warn_on_speed_before_running() -> None:
 def test_irregularity_amplitude_in_mm_warns_naming_the_option() -> None:
     """``random:0.3`` (0.3 mm typed as metres) warns naming --irregularity; 0.3e-3 does not."""
     import warnings
-
-    import pytest
 
     from maglevkit.errors import PlausibilityWarning
     from maglevkit.vehicle.simulation import parse_irregularity
@@ -151,8 +145,6 @@ def test_beamspan_precamber_checked_as_the_file() -> None:
     (the file's plausible range 0.1 mm ... 50 mm); 2.7e-3 and 0 pass silently."""
     import warnings
 
-    import pytest
-
     from maglevkit.errors import ParameterError, PlausibilityWarning
     from maglevkit.vehicle.guideway import BeamSpan
 
@@ -173,8 +165,6 @@ def test_crosswind_step_with_ignored_rise_hold_warns_naming_the_option() -> None
     ``5000:0.5:0:0.2:step`` and ``5000:step`` are silent and keep their meaning."""
     import warnings
 
-    import pytest
-
     from maglevkit.errors import MaglevkitWarning
     from maglevkit.vehicle.crossrun import parse_crosswind
 
@@ -189,3 +179,45 @@ def test_crosswind_step_with_ignored_rise_hold_warns_naming_the_option() -> None
         assert parse_crosswind("5000:0.5:0:0.2:step").start_s == 0.2
         assert parse_crosswind("5000:step").peak_force_N == 5000.0
         parse_crosswind("8000:0.5:1:0.5")
+
+
+# ---------------------------------------------------------------- cross-section dt
+def _bare_cross_section_model():  # type: ignore[no-untyped-def]
+    """A CrossSectionModel shell (the checks below run before any model data is used)."""
+    from maglevkit.vehicle.crossrun import CrossSectionModel
+
+    obj = CrossSectionModel.__new__(CrossSectionModel)
+    obj.flux_bandwidth_Hz = 30.0
+    obj._compiled_cache = {}
+    return obj
+
+
+def test_coarse_dt_warns_with_the_flux_loop_reasoning() -> None:
+    """dt = 50 ms (the review's --dt 0.05, touched down at 0.3 s) warns before the run;
+    the bound is 0.06 / 30 Hz = 2 ms, where the hold's lag pi f dt is 0.06 pi = 10.8 deg;
+    at 50 ms it is pi * 30 * 0.05 = 270 deg (closed form)."""
+    import warnings
+
+    from maglevkit.errors import MaglevkitWarning
+
+    obj = _bare_cross_section_model()
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", MaglevkitWarning)
+        with pytest.raises(MaglevkitWarning, match=r"dt_s = 0.05 s is coarse for the 30 Hz "
+                                                   r"flux loop.*270 deg.*dt_s <= 0.002 s"):
+            obj.run(speed_m_per_s=100.0, duration_s=1.0, dt_s=0.05)
+        # 2 ms itself passes the check (then fails later on the shell: no model data)
+        with pytest.raises(AttributeError):
+            obj.run(speed_m_per_s=100.0, duration_s=1.0, dt_s=0.002)
+
+
+def test_compile_note_once_per_dt(capsys: pytest.CaptureFixture[str]) -> None:
+    """The note names dt and is written only while that dt is not compiled yet."""
+    obj = _bare_cross_section_model()
+    obj._note_compiling(0.002)
+    err = capsys.readouterr().err
+    assert err.startswith("compiling the cross-section step for dt = 0.002 s (once per dt")
+    assert err.count("\n") == 1
+    obj._compiled_cache[0.002] = {}
+    obj._note_compiling(0.002)
+    assert capsys.readouterr().err == ""

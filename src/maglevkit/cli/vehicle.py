@@ -111,7 +111,7 @@ def run(
         try:
             _run_cross_section(vehicle_option or vehicle, speed_kmh, duration, dt, failure,
                                magnets, maps_cache, output, plot, force, curve, crosswind,
-                               irregularity, lateral)
+                               irregularity, lateral, progress)
         except KeyboardInterrupt:
             raise interrupted() from None
         return
@@ -237,7 +237,7 @@ def _run_cross_section(name: str, speed_kmh: float | None, duration: float, dt: 
                        failure: list[str] | None, magnets: str, maps_cache: Path | None,
                        output: Path | None, plot: Path | None, force: bool,
                        curve: str | None, crosswind: str | None, irregularity: str = "none",
-                       lateral: str | None = None) -> None:
+                       lateral: str | None = None, progress: bool = True) -> None:
     from ..vehicle.crossrun import (
         CrossSectionModel,
         parse_crosswind,
@@ -273,7 +273,7 @@ def _run_cross_section(name: str, speed_kmh: float | None, duration: float, dt: 
         model = CrossSectionModel(data, magnets=magnets, maps_cache=maps_cache)
         res = model.run(speed_m_per_s=speed_kmh / 3.6, duration_s=duration, dt_s=dt,
                         curve=crv, crosswind=gust, failures=fails, vertical=vert,
-                        lateral=lat)
+                        lateral=lat, progress=progress)
     except typer.BadParameter as exc:
         raise fail(str(exc)) from None
     except MaglevkitError as exc:

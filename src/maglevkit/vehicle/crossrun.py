@@ -39,6 +39,7 @@ Gaps (``z`` down, ``y`` right; ``Delta s = gap_matrix q`` of the force points)::
 from __future__ import annotations
 
 import math
+import sys
 import time
 import warnings
 from collections.abc import Sequence
@@ -566,6 +567,7 @@ class CrossSectionModel:
                                     voltage_limit_V=voltage_limit_V)
         self.designs = {"levitation": lev, "guidance": gui}
         self.voltage_limit_V = float(voltage_limit_V)
+        self.flux_bandwidth_Hz = float(flux_bandwidth_Hz)
         self._compiled_cache: dict[float, dict[str, Any]] = {}
 
     # ------------------------------------------------------------------ statics helpers
@@ -634,7 +636,8 @@ class CrossSectionModel:
     def run(self, *, speed_m_per_s: float, duration_s: float, dt_s: float = 1e-3,
             curve: TransitionCurve | None = None, crosswind: Crosswind | None = None,
             vertical: Any = None, lateral: Any = None,
-            failures: Sequence[Failure] = (), loop: str = "auto") -> CrossSectionRun:
+            failures: Sequence[Failure] = (), loop: str = "auto",
+            progress: bool = False) -> CrossSectionRun:
         """Simulate the slice at constant speed from the straight-level trim.
 
         Parameters
@@ -662,6 +665,10 @@ class CrossSectionModel:
             ``"compiled"``: the same step as one compiled CasADi function per block of
             steps (:meth:`compiled_step`; reduced magnets only); ``"auto"`` (default):
             compiled for reduced magnets, else the NumPy loop.
+        progress : bool, default False
+            A one-line note on stderr before the compiled step is built for a new
+            ``dt_s`` (compiled once per ``dt_s`` and cached on disk; the first time takes
+            minutes on a loaded machine).
 
         Returns
         -------
@@ -688,12 +695,26 @@ class CrossSectionModel:
         -----
         MaglevkitWarning
             A curve that starts beyond the distance covered, a crosswind that starts after
-            the run (the run never reaches them).
+            the run (the run never reaches them); a step ``dt_s`` too coarse for the flux
+            loop (above ``0.06 / flux_bandwidth_Hz``, 2 ms at 30 Hz).
+        PlausibilityWarning
+            A speed above 160 m/s (most likely km/h typed into ``speed_m_per_s``).
         """
         v = real_number(speed_m_per_s, "speed_m_per_s", "m/s", nonnegative=True)
         check_run_speed(v, "CrossSectionModel.run")
         dur = real_number(duration_s, "duration_s", "s", positive=True)
         dt = real_number(dt_s, "dt_s", "s", positive=True)
+        # the controllers sample every step and hold their voltage over it: that hold lags
+        # the flux loop by pi f dt at its bandwidth f; 2 ms at 30 Hz is 11 deg of its phase
+        # margin, beyond it the loop degrades fast (dt = 50 ms touched down at 0.3 s)
+        f_flux = self.flux_bandwidth_Hz
+        if dt > 0.06 / f_flux * (1 + 1e-9):
+            warnings.warn(f"dt_s = {dt:g} s is coarse for the {f_flux:g} Hz flux loop: the "
+                          f"controllers hold their voltage over a step, a lag of pi f dt = "
+                          f"{math.degrees(math.pi * f_flux * dt):.0f} deg at {f_flux:g} Hz "
+                          f"(11 deg at {0.06 / f_flux * 1e3:.3g} ms); the gaps may oscillate "
+                          f"or touch down: use dt_s <= {0.06 / f_flux:.3g} s",
+                          MaglevkitWarning, stacklevel=2)
         n = int(round(dur / dt))
         if n < 1:
             raise InputError(f"duration_s = {duration_s!r} s is shorter than one step "
@@ -764,6 +785,8 @@ class CrossSectionModel:
         r_mag = -(np.outer(rz, sign_z) + np.outer(ry, sign_y))
         rx_mag = -(np.outer(rz_x, sign_z) + np.outer(ry_x, sign_y))
         if use_compiled:
+            if progress:
+                self._note_compiling(dt)
             out = self._compiled_loop(dt, v, t, r_mag, rx_mag, field_mid, q_ext, fail_t, n)
         else:
             out = self._python_loop(dt, v, t, r_mag, rx_mag, field_mid, q_ext, fail_t, n)
@@ -980,6 +1003,14 @@ class CrossSectionModel:
                             [sv, ca.horzcat(*recs)], ["S", "P", "C"], ["S_next", "R"])
         return {"block": block, "state": st, "inputs": pi, "record": rc, "block_steps": nb,
                 "lanes": lib}
+
+    def _note_compiling(self, dt: float) -> None:
+        """One line on stderr before the compiled step for ``dt`` is first built here."""
+        if dt in self._compiled_cache:
+            return
+        sys.stderr.write(f"compiling the cross-section step for dt = {dt:g} s (once per dt, "
+                         "cached on disk: minutes the first time, seconds after) ...\n")
+        sys.stderr.flush()
 
     def _compiled_block(self, dt: float) -> dict[str, Any]:
         from ..errors import SolverError
