@@ -7,6 +7,7 @@ import subprocess
 import sys
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 
@@ -221,3 +222,29 @@ def test_compile_note_once_per_dt(capsys: pytest.CaptureFixture[str]) -> None:
     obj._compiled_cache[0.002] = {}
     obj._note_compiling(0.002)
     assert capsys.readouterr().err == ""
+
+
+# ---------------------------------------------------------------- touchdown within a step
+def test_limit_crossing_on_the_linear_path() -> None:
+    """Closed form: gap 2.299 mm closing at 0.63 m/s over dt = 1 ms ends at 1.669 mm (the
+    review's numbers); it crosses 2 mm at (2.299 - 2) / 630 s = 0.4746 ms, reported there
+    with the gap 2 mm (not the extrapolated 1.669 mm below every recorded gap)."""
+    from maglevkit.vehicle.simulation import limit_crossing
+
+    gaps = np.array([10e-3, 2.299e-3, 9e-3])
+    rates = np.array([0.0, -0.63, 1.0])
+    hit = limit_crossing(gaps, rates, dt_s=1e-3, start_s=0.3, touchdown_gap_m=2e-3,
+                         landing_gap_m=20e-3)
+    assert hit is not None
+    j, when, gap, closed = hit
+    assert (j, closed) == (1, True)
+    assert when == pytest.approx(0.3 + 0.299e-3 / 0.63, abs=1e-15)
+    assert gap == 2e-3
+    # the first of two crossings wins (the opening one here: 19.9 mm at +1 m/s, 0.1 ms)
+    hit = limit_crossing(np.array([2.299e-3, 19.9e-3]), np.array([-0.63, 1.0]), dt_s=1e-3,
+                         start_s=0.0, touchdown_gap_m=2e-3, landing_gap_m=20e-3)
+    assert hit is not None and hit[0] == 1 and not hit[3]
+    assert hit[1] == pytest.approx(1e-4, abs=1e-15) and hit[2] == 20e-3
+    # no gap ends the step beyond a limit: None
+    assert limit_crossing(gaps, np.zeros(3), dt_s=1e-3, start_s=0.0, touchdown_gap_m=2e-3,
+                          landing_gap_m=20e-3) is None

@@ -53,7 +53,7 @@ from ..errors import InputError, MaglevkitWarning
 from ..plant import STANDARD_GRAVITY
 from ..validation import Plausible, check_plausible, real_number
 from .crosssection import CrossSectionData, CrossSectionMechanics, track_field_path
-from .simulation import Failure, check_run_speed
+from .simulation import Failure, check_run_speed, limit_crossing
 
 __all__ = ["CrossSectionModel", "CrossSectionRun", "TransitionCurve", "Crosswind",
            "LATERAL_ALIGNMENT_PSD", "SCENARIO_PLAUSIBLE", "parse_curve", "parse_crosswind", "parse_lateral"]
@@ -846,15 +846,7 @@ class CrossSectionModel:
             rec_acc[k] = s.accelerations(q, qd, force, field_mid[k], q_ext[k])
             # a gap at a limit now, or crossing it within the coming step on the linear
             # path the bank moves it along (the maps start at the touchdown gap)
-            ends = gaps + rates * dt if k < n else gaps
-            for probe, when in ((gaps, t[k]), (ends, t[k] + dt)):
-                lo, hi = probe.min(), probe.max()
-                if lo <= self.touchdown_gap_m or hi >= self.landing_gap_m:
-                    closed = bool(lo <= self.touchdown_gap_m)
-                    j = int(np.argmin(probe)) if closed else int(np.argmax(probe))
-                    touchdown = (self.member_names[j], float(when), float(probe[j]),
-                                 "closed" if closed else "open")
-                    break
+            touchdown = self._limit_event(gaps, rates if k < n else None, float(t[k]), dt)
             if touchdown is not None:
                 last = k
                 break
@@ -1004,6 +996,27 @@ class CrossSectionModel:
         return {"block": block, "state": st, "inputs": pi, "record": rc, "block_steps": nb,
                 "lanes": lib}
 
+    def _limit_event(self, gaps: np.ndarray, rates: np.ndarray | None, t_k: float,
+                     dt: float) -> tuple[str, float, float, str] | None:
+        """The touchdown at ``t_k`` (a gap at a limit) or within the coming step (the
+        crossing on the linear path, :func:`~maglevkit.vehicle.simulation.limit_crossing`:
+        its time and the gap there, not the end value extrapolated past the limit);
+        ``rates`` None: the last record, no step follows."""
+        lo_lim, hi_lim = self.touchdown_gap_m, self.landing_gap_m
+        lo, hi = gaps.min(), gaps.max()
+        if lo <= lo_lim or hi >= hi_lim:
+            closed = bool(lo <= lo_lim)
+            j = int(np.argmin(gaps)) if closed else int(np.argmax(gaps))
+            return (self.member_names[j], t_k, float(gaps[j]), "closed" if closed else "open")
+        if rates is None:
+            return None
+        hit = limit_crossing(gaps, rates, dt_s=dt, start_s=t_k, touchdown_gap_m=lo_lim,
+                             landing_gap_m=hi_lim)
+        if hit is None:
+            return None
+        j, when, gap, closed = hit
+        return (self.member_names[j], when, gap, "closed" if closed else "open")
+
     def _note_compiling(self, dt: float) -> None:
         """One line on stderr before the compiled step for ``dt`` is first built here."""
         if dt in self._compiled_cache:
@@ -1100,15 +1113,8 @@ class CrossSectionModel:
                 continue
             for k in range(k0, min(k0 + nb, n + 1)):
                 g = rec[k, g_sl][::2]                              # one gap per magnet
-                e = g + rec[k, r_sl][::2] * dt if k < n else g
-                for probe, when in ((g, t[k]), (e, t[k] + dt)):
-                    lo, hi = probe.min(), probe.max()
-                    if lo <= lo_lim or hi >= hi_lim:
-                        closed = bool(lo <= lo_lim)
-                        jj = int(np.argmin(probe)) if closed else int(np.argmax(probe))
-                        touchdown = (self.member_names[jj], float(when), float(probe[jj]),
-                                     "closed" if closed else "open")
-                        break
+                touchdown = self._limit_event(g, rec[k, r_sl][::2] if k < n else None,
+                                              float(t[k]), dt)
                 if touchdown is not None:
                     last = k
                     break
@@ -1188,6 +1194,9 @@ class CrossSectionModel:
                          "landing_gap_m": self.landing_gap_m, "magnets": self.magnet_kind,
                          "guidance_bias_current_A": self.bias_A})
         min_gap = {"levitation": float(cg[:, :4].min()), "guidance": float(cg[:, 4:].min())}
+        if touchdown is not None and touchdown[3] == "closed":   # a crossing within a step
+            kind = touchdown[0].split("_")[0]                    # is below the records
+            min_gap[kind] = min(min_gap[kind], touchdown[2])
         comfort: dict[str, dict[str, float]] = {}
         if m >= 64:
             lat = rec_acc[:m, :1] - rec_acc[:m, :1].mean()

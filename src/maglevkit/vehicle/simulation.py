@@ -42,7 +42,8 @@ from .mechanics import VehicleMechanics
 from .train import TrainData
 
 __all__ = ["Failure", "VehicleRun", "VehicleModel", "VehicleRunInterrupted", "run_vehicle",
-           "parse_failure", "parse_irregularity", "RUN_PLAUSIBLE", "check_run_speed"]
+           "parse_failure", "parse_irregularity", "RUN_PLAUSIBLE", "check_run_speed",
+           "limit_crossing"]
 
 #: Plausible magnitudes of the run options (:func:`~maglevkit.validation.check_plausible`:
 #: outside, most likely a unit slip; the value is used as given, with a
@@ -85,6 +86,61 @@ _VEHICLE_MPC_WEIGHTS = {"gap_m": 1e-3, "gap_rate_m_per_s": 1.0, "voltage_V": 200
 #: force disturbance, whose estimates drift apart on a frame (docs/vehicle.md); the load
 #: goes to the reference integral
 _VEHICLE_MPC_DISTURBANCES = ("voltage",)
+
+
+def limit_crossing(gaps_m: Any, rates_m_per_s: Any, *, dt_s: float, start_s: float,
+                   touchdown_gap_m: float, landing_gap_m: float
+                   ) -> tuple[int, float, float, bool] | None:
+    """The first gap to cross a limit within one step, on the linear path over the step.
+
+    The bank moves every gap linearly over a step, ``s(t) = s + s' (t - t_0)``; a gap whose
+    end value ``s + s' dt`` is at or below the touchdown gap (at or above the landing gap)
+    crosses it at ``t_0 + (limit - s) / s'``.  The crossing is reported at that time with
+    the gap there (the limit itself): not the end value extrapolated past the limit, which
+    lay below every recorded gap (the run's report then showed a touchdown gap below its
+    minimum gap).  The one law of both vehicle runs' within-step touchdowns.
+
+    Parameters
+    ----------
+    gaps_m : array_like
+        Gaps at the start of the step [m].
+    rates_m_per_s : array_like
+        Their rates over the step [m/s].
+    dt_s : float
+        Step length [s].
+    start_s : float
+        Time at the start of the step [s].
+    touchdown_gap_m, landing_gap_m : float
+        The limits [m].
+
+    Returns
+    -------
+    (int, float, float, bool) or None
+        Index of the gap crossing first, the crossing time [s], the gap there [m] and
+        whether it closed (True: touchdown gap; False: landing gap); None if no gap ends
+        the step beyond a limit.
+    """
+    g = np.asarray(gaps_m, dtype=float)
+    r = np.asarray(rates_m_per_s, dtype=float)
+    end = g + r * dt_s
+    closed, opened = end <= touchdown_gap_m, end >= landing_gap_m
+    if not (closed.any() or opened.any()):
+        return None
+    with np.errstate(divide="ignore", invalid="ignore"):
+        frac_c = np.where(closed, (touchdown_gap_m - g) / np.where(r != 0, r, np.inf), np.inf)
+        frac_o = np.where(opened, (landing_gap_m - g) / np.where(r != 0, r, np.inf), np.inf)
+    frac_c = np.clip(np.nan_to_num(frac_c, nan=0.0, posinf=np.inf), 0.0, np.inf)
+    frac_o = np.clip(np.nan_to_num(frac_o, nan=0.0, posinf=np.inf), 0.0, np.inf)
+    frac_c = np.where(closed, np.minimum(frac_c, dt_s), np.inf)
+    frac_o = np.where(opened, np.minimum(frac_o, dt_s), np.inf)
+    jc, jo = int(np.argmin(frac_c)), int(np.argmin(frac_o))
+    is_closed = bool(frac_c[jc] <= frac_o[jo])
+    j = jc if is_closed else jo
+    tau = float(frac_c[j] if is_closed else frac_o[j])
+    # the gap there: the limit itself (exactly, not g + r tau rounded past it), or the
+    # gap measured at the start where it is already beyond the limit
+    gap = float(g[j]) if tau == 0.0 else (touchdown_gap_m if is_closed else landing_gap_m)
+    return j, start_s + tau, gap, is_closed
 
 
 @dataclass(frozen=True)
@@ -1117,6 +1173,9 @@ class VehicleModel:
         gaps = rec["gap"][sl]
         min_gap = {m: float(gaps[:, [j for j, o in enumerate(member_of) if o == m]].min())
                    for m in bank.member_names}
+        if touchdown is not None and touchdown[3] == "closed":   # a crossing within a step
+            mem = member_of[names.index(touchdown[0])]            # is below the records
+            min_gap[mem] = min(min_gap[mem], touchdown[2])
         peak = {c: float(rec["current"][sl, j].max()) for j, c in enumerate(names)}
         comfort = self._comfort(acc_floor, times, dt, floor)
         sim_t = float(times[-1])
@@ -1462,16 +1521,15 @@ class VehicleModel:
         the bank refuse it: the gaps move linearly over a step (as the bank integrates
         them), so a gap whose end value ``s + s' dt`` is at or below the touchdown gap (at
         or above the landing gap) has crossed it within the step.
-        ``(circuit, t_end, gap at t_end, kind)`` as :attr:`VehicleRun.touchdown`, or None
-        (then the refusal has another cause)."""
-        end = gaps + rates * dt
+        ``(circuit, crossing time, gap there, kind)`` as :attr:`VehicleRun.touchdown`
+        (:func:`limit_crossing`), or None (then the refusal has another cause)."""
         tr = self.train
-        closed, landed = end <= tr.touchdown_gap_m, end >= tr.landing_gap_m
-        if not (closed.any() or landed.any()):
+        hit = limit_crossing(gaps, rates, dt_s=dt, start_s=t_end - dt,
+                             touchdown_gap_m=tr.touchdown_gap_m, landing_gap_m=tr.landing_gap_m)
+        if hit is None:
             return None
-        j = int(np.argmin(end) if closed.any() else np.argmax(end))
-        return (self.bank.circuit_names[j], t_end, float(end[j]),
-                "closed" if closed.any() else "landed")
+        j, when, gap, closed = hit
+        return (self.bank.circuit_names[j], when, gap, "closed" if closed else "landed")
 
     def mechanics_trim_forces(self) -> np.ndarray:
         """Downward force on the guideway at every force point at the trim [N] (both sides)."""
