@@ -18,6 +18,7 @@ import pytest
 import maglevkit as mk
 from maglevkit.magnets.base import MAGNET_PLAUSIBLE
 from maglevkit.validation import Plausible, check_plausible
+from maglevkit.vehicle.crosssection import CROSS_SECTION_PLAUSIBLE, parse_cross_section
 from maglevkit.vehicle.data import GUIDEWAY_PLAUSIBLE, parse_guideway
 from maglevkit.vehicle.train import VEHICLE_PLAUSIBLE, parse_vehicle
 
@@ -34,10 +35,13 @@ def _bundled(path: str) -> dict[str, Any]:
 MAGNETS = {name: _bundled(f"{name}.toml") for name in mk.bundled_magnets()}
 VEHICLES = {"tr09": _bundled("vehicle/tr09.toml")}
 GUIDEWAYS = {"guideway": _bundled("vehicle/guideway.toml")}
+CROSS_SECTIONS = {"tr09-cross-section": _bundled("vehicle/tr09-cross-section.toml")}
 KINDS = {
     "magnet": (MAGNETS, MAGNET_PLAUSIBLE, lambda p: mk.build_magnet(p, source="f")),
     "vehicle": (VEHICLES, VEHICLE_PLAUSIBLE, lambda p: parse_vehicle(p, "f")),
     "guideway": (GUIDEWAYS, GUIDEWAY_PLAUSIBLE, lambda p: parse_guideway(p, "f")),
+    "cross-section": (CROSS_SECTIONS, CROSS_SECTION_PLAUSIBLE,
+                      lambda p: parse_cross_section(p, "f")),
 }
 
 

@@ -38,12 +38,18 @@ def test_touchdown_inside_a_step_is_a_touchdown(model: VehicleModel, loop: str,
     circuit, t, gap, kind = res.touchdown
     ds = res.dataset
     td = model.train.touchdown_gap_m
-    assert kind == "closed" and gap <= td
-    # reported at the end of the step it happened in; the records stop at its start,
-    # where every gap was still above the touchdown gap (not the documented case)
-    assert t == pytest.approx(float(ds.time[-1]) + float(ds.attrs["dt_s"]), abs=1e-12)
+    assert kind == "closed"
+    # reported where the gap's linear path over the step crosses the touchdown gap: the
+    # time inside the step it happened in, the gap there = the touchdown gap (was the end
+    # value extrapolated past it, 1.69 mm, below the reported minimum gap); the records
+    # stop at the step's start, where every gap was still above the touchdown gap
+    t0, dt = float(ds.time[-1]), float(ds.attrs["dt_s"])
+    assert t0 < t <= t0 + dt + 1e-12
+    assert gap == pytest.approx(td, abs=1e-12)
     assert float(ds.gap.sel(circuit=circuit)[-1]) > td
     assert float(ds.gap.min()) > td
+    # the minimum gap includes the event: the report is consistent
+    assert min(res.min_gap_m.values()) == pytest.approx(gap, abs=1e-12)
     assert np.isnan(ds.voltage.values[-1]).all() and np.isfinite(ds.voltage.values[:-1]).all()
     assert ds.attrs["touchdown"].startswith(f"closed: {circuit}@")
     assert "TOUCHDOWN (gap closed: magnet on the stator): circuit " + circuit in res.report()
@@ -55,7 +61,10 @@ def test_touchdown_inside_a_step_same_in_both_loops(model: VehicleModel) -> None
     rc = model.run(speed_m_per_s=SPEED, duration_s=0.3, irregularity=HARMONIC, loop="compiled")
     rp = model.run(speed_m_per_s=SPEED, duration_s=0.3, irregularity=HARMONIC, loop="python")
     assert rc.touchdown is not None and rp.touchdown is not None
-    assert rc.touchdown[0] == rp.touchdown[0] and rc.touchdown[1] == rp.touchdown[1]
+    assert rc.touchdown[0] == rp.touchdown[0]
+    # the crossing time is interpolated from the gap and its rate, which the loops round
+    # differently by ~1e-13 of a value (test_vehicle_compiled): 1e-12 s is far below dt
+    assert rc.touchdown[1] == pytest.approx(rp.touchdown[1], abs=1e-12)
     # the loops' rounding differs by ~1e-13 of a value (test_vehicle_compiled)
     assert rc.touchdown[2] == pytest.approx(rp.touchdown[2], rel=1e-10)
 

@@ -957,14 +957,19 @@ def design_sensitivities(spec: DesignSpec, values: Mapping[str, float], *, gap_m
     """
     import casadi as ca
 
-    from .models.statics import solve_statics
+    from .models.statics import plausible_range, solve_statics
 
+    gap_m = real_number(gap_m, "gap_m", "m", positive=True)
+    current_A = real_number(current_A, "current_A", "A")
     pb = _Problem(spec)
     missing = [n for n in pb.names if n not in values]
     if missing:
         raise InputError(f"design_sensitivities: values for {missing} missing")
     v = pb.value_vector(values)
     mag = _build(spec, values)
+    rng = plausible_range(mag)
+    if rng is not None:   # as solve_statics does (its own warnings are silenced below)
+        rng.check(gaps=gap_m, currents=current_A, where="design_sensitivities")
     turns_r = float(mag.parameters["magnet"]["turns"])
     n_val = float(values["turns"]) if "turns" in pb.names else pb.turns0
     if abs(n_val - turns_r) > 0.0:

@@ -299,6 +299,10 @@ _SLIP_UNITS = {
 def _slip(value: float, rng: Plausible) -> str:
     """The likely unit slip of a magnitude outside ``rng`` (empty if none is likely)."""
     big, small = _SLIP_UNITS.get(rng.unit, (f"milli-{rng.unit}", f"kilo-{rng.unit}"))
+    # a vehicle speed (a range reaching beyond 50 m/s): km/h typed in, not mm/s
+    if rng.unit == "m/s" and rng.high > 50.0 and value > rng.high and value / 3.6 <= rng.high:
+        return (f"typed in km/h instead of m/s? ({value:g} m/s is {value * 3.6:g} km/h; "
+                f"{value:g} km/h is {value / 3.6:.4g} m/s)")
     if value > rng.high and rng.low <= value / 1000.0 <= rng.high:
         return f"1000 times too large: typed in {big} instead of {rng.unit}?"
     if value < rng.low and rng.low <= value * 1000.0 <= rng.high:

@@ -184,18 +184,35 @@ ForceOption = Annotated[bool, typer.Option(
                     "error, reported before the computation).")]
 
 
+def _same_file(path: Path, other: str | Path | None) -> bool:
+    """True when ``other`` names an existing file that is ``path`` (resolved paths)."""
+    if other is None:
+        return False
+    try:
+        return Path(other).is_file() and Path(other).resolve() == path.resolve()
+    except OSError:
+        return False
+
+
 def output_file(path: Path | None, option: str, *,
-                formats: Sequence[str] | None = None, force: bool = True) -> Path | None:
+                formats: Sequence[str] | None = None, force: bool = True,
+                inputs: Sequence[str | Path | None] = ()) -> Path | None:
     """Check an output file before the computation (None passes through).
 
     Refuses a directory, a missing parent directory (nothing is created silently), with
-    ``formats`` a suffix outside them and, with ``force=False``, an existing file (the
-    command's ``--force`` overwrites).  Raises the CLI's error exit (code 2).
+    ``formats`` a suffix outside them, the command's own input file (any of ``inputs``
+    that is the same file, even with ``--force``) and, with ``force=False``, an existing
+    file (the command's ``--force`` overwrites).  Raises the CLI's error exit (code 2).
     """
     if path is None:
         return None
     if path.is_dir():
         raise fail(f"{option} {str(path)!r} is a directory; give a file name")
+    for other in inputs:
+        if _same_file(path, other):
+            raise fail(f"{option} {str(path)!r} is the command's input file {str(other)!r}; "
+                       "give another output name (the input is never overwritten, not even "
+                       "with --force)")
     if not force and path.exists():
         raise fail(f"{option} {str(path)!r} exists; add --force to overwrite it, or give "
                    "another name (nothing was computed)")
@@ -212,21 +229,28 @@ def output_file(path: Path | None, option: str, *,
     return path
 
 
-def plot_file(path: Path | None, option: str = "--plot", *, force: bool = True) -> Path | None:
+def plot_file(path: Path | None, option: str = "--plot", *, force: bool = True,
+              inputs: Sequence[str | Path | None] = ()) -> Path | None:
     """:func:`output_file` for a figure: the suffix must be a matplotlib format."""
     if path is None:
         return None
-    return output_file(path, option, formats=plot_formats(), force=force)
+    return output_file(path, option, formats=plot_formats(), force=force, inputs=inputs)
 
 
-def output_dir(path: Path, option: str) -> Path:
-    """An output folder: created if missing, but only inside an existing directory."""
+def output_dir(path: Path, option: str, *, create: bool = True) -> Path:
+    """An output folder: created if missing, but only inside an existing directory.
+
+    ``create=False`` only checks (before a computation: a failed or interrupted run then
+    leaves no empty folder); call it again with ``create=True`` when writing.
+    """
     if path.exists() and not path.is_dir():
         raise fail(f"{option} {str(path)!r} is a file, not a folder")
     if not path.exists():
         if not path.parent.is_dir():
             raise fail(f"{option} {str(path)!r}: the directory {str(path.parent)!r} does not "
                        "exist; create it first (only the last folder is created)")
+        if not create:
+            return path
         try:
             path.mkdir()
         except OSError as exc:

@@ -65,8 +65,8 @@ def design(
         write_design_toml,
     )
 
-    output_file(output, "--output", formats=("toml",), force=force)
-    plot_file(pareto, "--pareto", force=force)
+    output_file(output, "--output", formats=("toml",), force=force, inputs=(spec,))
+    plot_file(pareto, "--pareto", force=force, inputs=(spec,))
     if objective is not None and objective not in OBJECTIVES:
         raise fail(f"--objective {objective!r}: use one of {', '.join(OBJECTIVES)}")
     if pareto is not None and pareto_points < 2:

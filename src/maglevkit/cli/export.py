@@ -60,7 +60,7 @@ def fmu(
     """
     if not (math.isfinite(max_substep) and max_substep > 0):   # was named max_substep_s
         raise fail(f"--max-substep {max_substep:g}: must be a finite number of seconds > 0")
-    output_file(output, "--output", force=force)
+    output_file(output, "--output", force=force, inputs=(magnet, maps_file))
     if output.suffix.lower() != ".fmu":
         raise fail(f"--output {str(output)!r}: an FMU file must end in .fmu")
     from ..export import export_fmu

@@ -117,7 +117,7 @@ def build(
         raise typer.BadParameter("--workers must be >= 1")
     g = parse_values(gaps, "--gaps", "m")
     c = parse_values(currents, "--currents", "A")
-    output_file(output, "--output", force=force)
+    output_file(output, "--output", force=force, inputs=(magnet,))
     client = None
     if scheduler:   # before the heavy imports: an unreachable scheduler fails at once
         try:

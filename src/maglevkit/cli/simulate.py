@@ -93,8 +93,8 @@ def simulate(
     from ..models.flux import simulate_flux as run_simulation
     from ..models.scenario import load_scenario
 
-    output_file(csv_path, "--csv", force=force)
-    plot_file(plot, force=force)
+    output_file(csv_path, "--csv", force=force, inputs=(magnet, scenario))
+    plot_file(plot, force=force, inputs=(magnet, scenario))
     try:
         sc = load_scenario(scenario)
     except MaglevkitError as exc:

@@ -103,8 +103,8 @@ def statics(
 
     g = parse_values(gaps, "--gaps", "m")
     c = parse_values(currents, "--currents", "A")
-    output_file(csv_path, "--csv", force=force)
-    plot_file(plot, force=force)
+    output_file(csv_path, "--csv", force=force, inputs=(magnet,))
+    plot_file(plot, force=force, inputs=(magnet,))
     mag = load_magnet_or_exit(magnet, saturation=saturation, fringing=fringing, leakage=leakage,
                               eddy_currents=False)
     try:

@@ -66,7 +66,7 @@ def sweep(
     """
     from ..sweep import load_sweep, run_sweep
 
-    output_file(output, "-o", formats=("nc",), force=force)
+    output_file(output, "-o", formats=("nc",), force=force, inputs=(sweep_file,))
     folder = _resume_folder(resume_dir if resume_dir is not None
                             else output.with_suffix(".cases"))
     if workers is not None and workers < 1:

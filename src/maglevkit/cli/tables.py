@@ -122,7 +122,8 @@ def import_table(
     """
     from ..reduction.tables_in import eddy_resistance_from_step, maps_from_table, table_report
 
-    output_file(output, "--output", force=force)
+    output_file(output, "--output", force=force,
+                inputs=(data, voltage_step, magnet))
     mag = load_magnet_or_exit(magnet) if magnet is not None else None
     r_el = _ohms(resistance, "--resistance")
     r_ec = _ohms(eddy_resistance, "--eddy-resistance")
@@ -202,7 +203,7 @@ def calibrate_cmd(
     """
     from ..calibration import PARAMETERS, calibrate, write_calibrated_toml
 
-    output_file(output, "--output", force=force)
+    output_file(output, "--output", force=force, inputs=(magnet, data))
     names = None
     if params is not None:
         names = [p.strip() for p in params.split(",") if p.strip()]

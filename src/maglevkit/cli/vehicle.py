@@ -9,7 +9,7 @@ from typing import Annotated
 
 import typer
 
-from ..errors import MaglevkitError
+from ..errors import MaglevkitError, MaglevkitWarning
 from ._app import (
     INTERRUPTED_EXIT_CODE,
     ForceOption,
@@ -111,7 +111,7 @@ def run(
         try:
             _run_cross_section(vehicle_option or vehicle, speed_kmh, duration, dt, failure,
                                magnets, maps_cache, output, plot, force, curve, crosswind,
-                               irregularity, lateral)
+                               irregularity, lateral, progress)
         except KeyboardInterrupt:
             raise interrupted() from None
         return
@@ -137,9 +137,10 @@ def _run(vehicle: str, speed_kmh: float | None, speed: float | None, duration: f
     )
     from ..vehicle.train import load_vehicle
 
-    output = output_file(output, "-o", formats=("nc",), force=force)   # netCDF, as sweep -o
-    if plot is not None:
-        plot = output_dir(plot, "--plot")
+    output = output_file(output, "-o", formats=("nc",), force=force,   # netCDF, as sweep -o
+                         inputs=(vehicle, guideway))
+    if plot is not None:   # checked now, created only when the figures are written
+        plot = output_dir(plot, "--plot", create=False)
     try:
         # the unit in the option's name: sweep files' speed is in m/s (issue 27)
         opt = "--speed-kmh"
@@ -172,7 +173,10 @@ def _run(vehicle: str, speed_kmh: float | None, speed: float | None, duration: f
         model = VehicleModel(train, guideway=track, rigid=rigid, magnets=magnets,
                              maps_cache=maps_cache, controller=controller)
         if prof is not None and not rigid:
-            prof = parse_irregularity(irregularity, span_length_m=model.guideway.span.length_m)
+            with warnings.catch_warnings():   # its warnings were shown by the first parse
+                warnings.simplefilter("ignore", MaglevkitWarning)
+                prof = parse_irregularity(irregularity,
+                                          span_length_m=model.guideway.span.length_m)
         res = model.run(speed_m_per_s=speed_kmh / 3.6, duration_s=duration, dt_s=dt,
                         irregularity=prof, failures=fails, progress=progress)
     except VehicleRunInterrupted as exc:
@@ -196,6 +200,7 @@ def _run(vehicle: str, speed_kmh: float | None, speed: float | None, duration: f
     if plot is not None:
         from ..vehicle.plots import plot_vehicle_run
 
+        output_dir(plot, "--plot")
         with writing(plot, "--plot"):
             written = plot_vehicle_run(res.dataset, plot)
         for p in written:
@@ -232,7 +237,7 @@ def _run_cross_section(name: str, speed_kmh: float | None, duration: float, dt: 
                        failure: list[str] | None, magnets: str, maps_cache: Path | None,
                        output: Path | None, plot: Path | None, force: bool,
                        curve: str | None, crosswind: str | None, irregularity: str = "none",
-                       lateral: str | None = None) -> None:
+                       lateral: str | None = None, progress: bool = True) -> None:
     from ..vehicle.crossrun import (
         CrossSectionModel,
         parse_crosswind,
@@ -243,9 +248,9 @@ def _run_cross_section(name: str, speed_kmh: float | None, duration: float, dt: 
     from ..vehicle.data import load_guideway
     from ..vehicle.simulation import parse_failure, parse_irregularity
 
-    output = output_file(output, "-o", formats=("nc",), force=force)
-    if plot is not None:
-        plot = output_dir(plot, "--plot")
+    output = output_file(output, "-o", formats=("nc",), force=force, inputs=(name,))
+    if plot is not None:   # checked now, created only when the figures are written
+        plot = output_dir(plot, "--plot", create=False)
     try:
         speed_kmh = 0.0 if speed_kmh is None else speed_kmh
         if not (speed_kmh >= 0 and speed_kmh < 2000):
@@ -268,7 +273,7 @@ def _run_cross_section(name: str, speed_kmh: float | None, duration: float, dt: 
         model = CrossSectionModel(data, magnets=magnets, maps_cache=maps_cache)
         res = model.run(speed_m_per_s=speed_kmh / 3.6, duration_s=duration, dt_s=dt,
                         curve=crv, crosswind=gust, failures=fails, vertical=vert,
-                        lateral=lat)
+                        lateral=lat, progress=progress)
     except typer.BadParameter as exc:
         raise fail(str(exc)) from None
     except MaglevkitError as exc:
@@ -281,6 +286,7 @@ def _run_cross_section(name: str, speed_kmh: float | None, duration: float, dt: 
     if plot is not None:
         from ..vehicle.crossplots import plot_cross_section_run
 
+        output_dir(plot, "--plot")
         with writing(plot, "--plot"):
             written = plot_cross_section_run(res.dataset, plot)
         for p in written:

@@ -39,6 +39,7 @@ Gaps (``z`` down, ``y`` right; ``Delta s = gap_matrix q`` of the force points)::
 from __future__ import annotations
 
 import math
+import sys
 import time
 import warnings
 from collections.abc import Sequence
@@ -52,7 +53,7 @@ from ..errors import InputError, MaglevkitWarning
 from ..plant import STANDARD_GRAVITY, chopper_floor
 from ..validation import Plausible, check_plausible, real_number
 from .crosssection import CrossSectionData, CrossSectionMechanics, track_field_path
-from .simulation import Failure
+from .simulation import Failure, check_run_speed, limit_crossing
 
 __all__ = ["CrossSectionModel", "CrossSectionRun", "TransitionCurve", "Crosswind",
            "LATERAL_ALIGNMENT_PSD", "SCENARIO_PLAUSIBLE", "parse_curve", "parse_crosswind", "parse_lateral"]
@@ -273,7 +274,7 @@ def parse_crosswind(text: str) -> Crosswind:
     ----------
     text : str
         E.g. ``"8000:0.5:1:0.5"`` or ``"5000:0.5:0:0.2:step"`` (shape ``1-cosine`` or
-        ``step``).
+        ``step``; a step has no rise or hold: those slots only place ``START_S``).
 
     Returns
     -------
@@ -283,6 +284,12 @@ def parse_crosswind(text: str) -> Crosswind:
     ------
     InputError
         Bad numbers, a bad shape or values out of range (named).
+
+    Warns
+    -----
+    MaglevkitWarning
+        A step with RISE_S/HOLD_S but no START_S (they would be ignored), or with a
+        non-zero HOLD_S (a step does not end).
     """
     parts = str(text).split(":")
     shape = "1-cosine"
@@ -293,6 +300,18 @@ def parse_crosswind(text: str) -> Crosswind:
                          "]]][:SHAPE], SHAPE 1-cosine or step, e.g. 8000:0.5:1:0.5")
     vals = _numbers(":".join(parts), "--crosswind", "8000:0.5:1:0.5")
     names = ("peak_force_N", "rise_s", "hold_s", "start_s")
+    # a step has neither rise nor hold: those slots only place START_S (was silent)
+    if shape == "step" and len(vals) in (2, 3):
+        warnings.warn(f"--crosswind = {text!r}: the step shape has no rise or hold, so "
+                      f"{' and '.join(n.upper() for n in names[1:len(vals)])} "
+                      f"{':'.join(f'{v:g}' for v in vals[1:])} s are ignored; give "
+                      f"PEAK_N:step, or PEAK_N:0.5:0:START_S:step to set its start",
+                      MaglevkitWarning, stacklevel=2)
+    elif shape == "step" and len(vals) == 4 and vals[2] != 0.0:
+        warnings.warn(f"--crosswind = {text!r}: HOLD_S = {vals[2]:g} s is ignored: a step "
+                      "holds its force from START_S to the end of the run (use the 1-cosine "
+                      "shape for a gust that ends; for a step put 0 there)",
+                      MaglevkitWarning, stacklevel=2)
     try:
         return Crosswind(**dict(zip(names, vals, strict=False)), shape=shape)
     except InputError as exc:
@@ -548,6 +567,7 @@ class CrossSectionModel:
                                     voltage_limit_V=voltage_limit_V)
         self.designs = {"levitation": lev, "guidance": gui}
         self.voltage_limit_V = float(voltage_limit_V)
+        self.flux_bandwidth_Hz = float(flux_bandwidth_Hz)
         self._compiled_cache: dict[float, dict[str, Any]] = {}
 
     # ------------------------------------------------------------------ statics helpers
@@ -616,7 +636,8 @@ class CrossSectionModel:
     def run(self, *, speed_m_per_s: float, duration_s: float, dt_s: float = 1e-3,
             curve: TransitionCurve | None = None, crosswind: Crosswind | None = None,
             vertical: Any = None, lateral: Any = None,
-            failures: Sequence[Failure] = (), loop: str = "auto") -> CrossSectionRun:
+            failures: Sequence[Failure] = (), loop: str = "auto",
+            progress: bool = False) -> CrossSectionRun:
         """Simulate the slice at constant speed from the straight-level trim.
 
         Parameters
@@ -644,6 +665,10 @@ class CrossSectionModel:
             ``"compiled"``: the same step as one compiled CasADi function per block of
             steps (:meth:`compiled_step`; reduced magnets only); ``"auto"`` (default):
             compiled for reduced magnets, else the NumPy loop.
+        progress : bool, default False
+            A one-line note on stderr before the compiled step is built for a new
+            ``dt_s`` (compiled once per ``dt_s`` and cached on disk; the first time takes
+            minutes on a loaded machine).
 
         Returns
         -------
@@ -670,11 +695,26 @@ class CrossSectionModel:
         -----
         MaglevkitWarning
             A curve that starts beyond the distance covered, a crosswind that starts after
-            the run (the run never reaches them).
+            the run (the run never reaches them); a step ``dt_s`` too coarse for the flux
+            loop (above ``0.06 / flux_bandwidth_Hz``, 2 ms at 30 Hz).
+        PlausibilityWarning
+            A speed above 160 m/s (most likely km/h typed into ``speed_m_per_s``).
         """
         v = real_number(speed_m_per_s, "speed_m_per_s", "m/s", nonnegative=True)
+        check_run_speed(v, "CrossSectionModel.run")
         dur = real_number(duration_s, "duration_s", "s", positive=True)
         dt = real_number(dt_s, "dt_s", "s", positive=True)
+        # the controllers sample every step and hold their voltage over it: that hold lags
+        # the flux loop by pi f dt at its bandwidth f; 2 ms at 30 Hz is 11 deg of its phase
+        # margin, beyond it the loop degrades fast (dt = 50 ms touched down at 0.3 s)
+        f_flux = self.flux_bandwidth_Hz
+        if dt > 0.06 / f_flux * (1 + 1e-9):
+            warnings.warn(f"dt_s = {dt:g} s is coarse for the {f_flux:g} Hz flux loop: the "
+                          f"controllers hold their voltage over a step, a lag of pi f dt = "
+                          f"{math.degrees(math.pi * f_flux * dt):.0f} deg at {f_flux:g} Hz "
+                          f"(11 deg at {0.06 / f_flux * 1e3:.3g} ms); the gaps may oscillate "
+                          f"or touch down: use dt_s <= {0.06 / f_flux:.3g} s",
+                          MaglevkitWarning, stacklevel=2)
         n = int(round(dur / dt))
         if n < 1:
             raise InputError(f"duration_s = {duration_s!r} s is shorter than one step "
@@ -745,6 +785,8 @@ class CrossSectionModel:
         r_mag = -(np.outer(rz, sign_z) + np.outer(ry, sign_y))
         rx_mag = -(np.outer(rz_x, sign_z) + np.outer(ry_x, sign_y))
         if use_compiled:
+            if progress:
+                self._note_compiling(dt)
             out = self._compiled_loop(dt, v, t, r_mag, rx_mag, field_mid, q_ext, fail_t, n)
         else:
             out = self._python_loop(dt, v, t, r_mag, rx_mag, field_mid, q_ext, fail_t, n)
@@ -804,15 +846,7 @@ class CrossSectionModel:
             rec_acc[k] = s.accelerations(q, qd, force, field_mid[k], q_ext[k])
             # a gap at a limit now, or crossing it within the coming step on the linear
             # path the bank moves it along (the maps start at the touchdown gap)
-            ends = gaps + rates * dt if k < n else gaps
-            for probe, when in ((gaps, t[k]), (ends, t[k] + dt)):
-                lo, hi = probe.min(), probe.max()
-                if lo <= self.touchdown_gap_m or hi >= self.landing_gap_m:
-                    closed = bool(lo <= self.touchdown_gap_m)
-                    j = int(np.argmin(probe)) if closed else int(np.argmax(probe))
-                    touchdown = (self.member_names[j], float(when), float(probe[j]),
-                                 "closed" if closed else "open")
-                    break
+            touchdown = self._limit_event(gaps, rates if k < n else None, float(t[k]), dt)
             if touchdown is not None:
                 last = k
                 break
@@ -962,6 +996,35 @@ class CrossSectionModel:
         return {"block": block, "state": st, "inputs": pi, "record": rc, "block_steps": nb,
                 "lanes": lib}
 
+    def _limit_event(self, gaps: np.ndarray, rates: np.ndarray | None, t_k: float,
+                     dt: float) -> tuple[str, float, float, str] | None:
+        """The touchdown at ``t_k`` (a gap at a limit) or within the coming step (the
+        crossing on the linear path, :func:`~maglevkit.vehicle.simulation.limit_crossing`:
+        its time and the gap there, not the end value extrapolated past the limit);
+        ``rates`` None: the last record, no step follows."""
+        lo_lim, hi_lim = self.touchdown_gap_m, self.landing_gap_m
+        lo, hi = gaps.min(), gaps.max()
+        if lo <= lo_lim or hi >= hi_lim:
+            closed = bool(lo <= lo_lim)
+            j = int(np.argmin(gaps)) if closed else int(np.argmax(gaps))
+            return (self.member_names[j], t_k, float(gaps[j]), "closed" if closed else "open")
+        if rates is None:
+            return None
+        hit = limit_crossing(gaps, rates, dt_s=dt, start_s=t_k, touchdown_gap_m=lo_lim,
+                             landing_gap_m=hi_lim)
+        if hit is None:
+            return None
+        j, when, gap, closed = hit
+        return (self.member_names[j], when, gap, "closed" if closed else "open")
+
+    def _note_compiling(self, dt: float) -> None:
+        """One line on stderr before the compiled step for ``dt`` is first built here."""
+        if dt in self._compiled_cache:
+            return
+        sys.stderr.write(f"compiling the cross-section step for dt = {dt:g} s (once per dt, "
+                         "cached on disk: minutes the first time, seconds after) ...\n")
+        sys.stderr.flush()
+
     def _compiled_block(self, dt: float) -> dict[str, Any]:
         from ..errors import SolverError
         from ..models.compiled import DEFAULT_FLAGS, compile_function, compile_library
@@ -1050,15 +1113,8 @@ class CrossSectionModel:
                 continue
             for k in range(k0, min(k0 + nb, n + 1)):
                 g = rec[k, g_sl][::2]                              # one gap per magnet
-                e = g + rec[k, r_sl][::2] * dt if k < n else g
-                for probe, when in ((g, t[k]), (e, t[k] + dt)):
-                    lo, hi = probe.min(), probe.max()
-                    if lo <= lo_lim or hi >= hi_lim:
-                        closed = bool(lo <= lo_lim)
-                        jj = int(np.argmin(probe)) if closed else int(np.argmax(probe))
-                        touchdown = (self.member_names[jj], float(when), float(probe[jj]),
-                                     "closed" if closed else "open")
-                        break
+                touchdown = self._limit_event(g, rec[k, r_sl][::2] if k < n else None,
+                                              float(t[k]), dt)
                 if touchdown is not None:
                     last = k
                     break
@@ -1138,6 +1194,9 @@ class CrossSectionModel:
                          "landing_gap_m": self.landing_gap_m, "magnets": self.magnet_kind,
                          "guidance_bias_current_A": self.bias_A})
         min_gap = {"levitation": float(cg[:, :4].min()), "guidance": float(cg[:, 4:].min())}
+        if touchdown is not None and touchdown[3] == "closed":   # a crossing within a step
+            kind = touchdown[0].split("_")[0]                    # is below the records
+            min_gap[kind] = min(min_gap[kind], touchdown[2])
         comfort: dict[str, dict[str, float]] = {}
         if m >= 64:
             lat = rec_acc[:m, :1] - rec_acc[:m, :1].mean()

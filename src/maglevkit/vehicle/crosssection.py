@@ -55,11 +55,11 @@ from ..errors import InputError, ParameterFileError, ProvenanceWarning
 from ..magnets.base import Schema, take
 from ..parameter_files import bundled_files, parse_provenance, read_parameter_file
 from ..plant import STANDARD_GRAVITY
-from ..validation import real_number
+from ..validation import Plausible, check_plausible, real_number
 from .multibody import ForcePoint, PlanarMultibody, RigidBody, SpringDamper
 
 __all__ = ["CrossSectionData", "CrossSectionMechanics", "CROSS_SECTION_SCHEMA",
-           "CROSS_SECTION_TAGS", "bundled_cross_sections", "load_cross_section",
+           "CROSS_SECTION_TAGS", "CROSS_SECTION_PLAUSIBLE", "bundled_cross_sections", "load_cross_section",
            "parse_cross_section", "track_field_m_per_s2", "track_field_path"]
 
 #: Provenance tags of a cross-section file: published, widely quoted, derived, estimate.
@@ -103,31 +103,34 @@ CROSS_SECTION_SCHEMA: dict[str, dict[str, Schema]] = {
     },
 }
 
-# Plausible ranges (a value outside is most likely a unit mistake, e.g. mm typed for m or
-# t for kg): one slice of a maglev vehicle is 1-10 m long and weighs 0.1-100 t.
-_RANGES: dict[str, tuple[float, float]] = {
-    "cross_section.empty_train_mass": (1e3, 1e7),
-    "cross_section.sections": (1, 20),
-    "cross_section.slices_per_section": (1, 50),
-    "cross_section.slice_length": (0.5, 30.0),
-    "car_body.mass": (50.0, 1e5),
-    "car_body.payload": (0.0, 1e5),
-    "car_body.roll_inertia": (10.0, 1e6),
-    "car_body.centre_z": (-5.0, 1.0),
-    "chassis.mass": (10.0, 1e5),
-    "chassis.roll_inertia": (1.0, 1e6),
-    "chassis.centre_z": (-3.0, 1.0),
-    "air_spring.y": (0.1, 3.0),
-    "air_spring.z": (-3.0, 1.0),
-    "air_spring.vertical_stiffness": (1e3, 1e8),
-    "air_spring.vertical_damping": (0.0, 1e7),
-    "air_spring.lateral_stiffness": (1e3, 1e8),
-    "air_spring.lateral_damping": (0.0, 1e7),
-    "air_spring.lateral_damper_z": (-3.0, 1.0),
-    "levitation.y": (0.1, 3.0),
-    "levitation.z": (-1.0, 1.0),
-    "guidance.y": (0.1, 3.0),
-    "guidance.z": (-1.0, 1.0),
+#: The plausible magnitudes of every dimensional key of a cross-section file
+#: (:func:`~maglevkit.validation.check_plausible`, the one check of every file kind: a
+#: value outside warns, most likely a unit slip such as mm typed for m or t for kg; it is
+#: used as given).  One slice of a maglev vehicle is 1-10 m long and weighs 0.1-100 t;
+#: heights ``z`` are signed (magnitudes checked).  Every bundled value lies inside and
+#: the same value times 1000 or 1/1000 outside (docs/decisions.md).  Impossible values
+#: (negative masses, stiffnesses, lateral positions) are refused by the schema.
+CROSS_SECTION_PLAUSIBLE: dict[str, Plausible] = {
+    "cross_section.empty_train_mass": Plausible(1e3, 1e7, "kg"),
+    "cross_section.slice_length": Plausible(0.5, 30.0, "m"),
+    "car_body.mass": Plausible(50.0, 1e5, "kg"),
+    "car_body.payload": Plausible(1.0, 1e5, "kg"),
+    "car_body.roll_inertia": Plausible(100.0, 1e6, "kg m^2"),
+    "car_body.centre_z": Plausible(0.01, 5.0, "m"),
+    "chassis.mass": Plausible(10.0, 1e5, "kg"),
+    "chassis.roll_inertia": Plausible(10.0, 1e6, "kg m^2"),
+    "chassis.centre_z": Plausible(1e-3, 3.0, "m"),
+    "air_spring.y": Plausible(0.1, 3.0, "m"),
+    "air_spring.z": Plausible(0.01, 3.0, "m"),
+    "air_spring.vertical_stiffness": Plausible(1e3, 1e7, "N/m"),
+    "air_spring.vertical_damping": Plausible(100.0, 1e6, "N s/m"),
+    "air_spring.lateral_stiffness": Plausible(1e3, 1e7, "N/m"),
+    "air_spring.lateral_damping": Plausible(100.0, 1e6, "N s/m"),
+    "air_spring.lateral_damper_z": Plausible(0.01, 3.0, "m"),
+    "levitation.y": Plausible(0.1, 3.0, "m"),
+    "levitation.z": Plausible(1e-3, 1.0, "m"),
+    "guidance.y": Plausible(0.1, 3.0, "m"),
+    "guidance.z": Plausible(1e-3, 1.0, "m"),
 }
 
 
@@ -233,13 +236,16 @@ def parse_cross_section(parameters: Mapping[str, Any],
     Raises
     ------
     ParameterFileError
-        Unknown or missing tables and keys, values of the wrong type or sign, values
-        outside their plausible range (named with the range), the force points or air
+        Unknown or missing tables and keys, values of the wrong type or sign, the force
+        points or air
         springs not outboard of nothing (``y > 0``), or the guidance points not outboard
         of the levitation points.
 
     Warns
     -----
+    PlausibilityWarning
+        A value outside its plausible range (:data:`CROSS_SECTION_PLAUSIBLE`), naming the
+        key, the value, the range and the likely unit slip.
     ProvenanceWarning
         Values without a ``[provenance]`` entry, or tags not starting with one of
         ``[P]``, ``[R]``, ``[D]``, ``[E]``.
@@ -260,14 +266,7 @@ def parse_cross_section(parameters: Mapping[str, Any],
             t[table] = take(parameters[table], schema, table)
         except ParameterFileError as exc:
             raise ParameterFileError(f"{source}: {exc}") from None
-    for key, (lo, hi) in _RANGES.items():
-        table, k = key.split(".")
-        v = t[table][k]
-        if v is not None and not lo <= v <= hi:
-            unit = CROSS_SECTION_SCHEMA[table][k].unit
-            raise ParameterFileError(f"{source}: [{table}] {k} = {v!r} {unit} is outside the "
-                                     f"plausible range [{lo:g}, {hi:g}] {unit} (a unit "
-                                     "mistake?)")
+    check_plausible(t, CROSS_SECTION_PLAUSIBLE, source, stacklevel=3)
     if not t["guidance"]["y"] > t["levitation"]["y"]:
         raise ParameterFileError(f"{source}: [guidance] y = {t['guidance']['y']!r} m must be "
                                  f"outboard of [levitation] y = {t['levitation']['y']!r} m "

@@ -18,16 +18,17 @@ The bundled file is ``guideway`` (``maglevkit/data/vehicle/guideway.toml``).
 
 from __future__ import annotations
 
+import warnings
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from ..errors import ParameterError, ParameterFileError
+from ..errors import ParameterError, ParameterFileError, PlausibilityWarning
 from ..magnets.base import Schema, take
 from ..parameter_files import bundled_files, parse_provenance, read_parameter_file
-from ..validation import Plausible, check_plausible
-from .guideway import BeamSpan, Guideway
+from ..validation import check_plausible
+from .guideway import GUIDEWAY_PLAUSIBLE, BeamSpan, Guideway
 
 __all__ = ["GuidewayData", "load_guideway", "parse_guideway", "bundled_guideways",
            "GUIDEWAY_SCHEMA", "GUIDEWAY_PLAUSIBLE"]
@@ -41,15 +42,6 @@ GUIDEWAY_SCHEMA = {
     "precamber": Schema(float, unit="m", check="nonnegative", required=False, default=0.0),
 }
 
-#: The plausible magnitudes of every dimensional key of a guideway file
-#: (:func:`~maglevkit.validation.check_plausible`; docs/decisions.md).
-GUIDEWAY_PLAUSIBLE: dict[str, Plausible] = {
-    "guideway.span_length": Plausible(2.0, 200.0, "m"),
-    "guideway.mass_per_length": Plausible(100.0, 1e5, "kg/m"),
-    "guideway.bending_stiffness": Plausible(1e8, 1e13, "N m^2"),
-    # built-in camber: mm on real spans (2.7 mm bundled); 0 (none) is always plausible
-    "guideway.precamber": Plausible(1e-4, 0.05, "m"),
-}
 
 
 @dataclass(frozen=True)
@@ -132,9 +124,11 @@ def parse_guideway(parameters: Mapping[str, Any], source: str = "parameters") ->
     g = take(parameters["guideway"], GUIDEWAY_SCHEMA, "guideway")
     check_plausible({"guideway": g}, GUIDEWAY_PLAUSIBLE, source, stacklevel=3)
     try:
-        span = BeamSpan(g["span_length"], g["bending_stiffness"], g["mass_per_length"],
-                        n_modes=g["modes"], damping_ratio=g["damping_ratio"],
-                        precamber_m=g["precamber"])
+        with warnings.catch_warnings():   # the same ranges, warned above naming the file
+            warnings.simplefilter("ignore", PlausibilityWarning)
+            span = BeamSpan(g["span_length"], g["bending_stiffness"], g["mass_per_length"],
+                            n_modes=g["modes"], damping_ratio=g["damping_ratio"],
+                            precamber_m=g["precamber"])
     except ParameterError as exc:
         raise ParameterFileError(f"{source}: {exc}") from None
     prov = parse_provenance(parameters, ("guideway",), source)

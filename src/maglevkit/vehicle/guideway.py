@@ -33,10 +33,24 @@ import numpy as np
 
 from ..errors import InputError, OutOfRangeError, ParameterError
 from ..plant import STANDARD_GRAVITY
-from ..validation import flag, real_array, real_number, whole_number
+from ..validation import Plausible, check_plausible, flag, real_array, real_number, whole_number
 from .zoh import exact_zoh_step
 
-__all__ = ["BeamSpan", "Guideway", "GuidewayState", "GuidewayDeflection"]
+__all__ = ["BeamSpan", "Guideway", "GuidewayState", "GuidewayDeflection", "GUIDEWAY_PLAUSIBLE"]
+
+#: The plausible magnitudes of every dimensional key of a guideway file
+#: (:func:`~maglevkit.validation.check_plausible`; docs/decisions.md); :class:`BeamSpan`
+#: checks its arguments against the same ranges.
+GUIDEWAY_PLAUSIBLE: dict[str, Plausible] = {
+    "guideway.span_length": Plausible(2.0, 200.0, "m"),
+    "guideway.mass_per_length": Plausible(100.0, 1e5, "kg/m"),
+    "guideway.bending_stiffness": Plausible(1e8, 1e13, "N m^2"),
+    # built-in camber: mm on real spans (2.7 mm bundled); 0 (none) is always plausible
+    "guideway.precamber": Plausible(1e-4, 0.05, "m"),
+}
+#: BeamSpan argument -> its guideway-file key (the one table of ranges above)
+_SPAN_KEYS = {"length_m": "span_length", "mass_per_length_kg_per_m": "mass_per_length",
+              "bending_stiffness_N_m2": "bending_stiffness", "precamber_m": "precamber"}
 
 
 def _positive(name: str, value: float, unit: str) -> float:
@@ -89,8 +103,13 @@ class BeamSpan:
                            ("mass_per_length_kg_per_m", "kg/m")):
             object.__setattr__(self, name, _positive(name, getattr(self, name), unit))
         object.__setattr__(self, "n_modes", _count("n_modes", self.n_modes, 1))
+        # as the guideway file: a negative camber is refused, an implausible value warns
         object.__setattr__(self, "precamber_m", real_number(self.precamber_m, "precamber_m",
-                                                            "m", error=ParameterError))
+                                                            "m", nonnegative=True,
+                                                            error=ParameterError))
+        check_plausible({"BeamSpan": {arg: getattr(self, arg) for arg in _SPAN_KEYS}},
+                        {f"BeamSpan.{arg}": GUIDEWAY_PLAUSIBLE[f"guideway.{key}"]
+                         for arg, key in _SPAN_KEYS.items()}, stacklevel=4)
         d = self.damping_ratio
         if isinstance(d, Sequence) and not isinstance(d, str):
             if len(d) != self.n_modes:

@@ -36,12 +36,47 @@ import numpy as np
 
 from ..errors import InputError, MaglevkitError, OutOfRangeError, ParameterFileError, SolverError
 from ..plant import STANDARD_GRAVITY, chopper_floor
+from ..validation import Plausible, check_plausible
 from .guideway import Guideway
 from .mechanics import VehicleMechanics
 from .train import TrainData
 
 __all__ = ["Failure", "VehicleRun", "VehicleModel", "VehicleRunInterrupted", "run_vehicle",
-           "parse_failure", "parse_irregularity"]
+           "parse_failure", "parse_irregularity", "RUN_PLAUSIBLE", "check_run_speed",
+           "limit_crossing"]
+
+#: Plausible magnitudes of the run options (:func:`~maglevkit.validation.check_plausible`:
+#: outside, most likely a unit slip; the value is used as given, with a
+#: :class:`~maglevkit.errors.PlausibilityWarning`).  Speed: the Transrapid's design speed
+#: is 500 km/h (139 m/s); above 160 m/s (576 km/h) a speed in km/h typed into the m/s
+#: option is far more likely than a real run.  Irregularity amplitudes (sag, joint steps,
+#: random RMS) above 10 mm exceed the nominal gap; below 1 um they are a slip too.
+RUN_PLAUSIBLE: dict[str, Plausible] = {
+    "run.speed_m_per_s": Plausible(0.01, 160.0, "m/s"),
+    "irregularity.sag": Plausible(1e-6, 0.01, "m"),
+    "irregularity.joints": Plausible(1e-6, 0.01, "m"),
+    "irregularity.random": Plausible(1e-6, 0.01, "m"),
+}
+
+
+def check_run_speed(speed_m_per_s: float, where: str) -> None:
+    """Warn about an implausible vehicle speed (:data:`RUN_PLAUSIBLE`, e.g. km/h as m/s).
+
+    Parameters
+    ----------
+    speed_m_per_s : float
+        The run's speed [m/s].
+    where : str
+        The caller, for the message (e.g. ``"VehicleModel.run"``).
+
+    Warns
+    -----
+    PlausibilityWarning
+        Above 160 m/s (576 km/h) or below 0.01 m/s (zero is plausible).
+    """
+    check_plausible({"run": {"speed_m_per_s": speed_m_per_s}},
+                    {"run.speed_m_per_s": RUN_PLAUSIBLE["run.speed_m_per_s"]}, where,
+                    stacklevel=4)
 
 #: cost weights of the vehicle circuits' NMPC (MPCWeights fields; docs/decisions.md, "Any
 #: controller in the vehicle loop"): the gap rate is the guideway's more than the magnet's
@@ -51,6 +86,61 @@ _VEHICLE_MPC_WEIGHTS = {"gap_m": 1e-3, "gap_rate_m_per_s": 1.0, "voltage_V": 200
 #: force disturbance, whose estimates drift apart on a frame (docs/vehicle.md); the load
 #: goes to the reference integral
 _VEHICLE_MPC_DISTURBANCES = ("voltage",)
+
+
+def limit_crossing(gaps_m: Any, rates_m_per_s: Any, *, dt_s: float, start_s: float,
+                   touchdown_gap_m: float, landing_gap_m: float
+                   ) -> tuple[int, float, float, bool] | None:
+    """The first gap to cross a limit within one step, on the linear path over the step.
+
+    The bank moves every gap linearly over a step, ``s(t) = s + s' (t - t_0)``; a gap whose
+    end value ``s + s' dt`` is at or below the touchdown gap (at or above the landing gap)
+    crosses it at ``t_0 + (limit - s) / s'``.  The crossing is reported at that time with
+    the gap there (the limit itself): not the end value extrapolated past the limit, which
+    lay below every recorded gap (the run's report then showed a touchdown gap below its
+    minimum gap).  The one law of both vehicle runs' within-step touchdowns.
+
+    Parameters
+    ----------
+    gaps_m : array_like
+        Gaps at the start of the step [m].
+    rates_m_per_s : array_like
+        Their rates over the step [m/s].
+    dt_s : float
+        Step length [s].
+    start_s : float
+        Time at the start of the step [s].
+    touchdown_gap_m, landing_gap_m : float
+        The limits [m].
+
+    Returns
+    -------
+    (int, float, float, bool) or None
+        Index of the gap crossing first, the crossing time [s], the gap there [m] and
+        whether it closed (True: touchdown gap; False: landing gap); None if no gap ends
+        the step beyond a limit.
+    """
+    g = np.asarray(gaps_m, dtype=float)
+    r = np.asarray(rates_m_per_s, dtype=float)
+    end = g + r * dt_s
+    closed, opened = end <= touchdown_gap_m, end >= landing_gap_m
+    if not (closed.any() or opened.any()):
+        return None
+    with np.errstate(divide="ignore", invalid="ignore"):
+        frac_c = np.where(closed, (touchdown_gap_m - g) / np.where(r != 0, r, np.inf), np.inf)
+        frac_o = np.where(opened, (landing_gap_m - g) / np.where(r != 0, r, np.inf), np.inf)
+    frac_c = np.clip(np.nan_to_num(frac_c, nan=0.0, posinf=np.inf), 0.0, np.inf)
+    frac_o = np.clip(np.nan_to_num(frac_o, nan=0.0, posinf=np.inf), 0.0, np.inf)
+    frac_c = np.where(closed, np.minimum(frac_c, dt_s), np.inf)
+    frac_o = np.where(opened, np.minimum(frac_o, dt_s), np.inf)
+    jc, jo = int(np.argmin(frac_c)), int(np.argmin(frac_o))
+    is_closed = bool(frac_c[jc] <= frac_o[jo])
+    j = jc if is_closed else jo
+    tau = float(frac_c[j] if is_closed else frac_o[j])
+    # the gap there: the limit itself (exactly, not g + r tau rounded past it), or the
+    # gap measured at the start where it is already beyond the limit
+    gap = float(g[j]) if tau == 0.0 else (touchdown_gap_m if is_closed else landing_gap_m)
+    return j, start_s + tau, gap, is_closed
 
 
 @dataclass(frozen=True)
@@ -690,6 +780,7 @@ class VehicleModel:
                 raise InputError(f"{name} = {v!r} must be a finite number")
         if speed_m_per_s < 0 or duration_s <= 0 or dt_s <= 0:
             raise InputError("speed_m_per_s must be >= 0 and duration_s, dt_s > 0")
+        check_run_speed(speed_m_per_s, "VehicleModel.run")
         if loop not in ("auto", "compiled", "python"):
             raise InputError(f"loop = {loop!r}; use 'auto', 'compiled' or 'python'")
         if loop == "compiled" and self.fine:
@@ -787,6 +878,13 @@ class VehicleModel:
         # bank initial state
         u_p = bt @ q
         gaps_p = s0 + u_p - d0 - r_all[0]
+        if not np.all(gaps_p > 0):   # the irregularity closes the gap before the first step
+            k = int(np.argmin(np.where(np.isfinite(gaps_p), gaps_p, -np.inf)))
+            raise InputError(
+                f"irregularity: the guideway profile closes the gap at t = 0 (gap "
+                f"{gaps_p[k]:.4g} m at point {k}, irregularity r = {r_all[0][k]:.4g} m there, "
+                f"nominal gap {s0:g} m); irregularity amplitudes are in metres "
+                "(--irregularity sag:0.5e-3 is 0.5 mm): give a smaller amplitude")
         if self.fine:
             bstate = bank.initial_state(gaps_m=gaps_p, currents_A=self.trim_current_A)
             circ_avg = np.zeros((nc, npt))
@@ -1075,6 +1173,9 @@ class VehicleModel:
         gaps = rec["gap"][sl]
         min_gap = {m: float(gaps[:, [j for j, o in enumerate(member_of) if o == m]].min())
                    for m in bank.member_names}
+        if touchdown is not None and touchdown[3] == "closed":   # a crossing within a step
+            mem = member_of[names.index(touchdown[0])]            # is below the records
+            min_gap[mem] = min(min_gap[mem], touchdown[2])
         peak = {c: float(rec["current"][sl, j].max()) for j, c in enumerate(names)}
         comfort = self._comfort(acc_floor, times, dt, floor)
         sim_t = float(times[-1])
@@ -1420,16 +1521,15 @@ class VehicleModel:
         the bank refuse it: the gaps move linearly over a step (as the bank integrates
         them), so a gap whose end value ``s + s' dt`` is at or below the touchdown gap (at
         or above the landing gap) has crossed it within the step.
-        ``(circuit, t_end, gap at t_end, kind)`` as :attr:`VehicleRun.touchdown`, or None
-        (then the refusal has another cause)."""
-        end = gaps + rates * dt
+        ``(circuit, crossing time, gap there, kind)`` as :attr:`VehicleRun.touchdown`
+        (:func:`limit_crossing`), or None (then the refusal has another cause)."""
         tr = self.train
-        closed, landed = end <= tr.touchdown_gap_m, end >= tr.landing_gap_m
-        if not (closed.any() or landed.any()):
+        hit = limit_crossing(gaps, rates, dt_s=dt, start_s=t_end - dt,
+                             touchdown_gap_m=tr.touchdown_gap_m, landing_gap_m=tr.landing_gap_m)
+        if hit is None:
             return None
-        j = int(np.argmin(end) if closed.any() else np.argmax(end))
-        return (self.bank.circuit_names[j], t_end, float(end[j]),
-                "closed" if closed.any() else "landed")
+        j, when, gap, closed = hit
+        return (self.bank.circuit_names[j], when, gap, "closed" if closed else "landed")
 
     def mechanics_trim_forces(self) -> np.ndarray:
         """Downward force on the guideway at every force point at the trim [N] (both sides)."""
@@ -1593,6 +1693,10 @@ def parse_irregularity(text: str, *, span_length_m: float) -> Any:
             nums = [float(x) for x in vals]
         except ValueError:
             raise InputError(f"irregularity part {p!r}: values must be numbers") from None
+        if kind in ("sag", "joints", "random") and nums:
+            check_plausible({"irregularity": {kind: nums[0]}},
+                            {f"irregularity.{kind}": RUN_PLAUSIBLE[f"irregularity.{kind}"]},
+                            f"irregularity {p!r} (--irregularity)", stacklevel=3)
         if kind == "sag" and len(nums) == 1:
             new: Any = SpanSag(nums[0], span_length_m)
         elif kind == "joints" and len(nums) == 1:
