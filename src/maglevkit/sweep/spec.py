@@ -566,51 +566,10 @@ def parse_sweep(parameters: Mapping[str, Any], source: str = "parameters", *,
             raise bad(f"missing the [{t}] table")
     if sw["job"] == "cross-section":
         return _parse_cross_section(parameters, source, sw, bad, base_dir)
-    try:
-        raw_job = parameters["vehicle"]
-        if not isinstance(raw_job, Mapping):
-            raise ParameterFileError("[vehicle] must be a table")
-        fixed_raw = {k: v for k, v in raw_job.items() if k in _BY_NAME}
-        unknown_keys = sorted(set(raw_job) - set(_VEHICLE_SCHEMA) - set(_BY_NAME))
-        if unknown_keys:
-            raise ParameterFileError(
-                f"[vehicle]: unknown key(s) {unknown_keys}; allowed keys are: "
-                f"{', '.join(_VEHICLE_SCHEMA)} and the parameters {', '.join(_BY_NAME)}")
-        job = take({k: v for k, v in raw_job.items() if k in _VEHICLE_SCHEMA},
-                   _VEHICLE_SCHEMA, "vehicle")
-        out = take(parameters.get("output", {}), _OUTPUT_SCHEMA, "output")
-        ts = out["time_series"]
-        if not all(isinstance(v, str) and v in TIME_SERIES_VARIABLES for v in ts) or \
-                len(set(ts)) != len(ts):
-            raise ParameterFileError(f"[output] time_series = {ts!r}: a list of distinct names "
-                                     f"from {', '.join(TIME_SERIES_VARIABLES)} (or [])")
-        swept_raw = parameters["parameters"]
-        if not isinstance(swept_raw, Mapping):
-            raise ParameterFileError("[parameters] must be a table of lists")
-        unknown_keys = sorted(set(swept_raw) - set(_BY_NAME))
-        if unknown_keys:
-            raise ParameterFileError(f"[parameters]: unknown key(s) {unknown_keys}; allowed keys "
-                                     "are: " + ", ".join(f"{p.name} [{p.unit or 'text'}]"
-                                                         for p in PARAMETERS))
-        if not swept_raw:
-            raise ParameterFileError("[parameters] is empty: give at least one list, e.g. "
-                                     "speed = [0.0, 138.9] (m/s)")
-        both = sorted(set(swept_raw) & set(fixed_raw))
-        if both:
-            raise ParameterFileError(f"{both} given both in [vehicle] (fixed) and in "
-                                     "[parameters] (swept); give each once")
-    except ParameterFileError as exc:
-        raise bad(str(exc)) from None
-    # time grid
-    from ..models.inputs import check_span
-
-    try:
-        check_span(0.0, job["duration"], job["dt"])
-    except MaglevkitError as exc:
-        raise bad(f"[vehicle] duration/dt: {exc}") from None
-    if int(round(job["duration"] / job["dt"])) < 2:
-        raise bad(f"[vehicle] duration = {job['duration']} s is less than two steps of "
-                  f"dt = {job['dt']} s")
+    job, fixed_raw, swept_raw, ts = _job_tables(
+        parameters, "vehicle", _VEHICLE_SCHEMA, PARAMETERS, TIME_SERIES_VARIABLES,
+        example="speed = [0.0, 138.9] (m/s)", bad=bad)
+    _check_time_grid(job, "vehicle", bad)
     # the vehicle (cheap: the file and its magnets' circuits; no maps)
     vfile = _resolve_file(job["file"], base_dir)
     try:
@@ -618,10 +577,98 @@ def parse_sweep(parameters: Mapping[str, Any], source: str = "parameters", *,
     except MaglevkitError as exc:
         raise bad(f"[vehicle] file = {job['file']!r}: {exc}") from None
     # parameters
+    swept, fixed = _parameter_values(
+        PARAMETERS, swept_raw, fixed_raw, "vehicle", circuits, job["duration"], bad=bad,
+        defaults={"payload": payload0})
+    irr = _check_irregularity(job["irregularity"], "seed" in swept, bad)
+    spec_job = VehicleJob(vehicle_file=vfile, vehicle_sha256=vhash, duration_s=job["duration"],
+                          dt_s=job["dt"], rigid=job["rigid"], irregularity=irr,
+                          time_series=tuple(ts), circuit_names=circuits,
+                          default_payload_kg=payload0)
+    return SweepSpec(name=sw["name"] or Path(source).stem, job=spec_job, swept=swept,
+                     fixed=fixed, source=source)
+
+
+def _job_tables(parameters: Mapping[str, Any], table: str, schema: Mapping[str, Schema],
+                params: tuple[SweepParameter, ...], series: tuple[str, ...], *, example: str,
+                bad: Any, check_job: Any = None,
+                ) -> tuple[dict[str, Any], dict[str, Any], Mapping[str, Any], list[str]]:
+    """The job table ``[table]``, the ``[output]`` and ``[parameters]`` tables of a sweep
+    file, checked: (job options, fixed parameters as given, swept lists as given, time
+    series names).  ``check_job(job)`` checks the job options further (raises
+    ParameterFileError); ``example`` is the hint for an empty ``[parameters]``."""
+    names = [p.name for p in params]
+    try:
+        raw_job = parameters[table]
+        if not isinstance(raw_job, Mapping):
+            raise ParameterFileError(f"[{table}] must be a table")
+        fixed_raw = {k: v for k, v in raw_job.items() if k in names}
+        unknown_keys = sorted(set(raw_job) - set(schema) - set(names))
+        if unknown_keys:
+            raise ParameterFileError(
+                f"[{table}]: unknown key(s) {unknown_keys}; allowed keys are: "
+                f"{', '.join(schema)} and the parameters {', '.join(names)}")
+        job = take({k: v for k, v in raw_job.items() if k in schema}, schema, table)
+        if check_job is not None:
+            check_job(job)
+        out = take(parameters.get("output", {}), _OUTPUT_SCHEMA, "output")
+        ts = out["time_series"]
+        if not all(isinstance(v, str) and v in series for v in ts) or \
+                len(set(ts)) != len(ts):
+            raise ParameterFileError(f"[output] time_series = {ts!r}: a list of distinct names "
+                                     f"from {', '.join(series)} (or [])")
+        swept_raw = parameters["parameters"]
+        if not isinstance(swept_raw, Mapping):
+            raise ParameterFileError("[parameters] must be a table of lists")
+        unknown_keys = sorted(set(swept_raw) - set(names))
+        if unknown_keys:
+            raise ParameterFileError(
+                f"[parameters]: unknown key(s) {unknown_keys}; allowed keys are: "
+                + ", ".join(f"{p.name} [{p.unit or 'text'}]" for p in params))
+        if not swept_raw:
+            raise ParameterFileError("[parameters] is empty: give at least one list, e.g. "
+                                     + example)
+        both = sorted(set(swept_raw) & set(fixed_raw))
+        if both:
+            raise ParameterFileError(f"{both} given both in [{table}] (fixed) and in "
+                                     "[parameters] (swept); give each once")
+    except ParameterFileError as exc:
+        raise bad(str(exc)) from None
+    return job, fixed_raw, swept_raw, ts
+
+
+def _check_magnets(job: Mapping[str, Any]) -> None:
+    """The ``magnets`` option of a cross-section job."""
+    if job["magnets"] not in ("reduced", "detailed"):
+        raise ParameterFileError(f"[cross_section] magnets = {job['magnets']!r}: use "
+                                 "'reduced' or 'detailed'")
+
+
+def _check_time_grid(job: Mapping[str, Any], table: str, bad: Any) -> None:
+    """The job's duration and step: a whole number of steps, at least two."""
+    from ..models.inputs import check_span
+
+    try:
+        check_span(0.0, job["duration"], job["dt"])
+    except MaglevkitError as exc:
+        raise bad(f"[{table}] duration/dt: {exc}") from None
+    if int(round(job["duration"] / job["dt"])) < 2:
+        raise bad(f"[{table}] duration = {job['duration']} s is less than two steps of "
+                  f"dt = {job['dt']} s")
+
+
+def _parameter_values(params: tuple[SweepParameter, ...], swept_raw: Mapping[str, Any],
+                      fixed_raw: Mapping[str, Any], table: str, circuits: tuple[str, ...],
+                      duration: float, *, bad: Any, defaults: Mapping[str, Any] | None = None,
+                      hint: str | None = None,
+                      ) -> tuple[dict[str, tuple[Any, ...]], dict[str, Any]]:
+    """The swept lists and the fixed values of a sweep, each value checked (failures
+    against the job's circuits and duration); ``defaults`` overrides parameter
+    defaults (e.g. the vehicle file's payload)."""
     swept: dict[str, tuple[Any, ...]] = {}
     fixed: dict[str, Any] = {}
     try:
-        for p in PARAMETERS:
+        for p in params:
             if p.name in swept_raw:
                 vals = swept_raw[p.name]
                 if not isinstance(vals, list) or not vals:
@@ -635,21 +682,18 @@ def parse_sweep(parameters: Mapping[str, Any], source: str = "parameters", *,
                                              "(each value once)")
                 swept[p.name] = checked
             elif p.name in fixed_raw:
-                fixed[p.name] = _value(p.name, fixed_raw[p.name], f"[vehicle] {p.name}")
+                fixed[p.name] = _value(p.name, fixed_raw[p.name], f"[{table}] {p.name}")
             else:
-                fixed[p.name] = payload0 if p.name == "payload" else p.default
+                fixed[p.name] = (defaults or {}).get(p.name, p.default)
         for i, v in enumerate(swept.get("failure", (fixed.get("failure"),))):
-            where = f"[parameters] failure[{i}]" if "failure" in swept else "[vehicle] failure"
-            _check_failure(v, where, circuits, job["duration"])
+            where = f"[parameters] failure[{i}]" if "failure" in swept else f"[{table}] failure"
+            if hint is None:
+                _check_failure(v, where, circuits, duration)
+            else:
+                _check_failure(v, where, circuits, duration, hint=hint)
     except ParameterFileError as exc:
         raise bad(str(exc)) from None
-    irr = _check_irregularity(job["irregularity"], "seed" in swept, bad)
-    spec_job = VehicleJob(vehicle_file=vfile, vehicle_sha256=vhash, duration_s=job["duration"],
-                          dt_s=job["dt"], rigid=job["rigid"], irregularity=irr,
-                          time_series=tuple(ts), circuit_names=circuits,
-                          default_payload_kg=payload0)
-    return SweepSpec(name=sw["name"] or Path(source).stem, job=spec_job, swept=swept,
-                     fixed=fixed, source=source)
+    return swept, fixed
 
 
 def _resolve_file(name: str, base_dir: Path | None) -> str:
@@ -712,86 +756,20 @@ def _cross_section_identity(vehicle_file: str) -> tuple[tuple[str, ...], str]:
 def _parse_cross_section(parameters: Mapping[str, Any], source: str, sw: Mapping[str, Any],
                          bad: Any, base_dir: Path | None) -> SweepSpec:
     """The cross-section job of :func:`parse_sweep` (tables present, job checked)."""
-    names = {p.name: p for p in CROSS_SECTION_PARAMETERS}
-    try:
-        raw_job = parameters["cross_section"]
-        if not isinstance(raw_job, Mapping):
-            raise ParameterFileError("[cross_section] must be a table")
-        fixed_raw = {k: v for k, v in raw_job.items() if k in names}
-        unknown_keys = sorted(set(raw_job) - set(_CROSS_SECTION_SCHEMA) - set(names))
-        if unknown_keys:
-            raise ParameterFileError(
-                f"[cross_section]: unknown key(s) {unknown_keys}; allowed keys are: "
-                f"{', '.join(_CROSS_SECTION_SCHEMA)} and the parameters {', '.join(names)}")
-        job = take({k: v for k, v in raw_job.items() if k in _CROSS_SECTION_SCHEMA},
-                   _CROSS_SECTION_SCHEMA, "cross_section")
-        if job["magnets"] not in ("reduced", "detailed"):
-            raise ParameterFileError(f"[cross_section] magnets = {job['magnets']!r}: use "
-                                     "'reduced' or 'detailed'")
-        out = take(parameters.get("output", {}), _OUTPUT_SCHEMA, "output")
-        ts = out["time_series"]
-        if not all(isinstance(v, str) and v in CROSS_SECTION_TIME_SERIES for v in ts) or \
-                len(set(ts)) != len(ts):
-            raise ParameterFileError(f"[output] time_series = {ts!r}: a list of distinct names "
-                                     f"from {', '.join(CROSS_SECTION_TIME_SERIES)} (or [])")
-        swept_raw = parameters["parameters"]
-        if not isinstance(swept_raw, Mapping):
-            raise ParameterFileError("[parameters] must be a table of lists")
-        unknown_keys = sorted(set(swept_raw) - set(names))
-        if unknown_keys:
-            raise ParameterFileError(
-                f"[parameters]: unknown key(s) {unknown_keys}; allowed keys are: "
-                + ", ".join(f"{p.name} [{p.unit or 'text'}]" for p in CROSS_SECTION_PARAMETERS))
-        if not swept_raw:
-            raise ParameterFileError("[parameters] is empty: give at least one list, e.g. "
-                                     "speed = [55.6, 125.0] (m/s)")
-        both = sorted(set(swept_raw) & set(fixed_raw))
-        if both:
-            raise ParameterFileError(f"{both} given both in [cross_section] (fixed) and in "
-                                     "[parameters] (swept); give each once")
-    except ParameterFileError as exc:
-        raise bad(str(exc)) from None
-    from ..models.inputs import check_span
-
-    try:
-        check_span(0.0, job["duration"], job["dt"])
-    except MaglevkitError as exc:
-        raise bad(f"[cross_section] duration/dt: {exc}") from None
-    if int(round(job["duration"] / job["dt"])) < 2:
-        raise bad(f"[cross_section] duration = {job['duration']} s is less than two steps of "
-                  f"dt = {job['dt']} s")
+    job, fixed_raw, swept_raw, ts = _job_tables(
+        parameters, "cross_section", _CROSS_SECTION_SCHEMA, CROSS_SECTION_PARAMETERS,
+        CROSS_SECTION_TIME_SERIES, example="speed = [55.6, 125.0] (m/s)", bad=bad,
+        check_job=_check_magnets)
+    _check_time_grid(job, "cross_section", bad)
     vfile = _resolve_file(job["file"], base_dir)
     try:
         circuits, vhash = _cross_section_identity(vfile)
     except MaglevkitError as exc:
         raise bad(f"[cross_section] file = {job['file']!r}: {exc}") from None
-    swept: dict[str, tuple[Any, ...]] = {}
-    fixed: dict[str, Any] = {}
-    try:
-        for p in CROSS_SECTION_PARAMETERS:
-            if p.name in swept_raw:
-                vals = swept_raw[p.name]
-                if not isinstance(vals, list) or not vals:
-                    unit = f" [{p.unit}]" if p.unit not in ("", "1") else ""
-                    raise ParameterFileError(f"[parameters] {p.name} = {vals!r}: expected a "
-                                             f"non-empty list of values: {p.description}{unit}")
-                checked = tuple(_value(p.name, v, f"[parameters] {p.name}[{i}]")
-                                for i, v in enumerate(vals))
-                if len(set(checked)) != len(checked):
-                    raise ParameterFileError(f"[parameters] {p.name} = {vals!r}: repeated values "
-                                             "(each value once)")
-                swept[p.name] = checked
-            elif p.name in fixed_raw:
-                fixed[p.name] = _value(p.name, fixed_raw[p.name], f"[cross_section] {p.name}")
-            else:
-                fixed[p.name] = p.default
-        for i, v in enumerate(swept.get("failure", (fixed.get("failure"),))):
-            where = (f"[parameters] failure[{i}]" if "failure" in swept
-                     else "[cross_section] failure")
-            _check_failure(v, where, circuits, job["duration"],
-                           hint="MAGNET_SIDE/front|rear, e.g. guidance_left/front")
-    except ParameterFileError as exc:
-        raise bad(str(exc)) from None
+    swept, fixed = _parameter_values(
+        CROSS_SECTION_PARAMETERS, swept_raw, fixed_raw, "cross_section", circuits,
+        job["duration"], bad=bad,
+        hint="MAGNET_SIDE/front|rear, e.g. guidance_left/front")
     irr = _check_irregularity(job["irregularity"], False, bad, table="cross_section")
     lat = " ".join(job["lateral"].split())
     seeded = _seeded_parts(irr, "irregularity", "cross_section", ("random:",), bad)
