@@ -195,30 +195,45 @@ def _run(job: VehicleJob, params: Mapping[str, Any], key: str) -> Any:
         "setup_time": setup, "wall_time": float(res.wall_time_s),
         "real_time_factor": float(res.real_time_factor),
     }
-    for name, value in scalars.items():
-        out[name] = ((), value)
-    td = res.touchdown
-    out["touchdown_circuit"] = ((), "" if td is None else td[0])
-    out["touchdown_kind"] = ((), "" if td is None else td[3])
     circuits = [str(c) for c in ds["circuit"].values]
-    out = out.assign_coords(circuit=("circuit", circuits))
-    out["gap_min"] = ("circuit", gap.min(axis=0))
-    out["gap_max"] = ("circuit", gap.max(axis=0))
-    out["current_peak"] = ("circuit", cur.max(axis=0))
+    out = _case_results(out, scalars, res.touchdown, circuits, gap, cur)
     points = list(res.comfort)
     out = out.assign_coords(comfort_point=("comfort_point", points))
     out["wk_rms"] = ("comfort_point", [res.comfort[p]["wk_rms_m_per_s2"] for p in points])
     out["sperling_wz"] = ("comfort_point", [res.comfort[p]["sperling_wz"] for p in points])
-    if job.time_series:
-        n = job.n_steps + 1
-        out = out.assign_coords(time=("time", np.arange(n) * job.dt_s))
-        for name in job.time_series:
-            full = np.full((n, len(circuits)), np.nan)
-            vals = ds[name].values
-            full[:vals.shape[0]] = vals
-            out[name] = (("time", "circuit"), full, {"units": ds[name].attrs.get("units", ""),
-                                                     "long_name": ds[name].attrs.get(
-                                                         "long_name", name)})
+    return _time_series(out, job, len(circuits), {
+        name: (ds[name].values, {"units": ds[name].attrs.get("units", ""),
+                                 "long_name": ds[name].attrs.get("long_name", name)})
+        for name in job.time_series})
+
+
+def _case_results(out: Any, scalars: Mapping[str, Any], touchdown: Any,
+                  circuits: list[str], gap: np.ndarray, cur: np.ndarray) -> Any:
+    """A case's dataset with its scalars, its touchdown (circuit, kind) and the per-circuit
+    extremes of the gaps [m] and currents [A] (time x circuit arrays) added."""
+    for name, value in scalars.items():
+        out[name] = ((), value)
+    out["touchdown_circuit"] = ((), "" if touchdown is None else touchdown[0])
+    out["touchdown_kind"] = ((), "" if touchdown is None else touchdown[3])
+    out = out.assign_coords(circuit=("circuit", circuits))
+    out["gap_min"] = ("circuit", gap.min(axis=0))
+    out["gap_max"] = ("circuit", gap.max(axis=0))
+    out["current_peak"] = ("circuit", cur.max(axis=0))
+    return out
+
+
+def _time_series(out: Any, job: Any, n_circuits: int,
+                 series: Mapping[str, tuple[np.ndarray, dict[str, str]]]) -> Any:
+    """A case's dataset with its kept time series (name: (time x circuit values, attrs))
+    added on the job's full time grid, NaN after an early end (touchdown)."""
+    if not series:
+        return out
+    n = job.n_steps + 1
+    out = out.assign_coords(time=("time", np.arange(n) * job.dt_s))
+    for name, (vals, attrs) in series.items():
+        full = np.full((n, n_circuits), np.nan)
+        full[:vals.shape[0]] = vals
+        out[name] = (("time", "circuit"), full, attrs)
     return out
 
 
@@ -300,22 +315,8 @@ def _run_cross_section(job: CrossSectionJob, params: Mapping[str, Any], key: str
         "setup_time": setup, "wall_time": float(res.wall_time_s),
         "real_time_factor": float(res.real_time_factor),
     }
-    for name, value in scalars.items():
-        out[name] = ((), value)
-    td = res.touchdown
-    out["touchdown_circuit"] = ((), "" if td is None else td[0])
-    out["touchdown_kind"] = ((), "" if td is None else td[3])
     circuits = [str(c) for c in ds["circuit"].values]
-    out = out.assign_coords(circuit=("circuit", circuits))
-    out["gap_min"] = ("circuit", gap.min(axis=0))
-    out["gap_max"] = ("circuit", gap.max(axis=0))
-    out["current_peak"] = ("circuit", cur.max(axis=0))
-    if job.time_series:
-        n = job.n_steps + 1
-        out = out.assign_coords(time=("time", np.arange(n) * job.dt_s))
-        for name in job.time_series:
-            full = np.full((n, len(circuits)), np.nan)
-            vals = series[name]
-            full[:vals.shape[0]] = vals
-            out[name] = (("time", "circuit"), full, {"units": units[name], "long_name": name})
-    return out
+    out = _case_results(out, scalars, res.touchdown, circuits, gap, cur)
+    return _time_series(out, job, len(circuits), {
+        name: (series[name], {"units": units[name], "long_name": name})
+        for name in job.time_series})
