@@ -4,8 +4,9 @@ from __future__ import annotations
 
 import math
 import warnings
+from collections.abc import Callable
 from pathlib import Path
-from typing import Annotated
+from typing import Annotated, Any
 
 import typer
 
@@ -152,19 +153,9 @@ def _run(vehicle: str, speed_kmh: float | None, speed: float | None, duration: f
                           "same value, km/h; sweep files give speed in m/s)",
                           FutureWarning, stacklevel=1)   # shown to users
             opt, speed_kmh = "--speed", speed
-        speed_kmh = 0.0 if speed_kmh is None else speed_kmh
-        if not (speed_kmh >= 0 and speed_kmh < 2000):
-            raise typer.BadParameter(f"{opt} {speed_kmh} km/h must be in 0 ... 2000")
-        # the options' names, not the API's (duration_s, dt_s)
-        for opt, value in (("--duration", duration), ("--dt", dt)):
-            if not (math.isfinite(value) and value > 0):
-                raise typer.BadParameter(f"{opt} {value:g}: must be a finite number of "
-                                         "seconds > 0")
+        speed_kmh = _check_run_options(speed_kmh, duration, dt, speed_option=opt)
         if controller not in ("cascade", "mpc"):
             raise typer.BadParameter(f"--controller {controller!r}: use cascade or mpc")
-        if duration < 2 * dt:
-            raise typer.BadParameter(f"--duration {duration:g} s is less than two steps of "
-                                     f"--dt {dt:g} s")
         train = load_vehicle(vehicle)
         fails = [parse_failure(f) for f in (failure or [])]
         prof = parse_irregularity(irregularity, span_length_m=train.section_length_m)
@@ -192,17 +183,41 @@ def _run(vehicle: str, speed_kmh: float | None, speed: float | None, duration: f
         raise fail(str(exc)) from None
     except MaglevkitError as exc:
         raise fail(exc) from None
+    from ..vehicle.plots import plot_vehicle_run
+
+    _report_and_write(res, output, plot, plot_vehicle_run)
+
+
+def _check_run_options(speed_kmh: float | None, duration: float, dt: float, *,
+                       speed_option: str = "--speed-kmh") -> float:
+    """The speed [km/h] of a run (None: 0), checked with its duration and step [s]; the
+    messages name the options (``speed_option``: the one the speed came from)."""
+    speed_kmh = 0.0 if speed_kmh is None else speed_kmh
+    if not (speed_kmh >= 0 and speed_kmh < 2000):
+        raise typer.BadParameter(f"{speed_option} {speed_kmh} km/h must be in 0 ... 2000")
+    # the options' names, not the API's (duration_s, dt_s)
+    for opt, value in (("--duration", duration), ("--dt", dt)):
+        if not (math.isfinite(value) and value > 0):
+            raise typer.BadParameter(f"{opt} {value:g}: must be a finite number of "
+                                     "seconds > 0")
+    if duration < 2 * dt:
+        raise typer.BadParameter(f"--duration {duration:g} s is less than two steps of "
+                                 f"--dt {dt:g} s")
+    return speed_kmh
+
+
+def _report_and_write(res: Any, output: Path | None, plot: Path | None,
+                      plotter: Callable[[Any, Path], list[Path]]) -> None:
+    """Print a finished run's report; write it (-o, netCDF) and its figures (--plot)."""
     typer.echo(res.report())
     if output is not None:
         with writing(output, "-o"):
             res.to_netcdf(output)
         info(f"wrote {output}")
     if plot is not None:
-        from ..vehicle.plots import plot_vehicle_run
-
         output_dir(plot, "--plot")
         with writing(plot, "--plot"):
-            written = plot_vehicle_run(res.dataset, plot)
+            written = plotter(res.dataset, plot)
         for p in written:
             info(f"wrote {p}")
 
@@ -252,16 +267,7 @@ def _run_cross_section(name: str, speed_kmh: float | None, duration: float, dt: 
     if plot is not None:   # checked now, created only when the figures are written
         plot = output_dir(plot, "--plot", create=False)
     try:
-        speed_kmh = 0.0 if speed_kmh is None else speed_kmh
-        if not (speed_kmh >= 0 and speed_kmh < 2000):
-            raise typer.BadParameter(f"--speed-kmh {speed_kmh} km/h must be in 0 ... 2000")
-        for opt, value in (("--duration", duration), ("--dt", dt)):
-            if not (math.isfinite(value) and value > 0):
-                raise typer.BadParameter(f"{opt} {value:g}: must be a finite number of "
-                                         "seconds > 0")
-        if duration < 2 * dt:
-            raise typer.BadParameter(f"--duration {duration:g} s is less than two steps of "
-                                     f"--dt {dt:g} s")
+        speed_kmh = _check_run_options(speed_kmh, duration, dt)
         data = load_cross_section(name)
         fails = [parse_failure(f) for f in (failure or [])]
         crv = parse_curve(curve) if curve is not None else None
@@ -278,16 +284,6 @@ def _run_cross_section(name: str, speed_kmh: float | None, duration: float, dt: 
         raise fail(str(exc)) from None
     except MaglevkitError as exc:
         raise fail(exc) from None
-    typer.echo(res.report())
-    if output is not None:
-        with writing(output, "-o"):
-            res.to_netcdf(output)
-        info(f"wrote {output}")
-    if plot is not None:
-        from ..vehicle.crossplots import plot_cross_section_run
+    from ..vehicle.crossplots import plot_cross_section_run
 
-        output_dir(plot, "--plot")
-        with writing(plot, "--plot"):
-            written = plot_cross_section_run(res.dataset, plot)
-        for p in written:
-            info(f"wrote {p}")
+    _report_and_write(res, output, plot, plot_cross_section_run)
