@@ -135,6 +135,15 @@ def test_bundled_example_spans_the_balancing_speed() -> None:
      "[output] time_series = ['guidance_gap']: a list of distinct names from gap, current"),
     (("speed = [40.0, 120.0]", "speed = [40.0]\ncrosswind_hold = [1.0, 1.0]"),
      "repeated values"),
+    # the job's own words in the checks shared with the vehicle job (sweep/spec.py)
+    (("speed = [40.0, 120.0]", ""),
+     "[parameters] is empty: give at least one list, e.g. speed = [55.6, 125.0] (m/s)"),
+    (("curve_radius = 2000.0", "curve_radius = 2000.0\nspeed = 3.0"),
+     "['speed'] given both in [cross_section] (fixed) and in [parameters] (swept)"),
+    (("duration = 0.1", "duration = 0.001"),
+     "[cross_section] duration = 0.001 s is less than two steps of dt = 0.001 s"),
+    (("speed = [40.0, 120.0]", 'speed = [40.0]\nfailure = ["s1m1/front@0.05"]'),
+     "(MAGNET_SIDE/front|rear, e.g. guidance_left/front)"),
 ])
 def test_bad_cross_section_sweeps_name_the_key(change: tuple[str, str], needle: str,
                                                tmp_path: Path) -> None:
