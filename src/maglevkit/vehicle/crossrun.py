@@ -53,7 +53,13 @@ from ..errors import InputError, MaglevkitWarning
 from ..plant import STANDARD_GRAVITY, chopper_floor
 from ..validation import Plausible, check_plausible, real_number
 from .crosssection import CrossSectionData, CrossSectionMechanics, track_field_path
-from .simulation import Failure, check_run_speed, limit_crossing
+from .simulation import (
+    Failure,
+    check_run_speed,
+    limit_crossing,
+    touchdown_report_line,
+    write_run_netcdf,
+)
 
 __all__ = ["CrossSectionModel", "CrossSectionRun", "TransitionCurve", "Crosswind",
            "LATERAL_ALIGNMENT_PSD", "SCENARIO_PLAUSIBLE", "parse_curve", "parse_crosswind", "parse_lateral"]
@@ -410,22 +416,24 @@ class CrossSectionRun:
     real_time_factor: float = math.nan
 
     def to_netcdf(self, path: str | Path) -> Path:
-        """Write the dataset to netCDF (atomically) and return the path.
+        """Write the dataset to netCDF (atomically; :func:`write_run_netcdf`) and return
+        the path.
 
         Parameters
         ----------
         path : str or Path
-            Target file.
+            Target file; its folder must exist.
 
         Returns
         -------
         Path
+
+        Raises
+        ------
+        InputError
+            The parent directory of ``path`` does not exist.
         """
-        p = Path(path)
-        tmp = p.with_name(p.name + ".tmp")
-        self.dataset.to_netcdf(tmp)
-        tmp.replace(p)
-        return p
+        return write_run_netcdf(self.dataset, path)
 
     def report(self) -> str:
         """A short plain-text report."""
@@ -435,14 +443,7 @@ class CrossSectionRun:
                  "time)"]
         for k, v in self.min_gap_m.items():
             lines.append(f"  minimum {k} gap {v * 1e3:.3f} mm")
-        if self.touchdown is None:
-            lines.append(f"  no touchdown (gaps stayed within "
-                         f"{float(ds.attrs['touchdown_gap_m']) * 1e3:g} ... "
-                         f"{float(ds.attrs['landing_gap_m']) * 1e3:g} mm)")
-        else:
-            c, t, g, kind = self.touchdown
-            lines.append(f"  TOUCHDOWN ({kind}): circuit {c} at t = {t:.4f} s (gap "
-                         f"{g * 1e3:.3f} mm); the run stopped there")
+        lines.append(touchdown_report_line(ds, self.touchdown))
         for name, ci in self.comfort.items():
             lines.append(f"  comfort {name}: ISO 2631 a_w = {ci['weighted_rms_m_per_s2']:.4f} "
                          f"m/s^2, Sperling Wz = {ci['sperling_wz']:.2f}")
