@@ -916,7 +916,7 @@ class CrossSectionModel:
         """
         import casadi as ca
 
-        from .stepkernel import build_vehicle_step
+        from .stepkernel import build_vehicle_step, pack_slices
 
         bank = self.bank
         if self.magnet_kind != "reduced":
@@ -948,19 +948,11 @@ class CrossSectionModel:
             voltage_limit_V=self.voltage_limit_V, integral_projection=integ,
             midspan_shape=np.zeros(0), block_steps=1).parts
         f_ctl, f_upd = parts["controllers"], parts["controller_update"]
-
-        def pack(items: list[tuple[str, int]]) -> dict[str, slice]:
-            out, k = {}, 0
-            for name, size in items:
-                out[name] = slice(k, k + size)
-                k += size
-            return out
-
-        st = pack([("x", 2 * nq), ("I_L", nc), ("psi_hat", nc), ("integral", nc),
-                   ("current", nc), ("force", nc)])
-        pi = pack([("r", nc), ("r_x", nc), ("Q_t", nq), ("t", 1)])
-        rc = pack([("gap", nc), ("gap_rate", nc), ("current", nc), ("force", nc),
-                   ("I_L", nc), ("x", 2 * nq), ("voltage", nc), ("n_bad", 1)])
+        st = pack_slices([("x", 2 * nq), ("I_L", nc), ("psi_hat", nc), ("integral", nc),
+                          ("current", nc), ("force", nc)])
+        pi = pack_slices([("r", nc), ("r_x", nc), ("Q_t", nq), ("t", 1)])
+        rc = pack_slices([("gap", nc), ("gap_rate", nc), ("current", nc), ("force", nc),
+                          ("I_L", nc), ("x", 2 * nq), ("voltage", nc), ("n_bad", 1)])
         S, P, C = (ca.MX.sym("S", st["force"].stop), ca.MX.sym("P", pi["t"].stop),
                    ca.MX.sym("C", 1 + nc))
         x, il, psi, itg, cur, frc = (S[st[k]] for k in ("x", "I_L", "psi_hat", "integral",
