@@ -416,22 +416,14 @@ class CrossSectionRun:
     real_time_factor: float = math.nan
 
     def to_netcdf(self, path: str | Path) -> Path:
-        """Write the dataset to netCDF (atomically; :func:`write_run_netcdf`) and return
-        the path.
+        """Write the dataset to netCDF and return the path
+        (:func:`~maglevkit.vehicle.simulation.write_run_netcdf`: atomically; a missing
+        folder is an :class:`~maglevkit.errors.InputError`).
 
         Parameters
         ----------
         path : str or Path
-            Target file; its folder must exist.
-
-        Returns
-        -------
-        Path
-
-        Raises
-        ------
-        InputError
-            The parent directory of ``path`` does not exist.
+            Target file.
         """
         return write_run_netcdf(self.dataset, path)
 

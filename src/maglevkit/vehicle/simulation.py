@@ -301,23 +301,13 @@ class VehicleRun:
     controller_update_cpu_time_s: np.ndarray = field(default_factory=lambda: np.zeros(0))
 
     def to_netcdf(self, path: str | Path) -> Path:
-        """Write the run's Dataset (the folder must exist: nothing is created silently),
-        atomically: an interrupted write leaves no damaged file.
+        """Write the run's Dataset to netCDF and return the path (:func:`write_run_netcdf`:
+        atomically; a missing folder is an :class:`~maglevkit.errors.InputError`).
 
         Parameters
         ----------
         path : str or path-like
             The netCDF file to write; an existing file is replaced.
-
-        Returns
-        -------
-        pathlib.Path
-            The written file.
-
-        Raises
-        ------
-        InputError
-            The parent directory of ``path`` does not exist.
         """
         return write_run_netcdf(self.dataset, path)
 
