@@ -12,8 +12,8 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
-__all__ = ["covers_data", "place_legend", "plot_comparison", "plot_force_current", "plot_simulation",
-           "save", "sequence_colors"]
+__all__ = ["covers_data", "figure_directory", "place_legend", "plot_comparison",
+           "plot_force_current", "plot_simulation", "save", "sequence_colors"]
 
 
 def save(fig: Any, path: str | Path) -> Path:
@@ -35,6 +35,36 @@ def save(fig: Any, path: str | Path) -> Path:
     fig.savefig(p, dpi=130, bbox_inches="tight")
     plt.close(fig)
     return p
+
+
+def figure_directory(directory: str | Path) -> Path:
+    """The folder figures are written into, created if missing; only its last level is
+    created (a mistyped parent is refused rather than built).
+
+    Parameters
+    ----------
+    directory : str or Path
+        Output folder (no unit); its parent must exist if it does not exist itself.
+
+    Returns
+    -------
+    Path
+        ``directory``, now an existing folder.
+
+    Raises
+    ------
+    InputError
+        The parent of a missing ``directory`` does not exist.
+    """
+    out = Path(directory)
+    if not out.is_dir():
+        if not out.parent.is_dir():
+            from .errors import InputError
+
+            raise InputError(f"cannot write figures into {str(out)!r}: the directory "
+                             f"{str(out.parent)!r} does not exist")
+        out.mkdir()
+    return out
 
 
 #: Inside positions tried, in this order, before a legend goes outside the axes.

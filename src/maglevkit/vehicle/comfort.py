@@ -72,18 +72,36 @@ SPERLING_SCALE = (100.0 * math.sqrt(2.0)) ** 0.3
 """``Wz = SPERLING_SCALE a_B^0.3`` with the B-weighted RMS ``a_B`` in m/s^2 (about 4.42)."""
 
 
-def iso2631_wk_sections() -> list[tuple[np.ndarray, np.ndarray]]:
-    """The four analogue sections of ``Wk`` as ``(b, a)`` polynomials in ``s`` [rad/s]
-    (descending powers): high pass, low pass, a-v transition, upward step."""
-    p = WK_PARAMETERS
-    w1, w2, w3, w4, w5, w6 = (2 * math.pi * p[k] for k in ("f1", "f2", "f3", "f4", "f5", "f6"))
-    return [
+def _sections(p: dict[str, float]) -> list[tuple[np.ndarray, np.ndarray]]:
+    """The analogue sections of an ISO 2631-1 weighting with parameters ``p`` (``Wk``,
+    ``Wd``) as ``(b, a)`` polynomials in ``s`` [rad/s] (descending powers): high pass, low
+    pass, a-v transition and, where ``p`` has ``f5`` and ``f6``, the upward step."""
+    w1, w2, w3, w4 = (2 * math.pi * p[k] for k in ("f1", "f2", "f3", "f4"))
+    sections = [
         (np.array([1.0, 0.0, 0.0]), np.array([1.0, w1 / p["Q1"], w1 * w1])),
         (np.array([w2 * w2]), np.array([1.0, w2 / p["Q2"], w2 * w2])),
         (np.array([1.0 / w3, 1.0]), np.array([1.0 / w4 ** 2, 1.0 / (p["Q4"] * w4), 1.0])),
-        (np.array([1.0 / w5 ** 2, 1.0 / (p["Q5"] * w5), 1.0]) * (w5 / w6) ** 2,
-         np.array([1.0 / w6 ** 2, 1.0 / (p["Q6"] * w6), 1.0])),
     ]
+    if "f5" in p:
+        w5, w6 = 2 * math.pi * p["f5"], 2 * math.pi * p["f6"]
+        sections.append((np.array([1.0 / w5 ** 2, 1.0 / (p["Q5"] * w5), 1.0]) * (w5 / w6) ** 2,
+                         np.array([1.0 / w6 ** 2, 1.0 / (p["Q6"] * w6), 1.0])))
+    return sections
+
+
+def iso2631_wk_sections() -> list[tuple[np.ndarray, np.ndarray]]:
+    """The four analogue sections of ``Wk`` as ``(b, a)`` polynomials in ``s`` [rad/s]
+    (descending powers): high pass, low pass, a-v transition, upward step."""
+    return _sections(WK_PARAMETERS)
+
+
+def _response(p: dict[str, float], frequency_Hz: Any) -> np.ndarray:
+    """``K`` times the product of the sections of ``p`` at ``s = j 2 pi f``."""
+    s = 2j * math.pi * _freqs(frequency_Hz)
+    h = np.ones_like(s)
+    for b, a in _sections(p):
+        h = h * np.polyval(b, s) / np.polyval(a, s)
+    return p["K"] * h
 
 
 def _freqs(frequency_Hz: Any) -> np.ndarray:
@@ -112,11 +130,7 @@ def iso2631_wk(frequency_Hz: Any) -> np.ndarray:
     InputError
         Frequencies that are not finite real numbers >= 0.
     """
-    s = 2j * math.pi * _freqs(frequency_Hz)
-    h = np.ones_like(s)
-    for b, a in iso2631_wk_sections():
-        h = h * np.polyval(b, s) / np.polyval(a, s)
-    return WK_PARAMETERS["K"] * h
+    return _response(WK_PARAMETERS, frequency_Hz)
 
 
 def iso2631_wd(frequency_Hz: Any) -> np.ndarray:
@@ -141,13 +155,7 @@ def iso2631_wd(frequency_Hz: Any) -> np.ndarray:
     InputError
         Frequencies that are not finite real numbers >= 0.
     """
-    p = WD_PARAMETERS
-    s = 2j * math.pi * _freqs(frequency_Hz)
-    w1, w2, w3, w4 = (2 * math.pi * p[k] for k in ("f1", "f2", "f3", "f4"))
-    h = (s * s / (s * s + w1 / p["Q1"] * s + w1 * w1)
-         * w2 * w2 / (s * s + w2 / p["Q2"] * s + w2 * w2)
-         * (1 + s / w3) / (1 + s / (p["Q4"] * w4) + s * s / (w4 * w4)))
-    return p["K"] * h
+    return _response(WD_PARAMETERS, frequency_Hz)
 
 
 def lateral_comfort_indices(acceleration: Any, sample_rate_Hz: float
@@ -174,15 +182,7 @@ def lateral_comfort_indices(acceleration: Any, sample_rate_Hz: float
     InputError
         A record that is not finite (n, m) with n >= 8, or a bad sampling rate.
     """
-    a = real_array(acceleration, "acceleration", "m/s^2")
-    if a.ndim != 2 or a.shape[0] < 8:
-        raise InputError("acceleration must be finite (n samples, m records), n >= 8 [m/s^2]")
-    fs = real_number(sample_rate_Hz, "sample_rate_Hz", "Hz", positive=True)
-    spec = np.fft.rfft(a, axis=0)
-    f = np.fft.rfftfreq(a.shape[0], 1.0 / fs)
-    wd = _weighted_rms(spec, a.shape[0], np.abs(iso2631_wd(f)))
-    b = SPERLING_LATERAL_FACTOR * sperling_weighting(f)
-    return wd, SPERLING_SCALE * _weighted_rms(spec, a.shape[0], b) ** 0.3
+    return _indices(acceleration, sample_rate_Hz, iso2631_wd, SPERLING_LATERAL_FACTOR)
 
 
 def sperling_weighting(frequency_Hz: Any) -> np.ndarray:
@@ -234,15 +234,22 @@ def comfort_indices(acceleration: Any, sample_rate_Hz: float
     """ISO 2631-1 ``a_w`` [m/s^2] (frequency domain) and Sperling's ``Wz`` [-] of every
     column of ``acceleration`` (n samples, m records) [m/s^2], one FFT per record:
     :func:`iso2631_weighted_rms` and :func:`sperling_index` of each column."""
+    return _indices(acceleration, sample_rate_Hz, iso2631_wk, 1.0)
+
+
+def _indices(acceleration: Any, sample_rate_Hz: float, iso_weighting: Any,
+             sperling_factor: float) -> tuple[np.ndarray, np.ndarray]:
+    """ISO-weighted RMS [m/s^2] (``|iso_weighting(f)|``) and Sperling ``Wz`` [-] (weighting
+    ``sperling_factor B(f)``) of every column of ``acceleration``, one FFT per record."""
     a = real_array(acceleration, "acceleration", "m/s^2")
     if a.ndim != 2 or a.shape[0] < 8:
         raise InputError("acceleration must be finite (n samples, m records), n >= 8 [m/s^2]")
     fs = real_number(sample_rate_Hz, "sample_rate_Hz", "Hz", positive=True)
     spec = np.fft.rfft(a, axis=0)
     f = np.fft.rfftfreq(a.shape[0], 1.0 / fs)
-    wk = _weighted_rms(spec, a.shape[0], np.abs(iso2631_wk(f)))
-    wz = SPERLING_SCALE * _weighted_rms(spec, a.shape[0], sperling_weighting(f)) ** 0.3
-    return wk, wz
+    aw = _weighted_rms(spec, a.shape[0], np.abs(iso_weighting(f)))
+    b = sperling_factor * sperling_weighting(f)
+    return aw, SPERLING_SCALE * _weighted_rms(spec, a.shape[0], b) ** 0.3
 
 
 def iso2631_weighted_rms(acceleration: Any, sample_rate_Hz: float, *,

@@ -32,19 +32,11 @@ def plot_cross_section_run(dataset: Any, directory: str | Path, *,
     InputError
         The parent of a missing ``directory`` does not exist.
     """
-    import matplotlib
+    from ..plotting import figure_directory  # imported first: it sets the Agg backend
 
-    matplotlib.use("Agg")
+    out = figure_directory(directory)
     import matplotlib.pyplot as plt
 
-    out = Path(directory)
-    if not out.is_dir():
-        if not out.parent.is_dir():
-            from ..errors import InputError
-
-            raise InputError(f"cannot write figures into {str(out)!r}: the directory "
-                             f"{str(out.parent)!r} does not exist")
-        out.mkdir()
     ds = dataset
     t = ds.time.values
     title = (f"{ds.attrs['vehicle']}, {float(ds.attrs['speed_m_per_s']) * 3.6:.0f} km/h"
@@ -72,12 +64,7 @@ def plot_cross_section_run(dataset: Any, directory: str | Path, *,
                              "mm)", fontsize=10)
         ax[2, col].set_xlabel("time [s]")
     ax[0, 0].legend(fontsize=8, ncol=2, loc="best")
-    fig.suptitle(title, fontsize=11)
-    fig.tight_layout()
-    p = out / f"{name}_magnets.png"
-    fig.savefig(p, dpi=110)
-    plt.close(fig)
-    paths.append(p)
+    paths.append(_write(fig, title, out / f"{name}_magnets.png"))
     fig, ax = plt.subplots(3, 1, figsize=(9, 7.5), sharex=True)
     ax[0].plot(t, ds.car_body_y.values * 1e3, label="car body y")
     ax[0].plot(t, ds.chassis_y.values * 1e3, label="chassis y")
@@ -95,10 +82,16 @@ def plot_cross_section_run(dataset: Any, directory: str | Path, *,
     ax[2].legend(fontsize=8)
     for a in ax:
         a.grid(alpha=0.3)
+    paths.append(_write(fig, title, out / f"{name}_car_body.png"))
+    return paths
+
+
+def _write(fig: Any, title: str, path: Path) -> Path:
+    """Title, lay out, save (PNG, 110 dpi) and close ``fig``; returns ``path``."""
+    import matplotlib.pyplot as plt
+
     fig.suptitle(title, fontsize=11)
     fig.tight_layout()
-    p = out / f"{name}_car_body.png"
-    fig.savefig(p, dpi=110)
+    fig.savefig(path, dpi=110)
     plt.close(fig)
-    paths.append(p)
-    return paths
+    return path

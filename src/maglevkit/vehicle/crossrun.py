@@ -53,7 +53,13 @@ from ..errors import InputError, MaglevkitWarning
 from ..plant import STANDARD_GRAVITY, chopper_floor
 from ..validation import Plausible, check_plausible, real_number
 from .crosssection import CrossSectionData, CrossSectionMechanics, track_field_path
-from .simulation import Failure, check_run_speed, limit_crossing
+from .simulation import (
+    Failure,
+    check_run_speed,
+    limit_crossing,
+    touchdown_report_line,
+    write_run_netcdf,
+)
 
 __all__ = ["CrossSectionModel", "CrossSectionRun", "TransitionCurve", "Crosswind",
            "LATERAL_ALIGNMENT_PSD", "SCENARIO_PLAUSIBLE", "parse_curve", "parse_crosswind", "parse_lateral"]
@@ -410,22 +416,16 @@ class CrossSectionRun:
     real_time_factor: float = math.nan
 
     def to_netcdf(self, path: str | Path) -> Path:
-        """Write the dataset to netCDF (atomically) and return the path.
+        """Write the dataset to netCDF and return the path
+        (:func:`~maglevkit.vehicle.simulation.write_run_netcdf`: atomically; a missing
+        folder is an :class:`~maglevkit.errors.InputError`).
 
         Parameters
         ----------
         path : str or Path
             Target file.
-
-        Returns
-        -------
-        Path
         """
-        p = Path(path)
-        tmp = p.with_name(p.name + ".tmp")
-        self.dataset.to_netcdf(tmp)
-        tmp.replace(p)
-        return p
+        return write_run_netcdf(self.dataset, path)
 
     def report(self) -> str:
         """A short plain-text report."""
@@ -435,14 +435,7 @@ class CrossSectionRun:
                  "time)"]
         for k, v in self.min_gap_m.items():
             lines.append(f"  minimum {k} gap {v * 1e3:.3f} mm")
-        if self.touchdown is None:
-            lines.append(f"  no touchdown (gaps stayed within "
-                         f"{float(ds.attrs['touchdown_gap_m']) * 1e3:g} ... "
-                         f"{float(ds.attrs['landing_gap_m']) * 1e3:g} mm)")
-        else:
-            c, t, g, kind = self.touchdown
-            lines.append(f"  TOUCHDOWN ({kind}): circuit {c} at t = {t:.4f} s (gap "
-                         f"{g * 1e3:.3f} mm); the run stopped there")
+        lines.append(touchdown_report_line(ds, self.touchdown))
         for name, ci in self.comfort.items():
             lines.append(f"  comfort {name}: ISO 2631 a_w = {ci['weighted_rms_m_per_s2']:.4f} "
                          f"m/s^2, Sperling Wz = {ci['sperling_wz']:.2f}")
@@ -915,7 +908,7 @@ class CrossSectionModel:
         """
         import casadi as ca
 
-        from .stepkernel import build_vehicle_step
+        from .stepkernel import build_vehicle_step, pack_slices
 
         bank = self.bank
         if self.magnet_kind != "reduced":
@@ -947,19 +940,11 @@ class CrossSectionModel:
             voltage_limit_V=self.voltage_limit_V, integral_projection=integ,
             midspan_shape=np.zeros(0), block_steps=1).parts
         f_ctl, f_upd = parts["controllers"], parts["controller_update"]
-
-        def pack(items: list[tuple[str, int]]) -> dict[str, slice]:
-            out, k = {}, 0
-            for name, size in items:
-                out[name] = slice(k, k + size)
-                k += size
-            return out
-
-        st = pack([("x", 2 * nq), ("I_L", nc), ("psi_hat", nc), ("integral", nc),
-                   ("current", nc), ("force", nc)])
-        pi = pack([("r", nc), ("r_x", nc), ("Q_t", nq), ("t", 1)])
-        rc = pack([("gap", nc), ("gap_rate", nc), ("current", nc), ("force", nc),
-                   ("I_L", nc), ("x", 2 * nq), ("voltage", nc), ("n_bad", 1)])
+        st = pack_slices([("x", 2 * nq), ("I_L", nc), ("psi_hat", nc), ("integral", nc),
+                          ("current", nc), ("force", nc)])
+        pi = pack_slices([("r", nc), ("r_x", nc), ("Q_t", nq), ("t", 1)])
+        rc = pack_slices([("gap", nc), ("gap_rate", nc), ("current", nc), ("force", nc),
+                          ("I_L", nc), ("x", 2 * nq), ("voltage", nc), ("n_bad", 1)])
         S, P, C = (ca.MX.sym("S", st["force"].stop), ca.MX.sym("P", pi["t"].stop),
                    ca.MX.sym("C", 1 + nc))
         x, il, psi, itg, cur, frc = (S[st[k]] for k in ("x", "I_L", "psi_hat", "integral",

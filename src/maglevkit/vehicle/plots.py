@@ -32,19 +32,11 @@ def plot_vehicle_run(dataset: Any, directory: str | Path) -> list[Path]:
     InputError
         The parent of a missing ``directory`` does not exist.
     """
-    import matplotlib
+    from ..plotting import figure_directory  # imported first: it sets the Agg backend
 
-    matplotlib.use("Agg")
+    out = figure_directory(directory)
     import matplotlib.pyplot as plt
 
-    out = Path(directory)
-    if not out.is_dir():
-        if not out.parent.is_dir():
-            from ..errors import InputError
-
-            raise InputError(f"cannot write figures into {str(out)!r}: the directory "
-                             f"{str(out.parent)!r} does not exist")
-        out.mkdir()
     ds = dataset
     t = ds.time.values
     title = (f"{ds.attrs['vehicle']}\n{float(ds.attrs['speed_m_per_s']) * 3.6:.0f} km/h, "

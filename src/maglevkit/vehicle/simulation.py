@@ -43,7 +43,7 @@ from .train import TrainData
 
 __all__ = ["Failure", "VehicleRun", "VehicleModel", "VehicleRunInterrupted", "run_vehicle",
            "parse_failure", "parse_irregularity", "RUN_PLAUSIBLE", "check_run_speed",
-           "limit_crossing"]
+           "limit_crossing", "touchdown_report_line", "write_run_netcdf"]
 
 #: Plausible magnitudes of the run options (:func:`~maglevkit.validation.check_plausible`:
 #: outside, most likely a unit slip; the value is used as given, with a
@@ -188,6 +188,67 @@ def parse_failure(text: str) -> Failure:
     return Failure(name, ts)
 
 
+def write_run_netcdf(dataset: Any, path: str | Path) -> Path:
+    """Write a run's Dataset to netCDF atomically (an interrupted write leaves no damaged
+    file); the folder must exist: nothing is created silently.
+
+    Parameters
+    ----------
+    dataset : xarray.Dataset
+        The run's time series.
+    path : str or path-like
+        The netCDF file to write (no unit); an existing file is replaced.
+
+    Returns
+    -------
+    pathlib.Path
+        The written file.
+
+    Raises
+    ------
+    InputError
+        The parent directory of ``path`` does not exist.
+    """
+    from .._files import write_netcdf_atomically
+
+    p = Path(path)
+    if not p.parent.is_dir():
+        raise InputError(f"cannot write {str(p)!r}: the directory {str(p.parent)!r} does "
+                         "not exist")
+    return write_netcdf_atomically(dataset, p)
+
+
+def touchdown_report_line(dataset: Any, touchdown: tuple[str, float, float, str] | None, *,
+                          what: dict[str, str] | None = None) -> str:
+    """The touchdown line of a run's plain-text report: the gap limits kept, or where and
+    when the first limit was crossed.
+
+    Parameters
+    ----------
+    dataset : xarray.Dataset
+        The run's Dataset, with the attributes ``touchdown_gap_m`` and ``landing_gap_m``
+        [m].
+    touchdown : tuple or None
+        ``(circuit, time_s, gap_m, kind)`` of the first crossing (time [s], gap [m],
+        ``kind`` "closed" at the touchdown gap, "landed" or "open" at the landing gap), or
+        None.
+    what : dict, optional
+        Words for each ``kind`` (keyword only; default: the kind itself).
+
+    Returns
+    -------
+    str
+        One line, indented by two spaces.
+    """
+    if touchdown is None:
+        return (f"  no touchdown (gaps stayed within "
+                f"{float(dataset.attrs['touchdown_gap_m']) * 1e3:g} ... "
+                f"{float(dataset.attrs['landing_gap_m']) * 1e3:g} mm)")
+    c, t, g, kind = touchdown
+    return (f"  TOUCHDOWN ({(what or {}).get(kind, kind)}): circuit {c} at t = {t:.4f} s (gap "
+            f"{g * 1e3:.3f} mm); the run stopped there")
+
+
 @dataclass(frozen=True)
 class VehicleRun:
     """Result of a vehicle run.
@@ -240,31 +301,15 @@ class VehicleRun:
     controller_update_cpu_time_s: np.ndarray = field(default_factory=lambda: np.zeros(0))
 
     def to_netcdf(self, path: str | Path) -> Path:
-        """Write the run's Dataset (the folder must exist: nothing is created silently),
-        atomically: an interrupted write leaves no damaged file.
+        """Write the run's Dataset to netCDF and return the path (:func:`write_run_netcdf`:
+        atomically; a missing folder is an :class:`~maglevkit.errors.InputError`).
 
         Parameters
         ----------
         path : str or path-like
             The netCDF file to write; an existing file is replaced.
-
-        Returns
-        -------
-        pathlib.Path
-            The written file.
-
-        Raises
-        ------
-        InputError
-            The parent directory of ``path`` does not exist.
         """
-        from .._files import write_netcdf_atomically
-
-        p = Path(path)
-        if not p.parent.is_dir():
-            raise InputError(f"cannot write {str(p)!r}: the directory {str(p.parent)!r} does "
-                             "not exist")
-        return write_netcdf_atomically(self.dataset, p)
+        return write_run_netcdf(self.dataset, path)
 
     def report(self) -> str:
         """A short plain-text report."""
@@ -277,16 +322,9 @@ class VehicleRun:
         mc = max(self.peak_current_A.items(), key=lambda kv: kv[1])
         lines.append(f"  minimum gap {mg[1] * 1e3:.3f} mm (magnet {mg[0]}); peak current "
                      f"{mc[1]:.2f} A (circuit {mc[0]})")
-        if self.touchdown is None:
-            lines.append(f"  no touchdown (gaps stayed within "
-                         f"{float(ds.attrs['touchdown_gap_m']) * 1e3:g} ... "
-                         f"{float(ds.attrs['landing_gap_m']) * 1e3:g} mm)")
-        else:
-            c, t, g, kind = self.touchdown
-            what = ("gap closed: magnet on the stator" if kind == "closed"
-                    else "frame down on its skids")
-            lines.append(f"  TOUCHDOWN ({what}): circuit {c} at t = {t:.4f} s (gap "
-                         f"{g * 1e3:.3f} mm); the run stopped there")
+        lines.append(touchdown_report_line(
+            ds, self.touchdown, what={"closed": "gap closed: magnet on the stator",
+                                      "landed": "frame down on its skids"}))
         ut = self.controller_update_time_s
         if ut.size:
             p50, p99 = np.percentile(ut, [50, 99]) * 1e6

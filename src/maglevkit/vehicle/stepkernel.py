@@ -41,7 +41,7 @@ import numpy as np
 from ..control import damping_input
 from ..plant import chopper_floor
 
-__all__ = ["StepLayout", "VehicleStepFunction", "build_vehicle_step"]
+__all__ = ["StepLayout", "VehicleStepFunction", "build_vehicle_step", "pack_slices"]
 
 
 @dataclass(frozen=True)
@@ -92,20 +92,33 @@ class StepLayout:
         return max(s.stop for s in self.record.values())
 
 
-def _layout(n_dof: int, nc: int, n_sp: int, nm: int) -> StepLayout:
-    def pack(items: list[tuple[str, int]]) -> dict[str, slice]:
-        out, k = {}, 0
-        for name, n in items:
-            out[name] = slice(k, k + n)
-            k += n
-        return out
+def pack_slices(items: list[tuple[str, int]]) -> dict[str, slice]:
+    """Consecutive slices of a flat vector, one per named block, in the given order.
 
-    state = pack([("x_mech", 2 * n_dof), ("guideway", n_sp * 2 * nm), ("I_L", nc),
-                  ("psi_hat", nc), ("integral", nc), ("current", nc), ("force", nc)])
-    step = pack([("x", nc), ("r", nc), ("r_x", nc), ("t", 1), ("keep", n_sp)])
-    record = pack([("gap", nc), ("gap_rate", nc), ("current", nc), ("force", nc), ("I_L", nc),
-                   ("deflection", nc), ("q", n_dof), ("q_dot", n_dof), ("midspan_ring", n_sp),
-                   ("voltage", nc), ("gap_min", 1), ("gap_max", 1), ("n_bad", 1)])
+    Parameters
+    ----------
+    items : list of (str, int)
+        Block names and sizes (number of entries, no unit).
+
+    Returns
+    -------
+    dict
+        Name -> ``slice`` into the vector; the last block's ``stop`` is its length.
+    """
+    out, k = {}, 0
+    for name, n in items:
+        out[name] = slice(k, k + n)
+        k += n
+    return out
+
+
+def _layout(n_dof: int, nc: int, n_sp: int, nm: int) -> StepLayout:
+    state = pack_slices([("x_mech", 2 * n_dof), ("guideway", n_sp * 2 * nm), ("I_L", nc),
+                         ("psi_hat", nc), ("integral", nc), ("current", nc), ("force", nc)])
+    step = pack_slices([("x", nc), ("r", nc), ("r_x", nc), ("t", 1), ("keep", n_sp)])
+    record = pack_slices([("gap", nc), ("gap_rate", nc), ("current", nc), ("force", nc), ("I_L", nc),
+                          ("deflection", nc), ("q", n_dof), ("q_dot", n_dof), ("midspan_ring", n_sp),
+                          ("voltage", nc), ("gap_min", 1), ("gap_max", 1), ("n_bad", 1)])
     return StepLayout(n_dof, nc, n_sp, nm, state, step, record)
 
 
