@@ -454,8 +454,8 @@ MUTATIONS: tuple[Mutation, ...] = (
              '"f5": 2.5',
              ("tests/test_comfort.py::test_wk_matches_iso_table",)),
     Mutation("comfort: Sperling exponent 0.3 -> 1/3", CMF,
-             "wz = SPERLING_SCALE * _weighted_rms(spec, a.shape[0], sperling_weighting(f)) ** 0.3",
-             "wz = SPERLING_SCALE * _weighted_rms(spec, a.shape[0], sperling_weighting(f)) ** (1 / 3)",
+             "return aw, SPERLING_SCALE * _weighted_rms(spec, a.shape[0], b) ** 0.3",
+             "return aw, SPERLING_SCALE * _weighted_rms(spec, a.shape[0], b) ** (1 / 3)",
              ("tests/test_comfort.py::test_sperling_index_of_a_sine",)),
     # ------------------------------------------------------------------ MPC, observer, model
     Mutation("EKF: Joseph covariance update I + K H", OBS,
