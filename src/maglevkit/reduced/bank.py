@@ -372,6 +372,13 @@ class MagnetBank:
         ladders = [m.ladder for m in self._members if m.ladder is not None]
         self.motion_eddy = bool(ladders)
         """Whether some member carries the shielded-gap ladder (two states per circuit)."""
+        diodes = [m.name for m, (_, model) in zip(self._members, pairs, strict=True)
+                  if isinstance(model, CurrentModel) and model.freewheel]
+        if diodes and not self.freewheel:
+            # a member's freewheeling diodes would be dropped without a word
+            raise InputError(f"members {diodes} are CurrentModel(freewheel=True) but the bank "
+                             "has freewheel=False: give MagnetBank(..., freewheel=True) (the "
+                             "diodes are a bank-wide option)")
         if self.motion_eddy and self.freewheel:
             raise InputError("freewheel=True with shielded-gap ladder members (motion_eddy): "
                              "the chopper's diode limit is written for eq. 8's one state per "

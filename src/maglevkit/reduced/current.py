@@ -287,6 +287,12 @@ class CurrentModel:
         (maps variables ``motion_eddy_*``).  Two states per circuit: ``I_L`` and the
         shielding eddy current ``I_e`` (``eddy_currents_A``, shape ``(n_circuits, 1)``).
         Not with ``eddy_modes > 0`` or ``eddy_resistance``.
+    freewheel : bool
+        ``False`` (default): eq. 8 with the applied voltage as given.  ``True``: behind a
+        two-quadrant chopper with freewheeling diodes, the coil current cannot go below
+        zero within a step (:func:`eq8_freewheel_voltage` in every RK4 stage and in the
+        coil current; the same law as ``MagnetBank(freewheel=True)``).  Eq. 8 only (not
+        with ``eddy_modes > 0`` or ``motion_eddy``, whose diodes need laws of their own).
     jit : bool
         Compile the B-spline RK4 interval (``lookup="bspline"``) to machine code with
         CasADi's JIT (needs a C compiler on the ``PATH``; ~0.3 s once per sub-step count).
@@ -315,7 +321,7 @@ class CurrentModel:
                  rtol: float = 1e-8, atol: float = 1e-10, max_step_s: float = 1e-3,
                  eddy_resistance: str | None = None, jit: bool = False,
                  eddy_modes: int = 0, motion_eddy: bool = False, lookup: str = "tables",
-                 compiled: str = "auto") -> None:
+                 compiled: str = "auto", freewheel: bool = False) -> None:
         if not (hasattr(maps, "dataset") and hasattr(maps, "variable")):
             hint = (" (load a maps file with maglevkit.load_maps first)"
                     if isinstance(maps, (str, bytes)) or hasattr(maps, "__fspath__") else "")
@@ -366,6 +372,11 @@ class CurrentModel:
                              "or True (the shielded-gap ladder)")
         #: whether the shielded-gap ladder replaces eq. 8 (:mod:`~maglevkit.reduction.motion_eddy`)
         self.motion_eddy = bool(motion_eddy)
+        self.freewheel = flag(freewheel, "freewheel")
+        if self.freewheel and (m or self.motion_eddy):
+            raise InputError("freewheel=True is eq. 8's diode law; with eddy_modes > 0 or "
+                             "motion_eddy=True the coil current has other branches: leave "
+                             "freewheel out (or use plain eq. 8)")
         if self.motion_eddy:
             if m:
                 raise InputError(f"motion_eddy=True with eddy_modes={m}: these are two "
@@ -465,7 +476,10 @@ class CurrentModel:
                 eddy_rhs.append(eq8_eddy_branch_rhs(ik, u_l, ca.DM(r_k[j]), ca.DM(l_k[j]) * scale))
                 coils.append(eq8_coil_current(xm[j], u_eff, r_el[j], a[j]) + i_sum)
             else:
-                mx_rhs.append(eq8_rhs(xm[j], Um[j], sdm[j], lt, dl, r_el[j], a[j]))
+                u_j = (eq8_freewheel_voltage(xm[j], Um[j], r_el[j], a[j]) if self.freewheel
+                       else Um[j])
+                mx_rhs.append(eq8_rhs(xm[j], u_j, sdm[j], lt, dl, r_el[j], a[j]))
+                coils.append(eq8_coil_current(xm[j], u_j, r_el[j], a[j]))
             forces.append(f)
             ltil.append(lt)
         if n_e:
@@ -478,7 +492,8 @@ class CurrentModel:
                                            ["I_L", "U", "s", "I_ec"],
                                            ["I", "F", "Ltilde"]).expand()
         else:
-            coil = eq8_coil_current(xm, Um, ca.DM(r_el), ca.DM(a))
+            coil = (ca.vertcat(*coils) if self.freewheel
+                    else eq8_coil_current(xm, Um, ca.DM(r_el), ca.DM(a)))
             self.ode = ca.Function("current_model_ode", [xm, Um, sm, sdm],
                                    [ca.vertcat(*mx_rhs)], ["I_L", "U", "s", "sdot"], ["dI_L"])
             self.outputs_fun = ca.Function("current_model_out", [xm, Um, sm],
@@ -1002,7 +1017,7 @@ class CurrentModel:
 
             try:
                 self._bank = MagnetBank({"magnet": self}, compiled=self.compiled,
-                                        max_step_s=self.max_step_s)
+                                        max_step_s=self.max_step_s, freewheel=self.freewheel)
             except InputError:
                 # maps the cell tables cannot hold (a grid that is not regular, or shorter
                 # than 4 points): the B-splines take them, as before
