@@ -43,7 +43,7 @@ from ..errors import InputError
 from ..plant import STANDARD_GRAVITY
 from ..validation import describe, real_array, real_number
 from .train import TrainData
-from .zoh import exact_zoh_step
+from .zoh import exact_zoh_step, second_order_state_matrices
 
 __all__ = ["VehicleMechanics", "ForceElement", "derive_sympy"]
 
@@ -258,16 +258,7 @@ class VehicleMechanics:
         (A, Bq) : ndarray (2 n_dof, 2 n_dof) and (2 n_dof, n_dof)
             ``Q`` in [N] (heave rows) and [N m] (pitch rows).
         """
-        n = self.n_dof
-        minv = np.diag(1.0 / np.diag(self.M))
-        a = np.zeros((2 * n, 2 * n))
-        a[:n, n:] = np.eye(n)
-        a[n:, :n] = -minv @ self.K
-        if damping:
-            a[n:, n:] = -minv @ self.C
-        bq = np.zeros((2 * n, n))
-        bq[n:] = minv
-        return a, bq
+        return second_order_state_matrices(self.M, self.K, self.C, damping=damping)
 
     def discretize(self, dt_s: float, *, damping: bool = True) -> tuple[np.ndarray, np.ndarray]:
         """Exact zero-order-hold discretisation ``x+ = Ad x + Bd Q`` for forces held over

@@ -60,7 +60,7 @@ import numpy as np
 
 from ..errors import InputError
 from ..validation import real_number
-from .zoh import exact_zoh_step
+from .zoh import exact_zoh_step, second_order_state_matrices
 
 __all__ = ["RigidBody", "SpringDamper", "ForcePoint", "PlanarMultibody", "derive_sympy",
            "DOF_KINDS", "DIRECTIONS"]
@@ -443,16 +443,7 @@ class PlanarMultibody:
         -------
         (A, Bq) : ndarray (2 n_dof, 2 n_dof), ndarray (2 n_dof, n_dof)
         """
-        n = self.n_dof
-        minv = np.diag(1.0 / np.diag(self.M))
-        a = np.zeros((2 * n, 2 * n))
-        a[:n, n:] = np.eye(n)
-        a[n:, :n] = -minv @ self.K
-        if damping:
-            a[n:, n:] = -minv @ self.C
-        bq = np.zeros((2 * n, n))
-        bq[n:] = minv
-        return a, bq
+        return second_order_state_matrices(self.M, self.K, self.C, damping=damping)
 
     def discretize(self, dt_s: float, *, damping: bool = True) -> tuple[np.ndarray, np.ndarray]:
         """Exact zero-order-hold step ``x+ = Ad x + Bd Q`` for generalised forces held over

@@ -18,7 +18,7 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["exact_zoh_step"]
+__all__ = ["exact_zoh_step", "second_order_state_matrices"]
 
 
 def exact_zoh_step(a: Any, b: Any, dt_s: float) -> tuple[np.ndarray, np.ndarray]:
@@ -48,3 +48,39 @@ def exact_zoh_step(a: Any, b: Any, dt_s: float) -> tuple[np.ndarray, np.ndarray]
     aug[:n2, n2:] = b * dt_s
     e = scipy.linalg.expm(aug)
     return e[:n2, :n2].copy(), e[:n2, n2:].copy()
+
+
+def second_order_state_matrices(m: Any, k: Any, c: Any, *,
+                                damping: bool = True) -> tuple[np.ndarray, np.ndarray]:
+    """``(A, Bq)`` of ``M q'' + C q' + K q = Q`` with a diagonal mass matrix, state
+    ``x = [q; q']``: ``A = [[0, I], [-M^-1 K, -M^-1 C]]``, ``Bq = [0; M^-1]``.
+
+    The one form the heave-pitch mechanics and the planar multibody system share (their
+    exact steps then go through :func:`exact_zoh_step`).
+
+    Parameters
+    ----------
+    m : array_like (n, n)
+        Mass matrix (diagonal; only its diagonal is used) [kg] or [kg m^2].
+    k : array_like (n, n)
+        Stiffness matrix [N/m] (or per radian).
+    c : array_like (n, n)
+        Damping matrix [N s/m] (or per radian).
+    damping : bool, default True
+        Include ``-M^-1 C``; False: the undamped system (keyword only).
+
+    Returns
+    -------
+    (A, Bq) : ndarray (2 n, 2 n), ndarray (2 n, n)
+    """
+    m = np.asarray(m, dtype=float)
+    n = m.shape[0]
+    minv = np.diag(1.0 / np.diag(m))
+    a = np.zeros((2 * n, 2 * n))
+    a[:n, n:] = np.eye(n)
+    a[n:, :n] = -minv @ np.asarray(k, dtype=float)
+    if damping:
+        a[n:, n:] = -minv @ np.asarray(c, dtype=float)
+    bq = np.zeros((2 * n, n))
+    bq[n:] = minv
+    return a, bq
