@@ -1,4 +1,5 @@
-"""Writing result files so that an interrupted or failed write leaves no damaged file."""
+"""Reading netCDF files whole, and writing result files so that an interrupted or failed
+write leaves no damaged file."""
 
 from __future__ import annotations
 
@@ -6,7 +7,7 @@ import os
 from pathlib import Path
 from typing import Any
 
-__all__ = ["write_netcdf_atomically"]
+__all__ = ["read_netcdf", "write_netcdf_atomically"]
 
 
 def write_netcdf_atomically(dataset: Any, path: str | Path, **to_netcdf: Any) -> Path:
@@ -23,3 +24,24 @@ def write_netcdf_atomically(dataset: Any, path: str | Path, **to_netcdf: Any) ->
         if tmp.exists():
             tmp.unlink()
     return p
+
+
+def read_netcdf(path: str | Path) -> Any:
+    """An xarray Dataset read from the netCDF file ``path`` completely into memory (the file
+    is closed again).
+
+    Raises
+    ------
+    ParameterFileError
+        The file cannot be read as netCDF (``"<path>: not a readable netCDF file: ..."``).
+    """
+    import xarray as xr
+
+    from .errors import ParameterFileError
+
+    try:
+        with xr.open_dataset(path, engine="netcdf4") as ds:
+            ds.load()
+    except (OSError, ValueError) as exc:
+        raise ParameterFileError(f"{path}: not a readable netCDF file: {exc}") from None
+    return ds

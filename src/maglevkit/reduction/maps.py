@@ -361,14 +361,9 @@ def load_maps(path: str | Path, *, magnet: Any = None) -> CharacteristicMaps:
     p = Path(path)
     if not p.is_file():
         raise ParameterFileError(f"maps file {str(p)!r} does not exist")
-    import xarray as xr
+    from .._files import read_netcdf
 
-    try:
-        with xr.open_dataset(p, engine="netcdf4") as ds:
-            ds.load()
-            data = ds
-    except (OSError, ValueError) as exc:
-        raise ParameterFileError(f"{p}: not a readable netCDF file: {exc}") from None
+    data = read_netcdf(p)
     if data.attrs.get("format") != MAPS_FORMAT:
         raise ParameterFileError(f"{p}: not a maglevkit maps file (format attribute "
                                  f"{data.attrs.get('format')!r}, expected {MAPS_FORMAT!r})")

@@ -422,16 +422,9 @@ def _assemble(gap: np.ndarray, cur: np.ndarray, cols: Mapping[tuple[str, str], n
 
 
 def _read_netcdf(p: Path, digest: str) -> GridTable:
-    import xarray as xr
+    from .._files import read_netcdf
 
-    from ..errors import ParameterFileError
-
-    try:
-        with xr.open_dataset(p, engine="netcdf4") as ds:
-            ds.load()
-            data = ds
-    except (OSError, ValueError) as exc:
-        raise ParameterFileError(f"{p}: not a readable netCDF file: {exc}") from None
+    data = read_netcdf(p)
     have = [q for q in QUANTITIES if q in data.data_vars]
     if not have:
         raise DataError(f"{p}: no variable force_N or flux_linkage_Wb (dimensions (gap, "

@@ -25,9 +25,9 @@ from typing import IO, Any
 
 import numpy as np
 
-from .._files import write_netcdf_atomically
+from .._files import read_netcdf, write_netcdf_atomically
 from .._interrupt import sigint_blocked, stop_pool
-from ..errors import InputError
+from ..errors import InputError, ParameterFileError
 from .cases import SUMMARY_UNITS, error_case, run_case
 from .spec import SWEEP_FORMAT, SweepSpec
 
@@ -109,14 +109,11 @@ def _write(ds: Any, path: Path) -> None:
 
 def _load_case(path: Path, key: str) -> Any | None:
     """A stored case, or None if missing, unreadable or not this case."""
-    import xarray as xr
-
     if not path.is_file():
         return None
     try:
-        with xr.open_dataset(path, engine="netcdf4") as ds:
-            ds.load()
-    except (OSError, ValueError):
+        ds = read_netcdf(path)
+    except ParameterFileError:          # unreadable: computed again
         return None
     if ds.attrs.get("format") != SWEEP_FORMAT or ds.attrs.get("case_key") != key:
         return None
