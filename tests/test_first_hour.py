@@ -140,7 +140,13 @@ def test_sweep_with_workers_ends_promptly_on_sigint(group: bool, tmp_path: Path)
             workers_busy.t = time.monotonic()  # type: ignore[attr-defined]
         return hasattr(workers_busy, "t") and time.monotonic() - workers_busy.t > 3.0  # type: ignore[attr-defined]
 
-    cmd = [str(ENTRY), "sweep", "vehicle-speeds", "-o", "s.nc", "--workers", "2"]
+    # the bundled sweep with 20 s runs instead of 1 s: with the step's library already
+    # compiled, the 1 s cases all finished within the 3 s wait (the signal then met a
+    # process that had written s.nc and was exiting: rc -2, a flaky failure)
+    spec = (resources.files("maglevkit") / "data" / "sweeps" / "vehicle-speeds.toml").read_text()
+    assert "duration = 1.0 " in spec
+    (tmp_path / "long.toml").write_text(spec.replace("duration = 1.0 ", "duration = 20.0 ", 1))
+    cmd = [str(ENTRY), "sweep", "long.toml", "-o", "s.nc", "--workers", "2"]
     proc, err, took = _interrupt(cmd, workers_busy, group=group, cwd=tmp_path)
     assert proc.returncode == 130, err
     assert took < 10.0, took
