@@ -239,6 +239,9 @@ def read_design_spec(source: str | Path | Mapping[str, Any], *, base_dir: str | 
     if unknown:
         raise DesignSpecError(f"unknown table(s) {unknown}; allowed: design, variables, "
                               "requirements, coil, provenance")
+    # before the schema's own checks, so that a slipped value it then refuses (e.g.
+    # fill_factor = 600 for 0.6) is named with its unit and likely slip first (issue 27)
+    check_plausible(doc, DESIGN_PLAUSIBLE, label, stacklevel=3)
     design = _table(doc, "design")
     bad = sorted(set(design) - {"magnet", "objective"})
     if bad:
@@ -313,7 +316,6 @@ def read_design_spec(source: str | Path | Mapping[str, Any], *, base_dir: str | 
             raise DesignSpecError(f"[provenance] {k!r}: tags a key the spec does not give; "
                                   "expected \"table.key\" of one of its values (e.g. "
                                   "\"requirements.force_N\")")
-    check_plausible(doc, DESIGN_PLAUSIBLE, label, stacklevel=3)
     return DesignSpec(magnet=magnet, objective=objective, variables=variables,
                       requirements=req, coil=coil, provenance=dict(prov), source=label)
 
