@@ -449,3 +449,61 @@ def test_maps_build_names_the_next_step(tmp_path: Path) -> None:
     assert res.exit_code == 0, res.output
     assert f"next: maglevkit compare u-magnet {out} (detailed vs reduced)" in res.stderr
     assert res.stdout.startswith("maps of ")      # results on stdout, the hint on stderr
+
+
+def _string_constants(tree: Any) -> list[str]:
+    """The string constants of a module that are not docstrings (messages, help texts)."""
+    import ast
+
+    docstrings = {id(node.body[0].value) for node in ast.walk(tree)
+                  if isinstance(node, (ast.Module, ast.ClassDef, ast.FunctionDef,
+                                       ast.AsyncFunctionDef))
+                  and node.body and isinstance(node.body[0], ast.Expr)
+                  and isinstance(node.body[0].value, ast.Constant)}
+    return [node.value for node in ast.walk(tree)
+            if isinstance(node, ast.Constant) and isinstance(node.value, str)
+            and id(node) not in docstrings]
+
+
+def test_every_option_the_messages_recommend_exists() -> None:
+    # issue 27: "the CLI options the error messages recommend (--extrapolate, --guideway
+    # FILE) exist"; a message or help text naming an option no command has fails here
+    import ast
+
+    import typer.main
+
+    options = {"--help"}
+    for cmd in [typer.main.get_command(app), *_click_commands().values()]:
+        for param in cmd.params:
+            options.update(o for o in (*param.opts, *param.secondary_opts) if o.startswith("--"))
+    assert {"--extrapolate", "--guideway", "--force", "--speed-kmh"} <= options
+    linker = {"--no-as-needed"}         # a C compiler flag in the build commands, not ours
+    named: dict[str, str] = {}
+    for path in Path(mk.__file__).resolve().parent.rglob("*.py"):
+        for text in _string_constants(ast.parse(path.read_text())):
+            for opt in re.findall(r"(?<![\w-])--[a-z][a-z0-9-]*[a-z0-9]", text):
+                named.setdefault(opt, str(path))
+    assert len(named) > 30, "found too few option names: is the scan still reading messages?"
+    missing = {o: p for o, p in named.items() if o not in options | linker}
+    assert not missing, missing
+    # a magnet without [operating]: figures has no gap or current option to point to
+    res = runner.invoke(app, ["figures", "u-magnet", "--out", "never-written"])
+    assert res.exit_code == 2 and "explicitly" not in res.stderr
+    assert "add one to its parameter file (nominal_gap in m, nominal_current in A" \
+        in " ".join(res.stderr.split())
+
+
+def test_commands_name_the_next_step(tmp_path: Path) -> None:
+    # issue 27: "after each command a one-line next step where there is an obvious one"
+    res = runner.invoke(app, ["statics", "u-magnet", "--gaps", "0.01", "--currents", "10"])
+    assert res.exit_code == 0
+    assert "next: maglevkit maps build u-magnet -o maps.nc" in res.stderr
+    assert "next:" not in res.stdout                 # results on stdout, hints on stderr
+    res = runner.invoke(app, ["vehicle", "run", "--duration", "0.01", "--no-progress"])
+    assert res.exit_code == 0, res.output
+    assert "next: add --plot DIR (figures) or -o run.nc" in " ".join(res.stderr.split())
+    out = tmp_path / "run.nc"
+    res = runner.invoke(app, ["vehicle", "run", "--duration", "0.01", "--no-progress",
+                              "-o", str(out)])
+    assert res.exit_code == 0 and out.exists()
+    assert f"next: xarray.open_dataset({str(out)!r})" in " ".join(res.stderr.split())

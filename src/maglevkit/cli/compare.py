@@ -189,3 +189,5 @@ def compare(
             with writing(target):
                 p = plot_comparison(r, target, title=plot_title(mag.name, r))
             info(f"wrote {p}")
+    info(f"next: maglevkit export fmu {magnet} {maps_file} -o magnet.fmu (the reduced model "
+         "for other tools)" + ("" if out is not None else ", or add --out DIR for figures"))

@@ -14,7 +14,7 @@ import numpy as np
 import typer
 
 from ..errors import MaglevkitError
-from ._app import app, console, fail, load_magnet_or_exit, output_dir
+from ._app import app, console, fail, info, load_magnet_or_exit, output_dir
 
 DEFAULT_MAGNET = "tr09-standard"
 
@@ -121,3 +121,5 @@ def demo(
     console.print(f"{len(written)} files in {out}/:")
     for p in written:
         console.print(f"  {p}")
+    info("next: your own magnet: maglevkit template magnet levitation_magnet > my.toml, edit "
+         "it, then maglevkit demo --magnet my.toml; the train: maglevkit vehicle run")

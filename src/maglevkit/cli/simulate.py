@@ -133,3 +133,5 @@ def simulate(
         with writing(plot, "--plot"):
             plot_simulation(res, plot, title=f"{mag.name}: {Path(str(scenario)).stem}")
         info(f"wrote {plot}")
+    info(f"next: maglevkit maps build {magnet} -o maps.nc, then maglevkit compare {magnet} "
+         "maps.nc (the reduced model against this one)")

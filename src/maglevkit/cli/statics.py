@@ -128,3 +128,5 @@ def statics(
         with writing(plot, "--plot"):
             plot_force_current(sol, plot, title=mag.name)
         info(f"wrote {plot}")
+    info(f"next: maglevkit maps build {magnet} -o maps.nc (the reduced model's maps), or "
+         f"maglevkit simulate {magnet} (a transient)")

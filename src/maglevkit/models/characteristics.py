@@ -43,8 +43,12 @@ def nominal_point(magnet: Magnet) -> tuple[float, float]:
     """
     s0, i0 = magnet.nominal_gap, magnet.nominal_current
     if s0 is None or i0 is None:
-        raise InputError(f"magnet {magnet.name!r} has no [operating] table (nominal_gap, "
-                         "nominal_current); give the gap and current explicitly")
+        # issue 27: "give the gap and current explicitly" sent CLI users (figures) to
+        # options that do not exist; the file's table is the remedy for every caller
+        raise InputError(f"magnet {magnet.name!r} has no [operating] table: add one to its "
+                         "parameter file (nominal_gap in m, nominal_current in A; see "
+                         "'maglevkit template magnet levitation_magnet'), or in Python "
+                         "pass the gap and current where the function takes them")
     return s0, i0
 
 
