@@ -92,10 +92,12 @@ def _alive(pid: int) -> bool:
 
 
 def _interrupt(cmd: list[str], ready: Any, *, group: bool, cwd: Path,
-               timeout_s: float = 180.0) -> tuple[subprocess.Popen[str], str, float]:
+               timeout_s: float = 180.0, twice: bool = False
+               ) -> tuple[subprocess.Popen[str], str, float]:
     """Start ``cmd`` in its own session, wait for ``ready(proc, stderr so far)``, send
-    SIGINT (to the main process only or to its group); returns the process, its stderr
-    and the seconds it took to exit after the signal."""
+    SIGINT (to the main process only or to its group; ``twice``: again 0.3 s later, an
+    impatient user); returns the process, its stderr and the seconds it took to exit
+    after the (first) signal."""
     # the package under test, also from another folder
     src = str(Path(mk.__file__).resolve().parents[1])
     env = {**os.environ, "PYTHONPATH": os.pathsep.join(
@@ -112,11 +114,18 @@ def _interrupt(cmd: list[str], ready: Any, *, group: bool, cwd: Path,
         if proc.poll() is not None:
             pytest.fail(f"ended before the signal (rc {proc.returncode}): "
                         f"{err_path.read_text()[-2000:]}")
-        if group:
-            os.killpg(proc.pid, signal.SIGINT)
-        else:
-            proc.send_signal(signal.SIGINT)
+        def send() -> None:
+            if group:
+                os.killpg(proc.pid, signal.SIGINT)
+            else:
+                proc.send_signal(signal.SIGINT)
+
+        send()
         t1 = time.monotonic()
+        if twice:
+            time.sleep(0.3)
+            if proc.poll() is None:
+                send()
         proc.wait(timeout=60)
         return proc, err_path.read_text(), time.monotonic() - t1
     finally:
@@ -126,8 +135,10 @@ def _interrupt(cmd: list[str], ready: Any, *, group: bool, cwd: Path,
 
 
 @pytest.mark.skipif(not Path("/proc/self/stat").exists(), reason="needs /proc (Linux)")
-@pytest.mark.parametrize("group", [False, True], ids=["main-only", "group"])
-def test_sweep_with_workers_ends_promptly_on_sigint(group: bool, tmp_path: Path) -> None:
+@pytest.mark.parametrize("group, twice", [(False, False), (True, False), (False, True)],
+                         ids=["main-only", "group", "main-only-twice"])
+def test_sweep_with_workers_ends_promptly_on_sigint(group: bool, twice: bool,
+                                                    tmp_path: Path) -> None:
     # was: SIGINT to the main process printed "interrupted" and never exited (it waited on
     # its pool workers); a second SIGINT gave a traceback and left orphaned workers
     seen: set[int] = set()
@@ -147,7 +158,7 @@ def test_sweep_with_workers_ends_promptly_on_sigint(group: bool, tmp_path: Path)
     assert "duration = 1.0 " in spec
     (tmp_path / "long.toml").write_text(spec.replace("duration = 1.0 ", "duration = 20.0 ", 1))
     cmd = [str(ENTRY), "sweep", "long.toml", "-o", "s.nc", "--workers", "2"]
-    proc, err, took = _interrupt(cmd, workers_busy, group=group, cwd=tmp_path)
+    proc, err, took = _interrupt(cmd, workers_busy, group=group, cwd=tmp_path, twice=twice)
     assert proc.returncode == 130, err
     assert took < 10.0, took
     assert re.search(r"interrupted: \d+ of 12 cases stored in s.cases; run the same command "
@@ -159,9 +170,11 @@ def test_sweep_with_workers_ends_promptly_on_sigint(group: bool, tmp_path: Path)
 
 
 @pytest.mark.skipif(not Path("/proc/self/stat").exists(), reason="needs /proc (Linux)")
-@pytest.mark.parametrize("group, workers", [(False, "1"), (True, "1"), (False, "2")],
-                         ids=["main-only", "group", "pool-main-only"])
-def test_transient_maps_build_interrupted_exits_130(group: bool, workers: str,
+@pytest.mark.parametrize("group, workers, twice",
+                         [(False, "1", False), (True, "1", False), (False, "2", False),
+                          (False, "2", True)],
+                         ids=["main-only", "group", "pool-main-only", "pool-main-only-twice"])
+def test_transient_maps_build_interrupted_exits_130(group: bool, workers: str, twice: bool,
                                                     tmp_path: Path) -> None:
     # was: rc 2 "flux model failed ... check the magnet's dimensions", once with pages of
     # CasADi inputs (CasADi made the SIGINT inside IDAS a failed evaluation)
@@ -170,7 +183,9 @@ def test_transient_maps_build_interrupted_exits_130(group: bool, workers: str,
 
     cmd = [str(ENTRY), "maps", "build", "u-magnet", "-o", "m.nc", "--method", "transient",
            "--gaps", "0.006:0.014:10", "--currents", "10:40:10", "--workers", workers]
-    proc, err, took = _interrupt(cmd, transient_running, group=group, cwd=tmp_path)
+    # twice: the second SIGINT met a restored handler while exiting (rc -2, not 130)
+    proc, err, took = _interrupt(cmd, transient_running, group=group, cwd=tmp_path,
+                                 twice=twice)
     assert proc.returncode == 130, err
     assert took < 10.0, took
     lines = err.strip().splitlines()
@@ -178,6 +193,34 @@ def test_transient_maps_build_interrupted_exits_130(group: bool, workers: str,
     assert err.count("interrupted") == 1, err
     assert len(lines) < 20 and "Traceback" not in err and "Input 0" not in err, err
     assert not (tmp_path / "m.nc").exists()
+
+
+@pytest.mark.skipif(not Path("/proc/self/stat").exists(), reason="needs /proc (Linux)")
+@pytest.mark.parametrize("group", [False, True], ids=["main-only", "group"])
+def test_compare_interrupted_exits_130(group: bool, small_maps: mk.CharacteristicMaps,
+                                       tmp_path: Path) -> None:
+    # was (found re-checking issue 27): rc 2, "flux model failed over several hold
+    # intervals ..." and CasADi's solver inputs on stderr: the SIGINT landed inside IDAS.
+    # The detailed model's chunks and the closed loop's steps are now the safe points.
+    small_maps.to_netcdf(tmp_path / "m.nc")
+    step = (resources.files("maglevkit") / "data" / "scenarios" / "step.toml").read_text()
+    assert "duration = 0.4 " in step
+    # 40 s of detailed model: minutes of IDAS, so the signal meets a running integration
+    (tmp_path / "long.toml").write_text(step.replace("duration = 0.4 ", "duration = 40.0 ", 1))
+    seen: dict[str, float] = {}
+
+    def integrating(proc: subprocess.Popen[str], err: str) -> bool:
+        if "compare: scenario 1/1" in err:
+            seen.setdefault("t", time.monotonic())
+        return "t" in seen and time.monotonic() - seen["t"] > 3.0
+
+    cmd = [str(ENTRY), "compare", "u-magnet", "m.nc", "--scenario", "long.toml"]
+    proc, err, took = _interrupt(cmd, integrating, group=group, cwd=tmp_path)
+    assert proc.returncode == 130, err
+    assert took < 10.0, took                  # a chunk of 200 steps is well below a second
+    assert err.strip().splitlines()[-1] == "interrupted", err
+    assert err.count("interrupted") == 1 and "error:" not in err, err
+    assert "Input 0" not in err and "Traceback" not in err, err
 
 
 def test_a_vehicle_with_a_non_levitation_magnet_is_refused(tmp_path: Path) -> None:

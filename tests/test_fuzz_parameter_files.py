@@ -1,7 +1,8 @@
 """Fuzzing every bundled parameter file (issue 27, "Must show").
 
 Each example changes one or two dimensional values of a bundled magnet, vehicle,
-guideway, cross-section or design-spec file: a unit slip (times 1000 or 1/1000) or a plausible change (times 0.5 ... 2).
+guideway, cross-section or design-spec file: a unit slip (times 1000 or 1/1000) or a
+plausible change (times 0.5 ... 2).
 Every outcome must be one of
 
 * a documented error (a :class:`~maglevkit.MaglevkitError`, naming what is wrong),

@@ -16,8 +16,8 @@ from typing import Any
 import pytest
 
 import maglevkit as mk
-from maglevkit.magnets.base import MAGNET_PLAUSIBLE
 from maglevkit.design import DESIGN_PLAUSIBLE, read_design_spec
+from maglevkit.magnets.base import MAGNET_PLAUSIBLE
 from maglevkit.validation import Plausible, check_plausible
 from maglevkit.vehicle.crosssection import CROSS_SECTION_PLAUSIBLE, parse_cross_section
 from maglevkit.vehicle.data import GUIDEWAY_PLAUSIBLE, parse_guideway

@@ -14,8 +14,8 @@ detailed signal, and the *AC-normalised* error
 which measures the error relative to the signal's variation (a 50 Hz gap sine moves the
 current by a few percent of its DC value, so e_y hides errors that e_y,AC shows).  It is
 reported as undefined (NaN, printed "n/a (no variation)", :func:`format_ac_error`) when the
-detailed signal hardly moves: RMS(y_detailed - mean) < ``AC_MIN_RELATIVE_VARIATION`` x
-|mean(y_detailed)| (see there).
+detailed signal hardly moves: ``RMS(y_detailed - mean) < AC_MIN_RELATIVE_VARIATION x
+|mean(y_detailed)|`` (see there).
 The speed-up is the ratio of the two models' CPU times (``time.process_time``), each the
 best of ``repeat`` runs after one untimed warm-up run (which compiles and fills caches and
 whose results are compared): warm, CPU, best of N, so that neither the first call's
@@ -54,7 +54,7 @@ __all__ = ["AC_MIN_RELATIVE_VARIATION", "ACCEPTANCE_NRMS", "error_verdicts",
            "ComparisonScenario", "ComparisonResult",
            "standard_scenarios", "compare_models", "circuit_forces", "format_ac_error"]
 
-#: Smallest variation of a detailed signal, RMS(y - mean(y)) / |mean(y)|, for which the
+#: Smallest variation of a detailed signal, ``RMS(y - mean(y)) / |mean(y)|``, for which the
 #: AC-normalised error is reported.  Below it the ratio divides the model error by a
 #: variation of the size of that error and says nothing (it gave "AC errors" of 215-239 %).
 #: Measured on the standard set (tr09-standard, tr09-bow, tr-guidance at their nominal

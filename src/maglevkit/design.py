@@ -428,7 +428,7 @@ def design_parameters(spec: DesignSpec, values: Mapping[str, float], *,
     values : mapping
         Design variable -> value [m, turns -]; missing variables keep the base value.
     provenance : str
-        Tag (after ``[E] ``) for every changed value; empty: keep the base's tags.
+        Tag (after ``[E]`` and a space) for every changed value; empty: keep the base's tags.
 
     Returns
     -------
@@ -614,7 +614,7 @@ def evaluate_design(spec: DesignSpec, values: Mapping[str, float] | None = None,
     -------
     dict
         ``nominal_current_A``, ``reserve_current_A``, ``force_reserve_N``,
-        ``flux_density_T`` (peak |B| in the magnet's iron at the nominal point),
+        ``flux_density_T`` (peak ``|B|`` in the magnet's iron at the nominal point),
         ``flux_density_path``, ``current_density_A_per_m2``, ``voltage_V``,
         ``resistance_ohm``, ``mass_kg``, ``power_W``, the geometry slacks
         ``coil_fits_leg_m``, ``coils_fit_window_m``, ``magnet_fits_rail_m`` [m] and

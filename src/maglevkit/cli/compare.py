@@ -18,6 +18,7 @@ from ._app import (
     app,
     fail,
     info,
+    interruptible,
     load_magnet_or_exit,
     new_table,
     output_dir,
@@ -170,12 +171,14 @@ def compare(
         reduced = CurrentModel(maps, extrapolate=extrapolate)
         results = []
         start = time.monotonic()
-        for k, case in enumerate(cases, 1):
-            # progress on stderr: the standard set takes ~30 s
-            info(f"compare: scenario {k}/{len(cases)} {case.name} ...")
-            results += compare_models(mag, reduced, [case],
-                                      gap_m=s0 if s0 is not None else 0.0,
-                                      current_A=i0 if i0 is not None else 0.0, repeat=repeat)
+        with interruptible():   # Ctrl-C between chunks of steps, not inside CasADi
+            for k, case in enumerate(cases, 1):
+                # progress on stderr: the standard set takes ~30 s
+                info(f"compare: scenario {k}/{len(cases)} {case.name} ...")
+                results += compare_models(mag, reduced, [case],
+                                          gap_m=s0 if s0 is not None else 0.0,
+                                          current_A=i0 if i0 is not None else 0.0,
+                                          repeat=repeat)
         info(f"compare: {len(cases)} scenario(s) done in {time.monotonic() - start:.1f} s")
     except MaglevkitError as exc:
         raise fail(exc) from None

@@ -10,6 +10,7 @@ from typing import Any
 
 import numpy as np
 
+from .._interrupt import check_interrupt
 from ..errors import InputError, SolverError
 from ..models.inputs import check_span
 from ..plant import HeaveMass, HeaveState
@@ -245,6 +246,7 @@ def closed_loop(model: Any, vehicle: HeaveMass, controller: GapController | Cont
         return u
 
     for k in range(n):
+        check_interrupt()          # a deferred Ctrl-C (CLI): between steps, not in CasADi
         t = T[k]
         u = sample(k)
         lim[k] = bool(np.any(np.abs(u) >= limit))

@@ -48,6 +48,7 @@ from typing import TYPE_CHECKING, Any
 import casadi as ca
 import numpy as np
 
+from .._interrupt import check_interrupt
 from ..circuit.assembly import assemble
 from ..circuit.network import Network
 from ..errors import CompilationWarning, InputError, SolverError, TopologyError
@@ -1216,6 +1217,7 @@ class FluxModel:
                 O[k:k + m] = np.asarray(Oc).T
                 w = W[k + m - 1]
                 k += m
+                check_interrupt()  # a deferred Ctrl-C (CLI): between chunks, not in CasADi
         self._check_finite(state, W, O, h, U, rate)
         return W, Qd, O
 
@@ -1269,6 +1271,7 @@ class FluxModel:
             O[k:k + m] = np.asarray(Oc).T
             w = W[k + m - 1]
             k += m
+            check_interrupt()      # a deferred Ctrl-C (CLI): between chunks, not in CasADi
         self._check_finite(state, W, O, h, U, rate)
         return W, Qd, O
 

@@ -128,7 +128,7 @@ class TransitionCurve:
         check_plausible({"curve": {"radius_m": r}}, SCENARIO_PLAUSIBLE, stacklevel=4)
 
     def ramp(self, distance_m: Any) -> np.ndarray:
-        """Share ``0 ... 1`` of the full curve at the distances travelled [m] (-).
+        """Share (0 to 1) of the full curve at the distances travelled [m] (-).
 
         Parameters
         ----------
