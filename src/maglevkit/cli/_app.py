@@ -389,17 +389,17 @@ def main() -> None:  # pragma: no cover - console entry point
         raise SystemExit(fail(exc).exit_code) from None
     except KeyboardInterrupt:
         rc = INTERRUPTED_EXIT_CODE
+    except typer.Abort:             # end of input at a prompt
+        sys.stderr.write("Aborted!\n")
+        raise SystemExit(1) from None
+    except TyperException as exc:   # usage errors: one line, as every other error
+        raise SystemExit(_usage_error(exc)) from None
     except Exception:
         # a Ctrl-C inside CasADi can surface as a SystemError ("returned a result with an
         # exception set") or a RuntimeError: the interruption, not a traceback
         if not sigint_received():
             raise
         rc = INTERRUPTED_EXIT_CODE
-    except typer.Abort:             # end of input at a prompt
-        sys.stderr.write("Aborted!\n")
-        raise SystemExit(1) from None
-    except TyperException as exc:   # usage errors: one line, as every other error
-        raise SystemExit(_usage_error(exc)) from None
     if rc == INTERRUPTED_EXIT_CODE and not _INTERRUPT_REPORTED:
         interrupted()
     raise SystemExit(rc if isinstance(rc, int) else 0)
