@@ -427,6 +427,10 @@ def test_list_and_template(tmp_path: Path) -> None:
         assert f"{kind}:" in res.stdout and f"  {name} " in res.stdout
     res = runner.invoke(app, ["list", "magnets"])
     assert "u-magnet" in res.stdout and "TR09 standard levitation magnet" in res.stdout
+    # one title column, also past a long name (tr09-cross-section was cut at 16 characters)
+    rows = [ln for ln in runner.invoke(app, ["list"]).stdout.splitlines() if ln.startswith("  ")]
+    starts = {len(ln) - len(ln.lstrip()[len(ln.split()[0]):].lstrip()) for ln in rows}
+    assert len(rows) >= 8 and len(starts) == 1, rows
     assert "next: maglevkit statics NAME" in res.stderr
     loaders = {"magnet": mk.load_magnet, "vehicle": load_vehicle, "guideway": load_guideway,
                "scenario": load_scenario, "sweep": load_sweep}
