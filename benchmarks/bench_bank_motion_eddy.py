@@ -116,7 +116,7 @@ def run() -> str:
     if shutil.which("cc") is None:
         return "No C compiler on this machine: the compiled bank needs one."
     gm = _gap_motion()
-    maps = mk.build_maps(mk.load_magnet(gm.MAGNET), gaps=gm.GRID[0], currents=gm.GRID[1],
+    maps = mk.build_maps(mk.load_magnet(gm.MAGNET), gaps_m=gm.GRID[0], currents_A=gm.GRID[1],
                          progress=False)
     cache = Path(tempfile.mkdtemp(prefix="maglevkit-bench-cache-"))
     try:

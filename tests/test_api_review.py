@@ -23,7 +23,7 @@ def _short_run(u_lin: mk.Magnet, **kw):  # type: ignore[no-untyped-def]
     from maglevkit.control import closed_loop, design_gap_controller
     from maglevkit.vehicle import STANDARD_GRAVITY, HeaveMass
 
-    f0 = float(mk.solve_statics(u_lin, gaps=0.01, currents=10.0).force_N)
+    f0 = float(mk.solve_statics(u_lin, gaps_m=0.01, currents_A=10.0).force_N)
     veh = HeaveMass(f0 / STANDARD_GRAVITY)
     ctl = design_gap_controller(u_lin, mass_kg=veh.mass_kg, gap_m=0.01, current_A=10.0)
     return f0, closed_loop(mk.FluxModel(u_lin), veh, ctl, dt_s=1e-3, initial_gap_m=0.01,
@@ -52,7 +52,7 @@ def test_gap_metrics_refuse_start_after_the_end_and_missing_reference(u_lin) -> 
 def test_closed_loop_touchdown_is_a_solver_error_not_bad_input(u_lin) -> None:  # type: ignore[no-untyped-def]
     # a pull 20x the weight towards the rail: the loop cannot hold it and the magnet
     # closes onto the rail; was: InputError (the inputs were fine, the run was unstable)
-    f0 = float(mk.solve_statics(u_lin, gaps=0.01, currents=10.0).force_N)
+    f0 = float(mk.solve_statics(u_lin, gaps_m=0.01, currents_A=10.0).force_N)
     with pytest.raises(mk.SolverError, match=r"TOUCHDOWN.*at t = .* s; state: gap_m=") as exc:
         _short_run(u_lin, duration_s=0.5, external_force_N=lambda t: -20 * f0)
     assert not isinstance(exc.value, mk.InputError)
@@ -174,7 +174,7 @@ def test_psd_variance_refuses_reversed_and_divergent_bands() -> None:
 
 # ------------------------------------------------- raw Python errors -> maglevkit errors
 def test_branch_flux_unknown_name(u_lin) -> None:  # type: ignore[no-untyped-def]
-    sol = mk.solve_statics(u_lin, gaps=0.01, currents=10.0)
+    sol = mk.solve_statics(u_lin, gaps_m=0.01, currents_A=10.0)
     first = sol.branch_names[0]
     assert np.isfinite(sol.branch_flux(first))
     # was: ValueError "'nope' is not in list"
@@ -333,8 +333,8 @@ def test_load_maps_without_its_identity_attributes(tmp_path: Path) -> None:
     import maglevkit as mk
     from maglevkit.errors import ParameterFileError
 
-    maps = mk.build_maps(mk.load_magnet("u-magnet"), gaps=np.linspace(0.004, 0.02, 5),
-                         currents=np.linspace(0.0, 80.0, 5), progress=False)
+    maps = mk.build_maps(mk.load_magnet("u-magnet"), gaps_m=np.linspace(0.004, 0.02, 5),
+                         currents_A=np.linspace(0.0, 80.0, 5), progress=False)
     ds = maps.dataset.copy()
     del ds.attrs["magnet_hash"]
     path = tmp_path / "m.nc"

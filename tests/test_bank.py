@@ -31,7 +31,7 @@ REL = 1e-12
 
 @pytest.fixture(scope="module")
 def u_maps(u_magnet: mk.Magnet) -> mk.CharacteristicMaps:
-    return mk.build_maps(u_magnet, gaps=GAPS, currents=CURRENTS, progress=False)
+    return mk.build_maps(u_magnet, gaps_m=GAPS, currents_A=CURRENTS, progress=False)
 
 
 @pytest.fixture(scope="module")
@@ -39,18 +39,18 @@ def u_variant_maps() -> mk.CharacteristicMaps:
     """A U-magnet with 20 % more turns: different maps of the same topology."""
     p = u_params()
     p["magnet"]["turns"] = int(round(p["magnet"]["turns"] * 1.2))
-    return mk.build_maps(mk.build_magnet(p), gaps=GAPS, currents=CURRENTS, progress=False)
+    return mk.build_maps(mk.build_magnet(p), gaps_m=GAPS, currents_A=CURRENTS, progress=False)
 
 
 @pytest.fixture(scope="module")
 def guidance_maps() -> mk.CharacteristicMaps:
-    return mk.build_maps(mk.load_magnet("tr-guidance"), gaps=GAPS, currents=CURRENTS,
+    return mk.build_maps(mk.load_magnet("tr-guidance"), gaps_m=GAPS, currents_A=CURRENTS,
                          progress=False)
 
 
 @pytest.fixture(scope="module")
 def tr09_maps() -> mk.CharacteristicMaps:
-    return mk.build_maps(mk.load_magnet("tr09-standard"), gaps=GAPS, currents=CURRENTS,
+    return mk.build_maps(mk.load_magnet("tr09-standard"), gaps_m=GAPS, currents_A=CURRENTS,
                          progress=False)
 
 

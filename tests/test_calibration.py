@@ -40,7 +40,7 @@ def magnet() -> mk.Magnet:
 
 
 def _statics(model: object, gaps: np.ndarray, currents: np.ndarray) -> tuple[np.ndarray, ...]:
-    sol = mk.solve_statics(model, gaps=np.c_[gaps, gaps], currents=currents[:, None])
+    sol = mk.solve_statics(model, gaps_m=np.c_[gaps, gaps], currents_A=currents[:, None])
     return (np.asarray(sol.force_N, dtype=float).reshape(-1),
             np.asarray(sol.flux_linkage_Wb, dtype=float).reshape(-1))
 
@@ -380,10 +380,10 @@ def test_two_circuit_magnet_from_a_suffixed_csv(tmp_path: Path) -> None:
     net = calibrated_network(mag, true)
     g, c = (a.ravel() for a in np.meshgrid([0.008, 0.010, 0.012], [10.0, 25.0, 40.0],
                                            indexing="ij"))
-    groups = mk.reduction.circuit_pole_groups(mag, gap=0.01, current=10.0)
+    groups = mk.reduction.circuit_pole_groups(mag, gap_m=0.01, current_A=10.0)
     gi = {n: k for k, n in enumerate(net.gap_names)}
-    sol = mk.solve_statics(net, gaps=np.repeat(g[:, None], len(gi), axis=1),
-                           currents=np.repeat(c[:, None], 2, axis=1))
+    sol = mk.solve_statics(net, gaps_m=np.repeat(g[:, None], len(gi), axis=1),
+                           currents_A=np.repeat(c[:, None], 2, axis=1))
     path = tmp_path / "tr09.csv"
     with path.open("w", newline="") as fh:
         w = csv.writer(fh)

@@ -29,7 +29,7 @@ def all_maps() -> dict[str, tuple[mk.Magnet, mk.CharacteristicMaps]]:
     out = {}
     for name in MAGNETS:
         mag = mk.load_magnet(name)
-        out[name] = (mag, mk.build_maps(mag, gaps=GAPS, currents=CURRENTS, progress=False))
+        out[name] = (mag, mk.build_maps(mag, gaps_m=GAPS, currents_A=CURRENTS, progress=False))
     return out
 
 
@@ -234,7 +234,7 @@ def test_maps_the_tables_cannot_hold_stay_on_the_bsplines() -> None:
     import dataclasses
 
     mag = mk.load_magnet("u-magnet")
-    regular = mk.build_maps(mag, gaps=np.linspace(0.006, 0.016, 5), currents=CURRENTS,
+    regular = mk.build_maps(mag, gaps_m=np.linspace(0.006, 0.016, 5), currents_A=CURRENTS,
                             progress=False)
     # as an old maps file on a grid that is not equidistant would load (build_maps refuses
     # such grids now; load_maps does not check)

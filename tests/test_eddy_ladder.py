@@ -123,9 +123,9 @@ def test_one_layer_is_the_lumped_element() -> None:
 
 @pytest.mark.parametrize(("gap", "current"), [(0.004, 5.0), (0.006, 80.0)])
 def test_statics_are_those_of_the_lumped_magnet(gap: float, current: float) -> None:
-    a = mk.solve_statics(mk.load_magnet("u-magnet"), gaps=gap, currents=current)
+    a = mk.solve_statics(mk.load_magnet("u-magnet"), gaps_m=gap, currents_A=current)
     b = mk.solve_statics(mk.load_magnet("u-magnet", eddy_model="ladder", eddy_layers=4),
-                         gaps=gap, currents=current)
+                         gaps_m=gap, currents_A=current)
     # parallel tubes of one material and length carry one B: identical to the Newton
     # tolerance (measured 1e-11 relative)
     assert float(b.force_N) == pytest.approx(float(a.force_N), rel=1e-8)

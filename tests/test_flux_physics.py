@@ -50,7 +50,7 @@ def test_steady_state_reproduces_statics(u_magnet: mk.Magnet, eddy: bool) -> Non
     # algebraic part is exactly the static network (eddy MMFs G phi' ~ 1e-11 A vs
     # n I ~ 2e4 A), so only the algebraic solve tolerances remain: measured 2e-15
     # relative; 1e-8 is 100x below rtol and would catch any force/flux inconsistency.
-    sol = mk.solve_statics(u_magnet, gaps=gaps, currents=res.currents_A[-1])
+    sol = mk.solve_statics(u_magnet, gaps_m=gaps, currents_A=res.currents_A[-1])
     np.testing.assert_allclose(res.branch_flux_Wb[-1], sol.branch_flux_Wb, rtol=1e-8,
                                atol=1e-8 * np.abs(sol.branch_flux_Wb).max())
     np.testing.assert_allclose(res.pole_force_N[-1], sol.pole_force_N, rtol=1e-8)
@@ -110,7 +110,7 @@ def test_step_inductance_equals_statics_without_eddies(u_magnet: mk.Magnet, gap:
                                                        current: float) -> None:
     est = mk.differential_inductance_from_step(u_magnet, gap=gap, current=current,
                                                eddy_currents=False)
-    sol = mk.solve_statics(u_magnet, gaps=gap, currents=current)
+    sol = mk.solve_statics(u_magnet, gaps_m=gap, currents_A=current)
     # Two independent methods (time constant of a 0.1 % step vs implicit-function dpsi/dI);
     # the issue asks for 1 %; measured +4e-5, -1.4e-3, -1.1e-3 at the three points (the
     # 0.1 % step measures a chord of psi(I) where L~ falls with I; fit); bound 3e-3.

@@ -21,9 +21,9 @@ N = 5            # short horizon: the compile of a new horizon is the cost of th
 
 @pytest.fixture(scope="module")
 def setup(u_magnet: mk.Magnet):  # type: ignore[no-untyped-def]
-    maps = mk.build_maps(u_magnet, gaps=np.linspace(0.004, 0.02, 17),
-                         currents=np.linspace(0, 80, 33), progress=False)
-    f0 = float(mk.solve_statics(u_magnet, gaps=S0, currents=20.0).force_N)
+    maps = mk.build_maps(u_magnet, gaps_m=np.linspace(0.004, 0.02, 17),
+                         currents_A=np.linspace(0, 80, 33), progress=False)
+    f0 = float(mk.solve_statics(u_magnet, gaps_m=S0, currents_A=20.0).force_N)
     veh = HeaveMass(f0 / STANDARD_GRAVITY)
     model = MagnetHeaveModel(maps, mass_kg=veh.mass_kg)
     opts = dict(gap_ref_m=S0, sample_time_s=DT, horizon=N, interval_s=2e-3)

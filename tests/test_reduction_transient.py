@@ -21,7 +21,7 @@ CURRENTS = np.linspace(0.0, 60.0, 4)
 @pytest.fixture(scope="module")
 def both_maps(u_magnet: mk.Magnet):  # type: ignore[no-untyped-def]
     # the default executor ("auto"; in-process for this 16-point grid)
-    return build_maps(u_magnet, gaps=GAPS, currents=CURRENTS, method="both")
+    return build_maps(u_magnet, gaps_m=GAPS, currents_A=CURRENTS, method="both")
 
 
 def test_eddy_resistance_of_one_loop_is_n2_over_g() -> None:
@@ -67,7 +67,7 @@ def test_default_eddy_resistance_of_one_loop_is_n2_over_g() -> None:
     -0.17 % (IDAS at rtol 1e-9 on a 1e-3 step); bound 0.5 %."""
     r_ec = 10.0 * R_EL
     net = loop_network(eddy=True, g_ec=TURNS**2 / r_ec)
-    maps = build_maps(net, gaps=np.linspace(0.002, 0.008, 4), currents=np.linspace(0, 10, 4),
+    maps = build_maps(net, gaps_m=np.linspace(0.002, 0.008, 4), currents_A=np.linspace(0, 10, 4),
                       progress=False)
     assert float(maps.dataset["eddy_resistance_ohm"].values[0]) == pytest.approx(r_ec, rel=1e-12)
     fit = float(maps.dataset["eddy_resistance_fit_ohm"].values[0])
@@ -93,8 +93,8 @@ def test_default_eddy_resistance_against_an_independent_tail_fit(u_magnet: mk.Ma
     from scipy.optimize import curve_fit
 
     s, i0 = 0.012, 40.0                       # the maps' reference point (grid centre)
-    maps = build_maps(u_magnet, gaps=np.linspace(0.008, 0.016, 5),
-                      currents=np.linspace(0.0, 80.0, 5), progress=False)
+    maps = build_maps(u_magnet, gaps_m=np.linspace(0.008, 0.016, 5),
+                      currents_A=np.linspace(0.0, 80.0, 5), progress=False)
     assert "s = 0.012 m, I = 40.0 A" in maps.dataset["eddy_resistance_fit_ohm"].attrs[
         "description"]
     fit_lib = float(maps.dataset["eddy_resistance_fit_ohm"].values[0])
@@ -169,7 +169,7 @@ def test_transient_maps_through_a_process_pool_are_identical(u_magnet: mk.Magnet
     from concurrent.futures import ProcessPoolExecutor
 
     with ProcessPoolExecutor(2) as ex:
-        pooled = build_maps(u_magnet, gaps=GAPS, currents=CURRENTS, method="both", executor=ex,
+        pooled = build_maps(u_magnet, gaps_m=GAPS, currents_A=CURRENTS, method="both", executor=ex,
                             progress=False)
     for name in both_maps.dataset.data_vars:
         # same compiled code on the same inputs: bit-identical
@@ -194,7 +194,7 @@ def test_dask_local_cluster_gives_identical_transient_maps(u_magnet: mk.Magnet, 
     with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
                                   dashboard_address=None) as cluster, \
             distributed.Client(cluster) as client:
-        remote = build_maps(u_magnet, gaps=GAPS, currents=CURRENTS, method="transient",
+        remote = build_maps(u_magnet, gaps_m=GAPS, currents_A=CURRENTS, method="transient",
                             executor=client, progress=False)
     _assert_transient_equals_both(remote, both_maps)
 
@@ -232,7 +232,7 @@ def test_cli_maps_build_method_and_difference_plots(both_maps, tmp_path) -> None
 
 def test_transient_method_replaces_only_the_inductance_maps(u_magnet: mk.Magnet,  # type: ignore[no-untyped-def]
                                                             both_maps) -> None:
-    tr = build_maps(u_magnet, gaps=GAPS, currents=CURRENTS, method="transient")
+    tr = build_maps(u_magnet, gaps_m=GAPS, currents_A=CURRENTS, method="transient")
     assert "transient" in tr.dataset.attrs["method"]
     np.testing.assert_array_equal(tr.dataset["inductance_H"].values,
                                   both_maps.dataset["inductance_transient_H"].values)
@@ -263,7 +263,7 @@ def test_bad_ramp_inputs_raise(u_magnet: mk.Magnet, kwargs: dict, msg: str) -> N
 
 def test_bad_method_and_ramp_raise(u_magnet: mk.Magnet) -> None:
     with pytest.raises(mk.InputError, match="method"):
-        build_maps(u_magnet, gaps=GAPS, currents=CURRENTS, method="fit")
+        build_maps(u_magnet, gaps_m=GAPS, currents_A=CURRENTS, method="fit")
     with pytest.raises(mk.InputError, match="keep the gaps > 0"):
         flux_held_ramp(u_magnet, gap=0.01, current=1.0, gap_change=-0.02, duration=1.0)
     with pytest.raises(mk.InputError, match="duration"):

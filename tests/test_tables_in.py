@@ -62,7 +62,7 @@ def magnet() -> mk.Magnet:
 @pytest.fixture(scope="module")
 def built(magnet: mk.Magnet) -> mk.CharacteristicMaps:
     """Statics maps of the U-magnet, 17 x 33 (4-20 mm, 0-80 A; ~2 s)."""
-    return mk.build_maps(magnet, gaps=GAPS, currents=CURRENTS, progress=False)
+    return mk.build_maps(magnet, gaps_m=GAPS, currents_A=CURRENTS, progress=False)
 
 
 @pytest.fixture(scope="module")
@@ -165,7 +165,7 @@ def test_reduced_model_on_imported_maps_equals_built_maps(built: mk.Characterist
         "psi only": mk.maps_from_table(_maps_csv(built, tmp_path / "p.csv", force=False),
                                        magnet=magnet, eddy_resistance_ohm=r_ec)}
     ref = mk.CurrentModel(built)
-    force0 = float(mk.solve_statics(magnet, gaps=0.01, currents=20.0).force_N)
+    force0 = float(mk.solve_statics(magnet, gaps_m=0.01, currents_A=20.0).force_N)
     heave = HeaveMass(force0 / STANDARD_GRAVITY)
     ctl = design_gap_controller(magnet.network, mass_kg=heave.mass_kg, gap_m=0.01,
                                 current_A=20.0)

@@ -19,7 +19,7 @@ CURRENTS = np.linspace(0.0, 60.0, 7)
 
 @pytest.fixture(scope="module")
 def u_maps(u_magnet: mk.Magnet) -> mk.CharacteristicMaps:
-    return mk.build_maps(u_magnet, gaps=GAPS, currents=CURRENTS, progress=False)
+    return mk.build_maps(u_magnet, gaps_m=GAPS, currents_A=CURRENTS, progress=False)
 
 
 def test_helper_translates_warns_and_refuses_both() -> None:
@@ -138,7 +138,7 @@ def test_closed_loop_old_external_force_equals_new(u_magnet: mk.Magnet,
     from maglevkit.control import closed_loop, design_gap_controller
 
     s0, i0 = 0.01, 20.0
-    f0 = float(mk.solve_statics(u_magnet, gaps=s0, currents=i0).force_N)
+    f0 = float(mk.solve_statics(u_magnet, gaps_m=s0, currents_A=i0).force_N)
     veh = mk.vehicle.HeaveMass(f0 / mk.vehicle.STANDARD_GRAVITY)
     ctl = design_gap_controller(u_magnet, mass_kg=veh.mass_kg, gap_m=s0, current_A=i0)
     common = dict(duration_s=0.02, dt_s=1e-3, initial_gap_m=s0, initial_current_A=i0)
@@ -152,3 +152,60 @@ def test_closed_loop_old_external_force_equals_new(u_magnet: mk.Magnet,
                                                 r"use external_force_N="):
         old = closed_loop(cm, veh, ctl, external_force=load, **common)
     assert np.array_equal(old.gap_m, new.gap_m)
+
+
+# ---- statics and maps: gaps/currents -> gaps_m/currents_A (the grid axes of build_maps too) ---
+def test_solve_statics_and_coenergy_old_names_equal_new(u_magnet: mk.Magnet) -> None:
+    """The wrapper only renames: the same solution bit for bit, on a point and on a grid."""
+    new = mk.solve_statics(u_magnet, gaps_m=0.011, currents_A=25.0)
+    with pytest.warns(DeprecationWarning, match=r"solve_statics: gaps= is deprecated, use "
+                                                r"gaps_m=; currents= .*use currents_A="):
+        old = mk.solve_statics(u_magnet, gaps=0.011, currents=25.0)
+    for field in dataclasses.fields(new):
+        a, b = getattr(old, field.name), getattr(new, field.name)
+        if isinstance(a, np.ndarray):
+            assert np.array_equal(a, b, equal_nan=True), field.name
+    g_new = mk.solve_statics(u_magnet, gaps_m=GAPS[:3], currents_A=CURRENTS[:2], grid=True)
+    with pytest.warns(DeprecationWarning, match=r"use gaps_m="):
+        g_old = mk.solve_statics(u_magnet, gaps=GAPS[:3], currents=CURRENTS[:2], grid=True)
+    assert np.array_equal(g_old.force_N, g_new.force_N)
+    w_new = mk.coenergy(u_magnet, gaps_m=0.011, currents_A=25.0)
+    with pytest.warns(DeprecationWarning, match=r"coenergy: gaps= is deprecated"):
+        assert mk.coenergy(u_magnet, gaps=0.011, currents=25.0) == w_new
+    e_new = mk.magnetic_energy(u_magnet, new.branch_flux_Wb, new.gaps_m)
+    with pytest.warns(DeprecationWarning, match=r"magnetic_energy: branch_flux= is deprecated"):
+        assert mk.magnetic_energy(u_magnet, branch_flux=new.branch_flux_Wb,
+                                  gaps=new.gaps_m) == e_new
+    with pytest.warns(DeprecationWarning, match=r"pole_force_eq6: flux= .*use flux_Wb=; "
+                                                r"area= .*use area_m2="):
+        assert mk.pole_force_eq6(flux=1e-3, area=4e-4) == mk.pole_force_eq6(1e-3, 4e-4)
+    with pytest.raises(InputError, match=r"give gaps_m= only"):
+        mk.solve_statics(u_magnet, gaps=0.011, gaps_m=0.011, currents_A=25.0)
+
+
+def test_circuit_pole_groups_old_names_equal_new() -> None:
+    from maglevkit.models.statics import circuit_pole_groups
+
+    tr09 = mk.load_magnet("tr09-standard")      # two circuits: the grouping is solved
+
+    new = circuit_pole_groups(tr09, gap_m=0.01, current_A=20.0)
+    with pytest.warns(DeprecationWarning, match=r"gap= is deprecated, use gap_m=; "
+                                                r"current= is deprecated, use current_A="):
+        assert circuit_pole_groups(tr09, gap=0.01, current=20.0) == new
+
+
+def test_build_maps_old_names_equal_new(u_magnet: mk.Magnet,
+                                        u_maps: mk.CharacteristicMaps) -> None:
+    """``build_maps(gaps=, currents=)`` gives the same maps (every variable, the coordinates
+    and the attributes the caches key on); the dataset's own names (``gap``, ``current``
+    coordinates) did not change, so stored maps load as before."""
+    with pytest.warns(DeprecationWarning, match=r"build_maps: gaps= is deprecated, use gaps_m="):
+        old = mk.build_maps(u_magnet, gaps=GAPS, currents=CURRENTS, progress=False)
+    assert set(old.dataset.data_vars) == set(u_maps.dataset.data_vars)
+    for name in u_maps.dataset.data_vars:
+        assert np.array_equal(old.dataset[name].values, u_maps.dataset[name].values,
+                              equal_nan=True), name
+    assert np.array_equal(old.gaps_m, u_maps.gaps_m)
+    assert np.array_equal(old.currents_A, u_maps.currents_A)
+    assert old.dataset.attrs == u_maps.dataset.attrs
+    assert set(u_maps.dataset.coords) >= {"gap", "current"}

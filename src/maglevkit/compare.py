@@ -240,7 +240,7 @@ def standard_scenarios(magnet: Any, *, gap_m: float, current_A: float) -> list[C
     r = net.resistances
     u0 = r * current_A
     nc = len(r)
-    tau = float(np.max(solve_statics(magnet, gaps=gap_m, currents=current_A)
+    tau = float(np.max(solve_statics(magnet, gaps_m=gap_m, currents_A=current_A)
                        .common_differential_inductance_H) / np.min(r))
     t_step = min(3.0 * tau, 1.5)
     names = tuple(net.circuit_names)
@@ -322,7 +322,7 @@ def compare_models(detailed: Any, reduced: Any, scenarios: list[ComparisonScenar
     results = []
     for sc in scenarios:
         if sc.kind == "closed":
-            force0 = float(solve_statics(fm.network, gaps=gap_m, currents=current_A).force_N)
+            force0 = float(solve_statics(fm.network, gaps_m=gap_m, currents_A=current_A).force_N)
             veh = HeaveMass(force0 / STANDARD_GRAVITY)
             ctl = design_gap_controller(fm.network, mass_kg=veh.mass_kg, gap_m=gap_m,
                                         current_A=current_A)

@@ -136,10 +136,10 @@ def fig6_data(magnet: Magnet, *, gap_factors: tuple[float, ...] = (0.8, 1.0, 1.2
     i0 = saturation_knee(magnet, gap=s0)
     gaps = s0 * np.asarray(gap_factors, dtype=float)
     cur = np.linspace(0.0, max_current, points)
-    full = solve_statics(magnet, gaps=gaps, currents=cur * i0, grid=True).force_N
+    full = solve_statics(magnet, gaps_m=gaps, currents_A=cur * i0, grid=True).force_N
     lin_mag = magnet.with_options(saturation=False, eddy_currents=False)
-    lin = solve_statics(lin_mag, gaps=gaps, currents=cur * i0, grid=True).force_N
-    f0 = float(solve_statics(magnet, gaps=s0, currents=i0).force_N)
+    lin = solve_statics(lin_mag, gaps_m=gaps, currents_A=cur * i0, grid=True).force_N
+    f0 = float(solve_statics(magnet, gaps_m=s0, currents_A=i0).force_N)
     return Fig6Data(gaps, cur, full / f0, lin / f0, i0, f0, s0, i_nom)
 
 
@@ -188,9 +188,9 @@ def fig7_data(magnet: Magnet, *, gap: float = 0.0095, max_current: float = 2.2,
     s0, i_nom = nominal_point(magnet)
     i0 = saturation_knee(magnet, gap=s0)
     cur = np.linspace(0.0, max_current, points)
-    full = solve_statics(magnet, gaps=np.array([gap]), currents=cur * i0, grid=True)
+    full = solve_statics(magnet, gaps_m=np.array([gap]), currents_A=cur * i0, grid=True)
     lin_mag = magnet.with_options(saturation=False, eddy_currents=False)
-    lin = solve_statics(lin_mag, gaps=np.array([gap]), currents=cur * i0, grid=True)
+    lin = solve_statics(lin_mag, gaps_m=np.array([gap]), currents_A=cur * i0, grid=True)
     l_full = full.common_differential_inductance_H[0, :, 0]
     l_lin = lin.common_differential_inductance_H[0, :, 0]
     l0 = float(l_lin[0])
@@ -382,7 +382,7 @@ def coupling_response(magnet: Magnet, *, step: float = 0.2) -> CouplingResponse:
     s0, i0 = nominal_point(magnet)
     net = magnet.network
     r = net.resistances
-    sol = solve_statics(magnet, gaps=s0, currents=i0)
+    sol = solve_statics(magnet, gaps_m=s0, currents_A=i0)
     tau = float(sol.differential_inductance_H[0, 0] / r[0])
     u0 = r * i0
     bump = np.zeros(len(r))

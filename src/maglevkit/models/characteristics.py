@@ -77,7 +77,7 @@ def force_exponent(magnet: Magnet, *, gap: float, currents: np.ndarray) -> np.nd
     cur = np.asarray(currents, dtype=float)
     if np.any(cur <= 0.0):
         raise InputError("force_exponent needs currents > 0 A")
-    sol = solve_statics(magnet, gaps=np.array([gap]), currents=cur, grid=True)
+    sol = solve_statics(magnet, gaps_m=np.array([gap]), currents_A=cur, grid=True)
     dfdi = sol.dforce_dcurrent_N_per_A[0].sum(axis=(-2, -1))
     return np.asarray(cur * dfdi / sol.force_N[0])
 
@@ -197,7 +197,7 @@ def coupling_ratios(magnet: Magnet, *, gap: float | None = None,
         s0, i0 = nominal_point(magnet)
         gap = s0 if gap is None else gap
         current = i0 if current is None else current
-    sol = solve_statics(magnet, gaps=gap, currents=current)
+    sol = solve_statics(magnet, gaps_m=gap, currents_A=current)
     L = np.asarray(sol.differential_inductance_H)
     d = np.sqrt(np.diag(L))
     return Coupling(sol.circuit_names, L, L / np.outer(d, d))

@@ -165,7 +165,7 @@ def differential_inductance_from_step(model: Any, *, gap: float, current: float,
         raise InputError(f"circuit = {circuit!r} must be an index in 0..{nc - 1}")
     st = fm.initial_state(gaps_m=gap, currents_A=current)
     R = fm.resistances
-    sol = solve_statics(fm.network, gaps=st.gaps_m, currents=st.currents_A)
+    sol = solve_statics(fm.network, gaps_m=st.gaps_m, currents_A=st.currents_A)
     l_est = float(sol.differential_inductance_H[circuit, circuit])
     r_par = R[circuit]
     tau_est = max(l_est, 1e-12) / r_par

@@ -981,7 +981,7 @@ class FluxModel:
         time = real_number(time, "time", "s")
         if self.plausible_range is not None and where is not None:
             self.plausible_range.check(gaps=s, currents=i, where=where, stacklevel=4)
-        sol = solve_statics(net, gaps=s, currents=i)
+        sol = solve_statics(net, gaps_m=s, currents_A=i)
         x = np.asarray(sol.loop_flux_Wb, dtype=float).ravel()
         return FluxState(float(time), self._dae.D @ x, s.copy(), x, i.copy(),
                          self.resistances * i, np.zeros_like(s), np.zeros(4))

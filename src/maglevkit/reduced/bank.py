@@ -322,8 +322,8 @@ class MagnetBank:
     >>> import numpy as np
     >>> import maglevkit as mk
     >>> magnet = mk.load_magnet("u-magnet")
-    >>> maps = mk.build_maps(magnet, gaps=np.linspace(0.006, 0.016, 6),
-    ...                      currents=np.linspace(0, 60, 13), progress=False)
+    >>> maps = mk.build_maps(magnet, gaps_m=np.linspace(0.006, 0.016, 6),
+    ...                      currents_A=np.linspace(0, 60, 13), progress=False)
     >>> bank = mk.MagnetBank({f"m{k}": maps for k in range(4)}, compiled="never")
     >>> state = bank.initial_state(gaps_m=0.010, currents_A=20.0)
     >>> state, out = bank.step(state, 1e-3, voltages_V=bank.resistance_ohm * 20.0)
@@ -414,7 +414,7 @@ class MagnetBank:
             raise InputError(f"member name {name!r} must be a non-empty string without '/'")
         if isinstance(model, FluxModel):
             net = model.network
-            groups = (circuit_pole_groups(net, gap=0.01, current=10.0)
+            groups = (circuit_pole_groups(net, gap_m=0.01, current_A=10.0)
                       if len(net.circuit_names) > 1 else {net.circuit_names[0]: net.gap_names})
             return _Member(name, "detailed", tuple(model.circuit_names), tuple(model.gap_names),
                            groups, model=model)
@@ -1627,8 +1627,8 @@ class MagnetBank:
         --------
         >>> import numpy as np
         >>> import maglevkit as mk
-        >>> maps = mk.build_maps(mk.load_magnet("u-magnet"), gaps=np.linspace(0.006, 0.016, 6),
-        ...                      currents=np.linspace(0, 60, 13), progress=False)
+        >>> maps = mk.build_maps(mk.load_magnet("u-magnet"), gaps_m=np.linspace(0.006, 0.016, 6),
+        ...                      currents_A=np.linspace(0, 60, 13), progress=False)
         >>> bank = mk.MagnetBank({"a": maps, "b": maps}, compiled="never")
         >>> stepper = bank.stepper(bank.initial_state(gaps_m=0.010, currents_A=20.0), dt_s=1e-3)
         >>> stepper.advance(voltages_V=45.0, gap_rates_m_per_s=0.0)

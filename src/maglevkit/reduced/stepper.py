@@ -84,8 +84,8 @@ class BankStepper:
     >>> import numpy as np
     >>> import maglevkit as mk
     >>> magnet = mk.load_magnet("u-magnet")
-    >>> maps = mk.build_maps(magnet, gaps=np.linspace(0.006, 0.016, 6),
-    ...                      currents=np.linspace(0, 60, 13), progress=False)
+    >>> maps = mk.build_maps(magnet, gaps_m=np.linspace(0.006, 0.016, 6),
+    ...                      currents_A=np.linspace(0, 60, 13), progress=False)
     >>> bank = mk.MagnetBank({f"m{k}": maps for k in range(4)}, compiled="never")
     >>> stepper = bank.stepper(bank.initial_state(gaps_m=0.010, currents_A=20.0), dt_s=1e-3)
     >>> force = stepper.circuit_force_N            # bound once, always the last step's

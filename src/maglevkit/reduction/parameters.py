@@ -83,7 +83,7 @@ def current_jump_admittance(model: Any, *, gap: Any, current: Any) -> np.ndarray
         If the statics cannot be solved.
     """
     net = as_network(model)
-    sol = solve_statics(net, gaps=gap, currents=current)
+    sol = solve_statics(net, gaps_m=gap, currents_A=current)
     if sol.shape != ():
         raise InputError("current_jump_admittance takes one operating point (scalar or one "
                          "value per gap / circuit)")

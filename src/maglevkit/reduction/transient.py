@@ -177,7 +177,7 @@ def flux_held_ramp(model: Any, *, gap: Any, current: Any, gap_change: Any, durat
     net = as_network(model)
     duration = real_number(duration, "duration", "s", positive=True)
     samples = whole_number(samples, "samples", minimum=10)
-    sol = solve_statics(net, gaps=gap, currents=current)
+    sol = solve_statics(net, gaps_m=gap, currents_A=current)
     if sol.shape != ():
         raise InputError("flux_held_ramp takes one operating point")
     dsv = np.broadcast_to(np.asarray(gap_change, dtype=float), sol.gaps_m.shape).copy()

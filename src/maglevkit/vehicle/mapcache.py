@@ -112,7 +112,7 @@ def vehicle_maps(magnet: Any, *, cache_dir: str | Path | None = None,
         if (cached.gaps_m.shape == g.shape and cached.currents_A.shape == c.shape
                 and np.array_equal(cached.gaps_m, g) and np.array_equal(cached.currents_A, c)):
             return cached
-    maps = build_maps(magnet, gaps=g, currents=c, progress=progress)
+    maps = build_maps(magnet, gaps_m=g, currents_A=c, progress=progress)
     # the user's cache may be created with its parents; a folder given (cache_dir,
     # --maps-cache) only as its last level, as every other output folder
     path.parent.mkdir(parents=cache_dir is None, exist_ok=True)
