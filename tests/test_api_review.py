@@ -119,19 +119,19 @@ def test_ramp_identification_refuses_bools_and_empty_poles(u_lin) -> None:  # ty
 
     # was: True taken as 1 s / circuit 1; poles=[] an IndexError
     with pytest.raises(mk.InputError, match=r"duration \[s\] = True \(bool\)"):
-        flux_held_ramp(u_lin, gap=0.01, current=1.0, gap_change=1e-4, duration=True)
+        flux_held_ramp(u_lin, gap_m=0.01, current_A=1.0, gap_change_m=1e-4, duration_s=True)
     with pytest.raises(mk.InputError, match=r"samples = True \(bool\)"):
-        flux_held_ramp(u_lin, gap=0.01, current=1.0, gap_change=1e-4, duration=1.0,
+        flux_held_ramp(u_lin, gap_m=0.01, current_A=1.0, gap_change_m=1e-4, duration_s=1.0,
                        samples=True)
     with pytest.raises(mk.InputError, match=r"circuit = True \(bool\)"):
-        dl_ds_from_ramp(u_lin, gap=0.01, current=10.0, circuit=True)
+        dl_ds_from_ramp(u_lin, gap_m=0.01, current_A=10.0, circuit=True)
     ng = len(u_lin.network.gap_names)
     for poles in ([], [ng], [0, 0]):
         with pytest.raises(mk.InputError, match=rf"poles = {re.escape(repr(poles))}: expected at least one "
                                                 rf"distinct gap-input index in 0..{ng - 1}"):
-            dl_ds_from_ramp(u_lin, gap=0.01, current=10.0, poles=poles)
+            dl_ds_from_ramp(u_lin, gap_m=0.01, current_A=10.0, poles=poles)
     with pytest.raises(mk.InputError, match=r"poles = True \(bool\)"):
-        dl_ds_from_ramp(u_lin, gap=0.01, current=10.0, poles=[True])
+        dl_ds_from_ramp(u_lin, gap_m=0.01, current_A=10.0, poles=[True])
 
 
 def test_mechanics_discretize_takes_numpy_ints_not_bools() -> None:
@@ -277,7 +277,7 @@ def test_eddy_resistance_never_negative(u_lin, monkeypatch) -> None:  # type: ig
 
     mag = mk.load_magnet("u-magnet")
     r_el = float(mag.network.resistances[0])
-    assert parameters.eddy_resistance(mag, gap=0.01, current=10.0)[0] > 0.0
+    assert parameters.eddy_resistance(mag, gap_m=0.01, current_A=10.0)[0] > 0.0
     # a current jump above the resistive limit (rounding or a non-passive model): was
     # returned as a negative R_ec
     nc = len(mag.network.circuits)
@@ -286,7 +286,7 @@ def test_eddy_resistance_never_negative(u_lin, monkeypatch) -> None:  # type: ig
     with pytest.raises(mk.SolverError, match=r"negative R_ec = -.* ohm for circuit .*"
                                              r"reason: current-jump admittance Y_jj = .* S "
                                              r"exceeds 1/R_el"):
-        parameters.eddy_resistance(mag, gap=0.01, current=10.0)
+        parameters.eddy_resistance(mag, gap_m=0.01, current_A=10.0)
 
 
 def test_saturation_knee_checks_points_and_max_current(u_lin) -> None:  # type: ignore[no-untyped-def]
@@ -295,13 +295,13 @@ def test_saturation_knee_checks_points_and_max_current(u_lin) -> None:  # type: 
     # was: points=True scanned one current, points=0 divided by zero, a negative
     # max_current scanned negative currents
     with pytest.raises(mk.InputError, match=r"points = True \(bool\)"):
-        saturation_knee(u_lin, gap=0.01, max_current=100.0, points=True)
+        saturation_knee(u_lin, gap_m=0.01, max_current_A=100.0, points=True)
     with pytest.raises(mk.InputError, match=r"points = 1: must be a whole number >= 2"):
-        saturation_knee(u_lin, gap=0.01, max_current=100.0, points=1)
+        saturation_knee(u_lin, gap_m=0.01, max_current_A=100.0, points=1)
     with pytest.raises(mk.InputError, match=r"max_current \[A\] = -100.0: must be > 0"):
-        saturation_knee(u_lin, gap=0.01, max_current=-100.0)
+        saturation_knee(u_lin, gap_m=0.01, max_current_A=-100.0)
     with pytest.raises(mk.InputError, match=r"max_current \[A\] = '100' \(str\)"):
-        saturation_knee(u_lin, gap=0.01, max_current="100")
+        saturation_knee(u_lin, gap_m=0.01, max_current_A="100")
 
 
 def test_heave_model_mass_and_gravity_refuse_bools() -> None:

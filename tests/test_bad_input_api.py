@@ -432,12 +432,12 @@ def test_circuit_constructors_refuse_bools_and_strings() -> None:
 
 def test_step_experiment_arguments(u_lin: mk.Magnet) -> None:
     with pytest.raises(mk.InputError, match=r"circuit = True must be an index"):
-        mk.differential_inductance_from_step(u_lin, gap=0.01, current=10.0, circuit=True)
+        mk.differential_inductance_from_step(u_lin, gap_m=0.01, current_A=10.0, circuit=True)
     with pytest.raises(mk.InputError, match=r"samples_per_tau = 'many'"):
-        mk.differential_inductance_from_step(u_lin, gap=0.01, current=10.0,
+        mk.differential_inductance_from_step(u_lin, gap_m=0.01, current_A=10.0,
                                              samples_per_tau="many")
     with pytest.raises(mk.InputError, match=r"gap \[m\]|gaps \[m\] = '0.01'"):
-        mk.voltage_step_response(u_lin, gap="0.01", voltage=1.0, duration=1e-3, dt=1e-4)
+        mk.voltage_step_response(u_lin, gap_m="0.01", voltage_V=1.0, duration_s=1e-3, dt_s=1e-4)
 
 
 def test_vehicle_and_controller_arguments(u_lin: mk.Magnet) -> None:
@@ -475,4 +475,4 @@ def test_unknown_flux_model_options(u_lin: mk.Magnet) -> None:
     with pytest.raises(mk.InputError, match=r"FluxModel.with_options: " + msg):
         mk.FluxModel(u_lin).with_options(bogus=1)
     with pytest.raises(mk.InputError, match=msg):
-        mk.voltage_step_response(u_lin, gap=0.01, voltage=1.0, duration=1e-3, dt=1e-4, bogus=1)
+        mk.voltage_step_response(u_lin, gap_m=0.01, voltage_V=1.0, duration_s=1e-3, dt_s=1e-4, bogus=1)

@@ -353,8 +353,8 @@ def test_voltage_step_response_and_its_parameter_derivatives() -> None:
     times = np.linspace(0.002, 0.2, 12)
     kw = {"gap_m": 0.01, "current_A": 20.0, "voltage_step_V": 8.0, "times_s": times}
     d = step_response_sensitivities(mag, vals, **kw)
-    ref = mk.voltage_step_response(calibrated_network(mag, vals), gap=0.01, voltage=48.0,
-                                   initial_current=20.0, duration=0.2, dt=0.002, rtol=1e-10,
+    ref = mk.voltage_step_response(calibrated_network(mag, vals), gap_m=0.01, voltage_V=48.0,
+                                   initial_current_A=20.0, duration_s=0.2, dt_s=0.002, rtol=1e-10,
                                    atol=1e-12)
     idx = np.rint(times / 0.002).astype(int)
     # the collocation run against the adaptive IDAS one: measured 3.4e-10

@@ -348,7 +348,7 @@ def test_fitted_eddy_resistance_agrees_with_the_step_experiment() -> None:
     s, i = 0.012, 40.0           # the reference point of the default grid
 
     def step(**tol: float) -> float:
-        return differential_inductance_from_step(net, gap=s, current=i, samples_per_tau=50,
+        return differential_inductance_from_step(net, gap_m=s, current_A=i, samples_per_tau=50,
                                                  **tol).eddy_resistance_ohm
 
     r_step = step()

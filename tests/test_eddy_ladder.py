@@ -152,9 +152,9 @@ def test_no_current_jump_with_the_ladder() -> None:
 
     r = {n: float(eddy_resistance(mk.load_magnet("u-magnet", eddy_model="ladder",
                                                  eddy_layers=n).network,
-                                  gap=0.010, current=20.0)[0]) for n in (1, 3)}
-    lumped = float(eddy_resistance(mk.load_magnet("u-magnet").network, gap=0.010,
-                                   current=20.0)[0])
+                                  gap_m=0.010, current_A=20.0)[0]) for n in (1, 3)}
+    lumped = float(eddy_resistance(mk.load_magnet("u-magnet").network, gap_m=0.010,
+                                   current_A=20.0)[0])
     # the jump R_ec is set by the outermost layer's conductance (w_1 of the fit):
     # measured lumped 22.4 ohm, n = 1 18.1 ohm (2-D slab: 1/0.81 of the Saint-Venant
     # conductance), n = 3 1854 ohm, n = 4 2636 ohm, n = 6 4198 ohm: the jump

@@ -52,7 +52,7 @@ def test_knee_above_nominal(std: mk.Magnet) -> None:
 
     assert exponent_fd(i0) == pytest.approx(1.8, abs=1e-4)
     assert exponent_fd(0.99 * i0) > 1.81 and exponent_fd(1.01 * i0) < 1.79
-    n = force_exponent(std, gap=0.010, currents=np.array([i0]))
+    n = force_exponent(std, gap_m=0.010, currents_A=np.array([i0]))
     # exact dF/dI vs the difference quotient (truncation ~h^2 = 1e-6): measured 1.1e-6
     assert n[0] == pytest.approx(exponent_fd(i0), abs=1e-5)
 
@@ -134,7 +134,7 @@ def test_fig7_step_response_inductance(f7, std: mk.Magnet) -> None:  # type: ign
     for xi, li in zip(x, full, strict=True):
         cur = float(xi * f7.I0_A)
         l11 = mk.solve_statics(std, gaps_m=f7.gap_m, currents_A=cur).differential_inductance_H[0, 0]
-        r_ec = float(eddy_resistance(std, gap=f7.gap_m, current=cur)[0])
+        r_ec = float(eddy_resistance(std, gap_m=f7.gap_m, current_A=cur)[0])
         ratio = li * f7.L0_H / (l11 * (1.0 + r_el / r_ec))
         assert 1.0 < ratio < 1.12, (xi, ratio)
 

@@ -209,3 +209,73 @@ def test_build_maps_old_names_equal_new(u_magnet: mk.Magnet,
     assert np.array_equal(old.currents_A, u_maps.currents_A)
     assert old.dataset.attrs == u_maps.dataset.attrs
     assert set(u_maps.dataset.coords) >= {"gap", "current"}
+
+
+# ---- the experiments and identifications on the detailed model ----------------------------
+def test_voltage_step_response_old_names_equal_new(u_magnet: mk.Magnet) -> None:
+    lin = u_magnet.with_options(eddy_currents=False, saturation=False)
+    new = mk.voltage_step_response(lin, gap_m=0.01, voltage_V=30.0, initial_current_A=10.0,
+                                   duration_s=0.01, dt_s=1e-3)
+    with pytest.warns(DeprecationWarning, match=r"voltage_step_response: gap= is deprecated, "
+                                                r"use gap_m=; voltage= .*use voltage_V=; "
+                                                r"initial_current= .*; duration= .*; dt= .*"):
+        old = mk.voltage_step_response(lin, gap=0.01, voltage=30.0, initial_current=10.0,
+                                       duration=0.01, dt=1e-3)
+    assert np.array_equal(old.currents_A, new.currents_A)
+    assert np.array_equal(old.force_N, new.force_N)
+
+
+def test_step_inductance_and_characteristics_old_names_equal_new(u_magnet: mk.Magnet) -> None:
+    from maglevkit.models import coupling_ratios, force_exponent, saturation_knee
+
+    lin = u_magnet.with_options(eddy_currents=False)
+    opts = dict(samples_per_tau=10, n_tau=2.0)
+    new = mk.differential_inductance_from_step(lin, gap_m=0.01, current_A=20.0, **opts)
+    with pytest.warns(DeprecationWarning, match=r"differential_inductance_from_step: gap= "):
+        old = mk.differential_inductance_from_step(lin, gap=0.01, current=20.0, **opts)
+    assert old.inductance_H == new.inductance_H
+    cur = np.array([10.0, 30.0])
+    with pytest.warns(DeprecationWarning, match=r"force_exponent: .*use currents_A="):
+        assert np.array_equal(force_exponent(u_magnet, gap=0.01, currents=cur),
+                              force_exponent(u_magnet, gap_m=0.01, currents_A=cur))
+    with pytest.warns(DeprecationWarning, match=r"saturation_knee: .*use max_current_A="):
+        assert (saturation_knee(u_magnet, gap=0.01, max_current=200.0, points=20)
+                == saturation_knee(u_magnet, gap_m=0.01, max_current_A=200.0, points=20))
+    with pytest.warns(DeprecationWarning, match=r"coupling_ratios: .*use current_A="):
+        assert np.array_equal(coupling_ratios(u_magnet, gap=0.01, current=20.0).ratio,
+                              coupling_ratios(u_magnet, gap_m=0.01, current_A=20.0).ratio)
+
+
+def test_eddy_identification_old_names_equal_new(u_magnet: mk.Magnet) -> None:
+    from maglevkit.reduction import (current_jump_admittance, eddy_resistance,
+                                     flux_held_ramp)
+
+    with pytest.warns(DeprecationWarning, match=r"eddy_resistance: gap= .*use current_A="):
+        assert np.array_equal(eddy_resistance(u_magnet, gap=0.01, current=20.0),
+                              eddy_resistance(u_magnet, gap_m=0.01, current_A=20.0))
+    with pytest.warns(DeprecationWarning, match=r"current_jump_admittance: gap= "):
+        assert np.array_equal(current_jump_admittance(u_magnet, gap=0.01, current=20.0),
+                              current_jump_admittance(u_magnet, gap_m=0.01, current_A=20.0))
+    lin = u_magnet.with_options(eddy_currents=False)
+    new = flux_held_ramp(lin, gap_m=0.01, current_A=20.0, gap_change_m=2e-4, duration_s=0.05,
+                         samples=10)
+    with pytest.warns(DeprecationWarning, match=r"flux_held_ramp: .*gap_change= is deprecated, "
+                                                r"use gap_change_m=; duration= .*duration_s="):
+        old = flux_held_ramp(lin, gap=0.01, current=20.0, gap_change=2e-4, duration=0.05,
+                             samples=10)
+    assert np.array_equal(old.currents_A, new.currents_A)
+
+
+def test_dl_ds_from_ramp_old_names_equal_new(u_magnet: mk.Magnet) -> None:
+    from maglevkit.reduction import dl_ds_from_ramp
+
+    lin = u_magnet.with_options(eddy_currents=False)
+    common = dict(samples=10, relative_gap_change=0.02)
+    new = dl_ds_from_ramp(lin, gap_m=0.01, current_A=0.0, inductance_H=0.05, duration_s=0.05,
+                          zero_current_A=1e-3, **common)
+    with pytest.warns(DeprecationWarning, match=r"dl_ds_from_ramp: .*inductance= is deprecated, "
+                                                r"use inductance_H=;.*zero_current_A="):
+        old = dl_ds_from_ramp(lin, gap=0.01, current=0.0, inductance=0.05, duration=0.05,
+                              zero_current=1e-3, **common)
+    assert old.dL_ds_H_per_m == new.dL_ds_H_per_m and old.current_A == new.current_A == 1e-3
+    assert np.array_equal(old.response.currents_A, new.response.currents_A)

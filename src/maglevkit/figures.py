@@ -133,7 +133,7 @@ def fig6_data(magnet: Magnet, *, gap_factors: tuple[float, ...] = (0.8, 1.0, 1.2
         A magnet without an ``[operating]`` table, no saturation knee, or bad gaps.
     """
     s0, i_nom = nominal_point(magnet)
-    i0 = saturation_knee(magnet, gap=s0)
+    i0 = saturation_knee(magnet, gap_m=s0)
     gaps = s0 * np.asarray(gap_factors, dtype=float)
     cur = np.linspace(0.0, max_current, points)
     full = solve_statics(magnet, gaps_m=gaps, currents_A=cur * i0, grid=True).force_N
@@ -186,7 +186,7 @@ def fig7_data(magnet: Magnet, *, gap: float = 0.0095, max_current: float = 2.2,
     if isinstance(step_points, bool) or not isinstance(step_points, int) or step_points < 0:
         raise InputError(f"step_points = {step_points!r} must be an integer >= 0")
     s0, i_nom = nominal_point(magnet)
-    i0 = saturation_knee(magnet, gap=s0)
+    i0 = saturation_knee(magnet, gap_m=s0)
     cur = np.linspace(0.0, max_current, points)
     full = solve_statics(magnet, gaps_m=np.array([gap]), currents_A=cur * i0, grid=True)
     lin_mag = magnet.with_options(saturation=False, eddy_currents=False)
@@ -196,10 +196,10 @@ def fig7_data(magnet: Magnet, *, gap: float = 0.0095, max_current: float = 2.2,
     l0 = float(l_lin[0])
     x_step = np.linspace(0.1, max_current, step_points) if step_points else np.zeros(0)
     step_full = np.array([differential_inductance_from_step(
-        magnet, gap=gap, current=float(x * i0), **_STEP_SETTINGS).apparent_inductance_H
+        magnet, gap_m=gap, current_A=float(x * i0), **_STEP_SETTINGS).apparent_inductance_H
         for x in x_step])
     step_lin = np.array([differential_inductance_from_step(    # lin_mag: compiled once
-        lin_mag, gap=gap, current=float(x * i0), **_STEP_SETTINGS).apparent_inductance_H
+        lin_mag, gap_m=gap, current_A=float(x * i0), **_STEP_SETTINGS).apparent_inductance_H
         for x in x_step])
     return Fig7Data(gap, cur, l_full / l0, l_lin / l0, i0, l0, i_nom, x_step,
                     step_full / l0, step_lin / l0)
@@ -392,7 +392,7 @@ def coupling_response(magnet: Magnet, *, step: float = 0.2) -> CouplingResponse:
                    voltages_V=lambda t: u0 * (1.0 + bump * (t >= 0.02 * dur)), initial_currents_A=i0)
     rel = (res.currents_A - i0) / i0
     peak = np.max(np.abs(rel), axis=0)
-    ratios = coupling_ratios(magnet, gap=s0, current=i0).ratio
+    ratios = coupling_ratios(magnet, gap_m=s0, current_A=i0).ratio
     off = np.abs(ratios - np.diag(np.diag(ratios)))
     return CouplingResponse(res.time_s, res.circuit_names, rel,
                             float(peak[1:].max() / peak[0]), float(off.max()))

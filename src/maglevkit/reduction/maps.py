@@ -724,7 +724,7 @@ def _store_motion_eddy(ds: Any, net: Network, gap: float, current: float,
     rms = np.full(nc, np.nan)
     if net.has_eddy_currents:
         responses = detailed_frequency_response(net, gap=gap, current=current, groups=groups)
-        r_jump = eddy_resistance(net, gap=gap, current=current)
+        r_jump = eddy_resistance(net, gap_m=gap, current_A=current)
         for j, resp in enumerate(responses):
             fit = fit_motion_eddy(resp, r_el=float(net.resistances[j]),
                                   r_ec_jump=float(r_jump[j]), r_ec_fit=float(r_ec_fit[j]))
@@ -906,11 +906,11 @@ def build_maps(model: Any, *, gaps_m: Any, currents_A: Any, executor: Any = "aut
         data["eddy_resistance_step_ohm"] = tdata["eddy_resistance_step_ohm"]
     ds = maps_dataset(data, circuits=net.circuit_names, gaps_m=g, currents_A=c,
                       resistance_ohm=net.resistances)
-    r_ec = eddy_resistance(net, gap=ref_gap, current=ref_current)
+    r_ec = eddy_resistance(net, gap_m=ref_gap, current_A=ref_current)
     # R_ec depends on the operating point only through the iron's differential
     # reluctances (and not at all when every loop carries an eddy element): its spread
     # over the grid corners is recorded, not hidden.
-    corners = np.array([eddy_resistance(net, gap=float(sv), current=float(iv))
+    corners = np.array([eddy_resistance(net, gap_m=float(sv), current_A=float(iv))
                         for sv in (g[0], g[-1]) for iv in (c[0], c[-1])])
     with np.errstate(invalid="ignore"):
         spread = np.where(np.isinf(r_ec), 0.0, np.ptp(corners, axis=0) / np.where(
