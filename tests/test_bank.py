@@ -73,8 +73,8 @@ def _check_members_vs_single(bank: MagnetBank, members: dict, scenario, dt: floa
     from maglevkit.models.inputs import sample_input
 
     times = np.arange(0.0, min(scenario.duration_s, 0.2) + dt / 2, dt)
-    u_ref = sample_input(scenario.voltages, times, ("coil",), "voltages", "V")[:, 0]
-    gap = sample_input(scenario.gaps, times, ("left", "right"), "gaps", "m").mean(axis=1)
+    u_ref = sample_input(scenario.voltages_V, times, ("coil",), "voltages", "V")[:, 0]
+    gap = sample_input(scenario.gaps_m, times, ("left", "right"), "gaps", "m").mean(axis=1)
     factor = np.concatenate([np.full(len(m.circuits), 1.0 + 0.03 * k)
                              for k, m in enumerate(members.values())])
     volt = u_ref[:, None] / r_scenario * bank.resistance_ohm[None, :] * factor[None, :]

@@ -37,7 +37,7 @@ def test_gap_controller_levitates_and_tracks_a_reference(u_setup) -> None:  # ty
     veh = HeaveMass(f0 / STANDARD_GRAVITY)
     ctl = design_gap_controller(mag, mass_kg=veh.mass_kg, gap_m=s0, current_A=i0)
     res = closed_loop(reduced, veh, ctl, duration_s=1.5, dt_s=1e-3, initial_gap_m=s0,
-                      initial_current_A=i0, gap_reference=lambda t: 0.011 if t >= 0.05 else s0)
+                      initial_current_A=i0, gap_reference_m=lambda t: 0.011 if t >= 0.05 else s0)
     # settles at the new reference (the integrator removes the offset): within 20 um at the
     # end, and the current is the static current that carries the load there (to 0.5 %,
     # the remaining gap and acceleration error)

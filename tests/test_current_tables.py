@@ -64,11 +64,11 @@ def test_tables_equal_bspline_on_the_standard_scenarios(all_maps, name: str,
     refs = []
     for sc in scenarios:
         span = (0.0, min(sc.duration_s, 0.3))
-        refs.append((sc, span, mk.simulate(spline, span, dt_s=sc.dt_s, gaps_m=sc.gaps,
-                                           voltages_V=sc.voltages, initial_currents_A=i0)))
+        refs.append((sc, span, mk.simulate(spline, span, dt_s=sc.dt_s, gaps_m=sc.gaps_m,
+                                           voltages_V=sc.voltages_V, initial_currents_A=i0)))
     _no_bspline(monkeypatch)
     for sc, span, ref in refs:
-        res = mk.simulate(tables, span, dt_s=sc.dt_s, gaps_m=sc.gaps, voltages_V=sc.voltages,
+        res = mk.simulate(tables, span, dt_s=sc.dt_s, gaps_m=sc.gaps_m, voltages_V=sc.voltages_V,
                           initial_currents_A=i0)
         for field in ("currents_A", "inductor_currents_A", "circuit_force_N", "pole_force_N",
                       "force_N"):
@@ -88,7 +88,7 @@ def test_step_on_tables_equals_bspline_step(all_maps, name: str,
     tables = CurrentModel(maps)
     sc = standard_scenarios(mag, gap_m=s0, current_A=i0)[3]          # gap sine 5 Hz
     t = np.arange(0.0, 0.2 + 1e-9, 1e-3)
-    g = sample_input(sc.gaps, t, spline.gap_names, "gaps", "m")
+    g = sample_input(sc.gaps_m, t, spline.gap_names, "gaps", "m")
     u = mag.network.resistances * i0 * 1.1
     refs = []
     st = spline.initial_state(gaps_m=g[0], currents_A=i0)

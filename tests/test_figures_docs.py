@@ -105,7 +105,7 @@ def guidance_results() -> dict[str, Any]:
     coupling = [c for c in standard_scenarios(mag, gap_m=s0, current_A=i0) if c.coupling]
     closed = ComparisonScenario(
         "closed loop", "+1 mm reference step at 0.02 s", 0.25, 1e-3,
-        gap_reference=lambda t: s0 + (1e-3 if t >= 0.02 else 0.0), kind="closed")
+        gap_reference_m=lambda t: s0 + (1e-3 if t >= 0.02 else 0.0), kind="closed")
     res = compare_models(mag, mk.CurrentModel(maps), [closed, *coupling], gap_m=s0,
                          current_A=i0, repeat=0)
     return {r.scenario.name: r for r in res}

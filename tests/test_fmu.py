@@ -119,8 +119,8 @@ def _compare_scenarios(magnet: mk.Magnet, maps: mk.CharacteristicMaps, path: Pat
     for sc in scenarios:
         n = int(round(sc.duration_s / sc.dt_s))
         times = np.arange(min(n, max_steps or n) + 1) * sc.dt_s   # FMPy's points, exactly
-        u = sample_input(sc.voltages, times, circuits, "voltages", "V")
-        pole_gaps = sample_input(sc.gaps, times, magnet.network.gap_names, "gaps", "m")
+        u = sample_input(sc.voltages_V, times, circuits, "voltages", "V")
+        pole_gaps = sample_input(sc.gaps_m, times, magnet.network.gap_names, "gaps", "m")
         s = native.substitute_gaps(pole_gaps)
         sd = np.vstack([np.diff(s, axis=0) / np.diff(times)[:, None],
                         np.zeros((1, len(circuits)))])

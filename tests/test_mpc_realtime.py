@@ -35,7 +35,7 @@ def setup(u_magnet: mk.Magnet):  # type: ignore[no-untyped-def]
 def _run(maps, veh, ctl, load, duration, ref=None):  # type: ignore[no-untyped-def]
     return closed_loop(mk.CurrentModel(maps), veh, ctl, duration_s=duration, dt_s=DT,
                        initial_gap_m=S0, initial_current_A=ctl.design_state[0],
-                       external_force_N=load, gap_reference=ref)
+                       external_force_N=load, gap_reference_m=ref)
 
 
 def test_same_closed_loop_as_the_reference_rti_and_offset_free(setup) -> None:  # type: ignore[no-untyped-def]

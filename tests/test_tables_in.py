@@ -175,7 +175,7 @@ def test_reduced_model_on_imported_maps_equals_built_maps(built: mk.Characterist
             if sc.kind == "closed":
                 runs = [closed_loop(m, heave, ctl, duration_s=sc.duration_s, dt_s=sc.dt_s,
                                     initial_gap_m=0.01, initial_current_A=20.0,
-                                    gap_reference=sc.gap_reference,
+                                    gap_reference_m=sc.gap_reference_m,
                                     external_force_N=lambda t, f=sc.external_force_fraction:
                                     force0 * f(t))
                         for m in (ref, model)]
@@ -185,8 +185,8 @@ def test_reduced_model_on_imported_maps_equals_built_maps(built: mk.Characterist
                 # measured 4.6e-4 of the 1 mm reference step (0.46 um) and 9.8e-5 (current)
                 assert eg < 2e-3 and ei < 1e-3, (label, eg, ei)
                 continue
-            runs = [mk.simulate(m, (0.0, sc.duration_s), dt_s=sc.dt_s, gaps_m=sc.gaps,
-                                voltages_V=sc.voltages, initial_currents_A=sc.initial_current_A)
+            runs = [mk.simulate(m, (0.0, sc.duration_s), dt_s=sc.dt_s, gaps_m=sc.gaps_m,
+                                voltages_V=sc.voltages_V, initial_currents_A=sc.initial_current_A)
                     for m in (ref, model)]
             ei = np.max(np.abs(runs[1].currents_A - runs[0].currents_A)) / np.max(
                 np.abs(runs[0].currents_A))

@@ -247,8 +247,7 @@ def test_step_inductance_and_characteristics_old_names_equal_new(u_magnet: mk.Ma
 
 
 def test_eddy_identification_old_names_equal_new(u_magnet: mk.Magnet) -> None:
-    from maglevkit.reduction import (current_jump_admittance, eddy_resistance,
-                                     flux_held_ramp)
+    from maglevkit.reduction import current_jump_admittance, eddy_resistance, flux_held_ramp
 
     with pytest.warns(DeprecationWarning, match=r"eddy_resistance: gap= .*use current_A="):
         assert np.array_equal(eddy_resistance(u_magnet, gap=0.01, current=20.0),
@@ -279,3 +278,96 @@ def test_dl_ds_from_ramp_old_names_equal_new(u_magnet: mk.Magnet) -> None:
                               zero_current=1e-3, **common)
     assert old.dL_ds_H_per_m == new.dL_ds_H_per_m and old.current_A == new.current_A == 1e-3
     assert np.array_equal(old.response.currents_A, new.response.currents_A)
+
+
+# ---- the comparison scenario's fields and the closed loop's gap reference --------------------
+def test_helper_on_a_dataclass_renames_constructor_and_reads_old_attributes() -> None:
+    @renamed_keywords(gaps="gaps_m")
+    @dataclasses.dataclass(frozen=True)
+    class Case:
+        name: str
+        gaps_m: float = 0.0
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")            # the new names: no warning at all
+        assert Case("a", gaps_m=0.01) == Case("a", 0.01)
+    with pytest.warns(DeprecationWarning, match=r"Case: gaps= is deprecated, use gaps_m="):
+        old = Case("a", gaps=0.01)
+    assert old == Case("a", gaps_m=0.01)
+    with pytest.warns(DeprecationWarning, match=r"Case: \.gaps is deprecated, use \.gaps_m"):
+        assert old.gaps == 0.01
+    with pytest.raises(InputError, match=r"give gaps_m= only"):
+        Case("a", gaps=0.01, gaps_m=0.01)
+    with pytest.raises(TypeError, match=r"already defines"):
+        renamed_keywords(gaps_m="x")(Case)
+
+
+def test_comparison_scenario_old_fields_equal_new(u_magnet: mk.Magnet,
+                                                  u_maps: mk.CharacteristicMaps) -> None:
+    """``ComparisonScenario(gaps=, voltages=, gap_reference=)`` builds the same case (equal
+    dataclasses) and ``.gaps``/``.voltages``/``.gap_reference`` read the new fields; the
+    comparison run on it gives the same numbers bit for bit."""
+    from maglevkit.compare import ComparisonScenario, compare_models
+
+    ref = lambda t: 0.01 + (5e-4 if t >= 0.005 else 0.0)    # noqa: E731
+    u0 = float(u_magnet.network.resistances[0]) * 20.0
+    new = ComparisonScenario("open", "a step", 0.01, 1e-3, gaps_m=0.01, voltages_V=u0 * 1.1,
+                             initial_current_A=20.0)
+    with pytest.warns(DeprecationWarning, match=r"ComparisonScenario: gaps= is deprecated, use "
+                                                r"gaps_m=; voltages= .*use voltages_V="):
+        old = ComparisonScenario("open", "a step", 0.01, 1e-3, gaps=0.01, voltages=u0 * 1.1,
+                                 initial_current_A=20.0)
+    assert old == new
+    with pytest.warns(DeprecationWarning, match=r"\.voltages is deprecated, use \.voltages_V"):
+        assert old.voltages == new.voltages_V
+    with pytest.warns(DeprecationWarning, match=r"\.gaps is deprecated, use \.gaps_m"):
+        assert old.gaps == new.gaps_m
+    with pytest.warns(DeprecationWarning, match=r"gap_reference= is deprecated, use "
+                                                r"gap_reference_m="):
+        closed = ComparisonScenario("closed", "", 0.01, 1e-3, gap_reference=ref, kind="closed")
+    assert closed.gap_reference_m is ref
+    fm = mk.FluxModel(u_magnet.with_options(eddy_currents=False))
+    cm = mk.CurrentModel(u_maps)
+    r_new, r_old = (compare_models(fm, cm, [sc], gap_m=0.01, current_A=20.0, repeat=0)[0]
+                    for sc in (new, old))
+    assert np.array_equal(r_new.reduced_currents_A, r_old.reduced_currents_A)
+    assert np.array_equal(r_new.detailed_forces_N, r_old.detailed_forces_N)
+
+
+def test_closed_loop_old_gap_reference_equals_new(u_magnet: mk.Magnet,
+                                                  u_maps: mk.CharacteristicMaps) -> None:
+    from maglevkit.control import closed_loop, design_gap_controller
+
+    s0, i0 = 0.01, 20.0
+    f0 = float(mk.solve_statics(u_magnet, gaps_m=s0, currents_A=i0).force_N)
+    veh = mk.vehicle.HeaveMass(f0 / mk.vehicle.STANDARD_GRAVITY)
+    ctl = design_gap_controller(u_magnet, mass_kg=veh.mass_kg, gap_m=s0, current_A=i0)
+    common = dict(duration_s=0.02, dt_s=1e-3, initial_gap_m=s0, initial_current_A=i0)
+    cm = mk.CurrentModel(u_maps)
+
+    def ref(t: float) -> float:
+        return s0 + (5e-4 if t >= 0.005 else 0.0)
+
+    new = closed_loop(cm, veh, ctl, gap_reference_m=ref, **common)
+    with pytest.warns(DeprecationWarning, match=r"closed_loop: gap_reference= is deprecated, "
+                                                r"use gap_reference_m="):
+        old = closed_loop(cm, veh, ctl, gap_reference=ref, **common)
+    assert np.array_equal(old.gap_m, new.gap_m)
+    assert np.array_equal(old.gap_ref_m, new.gap_ref_m)
+
+
+def test_scenario_file_old_fields_read_new() -> None:
+    """``mk.Scenario``: ``.voltages``/``.gaps`` read ``voltages_V``/``gaps_m``; the old
+    constructor keywords build an equal scenario (the file's tables keep their names)."""
+    sc = mk.load_scenario("step")
+    with pytest.warns(DeprecationWarning, match=r"Scenario: \.voltages is deprecated, use "
+                                                r"\.voltages_V"):
+        assert sc.voltages is sc.voltages_V
+    with pytest.warns(DeprecationWarning, match=r"Scenario: \.gaps is deprecated"):
+        assert sc.gaps is sc.gaps_m
+    with pytest.warns(DeprecationWarning, match=r"Scenario: voltages= is deprecated"):
+        old = mk.Scenario(sc.duration_s, sc.dt_s, voltages=sc.voltages_V, gaps=sc.gaps_m,
+                          initial_current_A=sc.initial_current_A,
+                          model_options=sc.model_options, solver_options=sc.solver_options,
+                          source=sc.source)
+    assert old == sc

@@ -372,6 +372,10 @@ def renamed_keywords(**renames: str) -> Callable[[_F], _F]:
     new keyword.  Giving both names is an :class:`~maglevkit.errors.InputError`.  Calls
     without an old name pay one set test.
 
+    On a class (e.g. a dataclass whose fields were renamed) it wraps the constructor the
+    same way and adds each old name as a read-only property that returns the new
+    attribute with the same warning, so ``obj.gaps`` still reads ``obj.gaps_m``.
+
     Parameters
     ----------
     **renames : str
@@ -380,13 +384,12 @@ def renamed_keywords(**renames: str) -> Callable[[_F], _F]:
     Returns
     -------
     callable
-        The decorator (it keeps the function's name, docstring and signature).
+        The decorator (it keeps the function's name, docstring and signature; a class
+        is returned itself, changed in place).
     """
     old_names = frozenset(renames)
 
-    def decorate(fn: _F) -> _F:
-        where = fn.__qualname__
-
+    def wrap(fn: _F, where: str) -> _F:
         @functools.wraps(fn)
         def wrapper(*args: Any, **kwargs: Any) -> Any:
             if kwargs and not old_names.isdisjoint(kwargs):
@@ -404,5 +407,26 @@ def renamed_keywords(**renames: str) -> Callable[[_F], _F]:
             return fn(*args, **kwargs)
 
         return cast(_F, wrapper)
+
+    def alias(where: str, old: str, new: str) -> property:
+        def read(self: Any) -> Any:
+            warnings.warn(f"{where}: .{old} is deprecated, use .{new} (same values and "
+                          "units)", DeprecationWarning, stacklevel=2)
+            return getattr(self, new)
+
+        return property(read, doc=f"Deprecated alias of ``{new}`` (read only).")
+
+    def decorate(fn: _F) -> _F:
+        if isinstance(fn, type):
+            cls: Any = fn
+            where = cls.__qualname__
+            taken = [old for old in renames if old in vars(cls)]
+            if taken:
+                raise TypeError(f"{where} already defines {taken}")
+            cls.__init__ = wrap(cls.__init__, where)
+            for old, new in renames.items():
+                setattr(cls, old, alias(where, old, new))
+            return fn
+        return wrap(fn, fn.__qualname__)
 
     return decorate
