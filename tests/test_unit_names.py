@@ -371,3 +371,25 @@ def test_scenario_file_old_fields_read_new() -> None:
                           model_options=sc.model_options, solver_options=sc.solver_options,
                           source=sc.source)
     assert old == sc
+
+
+def test_plausibility_warnings_point_at_the_callers_line(u_magnet: mk.Magnet) -> None:
+    """A wrapper of renamed_keywords adds a frame; the range check's warning still names
+    the user's line (``external_stacklevel``), not a line inside maglevkit; and
+    ``PlausibleRange.check(gaps=, currents=)`` is an alias of ``gaps_m=``/``currents_A=``."""
+    fm = mk.FluxModel(u_magnet.with_options(eddy_currents=False))
+    for call in (lambda: mk.solve_statics(u_magnet, gaps_m=5.0, currents_A=20.0),
+                 lambda: fm.initial_state(gaps_m=5.0, currents_A=20.0)):
+        with pytest.warns(mk.PlausibilityWarning, match=r"gap 5 m is larger") as rec:
+            call()
+        assert [w.filename for w in rec] == [__file__]
+    rng = u_magnet.plausible_range
+    with pytest.warns(mk.PlausibilityWarning) as rec:
+        rng.check(gaps_m=5.0, currents_A=1e6, where="x")
+    assert len(rec) == 2 and all(w.filename == __file__ for w in rec)
+    with pytest.warns(DeprecationWarning, match=r"check: gaps= is deprecated, use gaps_m=; "
+                                                r"currents= is deprecated, use currents_A="):
+        with pytest.warns(mk.PlausibilityWarning) as rec_old:
+            rng.check(gaps=5.0, currents=1e6, where="x")
+    assert [str(w.message) for w in rec_old if w.category is mk.PlausibilityWarning] \
+        == [str(w.message) for w in rec]

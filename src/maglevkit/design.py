@@ -969,7 +969,7 @@ def design_sensitivities(spec: DesignSpec, values: Mapping[str, float], *, gap_m
     mag = _build(spec, values)
     rng = plausible_range(mag)
     if rng is not None:   # as solve_statics does (its own warnings are silenced below)
-        rng.check(gaps=gap_m, currents=current_A, where="design_sensitivities")
+        rng.check(gaps_m=gap_m, currents_A=current_A, where="design_sensitivities")
     turns_r = float(mag.parameters["magnet"]["turns"])
     n_val = float(values["turns"]) if "turns" in pb.names else pb.turns0
     if abs(n_val - turns_r) > 0.0:

@@ -22,6 +22,8 @@ from __future__ import annotations
 import functools
 import math
 import numbers
+import os
+import sys
 import warnings
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
@@ -33,7 +35,7 @@ from .errors import InputError, MaglevkitError, PlausibilityWarning
 
 _F = TypeVar("_F", bound=Callable[..., Any])
 
-__all__ = ["renamed_keywords", "real_number", "real_array", "whole_number", "flag",
+__all__ = ["renamed_keywords", "external_stacklevel", "real_number", "real_array", "whole_number", "flag",
            "optional_flag", "describe", "Plausible", "check_plausible"]
 
 
@@ -362,6 +364,30 @@ def check_plausible(values: Mapping[str, Any], ranges: Mapping[str, Plausible],
             flagged.append(name)
             break
     return flagged
+
+
+_PACKAGE_DIR = os.path.dirname(os.path.abspath(__file__)) + os.sep
+
+
+def external_stacklevel() -> int:
+    """The ``stacklevel`` that points a warning at the first caller outside maglevkit.
+
+    Call it in the function that calls :func:`warnings.warn`: it counts that function's
+    frame and every maglevkit frame above it (models, wrappers such as
+    :func:`renamed_keywords`'s, which add a frame of their own), so the warning names the
+    user's line however deep inside maglevkit it is raised.
+
+    Returns
+    -------
+    int
+        A value for ``warnings.warn(..., stacklevel=...)``, >= 1.
+    """
+    frame = sys._getframe(1)
+    level = 1
+    while frame.f_back is not None and frame.f_code.co_filename.startswith(_PACKAGE_DIR):
+        frame = frame.f_back
+        level += 1
+    return level
 
 
 def renamed_keywords(**renames: str) -> Callable[[_F], _F]:

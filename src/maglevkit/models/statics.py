@@ -501,7 +501,7 @@ def solve_statics(model: Any, *, gaps_m: Any, currents_A: Any,
         raise InputError("empty set of operating points")
     rng = plausible_range(model)
     if rng is not None:
-        rng.check(gaps=sv, currents=iv, where="solve_statics")
+        rng.check(gaps_m=sv, currents_A=iv, where="solve_statics")
     solver = _solver(net)
     x, _res, phi, psi, f, dpsi_di, dpsi_ds, df_di, df_ds = solver.batch(s2, i2)
     nb = len(net.branches)
