@@ -393,3 +393,43 @@ def test_plausibility_warnings_point_at_the_callers_line(u_magnet: mk.Magnet) ->
             rng.check(gaps=5.0, currents=1e6, where="x")
     assert [str(w.message) for w in rec_old if w.category is mk.PlausibilityWarning] \
         == [str(w.message) for w in rec]
+
+
+# ---- the reduced models' helpers: gaps_m, voltages_V, dt_s ------------------------------------
+def test_reduced_helpers_old_names_equal_new(u_maps: mk.CharacteristicMaps) -> None:
+    from maglevkit.reduced import BankStepper
+
+    cm = mk.CurrentModel(u_maps)
+    bank = mk.MagnetBank({"a": u_maps, "b": u_maps})
+    g = np.array([0.010, 0.011])
+    with pytest.warns(DeprecationWarning, match=r"substitute_gaps: gaps= is deprecated"):
+        assert np.array_equal(cm.substitute_gaps(gaps=g), cm.substitute_gaps(gaps_m=g))
+    st = cm.initial_state(gaps_m=0.010, currents_A=20.0)
+    with pytest.warns(DeprecationWarning, match=r"CurrentModel.outputs: voltages= is "
+                                                r"deprecated, use voltages_V="):
+        o_old = cm.outputs(st, voltages=45.0)
+    assert np.array_equal(o_old.force_N, cm.outputs(st, voltages_V=45.0).force_N)
+    gb = np.linspace(0.010, 0.011, bank.n_gaps)
+    with pytest.warns(DeprecationWarning, match=r"circuit_gaps: gaps= is deprecated"):
+        assert np.array_equal(bank.circuit_gaps(gaps=gb), bank.circuit_gaps(gaps_m=gb))
+    with pytest.warns(DeprecationWarning, match=r"pole_gaps: gaps= is deprecated"):
+        assert np.array_equal(bank.pole_gaps(gaps=gb), bank.pole_gaps(gaps_m=gb))
+    bs = bank.initial_state(gaps_m=0.010, currents_A=20.0)
+    u = bank.resistance_ohm * 22.0
+    with pytest.warns(DeprecationWarning, match=r"MagnetBank.outputs: voltages= is deprecated"):
+        b_old = bank.outputs(bs, voltages=u)
+    assert np.array_equal(b_old.circuit_force_N, bank.outputs(bs, voltages_V=u).circuit_force_N)
+    with pytest.warns(DeprecationWarning, match=r"BankStepper.__init__: dt= is deprecated, "
+                                                r"use dt_s="):
+        s_old = BankStepper(bank, bs, dt=1e-3)
+    s_new = BankStepper(bank, bs, dt_s=1e-3)
+    assert s_old.dt_s == s_new.dt_s == 1e-3
+    for name in ("step_function", "step_kernel"):
+        with pytest.warns(DeprecationWarning, match=rf"{name}: dt= is deprecated, use dt_s="):
+            f_old = getattr(bank, name)(dt=1e-3)
+        f_new = getattr(bank, name)(dt_s=1e-3)
+        assert f_old.name() == f_new.name() and f_old.n_in() == f_new.n_in()
+    with pytest.warns(DeprecationWarning, match=r"compiled_step_library: dt= is deprecated"):
+        lib_old = bank.compiled_step_library(dt=1e-3)
+    lib_new = bank.compiled_step_library(dt_s=1e-3)
+    assert (lib_old is None) == (lib_new is None)
