@@ -433,3 +433,31 @@ def test_reduced_helpers_old_names_equal_new(u_maps: mk.CharacteristicMaps) -> N
         lib_old = bank.compiled_step_library(dt=1e-3)
     lib_new = bank.compiled_step_library(dt_s=1e-3)
     assert (lib_old is None) == (lib_new is None)
+
+
+# ---- plant and vehicle helpers: gravity_m_per_s2, acceleration_m_per_s2, omega_*_rad_per_m ---
+def test_plant_and_vehicle_helpers_old_names_equal_new() -> None:
+    from maglevkit.vehicle.comfort import iso2631_weighted_rms, sperling_index
+    from maglevkit.vehicle.guideway import BeamSpan
+    from maglevkit.vehicle.irregularities import GermanTrackPSD, PowerLawPSD
+
+    with pytest.warns(DeprecationWarning, match=r"HeaveMass: gravity= is deprecated, use "
+                                                r"gravity_m_per_s2="):
+        old = mk.vehicle.HeaveMass(100.0, gravity=3.7)
+    assert old == mk.vehicle.HeaveMass(100.0, gravity_m_per_s2=3.7)
+    with pytest.warns(DeprecationWarning, match=r"HeaveMass: \.gravity is deprecated"):
+        assert old.gravity == 3.7
+    span = BeamSpan(length_m=31.0, mass_per_length_kg_per_m=3000.0,
+                    bending_stiffness_N_m2=2e10)
+    with pytest.warns(DeprecationWarning, match=r"self_weight_sag_m: gravity= is deprecated"):
+        assert span.self_weight_sag_m(gravity=9.0) == span.self_weight_sag_m(gravity_m_per_s2=9.0)
+    t = np.arange(512) / 256.0
+    a = 0.3 * np.sin(2 * np.pi * 4.0 * t)
+    for f in (iso2631_weighted_rms, sperling_index):
+        with pytest.warns(DeprecationWarning, match=r"acceleration= is deprecated, use "
+                                                    r"acceleration_m_per_s2="):
+            assert f(acceleration=a, sample_rate_Hz=256.0) == f(a, 256.0)
+    for psd in (GermanTrackPSD(), PowerLawPSD(1e-8, exponent=0.5)):
+        with pytest.warns(DeprecationWarning, match=r"variance_m2: omega_min= is deprecated, "
+                                                    r"use omega_min_rad_per_m=; omega_max="):
+            assert psd.variance_m2(omega_min=0.1, omega_max=2.0) == psd.variance_m2(0.1, 2.0)

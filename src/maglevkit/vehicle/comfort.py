@@ -37,7 +37,7 @@ from typing import Any
 import numpy as np
 
 from ..errors import InputError
-from ..validation import real_array, real_number
+from ..validation import real_array, real_number, renamed_keywords
 
 __all__ = [
     "WD_PARAMETERS",
@@ -252,13 +252,16 @@ def _indices(acceleration: Any, sample_rate_Hz: float, iso_weighting: Any,
     return aw, SPERLING_SCALE * _weighted_rms(spec, a.shape[0], b) ** 0.3
 
 
-def iso2631_weighted_rms(acceleration: Any, sample_rate_Hz: float, *,
+@renamed_keywords(acceleration="acceleration_m_per_s2")
+def iso2631_weighted_rms(acceleration_m_per_s2: Any, sample_rate_Hz: float, *,
                          method: str = "fft") -> float:
     """ISO 2631-1 frequency-weighted RMS ``a_w`` [m/s^2] of a vertical acceleration record.
 
+    Old keyword names (``acceleration``) are deprecated aliases for one release.
+
     Parameters
     ----------
-    acceleration : array_like (n,)
+    acceleration_m_per_s2 : array_like (n,)
         Vertical acceleration [m/s^2], equally sampled.
     sample_rate_Hz : float
         Sampling rate [Hz], > 0.
@@ -267,7 +270,7 @@ def iso2631_weighted_rms(acceleration: Any, sample_rate_Hz: float, *,
         as periodic); "filter": the four sections, bilinear-transformed, run causally
         over the record (as a measuring instrument would; start-up transient included).
     """
-    a, fs = _signal(acceleration, sample_rate_Hz)
+    a, fs = _signal(acceleration_m_per_s2, sample_rate_Hz)
     if method == "fft":
         return float(comfort_indices(a[:, None], fs)[0][0])
     if method == "filter":
@@ -283,7 +286,8 @@ def iso2631_weighted_rms(acceleration: Any, sample_rate_Hz: float, *,
     return float(np.sqrt(np.mean(y ** 2)))
 
 
-def sperling_index(acceleration: Any, sample_rate_Hz: float) -> float:
+@renamed_keywords(acceleration="acceleration_m_per_s2")
+def sperling_index(acceleration_m_per_s2: Any, sample_rate_Hz: float) -> float:
     """Sperling's ride comfort index ``Wz`` [-] of a vertical acceleration record [m/s^2]:
     ``Wz = (100 sqrt(2) a_B)^0.3`` with the B-weighted RMS ``a_B`` (frequency domain).
 
@@ -291,9 +295,11 @@ def sperling_index(acceleration: Any, sample_rate_Hz: float) -> float:
     pronounced but not unpleasant, 3 strong, irregular but tolerable, 3.25 very irregular,
     3.5 extremely irregular, unpleasant, 4 extremely unpleasant.
 
+    Old keyword names (``acceleration``) are deprecated aliases for one release.
+
     Parameters
     ----------
-    acceleration : array_like (n,)
+    acceleration_m_per_s2 : array_like (n,)
         Vertical acceleration [m/s^2], equally sampled, finite, at least 8 samples.  The
         record is weighted in the frequency domain (treated as periodic).
     sample_rate_Hz : float
@@ -310,7 +316,7 @@ def sperling_index(acceleration: Any, sample_rate_Hz: float) -> float:
         A record that is not a finite 1-D array of >= 8 samples, or a sampling rate that
         is not finite and > 0.
     """
-    a, fs = _signal(acceleration, sample_rate_Hz)
+    a, fs = _signal(acceleration_m_per_s2, sample_rate_Hz)
     return float(comfort_indices(a[:, None], fs)[1][0])
 
 
