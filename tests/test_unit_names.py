@@ -461,3 +461,71 @@ def test_plant_and_vehicle_helpers_old_names_equal_new() -> None:
         with pytest.warns(DeprecationWarning, match=r"variance_m2: omega_min= is deprecated, "
                                                     r"use omega_min_rad_per_m=; omega_max="):
             assert psd.variance_m2(omega_min=0.1, omega_max=2.0) == psd.variance_m2(0.1, 2.0)
+
+
+# ---- the audit: a new unit-less quantity name in the public API fails ------------------------
+def _unit_audit():  # type: ignore[no-untyped-def]
+    import importlib.util
+    from pathlib import Path
+
+    path = Path(__file__).resolve().parent.parent / "tools" / "unit_name_audit.py"
+    spec = importlib.util.spec_from_file_location("unit_name_audit", path)
+    assert spec is not None and spec.loader is not None
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+def test_audit_recognises_units_and_quantities() -> None:
+    audit = _unit_audit()
+    for name in ("gap_m", "dt_s", "voltages_V", "gap_rates_m_per_s", "kd_s_per_m", "area_m2",
+                 "bending_stiffness_N_m2", "omega_min_rad_per_m", "inertia_kg_m2"):
+        assert audit.has_unit(name), name
+    for name in ("gap", "gaps", "dt", "current", "max_current", "initial_currents", "s", "m"):
+        assert not audit.has_unit(name), name
+    for name in ("gap", "initial_current", "external_force", "dt", "gap_change", "duration"):
+        assert audit.names_quantity(name), name
+    for name in ("name", "samples", "method", "circuit", "seed"):
+        assert not audit.names_quantity(name), name
+
+
+def test_public_api_has_no_new_unit_less_quantity_names() -> None:
+    """Every keyword of a public callable that names a physical quantity carries its unit,
+    or is listed with a reason (dimensionless, a name, a switch, a symbol; or deferred)."""
+    audit = _unit_audit()
+    bad = audit.violations()
+    assert not bad, ("public parameters naming a quantity without its unit (rename with "
+                     "validation.renamed_keywords, or list in tools/unit_name_audit.py with "
+                     "a reason):\n" + "\n".join(f"{k}: {', '.join(v)}"
+                                                for k, v in sorted(bad.items())))
+    assert not audit.stale_allowances(), ("listed in tools/unit_name_audit.py but no longer "
+                                          f"found (remove): {audit.stale_allowances()}")
+    for table in (audit.ALLOWED, audit.DEFERRED):
+        assert all(isinstance(r, str) and len(r) > 10 for r in table.values())   # a reason
+
+
+def test_audit_would_catch_the_old_names() -> None:
+    """The names this change renamed are caught by the audit's rule (so it guards them)."""
+    audit = _unit_audit()
+    for old in ("gaps", "currents", "gap", "current", "voltage", "initial_current", "duration",
+                "dt", "gap_change", "inductance", "zero_current", "max_current", "gravity",
+                "acceleration", "omega_min", "gap_reference", "voltages", "pole_force", "flux",
+                "area", "branch_flux"):
+        assert audit.names_quantity(old) and not audit.has_unit(old), old
+
+
+def test_fig7_data_and_circuit_forces_old_names_equal_new() -> None:
+    from maglevkit.compare import circuit_forces
+    from maglevkit.figures import fig7_data
+
+    std = mk.load_magnet("tr09-standard")
+    new = fig7_data(std, gap_m=0.0095, points=5, step_points=0)
+    with pytest.warns(DeprecationWarning, match=r"fig7_data: gap= is deprecated, use gap_m="):
+        old = fig7_data(std, gap=0.0095, points=5, step_points=0)
+    assert old.gap_m == new.gap_m and np.array_equal(old.inductance_full, new.inductance_full)
+    pf = np.arange(8.0).reshape(2, 4)
+    args = (("a", "b", "c", "d"), {"x": ("a", "b"), "y": ("c", "d")}, ("x", "y"))
+    with pytest.warns(DeprecationWarning, match=r"circuit_forces: pole_force= is deprecated"):
+        assert np.array_equal(circuit_forces(pole_force=pf, gap_names=args[0], groups=args[1],
+                                             circuits=args[2]), circuit_forces(pf, *args))
+    assert np.array_equal(circuit_forces(pf, *args), [[1.0, 5.0], [9.0, 13.0]])

@@ -228,12 +228,30 @@ def format_ac_error(value: float, *, digits: int = 2, suffix: str = " %",
     return f"{100.0 * float(value):.{digits}f}{suffix}"
 
 
-def circuit_forces(pole_force: np.ndarray, gap_names: tuple[str, ...],
+@renamed_keywords(pole_force="pole_force_N")
+def circuit_forces(pole_force_N: np.ndarray, gap_names: tuple[str, ...],
                    groups: dict[str, tuple[str, ...]], circuits: tuple[str, ...]) -> np.ndarray:
-    """Sum pole forces (n_t, n_gaps) into circuit forces (n_t, n_circuits)."""
+    """Sum pole forces (n_t, n_gaps) into circuit forces (n_t, n_circuits).
+
+    Parameters
+    ----------
+    pole_force_N : ndarray (n_t, n_gaps)
+        Force of every gap input [N] (deprecated alias ``pole_force``).
+    gap_names : tuple of str
+        Names of the gap inputs (the columns of ``pole_force_N``).
+    groups : dict of str to tuple of str
+        Circuit name -> the gap inputs it drives (the maps' ``pole_groups``).
+    circuits : tuple of str
+        The circuits, in the order of the result's columns.
+
+    Returns
+    -------
+    ndarray (n_t, n_circuits)
+        Circuit forces [N].
+    """
     gi = {g: k for k, g in enumerate(gap_names)}
-    return np.stack([pole_force[:, [gi[g] for g in groups[c]]].sum(axis=1) for c in circuits],
-                    axis=1)
+    return np.stack([pole_force_N[:, [gi[g] for g in groups[c]]].sum(axis=1)
+                     for c in circuits], axis=1)
 
 
 def _scaled(fraction: Callable[[float], float] | None,

@@ -28,6 +28,7 @@ from .magnets.base import Magnet
 from .models.characteristics import KNEE_EXPONENT, nominal_point, saturation_knee
 from .models.statics import solve_statics
 from .plotting import place_legend, plt, save
+from .validation import renamed_keywords
 
 __all__ = ["Fig6Data", "Fig7Data", "CouplingResponse", "fig6_data", "fig7_data",
            "coupling_response", "figure_force_current", "figure_inductance", "figure_coupling",
@@ -152,15 +153,18 @@ _STEP_SETTINGS: dict[str, Any] = {"samples_per_tau": 25, "n_tau": 4.0, "rtol": 1
                                   "atol": 1e-11}
 
 
-def fig7_data(magnet: Magnet, *, gap: float = 0.0095, max_current: float = 2.2,
+@renamed_keywords(gap="gap_m")
+def fig7_data(magnet: Magnet, *, gap_m: float = 0.0095, max_current: float = 2.2,
               points: int = 89, step_points: int = 12) -> Fig7Data:
-    """Data of the Fig. 7 analog at ``gap`` [m] (the paper: 9.5 mm).
+    """Data of the Fig. 7 analog at ``gap_m`` [m] (the paper: 9.5 mm).
+
+    Old keyword names (``gap``) are deprecated aliases for one release.
 
     Parameters
     ----------
     magnet : Magnet
         Magnet with an ``[operating]`` table.
-    gap : float
+    gap_m : float
         Uniform gap [m].
     max_current : float
         Largest current as a multiple of the knee ``I0``.
@@ -188,20 +192,20 @@ def fig7_data(magnet: Magnet, *, gap: float = 0.0095, max_current: float = 2.2,
     s0, i_nom = nominal_point(magnet)
     i0 = saturation_knee(magnet, gap_m=s0)
     cur = np.linspace(0.0, max_current, points)
-    full = solve_statics(magnet, gaps_m=np.array([gap]), currents_A=cur * i0, grid=True)
+    full = solve_statics(magnet, gaps_m=np.array([gap_m]), currents_A=cur * i0, grid=True)
     lin_mag = magnet.with_options(saturation=False, eddy_currents=False)
-    lin = solve_statics(lin_mag, gaps_m=np.array([gap]), currents_A=cur * i0, grid=True)
+    lin = solve_statics(lin_mag, gaps_m=np.array([gap_m]), currents_A=cur * i0, grid=True)
     l_full = full.common_differential_inductance_H[0, :, 0]
     l_lin = lin.common_differential_inductance_H[0, :, 0]
     l0 = float(l_lin[0])
     x_step = np.linspace(0.1, max_current, step_points) if step_points else np.zeros(0)
     step_full = np.array([differential_inductance_from_step(
-        magnet, gap_m=gap, current_A=float(x * i0), **_STEP_SETTINGS).apparent_inductance_H
+        magnet, gap_m=gap_m, current_A=float(x * i0), **_STEP_SETTINGS).apparent_inductance_H
         for x in x_step])
     step_lin = np.array([differential_inductance_from_step(    # lin_mag: compiled once
-        lin_mag, gap_m=gap, current_A=float(x * i0), **_STEP_SETTINGS).apparent_inductance_H
+        lin_mag, gap_m=gap_m, current_A=float(x * i0), **_STEP_SETTINGS).apparent_inductance_H
         for x in x_step])
-    return Fig7Data(gap, cur, l_full / l0, l_lin / l0, i0, l0, i_nom, x_step,
+    return Fig7Data(gap_m, cur, l_full / l0, l_lin / l0, i0, l0, i_nom, x_step,
                     step_full / l0, step_lin / l0)
 
 
