@@ -178,10 +178,11 @@ DEFERRED: dict[str, str] = {
     "resistivity": _SI_IDENTITY + " (materials; the element factories take the same value)",
 }
 
-_ELEMENT_LAWS = ("circuit element laws and factories (circuit/elements.py): called "
-                 "positionally by the assembly and by the magnet builders in "
-                 "magnets/levitation.py and magnets/guidance.py, which two other branches "
-                 "rewrite in parallel; a change of its own")
+_ELEMENT_LAWS = ("circuit element laws and factories (circuit/elements.py): the laws are "
+                 "overridden by the calibrated elements of circuit/factors.py and the "
+                 "factories called by the magnet builders in magnets/levitation.py and "
+                 "magnets/guidance.py, files three other branches rewrite in parallel; "
+                 "a change of its own")
 for _law in ("AirGap.effective_gap", "AirGap.fringe_permeance", "AirGap.permeance",
              "EddyCurrent.energy", "EddyCurrent.mmf_drop", "Element.energy", "Element.mmf_drop",
              "FringePermeance.permeance", "GapLayerPermeance.permeance", "GapLeakage.permeance",
