@@ -102,15 +102,15 @@ def test_map_cache_key_separates_gaps_from_currents_and_checks_the_grid(u_lin, t
     # a stale file under the name (another grid) is rebuilt, not returned
     g1, c1 = np.linspace(0.008, 0.011, 4), np.linspace(0.0, 30.0, 5)
     g2, c2 = np.linspace(0.008, 0.012, 5), np.linspace(0.0, 30.0, 4)
-    vehicle_maps(u_lin, cache_dir=tmp_path, gaps=g1, currents=c1)
+    vehicle_maps(u_lin, cache_dir=tmp_path, gaps_m=g1, currents_A=c1)
     shutil.copy(maps_path(u_lin, g1, c1, tmp_path), maps_path(u_lin, g2, c2, tmp_path))
-    maps = vehicle_maps(u_lin, cache_dir=tmp_path, gaps=g2, currents=c2)
+    maps = vehicle_maps(u_lin, cache_dir=tmp_path, gaps_m=g2, currents_A=c2)
     np.testing.assert_array_equal(maps.gaps_m, g2)
     np.testing.assert_array_equal(maps.currents_A, c2)
-    again = vehicle_maps(u_lin, cache_dir=tmp_path, gaps=g2, currents=c2)   # now cached
+    again = vehicle_maps(u_lin, cache_dir=tmp_path, gaps_m=g2, currents_A=c2)   # now cached
     np.testing.assert_array_equal(again.currents_A, c2)
     with pytest.raises(mk.InputError, match=r"gaps \[m\] = True \(bool\)"):
-        vehicle_maps(u_lin, cache_dir=tmp_path, gaps=True)
+        vehicle_maps(u_lin, cache_dir=tmp_path, gaps_m=True)
 
 
 # ---------------------------------------------------- bools are not numbers (ints)

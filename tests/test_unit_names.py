@@ -529,3 +529,22 @@ def test_fig7_data_and_circuit_forces_old_names_equal_new() -> None:
         assert np.array_equal(circuit_forces(pole_force=pf, gap_names=args[0], groups=args[1],
                                              circuits=args[2]), circuit_forces(pf, *args))
     assert np.array_equal(circuit_forces(pf, *args), [[1.0, 5.0], [9.0, 13.0]])
+
+
+def test_vehicle_maps_and_comfort_indices_old_names_equal_new(tmp_path) -> None:  # type: ignore[no-untyped-def]
+    from maglevkit.vehicle.comfort import comfort_indices, lateral_comfort_indices
+    from maglevkit.vehicle.mapcache import vehicle_maps
+
+    t = np.arange(512) / 256.0
+    a = (0.3 * np.sin(2 * np.pi * 4.0 * t))[:, None]
+    for f in (comfort_indices, lateral_comfort_indices):
+        with pytest.warns(DeprecationWarning, match=r"acceleration= is deprecated"):
+            old = f(acceleration=a, sample_rate_Hz=256.0)
+        assert all(np.array_equal(o, n) for o, n in zip(old, f(a, 256.0), strict=True))
+    lin = mk.load_magnet("u-magnet").with_options(eddy_currents=False)
+    g, c = np.linspace(0.006, 0.016, 4), np.linspace(0.0, 40.0, 4)
+    new = vehicle_maps(lin, cache_dir=tmp_path, gaps_m=g, currents_A=c)
+    with pytest.warns(DeprecationWarning, match=r"vehicle_maps: gaps= is deprecated, use "
+                                                r"gaps_m=; currents= .*currents_A="):
+        old = vehicle_maps(lin, cache_dir=tmp_path, gaps=g, currents=c)   # from the cache
+    assert np.array_equal(old.dataset["force_N"].values, new.dataset["force_N"].values)

@@ -158,16 +158,19 @@ def iso2631_wd(frequency_Hz: Any) -> np.ndarray:
     return _response(WD_PARAMETERS, frequency_Hz)
 
 
-def lateral_comfort_indices(acceleration: Any, sample_rate_Hz: float
+@renamed_keywords(acceleration="acceleration_m_per_s2")
+def lateral_comfort_indices(acceleration_m_per_s2: Any, sample_rate_Hz: float
                             ) -> tuple[np.ndarray, np.ndarray]:
     """ISO 2631-1 ``Wd``-weighted RMS [m/s^2] and Sperling's lateral ``Wz`` [-] of every
     column of a lateral acceleration record, one FFT per record (as
     :func:`comfort_indices` with the horizontal weightings: ``Wd`` and ``B_y =
     SPERLING_LATERAL_FACTOR B``).
 
+    Old keyword names (``acceleration``) are deprecated aliases for one release.
+
     Parameters
     ----------
-    acceleration : array_like (n, m)
+    acceleration_m_per_s2 : array_like (n, m)
         Lateral accelerations [m/s^2], n >= 8 samples of m records, finite.
     sample_rate_Hz : float
         Sampling rate [Hz], > 0.
@@ -182,7 +185,7 @@ def lateral_comfort_indices(acceleration: Any, sample_rate_Hz: float
     InputError
         A record that is not finite (n, m) with n >= 8, or a bad sampling rate.
     """
-    return _indices(acceleration, sample_rate_Hz, iso2631_wd, SPERLING_LATERAL_FACTOR)
+    return _indices(acceleration_m_per_s2, sample_rate_Hz, iso2631_wd, SPERLING_LATERAL_FACTOR)
 
 
 def sperling_weighting(frequency_Hz: Any) -> np.ndarray:
@@ -229,12 +232,14 @@ def _weighted_rms(spectrum: np.ndarray, n: int, magnitude: np.ndarray) -> np.nda
     return np.sqrt(np.tensordot(c, power, axes=(0, 0)) / float(n) ** 2)
 
 
-def comfort_indices(acceleration: Any, sample_rate_Hz: float
+@renamed_keywords(acceleration="acceleration_m_per_s2")
+def comfort_indices(acceleration_m_per_s2: Any, sample_rate_Hz: float
                     ) -> tuple[np.ndarray, np.ndarray]:
     """ISO 2631-1 ``a_w`` [m/s^2] (frequency domain) and Sperling's ``Wz`` [-] of every
-    column of ``acceleration`` (n samples, m records) [m/s^2], one FFT per record:
-    :func:`iso2631_weighted_rms` and :func:`sperling_index` of each column."""
-    return _indices(acceleration, sample_rate_Hz, iso2631_wk, 1.0)
+    column of ``acceleration_m_per_s2`` (n samples, m records) [m/s^2], one FFT per record:
+    :func:`iso2631_weighted_rms` and :func:`sperling_index` of each column (the old keyword
+    ``acceleration`` is a deprecated alias for one release)."""
+    return _indices(acceleration_m_per_s2, sample_rate_Hz, iso2631_wk, 1.0)
 
 
 def _indices(acceleration: Any, sample_rate_Hz: float, iso_weighting: Any,
