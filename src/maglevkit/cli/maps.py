@@ -148,7 +148,7 @@ def build(
             executor = None
         # a Ctrl-C, or whatever failure CasADi made of it (a second Ctrl-C): interrupted
         with interruptible(f"no maps written to {str(output)!r}"):
-            maps = build_maps(mag, gaps=g, currents=c, executor=executor, progress=True,
+            maps = build_maps(mag, gaps_m=g, currents_A=c, executor=executor, progress=True,
                               method=method)
         built = True
     except MaglevkitError as exc:
