@@ -170,7 +170,7 @@ def test_cross_section_vehicle_is_listed_and_has_a_template(tmp_path: Any) -> No
     runner = CliRunner()
     res = runner.invoke(app, ["list", "vehicles"])
     assert res.exit_code == 0
-    assert "  tr09-cross-section TR09-type cross-section" in res.stdout
+    assert "tr09-cross-section TR09-type cross-section" in " ".join(res.stdout.split())
     assert "  tr09 " in res.stdout
     res = runner.invoke(app, ["template", "vehicle", "tr09-cross-section"])
     assert res.exit_code == 0, res.output
