@@ -19,13 +19,19 @@ parameter                  nominal  effect
                                     stretched along H: permeability / k)
 ``iron_saturation_scale``  1        scales the B axis of every iron path:
                                     ``V_m = l H(B/k)`` (saturation flux density x k)
+``eddy_conductance_scale`` 1        scales every eddy conductance ``G_ec`` (dynamics)
+``resistance_scale``       1        scales every circuit's ``R_el`` (dynamics)
 =========================  =======  ================================================
 
-``R_el`` does not enter the statics (static data cannot determine it) and is not fitted.
+The last two do not enter the statics (static data cannot determine them: a zero
+Jacobian column, named undetermined); measured voltage steps (:func:`read_steps`,
+``calibrate(..., steps=)``) determine them, fitted together with the statics.
 
 :func:`calibrate` fits a chosen subset by bounded least squares (SciPy ``least_squares``,
 trust-region reflective) on the relative residuals ``(model - data)/|data|`` of the force
-and/or flux linkage, with the exact Jacobian: the statics are a CasADi ``rootfinder`` of
+and/or flux linkage (and ``(I_model - I_data)/dI`` of the voltage steps' samples, ``dI``
+the step's largest measured current change), with the exact Jacobian: the statics are a
+CasADi ``rootfinder`` of
 the network's loop law ``r(x; s, I, p) = 0``, whose parameter sensitivities CasADi
 computes by the implicit function theorem, ``dx/dp = -(dr/dx)^-1 dr/dp``.  Reported:
 residuals per point, values with 95 % confidence intervals from the Jacobian
@@ -578,7 +584,9 @@ class _ParametricStep:
         try:
             out, jac = self.fun(guess, values)
         except RuntimeError as exc:
-            raise SolverError("the voltage step with parameter sensitivities failed",
+            raise SolverError("the voltage step with parameter sensitivities failed (a "
+                              "stiff network, e.g. an eddy ladder, may need more Radau steps: "
+                              "maglevkit.calibration.STEP_FINE_STEPS)",
                               state={"gap_m": self.gap_m, "current_A": self.current_A,
                                      **dict(zip(self.names, values, strict=True))},
                               reason=str(exc).splitlines()[-1][-200:]) from None

@@ -179,8 +179,10 @@ def calibrate_cmd(
                                                                 "write.")]
     = Path("calibrated.toml"),
     params: Annotated[str | None, typer.Option("--params", help="Parameters to fit (comma "
-                                                                "list; default: the whole "
-                                                                "documented set).")] = None,
+                                                                "list; default: the five "
+                                                                "static factors, with --steps "
+                                                                "also the eddy conductance "
+                                                                "and R_el scales).")] = None,
     holdout_gaps: Annotated[str | None, typer.Option("--holdout-gaps", help="Gaps [m] left out "
                                                                            "of the fit and "
                                                                            "reported (comma "
