@@ -49,8 +49,8 @@ def _idas_steps(magnet: mk.Magnet, values: dict[str, float], n: int = 12
     net = calibrated_network(magnet, values)
     out = []
     for label, gap, i0, u in STEPS:
-        r = mk.voltage_step_response(net, gap=gap, voltage=u, initial_current=i0,
-                                     duration=0.2, dt=0.001, rtol=1e-10, atol=1e-12)
+        r = mk.voltage_step_response(net, gap_m=gap, voltage_V=u, initial_current_A=i0,
+                                     duration_s=0.2, dt_s=0.001, rtol=1e-10, atol=1e-12)
         t, i = np.asarray(r.time_s), np.asarray(r.currents_A)[:, 0]
         idx = np.unique(np.r_[1:5, np.linspace(8, t.size - 1, n - 4).astype(int)])
         out.append((label, gap, i0, u, t[idx], i[idx]))
@@ -93,9 +93,9 @@ def test_eddy_and_resistance_scales_in_the_dae_equal_the_scaled_network(
     np.testing.assert_allclose(net.resistances, 1.05 * magnet.network.resistances, rtol=1e-15)
     np.testing.assert_allclose(net.eddy_conductances,
                                1.4 * magnet.network.eddy_conductances, rtol=1e-15)
-    ref = mk.voltage_step_response(net, gap=0.01, voltage=1.05 * 2.0 * 20.0 + 8.0,
-                                   initial_current=20.0, duration=0.2, dt=0.002, rtol=1e-10,
-                                   atol=1e-12)
+    ref = mk.voltage_step_response(net, gap_m=0.01, voltage_V=1.05 * 2.0 * 20.0 + 8.0,
+                                   initial_current_A=20.0, duration_s=0.2, dt_s=0.002,
+                                   rtol=1e-10, atol=1e-12)
     idx = np.rint(times / 0.002).astype(int)
     # two integrators of one DAE: measured 9e-9 A on ~24 A (collocation 10 steps per
     # interval vs adaptive IDAS at rtol 1e-10)
@@ -165,7 +165,7 @@ def test_statics_and_steps_together(magnet: mk.Magnet, tmp_path: Path) -> None:
     net = calibrated_network(magnet, truth)
     g, c = (a.ravel() for a in np.meshgrid([0.006, 0.010, 0.014], [10.0, 30.0, 60.0],
                                            indexing="ij"))
-    sol = mk.solve_statics(net, gaps=np.c_[g, g], currents=c[:, None])
+    sol = mk.solve_statics(net, gaps_m=np.c_[g, g], currents_A=c[:, None])
     force = np.asarray(sol.force_N, dtype=float).reshape(-1)
     psi = np.asarray(sol.flux_linkage_Wb, dtype=float).reshape(-1)
     data = tmp_path / "statics.csv"

@@ -29,7 +29,7 @@ CURRENTS = np.linspace(0.0, 60.0, 4)
 
 @pytest.fixture(scope="module")
 def small_maps(u_magnet: mk.Magnet) -> mk.CharacteristicMaps:
-    return mk.build_maps(u_magnet, gaps=GAPS, currents=CURRENTS, progress=False)
+    return mk.build_maps(u_magnet, gaps_m=GAPS, currents_A=CURRENTS, progress=False)
 
 
 # ------------------------------------------------------------ wrong or unreported results
@@ -58,13 +58,13 @@ def test_a_non_finite_statics_result_is_a_solver_error(u_magnet: mk.Magnet,
                                                       recwarn: pytest.WarningsRecorder) -> None:
     # was: --currents 1e200 gave F = nan with rc 0 (the residual came back as -inf)
     with pytest.raises(mk.SolverError, match=r"non-finite result .* I\[coil\]=1e\+200"):
-        mk.solve_statics(u_magnet, gaps=0.01, currents=1e200)
+        mk.solve_statics(u_magnet, gaps_m=0.01, currents_A=1e200)
     p = copy.deepcopy(dict(mk.load_magnet("tr09-standard").parameters))
     p["stator"]["slot_depth"] = 1e308        # was: F = nan from the API
     with pytest.warns(mk.PlausibilityWarning, match=r"\[stator\] slot_depth"):
         m = mk.build_magnet(p)
     with pytest.raises(mk.SolverError):
-        mk.solve_statics(m, gaps=0.01, currents=30.0)
+        mk.solve_statics(m, gaps_m=0.01, currents_A=30.0)
 
 
 # ------------------------------------------------------------ hangs and tracebacks

@@ -55,7 +55,7 @@ _REFERENCE: dict[str, float] = {}
 def _force(params: dict[str, Any]) -> float:
     m = mk.build_magnet(params, options=mk.ModelOptions(eddy_currents=False))
     gap, current = _operating_point(params)
-    return float(mk.solve_statics(m, gaps=gap, currents=current).force_N)
+    return float(mk.solve_statics(m, gaps_m=gap, currents_A=current).force_N)
 
 
 def _reference_force(name: str) -> float:

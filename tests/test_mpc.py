@@ -19,10 +19,10 @@ DT = 1e-3
 
 @pytest.fixture(scope="module")
 def setup(u_magnet: mk.Magnet):  # type: ignore[no-untyped-def]
-    maps = mk.build_maps(u_magnet, gaps=np.linspace(0.004, 0.02, 17),
-                         currents=np.linspace(0, 80, 33), progress=False)
+    maps = mk.build_maps(u_magnet, gaps_m=np.linspace(0.004, 0.02, 17),
+                         currents_A=np.linspace(0, 80, 33), progress=False)
     i0 = 20.0
-    f0 = float(mk.solve_statics(u_magnet, gaps=S0, currents=i0).force_N)
+    f0 = float(mk.solve_statics(u_magnet, gaps_m=S0, currents_A=i0).force_N)
     veh = HeaveMass(f0 / STANDARD_GRAVITY)
     model = MagnetHeaveModel(maps, mass_kg=veh.mass_kg)
     plain = MagnetHeaveModel(maps, mass_kg=veh.mass_kg, disturbances=())

@@ -21,9 +21,9 @@ N = 5            # short horizon: the compile of a new horizon is the cost of th
 
 @pytest.fixture(scope="module")
 def setup(u_magnet: mk.Magnet):  # type: ignore[no-untyped-def]
-    maps = mk.build_maps(u_magnet, gaps=np.linspace(0.004, 0.02, 17),
-                         currents=np.linspace(0, 80, 33), progress=False)
-    f0 = float(mk.solve_statics(u_magnet, gaps=S0, currents=20.0).force_N)
+    maps = mk.build_maps(u_magnet, gaps_m=np.linspace(0.004, 0.02, 17),
+                         currents_A=np.linspace(0, 80, 33), progress=False)
+    f0 = float(mk.solve_statics(u_magnet, gaps_m=S0, currents_A=20.0).force_N)
     veh = HeaveMass(f0 / STANDARD_GRAVITY)
     model = MagnetHeaveModel(maps, mass_kg=veh.mass_kg)
     opts = dict(gap_ref_m=S0, sample_time_s=DT, horizon=N, interval_s=2e-3)
@@ -35,7 +35,7 @@ def setup(u_magnet: mk.Magnet):  # type: ignore[no-untyped-def]
 def _run(maps, veh, ctl, load, duration, ref=None):  # type: ignore[no-untyped-def]
     return closed_loop(mk.CurrentModel(maps), veh, ctl, duration_s=duration, dt_s=DT,
                        initial_gap_m=S0, initial_current_A=ctl.design_state[0],
-                       external_force_N=load, gap_reference=ref)
+                       external_force_N=load, gap_reference_m=ref)
 
 
 def test_same_closed_loop_as_the_reference_rti_and_offset_free(setup) -> None:  # type: ignore[no-untyped-def]

@@ -210,8 +210,8 @@ def test_design_file_with_rounded_turns_holds_the_required_force(tmp_path: Any) 
     assert n * i_n == pytest.approx(n_opt * res.nominal_current_A, rel=1e-12)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", PlausibilityWarning)
-        sol = solve_statics(load_magnet(path), gaps=spec.requirements["nominal_gap_m"],
-                            currents=i_n)
+        sol = solve_statics(load_magnet(path), gaps_m=spec.requirements["nominal_gap_m"],
+                            currents_A=i_n)
     # IPOPT's tolerance 1e-10 on the scaled force equality; the re-solve's own ~1e-12
     assert float(sol.force_N) == pytest.approx(spec.requirements["force_N"], rel=1e-8)
 

@@ -297,9 +297,9 @@ S_REF = 0.010
 
 @pytest.fixture(scope="module")
 def heave(u_magnet: mk.Magnet) -> tuple[Any, float]:
-    maps = mk.build_maps(u_magnet, gaps=np.linspace(0.004, 0.02, 17),
-                         currents=np.linspace(0, 80, 33), progress=False)
-    f0 = float(mk.solve_statics(u_magnet, gaps=S_REF, currents=20.0).force_N)
+    maps = mk.build_maps(u_magnet, gaps_m=np.linspace(0.004, 0.02, 17),
+                         currents_A=np.linspace(0, 80, 33), progress=False)
+    f0 = float(mk.solve_statics(u_magnet, gaps_m=S_REF, currents_A=20.0).force_N)
     return maps, f0 / STANDARD_GRAVITY
 
 

@@ -286,8 +286,9 @@ MUTATIONS: tuple[Mutation, ...] = (
              "state.gap_m + state.gap_rate_m_per_s * dt + a * dt * dt",
              ("tests/test_control.py::test_heave_mass_free_fall_is_exact",)),
     Mutation("heave: magnet force x1.05", VEH,
-             "return self.gravity + (external_force_N - magnet_force_N) / self.mass_kg",
-             "return self.gravity + (external_force_N - 1.05 * magnet_force_N) / self.mass_kg",
+             "return self.gravity_m_per_s2 + (external_force_N - magnet_force_N) / self.mass_kg",
+             "return self.gravity_m_per_s2 + (external_force_N - 1.05 * magnet_force_N) / "
+             "self.mass_kg",
              ("tests/test_control.py::test_gap_controller_levitates_and_tracks_a_reference",)),
     # ------------------------------------------------------------------ magnet bank
     Mutation("bank: bicubic cell coefficients t^p scaled by h^(p+1)", "src/maglevkit/reduced/tables.py",

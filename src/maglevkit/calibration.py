@@ -413,8 +413,8 @@ def _start(model: Any, values: Mapping[str, float], gap: np.ndarray, current: np
     ng, nc = len(net.gap_names), len(net.circuits)
     if gap.size == 0:
         return np.zeros((0, net.n_loops))
-    sol = solve_statics(net, gaps=np.repeat(gap[:, None], ng, axis=1),
-                        currents=np.repeat(current[:, None], nc, axis=1))
+    sol = solve_statics(net, gaps_m=np.repeat(gap[:, None], ng, axis=1),
+                        currents_A=np.repeat(current[:, None], nc, axis=1))
     return np.asarray(sol.loop_flux_Wb, dtype=float).reshape(gap.size, -1)
 
 
@@ -685,7 +685,7 @@ def _groups(model: Any) -> dict[str, tuple[str, ...]]:
     from .models.statics import as_network, circuit_pole_groups
 
     net = as_network(model)
-    return circuit_pole_groups(net, gap=0.01, current=10.0)
+    return circuit_pole_groups(net, gap_m=0.01, current_A=10.0)
 
 
 # ---------------------------------------------------------------------------- the fit

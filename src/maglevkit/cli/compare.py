@@ -161,8 +161,8 @@ def compare(
             sc = load_scenario(scenario)
             cases = [ComparisonScenario(
                 Path(scenario).stem, "scenario file", sc.duration_s, sc.dt_s,
-                gaps=sc.inputs_for(mag.network.gap_names, "gaps"),
-                voltages=sc.inputs_for(mag.network.circuit_names, "voltages"),
+                gaps_m=sc.inputs_for(mag.network.gap_names, "gaps"),
+                voltages_V=sc.inputs_for(mag.network.circuit_names, "voltages"),
                 initial_current_A=sc.initial_current_A)]
             # the file's own operating point; the header names the file, not a gap it
             # did not run at (issue 27: "gap_m": 10.0 was printed for --gap 10)

@@ -61,7 +61,7 @@ def demo(
         gaps = np.linspace(0.5 * s0, 2.0 * s0, 9)
         currents = np.linspace(0.0, 2.5 * (i0 or 30.0), 33)
         t0 = time.perf_counter()
-        sol = solve_statics(mag, gaps=gaps, currents=currents, grid=True)
+        sol = solve_statics(mag, gaps_m=gaps, currents_A=currents, grid=True)
         t_stat = time.perf_counter() - t0
         write_statics_csv(sol, out / "statics.csv")
         written += [out / "statics.csv",
@@ -77,7 +77,7 @@ def demo(
         mg = np.linspace(0.5 * s0, 1.6 * s0, 12)
         mc = np.linspace(0.0, float(currents[-1]), 41)
         t0 = time.perf_counter()
-        maps = build_maps(mag, gaps=mg, currents=mc, progress=True)
+        maps = build_maps(mag, gaps_m=mg, currents_A=mc, progress=True)
         t_maps = time.perf_counter() - t0
         written.append(maps.to_netcdf(out / "maps.nc"))
         written += plot_maps(maps, out)

@@ -148,7 +148,7 @@ def build(
             executor = None
         with deferred_sigint() as sig:
             try:
-                maps = build_maps(mag, gaps=g, currents=c, executor=executor, progress=True,
+                maps = build_maps(mag, gaps_m=g, currents_A=c, executor=executor, progress=True,
                                   method=method)
             except BaseException as exc:
                 # a Ctrl-C, or whatever failure CasADi made of it (a second Ctrl-C)

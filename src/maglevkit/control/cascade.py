@@ -234,7 +234,7 @@ def design_gap_controller(magnet: Any, *, mass_kg: float, gap_m: float, current_
                     ("flux_bandwidth_hz", flux_bandwidth_hz), ("damping", damping),
                     ("voltage_limit_V", voltage_limit_V)):
         real_number(v, name, positive=True)
-    sol = solve_statics(magnet, gaps=gap_m, currents=current_A)
+    sol = solve_statics(magnet, gaps_m=gap_m, currents_A=current_A)
     dF_dI = sol.dforce_dcurrent_N_per_A.sum(axis=0)            # (n_c,) total force per I_j
     dF_ds = float(sol.dforce_dgap_N_per_m.sum())               # uniform gap, constant I
     L = np.asarray(sol.differential_inductance_H)              # dpsi/dI

@@ -33,7 +33,15 @@ import numpy as np
 
 from ..errors import InputError, OutOfRangeError, ParameterError
 from ..plant import STANDARD_GRAVITY
-from ..validation import Plausible, check_plausible, flag, real_array, real_number, whole_number
+from ..validation import (
+    Plausible,
+    check_plausible,
+    flag,
+    real_array,
+    real_number,
+    renamed_keywords,
+    whole_number,
+)
 from .zoh import exact_zoh_step
 
 __all__ = ["BeamSpan", "Guideway", "GuidewayState", "GuidewayDeflection", "GUIDEWAY_PLAUSIBLE"]
@@ -201,12 +209,15 @@ class BeamSpan:
         return 5.0 * float(load_N_per_m) * self.length_m ** 4 / (
             384.0 * self.bending_stiffness_N_m2)
 
-    def self_weight_sag_m(self, gravity: float = STANDARD_GRAVITY) -> float:
+    @renamed_keywords(gravity="gravity_m_per_s2")
+    def self_weight_sag_m(self, gravity_m_per_s2: float = STANDARD_GRAVITY) -> float:
         """Exact static midspan sag under the span's own weight, ``5 m g L^4 / (384 EI)`` [m].
+
+        Old keyword names (``gravity``) are deprecated aliases for one release.
 
         Parameters
         ----------
-        gravity : float, default STANDARD_GRAVITY
+        gravity_m_per_s2 : float, default STANDARD_GRAVITY
             Gravitational acceleration g [m/s^2] (9.80665; not checked).
 
         Returns
@@ -214,7 +225,7 @@ class BeamSpan:
         float
             Midspan sag [m], positive downward.
         """
-        return self.uniform_load_midspan_deflection_m(self.mass_per_length_kg_per_m * gravity)
+        return self.uniform_load_midspan_deflection_m(self.mass_per_length_kg_per_m * gravity_m_per_s2)
 
     def mode_shapes(self, local_x_m: Any) -> tuple[np.ndarray, np.ndarray]:
         """Mode shapes ``sin(k_j xi)`` and their slopes ``k_j cos(k_j xi)`` [1/m].
