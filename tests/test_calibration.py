@@ -368,7 +368,8 @@ def test_voltage_step_response_and_its_parameter_derivatives() -> None:
         # max over the samples relative to the largest derivative.  Central differences
         # of the same discrete scheme: truncation ~ (h/1e-3)^2 x 5.9e-7 (measured at
         # h = 1e-3) ~ 6e-9, the rootfinders' residual 1e-11 of the scaled unknowns makes
-        # the noise; measured 1.8e-8 / 2.2e-8 (before the scaling, 3-6e-6 for every h:
+        # the noise; measured 6.9e-9 / 1.4e-8 with 10 Radau steps per interval (1.8e-8 /
+        # 2.2e-8 with 40; before the scaling, 3-6e-6 for every h:
         # the unscaled Newton's 1e-9 was ~1e-6 of the eddy fluxes)
         assert err < 1e-6, (name, err)
 

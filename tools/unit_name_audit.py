@@ -138,6 +138,8 @@ _each(("models.flux.SimulationResult.energy_balance",), "stop", "a sample index"
 _each(("circuit.network.Branch",), "start", "a node name (a string)")
 _each(("calibration.calibrate",), "initial", "start values of the calibration factors "
       "(a mapping of dimensionless factors)")
+_each(("calibration.Calibration",), "nominal_step_points", "a list of per-sample report "
+      "records (dicts with unit-named keys: time_s, current_A, ...), like nominal_points")
 _each(("design.design_magnet",), "initial", "start values of the design variables (a mapping "
       "of several units, each named in docs/design.md)")
 _each(("control.cascade.design_gap_controller", "vehicle.crossrun.CrossSectionModel"),

@@ -479,12 +479,19 @@ class StepRun:
     """
 
     def __init__(self, net: Network, n_out: int, tau: np.ndarray | None = None,
-                 params: Any = None, topology: Network | None = None) -> None:
+                 params: Any = None, topology: Network | None = None, *,
+                 eddy_scale: Any = 1.0, resistance_scale: Any = 1.0) -> None:
         """``params``: CasADi symbols that ``net``'s elements contain (calibration
         factors, :mod:`maglevkit.calibration`), appended to the DAE's parameters (``dae``
         attribute; the IDAS ``integrator`` is not built then); ``topology``: a numeric
         network of the same topology and eddy elements for ``D``, ``K``, ``Q`` (default
-        ``net``)."""
+        ``net``); ``eddy_scale``, ``resistance_scale``: factors (numbers or expressions of
+        ``params``) on every eddy conductance and every ``R_el`` of ``topology``.
+
+        Every ``G_ec`` times ``k`` scales the loop rows of ``M = K D`` (``C G C^T``), so
+        ``K(k) = S K`` with ``S = diag(k 1_loops, 1_circuits)``: ``K(k) y' = h`` is
+        ``K y' = S^-1 h``, i.e. the loop rows of ``h`` divided by ``k`` (exact, no new
+        matrices)."""
         import casadi as ca
 
         from ..circuit.assembly import assemble
@@ -496,7 +503,8 @@ class StepRun:
         y = ca.SX.sym("y", d.n_diff)
         U = ca.SX.sym("U", d.n_circuits)
         T = ca.SX.sym("T")
-        hv = ca.vertcat(-eq.residual, U - net.resistances * eq.I)
+        hv = ca.vertcat(-eq.residual / eddy_scale, U - resistance_scale
+                        * net.resistances * eq.I)
         ydot = ca.mtimes(ca.DM(np.linalg.pinv(d.K)), hv)
         alg = ca.vertcat(ca.mtimes(ca.DM(d.D), eq.x) - y, ca.mtimes(ca.DM(d.Q), hv))
         p = ca.vertcat(T, U, eq.s) if params is None else ca.vertcat(T, U, eq.s, params)
