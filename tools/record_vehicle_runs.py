@@ -4,7 +4,9 @@ largest value.
 
 Run from a checkout whose results must not change::
 
-    PYTHONPATH=src python tools/record_vehicle_runs.py tests/data/vehicle_runs.npz
+    PYTHONPATH=src python tools/record_vehicle_runs.py tests/data/vehicle_runs.npz [NAME ...]
+
+(with names: only those scenarios re-recorded, the others kept).
 
 Scenarios (``SCENARIOS``; the test runs the same functions): the heave-pitch train on a
 rigid and on the elastic guideway with the bundled irregularity, the cascade in the
@@ -19,6 +21,7 @@ from __future__ import annotations
 
 import json
 import math
+import os
 import subprocess
 import sys
 from collections.abc import Callable
@@ -92,7 +95,7 @@ def hp_mpc() -> Any:
 
 def hp_detailed() -> Any:
     m = _cached("detailed", lambda: _train(magnets="detailed", rigid=True))
-    return m.run(speed_m_per_s=400 * KMH, duration_s=0.004)
+    return m.run(speed_m_per_s=400 * KMH, duration_s=0.006, irregularity=_irregularity(m))
 
 
 def _cross() -> Any:
@@ -179,24 +182,33 @@ def arrays(run: Any, every: int) -> dict[str, np.ndarray]:
     return out
 
 
-def main(path: str) -> None:
+def main(path: str, only: list[str]) -> None:
+    """Record every scenario (``only`` empty) or re-record the named ones into ``path``."""
     data: dict[str, np.ndarray] = {}
     meta: dict[str, Any] = {}
+    if only:
+        with np.load(Path(path)) as old:
+            data = {k: old[k] for k in old.files if k != "meta" and k.split("/")[0] not in only}
+            meta = json.loads(str(old["meta"]))
     for name, (fun, every) in SCENARIOS.items():
+        if only and name not in only:
+            continue
         run = fun()
         for key, val in arrays(run, every).items():
             data[f"{name}/{key}"] = val
         meta[name] = summaries(run)
         print(name, "done", file=sys.stderr)
+    commit = os.environ.get("RECORD_COMMIT", "")   # the code's commit, when run from a copy
     try:
-        commit = subprocess.run(["git", "rev-parse", "--short", "HEAD"], capture_output=True,
+        commit = commit or subprocess.run(["git", "rev-parse", "--short", "HEAD"], capture_output=True,
                                 text=True, check=True).stdout.strip()
     except (OSError, subprocess.CalledProcessError):
         commit = "unknown"
-    meta["recorded_by"] = f"tools/record_vehicle_runs.py at commit {commit}"
+    meta["recorded_by" if not only else f"recorded_by ({', '.join(only)})"] = \
+        f"tools/record_vehicle_runs.py at commit {commit}"
     data["meta"] = np.array(json.dumps(meta))
     np.savez_compressed(Path(path), **data)
 
 
 if __name__ == "__main__":
-    main(sys.argv[1])
+    main(sys.argv[1], sys.argv[2:])
