@@ -35,7 +35,7 @@ from typing import Any
 import numpy as np
 
 from ..errors import InputError, MaglevkitError, OutOfRangeError, ParameterFileError, SolverError
-from ..plant import STANDARD_GRAVITY, chopper_floor
+from ..plant import STANDARD_GRAVITY
 from ..validation import Plausible, check_plausible
 from .guideway import Guideway
 from .mechanics import VehicleMechanics
@@ -516,6 +516,7 @@ class VehicleModel:
         self.trim_current_A = self._trim_currents(circ_force)
         self._design_controllers()
         self._step_functions: dict[float, Any] = {}
+        self._part_functions: dict[float, Any] = {}
         self._set_controllers(controller, controller_sample_time_s, mpc_options)
 
     # ------------------------------------------------------------------ set-up helpers
@@ -885,8 +886,6 @@ class VehicleModel:
         span = gw.span
         nm = gw.n_modes
         gstate = gw.initial_state(first_span=int(gw.span_index(xpath[0].min())))
-        ad_g, bd_g = span.discretize(dt) if nm else (np.zeros((0, 0)), np.zeros((0, 0)))
-        kk = span.wavenumbers_rad_per_m
 
         # initial state: static guideway deflection under the trim loads, frames fitted
         f_pts = self.mechanics_trim_forces()
@@ -909,7 +908,6 @@ class VehicleModel:
         q[:nsec2] = np.linalg.solve(mech.K[:nsec2, :nsec2],
                                     mech.Q_gravity[:nsec2] - mech.K[:nsec2, nsec2:] @ q[nsec2:])
         qd = np.zeros_like(q)
-        ad_m, bd_m = mech.discretize(dt)
         ndof = mech.n_dof
         x_m = np.concatenate([q, qd])
         bt = mech.B.T.copy()
@@ -938,15 +936,10 @@ class VehicleModel:
         force_pts = pf0.copy()
         current = out0.currents_A.copy()
         # controllers (vectorised over circuits)
-        g = self.gains
-        kp, kd, ki, kf = g["kp_per_m"], g["kd_s_per_m"], g["ki_per_m_s"], g["kflux_per_s"]
         blend = tr.control_velocity_blend
         psi0 = self.flux_bias_Wb
         res = bank.resistance_ohm
-        umax = tr.voltage_limit_V
         psi_hat = psi0.copy()
-        r_ec = self.eddy_resistance_ohm
-        proj = self.integral_projection
         integ = np.zeros(nc)
         # records
         rec = {k: np.empty((n_steps + 1, nc)) for k in ("gap", "current", "voltage", "force",
@@ -974,21 +967,27 @@ class VehicleModel:
             # one discarded step first: compiles (or loads) the bank's kernel outside the timing
             if not self.fine:
                 bank.step(bstate, dt, res * current, gaps_p, 0.0)
+            # the step's parts (stepkernel.build_vehicle_parts), evaluated on CasADi's
+            # virtual machine: the laws of the compiled step, not a copy of them
+            parts = self._parts(dt)
+            f_in, f_cas, f_lim, f_upd, f_mech, f_out = (parts[k] for k in (
+                "guideway_in", "cascade", "voltage_limits", "controller_update",
+                "mechanics_loaded", "guideway_out"))
             bar = _Progress(n_steps, enabled=progress)
             clock = time.perf_counter
             t_start = clock()
             cpu0 = time.process_time()
-            mid_shape = span.mode_shapes(0.5 * span_l)[0] if nm else np.zeros(0)
-            zeros_np = np.zeros(npt)
-            # guideway modal state in ring order, [q | q'] per row (as Guideway.step)
-            gx = np.concatenate([gstate.modal_displacement_m, gstate.modal_velocity_m_per_s], axis=1)
-            first = gstate.first_span
-            n_sp = gw.n_spans
-            span_ids = np.arange(n_sp)
-            ad_gt, bd_gt = ad_g.T.copy(), bd_g.T.copy()
-            half = 0.5 * v * dt
-            fail_any = np.isfinite(fail_t)
-            t_fail0 = float(fail_t.min()) if fail_any.any() else math.inf
+            # guideway modal state in ring order, [q | q'] per row (as Guideway.step), flat
+            n_sp = gw.n_spans if nm else 0
+            gx = np.concatenate([gstate.modal_displacement_m, gstate.modal_velocity_m_per_s],
+                                axis=1).ravel() if nm else np.zeros(0)
+            span_ids = np.arange(gw.n_spans)
+            k_out = -1
+            if nm:
+                first_k, keep, k_out = gw.window_schedule(
+                    xpath.min(axis=1), xpath.max(axis=1) + 0.5 * v * dt,
+                    first_span=gstate.first_span)
+            i_l_fine = np.zeros(nc)          # detailed members: the chopper reads I, not I_L
             # controllers other than the vectorised cascade, sampled every `hold` steps
             ext_idx, hold, u_ext, ext_ctl = self._start_controllers(
                 dt, gaps_p if circ_avg is None else circ_avg @ gaps_p,
@@ -1003,34 +1002,16 @@ class VehicleModel:
                     t0 = clock()
                     t = times[k]
                     x_pts = xpath[k]
-                    # guideway deflection at the points (and mode shapes at the mid-step positions)
-                    if nm:
-                        if gw.moving_boundary:
-                            k_rear = int(gw.span_index(x_pts.min()))
-                            if k_rear > first:
-                                for kk_ in range(first, min(k_rear, first + n_sp)):
-                                    gx[kk_ % n_sp] = 0.0
-                                first = k_rear
-                        x2 = np.concatenate([x_pts, x_pts + half])
-                        ks = np.floor((x2 - gw.origin_m) / span_l).astype(int)
-                        if ks.min() < first or ks.max() > first + n_sp - 1:
-                            raise OutOfRangeError(f"vehicle run at t = {t:.4f} s: the train left the "
-                                                  f"integrated spans {first} ... {first + n_sp - 1}")
-                        rows2 = ks % n_sp
-                        arg = np.multiply.outer(x2 - (gw.origin_m + ks * span_l), kk)
-                        sn = np.sin(arg)
-                        rows = rows2[:npt]
-                        phi, dphi = sn[:npt], kk * np.cos(arg[:npt])
-                        qg = gx[rows]
-                        w = np.einsum("pj,pj->p", qg[:, :nm], phi)
-                        w_rate = (np.einsum("pj,pj->p", qg[:, nm:], phi)
-                                  + v * np.einsum("pj,pj->p", qg[:, :nm], dphi))
-                    else:
-                        w = w_rate = zeros_np
+                    if k == k_out:
+                        raise OutOfRangeError(
+                            f"vehicle run at t = {t:.4f} s: the train left the integrated "
+                            f"spans {first_k[k]} ... {first_k[k] + n_sp - 1}")
+                    if nm and not keep[k].all():    # spans recycled by the moving boundary
+                        gx.reshape(n_sp, -1)[keep[k] == 0.0] = 0.0
+                    gaps_p, rates_p, w, mid, vel_p = (
+                        np.asarray(o).ravel() for o in
+                        f_in(x_m, gx, x_pts, r_all[k], rx_all[k], v))
                     t1 = clock()
-                    q, qd = x_m[:ndof], x_m[ndof:]
-                    gaps_p = s0 + bt @ q - w - r_all[k]
-                    rates_p = bt @ qd - w_rate - v * rx_all[k]
                     gaps_c = gaps_p if circ_avg is None else circ_avg @ gaps_p
                     rates_c = rates_p if circ_avg is None else circ_avg @ rates_p
                     # record the state at t_k
@@ -1038,11 +1019,11 @@ class VehicleModel:
                     rec["current"][k] = current
                     rec["force"][k] = force_c
                     rec["deflection"][k] = w if circ_avg is None else circ_avg @ w
-                    rec_q[k], rec_qd[k] = q, qd
+                    rec_q[k], rec_qd[k] = x_m[:ndof], x_m[ndof:]
                     rec_fp[k] = force_pts
                     if nm:
-                        rec_span[k] = first + span_ids
-                        rec_mid[k] = gx[(first + span_ids) % n_sp, :nm] @ mid_shape
+                        rec_span[k] = first_k[k] + span_ids
+                        rec_mid[k] = mid[rec_span[k] % n_sp]
                     gmin = float(gaps_c.min())
                     gmax = float(gaps_c.max())
                     if gmin <= tr.touchdown_gap_m or gmax >= tr.landing_gap_m:
@@ -1062,23 +1043,17 @@ class VehicleModel:
                                                  current, ctl_times,
                                                  rec["voltage"][max(k - hold, 0):k], integ,
                                                  ctl_cpu)
-                    # controllers (flux cascade, every circuit at once)
-                    vel_p = bt @ qd          # the force points' absolute velocity
+                    # controllers (flux cascade, every circuit at once), the damping input
+                    # blending the gap rate with the force points' absolute velocity
                     vel_c = vel_p if circ_avg is None else circ_avg @ vel_p
-                    rho = (kp * (gaps_c - s0) + kd * damping_input(rates_c, vel_c, blend)
-                           + ki * integ)
-                    u = res * current + kf * (psi0 * (1.0 + rho) - psi_hat)
+                    u = np.asarray(f_cas(gaps_c, damping_input(rates_c, vel_c, blend), current,
+                                         psi_hat, integ)).ravel()
                     if ext_idx.size:        # the other controllers' voltages, held
                         u[ext_idx] = u_ext[ext_idx]
-                    np.clip(u, -umax, umax, out=u)
-                    # 2-quadrant chopper: the coil current cannot reverse.  Reduced model (eq. 8):
-                    # I = (U + R_ec I_L) / (R_el + R_ec) >= 0  <=>  U >= -R_ec I_L
-                    if self.fine:
-                        u = np.where((current < 1.0) & (u < 0.0), 0.0, u)
-                    else:
-                        u = chopper_floor(u, bstate.inductor_currents_A, r_ec)
-                    if t >= t_fail0:
-                        u = np.where(fail_t <= t, 0.0, u)
+                    # |U| <= U_max, the 2-quadrant chopper, failed circuits at 0 V
+                    u = np.asarray(f_lim(u, i_l_fine if self.fine else
+                                         bstate.inductor_currents_A, current, t,
+                                         fail_t)).ravel()
                     rec["voltage"][k] = u
                     t4 = clock()
                     try:
@@ -1093,20 +1068,18 @@ class VehicleModel:
                         break
                     t5 = clock()
                     new_current = out.currents_A
-                    psi_hat += dt * (u - res * 0.5 * (current + new_current))
-                    integ += proj @ ((gaps_c - s0) * dt)
+                    psi_hat, integ = (np.asarray(o).ravel() for o in
+                                      f_upd(psi_hat, integ, u, current, new_current, gaps_c))
                     new_pts = out.pole_force_N if self.fine else out.circuit_force_N
                     assert new_pts is not None
                     f_bar = (0.5 * sides) * (force_pts + new_pts)
                     t6 = clock()
                     if k == k_pay:
                         q_grav = self._payload_gravity(payload_fraction)
-                    x_m = ad_m @ x_m + bd_m @ (q_grav - mech.B @ f_bar)
+                    x_m = np.asarray(f_mech(x_m, f_bar, q_grav)).ravel()
                     t7 = clock()
                     if nm:
-                        onehot = (rows2[npt:, None] == span_ids).astype(float)
-                        qmod = onehot.T @ (sn[npt:] * f_bar[:, None])
-                        gx = gx @ ad_gt + qmod @ bd_gt
+                        gx = np.asarray(f_out(gx, x_pts, v, f_bar)).ravel()
                     t8 = clock()
                     current = new_current
                     force_c = out.circuit_force_N
@@ -1248,28 +1221,43 @@ class VehicleModel:
         """
         return self._step_function(float(dt_s), self.bank.step_function(float(dt_s)))
 
+    def _part_constants(self, dt: float) -> dict[str, Any]:
+        """The run's constants of the step's parts (:func:`build_vehicle_parts`)."""
+        gw, mech, span = self.guideway, self.mechanics, self.guideway.span
+        nm = gw.n_modes
+        ad_g, bd_g = span.discretize(dt) if nm else (np.zeros((0, 0)), np.zeros((0, 0)))
+        ad_m, bd_m = mech.discretize(dt)
+        return dict(
+            dt=dt, nominal_gap_m=self.train.nominal_gap_m, span_length_m=span.length_m,
+            origin_m=gw.origin_m, wavenumbers=span.wavenumbers_rad_per_m if nm else np.zeros(0),
+            guideway_ad=ad_g, guideway_bd=bd_g, n_spans=gw.n_spans, mech_ad=ad_m,
+            mech_bd=bd_m, gravity_force=mech.Q_gravity, force_matrix=mech.B, gains=self.gains,
+            flux_bias_Wb=self.flux_bias_Wb, resistance_ohm=self.bank.resistance_ohm,
+            eddy_resistance_ohm=self.eddy_resistance_ohm,
+            voltage_limit_V=self.train.voltage_limit_V,
+            integral_projection=self.integral_projection,
+            midspan_shape=span.mode_shapes(0.5 * span.length_m)[0] if nm else np.zeros(0))
+
     def _step_function(self, dt: float, bank_step: Any) -> Any:
         from .stepkernel import build_vehicle_step
 
         if self.fine:
             raise InputError("the compiled vehicle step needs reduced magnets "
                              "(magnets='reduced')")
-        gw, mech, span = self.guideway, self.mechanics, self.guideway.span
-        nm = gw.n_modes
-        ad_g, bd_g = span.discretize(dt) if nm else (np.zeros((0, 0)), np.zeros((0, 0)))
-        ad_m, bd_m = mech.discretize(dt)
-        return build_vehicle_step(
-            bank_step=bank_step, dt=dt, nominal_gap_m=self.train.nominal_gap_m,
-            sides=float(self.train.sides), span_length_m=span.length_m, origin_m=gw.origin_m,
-            wavenumbers=span.wavenumbers_rad_per_m if nm else np.zeros(0),
-            guideway_ad=ad_g, guideway_bd=bd_g, n_spans=gw.n_spans, mech_ad=ad_m,
-            mech_bd=bd_m, gravity_force=mech.Q_gravity, force_matrix=mech.B, gains=self.gains,
-            flux_bias_Wb=self.flux_bias_Wb, resistance_ohm=self.bank.resistance_ohm,
-            eddy_resistance_ohm=self.eddy_resistance_ohm,
-            voltage_limit_V=self.train.voltage_limit_V,
-            velocity_blend=self.train.control_velocity_blend,
-            integral_projection=self.integral_projection,
-            midspan_shape=span.mode_shapes(0.5 * span.length_m)[0] if nm else np.zeros(0))
+        return build_vehicle_step(bank_step=bank_step, sides=float(self.train.sides),
+                                  velocity_blend=self.train.control_velocity_blend,
+                                  **self._part_constants(dt))
+
+    def _parts(self, dt: float) -> dict[str, Any]:
+        """The step's parts for steps of ``dt`` (the NumPy loop's), built once per ``dt``."""
+        from .stepkernel import build_vehicle_parts
+
+        hit = self._part_functions.get(dt)
+        if hit is None:
+            hit = build_vehicle_parts(chopper="coil_current" if self.fine else "eq8",
+                                      **self._part_constants(dt))
+            self._part_functions[dt] = hit
+        return hit
 
     def _compiled_step(self, dt: float) -> tuple[Any, Any, int]:
         """(compiled block function, layout, steps per block), built and compiled (or
@@ -1341,18 +1329,9 @@ class VehicleModel:
         first0 = gstate.first_span
         k_out = -1
         if nm:
-            span_l = gw.span.length_m
-            lo = np.floor((xpath.min(axis=1) - gw.origin_m) / span_l).astype(int)
-            hi = np.floor((xpath.max(axis=1) + 0.5 * v * dt - gw.origin_m) / span_l).astype(int)
-            first_k = (np.maximum.accumulate(np.maximum(lo, first0)) if gw.moving_boundary
-                       else np.full(lo.shape, first0))
-            out = (lo < first_k) | (hi > first_k + n_sp - 1)
-            k_out = int(np.argmax(out)) if out.any() else -1
-            keep = p_all[:, sp["keep"]]
-            for kr in (np.flatnonzero(np.diff(first_k) > 0) + 1).tolist():
-                old = int(first_k[kr - 1])
-                for span in range(old, min(int(first_k[kr]), old + n_sp)):
-                    keep[kr, span % n_sp] = 0.0
+            first_k, keep, k_out = gw.window_schedule(
+                xpath.min(axis=1), xpath.max(axis=1) + 0.5 * v * dt, first_span=first0)
+            p_all[:n_steps + 1, sp["keep"]] = keep
         else:
             first_k = np.full(times.shape, first0)
         # two state vectors, each bound once to one of two buffers (ping-pong)
