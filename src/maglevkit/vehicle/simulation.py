@@ -37,6 +37,7 @@ import numpy as np
 from ..errors import InputError, MaglevkitError, OutOfRangeError, ParameterFileError, SolverError
 from ..plant import STANDARD_GRAVITY
 from ..validation import Plausible, check_plausible
+from .framework import run_blocks, run_steps
 from .guideway import Guideway
 from .mechanics import VehicleMechanics
 from .train import TrainData
@@ -973,10 +974,7 @@ class VehicleModel:
             f_in, f_cas, f_lim, f_upd, f_mech, f_out = (parts[k] for k in (
                 "guideway_in", "cascade", "voltage_limits", "controller_update",
                 "mechanics_loaded", "guideway_out"))
-            bar = _Progress(n_steps, enabled=progress)
             clock = time.perf_counter
-            t_start = clock()
-            cpu0 = time.process_time()
             # guideway modal state in ring order, [q | q'] per row (as Guideway.step), flat
             n_sp = gw.n_spans if nm else 0
             gx = np.concatenate([gstate.modal_displacement_m, gstate.modal_velocity_m_per_s],
@@ -995,111 +993,103 @@ class VehicleModel:
             k_pay = (n_steps + 1 if payload_step_s is None
                      else int(math.ceil(payload_step_s / dt - 1e-9)))
             q_grav = mech.Q_gravity
-            k = 0
-            interrupted = False
-            try:
-                for k in range(n_steps + 1):
-                    t0 = clock()
-                    t = times[k]
-                    x_pts = xpath[k]
-                    if k == k_out:
-                        raise OutOfRangeError(
-                            f"vehicle run at t = {t:.4f} s: the train left the integrated "
-                            f"spans {first_k[k]} ... {first_k[k] + n_sp - 1}")
-                    if nm and not keep[k].all():    # spans recycled by the moving boundary
-                        gx.reshape(n_sp, -1)[keep[k] == 0.0] = 0.0
-                    gaps_p, rates_p, w, mid, vel_p = (
-                        np.asarray(o).ravel() for o in
-                        f_in(x_m, gx, x_pts, r_all[k], rx_all[k], v))
-                    t1 = clock()
-                    gaps_c = gaps_p if circ_avg is None else circ_avg @ gaps_p
-                    rates_c = rates_p if circ_avg is None else circ_avg @ rates_p
-                    # record the state at t_k
-                    rec["gap"][k] = gaps_c
-                    rec["current"][k] = current
-                    rec["force"][k] = force_c
-                    rec["deflection"][k] = w if circ_avg is None else circ_avg @ w
-                    rec_q[k], rec_qd[k] = x_m[:ndof], x_m[ndof:]
-                    rec_fp[k] = force_pts
-                    if nm:
-                        rec_span[k] = first_k[k] + span_ids
-                        rec_mid[k] = mid[rec_span[k] % n_sp]
-                    gmin = float(gaps_c.min())
-                    gmax = float(gaps_c.max())
-                    if gmin <= tr.touchdown_gap_m or gmax >= tr.landing_gap_m:
-                        closed = gmin <= tr.touchdown_gap_m
-                        j = int(np.argmin(gaps_c) if closed else np.argmax(gaps_c))
-                        touchdown = (names[j], float(t), float(gaps_c[j]),
-                                     "closed" if closed else "landed")
-                        rec["voltage"][k] = np.nan
-                        last = k
-                        break
-                    if k == n_steps:
-                        rec["voltage"][k] = rec["voltage"][k - 1]
-                        break
-                    t3 = clock()
-                    if ext_idx.size and k % hold == 0:
-                        self._sample_controllers(ext_ctl, ext_idx, u_ext, t, gaps_c, rates_c,
-                                                 current, ctl_times,
-                                                 rec["voltage"][max(k - hold, 0):k], integ,
-                                                 ctl_cpu)
-                    # controllers (flux cascade, every circuit at once), the damping input
-                    # blending the gap rate with the force points' absolute velocity
-                    vel_c = vel_p if circ_avg is None else circ_avg @ vel_p
-                    u = np.asarray(f_cas(gaps_c, damping_input(rates_c, vel_c, blend), current,
-                                         psi_hat, integ)).ravel()
-                    if ext_idx.size:        # the other controllers' voltages, held
-                        u[ext_idx] = u_ext[ext_idx]
-                    # |U| <= U_max, the 2-quadrant chopper, failed circuits at 0 V
-                    u = np.asarray(f_lim(u, i_l_fine if self.fine else
-                                         bstate.inductor_currents_A, current, t,
-                                         fail_t)).ravel()
-                    rec["voltage"][k] = u
-                    t4 = clock()
-                    try:
-                        bstate, out = bank.step(bstate, dt, u, gaps_p, rates_p, pole_forces=self.fine)
-                    except MaglevkitError as exc:
-                        touchdown = self._touchdown_within_step(gaps_c, rates_c, dt,
-                                                            float(times[k + 1]))
-                        if touchdown is None:
-                            raise type(exc)(f"vehicle run at t = {t:.4f} s: {exc}") from None
-                        rec["voltage"][k] = np.nan
-                        last = k
-                        break
-                    t5 = clock()
-                    new_current = out.currents_A
-                    psi_hat, integ = (np.asarray(o).ravel() for o in
-                                      f_upd(psi_hat, integ, u, current, new_current, gaps_c))
-                    new_pts = out.pole_force_N if self.fine else out.circuit_force_N
-                    assert new_pts is not None
-                    f_bar = (0.5 * sides) * (force_pts + new_pts)
-                    t6 = clock()
-                    if k == k_pay:
-                        q_grav = self._payload_gravity(payload_fraction)
-                    x_m = np.asarray(f_mech(x_m, f_bar, q_grav)).ravel()
-                    t7 = clock()
-                    if nm:
-                        gx = np.asarray(f_out(gx, x_pts, v, f_bar)).ravel()
-                    t8 = clock()
-                    current = new_current
-                    force_c = out.circuit_force_N
-                    force_pts = new_pts
-                    timing["guideway"] += (t1 - t0) + (t8 - t7)
-                    timing["other"] += (t3 - t1) + (t6 - t5)
-                    timing["controllers"] += t4 - t3
-                    timing["magnets"] += t5 - t4
-                    timing["mechanics"] += t7 - t6
-                    bar.update(k + 1)
-            except KeyboardInterrupt:
-                # keep the steps done: records up to the step before the one under way
-                interrupted = True
-                last = k - 1
-                if last < 1:
-                    bar.close(finished=False)
-                    raise
-            wall = clock() - t_start
-            bar.close(finished=not interrupted)
-            cpu = time.process_time() - cpu0
+
+            def step(k: int) -> tuple[int, Any] | None:
+                """Record the state at step ``k`` and advance it (None), or stop there."""
+                nonlocal gx, x_m, bstate, current, force_c, force_pts, psi_hat, integ, q_grav
+                t0 = clock()
+                t = times[k]
+                x_pts = xpath[k]
+                if k == k_out:
+                    raise OutOfRangeError(
+                        f"vehicle run at t = {t:.4f} s: the train left the integrated "
+                        f"spans {first_k[k]} ... {first_k[k] + n_sp - 1}")
+                if nm and not keep[k].all():    # spans recycled by the moving boundary
+                    gx.reshape(n_sp, -1)[keep[k] == 0.0] = 0.0
+                gaps_p, rates_p, w, mid, vel_p = (
+                    np.asarray(o).ravel() for o in
+                    f_in(x_m, gx, x_pts, r_all[k], rx_all[k], v))
+                t1 = clock()
+                gaps_c = gaps_p if circ_avg is None else circ_avg @ gaps_p
+                rates_c = rates_p if circ_avg is None else circ_avg @ rates_p
+                # record the state at t_k
+                rec["gap"][k] = gaps_c
+                rec["current"][k] = current
+                rec["force"][k] = force_c
+                rec["deflection"][k] = w if circ_avg is None else circ_avg @ w
+                rec_q[k], rec_qd[k] = x_m[:ndof], x_m[ndof:]
+                rec_fp[k] = force_pts
+                if nm:
+                    rec_span[k] = first_k[k] + span_ids
+                    rec_mid[k] = mid[rec_span[k] % n_sp]
+                gmin = float(gaps_c.min())
+                gmax = float(gaps_c.max())
+                if gmin <= tr.touchdown_gap_m or gmax >= tr.landing_gap_m:
+                    closed = gmin <= tr.touchdown_gap_m
+                    j = int(np.argmin(gaps_c) if closed else np.argmax(gaps_c))
+                    rec["voltage"][k] = np.nan
+                    return k, (names[j], float(t), float(gaps_c[j]),
+                               "closed" if closed else "landed")
+                if k == n_steps:
+                    rec["voltage"][k] = rec["voltage"][k - 1]
+                    return None
+                t3 = clock()
+                if ext_idx.size and k % hold == 0:
+                    self._sample_controllers(ext_ctl, ext_idx, u_ext, t, gaps_c, rates_c,
+                                             current, ctl_times,
+                                             rec["voltage"][max(k - hold, 0):k], integ,
+                                             ctl_cpu)
+                # controllers (flux cascade, every circuit at once), the damping input
+                # blending the gap rate with the force points' absolute velocity
+                vel_c = vel_p if circ_avg is None else circ_avg @ vel_p
+                u = np.asarray(f_cas(gaps_c, damping_input(rates_c, vel_c, blend), current,
+                                     psi_hat, integ)).ravel()
+                if ext_idx.size:        # the other controllers' voltages, held
+                    u[ext_idx] = u_ext[ext_idx]
+                # |U| <= U_max, the 2-quadrant chopper, failed circuits at 0 V
+                u = np.asarray(f_lim(u, i_l_fine if self.fine else
+                                     bstate.inductor_currents_A, current, t,
+                                     fail_t)).ravel()
+                rec["voltage"][k] = u
+                t4 = clock()
+                try:
+                    bstate, out = bank.step(bstate, dt, u, gaps_p, rates_p,
+                                            pole_forces=self.fine)
+                except MaglevkitError as exc:
+                    within = self._touchdown_within_step(gaps_c, rates_c, dt,
+                                                         float(times[k + 1]))
+                    if within is None:
+                        raise type(exc)(f"vehicle run at t = {t:.4f} s: {exc}") from None
+                    rec["voltage"][k] = np.nan
+                    return k, within
+                t5 = clock()
+                new_current = out.currents_A
+                psi_hat, integ = (np.asarray(o).ravel() for o in
+                                  f_upd(psi_hat, integ, u, current, new_current, gaps_c))
+                new_pts = out.pole_force_N if self.fine else out.circuit_force_N
+                assert new_pts is not None
+                f_bar = (0.5 * sides) * (force_pts + new_pts)
+                t6 = clock()
+                if k == k_pay:
+                    q_grav = self._payload_gravity(payload_fraction)
+                x_m = np.asarray(f_mech(x_m, f_bar, q_grav)).ravel()
+                t7 = clock()
+                if nm:
+                    gx = np.asarray(f_out(gx, x_pts, v, f_bar)).ravel()
+                t8 = clock()
+                current = new_current
+                force_c = out.circuit_force_N
+                force_pts = new_pts
+                timing["guideway"] += (t1 - t0) + (t8 - t7)
+                timing["other"] += (t3 - t1) + (t6 - t5)
+                timing["controllers"] += t4 - t3
+                timing["magnets"] += t5 - t4
+                timing["mechanics"] += t7 - t6
+                return None
+
+            outcome = run_steps(step, n_steps=n_steps, progress=progress)
+            last, touchdown, interrupted = outcome.last_step, outcome.event, outcome.interrupted
+            wall, cpu = outcome.wall_s, outcome.cpu_s
         n = last + 1
         times = times[:n]
         sl = slice(0, n)
@@ -1334,104 +1324,61 @@ class VehicleModel:
             p_all[:n_steps + 1, sp["keep"]] = keep
         else:
             first_k = np.full(times.shape, first0)
-        # two state vectors, each bound once to one of two buffers (ping-pong)
-        s_buf = [np.zeros(lay.n_state), np.zeros(lay.n_state)]
-        s0v = s_buf[0]
+        # the state at step 0
+        s0v = np.zeros(lay.n_state)
         s0v[st["x_mech"]] = x_m
         if nm:
             s0v[st["guideway"]] = np.concatenate([gstate.modal_displacement_m,
                                                   gstate.modal_velocity_m_per_s], axis=1).ravel()
         s0v[st["I_L"]], s0v[st["psi_hat"]], s0v[st["integral"]] = i_l, psi_hat, integ
         s0v[st["current"]], s0v[st["force"]] = current, force
-        r_all_rec = np.empty((n_rows, lay.n_record))
         consts = np.concatenate([[v], fail_t])
-        bufs: list[Any] = []
-        evals = []
-        for j in (0, 1):
-            buf, ev = fun.buffer()
-            buf.set_arg(0, memoryview(s_buf[j]))        # type: ignore[arg-type]
-            buf.set_res(0, memoryview(s_buf[1 - j]))    # type: ignore[arg-type]
-            buf.set_arg(2, memoryview(consts))          # type: ignore[arg-type]
-            bufs.append(buf)
-            evals.append(ev)
         i_min, i_max, i_bad = rl["gap_min"].start, rl["gap_max"].start, rl["n_bad"].start
         td_gap, land_gap = tr.touchdown_gap_m, tr.landing_gap_m
-        touchdown: tuple[str, float, float, str] | None = None
-        last = n_steps
-        t_call = 0.0
-        done = False
-        bar = _Progress(n_steps, enabled=progress)
-        clock = time.perf_counter
-        t_start = clock()
-        cpu0 = time.process_time()
-        interrupted = False
-        k0 = 0
-        try:
-            for blk in range(n_rows // nb):
-                k0 = blk * nb
-                j = blk & 1
-                buf = bufs[j]
-                buf.set_arg(1, memoryview(p_all[k0:k0 + nb]))   # type: ignore[arg-type]
-                rows = r_all_rec[k0:k0 + nb]
-                buf.set_res(1, memoryview(rows))                 # type: ignore[arg-type]
-                tc = clock()
-                evals[j]()
-                t_call += clock() - tc
-                events = ((rows[:, i_min] <= td_gap) | (rows[:, i_max] >= land_gap)
-                          | (rows[:, i_bad] != 0))
-                end = k0 + nb > n_steps
-                if not (end or events.any() or k0 <= k_out < k0 + nb):
-                    bar.update(k0 + nb)
-                    continue
-                for k in range(k0, min(k0 + nb, n_steps + 1)):
-                    row = r_all_rec[k]
-                    if k == k_out:
-                        raise OutOfRangeError(f"vehicle run at t = {times[k]:.4f} s: the train left "
-                                              f"the integrated spans {first_k[k]} ... "
-                                              f"{first_k[k] + n_sp - 1}")
-                    if row[i_min] <= td_gap or row[i_max] >= land_gap:
-                        gaps = row[rl["gap"]]
-                        if np.isfinite(gaps).all():
-                            closed = row[i_min] <= td_gap
-                            jj = int(np.argmin(gaps) if closed else np.argmax(gaps))
-                            touchdown = (names[jj], float(times[k]), float(gaps[jj]),
-                                         "closed" if closed else "landed")
-                            last = k
-                            done = True
-                            break
-                    if k == n_steps:
-                        done = True
-                        break
-                    if row[i_bad]:       # out of the maps or not finite: a touchdown within
-                        touchdown = self._touchdown_within_step(    # the step, or diagnose
-                            row[rl["gap"]], row[rl["gap_rate"]], dt, float(times[k + 1]))
-                        if touchdown is not None:
-                            last = k
-                            done = True
-                            break
-                        state = BankState(float(times[k]), row[rl["I_L"]].copy(),
-                                          row[rl["gap"]].copy())
-                        try:
-                            bank.step(state, dt, row[rl["voltage"]].copy(), row[rl["gap"]].copy(),
-                                      row[rl["gap_rate"]].copy())
-                        except MaglevkitError as exc:
-                            raise type(exc)(f"vehicle run at t = {times[k]:.4f} s: {exc}") from None
-                if done:
-                    break
-                bar.update(k0 + nb)
-        except KeyboardInterrupt:
-            # keep the blocks done (their events checked); the block under way is dropped
-            interrupted = True
-            last = k0 - 1
-            if last < 1:
-                bar.close(finished=False)
-                raise
-        wall = clock() - t_start
-        cpu = time.process_time() - cpu0
-        bar.close(finished=not interrupted)
+
+        def look(k0: int, rows: np.ndarray) -> bool:
+            """Any event in the block: a gap at a limit, a flagged circuit, the window."""
+            return bool(((rows[:, i_min] <= td_gap) | (rows[:, i_max] >= land_gap)
+                         | (rows[:, i_bad] != 0)).any() or k0 <= k_out < k0 + nb)
+
+        def check(k: int, row: np.ndarray, final: bool) -> tuple[int, Any] | None:
+            """The NumPy loop's order per step: the loads leaving the integrated spans,
+            touchdown, the end of the run, a circuit the kernel flagged (a touchdown
+            within the step, else diagnosed by the bank's own step, which raises)."""
+            if k == k_out:
+                raise OutOfRangeError(f"vehicle run at t = {times[k]:.4f} s: the train left "
+                                      f"the integrated spans {first_k[k]} ... "
+                                      f"{first_k[k] + n_sp - 1}")
+            if row[i_min] <= td_gap or row[i_max] >= land_gap:
+                gaps = row[rl["gap"]]
+                if np.isfinite(gaps).all():
+                    closed = row[i_min] <= td_gap
+                    jj = int(np.argmin(gaps) if closed else np.argmax(gaps))
+                    return k, (names[jj], float(times[k]), float(gaps[jj]),
+                               "closed" if closed else "landed")
+            if final or not row[i_bad]:
+                return None
+            within = self._touchdown_within_step(row[rl["gap"]], row[rl["gap_rate"]], dt,
+                                                 float(times[k + 1]))
+            if within is not None:
+                return k, within
+            state = BankState(float(times[k]), row[rl["I_L"]].copy(), row[rl["gap"]].copy())
+            try:
+                bank.step(state, dt, row[rl["voltage"]].copy(), row[rl["gap"]].copy(),
+                          row[rl["gap_rate"]].copy())
+            except MaglevkitError as exc:
+                raise type(exc)(f"vehicle run at t = {times[k]:.4f} s: {exc}") from None
+            return None
+
+        outcome, r_all_rec = run_blocks(fun, state=s0v, inputs=p_all, constants=consts,
+                                        n_steps=n_steps, n_record=lay.n_record,
+                                        block_steps=nb, look=look, check=check,
+                                        progress=progress)
+        last, touchdown, interrupted = outcome.last_step, outcome.event, outcome.interrupted
+        wall, cpu = outcome.wall_s, outcome.cpu_s
         timing.clear()
-        timing["compiled step"] = t_call
-        timing["other"] = max(wall - t_call, 0.0)
+        timing["compiled step"] = outcome.call_s
+        timing["other"] = max(wall - outcome.call_s, 0.0)
         n = last + 1
         rr = r_all_rec[:n]
         for key in ("gap", "current", "force", "deflection", "voltage"):
@@ -1582,41 +1529,6 @@ def _scaled_resistances(maps: Any, r_el: float, r_ec: float) -> Any:
         if factor is not None:
             ds[name] = ds[name].copy(data=ds[name].values * float(factor))
     return type(maps)(ds)
-
-
-class _Progress:
-    """Progress of a vehicle run on stderr (:class:`maglevkit._progress.ProgressReporter`:
-    a rich bar on a terminal, plain lines with the ETA in logs), fed every ~0.5 % of the
-    steps so that the time loop stays free of it."""
-
-    def __init__(self, total: int, *, enabled: bool) -> None:
-        self.enabled = enabled and total > 0
-        self.total = total
-        self._next = 0
-        self._done = 0
-        self._rep: Any = None
-        if self.enabled:
-            from .._progress import ProgressReporter
-
-            self._rep = ProgressReporter(total, "vehicle run (steps)")
-            self._rep.__enter__()
-
-    def update(self, k: int) -> None:
-        if self.enabled and k >= self._next:
-            k = min(k, self.total)
-            self._rep.advance(k - self._done)
-            self._done = k
-            self._next = k + max(1, self.total // 200)
-
-    def close(self, finished: bool = True) -> None:
-        """Close the bar (``finished``: the closing ``done`` line in plain mode)."""
-        if self.enabled:
-            self.enabled = False
-            if finished:
-                self._rep.advance(self.total - self._done)
-                self._rep.__exit__(None, None, None)
-            else:
-                self._rep.__exit__(KeyboardInterrupt, None, None)
 
 
 class VehicleRunInterrupted(KeyboardInterrupt):
