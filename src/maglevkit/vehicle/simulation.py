@@ -1532,15 +1532,16 @@ def _scaled_resistances(maps: Any, r_el: float, r_ec: float) -> Any:
 
 
 class VehicleRunInterrupted(KeyboardInterrupt):
-    """Ctrl-C during the time loop of :meth:`VehicleModel.run`: a ``KeyboardInterrupt``
-    carrying the run up to the last whole step (``run``, a :class:`VehicleRun` whose
-    dataset's ``interrupted`` attribute says where it stopped)."""
+    """Ctrl-C during the time loop of :meth:`VehicleModel.run` or
+    :meth:`~maglevkit.vehicle.crossrun.CrossSectionModel.run`: a ``KeyboardInterrupt``
+    carrying the run up to the last whole step (``run``, a :class:`VehicleRun` or a
+    ``CrossSectionRun``, whose dataset's ``interrupted`` attribute says where it stopped)."""
 
-    def __init__(self, run: VehicleRun) -> None:
+    def __init__(self, run: Any) -> None:
         super().__init__(run.dataset.attrs.get("interrupted", "interrupted"))
         self.run = run
 
-    def __reduce__(self) -> tuple[Any, tuple[VehicleRun]]:
+    def __reduce__(self) -> tuple[Any, tuple[Any]]:
         return (type(self), (self.run,))      # picklable (e.g. from a worker process)
 
 
