@@ -4,6 +4,7 @@ cross-section model's Ctrl-C on the shared runner."""
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from pathlib import Path
 from typing import Any
@@ -199,3 +200,27 @@ def test_cross_section_ctrl_c_keeps_the_run_up_to_there(
             continue
         np.testing.assert_array_equal(ds[name].values, ref[name].values[:n], err_msg=name)
     part.to_netcdf(tmp_path / "part.nc")
+
+
+@pytest.mark.slow
+def test_heave_pitch_mechanics_is_a_planar_multibody_checked_by_sympy() -> None:
+    """VehicleMechanics' matrices are its multibody description's (``system``), and the
+    multibody's own sympy.physics.mechanics derivation (exact rotations, Lagrange) gives
+    them too; the heave-pitch ``B`` is the multibody's ``-B`` (force points along -z).
+    ~15 s of sympy: slow; the fast check is test_vehicle's mechanics.derive_sympy on a
+    small train, which now checks the multibody-composed matrices."""
+    from maglevkit.vehicle.mechanics import VehicleMechanics
+    from maglevkit.vehicle.multibody import PlanarMultibody, derive_sympy
+
+    tr = load_vehicle()
+    tr = dataclasses.replace(tr, n_sections=1)
+    mech = VehicleMechanics(tr, [3.0, 9.0, 20.5], [0, 1, 2])
+    assert isinstance(mech.system, PlanarMultibody)
+    ref = derive_sympy(mech.system)
+    g = mech.gravity
+    for key, val, want in (("M", mech.M, ref["M"]), ("K", mech.K, ref["K"]),
+                           ("C", mech.C, ref["C"]), ("B", mech.B, -ref["B"]),
+                           ("Q_gravity", mech.Q_gravity, ref["G"] @ np.array([0.0, g]))):
+        # rounding of sums of products of ~1e6 numbers: 1e-12 of the largest entry
+        np.testing.assert_allclose(val, want, rtol=0, atol=1e-12 * np.abs(want).max(),
+                                   err_msg=key)
