@@ -298,7 +298,8 @@ class VehicleMechanics:
         a, bq = self.state_matrices(damping=damping)
         return exact_zoh_step(a, bq, dt_s)
 
-    def accelerations(self, q: np.ndarray, q_dot: np.ndarray, forces_N: np.ndarray) -> np.ndarray:
+    def accelerations(self, q: np.ndarray, q_dot: np.ndarray, forces_N: np.ndarray, *,
+                      gravity_force: np.ndarray | None = None) -> np.ndarray:
         """``q''`` from the equations of motion (forces: upward magnet forces per point).
 
         Parameters
@@ -309,13 +310,17 @@ class VehicleMechanics:
             Generalised velocities [m/s, rad/s].
         forces_N : array_like (..., n_points)
             Upward (attractive) magnet force at each force point [N].
+        gravity_force : array_like (..., n_dof), optional
+            Generalised gravity ``Q_g`` [N, N m] in place of :attr:`Q_gravity` (e.g. with
+            a payload step; keyword only).
 
         Returns
         -------
         ndarray (..., n_dof)
             ``q''`` [m/s^2, rad/s^2] (heave positive downward).  Inputs are not checked.
         """
-        rhs = (self.Q_gravity - np.asarray(q) @ self.K.T - np.asarray(q_dot) @ self.C.T
+        q_g = self.Q_gravity if gravity_force is None else np.asarray(gravity_force)
+        rhs = (q_g - np.asarray(q) @ self.K.T - np.asarray(q_dot) @ self.C.T
                - np.asarray(forces_N) @ self.B.T)
         return rhs / np.diag(self.M)
 

@@ -950,7 +950,6 @@ class VehicleModel:
         rec_mid = np.zeros((n_steps + 1, gw.n_spans))
         rec_span = np.zeros((n_steps + 1, gw.n_spans), dtype=int)
         rec_fp = np.empty((n_steps + 1, npt))
-        minv = 1.0 / np.diag(mech.M)
         timing = dict.fromkeys(("magnets", "mechanics", "guideway", "controllers", "other"), 0.0)
         ctl_times: list[float] = []
         ctl_cpu: list[float] = []
@@ -1102,8 +1101,8 @@ class VehicleModel:
             # row k is the state at t_k, whose acceleration sees the load from then on
             q_g_all[times >= payload_step_s - 1e-9 * dt] = self._payload_gravity(
                 payload_fraction)
-        qdd_all = minv * (q_g_all - q_all @ mech.K.T - rec_qd[sl] @ mech.C.T
-                          - (rec_fp[sl] * sides) @ mech.B.T)
+        qdd_all = mech.accelerations(q_all, rec_qd[sl], rec_fp[sl] * sides,
+                                     gravity_force=q_g_all)
         floor = np.asarray(floor_points, dtype=float)
         acc_floor = (qdd_all[:, 0:2 * secs:2, None]
                      + qdd_all[:, 1:2 * secs:2, None] * floor[None, None, :] * tr.section_length_m)
