@@ -224,3 +224,19 @@ def test_heave_pitch_mechanics_is_a_planar_multibody_checked_by_sympy() -> None:
         # rounding of sums of products of ~1e6 numbers: 1e-12 of the largest entry
         np.testing.assert_allclose(val, want, rtol=0, atol=1e-12 * np.abs(want).max(),
                                    err_msg=key)
+
+
+def test_part_evaluator_equals_a_plain_call_and_densifies_structural_zeros() -> None:
+    from maglevkit.vehicle.framework import PartEvaluator
+
+    x, y = ca.MX.sym("x", 3), ca.MX.sym("y")
+    f = ca.Function("f", [x, y], [x * y + 1.0, ca.MX.zeros(3), ca.sin(x)])
+    ev = PartEvaluator(f)
+    a = np.array([0.5, -1.0, 2.0])
+    got = ev(a, 3.0)
+    want = [np.asarray(o, dtype=float).ravel() for o in f(a, 3.0)]
+    assert [g.shape for g in got] == [(3,), (3,), (3,)]
+    for g, w in zip(got, want, strict=True):
+        np.testing.assert_array_equal(g, w)
+    got[0][0] = 99.0                        # outputs are the caller's copies
+    np.testing.assert_array_equal(ev(a, 3.0)[0], want[0])
