@@ -184,10 +184,9 @@ class VehicleMechanics:
             1 in the body's heave column, ``xi - xi_b`` [m] in its pitch column.
         """
         x = np.atleast_1d(np.asarray(xi_m, dtype=float))
-        jac = np.zeros((x.size, self.n_dof))
-        jac[:, 2 * body] = 1.0
-        jac[:, 2 * body + 1] = x - self.body_centres_m[body]
-        return jac
+        name = self.body_names[body]     # the multibody description's z rows
+        return np.array([self.system.point_jacobian(name, (float(xi), 0.0))[1] for xi in x]
+                        ).reshape(x.size, self.n_dof)
 
     def _assemble(self) -> None:
         """The matrices from the multibody description (:class:`PlanarMultibody`): bodies
