@@ -52,7 +52,7 @@ from ..errors import InputError, MaglevkitWarning
 from ..plant import STANDARD_GRAVITY, chopper_floor
 from ..validation import Plausible, check_plausible, real_number
 from .crosssection import CrossSectionData, CrossSectionMechanics, track_field_path
-from .framework import run_blocks, run_steps
+from .framework import PartEvaluator, run_blocks, run_steps
 from .simulation import (
     Failure,
     VehicleRunInterrupted,
@@ -626,6 +626,38 @@ class CrossSectionModel:
         """
         return self.mechanics.system.discretize(dt_s, damping=damping)
 
+    def _step_parts(self, dt: float) -> dict[str, Any]:
+        """The step's parts (:func:`~maglevkit.vehicle.stepkernel.build_vehicle_parts`) for
+        the slice: every circuit a force point of the rigid guideway (force matrix
+        ``gap_matrix^T`` per circuit, so that ``s = s_0 + gap_matrix q - r`` and the
+        mechanics' load is ``Q_g + B F``), the cascade gains per circuit, the guidance
+        pairs' integrators fed the differential gap error."""
+        from .stepkernel import build_vehicle_parts
+
+        bank = self.bank
+        s = self.mechanics.system
+        nq, nc = s.n_dof, bank.n_circuits
+        circ = np.repeat(np.arange(4), 2)
+        gm = s.gap_matrix[circ]                            # (nc, nq): every circuit's gap
+        ad, bd = self.discretize(dt)
+        designs = [self.designs[n.split("_")[0]] for n in self.member_names]
+        gains = {k: np.array([getattr(designs[c], k) for c in circ])
+                 for k in ("kp_per_m", "kd_s_per_m", "ki_per_m_s", "kflux_per_s")}
+        psi0 = np.concatenate([np.asarray(d.flux_bias_Wb) for d in designs])
+        res = np.concatenate([np.asarray(d.resistances_ohm) for d in designs])
+        integ = np.eye(nc)
+        for a, b in ((4, 6), (5, 7)):                     # guidance pairs left/right
+            integ[a, a] = integ[b, b] = 0.5
+            integ[a, b] = integ[b, a] = -0.5
+        return build_vehicle_parts(
+            dt=dt, nominal_gap_m=self.s0, span_length_m=1.0, origin_m=0.0,
+            wavenumbers=np.zeros(0), guideway_ad=np.zeros((0, 0)),
+            guideway_bd=np.zeros((0, 0)), n_spans=0, mech_ad=ad, mech_bd=bd,
+            gravity_force=np.zeros(nq), force_matrix=gm.T, gains=gains, flux_bias_Wb=psi0,
+            resistance_ohm=res, eddy_resistance_ohm=bank.eddy_resistance_ohm,
+            voltage_limit_V=self.voltage_limit_V, integral_projection=integ,
+            midspan_shape=np.zeros(0))
+
     # ------------------------------------------------------------------ the run
     def run(self, *, speed_m_per_s: float, duration_s: float, dt_s: float = 1e-3,
             curve: TransitionCurve | None = None, crosswind: Crosswind | None = None,
@@ -818,10 +850,13 @@ class CrossSectionModel:
 
         s = self.mechanics.system
         bank = self.bank
-        ad, bd = self.discretize(dt)
         nq = s.n_dof
         x = np.concatenate([self.trim_q, np.zeros(nq)])
-        gm = s.gap_matrix
+        # gaps and the mechanics' step: the step's parts (as the compiled step's)
+        parts = self._step_parts(dt)
+        f_in = PartEvaluator(parts["guideway_in"])
+        f_mech = PartEvaluator(parts["mechanics_loaded"])
+        no_guideway = np.zeros(0)
         state = bank.initial_state(gaps_m=self.s0, currents_A=np.repeat(self.trim_current_A, 2))
         stepper = bank.stepper(state, dt)
         ctl = self.controllers()
@@ -836,14 +871,17 @@ class CrossSectionModel:
         rec_x = np.empty((n + 1, 2 * nq))
         rec_acc = np.empty((n + 1, nq))
         gap_circ = np.repeat(np.arange(4), 2)
+        x_circ = np.zeros(nc)
         force = stepper.member_force_N.copy()
+        force_c = stepper.circuit_force_N.copy()
 
         def step(k: int) -> tuple[int, Any] | None:
             """Record the state at step ``k`` and advance it (None), or stop there."""
-            nonlocal x, force
+            nonlocal x, force, force_c
             q, qd = x[:nq], x[nq:]
-            gaps = self.s0 + gm @ q - r_mag[k]
-            rates = gm @ qd - v * rx_mag[k]
+            gaps_c, rates_c = f_in(x, no_guideway, x_circ, r_mag[k][gap_circ],
+                                   rx_mag[k][gap_circ], v)[:2]
+            gaps, rates = gaps_c[::2], rates_c[::2]          # one per magnet
             rec_gap[k] = gaps
             rec_x[k] = x
             rec_force[k] = stepper.circuit_force_N
@@ -875,11 +913,12 @@ class CrossSectionModel:
             u[chop] = chopper_floor(u[chop], il[chop], r_ec[chop])
             u[fail_t <= t[k]] = 0.0
             rec_u[k] = u
-            f_start = force
-            stepper.advance(voltages_V=u, gaps_m=gaps[gap_circ], gap_rates_m_per_s=rates[gap_circ])
+            f_start = force_c
+            stepper.advance(voltages_V=u, gaps_m=gaps_c, gap_rates_m_per_s=rates_c)
             force = stepper.member_force_N.copy()
-            qgen = s.B @ (0.5 * (f_start + force)) + s.G @ field_mid[k] + s.Q_preload + q_ext[k]
-            x = ad @ x + bd @ qgen
+            force_c = stepper.circuit_force_N.copy()
+            (x,) = f_mech(x, 0.5 * (f_start + force_c),
+                          s.G @ field_mid[k] + s.Q_preload + q_ext[k])
             return None
 
         outcome = run_steps(step, n_steps=n, progress=progress,
@@ -897,9 +936,9 @@ class CrossSectionModel:
         chopper and the failures; the bank's step (:meth:`MagnetBank.step_function`); the
         flux estimates and integrators; the mechanics' exact ZOH step with
         ``Q = B S F_bar + Q_pre + Q_t`` (``S`` sums a magnet's circuits, ``Q_t = G a +
-        Q_wind`` at mid-step, a per-step input).  The controllers and their update are the
-        heave-pitch step's CasADi functions (:func:`~maglevkit.vehicle.stepkernel.
-        build_vehicle_step` ``parts``), not a copy of the cascade law: per circuit, the
+        Q_wind`` at mid-step, a per-step input).  Gaps, controllers, their update and the
+        mechanics' step are the vehicle step's parts (:func:`~maglevkit.vehicle.
+        stepkernel.build_vehicle_parts`, as the heave-pitch step's), not copies: per circuit, the
         guidance integrators fed the differential gap error ``(s_own - s_other)/2``
         through the integral matrix.  Per circuit, with every gap sum of a guidance pair
         ``2 s_0`` (a rigid chassis and one rail profile for both rails), the guidance
@@ -923,7 +962,7 @@ class CrossSectionModel:
         """
         import casadi as ca
 
-        from .stepkernel import build_vehicle_step, pack_slices
+        from .stepkernel import pack_slices
 
         bank = self.bank
         if self.magnet_kind != "reduced":
@@ -933,28 +972,9 @@ class CrossSectionModel:
         dt = real_number(dt_s, "dt_s", "s", positive=True)
         lib = bank.compiled_step_library(dt) if lanes else None
         bank_step = lib[0] if lib is not None else bank.step_function(dt)
-        circ = np.repeat(np.arange(4), 2)
-        gm = s.gap_matrix[circ]                            # (nc, nq): every circuit's gap
-        ad, bd = self.discretize(dt)
-        designs = [self.designs[n.split("_")[0]] for n in self.member_names]
-        gains = {k: np.array([getattr(designs[c], k) for c in circ])
-                 for k in ("kp_per_m", "kd_s_per_m", "ki_per_m_s", "kflux_per_s")}
-        psi0 = np.concatenate([np.asarray(d.flux_bias_Wb) for d in designs])
-        res = np.concatenate([np.asarray(d.resistances_ohm) for d in designs])
-        integ = np.eye(nc)
-        for a, b in ((4, 6), (5, 7)):                     # guidance pairs left/right
-            integ[a, a] = integ[b, b] = 0.5
-            integ[a, b] = integ[b, a] = -0.5
-        parts = build_vehicle_step(
-            bank_step=bank_step, dt=dt, nominal_gap_m=self.s0, sides=1.0,
-            span_length_m=1.0, origin_m=0.0, wavenumbers=np.zeros(0),
-            guideway_ad=np.zeros((0, 0)), guideway_bd=np.zeros((0, 0)), n_spans=0,
-            mech_ad=ad, mech_bd=bd, gravity_force=np.zeros(nq), force_matrix=-gm.T,
-            gains=gains, flux_bias_Wb=psi0, resistance_ohm=res,
-            eddy_resistance_ohm=bank.eddy_resistance_ohm,
-            voltage_limit_V=self.voltage_limit_V, integral_projection=integ,
-            midspan_shape=np.zeros(0), block_steps=1).parts
-        f_ctl, f_upd = parts["controllers"], parts["controller_update"]
+        parts = self._step_parts(dt)
+        f_in, f_ctl, f_upd, f_mech = (parts[k] for k in (
+            "guideway_in", "controllers", "controller_update", "mechanics_loaded"))
         st = pack_slices([("x", 2 * nq), ("I_L", nc), ("psi_hat", nc), ("integral", nc),
                           ("current", nc), ("force", nc)])
         pi = pack_slices([("r", nc), ("r_x", nc), ("Q_t", nq), ("t", 1)])
@@ -965,10 +985,9 @@ class CrossSectionModel:
         x, il, psi, itg, cur, frc = (S[st[k]] for k in ("x", "I_L", "psi_hat", "integral",
                                                          "current", "force"))
         v, fail_t = C[0], C[1:]
-        q, qd = x[:nq], x[nq:]
-        gmd = ca.DM(gm)
-        gaps = self.s0 + ca.mtimes(gmd, q) - P[pi["r"]]
-        rates = ca.mtimes(gmd, qd) - v * P[pi["r_x"]]
+        # gaps and rates of every circuit (the rigid guideway's part: no deflection)
+        gaps, rates = f_in(x, ca.DM.zeros(0), ca.DM.zeros(nc), P[pi["r"]], P[pi["r_x"]],
+                           v)[:2]
         u = f_ctl.call({"gap": gaps, "gap_rate": rates, "I_L": il, "current": cur,
                         "psi_hat": psi, "integral": itg, "t": P[pi["t"]],
                         "fail_t": fail_t})["U"]
@@ -976,11 +995,8 @@ class CrossSectionModel:
         il_n, cur_n, frc_n, n_bad = (bout[k] for k in ("I_L_next", "I", "F", "n_bad"))
         upd = f_upd.call({"psi_hat": psi, "integral": itg, "U": u, "current": cur,
                           "current_next": cur_n, "gap": gaps})
-        summ = np.zeros((4, nc))
-        summ[circ, np.arange(nc)] = 1.0
-        bmat = ca.DM(s.B @ summ)                          # circuit forces -> Q
-        qgen = (ca.mtimes(bmat, 0.5 * (frc + frc_n)) + ca.DM(s.Q_preload) + P[pi["Q_t"]])
-        x_n = ca.mtimes(ca.DM(ad), x) + ca.mtimes(ca.DM(bd), qgen)
+        # the mechanics' ZOH step with the load Q_g = Q_pre + Q_t (field and wind, per step)
+        x_n = f_mech(x, 0.5 * (frc + frc_n), ca.DM(s.Q_preload) + P[pi["Q_t"]])
         s_next = ca.vertcat(x_n, il_n, upd["psi_hat_next"], upd["integral_next"], cur_n, frc_n)
         rec = ca.vertcat(gaps, rates, cur, frc, il, x, u, n_bad)
         step = ca.Function("maglevkit_cross_section_step", [S, P, C], [s_next, rec])
