@@ -3,8 +3,11 @@
 The step of :meth:`maglevkit.vehicle.VehicleModel.run` written as one CasADi function and
 compiled to machine code (:func:`maglevkit.models.compiled.compile_function`, disk cache),
 so that a time step is one call instead of some fifty NumPy operations on small arrays.
-It is the same arithmetic as the NumPy loop of ``simulation.py`` (the reference, kept as
-``loop="python"``), in the same order per step::
+Each law of the step is written once, as a CasADi function of
+:func:`build_vehicle_parts`; :func:`build_vehicle_step` composes them with the bank's step,
+and the reference loop of ``simulation.py`` (``loop="python"``: detailed magnets, other
+controllers, payload steps) and the cross-section model evaluate the same functions.  Per
+step, in this order::
 
     gaps      s = s0 + B^T q - w(x) - r,   s' = B^T q' - (w_t + v w_x)(x) - v r_x
     control   U = clip(R I + k_psi (psi0 (1 + rho) - psi_hat)), U >= -R_ec I_L, failures
