@@ -578,6 +578,39 @@ class Guideway:
         qd[rows] = 0.0
         return GuidewayState(state.time_s, k_new, q, qd)
 
+    def window_schedule(self, rear_m: Any, front_m: Any, *, first_span: int
+                        ) -> tuple[np.ndarray, np.ndarray, int]:
+        """The moving system boundary over a whole run, computed once (both vehicle loops).
+
+        At every step the window starts at the span under the rearmost load (never moving
+        back; fixed without the moving boundary); the ring rows of the spans it leaves
+        are reset to rest at that step, the rule of :meth:`advance`.
+
+        Parameters
+        ----------
+        rear_m, front_m : array_like (n_steps,)
+            Rearmost and foremost load position [m] of every step (the foremost including
+            the half-step advance the modal update uses).
+        first_span : int
+            First span of the window at the first step.
+
+        Returns
+        -------
+        (first_k, keep, k_out) : ndarray (n_steps,) of int, ndarray (n_steps, n_spans), int
+            The window's first span per step; 1.0 for a ring row kept, 0.0 for one reset
+            at that step; the first step whose loads leave the window (-1: none).
+        """
+        lo = self.span_index(rear_m)
+        hi = self.span_index(front_m)
+        first_k = (np.maximum.accumulate(np.maximum(lo, int(first_span)))
+                   if self.moving_boundary else np.full(lo.shape, int(first_span)))
+        out = (lo < first_k) | (hi > first_k + self.n_spans - 1)
+        keep = np.ones((lo.size, self.n_spans))
+        for kr in (np.flatnonzero(np.diff(first_k) > 0) + 1).tolist():
+            old = int(first_k[kr - 1])
+            keep[kr, np.arange(old, min(int(first_k[kr]), old + self.n_spans)) % self.n_spans] = 0.0
+        return first_k, keep, int(np.argmax(out)) if out.any() else -1
+
     # ------------------------------------------------------------------ loads and outputs
     def _positions(self, positions_m: Any) -> np.ndarray:
         x = np.atleast_1d(real_array(positions_m, "positions_m", "m"))
