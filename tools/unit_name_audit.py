@@ -111,6 +111,8 @@ ALLOWED: dict[str, str] = {
     "resistance_scale": "a factor on R_el (dimensionless)",
     "external_force_fraction": "a fraction of the weight (dimensionless)",
     "real_time_factor": "a ratio of times (dimensionless)",
+    "gravity_force": "generalised forces Q of the mechanics' coordinates: N for a translation, "
+                     "N m for a rotation (mixed units; the docstring says which)",
     # signals are unit-agnostic: the same Step drives a voltage [V] or a gap [m]
 }
 
