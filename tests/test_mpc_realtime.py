@@ -4,6 +4,8 @@ same closed-loop runs, its target calculation against the Python Newton, its fal
 
 from __future__ import annotations
 
+import copy
+
 import numpy as np
 import pytest
 
@@ -183,3 +185,18 @@ def test_batch_equals_each_controllers_own_update(setup) -> None:  # type: ignor
     # alone: equal to rounding (measured 0 V); 1e-9 V is far below the 1e-6 V between the
     # condensed and the sparse reference QP
     assert du_max < 1e-9
+
+
+def test_batch_refuses_bad_controller_lists(setup) -> None:  # type: ignore[no-untyped-def]
+    """No controllers, other objects, the same object twice, other sample times."""
+    _, _, _, _, ref, fast = setup
+    with pytest.raises(mk.ParameterError, match="non-empty sequence of RealTimeMPC"):
+        RealTimeMPCBatch([])
+    with pytest.raises(mk.ParameterError, match="non-empty sequence of RealTimeMPC"):
+        RealTimeMPCBatch([fast, ref])
+    with pytest.raises(mk.ParameterError, match="appears twice"):
+        RealTimeMPCBatch([fast, fast])
+    other = copy.copy(fast)          # another object with another sample time (no compile)
+    other.sample_time_s = 2e-3
+    with pytest.raises(mk.ParameterError, match="sample times differ"):
+        RealTimeMPCBatch([fast, other])
