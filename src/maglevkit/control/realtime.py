@@ -96,8 +96,9 @@ class RealTimeMPC(OffsetFreeMPC):
         As :class:`~maglevkit.control.mpc.OffsetFreeMPC` (voltage limit [V], soft
         constraints [m], [A], weights, EKF options, initial ``[x; d]``).
     qp_solver : str
-        Dense QP solver of the condensed QP, one of :data:`DENSE_QP_SOLVERS` (default
-        qpOASES, hot-started; the others for comparison).
+        Dense QP solver of the condensed QP where the compiled active-set guess is not its
+        solution, one of :data:`DENSE_QP_SOLVERS` (default qpOASES, hot-started; the
+        others for comparison).
 
     Notes
     -----
