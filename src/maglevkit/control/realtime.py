@@ -816,8 +816,8 @@ class RealTimeMPCBatch:
             nx = gd["nx"]
             ug = (b[2][:, nx] + z[:, 0]) * gd["su"]
             lim = gd["ulim"]
-            if (np.abs(ug) > lim * (1 + 1e-6)).any():
-                r = int(np.flatnonzero(np.abs(ug) > lim * (1 + 1e-6))[0])
+            if not (np.abs(ug) <= lim * (1 + 1e-6)).all():        # also for NaN
+                r = int(np.flatnonzero(~(np.abs(ug) <= lim * (1 + 1e-6)))[0])
                 raise SolverError("the MPC solution violates the voltage limit", time=time_s,
                                   state={"controller": int(idx[r]), "u": float(ug[r])},
                                   reason="QP tolerance too loose")
