@@ -283,7 +283,8 @@ class VehicleRun:
         ``"compiled"`` or ``"python"``: which implementation of the step ran.
     controller_update_time_s : ndarray
         Wall time of every update of the controllers other than the vectorised cascade
-        [s] (one entry per circuit and sample; empty for the cascade).
+        [s] (one entry per circuit and sample; for ``controller="mpc"`` one entry per
+        sample, all circuits' NMPC updates in one call; empty for the cascade).
     controller_update_cpu_time_s : ndarray
         The same updates' CPU (thread) time [s], less sensitive to a busy machine.
     """
@@ -1414,9 +1415,19 @@ class VehicleModel:
         if self.controller_kind == "mpc":
             gaps, rates = s0 + self.integral_projection @ (gaps - s0), \
                 self.integral_projection @ rates
-        for j in idx.tolist():
-            ctls[j].reset(Measurement(0.0, float(gaps[j]), float(rates[j]),
-                                      current[j:j + 1].copy(), s0), sample_time_s=ts)
+        first = [Measurement(0.0, float(gaps[j]), float(rates[j]), current[j:j + 1].copy(), s0)
+                 for j in idx.tolist()]
+        if self.controller_kind == "mpc":
+            # every circuit's NMPC in one compiled call per sample (built once per model)
+            batch = getattr(self, "mpc_batch", None)
+            if batch is None:
+                from ..control.realtime import RealTimeMPCBatch
+
+                batch = self.mpc_batch = RealTimeMPCBatch([ctls[j] for j in idx.tolist()])
+            batch.reset(first, sample_time_s=ts)
+            return idx, hold, np.zeros(self.bank.n_circuits), [batch]
+        for j, meas in zip(idx.tolist(), first, strict=True):
+            ctls[j].reset(meas, sample_time_s=ts)
         return idx, hold, np.zeros(self.bank.n_circuits), [ctls[j] for j in idx.tolist()]
 
     def _initial_gap_rates(self, v: float, r_x: np.ndarray, x_pts: np.ndarray,
@@ -1455,6 +1466,18 @@ class VehicleModel:
             rates = proj @ rates
         clock, cpu = time.perf_counter, time.thread_time
         ua = applied.mean(axis=0) if applied.shape[0] else None
+        if self.controller_kind == "mpc":       # RealTimeMPCBatch: one call, every circuit
+            t0, c0 = clock(), cpu()
+            try:
+                u_out[idx] = ctls[0].update(gaps[idx], current[idx], refs[idx],
+                                            None if ua is None else ua[idx], time_s=float(t))
+            except MaglevkitError as exc:
+                j = int(idx[int(getattr(exc, "state", {}).get("controller", 0))])
+                raise type(exc)(f"vehicle run at t = {t:.4f} s, controller of circuit "
+                                f"{self.bank.circuit_names[j]!r}: {exc}") from None
+            times.append(clock() - t0)
+            times_cpu.append(cpu() - c0)
+            return
         for c, j in zip(ctls, idx.tolist(), strict=True):
             m = Measurement(float(t), float(gaps[j]), float(rates[j]), current[j:j + 1].copy(),
                             float(refs[j]),
