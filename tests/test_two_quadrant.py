@@ -23,14 +23,14 @@ START_GAP = 0.007        # 3 mm below the reference at the design current: far t
 
 @pytest.fixture(scope="module")
 def plant(u_magnet: mk.Magnet):  # type: ignore[no-untyped-def]
-    maps = mk.build_maps(u_magnet, gaps=np.linspace(0.004, 0.02, 17),
-                         currents=np.linspace(0, 80, 33), progress=False)
-    f0 = float(mk.solve_statics(u_magnet, gaps=S0, currents=20.0).force_N)
+    maps = mk.build_maps(u_magnet, gaps_m=np.linspace(0.004, 0.02, 17),
+                         currents_A=np.linspace(0, 80, 33), progress=False)
+    f0 = float(mk.solve_statics(u_magnet, gaps_m=S0, currents_A=20.0).force_N)
     return maps, f0, HeaveMass(f0 / STANDARD_GRAVITY)
 
 
 def _cascade_run(u_magnet, maps, veh, design, freewheel):  # type: ignore[no-untyped-def]
-    psi = np.atleast_1d(mk.solve_statics(u_magnet, gaps=START_GAP, currents=20.0)
+    psi = np.atleast_1d(mk.solve_statics(u_magnet, gaps_m=START_GAP, currents_A=20.0)
                         .flux_linkage_Wb)
     return closed_loop(mk.CurrentModel(maps, freewheel=freewheel), veh, design,
                        duration_s=0.1, dt_s=1e-3, initial_gap_m=START_GAP,
