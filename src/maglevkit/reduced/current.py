@@ -48,7 +48,7 @@ import numpy as np
 
 from ..errors import InputError, OutOfRangeError, SolverError
 from ..models.compiled import COMPILE_MODES, BoundCall
-from ..models.inputs import check_initial_choice, check_step, simulation_inputs
+from ..models.inputs import check_initial_choice, check_step, per_name_values, simulation_inputs
 from ..validation import flag, real_array, renamed_keywords
 from .core import (
     EXTRA_CELLS,
@@ -1194,20 +1194,23 @@ class CurrentModel:
                               else initial_currents, self.circuit_names, "initial_currents")
             e0 = np.zeros(self.n_circuits * self._n_e)    # steady state: I_k = 0
         s = self.substitute_gaps(g)
-        self._check_range(s, np.broadcast_to(i0, s.shape), times)
         sd = self.substitute_gaps(secant)
-        if self._use_tables:
-            run = self._run_tables(times, s, u, sd, i0)
-            if run is not None:
-                il, coil_t, fc = run
-                final = CurrentModelState(float(times[-1]), il[-1].copy(), g[-1].copy(), None)
-                return ReducedSimulation(
-                    time_s=times, gaps_m=g, gap_rates_m_per_s=np.vstack((secant, secant[-1:])),
-                    voltages_V=np.vstack((u[:-1], u[-2:-1])), currents_A=coil_t,
-                    inductor_currents_A=il, circuit_force_N=fc,
-                    pole_force_N=fc @ self._share.T, force_N=fc.sum(axis=1),
-                    gap_names=self.gap_names, circuit_names=self.circuit_names,
-                    final_state=final)
+        # the table kernel flags every step whose gap path or currents leave the maps (the
+        # same bounds with the same allowances as the check below), so a run it finishes
+        # needs no check of its own; a flagged run takes the checked B-spline path
+        run = self._run_tables(times, s, u, sd, i0) if self._use_tables else None
+        if run is None:
+            self._check_range(s, np.broadcast_to(i0, s.shape), times)
+        else:
+            il, coil_t, fc = run
+            final = CurrentModelState(float(times[-1]), il[-1].copy(), g[-1].copy(), None)
+            return ReducedSimulation(
+                time_s=times, gaps_m=g, gap_rates_m_per_s=np.vstack((secant, secant[-1:])),
+                voltages_V=np.vstack((u[:-1], u[-2:-1])), currents_A=coil_t,
+                inductor_currents_A=il, circuit_force_N=fc,
+                pole_force_N=fc @ self._share.T, force_N=fc.sum(axis=1),
+                gap_names=self.gap_names, circuit_names=self.circuit_names,
+                final_state=final)
         xs, outs = self._integrate(times, np.concatenate([i0, s[0], e0]),
                                    np.concatenate([u[:-1], sd], axis=1).T)
         nc = self.n_circuits
@@ -1443,25 +1446,16 @@ def _last_line(text: str) -> str:
     return lines[-1] if lines else text
 
 
+_UNITS = {"voltages": "V", "voltage_V": "V", "currents": "A", "current_A": "A",
+          "initial_currents": "A"}
+
+
 def _per_circuit(value: Any, names: tuple[str, ...], what: str) -> np.ndarray:
-    if isinstance(value, dict):
-        missing = [n for n in names if n not in value]
-        unknown = sorted(set(value) - set(names))
-        if missing or unknown:
-            raise InputError(f"{what}: give one value per circuit {list(names)} "
-                             f"(missing {missing}, unknown {unknown})")
-        value = [value[n] for n in names]
-    arr = real_array(value, what)          # no bools, strings, NaN or inf
-    if arr.ndim == 0:
-        arr = np.full(len(names), float(arr))
-    if arr.shape != (len(names),):
-        raise InputError(f"{what}: expected {len(names)} values (circuits {list(names)}), "
-                         f"got shape {arr.shape}")
-    return arr
+    """One finite value per circuit (:func:`~maglevkit.models.inputs.per_name_values`)."""
+    return per_name_values(value, names, what, _UNITS.get(what, ""))
 
 
 def _per_gap(value: Any, names: tuple[str, ...], *, positive: bool) -> np.ndarray:
-    arr = _per_circuit(value, names, "gaps" if positive else "gap_rates")
-    if positive and (arr <= 0).any():
-        raise InputError(f"gaps must be > 0 m, got {arr}")
-    return arr
+    """Pole gaps [m] (> 0) or gap rates [m/s] per gap (the same converter)."""
+    return (per_name_values(value, names, "gaps", "m", kind="gap", positive=True) if positive
+            else per_name_values(value, names, "gap_rates", "m/s", kind="gap"))

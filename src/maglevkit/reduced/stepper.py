@@ -29,7 +29,7 @@ import numpy as np
 
 from ..errors import InputError
 from ..models.compiled import BoundCall
-from ..models.inputs import check_step
+from ..models.inputs import check_step, per_name_values
 from ..validation import renamed_keywords
 
 if TYPE_CHECKING:
@@ -251,7 +251,8 @@ class BankStepper:
     def _convert(self, value: Any, names: tuple[str, ...], what: str, unit: str) -> np.ndarray:
         # as MagnetBank.step converts: non-finite values pass on the fast path, where the
         # kernel flags them and the step is diagnosed as step diagnoses it
-        return self._bank._vector(value, names, what, unit, not self._fast)
+        return per_name_values(value, names, what, unit, finite=not self._fast,
+                               kind="gap input" if what.startswith("gap") else "circuit")
 
     def _write_inputs(self, voltages: Any, gaps: Any, gap_rates: Any) -> None:
         """Convert the given inputs, then write them (a refused one writes nothing)."""
