@@ -41,13 +41,14 @@ from __future__ import annotations
 import math
 import warnings
 from dataclasses import dataclass
+from pathlib import Path
 from typing import TYPE_CHECKING, Any, TypeVar
 
 import casadi as ca
 import numpy as np
 
 from ..errors import InputError, OutOfRangeError, SolverError
-from ..models.compiled import COMPILE_MODES, BoundCall
+from ..models.compiled import COMPILE_MODES, DEFAULT_FLAGS, BoundCall, compile_library
 from ..models.inputs import check_initial_choice, check_step, per_name_values, simulation_inputs
 from ..validation import flag, real_array, renamed_keywords
 from .core import (
@@ -529,6 +530,7 @@ class CurrentModel:
                             and not self.motion_eddy)
         self._bank: Any = None
         self._table_steps: dict[float, _TableStep] = {}
+        self._input_shapes = ((self.n_circuits,), (len(self.gap_names),))
 
     # ------------------------------------------------------------------ helpers
     @property
@@ -1058,18 +1060,18 @@ class CurrentModel:
             return None                        # not a state of this model: say so there
         if not (type(dt) is float and 0.0 < dt < math.inf):
             dt = check_step(dt)
-        nc, ng = self.n_circuits, len(self.gap_names)
+        shape_c, shape_g = self._input_shapes
         u = (voltages if type(voltages) is np.ndarray and voltages.dtype == np.float64
-             and voltages.shape == (nc,) else _per_circuit(voltages, self.circuit_names,
-                                                           "voltages"))
+             and voltages.shape == shape_c else _per_circuit(voltages, self.circuit_names,
+                                                             "voltages"))
         g = (state.gaps_m if gaps is None else gaps if type(gaps) is np.ndarray
-             and gaps.dtype == np.float64 and gaps.shape == (ng,)
+             and gaps.dtype == np.float64 and gaps.shape == shape_g
              else _per_gap(gaps, self.gap_names, positive=True))
-        if type(gap_rates) is float:
-            gd = np.full(ng, gap_rates)
-        elif type(gap_rates) is np.ndarray and gap_rates.dtype == np.float64 and \
-                gap_rates.shape == (ng,):
+        if type(gap_rates) is np.ndarray and gap_rates.dtype == np.float64 and \
+                gap_rates.shape == shape_g:
             gd = gap_rates
+        elif type(gap_rates) is float:
+            gd = np.full(shape_g, gap_rates)
         else:
             gd = _per_gap(gap_rates, self.gap_names, positive=False)
         call = self._table_steps.get(dt)
@@ -1077,7 +1079,9 @@ class CurrentModel:
             bank = self._table_bank()
             if bank is None:
                 return None
-            call = _TableStep(bank.step_kernel(dt), self._avg, self._share)
+            lanes = bank.compiled_step_library(dt)
+            call = (_TableStep(bank.step_kernel(dt), self._avg, self._share) if lanes is None
+                    else _TableStep(lanes[0], self._avg, self._share, lanes[1]))
             if len(self._table_steps) > 16:
                 self._table_steps.clear()
             self._table_steps[dt] = call
@@ -1260,7 +1264,8 @@ class _TableStep:
     gaps, or None when the step is flagged.
     """
 
-    def __init__(self, kernel: ca.Function, avg: np.ndarray, share: np.ndarray) -> None:
+    def __init__(self, kernel: ca.Function, avg: np.ndarray, share: np.ndarray,
+                 library: Path | None = None) -> None:
         nc, ng = avg.shape
         x, u = ca.MX.sym("I_L", nc), ca.MX.sym("U", nc)
         g, gd, h = ca.MX.sym("gaps", ng), ca.MX.sym("gap_rates", ng), ca.MX.sym("h")
@@ -1271,7 +1276,17 @@ class _TableStep:
         force = res["F"]
         outs = [res["I_L_next"], res["I"], force, ca.mtimes(ca.DM(share), force),
                 res["member_F"], g1, res["I_L_next"], flag]
-        f = ca.Function("current_model_table_step", [x, g, u, gd, h], outs)
+        f = ca.Function(f"maglevkit_cm_{kernel.name()}", [x, g, u, gd, h], outs)
+        if library is not None:
+            # ``kernel`` is the bank's SIMD-lane step in ``library``: this function as
+            # generated C linked against it (CasADi's virtual machine would spend three
+            # times the kernel's own time calling it); the same operations, no contraction
+            try:
+                f = compile_library(f.name(), [f], mode="always", cache_dir=None, flags=(
+                    *DEFAULT_FLAGS, "-ffp-contract=off", "-Wl,--no-as-needed", str(library),
+                    f"-Wl,-rpath,{library.parent}"), stacklevel=5)[0][0]
+            except SolverError:            # e.g. a linker without these options: as it is
+                pass
         sizes = [f.nnz_out(i) for i in range(f.n_out() - 1)]
         self.block = np.zeros(sum(sizes))
         ends = np.cumsum([0, *sizes])
@@ -1284,7 +1299,7 @@ class _TableStep:
         self.eval = self.bound.eval
 
     def __call__(self, i: np.ndarray, g: np.ndarray, u: np.ndarray, gd: np.ndarray,
-                 h: float) -> list[np.ndarray] | None:
+                 h: float) -> tuple[np.ndarray, ...] | None:
         a = self.args
         a[0][:] = i
         a[1][:] = g
@@ -1295,7 +1310,8 @@ class _TableStep:
         if self.flag[0]:
             return None
         b = self.block.copy()
-        return [b[sl] for sl in self.slices]
+        s0, s1, s2, s3, s4, s5, s6 = self.slices
+        return b[s0], b[s1], b[s2], b[s3], b[s4], b[s5], b[s6]
 
 
 _T = TypeVar("_T")
