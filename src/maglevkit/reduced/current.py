@@ -1253,6 +1253,11 @@ def _jit_compile(f: ca.Function) -> ca.Function:
                           reason=_last_line(str(exc))) from None
 
 
+#: CurrentModel.step calls of one step length after which the wrapper around the bank's
+#: compiled step is compiled too (0.3-0.7 s of the C compiler once, then cached on disk)
+COMPILE_AFTER_STEPS = 200
+
+
 class _TableStep:
     """One step on the bank's compiled table kernel with everything around it in one
     CasADi call through bound NumPy buffers: substitute gaps and rates from the pole
@@ -1277,29 +1282,45 @@ class _TableStep:
         outs = [res["I_L_next"], res["I"], force, ca.mtimes(ca.DM(share), force),
                 res["member_F"], g1, res["I_L_next"], flag]
         f = ca.Function(f"maglevkit_cm_{kernel.name()}", [x, g, u, gd, h], outs)
-        if library is not None:
-            # ``kernel`` is the bank's SIMD-lane step in ``library``: this function as
-            # generated C linked against it (CasADi's virtual machine would spend three
-            # times the kernel's own time calling it); the same operations, no contraction
-            try:
-                f = compile_library(f.name(), [f], mode="always", cache_dir=None, flags=(
-                    *DEFAULT_FLAGS, "-ffp-contract=off", "-Wl,--no-as-needed", str(library),
-                    f"-Wl,-rpath,{library.parent}"), stacklevel=5)[0][0]
-            except SolverError:            # e.g. a linker without these options: as it is
-                pass
+        self.function, self.library = f, library
+        # with the lane library: compiled after COMPILE_AFTER_STEPS calls (a short run
+        # never pays the compiler), until then CasADi's virtual machine (bit-identical)
+        self.countdown = COMPILE_AFTER_STEPS if library is not None else 0
         sizes = [f.nnz_out(i) for i in range(f.n_out() - 1)]
         self.block = np.zeros(sum(sizes))
         ends = np.cumsum([0, *sizes])
         self.slices = [slice(int(a), int(b)) for a, b in zip(ends[:-1], ends[1:], strict=True)]
         self.flag = np.zeros(1)
+        self._bind(f)
+
+    def _bind(self, f: ca.Function) -> None:
         bind = {i: self.block[sl] for i, sl in enumerate(self.slices)}
         bind[len(self.slices)] = self.flag
         self.bound = BoundCall(f, res=bind)
         self.args = self.bound.args
         self.eval = self.bound.eval
 
+    def _compile(self) -> None:
+        """This function as generated C linked against the lane library that holds the
+        kernel (CasADi's virtual machine spends three times the kernel's own time calling
+        it); the same operations, no contraction (bit-identical, tested)."""
+        lib = self.library
+        assert lib is not None
+        try:
+            f = compile_library(self.function.name(), [self.function], mode="always",
+                                cache_dir=None, flags=(
+                                    *DEFAULT_FLAGS, "-ffp-contract=off", "-Wl,--no-as-needed",
+                                    str(lib), f"-Wl,-rpath,{lib.parent}"))[0][0]
+        except SolverError:                # e.g. a linker without these options: as it is
+            return
+        self._bind(f)
+
     def __call__(self, i: np.ndarray, g: np.ndarray, u: np.ndarray, gd: np.ndarray,
                  h: float) -> tuple[np.ndarray, ...] | None:
+        if self.countdown:
+            self.countdown -= 1
+            if not self.countdown:
+                self._compile()
         a = self.args
         a[0][:] = i
         a[1][:] = g
