@@ -1334,14 +1334,6 @@ class MagnetBank:
         return (self._share > 0).astype(float) @ gaps if self.gap_inputs == "circuit" else gaps
 
     # ------------------------------------------------------------------ input handling
-    def _vector(self, value: Any, names: tuple[str, ...], what: str, unit: str,
-                check: bool = True) -> np.ndarray:
-        """``value`` over ``names`` (:func:`~maglevkit.models.inputs.per_name_values`);
-        finite unless ``check`` is False (the fast step path, whose kernel flags
-        non-finite values)."""
-        return per_name_values(value, names, what, unit, finite=check,
-                               kind="gap input" if what.startswith("gap") else "circuit")
-
     def _range_error(self, k: int, s: float, i: float, where: str) -> None:
         j = int(self._reduced_idx[k])
         b = self._bounds[:, k]
@@ -1456,11 +1448,11 @@ class MagnetBank:
             ``extrapolate``).
         """
         gaps, currents, time = gaps_m, currents_A, time_s
-        g = self._vector(gaps, self.gap_names, "gaps", "m")
+        g = per_name_values(gaps, self.gap_names, "gaps", "m", kind="gap input")
         if (g <= 0).any():
             j = int(np.argmax(g <= 0))
             raise InputError(f"gaps must be > 0 m: {self.gap_names[j]!r} = {float(g[j])!r} m")
-        i = self._vector(currents, self.circuit_names, "currents", "A").copy()
+        i = per_name_values(currents, self.circuit_names, "currents", "A").copy()
         reject_bools(time, "time")
         if not (isinstance(time, (int, float, np.floating)) and math.isfinite(time)):
             raise InputError(f"time = {time!r} must be a finite number of seconds")
@@ -1542,10 +1534,11 @@ class MagnetBank:
         # inputs, gaps outside the maps (which start above 0) and currents leaving them;
         # only a flagged step is diagnosed in Python
         checked = not self._fast
-        u = self._vector(voltages, self.circuit_names, "voltages", "V", checked)
-        g = state.gaps_m if gaps is None else self._vector(gaps, self.gap_names, "gaps", "m",
-                                                           checked)
-        gd = self._vector(gap_rates, self.gap_names, "gap_rates", "m/s", checked)
+        u = per_name_values(voltages, self.circuit_names, "voltages", "V", finite=checked)
+        g = state.gaps_m if gaps is None else per_name_values(
+            gaps, self.gap_names, "gaps", "m", finite=checked, kind="gap input")
+        gd = per_name_values(gap_rates, self.gap_names, "gap_rates", "m/s", finite=checked,
+                             kind="gap input")
         t0, t1 = state.time_s, state.time_s + dt
         if self._fast:
             # all reduced, one gap per circuit: one kernel call and two objects (the kernel
@@ -1800,7 +1793,7 @@ class MagnetBank:
         # (steady state: I_e = 0 in the ladder circuits, so R_el I_L there too)
         u = (self.resistance_ohm * np.where(np.isnan(state.inductor_currents_A), 0.0,
                                             state.inductor_currents_A)
-             if voltages is None else self._vector(voltages, self.circuit_names, "voltages", "V"))
+             if voltages is None else per_name_values(voltages, self.circuit_names, "voltages", "V"))
         return self._outputs_at(state, u)
 
     def _outputs_at(self, state: BankState, u: np.ndarray) -> BankOutputs:
