@@ -249,3 +249,40 @@ def test_maps_the_tables_cannot_hold_stay_on_the_bsplines() -> None:
     st = tables.initial_state(gaps_m=0.010, currents_A=20.0)
     st, out = tables.step(st, 1e-3, 25.0)
     assert out.currents_A[0] == pytest.approx(runs[1].currents_A[1, 0], rel=1e-12)
+
+
+def test_step_wrapper_compiled_after_a_while_is_bit_identical(monkeypatch: pytest.MonkeyPatch
+                                                              ) -> None:
+    """CurrentModel.step's wrapper around the bank's lane step runs on CasADi's virtual
+    machine for COMPILE_AFTER_STEPS calls, then as C linked against the lane library: the
+    two give the same bits (12 different pole gaps and rates, voltages varying)."""
+    from maglevkit.reduced import current as cur
+
+    mag = mk.load_magnet("tr09-standard")
+    maps = mk.build_maps(mag, gaps=np.linspace(0.005, 0.016, 6),
+                         currents=np.linspace(0.0, 80.0, 9), progress=False)
+    monkeypatch.setattr(cur, "COMPILE_AFTER_STEPS", 20)
+
+    def run(model: mk.CurrentModel) -> np.ndarray:
+        st = model.initial_state(gaps_m=0.01, currents_A=34.0)
+        rng = np.random.default_rng(0)
+        rows = []
+        for k in range(60):
+            g = 0.01 + 1e-3 * np.sin(0.03 * k) + 1e-5 * rng.standard_normal(12)
+            st, o = model.step(st, 1e-3, np.array([40.0, 42.0]) * (1 + 0.2 * np.sin(0.1 * k)),
+                               gaps_m=g, gap_rates_m_per_s=1e-3 * rng.standard_normal(12))
+            rows.append(np.concatenate([o.currents_A, o.pole_force_N, st.gaps_m,
+                                        st.inductor_currents_A, [o.force_N]]))
+        return np.array(rows)
+
+    compiled = mk.CurrentModel(maps)
+    a = run(compiled)
+    call = compiled._table_steps[1e-3]
+    if call.library is None:
+        pytest.skip("no lane library (no C compiler)")
+    assert call.countdown == 0 and call.bound.function.class_name() != "MXFunction"
+    monkeypatch.setattr(cur, "COMPILE_AFTER_STEPS", 10**9)
+    vm = mk.CurrentModel(maps)
+    b = run(vm)
+    assert vm._table_steps[1e-3].bound.function.class_name() == "MXFunction"
+    assert np.array_equal(a, b)

@@ -314,8 +314,10 @@ def test_gap_outside_the_maps_is_an_fmi_error_with_a_log_line_not_a_clamp(
     assert err.value.status == fmi2Error
     status, message = sl.log[-1]
     assert status == fmi2Error
-    assert "circuit front" in message and "0.01601" in message
+    # the kernel's reason code (GAP_OUT_OF_RANGE) in MagnetBank.step's words
+    assert "circuit 'front'" in message and "0.01601" in message
     assert "0.006..0.016 m" in message and "does not extrapolate or clamp" in message
+    assert "over the step t = 0.001..0.002 s" in message
     sl.close()
 
 
@@ -336,8 +338,8 @@ def test_current_leaving_the_maps_and_non_finite_inputs_are_fmi_errors(
     # t = 0.015..0.02 s, 61.01 A at a sub-step end)
     assert t == pytest.approx(0.015, abs=1e-12)
     status, message = sl.log[-1]
-    assert status == fmi2Error and "circuit front" in message
-    assert "current I_L" in message and "0..60 A" in message and "RK4 sub-step" in message
+    assert status == fmi2Error and "circuit 'front'" in message
+    assert "and current 6" in message and "0..60 A" in message and "RK4 sub-step" in message
     i_kept = sl.get("front.I_L")[0]
     assert 55.0 < i_kept < 60.0         # the state before the failed step, not clamped to 60
     sl.close()
@@ -349,6 +351,36 @@ def test_current_leaving_the_maps_and_non_finite_inputs_are_fmi_errors(
     assert err.value.status == fmi2Error
     assert "non-finite" in sl.log[-1][1]
     sl.close()
+
+
+@pytest.mark.parametrize("case", ["gap", "current"])
+def test_a_flagged_step_gives_the_bank_step_message(fmu: Any, maps: mk.CharacteristicMaps,
+                                                    tmp_path: Path, case: str) -> None:
+    """The C wrapper turns the kernel's reason code into MagnetBank.step's message (the one
+    table, STEP_FLAG_MESSAGES): the same text, character for character, for a gap path and
+    a current leaving the maps in one RK4 sub-step (only the FMU's advice differs: it does
+    not extrapolate)."""
+    from maglevkit.errors import OutOfRangeError
+    from maglevkit.reduced.bank import STEP_FLAG_MESSAGES
+
+    s0, i0, u, rate = ((0.0155, CURRENT0, 40.0, 1.0) if case == "gap"
+                       else (0.010, 59.9, 400.0, 0.0))
+    sl = _Slave(fmu.path, tmp_path)
+    sl.set(front__s=s0, rear__s=s0, front__U=u, rear__U=40.0, front__I0=i0)
+    sl.fmu.exitInitializationMode()
+    sl.set(front__sdot=rate)
+    with pytest.raises(FMICallException):
+        sl.fmu.doStep(0.0, 1e-3)
+    fmu_message = sl.log[-1][1]
+    sl.close()
+    member = fmu_message.split("member '", 1)[1].split("'", 1)[0]
+    bank = mk.MagnetBank({member: maps})
+    state = bank.initial_state(gaps_m=s0, currents_A=[i0, CURRENT0])
+    with pytest.raises(OutOfRangeError) as err:
+        bank.step(state, 1e-3, [u, 40.0], gap_rates_m_per_s=[rate, 0.0])
+    expected = str(err.value).removesuffix(STEP_FLAG_MESSAGES["advice"])
+    assert fmu_message == expected + STEP_FLAG_MESSAGES["advice_fmu"]
+    assert ("over the step" if case == "gap" else "in an RK4 sub-step") in fmu_message
 
 
 # ---------------------------------------------------------------- bad arguments

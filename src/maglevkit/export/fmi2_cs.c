@@ -10,12 +10,14 @@
      (fmi2Reset back to instantiated; fmi2Error is final until fmi2Reset/fmi2FreeInstance);
    - value references in blocks of NC (config.h): inputs U, s, sdot; outputs I, F; local
      I_L; parameters R_el, R_ec, I0; then F_total and max_substep;
-   - fmi2DoStep: ceil(h / max_substep) RK4 sub-steps; the gap moves linearly from its
-     value at the communication point with the gap rate (exact at the RK4 stage times);
-   - inputs outside the maps (gap path at the start and the end of the step, current at
-     every sub-step end) or non-finite: fmi2Error and a log message naming the circuit,
-     the value and the range; the state is left as it was before the step.  Nothing is
-     clamped.
+   - fmi2DoStep: ceil(h / max_substep) RK4 sub-steps (SUBSTEP_COUNT, config.h: the rule of
+     maglevkit.reduced.core); the gap moves linearly from its value at the communication
+     point with the gap rate (exact at the RK4 stage times);
+   - a sub-step the kernel flags (gap path or current outside the maps, non-finite values:
+     its reason codes, maglevkit.reduced.bank.StepFlag): fmi2Error and a log message, the
+     one MagnetBank.step gives (the templates of STEP_FLAG_MESSAGES in config.h), naming
+     the circuit, the value and the range; the state is left as it was before the step.
+     Nothing is clamped.
    - with MOTION_EDDY (config.h) every circuit carries a second state, the shielding eddy
      current I_e of the shielded-gap ladder (0 in eq. 8 circuits; started at 0, the
      steady state), advanced and restored with I_L.
@@ -183,16 +185,22 @@ static int eval_outputs(Model *m) {
     return MK_OUT(m->arg, m->res, m->iw, m->w, 0);
 }
 
-/* checks of the inputs that a step or the outputs use; returns 0 if fine */
+/* the messages below are maglevkit.reduced.bank.STEP_FLAG_MESSAGES (config.h): the same
+   text as MagnetBank.step */
+static void out_of_maps(Model *m, int j, const char *where, double s, double i) {
+    fail(m, MSG_OUT_OF_MAPS MSG_ADVICE_FMU, CIRCUIT_LABELS[j], where, s, i, GAP_MIN[j],
+         GAP_MAX[j], CUR_MIN[j], CUR_MAX[j]);
+}
+
+/* checks of the inputs that the outputs (and initialization) use, where no step runs to
+   flag them; returns 0 if fine */
 static int check_gap(Model *m, int j, double s, const char *where) {
     if (!is_finite(s)) {
-        fail(m, "circuit %s%s: the gap is %g m (not finite)", CIRCUIT_NAMES[j], where, s);
+        fail(m, MSG_INPUT_NOT_FINITE, "gaps", BANK_CIRCUITS[j], s, "m");
         return 1;
     }
     if (s < GAP_LO[j] || s > GAP_HI[j]) {
-        fail(m, "circuit %s%s: gap %.9g m is outside the map range %.9g..%.9g m "
-                "(rebuild the maps on a larger grid; the FMU does not extrapolate or clamp)",
-             CIRCUIT_NAMES[j], where, s, GAP_MIN[j], GAP_MAX[j]);
+        out_of_maps(m, j, where, s, m->x[j]);
         return 1;
     }
     return 0;
@@ -200,43 +208,59 @@ static int check_gap(Model *m, int j, double s, const char *where) {
 
 static int check_current(Model *m, int j, double i, const char *where) {
     if (!is_finite(i)) {
-        fail(m, "circuit %s%s: the inductor current I_L is %g A (not finite)", CIRCUIT_NAMES[j],
-             where, i);
+        fail(m, MSG_RESULT_NOT_FINITE, BANK_CIRCUITS[j]);
         return 1;
     }
     if (i < CUR_LO[j] || i > CUR_HI[j]) {
-        fail(m, "circuit %s%s: current I_L %.9g A is outside the map range %.9g..%.9g A "
-                "(rebuild the maps on a larger grid; the FMU does not extrapolate or clamp)",
-             CIRCUIT_NAMES[j], where, i, CUR_MIN[j], CUR_MAX[j]);
+        out_of_maps(m, j, where, m->s_now[j], i);
         return 1;
     }
     return 0;
 }
 
-/* the message of a step the kernel flagged: its reason code's bits in the order of
-   StepFlag.by_priority() (inputs, gap path, result, currents), each with the message of the
-   check above that names the value and the range */
-static void report_step_flags(Model *m, int j, int code, double s, double h, const char *where) {
-    if (code & STEP_FLAG_INPUT_NOT_FINITE) {
-        if (!is_finite(m->r[VR_U(j)])) {
-            fail(m, "circuit %s%s: voltage U = %g V is not finite", CIRCUIT_NAMES[j], where,
-                 m->r[VR_U(j)]);
+/* the message of a sub-step the kernel flagged, from its reason codes
+   (maglevkit.reduced.bank.StepFlag) alone, as MagnetBank.step words it: reasons in the
+   order of StepFlag.by_priority(), each for the first circuit that has it.  The step runs
+   from t0 to t1 with the gaps s0 and the currents i0 at t0 */
+static void report_step_flags(Model *m, const double *s0, const double *i0, double t0,
+                              double t1) {
+    static const int priority[] = STEP_FLAG_PRIORITY;
+    char where[160];
+    size_t p;
+    int j;
+    for (p = 0; p < sizeof priority / sizeof priority[0]; ++p) {
+        int reason = priority[p];
+        for (j = 0; j < NC; ++j) {
+            double sdot = m->r[VR_SDOT(j)], se = s0[j] + sdot * (t1 - t0);
+            if (!((int)m->bad[j] & reason)) continue;
+            if (reason == STEP_FLAG_INPUT_NOT_FINITE) {
+                if (!is_finite(m->r[VR_U(j)]))
+                    fail(m, MSG_INPUT_NOT_FINITE, "voltages", BANK_CIRCUITS[j], m->r[VR_U(j)], "V");
+                else if (!is_finite(s0[j]))
+                    fail(m, MSG_INPUT_NOT_FINITE, "gaps", BANK_CIRCUITS[j], s0[j], "m");
+                else
+                    fail(m, MSG_INPUT_NOT_FINITE, "gap_rates", BANK_CIRCUITS[j], sdot, "m/s");
+            } else if (reason == STEP_FLAG_GAP_OUT_OF_RANGE) {
+                double lo = s0[j] < se ? s0[j] : se, hi = s0[j] < se ? se : s0[j];
+                if (s0[j] <= 0.0 || se <= 0.0) {
+                    fail(m, MSG_GAP_NOT_POSITIVE, BANK_CIRCUITS[j], s0[j], se);
+                } else {
+                    snprintf(where, sizeof where, MSG_STEP, t0, t1);
+                    out_of_maps(m, j, where, lo < GAP_LO[j] ? lo : hi, i0[j]);
+                }
+            } else if (reason == STEP_FLAG_RESULT_NOT_FINITE) {
+                fail(m, MSG_RESULT_NOT_FINITE, BANK_CIRCUITS[j]);
+            } else if (!(i0[j] >= CUR_LO[j] && i0[j] <= CUR_HI[j])) {  /* at the start */
+                snprintf(where, sizeof where, MSG_STEP, t0, t1);
+                out_of_maps(m, j, where, s0[j], i0[j]);
+            } else {                                                  /* in a sub-step */
+                snprintf(where, sizeof where, MSG_SUBSTEP, t0, t1);
+                out_of_maps(m, j, where, se, m->lo[j] < CUR_LO[j] ? m->lo[j] : m->hi[j]);
+            }
             return;
         }
-        if (!is_finite(m->r[VR_SDOT(j)])) {
-            fail(m, "circuit %s%s: gap rate sdot = %g m/s is not finite", CIRCUIT_NAMES[j], where,
-                 m->r[VR_SDOT(j)]);
-            return;
-        }
-        if (check_gap(m, j, s, where)) return;
     }
-    if (code & STEP_FLAG_GAP_OUT_OF_RANGE) {
-        if (check_gap(m, j, s, where) || check_gap(m, j, s + m->r[VR_SDOT(j)] * h, where)) return;
-    }
-    if (code & (STEP_FLAG_RESULT_NOT_FINITE | STEP_FLAG_CURRENT_OUT_OF_RANGE)) {
-        if (check_current(m, j, m->xs[j], where)) return;
-    }
-    fail(m, "circuit %s%s: the step was flagged (reason code %d)", CIRCUIT_NAMES[j], where, code);
+    fail(m, "the step was flagged without a known reason code");
 }
 
 static int check_parameters(Model *m) {
@@ -260,11 +284,11 @@ static int check_inputs(Model *m, const char *where) {
     int j;
     for (j = 0; j < NC; ++j) {
         if (!is_finite(m->r[VR_U(j)]))
-            return fail(m, "circuit %s%s: voltage U = %g V is not finite", CIRCUIT_NAMES[j], where,
-                        m->r[VR_U(j)]), 1;
+            return fail(m, MSG_INPUT_NOT_FINITE, "voltages", BANK_CIRCUITS[j], m->r[VR_U(j)],
+                        "V"), 1;
         if (!is_finite(m->r[VR_SDOT(j)]))
-            return fail(m, "circuit %s%s: gap rate sdot = %g m/s is not finite", CIRCUIT_NAMES[j],
-                        where, m->r[VR_SDOT(j)]), 1;
+            return fail(m, MSG_INPUT_NOT_FINITE, "gap_rates", BANK_CIRCUITS[j], m->r[VR_SDOT(j)],
+                        "m/s"), 1;
         if (check_gap(m, j, m->s_now[j], where)) return 1;
         if (check_current(m, j, m->x[j], where)) return 1;
     }
@@ -579,7 +603,6 @@ fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunicationPoint,
 #if MOTION_EDDY
     double e0[NC];
 #endif
-    char where[160];
     long n, k;
     int j;
     (void)noSetFMUStatePriorToCurrentPoint;
@@ -591,21 +614,17 @@ fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunicationPoint,
     if (!(fabs(currentCommunicationPoint - t0) <= 1e-9 * (fabs(t0) + h)))
         return fail(m, "fmi2DoStep: currentCommunicationPoint = %.12g s, but the FMU is at t = %.12g s",
                     currentCommunicationPoint, t0);
-    /* the gap path is linear over the step: checking its two ends checks all of it */
-    snprintf(where, sizeof where, " at the start of the step t = %.9g s", t0);
-    if (check_inputs(m, where)) return fmi2Error;
-    snprintf(where, sizeof where, " at the end of the step t = %.9g s", t0 + h);
+    /* no checks of our own: the kernel flags the gap path, the currents and non-finite
+       values of every sub-step, and its reason codes give the message */
     for (j = 0; j < NC; ++j) {
         s0[j] = m->s_now[j];
-        if (check_gap(m, j, s0[j] + m->r[VR_SDOT(j)] * h, where)) return fmi2Error;
         x0[j] = m->x[j];
 #if MOTION_EDDY
         e0[j] = m->xe[j];
 #endif
     }
-    /* RK4 sub-steps of at most max_substep (the rule of maglevkit's models) */
-    n = (long)ceil(h / m->r[VR_MAXSTEP] * (1.0 - 1e-12));
-    if (n < 1) n = 1;
+    /* RK4 sub-steps of at most max_substep (the rule of maglevkit's models, config.h) */
+    n = SUBSTEP_COUNT(h, m->r[VR_MAXSTEP]);
     hs = h / (double)n;
     for (k = 0; k < n; ++k) {
         for (j = 0; j < NC; ++j) sk[j] = s0[j] + m->r[VR_SDOT(j)] * ((double)k * hs);
@@ -616,11 +635,10 @@ fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunicationPoint,
 #endif
             return fail(m, "fmi2DoStep at t = %.9g s: the model evaluation failed", t0);
         }
-        snprintf(where, sizeof where, " in the RK4 sub-step ending at t = %.9g s", t0 + (double)(k + 1) * hs);
         for (j = 0; j < NC; ++j) {
             /* the kernel's reason code (maglevkit.reduced.bank.StepFlag), not a check of our own */
             if (m->bad[j] != 0.0) {
-                report_step_flags(m, j, (int)m->bad[j], sk[j], hs, where);
+                report_step_flags(m, s0, x0, t0, t0 + h);
                 memcpy(m->x, x0, sizeof x0);   /* the state before the step */
 #if MOTION_EDDY
                 memcpy(m->xe, e0, sizeof e0);

@@ -49,7 +49,14 @@ import numpy as np
 
 from ..errors import InputError, SolverError
 from ..models.compiled import cache_directory, find_compiler
-from ..reduced.bank import KERNEL_PARAMETERS, MagnetBank, StepFlag
+from ..reduced.bank import (
+    KERNEL_PARAMETERS,
+    STEP_FLAG_MESSAGES,
+    MagnetBank,
+    StepFlag,
+    circuit_label,
+)
+from ..reduced.core import substep_rule_c
 from ..reduced.current import CurrentModel
 from ..validation import flag
 
@@ -238,7 +245,7 @@ def export_fmu(magnet_or_maps: ReducedSource, path: str | os.PathLike[str], *,
                                                    encoding="utf-8")
         (src / "config.h").write_text(_config_header(
             ident, guid, circuits, par, ranges, s_start, i_start, r_el, r_ec,
-            float(max_substep_s)), encoding="utf-8")
+            float(max_substep_s)) + _messages_header(bank), encoding="utf-8")
         pkg = resources.files("maglevkit.export")
         (src / "fmi2_cs.c").write_bytes((pkg / "fmi2_cs.c").read_bytes())
         for h in FMI_HEADERS:
@@ -472,6 +479,35 @@ def _config_header(ident: str, guid: str, circuits: tuple[str, ...], par: np.nda
     text += _c_array("START_R_EL", r_el) + _c_array("START_R_EC", r_ec)
     text += ("static const char *const CIRCUIT_NAMES[] = {"
              + ", ".join(_c_string(c) for c in circuits) + "};\n")
+    return text + "#endif\n"
+
+
+def _c_literal(text: str) -> str:
+    """``text`` as a C string literal (printable ASCII kept, ``%`` too: a format)."""
+    safe = "".join(ch if (ch.isascii() and ch.isprintable()) else "_" for ch in text)
+    return '"' + safe.replace("\\", "\\\\").replace('"', '\\"') + '"'
+
+
+def _messages_header(bank: MagnetBank) -> str:
+    """The sub-step rule and the reason codes' messages for the C wrapper, from their one
+    source (:func:`~maglevkit.reduced.core.substep_rule_c`,
+    :data:`~maglevkit.reduced.bank.STEP_FLAG_MESSAGES`), and the bank's circuit names and
+    labels that the messages name."""
+    lines = ["#ifndef MAGLEVKIT_FMU_MESSAGES_H", "#define MAGLEVKIT_FMU_MESSAGES_H",
+             "/* the sub-step rule of maglevkit.reduced.core.substep_counts */",
+             "#define SUBSTEP_COUNT(h, max_step) " + substep_rule_c("(h)", "(max_step)"),
+             "/* the order in which reasons are reported (StepFlag.by_priority) */",
+             "#define STEP_FLAG_PRIORITY {" + ", ".join(str(int(f)) for f in
+                                                        StepFlag.by_priority()) + "}",
+             "/* the reason codes' messages (maglevkit.reduced.bank.STEP_FLAG_MESSAGES) */"]
+    lines += [f"#define MSG_{key.upper()} {_c_literal(text)}"
+              for key, text in STEP_FLAG_MESSAGES.items()]
+    names = bank.circuit_names
+    text = "\n".join(lines) + "\n"
+    text += ("static const char *const BANK_CIRCUITS[] = {"
+             + ", ".join(_c_literal(c) for c in names) + "};\n")
+    text += ("static const char *const CIRCUIT_LABELS[] = {"
+             + ", ".join(_c_literal(circuit_label(c)) for c in names) + "};\n")
     return text + "#endif\n"
 
 

@@ -14,11 +14,11 @@ from typing import Any
 import numpy as np
 
 from ..errors import InputError
-from ..validation import real_array, real_number
+from ..validation import describe, real_array, real_number
 from .signals import Signal
 
 __all__ = ["time_grid", "sample_input", "gap_secants", "check_step", "check_span",
-           "reject_bools", "simulation_inputs", "check_initial_choice"]
+           "reject_bools", "simulation_inputs", "check_initial_choice", "per_name_values"]
 
 
 def check_step(dt: Any, what: str = "dt") -> float:
@@ -186,10 +186,15 @@ def sample_input(value: Any, times: np.ndarray, names: tuple[str, ...], what: st
         if unknown or missing:
             raise InputError(f"{what}: unknown names {unknown}, missing {missing}; expected "
                              f"{list(names)}")
+        # every column is sampled and checked (finite) on its own
         cols = [sample_input(value[nm], times, (nm,), f"{what}[{nm}]", unit)[:, 0] for nm in names]
         return np.stack(cols, axis=1)
     if isinstance(value, Signal):
-        arr = np.repeat(np.asarray(value(times), dtype=float)[:, None], k, axis=1)
+        col = np.asarray(value(times), dtype=float)
+        if col.shape == (n,) and np.isfinite(col).all():
+            # the same value for every name: checked once, before the copies
+            return np.repeat(col[:, None], k, axis=1)
+        arr = np.repeat(col[:, None], k, axis=1)
     elif callable(value):
         arr = _sample_callable(value, times, k, names, what, unit)
     else:
@@ -366,3 +371,86 @@ def check_initial_choice(initial_state: Any, initial_currents: Any, state_type: 
         raise InputError("give initial_currents or initial_state, not both")
     if not isinstance(initial_state, state_type):
         raise InputError(f"initial_state must be a {state_type.__name__}")
+
+
+def _listed(names: Any, limit: int = 8) -> str:
+    """``names`` as a list for a message, the first ``limit`` of a long one."""
+    names = list(names)
+    return str(names) if len(names) <= limit else f"{names[:limit]} and {len(names) - limit} more"
+
+
+def per_name_values(value: Any, names: tuple[str, ...], what: str, unit: str, *,
+                    kind: str = "circuit", finite: bool = True, positive: bool = False,
+                    allow_inf: bool = False) -> np.ndarray:
+    """One value per name (circuit, gap, ...) as a float array: the one converter of
+    per-circuit and per-gap inputs (the reduced models, the bank, the table import).
+
+    Parameters
+    ----------
+    value : float, array_like (n,) or mapping
+        One value for every name, one per name in the order of ``names``, or
+        name -> value (every name, no other key).
+    names : tuple of str
+        The names, in order.
+    what : str
+        The user's name of the input (keyword or option) in error messages.
+    unit : str
+        Its unit in error messages (e.g. ``"V"``).
+    kind : str, default "circuit"
+        What a name is, in error messages (``"circuit"``, ``"gap"``, ``"gap input"``).
+    finite : bool, default True
+        Refuse NaN and inf (False: leave them to the caller, e.g. a kernel that flags
+        them; numbers are still checked).
+    positive : bool, default False
+        Refuse values <= 0.
+    allow_inf : bool, default False
+        Allow +inf (with ``finite``), e.g. "no eddy currents".
+
+    Returns
+    -------
+    numpy.ndarray (n,)
+        The values [``unit``]; a float64 array of the right shape is returned as it is.
+
+    Raises
+    ------
+    InputError
+        Missing or unknown names, non-numbers (bools, strings), a wrong count, and with
+        the options above NaN/inf or values <= 0; each message names ``what``, the
+        value and what is allowed.
+    """
+    n = len(names)
+    if type(value) is np.ndarray and value.dtype == np.float64 and value.shape == (n,):
+        arr = value
+        if not (finite or positive):
+            return arr
+    elif type(value) is float and (not finite or math.isfinite(value)) and \
+            not (positive and not value > 0.0):
+        return np.full(n, value)              # one plain float for all (e.g. 0.0 m/s)
+    else:
+        if isinstance(value, Mapping):
+            missing = [k for k in names if k not in value]
+            unknown = sorted(str(k) for k in set(value) - set(names))
+            if missing or unknown:
+                raise InputError(f"{what}: unknown names {_listed(unknown)}, missing "
+                                 f"{_listed(missing)}; give one value [{unit}] per {kind}: "
+                                 f"{_listed(names)}")
+            value = [value[k] for k in names]
+        arr = real_array(value, what, unit, finite=False)       # no bools or strings
+        if arr.ndim == 0:
+            arr = np.full(n, float(arr))
+        elif arr.shape != (n,):
+            raise InputError(f"{what}: expected {n} values [{unit}] (one per {kind} of "
+                             f"{_listed(names)}, or one for all), got shape {arr.shape}: "
+                             f"{describe(value)}")
+    if finite:
+        ok = np.isfinite(arr) | ((arr == math.inf) if allow_inf else False)
+        if not ok.all():
+            j = int(np.argmax(~ok))
+            allowed = " (or inf)" if allow_inf else ""
+            raise InputError(f"{what} must be finite{allowed}: {kind} {names[j]!r} = "
+                             f"{float(arr[j])!r} {unit}")
+    if positive and not (arr > 0.0).all():
+        j = int(np.argmax(~(arr > 0.0)))
+        raise InputError(f"{what} must be > 0 {unit}: {kind} {names[j]!r} = "
+                         f"{float(arr[j])!r} {unit}")
+    return arr

@@ -52,7 +52,13 @@ from ..models.compiled import (
     find_compiler,
 )
 from ..models.flux import FluxModel, FluxState
-from ..models.inputs import check_initial_choice, check_step, reject_bools, simulation_inputs
+from ..models.inputs import (
+    check_initial_choice,
+    check_step,
+    per_name_values,
+    reject_bools,
+    simulation_inputs,
+)
 from ..models.statics import circuit_pole_groups
 from ..validation import describe, flag, renamed_keywords
 from .core import (
@@ -77,8 +83,9 @@ from .tables import INTERPOLATION_METHODS, cell_table
 if TYPE_CHECKING:
     from ..reduction.maps import CharacteristicMaps
 
-__all__ = ["KERNEL_PARAMETERS", "MOTION_EDDY_PARAMETERS", "RUN_CHUNK", "BankOutputs", "BankRun",
-           "BankSimulation", "BankState", "MagnetBank", "StepFlag"]
+__all__ = ["KERNEL_PARAMETERS", "MOTION_EDDY_PARAMETERS", "RUN_CHUNK", "STEP_FLAG_MESSAGES",
+           "BankOutputs", "BankRun", "BankSimulation", "BankState", "MagnetBank", "StepFlag",
+           "circuit_label"]
 
 _MAP_VARIABLES = ("inductance_H", "dL_ds_H_per_m", "force_N")
 KERNEL_PARAMETERS = ("s0_m", "inv_ds_per_m", "cells_s", "i0_A", "inv_di_per_A", "cells_i",
@@ -222,6 +229,43 @@ class StepFlag(enum.IntFlag):
         """The order in which reasons are reported: inputs, gap path, result, currents."""
         return (cls.INPUT_NOT_FINITE, cls.GAP_OUT_OF_RANGE, cls.RESULT_NOT_FINITE,
                 cls.CURRENT_OUT_OF_RANGE)
+
+
+#: The message of each reason code (:class:`StepFlag`), written once as printf-style
+#: templates: Python's ``%`` formatting and C's ``printf`` agree on ``%s`` and ``%g``, so
+#: :meth:`MagnetBank.step` (and the stepper, ``run_steps``) and the FMU's C wrapper
+#: (:mod:`maglevkit.export.fmu` writes them into its ``config.h``) say the same.
+#: ``out_of_maps`` takes the circuit's label (:func:`circuit_label`), where (``step`` or
+#: ``substep`` with the step's start and end times [s]), the gap [m] and current [A] that
+#: left the maps, and the maps' gap [m] and current [A] ranges; the advice follows it.
+STEP_FLAG_MESSAGES: dict[str, str] = {
+    "input_not_finite": "%s must be finite: circuit '%s' has %g %s",      # what, name, value, unit
+    "gap_not_positive": "gaps must stay > 0 m over the step: circuit '%s' from %.9g m to %.9g m",
+    "out_of_maps": ("outside the characteristic maps: %s%s: substitute gap %.6g m and current "
+                    "%.6g A; its maps cover gaps %g..%g m and currents %g..%g A"),
+    "result_not_finite": "non-finite value in circuit '%s'",
+    "step": " over the step t = %.6g..%.6g s",
+    "substep": " in an RK4 sub-step within t = %.6g..%.6g s",
+    "advice": " (rebuild the maps on a larger grid, or pass extrapolate=True)",
+    "advice_extrapolating": " (rebuild the maps on a larger grid)",
+    "advice_fmu": " (rebuild the maps on a larger grid; the FMU does not extrapolate or clamp)",
+}
+
+
+def circuit_label(name: str) -> str:
+    """A bank circuit's name as the range messages give it: ``member 'm', circuit 'c'``.
+
+    Parameters
+    ----------
+    name : str
+        The bank's circuit name ``"member/circuit"``.
+
+    Returns
+    -------
+    str
+    """
+    member, circuit = name.split("/", 1)
+    return f"member {member!r}, circuit {circuit!r}"
 
 
 @dataclass(frozen=True)
@@ -1305,49 +1349,11 @@ class MagnetBank:
         return (self._share > 0).astype(float) @ gaps_m if self.gap_inputs == "circuit" else gaps_m
 
     # ------------------------------------------------------------------ input handling
-    def _vector(self, value: Any, names: tuple[str, ...], what: str, unit: str,
-                check: bool = True) -> np.ndarray:
-        """``value`` as a float array over ``names`` (a scalar for all); finite unless
-        ``check`` is False (the fast step path, whose kernel flags non-finite values)."""
-        n = len(names)
-        if type(value) is np.ndarray and value.dtype == np.float64 and value.shape == (n,):
-            arr = value
-            if not check:
-                return arr
-        elif type(value) is float and (not check or math.isfinite(value)):
-            return np.full(n, value)             # a plain float for all (e.g. gap_rates=0.0)
-        else:
-            reject_bools(value, what)
-            if isinstance(value, Mapping):
-                missing = [k for k in names if k not in value]
-                unknown = sorted(set(value) - set(names))
-                if missing or unknown:
-                    raise InputError(f"{what}: give one value per name (missing {missing[:5]}, "
-                                     f"unknown {unknown[:5]})")
-                value = [value[k] for k in names]
-            try:
-                arr = np.asarray(value, dtype=float)
-            except (TypeError, ValueError):
-                raise InputError(f"{what} must be numbers [{unit}], got {value!r}") from None
-            if arr.ndim == 0:
-                arr = np.full(n, float(arr))
-            if arr.shape != (n,):
-                raise InputError(f"{what}: expected {n} values [{unit}] (one per "
-                                 f"{'gap input' if what.startswith('gap') else 'circuit'}), "
-                                 f"got shape {arr.shape}")
-        if not np.isfinite(arr).all():
-            j = int(np.argmax(~np.isfinite(arr)))
-            raise InputError(f"{what} must be finite: {names[j]!r} = {float(arr[j])!r} {unit}")
-        return arr
-
     def _range_error(self, k: int, s: float, i: float, where: str) -> None:
         j = int(self._reduced_idx[k])
-        name = self.circuit_names[j]
-        member, circuit = name.split("/", 1)
         b = self._bounds[:, k]
-        msg = (f"member {member!r}, circuit {circuit!r}{where}: substitute gap {s:.6g} m and "
-               f"current {i:.6g} A; its maps cover gaps {b[0]:g}..{b[1]:g} m and currents "
-               f"{b[2]:g}..{b[3]:g} A")
+        text = STEP_FLAG_MESSAGES
+        msg = text["out_of_maps"] % (circuit_label(self.circuit_names[j]), where, s, i, *b)
         if self.extrapolate:
             e = self._spline_bounds[:, k]
             if e[0] <= s <= e[1] and e[2] <= i <= e[3]:
@@ -1355,14 +1361,15 @@ class MagnetBank:
                 # otherwise warn at every step (each message names its own time)
                 if k not in self._extrapolation_warned:
                     self._extrapolation_warned.add(k)
-                    warnings.warn("extrapolating the characteristic maps: " + msg
+                    warnings.warn("extrapolating the characteristic maps: "
+                                  + msg.removeprefix("outside the characteristic maps: ")
                                   + " (reported once per circuit)", stacklevel=4)
                 return
             msg += f"; linear extrapolation reaches only {EXTRA_CELLS} grid cells beyond the maps"
-            advice = " (rebuild the maps on a larger grid)"
+            advice = text["advice_extrapolating"]
         else:
-            advice = " (rebuild the maps on a larger grid, or pass extrapolate=True)"
-        raise OutOfRangeError("outside the characteristic maps: " + msg + advice)
+            advice = text["advice"]
+        raise OutOfRangeError(msg + advice)
 
     def _check_range(self, s_lo: np.ndarray, s_hi: np.ndarray, i_lo: np.ndarray,
                      i_hi: np.ndarray, where: str) -> None:
@@ -1397,32 +1404,29 @@ class MagnetBank:
         """The message of one reason code of reduced circuit ``k`` (raises, or returns after
         an extrapolation warning)."""
         name = self.circuit_names[int(self._reduced_idx[k])]
+        text = STEP_FLAG_MESSAGES
         if reason is StepFlag.INPUT_NOT_FINITE:
             for what, arr, unit in (("voltages", u, "V"), ("gaps", s, "m"),
                                     ("gap_rates", sd, "m/s")):
                 if not math.isfinite(float(arr[k])):
-                    raise InputError(f"{what} must be finite: circuit {name!r} has "
-                                     f"{float(arr[k])!r} {unit}")
+                    raise InputError(text["input_not_finite"] % (what, name, float(arr[k]), unit))
         elif reason is StepFlag.GAP_OUT_OF_RANGE:
             if s[k] <= 0 or se[k] <= 0:
-                raise InputError(f"gaps must stay > 0 m over the step: circuit {name!r} from "
-                                 f"{float(s[k])!r} m to {float(se[k])!r} m")
+                raise InputError(text["gap_not_positive"] % (name, float(s[k]), float(se[k])))
             low, high = min(s[k], se[k]), max(s[k], se[k])
             self._range_error(k, float(low if low < self._lo_s[k] else high), float(i0[k]),
-                              f" over the step t = {t0:.6g}..{t1:.6g} s")
+                              text["step"] % (t0, t1))
         elif reason is StepFlag.RESULT_NOT_FINITE:
-            raise SolverError(f"non-finite value in circuit {name!r}", time=t0,
+            raise SolverError(text["result_not_finite"] % name, time=t0,
                               state={"I_L_A": float(i0[k]), "gap_m": float(s[k]),
                                      "gap_rate_m_per_s": float(sd[k]),
                                      "voltage_V": float(u[k])},
                               reason="the RK4 step gave a non-finite current")
         elif not self._lo_i[k] <= i0[k] <= self._hi_i[k]:   # CURRENT_OUT_OF_RANGE at the start
-            self._range_error(k, float(s[k]), float(i0[k]),
-                              f" over the step t = {t0:.6g}..{t1:.6g} s")
+            self._range_error(k, float(s[k]), float(i0[k]), text["step"] % (t0, t1))
         else:                                     # CURRENT_OUT_OF_RANGE in a sub-step
             cur = lo[k] if lo[k] < self._lo_i[k] else hi[k]
-            self._range_error(k, float(se[k]), float(cur),
-                              f" in an RK4 sub-step within t = {t0:.6g}..{t1:.6g} s")
+            self._range_error(k, float(se[k]), float(cur), text["substep"] % (t0, t1))
 
     # ------------------------------------------------------------------ stepping interface
     @renamed_keywords(gaps="gaps_m", currents="currents_A", time="time_s")
@@ -1459,11 +1463,11 @@ class MagnetBank:
             ``extrapolate``).
         """
         gaps, currents, time = gaps_m, currents_A, time_s
-        g = self._vector(gaps, self.gap_names, "gaps", "m")
+        g = per_name_values(gaps, self.gap_names, "gaps", "m", kind="gap input")
         if (g <= 0).any():
             j = int(np.argmax(g <= 0))
             raise InputError(f"gaps must be > 0 m: {self.gap_names[j]!r} = {float(g[j])!r} m")
-        i = self._vector(currents, self.circuit_names, "currents", "A").copy()
+        i = per_name_values(currents, self.circuit_names, "currents", "A").copy()
         reject_bools(time, "time")
         if not (isinstance(time, (int, float, np.floating)) and math.isfinite(time)):
             raise InputError(f"time = {time!r} must be a finite number of seconds")
@@ -1545,10 +1549,11 @@ class MagnetBank:
         # inputs, gaps outside the maps (which start above 0) and currents leaving them;
         # only a flagged step is diagnosed in Python
         checked = not self._fast
-        u = self._vector(voltages, self.circuit_names, "voltages", "V", checked)
-        g = state.gaps_m if gaps is None else self._vector(gaps, self.gap_names, "gaps", "m",
-                                                           checked)
-        gd = self._vector(gap_rates, self.gap_names, "gap_rates", "m/s", checked)
+        u = per_name_values(voltages, self.circuit_names, "voltages", "V", finite=checked)
+        g = state.gaps_m if gaps is None else per_name_values(
+            gaps, self.gap_names, "gaps", "m", finite=checked, kind="gap input")
+        gd = per_name_values(gap_rates, self.gap_names, "gap_rates", "m/s", finite=checked,
+                             kind="gap input")
         t0, t1 = state.time_s, state.time_s + dt
         if self._fast:
             # all reduced, one gap per circuit: one kernel call and two objects (the kernel
@@ -1806,7 +1811,7 @@ class MagnetBank:
         # (steady state: I_e = 0 in the ladder circuits, so R_el I_L there too)
         u = (self.resistance_ohm * np.where(np.isnan(state.inductor_currents_A), 0.0,
                                             state.inductor_currents_A)
-             if voltages_V is None else self._vector(voltages_V, self.circuit_names, "voltages", "V"))
+             if voltages_V is None else per_name_values(voltages_V, self.circuit_names, "voltages", "V"))
         return self._outputs_at(state, u)
 
     def _outputs_at(self, state: BankState, u: np.ndarray) -> BankOutputs:

@@ -31,8 +31,9 @@ from ..errors import InputError
 if TYPE_CHECKING:
     from ..reduction.maps import CharacteristicMaps
 
-__all__ = ["EDDY_RESISTANCE_CHOICES", "EXTRA_CELLS", "MotionEddyLadder", "ReducedCore", "eq8_a",
-           "extend_axis", "extend_values", "rk4_substep", "substep_count", "substep_counts"]
+__all__ = ["EDDY_RESISTANCE_CHOICES", "EXTRA_CELLS", "SUBSTEP_ALLOWANCE", "MotionEddyLadder",
+           "ReducedCore", "eq8_a", "extend_axis", "extend_values", "rk4_substep", "substep_count",
+           "substep_counts", "substep_rule_c"]
 
 EXTRA_CELLS = 3
 """Grid cells by which the maps are continued linearly beyond their range."""
@@ -86,6 +87,31 @@ def extend_values(values: np.ndarray, *, axis: int) -> np.ndarray:
     return np.moveaxis(np.concatenate([lo, v, hi], axis=0), 0, axis)
 
 
+#: relative allowance of the sub-step rule: a step this much longer than a whole multiple
+#: of the longest sub-step gets no extra sub-step
+SUBSTEP_ALLOWANCE = 1e-12
+
+
+def substep_rule_c(step: str, max_step: str) -> str:
+    """The sub-step rule of :func:`substep_counts` as a C expression (a ``long``), for
+    generated C that must count sub-steps the same way (the FMU's wrapper).
+
+    Parameters
+    ----------
+    step : str
+        C expression of the step length [s].
+    max_step : str
+        C expression of the longest sub-step [s].
+
+    Returns
+    -------
+    str
+        ``max(1, ceil(step / max_step * (1 - SUBSTEP_ALLOWANCE)))`` in C (needs ``math.h``).
+    """
+    count = f"(long)ceil(({step}) / ({max_step}) * (1.0 - {SUBSTEP_ALLOWANCE!r}))"
+    return f"({count} > 1 ? {count} : 1L)"
+
+
 def substep_counts(dt_s: Any, max_step_s: float) -> np.ndarray:
     """The RK4 sub-step rule: ``max(1, ceil(dt / max_step_s))`` sub-steps per step.
 
@@ -105,7 +131,7 @@ def substep_counts(dt_s: Any, max_step_s: float) -> np.ndarray:
         Sub-steps per step (the shape of ``dt_s``).
     """
     return np.maximum(1, np.ceil(np.asarray(dt_s, dtype=float) / max_step_s
-                                 * (1 - 1e-12))).astype(int)
+                                 * (1 - SUBSTEP_ALLOWANCE))).astype(int)
 
 
 def substep_count(dt_s: float, max_step_s: float) -> int:
@@ -123,7 +149,7 @@ def substep_count(dt_s: float, max_step_s: float) -> int:
     int
         Sub-steps of the step.
     """
-    return max(1, math.ceil(dt_s / max_step_s * (1 - 1e-12)))
+    return max(1, math.ceil(dt_s / max_step_s * (1 - SUBSTEP_ALLOWANCE)))
 
 
 def rk4_substep(x: Any, hs: Any, rhs_start: Callable[[Any], Any],

@@ -41,14 +41,15 @@ from __future__ import annotations
 import math
 import warnings
 from dataclasses import dataclass
+from pathlib import Path
 from typing import TYPE_CHECKING, Any, TypeVar
 
 import casadi as ca
 import numpy as np
 
 from ..errors import InputError, OutOfRangeError, SolverError
-from ..models.compiled import COMPILE_MODES, BoundCall
-from ..models.inputs import check_initial_choice, check_step, simulation_inputs
+from ..models.compiled import COMPILE_MODES, DEFAULT_FLAGS, BoundCall, compile_library
+from ..models.inputs import check_initial_choice, check_step, per_name_values, simulation_inputs
 from ..validation import flag, real_array, renamed_keywords
 from .core import (
     EXTRA_CELLS,
@@ -529,6 +530,7 @@ class CurrentModel:
                             and not self.motion_eddy)
         self._bank: Any = None
         self._table_steps: dict[float, _TableStep] = {}
+        self._input_shapes = ((self.n_circuits,), (len(self.gap_names),))
 
     # ------------------------------------------------------------------ helpers
     @property
@@ -1064,18 +1066,18 @@ class CurrentModel:
             return None                        # not a state of this model: say so there
         if not (type(dt) is float and 0.0 < dt < math.inf):
             dt = check_step(dt)
-        nc, ng = self.n_circuits, len(self.gap_names)
+        shape_c, shape_g = self._input_shapes
         u = (voltages if type(voltages) is np.ndarray and voltages.dtype == np.float64
-             and voltages.shape == (nc,) else _per_circuit(voltages, self.circuit_names,
-                                                           "voltages"))
+             and voltages.shape == shape_c else _per_circuit(voltages, self.circuit_names,
+                                                             "voltages"))
         g = (state.gaps_m if gaps is None else gaps if type(gaps) is np.ndarray
-             and gaps.dtype == np.float64 and gaps.shape == (ng,)
+             and gaps.dtype == np.float64 and gaps.shape == shape_g
              else _per_gap(gaps, self.gap_names, positive=True))
-        if type(gap_rates) is float:
-            gd = np.full(ng, gap_rates)
-        elif type(gap_rates) is np.ndarray and gap_rates.dtype == np.float64 and \
-                gap_rates.shape == (ng,):
+        if type(gap_rates) is np.ndarray and gap_rates.dtype == np.float64 and \
+                gap_rates.shape == shape_g:
             gd = gap_rates
+        elif type(gap_rates) is float:
+            gd = np.full(shape_g, gap_rates)
         else:
             gd = _per_gap(gap_rates, self.gap_names, positive=False)
         call = self._table_steps.get(dt)
@@ -1083,7 +1085,9 @@ class CurrentModel:
             bank = self._table_bank()
             if bank is None:
                 return None
-            call = _TableStep(bank.step_kernel(dt), self._avg, self._share)
+            lanes = bank.compiled_step_library(dt)
+            call = (_TableStep(bank.step_kernel(dt), self._avg, self._share) if lanes is None
+                    else _TableStep(lanes[0], self._avg, self._share, lanes[1]))
             if len(self._table_steps) > 16:
                 self._table_steps.clear()
             self._table_steps[dt] = call
@@ -1200,20 +1204,23 @@ class CurrentModel:
                               else initial_currents, self.circuit_names, "initial_currents")
             e0 = np.zeros(self.n_circuits * self._n_e)    # steady state: I_k = 0
         s = self.substitute_gaps(g)
-        self._check_range(s, np.broadcast_to(i0, s.shape), times)
         sd = self.substitute_gaps(secant)
-        if self._use_tables:
-            run = self._run_tables(times, s, u, sd, i0)
-            if run is not None:
-                il, coil_t, fc = run
-                final = CurrentModelState(float(times[-1]), il[-1].copy(), g[-1].copy(), None)
-                return ReducedSimulation(
-                    time_s=times, gaps_m=g, gap_rates_m_per_s=np.vstack((secant, secant[-1:])),
-                    voltages_V=np.vstack((u[:-1], u[-2:-1])), currents_A=coil_t,
-                    inductor_currents_A=il, circuit_force_N=fc,
-                    pole_force_N=fc @ self._share.T, force_N=fc.sum(axis=1),
-                    gap_names=self.gap_names, circuit_names=self.circuit_names,
-                    final_state=final)
+        # the table kernel flags every step whose gap path or currents leave the maps (the
+        # same bounds with the same allowances as the check below), so a run it finishes
+        # needs no check of its own; a flagged run takes the checked B-spline path
+        run = self._run_tables(times, s, u, sd, i0) if self._use_tables else None
+        if run is None:
+            self._check_range(s, np.broadcast_to(i0, s.shape), times)
+        else:
+            il, coil_t, fc = run
+            final = CurrentModelState(float(times[-1]), il[-1].copy(), g[-1].copy(), None)
+            return ReducedSimulation(
+                time_s=times, gaps_m=g, gap_rates_m_per_s=np.vstack((secant, secant[-1:])),
+                voltages_V=np.vstack((u[:-1], u[-2:-1])), currents_A=coil_t,
+                inductor_currents_A=il, circuit_force_N=fc,
+                pole_force_N=fc @ self._share.T, force_N=fc.sum(axis=1),
+                gap_names=self.gap_names, circuit_names=self.circuit_names,
+                final_state=final)
         xs, outs = self._integrate(times, np.concatenate([i0, s[0], e0]),
                                    np.concatenate([u[:-1], sd], axis=1).T)
         nc = self.n_circuits
@@ -1252,6 +1259,11 @@ def _jit_compile(f: ca.Function) -> ca.Function:
                           reason=_last_line(str(exc))) from None
 
 
+#: CurrentModel.step calls of one step length after which the wrapper around the bank's
+#: compiled step is compiled too (0.3-0.7 s of the C compiler once, then cached on disk)
+COMPILE_AFTER_STEPS = 200
+
+
 class _TableStep:
     """One step on the bank's compiled table kernel with everything around it in one
     CasADi call through bound NumPy buffers: substitute gaps and rates from the pole
@@ -1263,7 +1275,8 @@ class _TableStep:
     gaps, or None when the step is flagged.
     """
 
-    def __init__(self, kernel: ca.Function, avg: np.ndarray, share: np.ndarray) -> None:
+    def __init__(self, kernel: ca.Function, avg: np.ndarray, share: np.ndarray,
+                 library: Path | None = None) -> None:
         nc, ng = avg.shape
         x, u = ca.MX.sym("I_L", nc), ca.MX.sym("U", nc)
         g, gd, h = ca.MX.sym("gaps", ng), ca.MX.sym("gap_rates", ng), ca.MX.sym("h")
@@ -1274,20 +1287,46 @@ class _TableStep:
         force = res["F"]
         outs = [res["I_L_next"], res["I"], force, ca.mtimes(ca.DM(share), force),
                 res["member_F"], g1, res["I_L_next"], flag]
-        f = ca.Function("current_model_table_step", [x, g, u, gd, h], outs)
+        f = ca.Function(f"maglevkit_cm_{kernel.name()}", [x, g, u, gd, h], outs)
+        self.function, self.library = f, library
+        # with the lane library: compiled after COMPILE_AFTER_STEPS calls (a short run
+        # never pays the compiler), until then CasADi's virtual machine (bit-identical)
+        self.countdown = COMPILE_AFTER_STEPS if library is not None else 0
         sizes = [f.nnz_out(i) for i in range(f.n_out() - 1)]
         self.block = np.zeros(sum(sizes))
         ends = np.cumsum([0, *sizes])
         self.slices = [slice(int(a), int(b)) for a, b in zip(ends[:-1], ends[1:], strict=True)]
         self.flag = np.zeros(1)
+        self._bind(f)
+
+    def _bind(self, f: ca.Function) -> None:
         bind = {i: self.block[sl] for i, sl in enumerate(self.slices)}
         bind[len(self.slices)] = self.flag
         self.bound = BoundCall(f, res=bind)
         self.args = self.bound.args
         self.eval = self.bound.eval
 
+    def _compile(self) -> None:
+        """This function as generated C linked against the lane library that holds the
+        kernel (CasADi's virtual machine spends three times the kernel's own time calling
+        it); the same operations, no contraction (bit-identical, tested)."""
+        lib = self.library
+        assert lib is not None
+        try:
+            f = compile_library(self.function.name(), [self.function], mode="always",
+                                cache_dir=None, flags=(
+                                    *DEFAULT_FLAGS, "-ffp-contract=off", "-Wl,--no-as-needed",
+                                    str(lib), f"-Wl,-rpath,{lib.parent}"))[0][0]
+        except SolverError:                # e.g. a linker without these options: as it is
+            return
+        self._bind(f)
+
     def __call__(self, i: np.ndarray, g: np.ndarray, u: np.ndarray, gd: np.ndarray,
-                 h: float) -> list[np.ndarray] | None:
+                 h: float) -> tuple[np.ndarray, ...] | None:
+        if self.countdown:
+            self.countdown -= 1
+            if not self.countdown:
+                self._compile()
         a = self.args
         a[0][:] = i
         a[1][:] = g
@@ -1298,7 +1337,8 @@ class _TableStep:
         if self.flag[0]:
             return None
         b = self.block.copy()
-        return [b[sl] for sl in self.slices]
+        s0, s1, s2, s3, s4, s5, s6 = self.slices
+        return b[s0], b[s1], b[s2], b[s3], b[s4], b[s5], b[s6]
 
 
 _T = TypeVar("_T")
@@ -1449,25 +1489,16 @@ def _last_line(text: str) -> str:
     return lines[-1] if lines else text
 
 
+_UNITS = {"voltages": "V", "voltage_V": "V", "currents": "A", "current_A": "A",
+          "initial_currents": "A"}
+
+
 def _per_circuit(value: Any, names: tuple[str, ...], what: str) -> np.ndarray:
-    if isinstance(value, dict):
-        missing = [n for n in names if n not in value]
-        unknown = sorted(set(value) - set(names))
-        if missing or unknown:
-            raise InputError(f"{what}: give one value per circuit {list(names)} "
-                             f"(missing {missing}, unknown {unknown})")
-        value = [value[n] for n in names]
-    arr = real_array(value, what)          # no bools, strings, NaN or inf
-    if arr.ndim == 0:
-        arr = np.full(len(names), float(arr))
-    if arr.shape != (len(names),):
-        raise InputError(f"{what}: expected {len(names)} values (circuits {list(names)}), "
-                         f"got shape {arr.shape}")
-    return arr
+    """One finite value per circuit (:func:`~maglevkit.models.inputs.per_name_values`)."""
+    return per_name_values(value, names, what, _UNITS.get(what, ""))
 
 
 def _per_gap(value: Any, names: tuple[str, ...], *, positive: bool) -> np.ndarray:
-    arr = _per_circuit(value, names, "gaps" if positive else "gap_rates")
-    if positive and (arr <= 0).any():
-        raise InputError(f"gaps must be > 0 m, got {arr}")
-    return arr
+    """Pole gaps [m] (> 0) or gap rates [m/s] per gap (the same converter)."""
+    return (per_name_values(value, names, "gaps", "m", kind="gap", positive=True) if positive
+            else per_name_values(value, names, "gap_rates", "m/s", kind="gap"))

@@ -29,7 +29,7 @@ import numpy as np
 
 from ..errors import InputError
 from ..models.compiled import BoundCall
-from ..models.inputs import check_step
+from ..models.inputs import check_step, per_name_values
 from ..validation import renamed_keywords
 
 if TYPE_CHECKING:
@@ -251,18 +251,23 @@ class BankStepper:
 
     # ------------------------------------------------------------------ stepping
     def _convert(self, value: Any, names: tuple[str, ...], what: str, unit: str) -> np.ndarray:
-        # as MagnetBank.step converts: non-finite values pass on the fast path, where the
-        # kernel flags them and the step is diagnosed as step diagnoses it
-        return self._bank._vector(value, names, what, unit, not self._fast)
+        """One input as :meth:`_write_inputs` converts it (for the property setters)."""
+        return per_name_values(value, names, what, unit, finite=not self._fast,
+                               kind="gap input" if what.startswith("gap") else "circuit")
 
     def _write_inputs(self, voltages: Any, gaps: Any, gap_rates: Any) -> None:
-        """Convert the given inputs, then write them (a refused one writes nothing)."""
+        """Convert the given inputs, then write them (a refused one writes nothing).
+
+        As :meth:`MagnetBank.step` converts: non-finite values pass on the fast path, where
+        the kernel flags them and the step is diagnosed as ``step`` diagnoses it."""
         bank = self._bank
-        u = None if voltages is None else self._convert(voltages, bank.circuit_names,
-                                                        "voltages", "V")
-        g = None if gaps is None else self._convert(gaps, bank.gap_names, "gaps", "m")
-        gd = None if gap_rates is None else self._convert(gap_rates, bank.gap_names,
-                                                          "gap_rates", "m/s")
+        finite = not self._fast
+        u = None if voltages is None else per_name_values(
+            voltages, bank.circuit_names, "voltages", "V", finite=finite)
+        g = None if gaps is None else per_name_values(
+            gaps, bank.gap_names, "gaps", "m", finite=finite, kind="gap input")
+        gd = None if gap_rates is None else per_name_values(
+            gap_rates, bank.gap_names, "gap_rates", "m/s", finite=finite, kind="gap input")
         if u is not None:
             self._u[:] = u
         if g is not None:

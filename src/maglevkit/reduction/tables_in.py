@@ -49,6 +49,7 @@ import numpy as np
 
 from .._version import __version__
 from ..errors import DataError, DataWarning, InputError, PlausibilityWarning
+from ..models.inputs import per_name_values
 from ..validation import real_number
 from .maps import MAPS_FORMAT, CharacteristicMaps, check_grid, maps_dataset
 
@@ -683,28 +684,6 @@ def _derived_grid_error(table: GridTable, what: str, value: np.ndarray, err: np.
 
 
 # ---------------------------------------------------------------------------- maps
-def _per_circuit(value: Any, circuits: tuple[str, ...], what: str, *,
-                 allow_inf: bool = False) -> np.ndarray:
-    if isinstance(value, Mapping):
-        missing = [c for c in circuits if c not in value]
-        unknown = sorted(set(value) - set(circuits))
-        if missing or unknown:
-            raise InputError(f"{what}: give one value per circuit {list(circuits)} (missing "
-                             f"{missing}, unknown {unknown})")
-        value = [value[c] for c in circuits]
-    vals = np.atleast_1d(np.asarray(value, dtype=object))
-    if vals.size == 1:
-        vals = np.repeat(vals, len(circuits))
-    if vals.size != len(circuits):
-        raise InputError(f"{what}: expected {len(circuits)} values (circuits {list(circuits)}), "
-                         f"got {vals.size}")
-    out = np.empty(len(circuits))
-    for j, v in enumerate(vals):
-        if allow_inf and isinstance(v, (float, int, np.floating)) and v == math.inf:
-            out[j] = math.inf
-        else:
-            out[j] = real_number(v, f"{what} of circuit {circuits[j]!r}", "ohm", positive=True)
-    return out
 
 
 def maps_from_table(data: str | Path | GridTable, *, resistance_ohm: Any = None,
@@ -766,8 +745,9 @@ def maps_from_table(data: str | Path | GridTable, *, resistance_ohm: Any = None,
             raise InputError("resistance_ohm (R_el per circuit [ohm]) is required: a table "
                              "holds no resistance (or give the magnet)")
         resistance_ohm = r_default
-    r_el = _per_circuit(resistance_ohm, circuits, "resistance_ohm")
-    r_ec = _per_circuit(eddy_resistance_ohm, circuits, "eddy_resistance_ohm", allow_inf=True)
+    r_el = per_name_values(resistance_ohm, circuits, "resistance_ohm", "ohm", positive=True)
+    r_ec = per_name_values(eddy_resistance_ohm, circuits, "eddy_resistance_ohm", "ohm",
+                           positive=True, allow_inf=True)
     psi = table.flux_linkage_Wb
     if psi is None:
         raise DataError(f"{table.source}: the table has no flux_linkage_Wb: the reduced model "

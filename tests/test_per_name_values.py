@@ -1,0 +1,66 @@
+"""The one converter of per-name inputs (models.inputs.per_name_values): its messages name
+the user's option, the value and what is allowed, the same style in all four users."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+import maglevkit as mk
+from maglevkit.errors import InputError
+from maglevkit.models.inputs import per_name_values
+
+NAMES = ("a/front", "a/rear")
+
+
+def test_forms_and_the_fast_path() -> None:
+    v = np.array([1.0, 2.0])
+    assert per_name_values(v, NAMES, "voltages", "V") is v          # no copy, no conversion
+    assert per_name_values(3.0, NAMES, "voltages", "V").tolist() == [3.0, 3.0]
+    assert per_name_values([1, 2], NAMES, "voltages", "V").tolist() == [1.0, 2.0]
+    assert per_name_values({"a/rear": 2, "a/front": 1}, NAMES, "voltages", "V").tolist() == [1, 2]
+    # finite=False passes NaN on (a kernel flags it), positive and allow_inf
+    assert math.isnan(per_name_values([np.nan, 1.0], NAMES, "gaps", "m", finite=False)[0])
+    assert per_name_values([1.0, math.inf], NAMES, "R", "ohm", positive=True,
+                           allow_inf=True)[1] == math.inf
+
+
+@pytest.mark.parametrize(("value", "options", "pattern"), [
+    ({"a/front": 1.0, "x": 2.0}, {}, r"voltages: unknown names \['x'\], missing \['a/rear'\]; "
+                                     r"give one value \[V\] per circuit: \['a/front', 'a/rear'\]"),
+    ([1.0, 2.0, 3.0], {}, r"voltages: expected 2 values \[V\] \(one per circuit of "
+                          r"\['a/front', 'a/rear'\], or one for all\), got shape \(3,\)"),
+    ([1.0, math.nan], {}, r"voltages must be finite: circuit 'a/rear' = nan V"),
+    ([1.0, math.inf], {"allow_inf": True, "positive": True}, None),
+    ([1.0, -math.inf], {"allow_inf": True}, r"voltages must be finite \(or inf\): circuit "
+                                            r"'a/rear' = -inf V"),
+    ([1.0, 0.0], {"positive": True}, r"voltages must be > 0 V: circuit 'a/rear' = 0.0 V"),
+    ([True, 1.0], {}, r"voltages \[V\] = \[True, 1.0\] \(list\) contains a bool"),
+])
+def test_messages(value: object, options: dict, pattern: str | None) -> None:
+    if pattern is None:
+        per_name_values(value, NAMES, "voltages", "V", **options)
+        return
+    with pytest.raises(InputError, match=pattern):
+        per_name_values(value, NAMES, "voltages", "V", **options)
+
+
+def test_the_users_share_the_message_style() -> None:
+    """CurrentModel, MagnetBank, its stepper and the table import say the same."""
+    mag = mk.load_magnet("u-magnet")
+    maps = mk.build_maps(mag, gaps=np.linspace(0.004, 0.02, 5), currents=np.linspace(0, 40, 5),
+                         progress=False)
+    cm = mk.CurrentModel(maps)
+    st = cm.initial_state(gaps_m=0.01, currents_A=10.0)
+    with pytest.raises(InputError, match=r"voltages: expected 1 values \[V\] \(one per circuit"):
+        cm.step(st, 1e-3, [1.0, 2.0])
+    bank = mk.MagnetBank({"m": maps})
+    bst = bank.initial_state(gaps_m=0.01, currents_A=10.0)
+    with pytest.raises(InputError, match=r"voltages: expected 1 values \[V\] \(one per circuit"):
+        bank.step(bst, 1e-3, [1.0, 2.0])
+    with pytest.raises(InputError, match=r"voltages: unknown names \['x'\], missing"):
+        bank.stepper(bst, 1e-3).advance({"x": 1.0})
+    with pytest.raises(InputError, match=r"gaps must be > 0 m: gap '.*' = -0.01 m"):
+        cm.initial_state(gaps_m=-0.01, currents_A=10.0)
