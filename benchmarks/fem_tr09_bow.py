@@ -209,6 +209,10 @@ def table(rows: list[dict]) -> str:
 def main(argv: list[str] | None = None) -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--grid", action="store_true", help="the gap x current x offset grid")
+    ap.add_argument("--gaps-mm", nargs="+", type=float, default=(10.0, 20.0, 6.0),
+                    help="gaps of the grid, in this order")
+    ap.add_argument("--currents", nargs="+", type=float, default=CURRENTS_A,
+                    help="currents of the grid [A]")
     ap.add_argument("--convergence", action="store_true",
                     help="10 mm / 80 A, tooth centred, on the finer mesh (refine 1)")
     ap.add_argument("--compare", action="store_true", help="network vs the recorded grid")
@@ -218,8 +222,8 @@ def main(argv: list[str] | None = None) -> None:
     assert tuple(mag.parameters["circuits"]["assignment"]) == ASSIGNMENT
     g = Geometry.from_magnet(mag)
     if args.grid:
-        order = (10.0, 20.0, 6.0)
-        run(g, [(s * 1e-3, i, o) for s in order for o in OFFSETS for i in CURRENTS_A])
+        run(g, [(s * 1e-3, i, o) for s in args.gaps_mm for o in OFFSETS
+                for i in args.currents])
     if args.convergence:
         run(g, [(0.010, 80.0, 0.0)], refine=1.0)
     if args.compare:

@@ -34,8 +34,34 @@ def _load(name: str):  # type: ignore[no-untyped-def]
 # (network - FEM)/FEM [%]: force, end circuit's psi and L, middle circuit's psi and L (all
 # currents together).  Deterministic network, fixed record: 0.3 pp covers rounding only.
 MARGIN = 0.3
-SPLIT: dict[tuple[float, float], tuple[float, ...]] = {}
-PAPER: dict[tuple[float, float], tuple[float, ...]] = {}
+# "split" as of 2026-12-02 (the network of test_fem_tr09.MEASURED: the force errors are
+# those, to the digit; a change of the split network re-measures both tables with
+# ``python benchmarks/fem_tr09_bow.py --compare``)
+SPLIT: dict[tuple[float, float], tuple[float, ...]] = {
+    (10.0, 10.0): (+1.0, +0.8, +0.8, +1.4, +1.4),
+    (10.0, 33.5): (+1.2, +0.9, +1.4, +1.5, +1.9),
+    (10.0, 50.0): (+1.4, +0.8, -0.9, +1.9, +3.0),
+    (10.0, 80.0): (-2.3, -0.7, -7.7, +0.6, -6.3),
+    (10.0, 100.0): (-3.7, -1.3, -8.6, +0.0, -6.4),
+    (20.0, 10.0): (+3.1, +0.3, +0.3, +1.2, +1.2),
+    (20.0, 33.5): (+3.1, +0.3, +0.4, +1.2, +1.3),
+    (20.0, 50.0): (+3.3, +0.4, +0.7, +1.3, +1.5),
+    (20.0, 80.0): (+3.4, +0.4, -0.4, +1.6, +2.9),
+    (20.0, 100.0): (+3.2, +0.1, -2.5, +1.7, +0.0),
+}
+# the lumped default ("paper")
+PAPER: dict[tuple[float, float], tuple[float, ...]] = {
+    (10.0, 10.0): (-9.6, -11.7, -11.6, -11.1, -11.1),
+    (10.0, 33.5): (-9.3, -11.5, -10.8, -11.0, -10.7),
+    (10.0, 50.0): (-9.0, -11.1, -13.1, -11.0, -14.1),
+    (10.0, 80.0): (-19.4, -14.9, -29.4, -15.4, -29.4),
+    (10.0, 100.0): (-23.1, -15.7, -17.2, -16.1, -15.6),
+    (20.0, 10.0): (-9.3, -12.8, -12.8, -11.8, -11.8),
+    (20.0, 33.5): (-9.3, -12.7, -12.7, -11.8, -11.7),
+    (20.0, 50.0): (-9.1, -12.7, -12.3, -11.7, -11.5),
+    (20.0, 80.0): (-7.9, -11.8, -7.9, -11.5, -10.9),
+    (20.0, 100.0): (-9.0, -11.6, -15.5, -11.7, -15.9),
+}
 
 
 def _check(flux_paths: str, measured: dict[tuple[float, float], tuple[float, ...]]) -> dict:
@@ -56,9 +82,11 @@ def _check(flux_paths: str, measured: dict[tuple[float, float], tuple[float, ...
 def test_split_network_per_circuit_against_recorded_fem() -> None:
     rows = _check("split", SPLIT)
     for k, r in rows.items():
-        # per circuit as good as the standard magnet's half magnets below the knee
-        if k[1] <= 33.5:
-            assert abs(r["epsi_end"]) < 3.0 and abs(r["epsi_mid"]) < 3.0, k
+        # every circuit's flux linkage within the 3 % aim, as the standard's half magnets
+        assert abs(r["epsi_end"]) < 3.0 and abs(r["epsi_mid"]) < 3.0, k
+        # the field's split between the circuits is followed to 2 pp: the network links
+        # the middle circuit 0.6-1.6 pp more than the end circuit, relative to the FEM
+        assert 0.0 < r["epsi_mid"] - r["epsi_end"] < 2.0, k
 
 
 @pytest.mark.slow
