@@ -28,7 +28,9 @@ So the FEM is the cross-section (x normal to the rail, pole faces at x = 0, the 
   section length where the real magnet has coil and legs only over the yokes' width (the
   network's leg leakage: ``yokes_per_section x yoke_width``); ``--convergence`` also solves it
   with that air at the yokes' depth (relative permeability ``n_y w_y / L``), which bounds
-  this 3-D term of the FEM itself.
+  this 3-D term of the FEM itself; and with the air behind the yoke at the yokes' depth
+  (``behind_depth``: the leakage around the coil's rear, which the 2-D field spreads into the
+  whole half plane behind the magnet over the whole section length).
 
 The magnet is symmetric about y = 0 with the flux crossing that plane at right angles
 (yoke, rail), so only y >= 0 is meshed (natural condition there, A = 0 on the box).
@@ -164,7 +166,7 @@ def regions(mesh, g: Geometry, s: float):  # type: ignore[no-untyped-def]
 
 
 def solve(g: Geometry, s: float, current: float, *, refine: float = 1.0, order: int = 2,
-          window_depth: bool = False, tol: float = 1e-9,
+          window_depth: bool = False, behind_depth: bool = False, tol: float = 1e-9,
           A0: np.ndarray | None = None) -> tuple[dict, np.ndarray]:
     """One FEM solution (half model y >= 0); returns the outputs and A."""
     import scipy.sparse.linalg as spla
@@ -178,9 +180,12 @@ def solve(g: Geometry, s: float, current: float, *, refine: float = 1.0, order: 
     parts = [(bars, Reluctivity(material=g.material)),
              (rail, Reluctivity(material=g.rail_material)),
              (yokes, Reluctivity(material=g.material, depth_ratio=g.depth / g.yoke_depth))]
+    thin = Reluctivity(mu_r=g.yoke_depth / g.depth)
     if window_depth:            # the air between the legs only over the yokes' depth
-        parts.append((window & (sign == 0), Reluctivity(mu_r=g.yoke_depth / g.depth)))
-        parts.append((window & (sign != 0), Reluctivity(mu_r=g.yoke_depth / g.depth)))
+        parts.append((window, thin))
+    if behind_depth:            # the air (and coil) behind the yoke likewise
+        cx = mesh.p[0, mesh.t].mean(axis=0)
+        parts.append((cx < g.xs()["yoke_back"], thin))
 
     @LinearForm
     def load(v, w):  # type: ignore[no-untyped-def]
@@ -224,19 +229,21 @@ def solve(g: Geometry, s: float, current: float, *, refine: float = 1.0, order: 
     # the mid-gap line over y > 0 (A = 0 on the box): face, flanks and fringes
     flux["gap"] = d * abs(float((basis.probes(np.array([[0.5 * s], [0.0]])) @ A)[0]))
     out = {"s": s, "current": current, "refine": refine, "order": order,
-           "window_depth": window_depth, "build": g.build, "box": g.box,
+           "window_depth": window_depth, "behind_depth": behind_depth, "build": g.build,
+           "box": g.box,
            "dofs": int(basis.N), "iterations": sol.iterations, "force_N": force,
            "psi_Wb": psi, "L_H": L, "flux": flux, "seconds": time.time() - t0}
     return out, A
 
 
 def key(s: float, current: float, refine: float = 1.0, order: int = 2, build: float = COIL_BUILD,
-        box: float = BOX, window_depth: bool = False) -> str:
+        box: float = BOX, window_depth: bool = False, behind_depth: bool = False) -> str:
     """Record key of one point."""
     return (f"s{s * 1e3:g}_I{current:g}" + (f"_r{refine:g}" if refine != 1.0 else "")
             + (f"_p{order}" if order != 2 else "")
             + (f"_build{build:g}" if build != COIL_BUILD else "")
-            + (f"_box{box:g}" if box != BOX else "") + ("_window" if window_depth else ""))
+            + (f"_box{box:g}" if box != BOX else "") + ("_window" if window_depth else "")
+            + ("_behind" if behind_depth else ""))
 
 
 def run(g: Geometry, points: list[tuple[float, float]], **kw) -> dict:  # type: ignore[no-untyped-def]
@@ -354,6 +361,7 @@ def main(argv: list[str] | None = None) -> None:
             run(g, [(s, i)], box=1.2)
             run(g, [(s, i)], build=1.0)
             run(g, [(s, i)], window_depth=True)
+            run(g, [(s, i)], behind_depth=True)
     if args.compare:
         rows = compare(mag, load())
         print(table(rows))
