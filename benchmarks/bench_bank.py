@@ -174,8 +174,8 @@ def _accuracy(magnet_name: str) -> list[str]:
     fine grid) against the fine grid's points that the coarse grid does not contain."""
     mag = mk.load_magnet(magnet_name)
     fine_g, fine_i = np.linspace(0.005, 0.016, 23), np.linspace(0.0, 80.0, 81)
-    fine = mk.build_maps(mag, gaps=fine_g, currents=fine_i, progress=False)
-    coarse = mk.build_maps(mag, gaps=fine_g[::2], currents=fine_i[::2], progress=False)
+    fine = mk.build_maps(mag, gaps_m=fine_g, currents_A=fine_i, progress=False)
+    coarse = mk.build_maps(mag, gaps_m=fine_g[::2], currents_A=fine_i[::2], progress=False)
     from maglevkit.reduced.tables import cell_table
 
     gs, gi = extend_axis(coarse.gaps_m), extend_axis(coarse.currents_A)
@@ -294,8 +294,8 @@ def _size_row(maps: mk.CharacteristicMaps, n: int, lib: ctypes.CDLL, cache: Path
 def run() -> str:
     if shutil.which("cc") is None:
         return "No C compiler on this machine: the compiled bank and the baseline need one."
-    maps = mk.build_maps(mk.load_magnet("tr09-standard"), gaps=np.linspace(0.005, 0.016, 12),
-                         currents=np.linspace(0.0, 80.0, 41), progress=False)
+    maps = mk.build_maps(mk.load_magnet("tr09-standard"), gaps_m=np.linspace(0.005, 0.016, 12),
+                         currents_A=np.linspace(0.0, 80.0, 41), progress=False)
     rows = []
     cache = Path(tempfile.mkdtemp(prefix="maglevkit-bench-cache-"))
     compile_cost = {}

@@ -64,7 +64,7 @@ def cost(maps: mk.CharacteristicMaps, cache: Path) -> list[str]:
                         ("ladder (motion_eddy), CasADi C", {"motion_eddy": True,
                                                            "codegen": "casadi"})):
         bank = MagnetBank(members, compiled="always", cache_dir=cache, **opts)
-        st = bank.initial_state(gaps=0.010, currents=33.5)
+        st = bank.initial_state(gaps_m=0.010, currents_A=33.5)
         nc = bank.n_circuits
         u = bank.resistance_ohm * 33.5 * 1.05
         stepper = bank.stepper(st, DT)
@@ -94,12 +94,12 @@ def sweep(gm: Any) -> list[str]:
         def gaps(t: Any, f: float = f) -> Any:
             return gm.GAP + gm.AMPLITUDE * np.sin(2 * np.pi * f * t)
 
-        det = mk.simulate(fm, (0.0, dur), dt=dt, gaps=gaps, voltages=u0)
-        single = mk.simulate(ladder, (0.0, dur), dt=dt, gaps=gaps, voltages=u0)
+        det = mk.simulate(fm, (0.0, dur), dt_s=dt, gaps_m=gaps, voltages_V=u0)
+        single = mk.simulate(ladder, (0.0, dur), dt_s=dt, gaps_m=gaps, voltages_V=u0)
         t = det.time_s
         g = gaps(t)
-        res = bank.simulate(t, gaps=np.repeat(g[:, None], bank.n_gaps, axis=1),
-                            voltages=u0)
+        res = bank.simulate(t, gaps_m=np.repeat(g[:, None], bank.n_gaps, axis=1),
+                            voltages_V=u0)
         cd, fd = det.currents_A[:, 0], det.pole_force_N.sum(axis=1)
         cb, fb = res.currents_A[:, 0], res.member_force_N[:, 0]
         last = t >= t[-1] - 1.0 / f * max(1, math.floor(f * dur / 2))
@@ -116,7 +116,7 @@ def run() -> str:
     if shutil.which("cc") is None:
         return "No C compiler on this machine: the compiled bank needs one."
     gm = _gap_motion()
-    maps = mk.build_maps(mk.load_magnet(gm.MAGNET), gaps=gm.GRID[0], currents=gm.GRID[1],
+    maps = mk.build_maps(mk.load_magnet(gm.MAGNET), gaps_m=gm.GRID[0], currents_A=gm.GRID[1],
                          progress=False)
     cache = Path(tempfile.mkdtemp(prefix="maglevkit-bench-cache-"))
     try:

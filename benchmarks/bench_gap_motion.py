@@ -33,7 +33,7 @@ GRID = (np.linspace(0.005, 0.016, 12), np.linspace(0.0, 80.0, 41))
 def models() -> tuple[mk.Magnet, mk.FluxModel, mk.CurrentModel, mk.CurrentModel]:
     """The magnet, its detailed model, eq. 8 and the shielded-gap ladder."""
     mag = mk.load_magnet(MAGNET)
-    maps = mk.build_maps(mag, gaps=GRID[0], currents=GRID[1], progress=False)
+    maps = mk.build_maps(mag, gaps_m=GRID[0], currents_A=GRID[1], progress=False)
     return (mag, mk.FluxModel(mag), mk.CurrentModel(maps),
             mk.CurrentModel(maps, motion_eddy=True))
 

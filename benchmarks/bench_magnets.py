@@ -28,13 +28,13 @@ def run() -> str:
         mag = mk.load_magnet("tr09-standard", eddy_currents=False, **kw)
         net = mag.network
         t0 = time.perf_counter()
-        mk.solve_statics(mag, gaps=gaps, currents=currents, grid=True)
+        mk.solve_statics(mag, gaps_m=gaps, currents_A=currents, grid=True)
         first = time.perf_counter() - t0
-        t = _best(lambda mag=mag: mk.solve_statics(mag, gaps=gaps, currents=currents, grid=True))
-        one = _best(lambda mag=mag: mk.solve_statics(mag, gaps=0.010, currents=34.0), repeat=50)
+        t = _best(lambda mag=mag: mk.solve_statics(mag, gaps_m=gaps, currents_A=currents, grid=True))
+        one = _best(lambda mag=mag: mk.solve_statics(mag, gaps_m=0.010, currents_A=34.0), repeat=50)
         uneven = np.linspace(0.008, 0.012, 12)
         one_u = _best(lambda mag=mag, uneven=uneven: mk.solve_statics(
-            mag, gaps=uneven, currents=[34.0, 30.0]), repeat=50)
+            mag, gaps_m=uneven, currents_A=[34.0, 30.0]), repeat=50)
         rows.append(f"| {label} | {len(net.branches)} / {net.n_loops} | {first * 1e3:.0f} | "
                     f"{t * 1e3:.1f} | {t / gaps.size / currents.size * 1e6:.0f} | "
                     f"{one * 1e3:.2f} | {one_u * 1e3:.2f} |")

@@ -29,14 +29,14 @@ def run() -> str:
     lines = ["| magnet | method | grid | workers | wall [s] | per point [ms] |",
              "|---|---|---|---|---|---|"]
     # Warm-up: compile the statics and transient functions once in this process.
-    build_maps(u, gaps=_grid(4)[0], currents=_grid(4)[1], method="transient")
+    build_maps(u, gaps_m=_grid(4)[0], currents_A=_grid(4)[1], method="transient")
     for n in (10, 25, 50):
         g, c = _grid(n)
-        t, _ = _timed(lambda g=g, c=c: build_maps(u, gaps=g, currents=c))
+        t, _ = _timed(lambda g=g, c=c: build_maps(u, gaps_m=g, currents_A=c))
         lines.append(f"| U-magnet | statics | {n} x {n} | 1 | {t:.3f} | {t / n / n * 1e3:.2f} |")
     for n in (4, 6, 8):
         g, c = _grid(n)
-        t, _ = _timed(lambda g=g, c=c: build_maps(u, gaps=g, currents=c, method="transient"))
+        t, _ = _timed(lambda g=g, c=c: build_maps(u, gaps_m=g, currents_A=c, method="transient"))
         lines.append(f"| U-magnet | transient | {n} x {n} | 1 (serial) | {t:.2f} | "
                      f"{t / n / n * 1e3:.0f} |")
     g, c = _grid(8)
@@ -44,23 +44,23 @@ def run() -> str:
         # a fresh pool each time: includes process start-up and per-process compilation
         def pooled(w: int = w):  # type: ignore[no-untyped-def]
             with ProcessPoolExecutor(w) as ex:
-                return build_maps(u, gaps=g, currents=c, method="transient", executor=ex)
+                return build_maps(u, gaps_m=g, currents_A=c, method="transient", executor=ex)
         t, _ = _timed(pooled)
         lines.append(f"| U-magnet | transient | 8 x 8 | {w} (process pool) | {t:.2f} | "
                      f"{t / 64 * 1e3:.0f} |")
     g, c = _grid(6)
-    t, both = _timed(lambda: build_maps(u, gaps=g, currents=c, method="both"))
+    t, both = _timed(lambda: build_maps(u, gaps_m=g, currents_A=c, method="both"))
     dl = float(np.max(np.abs(both.dataset["inductance_relative_difference"].values)))
     dd = float(np.max(np.abs(both.dataset["dL_ds_relative_difference"].values)))
-    build_maps(tr, gaps=np.linspace(0.006, 0.020, 4), currents=np.linspace(0.0, 68.0, 4))
+    build_maps(tr, gaps_m=np.linspace(0.006, 0.020, 4), currents_A=np.linspace(0.0, 68.0, 4))
     for n in (10, 25):
         gt, ct = np.linspace(0.006, 0.020, n), np.linspace(0.0, 68.0, n)
-        t0, _ = _timed(lambda gt=gt, ct=ct: build_maps(tr, gaps=gt, currents=ct))
+        t0, _ = _timed(lambda gt=gt, ct=ct: build_maps(tr, gaps_m=gt, currents_A=ct))
         lines.append(f"| TR09 standard (2 circuits) | statics | {n} x {n} | 1 | {t0:.2f} | "
                      f"{t0 / n / n * 1e3:.1f} |")
     gt, ct = np.linspace(0.009, 0.0105, 4), np.linspace(31.0, 37.0, 4)
     with ProcessPoolExecutor(2) as ex:
-        t1, trb = _timed(lambda: build_maps(tr, gaps=gt, currents=ct, method="both", executor=ex))
+        t1, trb = _timed(lambda: build_maps(tr, gaps_m=gt, currents_A=ct, method="both", executor=ex))
     lines.append(f"| TR09 standard (2 circuits) | both | 4 x 4 near nominal | 2 (process pool) | "
                  f"{t1:.1f} | {t1 / 16 * 1e3:.0f} |")
     tdl = float(np.max(np.abs(trb.dataset["inductance_relative_difference"].values)))

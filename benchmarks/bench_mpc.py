@@ -70,9 +70,9 @@ def _stats(a: np.ndarray) -> tuple[float, float, float, float]:
 
 def run() -> str:
     mag = mk.load_magnet("u-magnet")
-    maps = mk.build_maps(mag, gaps=np.linspace(0.004, 0.02, 17),
-                         currents=np.linspace(0, 80, 33), progress=False)
-    f0 = float(mk.solve_statics(mag, gaps=S0, currents=20.0).force_N)
+    maps = mk.build_maps(mag, gaps_m=np.linspace(0.004, 0.02, 17),
+                         currents_A=np.linspace(0, 80, 33), progress=False)
+    f0 = float(mk.solve_statics(mag, gaps_m=S0, currents_A=20.0).force_N)
     veh = HeaveMass(f0 / STANDARD_GRAVITY)
     model = MagnetHeaveModel(maps, mass_kg=veh.mass_kg)
     plant = mk.CurrentModel(maps)

@@ -84,8 +84,8 @@ def run() -> str:
     for name, s0, i0, grid in (("u-magnet", 0.010, 20.0, (0.004, 0.020, 17, 80.0, 33)),
                                ("tr09-standard", 0.010, 34.0, (0.005, 0.016, 12, 80.0, 41))):
         mag = mk.load_magnet(name)
-        maps = mk.build_maps(mag, gaps=np.linspace(grid[0], grid[1], grid[2]),
-                             currents=np.linspace(0.0, grid[3], grid[4]), progress=False)
+        maps = mk.build_maps(mag, gaps_m=np.linspace(grid[0], grid[1], grid[2]),
+                             currents_A=np.linspace(0.0, grid[3], grid[4]), progress=False)
         fm = mk.FluxModel(mag)
         gaps, signals, volts = _case(mag, s0, i0)
 

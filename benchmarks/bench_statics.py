@@ -27,9 +27,9 @@ def run() -> str:
     for label, kw in (("saturable iron", {}), ("linear iron", {"saturation": False})):
         mag = mk.load_magnet("u-magnet", eddy_currents=False, **kw)
         t0 = time.perf_counter()
-        mk.solve_statics(mag, gaps=gaps, currents=currents, grid=True)
+        mk.solve_statics(mag, gaps_m=gaps, currents_A=currents, grid=True)
         first = time.perf_counter() - t0
-        t = _best(lambda mag=mag: mk.solve_statics(mag, gaps=gaps, currents=currents, grid=True))
+        t = _best(lambda mag=mag: mk.solve_statics(mag, gaps_m=gaps, currents_A=currents, grid=True))
         rows.append(f"| {label} | {first * 1e3:.1f} | {t * 1e3:.1f} | {t / 2500 * 1e6:.1f} |")
     return ("Gaps 4-20 mm, currents 0-80 A (into deep saturation); each point returns fluxes, "
             "forces, flux linkage, differential inductance and dpsi/ds (exact sensitivities).\n\n"

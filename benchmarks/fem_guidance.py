@@ -280,7 +280,7 @@ def network_magnet() -> mk.Magnet:
 
 def network(magnet: mk.Magnet, s: float, current: float) -> dict:
     """One section of the network: force, psi, L (both currents together), fluxes."""
-    sol = mk.solve_statics(magnet, gaps=s, currents=[current, current])
+    sol = mk.solve_statics(magnet, gaps_m=s, currents_A=[current, current])
     L = np.asarray(sol.differential_inductance_H).reshape(2, 2).sum(axis=1)
     flux = dict(zip(sol.branch_names, map(float, np.ravel(sol.branch_flux_Wb)), strict=True))
     return {"force_N": float(np.ravel(sol.pole_force_N)[0]),

@@ -455,7 +455,7 @@ def cut_magnet(name: str = "tr09-standard", flux_paths: str = "split") -> mk.Mag
 def network(magnet: mk.Magnet, s: float, current: float) -> dict:
     """The network's statics at one point: force, psi, L (both currents together),
     pole forces and branch fluxes."""
-    sol = mk.solve_statics(magnet, gaps=s, currents=[current, current])
+    sol = mk.solve_statics(magnet, gaps_m=s, currents_A=[current, current])
     L = np.asarray(sol.differential_inductance_H).reshape(2, 2).sum(axis=1)
     return {"force_N": float(np.ravel(sol.force_N)[0]),
             "psi_Wb": [float(v) for v in np.ravel(sol.flux_linkage_Wb)],

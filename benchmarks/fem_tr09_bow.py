@@ -163,7 +163,7 @@ def averaged(data: dict, s: float, current: float) -> dict | None:
 def network(magnet: mk.Magnet, s: float, current: float) -> dict:
     """The bow network's statics at one point, all three currents equal."""
     n = len(magnet.parameters["circuits"]["names"])
-    sol = mk.solve_statics(magnet, gaps=s, currents=[current] * n)
+    sol = mk.solve_statics(magnet, gaps_m=s, currents_A=[current] * n)
     L = np.asarray(sol.differential_inductance_H).reshape(n, n).sum(axis=1)
     return {"force_N": float(np.ravel(sol.force_N)[0]),
             "psi_Wb": [float(v) for v in np.ravel(sol.flux_linkage_Wb)],

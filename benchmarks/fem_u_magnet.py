@@ -274,7 +274,7 @@ def emc(s: float, I: float, discretisation: str = "lumped", coil_air: bool = Fal
     air inside the coil sides if ``coil_air``, ``columns`` cells across the pole, ``extra``
     more ``[magnet]`` keys as (key, value) pairs, e.g. ``(("air_model", "cells"),)``)."""
     mag = _magnet(discretisation, coil_air, columns, extra, eddy_currents=False, **opts)
-    sol = mk.solve_statics(mag, gaps=s, currents=I)
+    sol = mk.solve_statics(mag, gaps_m=s, currents_A=I)
     flux = dict(zip(sol.branch_names, np.abs(np.ravel(sol.branch_flux_Wb)), strict=True))
     if discretisation == "lumped":
         # the leg at mid-coil height: the node between segments 2 and 3 (coil_segments = 5)
@@ -314,7 +314,7 @@ def emc_geometry(g: Geometry, s: float, I: float, discretisation: str,
         with warnings.catch_warnings():      # the changed keys' provenance is the example's
             warnings.simplefilter("ignore", mk.ProvenanceWarning)
             _MAGNETS[key] = build_magnet(params, options=mk.ModelOptions(eddy_currents=False))
-    sol = mk.solve_statics(_MAGNETS[key], gaps=s, currents=I)
+    sol = mk.solve_statics(_MAGNETS[key], gaps_m=s, currents_A=I)
     return float(np.ravel(sol.force_N)[0]), float(np.ravel(sol.flux_linkage_Wb)[0])
 
 
@@ -376,7 +376,7 @@ def grid_leg_profile(s: float, I: float, columns: int | None = None
     """Grid network: (height [m], flux [Wb]) of the left leg at each boundary between two
     cell rows (the leg's vertical links between the row centres around it)."""
     mag = _magnet("grid", False, columns, eddy_currents=False)
-    sol = mk.solve_statics(mag, gaps=s, currents=I)
+    sol = mk.solve_statics(mag, gaps_m=s, currents_A=I)
     yf, cols, nleg, flux = _grid_leg_links(mag, sol)
     return [(float(yf[j + 1]), float(abs(sum(flux[f"frame_v_{i}_{j}"] for i in cols))))
             for j in range(nleg)]

@@ -13,8 +13,8 @@ import numpy as np
 
 import maglevkit as mk
 
-maps = mk.build_maps(mk.load_magnet("u-magnet"), gaps=np.linspace(0.004, 0.020, 9),
-                     currents=np.linspace(0.0, 80.0, 17), progress=False)
+maps = mk.build_maps(mk.load_magnet("u-magnet"), gaps_m=np.linspace(0.004, 0.020, 9),
+                     currents_A=np.linspace(0.0, 80.0, 17), progress=False)
 bank = mk.MagnetBank({f"m{k}": maps for k in range(20)})
 state = bank.initial_state(gaps_m=0.010, currents_A=20.0)
 stepper = bank.stepper(state, dt_s=1e-3)

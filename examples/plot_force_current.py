@@ -16,9 +16,9 @@ import maglevkit as mk
 magnet = mk.load_magnet("u-magnet")
 gaps_m = np.array([0.006, 0.010, 0.016])
 currents_A = np.linspace(0.0, 80.0, 41)
-saturating = mk.solve_statics(magnet, gaps=gaps_m, currents=currents_A, grid=True)
-linear = mk.solve_statics(magnet.with_options(saturation=False), gaps=gaps_m,
-                          currents=currents_A, grid=True)
+saturating = mk.solve_statics(magnet, gaps_m=gaps_m, currents_A=currents_A, grid=True)
+linear = mk.solve_statics(magnet.with_options(saturation=False), gaps_m=gaps_m,
+                          currents_A=currents_A, grid=True)
 
 fig, (ax_f, ax_l) = plt.subplots(1, 2, figsize=(9, 3.6), layout="constrained")
 for k, gap in enumerate(gaps_m):

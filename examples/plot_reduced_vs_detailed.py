@@ -13,8 +13,8 @@ import numpy as np
 import maglevkit as mk
 
 magnet = mk.load_magnet("u-magnet")
-maps = mk.build_maps(magnet, gaps=np.linspace(0.004, 0.020, 9),
-                     currents=np.linspace(0.0, 80.0, 17), progress=False)
+maps = mk.build_maps(magnet, gaps_m=np.linspace(0.004, 0.020, 9),
+                     currents_A=np.linspace(0.0, 80.0, 17), progress=False)
 inputs = dict(gaps_m=lambda t: 0.010 + 0.0005 * np.sin(2 * np.pi * 5 * t),
               voltages_V=lambda t: 40.0 if t < 0.05 else 50.0, initial_currents_A=20.0)
 

@@ -23,7 +23,7 @@ def _short_run(u_lin: mk.Magnet, **kw):  # type: ignore[no-untyped-def]
     from maglevkit.control import closed_loop, design_gap_controller
     from maglevkit.vehicle import STANDARD_GRAVITY, HeaveMass
 
-    f0 = float(mk.solve_statics(u_lin, gaps=0.01, currents=10.0).force_N)
+    f0 = float(mk.solve_statics(u_lin, gaps_m=0.01, currents_A=10.0).force_N)
     veh = HeaveMass(f0 / STANDARD_GRAVITY)
     ctl = design_gap_controller(u_lin, mass_kg=veh.mass_kg, gap_m=0.01, current_A=10.0)
     return f0, closed_loop(mk.FluxModel(u_lin), veh, ctl, dt_s=1e-3, initial_gap_m=0.01,
@@ -52,7 +52,7 @@ def test_gap_metrics_refuse_start_after_the_end_and_missing_reference(u_lin) -> 
 def test_closed_loop_touchdown_is_a_solver_error_not_bad_input(u_lin) -> None:  # type: ignore[no-untyped-def]
     # a pull 20x the weight towards the rail: the loop cannot hold it and the magnet
     # closes onto the rail; was: InputError (the inputs were fine, the run was unstable)
-    f0 = float(mk.solve_statics(u_lin, gaps=0.01, currents=10.0).force_N)
+    f0 = float(mk.solve_statics(u_lin, gaps_m=0.01, currents_A=10.0).force_N)
     with pytest.raises(mk.SolverError, match=r"TOUCHDOWN.*at t = .* s; state: gap_m=") as exc:
         _short_run(u_lin, duration_s=0.5, external_force_N=lambda t: -20 * f0)
     assert not isinstance(exc.value, mk.InputError)
@@ -102,15 +102,15 @@ def test_map_cache_key_separates_gaps_from_currents_and_checks_the_grid(u_lin, t
     # a stale file under the name (another grid) is rebuilt, not returned
     g1, c1 = np.linspace(0.008, 0.011, 4), np.linspace(0.0, 30.0, 5)
     g2, c2 = np.linspace(0.008, 0.012, 5), np.linspace(0.0, 30.0, 4)
-    vehicle_maps(u_lin, cache_dir=tmp_path, gaps=g1, currents=c1)
+    vehicle_maps(u_lin, cache_dir=tmp_path, gaps_m=g1, currents_A=c1)
     shutil.copy(maps_path(u_lin, g1, c1, tmp_path), maps_path(u_lin, g2, c2, tmp_path))
-    maps = vehicle_maps(u_lin, cache_dir=tmp_path, gaps=g2, currents=c2)
+    maps = vehicle_maps(u_lin, cache_dir=tmp_path, gaps_m=g2, currents_A=c2)
     np.testing.assert_array_equal(maps.gaps_m, g2)
     np.testing.assert_array_equal(maps.currents_A, c2)
-    again = vehicle_maps(u_lin, cache_dir=tmp_path, gaps=g2, currents=c2)   # now cached
+    again = vehicle_maps(u_lin, cache_dir=tmp_path, gaps_m=g2, currents_A=c2)   # now cached
     np.testing.assert_array_equal(again.currents_A, c2)
     with pytest.raises(mk.InputError, match=r"gaps \[m\] = True \(bool\)"):
-        vehicle_maps(u_lin, cache_dir=tmp_path, gaps=True)
+        vehicle_maps(u_lin, cache_dir=tmp_path, gaps_m=True)
 
 
 # ---------------------------------------------------- bools are not numbers (ints)
@@ -119,19 +119,19 @@ def test_ramp_identification_refuses_bools_and_empty_poles(u_lin) -> None:  # ty
 
     # was: True taken as 1 s / circuit 1; poles=[] an IndexError
     with pytest.raises(mk.InputError, match=r"duration \[s\] = True \(bool\)"):
-        flux_held_ramp(u_lin, gap=0.01, current=1.0, gap_change=1e-4, duration=True)
+        flux_held_ramp(u_lin, gap_m=0.01, current_A=1.0, gap_change_m=1e-4, duration_s=True)
     with pytest.raises(mk.InputError, match=r"samples = True \(bool\)"):
-        flux_held_ramp(u_lin, gap=0.01, current=1.0, gap_change=1e-4, duration=1.0,
+        flux_held_ramp(u_lin, gap_m=0.01, current_A=1.0, gap_change_m=1e-4, duration_s=1.0,
                        samples=True)
     with pytest.raises(mk.InputError, match=r"circuit = True \(bool\)"):
-        dl_ds_from_ramp(u_lin, gap=0.01, current=10.0, circuit=True)
+        dl_ds_from_ramp(u_lin, gap_m=0.01, current_A=10.0, circuit=True)
     ng = len(u_lin.network.gap_names)
     for poles in ([], [ng], [0, 0]):
         with pytest.raises(mk.InputError, match=rf"poles = {re.escape(repr(poles))}: expected at least one "
                                                 rf"distinct gap-input index in 0..{ng - 1}"):
-            dl_ds_from_ramp(u_lin, gap=0.01, current=10.0, poles=poles)
+            dl_ds_from_ramp(u_lin, gap_m=0.01, current_A=10.0, poles=poles)
     with pytest.raises(mk.InputError, match=r"poles = True \(bool\)"):
-        dl_ds_from_ramp(u_lin, gap=0.01, current=10.0, poles=[True])
+        dl_ds_from_ramp(u_lin, gap_m=0.01, current_A=10.0, poles=[True])
 
 
 def test_mechanics_discretize_takes_numpy_ints_not_bools() -> None:
@@ -174,7 +174,7 @@ def test_psd_variance_refuses_reversed_and_divergent_bands() -> None:
 
 # ------------------------------------------------- raw Python errors -> maglevkit errors
 def test_branch_flux_unknown_name(u_lin) -> None:  # type: ignore[no-untyped-def]
-    sol = mk.solve_statics(u_lin, gaps=0.01, currents=10.0)
+    sol = mk.solve_statics(u_lin, gaps_m=0.01, currents_A=10.0)
     first = sol.branch_names[0]
     assert np.isfinite(sol.branch_flux(first))
     # was: ValueError "'nope' is not in list"
@@ -277,7 +277,7 @@ def test_eddy_resistance_never_negative(u_lin, monkeypatch) -> None:  # type: ig
 
     mag = mk.load_magnet("u-magnet")
     r_el = float(mag.network.resistances[0])
-    assert parameters.eddy_resistance(mag, gap=0.01, current=10.0)[0] > 0.0
+    assert parameters.eddy_resistance(mag, gap_m=0.01, current_A=10.0)[0] > 0.0
     # a current jump above the resistive limit (rounding or a non-passive model): was
     # returned as a negative R_ec
     nc = len(mag.network.circuits)
@@ -286,7 +286,7 @@ def test_eddy_resistance_never_negative(u_lin, monkeypatch) -> None:  # type: ig
     with pytest.raises(mk.SolverError, match=r"negative R_ec = -.* ohm for circuit .*"
                                              r"reason: current-jump admittance Y_jj = .* S "
                                              r"exceeds 1/R_el"):
-        parameters.eddy_resistance(mag, gap=0.01, current=10.0)
+        parameters.eddy_resistance(mag, gap_m=0.01, current_A=10.0)
 
 
 def test_saturation_knee_checks_points_and_max_current(u_lin) -> None:  # type: ignore[no-untyped-def]
@@ -295,13 +295,13 @@ def test_saturation_knee_checks_points_and_max_current(u_lin) -> None:  # type: 
     # was: points=True scanned one current, points=0 divided by zero, a negative
     # max_current scanned negative currents
     with pytest.raises(mk.InputError, match=r"points = True \(bool\)"):
-        saturation_knee(u_lin, gap=0.01, max_current=100.0, points=True)
+        saturation_knee(u_lin, gap_m=0.01, max_current_A=100.0, points=True)
     with pytest.raises(mk.InputError, match=r"points = 1: must be a whole number >= 2"):
-        saturation_knee(u_lin, gap=0.01, max_current=100.0, points=1)
+        saturation_knee(u_lin, gap_m=0.01, max_current_A=100.0, points=1)
     with pytest.raises(mk.InputError, match=r"max_current \[A\] = -100.0: must be > 0"):
-        saturation_knee(u_lin, gap=0.01, max_current=-100.0)
+        saturation_knee(u_lin, gap_m=0.01, max_current_A=-100.0)
     with pytest.raises(mk.InputError, match=r"max_current \[A\] = '100' \(str\)"):
-        saturation_knee(u_lin, gap=0.01, max_current="100")
+        saturation_knee(u_lin, gap_m=0.01, max_current_A="100")
 
 
 def test_heave_model_mass_and_gravity_refuse_bools() -> None:
@@ -333,8 +333,8 @@ def test_load_maps_without_its_identity_attributes(tmp_path: Path) -> None:
     import maglevkit as mk
     from maglevkit.errors import ParameterFileError
 
-    maps = mk.build_maps(mk.load_magnet("u-magnet"), gaps=np.linspace(0.004, 0.02, 5),
-                         currents=np.linspace(0.0, 80.0, 5), progress=False)
+    maps = mk.build_maps(mk.load_magnet("u-magnet"), gaps_m=np.linspace(0.004, 0.02, 5),
+                         currents_A=np.linspace(0.0, 80.0, 5), progress=False)
     ds = maps.dataset.copy()
     del ds.attrs["magnet_hash"]
     path = tmp_path / "m.nc"

@@ -118,15 +118,15 @@ def test_statics_refuses_non_numbers(u_magnet: mk.Magnet, gaps: Any, currents: A
                                      msg: str) -> None:
     # was: gaps=True computed a 1 m gap, currents=True 1 A, gaps="0.01" was parsed
     with pytest.raises(mk.InputError, match=msg):
-        mk.solve_statics(u_magnet, gaps=gaps, currents=currents)
+        mk.solve_statics(u_magnet, gaps_m=gaps, currents_A=currents)
 
 
 def test_statics_grid_switch_and_grid_values(u_magnet: mk.Magnet) -> None:
     with pytest.raises(mk.InputError, match=r"grid = 'no' \(str\): expected True or False"):
-        mk.solve_statics(u_magnet, gaps=0.01, currents=20.0, grid="no")
+        mk.solve_statics(u_magnet, gaps_m=0.01, currents_A=20.0, grid="no")
     with pytest.raises(mk.InputError, match=r"currents \[A\] = \['0', '10'\] \(list\) contains a "
                                             r"string"):
-        mk.solve_statics(u_magnet, gaps=[0.01, 0.02], currents=["0", "10"], grid=True)
+        mk.solve_statics(u_magnet, gaps_m=[0.01, 0.02], currents_A=["0", "10"], grid=True)
 
 
 @pytest.mark.parametrize("value", ["no", "false", 0, 1, None, "True"])
@@ -160,7 +160,7 @@ def test_simulate_refuses_bool_initial_currents(u_lin: mk.Magnet) -> None:
 def small_maps() -> Any:
     # 4 x 4 maps of the ideal-iron U-magnet: ~1 s, enough to construct a CurrentModel
     return mk.build_maps(build_u(material="ideal", fringing=False, leakage=False),
-                         gaps=np.linspace(0.004, 0.02, 4), currents=np.linspace(0.0, 80.0, 4),
+                         gaps_m=np.linspace(0.004, 0.02, 4), currents_A=np.linspace(0.0, 80.0, 4),
                          progress=False)
 
 
@@ -265,16 +265,16 @@ def test_gap_in_millimetres_warns(u_magnet: mk.Magnet) -> None:
     # "--gaps 10" meant 10 mm: a 10 m gap on a 30 mm pole
     with pytest.warns(mk.PlausibilityWarning, match=r"gap 10 m is larger than the pole width "
                                                     r"\(0.03 m\)"):
-        sol = mk.solve_statics(u_magnet, gaps=10.0, currents=20.0)
+        sol = mk.solve_statics(u_magnet, gaps_m=10.0, currents_A=20.0)
     assert np.isfinite(sol.force_N)          # warned, not refused: the result is still there
 
 
 def test_current_no_coil_carries_warns(u_magnet: mk.Magnet) -> None:
     with pytest.warns(mk.PlausibilityWarning, match=r"current 1e\+06 A exceeds 250 A, i.e. "
                                                     r"100 A/mm\^2 in the coil of one leg"):
-        mk.solve_statics(u_magnet, gaps=0.01, currents=1e6)
+        mk.solve_statics(u_magnet, gaps_m=0.01, currents_A=1e6)
     with pytest.warns(mk.PlausibilityWarning, match=r"current 1e\+06 A exceeds"):
-        mk.solve_statics(u_magnet, gaps=0.01, currents=-1e6)     # magnitude counts
+        mk.solve_statics(u_magnet, gaps_m=0.01, currents_A=-1e6)     # magnitude counts
 
 
 def test_documented_grids_do_not_warn(u_magnet: mk.Magnet) -> None:
@@ -283,10 +283,10 @@ def test_documented_grids_do_not_warn(u_magnet: mk.Magnet) -> None:
         warnings.simplefilter("error")
         for name in mk.bundled_magnets():
             m = mk.load_magnet(name)
-            mk.solve_statics(m, gaps=np.linspace(0.004, 0.02, 2),
-                             currents=np.linspace(0.0, 80.0, 2), grid=True)
+            mk.solve_statics(m, gaps_m=np.linspace(0.004, 0.02, 2),
+                             currents_A=np.linspace(0.0, 80.0, 2), grid=True)
         # the bound itself is allowed (rounding allowance 1e-9)
-        mk.solve_statics(u_magnet, gaps=0.030, currents=250.0)
+        mk.solve_statics(u_magnet, gaps_m=0.030, currents_A=250.0)
 
 
 def test_flux_model_and_simulate_warn(u_lin: mk.Magnet) -> None:
@@ -309,7 +309,7 @@ def test_bare_network_has_no_range() -> None:
     net = loop_network(eddy=False)
     with warnings.catch_warnings():
         warnings.simplefilter("error")
-        mk.solve_statics(net, gaps=10.0, currents=1e6)
+        mk.solve_statics(net, gaps_m=10.0, currents_A=1e6)
 
 
 # ----------------------------------------------------------------- 5. turns, provenance
@@ -368,17 +368,17 @@ def test_absurd_dimension_is_a_solver_error_not_a_casadi_traceback() -> None:
         m = mk.build_magnet(p)
     with pytest.raises(mk.SolverError, match=r"could not be evaluated \(non-finite numbers\); "
                                              r"check the magnet's dimensions") as info:
-        mk.solve_statics(m, gaps=0.01, currents=30.0)
+        mk.solve_statics(m, gaps_m=0.01, currents_A=30.0)
     assert info.value.state["gap[p01]"] == 0.01
 
 
 def test_a_name_instead_of_a_magnet() -> None:
     msg = r"model = 'u-magnet' is a name or path, not a magnet; load it first: .*load_magnet"
     with pytest.raises(mk.InputError, match=msg):
-        mk.solve_statics("u-magnet", gaps=0.01, currents=20.0)
+        mk.solve_statics("u-magnet", gaps_m=0.01, currents_A=20.0)
     with pytest.raises(mk.InputError, match=msg):
-        mk.build_maps("u-magnet", gaps=np.linspace(0.005, 0.01, 4),
-                      currents=np.linspace(0, 10, 4))
+        mk.build_maps("u-magnet", gaps_m=np.linspace(0.005, 0.01, 4),
+                      currents_A=np.linspace(0, 10, 4))
     with pytest.raises(mk.InputError, match=r"model = 'u-magnet.toml' is a name or path"):
         mk.FluxModel(Path("u-magnet.toml"))
     with pytest.raises(mk.InputError, match=msg):
@@ -390,8 +390,8 @@ def test_a_name_instead_of_a_magnet() -> None:
     lambda: mk.load_magnet(42),  # type: ignore[arg-type]
     lambda: mk.load_magnet(""),
     lambda: mk.load_scenario(None),  # type: ignore[arg-type]
-    lambda: mk.solve_statics(None, gaps=0.01, currents=1.0),
-    lambda: mk.coenergy(42, gaps=0.01, currents=1.0),
+    lambda: mk.solve_statics(None, gaps_m=0.01, currents_A=1.0),
+    lambda: mk.coenergy(42, gaps_m=0.01, currents_A=1.0),
     lambda: mk.magnetic_energy(mk.load_magnet("u-magnet"), "x", 0.01),
     lambda: mk.FluxModel({"magnet": {}}),
     lambda: mk.pole_force_eq6(1e-3, "4e-4"),
@@ -432,12 +432,12 @@ def test_circuit_constructors_refuse_bools_and_strings() -> None:
 
 def test_step_experiment_arguments(u_lin: mk.Magnet) -> None:
     with pytest.raises(mk.InputError, match=r"circuit = True must be an index"):
-        mk.differential_inductance_from_step(u_lin, gap=0.01, current=10.0, circuit=True)
+        mk.differential_inductance_from_step(u_lin, gap_m=0.01, current_A=10.0, circuit=True)
     with pytest.raises(mk.InputError, match=r"samples_per_tau = 'many'"):
-        mk.differential_inductance_from_step(u_lin, gap=0.01, current=10.0,
+        mk.differential_inductance_from_step(u_lin, gap_m=0.01, current_A=10.0,
                                              samples_per_tau="many")
     with pytest.raises(mk.InputError, match=r"gap \[m\]|gaps \[m\] = '0.01'"):
-        mk.voltage_step_response(u_lin, gap="0.01", voltage=1.0, duration=1e-3, dt=1e-4)
+        mk.voltage_step_response(u_lin, gap_m="0.01", voltage_V=1.0, duration_s=1e-3, dt_s=1e-4)
 
 
 def test_vehicle_and_controller_arguments(u_lin: mk.Magnet) -> None:
@@ -475,4 +475,4 @@ def test_unknown_flux_model_options(u_lin: mk.Magnet) -> None:
     with pytest.raises(mk.InputError, match=r"FluxModel.with_options: " + msg):
         mk.FluxModel(u_lin).with_options(bogus=1)
     with pytest.raises(mk.InputError, match=msg):
-        mk.voltage_step_response(u_lin, gap=0.01, voltage=1.0, duration=1e-3, dt=1e-4, bogus=1)
+        mk.voltage_step_response(u_lin, gap_m=0.01, voltage_V=1.0, duration_s=1e-3, dt_s=1e-4, bogus=1)

@@ -11,8 +11,8 @@ from maglevkit.errors import InputError, OutOfRangeError
 
 @pytest.fixture(scope="module")
 def model(u_magnet: mk.Magnet) -> mk.CurrentModel:
-    maps = mk.build_maps(u_magnet, gaps=np.linspace(0.008, 0.012, 5),
-                         currents=np.linspace(0.0, 40.0, 9), progress=False)
+    maps = mk.build_maps(u_magnet, gaps_m=np.linspace(0.008, 0.012, 5),
+                         currents_A=np.linspace(0.0, 40.0, 9), progress=False)
     return mk.CurrentModel(maps)
 
 
@@ -49,10 +49,10 @@ def test_maps_entry_points_refuse_wrong_types() -> None:
     with pytest.raises(InputError, match="wraps an xarray.Dataset"):
         mk.CharacteristicMaps("x")  # type: ignore[arg-type]
     with pytest.raises(InputError, match="gap grid.*string"):
-        mk.build_maps(mk.load_magnet("u-magnet"), gaps=["0.01"] * 4, currents=[0, 1, 2, 3])
+        mk.build_maps(mk.load_magnet("u-magnet"), gaps_m=["0.01"] * 4, currents_A=[0, 1, 2, 3])
     with pytest.raises(InputError, match="current grid.*bool"):
-        mk.build_maps(mk.load_magnet("u-magnet"), gaps=[0.01, 0.02, 0.03, 0.04],
-                      currents=[True, 1, 2, 3])
+        mk.build_maps(mk.load_magnet("u-magnet"), gaps_m=[0.01, 0.02, 0.03, 0.04],
+                      currents_A=[True, 1, 2, 3])
 
 
 def test_cli_prints_warnings_as_one_line(tmp_path) -> None:

@@ -31,7 +31,7 @@ REL = 1e-12
 
 @pytest.fixture(scope="module")
 def u_maps(u_magnet: mk.Magnet) -> mk.CharacteristicMaps:
-    return mk.build_maps(u_magnet, gaps=GAPS, currents=CURRENTS, progress=False)
+    return mk.build_maps(u_magnet, gaps_m=GAPS, currents_A=CURRENTS, progress=False)
 
 
 @pytest.fixture(scope="module")
@@ -39,18 +39,18 @@ def u_variant_maps() -> mk.CharacteristicMaps:
     """A U-magnet with 20 % more turns: different maps of the same topology."""
     p = u_params()
     p["magnet"]["turns"] = int(round(p["magnet"]["turns"] * 1.2))
-    return mk.build_maps(mk.build_magnet(p), gaps=GAPS, currents=CURRENTS, progress=False)
+    return mk.build_maps(mk.build_magnet(p), gaps_m=GAPS, currents_A=CURRENTS, progress=False)
 
 
 @pytest.fixture(scope="module")
 def guidance_maps() -> mk.CharacteristicMaps:
-    return mk.build_maps(mk.load_magnet("tr-guidance"), gaps=GAPS, currents=CURRENTS,
+    return mk.build_maps(mk.load_magnet("tr-guidance"), gaps_m=GAPS, currents_A=CURRENTS,
                          progress=False)
 
 
 @pytest.fixture(scope="module")
 def tr09_maps() -> mk.CharacteristicMaps:
-    return mk.build_maps(mk.load_magnet("tr09-standard"), gaps=GAPS, currents=CURRENTS,
+    return mk.build_maps(mk.load_magnet("tr09-standard"), gaps_m=GAPS, currents_A=CURRENTS,
                          progress=False)
 
 
@@ -73,8 +73,8 @@ def _check_members_vs_single(bank: MagnetBank, members: dict, scenario, dt: floa
     from maglevkit.models.inputs import sample_input
 
     times = np.arange(0.0, min(scenario.duration_s, 0.2) + dt / 2, dt)
-    u_ref = sample_input(scenario.voltages, times, ("coil",), "voltages", "V")[:, 0]
-    gap = sample_input(scenario.gaps, times, ("left", "right"), "gaps", "m").mean(axis=1)
+    u_ref = sample_input(scenario.voltages_V, times, ("coil",), "voltages", "V")[:, 0]
+    gap = sample_input(scenario.gaps_m, times, ("left", "right"), "gaps", "m").mean(axis=1)
     factor = np.concatenate([np.full(len(m.circuits), 1.0 + 0.03 * k)
                              for k, m in enumerate(members.values())])
     volt = u_ref[:, None] / r_scenario * bank.resistance_ohm[None, :] * factor[None, :]

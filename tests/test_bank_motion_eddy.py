@@ -30,7 +30,7 @@ TOL_REL_F = 1e-12
 
 @pytest.fixture(scope="module")
 def u_maps() -> mk.CharacteristicMaps:
-    return mk.build_maps(mk.load_magnet("u-magnet"), gaps=GAPS, currents=CURRENTS,
+    return mk.build_maps(mk.load_magnet("u-magnet"), gaps_m=GAPS, currents_A=CURRENTS,
                          progress=False)
 
 
@@ -292,9 +292,9 @@ def heave():  # type: ignore[no-untyped-def]
     from maglevkit.vehicle import STANDARD_GRAVITY, HeaveMass
 
     mag = mk.load_magnet("u-magnet")
-    maps = mk.build_maps(mag, gaps=np.linspace(0.004, 0.02, 17),
-                         currents=np.linspace(0, 80, 33), progress=False)
-    f0 = float(mk.solve_statics(mag, gaps=S0, currents=20.0).force_N)
+    maps = mk.build_maps(mag, gaps_m=np.linspace(0.004, 0.02, 17),
+                         currents_A=np.linspace(0, 80, 33), progress=False)
+    f0 = float(mk.solve_statics(mag, gaps_m=S0, currents_A=20.0).force_N)
     veh = HeaveMass(f0 / STANDARD_GRAVITY)
     cm = mk.CurrentModel(maps, motion_eddy=True)
     return cm, veh, f0, MagnetHeaveModel(cm, mass_kg=veh.mass_kg, compiled="never")

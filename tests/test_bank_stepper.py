@@ -16,12 +16,12 @@ CURRENTS = np.linspace(0.0, 60.0, 7)
 
 @pytest.fixture(scope="module")
 def u_maps(u_magnet: mk.Magnet) -> mk.CharacteristicMaps:
-    return mk.build_maps(u_magnet, gaps=GAPS, currents=CURRENTS, progress=False)
+    return mk.build_maps(u_magnet, gaps_m=GAPS, currents_A=CURRENTS, progress=False)
 
 
 @pytest.fixture(scope="module")
 def guidance_maps() -> mk.CharacteristicMaps:
-    return mk.build_maps(mk.load_magnet("tr-guidance"), gaps=GAPS, currents=CURRENTS,
+    return mk.build_maps(mk.load_magnet("tr-guidance"), gaps_m=GAPS, currents_A=CURRENTS,
                          progress=False)
 
 

@@ -240,7 +240,7 @@ def test_issue10_table_solves_statics() -> None:
     p = _u_magnet_with({"H": list(ISSUE10_H), "B": list(ISSUE10_B)})
     mag = mk.build_magnet(p, options=mk.ModelOptions(eddy_currents=False))
     currents = np.array([0.0, 5.0, 20.0, 80.0])
-    sol = mk.solve_statics(mag, gaps=0.010, currents=currents[:, None])
+    sol = mk.solve_statics(mag, gaps_m=0.010, currents_A=currents[:, None])
     assert sol.force_N[0] == 0.0
     assert np.all(np.diff(sol.force_N) > 0.0)
     # ideal iron bounds the saturable force from above at every point; at 80 A the table
@@ -250,11 +250,11 @@ def test_issue10_table_solves_statics() -> None:
     p_ideal["magnet"]["material"] = p_ideal["rail"]["material"] = "ideal"
     del p_ideal["materials"], p_ideal["provenance"]["materials.table_steel"]
     ideal = mk.solve_statics(mk.build_magnet(p_ideal, options=mk.ModelOptions(eddy_currents=False)),
-                             gaps=0.010, currents=currents[:, None])
+                             gaps_m=0.010, currents_A=currents[:, None])
     assert np.all(sol.force_N[1:] < ideal.force_N[1:])
     assert sol.force_N[-1] < 0.5 * ideal.force_N[-1]
     # the unsaturated variant (initial permeability) solves too
-    lin = mk.solve_statics(mag.with_options(saturation=False), gaps=0.010, currents=20.0)
+    lin = mk.solve_statics(mag.with_options(saturation=False), gaps_m=0.010, currents_A=20.0)
     assert lin.force_N > 0.0
 
 
@@ -333,7 +333,7 @@ def test_toml_csv_and_interpolation(tmp_path: Path) -> None:
                        ("lists", f"H = {STEEL_H}\nB = {steel_table()}")]:
         toml.write_text(base + f"\n[materials.steel1010]\n{extra}\n")
         mag = mk.load_magnet(toml, eddy_currents=False)   # csv path relative to the toml
-        results[key] = mk.solve_statics(mag, gaps=0.008, currents=60.0).force_N
+        results[key] = mk.solve_statics(mag, gaps_m=0.008, currents_A=60.0).force_N
     assert results["csv"] == results["lists"]
     # the linear law is a different curve (measured 0.9 % apart here), not a no-op
     assert results["csv-linear"] != pytest.approx(results["csv"], rel=1e-3)

@@ -40,7 +40,7 @@ def magnet() -> mk.Magnet:
 
 
 def _statics(model: object, gaps: np.ndarray, currents: np.ndarray) -> tuple[np.ndarray, ...]:
-    sol = mk.solve_statics(model, gaps=np.c_[gaps, gaps], currents=currents[:, None])
+    sol = mk.solve_statics(model, gaps_m=np.c_[gaps, gaps], currents_A=currents[:, None])
     return (np.asarray(sol.force_N, dtype=float).reshape(-1),
             np.asarray(sol.flux_linkage_Wb, dtype=float).reshape(-1))
 
@@ -353,8 +353,8 @@ def test_voltage_step_response_and_its_parameter_derivatives() -> None:
     times = np.linspace(0.002, 0.2, 12)
     kw = {"gap_m": 0.01, "current_A": 20.0, "voltage_step_V": 8.0, "times_s": times}
     d = step_response_sensitivities(mag, vals, **kw)
-    ref = mk.voltage_step_response(calibrated_network(mag, vals), gap=0.01, voltage=48.0,
-                                   initial_current=20.0, duration=0.2, dt=0.002, rtol=1e-10,
+    ref = mk.voltage_step_response(calibrated_network(mag, vals), gap_m=0.01, voltage_V=48.0,
+                                   initial_current_A=20.0, duration_s=0.2, dt_s=0.002, rtol=1e-10,
                                    atol=1e-12)
     idx = np.rint(times / 0.002).astype(int)
     # the collocation run against the adaptive IDAS one: measured 3.4e-10
@@ -368,7 +368,8 @@ def test_voltage_step_response_and_its_parameter_derivatives() -> None:
         # max over the samples relative to the largest derivative.  Central differences
         # of the same discrete scheme: truncation ~ (h/1e-3)^2 x 5.9e-7 (measured at
         # h = 1e-3) ~ 6e-9, the rootfinders' residual 1e-11 of the scaled unknowns makes
-        # the noise; measured 1.8e-8 / 2.2e-8 (before the scaling, 3-6e-6 for every h:
+        # the noise; measured 6.9e-9 / 1.4e-8 with 10 Radau steps per interval (1.8e-8 /
+        # 2.2e-8 with 40; before the scaling, 3-6e-6 for every h:
         # the unscaled Newton's 1e-9 was ~1e-6 of the eddy fluxes)
         assert err < 1e-6, (name, err)
 
@@ -380,10 +381,10 @@ def test_two_circuit_magnet_from_a_suffixed_csv(tmp_path: Path) -> None:
     net = calibrated_network(mag, true)
     g, c = (a.ravel() for a in np.meshgrid([0.008, 0.010, 0.012], [10.0, 25.0, 40.0],
                                            indexing="ij"))
-    groups = mk.reduction.circuit_pole_groups(mag, gap=0.01, current=10.0)
+    groups = mk.reduction.circuit_pole_groups(mag, gap_m=0.01, current_A=10.0)
     gi = {n: k for k, n in enumerate(net.gap_names)}
-    sol = mk.solve_statics(net, gaps=np.repeat(g[:, None], len(gi), axis=1),
-                           currents=np.repeat(c[:, None], 2, axis=1))
+    sol = mk.solve_statics(net, gaps_m=np.repeat(g[:, None], len(gi), axis=1),
+                           currents_A=np.repeat(c[:, None], 2, axis=1))
     path = tmp_path / "tr09.csv"
     with path.open("w", newline="") as fh:
         w = csv.writer(fh)

@@ -48,7 +48,7 @@ def test_statics_csv_and_plot(tmp_path: Path) -> None:
     data = np.array(rows[1:], dtype=float)
     # the CSV carries the same numbers as the library call
     sol = mk.solve_statics(mk.load_magnet("u-magnet", eddy_currents=False),
-                           gaps=[0.006, 0.012], currents=np.linspace(0, 40, 5), grid=True)
+                           gaps_m=[0.006, 0.012], currents_A=np.linspace(0, 40, 5), grid=True)
     np.testing.assert_allclose(data[:, 2], sol.force_N.ravel(), rtol=1e-8)
     np.testing.assert_allclose(data[:, 5], sol.dpsi_dgap_Wb_per_m.sum(-1).ravel(), rtol=1e-8)
     assert out_png.stat().st_size > 10_000 and out_png.read_bytes()[:4] == b"\x89PNG"
@@ -66,8 +66,8 @@ def test_statics_csv_of_a_two_circuit_magnet(tmp_path: Path) -> None:
                        "differential_inductance_H_front", "differential_inductance_H_rear",
                        "dpsi_dgap_Wb_per_m_front", "dpsi_dgap_Wb_per_m_rear"]
     assert rows[1][2] == "0"            # no force at zero current, and no "-0"
-    sol = mk.solve_statics(mk.load_magnet("tr09-standard", eddy_currents=False), gaps=0.010,
-                           currents=34.0)
+    sol = mk.solve_statics(mk.load_magnet("tr09-standard", eddy_currents=False), gaps_m=0.010,
+                           currents_A=34.0)
     data = np.array(rows[2], dtype=float)
     # 9 significant digits in the file
     np.testing.assert_allclose(data[3:5], sol.flux_linkage_Wb, rtol=1e-8)

@@ -56,8 +56,8 @@ def _is_one_line_error(res, needle: str) -> None:  # type: ignore[no-untyped-def
 def small_maps(tmp_path_factory: pytest.TempPathFactory) -> Path:
     """Statics maps of the U-magnet on a 5 x 5 grid (about a second)."""
     nc = tmp_path_factory.mktemp("maps") / "m.nc"
-    maps = mk.build_maps(mk.load_magnet("u-magnet"), gaps=np.linspace(0.006, 0.014, 5),
-                         currents=np.linspace(0.0, 40.0, 5), progress=False)
+    maps = mk.build_maps(mk.load_magnet("u-magnet"), gaps_m=np.linspace(0.006, 0.014, 5),
+                         currents_A=np.linspace(0.0, 40.0, 5), progress=False)
     maps.to_netcdf(nc)
     return nc
 
@@ -197,7 +197,7 @@ def test_statics_format_csv_and_json_carry_the_whole_grid() -> None:
     rows = list(csv.DictReader(io.StringIO(res.stdout)))
     assert len(rows) == 2 * 3 and "flux_linkage_Wb_rear" in rows[0]
     sol = mk.solve_statics(mk.load_magnet("tr09-standard", eddy_currents=False),
-                           gaps=[0.008, 0.010], currents=np.linspace(0, 40, 3), grid=True)
+                           gaps_m=[0.008, 0.010], currents_A=np.linspace(0, 40, 3), grid=True)
     # CSV with 10 significant digits
     np.testing.assert_allclose([float(r["force_N"]) for r in rows], sol.force_N.ravel(),
                                rtol=1e-9)
@@ -348,7 +348,7 @@ def test_fitted_eddy_resistance_agrees_with_the_step_experiment() -> None:
     s, i = 0.012, 40.0           # the reference point of the default grid
 
     def step(**tol: float) -> float:
-        return differential_inductance_from_step(net, gap=s, current=i, samples_per_tau=50,
+        return differential_inductance_from_step(net, gap_m=s, current_A=i, samples_per_tau=50,
                                                  **tol).eddy_resistance_ohm
 
     r_step = step()

@@ -16,7 +16,7 @@ LIMIT = 0.02   # the issue's bound on the normalised RMS error per circuit
 def _run(name: str, s0: float, i0: float, gaps: tuple, currents: tuple, *, skip: tuple = (),
          repeat: int = 0, **model_options: str) -> list:
     mag = mk.load_magnet(name)
-    maps = mk.build_maps(mag, gaps=np.linspace(*gaps), currents=np.linspace(*currents))
+    maps = mk.build_maps(mag, gaps_m=np.linspace(*gaps), currents_A=np.linspace(*currents))
     scenarios = [sc for sc in standard_scenarios(mag, gap_m=s0, current_A=i0)
                  if sc.name not in skip]
     return compare_models(mag, mk.CurrentModel(maps, **model_options), scenarios, gap_m=s0,
@@ -121,7 +121,7 @@ def test_u_magnet_with_transient_method_maps() -> None:
     covers the scenarios (gaps 9-12 mm, currents 13-30 A).  Measured largest NRMS 0.88 %
     (50 Hz gap sine, current); the 2 % bound is the issue's acceptance criterion."""
     mag = mk.load_magnet("u-magnet")
-    maps = mk.build_maps(mag, gaps=np.linspace(0.006, 0.014, 9), currents=np.linspace(0, 40, 9),
+    maps = mk.build_maps(mag, gaps_m=np.linspace(0.006, 0.014, 9), currents_A=np.linspace(0, 40, 9),
                          method="transient", progress=False)
     assert "transient" in maps.dataset.attrs["method"]
     scenarios = standard_scenarios(mag, gap_m=0.010, current_A=20.0)
@@ -136,8 +136,8 @@ def test_timing_is_warm_cpu_best_of_repeat() -> None:
     from maglevkit.errors import InputError
 
     mag = mk.load_magnet("u-magnet")
-    maps = mk.build_maps(mag, gaps=np.linspace(0.006, 0.016, 6),
-                         currents=np.linspace(0.0, 60.0, 7), progress=False)
+    maps = mk.build_maps(mag, gaps_m=np.linspace(0.006, 0.016, 6),
+                         currents_A=np.linspace(0.0, 60.0, 7), progress=False)
     step = [sc for sc in standard_scenarios(mag, gap_m=0.010, current_A=20.0)
             if sc.name == "voltage step up"]
     model = mk.CurrentModel(maps)
@@ -167,8 +167,8 @@ def test_cli_compare_has_the_extrapolate_option_its_message_recommends() -> None
 
     import maglevkit as mk
 
-    maps = mk.build_maps(mk.load_magnet("u-magnet"), gaps=np.linspace(0.004, 0.02, 5),
-                         currents=np.linspace(0.0, 80.0, 5), progress=False)
+    maps = mk.build_maps(mk.load_magnet("u-magnet"), gaps_m=np.linspace(0.004, 0.02, 5),
+                         currents_A=np.linspace(0.0, 80.0, 5), progress=False)
     model = mk.CurrentModel(maps)
     state = model.initial_state(gaps_m=0.010, currents_A=20.0)
     with pytest.raises(mk.OutOfRangeError, match="--extrapolate"):

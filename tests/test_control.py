@@ -26,24 +26,24 @@ def test_heave_mass_free_fall_is_exact() -> None:
 @pytest.fixture(scope="module")
 def u_setup(u_magnet: mk.Magnet):  # type: ignore[no-untyped-def]
     mag = u_magnet.with_options(eddy_currents=False)
-    maps = mk.build_maps(mag, gaps=np.linspace(0.004, 0.02, 17), currents=np.linspace(0, 80, 33))
+    maps = mk.build_maps(mag, gaps_m=np.linspace(0.004, 0.02, 17), currents_A=np.linspace(0, 80, 33))
     return mag, mk.CurrentModel(maps)
 
 
 def test_gap_controller_levitates_and_tracks_a_reference(u_setup) -> None:  # type: ignore[no-untyped-def]
     mag, reduced = u_setup
     s0, i0 = 0.01, 20.0
-    f0 = float(mk.solve_statics(mag, gaps=s0, currents=i0).force_N)
+    f0 = float(mk.solve_statics(mag, gaps_m=s0, currents_A=i0).force_N)
     veh = HeaveMass(f0 / STANDARD_GRAVITY)
     ctl = design_gap_controller(mag, mass_kg=veh.mass_kg, gap_m=s0, current_A=i0)
     res = closed_loop(reduced, veh, ctl, duration_s=1.5, dt_s=1e-3, initial_gap_m=s0,
-                      initial_current_A=i0, gap_reference=lambda t: 0.011 if t >= 0.05 else s0)
+                      initial_current_A=i0, gap_reference_m=lambda t: 0.011 if t >= 0.05 else s0)
     # settles at the new reference (the integrator removes the offset): within 20 um at the
     # end, and the current is the static current that carries the load there (to 0.5 %,
     # the remaining gap and acceleration error)
     assert res.gap_m.max() < 0.01105                   # I-PD form: overshoot < 5 % of the step
     assert res.gap_m[-1] == pytest.approx(0.011, abs=2e-5)
-    needed = mk.solve_statics(mag, gaps=0.011, currents=np.linspace(15, 30, 301)[:, None])
+    needed = mk.solve_statics(mag, gaps_m=0.011, currents_A=np.linspace(15, 30, 301)[:, None])
     i_needed = np.interp(f0, needed.force_N, np.linspace(15, 30, 301))
     assert res.currents_A[-1, 0] == pytest.approx(i_needed, rel=5e-3)
     assert not res.voltage_limited.any()
@@ -53,7 +53,7 @@ def test_flux_control_rejects_a_load_step_with_eddy_currents(u_magnet: mk.Magnet
     """The detailed model with eddy currents (which defeat a current-loop controller)
     stays levitated after a +10 % load step and returns to the reference gap."""
     s0, i0 = 0.01, 20.0
-    f0 = float(mk.solve_statics(u_magnet, gaps=s0, currents=i0).force_N)
+    f0 = float(mk.solve_statics(u_magnet, gaps_m=s0, currents_A=i0).force_N)
     veh = HeaveMass(f0 / STANDARD_GRAVITY)
     ctl = design_gap_controller(u_magnet, mass_kg=veh.mass_kg, gap_m=s0, current_A=i0)
     res = closed_loop(mk.FluxModel(u_magnet), veh, ctl, duration_s=0.8, dt_s=1e-3,
@@ -68,7 +68,7 @@ def test_without_control_the_magnet_is_unstable(u_setup) -> None:  # type: ignor
     """Negative stiffness: a fixed voltage cannot hold a 1 % heavier mass; it falls until it
     leaves the maps' gap range (0.004-0.02 m), which the reduced model reports."""
     mag, reduced = u_setup
-    f0 = float(mk.solve_statics(mag, gaps=0.01, currents=20.0).force_N)
+    f0 = float(mk.solve_statics(mag, gaps_m=0.01, currents_A=20.0).force_N)
     veh = HeaveMass(f0 / STANDARD_GRAVITY * 1.01)
     st = reduced.initial_state(gaps_m=0.01, currents_A=20.0)
     mech = HeaveState(0.01, 0.0)

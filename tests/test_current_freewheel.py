@@ -18,8 +18,8 @@ from maglevkit.errors import InputError, OutOfRangeError
 
 @pytest.fixture(scope="module")
 def u_maps() -> mk.CharacteristicMaps:
-    return mk.build_maps(mk.load_magnet("u-magnet"), gaps=np.linspace(0.004, 0.02, 9),
-                         currents=np.linspace(0.0, 40.0, 21), progress=False)
+    return mk.build_maps(mk.load_magnet("u-magnet"), gaps_m=np.linspace(0.004, 0.02, 9),
+                         currents_A=np.linspace(0.0, 40.0, 21), progress=False)
 
 
 def _discharge(model, n: int = 60, dt: float = 1e-3) -> np.ndarray:  # type: ignore[no-untyped-def]

@@ -29,7 +29,7 @@ def all_maps() -> dict[str, tuple[mk.Magnet, mk.CharacteristicMaps]]:
     out = {}
     for name in MAGNETS:
         mag = mk.load_magnet(name)
-        out[name] = (mag, mk.build_maps(mag, gaps=GAPS, currents=CURRENTS, progress=False))
+        out[name] = (mag, mk.build_maps(mag, gaps_m=GAPS, currents_A=CURRENTS, progress=False))
     return out
 
 
@@ -64,11 +64,11 @@ def test_tables_equal_bspline_on_the_standard_scenarios(all_maps, name: str,
     refs = []
     for sc in scenarios:
         span = (0.0, min(sc.duration_s, 0.3))
-        refs.append((sc, span, mk.simulate(spline, span, dt_s=sc.dt_s, gaps_m=sc.gaps,
-                                           voltages_V=sc.voltages, initial_currents_A=i0)))
+        refs.append((sc, span, mk.simulate(spline, span, dt_s=sc.dt_s, gaps_m=sc.gaps_m,
+                                           voltages_V=sc.voltages_V, initial_currents_A=i0)))
     _no_bspline(monkeypatch)
     for sc, span, ref in refs:
-        res = mk.simulate(tables, span, dt_s=sc.dt_s, gaps_m=sc.gaps, voltages_V=sc.voltages,
+        res = mk.simulate(tables, span, dt_s=sc.dt_s, gaps_m=sc.gaps_m, voltages_V=sc.voltages_V,
                           initial_currents_A=i0)
         for field in ("currents_A", "inductor_currents_A", "circuit_force_N", "pole_force_N",
                       "force_N"):
@@ -88,7 +88,7 @@ def test_step_on_tables_equals_bspline_step(all_maps, name: str,
     tables = CurrentModel(maps)
     sc = standard_scenarios(mag, gap_m=s0, current_A=i0)[3]          # gap sine 5 Hz
     t = np.arange(0.0, 0.2 + 1e-9, 1e-3)
-    g = sample_input(sc.gaps, t, spline.gap_names, "gaps", "m")
+    g = sample_input(sc.gaps_m, t, spline.gap_names, "gaps", "m")
     u = mag.network.resistances * i0 * 1.1
     refs = []
     st = spline.initial_state(gaps_m=g[0], currents_A=i0)
@@ -234,7 +234,7 @@ def test_maps_the_tables_cannot_hold_stay_on_the_bsplines() -> None:
     import dataclasses
 
     mag = mk.load_magnet("u-magnet")
-    regular = mk.build_maps(mag, gaps=np.linspace(0.006, 0.016, 5), currents=CURRENTS,
+    regular = mk.build_maps(mag, gaps_m=np.linspace(0.006, 0.016, 5), currents_A=CURRENTS,
                             progress=False)
     # as an old maps file on a grid that is not equidistant would load (build_maps refuses
     # such grids now; load_maps does not check)

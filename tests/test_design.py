@@ -147,7 +147,7 @@ def test_written_design_meets_the_constraints_resolved(tmp_path: Path,
     assert ev["voltage_V"] <= req["supply_voltage_V"]
     assert ev["voltage_V"] == pytest.approx(res.constraints["voltage"].value, rel=1e-7)
     assert ev["power_W"] == pytest.approx(res.power_W, rel=1e-7)
-    sol = solve_statics(mag, gaps=req["nominal_gap_m"], currents=ev["nominal_current_A"])
+    sol = solve_statics(mag, gaps_m=req["nominal_gap_m"], currents_A=ev["nominal_current_A"])
     assert float(np.asarray(sol.force_N)) == pytest.approx(req["force_N"], rel=1e-9)
 
 
@@ -164,7 +164,7 @@ def test_design_gradients_match_central_differences() -> None:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
             mag = build_magnet(design_parameters(spec, v))
-            sol = solve_statics(mag, gaps=gap, currents=cur)
+            sol = solve_statics(mag, gaps_m=gap, currents_A=cur)
         return float(np.asarray(sol.force_N)), float(np.asarray(sol.flux_linkage_Wb).ravel()[0])
 
     f0, psi0 = statics(values)
@@ -192,7 +192,7 @@ def test_turns_derivative_from_ampere_turns() -> None:
               "leg_height": 0.07, "turns": 600.0}
     gap, cur = 0.01, 12.0
     sens = design_sensitivities(spec, values, gap_m=gap, current_A=cur)
-    sol = solve_statics(spec.magnet, gaps=gap, currents=cur)
+    sol = solve_statics(spec.magnet, gaps_m=gap, currents_A=cur)
     dfdi = float(np.sum(np.asarray(sol.dforce_dcurrent_N_per_A)))
     ldiff = float(np.asarray(sol.differential_inductance_H).ravel()[0])
     psi = float(np.asarray(sol.flux_linkage_Wb).ravel()[0])

@@ -51,7 +51,7 @@ EXPECTED: dict[str, list[tuple[str, float]]] = {
     'print(f"{out.currents_A[0]:.3f} A, {out.circuit_force_N[0]:.0f} N")': [
         (rf"^{NUMBER} A", 20.397), (rf"A, {NUMBER} N", 1532.0)],
     # README, hand-built network (printed at full precision: compared to 1e-9 relative)
-    "print(mk.solve_statics(net, gaps=0.002, currents=3.0).force_N)": [
+    "print(mk.solve_statics(net, gaps_m=0.002, currents_A=3.0).force_N)": [
         (rf"^{NUMBER}$", 18.60471113014329)],
     # docs/reduction.md
     'print(f"R_ec = {r_ec[0]:.3f} ohm")': [(rf"R_ec = {NUMBER} ohm", 22.374)],

@@ -68,9 +68,9 @@ def test_rail_split_scales_only_the_rail_conductances() -> None:
     np.testing.assert_array_equal(gb[~rail], ga[~rail])
     assert (ga[rail] > 0).sum() == 4          # the 4 eddy elements of the rail ladder
     # statics: parallel tubes of one material carry one B whatever the eddy conductances
-    s0 = mk.solve_statics(mk.load_magnet("u-magnet"), gaps=0.006, currents=50.0)
+    s0 = mk.solve_statics(mk.load_magnet("u-magnet"), gaps_m=0.006, currents_A=50.0)
     s1 = mk.solve_statics(mk.load_magnet("u-magnet", eddy_model="ladder_split",
-                                         eddy_layers=4), gaps=0.006, currents=50.0)
+                                         eddy_layers=4), gaps_m=0.006, currents_A=50.0)
     # measured 1e-11 relative (the Newton tolerance)
     assert float(s1.force_N) == pytest.approx(float(s0.force_N), rel=1e-8)
 
@@ -145,8 +145,8 @@ def test_rail_split_all_recorded_steps() -> None:
 
 @pytest.mark.slow
 def test_grid_ladder_statics_are_the_grid_statics() -> None:
-    a = mk.solve_statics(_grid(), gaps=0.006, currents=50.0)
-    b = mk.solve_statics(_grid(eddy_model="ladder", eddy_layers=2), gaps=0.006, currents=50.0)
+    a = mk.solve_statics(_grid(), gaps_m=0.006, currents_A=50.0)
+    b = mk.solve_statics(_grid(eddy_model="ladder", eddy_layers=2), gaps_m=0.006, currents_A=50.0)
     # parallel tubes of one material and length carry one B: measured 7e-11 relative in
     # force and 4e-11 in flux linkage (the Newton tolerance); bound 1e-8
     assert float(b.force_N) == pytest.approx(float(a.force_N), rel=1e-8)

@@ -123,9 +123,9 @@ def test_one_layer_is_the_lumped_element() -> None:
 
 @pytest.mark.parametrize(("gap", "current"), [(0.004, 5.0), (0.006, 80.0)])
 def test_statics_are_those_of_the_lumped_magnet(gap: float, current: float) -> None:
-    a = mk.solve_statics(mk.load_magnet("u-magnet"), gaps=gap, currents=current)
+    a = mk.solve_statics(mk.load_magnet("u-magnet"), gaps_m=gap, currents_A=current)
     b = mk.solve_statics(mk.load_magnet("u-magnet", eddy_model="ladder", eddy_layers=4),
-                         gaps=gap, currents=current)
+                         gaps_m=gap, currents_A=current)
     # parallel tubes of one material and length carry one B: identical to the Newton
     # tolerance (measured 1e-11 relative)
     assert float(b.force_N) == pytest.approx(float(a.force_N), rel=1e-8)
@@ -152,9 +152,9 @@ def test_no_current_jump_with_the_ladder() -> None:
 
     r = {n: float(eddy_resistance(mk.load_magnet("u-magnet", eddy_model="ladder",
                                                  eddy_layers=n).network,
-                                  gap=0.010, current=20.0)[0]) for n in (1, 3)}
-    lumped = float(eddy_resistance(mk.load_magnet("u-magnet").network, gap=0.010,
-                                   current=20.0)[0])
+                                  gap_m=0.010, current_A=20.0)[0]) for n in (1, 3)}
+    lumped = float(eddy_resistance(mk.load_magnet("u-magnet").network, gap_m=0.010,
+                                   current_A=20.0)[0])
     # the jump R_ec is set by the outermost layer's conductance (w_1 of the fit):
     # measured lumped 22.4 ohm, n = 1 18.1 ohm (2-D slab: 1/0.81 of the Saint-Venant
     # conductance), n = 3 1854 ohm, n = 4 2636 ohm, n = 6 4198 ohm: the jump

@@ -98,7 +98,7 @@ def _fringe(s: float) -> float:
 def test_u_magnet_fringing_alone(s: float) -> None:
     """Ideal iron, no leakage, fringing on: two equal gaps in series, L = n^2 G(s)/2."""
     mag = build_u(material="ideal", leakage=False)
-    sol = mk.solve_statics(mag, gaps=s, currents=10.0)
+    sol = mk.solve_statics(mag, gaps_m=s, currents_A=10.0)
     g = MU0 * WP * D / s + _fringe(s)
     assert sol.differential_inductance_H[0, 0] == pytest.approx(N**2 * g / 2, rel=1e-9)
 
@@ -128,7 +128,7 @@ def test_u_magnet_leakage_alone(s: float) -> None:
     not from the code.  The force is the textbook one (no leakage tube depends on s)."""
     mag = build_u(material="ideal", fringing=False)
     i = 10.0
-    sol = mk.solve_statics(mag, gaps=s, currents=i)
+    sol = mk.solve_statics(mag, gaps_m=s, currents_A=i)
     a = WP * D
     g_tip = MU0 * D * GCP / WW
     g_strip = MU0 * D * H_STRIP / WW
@@ -144,8 +144,8 @@ def test_u_magnet_leakage_alone(s: float) -> None:
 def test_u_magnet_saturation_switch_alone() -> None:
     """Without saturation the iron is linear at mu_i: the inductance does not depend on
     the current (to Newton's tolerance); with saturation it falls by far more."""
-    lin = mk.solve_statics(build_u(saturation=False), gaps=0.006, currents=[[1.0], [80.0]])
-    sat = mk.solve_statics(build_u(), gaps=0.006, currents=[[1.0], [80.0]])
+    lin = mk.solve_statics(build_u(saturation=False), gaps_m=0.006, currents_A=[[1.0], [80.0]])
+    sat = mk.solve_statics(build_u(), gaps_m=0.006, currents_A=[[1.0], [80.0]])
     l_lin, l_sat = lin.differential_inductance_H[:, 0, 0], sat.differential_inductance_H[:, 0, 0]
     assert l_lin[1] == pytest.approx(l_lin[0], rel=1e-9)
     assert l_sat[1] < 0.5 * l_sat[0]
@@ -160,7 +160,7 @@ def test_kirchhoff_loop_law_by_hand_in_deep_saturation() -> None:
     test_single_saturable_loop_against_a_scalar_root_solve."""
     mag = mk.load_magnet("u-magnet", eddy_currents=False)
     s, i = 0.005, 80.0
-    sol = mk.solve_statics(mag, gaps=s, currents=i)
+    sol = mk.solve_statics(mag, gaps_m=s, currents_A=i)
     steel = mk.get_material("AISI 1008")
     c = WW + WP
     leg = P["leg_height"] + P["yoke_thickness"] / 2

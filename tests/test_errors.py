@@ -27,7 +27,7 @@ def coil() -> mk.Circuit:
 
 def test_minimal_network_solves() -> None:
     net = mk.Network(tuple(loop_branches()), (coil(),))
-    sol = mk.solve_statics(net, gaps=0.005, currents=2.0)
+    sol = mk.solve_statics(net, gaps_m=0.005, currents_A=2.0)
     assert sol.force_N > 0.0
 
 
@@ -87,12 +87,12 @@ def test_dangling_coil_branch_is_rejected() -> None:
 )
 def test_statics_input_errors(u_magnet: mk.Magnet, gaps, currents, msg: str) -> None:  # type: ignore[no-untyped-def]
     with pytest.raises(mk.InputError, match=msg):
-        mk.solve_statics(u_magnet, gaps=gaps, currents=currents)
+        mk.solve_statics(u_magnet, gaps_m=gaps, currents_A=currents)
 
 
 def test_grid_needs_1d_inputs(u_magnet: mk.Magnet) -> None:
     with pytest.raises(mk.InputError, match="1-D"):
-        mk.solve_statics(u_magnet, gaps=[[0.01]], currents=[1.0], grid=True)
+        mk.solve_statics(u_magnet, gaps_m=[[0.01]], currents_A=[1.0], grid=True)
 
 
 def _write(tmp_path: Path, text: str) -> Path:
@@ -133,7 +133,7 @@ def test_tabulated_material_from_file(tmp_path: Path) -> None:
     p["magnet"]["material"] = "my_steel"
     p["materials"] = {"my_steel": {"H": [0, 100, 200, 1000, 10000], "B": [0, 0.5, 0.9, 1.4, 1.8]}}
     mag = mk.build_magnet(p, options=mk.ModelOptions(eddy_currents=False))
-    assert mk.solve_statics(mag, gaps=0.01, currents=30.0).force_N > 0.0
+    assert mk.solve_statics(mag, gaps_m=0.01, currents_A=30.0).force_N > 0.0
     p["materials"]["my_steel"]["resistivity"] = 1.6e-7
     assert mk.build_magnet(p).network.has_eddy_currents
 
@@ -181,4 +181,4 @@ def test_statics_failure_is_reported_not_returned(u_magnet: mk.Magnet,
 
     monkeypatch.setattr(statics, "_RESIDUAL_TOL", -1.0)  # no residual can satisfy this
     with pytest.raises(mk.SolverError, match=r"did not converge.*gap\[left\]=0.007.*I\[coil\]=12"):
-        mk.solve_statics(u_magnet, gaps=0.007, currents=12.0)
+        mk.solve_statics(u_magnet, gaps_m=0.007, currents_A=12.0)

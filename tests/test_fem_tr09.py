@@ -164,7 +164,7 @@ def test_potential_drops_against_recorded_fem_lines() -> None:
             return float(np.dot(fem.WEIGHTS, [sum(abs(p["mmf"]["mmf"][t]["9"]) for t in tags)
                                               for p in pts]))
 
-        sol = mk.solve_statics(mag, gaps=s, currents=[i, i])
+        sol = mk.solve_statics(mag, gaps_m=s, currents_A=[i, i])
         flux = dict(zip(sol.branch_names, np.ravel(sol.branch_flux_Wb), strict=True))
         drop = {e.name: abs(float(e.mmf_drop(flux[br.name], s)))
                 for br in mag.network.branches for e in br.elements

@@ -58,7 +58,7 @@ def _fem():  # type: ignore[no-untyped-def]
 
 def _emc(s: float, current: float, **opts: bool) -> tuple[float, float]:
     mag = mk.load_magnet("u-magnet", eddy_currents=False, **opts)
-    sol = mk.solve_statics(mag, gaps=s, currents=current)
+    sol = mk.solve_statics(mag, gaps_m=s, currents_A=current)
     return float(np.ravel(sol.force_N)[0]), float(np.ravel(sol.flux_linkage_Wb)[0])
 
 

@@ -101,11 +101,11 @@ def guidance_results() -> dict[str, Any]:
     """
     mag = mk.load_magnet("tr-guidance")
     s0, i0 = mag.nominal_gap, mag.nominal_current
-    maps = mk.build_maps(mag, gaps=np.linspace(0.006, 0.016, 6), currents=np.linspace(0, 80, 17))
+    maps = mk.build_maps(mag, gaps_m=np.linspace(0.006, 0.016, 6), currents_A=np.linspace(0, 80, 17))
     coupling = [c for c in standard_scenarios(mag, gap_m=s0, current_A=i0) if c.coupling]
     closed = ComparisonScenario(
         "closed loop", "+1 mm reference step at 0.02 s", 0.25, 1e-3,
-        gap_reference=lambda t: s0 + (1e-3 if t >= 0.02 else 0.0), kind="closed")
+        gap_reference_m=lambda t: s0 + (1e-3 if t >= 0.02 else 0.0), kind="closed")
     res = compare_models(mag, mk.CurrentModel(maps), [closed, *coupling], gap_m=s0,
                          current_A=i0, repeat=0)
     return {r.scenario.name: r for r in res}
@@ -308,8 +308,8 @@ def test_simulate_figure_distinguishes_every_eddy_trace_and_keeps_legends_outsid
 
 def test_statics_plot_legend_covers_no_curve(monkeypatch: pytest.MonkeyPatch,
                                              tmp_path: Path) -> None:
-    sol = mk.solve_statics(mk.load_magnet("u-magnet"), gaps=np.linspace(0.004, 0.02, 5),
-                           currents=np.linspace(0, 60, 7), grid=True)
+    sol = mk.solve_statics(mk.load_magnet("u-magnet"), gaps_m=np.linspace(0.004, 0.02, 5),
+                           currents_A=np.linspace(0, 60, 7), grid=True)
     figs = _capture(monkeypatch)
     plotting.plot_force_current(sol, tmp_path / "f.png")
     _assert_legends_clear(figs[0])

@@ -29,7 +29,7 @@ CURRENTS = np.linspace(0.0, 60.0, 4)
 
 @pytest.fixture(scope="module")
 def small_maps(u_magnet: mk.Magnet) -> mk.CharacteristicMaps:
-    return mk.build_maps(u_magnet, gaps=GAPS, currents=CURRENTS, progress=False)
+    return mk.build_maps(u_magnet, gaps_m=GAPS, currents_A=CURRENTS, progress=False)
 
 
 # ------------------------------------------------------------ wrong or unreported results
@@ -58,13 +58,13 @@ def test_a_non_finite_statics_result_is_a_solver_error(u_magnet: mk.Magnet,
                                                       recwarn: pytest.WarningsRecorder) -> None:
     # was: --currents 1e200 gave F = nan with rc 0 (the residual came back as -inf)
     with pytest.raises(mk.SolverError, match=r"non-finite result .* I\[coil\]=1e\+200"):
-        mk.solve_statics(u_magnet, gaps=0.01, currents=1e200)
+        mk.solve_statics(u_magnet, gaps_m=0.01, currents_A=1e200)
     p = copy.deepcopy(dict(mk.load_magnet("tr09-standard").parameters))
     p["stator"]["slot_depth"] = 1e308        # was: F = nan from the API
     with pytest.warns(mk.PlausibilityWarning, match=r"\[stator\] slot_depth"):
         m = mk.build_magnet(p)
     with pytest.raises(mk.SolverError):
-        mk.solve_statics(m, gaps=0.01, currents=30.0)
+        mk.solve_statics(m, gaps_m=0.01, currents_A=30.0)
 
 
 # ------------------------------------------------------------ hangs and tracebacks
@@ -92,10 +92,12 @@ def _alive(pid: int) -> bool:
 
 
 def _interrupt(cmd: list[str], ready: Any, *, group: bool, cwd: Path,
-               timeout_s: float = 180.0) -> tuple[subprocess.Popen[str], str, float]:
+               timeout_s: float = 180.0, twice: bool = False
+               ) -> tuple[subprocess.Popen[str], str, float]:
     """Start ``cmd`` in its own session, wait for ``ready(proc, stderr so far)``, send
-    SIGINT (to the main process only or to its group); returns the process, its stderr
-    and the seconds it took to exit after the signal."""
+    SIGINT (to the main process only or to its group; ``twice``: again 0.3 s later, an
+    impatient user); returns the process, its stderr and the seconds it took to exit
+    after the (first) signal."""
     # the package under test, also from another folder
     src = str(Path(mk.__file__).resolve().parents[1])
     env = {**os.environ, "PYTHONPATH": os.pathsep.join(
@@ -112,11 +114,18 @@ def _interrupt(cmd: list[str], ready: Any, *, group: bool, cwd: Path,
         if proc.poll() is not None:
             pytest.fail(f"ended before the signal (rc {proc.returncode}): "
                         f"{err_path.read_text()[-2000:]}")
-        if group:
-            os.killpg(proc.pid, signal.SIGINT)
-        else:
-            proc.send_signal(signal.SIGINT)
+        def send() -> None:
+            if group:
+                os.killpg(proc.pid, signal.SIGINT)
+            else:
+                proc.send_signal(signal.SIGINT)
+
+        send()
         t1 = time.monotonic()
+        if twice:
+            time.sleep(0.3)
+            if proc.poll() is None:
+                send()
         proc.wait(timeout=60)
         return proc, err_path.read_text(), time.monotonic() - t1
     finally:
@@ -126,8 +135,10 @@ def _interrupt(cmd: list[str], ready: Any, *, group: bool, cwd: Path,
 
 
 @pytest.mark.skipif(not Path("/proc/self/stat").exists(), reason="needs /proc (Linux)")
-@pytest.mark.parametrize("group", [False, True], ids=["main-only", "group"])
-def test_sweep_with_workers_ends_promptly_on_sigint(group: bool, tmp_path: Path) -> None:
+@pytest.mark.parametrize("group, twice", [(False, False), (True, False), (False, True)],
+                         ids=["main-only", "group", "main-only-twice"])
+def test_sweep_with_workers_ends_promptly_on_sigint(group: bool, twice: bool,
+                                                    tmp_path: Path) -> None:
     # was: SIGINT to the main process printed "interrupted" and never exited (it waited on
     # its pool workers); a second SIGINT gave a traceback and left orphaned workers
     seen: set[int] = set()
@@ -147,7 +158,7 @@ def test_sweep_with_workers_ends_promptly_on_sigint(group: bool, tmp_path: Path)
     assert "duration = 1.0 " in spec
     (tmp_path / "long.toml").write_text(spec.replace("duration = 1.0 ", "duration = 20.0 ", 1))
     cmd = [str(ENTRY), "sweep", "long.toml", "-o", "s.nc", "--workers", "2"]
-    proc, err, took = _interrupt(cmd, workers_busy, group=group, cwd=tmp_path)
+    proc, err, took = _interrupt(cmd, workers_busy, group=group, cwd=tmp_path, twice=twice)
     assert proc.returncode == 130, err
     assert took < 10.0, took
     assert re.search(r"interrupted: \d+ of 12 cases stored in s.cases; run the same command "
@@ -159,9 +170,11 @@ def test_sweep_with_workers_ends_promptly_on_sigint(group: bool, tmp_path: Path)
 
 
 @pytest.mark.skipif(not Path("/proc/self/stat").exists(), reason="needs /proc (Linux)")
-@pytest.mark.parametrize("group, workers", [(False, "1"), (True, "1"), (False, "2")],
-                         ids=["main-only", "group", "pool-main-only"])
-def test_transient_maps_build_interrupted_exits_130(group: bool, workers: str,
+@pytest.mark.parametrize("group, workers, twice",
+                         [(False, "1", False), (True, "1", False), (False, "2", False),
+                          (False, "2", True)],
+                         ids=["main-only", "group", "pool-main-only", "pool-main-only-twice"])
+def test_transient_maps_build_interrupted_exits_130(group: bool, workers: str, twice: bool,
                                                     tmp_path: Path) -> None:
     # was: rc 2 "flux model failed ... check the magnet's dimensions", once with pages of
     # CasADi inputs (CasADi made the SIGINT inside IDAS a failed evaluation)
@@ -170,7 +183,9 @@ def test_transient_maps_build_interrupted_exits_130(group: bool, workers: str,
 
     cmd = [str(ENTRY), "maps", "build", "u-magnet", "-o", "m.nc", "--method", "transient",
            "--gaps", "0.006:0.014:10", "--currents", "10:40:10", "--workers", workers]
-    proc, err, took = _interrupt(cmd, transient_running, group=group, cwd=tmp_path)
+    # twice: the second SIGINT met a restored handler while exiting (rc -2, not 130)
+    proc, err, took = _interrupt(cmd, transient_running, group=group, cwd=tmp_path,
+                                 twice=twice)
     assert proc.returncode == 130, err
     assert took < 10.0, took
     lines = err.strip().splitlines()
@@ -178,6 +193,34 @@ def test_transient_maps_build_interrupted_exits_130(group: bool, workers: str,
     assert err.count("interrupted") == 1, err
     assert len(lines) < 20 and "Traceback" not in err and "Input 0" not in err, err
     assert not (tmp_path / "m.nc").exists()
+
+
+@pytest.mark.skipif(not Path("/proc/self/stat").exists(), reason="needs /proc (Linux)")
+@pytest.mark.parametrize("group", [False, True], ids=["main-only", "group"])
+def test_compare_interrupted_exits_130(group: bool, small_maps: mk.CharacteristicMaps,
+                                       tmp_path: Path) -> None:
+    # was (found re-checking issue 27): rc 2, "flux model failed over several hold
+    # intervals ..." and CasADi's solver inputs on stderr: the SIGINT landed inside IDAS.
+    # The detailed model's chunks and the closed loop's steps are now the safe points.
+    small_maps.to_netcdf(tmp_path / "m.nc")
+    step = (resources.files("maglevkit") / "data" / "scenarios" / "step.toml").read_text()
+    assert "duration = 0.4 " in step
+    # 40 s of detailed model: minutes of IDAS, so the signal meets a running integration
+    (tmp_path / "long.toml").write_text(step.replace("duration = 0.4 ", "duration = 40.0 ", 1))
+    seen: dict[str, float] = {}
+
+    def integrating(proc: subprocess.Popen[str], err: str) -> bool:
+        if "compare: scenario 1/1" in err:
+            seen.setdefault("t", time.monotonic())
+        return "t" in seen and time.monotonic() - seen["t"] > 3.0
+
+    cmd = [str(ENTRY), "compare", "u-magnet", "m.nc", "--scenario", "long.toml"]
+    proc, err, took = _interrupt(cmd, integrating, group=group, cwd=tmp_path)
+    assert proc.returncode == 130, err
+    assert took < 10.0, took                  # a chunk of 200 steps is well below a second
+    assert err.strip().splitlines()[-1] == "interrupted", err
+    assert err.count("interrupted") == 1 and "error:" not in err, err
+    assert "Input 0" not in err and "Traceback" not in err, err
 
 
 def test_a_vehicle_with_a_non_levitation_magnet_is_refused(tmp_path: Path) -> None:
@@ -384,6 +427,10 @@ def test_list_and_template(tmp_path: Path) -> None:
         assert f"{kind}:" in res.stdout and f"  {name} " in res.stdout
     res = runner.invoke(app, ["list", "magnets"])
     assert "u-magnet" in res.stdout and "TR09 standard levitation magnet" in res.stdout
+    # one title column, also past a long name (tr09-cross-section was cut at 16 characters)
+    rows = [ln for ln in runner.invoke(app, ["list"]).stdout.splitlines() if ln.startswith("  ")]
+    starts = {len(ln) - len(ln.lstrip()[len(ln.split()[0]):].lstrip()) for ln in rows}
+    assert len(rows) >= 8 and len(starts) == 1, rows
     assert "next: maglevkit statics NAME" in res.stderr
     loaders = {"magnet": mk.load_magnet, "vehicle": load_vehicle, "guideway": load_guideway,
                "scenario": load_scenario, "sweep": load_sweep}
@@ -449,3 +496,61 @@ def test_maps_build_names_the_next_step(tmp_path: Path) -> None:
     assert res.exit_code == 0, res.output
     assert f"next: maglevkit compare u-magnet {out} (detailed vs reduced)" in res.stderr
     assert res.stdout.startswith("maps of ")      # results on stdout, the hint on stderr
+
+
+def _string_constants(tree: Any) -> list[str]:
+    """The string constants of a module that are not docstrings (messages, help texts)."""
+    import ast
+
+    docstrings = {id(node.body[0].value) for node in ast.walk(tree)
+                  if isinstance(node, (ast.Module, ast.ClassDef, ast.FunctionDef,
+                                       ast.AsyncFunctionDef))
+                  and node.body and isinstance(node.body[0], ast.Expr)
+                  and isinstance(node.body[0].value, ast.Constant)}
+    return [node.value for node in ast.walk(tree)
+            if isinstance(node, ast.Constant) and isinstance(node.value, str)
+            and id(node) not in docstrings]
+
+
+def test_every_option_the_messages_recommend_exists() -> None:
+    # issue 27: "the CLI options the error messages recommend (--extrapolate, --guideway
+    # FILE) exist"; a message or help text naming an option no command has fails here
+    import ast
+
+    import typer.main
+
+    options = {"--help"}
+    for cmd in [typer.main.get_command(app), *_click_commands().values()]:
+        for param in cmd.params:
+            options.update(o for o in (*param.opts, *param.secondary_opts) if o.startswith("--"))
+    assert {"--extrapolate", "--guideway", "--force", "--speed-kmh"} <= options
+    linker = {"--no-as-needed"}         # a C compiler flag in the build commands, not ours
+    named: dict[str, str] = {}
+    for path in Path(mk.__file__).resolve().parent.rglob("*.py"):
+        for text in _string_constants(ast.parse(path.read_text())):
+            for opt in re.findall(r"(?<![\w-])--[a-z][a-z0-9-]*[a-z0-9]", text):
+                named.setdefault(opt, str(path))
+    assert len(named) > 30, "found too few option names: is the scan still reading messages?"
+    missing = {o: p for o, p in named.items() if o not in options | linker}
+    assert not missing, missing
+    # a magnet without [operating]: figures has no gap or current option to point to
+    res = runner.invoke(app, ["figures", "u-magnet", "--out", "never-written"])
+    assert res.exit_code == 2 and "explicitly" not in res.stderr
+    assert "add one to its parameter file (nominal_gap in m, nominal_current in A" \
+        in " ".join(res.stderr.split())
+
+
+def test_commands_name_the_next_step(tmp_path: Path) -> None:
+    # issue 27: "after each command a one-line next step where there is an obvious one"
+    res = runner.invoke(app, ["statics", "u-magnet", "--gaps", "0.01", "--currents", "10"])
+    assert res.exit_code == 0
+    assert "next: maglevkit maps build u-magnet -o maps.nc" in res.stderr
+    assert "next:" not in res.stdout                 # results on stdout, hints on stderr
+    res = runner.invoke(app, ["vehicle", "run", "--duration", "0.01", "--no-progress"])
+    assert res.exit_code == 0, res.output
+    assert "next: add --plot DIR (figures) or -o run.nc" in " ".join(res.stderr.split())
+    out = tmp_path / "run.nc"
+    res = runner.invoke(app, ["vehicle", "run", "--duration", "0.01", "--no-progress",
+                              "-o", str(out)])
+    assert res.exit_code == 0 and out.exists()
+    assert f"next: xarray.open_dataset({str(out)!r})" in " ".join(res.stderr.split())

@@ -356,4 +356,4 @@ def test_cli_simulate_typo_exits_2(tmp_path: Path, text: str, key: str) -> None:
 
 def test_bundled_scenario_loads() -> None:
     sc = mk.load_scenario("step")
-    assert sc.dt_s > 0 and "all" in sc.voltages
+    assert sc.dt_s > 0 and "all" in sc.voltages_V

@@ -72,7 +72,7 @@ def test_u_magnet_ideal_iron_textbook_inductance() -> None:
     gap, R, U = 0.01, m["resistance"], 20.0
     L = MU0 * m["turns"] ** 2 * area / (2 * gap)
     tau = L / R
-    res = mk.voltage_step_response(lin, gap=gap, voltage=U, duration=4 * tau, dt=tau / 40)
+    res = mk.voltage_step_response(lin, gap_m=gap, voltage_V=U, duration_s=4 * tau, dt_s=tau / 40)
     exact = U / R * (1.0 - np.exp(-res.time_s / tau))
     # 160 intervals at rtol 1e-6: measured 8.5e-7 of U/R (see the RL test)
     np.testing.assert_allclose(res.currents_A[:, 0], exact, rtol=0, atol=2e-4 * U / R)

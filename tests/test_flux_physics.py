@@ -50,7 +50,7 @@ def test_steady_state_reproduces_statics(u_magnet: mk.Magnet, eddy: bool) -> Non
     # algebraic part is exactly the static network (eddy MMFs G phi' ~ 1e-11 A vs
     # n I ~ 2e4 A), so only the algebraic solve tolerances remain: measured 2e-15
     # relative; 1e-8 is 100x below rtol and would catch any force/flux inconsistency.
-    sol = mk.solve_statics(u_magnet, gaps=gaps, currents=res.currents_A[-1])
+    sol = mk.solve_statics(u_magnet, gaps_m=gaps, currents_A=res.currents_A[-1])
     np.testing.assert_allclose(res.branch_flux_Wb[-1], sol.branch_flux_Wb, rtol=1e-8,
                                atol=1e-8 * np.abs(sol.branch_flux_Wb).max())
     np.testing.assert_allclose(res.pole_force_N[-1], sol.pole_force_N, rtol=1e-8)
@@ -108,9 +108,9 @@ def test_solver_failure_mid_run_reports_time_state_reason() -> None:
 @pytest.mark.parametrize(("gap", "current"), [(0.008, 5.0), (0.010, 20.0), (0.012, 40.0)])
 def test_step_inductance_equals_statics_without_eddies(u_magnet: mk.Magnet, gap: float,
                                                        current: float) -> None:
-    est = mk.differential_inductance_from_step(u_magnet, gap=gap, current=current,
+    est = mk.differential_inductance_from_step(u_magnet, gap_m=gap, current_A=current,
                                                eddy_currents=False)
-    sol = mk.solve_statics(u_magnet, gaps=gap, currents=current)
+    sol = mk.solve_statics(u_magnet, gaps_m=gap, currents_A=current)
     # Two independent methods (time constant of a 0.1 % step vs implicit-function dpsi/dI);
     # the issue asks for 1 %; measured +4e-5, -1.4e-3, -1.1e-3 at the three points (the
     # 0.1 % step measures a chord of psi(I) where L~ falls with I; fit); bound 3e-3.
@@ -119,8 +119,8 @@ def test_step_inductance_equals_statics_without_eddies(u_magnet: mk.Magnet, gap:
 
 
 def test_inductance_with_eddies_has_jump_and_same_l_tilde(u_magnet: mk.Magnet) -> None:
-    with_e = mk.differential_inductance_from_step(u_magnet, gap=0.01, current=20.0)
-    without = mk.differential_inductance_from_step(u_magnet, gap=0.01, current=20.0,
+    with_e = mk.differential_inductance_from_step(u_magnet, gap_m=0.01, current_A=20.0)
+    without = mk.differential_inductance_from_step(u_magnet, gap_m=0.01, current_A=20.0,
                                                    eddy_currents=False)
     assert with_e.current_jump_A > 0.05 * with_e.final_current_change_A
     assert 0.0 < with_e.eddy_resistance_ohm < np.inf
@@ -136,9 +136,9 @@ def test_inductance_with_eddies_has_jump_and_same_l_tilde(u_magnet: mk.Magnet) -
 def test_fig7_behaviour(u_magnet: mk.Magnet) -> None:
     """Saturation: L~ falls with current.  No saturation, no eddies: constant L~."""
     currents = [5.0, 20.0, 40.0]
-    full = [mk.differential_inductance_from_step(u_magnet, gap=0.0095, current=i)
+    full = [mk.differential_inductance_from_step(u_magnet, gap_m=0.0095, current_A=i)
             for i in currents]
-    lin = [mk.differential_inductance_from_step(u_magnet, gap=0.0095, current=i,
+    lin = [mk.differential_inductance_from_step(u_magnet, gap_m=0.0095, current_A=i,
                                                 saturation=False, eddy_currents=False)
            for i in currents]
     lf = np.array([e.inductance_H for e in full])
@@ -244,7 +244,7 @@ def test_laminated_u_magnet_has_small_core_eddy_currents() -> None:
     jumps = []
     for mag in (solid, lam):
         fm = mk.FluxModel(mag, rtol=1e-10, atol=1e-12)
-        r_ec = float(eddy_resistance(mag, gap=0.01, current=0.0)[0])
+        r_ec = float(eddy_resistance(mag, gap_m=0.01, current_A=0.0)[0])
         _, out = fm.step(fm.initial_state(gaps_m=0.01, currents_A=0.0), 1e-12, dU)
         assert out.currents_A[0] == pytest.approx(dU / (r_el + r_ec), rel=1e-4)
         jumps.append(out.currents_A[0])

@@ -166,7 +166,7 @@ def test_air_cell_network_builds_in_the_sparse_form() -> None:
     res = mk.simulate(fm, np.linspace(0.0, 0.004, 5), gaps_m=0.010,
                       voltages_V=fm.resistances[0] * 20.0, initial_currents_A=20.0)
     np.testing.assert_allclose(res.currents_A[:, 0], 20.0, rtol=1e-6)
-    sol = mk.solve_statics(mag, gaps=0.010, currents=20.0)
+    sol = mk.solve_statics(mag, gaps_m=0.010, currents_A=20.0)
     np.testing.assert_allclose(res.flux_linkage_Wb[-1], sol.flux_linkage_Wb, rtol=1e-6)
 
 

@@ -52,7 +52,7 @@ def magnet() -> mk.Magnet:
 
 @pytest.fixture(scope="module")
 def maps(magnet: mk.Magnet) -> mk.CharacteristicMaps:
-    return mk.build_maps(magnet, gaps=GAPS, currents=CURRENTS, progress=False)
+    return mk.build_maps(magnet, gaps_m=GAPS, currents_A=CURRENTS, progress=False)
 
 
 @pytest.fixture(scope="module")
@@ -119,8 +119,8 @@ def _compare_scenarios(magnet: mk.Magnet, maps: mk.CharacteristicMaps, path: Pat
     for sc in scenarios:
         n = int(round(sc.duration_s / sc.dt_s))
         times = np.arange(min(n, max_steps or n) + 1) * sc.dt_s   # FMPy's points, exactly
-        u = sample_input(sc.voltages, times, circuits, "voltages", "V")
-        pole_gaps = sample_input(sc.gaps, times, magnet.network.gap_names, "gaps", "m")
+        u = sample_input(sc.voltages_V, times, circuits, "voltages", "V")
+        pole_gaps = sample_input(sc.gaps_m, times, magnet.network.gap_names, "gaps", "m")
         s = native.substitute_gaps(pole_gaps)
         sd = np.vstack([np.diff(s, axis=0) / np.diff(times)[:, None],
                         np.zeros((1, len(circuits)))])
@@ -166,8 +166,8 @@ def test_fmu_reproduces_the_native_model_on_the_full_scenarios(
         magnet: mk.Magnet, maps: mk.CharacteristicMaps, fmu: Any, tmp_path: Path) -> None:
     _compare_scenarios(magnet, maps, fmu.path, GAP0, CURRENT0, max_steps=None)
     u_magnet = mk.load_magnet("u-magnet")
-    u_maps = mk.build_maps(u_magnet, gaps=np.linspace(0.006, 0.016, 6),
-                           currents=np.linspace(0.0, 60.0, 7), progress=False)
+    u_maps = mk.build_maps(u_magnet, gaps_m=np.linspace(0.006, 0.016, 6),
+                           currents_A=np.linspace(0.0, 60.0, 7), progress=False)
     res = export_fmu(u_maps, tmp_path / "u.fmu", start_gaps_m=0.010, initial_currents_A=20.0)
     assert validate_fmu(str(res.path)) == [] and res.circuit_names == ("coil",)
     _compare_scenarios(u_magnet, u_maps, res.path, 0.010, 20.0, max_steps=None)

@@ -1,14 +1,16 @@
 """Fuzzing every bundled parameter file (issue 27, "Must show").
 
-Each example changes one or two dimensional values of a bundled magnet, vehicle or
-guideway file: a unit slip (times 1000 or 1/1000) or a plausible change (times 0.5 ... 2).
+Each example changes one or two dimensional values of a bundled magnet, vehicle,
+guideway, cross-section or design-spec file: a unit slip (times 1000 or 1/1000) or a
+plausible change (times 0.5 ... 2).
 Every outcome must be one of
 
 * a documented error (a :class:`~maglevkit.MaglevkitError`, naming what is wrong),
 * a :class:`~maglevkit.PlausibilityWarning` naming every slipped key,
 * a plausible result: the magnet's force at its operating point finite, positive and
-  within a factor 100 of the bundled file's (vehicles, guideways: the derived masses and
-  frequencies finite and positive).
+  within a factor 100 of the bundled file's (vehicles, cross-sections: the derived masses
+  finite and positive; guideways: the span positive; design specs: every requirement and
+  bound finite, every bound pair ordered).
 
 A slipped key must always be warned about (an error alone is not enough: the user should
 learn which value is off).  The examples are bounded so that the default suite stays fast;
@@ -30,17 +32,34 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 import maglevkit as mk
+from maglevkit.design import DESIGN_PLAUSIBLE, read_design_spec
 from maglevkit.magnets.base import MAGNET_PLAUSIBLE
+from maglevkit.vehicle.crosssection import CROSS_SECTION_PLAUSIBLE, parse_cross_section
 from maglevkit.vehicle.data import GUIDEWAY_PLAUSIBLE, parse_guideway
 from maglevkit.vehicle.train import VEHICLE_PLAUSIBLE, parse_vehicle
 
-from .test_plausible_files import GUIDEWAYS, MAGNETS, VEHICLES, dimensional_keys, scaled
+from .test_plausible_files import (
+    CROSS_SECTIONS,
+    DESIGNS,
+    GUIDEWAYS,
+    MAGNETS,
+    VEHICLES,
+    dimensional_keys,
+    scaled,
+)
 
 EXAMPLES = int(os.environ.get("MAGLEVKIT_FUZZ_EXAMPLES", "40"))
 OUTCOMES: Counter[str] = Counter()
 FILES = ([("magnet", n, p, MAGNET_PLAUSIBLE) for n, p in MAGNETS.items()]
          + [("vehicle", n, p, VEHICLE_PLAUSIBLE) for n, p in VEHICLES.items()]
-         + [("guideway", n, p, GUIDEWAY_PLAUSIBLE) for n, p in GUIDEWAYS.items()])
+         + [("guideway", n, p, GUIDEWAY_PLAUSIBLE) for n, p in GUIDEWAYS.items()]
+         + [("cross-section", n, p, CROSS_SECTION_PLAUSIBLE) for n, p in CROSS_SECTIONS.items()]
+         + [("design", n, p, DESIGN_PLAUSIBLE) for n, p in DESIGNS.items()])
+BUILD = {"magnet": lambda p, name: mk.build_magnet(p, source=name),
+         "vehicle": parse_vehicle,
+         "guideway": parse_guideway,
+         "cross-section": parse_cross_section,
+         "design": lambda p, name: read_design_spec(p)}
 SLIPS = (1e3, 1e-3)
 
 
@@ -55,7 +74,7 @@ _REFERENCE: dict[str, float] = {}
 def _force(params: dict[str, Any]) -> float:
     m = mk.build_magnet(params, options=mk.ModelOptions(eddy_currents=False))
     gap, current = _operating_point(params)
-    return float(mk.solve_statics(m, gaps=gap, currents=current).force_N)
+    return float(mk.solve_statics(m, gaps_m=gap, currents_A=current).force_N)
 
 
 def _reference_force(name: str) -> float:
@@ -72,6 +91,14 @@ def _plausible_result(kind: str, name: str, params: dict[str, Any]) -> None:
     elif kind == "vehicle":
         t = parse_vehicle(params, name)
         assert math.isfinite(t.total_mass_kg) and t.total_mass_kg > 0
+    elif kind == "cross-section":
+        x = parse_cross_section(params, name)
+        masses = (x.empty_train_mass_kg, x.car_body_mass_kg, x.chassis_mass_kg)
+        assert all(math.isfinite(m) and m > 0 for m in masses), masses
+    elif kind == "design":
+        spec = read_design_spec(params)
+        assert all(math.isfinite(v) for v in spec.requirements.values()), spec.requirements
+        assert all(math.isfinite(lo) and lo < hi for lo, hi in spec.variables.values())
     else:
         span = parse_guideway(params, name).span
         assert span.length_m > 0
@@ -100,14 +127,12 @@ def mutations(draw: st.DrawFn) -> tuple[str, str, dict[str, Any], list[str], lis
 def test_every_mutated_bundled_file_gives_a_documented_outcome(
         case: tuple[str, str, dict[str, Any], list[str], list[str]]) -> None:
     kind, name, params, chosen, slipped = case
-    build = {"magnet": lambda p: mk.build_magnet(p, source=name),
-             "vehicle": lambda p: parse_vehicle(p, name),
-             "guideway": lambda p: parse_guideway(p, name)}[kind]
+    build = BUILD[kind]
     error: Exception | None = None
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         try:
-            build(copy.deepcopy(params))
+            build(copy.deepcopy(params), name)
         except mk.MaglevkitError as exc:      # documented; anything else fails the test
             error = exc
     texts = [str(w.message) for w in caught if w.category is mk.PlausibilityWarning]

@@ -29,9 +29,9 @@ def test_guidance_cut_is_todays_network() -> None:
         assert cut.parameter_hash != today.parameter_hash
         assert cut.network == today.network and on.network == today.network
     gaps, cur = np.array([0.006, 0.010, 0.020]), np.array([10.0, 32.0, 60.0])
-    a = mk.solve_statics(today.with_options(eddy_currents=False), gaps=gaps, currents=cur,
+    a = mk.solve_statics(today.with_options(eddy_currents=False), gaps_m=gaps, currents_A=cur,
                          grid=True)
-    b = mk.solve_statics(cut.with_options(eddy_currents=False), gaps=gaps, currents=cur,
+    b = mk.solve_statics(cut.with_options(eddy_currents=False), gaps_m=gaps, currents_A=cur,
                          grid=True)
     # the same equations: bit-identical
     np.testing.assert_array_equal(a.force_N, b.force_N)

@@ -122,7 +122,7 @@ def test_unsupported_operation_is_refused() -> None:
 @pytest.fixture(scope="module")
 def mixed_maps() -> list[mk.CharacteristicMaps]:
     g, i = np.linspace(0.006, 0.016, 6), np.linspace(0.0, 60.0, 7)
-    return [mk.build_maps(mk.load_magnet(name), gaps=g, currents=i, progress=False)
+    return [mk.build_maps(mk.load_magnet(name), gaps_m=g, currents_A=i, progress=False)
             for name in ("u-magnet", "tr09-standard")]
 
 

@@ -66,8 +66,8 @@ def test_cut_equals_the_hand_built_network(pair: tuple[mk.Magnet, mk.Magnet]) ->
     hand = _by_hand(full)
     assert sorted(b.name for b in cut.network.branches) == sorted(b.name for b in hand.branches)
     gaps, cur = np.array([0.008, 0.010, 0.016]), np.array([10.0, 33.5, 80.0])
-    a = mk.solve_statics(cut, gaps=gaps, currents=cur, grid=True)
-    b = mk.solve_statics(hand, gaps=gaps, currents=cur, grid=True)
+    a = mk.solve_statics(cut, gaps_m=gaps, currents_A=cur, grid=True)
+    b = mk.solve_statics(hand, gaps_m=gaps, currents_A=cur, grid=True)
     # the same equations in another branch order: agreement to the Newton tolerance
     np.testing.assert_allclose(a.force_N, b.force_N, rtol=1e-9)
     np.testing.assert_allclose(a.flux_linkage_Wb, b.flux_linkage_Wb, rtol=1e-9)
@@ -81,8 +81,8 @@ def test_cut_has_less_force_and_flux(pair: tuple[mk.Magnet, mk.Magnet]) -> None:
     the force then rises."""
     full, cut = pair
     gaps, cur = np.array([0.006, 0.010, 0.020]), np.array([10.0, 33.5, 100.0])
-    a = mk.solve_statics(full, gaps=gaps, currents=cur, grid=True)
-    b = mk.solve_statics(cut, gaps=gaps, currents=cur, grid=True)
+    a = mk.solve_statics(full, gaps_m=gaps, currents_A=cur, grid=True)
+    b = mk.solve_statics(cut, gaps_m=gaps, currents_A=cur, grid=True)
     assert np.all(b.flux_linkage_Wb < a.flux_linkage_Wb)
     assert np.all(b.force_N[:, :2] < a.force_N[:, :2])
     assert np.all(b.force_N[:2, 2] > a.force_N[:2, 2])
@@ -101,13 +101,13 @@ def test_file_key_equals_with_options(tmp_path, pair) -> None:  # type: ignore[n
         from_file = mk.build_magnet(p, options=mk.ModelOptions(eddy_currents=False))
     assert from_file.parameter_hash == cut.parameter_hash
     assert cut.parameter_hash != full.parameter_hash
-    sa = mk.solve_statics(from_file, gaps=0.010, currents=40.0)
-    sb = mk.solve_statics(cut, gaps=0.010, currents=40.0)
+    sa = mk.solve_statics(from_file, gaps_m=0.010, currents_A=40.0)
+    sb = mk.solve_statics(cut, gaps_m=0.010, currents_A=40.0)
     np.testing.assert_array_equal(sa.force_N, sb.force_N)
     # true is the default: the file key and the switch give back the full network
     back = cut.with_options(end_effects=True)
-    assert mk.solve_statics(back, gaps=0.010, currents=40.0).force_N == pytest.approx(
-        mk.solve_statics(full, gaps=0.010, currents=40.0).force_N, rel=1e-12)
+    assert mk.solve_statics(back, gaps_m=0.010, currents_A=40.0).force_N == pytest.approx(
+        mk.solve_statics(full, gaps_m=0.010, currents_A=40.0).force_N, rel=1e-12)
 
 
 def test_bad_end_effects_values() -> None:
@@ -141,8 +141,8 @@ def test_coil_segments_key() -> None:
         for c in mags[k].network.circuits:
             assert len(c.coils) == 6 * (k + 1)
             assert sum(coil.turns for coil in c.coils) == pytest.approx(6 * 190.0, rel=1e-12)
-    s3 = mk.solve_statics(mags[3], gaps=0.010, currents=33.5)
-    s6 = mk.solve_statics(mags[6], gaps=0.010, currents=33.5)
+    s3 = mk.solve_statics(mags[3], gaps_m=0.010, currents_A=33.5)
+    s6 = mk.solve_statics(mags[6], gaps_m=0.010, currents_A=33.5)
     assert float(s6.force_N) == pytest.approx(float(s3.force_N), rel=0.01)
     np.testing.assert_allclose(s6.flux_linkage_Wb, s3.flux_linkage_Wb, rtol=0.01)
     p["magnet"]["coil_segments"] = 0

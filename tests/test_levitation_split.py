@@ -80,8 +80,8 @@ def test_lig_grooves_matter(tmp_path) -> None:  # type: ignore[no-untyped-def]
     with_g = _split()
     p["magnet"]["lig_grooves"] = 0
     no_g = mk.load_magnet(_write(tmp_path, p))
-    f_with = mk.solve_statics(with_g, gaps=0.010, currents=33.5).force_N
-    f_no = mk.solve_statics(no_g, gaps=0.010, currents=33.5).force_N
+    f_with = mk.solve_statics(with_g, gaps_m=0.010, currents_A=33.5).force_N
+    f_no = mk.solve_statics(no_g, gaps_m=0.010, currents_A=33.5).force_N
     assert f_no > 1.01 * f_with
     # the grooves (20 mm deep, 10 mm wide: deeper than half their width) are slots in the
     # face: each takes Carter's slot loss gamma(b/(2s)) s off the face length (at the true
@@ -198,7 +198,7 @@ def test_iron_is_saturable_and_teeth_are_loaded(std: mk.Magnet) -> None:
     # + 2 x 12 yoke halves over the faces + 11 back + 11 stator segments, all with a B-H curve
     assert len(irons) == 48 + 12 + 24 + 24 + 11 + 11
     assert all(e.material.saturates for e in irons)
-    sol = mk.solve_statics(std, gaps=std.nominal_gap, currents=std.nominal_current)
+    sol = mk.solve_statics(std, gaps_m=std.nominal_gap, currents_A=std.nominal_current)
     b_teeth = []
     for br, phi in zip(net.branches, sol.branch_flux_Wb, strict=True):
         for e in br.elements:
@@ -248,7 +248,7 @@ def test_teeth_and_slot_air_share_one_mmf_deep_in_saturation(std: mk.Magnet) -> 
     length is the core height (the junction counted once, in the pole back)."""
     mag = std.with_options(eddy_currents=False)
     net = mag.network
-    sol = mk.solve_statics(mag, gaps=0.010, currents=[100.0, 100.0])
+    sol = mk.solve_statics(mag, gaps_m=0.010, currents_A=[100.0, 100.0])
     flux = dict(zip(sol.branch_names, np.ravel(sol.branch_flux_Wb), strict=True))
     st = mag.parameters["stator"]
     el = {e.name: e for br in net.branches for e in br.elements}
@@ -278,7 +278,7 @@ def test_split_network_reciprocity_by_ad_in_saturation(std: mk.Magnet) -> None:
     the new parallel branches enter the co-energy consistently."""
     mag = std.with_options(eddy_currents=False)
     for s, i in ((0.010, 50.0), (0.006, 100.0)):
-        sol = mk.solve_statics(mag, gaps=s, currents=[i, 0.8 * i])
+        sol = mk.solve_statics(mag, gaps_m=s, currents_A=[i, 0.8 * i])
         df_di = np.asarray(sol.dforce_dcurrent_N_per_A)        # (gaps, circuits)
         dpsi_ds = np.asarray(sol.dpsi_dgap_Wb_per_m)           # (circuits, gaps)
         scale = np.max(np.abs(df_di))

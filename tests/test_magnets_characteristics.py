@@ -46,13 +46,13 @@ def test_knee_above_nominal(std: mk.Magnet) -> None:
     h = 1e-3
 
     def exponent_fd(current: float) -> float:
-        f = mk.solve_statics(std, gaps=0.010, currents=[[current * (1 + h)] * 2,
+        f = mk.solve_statics(std, gaps_m=0.010, currents_A=[[current * (1 + h)] * 2,
                                                         [current * (1 - h)] * 2]).force_N
         return float((np.log(f[0]) - np.log(f[1])) / (np.log1p(h) - np.log1p(-h)))
 
     assert exponent_fd(i0) == pytest.approx(1.8, abs=1e-4)
     assert exponent_fd(0.99 * i0) > 1.81 and exponent_fd(1.01 * i0) < 1.79
-    n = force_exponent(std, gap=0.010, currents=np.array([i0]))
+    n = force_exponent(std, gap_m=0.010, currents_A=np.array([i0]))
     # exact dF/dI vs the difference quotient (truncation ~h^2 = 1e-6): measured 1.1e-6
     assert n[0] == pytest.approx(exponent_fd(i0), abs=1e-5)
 
@@ -112,7 +112,7 @@ def test_fig7_step_response_inductance(f7, std: mk.Magnet) -> None:  # type: ign
     # 25-samples-per-tau fit window; bound 0.5 %)
     assert np.ptp(lin) / lin.mean() < 1e-3
     lin_static = mk.solve_statics(std.with_options(saturation=False, eddy_currents=False),
-                                  gaps=f7.gap_m, currents=10.0).differential_inductance_H[0, 0]
+                                  gaps_m=f7.gap_m, currents_A=10.0).differential_inductance_H[0, 0]
     np.testing.assert_allclose(lin * f7.L0_H, lin_static, rtol=5e-3)
     # full model below the knee: larger than the simple one (computed 1.33 x at 0.1 I0,
     # 1.31 x at 0.8 I0; bound 1.2 x)
@@ -133,16 +133,16 @@ def test_fig7_step_response_inductance(f7, std: mk.Magnet) -> None:  # type: ign
     r_el = float(std.network.resistances[0])
     for xi, li in zip(x, full, strict=True):
         cur = float(xi * f7.I0_A)
-        l11 = mk.solve_statics(std, gaps=f7.gap_m, currents=cur).differential_inductance_H[0, 0]
-        r_ec = float(eddy_resistance(std, gap=f7.gap_m, current=cur)[0])
+        l11 = mk.solve_statics(std, gaps_m=f7.gap_m, currents_A=cur).differential_inductance_H[0, 0]
+        r_ec = float(eddy_resistance(std, gap_m=f7.gap_m, current_A=cur)[0])
         ratio = li * f7.L0_H / (l11 * (1.0 + r_el / r_ec))
         assert 1.0 < ratio < 1.12, (xi, ratio)
 
 
 def test_static_inductance_independent_of_eddy_currents(std: mk.Magnet) -> None:
     no_eddy = std.with_options(eddy_currents=False)
-    a = mk.solve_statics(std, gaps=0.0095, currents=40.0).differential_inductance_H
-    b = mk.solve_statics(no_eddy, gaps=0.0095, currents=40.0).differential_inductance_H
+    a = mk.solve_statics(std, gaps_m=0.0095, currents_A=40.0).differential_inductance_H
+    b = mk.solve_statics(no_eddy, gaps_m=0.0095, currents_A=40.0).differential_inductance_H
     np.testing.assert_allclose(a, b, rtol=1e-12)
 
 

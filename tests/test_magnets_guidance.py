@@ -23,10 +23,10 @@ def test_topology(gm: mk.Magnet) -> None:
 
 
 def test_conservation_and_symmetry(gm: mk.Magnet) -> None:
-    sol = mk.solve_statics(gm, gaps=[0.009, 0.011], currents=[32.0, 25.0])
+    sol = mk.solve_statics(gm, gaps_m=[0.009, 0.011], currents_A=[32.0, 25.0])
     A = gm.network.incidence_matrix
     assert np.max(np.abs(A @ sol.branch_flux_Wb)) <= 1e-12 * np.max(np.abs(sol.branch_flux_Wb))
-    even = mk.solve_statics(gm, gaps=0.010, currents=32.0)
+    even = mk.solve_statics(gm, gaps_m=0.010, currents_A=32.0)
     assert even.pole_force_N[0] == pytest.approx(even.pole_force_N[1], rel=1e-9)
     # the upper and lower pole bar carry the same flux magnitude in a section (series path)
     assert abs(even.branch_flux("gap_u_1")) == pytest.approx(abs(even.branch_flux("gap_l_1")),
@@ -35,7 +35,7 @@ def test_conservation_and_symmetry(gm: mk.Magnet) -> None:
 
 def test_force_decreasing_in_gap_and_knee(gm: mk.Magnet) -> None:
     gaps = np.linspace(0.005, 0.02, 31)
-    F = mk.solve_statics(gm, gaps=gaps, currents=np.array([32.0]), grid=True).force_N[:, 0]
+    F = mk.solve_statics(gm, gaps_m=gaps, currents_A=np.array([32.0]), grid=True).force_N[:, 0]
     assert np.all(np.diff(F) < 0)
     assert gm.nominal_current is not None
     assert saturation_knee(gm) > gm.nominal_current

@@ -63,14 +63,14 @@ def test_loop_matrix_is_a_cycle_basis(std: mk.Magnet) -> None:
 
 def test_flux_conservation(std: mk.Magnet) -> None:
     gaps = np.linspace(0.008, 0.013, 12)
-    sol = mk.solve_statics(std, gaps=gaps, currents=[30.0, 38.0])
+    sol = mk.solve_statics(std, gaps_m=gaps, currents_A=[30.0, 38.0])
     A = std.network.incidence_matrix
     # node sums relative to the largest branch flux: round-off level (loop fluxes are exact)
     assert np.max(np.abs(A @ sol.branch_flux_Wb)) <= 1e-12 * np.max(np.abs(sol.branch_flux_Wb))
 
 
 def test_half_magnets_symmetric(std: mk.Magnet) -> None:
-    sol = mk.solve_statics(std, gaps=0.010, currents=34.0)
+    sol = mk.solve_statics(std, gaps_m=0.010, currents_A=34.0)
     f = sol.pole_force_N
     front, rear = f[:6].sum(), f[6:].sum()
     # mirror symmetry of the network: equal to solver precision (Newton to 1e-9 scaled residual)
@@ -81,11 +81,11 @@ def test_half_magnets_symmetric(std: mk.Magnet) -> None:
 
 
 def test_locality_of_one_pole_gap(std: mk.Magnet) -> None:
-    base = mk.solve_statics(std, gaps=0.010, currents=34.0).pole_force_N
+    base = mk.solve_statics(std, gaps_m=0.010, currents_A=34.0).pole_force_N
     for k in (0, 3, 6, 11):
         gaps = np.full(12, 0.010)
         gaps[k] = 0.012
-        changed = mk.solve_statics(std, gaps=gaps, currents=34.0).pole_force_N
+        changed = mk.solve_statics(std, gaps_m=gaps, currents_A=34.0).pole_force_N
         delta = np.abs(changed - base)
         # the pole whose gap opened loses most; every other pole changes less than half as much
         assert np.argmax(delta) == k
@@ -96,7 +96,7 @@ def test_locality_of_one_pole_gap(std: mk.Magnet) -> None:
 
 def test_total_force_continuous_and_decreasing_in_gap(std: mk.Magnet) -> None:
     gaps = np.linspace(0.004, 0.025, 85)
-    sol = mk.solve_statics(std, gaps=gaps, currents=np.array([20.0, 34.0, 60.0]), grid=True)
+    sol = mk.solve_statics(std, gaps_m=gaps, currents_A=np.array([20.0, 34.0, 60.0]), grid=True)
     F = sol.force_N  # (gaps, currents)
     assert np.all(np.diff(F, axis=0) < 0.0)
     # continuity: the step between neighbouring gaps (0.25 mm) is bounded by the exact
@@ -110,7 +110,7 @@ def test_half_magnet_carries_section_share(std: mk.Magnet) -> None:
     share = SECTION_MASS * G / HALF_MAGNETS
     s0, i0 = std.nominal_gap, std.nominal_current
     assert s0 == pytest.approx(0.010)
-    sol = mk.solve_statics(std, gaps=s0, currents=i0)
+    sol = mk.solve_statics(std, gaps_m=s0, currents_A=i0)
     half = sol.pole_force_N[:6].sum()
     # margin 5 %: room for the control loop and a heavier load; the file's nominal current
     # (33.5 A) is chosen for ~9 % (computed 18.99 kN = 1.087 x 17.47 kN)
@@ -118,7 +118,7 @@ def test_half_magnet_carries_section_share(std: mk.Magnet) -> None:
     # "with margin": the knee lies above nominal and the force there exceeds 1.5 x the share
     knee = saturation_knee(std)
     assert knee > 1.2 * i0
-    at_knee = mk.solve_statics(std, gaps=s0, currents=knee).pole_force_N[:6].sum()
+    at_knee = mk.solve_statics(std, gaps_m=s0, currents_A=knee).pole_force_N[:6].sum()
     assert at_knee > 1.5 * share
 
 
@@ -133,8 +133,8 @@ def test_coupling_of_the_two_circuits_is_small(std: mk.Magnet) -> None:
     # 8e-10 for L_11 and 1.1e-9 for the coupling ratio; bound 1e-7)
     i0 = std.nominal_current
     h = 1e-4 * i0
-    psi = mk.solve_statics(std, gaps=std.nominal_gap,
-                           currents=[[i0 + h, i0], [i0 - h, i0], [i0, i0 + h],
+    psi = mk.solve_statics(std, gaps_m=std.nominal_gap,
+                           currents_A=[[i0 + h, i0], [i0 - h, i0], [i0, i0 + h],
                                      [i0, i0 - h]]).flux_linkage_Wb
     l_fd = np.column_stack([psi[0] - psi[1], psi[2] - psi[3]]) / (2 * h)   # [i, j] = dpsi_i/dI_j
     np.testing.assert_allclose(c.inductance_H, l_fd, rtol=1e-7)
@@ -173,8 +173,8 @@ def test_bow_magnet_three_circuits(bow: mk.Magnet) -> None:
     np.testing.assert_allclose(bow.network.resistances, 4 * 0.2167)
     # same iron and gaps as the standard magnet: equal total force at equal currents
     std = mk.load_magnet("tr09-standard")
-    f_bow = mk.solve_statics(bow, gaps=0.01, currents=30.0).force_N
-    f_std = mk.solve_statics(std, gaps=0.01, currents=30.0).force_N
+    f_bow = mk.solve_statics(bow, gaps_m=0.01, currents_A=30.0).force_N
+    f_std = mk.solve_statics(std, gaps_m=0.01, currents_A=30.0).force_N
     assert f_bow == pytest.approx(f_std, rel=1e-9)
 
 
@@ -305,8 +305,8 @@ def test_lig_grooves_matter(tmp_path) -> None:  # type: ignore[no-untyped-def]
     with_g = mk.load_magnet("tr09-standard")
     p["magnet"]["lig_grooves"] = 0
     no_g = mk.load_magnet(_write(tmp_path, p))
-    f_with = mk.solve_statics(with_g, gaps=0.010, currents=33.5).force_N
-    f_no = mk.solve_statics(no_g, gaps=0.010, currents=33.5).force_N
+    f_with = mk.solve_statics(with_g, gaps_m=0.010, currents_A=33.5).force_N
+    f_no = mk.solve_statics(no_g, gaps_m=0.010, currents_A=33.5).force_N
     assert f_no > 1.01 * f_with
     # permeance difference by hand: the groove area A_g faces the gap directly instead of
     # through the groove depth, dG = mu0 A_g (1/s' - 1/(s' + d_g)); exact to round-off
@@ -356,7 +356,7 @@ def test_iron_is_saturable_and_teeth_are_loaded(std: mk.Magnet) -> None:
     # 12 cores + 12 tooth groups + 11 back + 11 stator segments, all with a B-H curve
     assert len(irons) == 46
     assert all(e.material.saturates for e in irons)
-    sol = mk.solve_statics(std, gaps=std.nominal_gap, currents=std.nominal_current)
+    sol = mk.solve_statics(std, gaps_m=std.nominal_gap, currents_A=std.nominal_current)
     b_teeth = []
     for br, phi in zip(net.branches, sol.branch_flux_Wb, strict=True):
         for e in br.elements:
@@ -403,6 +403,6 @@ def test_bow_magnet_other_assignment(tmp_path, assignment) -> None:  # type: ign
         assert c.resistance == pytest.approx(len(poles) * r_pole, rel=1e-12)
     # same iron and gaps: with all circuits at the same current the MMF pattern is that of
     # the standard magnet, so the total force is equal (solver precision, Newton 1e-9)
-    f = mk.solve_statics(mag, gaps=0.010, currents=30.0).force_N
-    f_std = mk.solve_statics(mk.load_magnet("tr09-standard"), gaps=0.010, currents=30.0).force_N
+    f = mk.solve_statics(mag, gaps_m=0.010, currents_A=30.0).force_N
+    f_std = mk.solve_statics(mk.load_magnet("tr09-standard"), gaps_m=0.010, currents_A=30.0).force_N
     assert f == pytest.approx(f_std, rel=1e-9)

@@ -66,7 +66,7 @@ def test_effect_on_tr09_map_corner() -> None:
     currents: 5 mm / 83.75 A (the demo maps' corner) gains +0.6 % force; 10 mm / 33.5 A
     (nominal) is unchanged (its flux densities stay below every B*)."""
     mag = mk.load_magnet("tr09-standard")
-    sol = mk.solve_statics(mag, gaps=np.array([0.005, 0.010]), currents=np.array([33.5, 83.75]),
+    sol = mk.solve_statics(mag, gaps_m=np.array([0.005, 0.010]), currents_A=np.array([33.5, 83.75]),
                            grid=True)
     b_max = np.nanmax(np.abs(sol.branch_flux_density_T), axis=-1)
     assert b_max[1, 0] < 2.0 < 2.235 < b_max[0, 1]

@@ -19,10 +19,10 @@ DT = 1e-3
 
 @pytest.fixture(scope="module")
 def setup(u_magnet: mk.Magnet):  # type: ignore[no-untyped-def]
-    maps = mk.build_maps(u_magnet, gaps=np.linspace(0.004, 0.02, 17),
-                         currents=np.linspace(0, 80, 33), progress=False)
+    maps = mk.build_maps(u_magnet, gaps_m=np.linspace(0.004, 0.02, 17),
+                         currents_A=np.linspace(0, 80, 33), progress=False)
     i0 = 20.0
-    f0 = float(mk.solve_statics(u_magnet, gaps=S0, currents=i0).force_N)
+    f0 = float(mk.solve_statics(u_magnet, gaps_m=S0, currents_A=i0).force_N)
     veh = HeaveMass(f0 / STANDARD_GRAVITY)
     model = MagnetHeaveModel(maps, mass_kg=veh.mass_kg)
     plain = MagnetHeaveModel(maps, mass_kg=veh.mass_kg, disturbances=())
@@ -89,12 +89,15 @@ def test_offset_free_on_the_detailed_plant(setup) -> None:  # type: ignore[no-un
 
 def test_min_gap_constraint_in_a_large_disturbance(setup) -> None:  # type: ignore[no-untyped-def]
     """A load drop of 30 % pulls the magnet towards the rail: the MPC with min_gap_m =
-    9.9 mm holds it (voltage at its 440 V limit), the cascade on the same run comes
-    within 7 mm (60 % puts the cascade on the rail)."""
+    9.9 mm nearly holds it (it can cut the flux only as fast as the two-quadrant chopper
+    allows, ``U >= -R_ec I_L``, not with -440 V), the cascade on the same run comes within
+    7 mm (60 % puts the cascade on the rail)."""
     mag, maps, model, _, veh, f0 = setup
     plant = mk.CurrentModel(maps)
     drop = lambda t: -0.3 * f0 if t >= 0.02 else 0.0  # noqa: E731
-    ctl = _mpc(model, min_gap_m=0.0099)
+    # qpOASES: with the chopper's I >= 0 rows active, CasADi's qrqp ("Failed to calculate
+    # search direction") and OSQP (iteration limit) fail on this run's QP at t = 0.03 s
+    ctl = _mpc(model, min_gap_m=0.0099, qp_solver="qpoases")
     mpc = closed_loop(plant, veh, ctl, duration_s=0.3, dt_s=DT, initial_gap_m=S0,
                       initial_current_A=ctl.design_state[0], external_force_N=drop)
     design = design_gap_controller(mag, mass_kg=veh.mass_kg, gap_m=S0, current_A=20.0)
@@ -105,10 +108,12 @@ def test_min_gap_constraint_in_a_large_disturbance(setup) -> None:  # type: igno
         print(name, "min gap", r.gap_m.min(), "max dev", r.max_gap_deviation_m(),
               "IAE", r.iae_m_s(), "energy", r.energy_J())
     assert np.all(np.abs(mpc.voltages_V) <= 440.0)
-    assert np.abs(mpc.voltages_V).max() == pytest.approx(440.0)   # the limit is used
-    # soft constraint at the 2 ms shooting nodes, one RTI iteration per 1 ms sample:
-    # measured 4.8 um below 9.9 mm; bound 10 um
-    assert mpc.gap_m.min() >= 0.0099 - 1e-5
+    # the flux is cut at the chopper's floor, far from the -440 V limit (measured -153 V)
+    assert mpc.voltages_V.min() > -300.0
+    # soft constraint at the 2 ms shooting nodes, one RTI iteration per 1 ms sample, the
+    # flux cut limited by the chopper: measured 44 um below 9.9 mm (4.8 um with a
+    # four-quadrant -440 V); bound 60 um
+    assert mpc.gap_m.min() >= 0.0099 - 6e-5
     # measured: cascade min 6.97 mm, max deviation 3.0 mm against the MPC's 0.11 mm
     assert cas.gap_m.min() < 0.0099 - 1e-3
     assert cas.max_gap_deviation_m() > 10 * mpc.max_gap_deviation_m()

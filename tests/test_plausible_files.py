@@ -16,6 +16,7 @@ from typing import Any
 import pytest
 
 import maglevkit as mk
+from maglevkit.design import DESIGN_PLAUSIBLE, read_design_spec
 from maglevkit.magnets.base import MAGNET_PLAUSIBLE
 from maglevkit.validation import Plausible, check_plausible
 from maglevkit.vehicle.crosssection import CROSS_SECTION_PLAUSIBLE, parse_cross_section
@@ -36,12 +37,15 @@ MAGNETS = {name: _bundled(f"{name}.toml") for name in mk.bundled_magnets()}
 VEHICLES = {"tr09": _bundled("vehicle/tr09.toml")}
 GUIDEWAYS = {"guideway": _bundled("vehicle/guideway.toml")}
 CROSS_SECTIONS = {"tr09-cross-section": _bundled("vehicle/tr09-cross-section.toml")}
+DESIGNS = {"u-magnet-design": _bundled("designs/u-magnet-design.toml")}
 KINDS = {
     "magnet": (MAGNETS, MAGNET_PLAUSIBLE, lambda p: mk.build_magnet(p, source="f")),
     "vehicle": (VEHICLES, VEHICLE_PLAUSIBLE, lambda p: parse_vehicle(p, "f")),
     "guideway": (GUIDEWAYS, GUIDEWAY_PLAUSIBLE, lambda p: parse_guideway(p, "f")),
     "cross-section": (CROSS_SECTIONS, CROSS_SECTION_PLAUSIBLE,
                       lambda p: parse_cross_section(p, "f")),
+    # issue 27 "Must show" names the design specs too (their [variables] bounds are lists)
+    "design": (DESIGNS, DESIGN_PLAUSIBLE, lambda p: read_design_spec(p)),
 }
 
 

@@ -19,7 +19,7 @@ CURRENTS = np.linspace(0.0, 60.0, 7)
 @pytest.fixture(scope="module")
 def guidance_maps() -> mk.CharacteristicMaps:
     # two circuits, each driving its own poles: the averaging/share matrices are not trivial
-    return mk.build_maps(mk.load_magnet("tr-guidance"), gaps=GAPS, currents=CURRENTS,
+    return mk.build_maps(mk.load_magnet("tr-guidance"), gaps_m=GAPS, currents_A=CURRENTS,
                          progress=False)
 
 

@@ -122,7 +122,7 @@ def test_the_fit_recovers_a_known_network() -> None:
 @pytest.fixture(scope="module")
 def split_maps() -> CharacteristicMaps:
     mag = mk.load_magnet("u-magnet").with_options(eddy_model="ladder_split")
-    return mk.build_maps(mag, gaps=GAPS, currents=CURRENTS, progress=False)
+    return mk.build_maps(mag, gaps_m=GAPS, currents_A=CURRENTS, progress=False)
 
 
 def test_maps_store_the_fitted_network(split_maps: CharacteristicMaps, tmp_path) -> None:  # type: ignore[no-untyped-def]
@@ -163,7 +163,7 @@ def test_fitted_jump_tends_to_the_exact_one_on_the_lumped_magnet() -> None:
     implicit function theorem), and the fitted network's R_0 approaches it as branches are
     added: measured 21.69, 22.27, 22.37 ohm for m = 1, 2, 3 vs 22.374 ohm (TR09 standard:
     5.715, 5.732, 5.749 vs 5.747 ohm)."""
-    maps = mk.build_maps(mk.load_magnet("u-magnet"), gaps=GAPS, currents=CURRENTS,
+    maps = mk.build_maps(mk.load_magnet("u-magnet"), gaps_m=GAPS, currents_A=CURRENTS,
                          progress=False)
     jump = float(maps.dataset["eddy_resistance_ohm"].values[0])
     r0 = maps.dataset["eddy_network_r0_ohm"].values[0]
@@ -176,14 +176,14 @@ def test_fitted_jump_tends_to_the_exact_one_on_the_lumped_magnet() -> None:
 
 def test_eddy_reference_moves_the_identification_only() -> None:
     mag = mk.load_magnet("u-magnet")
-    default = mk.build_maps(mag, gaps=GAPS, currents=CURRENTS, progress=False)
+    default = mk.build_maps(mag, gaps_m=GAPS, currents_A=CURRENTS, progress=False)
     # the default point of these maps is 10 mm / 20 A: naming it changes nothing
-    same = mk.build_maps(mag, gaps=GAPS, currents=CURRENTS, progress=False,
+    same = mk.build_maps(mag, gaps_m=GAPS, currents_A=CURRENTS, progress=False,
                          eddy_reference=(0.010, 20.0))
     for name in default.dataset.data_vars:
         assert np.array_equal(default.dataset[name].values, same.dataset[name].values,
                               equal_nan=True), name
-    moved = mk.build_maps(mag, gaps=GAPS, currents=CURRENTS, progress=False,
+    moved = mk.build_maps(mag, gaps_m=GAPS, currents_A=CURRENTS, progress=False,
                           eddy_reference=(0.008, 35.0))
     for name in ("force_N", "inductance_H", "dL_ds_H_per_m", "eddy_resistance_ohm"):
         assert np.array_equal(default.dataset[name].values, moved.dataset[name].values), name
@@ -197,7 +197,7 @@ def test_eddy_reference_moves_the_identification_only() -> None:
                      (0.01, "give \\(gap_m, current_A\\)"), (([0.01], 20.0), "one gap"),
                      (("a", 20.0), "string")):
         with pytest.raises(mk.InputError, match=msg):
-            mk.build_maps(mag, gaps=GAPS, currents=CURRENTS, progress=False,
+            mk.build_maps(mag, gaps_m=GAPS, currents_A=CURRENTS, progress=False,
                           eddy_reference=bad)
 
 
@@ -305,7 +305,7 @@ def test_bad_input(split_maps: CharacteristicMaps) -> None:
 
 def test_maps_without_eddy_currents_refuse_eddy_modes() -> None:
     mag = mk.load_magnet("u-magnet", eddy_currents=False)
-    maps = mk.build_maps(mag, gaps=GAPS, currents=CURRENTS, progress=False)
+    maps = mk.build_maps(mag, gaps_m=GAPS, currents_A=CURRENTS, progress=False)
     assert np.all(np.isinf(maps.dataset["eddy_network_r0_ohm"].values))
     with pytest.raises(mk.InputError, match="no eddy network to use"):
         mk.CurrentModel(maps, eddy_modes=2)
@@ -359,8 +359,8 @@ MEASURED = {
 def test_eddy_modes_follow_the_detailed_model(key: tuple) -> None:
     eddy_model, reference, modes = key
     mag = mk.load_magnet("u-magnet").with_options(eddy_model=eddy_model)
-    maps = mk.build_maps(mag, gaps=np.linspace(0.004, 0.02, 17),
-                         currents=np.linspace(0, 80, 33), progress=False,
+    maps = mk.build_maps(mag, gaps_m=np.linspace(0.004, 0.02, 17),
+                         currents_A=np.linspace(0, 80, 33), progress=False,
                          eddy_reference=reference)
     results = compare_models(mk.FluxModel(mag), mk.CurrentModel(maps, eddy_modes=modes),
                              standard_scenarios(mag, gap_m=0.010, current_A=20.0),

@@ -29,7 +29,7 @@ CURRENTS = np.linspace(0.0, 40.0, 9)
 
 @pytest.fixture(scope="module")
 def u_maps() -> CharacteristicMaps:
-    return mk.build_maps(mk.load_magnet("u-magnet"), gaps=GAPS, currents=CURRENTS,
+    return mk.build_maps(mk.load_magnet("u-magnet"), gaps_m=GAPS, currents_A=CURRENTS,
                          progress=False)
 
 
@@ -183,8 +183,8 @@ def test_bad_input(u_maps: CharacteristicMaps) -> None:
 
     # the bank carries the ladder now (tests/test_bank_motion_eddy.py)
     assert MagnetBank({"m": model}, compiled="never").motion_eddy
-    no_eddy = mk.build_maps(mk.load_magnet("u-magnet", eddy_currents=False), gaps=GAPS,
-                            currents=CURRENTS, progress=False)
+    no_eddy = mk.build_maps(mk.load_magnet("u-magnet", eddy_currents=False), gaps_m=GAPS,
+                            currents_A=CURRENTS, progress=False)
     assert np.all(np.isnan(no_eddy.dataset["motion_eddy_unshielded_inductance_H"].values))
     with pytest.raises(mk.InputError, match="no eddy currents.*motion_eddy=False"):
         mk.CurrentModel(no_eddy, motion_eddy=True)
@@ -196,8 +196,8 @@ def test_tr09_gap_sine_sweep_against_the_detailed_model() -> None:
     within 5 deg (measured 0.5 / 3.3 / 5.6 %, 0.4 / 0.6 / 2.9 deg; eq. 8: 4.9 / 43 / 161 %,
     docs/decisions.md); the force error shrinks with it (measured 0.3 / 0.9 / 1.0 %)."""
     mag = mk.load_magnet("tr09-standard")
-    maps = mk.build_maps(mag, gaps=np.linspace(0.005, 0.016, 12),
-                         currents=np.linspace(0.0, 80.0, 41), progress=False)
+    maps = mk.build_maps(mag, gaps_m=np.linspace(0.005, 0.016, 12),
+                         currents_A=np.linspace(0.0, 80.0, 41), progress=False)
     fm = mk.FluxModel(mag)
     ladder = mk.CurrentModel(maps, motion_eddy=True)
     u0 = fm.resistances * 34.0

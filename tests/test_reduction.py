@@ -23,13 +23,13 @@ CURRENTS = np.linspace(0.0, 80.0, 33)
 
 @pytest.fixture(scope="module")
 def ideal_maps() -> mk.reduction.CharacteristicMaps:  # type: ignore[name-defined]
-    return build_maps(build_u(material="ideal", fringing=False, leakage=False), gaps=GAPS,
-                      currents=CURRENTS)
+    return build_maps(build_u(material="ideal", fringing=False, leakage=False), gaps_m=GAPS,
+                      currents_A=CURRENTS)
 
 
 @pytest.fixture(scope="module")
 def u_maps(u_magnet: mk.Magnet):  # type: ignore[no-untyped-def]
-    return build_maps(u_magnet, gaps=GAPS, currents=CURRENTS)
+    return build_maps(u_magnet, gaps_m=GAPS, currents_A=CURRENTS)
 
 
 def test_maps_of_the_ideal_magnet_are_the_closed_forms(ideal_maps) -> None:  # type: ignore[no-untyped-def]
@@ -54,7 +54,7 @@ def test_maps_satisfy_eq9_reciprocity(u_magnet: mk.Magnet) -> None:
     ~2e-6 here (measured 8e-5, dominated by the difference quotient of dL/ds in the maps).
     The bound 1e-3 is 12x above that and still fails for any wrong factor in eq. 9."""
     currents = np.linspace(0.0, 80.0, 321)
-    maps = build_maps(u_magnet, gaps=np.linspace(0.004, 0.020, 4), currents=currents)
+    maps = build_maps(u_magnet, gaps_m=np.linspace(0.004, 0.020, 4), currents_A=currents)
     f = maps.variable("force_N", "coil")
     dlds = maps.variable("dL_ds_H_per_m", "coil")
     h = currents[1] - currents[0]
@@ -88,14 +88,14 @@ def test_maps_of_another_magnet_are_refused(u_maps, tmp_path: Path) -> None:  # 
 
 def test_executors_give_identical_maps(u_magnet: mk.Magnet, u_maps) -> None:  # type: ignore[no-untyped-def]
     with ThreadPoolExecutor(2) as ex:
-        threaded = build_maps(u_magnet, gaps=GAPS, currents=CURRENTS, executor=ex)
+        threaded = build_maps(u_magnet, gaps_m=GAPS, currents_A=CURRENTS, executor=ex)
     for name in u_maps.dataset.data_vars:
         assert np.array_equal(u_maps.dataset[name].values, threaded.dataset[name].values,
                               equal_nan=True)
 
 
 def test_process_pool_gives_identical_maps(u_magnet: mk.Magnet, u_maps) -> None:  # type: ignore[no-untyped-def]
-    pooled = build_maps(u_magnet, gaps=GAPS, currents=CURRENTS, executor="process")
+    pooled = build_maps(u_magnet, gaps_m=GAPS, currents_A=CURRENTS, executor="process")
     for name in u_maps.dataset.data_vars:
         assert np.array_equal(u_maps.dataset[name].values, pooled.dataset[name].values,
                               equal_nan=True)
@@ -114,7 +114,7 @@ def test_process_pool_gives_identical_maps(u_magnet: mk.Magnet, u_maps) -> None:
 )
 def test_bad_grids_raise(u_magnet: mk.Magnet, gaps, currents, msg: str) -> None:  # type: ignore[no-untyped-def]
     with pytest.raises(mk.InputError, match=msg):
-        build_maps(u_magnet, gaps=gaps, currents=currents)
+        build_maps(u_magnet, gaps_m=gaps, currents_A=currents)
 
 
 def test_current_model_step_response_is_the_rl_law(ideal_maps) -> None:  # type: ignore[no-untyped-def]
@@ -172,7 +172,7 @@ def test_dask_local_cluster_gives_identical_maps(u_magnet: mk.Magnet, u_maps) ->
     with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
                                   dashboard_address=None) as cluster, \
             distributed.Client(cluster) as client:
-        remote = build_maps(u_magnet, gaps=GAPS, currents=CURRENTS, executor=client)
+        remote = build_maps(u_magnet, gaps_m=GAPS, currents_A=CURRENTS, executor=client)
     for name in u_maps.dataset.data_vars:
         assert np.array_equal(u_maps.dataset[name].values, remote.dataset[name].values,
                               equal_nan=True)
@@ -269,8 +269,8 @@ def test_maps_identity_is_shared_by_magnet_and_flux_model(u_magnet: mk.Magnet,
                                                           tmp_path: Path) -> None:
     """Maps of a magnet fit the Magnet and FluxModel(magnet) alike (all four combinations),
     and are refused for another magnet and for other physics switches."""
-    from_magnet = build_maps(u_magnet, gaps=SMALL_GAPS, currents=SMALL_CURRENTS)
-    from_flux = build_maps(mk.FluxModel(u_magnet), gaps=SMALL_GAPS, currents=SMALL_CURRENTS)
+    from_magnet = build_maps(u_magnet, gaps_m=SMALL_GAPS, currents_A=SMALL_CURRENTS)
+    from_flux = build_maps(mk.FluxModel(u_magnet), gaps_m=SMALL_GAPS, currents_A=SMALL_CURRENTS)
     assert from_magnet.magnet_hash == from_flux.magnet_hash
     for maps in (from_magnet, from_flux):
         p = maps.to_netcdf(tmp_path / "m.nc")
@@ -284,8 +284,8 @@ def test_maps_identity_is_shared_by_magnet_and_flux_model(u_magnet: mk.Magnet,
             with pytest.raises(mk.ParameterFileError, match="belong to magnet"):
                 load_maps(p, magnet=target)
     # same physics switches through either route: accepted
-    lin = build_maps(mk.FluxModel(u_magnet, saturation=False), gaps=SMALL_GAPS,
-                     currents=SMALL_CURRENTS)
+    lin = build_maps(mk.FluxModel(u_magnet, saturation=False), gaps_m=SMALL_GAPS,
+                     currents_A=SMALL_CURRENTS)
     lin.check_magnet(u_magnet.with_options(saturation=False))
     with pytest.raises(mk.ParameterFileError, match="belong to magnet"):
         lin.check_magnet(u_magnet)
@@ -297,8 +297,8 @@ def test_progress_bar_is_the_default_and_changes_nothing(u_magnet: mk.Magnet,
 
     params = inspect.signature(build_maps).parameters
     assert params["progress"].default is True and params["executor"].default == "auto"
-    quiet = build_maps(u_magnet, gaps=SMALL_GAPS, currents=SMALL_CURRENTS, progress=False)
-    shown = build_maps(u_magnet, gaps=SMALL_GAPS, currents=SMALL_CURRENTS, progress=True)
+    quiet = build_maps(u_magnet, gaps_m=SMALL_GAPS, currents_A=SMALL_CURRENTS, progress=False)
+    shown = build_maps(u_magnet, gaps_m=SMALL_GAPS, currents_A=SMALL_CURRENTS, progress=True)
     capsys.readouterr()      # whatever rich printed on the (non-terminal) capture
     for name in quiet.dataset.data_vars:
         assert np.array_equal(quiet.dataset[name].values, shown.dataset[name].values,
@@ -352,15 +352,15 @@ def test_tr09_maps_satisfy_eq9_reciprocity_per_circuit() -> None:
     tr = mk.load_magnet("tr09-standard")
     gaps = np.linspace(0.008, 0.012, 4)
     currents = np.linspace(10.0, 50.0, 81)
-    maps = build_maps(tr, gaps=gaps, currents=currents)
+    maps = build_maps(tr, gaps_m=gaps, currents_A=currents)
     groups = maps.pole_groups
     net = tr.network
     gi = {g: k for k, g in enumerate(net.gap_names)}
     h = currents[1] - currents[0]
     s_grid = np.repeat(gaps[:, None], currents.size, axis=1)[:, 2:-2]
     i_grid = np.repeat(currents[None, :], gaps.size, axis=0)[:, 2:-2]
-    sol = mk.solve_statics(tr, gaps=np.repeat(s_grid[..., None], len(gi), axis=-1),
-                           currents=np.repeat(i_grid[..., None], len(net.circuits), axis=-1))
+    sol = mk.solve_statics(tr, gaps_m=np.repeat(s_grid[..., None], len(gi), axis=-1),
+                           currents_A=np.repeat(i_grid[..., None], len(net.circuits), axis=-1))
     for j, c in enumerate(maps.circuits):
         f = maps.variable("force_N", c)
         dlds = maps.variable("dL_ds_H_per_m", c)
@@ -376,7 +376,7 @@ def test_tr09_maps_satisfy_eq9_reciprocity_per_circuit() -> None:
     for k, m in ((0, 10), (2, 40), (3, 80)):
         s, i = float(gaps[k]), float(currents[m])
         hi = 1e-4 * i
-        psi = mk.solve_statics(tr, gaps=s, currents=[[i + hi, i], [i - hi, i], [i, i + hi],
+        psi = mk.solve_statics(tr, gaps_m=s, currents_A=[[i + hi, i], [i - hi, i], [i, i + hi],
                                                      [i, i - hi]]).flux_linkage_Wb
         l_self = ((psi[0, 0] - psi[1, 0]) / (2 * hi), (psi[2, 1] - psi[3, 1]) / (2 * hi))
         for j, c in enumerate(maps.circuits):
@@ -445,7 +445,7 @@ def test_linearization_at_a_steady_state_matches_the_statics(u_maps, u_magnet: m
     for s0, i0 in ((0.010, 20.0), (0.006, 40.0), (0.014, 60.0)):
         lin = model.linearize(gap_m=s0, current_A=i0)
         np.testing.assert_allclose(lin.state_derivative_A_per_s, 0.0, atol=1e-12)
-        sol = mk.solve_statics(u_magnet, gaps=s0, currents=i0)
+        sol = mk.solve_statics(u_magnet, gaps_m=s0, currents_A=i0)
         df_di = sol.dforce_dcurrent_N_per_A.sum()
         assert df_di == pytest.approx(-sol.dpsi_dgap_Wb_per_m.sum(), rel=1e-9)  # reciprocity
         assert lin.C_force_N_per_A[0, 0] == pytest.approx(df_di, rel=1e-3), (s0, i0)

@@ -21,25 +21,25 @@ CURRENTS = np.linspace(0.0, 60.0, 4)
 @pytest.fixture(scope="module")
 def both_maps(u_magnet: mk.Magnet):  # type: ignore[no-untyped-def]
     # the default executor ("auto"; in-process for this 16-point grid)
-    return build_maps(u_magnet, gaps=GAPS, currents=CURRENTS, method="both")
+    return build_maps(u_magnet, gaps_m=GAPS, currents_A=CURRENTS, method="both")
 
 
 def test_eddy_resistance_of_one_loop_is_n2_over_g() -> None:
     # Linear algebra on a 3 x 3 system: exact up to rounding.
     for gap, current in ((0.002, 0.0), (0.01, 5.0)):
-        r = eddy_resistance(loop_network(eddy=True), gap=gap, current=current)
+        r = eddy_resistance(loop_network(eddy=True), gap_m=gap, current_A=current)
         np.testing.assert_allclose(r, [TURNS**2 / G_EC], rtol=1e-12)
-        y = current_jump_admittance(loop_network(eddy=True), gap=gap, current=current)
+        y = current_jump_admittance(loop_network(eddy=True), gap_m=gap, current_A=current)
         np.testing.assert_allclose(y, [[1.0 / (R_EL + TURNS**2 / G_EC)]], rtol=1e-12)
-    assert np.all(np.isinf(eddy_resistance(loop_network(eddy=False), gap=0.005, current=1.0)))
+    assert np.all(np.isinf(eddy_resistance(loop_network(eddy=False), gap_m=0.005, current_A=1.0)))
 
 
 def test_eddy_resistance_is_the_instantaneous_current_jump(u_magnet: mk.Magnet) -> None:
     s, i0, r_el = 0.008, 30.0, float(u_magnet.network.resistances[0])
-    r_ec = float(eddy_resistance(u_magnet, gap=s, current=i0)[0])
+    r_ec = float(eddy_resistance(u_magnet, gap_m=s, current_A=i0)[0])
     du = 0.04
-    res = voltage_step_response(u_magnet, gap=s, voltage=r_el * i0 + du, initial_current=i0,
-                                duration=2e-6, dt=1e-6, rtol=1e-10, atol=1e-12)
+    res = voltage_step_response(u_magnet, gap_m=s, voltage_V=r_el * i0 + du, initial_current_A=i0,
+                                duration_s=2e-6, dt_s=1e-6, rtol=1e-10, atol=1e-12)
     di = res.currents_A[1:, 0] - i0
     jump = 2.0 * di[0] - di[1]     # linear extrapolation of t = 1, 2 us back to t = 0+
     # Eddy modes of tau ~1 ms and ~0.24 ms carry the jump's decay (faster ones, down to
@@ -52,7 +52,7 @@ def test_eddy_resistance_is_the_instantaneous_current_jump(u_magnet: mk.Magnet) 
     # decay within a few ms.  Documented in docs/reduction.md.  Window +-3 % around the
     # measured ratio (its value is checked independently in
     # test_default_eddy_resistance_against_an_independent_tail_fit).
-    slow = differential_inductance_from_step(u_magnet, gap=s, current=i0).eddy_resistance_ohm
+    slow = differential_inductance_from_step(u_magnet, gap_m=s, current_A=i0).eddy_resistance_ohm
     assert 0.368 * r_ec < slow < 0.391 * r_ec
 
 
@@ -67,7 +67,7 @@ def test_default_eddy_resistance_of_one_loop_is_n2_over_g() -> None:
     -0.17 % (IDAS at rtol 1e-9 on a 1e-3 step); bound 0.5 %."""
     r_ec = 10.0 * R_EL
     net = loop_network(eddy=True, g_ec=TURNS**2 / r_ec)
-    maps = build_maps(net, gaps=np.linspace(0.002, 0.008, 4), currents=np.linspace(0, 10, 4),
+    maps = build_maps(net, gaps_m=np.linspace(0.002, 0.008, 4), currents_A=np.linspace(0, 10, 4),
                       progress=False)
     assert float(maps.dataset["eddy_resistance_ohm"].values[0]) == pytest.approx(r_ec, rel=1e-12)
     fit = float(maps.dataset["eddy_resistance_fit_ohm"].values[0])
@@ -93,8 +93,8 @@ def test_default_eddy_resistance_against_an_independent_tail_fit(u_magnet: mk.Ma
     from scipy.optimize import curve_fit
 
     s, i0 = 0.012, 40.0                       # the maps' reference point (grid centre)
-    maps = build_maps(u_magnet, gaps=np.linspace(0.008, 0.016, 5),
-                      currents=np.linspace(0.0, 80.0, 5), progress=False)
+    maps = build_maps(u_magnet, gaps_m=np.linspace(0.008, 0.016, 5),
+                      currents_A=np.linspace(0.0, 80.0, 5), progress=False)
     assert "s = 0.012 m, I = 40.0 A" in maps.dataset["eddy_resistance_fit_ohm"].attrs[
         "description"]
     fit_lib = float(maps.dataset["eddy_resistance_fit_ohm"].values[0])
@@ -126,14 +126,14 @@ def test_default_eddy_resistance_against_an_independent_tail_fit(u_magnet: mk.Ma
 
 def test_eddy_resistance_of_the_standard_magnet_is_symmetric() -> None:
     tr = mk.load_magnet("tr09-standard")
-    r = eddy_resistance(tr, gap=0.01, current=34.0)
+    r = eddy_resistance(tr, gap_m=0.01, current_A=34.0)
     # front and rear half magnets are mirror images: equal to rounding
     assert np.all(np.isfinite(r)) and np.all(r > 0.0)
     np.testing.assert_allclose(r[0], r[1], rtol=1e-9)
 
 
 def test_virtual_control_law_holds_the_flux_linkage(u_magnet: mk.Magnet) -> None:
-    resp = flux_held_ramp(u_magnet, gap=0.008, current=30.0, gap_change=4e-4, duration=1.0,
+    resp = flux_held_ramp(u_magnet, gap_m=0.008, current_A=30.0, gap_change_m=4e-4, duration_s=1.0,
                           samples=21)
     psi = resp.flux_linkage_Wb[:, 0]
     # U = R_el I is substituted exactly: psi' = 0 up to rounding (not a ZOH drift).
@@ -169,7 +169,7 @@ def test_transient_maps_through_a_process_pool_are_identical(u_magnet: mk.Magnet
     from concurrent.futures import ProcessPoolExecutor
 
     with ProcessPoolExecutor(2) as ex:
-        pooled = build_maps(u_magnet, gaps=GAPS, currents=CURRENTS, method="both", executor=ex,
+        pooled = build_maps(u_magnet, gaps_m=GAPS, currents_A=CURRENTS, method="both", executor=ex,
                             progress=False)
     for name in both_maps.dataset.data_vars:
         # same compiled code on the same inputs: bit-identical
@@ -194,7 +194,7 @@ def test_dask_local_cluster_gives_identical_transient_maps(u_magnet: mk.Magnet, 
     with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
                                   dashboard_address=None) as cluster, \
             distributed.Client(cluster) as client:
-        remote = build_maps(u_magnet, gaps=GAPS, currents=CURRENTS, method="transient",
+        remote = build_maps(u_magnet, gaps_m=GAPS, currents_A=CURRENTS, method="transient",
                             executor=client, progress=False)
     _assert_transient_equals_both(remote, both_maps)
 
@@ -232,7 +232,7 @@ def test_cli_maps_build_method_and_difference_plots(both_maps, tmp_path) -> None
 
 def test_transient_method_replaces_only_the_inductance_maps(u_magnet: mk.Magnet,  # type: ignore[no-untyped-def]
                                                             both_maps) -> None:
-    tr = build_maps(u_magnet, gaps=GAPS, currents=CURRENTS, method="transient")
+    tr = build_maps(u_magnet, gaps_m=GAPS, currents_A=CURRENTS, method="transient")
     assert "transient" in tr.dataset.attrs["method"]
     np.testing.assert_array_equal(tr.dataset["inductance_H"].values,
                                   both_maps.dataset["inductance_transient_H"].values)
@@ -241,7 +241,7 @@ def test_transient_method_replaces_only_the_inductance_maps(u_magnet: mk.Magnet,
 
 
 def test_zero_current_uses_the_small_current_limit(u_magnet: mk.Magnet, both_maps) -> None:  # type: ignore[no-untyped-def]
-    est = dl_ds_from_ramp(u_magnet, gap=float(GAPS[0]), current=0.0)
+    est = dl_ds_from_ramp(u_magnet, gap_m=float(GAPS[0]), current_A=0.0)
     assert est.current_A == pytest.approx(1e-4)
     assert est.dL_ds_H_per_m == both_maps.dataset["dL_ds_transient_H_per_m"].values[0, 0, 0]
 
@@ -250,21 +250,21 @@ def test_zero_current_uses_the_small_current_limit(u_magnet: mk.Magnet, both_map
     ("kwargs", "msg"),
     [
         ({"relative_gap_change": 0.5}, "relative_gap_change"),
-        ({"current": -1.0}, ">= 0"),
+        ({"current_A": -1.0}, ">= 0"),
         ({"circuit": 3}, "circuit"),
-        ({"zero_current": 0.0}, "zero_current"),
+        ({"zero_current_A": 0.0}, "zero_current"),
     ],
 )
 def test_bad_ramp_inputs_raise(u_magnet: mk.Magnet, kwargs: dict, msg: str) -> None:
-    args = {"gap": 0.01, "current": 10.0, **kwargs}
+    args = {"gap_m": 0.01, "current_A": 10.0, **kwargs}
     with pytest.raises(mk.InputError, match=msg):
         dl_ds_from_ramp(u_magnet, **args)
 
 
 def test_bad_method_and_ramp_raise(u_magnet: mk.Magnet) -> None:
     with pytest.raises(mk.InputError, match="method"):
-        build_maps(u_magnet, gaps=GAPS, currents=CURRENTS, method="fit")
+        build_maps(u_magnet, gaps_m=GAPS, currents_A=CURRENTS, method="fit")
     with pytest.raises(mk.InputError, match="keep the gaps > 0"):
-        flux_held_ramp(u_magnet, gap=0.01, current=1.0, gap_change=-0.02, duration=1.0)
+        flux_held_ramp(u_magnet, gap_m=0.01, current_A=1.0, gap_change_m=-0.02, duration_s=1.0)
     with pytest.raises(mk.InputError, match="duration"):
-        flux_held_ramp(u_magnet, gap=0.01, current=1.0, gap_change=1e-4, duration=0.0)
+        flux_held_ramp(u_magnet, gap_m=0.01, current_A=1.0, gap_change_m=1e-4, duration_s=0.0)

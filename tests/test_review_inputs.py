@@ -170,7 +170,7 @@ def test_cross_section_vehicle_is_listed_and_has_a_template(tmp_path: Any) -> No
     runner = CliRunner()
     res = runner.invoke(app, ["list", "vehicles"])
     assert res.exit_code == 0
-    assert "  tr09-cross-section TR09-type cross-section" in res.stdout
+    assert "tr09-cross-section TR09-type cross-section" in " ".join(res.stdout.split())
     assert "  tr09 " in res.stdout
     res = runner.invoke(app, ["template", "vehicle", "tr09-cross-section"])
     assert res.exit_code == 0, res.output
@@ -210,8 +210,8 @@ def test_design_file_with_rounded_turns_holds_the_required_force(tmp_path: Any) 
     assert n * i_n == pytest.approx(n_opt * res.nominal_current_A, rel=1e-12)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", PlausibilityWarning)
-        sol = solve_statics(load_magnet(path), gaps=spec.requirements["nominal_gap_m"],
-                            currents=i_n)
+        sol = solve_statics(load_magnet(path), gaps_m=spec.requirements["nominal_gap_m"],
+                            currents_A=i_n)
     # IPOPT's tolerance 1e-10 on the scaled force equality; the re-solve's own ~1e-12
     assert float(sol.force_N) == pytest.approx(spec.requirements["force_N"], rel=1e-8)
 

@@ -24,7 +24,7 @@ N_TURNS, AREA = 600.0, 0.030 * 0.100  # bundled U-magnet: turns, pole face [m^2]
 def test_ideal_iron_matches_textbook(s: float, current: float) -> None:
     """mu -> inf, no leakage/fringing: F = mu0 (nI)^2 A/(4 s^2), L = mu0 n^2 A/(2 s)."""
     mag = build_u(material="ideal", fringing=False, leakage=False)
-    sol = mk.solve_statics(mag, gaps=s, currents=current)
+    sol = mk.solve_statics(mag, gaps_m=s, currents_A=current)
     f_exact = MU0 * (N_TURNS * current) ** 2 * AREA / (4 * s * s)
     l_exact = MU0 * N_TURNS**2 * AREA / (2 * s)
     # a linear 2-loop solve in double precision: agreement to ~1e-15; 1e-9 is the brief's bound
@@ -55,7 +55,7 @@ def test_constant_mu_iron_is_series_reluctances() -> None:
         for e in b.elements:
             if isinstance(e, mk.IronPath):
                 r_total += e.length / (MU0 * mu * e.cross_section)
-    sol = mk.solve_statics(net, gaps=s, currents=current)
+    sol = mk.solve_statics(net, gaps_m=s, currents_A=current)
     assert sol.differential_inductance_H[0, 0] == pytest.approx(N_TURNS**2 / r_total, rel=1e-12)
     phi = N_TURNS * current / r_total
     assert sol.force_N == pytest.approx(2 * phi**2 / (2 * MU0 * AREA), rel=1e-12)
@@ -123,7 +123,7 @@ def test_single_saturable_loop_against_a_scalar_root_solve(s: float, current: fl
     steel = mk.get_material("AISI 1008")
     mag, iron, g, n_leg = _series_loop(s)
     n = 2.0 * n_leg                                   # 600 turns around the loop
-    sol = mk.solve_statics(mag, gaps=s, currents=current)
+    sol = mk.solve_statics(mag, gaps_m=s, currents_A=current)
     phi = _loop_flux(iron, g, n * current, steel)
     assert np.allclose(np.abs(sol.branch_flux_Wb), phi, rtol=1e-14, atol=0.0)
     assert float(sol.flux_linkage_Wb[0]) == pytest.approx(n * phi, rel=1e-14)
@@ -155,14 +155,14 @@ def test_force_gap_derivative_against_finite_differences(u_magnet: mk.Magnet, ga
     saturation.  h = 1e-7 m: truncation ~(h/s)^2 ~ 1e-9, rounding ~1e-16 F/(h dF/ds)
     ~ 1e-10 (Newton converges to ~1e-15); measured 1.1e-10 and 1.3e-10 of max |dF/ds|;
     bound 2e-9.  The cross terms (21 % and 9 % of the diagonal, measured) are checked too."""
-    sol = mk.solve_statics(u_magnet, gaps=list(gaps), currents=current)
+    sol = mk.solve_statics(u_magnet, gaps_m=list(gaps), currents_A=current)
     h = 1e-7
     fd = np.empty((2, 2))
     for col in range(2):
         plus, minus = np.array(gaps, dtype=float), np.array(gaps, dtype=float)
         plus[col] += h
         minus[col] -= h
-        two = mk.solve_statics(u_magnet, gaps=np.stack([plus, minus]), currents=current)
+        two = mk.solve_statics(u_magnet, gaps_m=np.stack([plus, minus]), currents_A=current)
         fd[:, col] = (two.pole_force_N[0] - two.pole_force_N[1]) / (2 * h)
     exact = sol.dforce_dgap_N_per_m
     assert np.max(np.abs(exact - fd)) < 2e-9 * np.max(np.abs(fd))
@@ -181,9 +181,9 @@ def test_coenergy_force_matches_finite_difference_of_coenergy(u_magnet: mk.Magne
     4.7e-9 (deep saturation included); bound 5e-8.
     """
     h = 1e-6
-    wp = mk.coenergy(u_magnet, gaps=s + h, currents=current)
-    wm = mk.coenergy(u_magnet, gaps=s - h, currents=current)
-    sol = mk.solve_statics(u_magnet, gaps=s, currents=current)
+    wp = mk.coenergy(u_magnet, gaps_m=s + h, currents_A=current)
+    wm = mk.coenergy(u_magnet, gaps_m=s - h, currents_A=current)
+    sol = mk.solve_statics(u_magnet, gaps_m=s, currents_A=current)
     assert sol.force_N == pytest.approx(-(wp - wm) / (2 * h), rel=5e-8)
 
 
@@ -196,13 +196,13 @@ def test_reciprocity_and_inductance_against_finite_differences(u_magnet: mk.Magn
     the *other* quantity; steps 1e-7 m and 1e-4 A give truncation and rounding errors
     below 1e-7 relative, so 1e-6 is the bound.
     """
-    sol = mk.solve_statics(u_magnet, gaps=s, currents=current)
+    sol = mk.solve_statics(u_magnet, gaps_m=s, currents_A=current)
     hs, hi = 1e-7, 1e-4
-    psi_s = mk.solve_statics(u_magnet, gaps=[[s + hs] * 2, [s - hs] * 2],
-                             currents=current).flux_linkage_Wb
-    f_i = mk.solve_statics(u_magnet, gaps=s, currents=[[current + hi], [current - hi]]).force_N
-    psi_i = mk.solve_statics(u_magnet, gaps=s,
-                             currents=[[current + hi], [current - hi]]).flux_linkage_Wb
+    psi_s = mk.solve_statics(u_magnet, gaps_m=[[s + hs] * 2, [s - hs] * 2],
+                             currents_A=current).flux_linkage_Wb
+    f_i = mk.solve_statics(u_magnet, gaps_m=s, currents_A=[[current + hi], [current - hi]]).force_N
+    psi_i = mk.solve_statics(u_magnet, gaps_m=s,
+                             currents_A=[[current + hi], [current - hi]]).flux_linkage_Wb
     dpsi_ds_fd = (psi_s[0, 0] - psi_s[1, 0]) / (2 * hs)
     df_di_fd = (f_i[0] - f_i[1]) / (2 * hi)
     df_di = sol.dforce_dcurrent_N_per_A.sum(axis=0)[0]
@@ -215,9 +215,9 @@ def test_reciprocity_and_inductance_against_finite_differences(u_magnet: mk.Magn
 
 def test_saturation_gives_a_knee_and_linear_iron_stays_quadratic(u_magnet: mk.Magnet) -> None:
     currents = np.array([1.0, 2.0, 20.0, 40.0, 80.0])
-    sat = mk.solve_statics(u_magnet, gaps=[0.01], currents=currents, grid=True).force_N[0]
+    sat = mk.solve_statics(u_magnet, gaps_m=[0.01], currents_A=currents, grid=True).force_N[0]
     lin_mag = build_u(saturation=False)
-    lin = mk.solve_statics(lin_mag, gaps=[0.01], currents=currents, grid=True).force_N[0]
+    lin = mk.solve_statics(lin_mag, gaps_m=[0.01], currents_A=currents, grid=True).force_N[0]
     # linear network: F proportional to I^2 to rounding
     np.testing.assert_allclose(lin / currents**2, lin[0] / currents[0] ** 2, rtol=1e-10)
     # saturable iron: near-quadratic at low current (the Roschke mu_r rises slightly from
@@ -260,13 +260,13 @@ def test_saturated_force_never_exceeds_unsaturated(pole_width: float, window: fl
            "yoke_thickness": yoke, "coil_thickness": 0.2 * window}
     mag = build_u(material=material, magnet=geo,
                   rail={"thickness": rail, "width": window + 2 * pole_width + 0.02})
-    sat = mk.solve_statics(mag, gaps=s, currents=current)
+    sat = mk.solve_statics(mag, gaps_m=s, currents_A=current)
     node, loop = _kirchhoff_residuals(mag, sat)
     assert loop <= 1e-9 * N_TURNS * current
-    f_max_mu = mk.solve_statics(_max_mu_network(mag.network), gaps=s, currents=current).force_N
+    f_max_mu = mk.solve_statics(_max_mu_network(mag.network), gaps_m=s, currents_A=current).force_N
     ideal = build_u(material="ideal", magnet=geo,
                     rail={"thickness": rail, "width": window + 2 * pole_width + 0.02})
-    f_ideal = mk.solve_statics(ideal, gaps=s, currents=current).force_N
+    f_ideal = mk.solve_statics(ideal, gaps_m=s, currents_A=current).force_N
     assert sat.force_N <= f_max_mu * (1 + 1e-9)
     assert f_max_mu <= f_ideal * (1 + 1e-9)
 
@@ -274,13 +274,13 @@ def test_saturated_force_never_exceeds_unsaturated(pole_width: float, window: fl
 def test_grid_and_batches_are_consistent(u_magnet: mk.Magnet) -> None:
     gaps = np.array([0.005, 0.012])
     currents = np.array([0.0, 15.0, 60.0])
-    grid = mk.solve_statics(u_magnet, gaps=gaps, currents=currents, grid=True)
+    grid = mk.solve_statics(u_magnet, gaps_m=gaps, currents_A=currents, grid=True)
     assert grid.force_N.shape == (2, 3)
     assert grid.differential_inductance_H.shape == (2, 3, 1, 1)
     assert grid.dpsi_dgap_Wb_per_m.shape == (2, 3, 1, 2)
     for i, s in enumerate(gaps):
         for j, c in enumerate(currents):
-            one = mk.solve_statics(u_magnet, gaps={"left": s, "right": s}, currents={"coil": c})
+            one = mk.solve_statics(u_magnet, gaps_m={"left": s, "right": s}, currents_A={"coil": c})
             # same computation, different batching: identical to rounding
             assert one.force_N == pytest.approx(grid.force_N[i, j], rel=1e-12, abs=1e-12)
             np.testing.assert_allclose(one.branch_flux_Wb, grid.branch_flux_Wb[i, j], rtol=1e-12,
@@ -294,10 +294,10 @@ def test_continuation_fallback_reaches_the_same_solution(u_magnet: mk.Magnet) ->
     solver = _solver(u_magnet.network)
     s, current = np.array([0.004, 0.004]), np.array([250.0])
     x_cont = solver._continuation(s, current)
-    direct = mk.solve_statics(u_magnet, gaps=s, currents=current)
+    direct = mk.solve_statics(u_magnet, gaps_m=s, currents_A=current)
     np.testing.assert_allclose(x_cont, direct.loop_flux_Wb, rtol=1e-9)
 
 
 def test_uneven_gaps_move_force_to_the_smaller_gap(u_magnet: mk.Magnet) -> None:
-    sol = mk.solve_statics(u_magnet, gaps={"left": 0.006, "right": 0.012}, currents=25.0)
+    sol = mk.solve_statics(u_magnet, gaps_m={"left": 0.006, "right": 0.012}, currents_A=25.0)
     assert sol.pole_force_N[0] > sol.pole_force_N[1] > 0.0

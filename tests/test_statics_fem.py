@@ -67,7 +67,7 @@ def lumped() -> mk.Magnet:
 
 
 def _solve(mag: mk.Magnet, s: float, current: float) -> tuple[float, float]:
-    sol = mk.solve_statics(mag, gaps=s, currents=current)
+    sol = mk.solve_statics(mag, gaps_m=s, currents_A=current)
     return float(np.ravel(sol.force_N)[0]), float(np.ravel(sol.flux_linkage_Wb)[0])
 
 
@@ -119,7 +119,7 @@ def test_coil_air_carries_no_flux_with_unsaturated_iron() -> None:
     params["rail"]["material"] = "stiff"
     _, net = build_u_magnet(params, {"stiff": ConstantPermeability(1e9)},
                             mk.ModelOptions(eddy_currents=False))
-    sol = mk.solve_statics(net, gaps=0.008, currents=20.0)
+    sol = mk.solve_statics(net, gaps_m=0.008, currents_A=20.0)
     flux = dict(zip(net.branch_names, np.ravel(sol.branch_flux_Wb), strict=True))
     air = [abs(v) for k, v in flux.items() if k.startswith("coil_air_")]
     pole = abs(sum(v for k, v in flux.items() if k.startswith("gap_left_")))
@@ -163,7 +163,7 @@ def test_grid_network_textbook_limit() -> None:
                             mk.ModelOptions(leakage=False, fringing=False, eddy_currents=False))
     n, area = 600.0, 0.03 * 0.1
     for s, current in ((0.004, 10.0), (0.015, 30.0)):
-        sol = mk.solve_statics(net, gaps=s, currents=current)
+        sol = mk.solve_statics(net, gaps_m=s, currents_A=current)
         assert float(sol.flux_linkage_Wb[0]) / current == pytest.approx(
             MU0 * n**2 * area / (2 * s), rel=1e-6)
         assert float(sol.force_N) == pytest.approx(MU0 * (n * current) ** 2 * area / (4 * s**2),
@@ -192,8 +192,8 @@ def test_grid_force_is_coenergy_derivative(grid: mk.Magnet, s: float, current: f
     Central difference, h = 1e-6 m: truncation ~(h/s)^2 ~ 1e-8, rounding ~1e-10; measured
     below 1e-8 on the lumped network (tests/test_statics.py); bound 5e-8."""
     h = 1e-6
-    wp = mk.coenergy(grid, gaps=s + h, currents=current)
-    wm = mk.coenergy(grid, gaps=s - h, currents=current)
+    wp = mk.coenergy(grid, gaps_m=s + h, currents_A=current)
+    wm = mk.coenergy(grid, gaps_m=s - h, currents_A=current)
     force, _ = _solve(grid, s, current)
     assert force == pytest.approx(-(wp - wm) / (2 * h), rel=5e-8)
 
@@ -203,7 +203,7 @@ def test_grid_reciprocity(grid: mk.Magnet, s: float, current: float) -> None:
     """dF/dI = -dpsi/ds (Maxwell relation of W'): each exact (implicit-function) derivative
     against a central difference of the other quantity (steps 1e-7 m, 1e-4 A: truncation
     and rounding < 1e-7 relative; bound 1e-6)."""
-    sol = mk.solve_statics(grid, gaps=s, currents=current)
+    sol = mk.solve_statics(grid, gaps_m=s, currents_A=current)
     hs, hi = 1e-7, 1e-4
     _, psi_p = _solve(grid, s + hs, current)
     _, psi_m = _solve(grid, s - hs, current)
@@ -222,7 +222,7 @@ def test_grid_pole_flux_is_flux_linkage_per_pole_turn(grid: mk.Magnet,
     grid's parallel column coils give ``pole_turns = n/2``, so the turns of the columns
     (3x the winding's) do not divide the pole flux by 3."""
     for mag in (grid, lumped):
-        sol = mk.solve_statics(mag, gaps=0.008, currents=40.0)
+        sol = mk.solve_statics(mag, gaps_m=0.008, currents_A=40.0)
         eta = mag.network.pole_flux_matrix.T @ np.ravel(sol.branch_flux_Wb)
         assert float(eta[0]) == pytest.approx(float(sol.flux_linkage_Wb[0]) / 300.0, rel=1e-12)
     turns = sum(c.turns for c in grid.network.circuits[0].coils)
@@ -283,8 +283,8 @@ def test_keys_of_the_other_network_are_refused(disc: str, key: str, value: objec
 def test_grid_network_builds_maps_and_flux_model(grid: mk.Magnet) -> None:
     """The reduction and the dynamic model take the grid network (maps ~20 s, FluxModel
     with its 132 eddy elements ~30 s to build: slow)."""
-    maps = mk.build_maps(grid, gaps=np.linspace(0.004, 0.02, 4),
-                         currents=np.linspace(0.0, 80.0, 4), progress=False)
+    maps = mk.build_maps(grid, gaps_m=np.linspace(0.004, 0.02, 4),
+                         currents_A=np.linspace(0.0, 80.0, 4), progress=False)
     force, psi = _solve(grid, 0.004 + 2 * 0.016 / 3, 80.0 / 3)
     f_map = maps.variable("force_N", "coil")
     assert np.isfinite(f_map).all()

@@ -69,7 +69,7 @@ def _grid(columns: int) -> mk.Magnet:
 def _errors(mag: mk.Magnet) -> tuple[float, float, float]:
     out = []
     for (s, current), col in (((4, 80), 0), ((20, 80), 1), ((20, 5), 0)):
-        sol = mk.solve_statics(mag, gaps=s * 1e-3, currents=float(current))
+        sol = mk.solve_statics(mag, gaps_m=s * 1e-3, currents_A=float(current))
         value = (float(np.ravel(sol.force_N)[0]), float(np.ravel(sol.flux_linkage_Wb)[0]))[col]
         out.append(100.0 * (value / FEM[s, current][col] - 1.0))
     return out[0], out[1], out[2]
@@ -167,7 +167,7 @@ def test_air_cells_against_recorded_fem() -> None:
     points of the FEM grid, including the worst ones (4 mm / 5 A psi, 4 mm / 80 A force)."""
     mag = _cells()
     for point, (f_fem, psi_fem) in CELLS_FEM.items():
-        sol = mk.solve_statics(mag, gaps=point[0] * 1e-3, currents=float(point[1]))
+        sol = mk.solve_statics(mag, gaps_m=point[0] * 1e-3, currents_A=float(point[1]))
         ef = 100.0 * (float(np.ravel(sol.force_N)[0]) / f_fem - 1.0)
         ep = 100.0 * (float(np.ravel(sol.flux_linkage_Wb)[0]) / psi_fem - 1.0)
         want_f, want_p = CELLS_MEASURED[point]
@@ -183,7 +183,7 @@ def coarse_cells() -> mk.Magnet:
 
 
 def _solve(mag: mk.Magnet, s: float, current: float) -> tuple[float, float]:
-    sol = mk.solve_statics(mag, gaps=s, currents=current)
+    sol = mk.solve_statics(mag, gaps_m=s, currents_A=current)
     return float(np.ravel(sol.force_N)[0]), float(np.ravel(sol.flux_linkage_Wb)[0])
 
 
@@ -192,8 +192,8 @@ def test_air_cells_force_is_coenergy_derivative(coarse_cells: mk.Magnet) -> None
     whose share of the force is repulsive) in the energy: central difference, h = 1e-6 m,
     truncation ~(h/s)^2 ~ 1e-8 (measured on the tube network < 1e-8; bound 5e-8)."""
     s, current, h = 0.008, 40.0, 1e-6
-    wp = mk.coenergy(coarse_cells, gaps=s + h, currents=current)
-    wm = mk.coenergy(coarse_cells, gaps=s - h, currents=current)
+    wp = mk.coenergy(coarse_cells, gaps_m=s + h, currents_A=current)
+    wm = mk.coenergy(coarse_cells, gaps_m=s - h, currents_A=current)
     force, _ = _solve(coarse_cells, s, current)
     assert force == pytest.approx(-(wp - wm) / (2 * h), rel=5e-8)
 
@@ -203,7 +203,7 @@ def test_air_cells_reciprocity_and_pole_flux(coarse_cells: mk.Magnet) -> None:
     rounding < 1e-7 relative; bound 1e-6); and the pole flux of eq. 5 is psi/(n/2) with the
     coil sides' partial turns counted (pole_turns = n/2; exact up to rounding)."""
     s, current = 0.008, 40.0
-    sol = mk.solve_statics(coarse_cells, gaps=s, currents=current)
+    sol = mk.solve_statics(coarse_cells, gaps_m=s, currents_A=current)
     _, psi_p = _solve(coarse_cells, s + 1e-7, current)
     _, psi_m = _solve(coarse_cells, s - 1e-7, current)
     f_p, _ = _solve(coarse_cells, s, current + 1e-4)

@@ -297,9 +297,9 @@ S_REF = 0.010
 
 @pytest.fixture(scope="module")
 def heave(u_magnet: mk.Magnet) -> tuple[Any, float]:
-    maps = mk.build_maps(u_magnet, gaps=np.linspace(0.004, 0.02, 17),
-                         currents=np.linspace(0, 80, 33), progress=False)
-    f0 = float(mk.solve_statics(u_magnet, gaps=S_REF, currents=20.0).force_N)
+    maps = mk.build_maps(u_magnet, gaps_m=np.linspace(0.004, 0.02, 17),
+                         currents_A=np.linspace(0, 80, 33), progress=False)
+    f0 = float(mk.solve_statics(u_magnet, gaps_m=S_REF, currents_A=20.0).force_N)
     return maps, f0 / STANDARD_GRAVITY
 
 
@@ -440,18 +440,32 @@ def test_one_interval_mpc_is_the_lqr_of_the_linearisation(
 
 def test_mpc_inputs_saturate_exactly_at_the_voltage_limit(
         one_interval_mpc: OffsetFreeMPC) -> None:
-    """Far from the target the unconstrained optimum lies beyond the chopper limit on
+    """Far from the target the unconstrained optimum lies beyond the chopper's limits on
     either side: the MPC's input is then the limit itself, +440 V with the magnet 2.5 mm
-    too far from the rail, -440 V 2.5 mm too close (each side's bound is active)."""
+    too far from the rail; 2.5 mm too close, the larger of -440 V and the two-quadrant
+    chopper's floor, the voltage at which the coil current is zero (each side's bound is
+    active)."""
+    import casadi as ca
+
     mpc = one_interval_mpc
-    nc = mpc.model.n_circuits
+    m = mpc.model
+    nc = m.n_circuits
+    x, uu, d = ca.MX.sym("x", m.nx), ca.MX.sym("u", m.nu), ca.MX.sym("d", m.nd)
+    coil = ca.Function("coil", [x, uu, d], [m.coil_currents(x, uu, d)])
     xt = mpc.design_state
     for dgap, sign in ((2.5e-3, 1.0), (-2.5e-3, -1.0)):
         x0 = xt.copy()
         x0[nc] += dgap
         u = mpc.solve_ocp(x0)["inputs_V"][0]
-        print(f"gap {dgap:+.1e} m: u - limit = {float(u[0] - sign * mpc.voltage_limit_V):.1e} V")
-        # the QP's bound is exact up to its tolerance (measured 5.7e-14 V and 3.4e-13 V
-        # from the limit); bound 440 uV (1e-6 of the limit, what solve() accepts before
-        # it raises).  An upper bound x1.05 lets the QP go to 462 V.
-        assert np.all(np.abs(u - sign * mpc.voltage_limit_V) < 1e-6 * mpc.voltage_limit_V), u
+        i0 = np.asarray(coil(x0, u, np.zeros(m.nd))).ravel()
+        print(f"gap {dgap:+.1e} m: u = {u}, u - limit = "
+              f"{float(u[0] - sign * mpc.voltage_limit_V):.1e} V, coil current {i0}")
+        # the QP's bound is exact up to its tolerance (measured 5.7e-14 V from +440 V, and
+        # the coil current 0 to 1e-14 A at the floor); bounds 440 uV (1e-6 of the limit,
+        # what solve() accepts before it raises) and 1e-9 A.  An upper bound x1.05 lets
+        # the QP go to 462 V.
+        at_limit = np.abs(u - sign * mpc.voltage_limit_V) < 1e-6 * mpc.voltage_limit_V
+        at_floor = (sign < 0) & (np.abs(i0) < 1e-9)
+        assert np.all(at_limit | at_floor), (u, i0)
+        if sign > 0:
+            assert np.all(at_limit), u

@@ -62,7 +62,7 @@ def magnet() -> mk.Magnet:
 @pytest.fixture(scope="module")
 def built(magnet: mk.Magnet) -> mk.CharacteristicMaps:
     """Statics maps of the U-magnet, 17 x 33 (4-20 mm, 0-80 A; ~2 s)."""
-    return mk.build_maps(magnet, gaps=GAPS, currents=CURRENTS, progress=False)
+    return mk.build_maps(magnet, gaps_m=GAPS, currents_A=CURRENTS, progress=False)
 
 
 @pytest.fixture(scope="module")
@@ -165,7 +165,7 @@ def test_reduced_model_on_imported_maps_equals_built_maps(built: mk.Characterist
         "psi only": mk.maps_from_table(_maps_csv(built, tmp_path / "p.csv", force=False),
                                        magnet=magnet, eddy_resistance_ohm=r_ec)}
     ref = mk.CurrentModel(built)
-    force0 = float(mk.solve_statics(magnet, gaps=0.01, currents=20.0).force_N)
+    force0 = float(mk.solve_statics(magnet, gaps_m=0.01, currents_A=20.0).force_N)
     heave = HeaveMass(force0 / STANDARD_GRAVITY)
     ctl = design_gap_controller(magnet.network, mass_kg=heave.mass_kg, gap_m=0.01,
                                 current_A=20.0)
@@ -175,7 +175,7 @@ def test_reduced_model_on_imported_maps_equals_built_maps(built: mk.Characterist
             if sc.kind == "closed":
                 runs = [closed_loop(m, heave, ctl, duration_s=sc.duration_s, dt_s=sc.dt_s,
                                     initial_gap_m=0.01, initial_current_A=20.0,
-                                    gap_reference=sc.gap_reference,
+                                    gap_reference_m=sc.gap_reference_m,
                                     external_force_N=lambda t, f=sc.external_force_fraction:
                                     force0 * f(t))
                         for m in (ref, model)]
@@ -185,8 +185,8 @@ def test_reduced_model_on_imported_maps_equals_built_maps(built: mk.Characterist
                 # measured 4.6e-4 of the 1 mm reference step (0.46 um) and 9.8e-5 (current)
                 assert eg < 2e-3 and ei < 1e-3, (label, eg, ei)
                 continue
-            runs = [mk.simulate(m, (0.0, sc.duration_s), dt_s=sc.dt_s, gaps_m=sc.gaps,
-                                voltages_V=sc.voltages, initial_currents_A=sc.initial_current_A)
+            runs = [mk.simulate(m, (0.0, sc.duration_s), dt_s=sc.dt_s, gaps_m=sc.gaps_m,
+                                voltages_V=sc.voltages_V, initial_currents_A=sc.initial_current_A)
                     for m in (ref, model)]
             ei = np.max(np.abs(runs[1].currents_A - runs[0].currents_A)) / np.max(
                 np.abs(runs[0].currents_A))

@@ -48,9 +48,9 @@ def _parameters(func: Callable[..., object]) -> list[str]:
             if p.name not in ("self", "cls") and p.kind not in (p.VAR_POSITIONAL, p.VAR_KEYWORD)]
 
 
-def _public_objects() -> Iterator[tuple[str, object]]:
+def _public_objects(modules: tuple[str, ...] = PUBLIC_MODULES) -> Iterator[tuple[str, object]]:
     seen: set[int] = set()
-    for module_name in PUBLIC_MODULES:
+    for module_name in modules:
         module = importlib.import_module(module_name)
         for name in getattr(module, "__all__", ()):
             obj = getattr(module, name)
@@ -60,36 +60,46 @@ def _public_objects() -> Iterator[tuple[str, object]]:
             yield f"{obj.__module__}.{obj.__qualname__}", obj
 
 
-def gaps() -> dict[str, list[str]]:
-    """``qualified name -> undocumented parameters`` over the public API."""
-    out: dict[str, list[str]] = {}
-    for qualname, obj in _public_objects():
+def public_callables(modules: tuple[str, ...] = PUBLIC_MODULES
+                     ) -> Iterator[tuple[str, Callable[..., object]]]:
+    """``(qualified name, callable)`` over the ``__all__`` of ``modules``: exported
+    functions, the constructors of exported classes (the class itself; a dataclass's fields
+    are its parameters) and their public methods (also used by ``tools/unit_name_audit.py``)."""
+    for qualname, obj in _public_objects(modules):
         if inspect.isfunction(obj):
-            missing = [p for p in _parameters(obj) if p not in documented_names(obj.__doc__)]
-            if missing:
-                out[qualname] = missing
+            yield qualname, obj
             continue
         assert inspect.isclass(obj)
         if issubclass(obj, BaseException):
             continue
-        # the constructor: documented in the class docstring (or __init__'s);
-        # a dataclass's fields count as its constructor's parameters
-        init = obj.__dict__.get("__init__")
-        if init is not None or dataclasses.is_dataclass(obj):
-            params = _parameters(obj)
-            doc = documented_names(obj.__doc__) | documented_names(getattr(init, "__doc__", None))
-            missing = [p for p in params if p not in doc]
-            if missing:
-                out[qualname] = missing
+        if obj.__dict__.get("__init__") is not None or dataclasses.is_dataclass(obj):
+            yield qualname, obj
         for name, member in vars(obj).items():
             if name.startswith("_"):
                 continue
             func = member.__func__ if isinstance(member, (classmethod, staticmethod)) else member
-            if not inspect.isfunction(func):
-                continue
-            missing = [p for p in _parameters(func) if p not in documented_names(func.__doc__)]
-            if missing:
-                out[f"{qualname}.{name}"] = missing
+            if inspect.isfunction(func):
+                yield f"{qualname}.{name}", func
+
+
+def parameters(func: Callable[..., object]) -> list[str]:
+    """The named parameters of ``func`` (``self``/``cls``, ``*args``, ``**kwargs`` left out)."""
+    return _parameters(func)
+
+
+def gaps() -> dict[str, list[str]]:
+    """``qualified name -> undocumented parameters`` over the public API."""
+    out: dict[str, list[str]] = {}
+    for qualname, obj in public_callables():
+        if inspect.isclass(obj):
+            # the constructor: documented in the class docstring (or __init__'s)
+            init = obj.__dict__.get("__init__")
+            doc = documented_names(obj.__doc__) | documented_names(getattr(init, "__doc__", None))
+        else:
+            doc = documented_names(obj.__doc__)
+        missing = [p for p in _parameters(obj) if p not in doc]
+        if missing:
+            out[qualname] = missing
     return out
 
 

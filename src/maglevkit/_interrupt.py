@@ -7,7 +7,10 @@ wrong diagnosis such as "check the magnet's dimensions") or leaves a pending
 the first SIGINT is only noted and raised as :class:`KeyboardInterrupt` at the next
 :func:`check_interrupt` (between two tasks: a map point, a case); a second SIGINT
 raises at once.  :func:`stop_pool` ends a local process pool without waiting for its
-running tasks.  Needs only the standard library (below every other layer).
+running tasks.  :func:`sigint_received` tells whether a SIGINT reached this process
+under :func:`deferred_sigint` or :func:`recorded_sigint` (the CLI's entry point), so that
+a failure it caused (CasADi's) is reported as the interruption it was.  Needs only the
+standard library (below every other layer).
 """
 
 from __future__ import annotations
@@ -21,7 +24,7 @@ from concurrent.futures import Executor
 from typing import Any
 
 __all__ = ["InterruptState", "deferred_sigint", "check_interrupt", "sigint_blocked",
-           "stop_pool"]
+           "stop_pool", "recorded_sigint", "sigint_received"]
 
 
 class InterruptState:
@@ -32,6 +35,43 @@ class InterruptState:
 
 
 _ACTIVE: list[InterruptState] = []
+_RECEIVED = InterruptState()     # any SIGINT under deferred_sigint or recorded_sigint
+
+
+def sigint_received() -> bool:
+    """Whether a SIGINT arrived under :func:`deferred_sigint` or :func:`recorded_sigint`.
+
+    Returns
+    -------
+    bool
+        True once a SIGINT was noted (it stays set: the process is ending).
+    """
+    return _RECEIVED.requested
+
+
+@contextlib.contextmanager
+def recorded_sigint() -> Iterator[None]:
+    """Python's own Ctrl-C (``KeyboardInterrupt`` at once), noted for
+    :func:`sigint_received` (main thread only; elsewhere nothing changes).
+
+    A SIGINT inside a CasADi evaluation becomes that evaluation's failure (a
+    ``SolverError`` with a wrong diagnosis, or a ``SystemError``); the CLI asks
+    :func:`sigint_received` to report it as the interruption instead.
+    """
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+
+    def handler(signum: int, frame: Any) -> None:
+        _RECEIVED.requested = True
+        raise KeyboardInterrupt
+
+    old = signal.signal(signal.SIGINT, handler)
+    try:
+        yield
+    finally:
+        if signal.getsignal(signal.SIGINT) is handler:   # not replaced meanwhile (SIG_IGN)
+            signal.signal(signal.SIGINT, old)
 
 
 @contextlib.contextmanager
@@ -47,6 +87,7 @@ def deferred_sigint() -> Iterator[InterruptState]:
         return
 
     def handler(signum: int, frame: Any) -> None:
+        _RECEIVED.requested = True
         if state.requested:
             raise KeyboardInterrupt
         state.requested = True
@@ -57,7 +98,11 @@ def deferred_sigint() -> Iterator[InterruptState]:
         yield state
     finally:
         _ACTIVE.remove(state)
-        signal.signal(signal.SIGINT, old)
+        # restored only if still ours: the CLI's report of the interruption ignores
+        # further SIGINTs (SIG_IGN) and a restored handler turned a second Ctrl-C during
+        # the exit into a death by SIGINT (rc -2 instead of 130)
+        if signal.getsignal(signal.SIGINT) is handler:
+            signal.signal(signal.SIGINT, old)
 
 
 def check_interrupt() -> None:

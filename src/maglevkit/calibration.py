@@ -19,13 +19,19 @@ parameter                  nominal  effect
                                     stretched along H: permeability / k)
 ``iron_saturation_scale``  1        scales the B axis of every iron path:
                                     ``V_m = l H(B/k)`` (saturation flux density x k)
+``eddy_conductance_scale`` 1        scales every eddy conductance ``G_ec`` (dynamics)
+``resistance_scale``       1        scales every circuit's ``R_el`` (dynamics)
 =========================  =======  ================================================
 
-``R_el`` does not enter the statics (static data cannot determine it) and is not fitted.
+The last two do not enter the statics (static data cannot determine them: a zero
+Jacobian column, named undetermined); measured voltage steps (:func:`read_steps`,
+``calibrate(..., steps=)``) determine them, fitted together with the statics.
 
 :func:`calibrate` fits a chosen subset by bounded least squares (SciPy ``least_squares``,
 trust-region reflective) on the relative residuals ``(model - data)/|data|`` of the force
-and/or flux linkage, with the exact Jacobian: the statics are a CasADi ``rootfinder`` of
+and/or flux linkage (and ``(I_model - I_data)/dI`` of the voltage steps' samples, ``dI``
+the step's largest measured current change), with the exact Jacobian: the statics are a
+CasADi ``rootfinder`` of
 the network's loop law ``r(x; s, I, p) = 0``, whose parameter sensitivities CasADi
 computes by the implicit function theorem, ``dx/dp = -(dr/dx)^-1 dr/dp``.  Reported:
 residuals per point, values with 95 % confidence intervals from the Jacobian
@@ -46,20 +52,23 @@ from typing import Any
 
 import numpy as np
 
-from .circuit.factors import PARAMETERS, with_factors
+from .circuit.factors import DYNAMIC_PARAMETERS, PARAMETERS, with_factors
 from .circuit.network import Network
 from .errors import DataError, DataWarning, InputError, MaglevkitWarning, SolverError
 from .parameter_files import toml_text
 
-__all__ = ["PARAMETERS", "DEFAULT_PARAMETERS", "Calibration", "StaticPoints", "calibrate",
-           "calibrated_network", "parameter_sensitivities", "read_points",
-           "step_response_sensitivities",
+__all__ = ["PARAMETERS", "DEFAULT_PARAMETERS", "DYNAMIC_PARAMETERS", "STEP_COLUMNS",
+           "STEP_GAP_PLAUSIBLE_M", "STEP_FINE_STEPS", "Calibration", "StaticPoints",
+           "StepResponses", "VoltageStep", "calibrate", "calibrated_network",
+           "parameter_sensitivities", "read_points", "read_steps",
+           "step_response_sensitivities", "step_substeps",
            "write_calibrated_toml", "load_calibrated_magnet"]
 
 
 DEFAULT_PARAMETERS = ("leakage_factor", "fringing_factor", "gap_offset_m", "iron_field_scale",
                       "iron_saturation_scale")
-"""Fitted without ``parameters=``: the whole set (all act on the statics)."""
+"""Fitted to statics without ``parameters=``: the factors that act on the statics (with
+voltage steps :data:`DYNAMIC_PARAMETERS` are added; steps alone fit only those)."""
 
 
 # ---------------------------------------------------------------------------- the one law
@@ -150,6 +159,191 @@ def read_points(path: str | Path) -> StaticPoints:
                         sha256=rows.sha256)
 
 
+STEP_COLUMNS = ("time_s", "current_A", "gap_m", "initial_current_A", "voltage_V")
+"""Required columns of a voltage-step file (:func:`read_steps`); ``step`` and ``circuit``
+are optional."""
+
+STEP_GAP_PLAUSIBLE_M = (1e-4, 0.1)
+"""Gaps outside this range [m] are refused in a step file as a unit slip (mm as m)."""
+
+
+@dataclass(frozen=True)
+class VoltageStep:
+    """One measured voltage step: the coil current after ``U`` steps to ``voltage_V``.
+
+    Attributes
+    ----------
+    label : str
+        The ``step`` column's value (or its number in the file).
+    time_s, current_A : ndarray (n,)
+        Samples after the step, ``t > 0`` [s], and the stepped circuit's current [A].
+    gap_m : float
+        Every gap, held [m].
+    initial_current_A : float
+        Every circuit's current before the step, at rest [A].
+    voltage_V : float
+        The stepped circuit's voltage after ``t = 0`` [V] (the others hold
+        ``R_el I_0``).
+    circuit : str
+        The stepped circuit ("" for a one-circuit magnet).
+    rows : ndarray (n,) of int
+        File rows of the samples.
+    """
+
+    label: str
+    time_s: np.ndarray
+    current_A: np.ndarray
+    gap_m: float
+    initial_current_A: float
+    voltage_V: float
+    circuit: str
+    rows: np.ndarray
+
+    @property
+    def current_change_A(self) -> float:
+        """Largest measured ``|I - I_0|`` [A]: the scale of the step's residuals."""
+        return float(np.max(np.abs(self.current_A - self.initial_current_A)))
+
+
+@dataclass(frozen=True)
+class StepResponses:
+    """Measured voltage steps (:func:`read_steps`).
+
+    Attributes
+    ----------
+    steps : tuple of VoltageStep
+    source, sha256 : str
+        File and the SHA-256 of its bytes.
+    """
+
+    steps: tuple[VoltageStep, ...]
+    source: str = "<memory>"
+    sha256: str = ""
+
+
+def read_steps(path: str | Path) -> StepResponses:
+    """Measured voltage steps from a CSV file.
+
+    Columns ``time_s`` [s], ``current_A`` [A] (the stepped circuit's coil current),
+    ``gap_m`` [m], ``initial_current_A`` [A] (every circuit's current at rest before the
+    step) and ``voltage_V`` [V] (the stepped circuit's voltage from ``t = 0`` on), optional
+    ``step`` (a label) and ``circuit`` (the stepped circuit's name); lines starting with
+    ``#`` are comments.  Consecutive rows with the same ``step``, ``gap_m``,
+    ``initial_current_A``, ``voltage_V`` and ``circuit`` form one step; its times must
+    increase; samples at ``t <= 0`` (before the step) are read and not fitted (the state
+    before the step is the statics at ``initial_current_A``).
+
+    Parameters
+    ----------
+    path : str or Path
+        The CSV file.
+
+    Raises
+    ------
+    DataError
+        A missing or unknown column, a cell that is not a finite number, times that do not
+        increase within a step, fewer than 3 samples after ``t = 0``, a gap outside
+        :data:`STEP_GAP_PLAUSIBLE_M` (mm as m), a negative current, or a current that does
+        not change; each naming the row.
+    """
+    import csv
+
+    from .errors import ParameterFileError
+
+    if not isinstance(path, (str, Path)):
+        raise InputError(f"read_steps needs a file path (str or Path), got {type(path).__name__}")
+    p = Path(path)
+    if not p.is_file():
+        raise ParameterFileError(f"voltage-step file {str(p)!r} does not exist")
+    raw = p.read_bytes()
+    try:
+        text = raw.decode("utf-8-sig")
+    except UnicodeDecodeError as exc:
+        raise DataError(f"{p}: not a UTF-8 text (CSV) file: {exc}") from None
+    reader = csv.reader(text.splitlines())
+    header: list[str] | None = None
+    records: list[tuple[int, list[str]]] = []
+    for line in reader:
+        if not line or not "".join(line).strip() or line[0].lstrip().startswith("#"):
+            continue
+        if header is None:
+            header = [h.strip() for h in line]
+        else:
+            records.append((reader.line_num, line))
+    allowed = (*STEP_COLUMNS, "step", "circuit")
+    if header is None:
+        raise DataError(f"{p}: the file is empty (expected a header row: "
+                        f"{', '.join(STEP_COLUMNS)} [, step, circuit])")
+    unknown = [h for h in header if h not in allowed]
+    missing = [h for h in STEP_COLUMNS if h not in header]
+    if unknown or missing or len(set(header)) != len(header):
+        raise DataError(f"{p}: columns {header}: unknown {unknown}, missing {missing}; a "
+                        f"voltage-step file has {', '.join(STEP_COLUMNS)} and optionally "
+                        "step, circuit (each once)")
+    if not records:
+        raise DataError(f"{p}: the file has a header but no data rows")
+    col = {h: k for k, h in enumerate(header)}
+    steps: list[VoltageStep] = []
+    group: list[tuple[int, list[float]]] = []
+    key: tuple[Any, ...] | None = None
+
+    def close() -> None:
+        if not group:
+            return
+        rows = np.array([r for r, _ in group])
+        vals = np.array([v for _, v in group])
+        after = vals[:, 0] > 0.0
+        label = str(key[0]) if key and key[0] else str(len(steps) + 1)
+        if np.count_nonzero(after) < 3:
+            raise DataError(f"{p}: the step starting at row {rows[0]} has "
+                            f"{np.count_nonzero(after)} samples at time_s > 0; a step needs at "
+                            "least 3 after t = 0")
+        step = VoltageStep(label=label, time_s=vals[after, 0], current_A=vals[after, 1],
+                           gap_m=float(vals[0, 2]), initial_current_A=float(vals[0, 3]),
+                           voltage_V=float(vals[0, 4]), circuit=str(key[4]) if key else "",
+                           rows=rows[after])
+        if not step.current_change_A > 1e-9 * max(1.0, abs(step.initial_current_A)):
+            raise DataError(f"{p}: the step starting at row {rows[0]}: current_A stays at "
+                            f"initial_current_A = {step.initial_current_A:g} A: no step")
+        steps.append(step)
+
+    for row, cells in records:
+        if len(cells) != len(header):
+            raise DataError(f"{p}: row {row} has {len(cells)} cells, the header {len(header)}")
+        nums = []
+        for name in STEP_COLUMNS:
+            cell = cells[col[name]].strip()
+            try:
+                v = float(cell)
+            except ValueError:
+                raise DataError(f"{p}: row {row}, column {name}: {cell!r} is not a number"
+                                ) from None
+            if not math.isfinite(v):
+                raise DataError(f"{p}: row {row}, column {name}: {cell!r} is not a finite "
+                                "number")
+            nums.append(v)
+        lo, hi = STEP_GAP_PLAUSIBLE_M
+        if not lo <= nums[2] <= hi:
+            raise DataError(f"{p}: row {row}: gap_m = {nums[2]:g} lies outside {lo:g}-{hi:g} "
+                            "m; is the gap in mm? (gap_m is in metres)")
+        if nums[1] < 0.0 or nums[3] < 0.0:
+            raise DataError(f"{p}: row {row}: current_A = {nums[1]:g}, initial_current_A = "
+                            f"{nums[3]:g}: currents must be >= 0 A")
+        new_key = (cells[col["step"]].strip() if "step" in col else "", *nums[2:5],
+                   cells[col["circuit"]].strip() if "circuit" in col else "")
+        if new_key != key:
+            close()
+            group, key = [], new_key
+        elif group and nums[0] <= group[-1][1][0]:
+            raise DataError(f"{p}: row {row}: time_s = {nums[0]:g} s does not increase (row "
+                            f"{group[-1][0]}: {group[-1][1][0]:g} s) within the step; start "
+                            "another step with a new step label")
+        group.append((row, nums))
+    close()
+    return StepResponses(steps=tuple(steps), source=str(p),
+                         sha256=hashlib.sha256(raw).hexdigest())
+
+
 # ---------------------------------------------------------------------------- exact statics
 class _ParametricStatics:
     """CasADi statics of a network with symbolic calibration parameters.
@@ -217,8 +411,10 @@ def _start(model: Any, values: Mapping[str, float], gap: np.ndarray, current: np
 
     net = calibrated_network(model, values)
     ng, nc = len(net.gap_names), len(net.circuits)
-    sol = solve_statics(net, gaps=np.repeat(gap[:, None], ng, axis=1),
-                        currents=np.repeat(current[:, None], nc, axis=1))
+    if gap.size == 0:
+        return np.zeros((0, net.n_loops))
+    sol = solve_statics(net, gaps_m=np.repeat(gap[:, None], ng, axis=1),
+                        currents_A=np.repeat(current[:, None], nc, axis=1))
     return np.asarray(sol.loop_flux_Wb, dtype=float).reshape(gap.size, -1)
 
 
@@ -243,16 +439,17 @@ def parameter_sensitivities(model: Any, values: Mapping[str, float], *, gap_m: f
 
 
 _STEP_SUBSTEPS = 40
-"""Radau (order 5, 3 points) steps per output interval of the step response (plus 40
+"""Most Radau (order 5, 3 points) steps per output interval of the step response (plus 40
 geometric ones from 1e-6 of the window to the first output, for the fast eddy modes);
-measured: the response equals the adaptive IDAS one (``simulate``, rtol 1e-10) to 3.4e-10."""
+:func:`step_substeps` takes fewer for many samples."""
 
 
 _STEP_ABSTOL = 1e-11
 """Newton tolerance of the step response's rootfinders on the scaled DAE (relative to
 each unknown's scale: every residual row is O(1) per relative change of the unknowns);
-measured (U-magnet, 10 mm, 20 A, +8 V): derivatives against central differences
-1.8e-8 / 2.2e-8 (Richardson-extrapolated 3.0e-8 / 3.8e-8) with 1e-11; unscaled with 1e-9
+measured (U-magnet, 10 mm, 20 A, +8 V, 40 Radau steps per interval): derivatives against
+central differences 1.8e-8 / 2.2e-8 (Richardson-extrapolated 3.0e-8 / 3.8e-8) with 1e-11
+(6.9e-9 / 1.4e-8 with the 10 steps of :func:`step_substeps`); unscaled with 1e-9
 they were 3-6e-6 off for every difference step.  The response moves by 1.2e-10."""
 
 
@@ -295,6 +492,129 @@ def _scaled_step_dae(run: Any, base: Network, *, gap_m: float, current_A: float,
              "alg": alg / ca.DM(rows)}, y_scale, z_scale)
 
 
+class _ParametricStep:
+    """One voltage step of the flux DAE with symbolic calibration parameters, built once:
+    ``evaluate(values)`` gives the stepped circuit's current at the sample times and its
+    exact Jacobian (see :func:`step_response_sensitivities`).
+
+    The stepped circuit's voltage after the step is ``voltage_V`` (absolute) or the hold
+    voltage ``k_R R_el I_0`` plus ``voltage_step_V``; the other circuits keep their hold
+    voltage.
+    """
+
+    def __init__(self, model: Any, names: Sequence[str], *, gap_m: float, current_A: float,
+                 times_s: np.ndarray, circuit: int, voltage_V: float | None = None,
+                 voltage_step_V: float = 0.0) -> None:
+        import casadi as ca
+
+        from .circuit.assembly import assemble
+        from .models.statics import as_network
+        from .reduction.maps import StepRun
+
+        self.names = tuple(names)
+        base = as_network(model)
+        t = np.asarray(times_s, dtype=float)
+        nc, ng = len(base.circuits), len(base.gap_names)
+        p = ca.SX.sym("p", len(self.names))
+        sym = {n: p[k] for k, n in enumerate(self.names)}
+        pnet = calibrated_network(base, sym)
+        duration = float(t[-1])
+        run = StepRun(pnet, 0, tau=t / duration, params=p, topology=base,
+                      eddy_scale=sym.get("eddy_conductance_scale", 1.0),
+                      resistance_scale=sym.get("resistance_scale", 1.0))
+        eq = assemble(pnet)
+        g_fun = ca.Function("step_statics_residual", [eq.x, ca.vertcat(eq.s, eq.I, p)],
+                            [eq.residual])
+        rf = ca.rootfinder("step_statics", "newton", g_fun,
+                           {"abstol": 1e-10, "abstolStep": 1e-15, "max_iter": 60,
+                            "error_on_fail": True})
+        P = ca.MX.sym("p", len(self.names))
+        X0 = ca.MX.sym("x0", eq.x.numel())
+        s_vec = np.full(ng, float(gap_m))
+        i_vec = np.full(nc, float(current_A))
+        x0 = rf(X0, ca.vertcat(ca.DM(s_vec), ca.DM(i_vec), P))
+        # voltages after the step: the hold voltage k_R R_el I_0 (the steady state before
+        # the step), the stepped circuit's given or stepped from it
+        k_r = (P[self.names.index("resistance_scale")] if "resistance_scale" in self.names
+               else 1.0)
+        u_nominal = base.resistances * i_vec
+        u_nominal[circuit] = (float(voltage_V) if voltage_V is not None
+                              else u_nominal[circuit] + float(voltage_step_V))
+        u_sym = [k_r * float(base.resistances[j] * i_vec[j]) for j in range(nc)]
+        u_sym[circuit] = (float(voltage_V) if voltage_V is not None
+                          else u_sym[circuit] + float(voltage_step_V))
+        pars = ca.vertcat(duration, *u_sym, ca.DM(s_vec), P)
+        # The DAE in scaled unknowns and equations (_scaled_step_dae): the collocation's
+        # Newton stops on an absolute residual, and unscaled its 1e-9 was ~1e-6 of the eddy
+        # fluxes (~3e-3 Wb): the derivatives of that inexact root were off by 3-6e-6
+        dae, y_scale, z_scale = _scaled_step_dae(run, base, gap_m=float(gap_m),
+                                                 current_A=float(current_A), u=u_nominal,
+                                                 duration=duration, names=self.names)
+        # consistent algebraic states just after the step: the differential states (flux
+        # linkages, eddy fluxes) are continuous, (x, I) jump (eddy currents), alg(y, z) = 0
+        alg = ca.Function("step_alg", [dae["z"], ca.vertcat(dae["x"], dae["p"])],
+                          [dae["alg"]])
+        rz = ca.rootfinder("step_consistent", "newton", alg,
+                           {"abstol": _STEP_ABSTOL, "abstolStep": 1e-15, "max_iter": 60,
+                            "error_on_fail": True})
+        y0 = ca.mtimes(ca.DM(run.D), x0) / ca.DM(y_scale)
+        z0 = rz(ca.vertcat(x0, ca.DM(i_vec)) / ca.DM(z_scale), ca.vertcat(y0, pars))
+        grid = np.concatenate(([0.0], t / duration))
+        substeps = step_substeps(t.size)
+        # the fast eddy modes start at t = 0: geometric steps there, then the output
+        # intervals in equal steps each
+        fine = np.unique(np.concatenate([np.geomspace(1e-6, grid[1], 40)] + [
+            np.linspace(a, b, substeps + 1) for a, b in zip(grid[:-1], grid[1:],
+                                                            strict=True)]))
+        colloc = ca.integrator("step_collocation", "collocation", dae, 0.0, list(fine[1:]),
+                               {"collocation_scheme": "radau", "interpolation_order": 3,
+                                "number_of_finite_elements": 1, "rootfinder": "newton",
+                                "rootfinder_options": {"abstol": _STEP_ABSTOL,
+                                                       "abstolStep": 1e-14, "max_iter": 50}})
+        res = colloc(x0=y0, z0=z0, p=pars)
+        keep = [int(np.searchsorted(fine, v)) - 1 for v in grid[1:]]
+        zf = res["zf"][:, keep]
+        cur = zf[run.n_loops + circuit, :].T * float(z_scale[run.n_loops + circuit])
+        self.fun = ca.Function("step_sensitivities", [X0, P], [cur, ca.jacobian(cur, P)])
+        self.base = base
+        self.gap_m, self.current_A = float(gap_m), float(current_A)
+
+    def evaluate(self, values: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        guess = _start(self.base, dict(zip(self.names, values, strict=True)),
+                       np.array([self.gap_m]), np.array([self.current_A]))[0]
+        try:
+            out, jac = self.fun(guess, values)
+        except RuntimeError as exc:
+            raise SolverError("the voltage step with parameter sensitivities failed (a "
+                              "stiff network, e.g. an eddy ladder, may need more Radau steps: "
+                              "maglevkit.calibration.STEP_FINE_STEPS)",
+                              state={"gap_m": self.gap_m, "current_A": self.current_A,
+                                     **dict(zip(self.names, values, strict=True))},
+                              reason=str(exc).splitlines()[-1][-200:]) from None
+        return np.asarray(out).ravel(), np.asarray(jac).reshape(-1, len(self.names))
+
+
+STEP_FINE_STEPS = 120
+"""Radau steps over a step response's output intervals in total (at least 3 and at most
+:data:`_STEP_SUBSTEPS` per interval; :func:`step_substeps`).  Measured (U-magnet, 10 mm,
+20 A, +8 V, 12 samples to 0.2 s, against IDAS at rtol 1e-10): 40 / 10 / 5 / 3 steps per
+interval 3.3e-8 / 3.3e-8 / 1.1e-7 / 1.6e-6 A off, 2.1 / 0.66 / 0.44 / 0.36 s per
+evaluation with the Jacobian; the 40 geometric steps after ``t = 0`` set the floor."""
+
+
+def step_substeps(n_samples: int) -> int:
+    """Radau steps per output interval for ``n_samples`` sample times:
+    ``clip(ceil(STEP_FINE_STEPS / n_samples), 3, 40)`` (12 samples: 10; 117 FEM samples:
+    3).
+
+    Parameters
+    ----------
+    n_samples : int
+        Number of sample times of the step response.
+    """
+    return int(min(_STEP_SUBSTEPS, max(3, math.ceil(STEP_FINE_STEPS / max(n_samples, 1)))))
+
+
 def step_response_sensitivities(model: Any, values: Mapping[str, float], *, gap_m: float,
                                 current_A: float, voltage_step_V: float, times_s: Any,
                                 circuit: int = 0) -> dict[str, np.ndarray]:
@@ -304,16 +624,27 @@ def step_response_sensitivities(model: Any, values: Mapping[str, float], *, gap_
     ``current_A``, held by ``U = R_el I``); at ``t = 0`` circuit ``circuit``'s voltage
     steps by ``voltage_step_V``.  The flux DAE of the ``R_ec`` fit
     (:class:`~maglevkit.reduction.maps.StepRun`) with the calibration factors as symbolic
-    parameters, integrated by Radau collocation (fixed steps, :data:`_STEP_SUBSTEPS`) so
-    that CasADi's AD differentiates the discrete solution exactly; the initial state is
-    the parametric statics and the algebraic states just after the step are solved
-    consistently (rootfinders, implicit function theorem), so ``d I(t)/d p`` includes the
-    operating point's dependence.  (IDAS forward sensitivities failed in IDACalcIC /
-    with error-test failures at t = 0 on this DAE.)  Eddy conductances are not
-    calibration parameters.
+    parameters, integrated by Radau collocation (fixed steps, :func:`step_substeps` per
+    output interval) so that CasADi's AD differentiates the discrete solution exactly; the
+    initial state is the parametric statics and the algebraic states just after the step
+    are solved consistently (rootfinders, implicit function theorem), so ``d I(t)/d p``
+    includes the operating point's dependence.  (IDAS forward sensitivities failed in
+    IDACalcIC / with error-test failures at t = 0 on this DAE.)  ``eddy_conductance_scale``
+    and ``resistance_scale`` enter the DAE's rows (the hold voltage is ``k_R R_el I``).
 
     Parameters
     ----------
+    model : Magnet or Network
+        The uncalibrated magnet.
+    values : mapping
+        Calibration parameter names of :data:`PARAMETERS` -> values (unit of the
+        parameter); the derivatives are taken w.r.t. these.
+    gap_m : float
+        Every gap [m].
+    current_A : float
+        The current every circuit holds before the step [A].
+    voltage_step_V : float
+        The stepped circuit's voltage change [V].
     times_s : array_like
         Increasing sample times > 0 [s].
     circuit : int
@@ -322,80 +653,23 @@ def step_response_sensitivities(model: Any, values: Mapping[str, float], *, gap_
     Returns
     -------
     dict
-        ``current_A`` (n_t,) coil current of the stepped circuit and ``dcurrent_dp``
+        ``current_A`` (n_t,) coil current of the stepped circuit [A] and ``dcurrent_dp``
         (n_t, n_p) in the order of ``values``.
     """
-    import casadi as ca
-
-    from .circuit.assembly import assemble
     from .models.statics import as_network
-    from .reduction.maps import StepRun
 
     names = _names(values)
     base = as_network(model)
     t = np.asarray(times_s, dtype=float)
     if t.ndim != 1 or t.size < 1 or t[0] <= 0.0 or np.any(np.diff(t) <= 0.0):
         raise InputError("times_s must be increasing sample times > 0 s")
-    nc, ng = len(base.circuits), len(base.gap_names)
+    nc = len(base.circuits)
     if isinstance(circuit, bool) or not isinstance(circuit, int) or not 0 <= circuit < nc:
         raise InputError(f"circuit = {circuit!r} must be an index in 0..{nc - 1}")
-    p = ca.SX.sym("p", len(names))
-    pnet = calibrated_network(base, {n: p[k] for k, n in enumerate(names)})
-    duration = float(t[-1])
-    run = StepRun(pnet, 0, tau=t / duration, params=p, topology=base)
-    eq = assemble(pnet)
-    g_fun = ca.Function("step_statics_residual", [eq.x, ca.vertcat(eq.s, eq.I, p)],
-                        [eq.residual])
-    rf = ca.rootfinder("step_statics", "newton", g_fun,
-                       {"abstol": 1e-10, "abstolStep": 1e-15, "max_iter": 60,
-                        "error_on_fail": True})
-    P = ca.MX.sym("p", len(names))
-    X0 = ca.MX.sym("x0", eq.x.numel())
-    s_vec = np.full(ng, float(gap_m))
-    i_vec = np.full(nc, float(current_A))
-    x0 = rf(X0, ca.vertcat(ca.DM(s_vec), ca.DM(i_vec), P))
-    u = base.resistances * i_vec
-    u[circuit] += float(voltage_step_V)
-    pars = ca.vertcat(duration, ca.DM(u), ca.DM(s_vec), P)
-    # The DAE in scaled unknowns and equations (_scaled_step_dae): the collocation's Newton
-    # stops on an absolute residual, and unscaled its 1e-9 was ~1e-6 of the eddy fluxes
-    # (~3e-3 Wb): the derivatives of that inexact root were off by 3-6e-6 (measured)
-    dae, y_scale, z_scale = _scaled_step_dae(run, base, gap_m=float(gap_m),
-                                             current_A=float(current_A), u=u,
-                                             duration=duration, names=names)
-    # consistent algebraic states just after the step: the differential states (flux
-    # linkages, eddy fluxes) are continuous, (x, I) jump (eddy currents), alg(y, z) = 0
-    alg = ca.Function("step_alg", [dae["z"], ca.vertcat(dae["x"], dae["p"])], [dae["alg"]])
-    rz = ca.rootfinder("step_consistent", "newton", alg,
-                       {"abstol": _STEP_ABSTOL, "abstolStep": 1e-15, "max_iter": 60,
-                        "error_on_fail": True})
-    y0 = ca.mtimes(ca.DM(run.D), x0) / ca.DM(y_scale)
-    z0 = rz(ca.vertcat(x0, ca.DM(i_vec)) / ca.DM(z_scale), ca.vertcat(y0, pars))
-    grid = np.concatenate(([0.0], t / duration))
-    # the fast eddy modes start at t = 0: geometric steps there, then the output intervals
-    # in _STEP_SUBSTEPS equal steps each
-    fine = np.unique(np.concatenate([np.geomspace(1e-6, grid[1], 40)] + [
-        np.linspace(a, b, _STEP_SUBSTEPS + 1) for a, b in zip(grid[:-1], grid[1:],
-                                                               strict=True)]))
-    colloc = ca.integrator("step_collocation", "collocation", dae, 0.0, list(fine[1:]),
-                           {"collocation_scheme": "radau", "interpolation_order": 3,
-                            "number_of_finite_elements": 1, "rootfinder": "newton",
-                            "rootfinder_options": {"abstol": _STEP_ABSTOL,
-                                                   "abstolStep": 1e-14, "max_iter": 50}})
-    res = colloc(x0=y0, z0=z0, p=pars)
-    keep = [int(np.searchsorted(fine, v)) - 1 for v in grid[1:]]
-    res = {"zf": res["zf"][:, keep]}
-    cur = res["zf"][run.n_loops + circuit, :].T * float(z_scale[run.n_loops + circuit])
-    fun = ca.Function("step_sensitivities", [X0, P], [cur, ca.jacobian(cur, P)])
-    v = np.array([float(values[n]) for n in names])
-    guess = _start(base, dict(values), np.array([float(gap_m)]), np.array([float(current_A)]))[0]
-    try:
-        out, jac = fun(guess, v)
-    except RuntimeError as exc:
-        raise SolverError("the voltage step with parameter sensitivities failed",
-                          state={"gap_m": gap_m, "current_A": current_A},
-                          reason=str(exc).splitlines()[-1][-200:]) from None
-    return {"current_A": np.asarray(out).ravel(), "dcurrent_dp": np.asarray(jac)}
+    step = _ParametricStep(base, names, gap_m=float(gap_m), current_A=float(current_A),
+                           times_s=t, circuit=circuit, voltage_step_V=float(voltage_step_V))
+    cur, jac = step.evaluate(np.array([float(values[n]) for n in names]))
+    return {"current_A": cur, "dcurrent_dp": jac}
 
 
 def _names(values: Any) -> tuple[str, ...]:
@@ -411,7 +685,7 @@ def _groups(model: Any) -> dict[str, tuple[str, ...]]:
     from .models.statics import as_network, circuit_pole_groups
 
     net = as_network(model)
-    return circuit_pole_groups(net, gap=0.01, current=10.0)
+    return circuit_pole_groups(net, gap_m=0.01, current_A=10.0)
 
 
 # ---------------------------------------------------------------------------- the fit
@@ -462,6 +736,12 @@ class Calibration:
     converged : bool
         Whether the least-squares solver met its tolerances (else it stopped at its
         evaluation limit; a warning says so).
+    step_points, nominal_step_points : list of dict
+        Per fitted voltage-step sample (calibrated and nominal parameters): step label,
+        row, time, gap, initial current, voltage, circuit, data and model current, and the
+        error relative to the step's current change (:attr:`VoltageStep.current_change_A`).
+    steps_sha256 : str
+        SHA-256 of the voltage-step file ("" without).
     """
 
     parameters: tuple[str, ...]
@@ -478,8 +758,21 @@ class Calibration:
     nominal_holdout: list[dict[str, Any]] = field(default_factory=list)
     null_shares: dict[str, float] = field(default_factory=dict)
     converged: bool = True
+    step_points: list[dict[str, Any]] = field(default_factory=list)
+    nominal_step_points: list[dict[str, Any]] = field(default_factory=list)
+    steps_sha256: str = ""
 
     def max_error(self, which: str = "holdout", quantity: str | None = None) -> float:
+        """Largest ``|relative_error|`` of ``which`` (``"points"``, ``"holdout"``,
+        ``"step_points"`` or a ``nominal_`` one), of one ``quantity`` or all (NaN: none).
+
+        Parameters
+        ----------
+        which : str
+            The list attribute.
+        quantity : str, optional
+            ``"force_N"``, ``"flux_linkage_Wb"`` or ``"current_A"`` (step samples).
+        """
         rows = getattr(self, which)
         vals = [abs(r["relative_error"]) for r in rows if quantity in (None, r["quantity"])]
         return max(vals) if vals else math.nan
@@ -502,7 +795,7 @@ def _model_points(ps: _ParametricStatics, values: np.ndarray, data: StaticPoints
                 res.append((model[j] - meas[k, j]) / scale)
                 jac.append(dmodel[j] / scale)
                 keys.append((k, j, q))
-    return np.array(res), np.array(jac), keys
+    return np.array(res), np.array(jac).reshape(len(res), values.size), keys
 
 
 UNIT_SLIP_RATIO = 10.0
@@ -543,25 +836,93 @@ def _report(res: np.ndarray, keys: list[tuple[int, int, str]], data: StaticPoint
     return out
 
 
-def calibrate(magnet: Any, data: str | Path | StaticPoints, *,
+def _step_circuit(step: VoltageStep, net: Network, source: str) -> int:
+    if not step.circuit:
+        if len(net.circuits) == 1:
+            return 0
+        raise DataError(f"{source}: step {step.label!r} (row {int(step.rows[0])}) names no "
+                        f"circuit; the magnet has {list(net.circuit_names)}: add a circuit "
+                        "column")
+    if step.circuit not in net.circuit_names:
+        raise DataError(f"{source}: step {step.label!r} (row {int(step.rows[0])}): circuit "
+                        f"{step.circuit!r} is not one of the magnet's {list(net.circuit_names)}")
+    return net.circuit_names.index(step.circuit)
+
+
+def _step_residuals(models: Sequence[_ParametricStep], steps: StepResponses,
+                    values: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Step residuals ``(I_model - I_data)/current_change_A`` and their Jacobian."""
+    res, jac = [], []
+    for model, step in zip(models, steps.steps, strict=True):
+        cur, dcur = model.evaluate(values)
+        scale = step.current_change_A
+        res.append((cur - step.current_A) / scale)
+        jac.append(dcur / scale)
+    if not res:
+        return np.zeros(0), np.zeros((0, values.size))
+    return np.concatenate(res), np.vstack(jac)
+
+
+def _step_report(res: np.ndarray, steps: StepResponses) -> list[dict[str, Any]]:
+    out, k = [], 0
+    for step in steps.steps:
+        for n in range(step.time_s.size):
+            r = float(res[k])
+            out.append({"step": step.label, "row": int(step.rows[n]),
+                        "time_s": float(step.time_s[n]), "gap_m": step.gap_m,
+                        "initial_current_A": step.initial_current_A,
+                        "voltage_V": step.voltage_V, "circuit": step.circuit,
+                        "quantity": "current_A", "data": float(step.current_A[n]),
+                        "model": float(step.current_A[n]) + r * step.current_change_A,
+                        "relative_error": r})
+            k += 1
+    return out
+
+
+def _check_step_units(res: np.ndarray, steps: StepResponses) -> None:
+    """Refuse step currents whose median ratio to the nominal model's is beyond
+    :data:`UNIT_SLIP_RATIO` (mA for A), naming the step and its first row."""
+    k = 0
+    for step in steps.steps:
+        n = step.time_s.size
+        model = step.current_A + res[k:k + n] * step.current_change_A
+        k += n
+        ok = np.abs(model) > 0.0
+        ratio = float(np.median(step.current_A[ok] / model[ok])) if ok.any() else 1.0
+        if not 1.0 / UNIT_SLIP_RATIO < ratio < UNIT_SLIP_RATIO:
+            raise DataError(f"{steps.source}: step {step.label!r} (first row "
+                            f"{int(step.rows[0])}): current_A is {ratio:.3g} x the nominal "
+                            "magnet's response (median): a unit slip (currents in A, voltage "
+                            "in V, times in s) or another magnet")
+
+
+def calibrate(magnet: Any, data: str | Path | StaticPoints | None, *,
               parameters: Sequence[str] | None = None,
               holdout_gaps_m: Sequence[float] = (),
-              initial: Mapping[str, float] | None = None) -> Calibration:
-    """Fit calibration parameters of ``magnet`` to measured statics (module docstring).
+              initial: Mapping[str, float] | None = None,
+              steps: str | Path | StepResponses | None = None) -> Calibration:
+    """Fit calibration parameters of ``magnet`` to measured statics and/or voltage steps
+    (module docstring).
 
     Parameters
     ----------
     magnet : Magnet
         The magnet (its network) to calibrate.
-    data : path or StaticPoints
+    data : path or StaticPoints or None
         Measured force and/or flux linkage (:func:`read_points`), every circuit at the
-        point's current, all gaps at its gap.
+        point's current, all gaps at its gap; None: voltage steps only.
     parameters : sequence of str, optional
-        Names from :data:`PARAMETERS` (default :data:`DEFAULT_PARAMETERS`).
+        Names from :data:`PARAMETERS` (default :data:`DEFAULT_PARAMETERS` with static data,
+        plus :data:`DYNAMIC_PARAMETERS` with steps).
     holdout_gaps_m : sequence of float
-        Gaps [m] whose points are left out of the fit and reported as the held-out check.
+        Gaps [m] whose static points are left out of the fit and reported as the held-out
+        check.
     initial : mapping, optional
         Start values (default: nominal).
+    steps : path or StepResponses, optional
+        Measured voltage steps (:func:`read_steps`), fitted with the statics: residuals
+        ``(I_model - I_data)/current_change_A`` per sample, the model the flux DAE
+        (:func:`step_response_sensitivities`) with exact parameter derivatives.
 
     Returns
     -------
@@ -570,11 +931,22 @@ def calibrate(magnet: Any, data: str | Path | StaticPoints, *,
     from scipy.optimize import least_squares
     from scipy.stats import t as student_t
 
-    names = _names(DEFAULT_PARAMETERS if parameters is None else parameters)
-    pts = data if isinstance(data, StaticPoints) else read_points(data)
     from .models.statics import as_network
 
+    if data is None and steps is None:
+        raise InputError("calibrate needs static data, voltage steps (steps=) or both")
+    step_data = (None if steps is None else steps if isinstance(steps, StepResponses)
+                 else read_steps(steps))
+    if parameters is None:
+        parameters = ((DEFAULT_PARAMETERS if data is not None else ())
+                      + (DYNAMIC_PARAMETERS if step_data is not None else ()))
+    names = _names(parameters)
     net = as_network(magnet)
+    pts = None if data is None else data if isinstance(data, StaticPoints) else read_points(data)
+    if pts is None:
+        pts = StaticPoints(gap_m=np.zeros(0), current_A=np.zeros(0), force_N=None,
+                           flux_linkage_Wb=None, circuits=tuple(net.circuit_names),
+                           rows=np.zeros(0, dtype=int))
     if tuple(sorted(pts.circuits)) != tuple(sorted(net.circuit_names)):
         if len(pts.circuits) == 1 and len(net.circuits) == 1:
             pts = replace(pts, circuits=tuple(net.circuit_names))
@@ -595,13 +967,18 @@ def calibrate(magnet: Any, data: str | Path | StaticPoints, *,
         hold |= hit
     fit_pts, test_pts = pts.subset(~hold), pts.subset(hold)
     specs = [PARAMETERS[n] for n in names]
+    n_steps = 0 if step_data is None else sum(st.time_s.size for st in step_data.steps)
     n_res = fit_pts.gap_m.size * len(net.circuits) * (
-        (fit_pts.force_N is not None) + (fit_pts.flux_linkage_Wb is not None))
+        (fit_pts.force_N is not None) + (fit_pts.flux_linkage_Wb is not None)) + n_steps
     if n_res <= len(names):
         raise DataError(f"{pts.source}: {n_res} fitted residuals for {len(names)} parameters; "
                         "the fit needs more data points than parameters")
     groups = _groups(net)
     ps = _ParametricStatics(net, names, groups)
+    step_models = [] if step_data is None else [
+        _ParametricStep(net, names, gap_m=st.gap_m, current_A=st.initial_current_A,
+                        times_s=st.time_s, circuit=_step_circuit(st, net, step_data.source),
+                        voltage_V=st.voltage_V) for st in step_data.steps]
     start = dict(initial or {})
     p0 = np.array([float(start.get(n, s.nominal)) for n, s in zip(names, specs, strict=True)])
     lo = np.array([s.lower for s in specs])
@@ -612,14 +989,22 @@ def calibrate(magnet: Any, data: str | Path | StaticPoints, *,
     x0 = _start(net, dict(zip(names, p0, strict=True)), fit_pts.gap_m, fit_pts.current_A)
     nominal_res, _, nominal_keys = _model_points(ps, p0, fit_pts, x0.copy())
     _check_units(nominal_res, nominal_keys, fit_pts)
+    nominal_step_res = np.zeros(0)
+    if step_data is not None:
+        nominal_step_res, _ = _step_residuals(step_models, step_data, p0)
+        _check_step_units(nominal_step_res, step_data)
     cache: dict[bytes, tuple[np.ndarray, np.ndarray]] = {}
 
     def evaluate(p: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         key = p.tobytes()
         if key not in cache:
             r, jac, _ = _model_points(ps, p, fit_pts, x0)
+            if step_data is not None:
+                rs, js = _step_residuals(step_models, step_data, p)
+                r = np.concatenate((r, rs))
+                jac = np.vstack((jac.reshape(-1, p.size), js))
             cache.clear()
-            cache[key] = (r, jac)
+            cache[key] = (r, jac.reshape(-1, p.size))
         return cache[key]
 
     sol = least_squares(lambda p: evaluate(p)[0], p0, jac=lambda p: evaluate(p)[1],
@@ -630,7 +1015,8 @@ def calibrate(magnet: Any, data: str | Path | StaticPoints, *,
                       f"{sol.status}: {sol.message}; {sol.nfev} evaluations): the values and "
                       "intervals are those where it stopped", MaglevkitWarning, stacklevel=2)
     p = sol.x
-    res, jac, keys = _model_points(ps, p, fit_pts, x0)
+    res, jac = evaluate(p)
+    n_static, keys = len(nominal_keys), nominal_keys
     m, n = res.size, p.size
     scales = np.array([s.scale for s in specs])
     _, sv, vt = np.linalg.svd(jac * scales, full_matrices=False)
@@ -639,7 +1025,8 @@ def calibrate(magnet: Any, data: str | Path | StaticPoints, *,
     tq = float(student_t.ppf(0.975, dof))
     # near-null directions (relative singular value below NULL_RCOND): a parameter with a
     # share of them above NULL_SHARE is undetermined (inf interval); the others get their
-    # interval from the pseudo-inverse on the determined subspace
+    # interval from the pseudo-inverse on the determined subspace.  A parameter the data do
+    # not see at all (eddy conductances in statics) has a zero column: a singular value 0
     null = vt[sv <= NULL_RCOND * sv[0]]
     shares = np.sum(null**2, axis=0) if null.size else np.zeros(n)
     keep = sv > NULL_RCOND * sv[0]
@@ -659,22 +1046,28 @@ def calibrate(magnet: Any, data: str | Path | StaticPoints, *,
         xn = _start(net, dict(zip(names, p0, strict=True)), test_pts.gap_m, test_pts.current_A)
         nres, _, nkeys = _model_points(ps, p0, test_pts, xn)
         nominal_hold = _report(nres, nkeys, test_pts)
+    step_rep = [] if step_data is None else _step_report(res[n_static:], step_data)
+    nominal_step_rep = ([] if step_data is None
+                        else _step_report(nominal_step_res, step_data))
     return Calibration(
         parameters=names, values={nm: float(v) for nm, v in zip(names, p, strict=True)},
         confidence_95={nm: float(h) for nm, h in zip(names, half, strict=True)},
         singular_values=sv, undetermined=undetermined,
-        residual_rms=float(np.sqrt(np.mean(res**2))), points=_report(res, keys, fit_pts),
+        residual_rms=float(np.sqrt(np.mean(res**2))),
+        points=_report(res[:n_static], keys, fit_pts),
         holdout=holdout, bounds_active=active, data_sha256=pts.sha256,
         nominal_points=_report(nominal_res, nominal_keys, fit_pts),
         nominal_holdout=nominal_hold,
         null_shares=({nm: float(v) for nm, v in zip(names, shares, strict=True)}
                      if null.size else {}),
-        converged=sol.status > 0)
+        converged=sol.status > 0, step_points=step_rep,
+        nominal_step_points=nominal_step_rep,
+        steps_sha256="" if step_data is None else step_data.sha256)
 
 
 # ---------------------------------------------------------------------------- TOML out/in
 def write_calibrated_toml(magnet: Any, result: Calibration, path: str | Path, *,
-                          data_source: str = "") -> Path:
+                          data_source: str = "", steps_source: str = "") -> Path:
     """Write the magnet's parameter file with a ``[calibration]`` table: the fitted values
     (each tagged ``calibrated`` in ``[calibration.provenance]``, with the data file's
     SHA-256), their 95 % half-widths and the parameters the data did not determine.
@@ -691,13 +1084,20 @@ def write_calibrated_toml(magnet: Any, result: Calibration, path: str | Path, *,
         The file to write.
     data_source : str
         The fitted data file (its name goes into the provenance tags).
+    steps_source : str
+        The fitted voltage-step file, if any (its name and SHA-256 go into the tags).
     """
     params = getattr(magnet, "parameters", None)
     if not isinstance(params, Mapping):
         raise InputError("write_calibrated_toml needs a Magnet loaded from a parameter file")
     doc = {k: v for k, v in params.items() if k != "calibration"}
-    tag = (f"calibrated: least squares on {Path(data_source).name or 'data'} "
-           f"(sha256 {result.data_sha256})")
+    parts = []
+    if result.data_sha256 or not result.steps_sha256:
+        parts.append(f"{Path(data_source).name or 'data'} (sha256 {result.data_sha256})")
+    if result.steps_sha256:
+        parts.append(f"voltage steps {Path(steps_source).name or 'steps'} (sha256 "
+                     f"{result.steps_sha256})")
+    tag = "calibrated: least squares on " + " and ".join(parts)
     doc["calibration"] = {
         **{k: v for k, v in result.values.items()},
         "data_sha256": result.data_sha256,

@@ -14,8 +14,8 @@ detailed signal, and the *AC-normalised* error
 which measures the error relative to the signal's variation (a 50 Hz gap sine moves the
 current by a few percent of its DC value, so e_y hides errors that e_y,AC shows).  It is
 reported as undefined (NaN, printed "n/a (no variation)", :func:`format_ac_error`) when the
-detailed signal hardly moves: RMS(y_detailed - mean) < ``AC_MIN_RELATIVE_VARIATION`` x
-|mean(y_detailed)| (see there).
+detailed signal hardly moves: ``RMS(y_detailed - mean) < AC_MIN_RELATIVE_VARIATION x
+|mean(y_detailed)|`` (see there).
 The speed-up is the ratio of the two models' CPU times (``time.process_time``), each the
 best of ``repeat`` runs after one untimed warm-up run (which compiles and fills caches and
 whose results are compared): warm, CPU, best of N, so that neither the first call's
@@ -49,12 +49,13 @@ from .models.signals import Ramp, Signal, Sine, Step
 from .models.statics import solve_statics
 from .plant import STANDARD_GRAVITY, HeaveMass
 from .simulation import simulate
+from .validation import renamed_keywords
 
 __all__ = ["AC_MIN_RELATIVE_VARIATION", "ACCEPTANCE_NRMS", "error_verdicts",
            "ComparisonScenario", "ComparisonResult",
            "standard_scenarios", "compare_models", "circuit_forces", "format_ac_error"]
 
-#: Smallest variation of a detailed signal, RMS(y - mean(y)) / |mean(y)|, for which the
+#: Smallest variation of a detailed signal, ``RMS(y - mean(y)) / |mean(y)|``, for which the
 #: AC-normalised error is reported.  Below it the ratio divides the model error by a
 #: variation of the size of that error and says nothing (it gave "AC errors" of 215-239 %).
 #: Measured on the standard set (tr09-standard, tr09-bow, tr-guidance at their nominal
@@ -67,22 +68,47 @@ __all__ = ["AC_MIN_RELATIVE_VARIATION", "ACCEPTANCE_NRMS", "error_verdicts",
 AC_MIN_RELATIVE_VARIATION = 5e-3
 
 
+@renamed_keywords(gaps="gaps_m", voltages="voltages_V", gap_reference="gap_reference_m")
 @dataclass(frozen=True)
 class ComparisonScenario:
     """One comparison case.
 
-    ``kind`` is ``"open"`` (inputs ``gaps``/``voltages`` as accepted by
-    :func:`maglevkit.simulate`) or ``"closed"`` (``gap_reference`` callable, gap
-    controller and heave mass designed at the operating point).
+    ``kind`` is ``"open"`` (inputs ``gaps_m``/``voltages_V`` as accepted by
+    :func:`maglevkit.simulate`) or ``"closed"`` (``gap_reference_m`` callable, gap
+    controller and heave mass designed at the operating point).  The old field names
+    ``gaps``, ``voltages`` and ``gap_reference`` are deprecated aliases for one release
+    (as constructor keywords and as read-only attributes).
+
+    Attributes
+    ----------
+    name, description : str
+        Short name (table row) and one-line description.
+    duration_s, dt_s : float
+        Simulated time and output step [s].
+    gaps_m : float, mapping, Signal or callable, optional
+        Open loop: the gap input(s) [m], in any form :func:`maglevkit.simulate` takes.
+    voltages_V : float, mapping, Signal or callable, optional
+        Open loop: the circuit voltage(s) [V], likewise.
+    gap_reference_m : callable t -> float, optional
+        Closed loop: the gap reference [m] as a function of time [s].
+    external_force_fraction : callable t -> float, optional
+        Closed loop: external force on the mass as a fraction of the design weight
+        (dimensionless) as a function of time [s].
+    kind : {"open", "closed"}
+        Open-loop inputs or the closed gap loop.
+    coupling : bool
+        The case excites one circuit only (its errors judge the coupling).
+    initial_current_A : float, optional
+        Open loop: initial current of every circuit [A] (None: steady state).
     """
 
     name: str
     description: str
     duration_s: float
     dt_s: float
-    gaps: Any = None
-    voltages: Any = None
-    gap_reference: Callable[[float], float] | None = None
+    gaps_m: Any = None
+    voltages_V: Any = None
+    gap_reference_m: Callable[[float], float] | None = None
     external_force_fraction: Callable[[float], float] | None = None
     kind: str = "open"
     coupling: bool = False
@@ -202,12 +228,30 @@ def format_ac_error(value: float, *, digits: int = 2, suffix: str = " %",
     return f"{100.0 * float(value):.{digits}f}{suffix}"
 
 
-def circuit_forces(pole_force: np.ndarray, gap_names: tuple[str, ...],
+@renamed_keywords(pole_force="pole_force_N")
+def circuit_forces(pole_force_N: np.ndarray, gap_names: tuple[str, ...],
                    groups: dict[str, tuple[str, ...]], circuits: tuple[str, ...]) -> np.ndarray:
-    """Sum pole forces (n_t, n_gaps) into circuit forces (n_t, n_circuits)."""
+    """Sum pole forces (n_t, n_gaps) into circuit forces (n_t, n_circuits).
+
+    Parameters
+    ----------
+    pole_force_N : ndarray (n_t, n_gaps)
+        Force of every gap input [N] (deprecated alias ``pole_force``).
+    gap_names : tuple of str
+        Names of the gap inputs (the columns of ``pole_force_N``).
+    groups : dict of str to tuple of str
+        Circuit name -> the gap inputs it drives (the maps' ``pole_groups``).
+    circuits : tuple of str
+        The circuits, in the order of the result's columns.
+
+    Returns
+    -------
+    ndarray (n_t, n_circuits)
+        Circuit forces [N].
+    """
     gi = {g: k for k, g in enumerate(gap_names)}
-    return np.stack([pole_force[:, [gi[g] for g in groups[c]]].sum(axis=1) for c in circuits],
-                    axis=1)
+    return np.stack([pole_force_N[:, [gi[g] for g in groups[c]]].sum(axis=1)
+                     for c in circuits], axis=1)
 
 
 def _scaled(fraction: Callable[[float], float] | None,
@@ -240,7 +284,7 @@ def standard_scenarios(magnet: Any, *, gap_m: float, current_A: float) -> list[C
     r = net.resistances
     u0 = r * current_A
     nc = len(r)
-    tau = float(np.max(solve_statics(magnet, gaps=gap_m, currents=current_A)
+    tau = float(np.max(solve_statics(magnet, gaps_m=gap_m, currents_A=current_A)
                        .common_differential_inductance_H) / np.min(r))
     t_step = min(3.0 * tau, 1.5)
     names = tuple(net.circuit_names)
@@ -254,29 +298,29 @@ def standard_scenarios(magnet: Any, *, gap_m: float, current_A: float) -> list[C
 
     out = [
         ComparisonScenario("voltage step up", "+20 % voltage on every circuit at constant gap",
-                           t_step, t_step / 1000, gaps=gap_m, voltages=volts(np.full(nc, 1.2))),
+                           t_step, t_step / 1000, gaps_m=gap_m, voltages_V=volts(np.full(nc, 1.2))),
         ComparisonScenario("voltage step down", "-20 % voltage on every circuit",
-                           t_step, t_step / 1000, gaps=gap_m, voltages=volts(np.full(nc, 0.8))),
+                           t_step, t_step / 1000, gaps_m=gap_m, voltages_V=volts(np.full(nc, 0.8))),
     ]
     for f in (0.5, 5.0, 50.0):
         dur = max(2.0 / f, 0.1)
         out.append(ComparisonScenario(
             f"gap sine {f:g} Hz", f"gap {gap_m * 1e3:g} +- 1 mm at {f:g} Hz, constant voltage",
-            dur, min(1.0 / (f * 100), 1e-3), gaps=Sine(gap_m, 1e-3, f), voltages=u0))
+            dur, min(1.0 / (f * 100), 1e-3), gaps_m=Sine(gap_m, 1e-3, f), voltages_V=u0))
     out.append(ComparisonScenario(
         "gap ramp", "gap +2 mm in 0.1 s, then held; constant voltage", 0.3, 3e-4,
-        gaps=Ramp(gap_m, gap_m + 2e-3, 0.02, 0.12), voltages=u0))
+        gaps_m=Ramp(gap_m, gap_m + 2e-3, 0.02, 0.12), voltages_V=u0))
     out.append(ComparisonScenario(
         "closed loop", "flux-cascade gap control, heave mass: +1 mm reference step at 0.05 s, "
         "+10 % load at 0.5 s", 1.0, 1e-3,
-        gap_reference=lambda t: gap_m + (1e-3 if t >= 0.05 else 0.0),
+        gap_reference_m=lambda t: gap_m + (1e-3 if t >= 0.05 else 0.0),
         external_force_fraction=lambda t: 0.1 if t >= 0.5 else 0.0, kind="closed"))
     if nc > 1:
         first = np.zeros(nc)
         first[0] = 1.0
         out.append(ComparisonScenario(
             "coupling", "+20 % voltage on the first circuit only", t_step, t_step / 1000,
-            gaps=gap_m, voltages=volts(1.0 + 0.2 * first), coupling=True))
+            gaps_m=gap_m, voltages_V=volts(1.0 + 0.2 * first), coupling=True))
     return out
 
 
@@ -322,7 +366,7 @@ def compare_models(detailed: Any, reduced: Any, scenarios: list[ComparisonScenar
     results = []
     for sc in scenarios:
         if sc.kind == "closed":
-            force0 = float(solve_statics(fm.network, gaps=gap_m, currents=current_A).force_N)
+            force0 = float(solve_statics(fm.network, gaps_m=gap_m, currents_A=current_A).force_N)
             veh = HeaveMass(force0 / STANDARD_GRAVITY)
             ctl = design_gap_controller(fm.network, mass_kg=veh.mass_kg, gap_m=gap_m,
                                         current_A=current_A)
@@ -332,7 +376,7 @@ def compare_models(detailed: Any, reduced: Any, scenarios: list[ComparisonScenar
                      sc: ComparisonScenario = sc, loads: Any = loads) -> Any:
                 return closed_loop(model, veh, ctl, duration_s=sc.duration_s, dt_s=sc.dt_s,
                                    initial_gap_m=gap_m, initial_current_A=current_A,
-                                   gap_reference=sc.gap_reference, external_force_N=loads)
+                                   gap_reference_m=sc.gap_reference_m, external_force_N=loads)
 
             (wd, d), (wr, r) = (_timed(partial(loop, model), repeat) for model in (fm, reduced))
             t = d.time_s
@@ -342,14 +386,14 @@ def compare_models(detailed: Any, reduced: Any, scenarios: list[ComparisonScenar
                                         / np.ptp(d.gap_m))}
             cd, cr = d.currents_A, r.currents_A
             gd, gr = d.gap_m, r.gap_m
-            gref: np.ndarray | None = (None if sc.gap_reference is None else
-                                       np.array([sc.gap_reference(float(tk)) for tk in t]))
+            gref: np.ndarray | None = (None if sc.gap_reference_m is None else
+                                       np.array([sc.gap_reference_m(float(tk)) for tk in t]))
         else:
             wd, ds = _timed(partial(simulate, fm, (0.0, sc.duration_s), dt_s=sc.dt_s,
-                                    gaps_m=sc.gaps, voltages_V=sc.voltages,
+                                    gaps_m=sc.gaps_m, voltages_V=sc.voltages_V,
                                     initial_currents_A=sc.initial_current_A), repeat)
             wr, rs = _timed(partial(simulate, reduced, (0.0, sc.duration_s), dt_s=sc.dt_s,
-                                    gaps_m=sc.gaps, voltages_V=sc.voltages,
+                                    gaps_m=sc.gaps_m, voltages_V=sc.voltages_V,
                                     initial_currents_A=sc.initial_current_A), repeat)
             t = ds.time_s
             fd = circuit_forces(ds.pole_force_N, ds.gap_names, groups, circuits)

@@ -239,6 +239,9 @@ def read_design_spec(source: str | Path | Mapping[str, Any], *, base_dir: str | 
     if unknown:
         raise DesignSpecError(f"unknown table(s) {unknown}; allowed: design, variables, "
                               "requirements, coil, provenance")
+    # before the schema's own checks, so that a slipped value it then refuses (e.g.
+    # fill_factor = 600 for 0.6) is named with its unit and likely slip first (issue 27)
+    check_plausible(doc, DESIGN_PLAUSIBLE, label, stacklevel=3)
     design = _table(doc, "design")
     bad = sorted(set(design) - {"magnet", "objective"})
     if bad:
@@ -313,7 +316,6 @@ def read_design_spec(source: str | Path | Mapping[str, Any], *, base_dir: str | 
             raise DesignSpecError(f"[provenance] {k!r}: tags a key the spec does not give; "
                                   "expected \"table.key\" of one of its values (e.g. "
                                   "\"requirements.force_N\")")
-    check_plausible(doc, DESIGN_PLAUSIBLE, label, stacklevel=3)
     return DesignSpec(magnet=magnet, objective=objective, variables=variables,
                       requirements=req, coil=coil, provenance=dict(prov), source=label)
 
@@ -370,7 +372,7 @@ class _Problem:
         net = lumped_network(g, r, core, rail_mat, options)
         eq = assemble(net)
         self.n_loops = eq.x.numel()
-        groups = circuit_pole_groups(base.network, gap=0.01, current=10.0)
+        groups = circuit_pole_groups(base.network, gap_m=0.01, current_A=10.0)
         gi = {gname: k for k, gname in enumerate(net.gap_names)}
         sel = np.zeros((1, len(gi)))
         for gname in groups[net.circuit_names[0]]:
@@ -426,7 +428,7 @@ def design_parameters(spec: DesignSpec, values: Mapping[str, float], *,
     values : mapping
         Design variable -> value [m, turns -]; missing variables keep the base value.
     provenance : str
-        Tag (after ``[E] ``) for every changed value; empty: keep the base's tags.
+        Tag (after ``[E]`` and a space) for every changed value; empty: keep the base's tags.
 
     Returns
     -------
@@ -570,7 +572,7 @@ def _nominal_current(magnet: Any, gap_m: float, force_N: float, i_hi: float) -> 
     grid = np.linspace(0.0, i_hi, 41)[1:]
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", MaglevkitWarning)
-        f = np.asarray(solve_statics(magnet, gaps=np.array([gap_m]), currents=grid,
+        f = np.asarray(solve_statics(magnet, gaps_m=np.array([gap_m]), currents_A=grid,
                                      grid=True).force_N)[0]
         if f[-1] < force_N:
             return math.nan
@@ -579,7 +581,7 @@ def _nominal_current(magnet: Any, gap_m: float, force_N: float, i_hi: float) -> 
         f_lo = f[k - 1] if k else 0.0
         i = lo + (force_N - f_lo) / (f[k] - f_lo) * (grid[k] - lo)
         for _ in range(30):
-            sol = solve_statics(magnet, gaps=gap_m, currents=i)
+            sol = solve_statics(magnet, gaps_m=gap_m, currents_A=i)
             fi = float(np.asarray(sol.force_N))
             dfdi = float(np.sum(np.asarray(sol.dforce_dcurrent_N_per_A)))
             step = (fi - force_N) / dfdi
@@ -612,7 +614,7 @@ def evaluate_design(spec: DesignSpec, values: Mapping[str, float] | None = None,
     -------
     dict
         ``nominal_current_A``, ``reserve_current_A``, ``force_reserve_N``,
-        ``flux_density_T`` (peak |B| in the magnet's iron at the nominal point),
+        ``flux_density_T`` (peak ``|B|`` in the magnet's iron at the nominal point),
         ``flux_density_path``, ``current_density_A_per_m2``, ``voltage_V``,
         ``resistance_ohm``, ``mass_kg``, ``power_W``, the geometry slacks
         ``coil_fits_leg_m``, ``coils_fit_window_m``, ``magnet_fits_rail_m`` [m] and
@@ -636,11 +638,11 @@ def evaluate_design(spec: DesignSpec, values: Mapping[str, float] | None = None,
     out["nominal_current_A"] = i_n
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", MaglevkitWarning)
-        f_r = float(np.asarray(solve_statics(mag, gaps=req["reserve_gap_m"],
-                                             currents=i_res).force_N))
+        f_r = float(np.asarray(solve_statics(mag, gaps_m=req["reserve_gap_m"],
+                                             currents_A=i_res).force_N))
         out["force_reserve_N"] = f_r
         if math.isfinite(i_n):
-            sol = solve_statics(mag, gaps=req["nominal_gap_m"], currents=i_n)
+            sol = solve_statics(mag, gaps_m=req["nominal_gap_m"], currents_A=i_n)
             phi = np.asarray(sol.branch_flux_Wb).ravel()
             best, where = 0.0, ""
             for j, br in enumerate(mag.network.branches):
@@ -741,10 +743,10 @@ def _setup(spec: DesignSpec, initial: Mapping[str, float] | None) -> _Setup:
     mag0 = _build(spec, start)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", MaglevkitWarning)
-        x_n0 = np.asarray(solve_statics(mag0, gaps=req["nominal_gap_m"],
-                                        currents=i_n0).loop_flux_Wb, dtype=float).ravel()
-        x_r0 = np.asarray(solve_statics(mag0, gaps=req["reserve_gap_m"],
-                                        currents=i_res0).loop_flux_Wb, dtype=float).ravel()
+        x_n0 = np.asarray(solve_statics(mag0, gaps_m=req["nominal_gap_m"],
+                                        currents_A=i_n0).loop_flux_Wb, dtype=float).ravel()
+        x_r0 = np.asarray(solve_statics(mag0, gaps_m=req["reserve_gap_m"],
+                                        currents_A=i_res0).loop_flux_Wb, dtype=float).ravel()
     # scaling: variables by their upper bounds, fluxes by the start's largest loop flux,
     # currents by the start's nominal current, loop laws by the nominal MMF
     vscale = hi.copy()
@@ -969,7 +971,7 @@ def design_sensitivities(spec: DesignSpec, values: Mapping[str, float], *, gap_m
     mag = _build(spec, values)
     rng = plausible_range(mag)
     if rng is not None:   # as solve_statics does (its own warnings are silenced below)
-        rng.check(gaps=gap_m, currents=current_A, where="design_sensitivities")
+        rng.check(gaps_m=gap_m, currents_A=current_A, where="design_sensitivities")
     turns_r = float(mag.parameters["magnet"]["turns"])
     n_val = float(values["turns"]) if "turns" in pb.names else pb.turns0
     if abs(n_val - turns_r) > 0.0:
@@ -979,7 +981,7 @@ def design_sensitivities(spec: DesignSpec, values: Mapping[str, float], *, gap_m
         cur0 = current_A
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", MaglevkitWarning)
-        x0 = np.asarray(solve_statics(mag, gaps=gap_m, currents=cur0).loop_flux_Wb,
+        x0 = np.asarray(solve_statics(mag, gaps_m=gap_m, currents_A=cur0).loop_flux_Wb,
                         dtype=float).ravel()
     rf = ca.rootfinder("design_statics", "newton", pb.residual,
                        {"abstol": 1e-10, "abstolStep": 1e-16, "max_iter": 60,

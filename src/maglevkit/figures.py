@@ -28,6 +28,7 @@ from .magnets.base import Magnet
 from .models.characteristics import KNEE_EXPONENT, nominal_point, saturation_knee
 from .models.statics import solve_statics
 from .plotting import place_legend, plt, save
+from .validation import renamed_keywords
 
 __all__ = ["Fig6Data", "Fig7Data", "CouplingResponse", "fig6_data", "fig7_data",
            "coupling_response", "figure_force_current", "figure_inductance", "figure_coupling",
@@ -133,13 +134,13 @@ def fig6_data(magnet: Magnet, *, gap_factors: tuple[float, ...] = (0.8, 1.0, 1.2
         A magnet without an ``[operating]`` table, no saturation knee, or bad gaps.
     """
     s0, i_nom = nominal_point(magnet)
-    i0 = saturation_knee(magnet, gap=s0)
+    i0 = saturation_knee(magnet, gap_m=s0)
     gaps = s0 * np.asarray(gap_factors, dtype=float)
     cur = np.linspace(0.0, max_current, points)
-    full = solve_statics(magnet, gaps=gaps, currents=cur * i0, grid=True).force_N
+    full = solve_statics(magnet, gaps_m=gaps, currents_A=cur * i0, grid=True).force_N
     lin_mag = magnet.with_options(saturation=False, eddy_currents=False)
-    lin = solve_statics(lin_mag, gaps=gaps, currents=cur * i0, grid=True).force_N
-    f0 = float(solve_statics(magnet, gaps=s0, currents=i0).force_N)
+    lin = solve_statics(lin_mag, gaps_m=gaps, currents_A=cur * i0, grid=True).force_N
+    f0 = float(solve_statics(magnet, gaps_m=s0, currents_A=i0).force_N)
     return Fig6Data(gaps, cur, full / f0, lin / f0, i0, f0, s0, i_nom)
 
 
@@ -152,15 +153,18 @@ _STEP_SETTINGS: dict[str, Any] = {"samples_per_tau": 25, "n_tau": 4.0, "rtol": 1
                                   "atol": 1e-11}
 
 
-def fig7_data(magnet: Magnet, *, gap: float = 0.0095, max_current: float = 2.2,
+@renamed_keywords(gap="gap_m")
+def fig7_data(magnet: Magnet, *, gap_m: float = 0.0095, max_current: float = 2.2,
               points: int = 89, step_points: int = 12) -> Fig7Data:
-    """Data of the Fig. 7 analog at ``gap`` [m] (the paper: 9.5 mm).
+    """Data of the Fig. 7 analog at ``gap_m`` [m] (the paper: 9.5 mm).
+
+    Old keyword names (``gap``) are deprecated aliases for one release.
 
     Parameters
     ----------
     magnet : Magnet
         Magnet with an ``[operating]`` table.
-    gap : float
+    gap_m : float
         Uniform gap [m].
     max_current : float
         Largest current as a multiple of the knee ``I0``.
@@ -186,22 +190,22 @@ def fig7_data(magnet: Magnet, *, gap: float = 0.0095, max_current: float = 2.2,
     if isinstance(step_points, bool) or not isinstance(step_points, int) or step_points < 0:
         raise InputError(f"step_points = {step_points!r} must be an integer >= 0")
     s0, i_nom = nominal_point(magnet)
-    i0 = saturation_knee(magnet, gap=s0)
+    i0 = saturation_knee(magnet, gap_m=s0)
     cur = np.linspace(0.0, max_current, points)
-    full = solve_statics(magnet, gaps=np.array([gap]), currents=cur * i0, grid=True)
+    full = solve_statics(magnet, gaps_m=np.array([gap_m]), currents_A=cur * i0, grid=True)
     lin_mag = magnet.with_options(saturation=False, eddy_currents=False)
-    lin = solve_statics(lin_mag, gaps=np.array([gap]), currents=cur * i0, grid=True)
+    lin = solve_statics(lin_mag, gaps_m=np.array([gap_m]), currents_A=cur * i0, grid=True)
     l_full = full.common_differential_inductance_H[0, :, 0]
     l_lin = lin.common_differential_inductance_H[0, :, 0]
     l0 = float(l_lin[0])
     x_step = np.linspace(0.1, max_current, step_points) if step_points else np.zeros(0)
     step_full = np.array([differential_inductance_from_step(
-        magnet, gap=gap, current=float(x * i0), **_STEP_SETTINGS).apparent_inductance_H
+        magnet, gap_m=gap_m, current_A=float(x * i0), **_STEP_SETTINGS).apparent_inductance_H
         for x in x_step])
     step_lin = np.array([differential_inductance_from_step(    # lin_mag: compiled once
-        lin_mag, gap=gap, current=float(x * i0), **_STEP_SETTINGS).apparent_inductance_H
+        lin_mag, gap_m=gap_m, current_A=float(x * i0), **_STEP_SETTINGS).apparent_inductance_H
         for x in x_step])
-    return Fig7Data(gap, cur, l_full / l0, l_lin / l0, i0, l0, i_nom, x_step,
+    return Fig7Data(gap_m, cur, l_full / l0, l_lin / l0, i0, l0, i_nom, x_step,
                     step_full / l0, step_lin / l0)
 
 
@@ -382,7 +386,7 @@ def coupling_response(magnet: Magnet, *, step: float = 0.2) -> CouplingResponse:
     s0, i0 = nominal_point(magnet)
     net = magnet.network
     r = net.resistances
-    sol = solve_statics(magnet, gaps=s0, currents=i0)
+    sol = solve_statics(magnet, gaps_m=s0, currents_A=i0)
     tau = float(sol.differential_inductance_H[0, 0] / r[0])
     u0 = r * i0
     bump = np.zeros(len(r))
@@ -392,7 +396,7 @@ def coupling_response(magnet: Magnet, *, step: float = 0.2) -> CouplingResponse:
                    voltages_V=lambda t: u0 * (1.0 + bump * (t >= 0.02 * dur)), initial_currents_A=i0)
     rel = (res.currents_A - i0) / i0
     peak = np.max(np.abs(rel), axis=0)
-    ratios = coupling_ratios(magnet, gap=s0, current=i0).ratio
+    ratios = coupling_ratios(magnet, gap_m=s0, current_A=i0).ratio
     off = np.abs(ratios - np.diag(np.diag(ratios)))
     return CouplingResponse(res.time_s, res.circuit_names, rel,
                             float(peak[1:].max() / peak[0]), float(off.max()))

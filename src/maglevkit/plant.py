@@ -41,6 +41,7 @@ class HeaveState:
     gap_rate_m_per_s: float
 
 
+@renamed_keywords(gravity="gravity_m_per_s2")
 @dataclass(frozen=True)
 class HeaveMass:
     """Rigid mass under an attracting magnet: ``m s'' = m g + F_ext - F_mag``.
@@ -52,16 +53,18 @@ class HeaveMass:
     ----------
     mass_kg : float
         Carried mass [kg] (> 0).
-    gravity : float
-        Gravitational acceleration [m/s^2] (>= 0; 0 for a guidance magnet).
+    gravity_m_per_s2 : float
+        Gravitational acceleration [m/s^2] (>= 0; 0 for a guidance magnet).  The old
+        name ``gravity`` is a deprecated alias (constructor keyword and attribute).
     """
 
     mass_kg: float
-    gravity: float = STANDARD_GRAVITY
+    gravity_m_per_s2: float = STANDARD_GRAVITY
 
     def __post_init__(self) -> None:
         real_number(self.mass_kg, "mass_kg", "kg", positive=True, error=ParameterError)
-        real_number(self.gravity, "gravity", "m/s^2", nonnegative=True, error=ParameterError)
+        real_number(self.gravity_m_per_s2, "gravity_m_per_s2", "m/s^2", nonnegative=True,
+                    error=ParameterError)
 
     def acceleration(self, magnet_force_N: float, external_force_N: float = 0.0) -> float:
         """Gap acceleration [m/s^2]: ``g + (F_ext - F_mag) / m``.
@@ -79,7 +82,7 @@ class HeaveMass:
             ``s''`` [m/s^2] (> 0: the gap opens faster).  The forces are not checked here
             (they are in :meth:`step`).
         """
-        return self.gravity + (external_force_N - magnet_force_N) / self.mass_kg
+        return self.gravity_m_per_s2 + (external_force_N - magnet_force_N) / self.mass_kg
 
     @renamed_keywords(dt="dt_s")
     def step(self, state: HeaveState, dt_s: float, magnet_force_N: float,

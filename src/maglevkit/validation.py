@@ -22,6 +22,8 @@ from __future__ import annotations
 import functools
 import math
 import numbers
+import os
+import sys
 import warnings
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
@@ -33,7 +35,7 @@ from .errors import InputError, MaglevkitError, PlausibilityWarning
 
 _F = TypeVar("_F", bound=Callable[..., Any])
 
-__all__ = ["renamed_keywords", "real_number", "real_array", "whole_number", "flag",
+__all__ = ["renamed_keywords", "external_stacklevel", "real_number", "real_array", "whole_number", "flag",
            "optional_flag", "describe", "Plausible", "check_plausible"]
 
 
@@ -364,6 +366,30 @@ def check_plausible(values: Mapping[str, Any], ranges: Mapping[str, Plausible],
     return flagged
 
 
+_PACKAGE_DIR = os.path.dirname(os.path.abspath(__file__)) + os.sep
+
+
+def external_stacklevel() -> int:
+    """The ``stacklevel`` that points a warning at the first caller outside maglevkit.
+
+    Call it in the function that calls :func:`warnings.warn`: it counts that function's
+    frame and every maglevkit frame above it (models, wrappers such as
+    :func:`renamed_keywords`'s, which add a frame of their own), so the warning names the
+    user's line however deep inside maglevkit it is raised.
+
+    Returns
+    -------
+    int
+        A value for ``warnings.warn(..., stacklevel=...)``, >= 1.
+    """
+    frame = sys._getframe(1)
+    level = 1
+    while frame.f_back is not None and frame.f_code.co_filename.startswith(_PACKAGE_DIR):
+        frame = frame.f_back
+        level += 1
+    return level
+
+
 def renamed_keywords(**renames: str) -> Callable[[_F], _F]:
     """Decorator: keep old (unit-less) keyword names of a function as deprecated aliases.
 
@@ -371,6 +397,10 @@ def renamed_keywords(**renames: str) -> Callable[[_F], _F]:
     the value is passed on as ``dt_s`` with a :class:`DeprecationWarning` that names the
     new keyword.  Giving both names is an :class:`~maglevkit.errors.InputError`.  Calls
     without an old name pay one set test.
+
+    On a class (e.g. a dataclass whose fields were renamed) it wraps the constructor the
+    same way and adds each old name as a read-only property that returns the new
+    attribute with the same warning, so ``obj.gaps`` still reads ``obj.gaps_m``.
 
     Parameters
     ----------
@@ -380,13 +410,12 @@ def renamed_keywords(**renames: str) -> Callable[[_F], _F]:
     Returns
     -------
     callable
-        The decorator (it keeps the function's name, docstring and signature).
+        The decorator (it keeps the function's name, docstring and signature; a class
+        is returned itself, changed in place).
     """
     old_names = frozenset(renames)
 
-    def decorate(fn: _F) -> _F:
-        where = fn.__qualname__
-
+    def wrap(fn: _F, where: str) -> _F:
         @functools.wraps(fn)
         def wrapper(*args: Any, **kwargs: Any) -> Any:
             if kwargs and not old_names.isdisjoint(kwargs):
@@ -404,5 +433,26 @@ def renamed_keywords(**renames: str) -> Callable[[_F], _F]:
             return fn(*args, **kwargs)
 
         return cast(_F, wrapper)
+
+    def alias(where: str, old: str, new: str) -> property:
+        def read(self: Any) -> Any:
+            warnings.warn(f"{where}: .{old} is deprecated, use .{new} (same values and "
+                          "units)", DeprecationWarning, stacklevel=2)
+            return getattr(self, new)
+
+        return property(read, doc=f"Deprecated alias of ``{new}`` (read only).")
+
+    def decorate(fn: _F) -> _F:
+        if isinstance(fn, type):
+            cls: Any = fn
+            where = cls.__qualname__
+            taken = [old for old in renames if old in vars(cls)]
+            if taken:
+                raise TypeError(f"{where} already defines {taken}")
+            cls.__init__ = wrap(cls.__init__, where)
+            for old, new in renames.items():
+                setattr(cls, old, alias(where, old, new))
+            return fn
+        return wrap(fn, fn.__qualname__)
 
     return decorate

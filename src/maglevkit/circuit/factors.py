@@ -18,6 +18,7 @@ import numpy as np
 from ..errors import InputError
 from .elements import (
     AirGap,
+    EddyCurrent,
     Element,
     FringePermeance,
     GapLeakage,
@@ -27,7 +28,7 @@ from .elements import (
 )
 from .network import Network
 
-__all__ = ["PARAMETERS", "ParameterSpec", "CalibratedLinear", "CalibratedIron",
+__all__ = ["PARAMETERS", "DYNAMIC_PARAMETERS", "ParameterSpec", "CalibratedLinear", "CalibratedIron",
            "with_factors", "has_factors"]
 
 
@@ -67,8 +68,19 @@ PARAMETERS: dict[str, ParameterSpec] = {
                                       "scales H(B) of the iron (permeability / k)"),
     "iron_saturation_scale": ParameterSpec(1.0, 0.5, 1.5, 0.1, "1",
                                            "scales the B axis of the iron's B-H curve"),
+    "eddy_conductance_scale": ParameterSpec(1.0, 0.05, 20.0, 1.0, "1",
+                                            "scales every eddy conductance G_ec (dynamics "
+                                            "only)"),
+    "resistance_scale": ParameterSpec(1.0, 0.5, 2.0, 0.1, "1",
+                                      "scales every circuit's R_el (dynamics only)"),
 }
 """The documented parameter set (docs/magnets.md, "Calibration")."""
+
+DYNAMIC_PARAMETERS = ("eddy_conductance_scale", "resistance_scale")
+"""Parameters that do not enter the statics (static data cannot determine them): with
+numbers :func:`with_factors` scales the eddy elements' conductances and the circuits'
+``R_el``; with CasADi symbols they enter the flux DAE's rows
+(:class:`~maglevkit.reduction.maps.StepRun`, ``eddy_scale``/``resistance_scale``)."""
 
 
 @dataclass(frozen=True)
@@ -178,7 +190,10 @@ def with_factors(network: Network, values: Mapping[str, Any], *, where: str = ""
     values : mapping
         Parameter names of :data:`PARAMETERS` to numbers (unit of the parameter: ``1`` or
         ``m``) or CasADi symbols; missing ones stay nominal.  With nominal values the
-        statics equal the original's bit for bit.
+        statics equal the original's bit for bit.  :data:`DYNAMIC_PARAMETERS` given as
+        numbers scale the eddy elements' ``G_ec`` and the circuits' ``R_el``; as CasADi
+        symbols they are left out here (they do not enter the statics; the step DAE takes
+        them, :class:`~maglevkit.reduction.maps.StepRun`).
     where : str
         Prefix of error messages (e.g. the file's ``[calibration]`` table).
 
@@ -197,6 +212,9 @@ def with_factors(network: Network, values: Mapping[str, Any], *, where: str = ""
                          "factors (a calibrated magnet); they do not compose: calibrate the "
                          "magnet without its [calibration] table")
     v = {k: values.get(k, spec.nominal) for k, spec in PARAMETERS.items()}
+    k_eddy, k_res = v["eddy_conductance_scale"], v["resistance_scale"]
+    numeric_eddy = isinstance(k_eddy, (int, float)) and k_eddy != 1.0
+    numeric_res = isinstance(k_res, (int, float)) and k_res != 1.0
 
     def wrap(el: Element) -> Element:
         if isinstance(el, LinearElement):
@@ -205,8 +223,12 @@ def with_factors(network: Network, values: Mapping[str, Any], *, where: str = ""
         if isinstance(el, IronPath):
             return CalibratedIron(el.name, inner=el, field_scale=v["iron_field_scale"],
                                   saturation_scale=v["iron_saturation_scale"])
+        if isinstance(el, EddyCurrent) and numeric_eddy:
+            return replace(el, conductance=float(k_eddy) * el.conductance)
         return el
 
     branches = tuple(replace(b, elements=tuple(wrap(e) for e in b.elements))
                      for b in network.branches)
-    return Network(branches, network.circuits, name=network.name)
+    circuits = (tuple(replace(c, resistance=float(k_res) * c.resistance)
+                      for c in network.circuits) if numeric_res else network.circuits)
+    return Network(branches, circuits, name=network.name)

@@ -33,6 +33,7 @@ from rich.table import Table
 from rich.text import Text
 from typer.exceptions import TyperException
 
+from .._interrupt import deferred_sigint, recorded_sigint, sigint_received
 from ..errors import MaglevkitError
 
 LOG_WIDTH = 200
@@ -104,7 +105,15 @@ def _root(
 
 # ---------------------------------------------------------------------------- errors
 def fail(exc: Exception | str) -> typer.Exit:
-    """Print a one-line error (no traceback) on stderr and return an exit (code 2)."""
+    """Print a one-line error (no traceback) on stderr and return an exit (code 2).
+
+    After a Ctrl-C the failure is the interruption's doing (CasADi makes a SIGINT inside
+    an evaluation a failed evaluation, e.g. "flux model failed ... check the magnet's
+    dimensions" with pages of solver inputs): reported as ``interrupted``, code 130.
+    """
+    if sigint_received():
+        return (typer.Exit(code=INTERRUPTED_EXIT_CODE) if _INTERRUPT_REPORTED
+                else interrupted())
     message = " ".join(str(exc).split()) if isinstance(exc, Exception) else exc
     err_console.print(Text.assemble(("error:", "bold red"), " ", message))
     return typer.Exit(code=2)
@@ -129,6 +138,31 @@ def interrupted(detail: str = "") -> typer.Exit:
     err_console.print(f"interrupted{': ' + detail if detail else ''}")
     _INTERRUPT_REPORTED = True
     return typer.Exit(code=INTERRUPTED_EXIT_CODE)
+
+
+@contextlib.contextmanager
+def interruptible(detail: str = "") -> Iterator[None]:
+    """A long computation with Ctrl-C deferred to its safe points.
+
+    The first SIGINT is raised at the next :func:`~maglevkit._interrupt.check_interrupt`
+    (between map points, cases, chunks of time steps), not inside a CasADi evaluation,
+    which would make it a failed evaluation; a second SIGINT raises at once.  Any failure
+    after a SIGINT is reported as ``interrupted[: detail]``, code 130.
+
+    Parameters
+    ----------
+    detail : str
+        What the interruption left behind (e.g. ``no maps written to 'm.nc'``).
+    """
+    with deferred_sigint() as sig:
+        try:
+            yield
+        except typer.Exit:
+            raise
+        except BaseException as exc:
+            if sig.requested or isinstance(exc, KeyboardInterrupt):
+                raise interrupted(detail) from None
+            raise
 
 
 def info(message: str) -> None:
@@ -349,7 +383,8 @@ def main() -> None:  # pragma: no cover - console entry point
     try:
         # not standalone: a Ctrl-C outside the commands' own handling (while starting,
         # importing, loading) ends with rc 130 and the "interrupted" line too, not silently
-        rc = app(prog_name="maglevkit", standalone_mode=False)
+        with recorded_sigint():
+            rc = app(prog_name="maglevkit", standalone_mode=False)
     except MaglevkitError as exc:   # a safety net: the commands catch their own errors
         raise SystemExit(fail(exc).exit_code) from None
     except KeyboardInterrupt:
@@ -359,6 +394,12 @@ def main() -> None:  # pragma: no cover - console entry point
         raise SystemExit(1) from None
     except TyperException as exc:   # usage errors: one line, as every other error
         raise SystemExit(_usage_error(exc)) from None
+    except Exception:
+        # a Ctrl-C inside CasADi can surface as a SystemError ("returned a result with an
+        # exception set") or a RuntimeError: the interruption, not a traceback
+        if not sigint_received():
+            raise
+        rc = INTERRUPTED_EXIT_CODE
     if rc == INTERRUPTED_EXIT_CODE and not _INTERRUPT_REPORTED:
         interrupted()
     raise SystemExit(rc if isinstance(rc, int) else 0)

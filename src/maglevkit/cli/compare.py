@@ -18,6 +18,7 @@ from ._app import (
     app,
     fail,
     info,
+    interruptible,
     load_magnet_or_exit,
     new_table,
     output_dir,
@@ -161,8 +162,8 @@ def compare(
             sc = load_scenario(scenario)
             cases = [ComparisonScenario(
                 Path(scenario).stem, "scenario file", sc.duration_s, sc.dt_s,
-                gaps=sc.inputs_for(mag.network.gap_names, "gaps"),
-                voltages=sc.inputs_for(mag.network.circuit_names, "voltages"),
+                gaps_m=sc.inputs_for(mag.network.gap_names, "gaps"),
+                voltages_V=sc.inputs_for(mag.network.circuit_names, "voltages"),
                 initial_current_A=sc.initial_current_A)]
             # the file's own operating point; the header names the file, not a gap it
             # did not run at (issue 27: "gap_m": 10.0 was printed for --gap 10)
@@ -170,12 +171,14 @@ def compare(
         reduced = CurrentModel(maps, extrapolate=extrapolate)
         results = []
         start = time.monotonic()
-        for k, case in enumerate(cases, 1):
-            # progress on stderr: the standard set takes ~30 s
-            info(f"compare: scenario {k}/{len(cases)} {case.name} ...")
-            results += compare_models(mag, reduced, [case],
-                                      gap_m=s0 if s0 is not None else 0.0,
-                                      current_A=i0 if i0 is not None else 0.0, repeat=repeat)
+        with interruptible():   # Ctrl-C between chunks of steps, not inside CasADi
+            for k, case in enumerate(cases, 1):
+                # progress on stderr: the standard set takes ~30 s
+                info(f"compare: scenario {k}/{len(cases)} {case.name} ...")
+                results += compare_models(mag, reduced, [case],
+                                          gap_m=s0 if s0 is not None else 0.0,
+                                          current_A=i0 if i0 is not None else 0.0,
+                                          repeat=repeat)
         info(f"compare: {len(cases)} scenario(s) done in {time.monotonic() - start:.1f} s")
     except MaglevkitError as exc:
         raise fail(exc) from None
@@ -189,3 +192,5 @@ def compare(
             with writing(target):
                 p = plot_comparison(r, target, title=plot_title(mag.name, r))
             info(f"wrote {p}")
+    info(f"next: maglevkit export fmu {magnet} {maps_file} -o magnet.fmu (the reduced model "
+         "for other tools)" + ("" if out is not None else ", or add --out DIR for figures"))

@@ -14,7 +14,7 @@ import numpy as np
 import typer
 
 from ..errors import MaglevkitError
-from ._app import app, console, fail, load_magnet_or_exit, output_dir
+from ._app import app, console, fail, info, interruptible, load_magnet_or_exit, output_dir
 
 DEFAULT_MAGNET = "tr09-standard"
 
@@ -57,41 +57,43 @@ def demo(
     i0 = getattr(mag, "nominal_current", None)
     _rule(f"maglevkit demo: {mag.name}")
     written: list[Path] = []
+    # Ctrl-C between map points and chunks of time steps, not inside CasADi
     try:
-        gaps = np.linspace(0.5 * s0, 2.0 * s0, 9)
-        currents = np.linspace(0.0, 2.5 * (i0 or 30.0), 33)
-        t0 = time.perf_counter()
-        sol = solve_statics(mag, gaps=gaps, currents=currents, grid=True)
-        t_stat = time.perf_counter() - t0
-        write_statics_csv(sol, out / "statics.csv")
-        written += [out / "statics.csv",
-                    plot_force_current(sol, out / "force_current.png", title=mag.name)]
-        console.print(f"1. statics: {gaps.size} x {currents.size} grid in {t_stat:.2f} s "
-                      f"({len(mag.network.branches)} branches, {mag.network.n_loops} loops)")
-        if i0 is not None:
-            written += write_figures(mag, out)
-            console.print("2. figures: paper Fig. 6/7 analogs and the circuit coupling")
-        else:
-            i0 = 0.4 * float(currents[-1])
-            console.print("2. figures: skipped (the magnet file has no [operating] table)")
-        mg = np.linspace(0.5 * s0, 1.6 * s0, 12)
-        mc = np.linspace(0.0, float(currents[-1]), 41)
-        t0 = time.perf_counter()
-        maps = build_maps(mag, gaps=mg, currents=mc, progress=True)
-        t_maps = time.perf_counter() - t0
-        written.append(maps.to_netcdf(out / "maps.nc"))
-        written += plot_maps(maps, out)
-        r_ec = maps.dataset["eddy_resistance_ohm"].values
-        console.print(f"3. maps: {mg.size} gaps x {mc.size} currents per circuit in "
-                      f"{t_maps:.1f} s; R_el = {maps.dataset['resistance_ohm'].values.round(3)} ohm, "
-                      f"R_ec = {np.round(r_ec, 2)} ohm")
-        cases = standard_scenarios(mag, gap_m=s0, current_A=i0)
-        if quick:
-            cases = [c for c in cases if "0.5 Hz" not in c.name]
-        results = compare_models(mag, CurrentModel(maps), cases, gap_m=s0, current_A=i0)
-        for r in results:
-            written.append(plot_comparison(r, out / f"compare-{slug(r.scenario.name)}.png",
-                                           title=plot_title(mag.name, r)))
+        with interruptible(f"the files written so far are in {str(out)!r}"):
+            gaps = np.linspace(0.5 * s0, 2.0 * s0, 9)
+            currents = np.linspace(0.0, 2.5 * (i0 or 30.0), 33)
+            t0 = time.perf_counter()
+            sol = solve_statics(mag, gaps_m=gaps, currents_A=currents, grid=True)
+            t_stat = time.perf_counter() - t0
+            write_statics_csv(sol, out / "statics.csv")
+            written += [out / "statics.csv",
+                        plot_force_current(sol, out / "force_current.png", title=mag.name)]
+            console.print(f"1. statics: {gaps.size} x {currents.size} grid in {t_stat:.2f} s "
+                          f"({len(mag.network.branches)} branches, {mag.network.n_loops} loops)")
+            if i0 is not None:
+                written += write_figures(mag, out)
+                console.print("2. figures: paper Fig. 6/7 analogs and the circuit coupling")
+            else:
+                i0 = 0.4 * float(currents[-1])
+                console.print("2. figures: skipped (the magnet file has no [operating] table)")
+            mg = np.linspace(0.5 * s0, 1.6 * s0, 12)
+            mc = np.linspace(0.0, float(currents[-1]), 41)
+            t0 = time.perf_counter()
+            maps = build_maps(mag, gaps_m=mg, currents_A=mc, progress=True)
+            t_maps = time.perf_counter() - t0
+            written.append(maps.to_netcdf(out / "maps.nc"))
+            written += plot_maps(maps, out)
+            r_ec = maps.dataset["eddy_resistance_ohm"].values
+            console.print(f"3. maps: {mg.size} gaps x {mc.size} currents per circuit in "
+                          f"{t_maps:.1f} s; R_el = {maps.dataset['resistance_ohm'].values.round(3)} ohm, "
+                          f"R_ec = {np.round(r_ec, 2)} ohm")
+            cases = standard_scenarios(mag, gap_m=s0, current_A=i0)
+            if quick:
+                cases = [c for c in cases if "0.5 Hz" not in c.name]
+            results = compare_models(mag, CurrentModel(maps), cases, gap_m=s0, current_A=i0)
+            for r in results:
+                written.append(plot_comparison(r, out / f"compare-{slug(r.scenario.name)}.png",
+                                               title=plot_title(mag.name, r)))
     except MaglevkitError as exc:
         raise fail(exc) from None
     except OSError as exc:
@@ -121,3 +123,5 @@ def demo(
     console.print(f"{len(written)} files in {out}/:")
     for p in written:
         console.print(f"  {p}")
+    info("next: your own magnet: maglevkit template magnet levitation_magnet > my.toml, edit "
+         "it, then maglevkit demo --magnet my.toml; the train: maglevkit vehicle run")

@@ -98,12 +98,14 @@ def list_files(
       maglevkit list magnets
     """
     kinds = [kind.value] if kind is not None else list(_KINDS)
+    # one column as wide as the longest name (a fixed 16 cut tr09-cross-section's row)
+    width = max((len(n) for k in kinds for n in _names(k)), default=0)
     for k in kinds:
         if len(kinds) > 1:
             console.print(f"{k}:")
         for name in _names(k):
             title = _title(k, name)
-            console.print(f"  {name:<16} {title}" if title else f"  {name}")
+            console.print(f"  {name:<{width}}  {title}" if title else f"  {name}")
     if len(kinds) == 1:
         info(f"next: {_USE[kinds[0]]}, or maglevkit template {kinds[0][:-1]} NAME > my.toml")
 

@@ -94,3 +94,5 @@ def fmu(
                   f"parameters {', '.join(result.parameter_names)}; "
                   f"{result.size_bytes / 1024:.0f} KiB, binary for {result.platform}")
     info(f"wrote {result.path}")
+    info(f"next: simulate it in an FMI 2.0 tool, e.g. fmpy.simulate_fmu({str(result.path)!r}, "
+         "stop_time=0.2) in Python (docs/fmu.md)")

@@ -8,7 +8,7 @@ from typing import Annotated, Any
 
 import typer
 
-from .._interrupt import deferred_sigint, stop_pool
+from .._interrupt import stop_pool
 from ..errors import InputError, MaglevkitError
 from ._app import (
     ForceOption,
@@ -16,7 +16,7 @@ from ._app import (
     console,
     fail,
     info,
-    interrupted,
+    interruptible,
     load_magnet_or_exit,
     output_dir,
     output_file,
@@ -146,15 +146,10 @@ def build(
             executor = pool
         else:
             executor = None
-        with deferred_sigint() as sig:
-            try:
-                maps = build_maps(mag, gaps=g, currents=c, executor=executor, progress=True,
-                                  method=method)
-            except BaseException as exc:
-                # a Ctrl-C, or whatever failure CasADi made of it (a second Ctrl-C)
-                if sig.requested or isinstance(exc, KeyboardInterrupt):
-                    raise interrupted(f"no maps written to {str(output)!r}") from None
-                raise
+        # a Ctrl-C, or whatever failure CasADi made of it (a second Ctrl-C): interrupted
+        with interruptible(f"no maps written to {str(output)!r}"):
+            maps = build_maps(mag, gaps_m=g, currents_A=c, executor=executor, progress=True,
+                              method=method)
         built = True
     except MaglevkitError as exc:
         raise fail(exc) from None

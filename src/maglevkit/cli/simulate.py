@@ -18,6 +18,7 @@ from ._app import (
     console,
     fail,
     info,
+    interruptible,
     load_magnet_or_exit,
     new_table,
     output_file,
@@ -104,8 +105,9 @@ def simulate(
         fm = FluxModel(mag, **sc.solver_options)
         volts = sc.inputs_for(fm.circuit_names, "voltages")
         gaps = sc.inputs_for(fm.gap_names, "gaps")
-        res = run_simulation(fm, (0.0, sc.duration_s), dt_s=sc.dt_s, gaps_m=gaps, voltages_V=volts,
-                             initial_currents_A=sc.initial_current_A)
+        with interruptible():   # Ctrl-C between chunks of steps, not inside CasADi
+            res = run_simulation(fm, (0.0, sc.duration_s), dt_s=sc.dt_s, gaps_m=gaps,
+                                 voltages_V=volts, initial_currents_A=sc.initial_current_A)
     except MaglevkitError as exc:
         raise fail(exc) from None
     rows = simulation_summary(res)
@@ -133,3 +135,5 @@ def simulate(
         with writing(plot, "--plot"):
             plot_simulation(res, plot, title=f"{mag.name}: {Path(str(scenario)).stem}")
         info(f"wrote {plot}")
+    info(f"next: maglevkit maps build {magnet} -o maps.nc, then maglevkit compare {magnet} "
+         "maps.nc (the reduced model against this one)")

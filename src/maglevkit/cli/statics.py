@@ -108,7 +108,7 @@ def statics(
     mag = load_magnet_or_exit(magnet, saturation=saturation, fringing=fringing, leakage=leakage,
                               eddy_currents=False)
     try:
-        sol = solve_statics(mag, gaps=g, currents=c, grid=True)
+        sol = solve_statics(mag, gaps_m=g, currents_A=c, grid=True)
     except MaglevkitError as exc:
         raise fail(exc) from None
     table = new_table(f"{mag.name}: total force [N]")
@@ -128,3 +128,5 @@ def statics(
         with writing(plot, "--plot"):
             plot_force_current(sol, plot, title=mag.name)
         info(f"wrote {plot}")
+    info(f"next: maglevkit maps build {magnet} -o maps.nc (the reduced model's maps), or "
+         f"maglevkit simulate {magnet} (a transient)")

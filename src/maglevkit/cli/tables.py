@@ -179,17 +179,24 @@ def calibrate_cmd(
                                                                 "write.")]
     = Path("calibrated.toml"),
     params: Annotated[str | None, typer.Option("--params", help="Parameters to fit (comma "
-                                                                "list; default: the whole "
-                                                                "documented set).")] = None,
+                                                                "list; default: the five "
+                                                                "static factors, with --steps "
+                                                                "also the eddy conductance "
+                                                                "and R_el scales).")] = None,
     holdout_gaps: Annotated[str | None, typer.Option("--holdout-gaps", help="Gaps [m] left out "
                                                                            "of the fit and "
                                                                            "reported (comma "
                                                                            "list).")] = None,
+    steps: Annotated[Path | None, typer.Option("--steps", help="Measured voltage steps "
+                                                    "fitted too (CSV: time_s, current_A, "
+                                                    "gap_m, initial_current_A, voltage_V "
+                                                    "[, step, circuit]).")] = None,
     fmt: FormatOption = OutputFormat.table,
     force: ForceOption = False,
 ) -> None:
     """Calibrate the magnet's leakage and fringing factors, gap offset and iron B-H scalings
-    to measured force and/or flux linkage (bounded least squares, exact derivatives).
+    to measured force and/or flux linkage (bounded least squares, exact derivatives);
+    with --steps also its eddy conductance and R_el scales to measured voltage steps.
 
     Prints the values with 95 % confidence intervals, the parameters the data cannot
     determine, and the relative error per point (fitted and held out); --format csv or json
@@ -200,10 +207,11 @@ def calibrate_cmd(
     \b
     Example:
       maglevkit calibrate tr09-standard measured.csv -o tr09-calibrated.toml
+      maglevkit calibrate u-magnet statics.csv --steps steps.csv -o calibrated.toml
     """
     from ..calibration import PARAMETERS, calibrate, write_calibrated_toml
 
-    output_file(output, "--output", force=force, inputs=(magnet, data))
+    output_file(output, "--output", force=force, inputs=(magnet, data, steps))
     names = None
     if params is not None:
         names = [p.strip() for p in params.split(",") if p.strip()]
@@ -216,26 +224,36 @@ def calibrate_cmd(
     with warnings.catch_warnings():
         warnings.simplefilter("always")
         try:
-            res = calibrate(mag, data, parameters=names, holdout_gaps_m=gaps)
+            res = calibrate(mag, data, parameters=names, holdout_gaps_m=gaps, steps=steps)
         except MaglevkitError as exc:
             raise fail(exc) from None
     with writing(output, "--output"):
-        write_calibrated_toml(mag, res, output, data_source=str(data))
+        write_calibrated_toml(mag, res, output, data_source=str(data),
+                              steps_source="" if steps is None else str(steps))
     records = [{"set": which, "gap_m": r["gap_m"], "current_A": r["current_A"],
                 "row": r["row"], "circuit": r["circuit"], "quantity": r["quantity"],
                 "data": r["data"], "model": r["model"],
-                "relative_error_pct": 100.0 * r["relative_error"]}
+                "relative_error_pct": 100.0 * r["relative_error"], "time_s": None}
                for which, rows in (("fit", res.points), ("holdout", res.holdout)) for r in rows]
+    n_static = len(records)
+    # the steps' samples (relative to each step's current change) in CSV/JSON; the table
+    # gets one summary line per step
+    records += [{"set": f"step {r['step']}", "gap_m": r["gap_m"], "current_A": r["data"],
+                 "row": r["row"], "circuit": r["circuit"], "quantity": "current_A",
+                 "data": r["data"], "model": r["model"],
+                 "relative_error_pct": 100.0 * r["relative_error"], "time_s": r["time_s"]}
+                for r in res.step_points]
     table = new_table(title="relative error per point (model - data)/data")
     add_columns(table, ["set", "gap [m]", "I [A]", "row", "quantity", "data", "model",
                         "error [%]"], left=["set", "quantity"])
-    for r in records:
+    for r in records[:n_static]:
         table.add_row(r["set"], f"{r['gap_m']:g}", f"{r['current_A']:g}", str(r["row"]),
                       r["quantity"], f"{r['data']:.6g}", f"{r['model']:.6g}",
                       f"{r['relative_error_pct']:+.2f}")
     meta = {"values": res.values, "confidence_95": res.confidence_95,
             "undetermined": list(res.undetermined), "bounds_active": list(res.bounds_active),
-            "singular_values": res.singular_values.tolist(), "data_sha256": res.data_sha256}
+            "singular_values": res.singular_values.tolist(), "data_sha256": res.data_sha256,
+            "steps_sha256": res.steps_sha256}
     if fmt == OutputFormat.table:
         for name in res.parameters:
             unit = "" if PARAMETERS[name].unit == "1" else f" {PARAMETERS[name].unit}"
@@ -251,6 +269,12 @@ def calibrate_cmd(
                          f"{100 * res.max_error('holdout', 'force_N'):.2f} %, flux linkage "
                          f"{100 * res.max_error('holdout', 'flux_linkage_Wb'):.2f} %)"
                          if res.holdout else ""))
+        if res.step_points:
+            worst: dict[str, float] = {}
+            for r in res.step_points:
+                worst[r["step"]] = max(worst.get(r["step"], 0.0), abs(r["relative_error"]))
+            console.print("voltage steps, max error of the step's current change: "
+                          + ", ".join(f"{k} {100 * v:.2f} %" for k, v in worst.items()))
     print_records(records, fmt, table, meta)
     info(f"wrote {output}")
     info(f"next: maglevkit statics {output} (the calibrated magnet), or maglevkit maps build "

@@ -220,6 +220,11 @@ def _report_and_write(res: Any, output: Path | None, plot: Path | None,
             written = plotter(res.dataset, plot)
         for p in written:
             info(f"wrote {p}")
+    if output is not None:
+        info(f"next: xarray.open_dataset({str(output)!r}) in Python (the run's time series)")
+    elif plot is None:
+        info("next: add --plot DIR (figures) or -o run.nc (the time series); several runs: "
+             "maglevkit list sweeps")
 
 
 # ---------------------------------------------------------------- cross-section (issue 24)

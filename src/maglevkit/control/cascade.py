@@ -8,6 +8,13 @@ Inner loop on the flux linkage, outer PID loop on the gap::
     d        = (1 - beta) ds/dt + beta u'        (damping input; beta = velocity_blend)
     psi_ref  = psi_0 (1 + rho)                 (every circuit, relative to its bias flux)
     U_j      = R_j I_j + k_psi (psi_ref,j - psi_hat,j),   |U_j| <= U_max (chopper limit)
+    U_j      = max(U_j, 0)  where I_j <= 0          (two-quadrant chopper: I >= 0)
+
+The two-quadrant chopper cannot reverse the coil current: once a circuit's current is at
+zero, a negative command does not act (the freewheeling diodes block; the terminal
+voltage is the one that holds ``I = 0``), and integrating it would wind the flux estimate
+down below the real flux.  So where the measured current is at zero the law does not
+command below 0 V (``GapController.two_quadrant``; False: a four-quadrant supply).
 
 Why flux and not current: with eddy currents a current loop is satisfied almost at once
 through the eddy-current path (``R_ec`` in the paper's Fig. 8) while the flux, which makes
@@ -46,7 +53,12 @@ from ..models.statics import solve_statics
 from ..validation import real_number
 from .interface import Measurement
 
-__all__ = ["CascadeController", "GapController", "damping_input", "design_gap_controller"]
+__all__ = ["ZERO_CURRENT_A", "CascadeController", "GapController", "damping_input",
+           "design_gap_controller"]
+
+#: a measured coil current at or below this [A] counts as zero for the two-quadrant law
+#: (the plant's diodes hold I at zero to rounding, ~1e-16 A)
+ZERO_CURRENT_A = 1e-6
 
 
 def damping_input(gap_rate_m_per_s: Any, absolute_velocity_m_per_s: Any,
@@ -101,6 +113,10 @@ class GapController:
     velocity_blend : float
         ``beta`` in [0, 1] [-]: the share of the magnet's absolute velocity in the damping
         input (:func:`damping_input`; 0: the gap rate only).
+    two_quadrant : bool
+        The supply is a two-quadrant chopper (default True): where a circuit's measured
+        current is at zero (<= :data:`ZERO_CURRENT_A`) its command is not below 0 V.
+        False: a four-quadrant supply (the current may reverse).
     """
 
     gap_ref_m: float
@@ -114,6 +130,7 @@ class GapController:
     voltage_limit_V: float = 440.0
     setpoint_weight: float = 0.0
     velocity_blend: float = 0.0
+    two_quadrant: bool = True
 
     def __post_init__(self) -> None:
         for k in ("gap_ref_m", "bias_current_A", "kp_per_m", "kd_s_per_m", "ki_per_m_s",
@@ -124,6 +141,9 @@ class GapController:
                                  "(0: damping from the gap rate, 1: from the absolute velocity)")
         if self.gap_ref_m <= 0 or self.voltage_limit_V <= 0 or self.kflux_per_s <= 0:
             raise ParameterError("gap_ref_m, voltage_limit_V and kflux_per_s must be > 0")
+        if not isinstance(self.two_quadrant, (bool, np.bool_)):
+            raise ParameterError(f"two_quadrant = {self.two_quadrant!r}: allowed True (a "
+                                 "two-quadrant chopper, I >= 0) or False (four quadrants)")
         if len(self.flux_bias_Wb) != len(self.resistances_ohm):
             raise ParameterError("flux_bias_Wb and resistances_ohm need one value per circuit")
 
@@ -158,7 +178,8 @@ class GapController:
         Returns
         -------
         ndarray (n_circuits,)
-            Voltages [V], clipped to ``[-voltage_limit_V, voltage_limit_V]``.
+            Voltages [V], clipped to ``[-voltage_limit_V, voltage_limit_V]``, and not below
+            0 V where the current is at zero (:attr:`two_quadrant`).
 
         Notes
         -----
@@ -174,8 +195,12 @@ class GapController:
                + self.ki_per_m_s * integral_m_s)
         psi_ref = np.asarray(self.flux_bias_Wb) * (1.0 + rho)
         r = np.asarray(self.resistances_ohm)
-        u = r * np.asarray(currents_A) + self.kflux_per_s * (psi_ref - flux_estimate_Wb)
-        return np.clip(u, -self.voltage_limit_V, self.voltage_limit_V)
+        i = np.asarray(currents_A)
+        u = r * i + self.kflux_per_s * (psi_ref - flux_estimate_Wb)
+        u = np.clip(u, -self.voltage_limit_V, self.voltage_limit_V)
+        if self.two_quadrant:         # the chopper cannot drive the current below zero
+            u = np.where((i <= ZERO_CURRENT_A) & (u < 0.0), 0.0, u)
+        return u
 
 
 def design_gap_controller(magnet: Any, *, mass_kg: float, gap_m: float, current_A: float,
@@ -234,7 +259,7 @@ def design_gap_controller(magnet: Any, *, mass_kg: float, gap_m: float, current_
                     ("flux_bandwidth_hz", flux_bandwidth_hz), ("damping", damping),
                     ("voltage_limit_V", voltage_limit_V)):
         real_number(v, name, positive=True)
-    sol = solve_statics(magnet, gaps=gap_m, currents=current_A)
+    sol = solve_statics(magnet, gaps_m=gap_m, currents_A=current_A)
     dF_dI = sol.dforce_dcurrent_N_per_A.sum(axis=0)            # (n_c,) total force per I_j
     dF_ds = float(sol.dforce_dgap_N_per_m.sum())               # uniform gap, constant I
     L = np.asarray(sol.differential_inductance_H)              # dpsi/dI

@@ -10,6 +10,7 @@ from typing import Any
 
 import numpy as np
 
+from .._interrupt import check_interrupt
 from ..errors import InputError, SolverError
 from ..models.inputs import check_span
 from ..plant import HeaveMass, HeaveState
@@ -123,10 +124,10 @@ class ClosedLoopResult:
         return float(np.sum(0.5 * (p_start + p_end) * np.diff(self.time_s)))
 
 
-@renamed_keywords(external_force="external_force_N")
+@renamed_keywords(external_force="external_force_N", gap_reference="gap_reference_m")
 def closed_loop(model: Any, vehicle: HeaveMass, controller: GapController | Controller, *,
                 duration_s: float, dt_s: float, initial_gap_m: float, initial_current_A: Any,
-                gap_reference: Callable[[float], float] | None = None,
+                gap_reference_m: Callable[[float], float] | None = None,
                 external_force_N: Callable[[float], float] | None = None,
                 initial_flux_Wb: Any = None) -> ClosedLoopResult:
     """Co-simulate magnet model, heave mass and controller at a fixed step ``dt_s`` [s].
@@ -136,8 +137,8 @@ def closed_loop(model: Any, vehicle: HeaveMass, controller: GapController | Cont
     at the current rate (its ``step``); the mass integrates with the magnet force held.
     Every pole sees the same gap.
 
-    The old keyword name ``external_force`` still works as a deprecated alias (a ``DeprecationWarning``
-    names the new one).
+    The old keyword names ``external_force`` and ``gap_reference`` still work as deprecated
+    aliases (a ``DeprecationWarning`` names the new one).
 
     Parameters
     ----------
@@ -159,7 +160,7 @@ def closed_loop(model: Any, vehicle: HeaveMass, controller: GapController | Cont
         Gap at the start [m], > 0 (every pole).
     initial_current_A : float or array (n_circuits,)
         Steady start: the model starts at rest at this gap and current [A].
-    gap_reference, external_force_N : callable t -> value, optional
+    gap_reference_m, external_force_N : callable t -> value, optional
         Gap reference [m] (default the controller's) and external force on the mass [N]
         (positive opens the gap, like gravity); both called with the time [s].
     initial_flux_Wb : array_like (n_circuits,), optional
@@ -215,7 +216,7 @@ def closed_loop(model: Any, vehicle: HeaveMass, controller: GapController | Cont
     else:
         raise InputError("controller must be a GapController or implement the Controller "
                          f"interface (reset, update, diagnostics), got {type(controller).__name__}")
-    ref = gap_reference or (lambda t: ctl.gap_ref_m)
+    ref = gap_reference_m or (lambda t: ctl.gap_ref_m)
     ext = external_force or (lambda t: 0.0)
     st = model.initial_state(gaps_m=initial_gap_m, currents_A=initial_current_A)
     out = model.outputs(st)
@@ -245,6 +246,7 @@ def closed_loop(model: Any, vehicle: HeaveMass, controller: GapController | Cont
         return u
 
     for k in range(n):
+        check_interrupt()          # a deferred Ctrl-C (CLI): between steps, not in CasADi
         t = T[k]
         u = sample(k)
         lim[k] = bool(np.any(np.abs(u) >= limit))

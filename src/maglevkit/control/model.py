@@ -136,6 +136,28 @@ class MagnetHeaveModel:
         n = 1 if name in ("force", "gap_sensor") else self.n_circuits
         return d[sl] if sl is not None else ca.DM.zeros(n)
 
+    def coil_currents(self, x: Any, u: Any, d: Any) -> Any:
+        """Symbolic coil currents ``I_j`` [A] at state ``x`` and voltages ``u`` [V] under the
+        disturbances ``d``: the measurement's current part (eq. 8's Fig. 8 circuit, no
+        sensor offset), which the two-quadrant chopper keeps >= 0 (the MPC's constraint).
+
+        Parameters
+        ----------
+        x : casadi.MX
+            State ``[I_L, s, s' (, I_e)]`` ([A], [m], [m/s], [A]).
+        u : casadi.MX
+            Circuit voltages [V].
+        d : casadi.MX
+            Disturbances (:attr:`disturbance_names`).
+
+        Returns
+        -------
+        casadi.MX
+            ``(n_c,)`` coil currents [A] (the maps' table is not needed).
+        """
+        y = self.expressions(x, u, d, self._T)[1]
+        return y[1:] - self.disturbance(d, "current_sensor")
+
     def expressions(self, x: Any, u: Any, d: Any, table: Any) -> tuple[Any, Any, Any]:
         """Symbolic ``(xdot, y, force)`` at state ``x``, voltages ``u`` [V], disturbances
         ``d`` and the bank's cell table ``table``: the state derivative, the measurements

@@ -8,7 +8,12 @@ length ``h``, ``N`` intervals, scaled variables)::
     min  sum_k=0..N-1 [ q_s (s_k - s_t)^2 + q_v s'_k^2 + q_I |I_k - I_t|^2 + r |U_k - U_t|^2 ]
          + (x_N - x_t)' P (x_N - x_t) + sum_k=1..N (rho_1 e_k + rho_2 e_k^2)
     s.t. x_0 = x_hat,  x_k+1 = F_h(x_k, U_k, d_hat),  |U_k| <= U_max,
-         s_k >= s_min - e_k,  I_k <= I_max + e_k,  e_k >= 0,  x_k within the maps
+         s_k >= s_min - e_k,  I_L,k <= I_max + e_k,  e_k >= 0,  I_k >= 0,
+         x_k within the maps
+
+(``I_L``: the inductor currents, the maps' current axis; ``I_k``: the coil currents at the
+start of interval ``k`` under ``U_k``, kept >= 0 by the two-quadrant chopper, a hard
+constraint, linear in ``(I_L, U)``)
 
 with ``P`` from the discrete Riccati equation of the linearisation at the design point
 (the infinite-horizon LQR cost beyond the horizon).  Solvers:
@@ -320,9 +325,17 @@ class OffsetFreeMPC:
             g.append(interval(k, X[k] * sx, U[k] * su) / sx - X[k + 1])
             g.append((X[k + 1][nc] * sx[nc] - self.min_gap_m) / sx[nc] + E[k])
             g.append((self.max_current_A - X[k + 1][:nc] * sx[:nc]) / sx[:nc] + E[k])
+            # the two-quadrant chopper: the coil currents under U_k >= 0 (hard; scaled)
+            g.append(m.coil_currents(X[k] * sx, U[k] * su, p[nx:nx + nd]) / sx[:nc])
         ex = X[N] * sx - xt
         J += ca.bilin(P, ex, ex)
         return J, ca.vertcat(*g)
+
+    def _rows_per_interval(self) -> int:
+        """Constraint rows per interval in :meth:`_problem`: the dynamics (n_x), then the
+        inequalities: the soft gap (1), the soft current bound (n_c), the chopper's
+        ``I >= 0`` (n_c), all ``>= 0``."""
+        return self.model.nx + 1 + 2 * self.model.n_circuits
 
     def _bounds(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         m, N = self.model, self.horizon
@@ -341,7 +354,7 @@ class OffsetFreeMPC:
                 lbw[k * blk + nx:k * blk + nx + nu] = -self._ulim / self._su
                 ubw[k * blk + nx:k * blk + nx + nu] = self._ulim / self._su
                 lbw[k * blk + nx + nu] = 0.0
-        rows = nx + 1 + nc
+        rows = self._rows_per_interval()
         ng = nx + N * rows
         lbg, ubg = np.zeros(ng), np.zeros(ng)
         for k in range(N):

@@ -16,10 +16,16 @@ computes it faster (docs/control.md, "Real-time iteration"):
   ``z = [du_k, de_k]_k``, leaving a dense, strictly convex QP in ``N (n_u + 1)`` variables
   (Hessian ``E' H E``; general constraints: the soft state constraints and the maps'
   state bounds);
-* that QP is solved by qpOASES (shipped in the casadi wheel), called through
-  preallocated buffers;
+* the same compiled call solves that QP for the guessed active set "every slack at its
+  lower bound, nothing else active" (a Cholesky factorisation of the input steps'
+  Hessian) and checks the optimality conditions; where they hold, that point *is* the
+  unique solution of the strictly convex QP; otherwise qpOASES (shipped in the casadi
+  wheel, hot-started) solves it, called through preallocated buffers;
 * two buffer sets alternate between samples (the outputs of one are bound as the inputs
   of the next), so that Python copies only the measurement in and the voltages out.
+
+:class:`RealTimeMPCBatch` updates many such controllers (one per vehicle circuit) with one
+compiled call per sample, evaluating each controller's own prepare function.
 
 The full Gauss-Newton SQP, the sparse reference RTI and the IPOPT peer stay in
 :class:`OffsetFreeMPC` as the references (tests/test_mpc_realtime.py compares them).
@@ -44,10 +50,15 @@ from .interface import Measurement
 from .model import MagnetHeaveModel
 from .mpc import MPCWeights, OffsetFreeMPC
 
-__all__ = ["DENSE_QP_SOLVERS", "RealTimeMPC"]
+__all__ = ["DENSE_QP_SOLVERS", "GUESS_TOLERANCE", "RealTimeMPC", "RealTimeMPCBatch"]
 
 #: conic solvers of the casadi wheel tried on the condensed QP (docs/decisions.md)
 DENSE_QP_SOLVERS = ("qpoases", "daqp", "qrqp", "proxqp", "osqp")
+
+#: tolerance [scaled units: 100 V, 10 A, 1 mm, 10 mm/s; slacks] of the optimality check of
+#: the compiled active-set guess (its Cholesky solution is exact to rounding, ~1e-14;
+#: 1e-9 x 100 V = 1e-7 V is below anything the chopper resolves)
+GUESS_TOLERANCE = 1e-9
 
 #: Newton steps of the compiled target calculation (from the previous target: measured
 #: 2-3 steps to a step below 1e-10 A; 6 leave margin, each costs ~0.1 us)
@@ -85,8 +96,9 @@ class RealTimeMPC(OffsetFreeMPC):
         As :class:`~maglevkit.control.mpc.OffsetFreeMPC` (voltage limit [V], soft
         constraints [m], [A], weights, EKF options, initial ``[x; d]``).
     qp_solver : str
-        Dense QP solver of the condensed QP, one of :data:`DENSE_QP_SOLVERS` (default
-        qpOASES, hot-started; the others for comparison).
+        Dense QP solver of the condensed QP where the compiled active-set guess is not its
+        solution, one of :data:`DENSE_QP_SOLVERS` (default qpOASES, hot-started; the
+        others for comparison).
 
     Notes
     -----
@@ -118,7 +130,7 @@ class RealTimeMPC(OffsetFreeMPC):
         """The condensed QP data function, the target function and the dense QP solver
         (replaces the sparse QP of :class:`OffsetFreeMPC`)."""
         m = self.model
-        nx, nu, nd, nc, N = m.nx, m.nu, m.nd, m.n_circuits, self.horizon
+        nx, nu, nd, N = m.nx, m.nu, m.nd, self.horizon
         xN, nw, blk = self._layout()
         self._np = 2 * nx + nd + nu
         self._lbw, self._ubw, self._lbg, self._ubg = self._bounds()
@@ -143,7 +155,7 @@ class RealTimeMPC(OffsetFreeMPC):
                                                                    np.zeros(self._np)))
         # condensing: dX_0 = -g_0 (initial-state rows), dX_k+1 = Ab_k dX_k + Bb_k dU_k + c_k
         # (the defect rows, Ab = A scaled, Bb = B scaled), everything affine in z
-        rows_per = nx + 1 + nc
+        rows_per = self._rows_per_interval()
         Sx_inv = ca.DM(np.diag(1 / self._sx))
         Sx, Su = ca.DM(np.diag(self._sx)), ca.DM(np.diag(self._su))
         eye_z = ca.DM.eye(nz)
@@ -167,7 +179,7 @@ class RealTimeMPC(OffsetFreeMPC):
         e = ca.vertcat(*rows_e)
         # general constraints of the condensed QP: the soft rows of the linearised
         # constraints, then the maps' bounds on the states x_1..x_N
-        ineq = [nx + k * rows_per + nx + j for k in range(N) for j in range(1 + nc)]
+        ineq = [nx + k * rows_per + nx + j for k in range(N) for j in range(rows_per - nx)]
         box = [k * blk + j for k in range(1, N + 1) for j in range(nx)
                if np.isfinite(self._lbw[k * blk + j]) or np.isfinite(self._ubw[k * blk + j])]
         zi = [k * blk + nx + j for k in range(N) for j in range(nzs)]
@@ -192,6 +204,7 @@ class RealTimeMPC(OffsetFreeMPC):
         self._nw = nw
         self._blk = blk
         self._target_f = self._target_function()
+        self._guess_f = self._guess_function()
         self._diag_raw: tuple[Any, ...] | None = None
         self._t_prep = self._t_qp = 0.0
 
@@ -225,6 +238,56 @@ class RealTimeMPC(OffsetFreeMPC):
         xt = ca.vertcat(ca.repmat(i, nc, 1), s, 0, ca.DM.zeros(m.n_eddy))
         ut = ca.DM(m.resistance_ohm) * i - m.disturbance(dh, "voltage")
         return ca.Function("mpc_rti_target", [dh, sref, ig, T], [xt, ut, step])
+
+    def _guess_function(self) -> ca.Function:
+        """``(H, g, A, lba, uba, lbx, ubx) -> (z, ok)``: the condensed QP's solution for the
+        guessed active set "every slack at its lower bound, nothing else" (the soft
+        constraints inactive, the voltages inside their limit), by a dense Cholesky
+        factorisation of the free variables' Hessian (unrolled, scalar code); ``ok`` is 1
+        where that point satisfies the QP's optimality conditions (primal feasibility and
+        non-negative bound multipliers of the slacks, within :data:`GUESS_TOLERANCE`), so
+        that it *is* the unique solution of the strictly convex QP, else 0 (then the
+        dense QP solver runs).  docs/control.md, "Real-time iteration"."""
+        nu, N, nz, na = self.model.nu, self.horizon, self._nz, self._na
+        nzs = nu + 1
+        fixed = [k * nzs + nu for k in range(N)]
+        free = [k * nzs + j for k in range(N) for j in range(nu)]
+        H, A = ca.SX.sym("H", nz, nz), ca.SX.sym("A", na, nz)
+        g, lbx, ubx = ca.SX.sym("g", nz), ca.SX.sym("lbx", nz), ca.SX.sym("ubx", nz)
+        lba, uba = ca.SX.sym("lba", na), ca.SX.sym("uba", na)
+        zf = lbx[fixed]
+        rhs = -(g[free] + ca.mtimes(H[free, fixed], zf))
+        n = len(free)
+        Hf = H[free, free]
+        # Cholesky Hf = L L' (lower triangle), forward and back substitution
+        L = [[ca.SX(0)] * n for _ in range(n)]
+        for j in range(n):
+            d = Hf[j, j] - sum((L[j][q] * L[j][q] for q in range(j)), ca.SX(0))
+            L[j][j] = ca.sqrt(d)
+            for i in range(j + 1, n):
+                L[i][j] = (Hf[i, j] - sum((L[i][q] * L[j][q] for q in range(j)),
+                                          ca.SX(0))) / L[j][j]
+        yv: list[Any] = []
+        for i in range(n):
+            yv.append((rhs[i] - sum((L[i][q] * yv[q] for q in range(i)), ca.SX(0))) / L[i][i])
+        xv: list[Any] = [ca.SX(0)] * n
+        for i in reversed(range(n)):
+            xv[i] = (yv[i] - sum((L[q][i] * xv[q] for q in range(i + 1, n)), ca.SX(0))) / L[i][i]
+        z = ca.SX.zeros(nz)
+        for k, i in enumerate(free):
+            z[i] = xv[k]
+        for k, i in enumerate(fixed):
+            z[i] = zf[k]
+        az = ca.mtimes(A, z)
+        mu = (ca.mtimes(H, z) + g)[fixed]
+        tol = GUESS_TOLERANCE
+        conds = ca.vertcat(z[free] - lbx[free] + tol, ubx[free] - z[free] + tol,
+                           az - lba + tol, uba - az + tol, mu + tol)
+        # NaN fails every comparison, so a failed factorisation is never ok
+        ok = ca.SX(1)
+        for q in range(conds.numel()):
+            ok = ok * (conds[q] >= 0)
+        return ca.Function("mpc_rti_guess", [H, g, A, lba, uba, lbx, ubx], [z, ok])
 
     def _finish_build(self) -> None:
         """One compiled function per sample, ``prepare``: the EKF step, the target, the
@@ -260,11 +323,15 @@ class RealTimeMPC(OffsetFreeMPC):
                                          ca.MX(1, 1)) for k in range(N)], xt / sx)
         w = ca.if_else(cold, w_cold, w_warm)
         qp = self._data_f(w, p, T)
-        status = ca.vertcat(step, ca.sum1(zc))
+        zg, ok = self._guess_f(*qp[:7])
+        status = ca.vertcat(step, ca.sum1(zc), ok)
         f = ca.Function("mpc_rti_prepare",
                         [z, P, u_prev, y, sref, ig, w_prev, E_prev, e_prev, z_prev, cold,
                          given, use_given, T],
-                        [zc, Pc, w, qp[7], qp[8], p, status, *qp[:7]])
+                        [zc, Pc, w, qp[7], qp[8], p, status, *qp[:7], zg])
+        #: the prepare law (one sample of one controller, uncompiled), the function that
+        #: :class:`RealTimeMPCBatch` maps over circuits
+        self.prepare_function = f
         compiled, _ = self._compile(f)
         with _quiet_stdout():        # qpOASES prints its licence banner per instance
             solver = self._qp_solver_function()
@@ -277,8 +344,10 @@ class RealTimeMPC(OffsetFreeMPC):
         self._y = np.zeros(m.ny)
         shared_in[3] = self._y
         qpdata = [np.zeros(f.nnz_out(7 + j)) for j in range(7)]
+        self._qpdata = qpdata
         self._p_arr = np.zeros(f.nnz_out(5))
-        self._status = np.zeros(2)
+        self._status = np.zeros(3)
+        self._zg = np.zeros(nz)
         par = [[np.zeros(nzz), np.zeros(nzz * nzz), np.zeros(nw), np.zeros(nw * nz),
                 np.zeros(nw)] for _ in range(2)]
         self._par = par
@@ -290,6 +359,7 @@ class RealTimeMPC(OffsetFreeMPC):
             res = {0: b[0], 1: b[1], 2: b[2], 3: b[3], 4: b[4], 5: self._p_arr,
                    6: self._status}
             res.update({7 + j: qpdata[j] for j in range(7)})
+            res[14] = self._zg
             self._prep.append(BoundCall(compiled, args=args, res=res))
         names = ("h", "g", "a", "lba", "uba", "lbx", "ubx")
         with _quiet_stdout():
@@ -357,7 +427,9 @@ class RealTimeMPC(OffsetFreeMPC):
         self._diag_raw = None
 
     def update(self, measurement: Measurement) -> np.ndarray:
-        """One sample: one compiled call (EKF step, target, QP data), one dense QP.
+        """One sample: one compiled call (EKF step, target, QP data, the QP's solution for
+        the guessed active set), the dense QP solver only where that guess fails its
+        optimality check.
 
         The EKF step integrates the previous output, or the measurement's
         ``applied_voltages_V`` when given.
@@ -401,11 +473,15 @@ class RealTimeMPC(OffsetFreeMPC):
                               state={"estimate": self._par[1 - k][0].copy()},
                               reason="non-finite estimate")
         t1 = time.perf_counter()
-        self._qpb.eval()
-        t2 = time.perf_counter()
         z = self._z
-        if self._qpb.buffer.ret() != 0 or not math.isfinite(z.sum()):
-            self._qp_failed(measurement.time_s)
+        guessed = float(st[2])
+        if guessed == 1.0:        # the compiled guess solved the QP (its optimality check)
+            z[:] = self._zg
+        else:
+            self._qpb.eval()
+            if self._qpb.buffer.ret() != 0 or not math.isfinite(z.sum()):
+                self._qp_failed(measurement.time_s)
+        t2 = time.perf_counter()
         u = self._u
         nx, nu = self.model.nx, self.model.nu
         # dU_0 = z[:nu] (the E rows of U_0 select it): u = (w + dw)[U_0] * scale
@@ -421,7 +497,7 @@ class RealTimeMPC(OffsetFreeMPC):
         self._k = 1 - k
         t3 = time.perf_counter()
         c3 = time.thread_time()
-        self._diag_raw = (t1 - t0, t2 - t1, t3 - t0, c3 - c0)
+        self._diag_raw = (t1 - t0, t2 - t1, t3 - t0, c3 - c0, guessed)
         self._u_prev = u
         return u.copy()
 
@@ -458,12 +534,14 @@ class RealTimeMPC(OffsetFreeMPC):
 
     def diagnostics(self) -> Mapping[str, float | np.ndarray]:
         """Estimates as :meth:`OffsetFreeMPC.diagnostics`; times [s]: ``prepare_time_s``
-        (the compiled EKF step, target and QP data), ``qp_time_s`` (the dense QP
-        solver), ``solve_time_s`` (the whole update, estimation included) and
-        ``update_cpu_time_s`` (its CPU time)."""
+        (the compiled EKF step, target, QP data and active-set guess), ``qp_time_s`` (the
+        dense QP solver, when the guess was not the solution), ``solve_time_s`` (the whole
+        update, estimation included) and ``update_cpu_time_s`` (its CPU time);
+        ``qp_guess``: 1.0 where the compiled guess was the QP's solution, 0.0 where the
+        dense solver ran."""
         if self._diag_raw is None:
             return {}
-        tp, tq, tu, cpu = self._diag_raw
+        tp, tq, tu, cpu, guessed = self._diag_raw
         m = self.model
         nc, nx = m.n_circuits, m.nx
         z = self._par[self._k][0]
@@ -472,7 +550,7 @@ class RealTimeMPC(OffsetFreeMPC):
                 "disturbance_estimate": z[nx:].copy(),
                 "target_voltage_V": self._p_arr[2 * nx + m.nd:].copy(),
                 "prepare_time_s": tp, "qp_time_s": tq, "solve_time_s": tu,
-                "update_cpu_time_s": cpu, "iterations": 1.0}
+                "update_cpu_time_s": cpu, "iterations": 1.0, "qp_guess": guessed}
 
     # ------------------------------------------------------------------ OCP (tests)
     def solve(self, x_hat: np.ndarray, d_hat: np.ndarray, xt: np.ndarray,
@@ -520,3 +598,287 @@ class RealTimeMPC(OffsetFreeMPC):
         self._w = w
         u = w[nx:nx + m.nu] * self._su
         return np.clip(u, -self._ulim, self._ulim), {"iterations": 1, "solution": w.copy()}
+
+
+class RealTimeMPCBatch:
+    """Many :class:`RealTimeMPC` controllers (e.g. one per vehicle circuit) updated by one
+    compiled call per sample.
+
+    The controllers' own prepare laws (:attr:`RealTimeMPC.prepare_function`: the EKF
+    step, the target, the condensed QP data and the compiled active-set guess) are called
+    once per controller inside one function (one generated copy of each distinct law,
+    its map table passed once), compiled; each sample then
+    costs one call for every controller together.  Where a controller's guess fails its
+    optimality check (an active voltage limit or soft constraint), that controller's own
+    dense QP solver (qpOASES, hot-started) solves its QP, from the same data.  The result is
+    that of calling each controller's :meth:`RealTimeMPC.update` (tested to rounding);
+    the controllers' own buffers are not advanced (their ``update`` is not called).
+
+    Parameters
+    ----------
+    controllers : sequence of RealTimeMPC
+        The controllers, in the order of the measurement and voltage vectors (one entry
+        per controller, at least one), all with the same sample time [s], one input each
+        and no two the same object.
+
+    Raises
+    ------
+    ParameterError
+        No controllers, not :class:`RealTimeMPC` objects, repeated objects, more than one
+        input per controller, or different sample times.
+    """
+
+    def __init__(self, controllers: Any) -> None:
+        ctls = list(controllers)
+        if not ctls or not all(isinstance(c, RealTimeMPC) for c in ctls):
+            raise ParameterError("RealTimeMPCBatch needs a non-empty sequence of RealTimeMPC "
+                                 "controllers")
+        if len({id(c) for c in ctls}) != len(ctls):
+            raise ParameterError("RealTimeMPCBatch: a controller object appears twice (each "
+                                 "has its own observer and QP state)")
+        if any(c.model.nu != 1 for c in ctls):
+            raise ParameterError("RealTimeMPCBatch takes controllers of one circuit each "
+                                 "(model.nu = 1)")
+        ts = {c.sample_time_s for c in ctls}
+        if len(ts) != 1:
+            raise ParameterError(f"RealTimeMPCBatch: the controllers' sample times differ "
+                                 f"({sorted(ts)} s)")
+        self.controllers = ctls
+        self.sample_time_s = ctls[0].sample_time_s
+        n = self.n = len(ctls)
+        # groups of equal laws (the same serialised prepare function)
+        keys: dict[str, int] = {}
+        group = np.zeros(n, dtype=int)
+        for j, c in enumerate(ctls):
+            group[j] = keys.setdefault(c.prepare_function.serialize(), len(keys))
+        self._groups = [np.flatnonzero(group == g) for g in range(len(keys))]
+        self._build()
+
+    def _build(self) -> None:
+        ctls = self.controllers
+        ins: list[Any] = []
+        outs: list[Any] = []
+        self._gdata: list[dict[str, Any]] = []
+        for g, idx in enumerate(self._groups):
+            c0 = ctls[int(idx[0])]
+            f = c0.prepare_function
+            ng = idx.size
+            ti = f.n_in() - 1                       # the table, passed once per group
+            # one call of the same law per controller (not Function.map: its shared-input
+            # form repeats the 70 000-entry table per instance, measured 50 us a call);
+            # per input one (numel, n_g) block, column r = controller r's (dense) input
+            sy = [ca.MX.sym(f"g{g}_{f.name_in(i)}", f.numel_in(i) if i != ti else f.nnz_in(i),
+                            ng if i != ti else 1) for i in range(f.n_in())]
+            cols: list[list[Any]] = [[] for _ in range(f.n_out())]
+            for r in range(ng):
+                res = f(*[sy[i] if i == ti else ca.reshape(sy[i][:, r], f.size_in(i))
+                          for i in range(f.n_in())])
+                for q, o in enumerate(res):
+                    cols[q].append(ca.densify(ca.vec(o)))
+            ins += sy
+            outs += [ca.horzcat(*c) for c in cols]
+            self._gdata.append({"f": f, "idx": idx, "c0": c0, "n_in": f.n_in(),
+                                "n_out": f.n_out()})
+        F = ca.Function("mpc_rti_prepare_batch", ins, outs)
+        compiled, _ = c0._compile(F)
+        self.function = F
+        # buffers: per group and input/output, (n_g, nnz of one controller) C-order arrays
+        # (the map stacks the instances' nonzeros one after another)
+        calls_args: list[dict[int, np.ndarray]] = [{}, {}]
+        calls_res: list[dict[int, np.ndarray]] = [{}, {}]
+        ia = oa = 0
+        for gd in self._gdata:
+            f, ng, c0 = gd["f"], gd["idx"].size, gd["c0"]
+            m = c0.model
+
+            def arr(nnz: int, ng: int = ng) -> np.ndarray:
+                return np.zeros((ng, nnz))
+
+            alt = [[arr(f.numel_in(i)) for i in (0, 1, 6, 7, 8)] for _ in range(2)]
+            shared = {i: arr(f.numel_in(i)) for i in (2, 3, 4, 5, 9, 10, 11, 12)}
+            shared[10][:] = 1.0
+            out_once = {i: arr(f.numel_out(i)) for i in range(5, f.n_out())}
+            gd.update(alt=alt, shared=shared, out=out_once, nx=m.nx, nd=m.nd,
+                      su=np.array([ctls[int(j)]._su[0] for j in gd["idx"]]),
+                      ulim=np.array([ctls[int(j)].voltage_limit_V for j in gd["idx"]]))
+            for k in range(2):
+                a, b = alt[k], alt[1 - k]
+                args = {ia + i: v for i, v in shared.items()}
+                args.update({ia + i: a[q] for q, i in enumerate((0, 1, 6, 7, 8))})
+                args[ia + 13] = c0._table_array()
+                res = {oa + q: b[q] for q in range(5)}
+                res.update({oa + i: v for i, v in out_once.items()})
+                calls_args[k].update(args)
+                calls_res[k].update(res)
+            ia += gd["n_in"]
+            oa += gd["n_out"]
+        self._calls = [BoundCall(compiled, args=calls_args[k], res=calls_res[k])
+                       for k in range(2)]
+        self._k = 0
+        self._u = np.zeros(self.n)
+        self.last_fallbacks = 0
+        self._timing: tuple[float, float, float] = (0.0, 0.0, 0.0)
+
+    def reset(self, measurements: Any, *, sample_time_s: float) -> None:
+        """Start a run: every controller's :meth:`RealTimeMPC.reset`, then its observer
+        state and covariance and its cold start copied into the batch's buffers.
+
+        Parameters
+        ----------
+        measurements : sequence of Measurement
+            One first measurement per controller (in order).
+        sample_time_s : float
+            The run's sample time [s]; must equal the controllers' (keyword only).
+
+        Raises
+        ------
+        InputError
+            A sample time other than the controllers', or not one measurement per
+            controller.
+        """
+        from ..errors import InputError
+
+        ms = list(measurements)
+        if len(ms) != self.n:
+            raise InputError(f"RealTimeMPCBatch.reset: {len(ms)} measurements for {self.n} "
+                             "controllers")
+        for c, meas in zip(self.controllers, ms, strict=True):
+            c.reset(meas, sample_time_s=sample_time_s)
+        self._k = 0
+        for gd in self._gdata:
+            a = gd["alt"][0]
+            for r, j in enumerate(gd["idx"].tolist()):
+                c = self.controllers[j]
+                a[0][r] = c.observer.state
+                a[1][r] = np.ravel(c.observer.covariance, order="F")
+                gd["shared"][2][r] = c._u_prev
+                gd["shared"][5][r] = c.design_state[0]
+            gd["shared"][10][:] = 1.0
+            gd["shared"][12][:] = 0.0
+        self._timing = (0.0, 0.0, 0.0)
+
+    def update(self, gaps_m: np.ndarray, currents_A: np.ndarray, gap_refs_m: np.ndarray,
+               applied_voltages_V: np.ndarray | None = None, *,
+               time_s: float | None = None) -> np.ndarray:
+        """One sample of every controller: one compiled call, the dense QP solver only
+        where a controller's compiled guess is not its QP's solution.
+
+        Parameters
+        ----------
+        gaps_m, currents_A, gap_refs_m : ndarray (n,)
+            Measured gap [m], coil current [A] and gap reference [m] per controller.
+        applied_voltages_V : ndarray (n,), optional
+            The voltages [V] applied since the last sample (the EKF's input; default: the
+            previous outputs).
+        time_s : float, optional
+            The sample's time [s] (for error messages).
+
+        Returns
+        -------
+        ndarray (n,)
+            Voltages [V] to hold until the next sample, within each controller's limit.
+
+        Raises
+        ------
+        SolverError
+            As :meth:`RealTimeMPC.update`, naming the controller's index.
+        """
+        t0 = time.perf_counter()
+        k = self._k
+        for gd in self._gdata:
+            idx, sh = gd["idx"], gd["shared"]
+            if applied_voltages_V is not None:
+                sh[2][:, 0] = applied_voltages_V[idx]
+            sh[3][:, 0] = gaps_m[idx]
+            sh[3][:, 1] = currents_A[idx]
+            sh[4][:, 0] = gap_refs_m[idx]
+        call = self._calls[k]
+        call.eval()
+        self._check_targets(call, gap_refs_m, time_s)
+        t1 = time.perf_counter()
+        fallbacks = 0
+        u = self._u
+        for gd in self._gdata:
+            idx, out, sh = gd["idx"], gd["out"], gd["shared"]
+            b = gd["alt"][1 - k]
+            st, zg = out[6], out[14]
+            nxd = gd["nx"] + gd["nd"]
+            if not np.isfinite(st[:, 1]).all():
+                r = int(np.flatnonzero(~np.isfinite(st[:, 1]))[0])
+                raise SolverError("the extended Kalman filter diverged", time=time_s,
+                                  state={"controller": int(idx[r]), "estimate": b[0][r].copy()},
+                                  reason="non-finite estimate")
+            z = sh[9]
+            z[:] = zg
+            for r in np.flatnonzero(st[:, 2] != 1.0).tolist():
+                z[r] = self._dense_qp(int(idx[r]), [out[7 + q][r] for q in range(7)], time_s)
+                fallbacks += 1
+            nx = gd["nx"]
+            ug = (b[2][:, nx] + z[:, 0]) * gd["su"]
+            lim = gd["ulim"]
+            if not (np.abs(ug) <= lim * (1 + 1e-6)).all():        # also for NaN
+                r = int(np.flatnonzero(~(np.abs(ug) <= lim * (1 + 1e-6)))[0])
+                raise SolverError("the MPC solution violates the voltage limit", time=time_s,
+                                  state={"controller": int(idx[r]), "u": float(ug[r])},
+                                  reason="QP tolerance too loose")
+            np.clip(ug, -lim, lim, out=ug)
+            sh[2][:, 0] = ug
+            sh[5][:, 0] = out[5][:, nxd]
+            sh[10][:] = 0.0
+            u[idx] = ug
+        self._k = 1 - k
+        self.last_fallbacks = fallbacks
+        t2 = time.perf_counter()
+        self._timing = (t1 - t0, t2 - t1, t2 - t0)
+        return u.copy()
+
+    def _check_targets(self, call: BoundCall, refs: np.ndarray, time_s: float | None) -> None:
+        """Controllers whose compiled Newton did not converge: the Python Newton's target
+        (or its SolverError), then the same call again with those targets given."""
+        redo = False
+        for gd in self._gdata:
+            st, p, sh = gd["out"][6], gd["out"][5], gd["shared"]
+            nx, nxd = gd["nx"], gd["nx"] + gd["nd"]
+            lim = 1e-10 * np.maximum(1.0, np.abs(p[:, nxd]))
+            bad = ~(np.abs(st[:, 0]) < lim)                 # also for NaN
+            for r in np.flatnonzero(bad).tolist():
+                j = int(gd["idx"][r])
+                c = self.controllers[j]
+                zc = gd["alt"][1 - self._k][0][r]
+                guess = float(sh[5][r, 0])
+                if not math.isfinite(guess):
+                    guess = float(c.design_state[0])
+                xs, us = c.model.steady_state(float(refs[j]), zc[nx:].copy(),
+                                              current_guess_A=guess)
+                sh[11][r, :nx] = xs
+                sh[11][r, nx:] = us
+                sh[12][r] = 1.0
+                redo = True
+        if redo:
+            try:
+                call.eval()        # the same inputs: the same EKF steps, the given targets
+            finally:
+                for gd in self._gdata:
+                    gd["shared"][12][:] = 0.0
+
+    def _dense_qp(self, j: int, data: list[np.ndarray], time_s: float | None) -> np.ndarray:
+        """Controller ``j``'s condensed QP by its own dense solver (hot-started)."""
+        c = self.controllers[j]
+        qpb = c._qpb
+        for q, v in enumerate(data):
+            c._qpdata[q][:] = v
+        qpb.eval()
+        if qpb.buffer.ret() != 0 or not math.isfinite(c._z.sum()):
+            raise SolverError("the MPC's condensed QP failed", time=time_s,
+                              state={"controller": j},
+                              reason=str(qpb.buffer.stats().get("return_status", "unknown")))
+        return c._z
+
+    def timing(self) -> Mapping[str, float]:
+        """Wall times [s] of the last :meth:`update`: ``prepare_time_s`` (the one compiled
+        call), ``qp_time_s`` (the dense QP solves where a guess failed, and the voltages),
+        ``solve_time_s`` (the whole update); ``fallbacks``: how many QPs went to the dense
+        solver."""
+        tp, tq, tu = self._timing
+        return {"prepare_time_s": tp, "qp_time_s": tq, "solve_time_s": tu,
+                "fallbacks": float(self.last_fallbacks)}

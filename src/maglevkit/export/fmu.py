@@ -315,7 +315,7 @@ def _as_bank(model: ReducedSource, eddy_resistance: str, interpolation: str,
         name = str(maps.dataset.attrs.get("magnet_name") or "magnet")
         members = {_member_name(name): model}
     else:
-        hint = (" (build its maps first: maglevkit.build_maps(magnet, gaps=..., currents=...))"
+        hint = (" (build its maps first: maglevkit.build_maps(magnet, gaps_m=..., currents_A=...))"
                 if hasattr(model, "network") else "")
         raise InputError("export_fmu needs the reduced model: CharacteristicMaps, a "
                          f"CurrentModel, a MagnetBank or a mapping of them, got "

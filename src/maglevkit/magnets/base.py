@@ -38,7 +38,7 @@ from ..errors import (
 )
 from ..materials import Material, TabulatedBH, get_material, normalise_name, read_bh_csv
 from ..parameter_files import bundled_files, read_parameter_file
-from ..validation import Plausible, check_plausible, flag
+from ..validation import Plausible, check_plausible, external_stacklevel, flag, renamed_keywords
 
 __all__ = [
     "MAGNET_PLAUSIBLE",
@@ -189,34 +189,41 @@ class PlausibleRange:
                  f"({winding_area_m2 * 1e6:.4g} mm^2, {turns:g} turns)")
         return cls(float(gap_m), float(current), gap_basis, basis)
 
-    def check(self, *, gaps: Any = None, currents: Any = None, where: str = "",
-              stacklevel: int = 3) -> None:
+    @renamed_keywords(gaps="gaps_m", currents="currents_A")
+    def check(self, *, gaps_m: Any = None, currents_A: Any = None, where: str = "",
+              stacklevel: int | None = None) -> None:
         """Warn (:class:`PlausibilityWarning`) if gaps [m] or currents [A] exceed the bounds.
 
-        ``gaps`` and ``currents`` are numbers or arrays of any shape (NaN ignored).
+        ``gaps_m`` and ``currents_A`` are numbers or arrays of any shape (NaN ignored).
+
+        Old keyword names (``gaps``, ``currents``) are deprecated aliases for one release.
 
         Parameters
         ----------
-        gaps : float or array_like, optional
+        gaps_m : float or array_like, optional
             Gaps [m] to check against :attr:`max_gap_m`.
-        currents : float or array_like, optional
+        currents_A : float or array_like, optional
             Currents [A] to check (by magnitude) against :attr:`max_current_A`.
         where : str
             Prefix of the warning text (what is being checked, e.g. a command or key).
-        stacklevel : int
-            Passed to :func:`warnings.warn` so the warning points at the caller's line.
+        stacklevel : int, optional
+            Passed to :func:`warnings.warn`; default: the first caller outside maglevkit
+            (:func:`~maglevkit.validation.external_stacklevel`), so the warning points at
+            the user's line through any depth of maglevkit calls and wrappers.
         """
         prefix = f"{where}: " if where else ""
-        if gaps is not None:
-            g = np.asarray(gaps, dtype=float)
+        if stacklevel is None:
+            stacklevel = external_stacklevel()
+        if gaps_m is not None:
+            g = np.asarray(gaps_m, dtype=float)
             worst = float(np.nanmax(g)) if g.size and not np.all(np.isnan(g)) else 0.0
             if worst > self.max_gap_m:
                 warnings.warn(
                     f"{prefix}gap {worst:.6g} m is larger than {self.gap_basis} "
                     f"({self.max_gap_m:.6g} m), far outside this magnet's range (gaps are in "
                     "metres: 10 mm is 0.01)", PlausibilityWarning, stacklevel=stacklevel)
-        if currents is not None:
-            c = np.abs(np.asarray(currents, dtype=float))
+        if currents_A is not None:
+            c = np.abs(np.asarray(currents_A, dtype=float))
             worst = float(np.nanmax(c)) if c.size and not np.all(np.isnan(c)) else 0.0
             # rounding allowance 1e-9: the bound itself is a product of file values
             if worst > self.max_current_A * (1.0 + 1e-9):

@@ -22,7 +22,7 @@ from typing import Any
 import numpy as np
 
 from ..errors import InputError, SolverError
-from ..validation import real_number, whole_number
+from ..validation import real_number, renamed_keywords, whole_number
 from .flux import FluxModel, SimulationResult, check_options, simulate_flux
 from .statics import solve_statics
 
@@ -37,32 +37,37 @@ def _model(model: Any, options: dict[str, Any]) -> FluxModel:
     return FluxModel(model, **options)
 
 
-def voltage_step_response(model: Any, *, gap: Any, voltage: Any, initial_current: Any = 0.0,
-                          duration: float, dt: float, **options: Any) -> SimulationResult:
+@renamed_keywords(gap="gap_m", voltage="voltage_V", initial_current="initial_current_A",
+                  duration="duration_s", dt="dt_s")
+def voltage_step_response(model: Any, *, gap_m: Any, voltage_V: Any, initial_current_A: Any = 0.0,
+                          duration_s: float, dt_s: float, **options: Any) -> SimulationResult:
     """Current and force after a voltage step at ``t = 0`` at a fixed gap.
 
-    The magnet starts at the static operating point with ``initial_current`` [A] (held by
-    ``U = R I``); from ``t = 0`` the circuits get ``voltage`` [V].
+    The magnet starts at the static operating point with ``initial_current_A`` (held by
+    ``U = R I``); from ``t = 0`` the circuits get ``voltage_V``.
+
+    Old keyword names (``gap``, ``voltage``, ``initial_current``, ``duration``, ``dt``) are
+    deprecated aliases for one release.
 
     Parameters
     ----------
     model : FluxModel, Magnet or Network
         The magnet model (a Magnet or Network is wrapped in a :class:`FluxModel` with
         ``options``; a FluxModel's own options are overridden by ``options``).
-    gap : float, sequence or mapping
+    gap_m : float, sequence or mapping
         Fixed gap(s) [m], > 0.
-    voltage : float, sequence or mapping
+    voltage_V : float, sequence or mapping
         Voltage(s) after the step [V].
-    initial_current : float, sequence or mapping
+    initial_current_A : float, sequence or mapping
         Current(s) before the step [A].
-    duration, dt : float
+    duration_s, dt_s : float
         Simulated time and output step [s].
     **options
         FluxModel options (``saturation``, ``eddy_currents``, ``rtol``, ...).
     """
     fm = _model(model, options)
-    st = fm.initial_state(gaps_m=gap, currents_A=initial_current)
-    return simulate_flux(fm, (0.0, duration), dt_s=dt, gaps_m=st.gaps_m, voltages_V=voltage,
+    st = fm.initial_state(gaps_m=gap_m, currents_A=initial_current_A)
+    return simulate_flux(fm, (0.0, duration_s), dt_s=dt_s, gaps_m=st.gaps_m, voltages_V=voltage_V,
                     initial_state=st)
 
 
@@ -100,14 +105,15 @@ class InductanceEstimate:
     response: SimulationResult
 
 
-def differential_inductance_from_step(model: Any, *, gap: float, current: float,
+@renamed_keywords(gap="gap_m", current="current_A")
+def differential_inductance_from_step(model: Any, *, gap_m: float, current_A: float,
                                       relative_step: float = 1e-3, circuit: int = 0,
                                       samples_per_tau: int = 200, n_tau: float = 6.0,
                                       rtol: float = 1e-9, atol: float = 1e-11,
                                       **options: Any) -> InductanceEstimate:
     """Identify ``L~(s, I)`` from the time constant of a small voltage step (paper IV-B).
 
-    The circuit ``circuit`` is held at ``current`` [A] at the (uniform) ``gap`` [m], then
+    The circuit ``circuit`` is held at ``current_A`` at the (uniform) ``gap_m``, then
     its voltage steps by ``dU = R_el dI_inf`` with ``dI_inf = relative_step x max(|I|,
     1 A)``; the other circuits keep their voltage.  ``log(dI_inf - dI(t))`` is fitted by
     a straight line (least squares) over the samples with ``2 % < remaining < 98 %``.
@@ -115,13 +121,15 @@ def differential_inductance_from_step(model: Any, *, gap: float, current: float,
     The time window (``n_tau`` time constants, ``samples_per_tau`` samples each) is
     sized with the statics' ``dpsi/dI``; that estimate is not used in the result.
 
+    Old keyword names (``gap``, ``current``) are deprecated aliases for one release.
+
     Parameters
     ----------
     model : FluxModel, Magnet or Network
         The magnet model (a Magnet or Network is wrapped in a :class:`FluxModel`).
-    gap : float
+    gap_m : float
         Gap of every pole [m], > 0 (keyword only, like all that follow).
-    current : float
+    current_A : float
         Operating current of every circuit [A] before the step.
     relative_step : float, default 1e-3
         Size of the final current change relative to ``max(|I|, 1 A)`` [-], in
@@ -163,9 +171,9 @@ def differential_inductance_from_step(model: Any, *, gap: float, current: float,
     if isinstance(circuit, bool) or not isinstance(circuit, numbers.Integral) \
             or not 0 <= circuit < nc:
         raise InputError(f"circuit = {circuit!r} must be an index in 0..{nc - 1}")
-    st = fm.initial_state(gaps_m=gap, currents_A=current)
+    st = fm.initial_state(gaps_m=gap_m, currents_A=current_A)
     R = fm.resistances
-    sol = solve_statics(fm.network, gaps=st.gaps_m, currents=st.currents_A)
+    sol = solve_statics(fm.network, gaps_m=st.gaps_m, currents_A=st.currents_A)
     l_est = float(sol.differential_inductance_H[circuit, circuit])
     r_par = R[circuit]
     tau_est = max(l_est, 1e-12) / r_par
@@ -181,7 +189,7 @@ def differential_inductance_from_step(model: Any, *, gap: float, current: float,
     try:
         fit = fit_step_response(t[sel], di[sel] / di_inf)
     except SolverError as exc:
-        raise SolverError(str(exc).split(";")[0], state={"gap_m": gap, "current_A": current},
+        raise SolverError(str(exc).split(";")[0], state={"gap_m": gap_m, "current_A": current_A},
                           reason=exc.reason) from None
     tau = fit.time_constant_s
     jump = fit.jump_fraction * di_inf

@@ -48,6 +48,7 @@ from typing import TYPE_CHECKING, Any
 import casadi as ca
 import numpy as np
 
+from .._interrupt import check_interrupt
 from ..circuit.assembly import assemble
 from ..circuit.network import Network
 from ..errors import CompilationWarning, InputError, SolverError, TopologyError
@@ -980,8 +981,8 @@ class FluxModel:
                              "circuit)")
         time = real_number(time, "time", "s")
         if self.plausible_range is not None and where is not None:
-            self.plausible_range.check(gaps=s, currents=i, where=where, stacklevel=4)
-        sol = solve_statics(net, gaps=s, currents=i)
+            self.plausible_range.check(gaps_m=s, currents_A=i, where=where)
+        sol = solve_statics(net, gaps_m=s, currents_A=i)
         x = np.asarray(sol.loop_flux_Wb, dtype=float).ravel()
         return FluxState(float(time), self._dae.D @ x, s.copy(), x, i.copy(),
                          self.resistances * i, np.zeros_like(s), np.zeros(4))
@@ -1121,7 +1122,7 @@ class FluxModel:
             raise InputError(f"gaps must stay > 0 m over the step: start {s0.tolist()} m, end "
                              f"{(s0 + rate * dt).tolist()} m")
         if self.plausible_range is not None and gaps is not None:
-            self.plausible_range.check(gaps=(s0, s0 + rate * dt), where="FluxModel.step")
+            self.plausible_range.check(gaps_m=(s0, s0 + rate * dt), where="FluxModel.step")
         if self.live_step:
             with self._live_lock:
                 return self._step_live_locked(state, dt, U, rate, s0, w)
@@ -1216,6 +1217,7 @@ class FluxModel:
                 O[k:k + m] = np.asarray(Oc).T
                 w = W[k + m - 1]
                 k += m
+                check_interrupt()  # a deferred Ctrl-C (CLI): between chunks, not in CasADi
         self._check_finite(state, W, O, h, U, rate)
         return W, Qd, O
 
@@ -1269,6 +1271,7 @@ class FluxModel:
             O[k:k + m] = np.asarray(Oc).T
             w = W[k + m - 1]
             k += m
+            check_interrupt()      # a deferred Ctrl-C (CLI): between chunks, not in CasADi
         self._check_finite(state, W, O, h, U, rate)
         return W, Qd, O
 
@@ -1497,7 +1500,7 @@ def simulate_flux(model: Any, t: Any, *, gaps_m: Any, voltages_V: Any,
     U = sample_input(voltages, times, net.circuit_names, "voltages", "V")
     rng = fm.plausible_range
     if rng is not None:
-        rng.check(gaps=s, currents=initial_currents, where="simulate")
+        rng.check(gaps_m=s, currents_A=initial_currents, where="simulate")
     h = np.diff(times)
     secant = gap_secants(times, s, gap_rates, net.gap_names, gap_rate_tolerance)
     if initial_state is not None:
@@ -1524,7 +1527,7 @@ def simulate_flux(model: Any, t: Any, *, gaps_m: Any, voltages_V: Any,
     final = fm._unpack_state(float(times[-1]), W[-1], U[-2], secant[-1], E[-1])
     if rng is not None:
         # voltages may drive currents no coil carries (e.g. U typed in mV)
-        rng.check(currents=W[:, d.nw - nc:], where="simulate (the currents the voltages drive)")
+        rng.check(currents_A=W[:, d.nw - nc:], where="simulate (the currents the voltages drive)")
     return SimulationResult(
         time_s=times, gaps_m=W[:, d.n_diff:d.n_diff + ng], gap_rates_m_per_s=rates,
         voltages_V=held_U, currents_A=W[:, d.nw - nc:],

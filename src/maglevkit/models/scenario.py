@@ -38,6 +38,7 @@ from pathlib import Path
 from typing import Any
 
 from ..errors import InputError, ParameterFileError
+from ..validation import renamed_keywords
 from .inputs import check_span
 from .signals import Signal, parse_signal
 
@@ -51,9 +52,14 @@ __all__ = ["Scenario", "load_scenario", "parse_scenario", "bundled_scenarios"]
 _TABLES = {"scenario", "voltages", "gaps", "model", "solver"}
 
 
+@renamed_keywords(voltages="voltages_V", gaps="gaps_m")
 @dataclass(frozen=True)
 class Scenario:
     """A parsed scenario.
+
+    The old field names ``voltages`` and ``gaps`` are deprecated aliases for one release
+    (constructor keywords and read-only attributes); the file's tables keep their names
+    ``[voltages]`` and ``[gaps]``.
 
     Attributes
     ----------
@@ -61,8 +67,8 @@ class Scenario:
         Simulated time and output/hold step [s].
     initial_current_A : float or None
         Initial current of every circuit [A] (None: steady state of the first voltage).
-    voltages, gaps : dict of str to Signal
-        Signals per circuit / gap name (key ``"all"``: every input).
+    voltages_V, gaps_m : dict of str to Signal
+        Signals per circuit [V] / gap name [m] (key ``"all"``: every input).
     model_options, solver_options : dict
         FluxModel switches (``saturation``, ``eddy_currents``) and solver settings
         (``method`` ``"idas"`` or ``"radau"``, ``rtol``, ``atol``).
@@ -72,8 +78,8 @@ class Scenario:
 
     duration_s: float
     dt_s: float
-    voltages: Mapping[str, Signal]
-    gaps: Mapping[str, Signal]
+    voltages_V: Mapping[str, Signal]
+    gaps_m: Mapping[str, Signal]
     initial_current_A: float | None = None
     model_options: Mapping[str, Any] = field(default_factory=dict)
     solver_options: Mapping[str, Any] = field(default_factory=dict)
@@ -105,7 +111,7 @@ class Scenario:
         """
         if not isinstance(which, str) or which not in ("voltages", "gaps"):
             raise InputError(f"inputs_for: which = {which!r}; allowed: 'voltages' or 'gaps'")
-        table = self.voltages if which == "voltages" else self.gaps
+        table = self.voltages_V if which == "voltages" else self.gaps_m
         unit = "circuit" if which == "voltages" else "gap"
         unknown = sorted(set(table) - set(names) - {"all"})
         if unknown:

@@ -30,7 +30,7 @@ from ..circuit.network import Network
 from ..errors import InputError, SolverError
 from ..magnets.base import PlausibleRange
 from ..materials import MU0
-from ..validation import describe, flag, real_array, real_number
+from ..validation import describe, flag, real_array, real_number, renamed_keywords
 
 __all__ = [
     "StaticSolution",
@@ -436,22 +436,24 @@ def _solver(network: Network) -> _StaticSolver:
     return solver  # type: ignore[no-any-return]
 
 
-def solve_statics(model: Any, *, gaps: Any, currents: Any, grid: bool = False) -> StaticSolution:
+@renamed_keywords(gaps="gaps_m", currents="currents_A")
+def solve_statics(model: Any, *, gaps_m: Any, currents_A: Any,
+                  grid: bool = False) -> StaticSolution:
     """Solve the magnet's statics at given gaps and circuit currents.
 
     Parameters
     ----------
     model : Network or magnet
         The equivalent magnetic circuit (or an object with a ``network``).
-    gaps : float, mapping or array_like
+    gaps_m : float, mapping or array_like
         Gaps [m]: a scalar (all gap inputs equal), a mapping ``{gap name: value}``, or
         an array whose last axis runs over the gap inputs.  With ``grid=True``: a 1-D
-        array of uniform gaps.
-    currents : float, mapping or array_like
+        array of uniform gaps.  (Deprecated alias: ``gaps``.)
+    currents_A : float, mapping or array_like
         Circuit currents [A], in the same forms (per circuit).  With ``grid=True``: a
-        1-D array of currents applied to every circuit.
+        1-D array of currents applied to every circuit.  (Deprecated alias: ``currents``.)
     grid : bool
-        Solve on the outer product ``gaps x currents`` (batch shape ``(n_s, n_I)``).
+        Solve on the outer product ``gaps_m x currents_A`` (batch shape ``(n_s, n_I)``).
 
     Returns
     -------
@@ -476,8 +478,8 @@ def solve_statics(model: Any, *, gaps: Any, currents: Any, grid: bool = False) -
     net = as_network(model)
     ng, nc = len(net.gap_names), len(net.circuit_names)
     if flag(grid, "grid"):
-        g1 = real_array(gaps, "gaps", "m")
-        c1 = real_array(currents, "currents", "A")
+        g1 = real_array(gaps_m, "gaps", "m")
+        c1 = real_array(currents_A, "currents", "A")
         if g1.ndim != 1 or c1.ndim != 1:
             raise InputError("with grid=True, gaps and currents must be 1-D arrays "
                              f"(got shapes {g1.shape} and {c1.shape})")
@@ -486,8 +488,8 @@ def solve_statics(model: Any, *, gaps: Any, currents: Any, grid: bool = False) -
         sv = np.broadcast_to(sv[:, None, :], (g1.size, c1.size, ng))
         iv = np.broadcast_to(iv[None, :, :], (g1.size, c1.size, nc))
     else:
-        sv = gap_vector(net, gaps)
-        iv = current_vector(net, currents)
+        sv = gap_vector(net, gaps_m)
+        iv = current_vector(net, currents_A)
         shape = np.broadcast_shapes(sv.shape[:-1], iv.shape[:-1])
         sv = np.broadcast_to(sv, (*shape, ng))
         iv = np.broadcast_to(iv, (*shape, nc))
@@ -499,7 +501,7 @@ def solve_statics(model: Any, *, gaps: Any, currents: Any, grid: bool = False) -
         raise InputError("empty set of operating points")
     rng = plausible_range(model)
     if rng is not None:
-        rng.check(gaps=sv, currents=iv, where="solve_statics")
+        rng.check(gaps_m=sv, currents_A=iv, where="solve_statics")
     solver = _solver(net)
     x, _res, phi, psi, f, dpsi_di, dpsi_ds, df_di, df_ds = solver.batch(s2, i2)
     nb = len(net.branches)
@@ -534,7 +536,8 @@ def solve_statics(model: Any, *, gaps: Any, currents: Any, grid: bool = False) -
     )
 
 
-def magnetic_energy(model: Any, branch_flux: Any, gaps: Any) -> float:
+@renamed_keywords(branch_flux="branch_flux_Wb", gaps="gaps_m")
+def magnetic_energy(model: Any, branch_flux_Wb: Any, gaps_m: Any) -> float:
     """Stored magnetic energy ``W = sum_elements integral_0^phi V_m dphi`` [J] at one point.
 
     Iron energies are integrated numerically from the material law (relative accuracy
@@ -544,11 +547,13 @@ def magnetic_energy(model: Any, branch_flux: Any, gaps: Any) -> float:
     ----------
     model : Magnet, FluxModel or Network
         The equivalent magnetic circuit (or a model with a ``network``).
-    branch_flux : array_like (n_branches,)
+    branch_flux_Wb : array_like (n_branches,)
         Flux of every branch [Wb], in :attr:`Network.branch_names` order (e.g.
-        ``StaticSolution.branch_flux_Wb`` of a single point).
-    gaps : float, mapping or array_like (n_gaps,)
-        Gaps [m], > 0: a scalar (all equal), ``{gap name: value}`` or one per gap input.
+        ``StaticSolution.branch_flux_Wb`` of a single point; deprecated alias
+        ``branch_flux``).
+    gaps_m : float, mapping or array_like (n_gaps,)
+        Gaps [m], > 0: a scalar (all equal), ``{gap name: value}`` or one per gap input
+        (deprecated alias ``gaps``).
 
     Returns
     -------
@@ -562,10 +567,10 @@ def magnetic_energy(model: Any, branch_flux: Any, gaps: Any) -> float:
         <= 0 or of the wrong shape or names.
     """
     net = as_network(model)
-    phi = real_array(branch_flux, "branch_flux", "Wb").ravel()
+    phi = real_array(branch_flux_Wb, "branch_flux", "Wb").ravel()
     if phi.size != len(net.branches):
         raise InputError(f"branch_flux must have {len(net.branches)} entries, got {phi.size}")
-    s = gap_vector(net, gaps)
+    s = gap_vector(net, gaps_m)
     gidx = {g: i for i, g in enumerate(net.gap_names)}
     total = 0.0
     for k, br in enumerate(net.branches):
@@ -575,17 +580,19 @@ def magnetic_energy(model: Any, branch_flux: Any, gaps: Any) -> float:
     return total
 
 
-def coenergy(model: Any, *, gaps: Any, currents: Any) -> float:
+@renamed_keywords(gaps="gaps_m", currents="currents_A")
+def coenergy(model: Any, *, gaps_m: Any, currents_A: Any) -> float:
     """Magnetic co-energy ``W' = I^T psi - W`` [J] at one operating point.
 
     Parameters
     ----------
     model : Magnet, FluxModel or Network
         The equivalent magnetic circuit (or a model with a ``network``).
-    gaps : float, mapping or array_like (n_gaps,)
-        Gaps [m], > 0 (keyword only; forms as in :func:`solve_statics`).
-    currents : float, mapping or array_like (n_circuits,)
-        Circuit currents [A] (keyword only).
+    gaps_m : float, mapping or array_like (n_gaps,)
+        Gaps [m], > 0 (keyword only; forms as in :func:`solve_statics`; deprecated
+        alias ``gaps``).
+    currents_A : float, mapping or array_like (n_circuits,)
+        Circuit currents [A] (keyword only; deprecated alias ``currents``).
 
     Returns
     -------
@@ -599,27 +606,34 @@ def coenergy(model: Any, *, gaps: Any, currents: Any) -> float:
     SolverError
         If the statics cannot be solved.
     """
-    sol = solve_statics(model, gaps=gaps, currents=currents)
+    sol = solve_statics(model, gaps_m=gaps_m, currents_A=currents_A)
     if sol.shape != ():
         raise InputError("coenergy takes a single operating point")
     w = magnetic_energy(model, sol.branch_flux_Wb, sol.gaps_m)
     return float(sol.currents_A @ sol.flux_linkage_Wb) - w
 
 
-def pole_force_eq6(flux: Any, area: float, mu_r: float = math.inf) -> Any:
+@renamed_keywords(flux="flux_Wb", area="area_m2")
+def pole_force_eq6(flux_Wb: Any, area_m2: float, mu_r: float = math.inf) -> Any:
     """The paper's pole force, eq. 6: ``F = (mu_r - 1) / (2 mu_r mu0 A) phi_F^2`` [N].
 
     Parameters
     ----------
-    flux : float or ndarray
-        Flux through the pole face contributing to the force, ``phi_F`` [Wb].
-    area : float
-        Pole face area ``A`` [m^2].
+    flux_Wb : float or ndarray
+        Flux through the pole face contributing to the force, ``phi_F`` [Wb] (deprecated
+        alias ``flux``).
+    area_m2 : float
+        Pole face area ``A`` [m^2] (deprecated alias ``area``).
     mu_r : float
-        Relative permeability of the iron (``inf``: ``phi^2 / (2 mu0 A)``).
+        Relative permeability of the iron (``inf``: ``phi^2 / (2 mu0 A)``), dimensionless.
+
+    Returns
+    -------
+    float or ndarray
+        Pole force [N].
     """
-    phi = real_array(flux, "flux", "Wb")
-    a = real_number(area, "area", "m^2", positive=True)
+    phi = real_array(flux_Wb, "flux", "Wb")
+    a = real_number(area_m2, "area", "m^2", positive=True)
     if isinstance(mu_r, (int, float)) and not isinstance(mu_r, bool) and math.isinf(mu_r) \
             and mu_r > 0:
         factor = 1.0
@@ -631,17 +645,20 @@ def pole_force_eq6(flux: Any, area: float, mu_r: float = math.inf) -> Any:
     return factor * phi ** 2 / (2.0 * MU0 * a)
 
 
-def circuit_pole_groups(model: Any, *, gap: float, current: float) -> dict[str, tuple[str, ...]]:
+@renamed_keywords(gap="gap_m", current="current_A")
+def circuit_pole_groups(model: Any, *, gap_m: float,
+                        current_A: float) -> dict[str, tuple[str, ...]]:
     """Assign each gap input (pole) to the circuit whose flux linkage depends most on it.
 
     Parameters
     ----------
     model : Magnet, FluxModel or Network
         The equivalent magnetic circuit (or a model with a ``network``).
-    gap : float
-        Gap of every pole [m], > 0, at which ``dpsi/ds`` is evaluated (keyword only).
-    current : float
-        Current of every circuit [A] (keyword only).
+    gap_m : float
+        Gap of every pole [m], > 0, at which ``dpsi/ds`` is evaluated (keyword only;
+        deprecated alias ``gap``).
+    current_A : float
+        Current of every circuit [A] (keyword only; deprecated alias ``current``).
 
     Returns
     -------
@@ -660,7 +677,7 @@ def circuit_pole_groups(model: Any, *, gap: float, current: float) -> dict[str, 
     net = as_network(model)
     if len(net.circuits) == 1:
         return {net.circuit_names[0]: net.gap_names}
-    sol = solve_statics(net, gaps=gap, currents=current)
+    sol = solve_statics(net, gaps_m=gap_m, currents_A=current_A)
     owner = np.argmax(np.abs(sol.dpsi_dgap_Wb_per_m), axis=0)   # (n_gaps,)
     groups = {c: tuple(g for g, o in zip(net.gap_names, owner, strict=True) if o == j)
               for j, c in enumerate(net.circuit_names)}

@@ -322,8 +322,8 @@ class MagnetBank:
     >>> import numpy as np
     >>> import maglevkit as mk
     >>> magnet = mk.load_magnet("u-magnet")
-    >>> maps = mk.build_maps(magnet, gaps=np.linspace(0.006, 0.016, 6),
-    ...                      currents=np.linspace(0, 60, 13), progress=False)
+    >>> maps = mk.build_maps(magnet, gaps_m=np.linspace(0.006, 0.016, 6),
+    ...                      currents_A=np.linspace(0, 60, 13), progress=False)
     >>> bank = mk.MagnetBank({f"m{k}": maps for k in range(4)}, compiled="never")
     >>> state = bank.initial_state(gaps_m=0.010, currents_A=20.0)
     >>> state, out = bank.step(state, 1e-3, voltages_V=bank.resistance_ohm * 20.0)
@@ -414,7 +414,7 @@ class MagnetBank:
             raise InputError(f"member name {name!r} must be a non-empty string without '/'")
         if isinstance(model, FluxModel):
             net = model.network
-            groups = (circuit_pole_groups(net, gap=0.01, current=10.0)
+            groups = (circuit_pole_groups(net, gap_m=0.01, current_A=10.0)
                       if len(net.circuit_names) > 1 else {net.circuit_names[0]: net.gap_names})
             return _Member(name, "detailed", tuple(model.circuit_names), tuple(model.gap_names),
                            groups, model=model)
@@ -933,7 +933,8 @@ class MagnetBank:
         return ca.Function("maglevkit_bank_outputs", [vi, vu, vs], [r.T for r in res],
                            ["I_L", "U", "s"], ["I", "F", "Ltilde"])
 
-    def step_function(self, dt: float) -> ca.Function:
+    @renamed_keywords(dt="dt_s")
+    def step_function(self, dt_s: float) -> ca.Function:
         """The step of every reduced circuit over ``dt`` [s] as an uncompiled CasADi
         function, for composing larger compiled models (the vehicle step).
 
@@ -945,9 +946,11 @@ class MagnetBank:
         with ladder members (:attr:`motion_eddy`) has one more input, ``I_e``, and one
         more output, ``I_e_next``, after the others.
 
+        Old keyword names (``dt``) are deprecated aliases for one release.
+
         Parameters
         ----------
-        dt : float
+        dt_s : float
             Step length [s], finite and > 0; it sets the RK4 sub-step count
             (``ceil(dt / max_step_s)``), while the function's ``h`` input is the step used.
 
@@ -960,9 +963,10 @@ class MagnetBank:
         InputError
             A bad ``dt``, or a bank with detailed members or ``gap_inputs="pole"``.
         """
-        return self._step_kernel(self._composable_substeps(dt, "step_function"))
+        return self._step_kernel(self._composable_substeps(dt_s, "step_function"))
 
-    def step_kernel(self, dt: float) -> ca.Function:
+    @renamed_keywords(dt="dt_s")
+    def step_kernel(self, dt_s: float) -> ca.Function:
         """The compiled step that :meth:`step` calls for steps of ``dt`` [s] (lanes or
         CasADi code, or CasADi's virtual machine, by ``compiled`` and ``codegen``).
 
@@ -970,17 +974,19 @@ class MagnetBank:
         maps or a value was not finite, ``flags`` says why per circuit; diagnose with
         :meth:`step`).  Banks of reduced members with one gap input per circuit only.
 
+        Old keyword names (``dt``) are deprecated aliases for one release.
+
         Parameters
         ----------
-        dt : float
+        dt_s : float
             Step length [s] (> 0); steps with the same RK4 sub-step count share a kernel.
 
         Returns
         -------
         casadi.Function
         """
-        self._composable_substeps(dt, "step_kernel")
-        return self._kernel(float(dt)).f
+        self._composable_substeps(dt_s, "step_kernel")
+        return self._kernel(float(dt_s)).f
 
     def run_steps(self, inductor_currents_A: Any, gaps_m: Any, voltages_V: Any,
                   gap_rates_m_per_s: Any, dt_s: Any, *, time_s: float = 0.0,
@@ -1207,7 +1213,8 @@ class MagnetBank:
         self._lanes[substeps] = (f, lib)
         return f
 
-    def compiled_step_library(self, dt: float) -> tuple[ca.Function, Path] | None:
+    @renamed_keywords(dt="dt_s")
+    def compiled_step_library(self, dt_s: float) -> tuple[ca.Function, Path] | None:
         """The compiled (lanes) step over ``dt`` [s] as a CasADi external function and the
         path of its shared library, or None (no compiler, ``compiled="never"`` or
         ``codegen="casadi"``).
@@ -1216,9 +1223,11 @@ class MagnetBank:
         CasADi function that calls it can be generated as C and compiled when linked
         against the library (the vehicle's compiled step does this).
 
+        Old keyword names (``dt``) are deprecated aliases for one release.
+
         Parameters
         ----------
-        dt : float
+        dt_s : float
             Step length [s], finite and > 0 (sets the RK4 sub-step count as in
             :meth:`step_function`).
 
@@ -1231,7 +1240,7 @@ class MagnetBank:
         InputError
             A bad ``dt``, or a bank with detailed members or ``gap_inputs="pole"``.
         """
-        n = self._composable_substeps(dt, "compiled_step_library")
+        n = self._composable_substeps(dt_s, "compiled_step_library")
         if self.codegen != "lanes":
             return None
         f = self._lanes_kernel(n)
@@ -1257,12 +1266,15 @@ class MagnetBank:
         return dict(zip(self.member_names, self._circuit_slices if self.gap_inputs == "circuit"
                         else self._pole_slices, strict=True))
 
-    def circuit_gaps(self, gaps: np.ndarray) -> np.ndarray:
+    @renamed_keywords(gaps="gaps_m")
+    def circuit_gaps(self, gaps_m: np.ndarray) -> np.ndarray:
         """Substitute gap of every circuit [m] from the gap inputs.
+
+        Old keyword names (``gaps``) are deprecated aliases for one release.
 
         Parameters
         ----------
-        gaps : ndarray (n_gaps,)
+        gaps_m : ndarray (n_gaps,)
             The bank's gap inputs [m] (:attr:`gap_names`); not checked.
 
         Returns
@@ -1271,14 +1283,17 @@ class MagnetBank:
             ``gaps`` itself with ``gap_inputs="circuit"``, else the mean of every circuit's
             pole gaps.
         """
-        return gaps if self.gap_inputs == "circuit" else self._avg @ gaps
+        return gaps_m if self.gap_inputs == "circuit" else self._avg @ gaps_m
 
-    def pole_gaps(self, gaps: np.ndarray) -> np.ndarray:
+    @renamed_keywords(gaps="gaps_m")
+    def pole_gaps(self, gaps_m: np.ndarray) -> np.ndarray:
         """Gap of every pole [m] from the gap inputs.
+
+        Old keyword names (``gaps``) are deprecated aliases for one release.
 
         Parameters
         ----------
-        gaps : ndarray (n_gaps,)
+        gaps_m : ndarray (n_gaps,)
             The bank's gap inputs [m] (:attr:`gap_names`); not checked.
 
         Returns
@@ -1287,7 +1302,7 @@ class MagnetBank:
             With ``gap_inputs="circuit"`` every pole gets its circuit's gap; with
             ``"pole"`` ``gaps`` itself.
         """
-        return (self._share > 0).astype(float) @ gaps if self.gap_inputs == "circuit" else gaps
+        return (self._share > 0).astype(float) @ gaps_m if self.gap_inputs == "circuit" else gaps_m
 
     # ------------------------------------------------------------------ input handling
     def _vector(self, value: Any, names: tuple[str, ...], what: str, unit: str,
@@ -1627,8 +1642,8 @@ class MagnetBank:
         --------
         >>> import numpy as np
         >>> import maglevkit as mk
-        >>> maps = mk.build_maps(mk.load_magnet("u-magnet"), gaps=np.linspace(0.006, 0.016, 6),
-        ...                      currents=np.linspace(0, 60, 13), progress=False)
+        >>> maps = mk.build_maps(mk.load_magnet("u-magnet"), gaps_m=np.linspace(0.006, 0.016, 6),
+        ...                      currents_A=np.linspace(0, 60, 13), progress=False)
         >>> bank = mk.MagnetBank({"a": maps, "b": maps}, compiled="never")
         >>> stepper = bank.stepper(bank.initial_state(gaps_m=0.010, currents_A=20.0), dt_s=1e-3)
         >>> stepper.advance(voltages_V=45.0, gap_rates_m_per_s=0.0)
@@ -1762,15 +1777,18 @@ class MagnetBank:
         col, w = self._pole_gather
         return circuit_forces[:, col] * w
 
-    def outputs(self, state: BankState, voltages: Any = None) -> BankOutputs:
+    @renamed_keywords(voltages="voltages_V")
+    def outputs(self, state: BankState, voltages_V: Any = None) -> BankOutputs:
         """Outputs at ``state`` with ``voltages`` [V] (default: the steady-state voltages
         ``R_el I_L``; for detailed members their state's own currents).
+
+        Old keyword names (``voltages``) are deprecated aliases for one release.
 
         Parameters
         ----------
         state : BankState
             State of this bank; not checked against the bank here.
-        voltages : float, array_like (n_circuits,), mapping or None, default None
+        voltages_V : float, array_like (n_circuits,), mapping or None, default None
             Circuit voltages [V], finite: one for all, one per circuit, or circuit name ->
             value.  They set the reduced circuits' coil currents ``I = (U - U_L) / R_el``;
             detailed members ignore them (their outputs come from their state).
@@ -1788,7 +1806,7 @@ class MagnetBank:
         # (steady state: I_e = 0 in the ladder circuits, so R_el I_L there too)
         u = (self.resistance_ohm * np.where(np.isnan(state.inductor_currents_A), 0.0,
                                             state.inductor_currents_A)
-             if voltages is None else self._vector(voltages, self.circuit_names, "voltages", "V"))
+             if voltages_V is None else self._vector(voltages_V, self.circuit_names, "voltages", "V"))
         return self._outputs_at(state, u)
 
     def _outputs_at(self, state: BankState, u: np.ndarray) -> BankOutputs:

@@ -535,12 +535,15 @@ class CurrentModel:
     def n_circuits(self) -> int:
         return len(self.circuit_names)
 
-    def substitute_gaps(self, gaps: np.ndarray) -> np.ndarray:
+    @renamed_keywords(gaps="gaps_m")
+    def substitute_gaps(self, gaps_m: np.ndarray) -> np.ndarray:
         """Mean gap per circuit [m] from pole gaps (..., n_gaps).
+
+        Old keyword names (``gaps``) are deprecated aliases for one release.
 
         Parameters
         ----------
-        gaps : array_like (..., n_gaps)
+        gaps_m : array_like (..., n_gaps)
             Pole gaps [m] in the order of ``gap_names``; leading axes (e.g. time) are kept.
             Not checked (no range or sign check).
 
@@ -549,7 +552,7 @@ class CurrentModel:
         ndarray (..., n_circuits)
             Substitute gap ``s`` of every circuit [m]: the mean of its poles' gaps.
         """
-        return np.asarray(gaps) @ self._avg.T
+        return np.asarray(gaps_m) @ self._avg.T
 
     def _outs(self, x: Any, u: Any) -> Any:
         """``outputs_fun`` on a full state ``x = [I_L; s(; I_ec)]`` with voltages ``u``."""
@@ -815,16 +818,19 @@ class CurrentModel:
                                      np.zeros((self.n_circuits, self._n_e)))
         return CurrentModelState(float(time), i, g)
 
-    def outputs(self, state: CurrentModelState, voltages: Any = None) -> CurrentOutputs:
+    @renamed_keywords(voltages="voltages_V")
+    def outputs(self, state: CurrentModelState, voltages_V: Any = None) -> CurrentOutputs:
         """Outputs at ``state`` with ``voltages`` [V] applied (default: the steady-state
         voltages ``R_el I_L``, as in :meth:`initial_state`).
+
+        Old keyword names (``voltages``) are deprecated aliases for one release.
 
         Parameters
         ----------
         state : CurrentModelState
             State of this model (from :meth:`initial_state`, :meth:`step` or a
             simulation's ``final_state``); not range-checked here.
-        voltages : float, array_like (n_circuits,), mapping or None, default None
+        voltages_V : float, array_like (n_circuits,), mapping or None, default None
             Circuit voltages [V] (one for all, one per circuit, or circuit name -> value);
             they set the coil current ``I = (U - U_L) / R_el``. None: ``R_el I_L``.
 
@@ -838,8 +844,8 @@ class CurrentModel:
         InputError
             Voltages of the wrong count or names, or not finite.
         """
-        u = (self.resistance_ohm * state.inductor_currents_A if voltages is None
-             else _per_circuit(voltages, self.circuit_names, "voltages"))
+        u = (self.resistance_ohm * state.inductor_currents_A if voltages_V is None
+             else _per_circuit(voltages_V, self.circuit_names, "voltages"))
         x = np.concatenate([state.inductor_currents_A, self.substitute_gaps(state.gaps_m),
                             self._eddy_state(state)])
         coil, fc, _ = (np.asarray(v).ravel() for v in self._outs(x, u))

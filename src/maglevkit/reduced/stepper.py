@@ -61,13 +61,14 @@ class BankStepper:
     state : BankState
         Start state of ``bank``.  The inputs start at its steady state: voltages
         ``R_el I`` [V], its gaps [m] and zero gap rates [m/s].
-    dt : float
-        Step length [s], finite and > 0 (fixed for the stepper's life).
+    dt_s : float
+        Step length [s], finite and > 0 (fixed for the stepper's life; deprecated alias
+        ``dt``).
 
     Raises
     ------
     InputError
-        ``state`` not a state of ``bank``, or a bad ``dt``.
+        ``state`` not a state of ``bank``, or a bad ``dt_s``.
 
     Attributes
     ----------
@@ -84,8 +85,8 @@ class BankStepper:
     >>> import numpy as np
     >>> import maglevkit as mk
     >>> magnet = mk.load_magnet("u-magnet")
-    >>> maps = mk.build_maps(magnet, gaps=np.linspace(0.006, 0.016, 6),
-    ...                      currents=np.linspace(0, 60, 13), progress=False)
+    >>> maps = mk.build_maps(magnet, gaps_m=np.linspace(0.006, 0.016, 6),
+    ...                      currents_A=np.linspace(0, 60, 13), progress=False)
     >>> bank = mk.MagnetBank({f"m{k}": maps for k in range(4)}, compiled="never")
     >>> stepper = bank.stepper(bank.initial_state(gaps_m=0.010, currents_A=20.0), dt_s=1e-3)
     >>> force = stepper.circuit_force_N            # bound once, always the last step's
@@ -101,10 +102,11 @@ class BankStepper:
                  "_force", "_member", "_pole", "_views", "_state_gaps", "_state",
                  "_buf", "_eval", "_res", "_n_bad", "_h", "_block", "_scratch", "_ie")
 
-    def __init__(self, bank: MagnetBank, state: BankState, dt: float) -> None:
+    @renamed_keywords(dt="dt_s")
+    def __init__(self, bank: MagnetBank, state: BankState, dt_s: float) -> None:
         bank._check_state(state)
         self._bank = bank
-        self._dt = check_step(dt)
+        self._dt = check_step(dt_s)
         nc, ng = bank.n_circuits, bank.n_gaps
         out = bank.outputs(state)
         # steady-state voltages U = R_el I (I = I_L for reduced circuits in steady state)

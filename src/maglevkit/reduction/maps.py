@@ -43,7 +43,7 @@ import numpy as np
 from ..circuit.network import Network
 from ..errors import InputError, ParameterFileError, SolverError
 from ..models.statics import as_network, circuit_pole_groups, solve_statics
-from ..validation import real_array
+from ..validation import real_array, renamed_keywords
 from .eddy_network import EDDY_NETWORK_MODES, EddyNetworkFit, fit_eddy_network
 from .motion_eddy import detailed_frequency_response, fit_motion_eddy
 from .parameters import eddy_resistance
@@ -103,8 +103,8 @@ def _statics_row(net: Network, s: float, currents: np.ndarray,
                  groups: dict[str, tuple[str, ...]]) -> dict[str, np.ndarray]:
     """Maps for one gap value over all currents (one executor task)."""
     gi = {g: k for k, g in enumerate(net.gap_names)}
-    sol = solve_statics(net, gaps=np.full((currents.size, len(gi)), s),
-                        currents=np.repeat(currents[:, None], len(net.circuits), axis=1))
+    sol = solve_statics(net, gaps_m=np.full((currents.size, len(gi)), s),
+                        currents_A=np.repeat(currents[:, None], len(net.circuits), axis=1))
     nc = len(net.circuits)
     force = np.empty((nc, currents.size))
     dpsi_ds = np.empty((nc, currents.size))
@@ -123,8 +123,8 @@ def _statics_row(net: Network, s: float, currents: np.ndarray,
         # dL/ds -> dL0/ds: central difference in s of the small-signal inductance
         # (h = 1e-6 s: truncation ~1e-12, rounding ~1e-10 relative).
         h = 1e-6 * s
-        side = solve_statics(net, gaps=np.array([[s + h] * len(gi), [s - h] * len(gi)]),
-                             currents=np.zeros((2, nc)))
+        side = solve_statics(net, gaps_m=np.array([[s + h] * len(gi), [s - h] * len(gi)]),
+                             currents_A=np.zeros((2, nc)))
         l0 = np.diagonal(side.differential_inductance_H, axis1=-2, axis2=-1)
         for j, c in enumerate(net.circuit_names):
             # moving only the circuit's own poles: sum of partial derivatives
@@ -136,7 +136,7 @@ def _statics_row(net: Network, s: float, currents: np.ndarray,
                 sm = sp.copy()
                 sp[idx] += h
                 sm[idx] -= h
-                two = solve_statics(net, gaps=np.stack([sp, sm]), currents=np.zeros((2, nc)))
+                two = solve_statics(net, gaps_m=np.stack([sp, sm]), currents_A=np.zeros((2, nc)))
                 lj = two.differential_inductance_H[:, j, j]
                 d = (lj[0] - lj[1]) / (2 * h)
             dlds[j, zero] = d
@@ -479,12 +479,19 @@ class StepRun:
     """
 
     def __init__(self, net: Network, n_out: int, tau: np.ndarray | None = None,
-                 params: Any = None, topology: Network | None = None) -> None:
+                 params: Any = None, topology: Network | None = None, *,
+                 eddy_scale: Any = 1.0, resistance_scale: Any = 1.0) -> None:
         """``params``: CasADi symbols that ``net``'s elements contain (calibration
         factors, :mod:`maglevkit.calibration`), appended to the DAE's parameters (``dae``
         attribute; the IDAS ``integrator`` is not built then); ``topology``: a numeric
         network of the same topology and eddy elements for ``D``, ``K``, ``Q`` (default
-        ``net``)."""
+        ``net``); ``eddy_scale``, ``resistance_scale``: factors (numbers or expressions of
+        ``params``) on every eddy conductance and every ``R_el`` of ``topology``.
+
+        Every ``G_ec`` times ``k`` scales the loop rows of ``M = K D`` (``C G C^T``), so
+        ``K(k) = S K`` with ``S = diag(k 1_loops, 1_circuits)``: ``K(k) y' = h`` is
+        ``K y' = S^-1 h``, i.e. the loop rows of ``h`` divided by ``k`` (exact, no new
+        matrices)."""
         import casadi as ca
 
         from ..circuit.assembly import assemble
@@ -496,7 +503,8 @@ class StepRun:
         y = ca.SX.sym("y", d.n_diff)
         U = ca.SX.sym("U", d.n_circuits)
         T = ca.SX.sym("T")
-        hv = ca.vertcat(-eq.residual, U - net.resistances * eq.I)
+        hv = ca.vertcat(-eq.residual / eddy_scale, U - resistance_scale
+                        * net.resistances * eq.I)
         ydot = ca.mtimes(ca.DM(np.linalg.pinv(d.K)), hv)
         alg = ca.vertcat(ca.mtimes(ca.DM(d.D), eq.x) - y, ca.mtimes(ca.DM(d.Q), hv))
         p = ca.vertcat(T, U, eq.s) if params is None else ca.vertcat(T, U, eq.s, params)
@@ -541,7 +549,7 @@ def _fitted_eddy_resistance(net: Network, gap: float, current: float) -> np.ndar
     nc = len(net.circuits)
     if not net.has_eddy_currents:
         return np.full(nc, np.inf)
-    sol = solve_statics(net, gaps=np.full(len(net.gap_names), gap), currents=np.full(nc, current))
+    sol = solve_statics(net, gaps_m=np.full(len(net.gap_names), gap), currents_A=np.full(nc, current))
     x0 = np.asarray(sol.loop_flux_Wb, dtype=float).ravel()
     i0 = np.asarray(sol.currents_A, dtype=float).ravel()
     s0 = np.asarray(sol.gaps_m, dtype=float).ravel()
@@ -598,7 +606,7 @@ def _eddy_network_steps(net: Network, gap: float, current: float
     (``dpsi_j/dI_j`` of the statics) per circuit.
     """
     nc = len(net.circuits)
-    sol = solve_statics(net, gaps=np.full(len(net.gap_names), gap), currents=np.full(nc, current))
+    sol = solve_statics(net, gaps_m=np.full(len(net.gap_names), gap), currents_A=np.full(nc, current))
     x0 = np.asarray(sol.loop_flux_Wb, dtype=float).ravel()
     i0 = np.asarray(sol.currents_A, dtype=float).ravel()
     s0 = np.asarray(sol.gaps_m, dtype=float).ravel()
@@ -724,7 +732,7 @@ def _store_motion_eddy(ds: Any, net: Network, gap: float, current: float,
     rms = np.full(nc, np.nan)
     if net.has_eddy_currents:
         responses = detailed_frequency_response(net, gap=gap, current=current, groups=groups)
-        r_jump = eddy_resistance(net, gap=gap, current=current)
+        r_jump = eddy_resistance(net, gap_m=gap, current_A=current)
         for j, resp in enumerate(responses):
             fit = fit_motion_eddy(resp, r_el=float(net.resistances[j]),
                                   r_ec_jump=float(r_jump[j]), r_ec_fit=float(r_ec_fit[j]))
@@ -802,7 +810,8 @@ def maps_dataset(data: dict[str, np.ndarray], *, circuits: Sequence[str], gaps_m
     return ds
 
 
-def build_maps(model: Any, *, gaps: Any, currents: Any, executor: Any = "auto",
+@renamed_keywords(gaps="gaps_m", currents="currents_A")
+def build_maps(model: Any, *, gaps_m: Any, currents_A: Any, executor: Any = "auto",
                progress: bool = True, method: str = "statics",
                eddy_reference: Any = None) -> CharacteristicMaps:
     """Compute the characteristic maps of a magnet on a regular gap x current grid.
@@ -811,10 +820,12 @@ def build_maps(model: Any, *, gaps: Any, currents: Any, executor: Any = "auto",
     ----------
     model : Magnet or Network
         The detailed model.
-    gaps : array_like
-        Equidistant gap grid [m] (> 0, at least 4 points).
-    currents : array_like
-        Equidistant current grid [A] (>= 0, at least 4 points).
+    gaps_m : array_like
+        Equidistant gap grid [m] (> 0, at least 4 points; deprecated alias ``gaps``).
+        Stored as the maps' ``gap`` coordinate.
+    currents_A : array_like
+        Equidistant current grid [A] (>= 0, at least 4 points; deprecated alias
+        ``currents``).  Stored as the maps' ``current`` coordinate.
     executor : "auto", None, "serial", "process", Executor or dask Client
         Where the tasks (statics: one per gap row; transient: one per grid point) run.
         ``"auto"`` (default): statics rows always in this process, transient points in
@@ -858,11 +869,11 @@ def build_maps(model: Any, *, gaps: Any, currents: Any, executor: Any = "auto",
     if method not in METHODS:
         raise InputError(f"method = {method!r}; use one of {list(METHODS)}")
     net = as_network(model)
-    g = check_grid(gaps, "gap", "m", positive=True)
-    c = check_grid(currents, "current", "A", positive=False)
+    g = check_grid(gaps_m, "gap", "m", positive=True)
+    c = check_grid(currents_A, "current", "A", positive=False)
     ref_gap, ref_current = float(g[g.size // 2]), float(max(c[c.size // 2], c[-1] / 2))
     eddy_gap, eddy_current = _eddy_point(eddy_reference, g, c, ref_gap, ref_current)
-    groups = circuit_pole_groups(net, gap=ref_gap, current=ref_current)
+    groups = circuit_pole_groups(net, gap_m=ref_gap, current_A=ref_current)
     ex, owned = _as_executor(executor, method, g.size * c.size)
     done = False
     try:
@@ -903,11 +914,11 @@ def build_maps(model: Any, *, gaps: Any, currents: Any, executor: Any = "auto",
         data["eddy_resistance_step_ohm"] = tdata["eddy_resistance_step_ohm"]
     ds = maps_dataset(data, circuits=net.circuit_names, gaps_m=g, currents_A=c,
                       resistance_ohm=net.resistances)
-    r_ec = eddy_resistance(net, gap=ref_gap, current=ref_current)
+    r_ec = eddy_resistance(net, gap_m=ref_gap, current_A=ref_current)
     # R_ec depends on the operating point only through the iron's differential
     # reluctances (and not at all when every loop carries an eddy element): its spread
     # over the grid corners is recorded, not hidden.
-    corners = np.array([eddy_resistance(net, gap=float(sv), current=float(iv))
+    corners = np.array([eddy_resistance(net, gap_m=float(sv), current_A=float(iv))
                         for sv in (g[0], g[-1]) for iv in (c[0], c[-1])])
     with np.errstate(invalid="ignore"):
         spread = np.where(np.isinf(r_ec), 0.0, np.ptp(corners, axis=0) / np.where(

@@ -132,7 +132,7 @@ def detailed_frequency_response(net: Any, *, gap: float, current: float,
                       [ca.jacobian(ydot, y), ca.jacobian(ydot, z), ca.jacobian(ydot, w),
                        ca.jacobian(alg, y), ca.jacobian(alg, z), ca.jacobian(alg, w),
                        ca.jacobian(eq.force, z), ca.jacobian(eq.force, w)])
-    sol = solve_statics(net, gaps=np.full(ng, gap), currents=np.full(nc, current))
+    sol = solve_statics(net, gaps_m=np.full(ng, gap), currents_A=np.full(nc, current))
     x0 = np.asarray(sol.loop_flux_Wb, dtype=float).ravel()
     i0 = np.asarray(sol.currents_A, dtype=float).ravel()
     s0 = np.asarray(sol.gaps_m, dtype=float).ravel()
@@ -150,7 +150,7 @@ def detailed_frequency_response(net: Any, *, gap: float, current: float,
     b = fw - fz @ gzi_gw
     cz, dz = -gzi_gy, -gzi_gw
     if groups is None:
-        groups = circuit_pole_groups(net, gap=gap, current=current)
+        groups = circuit_pole_groups(net, gap_m=gap, current_A=current)
     gi = {g: k for k, g in enumerate(net.gap_names)}
     eye = np.eye(a.shape[0])
     nl = d.n_loops

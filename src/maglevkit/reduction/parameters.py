@@ -37,6 +37,7 @@ from ..circuit.network import Network
 from ..errors import InputError, SolverError
 from ..models.flux import DEFAULT_ATOL, DEFAULT_RTOL, flux_dae
 from ..models.statics import as_network, solve_statics
+from ..validation import renamed_keywords
 
 __all__ = ["current_jump_admittance", "eddy_resistance"]
 
@@ -57,16 +58,19 @@ def _structure(net: Network) -> Any:
     return flux_dae(net, "idas", DEFAULT_RTOL, DEFAULT_ATOL, 20000, 2, 3)
 
 
-def current_jump_admittance(model: Any, *, gap: Any, current: Any) -> np.ndarray:
+@renamed_keywords(gap="gap_m", current="current_A")
+def current_jump_admittance(model: Any, *, gap_m: Any, current_A: Any) -> np.ndarray:
     """``Y = dI/dU`` [S] at fixed flux linkages and eddy fluxes (instantaneous current jump).
+
+    Old keyword names (``gap``, ``current``) are deprecated aliases for one release.
 
     Parameters
     ----------
     model : Magnet, Network or FluxModel
         The detailed model (with eddy-current elements for a non-zero result).
-    gap : float, sequence or mapping
+    gap_m : float, sequence or mapping
         Gap(s) [m] of one operating point (scalar: all gaps equal).
-    current : float, sequence or mapping
+    current_A : float, sequence or mapping
         Circuit current(s) [A] of the operating point (scalar: every circuit).
 
     Returns
@@ -83,7 +87,7 @@ def current_jump_admittance(model: Any, *, gap: Any, current: Any) -> np.ndarray
         If the statics cannot be solved.
     """
     net = as_network(model)
-    sol = solve_statics(net, gaps=gap, currents=current)
+    sol = solve_statics(net, gaps_m=gap_m, currents_A=current_A)
     if sol.shape != ():
         raise InputError("current_jump_admittance takes one operating point (scalar or one "
                          "value per gap / circuit)")
@@ -101,7 +105,8 @@ def current_jump_admittance(model: Any, *, gap: Any, current: Any) -> np.ndarray
     return np.asarray(dz_du[nl:, :])
 
 
-def eddy_resistance(model: Any, *, gap: Any, current: Any) -> np.ndarray:
+@renamed_keywords(gap="gap_m", current="current_A")
+def eddy_resistance(model: Any, *, gap_m: Any, current_A: Any) -> np.ndarray:
     """Eddy-current resistance ``R_ec`` [ohm] per circuit at one operating point.
 
     ``R_ec,j = 1 / Y_jj - R_el,j`` with ``Y`` from :func:`current_jump_admittance`: the
@@ -109,13 +114,15 @@ def eddy_resistance(model: Any, *, gap: Any, current: Any) -> np.ndarray:
     instantaneous current jump under a voltage step of circuit ``j`` (other voltages
     held).  ``inf`` where the circuit sees no eddy currents (``Y_jj = 0``).
 
+    Old keyword names (``gap``, ``current``) are deprecated aliases for one release.
+
     Parameters
     ----------
     model : Magnet, Network or FluxModel
         The detailed model (with eddy-current elements for a finite result).
-    gap : float, sequence or mapping
+    gap_m : float, sequence or mapping
         Gap(s) [m] of one operating point, > 0 (scalar: all gaps equal; keyword only).
-    current : float, sequence or mapping
+    current_A : float, sequence or mapping
         Circuit current(s) [A] of the operating point (scalar: every circuit; keyword
         only).
 
@@ -133,7 +140,7 @@ def eddy_resistance(model: Any, *, gap: Any, current: Any) -> np.ndarray:
         If the statics cannot be solved, or ``Y_jj > 1 / R_el`` (a negative ``R_ec``).
     """
     net = as_network(model)
-    y = current_jump_admittance(net, gap=gap, current=current)
+    y = current_jump_admittance(net, gap_m=gap_m, current_A=current_A)
     out = np.empty(y.shape[0])
     for j in range(y.shape[0]):
         yjj = float(y[j, j])
@@ -150,7 +157,7 @@ def eddy_resistance(model: Any, *, gap: Any, current: Any) -> np.ndarray:
                 raise SolverError(
                     f"eddy_resistance: negative R_ec = {out[j]:.6g} ohm for circuit "
                     f"{net.circuit_names[j]!r}",
-                    state={"gap_m": gap, "current_A": current},
+                    state={"gap_m": gap_m, "current_A": current_A},
                     reason=f"current-jump admittance Y_jj = {yjj:.9g} S exceeds 1/R_el = "
                            f"{1.0 / r_el:.9g} S (R_el = {r_el:g} ohm); R_ec must be >= 0 "
                            "for a passive network (rounding or a non-passive model)")

@@ -911,7 +911,7 @@ def _identity(table: GridTable, magnet: Any, pole_groups: Mapping[str, Sequence[
         r_default = net.resistances[order]
         mid_g = float(table.gaps_m[table.gaps_m.size // 2])
         mid_c = float(max(table.currents_A[table.currents_A.size // 2], table.currents_A[-1] / 2))
-        groups0 = pole_groups or circuit_pole_groups(net, gap=mid_g, current=mid_c)
+        groups0 = pole_groups or circuit_pole_groups(net, gap_m=mid_g, current_A=mid_c)
         default_name = str(getattr(magnet, "name", net.name))
         gap_names = tuple(net.gap_names)
     else:

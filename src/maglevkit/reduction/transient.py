@@ -20,7 +20,7 @@ Both quantities come from simulations of the detailed flux-based model (``models
 At ``I = 0`` the flux linkage is zero and stays zero, so the ramp carries no information.
 The map needs the limit ``dL/ds(s, 0) = dL0/ds`` (the small-signal inductance's slope);
 it is taken from the same experiment at the small current ``I_eps = 1e-4 A``
-(``zero_current``).  The Roschke B-H law's permeability rises linearly with ``|B|`` from
+(``zero_current_A``).  The Roschke B-H law's permeability rises linearly with ``|B|`` from
 its initial value, so ``L(s, I) = L0(s) + O(|I|)``: on the U-magnet ``dL/ds`` at 1e-3 A
 differs from the limit by 6e-4 relative, at 1e-4 A by < 1e-5 (measured).
 """
@@ -39,7 +39,7 @@ from ..errors import InputError, SolverError
 from ..models.experiments import differential_inductance_from_step
 from ..models.flux import FluxModel
 from ..models.statics import as_network, solve_statics
-from ..validation import real_number, whole_number
+from ..validation import real_number, renamed_keywords, whole_number
 
 __all__ = ["RampEstimate", "RampResponse", "dl_ds_from_ramp", "flux_held_ramp", "transient_point"]
 
@@ -137,26 +137,31 @@ def _held(net: Network, n_out: int) -> _HeldRamp:
     return obj  # type: ignore[no-any-return]
 
 
-def flux_held_ramp(model: Any, *, gap: Any, current: Any, gap_change: Any, duration: float,
+@renamed_keywords(gap="gap_m", current="current_A", gap_change="gap_change_m",
+                  duration="duration_s")
+def flux_held_ramp(model: Any, *, gap_m: Any, current_A: Any, gap_change_m: Any, duration_s: float,
                    samples: int = 201) -> RampResponse:
     """Simulate the detailed model under ``U = R_el I`` with linearly moving gaps.
 
-    Starts at rest at the static operating point (``gap`` [m], ``current`` [A]) and moves
-    every gap linearly by ``gap_change`` [m] (scalar or per gap) over ``duration`` [s].
+    Starts at rest at the static operating point (``gap_m``, ``current_A``) and moves
+    every gap linearly by ``gap_change_m`` (scalar or per gap) over ``duration_s``.
+
+    Old keyword names (``gap``, ``current``, ``gap_change``, ``duration``) are deprecated
+    aliases for one release.
 
     Parameters
     ----------
     model : Magnet, Network or FluxModel
         The detailed model (its network is used).
-    gap : float, sequence or mapping
+    gap_m : float, sequence or mapping
         Gap(s) [m] of one operating point at the start, > 0 (scalar: all gaps equal;
         keyword only, like all that follow).
-    current : float, sequence or mapping
+    current_A : float, sequence or mapping
         Circuit current(s) [A] at the start (scalar: every circuit).
-    gap_change : float or array_like (n_gaps,)
+    gap_change_m : float or array_like (n_gaps,)
         Change of each gap over the ramp [m] (scalar: every gap); finite, and the gaps
         must stay > 0.
-    duration : float
+    duration_s : float
         Ramp time [s], finite and > 0.
     samples : int, default 201
         Output samples including the start (integer >= 10); one compiled integrator is
@@ -169,26 +174,26 @@ def flux_held_ramp(model: Any, *, gap: Any, current: Any, gap_change: Any, durat
     Raises
     ------
     InputError
-        ``duration`` or ``samples`` out of range, more than one operating point, bad
-        gaps or currents, or a ``gap_change`` that is not finite or closes a gap.
+        ``duration_s`` or ``samples`` out of range, more than one operating point, bad
+        gaps or currents, or a ``gap_change_m`` that is not finite or closes a gap.
     SolverError
         If the statics or the integration fail.
     """
     net = as_network(model)
-    duration = real_number(duration, "duration", "s", positive=True)
+    duration_s = real_number(duration_s, "duration", "s", positive=True)
     samples = whole_number(samples, "samples", minimum=10)
-    sol = solve_statics(net, gaps=gap, currents=current)
+    sol = solve_statics(net, gaps_m=gap_m, currents_A=current_A)
     if sol.shape != ():
         raise InputError("flux_held_ramp takes one operating point")
-    dsv = np.broadcast_to(np.asarray(gap_change, dtype=float), sol.gaps_m.shape).copy()
+    dsv = np.broadcast_to(np.asarray(gap_change_m, dtype=float), sol.gaps_m.shape).copy()
     if not np.all(np.isfinite(dsv)) or np.any(sol.gaps_m + dsv <= 0.0):
-        raise InputError(f"gap_change = {gap_change!r} m must be finite and keep the gaps > 0")
+        raise InputError(f"gap_change = {gap_change_m!r} m must be finite and keep the gaps > 0")
     h = _held(net, samples)
     x0 = np.asarray(sol.loop_flux_Wb, dtype=float)
     xd0 = np.concatenate((h.D @ x0, sol.gaps_m))
     try:
         res = h.integrator(x0=xd0, z0=np.concatenate((x0, sol.currents_A)),
-                           p=np.concatenate(((duration,), dsv)))
+                           p=np.concatenate(((duration_s,), dsv)))
     except RuntimeError as exc:
         raise SolverError("flux-held gap ramp failed", state={"gap_m": sol.gaps_m,
                           "current_A": sol.currents_A}, reason=str(exc)[-300:]) from None
@@ -196,38 +201,43 @@ def flux_held_ramp(model: Any, *, gap: Any, current: Any, gap_change: Any, durat
     zf = np.hstack((np.concatenate((x0, sol.currents_A))[:, None], np.asarray(res["zf"])))
     loops = zf[:h.n_loops]
     psi = np.asarray(h.psi(loops)).T
-    return RampResponse(time_s=duration * h.tau, gaps_m=xf[h.n_diff:].T.copy(),
+    return RampResponse(time_s=duration_s * h.tau, gaps_m=xf[h.n_diff:].T.copy(),
                         currents_A=zf[h.n_loops:].T.copy(), flux_linkage_Wb=psi)
 
 
-def dl_ds_from_ramp(model: Any, *, gap: float, current: float, circuit: int = 0,
-                    poles: Any = None, inductance: float | None = None,
-                    relative_gap_change: float = 0.02, duration: float | None = None,
-                    zero_current: float = 1e-4, samples: int = 201) -> RampEstimate:
+@renamed_keywords(gap="gap_m", current="current_A", inductance="inductance_H",
+                  duration="duration_s", zero_current="zero_current_A")
+def dl_ds_from_ramp(model: Any, *, gap_m: float, current_A: float, circuit: int = 0,
+                    poles: Any = None, inductance_H: float | None = None,
+                    relative_gap_change: float = 0.02, duration_s: float | None = None,
+                    zero_current_A: float = 1e-4, samples: int = 201) -> RampEstimate:
     """Identify ``dL/ds(s, I)`` of circuit ``circuit`` by the virtual control law (paper IV-B).
+
+    Old keyword names (``gap``, ``current``, ``inductance``, ``duration``, ``zero_current``)
+    are deprecated aliases for one release.
 
     Parameters
     ----------
     model : Magnet, Network or FluxModel
         The detailed model (its network is used).
-    gap, current : float
-        Operating point: every gap at ``gap`` [m] (> 0), every circuit at ``current``
-        [A] (finite, >= 0: the maps are even in the current).  Keyword only, like all
-        that follow.
+    gap_m, current_A : float
+        Operating point: every gap at ``gap_m`` [m] (> 0), every circuit at
+        ``current_A`` [A] (finite, >= 0: the maps are even in the current).  Keyword
+        only, like all that follow.
     circuit : int
         Index of the circuit, ``0 .. n_circuits - 1``.
     poles : sequence of int, optional
         Indices of the gap inputs that move (the circuit's own poles); default all.
-    inductance : float, optional
+    inductance_H : float, optional
         ``L~`` [H] to convert the slope; default: identified by a voltage step
         (:func:`~maglevkit.models.experiments.differential_inductance_from_step`), which
         keeps the method independent of the statics' sensitivities.
     relative_gap_change : float
         Ramp length as a fraction of the gap, in (0, 0.2] (default 0.02; the cubic fit
         removes the curvature).
-    duration : float, optional
+    duration_s : float, optional
         Ramp time [s]; default ``50 L~/R_el`` (slow compared with the eddy currents).
-    zero_current : float
+    zero_current_A : float
         Current [A], > 0, used when ``current == 0`` (the limit ``I -> 0``, see module
         doc; default 1e-4 A).
     samples : int
@@ -252,11 +262,11 @@ def dl_ds_from_ramp(model: Any, *, gap: float, current: float, circuit: int = 0,
     relative_gap_change = real_number(relative_gap_change, "relative_gap_change")
     if not 0.0 < relative_gap_change <= 0.2:
         raise InputError(f"relative_gap_change = {relative_gap_change!r} must lie in (0, 0.2]")
-    current = real_number(current, "current", "A")
-    if current < 0.0:
-        raise InputError(f"current = {current!r} A must be a finite number >= 0 (maps are even "
+    current_A = real_number(current_A, "current", "A")
+    if current_A < 0.0:
+        raise InputError(f"current = {current_A!r} A must be a finite number >= 0 (maps are even "
                          "in the current)")
-    zero_current = real_number(zero_current, "zero_current", "A", positive=True)
+    zero_current_A = real_number(zero_current_A, "zero_current", "A", positive=True)
     ng = len(net.gap_names)
     if poles is None:
         idx = list(range(ng))
@@ -268,27 +278,27 @@ def dl_ds_from_ramp(model: Any, *, gap: float, current: float, circuit: int = 0,
         if not idx or max(idx) >= ng or len(set(idx)) != len(idx):
             raise InputError(f"poles = {list(poles)!r}: expected at least one distinct "
                              f"gap-input index in 0..{ng - 1} (or None: all gaps)")
-    i_exp = float(current) if current > 0.0 else float(zero_current)
-    if inductance is None:
-        inductance = differential_inductance_from_step(net, gap=gap, current=i_exp,
+    i_exp = float(current_A) if current_A > 0.0 else float(zero_current_A)
+    if inductance_H is None:
+        inductance_H = differential_inductance_from_step(net, gap_m=gap_m, current_A=i_exp,
                                                        circuit=circuit).inductance_H
     r_el = float(net.resistances[circuit])
-    if duration is None:
-        duration = 50.0 * inductance / r_el
+    if duration_s is None:
+        duration_s = 50.0 * inductance_H / r_el
     change = np.zeros(ng)
-    change[idx] = relative_gap_change * gap
-    resp = flux_held_ramp(net, gap=gap, current=i_exp, gap_change=change, duration=duration,
+    change[idx] = relative_gap_change * gap_m
+    resp = flux_held_ramp(net, gap_m=gap_m, current_A=i_exp, gap_change_m=change, duration_s=duration_s,
                           samples=samples)
     cur = resp.currents_A[:, circuit]
     if np.any(cur <= 0.0):
         raise SolverError("the current changed sign on the flux-held ramp",
-                          state={"gap_m": gap, "current_A": i_exp})
-    u = (resp.gaps_m[:, idx[0]] - gap) / (relative_gap_change * gap)   # 0..1
+                          state={"gap_m": gap_m, "current_A": i_exp})
+    u = (resp.gaps_m[:, idx[0]] - gap_m) / (relative_gap_change * gap_m)   # 0..1
     coef = np.polynomial.polynomial.polyfit(u, np.log(cur), 3)
     fit = np.polynomial.polynomial.polyval(u, coef) - np.log(cur)
-    slope = float(coef[1]) / (relative_gap_change * gap)
-    return RampEstimate(dL_ds_H_per_m=-inductance * slope, dlnI_ds_per_m=slope,
-                        inductance_H=float(inductance), current_A=i_exp,
+    slope = float(coef[1]) / (relative_gap_change * gap_m)
+    return RampEstimate(dL_ds_H_per_m=-inductance_H * slope, dlnI_ds_per_m=slope,
+                        inductance_H=float(inductance_H), current_A=i_exp,
                         fit_rms=float(np.sqrt(np.mean(fit**2))), response=resp)
 
 
@@ -329,13 +339,13 @@ def transient_point(key: str, net: Network, s: float, current: float,
     nc = len(net.circuits)
     lt, dl, rec = np.empty(nc), np.empty(nc), np.empty(nc)
     for j in range(nc):
-        step = differential_inductance_from_step(net, gap=s, current=current, circuit=j,
+        step = differential_inductance_from_step(net, gap_m=s, current_A=current, circuit=j,
                                                  rtol=RTOL, atol=ATOL)
         if current > 0.0:
             l_ramp = step.inductance_H
         else:   # the ramp runs at I_eps; use L~ at the same current
             l_ramp = None
-        ramp = dl_ds_from_ramp(net, gap=s, current=current, circuit=j, poles=poles[j],
-                               inductance=l_ramp)
+        ramp = dl_ds_from_ramp(net, gap_m=s, current_A=current, circuit=j, poles=poles[j],
+                               inductance_H=l_ramp)
         lt[j], dl[j], rec[j] = step.inductance_H, ramp.dL_ds_H_per_m, step.eddy_resistance_ohm
     return {"inductance_H": lt, "dL_ds_H_per_m": dl, "eddy_resistance_step_ohm": rec}

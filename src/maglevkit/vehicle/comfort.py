@@ -37,7 +37,7 @@ from typing import Any
 import numpy as np
 
 from ..errors import InputError
-from ..validation import real_array, real_number
+from ..validation import real_array, real_number, renamed_keywords
 
 __all__ = [
     "WD_PARAMETERS",
@@ -158,16 +158,19 @@ def iso2631_wd(frequency_Hz: Any) -> np.ndarray:
     return _response(WD_PARAMETERS, frequency_Hz)
 
 
-def lateral_comfort_indices(acceleration: Any, sample_rate_Hz: float
+@renamed_keywords(acceleration="acceleration_m_per_s2")
+def lateral_comfort_indices(acceleration_m_per_s2: Any, sample_rate_Hz: float
                             ) -> tuple[np.ndarray, np.ndarray]:
     """ISO 2631-1 ``Wd``-weighted RMS [m/s^2] and Sperling's lateral ``Wz`` [-] of every
     column of a lateral acceleration record, one FFT per record (as
     :func:`comfort_indices` with the horizontal weightings: ``Wd`` and ``B_y =
     SPERLING_LATERAL_FACTOR B``).
 
+    Old keyword names (``acceleration``) are deprecated aliases for one release.
+
     Parameters
     ----------
-    acceleration : array_like (n, m)
+    acceleration_m_per_s2 : array_like (n, m)
         Lateral accelerations [m/s^2], n >= 8 samples of m records, finite.
     sample_rate_Hz : float
         Sampling rate [Hz], > 0.
@@ -182,7 +185,7 @@ def lateral_comfort_indices(acceleration: Any, sample_rate_Hz: float
     InputError
         A record that is not finite (n, m) with n >= 8, or a bad sampling rate.
     """
-    return _indices(acceleration, sample_rate_Hz, iso2631_wd, SPERLING_LATERAL_FACTOR)
+    return _indices(acceleration_m_per_s2, sample_rate_Hz, iso2631_wd, SPERLING_LATERAL_FACTOR)
 
 
 def sperling_weighting(frequency_Hz: Any) -> np.ndarray:
@@ -229,12 +232,14 @@ def _weighted_rms(spectrum: np.ndarray, n: int, magnitude: np.ndarray) -> np.nda
     return np.sqrt(np.tensordot(c, power, axes=(0, 0)) / float(n) ** 2)
 
 
-def comfort_indices(acceleration: Any, sample_rate_Hz: float
+@renamed_keywords(acceleration="acceleration_m_per_s2")
+def comfort_indices(acceleration_m_per_s2: Any, sample_rate_Hz: float
                     ) -> tuple[np.ndarray, np.ndarray]:
     """ISO 2631-1 ``a_w`` [m/s^2] (frequency domain) and Sperling's ``Wz`` [-] of every
-    column of ``acceleration`` (n samples, m records) [m/s^2], one FFT per record:
-    :func:`iso2631_weighted_rms` and :func:`sperling_index` of each column."""
-    return _indices(acceleration, sample_rate_Hz, iso2631_wk, 1.0)
+    column of ``acceleration_m_per_s2`` (n samples, m records) [m/s^2], one FFT per record:
+    :func:`iso2631_weighted_rms` and :func:`sperling_index` of each column (the old keyword
+    ``acceleration`` is a deprecated alias for one release)."""
+    return _indices(acceleration_m_per_s2, sample_rate_Hz, iso2631_wk, 1.0)
 
 
 def _indices(acceleration: Any, sample_rate_Hz: float, iso_weighting: Any,
@@ -252,13 +257,16 @@ def _indices(acceleration: Any, sample_rate_Hz: float, iso_weighting: Any,
     return aw, SPERLING_SCALE * _weighted_rms(spec, a.shape[0], b) ** 0.3
 
 
-def iso2631_weighted_rms(acceleration: Any, sample_rate_Hz: float, *,
+@renamed_keywords(acceleration="acceleration_m_per_s2")
+def iso2631_weighted_rms(acceleration_m_per_s2: Any, sample_rate_Hz: float, *,
                          method: str = "fft") -> float:
     """ISO 2631-1 frequency-weighted RMS ``a_w`` [m/s^2] of a vertical acceleration record.
 
+    Old keyword names (``acceleration``) are deprecated aliases for one release.
+
     Parameters
     ----------
-    acceleration : array_like (n,)
+    acceleration_m_per_s2 : array_like (n,)
         Vertical acceleration [m/s^2], equally sampled.
     sample_rate_Hz : float
         Sampling rate [Hz], > 0.
@@ -267,7 +275,7 @@ def iso2631_weighted_rms(acceleration: Any, sample_rate_Hz: float, *,
         as periodic); "filter": the four sections, bilinear-transformed, run causally
         over the record (as a measuring instrument would; start-up transient included).
     """
-    a, fs = _signal(acceleration, sample_rate_Hz)
+    a, fs = _signal(acceleration_m_per_s2, sample_rate_Hz)
     if method == "fft":
         return float(comfort_indices(a[:, None], fs)[0][0])
     if method == "filter":
@@ -283,7 +291,8 @@ def iso2631_weighted_rms(acceleration: Any, sample_rate_Hz: float, *,
     return float(np.sqrt(np.mean(y ** 2)))
 
 
-def sperling_index(acceleration: Any, sample_rate_Hz: float) -> float:
+@renamed_keywords(acceleration="acceleration_m_per_s2")
+def sperling_index(acceleration_m_per_s2: Any, sample_rate_Hz: float) -> float:
     """Sperling's ride comfort index ``Wz`` [-] of a vertical acceleration record [m/s^2]:
     ``Wz = (100 sqrt(2) a_B)^0.3`` with the B-weighted RMS ``a_B`` (frequency domain).
 
@@ -291,9 +300,11 @@ def sperling_index(acceleration: Any, sample_rate_Hz: float) -> float:
     pronounced but not unpleasant, 3 strong, irregular but tolerable, 3.25 very irregular,
     3.5 extremely irregular, unpleasant, 4 extremely unpleasant.
 
+    Old keyword names (``acceleration``) are deprecated aliases for one release.
+
     Parameters
     ----------
-    acceleration : array_like (n,)
+    acceleration_m_per_s2 : array_like (n,)
         Vertical acceleration [m/s^2], equally sampled, finite, at least 8 samples.  The
         record is weighted in the frequency domain (treated as periodic).
     sample_rate_Hz : float
@@ -310,7 +321,7 @@ def sperling_index(acceleration: Any, sample_rate_Hz: float) -> float:
         A record that is not a finite 1-D array of >= 8 samples, or a sampling rate that
         is not finite and > 0.
     """
-    a, fs = _signal(acceleration, sample_rate_Hz)
+    a, fs = _signal(acceleration_m_per_s2, sample_rate_Hz)
     return float(comfort_indices(a[:, None], fs)[1][0])
 
 

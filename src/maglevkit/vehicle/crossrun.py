@@ -40,7 +40,6 @@ from __future__ import annotations
 
 import math
 import sys
-import time
 import warnings
 from collections.abc import Sequence
 from dataclasses import dataclass, field
@@ -53,8 +52,10 @@ from ..errors import InputError, MaglevkitWarning
 from ..plant import STANDARD_GRAVITY, chopper_floor
 from ..validation import Plausible, check_plausible, real_number
 from .crosssection import CrossSectionData, CrossSectionMechanics, track_field_path
+from .framework import PartEvaluator, run_blocks, run_steps
 from .simulation import (
     Failure,
+    VehicleRunInterrupted,
     check_run_speed,
     limit_crossing,
     touchdown_report_line,
@@ -128,7 +129,7 @@ class TransitionCurve:
         check_plausible({"curve": {"radius_m": r}}, SCENARIO_PLAUSIBLE, stacklevel=4)
 
     def ramp(self, distance_m: Any) -> np.ndarray:
-        """Share ``0 ... 1`` of the full curve at the distances travelled [m] (-).
+        """Share (0 to 1) of the full curve at the distances travelled [m] (-).
 
         Parameters
         ----------
@@ -625,6 +626,38 @@ class CrossSectionModel:
         """
         return self.mechanics.system.discretize(dt_s, damping=damping)
 
+    def _step_parts(self, dt: float) -> dict[str, Any]:
+        """The step's parts (:func:`~maglevkit.vehicle.stepkernel.build_vehicle_parts`) for
+        the slice: every circuit a force point of the rigid guideway (force matrix
+        ``gap_matrix^T`` per circuit, so that ``s = s_0 + gap_matrix q - r`` and the
+        mechanics' load is ``Q_g + B F``), the cascade gains per circuit, the guidance
+        pairs' integrators fed the differential gap error."""
+        from .stepkernel import build_vehicle_parts
+
+        bank = self.bank
+        s = self.mechanics.system
+        nq, nc = s.n_dof, bank.n_circuits
+        circ = np.repeat(np.arange(4), 2)
+        gm = s.gap_matrix[circ]                            # (nc, nq): every circuit's gap
+        ad, bd = self.discretize(dt)
+        designs = [self.designs[n.split("_")[0]] for n in self.member_names]
+        gains = {k: np.array([getattr(designs[c], k) for c in circ])
+                 for k in ("kp_per_m", "kd_s_per_m", "ki_per_m_s", "kflux_per_s")}
+        psi0 = np.concatenate([np.asarray(d.flux_bias_Wb) for d in designs])
+        res = np.concatenate([np.asarray(d.resistances_ohm) for d in designs])
+        integ = np.eye(nc)
+        for a, b in ((4, 6), (5, 7)):                     # guidance pairs left/right
+            integ[a, a] = integ[b, b] = 0.5
+            integ[a, b] = integ[b, a] = -0.5
+        return build_vehicle_parts(
+            dt=dt, nominal_gap_m=self.s0, span_length_m=1.0, origin_m=0.0,
+            wavenumbers=np.zeros(0), guideway_ad=np.zeros((0, 0)),
+            guideway_bd=np.zeros((0, 0)), n_spans=0, mech_ad=ad, mech_bd=bd,
+            gravity_force=np.zeros(nq), force_matrix=gm.T, gains=gains, flux_bias_Wb=psi0,
+            resistance_ohm=res, eddy_resistance_ohm=bank.eddy_resistance_ohm,
+            voltage_limit_V=self.voltage_limit_V, integral_projection=integ,
+            midspan_shape=np.zeros(0))
+
     # ------------------------------------------------------------------ the run
     def run(self, *, speed_m_per_s: float, duration_s: float, dt_s: float = 1e-3,
             curve: TransitionCurve | None = None, crosswind: Crosswind | None = None,
@@ -659,9 +692,10 @@ class CrossSectionModel:
             steps (:meth:`compiled_step`; reduced magnets only); ``"auto"`` (default):
             compiled for reduced magnets, else the NumPy loop.
         progress : bool, default False
-            A one-line note on stderr before the compiled step is built for a new
-            ``dt_s`` (compiled once per ``dt_s`` and cached on disk; the first time takes
-            minutes on a loaded machine).
+            Progress on stderr (the vehicle framework's runner: a bar on a terminal,
+            plain lines with the ETA in logs), and a one-line note before the compiled
+            step is built for a new ``dt_s`` (compiled once per ``dt_s`` and cached on
+            disk; the first time takes minutes on a loaded machine).
 
         Returns
         -------
@@ -683,6 +717,9 @@ class CrossSectionModel:
             Bad options (named), unknown failure circuits, non-finite irregularities.
         OutOfRangeError
             A circuit leaving its maps (from the bank).
+        VehicleRunInterrupted
+            Ctrl-C during the time loop, carrying the run up to the last whole step (or
+            block of the compiled loop); a plain ``KeyboardInterrupt`` before the second.
 
         Warns
         -----
@@ -780,12 +817,14 @@ class CrossSectionModel:
         if use_compiled:
             if progress:
                 self._note_compiling(dt)
-            out = self._compiled_loop(dt, v, t, r_mag, rx_mag, field_mid, q_ext, fail_t, n)
+            out = self._compiled_loop(dt, v, t, r_mag, rx_mag, field_mid, q_ext, fail_t, n,
+                                      progress)
         else:
-            out = self._python_loop(dt, v, t, r_mag, rx_mag, field_mid, q_ext, fail_t, n)
-        rec_gap, rec_force, rec_cur, rec_u, rec_x, rec_acc, touchdown, last, wall = out
+            out = self._python_loop(dt, v, t, r_mag, rx_mag, field_mid, q_ext, fail_t, n,
+                                    progress)
+        rec_gap, rec_force, rec_cur, rec_u, rec_x, rec_acc, touchdown, last, outcome = out
         res = self._result(v, dt, t, rec_gap, rec_force, rec_cur, rec_u, rec_x, rec_acc,
-                           touchdown, last, wall, field_mid, wind)
+                           touchdown, last, outcome.wall_s, field_mid, wind)
         # the scenario in the file (as the heave-pitch run's attributes): a run can be read
         # back and repeated from its netCDF alone
         res.dataset.attrs.update({
@@ -796,20 +835,28 @@ class CrossSectionModel:
             "curve": "" if curve is None else repr(curve),
             "crosswind": "" if crosswind is None else repr(crosswind),
             "vertical_irregularity": "" if vertical is None else repr(vertical),
-            "lateral_irregularity": "" if lateral is None else repr(lateral)})
+            "lateral_irregularity": "" if lateral is None else repr(lateral),
+            "interrupted": "" if not outcome.interrupted else
+                           f"Ctrl-C: the run stopped at t = {float(t[last]):.6g} s "
+                           f"of {float(t[-1]):.6g} s"})
+        if outcome.interrupted:
+            raise VehicleRunInterrupted(res)
         return res
 
     def _python_loop(self, dt: float, v: float, t: np.ndarray, r_mag: np.ndarray,
                      rx_mag: np.ndarray, field_mid: np.ndarray, q_ext: np.ndarray,
-                     fail_t: np.ndarray, n: int) -> tuple[Any, ...]:
+                     fail_t: np.ndarray, n: int, progress: bool = False) -> tuple[Any, ...]:
         from ..control import Measurement
 
         s = self.mechanics.system
         bank = self.bank
-        ad, bd = self.discretize(dt)
         nq = s.n_dof
         x = np.concatenate([self.trim_q, np.zeros(nq)])
-        gm = s.gap_matrix
+        # gaps and the mechanics' step: the step's parts (as the compiled step's)
+        parts = self._step_parts(dt)
+        f_in = PartEvaluator(parts["guideway_in"])
+        f_mech = PartEvaluator(parts["mechanics_loaded"])
+        no_guideway = np.zeros(0)
         state = bank.initial_state(gaps_m=self.s0, currents_A=np.repeat(self.trim_current_A, 2))
         stepper = bank.stepper(state, dt)
         ctl = self.controllers()
@@ -824,14 +871,17 @@ class CrossSectionModel:
         rec_x = np.empty((n + 1, 2 * nq))
         rec_acc = np.empty((n + 1, nq))
         gap_circ = np.repeat(np.arange(4), 2)
-        touchdown = None
-        last = n
+        x_circ = np.zeros(nc)
         force = stepper.member_force_N.copy()
-        t0 = time.perf_counter()
-        for k in range(n + 1):
+        force_c = stepper.circuit_force_N.copy()
+
+        def step(k: int) -> tuple[int, Any] | None:
+            """Record the state at step ``k`` and advance it (None), or stop there."""
+            nonlocal x, force, force_c
             q, qd = x[:nq], x[nq:]
-            gaps = self.s0 + gm @ q - r_mag[k]
-            rates = gm @ qd - v * rx_mag[k]
+            gaps_c, rates_c = f_in(x, no_guideway, x_circ, r_mag[k][gap_circ],
+                                   rx_mag[k][gap_circ], v)[:2]
+            gaps, rates = gaps_c[::2], rates_c[::2]          # one per magnet
             rec_gap[k] = gaps
             rec_x[k] = x
             rec_force[k] = stepper.circuit_force_N
@@ -839,12 +889,11 @@ class CrossSectionModel:
             rec_acc[k] = s.accelerations(q, qd, force, field_mid[k], q_ext[k])
             # a gap at a limit now, or crossing it within the coming step on the linear
             # path the bank moves it along (the maps start at the touchdown gap)
-            touchdown = self._limit_event(gaps, rates if k < n else None, float(t[k]), dt)
-            if touchdown is not None:
-                last = k
-                break
+            event = self._limit_event(gaps, rates if k < n else None, float(t[k]), dt)
+            if event is not None:
+                return k, event
             if k == n:
-                break
+                return None
             # controllers: levitation on their own gaps, guidance on the differential gap
             diff = 0.5 * (gaps[2] - gaps[3])
             diff_rate = 0.5 * (rates[2] - rates[3])
@@ -864,13 +913,18 @@ class CrossSectionModel:
             u[chop] = chopper_floor(u[chop], il[chop], r_ec[chop])
             u[fail_t <= t[k]] = 0.0
             rec_u[k] = u
-            f_start = force
-            stepper.advance(voltages_V=u, gaps_m=gaps[gap_circ], gap_rates_m_per_s=rates[gap_circ])
+            f_start = force_c
+            stepper.advance(voltages_V=u, gaps_m=gaps_c, gap_rates_m_per_s=rates_c)
             force = stepper.member_force_N.copy()
-            qgen = s.B @ (0.5 * (f_start + force)) + s.G @ field_mid[k] + s.Q_preload + q_ext[k]
-            x = ad @ x + bd @ qgen
-        wall = time.perf_counter() - t0
-        return rec_gap, rec_force, rec_cur, rec_u, rec_x, rec_acc, touchdown, last, wall
+            force_c = stepper.circuit_force_N.copy()
+            (x,) = f_mech(x, 0.5 * (f_start + force_c),
+                          s.G @ field_mid[k] + s.Q_preload + q_ext[k])
+            return None
+
+        outcome = run_steps(step, n_steps=n, progress=progress,
+                            label="cross-section run (steps)")
+        return (rec_gap, rec_force, rec_cur, rec_u, rec_x, rec_acc, outcome.event,
+                outcome.last_step, outcome)
 
     # ------------------------------------------------------------------ compiled step
     def compiled_step(self, dt_s: float = 1e-3, *, block_steps: int = 50,
@@ -882,9 +936,9 @@ class CrossSectionModel:
         chopper and the failures; the bank's step (:meth:`MagnetBank.step_function`); the
         flux estimates and integrators; the mechanics' exact ZOH step with
         ``Q = B S F_bar + Q_pre + Q_t`` (``S`` sums a magnet's circuits, ``Q_t = G a +
-        Q_wind`` at mid-step, a per-step input).  The controllers and their update are the
-        heave-pitch step's CasADi functions (:func:`~maglevkit.vehicle.stepkernel.
-        build_vehicle_step` ``parts``), not a copy of the cascade law: per circuit, the
+        Q_wind`` at mid-step, a per-step input).  Gaps, controllers, their update and the
+        mechanics' step are the vehicle step's parts (:func:`~maglevkit.vehicle.
+        stepkernel.build_vehicle_parts`, as the heave-pitch step's), not copies: per circuit, the
         guidance integrators fed the differential gap error ``(s_own - s_other)/2``
         through the integral matrix.  Per circuit, with every gap sum of a guidance pair
         ``2 s_0`` (a rigid chassis and one rail profile for both rails), the guidance
@@ -908,7 +962,7 @@ class CrossSectionModel:
         """
         import casadi as ca
 
-        from .stepkernel import build_vehicle_step, pack_slices
+        from .stepkernel import pack_slices
 
         bank = self.bank
         if self.magnet_kind != "reduced":
@@ -918,28 +972,9 @@ class CrossSectionModel:
         dt = real_number(dt_s, "dt_s", "s", positive=True)
         lib = bank.compiled_step_library(dt) if lanes else None
         bank_step = lib[0] if lib is not None else bank.step_function(dt)
-        circ = np.repeat(np.arange(4), 2)
-        gm = s.gap_matrix[circ]                            # (nc, nq): every circuit's gap
-        ad, bd = self.discretize(dt)
-        designs = [self.designs[n.split("_")[0]] for n in self.member_names]
-        gains = {k: np.array([getattr(designs[c], k) for c in circ])
-                 for k in ("kp_per_m", "kd_s_per_m", "ki_per_m_s", "kflux_per_s")}
-        psi0 = np.concatenate([np.asarray(d.flux_bias_Wb) for d in designs])
-        res = np.concatenate([np.asarray(d.resistances_ohm) for d in designs])
-        integ = np.eye(nc)
-        for a, b in ((4, 6), (5, 7)):                     # guidance pairs left/right
-            integ[a, a] = integ[b, b] = 0.5
-            integ[a, b] = integ[b, a] = -0.5
-        parts = build_vehicle_step(
-            bank_step=bank_step, dt=dt, nominal_gap_m=self.s0, sides=1.0,
-            span_length_m=1.0, origin_m=0.0, wavenumbers=np.zeros(0),
-            guideway_ad=np.zeros((0, 0)), guideway_bd=np.zeros((0, 0)), n_spans=0,
-            mech_ad=ad, mech_bd=bd, gravity_force=np.zeros(nq), force_matrix=-gm.T,
-            gains=gains, flux_bias_Wb=psi0, resistance_ohm=res,
-            eddy_resistance_ohm=bank.eddy_resistance_ohm,
-            voltage_limit_V=self.voltage_limit_V, integral_projection=integ,
-            midspan_shape=np.zeros(0), block_steps=1).parts
-        f_ctl, f_upd = parts["controllers"], parts["controller_update"]
+        parts = self._step_parts(dt)
+        f_in, f_ctl, f_upd, f_mech = (parts[k] for k in (
+            "guideway_in", "controllers", "controller_update", "mechanics_loaded"))
         st = pack_slices([("x", 2 * nq), ("I_L", nc), ("psi_hat", nc), ("integral", nc),
                           ("current", nc), ("force", nc)])
         pi = pack_slices([("r", nc), ("r_x", nc), ("Q_t", nq), ("t", 1)])
@@ -950,10 +985,9 @@ class CrossSectionModel:
         x, il, psi, itg, cur, frc = (S[st[k]] for k in ("x", "I_L", "psi_hat", "integral",
                                                          "current", "force"))
         v, fail_t = C[0], C[1:]
-        q, qd = x[:nq], x[nq:]
-        gmd = ca.DM(gm)
-        gaps = self.s0 + ca.mtimes(gmd, q) - P[pi["r"]]
-        rates = ca.mtimes(gmd, qd) - v * P[pi["r_x"]]
+        # gaps and rates of every circuit (the rigid guideway's part: no deflection)
+        gaps, rates = f_in(x, ca.DM.zeros(0), ca.DM.zeros(nc), P[pi["r"]], P[pi["r_x"]],
+                           v)[:2]
         u = f_ctl.call({"gap": gaps, "gap_rate": rates, "I_L": il, "current": cur,
                         "psi_hat": psi, "integral": itg, "t": P[pi["t"]],
                         "fail_t": fail_t})["U"]
@@ -961,11 +995,8 @@ class CrossSectionModel:
         il_n, cur_n, frc_n, n_bad = (bout[k] for k in ("I_L_next", "I", "F", "n_bad"))
         upd = f_upd.call({"psi_hat": psi, "integral": itg, "U": u, "current": cur,
                           "current_next": cur_n, "gap": gaps})
-        summ = np.zeros((4, nc))
-        summ[circ, np.arange(nc)] = 1.0
-        bmat = ca.DM(s.B @ summ)                          # circuit forces -> Q
-        qgen = (ca.mtimes(bmat, 0.5 * (frc + frc_n)) + ca.DM(s.Q_preload) + P[pi["Q_t"]])
-        x_n = ca.mtimes(ca.DM(ad), x) + ca.mtimes(ca.DM(bd), qgen)
+        # the mechanics' ZOH step with the load Q_g = Q_pre + Q_t (field and wind, per step)
+        x_n = f_mech(x, 0.5 * (frc + frc_n), ca.DM(s.Q_preload) + P[pi["Q_t"]])
         s_next = ca.vertcat(x_n, il_n, upd["psi_hat_next"], upd["integral_next"], cur_n, frc_n)
         rec = ca.vertcat(gaps, rates, cur, frc, il, x, u, n_bad)
         step = ca.Function("maglevkit_cross_section_step", [S, P, C], [s_next, rec])
@@ -1039,7 +1070,7 @@ class CrossSectionModel:
 
     def _compiled_loop(self, dt: float, v: float, t: np.ndarray, r_mag: np.ndarray,
                        rx_mag: np.ndarray, field_mid: np.ndarray, q_ext: np.ndarray,
-                       fail_t: np.ndarray, n: int) -> tuple[Any, ...]:
+                       fail_t: np.ndarray, n: int, progress: bool = False) -> tuple[Any, ...]:
         from ..errors import SolverError
         from ..reduced.bank import BankState
 
@@ -1059,61 +1090,45 @@ class CrossSectionModel:
         p_all[n + 1:, pi["t"].start] = t[-1] + dt * np.arange(1, n_rows - n)
         state0 = bank.initial_state(gaps_m=self.s0, currents_A=np.repeat(self.trim_current_A, 2))
         out0 = bank.outputs(state0)
-        sv = [np.zeros(st["force"].stop), np.zeros(st["force"].stop)]
-        sv[0][st["x"]] = np.concatenate([self.trim_q, np.zeros(nq)])
-        sv[0][st["I_L"]] = state0.inductor_currents_A
+        consts = np.concatenate([[v], fail_t])
+        s_init = np.zeros(st["force"].stop)
+        s_init[st["x"]] = np.concatenate([self.trim_q, np.zeros(nq)])
+        s_init[st["I_L"]] = state0.inductor_currents_A
         flux = [self._flux(n_.split("_")[0], float(self.trim_current_A[j]))
                 for j, n_ in enumerate(self.member_names)]
-        sv[0][st["psi_hat"]] = np.concatenate(flux)
-        sv[0][st["current"]] = out0.currents_A
-        sv[0][st["force"]] = out0.circuit_force_N
-        consts = np.concatenate([[v], fail_t])
-        rec = np.empty((n_rows, rc["n_bad"].stop))
-        bufs, evals = [], []
-        for j in (0, 1):
-            buf, ev = fun.buffer()
-            buf.set_arg(0, memoryview(sv[j]))            # type: ignore[arg-type]
-            buf.set_res(0, memoryview(sv[1 - j]))        # type: ignore[arg-type]
-            buf.set_arg(2, memoryview(consts))           # type: ignore[arg-type]
-            bufs.append(buf)
-            evals.append(ev)
+        s_init[st["psi_hat"]] = np.concatenate(flux)
+        s_init[st["current"]] = out0.currents_A
+        s_init[st["force"]] = out0.circuit_force_N
         g_sl, r_sl, b_sl = rc["gap"], rc["gap_rate"], rc["n_bad"].start
         lo_lim, hi_lim = self.touchdown_gap_m, self.landing_gap_m
-        touchdown = None
-        last = n
-        t0 = time.perf_counter()
-        for blk in range(n_rows // nb):
-            k0 = blk * nb
-            j = blk & 1
-            bufs[j].set_arg(1, memoryview(p_all[k0:k0 + nb]))    # type: ignore[arg-type]
-            rows = rec[k0:k0 + nb]
-            bufs[j].set_res(1, memoryview(rows))                  # type: ignore[arg-type]
-            evals[j]()
+
+        def look(k0: int, rows: np.ndarray) -> bool:
+            """A gap at a limit now or at the step's end on its linear path, or a flag."""
             gaps, rates = rows[:, g_sl], rows[:, r_sl]
             ends = gaps + rates * dt
-            events = ((gaps.min(axis=1) <= lo_lim) | (gaps.max(axis=1) >= hi_lim)
-                      | (ends.min(axis=1) <= lo_lim) | (ends.max(axis=1) >= hi_lim)
-                      | (rows[:, b_sl] != 0))
-            if not events[:max(0, min(nb, n + 1 - k0))].any():
-                continue
-            for k in range(k0, min(k0 + nb, n + 1)):
-                g = rec[k, g_sl][::2]                              # one gap per magnet
-                touchdown = self._limit_event(g, rec[k, r_sl][::2] if k < n else None,
-                                              float(t[k]), dt)
-                if touchdown is not None:
-                    last = k
-                    break
-                if k < n and rec[k, b_sl] != 0:
-                    # the bank names member, circuit, gap, current and range (same inputs)
-                    bank.step(BankState(float(t[k]), rec[k, rc["I_L"]].copy(),
-                                        rec[k, g_sl].copy()), dt, rec[k, rc["voltage"]],
-                              rec[k, g_sl], rec[k, r_sl])
-                    raise SolverError(f"cross-section run at t = {t[k]:.4f} s: the compiled "
-                                      "step flagged the magnets, the bank's step did not; "
-                                      "rerun with loop='python'")
-            if touchdown is not None:
-                break
-        wall = time.perf_counter() - t0
+            return bool(((gaps.min(axis=1) <= lo_lim) | (gaps.max(axis=1) >= hi_lim)
+                         | (ends.min(axis=1) <= lo_lim) | (ends.max(axis=1) >= hi_lim)
+                         | (rows[:, b_sl] != 0)).any())
+
+        def check(k: int, row: np.ndarray, final: bool) -> tuple[int, Any] | None:
+            g = row[g_sl][::2]                                     # one gap per magnet
+            event = self._limit_event(g, None if final else row[r_sl][::2], float(t[k]), dt)
+            if event is not None:
+                return k, event
+            if not final and row[b_sl] != 0:
+                # the bank names member, circuit, gap, current and range (same inputs)
+                bank.step(BankState(float(t[k]), row[rc["I_L"]].copy(), row[g_sl].copy()),
+                          dt, row[rc["voltage"]], row[g_sl], row[r_sl])
+                raise SolverError(f"cross-section run at t = {t[k]:.4f} s: the compiled "
+                                  "step flagged the magnets, the bank's step did not; "
+                                  "rerun with loop='python'")
+            return None
+
+        outcome, rec = run_blocks(fun, state=s_init, inputs=p_all, constants=consts,
+                                  n_steps=n, n_record=rc["n_bad"].stop, block_steps=nb,
+                                  look=look, check=check, progress=progress,
+                                  label="cross-section run (steps)")
+        last, touchdown = outcome.last_step, outcome.event
         m = last + 1
         rx = rec[:m, rc["x"]]
         frc = rec[:m, rc["force"]]
@@ -1122,7 +1137,7 @@ class CrossSectionModel:
         u = rec[:m, rc["voltage"]].copy()
         u[-1] = 0.0                  # the last record's step is not taken (as the NumPy loop)
         return (rec[:m, g_sl][:, ::2], frc, rec[:m, rc["current"]], u, rx, acc, touchdown,
-                last, wall)
+                last, outcome)
 
     def _result(self, v: float, dt: float, t: np.ndarray, rec_gap: np.ndarray,
                 rec_force: np.ndarray, rec_cur: np.ndarray, rec_u: np.ndarray,

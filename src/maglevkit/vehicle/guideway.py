@@ -33,7 +33,15 @@ import numpy as np
 
 from ..errors import InputError, OutOfRangeError, ParameterError
 from ..plant import STANDARD_GRAVITY
-from ..validation import Plausible, check_plausible, flag, real_array, real_number, whole_number
+from ..validation import (
+    Plausible,
+    check_plausible,
+    flag,
+    real_array,
+    real_number,
+    renamed_keywords,
+    whole_number,
+)
 from .zoh import exact_zoh_step
 
 __all__ = ["BeamSpan", "Guideway", "GuidewayState", "GuidewayDeflection", "GUIDEWAY_PLAUSIBLE"]
@@ -201,12 +209,15 @@ class BeamSpan:
         return 5.0 * float(load_N_per_m) * self.length_m ** 4 / (
             384.0 * self.bending_stiffness_N_m2)
 
-    def self_weight_sag_m(self, gravity: float = STANDARD_GRAVITY) -> float:
+    @renamed_keywords(gravity="gravity_m_per_s2")
+    def self_weight_sag_m(self, gravity_m_per_s2: float = STANDARD_GRAVITY) -> float:
         """Exact static midspan sag under the span's own weight, ``5 m g L^4 / (384 EI)`` [m].
+
+        Old keyword names (``gravity``) are deprecated aliases for one release.
 
         Parameters
         ----------
-        gravity : float, default STANDARD_GRAVITY
+        gravity_m_per_s2 : float, default STANDARD_GRAVITY
             Gravitational acceleration g [m/s^2] (9.80665; not checked).
 
         Returns
@@ -214,7 +225,7 @@ class BeamSpan:
         float
             Midspan sag [m], positive downward.
         """
-        return self.uniform_load_midspan_deflection_m(self.mass_per_length_kg_per_m * gravity)
+        return self.uniform_load_midspan_deflection_m(self.mass_per_length_kg_per_m * gravity_m_per_s2)
 
     def mode_shapes(self, local_x_m: Any) -> tuple[np.ndarray, np.ndarray]:
         """Mode shapes ``sin(k_j xi)`` and their slopes ``k_j cos(k_j xi)`` [1/m].
@@ -566,6 +577,39 @@ class Guideway:
         q[rows] = 0.0
         qd[rows] = 0.0
         return GuidewayState(state.time_s, k_new, q, qd)
+
+    def window_schedule(self, rear_m: Any, front_m: Any, *, first_span: int
+                        ) -> tuple[np.ndarray, np.ndarray, int]:
+        """The moving system boundary over a whole run, computed once (both vehicle loops).
+
+        At every step the window starts at the span under the rearmost load (never moving
+        back; fixed without the moving boundary); the ring rows of the spans it leaves
+        are reset to rest at that step, the rule of :meth:`advance`.
+
+        Parameters
+        ----------
+        rear_m, front_m : array_like (n_steps,)
+            Rearmost and foremost load position [m] of every step (the foremost including
+            the half-step advance the modal update uses).
+        first_span : int
+            First span of the window at the first step.
+
+        Returns
+        -------
+        (first_k, keep, k_out) : ndarray (n_steps,) of int, ndarray (n_steps, n_spans), int
+            The window's first span per step; 1.0 for a ring row kept, 0.0 for one reset
+            at that step; the first step whose loads leave the window (-1: none).
+        """
+        lo = self.span_index(rear_m)
+        hi = self.span_index(front_m)
+        first_k = (np.maximum.accumulate(np.maximum(lo, int(first_span)))
+                   if self.moving_boundary else np.full(lo.shape, int(first_span)))
+        out = (lo < first_k) | (hi > first_k + self.n_spans - 1)
+        keep = np.ones((lo.size, self.n_spans))
+        for kr in (np.flatnonzero(np.diff(first_k) > 0) + 1).tolist():
+            old = int(first_k[kr - 1])
+            keep[kr, np.arange(old, min(int(first_k[kr]), old + self.n_spans)) % self.n_spans] = 0.0
+        return first_k, keep, int(np.argmax(out)) if out.any() else -1
 
     # ------------------------------------------------------------------ loads and outputs
     def _positions(self, positions_m: Any) -> np.ndarray:

@@ -30,7 +30,7 @@ from typing import Any
 import numpy as np
 
 from ..errors import InputError, OutOfRangeError, ParameterError
-from ..validation import real_array, real_number, whole_number
+from ..validation import real_array, real_number, renamed_keywords, whole_number
 
 __all__ = [
     "Profile",
@@ -607,12 +607,16 @@ class GermanTrackPSD:
         c, r = self.omega_c_rad_per_m, self.omega_r_rad_per_m
         return self.A_v_m_rad * c * c / ((w2 + r * r) * (w2 + c * c))
 
-    def variance_m2(self, omega_min: float, omega_max: float) -> float:
+    @renamed_keywords(omega_min="omega_min_rad_per_m", omega_max="omega_max_rad_per_m")
+    def variance_m2(self, omega_min_rad_per_m: float, omega_max_rad_per_m: float) -> float:
         """Exact ``int S dOmega`` over ``[omega_min, omega_max]`` [m^2] (partial fractions).
+
+        Old keyword names (``omega_min``, ``omega_max``) are deprecated aliases for one
+        release.
 
         Parameters
         ----------
-        omega_min, omega_max : float
+        omega_min_rad_per_m, omega_max_rad_per_m : float
             Band of spatial angular frequencies [rad/m], finite,
             ``0 <= omega_min < omega_max``.
 
@@ -626,13 +630,14 @@ class GermanTrackPSD:
         InputError
             A band that is not finite, starts below 0, or is reversed or empty.
         """
-        omega_min, omega_max = _band(omega_min, omega_max, zero_ok=True)
+        omega_min_rad_per_m, omega_max_rad_per_m = _band(omega_min_rad_per_m, omega_max_rad_per_m,
+                                                         zero_ok=True)
         c, r = self.omega_c_rad_per_m, self.omega_r_rad_per_m
 
         def prim(w: float) -> float:
             return (math.atan(w / r) / r - math.atan(w / c) / c) * c * c / (c * c - r * r)
 
-        return self.A_v_m_rad * (prim(omega_max) - prim(omega_min))
+        return self.A_v_m_rad * (prim(omega_max_rad_per_m) - prim(omega_min_rad_per_m))
 
 
 @dataclass(frozen=True)
@@ -668,12 +673,16 @@ class PowerLawPSD:
         w = np.asarray(omega_rad_per_m, dtype=float)
         return self.S0_m2_per_rad_per_m * (w / self.omega0_rad_per_m) ** (-self.exponent)
 
-    def variance_m2(self, omega_min: float, omega_max: float) -> float:
+    @renamed_keywords(omega_min="omega_min_rad_per_m", omega_max="omega_max_rad_per_m")
+    def variance_m2(self, omega_min_rad_per_m: float, omega_max_rad_per_m: float) -> float:
         """Exact ``int S dOmega`` over ``[omega_min, omega_max]`` [m^2].
+
+        Old keyword names (``omega_min``, ``omega_max``) are deprecated aliases for one
+        release.
 
         Parameters
         ----------
-        omega_min, omega_max : float
+        omega_min_rad_per_m, omega_max_rad_per_m : float
             Band of spatial angular frequencies [rad/m], finite,
             ``0 <= omega_min < omega_max``; ``omega_min = 0`` only for ``exponent < 1``
             (the integral diverges at 0 otherwise).
@@ -689,15 +698,16 @@ class PowerLawPSD:
             A band that is not finite, starts below 0, or is reversed or empty; or
             ``omega_min = 0`` with ``exponent >= 1``.
         """
-        omega_min, omega_max = _band(omega_min, omega_max, zero_ok=True)
+        omega_min_rad_per_m, omega_max_rad_per_m = _band(omega_min_rad_per_m, omega_max_rad_per_m,
+                                                         zero_ok=True)
         s0, n, w0 = self.S0_m2_per_rad_per_m, self.exponent, self.omega0_rad_per_m
-        if omega_min == 0.0 and n >= 1.0:
+        if omega_min_rad_per_m == 0.0 and n >= 1.0:
             raise InputError(f"omega_min = 0 rad/m: the variance of a power law with "
                              f"exponent = {n:g} >= 1 diverges at 0; allowed: omega_min > 0 "
                              "(or an exponent < 1)")
         if n == 1.0:
-            return s0 * w0 * math.log(omega_max / omega_min)
-        return s0 * w0 ** n * (omega_max ** (1 - n) - omega_min ** (1 - n)) / (1 - n)
+            return s0 * w0 * math.log(omega_max_rad_per_m / omega_min_rad_per_m)
+        return s0 * w0 ** n * (omega_max_rad_per_m ** (1 - n) - omega_min_rad_per_m ** (1 - n)) / (1 - n)
 
 
 @dataclass(frozen=True, eq=False)

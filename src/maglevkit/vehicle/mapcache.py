@@ -18,7 +18,7 @@ from typing import Any
 import numpy as np
 
 from ..errors import InputError
-from ..validation import real_array
+from ..validation import real_array, renamed_keywords
 
 __all__ = ["VEHICLE_MAP_GAPS_M", "VEHICLE_MAP_CURRENTS_A", "vehicle_maps", "maps_path"]
 
@@ -78,9 +78,12 @@ def _check_cache_dir(base: Path) -> None:
                          "folder is created)")
 
 
+@renamed_keywords(gaps="gaps_m", currents="currents_A")
 def vehicle_maps(magnet: Any, *, cache_dir: str | Path | None = None,
-                 gaps: Any = None, currents: Any = None, progress: bool = False) -> Any:
+                 gaps_m: Any = None, currents_A: Any = None, progress: bool = False) -> Any:
     """The characteristic maps of ``magnet`` on the vehicle grid, from the cache or built.
+
+    Old keyword names (``gaps``, ``currents``) are deprecated aliases for one release.
 
     Parameters
     ----------
@@ -88,7 +91,7 @@ def vehicle_maps(magnet: Any, *, cache_dir: str | Path | None = None,
         The magnet whose maps are wanted.
     cache_dir : path, optional
         Directory of the cached netCDF files (default: the user's cache, see module doc).
-    gaps, currents : array_like, optional
+    gaps_m, currents_A : array_like, optional
         Grids [m], [A] (default :data:`VEHICLE_MAP_GAPS_M`, :data:`VEHICLE_MAP_CURRENTS_A`).
     progress : bool
         Show the build's progress bar.
@@ -102,8 +105,8 @@ def vehicle_maps(magnet: Any, *, cache_dir: str | Path | None = None,
     """
     from ..reduction.maps import build_maps, load_maps
 
-    g = VEHICLE_MAP_GAPS_M if gaps is None else real_array(gaps, "gaps", "m")
-    c = VEHICLE_MAP_CURRENTS_A if currents is None else real_array(currents, "currents", "A")
+    g = VEHICLE_MAP_GAPS_M if gaps_m is None else real_array(gaps_m, "gaps", "m")
+    c = VEHICLE_MAP_CURRENTS_A if currents_A is None else real_array(currents_A, "currents", "A")
     if cache_dir is not None:
         _check_cache_dir(Path(cache_dir))
     path = maps_path(magnet, g, c, cache_dir)
@@ -112,7 +115,7 @@ def vehicle_maps(magnet: Any, *, cache_dir: str | Path | None = None,
         if (cached.gaps_m.shape == g.shape and cached.currents_A.shape == c.shape
                 and np.array_equal(cached.gaps_m, g) and np.array_equal(cached.currents_A, c)):
             return cached
-    maps = build_maps(magnet, gaps=g, currents=c, progress=progress)
+    maps = build_maps(magnet, gaps_m=g, currents_A=c, progress=progress)
     # the user's cache may be created with its parents; a folder given (cache_dir,
     # --maps-cache) only as its last level, as every other output folder
     path.parent.mkdir(parents=cache_dir is None, exist_ok=True)

@@ -21,9 +21,12 @@ guideway).  With the small-angle kinematics the equations of motion are linear::
     g_e = d(Delta_e)/dq   (Delta_e = u_a(xi_e) - u_b(xi_e), the element's compression),
     Q_g = sum_b m_b g e_z,b,    B[:, p] = d u(xi_p)/dq of the frame carrying force p.
 
-:class:`VehicleMechanics` composes ``M``, ``C``, ``K``, ``Q_g`` and ``B`` from the bodies
-and force elements (NumPy; exact zero-order-hold discretisation; a CasADi right-hand side
-for optimisation).  :func:`derive_sympy` derives the same equations independently with
+:class:`VehicleMechanics` describes the bodies, force elements and force points as a
+:class:`~maglevkit.vehicle.multibody.PlanarMultibody` (the vertical plane: bodies at
+``(xi_b, 0)`` with ``dofs = ("z", "phi")``, vertical spring-dampers, force points acting
+along ``-z``), which composes ``M``, ``C``, ``K``, ``Q_g = G (0, g)`` and ``B`` (its ``-B``);
+on top: the exact zero-order-hold discretisation, the static trim and a CasADi right-hand
+side for optimisation.  :func:`derive_sympy` derives the same equations independently with
 ``sympy.physics.mechanics`` (Lagrange's equations from kinetic and potential energy with
 the exact rotation, dampers and forces as generalised forces) and linearises them at
 ``q = 0``; the tests compare both.  The exact large-angle kinematics only add terms of
@@ -118,6 +121,9 @@ class VehicleMechanics:
     B : ndarray (n_dof, n_points)
         Generalised force of a unit upward magnet force at each force point (``-B F``
         enters the equations).
+    system : PlanarMultibody
+        The multibody description the matrices come from (bodies, air springs and
+        joints as vertical spring-dampers, force points acting upward).
     """
 
     def __init__(self, train: TrainData, force_points_m: Sequence[float],
@@ -178,28 +184,34 @@ class VehicleMechanics:
             1 in the body's heave column, ``xi - xi_b`` [m] in its pitch column.
         """
         x = np.atleast_1d(np.asarray(xi_m, dtype=float))
-        jac = np.zeros((x.size, self.n_dof))
-        jac[:, 2 * body] = 1.0
-        jac[:, 2 * body + 1] = x - self.body_centres_m[body]
-        return jac
+        name = self.body_names[body]     # the multibody description's z rows
+        return np.array([self.system.point_jacobian(name, (float(xi), 0.0))[1] for xi in x]
+                        ).reshape(x.size, self.n_dof)
 
     def _assemble(self) -> None:
-        n = self.n_dof
-        self.M = np.diag(np.ravel(np.column_stack([self.body_mass_kg, self.body_inertia_kg_m2])))
-        self.K = np.zeros((n, n))
-        self.C = np.zeros((n, n))
-        self._element_g = np.zeros((len(self.elements), n))
-        for i, e in enumerate(self.elements):
-            g = (self.point_jacobian(e.body_a, e.xi_a_m) - self.point_jacobian(e.body_b, e.xi_b_m))[0]
-            self._element_g[i] = g
-            self.K += e.stiffness_N_per_m * np.outer(g, g)
-            self.C += e.damping_N_s_per_m * np.outer(g, g)
-        self.Q_gravity = np.zeros(n)
-        self.Q_gravity[0::2] = self.body_mass_kg * self.gravity
-        b = np.zeros((n, self.force_points_m.size))
-        for p, (body, x) in enumerate(zip(self.force_bodies, self.force_points_m, strict=True)):
-            b[:, p] = self.point_jacobian(int(body), x)[0]
-        self.B = b
+        """The matrices from the multibody description (:class:`PlanarMultibody`): bodies
+        at ``(xi_b, 0)`` with ``dofs = ("z", "phi")`` (``phi`` the pitch ``theta``),
+        vertical spring-dampers, force points acting along ``-z`` (upward); ``B`` here
+        is the multibody ``-B`` (``-B F`` enters the equations)."""
+        from .multibody import ForcePoint, PlanarMultibody, RigidBody, SpringDamper
+
+        names = self.body_names
+        bodies = [RigidBody(names[b], float(self.body_mass_kg[b]),
+                            float(self.body_inertia_kg_m2[b]),
+                            (float(self.body_centres_m[b]), 0.0), ("z", "phi"))
+                  for b in range(self.n_bodies)]
+        springs = [SpringDamper(e.name, names[e.body_a], (e.xi_a_m, 0.0), names[e.body_b],
+                                (e.xi_b_m, 0.0), "z", e.stiffness_N_per_m,
+                                e.damping_N_s_per_m) for e in self.elements]
+        points = [ForcePoint(f"point{p + 1}", names[int(body)], (float(x), 0.0), "-z")
+                  for p, (body, x) in enumerate(zip(self.force_bodies, self.force_points_m,
+                                                    strict=True))]
+        system = PlanarMultibody(bodies, springs, points)
+        self.system = system
+        self.M, self.K, self.C = system.M, system.K, system.C
+        self._element_g = system.element_matrix
+        self.Q_gravity = system.G @ np.array([0.0, self.gravity])
+        self.B = -system.B
 
     # ------------------------------------------------------------------ use
     @property
@@ -285,7 +297,8 @@ class VehicleMechanics:
         a, bq = self.state_matrices(damping=damping)
         return exact_zoh_step(a, bq, dt_s)
 
-    def accelerations(self, q: np.ndarray, q_dot: np.ndarray, forces_N: np.ndarray) -> np.ndarray:
+    def accelerations(self, q: np.ndarray, q_dot: np.ndarray, forces_N: np.ndarray, *,
+                      gravity_force: np.ndarray | None = None) -> np.ndarray:
         """``q''`` from the equations of motion (forces: upward magnet forces per point).
 
         Parameters
@@ -296,13 +309,17 @@ class VehicleMechanics:
             Generalised velocities [m/s, rad/s].
         forces_N : array_like (..., n_points)
             Upward (attractive) magnet force at each force point [N].
+        gravity_force : array_like (..., n_dof), optional
+            Generalised gravity ``Q_g`` [N, N m] in place of :attr:`Q_gravity` (e.g. with
+            a payload step; keyword only).
 
         Returns
         -------
         ndarray (..., n_dof)
             ``q''`` [m/s^2, rad/s^2] (heave positive downward).  Inputs are not checked.
         """
-        rhs = (self.Q_gravity - np.asarray(q) @ self.K.T - np.asarray(q_dot) @ self.C.T
+        q_g = self.Q_gravity if gravity_force is None else np.asarray(gravity_force)
+        rhs = (q_g - np.asarray(q) @ self.K.T - np.asarray(q_dot) @ self.C.T
                - np.asarray(forces_N) @ self.B.T)
         return rhs / np.diag(self.M)
 

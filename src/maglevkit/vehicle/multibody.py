@@ -46,8 +46,8 @@ coordinate ``xi`` (bodies at ``(xi_b, 0)``), ``dofs=("z", "phi")`` with ``phi`` 
 angle (``phi > 0`` lowers the rear, as ``theta`` there), vertical spring-dampers for the air
 springs and for the joints between car bodies, and vertical force points (direction
 ``-z``: magnet attraction upward) at the circuit or pole positions; its ``B`` is this
-``-B``.  Rewriting it on this class is left to the vehicle rebuild (one mechanics source
-per part).
+``-B``.  It is built on this class: ``VehicleMechanics.system`` is that description, and
+its matrices are the ones here.
 """
 
 from __future__ import annotations

@@ -35,8 +35,9 @@ from typing import Any
 import numpy as np
 
 from ..errors import InputError, MaglevkitError, OutOfRangeError, ParameterFileError, SolverError
-from ..plant import STANDARD_GRAVITY, chopper_floor
+from ..plant import STANDARD_GRAVITY
 from ..validation import Plausible, check_plausible
+from .framework import PartEvaluator, run_blocks, run_steps
 from .guideway import Guideway
 from .mechanics import VehicleMechanics
 from .train import TrainData
@@ -282,7 +283,8 @@ class VehicleRun:
         ``"compiled"`` or ``"python"``: which implementation of the step ran.
     controller_update_time_s : ndarray
         Wall time of every update of the controllers other than the vectorised cascade
-        [s] (one entry per circuit and sample; empty for the cascade).
+        [s] (one entry per circuit and sample; for ``controller="mpc"`` one entry per
+        sample, all circuits' NMPC updates in one call; empty for the cascade).
     controller_update_cpu_time_s : ndarray
         The same updates' CPU (thread) time [s], less sensitive to a busy machine.
     """
@@ -516,6 +518,7 @@ class VehicleModel:
         self.trim_current_A = self._trim_currents(circ_force)
         self._design_controllers()
         self._step_functions: dict[float, Any] = {}
+        self._part_functions: dict[float, Any] = {}
         self._set_controllers(controller, controller_sample_time_s, mpc_options)
 
     # ------------------------------------------------------------------ set-up helpers
@@ -885,8 +888,6 @@ class VehicleModel:
         span = gw.span
         nm = gw.n_modes
         gstate = gw.initial_state(first_span=int(gw.span_index(xpath[0].min())))
-        ad_g, bd_g = span.discretize(dt) if nm else (np.zeros((0, 0)), np.zeros((0, 0)))
-        kk = span.wavenumbers_rad_per_m
 
         # initial state: static guideway deflection under the trim loads, frames fitted
         f_pts = self.mechanics_trim_forces()
@@ -909,7 +910,6 @@ class VehicleModel:
         q[:nsec2] = np.linalg.solve(mech.K[:nsec2, :nsec2],
                                     mech.Q_gravity[:nsec2] - mech.K[:nsec2, nsec2:] @ q[nsec2:])
         qd = np.zeros_like(q)
-        ad_m, bd_m = mech.discretize(dt)
         ndof = mech.n_dof
         x_m = np.concatenate([q, qd])
         bt = mech.B.T.copy()
@@ -938,15 +938,10 @@ class VehicleModel:
         force_pts = pf0.copy()
         current = out0.currents_A.copy()
         # controllers (vectorised over circuits)
-        g = self.gains
-        kp, kd, ki, kf = g["kp_per_m"], g["kd_s_per_m"], g["ki_per_m_s"], g["kflux_per_s"]
         blend = tr.control_velocity_blend
         psi0 = self.flux_bias_Wb
         res = bank.resistance_ohm
-        umax = tr.voltage_limit_V
         psi_hat = psi0.copy()
-        r_ec = self.eddy_resistance_ohm
-        proj = self.integral_projection
         integ = np.zeros(nc)
         # records
         rec = {k: np.empty((n_steps + 1, nc)) for k in ("gap", "current", "voltage", "force",
@@ -956,7 +951,6 @@ class VehicleModel:
         rec_mid = np.zeros((n_steps + 1, gw.n_spans))
         rec_span = np.zeros((n_steps + 1, gw.n_spans), dtype=int)
         rec_fp = np.empty((n_steps + 1, npt))
-        minv = 1.0 / np.diag(mech.M)
         timing = dict.fromkeys(("magnets", "mechanics", "guideway", "controllers", "other"), 0.0)
         ctl_times: list[float] = []
         ctl_cpu: list[float] = []
@@ -974,21 +968,24 @@ class VehicleModel:
             # one discarded step first: compiles (or loads) the bank's kernel outside the timing
             if not self.fine:
                 bank.step(bstate, dt, res * current, gaps_p, 0.0)
-            bar = _Progress(n_steps, enabled=progress)
+            # the step's parts (stepkernel.build_vehicle_parts), evaluated on CasADi's
+            # virtual machine: the laws of the compiled step, not a copy of them
+            parts = self._part_evaluators(dt)
+            f_in, f_cas, f_lim, f_upd, f_mech, f_out = (parts[k] for k in (
+                "guideway_in", "cascade", "voltage_limits", "controller_update",
+                "mechanics_loaded", "guideway_out"))
             clock = time.perf_counter
-            t_start = clock()
-            cpu0 = time.process_time()
-            mid_shape = span.mode_shapes(0.5 * span_l)[0] if nm else np.zeros(0)
-            zeros_np = np.zeros(npt)
-            # guideway modal state in ring order, [q | q'] per row (as Guideway.step)
-            gx = np.concatenate([gstate.modal_displacement_m, gstate.modal_velocity_m_per_s], axis=1)
-            first = gstate.first_span
-            n_sp = gw.n_spans
-            span_ids = np.arange(n_sp)
-            ad_gt, bd_gt = ad_g.T.copy(), bd_g.T.copy()
-            half = 0.5 * v * dt
-            fail_any = np.isfinite(fail_t)
-            t_fail0 = float(fail_t.min()) if fail_any.any() else math.inf
+            # guideway modal state in ring order, [q | q'] per row (as Guideway.step), flat
+            n_sp = gw.n_spans if nm else 0
+            gx = np.concatenate([gstate.modal_displacement_m, gstate.modal_velocity_m_per_s],
+                                axis=1).ravel() if nm else np.zeros(0)
+            span_ids = np.arange(gw.n_spans)
+            k_out = -1
+            if nm:
+                first_k, keep, k_out = gw.window_schedule(
+                    xpath.min(axis=1), xpath.max(axis=1) + 0.5 * v * dt,
+                    first_span=gstate.first_span)
+            i_l_fine = np.zeros(nc)          # detailed members: the chopper reads I, not I_L
             # controllers other than the vectorised cascade, sampled every `hold` steps
             ext_idx, hold, u_ext, ext_ctl = self._start_controllers(
                 dt, gaps_p if circ_avg is None else circ_avg @ gaps_p,
@@ -996,137 +993,99 @@ class VehicleModel:
             k_pay = (n_steps + 1 if payload_step_s is None
                      else int(math.ceil(payload_step_s / dt - 1e-9)))
             q_grav = mech.Q_gravity
-            k = 0
-            interrupted = False
-            try:
-                for k in range(n_steps + 1):
-                    t0 = clock()
-                    t = times[k]
-                    x_pts = xpath[k]
-                    # guideway deflection at the points (and mode shapes at the mid-step positions)
-                    if nm:
-                        if gw.moving_boundary:
-                            k_rear = int(gw.span_index(x_pts.min()))
-                            if k_rear > first:
-                                for kk_ in range(first, min(k_rear, first + n_sp)):
-                                    gx[kk_ % n_sp] = 0.0
-                                first = k_rear
-                        x2 = np.concatenate([x_pts, x_pts + half])
-                        ks = np.floor((x2 - gw.origin_m) / span_l).astype(int)
-                        if ks.min() < first or ks.max() > first + n_sp - 1:
-                            raise OutOfRangeError(f"vehicle run at t = {t:.4f} s: the train left the "
-                                                  f"integrated spans {first} ... {first + n_sp - 1}")
-                        rows2 = ks % n_sp
-                        arg = np.multiply.outer(x2 - (gw.origin_m + ks * span_l), kk)
-                        sn = np.sin(arg)
-                        rows = rows2[:npt]
-                        phi, dphi = sn[:npt], kk * np.cos(arg[:npt])
-                        qg = gx[rows]
-                        w = np.einsum("pj,pj->p", qg[:, :nm], phi)
-                        w_rate = (np.einsum("pj,pj->p", qg[:, nm:], phi)
-                                  + v * np.einsum("pj,pj->p", qg[:, :nm], dphi))
-                    else:
-                        w = w_rate = zeros_np
-                    t1 = clock()
-                    q, qd = x_m[:ndof], x_m[ndof:]
-                    gaps_p = s0 + bt @ q - w - r_all[k]
-                    rates_p = bt @ qd - w_rate - v * rx_all[k]
-                    gaps_c = gaps_p if circ_avg is None else circ_avg @ gaps_p
-                    rates_c = rates_p if circ_avg is None else circ_avg @ rates_p
-                    # record the state at t_k
-                    rec["gap"][k] = gaps_c
-                    rec["current"][k] = current
-                    rec["force"][k] = force_c
-                    rec["deflection"][k] = w if circ_avg is None else circ_avg @ w
-                    rec_q[k], rec_qd[k] = q, qd
-                    rec_fp[k] = force_pts
-                    if nm:
-                        rec_span[k] = first + span_ids
-                        rec_mid[k] = gx[(first + span_ids) % n_sp, :nm] @ mid_shape
-                    gmin = float(gaps_c.min())
-                    gmax = float(gaps_c.max())
-                    if gmin <= tr.touchdown_gap_m or gmax >= tr.landing_gap_m:
-                        closed = gmin <= tr.touchdown_gap_m
-                        j = int(np.argmin(gaps_c) if closed else np.argmax(gaps_c))
-                        touchdown = (names[j], float(t), float(gaps_c[j]),
-                                     "closed" if closed else "landed")
-                        rec["voltage"][k] = np.nan
-                        last = k
-                        break
-                    if k == n_steps:
-                        rec["voltage"][k] = rec["voltage"][k - 1]
-                        break
-                    t3 = clock()
-                    if ext_idx.size and k % hold == 0:
-                        self._sample_controllers(ext_ctl, ext_idx, u_ext, t, gaps_c, rates_c,
-                                                 current, ctl_times,
-                                                 rec["voltage"][max(k - hold, 0):k], integ,
-                                                 ctl_cpu)
-                    # controllers (flux cascade, every circuit at once)
-                    vel_p = bt @ qd          # the force points' absolute velocity
-                    vel_c = vel_p if circ_avg is None else circ_avg @ vel_p
-                    rho = (kp * (gaps_c - s0) + kd * damping_input(rates_c, vel_c, blend)
-                           + ki * integ)
-                    u = res * current + kf * (psi0 * (1.0 + rho) - psi_hat)
-                    if ext_idx.size:        # the other controllers' voltages, held
-                        u[ext_idx] = u_ext[ext_idx]
-                    np.clip(u, -umax, umax, out=u)
-                    # 2-quadrant chopper: the coil current cannot reverse.  Reduced model (eq. 8):
-                    # I = (U + R_ec I_L) / (R_el + R_ec) >= 0  <=>  U >= -R_ec I_L
-                    if self.fine:
-                        u = np.where((current < 1.0) & (u < 0.0), 0.0, u)
-                    else:
-                        u = chopper_floor(u, bstate.inductor_currents_A, r_ec)
-                    if t >= t_fail0:
-                        u = np.where(fail_t <= t, 0.0, u)
-                    rec["voltage"][k] = u
-                    t4 = clock()
-                    try:
-                        bstate, out = bank.step(bstate, dt, u, gaps_p, rates_p, pole_forces=self.fine)
-                    except MaglevkitError as exc:
-                        touchdown = self._touchdown_within_step(gaps_c, rates_c, dt,
-                                                            float(times[k + 1]))
-                        if touchdown is None:
-                            raise type(exc)(f"vehicle run at t = {t:.4f} s: {exc}") from None
-                        rec["voltage"][k] = np.nan
-                        last = k
-                        break
-                    t5 = clock()
-                    new_current = out.currents_A
-                    psi_hat += dt * (u - res * 0.5 * (current + new_current))
-                    integ += proj @ ((gaps_c - s0) * dt)
-                    new_pts = out.pole_force_N if self.fine else out.circuit_force_N
-                    assert new_pts is not None
-                    f_bar = (0.5 * sides) * (force_pts + new_pts)
-                    t6 = clock()
-                    if k == k_pay:
-                        q_grav = self._payload_gravity(payload_fraction)
-                    x_m = ad_m @ x_m + bd_m @ (q_grav - mech.B @ f_bar)
-                    t7 = clock()
-                    if nm:
-                        onehot = (rows2[npt:, None] == span_ids).astype(float)
-                        qmod = onehot.T @ (sn[npt:] * f_bar[:, None])
-                        gx = gx @ ad_gt + qmod @ bd_gt
-                    t8 = clock()
-                    current = new_current
-                    force_c = out.circuit_force_N
-                    force_pts = new_pts
-                    timing["guideway"] += (t1 - t0) + (t8 - t7)
-                    timing["other"] += (t3 - t1) + (t6 - t5)
-                    timing["controllers"] += t4 - t3
-                    timing["magnets"] += t5 - t4
-                    timing["mechanics"] += t7 - t6
-                    bar.update(k + 1)
-            except KeyboardInterrupt:
-                # keep the steps done: records up to the step before the one under way
-                interrupted = True
-                last = k - 1
-                if last < 1:
-                    bar.close(finished=False)
-                    raise
-            wall = clock() - t_start
-            bar.close(finished=not interrupted)
-            cpu = time.process_time() - cpu0
+
+            def step(k: int) -> tuple[int, Any] | None:
+                """Record the state at step ``k`` and advance it (None), or stop there."""
+                nonlocal gx, x_m, bstate, current, force_c, force_pts, psi_hat, integ, q_grav
+                t0 = clock()
+                t = times[k]
+                x_pts = xpath[k]
+                if k == k_out:
+                    raise OutOfRangeError(
+                        f"vehicle run at t = {t:.4f} s: the train left the integrated "
+                        f"spans {first_k[k]} ... {first_k[k] + n_sp - 1}")
+                if nm and not keep[k].all():    # spans recycled by the moving boundary
+                    gx.reshape(n_sp, -1)[keep[k] == 0.0] = 0.0
+                gaps_p, rates_p, w, mid, vel_p = f_in(x_m, gx, x_pts, r_all[k], rx_all[k], v)
+                t1 = clock()
+                gaps_c = gaps_p if circ_avg is None else circ_avg @ gaps_p
+                rates_c = rates_p if circ_avg is None else circ_avg @ rates_p
+                # record the state at t_k
+                rec["gap"][k] = gaps_c
+                rec["current"][k] = current
+                rec["force"][k] = force_c
+                rec["deflection"][k] = w if circ_avg is None else circ_avg @ w
+                rec_q[k], rec_qd[k] = x_m[:ndof], x_m[ndof:]
+                rec_fp[k] = force_pts
+                if nm:
+                    rec_span[k] = first_k[k] + span_ids
+                    rec_mid[k] = mid[rec_span[k] % n_sp]
+                gmin = float(gaps_c.min())
+                gmax = float(gaps_c.max())
+                if gmin <= tr.touchdown_gap_m or gmax >= tr.landing_gap_m:
+                    closed = gmin <= tr.touchdown_gap_m
+                    j = int(np.argmin(gaps_c) if closed else np.argmax(gaps_c))
+                    rec["voltage"][k] = np.nan
+                    return k, (names[j], float(t), float(gaps_c[j]),
+                               "closed" if closed else "landed")
+                if k == n_steps:
+                    rec["voltage"][k] = rec["voltage"][k - 1]
+                    return None
+                t3 = clock()
+                if ext_idx.size and k % hold == 0:
+                    self._sample_controllers(ext_ctl, ext_idx, u_ext, t, gaps_c, rates_c,
+                                             current, ctl_times,
+                                             rec["voltage"][max(k - hold, 0):k], integ,
+                                             ctl_cpu)
+                # controllers (flux cascade, every circuit at once), the damping input
+                # blending the gap rate with the force points' absolute velocity
+                vel_c = vel_p if circ_avg is None else circ_avg @ vel_p
+                (u,) = f_cas(gaps_c, damping_input(rates_c, vel_c, blend), current, psi_hat,
+                             integ)
+                if ext_idx.size:        # the other controllers' voltages, held
+                    u[ext_idx] = u_ext[ext_idx]
+                # |U| <= U_max, the 2-quadrant chopper, failed circuits at 0 V
+                (u,) = f_lim(u, i_l_fine if self.fine else bstate.inductor_currents_A,
+                             current, t, fail_t)
+                rec["voltage"][k] = u
+                t4 = clock()
+                try:
+                    bstate, out = bank.step(bstate, dt, u, gaps_p, rates_p,
+                                            pole_forces=self.fine)
+                except MaglevkitError as exc:
+                    within = self._touchdown_within_step(gaps_c, rates_c, dt,
+                                                         float(times[k + 1]))
+                    if within is None:
+                        raise type(exc)(f"vehicle run at t = {t:.4f} s: {exc}") from None
+                    rec["voltage"][k] = np.nan
+                    return k, within
+                t5 = clock()
+                new_current = out.currents_A
+                psi_hat, integ = f_upd(psi_hat, integ, u, current, new_current, gaps_c)
+                new_pts = out.pole_force_N if self.fine else out.circuit_force_N
+                assert new_pts is not None
+                f_bar = (0.5 * sides) * (force_pts + new_pts)
+                t6 = clock()
+                if k == k_pay:
+                    q_grav = self._payload_gravity(payload_fraction)
+                (x_m,) = f_mech(x_m, f_bar, q_grav)
+                t7 = clock()
+                if nm:
+                    (gx,) = f_out(gx, x_pts, v, f_bar)
+                t8 = clock()
+                current = new_current
+                force_c = out.circuit_force_N
+                force_pts = new_pts
+                timing["guideway"] += (t1 - t0) + (t8 - t7)
+                timing["other"] += (t3 - t1) + (t6 - t5)
+                timing["controllers"] += t4 - t3
+                timing["magnets"] += t5 - t4
+                timing["mechanics"] += t7 - t6
+                return None
+
+            outcome = run_steps(step, n_steps=n_steps, progress=progress)
+            last, touchdown, interrupted = outcome.last_step, outcome.event, outcome.interrupted
+            wall, cpu = outcome.wall_s, outcome.cpu_s
         n = last + 1
         times = times[:n]
         sl = slice(0, n)
@@ -1139,8 +1098,8 @@ class VehicleModel:
             # row k is the state at t_k, whose acceleration sees the load from then on
             q_g_all[times >= payload_step_s - 1e-9 * dt] = self._payload_gravity(
                 payload_fraction)
-        qdd_all = minv * (q_g_all - q_all @ mech.K.T - rec_qd[sl] @ mech.C.T
-                          - (rec_fp[sl] * sides) @ mech.B.T)
+        qdd_all = mech.accelerations(q_all, rec_qd[sl], rec_fp[sl] * sides,
+                                     gravity_force=q_g_all)
         floor = np.asarray(floor_points, dtype=float)
         acc_floor = (qdd_all[:, 0:2 * secs:2, None]
                      + qdd_all[:, 1:2 * secs:2, None] * floor[None, None, :] * tr.section_length_m)
@@ -1248,28 +1207,50 @@ class VehicleModel:
         """
         return self._step_function(float(dt_s), self.bank.step_function(float(dt_s)))
 
+    def _part_constants(self, dt: float) -> dict[str, Any]:
+        """The run's constants of the step's parts (:func:`build_vehicle_parts`)."""
+        gw, mech, span = self.guideway, self.mechanics, self.guideway.span
+        nm = gw.n_modes
+        ad_g, bd_g = span.discretize(dt) if nm else (np.zeros((0, 0)), np.zeros((0, 0)))
+        ad_m, bd_m = mech.discretize(dt)
+        return dict(
+            dt=dt, nominal_gap_m=self.train.nominal_gap_m, span_length_m=span.length_m,
+            origin_m=gw.origin_m, wavenumbers=span.wavenumbers_rad_per_m if nm else np.zeros(0),
+            guideway_ad=ad_g, guideway_bd=bd_g, n_spans=gw.n_spans, mech_ad=ad_m,
+            mech_bd=bd_m, gravity_force=mech.Q_gravity, force_matrix=mech.B, gains=self.gains,
+            flux_bias_Wb=self.flux_bias_Wb, resistance_ohm=self.bank.resistance_ohm,
+            eddy_resistance_ohm=self.eddy_resistance_ohm,
+            voltage_limit_V=self.train.voltage_limit_V,
+            integral_projection=self.integral_projection,
+            midspan_shape=span.mode_shapes(0.5 * span.length_m)[0] if nm else np.zeros(0))
+
     def _step_function(self, dt: float, bank_step: Any) -> Any:
         from .stepkernel import build_vehicle_step
 
         if self.fine:
             raise InputError("the compiled vehicle step needs reduced magnets "
                              "(magnets='reduced')")
-        gw, mech, span = self.guideway, self.mechanics, self.guideway.span
-        nm = gw.n_modes
-        ad_g, bd_g = span.discretize(dt) if nm else (np.zeros((0, 0)), np.zeros((0, 0)))
-        ad_m, bd_m = mech.discretize(dt)
-        return build_vehicle_step(
-            bank_step=bank_step, dt=dt, nominal_gap_m=self.train.nominal_gap_m,
-            sides=float(self.train.sides), span_length_m=span.length_m, origin_m=gw.origin_m,
-            wavenumbers=span.wavenumbers_rad_per_m if nm else np.zeros(0),
-            guideway_ad=ad_g, guideway_bd=bd_g, n_spans=gw.n_spans, mech_ad=ad_m,
-            mech_bd=bd_m, gravity_force=mech.Q_gravity, force_matrix=mech.B, gains=self.gains,
-            flux_bias_Wb=self.flux_bias_Wb, resistance_ohm=self.bank.resistance_ohm,
-            eddy_resistance_ohm=self.eddy_resistance_ohm,
-            voltage_limit_V=self.train.voltage_limit_V,
-            velocity_blend=self.train.control_velocity_blend,
-            integral_projection=self.integral_projection,
-            midspan_shape=span.mode_shapes(0.5 * span.length_m)[0] if nm else np.zeros(0))
+        return build_vehicle_step(bank_step=bank_step, sides=float(self.train.sides),
+                                  velocity_blend=self.train.control_velocity_blend,
+                                  **self._part_constants(dt))
+
+    def _part_evaluators(self, dt: float) -> dict[str, Any]:
+        """The step's parts for steps of ``dt`` (:func:`build_vehicle_parts`), bound for
+        the reference loop (:class:`~maglevkit.vehicle.framework.PartEvaluator`), built
+        once per ``dt``.  The element-wise controller parts run expanded to scalar
+        expressions (CasADi's SX machine: ~3 us per call against 2-57 us as matrix
+        expressions), the matrix parts as they are (the expansion was 1.7-2.8x slower)."""
+        from .stepkernel import build_vehicle_parts
+
+        hit = self._part_functions.get(dt)
+        if hit is None:
+            parts = build_vehicle_parts(chopper="coil_current" if self.fine else "eq8",
+                                        **self._part_constants(dt))
+            hit = {k: PartEvaluator(f.expand() if k in ("cascade", "voltage_limits",
+                                                         "controller_update") else f)
+                   for k, f in parts.items() if k not in ("controllers", "mechanics")}
+            self._part_functions[dt] = hit
+        return hit
 
     def _compiled_step(self, dt: float) -> tuple[Any, Any, int]:
         """(compiled block function, layout, steps per block), built and compiled (or
@@ -1341,118 +1322,66 @@ class VehicleModel:
         first0 = gstate.first_span
         k_out = -1
         if nm:
-            span_l = gw.span.length_m
-            lo = np.floor((xpath.min(axis=1) - gw.origin_m) / span_l).astype(int)
-            hi = np.floor((xpath.max(axis=1) + 0.5 * v * dt - gw.origin_m) / span_l).astype(int)
-            first_k = (np.maximum.accumulate(np.maximum(lo, first0)) if gw.moving_boundary
-                       else np.full(lo.shape, first0))
-            out = (lo < first_k) | (hi > first_k + n_sp - 1)
-            k_out = int(np.argmax(out)) if out.any() else -1
-            keep = p_all[:, sp["keep"]]
-            for kr in (np.flatnonzero(np.diff(first_k) > 0) + 1).tolist():
-                old = int(first_k[kr - 1])
-                for span in range(old, min(int(first_k[kr]), old + n_sp)):
-                    keep[kr, span % n_sp] = 0.0
+            first_k, keep, k_out = gw.window_schedule(
+                xpath.min(axis=1), xpath.max(axis=1) + 0.5 * v * dt, first_span=first0)
+            p_all[:n_steps + 1, sp["keep"]] = keep
         else:
             first_k = np.full(times.shape, first0)
-        # two state vectors, each bound once to one of two buffers (ping-pong)
-        s_buf = [np.zeros(lay.n_state), np.zeros(lay.n_state)]
-        s0v = s_buf[0]
+        # the state at step 0
+        s0v = np.zeros(lay.n_state)
         s0v[st["x_mech"]] = x_m
         if nm:
             s0v[st["guideway"]] = np.concatenate([gstate.modal_displacement_m,
                                                   gstate.modal_velocity_m_per_s], axis=1).ravel()
         s0v[st["I_L"]], s0v[st["psi_hat"]], s0v[st["integral"]] = i_l, psi_hat, integ
         s0v[st["current"]], s0v[st["force"]] = current, force
-        r_all_rec = np.empty((n_rows, lay.n_record))
         consts = np.concatenate([[v], fail_t])
-        bufs: list[Any] = []
-        evals = []
-        for j in (0, 1):
-            buf, ev = fun.buffer()
-            buf.set_arg(0, memoryview(s_buf[j]))        # type: ignore[arg-type]
-            buf.set_res(0, memoryview(s_buf[1 - j]))    # type: ignore[arg-type]
-            buf.set_arg(2, memoryview(consts))          # type: ignore[arg-type]
-            bufs.append(buf)
-            evals.append(ev)
         i_min, i_max, i_bad = rl["gap_min"].start, rl["gap_max"].start, rl["n_bad"].start
         td_gap, land_gap = tr.touchdown_gap_m, tr.landing_gap_m
-        touchdown: tuple[str, float, float, str] | None = None
-        last = n_steps
-        t_call = 0.0
-        done = False
-        bar = _Progress(n_steps, enabled=progress)
-        clock = time.perf_counter
-        t_start = clock()
-        cpu0 = time.process_time()
-        interrupted = False
-        k0 = 0
-        try:
-            for blk in range(n_rows // nb):
-                k0 = blk * nb
-                j = blk & 1
-                buf = bufs[j]
-                buf.set_arg(1, memoryview(p_all[k0:k0 + nb]))   # type: ignore[arg-type]
-                rows = r_all_rec[k0:k0 + nb]
-                buf.set_res(1, memoryview(rows))                 # type: ignore[arg-type]
-                tc = clock()
-                evals[j]()
-                t_call += clock() - tc
-                events = ((rows[:, i_min] <= td_gap) | (rows[:, i_max] >= land_gap)
-                          | (rows[:, i_bad] != 0))
-                end = k0 + nb > n_steps
-                if not (end or events.any() or k0 <= k_out < k0 + nb):
-                    bar.update(k0 + nb)
-                    continue
-                for k in range(k0, min(k0 + nb, n_steps + 1)):
-                    row = r_all_rec[k]
-                    if k == k_out:
-                        raise OutOfRangeError(f"vehicle run at t = {times[k]:.4f} s: the train left "
-                                              f"the integrated spans {first_k[k]} ... "
-                                              f"{first_k[k] + n_sp - 1}")
-                    if row[i_min] <= td_gap or row[i_max] >= land_gap:
-                        gaps = row[rl["gap"]]
-                        if np.isfinite(gaps).all():
-                            closed = row[i_min] <= td_gap
-                            jj = int(np.argmin(gaps) if closed else np.argmax(gaps))
-                            touchdown = (names[jj], float(times[k]), float(gaps[jj]),
-                                         "closed" if closed else "landed")
-                            last = k
-                            done = True
-                            break
-                    if k == n_steps:
-                        done = True
-                        break
-                    if row[i_bad]:       # out of the maps or not finite: a touchdown within
-                        touchdown = self._touchdown_within_step(    # the step, or diagnose
-                            row[rl["gap"]], row[rl["gap_rate"]], dt, float(times[k + 1]))
-                        if touchdown is not None:
-                            last = k
-                            done = True
-                            break
-                        state = BankState(float(times[k]), row[rl["I_L"]].copy(),
-                                          row[rl["gap"]].copy())
-                        try:
-                            bank.step(state, dt, row[rl["voltage"]].copy(), row[rl["gap"]].copy(),
-                                      row[rl["gap_rate"]].copy())
-                        except MaglevkitError as exc:
-                            raise type(exc)(f"vehicle run at t = {times[k]:.4f} s: {exc}") from None
-                if done:
-                    break
-                bar.update(k0 + nb)
-        except KeyboardInterrupt:
-            # keep the blocks done (their events checked); the block under way is dropped
-            interrupted = True
-            last = k0 - 1
-            if last < 1:
-                bar.close(finished=False)
-                raise
-        wall = clock() - t_start
-        cpu = time.process_time() - cpu0
-        bar.close(finished=not interrupted)
+
+        def look(k0: int, rows: np.ndarray) -> bool:
+            """Any event in the block: a gap at a limit, a flagged circuit, the window."""
+            return bool(((rows[:, i_min] <= td_gap) | (rows[:, i_max] >= land_gap)
+                         | (rows[:, i_bad] != 0)).any() or k0 <= k_out < k0 + nb)
+
+        def check(k: int, row: np.ndarray, final: bool) -> tuple[int, Any] | None:
+            """The NumPy loop's order per step: the loads leaving the integrated spans,
+            touchdown, the end of the run, a circuit the kernel flagged (a touchdown
+            within the step, else diagnosed by the bank's own step, which raises)."""
+            if k == k_out:
+                raise OutOfRangeError(f"vehicle run at t = {times[k]:.4f} s: the train left "
+                                      f"the integrated spans {first_k[k]} ... "
+                                      f"{first_k[k] + n_sp - 1}")
+            if row[i_min] <= td_gap or row[i_max] >= land_gap:
+                gaps = row[rl["gap"]]
+                if np.isfinite(gaps).all():
+                    closed = row[i_min] <= td_gap
+                    jj = int(np.argmin(gaps) if closed else np.argmax(gaps))
+                    return k, (names[jj], float(times[k]), float(gaps[jj]),
+                               "closed" if closed else "landed")
+            if final or not row[i_bad]:
+                return None
+            within = self._touchdown_within_step(row[rl["gap"]], row[rl["gap_rate"]], dt,
+                                                 float(times[k + 1]))
+            if within is not None:
+                return k, within
+            state = BankState(float(times[k]), row[rl["I_L"]].copy(), row[rl["gap"]].copy())
+            try:
+                bank.step(state, dt, row[rl["voltage"]].copy(), row[rl["gap"]].copy(),
+                          row[rl["gap_rate"]].copy())
+            except MaglevkitError as exc:
+                raise type(exc)(f"vehicle run at t = {times[k]:.4f} s: {exc}") from None
+            return None
+
+        outcome, r_all_rec = run_blocks(fun, state=s0v, inputs=p_all, constants=consts,
+                                        n_steps=n_steps, n_record=lay.n_record,
+                                        block_steps=nb, look=look, check=check,
+                                        progress=progress)
+        last, touchdown, interrupted = outcome.last_step, outcome.event, outcome.interrupted
+        wall, cpu = outcome.wall_s, outcome.cpu_s
         timing.clear()
-        timing["compiled step"] = t_call
-        timing["other"] = max(wall - t_call, 0.0)
+        timing["compiled step"] = outcome.call_s
+        timing["other"] = max(wall - outcome.call_s, 0.0)
         n = last + 1
         rr = r_all_rec[:n]
         for key in ("gap", "current", "force", "deflection", "voltage"):
@@ -1486,9 +1415,19 @@ class VehicleModel:
         if self.controller_kind == "mpc":
             gaps, rates = s0 + self.integral_projection @ (gaps - s0), \
                 self.integral_projection @ rates
-        for j in idx.tolist():
-            ctls[j].reset(Measurement(0.0, float(gaps[j]), float(rates[j]),
-                                      current[j:j + 1].copy(), s0), sample_time_s=ts)
+        first = [Measurement(0.0, float(gaps[j]), float(rates[j]), current[j:j + 1].copy(), s0)
+                 for j in idx.tolist()]
+        if self.controller_kind == "mpc":
+            # every circuit's NMPC in one compiled call per sample (built once per model)
+            batch = getattr(self, "mpc_batch", None)
+            if batch is None:
+                from ..control.realtime import RealTimeMPCBatch
+
+                batch = self.mpc_batch = RealTimeMPCBatch([ctls[j] for j in idx.tolist()])
+            batch.reset(first, sample_time_s=ts)
+            return idx, hold, np.zeros(self.bank.n_circuits), [batch]
+        for j, meas in zip(idx.tolist(), first, strict=True):
+            ctls[j].reset(meas, sample_time_s=ts)
         return idx, hold, np.zeros(self.bank.n_circuits), [ctls[j] for j in idx.tolist()]
 
     def _initial_gap_rates(self, v: float, r_x: np.ndarray, x_pts: np.ndarray,
@@ -1527,6 +1466,18 @@ class VehicleModel:
             rates = proj @ rates
         clock, cpu = time.perf_counter, time.thread_time
         ua = applied.mean(axis=0) if applied.shape[0] else None
+        if self.controller_kind == "mpc":       # RealTimeMPCBatch: one call, every circuit
+            t0, c0 = clock(), cpu()
+            try:
+                u_out[idx] = ctls[0].update(gaps[idx], current[idx], refs[idx],
+                                            None if ua is None else ua[idx], time_s=float(t))
+            except MaglevkitError as exc:
+                j = int(idx[int(getattr(exc, "state", {}).get("controller", 0))])
+                raise type(exc)(f"vehicle run at t = {t:.4f} s, controller of circuit "
+                                f"{self.bank.circuit_names[j]!r}: {exc}") from None
+            times.append(clock() - t0)
+            times_cpu.append(cpu() - c0)
+            return
         for c, j in zip(ctls, idx.tolist(), strict=True):
             m = Measurement(float(t), float(gaps[j]), float(rates[j]), current[j:j + 1].copy(),
                             float(refs[j]),
@@ -1605,51 +1556,17 @@ def _scaled_resistances(maps: Any, r_el: float, r_ec: float) -> Any:
     return type(maps)(ds)
 
 
-class _Progress:
-    """Progress of a vehicle run on stderr (:class:`maglevkit._progress.ProgressReporter`:
-    a rich bar on a terminal, plain lines with the ETA in logs), fed every ~0.5 % of the
-    steps so that the time loop stays free of it."""
-
-    def __init__(self, total: int, *, enabled: bool) -> None:
-        self.enabled = enabled and total > 0
-        self.total = total
-        self._next = 0
-        self._done = 0
-        self._rep: Any = None
-        if self.enabled:
-            from .._progress import ProgressReporter
-
-            self._rep = ProgressReporter(total, "vehicle run (steps)")
-            self._rep.__enter__()
-
-    def update(self, k: int) -> None:
-        if self.enabled and k >= self._next:
-            k = min(k, self.total)
-            self._rep.advance(k - self._done)
-            self._done = k
-            self._next = k + max(1, self.total // 200)
-
-    def close(self, finished: bool = True) -> None:
-        """Close the bar (``finished``: the closing ``done`` line in plain mode)."""
-        if self.enabled:
-            self.enabled = False
-            if finished:
-                self._rep.advance(self.total - self._done)
-                self._rep.__exit__(None, None, None)
-            else:
-                self._rep.__exit__(KeyboardInterrupt, None, None)
-
-
 class VehicleRunInterrupted(KeyboardInterrupt):
-    """Ctrl-C during the time loop of :meth:`VehicleModel.run`: a ``KeyboardInterrupt``
-    carrying the run up to the last whole step (``run``, a :class:`VehicleRun` whose
-    dataset's ``interrupted`` attribute says where it stopped)."""
+    """Ctrl-C during the time loop of :meth:`VehicleModel.run` or
+    :meth:`~maglevkit.vehicle.crossrun.CrossSectionModel.run`: a ``KeyboardInterrupt``
+    carrying the run up to the last whole step (``run``, a :class:`VehicleRun` or a
+    ``CrossSectionRun``, whose dataset's ``interrupted`` attribute says where it stopped)."""
 
-    def __init__(self, run: VehicleRun) -> None:
+    def __init__(self, run: Any) -> None:
         super().__init__(run.dataset.attrs.get("interrupted", "interrupted"))
         self.run = run
 
-    def __reduce__(self) -> tuple[Any, tuple[VehicleRun]]:
+    def __reduce__(self) -> tuple[Any, tuple[Any]]:
         return (type(self), (self.run,))      # picklable (e.g. from a worker process)
 
 
