@@ -122,7 +122,8 @@ OPTION_NAMES = (*SWITCH_NAMES, "eddy_model", "eddy_layers")
 LADDER_KINDS = ("u_magnet",)
 #: Magnet kinds whose ``[magnet]`` table has the ``end_effects`` key (true: the terms of the
 #: finite extent across the 2-D cut; ``Magnet.with_options(end_effects=...)`` sets it).
-END_EFFECTS_KINDS = ("u_magnet", "levitation_magnet")
+#: The guidance magnet's network has no such term (false builds the same network).
+END_EFFECTS_KINDS = ("u_magnet", "levitation_magnet", "guidance_magnet")
 
 #: Winding current density [A/m^2], averaged over the coil's cross-section, above which a
 #: current is reported as implausible (:class:`PlausibleRange`): at 100 A/mm^2 even a

@@ -16,6 +16,15 @@ All yokes of one section are identical and in parallel magnetically with their c
 series: they are merged into one yoke branch of the summed cross-section whose coil has
 the turns of one yoke (exact for identical yokes: ``psi = n phi_total``).  Formulas and
 sources: docs/magnets.md.
+
+``end_effects`` (``[magnet]`` key, default true, as for the other kinds) has no term to
+remove here: the network is already the cross-section, 2-D over the section length.  Its
+terms across the cut (along the track) would be the fringing at the sections' ends and at
+the magnet's two ends; the bars and the rail run through from section to section, and the
+magnet's two ends are neglected.  ``end_effects = false`` therefore builds the same
+network (the key is accepted so that every kind can be set to its 2-D cut alike, e.g.
+against the cross-section FEM of benchmarks/fem_guidance.py).  The legs' and yokes' depth
+``yokes_per_section x yoke_width`` is a material cross-section of the cut, not an end term.
 """
 
 from __future__ import annotations
@@ -56,6 +65,7 @@ MAGNET_SCHEMA = {
     "resistance_per_yoke": Schema(float, unit="ohm"),
     "material": Schema(str),
     "resistivity": Schema(float, required=False, unit="ohm m"),
+    "end_effects": Schema(bool, required=False, default=True),
 }
 CIRCUITS_SCHEMA = {"names": Schema(list)}
 RAIL_SCHEMA = {
@@ -127,7 +137,8 @@ def build_guidance_magnet(params: Mapping[str, Any], materials: Mapping[str, Mat
     face = L * hp
     # bar flanks above and below the face see the rail (it covers both bars); flank depth
     # = bar thickness.  The ends of the sections along the track do not fringe (the bars
-    # continue), except at the two magnet ends, which are neglected (2-D cross-section).
+    # continue), except at the two magnet ends, which are neglected (2-D cross-section):
+    # there is no across-cut term, so m["end_effects"] (true or false) changes nothing.
     edges = ((L, tp), (L, tp)) if options.fringing else ()
     leg_area = ny * wy * tl
     yoke_area = ny * wy * ty

@@ -1,0 +1,372 @@
+"""Independent 2-D finite-element check of the guidance magnet ``tr-guidance`` (issue 26).
+
+Which cut: the network (src/maglevkit/magnets/guidance.py) is a cross-section: per section
+the flux loop yoke -> upper leg -> upper pole bar -> gap -> rail (down) -> gap -> lower pole
+bar -> lower leg -> yoke lies in the plane normal to the track, and everything along the
+track enters only as depth (face ``section_length x pole_bar_height``, the yokes merged into
+one of depth ``yokes_per_section x yoke_width``); the sections are coupled along the track
+only by the bars and the rail, which carry no flux when both sections have the same gap and
+current.  A longitudinal cut would show the yokes side by side along a bar, but the loop
+closes vertically, out of that plane: no 2-D longitudinal cut holds the magnet's circuit.
+So the FEM is the cross-section (x normal to the rail, pole faces at x = 0, the rail at
+``s <= x <= s + thickness``; y up, the magnet's mid-plane at y = 0), 2-D over the depth
+``section_length``, both sections at the same gap and current:
+
+* pole bars ``pole_bar_thickness`` (x) by ``pole_bar_height`` (y), centred at
+  ``y = +-pole_bar_distance/2``; legs ``leg_length`` (x) by ``leg_thickness`` (y) behind
+  them on the same centre lines; the yoke ``yoke_thickness`` (x) behind the legs, from the
+  lower leg's bottom to the upper leg's top; the rail ``thickness`` by ``height``, centred
+  on y = 0;
+* the coil around the yoke: ``coil_height`` (y) centred on y = 0, its two sides in front of
+  and behind the yoke, each ``COIL_BUILD`` x ``leg_length`` thick (the file gives no coil build;
+  the network needs none; ``--convergence`` also solves it with the whole leg length);
+* iron: the magnet's material (bars, rail: the rail's material) over the whole depth; the
+  legs and the yoke with the depth ratio ``section_length / (yokes_per_section x
+  yoke_width)`` (``fem_common.Reluctivity``: their real flux density is that ratio times the
+  model's), the way the network merges the yokes;
+* air everywhere else over the whole depth.  The air between the legs thus leaks over the
+  section length where the real magnet has coil and legs only over the yokes' width (the
+  network's leg leakage: ``yokes_per_section x yoke_width``); ``--convergence`` also solves it
+  with that air at the yokes' depth (relative permeability ``n_y w_y / L``), which bounds
+  this 3-D term of the FEM itself; and with the air behind the yoke at the yokes' depth
+  (``behind_depth``: the leakage around the coil's rear, which the 2-D field spreads into the
+  whole half plane behind the magnet over the whole section length).
+
+The magnet is symmetric about y = 0 with the flux crossing that plane at right angles
+(yoke, rail), so only y >= 0 is meshed (natural condition there, A = 0 on the box).
+
+Outputs per (s, I): the force of one section (Maxwell stress averaged over the air band of
+the gap, both bars), its circuit's flux linkage (``psi = n_turns x`` the flux through the
+yokes, as the network's merged yoke: ``N L / A_coil int A`` over the coil sides), the
+differential inductance from the Newton tangent, and region fluxes (yoke at y = 0, leg at
+mid-length, rail at y = 0, the gap's mid-line over y > 0).
+
+``python benchmarks/fem_guidance.py --grid --convergence`` records
+``benchmarks/results/fem_guidance.json``; ``--compare`` prints the network against it.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import sys
+import time
+from dataclasses import dataclass
+from pathlib import Path
+
+os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
+os.environ.setdefault("OMP_NUM_THREADS", "1")
+
+import numpy as np  # noqa: E402
+
+import maglevkit as mk  # noqa: E402
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from fem_common import MU0, Reluctivity, cap, grid_1d, solve_nonlinear  # noqa: E402
+
+RESULTS = Path(__file__).resolve().parent / "results"
+PATH = RESULTS / "fem_guidance.json"
+#: coil side thickness as a share of the leg length (the file gives no coil build)
+COIL_BUILD = 0.5
+GAPS_MM = (6.0, 10.0, 20.0)
+CURRENTS_A = (10.0, 32.0, 50.0, 80.0)
+#: air box beyond the magnet and the rail [m] (0.4 -> 0.6 moved the force by -0.8 % at
+#: 10 mm / 80 A: the leakage field behind the magnet reaches far; the convergence study
+#: measures 0.8 -> 1.2)
+BOX = 0.8
+
+
+@dataclass(frozen=True)
+class Geometry:
+    """The cross-section of a guidance magnet file (all m)."""
+
+    depth: float          # section length: the 2-D depth
+    hp: float             # pole bar height (y)
+    tp: float             # pole bar thickness (x)
+    dist: float           # bar centre distance
+    ll: float             # leg length (x)
+    tl: float             # leg thickness (y)
+    yoke_depth: float     # yokes_per_section x yoke_width
+    ty: float             # yoke thickness (x)
+    hc: float             # coil height (y)
+    turns: float
+    rail_t: float
+    rail_h: float
+    material: str
+    rail_material: str
+    build: float = COIL_BUILD
+    box: float = BOX      # air beyond the magnet and the rail [m]
+
+    @classmethod
+    def from_magnet(cls, magnet: mk.Magnet, **kw: float) -> Geometry:
+        m, r = magnet.parameters["magnet"], magnet.parameters["rail"]
+        return cls(m["section_length"], m["pole_bar_height"], m["pole_bar_thickness"],
+                   m["pole_bar_distance"], m["leg_length"], m["leg_thickness"],
+                   m["yokes_per_section"] * m["yoke_width"], m["yoke_thickness"],
+                   m["coil_height"], m["turns_per_yoke"], r["thickness"], r["height"],
+                   m["material"], r["material"], **kw)
+
+    def xs(self) -> dict[str, float]:
+        """x of the material boundaries (magnet side negative)."""
+        x_leg = -self.tp
+        x_yoke = x_leg - self.ll
+        x_back = x_yoke - self.ty
+        tcoil = self.build * self.ll
+        return {"face": 0.0, "bar_back": x_leg, "yoke_front": x_yoke, "yoke_back": x_back,
+                "coil_front": x_yoke + tcoil, "coil_back": x_back - tcoil}
+
+
+def build_mesh(g: Geometry, s: float, refine: float = 1.0):  # type: ignore[no-untyped-def]
+    from skfem import MeshTri
+
+    he = min(s / 4.0, 2.0e-3) / refine          # gap and bar corners
+    hm = 3.0e-3 / refine                        # other material edges
+    hi = 8.0e-3 / refine                        # cap inside iron and coils
+    hmax = 0.08 / refine
+    grade = 0.25
+    xs = g.xs()
+    x_lo, x_hi = xs["coil_back"] - g.box, s + g.rail_t + g.box
+    px = np.array([xs["coil_back"], xs["yoke_back"], xs["yoke_front"], xs["coil_front"],
+                   xs["bar_back"], 0.0, s + g.rail_t]).round(12)   # coincident edges
+    sx = np.array([hm, hm, hm, hm, hm, he, hm])
+    x0 = grid_1d(px, sx, x_lo, 0.0, hmax, grade)
+    x0 = cap(x0, xs["coil_back"], 0.0, hi)
+    ng = max(4, int(np.ceil(s / he - 1e-9)))
+    xg = np.linspace(0.0, s, ng + 1)[1:-1]
+    x1 = grid_1d(np.array([0.0, g.rail_t]), np.array([he, hm]), 0.0, x_hi - s, hmax, grade)
+    x1 = cap(x1, 0.0, g.rail_t, hi) + s
+    x = np.unique(np.concatenate([x0, xg, x1]))
+    c = 0.5 * g.dist
+    py = np.array([0.0, 0.5 * g.hc, c - 0.5 * g.tl, c - 0.5 * g.hp, c + 0.5 * g.hp,
+                   c + 0.5 * g.tl, 0.5 * g.rail_h])
+    sy = np.array([hm, hm, hm, he, he, hm, hm])
+    y_hi = max(c + 0.5 * g.tl, 0.5 * g.rail_h) + g.box
+    y = grid_1d(py, sy, 0.0, y_hi, hmax, grade)
+    y = cap(y, 0.0, max(c + 0.5 * g.tl, 0.5 * g.rail_h), hi)
+    return MeshTri.init_tensor(x, y)
+
+
+def regions(mesh, g: Geometry, s: float):  # type: ignore[no-untyped-def]
+    """Element masks: bars, rail, legs + yoke, the window between the legs; coil sign."""
+    cx, cy = mesh.p[:, mesh.t].mean(axis=1)
+    xs = g.xs()
+    c = 0.5 * g.dist
+    bars = (cx > xs["bar_back"]) & (cx < 0.0) & (np.abs(cy - c) < 0.5 * g.hp)
+    legs = (cx > xs["yoke_front"]) & (cx < xs["bar_back"]) & (np.abs(cy - c) < 0.5 * g.tl)
+    yoke = (cx > xs["yoke_back"]) & (cx < xs["yoke_front"]) & (cy < c + 0.5 * g.tl)
+    rail = (cx > s) & (cx < s + g.rail_t) & (cy < 0.5 * g.rail_h)
+    incoil = cy < 0.5 * g.hc
+    front = incoil & (cx > xs["yoke_front"]) & (cx < xs["coil_front"])
+    back = incoil & (cx > xs["coil_back"]) & (cx < xs["yoke_back"])
+    sign = np.zeros(cx.shape)
+    sign[front], sign[back] = 1.0, -1.0
+    window = (cx > xs["yoke_front"]) & (cx < xs["bar_back"]) & (cy < c - 0.5 * g.tl)
+    return bars, rail, legs | yoke, window, sign
+
+
+def solve(g: Geometry, s: float, current: float, *, refine: float = 1.0, order: int = 2,
+          window_depth: bool = False, behind_depth: bool = False, tol: float = 1e-9,
+          A0: np.ndarray | None = None) -> tuple[dict, np.ndarray]:
+    """One FEM solution (half model y >= 0); returns the outputs and A."""
+    import scipy.sparse.linalg as spla
+    from skfem import Basis, ElementTriP1, ElementTriP2, LinearForm, asm
+
+    t0 = time.time()
+    mesh = build_mesh(g, s, refine)
+    bars, rail, yokes, window, sign = regions(mesh, g, s)
+    basis = Basis(mesh, ElementTriP2() if order == 2 else ElementTriP1())
+    nqp = basis.X.shape[1]
+    parts = [(bars, Reluctivity(material=g.material)),
+             (rail, Reluctivity(material=g.rail_material)),
+             (yokes, Reluctivity(material=g.material, depth_ratio=g.depth / g.yoke_depth))]
+    thin = Reluctivity(mu_r=g.yoke_depth / g.depth)
+    if window_depth:            # the air between the legs only over the yokes' depth
+        parts.append((window, thin))
+    if behind_depth:            # the air (and coil) behind the yoke likewise
+        cx = mesh.p[0, mesh.t].mean(axis=0)
+        parts.append((cx < g.xs()["yoke_back"], thin))
+
+    @LinearForm
+    def load(v, w):  # type: ignore[no-untyped-def]
+        return w.sg * v
+
+    ld = asm(load, basis, sg=np.repeat(sign[:, None], nqp, axis=1))
+    area = g.build * g.ll * g.hc                # one coil side
+    jr = MU0 * g.turns / area
+    D = basis.get_dofs(mesh.facets_satisfying(lambda p: p[1] > 1e-9, boundaries_only=True))
+    free = np.setdiff1d(np.arange(basis.N), D.all())
+    sol = solve_nonlinear(basis, parts, jr * current * ld, free, tol=tol, A0=A0, tangent=True)
+    A = sol.A
+    dA = np.zeros(basis.N)
+    lu = spla.splu(sol.tangent.tocsc(), permc_spec="MMD_AT_PLUS_A",
+                   options={"SymmetricMode": True})
+    dA[free] = lu.solve(jr * ld[free])
+    scale = 2.0 * g.depth * g.turns / area      # both halves of the coil sides
+    psi, L = scale * float(ld @ A), scale * float(ld @ dA)
+    ga, dx = sol.grad, basis.dx
+    cx, _ = mesh.p[:, mesh.t].mean(axis=1)
+    t_xx = (ga[1] ** 2 - ga[0] ** 2) / (2 * MU0)
+    band = (cx > 0.0) & (cx < s)
+    force = 2.0 * g.depth / s * float(np.sum((t_xx * dx)[band]))
+    xs = g.xs()
+    c = 0.5 * g.dist
+    xm_leg = xs["bar_back"] - 0.5 * g.ll
+    x_lo, x_hi = mesh.p[0].min(), mesh.p[0].max()
+    # the flux crossing the symmetry plane y = 0, piece by piece along x (what the yoke
+    # sends up returns down beside it): behind the yoke, yoke, window (coil front side and
+    # the window between the legs up to the face plane), gap, rail, beyond the rail
+    cuts = [x_lo + 1e-9, xs["yoke_back"], xs["yoke_front"], 0.0, s, s + g.rail_t, x_hi - 1e-9]
+    probes = np.array([*[[x, 0.0] for x in cuts],
+                       [xm_leg, c - 0.5 * g.tl + 1e-7], [xm_leg, c + 0.5 * g.tl - 1e-7],
+                       [0.5 * s, c - 0.5 * g.hp], [0.5 * s, c + 0.5 * g.hp]]).T
+    a = basis.probes(probes) @ A
+    d = g.depth
+    names = ("behind", "yoke", "window", "gap_plane", "rail", "beyond")
+    flux = {n: d * abs(a[j + 1] - a[j]) for j, n in enumerate(names)}
+    flux["leg"] = d * abs(a[8] - a[7])
+    flux["face"] = d * abs(a[10] - a[9])        # mid-gap, in front of the bar face
+    # the mid-gap line over y > 0 (A = 0 on the box): face, flanks and fringes
+    flux["gap"] = d * abs(float((basis.probes(np.array([[0.5 * s], [0.0]])) @ A)[0]))
+    out = {"s": s, "current": current, "refine": refine, "order": order,
+           "window_depth": window_depth, "behind_depth": behind_depth, "build": g.build,
+           "box": g.box,
+           "dofs": int(basis.N), "iterations": sol.iterations, "force_N": force,
+           "psi_Wb": psi, "L_H": L, "flux": flux, "seconds": time.time() - t0}
+    return out, A
+
+
+def key(s: float, current: float, refine: float = 1.0, order: int = 2, build: float = COIL_BUILD,
+        box: float = BOX, window_depth: bool = False, behind_depth: bool = False) -> str:
+    """Record key of one point."""
+    return (f"s{s * 1e3:g}_I{current:g}" + (f"_r{refine:g}" if refine != 1.0 else "")
+            + (f"_p{order}" if order != 2 else "")
+            + (f"_build{build:g}" if build != COIL_BUILD else "")
+            + (f"_box{box:g}" if box != BOX else "") + ("_window" if window_depth else "")
+            + ("_behind" if behind_depth else ""))
+
+
+def run(g: Geometry, points: list[tuple[float, float]], **kw) -> dict:  # type: ignore[no-untyped-def]
+    """Solve the points (s [m], I [A]) not yet recorded, saving after each."""
+    data = json.loads(PATH.read_text()) if PATH.exists() else {}
+    gk = Geometry(**{**g.__dict__, **{k: kw.pop(k) for k in ("build", "box") if k in kw}})
+    prev = None
+    for s, current in points:
+        k = key(s, current, build=gk.build, box=gk.box, **kw)
+        if k in data:
+            continue
+        A0 = prev[2] * (current / prev[1]) if prev is not None and prev[0] == s else None
+        out, A = solve(gk, s, current, A0=A0, **kw)
+        prev = (s, current, A)
+        data[k] = out
+        RESULTS.mkdir(exist_ok=True)
+        PATH.write_text(json.dumps(data, indent=1, sort_keys=True) + "\n")
+        print(f"{k}: F {out['force_N']:.1f} N psi {out['psi_Wb']:.4f} L {out['L_H']:.4f} "
+              f"({out['dofs']} dofs, {out['iterations']} it, {out['seconds']:.0f} s)",
+              flush=True)
+    return data
+
+
+def load() -> dict:
+    """The recorded points."""
+    return json.loads(PATH.read_text())
+
+
+def network_magnet() -> mk.Magnet:
+    """The network held against the FEM: ``tr-guidance`` with ``end_effects = false``
+    (the same network as the default, guidance.py) and no eddy elements."""
+    return mk.load_magnet("tr-guidance", eddy_currents=False).with_options(end_effects=False)
+
+
+def network(magnet: mk.Magnet, s: float, current: float) -> dict:
+    """One section of the network: force, psi, L (both currents together), fluxes."""
+    sol = mk.solve_statics(magnet, gaps_m=s, currents_A=[current, current])
+    L = np.asarray(sol.differential_inductance_H).reshape(2, 2).sum(axis=1)
+    flux = dict(zip(sol.branch_names, map(float, np.ravel(sol.branch_flux_Wb)), strict=True))
+    return {"force_N": float(np.ravel(sol.pole_force_N)[0]),
+            "psi_Wb": float(np.ravel(sol.flux_linkage_Wb)[0]), "L_H": float(L[0]),
+            "flux": {"yoke": abs(flux["yoke_1"]), "leg": abs(flux["leg_u_1"]),
+                     "rail": abs(flux["rail_1"]), "gap": abs(flux["gap_u_1"]),
+                     "leak": abs(flux["leak_1"])}}
+
+
+def compare(magnet: mk.Magnet, data: dict, gaps_mm=GAPS_MM, currents=CURRENTS_A  # type: ignore[no-untyped-def]
+            ) -> list[dict]:
+    """Network vs FEM per point, errors in % ((net - FEM)/FEM)."""
+    rows = []
+    for smm in gaps_mm:
+        for i in currents:
+            fem = data.get(key(smm * 1e-3, i))
+            if fem is None:
+                continue
+            net = network(magnet, smm * 1e-3, i)
+            rows.append({"s_mm": smm, "I_A": i, "F_fem": fem["force_N"],
+                         "psi_fem": fem["psi_Wb"], "L_fem": fem["L_H"],
+                         "eF": 100 * (net["force_N"] / fem["force_N"] - 1),
+                         "epsi": 100 * (net["psi_Wb"] / fem["psi_Wb"] - 1),
+                         "eL": 100 * (net["L_H"] / fem["L_H"] - 1),
+                         "flux_fem": fem["flux"], "flux_net": net["flux"]})
+    return rows
+
+
+def table(rows: list[dict]) -> str:
+    """Markdown table of :func:`compare` rows."""
+    lines = ["| s [mm] | I [A] | F_FEM [kN] | err F [%] | psi_FEM [Wb] | err psi [%] "
+             "| L_FEM [H] | err L [%] |", "|---|---|---|---|---|---|---|---|"]
+    for r in rows:
+        lines.append(f"| {r['s_mm']:g} | {r['I_A']:g} | {r['F_fem'] / 1e3:.2f} | {r['eF']:+.1f} "
+                     f"| {r['psi_fem']:.3f} | {r['epsi']:+.1f} | {r['L_fem']:.4f} "
+                     f"| {r['eL']:+.1f} |")
+    return "\n".join(lines)
+
+
+def flux_table(rows: list[dict]) -> str:
+    """Where the yoke's flux returns (mWb, one section): FEM across the symmetry plane
+    y = 0 (behind the yoke, window, gap region, rail, beyond it) and along the magnet (leg
+    at mid-length, bar face at mid-gap); network: yoke, the bars' leakage ``leak``, rail."""
+    lines = ["| s [mm] | I [A] | yoke FEM / net | behind the yoke FEM / net | window FEM "
+             "/ net leak | leg FEM / net | face FEM | rail FEM / net |",
+             "|---|---|---|---|---|---|---|---|"]
+    for r in rows:
+        f, n = {k: 1e3 * v for k, v in r["flux_fem"].items()}, \
+            {k: 1e3 * v for k, v in r["flux_net"].items()}
+        lines.append(f"| {r['s_mm']:g} | {r['I_A']:g} | {f['yoke']:.1f} / {n['yoke']:.1f} "
+                     f"| {f['behind']:.1f} / 0 | {f['window']:.1f} / {n['leak']:.1f} "
+                     f"| {f['leg']:.1f} / {n['leg']:.1f} | {f['face']:.1f} "
+                     f"| {f['rail']:.1f} / {n['rail']:.1f} |")
+    return "\n".join(lines)
+
+
+def main(argv: list[str] | None = None) -> None:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--grid", action="store_true", help="the gap x current grid")
+    ap.add_argument("--convergence", action="store_true",
+                    help="mesh, order, box; coil build and the window air's depth")
+    ap.add_argument("--compare", action="store_true", help="network vs the recorded grid")
+    ap.add_argument("--probe", nargs=2, type=float, metavar=("S_MM", "I_A"))
+    args = ap.parse_args(argv)
+    mag = network_magnet()
+    g = Geometry.from_magnet(mag)
+    if args.probe:
+        out, _ = solve(g, args.probe[0] * 1e-3, args.probe[1])
+        print(json.dumps(out, indent=1))
+        print(network(mag, args.probe[0] * 1e-3, args.probe[1]))
+    if args.grid:
+        run(g, [(s * 1e-3, i) for s in GAPS_MM for i in CURRENTS_A])
+    if args.convergence:
+        for s, i in ((0.010, 32.0), (0.010, 80.0)):
+            for r in (1.4, 2.0):
+                run(g, [(s, i)], refine=r)
+            run(g, [(s, i)], refine=2.0, order=1)
+            run(g, [(s, i)], box=1.2)
+            run(g, [(s, i)], build=1.0)
+            run(g, [(s, i)], window_depth=True)
+            run(g, [(s, i)], behind_depth=True)
+    if args.compare:
+        rows = compare(mag, load())
+        print(table(rows))
+        print(flux_table(rows))
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,91 @@
+"""Guidance magnet against its recorded 2-D FEM (issue 26).
+
+The FEM (benchmarks/fem_guidance.py: the cross-section of ``tr-guidance``, pole bars, legs,
+yoke with its coil, the rail; 2-D over the section length, the yokes at their real
+cross-section by a depth ratio) is recorded in benchmarks/results/fem_guidance.json; the
+network (``end_effects = false``, which for this kind is the default network) is held to
+its measured errors here without rerunning the FEM.  The measured errors are large: the
+network lacks the leakage around the coil's back side behind the yoke (docs/validation_fem.md,
+"Guidance magnet"); the windows pin them so that a change of the network or of the record
+has to re-measure them.
+"""
+
+from __future__ import annotations
+
+import importlib.util
+import sys
+from pathlib import Path
+
+import pytest
+
+_PATH = Path(__file__).resolve().parents[1] / "benchmarks" / "fem_guidance.py"
+
+
+def _fem():  # type: ignore[no-untyped-def]
+    sys.path.insert(0, str(_PATH.parent))
+    spec = importlib.util.spec_from_file_location("fem_guidance", _PATH)
+    assert spec is not None and spec.loader is not None
+    mod = importlib.util.module_from_spec(spec)
+    sys.modules.setdefault("fem_guidance", mod)
+    spec.loader.exec_module(mod)
+    return mod
+
+
+# (network - FEM)/FEM [%] of one section: force, flux linkage, differential inductance
+# (both circuits' currents together).  The network is deterministic and the record fixed:
+# 0.3 pp covers the table's rounding only.
+MARGIN = 0.3
+MEASURED = {
+    (6.0, 10.0): (-5.2, -14.4, -14.3),
+    (6.0, 32.0): (+4.8, -10.2, +6.6),
+    (6.0, 50.0): (+8.4, -9.1, -10.9),
+    (6.0, 80.0): (+7.8, -9.9, -26.2),
+    (10.0, 10.0): (-3.4, -17.5, -17.4),
+    (10.0, 32.0): (-0.2, -16.2, -6.7),
+    (10.0, 50.0): (+13.4, -10.7, +8.4),
+    (10.0, 80.0): (+15.3, -10.1, -18.3),
+    (20.0, 10.0): (-0.7, -23.4, -23.4),
+    (20.0, 32.0): (-0.3, -23.3, -22.6),
+    (20.0, 50.0): (+5.6, -21.1, +1.0),
+    (20.0, 80.0): (+29.7, -12.3, +14.3),
+}
+
+
+@pytest.mark.slow
+def test_network_against_recorded_fem() -> None:
+    fem = _fem()
+    rows = {(r["s_mm"], r["I_A"]): r for r in fem.compare(fem.network_magnet(), fem.load())}
+    assert set(MEASURED) == set(rows)
+    for k, (ef, epsi, el) in MEASURED.items():
+        r = rows[k]
+        for name, got, want in (("F", r["eF"], ef), ("psi", r["epsi"], epsi),
+                                ("L", r["eL"], el)):
+            assert want - MARGIN <= got <= want + MARGIN, (k, name, got)
+        # the flux linkage is low at every point (the missing leakage behind the yoke)
+        assert r["epsi"] < -8.0, k
+    # below the knee the face and its flank fringing match the field's force: within 6 %
+    # at 10 A and 32 A, within 1 % at 10 and 20 mm / 32 A (the nominal current)
+    for (s, i), r in rows.items():
+        if i <= 32.0:
+            assert abs(r["eF"]) < (1.0 if s >= 10.0 and i == 32.0 else 6.0), (s, i)
+
+
+@pytest.mark.slow
+def test_recorded_fem_is_converged_and_balanced() -> None:
+    """The record's own checks: mesh (sizes / 1.4, / 2), P1, air box and the flux balance
+    across the symmetry plane (what the yoke sends up returns beside it)."""
+    data = _fem().load()
+    for i in (32, 80):
+        base = data[f"s10_I{i}"]
+        for suf, tol in (("_r1.4", 1e-3), ("_r2", 1e-3), ("_box1.2", 3e-3)):
+            p = data[f"s10_I{i}{suf}"]
+            for q in ("force_N", "psi_Wb", "L_H"):
+                # mesh: < 0.1 %; box 0.8 -> 1.2 m: < 0.3 % (measured 0.27 % at 80 A)
+                assert abs(p[q] / base[q] - 1) < tol, (i, suf, q)
+    for p in data.values():
+        f = p["flux"]
+        returned = f["behind"] + f["window"] + f["gap_plane"] + f["rail"] + f["beyond"]
+        # A = 0 at the plane's two ends (the box), so the signed pieces add up to zero
+        # exactly; with magnitudes this holds only if every piece returns (none goes up
+        # beside the yoke): 0.2 % covers the probes' interpolation
+        assert returned == pytest.approx(f["yoke"], rel=2e-3)
