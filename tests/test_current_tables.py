@@ -259,8 +259,8 @@ def test_step_wrapper_compiled_after_a_while_is_bit_identical(monkeypatch: pytes
     from maglevkit.reduced import current as cur
 
     mag = mk.load_magnet("tr09-standard")
-    maps = mk.build_maps(mag, gaps=np.linspace(0.005, 0.016, 6),
-                         currents=np.linspace(0.0, 80.0, 9), progress=False)
+    maps = mk.build_maps(mag, gaps_m=np.linspace(0.005, 0.016, 6),
+                         currents_A=np.linspace(0.0, 80.0, 9), progress=False)
     monkeypatch.setattr(cur, "COMPILE_AFTER_STEPS", 20)
 
     def run(model: mk.CurrentModel) -> np.ndarray:

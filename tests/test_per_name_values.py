@@ -50,7 +50,7 @@ def test_messages(value: object, options: dict, pattern: str | None) -> None:
 def test_the_users_share_the_message_style() -> None:
     """CurrentModel, MagnetBank, its stepper and the table import say the same."""
     mag = mk.load_magnet("u-magnet")
-    maps = mk.build_maps(mag, gaps=np.linspace(0.004, 0.02, 5), currents=np.linspace(0, 40, 5),
+    maps = mk.build_maps(mag, gaps_m=np.linspace(0.004, 0.02, 5), currents_A=np.linspace(0, 40, 5),
                          progress=False)
     cm = mk.CurrentModel(maps)
     st = cm.initial_state(gaps_m=0.01, currents_A=10.0)
