@@ -46,8 +46,9 @@ def test_network_shape_and_names(std: mk.Magnet) -> None:
     assert net.gap_names == pole_gap_names(12)
     assert net.circuit_names == ("front", "rear")
     # per pole: K + 1 = 4 core segments (coil_segments K = 3) and beside each the air
-    # through the coil's cross-section, gap, teeth and their slots' air under the face, the stator yoke over the two half faces, per side (l, r) window
-    # teeth and their slots' air, flank fringe, 2 flank strips (the strips whose quarter
+    # through the coil's cross-section, gap, teeth and their slots' air under the face,
+    # the stator yoke over the two half faces, per side (l, r) window teeth and their
+    # slots' air, flank fringe, 2 flank strips (the strips whose quarter
     # circles land before the window's centre plane: y0 = 15 and 48.3 mm < 69 mm), one
     # pole-back leakage; the two end poles' back end face and back underside to the stator
     # beyond and a third flank strip on their outer side (no neighbour: strips along the
@@ -55,9 +56,11 @@ def test_network_shape_and_names(std: mk.Magnet) -> None:
     # neighbour pair: pole back, stator (over the window), leakage between the heads and
     # per coil strip (3); nodes per pole: head, 3 coil nodes, pole back, stator at the
     # centre and at the two face edges, the two sides' window teeth, tooth tips
-    per_pole, per_pair = 2 * 4 + 1 + 2 + 2 + 2 * (2 + 1 + 2) + 1, 1 + 1 + 1 + 3
-    assert len(net.branches) == 12 * per_pole + 2 * 3 + 11 * per_pair == 360
-    assert len(net.nodes) == 12 * 11 and net.n_loops == 360 - 132 + 1
+    # (with eddy currents, the default, each segment's eddy element is a branch of its
+    # own in series with iron and coil air, through a node E per segment)
+    per_pole, per_pair = 3 * 4 + 1 + 2 + 2 + 2 * (2 + 1 + 2) + 1, 1 + 1 + 1 + 3
+    assert len(net.branches) == 12 * per_pole + 2 * 3 + 11 * per_pair == 408
+    assert len(net.nodes) == 12 * (11 + 4) and net.n_loops == 408 - 180 + 1
     # each circuit drives 6 poles with alternating polarity; every pole's winding is
     # spread over its 4 core segments, whose turns add up to turns_per_pole, and the air
     # beside each segment carries that segment's turns (its MMF cancels the coil's, so it
@@ -239,7 +242,9 @@ def test_eddy_elements_in_pole_cores_and_back_only(std: mk.Magnet) -> None:
     with_eddy = {br.name for br in std.network.branches
                  if any(isinstance(e, mk.EddyCurrent) for e in br.elements)}
     gaps = pole_gap_names(12)
-    cores = {f"core_{p}_{j}" for p in gaps for j in range(4)}
+    # a core segment's eddy element is a branch of its own (eddy_core_...), in series with
+    # the segment's iron and the coil air beside it
+    cores = {f"eddy_core_{p}_{j}" for p in gaps for j in range(4)}
     backs = {f"back_{a}_{b}" for a, b in zip(gaps[:-1], gaps[1:], strict=True)}
     assert with_eddy == cores | backs
     n_eddy = sum(isinstance(e, mk.EddyCurrent) for br in std.network.branches for e in br.elements)

@@ -25,7 +25,10 @@ gap, the window leakage ``leak_pp_k`` at the coil's energy-equivalent height ``h
 above.  Per pole k: the core split along its coil into ``coil_segments`` (K, default 3)
 strips as the U-magnet's legs, ``core_k_j`` (K_k -> C_k_K ... C_k_1 -> H_k, each segment with the
 turns of the coil it holds, saturable, eddy currents; the core ends at the pole back's
-underside, as ``back_k`` already crosses the junction); ``gap_k`` (H_k -> T_k: air gap of the
+underside, as ``back_k`` already crosses the junction), beside each segment ``coil_air_k_j``
+(the air through the coil's cross-section, in parallel with the iron and with its turns;
+with eddy currents the segment's eddy element ``eddy_core_k_j`` follows both, through a node
+``E_k_j``); ``gap_k`` (H_k -> T_k: air gap of the
 face with Carter's coefficient of the stator slots and the recessed linear-generator
 grooves as slots of the face) to the tooth tips, then ``teeth_k`` (T_k -> S_k: the saturable
 stator teeth under the face) and in parallel ``slots_k`` (T_k -> S_k: the air of their
@@ -339,17 +342,26 @@ def build_levitation_magnet(params: Mapping[str, Any], materials: Mapping[str, M
         for j in range(len(seg_len)):
             name = f"core_{p}_{j}" if split else f"core_{p}"
             core: list[Element] = [IronPath(f"iron_{name}", seg_len[j], lp * wp, core_mat)]
-            if options.eddy_currents:
-                # every segment carries the eddy currents of its own length
-                core.append(EddyCurrent.solid_rectangular(f"eddy_{name}", lp, wp, seg_len[j],
-                                                          rho))
-            branches.append(Branch(name, nodes[j + 1], nodes[j], tuple(core)))
-            turns.append((name, seg_turns[j]))
+            eddy = (EddyCurrent.solid_rectangular(f"eddy_{name}", lp, wp, seg_len[j], rho),
+                    ) if options.eddy_currents else ()
+            # every segment carries the eddy currents of its own length
             if split and options.leakage:
+                # the coil air in parallel with the iron only, the segment's eddy element in
+                # series with both (node E): the air's flux follows the iron's drop, which
+                # the lumped eddy element holds at a voltage step, so it is shielded with
+                # the core (else the coil would link unshielded flux and the current-jump
+                # admittance of paper eq. 8's R_ec would vanish)
+                end = f"E{k + 1}_{j}" if eddy else nodes[j]
                 air = f"coil_air_{p}_{j}"
-                branches.append(Branch(air, nodes[j + 1], nodes[j], (LeakagePermeance(
-                    air, MU0 * wp * coil_air_width(k) / seg_len[j]),)))
-                turns.append((air, seg_turns[j]))
+                branches += [Branch(name, nodes[j + 1], end, tuple(core)),
+                             Branch(air, nodes[j + 1], end, (LeakagePermeance(
+                                 air, MU0 * wp * coil_air_width(k) / seg_len[j]),))]
+                if eddy:
+                    branches.append(Branch(f"eddy_{name}", end, nodes[j], eddy))
+                turns += [(name, seg_turns[j]), (air, seg_turns[j])]
+                continue
+            branches.append(Branch(name, nodes[j + 1], nodes[j], (*core, *eddy)))
+            turns.append((name, seg_turns[j]))
         coil_turns.append(turns)
         air_gap = AirGap(f"gap_{p}", gap_input=p, pole_area=face_area, fringe_edges=tuple(edges),
                          recesses=grooves, face_slots=face_slots, **slots)
