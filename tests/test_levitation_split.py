@@ -58,9 +58,10 @@ def test_network_shape_and_names(std: mk.Magnet) -> None:
     # centre and at the two face edges, the two sides' window teeth, tooth tips
     # (with eddy currents, the default, each segment's eddy element is a branch of its
     # own in series with iron and coil air, through a node E per segment)
-    per_pole, per_pair = 3 * 4 + 1 + 2 + 2 + 2 * (2 + 1 + 2) + 1, 1 + 1 + 1 + 3
-    assert len(net.branches) == 12 * per_pole + 2 * 3 + 11 * per_pair == 408
-    assert len(net.nodes) == 12 * (11 + 4) and net.n_loops == 408 - 180 + 1
+    # and per side the slot at the face edge between the face's teeth and the window's
+    per_pole, per_pair = 3 * 4 + 1 + 2 + 2 + 2 * (2 + 1 + 2 + 1) + 1, 1 + 1 + 1 + 3
+    assert len(net.branches) == 12 * per_pole + 2 * 3 + 11 * per_pair == 432
+    assert len(net.nodes) == 12 * (11 + 4) and net.n_loops == 432 - 180 + 1
     # each circuit drives 6 poles with alternating polarity; every pole's winding is
     # spread over its 4 core segments, whose turns add up to turns_per_pole, and the air
     # beside each segment carries that segment's turns (its MMF cancels the coil's, so it
@@ -139,8 +140,16 @@ def test_leakage_permeances_against_roters() -> None:
     pb = {k: v for k, v in leak.items() if k.startswith("leak_pb_")}
     slots = {k: v for k, v in leak.items() if "slots_" in k}
     air = {k: v for k, v in leak.items() if k.startswith("coil_air_")}
+    across = {k: v for k, v in leak.items() if k.startswith("across_")}
     assert len(pp) == 11 * 4 and len(pb) == 12 and len(slots) == 36 and len(air) == 12 * 4
-    assert len(leak) == 44 + 12 + 36 + 48
+    assert len(across) == 24 and len(leak) == 44 + 12 + 36 + 48 + 24
+    # across the slot at each face edge (face teeth T -> that side's window teeth W): the
+    # potential difference falls linearly from the tips to the roots, so the slot of
+    # opening b and depth d carries mu0 wp dV d/(2 b): int_0^d mu0 wp (1 - y/d)/b dy
+    y = np.linspace(0.0, st["slot_depth"], 20001)
+    g_across = float(np.trapezoid(MU0 * wp * (1 - y / st["slot_depth"]) / st["slot_opening"], y))
+    for name, v in across.items():
+        assert v == pytest.approx(g_across, rel=1e-8), name
     # the air through the coil's cross-section beside each core segment: linked width per
     # flank int_0^tc (1 - x/a)(1 - x/tc) dx (a = window/2; an end pole's outer flank
     # a -> oo: tc/2), here evaluated by the trapezoidal rule, over the segment's length
@@ -268,7 +277,8 @@ def test_teeth_and_slot_air_share_one_mmf_deep_in_saturation(std: mk.Magnet) -> 
     ~2 mu0) the face flux splits between the teeth and the air of their slots at one
     magnetic potential drop: the apparent tooth flux density of machine design,
     ``phi = A_t B(H) + mu0 H A_slot`` with ``H`` the teeth's field (closed form, from
-    the material's B-H law alone); the tooth-tip node conserves flux; and the core's
+    the material's B-H law alone); the tooth-tip node conserves flux (with the slots at
+    the face edges to the window's teeth); and the core's
     length is the core height (the junction counted once, in the pole back)."""
     mag = std.with_options(eddy_currents=False)
     net = mag.network
@@ -278,9 +288,11 @@ def test_teeth_and_slot_air_share_one_mmf_deep_in_saturation(std: mk.Magnet) -> 
     el = {e.name: e for br in net.branches for e in br.elements}
     for p in pole_gap_names(12):
         teeth, slot = el[f"iron_teeth_{p}"], el[f"slots_{p}"]
-        # Kirchhoff at the tooth tips: gap = teeth + slots (the solver's loop fluxes)
-        assert flux[f"gap_{p}"] == pytest.approx(flux[f"teeth_{p}"] + flux[f"slots_{p}"],
-                                                 rel=1e-9)
+        # Kirchhoff at the tooth tips: gap = teeth + slots + the slots at the face edges
+        # to the window's teeth (the solver's loop fluxes)
+        assert flux[f"gap_{p}"] == pytest.approx(
+            flux[f"teeth_{p}"] + flux[f"slots_{p}"] + flux[f"across_{p}_l"]
+            + flux[f"across_{p}_r"], rel=1e-9)
         b = flux[f"teeth_{p}"] / teeth.cross_section
         h = float(teeth.material.field_strength(abs(b)))
         # the slots' air at the teeth's field: B_air = mu0 H over the slots' area

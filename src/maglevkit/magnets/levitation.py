@@ -37,7 +37,8 @@ per side ``x`` (``l``, ``r``) of the pole: ``fringe_k_x`` (H_k -> W_kx: the flan
 the coil facing that side) and ``flank_k_j_x`` (C_k_j -> W_kx: Roters quarter circles from
 each coil strip of the flank to the face level and across the gap), both landing on that
 side's window teeth ``window_k_x`` (W_kx -> S_kx, with their slots' air
-``window_slots_k_x``), and the stator yoke over the half face ``yoke_k_x`` (S_k -> S_kx,
+``window_slots_k_x``; ``across_k_x``, T_k -> W_kx: the slot at the face edge between the face's
+teeth and that side's window teeth), and the stator yoke over the half face ``yoke_k_x`` (S_k -> S_kx,
 ``l_p/2``: the face teeth feed the yoke at the pole centre S_k, the window's teeth at the
 face edge S_kx); ``leak_pb_k`` (H_k -> K_k: leakage around the coil back into the pole
 back); the two end poles also ``end_k`` and ``under_k`` (K_k -> W_kx on the outer side:
@@ -249,6 +250,8 @@ def build_levitation_magnet(params: Mapping[str, Any], materials: Mapping[str, M
     # a permeance mu0 A_slots / slot_depth over the slots' share of the footprint
     slot_share = 1.0 - teeth_share
 
+    g_across = MU0 * wp * st["slot_depth"] / (2.0 * st["slot_opening"])
+
     def slot_air(name: str, footprint: float) -> LeakagePermeance:
         return LeakagePermeance(name, MU0 * footprint * wp * slot_share / st["slot_depth"])
 
@@ -393,6 +396,15 @@ def build_levitation_magnet(params: Mapping[str, Any], materials: Mapping[str, M
                              share * window_teeth, stator_mat),)),
                     Branch(f"window_slots_{p}{sfx}", w_node, f"S{k + 1}{hand}",
                            (slot_air(f"window_slots_{p}{sfx}", share * (tau - lp)),))]
+            if split and options.leakage:
+                # across the slot at the face edge, from the face's teeth to that side's
+                # window teeth (T_k -> W_kx): their potentials differ by the face teeth's
+                # drop at the tips and by ~nothing at the roots, both joining the yoke, so
+                # the slot (opening b, depth d) carries mu0 w_p dV d/(2b): deep in
+                # saturation the increment spreads into the less loaded teeth beside the
+                # face (2-D FEM, docs/validation_fem.md)
+                branches.append(Branch(f"across_{p}{sfx}", f"T{k + 1}", w_node, (
+                    LeakagePermeance(f"across_{p}{sfx}", g_across),)))
             if split and options.fringing:
                 branches.append(Branch(f"fringe_{p}{sfx}", f"H{k + 1}", w_node, (
                     FringePermeance(f"fringe_{p}{sfx}", gap_input=p, width=2.0 * share * wp,
