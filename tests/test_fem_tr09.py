@@ -47,7 +47,8 @@ MEASURED = {
     # (docs/validation_fem.md, 2026-12-02, continued), the air through the coils'
     # cross-section beside the cores and the slots at the face edges between the face's
     # teeth and the window's ("The coils' cross-section and the slots at the face edges").
-    # The 8 mm and 12 mm points were solved after these paths were chosen (held out).
+    # Every point beyond the first grid (6/10/20 mm x 10/33.5/50/80/100 A) was solved after
+    # these paths were chosen (held out).
     (6.0, 10.0): (+1.3, +1.0, +1.0),
     (6.0, 33.5): (+2.0, +1.3, +0.8),
     (6.0, 50.0): (+0.3, +0.5, -2.1),
