@@ -478,6 +478,10 @@ def _load(name: str) -> object:
 
 GAPS_MM = (6.0, 10.0, 20.0)
 CURRENTS_A = (10.0, 33.5, 50.0, 80.0, 100.0)
+#: the full grid (``--grid --full``): 8 gaps x 6 currents = 48 points, the first grid's 15
+#: among them
+GAPS_FULL_MM = (6.0, 8.0, 10.0, 12.0, 14.0, 16.0, 18.0, 20.0)
+CURRENTS_FULL_A = (10.0, 20.0, 33.5, 50.0, 80.0, 100.0)
 #: mesh of the grid (sizes / 0.7; the convergence study measures what this costs)
 GRID_REFINE = 0.7
 #: stator positions [m]: tooth centred on the poles, a quarter slot pitch on, slot
@@ -612,6 +616,8 @@ def main(argv: list[str] | None = None) -> None:
     ap.add_argument("--flux-paths", default="split", help="network to compare: split, paper")
     ap.add_argument("--grid", action="store_true", help="the gap x current x offset grid")
     ap.add_argument("--compare", action="store_true", help="network vs the recorded grid")
+    ap.add_argument("--full", action="store_true",
+                    help="with --grid/--compare: the 48-point grid (GAPS_FULL_MM x CURRENTS_FULL_A)")
     ap.add_argument("--convergence", action="store_true", help="mesh, order, box, half model")
     ap.add_argument("--diagnose", nargs=2, type=float, metavar=("S_MM", "I_A"),
                     help="one point at the grid's stator positions with the incremental "
@@ -630,7 +636,8 @@ def main(argv: list[str] | None = None) -> None:
         print(f"network: F {net['force_N']:.1f} N, psi {net['psi_Wb']}, L {net['L_H']}")
         return
     if args.compare:
-        print(table(compare(mag, _load("grid"))))  # type: ignore[arg-type]
+        grid = (GAPS_FULL_MM, CURRENTS_FULL_A) if args.full else (GAPS_MM, CURRENTS_A)
+        print(table(compare(mag, _load("grid"), *grid)))  # type: ignore[arg-type]
     if args.convergence:
         # mesh (sizes / 0.7, 1, 1.4), element order, air box, and the half model at a
         # position whose slot pattern is not mirror-symmetric against the whole magnet
@@ -647,7 +654,11 @@ def main(argv: list[str] | None = None) -> None:
         run(g, "diagnosis", [(sd * 1e-3, idiag, o) for o in OFFSETS], refine=GRID_REFINE)
     if args.grid:
         order = (10.0, 20.0, 6.0)                # the most telling gaps first
-        pts = [(s * 1e-3, i, o) for s in order for o in OFFSETS for i in CURRENTS_A]
+        currents = CURRENTS_A
+        if args.full:                            # the new gaps first, then the 20 A rows
+            order = (8.0, 12.0, 14.0, 16.0, 18.0, 6.0, 10.0, 20.0)
+            currents = CURRENTS_FULL_A
+        pts = [(s * 1e-3, i, o) for s in order for o in OFFSETS for i in currents]
         run(g, "grid", pts, refine=GRID_REFINE)
 
 

@@ -43,23 +43,60 @@ MARGIN = 0.3
 MEASURED = {
     # (s [mm], I [A]): (err F, err psi, err L); "split" with the stator yoke split at the
     # face edges (window teeth per side), the end poles' back end face and underside to
-    # the stator beyond the magnet and their outer flank strips along the whole coil
-    # (docs/validation_fem.md, 2026-12-02, continued)
+    # the stator beyond the magnet, their outer flank strips along the whole coil
+    # (docs/validation_fem.md, 2026-12-02, continued), the air through the coils'
+    # cross-section beside the cores and the slots at the face edges between the face's
+    # teeth and the window's ("The coils' cross-section and the slots at the face edges").
+    # Every point beyond the first grid (6/10/20 mm x 10/33.5/50/80/100 A) was solved after
+    # these paths were chosen (held out).
     (6.0, 10.0): (+1.3, +1.0, +1.0),
-    (6.0, 33.5): (+2.0, +1.3, +0.5),
-    (6.0, 50.0): (-1.0, +0.0, -6.4),
-    (6.0, 80.0): (-1.9, -0.8, -4.3),
-    (6.0, 100.0): (-1.6, -1.1, -6.9),
+    (6.0, 20.0): (+1.5, +1.0, +1.4),
+    (6.0, 33.5): (+2.0, +1.3, +0.8),
+    (6.0, 50.0): (+0.3, +0.5, -2.1),
+    (6.0, 80.0): (+1.6, +0.4, -0.5),
+    (6.0, 100.0): (+2.7, +0.3, -1.7),
+    (8.0, 10.0): (+1.0, +1.0, +1.0),
+    (8.0, 20.0): (+1.1, +1.0, +1.2),
+    (8.0, 33.5): (+1.5, +1.2, +1.8),
+    (8.0, 50.0): (+0.8, +1.0, -2.6),
+    (8.0, 80.0): (-0.6, +0.2, -1.4),
+    (8.0, 100.0): (-0.2, +0.0, -1.8),
     (10.0, 10.0): (+1.0, +1.0, +1.0),
+    (10.0, 20.0): (+1.0, +1.0, +1.1),
     (10.0, 33.5): (+1.2, +1.1, +1.5),
-    (10.0, 50.0): (+1.4, +1.2, +0.5),
-    (10.0, 80.0): (-2.3, -0.3, -7.2),
-    (10.0, 100.0): (-3.7, -0.9, -7.9),
+    (10.0, 50.0): (+1.4, +1.2, +0.6),
+    (10.0, 80.0): (-0.9, +0.3, -3.2),
+    (10.0, 100.0): (-1.1, -0.0, -2.7),
+    (12.0, 10.0): (+1.1, +1.0, +1.0),
+    (12.0, 20.0): (+1.2, +1.0, +1.0),
+    (12.0, 33.5): (+1.3, +1.1, +1.3),
+    (12.0, 50.0): (+1.6, +1.2, +1.3),
+    (12.0, 80.0): (+0.0, +0.5, -4.0),
+    (12.0, 100.0): (-1.0, +0.1, -4.0),
+    (14.0, 10.0): (+1.5, +0.9, +1.0),
+    (14.0, 20.0): (+1.5, +0.9, +1.0),
+    (14.0, 33.5): (+1.6, +1.0, +1.2),
+    (14.0, 50.0): (+1.8, +1.1, +1.4),
+    (14.0, 80.0): (+1.2, +0.9, -2.5),
+    (14.0, 100.0): (-0.2, +0.3, -4.8),
+    (16.0, 10.0): (+1.9, +0.9, +0.9),
+    (16.0, 20.0): (+2.0, +0.9, +0.9),
+    (16.0, 33.5): (+2.0, +0.9, +1.0),
+    (16.0, 50.0): (+2.2, +1.0, +1.4),
+    (16.0, 80.0): (+2.2, +1.0, -0.2),
+    (16.0, 100.0): (+1.0, +0.5, -4.5),
+    (18.0, 10.0): (+2.5, +0.7, +0.8),
+    (18.0, 20.0): (+2.5, +0.8, +0.8),
+    (18.0, 33.5): (+2.5, +0.8, +0.9),
+    (18.0, 50.0): (+2.7, +0.8, +1.2),
+    (18.0, 80.0): (+2.9, +0.9, +0.8),
+    (18.0, 100.0): (+2.3, +0.7, -3.0),
     (20.0, 10.0): (+3.1, +0.6, +0.6),
+    (20.0, 20.0): (+3.1, +0.6, +0.6),
     (20.0, 33.5): (+3.1, +0.6, +0.7),
     (20.0, 50.0): (+3.3, +0.7, +1.0),
     (20.0, 80.0): (+3.4, +0.8, +0.8),
-    (20.0, 100.0): (+3.2, +0.7, -1.6),
+    (20.0, 100.0): (+3.3, +0.7, -1.0),
 }
 
 
@@ -67,27 +104,25 @@ MEASURED = {
 def test_network_against_recorded_fem() -> None:
     fem = _fem()
     mag = fem.cut_magnet("tr09-standard", "split")
-    rows = {(r["s_mm"], r["I_A"]): r for r in fem.compare(mag, fem._load("grid"))}
+    rows = {(r["s_mm"], r["I_A"]): r for r in fem.compare(
+        mag, fem._load("grid"), fem.GAPS_FULL_MM, fem.CURRENTS_FULL_A)}
     assert set(MEASURED) <= set(rows)
     for key, (ef, epsi, el) in MEASURED.items():
         r = rows[key]
         for name, got, want in (("F", r["eF"], ef), ("psi", r["epsi"], epsi),
                                 ("L", r["eL"], el)):
             assert want - MARGIN <= got <= want + MARGIN, (key, name, got)
-    # the aims (force and flux linkage within 3 %, L within 5 %) below the knee: every
-    # point up to 33.5 A, at 10 mm up to 50 A and at 20 mm up to 100 A; flux linkage
-    # everywhere.  Known exceptions, measured: the force at 20 mm is +3.1 ... +3.4 %
-    # (the air paths' share at large gaps; the iron's drop there now matches the FEM's
-    # line integral, tests below), so it is held to 3.5 % there
+    # the aims into deep saturation: flux linkage within 3 % and L within 5 % at every
+    # point, force within 3 % at every gap up to 10 mm.  Known exception, measured: the
+    # force at 20 mm is +3.1 ... +3.4 % at every current (the air paths' share at large
+    # gaps, linear iron; the iron's drop there matches the FEM's line integral, tests
+    # below), so it is held to 3.5 % there.  History of the deep-saturation errors (6-10
+    # mm, 80-100 A): first split network force -6.8 ... -9.6 %, L -15.5 ... -19 %; then
+    # -3.6 ... -5.3 %, -8.4 ... -12.3 %; then -1.6 ... -3.7 %, -4.3 ... -7.9 %; now
+    # -1.1 ... +2.7 %, -3.2 ... -0.5 %
     for (s, i), r in rows.items():
-        assert abs(r["epsi"]) < 3.0, (s, i)
-        if i <= 33.5 or (s >= 10.0 and i <= 50.0) or s >= 20.0:
-            assert abs(r["eF"]) < (3.5 if s >= 20.0 else 3.0) and abs(r["eL"]) < 5.0, (s, i)
-    # into deep saturation (6-10 mm, 80-100 A; first split network: force -6.8 ... -9.6 %,
-    # L -15.5 ... -19 %; then -3.6 ... -5.3 %, -8.4 ... -12.3 %): force within 5 %, L within
-    # 11 % -- the 3 % / 5 % aims are not met there
-    for (s, i), r in rows.items():
-        assert abs(r["eF"]) < 4.0 and abs(r["eL"]) < 8.5, (s, i)
+        assert abs(r["epsi"]) < 3.0 and abs(r["eL"]) < 5.0, (s, i)
+        assert abs(r["eF"]) < (3.5 if s >= 20.0 else 3.0), (s, i)
 
 
 # The former network ("paper"): force, psi, L errors at three points (the issue's early
@@ -131,9 +166,9 @@ def test_fem_script_reproduces_a_recorded_point() -> None:
 # it in the core and the pole back) and the face teeth (the network's remaining excess).
 DIAGNOSIS = {
     # (s [mm], I [A]): {region: (FEM, network)}
-    (10.0, 100.0): {"junction+core": (3186, 3058), "gap+teeth": (16230, 16125)},
-    (6.0, 80.0): {"junction+core": (2941, 2498), "gap+teeth": (12678, 12792)},
-    (20.0, 33.5): {"junction+core": (153, 140), "gap+teeth": (6347, 6314)},
+    (10.0, 100.0): {"junction+core": (3186, 3145), "gap+teeth": (16230, 15954)},
+    (6.0, 80.0): {"junction+core": (2941, 2673), "gap+teeth": (12678, 12529)},
+    (20.0, 33.5): {"junction+core": (153, 140), "gap+teeth": (6347, 6315)},
 }
 
 
@@ -146,7 +181,7 @@ def test_potential_drops_against_recorded_fem_lines() -> None:
     values (deterministic network, recorded FEM; the table is rounded to 1 A), and how
     close they are: gap + teeth within 2 %; junction + core within 20 % (the FEM's line
     runs through the core's centre, whose flux is 2-4 % above the network's mean core
-    flux deep in saturation: -6 % at 10 mm / 100 A, -17 % at 6 mm / 80 A; the former
+    flux deep in saturation: -1 % at 10 mm / 100 A, -9 % at 6 mm / 80 A; the former
     network: +6 % and -26 %, its junction alone 1064 A against the FEM's 367 A at 10 mm /
     100 A)."""
     import numpy as np

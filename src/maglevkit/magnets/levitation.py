@@ -25,7 +25,10 @@ gap, the window leakage ``leak_pp_k`` at the coil's energy-equivalent height ``h
 above.  Per pole k: the core split along its coil into ``coil_segments`` (K, default 3)
 strips as the U-magnet's legs, ``core_k_j`` (K_k -> C_k_K ... C_k_1 -> H_k, each segment with the
 turns of the coil it holds, saturable, eddy currents; the core ends at the pole back's
-underside, as ``back_k`` already crosses the junction); ``gap_k`` (H_k -> T_k: air gap of the
+underside, as ``back_k`` already crosses the junction), beside each segment ``coil_air_k_j``
+(the air through the coil's cross-section, in parallel with the iron and with its turns;
+with eddy currents the segment's eddy element ``eddy_core_k_j`` follows both, through a node
+``E_k_j``); ``gap_k`` (H_k -> T_k: air gap of the
 face with Carter's coefficient of the stator slots and the recessed linear-generator
 grooves as slots of the face) to the tooth tips, then ``teeth_k`` (T_k -> S_k: the saturable
 stator teeth under the face) and in parallel ``slots_k`` (T_k -> S_k: the air of their
@@ -34,7 +37,8 @@ per side ``x`` (``l``, ``r``) of the pole: ``fringe_k_x`` (H_k -> W_kx: the flan
 the coil facing that side) and ``flank_k_j_x`` (C_k_j -> W_kx: Roters quarter circles from
 each coil strip of the flank to the face level and across the gap), both landing on that
 side's window teeth ``window_k_x`` (W_kx -> S_kx, with their slots' air
-``window_slots_k_x``), and the stator yoke over the half face ``yoke_k_x`` (S_k -> S_kx,
+``window_slots_k_x``; ``across_k_x``, T_k -> W_kx: the slot at the face edge between the face's
+teeth and that side's window teeth), and the stator yoke over the half face ``yoke_k_x`` (S_k -> S_kx,
 ``l_p/2``: the face teeth feed the yoke at the pole centre S_k, the window's teeth at the
 face edge S_kx); ``leak_pb_k`` (H_k -> K_k: leakage around the coil back into the pole
 back); the two end poles also ``end_k`` and ``under_k`` (K_k -> W_kx on the outer side:
@@ -246,6 +250,8 @@ def build_levitation_magnet(params: Mapping[str, Any], materials: Mapping[str, M
     # a permeance mu0 A_slots / slot_depth over the slots' share of the footprint
     slot_share = 1.0 - teeth_share
 
+    g_across = MU0 * wp * st["slot_depth"] / (2.0 * st["slot_opening"])
+
     def slot_air(name: str, footprint: float) -> LeakagePermeance:
         return LeakagePermeance(name, MU0 * footprint * wp * slot_share / st["slot_depth"])
 
@@ -311,6 +317,25 @@ def build_levitation_magnet(params: Mapping[str, Any], materials: Mapping[str, M
         inner = [f"C{k + 1}_{j + 1}" for j in range(nseg)] if split else []
         return [f"H{k + 1}", *inner, f"K{k + 1}"]
 
+    # "split": the air beside the core, through the coil's own cross-section.  Where the
+    # core's magnetic potential falls along its height by D (deep saturation), the flank's
+    # potential falls with it (tangential H is continuous) and the window's air carries a
+    # vertical field: with the window's centre plane at zero potential (neighbours of
+    # opposite polarity) it is H_y = (D/l)(1 - x/a) at a distance x from the flank, a = half
+    # the window (harmonic: V = D (y/l)(1 - x/a)).  The coil links a tube at x with the
+    # share 1 - x/t_c of its turns, so the linked width per flank is
+    # int_0^t_c (1 - x/a)(1 - x/t_c) dx = t_c/2 - t_c^2/(6 a); an end pole's outer flank
+    # faces open air (no centre plane, a -> oo): t_c/2.  A branch parallel to each core
+    # segment with that segment's turns sees exactly the iron's own drop (its MMF cancels
+    # the coil's): flux mu0 w_p W D/l, linked like the core's (2-D FEM: the field's L is
+    # 3.5 % above its cores' share at 10 mm / 100 A, docs/validation_fem.md)
+    w_inner = 0.5 * tc - tc * tc / (6.0 * 0.5 * window)
+    w_outer = 0.5 * tc
+
+    def coil_air_width(k: int) -> float:
+        """Linked air width [m] beside pole k's core, both flanks."""
+        return sum(w_outer if end else w_inner for end in (k == 0, k == poles - 1))
+
     branches: list[Branch] = []
     coil_turns: list[list[tuple[str, float]]] = []
     for k in range(poles):
@@ -320,11 +345,25 @@ def build_levitation_magnet(params: Mapping[str, Any], materials: Mapping[str, M
         for j in range(len(seg_len)):
             name = f"core_{p}_{j}" if split else f"core_{p}"
             core: list[Element] = [IronPath(f"iron_{name}", seg_len[j], lp * wp, core_mat)]
-            if options.eddy_currents:
-                # every segment carries the eddy currents of its own length
-                core.append(EddyCurrent.solid_rectangular(f"eddy_{name}", lp, wp, seg_len[j],
-                                                          rho))
-            branches.append(Branch(name, nodes[j + 1], nodes[j], tuple(core)))
+            eddy = (EddyCurrent.solid_rectangular(f"eddy_{name}", lp, wp, seg_len[j], rho),
+                    ) if options.eddy_currents else ()
+            # every segment carries the eddy currents of its own length
+            if split and options.leakage:
+                # the coil air in parallel with the iron only, the segment's eddy element in
+                # series with both (node E): the air's flux follows the iron's drop, which
+                # the lumped eddy element holds at a voltage step, so it is shielded with
+                # the core (else the coil would link unshielded flux and the current-jump
+                # admittance of paper eq. 8's R_ec would vanish)
+                end = f"E{k + 1}_{j}" if eddy else nodes[j]
+                air = f"coil_air_{p}_{j}"
+                branches += [Branch(name, nodes[j + 1], end, tuple(core)),
+                             Branch(air, nodes[j + 1], end, (LeakagePermeance(
+                                 air, MU0 * wp * coil_air_width(k) / seg_len[j]),))]
+                if eddy:
+                    branches.append(Branch(f"eddy_{name}", end, nodes[j], eddy))
+                turns += [(name, seg_turns[j]), (air, seg_turns[j])]
+                continue
+            branches.append(Branch(name, nodes[j + 1], nodes[j], (*core, *eddy)))
             turns.append((name, seg_turns[j]))
         coil_turns.append(turns)
         air_gap = AirGap(f"gap_{p}", gap_input=p, pole_area=face_area, fringe_edges=tuple(edges),
@@ -357,6 +396,15 @@ def build_levitation_magnet(params: Mapping[str, Any], materials: Mapping[str, M
                              share * window_teeth, stator_mat),)),
                     Branch(f"window_slots_{p}{sfx}", w_node, f"S{k + 1}{hand}",
                            (slot_air(f"window_slots_{p}{sfx}", share * (tau - lp)),))]
+            if split and options.leakage:
+                # across the slot at the face edge, from the face's teeth to that side's
+                # window teeth (T_k -> W_kx): their potentials differ by the face teeth's
+                # drop at the tips and by ~nothing at the roots, both joining the yoke, so
+                # the slot (opening b, depth d) carries mu0 w_p dV d/(2b): deep in
+                # saturation the increment spreads into the less loaded teeth beside the
+                # face (2-D FEM, docs/validation_fem.md)
+                branches.append(Branch(f"across_{p}{sfx}", f"T{k + 1}", w_node, (
+                    LeakagePermeance(f"across_{p}{sfx}", g_across),)))
             if split and options.fringing:
                 branches.append(Branch(f"fringe_{p}{sfx}", f"H{k + 1}", w_node, (
                     FringePermeance(f"fringe_{p}{sfx}", gap_input=p, width=2.0 * share * wp,
@@ -418,7 +466,10 @@ def build_levitation_magnet(params: Mapping[str, Any], materials: Mapping[str, M
     circuits = []
     n = m["turns_per_pole"]
     for i, cname in enumerate(names):
-        coils = tuple(Coil(seg, n * share, 1 if k % 2 == 0 else -1, pole=gaps[k] if split else None)
+        # the coil-air branches carry the turns of the core segment they run beside: the
+        # pole's winding has n turns (pole_turns), not the sum over parallel branches
+        coils = tuple(Coil(seg, n * share, 1 if k % 2 == 0 else -1,
+                           pole=gaps[k] if split else None, pole_turns=n if split else None)
                       for k in range(poles) if assign[k] == i + 1 for seg, share in coil_turns[k])
         npoles = sum(1 for a in assign if a == i + 1)
         circuits.append(Circuit(cname, m["resistance_per_pole"] * npoles, coils))
