@@ -333,7 +333,7 @@ def test_coil_air_sees_the_iron_drop() -> None:
             if isinstance(e, mk.LeakagePermeance)}
     shares = {}
     for i in (10.0, 100.0):
-        sol = mk.solve_statics(mag, gaps=0.010, currents=[i, i])
+        sol = mk.solve_statics(mag, gaps_m=0.010, currents_A=[i, i])
         flux = dict(zip(sol.branch_names, np.ravel(sol.branch_flux_Wb), strict=True))
         for j in range(4):
             iron = next(e for br in mag.network.branches if br.name == f"core_p09_{j}"
