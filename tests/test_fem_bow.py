@@ -35,7 +35,8 @@ def _load(name: str):  # type: ignore[no-untyped-def]
 # currents together).  Deterministic network, fixed record: 0.3 pp covers rounding only.
 MARGIN = 0.3
 # "split" as of 2026-12-02, after the coil-air and face-edge slot paths (the network of
-# test_fem_tr09.MEASURED: the force errors are those, to the digit; a change of the split network re-measures both tables with
+# test_fem_tr09.MEASURED: the force errors are those, to the digit; a change of the split
+# network re-measures both tables with
 # ``python benchmarks/fem_tr09_bow.py --compare``)
 SPLIT: dict[tuple[float, float], tuple[float, ...]] = {
     (6.0, 10.0): (+1.3, +0.8, +0.8, +1.3, +1.3),
