@@ -57,6 +57,7 @@ from .simulation import (
     Failure,
     VehicleRunInterrupted,
     check_run_speed,
+    interrupted_report_lines,
     limit_crossing,
     touchdown_report_line,
     write_run_netcdf,
@@ -437,6 +438,7 @@ class CrossSectionRun:
         for k, v in self.min_gap_m.items():
             lines.append(f"  minimum {k} gap {v * 1e3:.3f} mm")
         lines.append(touchdown_report_line(ds, self.touchdown))
+        lines.extend(interrupted_report_lines(ds))
         for name, ci in self.comfort.items():
             lines.append(f"  comfort {name}: ISO 2631 a_w = {ci['weighted_rms_m_per_s2']:.4f} "
                          f"m/s^2, Sperling Wz = {ci['sperling_wz']:.2f}")

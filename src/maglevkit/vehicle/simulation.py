@@ -44,7 +44,8 @@ from .train import TrainData
 
 __all__ = ["Failure", "VehicleRun", "VehicleModel", "VehicleRunInterrupted", "run_vehicle",
            "parse_failure", "parse_irregularity", "RUN_PLAUSIBLE", "check_run_speed",
-           "limit_crossing", "touchdown_report_line", "write_run_netcdf"]
+           "limit_crossing", "touchdown_report_line", "interrupted_report_lines",
+           "write_run_netcdf"]
 
 #: Plausible magnitudes of the run options (:func:`~maglevkit.validation.check_plausible`:
 #: outside, most likely a unit slip; the value is used as given, with a
@@ -250,6 +251,25 @@ def touchdown_report_line(dataset: Any, touchdown: tuple[str, float, float, str]
             f"{g * 1e3:.3f} mm); the run stopped there")
 
 
+def interrupted_report_lines(dataset: Any) -> list[str]:
+    """The line of a run's plain-text report that says the run was interrupted (Ctrl-C),
+    where it stopped; none for a whole run (both vehicles' reports).
+
+    Parameters
+    ----------
+    dataset : xarray.Dataset
+        The run's Dataset; its ``interrupted`` attribute (empty or absent for a whole run)
+        says where the run stopped.
+
+    Returns
+    -------
+    list of str
+        One line indented by two spaces, or no line.
+    """
+    why = dataset.attrs.get("interrupted")
+    return [f"  INTERRUPTED ({why})"] if why else []
+
+
 @dataclass(frozen=True)
 class VehicleRun:
     """Result of a vehicle run.
@@ -334,8 +354,7 @@ class VehicleRun:
             lines.append(f"  controller: {ds.attrs.get('controller', '')}; {ut.size} updates, "
                          f"median {p50:.0f} us, p99 {p99:.0f} us, max {ut.max() * 1e6:.0f} us "
                          f"(wall time; CPU time median {c50:.0f} us, p99 {c99:.0f} us)")
-        if ds.attrs.get("interrupted"):
-            lines.append(f"  INTERRUPTED ({ds.attrs['interrupted']})")
+        lines.extend(interrupted_report_lines(ds))
         for k, v in self.comfort.items():
             lines.append(f"  comfort {k}: ISO 2631 Wk a_w = {v['wk_rms_m_per_s2']:.4f} m/s^2, "
                          f"Sperling Wz = {v['sperling_wz']:.2f}")
