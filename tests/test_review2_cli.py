@@ -51,3 +51,21 @@ def test_cli_ctrl_c_writes_the_partial_cross_section_run(monkeypatch: pytest.Mon
         assert 1 < ds.sizes["time"] < 301 and ds.attrs["interrupted"]
         assert {"levitation_gap", "guidance_gap"} <= set(ds.data_vars)
     assert [p.name for p in tmp_path.iterdir()] == ["x.nc"]      # no temporary file left
+
+
+@pytest.mark.parametrize("controller", ["mpc", "pid"])
+def test_cross_section_refuses_a_controller_it_does_not_have(controller: str,
+                                                             tmp_path: Path) -> None:
+    """``vehicle run --vehicle tr09-cross-section --controller mpc`` ran with the cascade
+    controllers, rc 0, the option ignored without a word; now refused before the run,
+    naming the option and what the cross-section has."""
+    from maglevkit.cli import app
+
+    out = tmp_path / "x.nc"
+    r = CliRunner().invoke(app, ["vehicle", "run", "--vehicle", "tr09-cross-section",
+                                 "--controller", controller, "--duration", "0.1",
+                                 "-o", str(out)])
+    assert r.exit_code == 2, r.output
+    assert r.stderr.startswith(f"error: --controller {controller}: the cross-section model "
+                               "has cascade gap controllers only"), r.stderr
+    assert "Traceback" not in r.output and not out.exists() and r.stdout == ""

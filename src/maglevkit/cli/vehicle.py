@@ -106,6 +106,10 @@ def run(
         if guideway is not None or rigid:
             raise fail("--guideway/--rigid: the cross-section model runs on a rigid "
                        "guideway; leave them out")
+        if controller != "cascade":   # was ignored: the run went with cascade controllers
+            raise fail(f"--controller {controller}: the cross-section model has cascade "
+                       "gap controllers only (the NMPC flies the heave-pitch train); leave "
+                       "--controller out")
         if speed is not None:       # was ignored: the run went at 0 km/h
             raise fail(f"--speed {speed:g}: use --speed-kmh for a cross-section run (--speed "
                        "is its deprecated old name)")
