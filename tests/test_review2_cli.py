@@ -69,3 +69,53 @@ def test_cross_section_refuses_a_controller_it_does_not_have(controller: str,
     assert r.stderr.startswith(f"error: --controller {controller}: the cross-section model "
                                "has cascade gap controllers only"), r.stderr
     assert "Traceback" not in r.output and not out.exists() and r.stdout == ""
+
+
+def test_cross_section_notes_a_failure_after_the_end_of_the_run() -> None:
+    """A failure after the run's end was noted for the train (issue 27) but ignored
+    without a word for the cross-section; both now resolve failures through the one
+    ``failure_times`` (name check, earliest time, the note)."""
+    from maglevkit.cli import app
+    from maglevkit.errors import MaglevkitWarning
+    from maglevkit.vehicle.crossrun import CrossSectionModel
+    from maglevkit.vehicle.simulation import parse_failure
+
+    with pytest.warns(MaglevkitWarning, match=r"failure guidance_left/front@5: 5 s is after "
+                                              r"the end of the run \(0.1 s, --duration\); "
+                                              "the circuit does not fail in this run"):
+        CrossSectionModel().run(speed_m_per_s=0.0, duration_s=0.1,
+                                failures=[parse_failure("guidance_left/front@5")])
+    r = CliRunner().invoke(app, ["vehicle", "run", "--vehicle", "tr09-cross-section",
+                                 "--duration", "0.1", "--no-progress",
+                                 "--failure", "s2m4/front@0.05"])
+    assert r.exit_code == 2, r.output
+    assert ("error: failure: no circuit 's2m4/front'; circuits are levitation_left/front, "
+            "levitation_left/rear,") in r.stderr, r.stderr
+
+
+def test_failure_times_takes_the_earliest_and_refuses_unknown_circuits() -> None:
+    import numpy as np
+
+    from maglevkit.errors import InputError
+    from maglevkit.vehicle.simulation import Failure, failure_times
+
+    t = failure_times([Failure("b", 0.3), Failure("b", 0.2)], ["a", "b"], end_s=1.0)
+    np.testing.assert_array_equal(t, [np.inf, 0.2])
+    with pytest.raises(InputError, match="failure: no circuit 'c'; circuits are a, b"):
+        failure_times([Failure("c", 0.1)], ["a", "b"], end_s=1.0)
+    with pytest.raises(InputError, match="failures must be Failure objects"):
+        failure_times(["a@0.1"], ["a", "b"], end_s=1.0)  # type: ignore[list-item]
+
+
+def test_a_curve_superelevation_out_of_range_is_named_in_degrees() -> None:
+    """``--curve 4000:120:300`` said "curve superelevation_rad = 2.0943951023931953 rad"
+    for the 120 deg typed; now the degrees given come first, the range in both units."""
+    from maglevkit.errors import InputError
+    from maglevkit.vehicle.crossrun import parse_curve
+
+    with pytest.raises(InputError) as err:
+        parse_curve("4000:120:300")
+    assert str(err.value) == ("--curve = '4000:120:300': curve superelevation 120 deg "
+                              "(superelevation_rad = 2.0944 rad): must be in (-17.19, 17.19) "
+                              "deg, i.e. (-0.3, 0.3) rad")
+    assert parse_curve("4000:17:300").superelevation_rad < 0.3     # 17 deg is allowed

@@ -57,6 +57,7 @@ from .simulation import (
     Failure,
     VehicleRunInterrupted,
     check_run_speed,
+    failure_times,
     interrupted_report_lines,
     limit_crossing,
     touchdown_report_line,
@@ -123,8 +124,9 @@ class TransitionCurve:
             raise InputError(f"curve radius_m = {r!r} m: expected |R| >= 1 m or inf")
         c = real_number(self.superelevation_rad, "curve superelevation_rad", "rad")
         if not abs(c) < 0.3:
-            raise InputError(f"curve superelevation_rad = {c!r} rad: must be in (-0.3, 0.3) "
-                             "rad (17 deg)")
+            raise InputError(f"curve superelevation {math.degrees(c):.6g} deg "
+                             f"(superelevation_rad = {c:.6g} rad): must be in (-17.19, 17.19) "
+                             "deg, i.e. (-0.3, 0.3) rad")
         real_number(self.transition_m, "curve transition_m", "m", nonnegative=True)
         real_number(self.start_m, "curve start_m", "m", nonnegative=True)
         check_plausible({"curve": {"radius_m": r}}, SCENARIO_PLAUSIBLE, stacklevel=4)
@@ -765,15 +767,7 @@ class CrossSectionModel:
                           f"{dur:g} s: it never blows", MaglevkitWarning, stacklevel=2)
         bank = self.bank
         names = bank.circuit_names
-        fail_t = np.full(bank.n_circuits, np.inf)
-        for f in failures:
-            if not isinstance(f, Failure):
-                raise InputError(f"failures must be Failure objects, got {type(f).__name__}")
-            if f.circuit not in names:
-                raise InputError(f"failure circuit {f.circuit!r} is not a circuit of the "
-                                 f"cross-section; allowed: {', '.join(names)}")
-            k = names.index(f.circuit)
-            fail_t[k] = min(fail_t[k], f.time_s)
+        fail_t = failure_times(failures, names, end_s=n * dt, stacklevel=3)
         s = self.mechanics.system
         t = np.arange(n + 1) * dt
         xs, xmid = v * t, v * (t + 0.5 * dt)
