@@ -119,3 +119,16 @@ def test_a_curve_superelevation_out_of_range_is_named_in_degrees() -> None:
                               "(superelevation_rad = 2.0944 rad): must be in (-17.19, 17.19) "
                               "deg, i.e. (-0.3, 0.3) rad")
     assert parse_curve("4000:17:300").superelevation_rad < 0.3     # 17 deg is allowed
+
+
+@pytest.mark.parametrize("vehicle", ["tr09", "tr09-cross-section"])
+def test_a_bad_magnets_option_names_the_cli_option(vehicle: str) -> None:
+    """``vehicle run --magnets detaild`` said "magnets = 'detaild'" (the Python keyword);
+    now the CLI option is named too, for both vehicles."""
+    from maglevkit.cli import app
+
+    r = CliRunner().invoke(app, ["vehicle", "run", "--vehicle", vehicle, "--magnets",
+                                 "detaild", "--duration", "0.1", "--no-progress"])
+    assert r.exit_code == 2, r.output
+    assert ("error: magnets (--magnets) = 'detaild'; use 'reduced' or 'detailed'"
+            in r.stderr), r.stderr

@@ -505,7 +505,7 @@ class CrossSectionModel:
         self.data = d = load_cross_section() if data is None else data
         self.mechanics = CrossSectionMechanics(d)
         if magnets not in ("reduced", "detailed"):
-            raise InputError(f"magnets = {magnets!r}; use 'reduced' or 'detailed'")
+            raise InputError(f"magnets (--magnets) = {magnets!r}; use 'reduced' or 'detailed'")
         self.s0 = real_number(nominal_gap_m, "nominal_gap_m", "m", positive=True)
         self.bias_A = real_number(guidance_bias_current_A, "guidance_bias_current_A", "A",
                                   positive=True)

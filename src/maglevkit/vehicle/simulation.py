@@ -482,7 +482,7 @@ class VehicleModel:
         if not isinstance(train, TrainData):
             raise InputError(f"train must be TrainData (from load_vehicle), got {type(train).__name__}")
         if magnets not in ("reduced", "detailed"):
-            raise InputError(f"magnets = {magnets!r}; use 'reduced' or 'detailed'")
+            raise InputError(f"magnets (--magnets) = {magnets!r}; use 'reduced' or 'detailed'")
         self.train = train
         self.fine = magnets == "detailed"
         kinds = {"standard": load_magnet(train.standard_magnet), "bow": load_magnet(train.bow_magnet)}
