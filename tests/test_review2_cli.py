@@ -132,3 +132,13 @@ def test_a_bad_magnets_option_names_the_cli_option(vehicle: str) -> None:
     assert r.exit_code == 2, r.output
     assert ("error: magnets (--magnets) = 'detaild'; use 'reduced' or 'detailed'"
             in r.stderr), r.stderr
+
+
+def test_vehicle_run_help_states_the_default_speed() -> None:
+    """Without --speed-kmh a run stands still (0 km/h); the help did not say so (no
+    default shown), so a first ``vehicle run --curve ...`` never entered its curve."""
+    from maglevkit.cli import app
+
+    r = CliRunner().invoke(app, ["vehicle", "run", "--help"], terminal_width=200)
+    assert r.exit_code == 0
+    assert "default 0, standing" in " ".join(r.stdout.split())

@@ -36,7 +36,8 @@ def run(
     vehicle: Annotated[str, typer.Argument(
         metavar="VEHICLE", help="Vehicle TOML file or bundled name.")] = "tr09",
     speed_kmh: Annotated[float | None, typer.Option(
-        "--speed-kmh", help="Speed [km/h] (0 ... 2000; sweep files give speed in m/s).")]
+        "--speed-kmh", help="Speed [km/h] (0 ... 2000; default 0, standing; sweep files "
+                            "give speed in m/s).")]
     = None,
     speed: Annotated[float | None, typer.Option(
         "--speed", help="Deprecated: the speed in km/h; use --speed-kmh.")] = None,
