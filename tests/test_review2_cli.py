@@ -142,3 +142,28 @@ def test_vehicle_run_help_states_the_default_speed() -> None:
     r = CliRunner().invoke(app, ["vehicle", "run", "--help"], terminal_width=200)
     assert r.exit_code == 0
     assert "default 0, standing" in " ".join(r.stdout.split())
+
+
+
+def test_a_magnet_file_s_errors_name_the_file(tmp_path: Path) -> None:
+    """A typo in a magnet file's key said "error: [magnet]: unknown key(s) ['pole_pich']"
+    without the file (a vehicle file's errors name it); now every message of
+    ``load_magnet`` starts with the file, and names it once."""
+    from importlib import resources
+
+    import maglevkit as mk
+    from maglevkit.errors import ParameterFileError
+
+    text = (resources.files("maglevkit") / "data" / "tr09-standard.toml").read_text()
+    assert "\npole_pitch" in text
+    bad = tmp_path / "typo.toml"
+    bad.write_text(text.replace("\npole_pitch", "\npole_pich", 1))
+    with pytest.raises(ParameterFileError) as err:
+        mk.load_magnet(bad)
+    assert str(err.value).startswith(f"{bad}: [magnet]: unknown key(s) ['pole_pich']")
+    no_kind = tmp_path / "no_kind.toml"
+    no_kind.write_text("[magnet]\nname = 'x'\n")
+    with pytest.raises(ParameterFileError) as err:   # this one named the file already
+        mk.load_magnet(no_kind)
+    assert str(err.value).startswith(str(no_kind))
+    assert str(err.value).count(str(no_kind)) == 1
