@@ -100,7 +100,7 @@ def run(
     \b
     Example:
       maglevkit vehicle run tr09 --speed-kmh 400 --duration 1.5 -o run.nc
-      maglevkit vehicle run --vehicle tr09-cross-section --speed-kmh 400 --curve 4000:12:300
+      maglevkit vehicle run --vehicle tr09-cross-section --speed-kmh 400 --duration 6 --curve 4000:12:300
       maglevkit vehicle run tr09 --speed-kmh 400 --duration 0.5 --controller mpc
     """
     if _cross_section_requested(vehicle, vehicle_option, curve, crosswind, lateral):
