@@ -147,7 +147,7 @@ def test_bad_scenarios_name_the_option(model: CrossSectionModel) -> None:
         parse_crosswind("8000:0")
     assert parse_crosswind("5000:0.5:0:0.2:step").shape == "step"
     assert parse_curve("4000:12:300").superelevation_rad == pytest.approx(math.radians(12))
-    with pytest.raises(InputError, match="not a circuit"):
+    with pytest.raises(InputError, match="no circuit .s1m1/front.; circuits are"):
         model.run(speed_m_per_s=10.0, duration_s=0.01, failures=[Failure("s1m1/front", 0)])
 
 

@@ -105,7 +105,8 @@ def test_bundled_example_spans_the_balancing_speed() -> None:
     (("duration = 0.1", "duratoin = 0.1"),
      "[cross_section]: unknown key(s) ['duratoin']; allowed keys are: file, duration"),
     (("curve_superelevation = 0.1", "curve_superelevation = 12.0"),
-     "[cross_section] curve_superelevation: curve superelevation_rad = 12.0 rad: must be in"),
+     "[cross_section] curve_superelevation: curve superelevation 687.549 deg "
+     "(superelevation_rad = 12 rad): must be in"),
     (("curve_radius = 2000.0", "curve_radius = 0.5"),
      "[cross_section] curve_radius: curve radius_m = 0.5 m: expected |R| >= 1 m or inf"),
     (("curve_radius = 2000.0", 'curve_radius = "2 km"'),

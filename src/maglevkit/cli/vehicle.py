@@ -36,7 +36,8 @@ def run(
     vehicle: Annotated[str, typer.Argument(
         metavar="VEHICLE", help="Vehicle TOML file or bundled name.")] = "tr09",
     speed_kmh: Annotated[float | None, typer.Option(
-        "--speed-kmh", help="Speed [km/h] (0 ... 2000; sweep files give speed in m/s).")]
+        "--speed-kmh", help="Speed [km/h] (0 ... 2000; default 0, standing; sweep files "
+                            "give speed in m/s).")]
     = None,
     speed: Annotated[float | None, typer.Option(
         "--speed", help="Deprecated: the speed in km/h; use --speed-kmh.")] = None,
@@ -92,20 +93,24 @@ def run(
     """Run the train at constant speed; report minimum gaps, peak currents, comfort and the
     real-time factor (results on stdout, diagnostics on stderr).  Ctrl-C stops the run:
     "interrupted" on stderr, exit code 130, and with -o the run up to there is written
-    (the train; an interrupted cross-section run writes no file).  A cross-section
+    (both vehicles).  A cross-section
     vehicle (--vehicle tr09-cross-section) runs one slice across the track with levitation
     and guidance magnets, curves and crosswind.
 
     \b
     Example:
       maglevkit vehicle run tr09 --speed-kmh 400 --duration 1.5 -o run.nc
-      maglevkit vehicle run --vehicle tr09-cross-section --speed-kmh 400 --curve 4000:12:300
+      maglevkit vehicle run --vehicle tr09-cross-section --speed-kmh 400 --duration 6 --curve 4000:12:300
       maglevkit vehicle run tr09 --speed-kmh 400 --duration 0.5 --controller mpc
     """
     if _cross_section_requested(vehicle, vehicle_option, curve, crosswind, lateral):
         if guideway is not None or rigid:
             raise fail("--guideway/--rigid: the cross-section model runs on a rigid "
                        "guideway; leave them out")
+        if controller != "cascade":   # was ignored: the run went with cascade controllers
+            raise fail(f"--controller {controller}: the cross-section model has cascade "
+                       "gap controllers only (the NMPC flies the heave-pitch train); leave "
+                       "--controller out")
         if speed is not None:       # was ignored: the run went at 0 km/h
             raise fail(f"--speed {speed:g}: use --speed-kmh for a cross-section run (--speed "
                        "is its deprecated old name)")
@@ -171,14 +176,7 @@ def _run(vehicle: str, speed_kmh: float | None, speed: float | None, duration: f
         res = model.run(speed_m_per_s=speed_kmh / 3.6, duration_s=duration, dt_s=dt,
                         irregularity=prof, failures=fails, progress=progress)
     except VehicleRunInterrupted as exc:
-        typer.echo(exc.run.report())
-        # the shared report (one "interrupted" line; a second Ctrl-C is ignored from here)
-        stop = interrupted(str(exc.run.dataset.attrs["interrupted"]))
-        if output is not None:
-            with writing(output, "-o"):
-                exc.run.to_netcdf(output)
-            info(f"wrote the run up to there to {output}")
-        raise stop from None
+        raise _interrupted_run(exc, output) from None
     except typer.BadParameter as exc:
         raise fail(str(exc)) from None
     except MaglevkitError as exc:
@@ -186,6 +184,19 @@ def _run(vehicle: str, speed_kmh: float | None, speed: float | None, duration: f
     from ..vehicle.plots import plot_vehicle_run
 
     _report_and_write(res, output, plot, plot_vehicle_run)
+
+
+def _interrupted_run(exc: Any, output: Path | None) -> BaseException:
+    """A run stopped by Ctrl-C (``exc``, a ``VehicleRunInterrupted``; either vehicle):
+    print its report, write it up to there (-o) and return the exit to raise."""
+    # the shared report (one "interrupted" line; a second Ctrl-C is ignored from here)
+    stop = interrupted(str(exc.run.dataset.attrs["interrupted"]))
+    typer.echo(exc.run.report())
+    if output is not None:
+        with writing(output, "-o"):
+            exc.run.to_netcdf(output)
+        info(f"wrote the run up to there to {output}")
+    return stop
 
 
 def _check_run_options(speed_kmh: float | None, duration: float, dt: float, *,
@@ -266,7 +277,7 @@ def _run_cross_section(name: str, speed_kmh: float | None, duration: float, dt: 
     )
     from ..vehicle.crosssection import load_cross_section
     from ..vehicle.data import load_guideway
-    from ..vehicle.simulation import parse_failure, parse_irregularity
+    from ..vehicle.simulation import VehicleRunInterrupted, parse_failure, parse_irregularity
 
     output = output_file(output, "-o", formats=("nc",), force=force, inputs=(name,))
     if plot is not None:   # checked now, created only when the figures are written
@@ -285,6 +296,8 @@ def _run_cross_section(name: str, speed_kmh: float | None, duration: float, dt: 
         res = model.run(speed_m_per_s=speed_kmh / 3.6, duration_s=duration, dt_s=dt,
                         curve=crv, crosswind=gust, failures=fails, vertical=vert,
                         lateral=lat, progress=progress)
+    except VehicleRunInterrupted as exc:   # as the train's: reported, written up to there
+        raise _interrupted_run(exc, output) from None
     except typer.BadParameter as exc:
         raise fail(str(exc)) from None
     except MaglevkitError as exc:

@@ -818,4 +818,9 @@ def load_magnet(source: str | Path, *, saturation: bool = True, fringing: bool =
                            eddy_currents=eddy_currents, eddy_model=eddy_model,
                            eddy_layers=eddy_layers)
     params, label = read_parameter_file(source, what="magnet")
-    return build_magnet(params, options=options, source=label)
+    try:
+        return build_magnet(params, options=options, source=label)
+    except ParameterFileError as exc:   # every message names the file (as a vehicle's)
+        if str(exc).startswith(label):
+            raise
+        raise type(exc)(f"{label}: {exc}") from None

@@ -57,6 +57,8 @@ from .simulation import (
     Failure,
     VehicleRunInterrupted,
     check_run_speed,
+    failure_times,
+    interrupted_report_lines,
     limit_crossing,
     touchdown_report_line,
     write_run_netcdf,
@@ -122,8 +124,9 @@ class TransitionCurve:
             raise InputError(f"curve radius_m = {r!r} m: expected |R| >= 1 m or inf")
         c = real_number(self.superelevation_rad, "curve superelevation_rad", "rad")
         if not abs(c) < 0.3:
-            raise InputError(f"curve superelevation_rad = {c!r} rad: must be in (-0.3, 0.3) "
-                             "rad (17 deg)")
+            raise InputError(f"curve superelevation {math.degrees(c):.6g} deg "
+                             f"(superelevation_rad = {c:.6g} rad): must be in (-17.19, 17.19) "
+                             "deg, i.e. (-0.3, 0.3) rad")
         real_number(self.transition_m, "curve transition_m", "m", nonnegative=True)
         real_number(self.start_m, "curve start_m", "m", nonnegative=True)
         check_plausible({"curve": {"radius_m": r}}, SCENARIO_PLAUSIBLE, stacklevel=4)
@@ -437,6 +440,7 @@ class CrossSectionRun:
         for k, v in self.min_gap_m.items():
             lines.append(f"  minimum {k} gap {v * 1e3:.3f} mm")
         lines.append(touchdown_report_line(ds, self.touchdown))
+        lines.extend(interrupted_report_lines(ds))
         for name, ci in self.comfort.items():
             lines.append(f"  comfort {name}: ISO 2631 a_w = {ci['weighted_rms_m_per_s2']:.4f} "
                          f"m/s^2, Sperling Wz = {ci['sperling_wz']:.2f}")
@@ -501,7 +505,7 @@ class CrossSectionModel:
         self.data = d = load_cross_section() if data is None else data
         self.mechanics = CrossSectionMechanics(d)
         if magnets not in ("reduced", "detailed"):
-            raise InputError(f"magnets = {magnets!r}; use 'reduced' or 'detailed'")
+            raise InputError(f"magnets (--magnets) = {magnets!r}; use 'reduced' or 'detailed'")
         self.s0 = real_number(nominal_gap_m, "nominal_gap_m", "m", positive=True)
         self.bias_A = real_number(guidance_bias_current_A, "guidance_bias_current_A", "A",
                                   positive=True)
@@ -763,15 +767,7 @@ class CrossSectionModel:
                           f"{dur:g} s: it never blows", MaglevkitWarning, stacklevel=2)
         bank = self.bank
         names = bank.circuit_names
-        fail_t = np.full(bank.n_circuits, np.inf)
-        for f in failures:
-            if not isinstance(f, Failure):
-                raise InputError(f"failures must be Failure objects, got {type(f).__name__}")
-            if f.circuit not in names:
-                raise InputError(f"failure circuit {f.circuit!r} is not a circuit of the "
-                                 f"cross-section; allowed: {', '.join(names)}")
-            k = names.index(f.circuit)
-            fail_t[k] = min(fail_t[k], f.time_s)
+        fail_t = failure_times(failures, names, end_s=n * dt, stacklevel=3)
         s = self.mechanics.system
         t = np.arange(n + 1) * dt
         xs, xmid = v * t, v * (t + 0.5 * dt)

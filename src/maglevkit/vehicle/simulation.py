@@ -44,7 +44,9 @@ from .train import TrainData
 
 __all__ = ["Failure", "VehicleRun", "VehicleModel", "VehicleRunInterrupted", "run_vehicle",
            "parse_failure", "parse_irregularity", "RUN_PLAUSIBLE", "check_run_speed",
-           "limit_crossing", "touchdown_report_line", "write_run_netcdf"]
+           "limit_crossing", "touchdown_report_line", "interrupted_report_lines",
+           "failure_times",
+           "write_run_netcdf"]
 
 #: Plausible magnitudes of the run options (:func:`~maglevkit.validation.check_plausible`:
 #: outside, most likely a unit slip; the value is used as given, with a
@@ -250,6 +252,73 @@ def touchdown_report_line(dataset: Any, touchdown: tuple[str, float, float, str]
             f"{g * 1e3:.3f} mm); the run stopped there")
 
 
+def interrupted_report_lines(dataset: Any) -> list[str]:
+    """The line of a run's plain-text report that says the run was interrupted (Ctrl-C),
+    where it stopped; none for a whole run (both vehicles' reports).
+
+    Parameters
+    ----------
+    dataset : xarray.Dataset
+        The run's Dataset; its ``interrupted`` attribute (empty or absent for a whole run)
+        says where the run stopped.
+
+    Returns
+    -------
+    list of str
+        One line indented by two spaces, or no line.
+    """
+    why = dataset.attrs.get("interrupted")
+    return [f"  INTERRUPTED ({why})"] if why else []
+
+
+def failure_times(failures: Sequence[Failure], circuit_names: Sequence[str], *,
+                  end_s: float, stacklevel: int = 2) -> np.ndarray:
+    """Each circuit's failure time of a run (both vehicles): the earliest of its failures.
+
+    Parameters
+    ----------
+    failures : sequence of Failure
+        The run's circuit failures (circuit name, time [s]).
+    circuit_names : sequence of str
+        The vehicle bank's circuit names, in its order.
+    end_s : float
+        The run's end [s]: a failure after it is noted with a ``MaglevkitWarning`` (the
+        circuit does not fail in the run).
+    stacklevel : int, default 2
+        The warning's stack level (keyword only).
+
+    Returns
+    -------
+    numpy.ndarray
+        Failure time per circuit [s], ``inf`` for a circuit that does not fail.
+
+    Raises
+    ------
+    InputError
+        A failure that is not a :class:`Failure`, or names no circuit of the bank.
+    """
+    import warnings
+
+    from ..errors import MaglevkitWarning
+
+    names = list(circuit_names)
+    fail_t = np.full(len(names), np.inf)
+    for f in failures:
+        if not isinstance(f, Failure):
+            raise InputError(f"failures must be Failure objects, got {f!r}")
+        if f.circuit not in names:
+            listed = (", ".join(names) if len(names) <= 8 else
+                      f"e.g. {', '.join(names[:3])} ... {names[-1]} (magnet/circuit)")
+            raise InputError(f"failure: no circuit {f.circuit!r}; circuits are {listed}")
+        k = names.index(f.circuit)
+        fail_t[k] = min(fail_t[k], f.time_s)
+        if f.time_s > end_s:   # was ignored without a note
+            warnings.warn(f"failure {f.circuit}@{f.time_s:g}: {f.time_s:g} s is after the "
+                          f"end of the run ({end_s:g} s, --duration); the circuit does not "
+                          "fail in this run", MaglevkitWarning, stacklevel=stacklevel)
+    return fail_t
+
+
 @dataclass(frozen=True)
 class VehicleRun:
     """Result of a vehicle run.
@@ -334,8 +403,7 @@ class VehicleRun:
             lines.append(f"  controller: {ds.attrs.get('controller', '')}; {ut.size} updates, "
                          f"median {p50:.0f} us, p99 {p99:.0f} us, max {ut.max() * 1e6:.0f} us "
                          f"(wall time; CPU time median {c50:.0f} us, p99 {c99:.0f} us)")
-        if ds.attrs.get("interrupted"):
-            lines.append(f"  INTERRUPTED ({ds.attrs['interrupted']})")
+        lines.extend(interrupted_report_lines(ds))
         for k, v in self.comfort.items():
             lines.append(f"  comfort {k}: ISO 2631 Wk a_w = {v['wk_rms_m_per_s2']:.4f} m/s^2, "
                          f"Sperling Wz = {v['sperling_wz']:.2f}")
@@ -414,7 +482,7 @@ class VehicleModel:
         if not isinstance(train, TrainData):
             raise InputError(f"train must be TrainData (from load_vehicle), got {type(train).__name__}")
         if magnets not in ("reduced", "detailed"):
-            raise InputError(f"magnets = {magnets!r}; use 'reduced' or 'detailed'")
+            raise InputError(f"magnets (--magnets) = {magnets!r}; use 'reduced' or 'detailed'")
         self.train = train
         self.fine = magnets == "detailed"
         kinds = {"standard": load_magnet(train.standard_magnet), "bow": load_magnet(train.bow_magnet)}
@@ -847,23 +915,7 @@ class VehicleModel:
         tr, bank, mech, gw = self.train, self.bank, self.mechanics, self.guideway
         names = bank.circuit_names
         nc = bank.n_circuits
-        fail_t = np.full(nc, np.inf)
-        for f in failures:
-            if not isinstance(f, Failure):
-                raise InputError(f"failures must be Failure objects, got {f!r}")
-            if f.circuit not in names:
-                raise InputError(f"failure: no circuit {f.circuit!r}; circuits are e.g. "
-                                 f"{', '.join(names[:3])} ... {names[-1]} (magnet/circuit)")
-            fail_t[names.index(f.circuit)] = min(fail_t[names.index(f.circuit)], f.time_s)
-            if f.time_s > n_steps * dt_s:   # was ignored without a note
-                import warnings
-
-                from ..errors import MaglevkitWarning
-
-                warnings.warn(f"failure {f.circuit}@{f.time_s:g}: {f.time_s:g} s is after the "
-                              f"end of the run ({n_steps * dt_s:g} s, --duration); the "
-                              "circuit does not fail in this run", MaglevkitWarning,
-                              stacklevel=2)
+        fail_t = failure_times(failures, names, end_s=n_steps * dt_s, stacklevel=3)
         v = float(speed_m_per_s)
         dt = float(dt_s)
         s0 = tr.nominal_gap_m
