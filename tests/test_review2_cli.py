@@ -167,3 +167,17 @@ def test_a_magnet_file_s_errors_name_the_file(tmp_path: Path) -> None:
         mk.load_magnet(no_kind)
     assert str(err.value).startswith(str(no_kind))
     assert str(err.value).count(str(no_kind)) == 1
+
+
+def test_a_superelevation_in_degrees_typed_as_radians_is_hinted() -> None:
+    """A sweep file's or the API's ``curve_superelevation`` is in rad: 12 (degrees meant)
+    is refused with the hint, which ``--curve`` (degrees) does not get."""
+    from maglevkit.errors import InputError
+    from maglevkit.vehicle.crossrun import TransitionCurve
+
+    with pytest.raises(InputError, match=r"take it in rad \(12 deg = 0.2094 rad\), --curve in "
+                                         r"deg: degrees typed as radians\?"):
+        TransitionCurve(4000.0, 12.0, 300.0)
+    with pytest.raises(InputError) as err:
+        TransitionCurve(4000.0, 40.0, 300.0)      # not a plausible angle in degrees either
+    assert "degrees typed" not in str(err.value)

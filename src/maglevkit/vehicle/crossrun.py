@@ -126,7 +126,10 @@ class TransitionCurve:
         if not abs(c) < 0.3:
             raise InputError(f"curve superelevation {math.degrees(c):.6g} deg "
                              f"(superelevation_rad = {c:.6g} rad): must be in (-17.19, 17.19) "
-                             "deg, i.e. (-0.3, 0.3) rad")
+                             "deg, i.e. (-0.3, 0.3) rad"
+                             + ("; sweep files and the Python API take it in rad (12 deg = "
+                                "0.2094 rad), --curve in deg: degrees typed as radians?"
+                                if abs(c) < 17.19 else ""))
         real_number(self.transition_m, "curve transition_m", "m", nonnegative=True)
         real_number(self.start_m, "curve start_m", "m", nonnegative=True)
         check_plausible({"curve": {"radius_m": r}}, SCENARIO_PLAUSIBLE, stacklevel=4)
@@ -274,7 +277,8 @@ def parse_curve(text: str) -> TransitionCurve:
         return TransitionCurve(vals[0], math.radians(vals[1]), vals[2],
                                vals[3] if len(vals) == 4 else 0.0)
     except InputError as exc:
-        raise InputError(f"--curve = {text!r}: {exc}") from None
+        # the degrees-as-radians hint is for files and the API: --curve takes degrees
+        raise InputError(f"--curve = {text!r}: {str(exc).split('; sweep files')[0]}") from None
 
 
 def parse_crosswind(text: str) -> Crosswind:
