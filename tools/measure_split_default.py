@@ -68,7 +68,7 @@ class Clock:
 
 
 def load() -> str:
-    return "load %.2f %.2f %.2f" % os.getloadavg()
+    return "load {:.2f} {:.2f} {:.2f}".format(*os.getloadavg())
 
 
 def part_maps(a: argparse.Namespace) -> None:
