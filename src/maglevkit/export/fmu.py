@@ -48,7 +48,7 @@ from xml.sax.saxutils import escape, quoteattr
 import numpy as np
 
 from ..errors import InputError, SolverError
-from ..models.compiled import cache_directory, find_compiler
+from ..models.compiled import cache_directory, find_compiler, run_compiler
 from ..reduced.bank import (
     KERNEL_PARAMETERS,
     STEP_FLAG_MESSAGES,
@@ -659,7 +659,7 @@ def _compile(cc: str, src: Path, binary: Path) -> None:
     cmd = [cc, *_CFLAGS, "-I", str(src), str(src / "fmi2_cs.c"), str(src / "model.c"),
            "-o", str(binary), "-lm"]
     try:
-        proc = subprocess.run(cmd, capture_output=True, text=True, timeout=600)
+        proc = run_compiler(cmd)
     except (OSError, subprocess.SubprocessError) as exc:
         raise SolverError(f"compiling the FMU's binary with {cc} failed",
                           reason=str(exc)) from None

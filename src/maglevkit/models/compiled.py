@@ -25,6 +25,7 @@ import hashlib
 import os
 import platform
 import shutil
+import signal
 import subprocess
 import sys
 import tempfile
@@ -40,7 +41,7 @@ from ..errors import CompilationWarning, SolverError
 
 __all__ = ["COMPILE_MODES", "DEFAULT_FLAGS", "BoundCall", "build_source", "cache_directory",
            "compile_function",
-           "compile_library", "find_compiler"]
+           "compile_library", "find_compiler", "run_compiler"]
 
 COMPILE_MODES = ("auto", "always", "never")
 #: Default C compiler flags of the compiled kernels (optimised, position-independent shared
@@ -220,14 +221,58 @@ def build_source(name: str, code: bytes, *, cache: Path, flags: Sequence[str] = 
             os.close(fd)
             part = Path(name_part)
             try:
-                proc = subprocess.run([cc, *flags, str(src), "-o", str(part), "-lm"],
-                                      capture_output=True, text=True, timeout=600)
+                proc = run_compiler([cc, *flags, str(src), "-o", str(part), "-lm"])
                 if proc.returncode != 0:
                     raise RuntimeError(f"{Path(cc).name} failed: {_last_line(proc.stderr)}")
                 os.replace(part, lib)    # atomic: concurrent builders never see half a file
             finally:
                 part.unlink(missing_ok=True)
     return lib
+
+
+def run_compiler(cmd: Sequence[str], *, timeout_s: float = 600.0) -> subprocess.CompletedProcess:
+    """Run a compiler command; on a time-out or an interrupt end its whole process group.
+
+    ``subprocess.run(..., timeout=)`` ends only the process it started: the compiler
+    driver (``cc``), not the compiler proper (``cc1``) the driver runs, which then keeps a
+    core busy for minutes as an orphan.  Here the command starts in a session of its own,
+    and a time-out, Ctrl-C or any other exception while waiting kills that whole group.
+
+    Parameters
+    ----------
+    cmd : sequence of str
+        The command (compiler first).
+    timeout_s : float
+        Seconds to wait for it [s].
+
+    Returns
+    -------
+    subprocess.CompletedProcess
+        With ``returncode``, ``stdout`` and ``stderr`` (text).
+
+    Raises
+    ------
+    subprocess.TimeoutExpired
+        The command did not finish within ``timeout_s`` (its process group is killed).
+    OSError
+        The command could not be started.
+    """
+    posix = os.name == "posix"
+    proc = subprocess.Popen(list(cmd), stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                            text=True, start_new_session=posix)
+    try:
+        out, err = proc.communicate(timeout=timeout_s)
+    except BaseException:
+        if posix:
+            try:
+                os.killpg(proc.pid, signal.SIGKILL)
+            except ProcessLookupError:
+                pass
+        else:  # pragma: no cover - no process groups
+            proc.kill()
+        proc.communicate()
+        raise
+    return subprocess.CompletedProcess(proc.args, proc.returncode, out, err)
 
 
 def _last_line(text: str) -> str:
