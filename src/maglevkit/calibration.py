@@ -246,7 +246,6 @@ def read_steps(path: str | Path) -> StepResponses:
         :data:`STEP_GAP_PLAUSIBLE_M` (mm as m), a negative current, or a current that does
         not change; each naming the row.
     """
-    import csv
 
     from .errors import ParameterFileError
 
@@ -255,21 +254,11 @@ def read_steps(path: str | Path) -> StepResponses:
     p = Path(path)
     if not p.is_file():
         raise ParameterFileError(f"voltage-step file {str(p)!r} does not exist")
+    from .reduction.tables_in import csv_records
+
     raw = p.read_bytes()
-    try:
-        text = raw.decode("utf-8-sig")
-    except UnicodeDecodeError as exc:
-        raise DataError(f"{p}: not a UTF-8 text (CSV) file: {exc}") from None
-    reader = csv.reader(text.splitlines())
-    header: list[str] | None = None
-    records: list[tuple[int, list[str]]] = []
-    for line in reader:
-        if not line or not "".join(line).strip() or line[0].lstrip().startswith("#"):
-            continue
-        if header is None:
-            header = [h.strip() for h in line]
-        else:
-            records.append((reader.line_num, line))
+    header, records = csv_records(p, raw)
+    header = None if header is None else [h.strip() for h in header]
     allowed = (*STEP_COLUMNS, "step", "circuit")
     if header is None:
         raise DataError(f"{p}: the file is empty (expected a header row: "

@@ -53,7 +53,7 @@ from ..models.inputs import per_name_values
 from ..validation import real_number
 from .maps import MAPS_FORMAT, CharacteristicMaps, check_grid, maps_dataset
 
-__all__ = ["GridTable", "TableReport", "TableRows", "eddy_resistance_from_step",
+__all__ = ["GridTable", "TableReport", "TableRows", "csv_records", "eddy_resistance_from_step",
            "maps_from_table", "read_rows", "read_table", "RECIPROCITY_TOLERANCE"]
 
 QUANTITIES = ("force_N", "flux_linkage_Wb")
@@ -298,7 +298,28 @@ def read_table(path: str | Path) -> GridTable:
                      str(p), digest, checked=True)
 
 
-def _parse_csv(p: Path, raw: bytes, digest: str) -> TableRows:
+def csv_records(p: Path, raw: bytes) -> tuple[list[str] | None, list[tuple[int, list[str]]]]:
+    """A CSV file's header and data rows, blank and ``#`` comment lines skipped.
+
+    Parameters
+    ----------
+    p : Path
+        The file (named in messages).
+    raw : bytes
+        Its content (UTF-8, a byte-order mark allowed).
+
+    Returns
+    -------
+    header : list of str or None
+        The first row that is not blank or a comment, as written (None: no such row).
+    records : list of (int, list of str)
+        The rows after it with their line numbers in the file.
+
+    Raises
+    ------
+    DataError
+        The content is not UTF-8 text.
+    """
     try:
         text = raw.decode("utf-8-sig")
     except UnicodeDecodeError as exc:
@@ -313,6 +334,11 @@ def _parse_csv(p: Path, raw: bytes, digest: str) -> TableRows:
             header = line
         else:
             records.append((reader.line_num, line))
+    return header, records
+
+
+def _parse_csv(p: Path, raw: bytes, digest: str) -> TableRows:
+    header, records = csv_records(p, raw)
     if header is None:
         raise DataError(f"{p}: the table is empty (expected a header row: {_ALLOWED})")
     base, cols, circuits = _columns(header, str(p))
