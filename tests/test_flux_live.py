@@ -182,7 +182,7 @@ def test_build_source_part_files_are_unique_per_call(tmp_path: Path,
         outs.append(cmd[cmd.index("-o") + 1])
         return subprocess.CompletedProcess(cmd, 1, "", "error: boom")
 
-    monkeypatch.setattr(compiled_mod.subprocess, "run", fake)
+    monkeypatch.setattr(compiled_mod, "run_compiler", fake)
     for _ in range(2):
         with pytest.raises(RuntimeError, match="boom"):
             compiled_mod.build_source("x", b"int x;", cache=tmp_path)
