@@ -41,7 +41,7 @@ from ..errors import CompilationWarning, SolverError
 
 __all__ = ["COMPILE_MODES", "DEFAULT_FLAGS", "BoundCall", "build_source", "cache_directory",
            "compile_function",
-           "compile_library", "find_compiler", "run_compiler"]
+           "compile_library", "compile_linked", "find_compiler", "run_compiler"]
 
 COMPILE_MODES = ("auto", "always", "never")
 #: Default C compiler flags of the compiled kernels (optimised, position-independent shared
@@ -179,6 +179,38 @@ def _build(name: str, funcs: list[ca.Function], cache: Path, flags: tuple[str, .
     with tempfile.TemporaryDirectory(prefix="maglevkit-cg-") as tmp:
         code = _generate(name, funcs, tmp)
     return build_source(name, code, cache=cache, flags=flags)
+
+
+def compile_linked(f: ca.Function, library: Path, *,
+                   flags: Sequence[str] = DEFAULT_FLAGS) -> ca.Function | None:
+    """``f`` as generated C linked against the shared ``library`` that defines the external
+    functions it calls (e.g. the magnet bank's SIMD-lane step), or None where that fails.
+
+    The library is loaded from where it lies (rpath), so it must stay there; the result is
+    kept in the default cache directory like the library itself.
+
+    Parameters
+    ----------
+    f : casadi.Function
+        The function; its name names the compiled library.
+    library : Path
+        The shared library ``f``'s external calls resolve to.
+    flags : sequence of str
+        Compiler flags before the linker options (default :data:`DEFAULT_FLAGS`).
+
+    Returns
+    -------
+    casadi.Function or None
+        The compiled function; None when no compiler is found or compiling or linking
+        fails (e.g. a linker without ``--no-as-needed``): the caller keeps its own path.
+    """
+    try:
+        funcs, _ = compile_library(f.name(), [f], mode="always", cache_dir=None,
+                                   flags=(*flags, "-Wl,--no-as-needed", str(library),
+                                          f"-Wl,-rpath,{library.parent}"))
+    except SolverError:
+        return None
+    return funcs[0]
 
 
 def build_source(name: str, code: bytes, *, cache: Path, flags: Sequence[str] = DEFAULT_FLAGS) -> Path:

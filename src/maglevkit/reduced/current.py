@@ -48,7 +48,7 @@ import casadi as ca
 import numpy as np
 
 from ..errors import InputError, OutOfRangeError, SolverError
-from ..models.compiled import COMPILE_MODES, DEFAULT_FLAGS, BoundCall, compile_library
+from ..models.compiled import COMPILE_MODES, DEFAULT_FLAGS, BoundCall, compile_linked
 from ..models.inputs import check_initial_choice, check_step, per_name_values, simulation_inputs
 from ..validation import flag, real_array, renamed_keywords
 from .core import (
@@ -1310,16 +1310,11 @@ class _TableStep:
         """This function as generated C linked against the lane library that holds the
         kernel (CasADi's virtual machine spends three times the kernel's own time calling
         it); the same operations, no contraction (bit-identical, tested)."""
-        lib = self.library
-        assert lib is not None
-        try:
-            f = compile_library(self.function.name(), [self.function], mode="always",
-                                cache_dir=None, flags=(
-                                    *DEFAULT_FLAGS, "-ffp-contract=off", "-Wl,--no-as-needed",
-                                    str(lib), f"-Wl,-rpath,{lib.parent}"))[0][0]
-        except SolverError:                # e.g. a linker without these options: as it is
-            return
-        self._bind(f)
+        assert self.library is not None
+        f = compile_linked(self.function, self.library,
+                           flags=(*DEFAULT_FLAGS, "-ffp-contract=off"))
+        if f is not None:                  # else (e.g. a linker without these options) as it is
+            self._bind(f)
 
     def __call__(self, i: np.ndarray, g: np.ndarray, u: np.ndarray, gd: np.ndarray,
                  h: float) -> tuple[np.ndarray, ...] | None:

@@ -1307,7 +1307,7 @@ class VehicleModel:
     def _compiled_step(self, dt: float) -> tuple[Any, Any, int]:
         """(compiled block function, layout, steps per block), built and compiled (or
         loaded from the disk cache) once per ``dt``."""
-        from ..models.compiled import DEFAULT_FLAGS, compile_function, compile_library
+        from ..models.compiled import compile_function, compile_linked
 
         hit = self._step_functions.get(dt)
         if hit is None:
@@ -1319,15 +1319,8 @@ class VehicleModel:
                 # directory (the bank above is built without a cache_dir)
                 ext, lib = lanes
                 vs = self._step_function(dt, ext)
-                bf = vs.block_function
-                try:
-                    funcs, _ = compile_library(
-                        bf.name(), [bf], mode="always", cache_dir=None,
-                        flags=(*DEFAULT_FLAGS, "-Wl,--no-as-needed", str(lib),
-                               f"-Wl,-rpath,{lib.parent}"))
-                    f = funcs[0]
-                except SolverError:          # e.g. a linker without these options:
-                    f = None                 # the CasADi-generated bank step below
+                # None (e.g. a linker without these options): the CasADi bank step below
+                f = compile_linked(vs.block_function, lib)
             if f is None:
                 vs = self.step_function(dt)
                 f, _ = compile_function(vs.block_function, mode=self.bank.compiled_mode)
