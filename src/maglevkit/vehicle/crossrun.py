@@ -87,6 +87,9 @@ SCENARIO_PLAUSIBLE: dict[str, Plausible] = {
     "lateral.height_m": Plausible(1e-5, 0.01, "m"),
 }
 
+#: Largest superelevation (cant) of a curve [rad] a run accepts (17.19 deg).
+SUPERELEVATION_LIMIT_RAD = 0.3
+
 
 @dataclass(frozen=True)
 class TransitionCurve:
@@ -123,13 +126,12 @@ class TransitionCurve:
                 and (math.isinf(r) or (math.isfinite(r) and abs(r) >= 1.0))):
             raise InputError(f"curve radius_m = {r!r} m: expected |R| >= 1 m or inf")
         c = real_number(self.superelevation_rad, "curve superelevation_rad", "rad")
-        if not abs(c) < 0.3:
-            raise InputError(f"curve superelevation {math.degrees(c):.6g} deg "
-                             f"(superelevation_rad = {c:.6g} rad): must be in (-17.19, 17.19) "
-                             "deg, i.e. (-0.3, 0.3) rad"
+        if not abs(c) < SUPERELEVATION_LIMIT_RAD:
+            # a value that would be a valid angle in degrees: probably typed as such
+            raise InputError(_superelevation_range(c)
                              + ("; sweep files and the Python API take it in rad (12 deg = "
                                 "0.2094 rad), --curve in deg: degrees typed as radians?"
-                                if abs(c) < 17.19 else ""))
+                                if abs(c) < math.degrees(SUPERELEVATION_LIMIT_RAD) else ""))
         real_number(self.transition_m, "curve transition_m", "m", nonnegative=True)
         real_number(self.start_m, "curve start_m", "m", nonnegative=True)
         check_plausible({"curve": {"radius_m": r}}, SCENARIO_PLAUSIBLE, stacklevel=4)
@@ -273,12 +275,21 @@ def parse_curve(text: str) -> TransitionCurve:
     if len(vals) not in (3, 4):
         raise InputError(f"--curve = {text!r}: expected RADIUS_M:SUPERELEVATION_DEG:"
                          "TRANSITION_M[:START_M], e.g. 4000:12:300")
+    c = math.radians(vals[1])
+    if math.isfinite(c) and not abs(c) < SUPERELEVATION_LIMIT_RAD:    # without the files' hint
+        raise InputError(f"--curve = {text!r}: {_superelevation_range(c)}")
     try:
-        return TransitionCurve(vals[0], math.radians(vals[1]), vals[2],
-                               vals[3] if len(vals) == 4 else 0.0)
+        return TransitionCurve(vals[0], c, vals[2], vals[3] if len(vals) == 4 else 0.0)
     except InputError as exc:
-        # the degrees-as-radians hint is for files and the API: --curve takes degrees
-        raise InputError(f"--curve = {text!r}: {str(exc).split('; sweep files')[0]}") from None
+        raise InputError(f"--curve = {text!r}: {exc}") from None
+
+
+def _superelevation_range(c: float) -> str:
+    """The out-of-range message of a superelevation ``c`` [rad], in both units."""
+    lim, lim_deg = SUPERELEVATION_LIMIT_RAD, math.degrees(SUPERELEVATION_LIMIT_RAD)
+    return (f"curve superelevation {math.degrees(c):.6g} deg (superelevation_rad = "
+            f"{c:.6g} rad): must be in ({-lim_deg:.2f}, {lim_deg:.2f}) deg, i.e. "
+            f"({-lim:g}, {lim:g}) rad")
 
 
 def parse_crosswind(text: str) -> Crosswind:
@@ -1042,8 +1053,7 @@ class CrossSectionModel:
         sys.stderr.flush()
 
     def _compiled_block(self, dt: float) -> dict[str, Any]:
-        from ..errors import SolverError
-        from ..models.compiled import DEFAULT_FLAGS, compile_function, compile_library
+        from ..models.compiled import compile_function, compile_linked
 
         cache: dict[float, dict[str, Any]] = self._compiled_cache
         hit = cache.get(dt)
@@ -1051,15 +1061,7 @@ class CrossSectionModel:
             hit = self.compiled_step(dt)
             f = None
             if hit["lanes"] is not None:
-                lib = hit["lanes"][1]
-                try:
-                    funcs, _ = compile_library(
-                        hit["block"].name(), [hit["block"]], mode="always", cache_dir=None,
-                        flags=(*DEFAULT_FLAGS, "-Wl,--no-as-needed", str(lib),
-                               f"-Wl,-rpath,{lib.parent}"))
-                    f = funcs[0]
-                except SolverError:
-                    f = None
+                f = compile_linked(hit["block"], hit["lanes"][1])
             if f is None:
                 if hit["lanes"] is not None:      # rebuild on the bank's CasADi step
                     hit = self.compiled_step(dt, lanes=False)
