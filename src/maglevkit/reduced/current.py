@@ -810,7 +810,7 @@ class CurrentModel:
         """
         gaps, currents, time = gaps_m, currents_A, time_s
         g = _per_gap(gaps, self.gap_names, positive=True)
-        i = _per_circuit(currents, self.circuit_names, "currents")
+        i = per_name_values(currents, self.circuit_names, "currents", "A")
         if not math.isfinite(time):
             raise InputError(f"time = {time!r} must be finite")
         self._check_range(self.substitute_gaps(g)[None, :], i[None, :], np.array([time]))
@@ -847,7 +847,7 @@ class CurrentModel:
             Voltages of the wrong count or names, or not finite.
         """
         u = (self.resistance_ohm * state.inductor_currents_A if voltages_V is None
-             else _per_circuit(voltages_V, self.circuit_names, "voltages"))
+             else per_name_values(voltages_V, self.circuit_names, "voltages", "V"))
         x = np.concatenate([state.inductor_currents_A, self.substitute_gaps(state.gaps_m),
                             self._eddy_state(state)])
         coil, fc, _ = (np.asarray(v).ravel() for v in self._outs(x, u))
@@ -882,9 +882,9 @@ class CurrentModel:
             If the operating point lies outside the maps (or warns with ``extrapolate``).
         """
         g = _per_gap(gap_m, self.gap_names, positive=True)
-        il = _per_circuit(current_A, self.circuit_names, "current_A")
+        il = per_name_values(current_A, self.circuit_names, "current_A", "A")
         u = (self.resistance_ohm * il if voltage_V is None
-             else _per_circuit(voltage_V, self.circuit_names, "voltage_V"))
+             else per_name_values(voltage_V, self.circuit_names, "voltage_V", "V"))
         gd = _per_gap(gap_rate_m_per_s, self.gap_names, positive=False)
         s, sd = self.substitute_gaps(g), self.substitute_gaps(gd)
         self._check_range(s[None, :], il[None, :], None)
@@ -977,7 +977,7 @@ class CurrentModel:
             if done is not None:
                 return done
         dt = check_step(dt)
-        u = _per_circuit(voltages, self.circuit_names, "voltages")
+        u = per_name_values(voltages, self.circuit_names, "voltages", "V")
         g = state.gaps_m if gaps is None else _per_gap(gaps, self.gap_names, positive=True)
         gd = _per_gap(gap_rates, self.gap_names, positive=False)
         if (g + gd * dt <= 0.0).any():
@@ -1068,8 +1068,8 @@ class CurrentModel:
             dt = check_step(dt)
         shape_c, shape_g = self._input_shapes
         u = (voltages if type(voltages) is np.ndarray and voltages.dtype == np.float64
-             and voltages.shape == shape_c else _per_circuit(voltages, self.circuit_names,
-                                                             "voltages"))
+             and voltages.shape == shape_c
+             else per_name_values(voltages, self.circuit_names, "voltages", "V"))
         g = (state.gaps_m if gaps is None else gaps if type(gaps) is np.ndarray
              and gaps.dtype == np.float64 and gaps.shape == shape_g
              else _per_gap(gaps, self.gap_names, positive=True))
@@ -1200,8 +1200,9 @@ class CurrentModel:
             i0 = initial_state.inductor_currents_A
             e0 = self._eddy_state(initial_state)
         else:
-            i0 = _per_circuit(u[0] / self.resistance_ohm if initial_currents is None
-                              else initial_currents, self.circuit_names, "initial_currents")
+            i0 = per_name_values(u[0] / self.resistance_ohm if initial_currents is None
+                                 else initial_currents, self.circuit_names, "initial_currents",
+                                 "A")
             e0 = np.zeros(self.n_circuits * self._n_e)    # steady state: I_k = 0
         s = self.substitute_gaps(g)
         sd = self.substitute_gaps(secant)
@@ -1482,15 +1483,6 @@ def _eddy_network(maps: CharacteristicMaps, m: int) -> tuple[np.ndarray, np.ndar
 def _last_line(text: str) -> str:
     lines = [ln for ln in text.splitlines() if ln.strip()]
     return lines[-1] if lines else text
-
-
-_UNITS = {"voltages": "V", "voltage_V": "V", "currents": "A", "current_A": "A",
-          "initial_currents": "A"}
-
-
-def _per_circuit(value: Any, names: tuple[str, ...], what: str) -> np.ndarray:
-    """One finite value per circuit (:func:`~maglevkit.models.inputs.per_name_values`)."""
-    return per_name_values(value, names, what, _UNITS.get(what, ""))
 
 
 def _per_gap(value: Any, names: tuple[str, ...], *, positive: bool) -> np.ndarray:
