@@ -64,6 +64,14 @@ GUESS_TOLERANCE = 1e-9
 #: 2-3 steps to a step below 1e-10 A; 6 leave margin, each costs ~0.1 us)
 _NEWTON_STEPS = 6
 
+#: The compiled target counts as converged when its residual is below this fraction of the
+#: target current (at least 1 A): 1e-10 relative, a few Newton steps past rounding
+_TARGET_RESIDUAL = 1e-10
+
+#: Relative slack on the voltage limit before a QP solution counts as violating it (the
+#: QP solvers' tolerance; within it the voltage is clipped to the limit)
+_LIMIT_SLACK = 1e-6
+
 
 @contextlib.contextmanager
 def _quiet_stdout() -> Iterator[None]:
@@ -466,7 +474,7 @@ class RealTimeMPC(OffsetFreeMPC):
         st = self._status
         nxd = self.model.nx + self.model.nd
         i_t = float(self._p_arr[nxd])
-        if not abs(float(st[0])) < 1e-10 * max(1.0, abs(i_t)):    # also for NaN
+        if not abs(float(st[0])) < _TARGET_RESIDUAL * max(1.0, abs(i_t)):    # also NaN
             self._target_fallback(measurement, prep)
         if not math.isfinite(float(st[1])):
             raise SolverError("the extended Kalman filter diverged", time=measurement.time_s,
@@ -487,7 +495,7 @@ class RealTimeMPC(OffsetFreeMPC):
         # dU_0 = z[:nu] (the E rows of U_0 select it): u = (w + dw)[U_0] * scale
         np.add(self._par[1 - k][2][nx:nx + nu], z[:nu], out=u)
         u *= self._su
-        if float(np.abs(u).max()) > self._ulim * (1 + 1e-6):
+        if float(np.abs(u).max()) > self._ulim * (1 + _LIMIT_SLACK):
             raise SolverError("the MPC solution violates the voltage limit",
                               time=measurement.time_s, state={"u": u.copy()},
                               reason="QP tolerance too loose")
@@ -816,8 +824,9 @@ class RealTimeMPCBatch:
             nx = gd["nx"]
             ug = (b[2][:, nx] + z[:, 0]) * gd["su"]
             lim = gd["ulim"]
-            if not (np.abs(ug) <= lim * (1 + 1e-6)).all():        # also for NaN
-                r = int(np.flatnonzero(~(np.abs(ug) <= lim * (1 + 1e-6)))[0])
+            ok = np.abs(ug) <= lim * (1 + _LIMIT_SLACK)             # False for NaN
+            if not ok.all():
+                r = int(np.flatnonzero(~ok)[0])
                 raise SolverError("the MPC solution violates the voltage limit", time=time_s,
                                   state={"controller": int(idx[r]), "u": float(ug[r])},
                                   reason="QP tolerance too loose")
@@ -839,7 +848,7 @@ class RealTimeMPCBatch:
         for gd in self._gdata:
             st, p, sh = gd["out"][6], gd["out"][5], gd["shared"]
             nx, nxd = gd["nx"], gd["nx"] + gd["nd"]
-            lim = 1e-10 * np.maximum(1.0, np.abs(p[:, nxd]))
+            lim = _TARGET_RESIDUAL * np.maximum(1.0, np.abs(p[:, nxd]))
             bad = ~(np.abs(st[:, 0]) < lim)                 # also for NaN
             for r in np.flatnonzero(bad).tolist():
                 j = int(gd["idx"][r])
