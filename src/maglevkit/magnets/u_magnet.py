@@ -53,6 +53,26 @@ Estimates of the secondary flux paths (Roters' method, docs/sources.md sec. 3):
   cell link that carries an eddy element (the rail's flux along its length is the
   cells' own, so ``"ladder_split"`` is refused there).
 
+``flux_paths = "split"`` (lumped network only; default ``"standard"``, the paths above):
+three changes of the air paths, each from geometry, chosen by the 2-D FEM's region fluxes
+(docs/validation_fem.md, "Calibration on the split network"), no value fitted to it:
+
+* the fringe at each pole edge in Roters' decomposition for a pole facing a plane: a
+  quarter cylinder of radius ``s`` beside the edge, ``0.52 mu0 w`` (gap-independent, its own
+  branch ``edge_cylinders_*`` from the pole tip to the rail, a leakage permeance for the
+  calibration factors), and outside it the quarter annulus from the flank below the coil,
+  ``(2 mu0 w/pi) ln(1 + r/s)`` (in the air gap element, ``r`` as above).  The FEM carries
+  1.6-2.1 times the standard fringe's flux across the gap beside the pole, all of it from
+  the flank below the coil;
+* no window-flank quarter circles: the window's air is counted once, by the strips across
+  it (the FEM's leg-to-leg leakage from the coil region is 0.27 mWb per leg at 20 mm /
+  5 A, the standard network's flank and window paths 0.46);
+* the air through the coil's cross-section beside every leg segment (``coil_air_*``),
+  in parallel with the segment's iron and carrying its turns, linked width
+  ``t_c - t_c^2/(3 w_w)`` over both flanks (the TR09 split network's law,
+  :mod:`maglevkit.magnets.levitation`); the segment's eddy element sits in series with
+  both (node ``E_*``), so ``eddy_model = "lumped"`` only.
+
 ``discretisation = "grid"`` replaces the legs, yoke and rail by grids of iron cells
 (:func:`_build_grid`); its air is the Roters tubes above attached to the cells
 (``air_model = "tubes"``, default) or a cell network as well (``air_model = "cells"``,
@@ -121,7 +141,14 @@ MAGNET_SCHEMA = {
     "air_model": Schema(str, required=False, default="tubes"),
     "air_gap_rows": Schema(int, required=False, default=4, unit="-"),
     "air_margin": Schema(float, required=False, default=0.2, unit="m"),
+    "flux_paths": Schema(str, required=False, default="standard"),
 }
+FLUX_PATHS = ("standard", "split")
+"""Air paths of the lumped network: ``"standard"`` (default) or ``"split"`` (module
+docstring)."""
+QUARTER_CYLINDER = 0.52
+"""Roters' quarter cylinder, ``G = 0.52 mu0 l`` (docs/sources.md sec. 3): at the leg ends
+(``end_effects``) and, with ``flux_paths = "split"``, beside each pole edge facing the rail."""
 DISCRETISATIONS = ("lumped", "grid")
 AIR_MODELS = ("tubes", "cells")
 RAIL_SCHEMA = {
@@ -183,13 +210,22 @@ def build_u_magnet(params: Mapping[str, Any], materials: Mapping[str, Material],
                                  f"one of {', '.join(map(repr, DISCRETISATIONS))}")
     given = set(params["magnet"])
     only = {"lumped": ("grid_columns", "coil_air", "air_model", "air_gap_rows", "air_margin"),
-            "grid": ("coil_segments",)}
+            "grid": ("coil_segments", "flux_paths")}
     for key in only[m["discretisation"]]:
         if key in given:
             raise ParameterFileError(
                 f"[magnet] {key} does not apply to discretisation = {m['discretisation']!r} "
                 f"(it is a key of the {'grid' if m['discretisation'] == 'lumped' else 'lumped'}"
                 " network); remove it or change the discretisation")
+    if m["flux_paths"] not in FLUX_PATHS:
+        raise ParameterFileError(f"[magnet] flux_paths = {m['flux_paths']!r}: expected one of "
+                                 f"{', '.join(map(repr, FLUX_PATHS))}")
+    if (m["flux_paths"] == "split" and options.eddy_currents
+            and options.eddy_model != "lumped"):
+        raise ParameterFileError(
+            f"[magnet] flux_paths = \"split\" has lumped eddy elements only (eddy_model "
+            f"{options.eddy_model!r} requested): use eddy_model = \"lumped\" or "
+            "flux_paths = \"standard\"")
     if m["air_model"] not in AIR_MODELS:
         raise ParameterFileError(f"[magnet] air_model = {m['air_model']!r}: expected one of "
                                  f"{', '.join(map(repr, AIR_MODELS))}")
@@ -308,9 +344,17 @@ def lumped_network(m: Mapping[str, Any], r: Mapping[str, Any], core: Material,
         if m["end_effects"]:
             edges += [(wp, gcp), (wp, gcp)]               # the two depth-wise ends
 
+    split = m["flux_paths"] == "split"
+
+    # "split": Roters' decomposition of an edge's fringe towards the rail: a quarter
+    # cylinder of radius s beside the edge (gap-independent, its own branch below) and the
+    # quarter annulus outside it from the flank below the coil, (2 mu0 w/pi) ln(1 + r/s),
+    # which is the AirGap's fringe form (2 mu0 w/pi) ln(1 + pi r'/(2 s)) with r' = 2 r/pi
+    fringes = tuple((w, 2.0 * radius / math.pi) for w, radius in edges) if split else tuple(edges)
+
     def gap(name: str) -> AirGap:
         return AirGap(name, gap_input=name.removeprefix("gap_"), pole_area=area,
-                      fringe_edges=tuple(edges))
+                      fringe_edges=fringes)
 
     leg_len = hl + 0.5 * ty
     rail_len = c + r["thickness"]
@@ -358,6 +402,12 @@ def lumped_network(m: Mapping[str, Any], r: Mapping[str, Any], core: Material,
         rho_core = resistivity(m["resistivity"], core, "magnet")
         rho_rail = resistivity(r["resistivity"], rail_mat, "rail")
 
+    # "split": linked air width beside a leg in the coil's cross-section, both flanks: the
+    # window flank's harmonic potential D (y/l)(1 - x/a) (a = half the window) weighted by
+    # the linked share 1 - x/t_c of the turns, t_c/2 - t_c^2/(6a); the outer flank faces
+    # open air (a -> oo): t_c/2
+    tc = m["coil_thickness"]
+    coil_air_width = tc - tc * tc / (3.0 * ww)
     left = ["PL", *(f"L{k + 1}" for k in range(K)), "YL"]
     right = ["PR", *(f"R{k + 1}" for k in range(K)), "YR"]
     branches: list[Branch] = []
@@ -369,17 +419,38 @@ def lumped_network(m: Mapping[str, Any], r: Mapping[str, Any], core: Material,
             # every segment carries the eddy currents of its own length: all of the
             # winding sits on solid (or laminated) iron, so no flux linked by the coil can
             # change without inducing them
-            branches += part(name, start, end_, IronPath(f"iron_{name}", seg_len[j], area, core),
-                             wp)
+            iron = IronPath(f"iron_{name}", seg_len[j], area, core)
+            if split and options.leakage:
+                # "split": the air through the coil's cross-section beside the segment, in
+                # parallel with the iron and carrying the segment's turns, so it sees the
+                # iron's own drop; the segment's eddy element in series with both (node E),
+                # as in the TR09 split network (magnets/levitation.py)
+                air = f"coil_air_{side}_{j}"
+                mid = f"E_{side}_{j}" if options.eddy_currents else end_
+                branches += [Branch(name, start, mid, (iron,)), Branch(air, start, mid, (
+                    LeakagePermeance(air, MU0 * d * coil_air_width / seg_len[j]),))]
+                if options.eddy_currents:
+                    branches.append(Branch(f"eddy_{name}", mid, end_,
+                                           eddy(f"eddy_{name}", wp, seg_len[j], rho_core, False)))
+                coils += [Coil(name, seg_turns[j], pole=side, pole_turns=half),
+                          Coil(air, seg_turns[j], pole=side, pole_turns=half)]
+                continue
+            branches += part(name, start, end_, iron, wp)
             coils.append(Coil(name, seg_turns[j], pole=side))
     branches += [Branch("gap_left", "PL", "RL", (gap("gap_left"),))]
     branches += part("rail", "RL", "RR",
                      IronPath("iron_rail", rail_len, r["thickness"] * d, rail_mat),
                      r["thickness"], solid=True)
     branches += [Branch("gap_right", "RR", "PR", (gap("gap_right"),))]
+    if split and edges:
+        # the edges' quarter cylinders (Roters: 0.52 mu0 w each), pole face to rail
+        g_cyl = QUARTER_CYLINDER * MU0 * sum(w for w, _ in edges)
+        for side, pair in (("left", ("PL", "RL")), ("right", ("RR", "PR"))):
+            branches.append(Branch(f"edge_cylinders_{side}", *pair, (
+                LeakagePermeance(f"edge_cylinders_{side}", g_cyl),)))
     branches += part("yoke", "YR", "YL", IronPath("iron_yoke", c, ty * d, core), ty)
     if options.leakage:
-        ends = 4.0 * 0.52 * MU0 if m["end_effects"] else 0.0   # quarter cylinders, leg ends
+        ends = 4.0 * QUARTER_CYLINDER * MU0 if m["end_effects"] else 0.0   # leg ends
         branches.append(Branch("leakage", "PL", "PR", (
             LeakagePermeance("leakage_window", MU0 * d * gcp / ww + ends * gcp),)))
         for k in range(K):
@@ -389,7 +460,9 @@ def lumped_network(m: Mapping[str, Any], r: Mapping[str, Any], core: Material,
         for k, y in enumerate(y_nodes):
             y0, y1 = y - 0.5 * h, y + 0.5 * h
             g = LeakagePermeance.quarter_hollow_cylinder("o", widths, y0, h).value   # outer
-            if symbolic(y0) or symbolic(ww):        # design: the clipped window strip
+            if split:
+                pass     # the window's air is the strips across it (module docstring)
+            elif symbolic(y0) or symbolic(ww):        # design: the clipped window strip
                 g += LeakagePermeance.quarter_hollow_cylinder(
                     "i", d, y0, ca.fmax(0.0, ca.fmin(y1, 0.5 * ww) - y0)).value
             elif y0 < 0.5 * ww:                                                     # window
