@@ -29,10 +29,11 @@ against the cross-section FEM of benchmarks/fem_guidance.py).  The legs' and yok
 
 from __future__ import annotations
 
+import math
 from collections.abc import Mapping
 from typing import Any
 
-import math
+import numpy as np
 
 from ..circuit.elements import (
     AirGap,
@@ -42,8 +43,6 @@ from ..circuit.elements import (
     IronPath,
     LeakagePermeance,
 )
-import numpy as np
-
 from ..circuit.network import Branch, Circuit, Coil, Network
 from ..errors import ParameterFileError
 from ..materials import MU0, Material
