@@ -8,6 +8,11 @@ its measured errors here without rerunning the FEM.  The measured errors are lar
 network lacks the leakage around the coil's back side behind the yoke (docs/validation_fem.md,
 "Guidance magnet"); the windows pin them so that a change of the network or of the record
 has to re-measure them.
+
+``flux_paths = "split"`` (guidance26) adds the missing paths from geometry (air behind the
+yoke, the legs' window leakage and top fringe, the coil's cross-section beside the yoke);
+it is held to its own measured errors, on the grid and on five points solved after the
+paths were chosen (held out).
 """
 
 from __future__ import annotations
@@ -89,3 +94,53 @@ def test_recorded_fem_is_converged_and_balanced() -> None:
         # exactly; with magnitudes this holds only if every piece returns (none goes up
         # beside the yoke): 0.2 % covers the probes' interpolation
         assert returned == pytest.approx(f["yoke"], rel=2e-3)
+
+
+# "split": (network - FEM)/FEM [%], force, flux linkage, differential inductance; the
+# grid, then the held-out points (solved after the paths were chosen).  Same 0.3 pp margin.
+MEASURED_SPLIT = {
+    (6.0, 10.0): (-7.0, -3.9, -3.7),
+    (6.0, 32.0): (-4.3, -2.5, -1.2),
+    (6.0, 50.0): (-5.1, -2.4, -2.3),
+    (6.0, 80.0): (-6.8, -2.4, -2.6),
+    (10.0, 10.0): (-4.9, -3.3, -3.2),
+    (10.0, 32.0): (-3.3, -2.5, -0.3),
+    (10.0, 50.0): (-3.0, -2.1, -1.4),
+    (10.0, 80.0): (-4.6, -2.0, -2.5),
+    (20.0, 10.0): (-0.7, -3.3, -3.3),
+    (20.0, 32.0): (-0.4, -3.1, -2.5),
+    (20.0, 50.0): (+1.1, -2.4, +1.5),
+    (20.0, 80.0): (+1.6, -1.6, -0.0),
+}
+HELD_OUT_SPLIT = {
+    (8.0, 20.0): (-5.3, -3.2, -2.2),
+    (8.0, 65.0): (-4.9, -2.2, -2.4),
+    (15.0, 20.0): (-2.7, -3.1, -2.9),
+    (15.0, 65.0): (-0.9, -1.8, -0.7),
+    (12.0, 100.0): (-4.5, -1.9, -2.5),
+}
+
+
+@pytest.mark.slow
+def test_split_network_against_recorded_fem() -> None:
+    fem = _fem()
+    mag, data = fem.network_magnet("split"), fem.load()
+    rows = {(r["s_mm"], r["I_A"]): r for r in fem.compare(mag, data)}
+    rows.update({(r["s_mm"], r["I_A"]): r for r in fem.compare(mag, data, points=fem.HELD_OUT)})
+    want = {**MEASURED_SPLIT, **HELD_OUT_SPLIT}
+    assert set(want) == set(rows)
+    for k, (ef, epsi, el) in want.items():
+        r = rows[k]
+        for name, got, w in (("F", r["eF"], ef), ("psi", r["epsi"], epsi), ("L", r["eL"], el)):
+            assert w - MARGIN <= got <= w + MARGIN, (k, name, got)
+        # the aims reached everywhere, into saturation (100 A): L within 5 %, psi within 4 %
+        # (3 % is missed by up to 0.9 pp at 10 A and 20 A, where the linear iron leaves only
+        # the air paths: a uniform -3 % offset of the leakage estimate)
+        assert abs(r["eL"]) < 5.0 and abs(r["epsi"]) < 4.0, k
+        # the force stays low by up to 7 % at 6-10 mm (not within the 3 % aim)
+        assert -7.5 < r["eF"] < 2.0, k
+    # the air behind the yoke now carries what the field returns behind it: within 15 %
+    # at every grid point (the plate model of the back face, no factor)
+    for k in MEASURED_SPLIT:
+        f, n = rows[k]["flux_fem"], rows[k]["flux_net"]
+        assert n["back"] == pytest.approx(f["behind"], rel=0.15), k
