@@ -97,27 +97,33 @@ def test_recorded_fem_is_converged_and_balanced() -> None:
 
 
 # "split": (network - FEM)/FEM [%], force, flux linkage, differential inductance; the
-# grid, then the held-out points (solved after the paths were chosen).  Same 0.3 pp margin.
+# grid, then the held-out points: the first five solved after the air paths were fixed,
+# the last five after the iron members' lengths were too.  Same 0.3 pp margin.
 MEASURED_SPLIT = {
-    (6.0, 10.0): (-7.0, -3.9, -3.7),
-    (6.0, 32.0): (-4.3, -2.5, -1.2),
-    (6.0, 50.0): (-5.1, -2.4, -2.3),
-    (6.0, 80.0): (-6.8, -2.4, -2.6),
-    (10.0, 10.0): (-4.9, -3.3, -3.2),
-    (10.0, 32.0): (-3.3, -2.5, -0.3),
-    (10.0, 50.0): (-3.0, -2.1, -1.4),
-    (10.0, 80.0): (-4.6, -2.0, -2.5),
-    (20.0, 10.0): (-0.7, -3.3, -3.3),
-    (20.0, 32.0): (-0.4, -3.1, -2.5),
-    (20.0, 50.0): (+1.1, -2.4, +1.5),
-    (20.0, 80.0): (+1.6, -1.6, -0.0),
+    (6.0, 10.0): (-3.1, -2.1, -1.9),
+    (6.0, 32.0): (-1.4, -1.3, -2.7),
+    (6.0, 50.0): (-2.6, -1.4, -2.6),
+    (6.0, 80.0): (-4.2, -1.5, -2.3),
+    (10.0, 10.0): (-1.9, -2.0, -1.9),
+    (10.0, 32.0): (-0.4, -1.3, +0.2),
+    (10.0, 50.0): (-0.7, -1.2, -1.6),
+    (10.0, 80.0): (-2.2, -1.2, -1.9),
+    (20.0, 10.0): (+1.3, -2.5, -2.5),
+    (20.0, 32.0): (+1.7, -2.3, -1.7),
+    (20.0, 50.0): (+3.2, -1.6, +1.9),
+    (20.0, 80.0): (+3.6, -0.9, +0.6),
 }
 HELD_OUT_SPLIT = {
-    (8.0, 20.0): (-5.3, -3.2, -2.2),
-    (8.0, 65.0): (-4.9, -2.2, -2.4),
-    (15.0, 20.0): (-2.7, -3.1, -2.9),
-    (15.0, 65.0): (-0.9, -1.8, -0.7),
-    (12.0, 100.0): (-4.5, -1.9, -2.5),
+    (8.0, 20.0): (-1.9, -1.7, -0.7),
+    (8.0, 65.0): (-2.5, -1.3, -2.2),
+    (15.0, 20.0): (-0.3, -2.1, -1.9),
+    (15.0, 65.0): (+1.1, -1.0, -0.4),
+    (12.0, 100.0): (-2.1, -1.2, -1.8),
+    (7.0, 40.0): (-1.5, -1.3, -2.5),
+    (9.0, 90.0): (-3.2, -1.3, -2.1),
+    (13.0, 30.0): (-0.3, -1.7, -0.4),
+    (17.0, 60.0): (+2.3, -1.1, +0.8),
+    (18.0, 100.0): (+1.5, -0.9, -0.8),
 }
 
 
@@ -133,14 +139,14 @@ def test_split_network_against_recorded_fem() -> None:
         r = rows[k]
         for name, got, w in (("F", r["eF"], ef), ("psi", r["epsi"], epsi), ("L", r["eL"], el)):
             assert w - MARGIN <= got <= w + MARGIN, (k, name, got)
-        # the aims reached everywhere, into saturation (100 A): L within 5 %, psi within 4 %
-        # (3 % is missed by up to 0.9 pp at 10 A and 20 A, where the linear iron leaves only
-        # the air paths: a uniform -3 % offset of the leakage estimate)
-        assert abs(r["eL"]) < 5.0 and abs(r["epsi"]) < 4.0, k
-        # the force stays low by up to 7 % at 6-10 mm (not within the 3 % aim)
-        assert -7.5 < r["eF"] < 2.0, k
-    # the air behind the yoke now carries what the field returns behind it: within 15 %
-    # at every grid point (the plate model of the back face, no factor)
+        # the aims for flux linkage (3 %) and differential inductance (5 %) everywhere,
+        # 6-20 mm, 10-100 A, into deep saturation
+        assert abs(r["epsi"]) < 3.0 and abs(r["eL"]) < 5.0, k
+        # the force's 3 % aim is missed at 6 mm / 10 and 80 A, 9 mm / 90 A (low) and at
+        # 20 mm / 50-80 A (high): within 4.5 %
+        assert abs(r["eF"]) < 4.5, k
+    # the air behind the yoke carries what the field returns behind it: within 11 % at
+    # every grid point (the plate model of the back face, no factor; measured -10 ... +6 %)
     for k in MEASURED_SPLIT:
         f, n = rows[k]["flux_fem"], rows[k]["flux_net"]
-        assert n["back"] == pytest.approx(f["behind"], rel=0.15), k
+        assert n["back"] == pytest.approx(f["behind"], rel=0.11), k
