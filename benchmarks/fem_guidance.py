@@ -311,14 +311,10 @@ def load() -> dict:
 def network_magnet(flux_paths: str = "paper") -> mk.Magnet:
     """The network held against the FEM: ``tr-guidance`` with ``end_effects = false``
     (for ``"paper"`` the same network as the default, guidance.py), the given
-    ``flux_paths`` and no eddy elements."""
-    base = mk.load_magnet("tr-guidance", eddy_currents=False)
-    params = dict(base.parameters)
-    params["magnet"] = {**params["magnet"], "end_effects": False, "flux_paths": flux_paths}
-    params["provenance"] = {**params["provenance"],
-                            "magnet.end_effects": "[E] modelling choice: 2-D cut",
-                            "magnet.flux_paths": "[E] modelling choice"}
-    return mk.build_magnet(params, options=base.options, source=base.source)
+    ``flux_paths`` and no eddy elements (fem_tr09.cut_magnet, the same cut)."""
+    from fem_tr09 import cut_magnet
+
+    return cut_magnet("tr-guidance", flux_paths)
 
 
 def network(magnet: mk.Magnet, s: float, current: float) -> dict:

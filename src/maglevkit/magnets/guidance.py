@@ -12,6 +12,21 @@ into sections, one per electric circuit; the pole bars and the rail run through:
                 |
               leg_u_1 -- YU_1 --yoke_1 (coil)-- YL_1 -- leg_l_1 -- L_1 (lower pole bar)
 
+``flux_paths = "split"`` (``[magnet]`` key; default ``"paper"``, the network above) adds the
+paths a 2-D cross-section FEM showed missing (docs/validation_fem.md) and needs the coil's
+build ``coil_thickness``::
+
+      YU_i --leg_u_i_0-- MU_i --leg_u_i_1 (+ bar)-- U_i        legs in halves, bar its own
+       |  \               |  \__top_u_i__ RU_i                 member; top: leg top -> rail
+    back_i  yoke_i ||     leak_leg_i                          back: behind the yoke
+       |    coil_air_i    |                                    coil_air: the coil's own
+      YL_i --leg_l_i_1-- ML_i --leg_l_i_0 (+ bar)-- L_i        cross-section beside the yoke
+
+(with eddy currents the yoke's eddy element follows ``yoke_i`` and ``coil_air_i`` through
+a node ``EY_i``), and takes the iron members' lengths from where the flux runs: the rail
+``d`` long, the yoke-leg corners on their mean quarter circle.  Formulas: :func:`_split_paths`
+and docs/magnets.md.
+
 All yokes of one section are identical and in parallel magnetically with their coils in
 series: they are merged into one yoke branch of the summed cross-section whose coil has
 the turns of one yoke (exact for identical yokes: ``psi = n phi_total``).  Formulas and
