@@ -17,7 +17,7 @@ paths a 2-D cross-section FEM showed missing (docs/validation_fem.md) and needs 
 build ``coil_thickness``::
 
       YU_i --leg_u_i_0-- MU_i --leg_u_i_1 (+ bar)-- U_i        legs in halves, bar its own
-       |  \               |  \__top_u_i__ RU_i                 member; top: leg top -> rail
+       |                  +--top_u_i-- RU_i                    member; top: leg top -> rail
     back_i  yoke_i ||     leak_leg_i                          back: behind the yoke
        |    coil_air_i    |                                    coil_air: the coil's own
       YL_i --leg_l_i_1-- ML_i --leg_l_i_0 (+ bar)-- L_i        cross-section beside the yoke
