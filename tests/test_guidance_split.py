@@ -115,3 +115,20 @@ def test_flux_paths_and_coil_thickness_keys() -> None:
     with pytest.raises(mk.ParameterFileError,
                        match=r"coil_thickness = 0.07 m: .* < leg_length = 0.06 m"):
         mk.build_magnet(_params(flux_paths="split", coil_thickness=0.07))
+
+
+def test_split_maps_build() -> None:
+    """Maps (with the eddy elements after the yoke and its coil air, node EY) build, with
+    a finite positive eddy resistance per circuit, and their statics are the network's."""
+    from maglevkit.reduction.maps import build_maps
+
+    mag = mk.build_magnet(_params(flux_paths="split"))
+    maps = build_maps(mag, gaps_m=np.linspace(0.006, 0.012, 4), currents_A=[0.0, 20.0, 40.0, 60.0],
+                      executor=None, progress=False)
+    r_ec = maps.dataset["eddy_resistance_ohm"].values
+    assert np.all(np.isfinite(r_ec)) and np.all(r_ec > 0.0)
+    ref = mk.solve_statics(mag.with_options(eddy_currents=False), gaps_m=0.008,
+                           currents_A=[40.0, 40.0])
+    force = maps.dataset["force_N"].sel(gap=0.008, current=40.0).values
+    # the map's force per circuit at equal currents is the network's per-gap force
+    np.testing.assert_allclose(force, np.ravel(ref.pole_force_N), rtol=1e-9)
