@@ -366,9 +366,10 @@ def guidance_magnet_range(params: Mapping[str, Any]) -> PlausibleRange:
     """Plausible inputs: gaps up to the pole-bar height, currents up to
     :data:`~maglevkit.magnets.base.MAX_CURRENT_DENSITY_A_PER_M2` in one yoke's coil.
 
-    The file gives no coil build; it cannot exceed the leg length between yoke and pole
-    bar, so ``coil_height x leg_length`` bounds the coil's cross-section from above
-    (and the current bound is generous)."""
+    The coil's build cannot exceed the leg length between yoke and pole bar, so
+    ``coil_height x leg_length`` bounds the coil's cross-section from above (and the
+    current bound is generous).  ``coil_thickness`` (optional, for ``flux_paths =
+    "split"``) is not used here, so the bound is the same with and without it."""
     m = params["magnet"]
     return PlausibleRange.from_geometry(
         gap_m=float(m["pole_bar_height"]), gap_basis="the pole-bar height",
