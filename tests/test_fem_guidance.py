@@ -8,6 +8,11 @@ its measured errors here without rerunning the FEM.  The measured errors are lar
 network lacks the leakage around the coil's back side behind the yoke (docs/validation_fem.md,
 "Guidance magnet"); the windows pin them so that a change of the network or of the record
 has to re-measure them.
+
+``flux_paths = "split"`` (guidance26) adds the missing paths from geometry (air behind the
+yoke, the legs' window leakage and top fringe, the coil's cross-section beside the yoke);
+it is held to its own measured errors, on the grid and on five points solved after the
+paths were chosen (held out).
 """
 
 from __future__ import annotations
@@ -89,3 +94,59 @@ def test_recorded_fem_is_converged_and_balanced() -> None:
         # exactly; with magnitudes this holds only if every piece returns (none goes up
         # beside the yoke): 0.2 % covers the probes' interpolation
         assert returned == pytest.approx(f["yoke"], rel=2e-3)
+
+
+# "split": (network - FEM)/FEM [%], force, flux linkage, differential inductance; the
+# grid, then the held-out points: the first five solved after the air paths were fixed,
+# the last five after the iron members' lengths were too.  Same 0.3 pp margin.
+MEASURED_SPLIT = {
+    (6.0, 10.0): (-3.1, -2.1, -1.9),
+    (6.0, 32.0): (-1.4, -1.3, -2.7),
+    (6.0, 50.0): (-2.6, -1.4, -2.6),
+    (6.0, 80.0): (-4.2, -1.5, -2.3),
+    (10.0, 10.0): (-1.9, -2.0, -1.9),
+    (10.0, 32.0): (-0.4, -1.3, +0.2),
+    (10.0, 50.0): (-0.7, -1.2, -1.6),
+    (10.0, 80.0): (-2.2, -1.2, -1.9),
+    (20.0, 10.0): (+1.3, -2.5, -2.5),
+    (20.0, 32.0): (+1.7, -2.3, -1.7),
+    (20.0, 50.0): (+3.2, -1.6, +1.9),
+    (20.0, 80.0): (+3.6, -0.9, +0.6),
+}
+HELD_OUT_SPLIT = {
+    (8.0, 20.0): (-1.9, -1.7, -0.7),
+    (8.0, 65.0): (-2.5, -1.3, -2.2),
+    (15.0, 20.0): (-0.3, -2.1, -1.9),
+    (15.0, 65.0): (+1.1, -1.0, -0.4),
+    (12.0, 100.0): (-2.1, -1.2, -1.8),
+    (7.0, 40.0): (-1.5, -1.3, -2.5),
+    (9.0, 90.0): (-3.2, -1.3, -2.1),
+    (13.0, 30.0): (-0.3, -1.7, -0.4),
+    (17.0, 60.0): (+2.3, -1.1, +0.8),
+    (18.0, 100.0): (+1.5, -0.9, -0.8),
+}
+
+
+@pytest.mark.slow
+def test_split_network_against_recorded_fem() -> None:
+    fem = _fem()
+    mag, data = fem.network_magnet("split"), fem.load()
+    rows = {(r["s_mm"], r["I_A"]): r for r in fem.compare(mag, data)}
+    rows.update({(r["s_mm"], r["I_A"]): r for r in fem.compare(mag, data, points=fem.HELD_OUT)})
+    want = {**MEASURED_SPLIT, **HELD_OUT_SPLIT}
+    assert set(want) == set(rows)
+    for k, (ef, epsi, el) in want.items():
+        r = rows[k]
+        for name, got, w in (("F", r["eF"], ef), ("psi", r["epsi"], epsi), ("L", r["eL"], el)):
+            assert w - MARGIN <= got <= w + MARGIN, (k, name, got)
+        # the aims for flux linkage (3 %) and differential inductance (5 %) everywhere,
+        # 6-20 mm, 10-100 A, into deep saturation
+        assert abs(r["epsi"]) < 3.0 and abs(r["eL"]) < 5.0, k
+        # the force's 3 % aim is missed at 6 mm / 10 and 80 A, 9 mm / 90 A (low) and at
+        # 20 mm / 50-80 A (high): within 4.5 %
+        assert abs(r["eF"]) < 4.5, k
+    # the air behind the yoke carries what the field returns behind it: within 11 % at
+    # every grid point (the plate model of the back face, no factor; measured -10 ... +6 %)
+    for k in MEASURED_SPLIT:
+        f, n = rows[k]["flux_fem"], rows[k]["flux_net"]
+        assert n["back"] == pytest.approx(f["behind"], rel=0.11), k

@@ -12,6 +12,21 @@ into sections, one per electric circuit; the pole bars and the rail run through:
                 |
               leg_u_1 -- YU_1 --yoke_1 (coil)-- YL_1 -- leg_l_1 -- L_1 (lower pole bar)
 
+``flux_paths = "split"`` (``[magnet]`` key; default ``"paper"``, the network above) adds the
+paths a 2-D cross-section FEM showed missing (docs/validation_fem.md) and needs the coil's
+build ``coil_thickness``::
+
+      YU_i --leg_u_i_0-- MU_i --leg_u_i_1 (+ bar)-- U_i        legs in halves, bar its own
+       |                  +--top_u_i-- RU_i                    member; top: leg top -> rail
+    back_i  yoke_i ||     leak_leg_i                          back: behind the yoke
+       |    coil_air_i    |                                    coil_air: the coil's own
+      YL_i --leg_l_i_1-- ML_i --leg_l_i_0 (+ bar)-- L_i        cross-section beside the yoke
+
+(with eddy currents the yoke's eddy element follows ``yoke_i`` and ``coil_air_i`` through
+a node ``EY_i``), and takes the iron members' lengths from where the flux runs: the rail
+``d`` long, the yoke-leg corners on their mean quarter circle.  Formulas: :func:`_split_paths`
+and docs/magnets.md.
+
 All yokes of one section are identical and in parallel magnetically with their coils in
 series: they are merged into one yoke branch of the summed cross-section whose coil has
 the turns of one yoke (exact for identical yokes: ``psi = n phi_total``).  Formulas and
@@ -29,10 +44,20 @@ against the cross-section FEM of benchmarks/fem_guidance.py).  The legs' and yok
 
 from __future__ import annotations
 
+import math
 from collections.abc import Mapping
 from typing import Any
 
-from ..circuit.elements import AirGap, EddyCurrent, Element, IronPath, LeakagePermeance
+import numpy as np
+
+from ..circuit.elements import (
+    AirGap,
+    EddyCurrent,
+    Element,
+    FringePermeance,
+    IronPath,
+    LeakagePermeance,
+)
 from ..circuit.network import Branch, Circuit, Coil, Network
 from ..errors import ParameterFileError
 from ..materials import MU0, Material
@@ -61,12 +86,15 @@ MAGNET_SCHEMA = {
     "yoke_width": Schema(float, unit="m"),
     "yoke_thickness": Schema(float, unit="m"),
     "coil_height": Schema(float, unit="m"),
+    "coil_thickness": Schema(float, required=False, unit="m"),
     "turns_per_yoke": Schema(float, unit="-", whole=True),
     "resistance_per_yoke": Schema(float, unit="ohm"),
     "material": Schema(str),
     "resistivity": Schema(float, required=False, unit="ohm m"),
     "end_effects": Schema(bool, required=False, default=True),
+    "flux_paths": Schema(str, required=False, default="paper"),
 }
+FLUX_PATHS = ("paper", "split")
 CIRCUITS_SCHEMA = {"names": Schema(list)}
 RAIL_SCHEMA = {
     "thickness": Schema(float, unit="m"),
@@ -128,6 +156,18 @@ def build_guidance_magnet(params: Mapping[str, Any], materials: Mapping[str, Mat
     if r["height"] < dist + hp:
         raise ParameterFileError(f"[rail] height = {r['height']:g} m must cover both pole bars "
                                  f"({dist + hp:g} m)")
+    if m["flux_paths"] not in FLUX_PATHS:
+        raise ParameterFileError(f"[magnet] flux_paths = {m['flux_paths']!r}: expected one of "
+                                 f"{', '.join(map(repr, FLUX_PATHS))}")
+    split = m["flux_paths"] == "split"
+    tc = m["coil_thickness"]
+    if split and tc is None:
+        raise ParameterFileError("[magnet] flux_paths = \"split\" needs coil_thickness (m, the "
+                                 "build of the coil's sides normal to the yoke)")
+    if tc is not None and not 0.0 < tc < ll:
+        raise ParameterFileError(f"[magnet] coil_thickness = {tc:g} m: the coil's front side "
+                                 f"must fit between the yoke and the pole bars, 0 < coil_thickness"
+                                 f" < leg_length = {ll:g} m")
     iron = resolve_material(m["material"], materials, "magnet")
     rail_mat = resolve_material(r["material"], materials, "rail")
     eddy = options.eddy_currents
@@ -144,11 +184,27 @@ def build_guidance_magnet(params: Mapping[str, Any], materials: Mapping[str, Mat
     yoke_area = ny * wy * ty
     leg_len = ll + 0.5 * (tp + ty)
     yoke_len = dist
+    # "split": the flux turns round the yoke-leg corner (square t_y x t_l) on its mean
+    # quarter circle, not along the centre lines' right angle: the corner's length
+    # t_y/2 + t_l/2 becomes (pi/4)(t_y/2 + t_l/2), each member shortened by its share
+    corner = 1.0 - 0.25 * math.pi
+    if split:
+        yoke_len = dist - 2.0 * corner * 0.5 * tl
     rail_len = dist + r["thickness"]
+    if split:
+        # the rail takes the flux in over the whole face height h_p (uniformly: the MMF drop
+        # of the entry region is that of h_p/2 at full flux) and carries it from the face's
+        # inner edge to the mid-plane: 2 (d/2 - h_p/2 + h_p/2) = d, no corner to turn (the
+        # centre-line length d + t_r counts a turn at the rail's mid-thickness; the FEM's
+        # line integral of H along the rail is 0.82 of it at 6 mm / 10 A)
+        rail_len = dist
     rail_area = L * r["thickness"]
     # leakage between the pole bars across the window (parallel faces, flank depth t_p)
     # and between the legs (energy-equivalent coil height h_c/3 for the yoke part)
     g_leak = MU0 * L * tp / window + MU0 * ny * wy * (ll + hc / 3.0) / window
+    if split:
+        paths = _split_paths(L, hp, tp, dist, ll, tl, ny, wy, ty, hc, tc, m["end_effects"])
+        g_leak = paths["bars"]
 
     def with_eddy(els: list[Element], name: str, w: float, h: float, length: float,
                   rho_: float) -> tuple[Element, ...]:
@@ -160,10 +216,40 @@ def build_guidance_magnet(params: Mapping[str, Any], materials: Mapping[str, Mat
     circuits: list[Circuit] = []
     for i, cname in enumerate(names, start=1):
         g = f"g{i}"
-        branches += [
+        if split:
+            # legs in two halves (node M at mid-length: the window's leakage and the top
+            # fringe leave there), their leakage to the other leg, the air behind the yoke
+            # (yoke end to yoke end) and the legs' top fringe to the rail.  A leg runs from
+            # the yoke's centre line (less the corner's share) to the bar's back, at the
+            # legs' section; the bar is a member of its own in series at the leg's end,
+            # t_p at its section L h_p (the "paper" leg counts t_p/2 at the legs' smaller
+            # section, which saturates first: at 6 mm / 80 A the FEM's line integral of H
+            # through the bar is 82 A of the 12 kA, the "paper" leg's t_p/2 230 A)
+            h = 0.5 * (ll + (1.0 - corner) * 0.5 * ty)
+            for side, a, b in (("u", f"YU{i}", f"U{i}"), ("l", f"L{i}", f"YL{i}")):
+                mid = f"M{side.upper()}{i}"
+                for j, (n0, n1) in enumerate(((a, mid), (mid, b))):
+                    els: list[Element] = [IronPath(f"iron_leg_{side}_{i}_{j}", h, leg_area, iron)]
+                    if j == (1 if side == "u" else 0):
+                        els.append(IronPath(f"iron_bar_{side}_{i}", tp, L * hp, iron))
+                    branches.append(Branch(f"leg_{side}_{i}_{j}", n0, n1, with_eddy(
+                        els, f"eddy_leg_{side}_{i}_{j}", ny * wy, tl, h, rho)))
+            if options.leakage:
+                branches += [
+                    Branch(f"leak_leg_{i}", f"MU{i}", f"ML{i}",
+                           (LeakagePermeance(f"leak_leg_{i}", paths["legs"]),)),
+                    Branch(f"back_{i}", f"YU{i}", f"YL{i}",
+                           (LeakagePermeance(f"back_{i}", paths["back"]),))]
+            if options.fringing:
+                for side, n0, n1 in (("u", f"MU{i}", f"RU{i}"), ("l", f"RL{i}", f"ML{i}")):
+                    branches.append(Branch(f"top_{side}_{i}", n0, n1, (FringePermeance(
+                        f"top_{side}_{i}", gap_input=g, width=paths["top_width"],
+                        radius=tp + ll, inner_radius=tp),)))
+        branches += [] if split else [
             Branch(f"leg_u_{i}", f"YU{i}", f"U{i}", with_eddy(
                 [IronPath(f"iron_leg_u_{i}", leg_len, leg_area, iron)], f"eddy_leg_u_{i}",
-                ny * wy, tl, leg_len, rho)),
+                ny * wy, tl, leg_len, rho))]
+        branches += [
             Branch(f"gap_u_{i}", f"U{i}", f"RU{i}", (
                 AirGap(f"gap_u_{i}", gap_input=g, pole_area=face, fringe_edges=edges),)),
             Branch(f"rail_{i}", f"RU{i}", f"RL{i}", with_eddy(
@@ -171,18 +257,36 @@ def build_guidance_magnet(params: Mapping[str, Any], materials: Mapping[str, Mat
                 L, r["thickness"], rail_len, rho_rail)),
             Branch(f"gap_l_{i}", f"RL{i}", f"L{i}", (
                 AirGap(f"gap_l_{i}", gap_input=g, pole_area=face, fringe_edges=edges),)),
+        ]
+        branches += [] if split else [
             Branch(f"leg_l_{i}", f"L{i}", f"YL{i}", with_eddy(
                 [IronPath(f"iron_leg_l_{i}", leg_len, leg_area, iron)], f"eddy_leg_l_{i}",
-                ny * wy, tl, leg_len, rho)),
-            Branch(f"yoke_{i}", f"YL{i}", f"YU{i}", with_eddy(
-                [IronPath(f"iron_yoke_{i}", yoke_len, yoke_area, iron)], f"eddy_yoke_{i}",
-                ny * wy, ty, yoke_len, rho)),
+                ny * wy, tl, leg_len, rho))]
+        branches += [
         ]
+        yoke_iron = IronPath(f"iron_yoke_{i}", yoke_len, yoke_area, iron)
+        coils = [Coil(f"yoke_{i}", m["turns_per_yoke"])]
+        if split and options.leakage:
+            # the air through the coil's cross-section beside the yoke, in parallel with its
+            # iron and with the same turns (it sees the iron's own drop), the yoke's eddy
+            # element in series with both (node EY), as the levitation magnet's coil_air
+            end = f"EY{i}" if eddy else f"YU{i}"
+            branches += [Branch(f"yoke_{i}", f"YL{i}", end, (yoke_iron,)),
+                         Branch(f"coil_air_{i}", f"YL{i}", end, (LeakagePermeance(
+                             f"coil_air_{i}", paths["coil_air"]),))]
+            if eddy:
+                branches.append(Branch(f"eddy_yoke_{i}", end, f"YU{i}", (
+                    EddyCurrent.solid_rectangular(f"eddy_yoke_{i}", ny * wy, ty, yoke_len, rho),)))
+            # one winding on two parallel branches: its flux is the turn-weighted mean
+            coils = [Coil(b, m["turns_per_yoke"], pole=f"yoke_{i}",
+                          pole_turns=m["turns_per_yoke"]) for b in (f"yoke_{i}", f"coil_air_{i}")]
+        else:
+            branches.append(Branch(f"yoke_{i}", f"YL{i}", f"YU{i}", with_eddy(
+                [yoke_iron], f"eddy_yoke_{i}", ny * wy, ty, yoke_len, rho)))
         if options.leakage:
             branches.append(Branch(f"leak_{i}", f"U{i}", f"L{i}",
                                    (LeakagePermeance(f"leak_{i}", g_leak),)))
-        circuits.append(Circuit(cname, ny * m["resistance_per_yoke"],
-                                (Coil(f"yoke_{i}", m["turns_per_yoke"]),)))
+        circuits.append(Circuit(cname, ny * m["resistance_per_yoke"], tuple(coils)))
         if i > 1:
             j = i - 1
             bar = L  # centre-to-centre distance of neighbouring sections
@@ -199,13 +303,73 @@ def build_guidance_magnet(params: Mapping[str, Any], materials: Mapping[str, Mat
     return m["name"], Network(tuple(branches), tuple(circuits), name=m["name"])
 
 
+def plate_flux(a: float, b: float, xi: float, n: int = 4096) -> float:
+    """Flux [Wb per m depth, per mu0 and per ampere-turn] crossing the mid-plane behind a
+    thin plate beyond the distance ``xi`` [m] from it.
+
+    The plate (the yoke's back face) has height ``2 b`` [m]; its magnetic potential is
+    ``+1/2`` above the coil (``y > a``, ``a`` [m] the coil's half height), ``-1/2`` below it
+    and linear in between (a coil of one ampere-turn).  The exterior of the plate (a slit)
+    is the exterior of the unit circle under Joukowski's map ``w = (b/2)(zeta + 1/zeta)``,
+    the plate's potential there ``f(phi) = clip(b cos(phi)/a, -1, 1)/2``; the complex
+    potential is Schwarz's integral ``W(zeta) = (1/2 pi) int f(phi) (zeta + e^{i phi}) /
+    (zeta - e^{i phi}) dphi`` and the flux between the mid-plane's point ``zeta = i rho``
+    (``xi = (b/2)(rho - 1/rho)``) and infinity is ``|Im W(i rho)|``.  Midpoint rule over
+    ``n`` points (4096: converged to 1e-7 relative; the kinks of f limit it to second order).
+    """
+    phi = (np.arange(n) + 0.5) * (2.0 * math.pi / n)
+    f = 0.5 * np.clip(b * np.cos(phi) / a, -1.0, 1.0)
+    t = xi / b
+    zeta = 1j * (t + math.sqrt(t * t + 1.0))
+    e = np.exp(1j * phi)
+    return float(abs(np.mean(f * (zeta + e) / (zeta - e)).imag))
+
+
+def _split_paths(L: float, hp: float, tp: float, dist: float, ll: float, tl: float,
+                 ny: int, wy: float, ty: float, hc: float, tc: float,
+                 ends: bool) -> dict[str, float]:
+    """Permeances [H] and widths [m] of the ``flux_paths = "split"`` air paths of one section.
+
+    Depths: the bars run through the section (``L``); the legs, the yoke and its coil exist
+    over the yokes' width ``yokes = n_y w_y`` only (the coil's sides add ``2 t_c`` per yoke
+    behind the yoke).  ``ends = False`` (the 2-D cross-section, as the FEM) puts every path
+    at the cut's depth ``L``.
+    """
+    ny_depth = L if not ends else ny * wy
+    a, b = 0.5 * hc, 0.5 * (dist + tl)           # coil's and yoke's half heights
+    back_depth = L if not ends else min(L, ny * (wy + 2.0 * tc))
+    # the bars' inner faces across the window (parallel faces)
+    bars = MU0 * L * tp / (dist - hp)
+    # the legs' inner faces across the window between them; over the first t_c from the
+    # yoke the coil's front side fills the window and a tube at xi links xi/t_c of the
+    # turns: energy-equivalent length t_c/3 (as the paper's h_c/3)
+    legs = MU0 * ny_depth * (ll - tc + tc / 3.0) / (dist - tl)
+    # behind the yoke: through the coil's back side (vertical tubes of length 2a linked
+    # xi/t_c of the turns: energy-equivalent t_c/(3 2a)), and beyond it the field of the
+    # yoke's back face seen as a thin plate of height 2b, its upper part at +NI/2 and its
+    # lower part at -NI/2 (the coil's ramp between), the flux crossing the mid-plane
+    # behind it beyond xi = t_c (plate_flux)
+    back = MU0 * back_depth * (tc / (6.0 * a) + plate_flux(a, b, tc))
+    # the air through the coil's cross-section beside the yoke (in parallel with the yoke,
+    # with its turns): where the yoke's potential falls by D along its length, the air
+    # beside it carries H = D/l, and a tube at x from the yoke links 1 - x/t_c of the
+    # turns: linked width t_c/2 per coil side facing open air (the levitation magnet's
+    # coil_air); the coil's sides run round the yoke (front and back over the cut's depth;
+    # with end effects the whole perimeter 2 (w_y + t_y) of every yoke)
+    area = L * tc if not ends else ny * (wy + ty) * tc
+    coil_air = MU0 * area / dist
+    return {"bars": bars, "legs": legs, "back": back, "coil_air": coil_air,
+            "top_width": ny_depth}
+
+
 def guidance_magnet_range(params: Mapping[str, Any]) -> PlausibleRange:
     """Plausible inputs: gaps up to the pole-bar height, currents up to
     :data:`~maglevkit.magnets.base.MAX_CURRENT_DENSITY_A_PER_M2` in one yoke's coil.
 
-    The file gives no coil build; it cannot exceed the leg length between yoke and pole
-    bar, so ``coil_height x leg_length`` bounds the coil's cross-section from above
-    (and the current bound is generous)."""
+    The coil's build cannot exceed the leg length between yoke and pole bar, so
+    ``coil_height x leg_length`` bounds the coil's cross-section from above (and the
+    current bound is generous).  ``coil_thickness`` (optional, for ``flux_paths =
+    "split"``) is not used here, so the bound is the same with and without it."""
     m = params["magnet"]
     return PlausibleRange.from_geometry(
         gap_m=float(m["pole_bar_height"]), gap_basis="the pole-bar height",
