@@ -73,7 +73,7 @@ def evaluate_mass(spec: Any, wp: float, hc: float) -> float:
                                         "window_width", "coil_thickness"))
     iron = (2 * wp * hl + (ww + 2 * wp) * ty) * d * c["iron_density_kg_per_m3"]
     turn = 2 * (wp + d) + math.pi * tc
-    copper = 2 * c["fill_factor"] * hc * tc * turn * c["copper_density_kg_per_m3"]
+    copper = 2 * c["fill_factor"] * hc * tc * turn * c["conductor_density_kg_per_m3"]
     return float(iron + copper)
 
 
@@ -214,8 +214,8 @@ def test_turns_derivative_from_ampere_turns() -> None:
     (lambda d: d["requirements"].update(force_kN=1.0), "[requirements] unknown key(s) "
                                                        "['force_kN']"),
     (lambda d: d["design"].update(objective="cost"), "[design] objective = 'cost'"),
-    (lambda d: d["design"].update(magnet="tr09-standard"), "[design] magnet = "
-                                                           "'tr09-standard'"),
+    (lambda d: d["design"].update(magnet="tr09-standard"), "[variables] unknown design "
+     "variable 'leg_height' for a levitation_magnet"),
     (lambda d: d["design"].update(magnet="nope"), "[design] magnet = 'nope'"),
     (lambda d: d["coil"].update(fill_factor=1.5), "[coil] fill_factor = 1.5"),
     (lambda d: d.update(extra={}), "unknown table(s) ['extra']"),
