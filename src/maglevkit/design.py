@@ -1,38 +1,54 @@
 """Design optimisation of a magnet's geometry and coil (issue 25, part 3; docs/design.md).
 
-A U-magnet's geometry and turns (a user-chosen subset of :data:`VARIABLES`, with bounds)
-are optimised for an objective -- magnet mass (iron + copper) or resistive power at the
-nominal operating point -- under constraints from a design spec (:func:`read_design_spec`):
+The geometry and turns of a lumped U-magnet or of a levitation magnet (TR09, its
+``flux_paths = "paper"`` network) -- a user-chosen subset of the kind's variables
+(:data:`KIND_VARIABLES`, with bounds) -- are optimised for an objective -- magnet mass
+(iron + conductor) or resistive power at the nominal operating point -- under constraints
+from a design spec (:func:`read_design_spec`).  Every circuit carries the same current:
 
-* ``force_nominal``: the circuit force at ``nominal_gap_m`` equals ``force_N``; the
-  current that holds it is the nominal current ``I_n`` (an optimisation variable);
-* ``force_reserve``: at ``reserve_gap_m`` the coil at the peak current density
-  ``peak_current_density_A_per_m2`` pulls at least ``reserve_factor * force_N``;
-* ``flux_density``: ``|B|`` in every iron path of the magnet (legs, yoke; not the rail)
-  at the nominal point is at most ``max_flux_density_T``;
-* ``current_density``: ``(N/2) I_n / (k_fill h_c t_c)`` at most
-  ``current_density_A_per_m2`` (continuous rating);
-* ``voltage``: ``U = R I_n + L~ dI/dt + |dpsi/ds| v`` at most ``supply_voltage_V``, with
-  ``L~ = dpsi/dI`` and ``dpsi/ds`` of the statics at the nominal point, ``v =
-  gap_rate_m_per_s`` and ``dI/dt = current_rate_A_per_s``: the chopper must hold the
-  current against the gap moving at ``v`` while ramping it at ``dI/dt``;
-* geometry: the coil fits its leg (``coil_height + coil_gap_to_pole_face <= leg_height``),
-  the two coils fit the window (``2 coil_thickness + window_clearance_m <=
-  window_width``), the magnet fits its rail (``window_width + 2 pole_width <=
-  rail.width``); each only when a variable enters it.
+* ``force_nominal``: the force per circuit (the magnet's force over its circuits; the
+  TR09's half magnet) at ``nominal_gap_m`` equals ``force_N``; the current that holds
+  it is the nominal current ``I_n`` (an optimisation variable);
+* ``force_reserve``: at ``reserve_gap_m`` the coils at the peak current density
+  ``peak_current_density_A_per_m2`` pull at least ``reserve_factor * force_N`` per circuit;
+* ``flux_density``: ``|B|`` in every iron path of the magnet (U-magnet: legs, yoke, not
+  the rail; levitation magnet: pole cores and pole back, not the stator) at the nominal
+  point is at most ``max_flux_density_T``;
+* ``current_density``: ``N_c I_n / (k_fill h_c t_c)`` at most
+  ``current_density_A_per_m2`` (continuous rating; ``N_c`` the turns through one coil
+  section: ``N/2`` per U-magnet leg, ``turns_per_pole``);
+* ``voltage``: ``U = R I_n + L~ dI/dt + |dpsi/ds| v`` at most ``supply_voltage_V`` for
+  circuit 1, with ``L~ = dpsi/dI`` and ``dpsi/ds`` of the statics at the nominal point
+  (all currents and all gaps together), ``v = gap_rate_m_per_s`` and ``dI/dt =
+  current_rate_A_per_s``: the chopper must hold the current against the gap moving at
+  ``v`` while ramping it at ``dI/dt``;
+* geometry (each only when a variable enters it): U-magnet: the coil fits its leg, the two
+  coils fit the window, the magnet fits its rail; levitation magnet: the coil fits its
+  core (``coil_height + coil_to_face <= core_height``), two coils fit between neighbouring
+  cores (``2 coil_thickness + window_clearance_m <= pole_pitch - pole_length``), the
+  stator covers the face (``pole_width <= stator.width``), the LIG grooves leave a face.
 
 Gradients are exact (CasADi AD) by the *simultaneous* approach: the loop fluxes of the
 network at the two static points are NLP variables and the network's loop law
-``r(x; s, I, p) = 0`` (:func:`maglevkit.circuit.assembly.assemble` of the one U-magnet
-builder :func:`maglevkit.magnets.u_magnet.lumped_network`, evaluated with CasADi symbols
-for the geometry) is an equality constraint; ``L~`` and ``dpsi/ds`` are the implicit
-derivatives ``psi_x (-r_x^-1 r_(I,s))``.  IPOPT (``nlpsol("ipopt")``) solves the NLP.
-:func:`design_sensitivities` gives the same statics' exact design derivatives by the
-nested route (CasADi ``rootfinder``, implicit function theorem), as calibration does.
+``r(x; s, I, p) = 0`` (:func:`maglevkit.circuit.assembly.assemble` of the kind's one
+builder, :func:`maglevkit.magnets.u_magnet.lumped_network` or
+:func:`maglevkit.magnets.levitation.levitation_network`, evaluated with CasADi symbols for
+the geometry) is an equality constraint; ``L~`` and ``dpsi/ds`` are ``psi_x y + psi_q``
+with the implicit derivatives ``y = dx/dq`` (``q = (I, s)``) as NLP variables too, under
+their linear law ``r_x y + r_q = 0``.  IPOPT (``nlpsol("ipopt")``) solves the NLP.  The
+levitation builder's comparisons of geometry values are decided at the start and checked
+at the optimum (:class:`~maglevkit.magnets.levitation.GeometryBranches`; decided again
+there once, else refused).  :func:`design_sensitivities` gives the same statics' exact
+design derivatives by the nested route (CasADi ``rootfinder``, implicit function
+theorem), as calibration does.
 
-The winding (both legs in series, ``N/2`` turns each): mean turn ``l_t = 2 (w_p + d) +
-pi t_c``, ``R = rho_cu N^2 l_t / (2 k_fill h_c t_c)``, copper mass ``2 k_fill h_c t_c l_t
-rho_m,cu``; iron mass ``(2 w_p h_l + (w_w + 2 w_p) t_y) d rho_m,fe``.
+The windings (docs/design.md): U-magnet (both legs in series, ``N/2`` turns each): mean
+turn ``l_t = 2 (w_p + d) + pi t_c``, ``R = rho_el N^2 l_t / (2 k_fill h_c t_c)``, conductor
+mass ``2 k_fill h_c t_c l_t rho_m,c``; iron mass ``(2 w_p h_l + (w_w + 2 w_p) t_y) d
+rho_m,fe``.  Levitation magnet (``P`` poles, one coil of ``N`` turns per pole core
+``l_p x w_p``): ``l_t = 2 (l_p + w_p) + pi t_c``, ``R_pole = rho_el N^2 l_t / (k_fill h_c
+t_c)``, conductor mass ``P k_fill h_c t_c l_t rho_m,c``, iron mass ``P (l_p w_p h_core +
+tau h_b w_b) rho_m,fe`` (cores and the pole back along the magnet's ``P tau``).
 """
 
 from __future__ import annotations
@@ -93,7 +109,8 @@ VARIABLES: dict[str, str] = {k: u for kv in KIND_VARIABLES.values() for k, u in 
 
 
 OBJECTIVES = ("mass", "power")
-"""``mass``: iron + copper [kg]; ``power``: ``R I_n^2`` at the nominal point [W]."""
+"""``mass``: iron + conductor [kg]; ``power``: ``R I_n^2`` of all circuits at the nominal
+point [W]."""
 
 # spec keys: (unit, default or None = required, lower bound (exclusive?), description)
 _REQUIREMENTS: dict[str, tuple[str, float | None, float, bool]] = {
@@ -768,8 +785,9 @@ class DesignResult:
     objective_value : float
         Its value [kg or W].
     mass_kg, power_W, resistance_ohm, nominal_current_A, reserve_current_A : float
-        Magnet mass, ``R I_n^2``, winding resistance, nominal current, the current at the
-        peak current density.
+        Magnet mass [kg], ``R I_n^2`` of all circuits [W], circuit 1's winding resistance
+        [ohm], nominal current and the current at the peak current density [A] (every
+        circuit).
     constraints : dict
         Name -> :class:`DesignConstraint`.
     status : str
@@ -1388,18 +1406,23 @@ def plot_pareto(front: Sequence[DesignResult], path: str | Path, *, title: str =
     fig, ax = plt.subplots(figsize=(7.0, 4.6))
     ax.plot([r.power_W for r in ok], [r.mass_kg for r in ok], "o-", color="C0",
             label="Pareto-optimal designs\n(epsilon constraint)")
-    for r in ok:
-        ax.annotate(", ".join(f"{k} {r.values[k] * 1e3:.1f} mm" if VARIABLES[k] == "m"
-                              else f"{k} {r.values[k]:.0f}" for k in shown),
-                    (r.power_W, r.mass_kg), textcoords="offset points", xytext=(7, 3),
-                    fontsize=7, color="0.3")
+    # number the points; their two most varying variables in a list beside the curve
+    lines = []
+    for j, r in enumerate(ok, start=1):
+        ax.annotate(str(j), (r.power_W, r.mass_kg), textcoords="offset points", xytext=(5, 4),
+                    fontsize=8, color="0.2")
+        lines.append(f"{j}: " + ", ".join(f"{k} {r.values[k] * 1e3:.1f} mm"
+                                          if VARIABLES[k] == "m" else f"{k} {r.values[k]:.0f}"
+                                          for k in shown))
+    ax.text(0.98, 0.80, "\n".join(lines), transform=ax.transAxes, ha="right", va="top",
+            fontsize=7, color="0.3", family="monospace")
     pw = [r.power_W for r in ok]
     span = max(max(pw) - min(pw), 1e-9 * max(pw))
-    ax.set_xlim(min(pw) - 0.06 * span, max(pw) + 0.45 * span)     # room for the labels
+    ax.set_xlim(min(pw) - 0.06 * span, max(pw) + 0.1 * span)
     ax.margins(y=0.08)
-    ax.set_xlabel("resistive power at the nominal point R I_n^2 [W]")
-    ax.set_ylabel("magnet mass (iron + copper) [kg]")
+    ax.set_xlabel("resistive power at the nominal point R I_n^2 (all circuits) [W]")
+    ax.set_ylabel("magnet mass (iron + conductor) [kg]")
     ax.grid(True, alpha=0.3)
     ax.set_title(title or f"Pareto front: {Path(front[0].spec.source).name}")
-    ax.legend(loc="upper right", fontsize=8)     # the labels run right of the points
+    ax.legend(loc="upper right", fontsize=8)     # the list of designs below it
     return save(fig, path)
