@@ -245,6 +245,12 @@ def test_unit_slips_warn_naming_the_key() -> None:
     doc["requirements"]["nominal_gap_m"] = 10.0      # mm typed into a metre key
     with pytest.warns(PlausibilityWarning, match="nominal_gap_m"):
         read_design_spec(doc)
+    # kN typed into the newton key: inside the range of any magnet (1 N - 200 kN) but a
+    # thousandth of the base magnet's 19 kN per circuit at its operating point
+    doc = tr09_doc()
+    doc["requirements"]["force_N"] = 17.47
+    with pytest.warns(PlausibilityWarning, match=r"\[requirements\] force_N = 17.47 N is below"):
+        read_design_spec(doc)
 
 
 def test_split_network_is_refused_by_name(tmp_path: Path) -> None:

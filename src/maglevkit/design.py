@@ -163,6 +163,11 @@ DESIGN_PLAUSIBLE: dict[str, Plausible] = {
        if u == "m"},
 }
 
+FORCE_PLAUSIBLE_FACTOR = 100.0
+"""A spec's ``force_N`` more than this factor away from the base magnet's force per
+circuit at its ``[operating]`` point warns (a unit slip: kN typed into the newton key); a
+design a hundred times stronger or weaker than its base is another magnet."""
+
 GEOMETRY_MARGIN_M = 1e-9
 """The geometry constraints hold with this margin [m], so that the written file passes the
 loader's strict checks (IPOPT meets constraints to ~1e-10 m here, from either side)."""
@@ -282,7 +287,7 @@ def read_design_spec(source: str | Path | Mapping[str, Any], *, base_dir: str | 
                               "requirements, coil, provenance")
     # before the schema's own checks, so that a slipped value it then refuses (e.g.
     # fill_factor = 600 for 0.6) is named with its unit and likely slip first (issue 27)
-    check_plausible(doc, DESIGN_PLAUSIBLE, label, stacklevel=3)
+    flagged = check_plausible(doc, DESIGN_PLAUSIBLE, label, stacklevel=3)
     design = _table(doc, "design")
     bad = sorted(set(design) - {"magnet", "objective"})
     if bad:
@@ -347,6 +352,20 @@ def read_design_spec(source: str | Path | Mapping[str, Any], *, base_dir: str | 
         raise DesignSpecError(f"[requirements] unknown key(s) {bad}; allowed: "
                               f"{', '.join(_REQUIREMENTS)}")
     req = {k: _number(rt, k, "requirements", s) for k, s in _REQUIREMENTS.items()}
+    if "requirements.force_N" not in flagged and "operating" in params:
+        # the generic 1 N - 200 kN spans both kinds; against the base magnet's own force
+        # at its operating point a kN-for-N slip of a TR09 spec (17.47 for 17470) shows
+        from .models.statics import solve_statics
+
+        op = params["operating"]
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", MaglevkitWarning)
+            f0 = float(np.asarray(solve_statics(magnet, gaps_m=op["nominal_gap"],
+                                                currents_A=op["nominal_current"]).force_N)
+                       ) / len(magnet.network.circuits)
+        check_plausible(doc, {"requirements.force_N": Plausible(
+            f0 / FORCE_PLAUSIBLE_FACTOR, f0 * FORCE_PLAUSIBLE_FACTOR, "N")}, label,
+            stacklevel=3)
     ct = _table(doc, "coil")
     for old, new in _RENAMED.items():
         if old in ct:
