@@ -20,16 +20,20 @@ from maglevkit.cli import app
 from maglevkit.design import (
     DesignSpecError,
     design_magnet,
-    design_parameters,
-    design_sensitivities,
     evaluate_design,
     read_design_spec,
-    write_design_toml,
 )
 from maglevkit.errors import MaglevkitWarning, PlausibilityWarning
-from maglevkit.magnets import build_magnet
 from maglevkit.magnets.levitation import GeometryBranches
 from maglevkit.models.statics import solve_statics
+
+from .test_design import (
+    check_active_constraints,
+    check_design_gradients,
+    check_turns_derivative,
+    check_written_design,
+    lazy_grid_min,
+)
 
 runner = CliRunner()
 
@@ -67,16 +71,7 @@ def tr09_mass(spec: Any, wp: float, hb: float) -> float:
 
 
 def _lazy_grid_min(spec: Any, wp: np.ndarray, hb: np.ndarray) -> tuple[float, tuple[float, float]]:
-    """The lightest feasible point of the grid ``wp x hb`` (brute force, checked in the
-    order of the explicit mass: the first feasible point is the grid's optimum)."""
-    pts = [(a, b) for a in wp for b in hb]
-    masses = [tr09_mass(spec, a, b) for a, b in pts]
-    for k in np.argsort(masses):
-        a, b = pts[k]
-        ev = evaluate_design(spec, {"pole_width": a, "back_height": b})
-        if ev["feasible"]:
-            return ev["mass_kg"], (a, b)
-    return math.inf, (math.nan, math.nan)
+    return lazy_grid_min(spec, ("pole_width", "back_height"), wp, hb, tr09_mass)
 
 
 def test_two_variable_optimum_matches_grid_search(two_variable: tuple[Any, Any]) -> None:
@@ -107,22 +102,7 @@ def test_active_constraints_are_reported(two_variable: tuple[Any, Any]) -> None:
     spec, res = two_variable
     assert set(res.active) == {"force_nominal", "current_density", "flux_density"}
     assert res.constraints["flux_density"].detail.startswith("iron_back_")
-    for c in res.constraints.values():
-        if c.active:
-            assert abs(c.slack) <= 1e-6 * max(abs(c.bound), 1.0), c
-        else:
-            assert c.slack > 1e-4 * max(abs(c.bound), 1e-3), c
-    # independently (statics re-solved by solve_statics): a constraint is at its bound
-    # exactly when it is reported active
-    ev = evaluate_design(spec, res.values)
-    req = spec.requirements
-    at_bound = {
-        "current_density": ev["current_density_A_per_m2"] / req["current_density_A_per_m2"],
-        "flux_density": ev["flux_density_T"] / req["max_flux_density_T"],
-        "voltage": ev["voltage_V"] / req["supply_voltage_V"],
-        "force_reserve": req["reserve_factor"] * req["force_N"] / ev["force_reserve_N"]}
-    for name, ratio in at_bound.items():
-        assert (abs(ratio - 1.0) <= 1e-6) == (name in res.active), (name, ratio)
+    check_active_constraints(spec, res)
 
 
 def test_written_design_meets_the_constraints_resolved(tmp_path: Path,
@@ -132,28 +112,14 @@ def test_written_design_meets_the_constraints_resolved(tmp_path: Path,
     # the end fringe's radius; the optimum's 140 mm face has 22.5 mm, above the 15 mm
     # flank: the decision was taken again at the optimum, and holds there
     assert "end fringe radius: flank or stator edge (>=)" in res.decisions
-    path = write_design_toml(res, tmp_path / "tr09-optimised.toml")
-    assert "[E] optimised: maglevkit design" in path.read_text()
-    with warnings.catch_warnings():
-        warnings.simplefilter("error")        # a complete, tagged parameter file
-        mag = load_magnet(path)
-    assert mag.parameters["magnet"].get("flux_paths", "paper") == "paper"
-    ev = evaluate_design(spec, magnet=mag)
-    assert ev["feasible"]
-    req = spec.requirements
     # the loaded file's numeric network (Python's min, max) reproduces the optimiser's
-    # symbolic one: the same law, solved to ~1e-12 relative by both
-    assert ev["nominal_current_A"] == pytest.approx(res.nominal_current_A, rel=1e-7)
-    assert ev["flux_density_T"] <= req["max_flux_density_T"] * (1 + 1e-6)
-    assert ev["flux_density_T"] == pytest.approx(res.constraints["flux_density"].value, rel=1e-7)
-    assert ev["current_density_A_per_m2"] <= req["current_density_A_per_m2"] * (1 + 1e-6)
-    assert ev["force_reserve_N"] >= req["reserve_factor"] * req["force_N"]
-    assert ev["voltage_V"] <= req["supply_voltage_V"]
-    assert ev["voltage_V"] == pytest.approx(res.constraints["voltage"].value, rel=1e-7)
-    assert ev["power_W"] == pytest.approx(res.power_W, rel=1e-7)
+    # symbolic one (in check_written_design, to 1e-7 relative)
+    mag, ev = check_written_design(spec, res, tmp_path / "tr09-optimised.toml")
+    assert mag.parameters["magnet"].get("flux_paths", "paper") == "paper"
     assert min(ev[k] for k in ("coil_fits_core_m", "coils_fit_window_m", "stator_covers_pole_m",
                                "grooves_leave_face_m")) >= 0.0
     # the half magnet (circuit "front") holds the force on its own poles
+    req = spec.requirements
     sol = solve_statics(mag, gaps_m=req["nominal_gap_m"], currents_A=ev["nominal_current_A"])
     front = [k for k, g in enumerate(sol.gap_names) if int(g[1:]) <= 6]
     assert float(np.sum(np.asarray(sol.pole_force_N)[front])) == pytest.approx(req["force_N"],
@@ -165,30 +131,7 @@ def test_design_gradients_match_central_differences() -> None:
     values = {"pole_width": 0.15, "core_height": 0.14, "coil_height": 0.10,
               "coil_thickness": 0.04, "back_height": 0.06}
     gap, cur = 0.009, 40.0
-    sens = design_sensitivities(spec, values, gap_m=gap, current_A=cur)
-
-    def statics(v: dict[str, float]) -> tuple[float, float]:
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore")
-            mag = build_magnet(design_parameters(spec, v))
-            sol = solve_statics(mag, gaps_m=gap, currents_A=cur)
-        # per circuit: the magnet's force over its two circuits; circuit 1's flux linkage
-        return (float(np.asarray(sol.force_N)) / 2,
-                float(np.asarray(sol.flux_linkage_Wb).ravel()[0]))
-
-    f0, psi0 = statics(values)
-    # the symbolic network equals the numeric one built from the parameter file
-    assert sens["force_N"] == pytest.approx(f0, rel=1e-10)
-    assert sens["flux_linkage_Wb"] == pytest.approx(psi0, rel=1e-10)
-    for name, v in values.items():
-        h = 1e-5 * v        # truncation ~h^2 f''' ~1e-10 relative; rounding of the
-        #                     statics (~1e-13) / h ~1e-8: 1e-6 relative holds with margin
-        fp, pp = statics({**values, name: v + h})
-        fm, pm = statics({**values, name: v - h})
-        assert sens["dforce_dp"][name] == pytest.approx((fp - fm) / (2 * h), rel=1e-6,
-                                                        abs=1e-6 * abs(f0) / v), name
-        assert sens["dpsi_dp"][name] == pytest.approx((pp - pm) / (2 * h), rel=1e-6,
-                                                      abs=1e-6 * abs(psi0) / v), name
+    check_design_gradients(spec, values, gap, cur)
 
 
 def test_turns_per_pole_derivative_from_ampere_turns() -> None:
@@ -197,16 +140,8 @@ def test_turns_per_pole_derivative_from_ampere_turns() -> None:
     doc = tr09_doc()
     doc["variables"] = {"pole_width": [0.06, 0.185], "turns_per_pole": [50, 400]}
     spec = read_design_spec(doc)
-    gap, cur = 0.01, 30.0
-    sens = design_sensitivities(spec, {"pole_width": 0.17, "turns_per_pole": 190.0},
-                                gap_m=gap, current_A=cur)
-    sol = solve_statics(spec.magnet, gaps_m=gap, currents_A=cur)
-    dfdi = float(np.sum(np.asarray(sol.dforce_dcurrent_N_per_A))) / 2
-    ldiff = float(np.asarray(sol.common_differential_inductance_H).ravel()[0])
-    psi = float(np.asarray(sol.flux_linkage_Wb).ravel()[0])
-    assert sens["dforce_dp"]["turns_per_pole"] == pytest.approx(cur / 190 * dfdi, rel=1e-8)
-    assert sens["dpsi_dp"]["turns_per_pole"] == pytest.approx(psi / 190 + cur / 190 * ldiff,
-                                                              rel=1e-8)
+    values = {"pole_width": 0.17, "turns_per_pole": 190.0}     # the base magnet's
+    check_turns_derivative(spec, values, "turns_per_pole", 0.01, 30.0)
 
 
 @pytest.mark.parametrize(("edit", "needle"), [
