@@ -194,6 +194,7 @@ def test_split_network_is_refused_by_name(tmp_path: Path) -> None:
     params = {k: (dict(v) if isinstance(v, dict) else v)
               for k, v in load_magnet("tr09-standard").parameters.items()}
     params["magnet"]["flux_paths"] = "split"
+    params["provenance"]["magnet.flux_paths"] = "[E] the 2-D FEM's paths (test)"
     (tmp_path / "split.toml").write_text(toml_text(params))
     doc = tr09_doc()
     doc["design"]["magnet"] = str(tmp_path / "split.toml")
