@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import math
 import warnings
+from collections.abc import Callable
 from importlib import resources
 from pathlib import Path
 from typing import Any
@@ -51,18 +52,24 @@ def two_variable() -> tuple[Any, Any]:
     return spec, design_magnet(spec)
 
 
-def _lazy_grid_min(spec: Any, wp: np.ndarray, hc: np.ndarray) -> tuple[float, tuple[float, float]]:
-    """The lightest feasible point of the grid ``wp x hc`` (brute force; the mass is explicit
-    in the geometry, so the points are checked in the order of their mass and the first
-    feasible one is the grid's optimum -- the same answer as checking every point)."""
-    pts = [(a, b) for a in wp for b in hc]
-    masses = [evaluate_mass(spec, a, b) for a, b in pts]
+def lazy_grid_min(spec: Any, names: tuple[str, str], xa: np.ndarray, xb: np.ndarray,
+                  mass: Callable[[Any, float, float], float]) -> tuple[float, tuple[float, float]]:
+    """The lightest feasible point of the grid ``xa x xb`` of the variables ``names``
+    (brute force; the mass is explicit in the geometry, so the points are checked in the
+    order of their mass and the first feasible one is the grid's optimum -- the same
+    answer as checking every point; shared with tests/test_design_tr09.py)."""
+    pts = [(a, b) for a in xa for b in xb]
+    masses = [mass(spec, a, b) for a, b in pts]
     for k in np.argsort(masses):
         a, b = pts[k]
-        ev = evaluate_design(spec, {"pole_width": a, "coil_height": b})
+        ev = evaluate_design(spec, dict(zip(names, (a, b), strict=True)))
         if ev["feasible"]:
             return ev["mass_kg"], (a, b)
     return math.inf, (math.nan, math.nan)
+
+
+def _lazy_grid_min(spec: Any, wp: np.ndarray, hc: np.ndarray) -> tuple[float, tuple[float, float]]:
+    return lazy_grid_min(spec, ("pole_width", "coil_height"), wp, hc, evaluate_mass)
 
 
 def evaluate_mass(spec: Any, wp: float, hc: float) -> float:
@@ -73,7 +80,7 @@ def evaluate_mass(spec: Any, wp: float, hc: float) -> float:
                                         "window_width", "coil_thickness"))
     iron = (2 * wp * hl + (ww + 2 * wp) * ty) * d * c["iron_density_kg_per_m3"]
     turn = 2 * (wp + d) + math.pi * tc
-    copper = 2 * c["fill_factor"] * hc * tc * turn * c["copper_density_kg_per_m3"]
+    copper = 2 * c["fill_factor"] * hc * tc * turn * c["conductor_density_kg_per_m3"]
     return float(iron + copper)
 
 
@@ -104,15 +111,15 @@ def test_two_variable_optimum_matches_grid_search(two_variable: tuple[Any, Any])
     assert abs(b - res.values["coil_height"]) <= h_hc
 
 
-def test_active_constraints_are_reported(two_variable: tuple[Any, Any]) -> None:
-    spec, res = two_variable
-    assert set(res.active) == {"force_nominal", "current_density", "flux_density"}
+def check_active_constraints(spec: Any, res: Any) -> None:
+    """Every reported-active constraint sits at its bound, every other has slack, and,
+    independently (statics re-solved by solve_statics), a constraint is at its bound
+    exactly when it is reported active (shared with tests/test_design_tr09.py)."""
     for c in res.constraints.values():
         if c.active:
             assert abs(c.slack) <= 1e-6 * max(abs(c.bound), 1.0), c
         else:
             assert c.slack > 1e-4 * max(abs(c.bound), 1e-3), c
-    # independently (re-solved statics): every constraint at its bound is among the active
     ev = evaluate_design(spec, res.values)
     req = spec.requirements
     at_bound = {
@@ -124,12 +131,13 @@ def test_active_constraints_are_reported(two_variable: tuple[Any, Any]) -> None:
         assert (abs(ratio - 1.0) <= 1e-6) == (name in res.active), (name, ratio)
 
 
-def test_written_design_meets_the_constraints_resolved(tmp_path: Path,
-                                                        two_variable: tuple[Any, Any]) -> None:
-    spec, res = two_variable
-    path = write_design_toml(res, tmp_path / "design.toml")
-    text = path.read_text()
-    assert "[E] optimised: maglevkit design" in text
+def check_written_design(spec: Any, res: Any, path: Path) -> tuple[Any, dict[str, Any]]:
+    """Write the optimum, load it as any magnet file (no warning: complete and tagged), and
+    re-solve its statics independently: it meets every constraint and reproduces the
+    optimiser's values (shared with tests/test_design_tr09.py).  Returns the magnet and
+    :func:`evaluate_design`'s values."""
+    path = write_design_toml(res, path)
+    assert "[E] optimised: maglevkit design" in path.read_text()
     with warnings.catch_warnings():
         warnings.simplefilter("error")        # a complete, tagged parameter file
         mag = load_magnet(path)
@@ -147,6 +155,20 @@ def test_written_design_meets_the_constraints_resolved(tmp_path: Path,
     assert ev["voltage_V"] <= req["supply_voltage_V"]
     assert ev["voltage_V"] == pytest.approx(res.constraints["voltage"].value, rel=1e-7)
     assert ev["power_W"] == pytest.approx(res.power_W, rel=1e-7)
+    return mag, ev
+
+
+def test_active_constraints_are_reported(two_variable: tuple[Any, Any]) -> None:
+    spec, res = two_variable
+    assert set(res.active) == {"force_nominal", "current_density", "flux_density"}
+    check_active_constraints(spec, res)
+
+
+def test_written_design_meets_the_constraints_resolved(tmp_path: Path,
+                                                        two_variable: tuple[Any, Any]) -> None:
+    spec, res = two_variable
+    mag, ev = check_written_design(spec, res, tmp_path / "design.toml")
+    req = spec.requirements
     sol = solve_statics(mag, gaps_m=req["nominal_gap_m"], currents_A=ev["nominal_current_A"])
     assert float(np.asarray(sol.force_N)) == pytest.approx(req["force_N"], rel=1e-9)
 
@@ -156,16 +178,26 @@ def test_design_gradients_match_central_differences() -> None:
     values = {"pole_width": 0.027, "coil_height": 0.045, "coil_thickness": 0.014,
               "leg_height": 0.068}
     gap, cur = 0.008, 14.0
-    sens = design_sensitivities(spec, values, gap_m=gap, current_A=cur)
+    check_design_gradients(spec, values, gap, cur)
+
+
+def check_design_gradients(spec: Any, values: dict[str, float], gap: float, cur: float) -> None:
+    """``design_sensitivities`` at (gap, current) equals the statics of the magnet built
+    from the parameter file and its derivatives their central differences (shared with
+    tests/test_design_tr09.py)."""
     from maglevkit.design import design_parameters
     from maglevkit.magnets import build_magnet
+
+    sens = design_sensitivities(spec, values, gap_m=gap, current_A=cur)
 
     def statics(v: dict[str, float]) -> tuple[float, float]:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
             mag = build_magnet(design_parameters(spec, v))
             sol = solve_statics(mag, gaps_m=gap, currents_A=cur)
-        return float(np.asarray(sol.force_N)), float(np.asarray(sol.flux_linkage_Wb).ravel()[0])
+        # per circuit: the magnet's force over its circuits; circuit 1's flux linkage
+        return (float(np.asarray(sol.force_N)) / len(mag.network.circuits),
+                float(np.asarray(sol.flux_linkage_Wb).ravel()[0]))
 
     f0, psi0 = statics(values)
     # the symbolic network equals the numeric one built from the parameter file
@@ -177,9 +209,9 @@ def test_design_gradients_match_central_differences() -> None:
         fp, pp = statics({**values, name: v + h})
         fm, pm = statics({**values, name: v - h})
         assert sens["dforce_dp"][name] == pytest.approx((fp - fm) / (2 * h), rel=1e-6,
-                                                        abs=1e-6 * abs(f0) / v)
+                                                        abs=1e-6 * abs(f0) / v), name
         assert sens["dpsi_dp"][name] == pytest.approx((pp - pm) / (2 * h), rel=1e-6,
-                                                      abs=1e-6 * abs(psi0) / v)
+                                                      abs=1e-6 * abs(psi0) / v), name
 
 
 def test_turns_derivative_from_ampere_turns() -> None:
@@ -190,14 +222,23 @@ def test_turns_derivative_from_ampere_turns() -> None:
     spec = read_design_spec(doc)
     values = {"pole_width": 0.03, "coil_height": 0.05, "coil_thickness": 0.015,
               "leg_height": 0.07, "turns": 600.0}
-    gap, cur = 0.01, 12.0
+    check_turns_derivative(spec, values, "turns", 0.01, 12.0)
+
+
+def check_turns_derivative(spec: Any, values: dict[str, float], key: str, gap: float,
+                           cur: float) -> None:
+    """The turns' design derivatives from the ampere-turns relations, with dF/dI and
+    dpsi/dI (every circuit at ``cur``) of the base magnet's solve_statics, whose turns
+    ``values[key]`` must be (shared with tests/test_design_tr09.py)."""
+    n = values[key]
     sens = design_sensitivities(spec, values, gap_m=gap, current_A=cur)
     sol = solve_statics(spec.magnet, gaps_m=gap, currents_A=cur)
-    dfdi = float(np.sum(np.asarray(sol.dforce_dcurrent_N_per_A)))
-    ldiff = float(np.asarray(sol.differential_inductance_H).ravel()[0])
+    circuits = len(spec.magnet.network.circuits)
+    dfdi = float(np.sum(np.asarray(sol.dforce_dcurrent_N_per_A))) / circuits
+    ldiff = float(np.asarray(sol.common_differential_inductance_H).ravel()[0])
     psi = float(np.asarray(sol.flux_linkage_Wb).ravel()[0])
-    assert sens["dforce_dp"]["turns"] == pytest.approx(cur / 600 * dfdi, rel=1e-8)
-    assert sens["dpsi_dp"]["turns"] == pytest.approx(psi / 600 + cur / 600 * ldiff, rel=1e-8)
+    assert sens["dforce_dp"][key] == pytest.approx(cur / n * dfdi, rel=1e-8)
+    assert sens["dpsi_dp"][key] == pytest.approx(psi / n + cur / n * ldiff, rel=1e-8)
 
 
 @pytest.mark.parametrize(("edit", "needle"), [
@@ -214,8 +255,8 @@ def test_turns_derivative_from_ampere_turns() -> None:
     (lambda d: d["requirements"].update(force_kN=1.0), "[requirements] unknown key(s) "
                                                        "['force_kN']"),
     (lambda d: d["design"].update(objective="cost"), "[design] objective = 'cost'"),
-    (lambda d: d["design"].update(magnet="tr09-standard"), "[design] magnet = "
-                                                           "'tr09-standard'"),
+    (lambda d: d["design"].update(magnet="tr09-standard"), "[variables] unknown design "
+     "variable 'leg_height' for a levitation_magnet"),
     (lambda d: d["design"].update(magnet="nope"), "[design] magnet = 'nope'"),
     (lambda d: d["coil"].update(fill_factor=1.5), "[coil] fill_factor = 1.5"),
     (lambda d: d.update(extra={}), "unknown table(s) ['extra']"),

@@ -37,7 +37,8 @@ MAGNETS = {name: _bundled(f"{name}.toml") for name in mk.bundled_magnets()}
 VEHICLES = {"tr09": _bundled("vehicle/tr09.toml")}
 GUIDEWAYS = {"guideway": _bundled("vehicle/guideway.toml")}
 CROSS_SECTIONS = {"tr09-cross-section": _bundled("vehicle/tr09-cross-section.toml")}
-DESIGNS = {"u-magnet-design": _bundled("designs/u-magnet-design.toml")}
+DESIGNS = {"u-magnet-design": _bundled("designs/u-magnet-design.toml"),
+           "tr09-design": _bundled("designs/tr09-design.toml")}
 KINDS = {
     "magnet": (MAGNETS, MAGNET_PLAUSIBLE, lambda p: mk.build_magnet(p, source="f")),
     "vehicle": (VEHICLES, VEHICLE_PLAUSIBLE, lambda p: parse_vehicle(p, "f")),

@@ -419,15 +419,17 @@ class AirGap(LinearElement):
         object.__setattr__(self, "fringe_edges", edges)
         for w, r in edges:
             _positive(owner, fringe_edge_length=w, fringe_radius=r)
-        recesses = tuple((float(a), float(d)) for a, d in self.recesses)
+        recesses = tuple((a if symbolic(a) else float(a), float(d)) for a, d in self.recesses)
         object.__setattr__(self, "recesses", recesses)
         for a, d in recesses:
             _positive(owner, recess_area=a, recess_depth=d)
-        slots = tuple((float(w), float(b)) for w, b in self.face_slots)
+        slots = tuple((w if symbolic(w) else float(w), float(b)) for w, b in self.face_slots)
         object.__setattr__(self, "face_slots", slots)
         for w, b in slots:
             _positive(owner, face_slot_length=w, face_slot_opening=b)
-        if slots and sum(w * b for w, b in slots) >= self.pole_area:
+        covered = sum(w * b for w, b in slots)
+        if slots and not (symbolic(covered) or symbolic(self.pole_area)) \
+                and covered >= self.pole_area:
             raise ParameterError(f"{owner}: the face slots (length x opening) cover the "
                                  "whole pole area; pole_area must include them")
         _nonnegative(owner, slot_pitch=self.slot_pitch, slot_opening=self.slot_opening)
@@ -848,7 +850,8 @@ class FringePermeance(LinearElement):
         _positive(owner, width=self.width, radius=self.radius)
         _nonnegative(owner, inner_radius=self.inner_radius, slot_pitch=self.slot_pitch,
                      slot_opening=self.slot_opening)
-        if self.inner_radius >= self.radius:
+        if not (symbolic(self.inner_radius) or symbolic(self.radius)) \
+                and self.inner_radius >= self.radius:
             raise ParameterError(f"{owner}: inner_radius = {self.inner_radius!r} m must be "
                                  f"smaller than radius = {self.radius!r} m")
         if self.slot_pitch > 0.0 and not 0.0 < self.slot_opening < self.slot_pitch:
@@ -877,7 +880,7 @@ class FringePermeance(LinearElement):
         if self.slot_pitch > 0.0:
             gap = carter_coefficient(gap, self.slot_pitch, self.slot_opening) * gap
         g = fringe_per_mu0(self.width, self.radius, gap)
-        if self.inner_radius > 0.0:
+        if symbolic(self.inner_radius) or self.inner_radius > 0.0:
             g = g - fringe_per_mu0(self.width, self.inner_radius, gap)
         return MU0 * g
 

@@ -35,7 +35,7 @@ def design(
                                                                 "optimum to write (TOML).")]
     = Path("design.toml"),
     objective: Annotated[str | None, typer.Option(
-        help="Override the spec's objective: mass (iron + copper) or power (R I^2 at the "
+        help="Override the spec's objective: mass (iron + conductor) or power (R I^2 at the "
              "nominal point).")] = None,
     pareto: Annotated[Path | None, typer.Option(
         help="Also sweep the mass-power Pareto front (epsilon constraint) and plot it to this "
@@ -55,6 +55,7 @@ def design(
     \b
     Example:
       maglevkit design u-magnet-design -o design.toml --pareto front.png
+      maglevkit design tr09-design -o tr09-optimised.toml
     """
     from ..design import (
         OBJECTIVES,

@@ -69,8 +69,10 @@ elements are unchanged.
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from typing import Any
+
+import casadi as ca
 
 from ..circuit.elements import (
     AirGap,
@@ -79,6 +81,7 @@ from ..circuit.elements import (
     FringePermeance,
     IronPath,
     LeakagePermeance,
+    symbolic,
 )
 from ..circuit.network import Branch, Circuit, Coil, Network
 from ..errors import ParameterFileError
@@ -93,7 +96,8 @@ from .base import (
     take,
 )
 
-__all__ = ["build_levitation_magnet", "pole_gap_names"]
+__all__ = ["build_levitation_magnet", "levitation_network", "GeometryBranches", "pole_gap_names",
+           "read_circuits"]
 
 MAGNET_SCHEMA = {
     "kind": Schema(str),
@@ -149,8 +153,26 @@ def pole_gap_names(poles: int) -> tuple[str, ...]:
     return tuple(f"p{k:02d}" for k in range(1, poles + 1))
 
 
-def _circuits(raw: Any, poles: int) -> tuple[list[str], list[int]]:
-    """Validate ``[circuits]``: names, and the 1-based circuit number of every pole."""
+def read_circuits(raw: Any, poles: int) -> tuple[list[str], list[int]]:
+    """Validate ``[circuits]``: names, and the 1-based circuit number of every pole.
+
+    Parameters
+    ----------
+    raw : mapping
+        The ``[circuits]`` table (``names``, ``assignment``).
+    poles : int
+        Number of poles.
+
+    Returns
+    -------
+    tuple
+        The circuit names and the circuit number (1-based) of every pole, in pole order.
+
+    Raises
+    ------
+    ParameterFileError
+        Bad names, an assignment of the wrong length or naming no circuit, an idle circuit.
+    """
     c = take(raw, CIRCUITS_SCHEMA, "circuits")
     names = c["names"]
     if not names or not all(isinstance(n, str) and n for n in names):
@@ -188,12 +210,11 @@ def build_levitation_magnet(params: Mapping[str, Any], materials: Mapping[str, M
     if poles < 2:
         raise ParameterFileError(f"[magnet] poles = {poles}: a levitation magnet needs >= 2 "
                                  "poles (flux returns through the neighbouring pole)")
-    names, assign = _circuits(params["circuits"], poles)
+    names, assign = read_circuits(params["circuits"], poles)
 
     tau, lp, wp = m["pole_pitch"], m["pole_length"], m["pole_width"]
     hcore, hc, tc, hf = m["core_height"], m["coil_height"], m["coil_thickness"], m["coil_to_face"]
-    hb, wb = m["back_height"], m["back_width"]
-    ng, bg, dg = m["lig_grooves"], m["lig_groove_width"], m["lig_groove_depth"]
+    ng, bg = m["lig_grooves"], m["lig_groove_width"]
     window = tau - lp
     if window <= 2.0 * tc:
         raise ParameterFileError(
@@ -211,21 +232,125 @@ def build_levitation_magnet(params: Mapping[str, Any], materials: Mapping[str, M
     if st["slot_opening"] >= st["slot_pitch"]:
         raise ParameterFileError("[stator] slot_opening must be smaller than slot_pitch")
 
+    if m["flux_paths"] not in FLUX_PATHS:
+        raise ParameterFileError(f"[magnet] flux_paths = {m['flux_paths']!r}: expected one of "
+                                 f"{', '.join(map(repr, FLUX_PATHS))}")
+    if m["flux_paths"] != "split" and "coil_segments" in params["magnet"]:
+        raise ParameterFileError("[magnet] coil_segments applies to flux_paths = \"split\" "
+                                 "only; remove it or set flux_paths = \"split\"")
+    if m["flux_paths"] == "split" and not 1 <= m["coil_segments"] <= 12:
+        raise ParameterFileError(f"[magnet] coil_segments = {m['coil_segments']}: allowed are "
+                                 "1 ... 12 strips along the coil")
     core_mat = resolve_material(m["material"], materials, "magnet")
     stator_mat = resolve_material(st["material"], materials, "stator")
+    net = levitation_network(m, st, names, assign, core_mat, stator_mat, options)
+    return m["name"], net
+
+
+class GeometryBranches:
+    """The builder's comparisons of geometry values, for numbers and CasADi symbols.
+
+    With numbers (a parameter file) each comparison is Python's own (``min``, ``max``,
+    ``<``), so the network is the same as without this class.  With CasADi symbols (the
+    design optimisation, :mod:`maglevkit.design`) a comparison cannot be decided on the
+    expression: it is decided on the numbers the symbols take at the design point
+    ``value`` evaluates at (the optimiser's start), and the condition that keeps the
+    decision valid is recorded in :attr:`taken` as ``(label, expression)`` with
+    ``expression >= 0`` while the decision holds.  The caller checks them at the optimum
+    (and refuses, or re-decides there, when one changed sign): each side of a decision
+    is a smooth function of the geometry, so the optimiser's derivatives are exact.
+
+    Parameters
+    ----------
+    value : callable, optional
+        ``expression -> float``: the value of a CasADi expression at the design point
+        (required once a comparison involves a symbol).
+    """
+
+    def __init__(self, value: Callable[[Any], float] | None = None) -> None:
+        self.value = value
+        self.taken: list[tuple[str, Any]] = []
+
+    def less(self, a: Any, b: Any, label: str) -> bool:
+        """``a < b`` [same unit] (decided at the design point when symbolic; ``label``
+        names the decision)."""
+        if not (symbolic(a) or symbolic(b)):
+            return bool(a < b)
+        if self.value is None:
+            raise ParameterFileError(f"geometry branch {label!r} depends on a symbolic value "
+                                     "but no design point to decide it at was given")
+        d = b - a
+        yes = self.value(d) > 0.0
+        self.taken.append((f"{label} ({'<' if yes else '>='})", d if yes else -d))
+        return yes
+
+    def minimum(self, a: Any, b: Any, label: str) -> Any:
+        """``min(a, b)`` (Python's: ``a`` unless ``b < a``)."""
+        return b if self.less(b, a, label) else a
+
+    def maximum(self, a: Any, b: Any, label: str) -> Any:
+        """``max(a, b)`` (Python's: ``a`` unless ``b > a``)."""
+        return b if self.less(a, b, label) else a
+
+
+def _log(x: Any) -> Any:
+    return ca.log(x) if symbolic(x) else math.log(x)
+
+
+def _hypot(a: Any, b: Any) -> Any:
+    return ca.sqrt(a * a + b * b) if symbolic(a) or symbolic(b) else math.hypot(a, b)
+
+
+def levitation_network(m: Mapping[str, Any], st: Mapping[str, Any], names: list[str],
+                       assign: list[int], core_mat: Material, stator_mat: Material,
+                       options: ModelOptions, decisions: GeometryBranches | None = None
+                       ) -> Network:
+    """The levitation magnet's network (module docstring): the one builder.
+
+    :func:`build_levitation_magnet` calls it with the checked numbers of a parameter
+    file; the design optimisation (:mod:`maglevkit.design`) with CasADi ``SX`` symbols for
+    the geometry it varies (exact geometry derivatives).  The geometry checks of
+    :func:`build_levitation_magnet` are then the optimiser's bounds and constraints, and
+    the comparisons of geometry values inside the builder go through ``decisions``
+    (:class:`GeometryBranches`: decided at the start design, checked at the optimum).
+
+    Parameters
+    ----------
+    m : mapping
+        The checked ``[magnet]`` table (:data:`MAGNET_SCHEMA`; lengths [m],
+        ``turns_per_pole`` [-], ``resistance_per_pole`` [ohm]); geometry entries may be
+        CasADi symbols.
+    st : mapping
+        The checked ``[stator]`` table (lengths [m]; numbers).
+    names : list of str
+        Circuit names.
+    assign : list of int
+        The 1-based circuit number of every pole.
+    core_mat, stator_mat : Material
+        The magnet's and the stator's iron.
+    options : ModelOptions
+        Physics switches.
+    decisions : GeometryBranches, optional
+        Decides the comparisons of geometry values (default: numbers only).
+
+    Returns
+    -------
+    Network
+    """
+    br = GeometryBranches() if decisions is None else decisions
+    poles = len(assign)
     gaps = pole_gap_names(poles)
+    tau, lp, wp = m["pole_pitch"], m["pole_length"], m["pole_width"]
+    hcore, hc, tc, hf = m["core_height"], m["coil_height"], m["coil_thickness"], m["coil_to_face"]
+    hb, wb = m["back_height"], m["back_width"]
+    ng, bg, dg = m["lig_grooves"], m["lig_groove_width"], m["lig_groove_depth"]
+    window = tau - lp
 
     # ---- air gap of one pole: face teeth, LIG grooves, flanks; Carter for the stator slots
     # LIG grooves: deeper than half their width (the bundled files: 20 mm x 10 mm), their
     # flux enters through the side walls as into a slot: Carter's slot loss on the whole
     # face; shallow ones: the groove bottom in series with the gap
-    if m["flux_paths"] not in FLUX_PATHS:
-        raise ParameterFileError(f"[magnet] flux_paths = {m['flux_paths']!r}: expected one of "
-                                 f"{', '.join(map(repr, FLUX_PATHS))}")
     split = m["flux_paths"] == "split"
-    if not split and "coil_segments" in params["magnet"]:
-        raise ParameterFileError("[magnet] coil_segments applies to flux_paths = \"split\" "
-                                 "only; remove it or set flux_paths = \"split\"")
     deep = split and dg >= 0.5 * bg
     face_area = (lp - (0 if deep else ng) * bg) * wp
     grooves = ((ng * bg * wp, dg),) if ng > 0 and not deep else ()
@@ -239,8 +364,8 @@ def build_levitation_magnet(params: Mapping[str, Any], materials: Mapping[str, M
     edges: list[tuple[float, float]] = []
     if options.fringing and not split:
         edges += [(wp, hf), (wp, hf)]                         # flanks facing the neighbours
-    if options.fringing and ends and overhang > 0.0:
-        r = min(hf, overhang)                                 # limited by the stator edge
+    if options.fringing and ends and br.less(0.0, overhang, "stator overhang beside the face"):
+        r = br.minimum(hf, overhang, "end fringe radius: flank or stator edge")   # stator edge
         edges += [(lp, r), (lp, r)]
     teeth_share = 1.0 - st["slot_opening"] / st["slot_pitch"]
     tooth_area = lp * wp * teeth_share
@@ -272,9 +397,6 @@ def build_levitation_magnet(params: Mapping[str, Any], materials: Mapping[str, M
     # (to C_1), K - 1 coil strips, top (C_K to the pole back's mid-line); turns in
     # proportion to the coil they hold, so leakage can leave part-way along the winding
     nseg = m["coil_segments"] if split else 1
-    if not 1 <= nseg <= 12:
-        raise ParameterFileError(f"[magnet] coil_segments = {nseg}: allowed are 1 ... 12 "
-                                 "strips along the coil")
     h = hc / nseg
     y_nodes = [hf + (j + 0.5) * h for j in range(nseg)]
     seg_len = [y_nodes[0], *([h] * (nseg - 1)), core_len - y_nodes[-1]]
@@ -295,8 +417,11 @@ def build_levitation_magnet(params: Mapping[str, Any], materials: Mapping[str, M
     # circle lands before the window's centre plane (y <= window/2; beyond it the window
     # leakage takes over); both flanks of every pole (an end pole's outer flank faces the
     # stator beyond the magnet, with no window centre plane: strips along the whole coil)
-    strips = [(y - 0.5 * h, min(y + 0.5 * h, 0.5 * window)) for y in y_nodes
-              if y - 0.5 * h < 0.5 * window] if split else []
+    strips = [(y - 0.5 * h, br.minimum(y + 0.5 * h, 0.5 * window,
+                                       f"flank strip {j + 1}: top or window centre"))
+              for j, y in enumerate(y_nodes)
+              if br.less(y - 0.5 * h, 0.5 * window, f"flank strip {j + 1} below the window "
+                         "centre")] if split else []
     outer_strips = [(y - 0.5 * h, y + 0.5 * h) for y in y_nodes] if split else []
     # around the coil into the own pole back: half hollow cylinders around the coil's
     # cross-section (inner radius h_c/2, radial extent t_c) along the coil sides that do
@@ -307,7 +432,7 @@ def build_levitation_magnet(params: Mapping[str, Any], materials: Mapping[str, M
     def g_pb(k: int) -> float:
         end_side = wp + 2.0 * tc if ends else wp
         length = 2.0 * side * ends + end_side * ((k == 0) + (k == poles - 1))
-        return MU0 * length * math.log(1.0 + tc / (0.5 * hc)) / math.pi
+        return MU0 * length * _log(1.0 + tc / (0.5 * hc)) / math.pi
 
     rho = resistivity(m["resistivity"], core_mat, "magnet") if options.eddy_currents else 0.0
     slots = {"slot_pitch": st["slot_pitch"], "slot_opening": st["slot_opening"]}
@@ -422,7 +547,7 @@ def build_levitation_magnet(params: Mapping[str, Any], materials: Mapping[str, M
             # end pole: the back's end face, beyond the coil's outer side, to the stator
             # beyond the magnet (Roters' quarter circles centred on the face's outer edge,
             # from the depth where they clear the coil's corner to the back's underside)
-            r0 = max(hcore, math.hypot(hf + hc, tc))
+            r0 = br.maximum(hcore, _hypot(hf + hc, tc), "end face: core or coil corner")
             branches.append(Branch(f"end_{p}", f"K{k + 1}", f"W{k + 1}{outer}", (
                 FringePermeance(f"end_{p}", gap_input=p, width=wp, radius=hcore + hb,
                                 inner_radius=r0, **slots),)))
@@ -438,7 +563,7 @@ def build_levitation_magnet(params: Mapping[str, Any], materials: Mapping[str, M
                 FringePermeance(f"under_{p}", gap_input=p, width=0.5 * wp,
                                 radius=r_d + lp + tau, inner_radius=r_d, **slots),)))
         if options.leakage:
-            if g_pb(k) > 0.0:
+            if ends or k in (0, poles - 1):       # g_pb > 0: a coil side not facing a pole
                 branches.append(Branch(f"leak_pb_{p}", f"H{k + 1}", f"K{k + 1}",
                                        (LeakagePermeance(f"leak_pb_{p}", g_pb(k)),)))
     for k in range(poles - 1):
@@ -473,7 +598,7 @@ def build_levitation_magnet(params: Mapping[str, Any], materials: Mapping[str, M
                       for k in range(poles) if assign[k] == i + 1 for seg, share in coil_turns[k])
         npoles = sum(1 for a in assign if a == i + 1)
         circuits.append(Circuit(cname, m["resistance_per_pole"] * npoles, coils))
-    return m["name"], Network(tuple(branches), tuple(circuits), name=m["name"])
+    return Network(tuple(branches), tuple(circuits), name=m["name"])
 
 
 def levitation_magnet_range(params: Mapping[str, Any]) -> PlausibleRange:
