@@ -368,9 +368,16 @@ def read_design_spec(source: str | Path | Mapping[str, Any], *, base_dir: str | 
             stacklevel=3)
     ct = _table(doc, "coil")
     for old, new in _RENAMED.items():
-        if old in ct:
-            raise DesignSpecError(f"[coil] {old} = {ct[old]!r}: renamed {new} (the winding "
-                                  "may be aluminium, as the TR09's strip coils)")
+        if old not in ct:
+            continue
+        if new in ct:
+            raise DesignSpecError(f"[coil] {old} = {ct[old]!r} and {new} = {ct[new]!r}: give "
+                                  f"{new} only ({old} is its deprecated old name)")
+        # the old name stays a deprecated alias for one release (the winding may be
+        # aluminium, as the TR09's strip coils, so the key names no metal any more)
+        warnings.warn(f"{label}: [coil] {old} is deprecated; use {new} (same value and unit)",
+                      DeprecationWarning, stacklevel=3)
+        ct = {**{k: v for k, v in ct.items() if k != old}, new: ct[old]}
     bad = sorted(set(ct) - set(_COIL))
     if bad:
         raise DesignSpecError(f"[coil] unknown key(s) {bad}; allowed: {', '.join(_COIL)}")
