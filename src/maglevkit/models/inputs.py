@@ -125,7 +125,11 @@ def time_grid(t: Any, dt: Any) -> np.ndarray:
         a bad ``dt`` or one longer than the span, or ``dt`` given together with an
         explicit grid.
     """
-    arr = real_array(t, "t", "s", finite=False)
+    if type(t) is tuple and len(t) == 2 and type(t[0]) in (int, float) and \
+            type(t[1]) in (int, float):
+        arr = np.array(t, dtype=float)      # a span of two plain numbers (the common case)
+    else:
+        arr = real_array(t, "t", "s", finite=False)
     if arr.ndim != 1 or arr.size < 2 or not np.all(np.isfinite(arr)):
         raise InputError("t must be (t0, tf) or a 1-D array of at least 2 finite times [s]")
     if arr.size == 2 and isinstance(t, (tuple, list)):
@@ -186,17 +190,30 @@ def sample_input(value: Any, times: np.ndarray, names: tuple[str, ...], what: st
         if unknown or missing:
             raise InputError(f"{what}: unknown names {unknown}, missing {missing}; expected "
                              f"{list(names)}")
-        # every column is sampled and checked (finite) on its own
-        cols = [sample_input(value[nm], times, (nm,), f"{what}[{nm}]", unit)[:, 0] for nm in names]
-        return np.stack(cols, axis=1)
+        # every column is sampled and checked (finite) on its own, into one (n, k) array
+        out = np.empty((n, k))
+        for j, nm in enumerate(names):
+            v = value[nm]
+            col = _signal_column(v, times) if isinstance(v, Signal) else None
+            out[:, j] = (col if col is not None
+                         else sample_input(v, times, (nm,), f"{what}[{nm}]", unit)[:, 0])
+        return out
     if isinstance(value, Signal):
-        col = np.asarray(value(times), dtype=float)
-        if col.shape == (n,) and np.isfinite(col).all():
+        col = _signal_column(value, times)
+        if col is not None:
             # the same value for every name: checked once, before the copies
-            return np.repeat(col[:, None], k, axis=1)
-        arr = np.repeat(col[:, None], k, axis=1)
+            out = np.empty((n, k))
+            out[:] = col[:, None]
+            return out
+        arr = np.repeat(np.asarray(value(times), dtype=float)[:, None], k, axis=1)
     elif callable(value):
         arr = _sample_callable(value, times, k, names, what, unit)
+    elif type(value) is np.ndarray and value.dtype == np.float64 and value.shape == (k,) \
+            and not (k == 1 and n == 1) and np.isfinite(value).all():
+        # one finite value per name (the common constant input): checked before the copies
+        out = np.empty((n, k))
+        out[:] = value
+        return out
     else:
         try:
             a = real_array(value, what, unit, finite=False)
@@ -219,6 +236,13 @@ def sample_input(value: Any, times: np.ndarray, names: tuple[str, ...], what: st
         bad = int(np.argmax(~np.all(np.isfinite(arr), axis=1)))
         raise InputError(f"{what} is not finite at t = {times[bad]:.6g} s: {arr[bad].tolist()}")
     return arr
+
+
+def _signal_column(value: Signal, times: np.ndarray) -> np.ndarray | None:
+    """A Signal's samples at ``times`` as a float array (n,), or None where they are not
+    finite numbers of that shape (the caller then reports them)."""
+    col = np.asarray(value(times), dtype=float)
+    return col if col.shape == times.shape and np.isfinite(col).all() else None
 
 
 def _sample_callable(value: Any, times: np.ndarray, k: int, names: tuple[str, ...], what: str,
@@ -341,7 +365,7 @@ def simulation_inputs(t: Any, dt: Any, *, gaps: Any, voltages: Any, gap_rates: A
     """
     times = time_grid(t, dt)
     g = sample_input(gaps, times, gap_names, "gaps", "m")
-    if np.any(g <= 0.0):
+    if g.size and g.min() <= 0.0:                 # (finite: sample_input checked them)
         raise InputError("gaps must be > 0 m")
     u = sample_input(voltages, times, circuit_names, "voltages", "V")
     rates = gap_secants(times, g, gap_rates, gap_names, gap_rate_tolerance)
