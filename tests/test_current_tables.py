@@ -322,12 +322,20 @@ def test_kernel_lookup_equals_the_cell_table_reference() -> None:
         ns, ni = tab.n_cells
         p = ca.DM([tab.s0_m, 1.0 / tab.ds_m, ns, tab.i0_A, 1.0 / tab.di_A, ni, 0.0])
         s, i = ca.MX.sym("s"), ca.MX.sym("i")
-        f = ca.Function("f", [s, i], cell_lookup(gap_cell_part(s, p, degree), i, p,
-                                                 ca.MX(ca.DM(tab.coefficients.reshape(-1))),
-                                                 degree))
+        table = ca.MX(ca.DM(tab.coefficients.reshape(-1)))
+        vals, k = cell_lookup(gap_cell_part(s, p, degree), i, p, table, degree)
+        # a lookup with a guess of the current's cell: the same values for any guess
+        guess = ca.MX.sym("guess")
+        hinted, _ = cell_lookup(gap_cell_part(s, p, degree), i, p, table, degree, hint=guess)
+        f = ca.Function("f", [s, i], vals)
+        fh = ca.Function("fh", [s, i, guess], hinted)
         rng = np.random.default_rng(7)
         pts = np.column_stack([rng.uniform(0.0045, 0.0165, 400), rng.uniform(-3.0, 83.0, 400)])
         got = np.array([np.array(f(a, b)).ravel() for a, b in pts], dtype=float).reshape(-1, 3)
         ref = tab.evaluate(pts[:, 0], pts[:, 1])
         scale = np.max(np.abs(ref), axis=0)
         assert np.max(np.abs(got - ref) / scale) <= 1e-13, method
+        for a, b in pts[:40]:
+            for g in (0.0, 5.0, 16.0, np.nan):
+                assert np.array_equal(np.array(fh(a, b, g), dtype=float).ravel(),
+                                      np.array(f(a, b), dtype=float).ravel())

@@ -125,21 +125,23 @@ def time_grid(t: Any, dt: Any) -> np.ndarray:
         a bad ``dt`` or one longer than the span, or ``dt`` given together with an
         explicit grid.
     """
-    if type(t) is tuple and len(t) == 2 and type(t[0]) in (int, float) and \
-            type(t[1]) in (int, float):
-        arr = np.array(t, dtype=float)      # a span of two plain numbers (the common case)
-    else:
+    span = (type(t) is tuple and len(t) == 2 and type(t[0]) in (int, float)
+            and type(t[1]) in (int, float) and math.isfinite(t[0]) and math.isfinite(t[1]))
+    if not span:                    # (a span of two plain finite numbers: the common case)
         arr = real_array(t, "t", "s", finite=False)
-    if arr.ndim != 1 or arr.size < 2 or not np.all(np.isfinite(arr)):
-        raise InputError("t must be (t0, tf) or a 1-D array of at least 2 finite times [s]")
-    if arr.size == 2 and isinstance(t, (tuple, list)):
-        t0, tf = float(arr[0]), float(arr[1])
+        if arr.ndim != 1 or arr.size < 2 or not np.all(np.isfinite(arr)):
+            raise InputError("t must be (t0, tf) or a 1-D array of at least 2 finite times [s]")
+        span = arr.size == 2 and isinstance(t, (tuple, list))
+    if span:
+        t0, tf = float(t[0]), float(t[1])
         step = 1e-4 if dt is None else check_step(dt)
         if dt is None and tf > t0:
             step = min(step, tf - t0)
         check_span(t0, tf, step)
         n = int(math.floor((tf - t0) / step * (1.0 + 1e-12)))
-        grid = t0 + step * np.arange(n + 1)
+        grid = np.arange(n + 1, dtype=float)
+        grid *= step
+        grid += t0                      # t0 + step k, as t0 + step * np.arange(n + 1)
         if tf - grid[-1] > 1e-9 * step:
             grid = np.append(grid, tf)
         else:

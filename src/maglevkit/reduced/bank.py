@@ -626,7 +626,7 @@ class MagnetBank:
         """Maps ``maps`` of ``(L~, dL/ds, F)`` of one circuit at the gap cell ``cell``
         (:meth:`_gap_cell`) and current ``i`` from the per-cell table (MX expressions;
         :func:`~maglevkit.reduced.tables.cell_lookup`)."""
-        return cell_lookup(cell, i, p, table, self._degree, maps)
+        return cell_lookup(cell, i, p, table, self._degree, maps)[0]
 
     def _circuit_expressions(self, i: Any, s: Any, u: Any, sd: Any, p: Any, table: Any,
                              cell: tuple[Any, Any] | None = None) -> tuple[Any, Any, Any, Any]:
@@ -705,10 +705,15 @@ class MagnetBank:
         hs = h / substeps
 
         r_el, a = p[7], p[8]
+        # the current's cell of the first stage is the guess of every later lookup's
+        # (cell_lookup's hint: the same values, a shorter chain in the lanes' C)
+        hint: list[Any] = []
 
         def f(x: Any, cell: tuple[Any, Any]) -> Any:
             # the stages need L~ and dL/ds only (the gather of F would be wasted)
-            lt, dl = self._lookup(cell, x, p, table, maps=(0, 1))
+            (lt, dl), k = cell_lookup(cell, x, p, table, self._degree, (0, 1),
+                                      hint=hint[0] if hint else None)
+            hint[:] = hint or [k]
             return eq8_rhs(x, eq8_freewheel_voltage(x, u, r_el, a) if self.freewheel else u,
                            sd, lt, dl, r_el, a)
 
@@ -716,7 +721,8 @@ class MagnetBank:
         se = s + sd * h
         coil = eq8_coil_current(x, eq8_freewheel_voltage(x, u, r_el, a) if self.freewheel
                                 else u, r_el, a)
-        force = self._lookup(self._gap_cell(se, p), x, p, table, maps=(2,))[0]
+        force = cell_lookup(self._gap_cell(se, p), x, p, table, self._degree, (2,),
+                            hint=hint[0])[0][0]
         bad = _reason_code(s, se, sd, u, lo, hi, (x,), p)
         return ca.Function("bank_circuit_step", [i, s, u, sd, h, p],
                            [x, coil, force, lo, hi, bad],

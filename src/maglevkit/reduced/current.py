@@ -359,6 +359,11 @@ class CurrentModel:
         nc = core.n_circuits
         self._avg = core.averaging           # pole gaps -> substitute gap per circuit
         self._share = core.share             # circuit force -> pole forces, (ng, nc)
+        one = np.count_nonzero(self._share, axis=1) == 1
+        self._pole_share = ((np.argmax(self._share != 0, axis=1),
+                             self._share[np.arange(self._share.shape[0]),
+                                         np.argmax(self._share != 0, axis=1)])
+                            if one.all() else None)
         self.gap_range = core.gap_range_m
         self.current_range = core.current_range_A
         # rounding allowances of every range check, and the bounds of the state [I_L; s]
@@ -555,6 +560,16 @@ class CurrentModel:
             Substitute gap ``s`` of every circuit [m]: the mean of its poles' gaps.
         """
         return np.asarray(gaps_m) @ self._avg.T
+
+    def _pole_forces(self, fc: np.ndarray) -> np.ndarray:
+        """Pole forces [N] (n_t, n_gaps) from circuit forces ``fc`` [N] (n_t, n_circuits):
+        ``fc @ share.T``, taken as each pole's circuit force times its share (the share
+        matrix has one entry per row, so the product adds only exact zeros: the same
+        numbers for finite forces, a zero's sign aside, without a BLAS call per run)."""
+        if self._pole_share is None:
+            return fc @ self._share.T
+        col, w = self._pole_share
+        return fc[:, col] * w
 
     def _outs(self, x: Any, u: Any) -> Any:
         """``outputs_fun`` on a full state ``x = [I_L; s(; I_ec)]`` with voltages ``u``."""
@@ -1220,12 +1235,15 @@ class CurrentModel:
             final = _new(CurrentModelState, time_s=float(times[-1]),
                          inductor_currents_A=il[-1].copy(), gaps_m=g[-1].copy(),
                          eddy_currents_A=None)
+            rates = np.empty(g.shape)
+            rates[:-1] = secant
+            rates[-1] = secant[-1]
+            held = u.copy()
+            held[-1] = u[-2]
             return _new(
-                ReducedSimulation, time_s=times, gaps_m=g,
-                gap_rates_m_per_s=np.concatenate((secant, secant[-1:])),
-                voltages_V=np.concatenate((u[:-1], u[-2:-1])), currents_A=coil_t,
-                inductor_currents_A=il, circuit_force_N=fc,
-                pole_force_N=fc @ self._share.T, force_N=row_sums(fc),
+                ReducedSimulation, time_s=times, gaps_m=g, gap_rates_m_per_s=rates,
+                voltages_V=held, currents_A=coil_t, inductor_currents_A=il,
+                circuit_force_N=fc, pole_force_N=self._pole_forces(fc), force_N=row_sums(fc),
                 gap_names=self.gap_names, circuit_names=self.circuit_names,
                 final_state=final, eddy_currents_A=None)
         xs, outs = self._integrate(times, np.concatenate([i0, s[0], e0]),

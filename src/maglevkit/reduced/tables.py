@@ -263,7 +263,7 @@ def _power_sum(c: list[Any], x: tuple[Any, ...]) -> Any:
 
 
 def cell_lookup(cell: tuple[Any, tuple[Any, ...]], i: Any, p: Any, table: Any, degree: int,
-                maps: Sequence[int] = (0, 1, 2)) -> list[Any]:
+                maps: Sequence[int] = (0, 1, 2), *, hint: Any = None) -> tuple[list[Any], Any]:
     """Maps ``maps`` of the kernel's table at the gap cell ``cell`` (:func:`gap_cell_part`)
     and current ``i`` [A] (CasADi expressions).
 
@@ -285,11 +285,18 @@ def cell_lookup(cell: tuple[Any, tuple[Any, ...]], i: Any, p: Any, table: Any, d
         ``d``.
     maps : sequence of int
         Which of ``L~`` [H], ``dL/ds`` [H/m], ``F`` [N] (0, 1, 2).
+    hint : casadi.MX, optional
+        A guess of the current's cell index (e.g. the cell of an earlier RK4 stage).  The
+        index used is ``if_else(k == hint, hint, k)``, the same number ``k`` either way,
+        so the values do not change; the lanes' C turns this select into a branch on
+        "every lane guessed right" (:mod:`.lanes`), so that the gather and the gap sums
+        need not wait for ``k`` (only the branch does).
 
     Returns
     -------
-    list of casadi.MX
-        The maps' values, in their units.
+    (list of casadi.MX, casadi.MX)
+        The maps' values, in their units, and the current's cell index ``k`` (for the
+        ``hint`` of a later lookup).
     """
     import casadi as ca
 
@@ -298,8 +305,9 @@ def cell_lookup(cell: tuple[Any, tuple[Any, ...]], i: Any, p: Any, table: Any, d
     row, tp = cell
     ui = (i - p[3]) * p[4]
     ki = ca.fmin(ca.fmax(ca.floor(ui), 0), p[5] - 1)
-    wq = _powers(ui - ki, d)
-    base = row + ki * (N_TABLE_MAPS * nk)
+    k = ki if hint is None else ca.if_else(ki == hint, hint, ki)
+    wq = _powers(ui - k, d)
+    base = row + k * (N_TABLE_MAPS * nk)
     idx = np.concatenate([np.arange(m * nk, (m + 1) * nk) for m in maps]).astype(float)
     c = table[base + ca.DM(idx)]
     out = []
@@ -307,4 +315,4 @@ def cell_lookup(cell: tuple[Any, tuple[Any, ...]], i: Any, p: Any, table: Any, d
         g = [_power_sum([c[j * nk + pp * (d + 1) + q] for pp in range(d + 1)], tp)
              for q in range(d + 1)]
         out.append(_power_sum(g, wq))
-    return out
+    return out, ki
