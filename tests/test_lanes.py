@@ -63,7 +63,10 @@ def _function() -> ca.Function:
          # mixed in others; and the operands the other way round, with a signed zero
          # (ceil gives -0 for y in (-1, 0))
          ca.if_else(c5, ca.ceil(y), y * p[2]), ca.if_else(x < p[1], ca.ceil(y), 2 * y),
-         ca.if_else(ca.logic_not(c5), 3 * y, 0.0) + ca.if_else(c5, ca.ceil(y), 0.0)]
+         ca.if_else(ca.logic_not(c5), 3 * y, 0.0) + ca.if_else(c5, ca.ceil(y), 0.0),
+         # fmin/fmax with a literal operand (AVX2: a shorter compare), signed zeros
+         ca.fmax(ca.ceil(y), 0.0), ca.fmin(ca.ceil(y), 0.0), ca.fmin(x, 1.5),
+         ca.fmax(-0.0 + ca.ceil(y), -1.0)]
     return ca.Function("probe", [x, y, p], e)
 
 
