@@ -187,11 +187,7 @@ def sample_input(value: Any, times: np.ndarray, names: tuple[str, ...], what: st
     """
     n, k = times.size, len(names)
     if isinstance(value, Mapping):
-        unknown = sorted(set(value) - set(names))
-        missing = [nm for nm in names if nm not in value]
-        if unknown or missing:
-            raise InputError(f"{what}: unknown names {unknown}, missing {missing}; expected "
-                             f"{list(names)}")
+        _check_names(value, names, what, unit, "name")
         # every column is sampled and checked (finite) on its own, into one (n, k) array
         out = np.empty((n, k))
         for j, nm in enumerate(names):
@@ -399,6 +395,18 @@ def check_initial_choice(initial_state: Any, initial_currents: Any, state_type: 
         raise InputError(f"initial_state must be a {state_type.__name__}")
 
 
+def _check_names(value: Mapping, names: tuple[str, ...], what: str, unit: str,
+                 kind: str) -> None:
+    """The name check of a mapping input, one message for every converter: every name of
+    ``names`` and no other key."""
+    missing = [k for k in names if k not in value]
+    unknown = sorted(str(k) for k in set(value) - set(names))
+    if missing or unknown:
+        raise InputError(f"{what}: unknown names {_listed(unknown)}, missing "
+                         f"{_listed(missing)}; give one value [{unit}] per {kind}: "
+                         f"{_listed(names)}")
+
+
 def _listed(names: Any, limit: int = 8) -> str:
     """``names`` as a list for a message, the first ``limit`` of a long one."""
     names = list(names)
@@ -407,7 +415,7 @@ def _listed(names: Any, limit: int = 8) -> str:
 
 def per_name_values(value: Any, names: tuple[str, ...], what: str, unit: str, *,
                     kind: str = "circuit", finite: bool = True, positive: bool = False,
-                    allow_inf: bool = False) -> np.ndarray:
+                    allow_inf: bool = False, leading: bool = False) -> np.ndarray:
     """One value per name (circuit, gap, ...) as a float array: the one converter of
     per-circuit and per-gap inputs (the reduced models, the bank, the table import).
 
@@ -431,10 +439,14 @@ def per_name_values(value: Any, names: tuple[str, ...], what: str, unit: str, *,
         Refuse values <= 0.
     allow_inf : bool, default False
         Allow +inf (with ``finite``), e.g. "no eddy currents".
+    leading : bool, default False
+        Also take values with leading axes: an array ``(..., n)`` (one value per name
+        along the last axis, e.g. a grid of operating points), or a mapping whose values
+        are arrays of one common shape (stacked along a new last axis).
 
     Returns
     -------
-    numpy.ndarray (n,)
+    numpy.ndarray (n,), or (..., n) with ``leading``
         The values [``unit``]; a float64 array of the right shape is returned as it is.
 
     Raises
@@ -445,7 +457,9 @@ def per_name_values(value: Any, names: tuple[str, ...], what: str, unit: str, *,
         value and what is allowed.
     """
     n = len(names)
-    if type(value) is np.ndarray and value.dtype == np.float64 and value.shape == (n,):
+    if leading:
+        arr = _with_leading_axes(value, names, what, unit, kind)
+    elif type(value) is np.ndarray and value.dtype == np.float64 and value.shape == (n,):
         arr = value
         if not (finite or positive):
             return arr
@@ -454,12 +468,7 @@ def per_name_values(value: Any, names: tuple[str, ...], what: str, unit: str, *,
         return np.full(n, value)              # one plain float for all (e.g. 0.0 m/s)
     else:
         if isinstance(value, Mapping):
-            missing = [k for k in names if k not in value]
-            unknown = sorted(str(k) for k in set(value) - set(names))
-            if missing or unknown:
-                raise InputError(f"{what}: unknown names {_listed(unknown)}, missing "
-                                 f"{_listed(missing)}; give one value [{unit}] per {kind}: "
-                                 f"{_listed(names)}")
+            _check_names(value, names, what, unit, kind)
             value = [value[k] for k in names]
         arr = real_array(value, what, unit, finite=False)       # no bools or strings
         if arr.ndim == 0:
@@ -471,12 +480,34 @@ def per_name_values(value: Any, names: tuple[str, ...], what: str, unit: str, *,
     if finite:
         ok = np.isfinite(arr) | ((arr == math.inf) if allow_inf else False)
         if not ok.all():
-            j = int(np.argmax(~ok))
+            j = int(np.argmax(~ok.reshape(-1)))
             allowed = " (or inf)" if allow_inf else ""
-            raise InputError(f"{what} must be finite{allowed}: {kind} {names[j]!r} = "
-                             f"{float(arr[j])!r} {unit}")
+            raise InputError(f"{what} must be finite{allowed}: {kind} {names[j % n]!r} = "
+                             f"{float(arr.reshape(-1)[j])!r} {unit}")
     if positive and not (arr > 0.0).all():
-        j = int(np.argmax(~(arr > 0.0)))
-        raise InputError(f"{what} must be > 0 {unit}: {kind} {names[j]!r} = "
-                         f"{float(arr[j])!r} {unit}")
+        j = int(np.argmax(~(arr > 0.0).reshape(-1)))
+        raise InputError(f"{what} must be > 0 {unit}: {kind} {names[j % n]!r} = "
+                         f"{float(arr.reshape(-1)[j])!r} {unit}")
+    return arr
+
+
+def _with_leading_axes(value: Any, names: tuple[str, ...], what: str, unit: str,
+                       kind: str) -> np.ndarray:
+    """:func:`per_name_values`' conversion with ``leading``: (..., n) float array, numbers
+    only (finiteness and sign are the caller's checks)."""
+    n = len(names)
+    if isinstance(value, Mapping):
+        _check_names(value, names, what, unit, kind)
+        cols = [real_array(value[k], f"{kind} {k!r}", unit, finite=False) for k in names]
+        if len({c.shape for c in cols}) > 1:
+            raise InputError(f"{what}: the values per {kind} must have one shape, got "
+                             f"{dict(zip(names, (c.shape for c in cols), strict=True))}")
+        return np.stack(cols, axis=-1)
+    arr = real_array(value, what, unit, finite=False)
+    if arr.ndim == 0:
+        return np.full(n, float(arr))
+    if arr.shape[-1] != n:
+        raise InputError(f"{what}: expected {n} values [{unit}] along the last axis (one per "
+                         f"{kind} of {_listed(names)}, or one for all), got shape "
+                         f"{arr.shape}: {describe(value)}")
     return arr
