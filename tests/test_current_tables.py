@@ -184,6 +184,12 @@ def test_bank_run_steps_equals_its_stepper_bit_for_bit(all_maps, codegen: str) -
         assert np.array_equal(run.currents_A[k], stepper.currents_A)
         assert np.array_equal(run.circuit_force_N[k], stepper.circuit_force_N)
     assert run.n_good == n
+    # a run of one compiled call (at most RUN_CHUNK steps of one sub-step: the short path
+    # of run_steps) gives the same rows as the long run
+    short = bank.run_steps(i0, g[:300], u[:300], rates[:300], np.full(300, 1e-3))
+    for a, b in ((short.inductor_currents_A, run.inductor_currents_A),
+                 (short.currents_A, run.currents_A), (short.circuit_force_N, run.circuit_force_N)):
+        assert np.array_equal(a, b[:300])
     # steps of 2 ms take two RK4 sub-steps: a run of mixed lengths equals step() per step
     h = np.where(np.arange(n) % 500 < 250, 1e-3, 2e-3)[:600]
     mixed = bank.run_steps(i0, g[:600], u[:600], rates[:600] * 0.5, h)
@@ -286,3 +292,50 @@ def test_step_wrapper_compiled_after_a_while_is_bit_identical(monkeypatch: pytes
     b = run(vm)
     assert vm._table_steps[1e-3].bound.function.class_name() == "MXFunction"
     assert np.array_equal(a, b)
+
+
+def test_row_sums_equal_numpy_sum_bit_for_bit() -> None:
+    from maglevkit.reduced.current import row_sums
+
+    rng = np.random.default_rng(5)
+    for m in range(0, 11):
+        a = rng.standard_normal((257, m)) * 10.0 ** rng.integers(-4, 6, (257, m))
+        assert np.array_equal(row_sums(a), a.sum(axis=1))
+
+
+def test_kernel_lookup_equals_the_cell_table_reference() -> None:
+    """The kernel's table lookup (power sums, gap half first) against the NumPy evaluation
+    of the same per-cell polynomials (einsum), inside and outside the grid (the edge cell
+    continued).  The two sum the same terms in different orders: rounding only; bound
+    1e-13 relative to the map's largest value (measured 1e-15)."""
+    import casadi as ca
+
+    from maglevkit.reduced.tables import N_TABLE_MAPS, cell_lookup, cell_table, gap_cell_part
+
+    s_ax, i_ax = np.linspace(0.005, 0.016, 12), np.linspace(0.0, 80.0, 17)
+    G, II = np.meshgrid(s_ax, i_ax, indexing="ij")
+    maps = np.stack([1e-2 / (G + 0.002) * (1 + II / 40.0) ** -1.3, -G * II ** 0.5 - G,
+                     1e3 * II ** 2 / (G * 1e3) ** 1.7])
+    assert maps.shape[0] == N_TABLE_MAPS
+    for method, degree in (("bicubic", 3), ("bilinear", 1)):
+        tab = cell_table(s_ax, i_ax, maps, method=method)
+        ns, ni = tab.n_cells
+        p = ca.DM([tab.s0_m, 1.0 / tab.ds_m, ns, tab.i0_A, 1.0 / tab.di_A, ni, 0.0])
+        s, i = ca.MX.sym("s"), ca.MX.sym("i")
+        table = ca.MX(ca.DM(tab.coefficients.reshape(-1)))
+        vals, k = cell_lookup(gap_cell_part(s, p, degree), i, p, table, degree)
+        # a lookup with a guess of the current's cell: the same values for any guess
+        guess = ca.MX.sym("guess")
+        hinted, _ = cell_lookup(gap_cell_part(s, p, degree), i, p, table, degree, hint=guess)
+        f = ca.Function("f", [s, i], vals)
+        fh = ca.Function("fh", [s, i, guess], hinted)
+        rng = np.random.default_rng(7)
+        pts = np.column_stack([rng.uniform(0.0045, 0.0165, 400), rng.uniform(-3.0, 83.0, 400)])
+        got = np.array([np.array(f(a, b)).ravel() for a, b in pts], dtype=float).reshape(-1, 3)
+        ref = tab.evaluate(pts[:, 0], pts[:, 1])
+        scale = np.max(np.abs(ref), axis=0)
+        assert np.max(np.abs(got - ref) / scale) <= 1e-13, method
+        for a, b in pts[:40]:
+            for g in (0.0, 5.0, 16.0, np.nan):
+                assert np.array_equal(np.array(fh(a, b, g), dtype=float).ravel(),
+                                      np.array(f(a, b), dtype=float).ravel())

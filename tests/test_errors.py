@@ -78,10 +78,20 @@ def test_dangling_coil_branch_is_rejected() -> None:
         (float("nan"), 10.0, "finite"),
         (np.inf, 10.0, "finite"),
         (0.01, float("nan"), "finite"),
-        ({"left": 0.01}, 10.0, "missing for \\['right'\\]"),
-        ({"left": 0.01, "right": 0.01, "middle": 0.01}, 10.0, "unknown gap name"),
-        (np.ones((3, 5)) * 0.01, 10.0, "last axis must have length 2"),
-        (0.01, {"coils": 3.0}, "unknown circuit current name"),
+        # the one per-name converter's messages (models.inputs.per_name_values)
+        ({"left": 0.01}, 10.0, r"gaps: unknown names \[\], missing \['right'\]; give one "
+                               r"value \[m\] per gap: \['left', 'right'\]"),
+        ({"left": 0.01, "right": 0.01, "middle": 0.01}, 10.0,
+         r"gaps: unknown names \['middle'\], missing \[\]"),
+        (np.ones((3, 5)) * 0.01, 10.0, r"gaps: expected 2 values \[m\] along the last axis "
+                                       r"\(one per gap of \['left', 'right'\], or one for "
+                                       r"all\), got shape \(3, 5\)"),
+        (0.01, {"coils": 3.0}, r"circuit currents: unknown names \['coils'\], missing "
+                               r"\['coil'\]; give one value \[A\] per circuit"),
+        ({"left": np.full(3, 0.01), "right": np.full(2, 0.01)}, 10.0,
+         r"gaps: the values per gap must have one shape, got \{'left': \(3,\), "
+         r"'right': \(2,\)\}"),
+        (float("nan"), 10.0, r"gaps must be finite: gap 'left' = nan m"),
         ("ten millimetres", 10.0, "must be numbers"),
     ],
 )

@@ -50,13 +50,23 @@ def _function() -> ca.Function:
     idx = ca.DM(np.array([0.0, 1.0, 2.0, 3.0, 7.0, 4.0])) + base
     g = table[idx]
     h = table[ca.fabs(y) * 3.3]                     # non-integral index: truncated
+    c5 = x > -5.0                                   # one node for the selects below
     e = [x + y, x - y, x * y, x / y, -x, 2 * x, x ** 2, 1 / y, ca.fabs(y),
          ca.floor(y), ca.ceil(x), ca.fmin(x, y), ca.fmax(x, y), ca.fmin(p[1], x),
          ca.fmax(x, p[1]), x < y, x <= y, x == y, x != y, ca.logic_and(x, y),
          ca.logic_or(x, p[2]), ca.logic_not(x), ca.if_else(x < p[1], y, 0.0),
          ca.sqrt(ca.fabs(x)), ca.exp(-ca.fabs(y)), ca.log(ca.fabs(x) + 1), ca.sin(x),
          ca.cos(y), ca.tanh(x), ca.atan2(x, y), ca.power(ca.fabs(x), y), ca.sign(y),
-         ca.fmod(x, 0.7), ca.erf(y), g[0] + g[1] * g[2] - g[3] * g[4] + g[5], h, p[0] * x]
+         ca.fmod(x, 0.7), ca.erf(y), g[0] + g[1] * g[2] - g[3] * g[4] + g[5], h, p[0] * x,
+         # two-sided selects (if_else_zero(c, a) + if_else_zero(!c, b)): a branch on "c
+         # in every lane" in the lanes' C; true in every lane of a block without NaN x,
+         # mixed in others; and the operands the other way round, with a signed zero
+         # (ceil gives -0 for y in (-1, 0))
+         ca.if_else(c5, ca.ceil(y), y * p[2]), ca.if_else(x < p[1], ca.ceil(y), 2 * y),
+         ca.if_else(ca.logic_not(c5), 3 * y, 0.0) + ca.if_else(c5, ca.ceil(y), 0.0),
+         # fmin/fmax with a literal operand (AVX2: a shorter compare), signed zeros
+         ca.fmax(ca.ceil(y), 0.0), ca.fmin(ca.ceil(y), 0.0), ca.fmin(x, 1.5),
+         ca.fmax(-0.0 + ca.ceil(y), -1.0)]
     return ca.Function("probe", [x, y, p], e)
 
 
@@ -203,3 +213,17 @@ def test_kernels_of_two_widths_in_one_file() -> None:
         for k, r in enumerate(ref):
             np.testing.assert_array_equal(outs[k].view(np.int64),
                                           np.asarray(r, dtype=float).ravel().view(np.int64))
+
+
+def test_two_sided_selects_become_guess_branches() -> None:
+    """The probe's three two-sided selects are written as branches on "the condition holds
+    in every lane" (the bank's hinted table lookups rely on it for their speed; the values
+    are checked bit for bit above); a one-sided select is not."""
+    f = _function()
+    _, _, p = _inputs(np.random.default_rng(1))
+    for width, avx2 in _widths():
+        src = lane_source(f, name="probe_k", n=N, inputs=[LaneInput("instance"),
+                                                          LaneInput("instance"),
+                                                          LaneInput("baked", p)],
+                          width=width, avx2=avx2)
+        assert src.count(f"lanes_guess_select_w{width}(") == 1 + 3     # definition + calls

@@ -64,3 +64,27 @@ def test_the_users_share_the_message_style() -> None:
         bank.stepper(bst, 1e-3).advance({"x": 1.0})
     with pytest.raises(InputError, match=r"gaps must be > 0 m: gap '.*' = -0.01 m"):
         cm.initial_state(gaps_m=-0.01, currents_A=10.0)
+
+
+def test_leading_axes_and_the_statics_and_sampled_inputs_share_it() -> None:
+    """``leading=True`` (the statics' gap and current grids): arrays (..., n), mappings of
+    equal-shaped arrays stacked along the last axis; the statics' converter and the
+    sampled inputs of ``simulate`` give the same messages."""
+    grid = np.array([[1.0, 2.0], [3.0, 4.0], [5.0, 6.0]])
+    assert per_name_values(grid, NAMES, "gaps", "m", kind="gap", leading=True) is grid
+    got = per_name_values({"a/rear": np.array([2.0, 4.0]), "a/front": np.array([1.0, 3.0])},
+                          NAMES, "gaps", "m", kind="gap", leading=True)
+    assert got.tolist() == [[1.0, 2.0], [3.0, 4.0]]
+    assert per_name_values(7.0, NAMES, "gaps", "m", leading=True).tolist() == [7.0, 7.0]
+    with pytest.raises(InputError, match=r"gaps must be finite: gap 'a/rear' = inf m"):
+        per_name_values([[1.0, 2.0], [3.0, math.inf]], NAMES, "gaps", "m", kind="gap",
+                        leading=True)
+    with pytest.raises(InputError, match=r"gaps: expected 2 values \[m\] along the last axis"):
+        per_name_values(np.ones((2, 3)), NAMES, "gaps", "m", kind="gap", leading=True)
+    mag = mk.load_magnet("u-magnet")
+    with pytest.raises(InputError, match=r"circuit currents: unknown names \['x'\], missing "
+                                         r"\['coil'\]; give one value \[A\] per circuit"):
+        mk.solve_statics(mag, gaps_m=0.01, currents_A={"x": 1.0})
+    with pytest.raises(InputError, match=r"voltages: unknown names \['x'\], missing \['coil'\]; "
+                                         r"give one value \[V\] per name: \['coil'\]"):
+        mk.simulate(mag, (0.0, 0.01), dt_s=1e-3, gaps_m=0.01, voltages_V={"x": 1.0})

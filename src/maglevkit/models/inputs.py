@@ -125,17 +125,23 @@ def time_grid(t: Any, dt: Any) -> np.ndarray:
         a bad ``dt`` or one longer than the span, or ``dt`` given together with an
         explicit grid.
     """
-    arr = real_array(t, "t", "s", finite=False)
-    if arr.ndim != 1 or arr.size < 2 or not np.all(np.isfinite(arr)):
-        raise InputError("t must be (t0, tf) or a 1-D array of at least 2 finite times [s]")
-    if arr.size == 2 and isinstance(t, (tuple, list)):
-        t0, tf = float(arr[0]), float(arr[1])
+    span = (type(t) is tuple and len(t) == 2 and type(t[0]) in (int, float)
+            and type(t[1]) in (int, float) and math.isfinite(t[0]) and math.isfinite(t[1]))
+    if not span:                    # (a span of two plain finite numbers: the common case)
+        arr = real_array(t, "t", "s", finite=False)
+        if arr.ndim != 1 or arr.size < 2 or not np.all(np.isfinite(arr)):
+            raise InputError("t must be (t0, tf) or a 1-D array of at least 2 finite times [s]")
+        span = arr.size == 2 and isinstance(t, (tuple, list))
+    if span:
+        t0, tf = float(t[0]), float(t[1])
         step = 1e-4 if dt is None else check_step(dt)
         if dt is None and tf > t0:
             step = min(step, tf - t0)
         check_span(t0, tf, step)
         n = int(math.floor((tf - t0) / step * (1.0 + 1e-12)))
-        grid = t0 + step * np.arange(n + 1)
+        grid = np.arange(n + 1, dtype=float)
+        grid *= step
+        grid += t0                      # t0 + step k, as t0 + step * np.arange(n + 1)
         if tf - grid[-1] > 1e-9 * step:
             grid = np.append(grid, tf)
         else:
@@ -181,22 +187,31 @@ def sample_input(value: Any, times: np.ndarray, names: tuple[str, ...], what: st
     """
     n, k = times.size, len(names)
     if isinstance(value, Mapping):
-        unknown = sorted(set(value) - set(names))
-        missing = [nm for nm in names if nm not in value]
-        if unknown or missing:
-            raise InputError(f"{what}: unknown names {unknown}, missing {missing}; expected "
-                             f"{list(names)}")
-        # every column is sampled and checked (finite) on its own
-        cols = [sample_input(value[nm], times, (nm,), f"{what}[{nm}]", unit)[:, 0] for nm in names]
-        return np.stack(cols, axis=1)
+        _check_names(value, names, what, unit, "name")
+        # every column is sampled and checked (finite) on its own, into one (n, k) array
+        out = np.empty((n, k))
+        for j, nm in enumerate(names):
+            v = value[nm]
+            col = _signal_column(v, times) if isinstance(v, Signal) else None
+            out[:, j] = (col if col is not None
+                         else sample_input(v, times, (nm,), f"{what}[{nm}]", unit)[:, 0])
+        return out
     if isinstance(value, Signal):
-        col = np.asarray(value(times), dtype=float)
-        if col.shape == (n,) and np.isfinite(col).all():
+        col = _signal_column(value, times)
+        if col is not None:
             # the same value for every name: checked once, before the copies
-            return np.repeat(col[:, None], k, axis=1)
-        arr = np.repeat(col[:, None], k, axis=1)
+            out = np.empty((n, k))
+            out[:] = col[:, None]
+            return out
+        arr = np.repeat(np.asarray(value(times), dtype=float)[:, None], k, axis=1)
     elif callable(value):
         arr = _sample_callable(value, times, k, names, what, unit)
+    elif type(value) is np.ndarray and value.dtype == np.float64 and value.shape == (k,) \
+            and not (k == 1 and n == 1) and np.isfinite(value).all():
+        # one finite value per name (the common constant input): checked before the copies
+        out = np.empty((n, k))
+        out[:] = value
+        return out
     else:
         try:
             a = real_array(value, what, unit, finite=False)
@@ -219,6 +234,13 @@ def sample_input(value: Any, times: np.ndarray, names: tuple[str, ...], what: st
         bad = int(np.argmax(~np.all(np.isfinite(arr), axis=1)))
         raise InputError(f"{what} is not finite at t = {times[bad]:.6g} s: {arr[bad].tolist()}")
     return arr
+
+
+def _signal_column(value: Signal, times: np.ndarray) -> np.ndarray | None:
+    """A Signal's samples at ``times`` as a float array (n,), or None where they are not
+    finite numbers of that shape (the caller then reports them)."""
+    col = np.asarray(value(times), dtype=float)
+    return col if col.shape == times.shape and np.isfinite(col).all() else None
 
 
 def _sample_callable(value: Any, times: np.ndarray, k: int, names: tuple[str, ...], what: str,
@@ -341,7 +363,7 @@ def simulation_inputs(t: Any, dt: Any, *, gaps: Any, voltages: Any, gap_rates: A
     """
     times = time_grid(t, dt)
     g = sample_input(gaps, times, gap_names, "gaps", "m")
-    if np.any(g <= 0.0):
+    if g.size and g.min() <= 0.0:                 # (finite: sample_input checked them)
         raise InputError("gaps must be > 0 m")
     u = sample_input(voltages, times, circuit_names, "voltages", "V")
     rates = gap_secants(times, g, gap_rates, gap_names, gap_rate_tolerance)
@@ -373,6 +395,18 @@ def check_initial_choice(initial_state: Any, initial_currents: Any, state_type: 
         raise InputError(f"initial_state must be a {state_type.__name__}")
 
 
+def _check_names(value: Mapping, names: tuple[str, ...], what: str, unit: str,
+                 kind: str) -> None:
+    """The name check of a mapping input, one message for every converter: every name of
+    ``names`` and no other key."""
+    missing = [k for k in names if k not in value]
+    unknown = sorted(str(k) for k in set(value) - set(names))
+    if missing or unknown:
+        raise InputError(f"{what}: unknown names {_listed(unknown)}, missing "
+                         f"{_listed(missing)}; give one value [{unit}] per {kind}: "
+                         f"{_listed(names)}")
+
+
 def _listed(names: Any, limit: int = 8) -> str:
     """``names`` as a list for a message, the first ``limit`` of a long one."""
     names = list(names)
@@ -381,7 +415,7 @@ def _listed(names: Any, limit: int = 8) -> str:
 
 def per_name_values(value: Any, names: tuple[str, ...], what: str, unit: str, *,
                     kind: str = "circuit", finite: bool = True, positive: bool = False,
-                    allow_inf: bool = False) -> np.ndarray:
+                    allow_inf: bool = False, leading: bool = False) -> np.ndarray:
     """One value per name (circuit, gap, ...) as a float array: the one converter of
     per-circuit and per-gap inputs (the reduced models, the bank, the table import).
 
@@ -405,10 +439,14 @@ def per_name_values(value: Any, names: tuple[str, ...], what: str, unit: str, *,
         Refuse values <= 0.
     allow_inf : bool, default False
         Allow +inf (with ``finite``), e.g. "no eddy currents".
+    leading : bool, default False
+        Also take values with leading axes: an array ``(..., n)`` (one value per name
+        along the last axis, e.g. a grid of operating points), or a mapping whose values
+        are arrays of one common shape (stacked along a new last axis).
 
     Returns
     -------
-    numpy.ndarray (n,)
+    numpy.ndarray (n,), or (..., n) with ``leading``
         The values [``unit``]; a float64 array of the right shape is returned as it is.
 
     Raises
@@ -419,7 +457,9 @@ def per_name_values(value: Any, names: tuple[str, ...], what: str, unit: str, *,
         value and what is allowed.
     """
     n = len(names)
-    if type(value) is np.ndarray and value.dtype == np.float64 and value.shape == (n,):
+    if leading:
+        arr = _with_leading_axes(value, names, what, unit, kind)
+    elif type(value) is np.ndarray and value.dtype == np.float64 and value.shape == (n,):
         arr = value
         if not (finite or positive):
             return arr
@@ -428,12 +468,7 @@ def per_name_values(value: Any, names: tuple[str, ...], what: str, unit: str, *,
         return np.full(n, value)              # one plain float for all (e.g. 0.0 m/s)
     else:
         if isinstance(value, Mapping):
-            missing = [k for k in names if k not in value]
-            unknown = sorted(str(k) for k in set(value) - set(names))
-            if missing or unknown:
-                raise InputError(f"{what}: unknown names {_listed(unknown)}, missing "
-                                 f"{_listed(missing)}; give one value [{unit}] per {kind}: "
-                                 f"{_listed(names)}")
+            _check_names(value, names, what, unit, kind)
             value = [value[k] for k in names]
         arr = real_array(value, what, unit, finite=False)       # no bools or strings
         if arr.ndim == 0:
@@ -445,12 +480,34 @@ def per_name_values(value: Any, names: tuple[str, ...], what: str, unit: str, *,
     if finite:
         ok = np.isfinite(arr) | ((arr == math.inf) if allow_inf else False)
         if not ok.all():
-            j = int(np.argmax(~ok))
+            j = int(np.argmax(~ok.reshape(-1)))
             allowed = " (or inf)" if allow_inf else ""
-            raise InputError(f"{what} must be finite{allowed}: {kind} {names[j]!r} = "
-                             f"{float(arr[j])!r} {unit}")
+            raise InputError(f"{what} must be finite{allowed}: {kind} {names[j % n]!r} = "
+                             f"{float(arr.reshape(-1)[j])!r} {unit}")
     if positive and not (arr > 0.0).all():
-        j = int(np.argmax(~(arr > 0.0)))
-        raise InputError(f"{what} must be > 0 {unit}: {kind} {names[j]!r} = "
-                         f"{float(arr[j])!r} {unit}")
+        j = int(np.argmax(~(arr > 0.0).reshape(-1)))
+        raise InputError(f"{what} must be > 0 {unit}: {kind} {names[j % n]!r} = "
+                         f"{float(arr.reshape(-1)[j])!r} {unit}")
+    return arr
+
+
+def _with_leading_axes(value: Any, names: tuple[str, ...], what: str, unit: str,
+                       kind: str) -> np.ndarray:
+    """:func:`per_name_values`' conversion with ``leading``: (..., n) float array, numbers
+    only (finiteness and sign are the caller's checks)."""
+    n = len(names)
+    if isinstance(value, Mapping):
+        _check_names(value, names, what, unit, kind)
+        cols = [real_array(value[k], f"{kind} {k!r}", unit, finite=False) for k in names]
+        if len({c.shape for c in cols}) > 1:
+            raise InputError(f"{what}: the values per {kind} must have one shape, got "
+                             f"{dict(zip(names, (c.shape for c in cols), strict=True))}")
+        return np.stack(cols, axis=-1)
+    arr = real_array(value, what, unit, finite=False)
+    if arr.ndim == 0:
+        return np.full(n, float(arr))
+    if arr.shape[-1] != n:
+        raise InputError(f"{what}: expected {n} values [{unit}] along the last axis (one per "
+                         f"{kind} of {_listed(names)}, or one for all), got shape "
+                         f"{arr.shape}: {describe(value)}")
     return arr

@@ -18,7 +18,6 @@ from __future__ import annotations
 
 import math
 import os
-from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -31,6 +30,7 @@ from ..errors import InputError, SolverError
 from ..magnets.base import PlausibleRange
 from ..materials import MU0
 from ..validation import describe, flag, real_array, real_number, renamed_keywords
+from .inputs import per_name_values
 
 __all__ = [
     "StaticSolution",
@@ -99,36 +99,6 @@ def plausible_range(model: Any) -> PlausibleRange | None:
     return rng if isinstance(rng, PlausibleRange) else None
 
 
-def _named_vector(kind: str, names: Sequence[str], value: Any, unit: str) -> np.ndarray:
-    """Turn a scalar, mapping or array (..., n) into a float array (..., n)."""
-    n = len(names)
-    if isinstance(value, Mapping):
-        unknown = sorted(set(value) - set(names))
-        missing = [k for k in names if k not in value]
-        if unknown:
-            raise InputError(f"unknown {kind} name(s) {unknown}; known: {list(names)}")
-        if missing:
-            raise InputError(f"{kind} value missing for {missing}; give all of {list(names)}")
-        cols = [real_array(value[k], f"{kind} {k!r}", unit) for k in names]
-        try:
-            arr = np.stack(cols, axis=-1)
-        except ValueError as exc:
-            raise InputError(f"{kind} values per name must have equal shapes, got "
-                             f"{[c.shape for c in cols]}") from exc
-    else:
-        arr = real_array(value, f"{kind}s", unit)
-        if arr.ndim == 0:
-            arr = np.full((n,), float(arr))
-        elif arr.shape[-1] != n:
-            raise InputError(
-                f"{kind} array has shape {arr.shape}; its last axis must have length {n} "
-                f"(one value per {kind}: {list(names)}), or pass a scalar for all"
-            )
-    if not np.all(np.isfinite(arr)):
-        raise InputError(f"{kind}s must be finite numbers [{unit}], got {value!r}")
-    return arr
-
-
 def gap_vector(network: Network, gaps: Any) -> np.ndarray:
     """Validated gaps [m] as an array (..., n_gaps); scalar means all gaps equal.
 
@@ -150,7 +120,8 @@ def gap_vector(network: Network, gaps: Any) -> np.ndarray:
         Non-numbers, non-finite values, gaps <= 0, wrong shapes, unknown or missing
         names.
     """
-    arr = _named_vector("gap", network.gap_names, gaps, "m")
+    arr = per_name_values(gaps, tuple(network.gap_names), "gaps", "m", kind="gap",
+                          leading=True)
     if np.any(arr <= 0.0):
         bad = float(arr[arr <= 0.0].ravel()[0])
         raise InputError(f"gap = {bad!r} m is not allowed; gaps must be > 0 m "
@@ -178,7 +149,8 @@ def current_vector(network: Network, currents: Any) -> np.ndarray:
     InputError
         Non-numbers, non-finite values, wrong shapes, unknown or missing names.
     """
-    return _named_vector("circuit current", network.circuit_names, currents, "A")
+    return per_name_values(currents, tuple(network.circuit_names), "circuit currents", "A",
+                           leading=True)
 
 
 @dataclass(frozen=True)

@@ -67,6 +67,7 @@ from .core import (
     ReducedCore,
     extend_values,
     rk4_substep,
+    substep_count,
     substep_counts,
 )
 from .current import (
@@ -78,7 +79,7 @@ from .current import (
 )
 from .lanes import LaneInput, external_source, lane_source, lane_target
 from .stepper import BankStepper
-from .tables import INTERPOLATION_METHODS, cell_table
+from .tables import INTERPOLATION_METHODS, cell_lookup, cell_table, gap_cell_part
 
 if TYPE_CHECKING:
     from ..reduction.maps import CharacteristicMaps
@@ -614,39 +615,18 @@ class MagnetBank:
         self._circuit_kernel = self._make_circuit_kernel()
 
     # ------------------------------------------------------------------ CasADi kernels
-    @staticmethod
-    def _gap_cell(s: Any, p: Any) -> tuple[Any, Any]:
-        """Cell row offset and local coordinate ``t`` of gap ``s`` (MX expressions)."""
-        us = (s - p[0]) * p[1]
-        ks = ca.fmin(ca.fmax(ca.floor(us), 0), p[2] - 1)
-        return ks * p[5], us - ks
+    def _gap_cell(self, s: Any, p: Any) -> tuple[Any, Any]:
+        """The gap half of a table lookup at gap ``s`` (MX expressions): the table offset
+        of the gap cell's row and the powers of the local coordinate ``t``
+        (:func:`~maglevkit.reduced.tables.gap_cell_part`)."""
+        return gap_cell_part(s, p, self._degree)
 
     def _lookup(self, cell: tuple[Any, Any], i: Any, p: Any, table: Any,
                 maps: tuple[int, ...] = (0, 1, 2)) -> list[Any]:
         """Maps ``maps`` of ``(L~, dL/ds, F)`` of one circuit at the gap cell ``cell``
-        (:meth:`_gap_cell`) and current ``i`` from the per-cell table (MX expressions).
-
-        The fmax/fmin clamp keeps the index inside the table for any input, NaN included.
-        """
-        d = self._degree
-        nk = (d + 1) ** 2
-        row0, t = cell
-        ui = (i - p[3]) * p[4]
-        ki = ca.fmin(ca.fmax(ca.floor(ui), 0), p[5] - 1)
-        w = ui - ki
-        base = p[6] + (row0 + ki) * (3 * nk)
-        idx = np.concatenate([np.arange(m * nk, (m + 1) * nk) for m in maps]).astype(float)
-        c = table[base + ca.DM(idx)]
-        out = []
-        for j, _ in enumerate(maps):
-            acc: Any = 0
-            for pp in range(d, -1, -1):         # Horner in t of Horner polynomials in w
-                row: Any = 0
-                for q in range(d, -1, -1):
-                    row = row * w + c[j * nk + pp * (d + 1) + q]
-                acc = acc * t + row
-            out.append(acc)
-        return out
+        (:meth:`_gap_cell`) and current ``i`` from the per-cell table (MX expressions;
+        :func:`~maglevkit.reduced.tables.cell_lookup`)."""
+        return cell_lookup(cell, i, p, table, self._degree, maps)[0]
 
     def _circuit_expressions(self, i: Any, s: Any, u: Any, sd: Any, p: Any, table: Any,
                              cell: tuple[Any, Any] | None = None) -> tuple[Any, Any, Any, Any]:
@@ -725,10 +705,15 @@ class MagnetBank:
         hs = h / substeps
 
         r_el, a = p[7], p[8]
+        # the current's cell of the first stage is the guess of every later lookup's
+        # (cell_lookup's hint: the same values, a shorter chain in the lanes' C)
+        hint: list[Any] = []
 
         def f(x: Any, cell: tuple[Any, Any]) -> Any:
             # the stages need L~ and dL/ds only (the gather of F would be wasted)
-            lt, dl = self._lookup(cell, x, p, table, maps=(0, 1))
+            (lt, dl), k = cell_lookup(cell, x, p, table, self._degree, (0, 1),
+                                      hint=hint[0] if hint else None)
+            hint[:] = hint or [k]
             return eq8_rhs(x, eq8_freewheel_voltage(x, u, r_el, a) if self.freewheel else u,
                            sd, lt, dl, r_el, a)
 
@@ -736,7 +721,8 @@ class MagnetBank:
         se = s + sd * h
         coil = eq8_coil_current(x, eq8_freewheel_voltage(x, u, r_el, a) if self.freewheel
                                 else u, r_el, a)
-        force = self._lookup(self._gap_cell(se, p), x, p, table, maps=(2,))[0]
+        force = cell_lookup(self._gap_cell(se, p), x, p, table, self._degree, (2,),
+                            hint=hint[0])[0][0]
         bad = _reason_code(s, se, sd, u, lo, hi, (x,), p)
         return ca.Function("bank_circuit_step", [i, s, u, sd, h, p],
                            [x, coil, force, lo, hi, bad],
@@ -1089,8 +1075,15 @@ class MagnetBank:
         if x0.shape != (nc,) or any(v.shape != (n, nc) for v in (s, u, sd)):
             raise InputError(f"run_steps: expected I_L ({nc},) and gaps, voltages and gap "
                              f"rates of shape ({n}, {nc}) for {n} steps")
-        if n and not (np.all(h >= 0) and np.all(np.isfinite(h))):
+        if n and not (h.min() >= 0.0 and h.max() < math.inf):      # (NaN fails the first)
             raise InputError("run_steps: dt_s must be finite and >= 0 s")
+        if 0 < n <= RUN_CHUNK and substep_count(float(h.max()), self.max_step_s) == 1:
+            # one chunk of one sub-step per step (the rule is monotone in the step length,
+            # so the longest step decides): the loop below with nothing to split
+            res = self._run_call(1)(x0, s, u, sd, h)
+            if res.n_done == n:
+                return BankRun(res.rows[0].copy(), res.rows[1].copy(), res.rows[2].copy(),
+                               n_good=n)
         # the sub-step count of every step (a step of 0 s takes one: it changes nothing)
         per = self._substep_counts(h)
         out = [np.full((n, nc), np.nan) for _ in range(3)]

@@ -359,6 +359,11 @@ class CurrentModel:
         nc = core.n_circuits
         self._avg = core.averaging           # pole gaps -> substitute gap per circuit
         self._share = core.share             # circuit force -> pole forces, (ng, nc)
+        one = np.count_nonzero(self._share, axis=1) == 1
+        self._pole_share = ((np.argmax(self._share != 0, axis=1),
+                             self._share[np.arange(self._share.shape[0]),
+                                         np.argmax(self._share != 0, axis=1)])
+                            if one.all() else None)
         self.gap_range = core.gap_range_m
         self.current_range = core.current_range_A
         # rounding allowances of every range check, and the bounds of the state [I_L; s]
@@ -555,6 +560,16 @@ class CurrentModel:
             Substitute gap ``s`` of every circuit [m]: the mean of its poles' gaps.
         """
         return np.asarray(gaps_m) @ self._avg.T
+
+    def _pole_forces(self, fc: np.ndarray) -> np.ndarray:
+        """Pole forces [N] (n_t, n_gaps) from circuit forces ``fc`` [N] (n_t, n_circuits):
+        ``fc @ share.T``, taken as each pole's circuit force times its share (the share
+        matrix has one entry per row, so the product adds only exact zeros: the same
+        numbers for finite forces, a zero's sign aside, without a BLAS call per run)."""
+        if self._pole_share is None:
+            return fc @ self._share.T
+        col, w = self._pole_share
+        return fc[:, col] * w
 
     def _outs(self, x: Any, u: Any) -> Any:
         """``outputs_fun`` on a full state ``x = [I_L; s(; I_ec)]`` with voltages ``u``."""
@@ -1045,13 +1060,16 @@ class CurrentModel:
         bank = self._table_bank()
         if bank is None:
             return None
-        h = np.empty(times.size)
+        n = times.size
+        h = np.empty(n)
         h[0] = 0.0
-        h[1:] = np.diff(times)
-        zero = np.zeros((1, self.n_circuits))
-        run = bank.run_steps(i0, np.vstack((s[:1], s[:-1])), np.vstack((u[:1], u[:-1])),
-                             np.vstack((zero, sd)), h, time_s=float(times[0]),
-                             stop_at_flag=True)
+        np.subtract(times[1:], times[:-1], out=h[1:])
+        # the step inputs: step 0 (length 0) with the first sample, step k with sample k - 1
+        s_k, u_k, sd_k = np.empty(s.shape), np.empty(u.shape), np.empty(s.shape)
+        s_k[0], s_k[1:] = s[0], s[:-1]
+        u_k[0], u_k[1:] = u[0], u[:-1]
+        sd_k[0], sd_k[1:] = 0.0, sd
+        run = bank.run_steps(i0, s_k, u_k, sd_k, h, time_s=float(times[0]), stop_at_flag=True)
         if run.n_good < times.size:
             return None
         return run.inductor_currents_A, run.currents_A, run.circuit_force_N
@@ -1204,8 +1222,8 @@ class CurrentModel:
                                  else initial_currents, self.circuit_names, "initial_currents",
                                  "A")
             e0 = np.zeros(self.n_circuits * self._n_e)    # steady state: I_k = 0
-        s = self.substitute_gaps(g)
-        sd = self.substitute_gaps(secant)
+        s = np.asarray(g) @ self._avg.T                 # substitute gaps (substitute_gaps)
+        sd = np.asarray(secant) @ self._avg.T
         # the table kernel flags every step whose gap path or currents leave the maps (the
         # same bounds with the same allowances as the check below), so a run it finishes
         # needs no check of its own; a flagged run takes the checked B-spline path
@@ -1214,14 +1232,20 @@ class CurrentModel:
             self._check_range(s, np.broadcast_to(i0, s.shape), times)
         else:
             il, coil_t, fc = run
-            final = CurrentModelState(float(times[-1]), il[-1].copy(), g[-1].copy(), None)
-            return ReducedSimulation(
-                time_s=times, gaps_m=g, gap_rates_m_per_s=np.vstack((secant, secant[-1:])),
-                voltages_V=np.vstack((u[:-1], u[-2:-1])), currents_A=coil_t,
-                inductor_currents_A=il, circuit_force_N=fc,
-                pole_force_N=fc @ self._share.T, force_N=fc.sum(axis=1),
+            final = _new(CurrentModelState, time_s=float(times[-1]),
+                         inductor_currents_A=il[-1].copy(), gaps_m=g[-1].copy(),
+                         eddy_currents_A=None)
+            rates = np.empty(g.shape)
+            rates[:-1] = secant
+            rates[-1] = secant[-1]
+            held = u.copy()
+            held[-1] = u[-2]
+            return _new(
+                ReducedSimulation, time_s=times, gaps_m=g, gap_rates_m_per_s=rates,
+                voltages_V=held, currents_A=coil_t, inductor_currents_A=il,
+                circuit_force_N=fc, pole_force_N=self._pole_forces(fc), force_N=row_sums(fc),
                 gap_names=self.gap_names, circuit_names=self.circuit_names,
-                final_state=final)
+                final_state=final, eddy_currents_A=None)
         xs, outs = self._integrate(times, np.concatenate([i0, s[0], e0]),
                                    np.concatenate([u[:-1], sd], axis=1).T)
         nc = self.n_circuits
@@ -1245,6 +1269,31 @@ class CurrentModel:
             inductor_currents_A=il, circuit_force_N=fc, pole_force_N=fc @ self._share.T,
             force_N=fc.sum(axis=1), gap_names=self.gap_names, circuit_names=self.circuit_names,
             final_state=final, eddy_currents_A=eddy)
+
+
+def row_sums(a: np.ndarray) -> np.ndarray:
+    """``a.sum(axis=1)`` of a 2-D float array, bit for bit, without the cost of NumPy's
+    reduction over a short last axis (~12 us for (1001, 2)): for fewer than 8 columns
+    NumPy adds them in order from the first, which is what this does (more columns: NumPy
+    itself, whose pairwise blocks differ).
+
+    Parameters
+    ----------
+    a : numpy.ndarray (n, m)
+        Any unit.
+
+    Returns
+    -------
+    numpy.ndarray (n,)
+        Row sums, in the unit of ``a``.
+    """
+    m = a.shape[1]
+    if m == 0 or m >= 8:
+        return a.sum(axis=1)
+    out = a[:, 0].copy()
+    for j in range(1, m):
+        out += a[:, j]
+    return out
 
 
 def _jit_compile(f: ca.Function) -> ca.Function:

@@ -103,6 +103,15 @@ static void __attribute__((noinline)) lanes_gather_slow_w{w}(const double *tbl, 
 }}
 #endif
 """
+_GUESS_SELECT = """#ifndef LANES_GUESS_SELECT_W{w}
+#define LANES_GUESS_SELECT_W{w}
+/* the lanes where c != 0 take a, the others b (out of line: the branch that calls this is
+   the unlikely one, and a call keeps the compiler from turning the branch into a select) */
+static {t} __attribute__((noinline)) lanes_guess_select_w{w}({t} c, {t} a, {t} b) {{
+  return {sel};
+}}
+#endif
+"""
 _PRELUDE = """typedef double vd __attribute__((vector_size(W * 8)));
 typedef long long vl __attribute__((vector_size(W * 8)));
 #define SEL(m, a, b) ((vd)(((vl)(a) & (m)) | ((vl)(b) & ~(m))))
@@ -241,6 +250,39 @@ def lane_source(f: ca.Function, *, name: str, n: int, inputs: Sequence[LaneInput
         t = fresh()
         rhs = template.format(**{k: vec(v) for k, v in ops.items()})
         body.append(f"    {'double' if scalar else 'vd'} {t} = {rhs};")
+        return t
+
+    # "if_else(c, a, b)" is if_else_zero(c, a) + if_else_zero(!c, b) in CasADi's graph:
+    # remembered per element name, so that the sum becomes a branch (guess_select)
+    negation: dict[str, str] = {}                # name of !c -> name of c
+    zero_unless: dict[str, tuple[str, str]] = {}  # name of if_else_zero(c, v) -> (c, v)
+
+    def guess_select(x: str, y: str) -> str | None:
+        """``x + y`` for ``x = if_else_zero(c_x, v_x)``, ``y = if_else_zero(c_y, v_y)`` with
+        one condition the negation of the other, as a branch on "the plain condition holds
+        in every lane": there the sum is known without waiting for the condition (the
+        processor predicts the branch), elsewhere the per-lane select, out of line.  Bit
+        for bit the sum: ``v + 0`` or ``0 + v`` in the operands' order.  None: not that
+        pattern."""
+        if x not in zero_unless or y not in zero_unless:
+            return None
+        (cx, vx), (cy, vy) = zero_unless[x], zero_unless[y]
+        zero = "0.0" if scalar else "ZERO"
+        if negation.get(cy) == cx:               # x holds the plain condition
+            c, likely, other = cx, f"{vec(vx)} + {zero}", f"{zero} + {vec(vy)}"
+        elif negation.get(cx) == cy:             # y does
+            c, likely, other = cy, f"{zero} + {vec(vy)}", f"{vec(vx)} + {zero}"
+        else:
+            return None
+        t = fresh()
+        if scalar:
+            body.append(f"    double {t}; if (__builtin_expect({c} != 0.0, 1)) {t} = {likely}; "
+                        f"else {t} = lanes_guess_select_w1({c}, {likely}, {other});")
+        else:
+            body.append(f"    vd {t}; {{ vl m_ = ({vec(c)} != ZERO); int all_ = 1; "
+                        f"for (l = 0; l < W; ++l) all_ &= m_[l] != 0; "
+                        f"if (__builtin_expect(all_, 1)) {t} = {likely}; "
+                        f"else {t} = lanes_guess_select_w{w}({vec(c)}, {likely}, {other}); }}")
         return t
 
     def operands(ins: Sequence[int], k: int, size: int) -> list[list[str]]:
@@ -402,7 +444,14 @@ def lane_source(f: ca.Function, *, name: str, n: int, inputs: Sequence[LaneInput
         elif op in _VECTOR:
             args = operands(ins, k, size)
             tpl = _SCALAR[op] if scalar else _VECTOR[op]
-            work[outs[0]] = [vector(tpl, **dict(zip("ab", a, strict=False))) for a in args]
+            names = []
+            for a in args:
+                guessed = guess_select(a[0], a[1]) if op == ca.OP_ADD else None
+                names.append(guessed if guessed is not None
+                             else vector(tpl, **dict(zip("ab", a, strict=False))))
+                if op == ca.OP_IF_ELSE_ZERO:
+                    zero_unless[names[-1]] = (a[0], a[1])
+            work[outs[0]] = names
             if op == ca.OP_ADD and size > 1:
                 # constant integer offsets + a scalar: remember for the gather
                 for a_c, other in ((operand_affine[0], operand_work[1]),
@@ -414,11 +463,16 @@ def lane_source(f: ca.Function, *, name: str, n: int, inputs: Sequence[LaneInput
             args = operands(ins, k, size)
             work[outs[0]] = [per_lane(tpl.format(**{c: at(v) for c, v in zip("ab", a, strict=False)}))
                              for a in args]
+            if op == ca.OP_NOT:
+                negation.update({t: a[0] for t, a in zip(work[outs[0]], args, strict=True)})
         else:
             raise NotImplementedError(f"instruction {k}: operation {op} "
                                       f"({node}) is not translated to lanes")
+    guess = _GUESS_SELECT.format(
+        w=w, t="double" if scalar else "vd",
+        sel="c != 0.0 ? a : b" if scalar else "SEL((c != ZERO), a, b)")
     code = (("#include <immintrin.h>\n" if avx2 else "") + f"#define W {w}\n"
-           + ("" if scalar else _PRELUDE) + _SLOW_GATHER.format(w=w) + "".join(head))
+           + ("" if scalar else _PRELUDE) + _SLOW_GATHER.format(w=w) + guess + "".join(head))
     if scalar:
         code += (f"static void {name}(const double **arg, double **res) {{\n"
                 f"  long c0;\n"

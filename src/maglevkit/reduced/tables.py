@@ -29,13 +29,15 @@ The accuracy each costs is measured against maps computed on a finer grid in
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
 from ..errors import InputError
 
-__all__ = ["INTERPOLATION_METHODS", "CellTable", "cell_table"]
+__all__ = ["INTERPOLATION_METHODS", "N_TABLE_MAPS", "CellTable", "cell_lookup", "cell_table", "gap_cell_part"]
 
 INTERPOLATION_METHODS = ("bicubic", "monotone", "bilinear")
 
@@ -200,3 +202,117 @@ def _monotone_table(s_axis: np.ndarray, i_axis: np.ndarray, v: np.ndarray, ds: f
     c = np.einsum("pa,...ab,qb->...pq", h, g, h)
     coef = np.ascontiguousarray(np.moveaxis(c, 0, 2))
     return CellTable(float(s_axis[0]), ds, float(i_axis[0]), di, coef, 3)
+
+
+# ----------------------------------------------------------------------------- kernel lookup
+# The compiled table lookup of the magnet bank's kernel, written once as CasADi expressions
+# (the bank's step, its ODE function and the vehicle's and FMU's code all come from it).
+# Kernel parameters ``p`` (MagnetBank.circuit_parameters): p[0] s0 [m], p[1] 1/ds [1/m],
+# p[2] gap cells, p[3] I0 [A], p[4] 1/dI [1/A], p[5] current cells, p[6] table offset.
+N_TABLE_MAPS = 3
+"""Maps per cell in the kernel's table: ``L~``, ``dL/ds``, ``F``."""
+
+
+def gap_cell_part(s: Any, p: Any, degree: int) -> tuple[Any, tuple[Any, ...]]:
+    """The gap half of a kernel table lookup at gap ``s`` [m] (CasADi expressions).
+
+    The gap does not depend on the current, so this half stays off the integrator's chain
+    of dependent operations: the table offset of the gap cell's row (``p[6] + k_s
+    n_i (d + 1)^2 N``, a whole number, exact in floating point) and the powers ``t^0..t^d``
+    of the local coordinate ``t = (s - s_k)/ds``.  The cell index is clamped to the
+    table (the edge cell's polynomial continues outside it, NaN included).
+
+    Parameters
+    ----------
+    s : casadi.MX
+        Gap [m].
+    p : casadi.MX or DM
+        The circuit's kernel parameters (above).
+    degree : int
+        ``d``: 3 (bicubic, monotone) or 1 (bilinear).
+
+    Returns
+    -------
+    (casadi.MX, tuple of casadi.MX)
+        Row offset, and ``(1, t, .., t^d)`` [-].
+    """
+    import casadi as ca
+
+    us = (s - p[0]) * p[1]
+    ks = ca.fmin(ca.fmax(ca.floor(us), 0), p[2] - 1)
+    t = us - ks
+    nk = (degree + 1) ** 2
+    return p[6] + ks * (p[5] * (N_TABLE_MAPS * nk)), _powers(t, degree)
+
+
+def _powers(x: Any, degree: int) -> tuple[Any, ...]:
+    out: list[Any] = [1.0, x]
+    for _ in range(2, degree + 1):
+        out.append(out[-1] * x)
+    return tuple(out[:degree + 1])
+
+
+def _power_sum(c: list[Any], x: tuple[Any, ...]) -> Any:
+    """``sum_k c_k x^k`` with the powers given, summed pairwise (a short dependency
+    chain: the products in parallel, then a tree of additions)."""
+    terms = [c[0]] + [c[k] * x[k] for k in range(1, len(c))]
+    while len(terms) > 1:
+        terms = [terms[j] + terms[j + 1] if j + 1 < len(terms) else terms[j]
+                 for j in range(0, len(terms), 2)]
+    return terms[0]
+
+
+def cell_lookup(cell: tuple[Any, tuple[Any, ...]], i: Any, p: Any, table: Any, degree: int,
+                maps: Sequence[int] = (0, 1, 2), *, hint: Any = None) -> tuple[list[Any], Any]:
+    """Maps ``maps`` of the kernel's table at the gap cell ``cell`` (:func:`gap_cell_part`)
+    and current ``i`` [A] (CasADi expressions).
+
+    ``f = sum_q w^q (sum_p c_pq t^p)``: the inner sums over the gap powers first (their
+    coefficients are gathered as soon as the current's cell is known), then the outer one
+    over the powers of ``w = (I - I_l)/dI``, each summed pairwise (:func:`_power_sum`).
+
+    Parameters
+    ----------
+    cell : (casadi.MX, tuple of casadi.MX)
+        From :func:`gap_cell_part`.
+    i : casadi.MX
+        Current [A].
+    p : casadi.MX or DM
+        The circuit's kernel parameters.
+    table : casadi.MX
+        The table (per cell map-major, then the ``(d + 1)^2`` coefficients ``t^p w^q``).
+    degree : int
+        ``d``.
+    maps : sequence of int
+        Which of ``L~`` [H], ``dL/ds`` [H/m], ``F`` [N] (0, 1, 2).
+    hint : casadi.MX, optional
+        A guess of the current's cell index (e.g. the cell of an earlier RK4 stage).  The
+        index used is ``if_else(k == hint, hint, k)``, the same number ``k`` either way,
+        so the values do not change; the lanes' C turns this select into a branch on
+        "every lane guessed right" (:mod:`.lanes`), so that the gather and the gap sums
+        need not wait for ``k`` (only the branch does).
+
+    Returns
+    -------
+    (list of casadi.MX, casadi.MX)
+        The maps' values, in their units, and the current's cell index ``k`` (for the
+        ``hint`` of a later lookup).
+    """
+    import casadi as ca
+
+    d = degree
+    nk = (d + 1) ** 2
+    row, tp = cell
+    ui = (i - p[3]) * p[4]
+    ki = ca.fmin(ca.fmax(ca.floor(ui), 0), p[5] - 1)
+    k = ki if hint is None else ca.if_else(ki == hint, hint, ki)
+    wq = _powers(ui - k, d)
+    base = row + k * (N_TABLE_MAPS * nk)
+    idx = np.concatenate([np.arange(m * nk, (m + 1) * nk) for m in maps]).astype(float)
+    c = table[base + ca.DM(idx)]
+    out = []
+    for j, _ in enumerate(maps):
+        g = [_power_sum([c[j * nk + pp * (d + 1) + q] for pp in range(d + 1)], tp)
+             for q in range(d + 1)]
+        out.append(_power_sum(g, wq))
+    return out, ki
