@@ -1359,10 +1359,12 @@ class VehicleModel:
         st, sp, rl = lay.state, lay.step_inputs, lay.record
         n_rows = -(-(n_steps + 1) // nb) * nb            # whole blocks
         p_all = np.empty((n_rows, lay.n_step_inputs))
-        pad = np.minimum(np.arange(n_rows), n_steps)      # the last step repeated
-        # the points ride at x_ref - xi_p, as xpath = (x_nose0 + v t) - xi
-        p_all[:, sp["x_ref"]], p_all[:, sp["r"]] = x_ref[pad, None], r_all[pad]
-        p_all[:, sp["r_x"]], p_all[:, sp["t"]] = rx_all[pad], times[pad, None]
+        # the points ride at x_ref - xi_p, as xpath = (x_nose0 + v t) - xi; rows after the
+        # run repeat its last step (they pad the last block)
+        for key, col in (("x_ref", x_ref[:, None]), ("r", r_all), ("r_x", rx_all),
+                         ("t", times[:, None])):
+            p_all[:n_steps + 1, sp[key]] = col
+            p_all[n_steps + 1:, sp[key]] = col[-1]
         p_all[:, sp["keep"]] = 1.0
         # moving system boundary, vectorised: the window's first span at every step (it
         # moves to the rearmost load, never back), the rows it recycles (reset to rest at
