@@ -11,7 +11,7 @@ counts the other processes' share of the core); the wall-time factor is given be
 The share of each part of the compiled step is measured by compiling each part (the
 functions the step composes) on its own and timing many calls of it on the trim state (the
 magnets: the bank's SIMD-lane library, which the compiled step calls); the
-rest of the run's CPU time per step is the Python loop (one call per block of 10 steps,
+rest of the run's CPU time per step is the Python loop (one call per block of 50 steps,
 event checks) and what a real run costs beyond hot repeated calls (fresh inputs and
 records every step, caches cleared by other processes).
 
@@ -124,8 +124,9 @@ def _time_calls(f: Any, args: list[np.ndarray], calls: int = CALLS, compile_it: 
 
 
 def part_times(model: VehicleModel, speed: float, dt: float = 1e-3) -> dict[str, float]:
-    """CPU time per call [s] of the whole compiled step and of each of its parts, on the
-    trim state with the train at its start position."""
+    """CPU time per call [s] of the run's compiled block per step and of each part of the
+    step, on the trim state with the train at its start position (``"block steps"``: the
+    steps per block)."""
     vs = model.step_function(dt)
     lay, parts = vs.layout, vs.parts
     nc = model.bank.n_circuits
@@ -137,18 +138,24 @@ def part_times(model: VehicleModel, speed: float, dt: float = 1e-3) -> dict[str,
     s[st["force"]] = model.trim_force_N
     s[st["psi_hat"]] = model.flux_bias_Wb
     gw = model.guideway
-    p[sp["x"]] = gw.origin_m + 1.3 * gw.span.length_m + model.train.length_m - model.point_xi_m
+    p[sp["x_ref"]] = gw.origin_m + 1.3 * gw.span.length_m + model.train.length_m
     p[sp["keep"]] = 1.0
     c = np.concatenate([[speed], np.full(nc, np.inf)])
     out: dict[str, float] = {}
-    out["whole step"], _ = _time_calls(vs.function, [s, p, c])
-    t_block, _ = _time_calls(vs.block_function, [s, np.tile(p, (vs.block_steps, 1)), c],
-                             calls=CALLS // vs.block_steps)
-    out["block per step"] = t_block / vs.block_steps
+    # the run's own compiled block (linked against the bank's lane library)
+    block_fun, _, nb = model._compiled_step(dt)
+    t_block, _ = _time_calls(block_fun, [s, np.tile(p, (nb, 1)), c], calls=CALLS // nb,
+                             compile_it=False)
+    out["block per step"] = t_block / nb
+    out["block steps"] = nb
     xm, gx, il = s[st["x_mech"]], s[st["guideway"]], s[st["I_L"]]
     cur, psi, integ = s[st["current"]], s[st["psi_hat"]], s[st["integral"]]
-    t_in, (gap, rate, _, _, _) = _time_calls(parts["guideway_in"], [xm, gx, p[sp["x"]], p[sp["r"]],
-                                                                 p[sp["r_x"]], [speed]])
+    # the guideway as the step composes it: the loads' geometry once, the deflection at
+    # the loads, the gaps, (below) the modal update
+    t_geo, geo = _time_calls(parts["guideway_train_loads"], [p[sp["x_ref"]], [speed]])
+    t_defl, (w, w_rate, _) = _time_calls(parts["guideway_deflection"], [gx, *geo[:3], [speed]])
+    t_gaps, (gap, rate, _) = _time_calls(parts["gaps"], [xm, w, w_rate, p[sp["r"]],
+                                                        p[sp["r_x"]], [speed]])
     t_ctl, (u,) = _time_calls(parts["controllers"], [gap, rate, il, cur, psi, integ, [0.0],
                                                      c[1:]])
     lanes = model.bank.compiled_step_library(dt)
@@ -163,8 +170,9 @@ def part_times(model: VehicleModel, speed: float, dt: float = 1e-3) -> dict[str,
     t_upd, _ = _time_calls(parts["controller_update"], [psi, integ, u, cur, new_cur, gap])
     f_bar = 0.5 * model.train.sides * (s[st["force"]] + new_f)
     t_mech, _ = _time_calls(parts["mechanics"], [xm, f_bar])
-    t_out, _ = _time_calls(parts["guideway_out"], [gx, p[sp["x"]], [speed], f_bar])
-    out.update({"guideway (deflection at the loads, gaps; modal update)": t_in + t_out,
+    t_out, _ = _time_calls(parts["guideway_update"], [gx, *geo[3:], f_bar])
+    out.update({"guideway (deflection at the loads, gaps; modal update)":
+                t_geo + t_defl + t_gaps + t_out,
                 "controllers (cascade, chopper, integrators)": t_ctl + t_upd,
                 "magnets (bank: RK4 of eq. 8, 50 circuits)": t_mag,
                 "mechanics (ZOH step, 60 states)": t_mech})
@@ -240,16 +248,16 @@ def run() -> str:
         lines.append(f"| {n_sec} | {nc} | {DURATION_S / r.cpu_time_s:.1f}x | "
                      f"{1e6 * r.cpu_time_s / (DURATION_S * 1000):.0f} | "
                      f"{DURATION_S / wh:.1f}x |")
-    whole = parts.pop("whole step")
     block = parts.pop("block per step")
+    block_steps = parts.pop("block steps")
     shares = dict(parts)
     shares["in the run, beyond the parts (Python per block, fresh data, cache misses)"] = max(
         per_step - sum(parts.values()), 0.0)
     tot = sum(shares.values())
     lines += ["", "Share of each part of the compiled elastic step (each part compiled and "
-              f"timed alone on the trim state, many calls; the whole step alone "
-              f"{1e6 * whole:.1f} us, in blocks of 10 steps {1e6 * block:.1f} us per step; "
-              f"in the run {1e6 * per_step:.1f} us per step):", "",
+              f"timed alone on the trim state, many calls; the run's compiled block of "
+              f"{block_steps:g} steps alone {1e6 * block:.1f} us per step; in the run "
+              f"{1e6 * per_step:.1f} us per step):", "",
               "| part | us per step | share |", "|---|---|---|"]
     for k, t in shares.items():
         lines.append(f"| {k} | {1e6 * t:.1f} | {100 * t / tot:.0f} % |")

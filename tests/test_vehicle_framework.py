@@ -125,6 +125,60 @@ def test_guideway_part_against_the_guideway_s_own_mode_shapes(model: VehicleMode
     np.testing.assert_allclose(rate, ref_rate, rtol=0, atol=1e-12 * np.abs(ref_rate).max())
 
 
+def test_train_loads_against_the_span_s_mode_shapes(model: VehicleModel) -> None:
+    """The compiled step's geometry of the loads (one reference point's phase, every point's
+    by angle addition, the sign flipped per span) against BeamSpan.mode_shapes at each
+    point's own span coordinate (direct sines), at the step start and at mid-step, with
+    points on both sides of piers and crossing one within the half step."""
+    gw = model.guideway
+    parts = model.step_function(1e-3).parts
+    span, L = gw.span, gw.span.length_m
+    xi = model.point_xi_m
+    v = 140.0                                     # 7 cm per half step: pier crossings
+    rng = np.random.default_rng(5)
+    x_refs = gw.origin_m + L * (7.0 + rng.uniform(0.0, 20.0, 40))
+    # a point exactly at a pier, and one just behind it that crosses it in the half step
+    x_refs[:2] = gw.origin_m + 11 * L + xi[7], gw.origin_m + 11 * L + xi[7] - 0.03
+    crossed = 0
+    for x_ref in x_refs:
+        out = [np.asarray(o).ravel() for o in parts["guideway_train_loads"](x_ref, v)]
+        for k, x in enumerate(((x_ref - xi), (x_ref - xi) + 0.5 * v * 1e-3)):
+            rows, s1, c1 = out[3 * k:3 * k + 3]
+            ks = gw.span_index(x)
+            np.testing.assert_array_equal(rows, np.mod(ks, gw.n_spans))
+            phi, dphi = span.mode_shapes(x - (gw.origin_m + ks * L))
+            # a few ulp of the angle addition on phases up to k_1 * 75 m: 1e-13
+            np.testing.assert_allclose(s1, phi[:, 0], rtol=0, atol=1e-13)
+            np.testing.assert_allclose(c1, dphi[:, 0] / span.wavenumbers_rad_per_m[0],
+                                       rtol=0, atol=1e-13)
+        crossed += int((np.asarray(out[3]) != np.asarray(out[0])).sum())
+    assert crossed > 0                            # some points changed span mid-step
+
+
+def test_guideway_update_part_against_guideway_step(model: VehicleModel) -> None:
+    """The step's modal update (a scatter-add of the loads by ring row, the span's ZOH)
+    against Guideway.step (modal forces by np.add.at, its own discretisation) from a random
+    state with the loads at the mid-step positions."""
+    gw = model.guideway
+    parts = model.step_function(1e-3).parts
+    L, nm, n_sp = gw.span.length_m, gw.n_modes, gw.n_spans
+    rng = np.random.default_rng(8)
+    q, qd = rng.normal(size=(n_sp, nm)) * 1e-3, rng.normal(size=(n_sp, nm)) * 1e-2
+    first = 4
+    x_ref = gw.origin_m + L * (first + 0.05) + model.point_xi_m.max()
+    v, dt = 120.0, 1e-3
+    f_bar = rng.uniform(0.5e5, 1.5e5, model.point_xi_m.size)
+    geo = [np.asarray(o).ravel() for o in parts["guideway_train_loads"](x_ref, v)]
+    gx = np.concatenate([q, qd], axis=1).ravel()
+    (got,) = (np.asarray(o).ravel() for o in [parts["guideway_update"](gx, *geo[3:], f_bar)])
+    state = GuidewayState(0.0, first, q, qd)
+    ref = gw.step(state, dt, (x_ref - model.point_xi_m) + 0.5 * v * dt, f_bar)
+    assert ref.first_span == first                # no recycling in this step
+    want = np.concatenate([ref.modal_displacement_m, ref.modal_velocity_m_per_s], axis=1).ravel()
+    # the same sums in another order and phases by angle addition: ~1e-15 relative
+    np.testing.assert_allclose(got, want, rtol=0, atol=1e-12 * np.abs(want).max())
+
+
 def test_voltage_limits_part_against_its_rules(model: VehicleModel) -> None:
     """|U| <= U_max, the chopper's U >= -R_ec I_L, failed circuits at 0 V, NaN kept."""
     f = model.step_function(1e-3).parts["voltage_limits"]

@@ -202,7 +202,9 @@ def run_blocks(function: Any, *, state: np.ndarray, inputs: np.ndarray,
     -------
     (LoopOutcome, ndarray (n_rows, n_record))
         The outcome and the records (rows up to ``last_step`` are the run's).  On Ctrl-C
-        the block under way is dropped: ``last_step`` is the step before it.
+        the block under way is dropped unless it was computed and checked (the interrupt
+        came in the progress update after it): ``last_step`` is the last step of the
+        blocks done.
 
     Raises
     ------
@@ -228,7 +230,7 @@ def run_blocks(function: Any, *, state: np.ndarray, inputs: np.ndarray,
     t0, c0 = clock(), time.process_time()
     t_call = 0.0
     last, event, interrupted, done = n_steps, None, False, False
-    k0 = 0
+    kept = -1                        # the last step of the blocks computed and checked
     try:
         for blk in range(n_rows // nb):
             k0 = blk * nb
@@ -241,6 +243,7 @@ def run_blocks(function: Any, *, state: np.ndarray, inputs: np.ndarray,
             t_call += clock() - tc
             k1 = min(k0 + nb, n_steps + 1)
             if k1 <= n_steps and not look(k0, rows[:k1 - k0]):
+                kept = k1 - 1
                 bar.update(k1)
                 continue
             for k in range(k0, k1):
@@ -254,9 +257,10 @@ def run_blocks(function: Any, *, state: np.ndarray, inputs: np.ndarray,
                     break
             if done:
                 break
+            kept = k1 - 1
             bar.update(k1)
     except KeyboardInterrupt:
-        interrupted, last = True, k0 - 1
+        interrupted, last = True, kept
         if last < 1:
             bar.close(finished=False)
             raise

@@ -927,7 +927,8 @@ class VehicleModel:
         x_nose0 = gw.origin_m + span_l * 1.3 + tr.length_m
         times = np.arange(n_steps + 1) * dt
         # irregularities at every point and step (vectorised once)
-        xpath = x_nose0 + v * times[:, None] - xi[None, :]
+        x_ref = x_nose0 + v * times
+        xpath = x_ref[:, None] - xi[None, :]
         built_in = gw.built_in_profile          # the girders' precamber: part of r(x)
         if built_in is not None:
             irregularity = built_in if irregularity is None else irregularity + built_in
@@ -1011,7 +1012,7 @@ class VehicleModel:
         interrupted = False
         if compiled_loop:
             last, touchdown, wall, cpu, interrupted = self._compiled_loop(
-                dt=dt, v=v, times=times, xpath=xpath, r_all=r_all, rx_all=rx_all,
+                dt=dt, v=v, times=times, x_ref=x_ref, xpath=xpath, r_all=r_all, rx_all=rx_all,
                 x_m=x_m, gstate=gstate, i_l=bstate.inductor_currents_A, psi_hat=psi_hat,
                 integ=integ, current=current, force=force_c, fail_t=fail_t, rec=rec,
                 rec_q=rec_q, rec_qd=rec_qd, rec_fp=rec_fp, rec_mid=rec_mid,
@@ -1284,7 +1285,7 @@ class VehicleModel:
                              "(magnets='reduced')")
         return build_vehicle_step(bank_step=bank_step, sides=float(self.train.sides),
                                   velocity_blend=self.train.control_velocity_blend,
-                                  **self._part_constants(dt))
+                                  point_offsets_m=self.point_xi_m, **self._part_constants(dt))
 
     def _part_evaluators(self, dt: float) -> dict[str, Any]:
         """The step's parts for steps of ``dt`` (:func:`build_vehicle_parts`), bound for
@@ -1328,8 +1329,9 @@ class VehicleModel:
             self._step_functions[dt] = hit
         return hit
 
-    def _compiled_loop(self, *, dt: float, v: float, times: np.ndarray, xpath: np.ndarray,
-                       r_all: np.ndarray, rx_all: np.ndarray, x_m: np.ndarray, gstate: Any,
+    def _compiled_loop(self, *, dt: float, v: float, times: np.ndarray, x_ref: np.ndarray,
+                       xpath: np.ndarray, r_all: np.ndarray, rx_all: np.ndarray,
+                       x_m: np.ndarray, gstate: Any,
                        i_l: np.ndarray, psi_hat: np.ndarray, integ: np.ndarray,
                        current: np.ndarray, force: np.ndarray, fail_t: np.ndarray,
                        rec: dict[str, np.ndarray], rec_q: np.ndarray, rec_qd: np.ndarray,
@@ -1357,9 +1359,12 @@ class VehicleModel:
         st, sp, rl = lay.state, lay.step_inputs, lay.record
         n_rows = -(-(n_steps + 1) // nb) * nb            # whole blocks
         p_all = np.empty((n_rows, lay.n_step_inputs))
-        pad = np.minimum(np.arange(n_rows), n_steps)      # the last step repeated
-        p_all[:, sp["x"]], p_all[:, sp["r"]] = xpath[pad], r_all[pad]
-        p_all[:, sp["r_x"]], p_all[:, sp["t"]] = rx_all[pad], times[pad, None]
+        # the points ride at x_ref - xi_p, as xpath = (x_nose0 + v t) - xi; rows after the
+        # run repeat its last step (they pad the last block)
+        for key, col in (("x_ref", x_ref[:, None]), ("r", r_all), ("r_x", rx_all),
+                         ("t", times[:, None])):
+            p_all[:n_steps + 1, sp[key]] = col
+            p_all[n_steps + 1:, sp[key]] = col[-1]
         p_all[:, sp["keep"]] = 1.0
         # moving system boundary, vectorised: the window's first span at every step (it
         # moves to the rearmost load, never back), the rows it recycles (reset to rest at

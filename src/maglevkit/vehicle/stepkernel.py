@@ -21,16 +21,20 @@ step, in this order::
 Which ring rows the moving system boundary recycles at which step, and the check that the
 loads stay on the integrated spans, are computed in Python before the loop (they change
 once per span crossing); the rows come in as a per-step keep mask (1 keep, 0 reset to
-rest).  The mode shapes' ring rows follow inside the function from the load positions
-(``row = floor((x - x0)/L) mod N``, as the loop computes them).
+rest).  The loads' geometry follows inside the function from the train's reference
+position ``x_ref`` (the points ride at ``x_ref - xi_p``): the ring rows
+(``row = floor((x - x0)/L) mod N``, as the loop computes them) and the first mode's phase
+at every point by angle addition from the reference point's phase (four transcendental
+calls per step); each point then reads its own span's modal state (a gather by ring row)
+and the modal forces are a scatter-add (:func:`_elastic_guideway`).
 
-Layout (:class:`StepLayout`): input ``S`` (state), ``P`` (per-step inputs: the load
-positions at the step start, the irregularity and its slope there, the time, the keep
-mask), ``C`` (per-run constants: speed and failure times); outputs ``S_next`` and ``R``
-(the record of the step: gaps, rates, coil currents, forces and ``I_L`` at the step start,
-deflections, the mechanical state, the midspan deflection per ring row, the voltages,
-min/max gap and the bank's out-of-range count).  The block function chains the step
-``block_steps`` times (``P`` and ``R`` one column per step).
+Layout (:class:`StepLayout`): input ``S`` (state), ``P`` (per-step inputs: the reference
+position at the step start, the irregularity and its slope at the points there, the time,
+the keep mask), ``C`` (per-run constants: speed and failure times); outputs ``S_next`` and
+``R`` (the record of the step: gaps, rates, coil currents, forces and ``I_L`` at the step
+start, deflections, the mechanical state, the midspan deflection per ring row, the
+voltages, min/max gap and the bank's out-of-range count).  The block function chains the
+step ``block_steps`` times (``P`` and ``R`` one column per step).
 """
 
 from __future__ import annotations
@@ -70,7 +74,7 @@ class StepLayout:
         Parts of the state vector ``S`` (``"x_mech"``, ``"guideway"``, ``"I_L"``,
         ``"psi_hat"``, ``"integral"``, ``"current"``, ``"force"``).
     step_inputs : dict of str to slice
-        Parts of the per-step input ``P`` (``"x"``, ``"r"``, ``"r_x"``, ``"t"``,
+        Parts of the per-step input ``P`` (``"x_ref"``, ``"r"``, ``"r_x"``, ``"t"``,
         ``"keep"``).
     record : dict of str to slice
         Parts of the record ``R`` of a step.
@@ -120,7 +124,7 @@ def pack_slices(items: list[tuple[str, int]]) -> dict[str, slice]:
 def _layout(n_dof: int, nc: int, n_sp: int, nm: int) -> StepLayout:
     state = pack_slices([("x_mech", 2 * n_dof), ("guideway", n_sp * 2 * nm), ("I_L", nc),
                          ("psi_hat", nc), ("integral", nc), ("current", nc), ("force", nc)])
-    step = pack_slices([("x", nc), ("r", nc), ("r_x", nc), ("t", 1), ("keep", n_sp)])
+    step = pack_slices([("x_ref", 1), ("r", nc), ("r_x", nc), ("t", 1), ("keep", n_sp)])
     record = pack_slices([("gap", nc), ("gap_rate", nc), ("current", nc), ("force", nc), ("I_L", nc),
                           ("deflection", nc), ("q", n_dof), ("q_dot", n_dof), ("midspan_ring", n_sp),
                           ("voltage", nc), ("gap_min", 1), ("gap_max", 1), ("n_bad", 1)])
@@ -159,6 +163,138 @@ def _sparse(a: np.ndarray) -> ca.DM:
     return ca.sparsify(ca.DM(np.asarray(a, dtype=float)))
 
 
+def _scatter_add(values: Any, index: Any, n: int) -> Any:
+    """``z = zeros(n); z[index[i]] += values[i]`` for i in order (CasADi MX, ``index``
+    an MX of whole numbers in ``0 ... n - 1``; entries outside are dropped): the
+    transpose of the gather ``g[index]``, which is how CasADi writes it."""
+    g = ca.MX.sym("g", n)
+    return ca.jtimes(g[index], g, values, True)
+
+
+def _elastic_guideway(*, npt: int, wavenumbers: np.ndarray, n_spans: int, origin_m: float,
+                      span_length_m: float, dt: float, guideway_ad: np.ndarray,
+                      guideway_bd: np.ndarray, midspan_shape: np.ndarray,
+                      point_offsets_m: np.ndarray | None = None) -> dict[str, Any]:
+    """The elastic guideway's laws at ``npt`` point loads, as CasADi functions.
+
+    ``"guideway_loads"`` ``(x, v) -> (rows, sin_a, cos_a, rows_mid, sin_a_mid,
+    cos_a_mid)``: the ring row of every point's span, ``row = floor((x - x0)/L) mod N``,
+    and the first mode's phase ``a = k_1 xi`` there (``xi = x - x0 - floor(..) L``), at the
+    step's start and at the mid-step positions ``x + v dt/2`` (the modal update's load
+    positions), evaluated directly (``sin``, ``cos`` per point).  With
+    ``point_offsets_m`` (points rigidly attached to a train, ``x_p = x_ref - xi_p``) also
+    ``"guideway_train_loads"`` ``(x_ref, v) -> (the same)``: since
+    ``a_p = (a_ref - k_1 xi_p) + (k_ref - k_p) pi``, ``sin a_p = (-1)^(k_ref - k_p)
+    (sin a_ref cos k_1 xi_p - cos a_ref sin k_1 xi_p)`` and ``cos a_p`` likewise, with
+    ``cos k_1 xi_p``, ``sin k_1 xi_p`` constants: four transcendental calls per step
+    instead of four per point (the rounding differs from direct evaluation by a few ulp).
+
+    ``"guideway_deflection"`` ``(guideway, rows, sin_a, cos_a, v) -> (w, w_rate,
+    midspan)``: ``w = sum_j q_j sin(k_j xi)``, ``w_rate = w_t + v w_x = sum_j (q_j' sin(k_j
+    xi) + v q_j k_j cos(k_j xi))`` at the points, each point reading its own span's
+    modal state (a gather by ring row), and the midspan deflection per ring row.
+
+    ``"guideway_update"`` ``(guideway, rows_mid, sin_a_mid, cos_a_mid, F_bar) ->
+    guideway_next``: ``X+ = X Ad^T + Q Bd^T``, ``Q[r, j] = sum of sin(k_j xi_p) F_p`` over
+    the points on ring row ``r`` (a scatter-add, points in ascending order).
+
+    ``sin(j a)``, ``cos(j a)`` come from ``sin a``, ``cos a`` by the angle-addition
+    recurrence (the rounding differs from direct evaluation by a few ulp).  The state
+    ``guideway`` is the ring buffer row-major: row ``r`` holds ``[q_1..q_n, q_1'..q_n']``.
+    """
+    kk = np.asarray(wavenumbers, dtype=float).ravel()
+    nm, n_sp = kk.size, int(n_spans)
+    k1 = float(kk[0])
+    sym = ca.MX.sym
+    xp, v = sym("x", npt), sym("v")
+
+    def span_rows(xs: Any) -> tuple[Any, Any]:
+        ks = ca.floor((xs - origin_m) / span_length_m)
+        return ks, ks - n_sp * ca.floor(ks / n_sp)
+
+    def phases(xs: Any) -> tuple[Any, Any, Any]:
+        """Ring rows, ``sin a``, ``cos a`` at the positions ``xs`` (direct evaluation)."""
+        ks, rows = span_rows(xs)
+        a = (xs - (origin_m + ks * span_length_m)) * k1
+        return rows, ca.sin(a), ca.cos(a)
+
+    half = 0.5 * v * dt
+    names_out = ["rows", "sin_a", "cos_a", "rows_mid", "sin_a_mid", "cos_a_mid"]
+    f_loads = ca.Function("vehicle_guideway_loads", [xp, v],
+                          [*phases(xp), *phases(xp + half)], ["x", "v"], names_out)
+    out: dict[str, Any] = {"guideway_loads": f_loads}
+    if point_offsets_m is not None:
+        # points rigidly attached to the train, x_p = x_ref - xi_p: with
+        # a_p = k_1 (x_p - x0 - k_p L) = (a_ref - k_1 xi_p) + (k_ref - k_p) pi,
+        # sin a_p = (-1)^(k_ref - k_p) (sin a_ref cos k_1 xi_p - cos a_ref sin k_1 xi_p),
+        # cos a_p likewise: four transcendental calls per step instead of four per point
+        offs = np.asarray(point_offsets_m, dtype=float).ravel()
+        c_off, s_off = ca.DM(np.cos(k1 * offs)), ca.DM(np.sin(k1 * offs))
+        x_ref = sym("x_ref")
+
+        def train_phases(xr: Any, xs: Any) -> tuple[Any, Any, Any]:
+            ks_r = ca.floor((xr - origin_m) / span_length_m)
+            a_r = (xr - (origin_m + ks_r * span_length_m)) * k1
+            s_r, c_r = ca.sin(a_r), ca.cos(a_r)
+            ks, rows = span_rows(xs)
+            d = ks_r - ks
+            sign = 1.0 - 2.0 * (d - 2.0 * ca.floor(0.5 * d))
+            return rows, sign * (s_r * c_off - c_r * s_off), sign * (c_r * c_off + s_r * s_off)
+
+        x_pts = x_ref - ca.DM(offs)          # as the run's positions x_ref + v t - xi
+        out["guideway_train_loads"] = ca.Function(
+            "vehicle_guideway_train_loads", [x_ref, v],
+            [*train_phases(x_ref, x_pts), *train_phases(x_ref + half, x_pts + half)],
+            ["x_ref", "v"], names_out)
+
+    def modes(s_1: Any, c_1: Any) -> tuple[list[Any], list[Any]]:
+        sins, coss = [s_1], [c_1]
+        for _ in range(1, nm):
+            sj, cj = sins[-1], coss[-1]
+            sins.append(sj * c_1 + cj * s_1)
+            coss.append(cj * c_1 - sj * s_1)
+        return sins, coss
+
+    gx_flat = sym("guideway", n_sp * 2 * nm)
+    gx = ca.reshape(gx_flat, 2 * nm, n_sp).T            # (N, 2 nm), row-major as the loop
+    r_in, s_in, c_in = sym("rows", npt), sym("sin_a", npt), sym("cos_a", npt)
+    phi, cosines = modes(s_in, c_in)
+    # each point reads its own span's [q | q'] (gx_flat[row 2 nm : (row + 1) 2 nm]): a
+    # gather instead of a one-hot (npt, N) matrix times the (N, 2 nm) state; the same
+    # numbers (the one-hot's zero products added nothing) with ~1/10 of the arithmetic
+    base = r_in * float(2 * nm)
+    qs = [gx_flat[base + float(j)] for j in range(nm)]
+    qds = [gx_flat[base + float(nm + j)] for j in range(nm)]
+    w = qs[0] * phi[0]
+    w_t = qds[0] * phi[0]
+    w_x = qs[0] * (cosines[0] * k1)
+    for j in range(1, nm):
+        w = w + qs[j] * phi[j]
+        w_t = w_t + qds[j] * phi[j]
+        w_x = w_x + qs[j] * (cosines[j] * float(kk[j]))
+    mid = ca.mtimes(gx[:, :nm], ca.DM(np.asarray(midspan_shape, dtype=float)))
+    f_defl = ca.Function("vehicle_guideway_deflection", [gx_flat, r_in, s_in, c_in, v],
+                         [w, w_t + v * w_x, mid],
+                         ["guideway", "rows", "sin_a", "cos_a", "v"],
+                         ["w", "w_rate", "midspan"])
+
+    f_bar = sym("F_bar", npt)
+    sn_m, _ = modes(s_in, c_in)
+    # Q[r, j] = sum of sin(k_j xi_p) F_p over the points p on ring row r: a scatter-add
+    # (points in ascending order, as the one-hot product summed them) into the
+    # column-major (N, nm) matrix
+    at = ca.vertcat(*[r_in + float(j * n_sp) for j in range(nm)])
+    loads = ca.vertcat(*[sn_m[j] * f_bar for j in range(nm)])
+    qmod = ca.reshape(_scatter_add(loads, at, n_sp * nm), n_sp, nm)
+    gx_next = (ca.mtimes(gx, _sparse(np.asarray(guideway_ad).T))
+               + ca.mtimes(qmod, _sparse(np.asarray(guideway_bd).T)))
+    f_upd = ca.Function("vehicle_guideway_update", [gx_flat, r_in, s_in, c_in, f_bar],
+                        [ca.reshape(gx_next.T, n_sp * 2 * nm, 1)],
+                        ["guideway", "rows_mid", "sin_a_mid", "cos_a_mid", "F_bar"],
+                        ["guideway_next"])
+    return {**out, "guideway_deflection": f_defl, "guideway_update": f_upd}
+
+
 def build_vehicle_parts(*, dt: float, nominal_gap_m: float, span_length_m: float,
                         origin_m: float, wavenumbers: np.ndarray, guideway_ad: np.ndarray,
                         guideway_bd: np.ndarray, n_spans: int, mech_ad: np.ndarray,
@@ -167,7 +303,8 @@ def build_vehicle_parts(*, dt: float, nominal_gap_m: float, span_length_m: float
                         flux_bias_Wb: np.ndarray, resistance_ohm: np.ndarray,
                         eddy_resistance_ohm: np.ndarray, voltage_limit_V: float,
                         integral_projection: np.ndarray, midspan_shape: np.ndarray,
-                        chopper: str = "eq8") -> dict[str, Any]:
+                        chopper: str = "eq8", point_offsets_m: np.ndarray | None = None
+                        ) -> dict[str, Any]:
     """The parts of the vehicle step, each law written once as a CasADi function.
 
     The compiled step (:func:`build_vehicle_step`) composes them with the bank's step; the
@@ -215,6 +352,10 @@ def build_vehicle_parts(*, dt: float, nominal_gap_m: float, span_length_m: float
         ``U >= -R_ec I_L`` (:func:`~maglevkit.plant.chopper_floor`); ``"coil_current"``
         (detailed magnets, no ``I_L``): no negative voltage while the coil current is
         below 1 A.
+    point_offsets_m : ndarray (n_points,), optional
+        Distances ``xi_p`` [m] of the force points behind the train's reference point
+        (they ride at ``x_ref - xi_p``); with an elastic guideway this adds the part
+        ``"guideway_train_loads"``, the compiled step's geometry of the loads.
 
     Returns
     -------
@@ -223,7 +364,12 @@ def build_vehicle_parts(*, dt: float, nominal_gap_m: float, span_length_m: float
         ``"voltage_limits"`` (clip, chopper, failures), ``"controllers"`` (the two
         composed), ``"controller_update"``, ``"mechanics_loaded"`` (with ``Q_g`` an
         input), ``"mechanics"`` (with the constant ``gravity_force``),
-        ``"guideway_out"``; see the module docstring for the laws.
+        ``"guideway_out"``; see the module docstring for the laws.  ``"gaps"``: the
+        gaps and rates with the deflection at the points given.  With an elastic
+        guideway also the guideway's own parts (:func:`_elastic_guideway`):
+        ``"guideway_loads"`` (``"guideway_train_loads"``), ``"guideway_deflection"``,
+        ``"guideway_update"``, of which ``"guideway_in"`` and ``"guideway_out"`` are
+        composed.
     """
     if chopper not in ("eq8", "coil_current"):
         raise InputError(f"chopper = {chopper!r}; use 'eq8' or 'coil_current'")
@@ -242,43 +388,35 @@ def build_vehicle_parts(*, dt: float, nominal_gap_m: float, span_length_m: float
     bt = _sparse(b_mat.T)
     q, qd = x_m[:n_dof], x_m[n_dof:]
 
-    def shapes(xs: Any) -> tuple[Any, Any, Any]:
-        """Ring-row one-hot matrix (npt, N), sin(k_j xi) and cos(k_j xi) (npt, nm) at the
-        positions ``xs``.  ``sin(j a)``, ``cos(j a)`` by the angle-addition recurrence from
-        ``sin a``, ``cos a`` (two transcendental calls per point instead of 2 nm; the
-        rounding differs from direct evaluation by a few ulp)."""
-        ks = ca.floor((xs - origin_m) / span_length_m)
-        rows = ks - n_sp * ca.floor(ks / n_sp)
-        onehot = ca.horzcat(*[rows == j for j in range(n_sp)])
-        a = (xs - (origin_m + ks * span_length_m)) * float(kk[0])
-        s1, c1 = ca.sin(a), ca.cos(a)
-        sins, coss = [s1], [c1]
-        for _ in range(1, nm):
-            sj, cj = sins[-1], coss[-1]
-            sins.append(sj * c1 + cj * s1)
-            coss.append(cj * c1 - sj * s1)
-        return onehot, ca.horzcat(*sins), ca.horzcat(*coss)
+    velocity = ca.mtimes(bt, qd)
 
-    w: Any
-    w_rate: Any
-    mid: Any
+    def gaps_rates(w: Any, w_rate: Any) -> tuple[Any, Any]:
+        """``s = s0 + B^T q - w - r``, ``s' = B^T q' - w_rate - v r_x``."""
+        return s0 + ca.mtimes(bt, q) - w - r, velocity - w_rate - v * rx
+
+    elastic: dict[str, Any] = {}
     if nm:
-        gx = ca.reshape(gx_flat, 2 * nm, n_sp).T            # (N, 2 nm), row-major as the loop
-        onehot, phi, cosines = shapes(xp)
-        dphi = cosines * ca.repmat(ca.DM(kk).T, npt, 1)
-        qg = ca.mtimes(onehot, gx)
-        w = ca.sum2(qg[:, :nm] * phi)
-        w_rate = ca.sum2(qg[:, nm:] * phi) + v * ca.sum2(qg[:, :nm] * dphi)
-        mid = ca.mtimes(gx[:, :nm], ca.DM(np.asarray(midspan_shape, dtype=float)))
+        elastic = _elastic_guideway(
+            npt=npt, wavenumbers=kk, n_spans=n_sp, origin_m=origin_m,
+            span_length_m=span_length_m, dt=dt, guideway_ad=guideway_ad,
+            guideway_bd=guideway_bd, midspan_shape=midspan_shape,
+            point_offsets_m=point_offsets_m)
+        rows, s1, c1, _, _, _ = elastic["guideway_loads"](xp, v)
+        w, w_rate, mid = elastic["guideway_deflection"](gx_flat, rows, s1, c1, v)
     else:
         w = w_rate = ca.MX.zeros(npt)
         mid = ca.MX.zeros(0)
-    gaps = s0 + ca.mtimes(bt, q) - w - r
-    rates = ca.mtimes(bt, qd) - w_rate - v * rx
     f_in = ca.Function("vehicle_guideway_in", [x_m, gx_flat, xp, r, rx, v],
-                       [gaps, rates, w, mid, ca.mtimes(bt, qd)],
+                       [*gaps_rates(w, w_rate), w, mid, velocity],
                        ["x_mech", "guideway", "x", "r", "r_x", "v"],
                        ["gap", "gap_rate", "w", "midspan", "velocity"])
+    # the same with the deflection given (the compiled step: the loads' geometry once
+    # per step, shared with the modal update)
+    w_in, wr_in = sym("w", npt), sym("w_rate", npt)
+    f_in_w = ca.Function("vehicle_gaps", [x_m, w_in, wr_in, r, rx, v],
+                         [*gaps_rates(w_in, wr_in), velocity],
+                         ["x_mech", "w", "w_rate", "r", "r_x", "v"],
+                         ["gap", "gap_rate", "velocity"])
 
     # ---- controllers: flux cascade of every circuit, then chopper and failures
     g_s, g_r, i_l, cur, psi, integ, t, fail_t = (
@@ -330,19 +468,15 @@ def build_vehicle_parts(*, dt: float, nominal_gap_m: float, span_length_m: float
 
     # ---- guideway modal update (loads at the mid-step positions)
     if nm:
-        half = 0.5 * v * dt
-        onehot_m, sn_m, _ = shapes(xp + half)
-        qmod = ca.mtimes(onehot_m.T, sn_m * ca.repmat(f_bar, 1, nm))
-        gx_next = (ca.mtimes(gx, _sparse(np.asarray(guideway_ad).T))
-                   + ca.mtimes(qmod, _sparse(np.asarray(guideway_bd).T)))
-        gx_next_flat = ca.reshape(gx_next.T, n_sp * 2 * nm, 1)
+        _, _, _, rows_m, s1_m, c1_m = elastic["guideway_loads"](xp, v)
+        gx_next_flat = elastic["guideway_update"](gx_flat, rows_m, s1_m, c1_m, f_bar)
     else:
         gx_next_flat = gx_flat
     f_out = ca.Function("vehicle_guideway_out", [gx_flat, xp, v, f_bar], [gx_next_flat],
                         ["guideway", "x", "v", "F_bar"], ["guideway_next"])
     return {"guideway_in": f_in, "cascade": f_cas, "voltage_limits": f_lim,
             "controllers": f_ctl, "controller_update": f_upd, "mechanics_loaded": f_mech_l,
-            "mechanics": f_mech, "guideway_out": f_out}
+            "mechanics": f_mech, "guideway_out": f_out, "gaps": f_in_w, **elastic}
 
 
 def build_vehicle_step(*, bank_step: Any, dt: float, nominal_gap_m: float, sides: float,
@@ -353,8 +487,8 @@ def build_vehicle_step(*, bank_step: Any, dt: float, nominal_gap_m: float, sides
                        flux_bias_Wb: np.ndarray, resistance_ohm: np.ndarray,
                        eddy_resistance_ohm: np.ndarray, voltage_limit_V: float,
                        integral_projection: np.ndarray, midspan_shape: np.ndarray,
-                       velocity_blend: float = 0.0,
-                       block_steps: int = 10, name: str = "maglevkit_vehicle_step"
+                       point_offsets_m: np.ndarray, velocity_blend: float = 0.0,
+                       block_steps: int = 50, name: str = "maglevkit_vehicle_step"
                        ) -> VehicleStepFunction:
     """Compose the vehicle step function (see the module docstring).
 
@@ -363,7 +497,8 @@ def build_vehicle_step(*, bank_step: Any, dt: float, nominal_gap_m: float, sides
     mechanics' ``Q_g`` and ``B``, the controller gains and biases, the chopper data, the
     integral projection, the mode shapes at midspan.  ``wavenumbers`` may be empty (rigid
     guideway).  ``block_steps`` steps are chained in the block function (one call from
-    Python per block: the per-call cost of binding buffers is ~1-2 us, a step ~40 us).
+    Python per block, and the per-block look for events: ~10-20 us of Python against
+    ~10 us per step).
 
     Parameters
     ----------
@@ -404,11 +539,15 @@ def build_vehicle_step(*, bank_step: Any, dt: float, nominal_gap_m: float, sides
         Maps the gap errors [m] to the integrators' inputs.
     midspan_shape : ndarray (n_modes,)
         Mode shapes at midspan (for the recorded midspan deflection).
+    point_offsets_m : ndarray (n_circuits,)
+        Distances ``xi_p`` [m] of the force points behind the reference point whose
+        position ``x_ref`` is the step input ``"x_ref"`` (the points ride at
+        ``x_ref - xi_p``).
     velocity_blend : float, default 0.0
         Share [-] of the force points' absolute velocity ``B^T q'`` in the cascade's
         damping input (:func:`~maglevkit.control.damping_input`; 0: the gap rate).
-    block_steps : int, default 10
-        Steps chained in ``block_function``.
+    block_steps : int, default 50
+        Steps chained in ``block_function`` (one call from Python per block).
     name : str, default "maglevkit_vehicle_step"
         Name of the CasADi function (and of its compiled library).
 
@@ -430,21 +569,27 @@ def build_vehicle_step(*, bank_step: Any, dt: float, nominal_gap_m: float, sides
         mech_ad=mech_ad, mech_bd=mech_bd, gravity_force=gravity_force, force_matrix=b_mat,
         gains=gains, flux_bias_Wb=flux_bias_Wb, resistance_ohm=resistance_ohm,
         eddy_resistance_ohm=eddy_resistance_ohm, voltage_limit_V=voltage_limit_V,
-        integral_projection=integral_projection, midspan_shape=midspan_shape)
-    f_in, f_ctl, f_upd, f_mech, f_out = (parts[k] for k in (
-        "guideway_in", "controllers", "controller_update", "mechanics", "guideway_out"))
+        integral_projection=integral_projection, midspan_shape=midspan_shape,
+        point_offsets_m=point_offsets_m)
+    f_in, f_ctl, f_upd, f_mech = (parts[k] for k in (
+        "guideway_in", "controllers", "controller_update", "mechanics"))
 
     # ---- the composed step
     S, P, C = sym("S", lay.n_state), sym("P", lay.n_step_inputs), sym("C", 1 + nc)
     st, sp = lay.state, lay.step_inputs
     s_xm, s_gx, s_il, s_psi, s_int, s_cur, s_f = (S[st[k]] for k in (
         "x_mech", "guideway", "I_L", "psi_hat", "integral", "current", "force"))
-    p_x, p_r, p_rx, p_t, p_keep = (P[sp[k]] for k in ("x", "r", "r_x", "t", "keep"))
+    p_x, p_r, p_rx, p_t, p_keep = (P[sp[k]] for k in ("x_ref", "r", "r_x", "t", "keep"))
     c_v, c_fail = C[0], C[1:]
     if nm:    # spans recycled by the moving boundary at this step: rows reset to rest
         s_gx = ca.reshape(ca.reshape(s_gx, 2 * nm, n_sp) * ca.repmat(p_keep.T, 2 * nm, 1),
                           n_sp * 2 * nm, 1)
-    gap_k, rate_k, w_k, mid_k, vel_k = f_in(s_xm, s_gx, p_x, p_r, p_rx, c_v)
+    if nm:    # the loads' geometry once per step, for the deflection and the update
+        rows_k, sa_k, ca_k, rows_mk, sa_mk, ca_mk = parts["guideway_train_loads"](p_x, c_v)
+        w_k, wr_k, mid_k = parts["guideway_deflection"](s_gx, rows_k, sa_k, ca_k, c_v)
+        gap_k, rate_k, vel_k = parts["gaps"](s_xm, w_k, wr_k, p_r, p_rx, c_v)
+    else:
+        gap_k, rate_k, w_k, mid_k, vel_k = f_in(s_xm, s_gx, ca.MX.zeros(nc), p_r, p_rx, c_v)
     damp_k = rate_k if velocity_blend == 0.0 else damping_input(rate_k, vel_k,
                                                                 float(velocity_blend))
     u_k = f_ctl(gap_k, damp_k, s_il, s_cur, s_psi, s_int, p_t, c_fail)
@@ -453,7 +598,7 @@ def build_vehicle_step(*, bank_step: Any, dt: float, nominal_gap_m: float, sides
     psi_n, int_n = f_upd(s_psi, s_int, u_k, s_cur, cur_next, gap_k)
     fb = (0.5 * sides) * (s_f + force_next)
     xm_n = f_mech(s_xm, fb)
-    gx_n = f_out(s_gx, p_x, c_v, fb)
+    gx_n = parts["guideway_update"](s_gx, rows_mk, sa_mk, ca_mk, fb) if nm else s_gx
     s_next = ca.vertcat(xm_n, gx_n, il_next, psi_n, int_n, cur_next, force_next)
     rec = ca.vertcat(gap_k, rate_k, s_cur, s_f, s_il, w_k, s_xm, mid_k, u_k, ca.mmin(gap_k),
                      ca.mmax(gap_k), n_bad)
