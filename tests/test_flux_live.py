@@ -187,3 +187,24 @@ def test_build_source_part_files_are_unique_per_call(tmp_path: Path,
         with pytest.raises(RuntimeError, match="boom"):
             compiled_mod.build_source("x", b"int x;", cache=tmp_path)
     assert len(set(outs)) == 2 and not list(tmp_path.iterdir())
+
+
+def test_live_step_on_the_sparse_form(u_magnet: mk.Magnet, tmp_path: Path,
+                                      monkeypatch: pytest.MonkeyPatch) -> None:
+    """The sparse form (``K y' = h``, the split network's) on the live integrator: the same
+    bounds as the dense form's test above against a run at rtol 1e-10."""
+    from maglevkit.models import flux
+
+    monkeypatch.setattr(flux, "SPARSE_FORM_SIZE", 0)     # the DAE's cache key holds the form
+    live = mk.FluxModel(u_magnet, compiled="always", cache_dir=tmp_path)
+    restart = mk.FluxModel(u_magnet, compiled="always", cache_dir=tmp_path, live_step=False)
+    ref = mk.FluxModel(u_magnet, compiled="always", cache_dir=tmp_path, rtol=1e-10,
+                       live_step=False)
+    assert live.dae.form == "sparse" and live.live_step
+    a, b, r = _run(live), _run(restart), _run(ref)
+    scale = np.abs(r).max(axis=0)
+    err_live = (np.abs(a - r) / scale).max(axis=0)
+    err_restart = (np.abs(b - r) / scale).max(axis=0)
+    assert np.all(err_live <= 3.0 * err_restart + 1e-7), (err_live, err_restart)
+    diff = (np.abs(a - b) / scale).max(axis=0)
+    assert diff[:-4].max() < 1e-4 and diff[-4:].max() < 1e-3, diff
