@@ -66,7 +66,11 @@ def test_live_step_equals_the_restarting_step_to_the_integrator_accuracy(
     """Against a run at rtol 1e-10 the live integrator's error is at most that of the
     restart-every-call path (times 3, plus 1e-7 of the signal's range), column by column;
     and the two differ by less than 1e-4 of each signal's largest value (energies 1e-3)."""
-    live, restart, ref = (_run(models[k]) for k in ("live", "restart", "reference"))
+    _check_live(*(_run(models[k]) for k in ("live", "restart", "reference")))
+
+
+def _check_live(live: np.ndarray, restart: np.ndarray, ref: np.ndarray) -> None:
+    """The bounds of the test above on runs of :func:`_run` (live, restart, rtol 1e-10)."""
     scale = np.abs(ref).max(axis=0)
     err_live = (np.abs(live - ref) / scale).max(axis=0)
     err_restart = (np.abs(restart - ref) / scale).max(axis=0)
@@ -187,3 +191,18 @@ def test_build_source_part_files_are_unique_per_call(tmp_path: Path,
         with pytest.raises(RuntimeError, match="boom"):
             compiled_mod.build_source("x", b"int x;", cache=tmp_path)
     assert len(set(outs)) == 2 and not list(tmp_path.iterdir())
+
+
+def test_live_step_on_the_sparse_form(u_magnet: mk.Magnet, tmp_path: Path,
+                                      monkeypatch: pytest.MonkeyPatch) -> None:
+    """The sparse form (``K y' = h``, the split network's) on the live integrator: the same
+    bounds as the dense form's test above against a run at rtol 1e-10."""
+    from maglevkit.models import flux
+
+    monkeypatch.setattr(flux, "SPARSE_FORM_SIZE", 0)     # the DAE's cache key holds the form
+    live = mk.FluxModel(u_magnet, compiled="always", cache_dir=tmp_path)
+    restart = mk.FluxModel(u_magnet, compiled="always", cache_dir=tmp_path, live_step=False)
+    ref = mk.FluxModel(u_magnet, compiled="always", cache_dir=tmp_path, rtol=1e-10,
+                       live_step=False)
+    assert live.dae.form == "sparse" and live.live_step
+    _check_live(_run(live), _run(restart), _run(ref))

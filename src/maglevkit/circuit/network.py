@@ -4,8 +4,9 @@ A :class:`Network` is a set of :class:`Branch` es between named nodes; each bran
 series chain of elements.  Electric :class:`Circuit` s put coils (``theta = n I``, paper
 eq. 2) on branches, in series with a resistance and a voltage source.
 
-The network is solved in loop fluxes: with the fundamental loop matrix ``C``
-(loops x branches, from a spanning tree) the branch fluxes ``phi = C^T x`` satisfy
+The network is solved in loop fluxes: with a loop matrix ``C`` (loops x branches, a basis
+of the closed flux paths: the fundamental loops of a spanning tree, or short loops for large
+networks, :attr:`Network.loop_matrix`) the branch fluxes ``phi = C^T x`` satisfy
 Kirchhoff's node law identically, and Kirchhoff's loop law reads
 ``C (V_m(phi, s) - N I) = 0`` with the branch-by-circuit turns matrix ``N``.
 """
@@ -13,6 +14,7 @@ Kirchhoff's node law identically, and Kirchhoff's loop law reads
 from __future__ import annotations
 
 import math
+from collections import deque
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, field, replace
 from functools import cached_property
@@ -23,7 +25,17 @@ from ..errors import ParameterError, TopologyError
 from ..validation import flag
 from .elements import EddyCurrent, Element, IronPath
 
-__all__ = ["Branch", "Coil", "Circuit", "Network"]
+__all__ = ["Branch", "Coil", "Circuit", "Network", "SHORT_LOOP_SIZE"]
+
+#: Networks with more loops than this are solved in a basis of short loops
+#: (:attr:`Network.loop_matrix`); smaller ones in the fundamental loops of a spanning tree.
+#: Either basis gives the same solutions (the loop laws of a basis imply those of every
+#: loop), but not the same rounding or integrator error control, so the networks whose
+#: results are recorded (the lumped TR09, guidance and U-magnet networks, 7-36 loops; the
+#: U-magnet's ladder n = 4: 59) keep theirs.  The short loops matter for the large ones: TR09
+#: split 253 loops, the U-magnet grid 110, its ladder 506, the air-cell grid 1385
+#: (docs/decisions.md, splitfast).
+SHORT_LOOP_SIZE = 100
 
 
 @dataclass(frozen=True)
@@ -323,7 +335,81 @@ class Network:
 
     @cached_property
     def loop_matrix(self) -> np.ndarray:
-        """Fundamental loop matrix ``C`` (loops x branches) from a BFS spanning tree."""
+        """Loop matrix ``C`` (loops x branches): a basis of the network's closed flux paths,
+        one row per loop, entries +-1 (the branch along or against the loop) and 0.
+
+        Networks of up to :data:`SHORT_LOOP_SIZE` loops take the fundamental loops of a BFS
+        spanning tree (as every earlier version did, so their results stay the same);
+        larger ones a basis of short loops (:meth:`_short_loops`), whose loop Jacobian
+        ``C diag(dV_m/dphi) C^T`` has a fraction of the nonzeros: on the TR09 split
+        network (253 loops) 1537 instead of 23455 (docs/decisions.md, splitfast).
+        """
+        fundamental = self._fundamental_loops()
+        if fundamental.shape[0] <= SHORT_LOOP_SIZE:
+            return fundamental
+        return self._short_loops(fundamental)
+
+    def _short_loops(self, fundamental: np.ndarray) -> np.ndarray:
+        """A loop basis of short loops: for every branch the shortest loop through it (a
+        shortest path in branch count between its nodes that avoids it, BFS), taken
+        shortest first (ties in branch order) where independent of the loops taken, then
+        the ``fundamental`` loops where still needed.
+
+        Independence is tested over GF(2) (loops as sets of branches, exact integer
+        arithmetic): rows independent mod 2 have a square minor with an odd, hence nonzero,
+        determinant, so they are independent over the reals too; the fundamental loops
+        span the loop space mod 2 as well, so the result always has their number of rows.
+        """
+        index = {n: i for i, n in enumerate(self.nodes)}
+        ends = [(index[b.start], index[b.end]) for b in self.branches]
+        nb = len(ends)
+        adj: list[list[tuple[int, int]]] = [[] for _ in index]
+        for j, (a, b) in enumerate(ends):
+            adj[a].append((j, b))
+            adj[b].append((j, a))
+
+        def shortest_loop(j: int) -> np.ndarray | None:
+            start, end = ends[j]
+            prev: dict[int, tuple[int, int] | None] = {end: None}
+            queue = deque((end,))
+            while queue and start not in prev:
+                n = queue.popleft()
+                for k, m in adj[n]:
+                    if k != j and m not in prev:
+                        prev[m] = (k, n)
+                        queue.append(m)
+            if start not in prev:
+                return None                   # a branch on no loop (a bridge)
+            row = np.zeros(nb)
+            row[j] = 1.0                      # along branch j, back from its end to its start
+            n = start
+            step = prev[n]
+            while step is not None:
+                k, before = step              # branch k walked from node `before` to `n`
+                row[k] = 1.0 if ends[k] == (before, n) else -1.0
+                n = before
+                step = prev[n]
+            return row
+
+        found = [row for row in map(shortest_loop, range(nb)) if row is not None]
+        found.sort(key=np.count_nonzero)      # stable: ties stay in branch order
+        pivots: dict[int, int] = {}           # leading branch -> reduced loop (bit set)
+        rows: list[np.ndarray] = []
+        for row in (*found, *fundamental):
+            bits = sum(1 << int(k) for k in np.flatnonzero(row))
+            while bits:
+                lead = bits.bit_length() - 1
+                if lead not in pivots:
+                    pivots[lead] = bits
+                    rows.append(row)
+                    break
+                bits ^= pivots[lead]
+            if len(rows) == fundamental.shape[0]:
+                break
+        return np.array(rows).reshape(len(rows), nb)
+
+    def _fundamental_loops(self) -> np.ndarray:
+        """Fundamental loop matrix (loops x branches) from a BFS spanning tree."""
         nodes = self.nodes
         adj: dict[str, list[tuple[int, str]]] = {n: [] for n in nodes}
         for j, b in enumerate(self.branches):

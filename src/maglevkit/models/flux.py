@@ -107,21 +107,25 @@ def _power_flows(U: Any, I: Any, R: Any, g_e: Any, phidot_e: Any, force: Any, ra
 #: Networks with more loop and circuit unknowns than this run IDAS on the sparse form
 #: (``K y' = h``, :meth:`FluxDAE._init_idas`); smaller ones on the dense form (``K^+``,
 #: ``Q``), whose results and compiled libraries stay those of earlier versions.  Counted:
-#: the bundled lumped networks 9-36 (the U-magnet's ladder n = 8: 116), the grid with
-#: Roters tubes 111 (its ladder n = 4: 507), the air-cell grid 1386-2310.  A bound between
-#: those, not tuned (docs/decisions.md, "The air-cell network in the transient").
-SPARSE_FORM_SIZE = 400
+#: the bundled lumped networks 9-36 and the U-magnet's ladder n = 4 (60) stay dense; the
+#: U-magnet's ladder n = 8 (116), the grid with Roters tubes (111, its ladder n = 4: 507),
+#: the TR09 split network (255) and the air-cell grid (1386-2310) are sparse.  The dense
+#: ``K^+`` and ``Q`` make the dense form's Jacobian a dense block: on the ladder n = 8 it
+#: compiled in 119 s and ran 4.3 s CPU per simulated second, the sparse form 8.6 s and
+#: 0.16 s; the split network's dense form did not compile in 400 s, the sparse one in 11 s
+#: (docs/decisions.md, splitfast; was 400, "The air-cell network in the transient").
+SPARSE_FORM_SIZE = 100
 
 #: ``compiled="auto"`` compiles networks up to this many loop and circuit unknowns; larger
-#: ones run on CasADi's virtual machine (``compiled="always"`` still compiles them).  The
-#: C compiler takes minutes there: the grid with Roters tubes and its placeholder eddy
-#: elements ~500 s once, its ladder n = 4 (507 unknowns) had not finished after 290 s
-#: (measured in an independent review), while its interpreted run takes seconds.  The TR09
-#: split network (253 loops + 2 circuits) did not compile within the 600 s time-out under
-#: ``gcc -O1`` (docs/decisions.md, split26), so the bound is 200, below it; the largest
-#: networks compiled by default stay the lumped ones (9-36 unknowns) and the U-magnet's
-#: ladder (116).
-AUTO_COMPILE_SIZE = 200
+#: ones run on CasADi's virtual machine (``compiled="always"`` still compiles them).  What
+#: the C compiler takes depends on the generated code, i.e. on the form and the loop basis
+#: (:data:`SPARSE_FORM_SIZE`, :attr:`~maglevkit.circuit.network.Network.loop_matrix`):
+#: measured with ``gcc -O1`` (docs/decisions.md, splitfast) the sparse form with short loops
+#: compiles the U-magnet's ladder n = 8 (116 unknowns) in 8.6 s, the grid with Roters
+#: tubes (111) in 12.5 s, the TR09 split network (255; bow 256) in 11 s, while the grid's
+#: ladder n = 4 (507) still takes minutes.  So the bound is 300, between them (was 200:
+#: the split network's dense form in the fundamental loops did not compile in 600 s).
+AUTO_COMPILE_SIZE = 300
 
 
 def _dm(a: Any, form: str) -> ca.DM:
@@ -543,14 +547,13 @@ class FluxDAE:
             if self.compiled:
                 oracle, balance_fun, output_fun = loaded[0], loaded[4], loaded[5]
                 self.output_fun = output_fun
-                if self.form == "dense":
-                    force_fun = ca.Function(
-                        "flux_force_quad", [t_sym, y, ca.vertcat(x, I, extra), U,
-                                            ca.vertcat(h, s0, rate, tau0)],
-                        [ca.substitute(h * eq.force, s, s_t)])
-                    # -O3 (DEFAULT_FLAGS): -O1 saved a quarter of the compile time but
-                    # the live step ran 1.6x slower (docs/decisions.md)
-                    self._live_parts = (daeF, jacF, quadF, force_fun, cache_dir)
+                force_fun = ca.Function(
+                    "flux_force_quad", [t_sym, y, ca.vertcat(x, I, extra), U,
+                                        ca.vertcat(h, s0, rate, tau0)],
+                    [ca.substitute(h * eq.force, s, s_t)])
+                # -O3 (DEFAULT_FLAGS): -O1 saved a quarter of the compile time but
+                # the live step ran 1.6x slower (docs/decisions.md)
+                self._live_parts = (daeF, jacF, quadF, force_fun, cache_dir)
         self._oracle, self._idas_opts, self._balance = oracle, opts, balance_fun
         # one hold interval, (w, p = (h, U, rate)) -> (w, q, outputs) as for radau
         wm = ca.MX.sym("w", self.nw)
@@ -561,7 +564,7 @@ class FluxDAE:
 
     def live_integrator(self) -> LiveIntegrator | None:
         """A new IDAS integrator kept alive between :meth:`FluxModel.step` calls
-        (:mod:`maglevkit.models.flux_live`), or None: interpreted functions, the sparse form,
+        (:mod:`maglevkit.models.flux_live`), or None: interpreted functions,
         ``method="radau"``, or no IDAS library to link against."""
         if self._live_parts is None:
             return None
@@ -785,7 +788,7 @@ class FluxModel:
         :meth:`step` keeps its IDAS integrator alive between calls (default True): it
         integrates on where nothing jumped since the last call (same state, ``dt`` and
         voltages, continuous gaps) and restarts only where something did
-        (:mod:`maglevkit.models.flux_live`; compiled IDAS on the dense form, else ignored).
+        (:mod:`maglevkit.models.flux_live`; compiled IDAS, else ignored).
         False restarts CasADi's integrator on every call (the behaviour before).
 
     Other Parameters

@@ -14,8 +14,10 @@ intervals (a kink of the gap path is no jump of any unknown).
 
 Linear algebra: IDAS's GMRES with this module's exact preconditioner (the Newton matrix
 ``dF/dy + c_j dF/dy'`` from the compiled Jacobian, factorised by dense LU with partial
-pivoting), so GMRES converges in one or two iterations; used for the dense form only (the
-networks of a few hundred unknowns at most, ``SPARSE_FORM_SIZE``).
+pivoting, updating only the nonzero rows of each pivot column, so that the Newton matrices of
+the sparse form, a few hundred unknowns with a few entries per row, factorise at a fraction
+of the dense cost), so GMRES converges in one or two iterations; on either form of the flux
+DAE (``FluxDAE.form``).
 
 The SUNDIALS API used is that of the 2.x series CasADi bundles (``IDASpgmr``,
 ``IDASpilsSetPreconditioner``, serial ``N_Vector``); :func:`live_library` checks the
@@ -83,7 +85,8 @@ typedef struct {
   N_Vector yy, yp, q, id, atol;
   long int nx, nz, nn, np, nu, nq, ns, nw, nout;
   double *p, *u, *M, *J[4], *w;
-  long long int *iw, *piv;
+  long long int *iw, *piv, *nzr, *lp, *li, *up, *ui;
+  double *lx, *ux;
   const double **arg;
   double **res;
   const long long int *sp[4];
@@ -156,20 +159,35 @@ static int fx_pset(realtype t, N_Vector yy, N_Vector yp, N_Vector rr, realtype c
         double tmp = s->M[j * n + k]; s->M[j * n + k] = s->M[j * n + p]; s->M[j * n + p] = tmp;
       }
     double inv = 1.0 / s->M[k * n + k];
-    for (i = k + 1; i < n; ++i) s->M[k * n + i] *= inv;
+    long int nz = 0, e;
+    for (i = k + 1; i < n; ++i) {
+      s->M[k * n + i] *= inv;
+      if (s->M[k * n + i] != 0.0) s->nzr[nz++] = i;     /* the rows the update touches */
+    }
     for (j = k + 1; j < n; ++j) {
       double a = s->M[j * n + k];
       if (a != 0.0)
-        for (i = k + 1; i < n; ++i) s->M[j * n + i] -= a * s->M[k * n + i];
+        for (e = 0; e < nz; ++e) s->M[j * n + s->nzr[e]] -= a * s->M[k * n + s->nzr[e]];
     }
   }
+  /* L (below the diagonal) and U (above) column by column, nonzeros only, for fx_psol */
+  long long int cl = 0, cu = 0;
+  for (k = 0; k < n; ++k) {
+    s->lp[k] = cl; s->up[k] = cu;
+    for (i = k + 1; i < n; ++i)
+      if (s->M[k * n + i] != 0.0) { s->li[cl] = i; s->lx[cl++] = s->M[k * n + i]; }
+    for (i = 0; i < k; ++i)
+      if (s->M[k * n + i] != 0.0) { s->ui[cu] = i; s->ux[cu++] = s->M[k * n + i]; }
+  }
+  s->lp[n] = cl; s->up[n] = cu;
   return 0;
 }
 
 static int fx_psol(realtype t, N_Vector yy, N_Vector yp, N_Vector rr, N_Vector rv, N_Vector zv,
                    realtype cj, realtype delta, void *data, N_Vector tmp) {
   fx_session *s = (fx_session *)data;
-  long int n = s->nn, i, k;
+  long int n = s->nn, k;
+  long long int e;
   double *z = NVD(zv);
   (void)t; (void)yy; (void)yp; (void)rr; (void)cj; (void)delta; (void)tmp;
   memcpy(z, NVD(rv), sizeof(double) * n);
@@ -177,11 +195,15 @@ static int fx_psol(realtype t, N_Vector yy, N_Vector yp, N_Vector rr, N_Vector r
     long int p = s->piv[k];
     if (p != k) { double a = z[k]; z[k] = z[p]; z[p] = a; }
   }
+  /* the dense loops' operations in their order, without the zero entries of L and U (and
+     of z: subtracting a zero product changes nothing) */
   for (k = 0; k < n; ++k)
-    for (i = k + 1; i < n; ++i) z[i] -= s->M[k * n + i] * z[k];
+    if (z[k] != 0.0)
+      for (e = s->lp[k]; e < s->lp[k + 1]; ++e) z[s->li[e]] -= s->lx[e] * z[k];
   for (k = n - 1; k >= 0; --k) {
     z[k] /= s->M[k * n + k];
-    for (i = 0; i < k; ++i) z[i] -= s->M[k * n + i] * z[k];
+    if (z[k] != 0.0)
+      for (e = s->up[k]; e < s->up[k + 1]; ++e) z[s->ui[e]] -= s->ux[e] * z[k];
   }
   return 0;
 }
@@ -219,13 +241,21 @@ void *fx_new(long int nx, long int nz, long int np, long int nu, long int nq, do
   s->u = (double *)calloc(nu + 1, sizeof(double));
   s->M = (double *)calloc(s->nn * s->nn, sizeof(double));
   s->piv = (long long int *)calloc(s->nn, sizeof(long long int));
+  s->nzr = (long long int *)calloc(s->nn, sizeof(long long int));
+  s->lp = (long long int *)calloc(s->nn + 1, sizeof(long long int));
+  s->up = (long long int *)calloc(s->nn + 1, sizeof(long long int));
+  s->li = (long long int *)calloc(s->nn * s->nn, sizeof(long long int));
+  s->ui = (long long int *)calloc(s->nn * s->nn, sizeof(long long int));
+  s->lx = (double *)calloc(s->nn * s->nn, sizeof(double));
+  s->ux = (double *)calloc(s->nn * s->nn, sizeof(double));
   for (k = 0; k < 4; ++k) {
     const long long int *sp = FX_JAC_sparsity_out(k);
     s->sp[k] = sp;
     s->J[k] = (double *)calloc(sp[2 + sp[1]] + 1, sizeof(double));
     if (!s->J[k]) { fx_free(s); return 0; }
   }
-  if (!s->arg || !s->res || !s->iw || !s->w || !s->p || !s->u || !s->M || !s->piv) {
+  if (!s->arg || !s->res || !s->iw || !s->w || !s->p || !s->u || !s->M || !s->piv || !s->nzr
+      || !s->lp || !s->up || !s->li || !s->ui || !s->lx || !s->ux) {
     fx_free(s); return 0;
   }
   s->yy = N_VNew_Serial(s->nn); s->yp = N_VNew_Serial(s->nn);
@@ -294,7 +324,8 @@ void fx_free(void *data) {
   if (s->atol) N_VDestroy_Serial(s->atol);
   for (k = 0; k < 4; ++k) free(s->J[k]);
   free(s->arg); free(s->res); free(s->iw); free(s->w); free(s->p); free(s->u); free(s->M);
-  free(s->piv); free(s);
+  free(s->piv); free(s->nzr); free(s->lp); free(s->up); free(s->li); free(s->ui);
+  free(s->lx); free(s->ux); free(s);
 }
 """
 
