@@ -187,8 +187,9 @@ def bode(path: str) -> None:
     for a in ax.ravel():
         a.grid(True, which="both", alpha=0.3)
     ax[0, 0].legend(loc="lower left", fontsize=8)
-    fig.suptitle(f"{MAGNET} ({FLUX_PATHS!r} network): gap -> coil current ('{eq8.circuit_names[0]}') and gap -> magnet "
-                 f"force, every pole moving, {GAP * 1e3:g} mm / {CURRENT:g} A, constant voltage")
+    fig.suptitle(f"{MAGNET} ({FLUX_PATHS!r} network): gap -> coil current "
+                 f"('{eq8.circuit_names[0]}') and gap -> magnet force, every pole moving, "
+                 f"{GAP * 1e3:g} mm / {CURRENT:g} A, constant voltage")
     fig.tight_layout()
     save(fig, path)
 

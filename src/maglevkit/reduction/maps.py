@@ -750,9 +750,9 @@ def _store_motion_eddy(ds: Any, net: Network, gap: float, current: float,
             r_a[j], l_u[j] = fit.jump_resistance_ohm, fit.unshielded_inductance_H
             r_2[j], beta[j] = fit.shielding_resistance_ohm, fit.unshielded_share
             rms[j] = fit.rms_residual
-    where = (f"fitted to the detailed model's small-signal gap -> current, voltage -> "
-             f"current and gap -> force responses (0.1 Hz - 1 kHz) at s = {gap!r} m, "
-             f"I = {current!r} A; NaN: no eddy currents")
+    where = (f"fitted to the detailed model's small-signal gap -> current and voltage -> "
+             f"current responses (0.1 Hz - 1 kHz) at s = {gap!r} m, I = {current!r} A; NaN: "
+             "no eddy currents")
     ds["motion_eddy_jump_resistance_ohm"] = ("circuit", r_a, {
         "units": "ohm", "long_name": "shunt R_a of the shielded-gap ladder (current jump)",
         "description": where})
@@ -770,7 +770,7 @@ def _store_motion_eddy(ds: Any, net: Network, gap: float, current: float,
                        "same point; absent (older maps): 0"})
     ds["motion_eddy_fit_rms"] = ("circuit", rms, {
         "units": "1", "long_name": "RMS relative residual of the shielded-gap ladder's fit",
-        "description": "over the three responses and 60 frequencies, each relative to the "
+        "description": "over both responses and 60 frequencies, each relative to the "
                        "detailed response's modulus"})
 
 MAP_UNITS = {"force_N": "N", "inductance_H": "H", "dL_ds_H_per_m": "H/m",
