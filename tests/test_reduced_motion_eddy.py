@@ -10,6 +10,7 @@ the TR09 gap-sine sweep against the detailed model.
 from __future__ import annotations
 
 import math
+from importlib import resources
 
 import numpy as np
 import pytest
@@ -21,6 +22,7 @@ from maglevkit.reduction.motion_eddy import (
     DetailedFrequencyResponse,
     fit_motion_eddy,
     ladder_frequency_response,
+    unshielded_share,
 )
 
 GAPS = np.linspace(0.006, 0.014, 5)
@@ -72,11 +74,47 @@ def test_ladder_transfer_functions_match_the_linearised_ode(u_maps: Characterist
         f, ltilde=lt, dpsi_ds=k, r_el=r_el,
         r_a=float(ds["motion_eddy_jump_resistance_ohm"].values[0]),
         l_u=float(ds["motion_eddy_unshielded_inductance_H"].values[0]),
-        r_2=float(ds["motion_eddy_shielding_resistance_ohm"].values[0]))
+        r_2=float(ds["motion_eddy_shielding_resistance_ohm"].values[0]),
+        beta=float(ds["motion_eddy_unshielded_share"].values[0]))
     # both are exact (AD vs algebra): rounding only
     assert np.max(np.abs(cs / ms - 1.0)) < 1e-9
     assert np.max(np.abs(cu / mu - 1.0)) < 1e-9
     assert ladder.linearize(gap_m=gap, current_A=cur).A_per_s.shape == (2, 2)
+
+
+def test_unshielded_share_in_the_ode_and_the_closed_form(u_maps: CharacteristicMaps) -> None:
+    """A share ``beta`` of the motion term in ``L_u``: the ODE's AD linearisation equals
+    the closed form with that ``beta`` (and differs from ``beta = 0`` by far more than the
+    rounding), and the high-frequency gap -> current response tends to the jump
+    ``-beta k/(a L_u)`` that :func:`unshielded_share` inverts."""
+    gap, cur, beta = 0.0093, 23.0, 0.05
+    maps = CharacteristicMaps(u_maps.dataset.assign(
+        motion_eddy_unshielded_share=("circuit", np.array([beta]))))
+    ladder = mk.CurrentModel(maps, motion_eddy=True)
+    eq8 = mk.CurrentModel(maps)
+    lin8 = eq8.linearize(gap_m=gap, current_A=cur)
+    r_el = float(eq8.resistance_ohm[0])
+    lt = -r_el / ((1.0 + r_el / float(eq8.eddy_resistance_ohm[0])) * float(lin8.A_per_s[0, 0]))
+    k = -float(lin8.E_gap_rate_A_per_m.sum()) * lt
+    ds = maps.dataset
+    r_a = float(ds["motion_eddy_jump_resistance_ohm"].values[0])
+    l_u = float(ds["motion_eddy_unshielded_inductance_H"].values[0])
+    r_2 = float(ds["motion_eddy_shielding_resistance_ohm"].values[0])
+    f = np.geomspace(0.2, 2000.0, 25)
+    cs, _, _ = _response(ladder, f, gap, cur)
+    ms, _, _ = ladder_frequency_response(f, ltilde=lt, dpsi_ds=k, r_el=r_el, r_a=r_a, l_u=l_u,
+                                         r_2=r_2, beta=beta)
+    m0, _, _ = ladder_frequency_response(f, ltilde=lt, dpsi_ds=k, r_el=r_el, r_a=r_a, l_u=l_u,
+                                         r_2=r_2)
+    assert np.max(np.abs(cs / ms - 1.0)) < 1e-9        # AD vs algebra: rounding only
+    assert np.max(np.abs(m0 / ms - 1.0)) > 1e-2        # beta matters at these frequencies
+    # p -> oo: the jump; at 1e9 Hz the remaining 1/p terms are ~1e-6 of it
+    hi, _, _ = ladder_frequency_response([1e9], ltilde=lt, dpsi_ds=k, r_el=r_el, r_a=r_a,
+                                         l_u=l_u, r_2=r_2, beta=beta)
+    jump = -beta * k / ((1.0 + r_el / r_a) * l_u)
+    assert hi[0] == pytest.approx(jump, rel=1e-5)
+    assert unshielded_share(jump, dpsi_ds=k, r_el=r_el, r_a=r_a, l_u=l_u) == pytest.approx(
+        beta, rel=1e-12)
 
 
 def test_vanishing_unshielded_inductance_gives_eq8() -> None:
@@ -99,7 +137,7 @@ def test_vanishing_unshielded_inductance_gives_eq8() -> None:
     a_l = 1.0 + r_el / r_a
     # I_e from V_A = V_m (no drop across L_u)
     i_e = (u - r_el * i_l) / (a_l * r_2 + r_el)
-    d_il, _ = eq8_shielded_gap_rhs(i_l, i_e, u, sd, lt, k / i_l, r_el, a_l, r_2, 1e-12)
+    d_il, _ = eq8_shielded_gap_rhs(i_l, i_e, u, sd, lt, k / i_l, r_el, a_l, r_2, 1e-12, 0.0)
     # L~ - L_u differs from L~ by 2e-12 relative
     assert d_il == pytest.approx(((u - r_el * i_l) / a - k * sd) / lt, rel=1e-10)
 
@@ -116,6 +154,30 @@ def test_fit_recovers_a_known_ladder() -> None:
     # noise-free data: the fit stops at its tolerance (1e-12), far below 1e-6
     assert np.allclose(got, true, rtol=1e-6)
     assert fit.rms_residual < 1e-8 and fit.max_gap_error < 1e-7
+
+
+def test_fit_recovers_a_ladder_with_an_unshielded_share_from_all_three_responses() -> None:
+    """A known ladder with ``beta`` (the split TR09 network's size: 7 ohm, 93 mH, 74 ohm,
+    2 %), its force ``dF/dI I_L + dF/ds`` and its exact gap jump: the fit (force included,
+    ``beta`` from the jump, ``L_u`` below a bound) gives it back."""
+    lt, k, r_el, dfi, dfs = 0.607, -1265.0, 1.3, 1265.0, -3.49e6
+    r_a, l_u, r_2, beta = 6.98, 0.093, 74.0, 0.02
+    f = np.geomspace(0.1, 1000.0, 60)
+    gs, il, gu = ladder_frequency_response(f, ltilde=lt, dpsi_ds=k, r_el=r_el, r_a=r_a,
+                                           l_u=l_u, r_2=r_2, beta=beta)
+    jump = -beta * k / ((1.0 + r_el / r_a) * l_u)
+    resp = DetailedFrequencyResponse(f, gs, dfi * il + dfs, gu, lt, k, jump, dfi, dfs)
+    fit = fit_motion_eddy(resp, r_el=r_el, r_ec_jump=8.2, r_ec_fit=4.8,
+                          max_unshielded_inductance_H=0.11, fit_force=True)
+    got = (fit.jump_resistance_ohm, fit.unshielded_inductance_H, fit.shielding_resistance_ohm,
+           fit.unshielded_share)
+    # noise-free data: the fit stops at its tolerance (1e-12), far below 1e-6
+    assert np.allclose(got, (r_a, l_u, r_2, beta), rtol=1e-6)
+    assert fit.rms_residual < 1e-8 and fit.max_force_error < 1e-7
+    # the bound holds: below the true L_u the fit cannot reach it and says so by its residual
+    low = fit_motion_eddy(resp, r_el=r_el, r_ec_jump=8.2, r_ec_fit=4.8,
+                          max_unshielded_inductance_H=0.05, fit_force=True)
+    assert low.unshielded_inductance_H < 0.05 and low.rms_residual > 1e-3
 
 
 def _old(maps: CharacteristicMaps) -> CharacteristicMaps:
@@ -190,18 +252,19 @@ def test_bad_input(u_maps: CharacteristicMaps) -> None:
         mk.CurrentModel(no_eddy, motion_eddy=True)
 
 
-def test_tr09_gap_sine_sweep_against_the_detailed_model() -> None:
-    """The issue's aims on tr09-standard (gap sine 10 +- 1 mm, constant voltage of 34 A):
-    current error relative to its variation <= 5 / 10 / 20 % at 5 / 50 / 200 Hz, phase
-    within 5 deg (measured 0.5 / 3.3 / 5.6 %, 0.4 / 0.6 / 2.9 deg; eq. 8: 4.9 / 43 / 161 %,
-    docs/decisions.md); the force error shrinks with it (measured 0.3 / 0.9 / 1.0 %)."""
-    mag = mk.load_magnet("tr09-standard")
+def _gap_sine_sweep(mag: mk.Magnet, frequencies: tuple[float, ...]
+                    ) -> dict[float, tuple[float, float, float]]:
+    """Per frequency: the ladder's current error and force error relative to the
+    detailed model's variation, and its current phase error [deg] against the gap sine
+    10 +- 1 mm at the constant voltage of 34 A (``benchmarks/bench_gap_motion.py``'s run;
+    maps 12 x 41, identified at their reference point 11 mm / 40 A)."""
     maps = mk.build_maps(mag, gaps_m=np.linspace(0.005, 0.016, 12),
                          currents_A=np.linspace(0.0, 80.0, 41), progress=False)
     fm = mk.FluxModel(mag)
     ladder = mk.CurrentModel(maps, motion_eddy=True)
     u0 = fm.resistances * 34.0
-    for f, aim in ((5.0, 0.05), (50.0, 0.10), (200.0, 0.20)):
+    out = {}
+    for f in frequencies:
         dur, dt = max(2.0 / f, 0.1), min(1.0 / (100 * f), 1e-3)
 
         def gaps(t: np.ndarray, f: float = f) -> np.ndarray:
@@ -213,8 +276,6 @@ def test_tr09_gap_sine_sweep_against_the_detailed_model() -> None:
         err = np.sqrt(np.mean((cr - cd) ** 2)) / np.sqrt(np.mean((cd - cd.mean(0)) ** 2))
         fd, fr = det.pole_force_N.sum(axis=1), red.force_N
         err_f = np.sqrt(np.mean((fr - fd) ** 2)) / np.sqrt(np.mean((fd - fd.mean()) ** 2))
-        assert err <= aim, (f, err)
-        assert err_f <= 0.03, (f, err_f)      # measured <= 1.0 %, eq. 8 6.5-14 % above 50 Hz
         t = det.time_s
         last = t >= t[-1] - 1.0 / f * max(1, math.floor(f * dur / 2))
         w = 2 * np.pi * f
@@ -222,6 +283,48 @@ def test_tr09_gap_sine_sweep_against_the_detailed_model() -> None:
                                  np.cos(w * t[last])])
         zd, zr = (np.linalg.lstsq(basis, y[last, 0], rcond=None)[0] for y in (cd, cr))
         phase = math.degrees(math.atan2(zr[3], zr[2]) - math.atan2(zd[3], zd[2]))
+        out[f] = (float(err), float(err_f), phase)
+    return out
+
+
+AIMS = {5.0: 0.05, 50.0: 0.10, 200.0: 0.20}
+"""Issue 26's aims for the current error relative to its variation (phase within 5 deg up
+to 100 Hz)."""
+
+
+def test_tr09_gap_sine_sweep_against_the_detailed_model() -> None:
+    """The issue's aims on tr09-standard (gap sine 10 +- 1 mm, constant voltage of 34 A):
+    current error relative to its variation <= 5 / 10 / 20 % at 5 / 50 / 200 Hz, phase
+    within 5 deg (measured 0.5 / 3.3 / 5.6 %, 0.4 / 0.6 / 2.9 deg; eq. 8: 4.9 / 43 / 161 %,
+    docs/decisions.md); the force error shrinks with it (measured 0.3 / 0.9 / 1.0 %)."""
+    for f, (err, err_f, phase) in _gap_sine_sweep(mk.load_magnet("tr09-standard"),
+                                                  tuple(AIMS)).items():
+        assert err <= AIMS[f], (f, err)
+        assert err_f <= 0.03, (f, err_f)      # measured <= 1.0 %, eq. 8 6.5-14 % above 50 Hz
+        if f <= 100.0:
+            assert abs(phase) <= 5.0, (f, phase)
+
+
+@pytest.mark.slow
+def test_split_tr09_gap_sine_sweep_against_its_detailed_model(tmp_path) -> None:  # type: ignore[no-untyped-def]
+    """The same sweep on the split TR09 network (``flux_paths = "split"``, 59 eddy elements,
+    interpreted detailed model: ~2.5 min CPU).  Current within the aims, measured 3.5 / 9.2
+    / 3.2 %, phase -1.8 / +1.4 / +0.2 deg (eq. 8: 2.3 / 26.5 / 97.4 %; the ladder without
+    ``beta``: 8.3 % at 50 Hz, 14.5 % at 200 Hz linearised).  The force is not followed:
+    2.9 / 23.9 / 51.5 % (eq. 8: 3.7 / 26.7 / 60.4 %); two states per circuit cannot fit it
+    without making voltage steps worse (the split network's responses need three poles;
+    docs/decisions.md, "The motion-eddy ladder on the split network"), so its bound here
+    only pins today's value (60 %), not the lumped network's 3 %."""
+    text = (resources.files("maglevkit") / "data" / "tr09-standard.toml").read_text()
+    path = tmp_path / "tr09-standard-split.toml"
+    path.write_text(text.replace("[magnet]\n", '[magnet]\nflux_paths = "split"\n', 1)
+                    .replace("[provenance]\n", '[provenance]\n"magnet.flux_paths" = '
+                             '"[E] modelling choice: the FEM-checked paths"\n', 1))
+    mag = mk.load_magnet(str(path))
+    assert mag.network.n_loops > 200          # the split network, not the lumped one
+    for f, (err, err_f, phase) in _gap_sine_sweep(mag, tuple(AIMS)).items():
+        assert err <= AIMS[f], (f, err)
+        assert err_f <= 0.60, (f, err_f)      # measured <= 51.5 % (at 200 Hz)
         if f <= 100.0:
             assert abs(phase) <= 5.0, (f, phase)
 

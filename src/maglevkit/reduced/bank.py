@@ -95,11 +95,13 @@ KERNEL_PARAMETERS = ("s0_m", "inv_ds_per_m", "cells_s", "i0_A", "inv_di_per_A", 
 """Rows of :attr:`MagnetBank.circuit_parameters`: the circuit's grid, its table offset,
 ``R_el``, ``a = 1 + R_el/R_ec`` and the range bounds (with rounding allowances)."""
 _N_PAR = len(KERNEL_PARAMETERS)
-MOTION_EDDY_PARAMETERS = ("motion_eddy", "shielding_resistance_ohm", "unshielded_inductance_H")
+MOTION_EDDY_PARAMETERS = ("motion_eddy", "shielding_resistance_ohm", "unshielded_inductance_H",
+                          "unshielded_share")
 """Rows appended to :attr:`MagnetBank.circuit_parameters` in a bank with shielded-gap
 ladder members (:attr:`MagnetBank.motion_eddy`): 1 for a ladder circuit, 0 for an eq. 8
-one; the ladder's ``R_2`` [ohm] and ``L_u`` [H] (1 H for eq. 8 circuits, unused).  In
-ladder circuits the row ``a`` holds ``1 + R_el/R_a``."""
+one; the ladder's ``R_2`` [ohm], ``L_u`` [H] (1 H for eq. 8 circuits, unused) and the
+unshielded share ``beta`` of the motion term [-] (0 for eq. 8 circuits).  In ladder
+circuits the row ``a`` holds ``1 + R_el/R_a``."""
 RUN_CHUNK = 1024
 """Steps per call of the compiled time loop of :meth:`MagnetBank.run_steps` (longer runs
 take several calls)."""
@@ -596,9 +598,10 @@ class MagnetBank:
                 a = float(core.a[j] if lad is None else lad.a[j])
                 self._par[:9, k] = (s0, 1.0 / ds_, cs_, i0, 1.0 / di_, ci_, offset, r_el, a)
                 if self.motion_eddy:
-                    self._par[_N_PAR:, k] = ((0.0, 0.0, 1.0) if lad is None else
+                    self._par[_N_PAR:, k] = ((0.0, 0.0, 1.0, 0.0) if lad is None else
                                              (1.0, float(lad.shielding_resistance_ohm[j]),
-                                              float(lad.unshielded_inductance_H[j])))
+                                              float(lad.unshielded_inductance_H[j]),
+                                              float(lad.unshielded_share[j])))
                 self._bounds[:, k] = (*core.gap_range_m, *core.current_range_A)
                 tol[:, k] = (core.gap_tolerance_m, core.current_tolerance_A)
                 self._spline_bounds[:, k] = (gs[0], gs[-1], gi[0], gi[-1])
@@ -644,8 +647,8 @@ class MagnetBank:
         ``motion_eddy`` is 1, else eq. 8 with ``dI_e/dt = 0`` (CasADi ``if_else``
         selects one of the two exactly)."""
         r_el, a = p[7], p[8]
-        me, r_2, l_u = p[_N_PAR], p[_N_PAR + 1], p[_N_PAR + 2]
-        d_il, d_ie = eq8_shielded_gap_rhs(i, ie, u, sd, lt, dl, r_el, a, r_2, l_u)
+        me, r_2, l_u, beta = p[_N_PAR], p[_N_PAR + 1], p[_N_PAR + 2], p[_N_PAR + 3]
+        d_il, d_ie = eq8_shielded_gap_rhs(i, ie, u, sd, lt, dl, r_el, a, r_2, l_u, beta)
         return (ca.if_else(me > 0, d_il, eq8_rhs(i, u, sd, lt, dl, r_el, a)),
                 ca.if_else(me > 0, d_ie, 0.0))
 
@@ -829,7 +832,7 @@ class MagnetBank:
         :meth:`circuit_step_function` and :attr:`circuit_output_function` (rows
         :data:`KERNEL_PARAMETERS`: grid, table offset, ``R_el`` [ohm], ``a = 1 + R_el/R_ec``
         and the range bounds with their rounding allowances; in a bank with ladder members
-        16 rows, :data:`MOTION_EDDY_PARAMETERS` appended)."""
+        17 rows, :data:`MOTION_EDDY_PARAMETERS` appended)."""
         return self._par.copy()
 
     @property

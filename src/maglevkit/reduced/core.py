@@ -372,6 +372,9 @@ class MotionEddyLadder:
         ``R_2`` [ohm], the shielding eddy path of the gap section.
     unshielded_inductance_H : numpy.ndarray (n_circuits,)
         The series ``L_u`` [H].
+    unshielded_share : numpy.ndarray (n_circuits,)
+        ``beta`` [-], the share of the motion-induced voltage in ``L_u`` (0 in maps built
+        before it was identified: the ladder as it was fitted then).
     a : numpy.ndarray (n_circuits,)
         ``1 + R_el/R_a`` [-].
     max_step_s : float
@@ -382,6 +385,7 @@ class MotionEddyLadder:
     jump_resistance_ohm: np.ndarray
     shielding_resistance_ohm: np.ndarray
     unshielded_inductance_H: np.ndarray
+    unshielded_share: np.ndarray
     a: np.ndarray
     max_step_s: float
 
@@ -410,6 +414,8 @@ class MotionEddyLadder:
             of a magnet without eddy currents), or maps whose smallest ``L~`` is not above
             ``L_u``.
         """
+        from ..reduction.motion_eddy import SHARE_VARIABLE
+
         ds = maps.dataset
         names = ("motion_eddy_jump_resistance_ohm", "motion_eddy_shielding_resistance_ohm",
                  "motion_eddy_unshielded_inductance_H")
@@ -422,9 +428,13 @@ class MotionEddyLadder:
                 else f"these maps have no shielded-gap ladder ({', '.join(missing)}); rebuild "
                 "them with this version (build_maps) to use motion_eddy=True"))
         r_a, r_2, l_u = (np.array(ds[n].values, dtype=float) for n in names)
+        # the unshielded share of the motion term (docs/reduction.md, "Gap motion"); maps
+        # built before it was identified had their ladder fitted without it: 0
+        beta = (np.array(ds[SHARE_VARIABLE].values, dtype=float) if SHARE_VARIABLE in ds
+                else np.zeros_like(r_a))
         if not (np.all(np.isfinite(r_a)) and np.all(np.isfinite(r_2))
                 and np.all(np.isfinite(l_u)) and np.all(r_a > 0) and np.all(r_2 > 0)
-                and np.all(l_u > 0)):
+                and np.all(l_u > 0) and np.all(np.isfinite(beta))):
             raise InputError(f"{what}these maps have no shielded-gap ladder to use (the magnet "
                              "has no eddy currents); use motion_eddy=False")
         circuits = tuple(maps.circuits)
@@ -439,10 +449,12 @@ class MotionEddyLadder:
         r_el = np.asarray(resistance_ohm, dtype=float)
         a = eq8_a(r_el, r_a)
         # RK4 stability: Gershgorin bound of the ladder's rates in (I_u, I_L) with the
-        # smallest L~ - L_u over the maps (module reduction.motion_eddy)
+        # smallest L~ - L_u over the maps (module reduction.motion_eddy; the share of the
+        # motion term is an input term and does not move them)
         rate = float(np.max(np.maximum((r_el / a + 2.0 * r_2) / l_u,
                                        2.0 * r_2 / (lt_min - l_u))))
-        for v in (r_a, r_2, l_u, a):
+        for v in (r_a, r_2, l_u, beta, a):
             v.flags.writeable = False
         return cls(jump_resistance_ohm=r_a, shielding_resistance_ohm=r_2,
-                   unshielded_inductance_H=l_u, a=a, max_step_s=1.5 / rate)
+                   unshielded_inductance_H=l_u, unshielded_share=beta, a=a,
+                   max_step_s=1.5 / rate)

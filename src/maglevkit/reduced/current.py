@@ -394,6 +394,7 @@ class CurrentModel:
             ladder = MotionEddyLadder.from_maps(maps, resistance_ohm=r_el)
             r_ec = ladder.jump_resistance_ohm
             r_2, l_u = ladder.shielding_resistance_ohm, ladder.unshielded_inductance_H
+            beta = ladder.unshielded_share
         elif m:
             if eddy_resistance is not None:
                 raise InputError(f"eddy_resistance = {eddy_resistance!r} chooses eq. 8's single "
@@ -466,7 +467,7 @@ class CurrentModel:
             if self.motion_eddy:
                 # the shielded-gap ladder (module docstring, reduction.motion_eddy)
                 d_il, d_ie = eq8_shielded_gap_rhs(xm[j], em[j], Um[j], sdm[j], lt, dl, r_el[j],
-                                                  a[j], r_2[j], l_u[j])
+                                                  a[j], r_2[j], l_u[j], beta[j])
                 mx_rhs.append(d_il)
                 eddy_rhs.append(d_ie)
                 coils.append(eq8_coil_current(xm[j] + em[j], Um[j], r_el[j], a[j]))
@@ -1463,19 +1464,22 @@ def eq8_eddy_branch_rhs(i_k: Any, u_l: Any, r_k: Any, l_k: Any) -> Any:
 
 
 def eq8_shielded_gap_rhs(i_l: Any, i_e: Any, u: Any, gap_rate: Any, ltilde: Any, dl_ds: Any,
-                         r_el: Any, a: Any, r_2: Any, l_u: Any) -> tuple[Any, Any]:
+                         r_el: Any, a: Any, r_2: Any, l_u: Any, share: Any) -> tuple[Any, Any]:
     """Eq. 8 with a shielded gap section (``CurrentModel(maps, motion_eddy=True)``).
 
     The ladder ``R_el``, shunt ``R_a``, series ``L_u``, shunt ``R_2 || L(s, I_L)``
-    (:mod:`maglevkit.reduction.motion_eddy`), with ``a = 1 + R_el/R_a``::
+    (:mod:`maglevkit.reduction.motion_eddy`), with ``a = 1 + R_el/R_a`` and the
+    motion-induced voltage ``e = dL/ds I_L ds/dt`` shared between the gap section
+    (``1 - beta``) and the unshielded ``L_u`` (``beta``, ``share``)::
 
         V_A = (U - R_el (I_L + I_e))/a,   V_m = R_2 I_e
-        dI_L/dt = (V_m - dL/ds I_L ds/dt)/(L~ - L_u)
-        dI_e/dt = (V_A - V_m)/L_u - dI_L/dt
+        dI_L/dt = (V_m - (1 - beta) e)/(L~ - L_u)
+        dI_e/dt = (V_A - V_m - beta e)/L_u - dI_L/dt
 
     ``I_L`` [A] is the gap section's current (the force's), ``I_e`` [A] the shielding eddy
     current through ``R_2``; the coil current is ``eq8_coil_current(I_L + I_e, U, R_el, a)``.
-    Element-wise on floats, NumPy arrays and CasADi expressions.
+    ``beta = 0`` is the ladder without an unshielded motion term.  Element-wise on floats,
+    NumPy arrays and CasADi expressions.
 
     Returns
     -------
@@ -1483,8 +1487,9 @@ def eq8_shielded_gap_rhs(i_l: Any, i_e: Any, u: Any, gap_rate: Any, ltilde: Any,
     """
     v_a = (u - r_el * (i_l + i_e)) / a
     v_m = r_2 * i_e
-    d_il = (v_m - dl_ds * i_l * gap_rate) / (ltilde - l_u)
-    return d_il, (v_a - v_m) / l_u - d_il
+    emf = dl_ds * i_l * gap_rate
+    d_il = (v_m - (1.0 - share) * emf) / (ltilde - l_u)
+    return d_il, (v_a - v_m - share * emf) / l_u - d_il
 
 
 #: Whether the eddy branches' ``L_k`` scale with ``L~(s, I_L)/L~_ref`` (True) or stay at

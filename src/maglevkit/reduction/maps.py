@@ -45,7 +45,12 @@ from ..errors import InputError, ParameterFileError, SolverError
 from ..models.statics import as_network, circuit_pole_groups, solve_statics
 from ..validation import real_array, renamed_keywords
 from .eddy_network import EDDY_NETWORK_MODES, EddyNetworkFit, fit_eddy_network
-from .motion_eddy import detailed_frequency_response, fit_motion_eddy
+from .motion_eddy import (
+    MAX_UNSHIELDED_SHARE_OF_MIN_L,
+    SHARE_VARIABLE,
+    detailed_frequency_response,
+    fit_motion_eddy,
+)
 from .parameters import eddy_resistance
 from .transient import transient_point
 
@@ -722,22 +727,29 @@ def _store_eddy_network(ds: Any, net: Network, gap: float, current: float,
 
 
 def _store_motion_eddy(ds: Any, net: Network, gap: float, current: float,
-                       r_ec_fit: np.ndarray, groups: dict[str, tuple[str, ...]]) -> None:
+                       r_ec_fit: np.ndarray, groups: dict[str, tuple[str, ...]],
+                       min_inductance_H: np.ndarray) -> None:
     """Add the ``motion_eddy_*`` variables: the shielded-gap ladder of
-    :mod:`maglevkit.reduction.motion_eddy` (docs/reduction.md, "Gap motion")."""
+    :mod:`maglevkit.reduction.motion_eddy` (docs/reduction.md, "Gap motion"), with ``L_u``
+    below :data:`~maglevkit.reduction.motion_eddy.MAX_UNSHIELDED_SHARE_OF_MIN_L` times
+    each circuit's smallest ``L~`` on the maps (``min_inductance_H`` [H])."""
     nc = len(net.circuits)
     r_a = np.full(nc, np.nan)
     l_u = np.full(nc, np.nan)
     r_2 = np.full(nc, np.nan)
+    beta = np.full(nc, np.nan)
     rms = np.full(nc, np.nan)
     if net.has_eddy_currents:
         responses = detailed_frequency_response(net, gap=gap, current=current, groups=groups)
         r_jump = eddy_resistance(net, gap_m=gap, current_A=current)
         for j, resp in enumerate(responses):
             fit = fit_motion_eddy(resp, r_el=float(net.resistances[j]),
-                                  r_ec_jump=float(r_jump[j]), r_ec_fit=float(r_ec_fit[j]))
+                                  r_ec_jump=float(r_jump[j]), r_ec_fit=float(r_ec_fit[j]),
+                                  max_unshielded_inductance_H=MAX_UNSHIELDED_SHARE_OF_MIN_L
+                                  * float(min_inductance_H[j]))
             r_a[j], l_u[j] = fit.jump_resistance_ohm, fit.unshielded_inductance_H
-            r_2[j], rms[j] = fit.shielding_resistance_ohm, fit.rms_residual
+            r_2[j], beta[j] = fit.shielding_resistance_ohm, fit.unshielded_share
+            rms[j] = fit.rms_residual
     where = (f"fitted to the detailed model's small-signal gap -> current and voltage -> "
              f"current responses (0.1 Hz - 1 kHz) at s = {gap!r} m, I = {current!r} A; NaN: "
              "no eddy currents")
@@ -750,6 +762,12 @@ def _store_motion_eddy(ds: Any, net: Network, gap: float, current: float,
     ds["motion_eddy_shielding_resistance_ohm"] = ("circuit", r_2, {
         "units": "ohm", "long_name": "shielding eddy resistance R_2 of the gap section",
         "description": where})
+    ds[SHARE_VARIABLE] = ("circuit", beta, {
+        "units": "1", "long_name": "share beta of the motion-induced voltage in L_u "
+                                   "(outside the shield)",
+        "description": "from the detailed model's instantaneous gap -> current jump at "
+                       "frozen flux linkages and eddy fluxes, -D a L_u/(dL/ds I), at the "
+                       "same point; absent (older maps): 0"})
     ds["motion_eddy_fit_rms"] = ("circuit", rms, {
         "units": "1", "long_name": "RMS relative residual of the shielded-gap ladder's fit",
         "description": "over both responses and 60 frequencies, each relative to the "
@@ -939,7 +957,8 @@ def build_maps(model: Any, *, gaps_m: Any, currents_A: Any, executor: Any = "aut
     _store_eddy_network(ds, net, eddy_gap, eddy_current,
                         np.asarray(ds["eddy_resistance_fit_ohm"].values, dtype=float))
     _store_motion_eddy(ds, net, eddy_gap, eddy_current,
-                       np.asarray(ds["eddy_resistance_fit_ohm"].values, dtype=float), groups)
+                       np.asarray(ds["eddy_resistance_fit_ohm"].values, dtype=float), groups,
+                       np.min(data["inductance_H"], axis=(1, 2)))
     magnet_name = getattr(model, "name", net.name)
     params = getattr(model, "parameters", None)
     ds.attrs.update({

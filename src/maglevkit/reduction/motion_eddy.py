@@ -18,22 +18,28 @@ circuit, read from the coil terminals::
 * ``R_a`` shunts the coil directly: the current jump of a voltage step (``dU/(R_el + R_a)``);
 * ``L_u``: the flux linkage not behind the iron's eddy currents (leakage), constant;
 * ``R_2``: the eddy currents that shield the gap section ``L(s, I_L)``, whose differential
-  inductance is ``L~(s, I_L) - L_u`` and which carries the motion-induced voltage.
+  inductance is ``L~(s, I_L) - L_u`` and which carries the motion-induced voltage
+  ``e = dL/ds I_L ds/dt`` -- all of it (``beta = 0``), or all but the share ``beta`` that
+  sits in ``L_u``, outside the shield (a gap-dependent path that no eddy current holds:
+  the split TR09 network's flank strips part-way along the coil, docs/reduction.md).
 
 States per circuit: ``I_L`` (the gap section's current; force ``F(s, I_L)`` as in eq. 8)
 and ``I_e = I_u - I_L`` (the shielding eddy current through ``R_2``; ``I_u`` is the
 current through ``L_u``)::
 
     a = 1 + R_el/R_a,   V_A = (U - R_el (I_L + I_e))/a,   V_m = R_2 I_e
-    (L~ - L_u) dI_L/dt = V_m - dL/ds I_L ds/dt
-    L_u dI_e/dt = V_A - V_m - L_u dI_L/dt
+    (L~ - L_u) dI_L/dt = V_m - (1 - beta) e
+    L_u dI_e/dt = V_A - V_m - beta e - L_u dI_L/dt
     I = (U - V_A)/R_el
 
 ``L_u -> 0`` gives eq. 8 with ``R_ec = R_a R_2/(R_a + R_2)``.  The parameters are fitted to
 the detailed model's small-signal responses (gap -> coil current and voltage -> coil
-current) at one operating point: the detailed DAE is linearised there
+current; gap -> force on request) at one operating point: the detailed DAE is linearised there
 (:func:`detailed_frequency_response`) and the ladder's closed-form transfer functions
-(:func:`ladder_frequency_response`) are fitted by least squares (:func:`fit_motion_eddy`).
+(:func:`ladder_frequency_response`) are fitted by least squares (:func:`fit_motion_eddy`);
+``beta`` is not fitted but follows from the detailed model's exact instantaneous
+gap -> current jump (at frozen flux linkages and eddy fluxes), as ``R_a`` starts from its
+exact voltage -> current jump.
 """
 
 from __future__ import annotations
@@ -47,8 +53,12 @@ import numpy as np
 from ..errors import MaglevkitWarning, SolverError
 
 __all__ = ["DetailedFrequencyResponse", "MotionEddyFit", "detailed_frequency_response",
-           "fit_motion_eddy", "ladder_frequency_response",
-           "relative_rms_residual", "FIT_FREQUENCIES_HZ"]
+           "fit_motion_eddy", "ladder_force_response", "ladder_frequency_response",
+           "unshielded_share",
+           "relative_rms_residual", "FIT_FREQUENCIES_HZ", "SHARE_VARIABLE"]
+
+#: The maps' variable of the ladder's unshielded share ``beta`` of the motion term.
+SHARE_VARIABLE = "motion_eddy_unshielded_share"
 
 #: Frequencies of the fit [Hz]: 0.1 Hz .. 1 kHz, 60 points evenly spaced in log f.
 FIT_FREQUENCIES_HZ = np.geomspace(0.1, 1000.0, 60)
@@ -74,6 +84,14 @@ class DetailedFrequencyResponse:
         ``L~ = dpsi_j/dI_j`` of the statics there [H].
     dpsi_ds_Wb_per_m : float
         ``dpsi_j/ds`` over the circuit's own poles [Wb/m] (``dL/ds I``).
+    gap_current_jump_A_per_m : float
+        The instantaneous coil current change per gap [A/m] at frozen flux linkages and
+        eddy fluxes (the gap -> current response as ``f -> oo``; 0 where every
+        gap-dependent flux is held by eddy currents).
+    dforce_dcurrent_N_per_A, dforce_dgap_N_per_m : float
+        The statics' ``dF_j/dI_j`` [N/A] and ``dF_j/ds`` [N/m] (circuit force, own poles
+        moving): with them the ladder's force ``F(s, I_L)`` is compared.  NaN: the fit
+        leaves the force out.
     """
 
     frequencies_Hz: np.ndarray
@@ -82,6 +100,9 @@ class DetailedFrequencyResponse:
     voltage_to_current_A_per_V: np.ndarray
     differential_inductance_H: float
     dpsi_ds_Wb_per_m: float
+    gap_current_jump_A_per_m: float = 0.0
+    dforce_dcurrent_N_per_A: float = float("nan")
+    dforce_dgap_N_per_m: float = float("nan")
 
 
 def detailed_frequency_response(net: Any, *, gap: float, current: float,
@@ -166,25 +187,33 @@ def detailed_frequency_response(net: Any, *, gap: float, current: float,
             zz = cz @ yy + dz @ win
             force = (force_z @ zz + force_w @ win)[own].sum(axis=0)
             res[k] = (zz[nl + j, 0], force[0], zz[nl + j, 1])
+        # statics: circuit force over own poles, its current and its poles' gaps
+        df_di = np.asarray(sol.dforce_dcurrent_N_per_A)[own, j].sum()
+        df_ds = np.asarray(sol.dforce_dgap_N_per_m)[np.ix_(own, own)].sum()
         out.append(DetailedFrequencyResponse(
             freqs, res[:, 0], res[:, 1], res[:, 2],
             float(sol.differential_inductance_H[j, j]),
-            float(np.asarray(sol.dpsi_dgap_Wb_per_m)[j, own].sum())))
+            float(np.asarray(sol.dpsi_dgap_Wb_per_m)[j, own].sum()),
+            float((dz @ win)[nl + j, 0]), float(df_di), float(df_ds)))
     return out
 
 
 def ladder_frequency_response(frequencies_Hz: Any, *, ltilde: float, dpsi_ds: float,
-                              r_el: float, r_a: float, l_u: float, r_2: float
+                              r_el: float, r_a: float, l_u: float, r_2: float,
+                              beta: float = 0.0
                               ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Closed-form small-signal responses of the shielded-gap ladder (module docstring).
 
     Linearised at a steady state (``I_e = 0``, ``V_m = 0``), with ``k = dL/ds I_L =
     dpsi/ds`` and ``a = 1 + R_el/R_a``; unknowns ``I_u = I_L + I_e`` and ``I_L``::
 
-        [p L_u + R_el/a + R_2,   -R_2            ] [I_u]   [U/a     ]
-        [-R_2,          p (L~ - L_u) + R_2       ] [I_L] = [-k p s  ]
+        [p L_u + R_el/a + R_2,   -R_2            ] [I_u]   [U/a - beta k p s   ]
+        [-R_2,          p (L~ - L_u) + R_2       ] [I_L] = [-(1 - beta) k p s  ]
 
         I = (1 - 1/a) U/R_el + I_u/a
+
+    As ``p -> oo`` the gap -> current response tends to ``-beta k/(a L_u)``, the
+    instantaneous jump (:func:`unshielded_share` inverts it).
 
     Parameters
     ----------
@@ -195,6 +224,8 @@ def ladder_frequency_response(frequencies_Hz: Any, *, ltilde: float, dpsi_ds: fl
         ``dL/ds I_L`` [Wb/m].
     r_el, r_a, l_u, r_2 : float
         ``R_el``, ``R_a`` [ohm], ``L_u`` [H], ``R_2`` [ohm].
+    beta : float
+        The unshielded share of the motion term [-] (default 0).
 
     Returns
     -------
@@ -206,31 +237,83 @@ def ladder_frequency_response(frequencies_Hz: Any, *, ltilde: float, dpsi_ds: fl
     m11 = p * l_u + r_el / a + r_2
     m22 = p * (ltilde - l_u) + r_2
     det = m11 * m22 - r_2 * r_2
-    # gap input: rhs (0, -k p)
-    iu_s = (r_2 * (-dpsi_ds * p)) / det
-    il_s = (m11 * (-dpsi_ds * p)) / det
+    # gap input: rhs (-beta k p, -(1 - beta) k p)
+    e1, e2 = -beta * dpsi_ds * p, -(1.0 - beta) * dpsi_ds * p
+    iu_s = (m22 * e1 + r_2 * e2) / det
+    il_s = (r_2 * e1 + m11 * e2) / det
     # voltage input: rhs (1/a, 0)
     iu_u = (m22 / a) / det
     return iu_s / a, il_s, (1.0 - 1.0 / a) / r_el + iu_u / a
 
 
+def unshielded_share(jump_A_per_m: float, *, dpsi_ds: float, r_el: float, r_a: float,
+                     l_u: float) -> float:
+    """The ladder's ``beta`` that gives the detailed model's instantaneous gap -> current
+    jump ``D``: ``beta = -D a L_u/k`` (:func:`ladder_frequency_response`).
+
+    Parameters
+    ----------
+    jump_A_per_m : float
+        ``D`` [A/m] (:attr:`DetailedFrequencyResponse.gap_current_jump_A_per_m`).
+    dpsi_ds : float
+        ``k = dL/ds I_L`` [Wb/m]; 0 (no current): ``beta = 0``.
+    r_el, r_a : float
+        ``R_el``, ``R_a`` [ohm].
+    l_u : float
+        ``L_u`` [H].
+
+    Returns
+    -------
+    float
+        ``beta`` [-].
+    """
+    if dpsi_ds == 0.0:
+        return 0.0
+    return float(-jump_A_per_m * (1.0 + r_el / r_a) * l_u / dpsi_ds)
+
+
+def _with_force(response: DetailedFrequencyResponse) -> bool:
+    """Whether the fit compares the force: the statics' partials are known and the gap
+    moves the force (not at I = 0, where the force does not depend on the gap)."""
+    return bool(np.isfinite(response.dforce_dcurrent_N_per_A)
+                and np.isfinite(response.dforce_dgap_N_per_m)
+                and np.all(np.abs(response.gap_to_force_N_per_m) > 0))
+
+
+def ladder_force_response(response: DetailedFrequencyResponse,
+                          gap_to_inductor_current: np.ndarray) -> np.ndarray:
+    """The ladder's gap -> circuit force ``dF/dI I_L + dF/ds`` [N/m] (force ``F(s, I_L)``
+    as eq. 8's) from its gap -> ``I_L`` response, with the statics' partials of
+    ``response``."""
+    return (response.dforce_dcurrent_N_per_A * gap_to_inductor_current
+            + response.dforce_dgap_N_per_m)
+
+
 def relative_rms_residual(response: DetailedFrequencyResponse, gap_to_current: np.ndarray,
-                          voltage_to_current: np.ndarray) -> float:
-    """RMS over frequencies and both responses of ``(model - detailed)/|detailed|`` (real
-    and imaginary parts; the gap response is left out where the detailed one is 0)."""
-    return float(np.sqrt(np.mean(_residuals(response, gap_to_current, voltage_to_current)
-                                 ** 2)))
+                          voltage_to_current: np.ndarray,
+                          gap_to_force: np.ndarray | None = None) -> float:
+    """RMS over frequencies and the responses of ``(model - detailed)/|detailed|`` (real
+    and imaginary parts; the gap responses are left out where the detailed ones are 0,
+    the force where ``gap_to_force`` is None or the response has no force partials)."""
+    return float(np.sqrt(np.mean(_residuals(response, gap_to_current, voltage_to_current,
+                                            gap_to_force) ** 2)))
 
 
 def _residuals(response: DetailedFrequencyResponse, gap_to_current: np.ndarray,
-               voltage_to_current: np.ndarray) -> np.ndarray:
+               voltage_to_current: np.ndarray,
+               gap_to_force: np.ndarray | None = None) -> np.ndarray:
     gs, gu = response.gap_to_current_A_per_m, response.voltage_to_current_A_per_V
     ns = np.abs(gs)
     # at I = 0 the gap does not move the current (dpsi/ds = 0): the voltage path only
     ws = 1.0 if np.all(ns > 0) else 0.0
     es = ws * (gap_to_current - gs) / np.where(ns > 0, ns, 1.0)
     eu = (voltage_to_current - gu) / np.abs(gu)
-    return np.concatenate((es.real, es.imag, eu.real, eu.imag))
+    parts = [es.real, es.imag, eu.real, eu.imag]
+    if gap_to_force is not None and _with_force(response):
+        gf = response.gap_to_force_N_per_m
+        ef = (gap_to_force - gf) / np.abs(gf)
+        parts += [ef.real, ef.imag]
+    return np.concatenate(parts)
 
 
 @dataclass(frozen=True)
@@ -245,32 +328,48 @@ class MotionEddyFit:
         ``L_u`` [H].
     shielding_resistance_ohm : float
         ``R_2`` [ohm].
+    unshielded_share : float
+        ``beta`` [-] (from the detailed model's gap -> current jump,
+        :func:`unshielded_share`).
     rms_residual : float
         RMS of the residuals (each response relative to its modulus) over the fit's
-        frequencies and both responses.
-    max_gap_error, max_voltage_error : float
-        Largest ``|model/detailed - 1|`` of the gap -> current and voltage -> current
-        responses over the fit's frequencies.
+        frequencies and the responses fitted.
+    max_gap_error, max_voltage_error, max_force_error : float
+        Largest ``|model/detailed - 1|`` of the gap -> current, voltage -> current and
+        gap -> force responses over the fit's frequencies (NaN where not compared).
     """
 
     jump_resistance_ohm: float
     unshielded_inductance_H: float
     shielding_resistance_ohm: float
+    unshielded_share: float
     rms_residual: float
     max_gap_error: float
     max_voltage_error: float
+    max_force_error: float
+
+
+#: Largest ``L_u`` as a share of the maps' smallest ``L~`` (:func:`fit_motion_eddy`'s
+#: bound in ``build_maps``): the gap section keeps at least a fifth of the smallest ``L~``
+#: anywhere on the maps (``MotionEddyLadder`` refuses ``L~ <= L_u``).
+MAX_UNSHIELDED_SHARE_OF_MIN_L = 0.8
 
 
 def fit_motion_eddy(response: DetailedFrequencyResponse, *, r_el: float, r_ec_jump: float,
-                    r_ec_fit: float) -> MotionEddyFit:
+                    r_ec_fit: float, max_unshielded_inductance_H: float | None = None,
+                    fit_force: bool = False) -> MotionEddyFit:
     """Least-squares fit of ``R_a``, ``L_u``, ``R_2`` to a detailed frequency response.
 
-    Residuals: ``(model - detailed)/|detailed|`` of gap -> current and voltage -> current
-    at every frequency (real and imaginary parts, equal weights).  Parameters are fitted as
-    ``log R_a``, ``log R_2`` and ``logit(L_u/L~)`` (so ``0 < L_u < L~``), with scipy's
-    trust-region least squares from several starts: ``R_a`` at the exact jump value
-    ``r_ec_jump`` (and 3x, 1/3x), ``R_2`` such that ``R_a || R_2`` is the step fit's
-    ``r_ec_fit`` (else 3 ``r_ec_fit``), ``L_u/L~`` 1 % and 5 %.
+    Residuals: ``(model - detailed)/|detailed|`` of gap -> current, voltage -> current and,
+    with ``fit_force`` (where the response carries the statics' force partials), gap ->
+    force at every frequency (real and imaginary parts, equal weights).  ``beta`` follows ``R_a`` and
+    ``L_u`` so that the ladder keeps the detailed model's instantaneous gap -> current jump
+    (:func:`unshielded_share`).  Parameters are fitted as ``log R_a``, ``log R_2`` and
+    ``logit(L_u/L_max)`` (so ``0 < L_u < L_max``, ``L_max`` the smaller of ``L~`` and
+    ``max_unshielded_inductance_H``), with scipy's trust-region least squares from
+    several starts: ``R_a`` at the exact jump value ``r_ec_jump`` (and 3x, 1/3x), ``R_2``
+    such that ``R_a || R_2`` is the step fit's ``r_ec_fit`` (else 3 ``r_ec_fit``),
+    ``L_u/L~`` 1 %, 5 % and 20 %.
 
     Parameters
     ----------
@@ -279,28 +378,44 @@ def fit_motion_eddy(response: DetailedFrequencyResponse, *, r_el: float, r_ec_ju
         ``R_el`` [ohm].
     r_ec_jump, r_ec_fit : float
         Eq. 8's ``R_ec`` from the exact jump and from the step's time constant [ohm].
+    max_unshielded_inductance_H : float, optional
+        Upper bound of ``L_u`` [H] (``build_maps``: :data:`MAX_UNSHIELDED_SHARE_OF_MIN_L`
+        times the maps' smallest ``L~``); default ``L~`` of the response.
+    fit_force : bool
+        Fit the gap -> force response too (default False, as ``build_maps``: on the split
+        TR09 network it halves the force error under gap motion but makes voltage steps
+        worse, 3.1 -> 5.3 % of the step; docs/decisions.md).  The force error is reported
+        either way where the response has the force partials.
     """
     from scipy.optimize import least_squares
 
     lt, k = response.differential_inductance_H, response.dpsi_ds_Wb_per_m
+    l_max = lt if max_unshielded_inductance_H is None else min(lt, max_unshielded_inductance_H)
     f = response.frequencies_Hz
     gs, gu = response.gap_to_current_A_per_m, response.voltage_to_current_A_per_V
+    jump = response.gap_current_jump_A_per_m
 
-    def unpack(x: np.ndarray) -> tuple[float, float, float]:
-        return float(np.exp(x[0])), float(lt / (1.0 + np.exp(-x[1]))), float(np.exp(x[2]))
+    def unpack(x: np.ndarray) -> tuple[float, float, float, float]:
+        r_a, l_u = float(np.exp(x[0])), float(l_max / (1.0 + np.exp(-x[1])))
+        return (r_a, l_u, float(np.exp(x[2])),
+                unshielded_share(jump, dpsi_ds=k, r_el=r_el, r_a=r_a, l_u=l_u))
+
+    def model(x: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        r_a, l_u, r_2, beta = unpack(x)
+        ms, il, mu = ladder_frequency_response(f, ltilde=lt, dpsi_ds=k, r_el=r_el, r_a=r_a,
+                                               l_u=l_u, r_2=r_2, beta=beta)
+        return ms, mu, ladder_force_response(response, il)
 
     def resid(x: np.ndarray) -> np.ndarray:
-        r_a, l_u, r_2 = unpack(x)
-        ms, _, mu = ladder_frequency_response(f, ltilde=lt, dpsi_ds=k, r_el=r_el, r_a=r_a,
-                                              l_u=l_u, r_2=r_2)
-        return _residuals(response, ms, mu)
+        ms, mu, mf = model(x)
+        return _residuals(response, ms, mu, mf if fit_force else None)
 
     r_a0 = r_ec_jump if np.isfinite(r_ec_jump) and r_ec_jump > 0 else 3.0 * r_ec_fit
     best = None
     for ra in (r_a0, 3.0 * r_a0, r_a0 / 3.0):
         g2 = 1.0 / r_ec_fit - 1.0 / ra
         r2 = 1.0 / g2 if g2 > 0 else 3.0 * r_ec_fit
-        for frac in (0.01, 0.05):
+        for frac in (0.01, 0.05, 0.2):       # of L_max
             x0 = np.array([np.log(ra), np.log(frac / (1.0 - frac)), np.log(r2)])
             sol = least_squares(resid, x0, xtol=1e-12, ftol=1e-12, gtol=1e-12, max_nfev=2000)
             if best is None or sol.cost < best.cost:
@@ -311,10 +426,13 @@ def fit_motion_eddy(response: DetailedFrequencyResponse, *, r_el: float, r_ec_ju
                       f"{best.message}; {best.nfev} evaluations): its R_a, L_u, R_2 are those "
                       "where it stopped (see its relative rms residual)", MaglevkitWarning,
                       stacklevel=2)
-    r_a, l_u, r_2 = unpack(best.x)
-    ms, _, mu = ladder_frequency_response(f, ltilde=lt, dpsi_ds=k, r_el=r_el, r_a=r_a,
-                                          l_u=l_u, r_2=r_2)
+    r_a, l_u, r_2, beta = unpack(best.x)
+    ms, mu, mf = model(best.x)
     moving = bool(np.all(np.abs(gs) > 0))
-    return MotionEddyFit(r_a, l_u, r_2, relative_rms_residual(response, ms, mu),
+    forced = _with_force(response)
+    return MotionEddyFit(r_a, l_u, r_2, beta,
+                         relative_rms_residual(response, ms, mu, mf if fit_force else None),
                          float(np.max(np.abs(ms / gs - 1.0))) if moving else float("nan"),
-                         float(np.max(np.abs(mu / gu - 1.0))))
+                         float(np.max(np.abs(mu / gu - 1.0))),
+                         float(np.max(np.abs(mf / response.gap_to_force_N_per_m - 1.0)))
+                         if forced else float("nan"))
