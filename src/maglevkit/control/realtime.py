@@ -420,7 +420,7 @@ class RealTimeMPC(OffsetFreeMPC):
                                                 for j, n in enumerate(names)},
                                   res={solver.index_out("x"): self._z})
         self._one: RealTimeMPCBatch | None = None
-        #: (batch, group, row) whose buffers hold this controller's latest sample
+        #: (batch, buffer class, row) whose buffers hold this controller's latest sample
         self._owner: tuple[RealTimeMPCBatch, int, int] | None = None
 
     def _table_array(self) -> np.ndarray:
@@ -520,7 +520,7 @@ class RealTimeMPC(OffsetFreeMPC):
         if self._owner is None:
             return np.zeros(self._nw)
         batch, g, r = self._owner
-        return batch._gdata[g]["alt"][batch._k][2][r].copy()
+        return batch._cdata[g]["alt"][batch._k][2][r].copy()
 
     def diagnostics(self) -> Mapping[str, float | np.ndarray]:
         """Estimates as :meth:`OffsetFreeMPC.diagnostics` after the last update of this
@@ -534,7 +534,7 @@ class RealTimeMPC(OffsetFreeMPC):
         if self._owner is None or not self._owner[0]._updated:
             return {}
         batch, g, r = self._owner
-        gd = batch._gdata[g]
+        gd = batch._cdata[g]
         m = self.model
         nc, nx = m.n_circuits, m.nx
         z = gd["alt"][batch._k][0][r]
@@ -694,34 +694,57 @@ class RealTimeMPCBatch:
                                    mode=c0.model.compiled_mode)
         compiled = funcs[0]
         self.function = F
-        # buffers: per group and input/output, (n_g, nnz of one controller) C-order arrays
-        # (the map stacks the instances' nonzeros one after another)
+        # buffers: (n rows, nnz of one controller) C-order arrays per input/output, one set
+        # per class of groups with equal sizes (one class for a vehicle's circuits), each
+        # group bound to its contiguous block of rows (the unrolled call stacks the
+        # instances' nonzeros one after another), so that the checks after the call run
+        # once per class, not once per group
+        classes: dict[tuple[int, ...], list[int]] = {}
+        for g, gd in enumerate(self._gdata):
+            f = gd["f"]
+            key = (*(f.numel_in(i) for i in range(f.n_in() - 1)),
+                   *(f.numel_out(i) for i in range(f.n_out())), gd["c0"].model.nx)
+            classes.setdefault(key, []).append(g)
+        self._cdata: list[dict[str, Any]] = []
+        for gs in classes.values():
+            idx = np.concatenate([self._gdata[g]["idx"] for g in gs])
+            nr = idx.size
+            f, c0 = self._gdata[gs[0]]["f"], self._gdata[gs[0]]["c0"]
+
+            def arr(nnz: int, nr: int = nr) -> np.ndarray:
+                return np.zeros((nr, nnz))
+
+            cd = {"idx": idx, "nx": c0.model.nx, "nd": c0.model.nd, "nz": c0._nz,
+                  "nw": c0._nw, "alt": [[arr(f.numel_in(i)) for i in self._ALT_IN]
+                                        for _ in range(2)],
+                  "shared": {i: arr(f.numel_in(i)) for i in self._SHARED_IN},
+                  "out": {i: arr(f.numel_out(i)) for i in self._ONCE_OUT},
+                  "su": np.array([ctls[int(j)]._su[0] for j in idx]),
+                  "ulim": np.array([ctls[int(j)].voltage_limit_V for j in idx]),
+                  "group_of": np.concatenate([np.full(self._gdata[g]["idx"].size, g)
+                                              for g in gs])}
+            cd["shared"][7][:] = 1.0
+            off = 0
+            for g in gs:
+                gd = self._gdata[g]
+                ng = gd["idx"].size
+                rows = slice(off, off + ng)
+                gd.update(cls=len(self._cdata), rows=rows,
+                          data=BoundCall(funcs[1 + g], args={2: gd["c0"]._table_array()}))
+                off += ng
+            self._cdata.append(cd)
         calls_args: list[dict[int, np.ndarray]] = [{}, {}]
         calls_res: list[dict[int, np.ndarray]] = [{}, {}]
         ia = oa = 0
-        for g, gd in enumerate(self._gdata):
-            f, ng, c0 = gd["f"], gd["idx"].size, gd["c0"]
-            m = c0.model
-
-            def arr(nnz: int, ng: int = ng) -> np.ndarray:
-                return np.zeros((ng, nnz))
-
-            alt = [[arr(f.numel_in(i)) for i in self._ALT_IN] for _ in range(2)]
-            shared = {i: arr(f.numel_in(i)) for i in self._SHARED_IN}
-            shared[7][:] = 1.0
-            out_once = {i: arr(f.numel_out(i)) for i in self._ONCE_OUT}
-            data = BoundCall(funcs[1 + g], args={2: c0._table_array()})
-            gd.update(alt=alt, shared=shared, out=out_once, nx=m.nx, nd=m.nd, data=data,
-                      su=np.array([ctls[int(j)]._su[0] for j in gd["idx"]]),
-                      ulim=np.array([ctls[int(j)].voltage_limit_V for j in gd["idx"]]),
-                      nz=c0._nz, nw=c0._nw)
+        for gd in self._gdata:
+            cd, rows = self._cdata[gd["cls"]], gd["rows"]
             for k in range(2):
-                a, b = alt[k], alt[1 - k]
-                args = {ia + i: v for i, v in shared.items()}
-                args.update({ia + i: a[q] for q, i in enumerate(self._ALT_IN)})
-                args[ia + 10] = c0._table_array()
-                res = {oa + i: b[q] for q, i in enumerate(self._ALT_OUT)}
-                res.update({oa + i: v for i, v in out_once.items()})
+                a, b = cd["alt"][k], cd["alt"][1 - k]
+                args = {ia + i: v[rows] for i, v in cd["shared"].items()}
+                args.update({ia + i: a[q][rows] for q, i in enumerate(self._ALT_IN)})
+                args[ia + 10] = gd["c0"]._table_array()
+                res = {oa + i: b[q][rows] for q, i in enumerate(self._ALT_OUT)}
+                res.update({oa + i: v[rows] for i, v in cd["out"].items()})
                 calls_args[k].update(args)
                 calls_res[k].update(res)
             ia += gd["n_in"]
@@ -739,16 +762,16 @@ class RealTimeMPCBatch:
         currents into the buffers, cold start (after their own ``reset``); the batch
         becomes each controller's owner (its diagnostics read this batch)."""
         self._k = 0
-        for g, gd in enumerate(self._gdata):
-            a = gd["alt"][0]
-            sh = gd["shared"]
-            for r, j in enumerate(gd["idx"].tolist()):
+        for ci, cd in enumerate(self._cdata):
+            a = cd["alt"][0]
+            sh = cd["shared"]
+            for r, j in enumerate(cd["idx"].tolist()):
                 c = self.controllers[j]
                 a[0][r] = c.observer.state
                 a[1][r] = np.ravel(c.observer.covariance, order="F")
                 sh[2][r] = c._u_prev
                 sh[5][r] = c.design_state[0]
-                c._owner = (self, g, r)
+                c._owner = (self, ci, r)
             sh[7][:] = 1.0
             sh[9][:] = 0.0
         self._updated = False
@@ -812,7 +835,7 @@ class RealTimeMPCBatch:
         t0 = time.perf_counter()
         c0 = time.thread_time()
         k = self._k
-        for gd in self._gdata:
+        for gd in self._cdata:
             idx, sh = gd["idx"], gd["shared"]
             if applied_voltages_V is not None:
                 sh[2][:, 0] = applied_voltages_V[idx]
@@ -825,7 +848,7 @@ class RealTimeMPCBatch:
         t1 = time.perf_counter()
         fallbacks = 0
         u = self._u
-        for gd in self._gdata:
+        for gd in self._cdata:
             idx, out, sh = gd["idx"], gd["out"], gd["shared"]
             b = gd["alt"][1 - k]
             st = out[4]
@@ -867,7 +890,7 @@ class RealTimeMPCBatch:
         """Controllers whose compiled Newton did not converge: the Python Newton's target
         (or its SolverError), then the same call again with those targets given."""
         redo = False
-        for gd in self._gdata:
+        for gd in self._cdata:
             st, p, sh = gd["out"][4], gd["out"][3], gd["shared"]
             nx, nxd = gd["nx"], gd["nx"] + gd["nd"]
             lim = _TARGET_RESIDUAL * np.maximum(1.0, np.abs(p[:, nxd]))
@@ -889,17 +912,17 @@ class RealTimeMPCBatch:
             try:
                 call.eval()        # the same inputs: the same EKF steps, the given targets
             finally:
-                for gd in self._gdata:
+                for gd in self._cdata:
                     gd["shared"][9][:] = 0.0
 
     def _dense_qp(self, gd: dict[str, Any], r: int, w_next: np.ndarray,
                   time_s: float | None, single: bool) -> None:
-        """Row ``r`` of group ``gd``: its condensed QP at ``(w, p)`` again (the compiled
-        QP data function), solved by the controller's own dense solver (hot-started), the
-        step applied into ``w_next``."""
+        """Row ``r`` of class ``gd``: its condensed QP at ``(w, p)`` again (its group's
+        compiled QP data function), solved by the controller's own dense solver
+        (hot-started), the step applied into ``w_next``."""
         j = int(gd["idx"][r])
         c = self.controllers[j]
-        data = gd["data"]
+        data = self._gdata[int(gd["group_of"][r])]["data"]
         data.args[0][:] = gd["out"][2][r]
         data.args[1][:] = gd["out"][3][r]
         data.eval()
