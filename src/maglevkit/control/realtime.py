@@ -8,9 +8,10 @@ computes it faster (docs/control.md, "Real-time iteration"):
 * one compiled function per sample (CasADi code generation, ``cc -O3``, disk cache) does
   the EKF step (the observer's own symbolic step), the target calculation (a fixed number
   of Newton steps, checked; the Python Newton of :meth:`MagnetHeaveModel.steady_state`
-  takes over if they did not converge), the previous QP step and the QP data at the new
-  linearisation point, from the same CasADi expressions (``OffsetFreeMPC._problem``:
-  eq. 8 + mechanics, RK4, the interval Jacobians by AD);
+  takes over if they did not converge), the shifted previous solution and the QP data at
+  that linearisation point, from the same CasADi expressions (``OffsetFreeMPC._problem``:
+  eq. 8 + mechanics, RK4, the interval Jacobians by AD); only the RK4 maps read the
+  maps' table, everything else is expanded to scalar code;
 * the QP is *condensed* in that function: the linearised dynamics
   ``dx_k+1 = A_k dx_k + B_k du_k + c_k`` eliminate the state steps, ``dw = E z + e`` with
   ``z = [du_k, de_k]_k``, leaving a dense, strictly convex QP in ``N (n_u + 1)`` variables
@@ -19,13 +20,19 @@ computes it faster (docs/control.md, "Real-time iteration"):
 * the same compiled call solves that QP for the guessed active set "every slack at its
   lower bound, nothing else active" (a Cholesky factorisation of the input steps'
   Hessian) and checks the optimality conditions; where they hold, that point *is* the
-  unique solution of the strictly convex QP; otherwise qpOASES (shipped in the casadi
-  wheel, hot-started) solves it, called through preallocated buffers;
+  unique solution of the strictly convex QP, applied to the decision vector in the same
+  call; otherwise the compiled QP data function gives that QP again and qpOASES (shipped
+  in the casadi wheel, hot-started) solves it, called through preallocated buffers;
 * two buffer sets alternate between samples (the outputs of one are bound as the inputs
   of the next), so that Python copies only the measurement in and the voltages out.
 
+With ``linearization="target"`` the intervals after the first are linearised at the
+steady-state target instead of the previous solution (two RK4 maps per sample instead of
+``N``; the vehicle's default).
+
 :class:`RealTimeMPCBatch` updates many such controllers (one per vehicle circuit) with one
-compiled call per sample, evaluating each controller's own prepare function.
+compiled call per sample, evaluating each controller's own prepare function; a single
+controller's :meth:`RealTimeMPC.update` is a batch of one.
 
 The full Gauss-Newton SQP, the sparse reference RTI and the IPOPT peer stay in
 :class:`OffsetFreeMPC` as the references (tests/test_mpc_realtime.py compares them).
@@ -124,8 +131,9 @@ class RealTimeMPC(OffsetFreeMPC):
     Notes
     -----
     The functions are compiled with the model's ``compiled`` mode (disk cache, see
-    :func:`~maglevkit.models.compiled.compile_function`); the first build of a new
-    horizon takes a compile of a few seconds to a minute.
+    :func:`~maglevkit.models.compiled.compile_library`) when the controller is first
+    reset (its batch of one) or batched; the first build of a new law takes a compile of
+    a few seconds to a few minutes.
     """
 
     def __init__(self, model: MagnetHeaveModel, *, gap_ref_m: float, sample_time_s: float,
