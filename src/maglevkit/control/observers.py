@@ -90,10 +90,11 @@ class ExtendedKalmanFilter:
         ks = [ca.MX.sym(n, *v.shape) for n, v in (("xp", xp), ("A", A), ("Bd", Bd),
                                                    ("d", d), ("P", P), ("u", u_prev),
                                                    ("y", y))]
-        k_xp, k_A, k_Bd, k_d, k_P, k_u, k_y = ks
+        P_in = P                     # the step's input; P below: the expanded part's
+        k_xp, k_A, k_Bd, k_d, P, k_u, k_y = ks
         zp = ca.vertcat(k_xp, k_d)
         Az = ca.vertcat(ca.horzcat(k_A, k_Bd), ca.horzcat(ca.DM.zeros(nd, nx), ca.DM.eye(nd)))
-        Pp = Az @ k_P @ Az.T + Qm
+        Pp = Az @ P @ Az.T + Qm
         yp = model.expressions(k_xp, k_u, k_d, T)[1]
         H = ca.horzcat(ca.jacobian(yp, k_xp), ca.jacobian(yp, k_d))
         S = H @ Pp @ H.T + Rm
@@ -103,8 +104,8 @@ class ExtendedKalmanFilter:
         Pc = IKH @ Pp @ IKH.T + K @ Rm @ K.T
         Pc = 0.5 * (Pc + Pc.T)
         kalman = ca.Function("mpc_ekf_update", ks, [zc, Pc, k_y - yp]).expand()
-        zc, Pc, innov = kalman(xp, A, Bd, d, P, u_prev, y)
-        f = ca.Function("mpc_ekf", [z, P, u_prev, y, T], [zc, Pc, innov],
+        zc, Pc, innov = kalman(xp, A, Bd, d, P_in, u_prev, y)
+        f = ca.Function("mpc_ekf", [z, P_in, u_prev, y, T], [zc, Pc, innov],
                         ["z", "P", "u_prev", "y", "table"], ["z_next", "P_next", "innovation"])
         self.step_function = f          # symbolic, for controllers that embed the step
         self._step = model.compile(f)
