@@ -267,8 +267,9 @@ def run() -> str:
 
 def mpc_lines(v: float, prof: Any) -> list[str]:
     """The same train with the offset-free NMPC (real-time iteration) on every circuit,
-    2 ms sample, NumPy loop: real-time factor and the update times inside the vehicle
-    (``RealTimeMPCBatch``: all circuits' updates in one compiled call per sample)."""
+    2 ms sample: the plant in compiled blocks of one sample's two steps, all circuits'
+    updates in one compiled call per sample between them (``RealTimeMPCBatch``);
+    real-time factor and the update times inside the vehicle."""
     t0 = time.perf_counter()
     model = VehicleModel(load_vehicle(), controller="mpc")
     setup = time.perf_counter() - t0
@@ -293,9 +294,11 @@ def mpc_lines(v: float, prof: Any) -> list[str]:
     per_sample = cpu.sum() / n_samples
     fb = (f"; QPs left to qpOASES {100 * sum(fallbacks) / (nc * len(fallbacks)):.1f} %"
           if fallbacks else "")
-    return [f"NMPC on every circuit ({nc} `RealTimeMPC`, N = 10, 2 ms sample, all "
-            "circuits' updates in one compiled call per sample (`RealTimeMPCBatch`); NumPy "
-            f"loop; {MPC_DURATION_S:g} s, set-up {setup:.1f} s): time loop "
+    lin = model.circuit_controllers[0].linearization
+    return [f"NMPC on every circuit ({nc} `RealTimeMPC`, N = 10, 2 ms sample, "
+            f"linearization '{lin}', all circuits' updates in one compiled call per sample "
+            f"(`RealTimeMPCBatch`) between compiled blocks of the sample's steps ({r.loop} "
+            f"loop); {MPC_DURATION_S:g} s, set-up {setup:.1f} s): time loop "
             f"{MPC_DURATION_S / r.cpu_time_s:.2f}x real time by CPU time "
             f"({r.real_time_factor:.2f}x wall; aim >= 5x); update time per sample (all "
             f"circuits), CPU median / p90 / p99 {pc[0]:.0f} / {pc[1]:.0f} / {pc[2]:.0f} us "

@@ -155,8 +155,16 @@ class MagnetHeaveModel:
         casadi.MX
             ``(n_c,)`` coil currents [A] (the maps' table is not needed).
         """
-        y = self.expressions(x, u, d, self._T)[1]
-        return y[1:] - self.disturbance(d, "current_sensor")
+        f = getattr(self, "_coil_f", None)
+        if f is None:        # built once (the expressions build every map lookup first)
+            xs, us, ds = (ca.MX.sym("x", self.nx), ca.MX.sym("u", self.nu),
+                          ca.MX.sym("d", self.nd))
+            y = self.expressions(xs, us, ds, self._T)[1]
+            f = self._coil_f = ca.Function("mpc_coil_currents", [xs, us, ds],
+                                           [y[1:] - self.disturbance(ds, "current_sensor")])
+        # inlined (a call node's Jacobian would keep the point symbolic): the function's
+        # graph holds only the coil-current nodes, not the map lookups
+        return f.call([x, u, d], True, False)[0]
 
     def expressions(self, x: Any, u: Any, d: Any, table: Any) -> tuple[Any, Any, Any]:
         """Symbolic ``(xdot, y, force)`` at state ``x``, voltages ``u`` [V], disturbances

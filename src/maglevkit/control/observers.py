@@ -84,18 +84,28 @@ class ExtendedKalmanFilter:
         Qm, Rm = ca.DM(self.Q), ca.DM(self.R)
         x, d = z[:nx], z[nx:]
         xp, A, B, Bd, _, _, _, _ = F(x, u_prev, d, T)
-        zp = ca.vertcat(xp, d)
-        Az = ca.vertcat(ca.horzcat(A, Bd), ca.horzcat(ca.DM.zeros(nd, nx), ca.DM.eye(nd)))
+        # the Kalman algebra, the measurement at the prediction included (its map reads no
+        # table), as one function expanded to scalar code; only the RK4 map above reads
+        # the maps
+        ks = [ca.MX.sym(n, *v.shape) for n, v in (("xp", xp), ("A", A), ("Bd", Bd),
+                                                   ("d", d), ("P", P), ("u", u_prev),
+                                                   ("y", y))]
+        P_in = P                     # the step's input; P below: the expanded part's
+        k_xp, k_A, k_Bd, k_d, P, k_u, k_y = ks
+        zp = ca.vertcat(k_xp, k_d)
+        Az = ca.vertcat(ca.horzcat(k_A, k_Bd), ca.horzcat(ca.DM.zeros(nd, nx), ca.DM.eye(nd)))
         Pp = Az @ P @ Az.T + Qm
-        _, _, _, _, yp, C, _, Cd = F(zp[:nx], u_prev, zp[nx:], T)
-        H = ca.horzcat(C, Cd)
+        yp = model.expressions(k_xp, k_u, k_d, T)[1]
+        H = ca.horzcat(ca.jacobian(yp, k_xp), ca.jacobian(yp, k_d))
         S = H @ Pp @ H.T + Rm
-        K = ca.solve(S, H @ Pp).T
-        zc = zp + K @ (y - yp)
+        K = ca.solve(S, H @ Pp, "symbolicqr").T     # (n_y x n_y: QR in scalar code)
+        zc = zp + K @ (k_y - yp)
         IKH = ca.DM.eye(nz) - K @ H
         Pc = IKH @ Pp @ IKH.T + K @ Rm @ K.T
         Pc = 0.5 * (Pc + Pc.T)
-        f = ca.Function("mpc_ekf", [z, P, u_prev, y, T], [zc, Pc, y - yp],
+        kalman = ca.Function("mpc_ekf_update", ks, [zc, Pc, k_y - yp]).expand()
+        zc, Pc, innov = kalman(xp, A, Bd, d, P_in, u_prev, y)
+        f = ca.Function("mpc_ekf", [z, P_in, u_prev, y, T], [zc, Pc, innov],
                         ["z", "P", "u_prev", "y", "table"], ["z_next", "P_next", "innovation"])
         self.step_function = f          # symbolic, for controllers that embed the step
         self._step = model.compile(f)

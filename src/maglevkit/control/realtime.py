@@ -8,9 +8,10 @@ computes it faster (docs/control.md, "Real-time iteration"):
 * one compiled function per sample (CasADi code generation, ``cc -O3``, disk cache) does
   the EKF step (the observer's own symbolic step), the target calculation (a fixed number
   of Newton steps, checked; the Python Newton of :meth:`MagnetHeaveModel.steady_state`
-  takes over if they did not converge), the previous QP step and the QP data at the new
-  linearisation point, from the same CasADi expressions (``OffsetFreeMPC._problem``:
-  eq. 8 + mechanics, RK4, the interval Jacobians by AD);
+  takes over if they did not converge), the shifted previous solution and the QP data at
+  that linearisation point, from the same CasADi expressions (``OffsetFreeMPC._problem``:
+  eq. 8 + mechanics, RK4, the interval Jacobians by AD); only the RK4 maps read the
+  maps' table, everything else is expanded to scalar code;
 * the QP is *condensed* in that function: the linearised dynamics
   ``dx_k+1 = A_k dx_k + B_k du_k + c_k`` eliminate the state steps, ``dw = E z + e`` with
   ``z = [du_k, de_k]_k``, leaving a dense, strictly convex QP in ``N (n_u + 1)`` variables
@@ -19,13 +20,19 @@ computes it faster (docs/control.md, "Real-time iteration"):
 * the same compiled call solves that QP for the guessed active set "every slack at its
   lower bound, nothing else active" (a Cholesky factorisation of the input steps'
   Hessian) and checks the optimality conditions; where they hold, that point *is* the
-  unique solution of the strictly convex QP; otherwise qpOASES (shipped in the casadi
-  wheel, hot-started) solves it, called through preallocated buffers;
+  unique solution of the strictly convex QP, applied to the decision vector in the same
+  call; otherwise the compiled QP data function gives that QP again and qpOASES (shipped
+  in the casadi wheel, hot-started) solves it, called through preallocated buffers;
 * two buffer sets alternate between samples (the outputs of one are bound as the inputs
   of the next), so that Python copies only the measurement in and the voltages out.
 
+With ``linearization="target"`` the intervals after the first are linearised at the
+steady-state target instead of the previous solution (two RK4 maps per sample instead of
+``N``; the vehicle's default).
+
 :class:`RealTimeMPCBatch` updates many such controllers (one per vehicle circuit) with one
-compiled call per sample, evaluating each controller's own prepare function.
+compiled call per sample, evaluating each controller's own prepare function; a single
+controller's :meth:`RealTimeMPC.update` is a batch of one.
 
 The full Gauss-Newton SQP, the sparse reference RTI and the IPOPT peer stay in
 :class:`OffsetFreeMPC` as the references (tests/test_mpc_realtime.py compares them).
@@ -50,7 +57,12 @@ from .interface import Measurement
 from .model import MagnetHeaveModel
 from .mpc import MPCWeights, OffsetFreeMPC
 
-__all__ = ["DENSE_QP_SOLVERS", "GUESS_TOLERANCE", "RealTimeMPC", "RealTimeMPCBatch"]
+__all__ = ["DENSE_QP_SOLVERS", "GUESS_TOLERANCE", "LINEARIZATIONS", "RealTimeMPC",
+           "RealTimeMPCBatch"]
+
+#: where :class:`RealTimeMPC`'s QP linearises the prediction (every node of the previous
+#: solution, or interval 0 at its node and the rest at the steady-state target)
+LINEARIZATIONS = ("trajectory", "target")
 
 #: conic solvers of the casadi wheel tried on the condensed QP (docs/decisions.md)
 DENSE_QP_SOLVERS = ("qpoases", "daqp", "qrqp", "proxqp", "osqp")
@@ -107,12 +119,21 @@ class RealTimeMPC(OffsetFreeMPC):
         Dense QP solver of the condensed QP where the compiled active-set guess is not its
         solution, one of :data:`DENSE_QP_SOLVERS` (default qpOASES, hot-started; the
         others for comparison).
+    linearization : {"trajectory", "target"}
+        Where the QP linearises the prediction model.  ``"trajectory"`` (default): every
+        interval at its node of the shifted previous solution (the real-time iteration;
+        the QP of ``OffsetFreeMPC(solver="rti")``).  ``"target"``: the first interval at
+        its node (the current estimate and the warm-started first voltage), the others
+        at the steady-state target ``(x_t, u_t)`` (one Jacobian for intervals 1..N-1,
+        affine predictions there): two RK4 evaluations per sample instead of ``N``
+        (docs/control.md, "Real-time iteration").
 
     Notes
     -----
     The functions are compiled with the model's ``compiled`` mode (disk cache, see
-    :func:`~maglevkit.models.compiled.compile_function`); the first build of a new
-    horizon takes a compile of a few seconds to a minute.
+    :func:`~maglevkit.models.compiled.compile_library`) when the controller is first
+    reset (its batch of one) or batched; the first build of a new law takes a compile of
+    a few seconds to a few minutes.
     """
 
     def __init__(self, model: MagnetHeaveModel, *, gap_ref_m: float, sample_time_s: float,
@@ -120,10 +141,14 @@ class RealTimeMPC(OffsetFreeMPC):
                  qp_solver: str = "qpoases", voltage_limit_V: float = 440.0,
                  min_gap_m: float | None = None, max_current_A: float | None = None,
                  weights: MPCWeights | None = None, observer_options: Mapping[str, Any] | None = None,
-                 initial_estimate: Any = None) -> None:
+                 initial_estimate: Any = None, linearization: str = "trajectory") -> None:
         if qp_solver not in DENSE_QP_SOLVERS:
             raise ParameterError(f"qp_solver = {qp_solver!r}; the condensed QP takes one of "
                                  f"{list(DENSE_QP_SOLVERS)}")
+        if linearization not in LINEARIZATIONS:
+            raise ParameterError(f"linearization = {linearization!r}; use one of "
+                                 f"{list(LINEARIZATIONS)}")
+        self.linearization = linearization
         self._dense_solver = qp_solver
         super().__init__(model, gap_ref_m=gap_ref_m, sample_time_s=sample_time_s,
                          horizon=horizon, interval_s=interval_s, substeps=substeps,
@@ -148,10 +173,26 @@ class RealTimeMPC(OffsetFreeMPC):
         p = ca.MX.sym("p", self._np)
         T = ca.MX.sym("table", m.table.size)
         Fd = m.discrete(self.interval_s, substeps, jacobians=True)
-        X, U, _ = self._unpack(w)
-        sx, su = ca.DM(self._sx), ca.DM(self._su)
-        d = p[nx:nx + nd]
-        blocks = [Fd(X[k] * sx, U[k] * su, d, T)[:3] for k in range(N)]
+        # the intervals' (x_k+1, A_k, B_k) enter the QP data as symbols: everything below
+        # is table-free and expanded to scalar code (straight-line C, every structural zero
+        # skipped); _interval_blocks computes them from the maps
+        def block(name: str) -> tuple[Any, Any, Any]:
+            return (ca.MX.sym(f"xf{name}", nx), ca.MX.sym(f"A{name}", nx, nx),
+                    ca.MX.sym(f"B{name}", nx, nu))
+
+        if self.linearization == "trajectory":
+            blocks = [block(str(k)) for k in range(N)]
+            syms = [v for b in blocks for v in b]
+        else:
+            # interval 0 at its node; 1..N-1 affine about the target:
+            # x_k+1 = xf_t + A_t (x_k - x_t) + B_t (u_k - u_t)
+            first, (xf_t, a_t, b_t) = block("0"), block("t")
+            Xs, Us, _ = self._unpack(w)
+            sx_, su_ = ca.DM(self._sx), ca.DM(self._su)
+            xt_, ut_ = p[nx + nd:2 * nx + nd], p[2 * nx + nd:]
+            blocks = [first] + [(xf_t + a_t @ (Xs[k] * sx_ - xt_) + b_t @ (Us[k] * su_ - ut_),
+                                 a_t, b_t) for k in range(1, N)]
+            syms = [*first, xf_t, a_t, b_t]
         # the reference RTI's QP (OffsetFreeMPC._build): cost gradient, constraint values
         # and the Jacobian of the constraints linearised in dw
         J, g = self._problem(w, p, lambda k, x, u: blocks[k][0])
@@ -202,11 +243,13 @@ class RealTimeMPC(OffsetFreeMPC):
         ubA = ca.vertcat(ca.DM(self._ubg[ineq]) - g[ineq] - Jin @ e,
                          ubw[box] - w[box] - e[box])
         lbz, ubz = lbw[zi] - w[zi], ubw[zi] - w[zi]
+        names = ["H", "g", "A", "lba", "uba", "lbx", "ubx", "E", "e"]
+        condense = ca.Function("mpc_rti_condense", [w, p, *syms],
+                               [ca.densify(v) for v in (Hc, gc, Ac, lbA, ubA, lbz, ubz, E, e)],
+                               ["w", "p", *[v.name() for v in syms]], names).expand()
+        ivals = [v for b in self._interval_blocks(w, p, T, Fd) for v in b]
         self._data_f = ca.Function("mpc_rti_condensed", [w, p, T],
-                                   [ca.densify(v) for v in (Hc, gc, Ac, lbA, ubA, lbz, ubz,
-                                                            E, e)],
-                                   ["w", "p", "table"],
-                                   ["H", "g", "A", "lba", "uba", "lbx", "ubx", "E", "e"])
+                                   list(condense(w, p, *ivals)), ["w", "p", "table"], names)
         self._na = Ac.size1()
         self._nz = nz
         self._nw = nw
@@ -215,6 +258,23 @@ class RealTimeMPC(OffsetFreeMPC):
         self._guess_f = self._guess_function()
         self._diag_raw: tuple[Any, ...] | None = None
         self._t_prep = self._t_qp = 0.0
+
+    def _interval_blocks(self, w: Any, p: Any, T: Any, Fd: ca.Function) -> list[Any]:
+        """The intervals' ``(x_k+1, A_k, B_k)`` of the QP at ``w`` (scaled decision vector),
+        ``p`` (``[x_hat, d_hat, x_t, u_t]``), the map table ``T``: RK4 of eq. 8 + mechanics
+        and its Jacobians by AD (``Fd``, :meth:`MagnetHeaveModel.discrete`) at every
+        shooting node (the real-time iteration's Gauss-Newton linearisation); with
+        ``linearization="target"`` only interval 0's and those at the target
+        ``(x_t, u_t)``."""
+        m = self.model
+        nx, nd = m.nx, m.nd
+        X, U, _ = self._unpack(w)
+        sx, su = ca.DM(self._sx), ca.DM(self._su)
+        d = p[nx:nx + nd]
+        if self.linearization == "target":
+            return [Fd(X[0] * sx, U[0] * su, d, T)[:3],
+                    Fd(p[nx + nd:2 * nx + nd], p[2 * nx + nd:], d, T)[:3]]
+        return [Fd(X[k] * sx, U[k] * su, d, T)[:3] for k in range(self.horizon)]
 
     def _target_function(self) -> ca.Function:
         """``(d_hat, s_ref, I_guess, table) -> (x_t, u_t, last Newton step)``: the target
@@ -298,11 +358,11 @@ class RealTimeMPC(OffsetFreeMPC):
         return ca.Function("mpc_rti_guess", [H, g, A, lba, uba, lbx, ubx], [z, ok])
 
     def _finish_build(self) -> None:
-        """One compiled function per sample, ``prepare``: the EKF step, the target, the
-        previous QP step applied (``w = w_prev + E_prev z_prev + e_prev``, shifted when
-        the interval is the sample time) and the condensed QP data at ``w``; then the
-        dense QP solver.  Two buffer sets alternate (the outputs of one sample are the
-        inputs of the next), so that Python copies nothing between samples."""
+        """The per-sample law ``prepare`` (uncompiled; :class:`RealTimeMPCBatch` compiles
+        it, one generated copy per distinct law): the EKF step, the target, the shifted
+        previous solution (or the cold start), the condensed QP data at that point and its
+        solution for the guessed active set, applied (``w + E z + e``); the dense QP
+        solver for the samples where the guess fails."""
         m = self.model
         nx, nu, nd, N = m.nx, m.nu, m.nd, self.horizon
         nz, nw, blk = self._nz, self._nw, self._blk
@@ -312,70 +372,64 @@ class RealTimeMPC(OffsetFreeMPC):
         z, P = ca.MX.sym("z", nzz), ca.MX.sym("P", nzz, nzz)
         u_prev, y = ca.MX.sym("u_prev", nu), ca.MX.sym("y", m.ny)
         sref, ig = ca.MX.sym("s_ref"), ca.MX.sym("i_guess")
-        w_prev, E_prev = ca.MX.sym("w_prev", nw), ca.MX.sym("E_prev", nw, nz)
-        e_prev, z_prev = ca.MX.sym("e_prev", nw), ca.MX.sym("z_prev", nz)
+        w_prev = ca.MX.sym("w_prev", nw)
         cold, given, use_given = ca.MX.sym("cold"), ca.MX.sym("target", nx + nu), \
             ca.MX.sym("use_given")
         zc, Pc, _ = ekf(z, P, u_prev, y, T)
         xt_n, ut_n, step = self._target_f(zc[nx:], sref, ig, T)
-        xt = ca.if_else(use_given, given[:nx], xt_n)
-        ut = ca.if_else(use_given, given[nx:], ut_n)
-        p = ca.vertcat(zc, xt, ut)
-        w_warm = w_prev + ca.mtimes(E_prev, z_prev) + e_prev
+        # the table-free glue (target choice, warm or cold start) as one function expanded
+        # to scalar code
+        g_syms = [ca.MX.sym(n, *v.shape) for n, v in (
+            ("zc", zc), ("xt_n", xt_n), ("ut_n", ut_n), ("given", given),
+            ("use_given", use_given), ("w_prev", w_prev), ("cold", cold))]
+        g_zc, g_xtn, g_utn, g_given, g_use, g_wp, g_cold = g_syms
+        xt = ca.if_else(g_use, g_given[:nx], g_xtn)
+        ut = ca.if_else(g_use, g_given[nx:], g_utn)
+        w_warm = g_wp
         if math.isclose(self.interval_s, self.sample_time_s, rel_tol=1e-9):
             # OffsetFreeMPC._shift: advance by one interval, repeat the last block
             w_warm = ca.vertcat(w_warm[blk:N * blk], w_warm[N * blk:N * blk + nx],
                                 w_warm[(N - 1) * blk + nx:N * blk], w_warm[N * blk:nw])
         sx, su = ca.DM(self._sx), ca.DM(self._su)
-        w_cold = ca.vertcat(*[ca.vertcat(zc[:nx] / sx if k == 0 else xt / sx, ut / su,
+        w_cold = ca.vertcat(*[ca.vertcat(g_zc[:nx] / sx if k == 0 else xt / sx, ut / su,
                                          ca.MX(1, 1)) for k in range(N)], xt / sx)
-        w = ca.if_else(cold, w_cold, w_warm)
+        start = ca.Function("mpc_rti_start", g_syms,
+                            [ca.if_else(g_cold, w_cold, w_warm), ca.vertcat(g_zc, xt, ut)]
+                            ).expand()
+        w, p = start(zc, xt_n, ut_n, given, use_given, w_prev, cold)
         qp = self._data_f(w, p, T)
         zg, ok = self._guess_f(*qp[:7])
+        # the guess applied: dw = E z + e (its U_0 row is z[:nu], exactly)
+        ws, Es, es, zs = (ca.MX.sym("w", nw), ca.MX.sym("E", nw, nz), ca.MX.sym("e", nw),
+                          ca.MX.sym("z", nz))
+        apply = ca.Function("mpc_rti_apply", [ws, Es, es, zs],
+                            [ws + ca.mtimes(Es, zs) + es]).expand()
         status = ca.vertcat(step, ca.sum1(zc), ok)
         f = ca.Function("mpc_rti_prepare",
-                        [z, P, u_prev, y, sref, ig, w_prev, E_prev, e_prev, z_prev, cold,
-                         given, use_given, T],
-                        [zc, Pc, w, qp[7], qp[8], p, status, *qp[:7], zg])
+                        [z, P, u_prev, y, sref, ig, w_prev, cold, given, use_given, T],
+                        [zc, Pc, w, p, status, apply(w, qp[7], qp[8], zg)],
+                        ["z", "P", "u_prev", "y", "s_ref", "i_guess", "w_prev", "cold",
+                         "target", "use_given", "table"],
+                        ["z_next", "P_next", "w", "p", "status", "w_next"])
         #: the prepare law (one sample of one controller, uncompiled), the function that
-        #: :class:`RealTimeMPCBatch` maps over circuits
+        #: :class:`RealTimeMPCBatch` calls per controller (inputs ``z, P, u_prev, y,
+        #: s_ref, i_guess, w_prev, cold, target, use_given, table``; outputs ``z_next,
+        #: P_next, w, p, status = [last Newton step, sum(z_next), guess ok], w_next``)
         self.prepare_function = f
-        compiled, _ = self._compile(f)
+        #: the QP data at ``(w, p)`` and its solver, for the samples whose guess fails
+        self.apply_function = apply
+        self._z = np.zeros(nz)
+        qpdata = [np.zeros(self._data_f.nnz_out(j)) for j in range(7)]
+        self._qpdata = qpdata
         with _quiet_stdout():        # qpOASES prints its licence banner per instance
             solver = self._qp_solver_function()
-        qz = solver.index_out("x")
-        self._z = np.zeros(nz)
-        self._u = np.zeros(nu)
-        shared_in = {4: np.zeros(1), 5: np.zeros(1), 9: self._z, 10: np.ones(1),
-                     11: np.zeros(nx + nu), 12: np.zeros(1), 13: self._table_array(),
-                     2: self._u}
-        self._y = np.zeros(m.ny)
-        shared_in[3] = self._y
-        qpdata = [np.zeros(f.nnz_out(7 + j)) for j in range(7)]
-        self._qpdata = qpdata
-        self._p_arr = np.zeros(f.nnz_out(5))
-        self._status = np.zeros(3)
-        self._zg = np.zeros(nz)
-        par = [[np.zeros(nzz), np.zeros(nzz * nzz), np.zeros(nw), np.zeros(nw * nz),
-                np.zeros(nw)] for _ in range(2)]
-        self._par = par
-        self._prep = []
-        for k in range(2):
-            a, b = par[k], par[1 - k]
-            args = dict(shared_in)
-            args.update({0: a[0], 1: a[1], 6: a[2], 7: a[3], 8: a[4]})
-            res = {0: b[0], 1: b[1], 2: b[2], 3: b[3], 4: b[4], 5: self._p_arr,
-                   6: self._status}
-            res.update({7 + j: qpdata[j] for j in range(7)})
-            res[14] = self._zg
-            self._prep.append(BoundCall(compiled, args=args, res=res))
-        names = ("h", "g", "a", "lba", "uba", "lbx", "ubx")
-        with _quiet_stdout():
+            names = ("h", "g", "a", "lba", "uba", "lbx", "ubx")
             self._qpb = BoundCall(solver, args={solver.index_in(n): qpdata[j]
-                                                for j, n in enumerate(names)}, res={qz: self._z})
-        self._sref, self._ig = shared_in[4], shared_in[5]
-        self._cold, self._given, self._use_given = shared_in[10], shared_in[11], shared_in[12]
-        self._k = 0
+                                                for j, n in enumerate(names)},
+                                  res={solver.index_out("x"): self._z})
+        self._one: RealTimeMPCBatch | None = None
+        #: (batch, buffer class, row) whose buffers hold this controller's latest sample
+        self._owner: tuple[RealTimeMPCBatch, int, int] | None = None
 
     def _table_array(self) -> np.ndarray:
         t = getattr(self, "_table_c", None)
@@ -424,20 +478,15 @@ class RealTimeMPC(OffsetFreeMPC):
             A sample time other than the one the controller was built for.
         """
         super().reset(measurement, sample_time_s=sample_time_s)
-        obs = self.observer
-        self._k = 0
-        a = self._par[0]
-        a[0][:] = obs.state
-        a[1][:] = np.ravel(obs.covariance, order="F")
-        self._u[:] = self._u_prev
-        self._ig[0] = self.design_state[0]
-        self._cold[0] = 1.0
-        self._diag_raw = None
+        if self._one is None:          # this controller alone, as a batch of one
+            self._one = RealTimeMPCBatch([self])
+        self._one._load()
 
     def update(self, measurement: Measurement) -> np.ndarray:
-        """One sample: one compiled call (EKF step, target, QP data, the QP's solution for
-        the guessed active set), the dense QP solver only where that guess fails its
-        optimality check.
+        """One sample: this controller as a batch of one (:class:`RealTimeMPCBatch`: one
+        compiled call for the EKF step, target, QP data and the QP's solution for the
+        guessed active set; the dense QP solver only where that guess fails its
+        optimality check).
 
         The EKF step integrates the previous output, or the measurement's
         ``applied_voltages_V`` when given.
@@ -461,104 +510,50 @@ class RealTimeMPC(OffsetFreeMPC):
             A diverged observer, no equilibrium for the reference, a failed QP, or a
             solution beyond the voltage limit.
         """
-        t0 = time.perf_counter()
-        c0 = time.thread_time()
-        if measurement.applied_voltages_V is not None:   # the EKF's input: what was applied
-            self._u[:] = measurement.applied_voltages_V
-        self._y[0] = measurement.gap_m
-        self._y[1:] = measurement.currents_A
-        self._sref[0] = measurement.gap_ref_m
-        k = self._k
-        prep = self._prep[k]
-        prep.eval()
-        st = self._status
-        nxd = self.model.nx + self.model.nd
-        i_t = float(self._p_arr[nxd])
-        if not abs(float(st[0])) < _TARGET_RESIDUAL * max(1.0, abs(i_t)):    # also NaN
-            self._target_fallback(measurement, prep)
-        if not math.isfinite(float(st[1])):
-            raise SolverError("the extended Kalman filter diverged", time=measurement.time_s,
-                              state={"estimate": self._par[1 - k][0].copy()},
-                              reason="non-finite estimate")
-        t1 = time.perf_counter()
-        z = self._z
-        guessed = float(st[2])
-        if guessed == 1.0:        # the compiled guess solved the QP (its optimality check)
-            z[:] = self._zg
-        else:
-            self._qpb.eval()
-            if self._qpb.buffer.ret() != 0 or not math.isfinite(z.sum()):
-                self._qp_failed(measurement.time_s)
-        t2 = time.perf_counter()
-        u = self._u
-        nx, nu = self.model.nx, self.model.nu
-        # dU_0 = z[:nu] (the E rows of U_0 select it): u = (w + dw)[U_0] * scale
-        np.add(self._par[1 - k][2][nx:nx + nu], z[:nu], out=u)
-        u *= self._su
-        if float(np.abs(u).max()) > self._ulim * (1 + _LIMIT_SLACK):
-            raise SolverError("the MPC solution violates the voltage limit",
-                              time=measurement.time_s, state={"u": u.copy()},
-                              reason="QP tolerance too loose")
-        u.clip(-self._ulim, self._ulim, out=u)
-        self._ig[0] = self._p_arr[nxd]
-        self._cold[0] = 0.0
-        self._k = 1 - k
-        t3 = time.perf_counter()
-        c3 = time.thread_time()
-        self._diag_raw = (t1 - t0, t2 - t1, t3 - t0, c3 - c0, guessed)
+        if self._one is None:
+            raise SolverError("RealTimeMPC.update before reset: call reset(measurement, "
+                              "sample_time_s=...) first")
+        one = self._one
+        applied = measurement.applied_voltages_V
+        u = one.update(np.array([measurement.gap_m]),
+                       np.asarray(measurement.currents_A, dtype=float).reshape(1),
+                       np.array([measurement.gap_ref_m]),
+                       None if applied is None else np.asarray(applied, dtype=float)
+                       .reshape(1), time_s=measurement.time_s, _single=True)
         self._u_prev = u
-        return u.copy()
-
-    def _target_fallback(self, measurement: Measurement, prep: BoundCall) -> None:
-        """The compiled Newton did not converge: the Python Newton's target (or its
-        SolverError), then the same compiled call with that target given."""
-        m = self.model
-        nx = m.nx
-        zc = self._par[1 - self._k][0]
-        guess = float(self._ig[0])
-        if not math.isfinite(guess):
-            guess = float(self.design_state[0])
-        xs, us = m.steady_state(measurement.gap_ref_m, zc[nx:].copy(), current_guess_A=guess)
-        self._given[:nx] = xs
-        self._given[nx:] = us
-        self._use_given[0] = 1.0
-        try:
-            prep.eval()            # the same inputs: the same EKF step, the given target
-        finally:
-            self._use_given[0] = 0.0
-
-    def _qp_failed(self, time_s: float | None) -> None:
-        m = self.model
-        p = self._p_arr
-        raise SolverError("the MPC's condensed QP failed", time=time_s,
-                          state={"x_hat": p[:m.nx].copy(), "d_hat": p[m.nx:m.nx + m.nd].copy()},
-                          reason=str(self._qpb.buffer.stats().get("return_status", "unknown")))
+        return u
 
     def current_solution(self) -> np.ndarray:
         """The scaled decision vector after the last update (``w + E z + e``)."""
-        b = self._par[self._k]        # the last call wrote w, E, e into this set
-        nw, nz = self._nw, self._nz
-        return b[2] + b[3].reshape(nz, nw).T @ self._z + b[4]
+        if self._owner is None:
+            return np.zeros(self._nw)
+        batch, g, r = self._owner
+        return batch._cdata[g]["alt"][batch._k][2][r].copy()
 
     def diagnostics(self) -> Mapping[str, float | np.ndarray]:
-        """Estimates as :meth:`OffsetFreeMPC.diagnostics`; times [s]: ``prepare_time_s``
-        (the compiled EKF step, target, QP data and active-set guess), ``qp_time_s`` (the
-        dense QP solver, when the guess was not the solution), ``solve_time_s`` (the whole
-        update, estimation included) and ``update_cpu_time_s`` (its CPU time);
+        """Estimates as :meth:`OffsetFreeMPC.diagnostics` after the last update of this
+        controller (alone or in a :class:`RealTimeMPCBatch`); the times [s] of that
+        update (of the whole batch's sample when batched): ``prepare_time_s`` (the
+        compiled EKF step, target, QP data and active-set guess), ``qp_time_s`` (the
+        dense QP solver where a guess was not the solution, and the checks),
+        ``solve_time_s`` (the whole update) and ``update_cpu_time_s`` (its CPU time);
         ``qp_guess``: 1.0 where the compiled guess was the QP's solution, 0.0 where the
         dense solver ran."""
-        if self._diag_raw is None:
+        if self._owner is None or not self._owner[0]._updated:
             return {}
-        tp, tq, tu, cpu, guessed = self._diag_raw
+        batch, g, r = self._owner
+        gd = batch._cdata[g]
         m = self.model
         nc, nx = m.n_circuits, m.nx
-        z = self._par[self._k][0]
+        z = gd["alt"][batch._k][0][r]
+        tp, tq, tu, cpu = batch._timing
         return {"gap_estimate_m": float(z[nc]), "gap_rate_estimate_m_per_s": float(z[nc + 1]),
                 "inductor_current_estimate_A": z[:nc].copy(),
                 "disturbance_estimate": z[nx:].copy(),
-                "target_voltage_V": self._p_arr[2 * nx + m.nd:].copy(),
+                "target_voltage_V": gd["out"][3][r, 2 * nx + m.nd:].copy(),
                 "prepare_time_s": tp, "qp_time_s": tq, "solve_time_s": tu,
-                "update_cpu_time_s": cpu, "iterations": 1.0, "qp_guess": guessed}
+                "update_cpu_time_s": cpu, "iterations": 1.0,
+                "qp_guess": float(gd["out"][4][r, 2] == 1.0)}
 
     # ------------------------------------------------------------------ OCP (tests)
     def solve(self, x_hat: np.ndarray, d_hat: np.ndarray, xt: np.ndarray,
@@ -610,17 +605,20 @@ class RealTimeMPC(OffsetFreeMPC):
 
 class RealTimeMPCBatch:
     """Many :class:`RealTimeMPC` controllers (e.g. one per vehicle circuit) updated by one
-    compiled call per sample.
+    compiled call per sample; a single controller's :meth:`RealTimeMPC.update` is a batch
+    of one.
 
     The controllers' own prepare laws (:attr:`RealTimeMPC.prepare_function`: the EKF
-    step, the target, the condensed QP data and the compiled active-set guess) are called
-    once per controller inside one function (one generated copy of each distinct law,
-    its map table passed once), compiled; each sample then
-    costs one call for every controller together.  Where a controller's guess fails its
-    optimality check (an active voltage limit or soft constraint), that controller's own
-    dense QP solver (qpOASES, hot-started) solves its QP, from the same data.  The result is
-    that of calling each controller's :meth:`RealTimeMPC.update` (tested to rounding);
-    the controllers' own buffers are not advanced (their ``update`` is not called).
+    step, the target, the condensed QP data, the QP's solution for the guessed active set
+    and that step applied) are called once per controller inside one function (one
+    generated copy of each distinct law, its map table passed once), compiled together
+    with each distinct law's QP data function; each sample then costs one call for every
+    controller together.  Where a controller's guess fails its optimality check (an
+    active voltage limit or soft constraint), the QP data function gives that
+    controller's QP again and its own dense QP solver (qpOASES, hot-started) solves it.
+    The batch's buffers hold every controller's state; each controller's
+    :meth:`RealTimeMPC.diagnostics` and :meth:`RealTimeMPC.current_solution` read the
+    batch that updated it last.
 
     Parameters
     ----------
@@ -635,6 +633,11 @@ class RealTimeMPCBatch:
         No controllers, not :class:`RealTimeMPC` objects, repeated objects, more than one
         input per controller, or different sample times.
     """
+
+    # prepare inputs: alternating sets (z, P, w_prev) and the shared ones
+    _ALT_IN, _SHARED_IN = (0, 1, 6), (2, 3, 4, 5, 7, 8, 9)
+    # prepare outputs into the other set (z_next, P_next, w_next) and the once-only ones
+    _ALT_OUT, _ONCE_OUT = (0, 1, 5), (2, 3, 4)
 
     def __init__(self, controllers: Any) -> None:
         ctls = list(controllers)
@@ -663,10 +666,13 @@ class RealTimeMPCBatch:
         self._build()
 
     def _build(self) -> None:
+        from ..models.compiled import compile_library
+
         ctls = self.controllers
         ins: list[Any] = []
         outs: list[Any] = []
         self._gdata: list[dict[str, Any]] = []
+        data_fs: list[ca.Function] = []
         for g, idx in enumerate(self._groups):
             c0 = ctls[int(idx[0])]
             f = c0.prepare_function
@@ -685,37 +691,68 @@ class RealTimeMPCBatch:
                     cols[q].append(ca.densify(ca.vec(o)))
             ins += sy
             outs += [ca.horzcat(*c) for c in cols]
+            d = c0._data_f
+            sd = [ca.MX.sym(d.name_in(i), d.sparsity_in(i)) for i in range(d.n_in())]
+            data_fs.append(ca.Function(f"mpc_rti_qp_data_g{g}", sd, d(*sd)))
             self._gdata.append({"f": f, "idx": idx, "c0": c0, "n_in": f.n_in(),
                                 "n_out": f.n_out()})
         F = ca.Function("mpc_rti_prepare_batch", ins, outs)
-        compiled, _ = c0._compile(F)
+        c0 = ctls[0]
+        funcs, _ = compile_library("mpc_rti_batch", [F, *data_fs],
+                                   mode=c0.model.compiled_mode)
+        compiled = funcs[0]
         self.function = F
-        # buffers: per group and input/output, (n_g, nnz of one controller) C-order arrays
-        # (the map stacks the instances' nonzeros one after another)
+        # buffers: (n rows, nnz of one controller) C-order arrays per input/output, one set
+        # per class of groups with equal sizes (one class for a vehicle's circuits), each
+        # group bound to its contiguous block of rows (the unrolled call stacks the
+        # instances' nonzeros one after another), so that the checks after the call run
+        # once per class, not once per group
+        classes: dict[tuple[int, ...], list[int]] = {}
+        for g, gd in enumerate(self._gdata):
+            f = gd["f"]
+            key = (*(f.numel_in(i) for i in range(f.n_in() - 1)),
+                   *(f.numel_out(i) for i in range(f.n_out())), gd["c0"].model.nx)
+            classes.setdefault(key, []).append(g)
+        self._cdata: list[dict[str, Any]] = []
+        for gs in classes.values():
+            idx = np.concatenate([self._gdata[g]["idx"] for g in gs])
+            nr = idx.size
+            f, c0 = self._gdata[gs[0]]["f"], self._gdata[gs[0]]["c0"]
+
+            def arr(nnz: int, nr: int = nr) -> np.ndarray:
+                return np.zeros((nr, nnz))
+
+            cd = {"idx": idx, "nx": c0.model.nx, "nd": c0.model.nd, "nz": c0._nz,
+                  "nw": c0._nw, "alt": [[arr(f.numel_in(i)) for i in self._ALT_IN]
+                                        for _ in range(2)],
+                  "shared": {i: arr(f.numel_in(i)) for i in self._SHARED_IN},
+                  "out": {i: arr(f.numel_out(i)) for i in self._ONCE_OUT},
+                  "su": np.array([ctls[int(j)]._su[0] for j in idx]),
+                  "ulim": np.array([ctls[int(j)].voltage_limit_V for j in idx]),
+                  "group_of": np.concatenate([np.full(self._gdata[g]["idx"].size, g)
+                                              for g in gs])}
+            cd["shared"][7][:] = 1.0
+            off = 0
+            for g in gs:
+                gd = self._gdata[g]
+                ng = gd["idx"].size
+                rows = slice(off, off + ng)
+                gd.update(cls=len(self._cdata), rows=rows,
+                          data=BoundCall(funcs[1 + g], args={2: gd["c0"]._table_array()}))
+                off += ng
+            self._cdata.append(cd)
         calls_args: list[dict[int, np.ndarray]] = [{}, {}]
         calls_res: list[dict[int, np.ndarray]] = [{}, {}]
         ia = oa = 0
         for gd in self._gdata:
-            f, ng, c0 = gd["f"], gd["idx"].size, gd["c0"]
-            m = c0.model
-
-            def arr(nnz: int, ng: int = ng) -> np.ndarray:
-                return np.zeros((ng, nnz))
-
-            alt = [[arr(f.numel_in(i)) for i in (0, 1, 6, 7, 8)] for _ in range(2)]
-            shared = {i: arr(f.numel_in(i)) for i in (2, 3, 4, 5, 9, 10, 11, 12)}
-            shared[10][:] = 1.0
-            out_once = {i: arr(f.numel_out(i)) for i in range(5, f.n_out())}
-            gd.update(alt=alt, shared=shared, out=out_once, nx=m.nx, nd=m.nd,
-                      su=np.array([ctls[int(j)]._su[0] for j in gd["idx"]]),
-                      ulim=np.array([ctls[int(j)].voltage_limit_V for j in gd["idx"]]))
+            cd, rows = self._cdata[gd["cls"]], gd["rows"]
             for k in range(2):
-                a, b = alt[k], alt[1 - k]
-                args = {ia + i: v for i, v in shared.items()}
-                args.update({ia + i: a[q] for q, i in enumerate((0, 1, 6, 7, 8))})
-                args[ia + 13] = c0._table_array()
-                res = {oa + q: b[q] for q in range(5)}
-                res.update({oa + i: v for i, v in out_once.items()})
+                a, b = cd["alt"][k], cd["alt"][1 - k]
+                args = {ia + i: v[rows] for i, v in cd["shared"].items()}
+                args.update({ia + i: a[q][rows] for q, i in enumerate(self._ALT_IN)})
+                args[ia + 10] = gd["c0"]._table_array()
+                res = {oa + i: b[q][rows] for q, i in enumerate(self._ALT_OUT)}
+                res.update({oa + i: v[rows] for i, v in cd["out"].items()})
                 calls_args[k].update(args)
                 calls_res[k].update(res)
             ia += gd["n_in"]
@@ -724,12 +761,33 @@ class RealTimeMPCBatch:
                        for k in range(2)]
         self._k = 0
         self._u = np.zeros(self.n)
+        self._updated = False
         self.last_fallbacks = 0
-        self._timing: tuple[float, float, float] = (0.0, 0.0, 0.0)
+        self._timing: tuple[float, float, float, float] = (0.0, 0.0, 0.0, 0.0)
+
+    def _load(self) -> None:
+        """The controllers' observer states and covariances, previous voltages and design
+        currents into the buffers, cold start (after their own ``reset``); the batch
+        becomes each controller's owner (its diagnostics read this batch)."""
+        self._k = 0
+        for ci, cd in enumerate(self._cdata):
+            a = cd["alt"][0]
+            sh = cd["shared"]
+            for r, j in enumerate(cd["idx"].tolist()):
+                c = self.controllers[j]
+                a[0][r] = c.observer.state
+                a[1][r] = np.ravel(c.observer.covariance, order="F")
+                sh[2][r] = c._u_prev
+                sh[5][r] = c.design_state[0]
+                c._owner = (self, ci, r)
+            sh[7][:] = 1.0
+            sh[9][:] = 0.0
+        self._updated = False
+        self._timing = (0.0, 0.0, 0.0, 0.0)
 
     def reset(self, measurements: Any, *, sample_time_s: float) -> None:
-        """Start a run: every controller's :meth:`RealTimeMPC.reset`, then its observer
-        state and covariance and its cold start copied into the batch's buffers.
+        """Start a run: every controller's observer and cold start
+        (:meth:`OffsetFreeMPC.reset`), copied into the batch's buffers.
 
         Parameters
         ----------
@@ -751,23 +809,12 @@ class RealTimeMPCBatch:
             raise InputError(f"RealTimeMPCBatch.reset: {len(ms)} measurements for {self.n} "
                              "controllers")
         for c, meas in zip(self.controllers, ms, strict=True):
-            c.reset(meas, sample_time_s=sample_time_s)
-        self._k = 0
-        for gd in self._gdata:
-            a = gd["alt"][0]
-            for r, j in enumerate(gd["idx"].tolist()):
-                c = self.controllers[j]
-                a[0][r] = c.observer.state
-                a[1][r] = np.ravel(c.observer.covariance, order="F")
-                gd["shared"][2][r] = c._u_prev
-                gd["shared"][5][r] = c.design_state[0]
-            gd["shared"][10][:] = 1.0
-            gd["shared"][12][:] = 0.0
-        self._timing = (0.0, 0.0, 0.0)
+            OffsetFreeMPC.reset(c, meas, sample_time_s=sample_time_s)
+        self._load()
 
     def update(self, gaps_m: np.ndarray, currents_A: np.ndarray, gap_refs_m: np.ndarray,
                applied_voltages_V: np.ndarray | None = None, *,
-               time_s: float | None = None) -> np.ndarray:
+               time_s: float | None = None, _single: bool = False) -> np.ndarray:
         """One sample of every controller: one compiled call, the dense QP solver only
         where a controller's compiled guess is not its QP's solution.
 
@@ -789,11 +836,14 @@ class RealTimeMPCBatch:
         Raises
         ------
         SolverError
-            As :meth:`RealTimeMPC.update`, naming the controller's index.
+            A diverged observer, no equilibrium for the reference, a failed QP or a
+            solution beyond the voltage limit, naming the controller's index (not for a
+            batch of one, :meth:`RealTimeMPC.update`).
         """
         t0 = time.perf_counter()
+        c0 = time.thread_time()
         k = self._k
-        for gd in self._gdata:
+        for gd in self._cdata:
             idx, sh = gd["idx"], gd["shared"]
             if applied_voltages_V is not None:
                 sh[2][:, 0] = applied_voltages_V[idx]
@@ -802,51 +852,54 @@ class RealTimeMPCBatch:
             sh[4][:, 0] = gap_refs_m[idx]
         call = self._calls[k]
         call.eval()
-        self._check_targets(call, gap_refs_m, time_s)
+        self._check_targets(call, gap_refs_m, time_s, _single)
         t1 = time.perf_counter()
         fallbacks = 0
         u = self._u
-        for gd in self._gdata:
+        for gd in self._cdata:
             idx, out, sh = gd["idx"], gd["out"], gd["shared"]
             b = gd["alt"][1 - k]
-            st, zg = out[6], out[14]
-            nxd = gd["nx"] + gd["nd"]
+            st = out[4]
             if not np.isfinite(st[:, 1]).all():
                 r = int(np.flatnonzero(~np.isfinite(st[:, 1]))[0])
                 raise SolverError("the extended Kalman filter diverged", time=time_s,
-                                  state={"controller": int(idx[r]), "estimate": b[0][r].copy()},
+                                  state=self._state(idx[r], _single, estimate=b[0][r].copy()),
                                   reason="non-finite estimate")
-            z = sh[9]
-            z[:] = zg
-            for r in np.flatnonzero(st[:, 2] != 1.0).tolist():
-                z[r] = self._dense_qp(int(idx[r]), [out[7 + q][r] for q in range(7)], time_s)
-                fallbacks += 1
             nx = gd["nx"]
-            ug = (b[2][:, nx] + z[:, 0]) * gd["su"]
+            for r in np.flatnonzero(st[:, 2] != 1.0).tolist():
+                self._dense_qp(gd, r, b[2][r], time_s, _single)
+                fallbacks += 1
+            ug = b[2][:, nx] * gd["su"]
             lim = gd["ulim"]
             ok = np.abs(ug) <= lim * (1 + _LIMIT_SLACK)             # False for NaN
             if not ok.all():
                 r = int(np.flatnonzero(~ok)[0])
                 raise SolverError("the MPC solution violates the voltage limit", time=time_s,
-                                  state={"controller": int(idx[r]), "u": float(ug[r])},
+                                  state=self._state(idx[r], _single, u=float(ug[r])),
                                   reason="QP tolerance too loose")
             np.clip(ug, -lim, lim, out=ug)
             sh[2][:, 0] = ug
-            sh[5][:, 0] = out[5][:, nxd]
-            sh[10][:] = 0.0
+            sh[5][:, 0] = out[3][:, nx + gd["nd"]]
+            sh[7][:] = 0.0
             u[idx] = ug
         self._k = 1 - k
+        self._updated = True
         self.last_fallbacks = fallbacks
         t2 = time.perf_counter()
-        self._timing = (t1 - t0, t2 - t1, t2 - t0)
+        self._timing = (t1 - t0, t2 - t1, t2 - t0, time.thread_time() - c0)
         return u.copy()
 
-    def _check_targets(self, call: BoundCall, refs: np.ndarray, time_s: float | None) -> None:
+    @staticmethod
+    def _state(j: Any, single: bool, **kw: Any) -> dict[str, Any]:
+        return kw if single else {"controller": int(j), **kw}
+
+    def _check_targets(self, call: BoundCall, refs: np.ndarray, time_s: float | None,
+                       single: bool) -> None:
         """Controllers whose compiled Newton did not converge: the Python Newton's target
         (or its SolverError), then the same call again with those targets given."""
         redo = False
-        for gd in self._gdata:
-            st, p, sh = gd["out"][6], gd["out"][5], gd["shared"]
+        for gd in self._cdata:
+            st, p, sh = gd["out"][4], gd["out"][3], gd["shared"]
             nx, nxd = gd["nx"], gd["nx"] + gd["nd"]
             lim = _TARGET_RESIDUAL * np.maximum(1.0, np.abs(p[:, nxd]))
             bad = ~(np.abs(st[:, 0]) < lim)                 # also for NaN
@@ -859,35 +912,49 @@ class RealTimeMPCBatch:
                     guess = float(c.design_state[0])
                 xs, us = c.model.steady_state(float(refs[j]), zc[nx:].copy(),
                                               current_guess_A=guess)
-                sh[11][r, :nx] = xs
-                sh[11][r, nx:] = us
-                sh[12][r] = 1.0
+                sh[8][r, :nx] = xs
+                sh[8][r, nx:] = us
+                sh[9][r] = 1.0
                 redo = True
         if redo:
             try:
                 call.eval()        # the same inputs: the same EKF steps, the given targets
             finally:
-                for gd in self._gdata:
-                    gd["shared"][12][:] = 0.0
+                for gd in self._cdata:
+                    gd["shared"][9][:] = 0.0
 
-    def _dense_qp(self, j: int, data: list[np.ndarray], time_s: float | None) -> np.ndarray:
-        """Controller ``j``'s condensed QP by its own dense solver (hot-started)."""
+    def _dense_qp(self, gd: dict[str, Any], r: int, w_next: np.ndarray,
+                  time_s: float | None, single: bool) -> None:
+        """Row ``r`` of class ``gd``: its condensed QP at ``(w, p)`` again (its group's
+        compiled QP data function), solved by the controller's own dense solver
+        (hot-started), the step applied into ``w_next``."""
+        j = int(gd["idx"][r])
         c = self.controllers[j]
+        data = self._gdata[int(gd["group_of"][r])]["data"]
+        data.args[0][:] = gd["out"][2][r]
+        data.args[1][:] = gd["out"][3][r]
+        data.eval()
+        for q in range(7):
+            c._qpdata[q][:] = data.res[q]
         qpb = c._qpb
-        for q, v in enumerate(data):
-            c._qpdata[q][:] = v
         qpb.eval()
-        if qpb.buffer.ret() != 0 or not math.isfinite(c._z.sum()):
+        z = c._z
+        if qpb.buffer.ret() != 0 or not math.isfinite(z.sum()):
+            m = c.model
+            p = gd["out"][3][r]
             raise SolverError("the MPC's condensed QP failed", time=time_s,
-                              state={"controller": j},
+                              state=self._state(j, single, x_hat=p[:m.nx].copy(),
+                                                d_hat=p[m.nx:m.nx + m.nd].copy()),
                               reason=str(qpb.buffer.stats().get("return_status", "unknown")))
-        return c._z
+        nw, nz = gd["nw"], gd["nz"]
+        w_next[:] = gd["out"][2][r] + data.res[7].reshape(nz, nw).T @ z + data.res[8]
 
     def timing(self) -> Mapping[str, float]:
-        """Wall times [s] of the last :meth:`update`: ``prepare_time_s`` (the one compiled
-        call), ``qp_time_s`` (the dense QP solves where a guess failed, and the voltages),
-        ``solve_time_s`` (the whole update); ``fallbacks``: how many QPs went to the dense
+        """Times of the last :meth:`update`: wall times [s] ``prepare_time_s`` (the one
+        compiled call), ``qp_time_s`` (the dense QP solves where a guess failed, the
+        checks and the voltages), ``solve_time_s`` (the whole update); its CPU time
+        ``update_cpu_time_s`` [s]; ``fallbacks``: how many QPs went to the dense
         solver."""
-        tp, tq, tu = self._timing
+        tp, tq, tu, cpu = self._timing
         return {"prepare_time_s": tp, "qp_time_s": tq, "solve_time_s": tu,
-                "fallbacks": float(self.last_fallbacks)}
+                "update_cpu_time_s": cpu, "fallbacks": float(self.last_fallbacks)}

@@ -163,7 +163,8 @@ def run_blocks(function: Any, *, state: np.ndarray, inputs: np.ndarray,
                constants: np.ndarray, n_steps: int, n_record: int, block_steps: int,
                look: Callable[[int, np.ndarray], bool],
                check: Callable[[int, np.ndarray, bool], tuple[int, Any] | None],
-               progress: bool = False, label: str = "vehicle run (steps)"
+               progress: bool = False, label: str = "vehicle run (steps)",
+               before_block: Callable[[int, np.ndarray, np.ndarray], None] | None = None
                ) -> tuple[LoopOutcome, np.ndarray]:
     """Run a compiled block step function over ``k = 0 ... n_steps``.
 
@@ -197,6 +198,10 @@ def run_blocks(function: Any, *, state: np.ndarray, inputs: np.ndarray,
         Progress on stderr (:class:`LoopProgress`), updated per block.
     label : str, default "vehicle run (steps)"
         The progress bar's label.
+    before_block : callable, optional
+        ``before_block(k0, state, records)`` before each block (steps ``k0 ...``), with
+        the state at step ``k0`` and the records so far; it may write the block's rows
+        of ``inputs`` (e.g. a sampled controller's held voltages).
 
     Returns
     -------
@@ -235,6 +240,8 @@ def run_blocks(function: Any, *, state: np.ndarray, inputs: np.ndarray,
         for blk in range(n_rows // nb):
             k0 = blk * nb
             j = blk & 1
+            if before_block is not None:
+                before_block(k0, s_buf[j], records)
             bufs[j].set_arg(1, memoryview(inputs[k0:k0 + nb]))   # type: ignore[arg-type]
             rows = records[k0:k0 + nb]
             bufs[j].set_res(1, memoryview(rows))                  # type: ignore[arg-type]

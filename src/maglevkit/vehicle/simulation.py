@@ -89,6 +89,11 @@ _VEHICLE_MPC_WEIGHTS = {"gap_m": 1e-3, "gap_rate_m_per_s": 1.0, "voltage_V": 200
 #: force disturbance, whose estimates drift apart on a frame (docs/vehicle.md); the load
 #: goes to the reference integral
 _VEHICLE_MPC_DISTURBANCES = ("voltage",)
+#: where the vehicle circuits' NMPC linearises its prediction (RealTimeMPC's
+#: ``linearization``): interval 0 at the current estimate, the rest at the target; the
+#: same must-show results as the full RTI to < 1 % at half its update time
+#: (docs/decisions.md, "The NMPC flying the train at speed")
+_VEHICLE_MPC_LINEARIZATION = "target"
 
 
 def limit_crossing(gaps_m: Any, rates_m_per_s: Any, *, dt_s: float, start_s: float,
@@ -461,7 +466,8 @@ class VehicleModel:
         step for a mapping.
     mpc_options : mapping, optional
         Keyword arguments for :meth:`design_circuit_mpc` (``horizon``, ``qp_solver``,
-        ``weights``, ...) with ``controller="mpc"``; and ``reference_integral_time_s``
+        ``weights``, ``linearization`` (default ``"target"``), ...) with
+        ``controller="mpc"``; and ``reference_integral_time_s``
         [s] (default 0.5; None: off): the NMPC's gap reference of circuit ``j`` is
         ``s0 - e_j / T``, ``e_j`` the integral of the frame-projected gap error (the
         cascade's integral), which removes the mean gap error that the random
@@ -585,7 +591,8 @@ class VehicleModel:
         self.trim_force_N = circ_force          # per circuit of one side
         self.trim_current_A = self._trim_currents(circ_force)
         self._design_controllers()
-        self._step_functions: dict[float, Any] = {}
+        self._step_functions: dict[Any, Any] = {}
+        self._measure_functions: dict[Any, Any] = {}
         self._part_functions: dict[float, Any] = {}
         self._set_controllers(controller, controller_sample_time_s, mpc_options)
 
@@ -782,7 +789,8 @@ class VehicleModel:
         from ..control.mpc import MPCWeights
         from ..control.realtime import RealTimeMPC
 
-        options = {"horizon": 10, "weights": MPCWeights(**_VEHICLE_MPC_WEIGHTS), **options}
+        options = {"horizon": 10, "weights": MPCWeights(**_VEHICLE_MPC_WEIGHTS),
+                   "linearization": _VEHICLE_MPC_LINEARIZATION, **options}
         dist = tuple(options.pop("disturbances", _VEHICLE_MPC_DISTURBANCES))
         nc = self.bank.n_circuits
         if isinstance(circuit, bool) or not isinstance(circuit, (int, np.integer)) or \
@@ -903,7 +911,10 @@ class VehicleModel:
             payload_step_s = real_number(payload_step_s, "payload_step_s", "s",
                                          nonnegative=True)
             payload_fraction = real_number(payload_fraction, "payload_fraction", "1")
-        if self.circuit_controllers or payload_step_s is not None:
+        # the NMPC ("mpc") runs between compiled blocks of its sample's steps (with payload
+        # steps); other controllers, and the cascade with a payload step, in the NumPy loop
+        sampled = self.controller_kind == "mpc"
+        if not sampled and (self.circuit_controllers or payload_step_s is not None):
             if loop == "compiled":
                 raise InputError("loop = 'compiled' runs the cascade without payload steps; "
                                  f"controller = {self.controller_kind!r} and payload steps run "
@@ -1016,7 +1027,11 @@ class VehicleModel:
                 x_m=x_m, gstate=gstate, i_l=bstate.inductor_currents_A, psi_hat=psi_hat,
                 integ=integ, current=current, force=force_c, fail_t=fail_t, rec=rec,
                 rec_q=rec_q, rec_qd=rec_qd, rec_fp=rec_fp, rec_mid=rec_mid,
-                rec_span=rec_span, timing=timing, progress=progress)
+                rec_span=rec_span, timing=timing, progress=progress,
+                sampled=(gaps_p, self._initial_gap_rates(v, rx_all[0], xpath[0], gstate),
+                         ctl_times, ctl_cpu, None if payload_step_s is None else
+                         (int(math.ceil(payload_step_s / dt - 1e-9)),
+                          self._payload_gravity(payload_fraction))) if sampled else None)
         else:
             # one discarded step first: compiles (or loads) the bank's kernel outside the timing
             if not self.fine:
@@ -1277,15 +1292,19 @@ class VehicleModel:
             integral_projection=self.integral_projection,
             midspan_shape=span.mode_shapes(0.5 * span.length_m)[0] if nm else np.zeros(0))
 
-    def _step_function(self, dt: float, bank_step: Any) -> Any:
+    def _step_function(self, dt: float, bank_step: Any, hold: int | None = None) -> Any:
+        """The composed step (``hold``: the held-voltage step of a sampled controller,
+        ``hold`` steps per block)."""
         from .stepkernel import build_vehicle_step
 
         if self.fine:
             raise InputError("the compiled vehicle step needs reduced magnets "
                              "(magnets='reduced')")
+        kw: dict[str, Any] = {} if hold is None else {
+            "controller": "held", "block_steps": hold, "name": "maglevkit_vehicle_held"}
         return build_vehicle_step(bank_step=bank_step, sides=float(self.train.sides),
                                   velocity_blend=self.train.control_velocity_blend,
-                                  point_offsets_m=self.point_xi_m, **self._part_constants(dt))
+                                  point_offsets_m=self.point_xi_m, **self._part_constants(dt), **kw)
 
     def _part_evaluators(self, dt: float) -> dict[str, Any]:
         """The step's parts for steps of ``dt`` (:func:`build_vehicle_parts`), bound for
@@ -1305,12 +1324,15 @@ class VehicleModel:
             self._part_functions[dt] = hit
         return hit
 
-    def _compiled_step(self, dt: float) -> tuple[Any, Any, int]:
+    def _compiled_step(self, dt: float, hold: int | None = None) -> tuple[Any, Any, int]:
         """(compiled block function, layout, steps per block), built and compiled (or
-        loaded from the disk cache) once per ``dt``."""
+        loaded from the disk cache) once per ``dt``; with ``hold``, the held-voltage step
+        (blocks of ``hold`` steps) and the layout's ``measure`` function compiled as
+        :attr:`_measure_functions` ``[(dt, hold)]``."""
         from ..models.compiled import compile_function, compile_linked
 
-        hit = self._step_functions.get(dt)
+        key: Any = dt if hold is None else (dt, hold)
+        hit = self._step_functions.get(key)
         if hit is None:
             f = None
             lanes = None if self.fine else self.bank.compiled_step_library(dt)
@@ -1319,14 +1341,17 @@ class VehicleModel:
                 # generated C, linked against that library; both in the default cache
                 # directory (the bank above is built without a cache_dir)
                 ext, lib = lanes
-                vs = self._step_function(dt, ext)
+                vs = self._step_function(dt, ext, hold)
                 # None (e.g. a linker without these options): the CasADi bank step below
                 f = compile_linked(vs.block_function, lib)
             if f is None:
-                vs = self.step_function(dt)
+                vs = self._step_function(dt, self.bank.step_function(dt), hold)
                 f, _ = compile_function(vs.block_function, mode=self.bank.compiled_mode)
+            if hold is not None:
+                self._measure_functions[key] = compile_function(
+                    vs.measure, mode=self.bank.compiled_mode)[0]
             hit = (f, vs.layout, vs.block_steps)
-            self._step_functions[dt] = hit
+            self._step_functions[key] = hit
         return hit
 
     def _compiled_loop(self, *, dt: float, v: float, times: np.ndarray, x_ref: np.ndarray,
@@ -1336,7 +1361,7 @@ class VehicleModel:
                        current: np.ndarray, force: np.ndarray, fail_t: np.ndarray,
                        rec: dict[str, np.ndarray], rec_q: np.ndarray, rec_qd: np.ndarray,
                        rec_fp: np.ndarray, rec_mid: np.ndarray, rec_span: np.ndarray,
-                       timing: dict[str, float], progress: bool
+                       timing: dict[str, float], progress: bool, sampled: Any = None
                        ) -> tuple[int, tuple[str, float, float, str] | None, float, float, bool]:
         """The time loop with one compiled call per block of steps; fills the records like
         the NumPy loop.  Returns ``(last step, touchdown, wall time, CPU time,
@@ -1347,10 +1372,21 @@ class VehicleModel:
         kernel flagged (a touchdown within the step, else diagnosed by the bank's own step,
         which raises).  Steps a block computed after the event are discarded, and on
         Ctrl-C the block under way.
+
+        ``sampled`` (the NMPC, ``controller="mpc"``): ``(initial gaps, initial gap rates,
+        update wall times, update CPU times, payload step (first step, gravity) or
+        None)``; then a block is one controller sample (the held-voltage step), and
+        before each block the controllers update from the gaps the step measures
+        (:meth:`_sample_controllers`, as the NumPy loop).
         """
         from ..reduced.bank import BankState
 
-        fun, lay, nb = self._compiled_step(dt)
+        hold = None
+        if sampled is not None:
+            gaps0, rates0, ctl_times, ctl_cpu, payload = sampled
+            ext_idx, hold, u_ext, ext_ctl = self._start_controllers(dt, gaps0, rates0,
+                                                                    current)
+        fun, lay, nb = self._compiled_step(dt, hold)
         tr, gw, bank = self.train, self.guideway, self.bank
         names = bank.circuit_names
         n_steps = times.size - 1
@@ -1377,6 +1413,14 @@ class VehicleModel:
             p_all[:n_steps + 1, sp["keep"]] = keep
         else:
             first_k = np.full(times.shape, first0)
+        before = None
+        if hold is not None:
+            p_all[:, sp["q_g"]] = self.mechanics.Q_gravity
+            if payload is not None:
+                p_all[payload[0]:, sp["q_g"]] = payload[1]
+            before = self._sampler(dt, hold, times, p_all, consts_v=np.concatenate(
+                [[v], fail_t]), lay=lay, k_out=k_out, ctl=(ext_idx, u_ext, ext_ctl),
+                ctl_times=ctl_times, ctl_cpu=ctl_cpu)
         # the state at step 0
         s0v = np.zeros(lay.n_state)
         s0v[st["x_mech"]] = x_m
@@ -1426,12 +1470,14 @@ class VehicleModel:
         outcome, r_all_rec = run_blocks(fun, state=s0v, inputs=p_all, constants=consts,
                                         n_steps=n_steps, n_record=lay.n_record,
                                         block_steps=nb, look=look, check=check,
-                                        progress=progress)
+                                        progress=progress, before_block=before)
         last, touchdown, interrupted = outcome.last_step, outcome.event, outcome.interrupted
         wall, cpu = outcome.wall_s, outcome.cpu_s
         timing.clear()
         timing["compiled step"] = outcome.call_s
-        timing["other"] = max(wall - outcome.call_s, 0.0)
+        if hold is not None:
+            timing["controllers"] = float(sum(ctl_times))
+        timing["other"] = max(wall - outcome.call_s - timing.get("controllers", 0.0), 0.0)
         n = last + 1
         rr = r_all_rec[:n]
         for key in ("gap", "current", "force", "deflection", "voltage"):
@@ -1446,6 +1492,40 @@ class VehicleModel:
         elif n_steps >= 1 and not interrupted:
             rec["voltage"][n_steps] = rec["voltage"][n_steps - 1]
         return last, touchdown, wall, cpu, interrupted
+
+    def _sampler(self, dt: float, hold: int, times: np.ndarray, p_all: np.ndarray, *,
+                 consts_v: np.ndarray, lay: Any, k_out: int, ctl: tuple[Any, Any, Any],
+                 ctl_times: list[float], ctl_cpu: list[float]) -> Any:
+        """The compiled loop's ``before_block`` for a sampled controller: the gaps the
+        step measures at the sample (compiled ``measure`` part), the controllers' update
+        (:meth:`_sample_controllers`), their voltages into the block's held-voltage rows.
+        Skipped where the NumPy loop stops before sampling (the run's end, touchdown,
+        the loads leaving the integrated spans): the block's check reports those."""
+        from ..models.compiled import BoundCall
+
+        meas = BoundCall(self._measure_functions[(dt, hold)])
+        meas.args[2][:] = consts_v
+        ext_idx, u_ext, ext_ctl = ctl
+        st, sp, rl = lay.state, lay.step_inputs, lay.record
+        n_steps = times.size - 1
+        td_gap, land_gap = self.train.touchdown_gap_m, self.train.landing_gap_m
+
+        def before(k0: int, state: np.ndarray, records: np.ndarray) -> None:
+            if k0 >= n_steps or k0 == k_out:
+                return
+            meas.args[0][:] = state
+            meas.args[1][:] = p_all[k0]
+            meas.eval()
+            gaps, rates = meas.res
+            if gaps.min() <= td_gap or gaps.max() >= land_gap:
+                return
+            self._sample_controllers(ext_ctl, ext_idx, u_ext, float(times[k0]), gaps, rates,
+                                     state[st["current"]], ctl_times,
+                                     records[max(k0 - hold, 0):k0, rl["voltage"]],
+                                     state[st["integral"]], ctl_cpu)
+            p_all[k0:k0 + hold, sp["u_held"]] = u_ext
+
+        return before
 
     def _start_controllers(self, dt: float, gaps: np.ndarray, rates: np.ndarray,
                            current: np.ndarray) -> tuple[np.ndarray, int, np.ndarray, list[Any]]:
@@ -1512,8 +1592,7 @@ class VehicleModel:
             # heave and pitch (the cascade's integral projection), so that the offset-free
             # estimates of a frame's circuits do not wind up against each other
             proj = self.integral_projection
-            gaps = s0 + proj @ (gaps - s0)
-            rates = proj @ rates
+            gaps = s0 + proj @ (gaps - s0)      # (the batch takes no rates: the EKF's)
         clock, cpu = time.perf_counter, time.thread_time
         ua = applied.mean(axis=0) if applied.shape[0] else None
         if self.controller_kind == "mpc":       # RealTimeMPCBatch: one call, every circuit

@@ -121,10 +121,11 @@ def pack_slices(items: list[tuple[str, int]]) -> dict[str, slice]:
     return out
 
 
-def _layout(n_dof: int, nc: int, n_sp: int, nm: int) -> StepLayout:
+def _layout(n_dof: int, nc: int, n_sp: int, nm: int, held: bool = False) -> StepLayout:
     state = pack_slices([("x_mech", 2 * n_dof), ("guideway", n_sp * 2 * nm), ("I_L", nc),
                          ("psi_hat", nc), ("integral", nc), ("current", nc), ("force", nc)])
-    step = pack_slices([("x_ref", 1), ("r", nc), ("r_x", nc), ("t", 1), ("keep", n_sp)])
+    extra = [("u_held", nc), ("q_g", n_dof)] if held else []
+    step = pack_slices([("x_ref", 1), ("r", nc), ("r_x", nc), ("t", 1), ("keep", n_sp), *extra])
     record = pack_slices([("gap", nc), ("gap_rate", nc), ("current", nc), ("force", nc), ("I_L", nc),
                           ("deflection", nc), ("q", n_dof), ("q_dot", n_dof), ("midspan_ring", n_sp),
                           ("voltage", nc), ("gap_min", 1), ("gap_max", 1), ("n_bad", 1)])
@@ -150,6 +151,10 @@ class VehicleStepFunction:
         ``"guideway_in"`` (deflection, rate at the loads; gaps), ``"controllers"``
         (voltages), ``"magnets"`` (the bank's step), ``"controller_update"``,
         ``"mechanics"``, ``"guideway_out"`` (modal update), composed by ``function``.
+    measure : casadi.Function
+        ``(S, P, C) -> (gap, gap_rate)``: the circuits' gaps [m] and rates [m/s] at the
+        step's start, as the step computes and records them (what a sampled controller
+        measures before the step).
     """
 
     function: Any
@@ -157,6 +162,7 @@ class VehicleStepFunction:
     block_steps: int
     layout: StepLayout
     parts: dict[str, Any]
+    measure: Any = None
 
 
 def _sparse(a: np.ndarray) -> ca.DM:
@@ -488,8 +494,8 @@ def build_vehicle_step(*, bank_step: Any, dt: float, nominal_gap_m: float, sides
                        eddy_resistance_ohm: np.ndarray, voltage_limit_V: float,
                        integral_projection: np.ndarray, midspan_shape: np.ndarray,
                        point_offsets_m: np.ndarray, velocity_blend: float = 0.0,
-                       block_steps: int = 50, name: str = "maglevkit_vehicle_step"
-                       ) -> VehicleStepFunction:
+                       block_steps: int = 50, name: str = "maglevkit_vehicle_step",
+                       controller: str = "cascade") -> VehicleStepFunction:
     """Compose the vehicle step function (see the module docstring).
 
     Parameters are the run's constants, as the NumPy loop uses them: ``bank_step`` from
@@ -550,6 +556,14 @@ def build_vehicle_step(*, bank_step: Any, dt: float, nominal_gap_m: float, sides
         Steps chained in ``block_function`` (one call from Python per block).
     name : str, default "maglevkit_vehicle_step"
         Name of the CasADi function (and of its compiled library).
+    controller : {"cascade", "held"}, default "cascade"
+        ``"cascade"``: the flux cascade computes every circuit's voltage in the step.
+        ``"held"``: the voltages come in per step (``P``'s ``"u_held"``, e.g. an NMPC's
+        outputs held over its sample; :class:`StepLayout`), through the same
+        ``"voltage_limits"`` part, and so does the generalised gravity (``"q_g"``
+        [N, N m]: payload steps; the ``"mechanics_loaded"`` part); the cascade's flux
+        estimate and integrator are still updated (the integrator is the NMPC's
+        reference correction).
 
     Returns
     -------
@@ -561,7 +575,10 @@ def build_vehicle_step(*, bank_step: Any, dt: float, nominal_gap_m: float, sides
     b_mat = np.asarray(force_matrix, dtype=float)
     n_dof, nc = b_mat.shape
     n_sp = int(n_spans) if nm else 0
-    lay = _layout(n_dof, nc, n_sp, nm)
+    if controller not in ("cascade", "held"):
+        raise InputError(f"controller = {controller!r}; use 'cascade' or 'held'")
+    held = controller == "held"
+    lay = _layout(n_dof, nc, n_sp, nm, held)
     sym = ca.MX.sym
     parts = build_vehicle_parts(
         dt=dt, nominal_gap_m=nominal_gap_m, span_length_m=span_length_m, origin_m=origin_m,
@@ -592,18 +609,23 @@ def build_vehicle_step(*, bank_step: Any, dt: float, nominal_gap_m: float, sides
         gap_k, rate_k, w_k, mid_k, vel_k = f_in(s_xm, s_gx, ca.MX.zeros(nc), p_r, p_rx, c_v)
     damp_k = rate_k if velocity_blend == 0.0 else damping_input(rate_k, vel_k,
                                                                 float(velocity_blend))
-    u_k = f_ctl(gap_k, damp_k, s_il, s_cur, s_psi, s_int, p_t, c_fail)
+    if held:
+        u_k = parts["voltage_limits"](P[sp["u_held"]], s_il, s_cur, p_t, c_fail)
+    else:
+        u_k = f_ctl(gap_k, damp_k, s_il, s_cur, s_psi, s_int, p_t, c_fail)
     bout = bank_step.call({"I_L": s_il, "s": gap_k, "U": u_k, "sdot": rate_k, "h": ca.MX(dt)})
     il_next, cur_next, force_next, n_bad = (bout[k] for k in ("I_L_next", "I", "F", "n_bad"))
     psi_n, int_n = f_upd(s_psi, s_int, u_k, s_cur, cur_next, gap_k)
     fb = (0.5 * sides) * (s_f + force_next)
-    xm_n = f_mech(s_xm, fb)
+    xm_n = parts["mechanics_loaded"](s_xm, fb, P[sp["q_g"]]) if held else f_mech(s_xm, fb)
     gx_n = parts["guideway_update"](s_gx, rows_mk, sa_mk, ca_mk, fb) if nm else s_gx
     s_next = ca.vertcat(xm_n, gx_n, il_next, psi_n, int_n, cur_next, force_next)
     rec = ca.vertcat(gap_k, rate_k, s_cur, s_f, s_il, w_k, s_xm, mid_k, u_k, ca.mmin(gap_k),
                      ca.mmax(gap_k), n_bad)
     assert rec.shape[0] == lay.n_record and s_next.shape[0] == lay.n_state
     fun = ca.Function(name, [S, P, C], [s_next, rec], ["S", "P", "C"], ["S_next", "R"])
+    measure = ca.Function(f"{name}_measure", [S, P, C], [gap_k, rate_k], ["S", "P", "C"],
+                          ["gap", "gap_rate"])
     nb = int(block_steps)
     Sb, Pb = sym("S", lay.n_state), sym("P", lay.n_step_inputs, nb)
     s_b: Any = Sb
@@ -613,4 +635,4 @@ def build_vehicle_step(*, bank_step: Any, dt: float, nominal_gap_m: float, sides
         recs.append(r_j)
     block = ca.Function(f"{name}s{nb}", [Sb, Pb, C], [s_b, ca.horzcat(*recs)],
                         ["S", "P", "C"], ["S_next", "R"])
-    return VehicleStepFunction(fun, block, nb, lay, {**parts, "magnets": bank_step})
+    return VehicleStepFunction(fun, block, nb, lay, {**parts, "magnets": bank_step}, measure)
