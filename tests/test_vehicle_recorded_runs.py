@@ -19,6 +19,14 @@ the controller's numerics, not of the framework: against the old recording the n
 differs by at most 1.6e-4 of the largest voltage (0.05 V of 298 V) and 3.7e-5 of the peak
 current; the framework itself had reproduced the old ``hp_mpc`` recording within 1e-10
 before that change (docs/decisions.md, both sections).
+
+The six cross-section scenarios (``cs_*``) were re-recorded after a deliberate model change
+(issue 26, gswitch): the bundled guidance magnet switched to ``flux_paths = "split"`` (the
+FEM-checked network; trim force at the 20 A bias 8.688 -> 8.918 kN per circuit).  Against
+the old recording, largest change relative to the variable's largest value: guidance gap
+0.9-1.2e-3, guidance current 0.9-4.4e-2, guidance force 2.1-2.4e-2, levitation gap, current
+and force <= 2.2e-5 (docs/decisions.md, "The split guidance network as the bundled
+default").  The heave-pitch scenarios are bit-identical to before.
 """
 
 from __future__ import annotations
