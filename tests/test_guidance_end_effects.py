@@ -1,14 +1,17 @@
 """The ``end_effects`` switch of the guidance and bow magnets (issue 26).
 
-The guidance network is already the 2-D cross-section (no term across the cut: the bars and
-the rail run through the sections, the magnet's two ends are neglected), so
-``end_effects = false`` must build exactly the same network and ``true`` today's.  The bow
+The guidance magnet's ``"paper"`` network is already the 2-D cross-section (no term across
+the cut: the bars and the rail run through the sections, the magnet's two ends are
+neglected), so ``end_effects = false`` must build exactly the same network and ``true`` the
+same again.  (The bundled file's ``"split"`` paths take their depth from the switch; that
+cut is tested in tests/test_guidance_split.py.)  The bow
 magnet shares the levitation builder: its cut removes exactly the along-track fringing edges
 of every face and the across-track share of the pole-back leakage, as the standard magnet's.
 """
 
 from __future__ import annotations
 
+import copy
 import math
 
 import numpy as np
@@ -18,9 +21,16 @@ import maglevkit as mk
 MU0 = 4e-7 * math.pi
 
 
+def _paper_guidance(eddy: bool) -> mk.Magnet:
+    """The bundled guidance magnet with the ``"paper"`` paths (the file sets ``"split"``)."""
+    p = copy.deepcopy(mk.load_magnet("tr-guidance").parameters)
+    p["magnet"]["flux_paths"] = "paper"
+    return mk.build_magnet(p, options=mk.ModelOptions(eddy_currents=eddy))
+
+
 def test_guidance_cut_is_todays_network() -> None:
     for eddy in (False, True):
-        today = mk.load_magnet("tr-guidance", eddy_currents=eddy)
+        today = _paper_guidance(eddy)
         cut, on = today.with_options(end_effects=False), today.with_options(end_effects=True)
         assert cut.parameters["magnet"]["end_effects"] is False
         assert on.parameters["magnet"]["end_effects"] is True

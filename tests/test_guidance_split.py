@@ -60,8 +60,9 @@ def test_plate_flux_limits() -> None:
 
 
 def test_paper_network_unchanged_by_coil_thickness() -> None:
-    """The bundled file gained coil_thickness (for "split"); the default network ignores it."""
-    with_key = mk.load_magnet("tr-guidance")
+    """The bundled file gained coil_thickness (for "split", its flux_paths since the switch);
+    the "paper" network ignores it."""
+    with_key = mk.build_magnet(_params(flux_paths="paper"))
     p = copy.deepcopy(with_key.parameters)
     del p["magnet"]["coil_thickness"]
     del p["provenance"]["magnet.coil_thickness"]

@@ -26,6 +26,15 @@ before that, the restructured NMPC (expanded condensing, lean outputs, compiled 
 blocks) still reproduced the previous recording within 1e-10; the new recording differs
 from it by at most 0.71 % of the largest voltage (2.1 V), 0.48 % of the peak current
 (0.41 A) and 0.036 % of the largest gap (3.7 um) over this 0.04 s start transient.
+
+The six cross-section scenarios (``cs_*``) were re-recorded after a deliberate model change
+(issue 26, gswitch): the bundled guidance magnet switched to ``flux_paths = "split"`` (the
+FEM-checked network; trim force at the 20 A bias 8.688 -> 8.918 kN per circuit).  Against
+the old recording, largest change relative to the variable's largest value: guidance gap
+0.9-1.2e-3, guidance current 0.9-4.4e-2, guidance force 2.1-2.4e-2, levitation gap, current
+and force <= 2.2e-5 (docs/decisions.md, "The split guidance network as the bundled
+default").  The heave-pitch scenarios are bit-identical to before; the lead re-recorded the
+``cs_*`` scenarios again after merging, on the merged code.
 """
 
 from __future__ import annotations
