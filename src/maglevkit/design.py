@@ -162,6 +162,10 @@ DESIGN_PLAUSIBLE: dict[str, Plausible] = {
     **{f"variables.{k}": MAGNET_PLAUSIBLE[f"magnet.{k}"] for k, u in VARIABLES.items()
        if u == "m"},
 }
+# the deprecated [coil] names (_RENAMED) are checked with their new key's range: the check
+# runs on the file before the old names are mapped to the new ones
+DESIGN_PLAUSIBLE.update({f"coil.{old}": DESIGN_PLAUSIBLE[f"coil.{new}"]
+                         for old, new in _RENAMED.items()})
 
 FORCE_PLAUSIBLE_FACTOR = 100.0
 """A spec's ``force_N`` more than this factor away from the base magnet's force per
