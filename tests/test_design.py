@@ -369,3 +369,20 @@ def test_shadow_prices_match_re_solved_optima(two_variable: tuple[Any, Any], nam
     for other in ("voltage", "force_reserve"):
         o = res.constraints[other]
         assert not o.active and abs(o.sensitivity * o.bound / res.mass_kg) < 1e-6, other
+
+
+@pytest.mark.parametrize(("initial", "match"), [
+    ({"pole_widht": 0.02}, r"initial pole_widht = 0.02: not a design variable of the spec; "
+                           r"its variables: \['pole_width', 'coil_height'\]"),
+    ({"pole_width": 0.02, "coil_height": "0.03"}, r"initial coil_height \[m\] = '0.03' \(str\): "
+                                                  r"expected a real number"),
+    ({"pole_width": 20.0}, r"initial pole_width = 20.0 \[m\]: outside its bounds \[0.015, 0.04\]"),
+])
+def test_bad_initial_point_names_the_variable_and_what_is_allowed(initial: dict, match: str
+                                                                  ) -> None:
+    """review3: an unknown name was reported with "bounds None", a string raised numpy's
+    TypeError from the bound comparison."""
+    from maglevkit.errors import InputError
+
+    with pytest.raises(InputError, match=match):
+        design_magnet(read_design_spec(two_variable_doc()), initial=initial)

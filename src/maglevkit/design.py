@@ -1018,10 +1018,15 @@ def _setup(spec: DesignSpec, initial: Mapping[str, float] | None) -> _Setup:
     start = {n: float(np.clip(m[n], a, b)) for n, a, b in zip(names, lo, hi, strict=True)}
     if initial:
         for n, v in initial.items():
-            if n not in spec.variables or not lo[names.index(n)] <= v <= hi[names.index(n)]:
-                raise InputError(f"initial {n} = {v!r}: not a design variable within its "
-                                 f"bounds {spec.variables.get(n)}")
-            start[n] = float(v)
+            if n not in spec.variables:
+                raise InputError(f"initial {n} = {v!r}: not a design variable of the spec; "
+                                 f"its variables: {list(names)}")
+            x = real_number(v, f"initial {n}", kd.variables[n])
+            a, b = spec.variables[n]
+            if not a <= x <= b:
+                raise InputError(f"initial {n} = {x!r} [{kd.variables[n]}]: outside its "
+                                 f"bounds [{a!r}, {b!r}] ([variables] of the spec)")
+            start[n] = x
     if kd.turns_key in start:
         start[kd.turns_key] = float(round(start[kd.turns_key]))
     # the builder's geometry comparisons are decided at the start (checked at the optimum)
