@@ -339,3 +339,24 @@ def test_kernel_lookup_equals_the_cell_table_reference() -> None:
             for g in (0.0, 5.0, 16.0, np.nan):
                 assert np.array_equal(np.array(fh(a, b, g), dtype=float).ravel(),
                                       np.array(f(a, b), dtype=float).ravel())
+
+
+def test_fast_built_results_carry_every_field(all_maps) -> None:
+    """``step`` and ``simulate`` build their frozen results without the dataclass
+    ``__init__`` (``current._new``, speed22); every field must be set, as the ``__init__``
+    would require (review3: a field added later would otherwise be missing silently)."""
+    import dataclasses
+
+    from maglevkit.reduced.current import CurrentModelState, CurrentOutputs, ReducedSimulation
+
+    mag, maps = all_maps["u-magnet"]
+    model = CurrentModel(maps)
+    st = model.initial_state(gaps_m=0.010, currents_A=20.0)
+    st1, out = model.step(st, 1e-3, mag.network.resistances * 20.0, gaps_m=0.010)
+    sim = model.simulate((0.0, 0.01), dt_s=1e-3, gaps_m=0.010,
+                         voltages_V=mag.network.resistances * 20.0, initial_currents_A=20.0)
+    for obj, cls in ((st1, CurrentModelState), (out, CurrentOutputs), (sim, ReducedSimulation),
+                     (sim.final_state, CurrentModelState)):
+        assert type(obj) is cls
+        assert set(vars(obj)) == {f.name for f in dataclasses.fields(cls)}, cls.__name__
+        cls(**vars(obj))                   # what the dataclass __init__ accepts

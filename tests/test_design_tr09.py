@@ -276,3 +276,24 @@ def test_old_copper_key_is_a_deprecated_alias() -> None:
     assert spec.coil["conductor_resistivity_ohm_m"] == value
     assert spec.coil == read_design_spec(tr09_doc()).coil
 
+
+
+@pytest.mark.parametrize(("old", "new", "factor"), [
+    ("copper_density_kg_per_m3", "conductor_density_kg_per_m3", 1e-3),       # g/cm^3 slip
+    ("copper_resistivity_ohm_m", "conductor_resistivity_ohm_m", 1e3),
+])
+def test_old_copper_key_slip_is_warned_like_the_new_key(old: str, new: str, factor: float
+                                                        ) -> None:
+    """A unit slip under the deprecated name warns as under the new one (review3: the
+    plausibility check runs before the rename and knew only the new names, so
+    ``copper_density_kg_per_m3 = 2.7`` was read silently)."""
+    doc = tr09_doc()
+    doc["coil"][old] = doc["coil"].pop(new) * factor
+    prov = doc.get("provenance", {})
+    if f"coil.{new}" in prov:
+        prov[f"coil.{old}"] = prov.pop(f"coil.{new}")
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        read_design_spec(doc)
+    slips = [str(w.message) for w in caught if issubclass(w.category, PlausibilityWarning)]
+    assert len(slips) == 1 and f"[coil] {old} = " in slips[0] and "1000 times" in slips[0]

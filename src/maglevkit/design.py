@@ -162,6 +162,10 @@ DESIGN_PLAUSIBLE: dict[str, Plausible] = {
     **{f"variables.{k}": MAGNET_PLAUSIBLE[f"magnet.{k}"] for k, u in VARIABLES.items()
        if u == "m"},
 }
+# the deprecated [coil] names (_RENAMED) are checked with their new key's range: the check
+# runs on the file before the old names are mapped to the new ones
+DESIGN_PLAUSIBLE.update({f"coil.{old}": DESIGN_PLAUSIBLE[f"coil.{new}"]
+                         for old, new in _RENAMED.items()})
 
 FORCE_PLAUSIBLE_FACTOR = 100.0
 """A spec's ``force_N`` more than this factor away from the base magnet's force per
@@ -1014,10 +1018,15 @@ def _setup(spec: DesignSpec, initial: Mapping[str, float] | None) -> _Setup:
     start = {n: float(np.clip(m[n], a, b)) for n, a, b in zip(names, lo, hi, strict=True)}
     if initial:
         for n, v in initial.items():
-            if n not in spec.variables or not lo[names.index(n)] <= v <= hi[names.index(n)]:
-                raise InputError(f"initial {n} = {v!r}: not a design variable within its "
-                                 f"bounds {spec.variables.get(n)}")
-            start[n] = float(v)
+            if n not in spec.variables:
+                raise InputError(f"initial {n} = {v!r}: not a design variable of the spec; "
+                                 f"its variables: {list(names)}")
+            x = real_number(v, f"initial {n}", kd.variables[n])
+            a, b = spec.variables[n]
+            if not a <= x <= b:
+                raise InputError(f"initial {n} = {x!r} [{kd.variables[n]}]: outside its "
+                                 f"bounds [{a!r}, {b!r}] ([variables] of the spec)")
+            start[n] = x
     if kd.turns_key in start:
         start[kd.turns_key] = float(round(start[kd.turns_key]))
     # the builder's geometry comparisons are decided at the start (checked at the optimum)
