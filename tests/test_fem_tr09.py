@@ -100,8 +100,8 @@ MEASURED = {
 }
 
 
-@pytest.mark.slow
 def test_network_against_recorded_fem() -> None:
+    """Reads the recorded FEM only (about 1.3 s; no scikit-fem needed), so it is in the fast suite."""
     fem = _fem()
     mag = fem.cut_magnet("tr09-standard", "split")
     rows = {(r["s_mm"], r["I_A"]): r for r in fem.compare(
@@ -131,7 +131,6 @@ PAPER = {(10.0, 33.5): (-9.3, -11.3, -10.8), (10.0, 80.0): (-19.4, -15.1, -29.4)
          (6.0, 80.0): (-22.1, -17.2, -21.4)}
 
 
-@pytest.mark.slow
 def test_paper_network_against_recorded_fem() -> None:
     fem = _fem()
     rows = {(r["s_mm"], r["I_A"]): r

@@ -113,8 +113,9 @@ def test_unshielded_share_in_the_ode_and_the_closed_form(u_maps: CharacteristicM
                                          l_u=l_u, r_2=r_2, beta=beta)
     jump = -beta * k / ((1.0 + r_el / r_a) * l_u)
     assert hi[0] == pytest.approx(jump, rel=1e-5)
-    assert unshielded_share(jump, dpsi_ds=k, r_el=r_el, r_a=r_a, l_u=l_u) == pytest.approx(
-        beta, rel=1e-12)
+    assert unshielded_share(jump, dpsi_ds_Wb_per_m=k, resistance_ohm=r_el,
+                            shield_resistance_ohm=r_a,
+                            unshielded_inductance_H=l_u) == pytest.approx(beta, rel=1e-12)
 
 
 def test_vanishing_unshielded_inductance_gives_eq8() -> None:
@@ -342,3 +343,19 @@ def test_a_fit_that_does_not_converge_is_reported(monkeypatch: pytest.MonkeyPatc
                         lambda *a, **kw: real(*a, **{**kw, "max_nfev": 1}))
     with pytest.warns(mk.MaglevkitWarning, match="ladder fit did not converge"):
         fit_motion_eddy(resp, r_el=r_el, r_ec_jump=5.0, r_ec_fit=4.0)
+
+
+@pytest.mark.parametrize(("key", "value", "needle"), [
+    ("shield_resistance_ohm", 0.0, "shield_resistance_ohm = 0.0 must be > 0"),
+    ("resistance_ohm", -1.0, "resistance_ohm = -1.0 must be >= 0"),
+    ("dpsi_ds_Wb_per_m", float("nan"), "dpsi_ds_Wb_per_m = nan must be finite"),
+])
+def test_unshielded_share_refuses_bad_input(key: str, value: float, needle: str) -> None:
+    """``R_a = 0`` was a ZeroDivisionError (review3): now an InputError naming the argument."""
+    from maglevkit.errors import InputError
+
+    kw = {"dpsi_ds_Wb_per_m": -50.0, "resistance_ohm": 1.0, "shield_resistance_ohm": 8.0,
+          "unshielded_inductance_H": 0.02, key: value}
+    with pytest.raises(InputError, match=needle.replace("(", r"\(")):
+        unshielded_share(230.0, **kw)
+

@@ -44,13 +44,14 @@ exact voltage -> current jump.
 
 from __future__ import annotations
 
+import math
 import warnings
 from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
-from ..errors import MaglevkitWarning, SolverError
+from ..errors import InputError, MaglevkitWarning, SolverError
 
 __all__ = ["DetailedFrequencyResponse", "MotionEddyFit", "detailed_frequency_response",
            "fit_motion_eddy", "ladder_force_response", "ladder_frequency_response",
@@ -246,8 +247,8 @@ def ladder_frequency_response(frequencies_Hz: Any, *, ltilde: float, dpsi_ds: fl
     return iu_s / a, il_s, (1.0 - 1.0 / a) / r_el + iu_u / a
 
 
-def unshielded_share(jump_A_per_m: float, *, dpsi_ds: float, r_el: float, r_a: float,
-                     l_u: float) -> float:
+def unshielded_share(jump_A_per_m: float, *, dpsi_ds_Wb_per_m: float, resistance_ohm: float,
+                     shield_resistance_ohm: float, unshielded_inductance_H: float) -> float:
     """The ladder's ``beta`` that gives the detailed model's instantaneous gap -> current
     jump ``D``: ``beta = -D a L_u/k`` (:func:`ladder_frequency_response`).
 
@@ -255,21 +256,40 @@ def unshielded_share(jump_A_per_m: float, *, dpsi_ds: float, r_el: float, r_a: f
     ----------
     jump_A_per_m : float
         ``D`` [A/m] (:attr:`DetailedFrequencyResponse.gap_current_jump_A_per_m`).
-    dpsi_ds : float
+    dpsi_ds_Wb_per_m : float
         ``k = dL/ds I_L`` [Wb/m]; 0 (no current): ``beta = 0``.
-    r_el, r_a : float
-        ``R_el``, ``R_a`` [ohm].
-    l_u : float
+    resistance_ohm : float
+        ``R_el`` [ohm], >= 0.
+    shield_resistance_ohm : float
+        ``R_a`` [ohm], > 0.
+    unshielded_inductance_H : float
         ``L_u`` [H].
 
     Returns
     -------
     float
         ``beta`` [-].
+
+    Raises
+    ------
+    InputError
+        A non-finite argument, ``R_a <= 0`` or ``R_el < 0``.
     """
-    if dpsi_ds == 0.0:
+    args = {"jump_A_per_m": jump_A_per_m, "dpsi_ds_Wb_per_m": dpsi_ds_Wb_per_m,
+            "resistance_ohm": resistance_ohm, "shield_resistance_ohm": shield_resistance_ohm,
+            "unshielded_inductance_H": unshielded_inductance_H}
+    for name, value in args.items():
+        if not math.isfinite(float(value)):
+            raise InputError(f"unshielded_share: {name} = {value!r} must be finite")
+    if not shield_resistance_ohm > 0.0:
+        raise InputError(f"unshielded_share: shield_resistance_ohm = {shield_resistance_ohm!r} "
+                         "must be > 0 (the ladder's R_a)")
+    if resistance_ohm < 0.0:
+        raise InputError(f"unshielded_share: resistance_ohm = {resistance_ohm!r} must be >= 0")
+    if dpsi_ds_Wb_per_m == 0.0:
         return 0.0
-    return float(-jump_A_per_m * (1.0 + r_el / r_a) * l_u / dpsi_ds)
+    return float(-jump_A_per_m * (1.0 + resistance_ohm / shield_resistance_ohm)
+                 * unshielded_inductance_H / dpsi_ds_Wb_per_m)
 
 
 def _with_force(response: DetailedFrequencyResponse) -> bool:
@@ -398,7 +418,8 @@ def fit_motion_eddy(response: DetailedFrequencyResponse, *, r_el: float, r_ec_ju
     def unpack(x: np.ndarray) -> tuple[float, float, float, float]:
         r_a, l_u = float(np.exp(x[0])), float(l_max / (1.0 + np.exp(-x[1])))
         return (r_a, l_u, float(np.exp(x[2])),
-                unshielded_share(jump, dpsi_ds=k, r_el=r_el, r_a=r_a, l_u=l_u))
+                unshielded_share(jump, dpsi_ds_Wb_per_m=k, resistance_ohm=r_el,
+                                 shield_resistance_ohm=r_a, unshielded_inductance_H=l_u))
 
     def model(x: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         r_a, l_u, r_2, beta = unpack(x)
