@@ -84,10 +84,25 @@ def paper_tr09(name: str = "tr09-standard", **options: Any) -> mk.Magnet:
 def paper_tr09_file(directory: Any, name: str = "tr09-standard") -> str:
     """Write the ``"paper"`` variant of a bundled TR09 file into ``directory``; its path."""
     text = (resources.files("maglevkit") / "data" / f"{name}.toml").read_text()
-    assert 'flux_paths = "split"' in text and "nominal_current = 31.7" in text
-    text = text.replace('flux_paths = "split"', 'flux_paths = "paper"', 1)
-    text = text.replace("nominal_current = 31.7", f"nominal_current = {PAPER_NOMINAL_CURRENT_A}", 1)
+    # the value lines (line starts: the header comments name them too)
+    assert '\nflux_paths = "split"' in text and "\nnominal_current = 31.7" in text
+    text = text.replace('\nflux_paths = "split"', '\nflux_paths = "paper"', 1)
+    text = text.replace("\nnominal_current = 31.7", f"\nnominal_current = {PAPER_NOMINAL_CURRENT_A}", 1)
     out = os.path.join(str(directory), f"{name}-paper.toml")
+    with open(out, "w") as fh:
+        fh.write(text)
+    return out
+
+
+def paper_tr09_vehicle(directory: Any) -> str:
+    """The bundled ``tr09`` vehicle file with its magnets on the ``"paper"`` network; its path
+    (for runs recorded before issue 26's switch of the TR09 files to ``"split"``)."""
+    text = (resources.files("maglevkit") / "data" / "vehicle" / "tr09.toml").read_text()
+    for name, key in (("tr09-standard", "standard_magnet"), ("tr09-bow", "bow_magnet")):
+        old = f'{key} = "{name}"'
+        assert old in text
+        text = text.replace(old, f'{key} = "{paper_tr09_file(directory, name)}"', 1)
+    out = os.path.join(str(directory), "tr09-paper.toml")
     with open(out, "w") as fh:
         fh.write(text)
     return out
