@@ -54,6 +54,60 @@ def build_u(*, material: str | None = None, magnet: dict | None = None, rail: di
     return mk.build_magnet(p, options=mk.ModelOptions(**opts))
 
 
+#: The former lumped TR09 network and its nominal current (the bundled files' values before
+#: issue 26's switch to ``flux_paths = "split"``, docs/decisions.md, tr09switch).
+PAPER_NOMINAL_CURRENT_A = 33.5
+
+
+def tr09_params(name: str = "tr09-standard", *, flux_paths: str | None = None) -> dict[str, Any]:
+    """A fresh copy of a bundled TR09 parameter dictionary, optionally with another ``flux_paths``.
+
+    ``flux_paths="paper"`` gives the former lumped network with its nominal current (33.5 A):
+    the tests of that network's laws load it explicitly since the bundled files are split.
+    """
+    text = (resources.files("maglevkit") / "data" / f"{name}.toml").read_text()
+    p = copy.deepcopy(tomllib.loads(text))
+    if flux_paths is not None:
+        p["magnet"]["flux_paths"] = flux_paths
+        p["provenance"]["magnet.flux_paths"] = f"[E] modelling choice: {flux_paths!r} network"
+    if flux_paths == "paper":
+        p["operating"]["nominal_current"] = PAPER_NOMINAL_CURRENT_A
+    return p
+
+
+def paper_tr09(name: str = "tr09-standard", **options: Any) -> mk.Magnet:
+    """The TR09 magnet ``name`` on the former lumped ``"paper"`` network (options: ModelOptions)."""
+    opts = mk.ModelOptions(**options) if options else None
+    return mk.build_magnet(tr09_params(name, flux_paths="paper"), options=opts)
+
+
+def paper_tr09_file(directory: Any, name: str = "tr09-standard") -> str:
+    """Write the ``"paper"`` variant of a bundled TR09 file into ``directory``; its path."""
+    text = (resources.files("maglevkit") / "data" / f"{name}.toml").read_text()
+    # the value lines (line starts: the header comments name them too)
+    assert '\nflux_paths = "split"' in text and "\nnominal_current = 31.7" in text
+    text = text.replace('\nflux_paths = "split"', '\nflux_paths = "paper"', 1)
+    text = text.replace("\nnominal_current = 31.7", f"\nnominal_current = {PAPER_NOMINAL_CURRENT_A}", 1)
+    out = os.path.join(str(directory), f"{name}-paper.toml")
+    with open(out, "w") as fh:
+        fh.write(text)
+    return out
+
+
+def paper_tr09_vehicle(directory: Any) -> str:
+    """The bundled ``tr09`` vehicle file with its magnets on the ``"paper"`` network; its path
+    (for runs recorded before issue 26's switch of the TR09 files to ``"split"``)."""
+    text = (resources.files("maglevkit") / "data" / "vehicle" / "tr09.toml").read_text()
+    for name, key in (("tr09-standard", "standard_magnet"), ("tr09-bow", "bow_magnet")):
+        old = f'{key} = "{name}"'
+        assert old in text
+        text = text.replace(old, f'{key} = "{paper_tr09_file(directory, name)}"', 1)
+    out = os.path.join(str(directory), "tr09-paper.toml")
+    with open(out, "w") as fh:
+        fh.write(text)
+    return out
+
+
 # A single flux loop: iron core (length L_FE, area AREA, mu_r) with an n-turn coil,
 # closed by one air gap.  Reluctance Rm = L_FE/(mu0 mu_r A) + s/(mu0 A), L = n^2/Rm.
 AREA = 4e-4       # m^2

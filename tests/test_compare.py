@@ -59,14 +59,18 @@ U_MAGNET_AC_MEASURED = {
 
 # TR09 standard magnet (fast set), both half magnets (equal by symmetry); the coupling
 # scenario: its stepped circuit only (the other one's response is the neglected coupling).
+# Measured on the split network, the bundled TR09 default since issue 26 (tr09switch; the
+# former "paper" network's values in the comments): the split detailed model has 59 eddy
+# elements and the maps' motion-eddy ladder follows its current, not its force, under gap
+# motion (docs/decisions.md, spliteddy), hence the larger force errors of the gap sines.
 TR09_AC_MEASURED = {
-    "voltage step up": (0.01922, 0.00537),
-    "voltage step down": (0.01923, 0.00478),
-    "gap sine 5 Hz": (0.04913, 0.01637),
-    "gap sine 50 Hz": (0.42609, 0.06543),
-    "gap ramp": (0.03465, 0.00857),
-    "closed loop": (0.03470, 0.02462),
-    "coupling": (0.01212, 0.00838),
+    "voltage step up": (0.02068, 0.00607),      # paper 0.01922, 0.00537
+    "voltage step down": (0.01995, 0.00523),    # paper 0.01923, 0.00478
+    "gap sine 5 Hz": (0.02274, 0.03677),        # paper 0.04913, 0.01637
+    "gap sine 50 Hz": (0.26542, 0.26739),       # paper 0.42609, 0.06543
+    "gap ramp": (0.02866, 0.01301),             # paper 0.03465, 0.00857
+    "closed loop": (0.08155, 0.00865),          # paper 0.03470, 0.02462
+    "coupling": (0.01487, 0.01194),             # paper 0.01212, 0.00838
 }
 
 

@@ -255,7 +255,7 @@ def check_turns_derivative(spec: Any, values: dict[str, float], key: str, gap: f
     (lambda d: d["requirements"].update(force_kN=1.0), "[requirements] unknown key(s) "
                                                        "['force_kN']"),
     (lambda d: d["design"].update(objective="cost"), "[design] objective = 'cost'"),
-    (lambda d: d["design"].update(magnet="tr09-standard"), "[variables] unknown design "
+    (lambda d: d["design"].update(magnet="tr09-standard", flux_paths="paper"), "[variables] unknown design "
      "variable 'leg_height' for a levitation_magnet"),
     (lambda d: d["design"].update(magnet="nope"), "[design] magnet = 'nope'"),
     (lambda d: d["coil"].update(fill_factor=1.5), "[coil] fill_factor = 1.5"),

@@ -157,8 +157,11 @@ def test_turns_per_pole_derivative_from_ampere_turns() -> None:
      "[variables] turns_per_pole = [0.5, 300]: at least 1 turn"),
     (lambda d: d["coil"].update(copper_resistivity_ohm_m=2.82e-8),
      "[coil] copper_resistivity_ohm_m = 2.82e-08 and conductor_resistivity_ohm_m = "),
-    (lambda d: d["design"].update(magnet="u-magnet"),
+    (lambda d: d["design"].update(magnet="u-magnet") or d["design"].pop("flux_paths"),
      "[variables] unknown design variable 'core_height' for a u_magnet"),
+    (lambda d: d["design"].update(magnet="u-magnet"),
+     "[design] flux_paths = 'paper': only \"paper\" (the lumped network) of a levitation magnet"),
+    (lambda d: d["design"].update(flux_paths="split"), "[design] flux_paths = 'split': only"),
 ])
 def test_bad_spec_names_the_key(edit: Any, needle: str) -> None:
     doc = tr09_doc()
@@ -198,6 +201,7 @@ def test_split_network_is_refused_by_name(tmp_path: Path) -> None:
     (tmp_path / "split.toml").write_text(toml_text(params))
     doc = tr09_doc()
     doc["design"]["magnet"] = str(tmp_path / "split.toml")
+    del doc["design"]["flux_paths"]     # without it: the split network is refused by name
     with pytest.raises(DesignSpecError, match='flux_paths = \\\\"paper\\\\"|flux_paths = "paper"'):
         read_design_spec(doc)
 

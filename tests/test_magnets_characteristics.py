@@ -35,7 +35,9 @@ def test_saturation_switch_reaches_the_network() -> None:
 
 
 def test_knee_above_nominal(std: mk.Magnet) -> None:
-    i0 = saturation_knee(std)
+    # 641 points (default 161): the split network's exponent curves more near the knee, so
+    # the scan's linear interpolation is 2e-4 off at 161 points (measured 1.8002)
+    i0 = saturation_knee(std, points=641)
     assert std.nominal_current is not None
     assert i0 > std.nominal_current
     # The knee's definition, checked with a second derivative method: d ln F/d ln I by a
@@ -143,7 +145,10 @@ def test_static_inductance_independent_of_eddy_currents(std: mk.Magnet) -> None:
     no_eddy = std.with_options(eddy_currents=False)
     a = mk.solve_statics(std, gaps_m=0.0095, currents_A=40.0).differential_inductance_H
     b = mk.solve_statics(no_eddy, gaps_m=0.0095, currents_A=40.0).differential_inductance_H
-    np.testing.assert_allclose(a, b, rtol=1e-12)
+    # round-off relative to the largest entry: the split network's 59 eddy elements change the
+    # solve's round-off of the small coupling entries (measured 1.6e-12 of themselves, 1.6e-14
+    # of the self inductance)
+    np.testing.assert_allclose(a, b, rtol=0, atol=1e-12 * np.abs(a).max())
 
 
 def test_figures_written(std: mk.Magnet, tmp_path) -> None:  # type: ignore[no-untyped-def]

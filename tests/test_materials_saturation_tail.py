@@ -13,6 +13,8 @@ import pytest
 import maglevkit as mk
 from maglevkit.materials import MU0, get_material, material_names
 
+from .conftest import paper_tr09
+
 
 def _plain(mat: mk.SoftMagneticMaterial, b: np.ndarray) -> np.ndarray:
     """H of the plain Roschke formula (no tail), written out independently."""
@@ -64,9 +66,13 @@ def test_tail_starts_at_the_polarisation_peak(name: str) -> None:
 def test_effect_on_tr09_map_corner() -> None:
     """The stator teeth (M700-100A, B* = 2.235 T) pass B* only at small gaps and high
     currents: 5 mm / 83.75 A (the demo maps' corner) gains +0.6 % force; 10 mm / 33.5 A
-    (nominal) is unchanged (its flux densities stay below every B*)."""
-    mag = mk.load_magnet("tr09-standard")
-    sol = mk.solve_statics(mag, gaps_m=np.array([0.005, 0.010]), currents_A=np.array([33.5, 83.75]),
-                           grid=True)
-    b_max = np.nanmax(np.abs(sol.branch_flux_density_T), axis=-1)
-    assert b_max[1, 0] < 2.0 < 2.235 < b_max[0, 1]
+    (nominal) is unchanged (its flux densities stay below every B*).  Checked on the lumped
+    "paper" network, loaded explicitly: the bundled split network (issue 26) spreads the
+    teeth's flux and stays below B* at that corner (measured 2.186 T; it reaches the tail only
+    further out, 4 mm / 120 A: 2.250 T)."""
+    for mag, corner in ((paper_tr09("tr09-standard"), (0.005, 83.75)),
+                        (mk.load_magnet("tr09-standard"), (0.004, 120.0))):
+        sol = mk.solve_statics(mag, gaps_m=np.array([corner[0], 0.010]),
+                               currents_A=np.array([mag.nominal_current, corner[1]]), grid=True)
+        b_max = np.nanmax(np.abs(sol.branch_flux_density_T), axis=-1)
+        assert b_max[1, 0] < 2.0 < 2.235 < b_max[0, 1]

@@ -10,7 +10,6 @@ the TR09 gap-sine sweep against the detailed model.
 from __future__ import annotations
 
 import math
-from importlib import resources
 
 import numpy as np
 import pytest
@@ -24,6 +23,8 @@ from maglevkit.reduction.motion_eddy import (
     ladder_frequency_response,
     unshielded_share,
 )
+
+from .conftest import paper_tr09
 
 GAPS = np.linspace(0.006, 0.014, 5)
 CURRENTS = np.linspace(0.0, 40.0, 9)
@@ -298,7 +299,10 @@ def test_tr09_gap_sine_sweep_against_the_detailed_model() -> None:
     current error relative to its variation <= 5 / 10 / 20 % at 5 / 50 / 200 Hz, phase
     within 5 deg (measured 0.5 / 3.3 / 5.6 %, 0.4 / 0.6 / 2.9 deg; eq. 8: 4.9 / 43 / 161 %,
     docs/decisions.md); the force error shrinks with it (measured 0.3 / 0.9 / 1.0 %)."""
-    for f, (err, err_f, phase) in _gap_sine_sweep(mk.load_magnet("tr09-standard"),
+    # the lumped "paper" network, loaded explicitly (the bundled file is split since issue
+    # 26): its force bound (3 %) does not hold on split (23.9 % at 50 Hz), whose sweep is
+    # the slow test below
+    for f, (err, err_f, phase) in _gap_sine_sweep(paper_tr09("tr09-standard"),
                                                   tuple(AIMS)).items():
         assert err <= AIMS[f], (f, err)
         assert err_f <= 0.03, (f, err_f)      # measured <= 1.0 %, eq. 8 6.5-14 % above 50 Hz
@@ -307,7 +311,7 @@ def test_tr09_gap_sine_sweep_against_the_detailed_model() -> None:
 
 
 @pytest.mark.slow
-def test_split_tr09_gap_sine_sweep_against_its_detailed_model(tmp_path) -> None:  # type: ignore[no-untyped-def]
+def test_split_tr09_gap_sine_sweep_against_its_detailed_model() -> None:
     """The same sweep on the split TR09 network (``flux_paths = "split"``, 59 eddy elements,
     interpreted detailed model: ~2.5 min CPU).  Current within the aims, measured 3.5 / 9.2
     / 3.2 %, phase -1.8 / +1.4 / +0.2 deg (eq. 8: 2.3 / 26.5 / 97.4 %; the ladder without
@@ -316,12 +320,7 @@ def test_split_tr09_gap_sine_sweep_against_its_detailed_model(tmp_path) -> None:
     without making voltage steps worse (the split network's responses need three poles;
     docs/decisions.md, "The motion-eddy ladder on the split network"), so its bound here
     only pins today's value (60 %), not the lumped network's 3 %."""
-    text = (resources.files("maglevkit") / "data" / "tr09-standard.toml").read_text()
-    path = tmp_path / "tr09-standard-split.toml"
-    path.write_text(text.replace("[magnet]\n", '[magnet]\nflux_paths = "split"\n', 1)
-                    .replace("[provenance]\n", '[provenance]\n"magnet.flux_paths" = '
-                             '"[E] modelling choice: the FEM-checked paths"\n', 1))
-    mag = mk.load_magnet(str(path))
+    mag = mk.load_magnet("tr09-standard")     # split since issue 26 (the bundled default)
     assert mag.network.n_loops > 200          # the split network, not the lumped one
     for f, (err, err_f, phase) in _gap_sine_sweep(mag, tuple(AIMS)).items():
         assert err <= AIMS[f], (f, err)

@@ -155,8 +155,9 @@ def test_resistance_scale_scales_the_standstill_voltage(serial: Any, folder: Pat
     # measured ratio exactly 1.5; bound 1e-12 (rounding of R I).  Were only the
     # controller's R scaled and not the plant's (or vice versa), the currents would drift.
     u = ds["max_abs_voltage"]
+    # (split TR09 network, issue 26: 4.0e-12 measured; bound 1e-11, still rounding only)
     np.testing.assert_allclose(u.sel(resistance_scale=1.5) / u.sel(resistance_scale=1.0), 1.5,
-                               rtol=1e-12)
+                               rtol=1e-11)
     # the same currents (measured exactly equal; bound 1e-9)
     np.testing.assert_allclose(ds["current_peak"].sel(resistance_scale=1.5).values,
                                ds["current_peak"].sel(resistance_scale=1.0).values, rtol=1e-9)

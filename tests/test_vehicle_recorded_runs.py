@@ -39,6 +39,16 @@ the old recording, largest change relative to the variable's largest value: guid
 and force <= 2.2e-5 (docs/decisions.md, "The split guidance network as the bundled
 default").  The heave-pitch scenarios are bit-identical to before; the lead re-recorded the
 ``cs_*`` scenarios again after merging, on the merged code.
+
+All twelve scenarios were then re-recorded after the second deliberate model change (issue
+26, tr09switch): the bundled TR09 standard and bow magnets switched to ``flux_paths =
+"split"`` with the nominal current 33.5 -> 31.7 A (the cross-section runs use the TR09
+levitation maps too).  Against the recordings before it, largest change relative to the
+variable's largest value: gap <= 1.2e-2, current <= 10.6 % (hp_detailed), voltage <= 6.7 %
+(hp_mpc); per scenario in docs/decisions.md ("tr09switch").  The lead recorded the file
+on the merged code (the NMPC, the guidance switch and the TR09 switch together); the
+scenarios that neither the NMPC nor the guidance switch touch equal the tr09switch
+branch's recording bit for bit.
 """
 
 from __future__ import annotations

@@ -273,7 +273,7 @@ def read_design_spec(source: str | Path | Mapping[str, Any], *, base_dir: str | 
         A value outside its plausible range (:data:`DESIGN_PLAUSIBLE`: most likely a unit
         slip), naming the key, its unit and the likely slip.
     """
-    from .magnets import load_magnet
+    from .magnets import build_magnet, load_magnet
     from .parameter_files import read_parameter_file
 
     if isinstance(source, Mapping):
@@ -293,9 +293,10 @@ def read_design_spec(source: str | Path | Mapping[str, Any], *, base_dir: str | 
     # fill_factor = 600 for 0.6) is named with its unit and likely slip first (issue 27)
     flagged = check_plausible(doc, DESIGN_PLAUSIBLE, label, stacklevel=3)
     design = _table(doc, "design")
-    bad = sorted(set(design) - {"magnet", "objective"})
+    bad = sorted(set(design) - {"magnet", "objective", "flux_paths"})
     if bad:
-        raise DesignSpecError(f"[design] unknown key(s) {bad}; allowed: magnet, objective")
+        raise DesignSpecError(f"[design] unknown key(s) {bad}; allowed: magnet, objective, "
+                              "flux_paths")
     if "magnet" not in design or not isinstance(design["magnet"], str):
         raise DesignSpecError("[design] magnet: expected a bundled magnet name (e.g. "
                               "\"u-magnet\") or a parameter file path")
@@ -311,6 +312,19 @@ def read_design_spec(source: str | Path | Mapping[str, Any], *, base_dir: str | 
         raise DesignSpecError(f"[design] magnet = {name!r}: {exc}") from None
     params = magnet.parameters
     kind = params["magnet"].get("kind")
+    if "flux_paths" in design:
+        # the levitation magnet's lumped network of a file that uses another one (the bundled
+        # TR09 files are "split" since issue 26): named in the spec, never silently
+        if design["flux_paths"] != "paper" or kind != "levitation_magnet":
+            raise DesignSpecError(f"[design] flux_paths = {design['flux_paths']!r}: only "
+                                  "\"paper\" (the lumped network) of a levitation magnet is "
+                                  f"allowed; magnet = {name!r} is of kind {kind!r}")
+        p = {k: dict(v) if isinstance(v, Mapping) else v for k, v in params.items()}
+        p["magnet"]["flux_paths"] = "paper"
+        p["magnet"].pop("coil_segments", None)
+        p.setdefault("provenance", {})["magnet.flux_paths"] = "[E] design spec: [design] flux_paths"
+        magnet = build_magnet(p, source=str(ref))
+        params = magnet.parameters
     if (kind == "u_magnet" and params["magnet"].get("discretisation", "lumped") != "lumped") \
             or (kind == "levitation_magnet"
                 and params["magnet"].get("flux_paths", "paper") != "paper") \
