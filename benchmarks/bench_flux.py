@@ -19,9 +19,10 @@ TITLE = "Flux model: real-time factor, compiled vs interpreted (1 s simulated, 1
 DURATION = 1.0   # s simulated
 DT = 1e-3        # s, hold / co-simulation step
 #: (magnet, flux_paths or None for the bundled file, nominal current [A], repetitions): the
-#: TR09 split network (issue 26; 253 loops, short loops on the sparse form) once per timing
+#: bundled TR09 file is the split network since issue 26 (253 loops, short loops on the
+#: sparse form); the lumped "paper" network, its default before, for comparison
 CASES = (("u-magnet", None, 20.0, 3), ("tr09-standard", None, 34.0, 3),
-         ("tr09-standard", "split", 34.0, 1))
+         ("tr09-standard", "paper", 34.0, 3))
 
 
 def _magnet(name: str, flux_paths: str | None) -> mk.Magnet:
@@ -30,6 +31,8 @@ def _magnet(name: str, flux_paths: str | None) -> mk.Magnet:
         return mk.load_magnet(name)
     params = copy.deepcopy(mk.load_magnet(name).parameters)
     params["magnet"]["flux_paths"] = flux_paths
+    if flux_paths != "split":
+        params["magnet"].pop("coil_segments", None)     # a key of the split network only
     params["provenance"]["magnet.flux_paths"] = "[E] benchmark variant"
     return build_magnet(params)
 
@@ -114,11 +117,12 @@ def run() -> str:
         f"Standard scenario of the reduced-model benchmark: {DURATION:g} s at a {DT * 1e3:g} ms "
         "hold, gaps 10 +- 1 mm at 5 Hz, voltage +20 % at 0.1 s, from the nominal point "
         "(U-magnet 20 A, TR09 34 A), eddy currents and saturable iron, IDAS rtol 1e-6.  "
-        "Real-time factor = simulated seconds per CPU second of this process (best of 3, the "
-        "split network once; the machine is shared, CPU time is steadier than wall time).  "
-        "*tr09-standard (split)*: the bundled file with `flux_paths = \"split\"` (issue 26; "
-        "the fundamental loops on the dense form took 27.5 s CPU per simulated second "
-        "interpreted and did not compile, docs/decisions.md, splitfast).  *unknowns*: loop "
+        "Real-time factor = simulated seconds per CPU second of this process (best of 3; the "
+        "machine is shared, CPU time is steadier than wall time).  *tr09-standard*: the bundled "
+        "file, the split network since issue 26 (on the fundamental loops and the dense form it "
+        "took 27.5 s CPU per simulated second interpreted and did not compile, "
+        "docs/decisions.md, splitfast); *tr09-standard (paper)*: the same file with "
+        "`flux_paths = \"paper\"`, the lumped network that was the default before.  *unknowns*: loop "
         "fluxes and currents; *form*: the DAE form IDAS runs (dense up to 100 unknowns, "
         "sparse above, `SPARSE_FORM_SIZE`); *first simulate*: CPU time of the first run "
         "(it builds the integrators).  `simulate` runs IDAS "
