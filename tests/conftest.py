@@ -139,3 +139,19 @@ def loop_inductance(gap: float) -> float:
 def u_magnet() -> mk.Magnet:
     """The bundled U-magnet with eddy-current elements (statics ignore them)."""
     return mk.load_magnet("u-magnet")
+
+
+def interrupt_after_steps(monkeypatch: pytest.MonkeyPatch, steps: int) -> None:
+    """Press Ctrl-C in a vehicle run once ``steps`` steps are done: ``ProgressReporter.advance``
+    (where both vehicles' time loops check for an interrupt) raises KeyboardInterrupt from
+    then on."""
+    from maglevkit._progress import ProgressReporter
+
+    original = ProgressReporter.advance
+
+    def advance(rep: ProgressReporter, n: int = 1) -> None:
+        original(rep, n)
+        if rep.done >= steps:
+            raise KeyboardInterrupt
+
+    monkeypatch.setattr(ProgressReporter, "advance", advance)

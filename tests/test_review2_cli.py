@@ -4,25 +4,11 @@ its regression test."""
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Any
 
 import pytest
 from typer.testing import CliRunner
 
-from maglevkit._progress import ProgressReporter
-
-
-def _ctrl_c_after(steps: int) -> Any:
-    """A progress ``advance`` that raises KeyboardInterrupt (as Ctrl-C) once ``steps``
-    steps are done: where both vehicles' time loops check for an interrupt."""
-    original = ProgressReporter.advance
-
-    def advance(rep: ProgressReporter, n: int = 1) -> None:
-        original(rep, n)
-        if rep.done >= steps:
-            raise KeyboardInterrupt
-
-    return advance
+from .conftest import interrupt_after_steps
 
 
 def test_cli_ctrl_c_writes_the_partial_cross_section_run(monkeypatch: pytest.MonkeyPatch,
@@ -33,7 +19,7 @@ def test_cli_ctrl_c_writes_the_partial_cross_section_run(monkeypatch: pytest.Mon
     Now as the train's: report with INTERRUPTED on stdout, the file written, rc 130."""
     from maglevkit.cli import app
 
-    monkeypatch.setattr(ProgressReporter, "advance", _ctrl_c_after(100))
+    interrupt_after_steps(monkeypatch, 100)
     out = tmp_path / "x.nc"
     r = CliRunner().invoke(app, ["vehicle", "run", "--vehicle", "tr09-cross-section",
                                  "--speed-kmh", "400", "--duration", "0.3", "-o", str(out)])

@@ -13,11 +13,12 @@ import casadi as ca
 import numpy as np
 import pytest
 
-from maglevkit._progress import ProgressReporter
 from maglevkit.vehicle.framework import run_blocks, run_steps
 from maglevkit.vehicle.guideway import GuidewayState
 from maglevkit.vehicle.simulation import VehicleModel, VehicleRunInterrupted
 from maglevkit.vehicle.train import load_vehicle
+
+from .conftest import interrupt_after_steps
 
 
 def _rotation_block(nb: int, angle: float) -> Any:
@@ -221,16 +222,6 @@ def test_window_schedule_equals_advancing_the_guideway_step_by_step(
     assert k_out == 0                      # loads beyond the window from the start
 
 
-def _ctrl_c_after(steps: int) -> Any:
-    original = ProgressReporter.advance
-
-    def advance(rep: ProgressReporter, n: int = 1) -> None:
-        original(rep, n)
-        if rep.done >= steps:
-            raise KeyboardInterrupt
-
-    return advance
-
 
 @pytest.mark.parametrize("loop", ["compiled", "python"])
 def test_cross_section_ctrl_c_keeps_the_run_up_to_there(
@@ -240,7 +231,7 @@ def test_cross_section_ctrl_c_keeps_the_run_up_to_there(
     cs = CrossSectionModel()
     kw: dict[str, Any] = dict(speed_m_per_s=400 / 3.6, duration_s=0.4, loop=loop)
     full = cs.run(**kw)
-    monkeypatch.setattr(ProgressReporter, "advance", _ctrl_c_after(150))
+    interrupt_after_steps(monkeypatch, 150)
     with pytest.raises(VehicleRunInterrupted) as err:
         cs.run(**kw, progress=True)
     part = err.value.run

@@ -12,13 +12,12 @@ import numpy as np
 import pytest
 from typer.testing import CliRunner
 
-from maglevkit._progress import ProgressReporter
 from maglevkit.errors import OutOfRangeError
 from maglevkit.vehicle.irregularities import HarmonicProfile
 from maglevkit.vehicle.simulation import VehicleModel, VehicleRunInterrupted
 from maglevkit.vehicle.train import load_vehicle
 
-from .conftest import paper_tr09_vehicle
+from .conftest import interrupt_after_steps, paper_tr09_vehicle
 
 # A 2 mm, 3 m harmonic irregularity at 400 km/h: a gap that is above the touchdown gap at
 # a step's start crosses it (and leaves the maps, which start at the same 2 mm) within the
@@ -79,17 +78,6 @@ def test_leaving_the_maps_without_a_touchdown_is_still_an_error(model: VehicleMo
         low.run(speed_m_per_s=SPEED, duration_s=0.3, irregularity=HARMONIC)
 
 
-def _ctrl_c_after(steps: int) -> Any:
-    """A ProgressReporter.advance that presses Ctrl-C once ``steps`` steps are done."""
-    original = ProgressReporter.advance
-
-    def advance(rep: ProgressReporter, n: int = 1) -> None:
-        original(rep, n)
-        if rep.done >= steps:
-            raise KeyboardInterrupt
-
-    return advance
-
 
 @pytest.mark.parametrize("loop", ["compiled", "python"])
 def test_ctrl_c_keeps_the_run_up_to_there(model: VehicleModel, loop: str,
@@ -97,7 +85,7 @@ def test_ctrl_c_keeps_the_run_up_to_there(model: VehicleModel, loop: str,
                                           tmp_path: Path) -> None:
     kw: dict[str, Any] = dict(speed_m_per_s=SPEED, duration_s=0.4, loop=loop)
     full = model.run(**kw)
-    monkeypatch.setattr(ProgressReporter, "advance", _ctrl_c_after(150))
+    interrupt_after_steps(monkeypatch, 150)
     with pytest.raises(VehicleRunInterrupted) as err:
         model.run(**kw, progress=True)
     assert isinstance(err.value, KeyboardInterrupt)
@@ -129,7 +117,7 @@ def test_cli_ctrl_c_writes_the_partial_run(monkeypatch: pytest.MonkeyPatch,
                                            tmp_path: Path) -> None:
     from maglevkit.cli import app
 
-    monkeypatch.setattr(ProgressReporter, "advance", _ctrl_c_after(100))
+    interrupt_after_steps(monkeypatch, 100)
     out = tmp_path / "run.nc"
     r = CliRunner().invoke(app, ["vehicle", "run", "--speed-kmh", "400", "--duration", "0.3",
                                  "-o", str(out)])
