@@ -216,3 +216,16 @@ def solve_nonlinear(basis, parts: Sequence[tuple[np.ndarray, Reluctivity]],  # t
     kt = asm(jac, basis, nu=cf[2], c=cf[3], ga=cf[0])[free][:, free] if tangent else None
     ga, b, nu, _ = cf
     return NewtonResult(A, ga, b, nu, it, rel, solver.factorisations, kt)
+
+
+def error_row(s_mm: float, current_A: float, fem: dict, *, force_N: float, psi_Wb: float,
+              L_H: float) -> dict:
+    """One point of a network-vs-FEM comparison: the FEM's force [N], flux linkage [Wb] and
+    differential inductance [H] and the network's errors against them in %
+    (``(net - FEM)/FEM``), as the magnets' ``compare`` tables read them."""
+    return {"s_mm": s_mm, "I_A": current_A, "F_fem": fem["force_N"],
+            "psi_fem": fem["psi_Wb"], "L_fem": fem["L_H"],
+            "eF": 100 * (force_N / fem["force_N"] - 1),
+            "epsi": 100 * (psi_Wb / fem["psi_Wb"] - 1),
+            "eL": 100 * (L_H / fem["L_H"] - 1)}
+

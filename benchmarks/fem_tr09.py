@@ -63,7 +63,7 @@ import numpy as np  # noqa: E402
 import maglevkit as mk  # noqa: E402
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from fem_common import MU0, Reluctivity, cap, grid_1d, solve_nonlinear  # noqa: E402
+from fem_common import MU0, Reluctivity, cap, error_row, grid_1d, solve_nonlinear  # noqa: E402
 
 RESULTS = Path(__file__).resolve().parent / "results"
 
@@ -546,11 +546,9 @@ def compare(magnet: mk.Magnet, data: dict, gaps_mm=GAPS_MM, currents=CURRENTS_A 
             if fem is None:
                 continue
             net = network(magnet, smm * 1e-3, i)
-            rows.append({"s_mm": smm, "I_A": i, "F_fem": fem["force_N"],
-                         "psi_fem": fem["psi_Wb"], "L_fem": fem["L_H"],
-                         "eF": 100 * (net["force_N"] / fem["force_N"] - 1),
-                         "epsi": 100 * (net["psi_Wb"][1] / fem["psi_Wb"] - 1),
-                         "eL": 100 * (net["L_H"][1] / fem["L_H"] - 1)})
+            # the rear circuit (index 1), whose psi and L the FEM record holds (averaged())
+            rows.append(error_row(smm, i, fem, force_N=net["force_N"], psi_Wb=net["psi_Wb"][1],
+                                  L_H=net["L_H"][1]))
     return rows
 
 
