@@ -148,9 +148,10 @@ class VehicleStepFunction:
     layout : StepLayout
         Where each quantity sits in the state, step-input and record vectors.
     parts : dict of casadi.Function
-        ``"guideway_in"`` (deflection, rate at the loads; gaps), ``"controllers"``
-        (voltages), ``"magnets"`` (the bank's step), ``"controller_update"``,
-        ``"mechanics"``, ``"guideway_out"`` (modal update), composed by ``function``.
+        The parts :func:`build_vehicle_parts` gives (the reference loop evaluates
+        ``"guideway_in"`` and ``"guideway_out"``; ``function`` composes the elastic
+        guideway from ``"guideway_train_loads"``, ``"guideway_deflection"``, ``"gaps"``
+        and ``"guideway_update"``), with ``"magnets"`` (the bank's step).
     measure : casadi.Function
         ``(S, P, C) -> (gap, gap_rate)``: the circuits' gaps [m] and rates [m/s] at the
         step's start, as the step computes and records them (what a sampled controller
