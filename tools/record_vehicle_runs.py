@@ -73,14 +73,16 @@ def maps_cache() -> Path:
     return _MAPS_CACHE[0]
 
 
-def store_maps(replace: bool) -> None:
-    """Keep the maps of this recording in :data:`MAPS_DIR` (all of them when ``replace``)."""
+def store_maps() -> None:
+    """Keep the maps of this recording in :data:`MAPS_DIR` (added or replaced by name).
+
+    Nothing is deleted: ``tools/record_vehicle_reference.py`` stores its own magnets' maps
+    there too.  A file left by a magnet whose network has since changed is unused (its
+    network hash is in its name); delete it by hand when re-recording.
+    """
     import shutil
 
     MAPS_DIR.mkdir(parents=True, exist_ok=True)
-    if replace:
-        for f in MAPS_DIR.glob("*.nc"):
-            f.unlink()
     for f in sorted(maps_cache().glob("*.nc")):
         shutil.copyfile(f, MAPS_DIR / f"{f.stem.rsplit('-', 1)[0]}.nc")
 
@@ -238,7 +240,8 @@ def main(path: str, only: list[str], rebuild_maps: bool = False) -> None:
     """Record every scenario (``only`` empty) or re-record the named ones into ``path``.
 
     The runs use the stored maps (:func:`maps_cache`); ``rebuild_maps`` (``--rebuild-maps``)
-    builds every magnet's maps afresh first.  The maps used are stored with the runs.
+    builds the runs' maps afresh (the stored files are not read).  The maps used are stored
+    with the runs (:func:`store_maps`).
     """
     if rebuild_maps:
         for f in maps_cache().glob("*.nc"):
@@ -267,7 +270,7 @@ def main(path: str, only: list[str], rebuild_maps: bool = False) -> None:
         f"tools/record_vehicle_runs.py at commit {commit}"
     data["meta"] = np.array(json.dumps(meta))
     np.savez_compressed(Path(path), **data)
-    store_maps(replace=not only)
+    store_maps()
 
 
 if __name__ == "__main__":
