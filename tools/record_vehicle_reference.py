@@ -51,10 +51,11 @@ def reference_run(work_dir: str | Path) -> Any:
     """The reference run (``work_dir``: where the ``"paper"`` vehicle file is written)."""
     if str(ROOT) not in sys.path:
         sys.path.insert(0, str(ROOT))
+    from tests.conftest import paper_tr09_vehicle
+
     from maglevkit.vehicle.data import load_guideway
     from maglevkit.vehicle.simulation import Failure, VehicleModel, parse_irregularity
     from maglevkit.vehicle.train import load_vehicle
-    from tests.conftest import paper_tr09_vehicle
 
     train = dataclasses.replace(load_vehicle(paper_tr09_vehicle(work_dir)),
                                 control_velocity_blend=0.0)
