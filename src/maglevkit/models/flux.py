@@ -527,7 +527,7 @@ class FluxDAE:
                                 "max_num_steps": max_num_steps,
                                 "disable_internal_warnings": True}
         oracle: Any = dae_fun
-        output_fun = self.output_fun
+        output_fun = output_sx = self.output_fun
         if compiled != "never":
             # One C file: the DAE, the residual/Jacobian/quadrature functions IDAS asks its
             # DAE for (casadi.external finds them by name in the DAE's library), the
@@ -553,7 +553,7 @@ class FluxDAE:
                     [ca.substitute(h * eq.force, s, s_t)])
                 # -O3 (DEFAULT_FLAGS): -O1 saved a quarter of the compile time but
                 # the live step ran 1.6x slower (docs/decisions.md)
-                self._live_parts = (daeF, jacF, quadF, force_fun, cache_dir)
+                self._live_parts = (daeF, jacF, quadF, force_fun, output_sx, cache_dir)
         self._oracle, self._idas_opts, self._balance = oracle, opts, balance_fun
         # one hold interval, (w, p = (h, U, rate)) -> (w, q, outputs) as for radau
         wm = ca.MX.sym("w", self.nw)
@@ -576,7 +576,8 @@ class FluxDAE:
             opts = self._idas_opts
             nz = len(opts["abstolv"]) - self.n_diff        # loop fluxes, currents, balance
             return LiveIntegrator(self._live_lib, self.n_diff, nz, self.n_circuits, self.n_u,
-                                  4 + self.n_gaps,
+                                  4 + self.n_gaps, self.n_gaps, self.n_loops + self.n_circuits,
+                                  self.n_out,
                                   opts["reltol"], np.asarray(opts["abstolv"]),
                                   opts["max_num_steps"])
         except (OSError, RuntimeError, AttributeError, subprocess.SubprocessError) as exc:
@@ -1181,13 +1182,11 @@ class FluxModel:
                                  rate, dt) from None
         k = last[3]
         try:
-            y, q = live.step(k + 1.0, np.concatenate(((dt,), s0, rate, (float(k),))))
+            wf, q, o = live.step(k + 1.0, np.concatenate(((dt,), s0, rate, (float(k),))))
         except RuntimeError as exc:
             raise self._fail(_physical_time(exc, state.time_s - k * dt, dt), state.time_s,
                              w, U, rate, dt) from None
-        wf = np.concatenate((y[:r], s0 + rate * dt, y[r:r + d.n_loops + d.n_circuits]))
-        o = np.asarray(d.output_fun(wf, U, rate)).ravel()
-        self._live_next = (dt, U.copy(), k + 1, q.copy())
+        self._live_next = (dt, U.copy(), k + 1, q)
         dq = q - last[4]
         # the mechanical work from the integrated pole forces (-rate . int F dt, exact for
         # the constant rate), not from -F.rate (whose integrand jumps at every step)
