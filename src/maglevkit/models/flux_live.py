@@ -428,6 +428,34 @@ int fx_set_lu(void *data, long long int nnz, const long long int *cp, const long
   return 0;
 }
 
+/* the preconditioner at one point (for tests): set up at (t, x, z) with inputs p, u and
+   c_j, then out = M^-1 rhs; 1 where the sparse LU was used, 0 the dense LU, -1 on failure.
+   It replaces the preconditioner IDAS set up last (GMRES corrects a stale one); the
+   inputs IDAS integrates with are restored. */
+int fx_newton_solve(void *data, double t, const double *x, const double *z, const double *p,
+                    const double *u, double cj, const double *rhs, double *out) {
+  fx_session *s = (fx_session *)data;
+  N_Vector y = N_VNew_Serial(s->nn), r = N_VNew_Serial(s->nn), o = N_VNew_Serial(s->nn);
+  double *p0 = (double *)malloc(sizeof(double) * (s->np + s->nu + 1));
+  int flag = -1;
+  if (y && r && o && p0) {
+    memcpy(p0, s->p, sizeof(double) * s->np); memcpy(p0 + s->np, s->u, sizeof(double) * s->nu);
+    memcpy(s->p, p, sizeof(double) * s->np); memcpy(s->u, u, sizeof(double) * s->nu);
+    memcpy(NVD(y), x, sizeof(double) * s->nx); memcpy(NVD(y) + s->nx, z, sizeof(double) * s->nz);
+    memcpy(NVD(r), rhs, sizeof(double) * s->nn);
+    if (!fx_pset(t, y, y, y, cj, s, y, y, y) && !fx_psol(t, y, y, y, r, o, cj, 0.0, s, y)) {
+      memcpy(out, NVD(o), sizeof(double) * s->nn);
+      flag = s->lu_sparse ? 1 : 0;
+    }
+    memcpy(s->p, p0, sizeof(double) * s->np); memcpy(s->u, p0 + s->np, sizeof(double) * s->nu);
+  }
+  if (y) N_VDestroy_Serial(y);
+  if (r) N_VDestroy_Serial(r);
+  if (o) N_VDestroy_Serial(o);
+  free(p0);
+  return flag;
+}
+
 /* the compressed-column sparsity of Jacobian block k (CasADi's format) */
 const long long int *fx_jac_sparsity(void *data, int k) {
   return ((fx_session *)data)->sp[k];
@@ -689,6 +717,8 @@ class LiveIntegrator:
         lib.fx_jac_sparsity.argtypes = [ctypes.c_void_p, ctypes.c_int]
         lib.fx_jacobian.argtypes = [ctypes.c_void_p, ctypes.c_double, dp, dp, dp, dp, dp]
         lib.fx_stats.argtypes = [ctypes.c_void_p, dp]
+        lib.fx_newton_solve.argtypes = [ctypes.c_void_p, ctypes.c_double, dp, dp, dp, dp,
+                                        ctypes.c_double, dp, dp]
         self._lib = lib
         self._lp = lp
         #: the sparse LU plan (None: not made yet, False: none; dense LU every setup)
@@ -728,6 +758,19 @@ class LiveIntegrator:
         if self._lib.fx_jacobian(self._mem, t, *map(self._ptr, arrays), self._ptr(out)):
             raise RuntimeError("the Jacobian could not be evaluated")
         return out
+
+    def newton_solve(self, t: float, x: np.ndarray, z: np.ndarray, p: np.ndarray,
+                     u: np.ndarray, cj: float, rhs: np.ndarray) -> tuple[np.ndarray, bool]:
+        """The preconditioner at one point: ``(M^-1 rhs, whether the sparse LU was used)``
+        with ``M = c_j dF/dy' + dF/dy`` (for tests; it replaces the preconditioner IDAS set
+        up last, which GMRES tolerates)."""
+        arrays = [np.ascontiguousarray(a, dtype=float) for a in (x, z, p, u, rhs)]
+        out = np.empty(self.nx + self.nz)
+        flag = self._lib.fx_newton_solve(self._mem, t, *map(self._ptr, arrays[:4]), cj,
+                                         self._ptr(arrays[4]), self._ptr(out))
+        if flag < 0:
+            raise RuntimeError("the Newton matrix could not be factorised")
+        return out, bool(flag)
 
     def set_plan(self, plan: dict[str, np.ndarray] | None,
                  tolerance: float = PIVOT_TOLERANCE) -> None:
