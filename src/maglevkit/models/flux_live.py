@@ -68,7 +68,6 @@ extern int IDASetErrHandlerFn(void *mem, fx_err_fn f, void *data);
 extern int IDASetMaxNumSteps(void *mem, long int n);
 extern int IDASetId(void *mem, N_Vector id);
 extern int IDASetStopTime(void *mem, realtype t);
-extern int IDASetSuppressAlg(void *mem, int s);
 extern int IDASpgmr(void *mem, int maxl);
 extern int IDASpilsSetPreconditioner(void *mem, fx_pset_fn pset, fx_psol_fn psol);
 extern int IDAQuadInit(void *mem, fx_quad_fn f, N_Vector q0);
@@ -83,7 +82,7 @@ extern int IDASolve(void *mem, realtype tout, realtype *tret, N_Vector yret, N_V
 
 typedef struct {
   void *mem;
-  N_Vector yy, yp, q, id, atol, mask;
+  N_Vector yy, yp, q, id, atol;
   long int nx, nz, nn, np, nu, nq, ns, nw, nout, ng, nlc;
   double *p, *u, *M, *J[4], *w;
   long long int *iw, *piv, *nzr, *lp, *li, *up, *ui;
@@ -335,22 +334,16 @@ void *fx_new(long int nx, long int nz, long int np, long int nu, long int nq, lo
   }
   s->yy = N_VNew_Serial(s->nn); s->yp = N_VNew_Serial(s->nn);
   s->q = N_VNew_Serial(nq); s->id = N_VNew_Serial(s->nn); s->atol = N_VNew_Serial(s->nn);
-  s->mask = N_VNew_Serial(s->nn);
-  if (!s->yy || !s->yp || !s->q || !s->id || !s->atol || !s->mask) { fx_free(s); return 0; }
+  if (!s->yy || !s->yp || !s->q || !s->id || !s->atol) { fx_free(s); return 0; }
   memset(NVD(s->yy), 0, sizeof(double) * s->nn); memset(NVD(s->yp), 0, sizeof(double) * s->nn);
   memset(NVD(s->q), 0, sizeof(double) * nq);
-  for (k = 0; k < s->nn; ++k) {
-    NVD(s->id)[k] = k < nx ? 1.0 : 0.0;
-    NVD(s->mask)[k] = (k < nx || (k >= nx + nlc - FX_NC && k < nx + nlc)) ? 1.0 : 0.0;
-    NVD(s->atol)[k] = atol[k];
-  }
+  for (k = 0; k < s->nn; ++k) { NVD(s->id)[k] = k < nx ? 1.0 : 0.0; NVD(s->atol)[k] = atol[k]; }
   s->mem = IDACreate();
   if (!s->mem || IDAInit(s->mem, fx_res, 0.0, s->yy, s->yp) || IDASetUserData(s->mem, s)
       || IDASetErrHandlerFn(s->mem, fx_err, s) || IDASVtolerances(s->mem, rtol, s->atol)
       || IDASetMaxNumSteps(s->mem, max_steps) || IDASetId(s->mem, s->id)
       || IDASpgmr(s->mem, 5) || IDASpilsSetPreconditioner(s->mem, fx_pset, fx_psol)
-      || IDAQuadInit(s->mem, fx_quad, s->q) || IDASetSuppressAlg(s->mem, 1)
-      || IDASetId(s->mem, s->mask)) {
+      || IDAQuadInit(s->mem, fx_quad, s->q)) {
     fx_free(s);                      /* no leak of the half-built session */
     return 0;
   }
@@ -372,12 +365,7 @@ int fx_reinit(void *data, double t0, const double *x0, const double *z0, const d
   memset(NVD(s->q), 0, sizeof(double) * s->nq);
   int flag = IDAReInit(s->mem, t0, s->yy, s->yp);
   if (!flag) flag = IDAQuadReInit(s->mem, s->q);
-  /* IDACalcIC reads the differential/algebraic split from the id vector, the error test
-     (suppressed algebraic variables) the unknowns it controls: the same vector, set in
-     turn */
-  if (!flag) flag = IDASetId(s->mem, s->id);
   if (!flag) flag = IDACalcIC(s->mem, 1 /* IDA_YA_YDP_INIT */, t0 + 1.0);
-  if (!flag) flag = IDASetId(s->mem, s->mask);
   return flag;
 }
 
@@ -521,7 +509,6 @@ void fx_free(void *data) {
   if (s->q) N_VDestroy_Serial(s->q);
   if (s->id) N_VDestroy_Serial(s->id);
   if (s->atol) N_VDestroy_Serial(s->atol);
-  if (s->mask) N_VDestroy_Serial(s->mask);
   for (k = 0; k < 4; ++k) free(s->J[k]);
   free(s->arg); free(s->res); free(s->iw); free(s->w); free(s->p); free(s->u); free(s->M);
   free(s->piv); free(s->nzr); free(s->lp); free(s->up); free(s->li); free(s->ui);
@@ -675,7 +662,7 @@ def live_library(dae_f: ca.Function, jac_f: ca.Function, quad_f: ca.Function,
              "FX_FORCE": force_f.name(), "FX_OUT": out_f.name()}
     defines = "".join(f"#define {k} {v}\n#define {k}_work {v}_work\n"
                       f"#define {k}_sparsity_out {v}_sparsity_out\n" for k, v in names.items())
-    defines += f"#define FX_QUAD_N {quad_f.numel_out(0)}\n#define FX_NC {out_f.numel_in(1)}\n"
+    defines += f"#define FX_QUAD_N {quad_f.numel_out(0)}\n"
     code = (cg.dump() + "\n" + defines + _DRIVER).encode()
     # -z defs (GNU ld, Linux): a symbol the IDAS libraries lack fails the link here, not
     # the first step at run time
