@@ -12,12 +12,31 @@ the gaps jump, or a state other than the last one returned is stepped.  Across a
 boundary with continuous inputs it simply integrates on, as ``simulate`` does across hold
 intervals (a kink of the gap path is no jump of any unknown).
 
-Linear algebra: IDAS's GMRES with this module's exact preconditioner (the Newton matrix
-``dF/dy + c_j dF/dy'`` from the compiled Jacobian, factorised by dense LU with partial
-pivoting, updating only the nonzero rows of each pivot column, so that the Newton matrices of
-the sparse form, a few hundred unknowns with a few entries per row, factorise at a fraction
-of the dense cost), so GMRES converges in one or two iterations; on either form of the flux
-DAE (``FluxDAE.form``).
+Linear algebra: IDAS's GMRES with this module's preconditioner, the Newton matrix
+``c_j dF/dy' + dF/dy`` from the compiled Jacobian, factorised exactly, so that GMRES
+converges in zero or one iteration; on either form of the flux DAE (``FluxDAE.form``).
+The factorisation is a sparse LU on a fixed pattern (:func:`sparse_lu_plan`): at the first
+restart SuperLU chooses a COLAMD column order and partial-pivoting row order on the Newton
+matrix at that point, a symbolic elimination gives the fill, and every setup then runs a
+left-looking numeric LU in C on that pattern with those pivots (static pivoting: no search,
+no allocation).  A static pivot can become poor where the matrix changes; GMRES corrects an
+inexact preconditioner, but a tiny pivot would make it useless, so a pivot below
+:data:`PIVOT_TOLERANCE` times the largest entry of its column (after the updates) makes
+that setup factorise densely with partial pivoting instead (the previous path: dense LU
+updating only the nonzero rows of each pivot column).  On TR09's split network (373 DAE
+unknowns, 2.2k Jacobian nonzeros, 8.7k in L and U) a setup costs tens of us instead of
+0.78 ms, and no setup of the benchmark run falls back.
+
+Error test: as in ``simulate`` (CasADi's IDAS), every unknown is in IDAS's local error
+test, so both paths integrate to the same tolerances.  On TR09's split network this holds
+IDAS at about 5 steps per 1 ms call for stretches of a run (the first 200 ms of the
+benchmark scenario, throughout with faster gap motion), against one step per call
+elsewhere.  Leaving the loop fluxes and ``y'`` out of the test (``IDASetSuppressAlg``)
+gave one step per call but 3-5x ``simulate``'s error at 20-50 Hz gap motion; measured,
+not adopted (docs/decisions.md, livestep22).
+
+The outputs are evaluated in C at the end of each step (the model's own output function,
+generated into this library), not through a CasADi call from Python.
 
 The SUNDIALS API used is that of the 2.x series CasADi bundles (``IDASpgmr``,
 ``IDASpilsSetPreconditioner``, serial ``N_Vector``); :func:`live_library` checks the
