@@ -17,7 +17,7 @@ import pytest
 import maglevkit as mk
 from maglevkit.models import compiled as compiled_mod
 from maglevkit.models import flux
-from maglevkit.models.flux_live import LiveIntegrator, _blocks
+from maglevkit.models.flux_live import LiveIntegrator, newton_entries
 from maglevkit.models.signals import Sine
 
 pytestmark = pytest.mark.skipif(compiled_mod.find_compiler() is None,
@@ -66,7 +66,7 @@ def _newton_matrix(live: LiveIntegrator, point: tuple[np.ndarray, ...], cj: floa
     """``c_j dF/dy' + dF/dy`` assembled independently of the C code: the Jacobian blocks'
     nonzeros with NumPy, ``c_j`` on the differential unknowns' diagonal."""
     x, z, p, u = point
-    rows, cols, signs = _blocks(live.sparsities(), live.nx)
+    rows, cols, signs = newton_entries(live.sparsities(), live.nx)
     n = live.nx + live.nz
     M = np.zeros((n, n))
     np.add.at(M, (rows, cols), signs * live.jacobian(0.0, x, z, p, u))

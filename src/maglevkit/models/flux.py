@@ -1140,6 +1140,16 @@ class FluxModel:
             raise self._fail(exc, state.time_s, w, U, rate, dt) from None
         return self._finish_step(state, dt, U, rate, w, wf, q, o)
 
+    def live_stats(self) -> dict[str, int] | None:
+        """Counters of the live integrator (:meth:`~maglevkit.models.flux_live.LiveIntegrator.stats`:
+        sparse and dense LU setups, preconditioner solves, IDAS steps and iterations since
+        its last restart), or None where :meth:`step` restarts IDAS on every call."""
+        if not self.live_step:
+            return None
+        with self._live_lock:
+            assert isinstance(self._live, LiveIntegrator)
+            return self._live.stats()
+
     def _step_live_locked(self, state: FluxState, dt: float, U: np.ndarray, rate: np.ndarray,
                           s0: np.ndarray, w: np.ndarray) -> tuple[FluxState, FluxOutputs]:
         assert isinstance(self._live, LiveIntegrator)
@@ -1150,7 +1160,7 @@ class FluxModel:
                      w: np.ndarray, wf: Any, q: Any, o: Any) -> tuple[FluxState, FluxOutputs]:
         wf = np.asarray(wf).ravel()
         o = np.asarray(o).ravel()
-        if not (np.all(np.isfinite(wf)) and np.all(np.isfinite(o))):
+        if not (np.isfinite(wf).all() and np.isfinite(o).all()):
             self._live_next = None
             raise self._fail(RuntimeError("non-finite solution"), state.time_s, w, U, rate, dt)
         t1 = state.time_s + dt

@@ -549,7 +549,7 @@ PIVOT_TOLERANCE = 1e-3
 PLAN_CJ = 1e3
 
 
-def _blocks(sparsities: list[np.ndarray], nx: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def newton_entries(sparsities: list[np.ndarray], nx: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Rows, columns and signs of the Newton matrix entries of the four Jacobian blocks
     (``d ode/dx``, ``d alg/dx``, ``d ode/dz``, ``d alg/dz``, each CasADi's compressed
     columns), in the order of their nonzeros."""
@@ -599,7 +599,7 @@ def sparse_lu_plan(sparsities: list[np.ndarray], nx: int, values: np.ndarray,
     import scipy.sparse as sp
     import scipy.sparse.linalg as spla
 
-    rows, cols, signs = _blocks(sparsities, nx)
+    rows, cols, signs = newton_entries(sparsities, nx)
     n = int(sparsities[3][0]) + nx
     diag = np.arange(nx)
     A = sp.csc_matrix((np.concatenate((signs * values, np.full(nx, cj))),
