@@ -1180,8 +1180,8 @@ class FluxModel:
         last = self._live_last
         self._live_last = None
         if not (last is not None and state is last[0] and dt == last[1]
-                and np.array_equal(U, last[2]) and np.all(
-                    np.abs(s0 - state.gaps_m) <= LIVE_GAP_TOLERANCE * np.abs(s0).max())):
+                and (U == last[2]).all()
+                and (np.abs(s0 - state.gaps_m) <= LIVE_GAP_TOLERANCE * np.abs(s0).max()).all()):
             last = (None, dt, U, 0, np.zeros(4 + d.n_gaps))
             v0 = np.asarray(d._balance(w[nx:], s0, U)).ravel()
             try:

@@ -749,7 +749,10 @@ class LiveIntegrator:
                                max_num_steps)
         if not self._mem:
             raise RuntimeError("IDAS could not be set up")
-        self._nw, self._nq, self._nout = nx + ng + nlc, nq, nout
+        # step's buffers and their ctypes pointers, made once (a pointer costs a few us)
+        self._u, self._w = np.empty(nu), np.empty(nx + ng + nlc)
+        self._q, self._o = np.empty(nq), np.empty(nout)
+        self._bufs = [a.ctypes.data_as(dp) for a in (self._u, self._w, self._q, self._o)]
 
     def _ptr(self, a: np.ndarray) -> Any:
         return a.ctypes.data_as(self._dp)
@@ -835,15 +838,13 @@ class LiveIntegrator:
         """Integrate to ``tout`` with interval inputs ``u`` = (h, start gaps, gap rates,
         tau): new arrays (state vector ``w`` at ``tout``, quadratures since the last
         :meth:`reinit`, outputs at ``w``)."""
-        u = np.ascontiguousarray(u, dtype=float)
-        w, q, o = np.empty(self._nw), np.empty(self._nq), np.empty(self._nout)
-        flag = self._lib.fx_step(self._mem, tout, self._ptr(u), self._ptr(w), self._ptr(q),
-                                 self._ptr(o))
+        self._u[:] = u
+        flag = self._lib.fx_step(self._mem, tout, *self._bufs)
         if flag == -98:
             raise RuntimeError("the outputs could not be evaluated")
         if flag < 0:
             raise RuntimeError(self.message() or f"IDAS flag {flag}")
-        return w, q, o
+        return self._w.copy(), self._q.copy(), self._o.copy()
 
     def __del__(self) -> None:
         mem, self._mem = getattr(self, "_mem", None), None
