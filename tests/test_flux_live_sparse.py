@@ -9,6 +9,7 @@ networks), compiled once into a temporary cache.  Slow: the bundled TR09 (split 
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
@@ -27,18 +28,27 @@ DT = 1e-3
 
 
 @pytest.fixture(scope="module")
-def sparse_model(u_magnet: mk.Magnet, tmp_path_factory: pytest.TempPathFactory
-                 ) -> mk.FluxModel:
-    """The U-magnet on the sparse form (the DAE's cache key holds the form)."""
-    mp = pytest.MonkeyPatch()
-    mp.setattr(flux, "SPARSE_FORM_SIZE", 0)
-    try:
-        fm = mk.FluxModel(u_magnet, compiled="always",
-                          cache_dir=tmp_path_factory.mktemp("maglevkit-live-sparse"))
-    finally:
-        mp.undo()
-    assert fm.dae.form == "sparse" and fm.live_step
-    return fm
+def make_sparse(u_magnet: mk.Magnet, tmp_path_factory: pytest.TempPathFactory
+                ) -> Callable[[], mk.FluxModel]:
+    """New models of the U-magnet on the sparse form, each with its own live integrator
+    (the DAE's cache key holds the form; the library is compiled once)."""
+    cache = tmp_path_factory.mktemp("maglevkit-live-sparse")
+
+    def make() -> mk.FluxModel:
+        mp = pytest.MonkeyPatch()
+        mp.setattr(flux, "SPARSE_FORM_SIZE", 0)
+        try:
+            fm = mk.FluxModel(u_magnet, compiled="always", cache_dir=cache)
+        finally:
+            mp.undo()
+        assert fm.dae.form == "sparse" and fm.live_step
+        return fm
+    return make
+
+
+@pytest.fixture(scope="module")
+def sparse_model(make_sparse: Callable[[], mk.FluxModel]) -> mk.FluxModel:
+    return make_sparse()
 
 
 def _point(fm: mk.FluxModel, i0: float) -> tuple[np.ndarray, ...]:
@@ -107,11 +117,12 @@ def test_sparse_lu_solves_the_newton_matrix(sparse_model: mk.FluxModel) -> None:
     _check_solves(live, _point(sparse_model, 20.0), sparse=True)
 
 
-def test_a_tiny_static_pivot_falls_back_to_the_dense_lu(sparse_model: mk.FluxModel) -> None:
+def test_a_tiny_static_pivot_falls_back_to_the_dense_lu(
+        make_sparse: Callable[[], mk.FluxModel]) -> None:
     """A pivot tolerance no pivot meets (infinity) makes every setup factorise densely with
     partial pivoting: the same solve, counted as dense setups; and without a plan (None)
     too."""
-    fm = mk.FluxModel(sparse_model)                     # an own live integrator
+    fm = make_sparse()                                  # an own live integrator
     live = _live(fm, 20.0)
     plan = live.plan
     assert isinstance(plan, dict)
@@ -143,12 +154,13 @@ def _run(fm: mk.FluxModel, i0: float, n: int, jump: int) -> np.ndarray:
     return np.array(rows)
 
 
-def test_the_dense_fallback_integrates_like_the_sparse_lu(sparse_model: mk.FluxModel) -> None:
+def test_the_dense_fallback_integrates_like_the_sparse_lu(
+        sparse_model: mk.FluxModel, make_sparse: Callable[[], mk.FluxModel]) -> None:
     """A run whose every setup falls back to the dense LU equals the sparse LU's run to
     the integrator's accuracy (1e-5 of each signal's largest value: rtol 1e-6, two
     preconditioners that GMRES corrects to its tolerance, so step sequences differ), and
     the sparse run needed no fallback."""
-    dense = mk.FluxModel(sparse_model)
+    dense = make_sparse()
     live = _live(dense, 20.0)
     assert isinstance(live.plan, dict)
     live.set_plan(live.plan, tolerance=np.inf)
