@@ -11,8 +11,9 @@ per body)::
     sigma (dA/dt - u_b) - div( nu grad A ) = J_coil,    U = R I + dpsi/dt
 
 What conducts is what maglevkit's guidance network gives eddy elements, all solid
-``9SMnPb28`` (``src/maglevkit/magnets/guidance.py``: ``eddy_leg_*``, ``eddy_yoke_*``,
-``eddy_rail_*``; the pole bars are iron of the legs' branches there and solid steel here):
+``9SMnPb28`` (``src/maglevkit/magnets/guidance.py``: the legs, the yoke and the rail; the
+pole bars in the legs' branches with ``eddy_model = "lumped"``, their own ladders with
+``"ladder"``):
 
 * the magnet (pole bars, legs, yoke) is one conducting body, the rail another; the body's
   eddy currents run along the track and close at its far ends (the 2-D picture, as the
@@ -30,7 +31,8 @@ What conducts is what maglevkit's guidance network gives eddy elements, all soli
 ``python benchmarks/fem_guidance_transient.py --fem cases`` (``study``: mesh and time step
 at the first case; ``noeddy``: the steps with sigma = 0) records
 ``benchmarks/results/fem_guidance_transient.json``; without ``--fem`` it compares the
-recorded runs with the flux model on the bundled ``tr-guidance`` and prints the tables of
+recorded runs with the flux model (``tr-guidance``, its 2-D cut with ``end_effects = false``
+and the bundled file; ``eddy_model`` ``"lumped"`` and ``"ladder"``) and prints the tables of
 docs/validation_fem.md (section "Guidance magnet: voltage-step transient").
 """
 
@@ -190,65 +192,6 @@ def load(part: str = "cases") -> list[dict]:
     return json.loads(RESULTS.read_text())[part]["runs"]
 
 
-def ladder_magnet(layers: int, magnet: mk.Magnet | None = None, *,
-                  bars: bool = False) -> mk.Magnet:
-    """``tr-guidance`` with every lumped eddy element replaced by the diffusing slab ladder
-    (``maglevkit.circuit.ladder.ladder_branches``, the U-magnet's ``eddy_model =
-    "ladder"``) of ``layers`` tubes: an experiment of this script, not an option of the
-    guidance kind (which refuses ``eddy_model = "ladder"``).
-
-    Each leg half and the rail become a ladder of their iron path (the eddy currents diffuse
-    across the leg thickness, across the rail thickness), the pole bar stays in series as
-    plain iron (``bars``: a ladder of its own too, its eddy currents diffusing across the
-    bar's height); the yoke's ladder carries the coil on its first branch, and the coil's own
-    cross-section beside the yoke (``coil_air``) joins the yoke's ends directly: no eddy
-    current in the iron encircles that air flux (the lumped network puts the yoke's eddy
-    element in series with both).  Thickness, resistivity, length and section come from
-    the network's own iron paths and the file; nothing is fitted.
-    """
-    from dataclasses import replace
-
-    from maglevkit.circuit.elements import EddyCurrent, IronPath
-    from maglevkit.circuit.ladder import ladder_branches
-    from maglevkit.circuit.network import Branch
-
-    mag = magnet if magnet is not None else mk.load_magnet(MAGNET)
-    m, r = mag.parameters["magnet"], mag.parameters["rail"]
-    rho = float(m.get("resistivity") or mk.get_material(m["material"]).resistivity)
-    rho_rail = float(r.get("resistivity") or mk.get_material(r["material"]).resistivity)
-    net = mag.network
-    out: list = []
-    yoke_end = {}
-    for b in net.branches:
-        if b.name.startswith("eddy_yoke_"):
-            yoke_end[b.start] = b.end                   # EY_i -> YU_i
-    for b in net.branches:
-        if b.name.startswith("eddy_yoke_"):
-            continue
-        start, end = b.start, yoke_end.get(b.end, b.end)
-        irons = [e for e in b.elements if isinstance(e, IronPath)]
-        eddy = [e for e in b.elements if isinstance(e, EddyCurrent)]
-        if b.name.startswith("yoke_"):
-            # the yoke: its flux along y, eddy currents across its thickness (x)
-            out += ladder_branches(b.name, start, end, irons[0], thickness=m["yoke_thickness"],
-                                   resistivity=rho, layers=layers)
-        elif eddy:
-            rail = b.name.startswith("rail_")
-            mid = f"{b.name}:bar" if len(irons) > 1 else end
-            out += ladder_branches(b.name, start, mid, irons[0],
-                                   thickness=r["thickness"] if rail else m["leg_thickness"],
-                                   resistivity=rho_rail if rail else rho, layers=layers)
-            if len(irons) > 1 and bars:
-                # the pole bar: flux along x through its height h_p, eddy currents across it
-                out += ladder_branches(f"{b.name}:bar", mid, end, irons[1], thickness=m[
-                    "pole_bar_height"], resistivity=rho, layers=layers)
-            elif len(irons) > 1:
-                out.append(Branch(f"{b.name}:bar", mid, end, tuple(irons[1:])))
-        else:
-            out.append(Branch(b.name, start, end, b.elements))
-    return replace(mag, network=mk.Network(tuple(out), net.circuits, name=net.name))
-
-
 def model_step(ref: dict, magnet: mk.Magnet) -> dict:
     """The flux model of ``magnet`` (both sections stepped alike, as the FEM's section) at
     the recorded step's time points: current of circuit 0, eddy energy per section."""
@@ -264,11 +207,13 @@ def model_step(ref: dict, magnet: mk.Magnet) -> dict:
             "eddy_elements": len(res.eddy_branch_names)}
 
 
-def guidance_magnet(*, end_effects: bool = True, eddy_currents: bool = True) -> mk.Magnet:
+def guidance_magnet(*, end_effects: bool = True, eddy_currents: bool = True,
+                    **options: object) -> mk.Magnet:
     """The bundled ``tr-guidance`` (``end_effects = true``: its air paths over the yokes'
     depth) or its 2-D cut (``false``: every path over the section length, as the FEM; the
-    network of the statics tables in docs/validation_fem.md, there without eddy elements)."""
-    mag = mk.load_magnet(MAGNET, eddy_currents=eddy_currents)
+    network of the statics tables in docs/validation_fem.md, there without eddy elements),
+    with the ``load_magnet`` options (``eddy_model``, ``eddy_layers``)."""
+    mag = mk.load_magnet(MAGNET, eddy_currents=eddy_currents, **options)
     if end_effects:
         return mag
     params = dict(mag.parameters)
@@ -278,15 +223,15 @@ def guidance_magnet(*, end_effects: bool = True, eddy_currents: bool = True) -> 
     return mk.build_magnet(params, options=mag.options, source=mag.source)
 
 
-#: the models held against the FEM: label -> magnet (built on first use)
+#: the models held against the FEM: label -> magnet (built on first use); "ladder" is the
+#: guidance kind's ``eddy_model = "ladder"`` (legs, pole bars, yoke and rail as slab ladders)
 MODELS = {"2-D cut, lumped": lambda: guidance_magnet(end_effects=False),
-          "2-D cut, ladder n = 6 (experiment)":
-              lambda: ladder_magnet(6, guidance_magnet(end_effects=False)),
-          "2-D cut, ladder n = 8 (experiment)":
-              lambda: ladder_magnet(8, guidance_magnet(end_effects=False)),
-          "2-D cut, ladder n = 8 + bars (experiment)":
-              lambda: ladder_magnet(8, guidance_magnet(end_effects=False), bars=True),
-          "bundled, lumped": lambda: guidance_magnet()}
+          "2-D cut, ladder n = 6": lambda: guidance_magnet(
+              end_effects=False, eddy_model="ladder", eddy_layers=6),
+          "2-D cut, ladder n = 8": lambda: guidance_magnet(
+              end_effects=False, eddy_model="ladder", eddy_layers=8),
+          "bundled, lumped": lambda: guidance_magnet(),
+          "bundled, ladder n = 8": lambda: guidance_magnet(eddy_model="ladder", eddy_layers=8)}
 #: the same networks without eddy elements against the FEM with sigma = 0
 STATIC_MODELS = {"2-D cut, no eddy currents vs FEM sigma = 0":
                      lambda: guidance_magnet(end_effects=False, eddy_currents=False),

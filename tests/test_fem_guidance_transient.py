@@ -69,12 +69,18 @@ MEASURED = {
     ("10 mm, 10 -> 20 A", "2-D cut, lumped"): (+10.5, 11.6, +8.2),
     ("6 mm, 10 -> 20 A", "2-D cut, lumped"): (+10.6, 11.8, +10.5),
     ("10 mm, 20 -> 50 A", "2-D cut, lumped"): (+10.5, 11.2, +12.5),
-    ("10 mm, 10 -> 20 A", "2-D cut, ladder n = 8 + bars (experiment)"): (-0.4, 0.4, -0.4),
-    ("6 mm, 10 -> 20 A", "2-D cut, ladder n = 8 + bars (experiment)"): (-0.4, 0.4, +1.0),
-    ("10 mm, 20 -> 50 A", "2-D cut, ladder n = 8 + bars (experiment)"): (-0.4, 0.7, +2.5),
+    ("10 mm, 10 -> 20 A", "2-D cut, ladder n = 6"): (-0.4, 0.4, -0.5),
+    ("6 mm, 10 -> 20 A", "2-D cut, ladder n = 6"): (-0.4, 0.5, +0.9),
+    ("10 mm, 20 -> 50 A", "2-D cut, ladder n = 6"): (-0.4, 1.2, +4.5),
+    ("10 mm, 10 -> 20 A", "2-D cut, ladder n = 8"): (-0.4, 0.4, -0.4),
+    ("6 mm, 10 -> 20 A", "2-D cut, ladder n = 8"): (-0.4, 0.4, +1.0),
+    ("10 mm, 20 -> 50 A", "2-D cut, ladder n = 8"): (-0.4, 0.7, +2.5),
     ("10 mm, 10 -> 20 A", "bundled, lumped"): (+10.9, 13.2, -0.2),
     ("6 mm, 10 -> 20 A", "bundled, lumped"): (+10.9, 13.4, +4.2),
     ("10 mm, 20 -> 50 A", "bundled, lumped"): (+10.9, 12.7, +9.7),
+    ("10 mm, 10 -> 20 A", "bundled, ladder n = 8"): (-0.3, 2.6, -8.5),
+    ("6 mm, 10 -> 20 A", "bundled, ladder n = 8"): (-0.2, 1.5, -5.1),
+    ("10 mm, 20 -> 50 A", "bundled, ladder n = 8"): (-0.3, 1.8, -5.4),
 }
 #: the same networks without eddy currents against the FEM with sigma = 0: (max err, t63 err)
 MEASURED_STATIC = {
@@ -91,16 +97,60 @@ def _within(value: float, measured: float, half: float) -> bool:
     return measured - half <= value <= measured + half
 
 
+def _errors(mod, ref: dict, mag) -> tuple[float, float, float]:  # type: ignore[no-untyped-def]
+    run = mod.model_step(ref, mag)
+    m = mod.metrics(run["time_s"], run["current_A"], run["eddy_loss_J"], ref)
+    return (100 * m["err_1ms"], 100 * m["err_max"], 100 * (m["t63_s"] / m["t63_fem_s"] - 1))
+
+
+def test_ladder_meets_the_aims_where_the_lumped_elements_jump() -> None:
+    """One recorded step (10 mm, 10 -> 20 A) on the 2-D cut, in the fast suite: issue 26's
+    aims (current within 5 % of the step for t >= 1 ms, t63 within 5 %) met by
+    ``eddy_model = "ladder"`` (measured 0.4 % and -0.4 %), missed by the lumped elements,
+    whose current jumps at t = 0+ (measured +10.5 % of the step at 1 ms, t63 +8.2 %)."""
+    mod = _script()
+    ref = _record()["cases"]["runs"][0]
+    assert ref["label"] == "10 mm, 10 -> 20 A"
+    ladder = _errors(mod, ref, mod.MODELS["2-D cut, ladder n = 8"]())
+    lumped = _errors(mod, ref, mod.MODELS["2-D cut, lumped"]())
+    assert ladder[1] < 5.0 and abs(ladder[2]) < 5.0, ladder
+    assert lumped[0] > 9.0 and lumped[2] > 5.0, lumped
+
+
+def test_guidance_ladder_structure() -> None:
+    """``eddy_model = "ladder"`` on the guidance kind: n tubes per solid part (per section
+    four half legs, two pole bars, the yoke, the rail), statics those of the lumped
+    network, ``coil_air`` across the whole yoke, ``"ladder_split"`` refused."""
+    import maglevkit as mk
+    from maglevkit.errors import InputError
+
+    lumped = mk.load_magnet("tr-guidance")
+    ladder = mk.load_magnet("tr-guidance", eddy_model="ladder", eddy_layers=3)
+    count = [sum(int(g > 0) for g in m.network.eddy_conductances) for m in (lumped, ladder)]
+    assert count == [2 * 6, 2 * 8 * 3], count
+    coil_air = ladder.network.branch("coil_air_1")
+    assert (coil_air.start, coil_air.end) == ("YL1", "YU1")
+    assert "EY1" not in {b.end for b in ladder.network.branches}
+    for gap, current in ((0.006, 50.0), (0.010, 32.0), (0.020, 80.0)):
+        a = mk.solve_statics(lumped, gaps_m=gap, currents_A=[current, current])
+        b = mk.solve_statics(ladder, gaps_m=gap, currents_A=[current, current])
+        # parallel tubes of one material and length carry one flux density: the same
+        # statics up to the solver's tolerance (measured ~1e-11 relative on the U-magnet)
+        assert np.allclose(b.pole_force_N, a.pole_force_N, rtol=1e-8)
+        assert np.allclose(b.flux_linkage_Wb, a.flux_linkage_Wb, rtol=1e-8)
+    with pytest.raises(InputError, match="ladder_split.*guidance_magnet.*'ladder' or"):
+        mk.load_magnet("tr-guidance", eddy_model="ladder_split")
+
+
 @pytest.mark.slow
 def test_flux_model_against_recorded_fem() -> None:
     """The lumped eddy elements jump (+10.5 % of the step at 1 ms, up to 11.8 % off: the
-    5 % aim is missed) and rise 8-13 % slow on the 2-D cut; the slab ladder (the U-magnet's
-    ``eddy_model = "ladder"``, n = 8, on every solid part including the pole bars; an
-    experiment of the script) meets both aims (current within 0.7 % of the step, t63
-    within +2.5 %).  The bundled file's air paths over the yokes' depth (``end_effects =
-    true``) are a 3-D term the 2-D FEM lacks: without eddy currents they make the rise
-    6.6-9.0 % fast below the knee, which happens to offset the lumped eddy elements' slow
-    rise there."""
+    5 % aim is missed) and rise 8-13 % slow on the 2-D cut; ``eddy_model = "ladder"`` (the
+    slab ladder on every solid part) meets both aims (n = 8: current within 0.7 % of the
+    step, t63 -0.4 ... +2.5 %; n = 6 +4.5 % in saturation).  The bundled file's air paths
+    over the yokes' depth (``end_effects = true``) are a 3-D term the 2-D FEM lacks:
+    without eddy currents they make the rise 6.6-9.0 % fast below the knee, which offsets
+    the lumped eddy elements' slow rise there and makes the bundled ladder 5-9 % fast."""
     mod = _script()
     data = _record()
     mags = {label: make() for label, make in mod.MODELS.items()}
@@ -111,14 +161,11 @@ def test_flux_model_against_recorded_fem() -> None:
         for (case, label), (e1, emax, et63) in MEASURED.items():
             if case != ref["label"]:
                 continue
-            run = mod.model_step(ref, mags[label])
-            m = mod.metrics(run["time_s"], run["current_A"], run["eddy_loss_J"], ref)
-            got = (100 * m["err_1ms"], 100 * m["err_max"],
-                   100 * (m["t63_s"] / m["t63_fem_s"] - 1))
+            got = _errors(mod, ref, mags[label])
             assert _within(got[0], e1, 0.5), (case, label, got)
             assert _within(got[1], emax, 0.5), (case, label, got)
             assert _within(got[2], et63, 1.0), (case, label, got)
-            if "ladder" in label:
+            if label.startswith("2-D cut, ladder n = 8"):
                 # issue 26's aims: current within 5 % of the step, t63 within 5 %
                 assert got[1] < 5.0 and abs(got[2]) < 5.0, (case, label, got)
         for (case, net), (emax, et63) in MEASURED_STATIC.items():
