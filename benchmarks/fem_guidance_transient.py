@@ -33,7 +33,8 @@ at the first case; ``noeddy``: the steps with sigma = 0) records
 ``benchmarks/results/fem_guidance_transient.json``; without ``--fem`` it compares the
 recorded runs with the flux model (``tr-guidance``, its 2-D cut with ``end_effects = false``
 and the bundled file; ``eddy_model`` ``"lumped"`` and ``"ladder"``) and prints the tables of
-docs/validation_fem.md (section "Guidance magnet: voltage-step transient").
+docs/validation_fem.md (section "Guidance magnet: voltage-step transient"); ``--figure
+docs/figures/fem-guidance-transient.png`` draws the steps.
 """
 
 from __future__ import annotations
@@ -299,12 +300,54 @@ def compare() -> tuple[list[str], dict]:
     return lines, table
 
 
+#: the models drawn by :func:`plot` (label -> matplotlib colour and line style)
+PLOTTED = {"2-D cut, lumped": ("tab:red", "--"), "2-D cut, ladder n = 8": ("tab:blue", "-"),
+           "bundled, lumped": ("tab:orange", ":"), "bundled, ladder n = 8": ("tab:cyan", "-.")}
+
+
+def plot(path: str) -> None:
+    """The recorded FEM steps against the flux model: normalised current and its error in %
+    of the step (the 5 % aim shaded), one column per step."""
+    from maglevkit.plotting import plt, save
+
+    cases = load("cases")
+    fig, ax = plt.subplots(2, len(cases), figsize=(4.4 * len(cases), 6.6), squeeze=False,
+                           sharex=True)
+    mags = {label: MODELS[label]() for label in PLOTTED}
+    for j, ref in enumerate(cases):
+        tf, i_f = np.asarray(ref["time_s"]), np.asarray(ref["current_A"])
+        i0, step = ref["i0_A"], ref["i1_A"] - ref["i0_A"]
+        ax[0, j].semilogx(tf[1:], (i_f[1:] - i0) / step, "k-", lw=3, alpha=0.4, label="FEM")
+        for label, (col, ls) in PLOTTED.items():
+            run = model_step(ref, mags[label])
+            i = np.interp(tf, run["time_s"], run["current_A"])
+            ax[0, j].semilogx(tf[1:], (i[1:] - i0) / step, color=col, ls=ls, label=label)
+            ax[1, j].semilogx(tf[1:], 100 * (i - i_f)[1:] / step, color=col, ls=ls,
+                              label=label)
+        ax[0, j].set_title(f"{MAGNET}: {ref['label']}")
+        ax[0, j].set_ylabel("(I - I0)/(I1 - I0)")
+        ax[1, j].set_ylabel("(I - I_FEM)/(I1 - I0) [%]")
+        ax[1, j].axhspan(-5, 5, color="0.9", zorder=0)
+        ax[1, j].set_ylim(-15, 15)
+        ax[1, j].set_xlabel("t [s]")
+        for a in ax[:, j]:
+            a.grid(True, which="both", alpha=0.3)
+    ax[0, 0].legend(fontsize=8, loc="upper left")
+    fig.tight_layout()
+    save(fig, path)
+
+
 def main(argv: list[str] | None = None) -> None:
     ap = argparse.ArgumentParser(description=(__doc__ or "").splitlines()[0])
     ap.add_argument("--fem", choices=("cases", "study", "noeddy"),
                     help="run that part of the FEM and store it in "
                          "benchmarks/results/fem_guidance_transient.json")
+    ap.add_argument("--figure", default="",
+                    help="draw the recorded steps against the flux model into this PNG")
     args = ap.parse_args(argv)
+    if args.figure:
+        plot(args.figure)
+        return
     if args.fem:
         out = run_fem(args.fem)
         data = json.loads(RESULTS.read_text()) if RESULTS.exists() else {}
