@@ -31,8 +31,9 @@ Eddy currents (solid iron): ``eddy_model = "lumped"`` (default) puts one
 ``EddyCurrent.solid_rectangular`` element on each half leg (with the pole bar's iron), the
 yoke and the rail; ``eddy_model = "ladder"`` makes each of them and each pole bar a slab
 ladder of ``eddy_layers`` tubes (:func:`maglevkit.circuit.ladder.ladder_branches`) across its
-thickness (legs ``t_l``, bars ``h_p``, yoke ``t_y``, rail ``t_r``), ``coil_air_i`` then
-from ``YL_i`` to ``YU_i`` (no eddy current in the iron encircles that air); statics are the
+thickness (legs ``t_l``, bars ``h_p``, yoke ``t_y``, rail ``t_r``; with ``end_effects``
+the Saint-Venant factor of the part's depth, as the U-magnet's), ``coil_air_i`` then from
+``YL_i`` to ``YU_i`` (no eddy current in the iron encircles that air); statics are the
 same.  docs/magnets.md, docs/validation_fem.md (the transient FEM).
 
 All yokes of one section are identical and in parallel magnetically with their coils in
@@ -65,6 +66,7 @@ from ..circuit.elements import (
     FringePermeance,
     IronPath,
     LeakagePermeance,
+    rectangle_torsion_constant,
 )
 from ..circuit.ladder import ladder_branches
 from ..circuit.network import Branch, Circuit, Coil, Network
@@ -237,12 +239,20 @@ def build_guidance_magnet(params: Mapping[str, Any], materials: Mapping[str, Mat
             return [Branch(branch, start, end, with_eddy(
                 list(irons), f"eddy_{branch}", w, h, irons[0].length, rho_))]
         mid = f"{branch}:bar" if len(irons) > 1 else end
-        out = ladder_branches(branch, start, mid, irons[0], thickness=thickness,
-                              resistivity=rho_, layers=options.eddy_layers)
+        out = slab(branch, start, mid, irons[0], thickness, w, rho_)
         if len(irons) > 1:
-            out += ladder_branches(mid, mid, end, irons[1], thickness=hp, resistivity=rho_,
-                                   layers=options.eddy_layers)
+            out += slab(mid, mid, end, irons[1], hp, L, rho_)
         return out
+
+    def slab(branch: str, start: str, end: str, iron: IronPath, thickness: float,
+             depth: float, rho_: float) -> list[Branch]:
+        """The slab ladder of one part across ``thickness``; with ``end_effects`` the
+        Saint-Venant factor of its finite ``depth`` (docs/equations.md 1a), as the
+        U-magnet's."""
+        factor = (rectangle_torsion_constant(thickness, depth) / (depth * thickness**3 / 3.0)
+                  if m["end_effects"] else 1.0)
+        return ladder_branches(branch, start, end, iron, thickness=thickness,
+                               resistivity=rho_, layers=options.eddy_layers, factor=factor)
 
     branches: list[Branch] = []
     circuits: list[Circuit] = []
@@ -301,10 +311,8 @@ def build_guidance_magnet(params: Mapping[str, Any], materials: Mapping[str, Mat
             # with the ladder the air joins the yoke's ends directly (no eddy current in
             # the iron encircles that air flux) and the yoke is its ladder across t_y
             end = f"EY{i}" if eddy and not ladder else f"YU{i}"
-            branches += [*(ladder_branches(f"yoke_{i}", f"YL{i}", end, yoke_iron,
-                                           thickness=ty, resistivity=rho,
-                                           layers=options.eddy_layers) if ladder else
-                           [Branch(f"yoke_{i}", f"YL{i}", end, (yoke_iron,))]),
+            branches += [*(slab(f"yoke_{i}", f"YL{i}", end, yoke_iron, ty, ny * wy, rho)
+                           if ladder else [Branch(f"yoke_{i}", f"YL{i}", end, (yoke_iron,))]),
                          Branch(f"coil_air_{i}", f"YL{i}", end, (LeakagePermeance(
                              f"coil_air_{i}", paths["coil_air"]),))]
             if eddy and not ladder:
