@@ -111,6 +111,72 @@ def test_compiled_loop_range_error_as_python(model: VehicleModel) -> None:
     assert msgs[0].startswith("vehicle run at t = 0.0420 s:")
 
 
+def test_compiled_loop_names_the_reason_from_its_own_flags(model: VehicleModel,
+                                                            monkeypatch: pytest.MonkeyPatch
+                                                            ) -> None:
+    """The compiled loop's message of a flagged step comes from the step's own reason
+    codes (recorded with the step) through the bank's message table, without stepping
+    the bank again: with ``MagnetBank.step`` broken the compiled loop gives the message
+    the NumPy loop (which steps the bank) gave."""
+    low = VehicleModel(dataclasses.replace(model.train, touchdown_gap_m=1e-3))
+    kw: dict[str, Any] = dict(speed_m_per_s=400 / 3.6, duration_s=0.3,
+                              irregularity=HarmonicProfile(2e-3, 3.0))
+    with pytest.raises(OutOfRangeError, match="outside the characteristic maps") as ref:
+        low.run(**kw, loop="python")
+
+    def no_step(*args: Any, **kw: Any) -> Any:
+        raise AssertionError("the compiled loop stepped the bank again")
+
+    low.run(**{**kw, "duration_s": 0.01}, loop="compiled")     # compile outside the patch
+    monkeypatch.setattr(MagnetBank, "step", no_step)
+    with pytest.raises(OutOfRangeError, match="outside the characteristic maps") as err:
+        low.run(**kw, loop="compiled")
+    assert str(err.value) == str(ref.value)
+
+
+@pytest.mark.parametrize("case", ["current_substep", "current_start", "gap", "voltage_nan"])
+def test_raise_step_flags_says_what_the_banks_step_says(model: VehicleModel, case: str
+                                                        ) -> None:
+    """``MagnetBank.raise_step_flags`` on a compiled step's outputs (reason codes, sub-step
+    extremes) gives the message of ``MagnetBank.step`` on the same step (the independent
+    path: the bank steps and diagnoses itself), for each reason: a current leaving the
+    maps within the step (a large voltage), at its start, a gap path leaving the maps, a
+    voltage that is not a number; and nothing for a good step."""
+    bank = model.bank
+    nc = bank.n_circuits
+    dt = 1e-3
+    gaps = np.full(nc, 0.010)
+    rates = np.zeros(nc)
+    i_l = model.trim_current_A.copy()
+    u = bank.resistance_ohm * i_l
+    if case == "current_substep":
+        u[7] = 5e4
+    elif case == "current_start":
+        i_l[7] = 1e4
+    elif case == "gap":
+        rates[7] = -9.0                    # 10 mm -> 1 mm, below the maps' gaps
+    else:
+        u[7] = np.nan
+    state = bank.initial_state(gaps_m=gaps, currents_A=model.trim_current_A)
+    state = type(state)(state.time_s, i_l, gaps.copy(), state.member_states,
+                        state.eddy_currents_A)
+    res = bank.step_function(dt)(I_L=i_l, s=gaps, U=u, sdot=rates, h=dt)
+    kw: dict[str, Any] = dict(gaps_m=gaps, gap_rates_m_per_s=rates, inductor_currents_A=i_l,
+                              voltages_V=u, current_min_A=np.asarray(res["I_L_min"]),
+                              current_max_A=np.asarray(res["I_L_max"]), start_s=0.0,
+                              end_s=dt)
+    assert float(res["n_bad"]) == 1.0
+    with pytest.raises(Exception) as ref:
+        bank.step(state, dt, u, gaps, rates)
+    with pytest.raises(type(ref.value)) as got:
+        bank.raise_step_flags(np.asarray(res["flags"]), **kw)
+    assert str(got.value) == str(ref.value)
+    expected = {"current_substep": "in an RK4 sub-step", "current_start": "over the step",
+                "gap": "outside the characteristic maps", "voltage_nan": "must be finite"}
+    assert expected[case] in str(got.value)          # each case a different reason
+    bank.raise_step_flags(np.zeros(nc), **kw)          # no flag: no error
+
+
 class _HoleProfile(Profile):
     """Flat, but not a number beyond ``x_bad``: a broken irregularity input."""
 

@@ -33,7 +33,10 @@ position at the step start, the irregularity and its slope at the points there, 
 the keep mask), ``C`` (per-run constants: speed and failure times); outputs ``S_next`` and
 ``R`` (the record of the step: gaps, rates, coil currents, forces and ``I_L`` at the step
 start, deflections, the mechanical state, the midspan deflection per ring row, the
-voltages, min/max gap and the bank's out-of-range count).  The block function chains the
+voltages, min/max gap, the bank's count of flagged circuits and, per circuit, the bank
+kernel's reason code (:class:`~maglevkit.reduced.StepFlag` bits) and the extremes of
+``I_L`` over the RK4 sub-steps, from which :meth:`MagnetBank.raise_step_flags` gives a
+flagged step's message without stepping again).  The block function chains the
 step ``block_steps`` times (``P`` and ``R`` one column per step).
 """
 
@@ -128,7 +131,8 @@ def _layout(n_dof: int, nc: int, n_sp: int, nm: int, held: bool = False) -> Step
     step = pack_slices([("x_ref", 1), ("r", nc), ("r_x", nc), ("t", 1), ("keep", n_sp), *extra])
     record = pack_slices([("gap", nc), ("gap_rate", nc), ("current", nc), ("force", nc), ("I_L", nc),
                           ("deflection", nc), ("q", n_dof), ("q_dot", n_dof), ("midspan_ring", n_sp),
-                          ("voltage", nc), ("gap_min", 1), ("gap_max", 1), ("n_bad", 1)])
+                          ("voltage", nc), ("gap_min", 1), ("gap_max", 1), ("n_bad", 1),
+                          ("flags", nc), ("I_L_min", nc), ("I_L_max", nc)])
     return StepLayout(n_dof, nc, n_sp, nm, state, step, record)
 
 
@@ -615,14 +619,15 @@ def build_vehicle_step(*, bank_step: Any, dt: float, nominal_gap_m: float, sides
     else:
         u_k = f_ctl(gap_k, damp_k, s_il, s_cur, s_psi, s_int, p_t, c_fail)
     bout = bank_step.call({"I_L": s_il, "s": gap_k, "U": u_k, "sdot": rate_k, "h": ca.MX(dt)})
-    il_next, cur_next, force_next, n_bad = (bout[k] for k in ("I_L_next", "I", "F", "n_bad"))
+    il_next, cur_next, force_next, n_bad, flags, il_lo, il_hi = (bout[k] for k in (
+        "I_L_next", "I", "F", "n_bad", "flags", "I_L_min", "I_L_max"))
     psi_n, int_n = f_upd(s_psi, s_int, u_k, s_cur, cur_next, gap_k)
     fb = (0.5 * sides) * (s_f + force_next)
     xm_n = parts["mechanics_loaded"](s_xm, fb, P[sp["q_g"]]) if held else f_mech(s_xm, fb)
     gx_n = parts["guideway_update"](s_gx, rows_mk, sa_mk, ca_mk, fb) if nm else s_gx
     s_next = ca.vertcat(xm_n, gx_n, il_next, psi_n, int_n, cur_next, force_next)
     rec = ca.vertcat(gap_k, rate_k, s_cur, s_f, s_il, w_k, s_xm, mid_k, u_k, ca.mmin(gap_k),
-                     ca.mmax(gap_k), n_bad)
+                     ca.mmax(gap_k), n_bad, flags, il_lo, il_hi)
     assert rec.shape[0] == lay.n_record and s_next.shape[0] == lay.n_state
     fun = ca.Function(name, [S, P, C], [s_next, rec], ["S", "P", "C"], ["S_next", "R"])
     measure = ca.Function(f"{name}_measure", [S, P, C], [gap_k, rate_k], ["S", "P", "C"],
