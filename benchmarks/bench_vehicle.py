@@ -9,8 +9,9 @@ step with one compiled CasADi function (``loop="compiled"``); the NumPy loop
 Times are process CPU time (``time.process_time``: the machine is shared, and wall time
 counts the other processes' share of the core); the wall-time factor is given beside it.
 The share of each part of the compiled step is measured by compiling each part (the
-functions the step composes) on its own and timing many calls of it on the trim state (the
-magnets: the bank's SIMD-lane library, which the compiled step calls); the
+functions the step composes, with the step's compiler flags, the mechanics and gaps
+expanded as the step has them) on its own and timing many calls of it on the trim state
+(the magnets: the bank's SIMD-lane library, which the compiled step calls); the
 rest of the run's CPU time per step is the Python loop (one call per block of 50 steps,
 event checks) and what a real run costs beyond hot repeated calls (fresh inputs and
 records every step, caches cleared by other processes).
@@ -35,7 +36,8 @@ from typing import Any
 
 import numpy as np
 
-from maglevkit.models.compiled import compile_function
+from maglevkit.control.realtime import vector_flags
+from maglevkit.models.compiled import compile_library
 from maglevkit.vehicle.simulation import VehicleModel, parse_irregularity
 from maglevkit.vehicle.train import load_vehicle
 
@@ -105,7 +107,7 @@ def irregularity_times(model: VehicleModel, prof: Any, v: float, dt: float = 1e-
 def _time_calls(f: Any, args: list[np.ndarray], calls: int = CALLS, compile_it: bool = True
                 ) -> tuple[float, list]:
     """CPU time per call [s] of the compiled ``f`` (best of 3 batches) and its outputs."""
-    fc = compile_function(f)[0] if compile_it else f
+    fc = compile_library(f.name(), [f], flags=vector_flags())[0][0] if compile_it else f
     buf, ev = fc.buffer()
     arrs = [np.ascontiguousarray(np.asarray(a, dtype=float).ravel()) for a in args]
     outs = [np.zeros(fc.nnz_out(i)) for i in range(fc.n_out())]
@@ -154,8 +156,10 @@ def part_times(model: VehicleModel, speed: float, dt: float = 1e-3) -> dict[str,
     # the loads, the gaps, (below) the modal update
     t_geo, geo = _time_calls(parts["guideway_train_loads"], [p[sp["x_ref"]], [speed]])
     t_defl, (w, w_rate, _) = _time_calls(parts["guideway_deflection"], [gx, *geo[:3], [speed]])
-    t_gaps, (gap, rate, _) = _time_calls(parts["gaps"], [xm, w, w_rate, p[sp["r"]],
-                                                        p[sp["r_x"]], [speed]])
+    # (the step composes the gaps and the mechanics expanded to scalar code, and compiles
+    # with the vector flags: so here)
+    t_gaps, (gap, rate, _) = _time_calls(parts["gaps"].expand(), [xm, w, w_rate, p[sp["r"]],
+                                                                 p[sp["r_x"]], [speed]])
     t_ctl, (u,) = _time_calls(parts["controllers"], [gap, rate, il, cur, psi, integ, [0.0],
                                                      c[1:]])
     lanes = model.bank.compiled_step_library(dt)
@@ -169,7 +173,7 @@ def part_times(model: VehicleModel, speed: float, dt: float = 1e-3) -> dict[str,
     new_cur, new_f = bank_out[names.index("I")], bank_out[names.index("F")]
     t_upd, _ = _time_calls(parts["controller_update"], [psi, integ, u, cur, new_cur, gap])
     f_bar = 0.5 * model.train.sides * (s[st["force"]] + new_f)
-    t_mech, _ = _time_calls(parts["mechanics"], [xm, f_bar])
+    t_mech, _ = _time_calls(parts["mechanics"].expand(), [xm, f_bar])
     t_out, _ = _time_calls(parts["guideway_update"], [gx, *geo[3:], f_bar])
     out.update({"guideway (deflection at the loads, gaps; modal update)":
                 t_geo + t_defl + t_gaps + t_out,

@@ -887,9 +887,11 @@ class RealTimeMPCBatch:
                                   state=self._state(idx[r], _single, estimate=b[0][r].copy()),
                                   reason="non-finite estimate")
             nx = gd["nx"]
-            for r in np.flatnonzero(st[:, 2] != 1.0).tolist():
-                self._dense_qp(gd, r, b[2][r], time_s, _single)
-                fallbacks += 1
+            guessed = st[:, 2] == 1.0
+            if not guessed.all():
+                for r in np.flatnonzero(~guessed).tolist():
+                    self._dense_qp(gd, r, b[2][r], time_s, _single)
+                    fallbacks += 1
             ug = b[2][:, nx] * gd["su"]
             lim = gd["ulim"]
             ok = np.abs(ug) <= lim * (1 + _LIMIT_SLACK)             # False for NaN
@@ -924,6 +926,8 @@ class RealTimeMPCBatch:
             nx, nxd = gd["nx"], gd["nx"] + gd["nd"]
             lim = _TARGET_RESIDUAL * np.maximum(1.0, np.abs(p[:, nxd]))
             bad = ~(np.abs(st[:, 0]) < lim)                 # also for NaN
+            if not bad.any():
+                continue
             for r in np.flatnonzero(bad).tolist():
                 j = int(gd["idx"][r])
                 c = self.controllers[j]

@@ -1439,8 +1439,13 @@ class VehicleModel:
 
         def look(k0: int, rows: np.ndarray) -> bool:
             """Any event in the block: a gap at a limit, a flagged circuit, the window."""
+            if k0 <= k_out < k0 + nb:
+                return True
+            if nb <= 4:     # a sampled controller's blocks: three scalars per row
+                return any(r[i_min] <= td_gap or r[i_max] >= land_gap or r[i_bad] != 0
+                           for r in rows)
             return bool(((rows[:, i_min] <= td_gap) | (rows[:, i_max] >= land_gap)
-                         | (rows[:, i_bad] != 0)).any() or k0 <= k_out < k0 + nb)
+                         | (rows[:, i_bad] != 0)).any())
 
         def check(k: int, row: np.ndarray, final: bool) -> tuple[int, Any] | None:
             """The NumPy loop's order per step: the loads leaving the integrated spans,
@@ -1521,20 +1526,22 @@ class VehicleModel:
         n_steps = times.size - 1
         td_gap, land_gap = self.train.touchdown_gap_m, self.train.landing_gap_m
 
+        s_cur, s_int, r_u, p_u = st["current"], st["integral"], rl["voltage"], sp["u_held"]
+        m_state, m_inputs = meas.args[0], meas.args[1]
+        gaps, rates = meas.res
+
         def before(k0: int, state: np.ndarray, records: np.ndarray) -> None:
             if k0 >= n_steps or k0 == k_out:
                 return
-            meas.args[0][:] = state
-            meas.args[1][:] = p_all[k0]
+            m_state[:] = state
+            m_inputs[:] = p_all[k0]
             meas.eval()
-            gaps, rates = meas.res
             if gaps.min() <= td_gap or gaps.max() >= land_gap:
                 return
             self._sample_controllers(ext_ctl, ext_idx, u_ext, float(times[k0]), gaps, rates,
-                                     state[st["current"]], ctl_times,
-                                     records[max(k0 - hold, 0):k0, rl["voltage"]],
-                                     state[st["integral"]], ctl_cpu)
-            p_all[k0:k0 + hold, sp["u_held"]] = u_ext
+                                     state[s_cur], ctl_times,
+                                     records[max(k0 - hold, 0):k0, r_u], state[s_int], ctl_cpu)
+            p_all[k0:k0 + hold, p_u] = u_ext
 
         return before
 
@@ -1592,25 +1599,25 @@ class VehicleModel:
         (``times_cpu``); ``applied``: the
         voltages applied since the last sample (rows), ``integral``: the projected gap
         error integral [m s] (the NMPC's reference correction)."""
-        from ..control.interface import Measurement
-
         s0 = self.train.nominal_gap_m
-        refs = np.full(gaps.size, s0)
-        if self.reference_integral_time_s is not None:
-            refs = refs - integral / self.reference_integral_time_s
-        if self.controller_kind == "mpc":
+        tau = self.reference_integral_time_s
+        # (s0 - e / tau, elementwise, is the same as full(s0) - e / tau)
+        refs = np.full(gaps.size, s0) if tau is None else s0 - integral / tau
+        # the mean of the applied rows: numpy's mean (the rows summed in order, / count)
+        ua = np.add.reduce(applied, axis=0) / applied.shape[0] if applied.shape[0] else None
+        clock, cpu = time.perf_counter, time.thread_time
+        if self.controller_kind == "mpc":       # RealTimeMPCBatch: one call, every circuit
             # what the circuit's frame can do: gaps and rates projected on the frame's
             # heave and pitch (the cascade's integral projection), so that the offset-free
             # estimates of a frame's circuits do not wind up against each other
-            proj = self.integral_projection
-            gaps = s0 + proj @ (gaps - s0)      # (the batch takes no rates: the EKF's)
-        clock, cpu = time.perf_counter, time.thread_time
-        ua = applied.mean(axis=0) if applied.shape[0] else None
-        if self.controller_kind == "mpc":       # RealTimeMPCBatch: one call, every circuit
+            gaps = s0 + self.integral_projection @ (gaps - s0)   # (the batch: no rates)
+            every = idx.size == gaps.size           # (idx is sorted and unique)
             t0, c0 = clock(), cpu()
             try:
-                u_out[idx] = ctls[0].update(gaps[idx], current[idx], refs[idx],
-                                            None if ua is None else ua[idx], time_s=float(t))
+                u_out[idx] = ctls[0].update(
+                    gaps if every else gaps[idx], current if every else current[idx],
+                    refs if every else refs[idx], None if ua is None else
+                    (ua if every else ua[idx]), time_s=float(t))
             except MaglevkitError as exc:
                 j = int(idx[int(getattr(exc, "state", {}).get("controller", 0))])
                 raise type(exc)(f"vehicle run at t = {t:.4f} s, controller of circuit "
@@ -1618,6 +1625,8 @@ class VehicleModel:
             times.append(clock() - t0)
             times_cpu.append(cpu() - c0)
             return
+        from ..control.interface import Measurement
+
         for c, j in zip(ctls, idx.tolist(), strict=True):
             m = Measurement(float(t), float(gaps[j]), float(rates[j]), current[j:j + 1].copy(),
                             float(refs[j]),
