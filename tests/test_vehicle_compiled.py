@@ -274,3 +274,41 @@ def test_bundled_guideway_consistent_with_published_values() -> None:
     # (measured 5.91 Hz; the self-weight reading, EI = 1.33e11, would give 10.8 Hz)
     f1 = float(span.natural_frequencies_Hz[0])
     assert 23.58 * L ** -0.592 <= f1 <= 94.76 * L ** -0.748
+
+
+def test_vector_flags_change_no_bit_of_the_step(model: VehicleModel) -> None:
+    """The step compiled with ``vector_flags`` (the lanes' vector target, no fused
+    multiply-adds) gives the bits of the plain ``-O3`` build: one block of 50 steps from
+    the trim state, every output equal."""
+    from maglevkit.control.realtime import vector_flags
+    from maglevkit.models.compiled import DEFAULT_FLAGS, compile_linked
+
+    flags = vector_flags()
+    assert flags[:len(DEFAULT_FLAGS)] == DEFAULT_FLAGS and "-ffp-contract=off" in flags
+    dt = 1e-3
+    lanes = model.bank.compiled_step_library(dt)
+    if lanes is None:
+        pytest.skip("no compiler for the bank's lanes")
+    vs = model._step_function(dt, lanes[0])
+    lay, nb = vs.layout, vs.block_steps
+    st, sp = lay.state, lay.step_inputs
+    s = np.zeros(lay.n_state)
+    s[st["x_mech"]][:model.mechanics.n_dof] = model.trim_q
+    s[st["I_L"]] = s[st["current"]] = model.trim_current_A
+    s[st["force"]] = model.trim_force_N
+    s[st["psi_hat"]] = model.flux_bias_Wb
+    p = np.zeros((nb, lay.n_step_inputs))
+    gw = model.guideway
+    p[:, sp["x_ref"].start] = (gw.origin_m + 1.3 * gw.span.length_m + model.train.length_m
+                               + 100 / 3.6 * dt * np.arange(nb))
+    p[:, sp["keep"]] = 1.0
+    p[:, sp["r"]] = 1e-4 * np.sin(np.arange(nb))[:, None]
+    c = np.concatenate([[100 / 3.6], np.full(model.bank.n_circuits, np.inf)])
+    outs = []
+    for fl in (DEFAULT_FLAGS, flags):
+        f = compile_linked(vs.block_function, lanes[1], flags=fl)
+        assert f is not None
+        res = f(s, p.T, c)
+        outs.append([np.asarray(r) for r in res])
+    for a, b in zip(*outs, strict=True):
+        np.testing.assert_array_equal(a, b)
