@@ -440,97 +440,57 @@ def slab_factor(thickness: float, depth: float) -> float:
     return rectangle_torsion_constant(thickness, depth) / (depth * thickness**3 / 3.0)
 
 
-def eddy_variant(magnet: mk.Magnet, *, slab: bool, layers: int | None = None) -> mk.Magnet:
-    """The magnet's network with its eddy elements changed (a benchmark variant, not a
-    maglevkit option): ``slab``: the core and pole-back elements as 2-D slabs (across x:
-    the pole length for a core, the back height for the back), else with the builder's
-    Saint-Venant factor of the finite width; ``layers``: each core segment and back segment
-    a diffusing ladder of that many tubes (``maglevkit.circuit.ladder``) instead of one
-    element, the segment's coil air beside the tubes outside the iron's eddy currents."""
+def slab_variant(magnet: mk.Magnet) -> mk.Magnet:
+    """The magnet's network with its lumped core and pole-back eddy elements as 2-D slabs
+    (across x: the pole length for a core, the back height for the back) instead of the
+    builder's bars with the Saint-Venant factor of the finite width: a benchmark variant
+    (not a maglevkit option) that isolates the 3-D factor."""
     from dataclasses import replace
 
-    from maglevkit.circuit.elements import EddyCurrent, IronPath
-    from maglevkit.circuit.ladder import ladder_branches
-    from maglevkit.circuit.network import Branch
+    from maglevkit.circuit.elements import EddyCurrent
 
     m = magnet.parameters["magnet"]
     lp, wp, hb, wb = m["pole_length"], m["pole_width"], m["back_height"], m["back_width"]
-    rho = float(m.get("resistivity") or mk.get_material(m["material"]).resistivity)
+    f_core, f_back = 1.0 / slab_factor(lp, wp), 1.0 / slab_factor(hb, wb)
+
+    def el(e, f):  # type: ignore[no-untyped-def]
+        return replace(e, conductance=f * e.conductance) if isinstance(e, EddyCurrent) else e
+
     net = magnet.network
-    byname = {b.name: b for b in net.branches}
-    drop: set[str] = set()
-    new: dict[str, list] = {}
-
-    def part(name: str) -> tuple[float, float]:
-        """(thickness, factor over the builder's element) of a core or back branch."""
-        t, d = (hb, wb) if name.startswith("back_") else (lp, wp)
-        return t, (1.0 / slab_factor(t, d) if slab else 1.0)
-
-    for b in net.branches:
-        if b.name.startswith("eddy_core_"):               # split: E -> core node
-            core = byname[b.name.removeprefix("eddy_")]
-            air = byname.get("coil_air_" + core.name.removeprefix("core_"))
-            t, f = part(core.name)
-            el = b.elements[0]
-            if layers is None:
-                new[b.name] = [replace(b, elements=(replace(el, conductance=f * el.conductance),))]
-                continue
-            iron = next(e for e in core.elements if isinstance(e, IronPath))
-            drop.add(b.name)
-            new[core.name] = ladder_branches(core.name, core.start, b.end, iron, thickness=t,
-                                             resistivity=rho, layers=layers,
-                                             factor=1.0 if slab else slab_factor(t, wp))
-            if air is not None:
-                new[air.name] = [replace(air, end=b.end)]
-        elif any(isinstance(e, EddyCurrent) for e in b.elements):
-            t, f = part(b.name)
-            iron = next(e for e in b.elements if isinstance(e, IronPath))
-            if layers is None:
-                new[b.name] = [replace(b, elements=tuple(
-                    replace(e, conductance=f * e.conductance) if isinstance(e, EddyCurrent)
-                    else e for e in b.elements))]
-            else:
-                d = wb if b.name.startswith("back_") else wp
-                new[b.name] = ladder_branches(b.name, b.start, b.end, iron, thickness=t,
-                                              resistivity=rho, layers=layers,
-                                              factor=1.0 if slab else slab_factor(t, d))
-    branches: list[Branch] = []
-    for b in net.branches:
-        if b.name in drop:
-            continue
-        branches += new.get(b.name, [b])
-    return replace(magnet, network=mk.Network(tuple(branches), net.circuits, name=net.name))
+    branches = tuple(replace(b, elements=tuple(el(e, f_back if "back" in e.name else f_core)
+                                               for e in b.elements)) for b in net.branches)
+    return replace(magnet, network=mk.Network(branches, net.circuits, name=net.name))
 
 
 def network_magnet(name: str, variant: str) -> mk.Magnet:
     """The network compared with the FEM: ``variant`` one of :data:`VARIANTS`."""
     spec = VARIANTS[variant]
+    base = mk.load_magnet(name, **spec["options"])
+    mag = base
     if spec["cut"]:
-        base = mk.load_magnet(name, eddy_currents=spec.get("eddy", True))
         params = dict(base.parameters)
         params["magnet"] = {**params["magnet"], "end_effects": False}
         params["provenance"] = {**params["provenance"],
                                 "magnet.end_effects": "[E] modelling choice: 2-D cut"}
         mag = mk.build_magnet(params, options=base.options, source=base.source)
-    else:
-        mag = mk.load_magnet(name, eddy_currents=spec.get("eddy", True))
-    if spec["slab"] or spec["layers"]:
-        mag = eddy_variant(mag, slab=spec["slab"], layers=spec["layers"])
-    return mag
+    return slab_variant(mag) if spec.get("slab") else mag
 
 
-#: networks held against the FEM: the bundled file as shipped (``end_effects = true``,
-#: split, lumped eddy elements with the Saint-Venant factor of the finite width); its
-#: longitudinal cut (``end_effects = false``: the 2-D partner of the FEM's statics; the
-#: eddy elements unchanged); the cut with 2-D slab eddy elements (the FEM's conductors like
-#: for like); the cut with slab ladders (diffusion, benchmark variant)
+#: networks held against the FEM (``options``: of ``load_magnet``): the bundled file as
+#: shipped (``end_effects = true``, split, lumped eddy elements with the Saint-Venant factor
+#: of the finite width); its longitudinal cut (``end_effects = false``: the 2-D partner of
+#: the FEM's statics); the cut with 2-D slab lumped elements (benchmark variant); the
+#: ladder (``eddy_model = "ladder"``: 2-D slabs on the cut, Saint-Venant on the bundled)
 VARIANTS: dict[str, dict] = {
-    "bundled": {"cut": False, "slab": False, "layers": None},
-    "cut": {"cut": True, "slab": False, "layers": None},
-    "cut, slab": {"cut": True, "slab": True, "layers": None},
-    "cut, slab ladder n = 4": {"cut": True, "slab": True, "layers": 4},
-    "cut, slab ladder n = 6": {"cut": True, "slab": True, "layers": 6},
-    "cut, no eddy currents": {"cut": True, "slab": False, "layers": None, "eddy": False},
+    "bundled": {"cut": False, "options": {}},
+    "bundled, ladder n = 6": {"cut": False, "options": {"eddy_model": "ladder",
+                                                        "eddy_layers": 6}},
+    "cut": {"cut": True, "options": {}},
+    "cut, slab": {"cut": True, "slab": True, "options": {}},
+    "cut, ladder n = 4": {"cut": True, "options": {"eddy_model": "ladder", "eddy_layers": 4}},
+    "cut, ladder n = 6": {"cut": True, "options": {"eddy_model": "ladder", "eddy_layers": 6}},
+    "cut, ladder n = 8": {"cut": True, "options": {"eddy_model": "ladder", "eddy_layers": 8}},
+    "cut, no eddy currents": {"cut": True, "options": {"eddy_currents": False}},
 }
 
 
@@ -578,7 +538,7 @@ def compare(magnet_name: str, variants: list[str], key_filter: str = "") -> list
         if ref["magnet"] != magnet_name or key_filter not in key:
             continue
         for v in variants:
-            if VARIANTS[v].get("eddy", True) != ref.get("eddy", True):
+            if VARIANTS[v]["options"].get("eddy_currents", True) != ref.get("eddy", True):
                 continue
             t0 = time.process_time()
             e = errors(ref, simulate_network(ref, v))

@@ -138,7 +138,9 @@ def test_bad_options_are_refused() -> None:
         with pytest.raises(InputError, match="eddy_"):
             mk.load_magnet("u-magnet", **kw)
     with pytest.raises(InputError, match="not available for kind"):
-        mk.load_magnet("tr09-standard", eddy_model="ladder")
+        mk.load_magnet("tr-guidance", eddy_model="ladder")
+    with pytest.raises(InputError, match="ladder_split"):
+        mk.load_magnet("tr09-standard", eddy_model="ladder_split")
     with pytest.raises(ParameterError, match="layers"):
         ladder_branches("p", "a", "b", IronPath("i", 0.1, 1e-3), thickness=0.01,
                         resistivity=1e-7, layers=12)
