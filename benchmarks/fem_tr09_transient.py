@@ -88,9 +88,10 @@ PATH = RESULTS / "fem_tr09_transient.json"
 OFFSET = 0.0215
 #: (label, gap [m], I0 [A], I1 [A]) of the voltage steps U = R I0 -> R I1 per circuit:
 #: across the nominal point (31.7 A) below the knee (45 A at 10 mm), at the nominal gap and
-#: a larger one
+#: a larger one; and from the nominal point into saturation
 CASES = (("10 mm, 20 -> 40 A", 0.010, 20.0, 40.0),
-         ("14 mm, 20 -> 40 A", 0.014, 20.0, 40.0))
+         ("14 mm, 20 -> 40 A", 0.014, 20.0, 40.0),
+         ("10 mm, 30 -> 60 A", 0.010, 30.0, 60.0))
 T_END = 3.0                  # s, ~7 electric time constants L/R = 0.61 H / 1.3 ohm
 REFINE = 1.0                 # fem_tr09's mesh sizes / REFINE
 DT0, BLOCK, DT_MAX = 5e-5, 8, 2e-2
@@ -535,7 +536,8 @@ def errors(ref: dict, run: dict) -> dict:
 def compare(magnet_name: str, variants: list[str], key_filter: str = "") -> list[dict]:
     rows = []
     for key, ref in _load().items():
-        if ref["magnet"] != magnet_name or key_filter not in key:
+        if (ref["magnet"] != magnet_name or key_filter not in key
+                or ref["label"] not in {c[0] for c in CASES}):     # not the study's runs
             continue
         for v in variants:
             if VARIANTS[v]["options"].get("eddy_currents", True) != ref.get("eddy", True):
@@ -551,6 +553,58 @@ def compare(magnet_name: str, variants: list[str], key_filter: str = "") -> list
                   f"{100 * e['force_start_err']:+.1f}/{100 * e['force_end_err']:+.1f} %",
                   flush=True)
     return rows
+
+
+def convergence(magnet_name: str = "tr09-standard") -> list[dict]:
+    """The study runs against the production run of case 0: current difference in % of
+    the step (largest for t >= 1 ms) and t63."""
+    data = _load()
+    lab = CASES[0][0]
+    base = data[f"{magnet_name} | {lab} | slices | o{OFFSET * 1e3:g}"]
+    tb, ib = np.asarray(base["time_s"]), np.asarray(base["current_A"])[:, -1]
+    i0, i1 = base["i0_A"], base["i1_A"]
+    rows = []
+    for key, r in data.items():
+        if r["magnet"] != magnet_name or not r["label"].startswith(lab):
+            continue
+        t, i = np.asarray(r["time_s"]), np.asarray(r["current_A"])[:, -1]
+        late = tb >= 1e-3 - 1e-12
+        rows.append({"key": key, "nodes": r["nodes"], "steps": r["steps"],
+                     "groups": r.get("n_groups"), "cpu_s": r["cpu_s"],
+                     "energy_residual": r["energy_residual"],
+                     "i_10ms": float(np.interp(1e-2, t, i)),
+                     "i_100ms": float(np.interp(0.1, t, i)),
+                     "t63_s": rise_time(t, i, i0, i1),
+                     "diff_max": float(np.max(np.abs(np.interp(tb, t, i) - ib)[late])
+                                       / (i1 - i0)),
+                     "force_0_N": r["force_N"][0], "force_end_N": r["force_N"][-1]})
+    return rows
+
+
+def report(magnet_name: str, variants: list[str]) -> str:
+    """Markdown tables: the FEM's convergence and the networks against the FEM."""
+    L = ["| FEM run | nodes | groups | steps | I(10 ms) [A] | I(100 ms) [A] | t63 [ms] | "
+         "max diff vs production, t >= 1 ms [% of step] | F(0) / F(end) [kN] | "
+         "energy residual | CPU [s] |", "|---|---|---|---|---|---|---|---|---|---|---|"]
+    for r in convergence(magnet_name):
+        L.append(f"| {r['key'].split(' | ', 1)[1]} | {r['nodes']} | {r['groups']} | "
+                 f"{r['steps']} | {r['i_10ms']:.3f} | {r['i_100ms']:.3f} | "
+                 f"{r['t63_s'] * 1e3:.1f} | {100 * r['diff_max']:.2f} | "
+                 f"{r['force_0_N'] / 1e3:.2f} / {r['force_end_N'] / 1e3:.2f} | "
+                 f"{r['energy_residual']:.1e} | {r['cpu_s']:.0f} |")
+    L += ["", "| FEM case | network | err at 1 ms [% of step] | max err t >= 1 ms [% of step] "
+          "| t63 model / FEM [ms] | t63 err [%] | force: max err [% of step] | "
+          "force at t = 0 / end [%] |", "|---|---|---|---|---|---|---|---|"]
+    for r in compare(magnet_name, variants, " | slices | o21.5") + compare(
+            magnet_name, [v for v in variants if "no eddy" in v], " | sigma 0 | o21.5"):
+        et = [a / b - 1 for a, b in zip(r["t63_s"], r["t63_fem_s"], strict=True)]
+        case = r["key"].split(" | ")[1] + (", sigma = 0" if "sigma 0" in r["key"] else "")
+        L.append(f"| {case} | {r['variant']} | {_pc(r['err_1ms'])} | "
+                 f"{' / '.join(f'{100 * x:.1f}' for x in r['err_max'])} | "
+                 f"{_ms(r['t63_s'])} / {_ms(r['t63_fem_s'])} | {_pc(et)} | "
+                 f"{100 * r['force_err_max']:.1f} | {100 * r['force_start_err']:+.1f} / "
+                 f"{100 * r['force_end_err']:+.1f} |")
+    return "\n".join(L)
 
 
 def _pc(v: list[float]) -> str:
@@ -575,6 +629,8 @@ def main(argv: list[str] | None = None) -> None:
     ap.add_argument("--compare", nargs="*", default=None, metavar="VARIANT",
                     help="the network variants (default all) against the recorded FEM")
     ap.add_argument("--filter", default="", help="with --compare: record keys containing this")
+    ap.add_argument("--report", nargs="*", default=None, metavar="VARIANT",
+                    help="markdown tables: FEM convergence and the variants (default all)")
     args = ap.parse_args(argv)
     only = None if args.only is None else [int(k) for k in args.only.split(",")]
     if args.fem:
@@ -591,6 +647,8 @@ def main(argv: list[str] | None = None) -> None:
                 groups=args.groups, offset=args.offset * 1e-3, verbose=args.verbose)
     if args.compare is not None:
         compare(args.magnet, args.compare or list(VARIANTS), args.filter)
+    if args.report is not None:
+        print(report(args.magnet, args.report or list(VARIANTS)))
 
 
 if __name__ == "__main__":
