@@ -595,6 +595,19 @@ def report(magnet_name: str, variants: list[str]) -> str:
     L += ["", "| FEM case | network | err at 1 ms [% of step] | max err t >= 1 ms [% of step] "
           "| t63 model / FEM [ms] | t63 err [%] | force: max err [% of step] | "
           "force at t = 0 / end [%] |", "|---|---|---|---|---|---|---|---|"]
+    mean = position_mean(magnet_name)
+    if mean is not None:
+        L_mean = []
+        for v in variants:
+            if not VARIANTS[v]["options"].get("eddy_currents", True):
+                continue
+            e = errors(mean, simulate_network(mean, v))
+            et = [a / b - 1 for a, b in zip(e["t63_s"], e["t63_fem_s"], strict=True)]
+            L_mean.append(f"| {mean['label']}, position mean | {v} | {_pc(e['err_1ms'])} | "
+                          f"{' / '.join(f'{100 * x:.1f}' for x in e['err_max'])} | "
+                          f"{_ms(e['t63_s'])} / {_ms(e['t63_fem_s'])} | {_pc(et)} | "
+                          f"{100 * e['force_err_max']:.1f} | "
+                          f"{100 * e['force_start_err']:+.1f} / {100 * e['force_end_err']:+.1f} |")
     for r in compare(magnet_name, variants, " | slices | o21.5") + compare(
             magnet_name, [v for v in variants if "no eddy" in v], " | sigma 0 | o21.5"):
         et = [a / b - 1 for a, b in zip(r["t63_s"], r["t63_fem_s"], strict=True)]
@@ -604,7 +617,25 @@ def report(magnet_name: str, variants: list[str]) -> str:
                  f"{_ms(r['t63_s'])} / {_ms(r['t63_fem_s'])} | {_pc(et)} | "
                  f"{100 * r['force_err_max']:.1f} | {100 * r['force_start_err']:+.1f} / "
                  f"{100 * r['force_end_err']:+.1f} |")
+    if mean is not None:
+        L += L_mean
     return "\n".join(L)
+
+
+def position_mean(magnet_name: str = "tr09-standard") -> dict | None:
+    """Case 0 averaged over the stator positions of fem_tr09 (0, 1/4, 1/2 slot pitch with
+    weights 1, 2, 1: four positions evenly over one slot pitch), if all are recorded (the
+    runs share one time grid)."""
+    data = _load()
+    lab = CASES[0][0]
+    runs = [data.get(f"{magnet_name} | {lab} | slices | o{o:g}") for o in (0, 21.5, 43)]
+    if any(r is None for r in runs):
+        return None
+    w = (0.25, 0.5, 0.25)
+    out = dict(runs[1])                                       # type: ignore[arg-type]
+    for k in ("current_A", "force_N"):
+        out[k] = sum(wi * np.asarray(r[k]) for wi, r in zip(w, runs, strict=True))  # type: ignore[index]
+    return out
 
 
 def _pc(v: list[float]) -> str:
