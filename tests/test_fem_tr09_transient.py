@@ -88,11 +88,12 @@ def test_lumped_network_jumps_and_the_ladder_follows_the_fem() -> None:
     ref = _record("tr09-standard", "10 mm, 20 -> 40 A")
     lumped = bench.errors(ref, bench.simulate_network(ref, "cut"))
     # the lumped eddy elements are resistors for the coil at t = 0+: the current jumps
-    # (measured LUMPED_1MS % of the step at 1 ms, t63 LUMPED_T63 %)
+    # (measured +13.7 % of the step at 1 ms, t63 +15.1 %)
     assert lumped["err_1ms"][0] > 0.10
     assert lumped["t63_s"][0] / lumped["t63_fem_s"][0] - 1 > 0.10
     err, t63 = _errors(bench, ref, "cut, ladder n = 6")
-    # measured LADDER_ERR % of the step and LADDER_T63 % t63; windows: WINDOWS
+    # measured 1.0 % of the step (largest, at 1 ms, where the FEM's own mesh error is
+    # 0.56 %) and t63 +1.0 %; windows 1.5 / 2.5 pp around them, inside the aims (5 %)
     assert np.all(err < 2.5)
     assert np.all((t63 > -2.5) & (t63 < 3.5))
 
@@ -117,7 +118,18 @@ def test_ladder_vs_fem_all_steps() -> None:
     assert seen == len(ALL_T63)
 
 
-#: largest current error [% of the step] allowed per step (measured + 1 pp)
-ALL_ERR: dict[tuple[str, str], float] = {}
-#: t63 error windows [%] per step (measured -/+ 1.5 pp)
-ALL_T63: dict[tuple[str, str], tuple[float, float]] = {}
+# Measured with the ladder n = 6 on the cut (docs/validation_fem.md): largest current error
+# for t >= 1 ms [% of the step] and t63 error [%], per circuit the FEM holds (standard:
+# rear; bow: middle c2 / end c3).  The model is deterministic (rtol 1e-7) and the record
+# fixed; the windows (error: measured + 1 pp; t63: measured -/+ 1.5 pp) only leave room
+# for round-off and integrator tolerance, and all lie inside the aims (5 % / 5 %).
+_MEASURED = {
+    ("tr09-standard", "10 mm, 20 -> 40 A"): ((1.0,), (+1.0,)),
+    ("tr09-standard", "14 mm, 20 -> 40 A"): ((1.0,), (+0.1,)),
+    ("tr09-standard", "10 mm, 30 -> 60 A"): ((1.1,), (-2.0,)),
+    ("tr09-bow", "10 mm, 20 -> 40 A"): ((1.0, 1.1), (+1.2, +0.8)),
+    ("tr09-bow", "14 mm, 20 -> 40 A"): ((1.0, 1.0), (+0.5, -0.1)),
+    ("tr09-bow", "10 mm, 30 -> 60 A"): ((1.1, 1.1), (-0.9, -2.6)),
+}
+ALL_ERR = {k: max(e) + 1.0 for k, (e, _) in _MEASURED.items()}
+ALL_T63 = {k: (min(t) - 1.5, max(t) + 1.5) for k, (_, t) in _MEASURED.items()}
