@@ -75,7 +75,7 @@ def test_ladder_statics_are_the_lumped_network_s() -> None:
     assert len(b.network.branches) > len(a.network.branches)
     sa = mk.solve_statics(a, gaps_m=0.010, currents_A=[40.0, 40.0])
     sb = mk.solve_statics(b, gaps_m=0.010, currents_A=[40.0, 40.0])
-    # Newton to ~1e-12 on both; measured 2e-15 (force) and 1e-12 (psi) relative
+    # Newton to ~1e-12 on both; measured 2e-12 (force) and 1e-12 (psi) relative
     assert float(np.ravel(sb.force_N)[0]) == pytest.approx(float(np.ravel(sa.force_N)[0]),
                                                              rel=1e-8)
     assert np.allclose(np.ravel(sb.flux_linkage_Wb), np.ravel(sa.flux_linkage_Wb), rtol=1e-8)
