@@ -651,6 +651,44 @@ def position_mean(magnet_name: str = "tr09-standard") -> dict | None:
     return out
 
 
+def figure(path: Path, variants: tuple[str, ...] = ("cut", "cut, ladder n = 6")) -> None:
+    """Current (normalised to the step) and its error against the FEM, per standard case."""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    data = _load()
+    refs = [data[f"tr09-standard | {c[0]} | slices | o{OFFSET * 1e3:g}"] for c in CASES]
+    fig, ax = plt.subplots(2, len(refs), figsize=(4.2 * len(refs), 6.5), squeeze=False)
+    styles = {"cut": ("tab:red", "--"), "cut, ladder n = 6": ("tab:blue", "-")}
+    for j, ref in enumerate(refs):
+        tf = np.asarray(ref["time_s"])
+        i_f = np.asarray(ref["current_A"])[:, 0]
+        i0, i1 = ref["i0_A"], ref["i1_A"]
+        ax[0, j].semilogx(tf[1:] * 1e3, (i_f[1:] - i0) / (i1 - i0), "k-", lw=2.5, alpha=0.5,
+                          label="FEM")
+        for v in variants:
+            run = simulate_network(ref, v)
+            col, ls = styles.get(v, ("tab:green", ":"))
+            im = np.interp(tf, run["time_s"], run["current_A"][:, 0])
+            ax[0, j].semilogx(tf[1:] * 1e3, (im[1:] - i0) / (i1 - i0), color=col, ls=ls,
+                              label=f"network: {v}")
+            ax[1, j].semilogx(tf[1:] * 1e3, 100 * (im - i_f)[1:] / (i1 - i0), color=col,
+                              ls=ls)
+        ax[0, j].set_title(f"TR09 standard, {ref['label']}")
+        ax[0, j].set_ylabel("(I - I0)/(I1 - I0)")
+        ax[1, j].set_ylabel("(I - I_FEM)/(I1 - I0) [%]")
+        ax[1, j].axhspan(-5, 5, color="0.9", zorder=0)
+        ax[1, j].set_ylim(-20, 20)
+        ax[1, j].set_xlabel("t [ms]")
+        for k in range(2):
+            ax[k, j].grid(True, which="both", alpha=0.3)
+    ax[0, 0].legend(fontsize=7)
+    fig.tight_layout()
+    fig.savefig(path, dpi=90)
+    print(f"wrote {path}")
+
+
 def _pc(v: list[float]) -> str:
     return " / ".join(f"{100 * x:+.1f} %" for x in v)
 
@@ -673,6 +711,8 @@ def main(argv: list[str] | None = None) -> None:
     ap.add_argument("--compare", nargs="*", default=None, metavar="VARIANT",
                     help="the network variants (default all) against the recorded FEM")
     ap.add_argument("--filter", default="", help="with --compare: record keys containing this")
+    ap.add_argument("--figure", action="store_true",
+                    help="docs/figures/fem-tr09-transient.png from the record")
     ap.add_argument("--report", nargs="*", default=None, metavar="VARIANT",
                     help="markdown tables: FEM convergence and the variants (default all)")
     args = ap.parse_args(argv)
@@ -691,6 +731,9 @@ def main(argv: list[str] | None = None) -> None:
                 groups=args.groups, offset=args.offset * 1e-3, verbose=args.verbose)
     if args.compare is not None:
         compare(args.magnet, args.compare or list(VARIANTS), args.filter)
+    if args.figure:
+        figure(Path(__file__).resolve().parents[1] / "docs" / "figures" /
+               "fem-tr09-transient.png")
     if args.report is not None:
         print(report(args.magnet, args.report or list(VARIANTS)))
 
