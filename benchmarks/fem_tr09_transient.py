@@ -408,6 +408,17 @@ def _spd_solve(K, b: np.ndarray) -> np.ndarray:  # type: ignore[no-untyped-def]
 # ---------------------------------------------------------------------------------------
 
 
+def _compact(x):  # type: ignore[no-untyped-def]
+    """The record's numbers to 9 significant digits (far below the FEM's own error)."""
+    if isinstance(x, float):
+        return float(f"{x:.9g}")
+    if isinstance(x, list):
+        return [_compact(v) for v in x]
+    if isinstance(x, dict):
+        return {k: _compact(v) for k, v in x.items()}
+    return x
+
+
 def _load() -> dict:
     return json.loads(PATH.read_text()) if PATH.exists() else {}
 
@@ -430,7 +441,7 @@ def run_fem(magnet_name: str, runs: list[tuple], *, groups: str = "slices",
         r.update(magnet=magnet_name, label=label, eddy=not sigma0, gap_m=s, i0_A=i0, i1_A=i1, refine=refine,
                  dt0_s=dt0, block=block, dt_max_s=dt_max, offset_m=offset)
         data = _load()
-        data[key] = r
+        data[key] = _compact(r)
         RESULTS.mkdir(exist_ok=True)
         PATH.write_text(json.dumps(data, separators=(",", ":")) + "\n")
         print(f"{key}: {r['steps']} steps, {r['cpu_s']:.0f} s CPU, energy residual "
