@@ -6,6 +6,7 @@ of a constant lateral force, failures, and the ISO 2631-1 Wd table."""
 from __future__ import annotations
 
 import math
+from typing import Any
 
 import numpy as np
 import pytest
@@ -301,3 +302,46 @@ def test_curve_entry_and_gust_at_400_kmh_keep_the_gaps_inside_their_limits(
     if scenario == "gust":
         f = ds.guidance_force.values[int(1.8 / 1e-3)]
         assert 0.3e4 < (f[2] + f[3]) - (f[0] + f[1]) < 3e4
+
+
+def test_compiled_loop_names_a_flagged_step_from_its_own_reason_codes(
+        model: CrossSectionModel, monkeypatch: pytest.MonkeyPatch) -> None:
+    """A guidance gap leaving the maps (2-22 mm) inside a step, with the touchdown limits
+    moved out of the way: the compiled loop's message comes from the step's own reason
+    codes through the bank's message table (issue 22 item 3), without stepping the bank
+    again.  Independent reference: the bank's own step (which diagnoses itself) on the
+    same step's inputs, as the loop did before.  (The NumPy loop is no reference here:
+    the choppers clamp on the way out of the maps, where the two loops part, see
+    test_compiled_step_equals_the_numpy_loop.)"""
+    from maglevkit.errors import OutOfRangeError
+    from maglevkit.reduced.bank import BankState, MagnetBank
+    from maglevkit.vehicle.irregularities import HarmonicProfile
+
+    low = CrossSectionModel(touchdown_gap_m=1e-3, landing_gap_m=0.05)
+    kw: dict = dict(speed_m_per_s=400 / 3.6, duration_s=0.3,
+                    lateral=HarmonicProfile(15e-3, 30.0))
+    low.run(**{**kw, "duration_s": 0.01}, loop="compiled")    # compile outside the patch
+    step, raise_flags = MagnetBank.step, MagnetBank.raise_step_flags
+    seen: list[tuple[str, str]] = []
+
+    def no_step(*args: object, **kw: object) -> None:
+        raise AssertionError("the compiled loop stepped the bank again")
+
+    def checked(self: MagnetBank, flags: np.ndarray, **kw: Any) -> None:
+        state = BankState(kw["start_s"], np.array(kw["inductor_currents_A"]),
+                          np.array(kw["gaps_m"]))
+        with pytest.raises(OutOfRangeError) as ref:
+            step(self, state, kw["end_s"] - kw["start_s"], np.array(kw["voltages_V"]),
+                 np.array(kw["gaps_m"]), np.array(kw["gap_rates_m_per_s"]))
+        with pytest.raises(OutOfRangeError) as got:
+            raise_flags(self, flags, **kw)
+        seen.append((str(got.value), str(ref.value)))
+        raise got.value
+
+    monkeypatch.setattr(MagnetBank, "step", no_step)
+    monkeypatch.setattr(MagnetBank, "raise_step_flags", checked)
+    with pytest.raises(OutOfRangeError, match="outside the characteristic maps: member "
+                                              "'guidance_") as err:
+        low.run(loop="compiled", **kw)
+    assert len(seen) == 1 and seen[0][0] == seen[0][1]
+    assert seen[0][0] in str(err.value)

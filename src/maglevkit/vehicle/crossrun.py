@@ -990,7 +990,8 @@ class CrossSectionModel:
                           ("current", nc), ("force", nc)])
         pi = pack_slices([("r", nc), ("r_x", nc), ("Q_t", nq), ("t", 1)])
         rc = pack_slices([("gap", nc), ("gap_rate", nc), ("current", nc), ("force", nc),
-                          ("I_L", nc), ("x", 2 * nq), ("voltage", nc), ("n_bad", 1)])
+                          ("I_L", nc), ("x", 2 * nq), ("voltage", nc), ("n_bad", 1),
+                          ("flags", nc), ("I_L_min", nc), ("I_L_max", nc)])
         S, P, C = (ca.MX.sym("S", st["force"].stop), ca.MX.sym("P", pi["t"].stop),
                    ca.MX.sym("C", 1 + nc))
         x, il, psi, itg, cur, frc = (S[st[k]] for k in ("x", "I_L", "psi_hat", "integral",
@@ -1003,13 +1004,16 @@ class CrossSectionModel:
                         "psi_hat": psi, "integral": itg, "t": P[pi["t"]],
                         "fail_t": fail_t})["U"]
         bout = bank_step.call({"I_L": il, "s": gaps, "U": u, "sdot": rates, "h": ca.MX(dt)})
-        il_n, cur_n, frc_n, n_bad = (bout[k] for k in ("I_L_next", "I", "F", "n_bad"))
+        il_n, cur_n, frc_n, n_bad, flags, il_lo, il_hi = (bout[k] for k in (
+            "I_L_next", "I", "F", "n_bad", "flags", "I_L_min", "I_L_max"))
         upd = f_upd.call({"psi_hat": psi, "integral": itg, "U": u, "current": cur,
                           "current_next": cur_n, "gap": gaps})
         # the mechanics' ZOH step with the load Q_g = Q_pre + Q_t (field and wind, per step)
         x_n = f_mech(x, 0.5 * (frc + frc_n), ca.DM(s.Q_preload) + P[pi["Q_t"]])
         s_next = ca.vertcat(x_n, il_n, upd["psi_hat_next"], upd["integral_next"], cur_n, frc_n)
-        rec = ca.vertcat(gaps, rates, cur, frc, il, x, u, n_bad)
+        # the bank kernel's reason codes and the sub-step extremes of I_L per circuit:
+        # a flagged step's message without stepping again (MagnetBank.raise_step_flags)
+        rec = ca.vertcat(gaps, rates, cur, frc, il, x, u, n_bad, flags, il_lo, il_hi)
         step = ca.Function("maglevkit_cross_section_step", [S, P, C], [s_next, rec])
         nb = int(block_steps)
         sb, pb = ca.MX.sym("S", S.shape[0]), ca.MX.sym("P", P.shape[0], nb)
@@ -1074,7 +1078,6 @@ class CrossSectionModel:
                        rx_mag: np.ndarray, field_mid: np.ndarray, q_ext: np.ndarray,
                        fail_t: np.ndarray, n: int, progress: bool = False) -> tuple[Any, ...]:
         from ..errors import SolverError
-        from ..reduced.bank import BankState
 
         s = self.mechanics.system
         bank = self.bank
@@ -1118,16 +1121,23 @@ class CrossSectionModel:
             if event is not None:
                 return k, event
             if not final and row[b_sl] != 0:
-                # the bank names member, circuit, gap, current and range (same inputs)
-                bank.step(BankState(float(t[k]), row[rc["I_L"]].copy(), row[g_sl].copy()),
-                          dt, row[rc["voltage"]], row[g_sl], row[r_sl])
+                # the step's own reason codes (the bank kernel's StepFlag bits) and sub-step
+                # extremes, turned into the bank's message (member, circuit, gap, current
+                # and range), as the heave-pitch vehicle's compiled loop: no second step
+                bank.raise_step_flags(row[rc["flags"]], gaps_m=row[g_sl],
+                                      gap_rates_m_per_s=row[r_sl],
+                                      inductor_currents_A=row[rc["I_L"]],
+                                      voltages_V=row[rc["voltage"]],
+                                      current_min_A=row[rc["I_L_min"]],
+                                      current_max_A=row[rc["I_L_max"]],
+                                      start_s=float(t[k]), end_s=float(t[k]) + dt)
                 raise SolverError(f"cross-section run at t = {t[k]:.4f} s: the compiled "
-                                  "step flagged the magnets, the bank's step did not; "
-                                  "rerun with loop='python'")
+                                  "step flagged the magnets, but its reason codes name no "
+                                  "reason; rerun with loop='python'")
             return None
 
         outcome, rec = run_blocks(fun, state=s_init, inputs=p_all, constants=consts,
-                                  n_steps=n, n_record=rc["n_bad"].stop, block_steps=nb,
+                                  n_steps=n, n_record=rc["I_L_max"].stop, block_steps=nb,
                                   look=look, check=check, progress=progress,
                                   label="cross-section run (steps)")
         last, touchdown = outcome.last_step, outcome.event
