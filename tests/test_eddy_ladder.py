@@ -147,6 +147,30 @@ def test_bad_options_are_refused() -> None:
     assert any(":tube2" in name for name in mag.network.branch_names)
 
 
+def test_each_kind_refuses_the_eddy_models_it_lacks() -> None:
+    """The message names the value, the kind and what that kind takes; a kind refuses a
+    model it lacks also with eddy currents off (was accepted for the guidance magnet's
+    "ladder_split" then, and the levitation kind's message offered the guidance kind for
+    "ladder_split")."""
+    from maglevkit.magnets.base import eddy_models_of_kind
+
+    assert eddy_models_of_kind("u_magnet") == ("lumped", "ladder", "ladder_split")
+    assert eddy_models_of_kind("guidance_magnet") == ("lumped", "ladder")
+    assert eddy_models_of_kind("levitation_magnet") == ("lumped",)
+    for eddy in (True, False):
+        with pytest.raises(InputError, match=r"'ladder_split' is not available for kind "
+                                             r"'guidance_magnet': use 'ladder' or 'lumped'"):
+            mk.load_magnet("tr-guidance", eddy_model="ladder_split", eddy_currents=eddy)
+        with pytest.raises(InputError, match=r"'ladder_split' is not available for kind "
+                                             r"'levitation_magnet': use 'lumped' \("):
+            mk.load_magnet("tr09-standard", eddy_model="ladder_split", eddy_currents=eddy)
+    with pytest.raises(InputError, match=r"'ladder': kinds u_magnet, guidance_magnet; "
+                                         r"'ladder_split': kind u_magnet"):
+        mk.load_magnet("tr09-standard", eddy_model="ladder")
+    with pytest.raises(InputError, match="eddy_model = 'Ladder'; allowed are"):
+        mk.load_magnet("tr-guidance", eddy_model="Ladder")
+
+
 def test_no_current_jump_with_the_ladder() -> None:
     from maglevkit.reduction import eddy_resistance
 

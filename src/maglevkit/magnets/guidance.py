@@ -70,7 +70,7 @@ from ..circuit.elements import (
 )
 from ..circuit.ladder import ladder_branches
 from ..circuit.network import Branch, Circuit, Coil, Network
-from ..errors import InputError, ParameterFileError
+from ..errors import ParameterFileError
 from ..materials import MU0, Material
 from .base import (
     ModelOptions,
@@ -182,10 +182,6 @@ def build_guidance_magnet(params: Mapping[str, Any], materials: Mapping[str, Mat
     iron = resolve_material(m["material"], materials, "magnet")
     rail_mat = resolve_material(r["material"], materials, "rail")
     eddy = options.eddy_currents
-    if eddy and options.eddy_model == "ladder_split":
-        raise InputError("eddy_model = 'ladder_split' (the U-magnet's rail split under its "
-                         "poles) does not apply to kind 'guidance_magnet': use 'ladder' or "
-                         "'lumped'")
     rho = resistivity(m["resistivity"], iron, "magnet") if eddy else 0.0
     rho_rail = resistivity(r["resistivity"], rail_mat, "rail") if eddy else 0.0
 
