@@ -292,3 +292,17 @@ def test_laminated_core_diffuses_across_each_sheet() -> None:
     rail_len = 0.06 + 0.03 + 0.03
     assert g_rail == pytest.approx(LADDER_COEFFICIENTS[3][1][0] * rail_len * 0.03 * 0.015
                                    / (2 * 1.5e-7 * 0.03 * 0.1), rel=1e-9)
+
+
+def test_saint_venant_factor() -> None:
+    """``J_rect / J_slab``, the one helper the U-magnet and guidance builders share: the
+    square's torsion constant 0.1406 a^4 (Timoshenko and Goodier, Theory of Elasticity,
+    k1 for a square: 0.141; Roark's 0.1406 to four places) over the slab's a^4/3, and a
+    deep section's approach to the slab (Roark: J = d t^3/3 (1 - 0.630 t/d) for d >> t)."""
+    from maglevkit.circuit.ladder import saint_venant_factor
+
+    # 0.1406 is rounded to four places: 5e-5 / 0.1406 relative
+    assert saint_venant_factor(0.01, 0.01) == pytest.approx(3 * 0.1406, rel=4e-4)
+    # t/d = 1e-2: 1 - 0.630 t/d; the exact series' 0.6302 and the neglected exp(-pi d/2t)
+    # terms are below 3e-6 of it (1e-4: room for both)
+    assert saint_venant_factor(0.001, 0.1) == pytest.approx(1 - 0.630 * 0.01, rel=1e-4)
