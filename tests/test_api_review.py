@@ -357,9 +357,13 @@ def test_mpc_refuses_bools_as_numbers() -> None:
 def test_eddy_resistance_rounding_zero_jump_is_no_jump(monkeypatch) -> None:  # type: ignore[no-untyped-def]
     from maglevkit.reduction import parameters
 
-    # the guidance magnet's eddy ladder shields its coil's every flux path: the coil current
-    # cannot jump, the jump admittance is zero up to the solve's rounding (was refused as
-    # "not passive" where the rounding came out negative, -9.7e-34 S)
+    # with the eddy ladder the guidance magnet's coil links coil_air (YL -> YU) with no eddy
+    # element in its path: the coil current cannot jump, the jump admittance is zero up to
+    # the solve's rounding (was refused as "not passive" where the rounding came out
+    # negative, -9.7e-34 S); without coil_air (leakage off) it is finite
+    no_air = mk.load_magnet("tr-guidance", eddy_model="ladder", leakage=False)
+    y_air = parameters.current_jump_admittance(no_air, gap_m=0.01, current_A=20.0)
+    assert np.all(np.diag(y_air) * no_air.network.resistances > 1e-4)   # measured 9.1e-4
     lad = mk.load_magnet("tr-guidance").with_options(eddy_model="ladder")
     y = parameters.current_jump_admittance(lad, gap_m=0.01, current_A=20.0)
     r_el = lad.network.resistances
