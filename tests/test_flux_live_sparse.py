@@ -184,8 +184,8 @@ def test_tr09_split_live_step_equals_simulate(tmp_path: Path) -> None:
     """The bundled TR09 (split network, sparse form): the live step's sparse LU solves its
     Newton matrix; 200 calls of 1 ms (voltage +20 % at 100 ms) agree with ``simulate`` on
     the same inputs to the integrator's accuracy: against a run at rtol 1e-10 the live
-    step's error is at most 3x that of ``simulate`` plus 1e-7 of each signal's range
-    (measured: 0.3-0.5x), and no setup fell back to the dense LU."""
+    step's error is at most 3x that of ``simulate`` plus 1e-7 of each signal's largest
+    magnitude (measured: 0.3-0.5x), and no setup fell back to the dense LU."""
     mag = mk.load_magnet("tr09-standard")
     fm = mk.FluxModel(mag, compiled="always", cache_dir=tmp_path)
     assert fm.dae.form == "sparse" and fm.dae.n_loops + fm.dae.n_circuits == 255
