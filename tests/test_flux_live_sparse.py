@@ -137,6 +137,10 @@ def test_a_tiny_static_pivot_falls_back_to_the_dense_lu(
     _check_solves(live, point, sparse=False)
     live.set_plan(plan)
     _check_solves(live, point, sparse=True)
+    # a tolerance of 0 (or below, or NaN) would let a zero static pivot through
+    for bad in (0.0, -1e-3, float("nan")):
+        with pytest.raises(mk.ParameterError, match="tolerance"):
+            live.set_plan(plan, tolerance=bad)
 
 
 def _run(fm: mk.FluxModel, i0: float, n: int, jump: int) -> np.ndarray:
