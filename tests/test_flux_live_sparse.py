@@ -18,7 +18,7 @@ import pytest
 import maglevkit as mk
 from maglevkit.models import compiled as compiled_mod
 from maglevkit.models import flux
-from maglevkit.models.flux_live import LiveIntegrator, newton_entries
+from maglevkit.models.flux_live import LiveIntegrator, newton_entries, sparse_lu_plan
 from maglevkit.models.signals import Sine
 
 pytestmark = pytest.mark.skipif(compiled_mod.find_compiler() is None,
@@ -141,6 +141,42 @@ def test_a_tiny_static_pivot_falls_back_to_the_dense_lu(
     for bad in (0.0, -1e-3, float("nan")):
         with pytest.raises(mk.ParameterError, match="tolerance"):
             live.set_plan(plan, tolerance=bad)
+
+
+def test_the_pivot_guard_catches_a_plan_made_on_another_matrix(
+        make_sparse: Callable[[], mk.FluxModel]) -> None:
+    """Plans chosen on perturbed copies of the Newton matrix (every entry times
+    10^U(-1, 1)) have static pivots that are zero or tiny at the true matrix.  With the
+    default tolerance every solve is as accurate as LAPACK's (the bounds of
+    ``_check_solves``), through the dense fallback where a pivot is caught; with a
+    negligible tolerance (1e-300: only exact zeros caught) some plan's sparse LU is used
+    and is far off (measured: 1e-7 ... 7 relative in three of the eight plans), so what
+    keeps the solves right is the guard."""
+    fm = make_sparse()                                  # an own live integrator
+    live = _live(fm, 20.0)
+    point = _point(fm, 20.0)
+    sparsities, values = live.sparsities(), live.jacobian(0.0, *point)
+    rng = np.random.default_rng(26)
+    worst_unguarded = 0.0
+    for _ in range(8):
+        plan = sparse_lu_plan(sparsities, live.nx,
+                              values * 10.0 ** rng.uniform(-1.0, 1.0, values.size))
+        assert plan is not None
+        for cj in (1e4, 1.0):
+            M = _newton_matrix(live, point, cj)
+            b = rng.standard_normal(M.shape[0])
+            ref = np.linalg.solve(M, b)
+            live.set_plan(plan)
+            sol, used_sparse = live.newton_solve(0.0, *point, cj, b)
+            res = np.abs(M @ sol - b).max() / (np.abs(M).sum(axis=1).max() * np.abs(sol).max())
+            assert res < 1e-12, (cj, res, used_sparse)
+            assert np.abs(sol - ref).max() <= 1e-9 * np.abs(ref).max(), (cj, used_sparse)
+            live.set_plan(plan, tolerance=1e-300)
+            sol, used_sparse = live.newton_solve(0.0, *point, cj, b)
+            if used_sparse:
+                worst_unguarded = max(worst_unguarded,
+                                      float(np.abs(sol - ref).max() / np.abs(ref).max()))
+    assert worst_unguarded > 1e-6, worst_unguarded
 
 
 def _run(fm: mk.FluxModel, i0: float, n: int, jump: int) -> np.ndarray:
