@@ -818,7 +818,9 @@ def load_magnet(source: str | Path, *, saturation: bool = True, fringing: bool =
     ParameterFileError
         Missing file, TOML syntax error, unknown/missing keys or invalid values.
     InputError
-        ``source`` is not a name or path, or a switch is not True/False.
+        ``source`` is not a name or path, a switch is not True/False, an unknown
+        ``eddy_model`` or one the magnet's kind lacks (:func:`eddy_models_of_kind`), or
+        ``eddy_layers`` not a whole number in 1 ... 8.
 
     Warns
     -----
