@@ -593,6 +593,8 @@ def build_magnet(parameters: Mapping[str, Any], *, options: ModelOptions | None 
     ------
     ParameterFileError
         Unknown, missing or invalid tables and values.
+    InputError
+        ``options.eddy_model`` not one the kind's builder has (:func:`eddy_models_of_kind`).
 
     Warns
     -----
