@@ -120,7 +120,7 @@ SWITCH_NAMES = ("saturation", "fringing", "leakage", "eddy_currents")
 #: ``Magnet.with_options``).
 OPTION_NAMES = (*SWITCH_NAMES, "eddy_model", "eddy_layers")
 #: Magnet kinds whose builder has the ``"ladder"`` eddy model.
-LADDER_KINDS = ("u_magnet", "guidance_magnet")
+LADDER_KINDS = ("u_magnet", "levitation_magnet", "guidance_magnet")
 #: Magnet kinds whose builder has the ``"ladder_split"`` eddy model (the U-magnet's rail).
 LADDER_SPLIT_KINDS = ("u_magnet",)
 

@@ -62,8 +62,17 @@ along the track (onto the stator's overhang) and the leakage around the coil's t
 across-track sides into the pole back.  ``end_effects = false`` leaves them out: the
 network is then a longitudinal cut of depth ``pole_width`` (the end poles' outer-side
 leakage over that depth), the like-for-like partner of a 2-D field solution.  The
-material cross-sections (stator yoke ``width``, pole back ``back_width``) and the eddy
-elements are unchanged.
+material cross-sections (stator yoke ``width``, pole back ``back_width``) and the lumped
+eddy elements are unchanged.
+
+Eddy currents: ``eddy_model = "lumped"`` (default) one solid-bar element per core segment
+and pole-back segment (``EddyCurrent.solid_rectangular``); ``"ladder"`` each of them a
+diffusing ladder of ``eddy_layers`` nested tubes (:mod:`maglevkit.circuit.ladder`) across
+the slab of the longitudinal cut (a core across the pole length, the back across its
+height), its conductances with the Saint-Venant factor of the finite width when
+``end_effects`` is true (the 2-D slab when false), as the U-magnet's; the split network's
+coil air then lies beside the tubes (outside the iron's eddy currents, no node ``E``).
+Checked against a voltage-step transient 2-D FEM (docs/validation_fem.md).
 """
 
 from __future__ import annotations
@@ -83,6 +92,7 @@ from ..circuit.elements import (
     LeakagePermeance,
     symbolic,
 )
+from ..circuit.ladder import ladder_branches, saint_venant_factor
 from ..circuit.network import Branch, Circuit, Coil, Network
 from ..errors import ParameterFileError
 from ..materials import MU0, Material
@@ -435,6 +445,14 @@ def levitation_network(m: Mapping[str, Any], st: Mapping[str, Any], names: list[
         return MU0 * length * _log(1.0 + tc / (0.5 * hc)) / math.pi
 
     rho = resistivity(m["resistivity"], core_mat, "magnet") if options.eddy_currents else 0.0
+    # "ladder": each core segment and pole-back segment diffuses its eddy currents across
+    # its section (nested tubes, circuit/ladder.py), the core across the pole length, the
+    # back across its height: the slab of the 2-D cut, with end_effects the Saint-Venant
+    # factor of the finite width (the loops close across the track), as the U-magnet's
+    ladder = options.eddy_currents and options.eddy_model == "ladder"
+
+    def ladder_factor(thickness: float, depth: float) -> float:
+        return saint_venant_factor(thickness, depth) if ends else 1.0
     slots = {"slot_pitch": st["slot_pitch"], "slot_opening": st["slot_opening"]}
 
     def chain(k: int) -> list[str]:
@@ -469,9 +487,16 @@ def levitation_network(m: Mapping[str, Any], st: Mapping[str, Any], names: list[
         turns = []
         for j in range(len(seg_len)):
             name = f"core_{p}_{j}" if split else f"core_{p}"
-            core: list[Element] = [IronPath(f"iron_{name}", seg_len[j], lp * wp, core_mat)]
+            core_iron = IronPath(f"iron_{name}", seg_len[j], lp * wp, core_mat)
+            core: list[Element] = [core_iron]
             eddy = (EddyCurrent.solid_rectangular(f"eddy_{name}", lp, wp, seg_len[j], rho),
-                    ) if options.eddy_currents else ()
+                    ) if options.eddy_currents and not ladder else ()
+            if ladder:
+                # the coil air beside the core is outside the iron's eddy currents
+                branches += ladder_branches(name, nodes[j + 1], nodes[j], core_iron,
+                                            thickness=lp, resistivity=rho,
+                                            layers=options.eddy_layers,
+                                            factor=ladder_factor(lp, wp))
             # every segment carries the eddy currents of its own length
             if split and options.leakage:
                 # the coil air in parallel with the iron only, the segment's eddy element in
@@ -481,14 +506,15 @@ def levitation_network(m: Mapping[str, Any], st: Mapping[str, Any], names: list[
                 # admittance of paper eq. 8's R_ec would vanish)
                 end = f"E{k + 1}_{j}" if eddy else nodes[j]
                 air = f"coil_air_{p}_{j}"
-                branches += [Branch(name, nodes[j + 1], end, tuple(core)),
+                branches += [*([] if ladder else [Branch(name, nodes[j + 1], end, tuple(core))]),
                              Branch(air, nodes[j + 1], end, (LeakagePermeance(
                                  air, MU0 * wp * coil_air_width(k) / seg_len[j]),))]
                 if eddy:
                     branches.append(Branch(f"eddy_{name}", end, nodes[j], eddy))
                 turns += [(name, seg_turns[j]), (air, seg_turns[j])]
                 continue
-            branches.append(Branch(name, nodes[j + 1], nodes[j], (*core, *eddy)))
+            if not ladder:
+                branches.append(Branch(name, nodes[j + 1], nodes[j], (*core, *eddy)))
             turns.append((name, seg_turns[j]))
         coil_turns.append(turns)
         air_gap = AirGap(f"gap_{p}", gap_input=p, pole_area=face_area, fringe_edges=tuple(edges),
@@ -568,10 +594,18 @@ def levitation_network(m: Mapping[str, Any], st: Mapping[str, Any], names: list[
                                        (LeakagePermeance(f"leak_pb_{p}", g_pb(k)),)))
     for k in range(poles - 1):
         q = f"{gaps[k]}_{gaps[k + 1]}"
-        back: list[Element] = [IronPath(f"iron_back_{q}", tau, hb * wb, core_mat)]
-        if options.eddy_currents:
+        back_iron = IronPath(f"iron_back_{q}", tau, hb * wb, core_mat)
+        back: list[Element] = [back_iron]
+        if ladder:
+            branches += ladder_branches(f"back_{q}", f"K{k + 1}", f"K{k + 2}", back_iron,
+                                        thickness=hb, resistivity=rho,
+                                        layers=options.eddy_layers,
+                                        factor=ladder_factor(hb, wb))
+            back = []
+        elif options.eddy_currents:
             back.append(EddyCurrent.solid_rectangular(f"eddy_back_{q}", hb, wb, tau, rho))
-        branches.append(Branch(f"back_{q}", f"K{k + 1}", f"K{k + 2}", tuple(back)))
+        if back:
+            branches.append(Branch(f"back_{q}", f"K{k + 1}", f"K{k + 2}", tuple(back)))
         if yoke_split:
             branches.append(Branch(f"stator_{q}", f"S{k + 1}r", f"S{k + 2}l",
                                    (IronPath(f"iron_stator_{q}", tau - lp, stator_area,

@@ -1394,6 +1394,41 @@ class MagnetBank:
             for k in np.flatnonzero(flags & reason):
                 self._flag_error(StepFlag(reason), int(k), s, se, sd, i0, u, lo, hi, t0, t1)
 
+    def raise_step_flags(self, flags: Any, *, gaps_m: Any, gap_rates_m_per_s: Any,
+                         inductor_currents_A: Any, voltages_V: Any, current_min_A: Any,
+                         current_max_A: Any, start_s: float, end_s: float) -> None:
+        """The error of a step that a compiled step flagged elsewhere (e.g. inside a
+        vehicle's compiled step, :meth:`step_function`): its reason codes (:class:`StepFlag`,
+        the step's ``flags``) turned into the same message :meth:`step` gives, without
+        stepping again.  Extrapolating banks warn instead, as :meth:`step`.
+
+        Parameters
+        ----------
+        flags : array (n_circuits,)
+            The step's ``flags`` output (reason codes, 0 for a good circuit).
+        gaps_m, gap_rates_m_per_s, inductor_currents_A, voltages_V : array (n_circuits,)
+            The step's inputs ``s`` [m], ``sdot`` [m/s], ``I_L`` [A], ``U`` [V].
+        current_min_A, current_max_A : array (n_circuits,)
+            The step's outputs ``I_L_min``, ``I_L_max`` [A] (extremes over the sub-steps).
+        start_s, end_s : float
+            Times of the step's start and end [s] (for the message).
+
+        Raises
+        ------
+        OutOfRangeError, InputError, SolverError
+            As :meth:`step` for the same step; nothing when no flag is set.
+        """
+        ri = self._reduced_idx
+
+        def arr(a: Any) -> np.ndarray:
+            return np.asarray(a, dtype=float).ravel()[ri]
+
+        res: list[Any] = [None] * 9
+        res[5], res[6], res[8] = arr(current_min_A), arr(current_max_A), arr(flags)
+        s, sd = arr(gaps_m), arr(gap_rates_m_per_s)
+        self._diagnose(s, sd, arr(inductor_currents_A), arr(voltages_V), s,
+                       SimpleNamespace(res=res), float(start_s), float(end_s))  # type: ignore[arg-type]
+
     def _flag_error(self, reason: StepFlag, k: int, s: np.ndarray, se: np.ndarray,
                     sd: np.ndarray, i0: np.ndarray, u: np.ndarray, lo: np.ndarray,
                     hi: np.ndarray, t0: float, t1: float) -> None:
