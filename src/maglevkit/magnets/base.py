@@ -80,8 +80,9 @@ class ModelOptions:
         section, each with its own eddy element (diffusion into solid iron,
         :mod:`maglevkit.circuit.ladder`); ``"ladder_split"``: the ladder with the
         U-magnet's rail split under and between the poles.  A kind refuses the models
-        its builder does not have (:func:`eddy_models_of_kind`; the ladder: U-magnet and
-        guidance magnet, the split ladder: U-magnet), with or without ``eddy_currents``.
+        its builder does not have (:func:`eddy_models_of_kind`: the ladder on every kind
+        of :data:`LADDER_KINDS`, the split ladder on the U-magnet only), with or without
+        ``eddy_currents``.
     eddy_layers : int
         Tubes per iron part of the ladder (1 ... 8; ignored by ``"lumped"``).
 
