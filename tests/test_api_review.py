@@ -357,9 +357,13 @@ def test_mpc_refuses_bools_as_numbers() -> None:
 def test_eddy_resistance_rounding_zero_jump_is_no_jump(monkeypatch) -> None:  # type: ignore[no-untyped-def]
     from maglevkit.reduction import parameters
 
-    # the guidance magnet's eddy ladder shields its coil's every flux path: the coil current
-    # cannot jump, the jump admittance is zero up to the solve's rounding (was refused as
-    # "not passive" where the rounding came out negative, -9.7e-34 S)
+    # with the eddy ladder the guidance magnet's coil links coil_air (YL -> YU) with no eddy
+    # element in its path: the coil current cannot jump, the jump admittance is zero up to
+    # the solve's rounding (was refused as "not passive" where the rounding came out
+    # negative, -9.7e-34 S); without coil_air (leakage off) it is finite
+    no_air = mk.load_magnet("tr-guidance", eddy_model="ladder", leakage=False)
+    y_air = parameters.current_jump_admittance(no_air, gap_m=0.01, current_A=20.0)
+    assert np.all(np.diag(y_air) * no_air.network.resistances > 1e-4)   # measured 9.1e-4
     lad = mk.load_magnet("tr-guidance").with_options(eddy_model="ladder")
     y = parameters.current_jump_admittance(lad, gap_m=0.01, current_A=20.0)
     r_el = lad.network.resistances
@@ -376,3 +380,17 @@ def test_eddy_resistance_rounding_zero_jump_is_no_jump(monkeypatch) -> None:  # 
         else:        # a clearly negative admittance is still refused
             with pytest.raises(mk.InputError, match="not passive"):
                 parameters.eddy_resistance(mag, gap_m=0.01, current_A=10.0)
+
+
+def test_maps_of_the_guidance_ladder_build() -> None:
+    """The use the zero-jump tolerance is for: ``build_maps`` on the guidance magnet's eddy
+    ladder (refused as "not passive" before it).  The jump ``R_ec`` is inf (the coil
+    current cannot jump), the step-fitted one finite and positive (measured 11.8 ohm with
+    two layers), and the reduced model builds on the maps."""
+    lad = mk.load_magnet("tr-guidance", eddy_model="ladder", eddy_layers=2)
+    maps = mk.build_maps(lad, gaps_m=np.linspace(0.006, 0.012, 4),
+                         currents_A=[0.0, 20.0, 40.0, 60.0], progress=False)
+    assert np.all(np.isinf(maps.dataset["eddy_resistance_ohm"].values))
+    fit = np.asarray(maps.dataset["eddy_resistance_fit_ohm"].values, dtype=float)
+    assert np.all(np.isfinite(fit) & (fit > 0.0)), fit
+    mk.CurrentModel(maps)

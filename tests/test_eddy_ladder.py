@@ -155,6 +155,25 @@ def test_bad_options_are_refused(monkeypatch) -> None:  # type: ignore[no-untype
     assert any(":tube2" in name for name in mag.network.branch_names)
 
 
+def test_each_kind_refuses_the_eddy_models_it_lacks() -> None:
+    """The message names the value, the kind and what that kind takes; a kind refuses a
+    model it lacks also with eddy currents off (the guidance and levitation builders
+    accepted "ladder_split" then, each checking it itself)."""
+    from maglevkit.magnets.base import eddy_models_of_kind
+
+    assert eddy_models_of_kind("u_magnet") == ("lumped", "ladder", "ladder_split")
+    assert eddy_models_of_kind("guidance_magnet") == ("lumped", "ladder")
+    assert eddy_models_of_kind("levitation_magnet") == ("lumped", "ladder")
+    for name, kind in (("tr-guidance", "guidance_magnet"), ("tr09-standard", "levitation_magnet")):
+        for eddy in (True, False):
+            with pytest.raises(InputError, match=rf"'ladder_split' is not available for kind "
+                                                 rf"'{kind}': use 'ladder' or 'lumped' "
+                                                 r"\(.*'ladder_split': kind u_magnet\)"):
+                mk.load_magnet(name, eddy_model="ladder_split", eddy_currents=eddy)
+    with pytest.raises(InputError, match="eddy_model = 'Ladder'; allowed are"):
+        mk.load_magnet("tr-guidance", eddy_model="Ladder")
+
+
 def test_no_current_jump_with_the_ladder() -> None:
     from maglevkit.reduction import eddy_resistance
 
@@ -276,3 +295,17 @@ def test_laminated_core_diffuses_across_each_sheet() -> None:
     rail_len = 0.06 + 0.03 + 0.03
     assert g_rail == pytest.approx(LADDER_COEFFICIENTS[3][1][0] * rail_len * 0.03 * 0.015
                                    / (2 * 1.5e-7 * 0.03 * 0.1), rel=1e-9)
+
+
+def test_saint_venant_factor() -> None:
+    """``J_rect / J_slab``, the one helper the U-magnet and guidance builders share: the
+    square's torsion constant 0.1406 a^4 (Timoshenko and Goodier, Theory of Elasticity,
+    k1 for a square: 0.141; Roark's 0.1406 to four places) over the slab's a^4/3, and a
+    deep section's approach to the slab (Roark: J = d t^3/3 (1 - 0.630 t/d) for d >> t)."""
+    from maglevkit.circuit.ladder import saint_venant_factor
+
+    # 0.1406 is rounded to four places: 5e-5 / 0.1406 relative
+    assert saint_venant_factor(0.01, 0.01) == pytest.approx(3 * 0.1406, rel=4e-4)
+    # t/d = 1e-2: 1 - 0.630 t/d; the exact series' 0.6302 and the neglected exp(-pi d/2t)
+    # terms are below 3e-6 of it (1e-4: room for both)
+    assert saint_venant_factor(0.001, 0.1) == pytest.approx(1 - 0.630 * 0.01, rel=1e-4)

@@ -18,7 +18,7 @@ import pytest
 import maglevkit as mk
 from maglevkit.models import compiled as compiled_mod
 from maglevkit.models import flux
-from maglevkit.models.flux_live import LiveIntegrator, newton_entries
+from maglevkit.models.flux_live import LiveIntegrator, newton_entries, sparse_lu_plan
 from maglevkit.models.signals import Sine
 
 pytestmark = pytest.mark.skipif(compiled_mod.find_compiler() is None,
@@ -137,6 +137,46 @@ def test_a_tiny_static_pivot_falls_back_to_the_dense_lu(
     _check_solves(live, point, sparse=False)
     live.set_plan(plan)
     _check_solves(live, point, sparse=True)
+    # a tolerance of 0 (or below, or NaN) would let a zero static pivot through
+    for bad in (0.0, -1e-3, float("nan")):
+        with pytest.raises(mk.ParameterError, match="tolerance"):
+            live.set_plan(plan, tolerance=bad)
+
+
+def test_the_pivot_guard_catches_a_plan_made_on_another_matrix(
+        make_sparse: Callable[[], mk.FluxModel]) -> None:
+    """Plans chosen on perturbed copies of the Newton matrix (every entry times
+    10^U(-1, 1)) have static pivots that are zero or tiny at the true matrix.  With the
+    default tolerance every solve is as accurate as LAPACK's (the bounds of
+    ``_check_solves``), through the dense fallback where a pivot is caught; with a
+    negligible tolerance (1e-300: only exact zeros caught) some plan's sparse LU is used
+    and is far off (measured: 1e-7 ... 7 relative in three of the eight plans), so what
+    keeps the solves right is the guard."""
+    fm = make_sparse()                                  # an own live integrator
+    live = _live(fm, 20.0)
+    point = _point(fm, 20.0)
+    sparsities, values = live.sparsities(), live.jacobian(0.0, *point)
+    rng = np.random.default_rng(26)
+    worst_unguarded = 0.0
+    for _ in range(8):
+        plan = sparse_lu_plan(sparsities, live.nx,
+                              values * 10.0 ** rng.uniform(-1.0, 1.0, values.size))
+        assert plan is not None
+        for cj in (1e4, 1.0):
+            M = _newton_matrix(live, point, cj)
+            b = rng.standard_normal(M.shape[0])
+            ref = np.linalg.solve(M, b)
+            live.set_plan(plan)
+            sol, used_sparse = live.newton_solve(0.0, *point, cj, b)
+            res = np.abs(M @ sol - b).max() / (np.abs(M).sum(axis=1).max() * np.abs(sol).max())
+            assert res < 1e-12, (cj, res, used_sparse)
+            assert np.abs(sol - ref).max() <= 1e-9 * np.abs(ref).max(), (cj, used_sparse)
+            live.set_plan(plan, tolerance=1e-300)
+            sol, used_sparse = live.newton_solve(0.0, *point, cj, b)
+            if used_sparse:
+                worst_unguarded = max(worst_unguarded,
+                                      float(np.abs(sol - ref).max() / np.abs(ref).max()))
+    assert worst_unguarded > 1e-6, worst_unguarded
 
 
 def _run(fm: mk.FluxModel, i0: float, n: int, jump: int) -> np.ndarray:
@@ -184,8 +224,8 @@ def test_tr09_split_live_step_equals_simulate(tmp_path: Path) -> None:
     """The bundled TR09 (split network, sparse form): the live step's sparse LU solves its
     Newton matrix; 200 calls of 1 ms (voltage +20 % at 100 ms) agree with ``simulate`` on
     the same inputs to the integrator's accuracy: against a run at rtol 1e-10 the live
-    step's error is at most 3x that of ``simulate`` plus 1e-7 of each signal's range
-    (measured: 0.3-0.5x), and no setup fell back to the dense LU."""
+    step's error is at most 3x that of ``simulate`` plus 1e-7 of each signal's largest
+    magnitude (measured: 0.3-0.5x), and no setup fell back to the dense LU."""
     mag = mk.load_magnet("tr09-standard")
     fm = mk.FluxModel(mag, compiled="always", cache_dir=tmp_path)
     assert fm.dae.form == "sparse" and fm.dae.n_loops + fm.dae.n_circuits == 255

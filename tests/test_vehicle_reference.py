@@ -64,6 +64,8 @@ def test_whole_run_reproduces_the_recorded_run(reference, tmp_path) -> None:  # 
     # recorded with the TR09 magnets' lumped "paper" network (the bundled files are split
     # since issue 26), the realism changes off, on the stored maps: the recorder's run
     res = REF.reference_run(tmp_path)
+    assert not REF.RUNS.built_maps(), (f"maps built, not stored: {REF.RUNS.built_maps()}; "
+                                       "re-record with tools/record_vehicle_reference.py")
     ds = res.dataset.isel(time=slice(None, None, 10))
     assert set(ds.data_vars) == set(reference.data_vars)
     assert dict(ds.sizes) == dict(reference.sizes)

@@ -73,6 +73,16 @@ def maps_cache() -> Path:
     return _MAPS_CACHE[0]
 
 
+def built_maps() -> list[str]:
+    """Maps files of :func:`maps_cache` that were built in this process, not copied from
+    :data:`MAPS_DIR` (a magnet whose network changed since the recording)."""
+    if not _MAPS_CACHE:
+        return []
+    stored = {f.stem for f in MAPS_DIR.glob("*.nc")}
+    return sorted(f.name for f in _MAPS_CACHE[0].glob("*.nc")
+                  if f.stem.rsplit("-", 1)[0] not in stored)
+
+
 def store_maps() -> None:
     """Keep the maps of this recording in :data:`MAPS_DIR` (added or replaced by name).
 

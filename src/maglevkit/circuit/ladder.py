@@ -29,11 +29,11 @@ from __future__ import annotations
 import math
 
 from ..errors import ParameterError
-from .elements import EddyCurrent, IronPath
+from .elements import EddyCurrent, IronPath, rectangle_torsion_constant
 from .network import Branch
 
 __all__ = ["LADDER_COEFFICIENTS", "LADDER_BAND", "ladder_parameters", "ladder_branches",
-           "EDDY_MODELS"]
+           "EDDY_MODELS", "saint_venant_factor"]
 
 #: Eddy-current models of the bundled magnets: one element per iron part, nested tubes,
 #: or nested tubes with the rail split under and between the poles (U-magnet).
@@ -107,6 +107,21 @@ def ladder_parameters(*, length: float, area: float, thickness: float, resistivi
     a, w = LADDER_COEFFICIENTS[layers]
     scale = factor * length * thickness * (0.5 * thickness) / (2.0 * resistivity * area)
     return tuple(area * ak for ak in a), tuple(scale * wk for wk in w)
+
+
+def saint_venant_factor(thickness_m: float, depth_m: float) -> float:
+    """``J_rect / J_slab`` of a solid bar's ``thickness x depth`` section [-]: the finite
+    depth's correction of its eddy conductances (the eddy currents close within the depth;
+    docs/equations.md 1a, "Finite depth"), the ``factor`` of :func:`ladder_parameters`.
+
+    Parameters
+    ----------
+    thickness_m : float
+        Thickness across which the eddy currents diffuse [m].
+    depth_m : float
+        Depth of the section, along which they run [m].
+    """
+    return rectangle_torsion_constant(thickness_m, depth_m) / (depth_m * thickness_m**3 / 3.0)
 
 
 def ladder_branches(name: str, start: str, end: str, iron: IronPath, *, thickness: float,

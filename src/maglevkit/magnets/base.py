@@ -79,8 +79,10 @@ class ModelOptions:
         ``t = 0+``); ``"ladder"``: ``eddy_layers`` nested flux tubes across each part's
         section, each with its own eddy element (diffusion into solid iron,
         :mod:`maglevkit.circuit.ladder`); ``"ladder_split"``: the ladder with the
-        U-magnet's rail split under and between the poles.  Kinds that have no ladder
-        refuse both.
+        U-magnet's rail split under and between the poles.  A kind refuses the models
+        its builder does not have (:func:`eddy_models_of_kind`: the ladder on every kind
+        of :data:`LADDER_KINDS`, the split ladder on the U-magnet only), with or without
+        ``eddy_currents``.
     eddy_layers : int
         Tubes per iron part of the ladder (1 ... 8; ignored by ``"lumped"``).
 
@@ -120,6 +122,15 @@ SWITCH_NAMES = ("saturation", "fringing", "leakage", "eddy_currents")
 OPTION_NAMES = (*SWITCH_NAMES, "eddy_model", "eddy_layers")
 #: Magnet kinds whose builder has the ``"ladder"`` eddy model.
 LADDER_KINDS = ("u_magnet", "levitation_magnet", "guidance_magnet")
+#: Magnet kinds whose builder has the ``"ladder_split"`` eddy model (the U-magnet's rail).
+LADDER_SPLIT_KINDS = ("u_magnet",)
+
+
+def eddy_models_of_kind(kind: str) -> tuple[str, ...]:
+    """The ``eddy_model`` values the builder of magnet kind ``kind`` takes."""
+    return tuple(m for m in EDDY_MODELS if m == "lumped"
+                 or (m == "ladder" and kind in LADDER_KINDS)
+                 or (m == "ladder_split" and kind in LADDER_SPLIT_KINDS))
 #: Magnet kinds whose ``[magnet]`` table has the ``end_effects`` key (true: the terms of the
 #: finite extent across the 2-D cut; ``Magnet.with_options(end_effects=...)`` sets it).
 #: The guidance magnet's network has no such term (false builds the same network).
@@ -583,6 +594,8 @@ def build_magnet(parameters: Mapping[str, Any], *, options: ModelOptions | None 
     ------
     ParameterFileError
         Unknown, missing or invalid tables and values.
+    InputError
+        ``options.eddy_model`` not one the kind's builder has (:func:`eddy_models_of_kind`).
 
     Warns
     -----
@@ -614,9 +627,12 @@ def _build(parameters: Mapping[str, Any], *, options: ModelOptions | None, sourc
         raise ParameterFileError(f"[magnet] kind = {kind!r} is unknown; known kinds: "
                                  f"{', '.join(sorted(_BUILDERS))}")
     builder, tables = _BUILDERS[kind]
-    if options.eddy_model != "lumped" and kind not in LADDER_KINDS:
+    allowed_models = eddy_models_of_kind(kind)
+    if options.eddy_model not in allowed_models:
         raise InputError(f"eddy_model = {options.eddy_model!r} is not available for kind "
-                         f"{kind!r} (only for {', '.join(LADDER_KINDS)}); use 'lumped'")
+                         f"{kind!r}: use {' or '.join(map(repr, reversed(allowed_models)))} "
+                         f"('ladder': kinds {', '.join(LADDER_KINDS)}; 'ladder_split': "
+                         f"kind {', '.join(LADDER_SPLIT_KINDS)})")
     allowed = {"magnet", "materials", "provenance", "operating", "calibration", *tables}
     unknown = sorted(set(parameters) - allowed)
     if unknown:
@@ -805,7 +821,9 @@ def load_magnet(source: str | Path, *, saturation: bool = True, fringing: bool =
     ParameterFileError
         Missing file, TOML syntax error, unknown/missing keys or invalid values.
     InputError
-        ``source`` is not a name or path, or a switch is not True/False.
+        ``source`` is not a name or path, a switch is not True/False, an unknown
+        ``eddy_model`` or one the magnet's kind lacks (:func:`eddy_models_of_kind`), or
+        ``eddy_layers`` not a whole number in 1 ... 8.
 
     Warns
     -----

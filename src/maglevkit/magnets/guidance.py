@@ -66,11 +66,10 @@ from ..circuit.elements import (
     FringePermeance,
     IronPath,
     LeakagePermeance,
-    rectangle_torsion_constant,
 )
-from ..circuit.ladder import ladder_branches
+from ..circuit.ladder import ladder_branches, saint_venant_factor
 from ..circuit.network import Branch, Circuit, Coil, Network
-from ..errors import InputError, ParameterFileError
+from ..errors import ParameterFileError
 from ..materials import MU0, Material
 from .base import (
     ModelOptions,
@@ -182,10 +181,6 @@ def build_guidance_magnet(params: Mapping[str, Any], materials: Mapping[str, Mat
     iron = resolve_material(m["material"], materials, "magnet")
     rail_mat = resolve_material(r["material"], materials, "rail")
     eddy = options.eddy_currents
-    if eddy and options.eddy_model == "ladder_split":
-        raise InputError("eddy_model = 'ladder_split' (the U-magnet's rail split under its "
-                         "poles) does not apply to kind 'guidance_magnet': use 'ladder' or "
-                         "'lumped'")
     rho = resistivity(m["resistivity"], iron, "magnet") if eddy else 0.0
     rho_rail = resistivity(r["resistivity"], rail_mat, "rail") if eddy else 0.0
 
@@ -249,8 +244,7 @@ def build_guidance_magnet(params: Mapping[str, Any], materials: Mapping[str, Mat
         """The slab ladder of one part across ``thickness``; with ``end_effects`` the
         Saint-Venant factor of its finite ``depth`` (docs/equations.md 1a), as the
         U-magnet's."""
-        factor = (rectangle_torsion_constant(thickness, depth) / (depth * thickness**3 / 3.0)
-                  if m["end_effects"] else 1.0)
+        factor = saint_venant_factor(thickness, depth) if m["end_effects"] else 1.0
         return ladder_branches(branch, start, end, iron, thickness=thickness,
                                resistivity=rho_, layers=options.eddy_layers, factor=factor)
 

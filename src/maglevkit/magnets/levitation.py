@@ -90,12 +90,11 @@ from ..circuit.elements import (
     FringePermeance,
     IronPath,
     LeakagePermeance,
-    rectangle_torsion_constant,
     symbolic,
 )
-from ..circuit.ladder import ladder_branches
+from ..circuit.ladder import ladder_branches, saint_venant_factor
 from ..circuit.network import Branch, Circuit, Coil, Network
-from ..errors import InputError, ParameterFileError
+from ..errors import ParameterFileError
 from ..materials import MU0, Material
 from .base import (
     ModelOptions,
@@ -446,9 +445,6 @@ def levitation_network(m: Mapping[str, Any], st: Mapping[str, Any], names: list[
         return MU0 * length * _log(1.0 + tc / (0.5 * hc)) / math.pi
 
     rho = resistivity(m["resistivity"], core_mat, "magnet") if options.eddy_currents else 0.0
-    if options.eddy_currents and options.eddy_model == "ladder_split":
-        raise InputError("eddy_model = 'ladder_split' splits the U-magnet's rail; a "
-                         "levitation magnet has 'lumped' or 'ladder'")
     # "ladder": each core segment and pole-back segment diffuses its eddy currents across
     # its section (nested tubes, circuit/ladder.py), the core across the pole length, the
     # back across its height: the slab of the 2-D cut, with end_effects the Saint-Venant
@@ -456,8 +452,7 @@ def levitation_network(m: Mapping[str, Any], st: Mapping[str, Any], names: list[
     ladder = options.eddy_currents and options.eddy_model == "ladder"
 
     def ladder_factor(thickness: float, depth: float) -> float:
-        return (rectangle_torsion_constant(thickness, depth) / (depth * thickness**3 / 3.0)
-                if ends else 1.0)
+        return saint_venant_factor(thickness, depth) if ends else 1.0
     slots = {"slot_pitch": st["slot_pitch"], "slot_opening": st["slot_opening"]}
 
     def chain(k: int) -> list[str]:

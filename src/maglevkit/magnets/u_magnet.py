@@ -99,10 +99,9 @@ from ..circuit.elements import (
     GapLayerPermeance,
     IronPath,
     LeakagePermeance,
-    rectangle_torsion_constant,
     symbolic,
 )
-from ..circuit.ladder import ladder_branches
+from ..circuit.ladder import ladder_branches, saint_venant_factor
 from ..circuit.network import Branch, Circuit, Coil, Network
 from ..errors import ParameterFileError
 from ..materials import MU0, IdealIron, Material
@@ -387,8 +386,7 @@ def lumped_network(m: Mapping[str, Any], r: Mapping[str, Any], core: Material,
                                    resistivity=rho, layers=options.eddy_layers)
         # solid bar: slab across the width; with end_effects the Saint-Venant factor of
         # the finite depth (the eddy currents close within the depth), else the 2-D slab
-        factor = (rectangle_torsion_constant(width, d) / (d * width**3 / 3.0)
-                  if m["end_effects"] else 1.0)
+        factor = saint_venant_factor(width, d) if m["end_effects"] else 1.0
         if solid and options.eddy_model == "ladder_split":
             # rail split under and between the poles: the flux enters the rail over each
             # pole face (rising linearly across it), runs uniform between the poles and
@@ -892,7 +890,7 @@ def _grid_ladders(branches: list[Branch], m: Mapping[str, Any], r: Mapping[str, 
         if not solid:
             thick = m["sheet_thickness"]
         elif m["end_effects"]:
-            factor = rectangle_torsion_constant(thick, d) / (d * thick**3 / 3.0)
+            factor = saint_venant_factor(thick, d)
         out += ladder_branches(br.name, br.start, br.end, iron, thickness=thick,
                                resistivity=rho, layers=layers, factor=factor)
     return out

@@ -55,6 +55,7 @@ from typing import Any
 import casadi as ca
 import numpy as np
 
+from ..errors import ParameterError
 from .compiled import DEFAULT_FLAGS, build_source, cache_directory
 
 __all__ = ["LiveIntegrator", "live_library"]
@@ -798,7 +799,11 @@ class LiveIntegrator:
                  tolerance: float = PIVOT_TOLERANCE) -> None:
         """Factorise on ``plan`` (from :func:`sparse_lu_plan`) from now on, falling back to
         the dense LU where a static pivot is below ``tolerance`` times its column's largest
-        entry; None: the dense LU at every setup."""
+        entry (> 0: a zero pivot always falls back; ``inf``: every setup falls back); None:
+        the dense LU at every setup.  ParameterError for a ``tolerance`` not > 0."""
+        if not (isinstance(tolerance, (int, float)) and tolerance > 0):
+            raise ParameterError(f"set_plan: tolerance = {tolerance!r}; allowed is a number "
+                                 "> 0 (0 would let a zero pivot through)")
         if plan is None:
             self._lib.fx_set_lu(self._mem, 0, *[None] * 7, tolerance)
             self.plan = False

@@ -115,7 +115,9 @@ def eddy_resistance(model: Any, *, gap_m: Any, current_A: Any) -> np.ndarray:
     ``R_ec,j = 1 / Y_jj - R_el,j`` with ``Y`` from :func:`current_jump_admittance`: the
     resistance that, in series with ``R_el`` (paper Fig. 8), gives the detailed model's
     instantaneous current jump under a voltage step of circuit ``j`` (other voltages
-    held).  ``inf`` where the circuit sees no eddy currents (``Y_jj = 0``).
+    held).  ``inf`` where the current cannot jump (``|Y_jj| <= JUMP_ADMITTANCE_ZERO /
+    R_el``): no eddy currents, or a flux path the coil links without an eddy element in
+    it (the guidance magnet's ladder: ``coil_air`` across the yoke).
 
     Old keyword names (``gap``, ``current``) are deprecated aliases for one release.
 
@@ -132,7 +134,7 @@ def eddy_resistance(model: Any, *, gap_m: Any, current_A: Any) -> np.ndarray:
     Returns
     -------
     ndarray (n_circuits,)
-        ``R_ec`` [ohm] per circuit (``inf`` without eddy currents).
+        ``R_ec`` [ohm] per circuit (``inf`` where the current cannot jump).
 
     Raises
     ------
@@ -147,11 +149,13 @@ def eddy_resistance(model: Any, *, gap_m: Any, current_A: Any) -> np.ndarray:
     out = np.empty(y.shape[0])
     for j in range(y.shape[0]):
         yjj = float(y[j, j])
-        # a coil whose every flux path is shielded by eddy elements (an eddy ladder) cannot
-        # jump: Y_jj is then zero up to the solve's rounding (measured +-1e-33 .. 1e-20 S on
-        # the guidance ladder, against 1/R_el ~ 0.7 S); |Y_jj| below 1e-12 of 1/R_el (the
-        # largest admittance a passive circuit can show) is that zero, not a sign of a
-        # non-passive network
+        # a coil that links a flux path with no eddy element in it cannot jump (that flux
+        # would follow the coil's MMF at once: an infinite voltage): no eddy currents at
+        # all, or the guidance ladder's coil_air across the yoke (YL -> YU; without it,
+        # leakage off, Y_jj is finite).  Y_jj is then zero up to the solve's rounding
+        # (measured +-1e-33 .. 1e-20 S on the guidance ladder, against 1/R_el ~ 0.7 S);
+        # |Y_jj| below 1e-12 of 1/R_el (the largest admittance a passive circuit can
+        # show) is that zero, not a sign of a non-passive network
         if abs(yjj) <= JUMP_ADMITTANCE_ZERO * (1.0 / float(net.resistances[j])):
             out[j] = math.inf
         elif yjj < 0.0 or not math.isfinite(yjj):
