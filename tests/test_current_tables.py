@@ -257,41 +257,41 @@ def test_maps_the_tables_cannot_hold_stay_on_the_bsplines() -> None:
     assert out.currents_A[0] == pytest.approx(runs[1].currents_A[1, 0], rel=1e-12)
 
 
-def test_step_wrapper_compiled_after_a_while_is_bit_identical(monkeypatch: pytest.MonkeyPatch
-                                                              ) -> None:
-    """CurrentModel.step's wrapper around the bank's lane step runs on CasADi's virtual
-    machine for COMPILE_AFTER_STEPS calls, then as C linked against the lane library: the
-    two give the same bits (12 different pole gaps and rates, voltages varying)."""
+def test_step_wrapper_compiled_at_the_first_step_is_bit_identical() -> None:
+    """CurrentModel.step's wrapper around the bank's lane step is C linked against the
+    lane library from the first step of a step length on (no compile pause later in a
+    run), and gives the same bits as the same wrapper on CasADi's virtual machine (12
+    different pole gaps and rates, voltages varying, 60 steps)."""
     from maglevkit.reduced import current as cur
 
     mag = mk.load_magnet("tr09-standard")
     maps = mk.build_maps(mag, gaps_m=np.linspace(0.005, 0.016, 6),
                          currents_A=np.linspace(0.0, 80.0, 9), progress=False)
-    monkeypatch.setattr(cur, "COMPILE_AFTER_STEPS", 20)
+    model = mk.CurrentModel(maps)
+    st = model.initial_state(gaps_m=0.01, currents_A=34.0)
+    model.step(st, 1e-3, 40.0)
+    compiled = model._table_steps[1e-3]
+    if compiled.library is None:
+        pytest.skip("no lane library (no C compiler)")
+    assert compiled.bound.function.class_name() != "MXFunction"       # compiled at once
+    lanes = model._bank.compiled_step_library(1e-3)
+    vm = cur._TableStep(lanes[0], model._avg, model._share)            # no library: the VM
+    assert vm.bound.function.class_name() == "MXFunction"
 
-    def run(model: mk.CurrentModel) -> np.ndarray:
-        st = model.initial_state(gaps_m=0.01, currents_A=34.0)
+    def run(call: cur._TableStep) -> np.ndarray:
+        i = np.array([34.0, 34.0])
         rng = np.random.default_rng(0)
         rows = []
         for k in range(60):
             g = 0.01 + 1e-3 * np.sin(0.03 * k) + 1e-5 * rng.standard_normal(12)
-            st, o = model.step(st, 1e-3, np.array([40.0, 42.0]) * (1 + 0.2 * np.sin(0.1 * k)),
-                               gaps_m=g, gap_rates_m_per_s=1e-3 * rng.standard_normal(12))
-            rows.append(np.concatenate([o.currents_A, o.pole_force_N, st.gaps_m,
-                                        st.inductor_currents_A, [o.force_N]]))
+            u = np.array([40.0, 42.0]) * (1 + 0.2 * np.sin(0.1 * k))
+            out = call(i, g, u, 1e-3 * rng.standard_normal(12), 1e-3)
+            assert out is not None
+            i = out[0]
+            rows.append(np.concatenate(out))
         return np.array(rows)
 
-    compiled = mk.CurrentModel(maps)
-    a = run(compiled)
-    call = compiled._table_steps[1e-3]
-    if call.library is None:
-        pytest.skip("no lane library (no C compiler)")
-    assert call.countdown == 0 and call.bound.function.class_name() != "MXFunction"
-    monkeypatch.setattr(cur, "COMPILE_AFTER_STEPS", 10**9)
-    vm = mk.CurrentModel(maps)
-    b = run(vm)
-    assert vm._table_steps[1e-3].bound.function.class_name() == "MXFunction"
-    assert np.array_equal(a, b)
+    assert np.array_equal(run(compiled), run(vm))
 
 
 def test_row_sums_equal_numpy_sum_bit_for_bit() -> None:

@@ -1310,11 +1310,6 @@ def _jit_compile(f: ca.Function) -> ca.Function:
                           reason=_last_line(str(exc))) from None
 
 
-#: CurrentModel.step calls of one step length after which the wrapper around the bank's
-#: compiled step is compiled too (0.3-0.7 s of the C compiler once, then cached on disk)
-COMPILE_AFTER_STEPS = 200
-
-
 class _TableStep:
     """One step on the bank's compiled table kernel with everything around it in one
     CasADi call through bound NumPy buffers: substitute gaps and rates from the pole
@@ -1340,15 +1335,16 @@ class _TableStep:
                 res["member_F"], g1, res["I_L_next"], flag]
         f = ca.Function(f"maglevkit_cm_{kernel.name()}", [x, g, u, gd, h], outs)
         self.function, self.library = f, library
-        # with the lane library: compiled after COMPILE_AFTER_STEPS calls (a short run
-        # never pays the compiler), until then CasADi's virtual machine (bit-identical)
-        self.countdown = COMPILE_AFTER_STEPS if library is not None else 0
         sizes = [f.nnz_out(i) for i in range(f.n_out() - 1)]
         self.block = np.zeros(sum(sizes))
         ends = np.cumsum([0, *sizes])
         self.slices = [slice(int(a), int(b)) for a, b in zip(ends[:-1], ends[1:], strict=True)]
         self.flag = np.zeros(1)
         self._bind(f)
+        if library is not None:
+            # compiled at once, on the first step of this length: that call builds (or
+            # loads) the lane library anyway, so no later step pauses for the compiler
+            self._compile()
 
     def _bind(self, f: ca.Function) -> None:
         bind = {i: self.block[sl] for i, sl in enumerate(self.slices)}
@@ -1369,10 +1365,6 @@ class _TableStep:
 
     def __call__(self, i: np.ndarray, g: np.ndarray, u: np.ndarray, gd: np.ndarray,
                  h: float) -> tuple[np.ndarray, ...] | None:
-        if self.countdown:
-            self.countdown -= 1
-            if not self.countdown:
-                self._compile()
         a = self.args
         a[0][:] = i
         a[1][:] = g
