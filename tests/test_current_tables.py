@@ -117,8 +117,8 @@ def test_leaving_the_maps_gives_the_bspline_messages(all_maps) -> None:
     messages = []
     for model in (tables, spline):
         st = model.initial_state(gaps_m=0.010, currents_A=20.0)
-        with pytest.raises(MaglevkitError) as step_err:
-            model.step(st, 1e-3, 1e4)                       # the current leaves the maps
+        with pytest.raises(MaglevkitError) as step_err:     # the current leaves the maps
+            model.step(model.initial_state(gaps_m=0.010, currents_A=58.0), 1e-3, 300.0)
         with pytest.raises(OutOfRangeError) as sim_err:
             model.simulate(np.linspace(0.0, 0.05, 51), gaps_m=0.010,
                            voltages_V=lambda t, r=model.resistance_ohm: 20.0 * r * (1 + 400 * t))
@@ -130,6 +130,17 @@ def test_leaving_the_maps_gives_the_bspline_messages(all_maps) -> None:
                          for e in (step_err, sim_err, nan_err, neg_err)])
     assert messages[0] == messages[1]
     assert messages[0][0][0] is OutOfRangeError and "currents 0..60 A" in messages[0][0][1]
+    # a step so steep that the B-spline RK4 leaves the splines' extension (it then
+    # integrates step-wise to the time the current leaves): the tables report the kernel's
+    # reason code, the sub-step, as the bank does for the same step
+    with pytest.raises(OutOfRangeError, match=r"circuit 'coil' in an RK4 sub-step within "
+                                              r"t = 0\.\.0\.001 s") as steep:
+        tables.step(tables.initial_state(gaps_m=0.010, currents_A=20.0), 1e-3, 1e4)
+    bank = mk.MagnetBank({"m": maps})
+    with pytest.raises(OutOfRangeError) as banked:
+        bank.step(bank.initial_state(gaps_m=0.010, currents_A=20.0), 1e-3, 1e4)
+    assert str(steep.value).split(" (")[0] == str(banked.value).split(" (")[0].replace(
+        "member 'm', circuit 'coil'", "circuit 'coil'")
 
 
 def test_extrapolation_falls_back_to_the_bspline_path(all_maps) -> None:
@@ -234,6 +245,51 @@ def test_kernel_reason_codes_name_each_reason(all_maps) -> None:
     with pytest.raises(OutOfRangeError, match=r"member 'b'.*over the step.*gap 0\.03 m"):
         bank.step(state, 1e-3, u[0], gaps_m=s)
     assert [int(r) for r in StepFlag.by_priority()] == [4, 1, 8, 2]
+
+
+def test_current_model_step_reads_the_kernels_reason_codes(all_maps) -> None:
+    """A flagged table step of CurrentModel is diagnosed from the kernel's reason codes
+    (no range check of its own: the checks are made to fail) and says what the B-spline
+    path says, character for character, and what the bank says of its circuit."""
+    from maglevkit.reduced.bank import MagnetBank
+
+    maps = all_maps["u-magnet"][1]                  # 6-16 mm, 0-60 A
+    tables, spline = mk.CurrentModel(maps), mk.CurrentModel(maps, lookup="bspline")
+
+    def no_check(*args: object, **kwargs: object) -> None:
+        raise AssertionError("a range check of CurrentModel's own ran")
+
+    tables._check_range = no_check                  # type: ignore[method-assign]
+    tables._check_substeps = no_check               # type: ignore[method-assign]
+    r = float(tables.core.resistance_ohm[0])
+    cases = [  # (start current [A], voltages, gaps, gap rates, error, message)
+        (20.0, np.array([20.0 * r]), 0.030, 0.0, OutOfRangeError,
+         r"circuit 'coil' over the step t = 0\.\.0\.001 s: substitute gap 0\.03 m"),
+        (20.0, np.array([20.0 * r]), 0.015, 2.0, OutOfRangeError,
+         r"over the step.*gap 0\.017 m"),
+        (58.0, np.array([300.0]), 0.010, 0.0, OutOfRangeError,
+         r"circuit 'coil' in an RK4 sub-step within t = 0\.\.0\.001 s: substitute gap 0\.01 m "
+         r"and current [\d.]+ A; its maps cover gaps 0\.006\.\.0\.016 m and currents 0\.\.60 A"),
+        (20.0, np.array([np.nan]), 0.010, 0.0, InputError,
+         r"voltages must be finite: circuit 'coil' = nan V"),
+    ]
+    bank = MagnetBank({"m": maps})
+    for i0, u, g, gd, err, pattern in cases:
+        msgs = []
+        state = spline.initial_state(gaps_m=0.010, currents_A=i0)   # (checks the range)
+        for model in (tables, spline):
+            with pytest.raises(err, match=pattern) as info:
+                model.step(state, 1e-3, u, gaps_m=np.full(len(model.gap_names), g),
+                           gap_rates_m_per_s=np.full(len(model.gap_names), gd))
+            msgs.append(str(info.value))
+        assert msgs[0] == msgs[1]
+        bst = bank.initial_state(gaps_m=0.010, currents_A=i0)
+        with pytest.raises(err) as info:
+            bank.step(bst, 1e-3, u, gaps_m=g, gap_rates_m_per_s=gd)
+        # the bank names member and circuit; its own advice has no command-line hint
+        bank_msg = str(info.value).replace("member 'm', circuit 'coil'", "circuit 'coil'")
+        bank_msg = bank_msg.replace("'m/coil'", "'coil'")
+        assert msgs[0].startswith(bank_msg.removesuffix(")"))
 
 
 def test_maps_the_tables_cannot_hold_stay_on_the_bsplines() -> None:

@@ -50,11 +50,14 @@ import numpy as np
 from ..errors import InputError, OutOfRangeError, SolverError
 from ..models.compiled import COMPILE_MODES, DEFAULT_FLAGS, BoundCall, compile_linked
 from ..models.inputs import check_initial_choice, check_step, per_name_values, simulation_inputs
-from ..validation import flag, real_array, renamed_keywords
+from ..validation import external_stacklevel, flag, real_array, renamed_keywords
 from .core import (
     EXTRA_CELLS,
+    STEP_FLAG_MESSAGES,
     MotionEddyLadder,
     ReducedCore,
+    StepFlag,
+    diagnose_flags,
     eq8_a,
     extend_values,
     rk4_substep,
@@ -620,21 +623,34 @@ class CurrentModel:
         k = int(idx[0]) if bad.ndim > 1 else 0
         j = int(idx[-1])
         if where is None:
-            where = f" at t = {t[k]:.6g} s" if t is not None else ""
-        msg = (f"circuit {self.circuit_names[j]!r}{where}: substitute gap "
-               f"{np.atleast_2d(s)[k if bad.ndim > 1 else 0, j]:.6g} m and current "
-               f"{np.atleast_2d(i_l)[k if bad.ndim > 1 else 0, j]:.6g} A; the maps cover gaps "
-               f"{lo_s:g}..{hi_s:g} m and currents {lo_i:g}..{hi_i:g} A")
+            where = STEP_FLAG_MESSAGES["time"] % t[k] if t is not None else ""
+        row = k if bad.ndim > 1 else 0
+        self._out_of_maps(j, float(np.atleast_2d(s)[row, j]), float(np.atleast_2d(i_l)[row, j]),
+                          where, inside_extension=bool(np.all(
+                              (s >= self._spline_range[0][0]) & (s <= self._spline_range[0][1])
+                              & (i_l >= self._spline_range[1][0])
+                              & (i_l <= self._spline_range[1][1]))))
+
+    def _out_of_maps(self, j: int, gap_m: float, current_A: float, where: str, *,
+                     inside_extension: bool = False) -> None:
+        """Circuit ``j`` outside its maps, in the words of every reduced model
+        (:data:`~maglevkit.reduced.core.STEP_FLAG_MESSAGES`): an :class:`OutOfRangeError`,
+        or with ``extrapolate`` and the point within the maps' linear continuation
+        (``inside_extension``) a warning."""
+        text = STEP_FLAG_MESSAGES
+        (lo_s, hi_s), (lo_i, hi_i) = self.gap_range, self.current_range
+        msg = text["out_of_maps"] % (f"circuit {self.circuit_names[j]!r}", where, gap_m,
+                                     current_A, lo_s, hi_s, lo_i, hi_i)
         if self.extrapolate:
-            (s_lo, s_hi), (i_lo, i_hi) = self._spline_range
-            if np.all((s >= s_lo) & (s <= s_hi) & (i_l >= i_lo) & (i_l <= i_hi)):
-                warnings.warn("extrapolating the characteristic maps: " + msg, stacklevel=3)
+            if inside_extension:
+                warnings.warn("extrapolating the characteristic maps: "
+                              + msg.removeprefix("outside the characteristic maps: "),
+                              stacklevel=external_stacklevel())
                 return
             msg += (f"; linear extrapolation reaches only {EXTRA_CELLS} grid cells beyond the "
                     "maps")
-        raise OutOfRangeError("outside the characteristic maps: " + msg
-                              + " (rebuild the maps on a larger grid, or pass extrapolate=True; on the "
-                                 "command line: --extrapolate)")
+            raise OutOfRangeError(msg + text["advice_extrapolating"])
+        raise OutOfRangeError(msg + text["advice_cli"])
 
     def _check_substeps(self, lo: np.ndarray, hi: np.ndarray, t0: float, t1: float) -> None:
         """Range check of the RK4 sub-step states of one interval from their extremes.
@@ -650,7 +666,7 @@ class CurrentModel:
         # report the extreme sub-step state (gap and current extremes may come from
         # different sub-steps of the interval)
         self._check_range(pts[:, self._sl], pts[:, :nc], np.array([t0, t0]),
-                          where=f" in an RK4 sub-step within t = {t0:.6g}..{t1:.6g} s")
+                          where=STEP_FLAG_MESSAGES["substep"] % (t0, t1))
 
     def _integrator(self, grid: tuple[float, ...]) -> ca.Function:
         """CVODES over a relative output grid (one run, no restarts), cached per grid."""
@@ -1003,10 +1019,9 @@ class CurrentModel:
         # far outside the maps is refused here (not as a non-finite integration later)
         s1 = s0 + sd * dt
         i_now = state.inductor_currents_A
-        self._check_range(np.minimum(s0, s1)[None, :], i_now[None, :], None,
-                          where=f" at the start of the step t = {state.time_s:.6g} s")
-        self._check_range(np.maximum(s0, s1)[None, :], i_now[None, :], None,
-                          where=f" at the end of the step t = {state.time_s + dt:.6g} s")
+        over = STEP_FLAG_MESSAGES["step"] % (state.time_s, state.time_s + dt)
+        self._check_range(np.minimum(s0, s1)[None, :], i_now[None, :], None, where=over)
+        self._check_range(np.maximum(s0, s1)[None, :], i_now[None, :], None, where=over)
         x0 = (np.concatenate([i_now, s0, self._eddy_state(state)]) if self._n_e
               else np.concatenate([i_now, s0]))
         uu = np.concatenate([u, sd])
@@ -1112,13 +1127,42 @@ class CurrentModel:
             self._table_steps[dt] = call
         r = call(state.inductor_currents_A, g, u, gd, dt)
         if r is None:
-            return None       # flagged: the B-spline path raises, warns or integrates
+            self._diagnose_table_step(call, state, g, u, gd, dt)
+            return None       # the B-spline path raises, warns or integrates
         x, coil, force, pole, total, g1, x_out = r
         t1 = state.time_s + dt
         return (_new(CurrentModelState, time_s=t1, inductor_currents_A=x, gaps_m=g1,
                      eddy_currents_A=None),
                 _new(CurrentOutputs, time_s=t1, currents_A=coil, inductor_currents_A=x_out,
                      circuit_force_N=force, pole_force_N=pole, force_N=float(total[0])))
+
+    def _diagnose_table_step(self, call: _TableStep, state: CurrentModelState, g: np.ndarray,
+                             u: np.ndarray, gd: np.ndarray, dt: float) -> None:
+        """A flagged table step: the kernel's reason codes (:class:`StepFlag`) turned into
+        the error by :func:`~maglevkit.reduced.core.diagnose_flags`, the one reading of
+        them (no range check of its own).  Returns (for the B-spline path to take the
+        step) where that path does more than raise: extrapolating, a non-finite result
+        (its step-wise integration), and pole gaps that are or become <= 0 (its
+        per-gap message; the kernel sees only substitute gaps)."""
+        codes = call.codes.astype(int)
+        first = int(np.bitwise_or.reduce(codes))
+        if (self.extrapolate or not first
+                or (first & StepFlag.RESULT_NOT_FINITE
+                    and not first & (StepFlag.INPUT_NOT_FINITE | StepFlag.GAP_OUT_OF_RANGE))
+                or (g <= 0.0).any() or (g + gd * dt <= 0.0).any()):
+            return
+        tol_s, tol_i = self._tol_s, self._tol_i
+        (lo_s, _), (lo_i, hi_i) = self.gap_range, self.current_range
+        nc = self.n_circuits
+        diagnose_flags(codes, self.circuit_names, gaps_m=self._avg @ g,
+                       gap_rates_m_per_s=self._avg @ gd, currents_A=state.inductor_currents_A,
+                       voltages_V=u, substep_min_A=call.current_min.copy(),
+                       substep_max_A=call.current_max.copy(),
+                       current_min_A=np.full(nc, lo_i - tol_i),
+                       current_max_A=np.full(nc, hi_i + tol_i),
+                       gap_min_m=np.full(nc, lo_s - tol_s), t0_s=state.time_s,
+                       t1_s=state.time_s + dt,
+                       out_of_maps=self._out_of_maps)
 
     def _integrate(self, t: np.ndarray, x0: np.ndarray, uu: np.ndarray
                    ) -> tuple[np.ndarray, tuple[np.ndarray, np.ndarray] | None]:
@@ -1331,15 +1375,21 @@ class _TableStep:
         g1 = g + gd * h
         flag = res["n_bad"] + ca.sum1(g <= 0) + ca.sum1(g1 <= 0)
         force = res["F"]
+        # the block of results, the flag, and for a flagged step the kernel's reason codes
+        # and sub-step current extremes
         outs = [res["I_L_next"], res["I"], force, ca.mtimes(ca.DM(share), force),
-                res["member_F"], g1, res["I_L_next"], flag]
+                res["member_F"], g1, res["I_L_next"], flag, res["flags"], res["I_L_min"],
+                res["I_L_max"]]
         f = ca.Function(f"maglevkit_cm_{kernel.name()}", [x, g, u, gd, h], outs)
         self.function, self.library = f, library
-        sizes = [f.nnz_out(i) for i in range(f.n_out() - 1)]
+        sizes = [f.nnz_out(i) for i in range(7)]
         self.block = np.zeros(sum(sizes))
         ends = np.cumsum([0, *sizes])
         self.slices = [slice(int(a), int(b)) for a, b in zip(ends[:-1], ends[1:], strict=True)]
         self.flag = np.zeros(1)
+        #: the kernel's reason codes (StepFlag bits) and the smallest and largest ``I_L``
+        #: over the sub-steps of the last call, per circuit
+        self.codes, self.current_min, self.current_max = (np.zeros(nc) for _ in range(3))
         self._bind(f)
         if library is not None:
             # compiled at once, on the first step of this length: that call builds (or
@@ -1348,7 +1398,9 @@ class _TableStep:
 
     def _bind(self, f: ca.Function) -> None:
         bind = {i: self.block[sl] for i, sl in enumerate(self.slices)}
-        bind[len(self.slices)] = self.flag
+        n = len(self.slices)
+        bind[n], bind[n + 1], bind[n + 2], bind[n + 3] = (self.flag, self.codes,
+                                                          self.current_min, self.current_max)
         self.bound = BoundCall(f, res=bind)
         self.args = self.bound.args
         self.eval = self.bound.eval
