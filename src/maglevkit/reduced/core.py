@@ -33,8 +33,9 @@ if TYPE_CHECKING:
     from ..reduction.maps import CharacteristicMaps
 
 __all__ = ["EDDY_RESISTANCE_CHOICES", "EXTRA_CELLS", "STEP_FLAG_MESSAGES", "SUBSTEP_ALLOWANCE",
-           "MotionEddyLadder", "ReducedCore", "StepFlag", "circuit_label", "eq8_a", "extend_axis",
-           "extend_values", "rk4_substep", "substep_count", "substep_counts", "substep_rule_c"]
+           "MotionEddyLadder", "ReducedCore", "StepFlag", "circuit_label", "diagnose_flags",
+           "eq8_a", "extend_axis", "extend_values", "rk4_substep", "substep_count",
+           "substep_counts", "substep_rule_c"]
 
 EXTRA_CELLS = 3
 """Grid cells by which the maps are continued linearly beyond their range."""
