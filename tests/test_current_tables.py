@@ -128,6 +128,12 @@ def test_leaving_the_maps_gives_the_bspline_messages(all_maps) -> None:
             model.step(st, 1e-3, 20.0, gaps_m=np.array([0.010, -0.001]))
         messages.append([(type(e.value), str(e.value))
                          for e in (step_err, sim_err, nan_err, neg_err)])
+    # simulate: the tables name the flagged step of the compiled loop (its reason code: an
+    # RK4 sub-step end), the B-spline path the end of that interval; the rest is the same
+    tab_sim, spl_sim = messages[0].pop(1), messages[1].pop(1)
+    assert tab_sim[0] is spl_sim[0] is OutOfRangeError
+    assert tab_sim[1] == spl_sim[1].replace(" at t = 0.017 s",
+                                            " in an RK4 sub-step within t = 0.016..0.017 s")
     assert messages[0] == messages[1]
     assert messages[0][0][0] is OutOfRangeError and "currents 0..60 A" in messages[0][0][1]
     # a step so steep that the B-spline RK4 leaves the splines' extension (it then
@@ -273,6 +279,12 @@ def test_current_model_step_reads_the_kernels_reason_codes(all_maps) -> None:
         (20.0, np.array([np.nan]), 0.010, 0.0, InputError,
          r"voltages must be finite: circuit 'coil' = nan V"),
     ]
+    # simulate: the compiled time loop stops at the flagged step, whose codes say why
+    # (a gap ramp out of the 6-16 mm maps between 20 and 21 ms)
+    with pytest.raises(OutOfRangeError, match=r"circuit 'coil' over the step t = 0\.02\.\.0\.021 "
+                                              r"s: substitute gap 0\.0161 m"):
+        tables.simulate(np.linspace(0.0, 0.05, 51), gaps_m=lambda t: 0.014 + 0.1 * t,
+                        voltages_V=20.0 * r, initial_currents_A=20.0)
     bank = MagnetBank({"m": maps})
     for i0, u, g, gd, err, pattern in cases:
         msgs = []

@@ -308,10 +308,13 @@ class CurrentModel:
         B-spline, equal to it within 1e-12 relative on the standard scenarios,
         docs/decisions.md), one compiled call per step and the whole time loop of
         :meth:`simulate` in C.  ``"bspline"``: CasADi's B-spline interpolants evaluated
-        per interval.  Where the tables cannot follow (a step leaves the maps, with
-        ``extrapolate`` too, or is not finite) the call is redone on the B-spline path,
-        which raises or warns as before; maps on a grid that is not regular (or has fewer
-        than 4 points) stay on the B-splines.  :meth:`linearize`, :attr:`ode` and
+        per interval.  A step the table kernel flags (it leaves the maps, an input is not
+        finite) raises from the kernel's reason codes with the messages of every reduced
+        model (:data:`~maglevkit.reduced.core.STEP_FLAG_MESSAGES`); with ``extrapolate``,
+        a non-finite result, a pole gap <= 0 or a run that starts outside the maps the call
+        is redone on the B-spline path (the continuation beyond the maps is the
+        B-spline's), which raises or warns; maps on a grid that is not regular (or has
+        fewer than 4 points) stay on the B-splines.  :meth:`linearize`, :attr:`ode` and
         :attr:`outputs_fun` (AD, MPC), ``method="cvodes"``, ``eddy_modes > 0`` and
         ``motion_eddy=True`` always use the B-splines.
     compiled : {"auto", "always", "never"}
@@ -1067,8 +1070,9 @@ class CurrentModel:
     def _run_tables(self, times: np.ndarray, s: np.ndarray, u: np.ndarray, sd: np.ndarray,
                     i0: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
         """``I_L``, coil currents and circuit forces (n_t, n_c) on the grid from the
-        compiled time loop, or None where the tables cannot follow (a flagged step): then
-        the B-spline path runs.
+        compiled time loop; a flagged step raises from its reason codes
+        (:meth:`_raise_from_codes`), or where that leaves it to the B-spline path (and for
+        a flagged step 0, the start itself) None: then the B-spline path runs.
 
         Step 0 has length 0: it gives the outputs at ``t_0`` with ``u[0]``; step ``k``
         runs from ``t_k-1`` with the substitute gap ``s[k-1]``, its rate and ``u[k-1]``.
@@ -1087,6 +1091,18 @@ class CurrentModel:
         sd_k[0], sd_k[1:] = 0.0, sd
         run = bank.run_steps(i0, s_k, u_k, sd_k, h, time_s=float(times[0]), stop_at_flag=True)
         if run.n_good < times.size:
+            j = run.n_good
+            if j > 0 and not self.extrapolate:
+                # the flagged step's reason codes from the same compiled step (step j from
+                # t_j-1 with the state the loop reached), read as step() reads them; step 0
+                # (the start itself) and what they leave to it go to the B-spline path
+                res = bank.step_kernel(float(h[j])).call(
+                    {"I_L": run.inductor_currents_A[j - 1], "s": s_k[j], "U": u_k[j],
+                     "sdot": sd_k[j], "h": float(h[j])})
+                lo, hi = (np.asarray(res[k], dtype=float).ravel() for k in ("I_L_min", "I_L_max"))
+                self._raise_from_codes(np.asarray(res["flags"]).ravel(), s_k[j], sd_k[j],
+                                       run.inductor_currents_A[j - 1], u_k[j], lo, hi,
+                                       float(times[j - 1]), float(times[j]))
             return None
         return run.inductor_currents_A, run.currents_A, run.circuit_force_N
 
@@ -1138,30 +1154,37 @@ class CurrentModel:
 
     def _diagnose_table_step(self, call: _TableStep, state: CurrentModelState, g: np.ndarray,
                              u: np.ndarray, gd: np.ndarray, dt: float) -> None:
-        """A flagged table step: the kernel's reason codes (:class:`StepFlag`) turned into
+        """A flagged table step of :meth:`step`: :meth:`_raise_from_codes` on its kernel's
+        reason codes, except for pole gaps that are or become <= 0 (the kernel sees only
+        substitute gaps; the B-spline path gives the per-gap message)."""
+        if (g <= 0.0).any() or (g + gd * dt <= 0.0).any():
+            return
+        self._raise_from_codes(call.codes, self._avg @ g, self._avg @ gd,
+                               state.inductor_currents_A, u, call.current_min.copy(),
+                               call.current_max.copy(), state.time_s, state.time_s + dt)
+
+    def _raise_from_codes(self, codes: np.ndarray, s: np.ndarray, sd: np.ndarray,
+                          i0: np.ndarray, u: np.ndarray, lo: np.ndarray, hi: np.ndarray,
+                          t0: float, t1: float) -> None:
+        """A step the table kernel flagged: its reason codes (:class:`StepFlag`) turned into
         the error by :func:`~maglevkit.reduced.core.diagnose_flags`, the one reading of
         them (no range check of its own).  Returns (for the B-spline path to take the
-        step) where that path does more than raise: extrapolating, a non-finite result
-        (its step-wise integration), and pole gaps that are or become <= 0 (its
-        per-gap message; the kernel sees only substitute gaps)."""
-        codes = call.codes.astype(int)
+        step or run) where that path does more than raise: extrapolating, and a non-finite
+        result (its step-wise integration)."""
+        codes = np.asarray(codes, dtype=float).astype(int)
         first = int(np.bitwise_or.reduce(codes))
         if (self.extrapolate or not first
                 or (first & StepFlag.RESULT_NOT_FINITE
-                    and not first & (StepFlag.INPUT_NOT_FINITE | StepFlag.GAP_OUT_OF_RANGE))
-                or (g <= 0.0).any() or (g + gd * dt <= 0.0).any()):
+                    and not first & (StepFlag.INPUT_NOT_FINITE | StepFlag.GAP_OUT_OF_RANGE))):
             return
         tol_s, tol_i = self._tol_s, self._tol_i
         (lo_s, _), (lo_i, hi_i) = self.gap_range, self.current_range
         nc = self.n_circuits
-        diagnose_flags(codes, self.circuit_names, gaps_m=self._avg @ g,
-                       gap_rates_m_per_s=self._avg @ gd, currents_A=state.inductor_currents_A,
-                       voltages_V=u, substep_min_A=call.current_min.copy(),
-                       substep_max_A=call.current_max.copy(),
+        diagnose_flags(codes, self.circuit_names, gaps_m=s, gap_rates_m_per_s=sd,
+                       currents_A=i0, voltages_V=u, substep_min_A=lo, substep_max_A=hi,
                        current_min_A=np.full(nc, lo_i - tol_i),
                        current_max_A=np.full(nc, hi_i + tol_i),
-                       gap_min_m=np.full(nc, lo_s - tol_s), t0_s=state.time_s,
-                       t1_s=state.time_s + dt,
+                       gap_min_m=np.full(nc, lo_s - tol_s), t0_s=t0, t1_s=t1,
                        out_of_maps=self._out_of_maps)
 
     def _integrate(self, t: np.ndarray, x0: np.ndarray, uu: np.ndarray
