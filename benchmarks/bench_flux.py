@@ -75,6 +75,28 @@ def _stepping(fm: mk.FluxModel, mag: mk.Magnet, i0: float) -> float:
     return _cpu() - t0
 
 
+def _live_counts(fm: mk.FluxModel, mag: mk.Magnet, i0: float) -> tuple[float, int, int]:
+    """One untimed live run of the scenario: (IDAS steps per call, sparse and dense LU
+    setups of the preconditioner); the live integrator's counters (steps since its last
+    restart, setups since it was made)."""
+    gaps, volts = _scenario(mag, i0)
+    n = int(round(DURATION / DT))
+    t = np.arange(n + 1) * DT
+    s = gaps(t)
+    st = fm.initial_state(gaps_m=s[0], currents_A=i0)
+    first = fm.live_stats()
+    assert first is not None
+    steps, last, now = 0, first["steps"], first
+    for k in range(n):
+        st, _out = fm.step(st, DT, volts(t[k]), gaps_m=s[k], gap_rates_m_per_s=(s[k + 1] - s[k]) / DT)
+        now = fm.live_stats()
+        assert now is not None
+        steps += now["steps"] - last if now["steps"] >= last else now["steps"]
+        last = now["steps"]
+    return (steps / n, now["sparse_setups"] - first["sparse_setups"],
+            now["dense_setups"] - first["dense_setups"])
+
+
 def run() -> str:
     rows, cost_rows = [], []
     modes = ("never", "always") if find_compiler() else ("never",)
@@ -106,13 +128,16 @@ def run() -> str:
                     if live is not None:
                         t_live.append(_stepping(live, mag, i0))
                 t_step = min(t_live or t_restart)
+                counts = _live_counts(live, mag, i0) if live is not None else None
                 label = "compiled" if fm.compiled else "interpreted"
                 rtf_live = f"{DURATION / min(t_live):.2f}" if t_live else "-"
                 ratio = f"{min(t_restart) / min(t_live):.1f}x" if t_live else "-"
                 rows.append(f"| {label_m} | {label} | {fm.dae.n_loops + fm.dae.n_circuits} | "
                             f"{fm.dae.form} | {len(fm.differential_state_names)} | "
                             f"{t_first:.2f} | {DURATION / t_sim:.2f} | {DURATION / min(t_restart):.2f} | "
-                            f"{rtf_live} | {ratio} | {t_step / (DURATION / DT) * 1e6:.0f} |")
+                            f"{rtf_live} | {ratio} | {t_step / (DURATION / DT) * 1e6:.0f} | "
+                            + (f"{counts[0]:.2f} | {counts[1]} / {counts[2]} |" if counts
+                               else "- | - |"))
     return (
         f"Standard scenario of the reduced-model benchmark: {DURATION:g} s at a {DT * 1e3:g} ms "
         "hold, gaps 10 +- 1 mm at 5 Hz, voltage +20 % at 0.1 s, from the nominal point "
@@ -131,14 +156,17 @@ def run() -> str:
         "*restart* = CasADi's IDAS set up and restarted on every call (`live_step=False`, the "
         "only path before issue 22), *live* = one IDAS kept between calls, restarted only "
         "where an input jumps (models/flux_live.py; compiled models only), both measured "
-        "alternately in this run, best of 3; *us per step call* is the faster.  *compiled*: "
+        "alternately in this run, best of 3; *us per step call* is the faster.  *IDAS steps "
+        "per live call*, *LU setups sparse / dense*: from one more (untimed) live run, the "
+        "preconditioner's factorisations on the sparse LU's fixed pattern and in the dense "
+        "LU (a fallback where a static pivot is tiny; livestep22).  *compiled*: "
         "residual, Jacobian, quadrature and output functions as one C library "
-        "(`compiled='always'`, cc -O1); *interpreted*: the same functions "
+        "(`compiled='always'`, cc -O1; the live step's library -O3); *interpreted*: the same functions "
         "on CasADi's virtual machine.\n\n"
         "| magnet | functions | unknowns | form | differential states | first simulate CPU [s] "
         "| RTF simulate | RTF step (restart) | RTF step (live) | live / restart | "
-        "us per step call |\n"
-        "|---|---|---|---|---|---|---|---|---|---|---|\n" + "\n".join(rows)
+        "us per step call | IDAS steps per live call | LU setups sparse / dense |\n"
+        "|---|---|---|---|---|---|---|---|---|---|---|---|---|\n" + "\n".join(rows)
         + "\n\nCompile and load cost (first model of a network: code generation in this "
         "process + the C compiler's CPU time in child processes, wall time; a second model "
         "finds the library in the on-disk cache):\n\n"

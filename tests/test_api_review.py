@@ -352,3 +352,27 @@ def test_mpc_refuses_bools_as_numbers() -> None:
         args = {"gap_ref_m": 0.01, "sample_time_s": 1e-3, **kw}
         with pytest.raises(ParameterError, match=name):
             OffsetFreeMPC(None, **args)   # type: ignore[arg-type]  # checked before the model
+
+
+def test_eddy_resistance_rounding_zero_jump_is_no_jump(monkeypatch) -> None:  # type: ignore[no-untyped-def]
+    from maglevkit.reduction import parameters
+
+    # the guidance magnet's eddy ladder shields its coil's every flux path: the coil current
+    # cannot jump, the jump admittance is zero up to the solve's rounding (was refused as
+    # "not passive" where the rounding came out negative, -9.7e-34 S)
+    lad = mk.load_magnet("tr-guidance").with_options(eddy_model="ladder")
+    y = parameters.current_jump_admittance(lad, gap_m=0.01, current_A=20.0)
+    r_el = lad.network.resistances
+    assert np.all(np.abs(np.diag(y)) * r_el < 1e-12)
+    assert np.all(np.isinf(parameters.eddy_resistance(lad, gap_m=0.01, current_A=20.0)))
+    mag = mk.load_magnet("u-magnet")
+    r0 = float(mag.network.resistances[0])
+    nc = len(mag.network.circuits)
+    for yjj, inf in ((-1e-30, True), (1e-13 / r0, True), (-1e-9 / r0, False)):
+        monkeypatch.setattr(parameters, "current_jump_admittance",
+                            lambda *a, v=yjj, **k: np.eye(nc) * v)
+        if inf:
+            assert np.isinf(parameters.eddy_resistance(mag, gap_m=0.01, current_A=10.0)[0])
+        else:        # a clearly negative admittance is still refused
+            with pytest.raises(mk.InputError, match="not passive"):
+                parameters.eddy_resistance(mag, gap_m=0.01, current_A=10.0)

@@ -313,7 +313,8 @@ def test_extrapolation_is_reported_once_per_circuit(u_maps) -> None:
 def test_the_public_parts_the_stepper_uses(u_maps: mk.CharacteristicMaps) -> None:
     """What the stepper takes from the bank is public (no private name crosses the two
     modules): the state check, the fast path, the pole forces, the diagnosis of the
-    kernel's reason codes, and a step length of the same sub-step count."""
+    kernel's reason codes (raise_step_flags), and a step length of the same sub-step
+    count."""
     bank = MagnetBank({"front": u_maps, "rear": u_maps})
     assert bank.compiled_fast_path
     state = bank.initial_state(gaps_m=0.010, currents_A=20.0)
@@ -330,11 +331,11 @@ def test_the_public_parts_the_stepper_uses(u_maps: mk.CharacteristicMaps) -> Non
     i, s, u = np.array([20.0, 58.0]), np.full(2, 0.01), np.array([40.0, 400.0])
     res = f.call({"I_L": i, "s": s, "U": u, "sdot": np.zeros(2), "h": 1e-3})
     with pytest.raises(OutOfRangeError) as direct:
-        bank.diagnose_step(np.asarray(res["flags"]).ravel(), gaps_m=s,
-                           gap_rates_m_per_s=np.zeros(2), currents_A=i, voltages_V=u,
-                           substep_min_A=np.asarray(res["I_L_min"]).ravel(),
-                           substep_max_A=np.asarray(res["I_L_max"]).ravel(), t0_s=0.0,
-                           t1_s=1e-3)
+        bank.raise_step_flags(np.asarray(res["flags"]).ravel(), gaps_m=s,
+                              gap_rates_m_per_s=np.zeros(2), inductor_currents_A=i,
+                              voltages_V=u, current_min_A=np.asarray(res["I_L_min"]).ravel(),
+                              current_max_A=np.asarray(res["I_L_max"]).ravel(), start_s=0.0,
+                              end_s=1e-3)
     with pytest.raises(OutOfRangeError) as stepped:
         bank.step(bank.initial_state(gaps_m=0.01, currents_A=i), 1e-3, u)
     assert str(direct.value) == str(stepped.value)

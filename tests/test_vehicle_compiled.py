@@ -111,6 +111,72 @@ def test_compiled_loop_range_error_as_python(model: VehicleModel) -> None:
     assert msgs[0].startswith("vehicle run at t = 0.0420 s:")
 
 
+def test_compiled_loop_names_the_reason_from_its_own_flags(model: VehicleModel,
+                                                            monkeypatch: pytest.MonkeyPatch
+                                                            ) -> None:
+    """The compiled loop's message of a flagged step comes from the step's own reason
+    codes (recorded with the step) through the bank's message table, without stepping
+    the bank again: with ``MagnetBank.step`` broken the compiled loop gives the message
+    the NumPy loop (which steps the bank) gave."""
+    low = VehicleModel(dataclasses.replace(model.train, touchdown_gap_m=1e-3))
+    kw: dict[str, Any] = dict(speed_m_per_s=400 / 3.6, duration_s=0.3,
+                              irregularity=HarmonicProfile(2e-3, 3.0))
+    with pytest.raises(OutOfRangeError, match="outside the characteristic maps") as ref:
+        low.run(**kw, loop="python")
+
+    def no_step(*args: Any, **kw: Any) -> Any:
+        raise AssertionError("the compiled loop stepped the bank again")
+
+    low.run(**{**kw, "duration_s": 0.01}, loop="compiled")     # compile outside the patch
+    monkeypatch.setattr(MagnetBank, "step", no_step)
+    with pytest.raises(OutOfRangeError, match="outside the characteristic maps") as err:
+        low.run(**kw, loop="compiled")
+    assert str(err.value) == str(ref.value)
+
+
+@pytest.mark.parametrize("case", ["current_substep", "current_start", "gap", "voltage_nan"])
+def test_raise_step_flags_says_what_the_banks_step_says(model: VehicleModel, case: str
+                                                        ) -> None:
+    """``MagnetBank.raise_step_flags`` on a compiled step's outputs (reason codes, sub-step
+    extremes) gives the message of ``MagnetBank.step`` on the same step (the independent
+    path: the bank steps and diagnoses itself), for each reason: a current leaving the
+    maps within the step (a large voltage), at its start, a gap path leaving the maps, a
+    voltage that is not a number; and nothing for a good step."""
+    bank = model.bank
+    nc = bank.n_circuits
+    dt = 1e-3
+    gaps = np.full(nc, 0.010)
+    rates = np.zeros(nc)
+    i_l = model.trim_current_A.copy()
+    u = bank.resistance_ohm * i_l
+    if case == "current_substep":
+        u[7] = 5e4
+    elif case == "current_start":
+        i_l[7] = 1e4
+    elif case == "gap":
+        rates[7] = -9.0                    # 10 mm -> 1 mm, below the maps' gaps
+    else:
+        u[7] = np.nan
+    state = bank.initial_state(gaps_m=gaps, currents_A=model.trim_current_A)
+    state = type(state)(state.time_s, i_l, gaps.copy(), state.member_states,
+                        state.eddy_currents_A)
+    res = bank.step_function(dt)(I_L=i_l, s=gaps, U=u, sdot=rates, h=dt)
+    kw: dict[str, Any] = dict(gaps_m=gaps, gap_rates_m_per_s=rates, inductor_currents_A=i_l,
+                              voltages_V=u, current_min_A=np.asarray(res["I_L_min"]),
+                              current_max_A=np.asarray(res["I_L_max"]), start_s=0.0,
+                              end_s=dt)
+    assert float(res["n_bad"]) == 1.0
+    with pytest.raises(Exception) as ref:
+        bank.step(state, dt, u, gaps, rates)
+    with pytest.raises(type(ref.value)) as got:
+        bank.raise_step_flags(np.asarray(res["flags"]), **kw)
+    assert str(got.value) == str(ref.value)
+    expected = {"current_substep": "in an RK4 sub-step", "current_start": "over the step",
+                "gap": "outside the characteristic maps", "voltage_nan": "must be finite"}
+    assert expected[case] in str(got.value)          # each case a different reason
+    bank.raise_step_flags(np.zeros(nc), **kw)          # no flag: no error
+
+
 class _HoleProfile(Profile):
     """Flat, but not a number beyond ``x_bad``: a broken irregularity input."""
 
@@ -208,3 +274,41 @@ def test_bundled_guideway_consistent_with_published_values() -> None:
     # (measured 5.91 Hz; the self-weight reading, EI = 1.33e11, would give 10.8 Hz)
     f1 = float(span.natural_frequencies_Hz[0])
     assert 23.58 * L ** -0.592 <= f1 <= 94.76 * L ** -0.748
+
+
+def test_vector_flags_change_no_bit_of_the_step(model: VehicleModel) -> None:
+    """The step compiled with ``vector_flags`` (the lanes' vector target, no fused
+    multiply-adds) gives the bits of the plain ``-O3`` build: one block of 50 steps from
+    the trim state, every output equal."""
+    from maglevkit.control.realtime import vector_flags
+    from maglevkit.models.compiled import DEFAULT_FLAGS, compile_linked
+
+    flags = vector_flags()
+    assert flags[:len(DEFAULT_FLAGS)] == DEFAULT_FLAGS and "-ffp-contract=off" in flags
+    dt = 1e-3
+    lanes = model.bank.compiled_step_library(dt)
+    if lanes is None:
+        pytest.skip("no compiler for the bank's lanes")
+    vs = model._step_function(dt, lanes[0])
+    lay, nb = vs.layout, vs.block_steps
+    st, sp = lay.state, lay.step_inputs
+    s = np.zeros(lay.n_state)
+    s[st["x_mech"]][:model.mechanics.n_dof] = model.trim_q
+    s[st["I_L"]] = s[st["current"]] = model.trim_current_A
+    s[st["force"]] = model.trim_force_N
+    s[st["psi_hat"]] = model.flux_bias_Wb
+    p = np.zeros((nb, lay.n_step_inputs))
+    gw = model.guideway
+    p[:, sp["x_ref"].start] = (gw.origin_m + 1.3 * gw.span.length_m + model.train.length_m
+                               + 100 / 3.6 * dt * np.arange(nb))
+    p[:, sp["keep"]] = 1.0
+    p[:, sp["r"]] = 1e-4 * np.sin(np.arange(nb))[:, None]
+    c = np.concatenate([[100 / 3.6], np.full(model.bank.n_circuits, np.inf)])
+    outs = []
+    for fl in (DEFAULT_FLAGS, flags):
+        f = compile_linked(vs.block_function, lanes[1], flags=fl)
+        assert f is not None
+        res = f(s, p.T, c)
+        outs.append([np.asarray(r) for r in res])
+    for a, b in zip(*outs, strict=True):
+        np.testing.assert_array_equal(a, b)

@@ -180,6 +180,40 @@ def test_guideway_update_part_against_guideway_step(model: VehicleModel) -> None
     np.testing.assert_allclose(got, want, rtol=0, atol=1e-12 * np.abs(want).max())
 
 
+def test_cascade_part_is_the_gap_controller_s_law(model: VehicleModel) -> None:
+    """The compiled step's flux cascade (part ``"cascade"``, every circuit at once) against
+    the single-circuit :class:`~maglevkit.control.GapController` written separately in
+    NumPy (``U = R I + k_psi (psi_0 (1 + rho) - psi_hat)``, ``rho = k_p (s - s_0) + k_d s'
+    + k_i e``), each circuit with its own gains, no limits (a 1 MV supply, four
+    quadrants): the same voltages at random states."""
+    from maglevkit.control import GapController
+
+    f = model.step_function(1e-3).parts["cascade"]
+    nc = model.bank.n_circuits
+    s0 = model.train.nominal_gap_m
+    rng = np.random.default_rng(7)
+    gap = s0 + 1e-3 * rng.standard_normal(nc)
+    rate = 0.05 * rng.standard_normal(nc)
+    cur = model.trim_current_A * (1 + 0.1 * rng.standard_normal(nc))
+    psi = model.flux_bias_Wb * (1 + 0.05 * rng.standard_normal(nc))
+    integ = 1e-4 * rng.standard_normal(nc)
+    got = np.asarray(f(gap, rate, cur, psi, integ)).ravel()
+    g = model.gains
+    for j in range(nc):
+        ctl = GapController(gap_ref_m=s0, flux_bias_Wb=(float(model.flux_bias_Wb[j]),),
+                            bias_current_A=float(model.trim_current_A[j]),
+                            kp_per_m=float(g["kp_per_m"][j]), kd_s_per_m=float(g["kd_s_per_m"][j]),
+                            ki_per_m_s=float(g["ki_per_m_s"][j]),
+                            kflux_per_s=float(g["kflux_per_s"][j]),
+                            resistances_ohm=(float(model.bank.resistance_ohm[j]),),
+                            voltage_limit_V=1e6, two_quadrant=False)
+        ref = ctl.voltages(float(gap[j]), float(rate[j]), float(integ[j]), cur[j:j + 1],
+                           psi[j:j + 1])
+        # the same arithmetic in the same order (CasADi's virtual machine vs NumPy):
+        # measured equal; 1e-13 relative allows a different rounding of the sums
+        assert got[j] == pytest.approx(float(ref[0]), rel=1e-13, abs=1e-12)
+
+
 def test_voltage_limits_part_against_its_rules(model: VehicleModel) -> None:
     """|U| <= U_max, the chopper's U >= -R_ec I_L, failed circuits at 0 V, NaN kept."""
     f = model.step_function(1e-3).parts["voltage_limits"]

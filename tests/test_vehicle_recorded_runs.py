@@ -49,6 +49,20 @@ variable's largest value: gap <= 1.2e-2, current <= 10.6 % (hp_detailed), voltag
 on the merged code (the NMPC, the guidance switch and the TR09 switch together); the
 scenarios that neither the NMPC nor the guidance switch touch equal the tr09switch
 branch's recording bit for bit.
+
+Since 2026-12-03 the runs are recorded and reproduced on stored maps
+(``tests/data/vehicle_run_maps``, ``record_vehicle_runs.maps_cache``): on a new machine (an
+Intel Xeon with AVX-512; the file had been recorded on an AMD EPYC) every scenario
+on reduced magnets differed by 0.7-4.2e-6 of a variable's largest value, already at the first stored row
+after the start (the start itself agreed to 1e-15), with maps built on that machine.  The
+maps' step-fitted ``R_ec`` comes from an IDAS run, which is reproducible across processors
+only to its tolerance (its accepted steps depend on the last bits of its arithmetic), while
+the vehicle's own arithmetic is not sensitive (the rigid run moved by 2.6e-14 when its
+sag amplitude was changed by 1e-13).  The map builder has its own tests; this file tests
+the vehicle framework, on the maps the runs were recorded with.  All twelve scenarios
+were re-recorded then on freshly built maps, the maps stored beside them; against the
+old file: 0.67-4.2e-6 (hp_mpc's voltage the largest), ``hp_detailed`` (per-pole IDAS, no
+maps) 1.5e-10.
 """
 
 from __future__ import annotations

@@ -11,24 +11,40 @@ The recorded run has the parameters of its time: the realism changes of issue 23
 (the girders' precamber, the damping input blended with the absolute velocity, the
 choppers' diodes in the plant) are model and parameter changes that came after, so the
 run here switches them off (``precamber_m = 0``, ``control_velocity_blend = 0``,
-``freewheel=False``): with them off the step is the recorded one."""
+``freewheel=False``): with them off the step is the recorded one.
+
+Re-recorded on 2026-12-03 (``tools/record_vehicle_reference.py``, which now holds the run
+the test makes) on stored maps: on an Intel Xeon with AVX-512 the run on maps built there
+differed from the a47fa63 recording (AMD EPYC) by up to 1.3e-4 of the largest voltage,
+because maps agree across processors only to the integrator's tolerance (the failed
+circuit's neighbours amplify it); see ``test_vehicle_recorded_runs`` and
+docs/decisions.md.  Since then it pins this configuration (lumped network, realism off)
+on the maps stored in ``tests/data/vehicle_run_maps``."""
 
 from __future__ import annotations
 
-import dataclasses
+import importlib.util
 import json
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pytest
 
-from maglevkit.vehicle.data import load_guideway
-from maglevkit.vehicle.simulation import Failure, VehicleModel, parse_irregularity
-from maglevkit.vehicle.train import load_vehicle
+ROOT = Path(__file__).parents[1]
+REFERENCE = ROOT / "tests" / "data" / "vehicle_run_reference.nc"
 
-from .conftest import paper_tr09_vehicle
 
-REFERENCE = Path(__file__).parent / "data" / "vehicle_run_reference.nc"
+def _recorder() -> Any:
+    spec = importlib.util.spec_from_file_location("record_vehicle_reference",
+                                                  ROOT / "tools" / "record_vehicle_reference.py")
+    assert spec is not None and spec.loader is not None
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    return mod
+
+
+REF = _recorder()
 
 # the interpolated irregularity differs from the old per-point sums by <= 3e-13 of its
 # largest value (slope), the compiled step's own rounding is ~1e-13 (test_vehicle_compiled)
@@ -46,17 +62,8 @@ def reference():                                     # type: ignore[no-untyped-d
 
 def test_whole_run_reproduces_the_recorded_run(reference, tmp_path) -> None:  # type: ignore[no-untyped-def]
     # recorded with the TR09 magnets' lumped "paper" network (the bundled files are split
-    # since issue 26): loaded explicitly, so that the run is the recorded one
-    train = dataclasses.replace(load_vehicle(paper_tr09_vehicle(tmp_path)),
-                                control_velocity_blend=0.0)
-    data = load_guideway()
-    data = dataclasses.replace(data, span=dataclasses.replace(data.span, precamber_m=0.0))
-    n_spans = data.guideway(n_spans=1).spans_needed(train.length_m)
-    model = VehicleModel(train, guideway=data.guideway(n_spans=n_spans), freewheel=False)
-    prof = parse_irregularity("sag:0.5e-3+random:0.3e-3:1",
-                              span_length_m=model.guideway.span.length_m)
-    res = model.run(speed_m_per_s=400 / 3.6, duration_s=0.3, irregularity=prof,
-                    failures=[Failure("s2m4/front", 0.1)], loop="compiled")
+    # since issue 26), the realism changes off, on the stored maps: the recorder's run
+    res = REF.reference_run(tmp_path)
     ds = res.dataset.isel(time=slice(None, None, 10))
     assert set(ds.data_vars) == set(reference.data_vars)
     assert dict(ds.sizes) == dict(reference.sizes)

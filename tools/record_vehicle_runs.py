@@ -4,9 +4,12 @@ largest value.
 
 Run from a checkout whose results must not change::
 
-    PYTHONPATH=src python tools/record_vehicle_runs.py tests/data/vehicle_runs.npz [NAME ...]
+    PYTHONPATH=src python tools/record_vehicle_runs.py tests/data/vehicle_runs.npz [NAME ...] \
+        [--rebuild-maps]
 
-(with names: only those scenarios re-recorded, the others kept).
+(with names: only those scenarios re-recorded, the others kept).  The runs are made on the
+maps stored in ``tests/data/vehicle_run_maps`` (``--rebuild-maps``: built afresh, then
+stored), so that they reproduce on any processor (:func:`maps_cache`).
 
 Scenarios (``SCENARIOS``; the test runs the same functions): the heave-pitch train on a
 rigid and on the elastic guideway with the bundled irregularity, the cascade in the
@@ -33,10 +36,61 @@ import numpy as np
 KMH = 1 / 3.6
 
 
+#: The characteristic maps the runs were recorded on, one netCDF file per magnet, named
+#: ``<magnet name>-<network hash>.nc`` (the vehicle cache's name without its grid hash).
+MAPS_DIR = Path(__file__).resolve().parents[1] / "tests" / "data" / "vehicle_run_maps"
+_MAPS_CACHE: list[Path] = []
+
+
+def maps_cache() -> Path:
+    """A temporary vehicle-maps cache holding the recorded maps under this code's names.
+
+    The runs are recorded and reproduced on the same maps: maps built on another processor
+    agree with these only to the detailed model's integrator tolerance (the step-fitted
+    ``R_ec`` comes from an IDAS run whose accepted steps depend on the last bits of its
+    arithmetic; measured: the runs moved by up to 2.7e-6 of a variable's largest value
+    between an AMD EPYC and an Intel Xeon with AVX-512), while the framework's own
+    arithmetic is reproducible to ~1e-13.  A magnet whose network changed finds no
+    stored file: its maps are built into this folder (and the runs must be re-recorded).
+    """
+    if not _MAPS_CACHE:
+        import atexit
+        import shutil
+        import tempfile
+        from types import SimpleNamespace
+
+        from maglevkit.vehicle.mapcache import VEHICLE_MAP_CURRENTS_A, VEHICLE_MAP_GAPS_M, maps_path
+
+        tmp = Path(tempfile.mkdtemp(prefix="maglevkit-recorded-maps-"))
+        atexit.register(shutil.rmtree, tmp, True)
+        # the grid hash of this code (it covers the law hash): the same for every magnet
+        probe = SimpleNamespace(name="x", network=SimpleNamespace(branches=(), circuits=()))
+        grid = maps_path(probe, VEHICLE_MAP_GAPS_M, VEHICLE_MAP_CURRENTS_A, tmp).stem
+        grid = grid.rsplit("-", 1)[1]
+        for f in sorted(MAPS_DIR.glob("*.nc")):
+            shutil.copyfile(f, tmp / f"{f.stem}-{grid}.nc")
+        _MAPS_CACHE.append(tmp)
+    return _MAPS_CACHE[0]
+
+
+def store_maps() -> None:
+    """Keep the maps of this recording in :data:`MAPS_DIR` (added or replaced by name).
+
+    Nothing is deleted: ``tools/record_vehicle_reference.py`` stores its own magnets' maps
+    there too.  A file left by a magnet whose network has since changed is unused (its
+    network hash is in its name); delete it by hand when re-recording.
+    """
+    import shutil
+
+    MAPS_DIR.mkdir(parents=True, exist_ok=True)
+    for f in sorted(maps_cache().glob("*.nc")):
+        shutil.copyfile(f, MAPS_DIR / f"{f.stem.rsplit('-', 1)[0]}.nc")
+
+
 def _train(**kw: Any) -> Any:
     from maglevkit.vehicle.simulation import VehicleModel
 
-    return VehicleModel(_TRAIN(), **kw)
+    return VehicleModel(_TRAIN(), maps_cache=maps_cache(), **kw)
 
 
 def _TRAIN() -> Any:
@@ -101,7 +155,7 @@ def hp_detailed() -> Any:
 def _cross() -> Any:
     from maglevkit.vehicle.crossrun import CrossSectionModel
 
-    return _cached("cross", CrossSectionModel)
+    return _cached("cross", lambda: CrossSectionModel(maps_cache=maps_cache()))
 
 
 def cs_curve(loop: str = "compiled") -> Any:
@@ -182,8 +236,16 @@ def arrays(run: Any, every: int) -> dict[str, np.ndarray]:
     return out
 
 
-def main(path: str, only: list[str]) -> None:
-    """Record every scenario (``only`` empty) or re-record the named ones into ``path``."""
+def main(path: str, only: list[str], rebuild_maps: bool = False) -> None:
+    """Record every scenario (``only`` empty) or re-record the named ones into ``path``.
+
+    The runs use the stored maps (:func:`maps_cache`); ``rebuild_maps`` (``--rebuild-maps``)
+    builds the runs' maps afresh (the stored files are not read).  The maps used are stored
+    with the runs (:func:`store_maps`).
+    """
+    if rebuild_maps:
+        for f in maps_cache().glob("*.nc"):
+            f.unlink()
     data: dict[str, np.ndarray] = {}
     meta: dict[str, Any] = {}
     if only:
@@ -208,7 +270,9 @@ def main(path: str, only: list[str]) -> None:
         f"tools/record_vehicle_runs.py at commit {commit}"
     data["meta"] = np.array(json.dumps(meta))
     np.savez_compressed(Path(path), **data)
+    store_maps()
 
 
 if __name__ == "__main__":
-    main(sys.argv[1], sys.argv[2:])
+    args = [a for a in sys.argv[1:] if a != "--rebuild-maps"]
+    main(args[0], args[1:], rebuild_maps="--rebuild-maps" in sys.argv[1:])

@@ -58,7 +58,7 @@ from .model import MagnetHeaveModel
 from .mpc import MPCWeights, OffsetFreeMPC
 
 __all__ = ["DENSE_QP_SOLVERS", "GUESS_TOLERANCE", "LINEARIZATIONS", "RealTimeMPC",
-           "RealTimeMPCBatch"]
+           "RealTimeMPCBatch", "vector_flags"]
 
 #: where :class:`RealTimeMPC`'s QP linearises the prediction (every node of the previous
 #: solution, or interval 0 at its node and the rest at the steady-state target)
@@ -83,6 +83,27 @@ _TARGET_RESIDUAL = 1e-10
 #: Relative slack on the voltage limit before a QP solution counts as violating it (the
 #: QP solvers' tolerance; within it the voltage is clipped to the limit)
 _LIMIT_SLACK = 1e-6
+
+
+def vector_flags() -> tuple[str, ...]:
+    """C compiler flags of the compiled controller batch and of the vehicles' compiled
+    steps: the default optimised shared library, this machine's vector instructions (the
+    bank's SIMD lanes' own target, :func:`maglevkit.reduced.lanes.lane_target`: AVX2 where
+    the processor has it) and no contraction of products and sums into fused
+    multiply-adds, so that the results are the same bits as without the vector flags (the
+    compiler vectorises only where the order of every sum stays; measured on the
+    3-section train's block: 10.5 -> 8.2 us per step, bit-identical).
+
+    Returns
+    -------
+    tuple of str
+        Flags for :func:`~maglevkit.models.compiled.compile_library` and
+        :func:`~maglevkit.models.compiled.compile_linked` (part of their cache key).
+    """
+    from ..models.compiled import DEFAULT_FLAGS
+    from ..reduced.lanes import lane_target
+
+    return (*DEFAULT_FLAGS, "-ffp-contract=off", *lane_target()[2])
 
 
 @contextlib.contextmanager
@@ -699,7 +720,7 @@ class RealTimeMPCBatch:
         F = ca.Function("mpc_rti_prepare_batch", ins, outs)
         c0 = ctls[0]
         funcs, _ = compile_library("mpc_rti_batch", [F, *data_fs],
-                                   mode=c0.model.compiled_mode)
+                                   mode=c0.model.compiled_mode, flags=vector_flags())
         compiled = funcs[0]
         self.function = F
         # buffers: (n rows, nnz of one controller) C-order arrays per input/output, one set
@@ -866,9 +887,11 @@ class RealTimeMPCBatch:
                                   state=self._state(idx[r], _single, estimate=b[0][r].copy()),
                                   reason="non-finite estimate")
             nx = gd["nx"]
-            for r in np.flatnonzero(st[:, 2] != 1.0).tolist():
-                self._dense_qp(gd, r, b[2][r], time_s, _single)
-                fallbacks += 1
+            guessed = st[:, 2] == 1.0
+            if not guessed.all():
+                for r in np.flatnonzero(~guessed).tolist():
+                    self._dense_qp(gd, r, b[2][r], time_s, _single)
+                    fallbacks += 1
             ug = b[2][:, nx] * gd["su"]
             lim = gd["ulim"]
             ok = np.abs(ug) <= lim * (1 + _LIMIT_SLACK)             # False for NaN
@@ -903,6 +926,8 @@ class RealTimeMPCBatch:
             nx, nxd = gd["nx"], gd["nx"] + gd["nd"]
             lim = _TARGET_RESIDUAL * np.maximum(1.0, np.abs(p[:, nxd]))
             bad = ~(np.abs(st[:, 0]) < lim)                 # also for NaN
+            if not bad.any():
+                continue
             for r in np.flatnonzero(bad).tolist():
                 j = int(gd["idx"][r])
                 c = self.controllers[j]

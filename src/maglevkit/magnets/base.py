@@ -119,7 +119,7 @@ SWITCH_NAMES = ("saturation", "fringing", "leakage", "eddy_currents")
 #: ``Magnet.with_options``).
 OPTION_NAMES = (*SWITCH_NAMES, "eddy_model", "eddy_layers")
 #: Magnet kinds whose builder has the ``"ladder"`` eddy model.
-LADDER_KINDS = ("u_magnet",)
+LADDER_KINDS = ("u_magnet", "guidance_magnet")
 #: Magnet kinds whose ``[magnet]`` table has the ``end_effects`` key (true: the terms of the
 #: finite extent across the 2-D cut; ``Magnet.with_options(end_effects=...)`` sets it).
 #: The guidance magnet's network has no such term (false builds the same network).

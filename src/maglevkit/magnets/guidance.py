@@ -22,10 +22,19 @@ build ``coil_thickness``::
        |    coil_air_i    |                                    coil_air: the coil's own
       YL_i --leg_l_i_1-- ML_i --leg_l_i_0 (+ bar)-- L_i        cross-section beside the yoke
 
-(with eddy currents the yoke's eddy element follows ``yoke_i`` and ``coil_air_i`` through
-a node ``EY_i``), and takes the iron members' lengths from where the flux runs: the rail
+(with lumped eddy currents the yoke's eddy element follows ``yoke_i`` and ``coil_air_i``
+through a node ``EY_i``), and takes the iron members' lengths from where the flux runs: the rail
 ``d`` long, the yoke-leg corners on their mean quarter circle.  Formulas: :func:`_split_paths`
 and docs/magnets.md.
+
+Eddy currents (solid iron): ``eddy_model = "lumped"`` (default) puts one
+``EddyCurrent.solid_rectangular`` element on each half leg (with the pole bar's iron), the
+yoke and the rail; ``eddy_model = "ladder"`` makes each of them and each pole bar a slab
+ladder of ``eddy_layers`` tubes (:func:`maglevkit.circuit.ladder.ladder_branches`) across its
+thickness (legs ``t_l``, bars ``h_p``, yoke ``t_y``, rail ``t_r``; with ``end_effects``
+the Saint-Venant factor of the part's depth, as the U-magnet's), ``coil_air_i`` then from
+``YL_i`` to ``YU_i`` (no eddy current in the iron encircles that air); statics are the
+same.  docs/magnets.md, docs/validation_fem.md (the transient FEM).
 
 All yokes of one section are identical and in parallel magnetically with their coils in
 series: they are merged into one yoke branch of the summed cross-section whose coil has
@@ -57,9 +66,11 @@ from ..circuit.elements import (
     FringePermeance,
     IronPath,
     LeakagePermeance,
+    rectangle_torsion_constant,
 )
+from ..circuit.ladder import ladder_branches
 from ..circuit.network import Branch, Circuit, Coil, Network
-from ..errors import ParameterFileError
+from ..errors import InputError, ParameterFileError
 from ..materials import MU0, Material
 from .base import (
     ModelOptions,
@@ -171,6 +182,10 @@ def build_guidance_magnet(params: Mapping[str, Any], materials: Mapping[str, Mat
     iron = resolve_material(m["material"], materials, "magnet")
     rail_mat = resolve_material(r["material"], materials, "rail")
     eddy = options.eddy_currents
+    if eddy and options.eddy_model == "ladder_split":
+        raise InputError("eddy_model = 'ladder_split' (the U-magnet's rail split under its "
+                         "poles) does not apply to kind 'guidance_magnet': use 'ladder' or "
+                         "'lumped'")
     rho = resistivity(m["resistivity"], iron, "magnet") if eddy else 0.0
     rho_rail = resistivity(r["resistivity"], rail_mat, "rail") if eddy else 0.0
 
@@ -206,11 +221,38 @@ def build_guidance_magnet(params: Mapping[str, Any], materials: Mapping[str, Mat
         paths = _split_paths(L, hp, tp, dist, ll, tl, ny, wy, ty, hc, tc, m["end_effects"])
         g_leak = paths["bars"]
 
+    ladder = eddy and options.eddy_model == "ladder"
+
     def with_eddy(els: list[Element], name: str, w: float, h: float, length: float,
                   rho_: float) -> tuple[Element, ...]:
         if eddy:
             els.append(EddyCurrent.solid_rectangular(name, w, h, length, rho_))
         return tuple(els)
+
+    def part(branch: str, start: str, end: str, irons: list[IronPath], w: float, h: float,
+             rho_: float, thickness: float) -> list[Branch]:
+        """An iron part (``irons[0]``; a pole bar ``irons[1]`` in series) as branches: one
+        lumped eddy element of the ``w x h`` section over the part's length, or
+        (``eddy_model = "ladder"``) the slab ladder of the part across ``thickness`` and the
+        bar's own ladder across its height ``h_p``."""
+        if not ladder:
+            return [Branch(branch, start, end, with_eddy(
+                list(irons), f"eddy_{branch}", w, h, irons[0].length, rho_))]
+        mid = f"{branch}:bar" if len(irons) > 1 else end
+        out = slab(branch, start, mid, irons[0], thickness, w, rho_)
+        if len(irons) > 1:
+            out += slab(mid, mid, end, irons[1], hp, L, rho_)
+        return out
+
+    def slab(branch: str, start: str, end: str, iron: IronPath, thickness: float,
+             depth: float, rho_: float) -> list[Branch]:
+        """The slab ladder of one part across ``thickness``; with ``end_effects`` the
+        Saint-Venant factor of its finite ``depth`` (docs/equations.md 1a), as the
+        U-magnet's."""
+        factor = (rectangle_torsion_constant(thickness, depth) / (depth * thickness**3 / 3.0)
+                  if m["end_effects"] else 1.0)
+        return ladder_branches(branch, start, end, iron, thickness=thickness,
+                               resistivity=rho_, layers=options.eddy_layers, factor=factor)
 
     branches: list[Branch] = []
     circuits: list[Circuit] = []
@@ -229,11 +271,10 @@ def build_guidance_magnet(params: Mapping[str, Any], materials: Mapping[str, Mat
             for side, a, b in (("u", f"YU{i}", f"U{i}"), ("l", f"L{i}", f"YL{i}")):
                 mid = f"M{side.upper()}{i}"
                 for j, (n0, n1) in enumerate(((a, mid), (mid, b))):
-                    els: list[Element] = [IronPath(f"iron_leg_{side}_{i}_{j}", h, leg_area, iron)]
+                    els = [IronPath(f"iron_leg_{side}_{i}_{j}", h, leg_area, iron)]
                     if j == (1 if side == "u" else 0):
                         els.append(IronPath(f"iron_bar_{side}_{i}", tp, L * hp, iron))
-                    branches.append(Branch(f"leg_{side}_{i}_{j}", n0, n1, with_eddy(
-                        els, f"eddy_leg_{side}_{i}_{j}", ny * wy, tl, h, rho)))
+                    branches += part(f"leg_{side}_{i}_{j}", n0, n1, els, ny * wy, tl, rho, tl)
             if options.leakage:
                 branches += [
                     Branch(f"leak_leg_{i}", f"MU{i}", f"ML{i}",
@@ -245,23 +286,20 @@ def build_guidance_magnet(params: Mapping[str, Any], materials: Mapping[str, Mat
                     branches.append(Branch(f"top_{side}_{i}", n0, n1, (FringePermeance(
                         f"top_{side}_{i}", gap_input=g, width=paths["top_width"],
                         radius=tp + ll, inner_radius=tp),)))
-        branches += [] if split else [
-            Branch(f"leg_u_{i}", f"YU{i}", f"U{i}", with_eddy(
-                [IronPath(f"iron_leg_u_{i}", leg_len, leg_area, iron)], f"eddy_leg_u_{i}",
-                ny * wy, tl, leg_len, rho))]
-        branches += [
-            Branch(f"gap_u_{i}", f"U{i}", f"RU{i}", (
-                AirGap(f"gap_u_{i}", gap_input=g, pole_area=face, fringe_edges=edges),)),
-            Branch(f"rail_{i}", f"RU{i}", f"RL{i}", with_eddy(
-                [IronPath(f"iron_rail_{i}", rail_len, rail_area, rail_mat)], f"eddy_rail_{i}",
-                L, r["thickness"], rail_len, rho_rail)),
-            Branch(f"gap_l_{i}", f"RL{i}", f"L{i}", (
-                AirGap(f"gap_l_{i}", gap_input=g, pole_area=face, fringe_edges=edges),)),
-        ]
-        branches += [] if split else [
-            Branch(f"leg_l_{i}", f"L{i}", f"YL{i}", with_eddy(
-                [IronPath(f"iron_leg_l_{i}", leg_len, leg_area, iron)], f"eddy_leg_l_{i}",
-                ny * wy, tl, leg_len, rho))]
+        branches += [] if split else part(
+            f"leg_u_{i}", f"YU{i}", f"U{i}", [IronPath(f"iron_leg_u_{i}", leg_len, leg_area,
+                                                       iron)], ny * wy, tl, rho, tl)
+        branches.append(Branch(f"gap_u_{i}", f"U{i}", f"RU{i}", (
+            AirGap(f"gap_u_{i}", gap_input=g, pole_area=face, fringe_edges=edges),)))
+        # the rail: flux along its height, eddy currents across its thickness
+        branches += part(f"rail_{i}", f"RU{i}", f"RL{i}",
+                         [IronPath(f"iron_rail_{i}", rail_len, rail_area, rail_mat)],
+                         L, r["thickness"], rho_rail, r["thickness"])
+        branches.append(Branch(f"gap_l_{i}", f"RL{i}", f"L{i}", (
+            AirGap(f"gap_l_{i}", gap_input=g, pole_area=face, fringe_edges=edges),)))
+        branches += [] if split else part(
+            f"leg_l_{i}", f"L{i}", f"YL{i}", [IronPath(f"iron_leg_l_{i}", leg_len, leg_area,
+                                                       iron)], ny * wy, tl, rho, tl)
         branches += [
         ]
         yoke_iron = IronPath(f"iron_yoke_{i}", yoke_len, yoke_area, iron)
@@ -269,20 +307,22 @@ def build_guidance_magnet(params: Mapping[str, Any], materials: Mapping[str, Mat
         if split and options.leakage:
             # the air through the coil's cross-section beside the yoke, in parallel with its
             # iron and with the same turns (it sees the iron's own drop), the yoke's eddy
-            # element in series with both (node EY), as the levitation magnet's coil_air
-            end = f"EY{i}" if eddy else f"YU{i}"
-            branches += [Branch(f"yoke_{i}", f"YL{i}", end, (yoke_iron,)),
+            # element in series with both (node EY), as the levitation magnet's coil_air;
+            # with the ladder the air joins the yoke's ends directly (no eddy current in
+            # the iron encircles that air flux) and the yoke is its ladder across t_y
+            end = f"EY{i}" if eddy and not ladder else f"YU{i}"
+            branches += [*(slab(f"yoke_{i}", f"YL{i}", end, yoke_iron, ty, ny * wy, rho)
+                           if ladder else [Branch(f"yoke_{i}", f"YL{i}", end, (yoke_iron,))]),
                          Branch(f"coil_air_{i}", f"YL{i}", end, (LeakagePermeance(
                              f"coil_air_{i}", paths["coil_air"]),))]
-            if eddy:
+            if eddy and not ladder:
                 branches.append(Branch(f"eddy_yoke_{i}", end, f"YU{i}", (
                     EddyCurrent.solid_rectangular(f"eddy_yoke_{i}", ny * wy, ty, yoke_len, rho),)))
             # one winding on two parallel branches: its flux is the turn-weighted mean
             coils = [Coil(b, m["turns_per_yoke"], pole=f"yoke_{i}",
                           pole_turns=m["turns_per_yoke"]) for b in (f"yoke_{i}", f"coil_air_{i}")]
         else:
-            branches.append(Branch(f"yoke_{i}", f"YL{i}", f"YU{i}", with_eddy(
-                [yoke_iron], f"eddy_yoke_{i}", ny * wy, ty, yoke_len, rho)))
+            branches += part(f"yoke_{i}", f"YL{i}", f"YU{i}", [yoke_iron], ny * wy, ty, rho, ty)
         if options.leakage:
             branches.append(Branch(f"leak_{i}", f"U{i}", f"L{i}",
                                    (LeakagePermeance(f"leak_{i}", g_leak),)))

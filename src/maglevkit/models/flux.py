@@ -527,7 +527,7 @@ class FluxDAE:
                                 "max_num_steps": max_num_steps,
                                 "disable_internal_warnings": True}
         oracle: Any = dae_fun
-        output_fun = self.output_fun
+        output_fun = output_sx = self.output_fun
         if compiled != "never":
             # One C file: the DAE, the residual/Jacobian/quadrature functions IDAS asks its
             # DAE for (casadi.external finds them by name in the DAE's library), the
@@ -553,7 +553,7 @@ class FluxDAE:
                     [ca.substitute(h * eq.force, s, s_t)])
                 # -O3 (DEFAULT_FLAGS): -O1 saved a quarter of the compile time but
                 # the live step ran 1.6x slower (docs/decisions.md)
-                self._live_parts = (daeF, jacF, quadF, force_fun, cache_dir)
+                self._live_parts = (daeF, jacF, quadF, force_fun, output_sx, cache_dir)
         self._oracle, self._idas_opts, self._balance = oracle, opts, balance_fun
         # one hold interval, (w, p = (h, U, rate)) -> (w, q, outputs) as for radau
         wm = ca.MX.sym("w", self.nw)
@@ -576,7 +576,8 @@ class FluxDAE:
             opts = self._idas_opts
             nz = len(opts["abstolv"]) - self.n_diff        # loop fluxes, currents, balance
             return LiveIntegrator(self._live_lib, self.n_diff, nz, self.n_circuits, self.n_u,
-                                  4 + self.n_gaps,
+                                  4 + self.n_gaps, self.n_gaps, self.n_loops + self.n_circuits,
+                                  self.n_out,
                                   opts["reltol"], np.asarray(opts["abstolv"]),
                                   opts["max_num_steps"])
         except (OSError, RuntimeError, AttributeError, subprocess.SubprocessError) as exc:
@@ -1119,6 +1120,16 @@ class FluxModel:
             raise self._fail(exc, state.time_s, w, U, rate, dt) from None
         return self._finish_step(state, dt, U, rate, w, wf, q, o)
 
+    def live_stats(self) -> dict[str, int] | None:
+        """Counters of the live integrator (:meth:`~maglevkit.models.flux_live.LiveIntegrator.stats`:
+        sparse and dense LU setups, preconditioner solves, IDAS steps and iterations since
+        its last restart), or None where :meth:`step` restarts IDAS on every call."""
+        if not self.live_step:
+            return None
+        with self._live_lock:
+            assert isinstance(self._live, LiveIntegrator)
+            return self._live.stats()
+
     def _step_live_locked(self, state: FluxState, dt: float, U: np.ndarray, rate: np.ndarray,
                           s0: np.ndarray, w: np.ndarray) -> tuple[FluxState, FluxOutputs]:
         assert isinstance(self._live, LiveIntegrator)
@@ -1129,7 +1140,7 @@ class FluxModel:
                      w: np.ndarray, wf: Any, q: Any, o: Any) -> tuple[FluxState, FluxOutputs]:
         wf = np.asarray(wf).ravel()
         o = np.asarray(o).ravel()
-        if not (np.all(np.isfinite(wf)) and np.all(np.isfinite(o))):
+        if not (np.isfinite(wf).all() and np.isfinite(o).all()):
             self._live_next = None
             raise self._fail(RuntimeError("non-finite solution"), state.time_s, w, U, rate, dt)
         t1 = state.time_s + dt
@@ -1149,8 +1160,8 @@ class FluxModel:
         last = self._live_last
         self._live_last = None
         if not (last is not None and state is last[0] and dt == last[1]
-                and np.array_equal(U, last[2]) and np.all(
-                    np.abs(s0 - state.gaps_m) <= LIVE_GAP_TOLERANCE * np.abs(s0).max())):
+                and (U == last[2]).all()
+                and (np.abs(s0 - state.gaps_m) <= LIVE_GAP_TOLERANCE * np.abs(s0).max()).all()):
             last = (None, dt, U, 0, np.zeros(4 + d.n_gaps))
             v0 = np.asarray(d._balance(w[nx:], s0, U)).ravel()
             try:
@@ -1161,13 +1172,11 @@ class FluxModel:
                                  rate, dt) from None
         k = last[3]
         try:
-            y, q = live.step(k + 1.0, np.concatenate(((dt,), s0, rate, (float(k),))))
+            wf, q, o = live.step(k + 1.0, np.concatenate(((dt,), s0, rate, (float(k),))))
         except RuntimeError as exc:
             raise self._fail(_physical_time(exc, state.time_s - k * dt, dt), state.time_s,
                              w, U, rate, dt) from None
-        wf = np.concatenate((y[:r], s0 + rate * dt, y[r:r + d.n_loops + d.n_circuits]))
-        o = np.asarray(d.output_fun(wf, U, rate)).ravel()
-        self._live_next = (dt, U.copy(), k + 1, q.copy())
+        self._live_next = (dt, U.copy(), k + 1, q)
         dq = q - last[4]
         # the mechanical work from the integrated pole forces (-rate . int F dt, exact for
         # the constant rate), not from -F.rate (whose integrand jumps at every step)

@@ -1322,10 +1322,54 @@ class MagnetBank:
 
     def _diagnose(self, s: np.ndarray, sd: np.ndarray, i0: np.ndarray, u: np.ndarray,
                   x: np.ndarray, call: _StepCall, t0: float, t1: float) -> None:
-        """The kernel flagged circuits: :meth:`diagnose_step` on the call's outputs."""
-        self.diagnose_step(call.res[8], gaps_m=s, gap_rates_m_per_s=sd, currents_A=i0,
-                           voltages_V=u, substep_min_A=call.res[5], substep_max_A=call.res[6],
-                           t0_s=t0, t1_s=t1)
+        """The kernel flagged circuits (inputs of the reduced circuits): their reason codes
+        read by :func:`~maglevkit.reduced.core.diagnose_flags`, the one reading of them."""
+        self._raise_reduced(call.res[8], s, sd, i0, u, call.res[5], call.res[6], t0, t1)
+
+    def _raise_reduced(self, flags: Any, s: np.ndarray, sd: np.ndarray, i0: np.ndarray,
+                       u: np.ndarray, lo: Any, hi: Any, t0: float, t1: float) -> None:
+        ri = self._reduced_idx
+        diagnose_flags(flags, [self.circuit_names[int(j)] for j in ri], gaps_m=s,
+                       gap_rates_m_per_s=sd, currents_A=i0, voltages_V=u,
+                       substep_min_A=np.array(lo, dtype=float).ravel(),
+                       substep_max_A=np.array(hi, dtype=float).ravel(),
+                       current_min_A=self._lo_i, current_max_A=self._hi_i, gap_min_m=self._lo_s,
+                       t0_s=t0, t1_s=t1, out_of_maps=self._range_error)
+
+    def raise_step_flags(self, flags: Any, *, gaps_m: Any, gap_rates_m_per_s: Any,
+                         inductor_currents_A: Any, voltages_V: Any, current_min_A: Any,
+                         current_max_A: Any, start_s: float, end_s: float) -> None:
+        """The error of a step that a compiled step flagged elsewhere (e.g. inside a
+        vehicle's compiled step, :meth:`step_function`, or a loop around
+        :meth:`step_kernel` such as the stepper): its reason codes (:class:`StepFlag`, the
+        step's ``flags``) turned into the same message :meth:`step` gives, without
+        stepping again (:func:`~maglevkit.reduced.core.diagnose_flags`).  Extrapolating
+        banks warn instead, as :meth:`step`.
+
+        Parameters
+        ----------
+        flags : array (n_circuits,)
+            The step's ``flags`` output (reason codes, 0 for a good circuit).
+        gaps_m, gap_rates_m_per_s, inductor_currents_A, voltages_V : array (n_circuits,)
+            The step's inputs ``s`` [m], ``sdot`` [m/s], ``I_L`` [A], ``U`` [V].
+        current_min_A, current_max_A : array (n_circuits,)
+            The step's outputs ``I_L_min``, ``I_L_max`` [A] (extremes over the sub-steps).
+        start_s, end_s : float
+            Times of the step's start and end [s] (for the message).
+
+        Raises
+        ------
+        OutOfRangeError, InputError, SolverError
+            As :meth:`step` for the same step; nothing when no flag is set.
+        """
+        ri = self._reduced_idx
+
+        def arr(a: Any) -> np.ndarray:
+            return np.asarray(a, dtype=float).ravel()[ri]
+
+        self._raise_reduced(arr(flags), arr(gaps_m), arr(gap_rates_m_per_s),
+                            arr(inductor_currents_A), arr(voltages_V), arr(current_min_A),
+                            arr(current_max_A), float(start_s), float(end_s))
 
     # ------------------------------------------------------------------ stepping interface
     @renamed_keywords(gaps="gaps_m", currents="currents_A", time="time_s")
@@ -1705,41 +1749,6 @@ class MagnetBank:
         """
         f = np.asarray(circuit_force_N, dtype=float)
         return self._pole_forces_of(f[None, :])[0] if f.ndim == 1 else self._pole_forces_of(f)
-
-    def diagnose_step(self, flags: np.ndarray, *, gaps_m: np.ndarray,
-                      gap_rates_m_per_s: np.ndarray, currents_A: np.ndarray,
-                      voltages_V: np.ndarray, substep_min_A: np.ndarray,
-                      substep_max_A: np.ndarray, t0_s: float, t1_s: float) -> None:
-        """The error of a compiled step that flagged circuits, from the kernel's reason codes
-        (:class:`StepFlag`, its ``flags`` output) in the words of every reduced model
-        (:func:`~maglevkit.reduced.core.diagnose_flags`): for callers of
-        :meth:`step_kernel` (the stepper, a co-simulation's own loop).  With
-        ``extrapolate`` a point within the maps' continuation warns once and returns.
-
-        Parameters
-        ----------
-        flags : ndarray (n,)
-            The kernel's ``flags`` (one per reduced circuit, in the kernel's order).
-        gaps_m, gap_rates_m_per_s, currents_A, voltages_V : ndarray (n,)
-            The step's inputs: substitute gaps [m] at its start, their rates [m/s], the
-            currents ``I_L`` [A] at its start, the held voltages [V].
-        substep_min_A, substep_max_A : ndarray (n,)
-            The kernel's ``I_L_min`` and ``I_L_max`` [A] of the step.
-        t0_s, t1_s : float
-            The step's start and end [s].
-
-        Raises
-        ------
-        InputError, OutOfRangeError, SolverError
-            As :meth:`step` for the same step.
-        """
-        ri = self._reduced_idx
-        diagnose_flags(flags, [self.circuit_names[int(j)] for j in ri], gaps_m=gaps_m,
-                       gap_rates_m_per_s=gap_rates_m_per_s, currents_A=currents_A,
-                       voltages_V=voltages_V, substep_min_A=np.array(substep_min_A),
-                       substep_max_A=np.array(substep_max_A), current_min_A=self._lo_i,
-                       current_max_A=self._hi_i, gap_min_m=self._lo_s, t0_s=t0_s, t1_s=t1_s,
-                       out_of_maps=self._range_error)
 
     def _pole_forces_of(self, circuit_forces: np.ndarray) -> np.ndarray:
         """Per-pole forces of a time series of reduced circuit forces (n_t, n_circuits),

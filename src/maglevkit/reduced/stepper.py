@@ -368,9 +368,10 @@ class BankStepper:
         if self._n_bad[0]:
             r = self._res
             try:
-                bank.diagnose_step(r[8], gaps_m=self._g, gap_rates_m_per_s=self._gd,
-                                   currents_A=self._il, voltages_V=self._u, substep_min_A=r[5],
-                                   substep_max_A=r[6], t0_s=t0, t1_s=t1)
+                bank.raise_step_flags(r[8], gaps_m=self._g, gap_rates_m_per_s=self._gd,
+                                      inductor_currents_A=self._il, voltages_V=self._u,
+                                      current_min_A=r[5], current_max_A=r[6], start_s=t0,
+                                      end_s=t1)
             except BaseException:
                 self._g[:] = self._state_gaps
                 raise

@@ -594,6 +594,7 @@ class VehicleModel:
         self._step_functions: dict[Any, Any] = {}
         self._measure_functions: dict[Any, Any] = {}
         self._part_functions: dict[float, Any] = {}
+        self._outputs_call: Any = None
         self._set_controllers(controller, controller_sample_time_s, mpc_options)
 
     # ------------------------------------------------------------------ set-up helpers
@@ -995,12 +996,16 @@ class VehicleModel:
         else:
             bstate = bank.initial_state(gaps_m=gaps_p, currents_A=self.trim_current_A)
             circ_avg = None
-        out0 = bank.outputs(bstate)
-        force_c = out0.circuit_force_N.copy()
-        pf0 = out0.pole_force_N if self.fine else force_c
-        assert pf0 is not None
-        force_pts = pf0.copy()
-        current = out0.currents_A.copy()
+        if self.fine or bank.motion_eddy:
+            out0 = bank.outputs(bstate)
+            force_c = out0.circuit_force_N.copy()
+            pf0 = out0.pole_force_N if self.fine else force_c
+            assert pf0 is not None
+            force_pts = pf0.copy()
+            current = out0.currents_A.copy()
+        else:
+            current, force_c = self._initial_outputs(bstate.inductor_currents_A, gaps_p)
+            force_pts = force_c.copy()
         # controllers (vectorised over circuits)
         blend = tr.control_velocity_blend
         psi0 = self.flux_bias_Wb
@@ -1329,6 +1334,7 @@ class VehicleModel:
         loaded from the disk cache) once per ``dt``; with ``hold``, the held-voltage step
         (blocks of ``hold`` steps) and the layout's ``measure`` function compiled as
         :attr:`_measure_functions` ``[(dt, hold)]``."""
+        from ..control.realtime import vector_flags
         from ..models.compiled import compile_function, compile_linked
 
         key: Any = dt if hold is None else (dt, hold)
@@ -1343,7 +1349,7 @@ class VehicleModel:
                 ext, lib = lanes
                 vs = self._step_function(dt, ext, hold)
                 # None (e.g. a linker without these options): the CasADi bank step below
-                f = compile_linked(vs.block_function, lib)
+                f = compile_linked(vs.block_function, lib, flags=vector_flags())
             if f is None:
                 vs = self._step_function(dt, self.bank.step_function(dt), hold)
                 f, _ = compile_function(vs.block_function, mode=self.bank.compiled_mode)
@@ -1379,8 +1385,6 @@ class VehicleModel:
         before each block the controllers update from the gaps the step measures
         (:meth:`_sample_controllers`, as the NumPy loop).
         """
-        from ..reduced.bank import BankState
-
         hold = None
         if sampled is not None:
             gaps0, rates0, ctl_times, ctl_cpu, payload = sampled
@@ -1435,13 +1439,19 @@ class VehicleModel:
 
         def look(k0: int, rows: np.ndarray) -> bool:
             """Any event in the block: a gap at a limit, a flagged circuit, the window."""
+            if k0 <= k_out < k0 + nb:
+                return True
+            if nb <= 4:     # a sampled controller's blocks: three scalars per row
+                return any(r[i_min] <= td_gap or r[i_max] >= land_gap or r[i_bad] != 0
+                           for r in rows)
             return bool(((rows[:, i_min] <= td_gap) | (rows[:, i_max] >= land_gap)
-                         | (rows[:, i_bad] != 0)).any() or k0 <= k_out < k0 + nb)
+                         | (rows[:, i_bad] != 0)).any())
 
         def check(k: int, row: np.ndarray, final: bool) -> tuple[int, Any] | None:
             """The NumPy loop's order per step: the loads leaving the integrated spans,
             touchdown, the end of the run, a circuit the kernel flagged (a touchdown
-            within the step, else diagnosed by the bank's own step, which raises)."""
+            within the step, else the bank's message of the step's reason codes, which
+            raises)."""
             if k == k_out:
                 raise OutOfRangeError(f"vehicle run at t = {times[k]:.4f} s: the train left "
                                       f"the integrated spans {first_k[k]} ... "
@@ -1459,10 +1469,16 @@ class VehicleModel:
                                                  float(times[k + 1]))
             if within is not None:
                 return k, within
-            state = BankState(float(times[k]), row[rl["I_L"]].copy(), row[rl["gap"]].copy())
+            # the compiled step's own reason codes (the bank kernel's StepFlag bits) and
+            # sub-step extremes, turned into the bank's message (no second step)
             try:
-                bank.step(state, dt, row[rl["voltage"]].copy(), row[rl["gap"]].copy(),
-                          row[rl["gap_rate"]].copy())
+                bank.raise_step_flags(row[rl["flags"]], gaps_m=row[rl["gap"]],
+                                      gap_rates_m_per_s=row[rl["gap_rate"]],
+                                      inductor_currents_A=row[rl["I_L"]],
+                                      voltages_V=row[rl["voltage"]],
+                                      current_min_A=row[rl["I_L_min"]],
+                                      current_max_A=row[rl["I_L_max"]],
+                                      start_s=float(times[k]), end_s=float(times[k + 1]))
             except MaglevkitError as exc:
                 raise type(exc)(f"vehicle run at t = {times[k]:.4f} s: {exc}") from None
             return None
@@ -1510,20 +1526,22 @@ class VehicleModel:
         n_steps = times.size - 1
         td_gap, land_gap = self.train.touchdown_gap_m, self.train.landing_gap_m
 
+        s_cur, s_int, r_u, p_u = st["current"], st["integral"], rl["voltage"], sp["u_held"]
+        m_state, m_inputs = meas.args[0], meas.args[1]
+        gaps, rates = meas.res
+
         def before(k0: int, state: np.ndarray, records: np.ndarray) -> None:
             if k0 >= n_steps or k0 == k_out:
                 return
-            meas.args[0][:] = state
-            meas.args[1][:] = p_all[k0]
+            m_state[:] = state
+            m_inputs[:] = p_all[k0]
             meas.eval()
-            gaps, rates = meas.res
             if gaps.min() <= td_gap or gaps.max() >= land_gap:
                 return
             self._sample_controllers(ext_ctl, ext_idx, u_ext, float(times[k0]), gaps, rates,
-                                     state[st["current"]], ctl_times,
-                                     records[max(k0 - hold, 0):k0, rl["voltage"]],
-                                     state[st["integral"]], ctl_cpu)
-            p_all[k0:k0 + hold, sp["u_held"]] = u_ext
+                                     state[s_cur], ctl_times,
+                                     records[max(k0 - hold, 0):k0, r_u], state[s_int], ctl_cpu)
+            p_all[k0:k0 + hold, p_u] = u_ext
 
         return before
 
@@ -1581,25 +1599,25 @@ class VehicleModel:
         (``times_cpu``); ``applied``: the
         voltages applied since the last sample (rows), ``integral``: the projected gap
         error integral [m s] (the NMPC's reference correction)."""
-        from ..control.interface import Measurement
-
         s0 = self.train.nominal_gap_m
-        refs = np.full(gaps.size, s0)
-        if self.reference_integral_time_s is not None:
-            refs = refs - integral / self.reference_integral_time_s
-        if self.controller_kind == "mpc":
+        tau = self.reference_integral_time_s
+        # (s0 - e / tau, elementwise, is the same as full(s0) - e / tau)
+        refs = np.full(gaps.size, s0) if tau is None else s0 - integral / tau
+        # the mean of the applied rows: numpy's mean (the rows summed in order, / count)
+        ua = np.add.reduce(applied, axis=0) / applied.shape[0] if applied.shape[0] else None
+        clock, cpu = time.perf_counter, time.thread_time
+        if self.controller_kind == "mpc":       # RealTimeMPCBatch: one call, every circuit
             # what the circuit's frame can do: gaps and rates projected on the frame's
             # heave and pitch (the cascade's integral projection), so that the offset-free
             # estimates of a frame's circuits do not wind up against each other
-            proj = self.integral_projection
-            gaps = s0 + proj @ (gaps - s0)      # (the batch takes no rates: the EKF's)
-        clock, cpu = time.perf_counter, time.thread_time
-        ua = applied.mean(axis=0) if applied.shape[0] else None
-        if self.controller_kind == "mpc":       # RealTimeMPCBatch: one call, every circuit
+            gaps = s0 + self.integral_projection @ (gaps - s0)   # (the batch: no rates)
+            every = idx.size == gaps.size           # (idx is sorted and unique)
             t0, c0 = clock(), cpu()
             try:
-                u_out[idx] = ctls[0].update(gaps[idx], current[idx], refs[idx],
-                                            None if ua is None else ua[idx], time_s=float(t))
+                u_out[idx] = ctls[0].update(
+                    gaps if every else gaps[idx], current if every else current[idx],
+                    refs if every else refs[idx], None if ua is None else
+                    (ua if every else ua[idx]), time_s=float(t))
             except MaglevkitError as exc:
                 j = int(idx[int(getattr(exc, "state", {}).get("controller", 0))])
                 raise type(exc)(f"vehicle run at t = {t:.4f} s, controller of circuit "
@@ -1607,6 +1625,8 @@ class VehicleModel:
             times.append(clock() - t0)
             times_cpu.append(cpu() - c0)
             return
+        from ..control.interface import Measurement
+
         for c, j in zip(ctls, idx.tolist(), strict=True):
             m = Measurement(float(t), float(gaps[j]), float(rates[j]), current[j:j + 1].copy(),
                             float(refs[j]),
@@ -1624,6 +1644,26 @@ class VehicleModel:
                                   f"returned {u!r} at t = {t:.4f} s; expected one finite "
                                   "voltage [V]")
             u_out[j] = u[0]
+
+    def _initial_outputs(self, i_l: np.ndarray, gaps: np.ndarray
+                         ) -> tuple[np.ndarray, np.ndarray]:
+        """Coil currents [A] and forces [N] of the circuits (reduced magnets, one state per
+        circuit) in the steady state ``U = R_el I_L`` at the gaps [m]: what
+        :meth:`MagnetBank.outputs` gives, from the same function
+        (:attr:`MagnetBank.output_function`), compiled once per model (on CasADi's
+        virtual machine it cost 10 ms per run, a sixth of a 3 s run's whole ``run``)."""
+        from ..models.compiled import BoundCall, compile_function
+
+        bank = self.bank
+        if self._outputs_call is None:
+            f, _ = compile_function(bank.output_function, mode=bank.compiled_mode)
+            self._outputs_call = BoundCall(f)
+        call = self._outputs_call
+        call.args[0][:] = i_l
+        call.args[1][:] = bank.resistance_ohm * i_l
+        call.args[2][:] = gaps
+        call.eval()
+        return call.res[0].copy(), call.res[1].copy()
 
     def _payload_gravity(self, fraction: float) -> np.ndarray:
         """Generalised gravity with every car body ``1 + fraction`` times as heavy [N, N m]."""

@@ -33,7 +33,10 @@ position at the step start, the irregularity and its slope at the points there, 
 the keep mask), ``C`` (per-run constants: speed and failure times); outputs ``S_next`` and
 ``R`` (the record of the step: gaps, rates, coil currents, forces and ``I_L`` at the step
 start, deflections, the mechanical state, the midspan deflection per ring row, the
-voltages, min/max gap and the bank's out-of-range count).  The block function chains the
+voltages, min/max gap, the bank's count of flagged circuits and, per circuit, the bank
+kernel's reason code (:class:`~maglevkit.reduced.StepFlag` bits) and the extremes of
+``I_L`` over the RK4 sub-steps, from which :meth:`MagnetBank.raise_step_flags` gives a
+flagged step's message without stepping again).  The block function chains the
 step ``block_steps`` times (``P`` and ``R`` one column per step).
 """
 
@@ -128,7 +131,8 @@ def _layout(n_dof: int, nc: int, n_sp: int, nm: int, held: bool = False) -> Step
     step = pack_slices([("x_ref", 1), ("r", nc), ("r_x", nc), ("t", 1), ("keep", n_sp), *extra])
     record = pack_slices([("gap", nc), ("gap_rate", nc), ("current", nc), ("force", nc), ("I_L", nc),
                           ("deflection", nc), ("q", n_dof), ("q_dot", n_dof), ("midspan_ring", n_sp),
-                          ("voltage", nc), ("gap_min", 1), ("gap_max", 1), ("n_bad", 1)])
+                          ("voltage", nc), ("gap_min", 1), ("gap_max", 1), ("n_bad", 1),
+                          ("flags", nc), ("I_L_min", nc), ("I_L_max", nc)])
     return StepLayout(n_dof, nc, n_sp, nm, state, step, record)
 
 
@@ -589,7 +593,15 @@ def build_vehicle_step(*, bank_step: Any, dt: float, nominal_gap_m: float, sides
         eddy_resistance_ohm=eddy_resistance_ohm, voltage_limit_V=voltage_limit_V,
         integral_projection=integral_projection, midspan_shape=midspan_shape,
         point_offsets_m=point_offsets_m)
-    f_in, f_ctl, f_upd, f_mech = (parts[k] for k in (
+    # the matrix parts without data-dependent indexing expanded to scalar code: in the
+    # generated C straight-line products instead of CasADi's sparse-product loops, the
+    # same operations in the same order (bit-identical; the 3-section train's block 8.1 ->
+    # 7.5 us per step); the element-wise controller parts stay as they are (expanded,
+    # CasADi reorders their arithmetic: ~1e-14 relative)
+    expanded = {k: parts[k].expand() for k in ("mechanics", "mechanics_loaded", "gaps")}
+    if not nm:
+        expanded["guideway_in"] = parts["guideway_in"].expand()
+    f_in, f_ctl, f_upd, f_mech = ({**parts, **expanded}[k] for k in (
         "guideway_in", "controllers", "controller_update", "mechanics"))
 
     # ---- the composed step
@@ -605,7 +617,7 @@ def build_vehicle_step(*, bank_step: Any, dt: float, nominal_gap_m: float, sides
     if nm:    # the loads' geometry once per step, for the deflection and the update
         rows_k, sa_k, ca_k, rows_mk, sa_mk, ca_mk = parts["guideway_train_loads"](p_x, c_v)
         w_k, wr_k, mid_k = parts["guideway_deflection"](s_gx, rows_k, sa_k, ca_k, c_v)
-        gap_k, rate_k, vel_k = parts["gaps"](s_xm, w_k, wr_k, p_r, p_rx, c_v)
+        gap_k, rate_k, vel_k = expanded["gaps"](s_xm, w_k, wr_k, p_r, p_rx, c_v)
     else:
         gap_k, rate_k, w_k, mid_k, vel_k = f_in(s_xm, s_gx, ca.MX.zeros(nc), p_r, p_rx, c_v)
     damp_k = rate_k if velocity_blend == 0.0 else damping_input(rate_k, vel_k,
@@ -615,14 +627,15 @@ def build_vehicle_step(*, bank_step: Any, dt: float, nominal_gap_m: float, sides
     else:
         u_k = f_ctl(gap_k, damp_k, s_il, s_cur, s_psi, s_int, p_t, c_fail)
     bout = bank_step.call({"I_L": s_il, "s": gap_k, "U": u_k, "sdot": rate_k, "h": ca.MX(dt)})
-    il_next, cur_next, force_next, n_bad = (bout[k] for k in ("I_L_next", "I", "F", "n_bad"))
+    il_next, cur_next, force_next, n_bad, flags, il_lo, il_hi = (bout[k] for k in (
+        "I_L_next", "I", "F", "n_bad", "flags", "I_L_min", "I_L_max"))
     psi_n, int_n = f_upd(s_psi, s_int, u_k, s_cur, cur_next, gap_k)
     fb = (0.5 * sides) * (s_f + force_next)
-    xm_n = parts["mechanics_loaded"](s_xm, fb, P[sp["q_g"]]) if held else f_mech(s_xm, fb)
+    xm_n = expanded["mechanics_loaded"](s_xm, fb, P[sp["q_g"]]) if held else f_mech(s_xm, fb)
     gx_n = parts["guideway_update"](s_gx, rows_mk, sa_mk, ca_mk, fb) if nm else s_gx
     s_next = ca.vertcat(xm_n, gx_n, il_next, psi_n, int_n, cur_next, force_next)
     rec = ca.vertcat(gap_k, rate_k, s_cur, s_f, s_il, w_k, s_xm, mid_k, u_k, ca.mmin(gap_k),
-                     ca.mmax(gap_k), n_bad)
+                     ca.mmax(gap_k), n_bad, flags, il_lo, il_hi)
     assert rec.shape[0] == lay.n_record and s_next.shape[0] == lay.n_state
     fun = ca.Function(name, [S, P, C], [s_next, rec], ["S", "P", "C"], ["S_next", "R"])
     measure = ca.Function(f"{name}_measure", [S, P, C], [gap_k, rate_k], ["S", "P", "C"],

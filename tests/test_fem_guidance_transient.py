@@ -1,0 +1,186 @@
+"""Guidance magnet: voltage steps with solid iron against its recorded transient 2-D FEM.
+
+The FEM (benchmarks/fem_guidance_transient.py: the cross-section of benchmarks/fem_guidance.py
+with the magnet and the rail as conducting bodies, the coil driven through the section's
+resistance; the U-magnet transient FEM's method) is recorded in
+benchmarks/results/fem_guidance_transient.json; the flux model is held to its measured
+errors against it here without rerunning the FEM (docs/validation_fem.md, "Guidance magnet:
+voltage-step transient").  Each window is signed: the lower and upper bound around the
+measured value, so that a change of the network, the eddy elements or the record in either
+direction has to re-measure them.  The model and the record are deterministic; the windows'
+half width (0.5 pp of the step for currents, 1 pp for t63) covers the integrator
+(``rtol = 1e-7``) and the tables' rounding, nothing else.
+"""
+
+from __future__ import annotations
+
+import importlib.util
+import json
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+_PATH = Path(__file__).resolve().parents[1] / "benchmarks" / "fem_guidance_transient.py"
+
+
+def _script():  # type: ignore[no-untyped-def]
+    sys.path.insert(0, str(_PATH.parent))
+    spec = importlib.util.spec_from_file_location("fem_guidance_transient", _PATH)
+    assert spec is not None and spec.loader is not None
+    mod = importlib.util.module_from_spec(spec)
+    sys.modules.setdefault("fem_guidance_transient", mod)
+    spec.loader.exec_module(mod)
+    return mod
+
+
+def _record() -> dict:
+    return json.loads((_PATH.parent / "results" / "fem_guidance_transient.json").read_text())
+
+
+def test_recorded_fem_is_converged() -> None:
+    """The FEM's own error, from its mesh and time-step study at 10 mm / 10 -> 20 A."""
+    mod = _script()
+    data = _record()
+    base = data["cases"]["runs"][0]
+    assert base["label"] == "10 mm, 10 -> 20 A"
+    changes = {r["label"]: mod.fem_change(r, base) for r in data["study"]["runs"]}
+    # measured: mesh x 1.5 0.24 %, dt / 2 0.011 % of the step for t >= 1 ms; the model
+    # comparisons below judge errors of >= 0.4 % of the step against aims of 5 %
+    assert set(changes) == {"10 mm, 10 -> 20 A, mesh x 1.5", "10 mm, 10 -> 20 A, dt / 2"}
+    assert all(c < 3e-3 for c in changes.values()), changes
+    t63 = {r["label"]: mod.rise_time(np.asarray(r["time_s"]), np.asarray(r["current_A"]),
+                                     r["i0_A"], r["i1_A"])
+           for r in [base, *data["study"]["runs"]]}
+    # measured 521.44 / 521.92 / 521.59 ms: within 0.1 % of each other
+    assert max(t63.values()) / min(t63.values()) - 1 < 2e-3, t63
+    # energy balance of every run (rectangle rule on the BDF2 steps): measured 2.9e-4 ...
+    # 6.8e-4
+    runs = [r for part in data.values() for r in part["runs"]]
+    assert all(r["energy_residual"] < 1e-3 for r in runs)
+    # the recorded circuit is the bundled network's (both sections alike, one circuit each)
+    assert all(r["resistance_ohm"] == 1.5 for r in runs)
+
+
+# (case, model) -> measured (err at 1 ms, max err for t >= 1 ms, both in % of the step;
+# t63 error in %), docs/validation_fem.md
+MEASURED = {
+    ("10 mm, 10 -> 20 A", "2-D cut, lumped"): (+10.5, 11.6, +8.2),
+    ("6 mm, 10 -> 20 A", "2-D cut, lumped"): (+10.6, 11.8, +10.5),
+    ("10 mm, 20 -> 50 A", "2-D cut, lumped"): (+10.5, 11.2, +12.5),
+    ("10 mm, 10 -> 20 A", "2-D cut, ladder n = 6"): (-0.4, 0.4, -0.5),
+    ("6 mm, 10 -> 20 A", "2-D cut, ladder n = 6"): (-0.4, 0.5, +0.9),
+    ("10 mm, 20 -> 50 A", "2-D cut, ladder n = 6"): (-0.4, 1.2, +4.5),
+    ("10 mm, 10 -> 20 A", "2-D cut, ladder n = 8"): (-0.4, 0.4, -0.4),
+    ("6 mm, 10 -> 20 A", "2-D cut, ladder n = 8"): (-0.4, 0.4, +1.0),
+    ("10 mm, 20 -> 50 A", "2-D cut, ladder n = 8"): (-0.4, 0.7, +2.5),
+    ("10 mm, 10 -> 20 A", "bundled, lumped"): (+10.9, 13.2, -0.2),
+    ("6 mm, 10 -> 20 A", "bundled, lumped"): (+10.9, 13.4, +4.2),
+    ("10 mm, 20 -> 50 A", "bundled, lumped"): (+10.9, 12.7, +9.7),
+    ("10 mm, 10 -> 20 A", "bundled, ladder n = 8"): (-0.3, 2.4, -8.0),
+    ("6 mm, 10 -> 20 A", "bundled, ladder n = 8"): (-0.3, 1.4, -4.4),
+    ("10 mm, 20 -> 50 A", "bundled, ladder n = 8"): (-0.3, 1.4, -4.2),
+}
+#: the same networks without eddy currents against the FEM with sigma = 0: (max err, t63 err)
+MEASURED_STATIC = {
+    ("10 mm, 10 -> 20 A", "2-D cut"): (0.6, -1.5),
+    ("6 mm, 10 -> 20 A", "2-D cut"): (0.5, -1.2),
+    ("10 mm, 20 -> 50 A", "2-D cut"): (0.3, -0.2),
+    ("10 mm, 10 -> 20 A", "bundled"): (3.5, -9.0),
+    ("6 mm, 10 -> 20 A", "bundled"): (2.5, -6.6),
+    ("10 mm, 20 -> 50 A", "bundled"): (1.9, -0.4),
+}
+
+
+def _within(value: float, measured: float, half: float) -> bool:
+    return measured - half <= value <= measured + half
+
+
+def _errors(mod, ref: dict, mag) -> tuple[float, float, float]:  # type: ignore[no-untyped-def]
+    run = mod.model_step(ref, mag)
+    m = mod.metrics(run["time_s"], run["current_A"], run["eddy_loss_J"], ref)
+    return (100 * m["err_1ms"], 100 * m["err_max"], 100 * (m["t63_s"] / m["t63_fem_s"] - 1))
+
+
+def test_ladder_meets_the_aims_where_the_lumped_elements_jump() -> None:
+    """One recorded step (10 mm, 10 -> 20 A) on the 2-D cut, in the fast suite: issue 26's
+    aims (current within 5 % of the step for t >= 1 ms, t63 within 5 %) met by
+    ``eddy_model = "ladder"`` (measured 0.4 % and -0.4 %), missed by the lumped elements,
+    whose current jumps at t = 0+ (measured +10.5 % of the step at 1 ms, t63 +8.2 %)."""
+    mod = _script()
+    ref = _record()["cases"]["runs"][0]
+    assert ref["label"] == "10 mm, 10 -> 20 A"
+    ladder = _errors(mod, ref, mod.MODELS["2-D cut, ladder n = 8"]())
+    lumped = _errors(mod, ref, mod.MODELS["2-D cut, lumped"]())
+    assert ladder[1] < 5.0 and abs(ladder[2]) < 5.0, ladder
+    assert lumped[0] > 9.0 and lumped[2] > 5.0, lumped
+
+
+def test_guidance_ladder_structure() -> None:
+    """``eddy_model = "ladder"`` on the guidance kind: n tubes per solid part (per section
+    four half legs, two pole bars, the yoke, the rail), statics those of the lumped
+    network, ``coil_air`` across the whole yoke, the Saint-Venant factor only with
+    ``end_effects``, ``"ladder_split"`` refused."""
+    import maglevkit as mk
+    from maglevkit.errors import InputError
+
+    lumped = mk.load_magnet("tr-guidance")
+    ladder = mk.load_magnet("tr-guidance", eddy_model="ladder", eddy_layers=3)
+    count = [sum(int(g > 0) for g in m.network.eddy_conductances) for m in (lumped, ladder)]
+    assert count == [2 * 6, 2 * 8 * 3], count
+    coil_air = ladder.network.branch("coil_air_1")
+    assert (coil_air.start, coil_air.end) == ("YL1", "YU1")
+    assert "EY1" not in {b.end for b in ladder.network.branches}
+    for gap, current in ((0.006, 50.0), (0.010, 32.0), (0.020, 80.0)):
+        a = mk.solve_statics(lumped, gaps_m=gap, currents_A=[current, current])
+        b = mk.solve_statics(ladder, gaps_m=gap, currents_A=[current, current])
+        # parallel tubes of one material and length carry one flux density: the same
+        # statics up to the solver's tolerance (measured ~1e-11 relative on the U-magnet)
+        assert np.allclose(b.pole_force_N, a.pole_force_N, rtol=1e-8)
+        assert np.allclose(b.flux_linkage_Wb, a.flux_linkage_Wb, rtol=1e-8)
+    # the yoke's outermost eddy element: the 2-D slab on the cut, times J_rect/J_slab of
+    # the merged yokes' 0.9 m x 70 mm section in the bundled file (measured 0.951)
+    mod = _script()
+    cut = mod.guidance_magnet(end_effects=False, eddy_model="ladder", eddy_layers=3)
+    g = [m.network.eddy_conductances[m.network.branch_names.index("yoke_1")]
+         for m in (ladder, cut)]
+    assert g[0] / g[1] == pytest.approx(0.951, abs=1e-3)
+    with pytest.raises(InputError, match="ladder_split.*guidance_magnet.*'ladder' or"):
+        mk.load_magnet("tr-guidance", eddy_model="ladder_split")
+
+
+@pytest.mark.slow
+def test_flux_model_against_recorded_fem() -> None:
+    """The lumped eddy elements jump (+10.5 % of the step at 1 ms, up to 11.8 % off: the
+    5 % aim is missed) and rise 8-13 % slow on the 2-D cut; ``eddy_model = "ladder"`` (the
+    slab ladder on every solid part) meets both aims (n = 8: current within 0.7 % of the
+    step, t63 -0.4 ... +2.5 %; n = 6 +4.5 % in saturation).  The bundled file's air paths
+    over the yokes' depth (``end_effects = true``) are a 3-D term the 2-D FEM lacks:
+    without eddy currents they make the rise 6.6-9.0 % fast below the knee, which offsets
+    the lumped eddy elements' slow rise there and makes the bundled ladder 4-8 % fast."""
+    mod = _script()
+    data = _record()
+    mags = {label: make() for label, make in mod.MODELS.items()}
+    static = {"2-D cut": mod.guidance_magnet(end_effects=False, eddy_currents=False),
+              "bundled": mod.guidance_magnet(eddy_currents=False)}
+    noeddy = {r["label"]: r for r in data["noeddy"]["runs"]}
+    for ref in data["cases"]["runs"]:
+        for (case, label), (e1, emax, et63) in MEASURED.items():
+            if case != ref["label"]:
+                continue
+            got = _errors(mod, ref, mags[label])
+            assert _within(got[0], e1, 0.5), (case, label, got)
+            assert _within(got[1], emax, 0.5), (case, label, got)
+            assert _within(got[2], et63, 1.0), (case, label, got)
+            if label.startswith("2-D cut, ladder n = 8"):
+                # issue 26's aims: current within 5 % of the step, t63 within 5 %
+                assert got[1] < 5.0 and abs(got[2]) < 5.0, (case, label, got)
+        for (case, net), (emax, et63) in MEASURED_STATIC.items():
+            if case != ref["label"]:
+                continue
+            fem = noeddy[case]
+            run = mod.model_step(fem, static[net])
+            m = mod.metrics(run["time_s"], run["current_A"], run["eddy_loss_J"], fem)
+            assert _within(100 * m["err_max"], emax, 0.5), (case, net, m)
+            assert _within(100 * (m["t63_s"] / m["t63_fem_s"] - 1), et63, 1.0), (case, net, m)
