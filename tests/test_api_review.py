@@ -262,7 +262,7 @@ def test_tabulated_signal_refuses_bools() -> None:
 
     assert Tabulated((0.0, 1.0), (0.0, 2.0))(0.5) == pytest.approx(1.0)
     # was: True taken as 1 s / 1 V
-    with pytest.raises(mk.InputError, match=r"tabulated signal times \[s\] = \(0.0, True\) "
+    with pytest.raises(mk.InputError, match=r"tabulated signal times_s \[s\] = \(0.0, True\) "
                                             r"\(tuple\) contains a bool"):
         Tabulated((0.0, True), (0.0, 2.0))
     with pytest.raises(mk.InputError, match=r"tabulated signal values = \(False, 2.0\) "

@@ -20,9 +20,10 @@ def test_far_outside_the_maps_is_out_of_range_not_a_solver_error(model) -> None:
     state = model.initial_state(gaps_m=0.010, currents_A=20.0)
     # 20 mm on 8-12 mm maps: refused before integrating (the spline would be evaluated
     # far beyond its extension and the state would become non-finite)
-    with pytest.raises(OutOfRangeError, match=r"start of the step.*gap 0\.02 m.*0\.008\.\.0\.012"):
+    with pytest.raises(OutOfRangeError, match=r"over the step t = 0\.\.0\.001 s: substitute gap "
+                                              r"0\.02 m.*0\.008\.\.0\.012"):
         model.step(state, 1e-3, 20.0, gaps_m=0.02)
-    with pytest.raises(OutOfRangeError, match=r"end of the step.*gap 1\.01 m"):
+    with pytest.raises(OutOfRangeError, match=r"over the step.*gap 1\.01 m"):
         model.step(state, 1e-3, 20.0, gap_rates_m_per_s=1e3)
 
 

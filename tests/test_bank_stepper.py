@@ -255,7 +255,7 @@ def test_messages_match_step_and_several_sub_steps(u_maps) -> None:
         with pytest.raises(InputError) as err:
             call()
         msgs.append(str(err.value))
-    assert msgs[0] == msgs[1] and "circuit 'b/coil' has nan V" in msgs[0]
+    assert msgs[0] == msgs[1] and "circuit 'b/coil' = nan V" in msgs[0]
     sp.voltages_V[:] = 45.0
     sp.voltages_V[1] = np.inf                        # written directly into the array
     with pytest.raises(InputError, match=r"voltages must be finite.*'b/coil'"):
@@ -308,3 +308,43 @@ def test_extrapolation_is_reported_once_per_circuit(u_maps) -> None:
     with pytest.raises(OutOfRangeError) as err:
         sp.advance(gaps_m=0.030)
     assert "extrapolate=True" not in str(err.value)
+
+
+def test_the_public_parts_the_stepper_uses(u_maps: mk.CharacteristicMaps) -> None:
+    """What the stepper takes from the bank is public (no private name crosses the two
+    modules): the state check, the fast path, the pole forces, the diagnosis of the
+    kernel's reason codes (raise_step_flags), and a step length of the same sub-step
+    count."""
+    bank = MagnetBank({"front": u_maps, "rear": u_maps})
+    assert bank.compiled_fast_path
+    state = bank.initial_state(gaps_m=0.010, currents_A=20.0)
+    bank.check_state(state)
+    with pytest.raises(InputError, match="state must be a BankState of this bank"):
+        bank.check_state(MagnetBank({"m": u_maps}).initial_state(gaps_m=0.01, currents_A=1.0))
+    # pole forces: each pole an equal share of its circuit's force, as step gives them
+    _, out = bank.step(state, 1e-3, 40.0, pole_forces=True)
+    np.testing.assert_array_equal(bank.pole_forces(out.circuit_force_N), out.pole_force_N)
+    np.testing.assert_array_equal(bank.pole_forces(np.stack([out.circuit_force_N] * 2))[1],
+                                  out.pole_force_N)
+    # the kernel's codes turned into step's message (a current leaving in a sub-step)
+    f = bank.step_kernel(1e-3)
+    i, s, u = np.array([20.0, 58.0]), np.full(2, 0.01), np.array([40.0, 400.0])
+    res = f.call({"I_L": i, "s": s, "U": u, "sdot": np.zeros(2), "h": 1e-3})
+    with pytest.raises(OutOfRangeError) as direct:
+        bank.raise_step_flags(np.asarray(res["flags"]).ravel(), gaps_m=s,
+                              gap_rates_m_per_s=np.zeros(2), inductor_currents_A=i,
+                              voltages_V=u, current_min_A=np.asarray(res["I_L_min"]).ravel(),
+                              current_max_A=np.asarray(res["I_L_max"]).ravel(), start_s=0.0,
+                              end_s=1e-3)
+    with pytest.raises(OutOfRangeError) as stepped:
+        bank.step(bank.initial_state(gaps_m=0.01, currents_A=i), 1e-3, u)
+    assert str(direct.value) == str(stepped.value)
+    assert "member 'rear', circuit 'coil' in an RK4 sub-step" in str(direct.value)
+    # another length of the same sub-step count is taken; one of another count is refused
+    stepper = bank.stepper(state, 1e-3)
+    stepper.set_step_length(0.9e-3)
+    stepper.advance(40.0)
+    assert stepper.dt_s == 0.9e-3 and stepper.time_s == pytest.approx(0.9e-3, rel=1e-15)
+    with pytest.raises(InputError, match=r"set_step_length: dt_s = 0\.0015 s takes 2 RK4 "
+                                         r"sub-steps, this stepper's step of 0\.0009 s takes 1"):
+        stepper.set_step_length(1.5e-3)

@@ -117,8 +117,8 @@ def test_leaving_the_maps_gives_the_bspline_messages(all_maps) -> None:
     messages = []
     for model in (tables, spline):
         st = model.initial_state(gaps_m=0.010, currents_A=20.0)
-        with pytest.raises(MaglevkitError) as step_err:
-            model.step(st, 1e-3, 1e4)                       # the current leaves the maps
+        with pytest.raises(MaglevkitError) as step_err:     # the current leaves the maps
+            model.step(model.initial_state(gaps_m=0.010, currents_A=58.0), 1e-3, 300.0)
         with pytest.raises(OutOfRangeError) as sim_err:
             model.simulate(np.linspace(0.0, 0.05, 51), gaps_m=0.010,
                            voltages_V=lambda t, r=model.resistance_ohm: 20.0 * r * (1 + 400 * t))
@@ -128,8 +128,25 @@ def test_leaving_the_maps_gives_the_bspline_messages(all_maps) -> None:
             model.step(st, 1e-3, 20.0, gaps_m=np.array([0.010, -0.001]))
         messages.append([(type(e.value), str(e.value))
                          for e in (step_err, sim_err, nan_err, neg_err)])
+    # simulate: the tables name the flagged step of the compiled loop (its reason code: an
+    # RK4 sub-step end), the B-spline path the end of that interval; the rest is the same
+    tab_sim, spl_sim = messages[0].pop(1), messages[1].pop(1)
+    assert tab_sim[0] is spl_sim[0] is OutOfRangeError
+    assert tab_sim[1] == spl_sim[1].replace(" at t = 0.017 s",
+                                            " in an RK4 sub-step within t = 0.016..0.017 s")
     assert messages[0] == messages[1]
     assert messages[0][0][0] is OutOfRangeError and "currents 0..60 A" in messages[0][0][1]
+    # a step so steep that the B-spline RK4 leaves the splines' extension (it then
+    # integrates step-wise to the time the current leaves): the tables report the kernel's
+    # reason code, the sub-step, as the bank does for the same step
+    with pytest.raises(OutOfRangeError, match=r"circuit 'coil' in an RK4 sub-step within "
+                                              r"t = 0\.\.0\.001 s") as steep:
+        tables.step(tables.initial_state(gaps_m=0.010, currents_A=20.0), 1e-3, 1e4)
+    bank = mk.MagnetBank({"m": maps})
+    with pytest.raises(OutOfRangeError) as banked:
+        bank.step(bank.initial_state(gaps_m=0.010, currents_A=20.0), 1e-3, 1e4)
+    assert str(steep.value).split(" (")[0] == str(banked.value).split(" (")[0].replace(
+        "member 'm', circuit 'coil'", "circuit 'coil'")
 
 
 def test_extrapolation_falls_back_to_the_bspline_path(all_maps) -> None:
@@ -236,6 +253,57 @@ def test_kernel_reason_codes_name_each_reason(all_maps) -> None:
     assert [int(r) for r in StepFlag.by_priority()] == [4, 1, 8, 2]
 
 
+def test_current_model_step_reads_the_kernels_reason_codes(all_maps) -> None:
+    """A flagged table step of CurrentModel is diagnosed from the kernel's reason codes
+    (no range check of its own: the checks are made to fail) and says what the B-spline
+    path says, character for character, and what the bank says of its circuit."""
+    from maglevkit.reduced.bank import MagnetBank
+
+    maps = all_maps["u-magnet"][1]                  # 6-16 mm, 0-60 A
+    tables, spline = mk.CurrentModel(maps), mk.CurrentModel(maps, lookup="bspline")
+
+    def no_check(*args: object, **kwargs: object) -> None:
+        raise AssertionError("a range check of CurrentModel's own ran")
+
+    tables._check_range = no_check                  # type: ignore[method-assign]
+    tables._check_substeps = no_check               # type: ignore[method-assign]
+    r = float(tables.core.resistance_ohm[0])
+    cases = [  # (start current [A], voltages, gaps, gap rates, error, message)
+        (20.0, np.array([20.0 * r]), 0.030, 0.0, OutOfRangeError,
+         r"circuit 'coil' over the step t = 0\.\.0\.001 s: substitute gap 0\.03 m"),
+        (20.0, np.array([20.0 * r]), 0.015, 2.0, OutOfRangeError,
+         r"over the step.*gap 0\.017 m"),
+        (58.0, np.array([300.0]), 0.010, 0.0, OutOfRangeError,
+         r"circuit 'coil' in an RK4 sub-step within t = 0\.\.0\.001 s: substitute gap 0\.01 m "
+         r"and current [\d.]+ A; its maps cover gaps 0\.006\.\.0\.016 m and currents 0\.\.60 A"),
+        (20.0, np.array([np.nan]), 0.010, 0.0, InputError,
+         r"voltages must be finite: circuit 'coil' = nan V"),
+    ]
+    # simulate: the compiled time loop stops at the flagged step, whose codes say why
+    # (a gap ramp out of the 6-16 mm maps between 20 and 21 ms)
+    with pytest.raises(OutOfRangeError, match=r"circuit 'coil' over the step t = 0\.02\.\.0\.021 "
+                                              r"s: substitute gap 0\.0161 m"):
+        tables.simulate(np.linspace(0.0, 0.05, 51), gaps_m=lambda t: 0.014 + 0.1 * t,
+                        voltages_V=20.0 * r, initial_currents_A=20.0)
+    bank = MagnetBank({"m": maps})
+    for i0, u, g, gd, err, pattern in cases:
+        msgs = []
+        state = spline.initial_state(gaps_m=0.010, currents_A=i0)   # (checks the range)
+        for model in (tables, spline):
+            with pytest.raises(err, match=pattern) as info:
+                model.step(state, 1e-3, u, gaps_m=np.full(len(model.gap_names), g),
+                           gap_rates_m_per_s=np.full(len(model.gap_names), gd))
+            msgs.append(str(info.value))
+        assert msgs[0] == msgs[1]
+        bst = bank.initial_state(gaps_m=0.010, currents_A=i0)
+        with pytest.raises(err) as info:
+            bank.step(bst, 1e-3, u, gaps_m=g, gap_rates_m_per_s=gd)
+        # the bank names member and circuit; its own advice has no command-line hint
+        bank_msg = str(info.value).replace("member 'm', circuit 'coil'", "circuit 'coil'")
+        bank_msg = bank_msg.replace("'m/coil'", "'coil'")
+        assert msgs[0].startswith(bank_msg.removesuffix(")"))
+
+
 def test_maps_the_tables_cannot_hold_stay_on_the_bsplines() -> None:
     import dataclasses
 
@@ -257,41 +325,41 @@ def test_maps_the_tables_cannot_hold_stay_on_the_bsplines() -> None:
     assert out.currents_A[0] == pytest.approx(runs[1].currents_A[1, 0], rel=1e-12)
 
 
-def test_step_wrapper_compiled_after_a_while_is_bit_identical(monkeypatch: pytest.MonkeyPatch
-                                                              ) -> None:
-    """CurrentModel.step's wrapper around the bank's lane step runs on CasADi's virtual
-    machine for COMPILE_AFTER_STEPS calls, then as C linked against the lane library: the
-    two give the same bits (12 different pole gaps and rates, voltages varying)."""
+def test_step_wrapper_compiled_at_the_first_step_is_bit_identical() -> None:
+    """CurrentModel.step's wrapper around the bank's lane step is C linked against the
+    lane library from the first step of a step length on (no compile pause later in a
+    run), and gives the same bits as the same wrapper on CasADi's virtual machine (12
+    different pole gaps and rates, voltages varying, 60 steps)."""
     from maglevkit.reduced import current as cur
 
     mag = mk.load_magnet("tr09-standard")
     maps = mk.build_maps(mag, gaps_m=np.linspace(0.005, 0.016, 6),
                          currents_A=np.linspace(0.0, 80.0, 9), progress=False)
-    monkeypatch.setattr(cur, "COMPILE_AFTER_STEPS", 20)
+    model = mk.CurrentModel(maps)
+    st = model.initial_state(gaps_m=0.01, currents_A=34.0)
+    model.step(st, 1e-3, 40.0)
+    compiled = model._table_steps[1e-3]
+    if compiled.library is None:
+        pytest.skip("no lane library (no C compiler)")
+    assert compiled.bound.function.class_name() != "MXFunction"       # compiled at once
+    lanes = model._bank.compiled_step_library(1e-3)
+    vm = cur._TableStep(lanes[0], model._avg, model._share)            # no library: the VM
+    assert vm.bound.function.class_name() == "MXFunction"
 
-    def run(model: mk.CurrentModel) -> np.ndarray:
-        st = model.initial_state(gaps_m=0.01, currents_A=34.0)
+    def run(call: cur._TableStep) -> np.ndarray:
+        i = np.array([34.0, 34.0])
         rng = np.random.default_rng(0)
         rows = []
         for k in range(60):
             g = 0.01 + 1e-3 * np.sin(0.03 * k) + 1e-5 * rng.standard_normal(12)
-            st, o = model.step(st, 1e-3, np.array([40.0, 42.0]) * (1 + 0.2 * np.sin(0.1 * k)),
-                               gaps_m=g, gap_rates_m_per_s=1e-3 * rng.standard_normal(12))
-            rows.append(np.concatenate([o.currents_A, o.pole_force_N, st.gaps_m,
-                                        st.inductor_currents_A, [o.force_N]]))
+            u = np.array([40.0, 42.0]) * (1 + 0.2 * np.sin(0.1 * k))
+            out = call(i, g, u, 1e-3 * rng.standard_normal(12), 1e-3)
+            assert out is not None
+            i = out[0]
+            rows.append(np.concatenate(out))
         return np.array(rows)
 
-    compiled = mk.CurrentModel(maps)
-    a = run(compiled)
-    call = compiled._table_steps[1e-3]
-    if call.library is None:
-        pytest.skip("no lane library (no C compiler)")
-    assert call.countdown == 0 and call.bound.function.class_name() != "MXFunction"
-    monkeypatch.setattr(cur, "COMPILE_AFTER_STEPS", 10**9)
-    vm = mk.CurrentModel(maps)
-    b = run(vm)
-    assert vm._table_steps[1e-3].bound.function.class_name() == "MXFunction"
-    assert np.array_equal(a, b)
+    assert np.array_equal(run(compiled), run(vm))
 
 
 def test_row_sums_equal_numpy_sum_bit_for_bit() -> None:

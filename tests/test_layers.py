@@ -189,3 +189,90 @@ def test_sweep_and_export_are_attributes_of_the_package() -> None:
 
     assert mk.sweep.run_sweep is not None and mk.export.export_fmu is not None
     assert mk.__version__ == maglevkit._version.__version__
+
+
+# ------------------------------------------------------------------ private attributes
+def _private(name: str) -> bool:
+    return name.startswith("_") and not (name.startswith("__") and name.endswith("__"))
+
+
+def private_names_defined(tree: ast.AST) -> set[str]:
+    """The private names a module defines: functions, classes and assignments (module or
+    class level), attributes it stores (``obj._x = ...``) and ``__slots__`` entries."""
+    out: set[str] = set()
+    for node in ast.walk(tree):
+        if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef, ast.ClassDef)):
+            out.add(node.name)
+        elif isinstance(node, ast.Name) and isinstance(node.ctx, ast.Store):
+            out.add(node.id)
+        elif isinstance(node, ast.Attribute) and isinstance(node.ctx, (ast.Store, ast.Del)):
+            out.add(node.attr)
+        elif isinstance(node, ast.Constant) and isinstance(node.value, str) \
+                and node.value.isidentifier():
+            out.add(node.value)                                  # __slots__ entries
+    return {n for n in out if _private(n)}
+
+
+def private_attribute_uses(sources: dict[str, str]) -> set[tuple[str, str]]:
+    """(module, ``receiver.name``) of every private attribute a module reads that is not
+    its own: ``obj._x`` where the module defines no ``_x`` (another module's private name),
+    ``self._x`` where it defines none (inherited from another module's class), and
+    ``obj._x`` (not ``self``) where another module defines ``_x`` too (which object it
+    is, the source alone does not say: each such use is listed and must be justified)."""
+    trees = {m: ast.parse(s) for m, s in sources.items()}
+    own = {m: private_names_defined(t) for m, t in trees.items()}
+    found: set[tuple[str, str]] = set()
+    for m, tree in trees.items():
+        others = set().union(*(v for k, v in own.items() if k != m))
+        for node in ast.walk(tree):
+            if not (isinstance(node, ast.Attribute) and isinstance(node.ctx, ast.Load)
+                    and _private(node.attr)):
+                continue
+            receiver = ast.unparse(node.value)
+            if node.attr not in own[m] or (receiver not in ("self", "cls")
+                                           and node.attr in others):
+                found.add((m, f"{receiver}.{node.attr}"))
+    return found
+
+
+#: Private attributes read outside the module that defines them, each with its reason.
+KNOWN_PRIVATE_ATTRIBUTES: dict[tuple[str, str], str] = {
+    ("maglevkit.validation", "sys._getframe"): "the standard library's documented frame access",
+    ("maglevkit.cli._app", "self._width"): "rich.Console's own width (the subclass's base)",
+    ("maglevkit.models.flux", "fm._dae"): "fm is a FluxModel: the module's own class",
+    ("maglevkit.models.flux", "fm._run"): "fm is a FluxModel: the module's own class",
+    ("maglevkit.reduced.stepper", "other._u"): "other is a BankStepper: the module's own class",
+    ("maglevkit.control.realtime", "batch._k"): "batch is a RealTimeMPCBatch: the module's own",
+    **{("maglevkit.control.realtime", f"{r}.{a}"):
+       "RealTimeMPC drives its base class OffsetFreeMPC (control.mpc) through its private "
+       "members; control/ was another helper's lane in session 22 (not changed there)"
+       for r, a in [("self", "_layout"), ("self", "_bounds"), ("self", "_problem"),
+                    ("self", "_rows_per_interval"), ("self", "_unpack"), ("self", "_su"),
+                    ("self", "_sx"), ("self", "_initial_guess"), ("self", "_ulim"),
+                    ("self", "_shift"), ("c", "_u_prev"), ("ctls[int(j)]", "_su")]},
+}
+
+
+def test_no_private_attribute_is_used_outside_its_module() -> None:
+    sources = {name: path.read_text(encoding="utf-8")
+               for name, (path, _) in modules().items()}
+    found = private_attribute_uses(sources)
+    assert found <= set(KNOWN_PRIVATE_ATTRIBUTES), sorted(found - set(KNOWN_PRIVATE_ATTRIBUTES))
+
+
+def test_the_private_attribute_check_catches_a_use() -> None:
+    """A module that reads another module's private method, one that inherits a private
+    member from another module's class, and one that reads a name both define (on an
+    object that is not ``self``) are reported; a module's own private names are not."""
+    sources = {
+        "pkg.bank": "class Bank:\n    def _kernel(self):\n        return self._cache\n"
+                    "    def __init__(self):\n        self._cache = 1\n        self._u = 0\n",
+        "pkg.stepper": "def f(bank):\n    return bank._kernel()\n",
+        "pkg.sub": "from pkg.bank import Bank\nclass Sub(Bank):\n"
+                   "    def g(self):\n        return self._cache\n",
+        "pkg.other": "class O:\n    def __init__(self):\n        self._u = 1\n"
+                     "    def h(self, bank):\n        return bank._u + self._u\n",
+    }
+    assert private_attribute_uses(sources) == {("pkg.stepper", "bank._kernel"),
+                                               ("pkg.sub", "self._cache"),
+                                               ("pkg.other", "bank._u")}

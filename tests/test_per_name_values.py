@@ -88,3 +88,30 @@ def test_leading_axes_and_the_statics_and_sampled_inputs_share_it() -> None:
     with pytest.raises(InputError, match=r"voltages: unknown names \['x'\], missing \['coil'\]; "
                                          r"give one value \[V\] per name: \['coil'\]"):
         mk.simulate(mag, (0.0, 0.01), dt_s=1e-3, gaps_m=0.01, voltages_V={"x": 1.0})
+
+
+def test_flux_model_step_shares_the_converter() -> None:
+    """FluxModel.step takes its per-circuit and per-gap inputs through the same converter
+    as the reduced models (it had a converter of its own with other messages)."""
+    mag = mk.load_magnet("u-magnet")
+    fm = mk.FluxModel(mag)
+    st = fm.initial_state(gaps_m=0.01, currents_A=10.0)
+    gap = fm.gap_names[0]
+    with pytest.raises(InputError, match=r"voltages: expected 1 values \[V\] \(one per circuit"):
+        fm.step(st, 1e-3, [1.0, 2.0])
+    with pytest.raises(InputError, match=r"voltages: unknown names \['x'\], missing \['coil'\]; "
+                                         r"give one value \[V\] per circuit: \['coil'\]"):
+        fm.step(st, 1e-3, {"x": 1.0})
+    with pytest.raises(InputError, match=r"voltages must be finite: circuit 'coil' = nan V"):
+        fm.step(st, 1e-3, math.nan)
+    with pytest.raises(InputError, match=rf"gaps must be finite: gap '{gap}' = inf m"):
+        fm.step(st, 1e-3, 1.0, gaps_m=math.inf)
+    n_g = len(fm.gap_names)
+    with pytest.raises(InputError, match=rf"gap_rates: expected {n_g} values \[m/s\] \(one per gap"):
+        fm.step(st, 1e-3, 1.0, gap_rates_m_per_s=np.zeros(n_g + 1))
+    with pytest.raises(InputError, match=r"voltages \[V\] = True \(bool\) is a bool"):
+        fm.step(st, 1e-3, True)
+    # the accepted forms give the same step: one for all, a sequence, a mapping
+    a = fm.step(st, 1e-3, 5.0)[0].currents_A
+    b = fm.step(st, 1e-3, {"coil": 5.0}, gaps_m=[0.01] * n_g)[0].currents_A
+    assert np.array_equal(a, b)

@@ -9,6 +9,7 @@ the TR09 gap-sine sweep against the detailed model.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import numpy as np
@@ -28,6 +29,16 @@ from .conftest import paper_tr09
 
 GAPS = np.linspace(0.006, 0.014, 5)
 CURRENTS = np.linspace(0.0, 40.0, 9)
+
+
+def _ladder(f: object, lt: float, k: float, r_el: float, r_a: float, l_u: float, r_2: float,
+            beta: float = 0.0) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """:func:`ladder_frequency_response` with its parameters in the order of the paper's
+    symbols (``L~``, ``k``, ``R_el``, ``R_a``, ``L_u``, ``R_2``)."""
+    return ladder_frequency_response(f, differential_inductance_H=lt, dpsi_ds_Wb_per_m=k,
+                                     resistance_ohm=r_el, jump_resistance_ohm=r_a,
+                                     unshielded_inductance_H=l_u, shielding_resistance_ohm=r_2,
+                                     beta=beta)
 
 
 @pytest.fixture(scope="module")
@@ -72,10 +83,10 @@ def test_ladder_transfer_functions_match_the_linearised_ode(u_maps: Characterist
     f = np.geomspace(0.2, 2000.0, 25)
     cs, _, cu = _response(ladder, f, gap, cur)
     ms, _, mu = ladder_frequency_response(
-        f, ltilde=lt, dpsi_ds=k, r_el=r_el,
-        r_a=float(ds["motion_eddy_jump_resistance_ohm"].values[0]),
-        l_u=float(ds["motion_eddy_unshielded_inductance_H"].values[0]),
-        r_2=float(ds["motion_eddy_shielding_resistance_ohm"].values[0]),
+        f, differential_inductance_H=lt, dpsi_ds_Wb_per_m=k, resistance_ohm=r_el,
+        jump_resistance_ohm=float(ds["motion_eddy_jump_resistance_ohm"].values[0]),
+        unshielded_inductance_H=float(ds["motion_eddy_unshielded_inductance_H"].values[0]),
+        shielding_resistance_ohm=float(ds["motion_eddy_shielding_resistance_ohm"].values[0]),
         beta=float(ds["motion_eddy_unshielded_share"].values[0]))
     # both are exact (AD vs algebra): rounding only
     assert np.max(np.abs(cs / ms - 1.0)) < 1e-9
@@ -103,19 +114,16 @@ def test_unshielded_share_in_the_ode_and_the_closed_form(u_maps: CharacteristicM
     r_2 = float(ds["motion_eddy_shielding_resistance_ohm"].values[0])
     f = np.geomspace(0.2, 2000.0, 25)
     cs, _, _ = _response(ladder, f, gap, cur)
-    ms, _, _ = ladder_frequency_response(f, ltilde=lt, dpsi_ds=k, r_el=r_el, r_a=r_a, l_u=l_u,
-                                         r_2=r_2, beta=beta)
-    m0, _, _ = ladder_frequency_response(f, ltilde=lt, dpsi_ds=k, r_el=r_el, r_a=r_a, l_u=l_u,
-                                         r_2=r_2)
+    ms, _, _ = _ladder(f, lt, k, r_el, r_a, l_u, r_2, beta=beta)
+    m0, _, _ = _ladder(f, lt, k, r_el, r_a, l_u, r_2)
     assert np.max(np.abs(cs / ms - 1.0)) < 1e-9        # AD vs algebra: rounding only
     assert np.max(np.abs(m0 / ms - 1.0)) > 1e-2        # beta matters at these frequencies
     # p -> oo: the jump; at 1e9 Hz the remaining 1/p terms are ~1e-6 of it
-    hi, _, _ = ladder_frequency_response([1e9], ltilde=lt, dpsi_ds=k, r_el=r_el, r_a=r_a,
-                                         l_u=l_u, r_2=r_2, beta=beta)
+    hi, _, _ = _ladder([1e9], lt, k, r_el, r_a, l_u, r_2, beta=beta)
     jump = -beta * k / ((1.0 + r_el / r_a) * l_u)
     assert hi[0] == pytest.approx(jump, rel=1e-5)
     assert unshielded_share(jump, dpsi_ds_Wb_per_m=k, resistance_ohm=r_el,
-                            shield_resistance_ohm=r_a,
+                            jump_resistance_ohm=r_a,
                             unshielded_inductance_H=l_u) == pytest.approx(beta, rel=1e-12)
 
 
@@ -127,8 +135,7 @@ def test_vanishing_unshielded_inductance_gives_eq8() -> None:
     a = 1.0 + r_el / r_ec
     f = np.geomspace(0.1, 1000.0, 30)
     p = 2j * np.pi * f
-    gs, _, gu = ladder_frequency_response(f, ltilde=lt, dpsi_ds=k, r_el=r_el, r_a=r_a,
-                                          l_u=1e-12, r_2=r_2)
+    gs, _, gu = _ladder(f, lt, k, r_el, r_a, 1e-12, r_2)
     eq8_s = -k * p / (a * (lt * p + r_el / a))
     eq8_u = (1.0 - 1.0 / a) / r_el + 1.0 / (a * a * (lt * p + r_el / a))
     # the neglected time constant L_u/(R_el/a + R_2) ~ 7e-14 s: relative effect < 1e-9
@@ -148,10 +155,10 @@ def test_fit_recovers_a_known_ladder() -> None:
     lt, k, r_el = 0.54, -1140.0, 1.3
     true = (5.77, 0.0226, 14.7)
     f = np.geomspace(0.1, 1000.0, 60)
-    gs, il, gu = ladder_frequency_response(f, ltilde=lt, dpsi_ds=k, r_el=r_el, r_a=true[0],
-                                           l_u=true[1], r_2=true[2])
+    gs, il, gu = _ladder(f, lt, k, r_el, true[0], true[1], true[2])
     resp = DetailedFrequencyResponse(f, gs, il * 0.0, gu, lt, k)
-    fit = fit_motion_eddy(resp, r_el=r_el, r_ec_jump=5.0, r_ec_fit=4.0)
+    fit = fit_motion_eddy(resp, resistance_ohm=r_el,
+                          eddy_resistance_jump_ohm=5.0, eddy_resistance_fit_ohm=4.0)
     got = (fit.jump_resistance_ohm, fit.unshielded_inductance_H, fit.shielding_resistance_ohm)
     # noise-free data: the fit stops at its tolerance (1e-12), far below 1e-6
     assert np.allclose(got, true, rtol=1e-6)
@@ -165,11 +172,11 @@ def test_fit_recovers_a_ladder_with_an_unshielded_share_from_all_three_responses
     lt, k, r_el, dfi, dfs = 0.607, -1265.0, 1.3, 1265.0, -3.49e6
     r_a, l_u, r_2, beta = 6.98, 0.093, 74.0, 0.02
     f = np.geomspace(0.1, 1000.0, 60)
-    gs, il, gu = ladder_frequency_response(f, ltilde=lt, dpsi_ds=k, r_el=r_el, r_a=r_a,
-                                           l_u=l_u, r_2=r_2, beta=beta)
+    gs, il, gu = _ladder(f, lt, k, r_el, r_a, l_u, r_2, beta=beta)
     jump = -beta * k / ((1.0 + r_el / r_a) * l_u)
     resp = DetailedFrequencyResponse(f, gs, dfi * il + dfs, gu, lt, k, jump, dfi, dfs)
-    fit = fit_motion_eddy(resp, r_el=r_el, r_ec_jump=8.2, r_ec_fit=4.8,
+    fit = fit_motion_eddy(resp, resistance_ohm=r_el,
+                          eddy_resistance_jump_ohm=8.2, eddy_resistance_fit_ohm=4.8,
                           max_unshielded_inductance_H=0.11, fit_force=True)
     got = (fit.jump_resistance_ohm, fit.unshielded_inductance_H, fit.shielding_resistance_ohm,
            fit.unshielded_share)
@@ -177,7 +184,8 @@ def test_fit_recovers_a_ladder_with_an_unshielded_share_from_all_three_responses
     assert np.allclose(got, (r_a, l_u, r_2, beta), rtol=1e-6)
     assert fit.rms_residual < 1e-8 and fit.max_force_error < 1e-7
     # the bound holds: below the true L_u the fit cannot reach it and says so by its residual
-    low = fit_motion_eddy(resp, r_el=r_el, r_ec_jump=8.2, r_ec_fit=4.8,
+    low = fit_motion_eddy(resp, resistance_ohm=r_el,
+                          eddy_resistance_jump_ohm=8.2, eddy_resistance_fit_ohm=4.8,
                           max_unshielded_inductance_H=0.05, fit_force=True)
     assert low.unshielded_inductance_H < 0.05 and low.rms_residual > 1e-3
 
@@ -336,18 +344,18 @@ def test_a_fit_that_does_not_converge_is_reported(monkeypatch: pytest.MonkeyPatc
 
     lt, k, r_el = 0.54, -1140.0, 1.3
     f = np.geomspace(0.1, 1000.0, 60)
-    gs, il, gu = ladder_frequency_response(f, ltilde=lt, dpsi_ds=k, r_el=r_el, r_a=5.77,
-                                           l_u=0.0226, r_2=14.7)
+    gs, il, gu = _ladder(f, lt, k, r_el, 5.77, 0.0226, 14.7)
     resp = DetailedFrequencyResponse(f, gs, il * 0.0, gu, lt, k)
     real = scipy.optimize.least_squares
     monkeypatch.setattr(scipy.optimize, "least_squares",
                         lambda *a, **kw: real(*a, **{**kw, "max_nfev": 1}))
     with pytest.warns(mk.MaglevkitWarning, match="ladder fit did not converge"):
-        fit_motion_eddy(resp, r_el=r_el, r_ec_jump=5.0, r_ec_fit=4.0)
+        fit_motion_eddy(resp, resistance_ohm=r_el,
+                                  eddy_resistance_jump_ohm=5.0, eddy_resistance_fit_ohm=4.0)
 
 
 @pytest.mark.parametrize(("key", "value", "needle"), [
-    ("shield_resistance_ohm", 0.0, "shield_resistance_ohm = 0.0 must be > 0"),
+    ("jump_resistance_ohm", 0.0, "jump_resistance_ohm = 0.0 must be > 0"),
     ("resistance_ohm", -1.0, "resistance_ohm = -1.0 must be >= 0"),
     ("dpsi_ds_Wb_per_m", float("nan"), "dpsi_ds_Wb_per_m = nan must be finite"),
 ])
@@ -355,8 +363,38 @@ def test_unshielded_share_refuses_bad_input(key: str, value: float, needle: str)
     """``R_a = 0`` was a ZeroDivisionError (review3): now an InputError naming the argument."""
     from maglevkit.errors import InputError
 
-    kw = {"dpsi_ds_Wb_per_m": -50.0, "resistance_ohm": 1.0, "shield_resistance_ohm": 8.0,
+    kw = {"dpsi_ds_Wb_per_m": -50.0, "resistance_ohm": 1.0, "jump_resistance_ohm": 8.0,
           "unshielded_inductance_H": 0.02, key: value}
     with pytest.raises(InputError, match=needle.replace("(", r"\(")):
         unshielded_share(230.0, **kw)
 
+
+
+def test_old_keyword_names_are_deprecated_aliases() -> None:
+    """The unit-less keywords of the ladder's functions still work for one release: the
+    same result, with a DeprecationWarning that names the new keyword."""
+    f, lt, k, r_el, r_a, l_u, r_2 = np.array([1.0, 50.0]), 0.5, -40.0, 1.2, 6.0, 0.02, 15.0
+    new = _ladder(f, lt, k, r_el, r_a, l_u, r_2, beta=0.1)
+    with pytest.warns(DeprecationWarning, match="ltilde= is deprecated, use "
+                                                "differential_inductance_H=.*r_2= is deprecated, "
+                                                "use shielding_resistance_ohm="):
+        old = ladder_frequency_response(f, ltilde=lt, dpsi_ds=k, r_el=r_el, r_a=r_a, l_u=l_u,
+                                        r_2=r_2, beta=0.1)
+    for a, b in zip(new, old, strict=True):
+        assert np.array_equal(a, b)
+    kw = {"dpsi_ds_Wb_per_m": k, "resistance_ohm": r_el, "unshielded_inductance_H": l_u}
+    with pytest.warns(DeprecationWarning, match="shield_resistance_ohm= is deprecated, use "
+                                                "jump_resistance_ohm="):
+        b_old = unshielded_share(230.0, shield_resistance_ohm=r_a, **kw)
+    assert b_old == unshielded_share(230.0, jump_resistance_ohm=r_a, **kw)
+    fr = np.geomspace(0.1, 1000.0, 30)
+    gs, il, gu = _ladder(fr, lt, k, r_el, r_a, l_u, r_2)
+    resp = DetailedFrequencyResponse(fr, gs, il * 0.0, gu, lt, k)
+    fit = fit_motion_eddy(resp, resistance_ohm=r_el, eddy_resistance_jump_ohm=5.0,
+                          eddy_resistance_fit_ohm=4.0)
+    with pytest.warns(DeprecationWarning, match="r_el= is deprecated, use resistance_ohm=; "
+                                                "r_ec_jump= is deprecated, use "
+                                                "eddy_resistance_jump_ohm="):
+        fit_old = fit_motion_eddy(resp, r_el=r_el, r_ec_jump=5.0, r_ec_fit=4.0)
+    # every field equal (NaN where the response has no force partials)
+    assert np.array_equal(dataclasses.astuple(fit_old), dataclasses.astuple(fit), equal_nan=True)

@@ -128,13 +128,8 @@ _each(("models.signals.Ramp", "models.signals.Step"), "final", "the value after 
       "in " + _SIGNALS)
 _each(("models.signals.Sine",), "amplitude", "in " + _SIGNALS)
 _each(("models.signals.Sine",), "offset", "in " + _SIGNALS)
-_each(("models.signals.Sine",), "frequency", "cycles per unit of the signal's time axis (Hz "
-      "for time); " + _SIGNALS)
-_each(("models.signals.Ramp",), "start", "time on the signal's own axis; " + _SIGNALS)
-_each(("models.signals.Ramp",), "stop", "time on the signal's own axis; " + _SIGNALS)
-_each(("models.signals.Step",), "time", "the switching time on the signal's own axis; "
-      + _SIGNALS)
-_each(("models.signals.Tabulated",), "times", "the signal's own time axis; " + _SIGNALS)
+# (a signal's times, frequency and phase carry units since session 22: every simulator
+# samples signals on its time grid in s, so they are s, Hz and rad)
 _each(("models.flux.SimulationResult.energy_balance",), "start", "a sample index")
 _each(("models.flux.SimulationResult.energy_balance",), "stop", "a sample index")
 _each(("circuit.network.Branch",), "start", "a node name (a string)")

@@ -14,7 +14,7 @@
      maglevkit.reduced.core); the gap moves linearly from its value at the communication
      point with the gap rate (exact at the RK4 stage times);
    - a sub-step the kernel flags (gap path or current outside the maps, non-finite values:
-     its reason codes, maglevkit.reduced.bank.StepFlag): fmi2Error and a log message, the
+     its reason codes, maglevkit.reduced.core.StepFlag): fmi2Error and a log message, the
      one MagnetBank.step gives (the templates of STEP_FLAG_MESSAGES in config.h), naming
      the circuit, the value and the range; the state is left as it was before the step.
      Nothing is clamped.
@@ -185,7 +185,7 @@ static int eval_outputs(Model *m) {
     return MK_OUT(m->arg, m->res, m->iw, m->w, 0);
 }
 
-/* the messages below are maglevkit.reduced.bank.STEP_FLAG_MESSAGES (config.h): the same
+/* the messages below are maglevkit.reduced.core.STEP_FLAG_MESSAGES (config.h): the same
    text as MagnetBank.step */
 static void out_of_maps(Model *m, int j, const char *where, double s, double i) {
     fail(m, MSG_OUT_OF_MAPS MSG_ADVICE_FMU, CIRCUIT_LABELS[j], where, s, i, GAP_MIN[j],
@@ -219,7 +219,7 @@ static int check_current(Model *m, int j, double i, const char *where) {
 }
 
 /* the message of a sub-step the kernel flagged, from its reason codes
-   (maglevkit.reduced.bank.StepFlag) alone, as MagnetBank.step words it: reasons in the
+   (maglevkit.reduced.core.StepFlag) alone, as MagnetBank.step words it: reasons in the
    order of StepFlag.by_priority(), each for the first circuit that has it.  The step runs
    from t0 to t1 with the gaps s0 and the currents i0 at t0 */
 static void report_step_flags(Model *m, const double *s0, const double *i0, double t0,
@@ -636,7 +636,7 @@ fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunicationPoint,
             return fail(m, "fmi2DoStep at t = %.9g s: the model evaluation failed", t0);
         }
         for (j = 0; j < NC; ++j) {
-            /* the kernel's reason code (maglevkit.reduced.bank.StepFlag), not a check of our own */
+            /* the kernel's reason code (maglevkit.reduced.core.StepFlag), not a check of our own */
             if (m->bad[j] != 0.0) {
                 report_step_flags(m, s0, x0, t0, t0 + h);
                 memcpy(m->x, x0, sizeof x0);   /* the state before the step */

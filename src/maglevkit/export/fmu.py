@@ -49,14 +49,8 @@ import numpy as np
 
 from ..errors import InputError, SolverError
 from ..models.compiled import cache_directory, find_compiler, run_compiler
-from ..reduced.bank import (
-    KERNEL_PARAMETERS,
-    STEP_FLAG_MESSAGES,
-    MagnetBank,
-    StepFlag,
-    circuit_label,
-)
-from ..reduced.core import substep_rule_c
+from ..reduced.bank import KERNEL_PARAMETERS, MagnetBank
+from ..reduced.core import STEP_FLAG_MESSAGES, StepFlag, circuit_label, substep_rule_c
 from ..reduced.current import CurrentModel
 from ..validation import flag
 
@@ -462,7 +456,7 @@ def _config_header(ident: str, guid: str, circuits: tuple[str, ...], par: np.nda
         f"#define MK_STEP {ident}_step", f"#define MK_STEP_WORK {ident}_step_work",
         f"#define MK_OUT {ident}_out", f"#define MK_OUT_WORK {ident}_out_work",
         f"#define START_MAX_SUBSTEP {_c_double(max_substep)}",
-        "/* the kernel's reason codes (maglevkit.reduced.bank.StepFlag) */",
+        "/* the kernel's reason codes (maglevkit.reduced.core.StepFlag) */",
         *(f"#define STEP_FLAG_{flag.name} {int(flag)}" for flag in StepFlag),
         "/* kernel parameters, one column of N_PAR per circuit (MagnetBank.circuit_parameters) */",
     ]
@@ -491,7 +485,7 @@ def _c_literal(text: str) -> str:
 def _messages_header(bank: MagnetBank) -> str:
     """The sub-step rule and the reason codes' messages for the C wrapper, from their one
     source (:func:`~maglevkit.reduced.core.substep_rule_c`,
-    :data:`~maglevkit.reduced.bank.STEP_FLAG_MESSAGES`), and the bank's circuit names and
+    :data:`~maglevkit.reduced.core.STEP_FLAG_MESSAGES`), and the bank's circuit names and
     labels that the messages name."""
     lines = ["#ifndef MAGLEVKIT_FMU_MESSAGES_H", "#define MAGLEVKIT_FMU_MESSAGES_H",
              "/* the sub-step rule of maglevkit.reduced.core.substep_counts */",
@@ -499,7 +493,7 @@ def _messages_header(bank: MagnetBank) -> str:
              "/* the order in which reasons are reported (StepFlag.by_priority) */",
              "#define STEP_FLAG_PRIORITY {" + ", ".join(str(int(f)) for f in
                                                         StepFlag.by_priority()) + "}",
-             "/* the reason codes' messages (maglevkit.reduced.bank.STEP_FLAG_MESSAGES) */"]
+             "/* the reason codes' messages (maglevkit.reduced.core.STEP_FLAG_MESSAGES) */"]
     lines += [f"#define MSG_{key.upper()} {_c_literal(text)}"
               for key, text in STEP_FLAG_MESSAGES.items()]
     names = bank.circuit_names

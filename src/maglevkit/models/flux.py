@@ -57,7 +57,7 @@ from ..materials import MU0
 from ..validation import flag, optional_flag, real_array, real_number, renamed_keywords, whole_number
 from .compiled import COMPILE_MODES, compile_library
 from .flux_live import LiveIntegrator, live_library
-from .inputs import check_step, gap_secants, sample_input, time_grid
+from .inputs import check_step, gap_secants, per_name_values, sample_input, time_grid
 from .statics import (
     as_network,
     current_vector,
@@ -723,26 +723,6 @@ def _physical_time(exc: Exception, t_restart: float, dt: float) -> RuntimeError:
     return RuntimeError(re.sub(r"\b(tstop|tout|t|h)\s*=\s*" + num, sec, str(exc)))
 
 
-def _vec(value: Any, n: int, what: str, unit: str, names: tuple[str, ...]) -> np.ndarray:
-    """A finite float vector of length n from a scalar, sequence or mapping."""
-    if isinstance(value, Mapping):
-        unknown = sorted(set(value) - set(names))
-        missing = [k for k in names if k not in value]
-        if unknown or missing:
-            raise InputError(f"{what}: unknown names {unknown}, missing {missing}; "
-                             f"expected {list(names)}")
-        value = [value[k] for k in names]
-    arr = real_array(value, what, unit, finite=False)
-    if arr.ndim == 0:
-        arr = np.full(n, float(arr))
-    elif arr.shape != (n,):
-        raise InputError(f"{what} has shape {arr.shape}; expected a scalar or {n} values "
-                         f"(one per {list(names)}) [{unit}]")
-    if not np.all(np.isfinite(arr)):
-        raise InputError(f"{what} must be finite numbers [{unit}], got {arr.tolist()}")
-    return arr
-
-
 # ---------------------------------------------------------------------------- the model
 class FluxModel:
     """Flux-based dynamic magnet model (index-1 DAE, paper eqs. 4-7).
@@ -1118,11 +1098,11 @@ class FluxModel:
         d = self._dae
         self._check_state(state)
         dt = check_step(dt)
-        U = _vec(voltages, d.n_circuits, "voltages", "V", self.circuit_names)
-        rate = _vec(gap_rates, d.n_gaps, "gap_rates", "m/s", self.gap_names)
+        U = per_name_values(voltages, self.circuit_names, "voltages", "V")
+        rate = per_name_values(gap_rates, self.gap_names, "gap_rates", "m/s", kind="gap")
         w = state._vector()
         if gaps is not None:
-            s0 = _vec(gaps, d.n_gaps, "gaps", "m", self.gap_names)
+            s0 = per_name_values(gaps, self.gap_names, "gaps", "m", kind="gap")
             w[d.n_diff:d.n_diff + d.n_gaps] = s0
         else:
             s0 = state.gaps_m

@@ -27,7 +27,6 @@ models, linearisation and MPC.
 
 from __future__ import annotations
 
-import enum
 import hashlib
 import math
 import subprocess
@@ -42,7 +41,7 @@ from typing import TYPE_CHECKING, Any, TypeVar
 import casadi as ca
 import numpy as np
 
-from ..errors import InputError, OutOfRangeError, SolverError
+from ..errors import InputError, OutOfRangeError
 from ..models.compiled import (
     COMPILE_MODES,
     BoundCall,
@@ -60,11 +59,15 @@ from ..models.inputs import (
     simulation_inputs,
 )
 from ..models.statics import circuit_pole_groups
-from ..validation import describe, flag, renamed_keywords
+from ..validation import describe, external_stacklevel, flag, renamed_keywords
 from .core import (
     EXTRA_CELLS,
+    STEP_FLAG_MESSAGES,
     MotionEddyLadder,
     ReducedCore,
+    StepFlag,
+    circuit_label,
+    diagnose_flags,
     extend_values,
     rk4_substep,
     substep_count,
@@ -208,67 +211,6 @@ class BankSimulation:
     member_names: tuple[str, ...]
     final_state: BankState
     eddy_currents_A: np.ndarray | None = None
-
-
-class StepFlag(enum.IntFlag):
-    """Why the compiled step flagged a circuit: the bits of the kernel's reason code.
-
-    The step (:meth:`MagnetBank.circuit_step_function`) returns, per circuit, the sum of
-    the reasons that hold (0: a good step); :meth:`MagnetBank.step` and the stepper turn
-    the code into the one message of each reason.
-    """
-
-    GAP_OUT_OF_RANGE = 1
-    """The gap path of the step leaves the map's gap range (or a gap is <= 0)."""
-    CURRENT_OUT_OF_RANGE = 2
-    """The current at the start or at a sub-step end leaves the map's current range."""
-    INPUT_NOT_FINITE = 4
-    """A voltage, gap or gap rate is NaN or infinite."""
-    RESULT_NOT_FINITE = 8
-    """The RK4 step gave a NaN or infinite current."""
-
-    @classmethod
-    def by_priority(cls) -> tuple[StepFlag, ...]:
-        """The order in which reasons are reported: inputs, gap path, result, currents."""
-        return (cls.INPUT_NOT_FINITE, cls.GAP_OUT_OF_RANGE, cls.RESULT_NOT_FINITE,
-                cls.CURRENT_OUT_OF_RANGE)
-
-
-#: The message of each reason code (:class:`StepFlag`), written once as printf-style
-#: templates: Python's ``%`` formatting and C's ``printf`` agree on ``%s`` and ``%g``, so
-#: :meth:`MagnetBank.step` (and the stepper, ``run_steps``) and the FMU's C wrapper
-#: (:mod:`maglevkit.export.fmu` writes them into its ``config.h``) say the same.
-#: ``out_of_maps`` takes the circuit's label (:func:`circuit_label`), where (``step`` or
-#: ``substep`` with the step's start and end times [s]), the gap [m] and current [A] that
-#: left the maps, and the maps' gap [m] and current [A] ranges; the advice follows it.
-STEP_FLAG_MESSAGES: dict[str, str] = {
-    "input_not_finite": "%s must be finite: circuit '%s' has %g %s",      # what, name, value, unit
-    "gap_not_positive": "gaps must stay > 0 m over the step: circuit '%s' from %.9g m to %.9g m",
-    "out_of_maps": ("outside the characteristic maps: %s%s: substitute gap %.6g m and current "
-                    "%.6g A; its maps cover gaps %g..%g m and currents %g..%g A"),
-    "result_not_finite": "non-finite value in circuit '%s'",
-    "step": " over the step t = %.6g..%.6g s",
-    "substep": " in an RK4 sub-step within t = %.6g..%.6g s",
-    "advice": " (rebuild the maps on a larger grid, or pass extrapolate=True)",
-    "advice_extrapolating": " (rebuild the maps on a larger grid)",
-    "advice_fmu": " (rebuild the maps on a larger grid; the FMU does not extrapolate or clamp)",
-}
-
-
-def circuit_label(name: str) -> str:
-    """A bank circuit's name as the range messages give it: ``member 'm', circuit 'c'``.
-
-    Parameters
-    ----------
-    name : str
-        The bank's circuit name ``"member/circuit"``.
-
-    Returns
-    -------
-    str
-    """
-    member, circuit = name.split("/", 1)
-    return f"member {member!r}, circuit {circuit!r}"
 
 
 @dataclass(frozen=True)
@@ -1359,7 +1301,7 @@ class MagnetBank:
                     self._extrapolation_warned.add(k)
                     warnings.warn("extrapolating the characteristic maps: "
                                   + msg.removeprefix("outside the characteristic maps: ")
-                                  + " (reported once per circuit)", stacklevel=4)
+                                  + " (reported once per circuit)", stacklevel=external_stacklevel())
                 return
             msg += f"; linear extrapolation reaches only {EXTRA_CELLS} grid cells beyond the maps"
             advice = text["advice_extrapolating"]
@@ -1380,27 +1322,29 @@ class MagnetBank:
 
     def _diagnose(self, s: np.ndarray, sd: np.ndarray, i0: np.ndarray, u: np.ndarray,
                   x: np.ndarray, call: _StepCall, t0: float, t1: float) -> None:
-        """The kernel flagged circuits: turn their reason codes (:class:`StepFlag`, the
-        kernel's ``flags``) into the error (or, extrapolating, the warning).
+        """The kernel flagged circuits (inputs of the reduced circuits): their reason codes
+        read by :func:`~maglevkit.reduced.core.diagnose_flags`, the one reading of them."""
+        self._raise_reduced(call.res[8], s, sd, i0, u, call.res[5], call.res[6], t0, t1)
 
-        Reasons are taken in the order of :class:`StepFlag`'s priority (inputs first, then
-        the gap path, the result, the sub-step currents), each for every circuit that has
-        it; the message of each reason is written here once.
-        """
-        lo, hi = call.res[5].copy(), call.res[6].copy()   # sub-step extremes of this call
-        flags = np.asarray(call.res[8], dtype=float).astype(int)
-        se = s + sd * (t1 - t0)
-        for reason in StepFlag.by_priority():
-            for k in np.flatnonzero(flags & reason):
-                self._flag_error(StepFlag(reason), int(k), s, se, sd, i0, u, lo, hi, t0, t1)
+    def _raise_reduced(self, flags: Any, s: np.ndarray, sd: np.ndarray, i0: np.ndarray,
+                       u: np.ndarray, lo: Any, hi: Any, t0: float, t1: float) -> None:
+        ri = self._reduced_idx
+        diagnose_flags(flags, [self.circuit_names[int(j)] for j in ri], gaps_m=s,
+                       gap_rates_m_per_s=sd, currents_A=i0, voltages_V=u,
+                       substep_min_A=np.array(lo, dtype=float).ravel(),
+                       substep_max_A=np.array(hi, dtype=float).ravel(),
+                       current_min_A=self._lo_i, current_max_A=self._hi_i, gap_min_m=self._lo_s,
+                       t0_s=t0, t1_s=t1, out_of_maps=self._range_error)
 
     def raise_step_flags(self, flags: Any, *, gaps_m: Any, gap_rates_m_per_s: Any,
                          inductor_currents_A: Any, voltages_V: Any, current_min_A: Any,
                          current_max_A: Any, start_s: float, end_s: float) -> None:
         """The error of a step that a compiled step flagged elsewhere (e.g. inside a
-        vehicle's compiled step, :meth:`step_function`): its reason codes (:class:`StepFlag`,
-        the step's ``flags``) turned into the same message :meth:`step` gives, without
-        stepping again.  Extrapolating banks warn instead, as :meth:`step`.
+        vehicle's compiled step, :meth:`step_function`, or a loop around
+        :meth:`step_kernel` such as the stepper): its reason codes (:class:`StepFlag`, the
+        step's ``flags``) turned into the same message :meth:`step` gives, without
+        stepping again (:func:`~maglevkit.reduced.core.diagnose_flags`).  Extrapolating
+        banks warn instead, as :meth:`step`.
 
         Parameters
         ----------
@@ -1423,41 +1367,9 @@ class MagnetBank:
         def arr(a: Any) -> np.ndarray:
             return np.asarray(a, dtype=float).ravel()[ri]
 
-        res: list[Any] = [None] * 9
-        res[5], res[6], res[8] = arr(current_min_A), arr(current_max_A), arr(flags)
-        s, sd = arr(gaps_m), arr(gap_rates_m_per_s)
-        self._diagnose(s, sd, arr(inductor_currents_A), arr(voltages_V), s,
-                       SimpleNamespace(res=res), float(start_s), float(end_s))  # type: ignore[arg-type]
-
-    def _flag_error(self, reason: StepFlag, k: int, s: np.ndarray, se: np.ndarray,
-                    sd: np.ndarray, i0: np.ndarray, u: np.ndarray, lo: np.ndarray,
-                    hi: np.ndarray, t0: float, t1: float) -> None:
-        """The message of one reason code of reduced circuit ``k`` (raises, or returns after
-        an extrapolation warning)."""
-        name = self.circuit_names[int(self._reduced_idx[k])]
-        text = STEP_FLAG_MESSAGES
-        if reason is StepFlag.INPUT_NOT_FINITE:
-            for what, arr, unit in (("voltages", u, "V"), ("gaps", s, "m"),
-                                    ("gap_rates", sd, "m/s")):
-                if not math.isfinite(float(arr[k])):
-                    raise InputError(text["input_not_finite"] % (what, name, float(arr[k]), unit))
-        elif reason is StepFlag.GAP_OUT_OF_RANGE:
-            if s[k] <= 0 or se[k] <= 0:
-                raise InputError(text["gap_not_positive"] % (name, float(s[k]), float(se[k])))
-            low, high = min(s[k], se[k]), max(s[k], se[k])
-            self._range_error(k, float(low if low < self._lo_s[k] else high), float(i0[k]),
-                              text["step"] % (t0, t1))
-        elif reason is StepFlag.RESULT_NOT_FINITE:
-            raise SolverError(text["result_not_finite"] % name, time=t0,
-                              state={"I_L_A": float(i0[k]), "gap_m": float(s[k]),
-                                     "gap_rate_m_per_s": float(sd[k]),
-                                     "voltage_V": float(u[k])},
-                              reason="the RK4 step gave a non-finite current")
-        elif not self._lo_i[k] <= i0[k] <= self._hi_i[k]:   # CURRENT_OUT_OF_RANGE at the start
-            self._range_error(k, float(s[k]), float(i0[k]), text["step"] % (t0, t1))
-        else:                                     # CURRENT_OUT_OF_RANGE in a sub-step
-            cur = lo[k] if lo[k] < self._lo_i[k] else hi[k]
-            self._range_error(k, float(se[k]), float(cur), text["substep"] % (t0, t1))
+        self._raise_reduced(arr(flags), arr(gaps_m), arr(gap_rates_m_per_s),
+                            arr(inductor_currents_A), arr(voltages_V), arr(current_min_A),
+                            arr(current_max_A), float(start_s), float(end_s))
 
     # ------------------------------------------------------------------ stepping interface
     @renamed_keywords(gaps="gaps_m", currents="currents_A", time="time_s")
@@ -1516,8 +1428,19 @@ class MagnetBank:
         eddy = np.where(np.isnan(i), np.nan, 0.0) if self.motion_eddy else None
         return BankState(float(time), i, g.copy(), tuple(states), eddy)
 
-    def _check_state(self, state: Any) -> None:
-        """``state`` is a BankState of this bank (type, array shapes, detailed members)."""
+    def check_state(self, state: Any) -> None:
+        """Refuse a state that is not a :class:`BankState` of this bank.
+
+        Parameters
+        ----------
+        state : object
+            The state to check (type, array shapes, detailed members, eddy currents).
+
+        Raises
+        ------
+        InputError
+            ``state`` is not a BankState of this bank; the message says how to make one.
+        """
         if (type(state) is not BankState or state.gaps_m.shape != (self.n_gaps,)
                 or state.inductor_currents_A.shape != (self.n_circuits,)
                 or len(state.member_states) != self._n_detailed):
@@ -1573,7 +1496,7 @@ class MagnetBank:
             integrator failing.
         """
         dt, voltages, gaps, gap_rates = dt_s, voltages_V, gaps_m, gap_rates_m_per_s
-        self._check_state(state)
+        self.check_state(state)
         if not (type(dt) is float and 0.0 < dt < math.inf):
             dt = check_step(dt)
         # fast path (all reduced, one gap per circuit): the kernel flags non-finite
@@ -1776,7 +1699,7 @@ class MagnetBank:
             # (each pole takes one share of one circuit's force: exact in any order)
             stepper = self.stepper(state, float(steps[0]))
             for k in range(nt - 1):
-                stepper._set_step_length(float(steps[k]))
+                stepper.set_step_length(float(steps[k]))
                 stepper.advance(u[k], g[k], rates[k])
                 cur[k + 1] = stepper.currents_A
                 il[k + 1] = stepper.inductor_currents_A
@@ -1802,6 +1725,30 @@ class MagnetBank:
             circuit_names=self.circuit_names, gap_names=self.gap_names,
             pole_names=self.pole_names, member_names=self.member_names, final_state=state,
             eddy_currents_A=ie)
+
+    @property
+    def compiled_fast_path(self) -> bool:
+        """Whether a step of the whole bank is one compiled call (every member reduced, one
+        gap input per circuit): :meth:`step`'s and the stepper's fast path, where the
+        kernel's reason codes (:class:`StepFlag`) are the only checks of a step."""
+        return self._fast
+
+    def pole_forces(self, circuit_force_N: np.ndarray) -> np.ndarray:
+        """Force per pole [N] from the circuit forces of the reduced circuits: each pole
+        takes an equal share of its circuit's force.
+
+        Parameters
+        ----------
+        circuit_force_N : ndarray (n_circuits,) or (n_t, n_circuits)
+            Circuit forces [N], one row per time.
+
+        Returns
+        -------
+        ndarray (n_poles,) or (n_t, n_poles)
+            Pole forces [N] in the order of :attr:`pole_names`.
+        """
+        f = np.asarray(circuit_force_N, dtype=float)
+        return self._pole_forces_of(f[None, :])[0] if f.ndim == 1 else self._pole_forces_of(f)
 
     def _pole_forces_of(self, circuit_forces: np.ndarray) -> np.ndarray:
         """Per-pole forces of a time series of reduced circuit forces (n_t, n_circuits),

@@ -19,8 +19,9 @@ with it, so a change of the scheme lands in one place.  Eq. 8 itself is
 
 from __future__ import annotations
 
+import enum
 import math
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
@@ -31,8 +32,9 @@ from ..errors import InputError
 if TYPE_CHECKING:
     from ..reduction.maps import CharacteristicMaps
 
-__all__ = ["EDDY_RESISTANCE_CHOICES", "EXTRA_CELLS", "SUBSTEP_ALLOWANCE", "MotionEddyLadder",
-           "ReducedCore", "eq8_a", "extend_axis", "extend_values", "rk4_substep", "substep_count",
+__all__ = ["EDDY_RESISTANCE_CHOICES", "EXTRA_CELLS", "STEP_FLAG_MESSAGES", "SUBSTEP_ALLOWANCE",
+           "MotionEddyLadder", "ReducedCore", "StepFlag", "circuit_label", "diagnose_flags",
+           "eq8_a", "extend_axis", "extend_values", "rk4_substep", "substep_count",
            "substep_counts", "substep_rule_c"]
 
 EXTRA_CELLS = 3
@@ -85,6 +87,154 @@ def extend_values(values: np.ndarray, *, axis: int) -> np.ndarray:
     lo = v[0] - (v[1] - v[0]) * k[::-1]
     hi = v[-1] + (v[-1] - v[-2]) * k
     return np.moveaxis(np.concatenate([lo, v, hi], axis=0), 0, axis)
+
+
+class StepFlag(enum.IntFlag):
+    """Why the compiled step flagged a circuit: the bits of the kernel's reason code.
+
+    The step (:meth:`~maglevkit.reduced.bank.MagnetBank.circuit_step_function`) returns,
+    per circuit, the sum of the reasons that hold (0: a good step);
+    :func:`diagnose_flags` turns the codes into the one message of each reason for
+    :meth:`~maglevkit.reduced.bank.MagnetBank.step`, its stepper and
+    :meth:`~maglevkit.reduced.current.CurrentModel.step`, the FMU's C wrapper likewise.
+    """
+
+    GAP_OUT_OF_RANGE = 1
+    """The gap path of the step leaves the map's gap range (or a gap is <= 0)."""
+    CURRENT_OUT_OF_RANGE = 2
+    """The current at the start or at a sub-step end leaves the map's current range."""
+    INPUT_NOT_FINITE = 4
+    """A voltage, gap or gap rate is NaN or infinite."""
+    RESULT_NOT_FINITE = 8
+    """The RK4 step gave a NaN or infinite current."""
+
+    @classmethod
+    def by_priority(cls) -> tuple[StepFlag, ...]:
+        """The order in which reasons are reported: inputs, gap path, result, currents."""
+        return (cls.INPUT_NOT_FINITE, cls.GAP_OUT_OF_RANGE, cls.RESULT_NOT_FINITE,
+                cls.CURRENT_OUT_OF_RANGE)
+
+
+#: The message of each reason code (:class:`StepFlag`), written once as printf-style
+#: templates: Python's ``%`` formatting and C's ``printf`` agree on ``%s`` and ``%g``, so
+#: ``MagnetBank.step`` (and the stepper, ``run_steps``), ``CurrentModel`` (its table step
+#: and the range checks of its B-spline path) and the FMU's C wrapper
+#: (:mod:`maglevkit.export.fmu` writes them into its ``config.h``) say the same.
+#: ``out_of_maps`` takes the circuit's label (:func:`circuit_label` in a bank,
+#: ``circuit 'c'`` in a ``CurrentModel``), where (``step`` or ``substep`` with the step's
+#: start and end times [s], or ``time`` [s]), the gap [m] and current [A] that left the
+#: maps, and the maps' gap [m] and current [A] ranges; the advice follows it
+#: (``advice_cli`` where the command line passes the option on).
+STEP_FLAG_MESSAGES: dict[str, str] = {
+    # what, name, value, unit: the words of models.inputs.per_name_values
+    "input_not_finite": "%s must be finite: circuit '%s' = %g %s",
+    "gap_not_positive": "gaps must stay > 0 m over the step: circuit '%s' from %.9g m to %.9g m",
+    "out_of_maps": ("outside the characteristic maps: %s%s: substitute gap %.6g m and current "
+                    "%.6g A; its maps cover gaps %g..%g m and currents %g..%g A"),
+    "result_not_finite": "non-finite value in circuit '%s'",
+    "step": " over the step t = %.6g..%.6g s",
+    "substep": " in an RK4 sub-step within t = %.6g..%.6g s",
+    "time": " at t = %.6g s",
+    "advice": " (rebuild the maps on a larger grid, or pass extrapolate=True)",
+    "advice_cli": (" (rebuild the maps on a larger grid, or pass extrapolate=True; on the "
+                   "command line: --extrapolate)"),
+    "advice_extrapolating": " (rebuild the maps on a larger grid)",
+    "advice_fmu": " (rebuild the maps on a larger grid; the FMU does not extrapolate or clamp)",
+}
+
+
+def circuit_label(name: str) -> str:
+    """A bank circuit's name as the range messages give it: ``member 'm', circuit 'c'``.
+
+    Parameters
+    ----------
+    name : str
+        The bank's circuit name ``"member/circuit"``.
+
+    Returns
+    -------
+    str
+    """
+    member, circuit = name.split("/", 1)
+    return f"member {member!r}, circuit {circuit!r}"
+
+
+def diagnose_flags(flags: np.ndarray, names: Sequence[str], *, gaps_m: np.ndarray,
+                   gap_rates_m_per_s: np.ndarray, currents_A: np.ndarray, voltages_V: np.ndarray,
+                   substep_min_A: np.ndarray, substep_max_A: np.ndarray,
+                   current_min_A: np.ndarray, current_max_A: np.ndarray, gap_min_m: np.ndarray,
+                   t0_s: float, t1_s: float,
+                   out_of_maps: Callable[[int, float, float, str], None]) -> None:
+    """Turn the kernel's reason codes of one flagged step into the error: the one reading
+    of :class:`StepFlag` for every Python caller (the FMU's C wrapper reads them the same
+    way, in C).
+
+    Reasons are taken in the order of :meth:`StepFlag.by_priority` (inputs first, then the
+    gap path, the result, the currents), each for every circuit that has it, with the
+    messages of :data:`STEP_FLAG_MESSAGES`.
+
+    Parameters
+    ----------
+    flags : ndarray (n,)
+        The kernel's reason code of every circuit (:class:`StepFlag` bits, 0: good).
+    names : sequence of str
+        The circuits' names as the messages give them.
+    gaps_m, gap_rates_m_per_s, currents_A, voltages_V : ndarray (n,)
+        The step's substitute gaps [m] at its start, their rates [m/s], the currents
+        ``I_L`` [A] at its start and the held voltages [V].
+    substep_min_A, substep_max_A : ndarray (n,)
+        The smallest and largest ``I_L`` [A] over the step's RK4 sub-step ends (the
+        kernel's ``I_L_min``, ``I_L_max``).
+    current_min_A, current_max_A, gap_min_m : ndarray (n,)
+        The checked bounds: the kernel's current range [A] and lower gap bound [m] (each
+        with its rounding allowance).
+    t0_s, t1_s : float
+        The step's start and end [s].
+    out_of_maps : callable ``(k, gap_m, current_A, where)``
+        Reports circuit ``k`` outside its maps (raises, or warns and returns where the
+        caller extrapolates); ``where`` is ``STEP_FLAG_MESSAGES["step"]`` or
+        ``["substep"]`` with the step's times.
+
+    Raises
+    ------
+    InputError
+        A non-finite input, or gaps that are or become <= 0.
+    SolverError
+        A non-finite result (with time, state and reason).
+    """
+    from ..errors import SolverError
+
+    text = STEP_FLAG_MESSAGES
+    s, sd, i0, u = gaps_m, gap_rates_m_per_s, currents_A, voltages_V
+    se = s + sd * (t1_s - t0_s)
+    codes = np.asarray(flags, dtype=float).astype(int)
+    step = text["step"] % (t0_s, t1_s)
+    for reason in StepFlag.by_priority():
+        for k in (int(v) for v in np.flatnonzero(codes & reason)):
+            name = names[k]
+            if reason is StepFlag.INPUT_NOT_FINITE:
+                for what, arr, unit in (("voltages", u, "V"), ("gaps", s, "m"),
+                                        ("gap_rates", sd, "m/s")):
+                    if not math.isfinite(float(arr[k])):
+                        raise InputError(text["input_not_finite"] % (what, name, float(arr[k]),
+                                                                     unit))
+            elif reason is StepFlag.GAP_OUT_OF_RANGE:
+                if s[k] <= 0 or se[k] <= 0:
+                    raise InputError(text["gap_not_positive"] % (name, float(s[k]), float(se[k])))
+                low, high = min(s[k], se[k]), max(s[k], se[k])
+                out_of_maps(k, float(low if low < gap_min_m[k] else high), float(i0[k]), step)
+            elif reason is StepFlag.RESULT_NOT_FINITE:
+                raise SolverError(text["result_not_finite"] % name, time=t0_s,
+                                  state={"I_L_A": float(i0[k]), "gap_m": float(s[k]),
+                                         "gap_rate_m_per_s": float(sd[k]),
+                                         "voltage_V": float(u[k])},
+                                  reason="the RK4 step gave a non-finite current")
+            elif not current_min_A[k] <= i0[k] <= current_max_A[k]:   # at the start
+                out_of_maps(k, float(s[k]), float(i0[k]), step)
+            else:                                                      # in a sub-step
+                lo, hi = substep_min_A[k], substep_max_A[k]
+                out_of_maps(k, float(se[k]), float(lo if lo < current_min_A[k] else hi),
+                            text["substep"] % (t0_s, t1_s))
 
 
 #: relative allowance of the sub-step rule: a step this much longer than a whole multiple

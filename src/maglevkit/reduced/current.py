@@ -50,11 +50,14 @@ import numpy as np
 from ..errors import InputError, OutOfRangeError, SolverError
 from ..models.compiled import COMPILE_MODES, DEFAULT_FLAGS, BoundCall, compile_linked
 from ..models.inputs import check_initial_choice, check_step, per_name_values, simulation_inputs
-from ..validation import flag, real_array, renamed_keywords
+from ..validation import external_stacklevel, flag, real_array, renamed_keywords
 from .core import (
     EXTRA_CELLS,
+    STEP_FLAG_MESSAGES,
     MotionEddyLadder,
     ReducedCore,
+    StepFlag,
+    diagnose_flags,
     eq8_a,
     extend_values,
     rk4_substep,
@@ -305,10 +308,13 @@ class CurrentModel:
         B-spline, equal to it within 1e-12 relative on the standard scenarios,
         docs/decisions.md), one compiled call per step and the whole time loop of
         :meth:`simulate` in C.  ``"bspline"``: CasADi's B-spline interpolants evaluated
-        per interval.  Where the tables cannot follow (a step leaves the maps, with
-        ``extrapolate`` too, or is not finite) the call is redone on the B-spline path,
-        which raises or warns as before; maps on a grid that is not regular (or has fewer
-        than 4 points) stay on the B-splines.  :meth:`linearize`, :attr:`ode` and
+        per interval.  A step the table kernel flags (it leaves the maps, an input is not
+        finite) raises from the kernel's reason codes with the messages of every reduced
+        model (:data:`~maglevkit.reduced.core.STEP_FLAG_MESSAGES`); with ``extrapolate``,
+        a non-finite result, a pole gap <= 0 or a run that starts outside the maps the call
+        is redone on the B-spline path (the continuation beyond the maps is the
+        B-spline's), which raises or warns; maps on a grid that is not regular (or has
+        fewer than 4 points) stay on the B-splines.  :meth:`linearize`, :attr:`ode` and
         :attr:`outputs_fun` (AD, MPC), ``method="cvodes"``, ``eddy_modes > 0`` and
         ``motion_eddy=True`` always use the B-splines.
     compiled : {"auto", "always", "never"}
@@ -620,21 +626,34 @@ class CurrentModel:
         k = int(idx[0]) if bad.ndim > 1 else 0
         j = int(idx[-1])
         if where is None:
-            where = f" at t = {t[k]:.6g} s" if t is not None else ""
-        msg = (f"circuit {self.circuit_names[j]!r}{where}: substitute gap "
-               f"{np.atleast_2d(s)[k if bad.ndim > 1 else 0, j]:.6g} m and current "
-               f"{np.atleast_2d(i_l)[k if bad.ndim > 1 else 0, j]:.6g} A; the maps cover gaps "
-               f"{lo_s:g}..{hi_s:g} m and currents {lo_i:g}..{hi_i:g} A")
+            where = STEP_FLAG_MESSAGES["time"] % t[k] if t is not None else ""
+        row = k if bad.ndim > 1 else 0
+        self._out_of_maps(j, float(np.atleast_2d(s)[row, j]), float(np.atleast_2d(i_l)[row, j]),
+                          where, inside_extension=bool(np.all(
+                              (s >= self._spline_range[0][0]) & (s <= self._spline_range[0][1])
+                              & (i_l >= self._spline_range[1][0])
+                              & (i_l <= self._spline_range[1][1]))))
+
+    def _out_of_maps(self, j: int, gap_m: float, current_A: float, where: str, *,
+                     inside_extension: bool = False) -> None:
+        """Circuit ``j`` outside its maps, in the words of every reduced model
+        (:data:`~maglevkit.reduced.core.STEP_FLAG_MESSAGES`): an :class:`OutOfRangeError`,
+        or with ``extrapolate`` and the point within the maps' linear continuation
+        (``inside_extension``) a warning."""
+        text = STEP_FLAG_MESSAGES
+        (lo_s, hi_s), (lo_i, hi_i) = self.gap_range, self.current_range
+        msg = text["out_of_maps"] % (f"circuit {self.circuit_names[j]!r}", where, gap_m,
+                                     current_A, lo_s, hi_s, lo_i, hi_i)
         if self.extrapolate:
-            (s_lo, s_hi), (i_lo, i_hi) = self._spline_range
-            if np.all((s >= s_lo) & (s <= s_hi) & (i_l >= i_lo) & (i_l <= i_hi)):
-                warnings.warn("extrapolating the characteristic maps: " + msg, stacklevel=3)
+            if inside_extension:
+                warnings.warn("extrapolating the characteristic maps: "
+                              + msg.removeprefix("outside the characteristic maps: "),
+                              stacklevel=external_stacklevel())
                 return
             msg += (f"; linear extrapolation reaches only {EXTRA_CELLS} grid cells beyond the "
                     "maps")
-        raise OutOfRangeError("outside the characteristic maps: " + msg
-                              + " (rebuild the maps on a larger grid, or pass extrapolate=True; on the "
-                                 "command line: --extrapolate)")
+            raise OutOfRangeError(msg + text["advice_extrapolating"])
+        raise OutOfRangeError(msg + text["advice_cli"])
 
     def _check_substeps(self, lo: np.ndarray, hi: np.ndarray, t0: float, t1: float) -> None:
         """Range check of the RK4 sub-step states of one interval from their extremes.
@@ -650,7 +669,7 @@ class CurrentModel:
         # report the extreme sub-step state (gap and current extremes may come from
         # different sub-steps of the interval)
         self._check_range(pts[:, self._sl], pts[:, :nc], np.array([t0, t0]),
-                          where=f" in an RK4 sub-step within t = {t0:.6g}..{t1:.6g} s")
+                          where=STEP_FLAG_MESSAGES["substep"] % (t0, t1))
 
     def _integrator(self, grid: tuple[float, ...]) -> ca.Function:
         """CVODES over a relative output grid (one run, no restarts), cached per grid."""
@@ -1003,10 +1022,9 @@ class CurrentModel:
         # far outside the maps is refused here (not as a non-finite integration later)
         s1 = s0 + sd * dt
         i_now = state.inductor_currents_A
-        self._check_range(np.minimum(s0, s1)[None, :], i_now[None, :], None,
-                          where=f" at the start of the step t = {state.time_s:.6g} s")
-        self._check_range(np.maximum(s0, s1)[None, :], i_now[None, :], None,
-                          where=f" at the end of the step t = {state.time_s + dt:.6g} s")
+        over = STEP_FLAG_MESSAGES["step"] % (state.time_s, state.time_s + dt)
+        self._check_range(np.minimum(s0, s1)[None, :], i_now[None, :], None, where=over)
+        self._check_range(np.maximum(s0, s1)[None, :], i_now[None, :], None, where=over)
         x0 = (np.concatenate([i_now, s0, self._eddy_state(state)]) if self._n_e
               else np.concatenate([i_now, s0]))
         uu = np.concatenate([u, sd])
@@ -1052,8 +1070,9 @@ class CurrentModel:
     def _run_tables(self, times: np.ndarray, s: np.ndarray, u: np.ndarray, sd: np.ndarray,
                     i0: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
         """``I_L``, coil currents and circuit forces (n_t, n_c) on the grid from the
-        compiled time loop, or None where the tables cannot follow (a flagged step): then
-        the B-spline path runs.
+        compiled time loop; a flagged step raises from its reason codes
+        (:meth:`_raise_from_codes`), or where that leaves it to the B-spline path (and for
+        a flagged step 0, the start itself) None: then the B-spline path runs.
 
         Step 0 has length 0: it gives the outputs at ``t_0`` with ``u[0]``; step ``k``
         runs from ``t_k-1`` with the substitute gap ``s[k-1]``, its rate and ``u[k-1]``.
@@ -1072,6 +1091,18 @@ class CurrentModel:
         sd_k[0], sd_k[1:] = 0.0, sd
         run = bank.run_steps(i0, s_k, u_k, sd_k, h, time_s=float(times[0]), stop_at_flag=True)
         if run.n_good < times.size:
+            j = run.n_good
+            if j > 0 and not self.extrapolate:
+                # the flagged step's reason codes from the same compiled step (step j from
+                # t_j-1 with the state the loop reached), read as step() reads them; step 0
+                # (the start itself) and what they leave to it go to the B-spline path
+                res = bank.step_kernel(float(h[j])).call(
+                    {"I_L": run.inductor_currents_A[j - 1], "s": s_k[j], "U": u_k[j],
+                     "sdot": sd_k[j], "h": float(h[j])})
+                lo, hi = (np.asarray(res[k], dtype=float).ravel() for k in ("I_L_min", "I_L_max"))
+                self._raise_from_codes(np.asarray(res["flags"]).ravel(), s_k[j], sd_k[j],
+                                       run.inductor_currents_A[j - 1], u_k[j], lo, hi,
+                                       float(times[j - 1]), float(times[j]))
             return None
         return run.inductor_currents_A, run.currents_A, run.circuit_force_N
 
@@ -1112,13 +1143,49 @@ class CurrentModel:
             self._table_steps[dt] = call
         r = call(state.inductor_currents_A, g, u, gd, dt)
         if r is None:
-            return None       # flagged: the B-spline path raises, warns or integrates
+            self._diagnose_table_step(call, state, g, u, gd, dt)
+            return None       # the B-spline path raises, warns or integrates
         x, coil, force, pole, total, g1, x_out = r
         t1 = state.time_s + dt
         return (_new(CurrentModelState, time_s=t1, inductor_currents_A=x, gaps_m=g1,
                      eddy_currents_A=None),
                 _new(CurrentOutputs, time_s=t1, currents_A=coil, inductor_currents_A=x_out,
                      circuit_force_N=force, pole_force_N=pole, force_N=float(total[0])))
+
+    def _diagnose_table_step(self, call: _TableStep, state: CurrentModelState, g: np.ndarray,
+                             u: np.ndarray, gd: np.ndarray, dt: float) -> None:
+        """A flagged table step of :meth:`step`: :meth:`_raise_from_codes` on its kernel's
+        reason codes, except for pole gaps that are or become <= 0 (the kernel sees only
+        substitute gaps; the B-spline path gives the per-gap message)."""
+        if (g <= 0.0).any() or (g + gd * dt <= 0.0).any():
+            return
+        self._raise_from_codes(call.codes, self._avg @ g, self._avg @ gd,
+                               state.inductor_currents_A, u, call.current_min.copy(),
+                               call.current_max.copy(), state.time_s, state.time_s + dt)
+
+    def _raise_from_codes(self, codes: np.ndarray, s: np.ndarray, sd: np.ndarray,
+                          i0: np.ndarray, u: np.ndarray, lo: np.ndarray, hi: np.ndarray,
+                          t0: float, t1: float) -> None:
+        """A step the table kernel flagged: its reason codes (:class:`StepFlag`) turned into
+        the error by :func:`~maglevkit.reduced.core.diagnose_flags`, the one reading of
+        them (no range check of its own).  Returns (for the B-spline path to take the
+        step or run) where that path does more than raise: extrapolating, and a non-finite
+        result (its step-wise integration)."""
+        codes = np.asarray(codes, dtype=float).astype(int)
+        first = int(np.bitwise_or.reduce(codes))
+        if (self.extrapolate or not first
+                or (first & StepFlag.RESULT_NOT_FINITE
+                    and not first & (StepFlag.INPUT_NOT_FINITE | StepFlag.GAP_OUT_OF_RANGE))):
+            return
+        tol_s, tol_i = self._tol_s, self._tol_i
+        (lo_s, _), (lo_i, hi_i) = self.gap_range, self.current_range
+        nc = self.n_circuits
+        diagnose_flags(codes, self.circuit_names, gaps_m=s, gap_rates_m_per_s=sd,
+                       currents_A=i0, voltages_V=u, substep_min_A=lo, substep_max_A=hi,
+                       current_min_A=np.full(nc, lo_i - tol_i),
+                       current_max_A=np.full(nc, hi_i + tol_i),
+                       gap_min_m=np.full(nc, lo_s - tol_s), t0_s=t0, t1_s=t1,
+                       out_of_maps=self._out_of_maps)
 
     def _integrate(self, t: np.ndarray, x0: np.ndarray, uu: np.ndarray
                    ) -> tuple[np.ndarray, tuple[np.ndarray, np.ndarray] | None]:
@@ -1310,11 +1377,6 @@ def _jit_compile(f: ca.Function) -> ca.Function:
                           reason=_last_line(str(exc))) from None
 
 
-#: CurrentModel.step calls of one step length after which the wrapper around the bank's
-#: compiled step is compiled too (0.3-0.7 s of the C compiler once, then cached on disk)
-COMPILE_AFTER_STEPS = 200
-
-
 class _TableStep:
     """One step on the bank's compiled table kernel with everything around it in one
     CasADi call through bound NumPy buffers: substitute gaps and rates from the pole
@@ -1336,23 +1398,32 @@ class _TableStep:
         g1 = g + gd * h
         flag = res["n_bad"] + ca.sum1(g <= 0) + ca.sum1(g1 <= 0)
         force = res["F"]
+        # the block of results, the flag, and for a flagged step the kernel's reason codes
+        # and sub-step current extremes
         outs = [res["I_L_next"], res["I"], force, ca.mtimes(ca.DM(share), force),
-                res["member_F"], g1, res["I_L_next"], flag]
+                res["member_F"], g1, res["I_L_next"], flag, res["flags"], res["I_L_min"],
+                res["I_L_max"]]
         f = ca.Function(f"maglevkit_cm_{kernel.name()}", [x, g, u, gd, h], outs)
         self.function, self.library = f, library
-        # with the lane library: compiled after COMPILE_AFTER_STEPS calls (a short run
-        # never pays the compiler), until then CasADi's virtual machine (bit-identical)
-        self.countdown = COMPILE_AFTER_STEPS if library is not None else 0
-        sizes = [f.nnz_out(i) for i in range(f.n_out() - 1)]
+        sizes = [f.nnz_out(i) for i in range(7)]
         self.block = np.zeros(sum(sizes))
         ends = np.cumsum([0, *sizes])
         self.slices = [slice(int(a), int(b)) for a, b in zip(ends[:-1], ends[1:], strict=True)]
         self.flag = np.zeros(1)
+        #: the kernel's reason codes (StepFlag bits) and the smallest and largest ``I_L``
+        #: over the sub-steps of the last call, per circuit
+        self.codes, self.current_min, self.current_max = (np.zeros(nc) for _ in range(3))
         self._bind(f)
+        if library is not None:
+            # compiled at once, on the first step of this length: that call builds (or
+            # loads) the lane library anyway, so no later step pauses for the compiler
+            self._compile()
 
     def _bind(self, f: ca.Function) -> None:
         bind = {i: self.block[sl] for i, sl in enumerate(self.slices)}
-        bind[len(self.slices)] = self.flag
+        n = len(self.slices)
+        bind[n], bind[n + 1], bind[n + 2], bind[n + 3] = (self.flag, self.codes,
+                                                          self.current_min, self.current_max)
         self.bound = BoundCall(f, res=bind)
         self.args = self.bound.args
         self.eval = self.bound.eval
@@ -1369,10 +1440,6 @@ class _TableStep:
 
     def __call__(self, i: np.ndarray, g: np.ndarray, u: np.ndarray, gd: np.ndarray,
                  h: float) -> tuple[np.ndarray, ...] | None:
-        if self.countdown:
-            self.countdown -= 1
-            if not self.countdown:
-                self._compile()
         a = self.args
         a[0][:] = i
         a[1][:] = g

@@ -22,7 +22,7 @@ committed with the rest.
 
 from __future__ import annotations
 
-from types import SimpleNamespace
+import math
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -31,6 +31,7 @@ from ..errors import InputError
 from ..models.compiled import BoundCall
 from ..models.inputs import check_step, per_name_values
 from ..validation import renamed_keywords
+from .core import substep_count
 
 if TYPE_CHECKING:
     from .bank import BankState, MagnetBank
@@ -100,13 +101,15 @@ class BankStepper:
 
     __slots__ = ("_bank", "_dt", "_time", "_fast", "_u", "_g", "_gd", "_il", "_coil",
                  "_force", "_member", "_pole", "_views", "_state_gaps", "_state",
-                 "_buf", "_eval", "_res", "_n_bad", "_h", "_block", "_scratch", "_ie")
+                 "_buf", "_eval", "_res", "_n_bad", "_h", "_block", "_scratch", "_ie",
+                 "_substeps")
 
     @renamed_keywords(dt="dt_s")
     def __init__(self, bank: MagnetBank, state: BankState, dt_s: float) -> None:
-        bank._check_state(state)
+        bank.check_state(state)
         self._bank = bank
         self._dt = check_step(dt_s)
+        self._substeps = substep_count(self._dt, bank.max_step_s)
         nc, ng = bank.n_circuits, bank.n_gaps
         out = bank.outputs(state)
         # steady-state voltages U = R_el I (I = I_L for reduced circuits in steady state)
@@ -116,7 +119,7 @@ class BankStepper:
         self._g = state.gaps_m.copy()
         self._gd = np.zeros(ng)
         self._time = float(state.time_s)
-        self._fast = bank._fast
+        self._fast = bank.compiled_fast_path
         # state and outputs in one block [I_L | I | F | member F | gaps of the state
         # (| I_e in a ladder bank)], so that a good step is committed by one copy of the
         # kernel's block of results
@@ -139,7 +142,7 @@ class BankStepper:
         if not self._fast:
             self._state = state
             return
-        call = bank._kernel(self._dt)
+        kernel = bank.step_kernel(self._dt)
         self._h = np.array([self._dt])
         # the kernel reads the state and input arrays and writes scratch buffers (copied
         # into the state and output arrays only after a good step)
@@ -150,7 +153,7 @@ class BankStepper:
         if self._ie is not None:                  # input 5 and output 9: I_e
             args.append(self._ie)
             self._res.append(r[ng0:])
-        self._buf = BoundCall(call.f, args=dict(enumerate(args)),    # keeps the arrays alive
+        self._buf = BoundCall(kernel, args=dict(enumerate(args)),    # keeps the arrays alive
                               res=dict(enumerate(self._res)))
         self._eval = self._buf.eval
         self._n_bad = self._res[4]
@@ -236,7 +239,7 @@ class BankStepper:
         """Force per pole [N] (a reduced circuit's force shared equally by its poles;
         a new array)."""
         if self._fast:
-            return self._bank._share @ self._force
+            return self._bank.pole_forces(self._force)
         return self._pole.copy()
 
     @property
@@ -275,11 +278,33 @@ class BankStepper:
         if gd is not None:
             self._gd[:] = gd
 
-    def _set_step_length(self, dt: float) -> None:
-        """Change the step length to ``dt`` [s] with the same RK4 sub-step count (for
-        :meth:`MagnetBank.simulate` on grids whose intervals differ in the last bits)."""
+    def set_step_length(self, dt_s: float) -> None:
+        """Change the step length of the next steps to ``dt_s`` [s], which must take the
+        RK4 sub-step count of this stepper's step (e.g. a time grid whose intervals differ
+        in their last bits, as :meth:`MagnetBank.simulate` steps them).
+
+        Parameters
+        ----------
+        dt_s : float
+            Step length [s], finite and > 0.
+
+        Raises
+        ------
+        InputError
+            A bad ``dt_s``, or one that needs another sub-step count (make a new stepper
+            with :meth:`MagnetBank.stepper` for it).
+        """
+        if dt_s == self._dt:
+            return
+        dt = dt_s if type(dt_s) is float and 0.0 < dt_s < math.inf else check_step(dt_s)
+        n = substep_count(dt, self._bank.max_step_s)
+        if n != self._substeps:
+            raise InputError(f"set_step_length: dt_s = {dt!r} s takes {n} RK4 sub-steps, this "
+                             f"stepper's step of {self._dt!r} s takes {self._substeps}; make a "
+                             "new stepper (MagnetBank.stepper) for it")
         self._dt = dt
-        self._h[0] = dt
+        if self._fast:
+            self._h[0] = dt
 
     @renamed_keywords(voltages="voltages_V", gaps="gaps_m", gap_rates="gap_rates_m_per_s")
     def advance(self, voltages_V: Any = None, gaps_m: Any = None, gap_rates_m_per_s: Any = None) -> None:
@@ -341,9 +366,12 @@ class BankStepper:
             return
         self._eval()
         if self._n_bad[0]:
+            r = self._res
             try:
-                bank._diagnose(self._g, self._gd, self._il, self._u, self._res[0],
-                               SimpleNamespace(res=self._res), t0, t1)  # type: ignore[arg-type]
+                bank.raise_step_flags(r[8], gaps_m=self._g, gap_rates_m_per_s=self._gd,
+                                      inductor_currents_A=self._il, voltages_V=self._u,
+                                      current_min_A=r[5], current_max_A=r[6], start_s=t0,
+                                      end_s=t1)
             except BaseException:
                 self._g[:] = self._state_gaps
                 raise

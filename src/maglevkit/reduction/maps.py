@@ -743,8 +743,9 @@ def _store_motion_eddy(ds: Any, net: Network, gap: float, current: float,
         responses = detailed_frequency_response(net, gap=gap, current=current, groups=groups)
         r_jump = eddy_resistance(net, gap_m=gap, current_A=current)
         for j, resp in enumerate(responses):
-            fit = fit_motion_eddy(resp, r_el=float(net.resistances[j]),
-                                  r_ec_jump=float(r_jump[j]), r_ec_fit=float(r_ec_fit[j]),
+            fit = fit_motion_eddy(resp, resistance_ohm=float(net.resistances[j]),
+                                  eddy_resistance_jump_ohm=float(r_jump[j]),
+                                  eddy_resistance_fit_ohm=float(r_ec_fit[j]),
                                   max_unshielded_inductance_H=MAX_UNSHIELDED_SHARE_OF_MIN_L
                                   * float(min_inductance_H[j]))
             r_a[j], l_u[j] = fit.jump_resistance_ohm, fit.unshielded_inductance_H

@@ -52,6 +52,7 @@ from typing import Any
 import numpy as np
 
 from ..errors import InputError, MaglevkitWarning, SolverError
+from ..validation import renamed_keywords
 
 __all__ = ["DetailedFrequencyResponse", "MotionEddyFit", "detailed_frequency_response",
            "fit_motion_eddy", "ladder_force_response", "ladder_frequency_response",
@@ -199,9 +200,13 @@ def detailed_frequency_response(net: Any, *, gap: float, current: float,
     return out
 
 
-def ladder_frequency_response(frequencies_Hz: Any, *, ltilde: float, dpsi_ds: float,
-                              r_el: float, r_a: float, l_u: float, r_2: float,
-                              beta: float = 0.0
+@renamed_keywords(ltilde="differential_inductance_H", dpsi_ds="dpsi_ds_Wb_per_m",
+                  r_el="resistance_ohm", r_a="jump_resistance_ohm",
+                  l_u="unshielded_inductance_H", r_2="shielding_resistance_ohm")
+def ladder_frequency_response(frequencies_Hz: Any, *, differential_inductance_H: float,
+                              dpsi_ds_Wb_per_m: float, resistance_ohm: float,
+                              jump_resistance_ohm: float, unshielded_inductance_H: float,
+                              shielding_resistance_ohm: float, beta: float = 0.0
                               ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Closed-form small-signal responses of the shielded-gap ladder (module docstring).
 
@@ -219,20 +224,32 @@ def ladder_frequency_response(frequencies_Hz: Any, *, ltilde: float, dpsi_ds: fl
     Parameters
     ----------
     frequencies_Hz : array_like
-    ltilde : float
+        Frequencies [Hz].
+    differential_inductance_H : float
         ``L~`` [H].
-    dpsi_ds : float
-        ``dL/ds I_L`` [Wb/m].
-    r_el, r_a, l_u, r_2 : float
-        ``R_el``, ``R_a`` [ohm], ``L_u`` [H], ``R_2`` [ohm].
+    dpsi_ds_Wb_per_m : float
+        ``k = dL/ds I_L`` [Wb/m].
+    resistance_ohm : float
+        ``R_el`` [ohm].
+    jump_resistance_ohm : float
+        The shunt ``R_a`` [ohm] (maps variable ``motion_eddy_jump_resistance_ohm``).
+    unshielded_inductance_H : float
+        The series ``L_u`` [H].
+    shielding_resistance_ohm : float
+        The gap section's eddy resistance ``R_2`` [ohm].
     beta : float
         The unshielded share of the motion term [-] (default 0).
+
+    The old keyword names ``ltilde``, ``dpsi_ds``, ``r_el``, ``r_a``, ``l_u``, ``r_2``
+    are deprecated aliases for one release (a ``DeprecationWarning`` names the new one).
 
     Returns
     -------
     gap_to_current_A_per_m, gap_to_inductor_current_A_per_m, voltage_to_current_A_per_V : ndarray
         Complex, per frequency: ``dI/ds``, ``dI_L/ds`` (the force's current) and ``dI/dU``.
     """
+    ltilde, dpsi_ds, r_el = differential_inductance_H, dpsi_ds_Wb_per_m, resistance_ohm
+    r_a, l_u, r_2 = jump_resistance_ohm, unshielded_inductance_H, shielding_resistance_ohm
     p = 2j * np.pi * np.asarray(frequencies_Hz, dtype=float)
     a = 1.0 + r_el / r_a
     m11 = p * l_u + r_el / a + r_2
@@ -247,8 +264,9 @@ def ladder_frequency_response(frequencies_Hz: Any, *, ltilde: float, dpsi_ds: fl
     return iu_s / a, il_s, (1.0 - 1.0 / a) / r_el + iu_u / a
 
 
+@renamed_keywords(shield_resistance_ohm="jump_resistance_ohm")
 def unshielded_share(jump_A_per_m: float, *, dpsi_ds_Wb_per_m: float, resistance_ohm: float,
-                     shield_resistance_ohm: float, unshielded_inductance_H: float) -> float:
+                     jump_resistance_ohm: float, unshielded_inductance_H: float) -> float:
     """The ladder's ``beta`` that gives the detailed model's instantaneous gap -> current
     jump ``D``: ``beta = -D a L_u/k`` (:func:`ladder_frequency_response`).
 
@@ -260,8 +278,8 @@ def unshielded_share(jump_A_per_m: float, *, dpsi_ds_Wb_per_m: float, resistance
         ``k = dL/ds I_L`` [Wb/m]; 0 (no current): ``beta = 0``.
     resistance_ohm : float
         ``R_el`` [ohm], >= 0.
-    shield_resistance_ohm : float
-        ``R_a`` [ohm], > 0.
+    jump_resistance_ohm : float
+        The shunt ``R_a`` [ohm], > 0 (``shield_resistance_ohm`` is its deprecated name).
     unshielded_inductance_H : float
         ``L_u`` [H].
 
@@ -276,19 +294,19 @@ def unshielded_share(jump_A_per_m: float, *, dpsi_ds_Wb_per_m: float, resistance
         A non-finite argument, ``R_a <= 0`` or ``R_el < 0``.
     """
     args = {"jump_A_per_m": jump_A_per_m, "dpsi_ds_Wb_per_m": dpsi_ds_Wb_per_m,
-            "resistance_ohm": resistance_ohm, "shield_resistance_ohm": shield_resistance_ohm,
+            "resistance_ohm": resistance_ohm, "jump_resistance_ohm": jump_resistance_ohm,
             "unshielded_inductance_H": unshielded_inductance_H}
     for name, value in args.items():
         if not math.isfinite(float(value)):
             raise InputError(f"unshielded_share: {name} = {value!r} must be finite")
-    if not shield_resistance_ohm > 0.0:
-        raise InputError(f"unshielded_share: shield_resistance_ohm = {shield_resistance_ohm!r} "
+    if not jump_resistance_ohm > 0.0:
+        raise InputError(f"unshielded_share: jump_resistance_ohm = {jump_resistance_ohm!r} "
                          "must be > 0 (the ladder's R_a)")
     if resistance_ohm < 0.0:
         raise InputError(f"unshielded_share: resistance_ohm = {resistance_ohm!r} must be >= 0")
     if dpsi_ds_Wb_per_m == 0.0:
         return 0.0
-    return float(-jump_A_per_m * (1.0 + resistance_ohm / shield_resistance_ohm)
+    return float(-jump_A_per_m * (1.0 + resistance_ohm / jump_resistance_ohm)
                  * unshielded_inductance_H / dpsi_ds_Wb_per_m)
 
 
@@ -375,8 +393,11 @@ class MotionEddyFit:
 MAX_UNSHIELDED_SHARE_OF_MIN_L = 0.8
 
 
-def fit_motion_eddy(response: DetailedFrequencyResponse, *, r_el: float, r_ec_jump: float,
-                    r_ec_fit: float, max_unshielded_inductance_H: float | None = None,
+@renamed_keywords(r_el="resistance_ohm", r_ec_jump="eddy_resistance_jump_ohm",
+                  r_ec_fit="eddy_resistance_fit_ohm")
+def fit_motion_eddy(response: DetailedFrequencyResponse, *, resistance_ohm: float,
+                    eddy_resistance_jump_ohm: float, eddy_resistance_fit_ohm: float,
+                    max_unshielded_inductance_H: float | None = None,
                     fit_force: bool = False) -> MotionEddyFit:
     """Least-squares fit of ``R_a``, ``L_u``, ``R_2`` to a detailed frequency response.
 
@@ -387,17 +408,19 @@ def fit_motion_eddy(response: DetailedFrequencyResponse, *, r_el: float, r_ec_ju
     (:func:`unshielded_share`).  Parameters are fitted as ``log R_a``, ``log R_2`` and
     ``logit(L_u/L_max)`` (so ``0 < L_u < L_max``, ``L_max`` the smaller of ``L~`` and
     ``max_unshielded_inductance_H``), with scipy's trust-region least squares from
-    several starts: ``R_a`` at the exact jump value ``r_ec_jump`` (and 3x, 1/3x), ``R_2``
-    such that ``R_a || R_2`` is the step fit's ``r_ec_fit`` (else 3 ``r_ec_fit``),
+    several starts: ``R_a`` at the exact jump value ``eddy_resistance_jump_ohm`` (and 3x,
+    1/3x), ``R_2`` such that ``R_a || R_2`` is the step fit's ``eddy_resistance_fit_ohm``
+    (else 3 times it),
     ``L_u/L~`` 1 %, 5 % and 20 %.
 
     Parameters
     ----------
     response : DetailedFrequencyResponse
-    r_el : float
+    resistance_ohm : float
         ``R_el`` [ohm].
-    r_ec_jump, r_ec_fit : float
-        Eq. 8's ``R_ec`` from the exact jump and from the step's time constant [ohm].
+    eddy_resistance_jump_ohm, eddy_resistance_fit_ohm : float
+        Eq. 8's ``R_ec`` from the exact jump and from the step's time constant [ohm]
+        (the maps variables ``eddy_resistance_ohm`` and ``eddy_resistance_fit_ohm``).
     max_unshielded_inductance_H : float, optional
         Upper bound of ``L_u`` [H] (``build_maps``: :data:`MAX_UNSHIELDED_SHARE_OF_MIN_L`
         times the maps' smallest ``L~``); default ``L~`` of the response.
@@ -409,6 +432,7 @@ def fit_motion_eddy(response: DetailedFrequencyResponse, *, r_el: float, r_ec_ju
     """
     from scipy.optimize import least_squares
 
+    r_el, r_ec_jump, r_ec_fit = resistance_ohm, eddy_resistance_jump_ohm, eddy_resistance_fit_ohm
     lt, k = response.differential_inductance_H, response.dpsi_ds_Wb_per_m
     l_max = lt if max_unshielded_inductance_H is None else min(lt, max_unshielded_inductance_H)
     f = response.frequencies_Hz
@@ -419,12 +443,14 @@ def fit_motion_eddy(response: DetailedFrequencyResponse, *, r_el: float, r_ec_ju
         r_a, l_u = float(np.exp(x[0])), float(l_max / (1.0 + np.exp(-x[1])))
         return (r_a, l_u, float(np.exp(x[2])),
                 unshielded_share(jump, dpsi_ds_Wb_per_m=k, resistance_ohm=r_el,
-                                 shield_resistance_ohm=r_a, unshielded_inductance_H=l_u))
+                                 jump_resistance_ohm=r_a, unshielded_inductance_H=l_u))
 
     def model(x: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         r_a, l_u, r_2, beta = unpack(x)
-        ms, il, mu = ladder_frequency_response(f, ltilde=lt, dpsi_ds=k, r_el=r_el, r_a=r_a,
-                                               l_u=l_u, r_2=r_2, beta=beta)
+        ms, il, mu = ladder_frequency_response(
+            f, differential_inductance_H=lt, dpsi_ds_Wb_per_m=k, resistance_ohm=r_el,
+            jump_resistance_ohm=r_a, unshielded_inductance_H=l_u, shielding_resistance_ohm=r_2,
+            beta=beta)
         return ms, mu, ladder_force_response(response, il)
 
     def resid(x: np.ndarray) -> np.ndarray:
