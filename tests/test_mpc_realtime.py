@@ -200,3 +200,40 @@ def test_batch_refuses_bad_controller_lists(setup) -> None:  # type: ignore[no-u
     other.sample_time_s = 2e-3
     with pytest.raises(mk.ParameterError, match="sample times differ"):
         RealTimeMPCBatch([fast, other])
+
+
+def test_fused_qp_step_is_the_separate_functions(setup, monkeypatch) -> None:  # type: ignore[no-untyped-def]
+    """The prepare law with the QP data, the active-set guess and the step composed into
+    one scalar-code function (``RealTimeMPC._FUSED``, structural zeros and ones of the
+    condensed matrices skipped) gives the same numbers as the separate QP data, guess and
+    apply functions, on every sample of a closed loop that has guessed samples and
+    voltage-limited ones (the dense-solver fall-back): both evaluated on CasADi's
+    virtual machine at the inputs the compiled batch of one saw."""
+    maps, model, veh, f0, _, _ = setup
+    opts = dict(gap_ref_m=S0, sample_time_s=DT, horizon=N, interval_s=2e-3)
+    fused = RealTimeMPC(model, **opts)
+    monkeypatch.setattr(RealTimeMPC, "_FUSED", False)
+    separate = RealTimeMPC(model, **opts)
+    f_new, f_old = fused.prepare_function, separate.prepare_function
+    assert f_new.n_out() == f_old.n_out()
+    step = lambda t: 0.012 if t >= 0.01 else S0  # noqa: E731
+    run = _run(maps, veh, fused, lambda t: 0.1 * f0 if t >= 0.005 else 0.0, 0.04, step)
+    fused.reset(Measurement(0.0, S0, 0.0, run.currents_A[0], S0), sample_time_s=DT)
+    one = fused._one
+    assert one is not None
+    oks = []
+    for k in range(run.gap_m.size - 1):
+        args = one._calls[one._k].args
+        ins = [np.reshape(args[i], f_new.size_in(i), order="F").copy()
+               for i in range(f_new.n_in() - 1)] + [fused._table_array()]
+        fused.update(Measurement(k * DT, float(run.gap_m[k]), 0.0, run.currents_A[k],
+                                 float(run.gap_ref_m[k])))
+        a, b = f_new(*ins), f_old(*ins)
+        oks.append(float(a[4][2]))
+        for q in range(f_new.n_out()):
+            # the skipped terms are exact zeros and products with exact ones: the same
+            # bits, so no tolerance
+            assert np.array_equal(np.asarray(a[q]), np.asarray(b[q]), equal_nan=True), \
+                (k, f_new.name_out(q))
+    print("guessed samples", sum(oks), "of", len(oks))
+    assert 0 < sum(oks) < len(oks)          # both kinds of sample were compared

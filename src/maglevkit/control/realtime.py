@@ -157,6 +157,10 @@ class RealTimeMPC(OffsetFreeMPC):
     a few seconds to a few minutes.
     """
 
+    #: the prepare law's QP data, guess and step in one scalar-code function
+    #: (:meth:`_solve_function`); False: the separate functions (for comparisons)
+    _FUSED = True
+
     def __init__(self, model: MagnetHeaveModel, *, gap_ref_m: float, sample_time_s: float,
                  horizon: int = 20, interval_s: float | None = None, substeps: int = 1,
                  qp_solver: str = "qpoases", voltage_limit_V: float = 440.0,
@@ -271,6 +275,8 @@ class RealTimeMPC(OffsetFreeMPC):
         ivals = [v for b in self._interval_blocks(w, p, T, Fd) for v in b]
         self._data_f = ca.Function("mpc_rti_condensed", [w, p, T],
                                    list(condense(w, p, *ivals)), ["w", "p", "table"], names)
+        self._condense = condense
+        self._ivals = (w, p, T, ivals)
         self._na = Ac.size1()
         self._nz = nz
         self._nw = nw
@@ -418,17 +424,24 @@ class RealTimeMPC(OffsetFreeMPC):
                             [ca.if_else(g_cold, w_cold, w_warm), ca.vertcat(g_zc, xt, ut)]
                             ).expand()
         w, p = start(zc, xt_n, ut_n, given, use_given, w_prev, cold)
-        qp = self._data_f(w, p, T)
-        zg, ok = self._guess_f(*qp[:7])
         # the guess applied: dw = E z + e (its U_0 row is z[:nu], exactly)
         ws, Es, es, zs = (ca.MX.sym("w", nw), ca.MX.sym("E", nw, nz), ca.MX.sym("e", nw),
                           ca.MX.sym("z", nz))
         apply = ca.Function("mpc_rti_apply", [ws, Es, es, zs],
                             [ws + ca.mtimes(Es, zs) + es]).expand()
+        zg: Any
+        ok: Any
+        w_next: Any
+        if self._FUSED:
+            zg, ok, w_next = self._solve_function()(w, p, T)
+        else:
+            qp = self._data_f(w, p, T)
+            zg, ok = self._guess_f(*qp[:7])
+            w_next = apply(w, qp[7], qp[8], zg)
         status = ca.vertcat(step, ca.sum1(zc), ok)
         f = ca.Function("mpc_rti_prepare",
                         [z, P, u_prev, y, sref, ig, w_prev, cold, given, use_given, T],
-                        [zc, Pc, w, p, status, apply(w, qp[7], qp[8], zg)],
+                        [zc, Pc, w, p, status, w_next],
                         ["z", "P", "u_prev", "y", "s_ref", "i_guess", "w_prev", "cold",
                          "target", "use_given", "table"],
                         ["z_next", "P_next", "w", "p", "status", "w_next"])
@@ -451,6 +464,30 @@ class RealTimeMPC(OffsetFreeMPC):
         self._one: RealTimeMPCBatch | None = None
         #: (batch, buffer class, row) whose buffers hold this controller's latest sample
         self._owner: tuple[RealTimeMPCBatch, int, int] | None = None
+
+    def _solve_function(self) -> ca.Function:
+        """``(w, p, table) -> (z, ok, w_next)``: the condensed QP data, its guessed
+        active set's solution (:meth:`_guess_function`) and that step applied
+        (``w + E z + e``) as ONE function of scalar code, composed from the same
+        functions as :attr:`_data_f` and the guess: only the map-reading interval
+        blocks stay outside.  Composed in scalar code, the guess and the step see the
+        structural zeros of the condensed matrices (the upper triangle of ``E``, its
+        identity rows, the zero blocks of the constraint matrix) and the constant
+        entries, so their products with zeros and ones are not computed; every other
+        operation and the order of every sum are those of the separate functions (the
+        skipped terms are exact zeros, ``x + 0 = x``, ``1 z = z``), so the results are
+        the same numbers (tests/test_mpc_realtime.py)."""
+        cond = self._condense
+        w, p, T, ivals = self._ivals
+        ins = [ca.SX.sym(cond.name_in(i), cond.sparsity_in(i)) for i in range(cond.n_in())]
+        qp = cond(*ins)
+        zg, ok = self._guess_f(*qp[:7])
+        w_next = ins[0] + ca.mtimes(qp[7], zg) + qp[8]
+        fused = ca.Function("mpc_rti_solve", ins, [zg, ok, w_next],
+                            [cond.name_in(i) for i in range(cond.n_in())],
+                            ["z", "ok", "w_next"], {"cse": True})
+        return ca.Function("mpc_rti_solved", [w, p, T], list(fused(w, p, *ivals)),
+                           ["w", "p", "table"], ["z", "ok", "w_next"])
 
     def _table_array(self) -> np.ndarray:
         t = getattr(self, "_table_c", None)
