@@ -140,6 +140,21 @@ def edge_flank_per_mu0(w: Any, r: Any, s: Any) -> Any:
     to ``O(s/r)``; nearer the edge they carry less flux and fall faster with the gap
     (at ``r = 0.75 s``: 0.496 against 0.596 ``w``, ``s dG/ds`` -0.344 against -0.320
     ``w``; docs/equations.md sec. 1).  NumPy or CasADi input.
+
+    Parameters
+    ----------
+    w : float or CasADi
+        Edge length [m].
+    r : float, array_like or CasADi
+        Flank height above the face [m], >= 0.
+    s : float, array_like or CasADi
+        Distance from the face to the plane [m], > 0 (Carter's ``k_C s`` over a slotted
+        stator).
+
+    Returns
+    -------
+    float, ndarray or CasADi
+        The permeance divided by mu0 [m].
     """
     v = edge_flank_parameter(r, s)
     return w / math.pi * _log(1.0 + v * v)

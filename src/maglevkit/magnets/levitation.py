@@ -34,8 +34,9 @@ grooves as slots of the face) to the tooth tips, then ``teeth_k`` (T_k -> S_k: t
 stator teeth under the face) and in parallel ``slots_k`` (T_k -> S_k: the air of their
 slots, the apparent tooth flux density of machine design);
 per side ``x`` (``l``, ``r``) of the pole: ``fringe_k_x`` (H_k -> W_kx: the flank below
-the coil facing that side) and ``flank_k_j_x`` (C_k_j -> W_kx: Roters quarter circles from
-each coil strip of the flank to the face level and across the gap), both landing on that
+the coil facing that side) and ``flank_k_j_x`` (C_k_j -> W_kx: from each coil strip of the
+flank below ``window/pi`` across the gap), both the pole edge's field over the stator
+(conformal map, ``FringePermeance(law="conformal")``) and both landing on that
 side's window teeth ``window_k_x`` (W_kx -> S_kx, with their slots' air
 ``window_slots_k_x``; ``across_k_x``, T_k -> W_kx: the slot at the face edge between the face's
 teeth and that side's window teeth), and the stator yoke over the half face ``yoke_k_x`` (S_k -> S_kx,
