@@ -343,7 +343,7 @@ def test_step_wrapper_compiled_at_the_first_step_is_bit_identical() -> None:
         pytest.skip("no lane library (no C compiler)")
     assert compiled.bound.function.class_name() != "MXFunction"       # compiled at once
     lanes = model._bank.compiled_step_library(1e-3)
-    vm = cur._TableStep(lanes[0], model._avg, model._share)            # no library: the VM
+    vm = cur._TableStep(lanes[0], model._avg, model._share, 1e-3)      # no library: the VM
     assert vm.bound.function.class_name() == "MXFunction"
 
     def run(call: cur._TableStep) -> np.ndarray:
@@ -353,10 +353,13 @@ def test_step_wrapper_compiled_at_the_first_step_is_bit_identical() -> None:
         for k in range(60):
             g = 0.01 + 1e-3 * np.sin(0.03 * k) + 1e-5 * rng.standard_normal(12)
             u = np.array([40.0, 42.0]) * (1 + 0.2 * np.sin(0.1 * k))
-            out = call(i, g, u, 1e-3 * rng.standard_normal(12), 1e-3)
+            out = call(i, g, u, 1e-3 * rng.standard_normal(12), 1e-3 * (k + 1))
             assert out is not None
-            i = out[0]
-            rows.append(np.concatenate(out))
+            state, outs = out
+            i = state.inductor_currents_A
+            rows.append(np.concatenate([state.inductor_currents_A, state.gaps_m, outs.currents_A,
+                                        outs.inductor_currents_A, outs.circuit_force_N,
+                                        outs.pole_force_N, [outs.force_N]]))
         return np.array(rows)
 
     assert np.array_equal(run(compiled), run(vm))
