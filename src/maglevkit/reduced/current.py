@@ -1003,14 +1003,14 @@ class CurrentModel:
             The substitute gap path or the currents (including RK4 sub-step states) leave
             the maps (see ``extrapolate``).
         """
-        dt, voltages, gaps, gap_rates = dt_s, voltages_V, gaps_m, gap_rates_m_per_s
         if not isinstance(state, CurrentModelState):
             raise InputError(f"state must be a CurrentModelState (from CurrentModel."
                              f"initial_state or step), got {type(state).__name__}")
         if self._use_tables:
-            done = self._step_tables(state, dt, voltages, gaps, gap_rates)
+            done = self._step_tables(state, dt_s, voltages_V, gaps_m, gap_rates_m_per_s)
             if done is not None:
                 return done
+        dt, voltages, gaps, gap_rates = dt_s, voltages_V, gaps_m, gap_rates_m_per_s
         dt = check_step(dt)
         u = per_name_values(voltages, self.circuit_names, "voltages", "V")
         g = state.gaps_m if gaps is None else _per_gap(gaps, self.gap_names, positive=True)
@@ -1128,16 +1128,16 @@ class CurrentModel:
         shape_c, shape_g = self._input_shapes
         # ``dtype is`` float64's (native) singleton; an equal dtype that is not it (or any
         # other input) takes the converter, which returns a float64 array as it is
-        u = (voltages if type(voltages) is np.ndarray and voltages.dtype is _F64
+        u = (voltages if type(voltages) is _NDARRAY and voltages.dtype is _F64
              and voltages.shape == shape_c
              else per_name_values(voltages, self.circuit_names, "voltages", "V"))
         if gaps is None:
             g = state.gaps_m
-        elif type(gaps) is np.ndarray and gaps.dtype is _F64 and gaps.shape == shape_g:
+        elif type(gaps) is _NDARRAY and gaps.dtype is _F64 and gaps.shape == shape_g:
             g = gaps
         else:
             g = _per_gap(gaps, self.gap_names, positive=True)
-        if type(gap_rates) is np.ndarray and gap_rates.dtype is _F64 and \
+        if type(gap_rates) is _NDARRAY and gap_rates.dtype is _F64 and \
                 gap_rates.shape == shape_g:
             gd = gap_rates
         elif type(gap_rates) is float:
@@ -1494,6 +1494,7 @@ class _TableStep:
 
 _T = TypeVar("_T")
 _F64 = np.dtype(np.float64)
+_NDARRAY = np.ndarray
 _new_object = object.__new__
 
 
