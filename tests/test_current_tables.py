@@ -343,7 +343,7 @@ def test_step_wrapper_compiled_at_the_first_step_is_bit_identical() -> None:
         pytest.skip("no lane library (no C compiler)")
     assert compiled.bound.function.class_name() != "MXFunction"       # compiled at once
     lanes = model._bank.compiled_step_library(1e-3)
-    vm = cur._TableStep(lanes[0], model._avg, model._share)            # no library: the VM
+    vm = cur._TableStep(lanes[0], model._avg, model._share, 1e-3)      # no library: the VM
     assert vm.bound.function.class_name() == "MXFunction"
 
     def run(call: cur._TableStep) -> np.ndarray:
@@ -353,10 +353,13 @@ def test_step_wrapper_compiled_at_the_first_step_is_bit_identical() -> None:
         for k in range(60):
             g = 0.01 + 1e-3 * np.sin(0.03 * k) + 1e-5 * rng.standard_normal(12)
             u = np.array([40.0, 42.0]) * (1 + 0.2 * np.sin(0.1 * k))
-            out = call(i, g, u, 1e-3 * rng.standard_normal(12), 1e-3)
+            out = call(i, g, u, 1e-3 * rng.standard_normal(12), 1e-3 * (k + 1))
             assert out is not None
-            i = out[0]
-            rows.append(np.concatenate(out))
+            state, outs = out
+            i = state.inductor_currents_A
+            rows.append(np.concatenate([state.inductor_currents_A, state.gaps_m, outs.currents_A,
+                                        outs.inductor_currents_A, outs.circuit_force_N,
+                                        outs.pole_force_N, [outs.force_N]]))
         return np.array(rows)
 
     assert np.array_equal(run(compiled), run(vm))
@@ -428,3 +431,41 @@ def test_fast_built_results_carry_every_field(all_maps) -> None:
         assert type(obj) is cls
         assert set(vars(obj)) == {f.name for f in dataclasses.fields(cls)}, cls.__name__
         cls(**vars(obj))                   # what the dataclass __init__ accepts
+
+
+def test_step_fast_path_and_converted_inputs_give_the_same_bits(all_maps) -> None:
+    """The table ``step`` takes float64 arrays of the right shape as they are and sends
+    every other form through the converters (cmstep22): lists, mappings, a float64 dtype
+    that is equal but not NumPy's singleton (metadata), and a NumPy float ``dt`` must give
+    exactly the results of the plain arrays (the converters only copy float64 values, so
+    the bits must match, not merely be close)."""
+    mag, maps = all_maps["tr09-standard"]
+    model = CurrentModel(maps)
+    names, gap_names = model.circuit_names, model.gap_names
+    u = mag.network.resistances * 34.0 * np.array([1.1, 0.9])
+    g = 0.010 + 1e-4 * np.arange(len(gap_names))
+    gd = 1e-3 * np.cos(np.arange(len(gap_names)))
+    st = model.initial_state(gaps_m=g, currents_A=34.0)
+
+    def fields(res: tuple) -> np.ndarray:
+        s, o = res
+        assert s.eddy_currents_A is None
+        return np.concatenate([[s.time_s], s.inductor_currents_A, s.gaps_m, [o.time_s],
+                               o.currents_A, o.inductor_currents_A, o.circuit_force_N,
+                               o.pole_force_N, [o.force_N]])
+
+    ref = fields(model.step(st, 1e-3, u, gaps_m=g, gap_rates_m_per_s=gd))
+    meta = np.dtype(np.float64, metadata={"unit": "V"})
+    assert meta == np.float64 and u.astype(meta).dtype is not np.dtype(np.float64)
+    forms = [
+        (1e-3, u.tolist(), g.tolist(), gd.tolist()),
+        (np.float64(1e-3), dict(zip(names, u, strict=True)),
+         dict(zip(gap_names, g, strict=True)), dict(zip(gap_names, gd, strict=True))),
+        (1e-3, u.astype(meta), g.astype(meta), gd.astype(meta)),
+    ]
+    for dt, uu, gg, gdd in forms:
+        got = fields(model.step(st, dt, uu, gaps_m=gg, gap_rates_m_per_s=gdd))
+        assert np.array_equal(got.view(np.uint64), ref.view(np.uint64))
+    # the kept per-input checks still name the input (wrong count, here one value short)
+    with pytest.raises(InputError, match="voltages"):
+        model.step(st, 1e-3, u[:1].copy())

@@ -1003,14 +1003,14 @@ class CurrentModel:
             The substitute gap path or the currents (including RK4 sub-step states) leave
             the maps (see ``extrapolate``).
         """
-        dt, voltages, gaps, gap_rates = dt_s, voltages_V, gaps_m, gap_rates_m_per_s
         if not isinstance(state, CurrentModelState):
             raise InputError(f"state must be a CurrentModelState (from CurrentModel."
                              f"initial_state or step), got {type(state).__name__}")
         if self._use_tables:
-            done = self._step_tables(state, dt, voltages, gaps, gap_rates)
+            done = self._step_tables(state, dt_s, voltages_V, gaps_m, gap_rates_m_per_s)
             if done is not None:
                 return done
+        dt, voltages, gaps, gap_rates = dt_s, voltages_V, gaps_m, gap_rates_m_per_s
         dt = check_step(dt)
         u = per_name_values(voltages, self.circuit_names, "voltages", "V")
         g = state.gaps_m if gaps is None else _per_gap(gaps, self.gap_names, positive=True)
@@ -1111,46 +1111,64 @@ class CurrentModel:
         """:meth:`step` on the compiled table kernel, or None (the caller then takes the
         B-spline path, which validates, raises or warns): inputs other than finite
         float arrays of the right shape are converted first; a step the kernel flags
-        (out of the maps, not finite) or gaps that are or become <= 0 give None."""
+        (out of the maps, not finite) or gaps that are or become <= 0 give None.
+
+        The hot path of a stepping loop: the checks are ordered by cost and the common
+        case (a float ``dt`` seen before, float64 arrays of the right shape) takes only
+        identity and shape tests; every other input goes through the same converters as
+        before, with the same messages.
+        """
         if state.eddy_currents_A is not None:
             return None                        # not a state of this model: say so there
-        if not (type(dt) is float and 0.0 < dt < math.inf):
+        if type(dt) is float and 0.0 < dt < math.inf:
+            call = self._table_steps.get(dt)
+        else:
             dt = check_step(dt)
+            call = None
         shape_c, shape_g = self._input_shapes
-        u = (voltages if type(voltages) is np.ndarray and voltages.dtype == np.float64
+        # ``dtype is`` float64's (native) singleton; an equal dtype that is not it (or any
+        # other input) takes the converter, which returns a float64 array as it is
+        u = (voltages if type(voltages) is _NDARRAY and voltages.dtype is _F64
              and voltages.shape == shape_c
              else per_name_values(voltages, self.circuit_names, "voltages", "V"))
-        g = (state.gaps_m if gaps is None else gaps if type(gaps) is np.ndarray
-             and gaps.dtype == np.float64 and gaps.shape == shape_g
-             else _per_gap(gaps, self.gap_names, positive=True))
-        if type(gap_rates) is np.ndarray and gap_rates.dtype == np.float64 and \
+        if gaps is None:
+            g = state.gaps_m
+        elif type(gaps) is _NDARRAY and gaps.dtype is _F64 and gaps.shape == shape_g:
+            g = gaps
+        else:
+            g = _per_gap(gaps, self.gap_names, positive=True)
+        if type(gap_rates) is _NDARRAY and gap_rates.dtype is _F64 and \
                 gap_rates.shape == shape_g:
             gd = gap_rates
         elif type(gap_rates) is float:
             gd = np.full(shape_g, gap_rates)
         else:
             gd = _per_gap(gap_rates, self.gap_names, positive=False)
+        if call is None:
+            call = self._table_step(dt)
+            if call is None:
+                return None
+        done = call(state.inductor_currents_A, g, u, gd, state.time_s + dt)
+        if done is None:
+            self._diagnose_table_step(call, state, g, u, gd, dt)
+        return done            # None: the B-spline path raises, warns or integrates
+
+    def _table_step(self, dt: float) -> _TableStep | None:
+        """The compiled step of length ``dt`` [s] (built, or loaded from the disk cache,
+        on first use and kept per length), or None where the tables cannot hold the maps."""
         call = self._table_steps.get(dt)
         if call is None:
             bank = self._table_bank()
             if bank is None:
                 return None
             lanes = bank.compiled_step_library(dt)
-            call = (_TableStep(bank.step_kernel(dt), self._avg, self._share) if lanes is None
-                    else _TableStep(lanes[0], self._avg, self._share, lanes[1]))
+            call = (_TableStep(bank.step_kernel(dt), self._avg, self._share, dt)
+                    if lanes is None
+                    else _TableStep(lanes[0], self._avg, self._share, dt, lanes[1]))
             if len(self._table_steps) > 16:
                 self._table_steps.clear()
             self._table_steps[dt] = call
-        r = call(state.inductor_currents_A, g, u, gd, dt)
-        if r is None:
-            self._diagnose_table_step(call, state, g, u, gd, dt)
-            return None       # the B-spline path raises, warns or integrates
-        x, coil, force, pole, total, g1, x_out = r
-        t1 = state.time_s + dt
-        return (_new(CurrentModelState, time_s=t1, inductor_currents_A=x, gaps_m=g1,
-                     eddy_currents_A=None),
-                _new(CurrentOutputs, time_s=t1, currents_A=coil, inductor_currents_A=x_out,
-                     circuit_force_N=force, pole_force_N=pole, force_N=float(total[0])))
+        return call
 
     def _diagnose_table_step(self, call: _TableStep, state: CurrentModelState, g: np.ndarray,
                              u: np.ndarray, gd: np.ndarray, dt: float) -> None:
@@ -1378,17 +1396,18 @@ def _jit_compile(f: ca.Function) -> ca.Function:
 
 
 class _TableStep:
-    """One step on the bank's compiled table kernel with everything around it in one
-    CasADi call through bound NumPy buffers: substitute gaps and rates from the pole
-    values (``avg``), the end gaps, the pole forces (``share``), the total force and one
-    flag (the kernel's, plus pole gaps that are or become <= 0).
+    """One step of one length on the bank's compiled table kernel with everything around
+    it in one CasADi call through bound NumPy buffers: substitute gaps and rates from the
+    pole values (``avg``), the end gaps, the pole forces (``share``), the total force and
+    one flag (the kernel's, plus pole gaps that are or become <= 0).
 
-    ``(I_L, pole gaps, U, pole gap rates, h)`` -> one new array holding ``I_L'`` twice
-    (state and outputs), ``I``, ``F``, the pole forces, the total force and the end pole
-    gaps, or None when the step is flagged.
+    ``(I_L, pole gaps, U, pole gap rates, end time)`` -> the new
+    :class:`CurrentModelState` and :class:`CurrentOutputs` (their arrays views of one
+    new block), or None when the step is flagged.  The step length ``h_s`` [s] is an
+    input of the function, written once: a ``_TableStep`` is kept per length.
     """
 
-    def __init__(self, kernel: ca.Function, avg: np.ndarray, share: np.ndarray,
+    def __init__(self, kernel: ca.Function, avg: np.ndarray, share: np.ndarray, h_s: float,
                  library: Path | None = None) -> None:
         nc, ng = avg.shape
         x, u = ca.MX.sym("I_L", nc), ca.MX.sym("U", nc)
@@ -1404,11 +1423,13 @@ class _TableStep:
                 res["member_F"], g1, res["I_L_next"], flag, res["flags"], res["I_L_min"],
                 res["I_L_max"]]
         f = ca.Function(f"maglevkit_cm_{kernel.name()}", [x, g, u, gd, h], outs)
-        self.function, self.library = f, library
+        self.function, self.library, self.h_s = f, library, h_s
         sizes = [f.nnz_out(i) for i in range(7)]
         self.block = np.zeros(sum(sizes))
         ends = np.cumsum([0, *sizes])
         self.slices = [slice(int(a), int(b)) for a, b in zip(ends[:-1], ends[1:], strict=True)]
+        #: where in the block the total force is (one value)
+        self.total_at = int(ends[4])
         self.flag = np.zeros(1)
         #: the kernel's reason codes (StepFlag bits) and the smallest and largest ``I_L``
         #: over the sub-steps of the last call, per circuit
@@ -1426,6 +1447,8 @@ class _TableStep:
                                                           self.current_min, self.current_max)
         self.bound = BoundCall(f, res=bind)
         self.args = self.bound.args
+        self.args[4][0] = self.h_s               # the step length: once per binding
+        self.inputs = tuple(self.args[:4])
         self.eval = self.bound.eval
 
     def _compile(self) -> None:
@@ -1439,28 +1462,46 @@ class _TableStep:
             self._bind(f)
 
     def __call__(self, i: np.ndarray, g: np.ndarray, u: np.ndarray, gd: np.ndarray,
-                 h: float) -> tuple[np.ndarray, ...] | None:
-        a = self.args
-        a[0][:] = i
-        a[1][:] = g
-        a[2][:] = u
-        a[3][:] = gd
-        a[4][0] = h
+                 t1_s: float) -> tuple[CurrentModelState, CurrentOutputs] | None:
+        a0, a1, a2, a3 = self.inputs
+        a0[:] = i
+        a1[:] = g
+        a2[:] = u
+        a3[:] = gd
         self.eval()
         if self.flag[0]:
             return None
         b = self.block.copy()
-        s0, s1, s2, s3, s4, s5, s6 = self.slices
-        return b[s0], b[s1], b[s2], b[s3], b[s4], b[s5], b[s6]
+        s0, s1, s2, s3, _, s5, s6 = self.slices
+        # both frozen dataclasses filled without their generated __init__ (one
+        # object.__setattr__ per field): equal to CurrentModelState(t1_s, ...) and as frozen
+        state = _new_object(CurrentModelState)
+        d = state.__dict__
+        d["time_s"] = t1_s
+        d["inductor_currents_A"] = b[s0]
+        d["gaps_m"] = b[s5]
+        d["eddy_currents_A"] = None
+        out = _new_object(CurrentOutputs)
+        d = out.__dict__
+        d["time_s"] = t1_s
+        d["currents_A"] = b[s1]
+        d["inductor_currents_A"] = b[s6]
+        d["circuit_force_N"] = b[s2]
+        d["pole_force_N"] = b[s3]
+        d["force_N"] = b.item(self.total_at)
+        return state, out
 
 
 _T = TypeVar("_T")
+_F64 = np.dtype(np.float64)
+_NDARRAY = np.ndarray
+_new_object = object.__new__
 
 
 def _new(cls: type[_T], **fields: Any) -> _T:
     """A frozen dataclass instance with every field given, without the per-field
-    ``object.__setattr__`` of its generated ``__init__`` (the hot path of :meth:`step`);
-    equal to ``cls(**fields)`` and as frozen."""
+    ``object.__setattr__`` of its generated ``__init__``; equal to ``cls(**fields)`` and
+    as frozen."""
     obj = object.__new__(cls)
     obj.__dict__.update(fields)
     return obj
