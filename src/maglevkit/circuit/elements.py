@@ -30,7 +30,7 @@ import numpy as np
 
 from ..errors import InputError, ParameterError
 from ..materials import MU0, Material, get_material
-from ..validation import real_array
+from ..validation import real_array, renamed_keywords
 
 __all__ = [
     "symbolic",
@@ -281,6 +281,7 @@ class LinearElement(Element):
         return flux * flux / (2.0 * self.permeance(gap))
 
 
+@renamed_keywords(length="length_m", cross_section="cross_section_m2")
 @dataclass(frozen=True)
 class IronPath(Element):
     """A homogeneous iron part: ``V_m = l H(phi/A)`` (paper eq. 1 with mu = mu(phi)).
@@ -289,10 +290,10 @@ class IronPath(Element):
     ----------
     name : str
         Unique name of the element within its network.
-    length : float
-        Mean flux path length [m], > 0.
-    cross_section : float
-        Cross-section area [m^2], > 0.
+    length_m : float
+        Mean flux path length [m], > 0 (deprecated keyword: ``length``).
+    cross_section_m2 : float
+        Cross-section area [m^2], > 0 (deprecated keyword: ``cross_section``).
     material : Material or str
         Constitutive law, or the name of a built-in record (default ``"ideal"``:
         infinitely permeable iron).
@@ -300,20 +301,21 @@ class IronPath(Element):
     Raises
     ------
     ParameterError
-        ``length`` or ``cross_section`` not a finite number > 0; an unknown material.
+        ``length_m`` or ``cross_section_m2`` not a finite number > 0; an unknown material.
     """
 
-    length: float
-    cross_section: float
+    length_m: float
+    cross_section_m2: float
     material: Material = field(default_factory=lambda: get_material("ideal"))
 
     def __post_init__(self) -> None:
-        _positive(f"iron path {self.name!r}", length=self.length, cross_section=self.cross_section)
+        _positive(f"iron path {self.name!r}", length_m=self.length_m,
+                  cross_section_m2=self.cross_section_m2)
         object.__setattr__(self, "material", get_material(self.material))
 
     @property
     def area(self) -> float:
-        return self.cross_section
+        return self.cross_section_m2
 
     def mmf_drop(self, flux: Any, gap: Any = None) -> Any:
         """``V_m = l H(phi / A)`` [A].
@@ -330,7 +332,7 @@ class IronPath(Element):
         float, ndarray or CasADi
             ``V_m`` [A].
         """
-        return self.length * self.material.field_strength(flux / self.cross_section)
+        return self.length_m * self.material.field_strength(flux / self.cross_section_m2)
 
     def energy(self, flux: Any, gap: Any = None) -> Any:
         """Stored energy ``l A w(phi / A)`` [J], with the material's energy density ``w(B)``.
@@ -347,10 +349,11 @@ class IronPath(Element):
         float or ndarray
             Energy [J].
         """
-        b = np.asarray(flux, dtype=float) / self.cross_section
-        return self.length * self.cross_section * self.material.energy_density(b)
+        b = np.asarray(flux, dtype=float) / self.cross_section_m2
+        return self.length_m * self.cross_section_m2 * self.material.energy_density(b)
 
 
+@renamed_keywords(pole_area="pole_area_m2", slot_pitch="slot_pitch_m", slot_opening="slot_opening_m")
 @dataclass(frozen=True)
 class AirGap(LinearElement):
     """Air gap between a pole face and the rail/stator.
@@ -367,7 +370,7 @@ class AirGap(LinearElement):
     is the flux from recessed parts of the pole face (e.g. the grooves of a
     linear-generator winding) of area ``A_j`` and depth ``d_j``, which cross the groove
     and then the gap in series.  ``k_C`` is Carter's coefficient of a slotted stator
-    (1 when ``slot_pitch`` is 0).  Slots in the pole face itself (``face_slots``, narrow
+    (1 when ``slot_pitch_m`` is 0).  Slots in the pole face itself (``face_slots``, narrow
     grooves deeper than half their opening, whose flux enters through the side walls)
     are counted by Carter's slot loss instead: ``A`` is then the whole face and each
     slot of length ``w_k`` and opening ``b_k`` subtracts ``w_k gamma(b_k/(2s)) s / s'``
@@ -380,20 +383,21 @@ class AirGap(LinearElement):
         Unique name of the element within its network.
     gap_input : str
         Name of the gap input (one per pole), non-empty.
-    pole_area : float
-        Pole face area [m^2], > 0.
+    pole_area_m2 : float
+        Pole face area [m^2], > 0 (deprecated keyword: ``pole_area``).
     fringe_edges : tuple of (float, float)
         ``(edge length w_e [m], flank height r_e [m])`` per fringing edge, each > 0
         (empty: none).
-    slot_pitch, slot_opening : float
+    slot_pitch_m, slot_opening_m : float
         Stator slot pitch and slot opening [m] for Carter's coefficient (0: smooth);
-        with a pitch > 0 the opening must lie in ``(0, slot_pitch)``.
+        with a pitch > 0 the opening must lie in ``(0, slot_pitch_m)`` (deprecated
+        keywords: ``slot_pitch``, ``slot_opening``).
     recesses : tuple of (float, float)
         ``(area A_j [m^2], depth d_j [m])`` of recessed pole-face parts, each > 0
         (empty: none).
     face_slots : tuple of (float, float)
         ``(slot length w_k [m], opening b_k [m])`` of slots in the pole face counted by
-        Carter's slot loss (their area is part of ``pole_area``; empty: none).
+        Carter's slot loss (their area is part of ``pole_area_m2``; empty: none).
 
     Raises
     ------
@@ -402,10 +406,10 @@ class AirGap(LinearElement):
     """
 
     gap_input: str = "s"
-    pole_area: float = 1.0
+    pole_area_m2: float = 1.0
     fringe_edges: tuple[tuple[float, float], ...] = ()
-    slot_pitch: float = 0.0
-    slot_opening: float = 0.0
+    slot_pitch_m: float = 0.0
+    slot_opening_m: float = 0.0
     recesses: tuple[tuple[float, float], ...] = ()
     face_slots: tuple[tuple[float, float], ...] = ()
 
@@ -413,7 +417,7 @@ class AirGap(LinearElement):
         owner = f"air gap {self.name!r}"
         if not isinstance(self.gap_input, str) or not self.gap_input:
             raise ParameterError(f"{owner}: gap_input must be a non-empty name")
-        _positive(owner, pole_area=self.pole_area)
+        _positive(owner, pole_area_m2=self.pole_area_m2)
         edges = tuple((w if symbolic(w) else float(w), r if symbolic(r) else float(r))
                       for w, r in self.fringe_edges)
         object.__setattr__(self, "fringe_edges", edges)
@@ -428,13 +432,13 @@ class AirGap(LinearElement):
         for w, b in slots:
             _positive(owner, face_slot_length=w, face_slot_opening=b)
         covered = sum(w * b for w, b in slots)
-        if slots and not (symbolic(covered) or symbolic(self.pole_area)) \
-                and covered >= self.pole_area:
+        if slots and not (symbolic(covered) or symbolic(self.pole_area_m2)) \
+                and covered >= self.pole_area_m2:
             raise ParameterError(f"{owner}: the face slots (length x opening) cover the "
-                                 "whole pole area; pole_area must include them")
-        _nonnegative(owner, slot_pitch=self.slot_pitch, slot_opening=self.slot_opening)
-        if self.slot_pitch > 0.0 and not 0.0 < self.slot_opening < self.slot_pitch:
-            raise ParameterError(f"{owner}: slot_opening must lie in (0, slot_pitch) when a "
+                                 "whole pole area; pole_area_m2 must include them")
+        _nonnegative(owner, slot_pitch_m=self.slot_pitch_m, slot_opening_m=self.slot_opening_m)
+        if self.slot_pitch_m > 0.0 and not 0.0 < self.slot_opening_m < self.slot_pitch_m:
+            raise ParameterError(f"{owner}: slot_opening_m must lie in (0, slot_pitch_m) when a "
                                  "slot pitch is given")
 
     @property
@@ -443,7 +447,7 @@ class AirGap(LinearElement):
 
     @property
     def area(self) -> float:
-        return self.pole_area
+        return self.pole_area_m2
 
     def effective_gap(self, gap: Any) -> Any:
         """Gap enlarged by Carter's coefficient [m].
@@ -459,8 +463,8 @@ class AirGap(LinearElement):
         float, ndarray or CasADi
             ``k_C s`` [m] (``s`` itself for a smooth stator).
         """
-        if self.slot_pitch > 0.0:
-            return carter_coefficient(gap, self.slot_pitch, self.slot_opening) * gap
+        if self.slot_pitch_m > 0.0:
+            return carter_coefficient(gap, self.slot_pitch_m, self.slot_opening_m) * gap
         return gap
 
     def fringe_permeance(self, gap: Any) -> Any:
@@ -501,7 +505,7 @@ class AirGap(LinearElement):
         if gap is None:
             raise ParameterError(f"air gap {self.name!r}: needs a gap value")
         s = self.effective_gap(gap)
-        g = self._add_fringe(self.pole_area / s, s)
+        g = self._add_fringe(self.pole_area_m2 / s, s)
         for a, d in self.recesses:
             g = g + a / (s + d)
         for w, b in self.face_slots:
@@ -509,6 +513,7 @@ class AirGap(LinearElement):
         return MU0 * g
 
 
+@renamed_keywords(value="value_H")
 @dataclass(frozen=True)
 class LeakagePermeance(LinearElement):
     """A constant leakage permeance ``G`` [H] (flux that does not cross the air gap).
@@ -519,19 +524,20 @@ class LeakagePermeance(LinearElement):
     ----------
     name : str
         Unique name of the element within its network.
-    value : float
-        Permeance G [H], > 0 (required, although it has a default for the dataclass).
+    value_H : float
+        Permeance G [H], > 0 (required, although it has a default for the dataclass;
+        deprecated keyword: ``value``).
 
     Raises
     ------
     ParameterError
-        ``value`` not a finite number > 0.
+        ``value_H`` not a finite number > 0.
     """
 
-    value: float = 0.0
+    value_H: float = 0.0
 
     def __post_init__(self) -> None:
-        _positive(f"leakage permeance {self.name!r}", value=self.value)
+        _positive(f"leakage permeance {self.name!r}", value_H=self.value_H)
 
     def permeance(self, gap: Any = None) -> Any:
         """The constant permeance ``G`` [H].
@@ -544,9 +550,9 @@ class LeakagePermeance(LinearElement):
         Returns
         -------
         float
-            :attr:`value` [H].
+            :attr:`value_H` [H].
         """
-        return self.value
+        return self.value_H
 
     @classmethod
     def parallel_plates(cls, name: str, area: float, distance: float) -> LeakagePermeance:
@@ -676,7 +682,7 @@ class LeakagePermeance(LinearElement):
             A dimension that is not a finite number > 0.
         """
         half = cls.half_hollow_cylinder(name, length, inner_radius, thickness)
-        return cls(name, 2.0 * half.value)
+        return cls(name, 2.0 * half.value_H)
 
     @classmethod
     def quarter_sphere(cls, name: str, radius: float) -> LeakagePermeance:
@@ -748,6 +754,7 @@ class LeakagePermeance(LinearElement):
         return cls(name, 0.25 * MU0 * thickness)
 
 
+@renamed_keywords(width="width_m", radius="radius_m")
 @dataclass(frozen=True)
 class GapLeakage(LinearElement):
     """Gap-dependent leakage around a pole: ``G = mu0 w / pi ln(1 + pi r / s)``.
@@ -762,23 +769,23 @@ class GapLeakage(LinearElement):
         Unique name of the element within its network.
     gap_input : str
         Name of the gap input.
-    width : float
-        Edge length w [m], > 0.
-    radius : float
-        Leakage radius r [m], > 0.
+    width_m : float
+        Edge length w [m], > 0 (deprecated keyword: ``width``).
+    radius_m : float
+        Leakage radius r [m], > 0 (deprecated keyword: ``radius``).
 
     Raises
     ------
     ParameterError
-        ``width`` or ``radius`` not a finite number > 0.
+        ``width_m`` or ``radius_m`` not a finite number > 0.
     """
 
     gap_input: str = "s"
-    width: float = 1.0
-    radius: float = 1.0
+    width_m: float = 1.0
+    radius_m: float = 1.0
 
     def __post_init__(self) -> None:
-        _positive(f"gap leakage {self.name!r}", width=self.width, radius=self.radius)
+        _positive(f"gap leakage {self.name!r}", width_m=self.width_m, radius_m=self.radius_m)
 
     @property
     def gap(self) -> str:
@@ -799,9 +806,11 @@ class GapLeakage(LinearElement):
         """
         if gap is None:
             raise ParameterError(f"gap leakage {self.name!r}: needs a gap value")
-        return MU0 * self.width / math.pi * _log(1.0 + math.pi * self.radius / gap)
+        return MU0 * self.width_m / math.pi * _log(1.0 + math.pi * self.radius_m / gap)
 
 
+@renamed_keywords(width="width_m", radius="radius_m", inner_radius="inner_radius_m",
+                  slot_pitch="slot_pitch_m", slot_opening="slot_opening_m")
 @dataclass(frozen=True)
 class FringePermeance(LinearElement):
     """Fringing from a pole flank to a flat rail: ``G = (2 mu0 w/pi) ln(1 + pi r/(2 s))``.
@@ -818,44 +827,46 @@ class FringePermeance(LinearElement):
         Unique name of the element within its network.
     gap_input : str
         Name of the gap input, non-empty.
-    width : float
-        Edge length w [m], > 0.
-    radius : float
-        Flank height r [m] whose tubes reach the rail, > 0.
-    inner_radius : float
+    width_m : float
+        Edge length w [m], > 0 (deprecated keyword: ``width``).
+    radius_m : float
+        Flank height r [m] whose tubes reach the rail, > 0 (deprecated keyword:
+        ``radius``).
+    inner_radius_m : float
         Flank height [m] where the tubes start (0: at the pole face): a strip
-        ``[inner_radius, radius]`` of the flank, ``(2 mu0 w/pi) ln((s + pi r/2) /
-        (s + pi r_i/2))``.
-    slot_pitch, slot_opening : float
+        ``[inner_radius_m, radius_m]`` of the flank, ``(2 mu0 w/pi) ln((s + pi r/2) /
+        (s + pi r_i/2))`` (deprecated keyword: ``inner_radius``).
+    slot_pitch_m, slot_opening_m : float
         Stator slot pitch and opening [m]: the gap is then Carter's ``k_C s``, as in
-        :class:`AirGap` (0: the true gap).
+        :class:`AirGap` (0: the true gap; deprecated keywords: ``slot_pitch``,
+        ``slot_opening``).
 
     Raises
     ------
     ParameterError
-        An empty ``gap_input``, or ``width`` or ``radius`` not a finite number > 0.
+        An empty ``gap_input``, or ``width_m`` or ``radius_m`` not a finite number > 0.
     """
 
     gap_input: str = "s"
-    width: float = 1.0
-    radius: float = 1.0
-    inner_radius: float = 0.0
-    slot_pitch: float = 0.0
-    slot_opening: float = 0.0
+    width_m: float = 1.0
+    radius_m: float = 1.0
+    inner_radius_m: float = 0.0
+    slot_pitch_m: float = 0.0
+    slot_opening_m: float = 0.0
 
     def __post_init__(self) -> None:
         owner = f"fringe permeance {self.name!r}"
         if not isinstance(self.gap_input, str) or not self.gap_input:
             raise ParameterError(f"{owner}: gap_input must be a non-empty name")
-        _positive(owner, width=self.width, radius=self.radius)
-        _nonnegative(owner, inner_radius=self.inner_radius, slot_pitch=self.slot_pitch,
-                     slot_opening=self.slot_opening)
-        if not (symbolic(self.inner_radius) or symbolic(self.radius)) \
-                and self.inner_radius >= self.radius:
-            raise ParameterError(f"{owner}: inner_radius = {self.inner_radius!r} m must be "
-                                 f"smaller than radius = {self.radius!r} m")
-        if self.slot_pitch > 0.0 and not 0.0 < self.slot_opening < self.slot_pitch:
-            raise ParameterError(f"{owner}: slot_opening must lie in (0, slot_pitch) when a "
+        _positive(owner, width_m=self.width_m, radius_m=self.radius_m)
+        _nonnegative(owner, inner_radius_m=self.inner_radius_m, slot_pitch_m=self.slot_pitch_m,
+                     slot_opening_m=self.slot_opening_m)
+        if not (symbolic(self.inner_radius_m) or symbolic(self.radius_m)) \
+                and self.inner_radius_m >= self.radius_m:
+            raise ParameterError(f"{owner}: inner_radius_m = {self.inner_radius_m!r} m must be "
+                                 f"smaller than radius_m = {self.radius_m!r} m")
+        if self.slot_pitch_m > 0.0 and not 0.0 < self.slot_opening_m < self.slot_pitch_m:
+            raise ParameterError(f"{owner}: slot_opening_m must lie in (0, slot_pitch_m) when a "
                                  "slot pitch is given")
 
     @property
@@ -877,14 +888,15 @@ class FringePermeance(LinearElement):
         """
         if gap is None:
             raise ParameterError(f"fringe permeance {self.name!r}: needs a gap value")
-        if self.slot_pitch > 0.0:
-            gap = carter_coefficient(gap, self.slot_pitch, self.slot_opening) * gap
-        g = fringe_per_mu0(self.width, self.radius, gap)
-        if symbolic(self.inner_radius) or self.inner_radius > 0.0:
-            g = g - fringe_per_mu0(self.width, self.inner_radius, gap)
+        if self.slot_pitch_m > 0.0:
+            gap = carter_coefficient(gap, self.slot_pitch_m, self.slot_opening_m) * gap
+        g = fringe_per_mu0(self.width_m, self.radius_m, gap)
+        if symbolic(self.inner_radius_m) or self.inner_radius_m > 0.0:
+            g = g - fringe_per_mu0(self.width_m, self.inner_radius_m, gap)
         return MU0 * g
 
 
+@renamed_keywords(width="width_m", length="length_m")
 @dataclass(frozen=True)
 class GapLayerPermeance(LinearElement):
     """Air inside the gap layer between two neighbouring cells: ``G = mu0 w s / l``.
@@ -901,26 +913,27 @@ class GapLayerPermeance(LinearElement):
         Unique name of the element within its network.
     gap_input : str
         Name of the gap input, non-empty.
-    width : float
-        Extent across the flux and the gap [m] (the depth), > 0.
-    length : float
-        Path length along the layer [m], > 0.
+    width_m : float
+        Extent across the flux and the gap [m] (the depth), > 0 (deprecated keyword:
+        ``width``).
+    length_m : float
+        Path length along the layer [m], > 0 (deprecated keyword: ``length``).
 
     Raises
     ------
     ParameterError
-        An empty ``gap_input``, or ``width`` or ``length`` not a finite number > 0.
+        An empty ``gap_input``, or ``width_m`` or ``length_m`` not a finite number > 0.
     """
 
     gap_input: str = "s"
-    width: float = 1.0
-    length: float = 1.0
+    width_m: float = 1.0
+    length_m: float = 1.0
 
     def __post_init__(self) -> None:
         owner = f"gap layer permeance {self.name!r}"
         if not isinstance(self.gap_input, str) or not self.gap_input:
             raise ParameterError(f"{owner}: gap_input must be a non-empty name")
-        _positive(owner, width=self.width, length=self.length)
+        _positive(owner, width_m=self.width_m, length_m=self.length_m)
 
     @property
     def gap(self) -> str:
@@ -941,7 +954,7 @@ class GapLayerPermeance(LinearElement):
         """
         if gap is None:
             raise ParameterError(f"gap layer permeance {self.name!r}: needs a gap value")
-        return MU0 * self.width * gap / self.length
+        return MU0 * self.width_m * gap / self.length_m
 
 
 def fringe_per_mu0(w: float, r: float, s: Any) -> Any:
@@ -957,6 +970,7 @@ def rectangle_torsion_constant(a: float, b: float) -> float:
     return a * b**3 / 3.0 * (1.0 - 192.0 / math.pi**5 * (b / a) * series)
 
 
+@renamed_keywords(conductance="conductance_S")
 @dataclass(frozen=True)
 class EddyCurrent(Element):
     """Eddy currents as a "magnetic inductance": ``V_m = G_ec dphi/dt``.
@@ -969,23 +983,24 @@ class EddyCurrent(Element):
     ----------
     name : str
         Unique name of the element within its network.
-    conductance : float
-        ``G_ec`` [S] (> 0; required, although it has a default for the dataclass).
+    conductance_S : float
+        ``G_ec`` [S] (> 0; required, although it has a default for the dataclass;
+        deprecated keyword: ``conductance``).
 
     Raises
     ------
     ParameterError
-        ``conductance`` not a finite number > 0.
+        ``conductance_S`` not a finite number > 0.
     """
 
-    conductance: float = 0.0
+    conductance_S: float = 0.0
 
     def __post_init__(self) -> None:
-        _positive(f"eddy-current element {self.name!r}", conductance=self.conductance)
+        _positive(f"eddy-current element {self.name!r}", conductance_S=self.conductance_S)
 
     @property
     def eddy_conductance(self) -> float:
-        return self.conductance
+        return self.conductance_S
 
     def mmf_drop(self, flux: Any, gap: Any = None) -> Any:
         """Static drop: zero (the element acts through :attr:`eddy_conductance` only).
