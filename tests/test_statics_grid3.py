@@ -244,7 +244,7 @@ def test_air_keys_are_refused_by_the_lumped_network(key: str) -> None:
 def test_gap_layer_permeance() -> None:
     """G = mu0 w s/l, linear in the gap (so its force share phi^2/2 dR/ds is repulsive);
     bad geometry is refused."""
-    el = GapLayerPermeance("g", gap_input="left", width=0.1, length=0.005)
+    el = GapLayerPermeance("g", gap_input="left", width_m=0.1, length_m=0.005)
     for s in (0.004, 0.02):
         assert el.permeance(s) == pytest.approx(MU0 * 0.1 * s / 0.005, rel=1e-15)
     assert el.gap == "left"

@@ -164,16 +164,16 @@ def ladder_branches(name: str, start: str, end: str, iron: IronPath, *, thicknes
     ParameterError
         As :func:`ladder_parameters`.
     """
-    areas, gs = ladder_parameters(length=iron.length, area=iron.cross_section,
+    areas, gs = ladder_parameters(length=iron.length_m, area=iron.cross_section_m2,
                                   thickness=thickness, resistivity=resistivity, layers=layers,
                                   factor=factor)
     node = [f"{name}:n{k + 1}" for k in range(layers)]
-    out = [Branch(name, start, node[0], (EddyCurrent(f"eddy_{name}", conductance=gs[0]),))]
+    out = [Branch(name, start, node[0], (EddyCurrent(f"eddy_{name}", conductance_S=gs[0]),))]
     for k in range(layers):
         out.append(Branch(f"{name}:tube{k + 1}", node[k], end,
-                          (IronPath(f"{iron.name}:tube{k + 1}", iron.length, areas[k],
+                          (IronPath(f"{iron.name}:tube{k + 1}", iron.length_m, areas[k],
                                     iron.material),)))
         if k + 1 < layers:
             out.append(Branch(f"{name}:eddy{k + 2}", node[k], node[k + 1],
-                              (EddyCurrent(f"eddy_{name}:{k + 2}", conductance=gs[k + 1]),)))
+                              (EddyCurrent(f"eddy_{name}:{k + 2}", conductance_S=gs[k + 1]),)))
     return out
