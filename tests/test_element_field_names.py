@@ -21,6 +21,7 @@ import pytest
 
 import maglevkit as mk
 from maglevkit.circuit.elements import FringePermeance, GapLayerPermeance
+from maglevkit.circuit.ladder import ladder_branches, ladder_parameters
 from maglevkit.errors import InputError
 from maglevkit.materials import MU0
 from maglevkit.reduction.maps import network_hash
@@ -97,6 +98,54 @@ def test_old_attribute_names_read_the_new_fields_with_a_warning(cls: type, args:
             assert getattr(element, key) == value
 
 
+# (callable, positional args, old keywords, new keywords) of the factories and ladder helpers
+FACTORY_CASES: list[tuple[Any, tuple[Any, ...], dict[str, float], dict[str, float]]] = [
+    (mk.LeakagePermeance.parallel_plates, ("p",), {"area": 2e-3, "distance": 0.01},
+     {"area_m2": 2e-3, "distance_m": 0.01}),
+    (mk.LeakagePermeance.half_cylinder, ("c",), {"length": 0.1}, {"length_m": 0.1}),
+    (mk.LeakagePermeance.quarter_cylinder, ("c",), {"length": 0.1}, {"length_m": 0.1}),
+    (mk.LeakagePermeance.half_hollow_cylinder, ("h",),
+     {"length": 0.1, "inner_radius": 0.01, "thickness": 0.02},
+     {"length_m": 0.1, "inner_radius_m": 0.01, "thickness_m": 0.02}),
+    (mk.LeakagePermeance.quarter_hollow_cylinder, ("h",),
+     {"length": 0.1, "inner_radius": 0.01, "thickness": 0.02},
+     {"length_m": 0.1, "inner_radius_m": 0.01, "thickness_m": 0.02}),
+    (mk.LeakagePermeance.quarter_sphere, ("s",), {"radius": 0.01}, {"radius_m": 0.01}),
+    (mk.LeakagePermeance.eighth_sphere, ("s",), {"radius": 0.01}, {"radius_m": 0.01}),
+    (mk.LeakagePermeance.quarter_hollow_sphere, ("s",), {"thickness": 0.01},
+     {"thickness_m": 0.01}),
+    (mk.EddyCurrent.one_turn, ("e",), {"path_area": 1e-4, "path_length": 0.3},
+     {"path_area_m2": 1e-4, "path_length_m": 0.3}),
+    (mk.EddyCurrent.solid_rectangular, ("e",), {"width": 0.03, "height": 0.1, "length": 0.2},
+     {"width_m": 0.03, "height_m": 0.1, "length_m": 0.2}),
+    (mk.EddyCurrent.laminated, ("e",), {"area": 2e-3, "length": 0.2, "sheet_thickness": 5e-4},
+     {"area_m2": 2e-3, "length_m": 0.2, "sheet_thickness_m": 5e-4}),
+    (ladder_parameters, (), {"length": 0.2, "area": 2e-3, "thickness": 0.03},
+     {"length_m": 0.2, "area_m2": 2e-3, "thickness_m": 0.03}),
+    (ladder_branches, ("b", "A", "B", mk.IronPath("i", length_m=0.2, cross_section_m2=2e-3)),
+     {"thickness": 0.03}, {"thickness_m": 0.03}),
+]
+# the eddy factories and helpers need a resistivity [ohm m] (and the helpers a tube count)
+EXTRA = {"one_turn": {"resistivity": 1.7e-8}, "solid_rectangular": {"resistivity": 1.5e-7},
+         "laminated": {"resistivity": 4e-7},
+         "ladder_parameters": {"resistivity": 1.5e-7, "layers": 3},
+         "ladder_branches": {"resistivity": 1.5e-7, "layers": 3}}
+
+
+@pytest.mark.parametrize(("fn", "args", "old", "new"), FACTORY_CASES,
+                         ids=[case[0].__name__ for case in FACTORY_CASES])
+def test_factories_and_ladder_helpers_take_the_old_keywords_with_a_warning(
+        fn: Any, args: tuple, old: dict, new: dict) -> None:
+    extra = EXTRA.get(fn.__name__, {})
+    expected = fn(*args, **new, **extra)
+    with pytest.warns(DeprecationWarning) as record:
+        got = fn(*args, **old, **extra)
+    assert len(record) == 1
+    for key, new_key in zip(old, new, strict=True):
+        assert f"{key}= is deprecated, use {new_key}=" in str(record[0].message)
+    assert got == expected and repr(got) == repr(expected)
+
+
 def test_old_and_new_name_together_are_refused() -> None:
     with pytest.raises(InputError, match=r"give length_m= only \(length= is its deprecated"):
         mk.IronPath("iron", length=0.3, length_m=0.3, cross_section_m2=1e-3)
@@ -137,7 +186,7 @@ g = AirGap("g", gap_input=p, pole_area_m2=a, fringe_edges=((w, r),), **slots)
 f = mk.FringePermeance("f", gap_input="s", width_m=w(x, radius=1), radius_m=r,
                        inner_radius_m=0.0)   # radius= of the inner call stays
 e = replace(el, conductance_S=2.0 * el.conductance_S)
-h = LeakagePermeance.quarter_cylinder("q", length=d).value_H
+h = LeakagePermeance.quarter_cylinder("q", length_m=d).value_H
 v = iron.length_m * iron.cross_section_m2 / gap.pole_area_m2
 s = "width=3" if x.width == y else exc.value
 t = IronPath("t", length == 1, cross_section_m2=2)
@@ -145,8 +194,8 @@ t = IronPath("t", length == 1, cross_section_m2=2)
 
 
 def test_the_script_rewrites_callers_and_is_idempotent() -> None:
-    # only keywords at the element call's own depth, factory keywords (length= of
-    # quarter_cylinder) and unrelated .width / .value reads stay
+    # only keywords at the element call's own depth; unrelated .width / .value reads and
+    # the comparison length == 1 stay
     script = _script()
     assert script.rewrite(SAMPLE, "src/x.py") == EXPECTED
     assert script.rewrite(EXPECTED, "src/x.py") == EXPECTED

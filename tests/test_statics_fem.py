@@ -144,10 +144,10 @@ def test_fringe_permeance_closed_form() -> None:
         assert el.gap == "g"
 
 
-@pytest.mark.parametrize("kwargs", [dict(width=0.0), dict(radius=-1e-3), dict(gap_input="")])
+@pytest.mark.parametrize("kwargs", [dict(width_m=0.0), dict(radius_m=-1e-3), dict(gap_input="")])
 def test_fringe_permeance_bad_input(kwargs: dict) -> None:
     with pytest.raises(ParameterError):
-        FringePermeance("f", **{"gap_input": "g", "width": 0.1, "radius": 0.01, **kwargs})
+        FringePermeance("f", **{"gap_input": "g", "width_m": 0.1, "radius_m": 0.01, **kwargs})
     with pytest.raises(ParameterError, match="needs a gap"):
         FringePermeance("f", gap_input="g", width_m=0.1, radius_m=0.01).permeance(None)
 

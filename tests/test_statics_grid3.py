@@ -250,9 +250,9 @@ def test_gap_layer_permeance() -> None:
     assert el.gap == "left"
     with pytest.raises(ParameterError, match="needs a gap"):
         el.permeance(None)
-    for bad in ({"width": 0.0}, {"length": -1.0}, {"gap_input": ""}):
+    for bad in ({"width_m": 0.0}, {"length_m": -1.0}, {"gap_input": ""}):
         with pytest.raises(ParameterError):
-            GapLayerPermeance("g", **{"gap_input": "s", "width": 0.1, "length": 0.01, **bad})
+            GapLayerPermeance("g", **{"gap_input": "s", "width_m": 0.1, "length_m": 0.01, **bad})
 
 
 # A second geometry (GEOM2 of benchmarks/fem_u_magnet.py), not used to choose the air

@@ -7,7 +7,10 @@ script rewrites the callers in the tree, so that no code of the package, its tes
 benchmarks, examples or docs uses the old names:
 
 1. keywords of element constructor calls: ``IronPath("x", length=0.1)`` ->
-   ``IronPath("x", length_m=0.1)`` (only keywords at the call's own bracket depth);
+   ``IronPath("x", length_m=0.1)`` (only keywords at the call's own bracket depth), and of
+   the element factories (``LeakagePermeance.half_cylinder(name, length_m=...)``,
+   ``EddyCurrent.laminated``, ...) and the ladder helpers (``ladder_branches(...,
+   thickness_m=...)``);
 2. keywords of ``dataclasses.replace`` calls whose old name only an element has
    (``replace(el, conductance=...)``);
 3. attribute reads: the names only elements have (``.cross_section``, ``.pole_area``,
@@ -15,8 +18,9 @@ benchmarks, examples or docs uses the old names:
    ``LeakagePermeance`` factory call; the other ambiguous reads (``.value`` of an element held
    in a variable) through the explicit table :data:`AMBIGUOUS_READS`.
 
-The old -> new names are read from the classes (``renamed_keywords`` class attribute that
-:func:`maglevkit.validation.renamed_keywords` sets), so they have one source.  The rewrite is
+The old -> new names are read from the classes and functions (the ``renamed_keywords``
+attribute that :func:`maglevkit.validation.renamed_keywords` sets), so they have one
+source.  The rewrite is
 idempotent (a new name never matches an old one: each new name is the old one plus a unit
 suffix, matched with word boundaries).  Files that hold the line
 ``# rename_element_fields: skip`` are left alone (the definitions and the tests of the
@@ -36,11 +40,17 @@ import re
 import sys
 from pathlib import Path
 
-from maglevkit.circuit import elements
+from maglevkit.circuit import elements, ladder
 
 #: The element classes whose fields were renamed.
 CLASSES = ("IronPath", "AirGap", "LeakagePermeance", "GapLeakage", "FringePermeance",
            "GapLayerPermeance", "EddyCurrent")
+#: The element factories (class methods) and ladder helpers whose keywords were renamed.
+FACTORIES = {"LeakagePermeance": ("parallel_plates", "half_cylinder", "quarter_cylinder",
+                                  "half_hollow_cylinder", "quarter_hollow_cylinder",
+                                  "quarter_sphere", "eighth_sphere", "quarter_hollow_sphere"),
+             "EddyCurrent": ("one_turn", "solid_rectangular", "laminated")}
+HELPERS = ("ladder_parameters", "ladder_branches")
 
 #: Where the callers live (relative to the repository root), and which files to rewrite.
 ROOTS = ("src", "tests", "tools", "benchmarks", "examples", "docs")
@@ -168,6 +178,13 @@ def rewrite(text: str, path: str) -> str:
     names = renames()
     classes = "|".join(CLASSES)
     text = _rename_calls(text, rf"(?<![\w.])(?:elements\.|mk\.)?(?:{classes})\(", names)
+    for owner, methods in FACTORIES.items():
+        for method in methods:
+            text = _rename_calls(text, rf"(?<![\w.])(?:elements\.|mk\.)?{owner}\.{method}\(",
+                                 getattr(getattr(elements, owner), method).renamed_keywords)
+    for helper in HELPERS:
+        text = _rename_calls(text, rf"(?<![\w.])(?:ladder\.|mk\.)?{helper}\(",
+                             getattr(ladder, helper).renamed_keywords)
     text = _rename_calls(text, r"(?<![\w.])(?:dataclasses\.)?replace\(",
                          {k: v for k, v in names.items() if k in UNIQUE_READS})
     # a LeakagePermeance factory's result read at once: LeakagePermeance.f(...).value

@@ -164,11 +164,10 @@ DEFERRED: dict[str, str] = {
     "resistivity": _SI_IDENTITY + " (materials; the element factories take the same value)",
 }
 
-_ELEMENT_LAWS = ("circuit element laws and factories (circuit/elements.py): the laws are "
-                 "overridden by the calibrated elements of circuit/factors.py and the "
-                 "factories called by the magnet builders in magnets/levitation.py and "
-                 "magnets/guidance.py, files three other branches rewrite in parallel; "
-                 "a change of its own")
+_ELEMENT_LAWS = ("circuit element laws (circuit/elements.py; their fields and factories "
+                 "carry units since units22): the laws' gap and flux arguments are "
+                 "overridden by the calibrated elements of circuit/factors.py and called by "
+                 "every solver; a change of its own")
 for _law in ("AirGap.effective_gap", "AirGap.fringe_permeance", "AirGap.permeance",
              "EddyCurrent.energy", "EddyCurrent.mmf_drop", "Element.energy", "Element.mmf_drop",
              "FringePermeance.permeance", "GapLayerPermeance.permeance", "GapLeakage.permeance",
@@ -176,21 +175,6 @@ for _law in ("AirGap.effective_gap", "AirGap.fringe_permeance", "AirGap.permeanc
              "LinearElement.energy", "LinearElement.mmf_drop", "LinearElement.permeance",
              "carter_coefficient"):
     for _p in ("gap", "flux") if _law.endswith(("energy", "mmf_drop")) else ("gap",):
-        DEFERRED[f"maglevkit.circuit.elements.{_law}:{_p}"] = _ELEMENT_LAWS
-for _law, _params in {"EddyCurrent.laminated": ("area", "length", "sheet_thickness"),
-                      "EddyCurrent.one_turn": ("path_area", "path_length"),
-                      "EddyCurrent.solid_rectangular": ("width", "height", "length"),
-                      "LeakagePermeance.eighth_sphere": ("radius",),
-                      "LeakagePermeance.quarter_sphere": ("radius",),
-                      "LeakagePermeance.half_cylinder": ("length",),
-                      "LeakagePermeance.quarter_cylinder": ("length",),
-                      "LeakagePermeance.half_hollow_cylinder": ("length", "inner_radius",
-                                                                "thickness"),
-                      "LeakagePermeance.quarter_hollow_cylinder": ("length", "inner_radius",
-                                                                   "thickness"),
-                      "LeakagePermeance.quarter_hollow_sphere": ("thickness",),
-                      "LeakagePermeance.parallel_plates": ("area", "distance")}.items():
-    for _p in _params:
         DEFERRED[f"maglevkit.circuit.elements.{_law}:{_p}"] = _ELEMENT_LAWS
 for _p in ("slot_opening", "slot_pitch"):
     DEFERRED.setdefault(f"maglevkit.circuit.elements.carter_coefficient:{_p}", _ELEMENT_LAWS)

@@ -400,9 +400,9 @@ def renamed_keywords(**renames: str) -> Callable[[_F], _F]:
 
     On a class (e.g. a dataclass whose fields were renamed) it wraps the constructor the
     same way and adds each old name as a read-only property that returns the new
-    attribute with the same warning, so ``obj.gaps`` still reads ``obj.gaps_m``; the
-    class attribute ``renamed_keywords`` then holds the old -> new mapping (for tools that
-    migrate callers, e.g. ``tools/rename_element_fields.py``).
+    attribute with the same warning, so ``obj.gaps`` still reads ``obj.gaps_m``.  The
+    wrapped function (or class) has the attribute ``renamed_keywords``, the old -> new
+    mapping, for tools that migrate callers (``tools/rename_element_fields.py``).
 
     Parameters
     ----------
@@ -434,6 +434,7 @@ def renamed_keywords(**renames: str) -> Callable[[_F], _F]:
                               + " (same values and units)", DeprecationWarning, stacklevel=2)
             return fn(*args, **kwargs)
 
+        wrapper.renamed_keywords = dict(renames)    # type: ignore[attr-defined]
         return cast(_F, wrapper)
 
     def alias(where: str, old: str, new: str) -> property:

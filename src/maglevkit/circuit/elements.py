@@ -518,7 +518,9 @@ class AirGap(LinearElement):
 class LeakagePermeance(LinearElement):
     """A constant leakage permeance ``G`` [H] (flux that does not cross the air gap).
 
-    Use the constructors for the standard Roters flux-tube shapes.
+    Use the constructors for the standard Roters flux-tube shapes (their dimensions carry
+    the unit in the name, ``length_m``, ``radius_m``, ...; the old names ``length=``,
+    ``radius=``, ... are deprecated aliases for one release).
 
     Parameters
     ----------
@@ -555,16 +557,17 @@ class LeakagePermeance(LinearElement):
         return self.value_H
 
     @classmethod
-    def parallel_plates(cls, name: str, area: float, distance: float) -> LeakagePermeance:
+    @renamed_keywords(area="area_m2", distance="distance_m")
+    def parallel_plates(cls, name: str, area_m2: float, distance_m: float) -> LeakagePermeance:
         """Homogeneous field between two parallel faces: ``mu0 A / d``.
 
         Parameters
         ----------
         name : str
             Unique name of the element within its network.
-        area : float
+        area_m2 : float
             Face area A [m^2], > 0.
-        distance : float
+        distance_m : float
             Distance d between the faces [m], > 0.
 
         Returns
@@ -576,18 +579,19 @@ class LeakagePermeance(LinearElement):
         ParameterError
             A dimension that is not a finite number > 0.
         """
-        _positive(f"leakage {name!r}", area=area, distance=distance)
-        return cls(name, MU0 * area / distance)
+        _positive(f"leakage {name!r}", area_m2=area_m2, distance_m=distance_m)
+        return cls(name, MU0 * area_m2 / distance_m)
 
     @classmethod
-    def half_cylinder(cls, name: str, length: float) -> LeakagePermeance:
+    @renamed_keywords(length="length_m")
+    def half_cylinder(cls, name: str, length_m: float) -> LeakagePermeance:
         """Half cylinder of axial length l: ``0.26 mu0 l``.
 
         Parameters
         ----------
         name : str
             Unique name of the element within its network.
-        length : float
+        length_m : float
             Axial length l [m], > 0.
 
         Returns
@@ -599,18 +603,19 @@ class LeakagePermeance(LinearElement):
         ParameterError
             A dimension that is not a finite number > 0.
         """
-        _positive(f"leakage {name!r}", length=length)
-        return cls(name, 0.26 * MU0 * length)
+        _positive(f"leakage {name!r}", length_m=length_m)
+        return cls(name, 0.26 * MU0 * length_m)
 
     @classmethod
-    def quarter_cylinder(cls, name: str, length: float) -> LeakagePermeance:
+    @renamed_keywords(length="length_m")
+    def quarter_cylinder(cls, name: str, length_m: float) -> LeakagePermeance:
         """Quarter cylinder of axial length l: ``0.52 mu0 l``.
 
         Parameters
         ----------
         name : str
             Unique name of the element within its network.
-        length : float
+        length_m : float
             Axial length l [m], > 0.
 
         Returns
@@ -622,23 +627,24 @@ class LeakagePermeance(LinearElement):
         ParameterError
             A dimension that is not a finite number > 0.
         """
-        _positive(f"leakage {name!r}", length=length)
-        return cls(name, 0.52 * MU0 * length)
+        _positive(f"leakage {name!r}", length_m=length_m)
+        return cls(name, 0.52 * MU0 * length_m)
 
     @classmethod
-    def half_hollow_cylinder(cls, name: str, length: float, inner_radius: float,
-                             thickness: float) -> LeakagePermeance:
+    @renamed_keywords(length="length_m", inner_radius="inner_radius_m", thickness="thickness_m")
+    def half_hollow_cylinder(cls, name: str, length_m: float, inner_radius_m: float,
+                             thickness_m: float) -> LeakagePermeance:
         """Half hollow cylinder: ``mu0 l ln(1 + t/r_i) / pi``.
 
         Parameters
         ----------
         name : str
             Unique name of the element within its network.
-        length : float
+        length_m : float
             Axial length l [m], > 0.
-        inner_radius : float
+        inner_radius_m : float
             Inner radius r_i [m], > 0 (half the distance between the faces).
-        thickness : float
+        thickness_m : float
             Shell thickness t [m], > 0.
 
         Returns
@@ -650,26 +656,27 @@ class LeakagePermeance(LinearElement):
         ParameterError
             A dimension that is not a finite number > 0.
         """
-        _positive(f"leakage {name!r}", length=length, inner_radius=inner_radius,
-                  thickness=thickness)
-        ratio = 1.0 + thickness / inner_radius
+        _positive(f"leakage {name!r}", length_m=length_m, inner_radius_m=inner_radius_m,
+                  thickness_m=thickness_m)
+        ratio = 1.0 + thickness_m / inner_radius_m
         log = ca.log(ratio) if symbolic(ratio) else math.log(ratio)
-        return cls(name, MU0 * length * log / math.pi)
+        return cls(name, MU0 * length_m * log / math.pi)
 
     @classmethod
-    def quarter_hollow_cylinder(cls, name: str, length: float, inner_radius: float,
-                                thickness: float) -> LeakagePermeance:
+    @renamed_keywords(length="length_m", inner_radius="inner_radius_m", thickness="thickness_m")
+    def quarter_hollow_cylinder(cls, name: str, length_m: float, inner_radius_m: float,
+                                thickness_m: float) -> LeakagePermeance:
         """Quarter hollow cylinder: twice the half hollow cylinder.
 
         Parameters
         ----------
         name : str
             Unique name of the element within its network.
-        length : float
+        length_m : float
             Axial length l [m], > 0.
-        inner_radius : float
+        inner_radius_m : float
             Inner radius r_i [m], > 0.
-        thickness : float
+        thickness_m : float
             Shell thickness t [m], > 0.
 
         Returns
@@ -681,18 +688,19 @@ class LeakagePermeance(LinearElement):
         ParameterError
             A dimension that is not a finite number > 0.
         """
-        half = cls.half_hollow_cylinder(name, length, inner_radius, thickness)
+        half = cls.half_hollow_cylinder(name, length_m, inner_radius_m, thickness_m)
         return cls(name, 2.0 * half.value_H)
 
     @classmethod
-    def quarter_sphere(cls, name: str, radius: float) -> LeakagePermeance:
+    @renamed_keywords(radius="radius_m")
+    def quarter_sphere(cls, name: str, radius_m: float) -> LeakagePermeance:
         """Quarter sphere: ``0.077 mu0 2 r``.
 
         Parameters
         ----------
         name : str
             Unique name of the element within its network.
-        radius : float
+        radius_m : float
             Radius r [m], > 0.
 
         Returns
@@ -704,18 +712,19 @@ class LeakagePermeance(LinearElement):
         ParameterError
             A dimension that is not a finite number > 0.
         """
-        _positive(f"leakage {name!r}", radius=radius)
-        return cls(name, 0.077 * MU0 * 2.0 * radius)
+        _positive(f"leakage {name!r}", radius_m=radius_m)
+        return cls(name, 0.077 * MU0 * 2.0 * radius_m)
 
     @classmethod
-    def eighth_sphere(cls, name: str, radius: float) -> LeakagePermeance:
+    @renamed_keywords(radius="radius_m")
+    def eighth_sphere(cls, name: str, radius_m: float) -> LeakagePermeance:
         """Eighth sphere: ``0.308 mu0 r``.
 
         Parameters
         ----------
         name : str
             Unique name of the element within its network.
-        radius : float
+        radius_m : float
             Radius r [m], > 0.
 
         Returns
@@ -727,18 +736,19 @@ class LeakagePermeance(LinearElement):
         ParameterError
             A dimension that is not a finite number > 0.
         """
-        _positive(f"leakage {name!r}", radius=radius)
-        return cls(name, 0.308 * MU0 * radius)
+        _positive(f"leakage {name!r}", radius_m=radius_m)
+        return cls(name, 0.308 * MU0 * radius_m)
 
     @classmethod
-    def quarter_hollow_sphere(cls, name: str, thickness: float) -> LeakagePermeance:
+    @renamed_keywords(thickness="thickness_m")
+    def quarter_hollow_sphere(cls, name: str, thickness_m: float) -> LeakagePermeance:
         """Quarter hollow sphere of shell thickness t: ``0.25 mu0 t``.
 
         Parameters
         ----------
         name : str
             Unique name of the element within its network.
-        thickness : float
+        thickness_m : float
             Shell thickness t [m], > 0.
 
         Returns
@@ -750,8 +760,8 @@ class LeakagePermeance(LinearElement):
         ParameterError
             A dimension that is not a finite number > 0.
         """
-        _positive(f"leakage {name!r}", thickness=thickness)
-        return cls(name, 0.25 * MU0 * thickness)
+        _positive(f"leakage {name!r}", thickness_m=thickness_m)
+        return cls(name, 0.25 * MU0 * thickness_m)
 
 
 @renamed_keywords(width="width_m", radius="radius_m")
@@ -1037,7 +1047,8 @@ class EddyCurrent(Element):
         return np.zeros_like(np.asarray(flux, dtype=float))
 
     @classmethod
-    def one_turn(cls, name: str, path_area: float, path_length: float,
+    @renamed_keywords(path_area="path_area_m2", path_length="path_length_m")
+    def one_turn(cls, name: str, path_area_m2: float, path_length_m: float,
                  resistivity: float) -> EddyCurrent:
         """Modelica's ``G = A / (rho l)``: a one-turn short circuit of wire area A, length l.
 
@@ -1045,9 +1056,9 @@ class EddyCurrent(Element):
         ----------
         name : str
             Unique name of the element within its network.
-        path_area : float
+        path_area_m2 : float
             Cross-section A of the current path [m^2], > 0.
-        path_length : float
+        path_length_m : float
             Length l of the current path (once around the flux) [m], > 0.
         resistivity : float
             Electrical resistivity rho of the conductor [ohm m], > 0.
@@ -1061,12 +1072,13 @@ class EddyCurrent(Element):
         ParameterError
             A dimension or the resistivity not a finite number > 0.
         """
-        _positive(f"eddy-current element {name!r}", path_area=path_area,
-                  path_length=path_length, resistivity=resistivity)
-        return cls(name, path_area / (resistivity * path_length))
+        _positive(f"eddy-current element {name!r}", path_area_m2=path_area_m2,
+                  path_length_m=path_length_m, resistivity=resistivity)
+        return cls(name, path_area_m2 / (resistivity * path_length_m))
 
     @classmethod
-    def solid_rectangular(cls, name: str, width: float, height: float, length: float,
+    @renamed_keywords(width="width_m", height="height_m", length="length_m")
+    def solid_rectangular(cls, name: str, width_m: float, height_m: float, length_m: float,
                           resistivity: float) -> EddyCurrent:
         """Solid bar of cross-section width x height and length l, flux along l.
 
@@ -1079,9 +1091,9 @@ class EddyCurrent(Element):
         ----------
         name : str
             Unique name of the element within its network.
-        width, height : float
+        width_m, height_m : float
             Sides of the cross-section [m], > 0.
-        length : float
+        length_m : float
             Length l of the bar along the flux [m], > 0.
         resistivity : float
             Electrical resistivity rho of the conductor [ohm m], > 0.
@@ -1095,28 +1107,29 @@ class EddyCurrent(Element):
         ParameterError
             A dimension or the resistivity not a finite number > 0.
         """
-        _positive(f"eddy-current element {name!r}", width=width, height=height, length=length,
-                  resistivity=resistivity)
-        area = width * height
-        torsion = rectangle_torsion_constant(width, height)
-        return cls(name, torsion * length / (4.0 * resistivity * area * area))
+        _positive(f"eddy-current element {name!r}", width_m=width_m, height_m=height_m,
+                  length_m=length_m, resistivity=resistivity)
+        area = width_m * height_m
+        torsion = rectangle_torsion_constant(width_m, height_m)
+        return cls(name, torsion * length_m / (4.0 * resistivity * area * area))
 
     @classmethod
-    def laminated(cls, name: str, area: float, length: float, resistivity: float,
-                  sheet_thickness: float) -> EddyCurrent:
+    @renamed_keywords(area="area_m2", length="length_m", sheet_thickness="sheet_thickness_m")
+    def laminated(cls, name: str, area_m2: float, length_m: float, resistivity: float,
+                  sheet_thickness_m: float) -> EddyCurrent:
         """Laminated stack of sheets of thickness d: ``G_ec = d^2 l / (12 rho A)``.
 
         Parameters
         ----------
         name : str
             Unique name of the element within its network.
-        area : float
+        area_m2 : float
             Cross-section A of the stack (across the flux) [m^2], > 0.
-        length : float
+        length_m : float
             Length l of the stack along the flux [m], > 0.
         resistivity : float
             Electrical resistivity rho of the sheets [ohm m], > 0.
-        sheet_thickness : float
+        sheet_thickness_m : float
             Sheet thickness d [m], > 0.
 
         Returns
@@ -1128,6 +1141,6 @@ class EddyCurrent(Element):
         ParameterError
             A dimension or the resistivity not a finite number > 0.
         """
-        _positive(f"eddy-current element {name!r}", area=area, length=length,
-                  resistivity=resistivity, sheet_thickness=sheet_thickness)
-        return cls(name, sheet_thickness**2 * length / (12.0 * resistivity * area))
+        _positive(f"eddy-current element {name!r}", area_m2=area_m2, length_m=length_m,
+                  resistivity=resistivity, sheet_thickness_m=sheet_thickness_m)
+        return cls(name, sheet_thickness_m**2 * length_m / (12.0 * resistivity * area_m2))

@@ -245,7 +245,7 @@ def build_guidance_magnet(params: Mapping[str, Any], materials: Mapping[str, Mat
         Saint-Venant factor of its finite ``depth`` (docs/equations.md 1a), as the
         U-magnet's."""
         factor = saint_venant_factor(thickness, depth) if m["end_effects"] else 1.0
-        return ladder_branches(branch, start, end, iron, thickness=thickness,
+        return ladder_branches(branch, start, end, iron, thickness_m=thickness,
                                resistivity=rho_, layers=options.eddy_layers, factor=factor)
 
     branches: list[Branch] = []

@@ -382,7 +382,7 @@ def lumped_network(m: Mapping[str, Any], r: Mapping[str, Any], core: Material,
             return [Branch(name, start, end, (iron, *eddy(f"eddy_{name}", width, iron.length_m,
                                                           rho, solid)))]
         if m["laminated"] and not solid:       # diffusion across each sheet
-            return ladder_branches(name, start, end, iron, thickness=m["sheet_thickness"],
+            return ladder_branches(name, start, end, iron, thickness_m=m["sheet_thickness"],
                                    resistivity=rho, layers=options.eddy_layers)
         # solid bar: slab across the width; with end_effects the Saint-Venant factor of
         # the finite depth (the eddy currents close within the depth), else the 2-D slab
@@ -392,7 +392,7 @@ def lumped_network(m: Mapping[str, Any], r: Mapping[str, Any], core: Material,
             # pole face (rising linearly across it), runs uniform between the poles and
             # hardly reaches the overhangs: eddy length ww + 2 wp/3 (docs/equations.md 1b)
             factor *= (ww + 2.0 * wp / 3.0) / iron.length_m
-        return ladder_branches(name, start, end, iron, thickness=width, resistivity=rho,
+        return ladder_branches(name, start, end, iron, thickness_m=width, resistivity=rho,
                                layers=options.eddy_layers, factor=factor)
 
     rho_core = rho_rail = 0.0
@@ -891,7 +891,7 @@ def _grid_ladders(branches: list[Branch], m: Mapping[str, Any], r: Mapping[str, 
             thick = m["sheet_thickness"]
         elif m["end_effects"]:
             factor = saint_venant_factor(thick, d)
-        out += ladder_branches(br.name, br.start, br.end, iron, thickness=thick,
+        out += ladder_branches(br.name, br.start, br.end, iron, thickness_m=thick,
                                resistivity=rho, layers=layers, factor=factor)
     return out
 
