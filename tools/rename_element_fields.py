@@ -54,6 +54,7 @@ HELPERS = ("ladder_parameters", "ladder_branches")
 
 #: Where the callers live (relative to the repository root), and which files to rewrite.
 ROOTS = ("src", "tests", "tools", "benchmarks", "examples", "docs")
+FILES = ("README.md",)
 SUFFIXES = (".py", ".md")
 SKIP_MARK = "# rename_element_fields: skip"
 #: Files that record history (their sections are not edited afterwards).
@@ -216,21 +217,21 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--root", type=Path, default=Path("."), help="repository root")
     args = parser.parse_args(argv)
     changed = []
-    for top in ROOTS:
-        for file in sorted((args.root / top).rglob("*")):
-            if file.suffix not in SUFFIXES or not file.is_file():
-                continue
-            text = file.read_text(encoding="utf-8")
-            if SKIP_MARK in text:
-                continue
-            rel = file.relative_to(args.root).as_posix()
-            if rel in SKIP_FILES:
-                continue
-            new = rewrite(text, rel)
-            if new != text:
-                changed.append(rel)
-                if not args.check:
-                    file.write_text(new, encoding="utf-8")
+    candidates = [file for top in ROOTS for file in sorted((args.root / top).rglob("*"))]
+    for file in candidates + [args.root / name for name in FILES]:
+        if file.suffix not in SUFFIXES or not file.is_file():
+            continue
+        text = file.read_text(encoding="utf-8")
+        if SKIP_MARK in text:
+            continue
+        rel = file.relative_to(args.root).as_posix()
+        if rel in SKIP_FILES:
+            continue
+        new = rewrite(text, rel)
+        if new != text:
+            changed.append(rel)
+            if not args.check:
+                file.write_text(new, encoding="utf-8")
     for rel in changed:
         print(("would change " if args.check else "changed ") + rel)
     return 1 if args.check and changed else 0
