@@ -16,6 +16,10 @@ base class owns the law the element contributes to its branch.
 Sign convention: a branch flux ``phi`` flows from the branch's start node to its end
 node; an element's magnetic voltage drop ``V_m`` is measured in the same direction.
 All quantities are SI: lengths in m, areas in m^2, flux in Wb, MMF in A (ampere-turns).
+The fields and the factories' arguments carry their unit in the name (``length_m``,
+``pole_area_m2``, ``value_H``, ``conductance_S``); the old names (``length``, ``pole_area``,
+``value``, ``conductance``, ...) are deprecated aliases for one release, as keywords and
+as attributes (``tools/rename_element_fields.py`` migrates callers).
 """
 
 from __future__ import annotations
