@@ -10,6 +10,7 @@ from importlib import resources
 
 import numpy as np
 import pytest
+from scipy.optimize import brentq
 
 import maglevkit as mk
 from maglevkit.circuit import FringePermeance
@@ -48,10 +49,11 @@ def test_network_shape_and_names(std: mk.Magnet) -> None:
     # per pole: K + 1 = 4 core segments (coil_segments K = 3) and beside each the air
     # through the coil's cross-section, gap, teeth and their slots' air under the face,
     # the stator yoke over the two half faces, per side (l, r) window teeth and their
-    # slots' air, flank fringe, 2 flank strips (the strips whose quarter
-    # circles land before the window's centre plane: y0 = 15 and 48.3 mm < 69 mm), one
+    # slots' air, flank fringe, 1 flank strip (the strips start below window/pi = 43.9
+    # mm, where the tube's arc pi y/2 reaches half the window: y0 = 15 mm; the second
+    # strip starts at 48.3 mm; until fringe26 it was window/2 = 69 mm and 2 strips), one
     # pole-back leakage; the two end poles' back end face and back underside to the stator
-    # beyond and a third flank strip on their outer side (no neighbour: strips along the
+    # beyond and two more flank strips on their outer side (no neighbour: strips along the
     # whole coil); per
     # neighbour pair: pole back, stator (over the window), leakage between the heads and
     # per coil strip (3); nodes per pole: head, 3 coil nodes, pole back, stator at the
@@ -59,9 +61,9 @@ def test_network_shape_and_names(std: mk.Magnet) -> None:
     # (with eddy currents, the default, each segment's eddy element is a branch of its
     # own in series with iron and coil air, through a node E per segment)
     # and per side the slot at the face edge between the face's teeth and the window's
-    per_pole, per_pair = 3 * 4 + 1 + 2 + 2 + 2 * (2 + 1 + 2 + 1) + 1, 1 + 1 + 1 + 3
-    assert len(net.branches) == 12 * per_pole + 2 * 3 + 11 * per_pair == 432
-    assert len(net.nodes) == 12 * (11 + 4) and net.n_loops == 432 - 180 + 1
+    per_pole, per_pair = 3 * 4 + 1 + 2 + 2 + 2 * (2 + 1 + 1 + 1) + 1, 1 + 1 + 1 + 3
+    assert len(net.branches) == 12 * per_pole + 2 * 4 + 11 * per_pair == 410
+    assert len(net.nodes) == 12 * (11 + 4) and net.n_loops == 410 - 180 + 1
     # each circuit drives 6 poles with alternating polarity; every pole's winding is
     # spread over its 4 core segments, whose turns add up to turns_per_pole, and the air
     # beside each segment carries that segment's turns (its MMF cancels the coil's, so it
@@ -175,31 +177,43 @@ def test_leakage_permeances_against_roters() -> None:
         end = name in ("leak_pb_p01", "leak_pb_p12")
         assert v == pytest.approx(g_pb_end if end else g_pb_inner, rel=1e-12)
     # the flank strips of an inner pole (each flank, wp, lands on its own side's window
-    # teeth): quarter circle from the flank at height y plus the gap at Carter's s',
-    # integrated over the strip: (2 mu0 wp/pi) ln((s' + pi y1/2)/(s' + pi y0/2)); strips
-    # 15-48.3 mm and 48.3-69 mm (the second ends at the window's centre plane); the end
-    # pole's outer flank (pole 1, side l) has no neighbour: three strips along the coil,
-    # 15-48.3, 48.3-81.7, 81.7-115 mm
+    # teeth): the field of the pole edge over the stator plane at Carter's s' (conformal
+    # map: the flank point at height y has v - atan v = pi y/(2 s'), the strip carries
+    # (mu0 wp/pi) ln((1 + v1^2)/(1 + v0^2)); v found here by a bracketing root finder),
+    # one strip 15-43.9 mm (window/pi, where the tube's arc is half the window long); the
+    # end pole's outer flank (pole 1, side l) has no neighbour: three strips along the
+    # coil, 15-48.3, 48.3-81.7, 81.7-115 mm; the flank below the coil (fringe_) the same
+    # law over 0-15 mm
     sp = _carter_by_hand(0.010, st["slot_pitch"], st["slot_opening"]) * 0.010
-    inner = [(hf, hf + h), (hf + h, 0.5 * window)]
+    inner = [(hf, window / np.pi)]
     outer = [(hf + j * h, hf + (j + 1) * h) for j in range(3)]
     fringe = {e.name: e for br in net.branches for e in br.elements
               if isinstance(e, FringePermeance)}
     flank = {k: e for k, e in fringe.items() if k.startswith(("flank_p02_", "flank_p01_"))}
-    assert sorted(flank) == ["flank_p01_1_l", "flank_p01_1_r", "flank_p01_2_l", "flank_p01_2_r",
-                             "flank_p01_3_l", "flank_p02_1_l", "flank_p02_1_r",
-                             "flank_p02_2_l", "flank_p02_2_r"]
+    assert sorted(flank) == ["flank_p01_1_l", "flank_p01_1_r", "flank_p01_2_l",
+                             "flank_p01_3_l", "flank_p02_1_l", "flank_p02_1_r"]
+
+    def ln_1v2(y: float) -> float:
+        q = np.pi * y / (2 * sp)
+        v = brentq(lambda v: v - np.arctan(v) - q, 0.0, q + 2.0, xtol=1e-15)
+        return float(np.log(1 + v * v))
+
+    def conformal(y0: float, y1: float) -> float:
+        return MU0 * wp / np.pi * (ln_1v2(y1) - (ln_1v2(y0) if y0 > 0 else 0.0))
 
     def roters(y0: float, y1: float) -> float:
         return 2 * MU0 * wp / np.pi * np.log((sp + np.pi * y1 / 2) / (sp + np.pi * y0 / 2))
 
     for j, (y0, y1) in enumerate(inner, start=1):
         for name in (f"flank_p02_{j}_l", f"flank_p02_{j}_r", f"flank_p01_{j}_r"):
-            assert float(flank[name].permeance(0.010)) == pytest.approx(roters(y0, y1),
-                                                                        rel=1e-12)
+            assert float(flank[name].permeance(0.010)) == pytest.approx(conformal(y0, y1),
+                                                                        rel=1e-10)
     for j, (y0, y1) in enumerate(outer, start=1):
         assert float(flank[f"flank_p01_{j}_l"].permeance(0.010)) == pytest.approx(
-            roters(y0, y1), rel=1e-12)
+            conformal(y0, y1), rel=1e-10)
+    for k in ("fringe_p01_l", "fringe_p02_r"):
+        assert float(fringe[k].permeance(0.010)) == pytest.approx(conformal(0.0, hf),
+                                                                  rel=1e-10)
     # the end poles' back end face (depth 130 ... 210 mm below the face; the quarter
     # circles clear the coil's outer corner at hypot(115, 45) = 123.5 mm < 130 mm) to the
     # stator beyond the magnet, one flank of width wp

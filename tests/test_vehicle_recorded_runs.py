@@ -54,15 +54,25 @@ Since 2026-12-03 the runs are recorded and reproduced on stored maps
 (``tests/data/vehicle_run_maps``, ``record_vehicle_runs.maps_cache``): on a new machine (an
 Intel Xeon with AVX-512; the file had been recorded on an AMD EPYC) every scenario
 on reduced magnets differed by 0.7-4.2e-6 of a variable's largest value, already at the first stored row
-after the start (the start itself agreed to 1e-15), with maps built on that machine.  The
-maps' step-fitted ``R_ec`` comes from an IDAS run, which is reproducible across processors
-only to its tolerance (its accepted steps depend on the last bits of its arithmetic), while
-the vehicle's own arithmetic is not sensitive (the rigid run moved by 2.6e-14 when its
+after the start (the start itself agreed to 1e-15), with maps built on that machine.  Maps
+are reproducible across processors only to about their solvers' tolerances (their entries
+come from Newton solves and IDAS runs on linear algebra whose last bits depend on the
+kernels chosen for the processor; veh23 measured map entries differing by up to 8.4e-5
+relative), while the vehicle's own arithmetic is not sensitive (the rigid run moved by 2.6e-14 when its
 sag amplitude was changed by 1e-13).  The map builder has its own tests; this file tests
 the vehicle framework, on the maps the runs were recorded with.  All twelve scenarios
 were re-recorded then on freshly built maps, the maps stored beside them; against the
 old file: 0.67-4.2e-6 (hp_mpc's voltage the largest), ``hp_detailed`` (per-pole IDAS, no
 maps) 1.5e-10.
+
+All twelve were re-recorded once more the same day after a deliberate model change
+(fringe26: the conformal-map flank fringe of the TR09 split network, which the cross-section
+runs use too) and the sparse preconditioner of the live flux step (livestep22, which moved
+``hp_detailed`` by 1.3e-10): against the recording before, gap <= 4.6e-3 (cross-section
+chassis roll 1.0e-2), current <= 6.6e-3, voltage <= 4.9e-3, car-body accelerations
+<= 3.2e-2 of each variable's largest value.  The guidance magnet's maps were rebuilt under
+its new network hash (a new element field in its repr; every map entry equal to the stored
+one).
 """
 
 from __future__ import annotations

@@ -46,11 +46,11 @@ def maps_cache() -> Path:
     """A temporary vehicle-maps cache holding the recorded maps under this code's names.
 
     The runs are recorded and reproduced on the same maps: maps built on another processor
-    agree with these only to the detailed model's integrator tolerance (the step-fitted
-    ``R_ec`` comes from an IDAS run whose accepted steps depend on the last bits of its
-    arithmetic; measured: the runs moved by up to 2.7e-6 of a variable's largest value
-    between an AMD EPYC and an Intel Xeon with AVX-512), while the framework's own
-    arithmetic is reproducible to ~1e-13.  A magnet whose network changed finds no
+    agree with these only to about their solvers' tolerances (Newton solves and IDAS runs
+    on linear algebra whose last bits depend on the processor's kernels; measured: the runs
+    moved by up to 4.2e-6 of a variable's largest value between an AMD EPYC and an Intel
+    Xeon with AVX-512), while the framework's own arithmetic is not sensitive (1e-13
+    changes stay 1e-13).  A magnet whose network changed finds no
     stored file: its maps are built into this folder (and the runs must be re-recorded).
     """
     if not _MAPS_CACHE:

@@ -34,8 +34,9 @@ grooves as slots of the face) to the tooth tips, then ``teeth_k`` (T_k -> S_k: t
 stator teeth under the face) and in parallel ``slots_k`` (T_k -> S_k: the air of their
 slots, the apparent tooth flux density of machine design);
 per side ``x`` (``l``, ``r``) of the pole: ``fringe_k_x`` (H_k -> W_kx: the flank below
-the coil facing that side) and ``flank_k_j_x`` (C_k_j -> W_kx: Roters quarter circles from
-each coil strip of the flank to the face level and across the gap), both landing on that
+the coil facing that side) and ``flank_k_j_x`` (C_k_j -> W_kx: from each coil strip of the
+flank below ``window/pi`` across the gap), both the pole edge's field over the stator
+(conformal map, ``FringePermeance(law="conformal")``) and both landing on that
 side's window teeth ``window_k_x`` (W_kx -> S_kx, with their slots' air
 ``window_slots_k_x``; ``across_k_x``, T_k -> W_kx: the slot at the face edge between the face's
 teeth and that side's window teeth), and the stator yoke over the half face ``yoke_k_x`` (S_k -> S_kx,
@@ -422,16 +423,21 @@ def levitation_network(m: Mapping[str, Any], st: Mapping[str, Any], names: list[
     g_pp_strip = MU0 * wp * h / window
     if not split:                          # energy-equivalent height h_c/3 of the coil
         g_pp_face = MU0 * wp * (hc / 3.0 + hf) / window
-    # flanks facing the window, per coil strip [y - h/2, y + h/2]: Roters' quarter circles
-    # to the face level and on across the gap to the stator (a fringe strip), while the
-    # circle lands before the window's centre plane (y <= window/2; beyond it the window
-    # leakage takes over); both flanks of every pole (an end pole's outer flank faces the
-    # stator beyond the magnet, with no window centre plane: strips along the whole coil)
-    strips = [(y - 0.5 * h, br.minimum(y + 0.5 * h, 0.5 * window,
-                                       f"flank strip {j + 1}: top or window centre"))
+    # flanks facing the window, per coil strip [y - h/2, y + h/2]: the pole edge's field
+    # (conformal map, FringePermeance law "conformal") across the gap to the stator, from
+    # the flank heights where that is the shorter path: the tube from height y runs an arc
+    # of pi y/2 before it crosses the gap, the path to the window's centre plane is
+    # window/2 long, so the strips end at y = window/pi (the gap's own part is left out,
+    # so the boundary does not move with the gap, docs/magnets.md); above it the window
+    # leakage alone carries the flank's flux.  Both flanks of every pole (an end pole's
+    # outer flank faces the stator beyond the magnet, with no window centre plane: strips
+    # along the whole coil)
+    reach = window / math.pi
+    strips = [(y - 0.5 * h, br.minimum(y + 0.5 * h, reach,
+                                       f"flank strip {j + 1}: top or window reach"))
               for j, y in enumerate(y_nodes)
-              if br.less(y - 0.5 * h, 0.5 * window, f"flank strip {j + 1} below the window "
-                         "centre")] if split else []
+              if br.less(y - 0.5 * h, reach, f"flank strip {j + 1} below the window "
+                         "reach")] if split else []
     outer_strips = [(y - 0.5 * h, y + 0.5 * h) for y in y_nodes] if split else []
     # around the coil into the own pole back: half hollow cylinders around the coil's
     # cross-section (inner radius h_c/2, radial extent t_c) along the coil sides that do
@@ -559,7 +565,7 @@ def levitation_network(m: Mapping[str, Any], st: Mapping[str, Any], names: list[
             if split and options.fringing:
                 branches.append(Branch(f"fringe_{p}{sfx}", f"H{k + 1}", w_node, (
                     FringePermeance(f"fringe_{p}{sfx}", gap_input=p, width_m=2.0 * share * wp,
-                                    radius_m=hf, **slots),)))
+                                    radius_m=hf, law="conformal", **slots),)))
             if options.leakage:
                 # an end pole's outer flank has no neighbour and no window centre plane:
                 # its strips run along the whole coil
@@ -568,7 +574,7 @@ def levitation_network(m: Mapping[str, Any], st: Mapping[str, Any], names: list[
                     name = f"flank_{p}_{j + 1}{sfx}"
                     branches.append(Branch(name, nodes[j + 1], w_node, (
                         FringePermeance(name, gap_input=p, width_m=2.0 * share * wp, radius_m=y1,
-                                        inner_radius_m=y0, **slots),)))
+                                        inner_radius_m=y0, law="conformal", **slots),)))
         if outer and options.leakage:
             # end pole: the back's end face, beyond the coil's outer side, to the stator
             # beyond the magnet (Roters' quarter circles centred on the face's outer edge,
