@@ -14,7 +14,8 @@ benchmarks, examples or docs uses the old names:
 2. keywords of ``dataclasses.replace`` calls whose old name only an element has
    (``replace(el, conductance=...)``);
 3. attribute reads: the names only elements have (``.cross_section``, ``.pole_area``,
-   ``.conductance``, ``.inner_radius``, ``.length``) everywhere, and ``.value`` after a
+   ``.conductance``, ``.inner_radius``) everywhere, ``.length`` on the receivers that hold
+   an iron path (:data:`LENGTH_RECEIVERS`), and ``.value`` after a
    ``LeakagePermeance`` factory call; the other ambiguous reads (``.value`` of an element held
    in a variable) through the explicit table :data:`AMBIGUOUS_READS`.
 
@@ -61,7 +62,12 @@ SKIP_MARK = "# rename_element_fields: skip"
 SKIP_FILES = ("docs/decisions.md", "BENCHMARKS.md", "CHANGELOG.md")
 
 #: Attribute names that, in this code base, only elements have: renamed on any receiver.
-UNIQUE_READS = ("cross_section", "pole_area", "conductance", "inner_radius", "length")
+UNIQUE_READS = ("cross_section", "pole_area", "conductance", "inner_radius")
+
+#: ``.length`` is common (a train, a guideway): renamed only on the receivers that hold an
+#: iron path in this code base (``iron``, ``iron_l``, ``irons[0]``, ``tube``, ``e``, ``el``,
+#: ``t``, ``self`` in the mutation snippets of elements.py lines).
+LENGTH_RECEIVERS = r"(?:\b(?:iron\w*|tube\w*|e|el|t|self)|\birons\[\d+\])"
 
 #: Element reads under names other objects have too (``.value`` of an exception info, ...):
 #: per file, the regular expressions of the receivers that hold an element.
@@ -199,6 +205,8 @@ def rewrite(text: str, path: str) -> str:
             pos = end + 7
     out.append(text[pos:])
     text = "".join(out)
+    text = re.sub(rf"({LENGTH_RECEIVERS})\.length\b(?!\s*=[^=])", rf"\1.{names['length']}",
+                  text)
     for old in UNIQUE_READS:
         text = re.sub(rf"(?<=[\w\])])\.{old}\b(?!\s*=[^=])", f".{names[old]}", text)
     for pattern in AMBIGUOUS_READS.get(path, ()):
