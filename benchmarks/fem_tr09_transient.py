@@ -478,7 +478,7 @@ def slab_variant(magnet: mk.Magnet) -> mk.Magnet:
     f_core, f_back = 1.0 / slab_factor(lp, wp), 1.0 / slab_factor(hb, wb)
 
     def el(e, f):  # type: ignore[no-untyped-def]
-        return replace(e, conductance=f * e.conductance) if isinstance(e, EddyCurrent) else e
+        return replace(e, conductance_S=f * e.conductance_S) if isinstance(e, EddyCurrent) else e
 
     net = magnet.network
     branches = tuple(replace(b, elements=tuple(el(e, f_back if "back" in e.name else f_core)

@@ -567,10 +567,10 @@ def model_magnet(*, discretisation: str = "lumped", air_model: str = "tubes",
         net = mag.network
         tube = net.branch("rail:tube1").elements[0]
         t = float(mag.parameters["rail"]["thickness"])
-        iron = IronPath("iron_rail", tube.length, t * float(mag.parameters["magnet"]["depth"]),
+        iron = IronPath("iron_rail", tube.length_m, t * float(mag.parameters["magnet"]["depth"]),
                         tube.material)
         keep = [b for b in net.branches if b.name.split(":")[0] != "rail"]
-        new = ladder_branches("rail", "RL", "RR", iron, thickness=2.0 * t,
+        new = ladder_branches("rail", "RL", "RR", iron, thickness_m=2.0 * t,
                               resistivity=float(mag.parameters["rail"].get("resistivity")
                                                 or tube.material.resistivity),
                               layers=kw.get("eddy_layers", 6))

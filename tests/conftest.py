@@ -124,7 +124,7 @@ def loop_network(*, eddy: bool, g_ec: float = G_EC) -> mk.Network:
         els.append(mk.EddyCurrent("core_eddy", g_ec))
     return mk.Network(
         (mk.Branch("core", "A", "B", tuple(els)),
-         mk.Branch("gap", "B", "A", (mk.AirGap("airgap", gap_input="s", pole_area=AREA),))),
+         mk.Branch("gap", "B", "A", (mk.AirGap("airgap", gap_input="s", pole_area_m2=AREA),))),
         (mk.Circuit("coil", R_EL, (mk.Coil("core", TURNS),)),),
         name="single loop",
     )

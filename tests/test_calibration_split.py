@@ -22,9 +22,11 @@ ROOT = Path(__file__).resolve().parents[1]
 FEM_2MM = ROOT / "benchmarks" / "results" / "u_magnet_fem_statics_2mm.csv"
 HOLD_M = [0.014, 0.016, 0.018, 0.020]
 # the bundled u-magnet's network hashes before this option existed (main at eef98e1):
-# stored maps stay valid
-BUNDLED_HASH = "e98c987cf565b941c747a3bf4a66317d935328624fca812069312561c42c671e"
-BUNDLED_HASH_NO_EDDY = "4b2aeef10d4a2d14548c6819a4b93dd6aea8e10be390124a941fa98e95b5b78e"
+# stored maps stay valid.  Re-pinned once when the element fields got their units (issue
+# 22 item 7, units22: e.g. pole_area -> pole_area_m2 changes the elements' repr, which the
+# hash covers; the values are unchanged): before e98c987c... and 4b2aeef1...
+BUNDLED_HASH = "cc30551e58df403b16f26381e6ebcc2c0d9819b1c00ea2068bc80db0a953458f"
+BUNDLED_HASH_NO_EDDY = "76f9d9c9e30a1f46449bb1c7295814b649f9e4a4e6f37553701b5645b7d1d6da"
 
 
 def _magnet(eddy: bool = False, **magnet: Any) -> mk.Magnet:
@@ -125,7 +127,7 @@ def test_split_paths_are_the_documented_elements(split: mk.Magnet) -> None:
     # no window-flank quarter circles, the outer flank's only (the window's air is the
     # strips across it)
     # strips: first coil strip 10-20 mm, quarter hollow cylinder (2 mu0 d/pi) ln(y1/y0)
-    assert els["flank_left_1"].value == pytest.approx(2 * MU0 * d / np.pi * np.log(2.0),
+    assert els["flank_left_1"].value_H == pytest.approx(2 * MU0 * d / np.pi * np.log(2.0),
                                                       rel=1e-12)
     # the gap: prism plus Roters' quarter annulus per edge, (2 mu0 w/pi) ln(1 + r/s) with
     # r = coil_gap_to_pole_face = 10 mm (inner and outer edge), beside it the quarter
@@ -137,13 +139,13 @@ def test_split_paths_are_the_documented_elements(split: mk.Magnet) -> None:
         assert gap.permeance(s) == pytest.approx(expected, rel=1e-12)
     cyl = els["edge_cylinders_left"]
     assert isinstance(cyl, LeakagePermeance)
-    assert cyl.value == pytest.approx(0.52 * MU0 * 2 * d)
+    assert cyl.value_H == pytest.approx(0.52 * MU0 * 2 * d)
     # coil air beside every leg segment, linked width t_c - t_c^2/(3 w_w), same turns
     seg = [n for n in names if n.startswith("coil_air_left_")]
     assert len(seg) == 6
     iron = els["iron_leg_left_2"]
     air = els["coil_air_left_2"]
-    assert air.value == pytest.approx(MU0 * d * (tc - tc * tc / (3 * ww)) / iron.length)
+    assert air.value_H == pytest.approx(MU0 * d * (tc - tc * tc / (3 * ww)) / iron.length_m)
     coils = {c.branch: c for c in split.network.circuits[0].coils}
     assert coils["coil_air_left_2"].turns == coils["leg_left_2"].turns
     assert coils["coil_air_left_2"].pole_turns == 300.0
@@ -200,7 +202,7 @@ def test_split_builds_with_symbolic_geometry() -> None:
     numeric = _magnet(flux_paths="split").network
     assert [b.name for b in net.branches] == [b.name for b in numeric.branches]
     g = ca.Function("g", [p], [net.branches[[b.name for b in net.branches].index(
-        "coil_air_left_2")].elements[0].value])
-    num = {e.name: e for b in numeric.branches for e in b.elements}["coil_air_left_2"].value
+        "coil_air_left_2")].elements[0].value_H])
+    num = {e.name: e for b in numeric.branches for e in b.elements}["coil_air_left_2"].value_H
     assert float(g([0.030, 0.060, 0.015])) == pytest.approx(num, rel=1e-12)
     assert assemble(net).x.numel() > 0

@@ -91,15 +91,15 @@ def test_grid_ladders_are_the_parts_slab_on_each_link() -> None:
         thick = {"leg": 0.030, "yoke": 0.030, "rail": 0.030}[part]
         tubes = [ladder.network.branch(f"{br.name}:tube{k + 1}").elements[0] for k in range(3)]
         # the tubes are the link's own section in the fitted fractions, same length
-        np.testing.assert_allclose([t.cross_section for t in tubes],
-                                   np.array(a) * iron.cross_section, rtol=1e-12)
-        assert all(t.length == iron.length for t in tubes)
+        np.testing.assert_allclose([t.cross_section_m2 for t in tubes],
+                                   np.array(a) * iron.cross_section_m2, rtol=1e-12)
+        assert all(t.length_m == iron.length_m for t in tubes)
         # conductances of the part's 2-D slab (thickness t, half-thickness b) on the
         # link's section: m links in parallel are the part's ladder (docs/equations.md 1b)
-        g = [ladder.network.branch(br.name).elements[0].conductance] + [
-            ladder.network.branch(f"{br.name}:eddy{k + 1}").elements[0].conductance
+        g = [ladder.network.branch(br.name).elements[0].conductance_S] + [
+            ladder.network.branch(f"{br.name}:eddy{k + 1}").elements[0].conductance_S
             for k in (1, 2)]
-        scale = iron.length * thick * 0.5 * thick / (2.0 * rho * iron.cross_section)
+        scale = iron.length_m * thick * 0.5 * thick / (2.0 * rho * iron.cross_section_m2)
         np.testing.assert_allclose(g, np.array(w) * scale, rtol=1e-12)
         checked[part] += 1
     # every eddy link of the grid became a ladder (measured: 54 leg, 33 yoke, 45 rail

@@ -33,9 +33,9 @@ L_BAR, T_BAR, DEPTH = 0.2, 0.03, 0.1        # m: length, thickness (2b), depth
 def _slab_network(layers: int) -> mk.Network:
     """A slab of linear iron with the ladder, closed by a tiny gap, one 1-turn coil."""
     iron = IronPath("iron_bar", L_BAR, T_BAR * DEPTH, ConstantPermeability(mu_r=MU_R))
-    branches = ladder_branches("bar", "a", "b", iron, thickness=T_BAR, resistivity=RHO,
+    branches = ladder_branches("bar", "a", "b", iron, thickness_m=T_BAR, resistivity=RHO,
                                layers=layers)
-    gap = mk.AirGap("air", gap_input="s", pole_area=1.0)
+    gap = mk.AirGap("air", gap_input="s", pole_area_m2=1.0)
     branches.append(mk.Branch("gap", "b", "a", (gap,)))
     return mk.Network(tuple(branches), (mk.Circuit("c", 1.0, (mk.Coil("bar", 1.0),)),))
 
@@ -49,7 +49,7 @@ def _slab_impedance(net: mk.Network, omega: np.ndarray, gap: float) -> np.ndarra
     for k, br in enumerate(net.branches):
         for el in br.elements:
             if isinstance(el, EddyCurrent):
-                g[k] += el.conductance
+                g[k] += el.conductance_S
             else:
                 zr[k] += float(el.mmf_drop(1e-6, gap if el.gap else None)) / 1e-6
     r_gap = float(net.branch("gap").elements[0].mmf_drop(1e-6, gap)) / 1e-6
@@ -108,17 +108,17 @@ def test_one_layer_is_the_lumped_element() -> None:
     iron = IronPath("i", 0.1, 0.03 * 0.1, "AISI 1008")
     solid = EddyCurrent.solid_rectangular("e", 0.03, 0.1, 0.1, 1.5e-7)
     factor = rectangle_torsion_constant(0.03, 0.1) / (0.1 * 0.03**3 / 3.0)
-    br = ladder_branches("p", "a", "b", iron, thickness=0.03, resistivity=1.5e-7, layers=1,
+    br = ladder_branches("p", "a", "b", iron, thickness_m=0.03, resistivity=1.5e-7, layers=1,
                          factor=factor)
-    assert br[0].elements[0].conductance == pytest.approx(solid.conductance, rel=1e-12)
+    assert br[0].elements[0].conductance_S == pytest.approx(solid.conductance_S, rel=1e-12)
     lam = EddyCurrent.laminated("e", 0.03 * 0.1, 0.1, 4e-7, 5e-4)
-    br = ladder_branches("p", "a", "b", iron, thickness=5e-4, resistivity=4e-7, layers=1)
-    assert br[0].elements[0].conductance == pytest.approx(lam.conductance, rel=1e-12)
+    br = ladder_branches("p", "a", "b", iron, thickness_m=5e-4, resistivity=4e-7, layers=1)
+    assert br[0].elements[0].conductance_S == pytest.approx(lam.conductance_S, rel=1e-12)
     # tube areas add up to the part's section for every n
     for n in LADDER_COEFFICIENTS:
-        br = ladder_branches("p", "a", "b", iron, thickness=0.03, resistivity=1.5e-7, layers=n)
-        area = sum(b.elements[0].cross_section for b in br if ":tube" in b.name)
-        assert area == pytest.approx(iron.cross_section, rel=1e-9)
+        br = ladder_branches("p", "a", "b", iron, thickness_m=0.03, resistivity=1.5e-7, layers=n)
+        area = sum(b.elements[0].cross_section_m2 for b in br if ":tube" in b.name)
+        assert area == pytest.approx(iron.cross_section_m2, rel=1e-9)
 
 
 @pytest.mark.parametrize(("gap", "current"), [(0.004, 5.0), (0.006, 80.0)])
@@ -148,7 +148,7 @@ def test_bad_options_are_refused(monkeypatch) -> None:  # type: ignore[no-untype
     with pytest.raises(InputError, match="ladder_split"):
         mk.load_magnet("tr09-standard", eddy_model="ladder_split")
     with pytest.raises(ParameterError, match="layers"):
-        ladder_branches("p", "a", "b", IronPath("i", 0.1, 1e-3), thickness=0.01,
+        ladder_branches("p", "a", "b", IronPath("i", 0.1, 1e-3), thickness_m=0.01,
                         resistivity=1e-7, layers=12)
     mag = mk.load_magnet("u-magnet").with_options(eddy_model="ladder", eddy_layers=2)
     assert mag.options.eddy_layers == 2
@@ -290,7 +290,7 @@ def test_laminated_core_diffuses_across_each_sheet() -> None:
     # the laminated core's ladder tubes span the whole section; the rail stays solid
     # (its outermost element is the 2-D slab's w_1 = 3.26e-3 of sigma l t b/(2A))
     tubes = [b for b in three.branches if b.name.startswith("leg_left_1:tube")]
-    assert sum(b.elements[0].cross_section for b in tubes) == pytest.approx(0.03 * 0.1)
+    assert sum(b.elements[0].cross_section_m2 for b in tubes) == pytest.approx(0.03 * 0.1)
     g_rail = three.eddy_conductances[three.branch_names.index("rail")]
     rail_len = 0.06 + 0.03 + 0.03
     assert g_rail == pytest.approx(LADDER_COEFFICIENTS[3][1][0] * rail_len * 0.03 * 0.015

@@ -36,7 +36,7 @@ def test_roters_leakage_shapes(ctor: str, args: tuple, expected: float) -> None:
 
 
 def test_gap_leakage_around_poles_is_the_modelica_formula() -> None:
-    el = mk.GapLeakage("g", gap_input="s", width=0.1, radius=0.02)
+    el = mk.GapLeakage("g", gap_input="s", width_m=0.1, radius_m=0.02)
     for s in (0.002, 0.01, 0.05):
         assert el.permeance(s) == pytest.approx(MU0 * 0.1 / math.pi * math.log(1 + math.pi * 0.02 / s),
                                                 rel=RTOL)
@@ -48,11 +48,11 @@ def test_air_gap_fringe_edge_is_the_quarter_circle_tube_to_a_plane(s: float) -> 
     straight across the gap: dG = mu0 w dx/(s + pi x/2).  Quadrature of that tube, not the
     closed form in the code."""
     w, r, area = 0.1, 0.01, 0.003
-    gap = mk.AirGap("g", gap_input="s", pole_area=area, fringe_edges=((w, r),))
+    gap = mk.AirGap("g", gap_input="s", pole_area_m2=area, fringe_edges=((w, r),))
     tube, _ = quad(lambda x: MU0 * w / (s + math.pi * x / 2), 0.0, r, epsabs=0, epsrel=1e-13)
     assert gap.permeance(s) - MU0 * area / s == pytest.approx(tube, rel=1e-10)
     # the image construction: twice the pole-to-pole tube at distance 2 s
-    image = 2 * mk.GapLeakage("i", gap_input="s", width=w, radius=r).permeance(2 * s)
+    image = 2 * mk.GapLeakage("i", gap_input="s", width_m=w, radius_m=r).permeance(2 * s)
     assert gap.permeance(s) - MU0 * area / s == pytest.approx(image, rel=RTOL)
 
 
@@ -170,7 +170,7 @@ def test_kirchhoff_loop_law_by_hand_in_deep_saturation() -> None:
                  "rail": (c + RAIL["thickness"], RAIL["thickness"] * D)})
     # the builder's iron parts have the documented lengths and areas (docs/equations.md
     # sec. 6, computed above from the parameter file): the same numbers, 1e-12 for rounding
-    built = {e.name.removeprefix("iron_"): (e.length, e.cross_section)
+    built = {e.name.removeprefix("iron_"): (e.length_m, e.cross_section_m2)
              for b in mag.network.branches for e in b.elements if isinstance(e, mk.IronPath)}
     assert set(built) == set(iron)
     for name, (length, area) in iron.items():
@@ -196,8 +196,8 @@ def test_air_gap_fringe_permeance_is_its_share_of_the_permeance() -> None:
     """One fringe law: the calibration's fringing factor scales AirGap.fringe_permeance."""
     from maglevkit.circuit.factors import CalibratedLinear
 
-    plain = mk.AirGap("g", gap_input="s", pole_area=0.01, slot_pitch=0.04, slot_opening=0.01)
-    edged = mk.AirGap("g", gap_input="s", pole_area=0.01, slot_pitch=0.04, slot_opening=0.01,
+    plain = mk.AirGap("g", gap_input="s", pole_area_m2=0.01, slot_pitch_m=0.04, slot_opening_m=0.01)
+    edged = mk.AirGap("g", gap_input="s", pole_area_m2=0.01, slot_pitch_m=0.04, slot_opening_m=0.01,
                       fringe_edges=((0.2, 0.02), (0.1, 0.01)))
     for s in (0.005, 0.012):
         f = edged.fringe_permeance(s)

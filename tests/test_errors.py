@@ -14,7 +14,7 @@ from maglevkit.cli import app
 from .conftest import build_u, u_params
 
 IRON = mk.IronPath("iron", 0.2, 1e-3, mk.get_material("AISI 1008"))
-GAP = mk.AirGap("gap", gap_input="s", pole_area=1e-3)
+GAP = mk.AirGap("gap", gap_input="s", pole_area_m2=1e-3)
 
 
 def loop_branches() -> list[mk.Branch]:
@@ -49,14 +49,14 @@ def test_minimal_network_solves() -> None:
         (lambda: mk.Network((mk.Branch("core", "a", "b", (IRON,)),), (coil(),)),
          mk.TopologyError, "no closed flux path"),
         (lambda: mk.Branch("loop", "a", "a", ()), mk.TopologyError, "two different nodes"),
-        (lambda: mk.IronPath("i", 0.0, 1e-3), mk.ParameterError, "length = 0.0 must be"),
+        (lambda: mk.IronPath("i", 0.0, 1e-3), mk.ParameterError, "length_m = 0.0 must be"),
         (lambda: mk.IronPath("i", 0.1, -1e-3), mk.ParameterError, "cross_section"),
-        (lambda: mk.AirGap("g", pole_area=0.0), mk.ParameterError, "pole_area"),
+        (lambda: mk.AirGap("g", pole_area_m2=0.0), mk.ParameterError, "pole_area"),
         (lambda: mk.Coil("core", 0), mk.ParameterError, "turns = 0"),
         (lambda: mk.Coil("core", float("nan")), mk.ParameterError, "turns"),
         (lambda: mk.Circuit("c", 0.0, (mk.Coil("core", 10),)), mk.ParameterError, "resistance"),
         (lambda: mk.IronPath("i", 0.1, 1e-3, "adamantium"), mk.MaterialError, "unknown material"),
-        (lambda: mk.EddyCurrent("e", conductance=-1.0), mk.ParameterError, "conductance"),
+        (lambda: mk.EddyCurrent("e", conductance_S=-1.0), mk.ParameterError, "conductance"),
     ],
 )
 def test_topology_and_element_errors(make, exc: type, msg: str) -> None:  # type: ignore[no-untyped-def]

@@ -119,7 +119,7 @@ def test_two_time_constant_network_matches_matrix_exponential() -> None:
     net = mk.Network((
         mk.Branch("core", "A", "B", (mk.IronPath("fe", l_fe, area, ConstantPermeability(mu_r)),)),
         mk.Branch("leak", "B", "A", (mk.LeakagePermeance("lk", g_leak),)),
-        mk.Branch("gap", "B", "A", (mk.AirGap("ag", gap_input="s", pole_area=area),
+        mk.Branch("gap", "B", "A", (mk.AirGap("ag", gap_input="s", pole_area_m2=area),
                                     mk.EddyCurrent("ed", g_ec))),
     ), (mk.Circuit("coil", r_el, (mk.Coil("core", n),)),), name="two time constants")
     fm = mk.FluxModel(net, rtol=1e-9, atol=1e-11)

@@ -195,7 +195,7 @@ def test_laminated_eddy_conductance() -> None:
     # correction (1 - 0.6302 d/w) (d/w = 5e-3); with it they agree: measured 2.5e-7.
     sheet = mk.EddyCurrent.solid_rectangular("sheet", width, d, length, RHO).eddy_conductance
     assert sheet / n_sheets == pytest.approx(g * (1 - 0.6302 * d / width), rel=1e-5)
-    with pytest.raises(mk.ParameterError, match=r"'bad': sheet_thickness = 0.0 must be a finite"):
+    with pytest.raises(mk.ParameterError, match=r"'bad': sheet_thickness_m = 0.0 must be a finite"):
         mk.EddyCurrent.laminated("bad", area, length, RHO, 0.0)
 
 

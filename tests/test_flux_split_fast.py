@@ -78,7 +78,7 @@ def test_short_loops_fall_back_to_fundamental_loops_where_needed(
     from maglevkit.circuit import Branch, Circuit, Coil, LeakagePermeance, Network
 
     def br(name: str, a: str, b: str) -> Branch:
-        return Branch(name, a, b, (LeakagePermeance(f"r_{name}", value=1e-7),))
+        return Branch(name, a, b, (LeakagePermeance(f"r_{name}", value_H=1e-7),))
 
     branches = [br("a", "1", "2"), br("b", "2", "3"), br("c", "3", "4"), br("d", "4", "1"),
                 br("e", "2", "5"), br("f", "5", "6"), br("g", "6", "3"), br("p", "1", "2")]

@@ -106,8 +106,8 @@ def test_map_parameter_and_roters_limit() -> None:
 def test_fringe_element_laws_and_casadi() -> None:
     """The element's conformal strip is the law's difference, with Carter's gap; NumPy and
     CasADi give the same value and CasADi's derivative equals a central difference."""
-    kw = {"gap_input": "s", "width": 0.17, "radius": 0.0439, "inner_radius": 0.015,
-          "slot_pitch": 0.086, "slot_opening": 0.035}
+    kw = {"gap_input": "s", "width_m": 0.17, "radius_m": 0.0439, "inner_radius_m": 0.015,
+          "slot_pitch_m": 0.086, "slot_opening_m": 0.035}
     el = FringePermeance("f", law="conformal", **kw)
     s = 0.012
     from maglevkit.circuit.elements import carter_coefficient

@@ -65,8 +65,8 @@ def test_bow_cut_removes_exactly_the_across_track_terms() -> None:
         if name.startswith("leak_pb_"):                      # end poles: outer side, depth wp
             (el,) = br.elements
             (full_el,) = a[name].elements
-            assert math.isclose(el.value, MU0 * wp * ln, rel_tol=1e-12)
-            assert math.isclose(full_el.value,
+            assert math.isclose(el.value_H, MU0 * wp * ln, rel_tol=1e-12)
+            assert math.isclose(full_el.value_H,
                                 MU0 * (2 * (lp + 2 * tc) + wp + 2 * tc) * ln, rel_tol=1e-12)
         elif name.startswith("gap_"):                        # along-track edges dropped
             gap, full_gap = br.elements[0], a[name].elements[0]

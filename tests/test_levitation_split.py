@@ -136,7 +136,7 @@ def test_leakage_permeances_against_roters() -> None:
     per_m = MU0 * np.log(1.0 + tc / (hc / 2.0)) / np.pi
     g_pb_inner = per_m * 2.0 * (lp + 2.0 * tc)
     g_pb_end = per_m * (2.0 * (lp + 2.0 * tc) + (wp + 2.0 * tc))
-    leak = {e.name: e.value for br in net.branches for e in br.elements
+    leak = {e.name: e.value_H for br in net.branches for e in br.elements
             if isinstance(e, mk.LeakagePermeance)}
     pp = {k: v for k, v in leak.items() if k.startswith("leak_pp_")}
     pb = {k: v for k, v in leak.items() if k.startswith("leak_pb_")}
@@ -249,7 +249,7 @@ def test_iron_is_saturable_and_teeth_are_loaded(std: mk.Magnet) -> None:
     for br, phi in zip(net.branches, sol.branch_flux_Wb, strict=True):
         for e in br.elements:
             if isinstance(e, mk.IronPath) and e.name.startswith("iron_teeth_"):
-                b_teeth.append(abs(phi) / e.cross_section)
+                b_teeth.append(abs(phi) / e.cross_section_m2)
     b_teeth = np.array(b_teeth)
     assert b_teeth.size == 12
     # computed at (10 mm, 33.5 A): 0.93 .. 1.17 T in the teeth under the faces (the flank
@@ -280,10 +280,10 @@ def test_eddy_elements_in_pole_cores_and_back_only(std: mk.Magnet) -> None:
     whole = mk.EddyCurrent.solid_rectangular("c", m["pole_length"], m["pole_width"],
                                              m["core_height"], 9.0e-8)
     parts = [mk.EddyCurrent.solid_rectangular("c", m["pole_length"], m["pole_width"],
-                                              e.length, 9.0e-8)
+                                              e.length_m, 9.0e-8)
              for br in std.network.branches if br.name.startswith("core_p01_")
              for e in br.elements if isinstance(e, mk.IronPath)]
-    assert sum(e.conductance for e in parts) == pytest.approx(whole.conductance, rel=1e-12)
+    assert sum(e.conductance_S for e in parts) == pytest.approx(whole.conductance_S, rel=1e-12)
     assert not std.with_options(eddy_currents=False).network.has_eddy_currents
 
 
@@ -308,17 +308,17 @@ def test_teeth_and_slot_air_share_one_mmf_deep_in_saturation(std: mk.Magnet) -> 
         assert flux[f"gap_{p}"] == pytest.approx(
             flux[f"teeth_{p}"] + flux[f"slots_{p}"] + flux[f"across_{p}_l"]
             + flux[f"across_{p}_r"], rel=1e-9)
-        b = flux[f"teeth_{p}"] / teeth.cross_section
+        b = flux[f"teeth_{p}"] / teeth.cross_section_m2
         h = float(teeth.material.field_strength(abs(b)))
         # the slots' air at the teeth's field: B_air = mu0 H over the slots' area
-        a_slot = slot.value * st["slot_depth"] / MU0
+        a_slot = slot.value_H * st["slot_depth"] / MU0
         assert abs(flux[f"slots_{p}"]) == pytest.approx(MU0 * h * a_slot, rel=1e-9)
     # deep in saturation the slots carry a few % of the face flux, far more of its
     # increment: mu0 A_slot against mu_diff(2.1 T) A_t ~ 2 mu0 A_t
     share = abs(flux["slots_p09"] / flux["gap_p09"])
     assert 0.01 < share < 0.1
     m = mag.parameters["magnet"]
-    lengths = sum(e.length for br in net.branches if br.name.startswith("core_p01_")
+    lengths = sum(e.length_m for br in net.branches if br.name.startswith("core_p01_")
                   for e in br.elements if isinstance(e, mk.IronPath))
     assert lengths == pytest.approx(m["core_height"], rel=1e-12)
 
@@ -344,7 +344,7 @@ def test_coil_air_sees_the_iron_drop() -> None:
     core's flux grows with saturation (measured 0.07 % at 10 mm / 10 A, 0.74 % at 100 A):
     a term of the increment in deep saturation, not of the statics below the knee."""
     mag = mk.build_magnet(_params("tr09-standard"), options=mk.ModelOptions(eddy_currents=False))
-    leak = {e.name: e.value for br in mag.network.branches for e in br.elements
+    leak = {e.name: e.value_H for br in mag.network.branches for e in br.elements
             if isinstance(e, mk.LeakagePermeance)}
     shares = {}
     for i in (10.0, 100.0):

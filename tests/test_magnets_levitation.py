@@ -342,7 +342,7 @@ def test_leakage_permeances_against_roters() -> None:
     per_m = MU0 * np.log(1.0 + tc / (hc / 2.0)) / np.pi
     g_pb_inner = per_m * 2.0 * (lp + 2.0 * tc)
     g_pb_end = per_m * (2.0 * (lp + 2.0 * tc) + (wp + 2.0 * tc))
-    leak = {e.name: e.value for br in net.branches for e in br.elements
+    leak = {e.name: e.value_H for br in net.branches for e in br.elements
             if isinstance(e, mk.LeakagePermeance)}
     pp = {k: v for k, v in leak.items() if k.startswith("leak_pp_")}
     pb = {k: v for k, v in leak.items() if k.startswith("leak_pb_")}
@@ -368,7 +368,7 @@ def test_iron_is_saturable_and_teeth_are_loaded(std: mk.Magnet) -> None:
     for br, phi in zip(net.branches, sol.branch_flux_Wb, strict=True):
         for e in br.elements:
             if isinstance(e, mk.IronPath) and e.name.startswith("iron_teeth_"):
-                b_teeth.append(abs(phi) / e.cross_section)
+                b_teeth.append(abs(phi) / e.cross_section_m2)
     b_teeth = np.array(b_teeth)
     assert b_teeth.size == 12
     # computed at (10 mm, 33.5 A): 1.00 .. 1.24 T.  Every tooth carries > 0.95 T and the

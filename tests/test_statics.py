@@ -54,7 +54,7 @@ def test_constant_mu_iron_is_series_reluctances() -> None:
     for b in net.branches:
         for e in b.elements:
             if isinstance(e, mk.IronPath):
-                r_total += e.length / (MU0 * mu * e.cross_section)
+                r_total += e.length_m / (MU0 * mu * e.cross_section_m2)
     sol = mk.solve_statics(net, gaps_m=s, currents_A=current)
     assert sol.differential_inductance_H[0, 0] == pytest.approx(N_TURNS**2 / r_total, rel=1e-12)
     phi = N_TURNS * current / r_total
@@ -81,7 +81,7 @@ def _series_loop(s: float) -> tuple[mk.Magnet, list[tuple[float, float]], float,
     mag = build_u(leakage=False)
     net = mag.network
     assert net.n_loops == 1
-    iron = [(e.length, e.cross_section) for b in net.branches for e in b.elements
+    iron = [(e.length_m, e.cross_section_m2) for b in net.branches for e in b.elements
             if isinstance(e, mk.IronPath)]
     gaps = [e for b in net.branches for e in b.elements if isinstance(e, mk.AirGap)]
     assert len(gaps) == 2 and gaps[0].permeance(s) == gaps[1].permeance(s)

@@ -134,22 +134,22 @@ def test_fringe_permeance_closed_form() -> None:
     quadrature, and the same as the fringe term of AirGap."""
     w, r = 0.1, 0.01
     for s in (0.002, 0.01, 0.03):
-        el = FringePermeance("f", gap_input="g", width=w, radius=r)
+        el = FringePermeance("f", gap_input="g", width_m=w, radius_m=r)
         ref = MU0 * w * quad(lambda x, s=s: 1.0 / (s + math.pi * x / 2.0), 0.0, r)[0]
         assert el.permeance(s) == pytest.approx(ref, rel=1e-12)
-        with_edge = AirGap("a", gap_input="g", pole_area=3e-3, fringe_edges=((w, r),))
-        bare = AirGap("b", gap_input="g", pole_area=3e-3)
+        with_edge = AirGap("a", gap_input="g", pole_area_m2=3e-3, fringe_edges=((w, r),))
+        bare = AirGap("b", gap_input="g", pole_area_m2=3e-3)
         assert el.permeance(s) == pytest.approx(with_edge.permeance(s) - bare.permeance(s),
                                                 rel=1e-12)
         assert el.gap == "g"
 
 
-@pytest.mark.parametrize("kwargs", [dict(width=0.0), dict(radius=-1e-3), dict(gap_input="")])
+@pytest.mark.parametrize("kwargs", [dict(width_m=0.0), dict(radius_m=-1e-3), dict(gap_input="")])
 def test_fringe_permeance_bad_input(kwargs: dict) -> None:
     with pytest.raises(ParameterError):
-        FringePermeance("f", **{"gap_input": "g", "width": 0.1, "radius": 0.01, **kwargs})
+        FringePermeance("f", **{"gap_input": "g", "width_m": 0.1, "radius_m": 0.01, **kwargs})
     with pytest.raises(ParameterError, match="needs a gap"):
-        FringePermeance("f", gap_input="g", width=0.1, radius=0.01).permeance(None)
+        FringePermeance("f", gap_input="g", width_m=0.1, radius_m=0.01).permeance(None)
 
 
 def test_grid_network_textbook_limit() -> None:
@@ -247,7 +247,7 @@ def test_grid_eddy_elements_dissipate_as_the_lumped_part() -> None:
     seg = lum.branch("leg_left_2")
     g_l = next(e for e in seg.elements if e.eddy_conductance > 0)
     iron_l = next(e for e in seg.elements if e.area is not None)
-    ref = g_l.eddy_conductance * iron_l.area**2 / iron_l.length
+    ref = g_l.eddy_conductance * iron_l.area**2 / iron_l.length_m
     row = [b for b in g.branches if b.name.startswith("frame_v_") and b.name.endswith("_3")
            and any(e.eddy_conductance > 0 for e in b.elements)]
     left = [b for b in row if int(b.name.split("_")[2]) < 3]
@@ -256,7 +256,7 @@ def test_grid_eddy_elements_dissipate_as_the_lumped_part() -> None:
     for b in left:
         ec = next(e for e in b.elements if e.eddy_conductance > 0)
         iron = next(e for e in b.elements if e.area is not None)
-        total += ec.eddy_conductance * iron.area**2 / iron.length
+        total += ec.eddy_conductance * iron.area**2 / iron.length_m
     assert total == pytest.approx(ref, rel=1e-12)
 
 

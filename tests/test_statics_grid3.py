@@ -244,15 +244,15 @@ def test_air_keys_are_refused_by_the_lumped_network(key: str) -> None:
 def test_gap_layer_permeance() -> None:
     """G = mu0 w s/l, linear in the gap (so its force share phi^2/2 dR/ds is repulsive);
     bad geometry is refused."""
-    el = GapLayerPermeance("g", gap_input="left", width=0.1, length=0.005)
+    el = GapLayerPermeance("g", gap_input="left", width_m=0.1, length_m=0.005)
     for s in (0.004, 0.02):
         assert el.permeance(s) == pytest.approx(MU0 * 0.1 * s / 0.005, rel=1e-15)
     assert el.gap == "left"
     with pytest.raises(ParameterError, match="needs a gap"):
         el.permeance(None)
-    for bad in ({"width": 0.0}, {"length": -1.0}, {"gap_input": ""}):
+    for bad in ({"width_m": 0.0}, {"length_m": -1.0}, {"gap_input": ""}):
         with pytest.raises(ParameterError):
-            GapLayerPermeance("g", **{"gap_input": "s", "width": 0.1, "length": 0.01, **bad})
+            GapLayerPermeance("g", **{"gap_input": "s", "width_m": 0.1, "length_m": 0.01, **bad})
 
 
 # A second geometry (GEOM2 of benchmarks/fem_u_magnet.py), not used to choose the air

@@ -158,30 +158,16 @@ _each(("figures.Fig6Data", "figures.Fig7Data"), "current", "I/I0 (dimensionless,
 #: Names that denote a quantity and should carry its unit, not renamed in this change, with
 #: the reason.  This list may only shrink (the test fails on a stale entry).
 DEFERRED: dict[str, str] = {
-    # circuit elements and materials: fields in the network's identity
-    "maglevkit.circuit.elements.AirGap:pole_area": _SI_IDENTITY,
-    "maglevkit.circuit.elements.AirGap:slot_opening": _SI_IDENTITY,
-    "maglevkit.circuit.elements.AirGap:slot_pitch": _SI_IDENTITY,
-    "maglevkit.circuit.elements.FringePermeance:slot_opening": _SI_IDENTITY,
-    "maglevkit.circuit.elements.FringePermeance:slot_pitch": _SI_IDENTITY,
-    "maglevkit.circuit.elements.FringePermeance:width": _SI_IDENTITY,
-    "maglevkit.circuit.elements.FringePermeance:radius": _SI_IDENTITY,
-    "maglevkit.circuit.elements.FringePermeance:inner_radius": _SI_IDENTITY,
-    "maglevkit.circuit.elements.GapLayerPermeance:width": _SI_IDENTITY,
-    "maglevkit.circuit.elements.GapLayerPermeance:length": _SI_IDENTITY,
-    "maglevkit.circuit.elements.GapLeakage:width": _SI_IDENTITY,
-    "maglevkit.circuit.elements.GapLeakage:radius": _SI_IDENTITY,
-    "maglevkit.circuit.elements.IronPath:length": _SI_IDENTITY,
-    "maglevkit.circuit.elements.EddyCurrent:conductance": _SI_IDENTITY,
+    # circuit and materials: fields in the network's identity (the element fields carry
+    # their units since units22)
     "maglevkit.circuit.network.Circuit:resistance": _SI_IDENTITY,
     "resistivity": _SI_IDENTITY + " (materials; the element factories take the same value)",
 }
 
-_ELEMENT_LAWS = ("circuit element laws and factories (circuit/elements.py): the laws are "
-                 "overridden by the calibrated elements of circuit/factors.py and the "
-                 "factories called by the magnet builders in magnets/levitation.py and "
-                 "magnets/guidance.py, files three other branches rewrite in parallel; "
-                 "a change of its own")
+_ELEMENT_LAWS = ("circuit element laws (circuit/elements.py; their fields and factories "
+                 "carry units since units22): the laws' gap and flux arguments are "
+                 "overridden by the calibrated elements of circuit/factors.py and called by "
+                 "every solver; a change of its own")
 for _law in ("AirGap.effective_gap", "AirGap.fringe_permeance", "AirGap.permeance",
              "EddyCurrent.energy", "EddyCurrent.mmf_drop", "Element.energy", "Element.mmf_drop",
              "FringePermeance.permeance", "GapLayerPermeance.permeance", "GapLeakage.permeance",
@@ -190,24 +176,8 @@ for _law in ("AirGap.effective_gap", "AirGap.fringe_permeance", "AirGap.permeanc
              "carter_coefficient"):
     for _p in ("gap", "flux") if _law.endswith(("energy", "mmf_drop")) else ("gap",):
         DEFERRED[f"maglevkit.circuit.elements.{_law}:{_p}"] = _ELEMENT_LAWS
-for _law, _params in {"EddyCurrent.laminated": ("area", "length", "sheet_thickness"),
-                      "EddyCurrent.one_turn": ("path_area", "path_length"),
-                      "EddyCurrent.solid_rectangular": ("width", "height", "length"),
-                      "LeakagePermeance.eighth_sphere": ("radius",),
-                      "LeakagePermeance.quarter_sphere": ("radius",),
-                      "LeakagePermeance.half_cylinder": ("length",),
-                      "LeakagePermeance.quarter_cylinder": ("length",),
-                      "LeakagePermeance.half_hollow_cylinder": ("length", "inner_radius",
-                                                                "thickness"),
-                      "LeakagePermeance.quarter_hollow_cylinder": ("length", "inner_radius",
-                                                                   "thickness"),
-                      "LeakagePermeance.quarter_hollow_sphere": ("thickness",),
-                      "LeakagePermeance.parallel_plates": ("area", "distance")}.items():
-    for _p in _params:
-        DEFERRED[f"maglevkit.circuit.elements.{_law}:{_p}"] = _ELEMENT_LAWS
-for _f in ("AirGap", "FringePermeance", "carter_coefficient"):
-    for _p in ("slot_opening", "slot_pitch"):
-        DEFERRED.setdefault(f"maglevkit.circuit.elements.{_f}:{_p}", _SI_IDENTITY)
+for _p in ("slot_opening", "slot_pitch"):
+    DEFERRED.setdefault(f"maglevkit.circuit.elements.carter_coefficient:{_p}", _ELEMENT_LAWS)
 DEFERRED["maglevkit.vehicle.mechanics.VehicleMechanics:gravity"] = (
     "vehicle/mechanics.py is being rewritten in parallel (the vehicle framework branch); "
     "rename with it to gravity_m_per_s2 as HeaveMass did")

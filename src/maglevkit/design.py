@@ -689,7 +689,7 @@ class _Problem:
             for el in br.elements:
                 if isinstance(el, IronPath) and kd.magnet_iron(el.name):
                     b_names.append(el.name)
-                    b_expr.append(flux_b[j] / el.cross_section)
+                    b_expr.append(flux_b[j] / el.cross_section_m2)
         self.iron_names = tuple(b_names)
         # statics of the network with turns0 at the effective current I N / N0
         self.point = ca.Function("design_point", [eq.x, s, current, self.p, y_i, y_s],
@@ -958,7 +958,7 @@ def evaluate_design(spec: DesignSpec, values: Mapping[str, float] | None = None,
             for j, br in enumerate(mag.network.branches):
                 for el in br.elements:
                     if isinstance(el, IronPath) and kd.magnet_iron(el.name):
-                        b = abs(phi[j]) / el.cross_section
+                        b = abs(phi[j]) / el.cross_section_m2
                         if b > best:
                             best, where = b, el.name
             # circuit 1 while every circuit carries I_n and every gap moves together

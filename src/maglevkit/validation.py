@@ -400,7 +400,9 @@ def renamed_keywords(**renames: str) -> Callable[[_F], _F]:
 
     On a class (e.g. a dataclass whose fields were renamed) it wraps the constructor the
     same way and adds each old name as a read-only property that returns the new
-    attribute with the same warning, so ``obj.gaps`` still reads ``obj.gaps_m``.
+    attribute with the same warning, so ``obj.gaps`` still reads ``obj.gaps_m``.  The
+    wrapped function (or class) has the attribute ``renamed_keywords``, the old -> new
+    mapping, for tools that migrate callers (``tools/rename_element_fields.py``).
 
     Parameters
     ----------
@@ -432,6 +434,7 @@ def renamed_keywords(**renames: str) -> Callable[[_F], _F]:
                               + " (same values and units)", DeprecationWarning, stacklevel=2)
             return fn(*args, **kwargs)
 
+        wrapper.renamed_keywords = dict(renames)    # type: ignore[attr-defined]
         return cast(_F, wrapper)
 
     def alias(where: str, old: str, new: str) -> property:
@@ -452,6 +455,7 @@ def renamed_keywords(**renames: str) -> Callable[[_F], _F]:
             cls.__init__ = wrap(cls.__init__, where)
             for old, new in renames.items():
                 setattr(cls, old, alias(where, old, new))
+            cls.renamed_keywords = dict(renames)        # read by tools that migrate callers
             return fn
         return wrap(fn, fn.__qualname__)
 

@@ -17,6 +17,10 @@ base class owns the law the element contributes to its branch.
 Sign convention: a branch flux ``phi`` flows from the branch's start node to its end
 node; an element's magnetic voltage drop ``V_m`` is measured in the same direction.
 All quantities are SI: lengths in m, areas in m^2, flux in Wb, MMF in A (ampere-turns).
+The fields and the factories' arguments carry their unit in the name (``length_m``,
+``pole_area_m2``, ``value_H``, ``conductance_S``); the old names (``length``, ``pole_area``,
+``value``, ``conductance``, ...) are deprecated aliases for one release, as keywords and
+as attributes (``tools/rename_element_fields.py`` migrates callers).
 """
 
 from __future__ import annotations
@@ -31,7 +35,7 @@ import numpy as np
 
 from ..errors import InputError, ParameterError
 from ..materials import MU0, Material, get_material
-from ..validation import real_array
+from ..validation import real_array, renamed_keywords
 
 __all__ = [
     "symbolic",
@@ -352,6 +356,7 @@ class LinearElement(Element):
         return flux * flux / (2.0 * self.permeance(gap))
 
 
+@renamed_keywords(length="length_m", cross_section="cross_section_m2")
 @dataclass(frozen=True)
 class IronPath(Element):
     """A homogeneous iron part: ``V_m = l H(phi/A)`` (paper eq. 1 with mu = mu(phi)).
@@ -360,10 +365,10 @@ class IronPath(Element):
     ----------
     name : str
         Unique name of the element within its network.
-    length : float
-        Mean flux path length [m], > 0.
-    cross_section : float
-        Cross-section area [m^2], > 0.
+    length_m : float
+        Mean flux path length [m], > 0 (deprecated keyword: ``length``).
+    cross_section_m2 : float
+        Cross-section area [m^2], > 0 (deprecated keyword: ``cross_section``).
     material : Material or str
         Constitutive law, or the name of a built-in record (default ``"ideal"``:
         infinitely permeable iron).
@@ -371,20 +376,21 @@ class IronPath(Element):
     Raises
     ------
     ParameterError
-        ``length`` or ``cross_section`` not a finite number > 0; an unknown material.
+        ``length_m`` or ``cross_section_m2`` not a finite number > 0; an unknown material.
     """
 
-    length: float
-    cross_section: float
+    length_m: float
+    cross_section_m2: float
     material: Material = field(default_factory=lambda: get_material("ideal"))
 
     def __post_init__(self) -> None:
-        _positive(f"iron path {self.name!r}", length=self.length, cross_section=self.cross_section)
+        _positive(f"iron path {self.name!r}", length_m=self.length_m,
+                  cross_section_m2=self.cross_section_m2)
         object.__setattr__(self, "material", get_material(self.material))
 
     @property
     def area(self) -> float:
-        return self.cross_section
+        return self.cross_section_m2
 
     def mmf_drop(self, flux: Any, gap: Any = None) -> Any:
         """``V_m = l H(phi / A)`` [A].
@@ -401,7 +407,7 @@ class IronPath(Element):
         float, ndarray or CasADi
             ``V_m`` [A].
         """
-        return self.length * self.material.field_strength(flux / self.cross_section)
+        return self.length_m * self.material.field_strength(flux / self.cross_section_m2)
 
     def energy(self, flux: Any, gap: Any = None) -> Any:
         """Stored energy ``l A w(phi / A)`` [J], with the material's energy density ``w(B)``.
@@ -418,10 +424,11 @@ class IronPath(Element):
         float or ndarray
             Energy [J].
         """
-        b = np.asarray(flux, dtype=float) / self.cross_section
-        return self.length * self.cross_section * self.material.energy_density(b)
+        b = np.asarray(flux, dtype=float) / self.cross_section_m2
+        return self.length_m * self.cross_section_m2 * self.material.energy_density(b)
 
 
+@renamed_keywords(pole_area="pole_area_m2", slot_pitch="slot_pitch_m", slot_opening="slot_opening_m")
 @dataclass(frozen=True)
 class AirGap(LinearElement):
     """Air gap between a pole face and the rail/stator.
@@ -438,7 +445,7 @@ class AirGap(LinearElement):
     is the flux from recessed parts of the pole face (e.g. the grooves of a
     linear-generator winding) of area ``A_j`` and depth ``d_j``, which cross the groove
     and then the gap in series.  ``k_C`` is Carter's coefficient of a slotted stator
-    (1 when ``slot_pitch`` is 0).  Slots in the pole face itself (``face_slots``, narrow
+    (1 when ``slot_pitch_m`` is 0).  Slots in the pole face itself (``face_slots``, narrow
     grooves deeper than half their opening, whose flux enters through the side walls)
     are counted by Carter's slot loss instead: ``A`` is then the whole face and each
     slot of length ``w_k`` and opening ``b_k`` subtracts ``w_k gamma(b_k/(2s)) s / s'``
@@ -451,20 +458,21 @@ class AirGap(LinearElement):
         Unique name of the element within its network.
     gap_input : str
         Name of the gap input (one per pole), non-empty.
-    pole_area : float
-        Pole face area [m^2], > 0.
+    pole_area_m2 : float
+        Pole face area [m^2], > 0 (deprecated keyword: ``pole_area``).
     fringe_edges : tuple of (float, float)
         ``(edge length w_e [m], flank height r_e [m])`` per fringing edge, each > 0
         (empty: none).
-    slot_pitch, slot_opening : float
+    slot_pitch_m, slot_opening_m : float
         Stator slot pitch and slot opening [m] for Carter's coefficient (0: smooth);
-        with a pitch > 0 the opening must lie in ``(0, slot_pitch)``.
+        with a pitch > 0 the opening must lie in ``(0, slot_pitch_m)`` (deprecated
+        keywords: ``slot_pitch``, ``slot_opening``).
     recesses : tuple of (float, float)
         ``(area A_j [m^2], depth d_j [m])`` of recessed pole-face parts, each > 0
         (empty: none).
     face_slots : tuple of (float, float)
         ``(slot length w_k [m], opening b_k [m])`` of slots in the pole face counted by
-        Carter's slot loss (their area is part of ``pole_area``; empty: none).
+        Carter's slot loss (their area is part of ``pole_area_m2``; empty: none).
 
     Raises
     ------
@@ -473,10 +481,10 @@ class AirGap(LinearElement):
     """
 
     gap_input: str = "s"
-    pole_area: float = 1.0
+    pole_area_m2: float = 1.0
     fringe_edges: tuple[tuple[float, float], ...] = ()
-    slot_pitch: float = 0.0
-    slot_opening: float = 0.0
+    slot_pitch_m: float = 0.0
+    slot_opening_m: float = 0.0
     recesses: tuple[tuple[float, float], ...] = ()
     face_slots: tuple[tuple[float, float], ...] = ()
 
@@ -484,7 +492,7 @@ class AirGap(LinearElement):
         owner = f"air gap {self.name!r}"
         if not isinstance(self.gap_input, str) or not self.gap_input:
             raise ParameterError(f"{owner}: gap_input must be a non-empty name")
-        _positive(owner, pole_area=self.pole_area)
+        _positive(owner, pole_area_m2=self.pole_area_m2)
         edges = tuple((w if symbolic(w) else float(w), r if symbolic(r) else float(r))
                       for w, r in self.fringe_edges)
         object.__setattr__(self, "fringe_edges", edges)
@@ -499,13 +507,13 @@ class AirGap(LinearElement):
         for w, b in slots:
             _positive(owner, face_slot_length=w, face_slot_opening=b)
         covered = sum(w * b for w, b in slots)
-        if slots and not (symbolic(covered) or symbolic(self.pole_area)) \
-                and covered >= self.pole_area:
+        if slots and not (symbolic(covered) or symbolic(self.pole_area_m2)) \
+                and covered >= self.pole_area_m2:
             raise ParameterError(f"{owner}: the face slots (length x opening) cover the "
-                                 "whole pole area; pole_area must include them")
-        _nonnegative(owner, slot_pitch=self.slot_pitch, slot_opening=self.slot_opening)
-        if self.slot_pitch > 0.0 and not 0.0 < self.slot_opening < self.slot_pitch:
-            raise ParameterError(f"{owner}: slot_opening must lie in (0, slot_pitch) when a "
+                                 "whole pole area; pole_area_m2 must include them")
+        _nonnegative(owner, slot_pitch_m=self.slot_pitch_m, slot_opening_m=self.slot_opening_m)
+        if self.slot_pitch_m > 0.0 and not 0.0 < self.slot_opening_m < self.slot_pitch_m:
+            raise ParameterError(f"{owner}: slot_opening_m must lie in (0, slot_pitch_m) when a "
                                  "slot pitch is given")
 
     @property
@@ -514,7 +522,7 @@ class AirGap(LinearElement):
 
     @property
     def area(self) -> float:
-        return self.pole_area
+        return self.pole_area_m2
 
     def effective_gap(self, gap: Any) -> Any:
         """Gap enlarged by Carter's coefficient [m].
@@ -530,8 +538,8 @@ class AirGap(LinearElement):
         float, ndarray or CasADi
             ``k_C s`` [m] (``s`` itself for a smooth stator).
         """
-        if self.slot_pitch > 0.0:
-            return carter_coefficient(gap, self.slot_pitch, self.slot_opening) * gap
+        if self.slot_pitch_m > 0.0:
+            return carter_coefficient(gap, self.slot_pitch_m, self.slot_opening_m) * gap
         return gap
 
     def fringe_permeance(self, gap: Any) -> Any:
@@ -572,7 +580,7 @@ class AirGap(LinearElement):
         if gap is None:
             raise ParameterError(f"air gap {self.name!r}: needs a gap value")
         s = self.effective_gap(gap)
-        g = self._add_fringe(self.pole_area / s, s)
+        g = self._add_fringe(self.pole_area_m2 / s, s)
         for a, d in self.recesses:
             g = g + a / (s + d)
         for w, b in self.face_slots:
@@ -580,29 +588,33 @@ class AirGap(LinearElement):
         return MU0 * g
 
 
+@renamed_keywords(value="value_H")
 @dataclass(frozen=True)
 class LeakagePermeance(LinearElement):
     """A constant leakage permeance ``G`` [H] (flux that does not cross the air gap).
 
-    Use the constructors for the standard Roters flux-tube shapes.
+    Use the constructors for the standard Roters flux-tube shapes (their dimensions carry
+    the unit in the name, ``length_m``, ``radius_m``, ...; the old names ``length=``,
+    ``radius=``, ... are deprecated aliases for one release).
 
     Parameters
     ----------
     name : str
         Unique name of the element within its network.
-    value : float
-        Permeance G [H], > 0 (required, although it has a default for the dataclass).
+    value_H : float
+        Permeance G [H], > 0 (required, although it has a default for the dataclass;
+        deprecated keyword: ``value``).
 
     Raises
     ------
     ParameterError
-        ``value`` not a finite number > 0.
+        ``value_H`` not a finite number > 0.
     """
 
-    value: float = 0.0
+    value_H: float = 0.0
 
     def __post_init__(self) -> None:
-        _positive(f"leakage permeance {self.name!r}", value=self.value)
+        _positive(f"leakage permeance {self.name!r}", value_H=self.value_H)
 
     def permeance(self, gap: Any = None) -> Any:
         """The constant permeance ``G`` [H].
@@ -615,21 +627,22 @@ class LeakagePermeance(LinearElement):
         Returns
         -------
         float
-            :attr:`value` [H].
+            :attr:`value_H` [H].
         """
-        return self.value
+        return self.value_H
 
     @classmethod
-    def parallel_plates(cls, name: str, area: float, distance: float) -> LeakagePermeance:
+    @renamed_keywords(area="area_m2", distance="distance_m")
+    def parallel_plates(cls, name: str, area_m2: float, distance_m: float) -> LeakagePermeance:
         """Homogeneous field between two parallel faces: ``mu0 A / d``.
 
         Parameters
         ----------
         name : str
             Unique name of the element within its network.
-        area : float
+        area_m2 : float
             Face area A [m^2], > 0.
-        distance : float
+        distance_m : float
             Distance d between the faces [m], > 0.
 
         Returns
@@ -641,18 +654,19 @@ class LeakagePermeance(LinearElement):
         ParameterError
             A dimension that is not a finite number > 0.
         """
-        _positive(f"leakage {name!r}", area=area, distance=distance)
-        return cls(name, MU0 * area / distance)
+        _positive(f"leakage {name!r}", area_m2=area_m2, distance_m=distance_m)
+        return cls(name, MU0 * area_m2 / distance_m)
 
     @classmethod
-    def half_cylinder(cls, name: str, length: float) -> LeakagePermeance:
+    @renamed_keywords(length="length_m")
+    def half_cylinder(cls, name: str, length_m: float) -> LeakagePermeance:
         """Half cylinder of axial length l: ``0.26 mu0 l``.
 
         Parameters
         ----------
         name : str
             Unique name of the element within its network.
-        length : float
+        length_m : float
             Axial length l [m], > 0.
 
         Returns
@@ -664,18 +678,19 @@ class LeakagePermeance(LinearElement):
         ParameterError
             A dimension that is not a finite number > 0.
         """
-        _positive(f"leakage {name!r}", length=length)
-        return cls(name, 0.26 * MU0 * length)
+        _positive(f"leakage {name!r}", length_m=length_m)
+        return cls(name, 0.26 * MU0 * length_m)
 
     @classmethod
-    def quarter_cylinder(cls, name: str, length: float) -> LeakagePermeance:
+    @renamed_keywords(length="length_m")
+    def quarter_cylinder(cls, name: str, length_m: float) -> LeakagePermeance:
         """Quarter cylinder of axial length l: ``0.52 mu0 l``.
 
         Parameters
         ----------
         name : str
             Unique name of the element within its network.
-        length : float
+        length_m : float
             Axial length l [m], > 0.
 
         Returns
@@ -687,23 +702,24 @@ class LeakagePermeance(LinearElement):
         ParameterError
             A dimension that is not a finite number > 0.
         """
-        _positive(f"leakage {name!r}", length=length)
-        return cls(name, 0.52 * MU0 * length)
+        _positive(f"leakage {name!r}", length_m=length_m)
+        return cls(name, 0.52 * MU0 * length_m)
 
     @classmethod
-    def half_hollow_cylinder(cls, name: str, length: float, inner_radius: float,
-                             thickness: float) -> LeakagePermeance:
+    @renamed_keywords(length="length_m", inner_radius="inner_radius_m", thickness="thickness_m")
+    def half_hollow_cylinder(cls, name: str, length_m: float, inner_radius_m: float,
+                             thickness_m: float) -> LeakagePermeance:
         """Half hollow cylinder: ``mu0 l ln(1 + t/r_i) / pi``.
 
         Parameters
         ----------
         name : str
             Unique name of the element within its network.
-        length : float
+        length_m : float
             Axial length l [m], > 0.
-        inner_radius : float
+        inner_radius_m : float
             Inner radius r_i [m], > 0 (half the distance between the faces).
-        thickness : float
+        thickness_m : float
             Shell thickness t [m], > 0.
 
         Returns
@@ -715,26 +731,27 @@ class LeakagePermeance(LinearElement):
         ParameterError
             A dimension that is not a finite number > 0.
         """
-        _positive(f"leakage {name!r}", length=length, inner_radius=inner_radius,
-                  thickness=thickness)
-        ratio = 1.0 + thickness / inner_radius
+        _positive(f"leakage {name!r}", length_m=length_m, inner_radius_m=inner_radius_m,
+                  thickness_m=thickness_m)
+        ratio = 1.0 + thickness_m / inner_radius_m
         log = ca.log(ratio) if symbolic(ratio) else math.log(ratio)
-        return cls(name, MU0 * length * log / math.pi)
+        return cls(name, MU0 * length_m * log / math.pi)
 
     @classmethod
-    def quarter_hollow_cylinder(cls, name: str, length: float, inner_radius: float,
-                                thickness: float) -> LeakagePermeance:
+    @renamed_keywords(length="length_m", inner_radius="inner_radius_m", thickness="thickness_m")
+    def quarter_hollow_cylinder(cls, name: str, length_m: float, inner_radius_m: float,
+                                thickness_m: float) -> LeakagePermeance:
         """Quarter hollow cylinder: twice the half hollow cylinder.
 
         Parameters
         ----------
         name : str
             Unique name of the element within its network.
-        length : float
+        length_m : float
             Axial length l [m], > 0.
-        inner_radius : float
+        inner_radius_m : float
             Inner radius r_i [m], > 0.
-        thickness : float
+        thickness_m : float
             Shell thickness t [m], > 0.
 
         Returns
@@ -746,18 +763,19 @@ class LeakagePermeance(LinearElement):
         ParameterError
             A dimension that is not a finite number > 0.
         """
-        half = cls.half_hollow_cylinder(name, length, inner_radius, thickness)
-        return cls(name, 2.0 * half.value)
+        half = cls.half_hollow_cylinder(name, length_m, inner_radius_m, thickness_m)
+        return cls(name, 2.0 * half.value_H)
 
     @classmethod
-    def quarter_sphere(cls, name: str, radius: float) -> LeakagePermeance:
+    @renamed_keywords(radius="radius_m")
+    def quarter_sphere(cls, name: str, radius_m: float) -> LeakagePermeance:
         """Quarter sphere: ``0.077 mu0 2 r``.
 
         Parameters
         ----------
         name : str
             Unique name of the element within its network.
-        radius : float
+        radius_m : float
             Radius r [m], > 0.
 
         Returns
@@ -769,18 +787,19 @@ class LeakagePermeance(LinearElement):
         ParameterError
             A dimension that is not a finite number > 0.
         """
-        _positive(f"leakage {name!r}", radius=radius)
-        return cls(name, 0.077 * MU0 * 2.0 * radius)
+        _positive(f"leakage {name!r}", radius_m=radius_m)
+        return cls(name, 0.077 * MU0 * 2.0 * radius_m)
 
     @classmethod
-    def eighth_sphere(cls, name: str, radius: float) -> LeakagePermeance:
+    @renamed_keywords(radius="radius_m")
+    def eighth_sphere(cls, name: str, radius_m: float) -> LeakagePermeance:
         """Eighth sphere: ``0.308 mu0 r``.
 
         Parameters
         ----------
         name : str
             Unique name of the element within its network.
-        radius : float
+        radius_m : float
             Radius r [m], > 0.
 
         Returns
@@ -792,18 +811,19 @@ class LeakagePermeance(LinearElement):
         ParameterError
             A dimension that is not a finite number > 0.
         """
-        _positive(f"leakage {name!r}", radius=radius)
-        return cls(name, 0.308 * MU0 * radius)
+        _positive(f"leakage {name!r}", radius_m=radius_m)
+        return cls(name, 0.308 * MU0 * radius_m)
 
     @classmethod
-    def quarter_hollow_sphere(cls, name: str, thickness: float) -> LeakagePermeance:
+    @renamed_keywords(thickness="thickness_m")
+    def quarter_hollow_sphere(cls, name: str, thickness_m: float) -> LeakagePermeance:
         """Quarter hollow sphere of shell thickness t: ``0.25 mu0 t``.
 
         Parameters
         ----------
         name : str
             Unique name of the element within its network.
-        thickness : float
+        thickness_m : float
             Shell thickness t [m], > 0.
 
         Returns
@@ -815,10 +835,11 @@ class LeakagePermeance(LinearElement):
         ParameterError
             A dimension that is not a finite number > 0.
         """
-        _positive(f"leakage {name!r}", thickness=thickness)
-        return cls(name, 0.25 * MU0 * thickness)
+        _positive(f"leakage {name!r}", thickness_m=thickness_m)
+        return cls(name, 0.25 * MU0 * thickness_m)
 
 
+@renamed_keywords(width="width_m", radius="radius_m")
 @dataclass(frozen=True)
 class GapLeakage(LinearElement):
     """Gap-dependent leakage around a pole: ``G = mu0 w / pi ln(1 + pi r / s)``.
@@ -833,23 +854,23 @@ class GapLeakage(LinearElement):
         Unique name of the element within its network.
     gap_input : str
         Name of the gap input.
-    width : float
-        Edge length w [m], > 0.
-    radius : float
-        Leakage radius r [m], > 0.
+    width_m : float
+        Edge length w [m], > 0 (deprecated keyword: ``width``).
+    radius_m : float
+        Leakage radius r [m], > 0 (deprecated keyword: ``radius``).
 
     Raises
     ------
     ParameterError
-        ``width`` or ``radius`` not a finite number > 0.
+        ``width_m`` or ``radius_m`` not a finite number > 0.
     """
 
     gap_input: str = "s"
-    width: float = 1.0
-    radius: float = 1.0
+    width_m: float = 1.0
+    radius_m: float = 1.0
 
     def __post_init__(self) -> None:
-        _positive(f"gap leakage {self.name!r}", width=self.width, radius=self.radius)
+        _positive(f"gap leakage {self.name!r}", width_m=self.width_m, radius_m=self.radius_m)
 
     @property
     def gap(self) -> str:
@@ -870,9 +891,11 @@ class GapLeakage(LinearElement):
         """
         if gap is None:
             raise ParameterError(f"gap leakage {self.name!r}: needs a gap value")
-        return MU0 * self.width / math.pi * _log(1.0 + math.pi * self.radius / gap)
+        return MU0 * self.width_m / math.pi * _log(1.0 + math.pi * self.radius_m / gap)
 
 
+@renamed_keywords(width="width_m", radius="radius_m", inner_radius="inner_radius_m",
+                  slot_pitch="slot_pitch_m", slot_opening="slot_opening_m")
 @dataclass(frozen=True)
 class FringePermeance(LinearElement):
     """Fringing from a pole flank to a flat rail: ``G = (2 mu0 w/pi) ln(1 + pi r/(2 s))``.
@@ -889,17 +912,19 @@ class FringePermeance(LinearElement):
         Unique name of the element within its network.
     gap_input : str
         Name of the gap input, non-empty.
-    width : float
-        Edge length w [m], > 0.
-    radius : float
-        Flank height r [m] whose tubes reach the rail, > 0.
-    inner_radius : float
+    width_m : float
+        Edge length w [m], > 0 (deprecated keyword: ``width``).
+    radius_m : float
+        Flank height r [m] whose tubes reach the rail, > 0 (deprecated keyword:
+        ``radius``).
+    inner_radius_m : float
         Flank height [m] where the tubes start (0: at the pole face): a strip
-        ``[inner_radius, radius]`` of the flank, ``(2 mu0 w/pi) ln((s + pi r/2) /
-        (s + pi r_i/2))``.
-    slot_pitch, slot_opening : float
+        ``[inner_radius_m, radius_m]`` of the flank, ``(2 mu0 w/pi) ln((s + pi r/2) /
+        (s + pi r_i/2))`` (deprecated keyword: ``inner_radius``).
+    slot_pitch_m, slot_opening_m : float
         Stator slot pitch and opening [m]: the gap is then Carter's ``k_C s``, as in
-        :class:`AirGap` (0: the true gap).
+        :class:`AirGap` (0: the true gap; deprecated keywords: ``slot_pitch``,
+        ``slot_opening``).
     law : str
         ``"roters"`` (default): the quarter circles above.  ``"conformal"``: the field of a
         right-angled pole edge over a plane (:func:`edge_flank_per_mu0`), ``(mu0 w/pi)
@@ -908,31 +933,31 @@ class FringePermeance(LinearElement):
     Raises
     ------
     ParameterError
-        An empty ``gap_input``, ``width`` or ``radius`` not a finite number > 0, or an
+        An empty ``gap_input``, ``width_m`` or ``radius_m`` not a finite number > 0, or an
         unknown ``law``.
     """
 
     gap_input: str = "s"
-    width: float = 1.0
-    radius: float = 1.0
-    inner_radius: float = 0.0
-    slot_pitch: float = 0.0
-    slot_opening: float = 0.0
+    width_m: float = 1.0
+    radius_m: float = 1.0
+    inner_radius_m: float = 0.0
+    slot_pitch_m: float = 0.0
+    slot_opening_m: float = 0.0
     law: str = "roters"
 
     def __post_init__(self) -> None:
         owner = f"fringe permeance {self.name!r}"
         if not isinstance(self.gap_input, str) or not self.gap_input:
             raise ParameterError(f"{owner}: gap_input must be a non-empty name")
-        _positive(owner, width=self.width, radius=self.radius)
-        _nonnegative(owner, inner_radius=self.inner_radius, slot_pitch=self.slot_pitch,
-                     slot_opening=self.slot_opening)
-        if not (symbolic(self.inner_radius) or symbolic(self.radius)) \
-                and self.inner_radius >= self.radius:
-            raise ParameterError(f"{owner}: inner_radius = {self.inner_radius!r} m must be "
-                                 f"smaller than radius = {self.radius!r} m")
-        if self.slot_pitch > 0.0 and not 0.0 < self.slot_opening < self.slot_pitch:
-            raise ParameterError(f"{owner}: slot_opening must lie in (0, slot_pitch) when a "
+        _positive(owner, width_m=self.width_m, radius_m=self.radius_m)
+        _nonnegative(owner, inner_radius_m=self.inner_radius_m, slot_pitch_m=self.slot_pitch_m,
+                     slot_opening_m=self.slot_opening_m)
+        if not (symbolic(self.inner_radius_m) or symbolic(self.radius_m)) \
+                and self.inner_radius_m >= self.radius_m:
+            raise ParameterError(f"{owner}: inner_radius_m = {self.inner_radius_m!r} m must be "
+                                 f"smaller than radius_m = {self.radius_m!r} m")
+        if self.slot_pitch_m > 0.0 and not 0.0 < self.slot_opening_m < self.slot_pitch_m:
+            raise ParameterError(f"{owner}: slot_opening_m must lie in (0, slot_pitch_m) when a "
                                  "slot pitch is given")
         if self.law not in FRINGE_LAWS:
             raise ParameterError(f"{owner}: law = {self.law!r} is not one of "
@@ -958,12 +983,12 @@ class FringePermeance(LinearElement):
         """
         if gap is None:
             raise ParameterError(f"fringe permeance {self.name!r}: needs a gap value")
-        if self.slot_pitch > 0.0:
-            gap = carter_coefficient(gap, self.slot_pitch, self.slot_opening) * gap
+        if self.slot_pitch_m > 0.0:
+            gap = carter_coefficient(gap, self.slot_pitch_m, self.slot_opening_m) * gap
         law = edge_flank_per_mu0 if self.law == "conformal" else fringe_per_mu0
-        g = law(self.width, self.radius, gap)
-        if symbolic(self.inner_radius) or self.inner_radius > 0.0:
-            g = g - law(self.width, self.inner_radius, gap)
+        g = law(self.width_m, self.radius_m, gap)
+        if symbolic(self.inner_radius_m) or self.inner_radius_m > 0.0:
+            g = g - law(self.width_m, self.inner_radius_m, gap)
         return MU0 * g
 
 
@@ -971,6 +996,7 @@ FRINGE_LAWS = ("roters", "conformal")
 """The laws of :class:`FringePermeance`."""
 
 
+@renamed_keywords(width="width_m", length="length_m")
 @dataclass(frozen=True)
 class GapLayerPermeance(LinearElement):
     """Air inside the gap layer between two neighbouring cells: ``G = mu0 w s / l``.
@@ -987,26 +1013,27 @@ class GapLayerPermeance(LinearElement):
         Unique name of the element within its network.
     gap_input : str
         Name of the gap input, non-empty.
-    width : float
-        Extent across the flux and the gap [m] (the depth), > 0.
-    length : float
-        Path length along the layer [m], > 0.
+    width_m : float
+        Extent across the flux and the gap [m] (the depth), > 0 (deprecated keyword:
+        ``width``).
+    length_m : float
+        Path length along the layer [m], > 0 (deprecated keyword: ``length``).
 
     Raises
     ------
     ParameterError
-        An empty ``gap_input``, or ``width`` or ``length`` not a finite number > 0.
+        An empty ``gap_input``, or ``width_m`` or ``length_m`` not a finite number > 0.
     """
 
     gap_input: str = "s"
-    width: float = 1.0
-    length: float = 1.0
+    width_m: float = 1.0
+    length_m: float = 1.0
 
     def __post_init__(self) -> None:
         owner = f"gap layer permeance {self.name!r}"
         if not isinstance(self.gap_input, str) or not self.gap_input:
             raise ParameterError(f"{owner}: gap_input must be a non-empty name")
-        _positive(owner, width=self.width, length=self.length)
+        _positive(owner, width_m=self.width_m, length_m=self.length_m)
 
     @property
     def gap(self) -> str:
@@ -1027,7 +1054,7 @@ class GapLayerPermeance(LinearElement):
         """
         if gap is None:
             raise ParameterError(f"gap layer permeance {self.name!r}: needs a gap value")
-        return MU0 * self.width * gap / self.length
+        return MU0 * self.width_m * gap / self.length_m
 
 
 def fringe_per_mu0(w: float, r: float, s: Any) -> Any:
@@ -1043,6 +1070,7 @@ def rectangle_torsion_constant(a: float, b: float) -> float:
     return a * b**3 / 3.0 * (1.0 - 192.0 / math.pi**5 * (b / a) * series)
 
 
+@renamed_keywords(conductance="conductance_S")
 @dataclass(frozen=True)
 class EddyCurrent(Element):
     """Eddy currents as a "magnetic inductance": ``V_m = G_ec dphi/dt``.
@@ -1055,23 +1083,24 @@ class EddyCurrent(Element):
     ----------
     name : str
         Unique name of the element within its network.
-    conductance : float
-        ``G_ec`` [S] (> 0; required, although it has a default for the dataclass).
+    conductance_S : float
+        ``G_ec`` [S] (> 0; required, although it has a default for the dataclass;
+        deprecated keyword: ``conductance``).
 
     Raises
     ------
     ParameterError
-        ``conductance`` not a finite number > 0.
+        ``conductance_S`` not a finite number > 0.
     """
 
-    conductance: float = 0.0
+    conductance_S: float = 0.0
 
     def __post_init__(self) -> None:
-        _positive(f"eddy-current element {self.name!r}", conductance=self.conductance)
+        _positive(f"eddy-current element {self.name!r}", conductance_S=self.conductance_S)
 
     @property
     def eddy_conductance(self) -> float:
-        return self.conductance
+        return self.conductance_S
 
     def mmf_drop(self, flux: Any, gap: Any = None) -> Any:
         """Static drop: zero (the element acts through :attr:`eddy_conductance` only).
@@ -1108,7 +1137,8 @@ class EddyCurrent(Element):
         return np.zeros_like(np.asarray(flux, dtype=float))
 
     @classmethod
-    def one_turn(cls, name: str, path_area: float, path_length: float,
+    @renamed_keywords(path_area="path_area_m2", path_length="path_length_m")
+    def one_turn(cls, name: str, path_area_m2: float, path_length_m: float,
                  resistivity: float) -> EddyCurrent:
         """Modelica's ``G = A / (rho l)``: a one-turn short circuit of wire area A, length l.
 
@@ -1116,9 +1146,9 @@ class EddyCurrent(Element):
         ----------
         name : str
             Unique name of the element within its network.
-        path_area : float
+        path_area_m2 : float
             Cross-section A of the current path [m^2], > 0.
-        path_length : float
+        path_length_m : float
             Length l of the current path (once around the flux) [m], > 0.
         resistivity : float
             Electrical resistivity rho of the conductor [ohm m], > 0.
@@ -1132,12 +1162,13 @@ class EddyCurrent(Element):
         ParameterError
             A dimension or the resistivity not a finite number > 0.
         """
-        _positive(f"eddy-current element {name!r}", path_area=path_area,
-                  path_length=path_length, resistivity=resistivity)
-        return cls(name, path_area / (resistivity * path_length))
+        _positive(f"eddy-current element {name!r}", path_area_m2=path_area_m2,
+                  path_length_m=path_length_m, resistivity=resistivity)
+        return cls(name, path_area_m2 / (resistivity * path_length_m))
 
     @classmethod
-    def solid_rectangular(cls, name: str, width: float, height: float, length: float,
+    @renamed_keywords(width="width_m", height="height_m", length="length_m")
+    def solid_rectangular(cls, name: str, width_m: float, height_m: float, length_m: float,
                           resistivity: float) -> EddyCurrent:
         """Solid bar of cross-section width x height and length l, flux along l.
 
@@ -1150,9 +1181,9 @@ class EddyCurrent(Element):
         ----------
         name : str
             Unique name of the element within its network.
-        width, height : float
+        width_m, height_m : float
             Sides of the cross-section [m], > 0.
-        length : float
+        length_m : float
             Length l of the bar along the flux [m], > 0.
         resistivity : float
             Electrical resistivity rho of the conductor [ohm m], > 0.
@@ -1166,28 +1197,29 @@ class EddyCurrent(Element):
         ParameterError
             A dimension or the resistivity not a finite number > 0.
         """
-        _positive(f"eddy-current element {name!r}", width=width, height=height, length=length,
-                  resistivity=resistivity)
-        area = width * height
-        torsion = rectangle_torsion_constant(width, height)
-        return cls(name, torsion * length / (4.0 * resistivity * area * area))
+        _positive(f"eddy-current element {name!r}", width_m=width_m, height_m=height_m,
+                  length_m=length_m, resistivity=resistivity)
+        area = width_m * height_m
+        torsion = rectangle_torsion_constant(width_m, height_m)
+        return cls(name, torsion * length_m / (4.0 * resistivity * area * area))
 
     @classmethod
-    def laminated(cls, name: str, area: float, length: float, resistivity: float,
-                  sheet_thickness: float) -> EddyCurrent:
+    @renamed_keywords(area="area_m2", length="length_m", sheet_thickness="sheet_thickness_m")
+    def laminated(cls, name: str, area_m2: float, length_m: float, resistivity: float,
+                  sheet_thickness_m: float) -> EddyCurrent:
         """Laminated stack of sheets of thickness d: ``G_ec = d^2 l / (12 rho A)``.
 
         Parameters
         ----------
         name : str
             Unique name of the element within its network.
-        area : float
+        area_m2 : float
             Cross-section A of the stack (across the flux) [m^2], > 0.
-        length : float
+        length_m : float
             Length l of the stack along the flux [m], > 0.
         resistivity : float
             Electrical resistivity rho of the sheets [ohm m], > 0.
-        sheet_thickness : float
+        sheet_thickness_m : float
             Sheet thickness d [m], > 0.
 
         Returns
@@ -1199,6 +1231,6 @@ class EddyCurrent(Element):
         ParameterError
             A dimension or the resistivity not a finite number > 0.
         """
-        _positive(f"eddy-current element {name!r}", area=area, length=length,
-                  resistivity=resistivity, sheet_thickness=sheet_thickness)
-        return cls(name, sheet_thickness**2 * length / (12.0 * resistivity * area))
+        _positive(f"eddy-current element {name!r}", area_m2=area_m2, length_m=length_m,
+                  resistivity=resistivity, sheet_thickness_m=sheet_thickness_m)
+        return cls(name, sheet_thickness_m**2 * length_m / (12.0 * resistivity * area_m2))

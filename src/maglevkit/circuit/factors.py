@@ -224,7 +224,7 @@ def with_factors(network: Network, values: Mapping[str, Any], *, where: str = ""
             return CalibratedIron(el.name, inner=el, field_scale=v["iron_field_scale"],
                                   saturation_scale=v["iron_saturation_scale"])
         if isinstance(el, EddyCurrent) and numeric_eddy:
-            return replace(el, conductance=float(k_eddy) * el.conductance)
+            return replace(el, conductance_S=float(k_eddy) * el.conductance_S)
         return el
 
     branches = tuple(replace(b, elements=tuple(wrap(e) for e in b.elements))

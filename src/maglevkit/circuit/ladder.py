@@ -29,6 +29,7 @@ from __future__ import annotations
 import math
 
 from ..errors import ParameterError
+from ..validation import renamed_keywords
 from .elements import EddyCurrent, IronPath, rectangle_torsion_constant
 from .network import Branch
 
@@ -70,19 +71,21 @@ LADDER_COEFFICIENTS: dict[int, tuple[tuple[float, ...], tuple[float, ...]]] = {
 }
 
 
-def ladder_parameters(*, length: float, area: float, thickness: float, resistivity: float,
-                      layers: int, factor: float = 1.0) -> tuple[tuple[float, ...],
-                                                                  tuple[float, ...]]:
+@renamed_keywords(length="length_m", area="area_m2", thickness="thickness_m")
+def ladder_parameters(*, length_m: float, area_m2: float, thickness_m: float,
+                      resistivity: float, layers: int,
+                      factor: float = 1.0) -> tuple[tuple[float, ...], tuple[float, ...]]:
     """Tube areas [m^2] and eddy conductances [S] of a slab's ``layers``-tube ladder.
 
     Parameters
     ----------
-    length : float
-        Flux path length ``l`` [m].
-    area : float
-        Total iron cross-section ``A`` [m^2].
-    thickness : float
-        Slab (or sheet) thickness ``t`` across which the eddy currents diffuse [m].
+    length_m : float
+        Flux path length ``l`` [m] (deprecated keyword: ``length``).
+    area_m2 : float
+        Total iron cross-section ``A`` [m^2] (deprecated keyword: ``area``).
+    thickness_m : float
+        Slab (or sheet) thickness ``t`` across which the eddy currents diffuse [m]
+        (deprecated keyword: ``thickness``).
     resistivity : float
         ``rho`` [ohm m].
     layers : int
@@ -96,7 +99,7 @@ def ladder_parameters(*, length: float, area: float, thickness: float, resistivi
     ParameterError
         Non-positive geometry, ``layers`` outside 1 ... 8.
     """
-    for key, v in (("length", length), ("area", area), ("thickness", thickness),
+    for key, v in (("length_m", length_m), ("area_m2", area_m2), ("thickness_m", thickness_m),
                    ("resistivity", resistivity), ("factor", factor)):
         if not (isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)
                 and v > 0.0):
@@ -105,8 +108,8 @@ def ladder_parameters(*, length: float, area: float, thickness: float, resistivi
         raise ParameterError(f"eddy ladder: layers = {layers!r}; allowed are the whole numbers "
                              f"{min(LADDER_COEFFICIENTS)} ... {max(LADDER_COEFFICIENTS)}")
     a, w = LADDER_COEFFICIENTS[layers]
-    scale = factor * length * thickness * (0.5 * thickness) / (2.0 * resistivity * area)
-    return tuple(area * ak for ak in a), tuple(scale * wk for wk in w)
+    scale = factor * length_m * thickness_m * (0.5 * thickness_m) / (2.0 * resistivity * area_m2)
+    return tuple(area_m2 * ak for ak in a), tuple(scale * wk for wk in w)
 
 
 def saint_venant_factor(thickness_m: float, depth_m: float) -> float:
@@ -124,7 +127,8 @@ def saint_venant_factor(thickness_m: float, depth_m: float) -> float:
     return rectangle_torsion_constant(thickness_m, depth_m) / (depth_m * thickness_m**3 / 3.0)
 
 
-def ladder_branches(name: str, start: str, end: str, iron: IronPath, *, thickness: float,
+@renamed_keywords(thickness="thickness_m")
+def ladder_branches(name: str, start: str, end: str, iron: IronPath, *, thickness_m: float,
                     resistivity: float, layers: int, factor: float = 1.0) -> list[Branch]:
     """Branches of an iron part with diffusing eddy currents (nested tubes).
 
@@ -144,9 +148,9 @@ def ladder_branches(name: str, start: str, end: str, iron: IronPath, *, thicknes
     iron : IronPath
         The part: its length [m], cross-section [m^2] and material are split into the
         tubes.
-    thickness : float
+    thickness_m : float
         Thickness across which the eddy currents diffuse [m], > 0 (keyword only, like
-        all that follow).
+        all that follow; deprecated keyword: ``thickness``).
     resistivity : float
         Electrical resistivity of the part [ohm m], > 0.
     layers : int
@@ -164,16 +168,16 @@ def ladder_branches(name: str, start: str, end: str, iron: IronPath, *, thicknes
     ParameterError
         As :func:`ladder_parameters`.
     """
-    areas, gs = ladder_parameters(length=iron.length, area=iron.cross_section,
-                                  thickness=thickness, resistivity=resistivity, layers=layers,
-                                  factor=factor)
+    areas, gs = ladder_parameters(length_m=iron.length_m, area_m2=iron.cross_section_m2,
+                                  thickness_m=thickness_m, resistivity=resistivity,
+                                  layers=layers, factor=factor)
     node = [f"{name}:n{k + 1}" for k in range(layers)]
-    out = [Branch(name, start, node[0], (EddyCurrent(f"eddy_{name}", conductance=gs[0]),))]
+    out = [Branch(name, start, node[0], (EddyCurrent(f"eddy_{name}", conductance_S=gs[0]),))]
     for k in range(layers):
         out.append(Branch(f"{name}:tube{k + 1}", node[k], end,
-                          (IronPath(f"{iron.name}:tube{k + 1}", iron.length, areas[k],
+                          (IronPath(f"{iron.name}:tube{k + 1}", iron.length_m, areas[k],
                                     iron.material),)))
         if k + 1 < layers:
             out.append(Branch(f"{name}:eddy{k + 2}", node[k], node[k + 1],
-                              (EddyCurrent(f"eddy_{name}:{k + 2}", conductance=gs[k + 1]),)))
+                              (EddyCurrent(f"eddy_{name}:{k + 2}", conductance_S=gs[k + 1]),)))
     return out

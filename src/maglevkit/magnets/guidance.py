@@ -232,7 +232,7 @@ def build_guidance_magnet(params: Mapping[str, Any], materials: Mapping[str, Mat
         bar's own ladder across its height ``h_p``."""
         if not ladder:
             return [Branch(branch, start, end, with_eddy(
-                list(irons), f"eddy_{branch}", w, h, irons[0].length, rho_))]
+                list(irons), f"eddy_{branch}", w, h, irons[0].length_m, rho_))]
         mid = f"{branch}:bar" if len(irons) > 1 else end
         out = slab(branch, start, mid, irons[0], thickness, w, rho_)
         if len(irons) > 1:
@@ -245,7 +245,7 @@ def build_guidance_magnet(params: Mapping[str, Any], materials: Mapping[str, Mat
         Saint-Venant factor of its finite ``depth`` (docs/equations.md 1a), as the
         U-magnet's."""
         factor = saint_venant_factor(thickness, depth) if m["end_effects"] else 1.0
-        return ladder_branches(branch, start, end, iron, thickness=thickness,
+        return ladder_branches(branch, start, end, iron, thickness_m=thickness,
                                resistivity=rho_, layers=options.eddy_layers, factor=factor)
 
     branches: list[Branch] = []
@@ -278,19 +278,19 @@ def build_guidance_magnet(params: Mapping[str, Any], materials: Mapping[str, Mat
             if options.fringing:
                 for side, n0, n1 in (("u", f"MU{i}", f"RU{i}"), ("l", f"RL{i}", f"ML{i}")):
                     branches.append(Branch(f"top_{side}_{i}", n0, n1, (FringePermeance(
-                        f"top_{side}_{i}", gap_input=g, width=paths["top_width"],
-                        radius=tp + ll, inner_radius=tp),)))
+                        f"top_{side}_{i}", gap_input=g, width_m=paths["top_width"],
+                        radius_m=tp + ll, inner_radius_m=tp),)))
         branches += [] if split else part(
             f"leg_u_{i}", f"YU{i}", f"U{i}", [IronPath(f"iron_leg_u_{i}", leg_len, leg_area,
                                                        iron)], ny * wy, tl, rho, tl)
         branches.append(Branch(f"gap_u_{i}", f"U{i}", f"RU{i}", (
-            AirGap(f"gap_u_{i}", gap_input=g, pole_area=face, fringe_edges=edges),)))
+            AirGap(f"gap_u_{i}", gap_input=g, pole_area_m2=face, fringe_edges=edges),)))
         # the rail: flux along its height, eddy currents across its thickness
         branches += part(f"rail_{i}", f"RU{i}", f"RL{i}",
                          [IronPath(f"iron_rail_{i}", rail_len, rail_area, rail_mat)],
                          L, r["thickness"], rho_rail, r["thickness"])
         branches.append(Branch(f"gap_l_{i}", f"RL{i}", f"L{i}", (
-            AirGap(f"gap_l_{i}", gap_input=g, pole_area=face, fringe_edges=edges),)))
+            AirGap(f"gap_l_{i}", gap_input=g, pole_area_m2=face, fringe_edges=edges),)))
         branches += [] if split else part(
             f"leg_l_{i}", f"L{i}", f"YL{i}", [IronPath(f"iron_leg_l_{i}", leg_len, leg_area,
                                                        iron)], ny * wy, tl, rho, tl)

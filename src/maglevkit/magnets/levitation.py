@@ -459,7 +459,7 @@ def levitation_network(m: Mapping[str, Any], st: Mapping[str, Any], names: list[
 
     def ladder_factor(thickness: float, depth: float) -> float:
         return saint_venant_factor(thickness, depth) if ends else 1.0
-    slots = {"slot_pitch": st["slot_pitch"], "slot_opening": st["slot_opening"]}
+    slots = {"slot_pitch_m": st["slot_pitch"], "slot_opening_m": st["slot_opening"]}
 
     def chain(k: int) -> list[str]:
         """Nodes of pole k's core from the face to the pole back."""
@@ -500,7 +500,7 @@ def levitation_network(m: Mapping[str, Any], st: Mapping[str, Any], names: list[
             if ladder:
                 # the coil air beside the core is outside the iron's eddy currents
                 branches += ladder_branches(name, nodes[j + 1], nodes[j], core_iron,
-                                            thickness=lp, resistivity=rho,
+                                            thickness_m=lp, resistivity=rho,
                                             layers=options.eddy_layers,
                                             factor=ladder_factor(lp, wp))
             # every segment carries the eddy currents of its own length
@@ -523,7 +523,7 @@ def levitation_network(m: Mapping[str, Any], st: Mapping[str, Any], names: list[
                 branches.append(Branch(name, nodes[j + 1], nodes[j], (*core, *eddy)))
             turns.append((name, seg_turns[j]))
         coil_turns.append(turns)
-        air_gap = AirGap(f"gap_{p}", gap_input=p, pole_area=face_area, fringe_edges=tuple(edges),
+        air_gap = AirGap(f"gap_{p}", gap_input=p, pole_area_m2=face_area, fringe_edges=tuple(edges),
                          recesses=grooves, face_slots=face_slots, **slots)
         teeth = IronPath(f"iron_teeth_{p}", st["slot_depth"], tooth_area, stator_mat)
         if split:
@@ -564,8 +564,8 @@ def levitation_network(m: Mapping[str, Any], st: Mapping[str, Any], names: list[
                     LeakagePermeance(f"across_{p}{sfx}", g_across),)))
             if split and options.fringing:
                 branches.append(Branch(f"fringe_{p}{sfx}", f"H{k + 1}", w_node, (
-                    FringePermeance(f"fringe_{p}{sfx}", gap_input=p, width=2.0 * share * wp,
-                                    radius=hf, law="conformal", **slots),)))
+                    FringePermeance(f"fringe_{p}{sfx}", gap_input=p, width_m=2.0 * share * wp,
+                                    radius_m=hf, law="conformal", **slots),)))
             if options.leakage:
                 # an end pole's outer flank has no neighbour and no window centre plane:
                 # its strips run along the whole coil
@@ -573,16 +573,16 @@ def levitation_network(m: Mapping[str, Any], st: Mapping[str, Any], names: list[
                 for j, (y0, y1) in enumerate(use):
                     name = f"flank_{p}_{j + 1}{sfx}"
                     branches.append(Branch(name, nodes[j + 1], w_node, (
-                        FringePermeance(name, gap_input=p, width=2.0 * share * wp, radius=y1,
-                                        inner_radius=y0, law="conformal", **slots),)))
+                        FringePermeance(name, gap_input=p, width_m=2.0 * share * wp, radius_m=y1,
+                                        inner_radius_m=y0, law="conformal", **slots),)))
         if outer and options.leakage:
             # end pole: the back's end face, beyond the coil's outer side, to the stator
             # beyond the magnet (Roters' quarter circles centred on the face's outer edge,
             # from the depth where they clear the coil's corner to the back's underside)
             r0 = br.maximum(hcore, _hypot(hf + hc, tc), "end face: core or coil corner")
             branches.append(Branch(f"end_{p}", f"K{k + 1}", f"W{k + 1}{outer}", (
-                FringePermeance(f"end_{p}", gap_input=p, width=wp, radius=hcore + hb,
-                                inner_radius=r0, **slots),)))
+                FringePermeance(f"end_{p}", gap_input=p, width_m=wp, radius_m=hcore + hb,
+                                inner_radius_m=r0, **slots),)))
         if outer and options.leakage:
             # end pole: the pole back's underside, from its end to the window centre (the
             # part node K_k stands for, u <= l_p/2 + tau/2), around the end to the stator
@@ -592,8 +592,8 @@ def levitation_network(m: Mapping[str, Any], st: Mapping[str, Any], names: list[
             # fringe form of width w_p/2 between radii 2D/pi and 2D/pi + 2u
             r_d = 2.0 * (hcore + hb) / math.pi
             branches.append(Branch(f"under_{p}", f"K{k + 1}", f"W{k + 1}{outer}", (
-                FringePermeance(f"under_{p}", gap_input=p, width=0.5 * wp,
-                                radius=r_d + lp + tau, inner_radius=r_d, **slots),)))
+                FringePermeance(f"under_{p}", gap_input=p, width_m=0.5 * wp,
+                                radius_m=r_d + lp + tau, inner_radius_m=r_d, **slots),)))
         if options.leakage:
             if ends or k in (0, poles - 1):       # g_pb > 0: a coil side not facing a pole
                 branches.append(Branch(f"leak_pb_{p}", f"H{k + 1}", f"K{k + 1}",
@@ -604,7 +604,7 @@ def levitation_network(m: Mapping[str, Any], st: Mapping[str, Any], names: list[
         back: list[Element] = [back_iron]
         if ladder:
             branches += ladder_branches(f"back_{q}", f"K{k + 1}", f"K{k + 2}", back_iron,
-                                        thickness=hb, resistivity=rho,
+                                        thickness_m=hb, resistivity=rho,
                                         layers=options.eddy_layers,
                                         factor=ladder_factor(hb, wb))
             back = []

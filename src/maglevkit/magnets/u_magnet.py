@@ -284,7 +284,7 @@ def build_u_magnet(params: Mapping[str, Any], materials: Mapping[str, Material],
                 el = EddyCurrent.laminated("e", thick * d, length, rho_core, m["sheet_thickness"])
             else:
                 el = EddyCurrent.solid_rectangular("e", thick, d, length, rho_core)
-            return (EddyCurrent(f"eddy_{name}", el.conductance * share),)
+            return (EddyCurrent(f"eddy_{name}", el.conductance_S * share),)
 
         grid_branches, grid_coils = _build_grid(m, r, core, rail_mat, options, eddy_part)
         if options.eddy_currents and options.eddy_model != "lumped":
@@ -352,7 +352,7 @@ def lumped_network(m: Mapping[str, Any], r: Mapping[str, Any], core: Material,
     fringes = tuple((w, 2.0 * radius / math.pi) for w, radius in edges) if split else tuple(edges)
 
     def gap(name: str) -> AirGap:
-        return AirGap(name, gap_input=name.removeprefix("gap_"), pole_area=area,
+        return AirGap(name, gap_input=name.removeprefix("gap_"), pole_area_m2=area,
                       fringe_edges=fringes)
 
     leg_len = hl + 0.5 * ty
@@ -379,10 +379,10 @@ def lumped_network(m: Mapping[str, Any], r: Mapping[str, Any], core: Material,
         """Branches of one iron part (flux along it, section ``width`` x depth)."""
         rho = rho_rail if solid else rho_core
         if not options.eddy_currents or options.eddy_model == "lumped":
-            return [Branch(name, start, end, (iron, *eddy(f"eddy_{name}", width, iron.length,
+            return [Branch(name, start, end, (iron, *eddy(f"eddy_{name}", width, iron.length_m,
                                                           rho, solid)))]
         if m["laminated"] and not solid:       # diffusion across each sheet
-            return ladder_branches(name, start, end, iron, thickness=m["sheet_thickness"],
+            return ladder_branches(name, start, end, iron, thickness_m=m["sheet_thickness"],
                                    resistivity=rho, layers=options.eddy_layers)
         # solid bar: slab across the width; with end_effects the Saint-Venant factor of
         # the finite depth (the eddy currents close within the depth), else the 2-D slab
@@ -391,8 +391,8 @@ def lumped_network(m: Mapping[str, Any], r: Mapping[str, Any], core: Material,
             # rail split under and between the poles: the flux enters the rail over each
             # pole face (rising linearly across it), runs uniform between the poles and
             # hardly reaches the overhangs: eddy length ww + 2 wp/3 (docs/equations.md 1b)
-            factor *= (ww + 2.0 * wp / 3.0) / iron.length
-        return ladder_branches(name, start, end, iron, thickness=width, resistivity=rho,
+            factor *= (ww + 2.0 * wp / 3.0) / iron.length_m
+        return ladder_branches(name, start, end, iron, thickness_m=width, resistivity=rho,
                                layers=options.eddy_layers, factor=factor)
 
     rho_core = rho_rail = 0.0
@@ -457,15 +457,15 @@ def lumped_network(m: Mapping[str, Any], r: Mapping[str, Any], core: Material,
         widths = d + (2.0 * wp if m["end_effects"] else 0.0)
         for k, y in enumerate(y_nodes):
             y0, y1 = y - 0.5 * h, y + 0.5 * h
-            g = LeakagePermeance.quarter_hollow_cylinder("o", widths, y0, h).value   # outer
+            g = LeakagePermeance.quarter_hollow_cylinder("o", widths, y0, h).value_H   # outer
             if split:
                 pass     # the window's air is the strips across it (module docstring)
             elif symbolic(y0) or symbolic(ww):        # design: the clipped window strip
                 g += LeakagePermeance.quarter_hollow_cylinder(
-                    "i", d, y0, ca.fmax(0.0, ca.fmin(y1, 0.5 * ww) - y0)).value
+                    "i", d, y0, ca.fmax(0.0, ca.fmin(y1, 0.5 * ww) - y0)).value_H
             elif y0 < 0.5 * ww:                                                     # window
                 g += LeakagePermeance.quarter_hollow_cylinder(
-                    "i", d, y0, min(y1, 0.5 * ww) - y0).value
+                    "i", d, y0, min(y1, 0.5 * ww) - y0).value_H
             branches.append(Branch(f"flank_left_{k + 1}", left[k + 1], "RL",
                                    (LeakagePermeance(f"flank_left_{k + 1}", g),)))
             branches.append(Branch(f"flank_right_{k + 1}", "RR", right[k + 1],
@@ -637,7 +637,7 @@ def _build_grid(m: Mapping[str, Any], r: Mapping[str, Any], core: Material, rail
         gname = f"gap_{side}"
         node_r, half_r = rail_top(i + off)
         half_f = iron(f"iron_face_{i}", 0.5 * (yf[1] - yf[0]), w, core)
-        air = AirGap(f"air_{gname}_{i}", gap_input=side, pole_area=w * d)
+        air = AirGap(f"air_{gname}_{i}", gap_input=side, pole_area_m2=w * d)
         el: tuple[Element, ...] = (half_f, air, replace(half_r, name=f"iron_rail_face_{i}"))
         a, b = (f"F{i}_0", node_r) if side == "left" else (node_r, f"F{i}_0")
         branches.append(Branch(f"{gname}_{i}", a, b, el if side == "left" else el[::-1]))
@@ -659,7 +659,7 @@ def _build_grid(m: Mapping[str, Any], r: Mapping[str, Any], core: Material, rail
                 node_r, half_r = rail_top(land)
                 name = f"fringe_{side}_{edge}"
                 el = (iron(f"iron_{name}", 0.5 * (xf[i + 1] - xf[i]), yf[1] - yf[0], core),
-                      FringePermeance(f"air_{name}", gap_input=side, width=d, radius=radius),
+                      FringePermeance(f"air_{name}", gap_input=side, width_m=d, radius_m=radius),
                       replace(half_r, name=f"iron_rail_{name}"))
                 a, b = (f"F{i}_0", node_r) if side == "left" else (node_r, f"F{i}_0")
                 branches.append(Branch(name, a, b, el if side == "left" else el[::-1]))
@@ -679,12 +679,12 @@ def _build_grid(m: Mapping[str, Any], r: Mapping[str, Any], core: Material, rail
                 continue
             # flank leakage (Roters quarter circles to the pole-face level), per coil row
             tubes = [("outer", o_left, o_right,
-                      LeakagePermeance.quarter_hollow_cylinder("o", d, y0, y1 - y0).value,
+                      LeakagePermeance.quarter_hollow_cylinder("o", d, y0, y1 - y0).value_H,
                       xo + 0.5 * (y0 + y1))]
             if y0 < 0.5 * ww:
                 y1w = min(y1, 0.5 * ww)
                 tubes.append(("window", i_left, i_right, LeakagePermeance.quarter_hollow_cylinder(
-                    "i", d, y0, y1w - y0).value, xi - 0.5 * (y0 + y1w)))
+                    "i", d, y0, y1w - y0).value_H, xi - 0.5 * (y0 + y1w)))
             for kind, il, ir, g, dist in tubes:
                 for side, i, sgn in (("left", il, -1.0), ("right", ir, 1.0)):
                     node_r, half_r = rail_top(rail_column(sgn * min(dist, 0.5 * wr - 1e-9)))
@@ -798,11 +798,11 @@ def _air_cells(m: Mapping[str, Any], r: Mapping[str, Any], core: Material, rail_
         if along == "x":
             half = 0.5 * (X[ix + 1] - X[ix])
             if kind == "gap":
-                return GapLayerPermeance(name, gap_input=side_of(cx[ix]), width=d / ngap,
-                                         length=half)
+                return GapLayerPermeance(name, gap_input=side_of(cx[ix]), width_m=d / ngap,
+                                         length_m=half)
             return LeakagePermeance(name, MU0 * d * width / half)
         if kind == "gap":
-            return AirGap(name, gap_input=side_of(cx[ix]), pole_area=2.0 * ngap * width * d)
+            return AirGap(name, gap_input=side_of(cx[ix]), pole_area_m2=2.0 * ngap * width * d)
         return LeakagePermeance(name, MU0 * d * width / (0.5 * (hi - lo)))
 
     def node(ix: int, iy: int) -> str:
@@ -891,7 +891,7 @@ def _grid_ladders(branches: list[Branch], m: Mapping[str, Any], r: Mapping[str, 
             thick = m["sheet_thickness"]
         elif m["end_effects"]:
             factor = saint_venant_factor(thick, d)
-        out += ladder_branches(br.name, br.start, br.end, iron, thickness=thick,
+        out += ladder_branches(br.name, br.start, br.end, iron, thickness_m=thick,
                                resistivity=rho, layers=layers, factor=factor)
     return out
 
