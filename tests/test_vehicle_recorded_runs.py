@@ -72,7 +72,9 @@ runs use too) and the sparse preconditioner of the live flux step (livestep22, w
 chassis roll 1.0e-2), current <= 6.6e-3, voltage <= 4.9e-3, car-body accelerations
 <= 3.2e-2 of each variable's largest value.  The guidance magnet's maps were rebuilt under
 its new network hash (a new element field in its repr; every map entry equal to the stored
-one).
+one).  After the circuit elements' fields got their units (units22: `length_m`, ...), every
+network hash moved again with the same values: the maps were stored anew under the new
+hashes (all map entries, all twelve runs and the whole-run reference bit-identical).
 """
 
 from __future__ import annotations
