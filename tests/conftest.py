@@ -59,6 +59,26 @@ def build_u(*, material: str | None = None, magnet: dict | None = None, rail: di
 PAPER_NOMINAL_CURRENT_A = 33.5
 
 
+def load_script(path: Any) -> Any:
+    """A script of this repository (``benchmarks/``, ``tools/``) loaded as a module by its path.
+
+    Its folder goes on ``sys.path`` (the scripts import their siblings, e.g. ``fem_common``)
+    and the module is registered under its file name in ``sys.modules`` (dataclasses and
+    pickling look it up there; a name registered already keeps its module).
+    """
+    from pathlib import Path
+
+    p = Path(path)
+    if str(p.parent) not in sys.path:
+        sys.path.insert(0, str(p.parent))
+    spec = importlib.util.spec_from_file_location(p.stem, p)
+    assert spec is not None and spec.loader is not None
+    mod = importlib.util.module_from_spec(spec)
+    sys.modules.setdefault(p.stem, mod)
+    spec.loader.exec_module(mod)
+    return mod
+
+
 def tr09_params(name: str = "tr09-standard", *, flux_paths: str | None = None) -> dict[str, Any]:
     """A fresh copy of a bundled TR09 parameter dictionary, optionally with another ``flux_paths``.
 

@@ -9,19 +9,16 @@ has since been documented (remove it from the list).
 
 from __future__ import annotations
 
-import importlib.util
 from pathlib import Path
+
+from .conftest import load_script
 
 ROOT = Path(__file__).resolve().parent.parent
 DEBT = Path(__file__).resolve().parent / "docstring_debt.txt"
 
 
 def _audit():  # type: ignore[no-untyped-def]
-    spec = importlib.util.spec_from_file_location("docstring_audit", ROOT / "tools" / "docstring_audit.py")
-    assert spec is not None and spec.loader is not None
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
+    return load_script(ROOT / "tools" / "docstring_audit.py")
 
 
 def _debt() -> set[str]:

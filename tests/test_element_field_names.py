@@ -9,9 +9,7 @@ tree holds no caller of an old name any more.
 
 from __future__ import annotations
 
-import importlib.util
 import math
-import sys
 import warnings
 from dataclasses import fields
 from pathlib import Path
@@ -25,6 +23,8 @@ from maglevkit.circuit.ladder import ladder_branches, ladder_parameters
 from maglevkit.errors import InputError
 from maglevkit.materials import MU0
 from maglevkit.reduction.maps import network_hash
+
+from .conftest import load_script
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -49,13 +49,7 @@ IDS = [case[0].__name__ for case in CASES]
 
 
 def _script() -> Any:
-    path = ROOT / "tools" / "rename_element_fields.py"
-    spec = importlib.util.spec_from_file_location("rename_element_fields", path)
-    assert spec is not None and spec.loader is not None
-    module = importlib.util.module_from_spec(spec)
-    sys.modules.setdefault("rename_element_fields", module)
-    spec.loader.exec_module(module)
-    return module
+    return load_script(ROOT / "tools" / "rename_element_fields.py")
 
 
 def _network(element: mk.Element) -> mk.Network:

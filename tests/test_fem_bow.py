@@ -11,24 +11,18 @@ rerunning the FEM.
 
 from __future__ import annotations
 
-import importlib.util
 import json
-import sys
 from pathlib import Path
 
 import pytest
+
+from .conftest import load_script
 
 _BENCH = Path(__file__).resolve().parents[1] / "benchmarks"
 
 
 def _load(name: str):  # type: ignore[no-untyped-def]
-    sys.path.insert(0, str(_BENCH))
-    spec = importlib.util.spec_from_file_location(name, _BENCH / f"{name}.py")
-    assert spec is not None and spec.loader is not None
-    mod = importlib.util.module_from_spec(spec)
-    sys.modules.setdefault(name, mod)
-    spec.loader.exec_module(mod)
-    return mod
+    return load_script(_BENCH / f"{name}.py")
 
 
 # (network - FEM)/FEM [%]: force, end circuit's psi and L, middle circuit's psi and L (all

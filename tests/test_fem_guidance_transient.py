@@ -14,25 +14,19 @@ half width (0.5 pp of the step for currents, 1 pp for t63) covers the integrator
 
 from __future__ import annotations
 
-import importlib.util
 import json
-import sys
 from pathlib import Path
 
 import numpy as np
 import pytest
 
+from .conftest import load_script
+
 _PATH = Path(__file__).resolve().parents[1] / "benchmarks" / "fem_guidance_transient.py"
 
 
 def _script():  # type: ignore[no-untyped-def]
-    sys.path.insert(0, str(_PATH.parent))
-    spec = importlib.util.spec_from_file_location("fem_guidance_transient", _PATH)
-    assert spec is not None and spec.loader is not None
-    mod = importlib.util.module_from_spec(spec)
-    sys.modules.setdefault("fem_guidance_transient", mod)
-    spec.loader.exec_module(mod)
-    return mod
+    return load_script(_PATH)
 
 
 def _record() -> dict:

@@ -10,14 +10,12 @@ One FEM point is re-solved as a regression of the script itself.
 
 from __future__ import annotations
 
-import importlib.util
 import math
-import sys
 from pathlib import Path
 
 import pytest
 
-from .conftest import HAVE_SKFEM, SKIP_FEM_VAR
+from .conftest import HAVE_SKFEM, SKIP_FEM_VAR, load_script
 
 _PATH = Path(__file__).resolve().parents[1] / "benchmarks" / "fem_tr09.py"
 needs_fem = pytest.mark.skipif(not HAVE_SKFEM, reason="scikit-fem not installed and "
@@ -25,12 +23,7 @@ needs_fem = pytest.mark.skipif(not HAVE_SKFEM, reason="scikit-fem not installed 
 
 
 def _fem():  # type: ignore[no-untyped-def]
-    spec = importlib.util.spec_from_file_location("fem_tr09", _PATH)
-    assert spec is not None and spec.loader is not None
-    mod = importlib.util.module_from_spec(spec)
-    sys.modules.setdefault("fem_tr09", mod)
-    spec.loader.exec_module(mod)
-    return mod
+    return load_script(_PATH)
 
 
 # Measured network errors (network - FEM)/FEM [%]: force, flux linkage, differential

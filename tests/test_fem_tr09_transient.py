@@ -10,9 +10,7 @@ discussion: docs/validation_fem.md, "Voltage-step transient of the TR09 magnets"
 
 from __future__ import annotations
 
-import importlib.util
 import json
-import sys
 from pathlib import Path
 
 import numpy as np
@@ -20,7 +18,7 @@ import pytest
 
 import maglevkit as mk
 
-from .conftest import HAVE_SKFEM, SKIP_FEM_VAR
+from .conftest import HAVE_SKFEM, SKIP_FEM_VAR, load_script
 
 _DIR = Path(__file__).resolve().parents[1] / "benchmarks"
 _RECORD = _DIR / "results" / "fem_tr09_transient.json"
@@ -29,14 +27,7 @@ needs_fem = pytest.mark.skipif(not HAVE_SKFEM, reason="scikit-fem not installed 
 
 
 def _bench():  # type: ignore[no-untyped-def]
-    sys.path.insert(0, str(_DIR))
-    spec = importlib.util.spec_from_file_location("fem_tr09_transient",
-                                                  _DIR / "fem_tr09_transient.py")
-    assert spec is not None and spec.loader is not None
-    mod = importlib.util.module_from_spec(spec)
-    sys.modules.setdefault("fem_tr09_transient", mod)
-    spec.loader.exec_module(mod)
-    return mod
+    return load_script(_DIR / "fem_tr09_transient.py")
 
 
 def _record(magnet: str, label: str, kind: str = "slices") -> dict:

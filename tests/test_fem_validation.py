@@ -17,10 +17,8 @@ up to +48 % in force and -25 % in flux linkage).  The FEM itself is accurate to 
 
 from __future__ import annotations
 
-import importlib.util
 import math
 import os
-import sys
 from pathlib import Path
 
 import numpy as np
@@ -28,7 +26,7 @@ import pytest
 
 import maglevkit as mk
 
-from .conftest import HAVE_SKFEM, SKIP_FEM_VAR
+from .conftest import HAVE_SKFEM, SKIP_FEM_VAR, load_script
 
 _PATH = Path(__file__).resolve().parents[1] / "benchmarks" / "fem_u_magnet.py"
 
@@ -48,12 +46,7 @@ def test_fem_extra_is_installed() -> None:
 
 
 def _fem():  # type: ignore[no-untyped-def]
-    spec = importlib.util.spec_from_file_location("fem_u_magnet", _PATH)
-    assert spec is not None and spec.loader is not None
-    mod = importlib.util.module_from_spec(spec)
-    sys.modules.setdefault("fem_u_magnet", mod)
-    spec.loader.exec_module(mod)
-    return mod
+    return load_script(_PATH)
 
 
 def _emc(s: float, current: float, **opts: bool) -> tuple[float, float]:

@@ -79,7 +79,6 @@ hashes (all map entries, all twelve runs and the whole-run reference bit-identic
 
 from __future__ import annotations
 
-import importlib.util
 import json
 import math
 from pathlib import Path
@@ -88,18 +87,15 @@ from typing import Any
 import numpy as np
 import pytest
 
+from .conftest import load_script
+
 ROOT = Path(__file__).parents[1]
 DATA = ROOT / "tests" / "data" / "vehicle_runs.npz"
 RTOL = 1e-10
 
 
 def _recorder() -> Any:
-    spec = importlib.util.spec_from_file_location("record_vehicle_runs",
-                                                  ROOT / "tools" / "record_vehicle_runs.py")
-    assert spec is not None and spec.loader is not None
-    mod = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(mod)
-    return mod
+    return load_script(ROOT / "tools" / "record_vehicle_runs.py")
 
 
 REC = _recorder()

@@ -23,7 +23,6 @@ on the maps stored in ``tests/data/vehicle_run_maps``."""
 
 from __future__ import annotations
 
-import importlib.util
 import json
 from pathlib import Path
 from typing import Any
@@ -31,17 +30,14 @@ from typing import Any
 import numpy as np
 import pytest
 
+from .conftest import load_script
+
 ROOT = Path(__file__).parents[1]
 REFERENCE = ROOT / "tests" / "data" / "vehicle_run_reference.nc"
 
 
 def _recorder() -> Any:
-    spec = importlib.util.spec_from_file_location("record_vehicle_reference",
-                                                  ROOT / "tools" / "record_vehicle_reference.py")
-    assert spec is not None and spec.loader is not None
-    mod = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(mod)
-    return mod
+    return load_script(ROOT / "tools" / "record_vehicle_reference.py")
 
 
 REF = _recorder()

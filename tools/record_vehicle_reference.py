@@ -33,18 +33,10 @@ DURATION_S = 0.3
 EVERY = 10
 
 
-def _runs_recorder() -> Any:
-    import importlib.util
-
-    spec = importlib.util.spec_from_file_location("record_vehicle_runs",
-                                                  ROOT / "tools" / "record_vehicle_runs.py")
-    assert spec is not None and spec.loader is not None
-    mod = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(mod)
-    return mod
-
-
-RUNS = _runs_recorder()
+# the runs' recorder beside this file (its maps cache and store); the same module object
+# as the tests' when they loaded it first (registered under its file name)
+sys.path.insert(0, str(ROOT / "tools"))
+import record_vehicle_runs as RUNS  # noqa: E402
 
 
 def reference_run(work_dir: str | Path) -> Any:
