@@ -52,7 +52,7 @@ def _by_hand(full: mk.Magnet) -> Network:
             if br.name not in ("leak_pb_p01", "leak_pb_p12"):
                 continue
             (el,) = br.elements
-            out.append(replace(br, elements=(replace(el, value=g_end),)))
+            out.append(replace(br, elements=(replace(el, value_H=g_end),)))
         elif br.name.startswith("gap_"):
             gap, teeth = br.elements
             assert isinstance(gap, mk.AirGap)
