@@ -360,7 +360,7 @@ def test_offset_free_mpc_on_a_ladder_plant(heave) -> None:  # type: ignore[no-un
                         interval_s=2e-3, solver="sqp")
     r = closed_loop(cm, veh, ctl, duration_s=0.3, dt_s=1e-3, initial_gap_m=S0,
                     initial_current_A=ctl.design_state[0],
-                    external_force=lambda t: 0.1 * f0 if t >= 0.02 else 0.0)
+                    external_force_N=lambda t: 0.1 * f0 if t >= 0.02 else 0.0)
     assert abs(r.gap_m[-1] - S0) < 1e-6
     assert np.max(np.abs(r.gap_m - S0)) < 2e-4
 
