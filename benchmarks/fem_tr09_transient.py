@@ -72,12 +72,11 @@ os.environ.setdefault("OMP_NUM_THREADS", "1")
 
 import numpy as np  # noqa: E402
 import scipy.sparse as sp  # noqa: E402
-import scipy.sparse.linalg as spla  # noqa: E402
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from fem_common import MU0, Reluctivity  # noqa: E402
 from fem_tr09 import Geometry, build_mesh, cut_magnet, regions  # noqa: E402
-from fem_u_magnet_transient import P1, rise_time, time_grid  # noqa: E402
+from fem_u_magnet_transient import P1, bordered_newton, rise_time, spd_solve, time_grid  # noqa: E402
 
 import maglevkit as mk  # noqa: E402
 
@@ -241,7 +240,7 @@ class Tr09Transient:
         nu0 = np.where(self.part >= 0, 1e-3, 1.0)
         z = np.zeros_like(nu0)
         A = np.zeros(fe.n)
-        A[free] = _spd_solve(fe.stiffness(nu0, z, z, z)[free][:, free], src[free])
+        A[free] = spd_solve(fe.stiffness(nu0, z, z, z)[free][:, free], src[free])
         scale = np.linalg.norm(src[free])
         for _ in range(80):
             ax, ay, _, nu, c = self._coeffs(A)
@@ -250,7 +249,7 @@ class Tr09Transient:
             if rel < tol:
                 return A
             dA = np.zeros(fe.n)
-            dA[free] = _spd_solve(fe.stiffness(nu, c, ax, ay)[free][:, free], -r[free])
+            dA[free] = spd_solve(fe.stiffness(nu, c, ax, ay)[free][:, free], -r[free])
             step = 1.0
             while True:
                 An = A + step * dA
@@ -319,47 +318,12 @@ class Tr09Transient:
             Br = a0 * np.vstack([Gb.T, kps])            # d (ru, rI) / d A
             Dd = np.diag(np.concatenate([-vb, R]))
 
-            def factor(K):
-                lu = spla.splu(K.tocsc(), permc_spec="MMD_AT_PLUS_A",
-                               options={"SymmetricMode": True})
-                kb = lu.solve(Bc)
-                cache.update(lu=lu, kb=kb, Sc=Dd - Br @ kb, a0=a0)
-                self.factorisations += 1
-
-            def solve(r):
-                kr = cache["lu"].solve(r[:nf])
-                dy = np.linalg.solve(cache["Sc"], r[nf:] - Br @ kr)
-                return -np.concatenate([kr - cache["kb"] @ dy, dy])
-
             def norm(r):
                 return max(np.linalg.norm(r[:nf]) / scaleA,
                            float(np.max(np.abs(r[nf + nb:]) / np.abs(U))))
 
-            fresh = cache.get("a0") != a0
-            r, J = res_jac(x, need_jac=fresh)
-            if fresh:
-                factor(J)
-            rel = norm(r)
-            it = 0
-            while True:
-                it += 1
-                dx = solve(r)
-                stp = 1.0
-                while True:
-                    xn = x + stp * dx
-                    rn, _ = res_jac(xn, need_jac=False)
-                    reln = norm(rn)
-                    if reln < max(rel, 1e-14) or stp < 1 / 64:
-                        break
-                    stp *= 0.5
-                slow = reln > 0.25 * rel
-                x, r, rel = xn, rn, reln
-                small = np.linalg.norm(stp * dx[:nf]) <= 1e-9 * np.linalg.norm(x[:nf])
-                if (rel < tol and small) or it >= 40:
-                    break
-                if slow:
-                    _, J = res_jac(x)
-                    factor(J)
+            x, rel, it = bordered_newton(x, res_jac, (Bc, Br, Dd), norm, nf=nf, a0=a0,
+                                         cache=cache, tol=tol, owner=self)
             if rel > 1e3 * tol:
                 raise RuntimeError(f"Newton failed at t={times[n]:.3e}: residual {rel:.2e}")
             nmax = max(nmax, it)
@@ -396,11 +360,6 @@ class Tr09Transient:
                              for c in self.circuits],
                    groups=self.groups, n_groups=self.ngroups, sigma_S_per_m=self.sigma)
         return out
-
-
-def _spd_solve(K, b: np.ndarray) -> np.ndarray:  # type: ignore[no-untyped-def]
-    lu = spla.splu(K.tocsc(), permc_spec="MMD_AT_PLUS_A", options={"SymmetricMode": True})
-    return lu.solve(b)
 
 
 # ---------------------------------------------------------------------------------------

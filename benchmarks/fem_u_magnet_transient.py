@@ -186,9 +186,63 @@ class Transient:
         return self.eddy_power_core_W + self.eddy_power_rail_W
 
 
-def _spd_solve(K, b: np.ndarray) -> np.ndarray:
+def spd_solve(K, b: np.ndarray) -> np.ndarray:
+    """``K^-1 b`` for a symmetric positive definite sparse ``K`` (SuperLU, symmetric mode)."""
     lu = spla.splu(K.tocsc(), permc_spec="MMD_AT_PLUS_A", options={"SymmetricMode": True})
     return lu.solve(b)
+
+
+def bordered_newton(x: np.ndarray, res_jac, border: tuple, norm, *, nf: int, a0: float,
+                    cache: dict, tol: float, owner, trace: bool = False):  # type: ignore[no-untyped-def]
+    """One implicit time step's modified Newton solve of the bordered system
+    ``[[K, Bc], [Br, Dd]]`` by its Schur complement (K symmetric positive definite: SuperLU
+    in symmetric mode; the border: the bodies' or groups' potentials and the circuits'
+    currents), with a halving line search.  The factorisation (``cache``) is kept while the
+    step's ``a0`` is the same and the residual falls by at least 4x per iteration; every
+    factorisation counts in ``owner.factorisations``.  ``res_jac(x, need_jac)`` gives the
+    residual and (when asked) ``K``; ``norm(r)`` the scaled residual.  Returns ``(x, rel,
+    iterations)``; raises where the step does not converge."""
+    Bc, Br, Dd = border
+
+    def factor(K):  # type: ignore[no-untyped-def]
+        lu = spla.splu(K.tocsc(), permc_spec="MMD_AT_PLUS_A", options={"SymmetricMode": True})
+        kb = lu.solve(Bc)
+        cache.update(lu=lu, kb=kb, S=Dd - Br @ kb, a0=a0)
+        owner.factorisations += 1
+
+    def solve(r):  # type: ignore[no-untyped-def]
+        kr = cache["lu"].solve(r[:nf])
+        dy = np.linalg.solve(cache["S"], r[nf:] - Br @ kr)
+        return -np.concatenate([kr - cache["kb"] @ dy, dy])
+
+    fresh = cache.get("a0") != a0
+    r, J = res_jac(x, need_jac=fresh)
+    if fresh:
+        factor(J)
+    rel = norm(r)
+    it = 0
+    while True:
+        it += 1
+        dx = solve(r)
+        stp = 1.0
+        while True:
+            xn = x + stp * dx
+            rn, _ = res_jac(xn, need_jac=False)
+            reln = norm(rn)
+            if reln < max(rel, 1e-14) or stp < 1 / 64:
+                break
+            stp *= 0.5
+        slow = reln > 0.25 * rel
+        x, r, rel = xn, rn, reln
+        if trace:
+            print(f"    it {it} step {stp} rel {rel:.3e} dI {dx[-1]:.3e}", flush=True)
+        small = np.linalg.norm(stp * dx[:nf]) <= 1e-9 * np.linalg.norm(x[:nf])
+        if (rel < tol and small) or it >= 40:
+            break
+        if slow:
+            _, J = res_jac(x)
+            factor(J)
+    return x, rel, it
 
 
 def time_grid(t_end: float, dt0: float, block: int, dt_max: float) -> np.ndarray:
@@ -266,7 +320,7 @@ class UMagnetFem:
         nu0 = np.where(self.iron_e, 1e-3, 1.0)
         K = fe.stiffness(nu0, np.zeros_like(nu0), np.zeros_like(nu0), np.zeros_like(nu0))
         A = np.zeros(fe.n)
-        A[free] = _spd_solve(K[free][:, free], src[free])
+        A[free] = spd_solve(K[free][:, free], src[free])
         scale = np.linalg.norm(src[free])
         for _ in range(80):
             ax, ay, _, nu, c = self._coeffs(A)
@@ -276,7 +330,7 @@ class UMagnetFem:
                 return A
             K = fe.stiffness(nu, c, ax, ay)
             dA = np.zeros(fe.n)
-            dA[free] = _spd_solve(K[free][:, free], -r[free])
+            dA[free] = spd_solve(K[free][:, free], -r[free])
             step = 1.0
             while True:
                 An = A + step * dA
@@ -332,9 +386,9 @@ class UMagnetFem:
                 rI = self.R * I_ + kps @ adot - U
                 r = np.concatenate([ra, [rc, rr, rI]])
                 if not need_jac:
-                    return r, None, Af
+                    return r, None
                 K = fe.stiffness(nu, c, ax, ay)[free][:, free] + sp.diags(a0 * msig)
-                return r, K, Af
+                return r, K
 
             # bordered Newton system [[K, Bc], [Br, Dd]] by its Schur complement: K is
             # symmetric positive definite (SuperLU in symmetric mode), 3 border columns
@@ -342,51 +396,15 @@ class UMagnetFem:
             Br = np.stack([a0 * mc, a0 * mr, a0 * kps], axis=0)
             Dd = np.diag([-self.vol_core, -self.vol_rail, self.R])
 
-            def factor(K):
-                lu = spla.splu(K.tocsc(), permc_spec="MMD_AT_PLUS_A",
-                               options={"SymmetricMode": True})
-                kb = lu.solve(Bc)
-                cache.update(lu=lu, kb=kb, S=Dd - Br @ kb, a0=a0)
-                self.factorisations += 1
-
-            def solve(r):
-                kr = cache["lu"].solve(r[:nf])
-                dy = np.linalg.solve(cache["S"], r[nf:] - Br @ kr)
-                return -np.concatenate([kr - cache["kb"] @ dy, dy])
-
             def norm(r):
                 # the body rows are linear (solved exactly by every Newton step)
                 return max(np.linalg.norm(r[:nf]) / scaleA, abs(r[nf + 2]) / max(abs(U), 1e-9))
 
             # modified Newton: the factorisation is kept while the step size is the same
             # and the residual falls by at least 4x per iteration
-            fresh = cache.get("a0") != a0
-            r, J, Af = res_jac(x, need_jac=fresh)
-            if fresh:
-                factor(J)
-            rel = norm(r)
-            it = 0
-            while True:
-                it += 1
-                dx = solve(r)
-                stp = 1.0
-                while True:
-                    xn = x + stp * dx
-                    rn, _, _ = res_jac(xn, need_jac=False)
-                    reln = norm(rn)
-                    if reln < max(rel, 1e-14) or stp < 1 / 64:
-                        break
-                    stp *= 0.5
-                slow = reln > 0.25 * rel
-                x, r, rel = xn, rn, reln
-                if verbose > 1:
-                    print(f"    it {it} step {stp} rel {rel:.3e} dI {dx[-1]:.3e}", flush=True)
-                small = np.linalg.norm(stp * dx[:nf]) <= 1e-9 * np.linalg.norm(x[:nf])
-                if (rel < tol and small) or it >= 40:
-                    break
-                if slow:
-                    _, J, _ = res_jac(x)
-                    factor(J)
+            x, rel, it = bordered_newton(x, res_jac, (Bc, Br, Dd), norm, nf=nf, a0=a0,
+                                         cache=cache, tol=tol, owner=self,
+                                         trace=verbose > 1)
             if rel > 1e3 * tol:
                 raise RuntimeError(f"Newton failed at t={times[n]:.3e}: residual {rel:.2e}")
             nmax = max(nmax, it)
