@@ -76,7 +76,7 @@ import scipy.sparse as sp  # noqa: E402
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from fem_common import MU0, Reluctivity  # noqa: E402
 from fem_tr09 import Geometry, build_mesh, cut_magnet, regions  # noqa: E402
-from fem_u_magnet_transient import P1, bordered_newton, rise_time, spd_solve, time_grid  # noqa: E402
+from fem_u_magnet_transient import P1, bordered_newton, rise_time, static_newton, time_grid  # noqa: E402
 
 import maglevkit as mk  # noqa: E402
 
@@ -235,31 +235,9 @@ class Tr09Transient:
 
     def static(self, currents: list[float], tol: float = 1e-10) -> np.ndarray:
         """Magnetostatic A at the circuits' currents [A]."""
-        fe, free = self.fe, self.free
         src = sum(c["src"] * i for c, i in zip(self.circuits, currents, strict=True))
-        nu0 = np.where(self.part >= 0, 1e-3, 1.0)
-        z = np.zeros_like(nu0)
-        A = np.zeros(fe.n)
-        A[free] = spd_solve(fe.stiffness(nu0, z, z, z)[free][:, free], src[free])
-        scale = np.linalg.norm(src[free])
-        for _ in range(80):
-            ax, ay, _, nu, c = self._coeffs(A)
-            r = fe.residual(nu, ax, ay) - src
-            rel = np.linalg.norm(r[free]) / scale
-            if rel < tol:
-                return A
-            dA = np.zeros(fe.n)
-            dA[free] = spd_solve(fe.stiffness(nu, c, ax, ay)[free][:, free], -r[free])
-            step = 1.0
-            while True:
-                An = A + step * dA
-                ax, ay, _, nu, _ = self._coeffs(An)
-                rn = np.linalg.norm((fe.residual(nu, ax, ay) - src)[free]) / scale
-                if rn < rel or step < 1 / 64:
-                    break
-                step *= 0.5
-            A = An
-        raise RuntimeError(f"static Newton did not converge at s={self.s}")
+        return static_newton(self.fe, self.free, self._coeffs, src, self.part >= 0, tol,
+                             f"s={self.s}")
 
     def step_response(self, i0: float, i1: float, times: np.ndarray, tol: float = 1e-9,
                       verbose: int = 0) -> dict:

@@ -192,6 +192,36 @@ def spd_solve(K, b: np.ndarray) -> np.ndarray:
     return lu.solve(b)
 
 
+def static_newton(fe, free: np.ndarray, coeffs, src: np.ndarray, iron: np.ndarray, tol: float,
+                  where: str) -> np.ndarray:  # type: ignore[no-untyped-def]
+    """Magnetostatic A for the source ``src`` by Newton with a halving line search, from the
+    field of a nearly ideal iron (nu = 1e-3 on ``iron``); ``coeffs(A)`` gives the element
+    fields and reluctivities (``ax, ay, _, nu, c``); ``where`` names the case in the error."""
+    nu0 = np.where(iron, 1e-3, 1.0)
+    z = np.zeros_like(nu0)
+    A = np.zeros(fe.n)
+    A[free] = spd_solve(fe.stiffness(nu0, z, z, z)[free][:, free], src[free])
+    scale = np.linalg.norm(src[free])
+    for _ in range(80):
+        ax, ay, _, nu, c = coeffs(A)
+        r = fe.residual(nu, ax, ay) - src
+        rel = np.linalg.norm(r[free]) / scale
+        if rel < tol:
+            return A
+        dA = np.zeros(fe.n)
+        dA[free] = spd_solve(fe.stiffness(nu, c, ax, ay)[free][:, free], -r[free])
+        step = 1.0
+        while True:
+            An = A + step * dA
+            ax, ay, _, nu, _ = coeffs(An)
+            rn = np.linalg.norm((fe.residual(nu, ax, ay) - src)[free]) / scale
+            if rn < rel or step < 1 / 64:
+                break
+            step *= 0.5
+        A = An
+    raise RuntimeError(f"static Newton did not converge at {where}")
+
+
 def bordered_newton(x: np.ndarray, res_jac, border: tuple, norm, *, nf: int, a0: float,
                     cache: dict, tol: float, owner, trace: bool = False):  # type: ignore[no-untyped-def]
     """One implicit time step's modified Newton solve of the bordered system
@@ -315,32 +345,9 @@ class UMagnetFem:
 
     def static(self, current: float, tol: float = 1e-10) -> np.ndarray:
         """Magnetostatic A at coil current ``current`` [A]."""
-        fe, free = self.fe, self.free
         src = MU0 * self.nside * current / self.ac * self.bsign
-        nu0 = np.where(self.iron_e, 1e-3, 1.0)
-        K = fe.stiffness(nu0, np.zeros_like(nu0), np.zeros_like(nu0), np.zeros_like(nu0))
-        A = np.zeros(fe.n)
-        A[free] = spd_solve(K[free][:, free], src[free])
-        scale = np.linalg.norm(src[free])
-        for _ in range(80):
-            ax, ay, _, nu, c = self._coeffs(A)
-            r = fe.residual(nu, ax, ay) - src
-            rel = np.linalg.norm(r[free]) / scale
-            if rel < tol:
-                return A
-            K = fe.stiffness(nu, c, ax, ay)
-            dA = np.zeros(fe.n)
-            dA[free] = spd_solve(K[free][:, free], -r[free])
-            step = 1.0
-            while True:
-                An = A + step * dA
-                ax, ay, _, nu, _ = self._coeffs(An)
-                rn = np.linalg.norm((fe.residual(nu, ax, ay) - src)[free]) / scale
-                if rn < rel or step < 1 / 64:
-                    break
-                step *= 0.5
-            A = An
-        raise RuntimeError(f"static Newton did not converge at s={self.s}, I={current}")
+        return static_newton(self.fe, self.free, self._coeffs, src, self.iron_e, tol,
+                             f"s={self.s}, I={current}")
 
     def step_response(self, i0: float, i1: float, times: np.ndarray,
                       tol: float = 1e-9, verbose: bool = False) -> Transient:
