@@ -115,7 +115,7 @@ def test_without_end_effects(tmp_path: Path) -> None:
     # the split network chooses deep or shallow LIG grooves on their depth (a choice of
     # structure, not a smooth law)
     ("levitation_magnet", "lig_groove_depth", "m", 0.020,
-     "decides its structure on one of these values"),
+     "decides its structure on this value"),
     # the U-magnet's air-cell margin belongs to the grid discretisation: the lumped
     # network and the winding's laws do not depend on it
     ("u_magnet", "air_margin", "m", 0.2, "do not depend on it"),
@@ -132,5 +132,5 @@ def test_a_variable_the_network_geometry_does_not_admit_is_refused(
     if kind == "u_magnet":
         doc["design"]["flux_paths"] = "split"
     doc["variables"][variable] = [0.5 * base, 1.5 * base]
-    with pytest.raises(DesignSpecError, match=rf"\[variables\] \[?.*{variable}.*{needle}"):
+    with pytest.raises(DesignSpecError, match=rf"\[variables\] \['{variable}'\]: .*{needle}"):
         read_design_spec(doc)

@@ -689,12 +689,22 @@ class _Problem:
             if "truth value" not in str(exc):
                 raise
             # the builder compares a varied value outside GeometryBranches (a choice of
-            # structure, e.g. deep or shallow LIG grooves): no smooth law to optimise on
+            # structure, e.g. deep or shallow LIG grooves): no smooth law to optimise on.
+            # Which one: rebuild with one symbol at a time (only on this failure)
+            culprits = []
+            for k, n in enumerate(self.names):
+                if n == kd.turns_key:
+                    continue
+                try:
+                    kd.network({**m, n: self.p[k]}, spec, options, GeometryBranches(value))
+                except RuntimeError as one:
+                    if "truth value" in str(one):
+                        culprits.append(n)
             raise DesignSpecError(
-                f"[variables] {list(self.names)}: the {network_name} decides its structure "
-                "on one of these values (a comparison of a symbolic value), so it cannot be "
-                f"a design variable there; the documented set: {list(kd.variables)}"
-                ) from None
+                f"[variables] {culprits or list(self.names)}: the {network_name} decides its "
+                "structure on this value (a comparison the builder makes outside "
+                "GeometryBranches), so it cannot be a design variable there; the documented "
+                f"set: {list(kd.variables)}") from None
         self.decisions = tuple(label for label, _ in branches.taken)
         self.conditions = ca.Function("design_branches", [self.p], [ca.vertcat(
             *[e for _, e in branches.taken])] if branches.taken else [ca.DM.zeros(0, 1)])
