@@ -38,9 +38,18 @@ from .test_design import (
 runner = CliRunner()
 
 
-def tr09_doc() -> dict[str, Any]:
+def bundled_doc() -> dict[str, Any]:
+    """The bundled ``tr09-design`` spec (the file's own split network)."""
     text = (resources.files("maglevkit") / "data" / "designs" / "tr09-design.toml").read_text()
     return tomllib.loads(text)
+
+
+def tr09_doc() -> dict[str, Any]:
+    """The bundled spec on the lumped ``"paper"`` network (``[design] flux_paths``): this
+    file's checks; the split network's are in tests/test_design_split.py."""
+    doc = bundled_doc()
+    doc["design"]["flux_paths"] = "paper"
+    return doc
 
 
 def two_variable_doc() -> dict[str, Any]:
@@ -160,8 +169,10 @@ def test_turns_per_pole_derivative_from_ampere_turns() -> None:
     (lambda d: d["design"].update(magnet="u-magnet") or d["design"].pop("flux_paths"),
      "[variables] unknown design variable 'core_height' for a u_magnet"),
     (lambda d: d["design"].update(magnet="u-magnet"),
-     "[design] flux_paths = 'paper': only \"paper\" (the lumped network) of a levitation magnet"),
-    (lambda d: d["design"].update(flux_paths="split"), "[design] flux_paths = 'split': only"),
+     "[design] flux_paths = 'paper': expected one of ['standard', 'split'] for magnet = "
+     "'u-magnet' (a u_magnet)"),
+    (lambda d: d["design"].update(flux_paths="lumped"),
+     "[design] flux_paths = 'lumped': expected one of ['paper', 'split']"),
 ])
 def test_bad_spec_names_the_key(edit: Any, needle: str) -> None:
     doc = tr09_doc()
@@ -191,14 +202,16 @@ def test_unit_slips_warn_naming_the_key() -> None:
         read_design_spec(doc)
 
 
-def test_split_network_is_refused_by_name() -> None:
-    doc = tr09_doc()
-    # the bundled tr09-standard is the split network (issue 26); without the spec's
-    # [design] flux_paths = "paper" it is refused by name
+def test_the_file_network_is_the_default_and_flux_paths_overrides_it() -> None:
+    doc = bundled_doc()
+    # the bundled tr09-standard is the split network (issue 26); the bundled spec designs
+    # on it, [design] flux_paths = "paper" on the lumped one
+    assert "flux_paths" not in doc["design"]
     assert load_magnet(doc["design"]["magnet"]).parameters["magnet"]["flux_paths"] == "split"
-    del doc["design"]["flux_paths"]
-    with pytest.raises(DesignSpecError, match='flux_paths = \\\\"paper\\\\"|flux_paths = "paper"'):
-        read_design_spec(doc)
+    split = read_design_spec(doc).magnet.parameters["magnet"]
+    paper = read_design_spec(tr09_doc()).magnet.parameters["magnet"]
+    assert split["flux_paths"] == "split" and paper["flux_paths"] == "paper"
+    assert "coil_segments" not in paper      # a key of the split network only
 
 
 def test_geometry_branches_numbers_are_pythons_and_symbols_are_recorded() -> None:

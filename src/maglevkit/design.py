@@ -1,7 +1,9 @@
 """Design optimisation of a magnet's geometry and coil (issue 25, part 3; docs/design.md).
 
-The geometry and turns of a lumped U-magnet or of a levitation magnet (TR09, its
-``flux_paths = "paper"`` network) -- a user-chosen subset of the kind's variables
+The geometry and turns of a lumped U-magnet or of a levitation magnet (TR09) -- on the
+network its file chooses (``flux_paths``: the U-magnet's ``"standard"`` or ``"split"``, the
+levitation magnet's ``"paper"`` or the FEM-checked ``"split"``, with the file's
+``end_effects``) or the spec's ``[design] flux_paths`` -- a user-chosen subset of the kind's variables
 (:data:`KIND_VARIABLES`, with bounds) -- are optimised for an objective -- magnet mass
 (iron + conductor) or resistive power at the nominal operating point -- under constraints
 from a design spec (:func:`read_design_spec`).  Every circuit carries the same current:
@@ -246,7 +248,8 @@ def read_design_spec(source: str | Path | Mapping[str, Any], *, base_dir: str | 
     """Read and check a design spec (TOML file or its parsed contents).
 
     Tables: ``[design]`` (``magnet``: a bundled name or a parameter file, relative to the
-    spec; ``objective``), ``[variables]`` (``name = [lower, upper]`` per design variable
+    spec; ``objective``; optional ``flux_paths``: another of the magnet's networks than
+    its file's), ``[variables]`` (``name = [lower, upper]`` per design variable
     of :data:`VARIABLES`), ``[requirements]`` (module docstring), optional ``[coil]``
     (:data:`COIL_DEFAULTS`) and ``[provenance]`` (``"table.key" = "[E] ..."``).
 
@@ -265,7 +268,9 @@ def read_design_spec(source: str | Path | Mapping[str, Any], *, base_dir: str | 
     ------
     DesignSpecError
         Unknown, missing or bad keys (named with their table), bounds that are empty or
-        exclude nothing feasible, a base magnet that is not a lumped U-magnet.
+        exclude nothing feasible, a base magnet that is neither a lumped U-magnet nor a
+        levitation magnet, a variable the network's geometry does not admit (one it
+        decides its structure on, or one neither its statics nor the winding depend on).
 
     Warns
     -----
@@ -313,26 +318,28 @@ def read_design_spec(source: str | Path | Mapping[str, Any], *, base_dir: str | 
     params = magnet.parameters
     kind = params["magnet"].get("kind")
     if "flux_paths" in design:
-        # the levitation magnet's lumped network of a file that uses another one (the bundled
-        # TR09 files are "split" since issue 26): named in the spec, never silently
-        if design["flux_paths"] != "paper" or kind != "levitation_magnet":
-            raise DesignSpecError(f"[design] flux_paths = {design['flux_paths']!r}: only "
-                                  "\"paper\" (the lumped network) of a levitation magnet is "
-                                  f"allowed; magnet = {name!r} is of kind {kind!r}")
+        # another of the magnet's own networks than its file's (named in the spec, never
+        # silently): the levitation magnet's "paper" / "split", the U-magnet's "standard" /
+        # "split" (lumped discretisation)
+        paths = _flux_paths_of(kind)
+        if design["flux_paths"] not in paths:
+            raise DesignSpecError(f"[design] flux_paths = {design['flux_paths']!r}: expected "
+                                  f"one of {list(paths)} for magnet = {name!r} (a {kind}); "
+                                  "omit it to design on the file's own network")
         p = {k: dict(v) if isinstance(v, Mapping) else v for k, v in params.items()}
-        p["magnet"]["flux_paths"] = "paper"
-        p["magnet"].pop("coil_segments", None)
+        p["magnet"]["flux_paths"] = design["flux_paths"]
+        if kind == "levitation_magnet" and design["flux_paths"] != "split":
+            p["magnet"].pop("coil_segments", None)      # a key of the split network only
         p.setdefault("provenance", {})["magnet.flux_paths"] = "[E] design spec: [design] flux_paths"
         magnet = build_magnet(p, source=str(ref))
         params = magnet.parameters
     if (kind == "u_magnet" and params["magnet"].get("discretisation", "lumped") != "lumped") \
-            or (kind == "levitation_magnet"
-                and params["magnet"].get("flux_paths", "paper") != "paper") \
             or kind not in KIND_VARIABLES:
         raise DesignSpecError(f"[design] magnet = {name!r}: design optimisation supports the "
-                              "lumped U-magnet (kind = \"u_magnet\", discretisation = "
-                              "\"lumped\") and the levitation magnet's lumped network "
-                              "(kind = \"levitation_magnet\", flux_paths = \"paper\") only")
+                              "U-magnet's lumped network (kind = \"u_magnet\", discretisation "
+                              "= \"lumped\"; flux_paths \"standard\" or \"split\") and the "
+                              "levitation magnet (kind = \"levitation_magnet\", flux_paths "
+                              "\"paper\" or \"split\")")
     allowed = KIND_VARIABLES[kind]
     if "calibration" in params:
         # the design rebuilds the network from the geometry: the factors would be lost
@@ -413,8 +420,25 @@ def read_design_spec(source: str | Path | Mapping[str, Any], *, base_dir: str | 
             raise DesignSpecError(f"[provenance] {k!r}: tags a key the spec does not give; "
                                   "expected \"table.key\" of one of its values (e.g. "
                                   "\"requirements.force_N\")")
-    return DesignSpec(magnet=magnet, objective=objective, variables=variables,
+    spec = DesignSpec(magnet=magnet, objective=objective, variables=variables,
                       requirements=req, coil=coil, provenance=dict(prov), source=label)
+    # the network with the variables as symbols: refuses a variable this network's
+    # geometry does not admit (DesignSpecError naming it); ~0.1-0.4 s
+    _Problem(spec)
+    return spec
+
+
+def _flux_paths_of(kind: Any) -> tuple[str, ...]:
+    """The networks (``flux_paths`` values) of a magnet kind the design can build."""
+    if kind == "levitation_magnet":
+        from .magnets.levitation import FLUX_PATHS as lev_paths
+
+        return tuple(lev_paths)
+    if kind == "u_magnet":
+        from .magnets.u_magnet import FLUX_PATHS as u_paths
+
+        return tuple(u_paths)
+    return ()
 
 
 # ---------------------------------------------------------------------------- the kinds
@@ -658,7 +682,29 @@ class _Problem:
 
         branches = GeometryBranches(value)
         options = replace(base.options, eddy_currents=False)
-        net = kd.network(g, spec, options, branches)
+        network_name = f"{kd.kind}'s {m.get('flux_paths', 'lumped')!r} network"
+        try:
+            net = kd.network(g, spec, options, branches)
+        except RuntimeError as exc:
+            if "truth value" not in str(exc):
+                raise
+            # the builder compares a varied value outside GeometryBranches (a choice of
+            # structure, e.g. deep or shallow LIG grooves): no smooth law to optimise on.
+            # Which one: rebuild with one symbol at a time (only on this failure)
+            culprits = []
+            for k, n in enumerate(self.names):
+                if n == kd.turns_key:
+                    continue
+                try:
+                    kd.network({**m, n: self.p[k]}, spec, options, GeometryBranches(value))
+                except RuntimeError as one:
+                    if "truth value" in str(one):
+                        culprits.append(n)
+            raise DesignSpecError(
+                f"[variables] {culprits or list(self.names)}: the {network_name} decides its "
+                "structure on this value (a comparison the builder makes outside "
+                "GeometryBranches), so it cannot be a design variable there; the documented "
+                f"set: {list(kd.variables)}") from None
         self.decisions = tuple(label for label, _ in branches.taken)
         self.conditions = ca.Function("design_branches", [self.p], [ca.vertcat(
             *[e for _, e in branches.taken])] if branches.taken else [ca.DM.zeros(0, 1)])
@@ -703,6 +749,18 @@ class _Problem:
         self.outputs = ca.Function("design_outputs", [eq.x, ca.vertcat(s, current, self.p)],
                                    [force, psi])
         self.laws = kd.laws(g, self.turns, spec.coil)
+        # every varied geometry value must enter the network's statics or the winding's
+        # laws: one that enters neither is not a dimension of this network (the objective
+        # and constraints would be flat in it)
+        entered = ca.vertcat(res, force, psi, ca.vertcat(*b_expr),
+                             *[self.laws[k] for k in ("mass_kg", "total_resistance_ohm")])
+        idle = [n for k, n in enumerate(self.names)
+                if n != kd.turns_key and not ca.depends_on(entered, self.p[k])]
+        if idle:
+            raise DesignSpecError(
+                f"[variables] {idle}: the {network_name} and the winding's laws do not "
+                "depend on it, so it is no dimension of this network; the documented set: "
+                f"{list(kd.variables)}")
         self.laws_fun = ca.Function("design_laws", [self.p], [self.laws[k] for k in (
             "circuit_resistance_ohm", "mass_kg", "coil_area_m2", "coil_turns",
             "total_resistance_ohm")])

@@ -107,14 +107,16 @@ def _power_flows(U: Any, I: Any, R: Any, g_e: Any, phidot_e: Any, force: Any, ra
 #: Networks with more loop and circuit unknowns than this run IDAS on the sparse form
 #: (``K y' = h``, :meth:`FluxDAE._init_idas`); smaller ones on the dense form (``K^+``,
 #: ``Q``), whose results and compiled libraries stay those of earlier versions.  Counted:
-#: the bundled lumped networks 9-36 and the U-magnet's ladder n = 4 (60) stay dense; the
-#: U-magnet's ladder n = 8 (116), the grid with Roters tubes (111, its ladder n = 4: 507),
-#: the TR09 split network (255) and the air-cell grid (1386-2310) are sparse.  The dense
-#: ``K^+`` and ``Q`` make the dense form's Jacobian a dense block: on the ladder n = 8 it
-#: compiled in 119 s and ran 4.3 s CPU per simulated second, the sparse form 8.6 s and
-#: 0.16 s; the split network's dense form did not compile in 400 s, the sparse one in 11 s
-#: (docs/decisions.md, splitfast; was 400, "The air-cell network in the transient").
-SPARSE_FORM_SIZE = 100
+#: the bundled lumped networks 9-36 (U-magnet 18, guidance 19, TR09 "paper" 36) and the
+#: U-magnet's ladder n = 2 (32) stay dense; the ladders from n = 3 (U-magnet 46, guidance
+#: n = 4: 67, n = 6: 99), the grids and the split networks (TR09 233) are sparse.  The
+#: dense ``K^+`` and ``Q`` make the dense form's Jacobian a dense block.  Measured
+#: (benchmarks/form_size_survey.py, compiled, 1 s at 1 kHz, docs/decisions.md design25):
+#: the sparse form is faster at every size, by 1.2-1.7x up to 36 unknowns, 3.5x at 46, 7x
+#: at 67 and 12x at 99 (whose dense form also compiled in 48 s instead of 2.5 s); the
+#: bound sits between 36 and 46 so that the bundled magnets' default networks keep their
+#: results and libraries (was 100: the guidance ladder n = 6, 99 unknowns, ran dense).
+SPARSE_FORM_SIZE = 40
 
 #: ``compiled="auto"`` compiles networks up to this many loop and circuit unknowns; larger
 #: ones run on CasADi's virtual machine (``compiled="always"`` still compiles them).  What

@@ -55,7 +55,7 @@ from typing import Any
 import casadi as ca
 import numpy as np
 
-from ..errors import ParameterError
+from ..errors import ParameterError, SolverError
 from .compiled import DEFAULT_FLAGS, build_source, cache_directory
 
 __all__ = ["LiveIntegrator", "live_library"]
@@ -112,7 +112,7 @@ typedef struct {
      c_j diagonal (cjdest), row and column permutations pr/pc, values v, work x (zeros) */
   long long int lu_on, lu_sparse, *cp, *ri, *dp, *dest, *cjdest, *pr, *pc;
   double *v, *x, *c, lu_tol;
-  long int n_sparse, n_dense, n_psol;
+  long int n_sparse, n_dense, n_psol, n_nonfinite;
   const double **arg;
   double **res;
   const long long int *sp[4];
@@ -190,6 +190,9 @@ static int fx_sparse_lu(fx_session *s, double cj) {
     }
     for (e = d; e < b; ++e) if (fabs(x[s->ri[e]]) > big) big = fabs(x[s->ri[e]]);
     piv = x[j];
+    /* a NaN anywhere in the column (fabs(NaN) > big is false, so the largest entry alone
+       misses one below the diagonal or in U) makes this setup fall back too */
+    for (e = a; e < b; ++e) if (!isfinite(x[s->ri[e]])) big = NAN;
     if (!(fabs(piv) >= s->lu_tol * big) || !(big > 0.0) || !isfinite(big)) {
       for (e = a; e < b; ++e) x[s->ri[e]] = 0.0;
       return 0;
@@ -202,16 +205,15 @@ static int fx_sparse_lu(fx_session *s, double cj) {
   return 1;
 }
 
-static int fx_pset(realtype t, N_Vector yy, N_Vector yp, N_Vector rr, realtype cj, void *data,
-                   N_Vector t1, N_Vector t2, N_Vector t3) {
-  fx_session *s = (fx_session *)data;
+/* factorise the Newton matrix c_j dF/dy' + dF/dy of the Jacobian blocks in s->J: the
+   sparse LU, else the dense LU with partial pivoting; 1 (recoverable) where the dense
+   factors are not finite (a NaN or an infinity in the matrix) or a column is zero */
+static int fx_factor(fx_session *s, realtype cj) {
   long int n = s->nn, nx = s->nx, i, j, k;
-  (void)yp; (void)rr; (void)t1; (void)t2; (void)t3;
-  if (fx_call(1, s, t, NVD(yy), NVD(yy) + nx, s->J)) return -1;
   if (s->lu_on) {
     if (fx_sparse_lu(s, cj)) { s->lu_sparse = 1; s->n_sparse++; return 0; }
-    s->n_dense++;                      /* a tiny or non-finite static pivot: dense LU */
   }
+  s->n_dense++;           /* a tiny or non-finite static pivot, or no plan: dense LU */
   s->lu_sparse = 0;
   memset(s->M, 0, sizeof(double) * n * n);
   for (i = 0; i < nx; ++i) s->M[i * n + i] = cj;
@@ -226,7 +228,10 @@ static int fx_pset(realtype t, N_Vector yy, N_Vector yp, N_Vector rr, realtype c
     for (i = k + 1; i < n; ++i)
       if (fabs(s->M[k * n + i]) > big) { big = fabs(s->M[k * n + i]); p = i; }
     s->piv[k] = p;
-    if (!(big > 0.0) || !isfinite(big)) return 1;              /* recoverable */
+    if (!(big > 0.0) || !isfinite(big)) {                      /* recoverable */
+      if (!(big == 0.0)) s->n_nonfinite++;
+      return 1;
+    }
     if (p != k)
       for (j = 0; j < n; ++j) {
         double tmp = s->M[j * n + k]; s->M[j * n + k] = s->M[j * n + p]; s->M[j * n + p] = tmp;
@@ -247,13 +252,30 @@ static int fx_pset(realtype t, N_Vector yy, N_Vector yp, N_Vector rr, realtype c
   long long int cl = 0, cu = 0;
   for (k = 0; k < n; ++k) {
     s->lp[k] = cl; s->up[k] = cu;
+    /* a NaN passes the pivot search (fabs(NaN) > big is false) and spreads through the
+       updates into L and U: any non-finite factor fails this setup (recoverable) */
+    if (!isfinite(s->M[k * n + k])) { s->n_nonfinite++; return 1; }
     for (i = k + 1; i < n; ++i)
-      if (s->M[k * n + i] != 0.0) { s->li[cl] = i; s->lx[cl++] = s->M[k * n + i]; }
+      if (s->M[k * n + i] != 0.0) {
+        if (!isfinite(s->M[k * n + i])) { s->n_nonfinite++; return 1; }
+        s->li[cl] = i; s->lx[cl++] = s->M[k * n + i];
+      }
     for (i = 0; i < k; ++i)
-      if (s->M[k * n + i] != 0.0) { s->ui[cu] = i; s->ux[cu++] = s->M[k * n + i]; }
+      if (s->M[k * n + i] != 0.0) {
+        if (!isfinite(s->M[k * n + i])) { s->n_nonfinite++; return 1; }
+        s->ui[cu] = i; s->ux[cu++] = s->M[k * n + i];
+      }
   }
   s->lp[n] = cl; s->up[n] = cu;
   return 0;
+}
+
+static int fx_pset(realtype t, N_Vector yy, N_Vector yp, N_Vector rr, realtype cj, void *data,
+                   N_Vector t1, N_Vector t2, N_Vector t3) {
+  fx_session *s = (fx_session *)data;
+  (void)yp; (void)rr; (void)t1; (void)t2; (void)t3;
+  if (fx_call(1, s, t, NVD(yy), NVD(yy) + s->nx, s->J)) return -1;
+  return fx_factor(s, cj);
 }
 
 static int fx_psol(realtype t, N_Vector yy, N_Vector yp, N_Vector rr, N_Vector rv, N_Vector zv,
@@ -450,10 +472,13 @@ int fx_set_lu(void *data, long long int nnz, const long long int *cp, const long
 
 /* the preconditioner at one point (for tests): set up at (t, x, z) with inputs p, u and
    c_j, then out = M^-1 rhs; 1 where the sparse LU was used, 0 the dense LU, -1 on failure.
-   It replaces the preconditioner IDAS set up last (GMRES corrects a stale one); the
-   inputs IDAS integrates with are restored. */
+   With jac (not NULL) the Jacobian blocks' nonzeros are these values (concatenated, as
+   fx_jacobian gives them) instead of the ones at the point.  It replaces the
+   preconditioner IDAS set up last (GMRES corrects a stale one); the inputs IDAS
+   integrates with are restored. */
 int fx_newton_solve(void *data, double t, const double *x, const double *z, const double *p,
-                    const double *u, double cj, const double *rhs, double *out) {
+                    const double *u, double cj, const double *rhs, const double *jac,
+                    double *out) {
   fx_session *s = (fx_session *)data;
   N_Vector y = N_VNew_Serial(s->nn), r = N_VNew_Serial(s->nn), o = N_VNew_Serial(s->nn);
   double *p0 = (double *)malloc(sizeof(double) * (s->np + s->nu + 1));
@@ -463,7 +488,20 @@ int fx_newton_solve(void *data, double t, const double *x, const double *z, cons
     memcpy(s->p, p, sizeof(double) * s->np); memcpy(s->u, u, sizeof(double) * s->nu);
     memcpy(NVD(y), x, sizeof(double) * s->nx); memcpy(NVD(y) + s->nx, z, sizeof(double) * s->nz);
     memcpy(NVD(r), rhs, sizeof(double) * s->nn);
-    if (!fx_pset(t, y, y, y, cj, s, y, y, y) && !fx_psol(t, y, y, y, r, o, cj, 0.0, s, y)) {
+    int set;
+    if (jac) {
+      long long int m = 0;
+      int k;
+      for (k = 0; k < 4; ++k) {
+        long long int nnz = s->sp[k][2 + s->sp[k][1]];
+        memcpy(s->J[k], jac + m, sizeof(double) * nnz);
+        m += nnz;
+      }
+      set = fx_factor(s, cj);
+    } else {
+      set = fx_pset(t, y, y, y, cj, s, y, y, y);
+    }
+    if (!set && !fx_psol(t, y, y, y, r, o, cj, 0.0, s, y)) {
       memcpy(out, NVD(o), sizeof(double) * s->nn);
       flag = s->lu_sparse ? 1 : 0;
     }
@@ -505,11 +543,12 @@ extern int IDASpilsGetNumLinIters(void *mem, long int *n);
 
 /* counters: sparse and dense factorisations, preconditioner solves (since fx_new); IDAS's
    steps, residual evaluations, Newton and GMRES iterations, error test failures (since the
-   last restart) */
+   last restart); setups refused for a non-finite matrix or factor (since fx_new) */
 void fx_stats(void *data, double *out) {
   fx_session *s = (fx_session *)data;
   long int v = 0;
   out[0] = (double)s->n_sparse; out[1] = (double)s->n_dense; out[2] = (double)s->n_psol;
+  out[8] = (double)s->n_nonfinite;
   IDAGetNumSteps(s->mem, &v); out[3] = (double)v;
   IDAGetNumResEvals(s->mem, &v); out[4] = (double)v;
   IDAGetNumNonlinSolvIters(s->mem, &v); out[5] = (double)v;
@@ -738,7 +777,7 @@ class LiveIntegrator:
         lib.fx_jacobian.argtypes = [ctypes.c_void_p, ctypes.c_double, dp, dp, dp, dp, dp]
         lib.fx_stats.argtypes = [ctypes.c_void_p, dp]
         lib.fx_newton_solve.argtypes = [ctypes.c_void_p, ctypes.c_double, dp, dp, dp, dp,
-                                        ctypes.c_double, dp, dp]
+                                        ctypes.c_double, dp, dp, dp]
         self._lib = lib
         self._lp = lp
         #: the sparse LU plan (None: not made yet, False: none; dense LU every setup)
@@ -746,6 +785,7 @@ class LiveIntegrator:
         self._dp = dp
         self.nx, self.nz, self.nq = nx, nz, nq
         atol = np.ascontiguousarray(atol, dtype=float)
+        self._nonfinite_reported = 0
         self._mem = lib.fx_new(nx, nz, np_, nu, nq, ng, nlc, rtol, atol.ctypes.data_as(dp),
                                max_num_steps)
         if not self._mem:
@@ -775,25 +815,48 @@ class LiveIntegrator:
     def jacobian(self, t: float, x: np.ndarray, z: np.ndarray, p: np.ndarray,
                  u: np.ndarray) -> np.ndarray:
         """The four Jacobian blocks' nonzeros, concatenated, at one point."""
-        nnz = sum(int(sp[2 + int(sp[1])]) for sp in self.sparsities())
-        out = np.empty(nnz)
+        out = np.empty(self.jacobian_size())
         arrays = [np.ascontiguousarray(a, dtype=float) for a in (x, z, p, u)]
         if self._lib.fx_jacobian(self._mem, t, *map(self._ptr, arrays), self._ptr(out)):
             raise RuntimeError("the Jacobian could not be evaluated")
         return out
 
     def newton_solve(self, t: float, x: np.ndarray, z: np.ndarray, p: np.ndarray,
-                     u: np.ndarray, cj: float, rhs: np.ndarray) -> tuple[np.ndarray, bool]:
+                     u: np.ndarray, cj: float, rhs: np.ndarray,
+                     jacobian: np.ndarray | None = None) -> tuple[np.ndarray, bool]:
         """The preconditioner at one point: ``(M^-1 rhs, whether the sparse LU was used)``
         with ``M = c_j dF/dy' + dF/dy`` (for tests; it replaces the preconditioner IDAS set
-        up last, which GMRES tolerates)."""
+        up last, which GMRES tolerates).  ``jacobian``: the Jacobian blocks' nonzeros to
+        factorise instead of those at the point (as :meth:`jacobian` gives them).
+
+        Raises
+        ------
+        SolverError
+            The matrix could not be factorised: a non-finite entry (NaN or infinity, which
+            no pivoting can factorise) or a zero column.
+        """
         arrays = [np.ascontiguousarray(a, dtype=float) for a in (x, z, p, u, rhs)]
+        jac = None
+        if jacobian is not None:
+            jac = np.ascontiguousarray(jacobian, dtype=float)
+            if jac.shape != (self.jacobian_size(),):
+                raise ParameterError(f"newton_solve: jacobian of shape {jac.shape}; allowed "
+                                     f"is ({self.jacobian_size()},), the blocks' nonzeros")
         out = np.empty(self.nx + self.nz)
+        before = self.stats()["nonfinite_setups"]
         flag = self._lib.fx_newton_solve(self._mem, t, *map(self._ptr, arrays[:4]), cj,
-                                         self._ptr(arrays[4]), self._ptr(out))
+                                         self._ptr(arrays[4]),
+                                         None if jac is None else self._ptr(jac), self._ptr(out))
         if flag < 0:
-            raise RuntimeError("the Newton matrix could not be factorised")
+            why = ("a non-finite entry (NaN or infinity) in the matrix or its LU factors"
+                   if self.stats()["nonfinite_setups"] > before else "a zero column")
+            raise SolverError(f"the Newton matrix could not be factorised: {why}",
+                              reason=why)
         return out, bool(flag)
+
+    def jacobian_size(self) -> int:
+        """The number of the four Jacobian blocks' nonzeros (:meth:`jacobian`)."""
+        return sum(int(sp[2 + int(sp[1])]) for sp in self.sparsities())
 
     def set_plan(self, plan: dict[str, np.ndarray] | None,
                  tolerance: float = PIVOT_TOLERANCE) -> None:
@@ -818,11 +881,13 @@ class LiveIntegrator:
     def stats(self) -> dict[str, int]:
         """Counters: ``sparse_setups``, ``dense_setups`` (fallbacks and setups without a
         plan), ``precond_solves`` (since creation); IDAS's ``steps``, ``residuals``,
-        ``newton_iters``, ``gmres_iters``, ``error_test_fails`` (since the last restart)."""
-        out = np.zeros(8)
+        ``newton_iters``, ``gmres_iters``, ``error_test_fails`` (since the last restart);
+        ``nonfinite_setups``: setups refused for a NaN or an infinity in the Newton matrix
+        or its dense LU factors (since creation; IDAS then retries with a shorter step)."""
+        out = np.zeros(9)
         self._lib.fx_stats(self._mem, self._ptr(out))
         keys = ("sparse_setups", "dense_setups", "precond_solves", "steps", "residuals",
-                "newton_iters", "gmres_iters", "error_test_fails")
+                "newton_iters", "gmres_iters", "error_test_fails", "nonfinite_setups")
         return dict(zip(keys, map(int, out), strict=True))
 
     def reinit(self, t0: float, x0: np.ndarray, z0: np.ndarray, p: np.ndarray,
@@ -848,7 +913,12 @@ class LiveIntegrator:
         if flag == -98:
             raise RuntimeError("the outputs could not be evaluated")
         if flag < 0:
-            raise RuntimeError(self.message() or f"IDAS flag {flag}")
+            # the counter is read on failure only (a step is a few tens of us)
+            total = self.stats()["nonfinite_setups"]
+            bad, self._nonfinite_reported = total - self._nonfinite_reported, total
+            why = (f" ({bad} preconditioner setups since the last failure refused: a NaN or "
+                   "an infinity in the Newton matrix or its LU factors)" if bad else "")
+            raise RuntimeError((self.message() or f"IDAS flag {flag}") + why)
         return self._w.copy(), self._q.copy(), self._o.copy()
 
     def __del__(self) -> None:
