@@ -92,13 +92,17 @@ def test_bank_option_and_simulate_equal_current_model(u_maps) -> None:
     assert np.max(np.abs(sim.eddy_currents_A[:, 0] - ref.eddy_currents_A[:, 0, 0])) < TOL_A
     assert np.max(np.abs(sim.currents_A[:, 0] - ref.currents_A[:, 0])) < TOL_A
     assert np.array_equal(sim.final_state.eddy_currents_A, sim.eddy_currents_A[-1])
-    # the parameter rows of the ladder: flag, R_2, L_u, beta of the maps
+    # the parameter rows of the ladder: flag, R_2, L_u, beta, gamma of the maps
     par = bank.circuit_parameters
     lad = MotionEddyLadder.from_maps(u_maps, resistance_ohm=bank.resistance_ohm)
     assert par.shape[0] == 13 + len(MOTION_EDDY_PARAMETERS)
     assert tuple(par[13:, 0]) == (1.0, lad.shielding_resistance_ohm[0],
-                                  lad.unshielded_inductance_H[0], lad.unshielded_share[0])
+                                  lad.unshielded_inductance_H[0], lad.unshielded_share[0],
+                                  lad.force_share[0])
     assert lad.unshielded_share[0] != 0.0     # the u-magnet's ladder has one (the bank carries it)
+    # its force share is refused (it would cost voltage steps 7 points; the bank's force
+    # with a nonzero one: tests/test_reduced_motion_eddy.py)
+    assert lad.force_share[0] == 0.0
     assert bank.eddy_resistance_ohm[0] == lad.jump_resistance_ohm[0]
 
 

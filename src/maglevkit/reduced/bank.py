@@ -79,6 +79,7 @@ from .current import (
     eq8_freewheel_voltage,
     eq8_rhs,
     eq8_shielded_gap_rhs,
+    shielded_gap_force_current,
 )
 from .lanes import LaneInput, external_source, lane_source, lane_target
 from .stepper import BankStepper
@@ -99,12 +100,13 @@ KERNEL_PARAMETERS = ("s0_m", "inv_ds_per_m", "cells_s", "i0_A", "inv_di_per_A", 
 ``R_el``, ``a = 1 + R_el/R_ec`` and the range bounds (with rounding allowances)."""
 _N_PAR = len(KERNEL_PARAMETERS)
 MOTION_EDDY_PARAMETERS = ("motion_eddy", "shielding_resistance_ohm", "unshielded_inductance_H",
-                          "unshielded_share")
+                          "unshielded_share", "force_share")
 """Rows appended to :attr:`MagnetBank.circuit_parameters` in a bank with shielded-gap
 ladder members (:attr:`MagnetBank.motion_eddy`): 1 for a ladder circuit, 0 for an eq. 8
-one; the ladder's ``R_2`` [ohm], ``L_u`` [H] (1 H for eq. 8 circuits, unused) and the
-unshielded share ``beta`` of the motion term [-] (0 for eq. 8 circuits).  In ladder
-circuits the row ``a`` holds ``1 + R_el/R_a``."""
+one; the ladder's ``R_2`` [ohm], ``L_u`` [H] (1 H for eq. 8 circuits, unused), the
+unshielded share ``beta`` of the motion term [-] and the force share ``gamma`` of ``I_e``
+[-] (force ``F(s, I_L + gamma I_e)``; both 0 for eq. 8 circuits).  In ladder circuits the
+row ``a`` holds ``1 + R_el/R_a``."""
 RUN_CHUNK = 1024
 """Steps per call of the compiled time loop of :meth:`MagnetBank.run_steps` (longer runs
 take several calls)."""
@@ -540,10 +542,11 @@ class MagnetBank:
                 a = float(core.a[j] if lad is None else lad.a[j])
                 self._par[:9, k] = (s0, 1.0 / ds_, cs_, i0, 1.0 / di_, ci_, offset, r_el, a)
                 if self.motion_eddy:
-                    self._par[_N_PAR:, k] = ((0.0, 0.0, 1.0, 0.0) if lad is None else
+                    self._par[_N_PAR:, k] = ((0.0, 0.0, 1.0, 0.0, 0.0) if lad is None else
                                              (1.0, float(lad.shielding_resistance_ohm[j]),
                                               float(lad.unshielded_inductance_H[j]),
-                                              float(lad.unshielded_share[j])))
+                                              float(lad.unshielded_share[j]),
+                                              float(lad.force_share[j])))
                 self._bounds[:, k] = (*core.gap_range_m, *core.current_range_A)
                 tol[:, k] = (core.gap_tolerance_m, core.current_tolerance_A)
                 self._spline_bounds[:, k] = (gs[0], gs[-1], gi[0], gi[-1])
@@ -594,6 +597,14 @@ class MagnetBank:
         return (ca.if_else(me > 0, d_il, eq8_rhs(i, u, sd, lt, dl, r_el, a)),
                 ca.if_else(me > 0, d_ie, 0.0))
 
+    def _ladder_force(self, cell: tuple[Any, Any], i: Any, ie: Any, p: Any, table: Any) -> Any:
+        """The force of one circuit of a bank with ladder members at the gap cell ``cell``:
+        eq. 8's map at the force current ``I_L + gamma I_e``
+        (:func:`shielded_gap_force_current`; ``gamma`` is 0 in eq. 8 circuits, whose
+        ``I_e`` stays 0)."""
+        i_f = shielded_gap_force_current(i, ie, p[_N_PAR + 4])
+        return self._lookup(cell, i_f, p, table, maps=(2,))[0]
+
     def _make_circuit_kernel(self) -> dict[str, ca.Function]:
         """Single-circuit functions: right-hand side, outputs (MX, table embedded)."""
         table = ca.MX(ca.DM(self._table))
@@ -601,11 +612,13 @@ class MagnetBank:
         if self.motion_eddy:
             p = ca.MX.sym("p", _N_PAR + len(MOTION_EDDY_PARAMETERS))
             ie = ca.MX.sym("I_e")
-            lt, dl, f = self._lookup(self._gap_cell(s, p), i, p, table)
+            cell = self._gap_cell(s, p)
+            lt, dl = self._lookup(cell, i, p, table, maps=(0, 1))
             d_il, d_ie = self._ladder_rhs(i, ie, u, sd, lt, dl, p)
             # the coil current of Fig. 8 with I_L + I_e through R_a's node (I_e = 0 in
             # eq. 8 circuits)
             coil = eq8_coil_current(i + ie, u, p[7], p[8])
+            f = self._ladder_force(cell, i, ie, p, table)
             return {"rhs": ca.Function("bank_circuit_rhs", [i, s, u, sd, p, ie], [d_il, d_ie]),
                     "out": ca.Function("bank_circuit_out", [i, s, u, p, ie], [coil, f, lt])}
         p = ca.MX.sym("p", _N_PAR)
@@ -713,7 +726,7 @@ class MagnetBank:
         x, lo, hi = self._rk4_substeps(_Pair(i, ie), lambda v: v[0], f, s, sd, hs, substeps, p)
         se = s + sd * h
         coil = eq8_coil_current(x[0] + x[1], u, p[7], p[8])
-        force = self._lookup(self._gap_cell(se, p), x[0], p, table, maps=(2,))[0]
+        force = self._ladder_force(self._gap_cell(se, p), x[0], x[1], p, table)
         bad = _reason_code(s, se, sd, u, lo, hi, (x[0], x[1]), p)
         return ca.Function("bank_circuit_step", [i, s, u, sd, h, p, ie],
                            [x[0], coil, force, lo, hi, bad, x[1]],
@@ -774,7 +787,7 @@ class MagnetBank:
         :meth:`circuit_step_function` and :attr:`circuit_output_function` (rows
         :data:`KERNEL_PARAMETERS`: grid, table offset, ``R_el`` [ohm], ``a = 1 + R_el/R_ec``
         and the range bounds with their rounding allowances; in a bank with ladder members
-        17 rows, :data:`MOTION_EDDY_PARAMETERS` appended)."""
+        18 rows, :data:`MOTION_EDDY_PARAMETERS` appended)."""
         return self._par.copy()
 
     @property
@@ -836,9 +849,11 @@ class MagnetBank:
                              "members (motion_eddy); this bank is eq. 8's: use "
                              "circuit_expressions")
         p = ca.DM(self._par[:, k])
-        lt, dl, f = self._lookup(self._gap_cell(s, p), i_l, p, table)
+        cell = self._gap_cell(s, p)
+        lt, dl = self._lookup(cell, i_l, p, table, maps=(0, 1))
         d_il, d_ie = self._ladder_rhs(i_l, i_e, u, gap_rate, lt, dl, p)
-        return d_il, d_ie, eq8_coil_current(i_l + i_e, u, p[7], p[8]), f, lt
+        return (d_il, d_ie, eq8_coil_current(i_l + i_e, u, p[7], p[8]),
+                self._ladder_force(cell, i_l, i_e, p, table), lt)
 
     def circuit_expressions(self, k: int, i_l: Any, s: Any, u: Any, gap_rate: Any,
                             table: Any) -> tuple[Any, Any, Any, Any]:
