@@ -217,6 +217,56 @@ def test_maps_without_a_force_share_read_as_zero(u_maps: CharacteristicMaps) -> 
     assert np.array_equal(runs[0].currents_A, runs[1].currents_A)
 
 
+def test_freewheel_diodes_on_ladder_members(u_maps: CharacteristicMaps) -> None:
+    """``MagnetBank(..., motion_eddy=True, freewheel=True)``: while the commanded voltage
+    keeps the coil current positive the diodes do nothing (bit-identical to
+    ``freewheel=False``); a large negative voltage from 20 A drives the coil current to 0
+    and holds it there (never below), and the states follow an independent integration of
+    CurrentModel's ladder ODE with the diode law written here from Fig. 8 (the coil current
+    ``(U/R_a + I_L + I_e)/a`` held at 0: ``U = -R_a (I_L + I_e)``)."""
+    from scipy.integrate import solve_ivp
+
+    from maglevkit.reduced.bank import MagnetBank
+
+    cm = mk.CurrentModel(u_maps, motion_eddy=True)
+    r_el = float(cm.resistance_ohm[0])
+    r_a = float(u_maps.dataset["motion_eddy_jump_resistance_ohm"].values[0])
+    t = np.arange(0, 201) * 5e-5
+    plain = MagnetBank({"m": u_maps}, motion_eddy=True, compiled="never")
+    diode = MagnetBank({"m": u_maps}, motion_eddy=True, freewheel=True, compiled="never")
+    assert diode.motion_eddy and diode.freewheel
+    gaps = (0.010 + 0.001 * np.sin(2 * np.pi * 50.0 * t))[:, None]
+    runs = [b.simulate(t, gaps_m=gaps, voltages_V=22.0 * r_el, initial_currents_A=20.0)
+            for b in (plain, diode)]
+    assert np.array_equal(runs[0].currents_A, runs[1].currents_A)
+    assert np.array_equal(runs[0].member_force_N, runs[1].member_force_N)
+    # switching off: -300 V from 20 A at 10 mm (the coil current would reverse in ~1 ms)
+    u_cmd = -300.0
+    sim = diode.simulate(t, gaps_m=0.010, voltages_V=u_cmd, initial_currents_A=20.0)
+    assert sim.eddy_currents_A is not None
+    coil = sim.currents_A[:, 0]
+    assert coil.min() >= -1e-9            # the diodes hold I >= 0 (rounding only)
+    assert np.sum(coil < 1e-9) > 100      # and it reached 0 and stayed there
+    # without diodes the coil current reverses (within the maps' I_L range: 2.5 ms)
+    free = plain.simulate(t[:51], gaps_m=0.010, voltages_V=u_cmd, initial_currents_A=20.0)
+    assert free.currents_A[-1, 0] < -1.0
+
+    def rhs(_t: float, x: np.ndarray) -> np.ndarray:
+        u = max(u_cmd, -r_a * (x[0] + x[1]))          # the diodes (Fig. 8's coil current)
+        d_il, d_ie = cm.ode(x[0], u, 0.010, 0.0, x[1])
+        return np.array([float(d_il), float(d_ie)])
+
+    ref = solve_ivp(rhs, (0.0, t[-1]), [20.0, 0.0], t_eval=t, rtol=1e-10, atol=1e-10,
+                    method="LSODA")
+    # RK4 at 50 us (sub-steps below the ladder's stable step): in the step where the
+    # diodes start to conduct the kink makes it first order (measured 5.8 mA on I_e's
+    # 13 A there), elsewhere ~1e-4 A; bounds 2e-2 A (the kink) and 1e-3 A (the median)
+    for got, want in ((sim.inductor_currents_A[:, 0], ref.y[0]),
+                      (sim.eddy_currents_A[:, 0], ref.y[1])):
+        assert np.max(np.abs(got - want)) < 2e-2
+        assert np.median(np.abs(got - want)) < 1e-3
+
+
 def test_vanishing_unshielded_inductance_gives_eq8() -> None:
     """``L_u -> 0``: the ladder is eq. 8 with ``R_ec = R_a || R_2`` (transfer functions and
     the right-hand side on its slow manifold)."""
