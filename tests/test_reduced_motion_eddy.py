@@ -470,8 +470,8 @@ def test_split_tr09_gap_sine_sweep_against_its_detailed_model() -> None:
     Current within the aims (measured 2.8 / 7.0 / 2.9 %, phase -1.3 / +0.7 deg at 5 / 50
     Hz; eq. 8: 1.8 / 24.8 / 94.9 %); the force within its aims 5 / 10 / 20 % with the force
     share ``gamma`` (F(s, I_L + gamma I_e), gamma = -0.142 from the held-flux stiffness;
-    measured 3.2 / 6.2 / 8.5 %; with gamma = 0, as before: 3.0 / 24.0 / 51.6 %; eq. 8: 2.7 /
-    20.3 / 46.4 %)."""
+    measured 3.2 / 6.2 / 8.5 %; with gamma = 0 on the same maps 17.8 / 38.7 % at 50 / 200
+    Hz; eq. 8: 2.7 / 20.3 / 46.4 %)."""
     mag = mk.load_magnet("tr09-standard")     # split since issue 26 (the bundled default)
     assert mag.network.n_loops > 200          # the split network, not the lumped one
     assert mag.nominal_current == 31.7
