@@ -137,10 +137,12 @@ def run() -> str:
     l_u = eq8.maps.dataset["motion_eddy_unshielded_inductance_H"].values[0]
     r_2 = eq8.maps.dataset["motion_eddy_shielding_resistance_ohm"].values[0]
     beta = eq8.maps.dataset["motion_eddy_unshielded_share"].values[0]
+    gamma = eq8.maps.dataset["motion_eddy_force_share"].values[0]
     out = [f"Network flux_paths = {FLUX_PATHS!r}.  Maps {GRID[0].size} x {GRID[1].size} "
            "(statics); ladder identified at the maps' "
            f"reference point: R_a = {r_a:.3f} ohm, L_u = {l_u * 1e3:.2f} mH, R_2 = {r_2:.2f} "
-           f"ohm, beta = {beta:.4f} (eq. 8: R_ec = {eq8.eddy_resistance_ohm[0]:.3f} ohm).  "
+           f"ohm, beta = {beta:.4f}, gamma = {gamma:.4f} (force F(s, I_L + gamma I_e)) "
+           f"(eq. 8: R_ec = {eq8.eddy_resistance_ohm[0]:.3f} ohm).  "
            f"Current of circuit "
            f"'{eq8.circuit_names[0]}', force of the magnet; amplitude and phase against the "
            "gap's sine (fundamental over the last half of the run); error = RMS(reduced - "
@@ -162,6 +164,13 @@ def run() -> str:
                 f"{f:g} Hz {got[f][0]:.1f} % (aim {a:g} %, {'met' if got[f][0] <= a else 'MISSED'})"
                 for f, a in aims.items() if f in got) + "; phase error " + ", ".join(
                 f"{got[f][1]:+.1f}" for f in got if f <= 100.0) + " deg."]
+    got_f = {r["f"]: 100 * r["ladder"][3] for r in rows}
+    force_aims = {5.0: 5.0, 50.0: 10.0, 200.0: 20.0}
+    out += ["", "gapforce26's aims for the ladder's force (error <= 5 / 10 / 20 % at 5 / 50 / "
+            "200 Hz): " + "; ".join(
+                f"{f:g} Hz {got_f[f]:.1f} % (aim {a:g} %, "
+                f"{'met' if got_f[f] <= a else 'MISSED'})"
+                for f, a in force_aims.items() if f in got_f) + "."]
     keep = ("voltage step up", "voltage step down", "gap ramp", "closed loop")
     scen = [s for s in standard_scenarios(mag, gap_m=GAP, current_A=i0) if s.name in keep]
     res = {name: compare_models(fm, model, scen, gap_m=GAP, current_A=i0)

@@ -28,10 +28,18 @@ TOL_A = 1e-12
 TOL_REL_F = 1e-12
 
 
+#: A force share set by hand (the u-magnet's own is refused by build_maps, 0), so that every
+#: path below (bank, lanes, FMU, control model) evaluates F(s, I_L + gamma I_e).
+GAMMA = -0.3
+
+
 @pytest.fixture(scope="module")
 def u_maps() -> mk.CharacteristicMaps:
-    return mk.build_maps(mk.load_magnet("u-magnet"), gaps_m=GAPS, currents_A=CURRENTS,
+    maps = mk.build_maps(mk.load_magnet("u-magnet"), gaps_m=GAPS, currents_A=CURRENTS,
                          progress=False)
+    assert maps.dataset["motion_eddy_force_share"].values[0] == 0.0
+    return mk.CharacteristicMaps(maps.dataset.assign(
+        motion_eddy_force_share=("circuit", np.array([GAMMA]))))
 
 
 def _gap_sine(k: int, f_hz: float = 50.0) -> tuple[float, float]:
@@ -92,13 +100,15 @@ def test_bank_option_and_simulate_equal_current_model(u_maps) -> None:
     assert np.max(np.abs(sim.eddy_currents_A[:, 0] - ref.eddy_currents_A[:, 0, 0])) < TOL_A
     assert np.max(np.abs(sim.currents_A[:, 0] - ref.currents_A[:, 0])) < TOL_A
     assert np.array_equal(sim.final_state.eddy_currents_A, sim.eddy_currents_A[-1])
-    # the parameter rows of the ladder: flag, R_2, L_u, beta of the maps
+    # the parameter rows of the ladder: flag, R_2, L_u, beta, gamma of the maps
     par = bank.circuit_parameters
     lad = MotionEddyLadder.from_maps(u_maps, resistance_ohm=bank.resistance_ohm)
     assert par.shape[0] == 13 + len(MOTION_EDDY_PARAMETERS)
     assert tuple(par[13:, 0]) == (1.0, lad.shielding_resistance_ohm[0],
-                                  lad.unshielded_inductance_H[0], lad.unshielded_share[0])
+                                  lad.unshielded_inductance_H[0], lad.unshielded_share[0],
+                                  lad.force_share[0])
     assert lad.unshielded_share[0] != 0.0     # the u-magnet's ladder has one (the bank carries it)
+    assert lad.force_share[0] == GAMMA       # the bank carries it (set in the fixture)
     assert bank.eddy_resistance_ohm[0] == lad.jump_resistance_ohm[0]
 
 
@@ -156,8 +166,9 @@ def test_eq8_banks_keep_their_layout(u_maps) -> None:
 
 def test_refusals(u_maps, tmp_path) -> None:
     cm = mk.CurrentModel(u_maps, motion_eddy=True)
-    with pytest.raises(InputError, match="freewheel=True with shielded-gap ladder"):
-        MagnetBank({"m": cm}, freewheel=True, compiled="never")
+    # freewheel with ladder members is built since gapforce26
+    # (tests/test_reduced_motion_eddy.py::test_freewheel_diodes_on_ladder_members)
+    assert MagnetBank({"m": cm}, freewheel=True, compiled="never").motion_eddy
     with pytest.raises(InputError, match="motion_eddy = 'yes'"):
         MagnetBank({"m": u_maps}, motion_eddy="yes", compiled="never")  # type: ignore[arg-type]
     bank = MagnetBank({"m": cm}, compiled="never")
@@ -295,6 +306,8 @@ def heave():  # type: ignore[no-untyped-def]
     mag = mk.load_magnet("u-magnet")
     maps = mk.build_maps(mag, gaps_m=np.linspace(0.004, 0.02, 17),
                          currents_A=np.linspace(0, 80, 33), progress=False)
+    maps = mk.CharacteristicMaps(maps.dataset.assign(   # the force share set by hand, as above
+        motion_eddy_force_share=("circuit", np.array([GAMMA]))))
     f0 = float(mk.solve_statics(mag, gaps_m=S0, currents_A=20.0).force_N)
     veh = HeaveMass(f0 / STANDARD_GRAVITY)
     cm = mk.CurrentModel(maps, motion_eddy=True)

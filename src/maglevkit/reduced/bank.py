@@ -79,6 +79,7 @@ from .current import (
     eq8_freewheel_voltage,
     eq8_rhs,
     eq8_shielded_gap_rhs,
+    shielded_gap_force_current,
 )
 from .lanes import LaneInput, external_source, lane_source, lane_target
 from .stepper import BankStepper
@@ -99,12 +100,13 @@ KERNEL_PARAMETERS = ("s0_m", "inv_ds_per_m", "cells_s", "i0_A", "inv_di_per_A", 
 ``R_el``, ``a = 1 + R_el/R_ec`` and the range bounds (with rounding allowances)."""
 _N_PAR = len(KERNEL_PARAMETERS)
 MOTION_EDDY_PARAMETERS = ("motion_eddy", "shielding_resistance_ohm", "unshielded_inductance_H",
-                          "unshielded_share")
+                          "unshielded_share", "force_share")
 """Rows appended to :attr:`MagnetBank.circuit_parameters` in a bank with shielded-gap
 ladder members (:attr:`MagnetBank.motion_eddy`): 1 for a ladder circuit, 0 for an eq. 8
-one; the ladder's ``R_2`` [ohm], ``L_u`` [H] (1 H for eq. 8 circuits, unused) and the
-unshielded share ``beta`` of the motion term [-] (0 for eq. 8 circuits).  In ladder
-circuits the row ``a`` holds ``1 + R_el/R_a``."""
+one; the ladder's ``R_2`` [ohm], ``L_u`` [H] (1 H for eq. 8 circuits, unused), the
+unshielded share ``beta`` of the motion term [-] and the force share ``gamma`` of ``I_e``
+[-] (force ``F(s, I_L + gamma I_e)``; both 0 for eq. 8 circuits).  In ladder circuits the
+row ``a`` holds ``1 + R_el/R_a``."""
 RUN_CHUNK = 1024
 """Steps per call of the compiled time loop of :meth:`MagnetBank.run_steps` (longer runs
 take several calls)."""
@@ -297,14 +299,17 @@ class MagnetBank:
         ``True``: behind a two-quadrant chopper with freewheeling diodes, the coil
         current cannot go below zero within a step (every RK4 stage applies
         :func:`~maglevkit.reduced.current.eq8_freewheel_voltage`, ``U_eff = max(U,
-        -R_ec I_L)``; the outputs' coil currents too).  The vehicle runs turn it on.
+        -R_ec I_L)``; the outputs' coil currents too; in ladder circuits with ``I_L + I_e``
+        and ``R_a`` in place of ``I_L`` and ``R_ec``, the same coil-current law).  The
+        vehicle runs turn it on.
     motion_eddy : bool
         ``False`` (default): members given as maps follow eq. 8; ``True``: they carry the
         shielded-gap ladder (as ``CurrentModel(maps, motion_eddy=True)``; a member given
         as a ``CurrentModel`` keeps its own choice).  Ladder circuits carry a second state,
         the shielding eddy current ``I_e`` (:attr:`BankState.eddy_currents_A`); the RK4
         sub-step is limited to the ladder's stable step
-        (:class:`~maglevkit.reduced.core.MotionEddyLadder`).  Not with ``freewheel``.
+        (:class:`~maglevkit.reduced.core.MotionEddyLadder`).  With ``freewheel`` the diodes
+        act on the ladder's coil current ``I = (U/R_a + I_L + I_e)/a`` (docs/bank.md).
 
     Examples
     --------
@@ -368,10 +373,6 @@ class MagnetBank:
             raise InputError(f"members {diodes} are CurrentModel(freewheel=True) but the bank "
                              "has freewheel=False: give MagnetBank(..., freewheel=True) (the "
                              "diodes are a bank-wide option)")
-        if self.motion_eddy and self.freewheel:
-            raise InputError("freewheel=True with shielded-gap ladder members (motion_eddy): "
-                             "the chopper's diode limit is written for eq. 8's one state per "
-                             "circuit; use freewheel=False or members without motion_eddy")
         if ladders:
             # the ladder's stable RK4 sub-step (CurrentModel limits its own the same way)
             self.max_step_s = min([self.max_step_s] + [lad.max_step_s for lad in ladders])
@@ -540,10 +541,11 @@ class MagnetBank:
                 a = float(core.a[j] if lad is None else lad.a[j])
                 self._par[:9, k] = (s0, 1.0 / ds_, cs_, i0, 1.0 / di_, ci_, offset, r_el, a)
                 if self.motion_eddy:
-                    self._par[_N_PAR:, k] = ((0.0, 0.0, 1.0, 0.0) if lad is None else
+                    self._par[_N_PAR:, k] = ((0.0, 0.0, 1.0, 0.0, 0.0) if lad is None else
                                              (1.0, float(lad.shielding_resistance_ohm[j]),
                                               float(lad.unshielded_inductance_H[j]),
-                                              float(lad.unshielded_share[j])))
+                                              float(lad.unshielded_share[j]),
+                                              float(lad.force_share[j])))
                 self._bounds[:, k] = (*core.gap_range_m, *core.current_range_A)
                 tol[:, k] = (core.gap_tolerance_m, core.current_tolerance_A)
                 self._spline_bounds[:, k] = (gs[0], gs[-1], gi[0], gi[-1])
@@ -590,9 +592,27 @@ class MagnetBank:
         selects one of the two exactly)."""
         r_el, a = p[7], p[8]
         me, r_2, l_u, beta = p[_N_PAR], p[_N_PAR + 1], p[_N_PAR + 2], p[_N_PAR + 3]
+        u = self._ladder_voltage(i, ie, u, p)
         d_il, d_ie = eq8_shielded_gap_rhs(i, ie, u, sd, lt, dl, r_el, a, r_2, l_u, beta)
         return (ca.if_else(me > 0, d_il, eq8_rhs(i, u, sd, lt, dl, r_el, a)),
                 ca.if_else(me > 0, d_ie, 0.0))
+
+    def _ladder_voltage(self, i: Any, ie: Any, u: Any, p: Any) -> Any:
+        """The voltage a circuit of a bank with ladder members applies: ``U`` as given, or
+        behind the chopper's freewheeling diodes (``freewheel``)
+        :func:`eq8_freewheel_voltage` of the current ``I_L + I_e`` through ``R_a``'s node:
+        the ladder's coil current ``(U/R_a + I_L + I_e)/a`` is eq. 8's ``(U/R_ec + I_L)/a``
+        with ``I_L + I_e`` and ``R_a`` (row ``a``), so the one diode law holds it at >= 0
+        (``I_e = 0`` in eq. 8 circuits: eq. 8's own limit)."""
+        return eq8_freewheel_voltage(i + ie, u, p[7], p[8]) if self.freewheel else u
+
+    def _ladder_force(self, cell: tuple[Any, Any], i: Any, ie: Any, p: Any, table: Any) -> Any:
+        """The force of one circuit of a bank with ladder members at the gap cell ``cell``:
+        eq. 8's map at the force current ``I_L + gamma I_e``
+        (:func:`shielded_gap_force_current`; ``gamma`` is 0 in eq. 8 circuits, whose
+        ``I_e`` stays 0)."""
+        i_f = shielded_gap_force_current(i, ie, p[_N_PAR + 4])
+        return self._lookup(cell, i_f, p, table, maps=(2,))[0]
 
     def _make_circuit_kernel(self) -> dict[str, ca.Function]:
         """Single-circuit functions: right-hand side, outputs (MX, table embedded)."""
@@ -601,11 +621,13 @@ class MagnetBank:
         if self.motion_eddy:
             p = ca.MX.sym("p", _N_PAR + len(MOTION_EDDY_PARAMETERS))
             ie = ca.MX.sym("I_e")
-            lt, dl, f = self._lookup(self._gap_cell(s, p), i, p, table)
+            cell = self._gap_cell(s, p)
+            lt, dl = self._lookup(cell, i, p, table, maps=(0, 1))
             d_il, d_ie = self._ladder_rhs(i, ie, u, sd, lt, dl, p)
             # the coil current of Fig. 8 with I_L + I_e through R_a's node (I_e = 0 in
             # eq. 8 circuits)
-            coil = eq8_coil_current(i + ie, u, p[7], p[8])
+            coil = eq8_coil_current(i + ie, self._ladder_voltage(i, ie, u, p), p[7], p[8])
+            f = self._ladder_force(cell, i, ie, p, table)
             return {"rhs": ca.Function("bank_circuit_rhs", [i, s, u, sd, p, ie], [d_il, d_ie]),
                     "out": ca.Function("bank_circuit_out", [i, s, u, p, ie], [coil, f, lt])}
         p = ca.MX.sym("p", _N_PAR)
@@ -712,8 +734,8 @@ class MagnetBank:
         # and the SIMD lanes translate it; the arithmetic per component is the same
         x, lo, hi = self._rk4_substeps(_Pair(i, ie), lambda v: v[0], f, s, sd, hs, substeps, p)
         se = s + sd * h
-        coil = eq8_coil_current(x[0] + x[1], u, p[7], p[8])
-        force = self._lookup(self._gap_cell(se, p), x[0], p, table, maps=(2,))[0]
+        coil = eq8_coil_current(x[0] + x[1], self._ladder_voltage(x[0], x[1], u, p), p[7], p[8])
+        force = self._ladder_force(self._gap_cell(se, p), x[0], x[1], p, table)
         bad = _reason_code(s, se, sd, u, lo, hi, (x[0], x[1]), p)
         return ca.Function("bank_circuit_step", [i, s, u, sd, h, p, ie],
                            [x[0], coil, force, lo, hi, bad, x[1]],
@@ -774,7 +796,7 @@ class MagnetBank:
         :meth:`circuit_step_function` and :attr:`circuit_output_function` (rows
         :data:`KERNEL_PARAMETERS`: grid, table offset, ``R_el`` [ohm], ``a = 1 + R_el/R_ec``
         and the range bounds with their rounding allowances; in a bank with ladder members
-        17 rows, :data:`MOTION_EDDY_PARAMETERS` appended)."""
+        18 rows, :data:`MOTION_EDDY_PARAMETERS` appended)."""
         return self._par.copy()
 
     @property
@@ -836,9 +858,12 @@ class MagnetBank:
                              "members (motion_eddy); this bank is eq. 8's: use "
                              "circuit_expressions")
         p = ca.DM(self._par[:, k])
-        lt, dl, f = self._lookup(self._gap_cell(s, p), i_l, p, table)
+        cell = self._gap_cell(s, p)
+        lt, dl = self._lookup(cell, i_l, p, table, maps=(0, 1))
         d_il, d_ie = self._ladder_rhs(i_l, i_e, u, gap_rate, lt, dl, p)
-        return d_il, d_ie, eq8_coil_current(i_l + i_e, u, p[7], p[8]), f, lt
+        return (d_il, d_ie,
+                eq8_coil_current(i_l + i_e, self._ladder_voltage(i_l, i_e, u, p), p[7], p[8]),
+                self._ladder_force(cell, i_l, i_e, p, table), lt)
 
     def circuit_expressions(self, k: int, i_l: Any, s: Any, u: Any, gap_rate: Any,
                             table: Any) -> tuple[Any, Any, Any, Any]:

@@ -525,6 +525,10 @@ class MotionEddyLadder:
     unshielded_share : numpy.ndarray (n_circuits,)
         ``beta`` [-], the share of the motion-induced voltage in ``L_u`` (0 in maps built
         before it was identified: the ladder as it was fitted then).
+    force_share : numpy.ndarray (n_circuits,)
+        ``gamma`` [-], the share of ``I_e`` in the force current ``I_L + gamma I_e``
+        (:func:`~maglevkit.reduced.current.shielded_gap_force_current`; 0 in maps built
+        before it was identified: the force ``F(s, I_L)`` of those maps).
     a : numpy.ndarray (n_circuits,)
         ``1 + R_el/R_a`` [-].
     max_step_s : float
@@ -536,6 +540,7 @@ class MotionEddyLadder:
     shielding_resistance_ohm: np.ndarray
     unshielded_inductance_H: np.ndarray
     unshielded_share: np.ndarray
+    force_share: np.ndarray
     a: np.ndarray
     max_step_s: float
 
@@ -564,7 +569,7 @@ class MotionEddyLadder:
             of a magnet without eddy currents), or maps whose smallest ``L~`` is not above
             ``L_u``.
         """
-        from ..reduction.motion_eddy import SHARE_VARIABLE
+        from ..reduction.motion_eddy import FORCE_SHARE_VARIABLE, SHARE_VARIABLE
 
         ds = maps.dataset
         names = ("motion_eddy_jump_resistance_ohm", "motion_eddy_shielding_resistance_ohm",
@@ -582,9 +587,14 @@ class MotionEddyLadder:
         # built before it was identified had their ladder fitted without it: 0
         beta = (np.array(ds[SHARE_VARIABLE].values, dtype=float) if SHARE_VARIABLE in ds
                 else np.zeros_like(r_a))
+        # the force share of I_e (docs/equations.md section 8); maps built before it was
+        # identified: 0, the force F(s, I_L)
+        gamma = (np.array(ds[FORCE_SHARE_VARIABLE].values, dtype=float)
+                 if FORCE_SHARE_VARIABLE in ds else np.zeros_like(r_a))
         if not (np.all(np.isfinite(r_a)) and np.all(np.isfinite(r_2))
                 and np.all(np.isfinite(l_u)) and np.all(r_a > 0) and np.all(r_2 > 0)
-                and np.all(l_u > 0) and np.all(np.isfinite(beta))):
+                and np.all(l_u > 0) and np.all(np.isfinite(beta))
+                and np.all(np.isfinite(gamma))):
             raise InputError(f"{what}these maps have no shielded-gap ladder to use (the magnet "
                              "has no eddy currents); use motion_eddy=False")
         circuits = tuple(maps.circuits)
@@ -603,8 +613,8 @@ class MotionEddyLadder:
         # motion term is an input term and does not move them)
         rate = float(np.max(np.maximum((r_el / a + 2.0 * r_2) / l_u,
                                        2.0 * r_2 / (lt_min - l_u))))
-        for v in (r_a, r_2, l_u, beta, a):
+        for v in (r_a, r_2, l_u, beta, gamma, a):
             v.flags.writeable = False
         return cls(jump_resistance_ohm=r_a, shielding_resistance_ohm=r_2,
-                   unshielded_inductance_H=l_u, unshielded_share=beta, a=a,
+                   unshielded_inductance_H=l_u, unshielded_share=beta, force_share=gamma, a=a,
                    max_step_s=1.5 / rate)

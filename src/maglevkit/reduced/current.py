@@ -69,7 +69,7 @@ if TYPE_CHECKING:
 
 __all__ = ["CurrentModel", "CurrentModelLinearization", "CurrentModelState", "CurrentOutputs",
            "ReducedSimulation", "eq8_coil_current", "eq8_eddy_branch_rhs", "eq8_freewheel_voltage", "eq8_rhs",
-           "eq8_shielded_gap_rhs"]
+           "eq8_shielded_gap_rhs", "shielded_gap_force_current"]
 
 
 @dataclass(frozen=True)
@@ -401,6 +401,7 @@ class CurrentModel:
             r_ec = ladder.jump_resistance_ohm
             r_2, l_u = ladder.shielding_resistance_ohm, ladder.unshielded_inductance_H
             beta = ladder.unshielded_share
+            gamma = ladder.force_share
         elif m:
             if eddy_resistance is not None:
                 raise InputError(f"eddy_resistance = {eddy_resistance!r} chooses eq. 8's single "
@@ -468,7 +469,8 @@ class CurrentModel:
         em = ca.MX.sym("I_ec", nc * n_e)
         eddy_rhs, coils = [], []
         for j in range(nc):
-            vals = spline(j)(ca.vertcat(sm[j], xm[j]))
+            sp = spline(j)
+            vals = sp(ca.vertcat(sm[j], xm[j]))
             lt, dl, f = vals[0], vals[1], vals[2]
             if self.motion_eddy:
                 # the shielded-gap ladder (module docstring, reduction.motion_eddy)
@@ -477,6 +479,11 @@ class CurrentModel:
                 mx_rhs.append(d_il)
                 eddy_rhs.append(d_ie)
                 coils.append(eq8_coil_current(xm[j] + em[j], Um[j], r_el[j], a[j]))
+                if gamma[j] != 0.0:
+                    # the force at the force current I_L + gamma I_e (maps without gamma,
+                    # or gamma = 0: F(s, I_L) from the lookup above)
+                    f = sp(ca.vertcat(sm[j], shielded_gap_force_current(
+                        xm[j], em[j], float(gamma[j]))))[2]
             elif m:
                 # the eddy network (module docstring): eq. 8 with U - R_el sum_k I_k as the
                 # voltage behind R_el gives U_L and dI_L/dt; I = that coil current + sum I_k
@@ -1598,6 +1605,33 @@ def eq8_shielded_gap_rhs(i_l: Any, i_e: Any, u: Any, gap_rate: Any, ltilde: Any,
     emf = dl_ds * i_l * gap_rate
     d_il = (v_m - (1.0 - share) * emf) / (ltilde - l_u)
     return d_il, (v_a - v_m - share * emf) / l_u - d_il
+
+
+def shielded_gap_force_current(i_l: Any, i_e: Any, force_share: Any) -> Any:
+    """The current at which the shielded-gap ladder reads eq. 8's force map:
+    ``F = F(s, I_L + gamma I_e)``.
+
+    ``gamma`` (``force_share``) is the share of the shielding eddy current's MMF that acts
+    on the gap (identified from the detailed model's held-flux stiffness,
+    :func:`~maglevkit.reduction.motion_eddy.force_share`; docs/equations.md section 8);
+    ``gamma = 0`` is eq. 8's ``F(s, I_L)``.  In a steady state ``I_e = 0``: the statics'
+    force.  Element-wise on floats, NumPy arrays and CasADi expressions.
+
+    Parameters
+    ----------
+    i_l : float, ndarray or CasADi expression
+        ``I_L`` [A].
+    i_e : float, ndarray or CasADi expression
+        ``I_e`` [A].
+    force_share : float, ndarray or CasADi expression
+        ``gamma`` [-].
+
+    Returns
+    -------
+    same type as ``i_l``
+        The force current [A].
+    """
+    return i_l + force_share * i_e
 
 
 #: Whether the eddy branches' ``L_k`` scale with ``L~(s, I_L)/L~_ref`` (True) or stay at

@@ -46,6 +46,7 @@ from ..models.statics import as_network, circuit_pole_groups, solve_statics
 from ..validation import real_array, renamed_keywords
 from .eddy_network import EDDY_NETWORK_MODES, EddyNetworkFit, fit_eddy_network
 from .motion_eddy import (
+    FORCE_SHARE_VARIABLE,
     MAX_UNSHIELDED_SHARE_OF_MIN_L,
     SHARE_VARIABLE,
     detailed_frequency_response,
@@ -738,6 +739,7 @@ def _store_motion_eddy(ds: Any, net: Network, gap: float, current: float,
     l_u = np.full(nc, np.nan)
     r_2 = np.full(nc, np.nan)
     beta = np.full(nc, np.nan)
+    gamma = np.full(nc, np.nan)
     rms = np.full(nc, np.nan)
     if net.has_eddy_currents:
         responses = detailed_frequency_response(net, gap=gap, current=current, groups=groups)
@@ -750,6 +752,7 @@ def _store_motion_eddy(ds: Any, net: Network, gap: float, current: float,
                                   * float(min_inductance_H[j]))
             r_a[j], l_u[j] = fit.jump_resistance_ohm, fit.unshielded_inductance_H
             r_2[j], beta[j] = fit.shielding_resistance_ohm, fit.unshielded_share
+            gamma[j] = fit.force_share
             rms[j] = fit.rms_residual
     where = (f"fitted to the detailed model's small-signal gap -> current and voltage -> "
              f"current responses (0.1 Hz - 1 kHz) at s = {gap!r} m, I = {current!r} A; NaN: "
@@ -769,6 +772,12 @@ def _store_motion_eddy(ds: Any, net: Network, gap: float, current: float,
         "description": "from the detailed model's instantaneous gap -> current jump at "
                        "frozen flux linkages and eddy fluxes, -D a L_u/(dL/ds I), at the "
                        "same point; absent (older maps): 0"})
+    ds[FORCE_SHARE_VARIABLE] = ("circuit", gamma, {
+        "units": "1", "long_name": "share gamma of the shielding eddy current in the ladder's "
+                                   "force current I_L + gamma I_e",
+        "description": "from the detailed model's instantaneous gap -> force jump (the "
+                       "stiffness at frozen flux linkages and eddy fluxes) at the same "
+                       "point; absent (older maps): 0, the force F(s, I_L)"})
     ds["motion_eddy_fit_rms"] = ("circuit", rms, {
         "units": "1", "long_name": "RMS relative residual of the shielded-gap ladder's fit",
         "description": "over both responses and 60 frequencies, each relative to the "

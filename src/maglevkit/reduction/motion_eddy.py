@@ -23,14 +23,17 @@ circuit, read from the coil terminals::
   sits in ``L_u``, outside the shield (a gap-dependent path that no eddy current holds:
   the split TR09 network's flank strips part-way along the coil, docs/reduction.md).
 
-States per circuit: ``I_L`` (the gap section's current; force ``F(s, I_L)`` as in eq. 8)
-and ``I_e = I_u - I_L`` (the shielding eddy current through ``R_2``; ``I_u`` is the
-current through ``L_u``)::
+States per circuit: ``I_L`` (the gap section's current) and ``I_e = I_u - I_L`` (the
+shielding eddy current through ``R_2``; ``I_u`` is the current through ``L_u``)::
 
     a = 1 + R_el/R_a,   V_A = (U - R_el (I_L + I_e))/a,   V_m = R_2 I_e
     (L~ - L_u) dI_L/dt = V_m - (1 - beta) e
     L_u dI_e/dt = V_A - V_m - beta e - L_u dI_L/dt
-    I = (U - V_A)/R_el
+    I = (U - V_A)/R_el,   F = F(s, I_L + gamma I_e)
+
+The force is read from eq. 8's force map at the *force current* ``I_L + gamma I_e``: the
+share ``gamma`` of the shielding eddy current's MMF that acts on the gap (0: eq. 8's
+``F(s, I_L)``).  In a steady state ``I_e = 0``, so the statics are unchanged.
 
 ``L_u -> 0`` gives eq. 8 with ``R_ec = R_a R_2/(R_a + R_2)``.  The parameters are fitted to
 the detailed model's small-signal responses (gap -> coil current and voltage -> coil
@@ -39,7 +42,8 @@ current; gap -> force on request) at one operating point: the detailed DAE is li
 (:func:`ladder_frequency_response`) are fitted by least squares (:func:`fit_motion_eddy`);
 ``beta`` is not fitted but follows from the detailed model's exact instantaneous
 gap -> current jump (at frozen flux linkages and eddy fluxes), as ``R_a`` starts from its
-exact voltage -> current jump.
+exact voltage -> current jump; ``gamma`` likewise from the detailed model's instantaneous
+gap -> force jump, the held-flux stiffness (:func:`force_share`).
 """
 
 from __future__ import annotations
@@ -56,11 +60,16 @@ from ..validation import renamed_keywords
 
 __all__ = ["DetailedFrequencyResponse", "MotionEddyFit", "detailed_frequency_response",
            "fit_motion_eddy", "ladder_force_response", "ladder_frequency_response",
-           "unshielded_share",
-           "relative_rms_residual", "FIT_FREQUENCIES_HZ", "SHARE_VARIABLE"]
+           "unshielded_share", "force_share", "ladder_voltage_currents",
+           "step_force_residual", "MAX_STEP_FORCE_LOSS",
+           "relative_rms_residual", "FIT_FREQUENCIES_HZ", "SHARE_VARIABLE",
+           "FORCE_SHARE_VARIABLE"]
 
 #: The maps' variable of the ladder's unshielded share ``beta`` of the motion term.
 SHARE_VARIABLE = "motion_eddy_unshielded_share"
+#: The maps' variable of the ladder's force share ``gamma`` of the eddy current (maps
+#: without it are read with ``gamma = 0``, the force ``F(s, I_L)`` they were built for).
+FORCE_SHARE_VARIABLE = "motion_eddy_force_share"
 
 #: Frequencies of the fit [Hz]: 0.1 Hz .. 1 kHz, 60 points evenly spaced in log f.
 FIT_FREQUENCIES_HZ = np.geomspace(0.1, 1000.0, 60)
@@ -92,8 +101,14 @@ class DetailedFrequencyResponse:
         gap-dependent flux is held by eddy currents).
     dforce_dcurrent_N_per_A, dforce_dgap_N_per_m : float
         The statics' ``dF_j/dI_j`` [N/A] and ``dF_j/ds`` [N/m] (circuit force, own poles
-        moving): with them the ladder's force ``F(s, I_L)`` is compared.  NaN: the fit
-        leaves the force out.
+        moving): with them the ladder's force is compared.  NaN: the fit leaves the force
+        out.
+    gap_force_jump_N_per_m : float
+        The instantaneous circuit force change per gap [N/m] at frozen flux linkages and
+        eddy fluxes (the gap -> force response as ``f -> oo``, the held-flux stiffness);
+        NaN: not known (the ladder's force share ``gamma`` is then 0).
+    voltage_to_force_N_per_V : ndarray (n_f,), complex, optional
+        Circuit force per coil voltage [N/V] (None: not evaluated).
     """
 
     frequencies_Hz: np.ndarray
@@ -105,6 +120,8 @@ class DetailedFrequencyResponse:
     gap_current_jump_A_per_m: float = 0.0
     dforce_dcurrent_N_per_A: float = float("nan")
     dforce_dgap_N_per_m: float = float("nan")
+    gap_force_jump_N_per_m: float = float("nan")
+    voltage_to_force_N_per_V: np.ndarray | None = None
 
 
 def detailed_frequency_response(net: Any, *, gap: float, current: float,
@@ -183,20 +200,24 @@ def detailed_frequency_response(net: Any, *, gap: float, current: float,
         win = np.zeros((ng + nc, 2))
         win[own, 0] = 1.0            # the circuit's own poles move together
         win[ng + j, 1] = 1.0         # its voltage
-        res = np.empty((freqs.size, 3), dtype=complex)
+        res = np.empty((freqs.size, 4), dtype=complex)
         for k, f in enumerate(freqs):
             yy = np.linalg.solve(2j * np.pi * f * eye - a, b @ win)
             zz = cz @ yy + dz @ win
             force = (force_z @ zz + force_w @ win)[own].sum(axis=0)
-            res[k] = (zz[nl + j, 0], force[0], zz[nl + j, 1])
+            res[k] = (zz[nl + j, 0], force[0], zz[nl + j, 1], force[1])
         # statics: circuit force over own poles, its current and its poles' gaps
         df_di = np.asarray(sol.dforce_dcurrent_N_per_A)[own, j].sum()
         df_ds = np.asarray(sol.dforce_dgap_N_per_m)[np.ix_(own, own)].sum()
+        # the instantaneous (frozen y) responses: coil current and circuit force
+        z_jump = dz @ win
+        f_jump = (force_z @ z_jump + force_w @ win)[own].sum(axis=0)
         out.append(DetailedFrequencyResponse(
             freqs, res[:, 0], res[:, 1], res[:, 2],
             float(sol.differential_inductance_H[j, j]),
             float(np.asarray(sol.dpsi_dgap_Wb_per_m)[j, own].sum()),
-            float((dz @ win)[nl + j, 0]), float(df_di), float(df_ds)))
+            float(z_jump[nl + j, 0]), float(df_di), float(df_ds), float(f_jump[0]),
+            res[:, 3]))
     return out
 
 
@@ -246,7 +267,9 @@ def ladder_frequency_response(frequencies_Hz: Any, *, differential_inductance_H:
     Returns
     -------
     gap_to_current_A_per_m, gap_to_inductor_current_A_per_m, voltage_to_current_A_per_V : ndarray
-        Complex, per frequency: ``dI/ds``, ``dI_L/ds`` (the force's current) and ``dI/dU``.
+        Complex, per frequency: ``dI/ds``, ``dI_L/ds`` and ``dI/dU``.  The shielding eddy
+        current follows as ``dI_e/ds = a dI/ds - dI_L/ds`` (at constant voltage
+        ``dI_u = a dI``; :func:`ladder_force_response`).
     """
     ltilde, dpsi_ds, r_el = differential_inductance_H, dpsi_ds_Wb_per_m, resistance_ohm
     r_a, l_u, r_2 = jump_resistance_ohm, unshielded_inductance_H, shielding_resistance_ohm
@@ -310,6 +333,121 @@ def unshielded_share(jump_A_per_m: float, *, dpsi_ds_Wb_per_m: float, resistance
                  * unshielded_inductance_H / dpsi_ds_Wb_per_m)
 
 
+def force_share(force_jump_N_per_m: float, *, differential_inductance_H: float,
+                dpsi_ds_Wb_per_m: float, dforce_dcurrent_N_per_A: float,
+                dforce_dgap_N_per_m: float, unshielded_inductance_H: float,
+                beta: float) -> float:
+    """The ladder's force share ``gamma`` that gives the detailed model's instantaneous
+    gap -> force jump ``J`` (the stiffness at frozen flux linkages and eddy fluxes).
+
+    As ``p -> oo`` the ladder's states jump by ``dI_L/ds = -(1 - beta) k/(L~ - L_u)``
+    and ``dI_u/ds = -beta k/L_u`` (``k = dpsi/ds``), so ``dI_e/ds = dI_u/ds - dI_L/ds``,
+    and its force ``F(s, I_L + gamma I_e)`` by ``dF/ds + dF/dI (dI_L/ds + gamma dI_e/ds)``;
+    equal to ``J``::
+
+        gamma = ((J - dF/ds)/(dF/dI) - dI_L/ds) / dI_e/ds
+
+    (docs/equations.md section 8).
+
+    Parameters
+    ----------
+    force_jump_N_per_m : float
+        ``J`` [N/m] (:attr:`DetailedFrequencyResponse.gap_force_jump_N_per_m`); NaN: not
+        known, ``gamma = 0``.
+    differential_inductance_H : float
+        ``L~`` [H].
+    dpsi_ds_Wb_per_m : float
+        ``k`` [Wb/m]; 0 (no current): ``gamma = 0``.
+    dforce_dcurrent_N_per_A, dforce_dgap_N_per_m : float
+        The statics' ``dF/dI`` [N/A] and ``dF/ds`` [N/m] (NaN: ``gamma = 0``).
+    unshielded_inductance_H : float
+        ``L_u`` [H], ``0 < L_u < L~``.
+    beta : float
+        The unshielded share of the motion term [-].
+
+    Returns
+    -------
+    float
+        ``gamma`` [-].
+
+    Raises
+    ------
+    InputError
+        ``L_u`` not within ``(0, L~)``.
+    """
+    l_u, lt, k = unshielded_inductance_H, differential_inductance_H, dpsi_ds_Wb_per_m
+    if not 0.0 < l_u < lt:
+        raise InputError(f"force_share: unshielded_inductance_H = {l_u!r} must be within "
+                         f"(0, differential_inductance_H = {lt!r})")
+    known = (force_jump_N_per_m, dforce_dcurrent_N_per_A, dforce_dgap_N_per_m)
+    if k == 0.0 or not all(math.isfinite(float(v)) for v in known) \
+            or dforce_dcurrent_N_per_A == 0.0:
+        return 0.0
+    d_il = -(1.0 - beta) * k / (lt - l_u)
+    d_ie = -beta * k / l_u - d_il
+    if d_ie == 0.0:
+        return 0.0
+    return float(((force_jump_N_per_m - dforce_dgap_N_per_m) / dforce_dcurrent_N_per_A
+                  - d_il) / d_ie)
+
+
+#: Largest rise of the voltage -> force residual (RMS over the fit's frequencies, relative
+#: to the detailed static ``dF/dU``, i.e. to a voltage step's force change) that the force
+#: share ``gamma`` may cost; above it the ladder keeps ``gamma = 0`` (``F(s, I_L)``): the
+#: U-magnet's ``gamma`` of -1.2 would take it from 1.0 to 8.3 %, the split TR09
+#: network's -0.14 from 0.7 to 1.0 % (docs/equations.md section 8).
+MAX_STEP_FORCE_LOSS = 0.01
+
+
+def ladder_voltage_currents(frequencies_Hz: Any, *, differential_inductance_H: float,
+                            resistance_ohm: float, jump_resistance_ohm: float,
+                            unshielded_inductance_H: float, shielding_resistance_ohm: float
+                            ) -> tuple[np.ndarray, np.ndarray]:
+    """The ladder's voltage -> ``I_L`` and voltage -> ``I_e`` responses [A/V] (the system
+    of :func:`ladder_frequency_response` with the voltage input ``(1/a, 0)``)."""
+    p = 2j * np.pi * np.asarray(frequencies_Hz, dtype=float)
+    l_u, r_2 = unshielded_inductance_H, shielding_resistance_ohm
+    a = 1.0 + resistance_ohm / jump_resistance_ohm
+    m11 = p * l_u + resistance_ohm / a + r_2
+    m22 = p * (differential_inductance_H - l_u) + r_2
+    det = m11 * m22 - r_2 * r_2
+    iu, il = (m22 / a) / det, (r_2 / a) / det
+    return il, iu - il
+
+
+def step_force_residual(response: DetailedFrequencyResponse, voltage_to_force: np.ndarray
+                        ) -> float:
+    """RMS over frequencies of ``|model - detailed|`` of the voltage -> force response,
+    relative to the detailed one at the lowest frequency (a voltage step's force change);
+    NaN where the response has no voltage -> force."""
+    gf = response.voltage_to_force_N_per_V
+    if gf is None or not np.abs(gf[0]) > 0:
+        return float("nan")
+    return float(np.sqrt(np.mean(np.abs(voltage_to_force - gf) ** 2)) / np.abs(gf[0]))
+
+
+def _response_force_share(response: DetailedFrequencyResponse, r_el: float, r_a: float,
+                          l_u: float, r_2: float, beta: float) -> float:
+    """:func:`force_share` with the facts of ``response``, kept where it costs voltage
+    steps at most :data:`MAX_STEP_FORCE_LOSS` (:func:`step_force_residual`), else 0."""
+    gamma = force_share(response.gap_force_jump_N_per_m,
+                        differential_inductance_H=response.differential_inductance_H,
+                        dpsi_ds_Wb_per_m=response.dpsi_ds_Wb_per_m,
+                        dforce_dcurrent_N_per_A=response.dforce_dcurrent_N_per_A,
+                        dforce_dgap_N_per_m=response.dforce_dgap_N_per_m,
+                        unshielded_inductance_H=l_u, beta=beta)
+    if gamma == 0.0 or response.voltage_to_force_N_per_V is None:
+        return gamma
+    il, ie = ladder_voltage_currents(response.frequencies_Hz,
+                                     differential_inductance_H=response.differential_inductance_H,
+                                     resistance_ohm=r_el, jump_resistance_ohm=r_a,
+                                     unshielded_inductance_H=l_u, shielding_resistance_ohm=r_2)
+    dfi = response.dforce_dcurrent_N_per_A
+    loss = (step_force_residual(response, dfi * (il + gamma * ie))
+            - step_force_residual(response, dfi * il))
+    return gamma if loss <= MAX_STEP_FORCE_LOSS else 0.0
+
+
 def _with_force(response: DetailedFrequencyResponse) -> bool:
     """Whether the fit compares the force: the statics' partials are known and the gap
     moves the force (not at I = 0, where the force does not depend on the gap)."""
@@ -319,11 +457,14 @@ def _with_force(response: DetailedFrequencyResponse) -> bool:
 
 
 def ladder_force_response(response: DetailedFrequencyResponse,
-                          gap_to_inductor_current: np.ndarray) -> np.ndarray:
-    """The ladder's gap -> circuit force ``dF/dI I_L + dF/ds`` [N/m] (force ``F(s, I_L)``
-    as eq. 8's) from its gap -> ``I_L`` response, with the statics' partials of
-    ``response``."""
-    return (response.dforce_dcurrent_N_per_A * gap_to_inductor_current
+                          gap_to_inductor_current: np.ndarray,
+                          gap_to_eddy_current: np.ndarray | float = 0.0,
+                          gamma: float = 0.0) -> np.ndarray:
+    """The ladder's gap -> circuit force ``dF/dI (dI_L + gamma dI_e) + dF/ds`` [N/m] (force
+    ``F(s, I_L + gamma I_e)``; ``gamma = 0``: eq. 8's ``F(s, I_L)``) from its gap -> ``I_L``
+    and gap -> ``I_e`` responses, with the statics' partials of ``response``."""
+    return (response.dforce_dcurrent_N_per_A
+            * (gap_to_inductor_current + gamma * np.asarray(gap_to_eddy_current))
             + response.dforce_dgap_N_per_m)
 
 
@@ -369,6 +510,10 @@ class MotionEddyFit:
     unshielded_share : float
         ``beta`` [-] (from the detailed model's gap -> current jump,
         :func:`unshielded_share`).
+    force_share : float
+        ``gamma`` [-] (from the detailed model's gap -> force jump, :func:`force_share`;
+        0 where the response has no force partials, or where it would cost voltage steps
+        more than :data:`MAX_STEP_FORCE_LOSS`).
     rms_residual : float
         RMS of the residuals (each response relative to its modulus) over the fit's
         frequencies and the responses fitted.
@@ -381,6 +526,7 @@ class MotionEddyFit:
     unshielded_inductance_H: float
     shielding_resistance_ohm: float
     unshielded_share: float
+    force_share: float
     rms_residual: float
     max_gap_error: float
     max_voltage_error: float
@@ -405,7 +551,8 @@ def fit_motion_eddy(response: DetailedFrequencyResponse, *, resistance_ohm: floa
     with ``fit_force`` (where the response carries the statics' force partials), gap ->
     force at every frequency (real and imaginary parts, equal weights).  ``beta`` follows ``R_a`` and
     ``L_u`` so that the ladder keeps the detailed model's instantaneous gap -> current jump
-    (:func:`unshielded_share`).  Parameters are fitted as ``log R_a``, ``log R_2`` and
+    (:func:`unshielded_share`), ``gamma`` so that it keeps the gap -> force jump
+    (:func:`force_share`).  Parameters are fitted as ``log R_a``, ``log R_2`` and
     ``logit(L_u/L_max)`` (so ``0 < L_u < L_max``, ``L_max`` the smaller of ``L~`` and
     ``max_unshielded_inductance_H``), with scipy's trust-region least squares from
     several starts: ``R_a`` at the exact jump value ``eddy_resistance_jump_ohm`` (and 3x,
@@ -451,7 +598,9 @@ def fit_motion_eddy(response: DetailedFrequencyResponse, *, resistance_ohm: floa
             f, differential_inductance_H=lt, dpsi_ds_Wb_per_m=k, resistance_ohm=r_el,
             jump_resistance_ohm=r_a, unshielded_inductance_H=l_u, shielding_resistance_ohm=r_2,
             beta=beta)
-        return ms, mu, ladder_force_response(response, il)
+        ie = (1.0 + r_el / r_a) * ms - il
+        gamma = _response_force_share(response, r_el, r_a, l_u, r_2, beta)
+        return ms, mu, ladder_force_response(response, il, ie, gamma)
 
     def resid(x: np.ndarray) -> np.ndarray:
         ms, mu, mf = model(x)
@@ -478,6 +627,7 @@ def fit_motion_eddy(response: DetailedFrequencyResponse, *, resistance_ohm: floa
     moving = bool(np.all(np.abs(gs) > 0))
     forced = _with_force(response)
     return MotionEddyFit(r_a, l_u, r_2, beta,
+                         _response_force_share(response, r_el, r_a, l_u, r_2, beta),
                          relative_rms_residual(response, ms, mu, mf if fit_force else None),
                          float(np.max(np.abs(ms / gs - 1.0))) if moving else float("nan"),
                          float(np.max(np.abs(mu / gu - 1.0))),
