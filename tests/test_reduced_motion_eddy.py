@@ -202,6 +202,32 @@ def test_force_share_in_the_model_the_closed_form_and_the_bank(u_maps: Character
     assert out0.force_N == out_old.force_N
 
 
+def test_built_maps_keep_the_held_flux_share_aside(u_maps: CharacteristicMaps) -> None:
+    """``build_maps`` stores the derived ``gamma`` in its own variable and uses 0;
+    ``with_held_flux_force`` puts it in use, in a copy; maps without it are refused by
+    name."""
+    from maglevkit.errors import InputError
+    from maglevkit.reduction.motion_eddy import HELD_FLUX_FORCE_SHARE_VARIABLE
+
+    ds = u_maps.dataset
+    assert np.all(ds[FORCE_SHARE_VARIABLE].values == 0.0)
+    held = np.asarray(ds[HELD_FLUX_FORCE_SHARE_VARIABLE].values, dtype=float)
+    assert np.all(np.isfinite(held))
+    used = u_maps.with_held_flux_force()
+    assert np.array_equal(used.dataset[FORCE_SHARE_VARIABLE].values, held)
+    assert np.all(u_maps.dataset[FORCE_SHARE_VARIABLE].values == 0.0)   # the original kept
+    gamma = np.array([-0.2])
+    planted = CharacteristicMaps(ds.assign(**{HELD_FLUX_FORCE_SHARE_VARIABLE:
+                                              ("circuit", gamma)})).with_held_flux_force()
+    from maglevkit.reduced.core import MotionEddyLadder
+
+    lad = MotionEddyLadder.from_maps(planted,
+                                     resistance_ohm=np.asarray(ds["resistance_ohm"].values))
+    assert lad.force_share[0] == -0.2
+    with pytest.raises(InputError, match=HELD_FLUX_FORCE_SHARE_VARIABLE):
+        CharacteristicMaps(ds.drop_vars(HELD_FLUX_FORCE_SHARE_VARIABLE)).with_held_flux_force()
+
+
 def test_maps_without_a_force_share_read_as_zero(u_maps: CharacteristicMaps) -> None:
     """Maps built before ``gamma`` (no ``motion_eddy_force_share``) are read with
     ``gamma = 0``: the force ``F(s, I_L)``, bit-identical to maps that hold 0."""
@@ -402,14 +428,18 @@ def test_bad_input(u_maps: CharacteristicMaps) -> None:
         mk.CurrentModel(no_eddy, motion_eddy=True)
 
 
-def _gap_sine_sweep(mag: mk.Magnet, frequencies: tuple[float, ...], current_A: float = 34.0
+def _gap_sine_sweep(mag: mk.Magnet, frequencies: tuple[float, ...], current_A: float = 34.0,
+                    *, held_flux_force: bool = False
                     ) -> dict[float, tuple[float, float, float]]:
     """Per frequency: the ladder's current error and force error relative to the
     detailed model's variation, and its current phase error [deg] against the gap sine
     10 +- 1 mm at the constant voltage of ``current_A`` (``benchmarks/bench_gap_motion.py``'s
-    run; maps 12 x 41, identified at their reference point 11 mm / 40 A)."""
+    run; maps 12 x 41, identified at their reference point 11 mm / 40 A); with
+    ``held_flux_force`` on ``maps.with_held_flux_force()``."""
     maps = mk.build_maps(mag, gaps_m=np.linspace(0.005, 0.016, 12),
                          currents_A=np.linspace(0.0, 80.0, 41), progress=False)
+    if held_flux_force:
+        maps = maps.with_held_flux_force()
     fm = mk.FluxModel(mag)
     ladder = mk.CurrentModel(maps, motion_eddy=True)
     u0 = fm.resistances * current_A
@@ -468,18 +498,24 @@ def test_split_tr09_gap_sine_sweep_against_its_detailed_model() -> None:
     """The same sweep on the split TR09 network (``flux_paths = "split"``, 59 eddy elements)
     at the bundled file's nominal 31.7 A, as ``make bench`` (bench_gap_motion) runs it.
     Current within the aims (measured 2.8 / 7.0 / 2.9 %, phase -1.3 / +0.7 deg at 5 / 50
-    Hz; eq. 8: 1.8 / 24.8 / 94.9 %); the force within its aims 5 / 10 / 20 % with the force
-    share ``gamma`` (F(s, I_L + gamma I_e), gamma = -0.142 from the held-flux stiffness;
-    measured 3.2 / 6.2 / 8.5 %; with gamma = 0 on the same maps 17.8 / 38.7 % at 50 / 200
-    Hz; eq. 8: 2.7 / 20.3 / 46.4 %)."""
+    Hz; eq. 8: 1.8 / 24.8 / 94.9 %); on ``maps.with_held_flux_force()`` the force within
+    its aims 5 / 10 / 20 % (F(s, I_L + gamma I_e), gamma = -0.142 from the held-flux
+    stiffness; measured 3.2 / 6.2 / 8.5 %; with the default gamma = 0 on the same maps
+    17.8 / 38.7 % at 50 / 200 Hz; eq. 8: 2.7 / 20.3 / 46.4 %)."""
     mag = mk.load_magnet("tr09-standard")     # split since issue 26 (the bundled default)
     assert mag.network.n_loops > 200          # the split network, not the lumped one
     assert mag.nominal_current == 31.7
-    for f, (err, err_f, phase) in _gap_sine_sweep(mag, tuple(AIMS), mag.nominal_current).items():
+    for f, (err, err_f, phase) in _gap_sine_sweep(mag, tuple(AIMS), mag.nominal_current,
+                                                  held_flux_force=True).items():
         assert err <= AIMS[f], (f, err)
         assert err_f <= FORCE_AIMS[f], (f, err_f)
         if f <= 100.0:
             assert abs(phase) <= 5.0, (f, phase)
+    # the default maps (gamma = 0): the current's aims hold as well; the force does not
+    # follow above ~10 Hz (measured 17.8 % at 50 Hz, more than the 10 % aim)
+    default = _gap_sine_sweep(mag, (50.0,), mag.nominal_current)[50.0]
+    assert default[0] <= AIMS[50.0], default
+    assert default[1] > FORCE_AIMS[50.0], default
 
 
 def test_a_fit_that_does_not_converge_is_reported(monkeypatch: pytest.MonkeyPatch) -> None:

@@ -47,6 +47,7 @@ from ..validation import real_array, renamed_keywords
 from .eddy_network import EDDY_NETWORK_MODES, EddyNetworkFit, fit_eddy_network
 from .motion_eddy import (
     FORCE_SHARE_VARIABLE,
+    HELD_FLUX_FORCE_SHARE_VARIABLE,
     MAX_UNSHIELDED_SHARE_OF_MIN_L,
     SHARE_VARIABLE,
     detailed_frequency_response,
@@ -249,6 +250,47 @@ class CharacteristicMaps:
         p.parent.mkdir(parents=True, exist_ok=True)
         self.dataset.to_netcdf(p, engine="netcdf4")
         return p
+
+    def with_held_flux_force(self) -> CharacteristicMaps:
+        """These maps with the shielded-gap ladder's force at ``F(s, I_L + gamma I_e)``.
+
+        ``gamma`` is the share derived from the detailed model's held-flux stiffness
+        (``motion_eddy_held_flux_force_share``, docs/equations.md section 8).  With it
+        ``CurrentModel(maps, motion_eddy=True)`` (and the bank, FMU and MPC on these maps)
+        follows the force under gap motion (split TR09, gap sine 10 +- 1 mm: force error
+        3.2 / 6.2 / 8.5 % at 5 / 50 / 200 Hz instead of about 3 / 18 / 39 %), but a fast
+        voltage change drives ``I_e`` before ``I_L``, so in a closed gap loop the force
+        dips first (the closed-loop scenario's current / force error 5.7 / 1.6 -> 20.7 /
+        13.1 %).  Use it for open-loop gap-disturbance studies, not for control loops.
+
+        Returns
+        -------
+        CharacteristicMaps
+            A new object; the dataset is shallow-copied with ``motion_eddy_force_share``
+            replaced.
+
+        Raises
+        ------
+        InputError
+            Maps without the derived share (built before it, imported from a table, or
+            of a magnet without eddy currents).
+        """
+        ds = self.dataset
+        if HELD_FLUX_FORCE_SHARE_VARIABLE not in ds:
+            raise InputError(
+                "with_held_flux_force: these maps have no "
+                f"{HELD_FLUX_FORCE_SHARE_VARIABLE!r} (maps imported from a table or built by "
+                "an older version); rebuild them with build_maps")
+        gamma = np.asarray(ds[HELD_FLUX_FORCE_SHARE_VARIABLE].values, dtype=float)
+        if not np.all(np.isfinite(gamma)):
+            raise InputError("with_held_flux_force: these maps have no shielded-gap ladder "
+                             f"({HELD_FLUX_FORCE_SHARE_VARIABLE} = {gamma.tolist()}: the magnet "
+                             "has no eddy currents)")
+        attrs = dict(ds[FORCE_SHARE_VARIABLE].attrs) if FORCE_SHARE_VARIABLE in ds else {}
+        attrs["description"] = ("the held-flux gamma (with_held_flux_force): the force under "
+                                "gap motion, at a cost in closed loop")
+        return CharacteristicMaps(ds.assign({FORCE_SHARE_VARIABLE: ("circuit", gamma.copy(),
+                                                                    attrs)}))
 
     def check_magnet(self, magnet: Any) -> None:
         """Raise if these maps were not built from ``magnet`` (same network and options).
@@ -772,12 +814,19 @@ def _store_motion_eddy(ds: Any, net: Network, gap: float, current: float,
         "description": "from the detailed model's instantaneous gap -> current jump at "
                        "frozen flux linkages and eddy fluxes, -D a L_u/(dL/ds I), at the "
                        "same point; absent (older maps): 0"})
-    ds[FORCE_SHARE_VARIABLE] = ("circuit", gamma, {
-        "units": "1", "long_name": "share gamma of the shielding eddy current in the ladder's "
-                                   "force current I_L + gamma I_e",
+    ds[HELD_FLUX_FORCE_SHARE_VARIABLE] = ("circuit", gamma, {
+        "units": "1", "long_name": "gamma from the held-flux stiffness (used only on request)",
         "description": "from the detailed model's instantaneous gap -> force jump (the "
                        "stiffness at frozen flux linkages and eddy fluxes) at the same "
-                       "point; absent (older maps): 0, the force F(s, I_L)"})
+                       "point, 0 where it would cost voltage steps more than "
+                       "MAX_STEP_FORCE_LOSS; CharacteristicMaps.with_held_flux_force() "
+                       "copies it into motion_eddy_force_share"})
+    ds[FORCE_SHARE_VARIABLE] = ("circuit", gamma * 0.0, {
+        "units": "1", "long_name": "share gamma of the shielding eddy current in the ladder's "
+                                   "force current I_L + gamma I_e (in use)",
+        "description": "0: the force F(s, I_L), which keeps the closed loop (the held-flux "
+                       "gamma follows the force under gap motion but costs the closed loop; "
+                       "docs/reduction.md, Gap motion); absent (older maps): 0"})
     ds["motion_eddy_fit_rms"] = ("circuit", rms, {
         "units": "1", "long_name": "RMS relative residual of the shielded-gap ladder's fit",
         "description": "over both responses and 60 frequencies, each relative to the "

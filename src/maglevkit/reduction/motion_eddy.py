@@ -63,13 +63,19 @@ __all__ = ["DetailedFrequencyResponse", "MotionEddyFit", "detailed_frequency_res
            "unshielded_share", "force_share", "ladder_voltage_currents",
            "step_force_residual", "MAX_STEP_FORCE_LOSS",
            "relative_rms_residual", "FIT_FREQUENCIES_HZ", "SHARE_VARIABLE",
-           "FORCE_SHARE_VARIABLE"]
+           "FORCE_SHARE_VARIABLE", "HELD_FLUX_FORCE_SHARE_VARIABLE"]
 
 #: The maps' variable of the ladder's unshielded share ``beta`` of the motion term.
 SHARE_VARIABLE = "motion_eddy_unshielded_share"
 #: The maps' variable of the ladder's force share ``gamma`` of the eddy current (maps
 #: without it are read with ``gamma = 0``, the force ``F(s, I_L)`` they were built for).
 FORCE_SHARE_VARIABLE = "motion_eddy_force_share"
+#: The maps' variable of the ``gamma`` derived from the detailed model's held-flux stiffness
+#: (:func:`force_share`, kept where voltage steps lose at most :data:`MAX_STEP_FORCE_LOSS`).
+#: ``build_maps`` stores it here and leaves :data:`FORCE_SHARE_VARIABLE` at 0: it costs the
+#: closed loop (split TR09: 5.7 -> 20.7 % current error), so it is used only when asked
+#: (:meth:`~maglevkit.reduction.maps.CharacteristicMaps.with_held_flux_force`).
+HELD_FLUX_FORCE_SHARE_VARIABLE = "motion_eddy_held_flux_force_share"
 
 #: Frequencies of the fit [Hz]: 0.1 Hz .. 1 kHz, 60 points evenly spaced in log f.
 FIT_FREQUENCIES_HZ = np.geomspace(0.1, 1000.0, 60)
