@@ -25,7 +25,7 @@ HOLD_M = [0.014, 0.016, 0.018, 0.020]
 # stored maps stay valid.  Re-pinned once when the element fields got their units (issue
 # 22 item 7, units22: e.g. pole_area -> pole_area_m2 changes the elements' repr, which the
 # hash covers; the values are unchanged): before e98c987c... and 4b2aeef1...; and again
-# by units22b (Circuit.resistance -> resistance_ohm, materials' resistivity ->
+# by units22b (a Circuit's resistance -> resistance_ohm, materials' resistivity ->
 # resistivity_ohm_m; maps built before and after bit-identical): before cc30551e... and
 # 76f9d9c9...
 BUNDLED_HASH = "85f37795958e984374f8a813f8322d57f0875849aa1a46662ab5bcbb1b045690"

@@ -2,9 +2,9 @@
 
 The maps in ``tests/data/vehicle_run_maps`` are named and tagged by the network hash of the
 magnet they belong to (``<magnet name>-<network hash>.nc``, attribute ``magnet_hash``; see
-``tools/record_vehicle_runs.py``).  A rename of an element, circuit or material field (e.g.
-``Circuit.resistance`` -> ``resistance_ohm``) changes every hash without changing one number
-of the maps; rebuilding them on another processor would move the recorded runs at the
+``tools/record_vehicle_runs.py``).  A rename of an element, circuit or material field
+(e.g. the circuits' ``resistance`` -> ``resistance_ohm``) changes every hash without
+changing one number of the maps; rebuilding them on another processor would move the recorded runs at the
 solvers' tolerance (about 4e-6 of a value), so instead this script carries each stored file
 over to the new hash: it computes the hashes of the recorded runs' magnets under the old
 code (``--old-src``, a checkout's ``src`` before the rename, run in a subprocess) and under
