@@ -96,8 +96,8 @@ class GuidanceFem(UMagnetFem):
         bars, rail, yokes, _, sign = regions(self.mesh, g, s)
         k = g.depth / g.yoke_depth
         mat, rail_mat = mk.get_material(g.material), mk.get_material(g.rail_material)
-        self.sigma = 1.0 / float(mat.resistivity) if sigma is None else sigma
-        rail_share = float(mat.resistivity) / float(rail_mat.resistivity)
+        self.sigma = 1.0 / float(mat.resistivity_ohm_m) if sigma is None else sigma
+        rail_share = float(mat.resistivity_ohm_m) / float(rail_mat.resistivity_ohm_m)
         self.R = resistance
         # conductor masses weighted by the part's conductivity over self.sigma (the legs' and
         # yoke's k: module docstring); the zero-current rows and the eddy power use the same

@@ -131,7 +131,7 @@ class Tr09Transient:
             self.part[mask] = j
         m = magnet.parameters["magnet"]
         mat = mk.get_material(g.core_material)
-        rho = m.get("resistivity") or mat.resistivity
+        rho = m.get("resistivity") or mat.resistivity_ohm_m
         self.sigma = 1.0 / float(rho) if sigma is None else float(sigma)
         # conductors: cores and pole back, in groups of zero net current
         back = iron & (cy < -g.hcore)

@@ -299,7 +299,7 @@ class UMagnetFem:
         core, rail, sign = body_regions(self.mesh, s, g)
         self.iron = core | rail
         mat = mk.get_material(material)
-        self.sigma = 1.0 / float(mat.resistivity) if sigma is None else sigma
+        self.sigma = 1.0 / float(mat.resistivity_ohm_m) if sigma is None else sigma
         self.R = resistance
         self.rel = Reluctivity(None, material)
         self.mat = mat
@@ -596,8 +596,8 @@ def model_magnet(*, discretisation: str = "lumped", air_model: str = "tubes",
                         tube.material)
         keep = [b for b in net.branches if b.name.split(":")[0] != "rail"]
         new = ladder_branches("rail", "RL", "RR", iron, thickness_m=2.0 * t,
-                              resistivity=float(mag.parameters["rail"].get("resistivity")
-                                                or tube.material.resistivity),
+                              resistivity_ohm_m=float(mag.parameters["rail"].get("resistivity")
+                                                or tube.material.resistivity_ohm_m),
                               layers=kw.get("eddy_layers", 6))
         mag = replace(mag, network=mk.Network((*keep, *new), net.circuits, name=net.name))
     return mag

@@ -56,7 +56,7 @@ def test_closed_loop_touchdown_is_a_solver_error_not_bad_input(u_lin) -> None:  
     with pytest.raises(mk.SolverError, match=r"TOUCHDOWN.*at t = .* s; state: gap_m=") as exc:
         _short_run(u_lin, duration_s=0.5, external_force_N=lambda t: -20 * f0)
     assert not isinstance(exc.value, mk.InputError)
-    assert exc.value.time is not None and exc.value.time < 0.5
+    assert exc.value.time_s is not None and exc.value.time_s < 0.5
     assert exc.value.state["gap_m"] > 0.0
 
 
@@ -244,16 +244,16 @@ def test_network_with_options_takes_only_true_or_false(u_lin) -> None:  # type: 
 def test_linear_and_ideal_materials_check_resistivity() -> None:
     from maglevkit.materials import ConstantPermeability, IdealIron
 
-    assert ConstantPermeability(1000.0, resistivity=1.5e-7).resistivity == 1.5e-7
-    assert IdealIron(resistivity=1.5e-7).resistivity == 1.5e-7
+    assert ConstantPermeability(1000.0, resistivity_ohm_m=1.5e-7).resistivity_ohm_m == 1.5e-7
+    assert IdealIron(resistivity_ohm_m=1.5e-7).resistivity_ohm_m == 1.5e-7
     # was: accepted (only the other materials checked it)
-    for make in (lambda r: ConstantPermeability(1000.0, resistivity=r),
-                 lambda r: IdealIron(resistivity=r)):
-        with pytest.raises(mk.MaterialError, match=r"resistivity \[ohm m\] = -1e-07: must be > 0"):
+    for make in (lambda r: ConstantPermeability(1000.0, resistivity_ohm_m=r),
+                 lambda r: IdealIron(resistivity_ohm_m=r)):
+        with pytest.raises(mk.MaterialError, match=r"resistivity_ohm_m \[ohm m\] = -1e-07: must be > 0"):
             make(-1e-7)
-        with pytest.raises(mk.MaterialError, match=r"resistivity \[ohm m\] = 'high' \(str\)"):
+        with pytest.raises(mk.MaterialError, match=r"resistivity_ohm_m \[ohm m\] = 'high' \(str\)"):
             make("high")
-        with pytest.raises(mk.MaterialError, match=r"resistivity \[ohm m\] = nan: must be finite"):
+        with pytest.raises(mk.MaterialError, match=r"resistivity_ohm_m \[ohm m\] = nan: must be finite"):
             make(float("nan"))
 
 

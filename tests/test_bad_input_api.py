@@ -416,17 +416,17 @@ def test_circuit_constructors_refuse_bools_and_strings() -> None:
         mk.Coil("core", True)
     with pytest.raises(mk.ParameterError, match=r"polarity must be \+1 or -1"):
         mk.Coil("core", 10, polarity=True)
-    with pytest.raises(mk.ParameterError, match=r"resistance = True ohm"):
+    with pytest.raises(mk.ParameterError, match=r"resistance_ohm = True must be"):
         mk.Circuit("c", True, (mk.Coil("core", 10),))
     with pytest.raises(mk.TopologyError, match=r"network branches must be a sequence of Branch "
                                                r"objects, got str"):
         mk.Network("abc", ())  # type: ignore[arg-type]
     with pytest.raises(mk.TopologyError, match=r"network circuits: 'coil' is not a Circuit"):
         mk.Network(loop_network(eddy=False).branches, ("coil",))  # type: ignore[arg-type]
-    with pytest.raises(mk.InputError, match=r"gap \[m\] = '0.01' \(str\) is a string"):
+    with pytest.raises(mk.InputError, match=r"gap_m \[m\] = '0.01' \(str\) is a string"):
         carter_coefficient("0.01", 0.086, 0.035)
-    with pytest.raises(mk.ParameterError, match=r"slot_opening = 0.1 m must be smaller than "
-                                                r"slot_pitch"):
+    with pytest.raises(mk.ParameterError, match=r"slot_opening_m = 0.1 m must be smaller "
+                                                r"than slot_pitch_m"):
         carter_coefficient(0.01, 0.086, 0.1)
 
 

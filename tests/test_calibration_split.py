@@ -24,9 +24,12 @@ HOLD_M = [0.014, 0.016, 0.018, 0.020]
 # the bundled u-magnet's network hashes before this option existed (main at eef98e1):
 # stored maps stay valid.  Re-pinned once when the element fields got their units (issue
 # 22 item 7, units22: e.g. pole_area -> pole_area_m2 changes the elements' repr, which the
-# hash covers; the values are unchanged): before e98c987c... and 4b2aeef1...
-BUNDLED_HASH = "cc30551e58df403b16f26381e6ebcc2c0d9819b1c00ea2068bc80db0a953458f"
-BUNDLED_HASH_NO_EDDY = "76f9d9c9e30a1f46449bb1c7295814b649f9e4a4e6f37553701b5645b7d1d6da"
+# hash covers; the values are unchanged): before e98c987c... and 4b2aeef1...; and again
+# by units22b (a Circuit's resistance -> resistance_ohm, materials' resistivity ->
+# resistivity_ohm_m; maps built before and after bit-identical): before cc30551e... and
+# 76f9d9c9...
+BUNDLED_HASH = "85f37795958e984374f8a813f8322d57f0875849aa1a46662ab5bcbb1b045690"
+BUNDLED_HASH_NO_EDDY = "4bbd718bc9deeb76b3b7255c9cd09f08a22fcc371c027c098bc3604a3e8095b4"
 
 
 def _magnet(eddy: bool = False, **magnet: Any) -> mk.Magnet:

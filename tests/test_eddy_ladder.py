@@ -33,7 +33,7 @@ L_BAR, T_BAR, DEPTH = 0.2, 0.03, 0.1        # m: length, thickness (2b), depth
 def _slab_network(layers: int) -> mk.Network:
     """A slab of linear iron with the ladder, closed by a tiny gap, one 1-turn coil."""
     iron = IronPath("iron_bar", L_BAR, T_BAR * DEPTH, ConstantPermeability(mu_r=MU_R))
-    branches = ladder_branches("bar", "a", "b", iron, thickness_m=T_BAR, resistivity=RHO,
+    branches = ladder_branches("bar", "a", "b", iron, thickness_m=T_BAR, resistivity_ohm_m=RHO,
                                layers=layers)
     gap = mk.AirGap("air", gap_input="s", pole_area_m2=1.0)
     branches.append(mk.Branch("gap", "b", "a", (gap,)))
@@ -108,15 +108,15 @@ def test_one_layer_is_the_lumped_element() -> None:
     iron = IronPath("i", 0.1, 0.03 * 0.1, "AISI 1008")
     solid = EddyCurrent.solid_rectangular("e", 0.03, 0.1, 0.1, 1.5e-7)
     factor = rectangle_torsion_constant(0.03, 0.1) / (0.1 * 0.03**3 / 3.0)
-    br = ladder_branches("p", "a", "b", iron, thickness_m=0.03, resistivity=1.5e-7, layers=1,
+    br = ladder_branches("p", "a", "b", iron, thickness_m=0.03, resistivity_ohm_m=1.5e-7, layers=1,
                          factor=factor)
     assert br[0].elements[0].conductance_S == pytest.approx(solid.conductance_S, rel=1e-12)
     lam = EddyCurrent.laminated("e", 0.03 * 0.1, 0.1, 4e-7, 5e-4)
-    br = ladder_branches("p", "a", "b", iron, thickness_m=5e-4, resistivity=4e-7, layers=1)
+    br = ladder_branches("p", "a", "b", iron, thickness_m=5e-4, resistivity_ohm_m=4e-7, layers=1)
     assert br[0].elements[0].conductance_S == pytest.approx(lam.conductance_S, rel=1e-12)
     # tube areas add up to the part's section for every n
     for n in LADDER_COEFFICIENTS:
-        br = ladder_branches("p", "a", "b", iron, thickness_m=0.03, resistivity=1.5e-7, layers=n)
+        br = ladder_branches("p", "a", "b", iron, thickness_m=0.03, resistivity_ohm_m=1.5e-7, layers=n)
         area = sum(b.elements[0].cross_section_m2 for b in br if ":tube" in b.name)
         assert area == pytest.approx(iron.cross_section_m2, rel=1e-9)
 
@@ -149,7 +149,7 @@ def test_bad_options_are_refused(monkeypatch) -> None:  # type: ignore[no-untype
         mk.load_magnet("tr09-standard", eddy_model="ladder_split")
     with pytest.raises(ParameterError, match="layers"):
         ladder_branches("p", "a", "b", IronPath("i", 0.1, 1e-3), thickness_m=0.01,
-                        resistivity=1e-7, layers=12)
+                        resistivity_ohm_m=1e-7, layers=12)
     mag = mk.load_magnet("u-magnet").with_options(eddy_model="ladder", eddy_layers=2)
     assert mag.options.eddy_layers == 2
     assert any(":tube2" in name for name in mag.network.branch_names)

@@ -58,7 +58,7 @@ def _network(element: mk.Element) -> mk.Network:
         branches=(mk.Branch("b", "A", "B", (element,)),
                   mk.Branch("back", "B", "A", (mk.IronPath("yoke", length_m=0.5,
                                                              cross_section_m2=1e-3),))),
-        circuits=(mk.Circuit("coil", resistance=1.0, coils=(mk.Coil("b", 100.0),)),))
+        circuits=(mk.Circuit("coil", resistance_ohm=1.0, coils=(mk.Coil("b", 100.0),)),))
 
 
 @pytest.mark.parametrize(("cls", "args", "old", "new"), CASES, ids=IDS)
@@ -108,22 +108,24 @@ FACTORY_CASES: list[tuple[Any, tuple[Any, ...], dict[str, float], dict[str, floa
     (mk.LeakagePermeance.eighth_sphere, ("s",), {"radius": 0.01}, {"radius_m": 0.01}),
     (mk.LeakagePermeance.quarter_hollow_sphere, ("s",), {"thickness": 0.01},
      {"thickness_m": 0.01}),
-    (mk.EddyCurrent.one_turn, ("e",), {"path_area": 1e-4, "path_length": 0.3},
-     {"path_area_m2": 1e-4, "path_length_m": 0.3}),
-    (mk.EddyCurrent.solid_rectangular, ("e",), {"width": 0.03, "height": 0.1, "length": 0.2},
-     {"width_m": 0.03, "height_m": 0.1, "length_m": 0.2}),
-    (mk.EddyCurrent.laminated, ("e",), {"area": 2e-3, "length": 0.2, "sheet_thickness": 5e-4},
-     {"area_m2": 2e-3, "length_m": 0.2, "sheet_thickness_m": 5e-4}),
-    (ladder_parameters, (), {"length": 0.2, "area": 2e-3, "thickness": 0.03},
-     {"length_m": 0.2, "area_m2": 2e-3, "thickness_m": 0.03}),
+    # (resistivity -> resistivity_ohm_m since units22b)
+    (mk.EddyCurrent.one_turn, ("e",), {"path_area": 1e-4, "path_length": 0.3,
+                                       "resistivity": 1.7e-8},
+     {"path_area_m2": 1e-4, "path_length_m": 0.3, "resistivity_ohm_m": 1.7e-8}),
+    (mk.EddyCurrent.solid_rectangular, ("e",), {"width": 0.03, "height": 0.1, "length": 0.2,
+                                                "resistivity": 1.5e-7},
+     {"width_m": 0.03, "height_m": 0.1, "length_m": 0.2, "resistivity_ohm_m": 1.5e-7}),
+    (mk.EddyCurrent.laminated, ("e",), {"area": 2e-3, "length": 0.2, "sheet_thickness": 5e-4,
+                                        "resistivity": 4e-7},
+     {"area_m2": 2e-3, "length_m": 0.2, "sheet_thickness_m": 5e-4, "resistivity_ohm_m": 4e-7}),
+    (ladder_parameters, (), {"length": 0.2, "area": 2e-3, "thickness": 0.03,
+                             "resistivity": 1.5e-7},
+     {"length_m": 0.2, "area_m2": 2e-3, "thickness_m": 0.03, "resistivity_ohm_m": 1.5e-7}),
     (ladder_branches, ("b", "A", "B", mk.IronPath("i", length_m=0.2, cross_section_m2=2e-3)),
-     {"thickness": 0.03}, {"thickness_m": 0.03}),
+     {"thickness": 0.03, "resistivity": 1.5e-7}, {"thickness_m": 0.03, "resistivity_ohm_m": 1.5e-7}),
 ]
-# the eddy factories and helpers need a resistivity [ohm m] (and the helpers a tube count)
-EXTRA = {"one_turn": {"resistivity": 1.7e-8}, "solid_rectangular": {"resistivity": 1.5e-7},
-         "laminated": {"resistivity": 4e-7},
-         "ladder_parameters": {"resistivity": 1.5e-7, "layers": 3},
-         "ladder_branches": {"resistivity": 1.5e-7, "layers": 3}}
+# the ladder helpers need a tube count
+EXTRA = {"ladder_parameters": {"layers": 3}, "ladder_branches": {"layers": 3}}
 
 
 @pytest.mark.parametrize(("fn", "args", "old", "new"), FACTORY_CASES,

@@ -157,11 +157,11 @@ def test_eddy_currents_need_a_resistivity() -> None:
 
 
 def test_solver_error_reports_state_and_reason() -> None:
-    err = mk.SolverError("integration failed", time=0.0125, state={"I": [1.0, 2.5]},
+    err = mk.SolverError("integration failed", time_s=0.0125, state={"I": [1.0, 2.5]},
                          reason="IDA_CONV_FAIL")
     text = str(err)
     assert "t = 0.0125 s" in text and "I=[1, 2.5]" in text and "IDA_CONV_FAIL" in text
-    assert err.time == 0.0125 and err.reason == "IDA_CONV_FAIL"
+    assert err.time_s == 0.0125 and err.reason == "IDA_CONV_FAIL"
 
 
 runner = CliRunner()

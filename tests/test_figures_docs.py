@@ -392,9 +392,9 @@ def test_sources_page_material_table_matches_the_built_in_records() -> None:
         assert (mu_i, b_max, c_a, c_b, n) == pytest.approx(
             (mat.mu_i, mat.B_mymax, mat.c_a, mat.c_b, mat.n), rel=1e-12), name
         rho = cells[6].split(" ")[0]
-        assert (rho == "-") == (mat.resistivity is None), name
-        if mat.resistivity is not None:
-            assert float(rho) == pytest.approx(mat.resistivity, rel=1e-12), name
+        assert (rho == "-") == (mat.resistivity_ohm_m is None), name
+        if mat.resistivity_ohm_m is not None:
+            assert float(rho) == pytest.approx(mat.resistivity_ohm_m, rel=1e-12), name
 
 
 def test_figure_copies_shown_by_the_readme_exist() -> None:

@@ -241,7 +241,7 @@ def test_solver_failure_raises_with_time_and_state() -> None:
     with pytest.raises(SolverError) as info:
         mk.simulate(fm, (0.0, 0.1), dt_s=0.05, gaps_m=0.004, voltages_V=30.0, initial_state=st)
     err = info.value
-    assert err.time == 0.0 and "gaps_m" in err.state and "psi[coil]" in err.state
+    assert err.time_s == 0.0 and "gaps_m" in err.state and "psi[coil]" in err.state
     assert err.reason
 
 

@@ -94,7 +94,7 @@ def test_solver_failure_mid_run_reports_time_state_reason() -> None:
     with pytest.raises(SolverError) as info:
         mk.simulate(fm, (0.0, 0.01), dt_s=1e-3, gaps_m=0.01, voltages_V=Step(20.0, 1e12, 0.005))
     err = info.value
-    assert err.time == pytest.approx(0.005, abs=1e-12)     # start of the failing interval
+    assert err.time_s == pytest.approx(0.005, abs=1e-12)     # start of the failing interval
     np.testing.assert_allclose(err.state["voltages_V"], [1e12])
     np.testing.assert_allclose(err.state["gaps_m"], [0.01, 0.01])
     # the state is the one at 5 ms (steady state of 20 V: 10 A), not the initial one
@@ -217,7 +217,7 @@ def test_laminated_u_magnet_has_small_core_eddy_currents() -> None:
     p["magnet"].update(laminated=True, sheet_thickness=0.5e-3)
     lam = mk.build_magnet(p)
     m = p["magnet"]
-    rho = get_material(m["material"]).resistivity
+    rho = get_material(m["material"]).resistivity_ohm_m
     d = m["sheet_thickness"]
     leg_len = m["leg_height"] + 0.5 * m["yoke_thickness"]     # leg to the yoke centre line
     leg_area = m["pole_width"] * m["depth"]

@@ -407,7 +407,7 @@ def test_bow_magnet_other_assignment(tmp_path, assignment) -> None:  # type: ign
         assert [coil.branch for coil in c.coils] == [f"core_p{k + 1:02d}" for k in poles]
         # polarity alternates along the magnet whatever circuit feeds the pole
         assert [coil.polarity for coil in c.coils] == [1 if k % 2 == 0 else -1 for k in poles]
-        assert c.resistance == pytest.approx(len(poles) * r_pole, rel=1e-12)
+        assert c.resistance_ohm == pytest.approx(len(poles) * r_pole, rel=1e-12)
     # same iron and gaps: with all circuits at the same current the MMF pattern is that of
     # the standard magnet, so the total force is equal (solver precision, Newton 1e-9)
     f = mk.solve_statics(mag, gaps_m=0.010, currents_A=30.0).force_N

@@ -548,3 +548,184 @@ def test_vehicle_maps_and_comfort_indices_old_names_equal_new(tmp_path) -> None:
                                                 r"gaps_m=; currents= .*currents_A="):
         old = vehicle_maps(lin, cache_dir=tmp_path, gaps=g, currents=c)   # from the cache
     assert np.array_equal(old.dataset["force_N"].values, new.dataset["force_N"].values)
+
+
+# ---- units22b: the last deferred names (circuit, materials, element laws, mechanics, simulate,
+# SolverError) ---------------------------------------------------------------------------------
+# rename_element_fields: skip   (this file uses the old names on purpose)
+def test_circuit_resistance_old_name_equals_new() -> None:
+    from maglevkit.reduction.maps import network_hash
+
+    coils = (mk.Coil("core", 100.0),)
+    new = mk.Circuit("c", resistance_ohm=1.5, coils=coils)
+    with pytest.warns(DeprecationWarning, match=r"Circuit: resistance= is deprecated, use "
+                                                r"resistance_ohm="):
+        old = mk.Circuit("c", resistance=1.5, coils=coils)
+    assert old == new and repr(old) == repr(new)
+    with pytest.warns(DeprecationWarning, match=r"\.resistance is deprecated, use "
+                                                r"\.resistance_ohm"):
+        assert new.resistance == 1.5
+    with pytest.raises(InputError, match=r"give resistance_ohm= only"):
+        mk.Circuit("c", resistance=1.5, resistance_ohm=1.5, coils=coils)
+    # the same network (its identity) whichever name built the circuit
+    branches = (mk.Branch("core", "A", "B", (mk.IronPath("i", length_m=0.2,
+                                                          cross_section_m2=1e-3),)),
+                mk.Branch("air", "B", "A", (mk.AirGap("g", gap_input="s",
+                                                       pole_area_m2=1e-3),)))
+    assert network_hash(mk.Network(branches, (old,))) == network_hash(mk.Network(branches, (new,)))
+    assert np.array_equal(mk.Network(branches, (old,)).resistances, [1.5])
+
+
+@pytest.mark.parametrize("make", [
+    lambda **kw: mk.SoftMagneticMaterial(1000.0, 1.5, 0.5, 0.5, 5.0, **kw),
+    lambda **kw: mk.ConstantPermeability(1000.0, **kw),
+    lambda **kw: mk.IdealIron(**kw),
+    lambda **kw: mk.TabulatedBH((0.0, 100.0, 1000.0), (0.0, 1.0, 1.5), **kw),
+], ids=["SoftMagneticMaterial", "ConstantPermeability", "IdealIron", "TabulatedBH"])
+def test_material_resistivity_old_name_equals_new(make) -> None:  # type: ignore[no-untyped-def]
+    new = make(resistivity_ohm_m=1.5e-7)
+    with pytest.warns(DeprecationWarning, match=r": resistivity= is deprecated, use "
+                                                r"resistivity_ohm_m="):
+        old = make(resistivity=1.5e-7)
+    assert old == new and repr(old) == repr(new) and new.resistivity_ohm_m == 1.5e-7
+    with pytest.warns(DeprecationWarning, match=r"\.resistivity is deprecated, use "
+                                                r"\.resistivity_ohm_m"):
+        assert new.resistivity == 1.5e-7
+
+
+def test_tabulated_from_csv_old_resistivity_equals_new(tmp_path) -> None:  # type: ignore[no-untyped-def]
+    path = tmp_path / "steel.csv"
+    path.write_text("0 0\n100 1.0\n1000 1.5\n")
+    new = mk.TabulatedBH.from_csv(path, resistivity_ohm_m=2e-7)
+    with pytest.warns(DeprecationWarning, match=r"from_csv: resistivity= is deprecated"):
+        old = mk.TabulatedBH.from_csv(path, resistivity=2e-7)
+    assert old == new and new.resistivity_ohm_m == 2e-7
+
+
+def _law_elements() -> list[mk.Element]:
+    """One element of every law class (slotted where the class can be), and the calibrated
+    wrappers of circuit/factors.py around an air gap and an iron path."""
+    from maglevkit.circuit.elements import FringePermeance, GapLayerPermeance
+    from maglevkit.circuit.factors import CalibratedIron, CalibratedLinear
+
+    iron = mk.IronPath("i", length_m=0.2, cross_section_m2=1e-3)
+    air = mk.AirGap("g", gap_input="s", pole_area_m2=1e-3, slot_pitch_m=0.086,
+                    slot_opening_m=0.035, fringe_edges=((0.05, 0.02),))
+    return [iron, air, mk.LeakagePermeance("l", value_H=2e-7),
+            mk.GapLeakage("gl", gap_input="s", width_m=0.1, radius_m=0.02),
+            FringePermeance("f", gap_input="s", width_m=0.1, radius_m=0.03),
+            GapLayerPermeance("lay", gap_input="s", width_m=0.1, length_m=0.005),
+            mk.EddyCurrent("e", conductance_S=3.0),
+            CalibratedLinear("cg", inner=air, leakage=1.1, fringing=1.2, offset=1e-4),
+            CalibratedIron("ci", inner=iron, field_scale=1.1, saturation_scale=0.9)]
+
+
+def test_element_law_old_keywords_equal_new() -> None:
+    """``permeance(gap=)``, ``mmf_drop(flux=, gap=)``, ``energy(flux=, gap=)`` (and the air
+    gap's ``effective_gap``/``fringe_permeance``) are deprecated aliases: the same float
+    operations, so equal bit for bit to the new keywords and to positional calls."""
+    from maglevkit.circuit.elements import LinearElement
+
+    s, phi = 0.011, 1.2e-3
+    checked = 0
+    for el in _law_elements():
+        laws = [("mmf_drop", {"flux": phi, "gap": s}, {"flux_Wb": phi, "gap_m": s}),
+                ("energy", {"flux": phi, "gap": s}, {"flux_Wb": phi, "gap_m": s})]
+        if isinstance(el, LinearElement):
+            laws.append(("permeance", {"gap": s}, {"gap_m": s}))
+        if isinstance(el, mk.AirGap):
+            laws += [("effective_gap", {"gap": s}, {"gap_m": s}),
+                     ("fringe_permeance", {"gap": s}, {"gap_m": s})]
+        for method, old_kw, new_kw in laws:
+            law = getattr(el, method)
+            new = law(**new_kw)
+            assert new == law(*new_kw.values())
+            with pytest.warns(DeprecationWarning, match=rf"{method}: .*{list(old_kw)[-1]}= is "
+                                                        rf"deprecated, use "
+                                                        rf"{list(new_kw)[-1]}="):
+                old = law(**old_kw)
+            assert np.array_equal(old, new), (el.name, method)
+            checked += 1
+    assert checked == 9 * 2 + 6 + 2      # every law of the 9 elements (6 linear, 1 air gap)
+
+
+def test_carter_coefficient_old_keywords_equal_new() -> None:
+    from maglevkit.circuit.elements import carter_coefficient
+
+    new = carter_coefficient(gap_m=0.01, slot_pitch_m=0.086, slot_opening_m=0.035)
+    with pytest.warns(DeprecationWarning, match=r"carter_coefficient: gap= is deprecated, use "
+                                                r"gap_m=; slot_pitch= .*slot_opening= is "
+                                                r"deprecated, use slot_opening_m="):
+        old = carter_coefficient(gap=0.01, slot_pitch=0.086, slot_opening=0.035)
+    assert old == new == carter_coefficient(0.01, 0.086, 0.035)
+
+
+def test_vehicle_mechanics_old_gravity_equals_new() -> None:
+    from maglevkit.vehicle.mechanics import VehicleMechanics
+
+    train = mk.vehicle.load_vehicle()
+    args = (train, [3.0, 9.0, 20.5], [0, 1, 2])
+    new = VehicleMechanics(*args, gravity_m_per_s2=3.7)
+    with pytest.warns(DeprecationWarning, match=r"VehicleMechanics: gravity= is deprecated, "
+                                                r"use gravity_m_per_s2="):
+        old = VehicleMechanics(*args, gravity=3.7)
+    assert np.array_equal(old.Q_gravity, new.Q_gravity)
+    # g enters Q_gravity linearly: the standard g's is the same vector scaled
+    std = VehicleMechanics(*args)
+    assert np.allclose(new.Q_gravity * (mk.vehicle.STANDARD_GRAVITY / 3.7), std.Q_gravity,
+                       rtol=1e-14, atol=0.0)        # one rounding per entry
+    with pytest.warns(DeprecationWarning, match=r"\.gravity is deprecated, use "
+                                                r"\.gravity_m_per_s2"):
+        assert old.gravity == 3.7
+
+
+def test_simulate_old_time_grid_name_equals_new(u_magnet: mk.Magnet,
+                                                 u_maps: mk.CharacteristicMaps) -> None:
+    """``t=`` is the deprecated name of ``times_s=`` in ``mk.simulate``, the reduced
+    models' ``simulate`` and ``simulate_flux``; positional grids need no name at all."""
+    from maglevkit.models.flux import simulate_flux
+
+    cm = mk.CurrentModel(u_maps)
+    bank = mk.MagnetBank({"a": u_maps})
+    fm = mk.FluxModel(u_magnet.with_options(eddy_currents=False))
+    common = dict(gaps_m=0.010, voltages_V=45.0, dt_s=1e-3, initial_currents_A=20.0)
+    for where, run in (("simulate", lambda **kw: mk.simulate(cm, **kw, **common)),
+                       ("CurrentModel.simulate", lambda **kw: cm.simulate(**kw, **common)),
+                       ("MagnetBank.simulate", lambda **kw: bank.simulate(**kw, **common)),
+                       ("simulate_flux", lambda **kw: simulate_flux(fm, **kw, **common))):
+        new = run(times_s=(0.0, 0.004))
+        with pytest.warns(DeprecationWarning, match=rf"{where}: t= is deprecated, use times_s="):
+            old = run(t=(0.0, 0.004))
+        assert np.array_equal(old.time_s, new.time_s) and new.time_s.size == 5
+        assert np.array_equal(old.currents_A, new.currents_A), where
+    with pytest.raises(InputError, match=r"give times_s= only"):
+        mk.simulate(cm, t=(0.0, 0.004), times_s=(0.0, 0.004), **common)
+
+
+def test_solver_error_old_time_equals_new() -> None:
+    new = mk.SolverError("failed", time_s=0.25, reason="x")
+    with pytest.warns(DeprecationWarning, match=r"SolverError: time= is deprecated, use "
+                                                r"time_s="):
+        old = mk.SolverError("failed", time=0.25, reason="x")
+    assert old.time_s == new.time_s == 0.25 and str(old) == str(new)
+    assert "at t = 0.25 s" in str(new)
+    with pytest.warns(DeprecationWarning, match=r"\.time is deprecated, use \.time_s"):
+        assert new.time == 0.25
+    with pytest.raises(InputError, match=r"give time_s= only"):
+        mk.SolverError("failed", time=0.25, time_s=0.25)
+    with pytest.raises(TypeError, match=r"unexpected keyword argument 'times'"):
+        mk.SolverError("failed", times=0.25)
+
+
+def test_audit_scans_the_time_grid_and_exception_keywords() -> None:
+    """The audit catches a bare ``t`` and reads exported exceptions' constructors, so
+    ``simulate(t)`` and ``SolverError(time=)`` could not come back unnoticed."""
+    audit = _unit_audit()
+    assert audit.names_quantity("t") and not audit.has_unit("t")
+    assert audit.names_quantity("time") and audit.has_unit("times_s")
+    inits = audit.exception_constructors()
+    assert "maglevkit.errors.SolverError" in inits
+    found = audit.findings()
+    assert "maglevkit.errors.SolverError" not in found          # time_s carries its unit
+    assert not any("t" in params for params in found.values())
+    assert audit.DEFERRED == {}

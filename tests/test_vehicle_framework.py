@@ -296,7 +296,7 @@ def test_heave_pitch_mechanics_is_a_planar_multibody_checked_by_sympy() -> None:
     mech = VehicleMechanics(tr, [3.0, 9.0, 20.5], [0, 1, 2])
     assert isinstance(mech.system, PlanarMultibody)
     ref = derive_sympy(mech.system)
-    g = mech.gravity
+    g = mech.gravity_m_per_s2
     for key, val, want in (("M", mech.M, ref["M"]), ("K", mech.K, ref["K"]),
                            ("C", mech.C, ref["C"]), ("B", mech.B, -ref["B"]),
                            ("Q_gravity", mech.Q_gravity, ref["G"] @ np.array([0.0, g]))):

@@ -2,19 +2,24 @@
 
 The elements of :mod:`maglevkit.circuit.elements` (``IronPath(length_m, cross_section_m2)``,
 ``AirGap(pole_area_m2, ...)``, ``LeakagePermeance(value_H)``, ``EddyCurrent(conductance_S)``,
-...) keep their old keyword and attribute names as deprecated aliases for one release.  This
-script rewrites the callers in the tree, so that no code of the package, its tests, tools,
-benchmarks, examples or docs uses the old names:
+...), the circuits (``Circuit(name, resistance_ohm, coils)``) and the materials
+(``SoftMagneticMaterial(..., resistivity_ohm_m=...)``, ``TabulatedBH``, ...) keep their old
+keyword and attribute names as deprecated aliases for one release.  This script rewrites the
+callers in the tree, so that no code of the package, its tests, tools, benchmarks, examples
+or docs uses the old names:
 
 1. keywords of element constructor calls: ``IronPath("x", length=0.1)`` ->
-   ``IronPath("x", length_m=0.1)`` (only keywords at the call's own bracket depth), and of
+   ``IronPath("x", length_m=0.1)`` (only keywords at the call's own bracket depth), of
+   circuit and material constructors (``Circuit("c", resistance_ohm=2.0, ...)``,
+   ``TabulatedBH(h, b, resistivity_ohm_m=...)``, ``TabulatedBH.from_csv``), of
    the element factories (``LeakagePermeance.half_cylinder(name, length_m=...)``,
    ``EddyCurrent.laminated``, ...) and the ladder helpers (``ladder_branches(...,
    thickness_m=...)``);
 2. keywords of ``dataclasses.replace`` calls whose old name only an element has
    (``replace(el, conductance=...)``);
-3. attribute reads: the names only elements have (``.cross_section``, ``.pole_area``,
-   ``.conductance``, ``.inner_radius``) everywhere, ``.length`` on the receivers that hold
+3. attribute reads: the names only elements, circuits and materials have
+   (``.cross_section``, ``.pole_area``, ``.conductance``, ``.inner_radius``,
+   ``.resistance``, ``.resistivity``) everywhere, ``.length`` on the receivers that hold
    an iron path (:data:`LENGTH_RECEIVERS`), and ``.value`` after a
    ``LeakagePermeance`` factory call; the other ambiguous reads (``.value`` of an element held
    in a variable) through the explicit table :data:`AMBIGUOUS_READS`.
@@ -41,16 +46,24 @@ import re
 import sys
 from pathlib import Path
 
-from maglevkit.circuit import elements, ladder
+from maglevkit import materials
+from maglevkit.circuit import elements, ladder, network
 
-#: The element classes whose fields were renamed.
-CLASSES = ("IronPath", "AirGap", "LeakagePermeance", "GapLeakage", "FringePermeance",
-           "GapLayerPermeance", "EddyCurrent")
-#: The element factories (class methods) and ladder helpers whose keywords were renamed.
+#: The classes whose fields were renamed: the elements (units22), the circuit and the
+#: materials (units22b).
+CLASSES = {name: getattr(elements, name)
+           for name in ("IronPath", "AirGap", "LeakagePermeance", "GapLeakage",
+                        "FringePermeance", "GapLayerPermeance", "EddyCurrent")}
+CLASSES["Circuit"] = network.Circuit
+CLASSES.update({name: getattr(materials, name)
+                for name in ("SoftMagneticMaterial", "TabulatedBH", "ConstantPermeability",
+                             "IdealIron")})
+#: The factories (class methods) whose keywords were renamed.
 FACTORIES = {"LeakagePermeance": ("parallel_plates", "half_cylinder", "quarter_cylinder",
                                   "half_hollow_cylinder", "quarter_hollow_cylinder",
                                   "quarter_sphere", "eighth_sphere", "quarter_hollow_sphere"),
-             "EddyCurrent": ("one_turn", "solid_rectangular", "laminated")}
+             "EddyCurrent": ("one_turn", "solid_rectangular", "laminated"),
+             "TabulatedBH": ("from_csv",)}
 HELPERS = ("ladder_parameters", "ladder_branches")
 
 #: Where the callers live (relative to the repository root), and which files to rewrite.
@@ -61,8 +74,10 @@ SKIP_MARK = "# rename_element_fields: skip"
 #: Files that record history (their sections are not edited afterwards).
 SKIP_FILES = ("docs/decisions.md", "BENCHMARKS.md", "CHANGELOG.md")
 
-#: Attribute names that, in this code base, only elements have: renamed on any receiver.
-UNIQUE_READS = ("cross_section", "pole_area", "conductance", "inner_radius")
+#: Attribute names that, in this code base, only elements, circuits and materials have:
+#: renamed on any receiver.
+UNIQUE_READS = ("cross_section", "pole_area", "conductance", "inner_radius", "resistance",
+                "resistivity")
 
 #: ``.length`` is common (a train, a guideway): renamed only on the receivers that hold an
 #: iron path in this code base (``iron``, ``iron_l``, ``irons[0]``, ``tube``, ``e``, ``el``,
@@ -92,10 +107,10 @@ KEYWORD_DICTS: dict[str, tuple[tuple[str, str], ...]] = {
 
 
 def renames() -> dict[str, str]:
-    """Old -> new field name over all element classes (each old name has one new name)."""
+    """Old -> new field name over all renamed classes (each old name has one new name)."""
     out: dict[str, str] = {}
-    for name in CLASSES:
-        for old, new in getattr(elements, name).renamed_keywords.items():
+    for cls in CLASSES.values():
+        for old, new in cls.renamed_keywords.items():
             if out.setdefault(old, new) != new:
                 raise SystemExit(f"{old} is renamed to both {out[old]} and {new}")
     return out
@@ -184,11 +199,12 @@ def rewrite(text: str, path: str) -> str:
     """The text of file ``path`` (relative, ``/``-separated) with the new names."""
     names = renames()
     classes = "|".join(CLASSES)
-    text = _rename_calls(text, rf"(?<![\w.])(?:elements\.|mk\.)?(?:{classes})\(", names)
+    owners = r"(?:(?:elements|network|materials|mk)\.)?"
+    text = _rename_calls(text, rf"(?<![\w.]){owners}(?:{classes})\(", names)
     for owner, methods in FACTORIES.items():
         for method in methods:
-            text = _rename_calls(text, rf"(?<![\w.])(?:elements\.|mk\.)?{owner}\.{method}\(",
-                                 getattr(getattr(elements, owner), method).renamed_keywords)
+            text = _rename_calls(text, rf"(?<![\w.]){owners}{owner}\.{method}\(",
+                                 getattr(CLASSES[owner], method).renamed_keywords)
     for helper in HELPERS:
         text = _rename_calls(text, rf"(?<![\w.])(?:ladder\.|mk\.)?{helper}\(",
                              getattr(ladder, helper).renamed_keywords)
@@ -208,7 +224,9 @@ def rewrite(text: str, path: str) -> str:
     text = re.sub(rf"({LENGTH_RECEIVERS})\.length\b(?!\s*=[^=])", rf"\1.{names['length']}",
                   text)
     for old in UNIQUE_READS:
-        text = re.sub(rf"(?<=[\w\])])\.{old}\b(?!\s*=[^=])", f".{names[old]}", text)
+        # (not the parameter files' keys "magnet.resistance", "rail.resistivity", ...)
+        text = re.sub(rf"(?<=[\w\])])(?<!\bmagnet)(?<!\brail)\.{old}\b(?!\s*=[^=])",
+                      f".{names[old]}", text)
     for pattern in AMBIGUOUS_READS.get(path, ()):
         text = re.sub(pattern, lambda m: re.sub(r"\.(\w+)$", lambda a: "." + names[a.group(1)],
                                                  m.group(0)), text)

@@ -16,7 +16,9 @@ no longer matches anything.  Run as a script to print the findings and the allow
 
 from __future__ import annotations
 
+import importlib
 import importlib.util
+import inspect
 import sys
 from pathlib import Path
 
@@ -29,6 +31,7 @@ QUANTITY_WORDS = frozenset({
     "acceleration", "position", "offset", "pitch", "wavelength", "energy", "power", "load",
     "deflection", "omega", "opening", "rate", "rates", "step", "sample", "period", "bandwidth",
     "weight", "weights", "inertia", "preload", "change", "initial", "final", "start", "stop",
+    "t",
 })
 
 #: Unit tokens: a name ends in a unit when its last ``_``-separated tokens all are units.
@@ -44,11 +47,6 @@ MODULES = ("maglevkit", "maglevkit.materials", "maglevkit.circuit", "maglevkit.m
            "maglevkit.vehicle", "maglevkit.export", "maglevkit.sweep", "maglevkit.plant",
            "maglevkit.simulation", "maglevkit.compare", "maglevkit.design",
            "maglevkit.calibration", "maglevkit.figures")
-
-_SI_IDENTITY = ("a field of a circuit element or material: part of the network's repr, which "
-                "network_hash (the maps' magnet_hash, every maps cache key) covers, so a "
-                "rename changes the identity of every magnet and refuses stored maps; to be "
-                "done with a maps-format migration")
 
 #: Names (``param``: everywhere, or ``qualified.callable:param``) that contain a quantity
 #: word but are no quantity with a unit (names, switches, ratios, objects, symbols), with
@@ -155,32 +153,12 @@ _each(("figures.Fig6Data", "figures.Fig7Data"), "current", "I/I0 (dimensionless,
       "curves)")
 
 
-#: Names that denote a quantity and should carry its unit, not renamed in this change, with
-#: the reason.  This list may only shrink (the test fails on a stale entry).
-DEFERRED: dict[str, str] = {
-    # circuit and materials: fields in the network's identity (the element fields carry
-    # their units since units22)
-    "maglevkit.circuit.network.Circuit:resistance": _SI_IDENTITY,
-    "resistivity": _SI_IDENTITY + " (materials; the element factories take the same value)",
-}
-
-_ELEMENT_LAWS = ("circuit element laws (circuit/elements.py; their fields and factories "
-                 "carry units since units22): the laws' gap and flux arguments are "
-                 "overridden by the calibrated elements of circuit/factors.py and called by "
-                 "every solver; a change of its own")
-for _law in ("AirGap.effective_gap", "AirGap.fringe_permeance", "AirGap.permeance",
-             "EddyCurrent.energy", "EddyCurrent.mmf_drop", "Element.energy", "Element.mmf_drop",
-             "FringePermeance.permeance", "GapLayerPermeance.permeance", "GapLeakage.permeance",
-             "IronPath.energy", "IronPath.mmf_drop", "LeakagePermeance.permeance",
-             "LinearElement.energy", "LinearElement.mmf_drop", "LinearElement.permeance",
-             "carter_coefficient"):
-    for _p in ("gap", "flux") if _law.endswith(("energy", "mmf_drop")) else ("gap",):
-        DEFERRED[f"maglevkit.circuit.elements.{_law}:{_p}"] = _ELEMENT_LAWS
-for _p in ("slot_opening", "slot_pitch"):
-    DEFERRED.setdefault(f"maglevkit.circuit.elements.carter_coefficient:{_p}", _ELEMENT_LAWS)
-DEFERRED["maglevkit.vehicle.mechanics.VehicleMechanics:gravity"] = (
-    "vehicle/mechanics.py is being rewritten in parallel (the vehicle framework branch); "
-    "rename with it to gravity_m_per_s2 as HeaveMass did")
+#: Names that denote a quantity and should carry its unit, not renamed yet, with the
+#: reason.  This list may only shrink (the test fails on a stale entry); it is empty since
+#: units22b renamed the last ones (``Circuit.resistance_ohm``, ``resistivity_ohm_m``, the
+#: element laws' ``gap_m``/``flux_Wb``, ``VehicleMechanics(gravity_m_per_s2)``,
+#: ``simulate(times_s)``, ``SolverError(time_s)``).
+DEFERRED: dict[str, str] = {}
 
 
 PREFIX = "maglevkit."
@@ -207,11 +185,27 @@ def names_quantity(name: str) -> bool:
     return any(tok in QUANTITY_WORDS for tok in name.lower().split("_"))
 
 
+def exception_constructors() -> dict[str, object]:
+    """``qualified name -> __init__`` of the exported exception classes that define one
+    (``SolverError(message, *, time_s, ...)``): ``docstring_audit.public_callables`` leaves
+    exceptions out, but their keywords are public API too."""
+    out: dict[str, object] = {}
+    for module_name in MODULES:
+        module = importlib.import_module(module_name)
+        for name in getattr(module, "__all__", ()):
+            obj = getattr(module, name)
+            if inspect.isclass(obj) and issubclass(obj, BaseException) \
+                    and "__init__" in vars(obj):
+                out[f"{obj.__module__}.{obj.__qualname__}"] = vars(obj)["__init__"]
+    return out
+
+
 def findings() -> dict[str, list[str]]:
     """``qualified callable name -> parameters that name a quantity without a unit``."""
     audit = _docstring_audit()
     out: dict[str, list[str]] = {}
-    for qualname, func in audit.public_callables(MODULES):
+    callables = list(audit.public_callables(MODULES)) + list(exception_constructors().items())
+    for qualname, func in callables:
         bad = [p for p in audit.parameters(func) if names_quantity(p) and not has_unit(p)]
         if bad:
             out[qualname] = bad

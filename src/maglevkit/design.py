@@ -1000,7 +1000,7 @@ def evaluate_design(spec: DesignSpec, values: Mapping[str, float] | None = None,
     i_res = req["peak_current_density_A_per_m2"] * coil["fill_factor"] \
         * laws["coil_area_m2"] / laws["coil_turns"]
     circuits = mag.network.circuits
-    out: dict[str, Any] = {"resistance_ohm": float(circuits[0].resistance),
+    out: dict[str, Any] = {"resistance_ohm": float(circuits[0].resistance_ohm),
                            "mass_kg": float(laws["mass_kg"]), "reserve_current_A": i_res}
     i_n = _nominal_current(mag, req["nominal_gap_m"], req["force_N"], 3.0 * i_res)
     out["nominal_current_A"] = i_n
@@ -1028,7 +1028,7 @@ def evaluate_design(spec: DesignSpec, values: Mapping[str, float] | None = None,
                        + abs(dpsi) * req["gap_rate_m_per_s"],
                        current_density_A_per_m2=laws["coil_turns"] * i_n
                        / (coil["fill_factor"] * laws["coil_area_m2"]),
-                       power_W=sum(c.resistance for c in circuits) * i_n**2)
+                       power_W=sum(c.resistance_ohm for c in circuits) * i_n**2)
         else:
             out.update(flux_density_T=math.nan, flux_density_path="", voltage_V=math.nan,
                        current_density_A_per_m2=math.nan, power_W=math.nan)

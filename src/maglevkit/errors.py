@@ -8,6 +8,7 @@ from :class:`MaglevkitWarning` (a :class:`UserWarning`).
 
 from __future__ import annotations
 
+import warnings
 from collections.abc import Mapping, Sequence
 from typing import Any
 
@@ -63,9 +64,23 @@ class ProvenanceWarning(MaglevkitWarning):
 class SolverError(MaglevkitError, RuntimeError):
     """A numerical solver failed.
 
+    The old keyword and attribute name ``time`` is a deprecated alias of ``time_s`` (a
+    ``DeprecationWarning`` names the new one).
+
+    Parameters
+    ----------
+    message : str
+        What failed.
+    time_s : float or None, keyword only
+        Simulation time [s] at which the failure happened (None for statics).
+    state : mapping, keyword only
+        The operating point or state at the failure (names to values).
+    reason : str, keyword only
+        What the solver reported.
+
     Attributes
     ----------
-    time : float or None
+    time_s : float or None
         Simulation time [s] at which the failure happened (None for statics).
     state : dict
         The operating point or state at the failure (names to values).
@@ -77,21 +92,47 @@ class SolverError(MaglevkitError, RuntimeError):
         self,
         message: str,
         *,
-        time: float | None = None,
+        time_s: float | None = None,
         state: Mapping[str, Any] | None = None,
         reason: str = "",
+        **renamed: Any,
     ) -> None:
-        self.time = time
+        if renamed:                 # the deprecated keyword time= (see _renamed_time)
+            time_s = _renamed_time(renamed, time_s)
+        self.time_s = time_s
         self.state = dict(state or {})
         self.reason = reason
         parts = [message]
-        if time is not None:
-            parts.append(f"at t = {time:.9g} s")
+        if time_s is not None:
+            parts.append(f"at t = {time_s:.9g} s")
         if self.state:
             parts.append("state: " + ", ".join(f"{k}={_fmt(v)}" for k, v in self.state.items()))
         if reason:
             parts.append(f"reason: {reason}")
         super().__init__("; ".join(parts))
+
+    @property
+    def time(self) -> float | None:
+        """Deprecated alias of ``time_s`` (read only)."""
+        warnings.warn("SolverError: .time is deprecated, use .time_s (same values and units)",
+                      DeprecationWarning, stacklevel=2)
+        return self.time_s
+
+
+def _renamed_time(renamed: dict[str, Any], time_s: float | None) -> float | None:
+    """``SolverError(time=...)``: the old keyword of ``time_s``, with a DeprecationWarning.
+
+    The same behaviour as :func:`maglevkit.validation.renamed_keywords` (which this module
+    cannot import: validation imports the errors), for the one renamed keyword here.
+    """
+    unknown = sorted(set(renamed) - {"time"})
+    if unknown:
+        raise TypeError(f"SolverError() got an unexpected keyword argument {unknown[0]!r}")
+    if time_s is not None:
+        raise InputError("SolverError: give time_s= only (time= is its deprecated name)")
+    warnings.warn("SolverError: time= is deprecated, use time_s= (same values and units)",
+                  DeprecationWarning, stacklevel=3)
+    return renamed["time"]
 
 
 def _fmt(value: Any) -> str:

@@ -35,7 +35,7 @@ import casadi as ca
 import numpy as np
 
 from .errors import MaterialError
-from .validation import real_number
+from .validation import real_number, renamed_keywords
 
 MU0: float = 4e-7 * math.pi
 """Permeability of free space [H/m] (the classical value; the 2019 SI value differs by 1e-10)."""
@@ -68,7 +68,7 @@ class Material(ABC):
     """
 
     name: str
-    resistivity: float | None
+    resistivity_ohm_m: float | None
 
     @abstractmethod
     def field_strength(self, B: Any) -> Any:
@@ -119,8 +119,9 @@ class Material(ABC):
         """The same material without saturation: constant ``mu_r = mu_r(0)``."""
         mu = self.initial_relative_permeability
         if math.isinf(mu):
-            return IdealIron(name=self.name, resistivity=self.resistivity)
-        return ConstantPermeability(mu_r=mu, name=f"{self.name} (linear)", resistivity=self.resistivity)
+            return IdealIron(name=self.name, resistivity_ohm_m=self.resistivity_ohm_m)
+        return ConstantPermeability(mu_r=mu, name=f"{self.name} (linear)",
+                                    resistivity_ohm_m=self.resistivity_ohm_m)
 
     def energy_density(self, B: Any) -> np.ndarray:
         """Stored magnetic energy density ``w(B) = integral_0^B H dB`` [J/m^3] (NumPy).
@@ -155,6 +156,7 @@ class Material(ABC):
         return np.vectorize(one, otypes=[float])(b)
 
 
+@renamed_keywords(resistivity="resistivity_ohm_m")
 @dataclass(frozen=True)
 class SoftMagneticMaterial(Material):
     """Roschke/Modelica approximation of a soft-magnetic B-H curve.
@@ -177,7 +179,7 @@ class SoftMagneticMaterial(Material):
         Saturation exponent [-] (> 1 so that H(B) is twice differentiable at 0).
     name : str
         Display name.
-    resistivity : float or None
+    resistivity_ohm_m : float or None
         Electrical resistivity [ohm m] for eddy-current estimates, if known.
     """
 
@@ -187,7 +189,7 @@ class SoftMagneticMaterial(Material):
     c_b: float
     n: float
     name: str = "soft-magnetic"
-    resistivity: float | None = None
+    resistivity_ohm_m: float | None = None
     #: Flux density [T] above which ``H`` continues with slope ``1/mu0`` (inf: never).
     tail_from_T: float = field(init=False, default=math.inf)
 
@@ -292,12 +294,13 @@ class SoftMagneticMaterial(Material):
 
 def _check_resistivity(material: Material) -> None:
     """The one check of every material's optional ``resistivity`` (finite, > 0 ohm m)."""
-    rho = getattr(material, "resistivity", None)
+    rho = getattr(material, "resistivity_ohm_m", None)
     if rho is not None:
-        real_number(rho, f"material {getattr(material, 'name', '?')!r}: resistivity",
+        real_number(rho, f"material {getattr(material, 'name', '?')!r}: resistivity_ohm_m",
                     "ohm m", positive=True, error=MaterialError)
 
 
+@renamed_keywords(resistivity="resistivity_ohm_m")
 @dataclass(frozen=True)
 class ConstantPermeability(Material):
     """Linear material ``H = B / (mu0 mu_r)``.
@@ -308,7 +311,7 @@ class ConstantPermeability(Material):
         Relative permeability [-], finite and >= 1.
     name : str, default "linear"
         Display name.
-    resistivity : float or None
+    resistivity_ohm_m : float or None
         Electrical resistivity [ohm m] for eddy-current estimates, if known (finite,
         > 0).
 
@@ -316,12 +319,12 @@ class ConstantPermeability(Material):
     ------
     MaterialError
         ``mu_r`` not finite or < 1 (use :class:`IdealIron` for ``mu_r -> inf``); a
-        ``resistivity`` that is not a finite number > 0.
+        ``resistivity_ohm_m`` that is not a finite number > 0.
     """
 
     mu_r: float
     name: str = "linear"
-    resistivity: float | None = None
+    resistivity_ohm_m: float | None = None
 
     def __post_init__(self) -> None:
         if not (math.isfinite(self.mu_r) and self.mu_r >= 1.0):
@@ -375,6 +378,7 @@ class ConstantPermeability(Material):
         return b * b / (2.0 * MU0 * self.mu_r)
 
 
+@renamed_keywords(resistivity="resistivity_ohm_m")
 @dataclass(frozen=True)
 class IdealIron(Material):
     """Infinitely permeable iron (``H = 0``): the reluctance of the part vanishes.
@@ -383,18 +387,18 @@ class IdealIron(Material):
     ----------
     name : str, default "ideal"
         Display name.
-    resistivity : float or None
+    resistivity_ohm_m : float or None
         Electrical resistivity [ohm m] for eddy-current estimates, if known (finite,
         > 0).
 
     Raises
     ------
     MaterialError
-        A ``resistivity`` that is not a finite number > 0.
+        A ``resistivity_ohm_m`` that is not a finite number > 0.
     """
 
     name: str = "ideal"
-    resistivity: float | None = None
+    resistivity_ohm_m: float | None = None
 
     def __post_init__(self) -> None:
         _check_resistivity(self)
@@ -686,6 +690,7 @@ def _bh_pieces(h: np.ndarray, b: np.ndarray, interpolation: str
     return x, np.array([c2, c1, c0])
 
 
+@renamed_keywords(resistivity="resistivity_ohm_m")
 @dataclass(frozen=True)
 class TabulatedBH(Material):
     """Material from measured (H, B) pairs of the first-magnetisation curve.
@@ -713,7 +718,7 @@ class TabulatedBH(Material):
         :data:`MAX_POLARISATION_T`.
     name : str
         Display name.
-    resistivity : float or None
+    resistivity_ohm_m : float or None
         Electrical resistivity [ohm m] for eddy-current estimates, if known.
     interpolation : {"smooth", "linear"}
         Interpolation law between the points (keyword-only).
@@ -722,7 +727,7 @@ class TabulatedBH(Material):
     H: tuple[float, ...]
     B: tuple[float, ...]
     name: str = "tabulated"
-    resistivity: float | None = None
+    resistivity_ohm_m: float | None = None
     interpolation: str = field(default="smooth", kw_only=True)
     _x: Any = field(init=False, repr=False, compare=False)
     _c: Any = field(init=False, repr=False, compare=False)
@@ -796,8 +801,9 @@ class TabulatedBH(Material):
         object.__setattr__(self, "_h_used", h_used)
 
     @classmethod
+    @renamed_keywords(resistivity="resistivity_ohm_m")
     def from_csv(cls, path: str | os.PathLike[str], *, name: str | None = None,
-                 resistivity: float | None = None, interpolation: str = "smooth") -> TabulatedBH:
+                 resistivity_ohm_m: float | None = None, interpolation: str = "smooth") -> TabulatedBH:
         """A table read by :func:`read_bh_csv` (H [A/m], B [T]); ``name`` defaults to the file stem.
 
         Parameters
@@ -806,7 +812,7 @@ class TabulatedBH(Material):
             Two-column text file, H [A/m] then B [T] (format: :func:`read_bh_csv`).
         name : str, optional
             Display name (default: the file name without its suffix).
-        resistivity : float or None
+        resistivity_ohm_m : float or None
             Electrical resistivity [ohm m], > 0, for eddy-current estimates, if known.
         interpolation : {"smooth", "linear"}
             Interpolation law between the points (default ``"smooth"``).
@@ -822,8 +828,8 @@ class TabulatedBH(Material):
             (see the class docstring).
         """
         h, b = read_bh_csv(path)
-        return cls(h, b, name=Path(path).stem if name is None else name, resistivity=resistivity,
-                   interpolation=interpolation)
+        return cls(h, b, name=Path(path).stem if name is None else name,
+                   resistivity_ohm_m=resistivity_ohm_m, interpolation=interpolation)
 
     @property
     def _h_end(self) -> float:
@@ -910,7 +916,7 @@ class TabulatedBH(Material):
 # Resistivities: pure iron 0.098e-6 ohm m [P]; solid structural/free-cutting steels
 # 1.5e-7 ohm m [E] (typically 1e-7 to 2e-7; docs/sources.md sec. 4); none given for electrical sheet grades.
 _ROSCHKE: dict[str, tuple[float, float, float, float, float, float | None]] = {
-    # name: (mu_i, B_mymax, c_a, c_b, n, resistivity)
+    # name: (mu_i, B_mymax, c_a, c_b, n, resistivity_ohm_m)
     "M330-50A": (500, 0.7, 24000, 9.38, 9.6, None),
     "M350-50A": (1210, 1.16, 24630, 2.44, 14, None),
     "M530-50A": (2120, 1.25, 12400, 1.6, 13.5, None),
@@ -993,5 +999,5 @@ def get_material(name: str | Material) -> Material:
     mat = _REGISTRY.get(key)
     if mat is None:
         v = _ROSCHKE[canonical]
-        mat = _REGISTRY[key] = SoftMagneticMaterial(*v[:5], name=canonical, resistivity=v[5])
+        mat = _REGISTRY[key] = SoftMagneticMaterial(*v[:5], name=canonical, resistivity_ohm_m=v[5])
     return mat

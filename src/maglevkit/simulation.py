@@ -21,36 +21,36 @@ __all__ = ["simulate"]
 
 
 @overload
-def simulate(model: CurrentModel, t: Any, *, gaps_m: Any, voltages_V: Any,
+def simulate(model: CurrentModel, times_s: Any, *, gaps_m: Any, voltages_V: Any,
              gap_rates_m_per_s: Any = None, dt_s: float | None = None,
              initial_currents_A: Any = None, initial_state: Any = None, gap_rate_tolerance: float = 0.02,
              **options: Any) -> ReducedSimulation: ...
 
 
 @overload
-def simulate(model: MagnetBank, t: Any, *, gaps_m: Any, voltages_V: Any,
+def simulate(model: MagnetBank, times_s: Any, *, gaps_m: Any, voltages_V: Any,
              gap_rates_m_per_s: Any = None, dt_s: float | None = None,
              initial_currents_A: Any = None, initial_state: Any = None, gap_rate_tolerance: float = 0.02,
              **options: Any) -> BankSimulation: ...
 
 
 @overload
-def simulate(model: Any, t: Any, *, gaps_m: Any, voltages_V: Any,
+def simulate(model: Any, times_s: Any, *, gaps_m: Any, voltages_V: Any,
              gap_rates_m_per_s: Any = None, dt_s: float | None = None,
              initial_currents_A: Any = None, initial_state: Any = None, gap_rate_tolerance: float = 0.02,
              **options: Any) -> SimulationResult: ...
 
 
-@renamed_keywords(gaps="gaps_m", voltages="voltages_V", gap_rates="gap_rates_m_per_s", dt="dt_s",
-                  initial_currents="initial_currents_A")
-def simulate(model: Any, t: Any, *, gaps_m: Any, voltages_V: Any,
+@renamed_keywords(t="times_s", gaps="gaps_m", voltages="voltages_V", gap_rates="gap_rates_m_per_s",
+                  dt="dt_s", initial_currents="initial_currents_A")
+def simulate(model: Any, times_s: Any, *, gaps_m: Any, voltages_V: Any,
              gap_rates_m_per_s: Any = None, dt_s: float | None = None,
              initial_currents_A: Any = None, initial_state: Any = None, gap_rate_tolerance: float = 0.02,
              **options: Any) -> SimulationResult | ReducedSimulation | BankSimulation:
     """Simulate a magnet model on a time grid.
 
-    The old keyword names ``gaps``, ``voltages``, ``gap_rates``, ``dt``, ``initial_currents`` still work as
-    deprecated aliases (a ``DeprecationWarning`` names the new one).
+    The old keyword names ``t``, ``gaps``, ``voltages``, ``gap_rates``, ``dt``, ``initial_currents`` still
+    work as deprecated aliases (a ``DeprecationWarning`` names the new one).
 
     Parameters
     ----------
@@ -61,8 +61,8 @@ def simulate(model: Any, t: Any, *, gaps_m: Any, voltages_V: Any,
         (:func:`~maglevkit.models.flux.simulate_flux`), where ``options`` (``saturation``,
         ``eddy_currents``, ``method``, ``rtol``, ``atol``, ...) build a
         :class:`~maglevkit.models.flux.FluxModel` (or change a given one).
-    t : (t0, tf), [t0, tf] or array
-        A time span [s] (with ``dt``) or an explicit increasing grid [s].
+    times_s : (t0, tf), [t0, tf] or array
+        A time span [s] (with ``dt_s``) or an explicit increasing grid [s].
     gaps_m : float, sequence, mapping, Signal, callable or array
         Gaps [m]; they move linearly between samples.
     voltages_V : same forms
@@ -102,11 +102,11 @@ def simulate(model: Any, t: Any, *, gaps_m: Any, voltages_V: Any,
         if options:
             raise InputError(f"options {sorted(options)} apply to the flux model; build the "
                              f"{type(model).__name__} with its own options instead")
-        return model.simulate(t, gaps_m=gaps_m, voltages_V=voltages_V,
+        return model.simulate(times_s, gaps_m=gaps_m, voltages_V=voltages_V,
                               gap_rates_m_per_s=gap_rates_m_per_s, dt_s=dt_s,
                               initial_currents_A=initial_currents_A, initial_state=initial_state,
                               gap_rate_tolerance=gap_rate_tolerance)
-    return simulate_flux(model, t, gaps_m=gaps_m, voltages_V=voltages_V,
+    return simulate_flux(model, times_s, gaps_m=gaps_m, voltages_V=voltages_V,
                          gap_rates_m_per_s=gap_rates_m_per_s, dt_s=dt_s,
                          initial_currents_A=initial_currents_A, initial_state=initial_state,
                          gap_rate_tolerance=gap_rate_tolerance, **options)

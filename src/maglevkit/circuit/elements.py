@@ -172,7 +172,8 @@ def edge_flank_per_mu0(w: Any, r: Any, s: Any) -> Any:
     return w / math.pi * _log(1.0 + v * v)
 
 
-def carter_coefficient(gap: Any, slot_pitch: float, slot_opening: float) -> Any:
+@renamed_keywords(gap="gap_m", slot_pitch="slot_pitch_m", slot_opening="slot_opening_m")
+def carter_coefficient(gap_m: Any, slot_pitch_m: float, slot_opening_m: float) -> Any:
     """Carter's coefficient ``k_C = tau / (tau - gamma s)`` of a slotted surface.
 
     ``gamma = (4/pi) [x atan(x) - ln sqrt(1 + x^2)]`` with ``x = b / (2 s)``
@@ -181,35 +182,35 @@ def carter_coefficient(gap: Any, slot_pitch: float, slot_opening: float) -> Any:
 
     Parameters
     ----------
-    gap : float, array_like or CasADi
+    gap_m : float, array_like or CasADi
         Air gap s [m], > 0 (numeric gaps are checked; CasADi expressions are not).
-    slot_pitch : float
+    slot_pitch_m : float
         Slot pitch tau [m], > 0.
-    slot_opening : float
+    slot_opening_m : float
         Slot opening b [m], ``0 <= b < tau``.
 
     Returns
     -------
     float, ndarray or CasADi
-        ``k_C`` [-] (>= 1), the shape of ``gap``.
+        ``k_C`` [-] (>= 1), the shape of ``gap_m``.
 
     Raises
     ------
     ParameterError
-        ``slot_pitch`` not a number > 0, ``slot_opening`` not in ``[0, slot_pitch)``.
+        ``slot_pitch_m`` not a number > 0, ``slot_opening_m`` not in ``[0, slot_pitch_m)``.
     InputError
-        A numeric ``gap`` that is not real numbers > 0 (bools and strings included).
+        A numeric ``gap_m`` that is not real numbers > 0 (bools and strings included).
     """
-    _positive("carter_coefficient", slot_pitch=slot_pitch)
-    _nonnegative("carter_coefficient", slot_opening=slot_opening)
-    if slot_opening >= slot_pitch:
-        raise ParameterError(f"carter_coefficient: slot_opening = {slot_opening!r} m must be "
-                             f"smaller than slot_pitch = {slot_pitch!r} m")
-    if not isinstance(gap, (ca.SX, ca.MX, ca.DM)):
-        gap = real_array(gap, "gap", "m")
-        if np.any(gap <= 0.0):
-            raise InputError(f"carter_coefficient: gap = {gap.tolist()!r} m must be > 0")
-    return slot_pitch / (slot_pitch - carter_slot_loss(gap, slot_opening))
+    _positive("carter_coefficient", slot_pitch_m=slot_pitch_m)
+    _nonnegative("carter_coefficient", slot_opening_m=slot_opening_m)
+    if slot_opening_m >= slot_pitch_m:
+        raise ParameterError(f"carter_coefficient: slot_opening_m = {slot_opening_m!r} m must be "
+                             f"smaller than slot_pitch_m = {slot_pitch_m!r} m")
+    if not isinstance(gap_m, (ca.SX, ca.MX, ca.DM)):
+        gap_m = real_array(gap_m, "gap_m", "m")
+        if np.any(gap_m <= 0.0):
+            raise InputError(f"carter_coefficient: gap_m = {gap_m.tolist()!r} m must be > 0")
+    return slot_pitch_m / (slot_pitch_m - carter_slot_loss(gap_m, slot_opening_m))
 
 
 def carter_slot_loss(gap: Any, slot_opening: float) -> Any:
@@ -253,30 +254,31 @@ class Element(ABC):
         return 0.0
 
     @abstractmethod
-    def mmf_drop(self, flux: Any, gap: Any = None) -> Any:
-        """Static magnetic voltage drop ``V_m`` [A] for branch flux ``flux`` [Wb].
+    def mmf_drop(self, flux_Wb: Any, gap_m: Any = None) -> Any:
+        """Static magnetic voltage drop ``V_m`` [A] for branch flux ``flux_Wb`` [Wb].
 
         Parameters
         ----------
-        flux : float, array_like or CasADi
+        flux_Wb : float, array_like or CasADi
             Branch flux phi [Wb], in the branch's direction.
-        gap : float, array_like or CasADi, optional
+        gap_m : float, array_like or CasADi, optional
             Value of the element's gap input [m] (ignored by gap-independent elements).
 
         Returns
         -------
         float, ndarray or CasADi
-            ``V_m`` [A] (ampere-turns), the shape of ``flux``.
+            ``V_m`` [A] (ampere-turns), the shape of ``flux_Wb``.
         """
 
-    def energy(self, flux: Any, gap: Any = None) -> Any:
+    @renamed_keywords(flux="flux_Wb", gap="gap_m")
+    def energy(self, flux_Wb: Any, gap_m: Any = None) -> Any:
         """Stored energy ``integral_0^phi V_m dphi`` [J] (NumPy input).
 
         Parameters
         ----------
-        flux : float or array_like
+        flux_Wb : float or array_like
             Branch flux phi [Wb].
-        gap : float or array_like, optional
+        gap_m : float or array_like, optional
             Value of the element's gap input [m] (gap-dependent elements only).
 
         Returns
@@ -306,12 +308,12 @@ class LinearElement(Element):
     """
 
     @abstractmethod
-    def permeance(self, gap: Any = None) -> Any:
-        """Permeance ``G`` [H] (= Wb/A); ``gap`` [m] for gap-dependent elements.
+    def permeance(self, gap_m: Any = None) -> Any:
+        """Permeance ``G`` [H] (= Wb/A); ``gap_m`` [m] for gap-dependent elements.
 
         Parameters
         ----------
-        gap : float, array_like or CasADi, optional
+        gap_m : float, array_like or CasADi, optional
             Value of the element's gap input [m]; required by gap-dependent elements
             (``ParameterError`` when missing), ignored by the others.
 
@@ -321,14 +323,15 @@ class LinearElement(Element):
             ``G`` [H].
         """
 
-    def mmf_drop(self, flux: Any, gap: Any = None) -> Any:
+    @renamed_keywords(flux="flux_Wb", gap="gap_m")
+    def mmf_drop(self, flux_Wb: Any, gap_m: Any = None) -> Any:
         """``V_m = phi / G`` [A].
 
         Parameters
         ----------
-        flux : float, array_like or CasADi
+        flux_Wb : float, array_like or CasADi
             Branch flux phi [Wb].
-        gap : float, array_like or CasADi, optional
+        gap_m : float, array_like or CasADi, optional
             Value of the element's gap input [m] (required by gap-dependent elements).
 
         Returns
@@ -336,16 +339,17 @@ class LinearElement(Element):
         float, ndarray or CasADi
             ``V_m`` [A].
         """
-        return flux / self.permeance(gap)
+        return flux_Wb / self.permeance(gap_m)
 
-    def energy(self, flux: Any, gap: Any = None) -> Any:
+    @renamed_keywords(flux="flux_Wb", gap="gap_m")
+    def energy(self, flux_Wb: Any, gap_m: Any = None) -> Any:
         """Stored energy ``phi^2 / (2 G)`` [J] (NumPy or CasADi input).
 
         Parameters
         ----------
-        flux : float, array_like or CasADi
+        flux_Wb : float, array_like or CasADi
             Branch flux phi [Wb].
-        gap : float, array_like or CasADi, optional
+        gap_m : float, array_like or CasADi, optional
             Value of the element's gap input [m] (required by gap-dependent elements).
 
         Returns
@@ -353,7 +357,7 @@ class LinearElement(Element):
         float, ndarray or CasADi
             Energy [J].
         """
-        return flux * flux / (2.0 * self.permeance(gap))
+        return flux_Wb * flux_Wb / (2.0 * self.permeance(gap_m))
 
 
 @renamed_keywords(length="length_m", cross_section="cross_section_m2")
@@ -392,14 +396,15 @@ class IronPath(Element):
     def area(self) -> float:
         return self.cross_section_m2
 
-    def mmf_drop(self, flux: Any, gap: Any = None) -> Any:
+    @renamed_keywords(flux="flux_Wb", gap="gap_m")
+    def mmf_drop(self, flux_Wb: Any, gap_m: Any = None) -> Any:
         """``V_m = l H(phi / A)`` [A].
 
         Parameters
         ----------
-        flux : float, array_like or CasADi
+        flux_Wb : float, array_like or CasADi
             Branch flux phi [Wb].
-        gap : optional
+        gap_m : optional
             Ignored (an iron path does not depend on a gap).
 
         Returns
@@ -407,16 +412,17 @@ class IronPath(Element):
         float, ndarray or CasADi
             ``V_m`` [A].
         """
-        return self.length_m * self.material.field_strength(flux / self.cross_section_m2)
+        return self.length_m * self.material.field_strength(flux_Wb / self.cross_section_m2)
 
-    def energy(self, flux: Any, gap: Any = None) -> Any:
+    @renamed_keywords(flux="flux_Wb", gap="gap_m")
+    def energy(self, flux_Wb: Any, gap_m: Any = None) -> Any:
         """Stored energy ``l A w(phi / A)`` [J], with the material's energy density ``w(B)``.
 
         Parameters
         ----------
-        flux : float or array_like
+        flux_Wb : float or array_like
             Branch flux phi [Wb].
-        gap : optional
+        gap_m : optional
             Ignored.
 
         Returns
@@ -424,7 +430,7 @@ class IronPath(Element):
         float or ndarray
             Energy [J].
         """
-        b = np.asarray(flux, dtype=float) / self.cross_section_m2
+        b = np.asarray(flux_Wb, dtype=float) / self.cross_section_m2
         return self.length_m * self.cross_section_m2 * self.material.energy_density(b)
 
 
@@ -524,12 +530,13 @@ class AirGap(LinearElement):
     def area(self) -> float:
         return self.pole_area_m2
 
-    def effective_gap(self, gap: Any) -> Any:
+    @renamed_keywords(gap="gap_m")
+    def effective_gap(self, gap_m: Any) -> Any:
         """Gap enlarged by Carter's coefficient [m].
 
         Parameters
         ----------
-        gap : float, array_like or CasADi
+        gap_m : float, array_like or CasADi
             Mechanical air gap s [m], > 0 (checked only with a slot pitch, by
             :func:`carter_coefficient`).
 
@@ -539,16 +546,17 @@ class AirGap(LinearElement):
             ``k_C s`` [m] (``s`` itself for a smooth stator).
         """
         if self.slot_pitch_m > 0.0:
-            return carter_coefficient(gap, self.slot_pitch_m, self.slot_opening_m) * gap
-        return gap
+            return carter_coefficient(gap_m, self.slot_pitch_m, self.slot_opening_m) * gap_m
+        return gap_m
 
-    def fringe_permeance(self, gap: Any) -> Any:
+    @renamed_keywords(gap="gap_m")
+    def fringe_permeance(self, gap_m: Any) -> Any:
         """The fringe edges' share of :meth:`permeance` [H]: ``mu0 sum fringe_per_mu0(w, r,
         k_C s)`` over ``fringe_edges`` (0 without).
 
         Parameters
         ----------
-        gap : float, array_like or CasADi
+        gap_m : float, array_like or CasADi
             Mechanical air gap s [m], > 0.
 
         Returns
@@ -556,7 +564,7 @@ class AirGap(LinearElement):
         float, ndarray or CasADi
             The fringe permeance [H].
         """
-        return MU0 * self._add_fringe(0.0, self.effective_gap(gap))
+        return MU0 * self._add_fringe(0.0, self.effective_gap(gap_m))
 
     def _add_fringe(self, g: Any, s: Any) -> Any:
         """``g + sum fringe_per_mu0(w, r, s)`` over the fringe edges (``s`` effective)."""
@@ -564,12 +572,13 @@ class AirGap(LinearElement):
             g = g + fringe_per_mu0(w, r, s)
         return g
 
-    def permeance(self, gap: Any = None) -> Any:
+    @renamed_keywords(gap="gap_m")
+    def permeance(self, gap_m: Any = None) -> Any:
         """Permeance ``G(s)`` [H] of the gap (see the class docstring).
 
         Parameters
         ----------
-        gap : float, array_like or CasADi
+        gap_m : float, array_like or CasADi
             Mechanical air gap s [m], > 0; required (``ParameterError`` when None).
 
         Returns
@@ -577,14 +586,14 @@ class AirGap(LinearElement):
         float, ndarray or CasADi
             ``G`` [H].
         """
-        if gap is None:
+        if gap_m is None:
             raise ParameterError(f"air gap {self.name!r}: needs a gap value")
-        s = self.effective_gap(gap)
+        s = self.effective_gap(gap_m)
         g = self._add_fringe(self.pole_area_m2 / s, s)
         for a, d in self.recesses:
             g = g + a / (s + d)
         for w, b in self.face_slots:
-            g = g - w * carter_slot_loss(gap, b) / s
+            g = g - w * carter_slot_loss(gap_m, b) / s
         return MU0 * g
 
 
@@ -616,12 +625,13 @@ class LeakagePermeance(LinearElement):
     def __post_init__(self) -> None:
         _positive(f"leakage permeance {self.name!r}", value_H=self.value_H)
 
-    def permeance(self, gap: Any = None) -> Any:
+    @renamed_keywords(gap="gap_m")
+    def permeance(self, gap_m: Any = None) -> Any:
         """The constant permeance ``G`` [H].
 
         Parameters
         ----------
-        gap : optional
+        gap_m : optional
             Ignored (gap-independent).
 
         Returns
@@ -876,12 +886,13 @@ class GapLeakage(LinearElement):
     def gap(self) -> str:
         return self.gap_input
 
-    def permeance(self, gap: Any = None) -> Any:
+    @renamed_keywords(gap="gap_m")
+    def permeance(self, gap_m: Any = None) -> Any:
         """Permeance ``G = mu0 w / pi ln(1 + pi r / s)`` [H].
 
         Parameters
         ----------
-        gap : float, array_like or CasADi
+        gap_m : float, array_like or CasADi
             Air gap s [m], > 0 (not checked here); required (``ParameterError`` when None).
 
         Returns
@@ -889,9 +900,9 @@ class GapLeakage(LinearElement):
         float, ndarray or CasADi
             ``G`` [H].
         """
-        if gap is None:
+        if gap_m is None:
             raise ParameterError(f"gap leakage {self.name!r}: needs a gap value")
-        return MU0 * self.width_m / math.pi * _log(1.0 + math.pi * self.radius_m / gap)
+        return MU0 * self.width_m / math.pi * _log(1.0 + math.pi * self.radius_m / gap_m)
 
 
 @renamed_keywords(width="width_m", radius="radius_m", inner_radius="inner_radius_m",
@@ -967,13 +978,14 @@ class FringePermeance(LinearElement):
     def gap(self) -> str:
         return self.gap_input
 
-    def permeance(self, gap: Any = None) -> Any:
+    @renamed_keywords(gap="gap_m")
+    def permeance(self, gap_m: Any = None) -> Any:
         """Permeance [H]: ``(2 mu0 w / pi) ln(1 + pi r / (2 s))`` (Roters) or the
         conformal map's strip (see the class docstring).
 
         Parameters
         ----------
-        gap : float, array_like or CasADi
+        gap_m : float, array_like or CasADi
             Air gap s [m], > 0 (not checked here); required (``ParameterError`` when None).
 
         Returns
@@ -981,14 +993,14 @@ class FringePermeance(LinearElement):
         float, ndarray or CasADi
             ``G`` [H].
         """
-        if gap is None:
+        if gap_m is None:
             raise ParameterError(f"fringe permeance {self.name!r}: needs a gap value")
         if self.slot_pitch_m > 0.0:
-            gap = carter_coefficient(gap, self.slot_pitch_m, self.slot_opening_m) * gap
+            gap_m = carter_coefficient(gap_m, self.slot_pitch_m, self.slot_opening_m) * gap_m
         law = edge_flank_per_mu0 if self.law == "conformal" else fringe_per_mu0
-        g = law(self.width_m, self.radius_m, gap)
+        g = law(self.width_m, self.radius_m, gap_m)
         if symbolic(self.inner_radius_m) or self.inner_radius_m > 0.0:
-            g = g - law(self.width_m, self.inner_radius_m, gap)
+            g = g - law(self.width_m, self.inner_radius_m, gap_m)
         return MU0 * g
 
 
@@ -1039,12 +1051,13 @@ class GapLayerPermeance(LinearElement):
     def gap(self) -> str:
         return self.gap_input
 
-    def permeance(self, gap: Any = None) -> Any:
+    @renamed_keywords(gap="gap_m")
+    def permeance(self, gap_m: Any = None) -> Any:
         """Permeance ``G = mu0 w s / l`` [H].
 
         Parameters
         ----------
-        gap : float, array_like or CasADi
+        gap_m : float, array_like or CasADi
             Air gap s [m], > 0 (not checked here); required (``ParameterError`` when None).
 
         Returns
@@ -1052,9 +1065,9 @@ class GapLayerPermeance(LinearElement):
         float, ndarray or CasADi
             ``G`` [H].
         """
-        if gap is None:
+        if gap_m is None:
             raise ParameterError(f"gap layer permeance {self.name!r}: needs a gap value")
-        return MU0 * self.width_m * gap / self.length_m
+        return MU0 * self.width_m * gap_m / self.length_m
 
 
 def fringe_per_mu0(w: float, r: float, s: Any) -> Any:
@@ -1102,14 +1115,15 @@ class EddyCurrent(Element):
     def eddy_conductance(self) -> float:
         return self.conductance_S
 
-    def mmf_drop(self, flux: Any, gap: Any = None) -> Any:
+    @renamed_keywords(flux="flux_Wb", gap="gap_m")
+    def mmf_drop(self, flux_Wb: Any, gap_m: Any = None) -> Any:
         """Static drop: zero (the element acts through :attr:`eddy_conductance` only).
 
         Parameters
         ----------
-        flux : float, array_like or CasADi
+        flux_Wb : float, array_like or CasADi
             Branch flux phi [Wb].
-        gap : optional
+        gap_m : optional
             Ignored.
 
         Returns
@@ -1117,29 +1131,31 @@ class EddyCurrent(Element):
         float, ndarray or CasADi
             ``0 * flux`` [A].
         """
-        return 0.0 * flux
+        return 0.0 * flux_Wb
 
-    def energy(self, flux: Any, gap: Any = None) -> Any:
+    @renamed_keywords(flux="flux_Wb", gap="gap_m")
+    def energy(self, flux_Wb: Any, gap_m: Any = None) -> Any:
         """Stored energy: zero (eddy currents dissipate, they store nothing).
 
         Parameters
         ----------
-        flux : float or array_like
+        flux_Wb : float or array_like
             Branch flux phi [Wb].
-        gap : optional
+        gap_m : optional
             Ignored.
 
         Returns
         -------
         ndarray
-            Zeros [J] of the shape of ``flux``.
+            Zeros [J] of the shape of ``flux_Wb``.
         """
-        return np.zeros_like(np.asarray(flux, dtype=float))
+        return np.zeros_like(np.asarray(flux_Wb, dtype=float))
 
     @classmethod
-    @renamed_keywords(path_area="path_area_m2", path_length="path_length_m")
+    @renamed_keywords(path_area="path_area_m2", path_length="path_length_m",
+                      resistivity="resistivity_ohm_m")
     def one_turn(cls, name: str, path_area_m2: float, path_length_m: float,
-                 resistivity: float) -> EddyCurrent:
+                 resistivity_ohm_m: float) -> EddyCurrent:
         """Modelica's ``G = A / (rho l)``: a one-turn short circuit of wire area A, length l.
 
         Parameters
@@ -1150,8 +1166,9 @@ class EddyCurrent(Element):
             Cross-section A of the current path [m^2], > 0.
         path_length_m : float
             Length l of the current path (once around the flux) [m], > 0.
-        resistivity : float
-            Electrical resistivity rho of the conductor [ohm m], > 0.
+        resistivity_ohm_m : float
+            Electrical resistivity rho of the conductor [ohm m], > 0 (deprecated keyword:
+            ``resistivity``).
 
         Returns
         -------
@@ -1163,13 +1180,14 @@ class EddyCurrent(Element):
             A dimension or the resistivity not a finite number > 0.
         """
         _positive(f"eddy-current element {name!r}", path_area_m2=path_area_m2,
-                  path_length_m=path_length_m, resistivity=resistivity)
-        return cls(name, path_area_m2 / (resistivity * path_length_m))
+                  path_length_m=path_length_m, resistivity_ohm_m=resistivity_ohm_m)
+        return cls(name, path_area_m2 / (resistivity_ohm_m * path_length_m))
 
     @classmethod
-    @renamed_keywords(width="width_m", height="height_m", length="length_m")
+    @renamed_keywords(width="width_m", height="height_m", length="length_m",
+                      resistivity="resistivity_ohm_m")
     def solid_rectangular(cls, name: str, width_m: float, height_m: float, length_m: float,
-                          resistivity: float) -> EddyCurrent:
+                          resistivity_ohm_m: float) -> EddyCurrent:
         """Solid bar of cross-section width x height and length l, flux along l.
 
         Low-frequency eddy loss under a uniform ``dB/dt`` is ``P = J l (dB/dt)^2/(4 rho)``
@@ -1185,8 +1203,9 @@ class EddyCurrent(Element):
             Sides of the cross-section [m], > 0.
         length_m : float
             Length l of the bar along the flux [m], > 0.
-        resistivity : float
-            Electrical resistivity rho of the conductor [ohm m], > 0.
+        resistivity_ohm_m : float
+            Electrical resistivity rho of the conductor [ohm m], > 0 (deprecated keyword:
+            ``resistivity``).
 
         Returns
         -------
@@ -1198,14 +1217,15 @@ class EddyCurrent(Element):
             A dimension or the resistivity not a finite number > 0.
         """
         _positive(f"eddy-current element {name!r}", width_m=width_m, height_m=height_m,
-                  length_m=length_m, resistivity=resistivity)
+                  length_m=length_m, resistivity_ohm_m=resistivity_ohm_m)
         area = width_m * height_m
         torsion = rectangle_torsion_constant(width_m, height_m)
-        return cls(name, torsion * length_m / (4.0 * resistivity * area * area))
+        return cls(name, torsion * length_m / (4.0 * resistivity_ohm_m * area * area))
 
     @classmethod
-    @renamed_keywords(area="area_m2", length="length_m", sheet_thickness="sheet_thickness_m")
-    def laminated(cls, name: str, area_m2: float, length_m: float, resistivity: float,
+    @renamed_keywords(area="area_m2", length="length_m", sheet_thickness="sheet_thickness_m",
+                      resistivity="resistivity_ohm_m")
+    def laminated(cls, name: str, area_m2: float, length_m: float, resistivity_ohm_m: float,
                   sheet_thickness_m: float) -> EddyCurrent:
         """Laminated stack of sheets of thickness d: ``G_ec = d^2 l / (12 rho A)``.
 
@@ -1217,8 +1237,9 @@ class EddyCurrent(Element):
             Cross-section A of the stack (across the flux) [m^2], > 0.
         length_m : float
             Length l of the stack along the flux [m], > 0.
-        resistivity : float
-            Electrical resistivity rho of the sheets [ohm m], > 0.
+        resistivity_ohm_m : float
+            Electrical resistivity rho of the sheets [ohm m], > 0 (deprecated keyword:
+            ``resistivity``).
         sheet_thickness_m : float
             Sheet thickness d [m], > 0.
 
@@ -1232,5 +1253,5 @@ class EddyCurrent(Element):
             A dimension or the resistivity not a finite number > 0.
         """
         _positive(f"eddy-current element {name!r}", area_m2=area_m2, length_m=length_m,
-                  resistivity=resistivity, sheet_thickness_m=sheet_thickness_m)
-        return cls(name, sheet_thickness_m**2 * length_m / (12.0 * resistivity * area_m2))
+                  resistivity_ohm_m=resistivity_ohm_m, sheet_thickness_m=sheet_thickness_m)
+        return cls(name, sheet_thickness_m**2 * length_m / (12.0 * resistivity_ohm_m * area_m2))

@@ -16,6 +16,7 @@ from typing import Any
 import numpy as np
 
 from ..errors import InputError
+from ..validation import renamed_keywords
 from .elements import (
     AirGap,
     EddyCurrent,
@@ -115,10 +116,11 @@ class CalibratedLinear(LinearElement):
     def area(self) -> float | None:
         return self.inner.area
 
-    def permeance(self, gap: Any = None) -> Any:
-        """Permeance [Wb/A] at the gap ``gap`` [m] (before the offset)."""
+    @renamed_keywords(gap="gap_m")
+    def permeance(self, gap_m: Any = None) -> Any:
+        """Permeance [Wb/A] at the gap ``gap_m`` [m] (before the offset)."""
         el = self.inner
-        g = None if gap is None or el.gap is None else gap + self.offset
+        g = None if gap_m is None or el.gap is None else gap_m + self.offset
         base = el.permeance(g)
         if isinstance(el, (LeakagePermeance, GapLeakage)):
             return self.leakage * base
@@ -151,15 +153,17 @@ class CalibratedIron(Element):
     def area(self) -> float | None:
         return self.inner.area
 
-    def mmf_drop(self, flux: Any, gap: Any = None) -> Any:
-        """Magnetic voltage [A] at the branch flux ``flux`` [Wb] (``gap`` unused)."""
-        return self.field_scale * self.inner.mmf_drop(flux / self.saturation_scale)
+    @renamed_keywords(flux="flux_Wb", gap="gap_m")
+    def mmf_drop(self, flux_Wb: Any, gap_m: Any = None) -> Any:
+        """Magnetic voltage [A] at the branch flux ``flux_Wb`` [Wb] (``gap_m`` unused)."""
+        return self.field_scale * self.inner.mmf_drop(flux_Wb / self.saturation_scale)
 
-    def energy(self, flux: Any, gap: Any = None) -> Any:
-        """Stored energy [J] at the flux ``flux`` [Wb] (``gap`` unused)."""
+    @renamed_keywords(flux="flux_Wb", gap="gap_m")
+    def energy(self, flux_Wb: Any, gap_m: Any = None) -> Any:
+        """Stored energy [J] at the flux ``flux_Wb`` [Wb] (``gap_m`` unused)."""
         # int_0^phi k_H V(phi'/k_B) dphi' = k_H k_B W_inner(phi/k_B)
         return (self.field_scale * self.saturation_scale
-                * self.inner.energy(np.asarray(flux, dtype=float) / self.saturation_scale))
+                * self.inner.energy(np.asarray(flux_Wb, dtype=float) / self.saturation_scale))
 
     def linearized(self) -> CalibratedIron:
         """The same factors on the iron's initial permeability (``saturation=False``)."""
@@ -229,6 +233,6 @@ def with_factors(network: Network, values: Mapping[str, Any], *, where: str = ""
 
     branches = tuple(replace(b, elements=tuple(wrap(e) for e in b.elements))
                      for b in network.branches)
-    circuits = (tuple(replace(c, resistance=float(k_res) * c.resistance)
+    circuits = (tuple(replace(c, resistance_ohm=float(k_res) * c.resistance_ohm)
                       for c in network.circuits) if numeric_res else network.circuits)
     return Network(branches, circuits, name=network.name)

@@ -71,9 +71,10 @@ LADDER_COEFFICIENTS: dict[int, tuple[tuple[float, ...], tuple[float, ...]]] = {
 }
 
 
-@renamed_keywords(length="length_m", area="area_m2", thickness="thickness_m")
+@renamed_keywords(length="length_m", area="area_m2", thickness="thickness_m",
+                  resistivity="resistivity_ohm_m")
 def ladder_parameters(*, length_m: float, area_m2: float, thickness_m: float,
-                      resistivity: float, layers: int,
+                      resistivity_ohm_m: float, layers: int,
                       factor: float = 1.0) -> tuple[tuple[float, ...], tuple[float, ...]]:
     """Tube areas [m^2] and eddy conductances [S] of a slab's ``layers``-tube ladder.
 
@@ -86,8 +87,8 @@ def ladder_parameters(*, length_m: float, area_m2: float, thickness_m: float,
     thickness_m : float
         Slab (or sheet) thickness ``t`` across which the eddy currents diffuse [m]
         (deprecated keyword: ``thickness``).
-    resistivity : float
-        ``rho`` [ohm m].
+    resistivity_ohm_m : float
+        ``rho`` [ohm m] (deprecated keyword: ``resistivity``).
     layers : int
         Number of nested tubes ``n`` (1 ... 8; 1 is the lumped element).
     factor : float
@@ -100,7 +101,7 @@ def ladder_parameters(*, length_m: float, area_m2: float, thickness_m: float,
         Non-positive geometry, ``layers`` outside 1 ... 8.
     """
     for key, v in (("length_m", length_m), ("area_m2", area_m2), ("thickness_m", thickness_m),
-                   ("resistivity", resistivity), ("factor", factor)):
+                   ("resistivity_ohm_m", resistivity_ohm_m), ("factor", factor)):
         if not (isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)
                 and v > 0.0):
             raise ParameterError(f"eddy ladder: {key} = {v!r} must be a finite number > 0")
@@ -108,7 +109,7 @@ def ladder_parameters(*, length_m: float, area_m2: float, thickness_m: float,
         raise ParameterError(f"eddy ladder: layers = {layers!r}; allowed are the whole numbers "
                              f"{min(LADDER_COEFFICIENTS)} ... {max(LADDER_COEFFICIENTS)}")
     a, w = LADDER_COEFFICIENTS[layers]
-    scale = factor * length_m * thickness_m * (0.5 * thickness_m) / (2.0 * resistivity * area_m2)
+    scale = factor * length_m * thickness_m * (0.5 * thickness_m) / (2.0 * resistivity_ohm_m * area_m2)
     return tuple(area_m2 * ak for ak in a), tuple(scale * wk for wk in w)
 
 
@@ -127,9 +128,9 @@ def saint_venant_factor(thickness_m: float, depth_m: float) -> float:
     return rectangle_torsion_constant(thickness_m, depth_m) / (depth_m * thickness_m**3 / 3.0)
 
 
-@renamed_keywords(thickness="thickness_m")
+@renamed_keywords(thickness="thickness_m", resistivity="resistivity_ohm_m")
 def ladder_branches(name: str, start: str, end: str, iron: IronPath, *, thickness_m: float,
-                    resistivity: float, layers: int, factor: float = 1.0) -> list[Branch]:
+                    resistivity_ohm_m: float, layers: int, factor: float = 1.0) -> list[Branch]:
     """Branches of an iron part with diffusing eddy currents (nested tubes).
 
     The first branch is named ``name`` and carries the part's whole flux from ``start``
@@ -151,8 +152,9 @@ def ladder_branches(name: str, start: str, end: str, iron: IronPath, *, thicknes
     thickness_m : float
         Thickness across which the eddy currents diffuse [m], > 0 (keyword only, like
         all that follow; deprecated keyword: ``thickness``).
-    resistivity : float
-        Electrical resistivity of the part [ohm m], > 0.
+    resistivity_ohm_m : float
+        Electrical resistivity of the part [ohm m], > 0 (deprecated keyword:
+        ``resistivity``).
     layers : int
         Number of nested tubes, 1 ... 8.
     factor : float, default 1.0
@@ -169,7 +171,7 @@ def ladder_branches(name: str, start: str, end: str, iron: IronPath, *, thicknes
         As :func:`ladder_parameters`.
     """
     areas, gs = ladder_parameters(length_m=iron.length_m, area_m2=iron.cross_section_m2,
-                                  thickness_m=thickness_m, resistivity=resistivity,
+                                  thickness_m=thickness_m, resistivity_ohm_m=resistivity_ohm_m,
                                   layers=layers, factor=factor)
     node = [f"{name}:n{k + 1}" for k in range(layers)]
     out = [Branch(name, start, node[0], (EddyCurrent(f"eddy_{name}", conductance_S=gs[0]),))]

@@ -22,7 +22,7 @@ from functools import cached_property
 import numpy as np
 
 from ..errors import ParameterError, TopologyError
-from ..validation import flag
+from ..validation import flag, renamed_keywords
 from .elements import EddyCurrent, Element, IronPath
 
 __all__ = ["Branch", "Coil", "Circuit", "Network", "SHORT_LOOP_SIZE"]
@@ -141,32 +141,36 @@ class Coil:
                                      "must be a finite number > 0")
 
 
+@renamed_keywords(resistance="resistance_ohm")
 @dataclass(frozen=True)
 class Circuit:
     """An electric circuit: coils in series with a resistance and a voltage input.
+
+    The old field name ``resistance`` still works as a deprecated alias (keyword and
+    read-only attribute; a ``DeprecationWarning`` names ``resistance_ohm``).
 
     Parameters
     ----------
     name : str
         Unique circuit name (also the name of its current and voltage).
-    resistance : float
+    resistance_ohm : float
         Total ohmic resistance R_el [ohm] (> 0).
     coils : tuple of Coil
         At least one coil.
     """
 
     name: str
-    resistance: float
+    resistance_ohm: float
     coils: tuple[Coil, ...] = ()
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "coils", tuple(self.coils))
         if not isinstance(self.name, str) or not self.name:
             raise TopologyError("a circuit needs a non-empty name")
-        if not (isinstance(self.resistance, (int, float))
-                and not isinstance(self.resistance, bool)
-                and math.isfinite(self.resistance) and self.resistance > 0):
-            raise ParameterError(f"circuit {self.name!r}: resistance = {self.resistance!r} ohm "
+        r = self.resistance_ohm
+        if not (isinstance(r, (int, float)) and not isinstance(r, bool)
+                and math.isfinite(r) and r > 0):
+            raise ParameterError(f"circuit {self.name!r}: resistance_ohm = {r!r} "
                                  "must be a finite number > 0")
         if not self.coils:
             raise TopologyError(f"circuit {self.name!r} has no coils; every circuit must drive "
@@ -488,7 +492,7 @@ class Network:
     @property
     def resistances(self) -> np.ndarray:
         """Circuit resistances R_el [ohm]."""
-        return np.array([c.resistance for c in self.circuits], dtype=float)
+        return np.array([c.resistance_ohm for c in self.circuits], dtype=float)
 
     @property
     def eddy_conductances(self) -> np.ndarray:

@@ -254,7 +254,7 @@ def closed_loop(model: Any, vehicle: HeaveMass, controller: GapController | Cont
         if not mech.gap_m + mech.gap_rate_m_per_s * dt_s > 0:
             raise SolverError(
                 "TOUCHDOWN: the magnet would hit the rail within the next step",
-                time=float(t), state={"gap_m": mech.gap_m,
+                time_s=float(t), state={"gap_m": mech.gap_m,
                                       "gap_rate_m_per_s": mech.gap_rate_m_per_s},
                 reason="the closed loop is unstable for this case (controller, "
                        "reference or disturbance)")

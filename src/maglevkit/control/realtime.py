@@ -920,7 +920,7 @@ class RealTimeMPCBatch:
             st = out[4]
             if not np.isfinite(st[:, 1]).all():
                 r = int(np.flatnonzero(~np.isfinite(st[:, 1]))[0])
-                raise SolverError("the extended Kalman filter diverged", time=time_s,
+                raise SolverError("the extended Kalman filter diverged", time_s=time_s,
                                   state=self._state(idx[r], _single, estimate=b[0][r].copy()),
                                   reason="non-finite estimate")
             nx = gd["nx"]
@@ -934,7 +934,7 @@ class RealTimeMPCBatch:
             ok = np.abs(ug) <= lim * (1 + _LIMIT_SLACK)             # False for NaN
             if not ok.all():
                 r = int(np.flatnonzero(~ok)[0])
-                raise SolverError("the MPC solution violates the voltage limit", time=time_s,
+                raise SolverError("the MPC solution violates the voltage limit", time_s=time_s,
                                   state=self._state(idx[r], _single, u=float(ug[r])),
                                   reason="QP tolerance too loose")
             np.clip(ug, -lim, lim, out=ug)
@@ -1004,7 +1004,7 @@ class RealTimeMPCBatch:
         if qpb.buffer.ret() != 0 or not math.isfinite(z.sum()):
             m = c.model
             p = gd["out"][3][r]
-            raise SolverError("the MPC's condensed QP failed", time=time_s,
+            raise SolverError("the MPC's condensed QP failed", time_s=time_s,
                               state=self._state(j, single, x_hat=p[:m.nx].copy(),
                                                 d_hat=p[m.nx:m.nx + m.nd].copy()),
                               reason=str(qpb.buffer.stats().get("return_status", "unknown")))

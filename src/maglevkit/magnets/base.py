@@ -503,11 +503,11 @@ def resistivity(given: float | None, material: Material, where: str) -> float:
     """
     if given is not None:
         return given
-    if material.resistivity is None:
+    if material.resistivity_ohm_m is None:
         raise ParameterFileError(
             f"[{where}] material {material.name!r} has no built-in resistivity; give "
             "'resistivity' (ohm m) or build the magnet with eddy_currents=False")
-    return material.resistivity
+    return material.resistivity_ohm_m
 
 
 _MATERIAL_SCHEMA = {
@@ -541,7 +541,7 @@ def _parse_materials(raw: Any, source: str = "") -> dict[str, Material]:
                 H, B = read_bh_csv(path)
             else:
                 H, B = tuple(t["H"]), tuple(t["B"])
-            out[normalise_name(name)] = TabulatedBH(H, B, name=name, resistivity=t["resistivity"],
+            out[normalise_name(name)] = TabulatedBH(H, B, name=name, resistivity_ohm_m=t["resistivity"],
                                                     interpolation=t["interpolation"])
         except MaterialError as exc:
             raise ParameterFileError(f"[{where}]: {exc}") from None

@@ -246,7 +246,7 @@ def build_guidance_magnet(params: Mapping[str, Any], materials: Mapping[str, Mat
         U-magnet's."""
         factor = saint_venant_factor(thickness, depth) if m["end_effects"] else 1.0
         return ladder_branches(branch, start, end, iron, thickness_m=thickness,
-                               resistivity=rho_, layers=options.eddy_layers, factor=factor)
+                               resistivity_ohm_m=rho_, layers=options.eddy_layers, factor=factor)
 
     branches: list[Branch] = []
     circuits: list[Circuit] = []

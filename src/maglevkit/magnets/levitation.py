@@ -500,7 +500,7 @@ def levitation_network(m: Mapping[str, Any], st: Mapping[str, Any], names: list[
             if ladder:
                 # the coil air beside the core is outside the iron's eddy currents
                 branches += ladder_branches(name, nodes[j + 1], nodes[j], core_iron,
-                                            thickness_m=lp, resistivity=rho,
+                                            thickness_m=lp, resistivity_ohm_m=rho,
                                             layers=options.eddy_layers,
                                             factor=ladder_factor(lp, wp))
             # every segment carries the eddy currents of its own length
@@ -604,7 +604,7 @@ def levitation_network(m: Mapping[str, Any], st: Mapping[str, Any], names: list[
         back: list[Element] = [back_iron]
         if ladder:
             branches += ladder_branches(f"back_{q}", f"K{k + 1}", f"K{k + 2}", back_iron,
-                                        thickness_m=hb, resistivity=rho,
+                                        thickness_m=hb, resistivity_ohm_m=rho,
                                         layers=options.eddy_layers,
                                         factor=ladder_factor(hb, wb))
             back = []

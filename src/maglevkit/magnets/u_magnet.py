@@ -383,7 +383,7 @@ def lumped_network(m: Mapping[str, Any], r: Mapping[str, Any], core: Material,
                                                           rho, solid)))]
         if m["laminated"] and not solid:       # diffusion across each sheet
             return ladder_branches(name, start, end, iron, thickness_m=m["sheet_thickness"],
-                                   resistivity=rho, layers=options.eddy_layers)
+                                   resistivity_ohm_m=rho, layers=options.eddy_layers)
         # solid bar: slab across the width; with end_effects the Saint-Venant factor of
         # the finite depth (the eddy currents close within the depth), else the 2-D slab
         factor = saint_venant_factor(width, d) if m["end_effects"] else 1.0
@@ -392,7 +392,7 @@ def lumped_network(m: Mapping[str, Any], r: Mapping[str, Any], core: Material,
             # pole face (rising linearly across it), runs uniform between the poles and
             # hardly reaches the overhangs: eddy length ww + 2 wp/3 (docs/equations.md 1b)
             factor *= (ww + 2.0 * wp / 3.0) / iron.length_m
-        return ladder_branches(name, start, end, iron, thickness_m=width, resistivity=rho,
+        return ladder_branches(name, start, end, iron, thickness_m=width, resistivity_ohm_m=rho,
                                layers=options.eddy_layers, factor=factor)
 
     rho_core = rho_rail = 0.0
@@ -892,7 +892,7 @@ def _grid_ladders(branches: list[Branch], m: Mapping[str, Any], r: Mapping[str, 
         elif m["end_effects"]:
             factor = saint_venant_factor(thick, d)
         out += ladder_branches(br.name, br.start, br.end, iron, thickness_m=thick,
-                               resistivity=rho, layers=layers, factor=factor)
+                               resistivity_ohm_m=rho, layers=layers, factor=factor)
     return out
 
 

@@ -1048,7 +1048,7 @@ class FluxModel:
         msg = str(exc).strip().splitlines()
         reason = next((ln.strip() for ln in reversed(msg) if ln.strip()), type(exc).__name__)
         return SolverError(f"flux model ({self.method}) failed on the step of {dt:.6g} s",
-                           time=t, state=st, reason=reason[:400])
+                           time_s=t, state=st, reason=reason[:400])
 
     @renamed_keywords(dt="dt_s", voltages="voltages_V", gaps="gaps_m", gap_rates="gap_rates_m_per_s")
     def step(self, state: FluxState, dt_s: float, voltages_V: Any, gaps_m: Any = None,
@@ -1232,7 +1232,7 @@ class FluxModel:
             w = np.asarray(wf).ravel()
             t += float(h[j])
         raise SolverError("flux model failed over several hold intervals but not interval by "
-                          "interval", time=t) from None
+                          "interval", time_s=t) from None
 
     def _check_finite(self, state: FluxState, W: np.ndarray, O: np.ndarray, h: np.ndarray,
                       U: np.ndarray, rate: np.ndarray) -> None:
@@ -1424,24 +1424,24 @@ class SimulationResult:
         return cols
 
 
-@renamed_keywords(gaps="gaps_m", voltages="voltages_V", gap_rates="gap_rates_m_per_s",
-                  dt="dt_s", initial_currents="initial_currents_A")
-def simulate_flux(model: Any, t: Any, *, gaps_m: Any, voltages_V: Any,
+@renamed_keywords(t="times_s", gaps="gaps_m", voltages="voltages_V",
+                  gap_rates="gap_rates_m_per_s", dt="dt_s", initial_currents="initial_currents_A")
+def simulate_flux(model: Any, times_s: Any, *, gaps_m: Any, voltages_V: Any,
                   gap_rates_m_per_s: Any = None, dt_s: float | None = None, initial_currents_A: Any = None,
                   initial_state: Any = None, gap_rate_tolerance: float = 0.02,
                   **options: Any) -> SimulationResult:
     """Simulate the flux model on a time grid (the flux-model branch of
     :func:`maglevkit.simulate`, which also runs the reduced models).
 
-    The old keyword names ``gaps``, ``voltages``, ``gap_rates``, ``dt``, ``initial_currents`` still work as
-    deprecated aliases (a ``DeprecationWarning`` names the new one).
+    The old keyword names ``t``, ``gaps``, ``voltages``, ``gap_rates``, ``dt``, ``initial_currents`` still
+    work as deprecated aliases (a ``DeprecationWarning`` names the new one).
 
     Parameters
     ----------
     model : FluxModel, Magnet or Network
         The model; ``options`` (``saturation``, ``eddy_currents``, ``method``, ``rtol``,
         ``atol``, ...) build a :class:`FluxModel` (or change a given one).
-    t : (t0, tf), [t0, tf] or array
+    times_s : (t0, tf), [t0, tf] or array
         A time span [s]: a tuple or list of exactly two numbers gives the grid
         ``t0 + k dt`` ending exactly at ``tf``.  A numpy array (any length >= 2) or a
         sequence of three or more times is an explicit increasing grid [s] (then no
@@ -1492,7 +1492,7 @@ def simulate_flux(model: Any, t: Any, *, gaps_m: Any, voltages_V: Any,
     else:
         fm = FluxModel(model, **options)
     net = fm.network
-    times = time_grid(t, dt)
+    times = time_grid(times_s, dt)
     s = sample_input(gaps, times, net.gap_names, "gaps", "m")
     gap_vector(net, s)  # checks > 0
     U = sample_input(voltages, times, net.circuit_names, "voltages", "V")

@@ -1637,9 +1637,10 @@ class MagnetBank:
         dt = dt_s
         return BankStepper(self, state, dt)
 
-    @renamed_keywords(gaps="gaps_m", voltages="voltages_V", gap_rates="gap_rates_m_per_s",
-                      dt="dt_s", initial_currents="initial_currents_A")
-    def simulate(self, t: Any, *, gaps_m: Any, voltages_V: Any, gap_rates_m_per_s: Any = None,
+    @renamed_keywords(t="times_s", gaps="gaps_m", voltages="voltages_V",
+                      gap_rates="gap_rates_m_per_s", dt="dt_s",
+                      initial_currents="initial_currents_A")
+    def simulate(self, times_s: Any, *, gaps_m: Any, voltages_V: Any, gap_rates_m_per_s: Any = None,
                  dt_s: float | None = None, initial_currents_A: Any = None,
                  initial_state: BankState | None = None,
                  gap_rate_tolerance: float = 0.02) -> BankSimulation:
@@ -1651,12 +1652,12 @@ class MagnetBank:
         with one gap per circuit, through :meth:`stepper`: the same compiled function,
         without the per-step objects).
 
-        The old keyword names ``gaps``, ``voltages``, ``gap_rates``, ``dt``, ``initial_currents`` still work
-        as deprecated aliases (a ``DeprecationWarning`` names the new one).
+        The old keyword names ``t``, ``gaps``, ``voltages``, ``gap_rates``, ``dt``,
+        ``initial_currents`` still work as deprecated aliases (a ``DeprecationWarning`` names the new one).
 
         Parameters
         ----------
-        t : (t0, tf), [t0, tf] or array_like
+        times_s : (t0, tf), [t0, tf] or array_like
             A time span [s] (sampled with ``dt``) or an explicit strictly increasing grid [s].
         gaps_m : float, sequence, mapping, Signal, callable or array
             Gap inputs [m] (one per circuit or per pole, :attr:`gap_names`), > 0 at every
@@ -1698,7 +1699,7 @@ class MagnetBank:
         gaps, voltages, gap_rates, dt = gaps_m, voltages_V, gap_rates_m_per_s, dt_s
         initial_currents = initial_currents_A
         times, g, u, rates = simulation_inputs(
-            t, dt, gaps=gaps, voltages=voltages, gap_rates=gap_rates, gap_names=self.gap_names,
+            times_s, dt, gaps=gaps, voltages=voltages, gap_rates=gap_rates, gap_names=self.gap_names,
             circuit_names=self.circuit_names, gap_rate_tolerance=gap_rate_tolerance)
         check_initial_choice(initial_state, initial_currents, BankState)
         if initial_state is not None:

@@ -224,7 +224,7 @@ def diagnose_flags(flags: np.ndarray, names: Sequence[str], *, gaps_m: np.ndarra
                 low, high = min(s[k], se[k]), max(s[k], se[k])
                 out_of_maps(k, float(low if low < gap_min_m[k] else high), float(i0[k]), step)
             elif reason is StepFlag.RESULT_NOT_FINITE:
-                raise SolverError(text["result_not_finite"] % name, time=t0_s,
+                raise SolverError(text["result_not_finite"] % name, time_s=t0_s,
                                   state={"I_L_A": float(i0[k]), "gap_m": float(s[k]),
                                          "gap_rate_m_per_s": float(sd[k]),
                                          "voltage_V": float(u[k])},

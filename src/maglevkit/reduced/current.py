@@ -811,7 +811,7 @@ class CurrentModel:
                         break
                     self._check_range(xs[self._sl][None, :], xs[:nc][None, :],
                                       np.array([t[k] + (m + 1) * h]))
-                raise SolverError("current-model integration failed", time=float(t[k]),
+                raise SolverError("current-model integration failed", time_s=float(t[k]),
                                   state={"I_L": x[:nc], "s": x[self._sl]},
                                   reason=_last_line(str(exc))) from None
             self._check_range(x[self._sl][None, :], x[:nc][None, :], t[k + 1:k + 2])
@@ -1249,9 +1249,10 @@ class CurrentModel:
                 self._check_substeps(lo[:, k], hi[:, k], float(t[k]), float(t[k + 1]))
         return xs, outs
 
-    @renamed_keywords(gaps="gaps_m", voltages="voltages_V", gap_rates="gap_rates_m_per_s",
-                      dt="dt_s", initial_currents="initial_currents_A")
-    def simulate(self, t: Any, *, gaps_m: Any, voltages_V: Any, gap_rates_m_per_s: Any = None,
+    @renamed_keywords(t="times_s", gaps="gaps_m", voltages="voltages_V",
+                      gap_rates="gap_rates_m_per_s", dt="dt_s",
+                      initial_currents="initial_currents_A")
+    def simulate(self, times_s: Any, *, gaps_m: Any, voltages_V: Any, gap_rates_m_per_s: Any = None,
                  dt_s: float | None = None, initial_currents_A: Any = None,
                  initial_state: CurrentModelState | None = None,
                  gap_rate_tolerance: float = 0.02) -> ReducedSimulation:
@@ -1260,12 +1261,12 @@ class CurrentModel:
         Gaps move linearly between samples, voltages are held from each sample to the
         next; the default initial state is the steady state ``I = U(t0) / R_el``.
 
-        The old keyword names ``gaps``, ``voltages``, ``gap_rates``, ``dt``, ``initial_currents`` still work
-        as deprecated aliases (a ``DeprecationWarning`` names the new one).
+        The old keyword names ``t``, ``gaps``, ``voltages``, ``gap_rates``, ``dt``,
+        ``initial_currents`` still work as deprecated aliases (a ``DeprecationWarning`` names the new one).
 
         Parameters
         ----------
-        t : (t0, tf), [t0, tf] or array_like
+        times_s : (t0, tf), [t0, tf] or array_like
             A time span [s] (sampled with ``dt``) or an explicit strictly increasing grid [s].
         gaps_m : float, sequence, mapping, Signal, callable or array
             Pole gaps [m], > 0 at every sample (constant, per gap, gap name -> value, a
@@ -1304,7 +1305,7 @@ class CurrentModel:
         gaps, voltages, gap_rates, dt = gaps_m, voltages_V, gap_rates_m_per_s, dt_s
         initial_currents = initial_currents_A
         times, g, u, secant = simulation_inputs(
-            t, dt, gaps=gaps, voltages=voltages, gap_rates=gap_rates, gap_names=self.gap_names,
+            times_s, dt, gaps=gaps, voltages=voltages, gap_rates=gap_rates, gap_names=self.gap_names,
             circuit_names=self.circuit_names, gap_rate_tolerance=gap_rate_tolerance)
         check_initial_choice(initial_state, initial_currents, CurrentModelState)
         if initial_state is not None:

@@ -615,7 +615,7 @@ def _fitted_eddy_resistance(net: Network, gap: float, current: float) -> np.ndar
             res = run.integrator(x0=run.D @ x0, z0=np.concatenate((x0, i0)),
                                  p=np.concatenate(((t_end,), U, s0)))
         except RuntimeError as exc:
-            raise SolverError("the voltage step of the R_ec fit failed", time=0.0, state=state,
+            raise SolverError("the voltage step of the R_ec fit failed", time_s=0.0, state=state,
                               reason=str(exc)[-300:]) from None
         remaining = di_inf - (np.asarray(res["zf"])[run.n_loops + j] - i0[j])
         t = t_end * run.tau
@@ -675,7 +675,7 @@ def _eddy_network_steps(net: Network, gap: float, current: float
             res = run.integrator(x0=run.D @ x0, z0=np.concatenate((x0, i0)),
                                  p=np.concatenate(((t_end,), U, s0)))
         except RuntimeError as exc:
-            raise SolverError("the voltage step of the eddy-network fit failed", time=0.0,
+            raise SolverError("the voltage step of the eddy-network fit failed", time_s=0.0,
                               state={"gap_m": gap, "current_A": current,
                                      "circuit": net.circuit_names[j]},
                               reason=str(exc)[-300:]) from None

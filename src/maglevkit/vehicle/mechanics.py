@@ -44,7 +44,7 @@ import numpy as np
 
 from ..errors import InputError
 from ..plant import STANDARD_GRAVITY
-from ..validation import describe, real_array, real_number
+from ..validation import describe, real_array, real_number, renamed_keywords
 from .train import TrainData
 from .zoh import exact_zoh_step, second_order_state_matrices
 
@@ -83,6 +83,7 @@ class ForceElement:
     damping_N_s_per_m: float
 
 
+@renamed_keywords(gravity="gravity_m_per_s2")
 class VehicleMechanics:
     """The train's linear heave-pitch model (see the module docstring).
 
@@ -97,8 +98,9 @@ class VehicleMechanics:
     force_frames : sequence of int
         Frame index (0-based, nose first) carrying each force point, in
         ``0 .. n_frames - 1``.
-    gravity : float, default STANDARD_GRAVITY
-        Gravitational acceleration g [m/s^2] (9.80665; not checked; keyword only).
+    gravity_m_per_s2 : float, default STANDARD_GRAVITY
+        Gravitational acceleration g [m/s^2] (9.80665; not checked; keyword only).  The old
+        name ``gravity`` is a deprecated alias (constructor keyword and attribute).
 
     Raises
     ------
@@ -127,7 +129,8 @@ class VehicleMechanics:
     """
 
     def __init__(self, train: TrainData, force_points_m: Sequence[float],
-                 force_frames: Sequence[int], *, gravity: float = STANDARD_GRAVITY) -> None:
+                 force_frames: Sequence[int], *,
+                 gravity_m_per_s2: float = STANDARD_GRAVITY) -> None:
         if not isinstance(train, TrainData):
             raise InputError(f"train must be TrainData (from load_vehicle), got {type(train).__name__}")
         self.train = train
@@ -142,7 +145,7 @@ class VehicleMechanics:
                                                   np.full(nf, train.frame_total_inertia_kg_m2)])
         self.n_bodies = ns + nf
         self.n_dof = 2 * self.n_bodies
-        self.gravity = float(gravity)
+        self.gravity_m_per_s2 = float(gravity_m_per_s2)
         elements: list[ForceElement] = []
         for f in range(nf):
             car = int(train.frame_section[f])
@@ -210,7 +213,7 @@ class VehicleMechanics:
         self.system = system
         self.M, self.K, self.C = system.M, system.K, system.C
         self._element_g = system.element_matrix
-        self.Q_gravity = system.G @ np.array([0.0, self.gravity])
+        self.Q_gravity = system.G @ np.array([0.0, self.gravity_m_per_s2])
         self.B = -system.B
 
     # ------------------------------------------------------------------ use
@@ -420,7 +423,7 @@ def derive_sympy(mech: VehicleMechanics) -> dict[str, np.ndarray]:
     O = me.Point("O")
     O.set_vel(N, 0)
     frames, cogs, bodies = [], [], []
-    g = sp.Float(mech.gravity)
+    g = sp.Float(mech.gravity_m_per_s2)
     forces: list[tuple[Any, Any]] = []
     for b in range(n_b):
         z, th = q[2 * b], q[2 * b + 1]
