@@ -113,7 +113,8 @@ def test_ladder_meets_the_aims_where_the_lumped_elements_jump() -> None:
 
 def test_guidance_ladder_structure() -> None:
     """``eddy_model = "ladder"`` on the guidance kind: n tubes per solid part (per section
-    four half legs, two pole bars, the yoke, the rail), statics those of the lumped
+    four half legs, two pole bars, the yoke, the rail's middle and, since guide26, its four
+    pieces beside each face), statics those of the lumped
     network, ``coil_air`` across the whole yoke, the Saint-Venant factor only with
     ``end_effects``, ``"ladder_split"`` refused."""
     import maglevkit as mk
@@ -122,7 +123,9 @@ def test_guidance_ladder_structure() -> None:
     lumped = mk.load_magnet("tr-guidance")
     ladder = mk.load_magnet("tr-guidance", eddy_model="ladder", eddy_layers=3)
     count = [sum(int(g > 0) for g in m.network.eddy_conductances) for m in (lumped, ladder)]
-    assert count == [2 * 6, 2 * 8 * 3], count
+    # lumped: 4 half legs (the bars' iron inside), the yoke, the rail's middle and its 8
+    # pieces beside the faces; ladder: those 14 parts and the two bars, 3 tubes each
+    assert count == [2 * 14, 2 * 16 * 3], count
     coil_air = ladder.network.branch("coil_air_1")
     assert (coil_air.start, coil_air.end) == ("YL1", "YU1")
     assert "EY1" not in {b.end for b in ladder.network.branches}

@@ -194,20 +194,29 @@ def build_guidance_magnet(params: Mapping[str, Any], materials: Mapping[str, Mat
     yoke_area = ny * wy * ty
     leg_len = ll + 0.5 * (tp + ty)
     yoke_len = dist
-    # "split": the flux turns round the yoke-leg corner (square t_y x t_l) on its mean
-    # quarter circle, not along the centre lines' right angle: the corner's length
-    # t_y/2 + t_l/2 becomes (pi/4)(t_y/2 + t_l/2), each member shortened by its share
-    corner = 1.0 - 0.25 * math.pi
+    # "split": the yoke-leg corner (the t_y x t_l rectangle) as the conformal map of a
+    # right-angled bend gives it (bend_reduction): each member runs along its outer edge to
+    # the outer corner, less the bend's reduction of that member (equal widths: the corner
+    # square counts 0.559 of a square, the centre lines' right angle 1, the mean quarter
+    # circle used before 0.785)
     if split:
-        yoke_len = dist - 2.0 * corner * 0.5 * tl
+        yoke_len = dist + tl - 2.0 * bend_reduction(ty, tl)
     rail_len = dist + r["thickness"]
+    # "split": where the bars' inner flanks' flux lands on the rail below the face: Roters'
+    # tube from flank depth x lands x beside the face, and the centroid of their flux density
+    # 1/(s + pi x/2) over the flank depth t_p is 0.31 / 0.35 / 0.39 t_p at s = 0.15 / 0.25 /
+    # 0.5 t_p: t_p/3 (at most a quarter of the window, so that the rail's middle stays)
+    land = min(tp / 3.0, 0.25 * window)
     if split:
-        # the rail takes the flux in over the whole face height h_p (uniformly: the MMF drop
-        # of the entry region is that of h_p/2 at full flux) and carries it from the face's
-        # inner edge to the mid-plane: 2 (d/2 - h_p/2 + h_p/2) = d, no corner to turn (the
-        # centre-line length d + t_r counts a turn at the rail's mid-thickness; the FEM's
-        # line integral of H along the rail is 0.82 of it at 6 mm / 10 A)
-        rail_len = dist
+        # the rail in pieces (upper side; the lower mirrors it): the face's flux enters
+        # over the face height in two strips of h_p/2, each at its middle (nodes R1, R2:
+        # the staircase of the uniform entry, whose drop in linear iron is h_p/2 at full
+        # flux like the ramp's; in saturation nearer the ramp's than one step), the outer
+        # flank and the legs' top fringe above the face (RO, the bar's outer edge: their
+        # flux crosses the whole face height), the inner flank below it at ``land`` (RF);
+        # the rest runs to the mid-plane, no corner to turn: d - h_p - 2 land between RF_u
+        # and RF_l
+        rail_len = dist - hp - 2.0 * land
     rail_area = L * r["thickness"]
     # leakage between the pole bars across the window (parallel faces, flank depth t_p)
     # and between the legs (energy-equivalent coil height h_c/3 for the yoke part)
@@ -261,7 +270,7 @@ def build_guidance_magnet(params: Mapping[str, Any], materials: Mapping[str, Mat
             # t_p at its section L h_p (the "paper" leg counts t_p/2 at the legs' smaller
             # section, which saturates first: at 6 mm / 80 A the FEM's line integral of H
             # through the bar is 82 A of the 12 kA, the "paper" leg's t_p/2 230 A)
-            h = 0.5 * (ll + (1.0 - corner) * 0.5 * ty)
+            h = 0.5 * (ll + ty - bend_reduction(tl, ty))
             for side, a, b in (("u", f"YU{i}", f"U{i}"), ("l", f"L{i}", f"YL{i}")):
                 mid = f"M{side.upper()}{i}"
                 for j, (n0, n1) in enumerate(((a, mid), (mid, b))):
@@ -276,21 +285,52 @@ def build_guidance_magnet(params: Mapping[str, Any], materials: Mapping[str, Mat
                     Branch(f"back_{i}", f"YU{i}", f"YL{i}",
                            (LeakagePermeance(f"back_{i}", paths["back"]),))]
             if options.fringing:
-                for side, n0, n1 in (("u", f"MU{i}", f"RU{i}"), ("l", f"RL{i}", f"ML{i}")):
+                for side, n0, n1 in (("u", f"MU{i}", f"ROU{i}"), ("l", f"ROL{i}", f"ML{i}")):
                     branches.append(Branch(f"top_{side}_{i}", n0, n1, (FringePermeance(
                         f"top_{side}_{i}", gap_input=g, width_m=paths["top_width"],
                         radius_m=tp + ll, inner_radius_m=tp),)))
+                # the bars' flanks (depth t_p, along the section) to the rail beside the
+                # face: the field of a right-angled pole edge over a plane (the conformal
+                # law, as the TR09 split network's flanks), the outer flank landing above
+                # the face (RO), the inner one below it (RF)
+                for side, n0, n1 in (("u", f"U{i}", f"ROU{i}"), ("u", f"U{i}", f"RFU{i}"),
+                                     ("l", f"ROL{i}", f"L{i}"), ("l", f"RFL{i}", f"L{i}")):
+                    name = f"flank_{side}_{i}_{'o' if 'RO' in n0 + n1 else 'i'}"
+                    branches.append(Branch(name, n0, n1, (FringePermeance(
+                        name, gap_input=g, width_m=L, radius_m=tp, law="conformal"),)))
         branches += [] if split else part(
             f"leg_u_{i}", f"YU{i}", f"U{i}", [IronPath(f"iron_leg_u_{i}", leg_len, leg_area,
                                                        iron)], ny * wy, tl, rho, tl)
-        branches.append(Branch(f"gap_u_{i}", f"U{i}", f"RU{i}", (
-            AirGap(f"gap_u_{i}", gap_input=g, pole_area_m2=face, fringe_edges=edges),)))
         # the rail: flux along its height, eddy currents across its thickness
-        branches += part(f"rail_{i}", f"RU{i}", f"RL{i}",
+        if split:
+            # the face in two strips (outer: gap_u_i_1 to R1, inner: gap_u_i_2 to R2), its
+            # flanks are branches of their own (above); the rail beside the face in pieces
+            # RO -> R1 -> R2 -> RI (h_p/4, h_p/2, h_p/4), RI -> RF (land), and mirrored
+            for k in (1, 2):
+                branches += [
+                    Branch(f"gap_u_{i}_{k}", f"U{i}", f"R{k}U{i}", (AirGap(
+                        f"gap_u_{i}_{k}", gap_input=g, pole_area_m2=0.5 * face),)),
+                    Branch(f"gap_l_{i}_{k}", f"R{k}L{i}", f"L{i}", (AirGap(
+                        f"gap_l_{i}_{k}", gap_input=g, pole_area_m2=0.5 * face),))]
+            pieces = (("o", "RO", "R1", 0.25 * hp), ("f", "R1", "R2", 0.5 * hp),
+                      ("i", "R2", "RI", 0.25 * hp), ("b", "RI", "RF", land))
+            for side in ("u", "l"):
+                for tag, a, b, length in pieces:
+                    name = f"rail_{i}_{side}{tag}"
+                    ends = (f"{a}U{i}", f"{b}U{i}") if side == "u" else (f"{b}L{i}", f"{a}L{i}")
+                    branches += part(name, *ends,
+                                     [IronPath(f"iron_{name}", length, rail_area, rail_mat)],
+                                     L, r["thickness"], rho_rail, r["thickness"])
+        else:
+            branches += [
+                Branch(f"gap_u_{i}", f"U{i}", f"RU{i}", (
+                    AirGap(f"gap_u_{i}", gap_input=g, pole_area_m2=face, fringe_edges=edges),)),
+                Branch(f"gap_l_{i}", f"RL{i}", f"L{i}", (
+                    AirGap(f"gap_l_{i}", gap_input=g, pole_area_m2=face, fringe_edges=edges),))]
+        rail_ends = (f"RFU{i}", f"RFL{i}") if split else (f"RU{i}", f"RL{i}")
+        branches += part(f"rail_{i}", *rail_ends,
                          [IronPath(f"iron_rail_{i}", rail_len, rail_area, rail_mat)],
                          L, r["thickness"], rho_rail, r["thickness"])
-        branches.append(Branch(f"gap_l_{i}", f"RL{i}", f"L{i}", (
-            AirGap(f"gap_l_{i}", gap_input=g, pole_area_m2=face, fringe_edges=edges),)))
         branches += [] if split else part(
             f"leg_l_{i}", f"L{i}", f"YL{i}", [IronPath(f"iron_leg_l_{i}", leg_len, leg_area,
                                                        iron)], ny * wy, tl, rho, tl)
@@ -329,12 +369,38 @@ def build_guidance_magnet(params: Mapping[str, Any], materials: Mapping[str, Mat
                        (IronPath(f"iron_bar_u_{j}_{i}", bar, hp * tp, iron),)),
                 Branch(f"bar_l_{j}_{i}", f"L{j}", f"L{i}",
                        (IronPath(f"iron_bar_l_{j}_{i}", bar, hp * tp, iron),)),
-                Branch(f"rail_u_{j}_{i}", f"RU{j}", f"RU{i}",
-                       (IronPath(f"iron_rail_u_{j}_{i}", bar, hp * r["thickness"], rail_mat),)),
-                Branch(f"rail_l_{j}_{i}", f"RL{j}", f"RL{i}",
-                       (IronPath(f"iron_rail_l_{j}_{i}", bar, hp * r["thickness"], rail_mat),)),
             ]
+            # the rail beside the faces along the track ("split": beside each strip, half
+            # the section each)
+            for side in ("u", "l"):
+                nodes = (f"R1{side.upper()}", f"R2{side.upper()}") if split \
+                    else (f"R{side.upper()}",)
+                for node in nodes:
+                    name = f"rail_{side}_{j}_{i}" + (f"_{node[1]}" if split else "")
+                    branches.append(Branch(name, f"{node}{j}", f"{node}{i}", (IronPath(
+                        f"iron_{name}", bar, hp * r["thickness"] / len(nodes), rail_mat),)))
     return m["name"], Network(tuple(branches), tuple(circuits), name=m["name"])
+
+
+def bend_reduction(w_own: float, w_other: float) -> float:
+    """Reduction [m] of a member's outer-edge length at a right-angled bend into a member of
+    width ``w_other`` [m], for a member of width ``w_own`` [m] (2-D, uniform permeability).
+
+    The bend of two strips (widths ``a`` = ``w_own``, ``b`` = ``w_other``) is the image of
+    the upper half plane under Schwarz-Christoffel's ``dz/dzeta = (b/pi) sqrt(zeta + a^2/b^2)
+    / (sqrt(zeta - 1) zeta)`` (outer corner at ``zeta = 1``, inner corner at ``-a^2/b^2``,
+    the strips at ``zeta -> 0`` and ``infinity``); the flux from one strip to the other has
+    the potential ``ln|zeta|/pi`` per unit flux, so the bend's reluctance is that of the two
+    strips along their outer edges up to the outer corner, each less a length
+
+    ``c(a, b) = (a/pi) [2 ln 2 - ln(1 + (b/a)^2) + 2 (b/a) atan(b/a)]``
+
+    (the integral in closed form).  Equal widths: ``c = (ln 2/pi + 1/2) w = 0.7206 w``, the
+    corner square then counts ``2 - 2 x 0.7206 = 0.559`` of a square (the centre lines' right
+    angle: 1, the mean quarter circle: pi/4).  docs/magnets.md, "Guidance magnet".
+    """
+    r = w_other / w_own
+    return w_own / math.pi * (2.0 * math.log(2.0) - math.log1p(r * r) + 2.0 * r * math.atan(r))
 
 
 def plate_flux(a: float, b: float, xi: float, n: int = 4096) -> float:
