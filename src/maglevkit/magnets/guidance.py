@@ -234,26 +234,32 @@ def build_guidance_magnet(params: Mapping[str, Any], materials: Mapping[str, Mat
         return tuple(els)
 
     def part(branch: str, start: str, end: str, irons: list[IronPath], w: float, h: float,
-             rho_: float, thickness: float) -> list[Branch]:
+             rho_: float, thickness: float, eddy_length: float | None = None) -> list[Branch]:
         """An iron part (``irons[0]``; a pole bar ``irons[1]`` in series) as branches: one
         lumped eddy element of the ``w x h`` section over the part's length, or
         (``eddy_model = "ladder"``) the slab ladder of the part across ``thickness`` and the
-        bar's own ladder across its height ``h_p``."""
+        bar's own ladder across its height ``h_p``.  ``eddy_length`` [m]: the length of
+        conducting material the eddy currents see, where it differs from the magnetic
+        length (the yoke-leg bends: the centre lines, which share out the corner's
+        material; the bend's magnetic length is shorter)."""
+        length = irons[0].length_m if eddy_length is None else eddy_length
         if not ladder:
             return [Branch(branch, start, end, with_eddy(
-                list(irons), f"eddy_{branch}", w, h, irons[0].length_m, rho_))]
+                list(irons), f"eddy_{branch}", w, h, length, rho_))]
         mid = f"{branch}:bar" if len(irons) > 1 else end
-        out = slab(branch, start, mid, irons[0], thickness, w, rho_)
+        out = slab(branch, start, mid, irons[0], thickness, w, rho_, length)
         if len(irons) > 1:
             out += slab(mid, mid, end, irons[1], hp, L, rho_)
         return out
 
     def slab(branch: str, start: str, end: str, iron: IronPath, thickness: float,
-             depth: float, rho_: float) -> list[Branch]:
+             depth: float, rho_: float, eddy_length: float | None = None) -> list[Branch]:
         """The slab ladder of one part across ``thickness``; with ``end_effects`` the
         Saint-Venant factor of its finite ``depth`` (docs/equations.md 1a), as the
-        U-magnet's."""
+        U-magnet's; the eddy conductances over ``eddy_length`` (default: the part's)."""
         factor = saint_venant_factor(thickness, depth) if m["end_effects"] else 1.0
+        if eddy_length is not None:
+            factor *= eddy_length / iron.length_m
         return ladder_branches(branch, start, end, iron, thickness_m=thickness,
                                resistivity=rho_, layers=options.eddy_layers, factor=factor)
 
@@ -277,7 +283,8 @@ def build_guidance_magnet(params: Mapping[str, Any], materials: Mapping[str, Mat
                     els = [IronPath(f"iron_leg_{side}_{i}_{j}", h, leg_area, iron)]
                     if j == (1 if side == "u" else 0):
                         els.append(IronPath(f"iron_bar_{side}_{i}", tp, L * hp, iron))
-                    branches += part(f"leg_{side}_{i}_{j}", n0, n1, els, ny * wy, tl, rho, tl)
+                    branches += part(f"leg_{side}_{i}_{j}", n0, n1, els, ny * wy, tl, rho, tl,
+                                     eddy_length=0.5 * (ll + 0.5 * ty))
             if options.leakage:
                 branches += [
                     Branch(f"leak_leg_{i}", f"MU{i}", f"ML{i}",
@@ -345,18 +352,19 @@ def build_guidance_magnet(params: Mapping[str, Any], materials: Mapping[str, Mat
             # with the ladder the air joins the yoke's ends directly (no eddy current in
             # the iron encircles that air flux) and the yoke is its ladder across t_y
             end = f"EY{i}" if eddy and not ladder else f"YU{i}"
-            branches += [*(slab(f"yoke_{i}", f"YL{i}", end, yoke_iron, ty, ny * wy, rho)
+            branches += [*(slab(f"yoke_{i}", f"YL{i}", end, yoke_iron, ty, ny * wy, rho, dist)
                            if ladder else [Branch(f"yoke_{i}", f"YL{i}", end, (yoke_iron,))]),
                          Branch(f"coil_air_{i}", f"YL{i}", end, (LeakagePermeance(
                              f"coil_air_{i}", paths["coil_air"]),))]
             if eddy and not ladder:
                 branches.append(Branch(f"eddy_yoke_{i}", end, f"YU{i}", (
-                    EddyCurrent.solid_rectangular(f"eddy_yoke_{i}", ny * wy, ty, yoke_len, rho),)))
+                    EddyCurrent.solid_rectangular(f"eddy_yoke_{i}", ny * wy, ty, dist, rho),)))
             # one winding on two parallel branches: its flux is the turn-weighted mean
             coils = [Coil(b, m["turns_per_yoke"], pole=f"yoke_{i}",
                           pole_turns=m["turns_per_yoke"]) for b in (f"yoke_{i}", f"coil_air_{i}")]
         else:
-            branches += part(f"yoke_{i}", f"YL{i}", f"YU{i}", [yoke_iron], ny * wy, ty, rho, ty)
+            branches += part(f"yoke_{i}", f"YL{i}", f"YU{i}", [yoke_iron], ny * wy, ty, rho, ty,
+                             eddy_length=dist)
         if options.leakage:
             branches.append(Branch(f"leak_{i}", f"U{i}", f"L{i}",
                                    (LeakagePermeance(f"leak_{i}", g_leak),)))
