@@ -17,15 +17,22 @@ paths a 2-D cross-section FEM showed missing (docs/validation_fem.md) and needs 
 build ``coil_thickness``::
 
       YU_i --leg_u_i_0-- MU_i --leg_u_i_1 (+ bar)-- U_i        legs in halves, bar its own
-       |                  +--top_u_i-- RU_i                    member; top: leg top -> rail
+       |                  +--top_u_i-- RO_u            member; top: leg top -> rail
     back_i  yoke_i ||     leak_leg_i                          back: behind the yoke
        |    coil_air_i    |                                    coil_air: the coil's own
       YL_i --leg_l_i_1-- ML_i --leg_l_i_0 (+ bar)-- L_i        cross-section beside the yoke
 
+and, beside each face (upper shown; nodes of section i)::
+
+      U --gap_u_i_1--> R1       U --flank_u_i_o--> RO     the face in two strips, the
+      U --gap_u_i_2--> R2       U --flank_u_i_i--> RF     flanks by the conformal edge law
+      rail: RO -> R1 -> R2 -> RI -> RF --rail_i-- RF_l    h_p/4, h_p/2, h_p/4, t_p/3, middle
+
 (with lumped eddy currents the yoke's eddy element follows ``yoke_i`` and ``coil_air_i``
-through a node ``EY_i``), and takes the iron members' lengths from where the flux runs: the rail
-``d`` long, the yoke-leg corners on their mean quarter circle.  Formulas: :func:`_split_paths`
-and docs/magnets.md.
+through a node ``EY_i``), and takes the iron members' lengths from where the flux runs: the
+yoke-leg bends from their conformal map (:func:`bend_reduction`), the rail from the face's
+entry to the mid-plane without a corner, the inner flank's flux landing ``t_p/3`` below the
+face (guide26, docs/validation_fem.md).  Formulas: :func:`_split_paths` and docs/magnets.md.
 
 Eddy currents (solid iron): ``eddy_model = "lumped"`` (default) puts one
 ``EddyCurrent.solid_rectangular`` element on each half leg (with the pole bar's iron), the
@@ -270,9 +277,9 @@ def build_guidance_magnet(params: Mapping[str, Any], materials: Mapping[str, Mat
         if split:
             # legs in two halves (node M at mid-length: the window's leakage and the top
             # fringe leave there), their leakage to the other leg, the air behind the yoke
-            # (yoke end to yoke end) and the legs' top fringe to the rail.  A leg runs from
-            # the yoke's centre line (less the corner's share) to the bar's back, at the
-            # legs' section; the bar is a member of its own in series at the leg's end,
+            # (yoke end to yoke end) and the legs' top fringe to the rail.  A leg runs along
+            # its outer edge from the outer corner (less the bend's reduction) to the bar's
+            # back, at the legs' section; the bar is a member of its own in series at the leg's end,
             # t_p at its section L h_p (the "paper" leg counts t_p/2 at the legs' smaller
             # section, which saturates first: at 6 mm / 80 A the FEM's line integral of H
             # through the bar is 82 A of the 12 kA, the "paper" leg's t_p/2 230 A)
