@@ -212,7 +212,7 @@ def build_guidance_magnet(params: Mapping[str, Any], materials: Mapping[str, Mat
     # "split": where the bars' inner flanks' flux lands on the rail below the face: Roters'
     # tube from flank depth x lands x beside the face, and the centroid of their flux density
     # 1/(s + pi x/2) over the flank depth t_p is 0.31 / 0.35 / 0.39 t_p at s = 0.15 / 0.25 /
-    # 0.5 t_p: t_p/3 (at most a quarter of the window, so that the rail's middle stays)
+    # 0.5 t_p: t_p/3 (at most a quarter of the window: the rail's middle keeps a length)
     land = min(tp / 3.0, 0.25 * window)
     if split:
         # the rail in pieces (upper side; the lower mirrors it): the face's flux enters
