@@ -11,8 +11,11 @@ has to re-measure them.
 
 ``flux_paths = "split"`` (guidance26) adds the missing paths from geometry (air behind the
 yoke, the legs' window leakage and top fringe, the coil's cross-section beside the yoke);
-it is held to its own measured errors, on the grid and on five points solved after the
-paths were chosen (held out).
+it is held to its own measured errors, on the grid and on ten points solved after the
+paths were chosen (held out then; guide26 changed the paths looking at all 22).  guide26: the
+yoke-leg bend from its conformal map, the bars' flanks with the conformal edge law landing on
+the rail beside the face, the rail beside the face in pieces; checked on the field's own MMF
+drops and region fluxes (``test_split_network_mmf_drops_against_the_field``, slow).
 """
 
 from __future__ import annotations
@@ -98,32 +101,47 @@ def test_recorded_fem_is_converged_and_balanced() -> None:
 
 # "split": (network - FEM)/FEM [%], force, flux linkage, differential inductance; the
 # grid, then the held-out points: the first five solved after the air paths were fixed,
-# the last five after the iron members' lengths were too.  Same 0.3 pp margin.
+# the last five after the iron members' lengths were too (guidance26).  Since guide26 (the
+# yoke-leg bend from its conformal map, the bars' flanks by the conformal edge law landing
+# beside the face, the rail beside the face in pieces) no point is held out: all 22 were
+# seen while those were chosen.  Same 0.3 pp margin.
 MEASURED_SPLIT = {
-    (6.0, 10.0): (-3.1, -2.1, -1.9),
-    (6.0, 32.0): (-1.4, -1.3, -2.7),
-    (6.0, 50.0): (-2.6, -1.4, -2.6),
-    (6.0, 80.0): (-4.2, -1.5, -2.3),
-    (10.0, 10.0): (-1.9, -2.0, -1.9),
-    (10.0, 32.0): (-0.4, -1.3, +0.2),
-    (10.0, 50.0): (-0.7, -1.2, -1.6),
-    (10.0, 80.0): (-2.2, -1.2, -1.9),
-    (20.0, 10.0): (+1.3, -2.5, -2.5),
-    (20.0, 32.0): (+1.7, -2.3, -1.7),
-    (20.0, 50.0): (+3.2, -1.6, +1.9),
-    (20.0, 80.0): (+3.6, -0.9, +0.6),
+    (6.0, 10.0): (+0.2, -0.0, +0.1),
+    (6.0, 32.0): (+0.5, +0.1, -4.6),
+    (6.0, 50.0): (-1.1, -0.4, -3.1),
+    (6.0, 80.0): (-2.6, -0.6, -2.2),
+    (10.0, 10.0): (-0.1, -0.0, -0.0),
+    (10.0, 32.0): (+1.1, +0.5, +0.3),
+    (10.0, 50.0): (-0.5, -0.1, -2.8),
+    (10.0, 80.0): (-2.1, -0.4, -1.9),
+    (20.0, 10.0): (+1.1, -0.2, -0.2),
+    (20.0, 32.0): (+1.4, -0.0, +0.6),
+    (20.0, 50.0): (+2.0, +0.3, +0.2),
+    (20.0, 80.0): (+0.7, +0.1, -0.8),
 }
 HELD_OUT_SPLIT = {
-    (8.0, 20.0): (-1.9, -1.7, -0.7),
-    (8.0, 65.0): (-2.5, -1.3, -2.2),
-    (15.0, 20.0): (-0.3, -2.1, -1.9),
-    (15.0, 65.0): (+1.1, -1.0, -0.4),
-    (12.0, 100.0): (-2.1, -1.2, -1.8),
-    (7.0, 40.0): (-1.5, -1.3, -2.5),
-    (9.0, 90.0): (-3.2, -1.3, -2.1),
-    (13.0, 30.0): (-0.3, -1.7, -0.4),
-    (17.0, 60.0): (+2.3, -1.1, +0.8),
-    (18.0, 100.0): (+1.5, -0.9, -0.8),
+    (8.0, 20.0): (+0.6, +0.2, +1.2),
+    (8.0, 65.0): (-1.7, -0.4, -2.3),
+    (15.0, 20.0): (+0.3, -0.0, +0.2),
+    (15.0, 65.0): (-0.3, +0.0, -1.7),
+    (12.0, 100.0): (-2.7, -0.3, -1.6),
+    (7.0, 40.0): (-0.3, -0.1, -3.8),
+    (9.0, 90.0): (-2.7, -0.4, -1.8),
+    (13.0, 30.0): (+0.7, +0.3, +1.3),
+    (17.0, 60.0): (+0.6, +0.1, -1.4),
+    (18.0, 100.0): (-1.0, -0.0, -1.1),
+}
+
+#: solved after guide26 chose its network (benchmarks/fem_guidance.py HELD_OUT_GUIDE26):
+#: held out from that choice; before guide26 -5.1 / -3.7 / -0.5 / -1.0 / +0.7 / +3.2 % in
+#: force, -1.6 ... -1.0 % in psi
+HELD_OUT_GUIDE26 = {
+    (6.0, 100.0): (-3.4, -0.7, -1.9),
+    (7.0, 80.0): (-2.5, -0.6, -2.1),
+    (11.0, 55.0): (-0.6, -0.1, -2.5),
+    (14.0, 100.0): (-2.3, -0.2, -1.4),
+    (16.0, 35.0): (+1.1, +0.3, +1.2),
+    (19.0, 70.0): (+0.8, +0.1, -1.0),
 }
 
 
@@ -140,14 +158,50 @@ def test_split_network_against_recorded_fem() -> None:
         r = rows[k]
         for name, got, w in (("F", r["eF"], ef), ("psi", r["epsi"], epsi), ("L", r["eL"], el)):
             assert w - MARGIN <= got <= w + MARGIN, (k, name, got)
-        # the aims for flux linkage (3 %) and differential inductance (5 %) everywhere,
-        # 6-20 mm, 10-100 A, into deep saturation
+        # issue 26's aims everywhere, 6-20 mm, 10-100 A, into deep saturation: force and
+        # flux linkage within 3 %, differential inductance within 5 %
+        assert abs(r["eF"]) < 3.0 and abs(r["epsi"]) < 3.0 and abs(r["eL"]) < 5.0, k
+    # the points held out from guide26's choice: flux linkage and L within the aims; the
+    # force within 3 % except in the deepest saturation at the smallest gap (6 mm / 100 A:
+    # -3.4 %, the gap's MMF 1.8 % short there, docs/validation_fem.md)
+    held = {(r["s_mm"], r["I_A"]): r for r in fem.compare(mag, data,
+                                                          points=fem.HELD_OUT_GUIDE26)}
+    assert set(held) == set(HELD_OUT_GUIDE26)
+    for k, (ef, epsi, el) in HELD_OUT_GUIDE26.items():
+        r = held[k]
+        for name, got, w in (("F", r["eF"], ef), ("psi", r["epsi"], epsi), ("L", r["eL"], el)):
+            assert w - MARGIN <= got <= w + MARGIN, (k, name, got)
         assert abs(r["epsi"]) < 3.0 and abs(r["eL"]) < 5.0, k
-        # the force's 3 % aim is missed at 6 mm / 10 and 80 A, 9 mm / 90 A (low) and at
-        # 20 mm / 50-80 A (high): within 4.5 %
-        assert abs(r["eF"]) < 4.5, k
+        assert abs(r["eF"]) < (3.5 if k == (6.0, 100.0) else 3.0), k
     # the air behind the yoke carries what the field returns behind it: within 11 % at
     # every grid point (the plate model of the back face, no factor; measured -10 ... +6 %)
     for k in MEASURED_SPLIT:
         f, n = rows[k]["flux_fem"], rows[k]["flux_net"]
         assert n["back"] == pytest.approx(f["behind"], rel=0.11), k
+
+
+@pytest.mark.slow
+def test_split_network_mmf_drops_against_the_field() -> None:
+    """Where the MMF goes (the line integral of H along the FEM's centre path, solved anew
+    here, about 5 s a point) against the split network: the magnet's iron, the gap and the
+    rail beside and below the face.  In linear iron (10 A) the network's iron took 7-8 %
+    more than the field before guide26 (the corners), so its gap 0.9-1.6 % less, 1.8-3.2 %
+    in force; in saturation (80 A) the rail took 15-24 % more (one step for the face's entry,
+    the inner flank's flux landing at the face's edge).  Measured now (6 / 10 / 20 mm): iron
+    +1.3 / +1.9 / +2.3 % at 10 A, +0.4 / +0.8 / +0.5 % at 80 A; gap +0.2 / -0.0 / -0.2 % at
+    10 A, -1.3 / -1.1 / -0.4 % at 80 A; rail -5.5 / -4.2 / -0.7 % at 10 A, +2.2 / +1.8 /
+    +2.1 % at 80 A."""
+    fem = _fem()
+    mag = fem.network_magnet("split")
+    g = fem.Geometry.from_magnet(mag)
+    for smm, i in ((6.0, 10.0), (6.0, 80.0), (20.0, 80.0)):
+        f = fem.field_regions(g, smm * 1e-3, i)
+        n = fem.network_regions(mag, smm * 1e-3, i)
+        # the FEM's loop closes to N I/2 within 0.1 % (its line integral's own error)
+        assert sum(f["mmf_A"].values()) == pytest.approx(150.0 * i, rel=1.5e-3)
+        err = {k: n["mmf_A"][k] / f["mmf_A"][k] - 1 for k in ("iron", "gap", "rail")}
+        # the gap's MMF sets the force (~ its square): within 1.5 %; the iron within 2.5 %,
+        # the rail within 7 % (it takes 2-6 % of the loop's MMF: < 0.4 % of it either way)
+        assert abs(err["gap"]) < 0.015, (smm, i, err)
+        assert abs(err["iron"]) < 0.025, (smm, i, err)
+        assert abs(err["rail"]) < 0.07, (smm, i, err)

@@ -75,6 +75,13 @@ its new network hash (a new element field in its repr; every map entry equal to 
 one).  After the circuit elements' fields got their units (units22: `length_m`, ...), every
 network hash moved again with the same values: the maps were stored anew under the new
 hashes (all map entries, all twelve runs and the whole-run reference bit-identical).
+The same again for the circuits' and materials' fields (units22b: `resistance_ohm`,
+`resistivity_ohm_m`), the stored files relabelled by ``tools/relabel_vehicle_run_maps.py``.
+The six cross-section runs were re-recorded after a deliberate change of the guidance
+magnet's network (guide26: conformal corner bends and flank branches, from geometry),
+its maps stored under the new hash; against the recording before, chassis_y <= 1.9e-2,
+guidance force <= 1.6e-2 of each variable's largest value; the heave-pitch runs and the
+whole-run reference bit-identical.
 """
 
 from __future__ import annotations

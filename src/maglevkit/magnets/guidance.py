@@ -17,15 +17,22 @@ paths a 2-D cross-section FEM showed missing (docs/validation_fem.md) and needs 
 build ``coil_thickness``::
 
       YU_i --leg_u_i_0-- MU_i --leg_u_i_1 (+ bar)-- U_i        legs in halves, bar its own
-       |                  +--top_u_i-- RU_i                    member; top: leg top -> rail
+       |                  +--top_u_i-- RO_u            member; top: leg top -> rail
     back_i  yoke_i ||     leak_leg_i                          back: behind the yoke
        |    coil_air_i    |                                    coil_air: the coil's own
       YL_i --leg_l_i_1-- ML_i --leg_l_i_0 (+ bar)-- L_i        cross-section beside the yoke
 
+and, beside each face (upper shown; nodes of section i)::
+
+      U --gap_u_i_1--> R1       U --flank_u_i_o--> RO     the face in two strips, the
+      U --gap_u_i_2--> R2       U --flank_u_i_i--> RF     flanks by the conformal edge law
+      rail: RO -> R1 -> R2 -> RI -> RF --rail_i-- RF_l    h_p/4, h_p/2, h_p/4, t_p/3, middle
+
 (with lumped eddy currents the yoke's eddy element follows ``yoke_i`` and ``coil_air_i``
-through a node ``EY_i``), and takes the iron members' lengths from where the flux runs: the rail
-``d`` long, the yoke-leg corners on their mean quarter circle.  Formulas: :func:`_split_paths`
-and docs/magnets.md.
+through a node ``EY_i``), and takes the iron members' lengths from where the flux runs: the
+yoke-leg bends from their conformal map (:func:`bend_reduction`), the rail from the face's
+entry to the mid-plane without a corner, the inner flank's flux landing ``t_p/3`` below the
+face (guide26, docs/validation_fem.md).  Formulas: :func:`_split_paths` and docs/magnets.md.
 
 Eddy currents (solid iron): ``eddy_model = "lumped"`` (default) puts one
 ``EddyCurrent.solid_rectangular`` element on each half leg (with the pole bar's iron), the
@@ -194,20 +201,29 @@ def build_guidance_magnet(params: Mapping[str, Any], materials: Mapping[str, Mat
     yoke_area = ny * wy * ty
     leg_len = ll + 0.5 * (tp + ty)
     yoke_len = dist
-    # "split": the flux turns round the yoke-leg corner (square t_y x t_l) on its mean
-    # quarter circle, not along the centre lines' right angle: the corner's length
-    # t_y/2 + t_l/2 becomes (pi/4)(t_y/2 + t_l/2), each member shortened by its share
-    corner = 1.0 - 0.25 * math.pi
+    # "split": the yoke-leg corner (the t_y x t_l rectangle) as the conformal map of a
+    # right-angled bend gives it (bend_reduction): each member runs along its outer edge to
+    # the outer corner, less the bend's reduction of that member (equal widths: the corner
+    # square counts 0.559 of a square, the centre lines' right angle 1, the mean quarter
+    # circle used before 0.785)
     if split:
-        yoke_len = dist - 2.0 * corner * 0.5 * tl
+        yoke_len = dist + tl - 2.0 * bend_reduction(ty, tl)
     rail_len = dist + r["thickness"]
+    # "split": where the bars' inner flanks' flux lands on the rail below the face: Roters'
+    # tube from flank depth x lands x beside the face, and the centroid of their flux density
+    # 1/(s + pi x/2) over the flank depth t_p is 0.31 / 0.35 / 0.39 t_p at s = 0.15 / 0.25 /
+    # 0.5 t_p: t_p/3 (at most a quarter of the window: the rail's middle keeps a length)
+    land = min(tp / 3.0, 0.25 * window)
     if split:
-        # the rail takes the flux in over the whole face height h_p (uniformly: the MMF drop
-        # of the entry region is that of h_p/2 at full flux) and carries it from the face's
-        # inner edge to the mid-plane: 2 (d/2 - h_p/2 + h_p/2) = d, no corner to turn (the
-        # centre-line length d + t_r counts a turn at the rail's mid-thickness; the FEM's
-        # line integral of H along the rail is 0.82 of it at 6 mm / 10 A)
-        rail_len = dist
+        # the rail in pieces (upper side; the lower mirrors it): the face's flux enters
+        # over the face height in two strips of h_p/2, each at its middle (nodes R1, R2:
+        # the staircase of the uniform entry, whose drop in linear iron is h_p/2 at full
+        # flux like the ramp's; in saturation nearer the ramp's than one step), the outer
+        # flank and the legs' top fringe above the face (RO, the bar's outer edge: their
+        # flux crosses the whole face height), the inner flank below it at ``land`` (RF);
+        # the rest runs to the mid-plane, no corner to turn: d - h_p - 2 land between RF_u
+        # and RF_l
+        rail_len = dist - hp - 2.0 * land
     rail_area = L * r["thickness"]
     # leakage between the pole bars across the window (parallel faces, flank depth t_p)
     # and between the legs (energy-equivalent coil height h_c/3 for the yoke part)
@@ -225,26 +241,32 @@ def build_guidance_magnet(params: Mapping[str, Any], materials: Mapping[str, Mat
         return tuple(els)
 
     def part(branch: str, start: str, end: str, irons: list[IronPath], w: float, h: float,
-             rho_: float, thickness: float) -> list[Branch]:
+             rho_: float, thickness: float, eddy_length: float | None = None) -> list[Branch]:
         """An iron part (``irons[0]``; a pole bar ``irons[1]`` in series) as branches: one
         lumped eddy element of the ``w x h`` section over the part's length, or
         (``eddy_model = "ladder"``) the slab ladder of the part across ``thickness`` and the
-        bar's own ladder across its height ``h_p``."""
+        bar's own ladder across its height ``h_p``.  ``eddy_length`` [m]: the length of
+        conducting material the eddy currents see, where it differs from the magnetic
+        length (the yoke-leg bends: the centre lines, which share out the corner's
+        material; the bend's magnetic length is shorter)."""
+        length = irons[0].length_m if eddy_length is None else eddy_length
         if not ladder:
             return [Branch(branch, start, end, with_eddy(
-                list(irons), f"eddy_{branch}", w, h, irons[0].length_m, rho_))]
+                list(irons), f"eddy_{branch}", w, h, length, rho_))]
         mid = f"{branch}:bar" if len(irons) > 1 else end
-        out = slab(branch, start, mid, irons[0], thickness, w, rho_)
+        out = slab(branch, start, mid, irons[0], thickness, w, rho_, length)
         if len(irons) > 1:
             out += slab(mid, mid, end, irons[1], hp, L, rho_)
         return out
 
     def slab(branch: str, start: str, end: str, iron: IronPath, thickness: float,
-             depth: float, rho_: float) -> list[Branch]:
+             depth: float, rho_: float, eddy_length: float | None = None) -> list[Branch]:
         """The slab ladder of one part across ``thickness``; with ``end_effects`` the
         Saint-Venant factor of its finite ``depth`` (docs/equations.md 1a), as the
-        U-magnet's."""
+        U-magnet's; the eddy conductances over ``eddy_length`` (default: the part's)."""
         factor = saint_venant_factor(thickness, depth) if m["end_effects"] else 1.0
+        if eddy_length is not None:
+            factor *= eddy_length / iron.length_m
         return ladder_branches(branch, start, end, iron, thickness_m=thickness,
                                resistivity_ohm_m=rho_, layers=options.eddy_layers, factor=factor)
 
@@ -255,20 +277,21 @@ def build_guidance_magnet(params: Mapping[str, Any], materials: Mapping[str, Mat
         if split:
             # legs in two halves (node M at mid-length: the window's leakage and the top
             # fringe leave there), their leakage to the other leg, the air behind the yoke
-            # (yoke end to yoke end) and the legs' top fringe to the rail.  A leg runs from
-            # the yoke's centre line (less the corner's share) to the bar's back, at the
-            # legs' section; the bar is a member of its own in series at the leg's end,
+            # (yoke end to yoke end) and the legs' top fringe to the rail.  A leg runs along
+            # its outer edge from the outer corner (less the bend's reduction) to the bar's
+            # back, at the legs' section; the bar is a member of its own in series at the leg's end,
             # t_p at its section L h_p (the "paper" leg counts t_p/2 at the legs' smaller
             # section, which saturates first: at 6 mm / 80 A the FEM's line integral of H
             # through the bar is 82 A of the 12 kA, the "paper" leg's t_p/2 230 A)
-            h = 0.5 * (ll + (1.0 - corner) * 0.5 * ty)
+            h = 0.5 * (ll + ty - bend_reduction(tl, ty))
             for side, a, b in (("u", f"YU{i}", f"U{i}"), ("l", f"L{i}", f"YL{i}")):
                 mid = f"M{side.upper()}{i}"
                 for j, (n0, n1) in enumerate(((a, mid), (mid, b))):
                     els = [IronPath(f"iron_leg_{side}_{i}_{j}", h, leg_area, iron)]
                     if j == (1 if side == "u" else 0):
                         els.append(IronPath(f"iron_bar_{side}_{i}", tp, L * hp, iron))
-                    branches += part(f"leg_{side}_{i}_{j}", n0, n1, els, ny * wy, tl, rho, tl)
+                    branches += part(f"leg_{side}_{i}_{j}", n0, n1, els, ny * wy, tl, rho, tl,
+                                     eddy_length=0.5 * (ll + 0.5 * ty))
             if options.leakage:
                 branches += [
                     Branch(f"leak_leg_{i}", f"MU{i}", f"ML{i}",
@@ -276,21 +299,52 @@ def build_guidance_magnet(params: Mapping[str, Any], materials: Mapping[str, Mat
                     Branch(f"back_{i}", f"YU{i}", f"YL{i}",
                            (LeakagePermeance(f"back_{i}", paths["back"]),))]
             if options.fringing:
-                for side, n0, n1 in (("u", f"MU{i}", f"RU{i}"), ("l", f"RL{i}", f"ML{i}")):
+                for side, n0, n1 in (("u", f"MU{i}", f"ROU{i}"), ("l", f"ROL{i}", f"ML{i}")):
                     branches.append(Branch(f"top_{side}_{i}", n0, n1, (FringePermeance(
                         f"top_{side}_{i}", gap_input=g, width_m=paths["top_width"],
                         radius_m=tp + ll, inner_radius_m=tp),)))
+                # the bars' flanks (depth t_p, along the section) to the rail beside the
+                # face: the field of a right-angled pole edge over a plane (the conformal
+                # law, as the TR09 split network's flanks), the outer flank landing above
+                # the face (RO), the inner one below it (RF)
+                for side, n0, n1 in (("u", f"U{i}", f"ROU{i}"), ("u", f"U{i}", f"RFU{i}"),
+                                     ("l", f"ROL{i}", f"L{i}"), ("l", f"RFL{i}", f"L{i}")):
+                    name = f"flank_{side}_{i}_{'o' if 'RO' in n0 + n1 else 'i'}"
+                    branches.append(Branch(name, n0, n1, (FringePermeance(
+                        name, gap_input=g, width_m=L, radius_m=tp, law="conformal"),)))
         branches += [] if split else part(
             f"leg_u_{i}", f"YU{i}", f"U{i}", [IronPath(f"iron_leg_u_{i}", leg_len, leg_area,
                                                        iron)], ny * wy, tl, rho, tl)
-        branches.append(Branch(f"gap_u_{i}", f"U{i}", f"RU{i}", (
-            AirGap(f"gap_u_{i}", gap_input=g, pole_area_m2=face, fringe_edges=edges),)))
         # the rail: flux along its height, eddy currents across its thickness
-        branches += part(f"rail_{i}", f"RU{i}", f"RL{i}",
+        if split:
+            # the face in two strips (outer: gap_u_i_1 to R1, inner: gap_u_i_2 to R2), its
+            # flanks are branches of their own (above); the rail beside the face in pieces
+            # RO -> R1 -> R2 -> RI (h_p/4, h_p/2, h_p/4), RI -> RF (land), and mirrored
+            for k in (1, 2):
+                branches += [
+                    Branch(f"gap_u_{i}_{k}", f"U{i}", f"R{k}U{i}", (AirGap(
+                        f"gap_u_{i}_{k}", gap_input=g, pole_area_m2=0.5 * face),)),
+                    Branch(f"gap_l_{i}_{k}", f"R{k}L{i}", f"L{i}", (AirGap(
+                        f"gap_l_{i}_{k}", gap_input=g, pole_area_m2=0.5 * face),))]
+            pieces = (("o", "RO", "R1", 0.25 * hp), ("f", "R1", "R2", 0.5 * hp),
+                      ("i", "R2", "RI", 0.25 * hp), ("b", "RI", "RF", land))
+            for side in ("u", "l"):
+                for tag, a, b, length in pieces:
+                    name = f"rail_{i}_{side}{tag}"
+                    ends = (f"{a}U{i}", f"{b}U{i}") if side == "u" else (f"{b}L{i}", f"{a}L{i}")
+                    branches += part(name, *ends,
+                                     [IronPath(f"iron_{name}", length, rail_area, rail_mat)],
+                                     L, r["thickness"], rho_rail, r["thickness"])
+        else:
+            branches += [
+                Branch(f"gap_u_{i}", f"U{i}", f"RU{i}", (
+                    AirGap(f"gap_u_{i}", gap_input=g, pole_area_m2=face, fringe_edges=edges),)),
+                Branch(f"gap_l_{i}", f"RL{i}", f"L{i}", (
+                    AirGap(f"gap_l_{i}", gap_input=g, pole_area_m2=face, fringe_edges=edges),))]
+        rail_ends = (f"RFU{i}", f"RFL{i}") if split else (f"RU{i}", f"RL{i}")
+        branches += part(f"rail_{i}", *rail_ends,
                          [IronPath(f"iron_rail_{i}", rail_len, rail_area, rail_mat)],
                          L, r["thickness"], rho_rail, r["thickness"])
-        branches.append(Branch(f"gap_l_{i}", f"RL{i}", f"L{i}", (
-            AirGap(f"gap_l_{i}", gap_input=g, pole_area_m2=face, fringe_edges=edges),)))
         branches += [] if split else part(
             f"leg_l_{i}", f"L{i}", f"YL{i}", [IronPath(f"iron_leg_l_{i}", leg_len, leg_area,
                                                        iron)], ny * wy, tl, rho, tl)
@@ -305,18 +359,19 @@ def build_guidance_magnet(params: Mapping[str, Any], materials: Mapping[str, Mat
             # with the ladder the air joins the yoke's ends directly (no eddy current in
             # the iron encircles that air flux) and the yoke is its ladder across t_y
             end = f"EY{i}" if eddy and not ladder else f"YU{i}"
-            branches += [*(slab(f"yoke_{i}", f"YL{i}", end, yoke_iron, ty, ny * wy, rho)
+            branches += [*(slab(f"yoke_{i}", f"YL{i}", end, yoke_iron, ty, ny * wy, rho, dist)
                            if ladder else [Branch(f"yoke_{i}", f"YL{i}", end, (yoke_iron,))]),
                          Branch(f"coil_air_{i}", f"YL{i}", end, (LeakagePermeance(
                              f"coil_air_{i}", paths["coil_air"]),))]
             if eddy and not ladder:
                 branches.append(Branch(f"eddy_yoke_{i}", end, f"YU{i}", (
-                    EddyCurrent.solid_rectangular(f"eddy_yoke_{i}", ny * wy, ty, yoke_len, rho),)))
+                    EddyCurrent.solid_rectangular(f"eddy_yoke_{i}", ny * wy, ty, dist, rho),)))
             # one winding on two parallel branches: its flux is the turn-weighted mean
             coils = [Coil(b, m["turns_per_yoke"], pole=f"yoke_{i}",
                           pole_turns=m["turns_per_yoke"]) for b in (f"yoke_{i}", f"coil_air_{i}")]
         else:
-            branches += part(f"yoke_{i}", f"YL{i}", f"YU{i}", [yoke_iron], ny * wy, ty, rho, ty)
+            branches += part(f"yoke_{i}", f"YL{i}", f"YU{i}", [yoke_iron], ny * wy, ty, rho, ty,
+                             eddy_length=dist)
         if options.leakage:
             branches.append(Branch(f"leak_{i}", f"U{i}", f"L{i}",
                                    (LeakagePermeance(f"leak_{i}", g_leak),)))
@@ -329,12 +384,38 @@ def build_guidance_magnet(params: Mapping[str, Any], materials: Mapping[str, Mat
                        (IronPath(f"iron_bar_u_{j}_{i}", bar, hp * tp, iron),)),
                 Branch(f"bar_l_{j}_{i}", f"L{j}", f"L{i}",
                        (IronPath(f"iron_bar_l_{j}_{i}", bar, hp * tp, iron),)),
-                Branch(f"rail_u_{j}_{i}", f"RU{j}", f"RU{i}",
-                       (IronPath(f"iron_rail_u_{j}_{i}", bar, hp * r["thickness"], rail_mat),)),
-                Branch(f"rail_l_{j}_{i}", f"RL{j}", f"RL{i}",
-                       (IronPath(f"iron_rail_l_{j}_{i}", bar, hp * r["thickness"], rail_mat),)),
             ]
+            # the rail beside the faces along the track ("split": beside each strip, half
+            # the section each)
+            for side in ("u", "l"):
+                nodes = (f"R1{side.upper()}", f"R2{side.upper()}") if split \
+                    else (f"R{side.upper()}",)
+                for node in nodes:
+                    name = f"rail_{side}_{j}_{i}" + (f"_{node[1]}" if split else "")
+                    branches.append(Branch(name, f"{node}{j}", f"{node}{i}", (IronPath(
+                        f"iron_{name}", bar, hp * r["thickness"] / len(nodes), rail_mat),)))
     return m["name"], Network(tuple(branches), tuple(circuits), name=m["name"])
+
+
+def bend_reduction(w_own: float, w_other: float) -> float:
+    """Reduction [m] of a member's outer-edge length at a right-angled bend into a member of
+    width ``w_other`` [m], for a member of width ``w_own`` [m] (2-D, uniform permeability).
+
+    The bend of two strips (widths ``a`` = ``w_own``, ``b`` = ``w_other``) is the image of
+    the upper half plane under Schwarz-Christoffel's ``dz/dzeta = (b/pi) sqrt(zeta + a^2/b^2)
+    / (sqrt(zeta - 1) zeta)`` (outer corner at ``zeta = 1``, inner corner at ``-a^2/b^2``,
+    the strips at ``zeta -> 0`` and ``infinity``); the flux from one strip to the other has
+    the potential ``ln|zeta|/pi`` per unit flux, so the bend's reluctance is that of the two
+    strips along their outer edges up to the outer corner, each less a length
+
+    ``c(a, b) = (a/pi) [2 ln 2 - ln(1 + (b/a)^2) + 2 (b/a) atan(b/a)]``
+
+    (the integral in closed form).  Equal widths: ``c = (ln 2/pi + 1/2) w = 0.7206 w``, the
+    corner square then counts ``2 - 2 x 0.7206 = 0.559`` of a square (the centre lines' right
+    angle: 1, the mean quarter circle: pi/4).  docs/magnets.md, "Guidance magnet".
+    """
+    r = w_other / w_own
+    return w_own / math.pi * (2.0 * math.log(2.0) - math.log1p(r * r) + 2.0 * r * math.atan(r))
 
 
 def plate_flux(a: float, b: float, xi: float, n: int = 4096) -> float:
