@@ -14,10 +14,14 @@ import pytest
 
 from maglevkit import design as design_mod
 from maglevkit.design import DesignSpecError, design_magnet, read_design_spec
-from maglevkit.models.statics import solve_statics
 
 from .test_design import check_active_constraints, check_design_gradients, check_written_design
-from .test_design_tr09 import bundled_doc, check_grid_search_optimum, tr09_mass
+from .test_design_tr09 import (
+    bundled_doc,
+    check_front_force,
+    check_grid_search_optimum,
+    tr09_mass,
+)
 
 #: pole width and pole-back height, bounds around the optimum (126.1 mm, 45.9 mm) so that
 #: the brute-force grid below stays short (every grid point is a statics solve of the
@@ -62,11 +66,7 @@ def test_written_design_meets_the_constraints_resolved(tmp_path: Path,
     # optimiser's symbolic one (check_written_design: to 1e-7 relative)
     mag, ev = check_written_design(spec, res, tmp_path / "tr09-split-optimised.toml")
     assert mag.parameters["magnet"]["flux_paths"] == "split"
-    req = spec.requirements
-    sol = solve_statics(mag, gaps_m=req["nominal_gap_m"], currents_A=ev["nominal_current_A"])
-    front = [k for k, g in enumerate(sol.gap_names) if int(g[1:]) <= 6]
-    assert float(np.sum(np.asarray(sol.pole_force_N)[front])) == pytest.approx(req["force_N"],
-                                                                              rel=1e-9)
+    check_front_force(spec, mag, ev)
 
 
 def test_design_gradients_match_central_differences() -> None:

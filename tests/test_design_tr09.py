@@ -132,7 +132,13 @@ def test_written_design_meets_the_constraints_resolved(tmp_path: Path,
     assert mag.parameters["magnet"].get("flux_paths", "paper") == "paper"
     assert min(ev[k] for k in ("coil_fits_core_m", "coils_fit_window_m", "stator_covers_pole_m",
                                "grooves_leave_face_m")) >= 0.0
-    # the half magnet (circuit "front") holds the force on its own poles
+    check_front_force(spec, mag, ev)
+
+
+def check_front_force(spec: Any, mag: Any, ev: Any) -> None:
+    """The written magnet ``mag``'s half magnet (circuit "front", poles 1-6) holds the
+    spec's force on its own poles at the nominal gap and the optimum's nominal current,
+    re-solved by ``solve_statics`` (to 1e-9: the statics' Newton tolerance)."""
     req = spec.requirements
     sol = solve_statics(mag, gaps_m=req["nominal_gap_m"], currents_A=ev["nominal_current_A"])
     front = [k for k, g in enumerate(sol.gap_names) if int(g[1:]) <= 6]
