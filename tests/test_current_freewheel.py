@@ -56,6 +56,11 @@ def test_table_bspline_and_bank_paths_agree(u_maps) -> None:  # type: ignore[no-
 def test_refusals(u_maps) -> None:  # type: ignore[no-untyped-def]
     with pytest.raises(InputError, match="freewheel"):
         mk.CurrentModel(u_maps, freewheel=True, eddy_modes=1)
+    # the ladder's diodes exist in the bank only: the refusal names where they are
+    with pytest.raises(InputError, match=r"motion_eddy=True.*MagnetBank\(.*freewheel=True\)"):
+        mk.CurrentModel(u_maps, freewheel=True, motion_eddy=True)
+    assert mk.MagnetBank({"m": u_maps}, motion_eddy=True, freewheel=True,
+                         compiled="never").freewheel
     with pytest.raises(InputError, match="freewheel"):
         mk.CurrentModel(u_maps, freewheel="yes")
     with pytest.raises(InputError, match="freewheel=True"):

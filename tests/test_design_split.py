@@ -14,10 +14,14 @@ import pytest
 
 from maglevkit import design as design_mod
 from maglevkit.design import DesignSpecError, design_magnet, read_design_spec
-from maglevkit.models.statics import solve_statics
 
 from .test_design import check_active_constraints, check_design_gradients, check_written_design
-from .test_design_tr09 import _lazy_grid_min, bundled_doc, tr09_mass
+from .test_design_tr09 import (
+    bundled_doc,
+    check_front_force,
+    check_grid_search_optimum,
+    tr09_mass,
+)
 
 #: pole width and pole-back height, bounds around the optimum (126.1 mm, 45.9 mm) so that
 #: the brute-force grid below stays short (every grid point is a statics solve of the
@@ -45,18 +49,7 @@ def test_two_variable_optimum_matches_grid_search(two_variable: tuple[Any, Any])
     wp_o, hb_o = res.values["pole_width"], res.values["back_height"]
     assert res.mass_kg == pytest.approx(tr09_mass(spec, wp_o, hb_o), rel=1e-12)
     assert not any(c.active for c in res.constraints.values() if c.detail == "variable bound")
-    # a coarse grid over the bounds, then one a quarter as fine around its optimum
-    wp, hb = np.linspace(*WP, 9), np.linspace(*HB, 9)
-    _, (a, b) = _lazy_grid_min(spec, wp, hb)
-    h_wp, h_hb = (wp[1] - wp[0]) / 4, (hb[1] - hb[0]) / 4
-    m_grid, (a, b) = _lazy_grid_min(spec, a + h_wp * np.arange(-4, 5), b + h_hb * np.arange(-4, 5))
-    # no grid point is lighter than the optimum (feasibility to 1e-6 relative, the order of
-    # IPOPT's constraint tolerance), and the grid's best lies within one fine cell of it:
-    # a wider face lowers the current density, a taller back the flux density, so the
-    # corner one cell up and right of the optimum is feasible and bounds the excess mass
-    assert m_grid >= res.mass_kg * (1 - 1e-6)
-    assert m_grid - res.mass_kg <= tr09_mass(spec, wp_o + h_wp, hb_o + h_hb) - res.mass_kg
-    assert abs(a - wp_o) <= h_wp and abs(b - hb_o) <= h_hb
+    check_grid_search_optimum(spec, res, np.linspace(*WP, 9), np.linspace(*HB, 9))
 
 
 def test_active_constraints_are_reported(two_variable: tuple[Any, Any]) -> None:
@@ -73,11 +66,7 @@ def test_written_design_meets_the_constraints_resolved(tmp_path: Path,
     # optimiser's symbolic one (check_written_design: to 1e-7 relative)
     mag, ev = check_written_design(spec, res, tmp_path / "tr09-split-optimised.toml")
     assert mag.parameters["magnet"]["flux_paths"] == "split"
-    req = spec.requirements
-    sol = solve_statics(mag, gaps_m=req["nominal_gap_m"], currents_A=ev["nominal_current_A"])
-    front = [k for k, g in enumerate(sol.gap_names) if int(g[1:]) <= 6]
-    assert float(np.sum(np.asarray(sol.pole_force_N)[front])) == pytest.approx(req["force_N"],
-                                                                              rel=1e-9)
+    check_front_force(spec, mag, ev)
 
 
 def test_design_gradients_match_central_differences() -> None:

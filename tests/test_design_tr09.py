@@ -90,14 +90,19 @@ def test_two_variable_optimum_matches_grid_search(two_variable: tuple[Any, Any])
     assert res.mass_kg == pytest.approx(tr09_mass(spec, wp_o, hb_o), rel=1e-12)
     # interior: neither variable at a bound
     assert not any(c.active for c in res.constraints.values() if c.detail == "variable bound")
-    # a coarse grid over the bounds, then one a quarter as fine around its optimum
-    wp = np.linspace(0.06, 0.185, 9)
-    hb = np.linspace(0.02, 0.12, 9)
+    check_grid_search_optimum(spec, res, np.linspace(0.06, 0.185, 9), np.linspace(0.02, 0.12, 9))
+
+
+def check_grid_search_optimum(spec: Any, res: Any, wp: np.ndarray, hb: np.ndarray) -> None:
+    """The two-variable (pole width ``wp``, pole-back height ``hb``) optimum ``res`` against
+    a brute-force search: the coarse grid ``wp x hb``, then one a quarter as fine around
+    its best point (tests/test_design_split.py uses it on the split network)."""
+    wp_o, hb_o = res.values["pole_width"], res.values["back_height"]
     _, (a, b) = _lazy_grid_min(spec, wp, hb)
     h_wp, h_hb = (wp[1] - wp[0]) / 4, (hb[1] - hb[0]) / 4
     m_grid, (a, b) = _lazy_grid_min(spec, a + h_wp * np.arange(-4, 5), b + h_hb * np.arange(-4, 5))
     # no grid point is lighter than the optimum (feasibility to 1e-6 relative, the order of
-    # IPOPT's constraint tolerance here)
+    # IPOPT's constraint tolerance)
     assert m_grid >= res.mass_kg * (1 - 1e-6)
     # the grid's best lies within one fine cell of the optimum: a wider face lowers the
     # current density, a taller back its flux density, so the corner one cell up and right
@@ -127,7 +132,13 @@ def test_written_design_meets_the_constraints_resolved(tmp_path: Path,
     assert mag.parameters["magnet"].get("flux_paths", "paper") == "paper"
     assert min(ev[k] for k in ("coil_fits_core_m", "coils_fit_window_m", "stator_covers_pole_m",
                                "grooves_leave_face_m")) >= 0.0
-    # the half magnet (circuit "front") holds the force on its own poles
+    check_front_force(spec, mag, ev)
+
+
+def check_front_force(spec: Any, mag: Any, ev: Any) -> None:
+    """The written magnet ``mag``'s half magnet (circuit "front", poles 1-6) holds the
+    spec's force on its own poles at the nominal gap and the optimum's nominal current,
+    re-solved by ``solve_statics`` (to 1e-9: the statics' Newton tolerance)."""
     req = spec.requirements
     sol = solve_statics(mag, gaps_m=req["nominal_gap_m"], currents_A=ev["nominal_current_A"])
     front = [k for k, g in enumerate(sol.gap_names) if int(g[1:]) <= 6]

@@ -107,9 +107,10 @@ def _power_flows(U: Any, I: Any, R: Any, g_e: Any, phidot_e: Any, force: Any, ra
 #: Networks with more loop and circuit unknowns than this run IDAS on the sparse form
 #: (``K y' = h``, :meth:`FluxDAE._init_idas`); smaller ones on the dense form (``K^+``,
 #: ``Q``), whose results and compiled libraries stay those of earlier versions.  Counted:
-#: the bundled lumped networks 9-36 (U-magnet 18, guidance 19, TR09 "paper" 36) and the
-#: U-magnet's ladder n = 2 (32) stay dense; the ladders from n = 3 (U-magnet 46, guidance
-#: n = 4: 67, n = 6: 99), the grids and the split networks (TR09 233) are sparse.  The
+#: the bundled networks of 9-36 unknowns (U-magnet 18; guidance 33 on its split network
+#: since guide26, 19 before; TR09 "paper" 36) and the U-magnet's ladder n = 2 (32) stay
+#: dense; the ladders from n = 3 (U-magnet 46, guidance n = 4: 67, n = 6: 99, counted
+#: before guide26), the grids and TR09's split networks (233) are sparse.  The
 #: dense ``K^+`` and ``Q`` make the dense form's Jacobian a dense block.  Measured
 #: (benchmarks/form_size_survey.py, compiled, 1 s at 1 kHz, docs/decisions.md design25):
 #: the sparse form is faster at every size, by 1.2-1.7x up to 36 unknowns, 3.5x at 46, 7x

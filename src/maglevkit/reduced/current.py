@@ -385,10 +385,15 @@ class CurrentModel:
         #: whether the shielded-gap ladder replaces eq. 8 (:mod:`~maglevkit.reduction.motion_eddy`)
         self.motion_eddy = bool(motion_eddy)
         self.freewheel = flag(freewheel, "freewheel")
-        if self.freewheel and (m or self.motion_eddy):
-            raise InputError("freewheel=True is eq. 8's diode law; with eddy_modes > 0 or "
-                             "motion_eddy=True the coil current has other branches: leave "
+        if self.freewheel and m:
+            raise InputError(f"freewheel=True with eddy_modes={m}: the diode law is eq. 8's, "
+                             "and the eddy network's coil current has other branches: leave "
                              "freewheel out (or use plain eq. 8)")
+        if self.freewheel and self.motion_eddy:
+            raise InputError("freewheel=True with motion_eddy=True: CurrentModel has the "
+                             "diodes for eq. 8 only; for the shielded-gap ladder with diodes "
+                             "use MagnetBank({name: maps}, motion_eddy=True, freewheel=True) "
+                             "(docs/bank.md), or leave freewheel out")
         if self.motion_eddy:
             if m:
                 raise InputError(f"motion_eddy=True with eddy_modes={m}: these are two "
