@@ -48,6 +48,7 @@ from .eddy_network import EDDY_NETWORK_MODES, EddyNetworkFit, fit_eddy_network
 from .motion_eddy import (
     FORCE_SHARE_VARIABLE,
     HELD_FLUX_FORCE_SHARE_VARIABLE,
+    MAX_STEP_FORCE_LOSS,
     MAX_UNSHIELDED_SHARE_OF_MIN_L,
     SHARE_VARIABLE,
     detailed_frequency_response,
@@ -265,7 +266,8 @@ class CharacteristicMaps:
         Where the derived share would cost voltage steps more than
         :data:`~maglevkit.reduction.motion_eddy.MAX_STEP_FORCE_LOSS`, ``build_maps`` stored
         0 as the held-flux share too (the U-magnet: -1.2 would take its step force residual
-        from 1.0 to 8.3 %), and these maps then equal the default ones.
+        from 1.0 to 8.3 %), and these maps then equal the default ones: a
+        :class:`~maglevkit.errors.MaglevkitWarning` says so.
 
         Returns
         -------
@@ -290,6 +292,15 @@ class CharacteristicMaps:
             raise InputError("with_held_flux_force: these maps have no shielded-gap ladder "
                              f"({HELD_FLUX_FORCE_SHARE_VARIABLE} = {gamma.tolist()}: the magnet "
                              "has no eddy currents)")
+        if np.all(gamma == 0.0):
+            import warnings
+
+            from ..errors import MaglevkitWarning
+
+            warnings.warn("with_held_flux_force: build_maps kept no held-flux force share for "
+                          "these maps (it would have cost the voltage steps' force more than "
+                          f"{100 * MAX_STEP_FORCE_LOSS:g} points), so they equal the default "
+                          "maps: the force stays F(s, I_L)", MaglevkitWarning, stacklevel=2)
         attrs = dict(ds[FORCE_SHARE_VARIABLE].attrs) if FORCE_SHARE_VARIABLE in ds else {}
         attrs["description"] = ("the held-flux gamma (with_held_flux_force): the force under "
                                 "gap motion, at a cost in closed loop")
