@@ -569,8 +569,7 @@ class CrossSectionModel:
             raise InputError(f"motion_eddy = {motion_eddy!r}; use True (every magnet), "
                              "'levitation' (the levitation magnets only) or False")
         if motion_eddy is not False:
-            _check_motion_eddy_options(magnets=magnets, controller="cascade",
-                                       eddy_resistance_scale=1.0)
+            _check_motion_eddy_options(magnets=magnets, eddy_resistance_scale=1.0)
         self.bank = _vehicle_bank(
             MagnetBank, members, motion_eddy=motion_eddy is not False,
             files={"levitation": levitation_magnet, "guidance": guidance_magnet},

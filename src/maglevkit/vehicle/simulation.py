@@ -482,10 +482,10 @@ class VehicleModel:
         Fly the reduced magnets with the shielded-gap ladder (:class:`MagnetBank` option
         ``motion_eddy``; docs/reduction.md, "Gap motion"): a second electric state per
         circuit, the shielding eddy current ``I_e``, carried by both loops and recorded
-        (the dataset's ``eddy_current``).  None (default): the vehicle file's
-        ``[magnets] motion_eddy`` (false unless set).  Needs reduced magnets whose maps
-        carry the ladder, the cascade or a mapping of controllers (not ``"mpc"``) and
-        ``eddy_resistance_scale = 1``.
+        (the dataset's ``eddy_current``); with ``controller="mpc"`` the NMPCs' prediction
+        models carry it too.  None (default): the vehicle file's ``[magnets]
+        motion_eddy`` (false unless set).  Needs reduced magnets whose maps carry the
+        ladder and ``eddy_resistance_scale = 1``.
     """
 
     def __init__(self, train: TrainData, *, guideway: Any = None, rigid: bool = False,
@@ -512,7 +512,7 @@ class VehicleModel:
                              "the vehicle file's [magnets] motion_eddy)")
         self.motion_eddy = bool(motion_eddy)
         if self.motion_eddy:
-            _check_motion_eddy_options(magnets=magnets, controller=controller,
+            _check_motion_eddy_options(magnets=magnets,
                                        eddy_resistance_scale=eddy_resistance_scale)
         kinds = {"standard": load_magnet(train.standard_magnet), "bow": load_magnet(train.bow_magnet)}
         self.magnets = kinds
@@ -851,7 +851,13 @@ class VehicleModel:
             dyn = self.mechanics.body_mass_kg[self.train.n_sections + fr] / (
                 self.train.sides * per_frame[fr])
             mass = float(dyn.mean())
-            model = MagnetHeaveModel(one, mass_kg=mass,
+            plant: Any = one
+            if self.bank.motion_eddy:   # the prediction model with the plant's ladder (I_e
+                # in its state after [I_L, s, s'], estimated by its EKF from the current)
+                from ..reduced.bank import MagnetBank
+
+                plant = MagnetBank({"magnet": one}, compiled="never", motion_eddy=True)
+            model = MagnetHeaveModel(plant, mass_kg=mass,
                                      gravity=float(self.trim_force_N[same].mean()) / mass,
                                      disturbances=dist, compiled=self.bank.compiled_mode)
             shared[key] = model
@@ -1766,18 +1772,12 @@ class VehicleModel:
         return out
 
 
-def _check_motion_eddy_options(*, magnets: str, controller: Any,
-                               eddy_resistance_scale: Any) -> None:
+def _check_motion_eddy_options(*, magnets: str, eddy_resistance_scale: Any) -> None:
     """Refuse the combinations a vehicle with shielded-gap ladder magnets does not fly."""
     if magnets != "reduced":
         raise InputError(f"motion_eddy = True with magnets = {magnets!r}: the shielded-gap "
                          "ladder is a reduced model's (the detailed magnets carry their eddy "
                          "currents themselves); use magnets='reduced' or motion_eddy=False")
-    if isinstance(controller, str) and controller == "mpc":
-        raise InputError("motion_eddy = True with controller = 'mpc': the vehicle's NMPC "
-                         "loop does not carry the ladder's eddy currents I_e yet; use "
-                         "controller='cascade' (or a mapping of controllers) or "
-                         "motion_eddy=False")
     if eddy_resistance_scale != 1.0:
         raise InputError(f"motion_eddy = True with eddy_resistance_scale = "
                          f"{eddy_resistance_scale!r}: the factor scales eq. 8's R_ec, not the "
