@@ -23,6 +23,10 @@ the number of sections (1/2/3/5 sections of the bundled train, each with its own
 step).  The random irregularity is synthesised once along the track; its time beside the
 previous method (the sums on every magnet's own path, kept as the fallback) is measured in
 the same run.
+
+The same train with shielded-gap ladder magnets (``motion_eddy=True``: a second electric
+state per circuit) runs in the same process, compiled step and NumPy loop, and its CPU
+time per step is given as a ratio to eq. 8's.
 """
 
 from __future__ import annotations
@@ -55,6 +59,8 @@ SPEED_KMH = 400.0
 CALLS = 3000
 SECTIONS = (1, 2, 3, 5)
 IMPORT_REPEATS = 5
+LADDER_ROWS = ("elastic guideway, compiled step, ladder magnets (motion_eddy)",
+               "elastic guideway, NumPy loop, ladder magnets (motion_eddy)")
 
 
 def import_time_s() -> float:
@@ -204,11 +210,16 @@ def run() -> str:
     first = time.perf_counter() - t0
     rigid = VehicleModel(load_vehicle(), rigid=True)
     rigid.run(speed_m_per_s=0.0, duration_s=0.05)
+    # the shielded-gap ladder magnets (motion_eddy: I_e per circuit in the step's state)
+    ladder = VehicleModel(load_vehicle(), motion_eddy=True)
+    ladder.run(speed_m_per_s=v, duration_s=0.05, irregularity=prof)    # compile or load
     rows = []
     for name, m, loop, dur in (("elastic guideway, compiled step", model, "compiled", DURATION_S),
                                ("rigid guideway, compiled step", rigid, "compiled", DURATION_S),
                                ("elastic guideway, NumPy loop (reference)", model, "python",
-                                PYTHON_DURATION_S)):
+                                PYTHON_DURATION_S),
+                               (LADDER_ROWS[0], ladder, "compiled", DURATION_S),
+                               (LADDER_ROWS[1], ladder, "python", PYTHON_DURATION_S)):
         best, whole = _best_run(m, v, prof, dur, loop=loop)
         rows.append((name, dur, best, whole))
     t_track, t_paths = irregularity_times(model, prof, v)
@@ -240,6 +251,14 @@ def run() -> str:
         sim = dur
         lines.append(f"| {name} | {sim / r.cpu_time_s:.1f}x | {r.real_time_factor:.1f}x | "
                      f"{1e6 * r.cpu_time_s / (sim * 1000):.0f} | {sim / whole:.1f}x |")
+    by_name = {name: (dur, r) for name, dur, r, _ in rows}
+    ratio = [by_name[lad][1].cpu_time_s / by_name[lad][0] / (r0.cpu_time_s / d0)
+             for lad, (d0, r0) in zip(LADDER_ROWS, (by_name[rows[0][0]], by_name[rows[2][0]]),
+                                      strict=True)]
+    lines += ["", f"Shielded-gap ladder magnets (`VehicleModel(train, motion_eddy=True)`: the "
+              f"eddy current I_e of every circuit in the step's state, the ladder's RK4 in "
+              f"the bank's lanes), same run: CPU time per step x{ratio[0]:.2f} of eq. 8's "
+              f"in the compiled step, x{ratio[1]:.2f} in the NumPy loop."]
     lines += ["", f"Aims of issue 23 (CPU time, this run): whole `run()` "
               f"{DURATION_S / rows[0][3]:.1f}x real time (aim >= 50x), time loop "
               f"{DURATION_S / rows[0][2].cpu_time_s:.1f}x (aim >= 100x); "

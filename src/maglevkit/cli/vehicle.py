@@ -59,6 +59,11 @@ def run(
         help="reduced (one force per circuit) or detailed (flux models, per pole; slow).")]
     = "reduced",
     maps_cache: Annotated[Path | None, typer.Option(help="Directory of the cached maps.")] = None,
+    motion_eddy: Annotated[bool | None, typer.Option(
+        "--motion-eddy/--no-motion-eddy",
+        help="Reduced magnets with the shielded-gap ladder (eddy currents under gap motion; "
+             "a second state per circuit); default: the vehicle file's [magnets] "
+             "motion_eddy (off unless set).")] = None,
     controller: Annotated[str, typer.Option(
         metavar="cascade|mpc",
         help="Gap controllers: cascade (flux cascade, compiled step) or mpc (offset-free "
@@ -117,7 +122,7 @@ def run(
         try:
             _run_cross_section(vehicle_option or vehicle, speed_kmh, duration, dt, failure,
                                magnets, maps_cache, output, plot, force, curve, crosswind,
-                               irregularity, lateral, progress)
+                               irregularity, lateral, progress, bool(motion_eddy))
         except KeyboardInterrupt:
             raise interrupted() from None
         return
@@ -125,7 +130,7 @@ def run(
         vehicle = vehicle_option
     try:
         _run(vehicle, speed_kmh, speed, duration, dt, irregularity, failure, rigid, magnets,
-             maps_cache, output, plot, progress, force, guideway, controller)
+             maps_cache, output, plot, progress, force, guideway, controller, motion_eddy)
     except KeyboardInterrupt:
         raise interrupted() from None
 
@@ -133,7 +138,8 @@ def run(
 def _run(vehicle: str, speed_kmh: float | None, speed: float | None, duration: float,
          dt: float, irregularity: str, failure: list[str] | None, rigid: bool, magnets: str,
          maps_cache: Path | None, output: Path | None, plot: Path | None, progress: bool,
-         force: bool, guideway: str | None = None, controller: str = "cascade") -> None:
+         force: bool, guideway: str | None = None, controller: str = "cascade",
+         motion_eddy: bool | None = None) -> None:
     from ..vehicle.data import load_guideway
     from ..vehicle.simulation import (
         VehicleModel,
@@ -167,7 +173,8 @@ def _run(vehicle: str, speed_kmh: float | None, speed: float | None, duration: f
         info(f"setting up {train.name} (maps, controllers) ...")
         track = load_guideway(guideway) if guideway is not None else None
         model = VehicleModel(train, guideway=track, rigid=rigid, magnets=magnets,
-                             maps_cache=maps_cache, controller=controller)
+                             maps_cache=maps_cache, controller=controller,
+                             motion_eddy=motion_eddy)
         if prof is not None and not rigid:
             with warnings.catch_warnings():   # its warnings were shown by the first parse
                 warnings.simplefilter("ignore", MaglevkitWarning)
@@ -268,7 +275,8 @@ def _run_cross_section(name: str, speed_kmh: float | None, duration: float, dt: 
                        failure: list[str] | None, magnets: str, maps_cache: Path | None,
                        output: Path | None, plot: Path | None, force: bool,
                        curve: str | None, crosswind: str | None, irregularity: str = "none",
-                       lateral: str | None = None, progress: bool = True) -> None:
+                       lateral: str | None = None, progress: bool = True,
+                       motion_eddy: bool = False) -> None:
     from ..vehicle.crossrun import (
         CrossSectionModel,
         parse_crosswind,
@@ -292,7 +300,8 @@ def _run_cross_section(name: str, speed_kmh: float | None, duration: float, dt: 
         vert = parse_irregularity(irregularity, span_length_m=girder)
         lat = parse_lateral(lateral, girder_length_m=girder) if lateral is not None else None
         info(f"setting up {data.name} (maps, controllers) ...")
-        model = CrossSectionModel(data, magnets=magnets, maps_cache=maps_cache)
+        model = CrossSectionModel(data, magnets=magnets, maps_cache=maps_cache,
+                                  motion_eddy=motion_eddy)
         res = model.run(speed_m_per_s=speed_kmh / 3.6, duration_s=duration, dt_s=dt,
                         curve=crv, crosswind=gust, failures=fails, vertical=vert,
                         lateral=lat, progress=progress)

@@ -56,6 +56,8 @@ from .framework import PartEvaluator, run_blocks, run_steps
 from .simulation import (
     Failure,
     VehicleRunInterrupted,
+    _check_motion_eddy_options,
+    _vehicle_bank,
     check_run_speed,
     failure_times,
     interrupted_report_lines,
@@ -491,6 +493,15 @@ class CrossSectionModel:
     touchdown_gap_m, landing_gap_m : float, default 0.002, 0.020
         A gap at or below ``touchdown_gap_m`` (magnet on its rail) or at or above
         ``landing_gap_m`` stops the run [m] [E].
+    motion_eddy : bool or "levitation", default False
+        Fly the reduced magnets with the shielded-gap ladder (:class:`MagnetBank` option
+        ``motion_eddy``; docs/reduction.md, "Gap motion"): the shielding eddy current
+        ``I_e`` of every circuit in both loops, recorded as ``levitation_eddy_current``
+        and ``guidance_eddy_current`` (0 in eq. 8 circuits); the chopper floor ``U >=
+        -R_a (I_L + I_e)``.  ``"levitation"``: the levitation magnets only, the guidance
+        magnets eq. 8 (the bundled guidance magnet's ladder fits its detailed model
+        poorly and destabilises its loops; docs/vehicle.md).  Reduced magnets whose maps
+        carry the ladder only.
 
     Raises
     ------
@@ -509,7 +520,8 @@ class CrossSectionModel:
                  nominal_gap_m: float = 0.010, guidance_bias_current_A: float = 20.0,
                  bandwidth_Hz: float = 5.0, damping: float = 0.7,
                  flux_bandwidth_Hz: float = 30.0, voltage_limit_V: float = 440.0,
-                 touchdown_gap_m: float = 0.002, landing_gap_m: float = 0.020) -> None:
+                 touchdown_gap_m: float = 0.002, landing_gap_m: float = 0.020,
+                 motion_eddy: bool | str = False) -> None:
         from ..control import design_gap_controller
         from ..magnets import load_magnet
         from ..models.flux import FluxModel
@@ -551,8 +563,22 @@ class CrossSectionModel:
         self.member_names = tuple(name for _, name in self.MEMBERS)
         members = [(n, FluxModel(kinds[n.split("_")[0]]) if magnets == "detailed"
                     else self.maps[n.split("_")[0]]) for n in self.member_names]
-        self.bank = MagnetBank(members, gap_inputs="circuit", compiled=compiled)
+        if isinstance(motion_eddy, np.bool_):
+            motion_eddy = bool(motion_eddy)
+        if not (isinstance(motion_eddy, bool) or motion_eddy == "levitation"):
+            raise InputError(f"motion_eddy = {motion_eddy!r}; use True (every magnet), "
+                             "'levitation' (the levitation magnets only) or False")
+        if motion_eddy is not False:
+            _check_motion_eddy_options(magnets=magnets, eddy_resistance_scale=1.0)
+        self.bank = _vehicle_bank(
+            MagnetBank, members, motion_eddy=motion_eddy is not False,
+            files={"levitation": levitation_magnet, "guidance": guidance_magnet},
+            kind_of={n: n.split("_")[0] for n in self.member_names},
+            ladder_kinds=("levitation",) if motion_eddy == "levitation" else None,
+            option=f"motion_eddy = {motion_eddy!r}", gap_inputs="circuit", compiled=compiled)
         self.magnet_kind = magnets
+        self.motion_eddy = motion_eddy
+        """The ``motion_eddy`` option (True, ``"levitation"`` or False)."""
         # circuits of each member, in the bank's order
         sl = self.bank.circuit_slices
         self.circuit_slices = [sl[n] for n in self.member_names]
@@ -833,9 +859,9 @@ class CrossSectionModel:
         else:
             out = self._python_loop(dt, v, t, r_mag, rx_mag, field_mid, q_ext, fail_t, n,
                                     progress)
-        rec_gap, rec_force, rec_cur, rec_u, rec_x, rec_acc, touchdown, last, outcome = out
+        rec_gap, rec_force, rec_cur, rec_u, rec_x, rec_acc, touchdown, last, outcome, rec_ie = out
         res = self._result(v, dt, t, rec_gap, rec_force, rec_cur, rec_u, rec_x, rec_acc,
-                           touchdown, last, outcome.wall_s, field_mid, wind)
+                           touchdown, last, outcome.wall_s, field_mid, wind, rec_ie)
         # the scenario in the file (as the heave-pitch run's attributes): a run can be read
         # back and repeated from its netCDF alone
         res.dataset.attrs.update({
@@ -881,6 +907,8 @@ class CrossSectionModel:
         rec_u = np.zeros((n + 1, nc))
         rec_x = np.empty((n + 1, 2 * nq))
         rec_acc = np.empty((n + 1, nq))
+        # the ladder's shielding eddy currents I_e at every step start (motion_eddy)
+        rec_ie = np.zeros((n + 1, nc)) if bank.motion_eddy else None
         gap_circ = np.repeat(np.arange(4), 2)
         x_circ = np.zeros(nc)
         force = stepper.member_force_N.copy()
@@ -897,6 +925,8 @@ class CrossSectionModel:
             rec_x[k] = x
             rec_force[k] = stepper.circuit_force_N
             rec_cur[k] = stepper.currents_A
+            if rec_ie is not None:
+                rec_ie[k] = stepper.eddy_currents_A
             rec_acc[k] = s.accelerations(q, qd, force, field_mid[k], q_ext[k])
             # a gap at a limit now, or crossing it within the coming step on the linear
             # path the bank moves it along (the maps start at the touchdown gap)
@@ -918,9 +948,12 @@ class CrossSectionModel:
                 if k == 0:
                     c.reset(meas, sample_time_s=dt)
                 u[2 * j:2 * j + 2] = c.update(meas)
-            # 2-quadrant chopper: coil current (U + R_ec I_L)/(R_el + R_ec) >= 0; then the
-            # failed circuits at 0 V (the compiled step's order)
+            # 2-quadrant chopper: coil current (U + R_ec I_L)/(R_el + R_ec) >= 0 (the
+            # ladder's: R_a and I_L + I_e); then the failed circuits at 0 V (the compiled
+            # step's order)
             il = stepper.inductor_currents_A
+            if rec_ie is not None:
+                il = il + stepper.eddy_currents_A
             u[chop] = chopper_floor(u[chop], il[chop], r_ec[chop])
             u[fail_t <= t[k]] = 0.0
             rec_u[k] = u
@@ -935,7 +968,7 @@ class CrossSectionModel:
         outcome = run_steps(step, n_steps=n, progress=progress,
                             label="cross-section run (steps)")
         return (rec_gap, rec_force, rec_cur, rec_u, rec_x, rec_acc, outcome.event,
-                outcome.last_step, outcome)
+                outcome.last_step, outcome, rec_ie)
 
     # ------------------------------------------------------------------ compiled step
     def compiled_step(self, dt_s: float = 1e-3, *, block_steps: int = 50,
@@ -986,34 +1019,44 @@ class CrossSectionModel:
         parts = self._step_parts(dt)
         f_in, f_ctl, f_upd, f_mech = (parts[k] for k in (
             "guideway_in", "controllers", "controller_update", "mechanics_loaded"))
+        # the ladder's I_e last in state and record (motion_eddy); else the layout before
+        eddy = [("I_e", nc)] if bank.motion_eddy else []
         st = pack_slices([("x", 2 * nq), ("I_L", nc), ("psi_hat", nc), ("integral", nc),
-                          ("current", nc), ("force", nc)])
+                          ("current", nc), ("force", nc), *eddy])
         pi = pack_slices([("r", nc), ("r_x", nc), ("Q_t", nq), ("t", 1)])
         rc = pack_slices([("gap", nc), ("gap_rate", nc), ("current", nc), ("force", nc),
                           ("I_L", nc), ("x", 2 * nq), ("voltage", nc), ("n_bad", 1),
-                          ("flags", nc), ("I_L_min", nc), ("I_L_max", nc)])
-        S, P, C = (ca.MX.sym("S", st["force"].stop), ca.MX.sym("P", pi["t"].stop),
+                          ("flags", nc), ("I_L_min", nc), ("I_L_max", nc), *eddy])
+        n_st = max(v.stop for v in st.values())
+        S, P, C = (ca.MX.sym("S", n_st), ca.MX.sym("P", pi["t"].stop),
                    ca.MX.sym("C", 1 + nc))
         x, il, psi, itg, cur, frc = (S[st[k]] for k in ("x", "I_L", "psi_hat", "integral",
                                                          "current", "force"))
+        ie = S[st["I_e"]] if eddy else None
         v, fail_t = C[0], C[1:]
         # gaps and rates of every circuit (the rigid guideway's part: no deflection)
         gaps, rates = f_in(x, ca.DM.zeros(0), ca.DM.zeros(nc), P[pi["r"]], P[pi["r_x"]],
                            v)[:2]
-        u = f_ctl.call({"gap": gaps, "gap_rate": rates, "I_L": il, "current": cur,
-                        "psi_hat": psi, "integral": itg, "t": P[pi["t"]],
+        # the chopper's current: I_L, or I_L + I_e with the ladder (its floor -R_a (I_L + I_e))
+        u = f_ctl.call({"gap": gaps, "gap_rate": rates, "I_L": il if ie is None else il + ie,
+                        "current": cur, "psi_hat": psi, "integral": itg, "t": P[pi["t"]],
                         "fail_t": fail_t})["U"]
-        bout = bank_step.call({"I_L": il, "s": gaps, "U": u, "sdot": rates, "h": ca.MX(dt)})
+        b_in = {"I_L": il, "s": gaps, "U": u, "sdot": rates, "h": ca.MX(dt)}
+        if ie is not None:
+            b_in["I_e"] = ie
+        bout = bank_step.call(b_in)
         il_n, cur_n, frc_n, n_bad, flags, il_lo, il_hi = (bout[k] for k in (
             "I_L_next", "I", "F", "n_bad", "flags", "I_L_min", "I_L_max"))
         upd = f_upd.call({"psi_hat": psi, "integral": itg, "U": u, "current": cur,
                           "current_next": cur_n, "gap": gaps})
         # the mechanics' ZOH step with the load Q_g = Q_pre + Q_t (field and wind, per step)
         x_n = f_mech(x, 0.5 * (frc + frc_n), ca.DM(s.Q_preload) + P[pi["Q_t"]])
-        s_next = ca.vertcat(x_n, il_n, upd["psi_hat_next"], upd["integral_next"], cur_n, frc_n)
+        s_next = ca.vertcat(x_n, il_n, upd["psi_hat_next"], upd["integral_next"], cur_n, frc_n,
+                            *([] if ie is None else [bout["I_e_next"]]))
         # the bank kernel's reason codes and the sub-step extremes of I_L per circuit:
         # a flagged step's message without stepping again (MagnetBank.raise_step_flags)
-        rec = ca.vertcat(gaps, rates, cur, frc, il, x, u, n_bad, flags, il_lo, il_hi)
+        rec = ca.vertcat(gaps, rates, cur, frc, il, x, u, n_bad, flags, il_lo, il_hi,
+                         *([] if ie is None else [ie]))
         step = ca.Function("maglevkit_cross_section_step", [S, P, C], [s_next, rec])
         nb = int(block_steps)
         sb, pb = ca.MX.sym("S", S.shape[0]), ca.MX.sym("P", P.shape[0], nb)
@@ -1096,7 +1139,7 @@ class CrossSectionModel:
         state0 = bank.initial_state(gaps_m=self.s0, currents_A=np.repeat(self.trim_current_A, 2))
         out0 = bank.outputs(state0)
         consts = np.concatenate([[v], fail_t])
-        s_init = np.zeros(st["force"].stop)
+        s_init = np.zeros(max(v_.stop for v_ in st.values()))
         s_init[st["x"]] = np.concatenate([self.trim_q, np.zeros(nq)])
         s_init[st["I_L"]] = state0.inductor_currents_A
         flux = [self._flux(n_.split("_")[0], float(self.trim_current_A[j]))
@@ -1104,6 +1147,8 @@ class CrossSectionModel:
         s_init[st["psi_hat"]] = np.concatenate(flux)
         s_init[st["current"]] = out0.currents_A
         s_init[st["force"]] = out0.circuit_force_N
+        if state0.eddy_currents_A is not None:
+            s_init[st["I_e"]] = state0.eddy_currents_A
         g_sl, r_sl, b_sl = rc["gap"], rc["gap_rate"], rc["n_bad"].start
         lo_lim, hi_lim = self.touchdown_gap_m, self.landing_gap_m
 
@@ -1137,7 +1182,8 @@ class CrossSectionModel:
             return None
 
         outcome, rec = run_blocks(fun, state=s_init, inputs=p_all, constants=consts,
-                                  n_steps=n, n_record=rc["I_L_max"].stop, block_steps=nb,
+                                  n_steps=n, n_record=max(v_.stop for v_ in rc.values()),
+                                  block_steps=nb,
                                   look=look, check=check, progress=progress,
                                   label="cross-section run (steps)")
         last, touchdown = outcome.last_step, outcome.event
@@ -1149,12 +1195,13 @@ class CrossSectionModel:
         u = rec[:m, rc["voltage"]].copy()
         u[-1] = 0.0                  # the last record's step is not taken (as the NumPy loop)
         return (rec[:m, g_sl][:, ::2], frc, rec[:m, rc["current"]], u, rx, acc, touchdown,
-                last, outcome)
+                last, outcome, rec[:m, rc["I_e"]] if "I_e" in rc else None)
 
     def _result(self, v: float, dt: float, t: np.ndarray, rec_gap: np.ndarray,
                 rec_force: np.ndarray, rec_cur: np.ndarray, rec_u: np.ndarray,
                 rec_x: np.ndarray, rec_acc: np.ndarray, touchdown: Any, last: int,
-                wall: float, field_mid: np.ndarray, wind: np.ndarray) -> CrossSectionRun:
+                wall: float, field_mid: np.ndarray, wind: np.ndarray,
+                rec_ie: np.ndarray | None = None) -> CrossSectionRun:
         import xarray as xr
 
         from .comfort import comfort_indices, lateral_comfort_indices
@@ -1187,6 +1234,10 @@ class CrossSectionModel:
             "coil current")
         put("guidance_current", ("time", "guidance_circuit"), rec_cur[:m, 4:], "A",
             "coil current")
+        if rec_ie is not None:
+            for j, kind in ((slice(0, 4), "levitation"), (slice(4, None), "guidance")):
+                put(f"{kind}_eddy_current", ("time", f"{kind}_circuit"), rec_ie[:m, j], "A",
+                    "shielding eddy current I_e of the shielded-gap ladder (motion_eddy)")
         put("voltage", ("time", "circuit"), rec_u[:m], "V", "circuit voltage held over the step")
         for i, dof in enumerate(s.dof_names):
             body, kind = dof.split(".")
@@ -1203,7 +1254,10 @@ class CrossSectionModel:
         put("crosswind_force", ("time",), wind[:m], "N", "lateral gust force on the car body")
         ds.attrs.update({"vehicle": self.data.name, "speed_m_per_s": v, "dt_s": dt,
                          "nominal_gap_m": self.s0, "touchdown_gap_m": self.touchdown_gap_m,
-                         "landing_gap_m": self.landing_gap_m, "magnets": self.magnet_kind,
+                         "landing_gap_m": self.landing_gap_m,
+                         "magnets": self.magnet_kind + (
+                             f", shielded-gap ladder (motion_eddy = {self.motion_eddy!r})"
+                             if self.bank.motion_eddy else ""),
                          "guidance_bias_current_A": self.bias_A})
         min_gap = {"levitation": float(cg[:, :4].min()), "guidance": float(cg[:, 4:].min())}
         if touchdown is not None and touchdown[3] == "closed":   # a crossing within a step

@@ -27,6 +27,7 @@ from __future__ import annotations
 
 import math
 import time
+import warnings
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -34,9 +35,16 @@ from typing import Any
 
 import numpy as np
 
-from ..errors import InputError, MaglevkitError, OutOfRangeError, ParameterFileError, SolverError
+from ..errors import (
+    InputError,
+    MaglevkitError,
+    MaglevkitWarning,
+    OutOfRangeError,
+    ParameterFileError,
+    SolverError,
+)
 from ..plant import STANDARD_GRAVITY
-from ..validation import Plausible, check_plausible
+from ..validation import Plausible, check_plausible, external_stacklevel
 from .framework import PartEvaluator, run_blocks, run_steps
 from .guideway import Guideway
 from .mechanics import VehicleMechanics
@@ -304,8 +312,6 @@ def failure_times(failures: Sequence[Failure], circuit_names: Sequence[str], *,
     """
     import warnings
 
-    from ..errors import MaglevkitWarning
-
     names = list(circuit_names)
     fail_t = np.full(len(names), np.inf)
     for f in failures:
@@ -472,13 +478,22 @@ class VehicleModel:
         ``s0 - e_j / T``, ``e_j`` the integral of the frame-projected gap error (the
         cascade's integral), which removes the mean gap error that the random
         irregularity leaves (docs/decisions.md, "Any controller in the vehicle loop").
+    motion_eddy : bool, optional
+        Fly the reduced magnets with the shielded-gap ladder (:class:`MagnetBank` option
+        ``motion_eddy``; docs/reduction.md, "Gap motion"): a second electric state per
+        circuit, the shielding eddy current ``I_e``, carried by both loops and recorded
+        (the dataset's ``eddy_current``); with ``controller="mpc"`` the NMPCs' prediction
+        models carry it too.  None (default): the vehicle file's ``[magnets]
+        motion_eddy`` (false unless set).  Needs reduced magnets whose maps carry the
+        ladder and ``eddy_resistance_scale = 1``.
     """
 
     def __init__(self, train: TrainData, *, guideway: Any = None, rigid: bool = False,
                  magnets: str = "reduced", maps_cache: Any = None, compiled: str = "auto",
                  resistance_scale: float = 1.0, eddy_resistance_scale: float = 1.0,
                  freewheel: bool = True, controller: Any = "cascade",
-                 controller_sample_time_s: float | None = None, mpc_options: Any = None) -> None:
+                 controller_sample_time_s: float | None = None, mpc_options: Any = None,
+                 motion_eddy: bool | None = None) -> None:
         from ..magnets import load_magnet
         from ..models.flux import FluxModel
         from ..reduced.bank import MagnetBank
@@ -491,6 +506,14 @@ class VehicleModel:
             raise InputError(f"magnets (--magnets) = {magnets!r}; use 'reduced' or 'detailed'")
         self.train = train
         self.fine = magnets == "detailed"
+        motion_eddy = train.motion_eddy if motion_eddy is None else motion_eddy
+        if not isinstance(motion_eddy, (bool, np.bool_)):
+            raise InputError(f"motion_eddy = {motion_eddy!r} must be True or False (or None: "
+                             "the vehicle file's [magnets] motion_eddy)")
+        self.motion_eddy = bool(motion_eddy)
+        if self.motion_eddy:
+            _check_motion_eddy_options(magnets=magnets,
+                                       eddy_resistance_scale=eddy_resistance_scale)
         kinds = {"standard": load_magnet(train.standard_magnet), "bow": load_magnet(train.bow_magnet)}
         self.magnets = kinds
         for kind, mag in kinds.items():
@@ -522,8 +545,12 @@ class VehicleModel:
         members: list[tuple[str, Any]] = []
         for s in self.slots:
             members.append((s.name, FluxModel(kinds[s.kind]) if self.fine else self.maps[s.kind]))
-        self.bank = MagnetBank(members, gap_inputs="pole" if self.fine else "circuit",
-                               compiled=compiled, freewheel=freewheel)
+        self.bank = _vehicle_bank(MagnetBank, members, motion_eddy=self.motion_eddy,
+                                  files={"standard": train.standard_magnet,
+                                         "bow": train.bow_magnet},
+                                  kind_of={s.name: s.kind for s in self.slots},
+                                  gap_inputs="pole" if self.fine else "circuit",
+                                  compiled=compiled, freewheel=freewheel)
         bank = self.bank
         # pole and circuit positions (train coordinate), frame of every circuit
         pole_xi: list[float] = []
@@ -591,6 +618,9 @@ class VehicleModel:
         self.trim_force_N = circ_force          # per circuit of one side
         self.trim_current_A = self._trim_currents(circ_force)
         self._design_controllers()
+        if bank.motion_eddy:
+            # the ladder's chopper floor U >= -R_a (I_L + I_e): the bank's R_a
+            self.eddy_resistance_ohm = np.array(bank.eddy_resistance_ohm, dtype=float)
         self._step_functions: dict[Any, Any] = {}
         self._measure_functions: dict[Any, Any] = {}
         self._part_functions: dict[float, Any] = {}
@@ -821,7 +851,13 @@ class VehicleModel:
             dyn = self.mechanics.body_mass_kg[self.train.n_sections + fr] / (
                 self.train.sides * per_frame[fr])
             mass = float(dyn.mean())
-            model = MagnetHeaveModel(one, mass_kg=mass,
+            plant: Any = one
+            if self.bank.motion_eddy:   # the prediction model with the plant's ladder (I_e
+                # in its state after [I_L, s, s'], estimated by its EKF from the current)
+                from ..reduced.bank import MagnetBank
+
+                plant = MagnetBank({"magnet": one}, compiled="never", motion_eddy=True)
+            model = MagnetHeaveModel(plant, mass_kg=mass,
                                      gravity=float(self.trim_force_N[same].mean()) / mass,
                                      disturbances=dist, compiled=self.bank.compiled_mode)
             shared[key] = model
@@ -1020,6 +1056,8 @@ class VehicleModel:
         rec_mid = np.zeros((n_steps + 1, gw.n_spans))
         rec_span = np.zeros((n_steps + 1, gw.n_spans), dtype=int)
         rec_fp = np.empty((n_steps + 1, npt))
+        # the ladder's shielding eddy currents I_e at every step start (motion_eddy)
+        rec_ie = np.zeros((n_steps + 1, nc)) if bank.motion_eddy else None
         timing = dict.fromkeys(("magnets", "mechanics", "guideway", "controllers", "other"), 0.0)
         ctl_times: list[float] = []
         ctl_cpu: list[float] = []
@@ -1029,7 +1067,8 @@ class VehicleModel:
         if compiled_loop:
             last, touchdown, wall, cpu, interrupted = self._compiled_loop(
                 dt=dt, v=v, times=times, x_ref=x_ref, xpath=xpath, r_all=r_all, rx_all=rx_all,
-                x_m=x_m, gstate=gstate, i_l=bstate.inductor_currents_A, psi_hat=psi_hat,
+                x_m=x_m, gstate=gstate, i_l=bstate.inductor_currents_A,
+                i_e=bstate.eddy_currents_A, rec_ie=rec_ie, psi_hat=psi_hat,
                 integ=integ, current=current, force=force_c, fail_t=fail_t, rec=rec,
                 rec_q=rec_q, rec_qd=rec_qd, rec_fp=rec_fp, rec_mid=rec_mid,
                 rec_span=rec_span, timing=timing, progress=progress,
@@ -1090,6 +1129,8 @@ class VehicleModel:
                 rec["deflection"][k] = w if circ_avg is None else circ_avg @ w
                 rec_q[k], rec_qd[k] = x_m[:ndof], x_m[ndof:]
                 rec_fp[k] = force_pts
+                if rec_ie is not None:
+                    rec_ie[k] = bstate.eddy_currents_A
                 if nm:
                     rec_span[k] = first_k[k] + span_ids
                     rec_mid[k] = mid[rec_span[k] % n_sp]
@@ -1118,8 +1159,12 @@ class VehicleModel:
                 if ext_idx.size:        # the other controllers' voltages, held
                     u[ext_idx] = u_ext[ext_idx]
                 # |U| <= U_max, the 2-quadrant chopper, failed circuits at 0 V
-                (u,) = f_lim(u, i_l_fine if self.fine else bstate.inductor_currents_A,
-                             current, t, fail_t)
+                # the chopper's current: I_L, or I_L + I_e in ladder circuits (the
+                # compiled step's i_chop)
+                i_chop = (i_l_fine if self.fine else bstate.inductor_currents_A
+                          if bstate.eddy_currents_A is None
+                          else bstate.inductor_currents_A + bstate.eddy_currents_A)
+                (u,) = f_lim(u, i_chop, current, t, fail_t)
                 rec["voltage"][k] = u
                 t4 = clock()
                 try:
@@ -1189,6 +1234,10 @@ class VehicleModel:
                 "force": (("time", "circuit"), rec["force"][sl], {"units": "N",
                           "long_name": "magnet force of the lumped circuit (both sides), "
                                        "attraction positive"}),
+                **({} if rec_ie is None else {"eddy_current": (
+                    ("time", "circuit"), rec_ie[sl], {
+                        "units": "A", "long_name": "shielding eddy current I_e of the "
+                        "shielded-gap ladder (one side's circuit; motion_eddy)"})}),
                 "guideway_deflection": (("time", "circuit"), rec["deflection"][sl],
                                         {"units": "m", "long_name": "guideway deflection under "
                                                                     "the circuit (down positive)"}),
@@ -1224,7 +1273,9 @@ class VehicleModel:
                    "nominal_gap_m": s0, "touchdown_gap_m": tr.touchdown_gap_m,
                    "landing_gap_m": tr.landing_gap_m,
                    "magnets": "detailed (fine, per pole)" if self.fine else
-                              "reduced (coarse, per circuit)",
+                              "reduced (coarse, per circuit)" + (
+                                  ", shielded-gap ladder (motion_eddy)"
+                                  if bank.motion_eddy else ""),
                    "controller": self.controller_kind + (
                        "" if self.controller_sample_time_s is None else
                        f" (sample time {self.controller_sample_time_s:g} s)"),
@@ -1309,7 +1360,9 @@ class VehicleModel:
             "controller": "held", "block_steps": hold, "name": "maglevkit_vehicle_held"}
         return build_vehicle_step(bank_step=bank_step, sides=float(self.train.sides),
                                   velocity_blend=self.train.control_velocity_blend,
-                                  point_offsets_m=self.point_xi_m, **self._part_constants(dt), **kw)
+                                  point_offsets_m=self.point_xi_m,
+                                  motion_eddy=self.bank.motion_eddy,
+                                  **self._part_constants(dt), **kw)
 
     def _part_evaluators(self, dt: float) -> dict[str, Any]:
         """The step's parts for steps of ``dt`` (:func:`build_vehicle_parts`), bound for
@@ -1364,6 +1417,7 @@ class VehicleModel:
                        xpath: np.ndarray, r_all: np.ndarray, rx_all: np.ndarray,
                        x_m: np.ndarray, gstate: Any,
                        i_l: np.ndarray, psi_hat: np.ndarray, integ: np.ndarray,
+                       i_e: np.ndarray | None, rec_ie: np.ndarray | None,
                        current: np.ndarray, force: np.ndarray, fail_t: np.ndarray,
                        rec: dict[str, np.ndarray], rec_q: np.ndarray, rec_qd: np.ndarray,
                        rec_fp: np.ndarray, rec_mid: np.ndarray, rec_span: np.ndarray,
@@ -1433,6 +1487,8 @@ class VehicleModel:
                                                   gstate.modal_velocity_m_per_s], axis=1).ravel()
         s0v[st["I_L"]], s0v[st["psi_hat"]], s0v[st["integral"]] = i_l, psi_hat, integ
         s0v[st["current"]], s0v[st["force"]] = current, force
+        if i_e is not None:
+            s0v[st["I_e"]] = i_e
         consts = np.concatenate([[v], fail_t])
         i_min, i_max, i_bad = rl["gap_min"].start, rl["gap_max"].start, rl["n_bad"].start
         td_gap, land_gap = tr.touchdown_gap_m, tr.landing_gap_m
@@ -1499,6 +1555,8 @@ class VehicleModel:
         for key in ("gap", "current", "force", "deflection", "voltage"):
             rec[key][:n] = rr[:, rl[key]]
         rec_q[:n], rec_qd[:n], rec_fp[:n] = rr[:, rl["q"]], rr[:, rl["q_dot"]], rr[:, rl["force"]]
+        if rec_ie is not None:
+            rec_ie[:n] = rr[:, rl["I_e"]]
         if nm:
             rec_span[:n] = first_k[:n, None] + np.arange(n_sp)
             rec_mid[:n] = np.take_along_axis(rr[:, rl["midspan_ring"]], rec_span[:n] % n_sp,
@@ -1712,6 +1770,76 @@ class VehicleModel:
                 out[f"car{s + 1}@{fp:+.2f}L"] = {"wk_rms_m_per_s2": float(wk[s * n_fp + p]),
                                                  "sperling_wz": float(wz[s * n_fp + p])}
         return out
+
+
+def _check_motion_eddy_options(*, magnets: str, eddy_resistance_scale: Any) -> None:
+    """Refuse the combinations a vehicle with shielded-gap ladder magnets does not fly."""
+    if magnets != "reduced":
+        raise InputError(f"motion_eddy = True with magnets = {magnets!r}: the shielded-gap "
+                         "ladder is a reduced model's (the detailed magnets carry their eddy "
+                         "currents themselves); use magnets='reduced' or motion_eddy=False")
+    if eddy_resistance_scale != 1.0:
+        raise InputError(f"motion_eddy = True with eddy_resistance_scale = "
+                         f"{eddy_resistance_scale!r}: the factor scales eq. 8's R_ec, not the "
+                         "ladder's R_a and R_2; use eddy_resistance_scale=1 or "
+                         "motion_eddy=False")
+
+
+#: A shielded-gap ladder whose fit to the detailed model's gap and voltage responses has a
+#: larger relative RMS residual (maps variable ``motion_eddy_fit_rms``) is flown with a
+#: warning: the bundled levitation magnets' fits are at 4.7-4.8 %, the guidance magnet's
+#: at 49 %, which destabilises the cross-section's guidance loops (docs/vehicle.md).
+LADDER_FIT_WARNING = 0.2
+
+
+def _vehicle_bank(bank_type: Any, members: list[tuple[str, Any]], *, motion_eddy: bool,
+                  files: dict[str, str], kind_of: dict[str, str],
+                  ladder_kinds: Any = None, option: str = "motion_eddy = True ([magnets] "
+                  "motion_eddy of the vehicle file, or the option)", **options: Any) -> Any:
+    """The vehicle's magnet bank; with ``motion_eddy`` its ladder members (those of
+    ``ladder_kinds`` only, if given), a member whose maps have no ladder refused naming
+    the option and the magnet file, a poorly fitted ladder flown with a warning."""
+    if not motion_eddy:
+        return bank_type(members, **options)
+    from ..reduced.current import CurrentModel
+
+    name = ""
+
+    def ladder_member(n: str, m: Any) -> Any:
+        nonlocal name
+        name = n
+        return (CurrentModel(m, motion_eddy=True)
+                if ladder_kinds is not None and kind_of[n] in ladder_kinds else m)
+
+    try:
+        # with ladder_kinds: those kinds as ladder members, the others eq. 8
+        members = [(n, ladder_member(n, m)) for n, m in members]
+        bank = bank_type(members, motion_eddy=ladder_kinds is None, **options)
+    except InputError as exc:
+        text = str(exc)
+        if text.startswith("member '"):
+            name = text.split("'", 2)[1]
+        kind = kind_of.get(name)
+        where = f"the {kind} magnet {files[kind]!r}" if kind in files else "a magnet"
+        raise InputError(f"{option}: {where} cannot fly with the shielded-gap "
+                         f"ladder: {text}") from None
+    warned: set[str] = set()
+    for n, m in members:
+        kind = kind_of[n]
+        maps = m.maps if isinstance(m, CurrentModel) else m
+        if kind in warned or (ladder_kinds is not None and kind not in ladder_kinds):
+            continue
+        ds = maps.dataset
+        fit = (float(np.max(ds["motion_eddy_fit_rms"].values))
+               if "motion_eddy_fit_rms" in ds else math.nan)
+        if fit > LADDER_FIT_WARNING:
+            warned.add(kind)
+            warnings.warn(f"{option}: the {kind} magnet {files[kind]!r}'s shielded-gap "
+                          f"ladder fits the detailed model's gap and voltage responses with "
+                          f"{100 * fit:.0f} % RMS residual (above {100 * LADDER_FIT_WARNING:.0f} "
+                          "%): its eddy currents under gap motion are not those of the "
+                          "detailed model", MaglevkitWarning, stacklevel=external_stacklevel())
+    return bank
 
 
 def _scaled_resistances(maps: Any, r_el: float, r_ec: float) -> Any:

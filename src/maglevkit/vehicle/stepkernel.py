@@ -12,7 +12,8 @@ step, in this order::
     gaps      s = s0 + B^T q - w(x) - r,   s' = B^T q' - (w_t + v w_x)(x) - v r_x
     control   U = clip(R I + k_psi (psi0 (1 + rho) - psi_hat)), U >= -R_ec I_L, failures
               (rho's damping input blends s' with the points' velocity B^T q')
-    magnets   the bank's own step function (MagnetBank.step_function: RK4 of eq. 8)
+    magnets   the bank's own step function (MagnetBank.step_function: RK4 of eq. 8, or of
+              the shielded-gap ladder with its I_e in the state: motion_eddy)
     control   psi_hat += dt (U - R (I + I+)/2),   e_I += P (s - s0) dt
     mechanics x+ = Ad x + Bd (Q_g - B F_bar),     F_bar = sides (F + F+)/2
     guideway  X+ = X Ad^T + Q Bd^T,  Q[r] = sum over the loads on ring row r of
@@ -75,7 +76,8 @@ class StepLayout:
         Sine modes per span (0 for a rigid guideway).
     state : dict of str to slice
         Parts of the state vector ``S`` (``"x_mech"``, ``"guideway"``, ``"I_L"``,
-        ``"psi_hat"``, ``"integral"``, ``"current"``, ``"force"``).
+        ``"psi_hat"``, ``"integral"``, ``"current"``, ``"force"``; ``"I_e"`` last with
+        shielded-gap ladder magnets).
     step_inputs : dict of str to slice
         Parts of the per-step input ``P`` (``"x_ref"``, ``"r"``, ``"r_x"``, ``"t"``,
         ``"keep"``).
@@ -124,15 +126,19 @@ def pack_slices(items: list[tuple[str, int]]) -> dict[str, slice]:
     return out
 
 
-def _layout(n_dof: int, nc: int, n_sp: int, nm: int, held: bool = False) -> StepLayout:
+def _layout(n_dof: int, nc: int, n_sp: int, nm: int, held: bool = False,
+            motion_eddy: bool = False) -> StepLayout:
+    # the ladder's I_e after every other block: without it the layout is the one before
+    eddy = [("I_e", nc)] if motion_eddy else []
     state = pack_slices([("x_mech", 2 * n_dof), ("guideway", n_sp * 2 * nm), ("I_L", nc),
-                         ("psi_hat", nc), ("integral", nc), ("current", nc), ("force", nc)])
+                         ("psi_hat", nc), ("integral", nc), ("current", nc), ("force", nc),
+                         *eddy])
     extra = [("u_held", nc), ("q_g", n_dof)] if held else []
     step = pack_slices([("x_ref", 1), ("r", nc), ("r_x", nc), ("t", 1), ("keep", n_sp), *extra])
     record = pack_slices([("gap", nc), ("gap_rate", nc), ("current", nc), ("force", nc), ("I_L", nc),
                           ("deflection", nc), ("q", n_dof), ("q_dot", n_dof), ("midspan_ring", n_sp),
                           ("voltage", nc), ("gap_min", 1), ("gap_max", 1), ("n_bad", 1),
-                          ("flags", nc), ("I_L_min", nc), ("I_L_max", nc)])
+                          ("flags", nc), ("I_L_min", nc), ("I_L_max", nc), *eddy])
     return StepLayout(n_dof, nc, n_sp, nm, state, step, record)
 
 
@@ -500,7 +506,8 @@ def build_vehicle_step(*, bank_step: Any, dt: float, nominal_gap_m: float, sides
                        integral_projection: np.ndarray, midspan_shape: np.ndarray,
                        point_offsets_m: np.ndarray, velocity_blend: float = 0.0,
                        block_steps: int = 50, name: str = "maglevkit_vehicle_step",
-                       controller: str = "cascade") -> VehicleStepFunction:
+                       controller: str = "cascade", motion_eddy: bool = False
+                       ) -> VehicleStepFunction:
     """Compose the vehicle step function (see the module docstring).
 
     Parameters are the run's constants, as the NumPy loop uses them: ``bank_step`` from
@@ -569,6 +576,13 @@ def build_vehicle_step(*, bank_step: Any, dt: float, nominal_gap_m: float, sides
         [N, N m]: payload steps; the ``"mechanics_loaded"`` part); the cascade's flux
         estimate and integrator are still updated (the integrator is the NMPC's
         reference correction).
+    motion_eddy : bool, default False
+        The bank has shielded-gap ladder members (:attr:`MagnetBank.motion_eddy`): its
+        step takes and returns the eddy currents ``I_e``, which the state carries (block
+        ``"I_e"`` after the others) and the record holds at the step start (``"I_e"``,
+        last); the chopper floor is the ladder's, ``U >= -R_a (I_L + I_e)``
+        (``eddy_resistance_ohm`` then holds the bank's ``R_a`` in ladder circuits).
+        False: the layout and the function are the ones without the ladder.
 
     Returns
     -------
@@ -583,7 +597,7 @@ def build_vehicle_step(*, bank_step: Any, dt: float, nominal_gap_m: float, sides
     if controller not in ("cascade", "held"):
         raise InputError(f"controller = {controller!r}; use 'cascade' or 'held'")
     held = controller == "held"
-    lay = _layout(n_dof, nc, n_sp, nm, held)
+    lay = _layout(n_dof, nc, n_sp, nm, held, motion_eddy)
     sym = ca.MX.sym
     parts = build_vehicle_parts(
         dt=dt, nominal_gap_m=nominal_gap_m, span_length_m=span_length_m, origin_m=origin_m,
@@ -622,20 +636,29 @@ def build_vehicle_step(*, bank_step: Any, dt: float, nominal_gap_m: float, sides
         gap_k, rate_k, w_k, mid_k, vel_k = f_in(s_xm, s_gx, ca.MX.zeros(nc), p_r, p_rx, c_v)
     damp_k = rate_k if velocity_blend == 0.0 else damping_input(rate_k, vel_k,
                                                                 float(velocity_blend))
+    # the chopper's current: I_L (eq. 8), I_L + I_e (the ladder: I = (U/R_a + I_L +
+    # I_e)/a, so I >= 0 is U >= -R_a (I_L + I_e), the same floor)
+    s_ie = S[st["I_e"]] if motion_eddy else None
+    i_chop = s_il if s_ie is None else s_il + s_ie
     if held:
-        u_k = parts["voltage_limits"](P[sp["u_held"]], s_il, s_cur, p_t, c_fail)
+        u_k = parts["voltage_limits"](P[sp["u_held"]], i_chop, s_cur, p_t, c_fail)
     else:
-        u_k = f_ctl(gap_k, damp_k, s_il, s_cur, s_psi, s_int, p_t, c_fail)
-    bout = bank_step.call({"I_L": s_il, "s": gap_k, "U": u_k, "sdot": rate_k, "h": ca.MX(dt)})
+        u_k = f_ctl(gap_k, damp_k, i_chop, s_cur, s_psi, s_int, p_t, c_fail)
+    b_in = {"I_L": s_il, "s": gap_k, "U": u_k, "sdot": rate_k, "h": ca.MX(dt)}
+    if s_ie is not None:
+        b_in["I_e"] = s_ie
+    bout = bank_step.call(b_in)
     il_next, cur_next, force_next, n_bad, flags, il_lo, il_hi = (bout[k] for k in (
         "I_L_next", "I", "F", "n_bad", "flags", "I_L_min", "I_L_max"))
+    eddy_next = [] if s_ie is None else [bout["I_e_next"]]
+    eddy_rec = [] if s_ie is None else [s_ie]
     psi_n, int_n = f_upd(s_psi, s_int, u_k, s_cur, cur_next, gap_k)
     fb = (0.5 * sides) * (s_f + force_next)
     xm_n = expanded["mechanics_loaded"](s_xm, fb, P[sp["q_g"]]) if held else f_mech(s_xm, fb)
     gx_n = parts["guideway_update"](s_gx, rows_mk, sa_mk, ca_mk, fb) if nm else s_gx
-    s_next = ca.vertcat(xm_n, gx_n, il_next, psi_n, int_n, cur_next, force_next)
+    s_next = ca.vertcat(xm_n, gx_n, il_next, psi_n, int_n, cur_next, force_next, *eddy_next)
     rec = ca.vertcat(gap_k, rate_k, s_cur, s_f, s_il, w_k, s_xm, mid_k, u_k, ca.mmin(gap_k),
-                     ca.mmax(gap_k), n_bad, flags, il_lo, il_hi)
+                     ca.mmax(gap_k), n_bad, flags, il_lo, il_hi, *eddy_rec)
     assert rec.shape[0] == lay.n_record and s_next.shape[0] == lay.n_state
     fun = ca.Function(name, [S, P, C], [s_next, rec], ["S", "P", "C"], ["S_next", "R"])
     measure = ca.Function(f"{name}_measure", [S, P, C], [gap_k, rate_k], ["S", "P", "C"],

@@ -10,6 +10,7 @@ guideway files (see ``maglevkit/data/vehicle/tr09.toml``, bundled as ``"tr09"``)
     [secondary]  stiffness, damping, positions
     [joint]      stiffness, damping
     [control]    bandwidth, damping, flux_bandwidth, voltage_limit, velocity_blend (optional)
+    [magnets]    motion_eddy (optional table and key, default false)
 
 Unknown or missing keys and bad values raise :class:`~maglevkit.errors.ParameterFileError`
 naming the key.  Train coordinate ``xi`` [m]: distance behind the train's nose (positive
@@ -77,7 +78,14 @@ VEHICLE_SCHEMA: dict[str, dict[str, Schema]] = {
         "velocity_blend": Schema(float, unit="-", check="nonnegative", required=False,
                                  default=0.0),
     },
+    # optional table (a file without it: every key's default)
+    "magnets": {
+        "motion_eddy": Schema(bool, required=False, default=False),
+    },
 }
+
+#: Tables a vehicle file may leave out (all their keys have defaults).
+OPTIONAL_TABLES = frozenset({"magnets"})
 
 
 #: The plausible magnitudes of every dimensional key of a vehicle file
@@ -165,6 +173,10 @@ class TrainData:
         Share ``beta`` in [0, 1] [-] of the magnet's absolute velocity in the gap
         controllers' damping input (:func:`~maglevkit.control.damping_input`; key
         ``velocity_blend`` of ``[control]``, default 0: the gap rate only).
+    motion_eddy : bool
+        Fly the reduced magnets with the shielded-gap ladder (key ``motion_eddy`` of the
+        optional ``[magnets]`` table, default False: eq. 8;
+        :class:`~maglevkit.vehicle.VehicleModel` option ``motion_eddy``).
     provenance : dict
         ``"table.key" -> tag/source``.
     source : str
@@ -202,6 +214,7 @@ class TrainData:
     source: str = ""
     sides: int = 2
     control_velocity_blend: float = 0.0
+    motion_eddy: bool = False
 
     # ------------------------------------------------------------------ derived layout
     @property
@@ -309,6 +322,9 @@ def parse_vehicle(parameters: Mapping[str, Any], source: str = "parameters") -> 
                                  f"{', '.join(sorted(allowed))}")
     t: dict[str, dict[str, Any]] = {}
     for table, schema in VEHICLE_SCHEMA.items():
+        if table not in parameters and table in OPTIONAL_TABLES:
+            t[table] = take({}, schema, table)
+            continue
         if table not in parameters:
             raise ParameterFileError(f"{source}: missing the [{table}] table (keys: "
                                      f"{', '.join(schema)})")
@@ -359,7 +375,8 @@ def parse_vehicle(parameters: Mapping[str, Any], source: str = "parameters") -> 
         joint_stiffness_N_per_m=jo["stiffness"], joint_damping_N_s_per_m=jo["damping"],
         control_bandwidth_Hz=c["bandwidth"], control_damping=c["damping"],
         flux_bandwidth_Hz=c["flux_bandwidth"], voltage_limit_V=c["voltage_limit"],
-        control_velocity_blend=c["velocity_blend"], provenance=prov, source=source)
+        control_velocity_blend=c["velocity_blend"],
+        motion_eddy=bool(t["magnets"]["motion_eddy"]), provenance=prov, source=source)
 
 
 def bundled_vehicles() -> list[str]:
