@@ -1838,7 +1838,10 @@ def _vehicle_bank(bank_type: Any, members: list[tuple[str, Any]], *, motion_eddy
                           f"ladder fits the detailed model's gap and voltage responses with "
                           f"{100 * fit:.0f} % RMS residual (above {100 * LADDER_FIT_WARNING:.0f} "
                           "%): its eddy currents under gap motion are not those of the "
-                          "detailed model", MaglevkitWarning, stacklevel=external_stacklevel())
+                          "detailed model, and its control loops may go unstable (the "
+                          "bundled guidance magnet's do); motion_eddy = \"levitation\" flies "
+                          "only the levitation magnets with the ladder", MaglevkitWarning,
+                          stacklevel=external_stacklevel())
     return bank
 
 
