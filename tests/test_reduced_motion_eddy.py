@@ -289,10 +289,8 @@ def test_freewheel_diodes_on_ladder_members(u_maps: CharacteristicMaps) -> None:
     keeps the coil current positive the diodes do nothing (bit-identical to
     ``freewheel=False``); a large negative voltage from 20 A drives the coil current to 0
     and holds it there (never below), and the states follow an independent integration of
-    CurrentModel's ladder ODE with the diode law written here from Fig. 8 (the coil current
-    ``(U/R_a + I_L + I_e)/a`` held at 0: ``U = -R_a (I_L + I_e)``)."""
-    from scipy.integrate import solve_ivp
-
+    CurrentModel's ladder ODE with the diode law written from Fig. 8
+    (:func:`_check_against_the_diode_reference`)."""
     from maglevkit.reduced.bank import MagnetBank
 
     cm = mk.CurrentModel(u_maps, motion_eddy=True)
@@ -318,6 +316,21 @@ def test_freewheel_diodes_on_ladder_members(u_maps: CharacteristicMaps) -> None:
     free = plain.simulate(t[:51], gaps_m=0.010, voltages_V=u_cmd, initial_currents_A=20.0)
     assert free.currents_A[-1, 0] < -1.0
 
+    _check_against_the_diode_reference(cm, r_a, u_cmd, t, sim.inductor_currents_A[:, 0],
+                                       sim.eddy_currents_A[:, 0])
+
+
+def _check_against_the_diode_reference(cm: mk.CurrentModel, r_a: float, u_cmd: float,
+                                       t: np.ndarray, i_l: np.ndarray, i_e: np.ndarray) -> None:
+    """``I_L``, ``I_e`` [A] on ``t`` [s] of a ladder switched off with ``u_cmd`` [V] from
+    20 A at a fixed 10 mm gap, against an independent LSODA integration of
+    ``CurrentModel``'s ladder ODE (``cm``: ``motion_eddy=True`` without diodes) with the
+    diode law written here from Fig. 8: the coil current ``(U/R_a + I_L + I_e)/a`` held at
+    0 gives ``U = -R_a (I_L + I_e)``."""
+    from scipy.integrate import solve_ivp
+
+    assert cm.motion_eddy and not cm.freewheel
+
     def rhs(_t: float, x: np.ndarray) -> np.ndarray:
         u = max(u_cmd, -r_a * (x[0] + x[1]))          # the diodes (Fig. 8's coil current)
         d_il, d_ie = cm.ode(x[0], u, 0.010, 0.0, x[1])
@@ -328,10 +341,64 @@ def test_freewheel_diodes_on_ladder_members(u_maps: CharacteristicMaps) -> None:
     # RK4 at 50 us (sub-steps below the ladder's stable step): in the step where the
     # diodes start to conduct the kink makes it first order (measured 5.8 mA on I_e's
     # 13 A there), elsewhere ~1e-4 A; bounds 2e-2 A (the kink) and 1e-3 A (the median)
-    for got, want in ((sim.inductor_currents_A[:, 0], ref.y[0]),
-                      (sim.eddy_currents_A[:, 0], ref.y[1])):
+    for got, want in ((i_l, ref.y[0]), (i_e, ref.y[1])):
         assert np.max(np.abs(got - want)) < 2e-2
         assert np.median(np.abs(got - want)) < 1e-3
+
+
+def test_freewheel_diodes_on_the_single_magnet_ladder(u_maps: CharacteristicMaps) -> None:
+    """``CurrentModel(maps, motion_eddy=True, freewheel=True)`` (both ``lookup`` values;
+    the ladder runs on the B-splines): ``simulate`` and ``step`` equal the bank with
+    ``motion_eddy=True, freewheel=True`` on the same inputs, follow the same independent
+    LSODA reference as the bank, hold the coil current at >= 0, and are bit-identical to
+    ``freewheel=False`` while the diodes block."""
+    from maglevkit.reduced.bank import MagnetBank
+
+    plain = mk.CurrentModel(u_maps, motion_eddy=True)
+    r_el = float(plain.resistance_ohm[0])
+    r_a = float(u_maps.dataset["motion_eddy_jump_resistance_ohm"].values[0])
+    t = np.arange(0, 201) * 5e-5
+    gap = 0.010 + 0.001 * np.sin(2 * np.pi * 50.0 * t)
+    poles = np.repeat(gap[:, None], 2, axis=1)         # the U-magnet's two pole gaps
+    bank = MagnetBank({"m": u_maps}, motion_eddy=True, freewheel=True, compiled="never")
+    u_cmd = -300.0                 # switching off from 20 A: the diodes conduct in ~1 ms
+    for lookup in ("tables", "bspline"):
+        diode = mk.CurrentModel(u_maps, motion_eddy=True, freewheel=True, lookup=lookup)
+        assert diode.freewheel and diode.max_step_s == bank.max_step_s
+        # diodes blocking (the coil current stays near 20 A): bit-identical to no diodes
+        runs = [m.simulate(t, gaps_m=poles, voltages_V=22.0 * r_el, initial_currents_A=20.0)
+                for m in (plain, diode)]
+        for name in ("currents_A", "inductor_currents_A", "eddy_currents_A", "force_N"):
+            assert np.array_equal(getattr(runs[0], name), getattr(runs[1], name)), name
+        # the bank on the same inputs: the same ladder ODE, diode law, RK4 sub-steps
+        # (both at the ladder's stable step) and bicubic maps (the bank's cell tables
+        # hold the B-spline's polynomials), so only rounding differs: measured 1.4e-14 A
+        # and 3e-11 N (2e-14 relative); bounds 1e-12 A and 1e-12 relative on the force
+        for g_cm, g_bank in ((poles, gap[:, None]), (0.010, 0.010)):
+            sim = diode.simulate(t, gaps_m=g_cm, voltages_V=u_cmd, initial_currents_A=20.0)
+            ref = bank.simulate(t, gaps_m=g_bank, voltages_V=u_cmd, initial_currents_A=20.0)
+            assert sim.eddy_currents_A is not None and ref.eddy_currents_A is not None
+            for got, want in ((sim.currents_A, ref.currents_A),
+                              (sim.inductor_currents_A, ref.inductor_currents_A),
+                              (sim.eddy_currents_A[:, :, 0], ref.eddy_currents_A)):
+                np.testing.assert_allclose(got, want, rtol=0, atol=1e-12)
+            np.testing.assert_allclose(sim.force_N, ref.member_force_N[:, 0], rtol=1e-12)
+            coil = sim.currents_A[:, 0]
+            assert coil.min() >= -1e-9            # the diodes hold I >= 0 (rounding only)
+            assert np.sum(coil < 1e-9) > 100      # and it reached 0 and stayed there
+        # the last run (fixed 10 mm) against the bank test's independent reference
+        _check_against_the_diode_reference(plain, r_a, u_cmd, t, sim.inductor_currents_A[:, 0],
+                                           sim.eddy_currents_A[:, 0, 0])
+        # step: the same numbers as simulate, and as the bank's step (bound as above)
+        st = diode.initial_state(gaps_m=0.010, currents_A=20.0)
+        bs = bank.initial_state(gaps_m=0.010, currents_A=20.0)
+        for k in range(1, 41):
+            st, out = diode.step(st, 5e-5, u_cmd, 0.010)
+            bs, bout = bank.step(bs, 5e-5, u_cmd, 0.010)
+            assert abs(out.currents_A[0] - sim.currents_A[k, 0]) < 1e-12
+            assert abs(out.currents_A[0] - bout.currents_A[0]) < 1e-12
+        assert st.eddy_currents_A is not None
+        assert abs(st.eddy_currents_A[0, 0] - sim.eddy_currents_A[40, 0, 0]) < 1e-12
 
 
 def test_vanishing_unshielded_inductance_gives_eq8() -> None:

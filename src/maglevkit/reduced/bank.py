@@ -80,6 +80,7 @@ from .current import (
     eq8_rhs,
     eq8_shielded_gap_rhs,
     shielded_gap_force_current,
+    shielded_gap_freewheel_voltage,
 )
 from .lanes import LaneInput, external_source, lane_source, lane_target
 from .stepper import BankStepper
@@ -599,12 +600,11 @@ class MagnetBank:
 
     def _ladder_voltage(self, i: Any, ie: Any, u: Any, p: Any) -> Any:
         """The voltage a circuit of a bank with ladder members applies: ``U`` as given, or
-        behind the chopper's freewheeling diodes (``freewheel``)
-        :func:`eq8_freewheel_voltage` of the current ``I_L + I_e`` through ``R_a``'s node:
-        the ladder's coil current ``(U/R_a + I_L + I_e)/a`` is eq. 8's ``(U/R_ec + I_L)/a``
-        with ``I_L + I_e`` and ``R_a`` (row ``a``), so the one diode law holds it at >= 0
-        (``I_e = 0`` in eq. 8 circuits: eq. 8's own limit)."""
-        return eq8_freewheel_voltage(i + ie, u, p[7], p[8]) if self.freewheel else u
+        behind the chopper's freewheeling diodes (``freewheel``,
+        :func:`shielded_gap_freewheel_voltage`: eq. 8's diode law of the current
+        ``I_L + I_e`` through ``R_a``'s node, with ``R_a`` from row ``a``; ``I_e = 0`` in
+        eq. 8 circuits: eq. 8's own limit)."""
+        return shielded_gap_freewheel_voltage(i, ie, u, p[7], p[8]) if self.freewheel else u
 
     def _ladder_force(self, cell: tuple[Any, Any], i: Any, ie: Any, p: Any, table: Any) -> Any:
         """The force of one circuit of a bank with ladder members at the gap cell ``cell``:

@@ -69,7 +69,7 @@ if TYPE_CHECKING:
 
 __all__ = ["CurrentModel", "CurrentModelLinearization", "CurrentModelState", "CurrentOutputs",
            "ReducedSimulation", "eq8_coil_current", "eq8_eddy_branch_rhs", "eq8_freewheel_voltage", "eq8_rhs",
-           "eq8_shielded_gap_rhs", "shielded_gap_force_current"]
+           "eq8_shielded_gap_rhs", "shielded_gap_force_current", "shielded_gap_freewheel_voltage"]
 
 
 @dataclass(frozen=True)
@@ -295,8 +295,10 @@ class CurrentModel:
         ``False`` (default): eq. 8 with the applied voltage as given.  ``True``: behind a
         two-quadrant chopper with freewheeling diodes, the coil current cannot go below
         zero within a step (:func:`eq8_freewheel_voltage` in every RK4 stage and in the
-        coil current; the same law as ``MagnetBank(freewheel=True)``).  Eq. 8 only (not
-        with ``eddy_modes > 0`` or ``motion_eddy``, whose diodes need laws of their own).
+        coil current; the same law as ``MagnetBank(freewheel=True)``).  With
+        ``motion_eddy`` the diodes act on the ladder's coil current
+        ``(U/R_a + I_L + I_e)/a`` (:func:`shielded_gap_freewheel_voltage`, the bank's law).
+        Not with ``eddy_modes > 0`` (the eddy network's coil current has other branches).
     jit : bool
         Compile the B-spline RK4 interval (``lookup="bspline"``) to machine code with
         CasADi's JIT (needs a C compiler on the ``PATH``; ~0.3 s once per sub-step count).
@@ -389,11 +391,6 @@ class CurrentModel:
             raise InputError(f"freewheel=True with eddy_modes={m}: the diode law is eq. 8's, "
                              "and the eddy network's coil current has other branches: leave "
                              "freewheel out (or use plain eq. 8)")
-        if self.freewheel and self.motion_eddy:
-            raise InputError("freewheel=True with motion_eddy=True: CurrentModel has the "
-                             "diodes for eq. 8 only; for the shielded-gap ladder with diodes "
-                             "use MagnetBank({name: maps}, motion_eddy=True, freewheel=True) "
-                             "(docs/bank.md), or leave freewheel out")
         if self.motion_eddy:
             if m:
                 raise InputError(f"motion_eddy=True with eddy_modes={m}: these are two "
@@ -478,12 +475,15 @@ class CurrentModel:
             vals = sp(ca.vertcat(sm[j], xm[j]))
             lt, dl, f = vals[0], vals[1], vals[2]
             if self.motion_eddy:
-                # the shielded-gap ladder (module docstring, reduction.motion_eddy)
-                d_il, d_ie = eq8_shielded_gap_rhs(xm[j], em[j], Um[j], sdm[j], lt, dl, r_el[j],
+                # the shielded-gap ladder (module docstring, reduction.motion_eddy), behind
+                # the chopper's diodes with freewheel (the bank's law, every RK4 stage)
+                u_j = (shielded_gap_freewheel_voltage(xm[j], em[j], Um[j], r_el[j], a[j])
+                       if self.freewheel else Um[j])
+                d_il, d_ie = eq8_shielded_gap_rhs(xm[j], em[j], u_j, sdm[j], lt, dl, r_el[j],
                                                   a[j], r_2[j], l_u[j], beta[j])
                 mx_rhs.append(d_il)
                 eddy_rhs.append(d_ie)
-                coils.append(eq8_coil_current(xm[j] + em[j], Um[j], r_el[j], a[j]))
+                coils.append(eq8_coil_current(xm[j] + em[j], u_j, r_el[j], a[j]))
                 if gamma[j] != 0.0:
                     # the force at the force current I_L + gamma I_e (maps without gamma,
                     # or gamma = 0: F(s, I_L) from the lookup above)
@@ -1611,6 +1611,38 @@ def eq8_shielded_gap_rhs(i_l: Any, i_e: Any, u: Any, gap_rate: Any, ltilde: Any,
     emf = dl_ds * i_l * gap_rate
     d_il = (v_m - (1.0 - share) * emf) / (ltilde - l_u)
     return d_il, (v_a - v_m - share * emf) / l_u - d_il
+
+
+def shielded_gap_freewheel_voltage(i_l: Any, i_e: Any, u: Any, r_el: Any, a: Any) -> Any:
+    """The shielded-gap ladder's terminal voltage behind a two-quadrant chopper with
+    freewheeling diodes (``CurrentModel(maps, motion_eddy=True, freewheel=True)`` and
+    ``MagnetBank(..., motion_eddy=True, freewheel=True)``).
+
+    The ladder's coil current ``I = (U/R_a + I_L + I_e)/a`` is eq. 8's
+    ``(U/R_ec + I_L)/a`` with ``I_L + I_e`` in place of ``I_L`` and the shunt ``R_a`` in
+    place of ``R_ec`` (``a = 1 + R_el/R_a``), so the diode law is
+    :func:`eq8_freewheel_voltage` of ``I_L + I_e``: ``U_eff = max(U, -R_a (I_L + I_e))``.
+    With ``I_e = 0`` (eq. 8 circuits of a bank) it is eq. 8's own limit.
+
+    Parameters
+    ----------
+    i_l : float or CasADi
+        The gap section's current ``I_L`` [A].
+    i_e : float or CasADi
+        The shielding eddy current ``I_e`` [A].
+    u : float or CasADi
+        Commanded terminal voltage ``U`` [V].
+    r_el : float or CasADi
+        Coil resistance ``R_el`` [ohm].
+    a : float or CasADi
+        ``1 + R_el/R_a`` [-].
+
+    Returns
+    -------
+    CasADi expression (or float for float inputs)
+        The applied voltage ``U_eff`` [V].
+    """
+    return eq8_freewheel_voltage(i_l + i_e, u, r_el, a)
 
 
 def shielded_gap_force_current(i_l: Any, i_e: Any, force_share: Any) -> Any:
