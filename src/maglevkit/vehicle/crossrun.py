@@ -56,13 +56,13 @@ from .framework import PartEvaluator, run_blocks, run_steps
 from .simulation import (
     Failure,
     VehicleRunInterrupted,
-    _check_motion_eddy_options,
-    _vehicle_bank,
+    check_motion_eddy_options,
     check_run_speed,
     failure_times,
     interrupted_report_lines,
     limit_crossing,
     touchdown_report_line,
+    vehicle_bank,
     write_run_netcdf,
 )
 
@@ -569,8 +569,8 @@ class CrossSectionModel:
             raise InputError(f"motion_eddy = {motion_eddy!r}; use True (every magnet), "
                              "'levitation' (the levitation magnets only) or False")
         if motion_eddy is not False:
-            _check_motion_eddy_options(magnets=magnets, eddy_resistance_scale=1.0)
-        self.bank = _vehicle_bank(
+            check_motion_eddy_options(magnets=magnets, eddy_resistance_scale=1.0)
+        self.bank = vehicle_bank(
             MagnetBank, members, motion_eddy=motion_eddy is not False,
             files={"levitation": levitation_magnet, "guidance": guidance_magnet},
             kind_of={n: n.split("_")[0] for n in self.member_names},

@@ -512,8 +512,8 @@ class VehicleModel:
                              "the vehicle file's [magnets] motion_eddy)")
         self.motion_eddy = bool(motion_eddy)
         if self.motion_eddy:
-            _check_motion_eddy_options(magnets=magnets,
-                                       eddy_resistance_scale=eddy_resistance_scale)
+            check_motion_eddy_options(magnets=magnets,
+                                      eddy_resistance_scale=eddy_resistance_scale)
         kinds = {"standard": load_magnet(train.standard_magnet), "bow": load_magnet(train.bow_magnet)}
         self.magnets = kinds
         for kind, mag in kinds.items():
@@ -545,12 +545,12 @@ class VehicleModel:
         members: list[tuple[str, Any]] = []
         for s in self.slots:
             members.append((s.name, FluxModel(kinds[s.kind]) if self.fine else self.maps[s.kind]))
-        self.bank = _vehicle_bank(MagnetBank, members, motion_eddy=self.motion_eddy,
-                                  files={"standard": train.standard_magnet,
-                                         "bow": train.bow_magnet},
-                                  kind_of={s.name: s.kind for s in self.slots},
-                                  gap_inputs="pole" if self.fine else "circuit",
-                                  compiled=compiled, freewheel=freewheel)
+        self.bank = vehicle_bank(MagnetBank, members, motion_eddy=self.motion_eddy,
+                                 files={"standard": train.standard_magnet,
+                                        "bow": train.bow_magnet},
+                                 kind_of={s.name: s.kind for s in self.slots},
+                                 gap_inputs="pole" if self.fine else "circuit",
+                                 compiled=compiled, freewheel=freewheel)
         bank = self.bank
         # pole and circuit positions (train coordinate), frame of every circuit
         pole_xi: list[float] = []
@@ -1772,7 +1772,7 @@ class VehicleModel:
         return out
 
 
-def _check_motion_eddy_options(*, magnets: str, eddy_resistance_scale: Any) -> None:
+def check_motion_eddy_options(*, magnets: str, eddy_resistance_scale: Any) -> None:
     """Refuse the combinations a vehicle with shielded-gap ladder magnets does not fly."""
     if magnets != "reduced":
         raise InputError(f"motion_eddy = True with magnets = {magnets!r}: the shielded-gap "
@@ -1792,10 +1792,10 @@ def _check_motion_eddy_options(*, magnets: str, eddy_resistance_scale: Any) -> N
 LADDER_FIT_WARNING = 0.2
 
 
-def _vehicle_bank(bank_type: Any, members: list[tuple[str, Any]], *, motion_eddy: bool,
-                  files: dict[str, str], kind_of: dict[str, str],
-                  ladder_kinds: Any = None, option: str = "motion_eddy = True ([magnets] "
-                  "motion_eddy of the vehicle file, or the option)", **options: Any) -> Any:
+def vehicle_bank(bank_type: Any, members: list[tuple[str, Any]], *, motion_eddy: bool,
+                 files: dict[str, str], kind_of: dict[str, str],
+                 ladder_kinds: Any = None, option: str = "motion_eddy = True ([magnets] "
+                 "motion_eddy of the vehicle file, or the option)", **options: Any) -> Any:
     """The vehicle's magnet bank; with ``motion_eddy`` its ladder members (those of
     ``ladder_kinds`` only, if given), a member whose maps have no ladder refused naming
     the option and the magnet file, a poorly fitted ladder flown with a warning."""
