@@ -210,3 +210,32 @@ def test_split_network_mmf_drops_against_the_field() -> None:
         assert abs(err["gap"]) < 0.015, (smm, i, err)
         assert abs(err["iron"]) < 0.025, (smm, i, err)
         assert abs(err["rail"]) < 0.11, (smm, i, err)
+
+
+def test_record_where_the_corner_sends_its_flux() -> None:
+    """guidesat26's premise, from the record alone (the outline fluxes recorded with 16 of
+    the points): the yoke-leg corner's top face sends more flux than the legs' top face at
+    every point (the split network's top fringe leaves from the corner), and the window's
+    flux leaves the yoke's front face for a minor share in linear iron but for most of it in
+    deep saturation at the smallest gap (a quarter of the window's permeance, the tubes
+    through the coil's front side, leaves from the corner: between the two)."""
+    fem = _fem()
+    seen, deep = 0, False
+    for v in fem.load().values():
+        o = v.get("outline_Wb")
+        if not o or v["refine"] != 1.0 or v.get("window_depth") or v.get("behind_depth"):
+            continue
+        seen += 1
+        corner_top = o["yoke_top"] - o["back_top"]
+        leg_top = o["leg_top"] - o["yoke_top"]
+        # measured 1.12-1.56 over the 16 points
+        assert 1.05 < corner_top / leg_top < 1.7, (v["s"], v["current"])
+        yoke_front = o["front_0"] - o["leg_inner_back"]
+        window = o["front_0"] - o["bar_bottom_back"]
+        share = yoke_front / window
+        if v["current"] <= 20.0:            # linear iron: measured 0.15-0.19
+            assert 0.1 < share < 0.25, (v["s"], v["current"], share)
+        if round(v["s"] * 1e3) == 6 and v["current"] == 100.0:    # measured 0.65
+            assert share > 0.5, share
+            deep = True
+    assert seen == 16 and deep
