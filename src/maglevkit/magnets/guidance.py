@@ -302,7 +302,7 @@ def build_guidance_magnet(params: Mapping[str, Any], materials: Mapping[str, Mat
                     # the window's tubes beside the coil's front side (within t_c of the
                     # yoke, a quarter of the window's permeance for tr-guidance) leave from
                     # the legs' yoke ends: in the field the window's flux leaving the yoke's
-                    # front face is 15-21 % of it in linear iron, up to 65 % in deep
+                    # front face is 15-19 % of it in linear iron, up to 65 % in deep
                     # saturation, where the legs' own drop lowers their potential
                     # (guidesat26, docs/validation_fem.md)
                     Branch(f"leak_coil_{i}", f"YU{i}", f"YL{i}",
