@@ -339,7 +339,8 @@ def network(magnet: mk.Magnet, s: float, current: float) -> dict:
                      "gap": sum(abs(v) for k, v in flux.items()
                                 if k in ("gap_u_1", "top_u_1") or k.startswith(("gap_u_1_",
                                                                                 "flank_u_1_"))),
-                     "leak": abs(flux["leak_1"]) + abs(flux.get("leak_leg_1", 0.0)),
+                     "leak": abs(flux["leak_1"]) + abs(flux.get("leak_leg_1", 0.0))
+                     + abs(flux.get("leak_coil_1", 0.0)),
                      "back": abs(flux.get("back_1", 0.0))}}
 
 

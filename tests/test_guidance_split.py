@@ -100,7 +100,7 @@ def test_split_end_effects_depths() -> None:
     assert [b.name for b in cut.network.branches] == [b.name for b in full.network.branches]
     g = {b.name: b.elements[0] for b in cut.network.branches}
     h = {b.name: b.elements[0] for b in full.network.branches}
-    for name in ("back_1", "leak_leg_1", "coil_air_1"):
+    for name in ("back_1", "leak_leg_1", "leak_coil_1", "coil_air_1"):
         assert h[name].value_H < g[name].value_H, name
     assert h["leak_1"].value_H == g["leak_1"].value_H          # the bars run through
     a = mk.solve_statics(cut, gaps_m=0.010, currents_A=[32.0, 32.0])

@@ -17,10 +17,11 @@ paths a 2-D cross-section FEM showed missing (docs/validation_fem.md) and needs 
 build ``coil_thickness``::
 
       YU_i --leg_u_i_0-- MU_i --leg_u_i_1 (+ bar)-- U_i        legs in halves, bar its own
-       |                  +--top_u_i-- RO_u            member; top: leg top -> rail
-    back_i  yoke_i ||     leak_leg_i                          back: behind the yoke
-       |    coil_air_i    |                                    coil_air: the coil's own
-      YL_i --leg_l_i_1-- ML_i --leg_l_i_0 (+ bar)-- L_i        cross-section beside the yoke
+       |  +--top_u_i-- RO_u                                   member; top: corner -> rail
+       |  leak_coil_i      leak_leg_i                         back: behind the yoke
+    back_i  yoke_i ||       |                                  coil_air: the coil's own
+       |    coil_air_i      |                                  cross-section beside the yoke
+      YL_i --leg_l_i_1-- ML_i --leg_l_i_0 (+ bar)-- L_i        leak_coil/leak_leg: window
 
 and, beside each face (upper shown; nodes of section i)::
 
@@ -32,7 +33,9 @@ and, beside each face (upper shown; nodes of section i)::
 through a node ``EY_i``), and takes the iron members' lengths from where the flux runs: the
 yoke-leg bends from their conformal map (:func:`bend_reduction`), the rail from the face's
 entry to the mid-plane without a corner, the inner flank's flux landing ``t_p/3`` below the
-face (guide26, docs/validation_fem.md).  Formulas: :func:`_split_paths` and docs/magnets.md.
+face (guide26, docs/validation_fem.md); the legs' top fringe leaves from the yoke-leg corner
+and the window's tubes beside the coil's front side from the legs' yoke ends (guidesat26:
+where the field's flux leaves them).  Formulas: :func:`_split_paths` and docs/magnets.md.
 
 Eddy currents (solid iron): ``eddy_model = "lumped"`` (default) puts one
 ``EddyCurrent.solid_rectangular`` element on each half leg (with the pole bar's iron), the
@@ -275,9 +278,9 @@ def build_guidance_magnet(params: Mapping[str, Any], materials: Mapping[str, Mat
     for i, cname in enumerate(names, start=1):
         g = f"g{i}"
         if split:
-            # legs in two halves (node M at mid-length: the window's leakage and the top
-            # fringe leave there), their leakage to the other leg, the air behind the yoke
-            # (yoke end to yoke end) and the legs' top fringe to the rail.  A leg runs along
+            # legs in two halves (node M at mid-length: the window's leakage beyond the coil
+            # leaves there), their leakage to the other leg, the air behind the yoke (yoke
+            # end to yoke end) and the legs' top fringe to the rail.  A leg runs along
             # its outer edge from the outer corner (less the bend's reduction) to the bar's
             # back, at the legs' section; the bar is a member of its own in series at the leg's end,
             # t_p at its section L h_p (the "paper" leg counts t_p/2 at the legs' smaller
@@ -296,10 +299,21 @@ def build_guidance_magnet(params: Mapping[str, Any], materials: Mapping[str, Mat
                 branches += [
                     Branch(f"leak_leg_{i}", f"MU{i}", f"ML{i}",
                            (LeakagePermeance(f"leak_leg_{i}", paths["legs"]),)),
+                    # the window's tubes beside the coil's front side (within t_c of the
+                    # yoke, a quarter of the window's permeance for tr-guidance) leave from
+                    # the legs' yoke ends: in the field the window's flux leaving the yoke's
+                    # front face is 15-19 % of it in linear iron, up to 65 % in deep
+                    # saturation, where the legs' own drop lowers their potential
+                    # (guidesat26, docs/validation_fem.md)
+                    Branch(f"leak_coil_{i}", f"YU{i}", f"YL{i}",
+                           (LeakagePermeance(f"leak_coil_{i}", paths["legs_coil"]),)),
                     Branch(f"back_{i}", f"YU{i}", f"YL{i}",
                            (LeakagePermeance(f"back_{i}", paths["back"]),))]
             if options.fringing:
-                for side, n0, n1 in (("u", f"MU{i}", f"ROU{i}"), ("l", f"ROL{i}", f"ML{i}")):
+                # the top fringe from the yoke-leg corner (YU, YL): in the field the corner's
+                # top face sends 1.1-1.6 times the leg's top face's flux at every recorded
+                # point (guidesat26, docs/validation_fem.md)
+                for side, n0, n1 in (("u", f"YU{i}", f"ROU{i}"), ("l", f"ROL{i}", f"YL{i}")):
                     branches.append(Branch(f"top_{side}_{i}", n0, n1, (FringePermeance(
                         f"top_{side}_{i}", gap_input=g, width_m=paths["top_width"],
                         radius_m=tp + ll, inner_radius_m=tp),)))
@@ -457,8 +471,10 @@ def _split_paths(L: float, hp: float, tp: float, dist: float, ll: float, tl: flo
     bars = MU0 * L * tp / (dist - hp)
     # the legs' inner faces across the window between them; over the first t_c from the
     # yoke the coil's front side fills the window and a tube at xi links xi/t_c of the
-    # turns: energy-equivalent length t_c/3 (as the paper's h_c/3)
-    legs = MU0 * ny_depth * (ll - tc + tc / 3.0) / (dist - tl)
+    # turns: energy-equivalent length t_c/3 (as the paper's h_c/3); that part ("legs_coil")
+    # leaves from the legs' yoke ends, the rest ("legs") from their middles
+    legs = MU0 * ny_depth * (ll - tc) / (dist - tl)
+    legs_coil = MU0 * ny_depth * (tc / 3.0) / (dist - tl)
     # behind the yoke: through the coil's back side (vertical tubes of length 2a linked
     # xi/t_c of the turns: energy-equivalent t_c/(3 2a)), and beyond it the field of the
     # yoke's back face seen as a thin plate of height 2b, its upper part at +NI/2 and its
@@ -473,7 +489,8 @@ def _split_paths(L: float, hp: float, tp: float, dist: float, ll: float, tl: flo
     # with end effects the whole perimeter 2 (w_y + t_y) of every yoke)
     area = L * tc if not ends else ny * (wy + ty) * tc
     coil_air = MU0 * area / dist
-    return {"bars": bars, "legs": legs, "back": back, "coil_air": coil_air,
+    return {"bars": bars, "legs": legs, "legs_coil": legs_coil, "back": back,
+            "coil_air": coil_air,
             "top_width": ny_depth}
 
 

@@ -1788,7 +1788,8 @@ def check_motion_eddy_options(*, magnets: str, eddy_resistance_scale: Any) -> No
 #: A shielded-gap ladder whose fit to the detailed model's gap and voltage responses has a
 #: larger relative RMS residual (maps variable ``motion_eddy_fit_rms``) is flown with a
 #: warning: the bundled levitation magnets' fits are at 4.7-4.8 %, the guidance magnet's
-#: at 49 %, which destabilises the cross-section's guidance loops (docs/vehicle.md).
+#: at 28 % (49 % before guidesat26's network, which destabilised the cross-section's
+#: guidance loops; docs/vehicle.md).
 LADDER_FIT_WARNING = 0.2
 
 
@@ -1839,7 +1840,8 @@ def vehicle_bank(bank_type: Any, members: list[tuple[str, Any]], *, motion_eddy:
                           f"{100 * fit:.0f} % RMS residual (above {100 * LADDER_FIT_WARNING:.0f} "
                           "%): its eddy currents under gap motion are not those of the "
                           "detailed model, and its control loops may go unstable (the "
-                          "bundled guidance magnet's do); motion_eddy = \"levitation\" flies "
+                          "bundled guidance magnet's did at 49 %); motion_eddy = \"levitation\" "
+                          "flies "
                           "only the levitation magnets with the ladder", MaglevkitWarning,
                           stacklevel=external_stacklevel())
     return bank
