@@ -81,7 +81,10 @@ The six cross-section runs were re-recorded after a deliberate change of the gui
 magnet's network (guide26: conformal corner bends and flank branches, from geometry),
 its maps stored under the new hash; against the recording before, chassis_y <= 1.9e-2,
 guidance force <= 1.6e-2 of each variable's largest value; the heave-pitch runs and the
-whole-run reference bit-identical.
+whole-run reference bit-identical.  Once more the same day (guidesat26: the guidance legs'
+top fringe and a share of the window's tubes leaving from the yoke-leg corner, where the
+field shows their flux leaving): chassis_y <= 2.6e-3, guidance force <= 1.9e-3, guidance
+current <= 1.8e-3 of each variable's largest value; heave-pitch runs bit-identical.
 """
 
 from __future__ import annotations
