@@ -1,0 +1,219 @@
+"""The three-state shielded-gap ladder (two shielded sections), linearised: its closed-form
+transfer functions against an independent nodal analysis, its reduction to the two-state
+ladder when the second branch vanishes, fit recovery, bad input, and (slow) the split TR09
+network's gap and voltage responses against the detailed model's (docs/equations.md
+section 8, "Three states")."""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+import pytest
+
+import maglevkit as mk
+from maglevkit.errors import InputError
+from maglevkit.reduction.motion_eddy import (
+    DetailedFrequencyResponse,
+    Ladder3Response,
+    MotionEddy3Fit,
+    fit_motion_eddy,
+    fit_motion_eddy3,
+    ladder3_force_current,
+    ladder3_frequency_response,
+    ladder_force_response,
+    ladder_frequency_response,
+    ladder_voltage_currents,
+)
+
+F = np.geomspace(0.1, 1000.0, 25)
+# split-TR09-like values (11 mm / 40 A fit): L~, k, R_el, R_a, L_u, R_2, L_2, R_3
+LT, K, R_EL = 0.52, -1200.0, 1.2
+ELEMENTS = {"jump_resistance_ohm": 9.6, "unshielded_inductance_H": 0.003,
+            "shielding_resistance_ohm": 22.0, "inner_inductance_H": 0.117,
+            "inner_shielding_resistance_ohm": 89.0}
+
+
+def _l3(f: np.ndarray = F, **over: float) -> Ladder3Response:
+    kw: dict[str, float] = {"differential_inductance_H": LT, "dpsi_ds_Wb_per_m": K, "resistance_ohm": R_EL,
+          **ELEMENTS, "beta": 0.001, "inner_beta": 0.05}
+    kw.update(over)
+    return ladder3_frequency_response(f, **kw)
+
+
+def _nodal(f: float, beta: float, beta_2: float) -> tuple[complex, complex]:
+    """Modified nodal analysis of the circuit drawn in docs/equations.md section 8 (an
+    independent assembly: node voltages V_A, V_B, V_C and the three inductor currents as
+    unknowns, each motion EMF a source in its inductor's branch): coil current per gap and
+    per voltage."""
+    p = 2j * np.pi * f
+    r_a, l_u = ELEMENTS["jump_resistance_ohm"], ELEMENTS["unshielded_inductance_H"]
+    r_2, l_2 = ELEMENTS["shielding_resistance_ohm"], ELEMENTS["inner_inductance_H"]
+    r_3, l_3 = ELEMENTS["inner_shielding_resistance_ohm"], LT - l_u - l_2
+    out = []
+    for u, ds in ((0.0, 1.0), (1.0, 0.0)):
+        e = K * p * ds
+        # unknowns: V_A, V_B, V_C, I_u, I_2, I_L
+        m = np.zeros((6, 6), dtype=complex)
+        rhs = np.zeros(6, dtype=complex)
+        m[0, 0], m[0, 3], rhs[0] = 1 / R_EL + 1 / r_a, 1.0, u / R_EL   # KCL at A
+        m[1, 1], m[1, 3], m[1, 4] = 1 / r_2, -1.0, 1.0                 # KCL at B
+        m[2, 2], m[2, 4], m[2, 5] = 1 / r_3, -1.0, 1.0                 # KCL at C
+        m[3, 0], m[3, 1], m[3, 3], rhs[3] = 1.0, -1.0, -p * l_u, beta * e          # L_u
+        m[4, 1], m[4, 2], m[4, 4], rhs[4] = 1.0, -1.0, -p * l_2, beta_2 * e        # L_2
+        m[5, 2], m[5, 5], rhs[5] = 1.0, -p * l_3, (1 - beta - beta_2) * e          # gap section
+        v = np.linalg.solve(m, rhs)
+        out.append((u - v[0]) / R_EL)
+    return out[0], out[1]
+
+
+def test_transfer_functions_match_a_nodal_analysis() -> None:
+    """Two assemblies of the same circuit agree to rounding (1e-10: both are direct
+    solves of well-conditioned 3x3 / 6x6 systems)."""
+    r = _l3()
+    ref = np.array([_nodal(f, 0.001, 0.05) for f in F])
+    np.testing.assert_allclose(r.gap_to_current_A_per_m, ref[:, 0], rtol=1e-10)
+    np.testing.assert_allclose(r.voltage_to_current_A_per_V, ref[:, 1], rtol=1e-10)
+    # far below the electric corner R_el/L~ (0.37 Hz): eq. 8's statics, dI/dU -> 1/R_el
+    # and dI/ds -> -k p/R_el (at 1e-5 Hz the next terms are ~1e-4 of these; bound 1e-3)
+    low = _l3(np.array([1e-5]))
+    assert low.voltage_to_current_A_per_V[0] == pytest.approx(1 / R_EL, rel=1e-3)
+    p0 = 2j * np.pi * 1e-5
+    assert low.gap_to_current_A_per_m[0] == pytest.approx(-K * p0 / R_EL, rel=1e-3)
+
+
+def _two(r_2: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    return ladder_frequency_response(
+        F, differential_inductance_H=LT, dpsi_ds_Wb_per_m=K, resistance_ohm=R_EL,
+        jump_resistance_ohm=ELEMENTS["jump_resistance_ohm"],
+        unshielded_inductance_H=ELEMENTS["unshielded_inductance_H"],
+        shielding_resistance_ohm=r_2, beta=0.001)
+
+
+def test_no_inner_inductance_is_the_two_state_ladder_with_parallel_shunts() -> None:
+    """``L_2 = 0`` (and ``beta_2 = 0``): nodes B and C are one, ``R_2 || R_3`` its shunt;
+    exact, so to rounding."""
+    r_2, r_3 = ELEMENTS["shielding_resistance_ohm"], ELEMENTS["inner_shielding_resistance_ohm"]
+    r = _l3(inner_inductance_H=0.0, inner_beta=0.0)
+    ms, il, mu = _two(r_2 * r_3 / (r_2 + r_3))
+    np.testing.assert_allclose(r.gap_to_current_A_per_m, ms, rtol=1e-10)
+    np.testing.assert_allclose(r.gap_states[:, 2], il, rtol=1e-10)
+    np.testing.assert_allclose(r.voltage_to_current_A_per_V, mu, rtol=1e-10)
+
+
+def test_an_open_inner_shunt_is_the_two_state_ladder() -> None:
+    """``R_3 -> oo`` (and ``beta_2 = 0``): ``L_2`` and the gap section are in series, the
+    two-state ladder with ``R_2``.  With ``R_3 = 1e9 ohm`` the difference is of order
+    ``|p| (L~ - L_u)/R_3`` < 4e-6 at 1 kHz; bound 1e-5."""
+    r = _l3(inner_shielding_resistance_ohm=1e9, inner_beta=0.0)
+    ms, il, mu = _two(ELEMENTS["shielding_resistance_ohm"])
+    np.testing.assert_allclose(r.gap_to_current_A_per_m, ms, rtol=1e-5)
+    np.testing.assert_allclose(r.gap_states[:, 2], il, rtol=1e-5)
+    np.testing.assert_allclose(r.voltage_to_current_A_per_V, mu, rtol=1e-5)
+
+
+def test_force_current_is_i_l_in_a_steady_state() -> None:
+    states = np.array([[3.0, 3.0, 3.0], [4.0, 2.0, 1.0]])
+    got = ladder3_force_current(states, (0.3, -0.2))
+    assert got[0] == 3.0
+    assert got[1] == pytest.approx(1.0 + 0.3 * 1.0 - 0.2 * 2.0)
+
+
+def _synthetic(fit: MotionEddy3Fit) -> DetailedFrequencyResponse:
+    """A 'detailed' response that is exactly a known three-state ladder."""
+    jump = -fit.unshielded_share * K / ((1 + R_EL / fit.jump_resistance_ohm)
+                                        * fit.unshielded_inductance_H)
+    base = DetailedFrequencyResponse(F, F * 0j, F * 0j, F * 0j, LT, K, jump, 800.0, -3.7e6,
+                                     float("nan"), F * 0j)
+    r, gf, uf = fit.response(F, base, R_EL)
+    return dataclasses.replace(base, gap_to_current_A_per_m=r.gap_to_current_A_per_m,
+                               gap_to_force_N_per_m=gf,
+                               voltage_to_current_A_per_V=r.voltage_to_current_A_per_V,
+                               voltage_to_force_N_per_V=uf)
+
+
+@pytest.mark.slow      # ~15 s: 36 starts to a noise-free optimum
+def test_fit_recovers_a_known_ladder() -> None:
+    """The fit finds the ladder that made the responses (noise-free: residual < 1e-6,
+    elements within 1e-3; beta from the jump)."""
+    true = MotionEddy3Fit(9.6, 0.003, 22.0, 0.117, 89.0, 0.001, 0.05, (0.06, 0.001), 0.0)
+    got = fit_motion_eddy3(_synthetic(true), resistance_ohm=R_EL, eddy_resistance_jump_ohm=7.0,
+                           max_series_inductance_H=0.2)
+    assert got.rms_residual < 1e-6
+    for name in ("jump_resistance_ohm", "unshielded_inductance_H", "shielding_resistance_ohm",
+                 "inner_inductance_H", "inner_shielding_resistance_ohm", "inner_share"):
+        assert getattr(got, name) == pytest.approx(getattr(true, name), rel=1e-3), name
+    assert got.force_shares == pytest.approx(true.force_shares, rel=1e-3, abs=1e-6)
+
+
+@pytest.mark.parametrize(("key", "value", "needle"), [
+    ("jump_resistance_ohm", 0.0, "jump_resistance_ohm = 0.0 must be > 0"),
+    ("inner_shielding_resistance_ohm", -1.0, "inner_shielding_resistance_ohm = -1.0"),
+    ("inner_inductance_H", 0.6, "must be below differential_inductance_H"),
+    ("inner_inductance_H", -0.1, "inner_inductance_H = -0.1"),
+    ("beta", float("nan"), "beta = nan must be finite"),
+])
+def test_bad_elements_are_refused(key: str, value: float, needle: str) -> None:
+    with pytest.raises(InputError, match=needle.replace("(", r"\(")):
+        _l3(**{key: value})
+
+
+def test_fit_refuses_a_response_without_force() -> None:
+    base = DetailedFrequencyResponse(F, F * 0j + 1, F * 0j + 1, F * 0j + 1, LT, K)
+    with pytest.raises(InputError, match="force partials"):
+        fit_motion_eddy3(base, resistance_ohm=R_EL, eddy_resistance_jump_ohm=7.0)
+
+
+@pytest.mark.slow
+def test_split_tr09_meets_the_gap_motion_aims_linearised() -> None:
+    """Split TR09 network: fitted where ``build_maps`` identifies the ladder (11 mm / 40 A),
+    evaluated at the gap-motion benchmark's point (10 mm / 31.7 A) against the detailed
+    model's linearisation.  The aims of issue 26 (force and current within 5 / 10 / 20 % at
+    5 / 50 / 200 Hz, current phase within 5 deg) hold (measured: force 0.7 / 8.9 / 9.8 %,
+    current 4.4 / 5.6 / 2.8 %, phase -1.2 / +0.1 / +1.6 deg), where the two-state ladder's
+    force with gamma = 0 misses them (1.9 / 18.0 / 38.8 %); and its voltage -> force
+    response, which the closed loop sees, is within 11 % at every frequency up to 1 kHz
+    where the two-state ladder's is off by 64 % (gamma = 0) and by a factor 21 (held-flux
+    gamma)."""
+    from maglevkit.models.statics import circuit_pole_groups
+    from maglevkit.reduction.maps import eddy_resistance
+    from maglevkit.reduction.motion_eddy import FIT_FREQUENCIES_HZ, detailed_frequency_response
+
+    net = mk.load_magnet("tr09-standard").network
+    f = np.concatenate((FIT_FREQUENCIES_HZ, [5.0, 50.0, 200.0]))
+    fit_at = detailed_frequency_response(net, gap=0.011, current=40.0)[0]
+    r_el = float(net.resistances[0])
+    rj = float(eddy_resistance(net, gap_m=0.011, current_A=40.0)[0])
+    fit = fit_motion_eddy3(fit_at, resistance_ohm=r_el, eddy_resistance_jump_ohm=rj,
+                           max_series_inductance_H=0.12)
+    groups = circuit_pole_groups(net, gap_m=0.010, current_A=31.7)
+    det = detailed_frequency_response(net, gap=0.010, current=31.7, frequencies_Hz=f,
+                                      groups=groups)[0]
+    r, gf, uf = fit.response(f, det, r_el)
+    for fr, aim in ((5.0, 0.05), (50.0, 0.10), (200.0, 0.20)):
+        i = int(np.argmin(np.abs(f - fr)))
+        ratio_i = r.gap_to_current_A_per_m[i] / det.gap_to_current_A_per_m[i]
+        assert abs(gf[i] / det.gap_to_force_N_per_m[i] - 1) <= aim, fr
+        assert abs(ratio_i - 1) <= aim, fr
+        assert abs(np.degrees(np.angle(ratio_i))) <= 5.0, fr
+    vf = det.voltage_to_force_N_per_V
+    assert vf is not None
+    three = np.max(np.abs(uf / vf - 1))
+    # the two-state ladder as build_maps fits it (gamma = 0), same points
+    two = fit_motion_eddy(fit_at, resistance_ohm=r_el, eddy_resistance_jump_ohm=rj,
+                          eddy_resistance_fit_ohm=0.7 * rj, max_unshielded_inductance_H=0.12)
+    il, _ = ladder_voltage_currents(
+        f, differential_inductance_H=det.differential_inductance_H, resistance_ohm=r_el,
+        jump_resistance_ohm=two.jump_resistance_ohm,
+        unshielded_inductance_H=two.unshielded_inductance_H,
+        shielding_resistance_ohm=two.shielding_resistance_ohm)
+    two_vf = np.max(np.abs(det.dforce_dcurrent_N_per_A * il / vf - 1))
+    assert three < 0.5 * two_vf
+    ms, il_s, _ = ladder_frequency_response(
+        f, differential_inductance_H=det.differential_inductance_H,
+        dpsi_ds_Wb_per_m=det.dpsi_ds_Wb_per_m, resistance_ohm=r_el,
+        jump_resistance_ohm=two.jump_resistance_ohm,
+        unshielded_inductance_H=two.unshielded_inductance_H,
+        shielding_resistance_ohm=two.shielding_resistance_ohm, beta=two.unshielded_share)
+    i200 = int(np.argmin(np.abs(f - 200.0)))
+    assert abs(ladder_force_response(det, il_s)[i200] / det.gap_to_force_N_per_m[i200] - 1) > 0.2
