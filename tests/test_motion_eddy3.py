@@ -7,6 +7,7 @@ section 8, "Three states")."""
 from __future__ import annotations
 
 import dataclasses
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -113,8 +114,8 @@ def test_an_open_inner_shunt_is_the_two_state_ladder() -> None:
 
 
 def test_force_current_is_i_l_in_a_steady_state() -> None:
-    states = np.array([[3.0, 3.0, 3.0], [4.0, 2.0, 1.0]])
-    got = ladder3_force_current(states, (0.3, -0.2))
+    got = ladder3_force_current(np.array([3.0, 4.0]), np.array([3.0, 2.0]),
+                                np.array([3.0, 1.0]), (0.3, -0.2))
     assert got[0] == 3.0
     assert got[1] == pytest.approx(1.0 + 0.3 * 1.0 - 0.2 * 2.0)
 
@@ -217,3 +218,123 @@ def test_split_tr09_meets_the_gap_motion_aims_linearised() -> None:
         shielding_resistance_ohm=two.shielding_resistance_ohm, beta=two.unshielded_share)
     i200 = int(np.argmin(np.abs(f - 200.0)))
     assert abs(ladder_force_response(det, il_s)[i200] / det.gap_to_force_N_per_m[i200] - 1) > 0.2
+
+
+# --- CurrentModel(maps, motion_eddy=True, eddy_branches=2) --------------------------------
+
+@pytest.fixture(scope="module")
+def u_maps() -> mk.CharacteristicMaps:
+    return mk.build_maps(mk.load_magnet("u-magnet"), gaps_m=np.linspace(0.006, 0.014, 5),
+                         currents_A=np.linspace(0.0, 40.0, 9), progress=False)
+
+
+def _lin_response(model: mk.CurrentModel, f: np.ndarray, gap: float, current: float
+                  ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """gap -> coil current, gap -> force, voltage -> coil current, voltage -> force of
+    circuit 0 from ``linearize`` (every pole moving)."""
+    lin = model.linearize(gap_m=gap, current_A=current)
+    n = lin.A_per_s.shape[0]
+    eg, er = lin.E_gap_A_per_m_s.sum(axis=1), lin.E_gap_rate_A_per_m.sum(axis=1)
+    out = []
+    for fk in f:
+        p = 2j * np.pi * fk
+        xs = np.linalg.solve(p * np.eye(n) - lin.A_per_s, eg + p * er)
+        xu = np.linalg.solve(p * np.eye(n) - lin.A_per_s, lin.B_A_per_V_s[:, 0])
+        out.append(((lin.C_current @ xs)[0],
+                    (lin.C_force_N_per_A @ xs)[0] + lin.D_force_gap_N_per_m.sum(axis=1)[0],
+                    (lin.C_current @ xu)[0] + lin.D_current_A_per_V[0, 0],
+                    (lin.C_force_N_per_A @ xu)[0]))   # the force has no direct U term
+    arr = np.array(out)
+    return arr[:, 0], arr[:, 1], arr[:, 2], arr[:, 3]
+
+
+def test_model_transfer_functions_match_the_closed_form(u_maps: mk.CharacteristicMaps) -> None:
+    """``ladder3_frequency_response`` and the force current (closed form) equal the AD
+    linearisation of the ODE that ``CurrentModel(motion_eddy=True, eddy_branches=2)``
+    integrates, at a point off the grid nodes (both exact: rounding only, 1e-9)."""
+    from maglevkit.reduced.current import motion_eddy3_parameters
+
+    gap, cur = 0.0093, 23.0
+    model = mk.CurrentModel(u_maps, motion_eddy=True, eddy_branches=2)
+    eq8 = mk.CurrentModel(u_maps)
+    lin8 = eq8.linearize(gap_m=gap, current_A=cur)
+    r_el = float(eq8.resistance_ohm[0])
+    a8 = 1.0 + r_el / float(eq8.eddy_resistance_ohm[0])
+    lt = -r_el / (a8 * float(lin8.A_per_s[0, 0]))
+    k = -float(lin8.E_gap_rate_A_per_m.sum()) * lt
+    dfi = float(lin8.C_force_N_per_A[0, 0])
+    dfs = float(lin8.D_force_gap_N_per_m.sum())
+    par, _ = motion_eddy3_parameters(u_maps, np.array([r_el]))
+    p = {key: float(v[0]) for key, v in par.items()}
+    f = np.geomspace(0.2, 2000.0, 25)
+    cs, cf, cu, cuf = _lin_response(model, f, gap, cur)
+    r = ladder3_frequency_response(
+        f, differential_inductance_H=lt, dpsi_ds_Wb_per_m=k, resistance_ohm=r_el,
+        jump_resistance_ohm=p["r_a"], unshielded_inductance_H=p["l_u"],
+        shielding_resistance_ohm=p["r_2"], inner_inductance_H=p["l_2"],
+        inner_shielding_resistance_ohm=p["r_3"], beta=p["beta"], inner_beta=p["beta_2"])
+    shares = (p["c_1"], p["c_2"])
+    gs, us = r.gap_states, r.voltage_states
+    mf = dfi * ladder3_force_current(gs[:, 0], gs[:, 1], gs[:, 2], shares) + dfs
+    muf = dfi * ladder3_force_current(us[:, 0], us[:, 1], us[:, 2], shares)
+    assert np.max(np.abs(cs / r.gap_to_current_A_per_m - 1.0)) < 1e-9
+    assert np.max(np.abs(cu / r.voltage_to_current_A_per_V - 1.0)) < 1e-9
+    assert np.max(np.abs(cf / mf - 1.0)) < 1e-9
+    assert np.max(np.abs(cuf / muf - 1.0)) < 1e-9
+    assert model.linearize(gap_m=gap, current_A=cur).A_per_s.shape == (3, 3)
+    assert p["c_1"] != 0.0 or p["c_2"] != 0.0      # the force current is exercised
+
+
+def test_model_steady_state_and_simulation(u_maps: mk.CharacteristicMaps) -> None:
+    """At rest the three-state model is eq. 8's steady state (eddy states 0, force of the
+    maps at I); a voltage step settles to U/R_el (within 1e-6 relative after 50 electric
+    time constants... here 2 s, L~/R_el ~ 0.06 s)."""
+    model = mk.CurrentModel(u_maps, motion_eddy=True, eddy_branches=2)
+    st = model.initial_state(gaps_m=0.010, currents_A=20.0)
+    assert np.asarray(st.eddy_currents_A).shape == (1, 2)
+    assert np.all(np.asarray(st.eddy_currents_A) == 0.0)
+    out = model.outputs(st)
+    ref = mk.CurrentModel(u_maps).outputs(mk.CurrentModel(u_maps).initial_state(
+        gaps_m=0.010, currents_A=20.0))
+    np.testing.assert_allclose(out.force_N, ref.force_N, rtol=1e-12)
+    r_el = float(model.resistance_ohm[0])
+    t = np.linspace(0.0, 2.0, 2001)
+    sim = model.simulate(t, gaps_m=0.010, voltages_V=r_el * 25.0, initial_currents_A=20.0)
+    assert float(np.asarray(sim.currents_A)[-1, 0]) == pytest.approx(25.0, rel=1e-6)
+
+
+@pytest.mark.parametrize(("kw", "needle"), [
+    ({"eddy_branches": 3}, "eddy_branches = 3"),
+    ({"eddy_branches": True}, "eddy_branches = True"),
+    ({"motion_eddy": False, "eddy_branches": 2}, "needs motion_eddy=True"),
+    ({"motion_eddy": True, "eddy_branches": 2, "freewheel": True}, "freewheel=True"),
+])
+def test_model_option_is_checked(u_maps: mk.CharacteristicMaps, kw: dict[str, object],
+                                 needle: str) -> None:
+    with pytest.raises(InputError, match=needle):
+        mk.CurrentModel(u_maps, **kw)  # type: ignore[arg-type]
+
+
+def test_bank_fmu_and_vehicles_refuse_the_three_state_ladder(u_maps: mk.CharacteristicMaps,
+                                                             tmp_path: Path) -> None:
+    """The bank (and through it the stepper, the FMU export and the MPC) carries one ladder
+    state per circuit: it refuses the model, naming the option."""
+    model = mk.CurrentModel(u_maps, motion_eddy=True, eddy_branches=2)
+    with pytest.raises(InputError, match="eddy_branches=2"):
+        mk.MagnetBank({"m": model}, motion_eddy=True)
+    with pytest.raises(InputError, match="eddy_branches=2"):
+        mk.MagnetBank({"m": model})
+    from maglevkit.export.fmu import export_fmu
+    with pytest.raises(InputError, match="eddy_branches=2"):
+        export_fmu(model, tmp_path / "x.fmu")
+
+
+def test_old_maps_without_the_three_state_ladder_are_refused(u_maps: mk.CharacteristicMaps
+                                                             ) -> None:
+    from maglevkit.reduction.maps import MOTION_EDDY3_VARIABLES
+
+    old = mk.CharacteristicMaps(u_maps.dataset.drop_vars(
+        [v[0] for v in MOTION_EDDY3_VARIABLES]))
+    mk.CurrentModel(old, motion_eddy=True)          # the two-state ladder still reads them
+    with pytest.raises(InputError, match="no three-state ladder"):
+        mk.CurrentModel(old, motion_eddy=True, eddy_branches=2)

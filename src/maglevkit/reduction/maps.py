@@ -53,6 +53,7 @@ from .motion_eddy import (
     SHARE_VARIABLE,
     detailed_frequency_response,
     fit_motion_eddy,
+    fit_motion_eddy3,
 )
 from .parameters import eddy_resistance
 from .transient import transient_point
@@ -811,6 +812,8 @@ def _store_motion_eddy(ds: Any, net: Network, gap: float, current: float,
             r_2[j], beta[j] = fit.shielding_resistance_ohm, fit.unshielded_share
             gamma[j] = fit.force_share
             rms[j] = fit.rms_residual
+    _store_motion_eddy3(ds, net, gap, current, groups, min_inductance_H,
+                        responses if net.has_eddy_currents else None)
     where = (f"fitted to the detailed model's small-signal gap -> current and voltage -> "
              f"current responses (0.1 Hz - 1 kHz) at s = {gap!r} m, I = {current!r} A; NaN: "
              "no eddy currents")
@@ -846,6 +849,53 @@ def _store_motion_eddy(ds: Any, net: Network, gap: float, current: float,
         "units": "1", "long_name": "RMS relative residual of the shielded-gap ladder's fit",
         "description": "over both responses and 60 frequencies, each relative to the "
                        "detailed response's modulus"})
+
+#: The maps' variables of the three-state ladder (``CurrentModel(maps, motion_eddy=True,
+#: eddy_branches=2)``), per circuit, in the order of :class:`MotionEddy3Fit`'s fields.
+MOTION_EDDY3_VARIABLES = (
+    ("motion_eddy3_jump_resistance_ohm", "ohm", "shunt R_a"),
+    ("motion_eddy3_unshielded_inductance_H", "H", "series L_u (unshielded)"),
+    ("motion_eddy3_shielding_resistance_ohm", "ohm", "shunt R_2 (outer shield)"),
+    ("motion_eddy3_inner_inductance_H", "H", "series L_2 (between the shields)"),
+    ("motion_eddy3_inner_shielding_resistance_ohm", "ohm", "shunt R_3 (inner shield)"),
+    ("motion_eddy3_unshielded_share", "1", "share beta of the motion voltage in L_u"),
+    ("motion_eddy3_inner_share", "1", "share beta_2 of the motion voltage in L_2"),
+    ("motion_eddy3_force_share_1", "1", "c_1 of the force current"),
+    ("motion_eddy3_force_share_2", "1", "c_2 of the force current"),
+    ("motion_eddy3_fit_rms", "1", "RMS relative residual of the fit"),
+)
+
+
+def _store_motion_eddy3(ds: Any, net: Network, gap: float, current: float,
+                        groups: dict[str, tuple[str, ...]], min_inductance_H: np.ndarray,
+                        responses: Any) -> None:
+    """Add the ``motion_eddy3_*`` variables: the three-state ladder
+    (:func:`~maglevkit.reduction.motion_eddy.fit_motion_eddy3`, docs/equations.md section
+    8), with ``L_u + L_2`` below ``MAX_UNSHIELDED_SHARE_OF_MIN_L`` times each circuit's
+    smallest ``L~`` on the maps; NaN without eddy currents (or where the fit has no force
+    response)."""
+    nc = len(net.circuits)
+    values = np.full((len(MOTION_EDDY3_VARIABLES), nc), np.nan)
+    if responses is not None:
+        r_jump = eddy_resistance(net, gap_m=gap, current_A=current)
+        for j, resp in enumerate(responses):
+            if not (np.isfinite(r_jump[j]) and r_jump[j] > 0):
+                continue
+            fit = fit_motion_eddy3(resp, resistance_ohm=float(net.resistances[j]),
+                                   eddy_resistance_jump_ohm=float(r_jump[j]),
+                                   max_series_inductance_H=MAX_UNSHIELDED_SHARE_OF_MIN_L
+                                   * float(min_inductance_H[j]))
+            values[:, j] = (fit.jump_resistance_ohm, fit.unshielded_inductance_H,
+                            fit.shielding_resistance_ohm, fit.inner_inductance_H,
+                            fit.inner_shielding_resistance_ohm, fit.unshielded_share,
+                            fit.inner_share, *fit.force_shares, fit.rms_residual)
+    where = (f"fitted to the detailed model's small-signal gap and voltage -> current and "
+             f"force responses (0.1 Hz - 1 kHz) at s = {gap!r} m, I = {current!r} A; NaN: "
+             "no eddy currents; absent (older maps): eddy_branches=2 is refused")
+    for (name, units, long_name), v in zip(MOTION_EDDY3_VARIABLES, values, strict=True):
+        ds[name] = ("circuit", v, {"units": units, "long_name": "three-state ladder: "
+                                   + long_name, "description": where})
+
 
 MAP_UNITS = {"force_N": "N", "inductance_H": "H", "dL_ds_H_per_m": "H/m",
              "flux_linkage_Wb": "Wb", "apparent_inductance_H": "H",

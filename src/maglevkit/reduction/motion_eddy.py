@@ -757,13 +757,19 @@ def ladder3_frequency_response(frequencies_Hz: Any, *, differential_inductance_H
     return Ladder3Response(xs, xu, xs[:, 0] / a, (1.0 - 1.0 / a) / r_el + xu[:, 0] / a)
 
 
-def ladder3_force_current(states: np.ndarray, force_shares: Any) -> np.ndarray:
+def ladder3_force_current(i_u: Any, i_2: Any, i_l: Any, force_shares: Any) -> Any:
     """The three-state ladder's force current ``I_L + c_1 (I_2 - I_L) + c_2 (I_u - I_2)``
-    from its states ``(..., 3)`` = ``(I_u, I_2, I_L)`` and ``force_shares = (c_1, c_2)``
-    [-] (both 0: the force ``F(s, I_L)``; in a steady state it is ``I_L`` whatever they are)."""
-    c1, c2 = (float(v) for v in force_shares)
-    s = np.asarray(states)
-    return s[..., 2] + c1 * (s[..., 1] - s[..., 2]) + c2 * (s[..., 0] - s[..., 1])
+    [A] from its currents ``I_u``, ``I_2``, ``I_L`` [A] and ``force_shares = (c_1, c_2)``
+    [-] (both 0: the force ``F(s, I_L)``; in a steady state it is ``I_L`` whatever they
+    are).  Element-wise on floats, NumPy arrays and CasADi expressions (the law of
+    ``CurrentModel(maps, motion_eddy=True, eddy_branches=2)`` too)."""
+    c1, c2 = force_shares
+    return i_l + c1 * (i_2 - i_l) + c2 * (i_u - i_2)
+
+
+def _force3(states: np.ndarray, shares: Any) -> np.ndarray:
+    return np.asarray(ladder3_force_current(states[..., 0], states[..., 1], states[..., 2],
+                                            shares))
 
 
 @dataclass(frozen=True)
@@ -809,9 +815,9 @@ class MotionEddy3Fit:
             inner_shielding_resistance_ohm=self.inner_shielding_resistance_ohm,
             beta=self.unshielded_share, inner_beta=self.inner_share)
         dfi = detailed.dforce_dcurrent_N_per_A
-        return (r, dfi * ladder3_force_current(r.gap_states, self.force_shares)
+        return (r, dfi * _force3(r.gap_states, self.force_shares)
                 + detailed.dforce_dgap_N_per_m,
-                dfi * ladder3_force_current(r.voltage_states, self.force_shares))
+                dfi * _force3(r.voltage_states, self.force_shares))
 
 
 def fit_motion_eddy3(response: DetailedFrequencyResponse, *, resistance_ohm: float,
@@ -880,9 +886,9 @@ def fit_motion_eddy3(response: DetailedFrequencyResponse, *, resistance_ohm: flo
             inner_beta=beta_2)
         base_s = dfi * r.gap_states[:, 2] + response.dforce_dgap_N_per_m
         base_u = dfi * r.voltage_states[:, 2]
-        cols_s = [dfi * ladder3_force_current(r.gap_states, c) - base_s
+        cols_s = [dfi * _force3(r.gap_states, c) - base_s
                   + response.dforce_dgap_N_per_m for c in ((1, 0), (0, 1))]
-        cols_u = [dfi * ladder3_force_current(r.voltage_states, c) - base_u
+        cols_u = [dfi * _force3(r.voltage_states, c) - base_u
                   for c in ((1, 0), (0, 1))]
         lhs = np.concatenate([np.stack(cols_s, 1) / scale[2][:, None],
                               np.stack(cols_u, 1) / scale[3][:, None]])
@@ -891,8 +897,8 @@ def fit_motion_eddy3(response: DetailedFrequencyResponse, *, resistance_ohm: flo
                             np.concatenate([rhs.real, rhs.imag]), rcond=None)[0]
         shares = (float(c[0]), float(c[1]))
         return [r.gap_to_current_A_per_m, r.voltage_to_current_A_per_V,
-                dfi * ladder3_force_current(r.gap_states, shares) + response.dforce_dgap_N_per_m,
-                dfi * ladder3_force_current(r.voltage_states, shares)], shares
+                dfi * _force3(r.gap_states, shares) + response.dforce_dgap_N_per_m,
+                dfi * _force3(r.voltage_states, shares)], shares
 
     def resid(x: np.ndarray) -> np.ndarray:
         e = np.concatenate([(m - d) / s for m, d, s in zip(model(x)[0], det, scale,
