@@ -50,6 +50,7 @@ from .motion_eddy import (
     HELD_FLUX_FORCE_SHARE_VARIABLE,
     MAX_STEP_FORCE_LOSS,
     MAX_UNSHIELDED_SHARE_OF_MIN_L,
+    MOTION_EDDY3_WEIGHTS,
     SHARE_VARIABLE,
     detailed_frequency_response,
     fit_motion_eddy,
@@ -884,7 +885,8 @@ def _store_motion_eddy3(ds: Any, net: Network, gap: float, current: float,
             fit = fit_motion_eddy3(resp, resistance_ohm=float(net.resistances[j]),
                                    eddy_resistance_jump_ohm=float(r_jump[j]),
                                    max_series_inductance_H=MAX_UNSHIELDED_SHARE_OF_MIN_L
-                                   * float(min_inductance_H[j]))
+                                   * float(min_inductance_H[j]),
+                                   weights=MOTION_EDDY3_WEIGHTS)
             values[:, j] = (fit.jump_resistance_ohm, fit.unshielded_inductance_H,
                             fit.shielding_resistance_ohm, fit.inner_inductance_H,
                             fit.inner_shielding_resistance_ohm, fit.unshielded_share,

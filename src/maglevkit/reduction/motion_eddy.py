@@ -65,7 +65,7 @@ __all__ = ["DetailedFrequencyResponse", "MotionEddyFit", "detailed_frequency_res
            "relative_rms_residual", "FIT_FREQUENCIES_HZ", "SHARE_VARIABLE",
            "FORCE_SHARE_VARIABLE", "HELD_FLUX_FORCE_SHARE_VARIABLE", "Ladder3Response",
            "ladder3_frequency_response", "ladder3_force_current", "MotionEddy3Fit",
-           "fit_motion_eddy3"]
+           "fit_motion_eddy3", "MOTION_EDDY3_WEIGHTS"]
 
 #: The maps' variable of the ladder's unshielded share ``beta`` of the motion term.
 SHARE_VARIABLE = "motion_eddy_unshielded_share"
@@ -772,6 +772,14 @@ def _force3(states: np.ndarray, shares: Any) -> np.ndarray:
                                             shares))
 
 
+#: Weights of the gap -> current, voltage -> current, gap -> force and voltage -> force
+#: residuals in ``build_maps``'s three-state fit: equal weights let the force responses
+#: pull the voltage -> current response off (split TR09: up to 17 %, voltage steps 2.9 ->
+#: 5.0 % current error); these keep it within 2 % and the gap responses within issue 26's
+#: aims (docs/decisions.md, ladder3).
+MOTION_EDDY3_WEIGHTS = (3.0, 10.0, 1.0, 1.0)
+
+
 @dataclass(frozen=True)
 class MotionEddy3Fit:
     """Fitted three-state ladder of one circuit (:func:`fit_motion_eddy3`).
@@ -822,7 +830,8 @@ class MotionEddy3Fit:
 
 def fit_motion_eddy3(response: DetailedFrequencyResponse, *, resistance_ohm: float,
                      eddy_resistance_jump_ohm: float,
-                     max_series_inductance_H: float | None = None) -> MotionEddy3Fit:
+                     max_series_inductance_H: float | None = None,
+                     weights: Any = (1.0, 1.0, 1.0, 1.0)) -> MotionEddy3Fit:
     """Least-squares fit of the three-state ladder to all four detailed responses.
 
     Residuals ``(model - detailed)/|detailed|`` (real and imaginary parts, equal weights) of
@@ -846,6 +855,9 @@ def fit_motion_eddy3(response: DetailedFrequencyResponse, *, resistance_ohm: flo
         Eq. 8's ``R_ec`` from the exact jump [ohm] (the starts' scale), > 0.
     max_series_inductance_H : float, optional
         Bound of ``L_u + L_2`` [H] (e.g. 0.8 times the maps' smallest ``L~``); default ``L~``.
+    weights : sequence of 4 floats
+        Weights of the gap -> current, voltage -> current, gap -> force and voltage -> force
+        residuals (default equal; :data:`MOTION_EDDY3_WEIGHTS` in ``build_maps``).
 
     Raises
     ------
@@ -867,7 +879,10 @@ def fit_motion_eddy3(response: DetailedFrequencyResponse, *, resistance_ohm: flo
     dfi = response.dforce_dcurrent_N_per_A
     det = (response.gap_to_current_A_per_m, response.voltage_to_current_A_per_V,
            response.gap_to_force_N_per_m, response.voltage_to_force_N_per_V)
-    scale = [np.abs(d) for d in det]
+    w = [float(v) for v in weights]
+    if len(w) != 4 or not all(math.isfinite(v) and v > 0 for v in w):
+        raise InputError(f"fit_motion_eddy3: weights = {weights!r}; give four numbers > 0")
+    scale = [np.abs(d) / wk for d, wk in zip(det, w, strict=True)]
 
     def unpack(x: np.ndarray) -> tuple[float, float, float, float, float, float, float]:
         e1, e2 = float(np.exp(x[1])), float(np.exp(x[3]))
