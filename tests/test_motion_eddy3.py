@@ -134,7 +134,6 @@ def _synthetic(fit: MotionEddy3Fit) -> DetailedFrequencyResponse:
                                voltage_to_force_N_per_V=uf)
 
 
-@pytest.mark.slow      # ~15 s: 36 starts to a noise-free optimum
 def test_fit_recovers_a_known_ladder() -> None:
     """The fit finds the ladder that made the responses (noise-free: residual < 1e-6,
     elements within 1e-3; beta from the jump)."""
@@ -387,3 +386,26 @@ def test_split_tr09_three_state_ladder_against_the_detailed_model() -> None:
     for a, b in zip(r3, r2, strict=True):
         assert np.max(a.current_error_ac) <= np.max(b.current_error_ac)
         assert np.max(a.force_error_ac) <= np.max(b.force_error_ac)
+
+
+def test_model_rk4_agrees_with_cvodes_under_gap_motion(u_maps: mk.CharacteristicMaps) -> None:
+    """RK4 (with the sub-step limit of ``motion_eddy3_parameters``) against CVODES (rtol
+    1e-8) on the same three-state ODE: a 100 Hz +-1 mm gap sine at constant voltage,
+    0.1 s at 0.1 ms steps.  RK4's local error ~(h lambda)^5 with h <= 0.1 ms; bound 1e-4
+    of the current's and the force's variation."""
+    rk4 = mk.CurrentModel(u_maps, motion_eddy=True, eddy_branches=2)
+    cv = mk.CurrentModel(u_maps, motion_eddy=True, eddy_branches=2, method="cvodes")
+    assert rk4.max_step_s < 1e-3      # the ladder's rates limit the sub-step
+    u = float(rk4.resistance_ohm[0]) * 20.0
+    t = np.linspace(0.0, 0.1, 1001)
+
+    def gaps(tt: np.ndarray) -> np.ndarray:
+        return 0.010 + 1e-3 * np.sin(2 * np.pi * 100.0 * tt)
+
+    a = rk4.simulate(t, gaps_m=gaps, voltages_V=u, initial_currents_A=20.0)
+    b = cv.simulate(t, gaps_m=gaps, voltages_V=u, initial_currents_A=20.0)
+    ia, ib = np.asarray(a.currents_A)[:, 0], np.asarray(b.currents_A)[:, 0]
+    fa, fb = np.asarray(a.force_N), np.asarray(b.force_N)
+    assert np.ptp(ib) > 0.1           # the gap moves the current
+    assert np.max(np.abs(ia - ib)) < 1e-4 * np.ptp(ib)
+    assert np.max(np.abs(fa - fb)) < 1e-4 * np.ptp(fb)

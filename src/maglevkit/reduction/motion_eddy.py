@@ -828,6 +828,16 @@ class MotionEddy3Fit:
                 dfi * _force3(r.voltage_states, self.force_shares))
 
 
+#: Starts of :func:`fit_motion_eddy3`: ``(R_a/R_ec, L_u/L_max, R_2/R_ec, L_2/L_max)`` with
+#: ``R_ec`` the exact jump value (``R_3`` starts at ``2 R_ec``, ``beta_2`` at 0).  Four
+#: spread ones: of the 36 of the grid R_a/R_ec in {1, 3}, L_u/L_max in {0.02, 0.05, 0.15},
+#: L_2/L_max in {0.05, 0.2, 0.5}, R_2/R_ec in {2, 8}, 35 (split TR09) and 36 (U-magnet)
+#: reach the same optimum (residual within 1e-6), these four on both (docs/decisions.md,
+#: ladder3).
+_FIT3_STARTS = ((1.0, 0.05, 0.2, 2.0), (3.0, 0.15, 0.5, 8.0), (1.0, 0.02, 0.5, 8.0),
+                (3.0, 0.05, 0.05, 2.0))
+
+
 def fit_motion_eddy3(response: DetailedFrequencyResponse, *, resistance_ohm: float,
                      eddy_resistance_jump_ohm: float,
                      max_series_inductance_H: float | None = None,
@@ -841,9 +851,9 @@ def fit_motion_eddy3(response: DetailedFrequencyResponse, *, resistance_ohm: flo
     ``L~`` and ``max_series_inductance_H``) and ``beta_2``; ``beta`` follows from the exact
     gap -> current jump (:func:`unshielded_share`); the force shares ``(c_1, c_2)`` enter
     linearly and are solved for at every iterate (linear least squares on the two force
-    responses).  Starts: ``R_a`` at 1 and 3 times the exact jump ``R_ec``, ``R_2`` at 2 and
-    8 times it, ``R_3`` at 2 times it, ``L_u``, ``L_2`` at 2 / 5 / 15 % and 5 / 20 / 50 %
-    of ``L_max``.
+    responses).  Four starts (``_FIT3_STARTS``): ``R_a`` at 1 or 3 times the exact jump
+    ``R_ec``, ``R_2`` at 2 or 8 times it, ``R_3`` at 2 times it, ``L_u`` and ``L_2`` at 2 -
+    15 % and 5 - 50 % of ``L_max``.
 
     Parameters
     ----------
@@ -921,15 +931,12 @@ def fit_motion_eddy3(response: DetailedFrequencyResponse, *, resistance_ohm: flo
         return np.concatenate([e.real, e.imag])
 
     best = None
-    for ra in (rj, 3.0 * rj):
-        for s1 in (0.02, 0.05, 0.15):
-            for s2 in (0.05, 0.2, 0.5):
-                for r2 in (2.0 * rj, 8.0 * rj):
-                    x0 = np.array([np.log(ra), np.log(s1 / (1 - s1 - s2)), np.log(r2),
-                                   np.log(s2 / (1 - s1 - s2)), np.log(2.0 * rj), 0.0])
-                    sol = least_squares(resid, x0, xtol=1e-10, ftol=1e-10, max_nfev=3000)
-                    if best is None or sol.cost < best.cost:
-                        best = sol
+    for ra, s1, s2, r2 in _FIT3_STARTS:
+        x0 = np.array([np.log(ra * rj), np.log(s1 / (1 - s1 - s2)), np.log(r2 * rj),
+                       np.log(s2 / (1 - s1 - s2)), np.log(2.0 * rj), 0.0])
+        sol = least_squares(resid, x0, xtol=1e-10, ftol=1e-10, max_nfev=3000)
+        if best is None or sol.cost < best.cost:
+            best = sol
     assert best is not None
     r_a, l_u, r_2, l_2, r_3, beta, beta_2 = unpack(best.x)
     return MotionEddy3Fit(r_a, l_u, r_2, l_2, r_3, beta, beta_2, model(best.x)[1],
