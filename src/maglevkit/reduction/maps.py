@@ -902,7 +902,7 @@ def _store_motion_eddy3(ds: Any, net: Network, gap: float, current: float,
             if not (np.isfinite(r_jump[j]) and r_jump[j] > 0):
                 continue
             # symmetric circuits (the TR09 magnet's two halves) have the same responses to
-            # rounding: one fit (~1 s) serves them
+            # rounding: one fit serves them
             twin = [k for other, rj, re, k in done if _same_response(other, resp)
                     and math.isclose(rj, float(r_jump[j]), rel_tol=1e-9) and re == r_el
                     and min_inductance_H[k] == min_inductance_H[j]]
