@@ -62,15 +62,16 @@ def magnet() -> mk.Magnet:
 
 
 def models() -> tuple[mk.Magnet, mk.FluxModel, mk.CurrentModel, mk.CurrentModel,
-                      mk.CurrentModel]:
+                      mk.CurrentModel, mk.CurrentModel]:
     """The magnet, its detailed model, eq. 8, the shielded-gap ladder (its default force
-    ``F(s, I_L)``) and the ladder with the held-flux force (``maps.with_held_flux_force()``,
-    ``F(s, I_L + gamma I_e)``)."""
+    ``F(s, I_L)``), the ladder with the held-flux force (``maps.with_held_flux_force()``,
+    ``F(s, I_L + gamma I_e)``) and the three-state ladder (``eddy_branches=2``)."""
     mag = magnet()
     maps = mk.build_maps(mag, gaps_m=GRID[0], currents_A=GRID[1], progress=False)
     return (mag, mk.FluxModel(mag), mk.CurrentModel(maps),
             mk.CurrentModel(maps, motion_eddy=True),
-            mk.CurrentModel(maps.with_held_flux_force(), motion_eddy=True))
+            mk.CurrentModel(maps.with_held_flux_force(), motion_eddy=True),
+            mk.CurrentModel(maps, motion_eddy=True, eddy_branches=2))
 
 
 def _fundamental(t: np.ndarray, y: np.ndarray, f: float) -> complex:
@@ -134,9 +135,10 @@ def _amp_phase(z: complex, scale: float = 1.0) -> str:
 
 
 def run() -> str:
-    mag, fm, eq8, ladder0, ladder = models()
+    mag, fm, eq8, ladder0, ladder, ladder3 = models()
     i0 = nominal_current(mag)
-    rows = sweep(fm, {"eq8": eq8, "ladder0": ladder0, "ladder": ladder}, i0)
+    rows = sweep(fm, {"eq8": eq8, "ladder0": ladder0, "ladder": ladder, "ladder3": ladder3},
+                 i0)
     r_a = eq8.maps.dataset["motion_eddy_jump_resistance_ohm"].values[0]
     l_u = eq8.maps.dataset["motion_eddy_unshielded_inductance_H"].values[0]
     r_2 = eq8.maps.dataset["motion_eddy_shielding_resistance_ohm"].values[0]
@@ -182,19 +184,38 @@ def run() -> str:
                 f"{f:g} Hz {got_f[f]:.1f} % (aim {a:g} %, "
                 f"{'met' if got_f[f] <= a else 'MISSED'})"
                 for f, a in force_aims.items() if f in got_f) + "."]
+    ds = eq8.maps.dataset
+    p3 = [float(ds[f"motion_eddy3_{n}"].values[0]) for n in (
+        "jump_resistance_ohm", "unshielded_inductance_H", "shielding_resistance_ohm",
+        "inner_inductance_H", "inner_shielding_resistance_ohm", "force_share_1",
+        "force_share_2")]
+    got3 = {r["f"]: (100 * r["ladder3"][2], 100 * r["ladder3"][3]) for r in rows}
+    out += ["", "The three-state ladder (`eddy_branches=2`: "
+            f"R_a = {p3[0]:.3f} ohm, L_u = {1e3 * p3[1]:.2f} mH, R_2 = {p3[2]:.2f} ohm, "
+            f"L_2 = {1e3 * p3[3]:.1f} mH, R_3 = {p3[4]:.2f} ohm, force current I_L + "
+            f"{p3[5]:.4f} I_e1 + {p3[6]:.5f} I_e2), current / force error, current phase "
+            "error: " + "; ".join(
+                f"{r['f']:g} Hz {100 * r['ladder3'][2]:.1f} / {100 * r['ladder3'][3]:.1f} %, "
+                f"{_phase_deg(r['ladder3'][0]) - _phase_deg(r['detailed'][0]):+.1f} deg"
+                for r in rows) + ".  Aims (current and force <= 5 / 10 / 20 % at 5 / 50 / "
+            "200 Hz): " + "; ".join(
+                f"{f:g} Hz {got3[f][0]:.1f} / {got3[f][1]:.1f} % ("
+                f"{'met' if max(got3[f]) <= a else 'MISSED'})"
+                for f, a in force_aims.items() if f in got3) + "."]
     keep = ("voltage step up", "voltage step down", "gap ramp", "closed loop")
     scen = [s for s in standard_scenarios(mag, gap_m=GAP, current_A=i0) if s.name in keep]
     res = {name: compare_models(fm, model, scen, gap_m=GAP, current_A=i0)
-           for name, model in (("eq8", eq8), ("ladder0", ladder0), ("ladder", ladder))}
+           for name, model in (("eq8", eq8), ("ladder0", ladder0), ("ladder", ladder),
+                               ("ladder3", ladder3))}
     out += ["", f"Other standard scenarios (`maglevkit.compare`, 10 mm / {i0:g} A), AC error of "
             "current / force, largest over circuits:", "",
-            "| scenario | eq. 8 | ladder, gamma = 0 (default) | ladder, held-flux gamma |",
-            "|---|---|---|---|"]
+            "| scenario | eq. 8 | ladder, gamma = 0 (default) | ladder, held-flux gamma | "
+            "three-state ladder |", "|---|---|---|---|---|"]
     for k, s in enumerate(scen):
         out.append(f"| {s.name} | " + " | ".join(
             f"{100 * np.max(res[n][k].current_error_ac):.2f} / "
             f"{100 * np.max(res[n][k].force_error_ac):.2f} %"
-            for n in ("eq8", "ladder0", "ladder")) + " |")
+            for n in ("eq8", "ladder0", "ladder", "ladder3")) + " |")
     return "\n".join(out)
 
 

@@ -417,6 +417,14 @@ class MagnetBank:
                                  f"{model.eddy_modes} cannot be a bank member (the bank "
                                  "advances eq. 8 with one R_ec per circuit); use "
                                  "CurrentModel(maps) or the model on its own")
+            if getattr(model, "eddy_branches", 1) != 1:
+                # the bank's lanes (and with them its stepper, the FMU, the MPC and the
+                # vehicles) carry one ladder eddy state per circuit
+                raise InputError(f"member {name!r}: a CurrentModel with eddy_branches="
+                                 f"{model.eddy_branches} (the three-state ladder) cannot be a "
+                                 "bank member yet (the bank, its stepper, the FMU, the MPC and "
+                                 "the vehicles carry the two-state ladder only); use "
+                                 "eddy_branches=1 or the model on its own")
             core = model.core
             motion_eddy = bool(getattr(model, "motion_eddy", False))
         elif hasattr(model, "dataset") and hasattr(model, "variable"):

@@ -50,6 +50,7 @@ import numpy as np
 from ..errors import InputError, OutOfRangeError, SolverError
 from ..models.compiled import COMPILE_MODES, DEFAULT_FLAGS, BoundCall, compile_linked
 from ..models.inputs import check_initial_choice, check_step, per_name_values, simulation_inputs
+from ..reduction.motion_eddy import ladder3_force_current
 from ..validation import external_stacklevel, flag, real_array, renamed_keywords
 from .core import (
     EXTRA_CELLS,
@@ -291,6 +292,15 @@ class CurrentModel:
         (maps variables ``motion_eddy_*``).  Two states per circuit: ``I_L`` and the
         shielding eddy current ``I_e`` (``eddy_currents_A``, shape ``(n_circuits, 1)``).
         Not with ``eddy_modes > 0`` or ``eddy_resistance``.
+    eddy_branches : int
+        With ``motion_eddy=True``: ``1`` (default) the two-state ladder above; ``2`` the
+        three-state ladder with a second shielded section (two eddy time scales,
+        :func:`eq8_shielded_gap3_rhs`, maps variables ``motion_eddy3_*``; docs/equations.md
+        section 8): states ``I_L`` and ``eddy_currents_A`` of shape ``(n_circuits, 2)``,
+        ``(I_e1, I_e2)`` = ``(I_2 - I_L, I_u - I_2)``, the force
+        ``F(s, I_L + c_1 I_e1 + c_2 I_e2)``.  B-spline path only (with or without
+        ``linearize``); not with ``freewheel``, and refused as a :class:`MagnetBank` member
+        (so by the bank's stepper, the FMU, the MPC and the vehicles) until they carry it.
     freewheel : bool
         ``False`` (default): eq. 8 with the applied voltage as given.  ``True``: behind a
         two-quadrant chopper with freewheeling diodes, the coil current cannot go below
@@ -330,7 +340,8 @@ class CurrentModel:
                  rtol: float = 1e-8, atol: float = 1e-10, max_step_s: float = 1e-3,
                  eddy_resistance: str | None = None, jit: bool = False,
                  eddy_modes: int = 0, motion_eddy: bool = False, lookup: str = "tables",
-                 compiled: str = "auto", freewheel: bool = False) -> None:
+                 compiled: str = "auto", freewheel: bool = False,
+                 eddy_branches: int = 1) -> None:
         if not (hasattr(maps, "dataset") and hasattr(maps, "variable")):
             hint = (" (load a maps file with maglevkit.load_maps first)"
                     if isinstance(maps, (str, bytes)) or hasattr(maps, "__fspath__") else "")
@@ -391,6 +402,17 @@ class CurrentModel:
             raise InputError(f"freewheel=True with eddy_modes={m}: the diode law is eq. 8's, "
                              "and the eddy network's coil current has other branches: leave "
                              "freewheel out (or use plain eq. 8)")
+        if isinstance(eddy_branches, bool) or eddy_branches not in (1, 2):
+            raise InputError(f"eddy_branches = {eddy_branches!r}; use 1 (the two-state ladder) "
+                             "or 2 (the three-state ladder), with motion_eddy=True")
+        if eddy_branches == 2 and not self.motion_eddy:
+            raise InputError("eddy_branches = 2 needs motion_eddy=True (it is the shielded-gap "
+                             "ladder's second shielded section)")
+        if eddy_branches == 2 and self.freewheel:
+            raise InputError("eddy_branches = 2 with freewheel=True: the diode law is not "
+                             "carried by the three-state ladder yet; use eddy_branches=1")
+        #: shielded sections of the ladder (1: two states per circuit, 2: three)
+        self.eddy_branches = int(eddy_branches)
         if self.motion_eddy:
             if m:
                 raise InputError(f"motion_eddy=True with eddy_modes={m}: these are two "
@@ -404,6 +426,9 @@ class CurrentModel:
             r_2, l_u = ladder.shielding_resistance_ohm, ladder.unshielded_inductance_H
             beta = ladder.unshielded_share
             gamma = ladder.force_share
+            if self.eddy_branches == 2:
+                ladder3, ladder3_step = motion_eddy3_parameters(maps, r_el)
+                r_ec = ladder3["r_a"]
         elif m:
             if eddy_resistance is not None:
                 raise InputError(f"eddy_resistance = {eddy_resistance!r} chooses eq. 8's single "
@@ -418,17 +443,18 @@ class CurrentModel:
         self.eddy_resistance_ohm = r_ec
         a = core.a if eq8 else eq8_a(r_el, r_ec)
         # extra (eddy) states per circuit: the m branch currents, or the ladder's I_e
-        n_e = m if m else (1 if self.motion_eddy else 0)
+        n_e = m if m else (self.eddy_branches if self.motion_eddy else 0)
         self._n_e = n_e
         # state [I_L; s; I_ec]: the gap slice and the bounds of the sub-step check
         # (eddy-branch currents are not range-checked)
         self._n_x = (2 + n_e) * nc
         self._sl = slice(nc, 2 * nc)
         if self.motion_eddy:
-            self._lower = np.concatenate([self._lower, np.full(nc, -np.inf)])
-            self._upper = np.concatenate([self._upper, np.full(nc, np.inf)])
-            # RK4 stability (MotionEddyLadder.max_step_s)
-            self.max_step_s = min(self.max_step_s, ladder.max_step_s)
+            self._lower = np.concatenate([self._lower, np.full(nc * n_e, -np.inf)])
+            self._upper = np.concatenate([self._upper, np.full(nc * n_e, np.inf)])
+            # RK4 stability (MotionEddyLadder.max_step_s, motion_eddy3_parameters)
+            self.max_step_s = min(self.max_step_s, ladder.max_step_s
+                                  if self.eddy_branches == 1 else ladder3_step)
         if m:
             self._lower = np.concatenate([self._lower, np.full(nc * m, -np.inf)])
             self._upper = np.concatenate([self._upper, np.full(nc * m, np.inf)])
@@ -474,7 +500,19 @@ class CurrentModel:
             sp = spline(j)
             vals = sp(ca.vertcat(sm[j], xm[j]))
             lt, dl, f = vals[0], vals[1], vals[2]
-            if self.motion_eddy:
+            if self.motion_eddy and self.eddy_branches == 2:
+                # the three-state ladder (eq8_shielded_gap3_rhs); eddy states (I_e1, I_e2)
+                e1, e2 = em[2 * j], em[2 * j + 1]
+                p3 = {k: float(v[j]) for k, v in ladder3.items()}
+                d_il, d_e1, d_e2 = eq8_shielded_gap3_rhs(
+                    xm[j], e1, e2, Um[j], sdm[j], lt, dl, r_el[j], p3["a"], p3["r_2"],
+                    p3["l_u"], p3["r_3"], p3["l_2"], p3["beta"], p3["beta_2"])
+                mx_rhs.append(d_il)
+                eddy_rhs.append(ca.vertcat(d_e1, d_e2))
+                coils.append(eq8_coil_current(xm[j] + e1 + e2, Um[j], r_el[j], p3["a"]))
+                f = sp(ca.vertcat(sm[j], ladder3_force_current(
+                    xm[j] + e1 + e2, xm[j] + e1, xm[j], (p3["c_1"], p3["c_2"]))))[2]
+            elif self.motion_eddy:
                 # the shielded-gap ladder (module docstring, reduction.motion_eddy), behind
                 # the chopper's diodes with freewheel (the bank's law, every RK4 stage)
                 u_j = (shielded_gap_freewheel_voltage(xm[j], em[j], Um[j], r_el[j], a[j])
@@ -1611,6 +1649,86 @@ def eq8_shielded_gap_rhs(i_l: Any, i_e: Any, u: Any, gap_rate: Any, ltilde: Any,
     emf = dl_ds * i_l * gap_rate
     d_il = (v_m - (1.0 - share) * emf) / (ltilde - l_u)
     return d_il, (v_a - v_m - share * emf) / l_u - d_il
+
+
+def eq8_shielded_gap3_rhs(i_l: Any, i_e1: Any, i_e2: Any, u: Any, gap_rate: Any,
+                          ltilde: Any, dl_ds: Any, r_el: Any, a: Any, r_2: Any, l_u: Any,
+                          r_3: Any, l_2: Any, share: Any, inner_share: Any
+                          ) -> tuple[Any, Any, Any]:
+    """Eq. 8 with two shielded sections, the three-state ladder
+    (``CurrentModel(maps, motion_eddy=True, eddy_branches=2)``; docs/equations.md section 8).
+
+    ``R_el``, shunt ``R_a``, series ``L_u``, shunt ``R_2``, series ``L_2``, shunt
+    ``R_3 || L(s, I_L)`` with the gap section's inductance ``L~ - L_u - L_2``; the currents
+    ``I_2 = I_L + I_e1`` (through ``L_2``) and ``I_u = I_2 + I_e2`` (through ``L_u``), and
+    the motion voltage ``e = dL/ds I_L ds/dt`` shared as ``beta e``, ``beta_2 e`` and
+    ``(1 - beta - beta_2) e``::
+
+        V_A = (U - R_el I_u)/a,   V_B = R_2 I_e2,   V_C = R_3 I_e1
+        dI_L/dt = (V_C - (1 - beta - beta_2) e)/(L~ - L_u - L_2)
+        dI_2/dt = (V_B - V_C - beta_2 e)/L_2
+        dI_u/dt = (V_A - V_B - beta e)/L_u
+
+    The coil current is ``eq8_coil_current(I_u, U, R_el, a)``.  ``L_2 -> 0`` is
+    :func:`eq8_shielded_gap_rhs` with ``R_2 || R_3`` on its slow manifold.  Element-wise on
+    floats, NumPy arrays and CasADi expressions.
+
+    Returns
+    -------
+    (dI_L/dt, dI_e1/dt, dI_e2/dt) [A/s]
+    """
+    i_2 = i_l + i_e1
+    i_u = i_2 + i_e2
+    v_a = (u - r_el * i_u) / a
+    v_b, v_c = r_2 * i_e2, r_3 * i_e1
+    emf = dl_ds * i_l * gap_rate
+    d_il = (v_c - (1.0 - share - inner_share) * emf) / (ltilde - l_u - l_2)
+    d_i2 = (v_b - v_c - inner_share * emf) / l_2
+    d_iu = (v_a - v_b - share * emf) / l_u
+    return d_il, d_i2 - d_il, d_iu - d_i2
+
+
+def motion_eddy3_parameters(maps: CharacteristicMaps, resistance_ohm: np.ndarray
+                            ) -> tuple[dict[str, np.ndarray], float]:
+    """The three-state ladder of ``maps`` (``motion_eddy3_*`` variables of ``build_maps``),
+    checked: its elements per circuit by the short names ``r_a, l_u, r_2, l_2, r_3, beta,
+    beta_2, c_1, c_2`` and ``a``, and the longest stable RK4 sub-step [s] (``1.5`` over the
+    Gershgorin bound of the rates in ``(I_u, I_2, I_L)`` with the maps' smallest ``L~``).
+
+    Raises
+    ------
+    InputError
+        Maps without the variables (built before them, or from a table), of a magnet
+        without eddy currents, or whose smallest ``L~`` is not above ``L_u + L_2``.
+    """
+    from ..reduction.maps import MOTION_EDDY3_VARIABLES
+
+    ds = maps.dataset
+    names = [v[0] for v in MOTION_EDDY3_VARIABLES[:9]]
+    missing = [n for n in names if n not in ds]
+    if missing:
+        raise InputError(f"eddy_branches=2: these maps have no three-state ladder "
+                         f"({', '.join(missing[:2])}, ...); rebuild them with this version "
+                         "(build_maps), or use eddy_branches=1")
+    vals = [np.array(ds[n].values, dtype=float) for n in names]
+    par = dict(zip(("r_a", "l_u", "r_2", "l_2", "r_3", "beta", "beta_2", "c_1", "c_2"),
+                   vals, strict=True))
+    if not (all(np.all(np.isfinite(v)) for v in vals)
+            and all(np.all(par[k] > 0) for k in ("r_a", "l_u", "r_2", "l_2", "r_3"))):
+        raise InputError("eddy_branches=2: these maps have no three-state ladder to use (the "
+                         "magnet has no eddy currents); use motion_eddy=False")
+    lt_min = np.array([float(np.min(maps.variable("inductance_H", c))) for c in maps.circuits])
+    l_3 = lt_min - par["l_u"] - par["l_2"]
+    if np.any(l_3 <= 0):
+        raise InputError(f"eddy_branches=2: the maps' smallest L~ ({lt_min.min():.4g} H) is "
+                         "not above the ladder's L_u + L_2 (the gap section would have no "
+                         "inductance left); use eddy_branches=1")
+    r_el = np.asarray(resistance_ohm, dtype=float)
+    par["a"] = eq8_a(r_el, par["r_a"])
+    rate = float(np.max(np.maximum.reduce([
+        (r_el / par["a"] + 2.0 * par["r_2"]) / par["l_u"],
+        2.0 * (par["r_2"] + par["r_3"]) / par["l_2"], 2.0 * par["r_3"] / l_3])))
+    return par, 1.5 / rate
 
 
 def shielded_gap_freewheel_voltage(i_l: Any, i_e: Any, u: Any, r_el: Any, a: Any) -> Any:

@@ -31,6 +31,7 @@ from __future__ import annotations
 import contextlib
 import functools
 import json
+import math
 import os
 from collections.abc import Callable, Sequence
 from concurrent.futures import Executor, Future, ProcessPoolExecutor
@@ -50,9 +51,11 @@ from .motion_eddy import (
     HELD_FLUX_FORCE_SHARE_VARIABLE,
     MAX_STEP_FORCE_LOSS,
     MAX_UNSHIELDED_SHARE_OF_MIN_L,
+    MOTION_EDDY3_WEIGHTS,
     SHARE_VARIABLE,
     detailed_frequency_response,
     fit_motion_eddy,
+    fit_motion_eddy3,
 )
 from .parameters import eddy_resistance
 from .transient import transient_point
@@ -811,6 +814,8 @@ def _store_motion_eddy(ds: Any, net: Network, gap: float, current: float,
             r_2[j], beta[j] = fit.shielding_resistance_ohm, fit.unshielded_share
             gamma[j] = fit.force_share
             rms[j] = fit.rms_residual
+    _store_motion_eddy3(ds, net, gap, current, groups, min_inductance_H,
+                        responses if net.has_eddy_currents else None)
     where = (f"fitted to the detailed model's small-signal gap -> current and voltage -> "
              f"current responses (0.1 Hz - 1 kHz) at s = {gap!r} m, I = {current!r} A; NaN: "
              "no eddy currents")
@@ -846,6 +851,81 @@ def _store_motion_eddy(ds: Any, net: Network, gap: float, current: float,
         "units": "1", "long_name": "RMS relative residual of the shielded-gap ladder's fit",
         "description": "over both responses and 60 frequencies, each relative to the "
                        "detailed response's modulus"})
+
+#: The maps' variables of the three-state ladder (``CurrentModel(maps, motion_eddy=True,
+#: eddy_branches=2)``), per circuit, in the order of :class:`MotionEddy3Fit`'s fields.
+MOTION_EDDY3_VARIABLES = (
+    ("motion_eddy3_jump_resistance_ohm", "ohm", "shunt R_a"),
+    ("motion_eddy3_unshielded_inductance_H", "H", "series L_u (unshielded)"),
+    ("motion_eddy3_shielding_resistance_ohm", "ohm", "shunt R_2 (outer shield)"),
+    ("motion_eddy3_inner_inductance_H", "H", "series L_2 (between the shields)"),
+    ("motion_eddy3_inner_shielding_resistance_ohm", "ohm", "shunt R_3 (inner shield)"),
+    ("motion_eddy3_unshielded_share", "1", "share beta of the motion voltage in L_u"),
+    ("motion_eddy3_inner_share", "1", "share beta_2 of the motion voltage in L_2"),
+    ("motion_eddy3_force_share_1", "1", "c_1 of the force current"),
+    ("motion_eddy3_force_share_2", "1", "c_2 of the force current"),
+    ("motion_eddy3_fit_rms", "1", "RMS relative residual of the fit"),
+)
+
+
+def _same_response(a: Any, b: Any) -> bool:
+    """Whether two detailed responses agree to rounding (relative 1e-9 everywhere)."""
+    pairs = [(a.gap_to_current_A_per_m, b.gap_to_current_A_per_m),
+             (a.voltage_to_current_A_per_V, b.voltage_to_current_A_per_V),
+             (a.gap_to_force_N_per_m, b.gap_to_force_N_per_m),
+             (a.voltage_to_force_N_per_V, b.voltage_to_force_N_per_V),
+             (np.array([a.differential_inductance_H, a.dpsi_ds_Wb_per_m,
+                        a.gap_current_jump_A_per_m, a.dforce_dcurrent_N_per_A,
+                        a.dforce_dgap_N_per_m]),
+              np.array([b.differential_inductance_H, b.dpsi_ds_Wb_per_m,
+                        b.gap_current_jump_A_per_m, b.dforce_dcurrent_N_per_A,
+                        b.dforce_dgap_N_per_m]))]
+    return all(x is not None and y is not None and np.shape(x) == np.shape(y)
+               and bool(np.allclose(x, y, rtol=1e-9, atol=0.0)) for x, y in pairs)
+
+
+def _store_motion_eddy3(ds: Any, net: Network, gap: float, current: float,
+                        groups: dict[str, tuple[str, ...]], min_inductance_H: np.ndarray,
+                        responses: Any) -> None:
+    """Add the ``motion_eddy3_*`` variables: the three-state ladder
+    (:func:`~maglevkit.reduction.motion_eddy.fit_motion_eddy3`, docs/equations.md section
+    8), with ``L_u + L_2`` below ``MAX_UNSHIELDED_SHARE_OF_MIN_L`` times each circuit's
+    smallest ``L~`` on the maps; NaN without eddy currents (or where the fit has no force
+    response)."""
+    nc = len(net.circuits)
+    values = np.full((len(MOTION_EDDY3_VARIABLES), nc), np.nan)
+    if responses is not None:
+        r_jump = eddy_resistance(net, gap_m=gap, current_A=current)
+        done: list[tuple[Any, float, float, int]] = []
+        for j, resp in enumerate(responses):
+            r_el = float(net.resistances[j])
+            if not (np.isfinite(r_jump[j]) and r_jump[j] > 0):
+                continue
+            # symmetric circuits (the TR09 magnet's two halves) have the same responses to
+            # rounding: one fit serves them
+            twin = [k for other, rj, re, k in done if _same_response(other, resp)
+                    and math.isclose(rj, float(r_jump[j]), rel_tol=1e-9) and re == r_el
+                    and min_inductance_H[k] == min_inductance_H[j]]
+            if twin:
+                values[:, j] = values[:, twin[0]]
+                continue
+            done.append((resp, float(r_jump[j]), r_el, j))
+            fit = fit_motion_eddy3(resp, resistance_ohm=r_el,
+                                   eddy_resistance_jump_ohm=float(r_jump[j]),
+                                   max_series_inductance_H=MAX_UNSHIELDED_SHARE_OF_MIN_L
+                                   * float(min_inductance_H[j]),
+                                   weights=MOTION_EDDY3_WEIGHTS)
+            values[:, j] = (fit.jump_resistance_ohm, fit.unshielded_inductance_H,
+                            fit.shielding_resistance_ohm, fit.inner_inductance_H,
+                            fit.inner_shielding_resistance_ohm, fit.unshielded_share,
+                            fit.inner_share, *fit.force_shares, fit.rms_residual)
+    where = (f"fitted to the detailed model's small-signal gap and voltage -> current and "
+             f"force responses (0.1 Hz - 1 kHz) at s = {gap!r} m, I = {current!r} A; NaN: "
+             "no eddy currents; absent (older maps): eddy_branches=2 is refused")
+    for (name, units, long_name), v in zip(MOTION_EDDY3_VARIABLES, values, strict=True):
+        ds[name] = ("circuit", v, {"units": units, "long_name": "three-state ladder: "
+                                   + long_name, "description": where})
+
 
 MAP_UNITS = {"force_N": "N", "inductance_H": "H", "dL_ds_H_per_m": "H/m",
              "flux_linkage_Wb": "Wb", "apparent_inductance_H": "H",
