@@ -9,12 +9,15 @@ currents (5, 20, 40, 80 A) with the same solver (``fem_u_magnet.solve_fem``: P2,
 networks (docs/magnets.md, "Calibration").
 
 ``python benchmarks/fem_u_magnet_calibration.py [--fem-only] [--regions] [--networks lumped,split,cells]
-[--subsets] [--validate-gaps 0.010,0.012]`` (needs the optional extra ``validation``,
+[--subsets] [--validate-gaps 0.010,0.012] [--steps 0,6]`` (needs the optional extra ``validation``,
 scikit-fem, for the FEM table and ``--regions`` only; ~5-20 s per FEM point).
 ``--regions``: the FEM's region fluxes against the networks' branches
 (docs/validation_fem.md, "Calibration on the split network").  ``--subsets``: every subset of
 the five static factors, each with its held-out error and, with ``--validate-gaps``, the
 error at those gaps of a fit without them (a choice of set from the fit range alone).
+``--steps 0,6``: the eddy conductance scale fitted on three of the transient FEM's voltage
+steps (``benchmarks/results/fem_transient_cases.json``), the fourth held out, for the lumped
+eddy elements (0) and the eddy ladder with 6 layers (``step_fits``).
 """
 
 from __future__ import annotations
@@ -30,7 +33,7 @@ from pathlib import Path
 import numpy as np
 
 import maglevkit as mk
-from maglevkit.calibration import calibrate
+from maglevkit.calibration import StepResponses, VoltageStep, calibrate
 from maglevkit.magnets import build_magnet
 from maglevkit.parameter_files import read_parameter_file
 
@@ -210,6 +213,62 @@ def subsets(network: str, validate_m: list[float]) -> list[dict]:
     return out
 
 
+STEPS_FEM = HERE / "results" / "fem_transient_cases.json"
+STEP_HOLDOUT = "6 mm, 20 -> 50 A"
+"""The FEM step held out of the step fits: the gap of two fitted steps and the current
+step of another, so neither alone."""
+
+
+def fem_steps(samples: int = 20) -> StepResponses:
+    """The U-magnet's transient FEM (benchmarks/fem_u_magnet_transient.py, 4 voltage
+    steps, R_el = 2 ohm) as measured steps, thinned to the sample indices
+    ``geomspace(1, 117, samples)`` rounded (dense after the step where the eddy currents
+    diffuse, sparse later; 17 distinct of 20)."""
+    runs = json.loads(STEPS_FEM.read_text())["runs"]
+    out = []
+    for r in runs:
+        t, cur = np.asarray(r["time_s"][1:]), np.asarray(r["current_A"][1:])
+        idx = np.unique(np.geomspace(1, t.size, samples).astype(int) - 1)
+        out.append(VoltageStep(label=r["label"], time_s=t[idx], current_A=cur[idx],
+                               gap_m=r["gap_m"], initial_current_A=r["i0_A"],
+                               voltage_V=2.0 * r["i1_A"], circuit="", rows=idx + 2))
+    return StepResponses(tuple(out), source=str(STEPS_FEM))
+
+
+def step_fits(layers: list[int]) -> list[dict]:
+    """The eddy conductance scale fitted on three FEM steps, STEP_HOLDOUT held out, for the
+    lumped eddy elements and the ladder with each of ``layers`` (docs/magnets.md,
+    "Calibration"; issue 25 part 2)."""
+    warnings.simplefilter("ignore")
+    data = fem_steps()
+    out = []
+    for n in layers:
+        mag = (mk.load_magnet("u-magnet") if n == 0 else
+               mk.load_magnet("u-magnet", eddy_model="ladder", eddy_layers=n))
+        t = time.process_time()
+        r = calibrate(mag, None, steps=data, parameters=["eddy_conductance_scale"],
+                      holdout_steps=[STEP_HOLDOUT])
+
+        def worst(rows: list[dict]) -> dict:
+            w: dict[str, float] = {}
+            for x in rows:
+                w[x["step"]] = max(w.get(x["step"], 0.0), abs(x["relative_error"]))
+            return {k: round(100 * v, 2) for k, v in w.items()}
+
+        rec = {"eddy_model": "lumped" if n == 0 else f"ladder n = {n}",
+               "samples_per_step": int(data.steps[0].time_s.size),
+               "eddy_conductance_scale": round(r.values["eddy_conductance_scale"], 4),
+               "ci95": float(f"{r.confidence_95['eddy_conductance_scale']:.3g}"),
+               "nominal_fit_pct": worst(r.nominal_step_points),
+               "fit_pct": worst(r.step_points),
+               "nominal_holdout_pct": worst(r.nominal_step_holdout),
+               "holdout_pct": worst(r.step_holdout),
+               "cpu_s": round(time.process_time() - t, 1)}
+        print(json.dumps(rec), flush=True)
+        out.append(rec)
+    return out
+
+
 def main(argv: list[str] | None = None) -> None:
     ap = argparse.ArgumentParser(description=(__doc__ or "").splitlines()[0])
     ap.add_argument("--fem-only", action="store_true", help="only write the FEM table")
@@ -223,7 +282,13 @@ def main(argv: list[str] | None = None) -> None:
                     help="every subset of the five static factors on each network")
     ap.add_argument("--validate-gaps", default="",
                     help="with --subsets: gaps [m] inside the fit range to choose a set by")
+    ap.add_argument("--steps", default="", help=(
+        "fit the eddy conductance scale on the transient FEM's steps instead: eddy models "
+        "to run, 0 for the lumped elements, n for the ladder with n layers (e.g. '0,6')"))
     a = ap.parse_args(argv)
+    if a.steps:
+        step_fits([int(x) for x in a.steps.split(",") if x])
+        return
     if not OUT.exists():
         fem_table()
     if a.regions:

@@ -58,9 +58,10 @@ from .errors import DataError, DataWarning, InputError, MaglevkitWarning, Solver
 from .parameter_files import toml_text
 
 __all__ = ["PARAMETERS", "DEFAULT_PARAMETERS", "DYNAMIC_PARAMETERS", "STEP_COLUMNS",
-           "STEP_GAP_PLAUSIBLE_M", "STEP_FINE_STEPS", "Calibration", "StaticPoints",
+           "STEP_GAP_PLAUSIBLE_M", "STEP_FINE_STEPS", "Calibration", "ParameterSetScore",
+           "StaticPoints",
            "StepResponses", "VoltageStep", "calibrate", "calibrated_network",
-           "parameter_sensitivities", "read_points", "read_steps",
+           "parameter_sensitivities", "read_points", "read_steps", "select_parameters",
            "step_response_sensitivities", "step_substeps", "interval_substeps",
            "write_calibrated_toml", "load_calibrated_magnet"]
 
@@ -1115,6 +1116,92 @@ def calibrate(magnet: Any, data: str | Path | StaticPoints | None, *,
         nominal_step_points=nominal_step_rep, step_holdout=step_hold,
         nominal_step_holdout=nominal_step_hold,
         steps_sha256=steps_sha)
+
+
+@dataclass(frozen=True)
+class ParameterSetScore:
+    """Leave-one-gap-out cross-validation of one parameter set (:func:`select_parameters`).
+
+    Attributes
+    ----------
+    parameters : tuple of str
+        The set.
+    worst : float
+        Largest ``|relative error|`` at a left-out gap's points over all folds [1].
+    rms : float
+        RMS of the left-out points' relative errors over all folds [1].
+    per_gap : dict
+        Left-out gap [m] -> largest ``|relative error|`` at its points [1].
+    """
+
+    parameters: tuple[str, ...]
+    worst: float
+    rms: float
+    per_gap: dict[float, float]
+
+
+def select_parameters(magnet: Any, data: str | Path | StaticPoints, *,
+                      candidates: Sequence[str] = DEFAULT_PARAMETERS,
+                      holdout_gaps_m: Sequence[float] = (),
+                      sets: Sequence[Sequence[str]] | None = None
+                      ) -> list[ParameterSetScore]:
+    """Rank parameter sets by leave-one-gap-out cross-validation on the fitted gaps only.
+
+    Every set (default: every non-empty subset of ``candidates``) is fitted once per
+    fitted gap with that gap left out, and scored by the largest relative error at the
+    left-out gaps' points; the gaps of ``holdout_gaps_m`` are left out of every fold, so
+    that the choice never sees them.  Returns the scores, best (smallest ``worst``) first:
+    ``select_parameters(...)[0].parameters`` is the set to fit, chosen without the held-out
+    data (docs/magnets.md, "Calibration").
+
+    Parameters
+    ----------
+    magnet : Magnet or Network
+        The magnet to calibrate.
+    data : path or StaticPoints
+        Measured statics (:func:`read_points`).
+    candidates : sequence of str
+        Names of :data:`PARAMETERS` whose subsets are scored.
+    holdout_gaps_m : sequence of float
+        Gaps [m] never used (the later held-out check).
+    sets : sequence of sequences of str, optional
+        Score these sets instead of all subsets of ``candidates``.
+
+    Raises
+    ------
+    InputError
+        Unknown names, or fewer than 3 fitted gaps (a fold needs a gap to leave out and
+        at least two to fit).
+    """
+    import itertools
+
+    pts = data if isinstance(data, StaticPoints) else read_points(data)
+    held = [float(g) for g in holdout_gaps_m]
+    gaps = sorted({float(g) for g in pts.gap_m.tolist()
+                   if not any(math.isclose(g, h, rel_tol=1e-9, abs_tol=1e-12) for h in held)})
+    if len(gaps) < 3:
+        raise InputError(f"select_parameters needs at least 3 fitted gaps, the data have "
+                         f"{gaps} m outside holdout_gaps_m")
+    if sets is None:
+        names = _names(candidates)
+        sets = [c for k in range(1, len(names) + 1) for c in itertools.combinations(names, k)]
+    out = []
+    for subset in sets:
+        names = _names(subset)
+        errs: list[float] = []
+        per_gap: dict[float, float] = {}
+        for g in gaps:
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore", MaglevkitWarning)
+                res = calibrate(magnet, pts, parameters=names, holdout_gaps_m=[g, *held])
+            e = [abs(r["relative_error"]) for r in res.holdout
+                 if math.isclose(r["gap_m"], g, rel_tol=1e-9, abs_tol=1e-12)]
+            per_gap[g] = max(e)
+            errs += e
+        out.append(ParameterSetScore(parameters=names, worst=max(per_gap.values()),
+                                     rms=float(np.sqrt(np.mean(np.square(errs)))),
+                                     per_gap=per_gap))
+    return sorted(out, key=lambda sc: (sc.worst, sc.rms))
 
 
 # ---------------------------------------------------------------------------- TOML out/in
