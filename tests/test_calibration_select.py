@@ -98,3 +98,28 @@ def test_fem_split_network_set_chosen_on_4_to_12_mm() -> None:
     # set (3.12 %): the window-limited inner fringe (docs/decisions.md, cal25)
     assert res.max_error("holdout", "force_N") == pytest.approx(0.0290, abs=0.002)
     assert res.max_error("holdout", "flux_linkage_Wb") < 0.011
+
+
+def test_cli_select_params(tmp_path: Path) -> None:
+    """``maglevkit calibrate --select-params``: the command line ranks the subsets of
+    --params on the fitted gaps, fits the best one and writes it; the same choice as the
+    Python function."""
+    import tomllib
+
+    from typer.testing import CliRunner
+
+    from maglevkit.cli import app
+
+    pool = ["leakage_factor", "iron_saturation_scale"]
+    out = tmp_path / "calibrated.toml"
+    res = CliRunner().invoke(app, ["calibrate", "u-magnet", str(FEM_2MM), "-o", str(out),
+                                   "--params", ",".join(pool), "--select-params",
+                                   "--holdout-gaps", ",".join(map(str, HOLD_M))])
+    assert res.exit_code == 0, res.output
+    ranked = select_parameters(mk.load_magnet("u-magnet"), FEM_2MM, candidates=pool,
+                               holdout_gaps_m=HOLD_M)
+    assert f"chosen: {', '.join(ranked[0].parameters)}" in res.stderr
+    assert "cross-validation (leave one fitted gap out)" in res.stderr
+    table = tomllib.loads(out.read_text())["calibration"]
+    assert set(ranked[0].parameters) <= set(table) and set(pool) - set(
+        ranked[0].parameters) == set(pool) - set(table)

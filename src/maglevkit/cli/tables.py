@@ -193,6 +193,10 @@ def calibrate_cmd(
                                                     "[, step, circuit]).")] = None,
     holdout_steps: Annotated[str | None, typer.Option("--holdout-steps", help=(
         "Labels of --steps' steps left out of the fit and reported (comma list)."))] = None,
+    select: Annotated[bool, typer.Option("--select-params", help=(
+        "Choose the static parameters among the subsets of --params (default: the five "
+        "static factors) by leave-one-gap-out cross-validation on the fitted gaps (never "
+        "the --holdout-gaps), then fit the best set."))] = False,
     fmt: FormatOption = OutputFormat.table,
     force: ForceOption = False,
 ) -> None:
@@ -211,7 +215,14 @@ def calibrate_cmd(
       maglevkit calibrate tr09-standard measured.csv -o tr09-calibrated.toml
       maglevkit calibrate u-magnet statics.csv --steps steps.csv -o calibrated.toml
     """
-    from ..calibration import PARAMETERS, calibrate, write_calibrated_toml
+    from ..calibration import (
+        DEFAULT_PARAMETERS,
+        DYNAMIC_PARAMETERS,
+        PARAMETERS,
+        calibrate,
+        select_parameters,
+        write_calibrated_toml,
+    )
 
     output_file(output, "--output", force=force, inputs=(magnet, data, steps))
     names = None
@@ -227,6 +238,22 @@ def calibrate_cmd(
     if held_steps and steps is None:
         raise fail(f"--holdout-steps {holdout_steps!r} needs --steps")
     mag = load_magnet_or_exit(magnet)
+    if select:
+        pool = names if names is not None else list(DEFAULT_PARAMETERS)
+        static = [n for n in pool if n not in DYNAMIC_PARAMETERS]
+        dynamic = ([n for n in pool if n in DYNAMIC_PARAMETERS] if names is not None
+                   else list(DYNAMIC_PARAMETERS) if steps is not None else [])
+        if not static:
+            raise fail(f"--select-params: no static parameter among {pool}")
+        try:
+            ranked = select_parameters(mag, data, candidates=static, holdout_gaps_m=gaps)
+        except MaglevkitError as exc:
+            raise fail(exc) from None
+        for sc in ranked[:5]:
+            info(f"cross-validation (leave one fitted gap out): worst "
+                 f"{100 * sc.worst:.2f} %, rms {100 * sc.rms:.2f} %: {', '.join(sc.parameters)}")
+        names = [*ranked[0].parameters, *dynamic]
+        info(f"chosen: {', '.join(names)}")
     with warnings.catch_warnings():
         warnings.simplefilter("always")
         try:
