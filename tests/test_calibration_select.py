@@ -105,7 +105,6 @@ def test_cli_select_params(tmp_path: Path) -> None:
     --params on the fitted gaps, fits the best one and writes it; the same choice as the
     Python function."""
     import tomllib
-
     from typer.testing import CliRunner
 
     from maglevkit.cli import app
