@@ -94,8 +94,9 @@ def test_fem_split_network_set_chosen_on_4_to_12_mm() -> None:
     assert 0.010 < best.worst < 0.016
     res = calibrate(split, FEM_2MM, parameters=list(best.parameters), holdout_gaps_m=HOLD_M)
     # measured held out: force -0.04 ... +2.90 %, psi -0.87 ... +0.50 %; the force misses
-    # the 2 % at 20 mm (and 18 mm / 80 A), growing with the gap as with the default
-    # set (3.12 %): the window-limited inner fringe (docs/decisions.md, cal25)
+    # the 2 % at 20 mm only (+2.07 ... +2.90 % at every current), growing with the
+    # gap as with the default set (3.12 %): the window-limited inner fringe
+    # (docs/magnets.md, "Why the force error grows with the gap")
     assert res.max_error("holdout", "force_N") == pytest.approx(0.0290, abs=0.002)
     assert res.max_error("holdout", "flux_linkage_Wb") < 0.011
 
