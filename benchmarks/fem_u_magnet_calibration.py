@@ -299,7 +299,9 @@ def window_fringe_network(magnet: mk.Magnet, cylinders: bool = True) -> Any:
     for b in net.branches:
         if b.name.startswith("edge_cylinders") and not cylinders:
             continue
-        els = tuple(WindowFringeGap(e.name, gap_input=e.gap_input, pole_area_m2=e.pole_area_m2)
+        # fringe_edges kept: the calibration wrapper applies k_f to fringe_permeance
+        els = tuple(WindowFringeGap(e.name, gap_input=e.gap_input, pole_area_m2=e.pole_area_m2,
+                                    fringe_edges=e.fringe_edges)
                     if isinstance(e, AirGap) else e for e in b.elements)
         if b.name == "leakage":
             els = (WindowTakeover("leakage_window"),)
