@@ -103,21 +103,33 @@ def _synthetic(magnet: mk.Magnet, values: dict[str, float], noise: float,
 @pytest.mark.slow
 def test_ladder_eddy_scale_recovered_and_a_held_out_step_predicted(ladder: mk.Magnet
                                                                     ) -> None:
-    """Seeded synthetic ladder steps with k_e = 0.7 and 0.3 % noise: fitted on step "a",
-    the value lies within its 95 % interval of the truth, and the held-out step "b"
-    (another gap and current) is predicted to the noise level, the nominal ladder not."""
-    rng = np.random.default_rng(25)
-    data = _synthetic(ladder, {"eddy_conductance_scale": TRUE_EDDY}, 0.003, rng)
-    res = calibrate(ladder, None, steps=data, parameters=["eddy_conductance_scale"],
+    """Synthetic ladder steps with k_e = 0.7, fitted on step "a", step "b" (another gap and
+    current) held out.  Noise-free: the truth and the held-out step to the solvers'
+    tolerance, the nominal ladder 2.8 % off there.  With 0.3 % noise, a seeded ensemble:
+    the truth inside the 95 % interval in most runs (issue 25's "Must show")."""
+    exact = _synthetic(ladder, {"eddy_conductance_scale": TRUE_EDDY}, 0.0,
+                       np.random.default_rng(0))
+    res = calibrate(ladder, None, steps=exact, parameters=["eddy_conductance_scale"],
                     holdout_steps=["b"])
-    k, ci = res.values["eddy_conductance_scale"], res.confidence_95["eddy_conductance_scale"]
-    assert abs(k - TRUE_EDDY) < ci and ci < 0.1
     assert {r["step"] for r in res.step_points} == {"a"}
     assert {r["step"] for r in res.step_holdout} == {"b"}
-    # held out: noise 0.3 % of the change (1-sigma; 7 samples, so < 1 % at 3 sigma) plus
-    # the fitted value's error
-    assert res.max_error("step_holdout") < 0.012
-    assert res.max_error("nominal_step_holdout") > 2.0 * res.max_error("step_holdout")
+    # measured: k_e to 8e-9, the held-out step to 4.6e-9 of its change; nominal 2.8 %
+    assert res.values["eddy_conductance_scale"] == pytest.approx(TRUE_EDDY, abs=1e-6)
+    assert res.max_error("step_holdout") < 1e-6
+    assert res.max_error("nominal_step_holdout") > 0.02
+    rng = np.random.default_rng(25)
+    inside = []
+    for _ in range(6):
+        data = _synthetic(ladder, {"eddy_conductance_scale": TRUE_EDDY}, 0.003, rng)
+        res = calibrate(ladder, None, steps=data, parameters=["eddy_conductance_scale"],
+                        holdout_steps=["b"])
+        k = res.values["eddy_conductance_scale"]
+        inside.append(abs(k - TRUE_EDDY) <= res.confidence_95["eddy_conductance_scale"])
+        # the held-out step follows the fitted value: measured 1.0 % at k_e = 0.665 (the
+        # run outside its interval), the nominal 2.8 %
+        assert res.max_error("step_holdout") < res.max_error("nominal_step_holdout")
+    # 95 % intervals: P(3 or fewer of 6 inside | p = 0.95) ~ 0.2 %
+    assert sum(inside) >= 4, inside
 
 
 def test_holdout_steps_unknown_label_is_refused(ladder: mk.Magnet) -> None:
