@@ -17,7 +17,8 @@ the five static factors, each with its held-out error and, with ``--validate-gap
 error at those gaps of a fit without them (a choice of set from the fit range alone).
 ``--steps 0,6``: the eddy conductance scale fitted on three of the transient FEM's voltage
 steps (``benchmarks/results/fem_transient_cases.json``), the fourth held out, for the lumped
-eddy elements (0) and the eddy ladder with 6 layers (``step_fits``).  ``--window``: the
+eddy elements (0) and the eddy ladder with 6 layers (``step_fits``); ``--with-statics``
+fits the five static factors on the FEM statics in the same problem.  ``--window``: the
 large-gap force trend (``window_diagnostic``, ``window_fringe_network``; docs/decisions.md,
 cal25).
 """
@@ -36,7 +37,13 @@ from typing import Any
 import numpy as np
 
 import maglevkit as mk
-from maglevkit.calibration import StepResponses, VoltageStep, calibrate, select_parameters
+from maglevkit.calibration import (
+    DEFAULT_PARAMETERS,
+    StepResponses,
+    VoltageStep,
+    calibrate,
+    select_parameters,
+)
 from maglevkit.magnets import build_magnet
 from maglevkit.parameter_files import read_parameter_file
 
@@ -357,10 +364,11 @@ def fem_steps(samples: int = 20) -> StepResponses:
     return StepResponses(tuple(out), source=str(STEPS_FEM))
 
 
-def step_fits(layers: list[int]) -> list[dict]:
+def step_fits(layers: list[int], statics: bool = False) -> list[dict]:
     """The eddy conductance scale fitted on three FEM steps, STEP_HOLDOUT held out, for the
     lumped eddy elements and the ladder with each of ``layers`` (docs/magnets.md,
-    "Calibration"; issue 25 part 2)."""
+    "Calibration"; issue 25 part 2).  ``statics``: the five static factors fitted too, on
+    the FEM statics of OUT (all gaps), in the same least-squares problem."""
     warnings.simplefilter("ignore")
     data = fem_steps()
     out = []
@@ -368,7 +376,8 @@ def step_fits(layers: list[int]) -> list[dict]:
         mag = (mk.load_magnet("u-magnet") if n == 0 else
                mk.load_magnet("u-magnet", eddy_model="ladder", eddy_layers=n))
         t = time.process_time()
-        r = calibrate(mag, None, steps=data, parameters=["eddy_conductance_scale"],
+        names = [*(DEFAULT_PARAMETERS if statics else ()), "eddy_conductance_scale"]
+        r = calibrate(mag, OUT if statics else None, steps=data, parameters=names,
                       holdout_steps=[STEP_HOLDOUT])
 
         def worst(rows: list[dict]) -> dict:
@@ -379,8 +388,11 @@ def step_fits(layers: list[int]) -> list[dict]:
 
         rec = {"eddy_model": "lumped" if n == 0 else f"ladder n = {n}",
                "samples_per_step": int(data.steps[0].time_s.size),
-               "eddy_conductance_scale": round(r.values["eddy_conductance_scale"], 4),
-               "ci95": float(f"{r.confidence_95['eddy_conductance_scale']:.3g}"),
+               "values": {k: round(v, 4) for k, v in r.values.items()},
+               "ci95": {k: float(f"{v:.3g}") for k, v in r.confidence_95.items()},
+               "statics_fit_pct": (None if not statics else (
+                   round(100 * r.max_error("points", "force_N"), 2),
+                   round(100 * r.max_error("points", "flux_linkage_Wb"), 2))),
                "nominal_fit_pct": worst(r.nominal_step_points),
                "fit_pct": worst(r.step_points),
                "nominal_holdout_pct": worst(r.nominal_step_holdout),
@@ -410,13 +422,15 @@ def main(argv: list[str] | None = None) -> None:
     ap.add_argument("--window", action="store_true", help=(
         "the large-gap force trend: the linear FEM's effective width for three geometries, "
         "and the window-fringe experiment's fits (window_fringe_network)"))
+    ap.add_argument("--with-statics", action="store_true",
+                    help="with --steps: fit the five static factors on the FEM statics too")
     a = ap.parse_args(argv)
     if a.window:
         window_diagnostic()
         window_experiment()
         return
     if a.steps:
-        step_fits([int(x) for x in a.steps.split(",") if x])
+        step_fits([int(x) for x in a.steps.split(",") if x], statics=a.with_statics)
         return
     if not OUT.exists():
         fem_table()
