@@ -9,12 +9,18 @@ currents (5, 20, 40, 80 A) with the same solver (``fem_u_magnet.solve_fem``: P2,
 networks (docs/magnets.md, "Calibration").
 
 ``python benchmarks/fem_u_magnet_calibration.py [--fem-only] [--regions] [--networks lumped,split,cells]
-[--subsets] [--validate-gaps 0.010,0.012]`` (needs the optional extra ``validation``,
+[--subsets] [--validate-gaps 0.010,0.012] [--steps 0,6]`` (needs the optional extra ``validation``,
 scikit-fem, for the FEM table and ``--regions`` only; ~5-20 s per FEM point).
 ``--regions``: the FEM's region fluxes against the networks' branches
 (docs/validation_fem.md, "Calibration on the split network").  ``--subsets``: every subset of
 the five static factors, each with its held-out error and, with ``--validate-gaps``, the
 error at those gaps of a fit without them (a choice of set from the fit range alone).
+``--steps 0,6``: the eddy conductance scale fitted on three of the transient FEM's voltage
+steps (``benchmarks/results/fem_transient_cases.json``), the fourth held out, for the lumped
+eddy elements (0) and the eddy ladder with 6 layers (``step_fits``); ``--with-statics``
+fits the five static factors on the FEM statics in the same problem.  ``--window``: the
+large-gap force trend (``window_diagnostic``, ``window_fringe_network``; docs/decisions.md,
+cal25).
 """
 
 from __future__ import annotations
@@ -26,11 +32,18 @@ import sys
 import time
 import warnings
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
 import maglevkit as mk
-from maglevkit.calibration import calibrate
+from maglevkit.calibration import (
+    DEFAULT_PARAMETERS,
+    StepResponses,
+    VoltageStep,
+    calibrate,
+    select_parameters,
+)
 from maglevkit.magnets import build_magnet
 from maglevkit.parameter_files import read_parameter_file
 
@@ -210,6 +223,186 @@ def subsets(network: str, validate_m: list[float]) -> list[dict]:
     return out
 
 
+# ------------------------------------------------------------------ the large-gap force trend
+WINDOW_DIAGNOSTIC = {"bundled": {}, "rail 400 mm": {"rail_width": 0.400},
+                     "window 160 mm": {"window_width": 0.160, "rail_width": 0.260}}
+
+
+def window_diagnostic() -> None:
+    """The FEM in linear iron (mu_r = 1e5) at 5 A, 4-20 mm: the force as an effective face
+    width ``w_eff = F s^2 / ((N I)^2/4 mu0 d)`` (the pole width plus what the edges add;
+    ``w`` alone for a uniform field), for the bundled geometry, a rail 400 mm wide and a
+    window 160 mm wide (docs/decisions.md, cal25).  Needs scikit-fem; ~1-2 s per point."""
+    from dataclasses import replace  # noqa: PLC0415
+
+    sys.path.insert(0, str(HERE))
+    import fem_u_magnet  # noqa: PLC0415 (optional dependency scikit-fem)
+
+    for name, change in WINDOW_DIAGNOSTIC.items():
+        g = replace(fem_u_magnet.GEOM, **change)
+        row = []
+        for s_mm in (4, 8, 12, 16, 20):
+            s = s_mm * 1e-3
+            res = fem_u_magnet.solve_full(s, 5.0, mu_r=1e5, g=g)
+            scale = 0.25 * (g.turns * 5.0) ** 2 * fem_u_magnet.MU0 * g.depth
+            row.append(f"{s_mm} mm: {1e3 * res.force_N * s * s / scale:.2f}")
+        print(f"{name}: w_eff [mm] " + ", ".join(row), flush=True)
+
+
+def window_fringe_network(magnet: mk.Magnet, cylinders: bool = True) -> Any:
+    """EXPERIMENT, not adopted (docs/decisions.md, cal25): the split network with both pole
+    edges' fringe by the conformal map of a right-angled edge
+    (:func:`maglevkit.circuit.elements.edge_flank_per_mu0`) and the inner edge's flank
+    limited by the window: a tube leaving the flank at height ``x`` has the local path
+    ``s v(x)`` (``v - atan v = pi x/(2s)``); where that exceeds ``a`` = half the window
+    (the centre plane is at the rail's potential) it goes to the window instead, so the
+    inner flank fringes up to ``x_w = (2/pi)(a - s atan(a/s))`` (< r from ~12 mm on) and the
+    window leakage takes the rest over (gap-dependent; the boundary terms cancel)."""
+    from dataclasses import dataclass, replace  # noqa: PLC0415
+
+    import casadi as ca  # noqa: PLC0415
+
+    from maglevkit.circuit.elements import AirGap, LinearElement, edge_flank_per_mu0  # noqa: PLC0415
+    from maglevkit.circuit.network import Network  # noqa: PLC0415
+    from maglevkit.materials import MU0  # noqa: PLC0415
+
+    m = magnet.parameters["magnet"]
+    a, r, d = 0.5 * m["window_width"], m["coil_gap_to_pole_face"], m["depth"]
+
+    def is_sym(*v: Any) -> bool:
+        return any(isinstance(x, (ca.SX, ca.MX)) for x in v)
+
+    def x_window(s: Any) -> Any:
+        at = ca.atan(a / s) if is_sym(s) else np.arctan(a / s)
+        return 2.0 / np.pi * (a - s * at)
+
+    def flank(s: Any) -> Any:
+        xw = x_window(s)
+        return ca.fmin(r, xw) if is_sym(xw) else np.minimum(r, xw)
+
+    @dataclass(frozen=True)
+    class WindowFringeGap(AirGap):
+        def fringe_permeance(self, gap: Any) -> Any:
+            return MU0 * (edge_flank_per_mu0(d, r, gap) + edge_flank_per_mu0(d, flank(gap), gap))
+
+        def permeance(self, gap: Any = None) -> Any:
+            return MU0 * self.pole_area_m2 / gap + self.fringe_permeance(gap)
+
+    @dataclass(frozen=True)
+    class WindowTakeover(LinearElement):
+        gap_input: str = "left"
+
+        @property
+        def gap(self) -> str:
+            return self.gap_input
+
+        def permeance(self, gap: Any = None) -> Any:
+            # the strip below the coil (as in the split network) plus the flank the inner
+            # fringe gives up to the window
+            return MU0 * d * (2.0 * r - flank(gap)) / (2.0 * a)
+
+    net = magnet.network
+    branches = []
+    for b in net.branches:
+        if b.name.startswith("edge_cylinders") and not cylinders:
+            continue
+        # fringe_edges kept: the calibration wrapper applies k_f to fringe_permeance
+        els = tuple(WindowFringeGap(e.name, gap_input=e.gap_input, pole_area_m2=e.pole_area_m2,
+                                    fringe_edges=e.fringe_edges)
+                    if isinstance(e, AirGap) else e for e in b.elements)
+        if b.name == "leakage":
+            els = (WindowTakeover("leakage_window"),)
+        branches.append(replace(b, elements=els))
+    return Network(tuple(branches), net.circuits, name=net.name + " (window fringe)")
+
+
+def window_experiment() -> None:
+    """The window-fringe experiment on the split network: the set chosen by
+    leave-one-gap-out cross-validation on 4-12 mm (select_parameters), then its held-out
+    14-20 mm errors per point (with and without the edge cylinders)."""
+    warnings.simplefilter("ignore")
+    params, _ = read_parameter_file("u-magnet", what="magnet")
+    p = {**params, "magnet": {**params["magnet"], **NETWORKS["split"]}}
+    mag = build_magnet(p, options=mk.ModelOptions(eddy_currents=False))
+    hold = [g * 1e-3 for g in HOLD_MM]
+    for label, net in (("split", mag.network),
+                       ("split + window fringe", window_fringe_network(mag)),
+                       ("split + window fringe, no cylinders",
+                        window_fringe_network(mag, cylinders=False))):
+        best = select_parameters(net, OUT, holdout_gaps_m=hold)[0]
+        r = calibrate(net, OUT, parameters=list(best.parameters), holdout_gaps_m=hold)
+        print(json.dumps({
+            "network": label, "chosen": best.parameters, "cv_worst_pct": round(100 * best.worst, 2),
+            "values": {k: round(v, 4) for k, v in r.values.items()},
+            "fit_pct": (round(100 * r.max_error("points", "force_N"), 2),
+                        round(100 * r.max_error("points", "flux_linkage_Wb"), 2)),
+            "holdout_pct": (round(100 * r.max_error("holdout", "force_N"), 2),
+                            round(100 * r.max_error("holdout", "flux_linkage_Wb"), 2)),
+            "holdout": [(round(x["gap_m"] * 1e3), x["current_A"], x["quantity"][:3],
+                         round(100 * x["relative_error"], 2)) for x in r.holdout]}), flush=True)
+
+
+STEPS_FEM = HERE / "results" / "fem_transient_cases.json"
+STEP_HOLDOUT = "6 mm, 20 -> 50 A"
+"""The FEM step held out of the step fits: the gap of two fitted steps and the current
+step of another, so neither alone."""
+
+
+def fem_steps(samples: int = 20) -> StepResponses:
+    """The U-magnet's transient FEM (benchmarks/fem_u_magnet_transient.py, 4 voltage
+    steps, R_el = 2 ohm) as measured steps, thinned to the sample indices
+    ``geomspace(1, 117, samples)`` rounded (dense after the step where the eddy currents
+    diffuse, sparse later; 17 distinct of 20)."""
+    runs = json.loads(STEPS_FEM.read_text())["runs"]
+    out = []
+    for r in runs:
+        t, cur = np.asarray(r["time_s"][1:]), np.asarray(r["current_A"][1:])
+        idx = np.unique(np.geomspace(1, t.size, samples).astype(int) - 1)
+        out.append(VoltageStep(label=r["label"], time_s=t[idx], current_A=cur[idx],
+                               gap_m=r["gap_m"], initial_current_A=r["i0_A"],
+                               voltage_V=2.0 * r["i1_A"], circuit="", rows=idx + 2))
+    return StepResponses(tuple(out), source=str(STEPS_FEM))
+
+
+def step_fits(layers: list[int], statics: bool = False) -> list[dict]:
+    """The eddy conductance scale fitted on three FEM steps, STEP_HOLDOUT held out, for the
+    lumped eddy elements and the ladder with each of ``layers`` (docs/magnets.md,
+    "Calibration"; issue 25 part 2).  ``statics``: the five static factors fitted too, on
+    the FEM statics of OUT (all gaps), in the same least-squares problem."""
+    warnings.simplefilter("ignore")
+    data = fem_steps()
+    out = []
+    for n in layers:
+        mag = (mk.load_magnet("u-magnet") if n == 0 else
+               mk.load_magnet("u-magnet", eddy_model="ladder", eddy_layers=n))
+        t = time.process_time()
+        names = [*(DEFAULT_PARAMETERS if statics else ()), "eddy_conductance_scale"]
+        r = calibrate(mag, OUT if statics else None, steps=data, parameters=names,
+                      holdout_steps=[STEP_HOLDOUT])
+
+        def worst(rows: list[dict]) -> dict:
+            w: dict[str, float] = {}
+            for x in rows:
+                w[x["step"]] = max(w.get(x["step"], 0.0), abs(x["relative_error"]))
+            return {k: round(100 * v, 2) for k, v in w.items()}
+
+        rec = {"eddy_model": "lumped" if n == 0 else f"ladder n = {n}",
+               "samples_per_step": int(data.steps[0].time_s.size),
+               "values": {k: round(v, 4) for k, v in r.values.items()},
+               "ci95": {k: float(f"{v:.3g}") for k, v in r.confidence_95.items()},
+               "statics_fit_pct": (None if not statics else (
+                   round(100 * r.max_error("points", "force_N"), 2),
+                   round(100 * r.max_error("points", "flux_linkage_Wb"), 2))),
+               "nominal_fit_pct": worst(r.nominal_step_points),
+               "fit_pct": worst(r.step_points),
+               "nominal_holdout_pct": worst(r.nominal_step_holdout),
+               "holdout_pct": worst(r.step_holdout),
+               "cpu_s": round(time.process_time() - t, 1)}
+        print(json.dumps(rec), flush=True)
+        out.append(rec)
+    return out
+
+
 def main(argv: list[str] | None = None) -> None:
     ap = argparse.ArgumentParser(description=(__doc__ or "").splitlines()[0])
     ap.add_argument("--fem-only", action="store_true", help="only write the FEM table")
@@ -223,7 +416,22 @@ def main(argv: list[str] | None = None) -> None:
                     help="every subset of the five static factors on each network")
     ap.add_argument("--validate-gaps", default="",
                     help="with --subsets: gaps [m] inside the fit range to choose a set by")
+    ap.add_argument("--steps", default="", help=(
+        "fit the eddy conductance scale on the transient FEM's steps instead: eddy models "
+        "to run, 0 for the lumped elements, n for the ladder with n layers (e.g. '0,6')"))
+    ap.add_argument("--window", action="store_true", help=(
+        "the large-gap force trend: the linear FEM's effective width for three geometries, "
+        "and the window-fringe experiment's fits (window_fringe_network)"))
+    ap.add_argument("--with-statics", action="store_true",
+                    help="with --steps: fit the five static factors on the FEM statics too")
     a = ap.parse_args(argv)
+    if a.window:
+        window_diagnostic()
+        window_experiment()
+        return
+    if a.steps:
+        step_fits([int(x) for x in a.steps.split(",") if x], statics=a.with_statics)
+        return
     if not OUT.exists():
         fem_table()
     if a.regions:

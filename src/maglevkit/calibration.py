@@ -58,10 +58,11 @@ from .errors import DataError, DataWarning, InputError, MaglevkitWarning, Solver
 from .parameter_files import toml_text
 
 __all__ = ["PARAMETERS", "DEFAULT_PARAMETERS", "DYNAMIC_PARAMETERS", "STEP_COLUMNS",
-           "STEP_GAP_PLAUSIBLE_M", "STEP_FINE_STEPS", "Calibration", "StaticPoints",
+           "STEP_GAP_PLAUSIBLE_M", "STEP_FINE_STEPS", "Calibration", "ParameterSetScore",
+           "StaticPoints",
            "StepResponses", "VoltageStep", "calibrate", "calibrated_network",
-           "parameter_sensitivities", "read_points", "read_steps",
-           "step_response_sensitivities", "step_substeps",
+           "parameter_sensitivities", "read_points", "read_steps", "select_parameters",
+           "step_response_sensitivities", "step_substeps", "interval_substeps",
            "write_calibrated_toml", "load_calibrated_magnet"]
 
 
@@ -433,13 +434,17 @@ geometric ones from 1e-6 of the window to the first output, for the fast eddy mo
 :func:`step_substeps` takes fewer for many samples."""
 
 
-_STEP_ABSTOL = 1e-11
+_STEP_ABSTOL = 1e-10
 """Newton tolerance of the step response's rootfinders on the scaled DAE (relative to
-each unknown's scale: every residual row is O(1) per relative change of the unknowns);
-measured (U-magnet, 10 mm, 20 A, +8 V, 40 Radau steps per interval): derivatives against
-central differences 1.8e-8 / 2.2e-8 (Richardson-extrapolated 3.0e-8 / 3.8e-8) with 1e-11
-(6.9e-9 / 1.4e-8 with the 10 steps of :func:`step_substeps`); unscaled with 1e-9
-they were 3-6e-6 off for every difference step.  The response moves by 1.2e-10."""
+each unknown's scale: every residual row is O(1) per relative change of the unknowns).
+Measured (U-magnet, 10 mm, 20 A, +8 V, 12 samples, 10 Radau steps per interval), the
+lumped network: derivatives against central differences 7.7e-9 / 1.1e-8 (with 1e-11:
+8.9e-9 / 8.6e-9), the response against IDAS 1.9e-10 relative either way; unscaled with
+1e-9 they were 3-6e-6 off for every difference step.  The eddy ladder
+(``eddy_model = "ladder"``) cannot reach 1e-11: its collocation Newton stalls at the
+rounding floor of its larger, stiffer system and fails; with 1e-10 (2 layers, 10 mm,
+20 A, +30 V, 7 samples) derivatives 0.9e-9 ... 5.0e-9 and 3.8e-9 of the step's change
+against IDAS (tests/test_calibration_ladder.py)."""
 
 
 def _scaled_step_dae(run: Any, base: Network, *, gap_m: float, current_A: float,
@@ -549,12 +554,13 @@ class _ParametricStep:
         y0 = ca.mtimes(ca.DM(run.D), x0) / ca.DM(y_scale)
         z0 = rz(ca.vertcat(x0, ca.DM(i_vec)) / ca.DM(z_scale), ca.vertcat(y0, pars))
         grid = np.concatenate(([0.0], t / duration))
-        substeps = step_substeps(t.size)
-        # the fast eddy modes start at t = 0: geometric steps there, then the output
-        # intervals in equal steps each
+        # the fast eddy modes start at t = 0: geometric steps there, then each output
+        # interval in equal steps (interval_substeps: at most 1/STEP_FINE_STEPS of the
+        # window each, so that a long interval of a thinned record is not one large step)
         fine = np.unique(np.concatenate([np.geomspace(1e-6, grid[1], 40)] + [
-            np.linspace(a, b, substeps + 1) for a, b in zip(grid[:-1], grid[1:],
-                                                            strict=True)]))
+            np.linspace(a, b, n + 1) for a, b, n in zip(grid[:-1], grid[1:],
+                                                        interval_substeps(grid),
+                                                        strict=True)]))
         colloc = ca.integrator("step_collocation", "collocation", dae, 0.0, list(fine[1:]),
                                {"collocation_scheme": "radau", "interpolation_order": 3,
                                 "number_of_finite_elements": 1, "rootfinder": "newton",
@@ -589,6 +595,26 @@ STEP_FINE_STEPS = 120
 20 A, +8 V, 12 samples to 0.2 s, against IDAS at rtol 1e-10): 40 / 10 / 5 / 3 steps per
 interval 3.3e-8 / 3.3e-8 / 1.1e-7 / 1.6e-6 A off, 2.1 / 0.66 / 0.44 / 0.36 s per
 evaluation with the Jacobian; the 40 geometric steps after ``t = 0`` set the floor."""
+
+
+def interval_substeps(grid: np.ndarray) -> np.ndarray:
+    """Radau steps per output interval of a step response: the larger of
+    :func:`step_substeps` (for the number of samples) and ``ceil(STEP_FINE_STEPS x
+    dtau)``, at most 40, for each interval ``dtau`` of ``grid`` (``[0, t_1, ..., t_n] /
+    t_n``).  With equally spaced samples this is :func:`step_substeps` for every interval
+    (the same scheme as before the second term); with samples thinned geometrically
+    (dense after the step, sparse later) the long late intervals get more steps: one
+    interval of a quarter of the window in 5 Radau steps made the collocation's Newton
+    fail on the U-magnet's 6-layer ladder at 20 -> 50 A (saturating iron).
+
+    Parameters
+    ----------
+    grid : ndarray
+        Increasing normalised times from 0 to 1 (the sample times over the window).
+    """
+    d = np.diff(np.asarray(grid, dtype=float))
+    least = step_substeps(d.size)
+    return np.clip(np.ceil(STEP_FINE_STEPS * d - 1e-9), least, _STEP_SUBSTEPS).astype(int)
 
 
 def step_substeps(n_samples: int) -> int:
@@ -729,6 +755,8 @@ class Calibration:
         Per fitted voltage-step sample (calibrated and nominal parameters): step label,
         row, time, gap, initial current, voltage, circuit, data and model current, and the
         error relative to the step's current change (:attr:`VoltageStep.current_change_A`).
+    step_holdout, nominal_step_holdout : list of dict
+        The same for the held-out steps (``holdout_steps``; empty without).
     steps_sha256 : str
         SHA-256 of the voltage-step file ("" without).
     """
@@ -750,10 +778,13 @@ class Calibration:
     step_points: list[dict[str, Any]] = field(default_factory=list)
     nominal_step_points: list[dict[str, Any]] = field(default_factory=list)
     steps_sha256: str = ""
+    step_holdout: list[dict[str, Any]] = field(default_factory=list)
+    nominal_step_holdout: list[dict[str, Any]] = field(default_factory=list)
 
     def max_error(self, which: str = "holdout", quantity: str | None = None) -> float:
         """Largest ``|relative_error|`` of ``which`` (``"points"``, ``"holdout"``,
-        ``"step_points"`` or a ``nominal_`` one), of one ``quantity`` or all (NaN: none).
+        ``"step_points"``, ``"step_holdout"`` or a ``nominal_`` one), of one ``quantity``
+        or all (NaN: none).
 
         Parameters
         ----------
@@ -889,7 +920,8 @@ def calibrate(magnet: Any, data: str | Path | StaticPoints | None, *,
               parameters: Sequence[str] | None = None,
               holdout_gaps_m: Sequence[float] = (),
               initial: Mapping[str, float] | None = None,
-              steps: str | Path | StepResponses | None = None) -> Calibration:
+              steps: str | Path | StepResponses | None = None,
+              holdout_steps: Sequence[str] = ()) -> Calibration:
     """Fit calibration parameters of ``magnet`` to measured statics and/or voltage steps
     (module docstring).
 
@@ -912,6 +944,9 @@ def calibrate(magnet: Any, data: str | Path | StaticPoints | None, *,
         Measured voltage steps (:func:`read_steps`), fitted with the statics: residuals
         ``(I_model - I_data)/current_change_A`` per sample, the model the flux DAE
         (:func:`step_response_sensitivities`) with exact parameter derivatives.
+    holdout_steps : sequence of str
+        Labels of voltage steps (:attr:`VoltageStep.label`) left out of the fit and
+        reported as the held-out check of the dynamics (``step_holdout``).
 
     Returns
     -------
@@ -926,6 +961,24 @@ def calibrate(magnet: Any, data: str | Path | StaticPoints | None, *,
         raise InputError("calibrate needs static data, voltage steps (steps=) or both")
     step_data = (None if steps is None else steps if isinstance(steps, StepResponses)
                  else read_steps(steps))
+    steps_sha = "" if step_data is None else step_data.sha256
+    test_steps: StepResponses | None = None
+    if holdout_steps:
+        if step_data is None:
+            raise InputError(f"holdout_steps {list(holdout_steps)}: no voltage steps given "
+                             "(steps=)")
+        labels = [st.label for st in step_data.steps]
+        unknown = [str(h) for h in holdout_steps if str(h) not in labels]
+        if unknown:
+            raise InputError(f"holdout_steps {unknown}: no step with that label; the steps: "
+                             f"{labels}")
+        held = {str(h) for h in holdout_steps}
+        test_steps = replace(step_data, steps=tuple(st for st in step_data.steps
+                                                    if st.label in held))
+        step_data = replace(step_data, steps=tuple(st for st in step_data.steps
+                                                   if st.label not in held))
+        if not step_data.steps:
+            step_data = None
     if parameters is None:
         parameters = ((DEFAULT_PARAMETERS if data is not None else ())
                       + (DYNAMIC_PARAMETERS if step_data is not None else ()))
@@ -1035,6 +1088,16 @@ def calibrate(magnet: Any, data: str | Path | StaticPoints | None, *,
         xn = _start(net, dict(zip(names, p0, strict=True)), test_pts.gap_m, test_pts.current_A)
         nres, _, nkeys = _model_points(ps, p0, test_pts, xn)
         nominal_hold = _report(nres, nkeys, test_pts)
+    step_hold: list[dict[str, Any]] = []
+    nominal_step_hold: list[dict[str, Any]] = []
+    if test_steps is not None:
+        test_models = [_ParametricStep(net, names, gap_m=st.gap_m,
+                                       current_A=st.initial_current_A, times_s=st.time_s,
+                                       circuit=_step_circuit(st, net, test_steps.source),
+                                       voltage_V=st.voltage_V) for st in test_steps.steps]
+        step_hold = _step_report(_step_residuals(test_models, test_steps, p)[0], test_steps)
+        nominal_step_hold = _step_report(_step_residuals(test_models, test_steps, p0)[0],
+                                         test_steps)
     step_rep = [] if step_data is None else _step_report(res[n_static:], step_data)
     nominal_step_rep = ([] if step_data is None
                         else _step_report(nominal_step_res, step_data))
@@ -1050,8 +1113,95 @@ def calibrate(magnet: Any, data: str | Path | StaticPoints | None, *,
         null_shares=({nm: float(v) for nm, v in zip(names, shares, strict=True)}
                      if null.size else {}),
         converged=sol.status > 0, step_points=step_rep,
-        nominal_step_points=nominal_step_rep,
-        steps_sha256="" if step_data is None else step_data.sha256)
+        nominal_step_points=nominal_step_rep, step_holdout=step_hold,
+        nominal_step_holdout=nominal_step_hold,
+        steps_sha256=steps_sha)
+
+
+@dataclass(frozen=True)
+class ParameterSetScore:
+    """Leave-one-gap-out cross-validation of one parameter set (:func:`select_parameters`).
+
+    Attributes
+    ----------
+    parameters : tuple of str
+        The set.
+    worst : float
+        Largest ``|relative error|`` at a left-out gap's points over all folds [1].
+    rms : float
+        RMS of the left-out points' relative errors over all folds [1].
+    per_gap : dict
+        Left-out gap [m] -> largest ``|relative error|`` at its points [1].
+    """
+
+    parameters: tuple[str, ...]
+    worst: float
+    rms: float
+    per_gap: dict[float, float]
+
+
+def select_parameters(magnet: Any, data: str | Path | StaticPoints, *,
+                      candidates: Sequence[str] = DEFAULT_PARAMETERS,
+                      holdout_gaps_m: Sequence[float] = (),
+                      sets: Sequence[Sequence[str]] | None = None
+                      ) -> list[ParameterSetScore]:
+    """Rank parameter sets by leave-one-gap-out cross-validation on the fitted gaps only.
+
+    Every set (default: every non-empty subset of ``candidates``) is fitted once per
+    fitted gap with that gap left out, and scored by the largest relative error at the
+    left-out gaps' points; the gaps of ``holdout_gaps_m`` are left out of every fold, so
+    that the choice never sees them.  Returns the scores, best (smallest ``worst``) first:
+    ``select_parameters(...)[0].parameters`` is the set to fit, chosen without the held-out
+    data (docs/magnets.md, "Calibration").
+
+    Parameters
+    ----------
+    magnet : Magnet or Network
+        The magnet to calibrate.
+    data : path or StaticPoints
+        Measured statics (:func:`read_points`).
+    candidates : sequence of str
+        Names of :data:`PARAMETERS` whose subsets are scored.
+    holdout_gaps_m : sequence of float
+        Gaps [m] never used (the later held-out check).
+    sets : sequence of sequences of str, optional
+        Score these sets instead of all subsets of ``candidates``.
+
+    Raises
+    ------
+    InputError
+        Unknown names, or fewer than 3 fitted gaps (a fold needs a gap to leave out and
+        at least two to fit).
+    """
+    import itertools
+
+    pts = data if isinstance(data, StaticPoints) else read_points(data)
+    held = [float(g) for g in holdout_gaps_m]
+    gaps = sorted({float(g) for g in pts.gap_m.tolist()
+                   if not any(math.isclose(g, h, rel_tol=1e-9, abs_tol=1e-12) for h in held)})
+    if len(gaps) < 3:
+        raise InputError(f"select_parameters needs at least 3 fitted gaps, the data have "
+                         f"{gaps} m outside holdout_gaps_m")
+    if sets is None:
+        names = _names(candidates)
+        sets = [c for k in range(1, len(names) + 1) for c in itertools.combinations(names, k)]
+    out = []
+    for subset in sets:
+        names = _names(subset)
+        errs: list[float] = []
+        per_gap: dict[float, float] = {}
+        for g in gaps:
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore", MaglevkitWarning)
+                res = calibrate(magnet, pts, parameters=names, holdout_gaps_m=[g, *held])
+            e = [abs(r["relative_error"]) for r in res.holdout
+                 if math.isclose(r["gap_m"], g, rel_tol=1e-9, abs_tol=1e-12)]
+            per_gap[g] = max(e)
+            errs += e
+        out.append(ParameterSetScore(parameters=names, worst=max(per_gap.values()),
+                                     rms=float(np.sqrt(np.mean(np.square(errs)))),
+                                     per_gap=per_gap))
+    return sorted(out, key=lambda sc: (sc.worst, sc.rms))
 
 
 # ---------------------------------------------------------------------------- TOML out/in

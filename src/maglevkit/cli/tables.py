@@ -191,6 +191,12 @@ def calibrate_cmd(
                                                     "fitted too (CSV: time_s, current_A, "
                                                     "gap_m, initial_current_A, voltage_V "
                                                     "[, step, circuit]).")] = None,
+    holdout_steps: Annotated[str | None, typer.Option("--holdout-steps", help=(
+        "Labels of --steps' steps left out of the fit and reported (comma list)."))] = None,
+    select: Annotated[bool, typer.Option("--select-params", help=(
+        "Choose the static parameters among the subsets of --params (default: the five "
+        "static factors) by leave-one-gap-out cross-validation on the fitted gaps (never "
+        "the --holdout-gaps), then fit the best set."))] = False,
     fmt: FormatOption = OutputFormat.table,
     force: ForceOption = False,
 ) -> None:
@@ -209,7 +215,14 @@ def calibrate_cmd(
       maglevkit calibrate tr09-standard measured.csv -o tr09-calibrated.toml
       maglevkit calibrate u-magnet statics.csv --steps steps.csv -o calibrated.toml
     """
-    from ..calibration import PARAMETERS, calibrate, write_calibrated_toml
+    from ..calibration import (
+        DEFAULT_PARAMETERS,
+        DYNAMIC_PARAMETERS,
+        PARAMETERS,
+        calibrate,
+        select_parameters,
+        write_calibrated_toml,
+    )
 
     output_file(output, "--output", force=force, inputs=(magnet, data, steps))
     names = None
@@ -220,11 +233,32 @@ def calibrate_cmd(
             raise fail(f"--params {params!r}: unknown {unknown}; choose from "
                        f"{', '.join(PARAMETERS)}")
     gaps = list(parse_values(holdout_gaps, "--holdout-gaps", "m")) if holdout_gaps else []
+    held_steps = ([h.strip() for h in holdout_steps.split(",") if h.strip()]
+                  if holdout_steps else [])
+    if held_steps and steps is None:
+        raise fail(f"--holdout-steps {holdout_steps!r} needs --steps")
     mag = load_magnet_or_exit(magnet)
+    if select:
+        pool = names if names is not None else list(DEFAULT_PARAMETERS)
+        static = [n for n in pool if n not in DYNAMIC_PARAMETERS]
+        dynamic = ([n for n in pool if n in DYNAMIC_PARAMETERS] if names is not None
+                   else list(DYNAMIC_PARAMETERS) if steps is not None else [])
+        if not static:
+            raise fail(f"--select-params: no static parameter among {pool}")
+        try:
+            ranked = select_parameters(mag, data, candidates=static, holdout_gaps_m=gaps)
+        except MaglevkitError as exc:
+            raise fail(exc) from None
+        for sc in ranked[:5]:
+            info(f"cross-validation (leave one fitted gap out): worst "
+                 f"{100 * sc.worst:.2f} %, rms {100 * sc.rms:.2f} %: {', '.join(sc.parameters)}")
+        names = [*ranked[0].parameters, *dynamic]
+        info(f"chosen: {', '.join(names)}")
     with warnings.catch_warnings():
         warnings.simplefilter("always")
         try:
-            res = calibrate(mag, data, parameters=names, holdout_gaps_m=gaps, steps=steps)
+            res = calibrate(mag, data, parameters=names, holdout_gaps_m=gaps, steps=steps,
+                            holdout_steps=held_steps)
         except MaglevkitError as exc:
             raise fail(exc) from None
     with writing(output, "--output"):
@@ -238,11 +272,12 @@ def calibrate_cmd(
     n_static = len(records)
     # the steps' samples (relative to each step's current change) in CSV/JSON; the table
     # gets one summary line per step
-    records += [{"set": f"step {r['step']}", "gap_m": r["gap_m"], "current_A": r["data"],
+    records += [{"set": f"{which} {r['step']}", "gap_m": r["gap_m"], "current_A": r["data"],
                  "row": r["row"], "circuit": r["circuit"], "quantity": "current_A",
                  "data": r["data"], "model": r["model"],
                  "relative_error_pct": 100.0 * r["relative_error"], "time_s": r["time_s"]}
-                for r in res.step_points]
+                for which, rows in (("step", res.step_points),
+                                    ("holdout step", res.step_holdout)) for r in rows]
     table = new_table(title="relative error per point (model - data)/data")
     add_columns(table, ["set", "gap [m]", "I [A]", "row", "quantity", "data", "model",
                         "error [%]"], left=["set", "quantity"])
@@ -269,12 +304,14 @@ def calibrate_cmd(
                          f"{100 * res.max_error('holdout', 'force_N'):.2f} %, flux linkage "
                          f"{100 * res.max_error('holdout', 'flux_linkage_Wb'):.2f} %)"
                          if res.holdout else ""))
-        if res.step_points:
+        for title, rows in (("voltage steps", res.step_points),
+                            ("held-out voltage steps", res.step_holdout)):
             worst: dict[str, float] = {}
-            for r in res.step_points:
+            for r in rows:
                 worst[r["step"]] = max(worst.get(r["step"], 0.0), abs(r["relative_error"]))
-            console.print("voltage steps, max error of the step's current change: "
-                          + ", ".join(f"{k} {100 * v:.2f} %" for k, v in worst.items()))
+            if worst:
+                console.print(f"{title}, max error of the step's current change: "
+                              + ", ".join(f"{k} {100 * v:.2f} %" for k, v in worst.items()))
     print_records(records, fmt, table, meta)
     info(f"wrote {output}")
     info(f"next: maglevkit statics {output} (the calibrated magnet), or maglevkit maps build "
