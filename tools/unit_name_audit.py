@@ -135,6 +135,11 @@ _each(("calibration.calibrate",), "initial", "start values of the calibration fa
       "(a mapping of dimensionless factors)")
 _each(("calibration.Calibration",), "nominal_step_points", "a list of per-sample report "
       "records (dicts with unit-named keys: time_s, current_A, ...), like nominal_points")
+for _name in ("step_holdout", "nominal_step_holdout"):
+    _each(("calibration.Calibration",), _name, "a list of per-sample report records of the "
+          "held-out voltage steps (dicts with unit-named keys), like step_points")
+_each(("calibration.ParameterSetScore",), "per_gap", "a mapping gap [m] -> worst relative "
+      "error [-] at that left-out gap (the keys are gaps in m, the values dimensionless)")
 _each(("design.design_magnet",), "initial", "start values of the design variables (a mapping "
       "of several units, each named in docs/design.md)")
 _each(("control.cascade.design_gap_controller", "vehicle.crossrun.CrossSectionModel"),
