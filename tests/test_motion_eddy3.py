@@ -28,6 +28,8 @@ from maglevkit.reduction.motion_eddy import (
     ladder_voltage_currents,
 )
 
+from .test_reduced_motion_eddy import linear_responses
+
 F = np.geomspace(0.1, 1000.0, 25)
 # split-TR09-like values (11 mm / 40 A fit): L~, k, R_el, R_a, L_u, R_2, L_2, R_3
 LT, K, R_EL = 0.52, -1200.0, 1.2
@@ -236,26 +238,6 @@ def u_maps() -> mk.CharacteristicMaps:
                          currents_A=np.linspace(0.0, 40.0, 9), progress=False)
 
 
-def _lin_response(model: mk.CurrentModel, f: np.ndarray, gap: float, current: float
-                  ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """gap -> coil current, gap -> force, voltage -> coil current, voltage -> force of
-    circuit 0 from ``linearize`` (every pole moving)."""
-    lin = model.linearize(gap_m=gap, current_A=current)
-    n = lin.A_per_s.shape[0]
-    eg, er = lin.E_gap_A_per_m_s.sum(axis=1), lin.E_gap_rate_A_per_m.sum(axis=1)
-    out = []
-    for fk in f:
-        p = 2j * np.pi * fk
-        xs = np.linalg.solve(p * np.eye(n) - lin.A_per_s, eg + p * er)
-        xu = np.linalg.solve(p * np.eye(n) - lin.A_per_s, lin.B_A_per_V_s[:, 0])
-        out.append(((lin.C_current @ xs)[0],
-                    (lin.C_force_N_per_A @ xs)[0] + lin.D_force_gap_N_per_m.sum(axis=1)[0],
-                    (lin.C_current @ xu)[0] + lin.D_current_A_per_V[0, 0],
-                    (lin.C_force_N_per_A @ xu)[0]))   # the force has no direct U term
-    arr = np.array(out)
-    return arr[:, 0], arr[:, 1], arr[:, 2], arr[:, 3]
-
-
 def test_model_transfer_functions_match_the_closed_form(u_maps: mk.CharacteristicMaps) -> None:
     """``ladder3_frequency_response`` and the force current (closed form) equal the AD
     linearisation of the ODE that ``CurrentModel(motion_eddy=True, eddy_branches=2)``
@@ -275,7 +257,7 @@ def test_model_transfer_functions_match_the_closed_form(u_maps: mk.Characteristi
     par, _ = motion_eddy3_parameters(u_maps, np.array([r_el]))
     p = {key: float(v[0]) for key, v in par.items()}
     f = np.geomspace(0.2, 2000.0, 25)
-    cs, cf, cu, cuf = _lin_response(model, f, gap, cur)
+    cs, cf, cu, cuf = linear_responses(model, f, gap, cur)
     r = ladder3_frequency_response(
         f, differential_inductance_H=lt, dpsi_ds_Wb_per_m=k, resistance_ohm=r_el,
         jump_resistance_ohm=p["r_a"], unshielded_inductance_H=p["l_u"],

@@ -51,10 +51,11 @@ def u_maps() -> CharacteristicMaps:
                          progress=False)
 
 
-def _response(model: mk.CurrentModel, f: np.ndarray, gap: float, current: float
-              ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """gap -> coil current, gap -> circuit force, voltage -> coil current of circuit 0 from
-    ``linearize`` (every pole moving)."""
+def linear_responses(model: mk.CurrentModel, f: np.ndarray, gap: float, current: float
+                     ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """gap -> coil current, gap -> circuit force, voltage -> coil current, voltage ->
+    circuit force of circuit 0 from ``linearize`` (every pole moving); also used by
+    tests/test_motion_eddy3.py."""
     lin = model.linearize(gap_m=gap, current_A=current)
     n = lin.A_per_s.shape[0]
     eg, er = lin.E_gap_A_per_m_s.sum(axis=1), lin.E_gap_rate_A_per_m.sum(axis=1)
@@ -65,9 +66,10 @@ def _response(model: mk.CurrentModel, f: np.ndarray, gap: float, current: float
         xu = np.linalg.solve(p * np.eye(n) - lin.A_per_s, lin.B_A_per_V_s[:, 0])
         out.append(((lin.C_current @ xs)[0],
                     (lin.C_force_N_per_A @ xs)[0] + lin.D_force_gap_N_per_m.sum(axis=1)[0],
-                    (lin.C_current @ xu)[0] + lin.D_current_A_per_V[0, 0]))
+                    (lin.C_current @ xu)[0] + lin.D_current_A_per_V[0, 0],
+                    (lin.C_force_N_per_A @ xu)[0]))   # the force has no direct U term
     arr = np.array(out)
-    return arr[:, 0], arr[:, 1], arr[:, 2]
+    return arr[:, 0], arr[:, 1], arr[:, 2], arr[:, 3]
 
 
 def test_ladder_transfer_functions_match_the_linearised_ode(u_maps: CharacteristicMaps) -> None:
@@ -85,7 +87,7 @@ def test_ladder_transfer_functions_match_the_linearised_ode(u_maps: Characterist
     k = -float(lin8.E_gap_rate_A_per_m.sum()) * lt
     ds = u_maps.dataset
     f = np.geomspace(0.2, 2000.0, 25)
-    cs, _, cu = _response(ladder, f, gap, cur)
+    cs, _, cu, _ = linear_responses(ladder, f, gap, cur)
     ms, _, mu = ladder_frequency_response(
         f, differential_inductance_H=lt, dpsi_ds_Wb_per_m=k, resistance_ohm=r_el,
         jump_resistance_ohm=float(ds["motion_eddy_jump_resistance_ohm"].values[0]),
@@ -117,7 +119,7 @@ def test_unshielded_share_in_the_ode_and_the_closed_form(u_maps: CharacteristicM
     l_u = float(ds["motion_eddy_unshielded_inductance_H"].values[0])
     r_2 = float(ds["motion_eddy_shielding_resistance_ohm"].values[0])
     f = np.geomspace(0.2, 2000.0, 25)
-    cs, _, _ = _response(ladder, f, gap, cur)
+    cs, _, _, _ = linear_responses(ladder, f, gap, cur)
     ms, _, _ = _ladder(f, lt, k, r_el, r_a, l_u, r_2, beta=beta)
     m0, _, _ = _ladder(f, lt, k, r_el, r_a, l_u, r_2)
     assert np.max(np.abs(cs / ms - 1.0)) < 1e-9        # AD vs algebra: rounding only
@@ -159,7 +161,7 @@ def test_force_share_in_the_model_the_closed_form_and_the_bank(u_maps: Character
     resp = DetailedFrequencyResponse(np.zeros(1), np.zeros(1), np.zeros(1), np.zeros(1), lt,
                                      k, dforce_dcurrent_N_per_A=dfi, dforce_dgap_N_per_m=dfs)
     f = np.geomspace(0.2, 2000.0, 25)
-    _, fs, _ = _response(ladder, f, gap, cur)
+    _, fs, _, _ = linear_responses(ladder, f, gap, cur)
     ms, il, _ = _ladder(f, lt, k, r_el, r_a, l_u, r_2, beta=beta)
     closed = ladder_force_response(resp, il, a * ms - il, gamma)
     assert np.max(np.abs(fs / closed - 1.0)) < 1e-9        # AD vs algebra: rounding only
