@@ -14,7 +14,7 @@ from maglevkit.errors import InputError, OutOfRangeError
 from maglevkit.reduced.bank import MagnetBank
 from maglevkit.vehicle import Guideway
 from maglevkit.vehicle.irregularities import HarmonicProfile, Profile
-from maglevkit.vehicle.simulation import Failure, VehicleModel, VehicleRun, parse_irregularity
+from maglevkit.vehicle.simulation import Failure, VehicleModel, parse_irregularity
 from maglevkit.vehicle.train import load_vehicle
 
 # Compiled and NumPy loops do the same arithmetic in a different order (sums over modes and
@@ -30,8 +30,10 @@ def model() -> VehicleModel:
     return VehicleModel(load_vehicle())
 
 
-def _worst_difference(a: VehicleRun, b: VehicleRun) -> dict[str, float]:
-    """Largest |a - b| of every data variable over the largest |b| (NaN where both are)."""
+def worst_difference(a: Any, b: Any) -> dict[str, float]:
+    """Largest |a - b| of every data variable over the largest |b| (NaN where both are), of
+    two runs' ``dataset`` (heave-pitch or cross-section; also used by
+    tests/test_vehicle_motion_eddy.py)."""
     da, db = a.dataset, b.dataset
     assert set(da.data_vars) == set(db.data_vars)
     assert da.sizes == db.sizes
@@ -58,7 +60,7 @@ def test_compiled_loop_equals_python_loop(model: VehicleModel) -> None:
     rp = model.run(**kw, loop="python")
     assert (rc.loop, rp.loop) == ("compiled", "python")
     assert model.run(**{**kw, "duration_s": 0.01}).loop == "compiled"     # the default
-    worst = _worst_difference(rc, rp)
+    worst = worst_difference(rc, rp)
     assert max(worst.values()) < RTOL, worst
     # the run exercised what it should: the window moved on by a span, the failed circuit
     # has voltage 0 after 0.1 s, the gaps moved (not a trivially steady run)
@@ -88,7 +90,7 @@ def test_compiled_loop_touchdown_as_python(model: VehicleModel) -> None:
     assert rc.touchdown[1] == rp.touchdown[1] < 0.6                # same step (measured 0.123 s)
     assert rc.touchdown[2] == pytest.approx(rp.touchdown[2], rel=RTOL)
     assert np.isnan(rc.dataset.voltage.values[-1]).all()
-    assert max(_worst_difference(rc, rp).values()) < RTOL
+    assert max(worst_difference(rc, rp).values()) < RTOL
 
 
 def test_compiled_loop_range_error_as_python(model: VehicleModel) -> None:

@@ -16,6 +16,8 @@ from maglevkit.errors import InputError, ParameterFileError
 from maglevkit.vehicle.simulation import Failure, VehicleModel, VehicleRun, parse_irregularity
 from maglevkit.vehicle.train import load_vehicle, parse_vehicle
 
+from .test_vehicle_compiled import worst_difference
+
 # Compiled and reference loops do the same arithmetic in another order (as
 # tests/test_vehicle_compiled.py, whose bound this is: measured there 5.4e-13 of a
 # variable's largest value without the ladder; here <= 5e-14 on the run below).
@@ -25,21 +27,6 @@ RTOL = 1e-10
 @pytest.fixture(scope="module")
 def ladder_model() -> VehicleModel:
     return VehicleModel(load_vehicle(), motion_eddy=True)
-
-
-def _worst(a: Any, b: Any) -> dict[str, float]:
-    """Largest |a - b| of every data variable over the largest |b|."""
-    assert set(a.data_vars) == set(b.data_vars)
-    out = {}
-    for name in b.data_vars:
-        x = np.asarray(a[name].values, dtype=float)
-        y = np.asarray(b[name].values, dtype=float)
-        np.testing.assert_array_equal(np.isnan(x), np.isnan(y))
-        ok = ~np.isnan(y)
-        scale = float(np.abs(y[ok]).max()) if ok.any() else 0.0
-        diff = float(np.abs(x[ok] - y[ok]).max()) if ok.any() else 0.0
-        out[str(name)] = diff / scale if scale > 0 else diff
-    return out
 
 
 def test_heave_pitch_compiled_step_carries_the_eddy_currents(ladder_model: VehicleModel) -> None:
@@ -55,7 +42,7 @@ def test_heave_pitch_compiled_step_carries_the_eddy_currents(ladder_model: Vehic
     rc = m.run(**kw, loop="compiled")
     rp = m.run(**kw, loop="python")
     assert (rc.loop, rp.loop) == ("compiled", "python")
-    worst = _worst(rc.dataset, rp.dataset)
+    worst = worst_difference(rc, rp)
     assert max(worst.values()) <= RTOL, worst
     ie = rp.dataset.eddy_current
     assert ie.attrs["units"] == "A"
@@ -96,11 +83,12 @@ def test_cross_section_compiled_step_carries_the_eddy_currents() -> None:
                                          crosswind=gust),
                              {"levitation": True, "guidance": True})):
         assert model.bank.motion_eddy
-        a = model.run(loop="python", **kw).dataset
-        b = model.run(loop="compiled", **kw).dataset
+        run_a = model.run(loop="python", **kw)
+        run_b = model.run(loop="compiled", **kw)
+        a = run_a.dataset
         live = np.delete(a.guidance_current.values, 0, axis=1)
         assert live.min() > 5.0 and a.levitation_current.values.min() > 5.0
-        worst = _worst(b, a)
+        worst = worst_difference(run_b, run_a)
         # measured 5.6e-16 (levitation) on the full scenario
         assert max(worst.values()) <= RTOL, worst
         for kind, moves in eddy.items():
