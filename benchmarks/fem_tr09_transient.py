@@ -76,7 +76,14 @@ import scipy.sparse as sp  # noqa: E402
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from fem_common import MU0, Reluctivity  # noqa: E402
 from fem_tr09 import Geometry, build_mesh, cut_magnet, regions  # noqa: E402
-from fem_u_magnet_transient import P1, bordered_newton, rise_time, static_newton, time_grid  # noqa: E402
+from fem_u_magnet_transient import (  # noqa: E402
+    P1,
+    bdf2_history,
+    bordered_newton,
+    rise_time,
+    static_newton,
+    time_grid,
+)
 
 import maglevkit as mk  # noqa: E402
 
@@ -266,13 +273,7 @@ class Tr09Transient:
                "eddy_power_back_W": [0.0], "energy_J": [self.energy(A)]}
         nmax, self.factorisations = 0, 0
         for n in range(1, times.size):
-            h = times[n] - times[n - 1]
-            if n == 1:
-                a0, hist = 1.0 / h, -hist_A[-1] / h
-            else:
-                w = h / (times[n - 1] - times[n - 2])
-                a0 = (1 + 2 * w) / ((1 + w) * h)
-                hist = (-(1 + w) * hist_A[-1] + w * w / (1 + w) * hist_A[-2]) / h
+            a0, hist = bdf2_history(times, n, hist_A)
             histf = hist[free]
             Shist = Sf @ histf
             x = np.concatenate([A[free], np.zeros(nb), I])

@@ -222,6 +222,18 @@ def static_newton(fe, free: np.ndarray, coeffs, src: np.ndarray, iron: np.ndarra
     raise RuntimeError(f"static Newton did not converge at {where}")
 
 
+
+def bdf2_history(times: np.ndarray, n: int, hist_A: list) -> tuple[float, np.ndarray]:
+    """Variable-step BDF2 for step ``n`` (BDF1 at ``n = 1``): ``dA/dt ~ a0 A_n + hist``
+    from the previous solutions ``hist_A`` (the last one or two used) on the grid
+    ``times`` [s]; used by every transient FEM here (U-magnet, TR09, guidance)."""
+    h = times[n] - times[n - 1]
+    if n == 1:
+        return 1.0 / h, -hist_A[-1] / h
+    w = h / (times[n - 1] - times[n - 2])
+    return ((1 + 2 * w) / ((1 + w) * h),
+            (-(1 + w) * hist_A[-1] + w * w / (1 + w) * hist_A[-2]) / h)
+
 def bordered_newton(x: np.ndarray, res_jac, border: tuple, norm, *, nf: int, a0: float,
                     cache: dict, tol: float, owner, trace: bool = False):  # type: ignore[no-untyped-def]
     """One implicit time step's modified Newton solve of the bordered system
@@ -369,13 +381,7 @@ class UMagnetFem:
         out_I, out_psi, out_pc, out_pr, out_W = [i0], [self.kpsi @ A], [0.0], [0.0], [self.energy(A)]
         nmax = 0
         for n in range(1, times.size):
-            h = times[n] - times[n - 1]
-            if n == 1:
-                a0, hist = 1.0 / h, -hist_A[-1] / h
-            else:
-                w = h / (times[n - 1] - times[n - 2])
-                a0 = (1 + 2 * w) / ((1 + w) * h)
-                hist = (-(1 + w) * hist_A[-1] + w * w / (1 + w) * hist_A[-2]) / h
+            a0, hist = bdf2_history(times, n, hist_A)
             x = np.concatenate([A[free], [uc, ur, I]])
             scaleA = MU0 * self.nside * max(abs(i0), abs(i1)) / self.ac * np.linalg.norm(
                 self.bsign[free])
