@@ -1006,7 +1006,7 @@ class CrossSectionModel:
         """
         import casadi as ca
 
-        from .stepkernel import pack_slices
+        from .stepkernel import bank_step_outputs, pack_slices
 
         bank = self.bank
         if self.magnet_kind != "reduced":
@@ -1041,18 +1041,14 @@ class CrossSectionModel:
         u = f_ctl.call({"gap": gaps, "gap_rate": rates, "I_L": il if ie is None else il + ie,
                         "current": cur, "psi_hat": psi, "integral": itg, "t": P[pi["t"]],
                         "fail_t": fail_t})["U"]
-        b_in = {"I_L": il, "s": gaps, "U": u, "sdot": rates, "h": ca.MX(dt)}
-        if ie is not None:
-            b_in["I_e"] = ie
-        bout = bank_step.call(b_in)
-        il_n, cur_n, frc_n, n_bad, flags, il_lo, il_hi = (bout[k] for k in (
-            "I_L_next", "I", "F", "n_bad", "flags", "I_L_min", "I_L_max"))
+        il_n, cur_n, frc_n, n_bad, flags, il_lo, il_hi, ie_n = bank_step_outputs(
+            bank_step, il=il, ie=ie, gaps=gaps, voltages=u, rates=rates, dt=dt)
         upd = f_upd.call({"psi_hat": psi, "integral": itg, "U": u, "current": cur,
                           "current_next": cur_n, "gap": gaps})
         # the mechanics' ZOH step with the load Q_g = Q_pre + Q_t (field and wind, per step)
         x_n = f_mech(x, 0.5 * (frc + frc_n), ca.DM(s.Q_preload) + P[pi["Q_t"]])
         s_next = ca.vertcat(x_n, il_n, upd["psi_hat_next"], upd["integral_next"], cur_n, frc_n,
-                            *([] if ie is None else [bout["I_e_next"]]))
+                            *([] if ie_n is None else [ie_n]))
         # the bank kernel's reason codes and the sub-step extremes of I_L per circuit:
         # a flagged step's message without stepping again (MagnetBank.raise_step_flags)
         rec = ca.vertcat(gaps, rates, cur, frc, il, x, u, n_bad, flags, il_lo, il_hi,

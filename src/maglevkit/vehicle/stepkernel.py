@@ -312,6 +312,23 @@ def _elastic_guideway(*, npt: int, wavenumbers: np.ndarray, n_spans: int, origin
     return {**out, "guideway_deflection": f_defl, "guideway_update": f_upd}
 
 
+def bank_step_outputs(bank_step: Any, *, il: Any, ie: Any, gaps: Any, voltages: Any,
+                      rates: Any, dt: float) -> tuple[Any, ...]:
+    """One call of the bank's step function inside a vehicle's compiled step: inputs
+    ``I_L``, gaps [m], voltages [V], gap rates [m/s], the step ``dt`` [s] and, with the
+    shielded-gap ladder (``ie`` not None), ``I_e`` [A].  Returns ``I_L_next``, the coil
+    current ``I``, the force ``F``, ``n_bad``, the reason ``flags``, ``I_L_min``,
+    ``I_L_max`` and ``I_e_next`` (None without the ladder); used by the heave-pitch and the
+    cross-section steps."""
+    b_in = {"I_L": il, "s": gaps, "U": voltages, "sdot": rates, "h": ca.MX(dt)}
+    if ie is not None:
+        b_in["I_e"] = ie
+    bout = bank_step.call(b_in)
+    return (*(bout[k] for k in ("I_L_next", "I", "F", "n_bad", "flags", "I_L_min",
+                                "I_L_max")),
+            None if ie is None else bout["I_e_next"])
+
+
 def build_vehicle_parts(*, dt: float, nominal_gap_m: float, span_length_m: float,
                         origin_m: float, wavenumbers: np.ndarray, guideway_ad: np.ndarray,
                         guideway_bd: np.ndarray, n_spans: int, mech_ad: np.ndarray,
@@ -644,13 +661,9 @@ def build_vehicle_step(*, bank_step: Any, dt: float, nominal_gap_m: float, sides
         u_k = parts["voltage_limits"](P[sp["u_held"]], i_chop, s_cur, p_t, c_fail)
     else:
         u_k = f_ctl(gap_k, damp_k, i_chop, s_cur, s_psi, s_int, p_t, c_fail)
-    b_in = {"I_L": s_il, "s": gap_k, "U": u_k, "sdot": rate_k, "h": ca.MX(dt)}
-    if s_ie is not None:
-        b_in["I_e"] = s_ie
-    bout = bank_step.call(b_in)
-    il_next, cur_next, force_next, n_bad, flags, il_lo, il_hi = (bout[k] for k in (
-        "I_L_next", "I", "F", "n_bad", "flags", "I_L_min", "I_L_max"))
-    eddy_next = [] if s_ie is None else [bout["I_e_next"]]
+    il_next, cur_next, force_next, n_bad, flags, il_lo, il_hi, ie_next = bank_step_outputs(
+        bank_step, il=s_il, ie=s_ie, gaps=gap_k, voltages=u_k, rates=rate_k, dt=dt)
+    eddy_next = [] if ie_next is None else [ie_next]
     eddy_rec = [] if s_ie is None else [s_ie]
     psi_n, int_n = f_upd(s_psi, s_int, u_k, s_cur, cur_next, gap_k)
     fb = (0.5 * sides) * (s_f + force_next)
