@@ -28,7 +28,7 @@ from maglevkit.reduction.motion_eddy import (
     ladder_voltage_currents,
 )
 
-from .test_reduced_motion_eddy import linear_responses
+from .test_reduced_motion_eddy import linear_responses, spline_point
 
 F = np.geomspace(0.1, 1000.0, 25)
 # split-TR09-like values (11 mm / 40 A fit): L~, k, R_el, R_a, L_u, R_2, L_2, R_3
@@ -246,14 +246,7 @@ def test_model_transfer_functions_match_the_closed_form(u_maps: mk.Characteristi
 
     gap, cur = 0.0093, 23.0
     model = mk.CurrentModel(u_maps, motion_eddy=True, eddy_branches=2)
-    eq8 = mk.CurrentModel(u_maps)
-    lin8 = eq8.linearize(gap_m=gap, current_A=cur)
-    r_el = float(eq8.resistance_ohm[0])
-    a8 = 1.0 + r_el / float(eq8.eddy_resistance_ohm[0])
-    lt = -r_el / (a8 * float(lin8.A_per_s[0, 0]))
-    k = -float(lin8.E_gap_rate_A_per_m.sum()) * lt
-    dfi = float(lin8.C_force_N_per_A[0, 0])
-    dfs = float(lin8.D_force_gap_N_per_m.sum())
+    r_el, lt, k, dfi, dfs = spline_point(u_maps, gap, cur)
     par, _ = motion_eddy3_parameters(u_maps, np.array([r_el]))
     p = {key: float(v[0]) for key, v in par.items()}
     f = np.geomspace(0.2, 2000.0, 25)

@@ -51,6 +51,21 @@ def u_maps() -> CharacteristicMaps:
                          progress=False)
 
 
+def spline_point(maps: CharacteristicMaps, gap: float, cur: float
+                 ) -> tuple[float, float, float, float, float]:
+    """``R_el``, ``L~``, ``k = dL/ds I_L``, ``dF/dI`` and ``dF/ds`` of circuit 0 of the maps'
+    splines at a point, from eq. 8's linearisation (``A = -R_el/(a L~)``, ``E_gap_rate =
+    -k/L~``); also used by tests/test_motion_eddy3.py."""
+    eq8 = mk.CurrentModel(maps)
+    lin8 = eq8.linearize(gap_m=gap, current_A=cur)
+    r_el = float(eq8.resistance_ohm[0])
+    a8 = 1.0 + r_el / float(eq8.eddy_resistance_ohm[0])
+    lt = -r_el / (a8 * float(lin8.A_per_s[0, 0]))
+    k = -float(lin8.E_gap_rate_A_per_m.sum()) * lt
+    return (r_el, lt, k, float(lin8.C_force_N_per_A[0, 0]),
+            float(lin8.D_force_gap_N_per_m.sum()))
+
+
 def linear_responses(model: mk.CurrentModel, f: np.ndarray, gap: float, current: float
                      ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """gap -> coil current, gap -> circuit force, voltage -> coil current, voltage ->
@@ -77,14 +92,7 @@ def test_ladder_transfer_functions_match_the_linearised_ode(u_maps: Characterist
     that ``CurrentModel(motion_eddy=True)`` integrates, at a point off the grid nodes."""
     gap, cur = 0.0093, 23.0
     ladder = mk.CurrentModel(u_maps, motion_eddy=True)
-    eq8 = mk.CurrentModel(u_maps)
-    # L~ and k = dL/ds I_L of the maps' splines, from eq. 8's linearisation:
-    # A = -R_el/(a L~), E_gap_rate = -k/L~
-    lin8 = eq8.linearize(gap_m=gap, current_A=cur)
-    r_el = float(eq8.resistance_ohm[0])
-    a8 = 1.0 + r_el / float(eq8.eddy_resistance_ohm[0])
-    lt = -r_el / (a8 * float(lin8.A_per_s[0, 0]))
-    k = -float(lin8.E_gap_rate_A_per_m.sum()) * lt
+    r_el, lt, k, _, _ = spline_point(u_maps, gap, cur)
     ds = u_maps.dataset
     f = np.geomspace(0.2, 2000.0, 25)
     cs, _, cu, _ = linear_responses(ladder, f, gap, cur)
@@ -109,11 +117,7 @@ def test_unshielded_share_in_the_ode_and_the_closed_form(u_maps: CharacteristicM
     maps = CharacteristicMaps(u_maps.dataset.assign(
         motion_eddy_unshielded_share=("circuit", np.array([beta]))))
     ladder = mk.CurrentModel(maps, motion_eddy=True)
-    eq8 = mk.CurrentModel(maps)
-    lin8 = eq8.linearize(gap_m=gap, current_A=cur)
-    r_el = float(eq8.resistance_ohm[0])
-    lt = -r_el / ((1.0 + r_el / float(eq8.eddy_resistance_ohm[0])) * float(lin8.A_per_s[0, 0]))
-    k = -float(lin8.E_gap_rate_A_per_m.sum()) * lt
+    r_el, lt, k, _, _ = spline_point(maps, gap, cur)
     ds = maps.dataset
     r_a = float(ds["motion_eddy_jump_resistance_ohm"].values[0])
     l_u = float(ds["motion_eddy_unshielded_inductance_H"].values[0])
@@ -146,18 +150,12 @@ def test_force_share_in_the_model_the_closed_form_and_the_bank(u_maps: Character
         motion_eddy_unshielded_share=("circuit", np.array([beta])),
         **{FORCE_SHARE_VARIABLE: ("circuit", np.array([gamma]))}))
     ladder = mk.CurrentModel(maps, motion_eddy=True)
-    lin8 = mk.CurrentModel(maps).linearize(gap_m=gap, current_A=cur)
-    r_el = float(ladder.resistance_ohm[0])
+    r_el, lt, k, dfi, dfs = spline_point(maps, gap, cur)
     ds = maps.dataset
     r_a = float(ds["motion_eddy_jump_resistance_ohm"].values[0])
     l_u = float(ds["motion_eddy_unshielded_inductance_H"].values[0])
     r_2 = float(ds["motion_eddy_shielding_resistance_ohm"].values[0])
     a = 1.0 + r_el / r_a
-    a8 = 1.0 + r_el / float(mk.CurrentModel(maps).eddy_resistance_ohm[0])
-    lt = -r_el / (a8 * float(lin8.A_per_s[0, 0]))
-    k = -float(lin8.E_gap_rate_A_per_m.sum()) * lt
-    dfi = float(lin8.C_force_N_per_A[0, 0])
-    dfs = float(lin8.D_force_gap_N_per_m.sum())
     resp = DetailedFrequencyResponse(np.zeros(1), np.zeros(1), np.zeros(1), np.zeros(1), lt,
                                      k, dforce_dcurrent_N_per_A=dfi, dforce_dgap_N_per_m=dfs)
     f = np.geomspace(0.2, 2000.0, 25)
