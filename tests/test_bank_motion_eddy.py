@@ -72,7 +72,7 @@ def test_bank_of_one_ladder_member_equals_current_model(u_maps, compiled: str) -
         cs, co = cm.step(cs, DT, u, np.full(ng, g0), np.full(ng, gd))
         assert cs.eddy_currents_A is not None and st.eddy_currents_A is not None
         assert abs(st.inductor_currents_A[0] - cs.inductor_currents_A[0]) < TOL_A
-        assert abs(st.eddy_currents_A[0] - cs.eddy_currents_A[0, 0]) < TOL_A
+        assert abs(st.eddy_currents_A[0] - cs.eddy_currents_A[0]) < TOL_A
         assert abs(out.currents_A[0] - co.currents_A[0]) < TOL_A
         assert abs(out.circuit_force_N[0] / co.circuit_force_N[0] - 1.0) < TOL_REL_F
         assert np.array_equal(stepper.inductor_currents_A, st.inductor_currents_A)
@@ -80,7 +80,7 @@ def test_bank_of_one_ladder_member_equals_current_model(u_maps, compiled: str) -
         assert np.array_equal(stepper.currents_A, out.currents_A)
     # the shielding current is really there (not a ladder that stayed at rest): at 50 Hz
     # its amplitude on the u-magnet is a few 10 mA
-    assert abs(cs.eddy_currents_A[0, 0]) > 1e-3
+    assert abs(cs.eddy_currents_A[0]) > 1e-3
     assert np.array_equal(stepper.state.eddy_currents_A, st.eddy_currents_A)
 
 
@@ -97,7 +97,7 @@ def test_bank_option_and_simulate_equal_current_model(u_maps) -> None:
                       voltages_V=u)
     assert sim.eddy_currents_A is not None and ref.eddy_currents_A is not None
     assert np.max(np.abs(sim.inductor_currents_A[:, 0] - ref.inductor_currents_A[:, 0])) < TOL_A
-    assert np.max(np.abs(sim.eddy_currents_A[:, 0] - ref.eddy_currents_A[:, 0, 0])) < TOL_A
+    assert np.max(np.abs(sim.eddy_currents_A[:, 0] - ref.eddy_currents_A[:, 0])) < TOL_A
     assert np.max(np.abs(sim.currents_A[:, 0] - ref.currents_A[:, 0])) < TOL_A
     assert np.array_equal(sim.final_state.eddy_currents_A, sim.eddy_currents_A[-1])
     # the parameter rows of the ladder: flag, R_2, L_u, beta, gamma of the maps

@@ -290,7 +290,6 @@ def test_model_steady_state_and_simulation(u_maps: mk.CharacteristicMaps) -> Non
     ({"eddy_branches": 3}, "eddy_branches = 3"),
     ({"eddy_branches": True}, "eddy_branches = True"),
     ({"motion_eddy": False, "eddy_branches": 2}, "needs motion_eddy=True"),
-    ({"motion_eddy": True, "eddy_branches": 2, "freewheel": True}, "freewheel=True"),
 ])
 def test_model_option_is_checked(u_maps: mk.CharacteristicMaps, kw: dict[str, object],
                                  needle: str) -> None:
@@ -298,18 +297,8 @@ def test_model_option_is_checked(u_maps: mk.CharacteristicMaps, kw: dict[str, ob
         mk.CurrentModel(u_maps, **kw)  # type: ignore[arg-type]
 
 
-def test_bank_fmu_and_vehicles_refuse_the_three_state_ladder(u_maps: mk.CharacteristicMaps,
-                                                             tmp_path: Path) -> None:
-    """The bank (and through it the stepper, the FMU export and the MPC) carries one ladder
-    state per circuit: it refuses the model, naming the option."""
-    model = mk.CurrentModel(u_maps, motion_eddy=True, eddy_branches=2)
-    with pytest.raises(InputError, match="eddy_branches=2"):
-        mk.MagnetBank({"m": model}, motion_eddy=True)
-    with pytest.raises(InputError, match="eddy_branches=2"):
-        mk.MagnetBank({"m": model})
-    from maglevkit.export.fmu import export_fmu
-    with pytest.raises(InputError, match="eddy_branches=2"):
-        export_fmu(model, tmp_path / "x.fmu")
+# The bank, its stepper and the FMU carry the three-state ladder (ladder3bank):
+# tests/test_bank_ladder3.py.
 
 
 def test_old_maps_without_the_three_state_ladder_are_refused(u_maps: mk.CharacteristicMaps

@@ -185,7 +185,7 @@ def test_force_share_in_the_model_the_closed_form_and_the_bank(u_maps: Character
     # the bank's compiled kernel and CurrentModel agree on the force (bicubic tables vs
     # B-splines: ~1e-12 relative on these maps)
     st = ladder.initial_state(gaps_m=0.010, currents_A=20.0)
-    st = dataclasses.replace(st, eddy_currents_A=np.array([[0.7]]))
+    st = dataclasses.replace(st, eddy_currents_A=np.array([0.7]))
     u = 26.0 * r_el
     ref = mk.simulate(ladder, (0.0, 0.01), dt_s=1e-3, gaps_m=lambda t: 0.010 + 0.05 * t,
                       voltages_V=u, initial_state=st)
@@ -276,7 +276,7 @@ def test_maps_without_a_force_share_read_as_zero(u_maps: CharacteristicMaps) -> 
     old = CharacteristicMaps(ds.drop_vars(FORCE_SHARE_VARIABLE))
     zero = CharacteristicMaps(ds.assign(**{FORCE_SHARE_VARIABLE: ("circuit", np.zeros(1))}))
     st = mk.CurrentModel(old, motion_eddy=True).initial_state(gaps_m=0.010, currents_A=20.0)
-    st = dataclasses.replace(st, eddy_currents_A=np.array([[0.7]]))
+    st = dataclasses.replace(st, eddy_currents_A=np.array([0.7]))
     runs = [mk.simulate(mk.CurrentModel(m, motion_eddy=True), (0.0, 0.01), dt_s=1e-3,
                         gaps_m=lambda t: 0.010 + 0.05 * t, voltages_V=30.0, initial_state=st)
             for m in (old, zero)]
@@ -380,7 +380,7 @@ def test_freewheel_diodes_on_the_single_magnet_ladder(u_maps: CharacteristicMaps
             assert sim.eddy_currents_A is not None and ref.eddy_currents_A is not None
             for got, want in ((sim.currents_A, ref.currents_A),
                               (sim.inductor_currents_A, ref.inductor_currents_A),
-                              (sim.eddy_currents_A[:, :, 0], ref.eddy_currents_A)):
+                              (sim.eddy_currents_A, ref.eddy_currents_A)):
                 np.testing.assert_allclose(got, want, rtol=0, atol=1e-12)
             np.testing.assert_allclose(sim.force_N, ref.member_force_N[:, 0], rtol=1e-12)
             coil = sim.currents_A[:, 0]
@@ -388,7 +388,7 @@ def test_freewheel_diodes_on_the_single_magnet_ladder(u_maps: CharacteristicMaps
             assert np.sum(coil < 1e-9) > 100      # and it reached 0 and stayed there
         # the last run (fixed 10 mm) against the bank test's independent reference
         _check_against_the_diode_reference(plain, r_a, u_cmd, t, sim.inductor_currents_A[:, 0],
-                                           sim.eddy_currents_A[:, 0, 0])
+                                           sim.eddy_currents_A[:, 0])
         # step: the same numbers as simulate, and as the bank's step (bound as above)
         st = diode.initial_state(gaps_m=0.010, currents_A=20.0)
         bs = bank.initial_state(gaps_m=0.010, currents_A=20.0)
@@ -398,7 +398,7 @@ def test_freewheel_diodes_on_the_single_magnet_ladder(u_maps: CharacteristicMaps
             assert abs(out.currents_A[0] - sim.currents_A[k, 0]) < 1e-12
             assert abs(out.currents_A[0] - bout.currents_A[0]) < 1e-12
         assert st.eddy_currents_A is not None
-        assert abs(st.eddy_currents_A[0, 0] - sim.eddy_currents_A[40, 0, 0]) < 1e-12
+        assert abs(st.eddy_currents_A[0] - sim.eddy_currents_A[40, 0]) < 1e-12
 
 
 def test_vanishing_unshielded_inductance_gives_eq8() -> None:
@@ -489,12 +489,12 @@ def test_default_is_unchanged(u_maps: CharacteristicMaps) -> None:
 def test_motion_eddy_step_simulate_and_state(u_maps: CharacteristicMaps) -> None:
     model = mk.CurrentModel(u_maps, motion_eddy=True)
     st = model.initial_state(gaps_m=0.010, currents_A=20.0)
-    assert st.eddy_currents_A is not None and st.eddy_currents_A.shape == (1, 1)
+    assert st.eddy_currents_A is not None and st.eddy_currents_A.shape == (1,)
     assert np.all(st.eddy_currents_A == 0.0)
     # steady state stays (I_e = 0, I = I_L)
     st1, out = model.step(st, 1e-3, 20.0 * model.resistance_ohm)
     assert out.currents_A[0] == pytest.approx(20.0, rel=1e-12)
-    assert abs(st1.eddy_currents_A[0, 0]) < 1e-12
+    assert abs(st1.eddy_currents_A[0]) < 1e-12
     # step and simulate agree (same compiled interval)
     u = 22.0 * float(model.resistance_ohm[0])
     res = mk.simulate(model, (0.0, 0.01), dt_s=1e-3, gaps_m=0.010, voltages_V=u,
@@ -505,7 +505,7 @@ def test_motion_eddy_step_simulate_and_state(u_maps: CharacteristicMaps) -> None
     assert np.allclose(res.final_state.eddy_currents_A, s.eddy_currents_A, rtol=1e-12,
                        atol=1e-15)
     assert res.currents_A[-1, 0] == pytest.approx(o.currents_A[0], rel=1e-12)
-    assert res.eddy_currents_A is not None and res.eddy_currents_A.shape == (11, 1, 1)
+    assert res.eddy_currents_A is not None and res.eddy_currents_A.shape == (11, 1)
     # the jump of a voltage step is the shunt's, dU/(R_el + R_a)
     lin = model.linearize(gap_m=0.010, current_A=20.0)
     r_a = float(u_maps.dataset["motion_eddy_jump_resistance_ohm"].values[0])

@@ -167,7 +167,7 @@ def test_ladder_vehicle_replayed_by_current_model_and_held_against_the_detailed_
         for j, mod in enumerate((ladder, eq8, flux)):
             states[j], out = mod.step(states[j], 1e-3, u[idx], poles(g[idx]), poles(r[idx]))
             cur[j, k + 1] = out.currents_A
-        eddy[k + 1] = states[0].eddy_currents_A[:, 0]
+        eddy[k + 1] = states[0].eddy_currents_A
     veh_i, veh_e = ds.current.values[:, idx], ds.eddy_current.values[:, idx]
     # the same law and sub-steps, only the pole -> circuit gap average in between:
     # measured 2.8e-14 A (coil, ~50 A) and 1.3e-15 A (eddy); bound ~1e-12 relative

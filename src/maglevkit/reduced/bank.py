@@ -59,6 +59,7 @@ from ..models.inputs import (
     simulation_inputs,
 )
 from ..models.statics import circuit_pole_groups
+from ..reduction.motion_eddy import ladder3_force_current
 from ..validation import describe, external_stacklevel, flag, renamed_keywords
 from .core import (
     EXTRA_CELLS,
@@ -78,7 +79,9 @@ from .current import (
     eq8_coil_current,
     eq8_freewheel_voltage,
     eq8_rhs,
+    eq8_shielded_gap3_rhs,
     eq8_shielded_gap_rhs,
+    motion_eddy3_parameters,
     shielded_gap_force_current,
     shielded_gap_freewheel_voltage,
 )
@@ -89,9 +92,9 @@ from .tables import INTERPOLATION_METHODS, cell_lookup, cell_table, gap_cell_par
 if TYPE_CHECKING:
     from ..reduction.maps import CharacteristicMaps
 
-__all__ = ["KERNEL_PARAMETERS", "MOTION_EDDY_PARAMETERS", "RUN_CHUNK", "STEP_FLAG_MESSAGES",
-           "BankOutputs", "BankRun", "BankSimulation", "BankState", "MagnetBank", "StepFlag",
-           "circuit_label"]
+__all__ = ["KERNEL_PARAMETERS", "MOTION_EDDY3_PARAMETERS", "MOTION_EDDY_PARAMETERS", "RUN_CHUNK",
+           "STEP_FLAG_MESSAGES", "BankOutputs", "BankRun", "BankSimulation", "BankState",
+           "MagnetBank", "StepFlag", "circuit_label"]
 
 _MAP_VARIABLES = ("inductance_H", "dL_ds_H_per_m", "force_N")
 KERNEL_PARAMETERS = ("s0_m", "inv_ds_per_m", "cells_s", "i0_A", "inv_di_per_A", "cells_i",
@@ -107,7 +110,17 @@ ladder members (:attr:`MagnetBank.motion_eddy`): 1 for a ladder circuit, 0 for a
 one; the ladder's ``R_2`` [ohm], ``L_u`` [H] (1 H for eq. 8 circuits, unused), the
 unshielded share ``beta`` of the motion term [-] and the force share ``gamma`` of ``I_e``
 [-] (force ``F(s, I_L + gamma I_e)``; both 0 for eq. 8 circuits).  In ladder circuits the
-row ``a`` holds ``1 + R_el/R_a``."""
+row ``a`` holds ``1 + R_el/R_a``.  In a bank with three-state ladder members
+(:attr:`MagnetBank.n_eddy_states` 2) the flag is 2 for their circuits, the rows ``R_2``,
+``L_u``, ``beta`` hold the outer section's ``R_2``, ``L_u``, ``beta`` and ``force_share``
+holds ``c_1`` (the share of the first eddy state ``I_e1``)."""
+MOTION_EDDY3_PARAMETERS = ("inner_shielding_resistance_ohm", "inner_inductance_H",
+                           "inner_share", "second_force_share")
+"""Rows appended after :data:`MOTION_EDDY_PARAMETERS` in a bank with three-state ladder
+members (``MagnetBank.n_eddy_states == 2``): the inner shield ``R_3`` [ohm], the inner
+series ``L_2`` [H], the inner share ``beta_2`` of the motion term [-] and the share
+``c_2`` of the second eddy state ``I_e2`` in the force current [-] (docs/equations.md
+section 8, "Three states"); ``0, 1 H, 0, 0`` in two-state ladder and eq. 8 circuits."""
 RUN_CHUNK = 1024
 """Steps per call of the compiled time loop of :meth:`MagnetBank.run_steps` (longer runs
 take several calls)."""
@@ -129,10 +142,12 @@ class BankState:
         :attr:`MagnetBank.gap_names`).
     member_states : tuple of FluxState
         States of the detailed members, in member order.
-    eddy_currents_A : ndarray (n_circuits,) or None
+    eddy_currents_A : ndarray (n_circuits,), (n_circuits, 2) or None
         The shielding eddy current ``I_e`` [A] of every circuit in a bank with
         shielded-gap ladder members (:attr:`MagnetBank.motion_eddy`; 0 for eq. 8
-        circuits, NaN for detailed members); None in banks without them.
+        circuits, NaN for detailed members); ``(I_e1, I_e2)`` per circuit in a bank with
+        three-state members (:attr:`MagnetBank.n_eddy_states` 2); None in banks without
+        ladder members.
     """
 
     time_s: float
@@ -196,8 +211,9 @@ class BankSimulation:
     final_state : BankState
         State at ``time_s[-1]`` (to continue with :meth:`MagnetBank.step` or a new
         ``simulate``).
-    eddy_currents_A : ndarray (n_t, n_circuits) or None
-        The shielding eddy currents ``I_e`` [A] in a bank with ladder members, else None.
+    eddy_currents_A : ndarray (n_t, n_circuits), (n_t, n_circuits, 2) or None
+        The shielding eddy currents ``I_e`` [A] in a bank with ladder members (the shape
+        of :attr:`BankState.eddy_currents_A` with time in front), else None.
     """
 
     time_s: np.ndarray
@@ -252,6 +268,13 @@ class _Member:
     eddy_resistance_ohm: np.ndarray | None = None
     model: FluxModel | None = None
     ladder: MotionEddyLadder | None = None   # the shielded-gap ladder (motion_eddy)
+    ladder3: dict[str, np.ndarray] | None = None   # the three-state ladder (eddy_branches=2)
+    ladder_step_s: float = math.inf          # the ladder's stable RK4 sub-step [s]
+
+    @property
+    def eddy_states(self) -> int:
+        """Ladder eddy states per circuit: 0 (eq. 8), 1 or 2."""
+        return 2 if self.ladder3 is not None else int(self.ladder is not None)
 
 
 class MagnetBank:
@@ -311,6 +334,15 @@ class MagnetBank:
         sub-step is limited to the ladder's stable step
         (:class:`~maglevkit.reduced.core.MotionEddyLadder`).  With ``freewheel`` the diodes
         act on the ladder's coil current ``I = (U/R_a + I_L + I_e)/a`` (docs/bank.md).
+    eddy_branches : {1, 2}
+        With ``motion_eddy=True``: the shielded sections of the ladder of members given as
+        maps, 1 (default; the two-state ladder, one eddy state ``I_e`` per circuit) or 2
+        (the three-state ladder of ``CurrentModel(maps, motion_eddy=True,
+        eddy_branches=2)``, eddy states ``I_e1``, ``I_e2`` per circuit; a member given as
+        a ``CurrentModel`` keeps its own).  A bank with three-state members carries two
+        eddy states in every circuit (:attr:`n_eddy_states`; ``eddy_currents_A`` of shape
+        ``(n_circuits, 2)``, the second 0 in two-state ladder circuits, both 0 in eq. 8
+        circuits).
 
     Examples
     --------
@@ -331,7 +363,7 @@ class MagnetBank:
                  compiled: str = "auto", eddy_resistance: str = "fit", max_step_s: float = 1e-3,
                  extrapolate: bool = False, cache_dir: Any = None,
                  codegen: str = "lanes", freewheel: bool = False,
-                 motion_eddy: bool = False) -> None:
+                 motion_eddy: bool = False, eddy_branches: int = 1) -> None:
         if compiled not in COMPILE_MODES:
             raise InputError(f"compiled = {compiled!r}; use one of {list(COMPILE_MODES)}")
         if codegen not in ("lanes", "casadi"):
@@ -363,10 +395,24 @@ class MagnetBank:
         if not pairs:
             raise InputError("a magnet bank needs at least one member")
         flag(motion_eddy, "motion_eddy")
-        self._members = tuple(self._member(p, eddy_resistance, bool(motion_eddy)) for p in pairs)
-        ladders = [m.ladder for m in self._members if m.ladder is not None]
+        if isinstance(eddy_branches, bool) or eddy_branches not in (1, 2):
+            raise InputError(f"eddy_branches = {eddy_branches!r}; use 1 (the two-state ladder) "
+                             "or 2 (the three-state ladder), with motion_eddy=True")
+        if eddy_branches == 2 and not motion_eddy:
+            raise InputError("eddy_branches = 2 needs motion_eddy=True (it is the shielded-gap "
+                             "ladder's second shielded section)")
+        self._members = tuple(self._member(p, eddy_resistance, bool(motion_eddy),
+                                           int(eddy_branches)) for p in pairs)
+        ladders = [m for m in self._members if m.eddy_states]
         self.motion_eddy = bool(ladders)
-        """Whether some member carries the shielded-gap ladder (two states per circuit)."""
+        """Whether some member carries the shielded-gap ladder (two or three states per
+        circuit)."""
+        self.n_eddy_states = max([m.eddy_states for m in self._members])
+        """Ladder eddy states per circuit: 0 (no ladder members), 1 (two-state ladders:
+        ``I_e``) or 2 (some three-state ladder member: ``I_e1``, ``I_e2``)."""
+        # which laws the bank's circuits follow (0 eq. 8, 1 two-state, 2 three-state): the
+        # kernel of a three-state bank selects only among those present
+        self._laws = tuple(sorted({m.eddy_states for m in self._members if m.kind == "reduced"}))
         diodes = [m.name for m, (_, model) in zip(self._members, pairs, strict=True)
                   if isinstance(model, CurrentModel) and model.freewheel]
         if diodes and not self.freewheel:
@@ -376,7 +422,7 @@ class MagnetBank:
                              "diodes are a bank-wide option)")
         if ladders:
             # the ladder's stable RK4 sub-step (CurrentModel limits its own the same way)
-            self.max_step_s = min([self.max_step_s] + [lad.max_step_s for lad in ladders])
+            self.max_step_s = min([self.max_step_s] + [m.ladder_step_s for m in ladders])
         names = [m.name for m in self._members]
         dup = sorted({n for n in names if names.count(n) > 1})
         if dup:
@@ -395,7 +441,8 @@ class MagnetBank:
 
     # ------------------------------------------------------------------ construction
     @staticmethod
-    def _member(pair: Any, eddy_resistance: str, motion_eddy: bool = False) -> _Member:
+    def _member(pair: Any, eddy_resistance: str, motion_eddy: bool = False,
+                eddy_branches: int = 1) -> _Member:
         try:
             name, model = pair
         except (TypeError, ValueError):
@@ -417,31 +464,30 @@ class MagnetBank:
                                  f"{model.eddy_modes} cannot be a bank member (the bank "
                                  "advances eq. 8 with one R_ec per circuit); use "
                                  "CurrentModel(maps) or the model on its own")
-            if getattr(model, "eddy_branches", 1) != 1:
-                # the bank's lanes (and with them its stepper, the FMU, the MPC and the
-                # vehicles) carry one ladder eddy state per circuit
-                raise InputError(f"member {name!r}: a CurrentModel with eddy_branches="
-                                 f"{model.eddy_branches} (the three-state ladder) cannot be a "
-                                 "bank member yet (the bank, its stepper, the FMU, the MPC and "
-                                 "the vehicles carry the two-state ladder only); use "
-                                 "eddy_branches=1 or the model on its own")
             core = model.core
             motion_eddy = bool(getattr(model, "motion_eddy", False))
+            eddy_branches = int(getattr(model, "eddy_branches", 1))
         elif hasattr(model, "dataset") and hasattr(model, "variable"):
             core = ReducedCore.from_maps(model, eddy_resistance=eddy_resistance,
                                          what=f"member {name!r}: ")
         else:
             raise InputError(f"member {name!r}: a model must be CharacteristicMaps, a "
                              f"CurrentModel or a FluxModel, got {type(model).__name__}")
-        ladder = (MotionEddyLadder.from_maps(core.maps, resistance_ohm=core.resistance_ohm,
-                                             what=f"member {name!r}: ")
-                  if motion_eddy else None)
+        ladder, ladder3, step_s = None, None, math.inf
+        if motion_eddy and eddy_branches == 2:
+            ladder3, step_s = motion_eddy3_parameters(core.maps, core.resistance_ohm,
+                                                      what=f"member {name!r}: ")
+            r_ec = ladder3["r_a"]
+        elif motion_eddy:
+            ladder = MotionEddyLadder.from_maps(core.maps, resistance_ohm=core.resistance_ohm,
+                                                what=f"member {name!r}: ")
+            r_ec, step_s = ladder.jump_resistance_ohm, ladder.max_step_s
+        else:
+            r_ec = core.eddy_resistance_ohm
         return _Member(name, "reduced", core.circuit_names, core.gap_names,
                        dict(core.pole_groups), maps=core.maps, core=core,
-                       resistance_ohm=core.resistance_ohm,
-                       eddy_resistance_ohm=(core.eddy_resistance_ohm if ladder is None
-                                            else ladder.jump_resistance_ohm),
-                       ladder=ladder)
+                       resistance_ohm=core.resistance_ohm, eddy_resistance_ohm=r_ec,
+                       ladder=ladder, ladder3=ladder3, ladder_step_s=step_s)
 
     def _layout(self) -> None:
         circuits: list[str] = []
@@ -506,7 +552,8 @@ class MagnetBank:
         """Per-cell tables (one per distinct map), kernel parameters and range bounds."""
         idx = self._reduced_idx
         n = idx.size
-        n_par = _N_PAR + (len(MOTION_EDDY_PARAMETERS) if self.motion_eddy else 0)
+        n_par = (_N_PAR + (len(MOTION_EDDY_PARAMETERS) if self.motion_eddy else 0)
+                 + (len(MOTION_EDDY3_PARAMETERS) if self.n_eddy_states == 2 else 0))
         self._par = np.zeros((n_par, n))
         self._bounds = np.zeros((4, n))            # s_lo, s_hi, i_lo, i_hi (map ranges)
         self._spline_bounds = np.zeros((4, n))     # the same extended by EXTRA_CELLS cells
@@ -546,15 +593,23 @@ class MagnetBank:
                 assert m.resistance_ohm is not None
                 core = m.core
                 r_el = float(m.resistance_ohm[j])
-                lad = m.ladder
-                a = float(core.a[j] if lad is None else lad.a[j])
+                lad, lad3 = m.ladder, m.ladder3
+                a = float(lad3["a"][j] if lad3 is not None else
+                          core.a[j] if lad is None else lad.a[j])
                 self._par[:9, k] = (s0, 1.0 / ds_, cs_, i0, 1.0 / di_, ci_, offset, r_el, a)
                 if self.motion_eddy:
-                    self._par[_N_PAR:, k] = ((0.0, 0.0, 1.0, 0.0, 0.0) if lad is None else
-                                             (1.0, float(lad.shielding_resistance_ohm[j]),
-                                              float(lad.unshielded_inductance_H[j]),
-                                              float(lad.unshielded_share[j]),
-                                              float(lad.force_share[j])))
+                    n2 = _N_PAR + len(MOTION_EDDY_PARAMETERS)
+                    self._par[_N_PAR:n2, k] = (
+                        (2.0, *(float(lad3[q][j]) for q in ("r_2", "l_u", "beta", "c_1")))
+                        if lad3 is not None else
+                        (0.0, 0.0, 1.0, 0.0, 0.0) if lad is None else
+                        (1.0, float(lad.shielding_resistance_ohm[j]),
+                         float(lad.unshielded_inductance_H[j]), float(lad.unshielded_share[j]),
+                         float(lad.force_share[j])))
+                    if self.n_eddy_states == 2:
+                        self._par[n2:, k] = (tuple(float(lad3[q][j]) for q in
+                                                   ("r_3", "l_2", "beta_2", "c_2"))
+                                             if lad3 is not None else (0.0, 1.0, 0.0, 0.0))
                 self._bounds[:, k] = (*core.gap_range_m, *core.current_range_A)
                 tol[:, k] = (core.gap_tolerance_m, core.current_tolerance_A)
                 self._spline_bounds[:, k] = (gs[0], gs[-1], gi[0], gi[-1])
@@ -614,12 +669,82 @@ class MagnetBank:
         eq. 8 circuits: eq. 8's own limit)."""
         return shielded_gap_freewheel_voltage(i, ie, u, p[7], p[8]) if self.freewheel else u
 
-    def _ladder_force(self, cell: tuple[Any, Any], i: Any, ie: Any, p: Any, table: Any) -> Any:
-        """The force of one circuit of a bank with ladder members at the gap cell ``cell``:
-        eq. 8's map at the force current ``I_L + gamma I_e``
-        (:func:`shielded_gap_force_current`; ``gamma`` is 0 in eq. 8 circuits, whose
-        ``I_e`` stays 0)."""
-        i_f = shielded_gap_force_current(i, ie, p[_N_PAR + 4])
+    def _eddy_tuple(self, ie: Any) -> tuple[Any, ...]:
+        """A circuit's ladder eddy states as scalars, ``(I_e,)`` or ``(I_e1, I_e2)``, from
+        the MX of :attr:`n_eddy_states` elements."""
+        return (ie,) if self.n_eddy_states == 1 else (ie[0], ie[1])
+
+    def _select(self, me: Any, laws: dict[int, tuple[Any, ...]]) -> tuple[Any, ...]:
+        """The law of the circuit's kind ``me`` (row ``motion_eddy``: 0, 1, 2) among the
+        ``laws`` present in the bank (CasADi ``if_else`` picks one exactly; a bank with
+        one kind evaluates that one alone)."""
+        kinds = sorted(laws)
+        out = laws[kinds[0]]
+        for k in kinds[1:]:
+            out = tuple(ca.if_else(me > k - 0.5, a, b)
+                        for a, b in zip(laws[k], out, strict=True))
+        return out
+
+    def _eddy_law(self, i: Any, e: tuple[Any, ...], u: Any, sd: Any, lt: Any, dl: Any,
+                  p: Any) -> tuple[Any, ...]:
+        """``(dI_L/dt, dI_e/dt)`` (:meth:`_ladder_rhs`) or, in a bank with three-state
+        members, ``(dI_L/dt, dI_e1/dt, dI_e2/dt)`` of one circuit: the three-state ladder
+        (:func:`eq8_shielded_gap3_rhs`) where row ``motion_eddy`` is 2, the two-state one
+        (``I_e1`` its ``I_e``, ``dI_e2/dt = 0``) where it is 1, eq. 8 where it is 0."""
+        if self.n_eddy_states == 1:
+            return self._ladder_rhs(i, e[0], u, sd, lt, dl, p)
+        e1, e2 = e
+        r_el, a = p[7], p[8]
+        me, r_2, l_u, beta = p[_N_PAR], p[_N_PAR + 1], p[_N_PAR + 2], p[_N_PAR + 3]
+        n3 = _N_PAR + len(MOTION_EDDY_PARAMETERS)
+        r_3, l_2, beta_2 = p[n3], p[n3 + 1], p[n3 + 2]
+        u = self._eddy_voltage(i, e, u, p)
+        laws: dict[int, tuple[Any, ...]] = {}
+        if 0 in self._laws:
+            laws[0] = (eq8_rhs(i, u, sd, lt, dl, r_el, a), 0.0, 0.0)
+        if 1 in self._laws:
+            laws[1] = (*eq8_shielded_gap_rhs(i, e1, u, sd, lt, dl, r_el, a, r_2, l_u, beta),
+                       0.0)
+        laws[2] = eq8_shielded_gap3_rhs(i, e1, e2, u, sd, lt, dl, r_el, a, r_2, l_u, r_3, l_2,
+                                        beta, beta_2)
+        return self._select(me, laws)
+
+    def _terminal_current(self, i: Any, e: tuple[Any, ...]) -> Any:
+        """The current through ``R_a``'s node, ``I_L + I_e`` (``I_u = I_L + I_e1 + I_e2``
+        with three states), whose coil current and diode law are eq. 8's."""
+        return i + e[0] if len(e) == 1 else i + e[0] + e[1]
+
+    def _eddy_voltage(self, i: Any, e: tuple[Any, ...], u: Any, p: Any) -> Any:
+        """:meth:`_ladder_voltage` with the terminal current of :meth:`_terminal_current`
+        (the diode law of :func:`shielded_gap_freewheel_voltage` for both ladders)."""
+        if len(e) == 1:
+            return self._ladder_voltage(i, e[0], u, p)
+        return (shielded_gap_freewheel_voltage(i + e[0], e[1], u, p[7], p[8])
+                if self.freewheel else u)
+
+    def _eddy_coil(self, i: Any, e: tuple[Any, ...], u: Any, p: Any) -> Any:
+        """The coil current of Fig. 8 with the terminal current through ``R_a``'s node."""
+        return eq8_coil_current(self._terminal_current(i, e), self._eddy_voltage(i, e, u, p),
+                                p[7], p[8])
+
+    def _force_current(self, i: Any, e: tuple[Any, ...], p: Any) -> Any:
+        """The current at which a circuit of a ladder bank reads its force map: ``I_L +
+        gamma I_e`` (:func:`shielded_gap_force_current`; ``gamma`` 0 in eq. 8 circuits,
+        whose eddy states stay 0), with three states ``I_L + c_1 I_e1 + c_2 I_e2``
+        (:func:`~maglevkit.reduction.motion_eddy.ladder3_force_current`)."""
+        if len(e) == 1:
+            return shielded_gap_force_current(i, e[0], p[_N_PAR + 4])
+        e1, e2 = e
+        c_2 = p[_N_PAR + len(MOTION_EDDY_PARAMETERS) + 3]
+        laws: dict[int, tuple[Any, ...]] = {}
+        if 0 in self._laws or 1 in self._laws:
+            laws[1] = (shielded_gap_force_current(i, e1, p[_N_PAR + 4]),)
+        laws[2] = (ladder3_force_current(i + e1 + e2, i + e1, i, (p[_N_PAR + 4], c_2)),)
+        return self._select(p[_N_PAR], laws)[0]
+
+    def _eddy_force(self, cell: tuple[Any, Any], i_f: Any, p: Any, table: Any) -> Any:
+        """The force of one circuit at the gap cell ``cell`` and the force current
+        ``i_f`` (:meth:`_force_current`)."""
         return self._lookup(cell, i_f, p, table, maps=(2,))[0]
 
     def _make_circuit_kernel(self) -> dict[str, ca.Function]:
@@ -627,16 +752,19 @@ class MagnetBank:
         table = ca.MX(ca.DM(self._table))
         i, s, u, sd = (ca.MX.sym(n) for n in ("I_L", "s", "U", "sdot"))
         if self.motion_eddy:
-            p = ca.MX.sym("p", _N_PAR + len(MOTION_EDDY_PARAMETERS))
-            ie = ca.MX.sym("I_e")
+            ne = self.n_eddy_states
+            p = ca.MX.sym("p", self._par.shape[0])
+            ie = ca.MX.sym("I_e", ne) if ne > 1 else ca.MX.sym("I_e")
+            e = self._eddy_tuple(ie)
             cell = self._gap_cell(s, p)
             lt, dl = self._lookup(cell, i, p, table, maps=(0, 1))
-            d_il, d_ie = self._ladder_rhs(i, ie, u, sd, lt, dl, p)
-            # the coil current of Fig. 8 with I_L + I_e through R_a's node (I_e = 0 in
-            # eq. 8 circuits)
-            coil = eq8_coil_current(i + ie, self._ladder_voltage(i, ie, u, p), p[7], p[8])
-            f = self._ladder_force(cell, i, ie, p, table)
-            return {"rhs": ca.Function("bank_circuit_rhs", [i, s, u, sd, p, ie], [d_il, d_ie]),
+            d = self._eddy_law(i, e, u, sd, lt, dl, p)
+            # the coil current of Fig. 8 with the terminal current I_L + I_e (I_L + I_e1 +
+            # I_e2) through R_a's node (the eddy states are 0 in eq. 8 circuits)
+            coil = self._eddy_coil(i, e, u, p)
+            f = self._eddy_force(cell, self._force_current(i, e, p), p, table)
+            d_e = d[1] if ne == 1 else ca.vertcat(*d[1:])
+            return {"rhs": ca.Function("bank_circuit_rhs", [i, s, u, sd, p, ie], [d[0], d_e]),
                     "out": ca.Function("bank_circuit_out", [i, s, u, p, ie], [coil, f, lt])}
         p = ca.MX.sym("p", _N_PAR)
         rhs, coil, f, lt = self._circuit_expressions(i, s, u, sd, p, table)
@@ -728,27 +856,39 @@ class MagnetBank:
     def _ladder_step_function(self, substeps: int) -> ca.Function:
         """:meth:`circuit_step_function` of a bank with ladder members: the state
         ``[I_L; I_e]`` of every circuit (``I_e`` stays 0 in eq. 8 circuits), one more
-        input ``I_e`` and output ``I_e_next`` after the others."""
+        input ``I_e`` and output ``I_e_next`` after the others; with three-state members
+        (:attr:`n_eddy_states` 2) the input ``I_e`` has two elements ``(I_e1, I_e2)`` and
+        the outputs are ``I_e1_next``, ``I_e2_next`` (scalars, for the SIMD lanes).  The
+        force current is read from the force map at the end: it is range-checked with
+        ``I_L`` (folded into ``I_L_min``/``I_L_max``, equal to ``I_L``'s extremes where
+        the force current is ``I_L``)."""
         table = ca.MX(ca.DM(self._table))
-        i, s, u, sd, h, ie = (ca.MX.sym(n) for n in ("I_L", "s", "U", "sdot", "h", "I_e"))
-        p = ca.MX.sym("p", _N_PAR + len(MOTION_EDDY_PARAMETERS))
+        i, s, u, sd, h = (ca.MX.sym(n) for n in ("I_L", "s", "U", "sdot", "h"))
+        ne = self.n_eddy_states
+        ie = ca.MX.sym("I_e", ne) if ne > 1 else ca.MX.sym("I_e")
+        p = ca.MX.sym("p", self._par.shape[0])
         hs = h / substeps
 
         def f(x: Any, cell: tuple[Any, Any]) -> Any:
             lt, dl = self._lookup(cell, x[0], p, table, maps=(0, 1))
-            return _Pair(*self._ladder_rhs(x[0], x[1], u, sd, lt, dl, p))
+            return _Pair(*self._eddy_law(x[0], x.v[1:], u, sd, lt, dl, p))
 
-        # the state as a pair of scalars (not a vertcat), so that the graph stays scalar
-        # and the SIMD lanes translate it; the arithmetic per component is the same
-        x, lo, hi = self._rk4_substeps(_Pair(i, ie), lambda v: v[0], f, s, sd, hs, substeps, p)
+        # the state as scalars (not a vertcat), so that the graph stays scalar and the
+        # SIMD lanes translate it; the arithmetic per component is the same
+        x, lo, hi = self._rk4_substeps(_Pair(i, *self._eddy_tuple(ie)), lambda v: v[0], f, s,
+                                       sd, hs, substeps, p)
         se = s + sd * h
-        coil = eq8_coil_current(x[0] + x[1], self._ladder_voltage(x[0], x[1], u, p), p[7], p[8])
-        force = self._ladder_force(self._gap_cell(se, p), x[0], x[1], p, table)
-        bad = _reason_code(s, se, sd, u, lo, hi, (x[0], x[1]), p)
+        e = x.v[1:]
+        coil = self._eddy_coil(x[0], e, u, p)
+        i_f = self._force_current(x[0], e, p)
+        force = self._eddy_force(self._gap_cell(se, p), i_f, p, table)
+        lo, hi = ca.fmin(lo, i_f), ca.fmax(hi, i_f)
+        bad = _reason_code(s, se, sd, u, lo, hi, x.v, p)
         return ca.Function("bank_circuit_step", [i, s, u, sd, h, p, ie],
-                           [x[0], coil, force, lo, hi, bad, x[1]],
+                           [x[0], coil, force, lo, hi, bad, *e],
                            ["I_L", "s", "U", "sdot", "h", "p", "I_e"],
-                           ["I_L_next", "I", "F", "I_L_min", "I_L_max", "bad", "I_e_next"])
+                           ["I_L_next", "I", "F", "I_L_min", "I_L_max", "bad"]
+                           + (["I_e_next"] if ne == 1 else ["I_e1_next", "I_e2_next"]))
 
     def _step_kernel(self, substeps: int) -> ca.Function:
         """One RK4 step of every reduced circuit: ``(I_L, s, U, sdot, h) -> (I_L', I, F,
@@ -769,7 +909,7 @@ class MagnetBank:
         vi, vs, vu, vsd = (ca.MX.sym(nm, n) for nm in ("I_L", "s", "U", "sdot"))
         vh = ca.MX.sym("h")
         if self.motion_eddy:
-            ve = ca.MX.sym("I_e", n)
+            ve = ca.MX.sym("I_e", n, self.n_eddy_states)
             res = mapped(vi.T, vs.T, vu.T, vsd.T, vh, ca.DM(self._par), ve.T)
         else:
             res = mapped(vi.T, vs.T, vu.T, vsd.T, vh, ca.DM(self._par))
@@ -783,9 +923,11 @@ class MagnetBank:
         names = ["I_L_next", "I", "F", "member_F", "n_bad", "I_L_min", "I_L_max", "s_next",
                  "flags"]
         if self.motion_eddy:
-            # the ladder's second state after the others (the layout of eq. 8 banks stays)
+            # the ladder's eddy states after the others (the layout of eq. 8 banks stays):
+            # (n, n_e), column-major as CasADi stores it (I_e1 of every circuit, then I_e2)
+            e_next = res[6].T if self.n_eddy_states == 1 else ca.horzcat(*(r.T for r in res[6:]))
             return ca.Function(f"maglevkit_bank_step{substeps}", [vi, vs, vu, vsd, vh, ve],
-                               outs + [res[6].T], ["I_L", "s", "U", "sdot", "h", "I_e"],
+                               outs + [e_next], ["I_L", "s", "U", "sdot", "h", "I_e"],
                                names + ["I_e_next"])
         return ca.Function(f"maglevkit_bank_step{substeps}", [vi, vs, vu, vsd, vh],
                            outs, ["I_L", "s", "U", "sdot", "h"], names)
@@ -831,7 +973,10 @@ class MagnetBank:
         """The law of reduced circuit ``k`` of a bank with ladder members (``motion_eddy``)
         as CasADi expressions ``(dI_L/dt, dI_e/dt, I, F, L~)``: the shielded-gap ladder in
         ladder circuits, eq. 8 with ``dI_e/dt = 0`` in the others (the kernel's own
-        expressions; :meth:`circuit_expressions` is eq. 8's).
+        expressions; :meth:`circuit_expressions` is eq. 8's).  In a bank with three-state
+        members (:attr:`n_eddy_states` 2) ``i_e`` and ``dI_e/dt`` have two elements,
+        ``(I_e1, I_e2)``: the three-state ladder in its circuits, the two-state one (with
+        ``I_e1`` as its ``I_e``, ``dI_e2/dt = 0``) and eq. 8 in the others.
 
         Parameters
         ----------
@@ -840,7 +985,7 @@ class MagnetBank:
         i_l : casadi.MX
             Inductor current ``I_L`` [A].
         i_e : casadi.MX
-            Shielding eddy current ``I_e`` [A].
+            Shielding eddy current ``I_e`` [A] (:attr:`n_eddy_states` elements).
         s : casadi.MX
             Substitute gap [m].
         u : casadi.MX
@@ -853,8 +998,8 @@ class MagnetBank:
         Returns
         -------
         tuple of casadi.MX
-            ``dI_L/dt`` [A/s], ``dI_e/dt`` [A/s], coil current ``I`` [A], force ``F`` [N]
-            and ``L~`` [H].
+            ``dI_L/dt`` [A/s], ``dI_e/dt`` [A/s] (as ``i_e``), coil current ``I`` [A],
+            force ``F`` [N] and ``L~`` [H].
 
         Raises
         ------
@@ -868,10 +1013,11 @@ class MagnetBank:
         p = ca.DM(self._par[:, k])
         cell = self._gap_cell(s, p)
         lt, dl = self._lookup(cell, i_l, p, table, maps=(0, 1))
-        d_il, d_ie = self._ladder_rhs(i_l, i_e, u, gap_rate, lt, dl, p)
-        return (d_il, d_ie,
-                eq8_coil_current(i_l + i_e, self._ladder_voltage(i_l, i_e, u, p), p[7], p[8]),
-                self._ladder_force(cell, i_l, i_e, p, table), lt)
+        e = self._eddy_tuple(i_e)
+        d = self._eddy_law(i_l, e, u, gap_rate, lt, dl, p)
+        return (d[0], d[1] if len(e) == 1 else ca.vertcat(*d[1:]),
+                self._eddy_coil(i_l, e, u, p),
+                self._eddy_force(cell, self._force_current(i_l, e, p), p, table), lt)
 
     def circuit_expressions(self, k: int, i_l: Any, s: Any, u: Any, gap_rate: Any,
                             table: Any) -> tuple[Any, Any, Any, Any]:
@@ -918,7 +1064,7 @@ class MagnetBank:
         vi, vu, vs, vsd = (ca.MX.sym(nm, n) for nm in ("I_L", "U", "s", "sdot"))
         f = self._circuit_kernel["rhs"].map(n, "serial")
         if self.motion_eddy:
-            ve = ca.MX.sym("I_e", n)
+            ve = ca.MX.sym("I_e", n, self.n_eddy_states)
             d_il, d_ie = f(vi.T, vs.T, vu.T, vsd.T, ca.DM(self._par), ve.T)
             return ca.Function("maglevkit_bank_ode", [vi, vu, vs, vsd, ve], [d_il.T, d_ie.T],
                                ["I_L", "U", "s", "sdot", "I_e"], ["dI_L", "dI_e"])
@@ -932,7 +1078,7 @@ class MagnetBank:
         n = self._reduced_idx.size
         vi, vu, vs = (ca.MX.sym(nm, n) for nm in ("I_L", "U", "s"))
         if self.motion_eddy:
-            ve = ca.MX.sym("I_e", n)
+            ve = ca.MX.sym("I_e", n, self.n_eddy_states)
             res = self._circuit_kernel["out"].map(n, "serial")(vi.T, vs.T, vu.T,
                                                                 ca.DM(self._par), ve.T)
             return ca.Function("maglevkit_bank_outputs", [vi, vu, vs, ve], [r.T for r in res],
@@ -1126,7 +1272,7 @@ class MagnetBank:
                 f, is_compiled = compile_function(self._step_kernel(n), mode=self.compiled_mode,
                                                   cache_dir=self._cache_dir)
                 self.compiled = is_compiled
-            call = _StepCall(f)
+            call = _StepCall(f, self.n_eddy_states)
             self._kernels[n] = call
         self._last_dt, self._last_call = dt, call
         return call
@@ -1146,7 +1292,8 @@ class MagnetBank:
         # the C names carry a hash of the source (written with a placeholder name first),
         # so that libraries of different banks never share a symbol
         name = "MAGLEVKIT_LANES_NAME"
-        me = self.motion_eddy
+        me = int(self.motion_eddy)
+        ne = self.n_eddy_states
         try:
             kernel = lane_source(self.circuit_step_function(substeps), name=f"{name}_k", n=n,
                                  inputs=[LaneInput("instance")] * 4
@@ -1156,13 +1303,15 @@ class MagnetBank:
         except (NotImplementedError, ValueError, KeyError, IndexError):  # pragma: no cover
             return None                  # a graph the generator does not translate
         members = self._member_of[self._reduced_idx]
-        # a ladder bank (motion_eddy): input 5 I_e (zeros at w + 10n + 1 when absent) and
-        # output 9 I_e_next (the kernel's seventh output; scratch at w + 11n + 1)
+        # a ladder bank (motion_eddy): input 5 I_e, n_e rows of n (zeros at w + 10n + 1
+        # when absent) and output 9 I_e_next, the same layout (the kernel's outputs 7,
+        # 8; scratch at w + (10 + n_e) n + 1)
         ladder = (f"  a[5] = arg[5];\n  if (!a[5]) {{ double *z = w + {10 * n + 1}; "
-                  f"for (c = 0; c < {n}; ++c) z[c] = 0.0; a[5] = z; }}\n"
-                  f"  r[6] = res[9] ? res[9] : w + {11 * n + 1};\n") if me else ""
+                  f"for (c = 0; c < {ne * n}; ++c) z[c] = 0.0; a[5] = z; }}\n"
+                  + "".join(f"  r[{6 + q}] = res[9] ? res[9]{f' + {q * n}' if q else ''} : "
+                            f"w + {(10 + ne + q) * n + 1};\n" for q in range(ne))) if me else ""
         body = (f"  static const int member[{n}] = {{{','.join(str(int(m)) for m in members)}}};\n"
-                f"  const double *a[{5 + me}];\n  double *r[{6 + me}];\n  long c;\n  int k;\n"
+                f"  const double *a[{5 + me}];\n  double *r[{6 + ne}];\n  long c;\n  int k;\n"
                 f"  for (k = 0; k < 4; ++k) {{ a[k] = arg[k]; if (!a[k]) {{ double *z = w + "
                 f"{6 * n} + k * {n}; for (c = 0; c < {n}; ++c) z[c] = 0.0; a[k] = z; }} }}\n"
                 f"  a[4] = arg[4] ? arg[4] : w + {10 * n};\n  w[{10 * n}] = 0.0;\n"
@@ -1198,12 +1347,12 @@ class MagnetBank:
                 f"  res[3][0] = (double) k;\n")
         code = ("#include <math.h>\n" + kernel
                 + external_source(name, inputs=[("I_L", n), ("s", n), ("U", n), ("sdot", n),
-                                                ("h", 1)] + [("I_e", n)] * me,
+                                                ("h", 1)] + [("I_e", ne * n)] * me,
                                   outputs=[("I_L_next", n), ("I", n), ("F", n), ("member_F", nm),
                                            ("n_bad", 1), ("I_L_min", n), ("I_L_max", n),
                                            ("s_next", n), ("flags", n)]
-                                  + [("I_e_next", n)] * me,
-                                  body=body, work=(12 if me else 10) * n + 1))
+                                  + [("I_e_next", ne * n)] * me,
+                                  body=body, work=(10 + 2 * ne) * n + 1))
         if not me:                       # (run_steps refuses ladder banks)
             code += external_source(f"{name}_run", inputs=[("I_L0", n), ("s", n * ch),
                                                            ("U", n * ch), ("sdot", n * ch),
@@ -1459,6 +1608,9 @@ class MagnetBank:
                 i[cs] = np.nan
         # the steady state of the ladder has no shielding current (I_e = V_m/R_2 = 0)
         eddy = np.where(np.isnan(i), np.nan, 0.0) if self.motion_eddy else None
+        if self.n_eddy_states == 2:
+            assert eddy is not None
+            eddy = np.repeat(eddy[:, None], 2, axis=1)
         return BankState(float(time), i, g.copy(), tuple(states), eddy)
 
     def check_state(self, state: Any) -> None:
@@ -1480,13 +1632,20 @@ class MagnetBank:
             raise InputError("state must be a BankState of this bank (from initial_state, step "
                              "or a stepper's state)")
         e = state.eddy_currents_A
-        if self.motion_eddy != (e is not None) or (e is not None and e.shape != (self.n_circuits,)):
+        shape = self._eddy_shape()
+        if self.motion_eddy != (e is not None) or (e is not None and e.shape != shape):
             raise InputError("state must be a BankState of this bank: "
                              + ("its ladder members (motion_eddy) need eddy_currents_A of shape "
-                                f"({self.n_circuits},)" if self.motion_eddy else
+                                f"{shape}" if self.motion_eddy else
                                 "this bank has no ladder members, so eddy_currents_A must be "
                                 "None")
                              + " (make it with initial_state, step or a stepper's state)")
+
+    def _eddy_shape(self) -> tuple[int, ...]:
+        """Shape of :attr:`BankState.eddy_currents_A`: ``(n_circuits,)`` with one ladder
+        eddy state per circuit, ``(n_circuits, 2)`` with two (:attr:`n_eddy_states`)."""
+        nc = self.n_circuits
+        return (nc,) if self.n_eddy_states < 2 else (nc, self.n_eddy_states)
 
     @renamed_keywords(dt="dt_s", voltages="voltages_V", gaps="gaps_m", gap_rates="gap_rates_m_per_s")
     def step(self, state: BankState, dt_s: float, voltages_V: Any, gaps_m: Any = None,
@@ -1723,7 +1882,7 @@ class MagnetBank:
             o.pole_force_N
         ie = None
         if state.eddy_currents_A is not None:
-            ie = np.empty((nt, nc))
+            ie = np.empty((nt, *self._eddy_shape()))
             ie[0] = state.eddy_currents_A
         steps = np.diff(times)
         if self._fast and nt > 1 and len({self._substeps(float(h))
@@ -1981,8 +2140,9 @@ class _StepCall:
     flag count; the sub-step extremes stay in ``res[5]``, ``res[6]`` for a diagnosis.
     """
 
-    def __init__(self, f: ca.Function) -> None:
+    def __init__(self, f: ca.Function, n_eddy: int = 0) -> None:
         self.f = f
+        self.n_eddy = n_eddy         # ladder eddy states per circuit (input 5, output 9)
         self.bound = BoundCall(f)
         self.eval = self.bound.eval
         self.args, self.res = self.bound.args, self.bound.res
@@ -1996,13 +2156,17 @@ class _StepCall:
         a[2][:] = u
         a[3][:] = sd
         a[4][0] = h
-        if eddy is not None:                 # a ladder bank's I_e (input 5)
-            a[5][:] = eddy
+        if eddy is not None:                 # a ladder bank's I_e (input 5, column-major)
+            a[5][:] = eddy if eddy.ndim == 1 else eddy.ravel(order="F")
         self.eval()
         r = self.res
         return (r[0].copy(), r[1].copy(), r[2].copy(), r[3].copy(), float(r[4][0]),
                 r[7].copy())
 
     def eddy_next(self) -> np.ndarray | None:
-        """A ladder bank's ``I_e`` after the last call (output 9; None in eq. 8 banks)."""
-        return self.res[9].copy() if len(self.res) > 9 else None
+        """A ladder bank's ``I_e`` after the last call (output 9; None in eq. 8 banks):
+        ``(n,)``, or ``(n, 2)`` with two eddy states per circuit."""
+        if len(self.res) <= 9:
+            return None
+        r = self.res[9]
+        return r.copy() if self.n_eddy < 2 else r.reshape(self.n_eddy, -1).T.copy()

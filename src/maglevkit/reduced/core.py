@@ -135,6 +135,9 @@ STEP_FLAG_MESSAGES: dict[str, str] = {
     "step": " over the step t = %.6g..%.6g s",
     "substep": " in an RK4 sub-step within t = %.6g..%.6g s",
     "time": " at t = %.6g s",
+    # a shielded-gap ladder's force current (I_L + gamma I_e, I_L + c_1 I_e1 + c_2 I_e2),
+    # read from the force map like I_L from the others, left the maps
+    "force_current": " (the ladder's force current)",
     "advice": " (rebuild the maps on a larger grid, or pass extrapolate=True)",
     "advice_cli": (" (rebuild the maps on a larger grid, or pass extrapolate=True; on the "
                    "command line: --extrapolate)"),

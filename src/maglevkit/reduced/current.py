@@ -408,9 +408,6 @@ class CurrentModel:
         if eddy_branches == 2 and not self.motion_eddy:
             raise InputError("eddy_branches = 2 needs motion_eddy=True (it is the shielded-gap "
                              "ladder's second shielded section)")
-        if eddy_branches == 2 and self.freewheel:
-            raise InputError("eddy_branches = 2 with freewheel=True: the diode law is not "
-                             "carried by the three-state ladder yet; use eddy_branches=1")
         #: shielded sections of the ladder (1: two states per circuit, 2: three)
         self.eddy_branches = int(eddy_branches)
         if self.motion_eddy:
@@ -426,9 +423,14 @@ class CurrentModel:
             r_2, l_u = ladder.shielding_resistance_ohm, ladder.unshielded_inductance_H
             beta = ladder.unshielded_share
             gamma = ladder.force_share
+            shares: tuple[np.ndarray, ...] = (gamma,)
             if self.eddy_branches == 2:
                 ladder3, ladder3_step = motion_eddy3_parameters(maps, r_el)
                 r_ec = ladder3["r_a"]
+                shares = (ladder3["c_1"], ladder3["c_2"])
+            # the force current's shares, where one is not 0 (then it is range-checked
+            # like I_L: the force map is read there)
+            self._force_shares = shares if any(np.any(c != 0.0) for c in shares) else None
         elif m:
             if eddy_resistance is not None:
                 raise InputError(f"eddy_resistance = {eddy_resistance!r} chooses eq. 8's single "
@@ -437,6 +439,8 @@ class CurrentModel:
             r_ec, r_k, l_k, l_ref = _eddy_network(maps, m)
         else:
             r_ec = core.eddy_resistance_ohm
+        if not self.motion_eddy:
+            self._force_shares = None
         self.resistance_ohm = r_el
         #: ``R_ec`` of eq. 8, the eddy network's ``R_0`` with ``eddy_modes > 0``, the
         #: ladder's shunt ``R_a`` with ``motion_eddy``
@@ -504,12 +508,16 @@ class CurrentModel:
                 # the three-state ladder (eq8_shielded_gap3_rhs); eddy states (I_e1, I_e2)
                 e1, e2 = em[2 * j], em[2 * j + 1]
                 p3 = {k: float(v[j]) for k, v in ladder3.items()}
+                # behind the chopper's diodes with freewheel: eq. 8's diode law of the
+                # terminal current I_u = I_L + I_e1 + I_e2 (shielded_gap_freewheel_voltage)
+                u_j = (shielded_gap_freewheel_voltage(xm[j] + e1, e2, Um[j], r_el[j], p3["a"])
+                       if self.freewheel else Um[j])
                 d_il, d_e1, d_e2 = eq8_shielded_gap3_rhs(
-                    xm[j], e1, e2, Um[j], sdm[j], lt, dl, r_el[j], p3["a"], p3["r_2"],
+                    xm[j], e1, e2, u_j, sdm[j], lt, dl, r_el[j], p3["a"], p3["r_2"],
                     p3["l_u"], p3["r_3"], p3["l_2"], p3["beta"], p3["beta_2"])
                 mx_rhs.append(d_il)
                 eddy_rhs.append(ca.vertcat(d_e1, d_e2))
-                coils.append(eq8_coil_current(xm[j] + e1 + e2, Um[j], r_el[j], p3["a"]))
+                coils.append(eq8_coil_current(xm[j] + e1 + e2, u_j, r_el[j], p3["a"]))
                 f = sp(ca.vertcat(sm[j], ladder3_force_current(
                     xm[j] + e1 + e2, xm[j] + e1, xm[j], (p3["c_1"], p3["c_2"]))))[2]
             elif self.motion_eddy:
@@ -635,6 +643,14 @@ class CurrentModel:
             return self.outputs_fun(x[:nc], u, x[self._sl], x[2 * nc:])
         return self.outputs_fun(x[:nc], u, x[nc:])
 
+    def _eddy_shape(self) -> tuple[int, ...]:
+        """Shape of ``CurrentModelState.eddy_currents_A``: ``(n_circuits,)`` for the
+        two-state ladder (one eddy state per circuit, as ``MagnetBank``), else
+        ``(n_circuits, m)`` (the eddy network's ``m`` branches, the three-state ladder's
+        ``(I_e1, I_e2)``)."""
+        nc = self.n_circuits
+        return (nc,) if self.motion_eddy and self._n_e == 1 else (nc, self._n_e)
+
     def _eddy_state(self, state: CurrentModelState) -> np.ndarray:
         """The eddy-branch currents of ``state`` as a flat vector (empty for eq. 8)."""
         m = self._n_e
@@ -651,19 +667,42 @@ class CurrentModel:
                              "state has no eddy_currents_A; make it with this model's "
                              "initial_state")
         arr = real_array(e, "eddy_currents_A")
-        if arr.shape != (self.n_circuits, m):
-            raise InputError(f"eddy_currents_A: expected shape ({self.n_circuits}, {m}) "
-                             f"(circuits x eddy modes), got {arr.shape}")
+        shape = self._eddy_shape()
+        if len(shape) == 1 and arr.shape == (self.n_circuits, 1):
+            warnings.warn("eddy_currents_A of shape (n_circuits, 1) for the two-state ladder "
+                          "is deprecated: it has shape (n_circuits,), as in MagnetBank "
+                          "(docs/reduction.md, \"Gap motion\")", DeprecationWarning,
+                          stacklevel=external_stacklevel())
+            return arr.ravel()
+        if arr.shape != shape:
+            raise InputError(f"eddy_currents_A: expected shape {shape} "
+                             f"(circuits{'' if len(shape) == 1 else ' x eddy states'}), "
+                             f"got {arr.shape}")
         return arr.ravel()
 
     def _eddy_of(self, x: np.ndarray) -> np.ndarray | None:
         """The eddy-branch currents (n_c, m) of a full state vector, None for eq. 8."""
         if not self._n_e:
             return None
-        return np.array(x[2 * self.n_circuits:]).reshape(self.n_circuits, self._n_e)
+        return np.array(x[2 * self.n_circuits:]).reshape(self._eddy_shape())
+
+    def _check_force_current(self, xs: np.ndarray, t: np.ndarray) -> None:
+        """Range check of the ladder's force current (``I_L + gamma I_e``, three states
+        ``I_L + c_1 I_e1 + c_2 I_e2``) of the states ``xs`` (n_t, n_x) at the times ``t``:
+        the force map is read there, so it must lie in the maps as ``I_L`` does (the same
+        error or extrapolation warning, naming the force current).  Nothing to check
+        where every share is 0 (the force current is ``I_L``)."""
+        if self._force_shares is None:
+            return
+        nc, ne = self.n_circuits, self._n_e
+        il, e = xs[:, :nc], xs[:, 2 * nc:].reshape(-1, nc, ne)
+        i_f = (shielded_gap_force_current(il, e[..., 0], self._force_shares[0]) if ne == 1
+               else ladder3_force_current(il + e[..., 0] + e[..., 1], il + e[..., 0], il,
+                                          self._force_shares))
+        self._check_range(xs[:, self._sl], i_f, t, what=STEP_FLAG_MESSAGES["force_current"])
 
     def _check_range(self, s: np.ndarray, i_l: np.ndarray, t: np.ndarray | None = None, *,
-                     where: str | None = None) -> None:
+                     where: str | None = None, what: str = "") -> None:
         lo_s, hi_s = self.gap_range
         lo_i, hi_i = self.current_range
         tol_s, tol_i = self._tol_s, self._tol_i
@@ -677,6 +716,7 @@ class CurrentModel:
         j = int(idx[-1])
         if where is None:
             where = STEP_FLAG_MESSAGES["time"] % t[k] if t is not None else ""
+        where += what
         row = k if bad.ndim > 1 else 0
         self._out_of_maps(j, float(np.atleast_2d(s)[row, j]), float(np.atleast_2d(i_l)[row, j]),
                           where, inside_extension=bool(np.all(
@@ -901,8 +941,7 @@ class CurrentModel:
         self._check_range(self.substitute_gaps(g)[None, :], i[None, :], np.array([time]))
         if self._n_e:
             # steady state: U_L = 0, so every eddy branch has decayed (I_k = 0)
-            return CurrentModelState(float(time), i, g,
-                                     np.zeros((self.n_circuits, self._n_e)))
+            return CurrentModelState(float(time), i, g, np.zeros(self._eddy_shape()))
         return CurrentModelState(float(time), i, g)
 
     @renamed_keywords(voltages="voltages_V")
@@ -1097,6 +1136,7 @@ class CurrentModel:
             self._check_substeps(extremes[0], extremes[1], state.time_s, t1)
         else:
             self._check_range(x[self._sl][None, :], x[:nc][None, :], np.array([t1]))
+        self._check_force_current(x[None, :], np.array([t1]))
         new = CurrentModelState(t1, x[:nc], g + gd * dt, self._eddy_of(x))   # None for eq. 8
         return new, CurrentOutputs(t1, coil, x[:nc].copy(), fc, self._share @ fc, float(fc.sum()))
 
@@ -1284,6 +1324,7 @@ class CurrentModel:
         xs = np.concatenate([x0[:, None], xf], axis=1).T
         nc = self.n_circuits
         self._check_range(xs[:, self._sl], xs[:, :nc], t)
+        self._check_force_current(xs, t)
         if extremes is not None:
             lo, hi = extremes
             bad = (lo < self._lower[:, None]) | (hi > self._upper[:, None])
@@ -1397,7 +1438,8 @@ class CurrentModel:
             outs = (np.asarray(c1), np.asarray(f1))
         coil = np.concatenate([np.asarray(c0), outs[0]], axis=1)
         fc = np.concatenate([np.asarray(f0), outs[1]], axis=1).T
-        eddy = (xs[:, 2 * nc:].reshape(times.size, nc, self._n_e) if self._n_e else None)
+        eddy = (xs[:, 2 * nc:].reshape(times.size, *self._eddy_shape()) if self._n_e
+                else None)
         final = CurrentModelState(float(times[-1]), il[-1].copy(), g[-1].copy(),
                                   None if eddy is None else eddy[-1].copy())
         return ReducedSimulation(
@@ -1688,12 +1730,14 @@ def eq8_shielded_gap3_rhs(i_l: Any, i_e1: Any, i_e2: Any, u: Any, gap_rate: Any,
     return d_il, d_i2 - d_il, d_iu - d_i2
 
 
-def motion_eddy3_parameters(maps: CharacteristicMaps, resistance_ohm: np.ndarray
-                            ) -> tuple[dict[str, np.ndarray], float]:
+def motion_eddy3_parameters(maps: CharacteristicMaps, resistance_ohm: np.ndarray, *,
+                            what: str = "") -> tuple[dict[str, np.ndarray], float]:
     """The three-state ladder of ``maps`` (``motion_eddy3_*`` variables of ``build_maps``),
     checked: its elements per circuit by the short names ``r_a, l_u, r_2, l_2, r_3, beta,
     beta_2, c_1, c_2`` and ``a``, and the longest stable RK4 sub-step [s] (``1.5`` over the
     Gershgorin bound of the rates in ``(I_u, I_2, I_L)`` with the maps' smallest ``L~``).
+    ``what`` prefixes the error messages (e.g. ``"member 'm1': "``).  Both
+    :class:`CurrentModel` and :class:`~maglevkit.reduced.bank.MagnetBank` read the ladder here.
 
     Raises
     ------
@@ -1707,7 +1751,7 @@ def motion_eddy3_parameters(maps: CharacteristicMaps, resistance_ohm: np.ndarray
     names = [v[0] for v in MOTION_EDDY3_VARIABLES[:9]]
     missing = [n for n in names if n not in ds]
     if missing:
-        raise InputError(f"eddy_branches=2: these maps have no three-state ladder "
+        raise InputError(f"{what}eddy_branches=2: these maps have no three-state ladder "
                          f"({', '.join(missing[:2])}, ...); rebuild them with this version "
                          "(build_maps), or use eddy_branches=1")
     vals = [np.array(ds[n].values, dtype=float) for n in names]
@@ -1715,12 +1759,12 @@ def motion_eddy3_parameters(maps: CharacteristicMaps, resistance_ohm: np.ndarray
                    vals, strict=True))
     if not (all(np.all(np.isfinite(v)) for v in vals)
             and all(np.all(par[k] > 0) for k in ("r_a", "l_u", "r_2", "l_2", "r_3"))):
-        raise InputError("eddy_branches=2: these maps have no three-state ladder to use (the "
+        raise InputError(f"{what}eddy_branches=2: these maps have no three-state ladder to use (the "
                          "magnet has no eddy currents); use motion_eddy=False")
     lt_min = np.array([float(np.min(maps.variable("inductance_H", c))) for c in maps.circuits])
     l_3 = lt_min - par["l_u"] - par["l_2"]
     if np.any(l_3 <= 0):
-        raise InputError(f"eddy_branches=2: the maps' smallest L~ ({lt_min.min():.4g} H) is "
+        raise InputError(f"{what}eddy_branches=2: the maps' smallest L~ ({lt_min.min():.4g} H) is "
                          "not above the ladder's L_u + L_2 (the gap section would have no "
                          "inductance left); use eddy_branches=1")
     r_el = np.asarray(resistance_ohm, dtype=float)

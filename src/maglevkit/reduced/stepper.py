@@ -17,7 +17,9 @@ stepper runs :meth:`MagnetBank.step` behind the same interface.
 
 In a bank with shielded-gap ladder members (``MagnetBank.motion_eddy``) the state carries
 the shielding eddy currents ``I_e`` too (:attr:`BankStepper.eddy_currents_A`), bound and
-committed with the rest.
+committed with the rest; with three-state members (``MagnetBank.n_eddy_states == 2``) the
+two eddy states of every circuit, stored as the kernel reads them (``I_e1`` of every
+circuit, then ``I_e2``) and shown as an ``(n_circuits, 2)`` view.
 """
 
 from __future__ import annotations
@@ -125,9 +127,10 @@ class BankStepper:
         # kernel's block of results
         nm = len(bank.member_names)
         eddy = state.eddy_currents_A
+        # (two eddy states per circuit: column-major, the kernel's layout)
         self._block = np.concatenate([out.inductor_currents_A, out.currents_A,
                                       out.circuit_force_N, out.member_force_N, state.gaps_m]
-                                     + ([] if eddy is None else [eddy]))
+                                     + ([] if eddy is None else [eddy.ravel(order="F")]))
         ng0 = 3 * nc + nm + ng
         b = self._block
         self._il, self._coil = b[:nc], b[nc:2 * nc]
@@ -138,7 +141,9 @@ class BankStepper:
         self._pole = out.pole_force_N.copy()
         self._views = tuple(_readonly(a) for a in (self._il, self._coil, self._force,
                                                    self._member)
-                            + (() if self._ie is None else (self._ie,)))
+                            + (() if self._ie is None else
+                               (self._ie if eddy is None or eddy.ndim == 1
+                                else self._ie.reshape(eddy.shape[1], nc).T,)))
         if not self._fast:
             self._state = state
             return
@@ -231,7 +236,8 @@ class BankStepper:
     @property
     def eddy_currents_A(self) -> np.ndarray | None:
         """The shielding eddy currents ``I_e`` [A] of a bank with ladder members
-        (read-only; 0 in eq. 8 circuits, NaN for detailed members), else None."""
+        (read-only; 0 in eq. 8 circuits, NaN for detailed members), else None: shape
+        ``(n_circuits,)``, or ``(n_circuits, 2)`` (a view) with three-state members."""
         return self._views[4] if self._ie is not None else None
 
     @property
@@ -250,7 +256,7 @@ class BankStepper:
 
         members = () if self._fast else self._state.member_states
         return BankState(self._time, self._il.copy(), self._state_gaps.copy(), members,
-                         None if self._ie is None else self._ie.copy())
+                         None if self._ie is None else self._views[4].copy())
 
     # ------------------------------------------------------------------ stepping
     def _convert(self, value: Any, names: tuple[str, ...], what: str, unit: str) -> np.ndarray:
@@ -359,7 +365,7 @@ class BankStepper:
             self._pole[:] = out.pole_force_N
             if self._ie is not None:
                 assert st.eddy_currents_A is not None
-                self._ie[:] = st.eddy_currents_A
+                self._ie[:] = st.eddy_currents_A.ravel(order="F")
             self._g[:] = st.gaps_m
             self._state_gaps[:] = st.gaps_m
             self._time = st.time_s
