@@ -1,12 +1,13 @@
 """The bank with shielded-gap ladder members (``motion_eddy``): cost and accuracy.
 
 Cost: the in-place stepper at 100 circuits (50 TR09 standard magnets) at 1 ms, eq. 8
-against the ladder, each through the SIMD lanes (the default) and CasADi's generated C,
-in ns per circuit-step (CPU time, best of 5; run pinned, ``taskset -c 0``).
+against the two-state and the three-state ladder (``eddy_branches=2``), each through the
+SIMD lanes (the default) and CasADi's generated C, in ns per circuit-step (CPU time, best
+of 5, all in one run; run pinned, ``taskset -c 0``).
 
 Accuracy: the gap-sine sweep of ``bench_gap_motion`` (TR09 standard, 10 +- 1 mm, constant
-voltage of 34 A) through a bank of one ladder member, against the detailed model and
-against ``CurrentModel(maps, motion_eddy=True)`` on its own.
+voltage of the nominal current) through a bank of one ladder member (two- and
+three-state), against the detailed model and against the ``CurrentModel`` on its own.
 """
 
 from __future__ import annotations
@@ -62,7 +63,11 @@ def cost(maps: mk.CharacteristicMaps, cache: Path) -> list[str]:
                         ("eq. 8, CasADi C", {"codegen": "casadi"}),
                         ("ladder (motion_eddy), lanes (default)", {"motion_eddy": True}),
                         ("ladder (motion_eddy), CasADi C", {"motion_eddy": True,
-                                                           "codegen": "casadi"})):
+                                                           "codegen": "casadi"}),
+                        ("three-state ladder (eddy_branches=2), lanes (default)",
+                         {"motion_eddy": True, "eddy_branches": 2}),
+                        ("three-state ladder (eddy_branches=2), CasADi C",
+                         {"motion_eddy": True, "eddy_branches": 2, "codegen": "casadi"})):
         bank = MagnetBank(members, compiled="always", cache_dir=cache, **opts)
         st = bank.initial_state(gaps_m=0.010, currents_A=33.5)
         nc = bank.n_circuits
@@ -82,11 +87,10 @@ def cost(maps: mk.CharacteristicMaps, cache: Path) -> list[str]:
 
 
 def sweep(gm: Any) -> list[str]:
-    """Table rows: the gap-sine sweep through the bank, against the detailed model and the
-    single ladder model."""
-    mag, fm, _, ladder = gm.models()
-    bank = MagnetBank({"m": ladder}, compiled="auto")
-    u0 = fm.resistances * gm.CURRENT
+    """Table rows: the gap-sine sweep through banks of one two-state and one three-state
+    ladder member, against the detailed model and the single ladder model."""
+    mag, fm, _, ladder, _, ladder3 = gm.models()
+    u0 = fm.resistances * gm.nominal_current(mag)
     rows = []
     for f in SWEEP:
         dur, dt = max(2.0 / f, 0.1), min(1.0 / (100 * f), 1e-3)
@@ -95,20 +99,24 @@ def sweep(gm: Any) -> list[str]:
             return gm.GAP + gm.AMPLITUDE * np.sin(2 * np.pi * f * t)
 
         det = mk.simulate(fm, (0.0, dur), dt_s=dt, gaps_m=gaps, voltages_V=u0)
-        single = mk.simulate(ladder, (0.0, dur), dt_s=dt, gaps_m=gaps, voltages_V=u0)
         t = det.time_s
         g = gaps(t)
-        res = bank.simulate(t, gaps_m=np.repeat(g[:, None], bank.n_gaps, axis=1),
-                            voltages_V=u0)
         cd, fd = det.currents_A[:, 0], det.pole_force_N.sum(axis=1)
-        cb, fb = res.currents_A[:, 0], res.member_force_N[:, 0]
         last = t >= t[-1] - 1.0 / f * max(1, math.floor(f * dur / 2))
-        zd, zb = gm._fundamental(t[last], cd[last], f), gm._fundamental(t[last], cb[last], f)
-        phase = math.degrees(math.atan2(zb.imag, zb.real) - math.atan2(zd.imag, zd.real))
-        diff = float(np.max(np.abs(cb - single.currents_A[:, 0])))
-        rows.append(f"| {f:g} Hz | {100 * gm._ac_error(cd, cb):.1f} % | "
-                    f"{100 * gm._ac_error(cd, single.currents_A[:, 0]):.1f} % | "
-                    f"{phase:+.1f} deg | {100 * gm._ac_error(fd, fb):.1f} % | {diff:.1e} A |")
+        zd = gm._fundamental(t[last], cd[last], f)
+        for label, model in (("two-state", ladder), ("three-state", ladder3)):
+            bank = MagnetBank({"m": model}, compiled="auto")
+            single = mk.simulate(model, (0.0, dur), dt_s=dt, gaps_m=gaps, voltages_V=u0)
+            res = bank.simulate(t, gaps_m=np.repeat(g[:, None], bank.n_gaps, axis=1),
+                                voltages_V=u0)
+            cb, fb = res.currents_A[:, 0], res.member_force_N[:, 0]
+            zb = gm._fundamental(t[last], cb[last], f)
+            phase = math.degrees(math.atan2(zb.imag, zb.real) - math.atan2(zd.imag, zd.real))
+            diff = float(np.max(np.abs(cb - single.currents_A[:, 0])))
+            rows.append(f"| {f:g} Hz | {label} | {100 * gm._ac_error(cd, cb):.1f} % | "
+                        f"{100 * gm._ac_error(cd, single.currents_A[:, 0]):.1f} % | "
+                        f"{phase:+.1f} deg | {100 * gm._ac_error(fd, fb):.1f} % | "
+                        f"{100 * gm._ac_error(fd, single.force_N):.1f} % | {diff:.1e} A |")
     return rows
 
 
@@ -128,13 +136,15 @@ def run() -> str:
            "the RK4 sub-step to its stable step.", "",
            "| bank | circuits | RK4 sub-steps | sub-step [us] | ns / circuit-step | "
            "ns / circuit-sub-step |", "|---|---|---|---|---|---|", *cost_rows, "",
-           "Gap sine through a bank of one ladder member (error = RMS(bank - detailed) / "
-           "RMS(detailed - mean) of circuit 0's current; phase of its fundamental against "
-           "the detailed one; last column: largest difference bank - CurrentModel(maps, "
-           "motion_eddy=True) over the run):", "",
-           "| f | bank current error | CurrentModel current error | bank phase error | "
-           "bank force error | bank - CurrentModel |", "|---|---|---|---|---|---|",
-           *sweep(gm)]
+           "Gap sine through a bank of one ladder member, two-state (`motion_eddy=True`) and "
+           "three-state (`eddy_branches=2`) (error = RMS(bank - detailed) / RMS(detailed - "
+           "mean) of circuit 0's current and of the magnet force; phase of the current's "
+           "fundamental against the detailed one; last column: largest difference of the "
+           "coil current bank - CurrentModel(maps, motion_eddy=True, eddy_branches=...) "
+           "over the run):", "",
+           "| f | ladder | bank current error | CurrentModel current error | bank phase "
+           "error | bank force error | CurrentModel force error | bank - CurrentModel |",
+           "|---|---|---|---|---|---|---|---|", *sweep(gm)]
     return "\n".join(out)
 
 

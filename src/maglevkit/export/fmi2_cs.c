@@ -20,7 +20,9 @@
      Nothing is clamped.
    - with MOTION_EDDY (config.h) every circuit carries a second state, the shielding eddy
      current I_e of the shielded-gap ladder (0 in eq. 8 circuits; started at 0, the
-     steady state), advanced and restored with I_L.
+     steady state), advanced and restored with I_L; with N_EDDY 2 (three-state ladder
+     members) two, I_e1 and I_e2 (stored as the kernel reads them: I_e1 of every circuit,
+     then I_e2).
 */
 
 #include <float.h>
@@ -60,7 +62,8 @@ typedef struct {
     double par[NC * N_PAR];   /* kernel parameters (column per circuit) */
     double xs[NC], coil[NC], force[NC], lo[NC], hi[NC], bad[NC], lt[NC];
 #if MOTION_EDDY
-    double xe[NC], xes[NC];   /* I_e, the ladder's second state [A], and its step result */
+    double xe[NC * N_EDDY], xes[NC * N_EDDY];   /* I_e, the ladder's eddy states [A], and
+                                                  their step result */
 #endif
     double s_arg[NC], h_arg;
     const casadi_real **arg;
@@ -130,10 +133,10 @@ static void set_defaults(Model *m) {
         m->r[VR_I0(j)] = START_I0[j];
         m->s_now[j] = START_S[j];
         m->x[j] = START_I0[j];
-#if MOTION_EDDY
-        m->xe[j] = 0.0;
-#endif
     }
+#if MOTION_EDDY
+    for (j = 0; j < NC * N_EDDY; ++j) m->xe[j] = 0.0;
+#endif
     m->r[VR_MAXSTEP] = START_MAX_SUBSTEP;
     memcpy(m->par, PAR0, sizeof m->par);
     m->time = 0.0;
@@ -408,7 +411,7 @@ fmi2Status fmi2ExitInitializationMode(fmi2Component c) {
         return refuse(m, "fmi2ExitInitializationMode", "only allowed in initialization mode");
     for (j = 0; j < NC; ++j) m->x[j] = m->r[VR_I0(j)];
 #if MOTION_EDDY
-    for (j = 0; j < NC; ++j) m->xe[j] = 0.0;   /* the steady state of the ladder */
+    for (j = 0; j < NC * N_EDDY; ++j) m->xe[j] = 0.0;   /* the steady state of the ladder */
 #endif
     if (check_parameters(m) || check_inputs(m, " at initialization")) return fmi2Error;
     update_parameters(m);
@@ -601,7 +604,7 @@ fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunicationPoint,
     Model *m = (Model *)c;
     double h = communicationStepSize, t0, hs, x0[NC], s0[NC], sk[NC];
 #if MOTION_EDDY
-    double e0[NC];
+    double e0[NC * N_EDDY];
 #endif
     long n, k;
     int j;
@@ -619,10 +622,10 @@ fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunicationPoint,
     for (j = 0; j < NC; ++j) {
         s0[j] = m->s_now[j];
         x0[j] = m->x[j];
-#if MOTION_EDDY
-        e0[j] = m->xe[j];
-#endif
     }
+#if MOTION_EDDY
+    memcpy(e0, m->xe, sizeof e0);
+#endif
     /* RK4 sub-steps of at most max_substep (the rule of maglevkit's models, config.h) */
     n = SUBSTEP_COUNT(h, m->r[VR_MAXSTEP]);
     hs = h / (double)n;

@@ -23,7 +23,9 @@ Members with the shielded-gap ladder (``CurrentModel(maps, motion_eddy=True)`` o
 ``MagnetBank(..., motion_eddy=True)``) are exported with their second state per circuit,
 the shielding eddy current ``I_e``, inside the FMU (the same kernel as the bank's; the
 parameter ``R_ec`` of a ladder circuit is its shunt ``R_a``, and ``max_substep`` starts at
-most at the ladder's stable RK4 step, as the bank limits it).
+most at the ladder's stable RK4 step, as the bank limits it).  Three-state ladder members
+(``CurrentModel(maps, motion_eddy=True, eddy_branches=2)``, ``export_fmu(...,
+eddy_branches=2)``) carry their two eddy states ``I_e1``, ``I_e2`` per circuit the same way.
 """
 
 from __future__ import annotations
@@ -140,7 +142,8 @@ def export_fmu(magnet_or_maps: ReducedSource, path: str | os.PathLike[str], *,
                eddy_resistance: str = "fit", interpolation: str = "bicubic",
                max_substep_s: float = 1e-3, start_gaps_m: Any = None,
                initial_currents_A: Any = None, stop_time_s: float = 1.0,
-               step_size_s: float = 1e-3, motion_eddy: bool = False) -> ExportedFmu:
+               step_size_s: float = 1e-3, motion_eddy: bool = False,
+               eddy_branches: int = 1) -> ExportedFmu:
     """Write an FMI 2.0 Co-Simulation FMU of the reduced model of every circuit (eq. 8).
 
     Parameters
@@ -178,6 +181,11 @@ def export_fmu(magnet_or_maps: ReducedSource, path: str | os.PathLike[str], *,
         (``MagnetBank(..., motion_eddy=True)``: a second state per circuit inside the FMU);
         a ``CurrentModel`` member keeps its own choice, a bank its own (then leave this
         ``False``).
+    eddy_branches : {1, 2}
+        With ``motion_eddy=True``: the ladder of members given as maps has one shielded
+        section (1, default: state ``I_e``) or two (2, the three-state ladder:
+        ``I_e1``, ``I_e2`` per circuit inside the FMU; ``MagnetBank(...,
+        eddy_branches=2)``).  A ``CurrentModel`` member or a bank keeps its own.
 
     Returns
     -------
@@ -202,7 +210,7 @@ def export_fmu(magnet_or_maps: ReducedSource, path: str | os.PathLike[str], *,
         raise InputError(f"description = {description!r} must be a string")
     flag(motion_eddy, "motion_eddy")
     bank, default_name = _as_bank(magnet_or_maps, eddy_resistance, interpolation,
-                                  bool(motion_eddy))
+                                  bool(motion_eddy), eddy_branches)
     if bank.motion_eddy:
         # the ladder's stable RK4 step (MotionEddyLadder.max_step_s), as the bank limits it
         max_substep_s = min(float(max_substep_s), bank.max_step_s)
@@ -239,7 +247,8 @@ def export_fmu(magnet_or_maps: ReducedSource, path: str | os.PathLike[str], *,
                                                    encoding="utf-8")
         (src / "config.h").write_text(_config_header(
             ident, guid, circuits, par, ranges, s_start, i_start, r_el, r_ec,
-            float(max_substep_s)) + _messages_header(bank), encoding="utf-8")
+            float(max_substep_s), bank.n_eddy_states) + _messages_header(bank),
+            encoding="utf-8")
         pkg = resources.files("maglevkit.export")
         (src / "fmi2_cs.c").write_bytes((pkg / "fmi2_cs.c").read_bytes())
         for h in FMI_HEADERS:
@@ -282,12 +291,16 @@ def _target_path(path: Any) -> Path:
 
 
 def _as_bank(model: ReducedSource, eddy_resistance: str, interpolation: str,
-             motion_eddy: bool = False) -> tuple[MagnetBank, str]:
+             motion_eddy: bool = False, eddy_branches: int = 1) -> tuple[MagnetBank, str]:
     """The bank to export and a default model name."""
     if isinstance(model, MagnetBank):
         if motion_eddy:
             raise InputError("motion_eddy=True applies to members given as maps; a bank has "
                              "chosen already (build it with MagnetBank(..., motion_eddy=True))")
+        if eddy_branches != 1:
+            raise InputError(f"eddy_branches = {eddy_branches!r} applies to members given as "
+                             "maps; a bank has chosen already (build it with MagnetBank(..., "
+                             "motion_eddy=True, eddy_branches=2))")
         kinds = {name: kind for name, kind, _ in model.members}
         detailed = [n for n, k in kinds.items() if k != "reduced"]
         if detailed:
@@ -322,7 +335,7 @@ def _as_bank(model: ReducedSource, eddy_resistance: str, interpolation: str,
                          f"CurrentModel, a MagnetBank or a mapping of them, got "
                          f"{type(model).__name__}{hint}")
     bank = MagnetBank(members, interpolation=interpolation, eddy_resistance=eddy_resistance,
-                      compiled="never", motion_eddy=motion_eddy)
+                      compiled="never", motion_eddy=motion_eddy, eddy_branches=eddy_branches)
     return bank, name
 
 
@@ -406,10 +419,13 @@ def _generate_model_code(bank: MagnetBank, ident: str, src: Path) -> None:
     vi, vs, vu, vsd = (ca.MX.sym(nm, n) for nm in ("I_L", "s", "U", "sdot"))
     vh = ca.MX.sym("h")
     vp = ca.MX.sym("p", npar, n)
-    # shielded-gap ladder members: one more input and output, I_e (MagnetBank)
-    ve = [ca.MX.sym("I_e", n)] if bank.motion_eddy else []
+    # shielded-gap ladder members: one more input and output, I_e (MagnetBank), (n, n_e)
+    # column-major with n_e eddy states per circuit (I_e1 of every circuit, then I_e2)
+    ne = bank.n_eddy_states
+    ve = [ca.MX.sym("I_e", n, ne)] if bank.motion_eddy else []
     res = one.map(n, "serial")(vi.T, vs.T, vu.T, vsd.T, vh, vp, *(v.T for v in ve))
-    step = ca.Function(f"{ident}_step", [vi, vs, vu, vsd, vh, vp, *ve], [r.T for r in res],
+    outs = [r.T for r in res[:6]] + ([ca.horzcat(*(r.T for r in res[6:]))] if ve else [])
+    step = ca.Function(f"{ident}_step", [vi, vs, vu, vsd, vh, vp, *ve], outs,
                        ["I_L", "s", "U", "sdot", "h", "p"] + ["I_e"] * len(ve),
                        ["I_L_next", "I", "F", "I_L_min", "I_L_max", "bad"]
                        + ["I_e_next"] * len(ve))
@@ -442,7 +458,8 @@ def _c_string(text: str) -> str:
 
 def _config_header(ident: str, guid: str, circuits: tuple[str, ...], par: np.ndarray,
                    ranges: np.ndarray, s_start: np.ndarray, i_start: np.ndarray,
-                   r_el: np.ndarray, r_ec: np.ndarray, max_substep: float) -> str:
+                   r_el: np.ndarray, r_ec: np.ndarray, max_substep: float,
+                   n_eddy: int = 0) -> str:
     nc = len(circuits)
     rows = {k: i for i, k in enumerate(KERNEL_PARAMETERS)}
     lines = [
@@ -452,6 +469,8 @@ def _config_header(ident: str, guid: str, circuits: tuple[str, ...], par: np.nda
         f"#define NC {nc}", f"#define N_PAR {par.shape[0]}",
         "/* 1: shielded-gap ladder circuits (MagnetBank.motion_eddy), state I_e too */",
         f"#define MOTION_EDDY {1 if par.shape[0] > len(KERNEL_PARAMETERS) else 0}",
+        "/* eddy states per circuit (MagnetBank.n_eddy_states: 1 I_e, 2 I_e1 and I_e2) */",
+        f"#define N_EDDY {max(n_eddy, 1)}",
         f"#define PAR_R_EL {rows['resistance_ohm']}", f"#define PAR_A {rows['a']}",
         f"#define MK_STEP {ident}_step", f"#define MK_STEP_WORK {ident}_step_work",
         f"#define MK_OUT {ident}_out", f"#define MK_OUT_WORK {ident}_out_work",
