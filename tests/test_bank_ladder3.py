@@ -355,3 +355,36 @@ def test_fmu_of_a_three_state_member_equals_the_bank(u_maps, tmp_path, via: str)
     assert max(worst) <= 1e-12
     # both eddy states were at work, so a two-state or eq. 8 FMU would differ
     assert peak > 1e-3
+
+
+def test_general_path_and_failed_stepper_step(u_maps) -> None:
+    """With one gap input per pole (the bank's general path, ``step`` per member) a
+    three-state member still follows the CurrentModel (1e-12, the poles' mean gap may
+    round); a stepper step that leaves the maps raises and leaves the stepper at the last
+    good step, both eddy states included."""
+    cm = mk.CurrentModel(u_maps, motion_eddy=True, eddy_branches=2)
+    bank = MagnetBank({"m": cm}, compiled="never", gap_inputs="pole")
+    assert not bank.compiled_fast_path
+    st = bank.initial_state(gaps_m=0.010, currents_A=20.0)
+    cs = cm.initial_state(gaps_m=0.010, currents_A=20.0)
+    u = float(bank.resistance_ohm[0]) * 20.0
+    ng = bank.n_gaps
+    for k in range(50):
+        g0, gd = _gap_sine(k)
+        st, out = bank.step(st, DT, u, np.full(ng, g0), np.full(ng, gd))
+        cs, co = cm.step(cs, DT, u, np.full(ng, g0), np.full(ng, gd))
+        assert np.max(np.abs(st.eddy_currents_A - cs.eddy_currents_A)) < TOL_A
+        assert abs(out.currents_A[0] - co.currents_A[0]) < TOL_A
+    assert np.all(np.abs(st.eddy_currents_A) > 1e-3)
+    fast = MagnetBank({"m": cm}, compiled="never")
+    stepper = fast.stepper(fast.initial_state(gaps_m=0.010, currents_A=20.0), DT)
+    for k in range(20):
+        g0, gd = _gap_sine(k)
+        stepper.advance(u, g0, gd)
+    before = stepper.state
+    with pytest.raises(OutOfRangeError):
+        stepper.advance(u, 0.0139, 50.0)          # the gap leaves the maps (14 mm)
+    after = stepper.state
+    assert after.time_s == before.time_s
+    assert np.array_equal(after.eddy_currents_A, before.eddy_currents_A)
+    assert np.array_equal(after.inductor_currents_A, before.inductor_currents_A)
