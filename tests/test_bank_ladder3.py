@@ -219,8 +219,8 @@ def test_force_current_is_range_checked(u_maps, branches: int) -> None:
     for extrapolate in (False, True):
         bank = MagnetBank({"m": u_maps}, motion_eddy=True, eddy_branches=branches,
                           compiled="never", extrapolate=extrapolate)
-        st = dataclasses.replace(bank.initial_state(gaps_m=0.010, currents_A=39.0),
-                                 eddy_currents_A=e_out.reshape(bank._eddy_shape()))
+        st0 = bank.initial_state(gaps_m=0.010, currents_A=39.0)
+        st = dataclasses.replace(st0, eddy_currents_A=e_out.reshape(st0.eddy_currents_A.shape))
         if extrapolate:
             with pytest.warns(UserWarning, match="extrapolating"):
                 st1, _ = bank.step(st, 1e-5, u, 0.010)
@@ -233,8 +233,8 @@ def test_force_current_is_range_checked(u_maps, branches: int) -> None:
     cm.step(flipped, 1e-5, u, np.full(ng, 0.010))
     bank = MagnetBank({"m": u_maps}, motion_eddy=True, eddy_branches=branches,
                       compiled="never")
-    st = dataclasses.replace(bank.initial_state(gaps_m=0.010, currents_A=39.0),
-                             eddy_currents_A=-e_out.reshape(bank._eddy_shape()))
+    st0 = bank.initial_state(gaps_m=0.010, currents_A=39.0)
+    st = dataclasses.replace(st0, eddy_currents_A=-e_out.reshape(st0.eddy_currents_A.shape))
     bank.step(st, 1e-5, u, 0.010)
 
 
