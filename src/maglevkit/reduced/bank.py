@@ -115,7 +115,7 @@ row ``a`` holds ``1 + R_el/R_a``.  In a bank with three-state ladder members
 ``L_u``, ``beta`` hold the outer section's ``R_2``, ``L_u``, ``beta`` and ``force_share``
 holds ``c_1`` (the share of the first eddy state ``I_e1``)."""
 MOTION_EDDY3_PARAMETERS = ("inner_shielding_resistance_ohm", "inner_inductance_H",
-                           "inner_share", "second_force_share")
+                           "inner_share", "force_share_2")
 """Rows appended after :data:`MOTION_EDDY_PARAMETERS` in a bank with three-state ladder
 members (``MagnetBank.n_eddy_states == 2``): the inner shield ``R_3`` [ohm], the inner
 series ``L_2`` [H], the inner share ``beta_2`` of the motion term [-] and the share
