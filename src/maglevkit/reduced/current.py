@@ -85,11 +85,12 @@ class CurrentModelState:
         The ODE states ``I_L`` [A].
     gaps_m : ndarray (n_gaps,)
         Pole gaps [m].
-    eddy_currents_A : ndarray (n_circuits, m) or None
+    eddy_currents_A : ndarray (n_circuits, m), (n_circuits,) or None
         Currents ``I_k`` [A] of the eddy network's RL branches (``CurrentModel(maps,
-        eddy_modes=m)``), or ``(n_circuits, 1)``: the shielding eddy current ``I_e`` of
-        the gap section (``motion_eddy=True``); None for eq. 8's single ``R_ec`` (the
-        default).
+        eddy_modes=m)``); ``(n_circuits,)``: the shielding eddy current ``I_e`` of the gap
+        section (``motion_eddy=True``; ``(n_circuits, 1)`` is still read, deprecated);
+        ``(n_circuits, 2)``: ``(I_e1, I_e2)`` of the three-state ladder
+        (``eddy_branches=2``); None for eq. 8's single ``R_ec`` (the default).
     """
 
     time_s: float
@@ -155,9 +156,10 @@ class ReducedSimulation:
     final_state : CurrentModelState
         State at ``time_s[-1]``, to continue with :meth:`CurrentModel.step` or as
         ``initial_state`` of another :meth:`CurrentModel.simulate`.
-    eddy_currents_A : ndarray (n_t, n_circuits, m) or None
+    eddy_currents_A : ndarray (n_t, n_circuits, m), (n_t, n_circuits) or None
         Eddy-branch currents ``I_k`` [A] with ``eddy_modes = m > 0``, the shielding eddy
-        current ``I_e`` (``m = 1``) with ``motion_eddy=True``, else None.
+        current ``I_e`` (``(n_t, n_circuits)``) with ``motion_eddy=True``, ``(I_e1, I_e2)``
+        (``(n_t, n_circuits, 2)``) with ``eddy_branches=2``, else None.
     """
 
     time_s: np.ndarray
@@ -290,7 +292,8 @@ class CurrentModel:
         current passes through eddy dynamics; ``R_a``, ``L_u``, ``R_2`` are fitted by
         ``build_maps`` to the detailed model's small-signal gap and voltage responses
         (maps variables ``motion_eddy_*``).  Two states per circuit: ``I_L`` and the
-        shielding eddy current ``I_e`` (``eddy_currents_A``, shape ``(n_circuits, 1)``).
+        shielding eddy current ``I_e`` (``eddy_currents_A``, shape ``(n_circuits,)``, as in
+        :class:`MagnetBank`).
         Not with ``eddy_modes > 0`` or ``eddy_resistance``.
     eddy_branches : int
         With ``motion_eddy=True``: ``1`` (default) the two-state ladder above; ``2`` the
@@ -299,8 +302,9 @@ class CurrentModel:
         section 8): states ``I_L`` and ``eddy_currents_A`` of shape ``(n_circuits, 2)``,
         ``(I_e1, I_e2)`` = ``(I_2 - I_L, I_u - I_2)``, the force
         ``F(s, I_L + c_1 I_e1 + c_2 I_e2)``.  B-spline path only (with or without
-        ``linearize``); not with ``freewheel``, and refused as a :class:`MagnetBank` member
-        (so by the bank's stepper, the FMU, the MPC and the vehicles) until they carry it.
+        ``linearize``); with ``freewheel`` the diodes act on the terminal current ``I_L +
+        I_e1 + I_e2``; a :class:`MagnetBank` member (its kernel, stepper and the FMU carry
+        it).
     freewheel : bool
         ``False`` (default): eq. 8 with the applied voltage as given.  ``True``: behind a
         two-quadrant chopper with freewheeling diodes, the coil current cannot go below
@@ -681,7 +685,8 @@ class CurrentModel:
         return arr.ravel()
 
     def _eddy_of(self, x: np.ndarray) -> np.ndarray | None:
-        """The eddy-branch currents (n_c, m) of a full state vector, None for eq. 8."""
+        """The eddy-branch currents of a full state vector (:meth:`_eddy_shape`), None for
+        eq. 8."""
         if not self._n_e:
             return None
         return np.array(x[2 * self.n_circuits:]).reshape(self._eddy_shape())
