@@ -19,7 +19,7 @@ import json
 import math
 import warnings
 from collections.abc import Callable, Mapping
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
@@ -82,7 +82,10 @@ class ModelOptions:
         U-magnet's rail split under and between the poles.  A kind refuses the models
         its builder does not have (:func:`eddy_models_of_kind`: the ladder on every kind
         of :data:`LADDER_KINDS`, the split ladder on the U-magnet only), with or without
-        ``eddy_currents``.
+        ``eddy_currents``.  A magnet file may name its own (``[magnet] eddy_model``,
+        ``eddy_layers``): :func:`load_magnet` and :func:`build_magnet` without these
+        options take the file's values (a built :class:`Magnet`'s options hold the
+        values used).
     eddy_layers : int
         Tubes per iron part of the ladder (1 ... 8; ignored by ``"lumped"``).
 
@@ -115,6 +118,9 @@ class ModelOptions:
         object.__setattr__(self, "eddy_layers", int(n))
 
 
+#: Options a magnet file may set in its ``[magnet]`` table (an option given to
+#: :func:`load_magnet` or :func:`build_magnet` wins).
+FILE_OPTION_NAMES = ("eddy_model", "eddy_layers")
 #: The True/False physics switches of :class:`ModelOptions`.
 SWITCH_NAMES = ("saturation", "fringing", "leakage", "eddy_currents")
 #: All options of :class:`ModelOptions` (keyword names of ``load_magnet`` and
@@ -569,7 +575,8 @@ def register_kind(kind: str, builder: Builder, tables: tuple[str, ...],
 
 
 def build_magnet(parameters: Mapping[str, Any], *, options: ModelOptions | None = None,
-                 source: str = "", provenance: Mapping[str, str] | None = None) -> Magnet:
+                 source: str = "", provenance: Mapping[str, str] | None = None,
+                 file_options: tuple[str, ...] | None = None) -> Magnet:
     """Build a :class:`Magnet` from a parsed parameter dictionary.
 
     Parameters
@@ -585,6 +592,10 @@ def build_magnet(parameters: Mapping[str, Any], *, options: ModelOptions | None 
     provenance : mapping of str to str, optional
         Extra ``"table.key"`` -> provenance tag entries (``[P]``, ``[R]``, ``[E]`` ...),
         merged under the ``[provenance]`` table of ``parameters`` (which wins).
+    file_options : tuple of str, optional
+        The options (of :data:`FILE_OPTION_NAMES`: ``eddy_model``, ``eddy_layers``) that
+        the ``[magnet]`` table sets where it has them, instead of ``options``.  Default:
+        all of them when ``options`` is None, none otherwise.
 
     Returns
     -------
@@ -606,12 +617,19 @@ def build_magnet(parameters: Mapping[str, Any], *, options: ModelOptions | None 
         A dimensional value outside its plausible range (:data:`MAGNET_PLAUSIBLE`; most
         likely a unit slip such as mm typed into a metre key), naming the key.
     """
+    if file_options is None:
+        file_options = FILE_OPTION_NAMES if options is None else ()
+    unknown = sorted(set(file_options) - set(FILE_OPTION_NAMES))
+    if unknown:
+        raise InputError(f"file_options = {file_options!r}: {unknown} cannot come from a "
+                         f"file; allowed are {', '.join(FILE_OPTION_NAMES)}")
     return _build(parameters, options=options, source=source, provenance=provenance,
-                  check_provenance=True)
+                  check_provenance=True, from_file_keys=tuple(file_options))
 
 
 def _build(parameters: Mapping[str, Any], *, options: ModelOptions | None, source: str,
-           provenance: Mapping[str, str] | None, check_provenance: bool) -> Magnet:
+           provenance: Mapping[str, str] | None, check_provenance: bool,
+           from_file_keys: tuple[str, ...] = ()) -> Magnet:
     if options is not None and not isinstance(options, ModelOptions):
         raise InputError(f"options = {options!r}: expected a ModelOptions (e.g. "
                          "ModelOptions(saturation=False)) or None")
@@ -627,12 +645,16 @@ def _build(parameters: Mapping[str, Any], *, options: ModelOptions | None, sourc
         raise ParameterFileError(f"[magnet] kind = {kind!r} is unknown; known kinds: "
                                  f"{', '.join(sorted(_BUILDERS))}")
     builder, tables = _BUILDERS[kind]
+    from_file = "eddy_model" in from_file_keys and "eddy_model" in mag
+    options = _file_options(options, mag, source or "parameters", from_file_keys)
     allowed_models = eddy_models_of_kind(kind)
     if options.eddy_model not in allowed_models:
-        raise InputError(f"eddy_model = {options.eddy_model!r} is not available for kind "
-                         f"{kind!r}: use {' or '.join(map(repr, reversed(allowed_models)))} "
-                         f"('ladder': kinds {', '.join(LADDER_KINDS)}; 'ladder_split': "
-                         f"kind {', '.join(LADDER_SPLIT_KINDS)})")
+        error = ParameterFileError if from_file else InputError
+        raise error(f"{source or 'parameters'}: [magnet] " * from_file
+                    + f"eddy_model = {options.eddy_model!r} is not available for kind "
+                    f"{kind!r}: use {' or '.join(map(repr, reversed(allowed_models)))} "
+                    f"('ladder': kinds {', '.join(LADDER_KINDS)}; 'ladder_split': "
+                    f"kind {', '.join(LADDER_SPLIT_KINDS)})")
     allowed = {"magnet", "materials", "provenance", "operating", "calibration", *tables}
     unknown = sorted(set(parameters) - allowed)
     if unknown:
@@ -650,7 +672,9 @@ def _build(parameters: Mapping[str, Any], *, options: ModelOptions | None, sourc
         # can refuse the value without naming its key (a unit slip is the likely cause)
         check_plausible(parameters, MAGNET_PLAUSIBLE, source or "parameters", stacklevel=4)
     try:
-        name, network = builder(parameters, materials, options)
+        # the file's option keys are read above; the builders' [magnet] schemas lack them
+        name, network = builder({**parameters, "magnet": {
+            k: v for k, v in mag.items() if k not in FILE_OPTION_NAMES}}, materials, options)
     except (ParameterError, MaterialError) as exc:
         hint = ""
         if "eddy-current element" in str(exc):
@@ -685,6 +709,24 @@ def _build(parameters: Mapping[str, Any], *, options: ModelOptions | None, sourc
     return Magnet(name=name, kind=kind, network=network, parameters=_plain(parameters),
                   provenance=prov, options=options, source=source,
                   plausible_range=None if ranges is None else ranges(parameters))
+
+
+def _file_options(options: ModelOptions, mag: Mapping[str, Any], source: str,
+                  keys: tuple[str, ...]) -> ModelOptions:
+    """``options`` with the options named in ``keys`` (of :data:`FILE_OPTION_NAMES`: the
+    ones the caller did not give) taken from the file's ``[magnet]`` table ``mag`` where it
+    has them.
+
+    Raises
+    ------
+    ParameterFileError
+        A file value that :class:`ModelOptions` refuses, naming the key.
+    """
+    chosen = {key: mag[key] for key in keys if key in mag}
+    try:
+        return replace(options, **chosen)
+    except InputError as exc:
+        raise ParameterFileError(f"{source}: [magnet] {exc}") from None
 
 
 def _warn_provenance(parameters: Mapping[str, Any], raw_prov: Mapping[str, Any],
@@ -799,8 +841,8 @@ def bundled_magnets() -> list[str]:
 
 
 def load_magnet(source: str | Path, *, saturation: bool = True, fringing: bool = True,
-                leakage: bool = True, eddy_currents: bool = True, eddy_model: str = "lumped",
-                eddy_layers: int = 6) -> Magnet:
+                leakage: bool = True, eddy_currents: bool = True, eddy_model: str | None = None,
+                eddy_layers: int | None = None) -> Magnet:
     """Load a magnet from a TOML file path or a bundled name (e.g. ``"u-magnet"``).
 
     Parameters
@@ -810,11 +852,13 @@ def load_magnet(source: str | Path, *, saturation: bool = True, fringing: bool =
     saturation, fringing, leakage, eddy_currents : bool
         Physics switches (:class:`ModelOptions`); True or False only.
     eddy_model : str
-        ``"lumped"`` (default), ``"ladder"`` (diffusing eddy currents, ``eddy_layers``
-        nested tubes per iron part) or ``"ladder_split"`` (the ladder, U-magnet rail split
-        under and between the poles); :class:`ModelOptions`.
-    eddy_layers : int
-        Tubes per iron part of the ladder (1 ... 8).
+        ``"lumped"``, ``"ladder"`` (diffusing eddy currents, ``eddy_layers`` nested tubes
+        per iron part) or ``"ladder_split"`` (the ladder, U-magnet rail split under and
+        between the poles); :class:`ModelOptions`.  None (default): the file's
+        ``[magnet] eddy_model``, else ``"lumped"``.
+    eddy_layers : int or None
+        Tubes per iron part of the ladder (1 ... 8); None (default): the file's
+        ``[magnet] eddy_layers``, else 6.
 
     Raises
     ------
@@ -832,12 +876,17 @@ def load_magnet(source: str | Path, *, saturation: bool = True, fringing: bool =
     PlausibilityWarning
         A dimensional value far outside its plausible range (see :func:`build_magnet`).
     """
+    default = ModelOptions()   # the options the file does not set
     options = ModelOptions(saturation=saturation, fringing=fringing, leakage=leakage,
-                           eddy_currents=eddy_currents, eddy_model=eddy_model,
-                           eddy_layers=eddy_layers)
+                           eddy_currents=eddy_currents,
+                           eddy_model=default.eddy_model if eddy_model is None else eddy_model,
+                           eddy_layers=default.eddy_layers if eddy_layers is None
+                           else eddy_layers)
+    from_file = tuple(k for k, v in (("eddy_model", eddy_model), ("eddy_layers", eddy_layers))
+                      if v is None)
     params, label = read_parameter_file(source, what="magnet")
     try:
-        return build_magnet(params, options=options, source=label)
+        return build_magnet(params, options=options, source=label, file_options=from_file)
     except ParameterFileError as exc:   # every message names the file (as a vehicle's)
         if str(exc).startswith(label):
             raise
