@@ -58,7 +58,8 @@ from .errors import DataError, DataWarning, InputError, MaglevkitWarning, Solver
 from .parameter_files import toml_text
 
 __all__ = ["PARAMETERS", "DEFAULT_PARAMETERS", "DYNAMIC_PARAMETERS", "STEP_COLUMNS",
-           "STEP_GAP_PLAUSIBLE_M", "STEP_FINE_STEPS", "Calibration", "ParameterSetScore",
+           "STEP_GAP_PLAUSIBLE_M", "STEP_FINE_STEPS", "STEP_REST_TOLERANCE",
+           "STEP_SPAN_MAX_TAU", "Calibration", "ParameterSetScore",
            "StaticPoints",
            "StepResponses", "VoltageStep", "calibrate", "calibrated_network",
            "parameter_sensitivities", "read_points", "read_steps", "select_parameters",
@@ -267,15 +268,22 @@ def read_steps(path: str | Path) -> StepResponses:
     unknown = [h for h in header if h not in allowed]
     missing = [h for h in STEP_COLUMNS if h not in header]
     if unknown or missing or len(set(header)) != len(header):
-        raise DataError(f"{p}: columns {header}: unknown {unknown}, missing {missing}; a "
-                        f"voltage-step file has {', '.join(STEP_COLUMNS)} and optionally "
-                        "step, circuit (each once)")
+        import difflib
+
+        hints = [f"{u!r} -> {m[0]!r}?" for u in unknown
+                 for m in [difflib.get_close_matches(u, missing or allowed, n=1, cutoff=0.6)]
+                 if m]
+        raise DataError(f"{p}: columns {header}: unknown {unknown}, missing {missing}"
+                        + (f" (did you mean {', '.join(hints)})" if hints else "")
+                        + f"; a voltage-step file has {', '.join(STEP_COLUMNS)} and "
+                        "optionally step, circuit (each once)")
     if not records:
         raise DataError(f"{p}: the file has a header but no data rows")
     col = {h: k for k, h in enumerate(header)}
     steps: list[VoltageStep] = []
     group: list[tuple[int, list[float]]] = []
     key: tuple[Any, ...] | None = None
+    first_row: dict[str, int] = {}
 
     def close() -> None:
         if not group:
@@ -287,7 +295,16 @@ def read_steps(path: str | Path) -> StepResponses:
         if np.count_nonzero(after) < 3:
             raise DataError(f"{p}: the step starting at row {rows[0]} has "
                             f"{np.count_nonzero(after)} samples at time_s > 0; a step needs at "
-                            "least 3 after t = 0")
+                            "least 3 after t = 0 (gap_m, initial_current_A, voltage_V and "
+                            "circuit are constant over a step's rows: a change starts a new "
+                            "step)")
+        if label in first_row:
+            raise DataError(f"{p}: row {rows[0]}: step {label!r} again (its rows start at row "
+                            f"{first_row[label]}) with another gap_m, initial_current_A, "
+                            "voltage_V or circuit, or after another step; a step's rows are "
+                            "consecutive and share those values")
+        first_row[label] = int(rows[0])
+        _check_rest(p, label, rows[~after], vals[~after], vals[after])
         step = VoltageStep(label=label, time_s=vals[after, 0], current_A=vals[after, 1],
                            gap_m=float(vals[0, 2]), initial_current_A=float(vals[0, 3]),
                            voltage_V=float(vals[0, 4]), circuit=str(key[4]) if key else "",
@@ -332,6 +349,32 @@ def read_steps(path: str | Path) -> StepResponses:
     close()
     return StepResponses(steps=tuple(steps), source=str(p),
                          sha256=hashlib.sha256(raw).hexdigest())
+
+
+STEP_REST_TOLERANCE = 0.02
+"""Samples before the step (``time_s <= 0``) whose current differs from
+``initial_current_A`` by more than this share of the step's current change (or 0.1 % of
+``initial_current_A``, the larger) are warned about: the model starts from the statics at
+``initial_current_A``, i.e. a magnet at rest."""
+
+
+def _check_rest(path: Path, label: str, rows: np.ndarray, before: np.ndarray,
+                after: np.ndarray) -> None:
+    """Warn (naming the first row) when the samples before a step show a magnet that is
+    not at rest at ``initial_current_A``."""
+    if not rows.size:
+        return
+    i0 = float(before[0, 3])
+    change = float(np.max(np.abs(after[:, 1] - i0)))
+    tol = max(STEP_REST_TOLERANCE * change, 1e-3 * abs(i0))
+    off = np.abs(before[:, 1] - i0) > tol
+    if off.any():
+        k = int(np.argmax(off))
+        warnings.warn(f"{path}: row {int(rows[k])}: step {label!r} before the step (time_s = "
+                      f"{before[k, 0]:g} s) has current_A = {before[k, 1]:g} A, not "
+                      f"initial_current_A = {i0:g} A ({int(off.sum())} such rows): the model "
+                      "starts from the magnet at rest at initial_current_A (the statics), "
+                      "so the fit sees a step from the wrong state", DataWarning, stacklevel=4)
 
 
 # ---------------------------------------------------------------------------- exact statics
@@ -486,6 +529,78 @@ def _scaled_step_dae(run: Any, base: Network, *, gap_m: float, current_A: float,
              "alg": alg / ca.DM(rows)}, y_scale, z_scale)
 
 
+_RADAU_DEGREE = 3
+"""Collocation points per Radau IIA step (order 5)."""
+
+_STEP_SCHEME = "radau"
+"""How :class:`_ParametricStep` integrates: ``"radau"`` (:func:`_radau_steps`, the
+collocation equations in SX, one Newton rootfinder per step) or ``"casadi"`` (CasADi's
+``collocation`` integrator, the same equations built in MX; kept for the benchmark's
+before/after, ``benchmarks/bench_calibration_steps.py``)."""
+
+
+def _radau_step_function(dae: Mapping[str, Any]) -> Any:
+    """The collocation equations of one Radau IIA step of ``dae`` as a CasADi Newton
+    rootfinder ``v = rf(v_guess, (y_0, h, p))``, ``v = (y_1, z_1, ..., y_3, z_3)`` the
+    differential and algebraic states at the collocation points ``h tau_j`` (the last one
+    the step's end).  The equations are those of CasADi's ``collocation`` integrator
+    (Lagrange polynomial through ``y_0`` and the ``y_j``; ``h f(y_j, z_j) - sum_r C_rj y_r =
+    0``, ``g(y_j, z_j) = 0``), written in SX so that the Newton's Jacobian is one SX
+    function: CasADi's integrator builds them in MX and forms that Jacobian by ~170
+    forward directions through the DAE per Newton iteration (the profile's 67 %)."""
+    import casadi as ca
+
+    tau = np.concatenate(([0.0], ca.collocation_points(_RADAU_DEGREE, "radau")))
+    nd = _RADAU_DEGREE + 1
+    # C[j, r]: derivative of the j-th Lagrange basis polynomial at tau_r
+    C = np.zeros((nd, nd))
+    for j in range(nd):
+        basis = np.poly1d([1.0])
+        for r in range(nd):
+            if r != j:
+                basis *= np.poly1d([1.0, -tau[r]]) / (tau[j] - tau[r])
+        C[j] = basis.deriv()(tau)
+    nx, nz = dae["x"].numel(), dae["z"].numel()
+    f = ca.Function("step_dae", [dae["x"], dae["z"], dae["p"]], [dae["ode"], dae["alg"]])
+    y0 = ca.SX.sym("y0", nx)
+    h = ca.SX.sym("h")
+    p = ca.SX.sym("p", dae["p"].numel())
+    v = ca.SX.sym("v", _RADAU_DEGREE * (nx + nz))
+    ys = [y0] + [v[k * (nx + nz):k * (nx + nz) + nx] for k in range(_RADAU_DEGREE)]
+    zs = [v[k * (nx + nz) + nx:(k + 1) * (nx + nz)] for k in range(_RADAU_DEGREE)]
+    eq = []
+    for j in range(1, nd):
+        ode, alg = f(ys[j], zs[j - 1], p)
+        yp = C[0, j] * y0
+        for r in range(1, nd):
+            yp = yp + C[r, j] * ys[r]
+        eq += [h * ode - yp, alg]
+    g = ca.Function("radau_residual", [v, ca.vertcat(y0, h, p)], [ca.vertcat(*eq)])
+    return ca.rootfinder("radau_step", "newton", g,
+                         {"abstol": _STEP_ABSTOL, "abstolStep": 1e-14, "max_iter": 50,
+                          "error_on_fail": True})
+
+
+def _radau_steps(dae: Mapping[str, Any], y0: Any, z0: Any, pars: Any, h: np.ndarray,
+                 keep: Sequence[int]) -> Any:
+    """Fixed Radau IIA steps ``h`` of ``dae`` from ``(y0, z0)`` (MX): the algebraic states
+    at the ends of the steps ``keep``, one column each.  Each step's Newton starts from the
+    previous step's collocation states (the first from ``(y0, z0)`` at every point)."""
+    import casadi as ca
+
+    rf = _radau_step_function(dae)
+    nx, nz = dae["x"].numel(), dae["z"].numel()
+    last = (_RADAU_DEGREE - 1) * (nx + nz)
+    guess = ca.repmat(ca.vertcat(y0, z0), _RADAU_DEGREE, 1)
+    y, out, wanted = y0, [], set(keep)
+    for k, hk in enumerate(h):
+        guess = rf(guess, ca.vertcat(y, float(hk), pars))
+        y = guess[last:last + nx]
+        if k in wanted:
+            out.append(guess[last + nx:])
+    return ca.horzcat(*out)
+
+
 class _ParametricStep:
     """One voltage step of the flux DAE with symbolic calibration parameters, built once:
     ``evaluate(values)`` gives the stepped circuit's current at the sample times and its
@@ -498,7 +613,7 @@ class _ParametricStep:
 
     def __init__(self, model: Any, names: Sequence[str], *, gap_m: float, current_A: float,
                  times_s: np.ndarray, circuit: int, voltage_V: float | None = None,
-                 voltage_step_V: float = 0.0) -> None:
+                 voltage_step_V: float = 0.0, scheme: str | None = None) -> None:
         import casadi as ca
 
         from .circuit.assembly import assemble
@@ -561,14 +676,19 @@ class _ParametricStep:
             np.linspace(a, b, n + 1) for a, b, n in zip(grid[:-1], grid[1:],
                                                         interval_substeps(grid),
                                                         strict=True)]))
-        colloc = ca.integrator("step_collocation", "collocation", dae, 0.0, list(fine[1:]),
-                               {"collocation_scheme": "radau", "interpolation_order": 3,
-                                "number_of_finite_elements": 1, "rootfinder": "newton",
-                                "rootfinder_options": {"abstol": _STEP_ABSTOL,
-                                                       "abstolStep": 1e-14, "max_iter": 50}})
-        res = colloc(x0=y0, z0=z0, p=pars)
         keep = [int(np.searchsorted(fine, v)) - 1 for v in grid[1:]]
-        zf = res["zf"][:, keep]
+        if (scheme or _STEP_SCHEME) == "casadi":
+            colloc = ca.integrator("step_collocation", "collocation", dae, 0.0,
+                                   list(fine[1:]),
+                                   {"collocation_scheme": "radau", "interpolation_order": 3,
+                                    "number_of_finite_elements": 1, "rootfinder": "newton",
+                                    "rootfinder_options": {"abstol": _STEP_ABSTOL,
+                                                           "abstolStep": 1e-14,
+                                                           "max_iter": 50}})
+            res = colloc(x0=y0, z0=z0, p=pars)
+            zf = res["zf"][:, keep]
+        else:
+            zf = _radau_steps(dae, y0, z0, pars, np.diff(fine), keep)
         cur = zf[run.n_loops + circuit, :].T * float(z_scale[run.n_loops + circuit])
         self.fun = ca.Function("step_sensitivities", [X0, P], [cur, ca.jacobian(cur, P)])
         self.base = base
@@ -916,12 +1036,55 @@ def _check_step_units(res: np.ndarray, steps: StepResponses) -> None:
                             "in V, times in s) or another magnet")
 
 
+STEP_SPAN_MAX_TAU = 200.0
+"""A step whose last sample lies beyond this many electrical time constants
+``tau = L_d / R_el`` of the nominal magnet (differential inductance of the statics at the
+step's gap and initial current) is refused as a unit slip (ms written as s: a record of a
+few ``tau`` becomes thousands); the U-magnet's FEM records span 2.7-8.2 ``tau``."""
+
+
+def _check_step_times(steps: StepResponses, net: Network) -> None:
+    """Refuse a step whose samples span more than :data:`STEP_SPAN_MAX_TAU` time
+    constants, naming the step and its last row."""
+    from .models.statics import solve_statics
+
+    for step in steps.steps:
+        j = _step_circuit(step, net, steps.source)
+        sol = solve_statics(net, gaps_m=np.full(len(net.gap_names), step.gap_m),
+                            currents_A=np.full(len(net.circuits), step.initial_current_A))
+        ind = np.asarray(sol.differential_inductance_H, dtype=float).reshape(
+            len(net.circuits), len(net.circuits))[j, j]
+        tau = float(ind) / float(net.resistances[j])
+        span = float(step.time_s[-1])
+        if tau > 0.0 and span > STEP_SPAN_MAX_TAU * tau:
+            raise DataError(f"{steps.source}: step {step.label!r} (last row "
+                            f"{int(step.rows[-1])}): time_s reaches {span:g} s, {span / tau:.0f} "
+                            f"time constants L/R_el = {tau:.3g} s of the nominal magnet there "
+                            f"(more than {STEP_SPAN_MAX_TAU:g}): is the time in ms? (time_s is "
+                            "in seconds)")
+
+
+def _holdout_labels(holdout_steps: str | Sequence[str]) -> list[str]:
+    """The held-out step labels: a str is one label (it may contain commas)."""
+    if isinstance(holdout_steps, str):
+        return [holdout_steps]
+    out: list[str] = []
+    for h in holdout_steps:
+        if not isinstance(h, str):
+            raise InputError(f"holdout_steps: {h!r} is not a step label (str); give the "
+                             "labels of the step file's step column (or the steps' numbers "
+                             "'1', '2', ... without one)")
+        if h not in out:
+            out.append(h)
+    return out
+
+
 def calibrate(magnet: Any, data: str | Path | StaticPoints | None, *,
               parameters: Sequence[str] | None = None,
               holdout_gaps_m: Sequence[float] = (),
               initial: Mapping[str, float] | None = None,
               steps: str | Path | StepResponses | None = None,
-              holdout_steps: Sequence[str] = ()) -> Calibration:
+              holdout_steps: str | Sequence[str] = ()) -> Calibration:
     """Fit calibration parameters of ``magnet`` to measured statics and/or voltage steps
     (module docstring).
 
@@ -944,9 +1107,21 @@ def calibrate(magnet: Any, data: str | Path | StaticPoints | None, *,
         Measured voltage steps (:func:`read_steps`), fitted with the statics: residuals
         ``(I_model - I_data)/current_change_A`` per sample, the model the flux DAE
         (:func:`step_response_sensitivities`) with exact parameter derivatives.
-    holdout_steps : sequence of str
+    holdout_steps : str or sequence of str
         Labels of voltage steps (:attr:`VoltageStep.label`) left out of the fit and
-        reported as the held-out check of the dynamics (``step_holdout``).
+        reported as the held-out check of the dynamics (``step_holdout``); a str is one
+        label (labels may contain commas).
+
+    Raises
+    ------
+    InputError
+        An unknown held-out label (the message lists the steps' labels), every step held
+        out without static data, or initial values outside the bounds.
+    DataError
+        Bad data (:func:`read_points`, :func:`read_steps`), a unit slip (statics or step
+        currents off the nominal magnet by more than :data:`UNIT_SLIP_RATIO`, a step
+        spanning more than :data:`STEP_SPAN_MAX_TAU` time constants: ms as s), or fewer
+        residuals than parameters.
 
     Returns
     -------
@@ -963,21 +1138,25 @@ def calibrate(magnet: Any, data: str | Path | StaticPoints | None, *,
                  else read_steps(steps))
     steps_sha = "" if step_data is None else step_data.sha256
     test_steps: StepResponses | None = None
-    if holdout_steps:
+    held_labels = _holdout_labels(holdout_steps)
+    if held_labels:
         if step_data is None:
-            raise InputError(f"holdout_steps {list(holdout_steps)}: no voltage steps given "
+            raise InputError(f"holdout_steps {held_labels}: no voltage steps given "
                              "(steps=)")
         labels = [st.label for st in step_data.steps]
-        unknown = [str(h) for h in holdout_steps if str(h) not in labels]
+        unknown = [h for h in held_labels if h not in labels]
         if unknown:
             raise InputError(f"holdout_steps {unknown}: no step with that label; the steps: "
                              f"{labels}")
-        held = {str(h) for h in holdout_steps}
+        held = set(held_labels)
         test_steps = replace(step_data, steps=tuple(st for st in step_data.steps
                                                     if st.label in held))
         step_data = replace(step_data, steps=tuple(st for st in step_data.steps
                                                    if st.label not in held))
         if not step_data.steps:
+            if data is None:
+                raise InputError(f"holdout_steps {held_labels} holds out every step and there "
+                                 "are no static data: nothing left to fit")
             step_data = None
     if parameters is None:
         parameters = ((DEFAULT_PARAMETERS if data is not None else ())
@@ -1015,6 +1194,9 @@ def calibrate(magnet: Any, data: str | Path | StaticPoints | None, *,
     if n_res <= len(names):
         raise DataError(f"{pts.source}: {n_res} fitted residuals for {len(names)} parameters; "
                         "the fit needs more data points than parameters")
+    for checked in (step_data, test_steps):
+        if checked is not None:
+            _check_step_times(checked, net)
     groups = _groups(net)
     ps = _ParametricStatics(net, names, groups)
     step_models = [] if step_data is None else [
