@@ -546,8 +546,11 @@ def _radau_step_function(dae: Mapping[str, Any]) -> Any:
     the step's end).  The equations are those of CasADi's ``collocation`` integrator
     (Lagrange polynomial through ``y_0`` and the ``y_j``; ``h f(y_j, z_j) - sum_r C_rj y_r =
     0``, ``g(y_j, z_j) = 0``), written in SX so that the Newton's Jacobian is one SX
-    function: CasADi's integrator builds them in MX and forms that Jacobian by ~170
-    forward directions through the DAE per Newton iteration (the profile's 67 %)."""
+    function.  CasADi's integrator builds them in MX and forms that Jacobian at every
+    Newton iteration by forward directional derivatives through the DAE (67 % of a 6-layer
+    ladder step's CPU in ``perf``), and its forward sensitivities integrate the nominal
+    run a second time; here values and derivatives come from one run
+    (docs/decisions.md, calsteps25)."""
     import casadi as ca
 
     tau = np.concatenate(([0.0], ca.collocation_points(_RADAU_DEGREE, "radau")))
