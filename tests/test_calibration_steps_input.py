@@ -3,7 +3,7 @@ included) from the command line and from Python, and bad step files -- a typo'd 
 label that does not exist, a magnet not at rest before the step, a label reused for
 another step, gaps in mm and times in ms -- each a one-line named error (exit code 2, no
 traceback) or a warning naming the row; and the step scheme against CasADi's collocation
-integrator (the same equations, one Newton per step)."""
+integrator (the same root, one Newton per step on the DAE's sparse form)."""
 
 from __future__ import annotations
 
@@ -206,8 +206,9 @@ def test_a_label_reused_for_another_step_names_both_rows(records: list,
 
 # ---------------------------------------------------------------------------- the scheme
 def test_step_scheme_equals_casadis_collocation_integrator(magnet: mk.Magnet) -> None:
-    """The SX Radau steps (one Newton rootfinder per step) against CasADi's ``collocation``
-    integrator on the same DAE, grid and tolerance: response and exact derivatives."""
+    """The Radau steps on the DAE's sparse form ``K y' = h`` (one Newton rootfinder per
+    step) against CasADi's ``collocation`` integrator on its explicit form ``y' = T pinv(K)
+    h``, same grid and tolerance: response and exact derivatives (the same root)."""
     ladder = mk.load_magnet("u-magnet", eddy_model="ladder", eddy_layers=2)
     names = ("eddy_conductance_scale", "resistance_scale", "leakage_factor")
     values = np.array([0.8, 1.02, 0.95])
@@ -220,7 +221,8 @@ def test_step_scheme_equals_casadis_collocation_integrator(magnet: mk.Magnet) ->
         out[scheme] = step.evaluate(values)
     (cur, jac), (cur_c, jac_c) = out["radau"], out["casadi"]
     change = float(np.max(np.abs(cur_c - 20.0)))
-    # the same equations from the same guesses: measured 3e-14 of the change (rounding);
-    # the derivatives 1e-11 ... 2e-9 relative (Newton's 1e-10 stop on either side)
+    # equivalent equations, each Newton stopped at 1e-10 on its own scaled rows: measured
+    # 1.2e-11 of the change and 7e-12 relative in the derivatives (6-layer ladder, six
+    # parameters: 2.5e-11 / 1.8e-9, benchmarks/bench_calibration_steps.py)
     assert np.max(np.abs(cur - cur_c)) / change < 1e-10
     assert np.max(np.abs(jac - jac_c)) / np.max(np.abs(jac_c)) < 1e-7

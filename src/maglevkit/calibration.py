@@ -492,14 +492,17 @@ against IDAS (tests/test_calibration_ladder.py)."""
 
 def _scaled_step_dae(run: Any, base: Network, *, gap_m: float, current_A: float,
                      u: np.ndarray, duration: float, names: Sequence[str]
-                     ) -> tuple[dict[str, Any], np.ndarray, np.ndarray]:
+                     ) -> tuple[dict[str, Any], np.ndarray, np.ndarray, dict[str, Any]]:
     """The step DAE of ``run`` in unknowns divided by their size at the nominal network's
     operating point (floored at 1e-3 of the largest of their kind) and algebraic rows
     divided by their largest entry of the scaled Jacobian there.
 
     The scales come from the nominal (uncalibrated) network, not the parameter values, so
     that the discrete scheme is the same function of the parameters (finite differences
-    see the same scheme).  Returns the DAE dict, the scales of ``y`` and of ``z = (x, I)``.
+    see the same scheme).  Returns the DAE dict, the scales of ``y`` and of ``z = (x, I)``,
+    and the sparse form of its differential rows for :func:`_radau_step_function`
+    (``K_y = K diag(y_scale)``, its rows' largest entries ``K_rows``, the scaled right side
+    ``rhs`` of ``K y' = h`` and ``rhs_rows``, the largest entries of ``d rhs/dz``).
     """
     import casadi as ca
 
@@ -525,32 +528,50 @@ def _scaled_step_dae(run: Any, base: Network, *, gap_m: float, current_A: float,
     rows = np.max(np.abs(np.asarray(jac(np.concatenate((x_num, i_num)) / z_scale,
                                         y_num / y_scale, nominal_p))), axis=1)
     rows = np.where(rows > 0.0, rows, 1.0)
+    # the sparse form K y' = h of the ode rows (_radau_step_function): K's columns times
+    # y_scale, each row divided by its largest entry; a row of K that is zero (h_i = 0, an
+    # algebraic row) by its largest entry of dh_i/dz_scaled at the nominal point
+    rhs = ca.substitute(run.h, ca.vertcat(dae["x"], dae["z"]),
+                        ca.vertcat(ca.DM(y_scale) * ys, ca.DM(z_scale) * zs))
+    k_y = run.K * y_scale[None, :]
+    k_rows = np.max(np.abs(k_y), axis=1)
+    jac_h = ca.Function("step_rhs_jacobian", [zs, ys, dae["p"]], [ca.jacobian(rhs, zs)])
+    h_rows = np.max(np.abs(np.asarray(jac_h(np.concatenate((x_num, i_num)) / z_scale,
+                                            y_num / y_scale, nominal_p))), axis=1)
+    sparse = {"K_y": k_y, "rhs": rhs, "K_rows": k_rows,
+              "rhs_rows": np.where(h_rows > 0.0, h_rows, 1.0)}
     return ({"x": ys, "z": zs, "p": dae["p"], "ode": ode / ca.DM(y_scale),
-             "alg": alg / ca.DM(rows)}, y_scale, z_scale)
+             "alg": alg / ca.DM(rows)}, y_scale, z_scale, sparse)
 
 
 _RADAU_DEGREE = 3
 """Collocation points per Radau IIA step (order 5)."""
 
 _STEP_SCHEME = "radau"
-"""How :class:`_ParametricStep` integrates: ``"radau"`` (:func:`_radau_steps`, the
-collocation equations in SX, one Newton rootfinder per step) or ``"casadi"`` (CasADi's
-``collocation`` integrator, the same equations built in MX; kept for the benchmark's
-before/after, ``benchmarks/bench_calibration_steps.py``)."""
+"""How :class:`_ParametricStep` integrates: ``"radau"`` (:func:`_radau_steps`) or
+``"casadi"`` (CasADi's ``collocation`` integrator on the explicit DAE, the scheme before
+calsteps25; kept for the benchmark's before/after, ``benchmarks/bench_calibration_steps.py``)."""
 
 
-def _radau_step_function(dae: Mapping[str, Any]) -> Any:
-    """The collocation equations of one Radau IIA step of ``dae`` as a CasADi Newton
-    rootfinder ``v = rf(v_guess, (y_0, h, p))``, ``v = (y_1, z_1, ..., y_3, z_3)`` the
-    differential and algebraic states at the collocation points ``h tau_j`` (the last one
-    the step's end).  The equations are those of CasADi's ``collocation`` integrator
-    (Lagrange polynomial through ``y_0`` and the ``y_j``; ``h f(y_j, z_j) - sum_r C_rj y_r =
-    0``, ``g(y_j, z_j) = 0``), written in SX so that the Newton's Jacobian is one SX
-    function.  CasADi's integrator builds them in MX and forms that Jacobian at every
-    Newton iteration by forward directional derivatives through the DAE (67 % of a 6-layer
-    ladder step's CPU in ``perf``), and its forward sensitivities integrate the nominal
-    run a second time; here values and derivatives come from one run
-    (docs/decisions.md, calsteps25)."""
+def _radau_step_function(dae: Mapping[str, Any], sparse: Mapping[str, Any]) -> Any:
+    """One Radau IIA step of the step DAE as a CasADi Newton rootfinder
+    ``v = rf(v_guess, (y_0, h, p))``, ``v = (y_1, z_1, ..., y_3, z_3)`` the differential and
+    algebraic states at the collocation points ``h tau_j`` (the last one the step's end).
+
+    The collocation of CasADi's ``collocation`` integrator (a Lagrange polynomial through
+    ``y_0`` and the ``y_j``, its derivative ``yp_j = sum_r C_rj y_r`` at each point), with the
+    differential rows in the DAE's sparse form: the step DAE is ``K y' = h(y, z)`` (the
+    flux model's ``K``), which :class:`~maglevkit.reduction.maps.StepRun` writes as
+    ``y' = T pinv(K) h`` plus the algebraic rows ``Q h = 0`` (``Q`` spanning the left null
+    space of ``K``).  ``pinv(K)`` and ``h`` are sparse (82 x 88 with 218 entries, 566 in
+    ``dh/dz`` on the 6-layer ladder), their product is not (5765 of 7216): so the rows here
+    are ``K (y_scale yp_j) - h T h_j = 0`` -- equivalent, since they hold exactly when both
+    ``yp_j = h T pinv(K) h_j`` and ``Q h_j = 0`` do -- each divided by its largest entry of
+    ``K diag(y_scale)`` (a zero row of ``K`` is ``h_i = 0``, divided by its largest entry of
+    ``dh_i/dz`` at the nominal point), and the algebraic rows ``D x - y = 0`` as scaled by
+    :func:`_scaled_step_dae`.  The same root as the explicit rows; the Newton's Jacobian
+    (one SX function) and its factorisation stay sparse.
+    """
     import casadi as ca
 
     tau = np.concatenate(([0.0], ca.collocation_points(_RADAU_DEGREE, "radau")))
@@ -564,7 +585,11 @@ def _radau_step_function(dae: Mapping[str, Any]) -> Any:
                 basis *= np.poly1d([1.0, -tau[r]]) / (tau[j] - tau[r])
         C[j] = basis.deriv()(tau)
     nx, nz = dae["x"].numel(), dae["z"].numel()
-    f = ca.Function("step_dae", [dae["x"], dae["z"], dae["p"]], [dae["ode"], dae["alg"]])
+    f = ca.Function("step_dae_sparse", [dae["x"], dae["z"], dae["p"]],
+                    [sparse["rhs"], dae["alg"][:nx]])
+    k_y = ca.DM(sparse["K_y"])
+    moving = [int(i) for i in np.flatnonzero(sparse["K_rows"] > 0.0)]
+    held = [int(i) for i in np.flatnonzero(sparse["K_rows"] == 0.0)]
     y0 = ca.SX.sym("y0", nx)
     h = ca.SX.sym("h")
     p = ca.SX.sym("p", dae["p"].numel())
@@ -573,25 +598,31 @@ def _radau_step_function(dae: Mapping[str, Any]) -> Any:
     zs = [v[k * (nx + nz) + nx:(k + 1) * (nx + nz)] for k in range(_RADAU_DEGREE)]
     eq = []
     for j in range(1, nd):
-        ode, alg = f(ys[j], zs[j - 1], p)
+        rhs, alg = f(ys[j], zs[j - 1], p)
         yp = C[0, j] * y0
         for r in range(1, nd):
             yp = yp + C[r, j] * ys[r]
-        eq += [h * ode - yp, alg]
+        res = ca.mtimes(k_y, yp) - h * p[0] * rhs          # p[0]: the window T
+        eq += [res[moving] / ca.DM(sparse["K_rows"][moving]),
+               rhs[held] / ca.DM(sparse["rhs_rows"][held]), alg]
     g = ca.Function("radau_residual", [v, ca.vertcat(y0, h, p)], [ca.vertcat(*eq)])
     return ca.rootfinder("radau_step", "newton", g,
                          {"abstol": _STEP_ABSTOL, "abstolStep": 1e-14, "max_iter": 50,
                           "error_on_fail": True})
 
 
-def _radau_steps(dae: Mapping[str, Any], y0: Any, z0: Any, pars: Any, h: np.ndarray,
-                 keep: Sequence[int]) -> Any:
-    """Fixed Radau IIA steps ``h`` of ``dae`` from ``(y0, z0)`` (MX): the algebraic states
-    at the ends of the steps ``keep``, one column each.  Each step's Newton starts from the
-    previous step's collocation states (the first from ``(y0, z0)`` at every point)."""
+def _radau_steps(dae: Mapping[str, Any], sparse: Mapping[str, Any], y0: Any, z0: Any,
+                 pars: Any, h: np.ndarray, keep: Sequence[int]) -> Any:
+    """Fixed Radau IIA steps ``h`` (:func:`_radau_step_function`) from ``(y0, z0)``, unrolled
+    in MX: the algebraic states at the ends of the steps ``keep``, one column each.  Each
+    step's Newton starts from the previous step's collocation states (the first from
+    ``(y0, z0)`` at every point), as CasADi's integrator does.  Differentiated by CasADi's
+    AD, each rootfinder by the implicit function theorem at its root: values and exact
+    derivatives from one run (the integrator's forward sensitivities integrated the
+    nominal run a second time)."""
     import casadi as ca
 
-    rf = _radau_step_function(dae)
+    rf = _radau_step_function(dae, sparse)
     nx, nz = dae["x"].numel(), dae["z"].numel()
     last = (_RADAU_DEGREE - 1) * (nx + nz)
     guess = ca.repmat(ca.vertcat(y0, z0), _RADAU_DEGREE, 1)
@@ -659,7 +690,7 @@ class _ParametricStep:
         # The DAE in scaled unknowns and equations (_scaled_step_dae): the collocation's
         # Newton stops on an absolute residual, and unscaled its 1e-9 was ~1e-6 of the eddy
         # fluxes (~3e-3 Wb): the derivatives of that inexact root were off by 3-6e-6
-        dae, y_scale, z_scale = _scaled_step_dae(run, base, gap_m=float(gap_m),
+        dae, y_scale, z_scale, sparse = _scaled_step_dae(run, base, gap_m=float(gap_m),
                                                  current_A=float(current_A), u=u_nominal,
                                                  duration=duration, names=self.names)
         # consistent algebraic states just after the step: the differential states (flux
@@ -691,7 +722,7 @@ class _ParametricStep:
             res = colloc(x0=y0, z0=z0, p=pars)
             zf = res["zf"][:, keep]
         else:
-            zf = _radau_steps(dae, y0, z0, pars, np.diff(fine), keep)
+            zf = _radau_steps(dae, sparse, y0, z0, pars, np.diff(fine), keep)
         cur = zf[run.n_loops + circuit, :].T * float(z_scale[run.n_loops + circuit])
         self.fun = ca.Function("step_sensitivities", [X0, P], [cur, ca.jacobian(cur, P)])
         self.base = base
