@@ -226,3 +226,26 @@ def test_step_scheme_equals_casadis_collocation_integrator(magnet: mk.Magnet) ->
     # parameters: 2.5e-11 / 1.8e-9, benchmarks/bench_calibration_steps.py)
     assert np.max(np.abs(cur - cur_c)) / change < 1e-10
     assert np.max(np.abs(jac - jac_c)) / np.max(np.abs(jac_c)) < 1e-7
+
+
+@pytest.mark.parametrize(("text", "needle"), [
+    # initial_current_A logged as the measured current: the step falls apart at row 3
+    ("time_s,current_A,gap_m,initial_current_A,voltage_V\n0.001,11,0.01,10,40\n"
+     "0.002,12,0.01,10.5,40\n0.003,12,0.01,10.5,40\n0.004,12,0.01,10.5,40\n",
+     "row 3: initial_current_A 10.0 -> 10.5 after 1 samples at time_s > 0 of the step "
+     "starting at row 2"),
+    # the hold voltage written on the rows before the step
+    ("time_s,current_A,gap_m,initial_current_A,voltage_V\n-0.001,10,0.01,10,20\n"
+     "0.001,11,0.01,10,40\n0.002,12,0.01,10,40\n0.003,12,0.01,10,40\n",
+     "row 3: voltage_V 20.0 -> 40.0 after 0 samples at time_s > 0 of the step starting at row "
+     "2: a step needs at least 3 with the same step, gap_m, initial_current_A, voltage_V and "
+     "circuit (a change starts a new step; voltage_V is the voltage after the step, on the "
+     "rows before it too)"),
+])
+def test_a_step_whose_fixed_columns_change_names_the_row_and_column(
+        tmp_path: Path, text: str, needle: str) -> None:
+    path = tmp_path / "s.csv"
+    path.write_text(text)
+    with pytest.raises(DataError) as info:
+        read_steps(path)
+    assert needle in str(info.value), str(info.value)

@@ -339,6 +339,19 @@ def read_steps(path: str | Path) -> StepResponses:
         new_key = (cells[col["step"]].strip() if "step" in col else "", *nums[2:5],
                    cells[col["circuit"]].strip() if "circuit" in col else "")
         if new_key != key:
+            n_after = sum(1 for _, v in group if v[0] > 0.0)
+            if group and key is not None and n_after < 3:
+                changed = [f"{name} {a!r} -> {b!r}" for name, a, b in zip(
+                    ("step", "gap_m", "initial_current_A", "voltage_V", "circuit"), key,
+                    new_key, strict=True) if a != b]
+                raise DataError(f"{p}: row {row}: {', '.join(changed)} after {n_after} "
+                                f"samples at time_s > 0 of the step starting at row "
+                                f"{group[0][0]}: a step needs at least 3 with the same "
+                                "step, gap_m, initial_current_A, voltage_V and circuit (a "
+                                "change starts a new step"
+                                + ("; voltage_V is the voltage after the step, on the rows "
+                                   "before it too" if n_after == 0 and key[3] != new_key[3]
+                                   else "") + ")")
             close()
             group, key = [], new_key
         elif group and nums[0] <= group[-1][1][0]:
