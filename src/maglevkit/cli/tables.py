@@ -230,7 +230,7 @@ def calibrate_cmd(
     holdout_steps: Annotated[str | None, typer.Option("--holdout-steps", help=(
         "Labels of --steps' steps left out of the fit and reported (comma list; refused "
         "when step labels with commas make it ambiguous: then --holdout-step)."))] = None,
-    holdout_step: Annotated[list[str] | None, typer.Option("--holdout-step", help=(
+    holdout_step: Annotated[list[str] | None, typer.Option("--holdout-step", metavar="LABEL", help=(
         "One label of a --steps step left out of the fit and reported, taken as it is "
         "(commas included); repeatable."))] = None,
     select: Annotated[bool, typer.Option("--select-params", help=(
