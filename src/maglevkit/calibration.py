@@ -761,7 +761,8 @@ STEP_FINE_STEPS = 120
 :data:`_STEP_SUBSTEPS` per interval; :func:`step_substeps`).  Measured (U-magnet, 10 mm,
 20 A, +8 V, 12 samples to 0.2 s, against IDAS at rtol 1e-10): 40 / 10 / 5 / 3 steps per
 interval 3.3e-8 / 3.3e-8 / 1.1e-7 / 1.6e-6 A off, 2.1 / 0.66 / 0.44 / 0.36 s per
-evaluation with the Jacobian; the 40 geometric steps after ``t = 0`` set the floor."""
+evaluation with the Jacobian (CasADi's integrator, before calsteps25); the 40 geometric steps
+after ``t = 0`` set the floor."""
 
 
 def interval_substeps(grid: np.ndarray) -> np.ndarray:
