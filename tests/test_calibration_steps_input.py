@@ -223,7 +223,7 @@ def test_step_scheme_equals_casadis_collocation_integrator(magnet: mk.Magnet) ->
     change = float(np.max(np.abs(cur_c - 20.0)))
     # equivalent equations, each Newton stopped at 1e-10 on its own scaled rows: measured
     # 1.2e-11 of the change and 7e-12 relative in the derivatives (6-layer ladder, six
-    # parameters: 2.5e-11 / 1.8e-9, benchmarks/bench_calibration_steps.py)
+    # parameters: 1.9e-11 / 4.6e-9, benchmarks/bench_calibration_steps.py)
     assert np.max(np.abs(cur - cur_c)) / change < 1e-10
     assert np.max(np.abs(jac - jac_c)) / np.max(np.abs(jac_c)) < 1e-7
 
