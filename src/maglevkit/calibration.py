@@ -58,7 +58,8 @@ from .errors import DataError, DataWarning, InputError, MaglevkitWarning, Solver
 from .parameter_files import toml_text
 
 __all__ = ["PARAMETERS", "DEFAULT_PARAMETERS", "DYNAMIC_PARAMETERS", "STEP_COLUMNS",
-           "STEP_GAP_PLAUSIBLE_M", "STEP_FINE_STEPS", "Calibration", "ParameterSetScore",
+           "STEP_GAP_PLAUSIBLE_M", "STEP_FINE_STEPS", "STEP_REST_TOLERANCE",
+           "STEP_SPAN_MAX_TAU", "Calibration", "ParameterSetScore",
            "StaticPoints",
            "StepResponses", "VoltageStep", "calibrate", "calibrated_network",
            "parameter_sensitivities", "read_points", "read_steps", "select_parameters",
@@ -267,15 +268,22 @@ def read_steps(path: str | Path) -> StepResponses:
     unknown = [h for h in header if h not in allowed]
     missing = [h for h in STEP_COLUMNS if h not in header]
     if unknown or missing or len(set(header)) != len(header):
-        raise DataError(f"{p}: columns {header}: unknown {unknown}, missing {missing}; a "
-                        f"voltage-step file has {', '.join(STEP_COLUMNS)} and optionally "
-                        "step, circuit (each once)")
+        import difflib
+
+        hints = [f"{u!r} -> {m[0]!r}?" for u in unknown
+                 for m in [difflib.get_close_matches(u, missing or allowed, n=1, cutoff=0.6)]
+                 if m]
+        raise DataError(f"{p}: columns {header}: unknown {unknown}, missing {missing}"
+                        + (f" (did you mean {', '.join(hints)})" if hints else "")
+                        + f"; a voltage-step file has {', '.join(STEP_COLUMNS)} and "
+                        "optionally step, circuit (each once)")
     if not records:
         raise DataError(f"{p}: the file has a header but no data rows")
     col = {h: k for k, h in enumerate(header)}
     steps: list[VoltageStep] = []
     group: list[tuple[int, list[float]]] = []
     key: tuple[Any, ...] | None = None
+    first_row: dict[str, int] = {}
 
     def close() -> None:
         if not group:
@@ -287,7 +295,16 @@ def read_steps(path: str | Path) -> StepResponses:
         if np.count_nonzero(after) < 3:
             raise DataError(f"{p}: the step starting at row {rows[0]} has "
                             f"{np.count_nonzero(after)} samples at time_s > 0; a step needs at "
-                            "least 3 after t = 0")
+                            "least 3 after t = 0 (gap_m, initial_current_A, voltage_V and "
+                            "circuit are constant over a step's rows: a change starts a new "
+                            "step)")
+        if label in first_row:
+            raise DataError(f"{p}: row {rows[0]}: step {label!r} again (its rows start at row "
+                            f"{first_row[label]}) with another gap_m, initial_current_A, "
+                            "voltage_V or circuit, or after another step; a step's rows are "
+                            "consecutive and share those values")
+        first_row[label] = int(rows[0])
+        _check_rest(p, label, rows[~after], vals[~after], vals[after])
         step = VoltageStep(label=label, time_s=vals[after, 0], current_A=vals[after, 1],
                            gap_m=float(vals[0, 2]), initial_current_A=float(vals[0, 3]),
                            voltage_V=float(vals[0, 4]), circuit=str(key[4]) if key else "",
@@ -322,6 +339,19 @@ def read_steps(path: str | Path) -> StepResponses:
         new_key = (cells[col["step"]].strip() if "step" in col else "", *nums[2:5],
                    cells[col["circuit"]].strip() if "circuit" in col else "")
         if new_key != key:
+            n_after = sum(1 for _, v in group if v[0] > 0.0)
+            if group and key is not None and n_after < 3:
+                changed = [f"{name} {a!r} -> {b!r}" for name, a, b in zip(
+                    ("step", "gap_m", "initial_current_A", "voltage_V", "circuit"), key,
+                    new_key, strict=True) if a != b]
+                raise DataError(f"{p}: row {row}: {', '.join(changed)} after {n_after} "
+                                f"samples at time_s > 0 of the step starting at row "
+                                f"{group[0][0]}: a step needs at least 3 with the same "
+                                "step, gap_m, initial_current_A, voltage_V and circuit (a "
+                                "change starts a new step"
+                                + ("; voltage_V is the voltage after the step, on the rows "
+                                   "before it too" if n_after == 0 and key[3] != new_key[3]
+                                   else "") + ")")
             close()
             group, key = [], new_key
         elif group and nums[0] <= group[-1][1][0]:
@@ -332,6 +362,32 @@ def read_steps(path: str | Path) -> StepResponses:
     close()
     return StepResponses(steps=tuple(steps), source=str(p),
                          sha256=hashlib.sha256(raw).hexdigest())
+
+
+STEP_REST_TOLERANCE = 0.02
+"""Samples before the step (``time_s <= 0``) whose current differs from
+``initial_current_A`` by more than this share of the step's current change (or 0.1 % of
+``initial_current_A``, the larger) are warned about: the model starts from the statics at
+``initial_current_A``, i.e. a magnet at rest."""
+
+
+def _check_rest(path: Path, label: str, rows: np.ndarray, before: np.ndarray,
+                after: np.ndarray) -> None:
+    """Warn (naming the first row) when the samples before a step show a magnet that is
+    not at rest at ``initial_current_A``."""
+    if not rows.size:
+        return
+    i0 = float(before[0, 3])
+    change = float(np.max(np.abs(after[:, 1] - i0)))
+    tol = max(STEP_REST_TOLERANCE * change, 1e-3 * abs(i0))
+    off = np.abs(before[:, 1] - i0) > tol
+    if off.any():
+        k = int(np.argmax(off))
+        warnings.warn(f"{path}: row {int(rows[k])}: step {label!r} before the step (time_s = "
+                      f"{before[k, 0]:g} s) has current_A = {before[k, 1]:g} A, not "
+                      f"initial_current_A = {i0:g} A ({int(off.sum())} such rows): the model "
+                      "starts from the magnet at rest at initial_current_A (the statics), "
+                      "so the fit sees a step from the wrong state", DataWarning, stacklevel=4)
 
 
 # ---------------------------------------------------------------------------- exact statics
@@ -449,14 +505,17 @@ against IDAS (tests/test_calibration_ladder.py)."""
 
 def _scaled_step_dae(run: Any, base: Network, *, gap_m: float, current_A: float,
                      u: np.ndarray, duration: float, names: Sequence[str]
-                     ) -> tuple[dict[str, Any], np.ndarray, np.ndarray]:
+                     ) -> tuple[dict[str, Any], np.ndarray, np.ndarray, dict[str, Any]]:
     """The step DAE of ``run`` in unknowns divided by their size at the nominal network's
     operating point (floored at 1e-3 of the largest of their kind) and algebraic rows
     divided by their largest entry of the scaled Jacobian there.
 
     The scales come from the nominal (uncalibrated) network, not the parameter values, so
     that the discrete scheme is the same function of the parameters (finite differences
-    see the same scheme).  Returns the DAE dict, the scales of ``y`` and of ``z = (x, I)``.
+    see the same scheme).  Returns the DAE dict, the scales of ``y`` and of ``z = (x, I)``,
+    and the sparse form of its differential rows for :func:`_radau_step_function`
+    (``K_y = K diag(y_scale)``, its rows' largest entries ``K_rows``, the scaled right side
+    ``rhs`` of ``K y' = h`` and ``rhs_rows``, the largest entries of ``d rhs/dz``).
     """
     import casadi as ca
 
@@ -482,8 +541,111 @@ def _scaled_step_dae(run: Any, base: Network, *, gap_m: float, current_A: float,
     rows = np.max(np.abs(np.asarray(jac(np.concatenate((x_num, i_num)) / z_scale,
                                         y_num / y_scale, nominal_p))), axis=1)
     rows = np.where(rows > 0.0, rows, 1.0)
+    # the sparse form K y' = h of the ode rows (_radau_step_function): K's columns times
+    # y_scale, each row divided by its largest entry; a row of K that is zero (h_i = 0, an
+    # algebraic row) by its largest entry of dh_i/dz_scaled at the nominal point
+    rhs = ca.substitute(run.h, ca.vertcat(dae["x"], dae["z"]),
+                        ca.vertcat(ca.DM(y_scale) * ys, ca.DM(z_scale) * zs))
+    k_y = run.K * y_scale[None, :]
+    k_rows = np.max(np.abs(k_y), axis=1)
+    jac_h = ca.Function("step_rhs_jacobian", [zs, ys, dae["p"]], [ca.jacobian(rhs, zs)])
+    h_rows = np.max(np.abs(np.asarray(jac_h(np.concatenate((x_num, i_num)) / z_scale,
+                                            y_num / y_scale, nominal_p))), axis=1)
+    sparse = {"K_y": k_y, "rhs": rhs, "K_rows": k_rows,
+              "rhs_rows": np.where(h_rows > 0.0, h_rows, 1.0)}
     return ({"x": ys, "z": zs, "p": dae["p"], "ode": ode / ca.DM(y_scale),
-             "alg": alg / ca.DM(rows)}, y_scale, z_scale)
+             "alg": alg / ca.DM(rows)}, y_scale, z_scale, sparse)
+
+
+_RADAU_DEGREE = 3
+"""Collocation points per Radau IIA step (order 5)."""
+
+_STEP_SCHEME = "radau"
+"""How :class:`_ParametricStep` integrates: ``"radau"`` (:func:`_radau_steps`) or
+``"casadi"`` (CasADi's ``collocation`` integrator on the explicit DAE, the scheme before
+calsteps25; kept for the benchmark's before/after, ``benchmarks/bench_calibration_steps.py``)."""
+
+
+def _radau_step_function(dae: Mapping[str, Any], sparse: Mapping[str, Any]) -> Any:
+    """One Radau IIA step of the step DAE as a CasADi Newton rootfinder
+    ``v = rf(v_guess, (y_0, h, p))``, ``v = (y_1, z_1, ..., y_3, z_3)`` the differential and
+    algebraic states at the collocation points ``h tau_j`` (the last one the step's end).
+
+    The collocation of CasADi's ``collocation`` integrator (a Lagrange polynomial through
+    ``y_0`` and the ``y_j``, its derivative ``yp_j = sum_r C_rj y_r`` at each point), with the
+    differential rows in the DAE's sparse form: the step DAE is ``K y' = h(y, z)`` (the
+    flux model's ``K``), which :class:`~maglevkit.reduction.maps.StepRun` writes as
+    ``y' = T pinv(K) h`` plus the algebraic rows ``Q h = 0`` (``Q`` spanning the left null
+    space of ``K``).  ``pinv(K)`` and ``h`` are sparse (82 x 88 with 218 entries, 566 in
+    ``dh/dz`` on the 6-layer ladder), their product is not (5765 of 7216): so the rows here
+    are ``K (y_scale yp_j) - h T h_j = 0`` -- equivalent, since they hold exactly when both
+    ``yp_j = h T pinv(K) h_j`` and ``Q h_j = 0`` do -- each divided by its largest entry of
+    ``K diag(y_scale)`` (a zero row of ``K`` is ``h_i = 0``, divided by its largest entry of
+    ``dh_i/dz`` at the nominal point), and the algebraic rows ``D x - y = 0`` as scaled by
+    :func:`_scaled_step_dae`.  The same root as the explicit rows; the Newton's Jacobian
+    (one SX function) and its factorisation stay sparse.
+    """
+    import casadi as ca
+
+    tau = np.concatenate(([0.0], ca.collocation_points(_RADAU_DEGREE, "radau")))
+    nd = _RADAU_DEGREE + 1
+    # C[j, r]: derivative of the j-th Lagrange basis polynomial at tau_r
+    C = np.zeros((nd, nd))
+    for j in range(nd):
+        basis = np.poly1d([1.0])
+        for r in range(nd):
+            if r != j:
+                basis *= np.poly1d([1.0, -tau[r]]) / (tau[j] - tau[r])
+        C[j] = basis.deriv()(tau)
+    nx, nz = dae["x"].numel(), dae["z"].numel()
+    f = ca.Function("step_dae_sparse", [dae["x"], dae["z"], dae["p"]],
+                    [sparse["rhs"], dae["alg"][:nx]])
+    k_y = ca.DM(sparse["K_y"])
+    moving = [int(i) for i in np.flatnonzero(sparse["K_rows"] > 0.0)]
+    held = [int(i) for i in np.flatnonzero(sparse["K_rows"] == 0.0)]
+    y0 = ca.SX.sym("y0", nx)
+    h = ca.SX.sym("h")
+    p = ca.SX.sym("p", dae["p"].numel())
+    v = ca.SX.sym("v", _RADAU_DEGREE * (nx + nz))
+    ys = [y0] + [v[k * (nx + nz):k * (nx + nz) + nx] for k in range(_RADAU_DEGREE)]
+    zs = [v[k * (nx + nz) + nx:(k + 1) * (nx + nz)] for k in range(_RADAU_DEGREE)]
+    eq = []
+    for j in range(1, nd):
+        rhs, alg = f(ys[j], zs[j - 1], p)
+        yp = C[0, j] * y0
+        for r in range(1, nd):
+            yp = yp + C[r, j] * ys[r]
+        res = ca.mtimes(k_y, yp) - h * p[0] * rhs          # p[0]: the window T
+        eq += [res[moving] / ca.DM(sparse["K_rows"][moving]),
+               rhs[held] / ca.DM(sparse["rhs_rows"][held]), alg]
+    g = ca.Function("radau_residual", [v, ca.vertcat(y0, h, p)], [ca.vertcat(*eq)])
+    return ca.rootfinder("radau_step", "newton", g,
+                         {"abstol": _STEP_ABSTOL, "abstolStep": 1e-14, "max_iter": 50,
+                          "error_on_fail": True})
+
+
+def _radau_steps(dae: Mapping[str, Any], sparse: Mapping[str, Any], y0: Any, z0: Any,
+                 pars: Any, h: np.ndarray, keep: Sequence[int]) -> Any:
+    """Fixed Radau IIA steps ``h`` (:func:`_radau_step_function`) from ``(y0, z0)``, unrolled
+    in MX: the algebraic states at the ends of the steps ``keep``, one column each.  Each
+    step's Newton starts from the previous step's collocation states (the first from
+    ``(y0, z0)`` at every point), as CasADi's integrator does.  Differentiated by CasADi's
+    AD, each rootfinder by the implicit function theorem at its root: values and exact
+    derivatives from one run (the integrator's forward sensitivities integrated the
+    nominal run a second time)."""
+    import casadi as ca
+
+    rf = _radau_step_function(dae, sparse)
+    nx, nz = dae["x"].numel(), dae["z"].numel()
+    last = (_RADAU_DEGREE - 1) * (nx + nz)
+    guess = ca.repmat(ca.vertcat(y0, z0), _RADAU_DEGREE, 1)
+    y, out, wanted = y0, [], set(keep)
+    for k, hk in enumerate(h):
+        guess = rf(guess, ca.vertcat(y, float(hk), pars))
+        y = guess[last:last + nx]
+        if k in wanted:
+            out.append(guess[last + nx:])
+    return ca.horzcat(*out)
 
 
 class _ParametricStep:
@@ -498,7 +660,7 @@ class _ParametricStep:
 
     def __init__(self, model: Any, names: Sequence[str], *, gap_m: float, current_A: float,
                  times_s: np.ndarray, circuit: int, voltage_V: float | None = None,
-                 voltage_step_V: float = 0.0) -> None:
+                 voltage_step_V: float = 0.0, scheme: str | None = None) -> None:
         import casadi as ca
 
         from .circuit.assembly import assemble
@@ -541,7 +703,7 @@ class _ParametricStep:
         # The DAE in scaled unknowns and equations (_scaled_step_dae): the collocation's
         # Newton stops on an absolute residual, and unscaled its 1e-9 was ~1e-6 of the eddy
         # fluxes (~3e-3 Wb): the derivatives of that inexact root were off by 3-6e-6
-        dae, y_scale, z_scale = _scaled_step_dae(run, base, gap_m=float(gap_m),
+        dae, y_scale, z_scale, sparse = _scaled_step_dae(run, base, gap_m=float(gap_m),
                                                  current_A=float(current_A), u=u_nominal,
                                                  duration=duration, names=self.names)
         # consistent algebraic states just after the step: the differential states (flux
@@ -561,14 +723,19 @@ class _ParametricStep:
             np.linspace(a, b, n + 1) for a, b, n in zip(grid[:-1], grid[1:],
                                                         interval_substeps(grid),
                                                         strict=True)]))
-        colloc = ca.integrator("step_collocation", "collocation", dae, 0.0, list(fine[1:]),
-                               {"collocation_scheme": "radau", "interpolation_order": 3,
-                                "number_of_finite_elements": 1, "rootfinder": "newton",
-                                "rootfinder_options": {"abstol": _STEP_ABSTOL,
-                                                       "abstolStep": 1e-14, "max_iter": 50}})
-        res = colloc(x0=y0, z0=z0, p=pars)
         keep = [int(np.searchsorted(fine, v)) - 1 for v in grid[1:]]
-        zf = res["zf"][:, keep]
+        if (scheme or _STEP_SCHEME) == "casadi":
+            colloc = ca.integrator("step_collocation", "collocation", dae, 0.0,
+                                   list(fine[1:]),
+                                   {"collocation_scheme": "radau", "interpolation_order": 3,
+                                    "number_of_finite_elements": 1, "rootfinder": "newton",
+                                    "rootfinder_options": {"abstol": _STEP_ABSTOL,
+                                                           "abstolStep": 1e-14,
+                                                           "max_iter": 50}})
+            res = colloc(x0=y0, z0=z0, p=pars)
+            zf = res["zf"][:, keep]
+        else:
+            zf = _radau_steps(dae, sparse, y0, z0, pars, np.diff(fine), keep)
         cur = zf[run.n_loops + circuit, :].T * float(z_scale[run.n_loops + circuit])
         self.fun = ca.Function("step_sensitivities", [X0, P], [cur, ca.jacobian(cur, P)])
         self.base = base
@@ -594,7 +761,8 @@ STEP_FINE_STEPS = 120
 :data:`_STEP_SUBSTEPS` per interval; :func:`step_substeps`).  Measured (U-magnet, 10 mm,
 20 A, +8 V, 12 samples to 0.2 s, against IDAS at rtol 1e-10): 40 / 10 / 5 / 3 steps per
 interval 3.3e-8 / 3.3e-8 / 1.1e-7 / 1.6e-6 A off, 2.1 / 0.66 / 0.44 / 0.36 s per
-evaluation with the Jacobian; the 40 geometric steps after ``t = 0`` set the floor."""
+evaluation with the Jacobian (CasADi's integrator, before calsteps25); the 40 geometric steps
+after ``t = 0`` set the floor."""
 
 
 def interval_substeps(grid: np.ndarray) -> np.ndarray:
@@ -916,12 +1084,55 @@ def _check_step_units(res: np.ndarray, steps: StepResponses) -> None:
                             "in V, times in s) or another magnet")
 
 
+STEP_SPAN_MAX_TAU = 200.0
+"""A step whose last sample lies beyond this many electrical time constants
+``tau = L_d / R_el`` of the nominal magnet (differential inductance of the statics at the
+step's gap and initial current) is refused as a unit slip (ms written as s: a record of a
+few ``tau`` becomes thousands); the U-magnet's FEM records span 2.7-8.2 ``tau``."""
+
+
+def _check_step_times(steps: StepResponses, net: Network) -> None:
+    """Refuse a step whose samples span more than :data:`STEP_SPAN_MAX_TAU` time
+    constants, naming the step and its last row."""
+    from .models.statics import solve_statics
+
+    for step in steps.steps:
+        j = _step_circuit(step, net, steps.source)
+        sol = solve_statics(net, gaps_m=np.full(len(net.gap_names), step.gap_m),
+                            currents_A=np.full(len(net.circuits), step.initial_current_A))
+        ind = np.asarray(sol.differential_inductance_H, dtype=float).reshape(
+            len(net.circuits), len(net.circuits))[j, j]
+        tau = float(ind) / float(net.resistances[j])
+        span = float(step.time_s[-1])
+        if tau > 0.0 and span > STEP_SPAN_MAX_TAU * tau:
+            raise DataError(f"{steps.source}: step {step.label!r} (last row "
+                            f"{int(step.rows[-1])}): time_s reaches {span:g} s, {span / tau:.0f} "
+                            f"time constants L/R_el = {tau:.3g} s of the nominal magnet there "
+                            f"(more than {STEP_SPAN_MAX_TAU:g}): is the time in ms? (time_s is "
+                            "in seconds)")
+
+
+def _holdout_labels(holdout_steps: str | Sequence[str]) -> list[str]:
+    """The held-out step labels: a str is one label (it may contain commas)."""
+    if isinstance(holdout_steps, str):
+        return [holdout_steps]
+    out: list[str] = []
+    for h in holdout_steps:
+        if not isinstance(h, str):
+            raise InputError(f"holdout_steps: {h!r} is not a step label (str); give the "
+                             "labels of the step file's step column (or the steps' numbers "
+                             "'1', '2', ... without one)")
+        if h not in out:
+            out.append(h)
+    return out
+
+
 def calibrate(magnet: Any, data: str | Path | StaticPoints | None, *,
               parameters: Sequence[str] | None = None,
               holdout_gaps_m: Sequence[float] = (),
               initial: Mapping[str, float] | None = None,
               steps: str | Path | StepResponses | None = None,
-              holdout_steps: Sequence[str] = ()) -> Calibration:
+              holdout_steps: str | Sequence[str] = ()) -> Calibration:
     """Fit calibration parameters of ``magnet`` to measured statics and/or voltage steps
     (module docstring).
 
@@ -944,9 +1155,21 @@ def calibrate(magnet: Any, data: str | Path | StaticPoints | None, *,
         Measured voltage steps (:func:`read_steps`), fitted with the statics: residuals
         ``(I_model - I_data)/current_change_A`` per sample, the model the flux DAE
         (:func:`step_response_sensitivities`) with exact parameter derivatives.
-    holdout_steps : sequence of str
+    holdout_steps : str or sequence of str
         Labels of voltage steps (:attr:`VoltageStep.label`) left out of the fit and
-        reported as the held-out check of the dynamics (``step_holdout``).
+        reported as the held-out check of the dynamics (``step_holdout``); a str is one
+        label (labels may contain commas).
+
+    Raises
+    ------
+    InputError
+        An unknown held-out label (the message lists the steps' labels), every step held
+        out without static data, or initial values outside the bounds.
+    DataError
+        Bad data (:func:`read_points`, :func:`read_steps`), a unit slip (statics or step
+        currents off the nominal magnet by more than :data:`UNIT_SLIP_RATIO`, a step
+        spanning more than :data:`STEP_SPAN_MAX_TAU` time constants: ms as s), or fewer
+        residuals than parameters.
 
     Returns
     -------
@@ -963,21 +1186,25 @@ def calibrate(magnet: Any, data: str | Path | StaticPoints | None, *,
                  else read_steps(steps))
     steps_sha = "" if step_data is None else step_data.sha256
     test_steps: StepResponses | None = None
-    if holdout_steps:
+    held_labels = _holdout_labels(holdout_steps)
+    if held_labels:
         if step_data is None:
-            raise InputError(f"holdout_steps {list(holdout_steps)}: no voltage steps given "
+            raise InputError(f"holdout_steps {held_labels}: no voltage steps given "
                              "(steps=)")
         labels = [st.label for st in step_data.steps]
-        unknown = [str(h) for h in holdout_steps if str(h) not in labels]
+        unknown = [h for h in held_labels if h not in labels]
         if unknown:
             raise InputError(f"holdout_steps {unknown}: no step with that label; the steps: "
                              f"{labels}")
-        held = {str(h) for h in holdout_steps}
+        held = set(held_labels)
         test_steps = replace(step_data, steps=tuple(st for st in step_data.steps
                                                     if st.label in held))
         step_data = replace(step_data, steps=tuple(st for st in step_data.steps
                                                    if st.label not in held))
         if not step_data.steps:
+            if data is None:
+                raise InputError(f"holdout_steps {held_labels} holds out every step and there "
+                                 "are no static data: nothing left to fit")
             step_data = None
     if parameters is None:
         parameters = ((DEFAULT_PARAMETERS if data is not None else ())
@@ -1015,6 +1242,9 @@ def calibrate(magnet: Any, data: str | Path | StaticPoints | None, *,
     if n_res <= len(names):
         raise DataError(f"{pts.source}: {n_res} fitted residuals for {len(names)} parameters; "
                         "the fit needs more data points than parameters")
+    for checked in (step_data, test_steps):
+        if checked is not None:
+            _check_step_times(checked, net)
     groups = _groups(net)
     ps = _ParametricStatics(net, names, groups)
     step_models = [] if step_data is None else [

@@ -169,6 +169,42 @@ def import_table(
          f"fmu MAGNET {path} -o magnet.fmu")
 
 
+def _comma_labels(text: str, labels: list[str]) -> list[str]:
+    """``--holdout-steps``' comma list as step labels: the one way of joining its pieces
+    into known labels (labels may contain commas); the CLI's error otherwise (no reading:
+    the unknown pieces and the labels; several: the readings, and ``--holdout-step``)."""
+    parts = text.split(",")
+    known = set(labels)
+    readings: list[list[str]] = []
+
+    def walk(k: int, acc: list[str]) -> None:
+        if len(readings) > 1:
+            return
+        if k == len(parts):
+            readings.append(acc)
+            return
+        if not parts[k].strip():
+            walk(k + 1, acc)                    # an empty piece (",," or a trailing comma)
+        for end in range(k + 1, len(parts) + 1):
+            seg = ",".join(parts[k:end]).strip()
+            if seg and seg in known:
+                walk(end, [*acc, seg])
+
+    walk(0, [])
+    with_commas = [lab for lab in labels if "," in lab]
+    hint = ("; labels with commas: give each with --holdout-step LABEL (repeatable)"
+            if with_commas else "")
+    if not readings:
+        unknown = [p.strip() for p in parts if p.strip() and p.strip() not in known]
+        raise fail(f"--holdout-steps {text!r}: no step with the label(s) {unknown}; the "
+                   f"steps: {labels}{hint}")
+    if len(readings) > 1:
+        raise fail(f"--holdout-steps {text!r} is ambiguous: it reads as {readings[0]} or as "
+                   f"{readings[1]} (step labels contain commas: {with_commas}); give each "
+                   "label with --holdout-step LABEL (repeatable)")
+    return list(dict.fromkeys(readings[0]))
+
+
 @app.command("calibrate", short_help="Fit a magnet's network factors to measured statics.")
 def calibrate_cmd(
     magnet: Annotated[str, typer.Argument(metavar="MAGNET",
@@ -192,7 +228,11 @@ def calibrate_cmd(
                                                     "gap_m, initial_current_A, voltage_V "
                                                     "[, step, circuit]).")] = None,
     holdout_steps: Annotated[str | None, typer.Option("--holdout-steps", help=(
-        "Labels of --steps' steps left out of the fit and reported (comma list)."))] = None,
+        "Labels of --steps' steps left out of the fit and reported (comma list; refused "
+        "when step labels with commas make it ambiguous: then --holdout-step)."))] = None,
+    holdout_step: Annotated[list[str] | None, typer.Option("--holdout-step", metavar="LABEL", help=(
+        "One label of a --steps step left out of the fit and reported, taken as it is "
+        "(commas included); repeatable."))] = None,
     select: Annotated[bool, typer.Option("--select-params", help=(
         "Choose the static parameters among the subsets of --params (default: the five "
         "static factors) by leave-one-gap-out cross-validation on the fitted gaps (never "
@@ -220,6 +260,7 @@ def calibrate_cmd(
         DYNAMIC_PARAMETERS,
         PARAMETERS,
         calibrate,
+        read_steps,
         select_parameters,
         write_calibrated_toml,
     )
@@ -233,10 +274,23 @@ def calibrate_cmd(
             raise fail(f"--params {params!r}: unknown {unknown}; choose from "
                        f"{', '.join(PARAMETERS)}")
     gaps = list(parse_values(holdout_gaps, "--holdout-gaps", "m")) if holdout_gaps else []
-    held_steps = ([h.strip() for h in holdout_steps.split(",") if h.strip()]
-                  if holdout_steps else [])
-    if held_steps and steps is None:
-        raise fail(f"--holdout-steps {holdout_steps!r} needs --steps")
+    for option, given in (("--holdout-steps", holdout_steps), ("--holdout-step", holdout_step)):
+        if given and steps is None:
+            raise fail(f"{option} {given!r} needs --steps")
+    step_data = None
+    held_steps: list[str] = []
+    if steps is not None:
+        try:
+            step_data = read_steps(steps)
+        except MaglevkitError as exc:
+            raise fail(exc) from None
+        labels = [st.label for st in step_data.steps]
+        for label in holdout_step or []:
+            if label not in labels:
+                raise fail(f"--holdout-step {label!r}: no step with that label; the steps: "
+                           f"{labels}")
+        held_steps = [*(_comma_labels(holdout_steps, labels) if holdout_steps else []),
+                      *(holdout_step or [])]
     mag = load_magnet_or_exit(magnet)
     if select:
         pool = names if names is not None else list(DEFAULT_PARAMETERS)
@@ -257,7 +311,7 @@ def calibrate_cmd(
     with warnings.catch_warnings():
         warnings.simplefilter("always")
         try:
-            res = calibrate(mag, data, parameters=names, holdout_gaps_m=gaps, steps=steps,
+            res = calibrate(mag, data, parameters=names, holdout_gaps_m=gaps, steps=step_data,
                             holdout_steps=held_steps)
         except MaglevkitError as exc:
             raise fail(exc) from None

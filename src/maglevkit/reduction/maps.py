@@ -586,6 +586,9 @@ class StepRun:
                                 "max_num_steps": 100000, "disable_internal_warnings": True}
         self.dae = dae
         self.D, self.n_loops = d.D, d.n_loops
+        # the DAE's K y' = h (its ode is T pinv(K) h, exact as Q h = 0; calibration's Radau
+        # steps solve the sparse K form)
+        self.K, self.h = d.K, hv
         if params is not None:
             return
         self.integrator = ca.integrator("maglevkit_step_fit", "idas", dae, 0.0, self.tau, opts)
