@@ -350,6 +350,11 @@ CORNER_EXCESS = (2.0 - 2.0 * np.log(2.0)) / np.pi
 """The conformal map's face excess per pole edge [1], ``0.195``: the face from the edge to
 ``X >> s`` carries ``mu0 w (X/s + (2 - 2 ln 2)/pi)`` (docs/equations.md sec. 1), gap-
 independent; the Roters decomposition puts ``0.52`` (``QUARTER_CYLINDER``) there."""
+FACE_EXCESS_GEOMETRIES: tuple[dict[str, float] | None, ...] = (
+    None, {"rail_width": 0.400}, {"window_width": 0.160, "rail_width": 0.400},
+    {"pole_width": 0.060, "rail_width": 0.220})
+"""The bundled geometry, a 400 mm rail, a 160 mm window on it, a 60 mm pole
+(:func:`fem_face_excess`): what makes the face's corner term grow with the gap."""
 SATURATION_POINTS = ((0.004, 80.0), (0.012, 80.0), (0.020, 5.0), (0.020, 40.0), (0.020, 80.0))
 """(gap [m], current [A]) of :func:`saturation_diagnostic`."""
 
@@ -392,39 +397,47 @@ def iron_lengths(net: Any, rail_m: float | None = None, yoke_m: float | None = N
     return Network(tuple(branches), net.circuits, name=f"{net.name} (iron paths)")
 
 
-def fem_face_excess() -> None:
+def fem_face_excess(change: dict[str, float] | None = None) -> None:
     """The linear FEM (``mu_r`` = 1e5, 5 A, 4-20 mm): the flux through the face, the
     inner and the outer flank below the coil against the uniform face field and the
     conformal edge (``edge_flank_per_mu0``; the inner flank limited by the window as in
-    :func:`window_fringe_network`), per pole, at ``V = N I/2`` [mWb].  Needs scikit-fem."""
+    :func:`window_fringe_network`), per pole, at ``V = N I/2`` [mWb]; ``change``: other
+    geometry (``fem_u_magnet.Geometry`` fields, e.g. a wider window).  Needs scikit-fem."""
+    from dataclasses import replace  # noqa: PLC0415
+
     sys.path.insert(0, str(HERE))
     import fem_u_magnet as fu  # noqa: PLC0415 (optional dependency scikit-fem)
     from skfem import Basis, ElementTriP2  # noqa: PLC0415
 
     from maglevkit.circuit.elements import edge_flank_per_mu0  # noqa: PLC0415
 
-    g = fu.GEOM
+    g = replace(fu.GEOM, **(change or {}))
+    print(f"geometry: {change or 'bundled'}")
     d, r, a = g.depth, g.coil_gap_to_pole_face, 0.5 * g.window_width
     v_gap = 0.5 * g.turns * 5.0
-    print("| s [mm] | face: FEM / uniform / excess per edge [w] | inner flank: FEM / conformal"
-          " (window-limited) | outer flank: FEM / conformal |")
+    print("| s [mm] | face: FEM / uniform / excess per edge [w] (window half, outer half) | "
+          "inner flank: FEM / conformal (window-limited) | outer flank: FEM / conformal |")
     for s_mm in (4, 8, 12, 16, 20):
         s = s_mm * 1e-3
-        res = fu.solve_full(s, 5.0, mu_r=1e5)
-        basis = Basis(fu.build_mesh(s), ElementTriP2())
+        res = fu.solve_full(s, 5.0, mu_r=1e5, g=g)
+        basis = Basis(fu.build_mesh(s, g=g), ElementTriP2())
 
         def a_z(x: float, y: float, res: Any = res, basis: Any = basis) -> float:
             return float((basis.probes(np.array([[x], [y]])) @ res.A)[0])
 
         e = 1e-6
         face = d * abs(a_z(g.xo, -e) - a_z(g.xi, -e))
+        xm = 0.5 * (g.xi + g.xo)
+        halves = (d * abs(a_z(xm, -e) - a_z(g.xi, -e)), d * abs(a_z(g.xo, -e) - a_z(xm, -e)))
         inner = d * abs(a_z(g.xi - e, r) - a_z(g.xi - e, e))
         outer = d * abs(a_z(g.xo + e, r) - a_z(g.xo + e, e))
         mv = fu.MU0 * v_gap
         uniform = mv * g.pole_width * d / s
         xw = 2.0 / np.pi * (a - s * np.arctan(a / s))
         print(f"| {s_mm} | {1e3 * face:.4f} / {1e3 * uniform:.4f} / "
-              f"{(face - uniform) / (2 * mv * d):.3f} | {1e3 * inner:.4f} / "
+              f"{(face - uniform) / (2 * mv * d):.3f} ("
+              + ", ".join(f"{(h - 0.5 * uniform) / (mv * d):.3f}" for h in halves) + ") | "
+              f"{1e3 * inner:.4f} / "
               f"{1e3 * mv * float(edge_flank_per_mu0(d, r, s)):.4f} "
               f"({1e3 * mv * float(edge_flank_per_mu0(d, min(r, xw), s)):.4f}) | "
               f"{1e3 * outer:.4f} / {1e3 * mv * float(edge_flank_per_mu0(d, r, s)):.4f} |",
@@ -691,7 +704,8 @@ def main(argv: list[str] | None = None) -> None:
         "errors; optionally only these labels, ';'-separated"))
     a = ap.parse_args(argv)
     if a.saturation:
-        fem_face_excess()
+        for change in FACE_EXCESS_GEOMETRIES:
+            fem_face_excess(change)
         saturation_diagnostic()
         return
     if a.variants is not None:
