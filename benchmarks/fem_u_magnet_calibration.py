@@ -352,9 +352,14 @@ CORNER_EXCESS = (2.0 - 2.0 * np.log(2.0)) / np.pi
 independent; the Roters decomposition puts ``0.52`` (``QUARTER_CYLINDER``) there."""
 FACE_EXCESS_GEOMETRIES: tuple[dict[str, float] | None, ...] = (
     None, {"rail_width": 0.400}, {"window_width": 0.160, "rail_width": 0.400},
-    {"pole_width": 0.060, "rail_width": 0.220})
-"""The bundled geometry, a 400 mm rail, a 160 mm window on it, a 60 mm pole
-(:func:`fem_face_excess`): what makes the face's corner term grow with the gap."""
+    {"pole_width": 0.060, "rail_width": 0.220},
+    {"window_width": 0.160, "rail_width": 0.400, "coil_gap_to_pole_face": 0.030,
+     "coil_height": 0.030},
+    {"window_width": 0.160, "rail_width": 0.400, "leg_height": 0.200,
+     "coil_gap_to_pole_face": 0.140, "coil_height": 0.050})
+"""The bundled geometry, a 400 mm rail, a 160 mm window on it, a 60 mm pole, the coil 30
+and 140 mm above the face (:func:`fem_face_excess`): what makes the face's corner term
+grow with the gap."""
 SATURATION_POINTS = ((0.004, 80.0), (0.012, 80.0), (0.020, 5.0), (0.020, 40.0), (0.020, 80.0))
 """(gap [m], current [A]) of :func:`saturation_diagnostic`."""
 
