@@ -252,7 +252,8 @@ def window_diagnostic() -> None:
         print(f"{name}: w_eff [mm] " + ", ".join(row), flush=True)
 
 
-def window_fringe_network(magnet: mk.Magnet, cylinders: bool = True) -> Any:
+def window_fringe_network(magnet: mk.Magnet, cylinders: bool = True,
+                          takeover: str = "window") -> Any:
     """EXPERIMENT, not adopted (docs/decisions.md, cal25): the split network with both pole
     edges' fringe by the conformal map of a right-angled edge
     (:func:`maglevkit.circuit.elements.edge_flank_per_mu0`) and the inner edge's flank
@@ -260,7 +261,17 @@ def window_fringe_network(magnet: mk.Magnet, cylinders: bool = True) -> Any:
     ``s v(x)`` (``v - atan v = pi x/(2s)``); where that exceeds ``a`` = half the window
     (the centre plane is at the rail's potential) it goes to the window instead, so the
     inner flank fringes up to ``x_w = (2/pi)(a - s atan(a/s))`` (< r from ~12 mm on) and the
-    window leakage takes the rest over (gap-dependent; the boundary terms cancel)."""
+    window leakage takes the rest over (gap-dependent; the boundary terms cancel).
+
+    ``takeover = "window"`` (cal25): the flank above ``x_w`` joins the strip below the coil
+    in the leakage branch from pole to pole, whose middle is the mirror plane; the
+    boundary terms then cancel only while the rail node is at the mirror plane's potential,
+    and in saturation the network's rail drop makes the force step down at ``x_w = r``
+    (s = 12.0 mm; -136 N between 12.0 and 12.25 mm at 80 A, neighbouring steps -60 N;
+    u20mm25).  ``"rail"``: that flank's path ``a`` to the mirror plane ends at the rail's
+    potential in the air gap element (pole to rail, in the fringe permeance), continuous
+    through ``x_w = r`` at every current; the leakage branch keeps the strip below the
+    coil."""
     from dataclasses import dataclass, replace  # noqa: PLC0415
 
     import casadi as ca  # noqa: PLC0415
@@ -286,7 +297,9 @@ def window_fringe_network(magnet: mk.Magnet, cylinders: bool = True) -> Any:
     @dataclass(frozen=True)
     class WindowFringeGap(AirGap):
         def fringe_permeance(self, gap: Any) -> Any:
-            return MU0 * (edge_flank_per_mu0(d, r, gap) + edge_flank_per_mu0(d, flank(gap), gap))
+            rail = d * (r - flank(gap)) / a if takeover == "rail" else 0.0
+            return MU0 * (edge_flank_per_mu0(d, r, gap) + edge_flank_per_mu0(d, flank(gap), gap)
+                          + rail)
 
         def permeance(self, gap: Any = None) -> Any:
             return MU0 * self.pole_area_m2 / gap + self.fringe_permeance(gap)
@@ -313,7 +326,7 @@ def window_fringe_network(magnet: mk.Magnet, cylinders: bool = True) -> Any:
         els = tuple(WindowFringeGap(e.name, gap_input=e.gap_input, pole_area_m2=e.pole_area_m2,
                                     fringe_edges=e.fringe_edges)
                     if isinstance(e, AirGap) else e for e in b.elements)
-        if b.name == "leakage":
+        if b.name == "leakage" and takeover == "window":
             els = (WindowTakeover("leakage_window"),)
         branches.append(replace(b, elements=els))
     return Network(tuple(branches), net.circuits, name=net.name + " (window fringe)")
@@ -565,6 +578,7 @@ def variant_networks(magnet: mk.Magnet) -> dict[str, Any]:
             net.circuits, name=net.name + " (FEM corner)")
 
     window = window_fringe_network(magnet)
+    rail = window_fringe_network(magnet, takeover="rail")
     return {"split": magnet.network, "window": window,
             "window, no cylinders": corner_network(window, None),
             "window, corner": corner_network(window),
@@ -572,7 +586,9 @@ def variant_networks(magnet: mk.Magnet) -> dict[str, Any]:
                 corner_network(window), rail_m=ww + 2.0 * wp / 3.0, yoke_m=ww),
             "window, corner, rail and yoke w_w": iron_lengths(
                 corner_network(window), rail_m=ww, yoke_m=ww),
-            "window, FEM corner": fem_corner(window)}
+            "window, FEM corner": fem_corner(window),
+            "window (takeover to the rail), corner": corner_network(rail),
+            "window (takeover to the rail), FEM corner": fem_corner(rail)}
 
 
 def variants_experiment(names: list[str] | None = None) -> None:
