@@ -20,7 +20,10 @@ steps (``benchmarks/results/fem_transient_cases.json``), the fourth held out, fo
 eddy elements (0) and the eddy ladder with 6 layers (``step_fits``); ``--with-statics``
 fits the five static factors on the FEM statics in the same problem.  ``--window``: the
 large-gap force trend (``window_diagnostic``, ``window_fringe_network``; docs/decisions.md,
-cal25).
+cal25).  ``--saturation``: the window fringe in saturation, where the flux and the MMF go in
+the FEM against the networks (``fem_face_excess``, ``saturation_diagnostic``); ``--variants``:
+the networks tried for it, nominal and calibrated (``variant_networks``,
+``variants_experiment``; docs/validation_fem.md, "The window fringe in saturation").
 """
 
 from __future__ import annotations
@@ -249,7 +252,8 @@ def window_diagnostic() -> None:
         print(f"{name}: w_eff [mm] " + ", ".join(row), flush=True)
 
 
-def window_fringe_network(magnet: mk.Magnet, cylinders: bool = True) -> Any:
+def window_fringe_network(magnet: mk.Magnet, cylinders: bool = True,
+                          takeover: str = "window") -> Any:
     """EXPERIMENT, not adopted (docs/decisions.md, cal25): the split network with both pole
     edges' fringe by the conformal map of a right-angled edge
     (:func:`maglevkit.circuit.elements.edge_flank_per_mu0`) and the inner edge's flank
@@ -257,7 +261,17 @@ def window_fringe_network(magnet: mk.Magnet, cylinders: bool = True) -> Any:
     ``s v(x)`` (``v - atan v = pi x/(2s)``); where that exceeds ``a`` = half the window
     (the centre plane is at the rail's potential) it goes to the window instead, so the
     inner flank fringes up to ``x_w = (2/pi)(a - s atan(a/s))`` (< r from ~12 mm on) and the
-    window leakage takes the rest over (gap-dependent; the boundary terms cancel)."""
+    window leakage takes the rest over (gap-dependent; the boundary terms cancel).
+
+    ``takeover = "window"`` (cal25): the flank above ``x_w`` joins the strip below the coil
+    in the leakage branch from pole to pole, whose middle is the mirror plane; the
+    boundary terms then cancel only while the rail node is at the mirror plane's potential,
+    and in saturation the network's rail drop makes the force step down at ``x_w = r``
+    (s = 12.0 mm; -136 N between 12.0 and 12.25 mm at 80 A, neighbouring steps -60 N;
+    u20mm25).  ``"rail"``: that flank's path ``a`` to the mirror plane ends at the rail's
+    potential in the air gap element (pole to rail, in the fringe permeance), continuous
+    through ``x_w = r`` at every current; the leakage branch keeps the strip below the
+    coil."""
     from dataclasses import dataclass, replace  # noqa: PLC0415
 
     import casadi as ca  # noqa: PLC0415
@@ -283,7 +297,9 @@ def window_fringe_network(magnet: mk.Magnet, cylinders: bool = True) -> Any:
     @dataclass(frozen=True)
     class WindowFringeGap(AirGap):
         def fringe_permeance(self, gap: Any) -> Any:
-            return MU0 * (edge_flank_per_mu0(d, r, gap) + edge_flank_per_mu0(d, flank(gap), gap))
+            rail = d * (r - flank(gap)) / a if takeover == "rail" else 0.0
+            return MU0 * (edge_flank_per_mu0(d, r, gap) + edge_flank_per_mu0(d, flank(gap), gap)
+                          + rail)
 
         def permeance(self, gap: Any = None) -> Any:
             return MU0 * self.pole_area_m2 / gap + self.fringe_permeance(gap)
@@ -310,7 +326,7 @@ def window_fringe_network(magnet: mk.Magnet, cylinders: bool = True) -> Any:
         els = tuple(WindowFringeGap(e.name, gap_input=e.gap_input, pole_area_m2=e.pole_area_m2,
                                     fringe_edges=e.fringe_edges)
                     if isinstance(e, AirGap) else e for e in b.elements)
-        if b.name == "leakage":
+        if b.name == "leakage" and takeover == "window":
             els = (WindowTakeover("leakage_window"),)
         branches.append(replace(b, elements=els))
     return Network(tuple(branches), net.circuits, name=net.name + " (window fringe)")
@@ -340,6 +356,283 @@ def window_experiment() -> None:
                             round(100 * r.max_error("holdout", "flux_linkage_Wb"), 2)),
             "holdout": [(round(x["gap_m"] * 1e3), x["current_A"], x["quantity"][:3],
                          round(100 * x["relative_error"], 2)) for x in r.holdout]}), flush=True)
+
+
+# ------------------------------------------- the window fringe in saturation (u20mm25)
+CORNER_EXCESS = (2.0 - 2.0 * np.log(2.0)) / np.pi
+"""The conformal map's face excess per pole edge [1], ``0.195``: the face from the edge to
+``X >> s`` carries ``mu0 w (X/s + (2 - 2 ln 2)/pi)`` (docs/equations.md sec. 1), gap-
+independent; the Roters decomposition puts ``0.52`` (``QUARTER_CYLINDER``) there."""
+FACE_EXCESS_GEOMETRIES: tuple[dict[str, float] | None, ...] = (
+    None, {"rail_width": 0.400}, {"window_width": 0.160, "rail_width": 0.400},
+    {"pole_width": 0.060, "rail_width": 0.220},
+    {"window_width": 0.160, "rail_width": 0.400, "coil_gap_to_pole_face": 0.030,
+     "coil_height": 0.030},
+    {"window_width": 0.160, "rail_width": 0.400, "leg_height": 0.200,
+     "coil_gap_to_pole_face": 0.140, "coil_height": 0.050})
+"""The bundled geometry, a 400 mm rail, a 160 mm window on it, a 60 mm pole, the coil 30
+and 140 mm above the face (:func:`fem_face_excess`): what makes the face's corner term
+grow with the gap."""
+SATURATION_POINTS = ((0.004, 80.0), (0.012, 80.0), (0.020, 5.0), (0.020, 40.0), (0.020, 80.0))
+"""(gap [m], current [A]) of :func:`saturation_diagnostic`."""
+
+
+def corner_network(net: Any, per_edge: float | None = CORNER_EXCESS) -> Any:
+    """``net`` (a split or window-fringe network) with the edges' gap-independent term
+    ``edge_cylinders_*`` at ``per_edge mu0 w`` per edge instead of Roters' 0.52 (``None``:
+    left out).  EXPERIMENT (docs/decisions.md, u20mm25)."""
+    from dataclasses import replace  # noqa: PLC0415
+
+    from maglevkit.circuit.elements import LeakagePermeance  # noqa: PLC0415
+    from maglevkit.circuit.network import Network  # noqa: PLC0415
+    from maglevkit.magnets.u_magnet import QUARTER_CYLINDER  # noqa: PLC0415
+
+    branches = []
+    for b in net.branches:
+        if b.name.startswith("edge_cylinders"):
+            if per_edge is None:
+                continue
+            el = b.elements[0]
+            b = replace(b, elements=(LeakagePermeance(
+                el.name, el.permeance() * per_edge / QUARTER_CYLINDER),))
+        branches.append(b)
+    return Network(tuple(branches), net.circuits, name=f"{net.name} (corner {per_edge})")
+
+
+def iron_lengths(net: Any, rail_m: float | None = None, yoke_m: float | None = None) -> Any:
+    """``net`` with the rail's and/or the yoke's iron path length replaced [m].
+    EXPERIMENT: shorter paths as the FEM's MMF drops suggest (the rail's flux enters it
+    across the faces, the yoke's corners are cut short), see :func:`saturation_diagnostic`."""
+    from dataclasses import replace  # noqa: PLC0415
+
+    from maglevkit.circuit.elements import IronPath  # noqa: PLC0415
+    from maglevkit.circuit.network import Network  # noqa: PLC0415
+
+    new = {"iron_rail": rail_m, "iron_yoke": yoke_m}
+    branches = [replace(b, elements=tuple(
+        replace(e, length_m=new[e.name]) if isinstance(e, IronPath) and new.get(e.name)
+        else e for e in b.elements)) for b in net.branches]
+    return Network(tuple(branches), net.circuits, name=f"{net.name} (iron paths)")
+
+
+def fem_face_excess(change: dict[str, float] | None = None) -> None:
+    """The linear FEM (``mu_r`` = 1e5, 5 A, 4-20 mm): the flux through the face, the
+    inner and the outer flank below the coil against the uniform face field and the
+    conformal edge (``edge_flank_per_mu0``; the inner flank limited by the window as in
+    :func:`window_fringe_network`), per pole, at ``V = N I/2`` [mWb]; ``change``: other
+    geometry (``fem_u_magnet.Geometry`` fields, e.g. a wider window).  Needs scikit-fem."""
+    from dataclasses import replace  # noqa: PLC0415
+
+    sys.path.insert(0, str(HERE))
+    import fem_u_magnet as fu  # noqa: PLC0415 (optional dependency scikit-fem)
+    from skfem import Basis, ElementTriP2  # noqa: PLC0415
+
+    from maglevkit.circuit.elements import edge_flank_per_mu0  # noqa: PLC0415
+
+    g = replace(fu.GEOM, **(change or {}))
+    print(f"geometry: {change or 'bundled'}")
+    d, r, a = g.depth, g.coil_gap_to_pole_face, 0.5 * g.window_width
+    v_gap = 0.5 * g.turns * 5.0
+    print("| s [mm] | face: FEM / uniform / excess per edge [w] (window half, outer half) | "
+          "inner flank: FEM / conformal (window-limited) | outer flank: FEM / conformal |")
+    for s_mm in (4, 8, 12, 16, 20):
+        s = s_mm * 1e-3
+        res = fu.solve_full(s, 5.0, mu_r=1e5, g=g)
+        basis = Basis(fu.build_mesh(s, g=g), ElementTriP2())
+
+        def a_z(x: float, y: float, res: Any = res, basis: Any = basis) -> float:
+            return float((basis.probes(np.array([[x], [y]])) @ res.A)[0])
+
+        e = 1e-6
+        face = d * abs(a_z(g.xo, -e) - a_z(g.xi, -e))
+        xm = 0.5 * (g.xi + g.xo)
+        halves = (d * abs(a_z(xm, -e) - a_z(g.xi, -e)), d * abs(a_z(g.xo, -e) - a_z(xm, -e)))
+        inner = d * abs(a_z(g.xi - e, r) - a_z(g.xi - e, e))
+        outer = d * abs(a_z(g.xo + e, r) - a_z(g.xo + e, e))
+        mv = fu.MU0 * v_gap
+        uniform = mv * g.pole_width * d / s
+        xw = 2.0 / np.pi * (a - s * np.arctan(a / s))
+        print(f"| {s_mm} | {1e3 * face:.4f} / {1e3 * uniform:.4f} / "
+              f"{(face - uniform) / (2 * mv * d):.3f} ("
+              + ", ".join(f"{(h - 0.5 * uniform) / (mv * d):.3f}" for h in halves) + ") | "
+              f"{1e3 * inner:.4f} / "
+              f"{1e3 * mv * float(edge_flank_per_mu0(d, r, s)):.4f} "
+              f"({1e3 * mv * float(edge_flank_per_mu0(d, min(r, xw), s)):.4f}) | "
+              f"{1e3 * outer:.4f} / {1e3 * mv * float(edge_flank_per_mu0(d, r, s)):.4f} |",
+              flush=True)
+
+
+def saturation_diagnostic(points: tuple[tuple[float, float], ...] = SATURATION_POINTS
+                          ) -> None:
+    """Where the saturated flux and MMF go, FEM against the networks (nominal): the MMF
+    drops per pole along straight lines (``int H . dl``, H from the FEM's B and the iron's
+    reluctivity, midpoint rule on 300 points; they add up to ``N I/2`` to < 0.1 %): ``leg``
+    (leg centre line, face to the window's top), ``yoke`` (on to the yoke's mid-line and
+    along it to the mirror plane), ``gap`` (face centre to rail), ``rail`` (to the rail's
+    mid-line under the pole and along it to the mirror plane); the flux crossing the mirror
+    plane ``x = 0`` (rail, gap air, window, yoke, above the yoke) and the leg flux at
+    heights [mWb].  The networks' counterparts are their branch drops (legs to the yoke's
+    mid-line, half the yoke and the rail).  Needs scikit-fem; ~10-20 s per FEM point."""
+    sys.path.insert(0, str(HERE))
+    import fem_u_magnet as fu  # noqa: PLC0415 (optional dependency scikit-fem)
+    from fem_common import Reluctivity  # noqa: PLC0415
+    from skfem import Basis, ElementTriP2  # noqa: PLC0415
+
+    from maglevkit.models.statics import solve_statics  # noqa: PLC0415
+
+    warnings.simplefilter("ignore")
+    g, iron = fu.GEOM, Reluctivity(None)
+    params, _ = read_parameter_file("u-magnet", what="magnet")
+    split = build_magnet({**params, "magnet": {**params["magnet"], **NETWORKS["split"]}},
+                         options=mk.ModelOptions(eddy_currents=False))
+    nets = {"split": split.network, "window": window_fringe_network(split),
+            "window, corner": corner_network(window_fringe_network(split))}
+    xc, ym = 0.5 * (g.xi + g.xo), g.leg_height + 0.5 * g.yoke_thickness
+    for s, current in points:
+        res = fu.solve_full(s, current)
+        basis = Basis(fu.build_mesh(s), ElementTriP2())
+
+        def pot(p: np.ndarray, res: Any = res, basis: Any = basis) -> np.ndarray:
+            return np.asarray(basis.probes(np.asarray(p, dtype=float).T) @ res.A)
+
+        def h_along(p: tuple[float, float], q: tuple[float, float], is_iron: bool,
+                    n: int = 300) -> float:
+            pa, qa = np.asarray(p), np.asarray(q)
+            pts = pa[None] + ((np.arange(n) + 0.5) / n)[:, None] * (qa - pa)[None]
+            h = 1e-6
+            bx = (pot(pts + [0.0, h]) - pot(pts - [0.0, h])) / (2 * h)
+            by = -(pot(pts + [h, 0.0]) - pot(pts - [h, 0.0])) / (2 * h)
+            nu = iron.nu_r(np.hypot(bx, by))[0] if is_iron else np.ones_like(bx)
+            return float(np.sum(nu / fu.MU0 * (bx * (qa - pa)[0] + by * (qa - pa)[1])) / n)
+
+        yr = -s - 0.5 * g.rail_thickness
+        fem = {"leg": h_along((xc, 1e-5), (xc, g.leg_height), True),
+               "yoke": h_along((xc, g.leg_height), (xc, ym), True)
+               + h_along((xc, ym), (0.0, ym), True),
+               "gap": h_along((xc, -1e-5), (xc, -s + 1e-5), False),
+               "rail": h_along((xc, -s - 1e-5), (xc, yr), True)
+               + h_along((xc, yr), (0.0, yr), True)}
+        ys = {"rail": (-s - g.rail_thickness, -s), "gap air": (-s, 0.0),
+              "window": (0.0, g.leg_height), "yoke": (g.leg_height, g.leg_height + g.yoke_thickness),
+              "above": (g.leg_height + g.yoke_thickness, 0.5)}
+        cross = {k: 1e3 * g.depth * abs(float(np.diff(pot(np.array([[0.0, lo], [0.0, hi]])))[0]))
+                 for k, (lo, hi) in ys.items()}
+        heights = (0.001, 0.005, 0.010, 0.020, 0.035, 0.060)
+        leg = [1e3 * g.depth * abs(float(np.diff(pot(np.array([[g.xi, y], [g.xo, y]])))[0]))
+               for y in heights]
+        print(f"{s * 1e3:g} mm, {current:g} A: FEM F {res.force_N:.1f} N, psi {res.psi_Wb:.4f} Wb;"
+              " MMF per pole [A] " + ", ".join(f"{k} {abs(v):.0f}" for k, v in fem.items())
+              + "; across x = 0 [mWb] " + ", ".join(f"{k} {v:.3f}" for k, v in cross.items())
+              + "; leg flux at " + "/".join(f"{1e3 * y:g}" for y in heights) + " mm "
+              + "/".join(f"{v:.2f}" for v in leg), flush=True)
+        for name, net in nets.items():
+            sol = solve_statics(net, gaps_m=s, currents_A=current)
+            flux = dict(zip(sol.branch_names, map(float, np.ravel(sol.branch_flux_Wb)),
+                            strict=True))
+
+            def drop(b: str, net: Any = net, flux: dict = flux, s: float = s) -> float:
+                els = net.branch(b).elements
+                return abs(sum(float(e.mmf_drop(flux[b], s) if getattr(e, "gap", None)
+                                     else e.mmf_drop(flux[b])) for e in els))
+
+            legs = sum(drop(b) for b in flux if b.startswith("leg_right_"))
+            tip = abs(flux["leg_right_0"]) * 1e3
+            f_net = float(sol.force_N)
+            print(f"    {name}: F {f_net:.1f} N ({100 * (f_net / res.force_N - 1):+.1f} %), "
+                  f"psi {float(np.ravel(sol.flux_linkage_Wb)[0]):.4f} Wb; MMF leg (to the yoke's "
+                  f"mid-line) {legs:.0f}, yoke {0.5 * drop('yoke'):.0f}, gap {drop('gap_right'):.0f}, "
+                  f"rail {0.5 * drop('rail'):.0f}; tip segment flux {tip:.2f} mWb", flush=True)
+
+
+def variant_networks(magnet: mk.Magnet) -> dict[str, Any]:
+    """The networks of the u20mm25 experiment (docs/decisions.md), all on the split
+    network's iron and coil air.  ``"window, FEM corner"`` is a DIAGNOSTIC, not a
+    candidate: its gap-dependent edge term is the linear FEM's face excess
+    (:func:`fem_face_excess`, 0.193 -> 0.224 w per edge from 4 to 20 mm) interpolated in
+    the gap, i.e. taken from the FEM."""
+    from dataclasses import dataclass, replace  # noqa: PLC0415
+
+    from maglevkit.circuit.elements import LinearElement  # noqa: PLC0415
+    from maglevkit.circuit.network import Network  # noqa: PLC0415
+    from maglevkit.materials import MU0  # noqa: PLC0415
+
+    m = magnet.parameters["magnet"]
+    d, ww, wp = m["depth"], m["window_width"], m["pole_width"]
+
+    @dataclass(frozen=True)
+    class FemFaceExcess(LinearElement):
+        gap_input: str = "left"
+
+        @property
+        def gap(self) -> str:
+            return self.gap_input
+
+        def permeance(self, gap: Any = None) -> Any:
+            # both edges of a pole: 2 (0.193 + 0.031 (s - 4 mm)/16 mm) w, from fem_face_excess
+            return MU0 * d * 2.0 * (0.1925 + 0.0315 * (gap - 0.004) / 0.016)
+
+    def fem_corner(net: Any) -> Any:
+        return Network(tuple(
+            replace(b, elements=(FemFaceExcess(b.name, gap_input=b.name.split("_")[-1]),))
+            if b.name.startswith("edge_cylinders") else b for b in net.branches),
+            net.circuits, name=net.name + " (FEM corner)")
+
+    window = window_fringe_network(magnet)
+    rail = window_fringe_network(magnet, takeover="rail")
+    return {"split": magnet.network, "window": window,
+            "window, no cylinders": corner_network(window, None),
+            "window, corner": corner_network(window),
+            "window, corner, rail w_w + 2 w_p/3, yoke w_w": iron_lengths(
+                corner_network(window), rail_m=ww + 2.0 * wp / 3.0, yoke_m=ww),
+            "window, corner, rail and yoke w_w": iron_lengths(
+                corner_network(window), rail_m=ww, yoke_m=ww),
+            "window, FEM corner": fem_corner(window),
+            "window (takeover to the rail), corner": corner_network(rail),
+            "window (takeover to the rail), FEM corner": fem_corner(rail)}
+
+
+def variants_experiment(names: list[str] | None = None) -> None:
+    """Each network of :func:`variant_networks`: its nominal errors against the FEM at
+    all 36 points (force and flux linkage, per current and gap), then the set chosen by
+    leave-one-gap-out cross-validation on 4-12 mm and that set's held-out 14-20 mm errors
+    (~60 s CPU per network)."""
+    from maglevkit.models.statics import solve_statics  # noqa: PLC0415
+
+    warnings.simplefilter("ignore")
+    params, _ = read_parameter_file("u-magnet", what="magnet")
+    mag = build_magnet({**params, "magnet": {**params["magnet"], **NETWORKS["split"]}},
+                       options=mk.ModelOptions(eddy_currents=False))
+    hold = [g * 1e-3 for g in HOLD_MM]
+    data = list(csv.DictReader(ln for ln in OUT.open() if not ln.startswith("#")))
+    for label, net in variant_networks(mag).items():
+        if names and label not in names:
+            continue
+        err: dict[tuple[int, float], tuple[float, float]] = {}
+        for row in data:
+            s, cur = float(row["gap_m"]), float(row["current_A"])
+            sol = solve_statics(net, gaps_m=s, currents_A=cur)
+            err[(round(s * 1e3), cur)] = (
+                100 * (float(sol.force_N) / float(row["force_N"]) - 1),
+                100 * (float(np.ravel(sol.flux_linkage_Wb)[0]) / float(row["flux_linkage_Wb"]) - 1))
+        print(f"{label}: nominal error [%] at {', '.join(map(str, GAPS_MM))} mm")
+        for cur in CURRENTS_A:
+            for q, name in ((0, "F"), (1, "psi")):
+                print(f"  {cur:g} A {name}: " + " ".join(f"{err[(g, cur)][q]:+.1f}" for g in GAPS_MM))
+        t = time.process_time()
+        ranked = select_parameters(net, OUT, holdout_gaps_m=hold)
+        r = calibrate(net, OUT, parameters=list(ranked[0].parameters), holdout_gaps_m=hold)
+        print(json.dumps({
+            "network": label, "chosen": ranked[0].parameters,
+            "cv_worst_pct": round(100 * ranked[0].worst, 2),
+            "next": [(x.parameters, round(100 * x.worst, 2)) for x in ranked[1:4]],
+            "values": {k: round(v, 4) for k, v in r.values.items()},
+            "fit_pct": (round(100 * r.max_error("points", "force_N"), 2),
+                        round(100 * r.max_error("points", "flux_linkage_Wb"), 2)),
+            "holdout_pct": (round(100 * r.max_error("holdout", "force_N"), 2),
+                            round(100 * r.max_error("holdout", "flux_linkage_Wb"), 2)),
+            "holdout": [(round(x["gap_m"] * 1e3), x["current_A"], x["quantity"][:3],
+                         round(100 * x["relative_error"], 2)) for x in r.holdout],
+            "cpu_s": round(time.process_time() - t)}), flush=True)
 
 
 STEPS_FEM = HERE / "results" / "fem_transient_cases.json"
@@ -424,7 +717,21 @@ def main(argv: list[str] | None = None) -> None:
         "and the window-fringe experiment's fits (window_fringe_network)"))
     ap.add_argument("--with-statics", action="store_true",
                     help="with --steps: fit the five static factors on the FEM statics too")
+    ap.add_argument("--saturation", action="store_true", help=(
+        "the window fringe in saturation: the linear FEM's face and flank fluxes, the "
+        "FEM's MMF drops and mirror-plane fluxes against the networks (needs scikit-fem)"))
+    ap.add_argument("--variants", default=None, const="", nargs="?", help=(
+        "the u20mm25 networks (variant_networks): nominal errors, CV-chosen set, held-out "
+        "errors; optionally only these labels, ';'-separated"))
     a = ap.parse_args(argv)
+    if a.saturation:
+        for change in FACE_EXCESS_GEOMETRIES:
+            fem_face_excess(change)
+        saturation_diagnostic()
+        return
+    if a.variants is not None:
+        variants_experiment([x for x in a.variants.split(";") if x] or None)
+        return
     if a.window:
         window_diagnostic()
         window_experiment()
