@@ -151,3 +151,14 @@ def test_the_eddy_network_follows_the_ladder_where_eq8_cannot() -> None:
         # integrator changes), and eq. 8 at least 10x worse (measured 18-19x): the point
         assert ac["modes"] < 0.03, (sc.name, ac)
         assert ac["eq8"] > 10.0 * ac["modes"], (sc.name, ac)
+
+
+def test_a_slip_in_the_file_lists_the_models_of_its_kind(tmp_path: Path) -> None:
+    # review6: "ladr" in a guidance file listed 'ladder_split' as allowed, which the
+    # guidance builder then refuses; the message names the kind's own models
+    with pytest.raises(ParameterFileError) as err:
+        mk.load_magnet(_file(tmp_path, 'eddy_model = "ladr"'))
+    msg = str(err.value)
+    assert "[magnet] eddy_model = 'ladr'; allowed for kind 'guidance_magnet' are " \
+           "'lumped', 'ladder'" in msg
+    assert "ladder_split" not in msg

@@ -46,13 +46,19 @@ def fmu(
     motion_eddy: Annotated[bool, typer.Option(
         "--motion-eddy", help="Carry the shielded-gap ladder (a second state per circuit, "
                               "for gap motion; docs/bank.md) instead of eq. 8.")] = False,
+    eddy_branches: Annotated[int, typer.Option(
+        "--eddy-branches", metavar="1|2",
+        help="With --motion-eddy: shielded sections of the ladder, 1 (default: one eddy "
+             "state per circuit) or 2 (the three-state ladder: I_e1, I_e2 per circuit; "
+             "docs/fmu.md).")] = 1,
     force: ForceOption = False,
 ) -> None:
     """Write an FMI 2.0 co-simulation FMU of the reduced model (paper eq. 8) of every
     circuit: inputs voltages, gaps and gap rates; outputs coil currents and forces;
     R_el and R_ec as parameters; the maps embedded as C arrays; compiled by the system C
     compiler.  --motion-eddy exports the shielded-gap ladder instead (our extension of
-    eq. 8 for gap motion; its maps need the motion_eddy_* variables).  See docs/fmu.md.
+    eq. 8 for gap motion; its maps need the motion_eddy_* variables), with --eddy-branches 2
+    the three-state ladder (motion_eddy3_* variables).  See docs/fmu.md.
 
     \b
     Example:
@@ -60,6 +66,12 @@ def fmu(
     """
     if not (math.isfinite(max_substep) and max_substep > 0):   # was named max_substep_s
         raise fail(f"--max-substep {max_substep:g}: must be a finite number of seconds > 0")
+    if eddy_branches not in (1, 2):
+        raise fail(f"--eddy-branches {eddy_branches}: allowed are 1 (the two-state ladder) "
+                   "or 2 (the three-state ladder)")
+    if eddy_branches == 2 and not motion_eddy:
+        raise fail("--eddy-branches 2 needs --motion-eddy (it chooses the shielded-gap "
+                   "ladder's sections; without --motion-eddy the FMU carries eq. 8)")
     output_file(output, "--output", force=force, inputs=(magnet, maps_file))
     if output.suffix.lower() != ".fmu":
         raise fail(f"--output {str(output)!r}: an FMU file must end in .fmu")
@@ -85,7 +97,8 @@ def fmu(
         result = export_fmu(maps, output, model_identifier=model_identifier,
                             eddy_resistance=eddy_resistance, interpolation=interpolation,
                             max_substep_s=max_substep, start_gaps_m=gap,
-                            initial_currents_A=current, motion_eddy=motion_eddy)
+                            initial_currents_A=current, motion_eddy=motion_eddy,
+                            eddy_branches=eddy_branches)
     except MaglevkitError as exc:
         raise fail(exc) from None
     console.print(f"FMU (FMI 2.0 co-simulation) {result.model_identifier!r} of {mag.name!r}: "

@@ -646,8 +646,12 @@ def _build(parameters: Mapping[str, Any], *, options: ModelOptions | None, sourc
                                  f"{', '.join(sorted(_BUILDERS))}")
     builder, tables = _BUILDERS[kind]
     from_file = "eddy_model" in from_file_keys and "eddy_model" in mag
-    options = _file_options(options, mag, source or "parameters", from_file_keys)
     allowed_models = eddy_models_of_kind(kind)
+    if from_file and mag["eddy_model"] not in EDDY_MODELS:     # a slip: name this kind's
+        raise ParameterFileError(f"{source or 'parameters'}: [magnet] eddy_model = "
+                                 f"{mag['eddy_model']!r}; allowed for kind {kind!r} are "
+                                 f"{', '.join(map(repr, allowed_models))}")
+    options = _file_options(options, mag, source or "parameters", from_file_keys)
     if options.eddy_model not in allowed_models:
         error = ParameterFileError if from_file else InputError
         raise error(f"{source or 'parameters'}: [magnet] " * from_file
