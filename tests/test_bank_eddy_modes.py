@@ -294,3 +294,41 @@ def test_three_state_ladder_on_maps_without_a_current_jump_names_the_reason(lmap
     assert "eddy_modes=2" in str(exc.value) and "no eddy currents" not in str(exc.value)
     with pytest.raises(InputError, match="member 'm': eddy_branches=2.*eddy_modes=2"):
         MagnetBank({"m": lmaps}, motion_eddy=True, eddy_branches=2)
+
+
+def test_mixed_with_three_state_ladder_and_three_branches() -> None:
+    """Three eddy states per circuit (a three-branch network) next to a three-state
+    ladder, a one-branch network and eq. 8 (u-magnet maps with the lumped eddy element,
+    where every extension has a fit): each circuit bit for bit as its member alone (the
+    ladder's third state and the small network's last two stay exactly 0)."""
+    u_maps = mk.build_maps(mk.load_magnet("u-magnet"), gaps_m=GAPS,
+                           currents_A=np.linspace(0.0, 40.0, 9), progress=False)
+    members = {"eq8": u_maps, "three": mk.CurrentModel(u_maps, motion_eddy=True, eddy_branches=2),
+               "net1": mk.CurrentModel(u_maps, eddy_modes=1),
+               "net3": mk.CurrentModel(u_maps, eddy_modes=3)}
+    # the reference path (the compiled kernels equal it bit for bit: tested above)
+    bank = MagnetBank(members, compiled="never")
+    assert bank.n_eddy_states == 3 and bank.eddy_modes == 3
+    alone = [MagnetBank({"m": m}, compiled="never", max_step_s=bank.max_step_s)
+             for m in members.values()]
+    st = bank.initial_state(gaps_m=0.010, currents_A=20.0)
+    sa = [b.initial_state(gaps_m=0.010, currents_A=20.0) for b in alone]
+    u = float(bank.resistance_ohm[0]) * 22.0
+    dt = 2e-4
+    for k in range(100):
+        g0 = 0.010 + 0.001 * np.sin(2 * np.pi * 50.0 * k * dt)
+        gd = (0.010 + 0.001 * np.sin(2 * np.pi * 50.0 * (k + 1) * dt) - g0) / dt
+        st, out = bank.step(st, dt, u, g0, gd)
+        res = [b.step(s, dt, u, g0, gd) for b, s in zip(alone, sa, strict=True)]
+        sa = [r[0] for r in res]
+        assert st.eddy_currents_A is not None
+        for j, (s1, o1) in enumerate(res):
+            assert st.inductor_currents_A[j] == s1.inductor_currents_A[0]
+            assert out.currents_A[j] == o1.currents_A[0]
+            assert out.circuit_force_N[j] == o1.circuit_force_N[0]
+            e, e1 = st.eddy_currents_A[j], s1.eddy_currents_A
+            width = 0 if e1 is None else (1 if e1.ndim == 1 else e1.shape[1])
+            if width:
+                assert np.array_equal(e[:width], np.asarray(e1).reshape(-1))
+            assert np.all(e[width:] == 0.0)
+    assert np.all(np.abs(st.eddy_currents_A[1:, 0]) > 1e-4)
