@@ -155,12 +155,14 @@ class BankState:
         :attr:`MagnetBank.gap_names`).
     member_states : tuple of FluxState
         States of the detailed members, in member order.
-    eddy_currents_A : ndarray (n_circuits,), (n_circuits, 2) or None
+    eddy_currents_A : ndarray (n_circuits,), (n_circuits, n_e) or None
         The shielding eddy current ``I_e`` [A] of every circuit in a bank with
         shielded-gap ladder members (:attr:`MagnetBank.motion_eddy`; 0 for eq. 8
         circuits, NaN for detailed members); ``(I_e1, I_e2)`` per circuit in a bank with
-        three-state members (:attr:`MagnetBank.n_eddy_states` 2); None in banks without
-        ladder members.
+        three-state members (:attr:`MagnetBank.n_eddy_states` 2); the branch currents
+        ``I_k`` of eddy-network members (``eddy_modes``) in their first ``m`` columns;
+        ``n_e`` = :attr:`MagnetBank.n_eddy_states` columns when it is 2 or 3; None in
+        banks without ladder or eddy-network members.
     """
 
     time_s: float
@@ -1076,7 +1078,10 @@ class MagnetBank:
         :meth:`circuit_step_function` and :attr:`circuit_output_function` (rows
         :data:`KERNEL_PARAMETERS`: grid, table offset, ``R_el`` [ohm], ``a = 1 + R_el/R_ec``
         and the range bounds with their rounding allowances; in a bank with ladder members
-        18 rows, :data:`MOTION_EDDY_PARAMETERS` appended)."""
+        18 rows, :data:`MOTION_EDDY_PARAMETERS` appended, then
+        :data:`MOTION_EDDY3_PARAMETERS` with three-state members and
+        :data:`EDDY_NETWORK_PARAMETERS` with ``R_k``, ``L_k`` rows with eddy-network
+        members)."""
         return self._par.copy()
 
     @property
