@@ -332,3 +332,25 @@ def test_mixed_with_three_state_ladder_and_three_branches() -> None:
                 assert np.array_equal(e[:width], np.asarray(e1).reshape(-1))
             assert np.all(e[width:] == 0.0)
     assert np.all(np.abs(st.eddy_currents_A[1:, 0]) > 1e-4)
+
+
+def test_pole_gap_inputs_and_simulate(lmaps) -> None:
+    """With one gap input per pole (the bank's general path) a network member still
+    follows the CurrentModel (1e-12: the poles' mean gap may round differently), and
+    ``simulate`` records the branch currents as ``(n_t, n_circuits, m)``, equal to the
+    model's."""
+    cm = mk.CurrentModel(lmaps, eddy_modes=2)
+    bank = MagnetBank({"m": cm}, compiled="never", gap_inputs="pole")
+    assert not bank.compiled_fast_path
+    t = np.arange(0, 81) * DT
+    gaps = 0.010 + 0.001 * np.sin(2 * np.pi * 50.0 * t)
+    ng = len(cm.gap_names)
+    u = float(bank.resistance_ohm[0]) * I0 * 1.1
+    ref = cm.simulate(t, gaps_m=np.repeat(gaps[:, None], ng, axis=1), voltages_V=u,
+                      initial_currents_A=I0)
+    got = bank.simulate(t, gaps_m=np.repeat(gaps[:, None], bank.n_gaps, axis=1),
+                        voltages_V=u, initial_currents_A=I0)
+    assert got.eddy_currents_A is not None and got.eddy_currents_A.shape == (81, 2, 2)
+    np.testing.assert_allclose(got.currents_A, ref.currents_A, rtol=0, atol=TOL_A)
+    np.testing.assert_allclose(got.eddy_currents_A, ref.eddy_currents_A, rtol=0, atol=TOL_A)
+    assert np.max(np.abs(ref.eddy_currents_A)) > 1e-2
