@@ -1,9 +1,10 @@
 """The bank with shielded-gap ladder members (``motion_eddy``): cost and accuracy.
 
 Cost: the in-place stepper at 100 circuits (50 TR09 standard magnets) at 1 ms, eq. 8
-against the two-state and the three-state ladder (``eddy_branches=2``), each through the
-SIMD lanes (the default) and CasADi's generated C, in ns per circuit-step (CPU time, best
-of 5, all in one run; run pinned, ``taskset -c 0``).
+against the two-state and the three-state ladder (``eddy_branches=2``), and on the maps of
+the diffusing eddy ladder (``eddy_model = "ladder"``) eq. 8 against the eddy network
+(``eddy_modes=2``), each through the SIMD lanes (the default) and CasADi's generated C, in
+ns per circuit-step (CPU time, best of 5, all in one run; run pinned, ``taskset -c 0``).
 
 Accuracy: the gap-sine sweep of ``bench_gap_motion`` (TR09 standard, 10 +- 1 mm, constant
 voltage of the nominal current) through a bank of one ladder member (two- and
@@ -55,11 +56,14 @@ def _per_step(fn: Any, steps: int) -> float:
     return best
 
 
-def cost(maps: mk.CharacteristicMaps, cache: Path) -> list[str]:
-    """Table rows: stepper ns per circuit-step at :data:`N_CIRCUITS` circuits."""
-    members = {f"m{k}": maps for k in range(N_CIRCUITS // len(maps.circuits))}
+def cost(maps: mk.CharacteristicMaps, cache: Path,
+         ladder_maps: mk.CharacteristicMaps | None = None) -> list[str]:
+    """Table rows: stepper ns per circuit-step at :data:`N_CIRCUITS` circuits; with
+    ``ladder_maps`` (the diffusing eddy ladder's maps) eq. 8 and the eddy network
+    (``eddy_modes=2``) on them too."""
     rows = []
-    for label, opts in (("eq. 8, lanes (default)", {}),
+    cases: list[tuple[str, mk.CharacteristicMaps, dict[str, Any]]] = [
+        (label, maps, opts) for label, opts in (("eq. 8, lanes (default)", {}),
                         ("eq. 8, CasADi C", {"codegen": "casadi"}),
                         ("ladder (motion_eddy), lanes (default)", {"motion_eddy": True}),
                         ("ladder (motion_eddy), CasADi C", {"motion_eddy": True,
@@ -67,7 +71,15 @@ def cost(maps: mk.CharacteristicMaps, cache: Path) -> list[str]:
                         ("three-state ladder (eddy_branches=2), lanes (default)",
                          {"motion_eddy": True, "eddy_branches": 2}),
                         ("three-state ladder (eddy_branches=2), CasADi C",
-                         {"motion_eddy": True, "eddy_branches": 2, "codegen": "casadi"})):
+                         {"motion_eddy": True, "eddy_branches": 2, "codegen": "casadi"}))]
+    if ladder_maps is not None:
+        cases += [("ladder maps: eq. 8, lanes (default)", ladder_maps, {}),
+                  ("ladder maps: eddy network (eddy_modes=2), lanes (default)", ladder_maps,
+                   {"eddy_modes": 2}),
+                  ("ladder maps: eddy network (eddy_modes=2), CasADi C", ladder_maps,
+                   {"eddy_modes": 2, "codegen": "casadi"})]
+    for label, source, opts in cases:
+        members = {f"m{k}": source for k in range(N_CIRCUITS // len(source.circuits))}
         bank = MagnetBank(members, compiled="always", cache_dir=cache, **opts)
         st = bank.initial_state(gaps_m=0.010, currents_A=33.5)
         nc = bank.n_circuits
@@ -120,15 +132,54 @@ def sweep(gm: Any) -> list[str]:
     return rows
 
 
+def network_sweep(gm: Any, ladder_maps: mk.CharacteristicMaps) -> list[str]:
+    """Table rows: the gap-sine sweep through a bank of one eddy-network member
+    (``eddy_modes=2``) on the maps of the diffusing eddy ladder, against the detailed
+    model of that ladder (``eddy_model = "ladder"``) and the single ``CurrentModel``."""
+    mag = mk.load_magnet(gm.MAGNET, eddy_model="ladder")
+    fm = mk.FluxModel(mag)
+    model = mk.CurrentModel(ladder_maps, eddy_modes=2)
+    u0 = fm.resistances * gm.nominal_current(mag)
+    rows = []
+    for f in SWEEP:
+        dur, dt = max(2.0 / f, 0.1), min(1.0 / (100 * f), 1e-3)
+
+        def gaps(t: Any, f: float = f) -> Any:
+            return gm.GAP + gm.AMPLITUDE * np.sin(2 * np.pi * f * t)
+
+        det = mk.simulate(fm, (0.0, dur), dt_s=dt, gaps_m=gaps, voltages_V=u0)
+        t = det.time_s
+        g = gaps(t)
+        cd, fd = det.currents_A[:, 0], det.pole_force_N.sum(axis=1)
+        last = t >= t[-1] - 1.0 / f * max(1, math.floor(f * dur / 2))
+        zd = gm._fundamental(t[last], cd[last], f)
+        bank = MagnetBank({"m": model}, compiled="auto")
+        single = mk.simulate(model, (0.0, dur), dt_s=dt, gaps_m=gaps, voltages_V=u0)
+        res = bank.simulate(t, gaps_m=np.repeat(g[:, None], bank.n_gaps, axis=1),
+                            voltages_V=u0)
+        cb, fb = res.currents_A[:, 0], res.member_force_N[:, 0]
+        zb = gm._fundamental(t[last], cb[last], f)
+        phase = math.degrees(math.atan2(zb.imag, zb.real) - math.atan2(zd.imag, zd.real))
+        diff = float(np.max(np.abs(cb - single.currents_A[:, 0])))
+        rows.append(f"| {f:g} Hz | eddy network (eddy_modes=2), ladder maps | "
+                    f"{100 * gm._ac_error(cd, cb):.1f} % | "
+                    f"{100 * gm._ac_error(cd, single.currents_A[:, 0]):.1f} % | "
+                    f"{phase:+.1f} deg | {100 * gm._ac_error(fd, fb):.1f} % | "
+                    f"{100 * gm._ac_error(fd, single.force_N):.1f} % | {diff:.1e} A |")
+    return rows
+
+
 def run() -> str:
     if shutil.which("cc") is None:
         return "No C compiler on this machine: the compiled bank needs one."
     gm = _gap_motion()
     maps = mk.build_maps(mk.load_magnet(gm.MAGNET), gaps_m=gm.GRID[0], currents_A=gm.GRID[1],
                          progress=False)
+    ladder_maps = mk.build_maps(mk.load_magnet(gm.MAGNET, eddy_model="ladder"),
+                                gaps_m=gm.GRID[0], currents_A=gm.GRID[1], progress=False)
     cache = Path(tempfile.mkdtemp(prefix="maglevkit-bench-cache-"))
     try:
-        cost_rows = cost(maps, cache)
+        cost_rows = cost(maps, cache, ladder_maps)
     finally:
         shutil.rmtree(cache, ignore_errors=True)
     out = [f"Stepper at {DT * 1e3:g} ms, TR09 standard maps {gm.GRID[0].size} x "
@@ -144,7 +195,10 @@ def run() -> str:
            "over the run):", "",
            "| f | ladder | bank current error | CurrentModel current error | bank phase "
            "error | bank force error | CurrentModel force error | bank - CurrentModel |",
-           "|---|---|---|---|---|---|---|---|", *sweep(gm)]
+           "|---|---|---|---|---|---|---|---|", *sweep(gm), *network_sweep(gm, ladder_maps),
+           "", "(The eddy-network rows: a bank of `CurrentModel(maps, eddy_modes=2)` on the "
+           "maps of the diffusing eddy ladder against the detailed model of that ladder, "
+           "`eddy_model = \"ladder\"`.)"]
     return "\n".join(out)
 
 

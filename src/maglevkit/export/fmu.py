@@ -25,7 +25,10 @@ the shielding eddy current ``I_e``, inside the FMU (the same kernel as the bank'
 parameter ``R_ec`` of a ladder circuit is its shunt ``R_a``, and ``max_substep`` starts at
 most at the ladder's stable RK4 step, as the bank limits it).  Three-state ladder members
 (``CurrentModel(maps, motion_eddy=True, eddy_branches=2)``, ``export_fmu(...,
-eddy_branches=2)``) carry their two eddy states ``I_e1``, ``I_e2`` per circuit the same way.
+eddy_branches=2)``) carry their two eddy states ``I_e1``, ``I_e2`` per circuit the same way,
+eddy-network members (``CurrentModel(maps, eddy_modes=m)``, ``export_fmu(...,
+eddy_modes=m)``) their ``m`` branch currents ``I_k`` (the parameter ``R_ec`` is then the
+network's ``R_0``, inf where the network has no current jump).
 """
 
 from __future__ import annotations
@@ -143,7 +146,7 @@ def export_fmu(magnet_or_maps: ReducedSource, path: str | os.PathLike[str], *,
                max_substep_s: float = 1e-3, start_gaps_m: Any = None,
                initial_currents_A: Any = None, stop_time_s: float = 1.0,
                step_size_s: float = 1e-3, motion_eddy: bool = False,
-               eddy_branches: int = 1) -> ExportedFmu:
+               eddy_branches: int = 1, eddy_modes: int = 0) -> ExportedFmu:
     """Write an FMI 2.0 Co-Simulation FMU of the reduced model of every circuit (eq. 8).
 
     Parameters
@@ -186,6 +189,11 @@ def export_fmu(magnet_or_maps: ReducedSource, path: str | os.PathLike[str], *,
         section (1, default: state ``I_e``) or two (2, the three-state ladder:
         ``I_e1``, ``I_e2`` per circuit inside the FMU; ``MagnetBank(...,
         eddy_branches=2)``).  A ``CurrentModel`` member or a bank keeps its own.
+    eddy_modes : {0, 1, 2, 3}
+        ``m > 0``: members given as maps carry the maps' eddy network with ``m`` RL
+        branches (``MagnetBank(..., eddy_modes=m)``: ``m`` branch currents per circuit
+        inside the FMU; not with ``motion_eddy``).  A ``CurrentModel`` member or a bank
+        keeps its own.
 
     Returns
     -------
@@ -210,9 +218,10 @@ def export_fmu(magnet_or_maps: ReducedSource, path: str | os.PathLike[str], *,
         raise InputError(f"description = {description!r} must be a string")
     flag(motion_eddy, "motion_eddy")
     bank, default_name = _as_bank(magnet_or_maps, eddy_resistance, interpolation,
-                                  bool(motion_eddy), eddy_branches)
-    if bank.motion_eddy:
-        # the ladder's stable RK4 step (MotionEddyLadder.max_step_s), as the bank limits it
+                                  bool(motion_eddy), eddy_branches, eddy_modes)
+    if bank.n_eddy_states:
+        # the ladder's stable RK4 step (MotionEddyLadder.max_step_s) or the eddy
+        # network's (eddy_network_parameters), as the bank limits it
         max_substep_s = min(float(max_substep_s), bank.max_step_s)
     ident = _model_identifier(model_identifier, default_name)
     cc = find_compiler()
@@ -291,7 +300,8 @@ def _target_path(path: Any) -> Path:
 
 
 def _as_bank(model: ReducedSource, eddy_resistance: str, interpolation: str,
-             motion_eddy: bool = False, eddy_branches: int = 1) -> tuple[MagnetBank, str]:
+             motion_eddy: bool = False, eddy_branches: int = 1,
+             eddy_modes: int = 0) -> tuple[MagnetBank, str]:
     """The bank to export and a default model name."""
     if isinstance(model, MagnetBank):
         if motion_eddy:
@@ -301,6 +311,10 @@ def _as_bank(model: ReducedSource, eddy_resistance: str, interpolation: str,
             raise InputError(f"eddy_branches = {eddy_branches!r} applies to members given as "
                              "maps; a bank has chosen already (build it with MagnetBank(..., "
                              "motion_eddy=True, eddy_branches=2))")
+        if eddy_modes != 0:
+            raise InputError(f"eddy_modes = {eddy_modes!r} applies to members given as maps; "
+                             "a bank has chosen already (build it with MagnetBank(..., "
+                             "eddy_modes=m))")
         kinds = {name: kind for name, kind, _ in model.members}
         detailed = [n for n, k in kinds.items() if k != "reduced"]
         if detailed:
@@ -335,7 +349,8 @@ def _as_bank(model: ReducedSource, eddy_resistance: str, interpolation: str,
                          f"CurrentModel, a MagnetBank or a mapping of them, got "
                          f"{type(model).__name__}{hint}")
     bank = MagnetBank(members, interpolation=interpolation, eddy_resistance=eddy_resistance,
-                      compiled="never", motion_eddy=motion_eddy, eddy_branches=eddy_branches)
+                      compiled="never", motion_eddy=motion_eddy, eddy_branches=eddy_branches,
+                      eddy_modes=eddy_modes)
     return bank, name
 
 
@@ -422,7 +437,7 @@ def _generate_model_code(bank: MagnetBank, ident: str, src: Path) -> None:
     # shielded-gap ladder members: one more input and output, I_e (MagnetBank), (n, n_e)
     # column-major with n_e eddy states per circuit (I_e1 of every circuit, then I_e2)
     ne = bank.n_eddy_states
-    ve = [ca.MX.sym("I_e", n, ne)] if bank.motion_eddy else []
+    ve = [ca.MX.sym("I_e", n, ne)] if ne else []
     res = one.map(n, "serial")(vi.T, vs.T, vu.T, vsd.T, vh, vp, *(v.T for v in ve))
     outs = [r.T for r in res[:6]] + ([ca.horzcat(*(r.T for r in res[6:]))] if ve else [])
     step = ca.Function(f"{ident}_step", [vi, vs, vu, vsd, vh, vp, *ve], outs,
@@ -467,9 +482,10 @@ def _config_header(ident: str, guid: str, circuits: tuple[str, ...], par: np.nda
         "#ifndef MAGLEVKIT_FMU_CONFIG_H", "#define MAGLEVKIT_FMU_CONFIG_H", "#include <math.h>",
         f'#define MODEL_IDENTIFIER "{ident}"', f'#define MODEL_GUID "{guid}"',
         f"#define NC {nc}", f"#define N_PAR {par.shape[0]}",
-        "/* 1: shielded-gap ladder circuits (MagnetBank.motion_eddy), state I_e too */",
+        "/* 1: circuits with eddy states (shielded-gap ladder, eddy network), I_e too */",
         f"#define MOTION_EDDY {1 if par.shape[0] > len(KERNEL_PARAMETERS) else 0}",
-        "/* eddy states per circuit (MagnetBank.n_eddy_states: 1 I_e, 2 I_e1 and I_e2) */",
+        "/* eddy states per circuit (MagnetBank.n_eddy_states: 1 I_e, 2 I_e1 and I_e2, or the",
+        "   eddy network's branch currents I_k) */",
         f"#define N_EDDY {max(n_eddy, 1)}",
         f"#define PAR_R_EL {rows['resistance_ohm']}", f"#define PAR_A {rows['a']}",
         f"#define MK_STEP {ident}_step", f"#define MK_STEP_WORK {ident}_step_work",

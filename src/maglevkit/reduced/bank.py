@@ -76,6 +76,10 @@ from .core import (
 )
 from .current import (
     CurrentModel,
+    _check_eddy_modes,
+    eddy_network_coil_current,
+    eddy_network_parameters,
+    eddy_network_rhs,
     eq8_coil_current,
     eq8_freewheel_voltage,
     eq8_rhs,
@@ -92,7 +96,8 @@ from .tables import INTERPOLATION_METHODS, cell_lookup, cell_table, gap_cell_par
 if TYPE_CHECKING:
     from ..reduction.maps import CharacteristicMaps
 
-__all__ = ["KERNEL_PARAMETERS", "MOTION_EDDY3_PARAMETERS", "MOTION_EDDY_PARAMETERS", "RUN_CHUNK",
+__all__ = ["EDDY_NETWORK_PARAMETERS", "KERNEL_PARAMETERS", "MOTION_EDDY3_PARAMETERS",
+           "MOTION_EDDY_PARAMETERS", "RUN_CHUNK",
            "STEP_FLAG_MESSAGES", "BankOutputs", "BankRun", "BankSimulation", "BankState",
            "MagnetBank", "StepFlag", "circuit_label"]
 
@@ -121,6 +126,14 @@ members (``MagnetBank.n_eddy_states == 2``): the inner shield ``R_3`` [ohm], the
 series ``L_2`` [H], the inner share ``beta_2`` of the motion term [-] and the share
 ``c_2`` of the second eddy state ``I_e2`` in the force current [-] (docs/equations.md
 section 8, "Three states"); ``0, 1 H, 0, 0`` in two-state ladder and eq. 8 circuits."""
+EDDY_NETWORK_PARAMETERS = ("eddy_network_modes", "eddy_network_reference_inductance_H")
+"""Rows appended after :data:`MOTION_EDDY_PARAMETERS` (and :data:`MOTION_EDDY3_PARAMETERS`
+where present) in a bank with eddy-network members (``eddy_modes > 0``;
+:attr:`MagnetBank.eddy_modes`): the circuit's branch count ``m`` (0 in other circuits) and
+``L~_ref`` [H] (1 H elsewhere), then ``n_e`` rows of branch resistances ``R_k`` [ohm] and
+``n_e`` rows of branch inductances ``L_k`` [H] (``n_e`` = :attr:`MagnetBank.n_eddy_states`;
+``0, 1 H`` for absent branches).  Their circuits have the flag 3 in row ``motion_eddy`` and
+``a = 1 + R_el/R_0`` in row ``a``."""
 RUN_CHUNK = 1024
 """Steps per call of the compiled time loop of :meth:`MagnetBank.run_steps` (longer runs
 take several calls)."""
@@ -142,12 +155,14 @@ class BankState:
         :attr:`MagnetBank.gap_names`).
     member_states : tuple of FluxState
         States of the detailed members, in member order.
-    eddy_currents_A : ndarray (n_circuits,), (n_circuits, 2) or None
+    eddy_currents_A : ndarray (n_circuits,), (n_circuits, n_e) or None
         The shielding eddy current ``I_e`` [A] of every circuit in a bank with
         shielded-gap ladder members (:attr:`MagnetBank.motion_eddy`; 0 for eq. 8
         circuits, NaN for detailed members); ``(I_e1, I_e2)`` per circuit in a bank with
-        three-state members (:attr:`MagnetBank.n_eddy_states` 2); None in banks without
-        ladder members.
+        three-state members (:attr:`MagnetBank.n_eddy_states` 2); the branch currents
+        ``I_k`` of eddy-network members (``eddy_modes``) in their first ``m`` columns;
+        ``n_e`` = :attr:`MagnetBank.n_eddy_states` columns when it is 2 or 3; None in
+        banks without ladder or eddy-network members.
     """
 
     time_s: float
@@ -270,11 +285,20 @@ class _Member:
     ladder: MotionEddyLadder | None = None   # the shielded-gap ladder (motion_eddy)
     ladder3: dict[str, np.ndarray] | None = None   # the three-state ladder (eddy_branches=2)
     ladder_step_s: float = math.inf          # the ladder's stable RK4 sub-step [s]
+    network: dict[str, np.ndarray] | None = None   # the eddy network (eddy_modes > 0)
 
     @property
     def eddy_states(self) -> int:
-        """Ladder eddy states per circuit: 0 (eq. 8), 1 or 2."""
+        """Eddy states per circuit: 0 (eq. 8), 1 or 2 (ladders), m (eddy network)."""
+        if self.network is not None:
+            return int(self.network["r_k"].shape[1])
         return 2 if self.ladder3 is not None else int(self.ladder is not None)
+
+    @property
+    def law(self) -> int:
+        """The circuits' law (row ``motion_eddy``): 0 eq. 8, 1 two-state ladder, 2
+        three-state ladder, 3 eddy network."""
+        return 3 if self.network is not None else self.eddy_states
 
 
 class MagnetBank:
@@ -343,6 +367,14 @@ class MagnetBank:
         eddy states in every circuit (:attr:`n_eddy_states`; ``eddy_currents_A`` of shape
         ``(n_circuits, 2)``, the second 0 in two-state ladder circuits, both 0 in eq. 8
         circuits).
+    eddy_modes : {0, 1, 2, 3}
+        ``0`` (default): members given as maps follow eq. 8 (or the ladder); ``m > 0``: they
+        carry the maps' fitted eddy network with ``m`` RL branches (as
+        ``CurrentModel(maps, eddy_modes=m)``; a member given as a ``CurrentModel`` keeps
+        its own), ``m`` eddy states ``I_k`` per circuit (:attr:`n_eddy_states`, the
+        bank-wide maximum; absent branches stay 0).  Not with ``motion_eddy=True`` (two
+        different extensions for members given as maps; members given as
+        ``CurrentModel`` may mix) and not with ``freewheel=True`` (docs/bank.md).
 
     Examples
     --------
@@ -363,7 +395,8 @@ class MagnetBank:
                  compiled: str = "auto", eddy_resistance: str = "fit", max_step_s: float = 1e-3,
                  extrapolate: bool = False, cache_dir: Any = None,
                  codegen: str = "lanes", freewheel: bool = False,
-                 motion_eddy: bool = False, eddy_branches: int = 1) -> None:
+                 motion_eddy: bool = False, eddy_branches: int = 1,
+                 eddy_modes: int = 0) -> None:
         if compiled not in COMPILE_MODES:
             raise InputError(f"compiled = {compiled!r}; use one of {list(COMPILE_MODES)}")
         if codegen not in ("lanes", "casadi"):
@@ -401,18 +434,40 @@ class MagnetBank:
         if eddy_branches == 2 and not motion_eddy:
             raise InputError("eddy_branches = 2 needs motion_eddy=True (it is the shielded-gap "
                              "ladder's second shielded section)")
+        modes = _check_eddy_modes(eddy_modes)
+        if modes and motion_eddy:
+            raise InputError(f"motion_eddy=True with eddy_modes={modes}: these are two "
+                             "different eddy extensions of eq. 8 for the members given as "
+                             "maps; use one of them (give CurrentModel members to mix them)")
         self._members = tuple(self._member(p, eddy_resistance, bool(motion_eddy),
-                                           int(eddy_branches)) for p in pairs)
+                                           int(eddy_branches), modes) for p in pairs)
         ladders = [m for m in self._members if m.eddy_states]
-        self.motion_eddy = bool(ladders)
+        self.motion_eddy = any(m.law in (1, 2) for m in self._members)
         """Whether some member carries the shielded-gap ladder (two or three states per
         circuit)."""
+        self.eddy_modes = max([m.eddy_states for m in self._members if m.network is not None],
+                              default=0)
+        """The most eddy-network branches of a member (``eddy_modes``; 0: no eddy-network
+        members)."""
         self.n_eddy_states = max([m.eddy_states for m in self._members])
-        """Ladder eddy states per circuit: 0 (no ladder members), 1 (two-state ladders:
-        ``I_e``) or 2 (some three-state ladder member: ``I_e1``, ``I_e2``)."""
-        # which laws the bank's circuits follow (0 eq. 8, 1 two-state, 2 three-state): the
-        # kernel of a three-state bank selects only among those present
-        self._laws = tuple(sorted({m.eddy_states for m in self._members if m.kind == "reduced"}))
+        """Eddy states per circuit: 0 (eq. 8 members only), 1 (two-state ladders: ``I_e``;
+        or eddy networks of one branch), 2 (some three-state ladder member: ``I_e1``,
+        ``I_e2``; or an eddy network of two branches) or 3 (an eddy network of three)."""
+        self._has_eddy = self.n_eddy_states > 0
+        # which laws the bank's circuits follow (0 eq. 8, 1 two-state, 2 three-state, 3 eddy
+        # network): the kernel selects only among those present
+        self._laws = tuple(sorted({m.law for m in self._members if m.kind == "reduced"}))
+        # eddy-network circuits with fewer branches than n_eddy_states (their last
+        # branches are switched off per circuit)
+        self._mixed_modes = any(m.network is not None and m.eddy_states < self.n_eddy_states
+                                for m in self._members)
+        networks = [m.name for m in self._members if m.network is not None]
+        if networks and self.freewheel:
+            raise InputError(f"freewheel=True with eddy-network members {networks} "
+                             "(eddy_modes > 0): the diode law is not carried for the eddy "
+                             "network (with R_0 = inf, no current jump, blocking the coil "
+                             "current is a constraint, not a clamp; docs/bank.md); use "
+                             "freewheel=False or members without eddy_modes")
         diodes = [m.name for m, (_, model) in zip(self._members, pairs, strict=True)
                   if isinstance(model, CurrentModel) and model.freewheel]
         if diodes and not self.freewheel:
@@ -442,7 +497,7 @@ class MagnetBank:
     # ------------------------------------------------------------------ construction
     @staticmethod
     def _member(pair: Any, eddy_resistance: str, motion_eddy: bool = False,
-                eddy_branches: int = 1) -> _Member:
+                eddy_branches: int = 1, eddy_modes: int = 0) -> _Member:
         try:
             name, model = pair
         except (TypeError, ValueError):
@@ -457,24 +512,23 @@ class MagnetBank:
             return _Member(name, "detailed", tuple(model.circuit_names), tuple(model.gap_names),
                            groups, model=model)
         if isinstance(model, CurrentModel):
-            if model.eddy_modes:
-                # the bank's lanes carry eq. 8's one state per circuit; the eddy network's
-                # branch currents would be dropped silently
-                raise InputError(f"member {name!r}: a CurrentModel with eddy_modes="
-                                 f"{model.eddy_modes} cannot be a bank member (the bank "
-                                 "advances eq. 8 with one R_ec per circuit); use "
-                                 "CurrentModel(maps) or the model on its own")
             core = model.core
             motion_eddy = bool(getattr(model, "motion_eddy", False))
             eddy_branches = int(getattr(model, "eddy_branches", 1))
+            eddy_modes = int(model.eddy_modes)
         elif hasattr(model, "dataset") and hasattr(model, "variable"):
             core = ReducedCore.from_maps(model, eddy_resistance=eddy_resistance,
                                          what=f"member {name!r}: ")
         else:
             raise InputError(f"member {name!r}: a model must be CharacteristicMaps, a "
                              f"CurrentModel or a FluxModel, got {type(model).__name__}")
-        ladder, ladder3, step_s = None, None, math.inf
-        if motion_eddy and eddy_branches == 2:
+        ladder, ladder3, network, step_s = None, None, None, math.inf
+        if eddy_modes:
+            network, step_s = eddy_network_parameters(core.maps, eddy_modes,
+                                                      core.resistance_ohm,
+                                                      what=f"member {name!r}: ")
+            r_ec = network["r_0"]
+        elif motion_eddy and eddy_branches == 2:
             ladder3, step_s = motion_eddy3_parameters(core.maps, core.resistance_ohm,
                                                       what=f"member {name!r}: ")
             r_ec = ladder3["r_a"]
@@ -487,7 +541,8 @@ class MagnetBank:
         return _Member(name, "reduced", core.circuit_names, core.gap_names,
                        dict(core.pole_groups), maps=core.maps, core=core,
                        resistance_ohm=core.resistance_ohm, eddy_resistance_ohm=r_ec,
-                       ladder=ladder, ladder3=ladder3, ladder_step_s=step_s)
+                       ladder=ladder, ladder3=ladder3, ladder_step_s=step_s,
+                       network=network)
 
     def _layout(self) -> None:
         circuits: list[str] = []
@@ -552,8 +607,12 @@ class MagnetBank:
         """Per-cell tables (one per distinct map), kernel parameters and range bounds."""
         idx = self._reduced_idx
         n = idx.size
-        n_par = (_N_PAR + (len(MOTION_EDDY_PARAMETERS) if self.motion_eddy else 0)
-                 + (len(MOTION_EDDY3_PARAMETERS) if self.n_eddy_states == 2 else 0))
+        ne = self.n_eddy_states
+        n3 = _N_PAR + (len(MOTION_EDDY_PARAMETERS) if self._has_eddy else 0)
+        # the eddy network's rows (EDDY_NETWORK_PARAMETERS, then R_k and L_k of n_e branches)
+        self._net_row = n3 + (len(MOTION_EDDY3_PARAMETERS) if 2 in self._laws else 0)
+        n_par = self._net_row + ((len(EDDY_NETWORK_PARAMETERS) + 2 * ne) if 3 in self._laws
+                                 else 0)
         self._par = np.zeros((n_par, n))
         self._bounds = np.zeros((4, n))            # s_lo, s_hi, i_lo, i_hi (map ranges)
         self._spline_bounds = np.zeros((4, n))     # the same extended by EXTRA_CELLS cells
@@ -593,23 +652,34 @@ class MagnetBank:
                 assert m.resistance_ohm is not None
                 core = m.core
                 r_el = float(m.resistance_ohm[j])
-                lad, lad3 = m.ladder, m.ladder3
-                a = float(lad3["a"][j] if lad3 is not None else
+                lad, lad3, net = m.ladder, m.ladder3, m.network
+                a = float(net["a"][j] if net is not None else
+                          lad3["a"][j] if lad3 is not None else
                           core.a[j] if lad is None else lad.a[j])
                 self._par[:9, k] = (s0, 1.0 / ds_, cs_, i0, 1.0 / di_, ci_, offset, r_el, a)
-                if self.motion_eddy:
-                    n2 = _N_PAR + len(MOTION_EDDY_PARAMETERS)
-                    self._par[_N_PAR:n2, k] = (
+                if self._has_eddy:
+                    self._par[_N_PAR:n3, k] = (
                         (2.0, *(float(lad3[q][j]) for q in ("r_2", "l_u", "beta", "c_1")))
                         if lad3 is not None else
+                        (3.0, 0.0, 1.0, 0.0, 0.0) if net is not None else
                         (0.0, 0.0, 1.0, 0.0, 0.0) if lad is None else
                         (1.0, float(lad.shielding_resistance_ohm[j]),
                          float(lad.unshielded_inductance_H[j]), float(lad.unshielded_share[j]),
                          float(lad.force_share[j])))
-                    if self.n_eddy_states == 2:
-                        self._par[n2:, k] = (tuple(float(lad3[q][j]) for q in
-                                                   ("r_3", "l_2", "beta_2", "c_2"))
-                                             if lad3 is not None else (0.0, 1.0, 0.0, 0.0))
+                    if 2 in self._laws:
+                        self._par[n3:self._net_row, k] = (
+                            tuple(float(lad3[q][j]) for q in ("r_3", "l_2", "beta_2", "c_2"))
+                            if lad3 is not None else (0.0, 1.0, 0.0, 0.0))
+                    if 3 in self._laws:
+                        # the branches' R_k, L_k (absent ones 0, 1 H: never advanced)
+                        rk, lk = np.zeros(ne), np.ones(ne)
+                        mk_ = 0
+                        if net is not None:
+                            mk_ = net["r_k"].shape[1]
+                            rk[:mk_], lk[:mk_] = net["r_k"][j], net["l_k"][j]
+                        self._par[self._net_row:, k] = (
+                            float(mk_), float(net["l_ref"][j]) if net is not None else 1.0,
+                            *rk, *lk)
                 self._bounds[:, k] = (*core.gap_range_m, *core.current_range_A)
                 tol[:, k] = (core.gap_tolerance_m, core.current_tolerance_A)
                 self._spline_bounds[:, k] = (gs[0], gs[-1], gi[0], gi[-1])
@@ -672,7 +742,8 @@ class MagnetBank:
     def _eddy_tuple(self, ie: Any) -> tuple[Any, ...]:
         """A circuit's ladder eddy states as scalars, ``(I_e,)`` or ``(I_e1, I_e2)``, from
         the MX of :attr:`n_eddy_states` elements."""
-        return (ie,) if self.n_eddy_states == 1 else (ie[0], ie[1])
+        return (ie,) if self.n_eddy_states == 1 else tuple(ie[k] for k in
+                                                            range(self.n_eddy_states))
 
     def _select(self, me: Any, laws: dict[int, tuple[Any, ...]]) -> tuple[Any, ...]:
         """The law of the circuit's kind ``me`` (row ``motion_eddy``: 0, 1, 2) among the
@@ -691,6 +762,8 @@ class MagnetBank:
         members, ``(dI_L/dt, dI_e1/dt, dI_e2/dt)`` of one circuit: the three-state ladder
         (:func:`eq8_shielded_gap3_rhs`) where row ``motion_eddy`` is 2, the two-state one
         (``I_e1`` its ``I_e``, ``dI_e2/dt = 0``) where it is 1, eq. 8 where it is 0."""
+        if 3 in self._laws:
+            return self._network_law(i, e, u, sd, lt, dl, p)
         if self.n_eddy_states == 1:
             return self._ladder_rhs(i, e[0], u, sd, lt, dl, p)
         e1, e2 = e
@@ -709,21 +782,69 @@ class MagnetBank:
                                         beta, beta_2)
         return self._select(me, laws)
 
+    def _network_law(self, i: Any, e: tuple[Any, ...], u: Any, sd: Any, lt: Any, dl: Any,
+                     p: Any) -> tuple[Any, ...]:
+        """``(dI_L/dt, dI_1/dt, ..., dI_ne/dt)`` of one circuit of a bank with eddy-network
+        members: the eddy network (:func:`eddy_network_rhs`, its first ``m`` states; the
+        others' rates 0 where the circuit has fewer branches) where row ``motion_eddy`` is
+        3, the ladders and eq. 8 elsewhere (their unused states' rates 0).  No diodes
+        (refused with eddy-network members)."""
+        ne = self.n_eddy_states
+        r_el, a = p[7], p[8]
+        me, r_2, l_u, beta = p[_N_PAR], p[_N_PAR + 1], p[_N_PAR + 2], p[_N_PAR + 3]
+        zeros = (0.0,) * ne
+        laws: dict[int, tuple[Any, ...]] = {}
+        if 0 in self._laws:
+            laws[0] = (eq8_rhs(i, u, sd, lt, dl, r_el, a), *zeros)
+        if 1 in self._laws:
+            laws[1] = (*eq8_shielded_gap_rhs(i, e[0], u, sd, lt, dl, r_el, a, r_2, l_u, beta),
+                       *zeros[1:])
+        if 2 in self._laws:
+            n3 = _N_PAR + len(MOTION_EDDY_PARAMETERS)
+            laws[2] = (*eq8_shielded_gap3_rhs(i, e[0], e[1], u, sd, lt, dl, r_el, a, r_2, l_u,
+                                              p[n3], p[n3 + 1], beta, p[n3 + 2]), *zeros[2:])
+        q = self._net_row
+        modes, l_ref = p[q], p[q + 1]
+        r_k = [p[q + 2 + k] for k in range(ne)]
+        l_k = [p[q + 2 + ne + k] for k in range(ne)]
+        d_il, d_k = eddy_network_rhs(i, e, u, sd, lt, dl, r_el, a, r_k, l_k, l_ref)
+        if self._mixed_modes:
+            # a circuit with m < n_e branches: the last ones switched off (their currents
+            # start at 0 and stay there, so that the sums above add exact zeros)
+            d_k = tuple(ca.if_else(modes > k + 0.5, d, 0.0) if k else d
+                        for k, d in enumerate(d_k))
+        laws[3] = (d_il, *d_k)
+        return self._select(me, laws)
+
     def _terminal_current(self, i: Any, e: tuple[Any, ...]) -> Any:
         """The current through ``R_a``'s node, ``I_L + I_e`` (``I_u = I_L + I_e1 + I_e2``
-        with three states), whose coil current and diode law are eq. 8's."""
-        return i + e[0] if len(e) == 1 else i + e[0] + e[1]
+        with three states; ``I_L + sum_k I_k`` of the eddy network), whose coil current
+        and diode law are eq. 8's."""
+        out = i + e[0]
+        for v in e[1:]:
+            out = out + v
+        return out
 
     def _eddy_voltage(self, i: Any, e: tuple[Any, ...], u: Any, p: Any) -> Any:
         """:meth:`_ladder_voltage` with the terminal current of :meth:`_terminal_current`
         (the diode law of :func:`shielded_gap_freewheel_voltage` for both ladders)."""
         if len(e) == 1:
             return self._ladder_voltage(i, e[0], u, p)
-        return (shielded_gap_freewheel_voltage(i + e[0], e[1], u, p[7], p[8])
+        return (shielded_gap_freewheel_voltage(self._terminal_current(i, e[:-1]), e[-1], u,
+                                               p[7], p[8])
                 if self.freewheel else u)
 
     def _eddy_coil(self, i: Any, e: tuple[Any, ...], u: Any, p: Any) -> Any:
-        """The coil current of Fig. 8 with the terminal current through ``R_a``'s node."""
+        """The coil current of Fig. 8 with the terminal current through ``R_a``'s node
+        (:func:`eddy_network_coil_current` in eddy-network circuits, selected per circuit
+        as the law)."""
+        if 3 in self._laws:
+            laws: dict[int, tuple[Any, ...]] = {3: (eddy_network_coil_current(i, e, u, p[7],
+                                                                                p[8]),)}
+            if set(self._laws) - {3}:
+                laws[0] = (eq8_coil_current(self._terminal_current(i, e),
+                                            self._eddy_voltage(i, e, u, p), p[7], p[8]),)
+            return self._select(p[_N_PAR], laws)[0]
         return eq8_coil_current(self._terminal_current(i, e), self._eddy_voltage(i, e, u, p),
                                 p[7], p[8])
 
@@ -732,11 +853,21 @@ class MagnetBank:
         gamma I_e`` (:func:`shielded_gap_force_current`; ``gamma`` 0 in eq. 8 circuits,
         whose eddy states stay 0), with three states ``I_L + c_1 I_e1 + c_2 I_e2``
         (:func:`~maglevkit.reduction.motion_eddy.ladder3_force_current`)."""
+        if 3 in self._laws:
+            # the eddy network reads the force map at I_L (CurrentModel's F(s, I_L))
+            laws: dict[int, tuple[Any, ...]] = {3: (i,)}
+            if 0 in self._laws or 1 in self._laws:
+                laws[1] = (shielded_gap_force_current(i, e[0], p[_N_PAR + 4]),)
+            if 2 in self._laws:
+                laws[2] = (ladder3_force_current(
+                    i + e[0] + e[1], i + e[0], i,
+                    (p[_N_PAR + 4], p[_N_PAR + len(MOTION_EDDY_PARAMETERS) + 3])),)
+            return self._select(p[_N_PAR], laws)[0]
         if len(e) == 1:
             return shielded_gap_force_current(i, e[0], p[_N_PAR + 4])
         e1, e2 = e
         c_2 = p[_N_PAR + len(MOTION_EDDY_PARAMETERS) + 3]
-        laws: dict[int, tuple[Any, ...]] = {}
+        laws = {}
         if 0 in self._laws or 1 in self._laws:
             laws[1] = (shielded_gap_force_current(i, e1, p[_N_PAR + 4]),)
         laws[2] = (ladder3_force_current(i + e1 + e2, i + e1, i, (p[_N_PAR + 4], c_2)),)
@@ -751,7 +882,7 @@ class MagnetBank:
         """Single-circuit functions: right-hand side, outputs (MX, table embedded)."""
         table = ca.MX(ca.DM(self._table))
         i, s, u, sd = (ca.MX.sym(n) for n in ("I_L", "s", "U", "sdot"))
-        if self.motion_eddy:
+        if self._has_eddy:
             ne = self.n_eddy_states
             p = ca.MX.sym("p", self._par.shape[0])
             ie = ca.MX.sym("I_e", ne) if ne > 1 else ca.MX.sym("I_e")
@@ -800,7 +931,7 @@ class MagnetBank:
         """
         if not (isinstance(substeps, int) and not isinstance(substeps, bool) and substeps >= 1):
             raise InputError(f"substeps = {substeps!r} must be a whole number >= 1")
-        if self.motion_eddy:
+        if self._has_eddy:
             return self._ladder_step_function(substeps)
         table = ca.MX(ca.DM(self._table))
         i, s, u, sd, h = (ca.MX.sym(n) for n in ("I_L", "s", "U", "sdot", "h"))
@@ -888,7 +1019,8 @@ class MagnetBank:
                            [x[0], coil, force, lo, hi, bad, *e],
                            ["I_L", "s", "U", "sdot", "h", "p", "I_e"],
                            ["I_L_next", "I", "F", "I_L_min", "I_L_max", "bad"]
-                           + (["I_e_next"] if ne == 1 else ["I_e1_next", "I_e2_next"]))
+                           + (["I_e_next"] if ne == 1 else
+                              [f"I_e{k + 1}_next" for k in range(ne)]))
 
     def _step_kernel(self, substeps: int) -> ca.Function:
         """One RK4 step of every reduced circuit: ``(I_L, s, U, sdot, h) -> (I_L', I, F,
@@ -908,7 +1040,7 @@ class MagnetBank:
         mapped = one.map(n, "serial")
         vi, vs, vu, vsd = (ca.MX.sym(nm, n) for nm in ("I_L", "s", "U", "sdot"))
         vh = ca.MX.sym("h")
-        if self.motion_eddy:
+        if self._has_eddy:
             ve = ca.MX.sym("I_e", n, self.n_eddy_states)
             res = mapped(vi.T, vs.T, vu.T, vsd.T, vh, ca.DM(self._par), ve.T)
         else:
@@ -922,7 +1054,7 @@ class MagnetBank:
                 + [res[3].T, res[4].T, vs + vsd * vh, res[5].T])
         names = ["I_L_next", "I", "F", "member_F", "n_bad", "I_L_min", "I_L_max", "s_next",
                  "flags"]
-        if self.motion_eddy:
+        if self._has_eddy:
             # the ladder's eddy states after the others (the layout of eq. 8 banks stays):
             # (n, n_e), column-major as CasADi stores it (I_e1 of every circuit, then I_e2)
             e_next = res[6].T if self.n_eddy_states == 1 else ca.horzcat(*(r.T for r in res[6:]))
@@ -946,7 +1078,10 @@ class MagnetBank:
         :meth:`circuit_step_function` and :attr:`circuit_output_function` (rows
         :data:`KERNEL_PARAMETERS`: grid, table offset, ``R_el`` [ohm], ``a = 1 + R_el/R_ec``
         and the range bounds with their rounding allowances; in a bank with ladder members
-        18 rows, :data:`MOTION_EDDY_PARAMETERS` appended)."""
+        18 rows, :data:`MOTION_EDDY_PARAMETERS` appended, then
+        :data:`MOTION_EDDY3_PARAMETERS` with three-state members and
+        :data:`EDDY_NETWORK_PARAMETERS` with ``R_k``, ``L_k`` rows with eddy-network
+        members)."""
         return self._par.copy()
 
     @property
@@ -976,7 +1111,9 @@ class MagnetBank:
         expressions; :meth:`circuit_expressions` is eq. 8's).  In a bank with three-state
         members (:attr:`n_eddy_states` 2) ``i_e`` and ``dI_e/dt`` have two elements,
         ``(I_e1, I_e2)``: the three-state ladder in its circuits, the two-state one (with
-        ``I_e1`` as its ``I_e``, ``dI_e2/dt = 0``) and eq. 8 in the others.
+        ``I_e1`` as its ``I_e``, ``dI_e2/dt = 0``) and eq. 8 in the others.  In a bank
+        with eddy-network members (``eddy_modes``) ``i_e`` has :attr:`n_eddy_states`
+        elements, the branch currents ``I_k`` (:func:`eddy_network_rhs` in their circuits).
 
         Parameters
         ----------
@@ -1006,10 +1143,10 @@ class MagnetBank:
         InputError
             A bank without ladder members (use :meth:`circuit_expressions`).
         """
-        if not self.motion_eddy:
+        if not self._has_eddy:
             raise InputError("ladder_expressions needs a bank with shielded-gap ladder "
-                             "members (motion_eddy); this bank is eq. 8's: use "
-                             "circuit_expressions")
+                             "members (motion_eddy) or eddy-network members (eddy_modes); "
+                             "this bank is eq. 8's: use circuit_expressions")
         p = ca.DM(self._par[:, k])
         cell = self._gap_cell(s, p)
         lt, dl = self._lookup(cell, i_l, p, table, maps=(0, 1))
@@ -1048,10 +1185,10 @@ class MagnetBank:
         tuple of casadi.MX
             ``dI_L/dt`` [A/s], coil current ``I`` [A], force ``F`` [N] and ``L~`` [H].
         """
-        if self.motion_eddy:
+        if self._has_eddy:
             raise InputError("circuit_expressions is eq. 8's one state per circuit; this bank "
-                             "has shielded-gap ladder members (motion_eddy) with a second "
-                             "state: use ladder_expressions")
+                             "has shielded-gap ladder members (motion_eddy) or eddy-network "
+                             "members (eddy_modes) with eddy states: use ladder_expressions")
         p = ca.DM(self._par[:, k])
         return self._circuit_expressions(i_l, s, u, gap_rate, p, table)
 
@@ -1063,7 +1200,7 @@ class MagnetBank:
         n = self._reduced_idx.size
         vi, vu, vs, vsd = (ca.MX.sym(nm, n) for nm in ("I_L", "U", "s", "sdot"))
         f = self._circuit_kernel["rhs"].map(n, "serial")
-        if self.motion_eddy:
+        if self._has_eddy:
             ve = ca.MX.sym("I_e", n, self.n_eddy_states)
             d_il, d_ie = f(vi.T, vs.T, vu.T, vsd.T, ca.DM(self._par), ve.T)
             return ca.Function("maglevkit_bank_ode", [vi, vu, vs, vsd, ve], [d_il.T, d_ie.T],
@@ -1077,7 +1214,7 @@ class MagnetBank:
         """Outputs of every reduced circuit: ``(I_L, U, s) -> (I, F, L~)`` (CasADi)."""
         n = self._reduced_idx.size
         vi, vu, vs = (ca.MX.sym(nm, n) for nm in ("I_L", "U", "s"))
-        if self.motion_eddy:
+        if self._has_eddy:
             ve = ca.MX.sym("I_e", n, self.n_eddy_states)
             res = self._circuit_kernel["out"].map(n, "serial")(vi.T, vs.T, vu.T,
                                                                 ca.DM(self._par), ve.T)
@@ -1187,9 +1324,10 @@ class MagnetBank:
         if not self._fast:
             raise InputError("run_steps needs a bank of reduced members only with "
                              "gap_inputs='circuit'")
-        if self.motion_eddy:
+        if self._has_eddy:
             raise InputError("run_steps carries eq. 8's one state per circuit; this bank has "
-                             "shielded-gap ladder members (motion_eddy): use step or stepper")
+                             "shielded-gap ladder members (motion_eddy) or eddy-network "
+                             "members (eddy_modes): use step or stepper")
         nc = self.n_circuits
         x0 = np.asarray(inductor_currents_A, dtype=float)
         s, u, sd = (np.ascontiguousarray(v, dtype=float) for v in (gaps_m, voltages_V,
@@ -1292,7 +1430,7 @@ class MagnetBank:
         # the C names carry a hash of the source (written with a placeholder name first),
         # so that libraries of different banks never share a symbol
         name = "MAGLEVKIT_LANES_NAME"
-        me = int(self.motion_eddy)
+        me = int(self._has_eddy)
         ne = self.n_eddy_states
         try:
             kernel = lane_source(self.circuit_step_function(substeps), name=f"{name}_k", n=n,
@@ -1607,10 +1745,10 @@ class MagnetBank:
                 states.append(m.model.initial_state(gaps_m=pg[ps], currents_A=i[cs], time_s=float(time)))
                 i[cs] = np.nan
         # the steady state of the ladder has no shielding current (I_e = V_m/R_2 = 0)
-        eddy = np.where(np.isnan(i), np.nan, 0.0) if self.motion_eddy else None
-        if self.n_eddy_states == 2:
+        eddy = np.where(np.isnan(i), np.nan, 0.0) if self._has_eddy else None
+        if self.n_eddy_states >= 2:
             assert eddy is not None
-            eddy = np.repeat(eddy[:, None], 2, axis=1)
+            eddy = np.repeat(eddy[:, None], self.n_eddy_states, axis=1)
         return BankState(float(time), i, g.copy(), tuple(states), eddy)
 
     def check_state(self, state: Any) -> None:
@@ -1633,12 +1771,12 @@ class MagnetBank:
                              "or a stepper's state)")
         e = state.eddy_currents_A
         shape = self._eddy_shape()
-        if self.motion_eddy != (e is not None) or (e is not None and e.shape != shape):
+        if self._has_eddy != (e is not None) or (e is not None and e.shape != shape):
             raise InputError("state must be a BankState of this bank: "
-                             + ("its ladder members (motion_eddy) need eddy_currents_A of shape "
-                                f"{shape}" if self.motion_eddy else
-                                "this bank has no ladder members, so eddy_currents_A must be "
-                                "None")
+                             + ("its ladder or eddy-network members (motion_eddy, eddy_modes) "
+                                f"need eddy_currents_A of shape {shape}" if self._has_eddy else
+                                "this bank has no ladder or eddy-network members, so "
+                                "eddy_currents_A must be None")
                              + " (make it with initial_state, step or a stepper's state)")
 
     def _eddy_shape(self) -> tuple[int, ...]:

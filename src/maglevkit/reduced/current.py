@@ -40,6 +40,7 @@ from __future__ import annotations
 
 import math
 import warnings
+from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, TypeVar
@@ -69,7 +70,9 @@ if TYPE_CHECKING:
     from ..reduction.maps import CharacteristicMaps
 
 __all__ = ["CurrentModel", "CurrentModelLinearization", "CurrentModelState", "CurrentOutputs",
-           "ReducedSimulation", "eq8_coil_current", "eq8_eddy_branch_rhs", "eq8_freewheel_voltage", "eq8_rhs",
+           "ReducedSimulation", "eddy_network_coil_current", "eddy_network_parameters",
+           "eddy_network_rhs", "eq8_coil_current", "eq8_eddy_branch_rhs", "eq8_freewheel_voltage",
+           "eq8_rhs",
            "eq8_shielded_gap_rhs", "shielded_gap_force_current", "shielded_gap_freewheel_voltage"]
 
 
@@ -440,7 +443,8 @@ class CurrentModel:
                 raise InputError(f"eddy_resistance = {eddy_resistance!r} chooses eq. 8's single "
                                  "R_ec; with eddy_modes > 0 the eddy network's R_0 takes its "
                                  "place: leave eddy_resistance out")
-            r_ec, r_k, l_k, l_ref = _eddy_network(maps, m)
+            net, net_step = eddy_network_parameters(maps, m, r_el)
+            r_ec, r_k, l_k, l_ref = net["r_0"], net["r_k"], net["l_k"], net["l_ref"]
         else:
             r_ec = core.eddy_resistance_ohm
         if not self.motion_eddy:
@@ -466,16 +470,8 @@ class CurrentModel:
         if m:
             self._lower = np.concatenate([self._lower, np.full(nc * m, -np.inf)])
             self._upper = np.concatenate([self._upper, np.full(nc * m, np.inf)])
-            # RK4 stability: the eigenvalues of M^-1 S (network_step_response) lie within
-            # the Gershgorin discs of its rows, |lambda| <= (R_k + (m + 1) R_el/a)/L_k, with
-            # the smallest L_k over the maps (L_k scales with L~)
-            lt_min = np.array([float(np.min(maps.variable("inductance_H", c)))
-                               for c in self.circuit_names])
-            scale = lt_min / l_ref if _EDDY_INDUCTANCE_SCALES else np.ones(nc)
-            if np.all(scale > 0):
-                rate = float(np.max((r_k + ((m + 1) * r_el / a)[:, None])
-                                    / (l_k * scale[:, None])))
-                self.max_step_s = min(self.max_step_s, 1.5 / rate)
+            # RK4 stability (eddy_network_parameters)
+            self.max_step_s = min(self.max_step_s, net_step)
 
         # CasADi's B-spline is 0 outside its grid. The map data are therefore continued
         # linearly (edge slope) by EXTRA_CELLS grid cells on every side before the spline
@@ -540,16 +536,14 @@ class CurrentModel:
                     f = sp(ca.vertcat(sm[j], shielded_gap_force_current(
                         xm[j], em[j], float(gamma[j]))))[2]
             elif m:
-                # the eddy network (module docstring): eq. 8 with U - R_el sum_k I_k as the
-                # voltage behind R_el gives U_L and dI_L/dt; I = that coil current + sum I_k
-                ik = em[j * m:(j + 1) * m]
-                i_sum = ca.sum1(ik)
-                u_eff = Um[j] - r_el[j] * i_sum
-                mx_rhs.append(eq8_rhs(xm[j], u_eff, sdm[j], lt, dl, r_el[j], a[j]))
-                u_l = (u_eff - r_el[j] * xm[j]) / a[j]
-                scale = lt / l_ref[j] if _EDDY_INDUCTANCE_SCALES else 1.0
-                eddy_rhs.append(eq8_eddy_branch_rhs(ik, u_l, ca.DM(r_k[j]), ca.DM(l_k[j]) * scale))
-                coils.append(eq8_coil_current(xm[j], u_eff, r_el[j], a[j]) + i_sum)
+                # the eddy network (eddy_network_rhs, eddy_network_coil_current: the law
+                # the bank's kernel evaluates too)
+                ik = [em[j * m + k] for k in range(m)]
+                d_il, d_ik = eddy_network_rhs(xm[j], ik, Um[j], sdm[j], lt, dl, r_el[j], a[j],
+                                              r_k[j], l_k[j], l_ref[j])
+                mx_rhs.append(d_il)
+                eddy_rhs.append(ca.vertcat(*d_ik))
+                coils.append(eddy_network_coil_current(xm[j], ik, Um[j], r_el[j], a[j]))
             else:
                 u_j = (eq8_freewheel_voltage(xm[j], Um[j], r_el[j], a[j]) if self.freewheel
                        else Um[j])
@@ -1764,6 +1758,15 @@ def motion_eddy3_parameters(maps: CharacteristicMaps, resistance_ohm: np.ndarray
                    vals, strict=True))
     if not (all(np.all(np.isfinite(v)) for v in vals)
             and all(np.all(par[k] > 0) for k in ("r_a", "l_u", "r_2", "l_2", "r_3"))):
+        if _no_current_jump(ds):
+            # the fit needs the exact current jump (build_maps); an eddy network that
+            # diffuses (eddy_model = "ladder") has none, so the fit was skipped
+            raise InputError(f"{what}eddy_branches=2: these maps have no three-state ladder: "
+                             "its fit starts from the current jump on a voltage step, and "
+                             "this magnet's eddy network has none (R_ec of the jump is inf: "
+                             "its eddy currents diffuse, e.g. eddy_model = 'ladder'); use "
+                             "eddy_modes=2 (the fitted RL eddy network, without motion_eddy), "
+                             "or eddy_branches=1")
         raise InputError(f"{what}eddy_branches=2: these maps have no three-state ladder to use (the "
                          "magnet has no eddy currents); use motion_eddy=False")
     lt_min = np.array([float(np.min(maps.variable("inductance_H", c))) for c in maps.circuits])
@@ -1778,6 +1781,17 @@ def motion_eddy3_parameters(maps: CharacteristicMaps, resistance_ohm: np.ndarray
         (r_el / par["a"] + 2.0 * par["r_2"]) / par["l_u"],
         2.0 * (par["r_2"] + par["r_3"]) / par["l_2"], 2.0 * par["r_3"] / l_3])))
     return par, 1.5 / rate
+
+
+def _no_current_jump(ds: Any) -> bool:
+    """Whether maps (their dataset) have eddy currents but no current jump on a voltage
+    step: the jump's ``R_ec`` (``eddy_resistance_ohm``) inf in some circuit while the
+    step-fitted one (``eddy_resistance_fit_ohm``) is finite there."""
+    if "eddy_resistance_ohm" not in ds or "eddy_resistance_fit_ohm" not in ds:
+        return False
+    jump = np.asarray(ds["eddy_resistance_ohm"].values, dtype=float)
+    fit = np.asarray(ds["eddy_resistance_fit_ohm"].values, dtype=float)
+    return bool(np.any(np.isinf(jump) & np.isfinite(fit)))
 
 
 def shielded_gap_freewheel_voltage(i_l: Any, i_e: Any, u: Any, r_el: Any, a: Any) -> Any:
@@ -1854,19 +1868,36 @@ def _check_eddy_modes(value: Any) -> int:
     return int(value)
 
 
-def _eddy_network(maps: CharacteristicMaps, m: int) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """``R_0`` (n_c,), ``R_k``, ``L_k`` (n_c, m) and ``L~_ref`` (n_c,) of the maps' fitted
-    eddy network with ``m`` branches."""
+def eddy_network_parameters(maps: CharacteristicMaps, m: int, resistance_ohm: np.ndarray, *,
+                            what: str = "") -> tuple[dict[str, np.ndarray], float]:
+    """The maps' fitted eddy network with ``m`` branches (``eddy_network_*`` variables of
+    ``build_maps``), checked: per circuit ``r_0`` (``R_0`` [ohm], inf: no current jump),
+    ``a = 1 + R_el/R_0``, ``l_ref`` (``L~_ref`` [H]) and per branch ``r_k`` [ohm], ``l_k`` [H]
+    (arrays ``(n_circuits, m)``), and the longest stable RK4 sub-step [s].
+
+    The sub-step: the eigenvalues of ``M^-1 S`` (``network_step_response``) lie within the
+    Gershgorin discs of its rows, ``|lambda| <= (R_k + (m + 1) R_el/a)/L_k``, with the
+    smallest ``L_k`` over the maps (``L_k`` scales with ``L~``); 1.5 over the largest rate.
+    ``what`` prefixes the error messages (e.g. ``"member 'm1': "``).  Both
+    :class:`CurrentModel` and :class:`~maglevkit.reduced.bank.MagnetBank` read the network
+    here.
+
+    Raises
+    ------
+    InputError
+        Maps without the variables (built before them), without a network of ``m``
+        branches, or of a magnet without eddy currents (or a failed fit).
+    """
     ds = maps.dataset
     names = ("eddy_network_r0_ohm", "eddy_network_resistance_ohm",
              "eddy_network_inductance_H", "eddy_network_reference_inductance_H")
     missing = [n for n in names if n not in ds]
     if missing:
-        raise InputError(f"these maps have no eddy network ({', '.join(missing)}); rebuild "
-                         "them with this version (build_maps) to use eddy_modes > 0")
+        raise InputError(f"{what}these maps have no eddy network ({', '.join(missing)}); "
+                         "rebuild them with this version (build_maps) to use eddy_modes > 0")
     have = [int(v) for v in ds["eddy_modes"].values] if "eddy_modes" in ds.coords else []
     if m not in have:
-        raise InputError(f"eddy_modes = {m}: these maps hold eddy networks with {have} "
+        raise InputError(f"{what}eddy_modes = {m}: these maps hold eddy networks with {have} "
                          "branches; use one of those or 0")
     r0 = np.asarray(ds["eddy_network_r0_ohm"].sel(eddy_modes=m).values, dtype=float)
     r_k = np.asarray(ds["eddy_network_resistance_ohm"].sel(eddy_modes=m).values,
@@ -1876,9 +1907,77 @@ def _eddy_network(maps: CharacteristicMaps, m: int) -> tuple[np.ndarray, np.ndar
     l_ref = np.asarray(ds["eddy_network_reference_inductance_H"].values, dtype=float)
     if not (np.all(np.isfinite(r_k)) and np.all(np.isfinite(l_k)) and np.all(r_k > 0)
             and np.all(l_k > 0) and np.all(l_ref > 0) and not np.any(np.isnan(r0))):
-        raise InputError("these maps have no eddy network to use (the magnet has no eddy "
-                         "currents, or the fit failed); use eddy_modes=0")
-    return r0, r_k, l_k, l_ref
+        raise InputError(f"{what}these maps have no eddy network to use (the magnet has no "
+                         "eddy currents, or the fit failed); use eddy_modes=0")
+    r_el = np.asarray(resistance_ohm, dtype=float)
+    a = eq8_a(r_el, r0)
+    lt_min = np.array([float(np.min(maps.variable("inductance_H", c))) for c in maps.circuits])
+    scale = lt_min / l_ref if _EDDY_INDUCTANCE_SCALES else np.ones(r_el.size)
+    step = math.inf
+    if np.all(scale > 0):
+        rate = float(np.max((r_k + ((m + 1) * r_el / a)[:, None]) / (l_k * scale[:, None])))
+        step = 1.5 / rate
+    return {"r_0": r0, "a": a, "r_k": r_k, "l_k": l_k, "l_ref": l_ref}, step
+
+
+def eddy_network_rhs(i_l: Any, i_k: Sequence[Any], u: Any, gap_rate: Any, ltilde: Any,
+                     dl_ds: Any, r_el: Any, a: Any, r_k: Sequence[Any], l_k: Sequence[Any],
+                     l_ref: Any) -> tuple[Any, tuple[Any, ...]]:
+    """Eq. 8 with the eddy network (``CurrentModel(maps, eddy_modes=m)``, ``MagnetBank(...,
+    eddy_modes=m)``): ``R_ec`` replaced by ``1/R_0 + sum_k 1/(R_k + p L_k)``, one state
+    ``I_k`` per branch (docs/equations.md, "The eddy network")::
+
+        U_L = (U - R_el (I_L + sum_k I_k))/a,        a = 1 + R_el/R_0
+        dI_L/dt = (U_L - dL/ds I_L ds/dt)/L~
+        dI_k/dt = (U_L - R_k I_k)/(L_k L~/L~_ref)
+
+    eq. 8 (:func:`eq8_rhs`) with ``U - R_el sum_k I_k`` as the voltage behind ``R_el``, and
+    the branches of :func:`eq8_eddy_branch_rhs` (their ``L_k`` scaled with ``L~``).
+
+    Parameters
+    ----------
+    i_l : float or CasADi
+        Inductor current ``I_L`` [A].
+    i_k : sequence of float or CasADi, length m
+        Branch currents ``I_k`` [A].
+    u : float or CasADi
+        Terminal voltage ``U`` [V].
+    gap_rate : float or CasADi
+        ``ds/dt`` [m/s].
+    ltilde, dl_ds : float or CasADi
+        ``L~(s, I_L)`` [H] and ``dL/ds(s, I_L)`` [H/m] from the maps.
+    r_el : float or CasADi
+        Coil resistance ``R_el`` [ohm].
+    a : float or CasADi
+        ``1 + R_el/R_0`` [-] (1 with ``R_0 = inf``: no current jump).
+    r_k, l_k : sequence of float or CasADi, length m
+        The branches' ``R_k`` [ohm] and ``L_k`` [H] (at ``L~_ref``).
+    l_ref : float or CasADi
+        ``L~_ref`` [H], the ``L~`` at which ``L_k`` were fitted.
+
+    Returns
+    -------
+    (dI_L/dt, (dI_k/dt, ...)) [A/s]
+    """
+    i_sum = i_k[0]
+    for v in i_k[1:]:
+        i_sum = i_sum + v
+    u_eff = u - r_el * i_sum
+    u_l = (u_eff - r_el * i_l) / a
+    scale = ltilde / l_ref if _EDDY_INDUCTANCE_SCALES else 1.0
+    return (eq8_rhs(i_l, u_eff, gap_rate, ltilde, dl_ds, r_el, a),
+            tuple(eq8_eddy_branch_rhs(i, u_l, r, ll * scale)
+                  for i, r, ll in zip(i_k, r_k, l_k, strict=True)))
+
+
+def eddy_network_coil_current(i_l: Any, i_k: Sequence[Any], u: Any, r_el: Any, a: Any) -> Any:
+    """The eddy network's coil current ``I = (U - U_L)/R_el``: eq. 8's
+    (:func:`eq8_coil_current`) with ``U - R_el sum_k I_k`` behind ``R_el``, plus the
+    branch currents [A]."""
+    i_sum = i_k[0]
+    for v in i_k[1:]:
+        i_sum = i_sum + v
+    return eq8_coil_current(i_l, u - r_el * i_sum, r_el, a) + i_sum
 
 
 def _last_line(text: str) -> str:
