@@ -76,7 +76,7 @@ from .core import (
 )
 from .current import (
     CurrentModel,
-    _check_eddy_modes,
+    check_eddy_modes,
     eddy_network_coil_current,
     eddy_network_parameters,
     eddy_network_rhs,
@@ -434,7 +434,7 @@ class MagnetBank:
         if eddy_branches == 2 and not motion_eddy:
             raise InputError("eddy_branches = 2 needs motion_eddy=True (it is the shielded-gap "
                              "ladder's second shielded section)")
-        modes = _check_eddy_modes(eddy_modes)
+        modes = check_eddy_modes(eddy_modes)
         if modes and motion_eddy:
             raise InputError(f"motion_eddy=True with eddy_modes={modes}: these are two "
                              "different eddy extensions of eq. 8 for the members given as "

@@ -372,7 +372,7 @@ class CurrentModel:
             raise InputError(f"compiled = {compiled!r}; use one of {list(COMPILE_MODES)}")
         self.lookup = lookup
         self.compiled = compiled
-        m = _check_eddy_modes(eddy_modes)
+        m = check_eddy_modes(eddy_modes)
         # the facts of the maps, derived once (names, pole groups, averaging and share
         # matrices, R_el, eq. 8's R_ec and a, grids, ranges and their allowances); the eddy
         # extensions replace R_ec below
@@ -1858,7 +1858,7 @@ def shielded_gap_force_current(i_l: Any, i_e: Any, force_share: Any) -> Any:
 _EDDY_INDUCTANCE_SCALES = True
 
 
-def _check_eddy_modes(value: Any) -> int:
+def check_eddy_modes(value: Any) -> int:
     from ..reduction.eddy_network import EDDY_NETWORK_MODES
 
     if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or \
