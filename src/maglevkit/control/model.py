@@ -49,7 +49,8 @@ class MagnetHeaveModel:
     ----------
     maps : CharacteristicMaps or MagnetBank
         The magnet's characteristic maps (or a bank of exactly this one magnet, all
-        members reduced).
+        members reduced; a bank with the shielded-gap ladder adds its eddy states to the
+        state: :attr:`eddy_states` per circuit, two with ``eddy_branches=2``).
     mass_kg : float
         The mass the magnet carries [kg], finite and > 0.
     gravity : float
