@@ -25,8 +25,9 @@ previous method (the sums on every magnet's own path, kept as the fallback) is m
 the same run.
 
 The same train with shielded-gap ladder magnets (``motion_eddy=True``: a second electric
-state per circuit) runs in the same process, compiled step and NumPy loop, and its CPU
-time per step is given as a ratio to eq. 8's.
+state per circuit; ``eddy_branches=2``: the three-state ladder, two eddy states per
+circuit) runs in the same process, compiled step and NumPy loop, and its CPU time per
+step is given as a ratio to eq. 8's.
 """
 
 from __future__ import annotations
@@ -61,6 +62,8 @@ SECTIONS = (1, 2, 3, 5)
 IMPORT_REPEATS = 5
 LADDER_ROWS = ("elastic guideway, compiled step, ladder magnets (motion_eddy)",
                "elastic guideway, NumPy loop, ladder magnets (motion_eddy)")
+LADDER3_ROWS = ("elastic guideway, compiled step, three-state ladder (eddy_branches=2)",
+                "elastic guideway, NumPy loop, three-state ladder (eddy_branches=2)")
 
 
 def import_time_s() -> float:
@@ -213,13 +216,17 @@ def run() -> str:
     # the shielded-gap ladder magnets (motion_eddy: I_e per circuit in the step's state)
     ladder = VehicleModel(load_vehicle(), motion_eddy=True)
     ladder.run(speed_m_per_s=v, duration_s=0.05, irregularity=prof)    # compile or load
+    ladder3 = VehicleModel(load_vehicle(), motion_eddy=True, eddy_branches=2)
+    ladder3.run(speed_m_per_s=v, duration_s=0.05, irregularity=prof)   # compile or load
     rows = []
     for name, m, loop, dur in (("elastic guideway, compiled step", model, "compiled", DURATION_S),
                                ("rigid guideway, compiled step", rigid, "compiled", DURATION_S),
                                ("elastic guideway, NumPy loop (reference)", model, "python",
                                 PYTHON_DURATION_S),
                                (LADDER_ROWS[0], ladder, "compiled", DURATION_S),
-                               (LADDER_ROWS[1], ladder, "python", PYTHON_DURATION_S)):
+                               (LADDER_ROWS[1], ladder, "python", PYTHON_DURATION_S),
+                               (LADDER3_ROWS[0], ladder3, "compiled", DURATION_S),
+                               (LADDER3_ROWS[1], ladder3, "python", PYTHON_DURATION_S)):
         best, whole = _best_run(m, v, prof, dur, loop=loop)
         rows.append((name, dur, best, whole))
     t_track, t_paths = irregularity_times(model, prof, v)
@@ -252,13 +259,16 @@ def run() -> str:
         lines.append(f"| {name} | {sim / r.cpu_time_s:.1f}x | {r.real_time_factor:.1f}x | "
                      f"{1e6 * r.cpu_time_s / (sim * 1000):.0f} | {sim / whole:.1f}x |")
     by_name = {name: (dur, r) for name, dur, r, _ in rows}
-    ratio = [by_name[lad][1].cpu_time_s / by_name[lad][0] / (r0.cpu_time_s / d0)
-             for lad, (d0, r0) in zip(LADDER_ROWS, (by_name[rows[0][0]], by_name[rows[2][0]]),
-                                      strict=True)]
+    ratio, ratio3 = ([by_name[lad][1].cpu_time_s / by_name[lad][0] / (r0.cpu_time_s / d0)
+                      for lad, (d0, r0) in zip(names, (by_name[rows[0][0]],
+                                                       by_name[rows[2][0]]), strict=True)]
+                     for names in (LADDER_ROWS, LADDER3_ROWS))
     lines += ["", f"Shielded-gap ladder magnets (`VehicleModel(train, motion_eddy=True)`: the "
               f"eddy current I_e of every circuit in the step's state, the ladder's RK4 in "
               f"the bank's lanes), same run: CPU time per step x{ratio[0]:.2f} of eq. 8's "
-              f"in the compiled step, x{ratio[1]:.2f} in the NumPy loop."]
+              f"in the compiled step, x{ratio[1]:.2f} in the NumPy loop; the three-state "
+              f"ladder (`eddy_branches=2`: I_e1, I_e2 per circuit) x{ratio3[0]:.2f} and "
+              f"x{ratio3[1]:.2f}."]
     lines += ["", f"Aims of issue 23 (CPU time, this run): whole `run()` "
               f"{DURATION_S / rows[0][3]:.1f}x real time (aim >= 50x), time loop "
               f"{DURATION_S / rows[0][2].cpu_time_s:.1f}x (aim >= 100x); "

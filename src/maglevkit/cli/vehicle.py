@@ -64,6 +64,11 @@ def run(
         help="Reduced magnets with the shielded-gap ladder (eddy currents under gap motion; "
              "a second state per circuit); default: the vehicle file's [magnets] "
              "motion_eddy (off unless set).")] = None,
+    eddy_branches: Annotated[int | None, typer.Option(
+        "--eddy-branches", metavar="1|2",
+        help="Shielded sections of that ladder: 1 (two-state) or 2 (three-state: two eddy "
+             "states per circuit); needs --motion-eddy; default: the vehicle file's "
+             "[magnets] eddy_branches (1 unless set; 1 for a cross-section).")] = None,
     controller: Annotated[str, typer.Option(
         metavar="cascade|mpc",
         help="Gap controllers: cascade (flux cascade, compiled step) or mpc (offset-free "
@@ -122,7 +127,8 @@ def run(
         try:
             _run_cross_section(vehicle_option or vehicle, speed_kmh, duration, dt, failure,
                                magnets, maps_cache, output, plot, force, curve, crosswind,
-                               irregularity, lateral, progress, bool(motion_eddy))
+                               irregularity, lateral, progress, bool(motion_eddy),
+                               1 if eddy_branches is None else eddy_branches)
         except KeyboardInterrupt:
             raise interrupted() from None
         return
@@ -130,7 +136,8 @@ def run(
         vehicle = vehicle_option
     try:
         _run(vehicle, speed_kmh, speed, duration, dt, irregularity, failure, rigid, magnets,
-             maps_cache, output, plot, progress, force, guideway, controller, motion_eddy)
+             maps_cache, output, plot, progress, force, guideway, controller, motion_eddy,
+             eddy_branches)
     except KeyboardInterrupt:
         raise interrupted() from None
 
@@ -139,7 +146,7 @@ def _run(vehicle: str, speed_kmh: float | None, speed: float | None, duration: f
          dt: float, irregularity: str, failure: list[str] | None, rigid: bool, magnets: str,
          maps_cache: Path | None, output: Path | None, plot: Path | None, progress: bool,
          force: bool, guideway: str | None = None, controller: str = "cascade",
-         motion_eddy: bool | None = None) -> None:
+         motion_eddy: bool | None = None, eddy_branches: int | None = None) -> None:
     from ..vehicle.data import load_guideway
     from ..vehicle.simulation import (
         VehicleModel,
@@ -174,7 +181,7 @@ def _run(vehicle: str, speed_kmh: float | None, speed: float | None, duration: f
         track = load_guideway(guideway) if guideway is not None else None
         model = VehicleModel(train, guideway=track, rigid=rigid, magnets=magnets,
                              maps_cache=maps_cache, controller=controller,
-                             motion_eddy=motion_eddy)
+                             motion_eddy=motion_eddy, eddy_branches=eddy_branches)
         if prof is not None and not rigid:
             with warnings.catch_warnings():   # its warnings were shown by the first parse
                 warnings.simplefilter("ignore", MaglevkitWarning)
@@ -276,7 +283,7 @@ def _run_cross_section(name: str, speed_kmh: float | None, duration: float, dt: 
                        output: Path | None, plot: Path | None, force: bool,
                        curve: str | None, crosswind: str | None, irregularity: str = "none",
                        lateral: str | None = None, progress: bool = True,
-                       motion_eddy: bool = False) -> None:
+                       motion_eddy: bool = False, eddy_branches: int = 1) -> None:
     from ..vehicle.crossrun import (
         CrossSectionModel,
         parse_crosswind,
@@ -301,7 +308,7 @@ def _run_cross_section(name: str, speed_kmh: float | None, duration: float, dt: 
         lat = parse_lateral(lateral, girder_length_m=girder) if lateral is not None else None
         info(f"setting up {data.name} (maps, controllers) ...")
         model = CrossSectionModel(data, magnets=magnets, maps_cache=maps_cache,
-                                  motion_eddy=motion_eddy)
+                                  motion_eddy=motion_eddy, eddy_branches=eddy_branches)
         res = model.run(speed_m_per_s=speed_kmh / 3.6, duration_s=duration, dt_s=dt,
                         curve=crv, crosswind=gust, failures=fails, vertical=vert,
                         lateral=lat, progress=progress)

@@ -49,7 +49,8 @@ class MagnetHeaveModel:
     ----------
     maps : CharacteristicMaps or MagnetBank
         The magnet's characteristic maps (or a bank of exactly this one magnet, all
-        members reduced).
+        members reduced; a bank with the shielded-gap ladder adds its eddy states to the
+        state: :attr:`eddy_states` per circuit, two with ``eddy_branches=2``).
     mass_kg : float
         The mass the magnet carries [kg], finite and > 0.
     gravity : float
@@ -94,9 +95,14 @@ class MagnetHeaveModel:
         self.compiled_mode = compiled
         nc = self.n_circuits = bank.n_circuits
         self.circuit_names = bank.circuit_names
-        #: the shielding eddy currents I_e in the state (a magnet with the shielded-gap
-        #: ladder, ``motion_eddy``): n_c, else 0; they follow ``[I_L, s, s']``
-        self.n_eddy = nc if bank.motion_eddy else 0
+        #: eddy states per circuit: 0 (eq. 8), 1 (the two-state shielded-gap ladder,
+        #: ``I_e``) or 2 (the three-state ladder, ``I_e1``, ``I_e2``;
+        #: :attr:`MagnetBank.n_eddy_states`)
+        self.eddy_states = int(bank.n_eddy_states) if bank.motion_eddy else 0
+        #: the shielding eddy currents in the state (a magnet with the shielded-gap
+        #: ladder, ``motion_eddy``): ``n_c`` times :attr:`eddy_states`, after ``[I_L, s,
+        #: s']``, the bank's column-major order (every circuit's ``I_e1``, then ``I_e2``)
+        self.n_eddy = nc * self.eddy_states
         self.nx = nc + 2 + self.n_eddy
         self.nu = nc
         self.ny = nc + 1
@@ -174,10 +180,13 @@ class MagnetHeaveModel:
         s, v = x[nc], x[nc + 1]
         ueff = u + self.disturbance(d, "voltage")
         rhs, coil, force, eddy = [], [], 0, []
+        ne = self.eddy_states
         for j in range(nc):
-            if self.n_eddy:          # the shielded-gap ladder: I_e after [I_L, s, s']
-                r, e, c, f, _ = self.bank.ladder_expressions(j, x[j], x[nc + 2 + j], s,
-                                                             ueff[j], v, table)
+            if ne:          # the shielded-gap ladder: I_e after [I_L, s, s']
+                ie = (x[nc + 2 + j] if ne == 1 else
+                      ca.vertcat(*(x[nc + 2 + m * nc + j] for m in range(ne))))
+                r, e, c, f, _ = self.bank.ladder_expressions(j, x[j], ie, s, ueff[j], v,
+                                                             table)
                 eddy.append(e)
             else:
                 r, c, f, _ = self.bank.circuit_expressions(j, x[j], s, ueff[j], v, table)
@@ -185,6 +194,8 @@ class MagnetHeaveModel:
             coil.append(c)
             force = force + f
         acc = self.gravity + (self.disturbance(d, "force") - force) / self.mass_kg
+        if ne == 2:        # column-major as the state: every circuit's dI_e1, then dI_e2
+            eddy = [e[m] for m in range(ne) for e in eddy]
         xdot = ca.vertcat(*rhs, v, acc, *eddy)
         y = ca.vertcat(s + self.disturbance(d, "gap_sensor"), ca.vertcat(*coil)
                        + self.disturbance(d, "current_sensor"))
@@ -446,17 +457,21 @@ class MagnetHeaveModel:
         for the IPOPT reference formulation."""
         from ..reduced.current import CurrentModel
 
-        cm = CurrentModel(self.bank.members[0][2], motion_eddy=bool(self.n_eddy))
+        ne = self.eddy_states
+        cm = CurrentModel(self.bank.members[0][2], motion_eddy=bool(ne),
+                          eddy_branches=max(ne, 1))
         nc = self.n_circuits
         x, u, d = ca.MX.sym("x", self.nx), ca.MX.sym("u", self.nu), ca.MX.sym("d", self.nd)
         s, v = x[nc], x[nc + 1]
         ueff = u + self.disturbance(d, "voltage")
         sv = ca.repmat(s, nc, 1)
-        if self.n_eddy:
-            ie = x[nc + 2:]
+        if ne:
+            # CurrentModel's eddy states run circuit by circuit (I_e1, I_e2 of circuit 0,
+            # ...), the state's column-major: the (n_c, n_e) block transposed
+            ie = ca.vec(ca.reshape(x[nc + 2:], nc, ne).T)
             didt, dedt = cm.ode(x[:nc], ueff, sv, ca.repmat(v, nc, 1), ie)
             coil, force, _ = cm.outputs_fun(x[:nc], ueff, sv, ie)
-            tail = [dedt]
+            tail = [ca.vec(ca.reshape(dedt, ne, nc).T)]
         else:
             didt = cm.ode(x[:nc], ueff, sv, ca.repmat(v, nc, 1))
             coil, force, _ = cm.outputs_fun(x[:nc], ueff, sv)

@@ -56,6 +56,7 @@ from .framework import PartEvaluator, run_blocks, run_steps
 from .simulation import (
     Failure,
     VehicleRunInterrupted,
+    check_eddy_branches,
     check_motion_eddy_options,
     check_run_speed,
     failure_times,
@@ -502,6 +503,11 @@ class CrossSectionModel:
         magnets eq. 8 (the bundled guidance magnet's ladder fits its detailed model
         poorly and destabilises its loops; docs/vehicle.md).  Reduced magnets whose maps
         carry the ladder only.
+    eddy_branches : {1, 2}, default 1
+        Shielded sections of that ladder: 1 the two-state ladder, 2 the three-state ladder
+        (``I_e1``, ``I_e2`` per circuit; the eddy-current records then have an
+        ``eddy_state`` dimension; docs/equations.md section 8, "Three states"), only with
+        ``motion_eddy``.
 
     Raises
     ------
@@ -521,7 +527,7 @@ class CrossSectionModel:
                  bandwidth_Hz: float = 5.0, damping: float = 0.7,
                  flux_bandwidth_Hz: float = 30.0, voltage_limit_V: float = 440.0,
                  touchdown_gap_m: float = 0.002, landing_gap_m: float = 0.020,
-                 motion_eddy: bool | str = False) -> None:
+                 motion_eddy: bool | str = False, eddy_branches: int = 1) -> None:
         from ..control import design_gap_controller
         from ..magnets import load_magnet
         from ..models.flux import FluxModel
@@ -568,10 +574,14 @@ class CrossSectionModel:
         if not (isinstance(motion_eddy, bool) or motion_eddy == "levitation"):
             raise InputError(f"motion_eddy = {motion_eddy!r}; use True (every magnet), "
                              "'levitation' (the levitation magnets only) or False")
+        self.eddy_branches = check_eddy_branches(eddy_branches,
+                                                 motion_eddy=motion_eddy is not False)
+        """Shielded sections of the ladder: 1 (two-state) or 2 (three-state)."""
         if motion_eddy is not False:
             check_motion_eddy_options(magnets=magnets, eddy_resistance_scale=1.0)
         self.bank = vehicle_bank(
             MagnetBank, members, motion_eddy=motion_eddy is not False,
+            eddy_branches=self.eddy_branches,
             files={"levitation": levitation_magnet, "guidance": guidance_magnet},
             kind_of={n: n.split("_")[0] for n in self.member_names},
             ladder_kinds=("levitation",) if motion_eddy == "levitation" else None,
@@ -884,6 +894,7 @@ class CrossSectionModel:
                      rx_mag: np.ndarray, field_mid: np.ndarray, q_ext: np.ndarray,
                      fail_t: np.ndarray, n: int, progress: bool = False) -> tuple[Any, ...]:
         from ..control import Measurement
+        from .stepkernel import terminal_current
 
         s = self.mechanics.system
         bank = self.bank
@@ -907,8 +918,10 @@ class CrossSectionModel:
         rec_u = np.zeros((n + 1, nc))
         rec_x = np.empty((n + 1, 2 * nq))
         rec_acc = np.empty((n + 1, nq))
-        # the ladder's shielding eddy currents I_e at every step start (motion_eddy)
-        rec_ie = np.zeros((n + 1, nc)) if bank.motion_eddy else None
+        # the ladder's shielding eddy currents I_e at every step start (motion_eddy),
+        # (n_t, n_c) or, three-state, (n_t, n_c, 2) as the bank's state
+        rec_ie = (np.zeros((n + 1, nc) + ((2,) if bank.n_eddy_states == 2 else ()))
+                  if bank.motion_eddy else None)
         gap_circ = np.repeat(np.arange(4), 2)
         x_circ = np.zeros(nc)
         force = stepper.member_force_N.copy()
@@ -951,9 +964,8 @@ class CrossSectionModel:
             # 2-quadrant chopper: coil current (U + R_ec I_L)/(R_el + R_ec) >= 0 (the
             # ladder's: R_a and I_L + I_e); then the failed circuits at 0 V (the compiled
             # step's order)
-            il = stepper.inductor_currents_A
-            if rec_ie is not None:
-                il = il + stepper.eddy_currents_A
+            il = terminal_current(stepper.inductor_currents_A,
+                                  None if rec_ie is None else stepper.eddy_currents_A, nc)
             u[chop] = chopper_floor(u[chop], il[chop], r_ec[chop])
             u[fail_t <= t[k]] = 0.0
             rec_u[k] = u
@@ -1006,7 +1018,7 @@ class CrossSectionModel:
         """
         import casadi as ca
 
-        from .stepkernel import bank_step_outputs, pack_slices
+        from .stepkernel import bank_step_outputs, pack_slices, terminal_current
 
         bank = self.bank
         if self.magnet_kind != "reduced":
@@ -1019,8 +1031,10 @@ class CrossSectionModel:
         parts = self._step_parts(dt)
         f_in, f_ctl, f_upd, f_mech = (parts[k] for k in (
             "guideway_in", "controllers", "controller_update", "mechanics_loaded"))
-        # the ladder's I_e last in state and record (motion_eddy); else the layout before
-        eddy = [("I_e", nc)] if bank.motion_eddy else []
+        # the ladder's I_e last in state and record (motion_eddy; three-state: 2 n_c,
+        # every circuit's I_e1, then I_e2); else the layout before
+        ne = bank.n_eddy_states
+        eddy = [("I_e", nc * ne)] if bank.motion_eddy else []
         st = pack_slices([("x", 2 * nq), ("I_L", nc), ("psi_hat", nc), ("integral", nc),
                           ("current", nc), ("force", nc), *eddy])
         pi = pack_slices([("r", nc), ("r_x", nc), ("Q_t", nq), ("t", 1)])
@@ -1038,7 +1052,7 @@ class CrossSectionModel:
         gaps, rates = f_in(x, ca.DM.zeros(0), ca.DM.zeros(nc), P[pi["r"]], P[pi["r_x"]],
                            v)[:2]
         # the chopper's current: I_L, or I_L + I_e with the ladder (its floor -R_a (I_L + I_e))
-        u = f_ctl.call({"gap": gaps, "gap_rate": rates, "I_L": il if ie is None else il + ie,
+        u = f_ctl.call({"gap": gaps, "gap_rate": rates, "I_L": terminal_current(il, ie, nc),
                         "current": cur, "psi_hat": psi, "integral": itg, "t": P[pi["t"]],
                         "fail_t": fail_t})["U"]
         il_n, cur_n, frc_n, n_bad, flags, il_lo, il_hi, ie_n = bank_step_outputs(
@@ -1143,8 +1157,8 @@ class CrossSectionModel:
         s_init[st["psi_hat"]] = np.concatenate(flux)
         s_init[st["current"]] = out0.currents_A
         s_init[st["force"]] = out0.circuit_force_N
-        if state0.eddy_currents_A is not None:
-            s_init[st["I_e"]] = state0.eddy_currents_A
+        if state0.eddy_currents_A is not None:     # (n_c, 2): column-major
+            s_init[st["I_e"]] = np.ravel(state0.eddy_currents_A, order="F")
         g_sl, r_sl, b_sl = rc["gap"], rc["gap_rate"], rc["n_bad"].start
         lo_lim, hi_lim = self.touchdown_gap_m, self.landing_gap_m
 
@@ -1191,7 +1205,9 @@ class CrossSectionModel:
         u = rec[:m, rc["voltage"]].copy()
         u[-1] = 0.0                  # the last record's step is not taken (as the NumPy loop)
         return (rec[:m, g_sl][:, ::2], frc, rec[:m, rc["current"]], u, rx, acc, touchdown,
-                last, outcome, rec[:m, rc["I_e"]] if "I_e" in rc else None)
+                last, outcome, None if "I_e" not in rc else
+                rec[:m, rc["I_e"]].reshape(m, -1, bank.n_circuits).transpose(0, 2, 1)
+                .reshape((m, bank.n_circuits) + ((2,) if bank.n_eddy_states == 2 else ())))
 
     def _result(self, v: float, dt: float, t: np.ndarray, rec_gap: np.ndarray,
                 rec_force: np.ndarray, rec_cur: np.ndarray, rec_u: np.ndarray,
@@ -1231,9 +1247,16 @@ class CrossSectionModel:
         put("guidance_current", ("time", "guidance_circuit"), rec_cur[:m, 4:], "A",
             "coil current")
         if rec_ie is not None:
+            three = rec_ie.ndim == 3
+            if three:
+                ds = ds.assign_coords(eddy_state=["I_e1", "I_e2"])
             for j, kind in ((slice(0, 4), "levitation"), (slice(4, None), "guidance")):
-                put(f"{kind}_eddy_current", ("time", f"{kind}_circuit"), rec_ie[:m, j], "A",
-                    "shielding eddy current I_e of the shielded-gap ladder (motion_eddy)")
+                put(f"{kind}_eddy_current",
+                    ("time", f"{kind}_circuit", *(("eddy_state",) if three else ())),
+                    rec_ie[:m, j], "A",
+                    "shielding eddy current I_e of the shielded-gap ladder (motion_eddy)"
+                    + ("; eddy_state I_e1 (inner shield R_3), I_e2 (outer shield R_2)"
+                       if three else ""))
         put("voltage", ("time", "circuit"), rec_u[:m], "V", "circuit voltage held over the step")
         for i, dof in enumerate(s.dof_names):
             body, kind = dof.split(".")
@@ -1252,7 +1275,8 @@ class CrossSectionModel:
                          "nominal_gap_m": self.s0, "touchdown_gap_m": self.touchdown_gap_m,
                          "landing_gap_m": self.landing_gap_m,
                          "magnets": self.magnet_kind + (
-                             f", shielded-gap ladder (motion_eddy = {self.motion_eddy!r})"
+                             f", shielded-gap ladder (motion_eddy = {self.motion_eddy!r}"
+                             + (", three-state)" if self.eddy_branches == 2 else ")")
                              if self.bank.motion_eddy else ""),
                          "guidance_bias_current_A": self.bias_A})
         min_gap = {"levitation": float(cg[:, :4].min()), "guidance": float(cg[:, 4:].min())}

@@ -486,6 +486,12 @@ class VehicleModel:
         models carry it too.  None (default): the vehicle file's ``[magnets]
         motion_eddy`` (false unless set).  Needs reduced magnets whose maps carry the
         ladder and ``eddy_resistance_scale = 1``.
+    eddy_branches : {1, 2}, optional
+        Shielded sections of that ladder (:class:`MagnetBank` option ``eddy_branches``;
+        docs/equations.md section 8, "Three states"): 1 the two-state ladder (``I_e``), 2
+        the three-state ladder (``I_e1``, ``I_e2`` per circuit, the dataset's
+        ``eddy_current`` with an ``eddy_state`` dimension), only with ``motion_eddy``.
+        None (default): the vehicle file's ``[magnets] eddy_branches`` (1 unless set).
     """
 
     def __init__(self, train: TrainData, *, guideway: Any = None, rigid: bool = False,
@@ -493,7 +499,7 @@ class VehicleModel:
                  resistance_scale: float = 1.0, eddy_resistance_scale: float = 1.0,
                  freewheel: bool = True, controller: Any = "cascade",
                  controller_sample_time_s: float | None = None, mpc_options: Any = None,
-                 motion_eddy: bool | None = None) -> None:
+                 motion_eddy: bool | None = None, eddy_branches: int | None = None) -> None:
         from ..magnets import load_magnet
         from ..models.flux import FluxModel
         from ..reduced.bank import MagnetBank
@@ -511,6 +517,11 @@ class VehicleModel:
             raise InputError(f"motion_eddy = {motion_eddy!r} must be True or False (or None: "
                              "the vehicle file's [magnets] motion_eddy)")
         self.motion_eddy = bool(motion_eddy)
+        self.eddy_branches = check_eddy_branches(
+            train.eddy_branches if eddy_branches is None else eddy_branches,
+            motion_eddy=self.motion_eddy,
+            where="" if eddy_branches is not None else " (the vehicle file's [magnets])")
+        """Shielded sections of the ladder: 1 (two-state) or 2 (three-state)."""
         if self.motion_eddy:
             check_motion_eddy_options(magnets=magnets,
                                       eddy_resistance_scale=eddy_resistance_scale)
@@ -546,6 +557,7 @@ class VehicleModel:
         for s in self.slots:
             members.append((s.name, FluxModel(kinds[s.kind]) if self.fine else self.maps[s.kind]))
         self.bank = vehicle_bank(MagnetBank, members, motion_eddy=self.motion_eddy,
+                                 eddy_branches=self.eddy_branches,
                                  files={"standard": train.standard_magnet,
                                         "bow": train.bow_magnet},
                                  kind_of={s.name: s.kind for s in self.slots},
@@ -856,7 +868,8 @@ class VehicleModel:
                 # in its state after [I_L, s, s'], estimated by its EKF from the current)
                 from ..reduced.bank import MagnetBank
 
-                plant = MagnetBank({"magnet": one}, compiled="never", motion_eddy=True)
+                plant = MagnetBank({"magnet": one}, compiled="never", motion_eddy=True,
+                                   eddy_branches=self.eddy_branches)
             model = MagnetHeaveModel(plant, mass_kg=mass,
                                      gravity=float(self.trim_force_N[same].mean()) / mass,
                                      disturbances=dist, compiled=self.bank.compiled_mode)
@@ -926,6 +939,7 @@ class VehicleModel:
 
         from ..control import damping_input
         from ..models.inputs import reject_bools
+        from .stepkernel import terminal_current
 
         for name, v in (("speed_m_per_s", speed_m_per_s), ("duration_s", duration_s),
                         ("dt_s", dt_s)):
@@ -1056,8 +1070,10 @@ class VehicleModel:
         rec_mid = np.zeros((n_steps + 1, gw.n_spans))
         rec_span = np.zeros((n_steps + 1, gw.n_spans), dtype=int)
         rec_fp = np.empty((n_steps + 1, npt))
-        # the ladder's shielding eddy currents I_e at every step start (motion_eddy)
-        rec_ie = np.zeros((n_steps + 1, nc)) if bank.motion_eddy else None
+        # the ladder's shielding eddy currents I_e at every step start (motion_eddy),
+        # (n_t, n_c) or, three-state, (n_t, n_c, 2) as the bank's state
+        rec_ie = (np.zeros((n_steps + 1, nc) + ((2,) if bank.n_eddy_states == 2 else ()))
+                  if bank.motion_eddy else None)
         timing = dict.fromkeys(("magnets", "mechanics", "guideway", "controllers", "other"), 0.0)
         ctl_times: list[float] = []
         ctl_cpu: list[float] = []
@@ -1161,9 +1177,8 @@ class VehicleModel:
                 # |U| <= U_max, the 2-quadrant chopper, failed circuits at 0 V
                 # the chopper's current: I_L, or I_L + I_e in ladder circuits (the
                 # compiled step's i_chop)
-                i_chop = (i_l_fine if self.fine else bstate.inductor_currents_A
-                          if bstate.eddy_currents_A is None
-                          else bstate.inductor_currents_A + bstate.eddy_currents_A)
+                i_chop = (i_l_fine if self.fine else terminal_current(
+                    bstate.inductor_currents_A, bstate.eddy_currents_A, nc))
                 (u,) = f_lim(u, i_chop, current, t, fail_t)
                 rec["voltage"][k] = u
                 t4 = clock()
@@ -1235,9 +1250,12 @@ class VehicleModel:
                           "long_name": "magnet force of the lumped circuit (both sides), "
                                        "attraction positive"}),
                 **({} if rec_ie is None else {"eddy_current": (
-                    ("time", "circuit"), rec_ie[sl], {
+                    ("time", "circuit", *(() if rec_ie.ndim == 2 else ("eddy_state",))),
+                    rec_ie[sl], {
                         "units": "A", "long_name": "shielding eddy current I_e of the "
-                        "shielded-gap ladder (one side's circuit; motion_eddy)"})}),
+                        "shielded-gap ladder (one side's circuit; motion_eddy)" + (
+                            "" if rec_ie.ndim == 2 else "; eddy_state I_e1 (inner "
+                            "shield R_3), I_e2 (outer shield R_2)")})}),
                 "guideway_deflection": (("time", "circuit"), rec["deflection"][sl],
                                         {"units": "m", "long_name": "guideway deflection under "
                                                                     "the circuit (down positive)"}),
@@ -1260,6 +1278,8 @@ class VehicleModel:
             },
             coords={"time": ("time", times, {"units": "s"}),
                     "circuit": list(names),
+                    **({"eddy_state": ["I_e1", "I_e2"]}
+                       if rec_ie is not None and rec_ie.ndim == 3 else {}),
                     "magnet_of_circuit": ("circuit", member_of),
                     "circuit_position": ("circuit", self.circuit_xi_m, {"units": "m",
                                          "long_name": "distance behind the nose"}),
@@ -1274,7 +1294,8 @@ class VehicleModel:
                    "landing_gap_m": tr.landing_gap_m,
                    "magnets": "detailed (fine, per pole)" if self.fine else
                               "reduced (coarse, per circuit)" + (
-                                  ", shielded-gap ladder (motion_eddy)"
+                                  ", shielded-gap ladder (motion_eddy" + (
+                                      ", three-state)" if bank.n_eddy_states == 2 else ")")
                                   if bank.motion_eddy else ""),
                    "controller": self.controller_kind + (
                        "" if self.controller_sample_time_s is None else
@@ -1362,6 +1383,7 @@ class VehicleModel:
                                   velocity_blend=self.train.control_velocity_blend,
                                   point_offsets_m=self.point_xi_m,
                                   motion_eddy=self.bank.motion_eddy,
+                                  eddy_states=max(self.bank.n_eddy_states, 1),
                                   **self._part_constants(dt), **kw)
 
     def _part_evaluators(self, dt: float) -> dict[str, Any]:
@@ -1487,8 +1509,8 @@ class VehicleModel:
                                                   gstate.modal_velocity_m_per_s], axis=1).ravel()
         s0v[st["I_L"]], s0v[st["psi_hat"]], s0v[st["integral"]] = i_l, psi_hat, integ
         s0v[st["current"]], s0v[st["force"]] = current, force
-        if i_e is not None:
-            s0v[st["I_e"]] = i_e
+        if i_e is not None:     # (n_c, 2) of the three-state ladder: column-major
+            s0v[st["I_e"]] = np.ravel(i_e, order="F")
         consts = np.concatenate([[v], fail_t])
         i_min, i_max, i_bad = rl["gap_min"].start, rl["gap_max"].start, rl["n_bad"].start
         td_gap, land_gap = tr.touchdown_gap_m, tr.landing_gap_m
@@ -1555,8 +1577,9 @@ class VehicleModel:
         for key in ("gap", "current", "force", "deflection", "voltage"):
             rec[key][:n] = rr[:, rl[key]]
         rec_q[:n], rec_qd[:n], rec_fp[:n] = rr[:, rl["q"]], rr[:, rl["q_dot"]], rr[:, rl["force"]]
-        if rec_ie is not None:
-            rec_ie[:n] = rr[:, rl["I_e"]]
+        if rec_ie is not None:     # the state's column-major block as the bank's shape
+            rec_ie[:n] = rr[:, rl["I_e"]].reshape(n, -1, bank.n_circuits).transpose(0, 2, 1).reshape(
+                rec_ie[:n].shape)
         if nm:
             rec_span[:n] = first_k[:n, None] + np.arange(n_sp)
             rec_mid[:n] = np.take_along_axis(rr[:, rl["midspan_ring"]], rec_span[:n] % n_sp,
@@ -1785,21 +1808,39 @@ def check_motion_eddy_options(*, magnets: str, eddy_resistance_scale: Any) -> No
                          "motion_eddy=False")
 
 
+def check_eddy_branches(value: Any, *, motion_eddy: bool, where: str = "") -> int:
+    """``eddy_branches`` of a vehicle checked: 1 (the two-state shielded-gap ladder) or 2
+    (the three-state ladder, only with ``motion_eddy``); an :class:`InputError` naming
+    the option, the value (``where``: where it came from) and what is allowed otherwise.
+    Returns it as an int."""
+    if isinstance(value, (bool, np.bool_)) or value not in (1, 2):
+        raise InputError(f"eddy_branches = {value!r}{where}; use 1 (the two-state "
+                         "shielded-gap ladder) or 2 (the three-state ladder), with "
+                         "motion_eddy")
+    if value == 2 and not motion_eddy:
+        raise InputError(f"eddy_branches = 2{where} needs motion_eddy (the three-state ladder is the "
+                         "shielded-gap ladder's second shielded section); give motion_eddy="
+                         "True (--motion-eddy) or leave eddy_branches at 1")
+    return int(value)
+
+
 #: A shielded-gap ladder whose fit to the detailed model's gap and voltage responses has a
-#: larger relative RMS residual (maps variable ``motion_eddy_fit_rms``) is flown with a
-#: warning: the bundled levitation magnets' fits are at 4.7-4.8 %, the guidance magnet's
-#: at 28 % (49 % before guidesat26's network, which destabilised the cross-section's
-#: guidance loops; docs/vehicle.md).
+#: larger relative RMS residual (maps variable ``motion_eddy_fit_rms``; the three-state
+#: ladder's ``motion_eddy3_fit_rms``, over its four weighted responses) is flown with a
+#: warning: the bundled levitation magnets' fits are at 4.7-4.8 % (three-state 11.7-12.0
+#: %), the guidance magnet's at 28 % (three-state 77 %; 49 % before guidesat26's network,
+#: which destabilised the cross-section's guidance loops; docs/vehicle.md).
 LADDER_FIT_WARNING = 0.2
 
 
 def vehicle_bank(bank_type: Any, members: list[tuple[str, Any]], *, motion_eddy: bool,
-                 files: dict[str, str], kind_of: dict[str, str],
+                 files: dict[str, str], kind_of: dict[str, str], eddy_branches: int = 1,
                  ladder_kinds: Any = None, option: str = "motion_eddy = True ([magnets] "
                  "motion_eddy of the vehicle file, or the option)", **options: Any) -> Any:
     """The vehicle's magnet bank; with ``motion_eddy`` its ladder members (those of
-    ``ladder_kinds`` only, if given), a member whose maps have no ladder refused naming
-    the option and the magnet file, a poorly fitted ladder flown with a warning."""
+    ``ladder_kinds`` only, if given; ``eddy_branches`` 2: the three-state ladder), a
+    member whose maps have no ladder refused naming the option and the magnet file, a
+    poorly fitted ladder flown with a warning."""
     if not motion_eddy:
         return bank_type(members, **options)
     from ..reduced.current import CurrentModel
@@ -1809,13 +1850,15 @@ def vehicle_bank(bank_type: Any, members: list[tuple[str, Any]], *, motion_eddy:
     def ladder_member(n: str, m: Any) -> Any:
         nonlocal name
         name = n
-        return (CurrentModel(m, motion_eddy=True)
+        return (CurrentModel(m, motion_eddy=True, eddy_branches=eddy_branches)
                 if ladder_kinds is not None and kind_of[n] in ladder_kinds else m)
 
     try:
         # with ladder_kinds: those kinds as ladder members, the others eq. 8
         members = [(n, ladder_member(n, m)) for n, m in members]
-        bank = bank_type(members, motion_eddy=ladder_kinds is None, **options)
+        bank = bank_type(members, motion_eddy=ladder_kinds is None,
+                         eddy_branches=eddy_branches if ladder_kinds is None else 1,
+                         **options)
     except InputError as exc:
         text = str(exc)
         if text.startswith("member '"):
@@ -1831,11 +1874,12 @@ def vehicle_bank(bank_type: Any, members: list[tuple[str, Any]], *, motion_eddy:
         if kind in warned or (ladder_kinds is not None and kind not in ladder_kinds):
             continue
         ds = maps.dataset
-        fit = (float(np.max(ds["motion_eddy_fit_rms"].values))
-               if "motion_eddy_fit_rms" in ds else math.nan)
+        var = "motion_eddy3_fit_rms" if eddy_branches == 2 else "motion_eddy_fit_rms"
+        fit = float(np.max(ds[var].values)) if var in ds else math.nan
         if fit > LADDER_FIT_WARNING:
             warned.add(kind)
-            warnings.warn(f"{option}: the {kind} magnet {files[kind]!r}'s shielded-gap "
+            warnings.warn(f"{option}: the {kind} magnet {files[kind]!r}'s "
+                          f"{'three-state ' if eddy_branches == 2 else ''}shielded-gap "
                           f"ladder fits the detailed model's gap and voltage responses with "
                           f"{100 * fit:.0f} % RMS residual (above {100 * LADDER_FIT_WARNING:.0f} "
                           "%): its eddy currents under gap motion are not those of the "

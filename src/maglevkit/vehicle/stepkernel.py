@@ -127,9 +127,10 @@ def pack_slices(items: list[tuple[str, int]]) -> dict[str, slice]:
 
 
 def _layout(n_dof: int, nc: int, n_sp: int, nm: int, held: bool = False,
-            motion_eddy: bool = False) -> StepLayout:
-    # the ladder's I_e after every other block: without it the layout is the one before
-    eddy = [("I_e", nc)] if motion_eddy else []
+            motion_eddy: bool = False, eddy_states: int = 1) -> StepLayout:
+    # the ladder's I_e after every other block: without it the layout is the one before;
+    # with the three-state ladder 2 n_c entries (every circuit's I_e1, then I_e2)
+    eddy = [("I_e", nc * eddy_states)] if motion_eddy else []
     state = pack_slices([("x_mech", 2 * n_dof), ("guideway", n_sp * 2 * nm), ("I_L", nc),
                          ("psi_hat", nc), ("integral", nc), ("current", nc), ("force", nc),
                          *eddy])
@@ -316,17 +317,41 @@ def bank_step_outputs(bank_step: Any, *, il: Any, ie: Any, gaps: Any, voltages: 
                       rates: Any, dt: float) -> tuple[Any, ...]:
     """One call of the bank's step function inside a vehicle's compiled step: inputs
     ``I_L``, gaps [m], voltages [V], gap rates [m/s], the step ``dt`` [s] and, with the
-    shielded-gap ladder (``ie`` not None), ``I_e`` [A].  Returns ``I_L_next``, the coil
+    shielded-gap ladder (``ie`` not None), ``I_e`` [A] (``n`` or, three-state, ``2 n``
+    entries, column-major).  Returns ``I_L_next``, the coil
     current ``I``, the force ``F``, ``n_bad``, the reason ``flags``, ``I_L_min``,
     ``I_L_max`` and ``I_e_next`` (None without the ladder); used by the heave-pitch and the
     cross-section steps."""
     b_in = {"I_L": il, "s": gaps, "U": voltages, "sdot": rates, "h": ca.MX(dt)}
+    ie_next = None
     if ie is not None:
-        b_in["I_e"] = ie
+        # the three-state ladder's (n, 2) block comes and goes as the vehicle state's flat
+        # 2n entries, column-major (every circuit's I_e1, then I_e2); (n, 1): unchanged
+        shape = bank_step.sparsity_in("I_e").shape
+        b_in["I_e"] = ie if shape[1] == 1 else ca.reshape(ie, *shape)
     bout = bank_step.call(b_in)
+    if ie is not None:
+        ie_next = bout["I_e_next"]
+        if ie_next.shape[1] != 1:
+            ie_next = ca.vec(ie_next)
     return (*(bout[k] for k in ("I_L_next", "I", "F", "n_bad", "flags", "I_L_min",
-                                "I_L_max")),
-            None if ie is None else bout["I_e_next"])
+                                "I_L_max")), ie_next)
+
+
+def terminal_current(il: Any, ie: Any, n_circuits: int) -> Any:
+    """The ladder's terminal current ``I_L + I_e`` (two-state, ``ie`` of ``n_circuits``
+    entries) or ``I_L + I_e1 + I_e2`` (three-state, ``ie`` of ``2 n_circuits``, every
+    circuit's ``I_e1`` first, or a NumPy ``(n_circuits, 2)`` array as the bank's state):
+    the chopper's current, whose floor is ``U >= -R_a`` times it (the coil current
+    ``(U/R_a + I_u)/a`` stays >= 0); ``il`` itself when ``ie`` is None (eq. 8).  CasADi
+    or NumPy [A], summed in the bank kernel's order."""
+    if ie is None:
+        return il
+    if len(ie.shape) == 2 and ie.shape[1] == 2:     # the bank's (n_c, 2) state
+        return il + ie[:, 0] + ie[:, 1]
+    if ie.shape[0] == n_circuits:
+        return il + ie
+    return il + ie[:n_circuits] + ie[n_circuits:]
 
 
 def build_vehicle_parts(*, dt: float, nominal_gap_m: float, span_length_m: float,
@@ -523,8 +548,8 @@ def build_vehicle_step(*, bank_step: Any, dt: float, nominal_gap_m: float, sides
                        integral_projection: np.ndarray, midspan_shape: np.ndarray,
                        point_offsets_m: np.ndarray, velocity_blend: float = 0.0,
                        block_steps: int = 50, name: str = "maglevkit_vehicle_step",
-                       controller: str = "cascade", motion_eddy: bool = False
-                       ) -> VehicleStepFunction:
+                       controller: str = "cascade", motion_eddy: bool = False,
+                       eddy_states: int = 1) -> VehicleStepFunction:
     """Compose the vehicle step function (see the module docstring).
 
     Parameters are the run's constants, as the NumPy loop uses them: ``bank_step`` from
@@ -600,6 +625,11 @@ def build_vehicle_step(*, bank_step: Any, dt: float, nominal_gap_m: float, sides
         last); the chopper floor is the ladder's, ``U >= -R_a (I_L + I_e)``
         (``eddy_resistance_ohm`` then holds the bank's ``R_a`` in ladder circuits).
         False: the layout and the function are the ones without the ladder.
+    eddy_states : {1, 2}, default 1
+        Eddy states per circuit with ``motion_eddy`` (:attr:`MagnetBank.n_eddy_states`):
+        2 for the three-state ladder, whose ``I_e`` block then holds ``2 n_c`` entries
+        (every circuit's ``I_e1``, then ``I_e2``) and whose chopper floor is ``U >= -R_a
+        (I_L + I_e1 + I_e2)``.
 
     Returns
     -------
@@ -614,7 +644,7 @@ def build_vehicle_step(*, bank_step: Any, dt: float, nominal_gap_m: float, sides
     if controller not in ("cascade", "held"):
         raise InputError(f"controller = {controller!r}; use 'cascade' or 'held'")
     held = controller == "held"
-    lay = _layout(n_dof, nc, n_sp, nm, held, motion_eddy)
+    lay = _layout(n_dof, nc, n_sp, nm, held, motion_eddy, eddy_states)
     sym = ca.MX.sym
     parts = build_vehicle_parts(
         dt=dt, nominal_gap_m=nominal_gap_m, span_length_m=span_length_m, origin_m=origin_m,
@@ -654,9 +684,10 @@ def build_vehicle_step(*, bank_step: Any, dt: float, nominal_gap_m: float, sides
     damp_k = rate_k if velocity_blend == 0.0 else damping_input(rate_k, vel_k,
                                                                 float(velocity_blend))
     # the chopper's current: I_L (eq. 8), I_L + I_e (the ladder: I = (U/R_a + I_L +
-    # I_e)/a, so I >= 0 is U >= -R_a (I_L + I_e), the same floor)
+    # I_e)/a, so I >= 0 is U >= -R_a (I_L + I_e), the same floor; three states: I_L +
+    # I_e1 + I_e2)
     s_ie = S[st["I_e"]] if motion_eddy else None
-    i_chop = s_il if s_ie is None else s_il + s_ie
+    i_chop = terminal_current(s_il, s_ie, nc)
     if held:
         u_k = parts["voltage_limits"](P[sp["u_held"]], i_chop, s_cur, p_t, c_fail)
     else:

@@ -10,7 +10,8 @@ guideway files (see ``maglevkit/data/vehicle/tr09.toml``, bundled as ``"tr09"``)
     [secondary]  stiffness, damping, positions
     [joint]      stiffness, damping
     [control]    bandwidth, damping, flux_bandwidth, voltage_limit, velocity_blend (optional)
-    [magnets]    motion_eddy (optional table and key, default false)
+    [magnets]    motion_eddy (optional table and key, default false), eddy_branches
+                 (optional, default 1; 2: the three-state ladder)
 
 Unknown or missing keys and bad values raise :class:`~maglevkit.errors.ParameterFileError`
 naming the key.  Train coordinate ``xi`` [m]: distance behind the train's nose (positive
@@ -81,6 +82,7 @@ VEHICLE_SCHEMA: dict[str, dict[str, Schema]] = {
     # optional table (a file without it: every key's default)
     "magnets": {
         "motion_eddy": Schema(bool, required=False, default=False),
+        "eddy_branches": Schema(int, required=False, default=1, unit="-"),
     },
 }
 
@@ -177,6 +179,9 @@ class TrainData:
         Fly the reduced magnets with the shielded-gap ladder (key ``motion_eddy`` of the
         optional ``[magnets]`` table, default False: eq. 8;
         :class:`~maglevkit.vehicle.VehicleModel` option ``motion_eddy``).
+    eddy_branches : int
+        Shielded sections of that ladder (key ``eddy_branches`` of ``[magnets]``, default
+        1: the two-state ladder; 2: the three-state ladder, only with ``motion_eddy``).
     provenance : dict
         ``"table.key" -> tag/source``.
     source : str
@@ -215,6 +220,7 @@ class TrainData:
     sides: int = 2
     control_velocity_blend: float = 0.0
     motion_eddy: bool = False
+    eddy_branches: int = 1
 
     # ------------------------------------------------------------------ derived layout
     @property
@@ -359,6 +365,12 @@ def parse_vehicle(parameters: Mapping[str, Any], source: str = "parameters") -> 
     _check(0 <= c["velocity_blend"] <= 1, f"[control] velocity_blend = {c['velocity_blend']} "
            "must be in [0, 1] (0: damping from the gap rate, 1: from the absolute velocity)",
            source)
+    mg = t["magnets"]
+    _check(mg["eddy_branches"] in (1, 2), f"[magnets] eddy_branches = {mg['eddy_branches']}: "
+           "use 1 (the two-state shielded-gap ladder) or 2 (the three-state ladder)", source)
+    _check(mg["eddy_branches"] == 1 or mg["motion_eddy"],
+           f"[magnets] eddy_branches = {mg['eddy_branches']} needs motion_eddy = true (the "
+           "shielded-gap ladder's sections)", source)
     prov = parse_provenance(parameters, VEHICLE_SCHEMA, source)
     cb, fr, se, jo = t["car_body"], t["frame"], t["secondary"], t["joint"]
     return TrainData(
@@ -376,7 +388,8 @@ def parse_vehicle(parameters: Mapping[str, Any], source: str = "parameters") -> 
         control_bandwidth_Hz=c["bandwidth"], control_damping=c["damping"],
         flux_bandwidth_Hz=c["flux_bandwidth"], voltage_limit_V=c["voltage_limit"],
         control_velocity_blend=c["velocity_blend"],
-        motion_eddy=bool(t["magnets"]["motion_eddy"]), provenance=prov, source=source)
+        motion_eddy=bool(mg["motion_eddy"]), eddy_branches=int(mg["eddy_branches"]),
+        provenance=prov, source=source)
 
 
 def bundled_vehicles() -> list[str]:
