@@ -439,3 +439,30 @@ def test_guidance_magnet_ladders_and_the_series_bound() -> None:
                             weights=MOTION_EDDY3_WEIGHTS, max_series_inductance_H=bound)
     # measured 0.32 (unweighted; the force responses 55 %), against 0.035 free
     assert held.series_bound_share > 0.95 and held.rms_residual > 0.25
+
+
+def test_common_mode_responses_are_the_sum_of_the_single_gap_ones() -> None:
+    """``detailed_frequency_response(common_mode=True)``: every gap moving together is, by
+    linearity, the sum of each gap moving alone (the single-gap responses through
+    ``groups``), for the coil current; the statics' partials stay
+    the circuit's own; and on the guidance magnet the sections' coupling shows (the common
+    gap -> current differs from the own-pole one by more than 3 % in the fit's band)."""
+    from maglevkit.reduction.motion_eddy import detailed_frequency_response
+
+    net = mk.load_magnet("tr-guidance").network
+    f = np.array([0.3, 5.0, 50.0, 300.0])
+    own = detailed_frequency_response(net, gap=0.010, current=32.0, frequencies_Hz=f)
+    common = detailed_frequency_response(net, gap=0.010, current=32.0, frequencies_Hz=f,
+                                         common_mode=True)
+    singles = [detailed_frequency_response(net, gap=0.010, current=32.0, frequencies_Hz=f,
+                                           groups={c: (g,) for c in net.circuit_names})
+               for g in net.gap_names]
+    for j, c in enumerate(net.circuit_names):
+        total = sum(s[j].gap_to_current_A_per_m for s in singles)
+        # rounding only (the same linear solves, summed)
+        np.testing.assert_allclose(common[j].gap_to_current_A_per_m, total, rtol=1e-9)
+        assert common[j].differential_inductance_H == own[j].differential_inductance_H
+        assert common[j].dpsi_ds_Wb_per_m == own[j].dpsi_ds_Wb_per_m
+        assert common[j].dforce_dgap_N_per_m == own[j].dforce_dgap_N_per_m
+        gap = np.abs(common[j].gap_to_current_A_per_m / own[j].gap_to_current_A_per_m - 1)
+        assert np.max(gap) > 0.03, c

@@ -134,7 +134,8 @@ class DetailedFrequencyResponse:
 
 def detailed_frequency_response(net: Any, *, gap: float, current: float,
                                 frequencies_Hz: Any = FIT_FREQUENCIES_HZ,
-                                groups: dict[str, tuple[str, ...]] | None = None
+                                groups: dict[str, tuple[str, ...]] | None = None,
+                                common_mode: bool = False
                                 ) -> list[DetailedFrequencyResponse]:
     """Linearise the detailed DAE at a steady state and evaluate its frequency responses.
 
@@ -153,6 +154,15 @@ def detailed_frequency_response(net: Any, *, gap: float, current: float,
         Frequencies [Hz].
     groups : dict, optional
         Circuit -> its poles (gap inputs); default :func:`circuit_pole_groups` there.
+    common_mode : bool
+        False (default): each circuit's responses to its own poles moving and to its own
+        voltage (the others held).  True: to every gap of the magnet moving together and
+        to every circuit's voltage changing together (a heave of the whole magnet driven
+        alike, which couples the circuits through their mutual fluxes and shared eddy
+        elements); the force is still the circuit's own poles', and the statics' partials
+        (``L~``, ``dpsi/ds``, ``dF/dI``, ``dF/ds``) stay the circuit's own -- the reduced
+        model's per-circuit law -- so that a ladder fitted to them carries the coupling in
+        its elements.  The instantaneous jumps follow the same inputs.
 
     Returns
     -------
@@ -206,8 +216,12 @@ def detailed_frequency_response(net: Any, *, gap: float, current: float,
     for j, c in enumerate(net.circuit_names):
         own = [gi[g] for g in groups[c]]
         win = np.zeros((ng + nc, 2))
-        win[own, 0] = 1.0            # the circuit's own poles move together
-        win[ng + j, 1] = 1.0         # its voltage
+        if common_mode:
+            win[:ng, 0] = 1.0        # every gap of the magnet moves together
+            win[ng:, 1] = 1.0        # every circuit's voltage changes together
+        else:
+            win[own, 0] = 1.0        # the circuit's own poles move together
+            win[ng + j, 1] = 1.0     # its voltage
         res = np.empty((freqs.size, 4), dtype=complex)
         for k, f in enumerate(freqs):
             yy = np.linalg.solve(2j * np.pi * f * eye - a, b @ win)
