@@ -12,6 +12,10 @@ steps, ramp, closed loop), so that the extension is seen not to cost elsewhere.
 the Bode plot of gap -> current and gap -> force from the linearised models.
 ``--flux-paths paper`` runs the same on the former lumped TR09 network (a copy of the
 bundled file with ``flux_paths = "paper"`` at 34 A, the current of its recorded sweep).
+``--magnet tr-guidance`` runs it on the bundled guidance magnet at its nominal 32 A, and
+``--max-current`` sets the maps' largest current (default 80 A): on the guidance magnet the
+maps' saturated corner bounds the ladders' series inductances (docs/reduction.md, "Gap
+motion").
 """
 
 from __future__ import annotations
