@@ -12,6 +12,10 @@ steps, ramp, closed loop), so that the extension is seen not to cost elsewhere.
 the Bode plot of gap -> current and gap -> force from the linearised models.
 ``--flux-paths paper`` runs the same on the former lumped TR09 network (a copy of the
 bundled file with ``flux_paths = "paper"`` at 34 A, the current of its recorded sweep).
+``--magnet tr-guidance`` runs it on the bundled guidance magnet at its nominal 32 A, and
+``--max-current`` sets the maps' largest current (default 80 A): on the guidance magnet the
+maps' saturated corner bounds the ladders' series inductances (docs/reduction.md, "Gap
+motion").
 """
 
 from __future__ import annotations
@@ -144,8 +148,9 @@ def run() -> str:
     r_2 = eq8.maps.dataset["motion_eddy_shielding_resistance_ohm"].values[0]
     beta = eq8.maps.dataset["motion_eddy_unshielded_share"].values[0]
     gamma = eq8.maps.dataset["motion_eddy_held_flux_force_share"].values[0]
-    out = [f"Network flux_paths = {FLUX_PATHS!r}.  Maps {GRID[0].size} x {GRID[1].size} "
-           "(statics); ladder identified at the maps' "
+    out = [f"Magnet {MAGNET!r}, network flux_paths = {FLUX_PATHS!r}.  Maps "
+           f"{GRID[0].size} x {GRID[1].size} ({GRID[0][0] * 1e3:g}-{GRID[0][-1] * 1e3:g} mm, "
+           f"0-{GRID[1][-1]:g} A; statics); ladder identified at the maps' "
            f"reference point: R_a = {r_a:.3f} ohm, L_u = {l_u * 1e3:.2f} mH, R_2 = {r_2:.2f} "
            f"ohm, beta = {beta:.4f}, held-flux gamma = {gamma:.4f}.  'ladder': the default "
            "maps (force F(s, I_L)) "
@@ -271,11 +276,20 @@ def bode(path: str) -> None:
 if __name__ == "__main__":
     ap = argparse.ArgumentParser(description=__doc__)
     ap.add_argument("--figure", default="", help="write the Bode plot (PNG) here and stop")
+    ap.add_argument("--magnet", default=MAGNET, choices=("tr09-standard", "tr-guidance"),
+                    help="the bundled magnet (default tr09-standard; tr-guidance: the guidance "
+                         "magnet at its nominal 32 A, split network only)")
+    ap.add_argument("--max-current", type=float, default=float(GRID[1][-1]),
+                    help="the maps' largest current [A] (default 80; 41 currents from 0)")
     ap.add_argument("--flux-paths", default="split", choices=("split", "paper"),
                     help="the TR09 network (default: the bundled 'split' one; 'paper' is the "
                          "former lumped network at 34 A)")
     args = ap.parse_args()
     FLUX_PATHS = args.flux_paths
+    MAGNET = args.magnet
+    if MAGNET != "tr09-standard" and FLUX_PATHS != "split":
+        raise SystemExit("--flux-paths paper exists for tr09-standard only")
+    GRID = (GRID[0], np.linspace(0.0, args.max_current, GRID[1].size))
     if args.figure:
         bode(args.figure)
     else:

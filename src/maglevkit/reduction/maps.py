@@ -867,7 +867,7 @@ MOTION_EDDY3_VARIABLES = (
     ("motion_eddy3_inner_share", "1", "share beta_2 of the motion voltage in L_2"),
     ("motion_eddy3_force_share_1", "1", "c_1 of the force current"),
     ("motion_eddy3_force_share_2", "1", "c_2 of the force current"),
-    ("motion_eddy3_fit_rms", "1", "RMS relative residual of the fit"),
+    ("motion_eddy3_fit_rms", "1", "RMS relative residual of the fit (unweighted)"),
 )
 
 

@@ -134,7 +134,8 @@ class DetailedFrequencyResponse:
 
 def detailed_frequency_response(net: Any, *, gap: float, current: float,
                                 frequencies_Hz: Any = FIT_FREQUENCIES_HZ,
-                                groups: dict[str, tuple[str, ...]] | None = None
+                                groups: dict[str, tuple[str, ...]] | None = None,
+                                common_mode: bool = False
                                 ) -> list[DetailedFrequencyResponse]:
     """Linearise the detailed DAE at a steady state and evaluate its frequency responses.
 
@@ -153,6 +154,15 @@ def detailed_frequency_response(net: Any, *, gap: float, current: float,
         Frequencies [Hz].
     groups : dict, optional
         Circuit -> its poles (gap inputs); default :func:`circuit_pole_groups` there.
+    common_mode : bool
+        False (default): each circuit's responses to its own poles moving and to its own
+        voltage (the others held).  True: to every gap of the magnet moving together and
+        to every circuit's voltage changing together (a heave of the whole magnet driven
+        alike, which couples the circuits through their mutual fluxes and shared eddy
+        elements); the force is still the circuit's own poles', and the statics' partials
+        (``L~``, ``dpsi/ds``, ``dF/dI``, ``dF/ds``) stay the circuit's own -- the reduced
+        model's per-circuit law -- so that a ladder fitted to them carries the coupling in
+        its elements.  The instantaneous jumps follow the same inputs.
 
     Returns
     -------
@@ -206,8 +216,12 @@ def detailed_frequency_response(net: Any, *, gap: float, current: float,
     for j, c in enumerate(net.circuit_names):
         own = [gi[g] for g in groups[c]]
         win = np.zeros((ng + nc, 2))
-        win[own, 0] = 1.0            # the circuit's own poles move together
-        win[ng + j, 1] = 1.0         # its voltage
+        if common_mode:
+            win[:ng, 0] = 1.0        # every gap of the magnet moves together
+            win[ng:, 1] = 1.0        # every circuit's voltage changes together
+        else:
+            win[own, 0] = 1.0        # the circuit's own poles move together
+            win[ng + j, 1] = 1.0     # its voltage
         res = np.empty((freqs.size, 4), dtype=complex)
         for k, f in enumerate(freqs):
             yy = np.linalg.solve(2j * np.pi * f * eye - a, b @ win)
@@ -796,7 +810,18 @@ class MotionEddy3Fit:
     force_shares : tuple of float
         ``(c_1, c_2)`` of :func:`ladder3_force_current` [-].
     rms_residual : float
-        RMS relative residual over the four responses and the fit's frequencies.
+        RMS relative residual over the four responses and the fit's frequencies, unweighted
+        (each response relative to its modulus, real and imaginary parts; the fit's
+        ``weights`` shape its objective, not this measure, which is the two-state fit's).
+    response_residuals : tuple of 4 floats
+        The same per response: gap -> current, voltage -> current, gap -> force, voltage ->
+        force [-] (NaN: not known, a fit made by hand).
+    series_bound_share : float
+        ``(L_u + L_2)/L_max`` [-], ``L_max`` the bound of the series inductances; near 1 the
+        bound holds the fit (NaN: not known).  ``build_maps``' bound is
+        :data:`MAX_UNSHIELDED_SHARE_OF_MIN_L` times the maps' smallest ``L~``: on maps that
+        reach deep saturation (the guidance magnet to 80 A) it sits far below the series
+        inductances that the operating point asks for (docs/reduction.md, "Gap motion").
     """
 
     jump_resistance_ohm: float
@@ -808,6 +833,8 @@ class MotionEddy3Fit:
     inner_share: float
     force_shares: tuple[float, float]
     rms_residual: float
+    response_residuals: tuple[float, float, float, float] = (math.nan,) * 4
+    series_bound_share: float = math.nan
 
     def response(self, frequencies_Hz: Any, detailed: DetailedFrequencyResponse,
                  resistance_ohm: float) -> tuple[Ladder3Response, np.ndarray, np.ndarray]:
@@ -939,5 +966,11 @@ def fit_motion_eddy3(response: DetailedFrequencyResponse, *, resistance_ohm: flo
             best = sol
     assert best is not None
     r_a, l_u, r_2, l_2, r_3, beta, beta_2 = unpack(best.x)
-    return MotionEddy3Fit(r_a, l_u, r_2, l_2, r_3, beta, beta_2, model(best.x)[1],
-                          float(np.sqrt(np.mean(resid(best.x) ** 2))))
+    fitted, shares = model(best.x)
+    # unweighted: each response relative to its modulus (real and imaginary parts)
+    parts = [np.concatenate([((m - d) / np.abs(d)).real, ((m - d) / np.abs(d)).imag])
+             for m, d in zip(fitted, det, strict=True)]
+    per = tuple(float(np.sqrt(np.mean(e ** 2))) for e in parts)
+    return MotionEddy3Fit(r_a, l_u, r_2, l_2, r_3, beta, beta_2, shares,
+                          float(np.sqrt(np.mean(np.concatenate(parts) ** 2))),
+                          (per[0], per[1], per[2], per[3]), (l_u + l_2) / l_max)
