@@ -175,3 +175,20 @@ def interrupt_after_steps(monkeypatch: pytest.MonkeyPatch, steps: int) -> None:
             raise KeyboardInterrupt
 
     monkeypatch.setattr(ProgressReporter, "advance", advance)
+
+
+def open_fmu(exported: Any, directory: Any) -> tuple[Any, dict[str, int], dict[str, Any]]:
+    """An exported FMU (``export_fmu``'s result) unzipped into ``directory``, instantiated
+    with FMPy and left in initialisation mode at time 0 (the caller sets its start inputs
+    and calls ``exitInitializationMode``).  Returns the FMU, the value reference and the
+    start value of each variable by name."""
+    from fmpy import extract, read_model_description
+    from fmpy.simulation import instantiate_fmu
+
+    md = read_model_description(str(exported.path))
+    vr = {v.name: v.valueReference for v in md.modelVariables}
+    start = {v.name: v.start for v in md.modelVariables}
+    fmu = instantiate_fmu(extract(str(exported.path), str(directory)), md)
+    fmu.setupExperiment(startTime=0.0)
+    fmu.enterInitializationMode()
+    return fmu, vr, start

@@ -22,6 +22,8 @@ import maglevkit as mk
 from maglevkit.errors import InputError, OutOfRangeError
 from maglevkit.reduced.bank import EDDY_NETWORK_PARAMETERS, MagnetBank
 
+from .conftest import open_fmu
+
 GAPS = np.linspace(0.006, 0.014, 5)
 CURRENTS = np.linspace(0.0, 60.0, 7)
 DT = 1e-3          # the network's RK4 limit on these maps is above 1 ms: one sub-step
@@ -196,9 +198,6 @@ def test_fmu_of_a_network_member_equals_the_bank(lmaps, tmp_path, via: str) -> N
     bank); its coil current and force equal the bank's to 1e-12 relative (the same
     kernel, compiled by a different compiler run)."""
     pytest.importorskip("fmpy")
-    from fmpy import extract, read_model_description
-    from fmpy.simulation import instantiate_fmu
-
     from maglevkit.export import export_fmu
 
     cm = mk.CurrentModel(lmaps, eddy_modes=2)
@@ -206,11 +205,7 @@ def test_fmu_of_a_network_member_equals_the_bank(lmaps, tmp_path, via: str) -> N
     extra = {} if via == "model" else {"eddy_modes": 2}
     exported = export_fmu(source, tmp_path / "net.fmu", start_gaps_m=0.010,
                           initial_currents_A=I0, **extra)
-    md = read_model_description(str(exported.path))
-    vr = {v.name: v.valueReference for v in md.modelVariables}
-    fmu = instantiate_fmu(extract(str(exported.path), str(tmp_path / "x")), md)
-    fmu.setupExperiment(startTime=0.0)
-    fmu.enterInitializationMode()
+    fmu, vr, _ = open_fmu(exported, tmp_path / "x")
     bank = MagnetBank({"m": cm}, compiled="never")
     r_el = float(bank.resistance_ohm[0])
     u_names, s_names, sd_names = (exported.input_names[2 * b:2 * b + 2] for b in range(3))

@@ -19,6 +19,8 @@ from maglevkit.export import export_fmu
 from maglevkit.reduced.bank import MOTION_EDDY_PARAMETERS, MagnetBank
 from maglevkit.reduced.core import MotionEddyLadder
 
+from .conftest import open_fmu
+
 GAPS = np.linspace(0.006, 0.014, 5)
 CURRENTS = np.linspace(0.0, 40.0, 9)
 DT = 2e-4          # 2 RK4 sub-steps of the u-magnet ladder's ~1.4e-4 s limit
@@ -197,18 +199,10 @@ def test_fmu_of_a_ladder_member_equals_the_bank(u_maps, tmp_path) -> None:
     to 1e-12 relative (the same kernel; only the sub-steps' start gaps are computed as
     s + sdot k h/n instead of chained)."""
     pytest.importorskip("fmpy")
-    from fmpy import extract, read_model_description
-    from fmpy.simulation import instantiate_fmu
-
     cm = mk.CurrentModel(u_maps, motion_eddy=True)
     exported = export_fmu(cm, tmp_path / "ladder.fmu", start_gaps_m=0.010,
                           initial_currents_A=20.0)
-    md = read_model_description(str(exported.path))
-    vr = {v.name: v.valueReference for v in md.modelVariables}
-    start = {v.name: v.start for v in md.modelVariables}
-    fmu = instantiate_fmu(extract(str(exported.path), str(tmp_path / "x")), md)
-    fmu.setupExperiment(startTime=0.0)
-    fmu.enterInitializationMode()
+    fmu, vr, start = open_fmu(exported, tmp_path / "x")
     u_name, s_name, sd_name = exported.input_names
     i_name, f_name = exported.output_names[:2]
     assert float(start["max_substep"]) == cm.max_step_s
