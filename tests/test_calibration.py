@@ -25,7 +25,7 @@ from maglevkit.calibration import (
     write_calibrated_toml,
 )
 from maglevkit.cli import app
-from maglevkit.errors import DataError
+from maglevkit.errors import DataError, DataWarning
 
 ROOT = Path(__file__).resolve().parents[1]
 FEM = ROOT / "benchmarks" / "results" / "u_magnet_fem_statics.csv"
@@ -430,3 +430,25 @@ def test_only_the_parameters_spanning_the_null_direction_are_undetermined(
     with pytest.warns(mk.MaglevkitWarning, match="did not converge"):
         res = calibrate(magnet, pts, parameters=names, initial={"iron_saturation_scale": 1.2})
     assert not res.converged
+
+
+def test_the_statics_csv_reads_back_into_calibrate(tmp_path: Path) -> None:
+    """A new user's first try: `maglevkit statics --csv` writes the magnet's own statics, with
+    two derived columns (differential inductance, dpsi/ds) besides force and flux linkage;
+    `calibrate` reads that file (a DataWarning names the derived columns it does not read) and,
+    the data being the nominal model's own, returns the nominal factors.  Bound: the CSV's
+    9 significant digits move the data by <= 5e-9 relative, so a factor by well under 1e-6."""
+    runner = CliRunner()
+    data = tmp_path / "s.csv"
+    res = runner.invoke(app, ["statics", "u-magnet", "--gaps", "0.004:0.012:5",
+                              "--currents", "5:40:4", "--csv", str(data)])
+    assert res.exit_code == 0, res.output
+    assert "differential_inductance_H" in data.read_text().splitlines()[0]
+    out = tmp_path / "c.toml"
+    with pytest.warns(DataWarning, match=r"differential_inductance_H.*not read"):
+        res = runner.invoke(app, ["calibrate", "u-magnet", str(data), "-o", str(out)])
+    assert res.exit_code == 0, res.output
+    cal = tomllib.loads(out.read_text())["calibration"]
+    for name in ("leakage_factor", "fringing_factor", "iron_field_scale"):
+        assert abs(cal[name] - 1.0) < 1e-6, (name, cal[name])
+    assert abs(cal["gap_offset_m"]) < 1e-9

@@ -151,6 +151,10 @@ def _listed(table: GridTable, points: Sequence[tuple[int, int]], circuit: str | 
 _COLUMN = re.compile(r"^(force_N|flux_linkage_Wb)(?:_([A-Za-z0-9][A-Za-z0-9_.-]*))?$")
 _ALLOWED = ("gap_m, current_A, force_N and/or flux_linkage_Wb (one column each per circuit "
             "with a _<circuit> suffix when there are several)")
+#: Columns ``maglevkit statics --csv`` writes besides the ones a table needs: derived from the
+#: flux linkage, so not data of their own; a table that carries them is read without them
+#: (a DataWarning names them), so that the statics' own file can be read back.
+_DERIVED = re.compile(r"^(differential_inductance_H|dpsi_dgap_Wb_per_m)(?:_[A-Za-z0-9][A-Za-z0-9_.-]*)?$")
 
 
 def _hint(name: str) -> str:
@@ -180,8 +184,12 @@ def _columns(header: list[str], source: str) -> tuple[dict[str, int], dict[tuple
     missing = [n for n in ("gap_m", "current_A") if n not in seen]
     data: dict[tuple[str, str], int] = {}
     suffixed: list[bool] = []
+    derived: list[str] = []
     for i, n in enumerate(names):
         if n in ("gap_m", "current_A"):
+            continue
+        if _DERIVED.match(n):
+            derived.append(n)
             continue
         m = _COLUMN.match(n)
         if m is None:
@@ -189,6 +197,10 @@ def _columns(header: list[str], source: str) -> tuple[dict[str, int], dict[tuple
                             f"allowed: {_ALLOWED}")
         suffixed.append(m.group(2) is not None)
         data[(m.group(1), m.group(2) or "")] = i
+    if derived:
+        warnings.warn(f"{source}: column(s) {derived} (derived quantities, as `maglevkit statics` "
+                      "writes them) are not read; the table's data are force_N and/or "
+                      "flux_linkage_Wb", DataWarning, stacklevel=3)
     if missing:
         raise DataError(f"{source}: the table lacks column(s) {missing}; columns: {_ALLOWED}")
     if not data:
