@@ -350,8 +350,9 @@ class MagnetBank:
         current cannot go below zero within a step (every RK4 stage applies
         :func:`~maglevkit.reduced.current.eq8_freewheel_voltage`, ``U_eff = max(U,
         -R_ec I_L)``; the outputs' coil currents too; in ladder circuits with ``I_L + I_e``
-        and ``R_a`` in place of ``I_L`` and ``R_ec``, the same coil-current law).  The
-        vehicle runs turn it on.
+        and ``R_a`` in place of ``I_L`` and ``R_ec``, the same coil-current law; in
+        eddy-network circuits with ``I_L + sum_k I_k`` and ``R_0``).  The vehicle runs
+        turn it on.
     motion_eddy : bool
         ``False`` (default): members given as maps follow eq. 8; ``True``: they carry the
         shielded-gap ladder (as ``CurrentModel(maps, motion_eddy=True)``; a member given
@@ -376,7 +377,10 @@ class MagnetBank:
         its own), ``m`` eddy states ``I_k`` per circuit (:attr:`n_eddy_states`, the
         bank-wide maximum; absent branches stay 0).  Not with ``motion_eddy=True`` (two
         different extensions for members given as maps; members given as
-        ``CurrentModel`` may mix) and not with ``freewheel=True`` (docs/bank.md).
+        ``CurrentModel`` may mix).  With ``freewheel=True`` the diodes act on the terminal
+        current ``I_L + sum_k I_k`` (:func:`~maglevkit.reduced.current.
+        eddy_network_freewheel_voltage`); a network whose fitted ``R_0`` is inf is then
+        refused (docs/bank.md, "Eddy-network members").
 
     Examples
     --------

@@ -315,7 +315,9 @@ class CurrentModel:
         coil current; the same law as ``MagnetBank(freewheel=True)``).  With
         ``motion_eddy`` the diodes act on the ladder's coil current
         ``(U/R_a + I_L + I_e)/a`` (:func:`shielded_gap_freewheel_voltage`, the bank's law).
-        Not with ``eddy_modes > 0`` (the eddy network's coil current has other branches).
+        With ``eddy_modes > 0`` on the network's terminal current ``I_L + sum_k I_k``
+        (:func:`eddy_network_freewheel_voltage`, the bank's law); a network whose fitted
+        ``R_0`` is inf is refused (:func:`check_network_freewheel`).
     jit : bool
         Compile the B-spline RK4 interval (``lookup="bspline"``) to machine code with
         CasADi's JIT (needs a C compiler on the ``PATH``; ~0.3 s once per sub-step count).
