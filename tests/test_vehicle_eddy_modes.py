@@ -259,3 +259,28 @@ def test_cli_takes_the_option(tmp_path: Any) -> None:
         assert res.exit_code != 0
         for w in words:
             assert w in res.output, (extra, res.output)
+
+
+@pytest.mark.slow
+def test_nmpc_flies_the_eddy_network_and_its_compiled_blocks_are_the_numpy_loop() -> None:
+    """controller="mpc" with network magnets (one section, 400 km/h, bundled
+    irregularity, 0.3 s), as the ladders' tests: every prediction model carries both
+    branch currents per circuit, no touchdown, and the run in compiled blocks equals the
+    NumPy loop (bound 1e-7 of each variable's largest value, as there)."""
+    import dataclasses
+
+    train = dataclasses.replace(load_vehicle(), n_sections=1)
+    m = VehicleModel(train, controller="mpc", eddy_modes=2)
+    assert all(c.model.n_eddy == 2 * c.model.n_circuits and not c.model.bank.motion_eddy
+               for c in m.circuit_controllers.values())
+    prof = parse_irregularity("sag:0.5e-3+random:0.3e-3:1",
+                              span_length_m=m.guideway.span.length_m)
+    kw: dict[str, Any] = dict(speed_m_per_s=400 / 3.6, duration_s=0.3, irregularity=prof)
+    a = m.run(loop="python", **kw)
+    b = m.run(**kw)
+    assert a.touchdown is None and b.touchdown is None and b.loop == "compiled"
+    rel = {k: float(np.nanmax(np.abs(a.dataset[k].values - b.dataset[k].values))
+                    / np.nanmax(np.abs(a.dataset[k].values)))
+           for k in ("gap", "voltage", "current", "eddy_current", "force")}
+    assert max(rel.values()) < 1e-7, rel
+    assert float(np.abs(a.dataset.eddy_current.values).max()) > 0.5
