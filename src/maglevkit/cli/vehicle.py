@@ -69,6 +69,11 @@ def run(
         help="Shielded sections of that ladder: 1 (two-state) or 2 (three-state: two eddy "
              "states per circuit); needs --motion-eddy; default: the vehicle file's "
              "[magnets] eddy_branches (1 unless set; 1 for a cross-section).")] = None,
+    eddy_modes: Annotated[int | None, typer.Option(
+        "--eddy-modes", metavar="0|1|2|3",
+        help="Reduced magnets with the maps' fitted eddy network of that many branches (one "
+             "state per branch and circuit; not with --motion-eddy); default: the vehicle "
+             "file's [magnets] eddy_modes (0 unless set; 0 for a cross-section).")] = None,
     controller: Annotated[str, typer.Option(
         metavar="cascade|mpc",
         help="Gap controllers: cascade (flux cascade, compiled step) or mpc (offset-free "
@@ -128,7 +133,8 @@ def run(
             _run_cross_section(vehicle_option or vehicle, speed_kmh, duration, dt, failure,
                                magnets, maps_cache, output, plot, force, curve, crosswind,
                                irregularity, lateral, progress, bool(motion_eddy),
-                               1 if eddy_branches is None else eddy_branches)
+                               1 if eddy_branches is None else eddy_branches,
+                               0 if eddy_modes is None else eddy_modes)
         except KeyboardInterrupt:
             raise interrupted() from None
         return
@@ -137,7 +143,7 @@ def run(
     try:
         _run(vehicle, speed_kmh, speed, duration, dt, irregularity, failure, rigid, magnets,
              maps_cache, output, plot, progress, force, guideway, controller, motion_eddy,
-             eddy_branches)
+             eddy_branches, eddy_modes)
     except KeyboardInterrupt:
         raise interrupted() from None
 
@@ -146,7 +152,8 @@ def _run(vehicle: str, speed_kmh: float | None, speed: float | None, duration: f
          dt: float, irregularity: str, failure: list[str] | None, rigid: bool, magnets: str,
          maps_cache: Path | None, output: Path | None, plot: Path | None, progress: bool,
          force: bool, guideway: str | None = None, controller: str = "cascade",
-         motion_eddy: bool | None = None, eddy_branches: int | None = None) -> None:
+         motion_eddy: bool | None = None, eddy_branches: int | None = None,
+         eddy_modes: int | None = None) -> None:
     from ..vehicle.data import load_guideway
     from ..vehicle.simulation import (
         VehicleModel,
@@ -181,7 +188,8 @@ def _run(vehicle: str, speed_kmh: float | None, speed: float | None, duration: f
         track = load_guideway(guideway) if guideway is not None else None
         model = VehicleModel(train, guideway=track, rigid=rigid, magnets=magnets,
                              maps_cache=maps_cache, controller=controller,
-                             motion_eddy=motion_eddy, eddy_branches=eddy_branches)
+                             motion_eddy=motion_eddy, eddy_branches=eddy_branches,
+                             eddy_modes=eddy_modes)
         if prof is not None and not rigid:
             with warnings.catch_warnings():   # its warnings were shown by the first parse
                 warnings.simplefilter("ignore", MaglevkitWarning)
@@ -283,7 +291,8 @@ def _run_cross_section(name: str, speed_kmh: float | None, duration: float, dt: 
                        output: Path | None, plot: Path | None, force: bool,
                        curve: str | None, crosswind: str | None, irregularity: str = "none",
                        lateral: str | None = None, progress: bool = True,
-                       motion_eddy: bool = False, eddy_branches: int = 1) -> None:
+                       motion_eddy: bool = False, eddy_branches: int = 1,
+                       eddy_modes: int = 0) -> None:
     from ..vehicle.crossrun import (
         CrossSectionModel,
         parse_crosswind,
@@ -308,7 +317,8 @@ def _run_cross_section(name: str, speed_kmh: float | None, duration: float, dt: 
         lat = parse_lateral(lateral, girder_length_m=girder) if lateral is not None else None
         info(f"setting up {data.name} (maps, controllers) ...")
         model = CrossSectionModel(data, magnets=magnets, maps_cache=maps_cache,
-                                  motion_eddy=motion_eddy, eddy_branches=eddy_branches)
+                                  motion_eddy=motion_eddy, eddy_branches=eddy_branches,
+                                  eddy_modes=eddy_modes)
         res = model.run(speed_m_per_s=speed_kmh / 3.6, duration_s=duration, dt_s=dt,
                         curve=crv, crosswind=gust, failures=fails, vertical=vert,
                         lateral=lat, progress=progress)

@@ -49,8 +49,9 @@ class MagnetHeaveModel:
     ----------
     maps : CharacteristicMaps or MagnetBank
         The magnet's characteristic maps (or a bank of exactly this one magnet, all
-        members reduced; a bank with the shielded-gap ladder adds its eddy states to the
-        state: :attr:`eddy_states` per circuit, two with ``eddy_branches=2``).
+        members reduced; a bank with the shielded-gap ladder or the eddy network adds its
+        eddy states to the state: :attr:`eddy_states` per circuit, two with
+        ``eddy_branches=2``, ``m`` with ``eddy_modes=m``).
     mass_kg : float
         The mass the magnet carries [kg], finite and > 0.
     gravity : float
@@ -95,13 +96,14 @@ class MagnetHeaveModel:
         self.compiled_mode = compiled
         nc = self.n_circuits = bank.n_circuits
         self.circuit_names = bank.circuit_names
-        #: eddy states per circuit: 0 (eq. 8), 1 (the two-state shielded-gap ladder,
-        #: ``I_e``) or 2 (the three-state ladder, ``I_e1``, ``I_e2``;
-        #: :attr:`MagnetBank.n_eddy_states`)
-        self.eddy_states = int(bank.n_eddy_states) if bank.motion_eddy else 0
-        #: the shielding eddy currents in the state (a magnet with the shielded-gap
-        #: ladder, ``motion_eddy``): ``n_c`` times :attr:`eddy_states`, after ``[I_L, s,
-        #: s']``, the bank's column-major order (every circuit's ``I_e1``, then ``I_e2``)
+        #: eddy states per circuit (:attr:`MagnetBank.n_eddy_states`): 0 (eq. 8), 1 (the
+        #: two-state shielded-gap ladder, ``I_e``), 2 (the three-state ladder, ``I_e1``,
+        #: ``I_e2``) or ``m`` (the eddy network, ``eddy_modes=m``: branch currents ``I_k``)
+        self.eddy_states = int(bank.n_eddy_states)
+        #: the eddy states in the state (a magnet with the shielded-gap ladder,
+        #: ``motion_eddy``, or the eddy network, ``eddy_modes``): ``n_c`` times
+        #: :attr:`eddy_states`, after ``[I_L, s, s']``, the bank's column-major order
+        #: (every circuit's first eddy state, then the second, ...)
         self.n_eddy = nc * self.eddy_states
         self.nx = nc + 2 + self.n_eddy
         self.nu = nc
@@ -182,7 +184,7 @@ class MagnetHeaveModel:
         rhs, coil, force, eddy = [], [], 0, []
         ne = self.eddy_states
         for j in range(nc):
-            if ne:          # the shielded-gap ladder: I_e after [I_L, s, s']
+            if ne:          # the ladder's or the network's I_e after [I_L, s, s']
                 ie = (x[nc + 2 + j] if ne == 1 else
                       ca.vertcat(*(x[nc + 2 + m * nc + j] for m in range(ne))))
                 r, e, c, f, _ = self.bank.ladder_expressions(j, x[j], ie, s, ueff[j], v,
@@ -194,7 +196,7 @@ class MagnetHeaveModel:
             coil.append(c)
             force = force + f
         acc = self.gravity + (self.disturbance(d, "force") - force) / self.mass_kg
-        if ne == 2:        # column-major as the state: every circuit's dI_e1, then dI_e2
+        if ne > 1:         # column-major as the state: every circuit's dI_e1, then dI_e2, ...
             eddy = [e[m] for m in range(ne) for e in eddy]
         xdot = ca.vertcat(*rhs, v, acc, *eddy)
         y = ca.vertcat(s + self.disturbance(d, "gap_sensor"), ca.vertcat(*coil)
@@ -458,8 +460,10 @@ class MagnetHeaveModel:
         from ..reduced.current import CurrentModel
 
         ne = self.eddy_states
-        cm = CurrentModel(self.bank.members[0][2], motion_eddy=bool(ne),
-                          eddy_branches=max(ne, 1))
+        m = self.bank.eddy_modes
+        cm = (CurrentModel(self.bank.members[0][2], eddy_modes=m) if m else
+              CurrentModel(self.bank.members[0][2], motion_eddy=bool(ne),
+                           eddy_branches=max(ne, 1)))
         nc = self.n_circuits
         x, u, d = ca.MX.sym("x", self.nx), ca.MX.sym("u", self.nu), ca.MX.sym("d", self.nd)
         s, v = x[nc], x[nc + 1]

@@ -77,7 +77,9 @@ from .core import (
 from .current import (
     CurrentModel,
     check_eddy_modes,
+    check_network_freewheel,
     eddy_network_coil_current,
+    eddy_network_freewheel_voltage,
     eddy_network_parameters,
     eddy_network_rhs,
     eq8_coil_current,
@@ -348,8 +350,9 @@ class MagnetBank:
         current cannot go below zero within a step (every RK4 stage applies
         :func:`~maglevkit.reduced.current.eq8_freewheel_voltage`, ``U_eff = max(U,
         -R_ec I_L)``; the outputs' coil currents too; in ladder circuits with ``I_L + I_e``
-        and ``R_a`` in place of ``I_L`` and ``R_ec``, the same coil-current law).  The
-        vehicle runs turn it on.
+        and ``R_a`` in place of ``I_L`` and ``R_ec``, the same coil-current law; in
+        eddy-network circuits with ``I_L + sum_k I_k`` and ``R_0``).  The vehicle runs
+        turn it on.
     motion_eddy : bool
         ``False`` (default): members given as maps follow eq. 8; ``True``: they carry the
         shielded-gap ladder (as ``CurrentModel(maps, motion_eddy=True)``; a member given
@@ -374,7 +377,10 @@ class MagnetBank:
         its own), ``m`` eddy states ``I_k`` per circuit (:attr:`n_eddy_states`, the
         bank-wide maximum; absent branches stay 0).  Not with ``motion_eddy=True`` (two
         different extensions for members given as maps; members given as
-        ``CurrentModel`` may mix) and not with ``freewheel=True`` (docs/bank.md).
+        ``CurrentModel`` may mix).  With ``freewheel=True`` the diodes act on the terminal
+        current ``I_L + sum_k I_k`` (:func:`~maglevkit.reduced.current.
+        eddy_network_freewheel_voltage`); a network whose fitted ``R_0`` is inf is then
+        refused (docs/bank.md, "Eddy-network members").
 
     Examples
     --------
@@ -461,13 +467,13 @@ class MagnetBank:
         # branches are switched off per circuit)
         self._mixed_modes = any(m.network is not None and m.eddy_states < self.n_eddy_states
                                 for m in self._members)
-        networks = [m.name for m in self._members if m.network is not None]
-        if networks and self.freewheel:
-            raise InputError(f"freewheel=True with eddy-network members {networks} "
-                             "(eddy_modes > 0): the diode law is not carried for the eddy "
-                             "network (with R_0 = inf, no current jump, blocking the coil "
-                             "current is a constraint, not a clamp; docs/bank.md); use "
-                             "freewheel=False or members without eddy_modes")
+        if self.freewheel:
+            # the diodes on eddy-network circuits need a finite fitted R_0
+            # (eddy_network_freewheel_voltage)
+            for m in self._members:
+                if m.network is not None:
+                    check_network_freewheel(m.network["r_0"], m.circuits,
+                                            f"member {m.name!r}: ")
         diodes = [m.name for m, (_, model) in zip(self._members, pairs, strict=True)
                   if isinstance(model, CurrentModel) and model.freewheel]
         if diodes and not self.freewheel:
@@ -787,10 +793,11 @@ class MagnetBank:
         """``(dI_L/dt, dI_1/dt, ..., dI_ne/dt)`` of one circuit of a bank with eddy-network
         members: the eddy network (:func:`eddy_network_rhs`, its first ``m`` states; the
         others' rates 0 where the circuit has fewer branches) where row ``motion_eddy`` is
-        3, the ladders and eq. 8 elsewhere (their unused states' rates 0).  No diodes
-        (refused with eddy-network members)."""
+        3, the ladders and eq. 8 elsewhere (their unused states' rates 0).  Behind the
+        chopper's diodes (``freewheel``) every law sees :meth:`_network_voltage`."""
         ne = self.n_eddy_states
         r_el, a = p[7], p[8]
+        u = self._network_voltage(i, e, u, p)
         me, r_2, l_u, beta = p[_N_PAR], p[_N_PAR + 1], p[_N_PAR + 2], p[_N_PAR + 3]
         zeros = (0.0,) * ne
         laws: dict[int, tuple[Any, ...]] = {}
@@ -816,6 +823,14 @@ class MagnetBank:
         laws[3] = (d_il, *d_k)
         return self._select(me, laws)
 
+    def _network_voltage(self, i: Any, e: tuple[Any, ...], u: Any, p: Any) -> Any:
+        """The voltage a circuit of a bank with eddy-network members applies: ``U`` as
+        given, or behind the chopper's diodes (``freewheel``) eq. 8's diode law of the
+        terminal current ``I_L + sum_k e_k`` (:func:`eddy_network_freewheel_voltage`).  The
+        same expression as the ladders' (:meth:`_eddy_voltage`) and eq. 8's in their
+        circuits, whose unused eddy states hold exact zeros."""
+        return eddy_network_freewheel_voltage(i, e, u, p[7], p[8]) if self.freewheel else u
+
     def _terminal_current(self, i: Any, e: tuple[Any, ...]) -> Any:
         """The current through ``R_a``'s node, ``I_L + I_e`` (``I_u = I_L + I_e1 + I_e2``
         with three states; ``I_L + sum_k I_k`` of the eddy network), whose coil current
@@ -839,11 +854,11 @@ class MagnetBank:
         (:func:`eddy_network_coil_current` in eddy-network circuits, selected per circuit
         as the law)."""
         if 3 in self._laws:
-            laws: dict[int, tuple[Any, ...]] = {3: (eddy_network_coil_current(i, e, u, p[7],
+            u_eff = self._network_voltage(i, e, u, p)
+            laws: dict[int, tuple[Any, ...]] = {3: (eddy_network_coil_current(i, e, u_eff, p[7],
                                                                                 p[8]),)}
             if set(self._laws) - {3}:
-                laws[0] = (eq8_coil_current(self._terminal_current(i, e),
-                                            self._eddy_voltage(i, e, u, p), p[7], p[8]),)
+                laws[0] = (eq8_coil_current(self._terminal_current(i, e), u_eff, p[7], p[8]),)
             return self._select(p[_N_PAR], laws)[0]
         return eq8_coil_current(self._terminal_current(i, e), self._eddy_voltage(i, e, u, p),
                                 p[7], p[8])

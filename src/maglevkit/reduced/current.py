@@ -70,9 +70,9 @@ if TYPE_CHECKING:
     from ..reduction.maps import CharacteristicMaps
 
 __all__ = ["CurrentModel", "CurrentModelLinearization", "CurrentModelState", "CurrentOutputs",
-           "ReducedSimulation", "eddy_network_coil_current", "eddy_network_parameters",
-           "eddy_network_rhs", "eq8_coil_current", "eq8_eddy_branch_rhs", "eq8_freewheel_voltage",
-           "eq8_rhs",
+           "ReducedSimulation", "check_network_freewheel", "eddy_network_coil_current",
+           "eddy_network_freewheel_voltage", "eddy_network_parameters", "eddy_network_rhs",
+           "eq8_coil_current", "eq8_eddy_branch_rhs", "eq8_freewheel_voltage", "eq8_rhs",
            "eq8_shielded_gap_rhs", "shielded_gap_force_current", "shielded_gap_freewheel_voltage"]
 
 
@@ -315,7 +315,9 @@ class CurrentModel:
         coil current; the same law as ``MagnetBank(freewheel=True)``).  With
         ``motion_eddy`` the diodes act on the ladder's coil current
         ``(U/R_a + I_L + I_e)/a`` (:func:`shielded_gap_freewheel_voltage`, the bank's law).
-        Not with ``eddy_modes > 0`` (the eddy network's coil current has other branches).
+        With ``eddy_modes > 0`` on the network's terminal current ``I_L + sum_k I_k``
+        (:func:`eddy_network_freewheel_voltage`, the bank's law); a network whose fitted
+        ``R_0`` is inf is refused (:func:`check_network_freewheel`).
     jit : bool
         Compile the B-spline RK4 interval (``lookup="bspline"``) to machine code with
         CasADi's JIT (needs a C compiler on the ``PATH``; ~0.3 s once per sub-step count).
@@ -405,10 +407,6 @@ class CurrentModel:
         #: whether the shielded-gap ladder replaces eq. 8 (:mod:`~maglevkit.reduction.motion_eddy`)
         self.motion_eddy = bool(motion_eddy)
         self.freewheel = flag(freewheel, "freewheel")
-        if self.freewheel and m:
-            raise InputError(f"freewheel=True with eddy_modes={m}: the diode law is eq. 8's, "
-                             "and the eddy network's coil current has other branches: leave "
-                             "freewheel out (or use plain eq. 8)")
         if isinstance(eddy_branches, bool) or eddy_branches not in (1, 2):
             raise InputError(f"eddy_branches = {eddy_branches!r}; use 1 (the two-state ladder) "
                              "or 2 (the three-state ladder), with motion_eddy=True")
@@ -444,6 +442,8 @@ class CurrentModel:
                                  "R_ec; with eddy_modes > 0 the eddy network's R_0 takes its "
                                  "place: leave eddy_resistance out")
             net, net_step = eddy_network_parameters(maps, m, r_el)
+            if self.freewheel:
+                check_network_freewheel(net["r_0"], core.circuit_names, f"eddy_modes={m}: ")
             r_ec, r_k, l_k, l_ref = net["r_0"], net["r_k"], net["l_k"], net["l_ref"]
         else:
             r_ec = core.eddy_resistance_ohm
@@ -539,11 +539,15 @@ class CurrentModel:
                 # the eddy network (eddy_network_rhs, eddy_network_coil_current: the law
                 # the bank's kernel evaluates too)
                 ik = [em[j * m + k] for k in range(m)]
-                d_il, d_ik = eddy_network_rhs(xm[j], ik, Um[j], sdm[j], lt, dl, r_el[j], a[j],
+                # behind the chopper's diodes with freewheel: eq. 8's diode law of the
+                # terminal current I_L + sum_k I_k (eddy_network_freewheel_voltage)
+                u_j = (eddy_network_freewheel_voltage(xm[j], ik, Um[j], r_el[j], a[j])
+                       if self.freewheel else Um[j])
+                d_il, d_ik = eddy_network_rhs(xm[j], ik, u_j, sdm[j], lt, dl, r_el[j], a[j],
                                               r_k[j], l_k[j], l_ref[j])
                 mx_rhs.append(d_il)
                 eddy_rhs.append(ca.vertcat(*d_ik))
-                coils.append(eddy_network_coil_current(xm[j], ik, Um[j], r_el[j], a[j]))
+                coils.append(eddy_network_coil_current(xm[j], ik, u_j, r_el[j], a[j]))
             else:
                 u_j = (eq8_freewheel_voltage(xm[j], Um[j], r_el[j], a[j]) if self.freewheel
                        else Um[j])
@@ -1918,6 +1922,68 @@ def eddy_network_parameters(maps: CharacteristicMaps, m: int, resistance_ohm: np
         rate = float(np.max((r_k + ((m + 1) * r_el / a)[:, None]) / (l_k * scale[:, None])))
         step = 1.5 / rate
     return {"r_0": r0, "a": a, "r_k": r_k, "l_k": l_k, "l_ref": l_ref}, step
+
+
+def eddy_network_freewheel_voltage(i_l: Any, i_k: Sequence[Any], u: Any, r_el: Any,
+                                   a: Any) -> Any:
+    """The eddy network's terminal voltage behind a two-quadrant chopper with freewheeling
+    diodes (``CurrentModel(maps, eddy_modes=m, freewheel=True)``, ``MagnetBank(...,
+    eddy_modes=m, freewheel=True)``; docs/bank.md, "Eddy-network members").
+
+    The network's coil current (:func:`eddy_network_coil_current`) is
+    ``I = (U - U_L)/R_el = (U/R_0 + I_L + sum_k I_k)/a`` with ``a = 1 + R_el/R_0``: eq. 8's
+    ``(U/R_ec + I_L)/a`` with the terminal current ``I_L + sum_k I_k`` in place of ``I_L``
+    and ``R_0`` in place of ``R_ec``.  So the diode law is :func:`eq8_freewheel_voltage` of
+    that sum, ``U_eff = max(U, -R_0 (I_L + sum_k I_k))``, exact for a finite ``R_0``.  With
+    ``R_0 = inf`` (``a = 1``) ``I = I_L + sum_k I_k`` does not depend on ``U`` and blocking
+    is a constraint on the states, not a clamp of ``U``: refused by
+    :func:`check_network_freewheel`.  The sum runs left to right, as the ladders' terminal
+    currents (unused branches of a bank hold exact zeros).
+
+    Parameters
+    ----------
+    i_l : float or CasADi
+        Inductor current ``I_L`` [A].
+    i_k : sequence of float or CasADi
+        Branch currents ``I_k`` [A].
+    u : float or CasADi
+        Commanded terminal voltage ``U`` [V].
+    r_el : float or CasADi
+        Coil resistance ``R_el`` [ohm].
+    a : float or CasADi
+        ``1 + R_el/R_0`` [-] (> 1: finite ``R_0``).
+
+    Returns
+    -------
+    CasADi expression (or float for float inputs)
+        The applied voltage ``U_eff`` [V].
+    """
+    total = i_l
+    for v in i_k:
+        total = total + v
+    return eq8_freewheel_voltage(total, u, r_el, a)
+
+
+def check_network_freewheel(r_0_ohm: Any, names: Sequence[str], what: str = "") -> None:
+    """Refuse freewheeling diodes on eddy-network circuits whose fitted ``R_0`` is infinite
+    (``names`` the circuits, ``what`` prefixes the message).
+
+    Raises
+    ------
+    InputError
+        Naming the circuits: with ``R_0 = inf`` the coil current ``I_L + sum_k I_k`` does not
+        depend on ``U``, so a blocking diode is a constraint on the states (the branches keep
+        relaxing while their sum is held at 0), which :func:`eddy_network_freewheel_voltage`
+        cannot express.
+    """
+    r0 = np.atleast_1d(np.asarray(r_0_ohm, dtype=float))
+    bad = [str(n) for n, r in zip(names, r0, strict=True) if not np.isfinite(r)]
+    if bad:
+        raise InputError(f"{what}freewheel=True on eddy-network circuits {bad} whose fitted "
+                         "R_0 is inf (no current jump): there the coil current I_L + sum I_k "
+                         "does not depend on U and a blocking diode is a constraint on the "
+                         "states, not a clamp of U (docs/bank.md); allowed: circuits with a "
+                         "finite R_0, or freewheel=False")
 
 
 def eddy_network_rhs(i_l: Any, i_k: Sequence[Any], u: Any, gap_rate: Any, ltilde: Any,

@@ -59,6 +59,7 @@ from .simulation import (
     check_eddy_branches,
     check_motion_eddy_options,
     check_run_speed,
+    check_vehicle_eddy_modes,
     failure_times,
     interrupted_report_lines,
     limit_crossing,
@@ -508,6 +509,13 @@ class CrossSectionModel:
         (``I_e1``, ``I_e2`` per circuit; the eddy-current records then have an
         ``eddy_state`` dimension; docs/equations.md section 8, "Three states"), only with
         ``motion_eddy``.
+    eddy_modes : {0, 1, 2, 3}, default 0
+        Fly every reduced magnet with the maps' fitted eddy network of that many branches
+        (:class:`MagnetBank` option ``eddy_modes``; docs/bank.md, "Eddy-network members"):
+        the branch currents ``I_k`` in both loops, recorded as ``levitation_eddy_current``
+        and ``guidance_eddy_current`` (an ``eddy_state`` dimension for more than one
+        branch); the chopper floor ``U >= -R_0 (I_L + sum_k I_k)``.  Not with
+        ``motion_eddy``; reduced magnets whose maps carry the network only.
 
     Raises
     ------
@@ -527,7 +535,8 @@ class CrossSectionModel:
                  bandwidth_Hz: float = 5.0, damping: float = 0.7,
                  flux_bandwidth_Hz: float = 30.0, voltage_limit_V: float = 440.0,
                  touchdown_gap_m: float = 0.002, landing_gap_m: float = 0.020,
-                 motion_eddy: bool | str = False, eddy_branches: int = 1) -> None:
+                 motion_eddy: bool | str = False, eddy_branches: int = 1,
+                 eddy_modes: int = 0) -> None:
         from ..control import design_gap_controller
         from ..magnets import load_magnet
         from ..models.flux import FluxModel
@@ -579,9 +588,13 @@ class CrossSectionModel:
         """Shielded sections of the ladder: 1 (two-state) or 2 (three-state)."""
         if motion_eddy is not False:
             check_motion_eddy_options(magnets=magnets, eddy_resistance_scale=1.0)
+        self.eddy_modes = check_vehicle_eddy_modes(eddy_modes,
+                                                   motion_eddy=motion_eddy is not False,
+                                                   magnets=magnets)
+        """Branches of the eddy network the reduced magnets fly with (0: eq. 8)."""
         self.bank = vehicle_bank(
             MagnetBank, members, motion_eddy=motion_eddy is not False,
-            eddy_branches=self.eddy_branches,
+            eddy_branches=self.eddy_branches, eddy_modes=self.eddy_modes,
             files={"levitation": levitation_magnet, "guidance": guidance_magnet},
             kind_of={n: n.split("_")[0] for n in self.member_names},
             ladder_kinds=("levitation",) if motion_eddy == "levitation" else None,
@@ -920,8 +933,8 @@ class CrossSectionModel:
         rec_acc = np.empty((n + 1, nq))
         # the ladder's shielding eddy currents I_e at every step start (motion_eddy),
         # (n_t, n_c) or, three-state, (n_t, n_c, 2) as the bank's state
-        rec_ie = (np.zeros((n + 1, nc) + ((2,) if bank.n_eddy_states == 2 else ()))
-                  if bank.motion_eddy else None)
+        ne = bank.n_eddy_states
+        rec_ie = (np.zeros((n + 1, nc) + ((ne,) if ne > 1 else ())) if ne else None)
         gap_circ = np.repeat(np.arange(4), 2)
         x_circ = np.zeros(nc)
         force = stepper.member_force_N.copy()
@@ -1034,7 +1047,7 @@ class CrossSectionModel:
         # the ladder's I_e last in state and record (motion_eddy; three-state: 2 n_c,
         # every circuit's I_e1, then I_e2); else the layout before
         ne = bank.n_eddy_states
-        eddy = [("I_e", nc * ne)] if bank.motion_eddy else []
+        eddy = [("I_e", nc * ne)] if ne else []
         st = pack_slices([("x", 2 * nq), ("I_L", nc), ("psi_hat", nc), ("integral", nc),
                           ("current", nc), ("force", nc), *eddy])
         pi = pack_slices([("r", nc), ("r_x", nc), ("Q_t", nq), ("t", 1)])
@@ -1207,7 +1220,8 @@ class CrossSectionModel:
         return (rec[:m, g_sl][:, ::2], frc, rec[:m, rc["current"]], u, rx, acc, touchdown,
                 last, outcome, None if "I_e" not in rc else
                 rec[:m, rc["I_e"]].reshape(m, -1, bank.n_circuits).transpose(0, 2, 1)
-                .reshape((m, bank.n_circuits) + ((2,) if bank.n_eddy_states == 2 else ())))
+                .reshape((m, bank.n_circuits) + ((bank.n_eddy_states,)
+                                                 if bank.n_eddy_states > 1 else ())))
 
     def _result(self, v: float, dt: float, t: np.ndarray, rec_gap: np.ndarray,
                 rec_force: np.ndarray, rec_cur: np.ndarray, rec_u: np.ndarray,
@@ -1249,14 +1263,17 @@ class CrossSectionModel:
         if rec_ie is not None:
             three = rec_ie.ndim == 3
             if three:
-                ds = ds.assign_coords(eddy_state=["I_e1", "I_e2"])
+                ds = ds.assign_coords(eddy_state=[f"I_e{k + 1}"
+                                                  for k in range(rec_ie.shape[2])])
             for j, kind in ((slice(0, 4), "levitation"), (slice(4, None), "guidance")):
                 put(f"{kind}_eddy_current",
                     ("time", f"{kind}_circuit", *(("eddy_state",) if three else ())),
                     rec_ie[:m, j], "A",
-                    "shielding eddy current I_e of the shielded-gap ladder (motion_eddy)"
-                    + ("; eddy_state I_e1 (inner shield R_3), I_e2 (outer shield R_2)"
-                       if three else ""))
+                    (f"branch currents I_k of the eddy network (eddy_modes = "
+                     f"{self.eddy_modes})" if self.eddy_modes else
+                     "shielding eddy current I_e of the shielded-gap ladder (motion_eddy)"
+                     + ("; eddy_state I_e1 (inner shield R_3), I_e2 (outer shield R_2)"
+                        if three else "")))
         put("voltage", ("time", "circuit"), rec_u[:m], "V", "circuit voltage held over the step")
         for i, dof in enumerate(s.dof_names):
             body, kind = dof.split(".")
@@ -1277,7 +1294,9 @@ class CrossSectionModel:
                          "magnets": self.magnet_kind + (
                              f", shielded-gap ladder (motion_eddy = {self.motion_eddy!r}"
                              + (", three-state)" if self.eddy_branches == 2 else ")")
-                             if self.bank.motion_eddy else ""),
+                             if self.bank.motion_eddy else
+                             f", eddy network (eddy_modes = {self.eddy_modes})"
+                             if self.eddy_modes else ""),
                          "guidance_bias_current_A": self.bias_A})
         min_gap = {"levitation": float(cg[:, :4].min()), "guidance": float(cg[:, 4:].min())}
         if touchdown is not None and touchdown[3] == "closed":   # a crossing within a step

@@ -492,6 +492,16 @@ class VehicleModel:
         the three-state ladder (``I_e1``, ``I_e2`` per circuit, the dataset's
         ``eddy_current`` with an ``eddy_state`` dimension), only with ``motion_eddy``.
         None (default): the vehicle file's ``[magnets] eddy_branches`` (1 unless set).
+    eddy_modes : {0, 1, 2, 3}, optional
+        Fly the reduced magnets with the maps' fitted eddy network of that many branches
+        (:class:`MagnetBank` option ``eddy_modes``; docs/bank.md, "Eddy-network members"):
+        ``eddy_modes`` branch currents ``I_k`` per circuit, carried by both loops, the
+        NMPCs' prediction models and the record (``eddy_current``, with an ``eddy_state``
+        dimension for more than one branch); the chopper's diodes act on ``I_L + sum_k
+        I_k`` (needs a finite fitted ``R_0``).  Not with ``motion_eddy``; needs reduced
+        magnets whose maps carry the network (``build_maps``) and
+        ``eddy_resistance_scale = 1``.  None (default): the vehicle file's ``[magnets]
+        eddy_modes`` (0 unless set: eq. 8).
     """
 
     def __init__(self, train: TrainData, *, guideway: Any = None, rigid: bool = False,
@@ -499,7 +509,8 @@ class VehicleModel:
                  resistance_scale: float = 1.0, eddy_resistance_scale: float = 1.0,
                  freewheel: bool = True, controller: Any = "cascade",
                  controller_sample_time_s: float | None = None, mpc_options: Any = None,
-                 motion_eddy: bool | None = None, eddy_branches: int | None = None) -> None:
+                 motion_eddy: bool | None = None, eddy_branches: int | None = None,
+                 eddy_modes: int | None = None) -> None:
         from ..magnets import load_magnet
         from ..models.flux import FluxModel
         from ..reduced.bank import MagnetBank
@@ -525,6 +536,12 @@ class VehicleModel:
         if self.motion_eddy:
             check_motion_eddy_options(magnets=magnets,
                                       eddy_resistance_scale=eddy_resistance_scale)
+        self.eddy_modes = check_vehicle_eddy_modes(
+            train.eddy_modes if eddy_modes is None else eddy_modes,
+            motion_eddy=self.motion_eddy, magnets=magnets,
+            eddy_resistance_scale=eddy_resistance_scale,
+            where="" if eddy_modes is not None else " (the vehicle file's [magnets])")
+        """Branches of the eddy network the reduced magnets fly with (0: eq. 8)."""
         kinds = {"standard": load_magnet(train.standard_magnet), "bow": load_magnet(train.bow_magnet)}
         self.magnets = kinds
         for kind, mag in kinds.items():
@@ -557,7 +574,7 @@ class VehicleModel:
         for s in self.slots:
             members.append((s.name, FluxModel(kinds[s.kind]) if self.fine else self.maps[s.kind]))
         self.bank = vehicle_bank(MagnetBank, members, motion_eddy=self.motion_eddy,
-                                 eddy_branches=self.eddy_branches,
+                                 eddy_branches=self.eddy_branches, eddy_modes=self.eddy_modes,
                                  files={"standard": train.standard_magnet,
                                         "bow": train.bow_magnet},
                                  kind_of={s.name: s.kind for s in self.slots},
@@ -630,8 +647,9 @@ class VehicleModel:
         self.trim_force_N = circ_force          # per circuit of one side
         self.trim_current_A = self._trim_currents(circ_force)
         self._design_controllers()
-        if bank.motion_eddy:
-            # the ladder's chopper floor U >= -R_a (I_L + I_e): the bank's R_a
+        if bank.n_eddy_states:
+            # the ladder's chopper floor U >= -R_a (I_L + I_e): the bank's R_a (the eddy
+            # network's: U >= -R_0 (I_L + sum_k I_k), the bank's R_0)
             self.eddy_resistance_ohm = np.array(bank.eddy_resistance_ohm, dtype=float)
         self._step_functions: dict[Any, Any] = {}
         self._measure_functions: dict[Any, Any] = {}
@@ -864,12 +882,15 @@ class VehicleModel:
                 self.train.sides * per_frame[fr])
             mass = float(dyn.mean())
             plant: Any = one
-            if self.bank.motion_eddy:   # the prediction model with the plant's ladder (I_e
-                # in its state after [I_L, s, s'], estimated by its EKF from the current)
+            if self.bank.n_eddy_states:   # the prediction model with the plant's ladder
+                # or eddy network (I_e in its state after [I_L, s, s'], estimated by its
+                # EKF from the current)
                 from ..reduced.bank import MagnetBank
 
-                plant = MagnetBank({"magnet": one}, compiled="never", motion_eddy=True,
-                                   eddy_branches=self.eddy_branches)
+                plant = (MagnetBank({"magnet": one}, compiled="never",
+                                    eddy_modes=self.eddy_modes) if self.eddy_modes else
+                         MagnetBank({"magnet": one}, compiled="never", motion_eddy=True,
+                                    eddy_branches=self.eddy_branches))
             model = MagnetHeaveModel(plant, mass_kg=mass,
                                      gravity=float(self.trim_force_N[same].mean()) / mass,
                                      disturbances=dist, compiled=self.bank.compiled_mode)
@@ -1046,7 +1067,7 @@ class VehicleModel:
         else:
             bstate = bank.initial_state(gaps_m=gaps_p, currents_A=self.trim_current_A)
             circ_avg = None
-        if self.fine or bank.motion_eddy:
+        if self.fine or bank.n_eddy_states:
             out0 = bank.outputs(bstate)
             force_c = out0.circuit_force_N.copy()
             pf0 = out0.pole_force_N if self.fine else force_c
@@ -1072,8 +1093,8 @@ class VehicleModel:
         rec_fp = np.empty((n_steps + 1, npt))
         # the ladder's shielding eddy currents I_e at every step start (motion_eddy),
         # (n_t, n_c) or, three-state, (n_t, n_c, 2) as the bank's state
-        rec_ie = (np.zeros((n_steps + 1, nc) + ((2,) if bank.n_eddy_states == 2 else ()))
-                  if bank.motion_eddy else None)
+        ne = bank.n_eddy_states
+        rec_ie = (np.zeros((n_steps + 1, nc) + ((ne,) if ne > 1 else ())) if ne else None)
         timing = dict.fromkeys(("magnets", "mechanics", "guideway", "controllers", "other"), 0.0)
         ctl_times: list[float] = []
         ctl_cpu: list[float] = []
@@ -1252,10 +1273,15 @@ class VehicleModel:
                 **({} if rec_ie is None else {"eddy_current": (
                     ("time", "circuit", *(() if rec_ie.ndim == 2 else ("eddy_state",))),
                     rec_ie[sl], {
-                        "units": "A", "long_name": "shielding eddy current I_e of the "
-                        "shielded-gap ladder (one side's circuit; motion_eddy)" + (
-                            "" if rec_ie.ndim == 2 else "; eddy_state I_e1 (inner "
-                            "shield R_3), I_e2 (outer shield R_2)")})}),
+                        "units": "A", "long_name": (
+                            "branch currents I_k of the eddy network (one side's circuit; "
+                            f"eddy_modes = {self.eddy_modes}"
+                            + (")" if rec_ie.ndim == 2 else "; eddy_state I_k)")
+                            if self.eddy_modes else
+                            "shielding eddy current I_e of the shielded-gap ladder (one "
+                            "side's circuit; motion_eddy)" + (
+                                "" if rec_ie.ndim == 2 else "; eddy_state I_e1 (inner "
+                                "shield R_3), I_e2 (outer shield R_2)"))})}),
                 "guideway_deflection": (("time", "circuit"), rec["deflection"][sl],
                                         {"units": "m", "long_name": "guideway deflection under "
                                                                     "the circuit (down positive)"}),
@@ -1278,7 +1304,7 @@ class VehicleModel:
             },
             coords={"time": ("time", times, {"units": "s"}),
                     "circuit": list(names),
-                    **({"eddy_state": ["I_e1", "I_e2"]}
+                    **({"eddy_state": [f"I_e{k + 1}" for k in range(rec_ie.shape[2])]}
                        if rec_ie is not None and rec_ie.ndim == 3 else {}),
                     "magnet_of_circuit": ("circuit", member_of),
                     "circuit_position": ("circuit", self.circuit_xi_m, {"units": "m",
@@ -1296,7 +1322,9 @@ class VehicleModel:
                               "reduced (coarse, per circuit)" + (
                                   ", shielded-gap ladder (motion_eddy" + (
                                       ", three-state)" if bank.n_eddy_states == 2 else ")")
-                                  if bank.motion_eddy else ""),
+                                  if bank.motion_eddy else
+                                  f", eddy network (eddy_modes = {self.eddy_modes})"
+                                  if self.eddy_modes else ""),
                    "controller": self.controller_kind + (
                        "" if self.controller_sample_time_s is None else
                        f" (sample time {self.controller_sample_time_s:g} s)"),
@@ -1382,7 +1410,7 @@ class VehicleModel:
         return build_vehicle_step(bank_step=bank_step, sides=float(self.train.sides),
                                   velocity_blend=self.train.control_velocity_blend,
                                   point_offsets_m=self.point_xi_m,
-                                  motion_eddy=self.bank.motion_eddy,
+                                  motion_eddy=self.bank.n_eddy_states > 0,
                                   eddy_states=max(self.bank.n_eddy_states, 1),
                                   **self._part_constants(dt), **kw)
 
@@ -1808,6 +1836,31 @@ def check_motion_eddy_options(*, magnets: str, eddy_resistance_scale: Any) -> No
                          "motion_eddy=False")
 
 
+def check_vehicle_eddy_modes(value: Any, *, motion_eddy: bool, magnets: str = "reduced",
+                             eddy_resistance_scale: Any = 1.0, where: str = "") -> int:
+    """``eddy_modes`` of a vehicle checked: 0 (eq. 8) or 1, 2, 3 (branches of the maps'
+    fitted eddy network), not with ``motion_eddy``, reduced magnets and
+    ``eddy_resistance_scale = 1`` only; an :class:`InputError` naming the option, the value
+    (``where``: where it came from) and what is allowed otherwise.  Returns it as an int."""
+    if isinstance(value, (bool, np.bool_)) or value not in (0, 1, 2, 3):
+        raise InputError(f"eddy_modes = {value!r}{where}; use 0 (eq. 8) or 1, 2, 3 (branches "
+                         "of the maps' fitted eddy network)")
+    value = int(value)
+    if value and motion_eddy:
+        raise InputError(f"eddy_modes = {value}{where} with motion_eddy: two eddy extensions "
+                         "of eq. 8 (the eddy network, the shielded-gap ladder); use one of "
+                         "them")
+    if value and magnets != "reduced":
+        raise InputError(f"eddy_modes = {value}{where} with magnets = {magnets!r}: the eddy "
+                         "network is a reduced model's (the detailed magnets carry their "
+                         "eddy currents themselves); use magnets='reduced' or eddy_modes=0")
+    if value and eddy_resistance_scale != 1.0:
+        raise InputError(f"eddy_modes = {value}{where} with eddy_resistance_scale = "
+                         f"{eddy_resistance_scale!r}: the factor scales eq. 8's R_ec, not the "
+                         "network's R_0 and R_k; use eddy_resistance_scale=1 or eddy_modes=0")
+    return value
+
+
 def check_eddy_branches(value: Any, *, motion_eddy: bool, where: str = "") -> int:
     """``eddy_branches`` of a vehicle checked: 1 (the two-state shielded-gap ladder) or 2
     (the three-state ladder, only with ``motion_eddy``); an :class:`InputError` naming
@@ -1836,11 +1889,23 @@ LADDER_FIT_WARNING = 0.2
 def vehicle_bank(bank_type: Any, members: list[tuple[str, Any]], *, motion_eddy: bool,
                  files: dict[str, str], kind_of: dict[str, str], eddy_branches: int = 1,
                  ladder_kinds: Any = None, option: str = "motion_eddy = True ([magnets] "
-                 "motion_eddy of the vehicle file, or the option)", **options: Any) -> Any:
+                 "motion_eddy of the vehicle file, or the option)", eddy_modes: int = 0,
+                 **options: Any) -> Any:
     """The vehicle's magnet bank; with ``motion_eddy`` its ladder members (those of
     ``ladder_kinds`` only, if given; ``eddy_branches`` 2: the three-state ladder), a
     member whose maps have no ladder refused naming the option and the magnet file, a
-    poorly fitted ladder flown with a warning."""
+    poorly fitted ladder flown with a warning; with ``eddy_modes`` every member with the
+    maps' eddy network (maps without it, or diodes on a network with ``R_0 = inf``,
+    refused naming the option and the magnet file)."""
+    if eddy_modes:
+        try:
+            return bank_type(members, eddy_modes=eddy_modes, **options)
+        except InputError as exc:
+            text = str(exc)
+            kind = kind_of.get(text.split("'", 2)[1]) if text.startswith("member '") else None
+            where = f"the {kind} magnet {files[kind]!r}" if kind in files else "a magnet"
+            raise InputError(f"eddy_modes = {eddy_modes}: {where} cannot fly with the eddy "
+                             f"network: {text}") from None
     if not motion_eddy:
         return bank_type(members, **options)
     from ..reduced.current import CurrentModel

@@ -341,17 +341,22 @@ def bank_step_outputs(bank_step: Any, *, il: Any, ie: Any, gaps: Any, voltages: 
 def terminal_current(il: Any, ie: Any, n_circuits: int) -> Any:
     """The ladder's terminal current ``I_L + I_e`` (two-state, ``ie`` of ``n_circuits``
     entries) or ``I_L + I_e1 + I_e2`` (three-state, ``ie`` of ``2 n_circuits``, every
-    circuit's ``I_e1`` first, or a NumPy ``(n_circuits, 2)`` array as the bank's state):
+    circuit's ``I_e1`` first, or a NumPy ``(n_circuits, 2)`` array as the bank's state);
+    the eddy network's ``I_L + sum_k I_k`` alike (``ie`` of ``n_e n_circuits`` or
+    ``(n_circuits, n_e)``):
     the chopper's current, whose floor is ``U >= -R_a`` times it (the coil current
     ``(U/R_a + I_u)/a`` stays >= 0); ``il`` itself when ``ie`` is None (eq. 8).  CasADi
     or NumPy [A], summed in the bank kernel's order."""
     if ie is None:
         return il
-    if len(ie.shape) == 2 and ie.shape[1] == 2:     # the bank's (n_c, 2) state
-        return il + ie[:, 0] + ie[:, 1]
-    if ie.shape[0] == n_circuits:
-        return il + ie
-    return il + ie[:n_circuits] + ie[n_circuits:]
+    out = il
+    if len(ie.shape) == 2 and ie.shape[1] > 1:      # the bank's (n_c, n_e) state
+        for k in range(ie.shape[1]):
+            out = out + ie[:, k]
+        return out
+    for k in range(ie.shape[0] // n_circuits):      # column-major: I_e1 block, I_e2, ...
+        out = out + ie[k * n_circuits:(k + 1) * n_circuits]
+    return out
 
 
 def build_vehicle_parts(*, dt: float, nominal_gap_m: float, span_length_m: float,

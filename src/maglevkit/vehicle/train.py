@@ -11,7 +11,8 @@ guideway files (see ``maglevkit/data/vehicle/tr09.toml``, bundled as ``"tr09"``)
     [joint]      stiffness, damping
     [control]    bandwidth, damping, flux_bandwidth, voltage_limit, velocity_blend (optional)
     [magnets]    motion_eddy (optional table and key, default false), eddy_branches
-                 (optional, default 1; 2: the three-state ladder)
+                 (optional, default 1; 2: the three-state ladder), eddy_modes (optional,
+                 default 0; 1-3: the maps' fitted eddy network, not with motion_eddy)
 
 Unknown or missing keys and bad values raise :class:`~maglevkit.errors.ParameterFileError`
 naming the key.  Train coordinate ``xi`` [m]: distance behind the train's nose (positive
@@ -83,6 +84,7 @@ VEHICLE_SCHEMA: dict[str, dict[str, Schema]] = {
     "magnets": {
         "motion_eddy": Schema(bool, required=False, default=False),
         "eddy_branches": Schema(int, required=False, default=1, unit="-"),
+        "eddy_modes": Schema(int, required=False, default=0, unit="-"),
     },
 }
 
@@ -182,6 +184,10 @@ class TrainData:
     eddy_branches : int
         Shielded sections of that ladder (key ``eddy_branches`` of ``[magnets]``, default
         1: the two-state ladder; 2: the three-state ladder, only with ``motion_eddy``).
+    eddy_modes : int
+        Branches of the maps' fitted eddy network the reduced magnets fly with (key
+        ``eddy_modes`` of ``[magnets]``, default 0: none; 1-3, not with ``motion_eddy``;
+        :class:`~maglevkit.vehicle.VehicleModel` option ``eddy_modes``).
     provenance : dict
         ``"table.key" -> tag/source``.
     source : str
@@ -221,6 +227,7 @@ class TrainData:
     control_velocity_blend: float = 0.0
     motion_eddy: bool = False
     eddy_branches: int = 1
+    eddy_modes: int = 0
 
     # ------------------------------------------------------------------ derived layout
     @property
@@ -371,6 +378,11 @@ def parse_vehicle(parameters: Mapping[str, Any], source: str = "parameters") -> 
     _check(mg["eddy_branches"] == 1 or mg["motion_eddy"],
            f"[magnets] eddy_branches = {mg['eddy_branches']} needs motion_eddy = true (the "
            "shielded-gap ladder's sections)", source)
+    _check(mg["eddy_modes"] in (0, 1, 2, 3), f"[magnets] eddy_modes = {mg['eddy_modes']}: "
+           "use 0 (eq. 8) or 1, 2, 3 (branches of the maps' fitted eddy network)", source)
+    _check(mg["eddy_modes"] == 0 or not mg["motion_eddy"],
+           f"[magnets] eddy_modes = {mg['eddy_modes']} with motion_eddy = true: two eddy "
+           "extensions of eq. 8; use one of them", source)
     prov = parse_provenance(parameters, VEHICLE_SCHEMA, source)
     cb, fr, se, jo = t["car_body"], t["frame"], t["secondary"], t["joint"]
     return TrainData(
@@ -389,6 +401,7 @@ def parse_vehicle(parameters: Mapping[str, Any], source: str = "parameters") -> 
         flux_bandwidth_Hz=c["flux_bandwidth"], voltage_limit_V=c["voltage_limit"],
         control_velocity_blend=c["velocity_blend"],
         motion_eddy=bool(mg["motion_eddy"]), eddy_branches=int(mg["eddy_branches"]),
+        eddy_modes=int(mg["eddy_modes"]),
         provenance=prov, source=source)
 
 
