@@ -31,3 +31,20 @@ def test_numpy_and_casadi_agree_and_keep_nan() -> None:
     f = ca.Function("f", [us, ils], [chopper_floor(us, ils, ca.DM(r_ec))])
     np.testing.assert_array_equal(np.asarray(f(u, i_l)).ravel(), chopper_floor(u, i_l, r_ec))
     assert np.isnan(chopper_floor(u, i_l, r_ec)[2])
+
+
+def test_a_circuit_without_eddy_path_at_zero_current_has_no_bound_and_no_warning() -> None:
+    """R_ec = inf (no eddy path) at I_L = 0: the bound -R_ec I_L is inf * 0, undefined; the
+    command passes unchanged, in NumPy without a RuntimeWarning (pytest turns none into an
+    error here: the filter below), and CasADi gives the same."""
+    import warnings
+
+    u = np.array([-5.0, 3.0])
+    i_l, r_ec = np.array([0.0, 1.0]), np.array([np.inf, np.inf])
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        out = chopper_floor(u, i_l, r_ec)
+    np.testing.assert_array_equal(out, u)
+    us, ils = ca.SX.sym("u", 2), ca.SX.sym("i", 2)
+    f = ca.Function("f", [us, ils], [chopper_floor(us, ils, ca.DM(r_ec))])
+    np.testing.assert_array_equal(np.asarray(f(u, i_l)).ravel(), u)

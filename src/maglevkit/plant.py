@@ -150,7 +150,13 @@ def chopper_floor(u: Any, inductor_current_A: Any, eddy_resistance_ohm: Any) -> 
         ``max``), so that a NaN command stays NaN in NumPy and in CasADi alike and the
         bank names the same culprit on every path.
     """
-    low = -eddy_resistance_ohm * inductor_current_A
-    if isinstance(u, (ca.SX, ca.MX)) or isinstance(low, (ca.SX, ca.MX)):
+    # A circuit without an eddy path (R_ec = inf, as a cross-section's network members may
+    # have) at I_L = 0 gives the bound inf * 0 = NaN: no bound, the comparison keeps u
+    # (CasADi's if_else alike); NumPy's warning about that product is not the user's.
+    if isinstance(u, (ca.SX, ca.MX)) or isinstance(inductor_current_A, (ca.SX, ca.MX)) or \
+            isinstance(eddy_resistance_ohm, (ca.SX, ca.MX)):
+        low = -eddy_resistance_ohm * inductor_current_A
         return ca.if_else(u < low, low, u)
+    with np.errstate(invalid="ignore"):
+        low = -np.asarray(eddy_resistance_ohm) * inductor_current_A
     return np.where(u < low, low, u)
