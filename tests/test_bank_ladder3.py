@@ -22,9 +22,8 @@ from maglevkit.reduced.bank import MOTION_EDDY3_PARAMETERS, MOTION_EDDY_PARAMETE
 from maglevkit.reduced.current import motion_eddy3_parameters
 
 from .conftest import open_fmu
+from .test_bank_motion_eddy import gap_sine, u_maps_with_force_share
 
-GAPS = np.linspace(0.006, 0.014, 5)
-CURRENTS = np.linspace(0.0, 40.0, 9)
 DT = 2e-4          # 2 RK4 sub-steps of the u-magnet three-state ladder's ~1.5e-4 s limit
 # bicubic tables vs B-splines agree to ~4e-14 relative (docs/decisions.md, "The reduced
 # model's compiled tables"); 200 steps accumulate a few 1e-14 A on ~20 A (measured
@@ -39,18 +38,7 @@ GAMMA = -0.3
 
 @pytest.fixture(scope="module")
 def u_maps() -> mk.CharacteristicMaps:
-    maps = mk.build_maps(mk.load_magnet("u-magnet"), gaps_m=GAPS, currents_A=CURRENTS,
-                         progress=False)
-    return mk.CharacteristicMaps(maps.dataset.assign(
-        motion_eddy_force_share=("circuit", np.array([GAMMA]))))
-
-
-def _gap_sine(k: int, f_hz: float = 50.0) -> tuple[float, float]:
-    """Gap at the start of step ``k`` [m] and its secant rate over the step [m/s]."""
-    t0, t1 = k * DT, (k + 1) * DT
-    g0 = 0.010 + 0.001 * np.sin(2 * np.pi * f_hz * t0)
-    g1 = 0.010 + 0.001 * np.sin(2 * np.pi * f_hz * t1)
-    return g0, (g1 - g0) / DT
+    return u_maps_with_force_share(GAMMA)
 
 
 @pytest.mark.parametrize("compiled", ["never", "auto"])
@@ -70,7 +58,7 @@ def test_bank_of_one_three_state_member_equals_current_model(u_maps, compiled: s
     u = float(bank.resistance_ohm[0]) * 20.0
     ng = len(cm.gap_names)
     for k in range(200):
-        g0, gd = _gap_sine(k)
+        g0, gd = gap_sine(k, dt_s=DT)
         st, out = bank.step(st, DT, u, g0, gd)
         stepper.advance(u, g0, gd)
         cs, co = cm.step(cs, DT, u, np.full(ng, g0), np.full(ng, gd))
@@ -101,7 +89,7 @@ def test_compiled_kernels_equal_the_reference_path(u_maps) -> None:
     states = [b.initial_state(gaps_m=0.010, currents_A=[20.0, 25.0]) for b in banks]
     u = float(banks[0].resistance_ohm[0]) * np.array([20.0, 27.0])
     for k in range(100):
-        g0, gd = _gap_sine(k, 200.0)
+        g0, gd = gap_sine(k, 200.0, dt_s=DT)
         res = [b.step(s, DT, u, [g0, 0.011], [gd, -gd]) for b, s in zip(banks, states,
                                                                         strict=True)]
         states = [r[0] for r in res]
@@ -131,7 +119,7 @@ def test_mixed_bank_equals_its_members_on_their_own(u_maps, compiled: str) -> No
     sa = [b.initial_state(gaps_m=0.010, currents_A=20.0) for b in alone]
     u = float(bank.resistance_ohm[0]) * 21.0
     for k in range(100):
-        g0, gd = _gap_sine(k)
+        g0, gd = gap_sine(k, dt_s=DT)
         st, out = bank.step(st, DT, u, g0, gd)
         res = [b.step(s, DT, u, g0, gd) for b, s in zip(alone, sa, strict=True)]
         sa = [r[0] for r in res]
@@ -364,7 +352,7 @@ def test_general_path_and_failed_stepper_step(u_maps) -> None:
     u = float(bank.resistance_ohm[0]) * 20.0
     ng = bank.n_gaps
     for k in range(50):
-        g0, gd = _gap_sine(k)
+        g0, gd = gap_sine(k, dt_s=DT)
         st, out = bank.step(st, DT, u, np.full(ng, g0), np.full(ng, gd))
         cs, co = cm.step(cs, DT, u, np.full(ng, g0), np.full(ng, gd))
         assert np.max(np.abs(st.eddy_currents_A - cs.eddy_currents_A)) < TOL_A
@@ -373,7 +361,7 @@ def test_general_path_and_failed_stepper_step(u_maps) -> None:
     fast = MagnetBank({"m": cm}, compiled="never")
     stepper = fast.stepper(fast.initial_state(gaps_m=0.010, currents_A=20.0), DT)
     for k in range(20):
-        g0, gd = _gap_sine(k)
+        g0, gd = gap_sine(k, dt_s=DT)
         stepper.advance(u, g0, gd)
     before = stepper.state
     with pytest.raises(OutOfRangeError):

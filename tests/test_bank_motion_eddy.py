@@ -35,21 +35,28 @@ TOL_REL_F = 1e-12
 GAMMA = -0.3
 
 
-@pytest.fixture(scope="module")
-def u_maps() -> mk.CharacteristicMaps:
+def u_maps_with_force_share(gamma: float) -> mk.CharacteristicMaps:
+    """The u-magnet's maps on GAPS x CURRENTS with the ladder's force share set to
+    ``gamma`` (its own is 0, checked here)."""
     maps = mk.build_maps(mk.load_magnet("u-magnet"), gaps_m=GAPS, currents_A=CURRENTS,
                          progress=False)
     assert maps.dataset["motion_eddy_force_share"].values[0] == 0.0
     return mk.CharacteristicMaps(maps.dataset.assign(
-        motion_eddy_force_share=("circuit", np.array([GAMMA]))))
+        motion_eddy_force_share=("circuit", np.array([gamma]))))
 
 
-def _gap_sine(k: int, f_hz: float = 50.0) -> tuple[float, float]:
-    """Gap at the start of step ``k`` [m] and its secant rate over the step [m/s]."""
-    t0, t1 = k * DT, (k + 1) * DT
+@pytest.fixture(scope="module")
+def u_maps() -> mk.CharacteristicMaps:
+    return u_maps_with_force_share(GAMMA)
+
+
+def gap_sine(k: int, f_hz: float = 50.0, dt_s: float = DT) -> tuple[float, float]:
+    """Gap at the start of step ``k`` of ``dt_s`` [m] (10 mm, 1 mm amplitude at
+    ``f_hz``) and its secant rate over the step [m/s]."""
+    t0, t1 = k * dt_s, (k + 1) * dt_s
     g0 = 0.010 + 0.001 * np.sin(2 * np.pi * f_hz * t0)
     g1 = 0.010 + 0.001 * np.sin(2 * np.pi * f_hz * t1)
-    return g0, (g1 - g0) / DT
+    return g0, (g1 - g0) / dt_s
 
 
 @pytest.mark.parametrize("compiled", ["never", "auto"])
@@ -68,7 +75,7 @@ def test_bank_of_one_ladder_member_equals_current_model(u_maps, compiled: str) -
     u = float(bank.resistance_ohm[0]) * 20.0
     ng = len(cm.gap_names)
     for k in range(200):
-        g0, gd = _gap_sine(k)
+        g0, gd = gap_sine(k)
         st, out = bank.step(st, DT, u, g0, gd)
         stepper.advance(u, g0, gd)
         cs, co = cm.step(cs, DT, u, np.full(ng, g0), np.full(ng, gd))
@@ -131,7 +138,7 @@ def test_mixed_bank_equals_its_members_on_their_own(u_maps, gap_inputs: str) -> 
     u = float(bank.resistance_ohm[0]) * 20.0
     ng = len(cm.gap_names)
     for k in range(100):
-        g0, gd = _gap_sine(k)
+        g0, gd = gap_sine(k)
         st, out = bank.step(st, DT, u, np.full(bank.n_gaps, g0), np.full(bank.n_gaps, gd))
         s8, o8 = eq8.step(s8, DT, u, g0, gd)
         cs, co = cm.step(cs, DT, u, np.full(ng, g0), np.full(ng, gd))
@@ -248,7 +255,7 @@ def test_ladder_lanes_equal_casadi_code_and_the_virtual_machine(u_maps) -> None:
     states = [b.initial_state(gaps_m=0.010, currents_A=20.0) for b in banks]
     u = float(banks[0].resistance_ohm[0]) * 20.0
     for k in range(60):
-        g0, gd = _gap_sine(k)
+        g0, gd = gap_sine(k)
         outs = []
         for j, b in enumerate(banks):
             states[j], o = b.step(states[j], DT, u, g0, gd)
