@@ -12,6 +12,7 @@ bicubic tables, equal to the B-spline to rounding.
 from __future__ import annotations
 
 import dataclasses
+from typing import Any
 
 import numpy as np
 import pytest
@@ -134,6 +135,39 @@ def test_mixed_bank_equals_its_members_on_their_own(u_maps, compiled: str) -> No
     assert abs(st.eddy_currents_A[1, 0]) > 1e-3
 
 
+def assert_bank_law_is_the_models(bank: MagnetBank, cm: mk.CurrentModel, il: Any, u: Any,
+                                  s: Any, sd: Any, e: np.ndarray) -> list[np.ndarray]:
+    """Assert that ``bank``'s ``ode_function``, ``output_function`` and (for circuit 0)
+    ``ladder_expressions`` equal ``cm``'s ``ode``/``outputs_fun`` at coil currents ``il``
+    [A], voltages ``u`` [V], gaps ``s`` [m], gap rates ``sd`` [m/s] and eddy states ``e``
+    (n_circuits, n_eddy) [A], to 1e-12 relative (tables vs B-splines; as the arguments are
+    given to both: scalars for one circuit or per-circuit arrays). Returns ``cm``'s
+    outputs (coil current, force), raveled."""
+    import casadi as ca
+
+    d_il, d_e = (np.asarray(v) for v in bank.ode_function(il, u, s, sd, e))
+    ref_il, ref_e = (np.asarray(v).ravel() for v in cm.ode(il, u, s, sd, e.ravel()))
+    assert d_e.shape == e.shape
+    np.testing.assert_allclose(d_il.ravel(), ref_il, rtol=1e-12)
+    np.testing.assert_allclose(d_e.ravel(), ref_e, rtol=1e-12)
+    outs = [np.asarray(v).ravel() for v in bank.output_function(il, u, s, e)]
+    refs = [np.asarray(v).ravel() for v in cm.outputs_fun(il, u, s, e.ravel())]
+    for got, want in zip(outs, refs, strict=True):
+        np.testing.assert_allclose(got, want, rtol=1e-12)
+    n_e = e.shape[1]
+    ie = ca.MX.sym("I_e", n_e)
+    first = [float(np.ravel(x)[0]) for x in (il, s, u, sd)]
+    ex = bank.ladder_expressions(0, first[0], ie, first[1], first[2], first[3],
+                                 ca.MX(ca.DM(bank.table)))
+    f = ca.Function("f", [ie], [ex[0], ex[1], ex[2], ex[3]])
+    got = [np.asarray(v).ravel() for v in f(e[0])]
+    np.testing.assert_allclose(got[0], ref_il[:1], rtol=1e-12)
+    np.testing.assert_allclose(got[1], ref_e[:n_e], rtol=1e-12)
+    np.testing.assert_allclose(got[2], refs[0][:1], rtol=1e-12)
+    np.testing.assert_allclose(got[3], refs[1][:1], rtol=1e-12)
+    return refs
+
+
 def test_model_functions_equal_current_model(u_maps) -> None:
     """``ode_function``, ``output_function`` and ``ladder_expressions`` of a three-state
     bank are the single model's law (``CurrentModel.ode``/``outputs_fun``) at a state
@@ -141,25 +175,7 @@ def test_model_functions_equal_current_model(u_maps) -> None:
     cm = mk.CurrentModel(u_maps, motion_eddy=True, eddy_branches=2)
     bank = MagnetBank({"m": cm}, compiled="never")
     il, u, s, sd, e = 23.0, 50.0, 0.0093, 0.05, np.array([[0.4, -0.7]])
-    d_il, d_e = (np.asarray(v) for v in bank.ode_function(il, u, s, sd, e))
-    ref_il, ref_e = (np.asarray(v).ravel() for v in cm.ode(il, u, s, sd, e.ravel()))
-    assert d_e.shape == (1, 2)
-    np.testing.assert_allclose(d_il.ravel(), ref_il, rtol=1e-12)
-    np.testing.assert_allclose(d_e.ravel(), ref_e, rtol=1e-12)
-    outs = [np.asarray(v).ravel() for v in bank.output_function(il, u, s, e)]
-    refs = [np.asarray(v).ravel() for v in cm.outputs_fun(il, u, s, e.ravel())]
-    for got, want in zip(outs, refs, strict=True):
-        np.testing.assert_allclose(got, want, rtol=1e-12)
-    import casadi as ca
-
-    ie = ca.MX.sym("I_e", 2)
-    ex = bank.ladder_expressions(0, il, ie, s, u, sd, ca.MX(ca.DM(bank.table)))
-    f = ca.Function("f", [ie], [ex[0], ex[1], ex[2], ex[3]])
-    got = [np.asarray(v).ravel() for v in f(e.ravel())]
-    np.testing.assert_allclose(got[0], ref_il, rtol=1e-12)
-    np.testing.assert_allclose(got[1], ref_e, rtol=1e-12)
-    np.testing.assert_allclose(got[2], refs[0], rtol=1e-12)
-    np.testing.assert_allclose(got[3], refs[1], rtol=1e-12)
+    refs = assert_bank_law_is_the_models(bank, cm, il, u, s, sd, e)
     # the force current is in use: the force differs from F(s, I_L) (shares c_1, c_2)
     assert abs(refs[1][0] - np.asarray(bank.output_function(il, u, s, 0 * e)[1]).item()) > 1e-3
 
