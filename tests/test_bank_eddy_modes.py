@@ -23,7 +23,7 @@ from maglevkit.errors import InputError, OutOfRangeError
 from maglevkit.reduced.bank import EDDY_NETWORK_PARAMETERS, MagnetBank
 
 from .conftest import open_fmu
-from .test_bank_ladder3 import assert_bank_law_is_the_models
+from .test_bank_ladder3 import assert_bank_law_is_the_models, equal_bit_for_bit
 
 GAPS = np.linspace(0.006, 0.014, 5)
 CURRENTS = np.linspace(0.0, 60.0, 7)
@@ -107,12 +107,7 @@ def test_compiled_kernels_equal_the_reference_path(lmaps) -> None:
         res = [b.step(s, DT, [u, u, u * 0.9, u * 0.9], [g0, g0, 0.011, 0.011],
                       [gd, gd, -gd, -gd])
                for b, s in zip(banks, states, strict=True)]
-        states = [r[0] for r in res]
-        for st, out in res[1:]:
-            assert np.array_equal(st.inductor_currents_A, states[0].inductor_currents_A)
-            assert np.array_equal(st.eddy_currents_A, states[0].eddy_currents_A)
-            assert np.array_equal(out.currents_A, res[0][1].currents_A)
-            assert np.array_equal(out.circuit_force_N, res[0][1].circuit_force_N)
+        states = equal_bit_for_bit(res)
     assert banks[1].compiled and banks[2].compiled
     assert states[0].eddy_currents_A is not None
     assert np.all(np.abs(states[0].eddy_currents_A) > 1e-4)

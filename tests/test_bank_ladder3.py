@@ -80,6 +80,19 @@ def test_bank_of_one_three_state_member_equals_current_model(u_maps, compiled: s
     assert opt.max_step_s == bank.max_step_s
 
 
+def equal_bit_for_bit(res: list[tuple[Any, Any]]) -> list[Any]:
+    """Assert that the (state, outputs) of one step of several banks agree bit for bit
+    with the first's: inductor and eddy currents, coil currents and circuit forces.
+    Returns the states."""
+    states = [r[0] for r in res]
+    for st, out in res[1:]:
+        assert np.array_equal(st.inductor_currents_A, states[0].inductor_currents_A)
+        assert np.array_equal(st.eddy_currents_A, states[0].eddy_currents_A)
+        assert np.array_equal(out.currents_A, res[0][1].currents_A)
+        assert np.array_equal(out.circuit_force_N, res[0][1].circuit_force_N)
+    return states
+
+
 def test_compiled_kernels_equal_the_reference_path(u_maps) -> None:
     """The SIMD lanes, CasADi's own C and CasADi's virtual machine evaluate the same
     function: equal bit for bit (the lanes' arithmetic is the graph's, compiled without
@@ -93,12 +106,7 @@ def test_compiled_kernels_equal_the_reference_path(u_maps) -> None:
         g0, gd = gap_sine(k, 200.0, dt_s=DT)
         res = [b.step(s, DT, u, [g0, 0.011], [gd, -gd]) for b, s in zip(banks, states,
                                                                         strict=True)]
-        states = [r[0] for r in res]
-        for st, out in res[1:]:
-            assert np.array_equal(st.inductor_currents_A, states[0].inductor_currents_A)
-            assert np.array_equal(st.eddy_currents_A, states[0].eddy_currents_A)
-            assert np.array_equal(out.currents_A, res[0][1].currents_A)
-            assert np.array_equal(out.circuit_force_N, res[0][1].circuit_force_N)
+        states = equal_bit_for_bit(res)
     assert banks[1].compiled and banks[2].compiled
     assert np.all(np.abs(states[0].eddy_currents_A) > 1e-3)
 
