@@ -22,8 +22,7 @@ from maglevkit.errors import InputError, OutOfRangeError
 from maglevkit.reduced.bank import MOTION_EDDY3_PARAMETERS, MOTION_EDDY_PARAMETERS, MagnetBank
 from maglevkit.reduced.current import motion_eddy3_parameters
 
-from .conftest import open_fmu
-from .test_bank_motion_eddy import gap_sine, u_maps_with_force_share
+from .test_bank_motion_eddy import fmu_next_to_bank, gap_sine, u_maps_with_force_share
 
 DT = 2e-4          # 2 RK4 sub-steps of the u-magnet three-state ladder's ~1.5e-4 s limit
 # bicubic tables vs B-splines agree to ~4e-14 relative (docs/decisions.md, "The reduced
@@ -328,15 +327,9 @@ def test_fmu_of_a_three_state_member_equals_the_bank(u_maps, tmp_path, via: str)
     extra = {} if via == "model" else {"motion_eddy": True, "eddy_branches": 2}
     exported = export_fmu(source, tmp_path / "ladder3.fmu", start_gaps_m=0.010,
                           initial_currents_A=20.0, **extra)
-    fmu, vr, start = open_fmu(exported, tmp_path / "x")
     u_name, s_name, sd_name = exported.input_names
     i_name, f_name = exported.output_names[:2]
-    assert float(start["max_substep"]) == cm.max_step_s
-    bank = MagnetBank({"m": cm}, compiled="never")
-    u = float(bank.resistance_ohm[0]) * 20.0
-    fmu.setReal([vr[u_name]], [u])
-    fmu.exitInitializationMode()
-    st = bank.initial_state(gaps_m=0.010, currents_A=20.0)
+    fmu, vr, bank, u, st = fmu_next_to_bank(exported, cm, tmp_path)
     h = 5e-4
     worst = [0.0, 0.0]
     peak = 0.0

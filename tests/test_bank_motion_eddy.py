@@ -9,6 +9,7 @@ mixed banks against their members on their own; the eq. 8 layout left as it was;
 from __future__ import annotations
 
 import math
+from typing import Any
 
 import numpy as np
 import pytest
@@ -199,6 +200,22 @@ def test_refusals(u_maps, tmp_path) -> None:
             0, 20.0, 0.0, 0.01, 40.0, 0.0, bank.table)
 
 
+def fmu_next_to_bank(exported: Any, cm: mk.CurrentModel, tmp_path: Any
+                     ) -> tuple[Any, dict[str, int], MagnetBank, float, Any]:
+    """Open the ``exported`` FMU of ``cm`` (built at 10 mm, 20 A), check that it sub-steps
+    at ``cm``'s stable step, set its voltage to hold 20 A and leave initialisation; next to
+    it a reference-path bank of ``cm`` in its initial state at 10 mm, 20 A. Returns (fmu,
+    value references, bank, that voltage [V], bank state)."""
+    fmu, vr, start = open_fmu(exported, tmp_path / "x")
+    assert float(start["max_substep"]) == cm.max_step_s
+    bank = MagnetBank({"m": cm}, compiled="never")
+    u = float(bank.resistance_ohm[0]) * 20.0
+    fmu.setReal([vr[exported.input_names[0]]], [u])
+    fmu.exitInitializationMode()
+    st = bank.initial_state(gaps_m=0.010, currents_A=20.0)
+    return fmu, vr, bank, u, st
+
+
 def test_fmu_of_a_ladder_member_equals_the_bank(u_maps, tmp_path) -> None:
     """The exported FMU carries I_e: under a 50 Hz gap sine (communication steps of
     0.5 ms, the ladder's 1.4e-4 s sub-step: 4 sub-steps, the FMU's loop of one-sub-step
@@ -209,15 +226,9 @@ def test_fmu_of_a_ladder_member_equals_the_bank(u_maps, tmp_path) -> None:
     cm = mk.CurrentModel(u_maps, motion_eddy=True)
     exported = export_fmu(cm, tmp_path / "ladder.fmu", start_gaps_m=0.010,
                           initial_currents_A=20.0)
-    fmu, vr, start = open_fmu(exported, tmp_path / "x")
     u_name, s_name, sd_name = exported.input_names
     i_name, f_name = exported.output_names[:2]
-    assert float(start["max_substep"]) == cm.max_step_s
-    bank = MagnetBank({"m": cm}, compiled="never")
-    u = float(bank.resistance_ohm[0]) * 20.0
-    fmu.setReal([vr[u_name]], [u])
-    fmu.exitInitializationMode()
-    st = bank.initial_state(gaps_m=0.010, currents_A=20.0)
+    fmu, vr, bank, u, st = fmu_next_to_bank(exported, cm, tmp_path)
     h = 5e-4
     worst = 0.0
     for k in range(80):
