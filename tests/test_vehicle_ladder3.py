@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 
 from maglevkit.errors import InputError, MaglevkitWarning, ParameterFileError
-from maglevkit.vehicle.simulation import VehicleModel
+from maglevkit.vehicle.simulation import VehicleModel, VehicleRun
 from maglevkit.vehicle.train import load_vehicle, parse_vehicle
 
 from .test_vehicle_compiled import heave_pitch_runs, loops_agree
@@ -27,13 +27,14 @@ from .test_vehicle_motion_eddy import nmpc_runs, record_bank_inputs, replay_circ
 RTOL = 1e-10
 
 
-def test_heave_pitch_compiled_step_carries_both_eddy_states() -> None:
-    """400 km/h, elastic guideway, sag + random irregularity, a circuit failure: the
-    compiled step with I_e1, I_e2 in its state (2 n_c entries, column-major) equals the
-    reference loop (bank.step with the bank's (n_c, 2) state) to RTOL, both eddy states
-    are recorded per circuit and move, the coil current stays >= 0."""
-    m = VehicleModel(load_vehicle(), motion_eddy=True, eddy_branches=2)
-    assert m.bank.n_eddy_states == 2 and m.eddy_branches == 2
+def heave_pitch_with_two_eddy_states(m: VehicleModel) -> VehicleRun:
+    """The heave-pitch scenario (heave_pitch_runs, RTOL) on a vehicle with two eddy states
+    per circuit: the compiled step's state holds 2 n_c of them (column-major), the
+    reference loop's dataset records them per circuit as I_e1, I_e2 (the compiled loop's
+    in the same layout), both start at 0 and move (peaks > 0.5 A) and differ (by > 0.1 A,
+    so that a swap of the two or of circuits in the column-major block shows as an O(1)
+    difference between the loops), and the coil current never reverses (the chopper floor
+    U >= -R_a I_u, the diodes). Returns the reference loop's run."""
     nc = m.bank.n_circuits
     lay = m.step_function(1e-3).layout
     assert lay.state["I_e"].stop - lay.state["I_e"].start == 2 * nc
@@ -41,16 +42,24 @@ def test_heave_pitch_compiled_step_carries_both_eddy_states() -> None:
     ie = rp.dataset.eddy_current
     assert ie.dims == ("time", "circuit", "eddy_state") and ie.shape[1:] == (nc, 2)
     assert list(ie.eddy_state.values) == ["I_e1", "I_e2"]
-    # the compiled loop's column-major block read back in the bank's (n_c, 2) order: a
-    # swap of I_e1 and I_e2 or of circuits would show as an O(1) difference above; here
-    # also the two states differ (measured peaks 3.1 A and 3.9 A), so a swap is visible
     assert np.array_equal(rc.dataset.eddy_current.dims, ie.dims)
     peaks = np.abs(ie.values).max(axis=(0, 1))
     assert float(np.abs(ie.values[0]).max()) == 0.0 and peaks.min() > 0.5
     assert abs(peaks[0] - peaks[1]) > 0.1
-    assert "three-state" in rp.dataset.attrs["magnets"]
-    # the chopper floor U >= -R_a (I_L + I_e1 + I_e2): the coil current never reverses
     assert float(rp.dataset.current.values.min()) >= -1e-12
+    return rp
+
+
+def test_heave_pitch_compiled_step_carries_both_eddy_states() -> None:
+    """400 km/h, elastic guideway, sag + random irregularity, a circuit failure: the
+    compiled step with I_e1, I_e2 in its state (2 n_c entries, column-major) equals the
+    reference loop (bank.step with the bank's (n_c, 2) state) to RTOL, both eddy states
+    are recorded per circuit and move, the coil current stays >= 0."""
+    m = VehicleModel(load_vehicle(), motion_eddy=True, eddy_branches=2)
+    assert m.bank.n_eddy_states == 2 and m.eddy_branches == 2
+    # measured peaks of I_e1, I_e2: 3.1 A and 3.9 A
+    rp = heave_pitch_with_two_eddy_states(m)
+    assert "three-state" in rp.dataset.attrs["magnets"]
 
 
 def test_three_state_vehicle_replayed_and_held_against_the_detailed_model() -> None:
