@@ -98,11 +98,10 @@ def cost(maps: mk.CharacteristicMaps, cache: Path,
     return rows
 
 
-def sweep(gm: Any) -> list[str]:
-    """Table rows: the gap-sine sweep through banks of one two-state and one three-state
-    ladder member, against the detailed model and the single ladder model."""
-    mag, fm, _, ladder, _, ladder3 = gm.models()
-    u0 = fm.resistances * gm.nominal_current(mag)
+def _sine_rows(gm: Any, fm: Any, u0: Any, members: list[tuple[str, Any]]) -> list[str]:
+    """Table rows: per frequency of SWEEP, the gap sine through the detailed model ``fm``
+    at the voltages ``u0`` [V], and through a bank of one member and the single model of
+    each (label, CurrentModel) in ``members``, against the detailed model."""
     rows = []
     for f in SWEEP:
         dur, dt = max(2.0 / f, 0.1), min(1.0 / (100 * f), 1e-3)
@@ -116,7 +115,7 @@ def sweep(gm: Any) -> list[str]:
         cd, fd = det.currents_A[:, 0], det.pole_force_N.sum(axis=1)
         last = t >= t[-1] - 1.0 / f * max(1, math.floor(f * dur / 2))
         zd = gm._fundamental(t[last], cd[last], f)
-        for label, model in (("two-state", ladder), ("three-state", ladder3)):
+        for label, model in members:
             bank = MagnetBank({"m": model}, compiled="auto")
             single = mk.simulate(model, (0.0, dur), dt_s=dt, gaps_m=gaps, voltages_V=u0)
             res = bank.simulate(t, gaps_m=np.repeat(g[:, None], bank.n_gaps, axis=1),
@@ -132,6 +131,14 @@ def sweep(gm: Any) -> list[str]:
     return rows
 
 
+def sweep(gm: Any) -> list[str]:
+    """Table rows: the gap-sine sweep through banks of one two-state and one three-state
+    ladder member, against the detailed model and the single ladder model."""
+    mag, fm, _, ladder, _, ladder3 = gm.models()
+    u0 = fm.resistances * gm.nominal_current(mag)
+    return _sine_rows(gm, fm, u0, [("two-state", ladder), ("three-state", ladder3)])
+
+
 def network_sweep(gm: Any, ladder_maps: mk.CharacteristicMaps) -> list[str]:
     """Table rows: the gap-sine sweep through a bank of one eddy-network member
     (``eddy_modes=2``) on the maps of the diffusing eddy ladder, against the detailed
@@ -140,33 +147,7 @@ def network_sweep(gm: Any, ladder_maps: mk.CharacteristicMaps) -> list[str]:
     fm = mk.FluxModel(mag)
     model = mk.CurrentModel(ladder_maps, eddy_modes=2)
     u0 = fm.resistances * gm.nominal_current(mag)
-    rows = []
-    for f in SWEEP:
-        dur, dt = max(2.0 / f, 0.1), min(1.0 / (100 * f), 1e-3)
-
-        def gaps(t: Any, f: float = f) -> Any:
-            return gm.GAP + gm.AMPLITUDE * np.sin(2 * np.pi * f * t)
-
-        det = mk.simulate(fm, (0.0, dur), dt_s=dt, gaps_m=gaps, voltages_V=u0)
-        t = det.time_s
-        g = gaps(t)
-        cd, fd = det.currents_A[:, 0], det.pole_force_N.sum(axis=1)
-        last = t >= t[-1] - 1.0 / f * max(1, math.floor(f * dur / 2))
-        zd = gm._fundamental(t[last], cd[last], f)
-        bank = MagnetBank({"m": model}, compiled="auto")
-        single = mk.simulate(model, (0.0, dur), dt_s=dt, gaps_m=gaps, voltages_V=u0)
-        res = bank.simulate(t, gaps_m=np.repeat(g[:, None], bank.n_gaps, axis=1),
-                            voltages_V=u0)
-        cb, fb = res.currents_A[:, 0], res.member_force_N[:, 0]
-        zb = gm._fundamental(t[last], cb[last], f)
-        phase = math.degrees(math.atan2(zb.imag, zb.real) - math.atan2(zd.imag, zd.real))
-        diff = float(np.max(np.abs(cb - single.currents_A[:, 0])))
-        rows.append(f"| {f:g} Hz | eddy network (eddy_modes=2), ladder maps | "
-                    f"{100 * gm._ac_error(cd, cb):.1f} % | "
-                    f"{100 * gm._ac_error(cd, single.currents_A[:, 0]):.1f} % | "
-                    f"{phase:+.1f} deg | {100 * gm._ac_error(fd, fb):.1f} % | "
-                    f"{100 * gm._ac_error(fd, single.force_N):.1f} % | {diff:.1e} A |")
-    return rows
+    return _sine_rows(gm, fm, u0, [("eddy network (eddy_modes=2), ladder maps", model)])
 
 
 def run() -> str:

@@ -23,6 +23,7 @@ from maglevkit.errors import InputError, OutOfRangeError
 from maglevkit.reduced.bank import EDDY_NETWORK_PARAMETERS, MagnetBank
 
 from .conftest import open_fmu
+from .test_bank_ladder3 import assert_bank_law_is_the_models, equal_bit_for_bit
 
 GAPS = np.linspace(0.006, 0.014, 5)
 CURRENTS = np.linspace(0.0, 60.0, 7)
@@ -106,12 +107,7 @@ def test_compiled_kernels_equal_the_reference_path(lmaps) -> None:
         res = [b.step(s, DT, [u, u, u * 0.9, u * 0.9], [g0, g0, 0.011, 0.011],
                       [gd, gd, -gd, -gd])
                for b, s in zip(banks, states, strict=True)]
-        states = [r[0] for r in res]
-        for st, out in res[1:]:
-            assert np.array_equal(st.inductor_currents_A, states[0].inductor_currents_A)
-            assert np.array_equal(st.eddy_currents_A, states[0].eddy_currents_A)
-            assert np.array_equal(out.currents_A, res[0][1].currents_A)
-            assert np.array_equal(out.circuit_force_N, res[0][1].circuit_force_N)
+        states = equal_bit_for_bit(res)
     assert banks[1].compiled and banks[2].compiled
     assert states[0].eddy_currents_A is not None
     assert np.all(np.abs(states[0].eddy_currents_A) > 1e-4)
@@ -159,31 +155,12 @@ def test_model_functions_equal_current_model(lmaps) -> None:
     """``ode_function``, ``output_function`` and ``ladder_expressions`` of a network bank
     are the single model's law (``CurrentModel.ode``/``outputs_fun``) at a state away
     from rest, to 1e-12 relative (tables vs B-splines)."""
-    import casadi as ca
-
     cm = mk.CurrentModel(lmaps, eddy_modes=2)
     bank = MagnetBank({"m": cm}, compiled="never")
     il, u, s, sd = np.array([31.0, 28.0]), np.array([90.0, 40.0]), 0.0093, 0.05
     e = np.array([[0.4, -0.7], [0.1, 0.2]])
     sv = np.full(2, s)
-    d_il, d_e = (np.asarray(v) for v in bank.ode_function(il, u, sv, np.full(2, sd), e))
-    ref_il, ref_e = (np.asarray(v).ravel() for v in cm.ode(il, u, sv, np.full(2, sd),
-                                                            e.ravel()))
-    assert d_e.shape == (2, 2)
-    np.testing.assert_allclose(d_il.ravel(), ref_il, rtol=1e-12)
-    np.testing.assert_allclose(d_e.ravel(), ref_e, rtol=1e-12)
-    outs = [np.asarray(v).ravel() for v in bank.output_function(il, u, sv, e)]
-    refs = [np.asarray(v).ravel() for v in cm.outputs_fun(il, u, sv, e.ravel())]
-    for got, want in zip(outs, refs, strict=True):
-        np.testing.assert_allclose(got, want, rtol=1e-12)
-    ie = ca.MX.sym("I_e", 2)
-    ex = bank.ladder_expressions(0, il[0], ie, s, u[0], sd, ca.MX(ca.DM(bank.table)))
-    f = ca.Function("f", [ie], [ex[0], ex[1], ex[2], ex[3]])
-    got = [np.asarray(v).ravel() for v in f(e[0])]
-    np.testing.assert_allclose(got[0], ref_il[:1], rtol=1e-12)
-    np.testing.assert_allclose(got[1], ref_e[:2], rtol=1e-12)
-    np.testing.assert_allclose(got[2], refs[0][:1], rtol=1e-12)
-    np.testing.assert_allclose(got[3], refs[1][:1], rtol=1e-12)
+    refs = assert_bank_law_is_the_models(bank, cm, il, u, sv, np.full(2, sd), e)
     # the branch currents are in use: the coil current differs from eq. 8's at e = 0
     assert abs(refs[0][0] - np.asarray(bank.output_function(il, u, sv, 0 * e)[0])[0, 0]) > 0.1
     rows = bank.circuit_parameters

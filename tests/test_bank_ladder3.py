@@ -12,6 +12,7 @@ bicubic tables, equal to the B-spline to rounding.
 from __future__ import annotations
 
 import dataclasses
+from typing import Any
 
 import numpy as np
 import pytest
@@ -21,10 +22,8 @@ from maglevkit.errors import InputError, OutOfRangeError
 from maglevkit.reduced.bank import MOTION_EDDY3_PARAMETERS, MOTION_EDDY_PARAMETERS, MagnetBank
 from maglevkit.reduced.current import motion_eddy3_parameters
 
-from .conftest import open_fmu
+from .test_bank_motion_eddy import fmu_next_to_bank, gap_sine, u_maps_with_force_share
 
-GAPS = np.linspace(0.006, 0.014, 5)
-CURRENTS = np.linspace(0.0, 40.0, 9)
 DT = 2e-4          # 2 RK4 sub-steps of the u-magnet three-state ladder's ~1.5e-4 s limit
 # bicubic tables vs B-splines agree to ~4e-14 relative (docs/decisions.md, "The reduced
 # model's compiled tables"); 200 steps accumulate a few 1e-14 A on ~20 A (measured
@@ -39,18 +38,7 @@ GAMMA = -0.3
 
 @pytest.fixture(scope="module")
 def u_maps() -> mk.CharacteristicMaps:
-    maps = mk.build_maps(mk.load_magnet("u-magnet"), gaps_m=GAPS, currents_A=CURRENTS,
-                         progress=False)
-    return mk.CharacteristicMaps(maps.dataset.assign(
-        motion_eddy_force_share=("circuit", np.array([GAMMA]))))
-
-
-def _gap_sine(k: int, f_hz: float = 50.0) -> tuple[float, float]:
-    """Gap at the start of step ``k`` [m] and its secant rate over the step [m/s]."""
-    t0, t1 = k * DT, (k + 1) * DT
-    g0 = 0.010 + 0.001 * np.sin(2 * np.pi * f_hz * t0)
-    g1 = 0.010 + 0.001 * np.sin(2 * np.pi * f_hz * t1)
-    return g0, (g1 - g0) / DT
+    return u_maps_with_force_share(GAMMA)
 
 
 @pytest.mark.parametrize("compiled", ["never", "auto"])
@@ -70,7 +58,7 @@ def test_bank_of_one_three_state_member_equals_current_model(u_maps, compiled: s
     u = float(bank.resistance_ohm[0]) * 20.0
     ng = len(cm.gap_names)
     for k in range(200):
-        g0, gd = _gap_sine(k)
+        g0, gd = gap_sine(k, dt_s=DT)
         st, out = bank.step(st, DT, u, g0, gd)
         stepper.advance(u, g0, gd)
         cs, co = cm.step(cs, DT, u, np.full(ng, g0), np.full(ng, gd))
@@ -91,6 +79,19 @@ def test_bank_of_one_three_state_member_equals_current_model(u_maps, compiled: s
     assert opt.max_step_s == bank.max_step_s
 
 
+def equal_bit_for_bit(res: list[tuple[Any, Any]]) -> list[Any]:
+    """Assert that the (state, outputs) of one step of several banks agree bit for bit
+    with the first's: inductor and eddy currents, coil currents and circuit forces.
+    Returns the states."""
+    states = [r[0] for r in res]
+    for st, out in res[1:]:
+        assert np.array_equal(st.inductor_currents_A, states[0].inductor_currents_A)
+        assert np.array_equal(st.eddy_currents_A, states[0].eddy_currents_A)
+        assert np.array_equal(out.currents_A, res[0][1].currents_A)
+        assert np.array_equal(out.circuit_force_N, res[0][1].circuit_force_N)
+    return states
+
+
 def test_compiled_kernels_equal_the_reference_path(u_maps) -> None:
     """The SIMD lanes, CasADi's own C and CasADi's virtual machine evaluate the same
     function: equal bit for bit (the lanes' arithmetic is the graph's, compiled without
@@ -101,15 +102,10 @@ def test_compiled_kernels_equal_the_reference_path(u_maps) -> None:
     states = [b.initial_state(gaps_m=0.010, currents_A=[20.0, 25.0]) for b in banks]
     u = float(banks[0].resistance_ohm[0]) * np.array([20.0, 27.0])
     for k in range(100):
-        g0, gd = _gap_sine(k, 200.0)
+        g0, gd = gap_sine(k, 200.0, dt_s=DT)
         res = [b.step(s, DT, u, [g0, 0.011], [gd, -gd]) for b, s in zip(banks, states,
                                                                         strict=True)]
-        states = [r[0] for r in res]
-        for st, out in res[1:]:
-            assert np.array_equal(st.inductor_currents_A, states[0].inductor_currents_A)
-            assert np.array_equal(st.eddy_currents_A, states[0].eddy_currents_A)
-            assert np.array_equal(out.currents_A, res[0][1].currents_A)
-            assert np.array_equal(out.circuit_force_N, res[0][1].circuit_force_N)
+        states = equal_bit_for_bit(res)
     assert banks[1].compiled and banks[2].compiled
     assert np.all(np.abs(states[0].eddy_currents_A) > 1e-3)
 
@@ -131,7 +127,7 @@ def test_mixed_bank_equals_its_members_on_their_own(u_maps, compiled: str) -> No
     sa = [b.initial_state(gaps_m=0.010, currents_A=20.0) for b in alone]
     u = float(bank.resistance_ohm[0]) * 21.0
     for k in range(100):
-        g0, gd = _gap_sine(k)
+        g0, gd = gap_sine(k, dt_s=DT)
         st, out = bank.step(st, DT, u, g0, gd)
         res = [b.step(s, DT, u, g0, gd) for b, s in zip(alone, sa, strict=True)]
         sa = [r[0] for r in res]
@@ -146,6 +142,39 @@ def test_mixed_bank_equals_its_members_on_their_own(u_maps, compiled: str) -> No
     assert abs(st.eddy_currents_A[1, 0]) > 1e-3
 
 
+def assert_bank_law_is_the_models(bank: MagnetBank, cm: mk.CurrentModel, il: Any, u: Any,
+                                  s: Any, sd: Any, e: np.ndarray) -> list[np.ndarray]:
+    """Assert that ``bank``'s ``ode_function``, ``output_function`` and (for circuit 0)
+    ``ladder_expressions`` equal ``cm``'s ``ode``/``outputs_fun`` at coil currents ``il``
+    [A], voltages ``u`` [V], gaps ``s`` [m], gap rates ``sd`` [m/s] and eddy states ``e``
+    (n_circuits, n_eddy) [A], to 1e-12 relative (tables vs B-splines; as the arguments are
+    given to both: scalars for one circuit or per-circuit arrays). Returns ``cm``'s
+    outputs (coil current, force), raveled."""
+    import casadi as ca
+
+    d_il, d_e = (np.asarray(v) for v in bank.ode_function(il, u, s, sd, e))
+    ref_il, ref_e = (np.asarray(v).ravel() for v in cm.ode(il, u, s, sd, e.ravel()))
+    assert d_e.shape == e.shape
+    np.testing.assert_allclose(d_il.ravel(), ref_il, rtol=1e-12)
+    np.testing.assert_allclose(d_e.ravel(), ref_e, rtol=1e-12)
+    outs = [np.asarray(v).ravel() for v in bank.output_function(il, u, s, e)]
+    refs = [np.asarray(v).ravel() for v in cm.outputs_fun(il, u, s, e.ravel())]
+    for got, want in zip(outs, refs, strict=True):
+        np.testing.assert_allclose(got, want, rtol=1e-12)
+    n_e = e.shape[1]
+    ie = ca.MX.sym("I_e", n_e)
+    first = [float(np.ravel(x)[0]) for x in (il, s, u, sd)]
+    ex = bank.ladder_expressions(0, first[0], ie, first[1], first[2], first[3],
+                                 ca.MX(ca.DM(bank.table)))
+    f = ca.Function("f", [ie], [ex[0], ex[1], ex[2], ex[3]])
+    got = [np.asarray(v).ravel() for v in f(e[0])]
+    np.testing.assert_allclose(got[0], ref_il[:1], rtol=1e-12)
+    np.testing.assert_allclose(got[1], ref_e[:n_e], rtol=1e-12)
+    np.testing.assert_allclose(got[2], refs[0][:1], rtol=1e-12)
+    np.testing.assert_allclose(got[3], refs[1][:1], rtol=1e-12)
+    return refs
+
+
 def test_model_functions_equal_current_model(u_maps) -> None:
     """``ode_function``, ``output_function`` and ``ladder_expressions`` of a three-state
     bank are the single model's law (``CurrentModel.ode``/``outputs_fun``) at a state
@@ -153,25 +182,7 @@ def test_model_functions_equal_current_model(u_maps) -> None:
     cm = mk.CurrentModel(u_maps, motion_eddy=True, eddy_branches=2)
     bank = MagnetBank({"m": cm}, compiled="never")
     il, u, s, sd, e = 23.0, 50.0, 0.0093, 0.05, np.array([[0.4, -0.7]])
-    d_il, d_e = (np.asarray(v) for v in bank.ode_function(il, u, s, sd, e))
-    ref_il, ref_e = (np.asarray(v).ravel() for v in cm.ode(il, u, s, sd, e.ravel()))
-    assert d_e.shape == (1, 2)
-    np.testing.assert_allclose(d_il.ravel(), ref_il, rtol=1e-12)
-    np.testing.assert_allclose(d_e.ravel(), ref_e, rtol=1e-12)
-    outs = [np.asarray(v).ravel() for v in bank.output_function(il, u, s, e)]
-    refs = [np.asarray(v).ravel() for v in cm.outputs_fun(il, u, s, e.ravel())]
-    for got, want in zip(outs, refs, strict=True):
-        np.testing.assert_allclose(got, want, rtol=1e-12)
-    import casadi as ca
-
-    ie = ca.MX.sym("I_e", 2)
-    ex = bank.ladder_expressions(0, il, ie, s, u, sd, ca.MX(ca.DM(bank.table)))
-    f = ca.Function("f", [ie], [ex[0], ex[1], ex[2], ex[3]])
-    got = [np.asarray(v).ravel() for v in f(e.ravel())]
-    np.testing.assert_allclose(got[0], ref_il, rtol=1e-12)
-    np.testing.assert_allclose(got[1], ref_e, rtol=1e-12)
-    np.testing.assert_allclose(got[2], refs[0], rtol=1e-12)
-    np.testing.assert_allclose(got[3], refs[1], rtol=1e-12)
+    refs = assert_bank_law_is_the_models(bank, cm, il, u, s, sd, e)
     # the force current is in use: the force differs from F(s, I_L) (shares c_1, c_2)
     assert abs(refs[1][0] - np.asarray(bank.output_function(il, u, s, 0 * e)[1]).item()) > 1e-3
 
@@ -316,15 +327,9 @@ def test_fmu_of_a_three_state_member_equals_the_bank(u_maps, tmp_path, via: str)
     extra = {} if via == "model" else {"motion_eddy": True, "eddy_branches": 2}
     exported = export_fmu(source, tmp_path / "ladder3.fmu", start_gaps_m=0.010,
                           initial_currents_A=20.0, **extra)
-    fmu, vr, start = open_fmu(exported, tmp_path / "x")
     u_name, s_name, sd_name = exported.input_names
     i_name, f_name = exported.output_names[:2]
-    assert float(start["max_substep"]) == cm.max_step_s
-    bank = MagnetBank({"m": cm}, compiled="never")
-    u = float(bank.resistance_ohm[0]) * 20.0
-    fmu.setReal([vr[u_name]], [u])
-    fmu.exitInitializationMode()
-    st = bank.initial_state(gaps_m=0.010, currents_A=20.0)
+    fmu, vr, bank, u, st = fmu_next_to_bank(exported, cm, tmp_path)
     h = 5e-4
     worst = [0.0, 0.0]
     peak = 0.0
@@ -364,7 +369,7 @@ def test_general_path_and_failed_stepper_step(u_maps) -> None:
     u = float(bank.resistance_ohm[0]) * 20.0
     ng = bank.n_gaps
     for k in range(50):
-        g0, gd = _gap_sine(k)
+        g0, gd = gap_sine(k, dt_s=DT)
         st, out = bank.step(st, DT, u, np.full(ng, g0), np.full(ng, gd))
         cs, co = cm.step(cs, DT, u, np.full(ng, g0), np.full(ng, gd))
         assert np.max(np.abs(st.eddy_currents_A - cs.eddy_currents_A)) < TOL_A
@@ -373,7 +378,7 @@ def test_general_path_and_failed_stepper_step(u_maps) -> None:
     fast = MagnetBank({"m": cm}, compiled="never")
     stepper = fast.stepper(fast.initial_state(gaps_m=0.010, currents_A=20.0), DT)
     for k in range(20):
-        g0, gd = _gap_sine(k)
+        g0, gd = gap_sine(k, dt_s=DT)
         stepper.advance(u, g0, gd)
     before = stepper.state
     with pytest.raises(OutOfRangeError):

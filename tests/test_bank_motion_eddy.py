@@ -9,6 +9,7 @@ mixed banks against their members on their own; the eq. 8 layout left as it was;
 from __future__ import annotations
 
 import math
+from typing import Any
 
 import numpy as np
 import pytest
@@ -35,21 +36,28 @@ TOL_REL_F = 1e-12
 GAMMA = -0.3
 
 
-@pytest.fixture(scope="module")
-def u_maps() -> mk.CharacteristicMaps:
+def u_maps_with_force_share(gamma: float) -> mk.CharacteristicMaps:
+    """The u-magnet's maps on GAPS x CURRENTS with the ladder's force share set to
+    ``gamma`` (its own is 0, checked here)."""
     maps = mk.build_maps(mk.load_magnet("u-magnet"), gaps_m=GAPS, currents_A=CURRENTS,
                          progress=False)
     assert maps.dataset["motion_eddy_force_share"].values[0] == 0.0
     return mk.CharacteristicMaps(maps.dataset.assign(
-        motion_eddy_force_share=("circuit", np.array([GAMMA]))))
+        motion_eddy_force_share=("circuit", np.array([gamma]))))
 
 
-def _gap_sine(k: int, f_hz: float = 50.0) -> tuple[float, float]:
-    """Gap at the start of step ``k`` [m] and its secant rate over the step [m/s]."""
-    t0, t1 = k * DT, (k + 1) * DT
+@pytest.fixture(scope="module")
+def u_maps() -> mk.CharacteristicMaps:
+    return u_maps_with_force_share(GAMMA)
+
+
+def gap_sine(k: int, f_hz: float = 50.0, dt_s: float = DT) -> tuple[float, float]:
+    """Gap at the start of step ``k`` of ``dt_s`` [m] (10 mm, 1 mm amplitude at
+    ``f_hz``) and its secant rate over the step [m/s]."""
+    t0, t1 = k * dt_s, (k + 1) * dt_s
     g0 = 0.010 + 0.001 * np.sin(2 * np.pi * f_hz * t0)
     g1 = 0.010 + 0.001 * np.sin(2 * np.pi * f_hz * t1)
-    return g0, (g1 - g0) / DT
+    return g0, (g1 - g0) / dt_s
 
 
 @pytest.mark.parametrize("compiled", ["never", "auto"])
@@ -68,7 +76,7 @@ def test_bank_of_one_ladder_member_equals_current_model(u_maps, compiled: str) -
     u = float(bank.resistance_ohm[0]) * 20.0
     ng = len(cm.gap_names)
     for k in range(200):
-        g0, gd = _gap_sine(k)
+        g0, gd = gap_sine(k)
         st, out = bank.step(st, DT, u, g0, gd)
         stepper.advance(u, g0, gd)
         cs, co = cm.step(cs, DT, u, np.full(ng, g0), np.full(ng, gd))
@@ -131,7 +139,7 @@ def test_mixed_bank_equals_its_members_on_their_own(u_maps, gap_inputs: str) -> 
     u = float(bank.resistance_ohm[0]) * 20.0
     ng = len(cm.gap_names)
     for k in range(100):
-        g0, gd = _gap_sine(k)
+        g0, gd = gap_sine(k)
         st, out = bank.step(st, DT, u, np.full(bank.n_gaps, g0), np.full(bank.n_gaps, gd))
         s8, o8 = eq8.step(s8, DT, u, g0, gd)
         cs, co = cm.step(cs, DT, u, np.full(ng, g0), np.full(ng, gd))
@@ -192,6 +200,22 @@ def test_refusals(u_maps, tmp_path) -> None:
             0, 20.0, 0.0, 0.01, 40.0, 0.0, bank.table)
 
 
+def fmu_next_to_bank(exported: Any, cm: mk.CurrentModel, tmp_path: Any
+                     ) -> tuple[Any, dict[str, int], MagnetBank, float, Any]:
+    """Open the ``exported`` FMU of ``cm`` (built at 10 mm, 20 A), check that it sub-steps
+    at ``cm``'s stable step, set its voltage to hold 20 A and leave initialisation; next to
+    it a reference-path bank of ``cm`` in its initial state at 10 mm, 20 A. Returns (fmu,
+    value references, bank, that voltage [V], bank state)."""
+    fmu, vr, start = open_fmu(exported, tmp_path / "x")
+    assert float(start["max_substep"]) == cm.max_step_s
+    bank = MagnetBank({"m": cm}, compiled="never")
+    u = float(bank.resistance_ohm[0]) * 20.0
+    fmu.setReal([vr[exported.input_names[0]]], [u])
+    fmu.exitInitializationMode()
+    st = bank.initial_state(gaps_m=0.010, currents_A=20.0)
+    return fmu, vr, bank, u, st
+
+
 def test_fmu_of_a_ladder_member_equals_the_bank(u_maps, tmp_path) -> None:
     """The exported FMU carries I_e: under a 50 Hz gap sine (communication steps of
     0.5 ms, the ladder's 1.4e-4 s sub-step: 4 sub-steps, the FMU's loop of one-sub-step
@@ -202,15 +226,9 @@ def test_fmu_of_a_ladder_member_equals_the_bank(u_maps, tmp_path) -> None:
     cm = mk.CurrentModel(u_maps, motion_eddy=True)
     exported = export_fmu(cm, tmp_path / "ladder.fmu", start_gaps_m=0.010,
                           initial_currents_A=20.0)
-    fmu, vr, start = open_fmu(exported, tmp_path / "x")
     u_name, s_name, sd_name = exported.input_names
     i_name, f_name = exported.output_names[:2]
-    assert float(start["max_substep"]) == cm.max_step_s
-    bank = MagnetBank({"m": cm}, compiled="never")
-    u = float(bank.resistance_ohm[0]) * 20.0
-    fmu.setReal([vr[u_name]], [u])
-    fmu.exitInitializationMode()
-    st = bank.initial_state(gaps_m=0.010, currents_A=20.0)
+    fmu, vr, bank, u, st = fmu_next_to_bank(exported, cm, tmp_path)
     h = 5e-4
     worst = 0.0
     for k in range(80):
@@ -248,7 +266,7 @@ def test_ladder_lanes_equal_casadi_code_and_the_virtual_machine(u_maps) -> None:
     states = [b.initial_state(gaps_m=0.010, currents_A=20.0) for b in banks]
     u = float(banks[0].resistance_ohm[0]) * 20.0
     for k in range(60):
-        g0, gd = _gap_sine(k)
+        g0, gd = gap_sine(k)
         outs = []
         for j, b in enumerate(banks):
             states[j], o = b.step(states[j], DT, u, g0, gd)

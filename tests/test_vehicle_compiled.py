@@ -14,7 +14,7 @@ from maglevkit.errors import InputError, OutOfRangeError
 from maglevkit.reduced.bank import MagnetBank
 from maglevkit.vehicle import Guideway
 from maglevkit.vehicle.irregularities import HarmonicProfile, Profile
-from maglevkit.vehicle.simulation import Failure, VehicleModel, parse_irregularity
+from maglevkit.vehicle.simulation import Failure, VehicleModel, VehicleRun, parse_irregularity
 from maglevkit.vehicle.train import load_vehicle
 
 # Compiled and NumPy loops do the same arithmetic in a different order (sums over modes and
@@ -49,19 +49,39 @@ def worst_difference(a: Any, b: Any) -> dict[str, float]:
     return out
 
 
+def loops_agree(model: Any, rtol: float, **run_kw: Any) -> tuple[Any, Any]:
+    """Fly ``model`` (a VehicleModel or CrossSectionModel; ``run_kw`` as for its ``run``)
+    in the compiled step and in the reference loop; asserts they agree to ``rtol`` of
+    each variable's largest value (worst_difference). Returns (compiled, reference)."""
+    rc = model.run(**run_kw, loop="compiled")
+    rp = model.run(**run_kw, loop="python")
+    worst = worst_difference(rc, rp)
+    assert max(worst.values()) < rtol, worst
+    return rc, rp
+
+
+def heave_pitch_runs(m: VehicleModel, rtol: float) -> tuple[VehicleRun, VehicleRun]:
+    """The heave-pitch scenario (400 km/h, sag + random irregularity, circuit s2m4/front
+    failing at 0.1 s, 0.3 s; also used by the eddy-state vehicles' tests) through
+    loops_agree; asserts the runs say which loop flew them. Returns (compiled,
+    reference)."""
+    prof = parse_irregularity("sag:0.5e-3+random:0.3e-3:1",
+                              span_length_m=m.guideway.span.length_m)
+    rc, rp = loops_agree(m, rtol, speed_m_per_s=400 / 3.6, duration_s=0.3,
+                         irregularity=prof, failures=[Failure("s2m4/front", 0.1)])
+    assert (rc.loop, rp.loop) == ("compiled", "python")
+    return rc, rp
+
+
 def test_compiled_loop_equals_python_loop(model: VehicleModel) -> None:
     """400 km/h on the elastic guideway, sag + random irregularity, a circuit failure, the
     moving boundary recycling a span: the whole dataset agrees to RTOL."""
+    rc, rp = heave_pitch_runs(model, RTOL)
     prof = parse_irregularity("sag:0.5e-3+random:0.3e-3:1",
                               span_length_m=model.guideway.span.length_m)
-    kw: dict[str, Any] = dict(speed_m_per_s=400 / 3.6, duration_s=0.3, irregularity=prof,
-                              failures=[Failure("s2m4/front", 0.1)])
-    rc = model.run(**kw, loop="compiled")
-    rp = model.run(**kw, loop="python")
-    assert (rc.loop, rp.loop) == ("compiled", "python")
-    assert model.run(**{**kw, "duration_s": 0.01}).loop == "compiled"     # the default
-    worst = worst_difference(rc, rp)
-    assert max(worst.values()) < RTOL, worst
+    short = model.run(speed_m_per_s=400 / 3.6, duration_s=0.01, irregularity=prof,
+                      failures=[Failure("s2m4/front", 0.1)])
+    assert short.loop == "compiled"     # the default
     # the run exercised what it should: the window moved on by a span, the failed circuit
     # has voltage 0 after 0.1 s, the gaps moved (not a trivially steady run)
     span = rp.dataset.span_index.values

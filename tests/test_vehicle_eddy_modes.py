@@ -12,10 +12,12 @@ import numpy as np
 import pytest
 
 from maglevkit.errors import InputError, ParameterFileError
-from maglevkit.vehicle.simulation import Failure, VehicleModel, VehicleRun, parse_irregularity
+from maglevkit.vehicle.simulation import Failure, VehicleModel
 from maglevkit.vehicle.train import load_vehicle, parse_vehicle
 
-from .test_vehicle_compiled import worst_difference
+from .test_vehicle_compiled import loops_agree
+from .test_vehicle_ladder3 import heave_pitch_with_two_eddy_states
+from .test_vehicle_motion_eddy import nmpc_runs, record_bank_inputs, replay_circuits
 
 # Compiled and reference loops do the same arithmetic in another order (the bound of
 # tests/test_vehicle_ladder3.py; measured here 5.4e-14 of a variable's largest value)
@@ -36,27 +38,9 @@ def test_heave_pitch_compiled_step_carries_the_branch_currents(model: VehicleMod
     m = model
     assert m.bank.n_eddy_states == 2 and m.bank.eddy_modes == 2 and not m.bank.motion_eddy
     assert m.bank.freewheel
-    nc = m.bank.n_circuits
-    lay = m.step_function(1e-3).layout
-    assert lay.state["I_e"].stop - lay.state["I_e"].start == 2 * nc
-    prof = parse_irregularity("sag:0.5e-3+random:0.3e-3:1",
-                              span_length_m=m.guideway.span.length_m)
-    kw: dict[str, Any] = dict(speed_m_per_s=400 / 3.6, duration_s=0.3, irregularity=prof,
-                              failures=[Failure("s2m4/front", 0.1)])
-    rc = m.run(**kw, loop="compiled")
-    rp = m.run(**kw, loop="python")
-    worst = worst_difference(rc, rp)
-    assert max(worst.values()) <= RTOL, worst
-    ie = rp.dataset.eddy_current
-    assert ie.dims == ("time", "circuit", "eddy_state") and ie.shape[1:] == (nc, 2)
-    assert list(ie.eddy_state.values) == ["I_e1", "I_e2"]
-    # a swap of the branches or of circuits in the column-major block would show above
-    # as an O(1) difference: the two branches differ (measured peaks 2.7 A and 2.4 A)
-    peaks = np.abs(ie.values).max(axis=(0, 1))
-    assert float(np.abs(ie.values[0]).max()) == 0.0 and peaks.min() > 0.5
-    assert abs(peaks[0] - peaks[1]) > 0.1
+    # measured peaks of the branch currents: 2.7 A and 2.4 A
+    rp = heave_pitch_with_two_eddy_states(m)
     assert "eddy network (eddy_modes = 2)" in rp.dataset.attrs["magnets"]
-    assert float(rp.dataset.current.values.min()) >= -1e-12
 
 
 def test_vehicle_replayed_through_the_single_model(model: VehicleModel) -> None:
@@ -69,43 +53,15 @@ def test_vehicle_replayed_through_the_single_model(model: VehicleModel) -> None:
 
     v, f = 400 / 3.6, 50.0
     m = VehicleModel(load_vehicle(), rigid=True, eddy_modes=2)
-    calls: list[tuple[np.ndarray, np.ndarray, np.ndarray]] = []
-    step = m.bank.step
-
-    def spy(state: Any, dt: float, u: Any, gaps: Any, rates: Any, **kw: Any) -> Any:
-        calls.append((np.array(u, dtype=float), np.array(gaps, dtype=float),
-                      np.array(rates, dtype=float)))
-        return step(state, dt, u, gaps, rates, **kw)
-
-    m.bank.step = spy             # type: ignore[method-assign]
-    run: VehicleRun = m.run(speed_m_per_s=v, duration_s=0.2, loop="python",
-                            irregularity=HarmonicProfile(0.05e-3, v / f),
-                            failures=[Failure("s2m4/front", 0.1)])
-    calls = calls[1:]             # the loop's first, discarded step (compiles the kernel)
+    run, calls = record_bank_inputs(m, speed_m_per_s=v, duration_s=0.2,
+                                    irregularity=HarmonicProfile(0.05e-3, v / f),
+                                    failures=[Failure("s2m4/front", 0.1)])
     ds = run.dataset
     names = list(ds.circuit.values)
     idx = [names.index("s2m4/front"), names.index("s2m4/rear")]
-    maps = m.maps["standard"]
-    cm = CurrentModel(maps, eddy_modes=2, freewheel=True, max_step_s=m.bank.max_step_s)
-    gap_names = list(cm.gap_names)
-
-    def poles(circuit_values: np.ndarray) -> np.ndarray:
-        out = np.empty(len(gap_names))
-        for c, val in zip(cm.circuit_names, circuit_values, strict=True):
-            for p in maps.pole_groups[c]:
-                out[gap_names.index(p)] = val
-        return out
-
-    st = cm.initial_state(gaps_m=poles(ds.gap.values[0, idx]), currents_A=m.trim_current_A[idx])
-    n = len(calls)
-    cur = np.empty((n + 1, 2))
-    eddy = np.zeros((n + 1, 2, 2))
-    cur[0] = ds.current.values[0, idx]
-    for k, (u, g, r) in enumerate(calls):
-        st, out = cm.step(st, 1e-3, u[idx], poles(g[idx]), poles(r[idx]))
-        cur[k + 1] = out.currents_A
-        assert st.eddy_currents_A is not None
-        eddy[k + 1] = np.reshape(st.eddy_currents_A, (2, 2))
+    cm = CurrentModel(m.maps["standard"], eddy_modes=2, freewheel=True,
+                      max_step_s=m.bank.max_step_s)
+    (cur,), eddy = replay_circuits(m, run, calls, ["s2m4/front", "s2m4/rear"], (cm,), (2, 2))
     veh_i, veh_e = ds.current.values[:, idx], ds.eddy_current.values[:, idx]
     # the same law and sub-steps, only the pole -> circuit gap average in between (the
     # three-state ladder's replay: 2.8e-14 A); bound ~1e-12 relative
@@ -166,11 +122,7 @@ def test_cross_section_compiled_step_carries_the_branch_currents() -> None:
     kw: dict[str, Any] = dict(speed_m_per_s=400 / 3.6, duration_s=0.3,
                               crosswind=Crosswind(5e3, rise_s=0.1, hold_s=0.1, start_s=0.05),
                               lateral=HarmonicProfile(0.2e-3, 100.0))
-    run_a = model.run(loop="python", **kw)
-    run_b = model.run(loop="compiled", **kw)
-    worst = worst_difference(run_b, run_a)
-    assert max(worst.values()) <= RTOL, worst
-    a = run_a.dataset
+    a = loops_agree(model, RTOL, **kw)[1].dataset
     lev, gui = a.levitation_eddy_current, a.guidance_eddy_current
     assert lev.dims == ("time", "levitation_circuit", "eddy_state")
     assert float(np.abs(lev.values).max()) > 0.05 and float(np.abs(gui.values).max()) > 0.05
@@ -273,14 +225,5 @@ def test_nmpc_flies_the_eddy_network_and_its_compiled_blocks_are_the_numpy_loop(
     m = VehicleModel(train, controller="mpc", eddy_modes=2)
     assert all(c.model.n_eddy == 2 * c.model.n_circuits and not c.model.bank.motion_eddy
                for c in m.circuit_controllers.values())
-    prof = parse_irregularity("sag:0.5e-3+random:0.3e-3:1",
-                              span_length_m=m.guideway.span.length_m)
-    kw: dict[str, Any] = dict(speed_m_per_s=400 / 3.6, duration_s=0.3, irregularity=prof)
-    a = m.run(loop="python", **kw)
-    b = m.run(**kw)
-    assert a.touchdown is None and b.touchdown is None and b.loop == "compiled"
-    rel = {k: float(np.nanmax(np.abs(a.dataset[k].values - b.dataset[k].values))
-                    / np.nanmax(np.abs(a.dataset[k].values)))
-           for k in ("gap", "voltage", "current", "eddy_current", "force")}
-    assert max(rel.values()) < 1e-7, rel
+    a = nmpc_runs(m)
     assert float(np.abs(a.dataset.eddy_current.values).max()) > 0.5

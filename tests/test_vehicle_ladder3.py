@@ -15,15 +15,39 @@ import numpy as np
 import pytest
 
 from maglevkit.errors import InputError, MaglevkitWarning, ParameterFileError
-from maglevkit.vehicle.simulation import Failure, VehicleModel, VehicleRun, parse_irregularity
+from maglevkit.vehicle.simulation import VehicleModel, VehicleRun
 from maglevkit.vehicle.train import load_vehicle, parse_vehicle
 
-from .test_vehicle_compiled import worst_difference
+from .test_vehicle_compiled import heave_pitch_runs, loops_agree
+from .test_vehicle_motion_eddy import nmpc_runs, record_bank_inputs, replay_circuits
 
 # Compiled and reference loops do the same arithmetic in another order (the bound of
 # tests/test_vehicle_motion_eddy.py; measured here 3.5e-14 of a variable's largest value
 # on the heave-pitch run below)
 RTOL = 1e-10
+
+
+def heave_pitch_with_two_eddy_states(m: VehicleModel) -> VehicleRun:
+    """The heave-pitch scenario (heave_pitch_runs, RTOL) on a vehicle with two eddy states
+    per circuit: the compiled step's state holds 2 n_c of them (column-major), the
+    reference loop's dataset records them per circuit as I_e1, I_e2 (the compiled loop's
+    in the same layout), both start at 0 and move (peaks > 0.5 A) and differ (by > 0.1 A,
+    so that a swap of the two or of circuits in the column-major block shows as an O(1)
+    difference between the loops), and the coil current never reverses (the chopper floor
+    U >= -R_a I_u, the diodes). Returns the reference loop's run."""
+    nc = m.bank.n_circuits
+    lay = m.step_function(1e-3).layout
+    assert lay.state["I_e"].stop - lay.state["I_e"].start == 2 * nc
+    rc, rp = heave_pitch_runs(m, RTOL)
+    ie = rp.dataset.eddy_current
+    assert ie.dims == ("time", "circuit", "eddy_state") and ie.shape[1:] == (nc, 2)
+    assert list(ie.eddy_state.values) == ["I_e1", "I_e2"]
+    assert np.array_equal(rc.dataset.eddy_current.dims, ie.dims)
+    peaks = np.abs(ie.values).max(axis=(0, 1))
+    assert float(np.abs(ie.values[0]).max()) == 0.0 and peaks.min() > 0.5
+    assert abs(peaks[0] - peaks[1]) > 0.1
+    assert float(rp.dataset.current.values.min()) >= -1e-12
+    return rp
 
 
 def test_heave_pitch_compiled_step_carries_both_eddy_states() -> None:
@@ -33,31 +57,9 @@ def test_heave_pitch_compiled_step_carries_both_eddy_states() -> None:
     are recorded per circuit and move, the coil current stays >= 0."""
     m = VehicleModel(load_vehicle(), motion_eddy=True, eddy_branches=2)
     assert m.bank.n_eddy_states == 2 and m.eddy_branches == 2
-    nc = m.bank.n_circuits
-    lay = m.step_function(1e-3).layout
-    assert lay.state["I_e"].stop - lay.state["I_e"].start == 2 * nc
-    prof = parse_irregularity("sag:0.5e-3+random:0.3e-3:1",
-                              span_length_m=m.guideway.span.length_m)
-    kw: dict[str, Any] = dict(speed_m_per_s=400 / 3.6, duration_s=0.3, irregularity=prof,
-                              failures=[Failure("s2m4/front", 0.1)])
-    rc = m.run(**kw, loop="compiled")
-    rp = m.run(**kw, loop="python")
-    assert (rc.loop, rp.loop) == ("compiled", "python")
-    worst = worst_difference(rc, rp)
-    assert max(worst.values()) <= RTOL, worst
-    ie = rp.dataset.eddy_current
-    assert ie.dims == ("time", "circuit", "eddy_state") and ie.shape[1:] == (nc, 2)
-    assert list(ie.eddy_state.values) == ["I_e1", "I_e2"]
-    # the compiled loop's column-major block read back in the bank's (n_c, 2) order: a
-    # swap of I_e1 and I_e2 or of circuits would show as an O(1) difference above; here
-    # also the two states differ (measured peaks 3.1 A and 3.9 A), so a swap is visible
-    assert np.array_equal(rc.dataset.eddy_current.dims, ie.dims)
-    peaks = np.abs(ie.values).max(axis=(0, 1))
-    assert float(np.abs(ie.values[0]).max()) == 0.0 and peaks.min() > 0.5
-    assert abs(peaks[0] - peaks[1]) > 0.1
+    # measured peaks of I_e1, I_e2: 3.1 A and 3.9 A
+    rp = heave_pitch_with_two_eddy_states(m)
     assert "three-state" in rp.dataset.attrs["magnets"]
-    # the chopper floor U >= -R_a (I_L + I_e1 + I_e2): the coil current never reverses
-    assert float(rp.dataset.current.values.min()) >= -1e-12
 
 
 def test_three_state_vehicle_replayed_and_held_against_the_detailed_model() -> None:
@@ -74,18 +76,8 @@ def test_three_state_vehicle_replayed_and_held_against_the_detailed_model() -> N
 
     v, f = 400 / 3.6, 50.0
     m = VehicleModel(load_vehicle(), rigid=True, motion_eddy=True, eddy_branches=2)
-    calls: list[tuple[np.ndarray, np.ndarray, np.ndarray]] = []
-    step = m.bank.step
-
-    def spy(state: Any, dt: float, u: Any, gaps: Any, rates: Any, **kw: Any) -> Any:
-        calls.append((np.array(u, dtype=float), np.array(gaps, dtype=float),
-                      np.array(rates, dtype=float)))
-        return step(state, dt, u, gaps, rates, **kw)
-
-    m.bank.step = spy             # type: ignore[method-assign]
-    run: VehicleRun = m.run(speed_m_per_s=v, duration_s=0.3, loop="python",
-                            irregularity=HarmonicProfile(0.05e-3, v / f))
-    calls = calls[1:]             # the loop's first, discarded step (compiles the kernel)
+    run, calls = record_bank_inputs(m, speed_m_per_s=v, duration_s=0.3,
+                                    irregularity=HarmonicProfile(0.05e-3, v / f))
     ds = run.dataset
     names = list(ds.circuit.values)
     idx = [names.index("s2m4/front"), names.index("s2m4/rear")]
@@ -95,26 +87,7 @@ def test_three_state_vehicle_replayed_and_held_against_the_detailed_model() -> N
     models = (CurrentModel(maps, motion_eddy=True, eddy_branches=2, max_step_s=h),
               CurrentModel(maps, motion_eddy=True, max_step_s=h),
               CurrentModel(maps, max_step_s=h), FluxModel(m.magnets["standard"]))
-    gap_names = list(models[0].gap_names)
-
-    def poles(circuit_values: np.ndarray) -> np.ndarray:
-        out = np.empty(len(gap_names))
-        for c, val in zip(models[0].circuit_names, circuit_values, strict=True):
-            for p in maps.pole_groups[c]:
-                out[gap_names.index(p)] = val
-        return out
-
-    g0, i0 = poles(ds.gap.values[0, idx]), m.trim_current_A[idx]
-    states = [mod.initial_state(gaps_m=g0, currents_A=i0) for mod in models]
-    n = len(calls)
-    cur = np.empty((len(models), n + 1, 2))
-    eddy = np.zeros((n + 1, 2, 2))
-    cur[:, 0] = ds.current.values[0, idx]
-    for k, (u, g, r) in enumerate(calls):
-        for j, mod in enumerate(models):
-            states[j], out = mod.step(states[j], 1e-3, u[idx], poles(g[idx]), poles(r[idx]))
-            cur[j, k + 1] = out.currents_A
-        eddy[k + 1] = states[0].eddy_currents_A
+    cur, eddy = replay_circuits(m, run, calls, ["s2m4/front", "s2m4/rear"], models, (2, 2))
     veh_i, veh_e = ds.current.values[:, idx], ds.eddy_current.values[:, idx]
     # the same law and sub-steps, only the pole -> circuit gap average in between:
     # measured 2.8e-14 A (coil, ~50 A) and 1.3e-15 A (eddy); bound ~1e-12 relative
@@ -206,11 +179,7 @@ def test_cross_section_compiled_step_carries_both_eddy_states() -> None:
     kw: dict[str, Any] = dict(speed_m_per_s=400 / 3.6, duration_s=0.5,
                               crosswind=Crosswind(5e3, rise_s=0.2, hold_s=0.1, start_s=0.2),
                               lateral=HarmonicProfile(0.2e-3, 100.0))
-    run_a = model.run(loop="python", **kw)
-    run_b = model.run(loop="compiled", **kw)
-    worst = worst_difference(run_b, run_a)
-    assert max(worst.values()) <= RTOL, worst
-    a = run_a.dataset
+    a = loops_agree(model, RTOL, **kw)[1].dataset
     lev, gui = a.levitation_eddy_current, a.guidance_eddy_current
     assert lev.dims == ("time", "levitation_circuit", "eddy_state")
     assert float(np.abs(lev.values).max()) > 0.05 and float(np.abs(gui.values).max()) == 0.0
@@ -293,14 +262,5 @@ def test_nmpc_flies_the_three_state_ladder_and_its_compiled_blocks_are_the_numpy
     m = VehicleModel(train, controller="mpc", motion_eddy=True, eddy_branches=2)
     assert all(c.model.n_eddy == 2 * c.model.n_circuits
                for c in m.circuit_controllers.values())
-    prof = parse_irregularity("sag:0.5e-3+random:0.3e-3:1",
-                              span_length_m=m.guideway.span.length_m)
-    kw: dict[str, Any] = dict(speed_m_per_s=400 / 3.6, duration_s=0.3, irregularity=prof)
-    a = m.run(loop="python", **kw)
-    b = m.run(**kw)
-    assert a.touchdown is None and b.touchdown is None and b.loop == "compiled"
-    rel = {k: float(np.nanmax(np.abs(a.dataset[k].values - b.dataset[k].values))
-                    / np.nanmax(np.abs(a.dataset[k].values)))
-           for k in ("gap", "voltage", "current", "eddy_current", "force")}
-    assert max(rel.values()) < 1e-7, rel
+    a = nmpc_runs(m)
     assert float(np.abs(a.dataset.eddy_current.values).max()) > 1.0    # measured 8.2 A

@@ -16,7 +16,7 @@ from maglevkit.errors import InputError, ParameterFileError
 from maglevkit.vehicle.simulation import Failure, VehicleModel, VehicleRun, parse_irregularity
 from maglevkit.vehicle.train import load_vehicle, parse_vehicle
 
-from .test_vehicle_compiled import worst_difference
+from .test_vehicle_compiled import heave_pitch_runs, loops_agree
 
 # Compiled and reference loops do the same arithmetic in another order (as
 # tests/test_vehicle_compiled.py, whose bound this is: measured there 5.4e-13 of a
@@ -29,21 +29,90 @@ def ladder_model() -> VehicleModel:
     return VehicleModel(load_vehicle(), motion_eddy=True)
 
 
+def record_bank_inputs(m: VehicleModel, **run_kw: Any
+                       ) -> tuple[VehicleRun, list[tuple[np.ndarray, np.ndarray, np.ndarray]]]:
+    """Fly ``m`` in the reference loop (``loop="python"``, ``run_kw`` as for
+    ``VehicleModel.run``) and record what its bank's ``step`` received each step:
+    (voltages V, gaps m, gap rates m/s) per circuit, without the loop's first, discarded
+    step (the one that compiles the kernel)."""
+    calls: list[tuple[np.ndarray, np.ndarray, np.ndarray]] = []
+    step = m.bank.step
+
+    def spy(state: Any, dt: float, u: Any, gaps: Any, rates: Any, **kw: Any) -> Any:
+        calls.append((np.array(u, dtype=float), np.array(gaps, dtype=float),
+                      np.array(rates, dtype=float)))
+        return step(state, dt, u, gaps, rates, **kw)
+
+    m.bank.step = spy             # type: ignore[method-assign]
+    run: VehicleRun = m.run(loop="python", **run_kw)
+    return run, calls[1:]
+
+
+def replay_circuits(m: VehicleModel, run: VehicleRun,
+                    calls: list[tuple[np.ndarray, np.ndarray, np.ndarray]],
+                    circuits: list[str], models: tuple[Any, ...],
+                    eddy_shape: tuple[int, ...]) -> tuple[np.ndarray, np.ndarray]:
+    """Replay the vehicle's ``circuits`` (one magnet's) through single ``models``
+    (``CurrentModel``/``FluxModel`` of the "standard" magnet): started at the run's first
+    gaps and the trim currents, stepped at 1e-3 s with the recorded voltages, gaps and gap
+    rates (each circuit's value given to its poles, via ``models[0]``'s pole groups).
+
+    Returns the coil currents (len(models), n_t, n_circuits) in A, row 0 the run's, and
+    ``models[0]``'s eddy state reshaped to ``eddy_shape`` per step (n_t, *eddy_shape) in
+    A, row 0 zero."""
+    ds = run.dataset
+    names = list(ds.circuit.values)
+    idx = [names.index(c) for c in circuits]
+    maps = m.maps["standard"]
+    gap_names = list(models[0].gap_names)
+
+    def poles(circuit_values: np.ndarray) -> np.ndarray:
+        out = np.empty(len(gap_names))
+        for c, val in zip(models[0].circuit_names, circuit_values, strict=True):
+            for p in maps.pole_groups[c]:
+                out[gap_names.index(p)] = val
+        return out
+
+    g0, i0 = poles(ds.gap.values[0, idx]), m.trim_current_A[idx]
+    states = [mod.initial_state(gaps_m=g0, currents_A=i0) for mod in models]
+    n = len(calls)
+    cur = np.empty((len(models), n + 1, len(idx)))
+    eddy = np.zeros((n + 1, *eddy_shape))
+    cur[:, 0] = ds.current.values[0, idx]
+    for k, (u, g, r) in enumerate(calls):
+        for j, mod in enumerate(models):
+            states[j], out = mod.step(states[j], 1e-3, u[idx], poles(g[idx]), poles(r[idx]))
+            cur[j, k + 1] = out.currents_A
+        assert states[0].eddy_currents_A is not None
+        eddy[k + 1] = np.reshape(states[0].eddy_currents_A, eddy_shape)
+    return cur, eddy
+
+
+def nmpc_runs(m: VehicleModel) -> VehicleRun:
+    """The NMPC scenario of the eddy-state vehicles (400 km/h, bundled irregularity,
+    0.3 s) flown in the NumPy loop and in compiled blocks; asserts no touchdown and that
+    the two agree to 1e-7 of each variable's largest value (the bound of
+    tests/test_vehicle_controllers.py's eq. 8 NMPC). Returns the NumPy loop's run."""
+    prof = parse_irregularity("sag:0.5e-3+random:0.3e-3:1",
+                              span_length_m=m.guideway.span.length_m)
+    kw: dict[str, Any] = dict(speed_m_per_s=400 / 3.6, duration_s=0.3, irregularity=prof)
+    a = m.run(loop="python", **kw)
+    b = m.run(**kw)
+    assert a.touchdown is None and b.touchdown is None and b.loop == "compiled"
+    rel = {k: float(np.nanmax(np.abs(a.dataset[k].values - b.dataset[k].values))
+                    / np.nanmax(np.abs(a.dataset[k].values)))
+           for k in ("gap", "voltage", "current", "eddy_current", "force")}
+    assert max(rel.values()) < 1e-7, rel
+    return a
+
+
 def test_heave_pitch_compiled_step_carries_the_eddy_currents(ladder_model: VehicleModel) -> None:
     """400 km/h, elastic guideway, sag + random irregularity, a circuit failure: the
     compiled step with I_e in its state equals the reference loop (bank.step) to RTOL,
     and the eddy currents are recorded and move."""
     m = ladder_model
     assert m.bank.motion_eddy
-    prof = parse_irregularity("sag:0.5e-3+random:0.3e-3:1",
-                              span_length_m=m.guideway.span.length_m)
-    kw: dict[str, Any] = dict(speed_m_per_s=400 / 3.6, duration_s=0.3, irregularity=prof,
-                              failures=[Failure("s2m4/front", 0.1)])
-    rc = m.run(**kw, loop="compiled")
-    rp = m.run(**kw, loop="python")
-    assert (rc.loop, rp.loop) == ("compiled", "python")
-    worst = worst_difference(rc, rp)
-    assert max(worst.values()) <= RTOL, worst
+    rc, rp = heave_pitch_runs(m, RTOL)
     ie = rp.dataset.eddy_current
     assert ie.attrs["units"] == "A"
     # starts in the ladder's steady state (V_m = R_2 I_e = 0) and is driven by the gap
@@ -83,14 +152,10 @@ def test_cross_section_compiled_step_carries_the_eddy_currents() -> None:
                                          crosswind=gust),
                              {"levitation": True, "guidance": True})):
         assert model.bank.motion_eddy
-        run_a = model.run(loop="python", **kw)
-        run_b = model.run(loop="compiled", **kw)
-        a = run_a.dataset
+        # measured 5.6e-16 (levitation) on the full scenario
+        a = loops_agree(model, RTOL, **kw)[1].dataset
         live = np.delete(a.guidance_current.values, 0, axis=1)
         assert live.min() > 5.0 and a.levitation_current.values.min() > 5.0
-        worst = worst_difference(run_b, run_a)
-        # measured 5.6e-16 (levitation) on the full scenario
-        assert max(worst.values()) <= RTOL, worst
         for kind, moves in eddy.items():
             peak = float(np.abs(a[f"{kind}_eddy_current"].values).max())
             # eq. 8 circuits keep I_e = 0 exactly; ladder circuits carry 0.1-10 A here
@@ -126,18 +191,8 @@ def test_ladder_vehicle_replayed_by_current_model_and_held_against_the_detailed_
 
     v, f = 400 / 3.6, 50.0
     m = VehicleModel(load_vehicle(), rigid=True, motion_eddy=True)
-    calls: list[tuple[np.ndarray, np.ndarray, np.ndarray]] = []
-    step = m.bank.step
-
-    def spy(state: Any, dt: float, u: Any, gaps: Any, rates: Any, **kw: Any) -> Any:
-        calls.append((np.array(u, dtype=float), np.array(gaps, dtype=float),
-                      np.array(rates, dtype=float)))
-        return step(state, dt, u, gaps, rates, **kw)
-
-    m.bank.step = spy             # type: ignore[method-assign]
-    run: VehicleRun = m.run(speed_m_per_s=v, duration_s=0.3, loop="python",
-                            irregularity=HarmonicProfile(0.05e-3, v / f))
-    calls = calls[1:]             # the loop's first, discarded step (compiles the kernel)
+    run, calls = record_bank_inputs(m, speed_m_per_s=v, duration_s=0.3,
+                                    irregularity=HarmonicProfile(0.05e-3, v / f))
     ds = run.dataset
     names = list(ds.circuit.values)
     idx = [names.index("s2m4/front"), names.index("s2m4/rear")]
@@ -148,26 +203,8 @@ def test_ladder_vehicle_replayed_by_current_model_and_held_against_the_detailed_
     ladder = CurrentModel(maps, motion_eddy=True, max_step_s=m.bank.max_step_s)
     eq8 = CurrentModel(maps, max_step_s=m.bank.max_step_s)
     flux = FluxModel(m.magnets["standard"])
-    gap_names = list(ladder.gap_names)
-
-    def poles(circuit_values: np.ndarray) -> np.ndarray:
-        out = np.empty(len(gap_names))
-        for c, val in zip(ladder.circuit_names, circuit_values, strict=True):
-            for p in maps.pole_groups[c]:
-                out[gap_names.index(p)] = val
-        return out
-
-    g0, i0 = poles(ds.gap.values[0, idx]), m.trim_current_A[idx]
-    states = [mod.initial_state(gaps_m=g0, currents_A=i0) for mod in (ladder, eq8, flux)]
-    n = len(calls)
-    cur = np.empty((3, n + 1, 2))
-    eddy = np.zeros((n + 1, 2))
-    cur[:, 0] = ds.current.values[0, idx]
-    for k, (u, g, r) in enumerate(calls):
-        for j, mod in enumerate((ladder, eq8, flux)):
-            states[j], out = mod.step(states[j], 1e-3, u[idx], poles(g[idx]), poles(r[idx]))
-            cur[j, k + 1] = out.currents_A
-        eddy[k + 1] = states[0].eddy_currents_A
+    cur, eddy = replay_circuits(m, run, calls, ["s2m4/front", "s2m4/rear"],
+                                (ladder, eq8, flux), (2,))
     veh_i, veh_e = ds.current.values[:, idx], ds.eddy_current.values[:, idx]
     # the same law and sub-steps, only the pole -> circuit gap average in between:
     # measured 2.8e-14 A (coil, ~50 A) and 1.3e-15 A (eddy); bound ~1e-12 relative
@@ -284,14 +321,5 @@ def test_nmpc_flies_the_ladder_and_its_compiled_blocks_are_the_numpy_loop() -> N
     train = dataclasses.replace(load_vehicle(), n_sections=1)
     m = VehicleModel(train, controller="mpc", motion_eddy=True)
     assert all(c.model.n_eddy == c.model.n_circuits for c in m.circuit_controllers.values())
-    prof = parse_irregularity("sag:0.5e-3+random:0.3e-3:1",
-                              span_length_m=m.guideway.span.length_m)
-    kw: dict[str, Any] = dict(speed_m_per_s=400 / 3.6, duration_s=0.3, irregularity=prof)
-    a = m.run(loop="python", **kw)
-    b = m.run(**kw)
-    assert a.touchdown is None and b.touchdown is None and b.loop == "compiled"
-    rel = {k: float(np.nanmax(np.abs(a.dataset[k].values - b.dataset[k].values))
-                    / np.nanmax(np.abs(a.dataset[k].values)))
-           for k in ("gap", "voltage", "current", "eddy_current", "force")}
-    assert max(rel.values()) < 1e-7, rel
+    a = nmpc_runs(m)
     assert float(np.abs(a.dataset.eddy_current.values).max()) > 1.0     # measured 12.6 A
