@@ -1144,6 +1144,7 @@ class CrossSectionModel:
                        rx_mag: np.ndarray, field_mid: np.ndarray, q_ext: np.ndarray,
                        fail_t: np.ndarray, n: int, progress: bool = False) -> tuple[Any, ...]:
         from ..errors import SolverError
+        from .stepkernel import eddy_block_as_state
 
         s = self.mechanics.system
         bank = self.bank
@@ -1219,9 +1220,7 @@ class CrossSectionModel:
         u[-1] = 0.0                  # the last record's step is not taken (as the NumPy loop)
         return (rec[:m, g_sl][:, ::2], frc, rec[:m, rc["current"]], u, rx, acc, touchdown,
                 last, outcome, None if "I_e" not in rc else
-                rec[:m, rc["I_e"]].reshape(m, -1, bank.n_circuits).transpose(0, 2, 1)
-                .reshape((m, bank.n_circuits) + ((bank.n_eddy_states,)
-                                                 if bank.n_eddy_states > 1 else ())))
+                eddy_block_as_state(rec[:m, rc["I_e"]], bank.n_circuits))
 
     def _result(self, v: float, dt: float, t: np.ndarray, rec_gap: np.ndarray,
                 rec_force: np.ndarray, rec_cur: np.ndarray, rec_u: np.ndarray,

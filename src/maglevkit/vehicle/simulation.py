@@ -1489,6 +1489,8 @@ class VehicleModel:
         before each block the controllers update from the gaps the step measures
         (:meth:`_sample_controllers`, as the NumPy loop).
         """
+        from .stepkernel import eddy_block_as_state
+
         hold = None
         if sampled is not None:
             gaps0, rates0, ctl_times, ctl_cpu, payload = sampled
@@ -1606,8 +1608,7 @@ class VehicleModel:
             rec[key][:n] = rr[:, rl[key]]
         rec_q[:n], rec_qd[:n], rec_fp[:n] = rr[:, rl["q"]], rr[:, rl["q_dot"]], rr[:, rl["force"]]
         if rec_ie is not None:     # the state's column-major block as the bank's shape
-            rec_ie[:n] = rr[:, rl["I_e"]].reshape(n, -1, bank.n_circuits).transpose(0, 2, 1).reshape(
-                rec_ie[:n].shape)
+            rec_ie[:n] = eddy_block_as_state(rr[:, rl["I_e"]], bank.n_circuits)
         if nm:
             rec_span[:n] = first_k[:n, None] + np.arange(n_sp)
             rec_mid[:n] = np.take_along_axis(rr[:, rl["midspan_ring"]], rec_span[:n] % n_sp,

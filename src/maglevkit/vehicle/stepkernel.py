@@ -359,6 +359,16 @@ def terminal_current(il: Any, ie: Any, n_circuits: int) -> Any:
     return out
 
 
+def eddy_block_as_state(block: np.ndarray, n_circuits: int) -> np.ndarray:
+    """A compiled step's recorded eddy-state block ``(n_t, n_e n_circuits)`` (column-major:
+    every circuit's ``I_e1``, then ``I_e2``, ...) in the bank's state shape: ``(n_t,
+    n_circuits)`` for one eddy state per circuit, ``(n_t, n_circuits, n_e)`` for more (as
+    :attr:`BankState.eddy_currents_A` with time in front)."""
+    n_t = block.shape[0]
+    out = block.reshape(n_t, -1, n_circuits).transpose(0, 2, 1)
+    return out[:, :, 0] if out.shape[2] == 1 else out
+
+
 def build_vehicle_parts(*, dt: float, nominal_gap_m: float, span_length_m: float,
                         origin_m: float, wavenumbers: np.ndarray, guideway_ad: np.ndarray,
                         guideway_bd: np.ndarray, n_spans: int, mech_ad: np.ndarray,
