@@ -61,17 +61,30 @@ def test_statics_csv_of_a_two_circuit_magnet(tmp_path: Path) -> None:
     assert res.exit_code == 0, res.output
     with out_csv.open() as fh:
         rows = list(csv.reader(fh))
-    assert rows[0] == ["gap_m", "current_A", "force_N",
+    assert rows[0] == ["gap_m", "current_A", "force_N", "force_N_front", "force_N_rear",
                        "flux_linkage_Wb_front", "flux_linkage_Wb_rear",
+                       "mutual_inductance_H_front", "mutual_inductance_H_rear",
+                       "mutual_dpsi_dgap_Wb_per_m_front", "mutual_dpsi_dgap_Wb_per_m_rear",
                        "differential_inductance_H_front", "differential_inductance_H_rear",
                        "dpsi_dgap_Wb_per_m_front", "dpsi_dgap_Wb_per_m_rear"]
     assert rows[1][2] == "0"            # no force at zero current, and no "-0"
     sol = mk.solve_statics(mk.load_magnet("tr09-standard", eddy_currents=False), gaps_m=0.010,
                            currents_A=34.0)
-    data = np.array(rows[2], dtype=float)
+    data = dict(zip(rows[0], np.array(rows[2], dtype=float), strict=True))
     # 9 significant digits in the file
-    np.testing.assert_allclose(data[3:5], sol.flux_linkage_Wb, rtol=1e-8)
-    np.testing.assert_allclose(data[5:7], sol.differential_inductance_H.sum(-1), rtol=1e-8)
+    for j, c in enumerate(("front", "rear")):
+        poles = slice(0, 6) if c == "front" else slice(6, 12)   # p01-p06 front, p07-p12 rear
+        other = slice(6, 12) if c == "front" else slice(0, 6)
+        np.testing.assert_allclose(data[f"flux_linkage_Wb_{c}"], sol.flux_linkage_Wb[j],
+                                   rtol=1e-8)
+        np.testing.assert_allclose(data[f"force_N_{c}"], sol.pole_force_N[poles].sum(),
+                                   rtol=1e-8)
+        np.testing.assert_allclose(data[f"mutual_inductance_H_{c}"],
+                                   sol.differential_inductance_H[j, 1 - j], rtol=1e-8)
+        np.testing.assert_allclose(data[f"mutual_dpsi_dgap_Wb_per_m_{c}"],
+                                   sol.dpsi_dgap_Wb_per_m[j, other].sum(), rtol=1e-8)
+        np.testing.assert_allclose(data[f"differential_inductance_H_{c}"],
+                                   sol.differential_inductance_H[j].sum(), rtol=1e-8)
 
 
 @pytest.mark.parametrize("sub", ["build", "plot"])

@@ -299,7 +299,10 @@ def test_gap_in_mm_is_warned_with_the_row(tmp_path: Path) -> None:
 
 
 def test_mixed_and_partial_circuit_columns(tmp_path: Path) -> None:
-    for header, message in ((["gap_m", "current_A", "force_N", "flux_linkage_Wb_a"], "mixed"),
+    # an unsuffixed force_N beside suffixed columns is a total force; any other mix is refused
+    for header, message in ((["gap_m", "current_A", "flux_linkage_Wb", "force_N_a"],
+                             r"with and without a _<circuit> suffix are mixed \(\['flux_linkage"
+                             r"_Wb'\]"),
                             (["gap_m", "current_A", "flux_linkage_Wb_a", "flux_linkage_Wb_b",
                               "force_N_a"], r"force_N is given for circuit\(s\) \['a'\] but "
                                             r"not for \['b'\]")):

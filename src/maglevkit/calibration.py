@@ -141,6 +141,10 @@ def read_points(path: str | Path) -> StaticPoints:
             arrays[q] = np.stack([rows.columns[(q, c)] for c in rows.circuit_keys], axis=1)
         else:
             arrays[q] = None
+    if rows.total_force_N is not None and arrays["force_N"] is None:
+        warnings.warn(f"{rows.source}: the total force_N is not fitted: calibrate fits "
+                      "each circuit's force (force_N_<circuit> columns, which the table "
+                      "lacks)", DataWarning, stacklevel=2)
     if np.any(rows.current_A <= 0.0):
         i = int(np.argmax(rows.current_A <= 0.0))
         raise DataError(f"{rows.source}: row {rows.lines[i]}: current_A = "

@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import math
 import os
+from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -35,6 +36,7 @@ from .inputs import per_name_values
 __all__ = [
     "StaticSolution",
     "circuit_pole_groups",
+    "pole_groups_from_sensitivities",
     "solve_statics",
     "magnetic_energy",
     "coenergy",
@@ -650,9 +652,29 @@ def circuit_pole_groups(model: Any, *, gap_m: float,
     if len(net.circuits) == 1:
         return {net.circuit_names[0]: net.gap_names}
     sol = solve_statics(net, gaps_m=gap_m, currents_A=current_A)
-    owner = np.argmax(np.abs(sol.dpsi_dgap_Wb_per_m), axis=0)   # (n_gaps,)
-    groups = {c: tuple(g for g, o in zip(net.gap_names, owner, strict=True) if o == j)
-              for j, c in enumerate(net.circuit_names)}
+    return pole_groups_from_sensitivities(sol.dpsi_dgap_Wb_per_m, net.circuit_names,
+                                          net.gap_names)
+
+
+def pole_groups_from_sensitivities(dpsi_dgap_Wb_per_m: np.ndarray, circuit_names: Sequence[str],
+                                   gap_names: Sequence[str]) -> dict[str, tuple[str, ...]]:
+    """The rule of :func:`circuit_pole_groups` on given sensitivities: each pole (gap input)
+    belongs to the circuit ``argmax_j |dpsi_j/ds_k|``.
+
+    Parameters
+    ----------
+    dpsi_dgap_Wb_per_m : ndarray (n_circuits, n_gaps)
+        ``dpsi_j/ds_k`` [Wb/m] at one operating point.
+    circuit_names, gap_names : sequence of str
+
+    Raises
+    ------
+    InputError
+        A circuit that drives no pole of its own.
+    """
+    owner = np.argmax(np.abs(np.asarray(dpsi_dgap_Wb_per_m)), axis=0)   # (n_gaps,)
+    groups = {c: tuple(g for g, o in zip(gap_names, owner, strict=True) if o == j)
+              for j, c in enumerate(circuit_names)}
     empty = [c for c, g in groups.items() if not g]
     if empty:
         raise InputError(f"circuit(s) {empty} drive no pole of their own; the current-based model "

@@ -110,6 +110,14 @@ def check_grid(values: Any, what: str, unit: str, *, positive: bool) -> np.ndarr
     return arr
 
 
+def pole_group_point(gaps_m: np.ndarray, currents_A: np.ndarray) -> tuple[float, float]:
+    """The operating point at which the maps assign the poles to circuits
+    (:func:`circuit_pole_groups`): the middle gap of the grid and the larger of its middle
+    current and half its largest current [m], [A]."""
+    g, c = np.asarray(gaps_m, dtype=float), np.asarray(currents_A, dtype=float)
+    return float(g[g.size // 2]), float(max(c[c.size // 2], c[-1] / 2))
+
+
 def _statics_row(net: Network, s: float, currents: np.ndarray,
                  groups: dict[str, tuple[str, ...]]) -> dict[str, np.ndarray]:
     """Maps for one gap value over all currents (one executor task)."""
@@ -1046,7 +1054,7 @@ def build_maps(model: Any, *, gaps_m: Any, currents_A: Any, executor: Any = "aut
     net = as_network(model)
     g = check_grid(gaps_m, "gap", "m", positive=True)
     c = check_grid(currents_A, "current", "A", positive=False)
-    ref_gap, ref_current = float(g[g.size // 2]), float(max(c[c.size // 2], c[-1] / 2))
+    ref_gap, ref_current = pole_group_point(g, c)
     eddy_gap, eddy_current = _eddy_point(eddy_reference, g, c, ref_gap, ref_current)
     groups = circuit_pole_groups(net, gap_m=ref_gap, current_A=ref_current)
     ex, owned = _as_executor(executor, method, g.size * c.size)

@@ -51,13 +51,29 @@ from .._version import __version__
 from ..errors import DataError, DataWarning, InputError, PlausibilityWarning
 from ..models.inputs import per_name_values
 from ..validation import real_number
-from .maps import MAPS_FORMAT, CharacteristicMaps, check_grid, maps_dataset
+from .maps import MAPS_FORMAT, CharacteristicMaps, check_grid, maps_dataset, pole_group_point
 
 __all__ = ["GridTable", "TableReport", "TableRows", "csv_records", "eddy_resistance_from_step",
            "maps_from_table", "read_rows", "read_table", "RECIPROCITY_TOLERANCE"]
 
 QUANTITIES = ("force_N", "flux_linkage_Wb")
 """The tabulated quantities (CSV column prefixes and netCDF variable names)."""
+
+MUTUALS = ("mutual_inductance_H", "mutual_dpsi_dgap_Wb_per_m")
+"""Optional per-circuit columns of a table with several circuits: the parts of the
+symmetric-path slopes ``dpsi_j/dI`` and ``dpsi_j/ds`` that the *other* circuits make (their
+currents, their poles).  ``L~_j = dpsi_j/dI - mutual_inductance_H_j`` and
+``dpsi_j/ds_own = dpsi_j/ds - mutual_dpsi_dgap_Wb_per_m_j`` are then what the built maps
+hold (``dpsi_j/dI_j`` with the other currents fixed, the circuit's own poles moving); a
+table on a gap x current grid (every circuit at ``I``, all gaps at ``s``) cannot show them
+otherwise.  ``maglevkit statics --csv`` writes them."""
+
+TOTAL_FORCE_TOLERANCE = 1e-3
+"""Largest relative difference, per row, between a table's total ``force_N`` and the sum of
+its per-circuit ``force_N_<circuit>`` (relative to ``max(|total|, 1 % of the table's
+largest)``).  The statics' own CSV (9 significant digits) agrees to ~1e-8; a test bed's
+load cells to ~1e-3; a column of another magnet, a circuit left out or a unit slip by far
+more.  Above it the table is refused naming the row."""
 
 RECIPROCITY_TOLERANCE = 0.1
 """Default largest relative reciprocity residual per gap cell,
@@ -120,6 +136,12 @@ class GridTable:
         Where the data came from (file path or ``"<memory>"``).
     sha256 : str
         SHA-256 of the file's bytes (of the arrays for an in-memory table).
+    total_force_N : ndarray (n_gaps, n_currents) or None
+        Total force [N] of a table with several circuits (besides or instead of the
+        per-circuit ``force_N``).
+    mutual_inductance_H, mutual_dpsi_dgap_Wb_per_m : ndarray (n_circuits, n_gaps, n_currents) or None
+        The other circuits' parts of ``dpsi_j/dI`` [H] and ``dpsi_j/ds`` [Wb/m] on the
+        symmetric path (:data:`MUTUALS`).
     """
 
     gaps_m: np.ndarray
@@ -130,6 +152,9 @@ class GridTable:
     rows: np.ndarray
     source: str = "<memory>"
     sha256: str = ""
+    total_force_N: np.ndarray | None = None
+    mutual_inductance_H: np.ndarray | None = None
+    mutual_dpsi_dgap_Wb_per_m: np.ndarray | None = None
 
     def where(self, k: int, m: int) -> str:
         """``gap ... m, current ... A (row r)`` of grid point ``(k, m)``."""
@@ -141,16 +166,25 @@ class GridTable:
         return self.force_N if name == "force_N" else self.flux_linkage_Wb
 
 
+_TOTAL = "<total>"
+"""The circuit label of a table's total force in messages."""
+
+
 def _listed(table: GridTable, points: Sequence[tuple[int, int]], circuit: str | None) -> str:
     head = ", ".join(table.where(k, m) for k, m in points[:_MAX_LISTED])
     more = f" and {len(points) - _MAX_LISTED} more" if len(points) > _MAX_LISTED else ""
     who = f"circuit {circuit!r}: " if circuit is not None and len(table.circuits) > 1 else ""
+    if circuit == _TOTAL:
+        who = "total force_N: "
     return f"{who}{head}{more}"
 
 
-_COLUMN = re.compile(r"^(force_N|flux_linkage_Wb)(?:_([A-Za-z0-9][A-Za-z0-9_.-]*))?$")
+_COLUMN = re.compile(r"^(force_N|flux_linkage_Wb|mutual_inductance_H|mutual_dpsi_dgap_Wb_per_m)"
+                     r"(?:_([A-Za-z0-9][A-Za-z0-9_.-]*))?$")
 _ALLOWED = ("gap_m, current_A, force_N and/or flux_linkage_Wb (one column each per circuit "
-            "with a _<circuit> suffix when there are several)")
+            "with a _<circuit> suffix when there are several; then also a total force_N and "
+            "the coupling columns mutual_inductance_H_<circuit>, "
+            "mutual_dpsi_dgap_Wb_per_m_<circuit>)")
 #: Columns ``maglevkit statics --csv`` writes besides the ones a table needs: derived from the
 #: flux linkage, so not data of their own; a table that carries them is read without them
 #: (a DataWarning names them), so that the statics' own file can be read back.
@@ -170,9 +204,10 @@ def _hint(name: str) -> str:
     return ""
 
 
-def _columns(header: list[str], source: str) -> tuple[dict[str, int], dict[tuple[str, str], int],
-                                                    tuple[str, ...]]:
-    """Parse the header: (gap/current index, (quantity, circuit) -> index, circuits)."""
+def _columns(header: list[str], source: str
+             ) -> tuple[dict[str, int], dict[tuple[str, str], int], tuple[str, ...], int | None]:
+    """Parse the header: (gap/current index, (quantity, circuit) -> index, circuits, index of
+    a total ``force_N`` beside per-circuit columns or None)."""
     names = [h.strip() for h in header]
     seen: dict[str, int] = {}
     for i, n in enumerate(names):
@@ -183,7 +218,6 @@ def _columns(header: list[str], source: str) -> tuple[dict[str, int], dict[tuple
     base: dict[str, int] = {n: seen[n] for n in ("gap_m", "current_A") if n in seen}
     missing = [n for n in ("gap_m", "current_A") if n not in seen]
     data: dict[tuple[str, str], int] = {}
-    suffixed: list[bool] = []
     derived: list[str] = []
     for i, n in enumerate(names):
         if n in ("gap_m", "current_A"):
@@ -195,29 +229,42 @@ def _columns(header: list[str], source: str) -> tuple[dict[str, int], dict[tuple
         if m is None:
             raise DataError(f"{source}: unknown column {n!r} (column {i + 1}){_hint(n)}; "
                             f"allowed: {_ALLOWED}")
-        suffixed.append(m.group(2) is not None)
         data[(m.group(1), m.group(2) or "")] = i
     if derived:
         warnings.warn(f"{source}: column(s) {derived} (derived quantities, as `maglevkit statics` "
                       "writes them) are not read; the table's data are force_N and/or "
-                      "flux_linkage_Wb", DataWarning, stacklevel=3)
+                      "flux_linkage_Wb (and the mutual_* coupling columns)", DataWarning, stacklevel=3)
     if missing:
         raise DataError(f"{source}: the table lacks column(s) {missing}; columns: {_ALLOWED}")
-    if not data:
+    plain = [k for k in data if not k[1]]
+    total = None
+    if len(plain) < len(data) and plain:
+        if plain == [("force_N", "")]:
+            total = data.pop(("force_N", ""))     # the total force beside per-circuit columns
+        else:
+            raise DataError(f"{source}: columns with and without a _<circuit> suffix are mixed "
+                            f"({[names[data[k]] for k in plain]} beside "
+                            f"{[names[i] for k, i in data.items() if k[1]]}); with several "
+                            "circuits every column carries its circuit's suffix (only a total "
+                            "force_N may go without)")
+    coupling = [names[i] for k, i in data.items() if k[0] in MUTUALS and not k[1]]
+    if coupling:
+        raise DataError(f"{source}: column(s) {coupling} without a _<circuit> suffix: the "
+                        "mutual terms couple several circuits, one column per circuit "
+                        "(mutual_inductance_H_<circuit>, mutual_dpsi_dgap_Wb_per_m_<circuit>)")
+    if not any(k[0] in QUANTITIES for k in data) and total is None:
         raise DataError(f"{source}: the table has no force_N or flux_linkage_Wb column; "
                         f"columns: {_ALLOWED}")
-    if any(suffixed) and not all(suffixed):
-        raise DataError(f"{source}: columns with and without a _<circuit> suffix are mixed "
-                        f"({[names[i] for i in data.values()]}); with several circuits every "
-                        "force_N/flux_linkage_Wb column carries its circuit's suffix")
     circuits = tuple(dict.fromkeys(c for _, c in data))
-    for q in QUANTITIES:
+    for q in QUANTITIES + MUTUALS:
         have = [c for c in circuits if (q, c) in data]
         if have and len(have) != len(circuits):
             lack = [c for c in circuits if (q, c) not in data]
-            raise DataError(f"{source}: {q} is given for circuit(s) {have} but not for {lack}; "
-                            "give each quantity for every circuit or for none")
-    return base, data, circuits
+            raise DataError(f"{source}: {q} is given for circuit(s) {have} but not for {lack} "
+                            f"(columns {[f'{q}_{c}' for c in lack]} missing; a column suffix "
+                            "that names no circuit makes one of its own); give each quantity "
+                            "for every circuit or for none")
+    return base, data, circuits, total
 
 
 def _key(value: float) -> float:
@@ -243,6 +290,9 @@ class TableRows:
         Line number of each row (header = 1).
     source, sha256 : str
         File and SHA-256 of its bytes.
+    total_force_N : ndarray (n,) or None
+        A total ``force_N`` beside per-circuit columns (checked against the per-circuit
+        forces' sum when those are given too, :data:`TOTAL_FORCE_TOLERANCE`).
     """
 
     gap_m: np.ndarray
@@ -253,6 +303,7 @@ class TableRows:
     lines: np.ndarray
     source: str
     sha256: str
+    total_force_N: np.ndarray | None = None
 
 
 def read_rows(path: str | Path) -> TableRows:
@@ -307,7 +358,7 @@ def read_table(path: str | Path) -> GridTable:
         return _read_netcdf(p, digest)
     rows = _parse_csv(p, raw, digest)
     return _assemble(rows.gap_m, rows.current_A, rows.columns, rows.circuit_keys, rows.lines,
-                     str(p), digest, checked=True)
+                     str(p), digest, checked=True, total=rows.total_force_N)
 
 
 def csv_records(p: Path, raw: bytes) -> tuple[list[str] | None, list[tuple[int, list[str]]]]:
@@ -353,7 +404,7 @@ def _parse_csv(p: Path, raw: bytes, digest: str) -> TableRows:
     header, records = csv_records(p, raw)
     if header is None:
         raise DataError(f"{p}: the table is empty (expected a header row: {_ALLOWED})")
-    base, cols, circuits = _columns(header, str(p))
+    base, cols, circuits, total = _columns(header, str(p))
     if not records:
         raise DataError(f"{p}: the table has a header but no data rows")
     n = len(header)
@@ -375,9 +426,35 @@ def _parse_csv(p: Path, raw: bytes, digest: str) -> TableRows:
     lines = np.array([row for row, _ in records])
     gap, cur = values[:, base["gap_m"]], values[:, base["current_A"]]
     _check_axes(gap, cur, lines, str(p))
-    return TableRows(gap_m=gap, current_A=cur, columns={k: values[:, i] for k, i in cols.items()},
+    columns = {k: values[:, i] for k, i in cols.items()}
+    total_force = None if total is None else values[:, total]
+    if total_force is not None and ("force_N", circuits[0]) in columns:
+        _check_total_force(total_force, [columns[("force_N", c)] for c in circuits], circuits,
+                           lines, str(p))
+    return TableRows(gap_m=gap, current_A=cur, columns=columns,
                      circuit_keys=circuits, circuits=tuple(c or "coil" for c in circuits),
-                     lines=lines, source=str(p), sha256=digest)
+                     lines=lines, source=str(p), sha256=digest, total_force_N=total_force)
+
+
+def _check_total_force(total: np.ndarray, forces: Sequence[np.ndarray], circuits: Sequence[str],
+                       lines: np.ndarray, source: str) -> None:
+    """A total ``force_N`` must equal the sum of the per-circuit forces
+    (:data:`TOTAL_FORCE_TOLERANCE`), naming the first row where it does not."""
+    summed = np.sum(forces, axis=0)
+    scale = np.maximum(np.abs(total), RECIPROCITY_FLOOR * float(np.max(np.abs(total))))
+    rel = np.abs(summed - total) / np.where(scale > 0.0, scale, 1.0)
+    bad = np.nonzero(rel > TOTAL_FORCE_TOLERANCE)[0]
+    if bad.size:
+        r = int(bad[0])
+        where = f"row {lines[r]}" if lines[r] else f"point {r}"
+        parts = " + ".join(f"force_N_{c} {float(f[r]):.6g}" for c, f in zip(circuits, forces,
+                                                                               strict=True))
+        raise DataError(f"{source}: {where}: the total force_N = {float(total[r]):.6g} N is not "
+                        f"the sum of the circuits' forces {parts} = {float(summed[r]):.6g} N "
+                        f"(relative {float(rel[r]):.3g}, allowed {TOTAL_FORCE_TOLERANCE:g}; "
+                        f"{bad.size} row(s) differ): a circuit left out, a column of another "
+                        "magnet or another unit?  Give the total or agreeing per-circuit "
+                        "forces")
 
 
 def _check_axes(gap: np.ndarray, cur: np.ndarray, lines: np.ndarray, source: str) -> None:
@@ -403,7 +480,8 @@ def _check_axes(gap: np.ndarray, cur: np.ndarray, lines: np.ndarray, source: str
 
 def _assemble(gap: np.ndarray, cur: np.ndarray, cols: Mapping[tuple[str, str], np.ndarray],
               circuits: tuple[str, ...], lines: np.ndarray, source: str,
-              digest: str, *, checked: bool = False) -> GridTable:
+              digest: str, *, checked: bool = False, total: np.ndarray | None = None
+              ) -> GridTable:
     """Scattered rows -> a rectangular grid (checks duplicates, coverage, equidistance)."""
     def row(i: int) -> str:
         return f"row {lines[i]}" if lines[i] else f"point {i}"
@@ -446,7 +524,7 @@ def _assemble(gap: np.ndarray, cur: np.ndarray, cols: Mapping[tuple[str, str], n
     rows = np.zeros((gaps.size, currents.size), dtype=int)
     rows[index] = lines
     arrays: dict[str, np.ndarray | None] = {}
-    for q in QUANTITIES:
+    for q in QUANTITIES + MUTUALS:
         if (q, circuits[0]) not in cols:
             arrays[q] = None
             continue
@@ -455,9 +533,15 @@ def _assemble(gap: np.ndarray, cur: np.ndarray, cols: Mapping[tuple[str, str], n
             a[j][index] = cols[(q, c)]
         arrays[q] = a
     names = tuple(c or "coil" for c in circuits)
+    total_grid = None
+    if total is not None:
+        total_grid = np.empty((gaps.size, currents.size))
+        total_grid[index] = total
     return GridTable(gaps_m=gaps, currents_A=currents, circuits=names, force_N=arrays["force_N"],
                      flux_linkage_Wb=arrays["flux_linkage_Wb"], rows=rows, source=source,
-                     sha256=digest)
+                     sha256=digest, total_force_N=total_grid,
+                     mutual_inductance_H=arrays["mutual_inductance_H"],
+                     mutual_dpsi_dgap_Wb_per_m=arrays["mutual_dpsi_dgap_Wb_per_m"])
 
 
 def _read_netcdf(p: Path, digest: str) -> GridTable:
@@ -477,23 +561,35 @@ def _read_netcdf(p: Path, digest: str) -> GridTable:
     circuits = tuple(str(c) for c in data["circuit"].values) if "circuit" in data.dims \
         else ("",)
     cols: dict[tuple[str, str], np.ndarray] = {}
-    for q in have:
+    total = None
+    for q in have + [m for m in MUTUALS if m in data.data_vars]:
         v = data[q]
         dims = ("circuit", "gap", "current") if "circuit" in v.dims else ("gap", "current")
         if set(v.dims) != set(dims):
             raise DataError(f"{p}: variable {q} has dimensions {v.dims}; expected {dims}")
         arr = np.asarray(v.transpose(*dims).values, dtype=float)
+        if arr.ndim == 2 and len(circuits) > 1 and q != "force_N":
+            raise DataError(f"{p}: variable {q} has dimensions {v.dims} but the table has "
+                            f"circuits {list(circuits)}; expected ('circuit', 'gap', 'current') "
+                            "(only force_N may be the total over (gap, current))")
         arr = arr if arr.ndim == 3 else arr[None]
+        bad = np.argwhere(~np.isfinite(arr))
+        if bad.size:
+            j, k, m = bad[0]
+            raise DataError(f"{p}: {q} is not finite at gap {gaps[k]:g} m, current "
+                            f"{currents[m]:g} A"
+                            + (f" (circuit {circuits[j]!r})" if arr.shape[0] > 1 else ""))
+        if arr.shape[0] != len(circuits):      # a total force (gap, current)
+            total = arr[0].ravel()
+            continue
         for j, c in enumerate(circuits):
-            bad = np.argwhere(~np.isfinite(arr[j]))
-            if bad.size:
-                k, m = bad[0]
-                raise DataError(f"{p}: {q} is not finite at gap {gaps[k]:g} m, current "
-                                f"{currents[m]:g} A" + (f" (circuit {c!r})" if c else ""))
             cols[(q, c)] = arr[j].ravel()
     gg, cc = np.meshgrid(gaps, currents, indexing="ij")
+    if total is not None and ("force_N", circuits[0]) in cols:
+        _check_total_force(total, [cols[("force_N", c)] for c in circuits], circuits,
+                           np.zeros(gg.size, dtype=int), str(p))
     return _assemble(gg.ravel(), cc.ravel(), cols, circuits, np.zeros(gg.size, dtype=int),
-                     str(p), digest)
+                     str(p), digest, total=total)
 
 
 # ---------------------------------------------------------------------------- derivatives
@@ -589,9 +685,13 @@ def _points(mask: np.ndarray) -> list[tuple[int, int]]:
 
 def _monotonicity(table: GridTable, messages: list[str]) -> None:
     """psi strictly rising in I (required); psi, F falling in s and F rising in I (warned)."""
-    psi, force = table.flux_linkage_Wb, table.force_N
-    for j, c in enumerate(table.circuits):
-        if psi is not None:
+    psi = table.flux_linkage_Wb
+    forces = [(c, None if table.force_N is None else table.force_N[j])
+              for j, c in enumerate(table.circuits)]
+    if table.total_force_N is not None:
+        forces.append((_TOTAL, table.total_force_N))
+    for j, (c, f) in enumerate(forces):
+        if psi is not None and j < len(table.circuits):
             step = np.diff(psi[j], axis=1)
             bad = _points(np.pad(step <= 0.0, ((0, 0), (1, 0))))
             if bad:
@@ -607,18 +707,18 @@ def _monotonicity(table: GridTable, messages: list[str]) -> None:
                 _warn(messages, f"{table.source}: the flux linkage rises with the gap at "
                                 f"{_listed(table, bad, c)} (compared with the next smaller "
                                 "gap): dL/ds > 0 there, unusual for an attracting magnet")
-        if force is not None:
-            tol = 1e-9 * np.ptp(force[j])
-            bad = _points(np.pad(np.diff(force[j], axis=0) > tol, ((1, 0), (0, 0))))
+        if f is not None:
+            tol = 1e-9 * np.ptp(f)
+            bad = _points(np.pad(np.diff(f, axis=0) > tol, ((1, 0), (0, 0))))
             if bad:
                 _warn(messages, f"{table.source}: the force rises with the gap at "
                                 f"{_listed(table, bad, c)} (compared with the next smaller gap)")
-            bad = _points(np.pad(np.diff(force[j], axis=1) < -tol, ((0, 0), (1, 0))))
+            bad = _points(np.pad(np.diff(f, axis=1) < -tol, ((0, 0), (1, 0))))
             if bad:
                 _warn(messages, f"{table.source}: the force falls with the current at "
                                 f"{_listed(table, bad, c)} (compared with the next lower "
                                 "current)")
-            bad = _points(force[j] < -tol)
+            bad = _points(f < -tol)
             if bad:
                 _warn(messages, f"{table.source}: the force is negative (repelling) at "
                                 f"{_listed(table, bad, c)}; force_N is attraction-positive")
@@ -802,14 +902,22 @@ def maps_from_table(data: str | Path | GridTable, *, resistance_ohm: Any = None,
     nc = len(circuits)
     ltilde = np.stack([axes.d_current(psi[j], -1) for j in range(nc)])
     dpsi_ds = np.stack([axes.d_gap(psi[j]) for j in range(nc)])
+    # several circuits: the symmetric-path slopes less the other circuits' parts (MUTUALS)
+    # are the maps' dpsi_j/dI_j and own-pole dpsi_j/ds
+    if table.mutual_inductance_H is not None:
+        ltilde = ltilde - table.mutual_inductance_H
+    if table.mutual_dpsi_dgap_Wb_per_m is not None:
+        dpsi_ds = dpsi_ds - table.mutual_dpsi_dgap_Wb_per_m
     _derived_grid_error(table, "dL/ds", dpsi_ds,
                         np.stack([axes.gap_error(psi[j]) for j in range(nc)]), messages)
     bad = [(j, _points(ltilde[j] <= 0.0)) for j in range(nc)]
     for j, pts in bad:
         if pts:
+            less = (" less mutual_inductance_H" if table.mutual_inductance_H is not None
+                    else "")
             raise DataError(f"{table.source}: the spline through the flux linkage has a "
-                            f"slope L~ <= 0 at {_listed(table, pts, circuits[j])}; the data "
-                            "are too coarse or too noisy near there")
+                            f"slope L~{less} <= 0 at {_listed(table, pts, circuits[j])}; the "
+                            "data are too coarse or too noisy near there")
     pos = c > 0.0
     with np.errstate(divide="ignore", invalid="ignore"):
         dlds = np.where(pos, dpsi_ds / np.where(pos, c, 1.0), np.nan)
@@ -820,6 +928,7 @@ def maps_from_table(data: str | Path | GridTable, *, resistance_ohm: Any = None,
             dlds[j, :, 0] = axes.d_current(dpsi_ds[j], -1)[:, 0]
             lapp[j, :, 0] = ltilde[j, :, 0]
     residual = None
+    total_residual = None
     worst: dict[str, float] = {cc: math.nan for cc in circuits}
     where = {cc: "" for cc in circuits}
     if table.force_N is not None:
@@ -830,6 +939,25 @@ def maps_from_table(data: str | Path | GridTable, *, resistance_ohm: Any = None,
         else:
             _warn(messages, f"{table.source}: reciprocity not checked: the co-energy needs "
                             "the flux linkage from 0 A")
+    elif table.total_force_N is not None:
+        if c[0] > 0.0:
+            raise DataError(f"{table.source}: splitting the total force_N among the circuits "
+                            "needs their co-energy from 0 A, but the currents start at "
+                            f"{c[0]:g} A; add rows at 0 A or force_N_<circuit> columns")
+        # exact for the sum: W'(s, I, ..., I) = int_0^I sum_j psi_j di on the symmetric path
+        summed = replace(table, circuits=("total",), force_N=table.total_force_N[None],
+                         flux_linkage_Wb=psi.sum(axis=0)[None],
+                         source=f"{table.source} (the total force_N against the circuits' "
+                                "summed flux linkage)")
+        total_residual, worst_t, where_t = _reciprocity(summed, axes, tol, messages)
+        worst, where = {**worst, **worst_t}, {**where, **where_t}
+        coenergy = np.stack([_coenergy_force(axes, psi[j]) for j in range(nc)])
+        sum_co = coenergy.sum(axis=0)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            share = np.where(sum_co != 0.0, coenergy / np.where(sum_co != 0.0, sum_co, 1.0),
+                             1.0 / nc)
+        force = table.total_force_N[None] * share
+        force_from = "table total split by the circuits' co-energy shares"
     else:
         if c[0] > 0.0:
             raise DataError(f"{table.source}: deriving the force from the flux linkage needs "
@@ -859,6 +987,11 @@ def maps_from_table(data: str | Path | GridTable, *, resistance_ohm: Any = None,
     ds["eddy_resistance_fit_ohm"] = ("circuit", r_ec.copy(), {
         "units": "ohm", "long_name": "eddy-current resistance R_ec from the step time constant",
         "description": given})
+    if total_residual is not None:
+        ds["total_reciprocity_residual"] = (("gap", "current"), total_residual[0], {
+            "units": "1", "long_name": "co-energy reciprocity residual of the table's total "
+                                       "force against the circuits' summed flux linkage",
+            "description": "as reciprocity_residual, for the total force"})
     if residual is not None:
         ds["reciprocity_residual"] = (("circuit", "gap", "current"), residual, {
             "units": "1", "long_name": "co-energy reciprocity residual of the table",
@@ -877,8 +1010,10 @@ def maps_from_table(data: str | Path | GridTable, *, resistance_ohm: Any = None,
         "gap_names": ",".join(gap_names),
         "method": "imported table: L~ and dL/ds from the not-a-knot bicubic spline of psi "
                   + ("(odd-mirrored in I)" if MIRROR_CURRENTS else "(currents as tabulated)")
-                  + "; force " + ("from the table" if force_from == "table"
-                                                   else "by co-energy, -d/ds int_0^I psi di"),
+                  + _coupling_note(table)
+                  + "; force " + {"table": "from the table",
+                                  "co-energy of psi": "by co-energy, -d/ds int_0^I psi di"}.get(
+                      force_from, "the table's total split by -d/ds int_0^I psi_j di"),
         "table_source": table.source,
         "table_sha256": table.sha256,
         "table_report": json.dumps(asdict(report)),
@@ -887,6 +1022,20 @@ def maps_from_table(data: str | Path | GridTable, *, resistance_ohm: Any = None,
                        "force is attraction-positive",
     })
     return CharacteristicMaps(ds)
+
+
+def _coupling_note(table: GridTable) -> str:
+    """How the maps' per-circuit slopes treat the other circuits (the ``method`` attribute)."""
+    if len(table.circuits) == 1:
+        return ""
+    parts = [f"{q} columns subtracted" for q, a in (
+        ("mutual_inductance_H", table.mutual_inductance_H),
+        ("mutual_dpsi_dgap_Wb_per_m", table.mutual_dpsi_dgap_Wb_per_m)) if a is not None]
+    if len(parts) == 2:
+        return "; the other circuits' parts (" + ", ".join(parts) + ")"
+    return ("; " + ", ".join(parts) + "; " if parts else "; ") + (
+        "symmetric-path slopes otherwise (every circuit at I, all gaps at s: the other "
+        "circuits' coupling included)")
 
 
 def table_report(maps: CharacteristicMaps) -> TableReport:
@@ -923,12 +1072,16 @@ def _identity(table: GridTable, magnet: Any, pole_groups: Mapping[str, Sequence[
             circuits = tuple(net.circuit_names)
             table = replace(table, circuits=circuits)
         if tuple(sorted(circuits)) != tuple(sorted(net.circuit_names)):
+            unknown = [cc for cc in circuits if cc not in net.circuit_names]
+            absent = [cc for cc in net.circuit_names if cc not in circuits]
             raise DataError(f"{table.source}: the table's circuits {list(circuits)} are not the "
-                            f"magnet's {list(net.circuit_names)} (column suffixes _<circuit>)")
+                            f"magnet's {list(net.circuit_names)} (column suffixes _<circuit>)"
+                            + (f"; suffix(es) {['_' + cc for cc in unknown]} name no circuit "
+                               f"of {net.name!r}" if unknown else "")
+                            + (f"; no columns for circuit(s) {absent}" if absent else ""))
         order = [net.circuit_names.index(cc) for cc in circuits]
         r_default = net.resistances[order]
-        mid_g = float(table.gaps_m[table.gaps_m.size // 2])
-        mid_c = float(max(table.currents_A[table.currents_A.size // 2], table.currents_A[-1] / 2))
+        mid_g, mid_c = pole_group_point(table.gaps_m, table.currents_A)
         groups0 = pole_groups or circuit_pole_groups(net, gap_m=mid_g, current_A=mid_c)
         default_name = str(getattr(magnet, "name", net.name))
         gap_names = tuple(net.gap_names)
