@@ -89,7 +89,8 @@ def _read_step(path: Path) -> tuple[Any, Any]:
                                        "netCDF).")
 def import_table(
     data: Annotated[Path, typer.Argument(metavar="DATA", help="CSV (gap_m, current_A, force_N and/or "
-                                              "flux_linkage_Wb[_<circuit>]) or netCDF table.")],
+                                              "flux_linkage_Wb[_<circuit>]; the file of "
+                                              "maglevkit statics --csv) or netCDF table.")],
     output: Annotated[Path, typer.Option("-o", "--output", help="netCDF maps file to write.")]
     = Path("maps.nc"),
     resistance: Annotated[str | None, typer.Option(help="R_el [ohm], one value or one per "

@@ -17,6 +17,12 @@ equal to ``s``, every circuit at ``I``: the maps' convention, :mod:`maglevkit.re
   spline's exact antiderivative) and ``F = -dW'/ds`` (attraction-positive).  Exact for one
   circuit; with several circuits it is exact for their sum and per circuit when they do
   not couple or are alike (the table holds only the symmetric path ``I_1 = ... = I``).
+* Several circuits: the symmetric path's slopes include the other circuits' coupling
+  (``dpsi_j/dI = sum_k dpsi_j/dI_k``, all poles moving); the maps hold ``dpsi_j/dI_j`` and
+  the own poles' ``dpsi_j/ds``.  The optional columns :data:`MUTUALS` carry the
+  difference and are subtracted.  A total ``force_N`` beside per-circuit columns is
+  checked against their sum (:data:`TOTAL_FORCE_TOLERANCE`) or, alone, split among the
+  circuits by their co-energy forces.  ``maglevkit statics --csv`` writes all of these.
 * ``psi`` from ``F`` is **not** possible: ``F`` fixes ``dpsi/ds = -dF/dI`` and so ``psi``
   only up to a function of the current (e.g. the leakage flux at a reference gap); a table
   without ``psi`` is refused.
@@ -326,8 +332,10 @@ def read_table(path: str | Path) -> GridTable:
 
     CSV: a header row with ``gap_m`` [m], ``current_A`` [A] and ``force_N`` [N] and/or
     ``flux_linkage_Wb`` [Wb] (with several circuits one column per circuit with a
-    ``_<circuit>`` suffix, e.g. ``force_N_front``); then one row per grid point, in any
-    order; lines starting with ``#`` are comments.  netCDF: variables ``force_N`` and/or
+    ``_<circuit>`` suffix, e.g. ``force_N_front``, and optionally a total ``force_N`` and
+    the coupling columns ``mutual_inductance_H_<circuit>`` [H],
+    ``mutual_dpsi_dgap_Wb_per_m_<circuit>`` [Wb/m], :data:`MUTUALS`); then one row per
+    grid point, in any order; lines starting with ``#`` are comments.  netCDF: variables ``force_N`` and/or
     ``flux_linkage_Wb`` with dimensions ``(gap, current)`` or ``(circuit, gap, current)``
     (e.g. a maglevkit maps file).
 
@@ -339,9 +347,10 @@ def read_table(path: str | Path) -> GridTable:
     Raises
     ------
     DataError
-        Unknown or missing columns, a cell that is not a finite number, a gap <= 0 or a
-        negative current, duplicate grid points, a grid that is not rectangular (each
-        naming the row).
+        Unknown or missing columns (a quantity given for some circuits only), a cell that
+        is not a finite number, a gap <= 0 or a negative current, a total force that is
+        not the sum of the circuits' forces, duplicate grid points, a grid that is not
+        rectangular (each naming the row or column).
     ParameterFileError
         The file does not exist or cannot be read.
     """
@@ -864,7 +873,10 @@ def maps_from_table(data: str | Path | GridTable, *, resistance_ohm: Any = None,
         With ``force_N``, ``inductance_H``, ``dL_ds_H_per_m``, ``flux_linkage_Wb``,
         ``apparent_inductance_H``, ``resistance_ohm``, ``eddy_resistance_ohm``,
         ``eddy_resistance_fit_ohm`` and, when force and flux linkage are both given,
-        ``reciprocity_residual``.  The attribute ``table_report`` (JSON) holds the
+        ``reciprocity_residual`` (``total_reciprocity_residual`` for a total force alone,
+        which is split among the circuits by their co-energy forces).  With several
+        circuits ``L~`` and ``dL/ds`` are the symmetric path's slopes less the
+        :data:`MUTUALS` columns, where given.  The attribute ``table_report`` (JSON) holds the
         :class:`TableReport`; :func:`table_report` returns it.
 
     Raises
