@@ -286,3 +286,19 @@ def test_the_multi_circuit_statics_csv_reads_back_into_calibrate(tmp_path: Path)
     for name in ("leakage_factor", "fringing_factor", "iron_field_scale"):
         assert abs(cal[name] - 1.0) < 1e-6, (name, cal[name])
     assert abs(cal["gap_offset_m"]) < 1e-9
+
+
+def test_a_statics_csv_at_zero_current_only(tmp_path: Path) -> None:
+    """At 0 A no pole's flux tells which circuit it belongs to (every dpsi/ds is 0): the
+    writer does not need the groups then (all forces and mutual dpsi/ds are 0) and must not
+    fail on them; the mutual inductance is there at 0 A."""
+    out = tmp_path / "z.csv"
+    res = runner.invoke(app, ["statics", "tr09-standard", "--gaps", "0.010", "--currents", "0",
+                              "--csv", str(out)])
+    assert res.exit_code == 0, res.output
+    (row,) = list(csv.DictReader(out.open()))
+    assert row["force_N_front"] == row["force_N_rear"] == "0"
+    sol = mk.solve_statics(mk.load_magnet("tr09-standard", eddy_currents=False), gaps_m=0.010,
+                           currents_A=0.0)
+    assert float(row["mutual_inductance_H_rear"]) == pytest.approx(
+        sol.differential_inductance_H[1, 0], rel=1e-8)           # 9 significant digits

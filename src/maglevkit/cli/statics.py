@@ -106,6 +106,10 @@ def _grid_pole_groups(sol) -> dict[str, tuple[str, ...]]:  # type: ignore[no-unt
     ref_gap, ref_current = pole_group_point(gaps, currents)
     k = int(np.argmin(np.abs(gaps - ref_gap)))
     m = int(np.argmin(np.abs(currents - ref_current)))
+    if currents[m] == 0.0:          # no flux to tell the poles apart: the largest current
+        m = int(np.argmax(np.abs(currents)))
+        if currents[m] == 0.0:      # all at 0 A: every force and dpsi/ds is 0, no groups needed
+            return {c: () for c in sol.circuit_names}
     return pole_groups_from_sensitivities(sol.dpsi_dgap_Wb_per_m[k, m], sol.circuit_names,
                                           sol.gap_names)
 
