@@ -31,6 +31,7 @@ from __future__ import annotations
 import argparse
 import csv
 import json
+import math
 import sys
 import time
 import warnings
@@ -399,6 +400,29 @@ def corner_network(net: Any, per_edge: float | None = CORNER_EXCESS) -> Any:
     return Network(tuple(branches), net.circuits, name=f"{net.name} (corner {per_edge})")
 
 
+def corner_law_network(net: Any, magnet: mk.Magnet) -> Any:
+    """``net`` with the edges' term ``edge_cylinders_*`` replaced by the face's corner flux
+    from geometry (:class:`maglevkit.circuit.elements.EdgeCornerPermeance`, u20c25): per
+    pole the inner edge with the window's centre plane at half the window, the outer edge
+    free, both with the coil's MMF falling along the flank from ``coil_gap_to_pole_face``
+    over ``coil_height``."""
+    from dataclasses import replace  # noqa: PLC0415
+
+    from maglevkit.circuit.elements import EdgeCornerPermeance  # noqa: PLC0415
+    from maglevkit.circuit.network import Network  # noqa: PLC0415
+
+    m = magnet.parameters["magnet"]
+    branches = []
+    for b in net.branches:
+        if b.name.startswith("edge_cylinders"):
+            b = replace(b, elements=(EdgeCornerPermeance(
+                b.name, gap_input=b.name.split("_")[-1], width_m=m["depth"],
+                coil_from_m=m["coil_gap_to_pole_face"], coil_height_m=m["coil_height"],
+                window_halves_m=(0.5 * m["window_width"], math.inf)),))
+        branches.append(b)
+    return Network(tuple(branches), net.circuits, name=f"{net.name} (corner law)")
+
+
 def iron_lengths(net: Any, rail_m: float | None = None, yoke_m: float | None = None) -> Any:
     """``net`` with the rail's and/or the yoke's iron path length replaced [m].
     EXPERIMENT: shorter paths as the FEM's MMF drops suggest (the rail's flux enters it
@@ -579,6 +603,7 @@ def variant_networks(magnet: mk.Magnet) -> dict[str, Any]:
 
     window = window_fringe_network(magnet)
     rail = window_fringe_network(magnet, takeover="rail")
+    law = corner_law_network(rail, magnet)
     return {"split": magnet.network, "window": window,
             "window, no cylinders": corner_network(window, None),
             "window, corner": corner_network(window),
@@ -588,7 +613,8 @@ def variant_networks(magnet: mk.Magnet) -> dict[str, Any]:
                 corner_network(window), rail_m=ww, yoke_m=ww),
             "window, FEM corner": fem_corner(window),
             "window (takeover to the rail), corner": corner_network(rail),
-            "window (takeover to the rail), FEM corner": fem_corner(rail)}
+            "window (takeover to the rail), FEM corner": fem_corner(rail),
+            "window (takeover to the rail), corner law": law}
 
 
 def variants_experiment(names: list[str] | None = None) -> None:
