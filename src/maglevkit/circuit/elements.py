@@ -1178,6 +1178,8 @@ class EdgeCornerPermeance(LinearElement):
             raise ParameterError(f"{owner}: window_halves_m must be a non-empty tuple (one "
                                  f"entry per edge), got {self.window_halves_m!r}")
         for a in self.window_halves_m:
+            if symbolic(a):
+                continue
             if not isinstance(a, (int, float)) or isinstance(a, bool) or not a > 0.0:
                 raise ParameterError(f"{owner}: window_halves_m entry {a!r} must be a number "
                                      "> 0 [m] (inf: no centre plane)")
