@@ -23,7 +23,10 @@ large-gap force trend (``window_diagnostic``, ``window_fringe_network``; docs/de
 cal25).  ``--saturation``: the window fringe in saturation, where the flux and the MMF go in
 the FEM against the networks (``fem_face_excess``, ``saturation_diagnostic``); ``--variants``:
 the networks tried for it, nominal and calibrated (``variant_networks``,
-``variants_experiment``; docs/validation_fem.md, "The window fringe in saturation").
+``variants_experiment``; docs/validation_fem.md, "The window fringe in saturation"); its
+last row is the library's ``flux_paths = "window"`` (the face's corner flux from geometry,
+u20c25), also ``--networks window`` (docs/validation_fem.md, "The face's corner flux from
+geometry").
 """
 
 from __future__ import annotations
