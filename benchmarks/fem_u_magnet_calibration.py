@@ -23,7 +23,10 @@ large-gap force trend (``window_diagnostic``, ``window_fringe_network``; docs/de
 cal25).  ``--saturation``: the window fringe in saturation, where the flux and the MMF go in
 the FEM against the networks (``fem_face_excess``, ``saturation_diagnostic``); ``--variants``:
 the networks tried for it, nominal and calibrated (``variant_networks``,
-``variants_experiment``; docs/validation_fem.md, "The window fringe in saturation").
+``variants_experiment``; docs/validation_fem.md, "The window fringe in saturation"); its
+last row is the library's ``flux_paths = "window"`` (the face's corner flux from geometry,
+u20c25), also ``--networks window`` (docs/validation_fem.md, "The face's corner flux from
+geometry").
 """
 
 from __future__ import annotations
@@ -56,7 +59,8 @@ OUT = HERE / "results" / "u_magnet_fem_statics_2mm.csv"
 GAPS_MM = (4, 6, 8, 10, 12, 14, 16, 18, 20)
 CURRENTS_A = (5.0, 20.0, 40.0, 80.0)
 FIT_MM, HOLD_MM = (4, 6, 8, 10, 12), (14, 16, 18, 20)
-NETWORKS = {"lumped": {}, "split": {"flux_paths": "split"}, "tubes": {"discretisation": "grid"},
+NETWORKS = {"lumped": {}, "split": {"flux_paths": "split"}, "window": {"flux_paths": "window"},
+            "tubes": {"discretisation": "grid"},
             "cells": {"discretisation": "grid", "air_model": "cells"}}
 SETS = {
     "lumped": [("leakage_factor", "fringing_factor", "gap_offset_m", "iron_field_scale",
@@ -73,6 +77,10 @@ SETS = {
               ("leakage_factor", "fringing_factor", "iron_field_scale"),
               ("leakage_factor", "fringing_factor", "iron_saturation_scale"),
               ("leakage_factor", "iron_saturation_scale")],
+    # flux_paths = "window" (u20c25): the set leave-one-gap-out CV on 4-12 mm chose
+    # (select_parameters; --variants reprints the ranking)
+    "window": [("leakage_factor", "fringing_factor", "gap_offset_m", "iron_field_scale",
+                "iron_saturation_scale")],
     "tubes": [("leakage_factor", "iron_saturation_scale"),
               ("leakage_factor", "fringing_factor", "iron_saturation_scale")],
     # (leakage_factor scales every air cell outside the gap there, fringing_factor nothing)
@@ -579,6 +587,10 @@ def variant_networks(magnet: mk.Magnet) -> dict[str, Any]:
 
     window = window_fringe_network(magnet)
     rail = window_fringe_network(magnet, takeover="rail")
+    # u20c25: the same structure with the face's corner flux from geometry, the library's
+    # flux_paths = "window" (magnets/u_magnet.py; EdgeCornerPermeance)
+    law = build_magnet({**magnet.parameters, "magnet": {**m, "flux_paths": "window"}},
+                       options=mk.ModelOptions(eddy_currents=False)).network
     return {"split": magnet.network, "window": window,
             "window, no cylinders": corner_network(window, None),
             "window, corner": corner_network(window),
@@ -588,7 +600,8 @@ def variant_networks(magnet: mk.Magnet) -> dict[str, Any]:
                 corner_network(window), rail_m=ww, yoke_m=ww),
             "window, FEM corner": fem_corner(window),
             "window (takeover to the rail), corner": corner_network(rail),
-            "window (takeover to the rail), FEM corner": fem_corner(rail)}
+            "window (takeover to the rail), FEM corner": fem_corner(rail),
+            "window (takeover to the rail), corner law (flux_paths = \"window\")": law}
 
 
 def variants_experiment(names: list[str] | None = None) -> None:

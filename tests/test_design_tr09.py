@@ -180,7 +180,7 @@ def test_turns_per_pole_derivative_from_ampere_turns() -> None:
     (lambda d: d["design"].update(magnet="u-magnet") or d["design"].pop("flux_paths"),
      "[variables] unknown design variable 'core_height' for a u_magnet"),
     (lambda d: d["design"].update(magnet="u-magnet"),
-     "[design] flux_paths = 'paper': expected one of ['standard', 'split'] for magnet = "
+     "[design] flux_paths = 'paper': expected one of ['standard', 'split', 'window'] for magnet = "
      "'u-magnet' (a u_magnet)"),
     (lambda d: d["design"].update(flux_paths="lumped"),
      "[design] flux_paths = 'lumped': expected one of ['paper', 'split']"),

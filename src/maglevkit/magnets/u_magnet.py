@@ -73,6 +73,22 @@ three changes of the air paths, each from geometry, chosen by the 2-D FEM's regi
   :mod:`maglevkit.magnets.levitation`); the segment's eddy element sits in series with
   both (node ``E_*``), so ``eddy_model = "lumped"`` only.
 
+``flux_paths = "window"`` (lumped network, ``end_effects = false``; issue 25, u20c25): the
+split network's iron, coil air and window strips with the edges' air from the conformal
+map of a right-angled pole edge over a plane instead of Roters' decomposition:
+
+* the flanks below the coil by the map (``edge_flank_per_mu0``), the window's flank only
+  up to where its tubes' local path ``s v(x)`` reaches the window's centre plane, ``x_w =
+  (2/pi)(a - s atan(a/s))`` (``a = window_width/2``), the flank above ``x_w`` straight to
+  that plane at the rail's potential (in the air gap element, :class:`WindowFringeGap`);
+* instead of the quarter cylinders, the face's corner flux of each edge (branch
+  ``edge_corner_*``, :class:`~maglevkit.circuit.elements.EdgeCornerPermeance`): the map's
+  ``0.195 mu0 w`` per edge, growing with the gap because the coil's MMF falls along the
+  flank from ``coil_gap_to_pole_face`` up and the inner edge faces the window's centre
+  plane.  Gap-dependent, so the calibration factors leave it alone (``gap_offset_m``
+  aside).  The network the U-magnet's held-out calibration check meets its 2 % with
+  (docs/validation_fem.md, "The face's corner flux from geometry").
+
 ``discretisation = "grid"`` replaces the legs, yoke and rail by grids of iron cells
 (:func:`_build_grid`); its air is the Roters tubes above attached to the cells
 (``air_model = "tubes"``, default) or a cell network as well (``air_model = "cells"``,
@@ -86,19 +102,22 @@ from __future__ import annotations
 import bisect
 import math
 from collections.abc import Callable, Mapping
-from dataclasses import replace
+from dataclasses import dataclass, replace
 from typing import Any
 
 import casadi as ca
+import numpy as np
 
 from ..circuit.elements import (
     AirGap,
     EddyCurrent,
+    EdgeCornerPermeance,
     Element,
     FringePermeance,
     GapLayerPermeance,
     IronPath,
     LeakagePermeance,
+    edge_flank_per_mu0,
     symbolic,
 )
 from ..circuit.ladder import ladder_branches, saint_venant_factor
@@ -142,9 +161,9 @@ MAGNET_SCHEMA = {
     "air_margin": Schema(float, required=False, default=0.2, unit="m"),
     "flux_paths": Schema(str, required=False, default="standard"),
 }
-FLUX_PATHS = ("standard", "split")
-"""Air paths of the lumped network: ``"standard"`` (default) or ``"split"`` (module
-docstring)."""
+FLUX_PATHS = ("standard", "split", "window")
+"""Air paths of the lumped network: ``"standard"`` (default), ``"split"`` or ``"window"``
+(module docstring)."""
 QUARTER_CYLINDER = 0.52
 """Roters' quarter cylinder, ``G = 0.52 mu0 l`` (docs/sources.md sec. 3): at the leg ends
 (``end_effects``) and, with ``flux_paths = "split"``, beside each pole edge facing the rail."""
@@ -156,6 +175,42 @@ RAIL_SCHEMA = {
     "material": Schema(str),
     "resistivity": Schema(float, required=False, unit="ohm m"),
 }
+
+
+@dataclass(frozen=True)
+class WindowFringeGap(AirGap):
+    """The ``flux_paths = "window"`` air gap: both edges' flanks by the conformal map of a
+    right-angled pole edge (:func:`~maglevkit.circuit.elements.edge_flank_per_mu0`), the
+    first edge of ``fringe_edges`` facing the window, whose centre plane (at the rail's
+    potential, by antisymmetry) is ``window_half_m`` from the flank.
+
+    A tube leaving that flank at height ``x`` has the local path ``s v(x)`` (``v - atan v =
+    pi x/(2 s)``); where it exceeds ``a`` = ``window_half_m`` it goes straight to the
+    centre plane instead, so the flank fringes up to ``x_w = (2/pi)(a - s atan(a/s))``
+    (below ``r`` from ~12 mm on for the bundled magnet) and the rest of it, ``[x_w, r]``,
+    reaches the rail's potential over ``a``: ``mu0 w (r - x_w)/a``, continuous through
+    ``x_w = r`` (docs/equations.md sec. 6; docs/validation_fem.md, u20mm25, u20c25).
+
+    Parameters
+    ----------
+    window_half_m : float
+        Distance from the first edge's flank to the window's centre plane [m], > 0.
+    (the rest as :class:`~maglevkit.circuit.elements.AirGap`)
+    """
+
+    window_half_m: float = math.inf
+
+    def _add_fringe(self, g: Any, s: Any) -> Any:
+        for k, (w, r) in enumerate(self.fringe_edges):
+            if k > 0:
+                g = g + edge_flank_per_mu0(w, r, s)
+                continue
+            a = self.window_half_m
+            sym = symbolic(s) or symbolic(a) or symbolic(r)
+            x_w = 2.0 / math.pi * (a - s * (ca.atan(a / s) if sym else np.arctan(a / s)))
+            flank = ca.fmin(r, x_w) if sym else np.minimum(r, x_w)
+            g = g + edge_flank_per_mu0(w, flank, s) + w * (r - flank) / a
+        return g
 
 
 def build_u_magnet(params: Mapping[str, Any], materials: Mapping[str, Material],
@@ -219,12 +274,16 @@ def build_u_magnet(params: Mapping[str, Any], materials: Mapping[str, Material],
     if m["flux_paths"] not in FLUX_PATHS:
         raise ParameterFileError(f"[magnet] flux_paths = {m['flux_paths']!r}: expected one of "
                                  f"{', '.join(map(repr, FLUX_PATHS))}")
-    if (m["flux_paths"] == "split" and options.eddy_currents
+    if (m["flux_paths"] in ("split", "window") and options.eddy_currents
             and options.eddy_model != "lumped"):
         raise ParameterFileError(
-            f"[magnet] flux_paths = \"split\" has lumped eddy elements only (eddy_model "
-            f"{options.eddy_model!r} requested): use eddy_model = \"lumped\" or "
+            f"[magnet] flux_paths = \"{m['flux_paths']}\" has lumped eddy elements only "
+            f"(eddy_model {options.eddy_model!r} requested): use eddy_model = \"lumped\" or "
             "flux_paths = \"standard\"")
+    if m["flux_paths"] == "window" and m["end_effects"]:
+        raise ParameterFileError(
+            "[magnet] flux_paths = \"window\" is a 2-D cross-section's network (its edge laws "
+            "are 2-D conformal maps): it needs end_effects = false, got end_effects = true")
     if m["air_model"] not in AIR_MODELS:
         raise ParameterFileError(f"[magnet] air_model = {m['air_model']!r}: expected one of "
                                  f"{', '.join(map(repr, AIR_MODELS))}")
@@ -343,15 +402,20 @@ def lumped_network(m: Mapping[str, Any], r: Mapping[str, Any], core: Material,
         if m["end_effects"]:
             edges += [(wp, gcp), (wp, gcp)]               # the two depth-wise ends
 
-    split = m["flux_paths"] == "split"
+    window = m["flux_paths"] == "window"
+    split = m["flux_paths"] == "split" or window     # "window": the split network's iron and air
 
     # "split": Roters' decomposition of an edge's fringe towards the rail: a quarter
     # cylinder of radius s beside the edge (gap-independent, its own branch below) and the
     # quarter annulus outside it from the flank below the coil, (2 mu0 w/pi) ln(1 + r/s),
     # which is the AirGap's fringe form (2 mu0 w/pi) ln(1 + pi r'/(2 s)) with r' = 2 r/pi
-    fringes = tuple((w, 2.0 * radius / math.pi) for w, radius in edges) if split else tuple(edges)
+    fringes = (tuple((w, 2.0 * radius / math.pi) for w, radius in edges)
+               if split and not window else tuple(edges))
 
     def gap(name: str) -> AirGap:
+        if window:
+            return WindowFringeGap(name, gap_input=name.removeprefix("gap_"), pole_area_m2=area,
+                                   fringe_edges=fringes, window_half_m=0.5 * ww)
         return AirGap(name, gap_input=name.removeprefix("gap_"), pole_area_m2=area,
                       fringe_edges=fringes)
 
@@ -440,7 +504,16 @@ def lumped_network(m: Mapping[str, Any], r: Mapping[str, Any], core: Material,
                      IronPath("iron_rail", rail_len, r["thickness"] * d, rail_mat),
                      r["thickness"], solid=True)
     branches += [Branch("gap_right", "RR", "PR", (gap("gap_right"),))]
-    if split and edges:
+    if window and edges:
+        # the face's corner flux of each edge from the conformal map with the coil's MMF
+        # falling along the flank and the window's centre plane (inner edge): 0.195 mu0 w
+        # per free edge, growing with the gap (docs/equations.md sec. 1)
+        halves = (0.5 * ww, *([math.inf] * (len(edges) - 1)))
+        for side, pair in (("left", ("PL", "RL")), ("right", ("RR", "PR"))):
+            branches.append(Branch(f"edge_corner_{side}", *pair, (EdgeCornerPermeance(
+                f"edge_corner_{side}", gap_input=side, width_m=d, coil_from_m=gcp,
+                coil_height_m=hc, window_halves_m=halves),)))
+    elif split and edges:
         # the edges' quarter cylinders (Roters: 0.52 mu0 w each), pole face to rail
         g_cyl = QUARTER_CYLINDER * MU0 * sum(w for w, _ in edges)
         for side, pair in (("left", ("PL", "RL")), ("right", ("RR", "PR"))):
