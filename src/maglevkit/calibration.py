@@ -52,6 +52,7 @@ from typing import Any
 
 import numpy as np
 
+from ._interrupt import sigint_received
 from .circuit.factors import DYNAMIC_PARAMETERS, PARAMETERS, with_factors
 from .circuit.network import Network
 from .errors import DataError, DataWarning, InputError, MaglevkitWarning, SolverError
@@ -446,10 +447,16 @@ class _ParametricStatics:
         try:
             f, psi, jf, jpsi, xs = self.fun(x0, par)
         except RuntimeError as exc:
+            if sigint_received():
+                raise KeyboardInterrupt from None
             raise SolverError("the calibration statics did not converge",
                               state={"gap_m": gap, "current_A": current,
                                      **dict(zip(self.names, values, strict=True))},
                               reason=str(exc).splitlines()[-1][-200:]) from None
+        if sigint_received():
+            # a Ctrl-C inside CasADi's rootfinder is swallowed there: the fit went on and
+            # wrote its file (exit 0); end it here, the CLI reports it (exit 130)
+            raise KeyboardInterrupt
         return (np.asarray(f).ravel(), np.asarray(psi).ravel(), np.asarray(jf),
                 np.asarray(jpsi), np.asarray(xs).ravel())
 
@@ -751,12 +758,16 @@ class _ParametricStep:
         try:
             out, jac = self.fun(guess, values)
         except RuntimeError as exc:
+            if sigint_received():
+                raise KeyboardInterrupt from None
             raise SolverError("the voltage step with parameter sensitivities failed (a "
                               "stiff network, e.g. an eddy ladder, may need more Radau steps: "
                               "maglevkit.calibration.STEP_FINE_STEPS)",
                               state={"gap_m": self.gap_m, "current_A": self.current_A,
                                      **dict(zip(self.names, values, strict=True))},
                               reason=str(exc).splitlines()[-1][-200:]) from None
+        if sigint_received():     # as in _ParametricStatics.evaluate
+            raise KeyboardInterrupt
         return np.asarray(out).ravel(), np.asarray(jac).reshape(-1, len(self.names))
 
 

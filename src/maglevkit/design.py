@@ -64,6 +64,7 @@ from typing import Any
 
 import numpy as np
 
+from ._interrupt import sigint_received
 from .errors import InputError, MaglevkitError, MaglevkitWarning, ParameterFileError
 from .magnets.base import MAGNET_PLAUSIBLE
 from .validation import Plausible, check_plausible, real_number
@@ -1278,6 +1279,10 @@ def _solve(spec: DesignSpec, st: _Setup, obj: str, max_power_W: float | None,
     solver = st.solver
     sol = solver(x0=st.z0, lbx=st.lbz, ubx=st.ubz, lbg=st.lbg, ubg=ubg,
                  p=[1.0, 0.0] if obj == "mass" else [0.0, 1.0])
+    if sigint_received():
+        # CasADi turns a Ctrl-C inside IPOPT into the status NonIpopt_Exception_Thrown:
+        # without this the command went on (a Pareto sweep wrote its figure, exit 0)
+        raise KeyboardInterrupt
     stats = solver.stats()
     zs = np.asarray(sol["x"]).ravel()
     lam = np.asarray(sol["lam_g"]).ravel()[4 * nl:]

@@ -335,11 +335,22 @@ class CharacteristicMaps:
         ------
         ParameterFileError
             The maps belong to another equivalent circuit (or are a file of an earlier
-            version that stored another hash).
+            version that stored another hash), or were imported from a table
+            (:func:`~maglevkit.reduction.tables_in.maps_from_table`; the message says so).
         """
         h = model_hash(magnet)
         if h == self.magnet_hash:
             return
+        source = self.dataset.attrs.get("table_source")
+        if source is not None:
+            # imported maps carry the table's hash: no magnet's network made them, so a
+            # "rebuild" hint (the message below) would send the user away from their data
+            raise ParameterFileError(
+                f"these maps were imported from the table {source!r} (maglevkit maps import), "
+                f"not built from magnet {getattr(magnet, 'name', 'this model')!r}; what needs "
+                "the magnet's own maps (its detailed model beside them, e.g. maglevkit compare) "
+                "takes `maglevkit maps build MAGNET`; imported maps run in Python: "
+                "mk.CurrentModel(maps), MagnetBank, maglevkit.export.export_fmu(maps, PATH)")
         # Files of earlier versions stored the parameter-file hash instead; they are refused
         # too: the physics behind the same parameters may have changed since.
         raise ParameterFileError(
