@@ -95,3 +95,17 @@ def test_compare_on_imported_maps_says_they_are_imported(tmp_path: Path) -> None
     assert "imported from the table" in res.stderr and "export_fmu(maps" in res.stderr
     assert "Traceback" not in res.output
     assert len(res.stderr.strip().splitlines()) == 1, res.stderr
+
+
+def test_a_holdout_gap_without_data_names_the_option_and_the_gaps(tmp_path: Path) -> None:
+    # was: "holdout gap 10.0 m: no data point ...; gaps in the data: [0.004, ...,
+    # 0.018000000000000002, 0.02]" (a float's repr, no unit hint for a gap typed in mm)
+    data = tmp_path / "d.csv"
+    data.write_text("gap_m,current_A,flux_linkage_Wb\n"
+                    + "".join(f"{0.006 + 0.006 * k},{c},{0.1 * c}\n"
+                              for k in range(3) for c in (10.0, 20.0)))
+    res = runner.invoke(app, ["calibrate", "u-magnet", str(data), "-o",
+                              str(tmp_path / "c.toml"), "--holdout-gaps", "18"])
+    assert res.exit_code == 2, res.output
+    assert ("holdout gap 18 m (holdout_gaps_m, --holdout-gaps: in m): no data point at that "
+            "gap; gaps in the data: 0.006, 0.012, 0.018 m") in " ".join(res.stderr.split())

@@ -1246,8 +1246,9 @@ def calibrate(magnet: Any, data: str | Path | StaticPoints | None, *,
     for g in holdout_gaps_m:
         hit = np.isclose(pts.gap_m, float(g), rtol=1e-9, atol=1e-12)
         if not hit.any():
-            raise InputError(f"holdout gap {float(g)!r} m: no data point at that gap; gaps in "
-                             f"the data: {sorted(set(pts.gap_m.tolist()))}")
+            gaps = ", ".join(f"{x:.6g}" for x in sorted(set(pts.gap_m.tolist())))
+            raise InputError(f"holdout gap {float(g):.6g} m (holdout_gaps_m, --holdout-gaps: "
+                             f"in m): no data point at that gap; gaps in the data: {gaps} m")
         hold |= hit
     fit_pts, test_pts = pts.subset(~hold), pts.subset(hold)
     specs = [PARAMETERS[n] for n in names]
