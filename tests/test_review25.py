@@ -107,5 +107,5 @@ def test_a_holdout_gap_without_data_names_the_option_and_the_gaps(tmp_path: Path
     res = runner.invoke(app, ["calibrate", "u-magnet", str(data), "-o",
                               str(tmp_path / "c.toml"), "--holdout-gaps", "18"])
     assert res.exit_code == 2, res.output
-    assert ("holdout gap 18 m (holdout_gaps_m, --holdout-gaps: in m): no data point at that "
-            "gap; gaps in the data: 0.006, 0.012, 0.018 m") in " ".join(res.stderr.split())
+    assert ("holdout gap 18 m: no data point at that gap (holdout_gaps_m, --holdout-gaps: in "
+            "m); gaps in the data: 0.006, 0.012, 0.018 m") in " ".join(res.stderr.split())

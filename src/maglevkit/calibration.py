@@ -1247,8 +1247,9 @@ def calibrate(magnet: Any, data: str | Path | StaticPoints | None, *,
         hit = np.isclose(pts.gap_m, float(g), rtol=1e-9, atol=1e-12)
         if not hit.any():
             gaps = ", ".join(f"{x:.6g}" for x in sorted(set(pts.gap_m.tolist())))
-            raise InputError(f"holdout gap {float(g):.6g} m (holdout_gaps_m, --holdout-gaps: "
-                             f"in m): no data point at that gap; gaps in the data: {gaps} m")
+            raise InputError(f"holdout gap {float(g):.6g} m: no data point at that gap "
+                             f"(holdout_gaps_m, --holdout-gaps: in m); gaps in the data: "
+                             f"{gaps} m")
         hold |= hit
     fit_pts, test_pts = pts.subset(~hold), pts.subset(hold)
     specs = [PARAMETERS[n] for n in names]
