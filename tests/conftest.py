@@ -108,12 +108,10 @@ def paper_tr09_file(directory: Any, name: str = "tr09-standard") -> str:
     assert '\nflux_paths = "split"' in text and "\nnominal_current = 31.7" in text
     text = text.replace('\nflux_paths = "split"', '\nflux_paths = "paper"', 1)
     text = text.replace("\nnominal_current = 31.7", f"\nnominal_current = {PAPER_NOMINAL_CURRENT_A}", 1)
-    # and the eddy model of that time: lumped elements, eq. 8 (issue 26's switch26m moved
-    # the bundled files to the ladder with the eddy network as the reduced default)
-    for before, after in (('\neddy_model = "ladder"', '\neddy_model = "lumped"'),
-                          ("\neddy_modes = 2", "\neddy_modes = 0")):
-        if before in text:
-            text = text.replace(before, after, 1)
+    # the former network's lumped eddy elements and eq. 8 (the file's lines since switch26m)
+    text = "\n".join(line for line in text.split("\n") if not line.startswith(
+        ("eddy_model = ", "eddy_layers = ", "[reduced]", "eddy_modes = ", '"magnet.eddy_model"',
+         '"magnet.eddy_layers"', '"reduced.eddy_modes"')))
     out = os.path.join(str(directory), f"{name}-paper.toml")
     with open(out, "w") as fh:
         fh.write(text)
