@@ -442,8 +442,9 @@ class VehicleModel:
     compiled : {"auto", "always", "never"}
         Passed to the bank.
     resistance_scale, eddy_resistance_scale : float
-        Factors on every circuit's ohmic resistance ``R_el`` and eddy-current resistance
-        ``R_ec`` of the reduced models (e.g. 1.3 for a hot coil); default 1.  They change the
+        Factors on every circuit's ohmic resistance ``R_el`` and eddy-current resistances
+        (eq. 8's ``R_ec``, the eddy network's ``R_0`` and ``R_k``) of the reduced models
+        (e.g. 1.3 for a hot coil); default 1.  They change the
         plant and what the controllers' flux estimate and chopper limit use (both read the
         bank's resistances); the gains stay designed on the nominal magnet.  Reduced models
         only (``magnets="reduced"``).
@@ -492,16 +493,21 @@ class VehicleModel:
         the three-state ladder (``I_e1``, ``I_e2`` per circuit, the dataset's
         ``eddy_current`` with an ``eddy_state`` dimension), only with ``motion_eddy``.
         None (default): the vehicle file's ``[magnets] eddy_branches`` (1 unless set).
-    eddy_modes : {0, 1, 2, 3}, optional
+    eddy_modes : {0, 1, 2, 3} or mapping of str to int, optional
         Fly the reduced magnets with the maps' fitted eddy network of that many branches
-        (:class:`MagnetBank` option ``eddy_modes``; docs/bank.md, "Eddy-network members"):
-        ``eddy_modes`` branch currents ``I_k`` per circuit, carried by both loops, the
-        NMPCs' prediction models and the record (``eddy_current``, with an ``eddy_state``
-        dimension for more than one branch); the chopper's diodes act on ``I_L + sum_k
-        I_k`` (needs a finite fitted ``R_0``).  Not with ``motion_eddy``; needs reduced
-        magnets whose maps carry the network (``build_maps``) and
-        ``eddy_resistance_scale = 1``.  None (default): the vehicle file's ``[magnets]
-        eddy_modes`` (0 unless set: eq. 8).
+        (:class:`MagnetBank` option ``eddy_modes``; docs/bank.md, "Eddy-network members";
+        0: eq. 8): ``eddy_modes`` branch currents ``I_k`` per circuit, carried by both
+        loops, the NMPCs' prediction models and the record (``eddy_current``, with an
+        ``eddy_state`` dimension for more than one branch); the chopper's diodes act on
+        ``I_L + sum_k I_k`` (needs a finite fitted ``R_0``).  An int: every magnet; a
+        mapping ``{"standard": m, "bow": m}``: per kind (a kind left out takes its
+        default).  None (default): the vehicle file's ``[magnets] eddy_modes``, else each
+        magnet file's own default (``[reduced] eddy_modes``,
+        :attr:`~maglevkit.magnets.Magnet.default_eddy_modes`; the bundled TR09 files: 2),
+        0 with ``motion_eddy`` or detailed magnets (:func:`vehicle_eddy_modes`;
+        docs/vehicle.md, "Which reduced model the magnets fly").  Not 1-3 with
+        ``motion_eddy``; needs reduced magnets whose maps carry the network
+        (``build_maps``).
     """
 
     def __init__(self, train: TrainData, *, guideway: Any = None, rigid: bool = False,
