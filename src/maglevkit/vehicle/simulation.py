@@ -1076,15 +1076,16 @@ class VehicleModel:
         else:
             bstate = bank.initial_state(gaps_m=gaps_p, currents_A=self.trim_current_A)
             circ_avg = None
-        if self.fine or bank.n_eddy_states:
+        if self.fine:
             out0 = bank.outputs(bstate)
             force_c = out0.circuit_force_N.copy()
-            pf0 = out0.pole_force_N if self.fine else force_c
+            pf0 = out0.pole_force_N
             assert pf0 is not None
             force_pts = pf0.copy()
             current = out0.currents_A.copy()
         else:
-            current, force_c = self._initial_outputs(bstate.inductor_currents_A, gaps_p)
+            current, force_c = self._initial_outputs(bstate.inductor_currents_A, gaps_p,
+                                                     bstate.eddy_currents_A)
             force_pts = force_c.copy()
         # controllers (vectorised over circuits)
         blend = tr.control_velocity_blend
@@ -1756,13 +1757,15 @@ class VehicleModel:
                                   "voltage [V]")
             u_out[j] = u[0]
 
-    def _initial_outputs(self, i_l: np.ndarray, gaps: np.ndarray
-                         ) -> tuple[np.ndarray, np.ndarray]:
-        """Coil currents [A] and forces [N] of the circuits (reduced magnets, one state per
-        circuit) in the steady state ``U = R_el I_L`` at the gaps [m]: what
-        :meth:`MagnetBank.outputs` gives, from the same function
-        (:attr:`MagnetBank.output_function`), compiled once per model (on CasADi's
-        virtual machine it cost 10 ms per run, a sixth of a 3 s run's whole ``run``)."""
+    def _initial_outputs(self, i_l: np.ndarray, gaps: np.ndarray,
+                         i_e: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+        """Coil currents [A] and forces [N] of the circuits (reduced magnets) in the steady
+        state ``U = R_el I_L`` at the gaps [m] (``i_e``: the eddy states of a bank with
+        them, as :attr:`BankState.eddy_currents_A`): what :meth:`MagnetBank.outputs`
+        gives, from the same function (:attr:`MagnetBank.output_function`), compiled once
+        per model (on CasADi's virtual machine it cost 10 ms per run, a sixth of a 3 s
+        run's whole ``run``; with eddy states too since switch26v, whose default flies
+        the eddy network)."""
         from ..models.compiled import BoundCall, compile_function
 
         bank = self.bank
@@ -1773,6 +1776,8 @@ class VehicleModel:
         call.args[0][:] = i_l
         call.args[1][:] = bank.resistance_ohm * i_l
         call.args[2][:] = gaps
+        if i_e is not None:        # (n_c, n_e) column-major, as the function's I_e
+            call.args[3][:] = np.ravel(i_e, order="F")
         call.eval()
         return call.res[0].copy(), call.res[1].copy()
 
