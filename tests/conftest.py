@@ -90,8 +90,13 @@ def tr09_params(name: str = "tr09-standard", *, flux_paths: str | None = None) -
     if flux_paths is not None:
         p["magnet"]["flux_paths"] = flux_paths
         p["provenance"]["magnet.flux_paths"] = f"[E] modelling choice: {flux_paths!r} network"
-    if flux_paths == "paper":
+    if flux_paths == "paper":   # the former network: lumped eddy elements, eq. 8 (switch26m)
         p["operating"]["nominal_current"] = PAPER_NOMINAL_CURRENT_A
+        for key in ("eddy_model", "eddy_layers"):
+            p["magnet"].pop(key, None)
+            p["provenance"].pop(f"magnet.{key}", None)
+        p.pop("reduced", None)
+        p["provenance"].pop("reduced.eddy_modes", None)
     return p
 
 
