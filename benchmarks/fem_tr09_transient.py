@@ -442,13 +442,15 @@ def network_magnet(name: str, variant: str) -> mk.Magnet:
 #: shipped (``end_effects = true``, split, lumped eddy elements with the Saint-Venant factor
 #: of the finite width); its longitudinal cut (``end_effects = false``: the 2-D partner of
 #: the FEM's statics); the cut with 2-D slab lumped elements (benchmark variant); the
-#: ladder (``eddy_model = "ladder"``: 2-D slabs on the cut, Saint-Venant on the bundled)
+#: ladder (``eddy_model = "ladder"``: 2-D slabs on the cut, Saint-Venant on the bundled).
+#: The lumped rows name their eddy model: the files name the ladder since switch26m.
+_LUMPED = {"eddy_model": "lumped"}
 VARIANTS: dict[str, dict] = {
-    "bundled": {"cut": False, "options": {}},
+    "bundled": {"cut": False, "options": _LUMPED},
     "bundled, ladder n = 6": {"cut": False, "options": {"eddy_model": "ladder",
                                                         "eddy_layers": 6}},
-    "cut": {"cut": True, "options": {}},
-    "cut, slab": {"cut": True, "slab": True, "options": {}},
+    "cut": {"cut": True, "options": _LUMPED},
+    "cut, slab": {"cut": True, "slab": True, "options": _LUMPED},
     "cut, ladder n = 4": {"cut": True, "options": {"eddy_model": "ladder", "eddy_layers": 4}},
     "cut, ladder n = 6": {"cut": True, "options": {"eddy_model": "ladder", "eddy_layers": 6}},
     "cut, ladder n = 8": {"cut": True, "options": {"eddy_model": "ladder", "eddy_layers": 8}},

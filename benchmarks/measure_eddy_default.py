@@ -59,8 +59,8 @@ def load(name: str, model: str) -> Any:
     """The bundled magnet ``name`` with ``eddy_model = model``."""
     import maglevkit as mk
 
-    if model == "lumped":
-        return mk.load_magnet(name)
+    if model == "lumped":   # explicit: the TR09 files name the ladder since switch26m
+        return mk.load_magnet(name, eddy_model="lumped")
     return mk.load_magnet(name, eddy_model=model, eddy_layers=LAYERS[name])
 
 

@@ -90,8 +90,13 @@ def tr09_params(name: str = "tr09-standard", *, flux_paths: str | None = None) -
     if flux_paths is not None:
         p["magnet"]["flux_paths"] = flux_paths
         p["provenance"]["magnet.flux_paths"] = f"[E] modelling choice: {flux_paths!r} network"
-    if flux_paths == "paper":
+    if flux_paths == "paper":   # the former network: lumped eddy elements, eq. 8 (switch26m)
         p["operating"]["nominal_current"] = PAPER_NOMINAL_CURRENT_A
+        for key in ("eddy_model", "eddy_layers"):
+            p["magnet"].pop(key, None)
+            p["provenance"].pop(f"magnet.{key}", None)
+        p.pop("reduced", None)
+        p["provenance"].pop("reduced.eddy_modes", None)
     return p
 
 
@@ -108,6 +113,10 @@ def paper_tr09_file(directory: Any, name: str = "tr09-standard") -> str:
     assert '\nflux_paths = "split"' in text and "\nnominal_current = 31.7" in text
     text = text.replace('\nflux_paths = "split"', '\nflux_paths = "paper"', 1)
     text = text.replace("\nnominal_current = 31.7", f"\nnominal_current = {PAPER_NOMINAL_CURRENT_A}", 1)
+    # the former network's lumped eddy elements and eq. 8 (the file's lines since switch26m)
+    text = "\n".join(line for line in text.split("\n") if not line.startswith(
+        ("eddy_model = ", "eddy_layers = ", "[reduced]", "eddy_modes = ", '"magnet.eddy_model"',
+         '"magnet.eddy_layers"', '"reduced.eddy_modes"')))
     out = os.path.join(str(directory), f"{name}-paper.toml")
     with open(out, "w") as fh:
         fh.write(text)

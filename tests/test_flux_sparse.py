@@ -33,8 +33,10 @@ NETWORKS = {
     # 54 differential states from 56 eddy branches: dependent rows in the selection
     "u-magnet ladder n = 4": lambda: mk.load_magnet("u-magnet", eddy_model="ladder",
                                                     eddy_layers=4).network,
-    # two circuits (two flux-linkage rows, S_psi with two rows)
-    "tr09-standard": lambda: mk.load_magnet("tr09-standard").network,
+    # two circuits (two flux-linkage rows, S_psi with two rows); its lumped eddy elements
+    # (the file's ladder since switch26m has 1011 branches: the dense form's pseudo-inverse
+    # took ~8 min of this module on a loaded machine for nothing the two rows need)
+    "tr09-standard": lambda: mk.load_magnet("tr09-standard", eddy_model="lumped").network,
     # the cell network (tubes) with its placeholder eddy elements: 132 eddy branches
     "u-magnet grid": lambda: _grid(eddy_model="lumped").network,
 }

@@ -62,8 +62,11 @@ def maps_file(maps: mk.CharacteristicMaps, tmp_path_factory: pytest.TempPathFact
 
 @pytest.fixture(scope="module")
 def fmu(maps: mk.CharacteristicMaps, tmp_path_factory: pytest.TempPathFactory) -> Any:
+    # eq. 8 (one R_ec): the FMU of this module; the file's default on these maps, the eddy
+    # network (switch26m), is checked below (test_cli_export_fmu_takes_the_file_default) and
+    # against the bank in tests/test_bank_eddy_modes.py
     return export_fmu(maps, tmp_path_factory.mktemp("fmu") / "tr09.fmu", start_gaps_m=GAP0,
-                      initial_currents_A=CURRENT0)
+                      initial_currents_A=CURRENT0, eddy_modes=0)
 
 
 def _rel(a: np.ndarray, b: np.ndarray) -> float:
@@ -110,7 +113,7 @@ def _compare_scenarios(magnet: mk.Magnet, maps: mk.CharacteristicMaps, path: Pat
     (each cut after ``max_steps`` communication steps); returns the largest relative
     difference."""
     circuits = tuple(maps.circuits)
-    native = mk.CurrentModel(maps)
+    native = mk.CurrentModel(maps)             # eq. 8, as the module's FMU
     bank = mk.MagnetBank({"m": maps}, compiled="never")
     scenarios = [sc for sc in standard_scenarios(magnet, gap_m=gap, current_A=current)
                  if sc.kind == "open"]
@@ -420,7 +423,7 @@ def test_export_fmu_refuses_bad_arguments(magnet: mk.Magnet, maps: mk.Characteri
 def test_cli_export_fmu_writes_the_same_fmu(fmu: Any, maps_file: Path, tmp_path: Path) -> None:
     target = tmp_path / "magnet.fmu"
     res = runner.invoke(app, ["export", "fmu", "tr09-standard", str(maps_file), "-o",
-                              str(target)])
+                              str(target), "--eddy-modes", "0"])
     assert res.exit_code == 0, res.output
     assert res.stdout.startswith("FMU (FMI 2.0 co-simulation)")
     assert "front.U" in res.stdout and "F_total" in res.stdout
@@ -429,6 +432,21 @@ def test_cli_export_fmu_writes_the_same_fmu(fmu: Any, maps_file: Path, tmp_path:
     # same content, so the same GUID (the GUID is a hash of the content)
     assert read_model_description(str(target)).guid == fmu.guid
     assert validate_fmu(str(target)) == []
+
+
+def test_cli_export_fmu_takes_the_file_default(fmu: Any, maps: mk.CharacteristicMaps,
+                                               maps_file: Path, tmp_path: Path) -> None:
+    # the bundled TR09 file's [reduced] eddy_modes = 2 (switch26m): the command without
+    # --eddy-modes writes the network's FMU, the one export_fmu writes with eddy_modes=2
+    assert maps.default_eddy_modes == 2
+    target = tmp_path / "default.fmu"
+    res = runner.invoke(app, ["export", "fmu", "tr09-standard", str(maps_file), "-o",
+                              str(target)])
+    assert res.exit_code == 0, res.output
+    guid = read_model_description(str(target)).guid
+    network = export_fmu(maps, tmp_path / "net.fmu", start_gaps_m=GAP0,
+                         initial_currents_A=CURRENT0, eddy_modes=2)
+    assert guid == network.guid != fmu.guid
 
 
 def _one_line_error(res: Any, needle: str) -> None:

@@ -30,6 +30,9 @@ def _params(name: str) -> dict:
     p = tomllib.loads((resources.files("maglevkit") / "data" / f"{name}.toml").read_text())
     p["magnet"]["flux_paths"] = "split"
     p["provenance"]["magnet.flux_paths"] = "[E] modelling choice: the FEM-checked paths"
+    # the split network's lumped eddy elements (the file names the ladder since switch26m;
+    # the ladder's tubes: tests/test_eddy_ladder*.py, tests/test_fem_tr09_transient.py)
+    p["magnet"]["eddy_model"] = "lumped"
     return p
 
 

@@ -1,6 +1,7 @@
 """The eddy model chosen in a magnet file: ``[magnet] eddy_model`` / ``eddy_layers``.
 
-A file may name its eddy model (issue 26 item 2, eddydefault26: the ladder should be one
+A file may name its eddy model (issue 26 item 2, eddydefault26; the bundled TR09 files name
+the ladder since switch26m: the ladder should be one
 line away for users, e.g. a vehicle whose ``standard_magnet`` is a copy of the bundled
 file with ``eddy_model = "ladder"``); an option given to ``load_magnet`` /
 ``with_options`` wins over the file's.  The networks are compared with the ones the
@@ -39,7 +40,7 @@ def _file(tmp_path: Path, lines: str, *, provenance: bool = True) -> str:
 
 
 def test_a_file_without_the_keys_is_built_as_before() -> None:
-    # the bundled files name no eddy model: the default lumped elements, 6 layers noted,
+    # the bundled guidance file names no eddy model: the default lumped elements, 6 layers noted,
     # and the same parameter hash as with the options given explicitly (maps and cached
     # vehicle maps are keyed by it, so it must not move)
     mag = mk.load_magnet(GUIDANCE)
@@ -114,15 +115,22 @@ def test_build_magnet_takes_the_file_only_where_told(tmp_path: Path) -> None:
         mk.build_magnet(params, file_options=("saturation",))
 
 
-@pytest.mark.parametrize("name", ["tr09-standard", "tr09-bow", "tr-guidance"])
-def test_the_bundled_transrapid_magnets_keep_the_lumped_elements(name: str) -> None:
-    # eddydefault26's decision (docs/decisions.md): the reduced model the vehicles, the
-    # bank, the FMU and the MPC run is not closer to the ladder on ladder maps, so the
-    # bundled files name no eddy model and build the lumped elements.  Switching is one
-    # `[magnet] eddy_model = "ladder"` line per file once the bank carries eddy_modes.
+@pytest.mark.parametrize("name, model", [("tr09-standard", "ladder"), ("tr09-bow", "ladder"),
+                                         ("tr-guidance", "lumped")])
+def test_the_bundled_transrapid_magnets_name_their_eddy_model(name: str, model: str) -> None:
+    # switch26m (docs/decisions.md): the TR09 levitation magnets are built with the
+    # ladder their transient FEM validates (6 layers), their reduced model is the eddy
+    # network ([reduced] eddy_modes = 2, tests/test_reduced_default.py); the guidance
+    # magnet keeps the lumped elements (its reduced models miss the 2 % either way,
+    # eddydefault26, guidered26) and names no eddy model
     text = (resources.files("maglevkit") / "data" / f"{name}.toml").read_text()
-    assert "\neddy_model" not in text and "\neddy_layers" not in text
-    assert mk.load_magnet(name).options.eddy_model == "lumped"
+    named = "\neddy_model" in text and "\neddy_layers" in text
+    assert named == (model == "ladder")
+    mag = mk.load_magnet(name)
+    assert mag.options.eddy_model == model
+    # the file's keys build the same network as the options (an independent path)
+    explicit = mk.load_magnet(name, eddy_model=model, eddy_layers=6)
+    assert network_hash(mag.network) == network_hash(explicit.network)
 
 
 @pytest.mark.slow   # ~40 s CPU: the ladder's maps and detailed runs
@@ -136,7 +144,8 @@ def test_the_eddy_network_follows_the_ladder_where_eq8_cannot() -> None:
 
     from maglevkit.compare import compare_models, standard_scenarios
 
-    mag = mk.load_magnet("tr09-standard", eddy_model="ladder", eddy_layers=6)
+    mag = mk.load_magnet("tr09-standard")   # the ladder, 6 layers (the file's, switch26m)
+    assert mag.options.eddy_model == "ladder" and mag.default_eddy_modes == 2
     maps = mk.build_maps(mag, gaps_m=np.linspace(0.008, 0.012, 5),
                          currents_A=np.linspace(20.0, 45.0, 11), progress=False)
     scen = [s for s in standard_scenarios(mag, gap_m=0.010, current_A=31.7)

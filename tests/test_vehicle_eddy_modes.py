@@ -132,14 +132,15 @@ def test_cross_section_compiled_step_carries_the_branch_currents() -> None:
 def test_options_in_the_file_and_their_refusals() -> None:
     """``[magnets] eddy_modes`` in the vehicle file; 4, a bool, or with motion_eddy are
     refused naming the option and the value, on the API and the file; detailed magnets
-    and a scaled R_ec too; the diodes on a network with R_0 = inf name the magnet file."""
+    too, and a per-kind mapping with an unknown kind or a bad value; the diodes on a
+    network with R_0 = inf name the magnet file."""
     from maglevkit.parameter_files import read_parameter_file
     from maglevkit.vehicle.crossrun import CrossSectionModel
 
     params, label = read_parameter_file("tr09", what="vehicle", folder="vehicle",
                                         table="vehicle")
     assert parse_vehicle({**params, "magnets": {"eddy_modes": 2}}, label).eddy_modes == 2
-    assert parse_vehicle(params, label).eddy_modes == 0
+    assert parse_vehicle(params, label).eddy_modes is None      # unset: the magnets' own
     for bad, words in (({"eddy_modes": 4}, ("eddy_modes = 4",)),
                        ({"eddy_modes": 2, "motion_eddy": True}, ("eddy_modes = 2",
                                                                  "motion_eddy")),
@@ -155,8 +156,9 @@ def test_options_in_the_file_and_their_refusals() -> None:
                                                                 "motion_eddy")),
                       ({"eddy_modes": 2, "magnets": "detailed"}, ("eddy_modes = 2",
                                                                   "'detailed'")),
-                      ({"eddy_modes": 1, "eddy_resistance_scale": 2.0},
-                       ("eddy_modes = 1", "eddy_resistance_scale = 2.0"))):
+                      ({"eddy_modes": {"bow": 1, "front": 2}}, ("eddy_modes", "'front'",
+                                                                "bow", "standard")),
+                      ({"eddy_modes": {"bow": 5}}, ("eddy_modes = 5", "bow magnets"))):
         with pytest.raises(InputError) as exc:
             VehicleModel(train, rigid=True, **kw)
         for w in words:
@@ -190,8 +192,9 @@ def test_infinite_r0_with_the_vehicle_diodes_names_the_magnet(monkeypatch) -> No
 
 
 def test_cli_takes_the_option(tmp_path: Any) -> None:
-    """``maglevkit vehicle run --eddy-modes 2`` flies the eddy network and writes both
-    branch currents; 4, or with --motion-eddy, fail naming it."""
+    """``maglevkit vehicle run`` without ``--eddy-modes`` flies the magnet files' eddy
+    network and writes both branch currents, ``--eddy-modes 0`` eq. 8 without them; 4,
+    or 2 with --motion-eddy, fail naming it."""
     import xarray as xr
     from typer.testing import CliRunner
 
@@ -199,11 +202,17 @@ def test_cli_takes_the_option(tmp_path: Any) -> None:
 
     out = tmp_path / "run.nc"
     base = ["vehicle", "run", "tr09", "--rigid", "--duration", "0.01", "--no-progress"]
-    res = CliRunner().invoke(app, [*base, "--eddy-modes", "2", "-o", str(out)])
+    # unset: the magnet files' default (the bundled TR09: 2 branches)
+    res = CliRunner().invoke(app, [*base, "-o", str(out)])
     assert res.exit_code == 0, res.output
     with xr.open_dataset(out) as ds:
         assert ds.eddy_current.dims == ("time", "circuit", "eddy_state")
-        assert "eddy network" in ds.attrs["magnets"]
+        assert ds.eddy_state.size == 2
+        assert "eddy network (eddy_modes = 2)" in ds.attrs["magnets"]
+    res = CliRunner().invoke(app, [*base, "--eddy-modes", "0", "-o", str(out), "--force"])
+    assert res.exit_code == 0, res.output
+    with xr.open_dataset(out) as ds:
+        assert "eddy_current" not in ds and "eddy network" not in ds.attrs["magnets"]
     for extra, words in ((["--eddy-modes", "4"], ("eddy_modes = 4",)),
                          (["--eddy-modes", "2", "--motion-eddy"], ("eddy_modes = 2",
                                                                    "motion_eddy"))):

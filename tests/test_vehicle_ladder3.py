@@ -19,7 +19,13 @@ from maglevkit.vehicle.simulation import VehicleModel, VehicleRun
 from maglevkit.vehicle.train import load_vehicle, parse_vehicle
 
 from .test_vehicle_compiled import heave_pitch_runs, loops_agree
-from .test_vehicle_motion_eddy import nmpc_runs, record_bank_inputs, replay_circuits
+from .test_vehicle_motion_eddy import (
+    lumped_tr09,
+    lumped_train,
+    nmpc_runs,
+    record_bank_inputs,
+    replay_circuits,
+)
 
 # Compiled and reference loops do the same arithmetic in another order (the bound of
 # tests/test_vehicle_motion_eddy.py; measured here 3.5e-14 of a variable's largest value
@@ -55,7 +61,7 @@ def test_heave_pitch_compiled_step_carries_both_eddy_states() -> None:
     compiled step with I_e1, I_e2 in its state (2 n_c entries, column-major) equals the
     reference loop (bank.step with the bank's (n_c, 2) state) to RTOL, both eddy states
     are recorded per circuit and move, the coil current stays >= 0."""
-    m = VehicleModel(load_vehicle(), motion_eddy=True, eddy_branches=2)
+    m = VehicleModel(lumped_train(), motion_eddy=True, eddy_branches=2)
     assert m.bank.n_eddy_states == 2 and m.eddy_branches == 2
     # measured peaks of I_e1, I_e2: 3.1 A and 3.9 A
     rp = heave_pitch_with_two_eddy_states(m)
@@ -75,7 +81,7 @@ def test_three_state_vehicle_replayed_and_held_against_the_detailed_model() -> N
     from maglevkit.vehicle.irregularities import HarmonicProfile
 
     v, f = 400 / 3.6, 50.0
-    m = VehicleModel(load_vehicle(), rigid=True, motion_eddy=True, eddy_branches=2)
+    m = VehicleModel(lumped_train(), rigid=True, motion_eddy=True, eddy_branches=2)
     run, calls = record_bank_inputs(m, speed_m_per_s=v, duration_s=0.3,
                                     irregularity=HarmonicProfile(0.05e-3, v / f))
     ds = run.dataset
@@ -131,7 +137,7 @@ def test_mpc_model_carries_both_eddy_states_and_flies_a_heave_mass() -> None:
     from maglevkit.vehicle import STANDARD_GRAVITY, HeaveMass
     from maglevkit.vehicle.mapcache import vehicle_maps
 
-    full = vehicle_maps(mk.load_magnet("tr09-standard"))
+    full = vehicle_maps(mk.load_magnet(lumped_tr09()["tr09-standard"]))
     maps = CharacteristicMaps(full.dataset.isel(circuit=[0]))
     eq8 = mk.CurrentModel(maps)
     gaps0 = np.full(len(eq8.gap_names), 0.010)
@@ -174,7 +180,9 @@ def test_cross_section_compiled_step_carries_both_eddy_states() -> None:
     from maglevkit.vehicle.crossrun import CrossSectionModel, Crosswind
     from maglevkit.vehicle.irregularities import HarmonicProfile
 
-    model = CrossSectionModel(motion_eddy="levitation", eddy_branches=2)
+    lumped = lumped_tr09()["tr09-standard"]
+    model = CrossSectionModel(levitation_magnet=lumped, motion_eddy="levitation",
+                              eddy_branches=2)
     assert model.bank.n_eddy_states == 2
     kw: dict[str, Any] = dict(speed_m_per_s=400 / 3.6, duration_s=0.5,
                               crosswind=Crosswind(5e3, rise_s=0.2, hold_s=0.1, start_s=0.2),
@@ -185,7 +193,7 @@ def test_cross_section_compiled_step_carries_both_eddy_states() -> None:
     assert float(np.abs(lev.values).max()) > 0.05 and float(np.abs(gui.values).max()) == 0.0
     assert "three-state" in a.attrs["magnets"]
     with pytest.warns(MaglevkitWarning, match="guidance magnet 'tr-guidance'.*three-state"):
-        CrossSectionModel(motion_eddy=True, eddy_branches=2)
+        CrossSectionModel(levitation_magnet=lumped, motion_eddy=True, eddy_branches=2)
 
 
 def test_options_in_the_file_and_their_refusals() -> None:
@@ -230,7 +238,8 @@ def test_cli_takes_the_option(tmp_path: Any) -> None:
     from maglevkit.cli import app
 
     out = tmp_path / "run.nc"
-    base = ["vehicle", "run", "tr09", "--rigid", "--duration", "0.01", "--no-progress"]
+    base = ["vehicle", "run", lumped_tr09()["tr09"], "--rigid", "--duration", "0.01",
+            "--no-progress"]
     res = CliRunner().invoke(app, [*base, "--motion-eddy", "--eddy-branches", "2", "-o",
                                    str(out)])
     assert res.exit_code == 0, res.output
@@ -258,7 +267,7 @@ def test_nmpc_flies_the_three_state_ladder_and_its_compiled_blocks_are_the_numpy
     variable's largest value, as there; measured 7.5e-9 (I_e), 7.3e-9 (voltage))."""
     import dataclasses
 
-    train = dataclasses.replace(load_vehicle(), n_sections=1)
+    train = dataclasses.replace(lumped_train(), n_sections=1)
     m = VehicleModel(train, controller="mpc", motion_eddy=True, eddy_branches=2)
     assert all(c.model.n_eddy == 2 * c.model.n_circuits
                for c in m.circuit_controllers.values())

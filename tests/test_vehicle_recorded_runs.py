@@ -85,6 +85,23 @@ whole-run reference bit-identical.  Once more the same day (guidesat26: the guid
 top fringe and a share of the window's tubes leaving from the yoke-leg corner, where the
 field shows their flux leaving): chassis_y <= 2.6e-3, guidance force <= 1.9e-3, guidance
 current <= 1.8e-3 of each variable's largest value; heave-pitch runs bit-identical.
+
+All twelve were re-recorded after issue 26's eddy switch (switch26m, switch26v): the TR09
+standard and bow files on the diffusing eddy ladder (``eddy_model = "ladder"``, new maps
+stored, the lumped-element split maps deleted) and the vehicles' reduced magnets on each
+magnet file's default reduced model (``[reduced] eddy_modes = 2``: the eddy network, its
+branch currents recorded as ``eddy_current``, ``levitation_eddy_current``,
+``guidance_eddy_current``).  Against the recording before (eq. 8 on the lumped maps),
+largest change relative to the variable's largest value: heave-pitch coil current 0.34-0.54
+(the network's branches take the fast part of the drive that eq. 8's current jump puts
+into the coil current: in hp_rigid_compiled one circuit swings 13.9-49.5 A on eq. 8, the
+network's stays near 31 A), voltage 0.12-0.56, gap 1.2e-4-2.4e-2, force 1.4e-3-6.0e-2;
+cross-section levitation current 8.8e-3-0.13, chassis_y <= 1.8e-2, guidance current <=
+2.4e-3; no touchdown, minimum gaps within 0.04 mm of before (per scenario in
+docs/decisions.md, "switch26v").  ``hp_detailed`` (detailed magnets, now the ladder's
+FluxModel) moved by 0.25 of the largest current.  The whole-run reference
+(vehicle_run_reference.nc) keeps its ``"paper"`` magnets with the lumped elements and eq. 8
+(tests/conftest.py ``paper_tr09_file``): unchanged, its stored maps still used.
 """
 
 from __future__ import annotations

@@ -501,7 +501,7 @@ class _UMagnetKind(_Kind):
         from .magnets.base import take
         from .magnets.u_magnet import MAGNET_SCHEMA, RAIL_SCHEMA
 
-        return (take(params["magnet"], MAGNET_SCHEMA, "magnet"),
+        return (take(_builder_keys(params["magnet"]), MAGNET_SCHEMA, "magnet"),
                 take(params["rail"], RAIL_SCHEMA, "rail"))
 
     def laws(self, m: Mapping[str, Any], turns: Any, coil: Mapping[str, float]
@@ -543,6 +543,14 @@ class _UMagnetKind(_Kind):
                               _iron_material(base, "iron_rail"), options)
 
 
+def _builder_keys(table: Mapping[str, Any]) -> dict[str, Any]:
+    """A ``[magnet]`` table without the model options a file may set (``eddy_model``,
+    ``eddy_layers``: read by ``load_magnet``, not part of the builders' schemas)."""
+    from .magnets.base import FILE_OPTION_NAMES
+
+    return {k: v for k, v in table.items() if k not in FILE_OPTION_NAMES}
+
+
 class _LevitationKind(_Kind):
     kind, turns_key, resistance_key = "levitation_magnet", "turns_per_pole", "resistance_per_pole"
     fixed_table = "stator"
@@ -551,7 +559,7 @@ class _LevitationKind(_Kind):
         from .magnets.base import take
         from .magnets.levitation import MAGNET_SCHEMA, STATOR_SCHEMA
 
-        return (take(params["magnet"], MAGNET_SCHEMA, "magnet"),
+        return (take(_builder_keys(params["magnet"]), MAGNET_SCHEMA, "magnet"),
                 take(params["stator"], STATOR_SCHEMA, "stator"))
 
     def laws(self, m: Mapping[str, Any], turns: Any, coil: Mapping[str, float]

@@ -85,6 +85,28 @@ def timing_note(results) -> str:  # type: ignore[no-untyped-def]
             "detailed / reduced")
 
 
+def eddy_modes_option(value: int | None, source: object) -> int:
+    """The ``--eddy-modes`` option checked, or else ``source``'s default (a magnet or maps:
+    :func:`maglevkit.reduction.default_eddy_modes`)."""
+    from ..magnets.base import REDUCED_EDDY_MODES
+    from ..reduction import default_eddy_modes
+
+    if value is None:
+        return default_eddy_modes(source)
+    if value not in REDUCED_EDDY_MODES:
+        raise fail(f"--eddy-modes {value}: allowed are "
+                   f"{', '.join(map(str, REDUCED_EDDY_MODES))} (0: eq. 8 with one R_ec; 1-3: "
+                   "the eddy network's RL branches)")
+    return int(value)
+
+
+def reduced_model_name(eddy_modes: int) -> str:
+    """What the reduced model with ``eddy_modes`` is, for titles and reports."""
+    if eddy_modes == 0:
+        return "eq. 8, one eddy resistor R_ec"
+    return f"eddy network, {eddy_modes} RL branch{'es' if eddy_modes > 1 else ''}"
+
+
 def plot_title(name: str, result) -> str:  # type: ignore[no-untyped-def]
     """Figure title with the AC-normalised errors (the plot's own note has the NRMS)."""
     from ..compare import format_ac_error
@@ -120,6 +142,11 @@ def compare(
     extrapolate: Annotated[bool, typer.Option(
         help="Let the reduced model extrapolate beyond its maps' grid (warned) instead of "
              "stopping with an error.")] = False,
+    eddy_modes: Annotated[int | None, typer.Option(
+        "--eddy-modes", metavar="0|1|2|3",
+        help="Reduced model: 0 = eq. 8 (one eddy resistor R_ec), 1-3 = the fitted RL eddy "
+             "network with that many branches; default: the magnet file's [reduced] "
+             "eddy_modes (0 if it has none).")] = None,
     fmt: FormatOption = OutputFormat.table,
 ) -> None:
     """Run the detailed flux-based and the reduced current-based model side by side.
@@ -145,6 +172,7 @@ def compare(
                    "--current set the operating point of the standard scenarios only: "
                    "leave them out or edit the scenario file")
     mag = load_magnet_or_exit(magnet)
+    modes = eddy_modes_option(eddy_modes, mag)
     s0 = gap if gap is not None else getattr(mag, "nominal_gap", None)
     i0 = current if current is not None else getattr(mag, "nominal_current", None)
     if scenario is None and (s0 is None or i0 is None):
@@ -168,7 +196,8 @@ def compare(
             # the file's own operating point; the header names the file, not a gap it
             # did not run at (issue 27: "gap_m": 10.0 was printed for --gap 10)
             meta = {"magnet": mag.name, "scenario": str(scenario)}
-        reduced = CurrentModel(maps, extrapolate=extrapolate)
+        reduced = CurrentModel(maps, extrapolate=extrapolate, eddy_modes=modes)
+        meta["reduced_eddy_modes"] = modes
         results = []
         start = time.monotonic()
         with interruptible():   # Ctrl-C between chunks of steps, not inside CasADi
@@ -183,7 +212,8 @@ def compare(
     except MaglevkitError as exc:
         raise fail(exc) from None
     print_records(comparison_records(results) if fmt != OutputFormat.table else [], fmt,
-                  comparison_table(results, f"{mag.name}: detailed vs reduced"), meta=meta)
+                  comparison_table(results, f"{mag.name}: detailed vs reduced "
+                                            f"({reduced_model_name(modes)})"), meta=meta)
     if out is not None:
         from ..plotting import plot_comparison
 

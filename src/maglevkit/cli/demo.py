@@ -26,6 +26,24 @@ def _rule(title: str) -> None:
     console.print(Rule(title), width=min(console.width, 100))
 
 
+def _eddy_text(reduced) -> str:  # type: ignore[no-untyped-def]
+    """The reduced model's eddy branch in one phrase: eq. 8's ``R_ec`` (the maps' current
+    jump) or the network's ``R_0`` and branch time constants ``L_k/R_k`` (the first
+    circuit's, at the maps' reference inductance)."""
+    maps = reduced.maps
+    if reduced.eddy_modes == 0:
+        r_ec = maps.dataset["eddy_resistance_ohm"].values
+        return f"eq. 8, R_ec = {np.round(r_ec, 2)} ohm"
+    ds = maps.dataset.sel(eddy_modes=reduced.eddy_modes)
+    m = reduced.eddy_modes
+    r_k = np.asarray(ds["eddy_network_resistance_ohm"].values, dtype=float)[:, :m]
+    l_k = np.asarray(ds["eddy_network_inductance_H"].values, dtype=float)[:, :m]
+    r_0 = np.asarray(ds["eddy_network_r0_ohm"].values, dtype=float)
+    tau_ms = ", ".join(f"{1e3 * t:.3g}" for t in (l_k / r_k)[0])
+    return (f"network of {m} RL branch{'es' if m > 1 else ''}, R_0 = {np.round(r_0, 1)} ohm, "
+            f"branch time constants {tau_ms} ms ({maps.circuits[0]})")
+
+
 @app.command(short_help="The whole chain on the bundled standard magnet, with a report.")
 def demo(
     out: Annotated[Path, typer.Option(help="Folder for figures and data (created inside an "
@@ -33,6 +51,11 @@ def demo(
     magnet: Annotated[str, typer.Option(help="Magnet file or bundled name.")] = DEFAULT_MAGNET,
     quick: Annotated[bool, typer.Option(help="Skip the slow open-loop comparison cases "
                                              "(0.5 Hz sine).")] = False,
+    eddy_modes: Annotated[int | None, typer.Option(
+        "--eddy-modes", metavar="0|1|2|3",
+        help="Reduced model: 0 = eq. 8 (one eddy resistor R_ec), 1-3 = the fitted RL eddy "
+             "network with that many branches; default: the magnet file's [reduced] "
+             "eddy_modes (0 if it has none).")] = None,
 ) -> None:
     """Run statics, figures, maps and the detailed-vs-reduced comparison; print a report.
 
@@ -48,10 +71,17 @@ def demo(
     from ..plotting import plot_comparison, plot_force_current, plot_maps
     from ..reduced.current import CurrentModel
     from ..reduction import build_maps
-    from .compare import comparison_table, plot_title, slug
+    from .compare import (
+        comparison_table,
+        eddy_modes_option,
+        plot_title,
+        reduced_model_name,
+        slug,
+    )
     from .statics import write_statics_csv
 
     mag = load_magnet_or_exit(magnet)
+    modes = eddy_modes_option(eddy_modes, mag)
     output_dir(out, "--out")
     s0 = getattr(mag, "nominal_gap", None) or 0.010
     i0 = getattr(mag, "nominal_current", None)
@@ -83,14 +113,14 @@ def demo(
             t_maps = time.perf_counter() - t0
             written.append(maps.to_netcdf(out / "maps.nc"))
             written += plot_maps(maps, out)
-            r_ec = maps.dataset["eddy_resistance_ohm"].values
+            reduced = CurrentModel(maps, eddy_modes=modes)
             console.print(f"3. maps: {mg.size} gaps x {mc.size} currents per circuit in "
                           f"{t_maps:.1f} s; R_el = {maps.dataset['resistance_ohm'].values.round(3)} ohm, "
-                          f"R_ec = {np.round(r_ec, 2)} ohm")
+                          f"eddy: {_eddy_text(reduced)}")
             cases = standard_scenarios(mag, gap_m=s0, current_A=i0)
             if quick:
                 cases = [c for c in cases if "0.5 Hz" not in c.name]
-            results = compare_models(mag, CurrentModel(maps), cases, gap_m=s0, current_A=i0)
+            results = compare_models(mag, reduced, cases, gap_m=s0, current_A=i0)
             for r in results:
                 written.append(plot_comparison(r, out / f"compare-{slug(r.scenario.name)}.png",
                                                title=plot_title(mag.name, r)))
@@ -99,7 +129,7 @@ def demo(
     except OSError as exc:
         raise fail(f"cannot write the demo's files in {str(out)!r}: "
                    f"{exc.strerror or exc}") from None
-    console.print("4. detailed vs reduced model:")
+    console.print(f"4. detailed vs reduced model ({reduced_model_name(modes)}):")
     console.print(comparison_table(results, f"{mag.name}: detailed vs reduced"))
     main = [r for r in results if not r.scenario.coupling]
     worst = max(main, key=lambda r: r.max_error)

@@ -10,6 +10,7 @@ import typer
 
 from ..errors import MaglevkitError
 from ._app import ForceOption, app, console, fail, info, load_magnet_or_exit, output_file
+from .compare import eddy_modes_option
 
 export_app = typer.Typer(help="Export the reduced magnet model for other simulation tools.",
                          no_args_is_help=True, rich_markup_mode=None)
@@ -51,14 +52,21 @@ def fmu(
         help="With --motion-eddy: shielded sections of the ladder, 1 (default: one eddy "
              "state per circuit) or 2 (the three-state ladder: I_e1, I_e2 per circuit; "
              "docs/fmu.md).")] = 1,
+    eddy_modes: Annotated[int | None, typer.Option(
+        "--eddy-modes", metavar="0|1|2|3",
+        help="0 = eq. 8 (one eddy resistor R_ec), 1-3 = the fitted RL eddy network with "
+             "that many branch currents per circuit; default: the magnet file's [reduced] "
+             "eddy_modes (0 if it has none; 0 with --motion-eddy).")] = None,
     force: ForceOption = False,
 ) -> None:
     """Write an FMI 2.0 co-simulation FMU of the reduced model (paper eq. 8) of every
     circuit: inputs voltages, gaps and gap rates; outputs coil currents and forces;
     R_el and R_ec as parameters; the maps embedded as C arrays; compiled by the system C
-    compiler.  --motion-eddy exports the shielded-gap ladder instead (our extension of
-    eq. 8 for gap motion; its maps need the motion_eddy_* variables), with --eddy-branches 2
-    the three-state ladder (motion_eddy3_* variables).  See docs/fmu.md.
+    compiler.  --eddy-modes m (default: the magnet file's [reduced] eddy_modes, 2 for the
+    bundled TR09 magnets) exports the fitted RL eddy network with m branches instead of
+    one R_ec; --motion-eddy the shielded-gap ladder (our extension of eq. 8 for gap
+    motion; its maps need the motion_eddy_* variables), with --eddy-branches 2 the
+    three-state ladder (motion_eddy3_* variables).  See docs/fmu.md.
 
     \b
     Example:
@@ -69,6 +77,9 @@ def fmu(
     if eddy_branches not in (1, 2):
         raise fail(f"--eddy-branches {eddy_branches}: allowed are 1 (the two-state ladder) "
                    "or 2 (the three-state ladder)")
+    if motion_eddy and eddy_modes:
+        raise fail(f"--eddy-modes {eddy_modes} with --motion-eddy: these are two reduced "
+                   "models (the eddy network, the shielded-gap ladder); choose one")
     if eddy_branches == 2 and not motion_eddy:
         raise fail("--eddy-branches 2 needs --motion-eddy (it chooses the shielded-gap "
                    "ladder's sections; without --motion-eddy the FMU carries eq. 8)")
@@ -79,6 +90,7 @@ def fmu(
     from ..reduction import load_maps
 
     mag = load_magnet_or_exit(magnet)
+    modes = 0 if motion_eddy and eddy_modes is None else eddy_modes_option(eddy_modes, mag)
     try:
         maps = load_maps(maps_file, magnet=mag)
         lo_s, hi_s = float(maps.gaps_m[0]), float(maps.gaps_m[-1])
@@ -98,7 +110,7 @@ def fmu(
                             eddy_resistance=eddy_resistance, interpolation=interpolation,
                             max_substep_s=max_substep, start_gaps_m=gap,
                             initial_currents_A=current, motion_eddy=motion_eddy,
-                            eddy_branches=eddy_branches)
+                            eddy_branches=eddy_branches, eddy_modes=modes)
     except MaglevkitError as exc:
         raise fail(exc) from None
     console.print(f"FMU (FMI 2.0 co-simulation) {result.model_identifier!r} of {mag.name!r}: "

@@ -72,8 +72,9 @@ def run(
     eddy_modes: Annotated[int | None, typer.Option(
         "--eddy-modes", metavar="0|1|2|3",
         help="Reduced magnets with the maps' fitted eddy network of that many branches (one "
-             "state per branch and circuit; not with --motion-eddy); default: the vehicle "
-             "file's [magnets] eddy_modes (0 unless set; 0 for a cross-section).")] = None,
+             "state per branch and circuit; 0: eq. 8; not with --motion-eddy), every magnet; "
+             "default: the vehicle file's [magnets] eddy_modes, else each magnet file's "
+             "[reduced] eddy_modes (the bundled TR09 magnets: 2).")] = None,
     controller: Annotated[str, typer.Option(
         metavar="cascade|mpc",
         help="Gap controllers: cascade (flux cascade, compiled step) or mpc (offset-free "
@@ -133,8 +134,7 @@ def run(
             _run_cross_section(vehicle_option or vehicle, speed_kmh, duration, dt, failure,
                                magnets, maps_cache, output, plot, force, curve, crosswind,
                                irregularity, lateral, progress, bool(motion_eddy),
-                               1 if eddy_branches is None else eddy_branches,
-                               0 if eddy_modes is None else eddy_modes)
+                               1 if eddy_branches is None else eddy_branches, eddy_modes)
         except KeyboardInterrupt:
             raise interrupted() from None
         return
@@ -292,7 +292,7 @@ def _run_cross_section(name: str, speed_kmh: float | None, duration: float, dt: 
                        curve: str | None, crosswind: str | None, irregularity: str = "none",
                        lateral: str | None = None, progress: bool = True,
                        motion_eddy: bool = False, eddy_branches: int = 1,
-                       eddy_modes: int = 0) -> None:
+                       eddy_modes: int | None = None) -> None:
     from ..vehicle.crossrun import (
         CrossSectionModel,
         parse_crosswind,

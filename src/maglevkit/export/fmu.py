@@ -57,6 +57,7 @@ from ..models.compiled import cache_directory, find_compiler, run_compiler
 from ..reduced.bank import KERNEL_PARAMETERS, MagnetBank
 from ..reduced.core import STEP_FLAG_MESSAGES, StepFlag, circuit_label, substep_rule_c
 from ..reduced.current import CurrentModel
+from ..reduction.maps import default_eddy_modes
 from ..validation import flag
 
 if TYPE_CHECKING:
@@ -146,7 +147,7 @@ def export_fmu(magnet_or_maps: ReducedSource, path: str | os.PathLike[str], *,
                max_substep_s: float = 1e-3, start_gaps_m: Any = None,
                initial_currents_A: Any = None, stop_time_s: float = 1.0,
                step_size_s: float = 1e-3, motion_eddy: bool = False,
-               eddy_branches: int = 1, eddy_modes: int = 0) -> ExportedFmu:
+               eddy_branches: int = 1, eddy_modes: int | None = None) -> ExportedFmu:
     """Write an FMI 2.0 Co-Simulation FMU of the reduced model of every circuit (eq. 8).
 
     Parameters
@@ -189,11 +190,15 @@ def export_fmu(magnet_or_maps: ReducedSource, path: str | os.PathLike[str], *,
         section (1, default: state ``I_e``) or two (2, the three-state ladder:
         ``I_e1``, ``I_e2`` per circuit inside the FMU; ``MagnetBank(...,
         eddy_branches=2)``).  A ``CurrentModel`` member or a bank keeps its own.
-    eddy_modes : {0, 1, 2, 3}
+    eddy_modes : {None, 0, 1, 2, 3}
         ``m > 0``: members given as maps carry the maps' eddy network with ``m`` RL
         branches (``MagnetBank(..., eddy_modes=m)``: ``m`` branch currents per circuit
-        inside the FMU; not with ``motion_eddy``).  A ``CurrentModel`` member or a bank
-        keeps its own.
+        inside the FMU; not with ``motion_eddy``); 0: eq. 8.  None (default): the maps'
+        own default (:attr:`~maglevkit.reduction.maps.CharacteristicMaps.default_eddy_modes`,
+        the magnet file's ``[reduced] eddy_modes``; 2 for the bundled TR09 magnets, 0
+        for maps without it), or 0 with ``motion_eddy=True``; members given as maps with
+        different defaults need it given.  A ``CurrentModel`` member or a bank keeps
+        its own.
 
     Returns
     -------
@@ -217,6 +222,8 @@ def export_fmu(magnet_or_maps: ReducedSource, path: str | os.PathLike[str], *,
     if description is not None and not isinstance(description, str):
         raise InputError(f"description = {description!r} must be a string")
     flag(motion_eddy, "motion_eddy")
+    if eddy_modes is None:
+        eddy_modes = 0 if motion_eddy else _maps_default_eddy_modes(magnet_or_maps)
     bank, default_name = _as_bank(magnet_or_maps, eddy_resistance, interpolation,
                                   bool(motion_eddy), eddy_branches, eddy_modes)
     if bank.n_eddy_states:
@@ -352,6 +359,29 @@ def _as_bank(model: ReducedSource, eddy_resistance: str, interpolation: str,
                       compiled="never", motion_eddy=motion_eddy, eddy_branches=eddy_branches,
                       eddy_modes=eddy_modes)
     return bank, name
+
+
+def _maps_default_eddy_modes(model: ReducedSource) -> int:
+    """``export_fmu(eddy_modes=None)``: the default of the members given as maps (0 when
+    there are none: a bank or ``CurrentModel`` members keep their own).
+
+    Raises
+    ------
+    InputError
+        Members given as maps whose defaults differ (the bank takes one ``eddy_modes``
+        for all of them).
+    """
+    if isinstance(model, MagnetBank):
+        return 0
+    members = dict(model) if isinstance(model, Mapping) else {"": model}
+    found = {k: default_eddy_modes(v) for k, v in members.items()
+             if _is_reduced(v) and not isinstance(v, CurrentModel)}
+    values = sorted(set(found.values()))
+    if len(values) > 1:
+        raise InputError(f"eddy_modes = None: the members given as maps default to different "
+                         f"eddy_modes ({found}); give eddy_modes (0, 1, 2 or 3) or members "
+                         "CurrentModel(maps, eddy_modes=m)")
+    return values[0] if values else 0
 
 
 def _is_reduced(model: Any) -> bool:

@@ -4,9 +4,11 @@ A parameter file has a ``[magnet]`` table whose ``kind`` selects the builder, th
 builder's own tables, optional ``[materials.NAME]`` tabulated B-H curves (``H``/``B`` lists or
 ``csv = "file.csv"``, optional ``interpolation``, ``resistivity``), a
 ``[provenance]`` table that tags every value (``"magnet.turns" = "[E] estimate"``; tags
-start with ``[P]``, ``[R]`` or ``[E]``), and an optional ``[operating]`` table with the
+start with ``[P]``, ``[R]`` or ``[E]``), an optional ``[operating]`` table with the
 nominal operating point (``nominal_gap`` [m], ``nominal_current`` [A]) that figures and
-maps normalise by.  All values are SI (m, ohm, A, ...).  Unknown and missing keys,
+maps normalise by, and an optional ``[reduced]`` table with the reduced model's default
+on this magnet's maps (``eddy_modes``: :data:`REDUCED_EDDY_MODES`,
+:attr:`Magnet.default_eddy_modes`).  All values are SI (m, ohm, A, ...).  Unknown and missing keys,
 wrong types, negative or fractional counts (turns included) are errors; a missing
 ``[provenance]`` table, values without a tag and malformed tags are a
 :class:`~maglevkit.errors.ProvenanceWarning`.
@@ -44,6 +46,8 @@ __all__ = [
     "MAGNET_PLAUSIBLE",
     "MAX_CURRENT_DENSITY_A_PER_M2",
     "OPTION_NAMES",
+    "REDUCED_EDDY_MODES",
+    "REDUCED_SCHEMA",
     "Magnet",
     "ModelOptions",
     "PlausibleRange",
@@ -305,6 +309,26 @@ class Magnet:
         return None if op is None else float(op["nominal_current"])
 
     @property
+    def default_eddy_modes(self) -> int:
+        """The reduced model's default ``eddy_modes`` on maps of this magnet [-].
+
+        From the file's ``[reduced] eddy_modes`` (:data:`REDUCED_EDDY_MODES`; absent: 0,
+        eq. 8 with one ``R_ec``).  The key describes the magnet as its file builds it, so
+        it is 0 when the magnet is built without eddy currents (``eddy_currents=False``:
+        no eddy network to fit) or with another ``eddy_model`` than the file's (e.g.
+        ``with_options(eddy_model="lumped")`` of a ladder file: the network was chosen
+        for the ladder's diffusion; the lumped elements' maps are eq. 8's).
+        ``build_maps`` writes it into the maps
+        (``CharacteristicMaps.default_eddy_modes``); entry points whose ``eddy_modes``
+        option is unset take it.
+        """
+        file_model = self.parameters.get("magnet", {}).get("eddy_model", "lumped")
+        if not self.options.eddy_currents or self.options.eddy_model != file_model:
+            return 0
+        table = self.parameters.get("reduced")
+        return int(_reduced_table(table, self.source)["eddy_modes"])
+
+    @property
     def calibration(self) -> dict[str, float]:
         """The calibration factors applied to the network (from the file's
         ``[calibration]`` table; empty for an uncalibrated magnet).  Their tags and the
@@ -484,6 +508,45 @@ OPERATING_SCHEMA = {
     "nominal_current": Schema(float, unit="A"),
 }
 
+#: The values of ``[reduced] eddy_modes`` (and of the reduced model's ``eddy_modes``
+#: option): 0 is the paper's eq. 8 with one eddy resistor ``R_ec``; ``m`` = 1, 2, 3 the
+#: RL eddy network with ``m`` branches fitted to the detailed model's voltage step
+#: (``CurrentModel(maps, eddy_modes=m)``, docs/reduction.md, "More eddy modes").  The
+#: one list of them (``maglevkit.reduction.eddy_network.EDDY_NETWORK_MODES`` is its
+#: nonzero part).
+REDUCED_EDDY_MODES = (0, 1, 2, 3)
+
+#: The ``[reduced]`` table of a magnet file: the reduced model's defaults on maps of this
+#: magnet (an option given to an entry point wins; docs/magnets.md, "Which eddy model
+#: the bundled files use").
+REDUCED_SCHEMA = {
+    "eddy_modes": Schema(int, required=False, unit="-", check="nonnegative", default=0),
+}
+
+
+def _reduced_table(table: Any, source: str) -> dict[str, Any]:
+    """The ``[reduced]`` table, validated (absent: the defaults, ``eddy_modes = 0``).
+
+    Raises
+    ------
+    ParameterFileError
+        Unknown keys, or ``eddy_modes`` not one of :data:`REDUCED_EDDY_MODES` (named with
+        its value and the allowed ones).
+    """
+    if table is None:
+        return {k: sc.default for k, sc in REDUCED_SCHEMA.items()}
+    label = f"{source or 'parameters'}: " if source else ""
+    try:
+        out = take(table, REDUCED_SCHEMA, "reduced")
+    except ParameterFileError as exc:
+        raise ParameterFileError(f"{label}{exc}") from None
+    if out["eddy_modes"] not in REDUCED_EDDY_MODES:
+        raise ParameterFileError(
+            f"{label}[reduced] eddy_modes = {table['eddy_modes']!r}; allowed are "
+            f"{', '.join(map(str, REDUCED_EDDY_MODES))} (0: eq. 8 with one R_ec; 1-3: the "
+            "RL eddy network's branches)")
+    return out
+
 
 def resolve_material(name: str, custom: Mapping[str, Material], where: str) -> Material:
     """A material by name: a ``[materials.NAME]`` table of the file, or a built-in record."""
@@ -659,7 +722,8 @@ def _build(parameters: Mapping[str, Any], *, options: ModelOptions | None, sourc
                     f"{kind!r}: use {' or '.join(map(repr, reversed(allowed_models)))} "
                     f"('ladder': kinds {', '.join(LADDER_KINDS)}; 'ladder_split': "
                     f"kind {', '.join(LADDER_SPLIT_KINDS)})")
-    allowed = {"magnet", "materials", "provenance", "operating", "calibration", *tables}
+    allowed = {"magnet", "materials", "provenance", "operating", "calibration", "reduced",
+               *tables}
     unknown = sorted(set(parameters) - allowed)
     if unknown:
         raise ParameterFileError(f"unknown table(s) {unknown}; a {kind!r} file may have: "
@@ -671,6 +735,8 @@ def _build(parameters: Mapping[str, Any], *, options: ModelOptions | None, sourc
         raise ParameterFileError("[provenance] must map 'table.key' to a tag string")
     if "operating" in parameters:
         take(parameters["operating"], OPERATING_SCHEMA, "operating")
+    if "reduced" in parameters:
+        _reduced_table(parameters["reduced"], source)
     factors, factor_tags = read_calibration(parameters.get("calibration"), source)
     if check_provenance:   # a first build (not with_options): warn once, before the builder
         # can refuse the value without naming its key (a unit slip is the likely cause)

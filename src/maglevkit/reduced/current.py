@@ -286,7 +286,10 @@ class CurrentModel:
         ``build_maps(eddy_reference=...)`` (maps variables ``eddy_network_*``; identify
         at the operating point if it is known), one extra state ``I_k`` per branch and circuit; ``L_k`` scales
         with ``L~(s, I_L)`` (docs/reduction.md, "More eddy modes").  For detailed models
-        whose eddy currents diffuse (``eddy_model="ladder_split"``).
+        whose eddy currents diffuse (``eddy_model="ladder"`` or ``"ladder_split"``).  The
+        magnet file's choice for these maps is ``maps.default_eddy_modes`` (``[reduced]
+        eddy_modes``; 2 for the bundled TR09 magnets); the option's default stays 0
+        (docs/reduction.md, "Which `m` by default").
     motion_eddy : bool
         ``False`` (default): eq. 8.  ``True``: the shielded-gap ladder (our extension of
         Fig. 8 for gap motion; :mod:`maglevkit.reduction.motion_eddy`, docs/reduction.md,

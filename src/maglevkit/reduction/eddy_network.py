@@ -24,10 +24,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..magnets.base import REDUCED_EDDY_MODES
+
 __all__ = ["EDDY_NETWORK_MODES", "EddyNetworkFit", "fit_eddy_network", "network_step_response"]
 
-#: The numbers of RL branches the maps store a fit for (``CurrentModel(eddy_modes=m)``).
-EDDY_NETWORK_MODES = (1, 2, 3)
+#: The numbers of RL branches the maps store a fit for (``CurrentModel(eddy_modes=m)``):
+#: the nonzero values of :data:`maglevkit.magnets.base.REDUCED_EDDY_MODES`.
+EDDY_NETWORK_MODES = tuple(m for m in REDUCED_EDDY_MODES if m)
 
 
 def network_step_response(t: np.ndarray, *, ltilde: float, r_el: float, r0: float,

@@ -63,8 +63,9 @@ from .transient import transient_point
 if TYPE_CHECKING:  # xarray is imported where it is used (0.45 s of start-up otherwise)
     import xarray as xr
 
-__all__ = ["CharacteristicMaps", "build_maps", "circuit_pole_groups", "law_hash", "load_maps",
-           "model_hash", "network_hash"]
+__all__ = ["DEFAULT_EDDY_MODES_ATTRIBUTE", "CharacteristicMaps", "build_maps",
+           "circuit_pole_groups", "default_eddy_modes", "law_hash", "load_maps", "model_hash",
+           "network_hash"]
 
 MAPS_FORMAT = "maglevkit-maps/1"
 REQUIRED_VARIABLES = ("force_N", "inductance_H", "dL_ds_H_per_m", "resistance_ohm")
@@ -209,6 +210,18 @@ class CharacteristicMaps:
     @property
     def magnet_hash(self) -> str:
         return str(self.dataset.attrs["magnet_hash"])
+
+    @property
+    def default_eddy_modes(self) -> int:
+        """The reduced model's default ``eddy_modes`` on these maps [-].
+
+        The magnet file's ``[reduced] eddy_modes`` when the maps were built
+        (:attr:`maglevkit.magnets.base.Magnet.default_eddy_modes`, stored as the attribute
+        :data:`DEFAULT_EDDY_MODES_ATTRIBUTE`); 0 (eq. 8 with one ``R_ec``) for maps without
+        it: built from a bare network, imported from a table, or written by an earlier
+        version.
+        """
+        return int(self.dataset.attrs.get(DEFAULT_EDDY_MODES_ATTRIBUTE, 0))
 
     @property
     def pole_groups(self) -> dict[str, tuple[str, ...]]:
@@ -358,6 +371,49 @@ class CharacteristicMaps:
             f"(hash {self.magnet_hash[:12]}...), not to {getattr(magnet, 'name', 'this model')!r} "
             f"(hash {h[:12]}...); rebuild them with `maglevkit maps build`"
         )
+
+
+#: The maps attribute that carries the magnet file's ``[reduced] eddy_modes``
+#: (:attr:`CharacteristicMaps.default_eddy_modes`).
+DEFAULT_EDDY_MODES_ATTRIBUTE = "reduced_eddy_modes"
+
+
+def default_eddy_modes(source: Any) -> int:
+    """The reduced model's default ``eddy_modes`` of a magnet or of its maps [-].
+
+    The one rule every entry point uses when its ``eddy_modes`` option is unset
+    (``maglevkit compare``, ``demo``, ``export fmu``, :func:`maglevkit.export.export_fmu`,
+    the vehicles): the magnet file's ``[reduced] eddy_modes`` (0: eq. 8 with one
+    ``R_ec``; 1-3: the fitted RL eddy network, ``CurrentModel(maps, eddy_modes=m)``).
+
+    Parameters
+    ----------
+    source : Magnet, CharacteristicMaps, FluxModel or Network
+        A magnet (:attr:`~maglevkit.magnets.base.Magnet.default_eddy_modes`) or maps built
+        from one (:attr:`CharacteristicMaps.default_eddy_modes`); a bare network or
+        ``FluxModel`` has no file and gives 0.
+
+    Returns
+    -------
+    int
+        One of :data:`~maglevkit.magnets.base.REDUCED_EDDY_MODES`.
+
+    Raises
+    ------
+    InputError
+        ``source`` is none of these.
+    """
+    if isinstance(source, CharacteristicMaps):
+        return source.default_eddy_modes
+    value = getattr(source, "default_eddy_modes", None)
+    if value is not None:
+        return int(value)
+    try:
+        as_network(source)
+    except (InputError, TypeError, AttributeError):
+        raise InputError(f"default_eddy_modes: expected a Magnet, CharacteristicMaps, "
+                         f"FluxModel or Network, got {type(source).__name__}") from None
+    return 0
 
 
 def network_hash(net: Network) -> str:
@@ -1137,6 +1193,8 @@ def build_maps(model: Any, *, gaps_m: Any, currents_A: Any, executor: Any = "aut
                        np.min(data["inductance_H"], axis=(1, 2)))
     magnet_name = getattr(model, "name", net.name)
     params = getattr(model, "parameters", None)
+    # the magnet file's reduced-model default; 0 where no eddy network could be fitted
+    modes = default_eddy_modes(model) if net.has_eddy_currents else 0
     ds.attrs.update({
         "format": MAPS_FORMAT,
         "magnet_name": str(magnet_name),
@@ -1146,6 +1204,7 @@ def build_maps(model: Any, *, gaps_m: Any, currents_A: Any, executor: Any = "aut
         "magnet_parameter_hash": str(getattr(model, "parameter_hash", "")),
         "magnet_parameters": json.dumps(params, sort_keys=True) if params is not None else "",
         "pole_groups": json.dumps(groups),
+        DEFAULT_EDDY_MODES_ATTRIBUTE: int(modes),
         "gap_names": ",".join(net.gap_names),
         "method": _METHOD_TEXT[method],
         "maglevkit_version": _version(),

@@ -41,7 +41,7 @@ from __future__ import annotations
 import math
 import sys
 import warnings
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -59,12 +59,12 @@ from .simulation import (
     check_eddy_branches,
     check_motion_eddy_options,
     check_run_speed,
-    check_vehicle_eddy_modes,
     failure_times,
     interrupted_report_lines,
     limit_crossing,
     touchdown_report_line,
     vehicle_bank,
+    vehicle_eddy_modes,
     write_run_netcdf,
 )
 
@@ -509,13 +509,18 @@ class CrossSectionModel:
         (``I_e1``, ``I_e2`` per circuit; the eddy-current records then have an
         ``eddy_state`` dimension; docs/equations.md section 8, "Three states"), only with
         ``motion_eddy``.
-    eddy_modes : {0, 1, 2, 3}, default 0
-        Fly every reduced magnet with the maps' fitted eddy network of that many branches
+    eddy_modes : {0, 1, 2, 3} or mapping of str to int, optional
+        Fly the reduced magnets with the maps' fitted eddy network of that many branches
         (:class:`MagnetBank` option ``eddy_modes``; docs/bank.md, "Eddy-network members"):
         the branch currents ``I_k`` in both loops, recorded as ``levitation_eddy_current``
         and ``guidance_eddy_current`` (an ``eddy_state`` dimension for more than one
-        branch); the chopper floor ``U >= -R_0 (I_L + sum_k I_k)``.  Not with
-        ``motion_eddy``; reduced magnets whose maps carry the network only.
+        branch; 0 in a kind's circuits on eq. 8); the chopper floor ``U >= -R_0 (I_L +
+        sum_k I_k)``.  An int: every magnet; a mapping ``{"levitation": m, "guidance":
+        m}``: per kind (a kind left out takes its default).  None (default): each magnet
+        file's own default (``[reduced] eddy_modes``;
+        :attr:`~maglevkit.magnets.Magnet.default_eddy_modes`), 0 with ``motion_eddy`` or
+        detailed magnets (docs/cross_section.md, "Which reduced model the magnets fly").
+        Not 1-3 with ``motion_eddy``; reduced magnets whose maps carry the network only.
 
     Raises
     ------
@@ -536,7 +541,7 @@ class CrossSectionModel:
                  flux_bandwidth_Hz: float = 30.0, voltage_limit_V: float = 440.0,
                  touchdown_gap_m: float = 0.002, landing_gap_m: float = 0.020,
                  motion_eddy: bool | str = False, eddy_branches: int = 1,
-                 eddy_modes: int = 0) -> None:
+                 eddy_modes: int | Mapping[str, int] | None = None) -> None:
         from ..control import design_gap_controller
         from ..magnets import load_magnet
         from ..models.flux import FluxModel
@@ -588,13 +593,17 @@ class CrossSectionModel:
         """Shielded sections of the ladder: 1 (two-state) or 2 (three-state)."""
         if motion_eddy is not False:
             check_motion_eddy_options(magnets=magnets, eddy_resistance_scale=1.0)
-        self.eddy_modes = check_vehicle_eddy_modes(eddy_modes,
-                                                   motion_eddy=motion_eddy is not False,
-                                                   magnets=magnets)
-        """Branches of the eddy network the reduced magnets fly with (0: eq. 8)."""
+        self.eddy_modes_of = vehicle_eddy_modes(eddy_modes, kinds,
+                                                motion_eddy=motion_eddy is not False,
+                                                magnet_kind=magnets)
+        """Branches of the eddy network each magnet kind (``"levitation"``,
+        ``"guidance"``) flies with (0: eq. 8): the option, else each magnet file's own
+        default (:func:`~maglevkit.vehicle.simulation.vehicle_eddy_modes`)."""
+        self.eddy_modes = max(self.eddy_modes_of.values())
+        """The most eddy-network branches of a magnet kind (0: none flies the network)."""
         self.bank = vehicle_bank(
             MagnetBank, members, motion_eddy=motion_eddy is not False,
-            eddy_branches=self.eddy_branches, eddy_modes=self.eddy_modes,
+            eddy_branches=self.eddy_branches, eddy_modes=self.eddy_modes_of,
             files={"levitation": levitation_magnet, "guidance": guidance_magnet},
             kind_of={n: n.split("_")[0] for n in self.member_names},
             ladder_kinds=("levitation",) if motion_eddy == "levitation" else None,
@@ -1230,6 +1239,7 @@ class CrossSectionModel:
         import xarray as xr
 
         from .comfort import comfort_indices, lateral_comfort_indices
+        from .stepkernel import eddy_modes_label, eddy_record
 
         s = self.mechanics.system
         names = self.bank.circuit_names
@@ -1260,19 +1270,11 @@ class CrossSectionModel:
         put("guidance_current", ("time", "guidance_circuit"), rec_cur[:m, 4:], "A",
             "coil current")
         if rec_ie is not None:
-            three = rec_ie.ndim == 3
-            if three:
-                ds = ds.assign_coords(eddy_state=[f"I_e{k + 1}"
-                                                  for k in range(rec_ie.shape[2])])
+            dims, coords, long_name = eddy_record(rec_ie, modes=self.eddy_modes_of)
+            ds = ds.assign_coords(coords)
             for j, kind in ((slice(0, 4), "levitation"), (slice(4, None), "guidance")):
-                put(f"{kind}_eddy_current",
-                    ("time", f"{kind}_circuit", *(("eddy_state",) if three else ())),
-                    rec_ie[:m, j], "A",
-                    (f"branch currents I_k of the eddy network (eddy_modes = "
-                     f"{self.eddy_modes})" if self.eddy_modes else
-                     "shielding eddy current I_e of the shielded-gap ladder (motion_eddy)"
-                     + ("; eddy_state I_e1 (inner shield R_3), I_e2 (outer shield R_2)"
-                        if three else "")))
+                put(f"{kind}_eddy_current", ("time", f"{kind}_circuit", *dims),
+                    rec_ie[:m, j], "A", long_name)
         put("voltage", ("time", "circuit"), rec_u[:m], "V", "circuit voltage held over the step")
         for i, dof in enumerate(s.dof_names):
             body, kind = dof.split(".")
@@ -1294,7 +1296,7 @@ class CrossSectionModel:
                              f", shielded-gap ladder (motion_eddy = {self.motion_eddy!r}"
                              + (", three-state)" if self.eddy_branches == 2 else ")")
                              if self.bank.motion_eddy else
-                             f", eddy network (eddy_modes = {self.eddy_modes})"
+                             f", eddy network ({eddy_modes_label(self.eddy_modes_of)})"
                              if self.eddy_modes else ""),
                          "guidance_bias_current_A": self.bias_A})
         min_gap = {"levitation": float(cg[:, :4].min()), "guidance": float(cg[:, 4:].min())}

@@ -28,7 +28,7 @@ from __future__ import annotations
 import math
 import time
 import warnings
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -442,8 +442,9 @@ class VehicleModel:
     compiled : {"auto", "always", "never"}
         Passed to the bank.
     resistance_scale, eddy_resistance_scale : float
-        Factors on every circuit's ohmic resistance ``R_el`` and eddy-current resistance
-        ``R_ec`` of the reduced models (e.g. 1.3 for a hot coil); default 1.  They change the
+        Factors on every circuit's ohmic resistance ``R_el`` and eddy-current resistances
+        (eq. 8's ``R_ec``, the eddy network's ``R_0`` and ``R_k``) of the reduced models
+        (e.g. 1.3 for a hot coil); default 1.  They change the
         plant and what the controllers' flux estimate and chopper limit use (both read the
         bank's resistances); the gains stay designed on the nominal magnet.  Reduced models
         only (``magnets="reduced"``).
@@ -492,16 +493,21 @@ class VehicleModel:
         the three-state ladder (``I_e1``, ``I_e2`` per circuit, the dataset's
         ``eddy_current`` with an ``eddy_state`` dimension), only with ``motion_eddy``.
         None (default): the vehicle file's ``[magnets] eddy_branches`` (1 unless set).
-    eddy_modes : {0, 1, 2, 3}, optional
+    eddy_modes : {0, 1, 2, 3} or mapping of str to int, optional
         Fly the reduced magnets with the maps' fitted eddy network of that many branches
-        (:class:`MagnetBank` option ``eddy_modes``; docs/bank.md, "Eddy-network members"):
-        ``eddy_modes`` branch currents ``I_k`` per circuit, carried by both loops, the
-        NMPCs' prediction models and the record (``eddy_current``, with an ``eddy_state``
-        dimension for more than one branch); the chopper's diodes act on ``I_L + sum_k
-        I_k`` (needs a finite fitted ``R_0``).  Not with ``motion_eddy``; needs reduced
-        magnets whose maps carry the network (``build_maps``) and
-        ``eddy_resistance_scale = 1``.  None (default): the vehicle file's ``[magnets]
-        eddy_modes`` (0 unless set: eq. 8).
+        (:class:`MagnetBank` option ``eddy_modes``; docs/bank.md, "Eddy-network members";
+        0: eq. 8): ``eddy_modes`` branch currents ``I_k`` per circuit, carried by both
+        loops, the NMPCs' prediction models and the record (``eddy_current``, with an
+        ``eddy_state`` dimension for more than one branch); the chopper's diodes act on
+        ``I_L + sum_k I_k`` (needs a finite fitted ``R_0``).  An int: every magnet; a
+        mapping ``{"standard": m, "bow": m}``: per kind (a kind left out takes its
+        default).  None (default): the vehicle file's ``[magnets] eddy_modes``, else each
+        magnet file's own default (``[reduced] eddy_modes``,
+        :attr:`~maglevkit.magnets.Magnet.default_eddy_modes`; the bundled TR09 files: 2),
+        0 with ``motion_eddy`` or detailed magnets (:func:`vehicle_eddy_modes`;
+        docs/vehicle.md, "Which reduced model the magnets fly").  Not 1-3 with
+        ``motion_eddy``; needs reduced magnets whose maps carry the network
+        (``build_maps``).
     """
 
     def __init__(self, train: TrainData, *, guideway: Any = None, rigid: bool = False,
@@ -536,14 +542,16 @@ class VehicleModel:
         if self.motion_eddy:
             check_motion_eddy_options(magnets=magnets,
                                       eddy_resistance_scale=eddy_resistance_scale)
-        self.eddy_modes = check_vehicle_eddy_modes(
-            train.eddy_modes if eddy_modes is None else eddy_modes,
-            motion_eddy=self.motion_eddy, magnets=magnets,
-            eddy_resistance_scale=eddy_resistance_scale,
-            where="" if eddy_modes is not None else " (the vehicle file's [magnets])")
-        """Branches of the eddy network the reduced magnets fly with (0: eq. 8)."""
         kinds = {"standard": load_magnet(train.standard_magnet), "bow": load_magnet(train.bow_magnet)}
         self.magnets = kinds
+        self.eddy_modes_of = vehicle_eddy_modes(
+            eddy_modes, kinds, file_value=train.eddy_modes, motion_eddy=self.motion_eddy,
+            magnet_kind=magnets, file_where=" (the vehicle file's [magnets])")
+        """Branches of the eddy network each magnet kind (``"standard"``, ``"bow"``) flies
+        with (0: eq. 8): the option, else the vehicle file's ``[magnets] eddy_modes``, else
+        each magnet file's own default (:func:`vehicle_eddy_modes`)."""
+        self.eddy_modes = max(self.eddy_modes_of.values())
+        """The most eddy-network branches of a magnet kind (0: none flies the network)."""
         for kind, mag in kinds.items():
             if mag.kind != "levitation_magnet":   # was: KeyError 'poles'
                 source = train.standard_magnet if kind == "standard" else train.bow_magnet
@@ -574,7 +582,7 @@ class VehicleModel:
         for s in self.slots:
             members.append((s.name, FluxModel(kinds[s.kind]) if self.fine else self.maps[s.kind]))
         self.bank = vehicle_bank(MagnetBank, members, motion_eddy=self.motion_eddy,
-                                 eddy_branches=self.eddy_branches, eddy_modes=self.eddy_modes,
+                                 eddy_branches=self.eddy_branches, eddy_modes=self.eddy_modes_of,
                                  files={"standard": train.standard_magnet,
                                         "bow": train.bow_magnet},
                                  kind_of={s.name: s.kind for s in self.slots},
@@ -882,13 +890,14 @@ class VehicleModel:
                 self.train.sides * per_frame[fr])
             mass = float(dyn.mean())
             plant: Any = one
-            if self.bank.n_eddy_states:   # the prediction model with the plant's ladder
-                # or eddy network (I_e in its state after [I_L, s, s'], estimated by its
-                # EKF from the current)
+            modes = self.eddy_modes_of[kind]
+            if modes or self.bank.motion_eddy:   # the prediction model with the plant's
+                # ladder or its kind's eddy network (I_e in its state after [I_L, s, s'],
+                # estimated by its EKF from the current)
                 from ..reduced.bank import MagnetBank
 
-                plant = (MagnetBank({"magnet": one}, compiled="never",
-                                    eddy_modes=self.eddy_modes) if self.eddy_modes else
+                plant = (MagnetBank({"magnet": one}, compiled="never", eddy_modes=modes)
+                         if modes else
                          MagnetBank({"magnet": one}, compiled="never", motion_eddy=True,
                                     eddy_branches=self.eddy_branches))
             model = MagnetHeaveModel(plant, mass_kg=mass,
@@ -960,7 +969,7 @@ class VehicleModel:
 
         from ..control import damping_input
         from ..models.inputs import reject_bools
-        from .stepkernel import terminal_current
+        from .stepkernel import eddy_modes_label, eddy_record, terminal_current
 
         for name, v in (("speed_m_per_s", speed_m_per_s), ("duration_s", duration_s),
                         ("dt_s", dt_s)):
@@ -1067,15 +1076,16 @@ class VehicleModel:
         else:
             bstate = bank.initial_state(gaps_m=gaps_p, currents_A=self.trim_current_A)
             circ_avg = None
-        if self.fine or bank.n_eddy_states:
+        if self.fine:
             out0 = bank.outputs(bstate)
             force_c = out0.circuit_force_N.copy()
-            pf0 = out0.pole_force_N if self.fine else force_c
+            pf0 = out0.pole_force_N
             assert pf0 is not None
             force_pts = pf0.copy()
             current = out0.currents_A.copy()
         else:
-            current, force_c = self._initial_outputs(bstate.inductor_currents_A, gaps_p)
+            current, force_c = self._initial_outputs(bstate.inductor_currents_A, gaps_p,
+                                                     bstate.eddy_currents_A)
             force_pts = force_c.copy()
         # controllers (vectorised over circuits)
         blend = tr.control_velocity_blend
@@ -1258,6 +1268,8 @@ class VehicleModel:
         acc_floor = (qdd_all[:, 0:2 * secs:2, None]
                      + qdd_all[:, 1:2 * secs:2, None] * floor[None, None, :] * tr.section_length_m)
         fr0 = 2 * secs
+        eddy_dims, eddy_coords, eddy_name = ((), {}, "") if rec_ie is None else eddy_record(
+            rec_ie, modes=self.eddy_modes_of, scope="one side's circuit")
         member_of = [nm_.split("/", 1)[0] for nm_ in names]
         ds = xr.Dataset(
             {
@@ -1271,17 +1283,8 @@ class VehicleModel:
                           "long_name": "magnet force of the lumped circuit (both sides), "
                                        "attraction positive"}),
                 **({} if rec_ie is None else {"eddy_current": (
-                    ("time", "circuit", *(() if rec_ie.ndim == 2 else ("eddy_state",))),
-                    rec_ie[sl], {
-                        "units": "A", "long_name": (
-                            "branch currents I_k of the eddy network (one side's circuit; "
-                            f"eddy_modes = {self.eddy_modes}"
-                            + (")" if rec_ie.ndim == 2 else "; eddy_state I_k)")
-                            if self.eddy_modes else
-                            "shielding eddy current I_e of the shielded-gap ladder (one "
-                            "side's circuit; motion_eddy)" + (
-                                "" if rec_ie.ndim == 2 else "; eddy_state I_e1 (inner "
-                                "shield R_3), I_e2 (outer shield R_2)"))})}),
+                    ("time", "circuit", *eddy_dims), rec_ie[sl],
+                    {"units": "A", "long_name": eddy_name})}),
                 "guideway_deflection": (("time", "circuit"), rec["deflection"][sl],
                                         {"units": "m", "long_name": "guideway deflection under "
                                                                     "the circuit (down positive)"}),
@@ -1304,8 +1307,7 @@ class VehicleModel:
             },
             coords={"time": ("time", times, {"units": "s"}),
                     "circuit": list(names),
-                    **({"eddy_state": [f"I_e{k + 1}" for k in range(rec_ie.shape[2])]}
-                       if rec_ie is not None and rec_ie.ndim == 3 else {}),
+                    **eddy_coords,
                     "magnet_of_circuit": ("circuit", member_of),
                     "circuit_position": ("circuit", self.circuit_xi_m, {"units": "m",
                                          "long_name": "distance behind the nose"}),
@@ -1323,7 +1325,7 @@ class VehicleModel:
                                   ", shielded-gap ladder (motion_eddy" + (
                                       ", three-state)" if bank.n_eddy_states == 2 else ")")
                                   if bank.motion_eddy else
-                                  f", eddy network (eddy_modes = {self.eddy_modes})"
+                                  f", eddy network ({eddy_modes_label(self.eddy_modes_of)})"
                                   if self.eddy_modes else ""),
                    "controller": self.controller_kind + (
                        "" if self.controller_sample_time_s is None else
@@ -1755,13 +1757,15 @@ class VehicleModel:
                                   "voltage [V]")
             u_out[j] = u[0]
 
-    def _initial_outputs(self, i_l: np.ndarray, gaps: np.ndarray
-                         ) -> tuple[np.ndarray, np.ndarray]:
-        """Coil currents [A] and forces [N] of the circuits (reduced magnets, one state per
-        circuit) in the steady state ``U = R_el I_L`` at the gaps [m]: what
-        :meth:`MagnetBank.outputs` gives, from the same function
-        (:attr:`MagnetBank.output_function`), compiled once per model (on CasADi's
-        virtual machine it cost 10 ms per run, a sixth of a 3 s run's whole ``run``)."""
+    def _initial_outputs(self, i_l: np.ndarray, gaps: np.ndarray,
+                         i_e: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+        """Coil currents [A] and forces [N] of the circuits (reduced magnets) in the steady
+        state ``U = R_el I_L`` at the gaps [m] (``i_e``: the eddy states of a bank with
+        them, as :attr:`BankState.eddy_currents_A`): what :meth:`MagnetBank.outputs`
+        gives, from the same function (:attr:`MagnetBank.output_function`), compiled once
+        per model (on CasADi's virtual machine it cost 10 ms per run, a sixth of a 3 s
+        run's whole ``run``; with eddy states too since switch26v, whose default flies
+        the eddy network)."""
         from ..models.compiled import BoundCall, compile_function
 
         bank = self.bank
@@ -1772,6 +1776,8 @@ class VehicleModel:
         call.args[0][:] = i_l
         call.args[1][:] = bank.resistance_ohm * i_l
         call.args[2][:] = gaps
+        if i_e is not None:        # (n_c, n_e) column-major, as the function's I_e
+            call.args[3][:] = np.ravel(i_e, order="F")
         call.eval()
         return call.res[0].copy(), call.res[1].copy()
 
@@ -1838,11 +1844,11 @@ def check_motion_eddy_options(*, magnets: str, eddy_resistance_scale: Any) -> No
 
 
 def check_vehicle_eddy_modes(value: Any, *, motion_eddy: bool, magnets: str = "reduced",
-                             eddy_resistance_scale: Any = 1.0, where: str = "") -> int:
+                             where: str = "") -> int:
     """``eddy_modes`` of a vehicle checked: 0 (eq. 8) or 1, 2, 3 (branches of the maps'
-    fitted eddy network), not with ``motion_eddy``, reduced magnets and
-    ``eddy_resistance_scale = 1`` only; an :class:`InputError` naming the option, the value
-    (``where``: where it came from) and what is allowed otherwise.  Returns it as an int."""
+    fitted eddy network), not with ``motion_eddy``, reduced magnets only; an
+    :class:`InputError` naming the option, the value (``where``: where it came from) and
+    what is allowed otherwise.  Returns it as an int."""
     if isinstance(value, (bool, np.bool_)) or value not in (0, 1, 2, 3):
         raise InputError(f"eddy_modes = {value!r}{where}; use 0 (eq. 8) or 1, 2, 3 (branches "
                          "of the maps' fitted eddy network)")
@@ -1855,11 +1861,44 @@ def check_vehicle_eddy_modes(value: Any, *, motion_eddy: bool, magnets: str = "r
         raise InputError(f"eddy_modes = {value}{where} with magnets = {magnets!r}: the eddy "
                          "network is a reduced model's (the detailed magnets carry their "
                          "eddy currents themselves); use magnets='reduced' or eddy_modes=0")
-    if value and eddy_resistance_scale != 1.0:
-        raise InputError(f"eddy_modes = {value}{where} with eddy_resistance_scale = "
-                         f"{eddy_resistance_scale!r}: the factor scales eq. 8's R_ec, not the "
-                         "network's R_0 and R_k; use eddy_resistance_scale=1 or eddy_modes=0")
     return value
+
+
+def vehicle_eddy_modes(option: Any, magnets: Mapping[str, Any], *, file_value: Any = None,
+                       motion_eddy: bool, magnet_kind: str = "reduced",
+                       eddy_resistance_scale: Any = 1.0, file_where: str = "") -> dict[str, int]:
+    """Which eddy network every magnet kind of a vehicle flies: kind -> ``eddy_modes`` (0:
+    eq. 8), each checked by :func:`check_vehicle_eddy_modes`.
+
+    ``option`` (the model's option or ``--eddy-modes``) wins: an int for every kind, or a
+    mapping kind -> int (kinds left out take their magnet's default); else ``file_value``
+    (the vehicle file's ``[magnets] eddy_modes``; ``file_where`` names it) for every kind;
+    else each magnet's own default, :attr:`~maglevkit.magnets.Magnet.default_eddy_modes`
+    (its magnet file's ``[reduced] eddy_modes``; ``magnets``: kind -> the loaded magnet).
+    The default yields to an explicitly chosen alternative: with ``motion_eddy`` (the
+    shielded-gap ladder) or detailed magnets (``magnet_kind``) every kind is 0 unless an
+    option or the file asks otherwise (and then that is refused by name, as before).
+    """
+    if option is None and file_value is not None:
+        option, where = file_value, file_where
+    else:
+        where = ""
+    if option is None or isinstance(option, Mapping):
+        given = dict(option or {})
+        unknown = sorted(set(map(str, given)) - set(magnets))
+        if unknown:
+            raise InputError(f"eddy_modes = {option!r}: unknown magnet kinds {unknown}; use "
+                             f"{sorted(magnets)} (an int applies to every kind)")
+        own = not motion_eddy and magnet_kind == "reduced"
+        modes = {k: given[k] if k in given else
+                 (int(m.default_eddy_modes) if own else 0) for k, m in magnets.items()}
+        for k in given:
+            check_vehicle_eddy_modes(given[k], motion_eddy=motion_eddy, magnets=magnet_kind,
+                                     where=f" (the {k} magnets)")
+        return {k: int(v) for k, v in modes.items()}
+    value = check_vehicle_eddy_modes(option, motion_eddy=motion_eddy, magnets=magnet_kind,
+                                     where=where)
+    return {k: value for k in magnets}
 
 
 def check_eddy_branches(value: Any, *, motion_eddy: bool, where: str = "") -> int:
@@ -1890,23 +1929,45 @@ LADDER_FIT_WARNING = 0.2
 def vehicle_bank(bank_type: Any, members: list[tuple[str, Any]], *, motion_eddy: bool,
                  files: dict[str, str], kind_of: dict[str, str], eddy_branches: int = 1,
                  ladder_kinds: Any = None, option: str = "motion_eddy = True ([magnets] "
-                 "motion_eddy of the vehicle file, or the option)", eddy_modes: int = 0,
-                 **options: Any) -> Any:
+                 "motion_eddy of the vehicle file, or the option)",
+                 eddy_modes: int | Mapping[str, int] = 0, **options: Any) -> Any:
     """The vehicle's magnet bank; with ``motion_eddy`` its ladder members (those of
     ``ladder_kinds`` only, if given; ``eddy_branches`` 2: the three-state ladder), a
     member whose maps have no ladder refused naming the option and the magnet file, a
-    poorly fitted ladder flown with a warning; with ``eddy_modes`` every member with the
-    maps' eddy network (maps without it, or diodes on a network with ``R_0 = inf``,
-    refused naming the option and the magnet file)."""
-    if eddy_modes:
+    poorly fitted ladder flown with a warning; with ``eddy_modes`` (an int for every
+    member, or magnet kind -> int: a mixed bank, the kinds at 0 on eq. 8) the members
+    with the maps' eddy network (maps without it, or diodes on a network with ``R_0 =
+    inf``, refused naming the option and the magnet file)."""
+    by_kind = (dict(eddy_modes) if isinstance(eddy_modes, Mapping) else
+               dict.fromkeys(set(kind_of.values()), int(eddy_modes)))
+    if any(by_kind.values()):
+        from ..reduced.current import CurrentModel
+
+        uniform = len(set(by_kind.values())) == 1
+        name = ""
+        label = (f"eddy_modes = {next(iter(by_kind.values()))}" if uniform else
+                 "eddy_modes = " + ", ".join(f"{k} {m}" for k, m in by_kind.items()))
+
+        def member(n: str, m: Any) -> Any:
+            nonlocal name
+            name, modes = n, by_kind[kind_of[n]]
+            return CurrentModel(m, eddy_modes=modes) if modes else m
+
         try:
-            return bank_type(members, eddy_modes=eddy_modes, **options)
+            if uniform:   # every member on the network: the bank's own option
+                return bank_type(members, eddy_modes=by_kind[kind_of[members[0][0]]],
+                                 **options)
+            # mixed: the network's kinds as CurrentModel members (they keep their
+            # eddy_modes), the others eq. 8
+            return bank_type([(n, member(n, m)) for n, m in members], **options)
         except InputError as exc:
             text = str(exc)
-            kind = kind_of.get(text.split("'", 2)[1]) if text.startswith("member '") else None
+            if text.startswith("member '"):
+                name = text.split("'", 2)[1]
+            kind = kind_of.get(name)
             where = f"the {kind} magnet {files[kind]!r}" if kind in files else "a magnet"
-            raise InputError(f"eddy_modes = {eddy_modes}: {where} cannot fly with the eddy "
-                             f"network: {text}") from None
+            raise InputError(f"{label}: {where} cannot fly with the eddy network: "
+                             f"{text}") from None
     if not motion_eddy:
         return bank_type(members, **options)
     from ..reduced.current import CurrentModel
@@ -1958,11 +2019,14 @@ def vehicle_bank(bank_type: Any, members: list[tuple[str, Any]], *, motion_eddy:
 
 
 def _scaled_resistances(maps: Any, r_el: float, r_ec: float) -> Any:
-    """A copy of ``maps`` with ``R_el`` x ``r_el`` and every ``R_ec`` variable x ``r_ec``."""
+    """A copy of ``maps`` with ``R_el`` x ``r_el`` and every eddy resistance x ``r_ec``:
+    eq. 8's ``R_ec`` variables and the eddy network's ``R_0`` and ``R_k`` (an eddy path's
+    resistance is proportional to the iron's resistivity; the inductances stay)."""
     ds = maps.dataset.copy()
+    eddy = ("eddy_network_r0_ohm", "eddy_network_resistance_ohm")
     for name in ds.data_vars:
         factor = (r_el if name == "resistance_ohm" else
-                  r_ec if str(name).startswith("eddy_resistance") else None)
+                  r_ec if str(name).startswith("eddy_resistance") or name in eddy else None)
         if factor is not None:
             ds[name] = ds[name].copy(data=ds[name].values * float(factor))
     return type(maps)(ds)

@@ -43,6 +43,7 @@ step ``block_steps`` times (``P`` and ``R`` one column per step).
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any
 
@@ -367,6 +368,48 @@ def eddy_block_as_state(block: np.ndarray, n_circuits: int) -> np.ndarray:
     n_t = block.shape[0]
     out = block.reshape(n_t, -1, n_circuits).transpose(0, 2, 1)
     return out[:, :, 0] if out.shape[2] == 1 else out
+
+
+def eddy_modes_label(modes: Mapping[str, int]) -> str:
+    """The eddy-network branch counts of a vehicle's magnet kinds as written in its records
+    (``modes``: magnet kind -> ``eddy_modes``, 0 for eq. 8): ``"eddy_modes = 2"`` when
+    every kind flies the same network, ``"eddy_modes = levitation 2, guidance 0"``
+    otherwise; ``""`` when no kind flies one."""
+    values = set(modes.values())
+    if values <= {0}:
+        return ""
+    if len(values) == 1:
+        return f"eddy_modes = {values.pop()}"
+    return "eddy_modes = " + ", ".join(f"{k} {m}" for k, m in modes.items())
+
+
+def eddy_record(record: np.ndarray, *, modes: Mapping[str, int], scope: str = ""
+                ) -> tuple[tuple[str, ...], dict[str, list[str]], str]:
+    """How a vehicle run's dataset records its eddy states (the bank-shaped record
+    ``(n_t, n_circuits)`` or ``(n_t, n_circuits, n_e)``, as :func:`eddy_block_as_state`
+    gives it): the dimensions after ``("time", <circuit>)`` (``("eddy_state",)`` for more
+    than one state per circuit), the coordinates they need (``eddy_state``: ``I_e1 ..
+    I_en``) and the ``long_name``.  ``modes``: magnet kind -> ``eddy_modes`` of the eddy
+    network (all 0: the shielded-gap ladder, ``motion_eddy``); ``scope`` a note on what a
+    circuit is (e.g. ``"one side's circuit"``).  Written once for the heave-pitch and the
+    cross-section records."""
+    n_e = record.shape[2] if record.ndim == 3 else 1
+    dims: tuple[str, ...] = ("eddy_state",) if n_e > 1 else ()
+    coords = {"eddy_state": [f"I_e{k + 1}" for k in range(n_e)]} if n_e > 1 else {}
+    label = eddy_modes_label(modes)
+    notes = [scope] if scope else []
+    if label:
+        text = "branch currents I_k of the eddy network"
+        notes.append(label + ("; a kind's absent branches 0" if len(set(modes.values())) > 1
+                              else ""))
+        if n_e > 1:
+            notes.append(f"eddy_state I_e1..I_e{n_e}: the branches I_1..I_{n_e}")
+    else:
+        text = "shielding eddy current I_e of the shielded-gap ladder"
+        notes.append("motion_eddy")
+        if n_e > 1:
+            notes.append("eddy_state I_e1 (inner shield R_3), I_e2 (outer shield R_2)")
+    return dims, coords, f"{text} ({'; '.join(notes)})"
 
 
 def build_vehicle_parts(*, dt: float, nominal_gap_m: float, span_length_m: float,

@@ -11,8 +11,9 @@ guideway files (see ``maglevkit/data/vehicle/tr09.toml``, bundled as ``"tr09"``)
     [joint]      stiffness, damping
     [control]    bandwidth, damping, flux_bandwidth, voltage_limit, velocity_blend (optional)
     [magnets]    motion_eddy (optional table and key, default false), eddy_branches
-                 (optional, default 1; 2: the three-state ladder), eddy_modes (optional,
-                 default 0; 1-3: the maps' fitted eddy network, not with motion_eddy)
+                 (optional, default 1; 2: the three-state ladder), eddy_modes (optional:
+                 0 eq. 8, 1-3 the maps' fitted eddy network, not with motion_eddy; left
+                 out: each magnet's own default from its magnet file)
 
 Unknown or missing keys and bad values raise :class:`~maglevkit.errors.ParameterFileError`
 naming the key.  Train coordinate ``xi`` [m]: distance behind the train's nose (positive
@@ -84,7 +85,8 @@ VEHICLE_SCHEMA: dict[str, dict[str, Schema]] = {
     "magnets": {
         "motion_eddy": Schema(bool, required=False, default=False),
         "eddy_branches": Schema(int, required=False, default=1, unit="-"),
-        "eddy_modes": Schema(int, required=False, default=0, unit="-"),
+        # unset (None): every magnet's own default (its file's reduced model)
+        "eddy_modes": Schema(int, required=False, default=None, unit="-"),
     },
 }
 
@@ -184,10 +186,12 @@ class TrainData:
     eddy_branches : int
         Shielded sections of that ladder (key ``eddy_branches`` of ``[magnets]``, default
         1: the two-state ladder; 2: the three-state ladder, only with ``motion_eddy``).
-    eddy_modes : int
-        Branches of the maps' fitted eddy network the reduced magnets fly with (key
-        ``eddy_modes`` of ``[magnets]``, default 0: none; 1-3, not with ``motion_eddy``;
-        :class:`~maglevkit.vehicle.VehicleModel` option ``eddy_modes``).
+    eddy_modes : int or None
+        Branches of the maps' fitted eddy network every reduced magnet flies with (key
+        ``eddy_modes`` of ``[magnets]``: 0 eq. 8, 1-3 the network, not with
+        ``motion_eddy``; :class:`~maglevkit.vehicle.VehicleModel` option ``eddy_modes``).
+        None (the key left out): each magnet's own default, from its magnet file
+        (docs/vehicle.md, "Which reduced model the magnets fly").
     provenance : dict
         ``"table.key" -> tag/source``.
     source : str
@@ -227,7 +231,7 @@ class TrainData:
     control_velocity_blend: float = 0.0
     motion_eddy: bool = False
     eddy_branches: int = 1
-    eddy_modes: int = 0
+    eddy_modes: int | None = None
 
     # ------------------------------------------------------------------ derived layout
     @property
@@ -378,9 +382,10 @@ def parse_vehicle(parameters: Mapping[str, Any], source: str = "parameters") -> 
     _check(mg["eddy_branches"] == 1 or mg["motion_eddy"],
            f"[magnets] eddy_branches = {mg['eddy_branches']} needs motion_eddy = true (the "
            "shielded-gap ladder's sections)", source)
-    _check(mg["eddy_modes"] in (0, 1, 2, 3), f"[magnets] eddy_modes = {mg['eddy_modes']}: "
-           "use 0 (eq. 8) or 1, 2, 3 (branches of the maps' fitted eddy network)", source)
-    _check(mg["eddy_modes"] == 0 or not mg["motion_eddy"],
+    _check(mg["eddy_modes"] in (None, 0, 1, 2, 3), f"[magnets] eddy_modes = "
+           f"{mg['eddy_modes']}: use 0 (eq. 8) or 1, 2, 3 (branches of the maps' fitted eddy "
+           "network), or leave it out (each magnet's own default)", source)
+    _check(not mg["eddy_modes"] or not mg["motion_eddy"],
            f"[magnets] eddy_modes = {mg['eddy_modes']} with motion_eddy = true: two eddy "
            "extensions of eq. 8; use one of them", source)
     prov = parse_provenance(parameters, VEHICLE_SCHEMA, source)
@@ -401,7 +406,7 @@ def parse_vehicle(parameters: Mapping[str, Any], source: str = "parameters") -> 
         flux_bandwidth_Hz=c["flux_bandwidth"], voltage_limit_V=c["voltage_limit"],
         control_velocity_blend=c["velocity_blend"],
         motion_eddy=bool(mg["motion_eddy"]), eddy_branches=int(mg["eddy_branches"]),
-        eddy_modes=int(mg["eddy_modes"]),
+        eddy_modes=None if mg["eddy_modes"] is None else int(mg["eddy_modes"]),
         provenance=prov, source=source)
 
 
