@@ -495,6 +495,7 @@ class MagnetBank:
         self._lanes: dict[int, tuple[ca.Function, Path]] = {}   # sub-steps -> (f, library)
         self._lane_runs: dict[int, ca.Function] = {}    # sub-steps -> the compiled time loop
         self._runs: dict[int, _RunCall] = {}
+        self._inlined_outputs: ca.Function | None = None    # built by _outputs_at
         self._last_dt: float = math.nan             # the last step length and its kernel
         self._last_call: _StepCall | None = None
         self.compiled: bool | None = None       # known after the first step
@@ -1238,6 +1239,34 @@ class MagnetBank:
         res = self._circuit_kernel["out"].map(n, "serial")(vi.T, vs.T, vu.T, ca.DM(self._par))
         return ca.Function("maglevkit_bank_outputs", [vi, vu, vs], [r.T for r in res],
                            ["I_L", "U", "s"], ["I", "F", "Ltilde"])
+
+    def _outputs_inlined(self) -> ca.Function:
+        """:attr:`output_function` with every circuit's outputs inlined into one graph and
+        the parameters an input (``(I_L, U, s[, I_e], p) -> (I, F, L~)``, ``p`` the
+        :attr:`circuit_parameters`), built once: what :meth:`outputs` evaluates on CasADi's
+        virtual machine.  The machine copies a function's constants into its work vector at
+        every call, so the mapped circuit function copied the table once per circuit (11 ms
+        per call for the 50 circuits of the TR09 vehicle, whose table holds 349 440
+        coefficients; every vehicle run with eddy states made this call); inlined, the
+        table is one node, copied once (0.7 ms).  The instructions per circuit are the
+        mapped function's, so the results are the same bits."""
+        if self._inlined_outputs is None:
+            n = self._reduced_idx.size
+            vi, vu, vs = (ca.MX.sym(nm, n) for nm in ("I_L", "U", "s"))
+            par = ca.MX.sym("p", *self._par.shape)
+            ins = [vi, vu, vs]
+            ve = ca.MX.sym("I_e", n, self.n_eddy_states) if self._has_eddy else None
+            if ve is not None:
+                ins.append(ve)
+            out = self._circuit_kernel["out"]
+            cols: list[list[Any]] = [[], [], []]
+            for k in range(n):
+                args = [vi[k], vs[k], vu[k], par[:, k]] + ([] if ve is None else [ve[k, :].T])
+                for col, r in zip(cols, out.call(args, True, False), strict=True):
+                    col.append(r)
+            self._inlined_outputs = ca.Function("maglevkit_bank_outputs_inlined", [*ins, par],
+                                                [ca.vertcat(*c) for c in cols])
+        return self._inlined_outputs
 
     @renamed_keywords(dt="dt_s")
     def step_function(self, dt_s: float) -> ca.Function:
@@ -2145,9 +2174,10 @@ class MagnetBank:
         s = self.circuit_gaps(state.gaps_m)
         if ri.size:
             e = state.eddy_currents_A
-            c, f, _ = (self.output_function(state.inductor_currents_A[ri], u[ri], s[ri])
-                       if e is None else
-                       self.output_function(state.inductor_currents_A[ri], u[ri], s[ri], e[ri]))
+            args = [state.inductor_currents_A[ri], u[ri], s[ri]]
+            if e is not None:
+                args.append(e[ri])
+            c, f, _ = self._outputs_inlined()(*args, self._par)
             coil[ri], force[ri] = np.asarray(c).ravel(), np.asarray(f).ravel()
         pf_detailed = {}
         k = 0
