@@ -86,12 +86,12 @@ def _inputs(rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray, np.ndarra
 
 
 def _run_lanes(f: ca.Function, width: int, avx2: bool, x: np.ndarray, y: np.ndarray,
-               p: np.ndarray) -> list[np.ndarray]:
+               p: np.ndarray, interleave: int = 1) -> list[np.ndarray]:
     src = ("#include <math.h>\n"
            + lane_source(f, name="probe_k", n=N, inputs=[LaneInput("instance"),
                                                          LaneInput("instance"),
                                                          LaneInput("baked", p)],
-                         width=width, avx2=avx2)
+                         width=width, avx2=avx2, interleave=interleave)
            + "void probe(const double **arg, double **res) { probe_k(arg, res); }\n")
     with tempfile.TemporaryDirectory() as tmp:
         flags = ("-O3", "-shared", "-fPIC", "-ffp-contract=off") + (("-mavx2",) if avx2 else ())
@@ -104,11 +104,15 @@ def _run_lanes(f: ca.Function, width: int, avx2: bool, x: np.ndarray, y: np.ndar
     return outs
 
 
+# interleave 2: two blocks per iteration, the second partly past the end (the bank's
+# setting); 3: with width 4 the third block of the first iteration lies wholly past the
+# N = 7 instances and must write nothing
+@pytest.mark.parametrize("interleave", [1, 2, 3])
 @pytest.mark.parametrize("width,avx2", _widths())
-def test_lane_kernel_equals_casadi_bit_for_bit(width: int, avx2: bool) -> None:
+def test_lane_kernel_equals_casadi_bit_for_bit(width: int, avx2: bool, interleave: int) -> None:
     f = _function()
     x, y, p = _inputs(np.random.default_rng(width))
-    got = _run_lanes(f, width, avx2, x, y, p)
+    got = _run_lanes(f, width, avx2, x, y, p, interleave)
     ref = f.map(N)(x[None], y[None], p)
     with np.errstate(all="ignore"):
         for k, r in enumerate(ref):

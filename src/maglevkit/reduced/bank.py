@@ -139,6 +139,9 @@ where present) in a bank with eddy-network members (``eddy_modes > 0``;
 RUN_CHUNK = 1024
 """Steps per call of the compiled time loop of :meth:`MagnetBank.run_steps` (longer runs
 take several calls)."""
+_LANE_INTERLEAVE = 2
+# blocks of SIMD lanes per iteration of the lanes' loop (lane_source's interleave; the
+# same bits either way, docs/decisions.md "netperf")
 _T = TypeVar("_T")
 
 
@@ -1481,7 +1484,7 @@ class MagnetBank:
                                  inputs=[LaneInput("instance")] * 4
                                  + [LaneInput("shared"), LaneInput("baked", self._par)]
                                  + [LaneInput("instance")] * me,
-                                 width=width, avx2=avx2)
+                                 width=width, avx2=avx2, interleave=_LANE_INTERLEAVE)
         except (NotImplementedError, ValueError, KeyError, IndexError):  # pragma: no cover
             return None                  # a graph the generator does not translate
         members = self._member_of[self._reduced_idx]
