@@ -493,7 +493,7 @@ def lane_source(f: ca.Function, *, name: str, n: int, inputs: Sequence[LaneInput
     if blocks < 1 or blocks != interleave:
         raise ValueError(f"interleave = {interleave!r}; use a whole number >= 1")
 
-    def other(line: str, j: int) -> str:
+    def in_block(line: str, j: int) -> str:
         # block j's own work names, instances and count
         line = re.sub(r"\bt(\d+)\b", rf"t\1b{j}", line)
         line = re.sub(r"\bid\[", f"id{j}[", line)
@@ -508,7 +508,7 @@ def lane_source(f: ca.Function, *, name: str, n: int, inputs: Sequence[LaneInput
                       f"    int m{j} = {n} - c{j} < W ? (int) ({n} - c{j}) : W;\n"
                       f"    long id{j}[W];\n"
                       f"    for (l = 0; l < W; ++l) id{j}[l] = l < m{j} ? c{j} + l : {n} - 1;\n")
-    body = [x for line in body for x in (line, *(other(line, j) for j in range(1, blocks)))]
+    body = [x for line in body for x in (line, *(in_block(line, j) for j in range(1, blocks)))]
     step = "W" if blocks == 1 else f"{blocks} * W"
     code += (f"static void {name}(const double **arg, double **res) {{\n"
             f"  long c0;\n"
