@@ -184,7 +184,8 @@ def lane_source(f: ca.Function, *, name: str, n: int, inputs: Sequence[LaneInput
         instances ``c0 ... c0 + W - 1`` and ``c0 + W ... c0 + 2W - 1``).  The arithmetic
         of every instance is the same, so are the results (bit for bit); two independent
         dependency chains side by side let the processor overlap their latencies (a
-        kernel whose RK4 stages wait on divisions and table lookups).  Ignored at width 1.
+        kernel whose RK4 stages wait on divisions and table lookups).  Ignored at width 1;
+        at most the number of blocks the ``n`` instances fill (``ceil(n / width)``).
 
     Returns
     -------
@@ -492,6 +493,9 @@ def lane_source(f: ca.Function, *, name: str, n: int, inputs: Sequence[LaneInput
     blocks = int(interleave)
     if blocks < 1 or blocks != interleave:
         raise ValueError(f"interleave = {interleave!r}; use a whole number >= 1")
+    # no more blocks than the instances fill: a bank of at most W circuits keeps the
+    # one-block code (and its compile time)
+    blocks = min(blocks, -(-n // w))
 
     def in_block(line: str, j: int) -> str:
         # block j's own work names, instances and count
