@@ -499,6 +499,7 @@ class MagnetBank:
         self._lane_runs: dict[int, ca.Function] = {}    # sub-steps -> the compiled time loop
         self._runs: dict[int, _RunCall] = {}
         self._inlined_outputs: ca.Function | None = None    # built by _outputs_at
+        self._outputs_calls = 0
         self._last_dt: float = math.nan             # the last step length and its kernel
         self._last_call: _StepCall | None = None
         self.compiled: bool | None = None       # known after the first step
@@ -1252,7 +1253,10 @@ class MagnetBank:
         per call for the 50 circuits of the TR09 vehicle, whose table holds 349 440
         coefficients; every vehicle run with eddy states made this call); inlined, the
         table is one node, copied once (0.7 ms).  The instructions per circuit are the
-        mapped function's, so the results are the same bits."""
+        mapped function's, so the results are the same bits.  Building it costs about as
+        much as one or two mapped calls of the vehicle's bank (16 ms; 0.3 ms per circuit,
+        0.2 s for 1000), so :meth:`outputs` maps on its first call and takes this from
+        the second on (a vehicle's later runs, a stepper built again)."""
         if self._inlined_outputs is None:
             n = self._reduced_idx.size
             vi, vu, vs = (ca.MX.sym(nm, n) for nm in ("I_L", "U", "s"))
@@ -2180,7 +2184,11 @@ class MagnetBank:
             args = [state.inductor_currents_A[ri], u[ri], s[ri]]
             if e is not None:
                 args.append(e[ri])
-            c, f, _ = self._outputs_inlined()(*args, self._par)
+            # the first call maps the circuit function (no build); later calls take the
+            # inlined graph, built once (_outputs_inlined: the same bits)
+            self._outputs_calls += 1
+            c, f, _ = (self.output_function(*args) if self._outputs_calls == 1 else
+                       self._outputs_inlined()(*args, self._par))
             coil[ri], force[ri] = np.asarray(c).ravel(), np.asarray(f).ravel()
         pf_detailed = {}
         k = 0
