@@ -151,6 +151,43 @@ def test_mixed_bank_equals_its_members_on_their_own(lmaps, compiled: str) -> Non
     assert np.all(np.abs(st.eddy_currents_A[2:, 0]) > 1e-3)
 
 
+@pytest.mark.parametrize("kinds", ["eq8", "mixed"])
+def test_outputs_are_the_output_function_bit_for_bit(lmaps, kinds: str) -> None:
+    """``bank.outputs`` (from its second call every circuit inlined into one graph,
+    netperf) gives the bits of
+    ``output_function`` (the circuit function mapped over the circuits, whose law
+    test_model_functions_equal_current_model ties to the single model) at a state away
+    from rest with nonzero eddy states, in an eq. 8 bank and a mixed one (eq. 8, two-state
+    ladder, one- and two-branch network: every law's output selection)."""
+    members: dict[str, object] = {"eq8": lmaps, "eq8b": lmaps}
+    if kinds == "mixed":
+        members = {"eq8": lmaps, "two": mk.CurrentModel(lmaps, motion_eddy=True),
+                   "net1": mk.CurrentModel(lmaps, eddy_modes=1),
+                   "net2": mk.CurrentModel(lmaps, eddy_modes=2)}
+    bank = MagnetBank(members, compiled="never")
+    rng = np.random.default_rng(7)
+    n = bank.n_circuits
+    st = bank.initial_state(gaps_m=0.0093, currents_A=I0)
+    il = I0 * (1.0 + 0.3 * rng.uniform(-1.0, 1.0, n))
+    st = dataclasses.replace(st, inductor_currents_A=il)
+    args = [il, 200.0 * rng.uniform(-1.0, 1.0, n), bank.circuit_gaps(st.gaps_m)]
+    if kinds == "mixed":
+        e = rng.uniform(-0.5, 0.5, (n, bank.n_eddy_states))
+        e[:2] = 0.0                  # the eq. 8 member's states stay 0 in a run
+        e[2:6, 1] = 0.0              # so do the unused second states of the one-state kinds
+        st = dataclasses.replace(st, eddy_currents_A=e)
+        args.append(e)
+    ref = bank.output_function(*args)
+    for _ in range(2):               # the first call maps, the second takes the inlined graph
+        out = bank.outputs(st, args[1])
+        assert np.array_equal(out.currents_A, np.asarray(ref[0]).ravel())
+        assert np.array_equal(out.circuit_force_N, np.asarray(ref[1]).ravel())
+    assert bank._inlined_outputs is not None
+    if kinds == "mixed":             # the eddy states are in use
+        plain = bank.output_function(*args[:3], 0.0 * args[3])
+        assert np.all(np.abs(np.asarray(plain[0]).ravel()[2:] - out.currents_A[2:]) > 1e-3)
+
+
 def test_model_functions_equal_current_model(lmaps) -> None:
     """``ode_function``, ``output_function`` and ``ladder_expressions`` of a network bank
     are the single model's law (``CurrentModel.ode``/``outputs_fun``) at a state away

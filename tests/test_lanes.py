@@ -86,12 +86,12 @@ def _inputs(rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray, np.ndarra
 
 
 def _run_lanes(f: ca.Function, width: int, avx2: bool, x: np.ndarray, y: np.ndarray,
-               p: np.ndarray) -> list[np.ndarray]:
+               p: np.ndarray, interleave: int = 1) -> list[np.ndarray]:
     src = ("#include <math.h>\n"
            + lane_source(f, name="probe_k", n=N, inputs=[LaneInput("instance"),
                                                          LaneInput("instance"),
                                                          LaneInput("baked", p)],
-                         width=width, avx2=avx2)
+                         width=width, avx2=avx2, interleave=interleave)
            + "void probe(const double **arg, double **res) { probe_k(arg, res); }\n")
     with tempfile.TemporaryDirectory() as tmp:
         flags = ("-O3", "-shared", "-fPIC", "-ffp-contract=off") + (("-mavx2",) if avx2 else ())
@@ -104,11 +104,15 @@ def _run_lanes(f: ca.Function, width: int, avx2: bool, x: np.ndarray, y: np.ndar
     return outs
 
 
+# interleave 2: two blocks per iteration, the second partly past the end (the bank's
+# setting); 3: with width 2 the third block of the second iteration lies wholly past the
+# N = 7 instances and must write nothing (with width 4 it is cut to the 2 blocks N fills)
+@pytest.mark.parametrize("interleave", [1, 2, 3])
 @pytest.mark.parametrize("width,avx2", _widths())
-def test_lane_kernel_equals_casadi_bit_for_bit(width: int, avx2: bool) -> None:
+def test_lane_kernel_equals_casadi_bit_for_bit(width: int, avx2: bool, interleave: int) -> None:
     f = _function()
     x, y, p = _inputs(np.random.default_rng(width))
-    got = _run_lanes(f, width, avx2, x, y, p)
+    got = _run_lanes(f, width, avx2, x, y, p, interleave)
     ref = f.map(N)(x[None], y[None], p)
     with np.errstate(all="ignore"):
         for k, r in enumerate(ref):
@@ -120,6 +124,26 @@ def test_lane_kernel_equals_casadi_bit_for_bit(width: int, avx2: bool) -> None:
     # base at the end of the table is inside, one further is outside
     assert np.isnan(got[34][0]) and np.isnan(got[34][1])
     assert np.isfinite(got[34][4]) and np.isnan(got[34][5])
+
+
+def test_interleave_needs_instances_for_its_blocks() -> None:
+    """A kernel for at most one block of instances is the one-block code whatever the
+    interleave (no wasted block, the same library); more instances take the interleaved
+    loop; a bad interleave is refused."""
+    f = _function()
+    p3 = np.ones((3, 3))
+    p9 = np.ones((3, 9))
+
+    def src(n: int, p: np.ndarray, interleave: int) -> str:
+        return lane_source(f, name="probe_k", n=n, inputs=[LaneInput("instance"),
+                                                          LaneInput("instance"),
+                                                          LaneInput("baked", p)],
+                           width=4, interleave=interleave)
+
+    assert src(3, p3, 2) == src(3, p3, 1)
+    assert "c0 += 2 * W" in src(9, p9, 2) and "c0 += W" in src(9, p9, 1)
+    with pytest.raises(ValueError, match="interleave"):
+        src(9, p9, 0)
 
 
 def test_unsupported_operation_is_refused() -> None:

@@ -139,6 +139,9 @@ where present) in a bank with eddy-network members (``eddy_modes > 0``;
 RUN_CHUNK = 1024
 """Steps per call of the compiled time loop of :meth:`MagnetBank.run_steps` (longer runs
 take several calls)."""
+_LANE_INTERLEAVE = 2
+# blocks of SIMD lanes per iteration of the lanes' loop (lane_source's interleave; the
+# same bits either way, docs/decisions.md "netperf")
 _T = TypeVar("_T")
 
 
@@ -495,6 +498,8 @@ class MagnetBank:
         self._lanes: dict[int, tuple[ca.Function, Path]] = {}   # sub-steps -> (f, library)
         self._lane_runs: dict[int, ca.Function] = {}    # sub-steps -> the compiled time loop
         self._runs: dict[int, _RunCall] = {}
+        self._inlined_outputs: ca.Function | None = None    # built by _outputs_at
+        self._outputs_calls = 0
         self._last_dt: float = math.nan             # the last step length and its kernel
         self._last_call: _StepCall | None = None
         self.compiled: bool | None = None       # known after the first step
@@ -1239,6 +1244,37 @@ class MagnetBank:
         return ca.Function("maglevkit_bank_outputs", [vi, vu, vs], [r.T for r in res],
                            ["I_L", "U", "s"], ["I", "F", "Ltilde"])
 
+    def _outputs_inlined(self) -> ca.Function:
+        """:attr:`output_function` with every circuit's outputs inlined into one graph and
+        the parameters an input (``(I_L, U, s[, I_e], p) -> (I, F, L~)``, ``p`` the
+        :attr:`circuit_parameters`), built once: what :meth:`outputs` evaluates on CasADi's
+        virtual machine.  The machine copies a function's constants into its work vector at
+        every call, so the mapped circuit function copied the table once per circuit (11 ms
+        per call for the 50 circuits of the TR09 vehicle, whose table holds 349 440
+        coefficients; every vehicle run with eddy states made this call); inlined, the
+        table is one node, copied once (0.7 ms).  The instructions per circuit are the
+        mapped function's, so the results are the same bits.  Building it costs about as
+        much as one or two mapped calls of the vehicle's bank (16 ms; 0.3 ms per circuit,
+        0.2 s for 1000), so :meth:`outputs` maps on its first call and takes this from
+        the second on (a vehicle's later runs, a stepper built again)."""
+        if self._inlined_outputs is None:
+            n = self._reduced_idx.size
+            vi, vu, vs = (ca.MX.sym(nm, n) for nm in ("I_L", "U", "s"))
+            par = ca.MX.sym("p", *self._par.shape)
+            ins = [vi, vu, vs]
+            ve = ca.MX.sym("I_e", n, self.n_eddy_states) if self._has_eddy else None
+            if ve is not None:
+                ins.append(ve)
+            out = self._circuit_kernel["out"]
+            cols: list[list[Any]] = [[], [], []]
+            for k in range(n):
+                args = [vi[k], vs[k], vu[k], par[:, k]] + ([] if ve is None else [ve[k, :].T])
+                for col, r in zip(cols, out.call(args, True, False), strict=True):
+                    col.append(r)
+            self._inlined_outputs = ca.Function("maglevkit_bank_outputs_inlined", [*ins, par],
+                                                [ca.vertcat(*c) for c in cols])
+        return self._inlined_outputs
+
     @renamed_keywords(dt="dt_s")
     def step_function(self, dt_s: float) -> ca.Function:
         """The step of every reduced circuit over ``dt`` [s] as an uncompiled CasADi
@@ -1452,7 +1488,7 @@ class MagnetBank:
                                  inputs=[LaneInput("instance")] * 4
                                  + [LaneInput("shared"), LaneInput("baked", self._par)]
                                  + [LaneInput("instance")] * me,
-                                 width=width, avx2=avx2)
+                                 width=width, avx2=avx2, interleave=_LANE_INTERLEAVE)
         except (NotImplementedError, ValueError, KeyError, IndexError):  # pragma: no cover
             return None                  # a graph the generator does not translate
         members = self._member_of[self._reduced_idx]
@@ -2145,9 +2181,14 @@ class MagnetBank:
         s = self.circuit_gaps(state.gaps_m)
         if ri.size:
             e = state.eddy_currents_A
-            c, f, _ = (self.output_function(state.inductor_currents_A[ri], u[ri], s[ri])
-                       if e is None else
-                       self.output_function(state.inductor_currents_A[ri], u[ri], s[ri], e[ri]))
+            args = [state.inductor_currents_A[ri], u[ri], s[ri]]
+            if e is not None:
+                args.append(e[ri])
+            # the first call maps the circuit function (no build); later calls take the
+            # inlined graph, built once (_outputs_inlined: the same bits)
+            self._outputs_calls += 1
+            c, f, _ = (self.output_function(*args) if self._outputs_calls == 1 else
+                       self._outputs_inlined()(*args, self._par))
             coil[ri], force[ri] = np.asarray(c).ravel(), np.asarray(f).ravel()
         pf_detailed = {}
         k = 0

@@ -31,6 +31,7 @@ gather (NaN outside the table), out of line.
 from __future__ import annotations
 
 import platform
+import re
 from collections.abc import Sequence
 from dataclasses import dataclass
 
@@ -160,7 +161,7 @@ def _table_literal(name: str, values: np.ndarray) -> str:
 
 
 def lane_source(f: ca.Function, *, name: str, n: int, inputs: Sequence[LaneInput],
-                width: int = 4, avx2: bool = False) -> str:
+                width: int = 4, avx2: bool = False, interleave: int = 1) -> str:
     """C source of ``void name(const double **arg, double **res)`` evaluating ``f`` for
     ``n`` instances, ``width`` at a time.
 
@@ -178,6 +179,13 @@ def lane_source(f: ca.Function, *, name: str, n: int, inputs: Sequence[LaneInput
         inputs that are not ``"baked"``.
     width : int
         Lanes per block (a power of two; 8 suits 2-4 wide vector units).
+    interleave : int, default 1
+        Blocks of lanes per loop iteration, their statements interleaved one by one (2:
+        instances ``c0 ... c0 + W - 1`` and ``c0 + W ... c0 + 2W - 1``).  The arithmetic
+        of every instance is the same, so are the results (bit for bit); two independent
+        dependency chains side by side let the processor overlap their latencies (a
+        kernel whose RK4 stages wait on divisions and table lookups).  Ignored at width 1;
+        at most the number of blocks the ``n`` instances fill (``ceil(n / width)``).
 
     Returns
     -------
@@ -479,12 +487,36 @@ def lane_source(f: ca.Function, *, name: str, n: int, inputs: Sequence[LaneInput
                 f"  for (c0 = 0; c0 < {n}; ++c0) {{\n"
                 + "\n".join(body) + "\n  }\n}\n#undef W\n")
         return code
+    head_loop = (f"    int l, m = {n} - c0 < W ? (int) ({n} - c0) : W;\n"
+                 f"    long id[W];\n"
+                 f"    for (l = 0; l < W; ++l) id[l] = l < m ? c0 + l : {n} - 1;\n")
+    blocks = int(interleave)
+    if blocks < 1 or blocks != interleave:
+        raise ValueError(f"interleave = {interleave!r}; use a whole number >= 1")
+    # no more blocks than the instances fill: a bank of at most W circuits keeps the
+    # one-block code (and its compile time)
+    blocks = min(blocks, -(-n // w))
+
+    def in_block(line: str, j: int) -> str:
+        # block j's own work names, instances and count
+        line = re.sub(r"\bt(\d+)\b", rf"t\1b{j}", line)
+        line = re.sub(r"\bid\[", f"id{j}[", line)
+        line = re.sub(r"\bc0\b", f"c{j}", line)
+        return re.sub(r"\bm\b", f"m{j}", line)
+
+    for j in range(1, blocks):
+        # the further blocks: the statements of all blocks alternate (each statement is
+        # self-contained: it declares its results and reads earlier ones only); a block
+        # past the last instance computes copies of it and writes nothing (m_j <= 0)
+        head_loop += (f"    long c{j} = c0 + {j} * W;\n"
+                      f"    int m{j} = {n} - c{j} < W ? (int) ({n} - c{j}) : W;\n"
+                      f"    long id{j}[W];\n"
+                      f"    for (l = 0; l < W; ++l) id{j}[l] = l < m{j} ? c{j} + l : {n} - 1;\n")
+    body = [x for line in body for x in (line, *(in_block(line, j) for j in range(1, blocks)))]
+    step = "W" if blocks == 1 else f"{blocks} * W"
     code += (f"static void {name}(const double **arg, double **res) {{\n"
             f"  long c0;\n"
-            f"  for (c0 = 0; c0 < {n}; c0 += W) {{\n"
-            f"    int l, m = {n} - c0 < W ? (int) ({n} - c0) : W;\n"
-            f"    long id[W];\n"
-            f"    for (l = 0; l < W; ++l) id[l] = l < m ? c0 + l : {n} - 1;\n"
+            f"  for (c0 = 0; c0 < {n}; c0 += {step}) {{\n" + head_loop
             + "\n".join(body) + "\n  }\n}\n#undef W\n#undef SEL\n#undef ONE\n#undef ABSMASK\n#undef ZERO\n")
     return code
 
