@@ -18,21 +18,30 @@ TITLE = "Flux model: real-time factor, compiled vs interpreted (1 s simulated, 1
 
 DURATION = 1.0   # s simulated
 DT = 1e-3        # s, hold / co-simulation step
-#: (magnet, flux_paths or None for the bundled file, nominal current [A], repetitions): the
+#: (magnet, variant or None for the bundled file, nominal current [A], repetitions): the
 #: bundled TR09 file is the split network since issue 26 (253 loops, short loops on the
-#: sparse form); the lumped "paper" network, its default before, for comparison
+#: sparse form) with the eddy ladder since switch26m; "lumped": the same network with the
+#: lumped eddy elements (its default before switch26m); "paper": the lumped "paper" network
+#: with lumped eddy elements, the default before the split network, for comparison
 CASES = (("u-magnet", None, 20.0, 3), ("tr09-standard", None, 34.0, 3),
-         ("tr09-standard", "paper", 34.0, 3))
+         ("tr09-standard", "lumped", 34.0, 3), ("tr09-standard", "paper", 34.0, 3))
 
 
-def _magnet(name: str, flux_paths: str | None) -> mk.Magnet:
-    """The bundled magnet, or a copy with ``flux_paths`` set (as tools/measure_split_default.py)."""
-    if flux_paths is None:
+def _magnet(name: str, variant: str | None) -> mk.Magnet:
+    """The bundled magnet, or a variant: ``"lumped"`` (the file with the lumped eddy elements),
+    ``"paper"`` (the ``"paper"`` network with lumped eddy elements and eq. 8's default)."""
+    if variant is None:
         return mk.load_magnet(name)
+    if variant == "lumped":
+        return mk.load_magnet(name, eddy_model="lumped")
     params = copy.deepcopy(mk.load_magnet(name).parameters)
-    params["magnet"]["flux_paths"] = flux_paths
-    if flux_paths != "split":
-        params["magnet"].pop("coil_segments", None)     # a key of the split network only
+    params["magnet"]["flux_paths"] = variant
+    params["magnet"].pop("coil_segments", None)         # a key of the split network only
+    for key in ("eddy_model", "eddy_layers"):           # the file's ladder: the variant is lumped
+        params["magnet"].pop(key, None)
+        params["provenance"].pop(f"magnet.{key}", None)
+    params.pop("reduced", None)
+    params["provenance"].pop("reduced.eddy_modes", None)
     params["provenance"]["magnet.flux_paths"] = "[E] benchmark variant"
     return build_magnet(params)
 
@@ -146,8 +155,10 @@ def run() -> str:
         "machine is shared, CPU time is steadier than wall time).  *tr09-standard*: the bundled "
         "file, the split network since issue 26 (on the fundamental loops and the dense form it "
         "took 27.5 s CPU per simulated second interpreted and did not compile, "
-        "docs/decisions.md, splitfast); *tr09-standard (paper)*: the same file with "
-        "`flux_paths = \"paper\"`, the lumped network that was the default before.  *unknowns*: loop "
+        "docs/decisions.md, splitfast), with the eddy ladder (6 layers) since switch26m; "
+        "*tr09-standard (lumped)*: the same with the lumped eddy elements, its default before "
+        "switch26m; *tr09-standard (paper)*: the file with `flux_paths = \"paper\"` and the "
+        "lumped eddy elements, the network that was the default before issue 26.  *unknowns*: loop "
         "fluxes and currents; *form*: the DAE form IDAS runs (dense up to 100 unknowns, "
         "sparse above, `SPARSE_FORM_SIZE`); *first simulate*: CPU time of the first run "
         "(it builds the integrators).  `simulate` runs IDAS "
