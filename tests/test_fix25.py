@@ -161,3 +161,95 @@ def test_compare_refuses_imported_maps_saying_why(imported_file: Path) -> None:
                               "--current", "20", "--repeat", "1"])
     _one_line_error(res, "imported from the table", "detailed model",
                     "maglevkit maps build MAGNET", "maglevkit export fmu MAPS_FILE")
+
+
+# ---------------------------------------------------------------- 2. design spec slips
+def _spec_doc() -> dict[str, Any]:
+    from importlib import resources
+
+    import tomllib
+
+    text = (resources.files("maglevkit") / "data" / "designs" / "u-magnet-design.toml"
+            ).read_text()
+    return tomllib.loads(text)
+
+
+@pytest.mark.parametrize(("key", "value", "needles"), [
+    # metres for millimetres: was 500 IPOPT iterations, then a failure naming no key
+    ("nominal_gap_m", 10, ("[requirements] nominal_gap_m = 10 m cannot be physical",
+                           "allowed are <= 1 m", "1000 times too large: typed in mm")),
+    ("reserve_gap_m", 6.0, ("[requirements] reserve_gap_m = 6.0 m", "<= 1 m")),
+    # gauss for tesla: was a run to exit 0
+    ("max_flux_density_T", 15000, ("[requirements] max_flux_density_T = 15000 T",
+                                   "allowed are <= 10 T", "gauss", "1.5 T")),
+    # was accepted silently: a "reserve" that does not hold the nominal force
+    ("reserve_factor", 0.5, ("[requirements] reserve_factor = 0.5 - cannot be physical",
+                             "allowed are >= 1 -")),
+])
+def test_unphysical_spec_values_are_refused_before_solving(
+        key: str, value: float, needles: tuple[str, ...],
+        monkeypatch: pytest.MonkeyPatch) -> None:
+    from maglevkit import design
+    from maglevkit.design import DesignSpecError
+
+    doc = _spec_doc()
+    doc["requirements"][key] = value
+
+    def no_magnet(*args: Any, **kwargs: Any) -> None:     # "before solving": before even
+        raise AssertionError("the spec was read past its values")   # loading the magnet
+
+    monkeypatch.setattr("maglevkit.magnets.load_magnet", no_magnet)
+    with pytest.raises(DesignSpecError) as info:
+        design.read_design_spec(doc)
+    for needle in needles:
+        assert needle in str(info.value), str(info.value)
+
+
+@pytest.mark.parametrize(("key", "value"), [
+    ("nominal_gap_m", 0.3),           # 300 mm: implausible for an EMS magnet, not impossible
+    ("max_flux_density_T", 3.0),      # above iron's saturation: implausible
+    ("reserve_factor", 20.0),         # a twentyfold reserve
+])
+def test_implausible_spec_values_warn_naming_the_key(key: str, value: float) -> None:
+    from maglevkit import design
+    from maglevkit.errors import PlausibilityWarning
+
+    doc = _spec_doc()
+    doc["requirements"][key] = value
+    with pytest.warns(PlausibilityWarning, match=rf"\[requirements\] {key} = {value!r}"):
+        try:
+            design.read_design_spec(doc)
+        except mk.MaglevkitError:
+            pass      # later checks may refuse the spec (bounds); the warning came first
+
+
+def test_cli_design_refuses_an_unphysical_spec(tmp_path: Path) -> None:
+    spec = tmp_path / "spec.toml"
+    text = (Path(mk.__file__).parent / "data" / "designs" / "u-magnet-design.toml").read_text()
+    spec.write_text(text.replace("nominal_gap_m = 0.010", "nominal_gap_m = 10"))
+    res = runner.invoke(app, ["design", str(spec), "-o", str(tmp_path / "d.toml")])
+    assert res.exit_code == 2, res.output
+    assert "nominal_gap_m = 10 m cannot be physical" in res.stderr
+    assert not (tmp_path / "d.toml").exists()
+
+
+def test_physical_limits_refuse_where_plausible_ranges_warn() -> None:
+    import warnings
+
+    from maglevkit.errors import PlausibilityWarning
+    from maglevkit.validation import Plausible, check_plausible
+
+    ranges = {"a.x": Plausible(1.0, 10.0, "m", physical_high=100.0)}
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        assert check_plausible({"a": {"x": 5.0}}, ranges) == []
+    with pytest.warns(PlausibilityWarning, match=r"\[a\] x = 50.0 m is above"):
+        assert check_plausible({"a": {"x": 50.0}}, ranges) == ["a.x"]
+    with pytest.raises(mk.InputError, match=r"\[a\] x = 500.0 m cannot be physical .*"
+                                            r"allowed are <= 100 m"):
+        check_plausible({"a": {"x": 500.0}}, ranges)
+    # values <= 0 are left to the file's own checks (its "must be > 0"): warned only
+    with pytest.warns(PlausibilityWarning, match=r"\[a\] x = -500.0 m is above"):
+        assert check_plausible({"a": {"x": -500.0}}, ranges) == ["a.x"]
+    with pytest.raises(ValueError, match="must enclose it"):
+        Plausible(1.0, 10.0, "m", physical_high=5.0)
