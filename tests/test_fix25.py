@@ -40,21 +40,33 @@ def magnet() -> mk.Magnet:
     return mk.load_magnet("u-magnet")
 
 
-@pytest.fixture(scope="module")
-def table(magnet: mk.Magnet, tmp_path_factory: pytest.TempPathFactory) -> Path:
-    """A small statics CSV of the U-magnet (psi only, 9 gaps x 6 currents; the force comes
-    by co-energy), as a user's measured table would be."""
-    s, i = (a.ravel() for a in np.meshgrid(np.linspace(0.006, 0.014, 9),
-                                           np.linspace(0.0, 40.0, 6), indexing="ij"))
+def _statics_csv(magnet: mk.Magnet, path: Path, currents_A: np.ndarray) -> Path:
+    """A small statics CSV of the U-magnet (psi only, 9 gaps 6-14 mm x the currents), as a
+    user's measured table would be."""
+    s, i = (a.ravel() for a in np.meshgrid(np.linspace(0.006, 0.014, 9), currents_A,
+                                           indexing="ij"))
     psi = np.asarray(mk.solve_statics(magnet, gaps_m=np.c_[s, s], currents_A=i[:, None])
                      .flux_linkage_Wb).ravel()
-    path = tmp_path_factory.mktemp("table") / "u.csv"
     with path.open("w", newline="") as fh:
         w = csv.writer(fh)
         w.writerow(["gap_m", "current_A", "flux_linkage_Wb"])
         w.writerows([repr(float(a)), repr(float(b)), repr(float(c))]
                     for a, b, c in zip(s, i, psi, strict=True))
     return path
+
+
+@pytest.fixture(scope="module")
+def table(magnet: mk.Magnet, tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """The maps' table: 0-40 A (the force comes by co-energy from psi)."""
+    return _statics_csv(magnet, tmp_path_factory.mktemp("table") / "u.csv",
+                        np.linspace(0.0, 40.0, 6))
+
+
+@pytest.fixture(scope="module")
+def points(magnet: mk.Magnet, tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """Calibration data: 5-40 A (calibration points need I > 0)."""
+    return _statics_csv(magnet, tmp_path_factory.mktemp("points") / "p.csv",
+                        np.linspace(5.0, 40.0, 4))
 
 
 @pytest.fixture(scope="module")
@@ -253,3 +265,38 @@ def test_physical_limits_refuse_where_plausible_ranges_warn() -> None:
         assert check_plausible({"a": {"x": -500.0}}, ranges) == ["a.x"]
     with pytest.raises(ValueError, match="must enclose it"):
         Plausible(1.0, 10.0, "m", physical_high=5.0)
+
+
+# ---------------------------------------------------------------- 3. nothing determined
+def test_calibrate_refuses_when_the_data_determine_no_parameter(points: Path,
+                                                               tmp_path: Path) -> None:
+    out = tmp_path / "cal.toml"
+    # R_el does not enter the statics: was exit 0 and a "calibrated" file of start values
+    res = runner.invoke(app, ["calibrate", "u-magnet", str(points), "-o", str(out),
+                              "--params", "resistance_scale"])
+    _one_line_error(res, "cannot determine any of the fitted parameters ['resistance_scale']",
+                    "voltage steps", "--steps")
+    assert not out.exists()
+    with pytest.raises(mk.DataError, match=r"eddy_conductance_scale, resistance_scale do not "
+                                           r"enter the statics"):
+        mk.calibrate(mk.load_magnet("u-magnet"), points,
+                     parameters=["eddy_conductance_scale", "resistance_scale"])
+
+
+def test_calibrate_with_some_parameters_undetermined_reports_them(points: Path,
+                                                                  tmp_path: Path) -> None:
+    out = tmp_path / "cal.toml"
+    res = runner.invoke(app, ["calibrate", "u-magnet", str(points), "-o", str(out),
+                              "--params", "leakage_factor,resistance_scale"])
+    assert res.exit_code == 0, res.output
+    rows = {ln.split()[0]: ln for ln in res.stdout.splitlines() if ln.strip()}
+    assert "NOT DETERMINED" in rows["resistance_scale"]
+    assert "NOT DETERMINED" not in rows["leakage_factor"]
+    assert out.is_file()
+    # the Python result says the same; select_parameters' folds are not refused
+    cal = mk.calibrate(mk.load_magnet("u-magnet"), points,
+                       parameters=["leakage_factor", "resistance_scale"])
+    assert cal.undetermined == ("resistance_scale",)
+    none = mk.calibrate(mk.load_magnet("u-magnet"), points, parameters=["resistance_scale"],
+                        require_determined=False)
+    assert none.undetermined == ("resistance_scale",)
