@@ -300,3 +300,50 @@ def test_calibrate_with_some_parameters_undetermined_reports_them(points: Path,
     none = mk.calibrate(mk.load_magnet("u-magnet"), points, parameters=["resistance_scale"],
                         require_determined=False)
     assert none.undetermined == ("resistance_scale",)
+
+
+# ---------------------------------------------------------------- 4. nits
+def _template(name: str) -> str:
+    res = runner.invoke(app, ["template", "magnet", name])
+    assert res.exit_code == 0, res.output
+    return res.stdout
+
+
+def test_u_magnet_template_offers_flux_paths_with_its_provenance(tmp_path: Path) -> None:
+    import warnings
+
+    from maglevkit.errors import ProvenanceWarning
+
+    text = _template("u_magnet")
+    assert '# flux_paths = "window"' in text and '"standard"' in text and '"split"' in text
+    assert '# "magnet.flux_paths" = "[E]' in text
+    as_is, both, key_only = (tmp_path / f"{n}.toml" for n in ("as_is", "both", "key_only"))
+    as_is.write_text(text)
+    both.write_text(text.replace('# flux_paths = "window"', 'flux_paths = "window"')
+                    .replace('# "magnet.flux_paths"', '"magnet.flux_paths"'))
+    key_only.write_text(text.replace('# flux_paths = "window"', 'flux_paths = "window"'))
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")         # neither the template nor its option warn
+        assert "flux_paths" not in mk.load_magnet(as_is).parameters["magnet"]   # default
+        assert mk.load_magnet(both).parameters["magnet"]["flux_paths"] == "window"
+    # the provenance line is what keeps it quiet: without it the key warns
+    with pytest.warns(ProvenanceWarning, match="magnet.flux_paths"):
+        mk.load_magnet(key_only)
+    # the levitation magnet's template is its bundled file as before (it sets flux_paths)
+    tr09 = _template("tr09-standard")
+    assert "# flux_paths" not in tr09 and 'flux_paths = "split"' in tr09
+
+
+def test_design_pareto_format_follows_the_suffix(tmp_path: Path) -> None:
+    res = runner.invoke(app, ["design", "--help"], terminal_width=200)
+    assert "the format follows the suffix" in " ".join(res.stdout.split())
+    # a suffix matplotlib cannot write: refused before solving, naming the option
+    bad = runner.invoke(app, ["design", "u-magnet-design", "-o", str(tmp_path / "d.toml"),
+                              "--pareto", str(tmp_path / "front.xyz")])
+    _one_line_error(bad, "--pareto", "format 'xyz'", ".png")
+    assert not (tmp_path / "d.toml").exists()
+    jpg = tmp_path / "front.jpg"
+    res = runner.invoke(app, ["design", "u-magnet-design", "-o", str(tmp_path / "d.toml"),
+                              "--pareto", str(jpg), "--pareto-points", "2"])
+    assert res.exit_code == 0, res.output
+    assert jpg.read_bytes()[:3] == b"\xff\xd8\xff"       # a JPEG, not a PNG named .jpg
