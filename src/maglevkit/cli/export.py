@@ -25,7 +25,7 @@ def fmu(
                                                "must belong to it); alone: the maps file, "
                                                "for maps imported from a table.")],
     maps_file: Annotated[Path | None, typer.Argument(
-        metavar="[MAPS_FILE]", help="netCDF maps of this magnet (maglevkit maps build), or "
+        metavar="MAPS_FILE", help="netCDF maps of this magnet (maglevkit maps build), or "
                                     "maps imported from a table describing it (maglevkit "
                                     "maps import).")] = None,
     output: Annotated[Path, typer.Option("-o", "--output", help="FMU file to write (.fmu; its "
