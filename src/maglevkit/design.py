@@ -273,7 +273,10 @@ def read_design_spec(source: str | Path | Mapping[str, Any], *, base_dir: str | 
     Raises
     ------
     DesignSpecError
-        Unknown, missing or bad keys (named with their table), bounds that are empty or
+        Unknown, missing or bad keys (named with their table), a value that cannot be
+        physical (outside :data:`DESIGN_PLAUSIBLE`'s ``physical_low`` / ``physical_high``:
+        a gap above 1 m, a flux density above 10 T, a reserve factor below 1; before
+        anything is solved), bounds that are empty or
         exclude nothing feasible, a base magnet that is neither a lumped U-magnet nor a
         levitation magnet, a variable the network's geometry does not admit (one it
         decides its structure on, or one neither its statics nor the winding depend on).
