@@ -153,11 +153,19 @@ round wire).  The conductor keys name no metal: the TR09 coils are aluminium str
 #: saturates near 2 T; 15000 is gauss), a force reserve below 1 (the magnet at its peak
 #: current would not hold its own nominal force: no reserve).
 DESIGN_PLAUSIBLE: dict[str, Plausible] = {
-    "requirements.nominal_gap_m": Plausible(1e-3, 0.1, "m", physical_high=1.0),
-    "requirements.reserve_gap_m": Plausible(1e-3, 0.1, "m", physical_high=1.0),
+    "requirements.nominal_gap_m": Plausible(
+        1e-3, 0.1, "m", physical_high=1.0,
+        physical_note="an electromagnet's gap of a metre or more is no gap"),
+    "requirements.reserve_gap_m": Plausible(
+        1e-3, 0.1, "m", physical_high=1.0,
+        physical_note="an electromagnet's gap of a metre or more is no gap"),
     "requirements.force_N": Plausible(1.0, 2e5, "N"),
-    "requirements.reserve_factor": Plausible(1.0, 10.0, "-", physical_low=1.0),
-    "requirements.max_flux_density_T": Plausible(0.1, 2.5, "T", physical_high=10.0),
+    "requirements.reserve_factor": Plausible(
+        1.0, 10.0, "-", physical_low=1.0,
+        physical_note="a force reserve below 1 does not hold the nominal force"),
+    "requirements.max_flux_density_T": Plausible(
+        0.1, 2.5, "T", physical_high=10.0,
+        physical_note="iron saturates near 2 T"),
     "requirements.current_density_A_per_m2": Plausible(1e5, 1e8, "A/m^2"),
     "requirements.peak_current_density_A_per_m2": Plausible(1e5, 1e8, "A/m^2"),
     "requirements.supply_voltage_V": Plausible(1.0, 1e4, "V"),

@@ -281,7 +281,8 @@ class Plausible:
     ``physical_low`` / ``physical_high`` (optional) bound what the key can mean at all (a
     gap of metres, a flux density in iron of thousands of tesla, a force reserve below 1):
     a positive value outside them is refused by :func:`check_plausible` instead of warned
-    (values <= 0 are left to the file's own checks).
+    (values <= 0 are left to the file's own checks); ``physical_note`` says why, in the
+    refusal.
     """
 
     low: float
@@ -289,6 +290,7 @@ class Plausible:
     unit: str
     physical_low: float | None = None
     physical_high: float | None = None
+    physical_note: str = ""
 
     def __post_init__(self) -> None:
         if not 0.0 < self.low < self.high:
@@ -392,8 +394,10 @@ def check_plausible(values: Mapping[str, Any], ranges: Mapping[str, Plausible],
                     rng.physical_high is not None and val > rng.physical_high)):
                 raise error(f"{prefix}[{table}] {key} = {item!r} {rng.unit} cannot be "
                             f"physical ({key} is in {rng.unit}): allowed are "
-                            f"{rng.allowed()} (plausible "
-                            f"{rng.low:g} ... {rng.high:g} {rng.unit}); {_slip(mag, rng)}")
+                            f"{rng.allowed()} ("
+                            + (f"{rng.physical_note}; " if rng.physical_note else "")
+                            + f"plausible {rng.low:g} ... {rng.high:g} {rng.unit}); "
+                            f"{_slip(mag, rng)}")
             side = "above" if mag > rng.high else "below"
             warnings.warn(
                 f"{prefix}[{table}] {key} = {item!r} {rng.unit} is {side} the plausible range "

@@ -75,7 +75,7 @@ def fmu(
     carry eq. 8 only.  See docs/fmu.md.
 
     \b
-    Examples:
+    Example:
       maglevkit export fmu tr09-standard maps.nc -o tr09.fmu
       maglevkit export fmu imported.nc -o mine.fmu
     """
