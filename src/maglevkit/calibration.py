@@ -1392,15 +1392,17 @@ def _refuse_undetermined(names: Sequence[str], with_steps: bool, pts: StaticPoin
     static = [n for n in names if n not in DYNAMIC_PARAMETERS]
     needs = []
     if dynamic:
-        needs.append(f"{', '.join(dynamic)} do not enter the statics: measured voltage steps "
-                     "determine them (steps=, maglevkit calibrate --steps)"
+        one = len(dynamic) == 1
+        needs.append(f"{', '.join(dynamic)} {'does' if one else 'do'} not enter the statics: "
+                     f"measured voltage steps determine {'it' if one else 'them'} (steps=, "
+                     "maglevkit calibrate --steps)"
                      + ("" if not with_steps else "; these steps do not (check their "
                         "circuits and current change)"))
     if static:
         gaps, currents = np.unique(pts.gap_m).size, np.unique(pts.current_A).size
-        needs.append(f"{', '.join(static)} need force and/or flux linkage over several "
-                     f"gaps and currents where they act (the fitted data: {gaps} gap(s), "
-                     f"{currents} current(s); with the held-out gaps left out)")
+        needs.append(f"{', '.join(static)}: force and/or flux linkage at more gaps and "
+                     "currents, where they act, would determine them (the fitted data: "
+                     f"{gaps} gap(s), {currents} current(s), held-out gaps left out)")
     raise DataError(f"calibrate: the data cannot determine any of the fitted parameters "
                     f"{list(names)} (they do not change the modelled data: a zero Jacobian), "
                     f"so a calibrated file would hold their start values; "
