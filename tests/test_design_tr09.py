@@ -202,9 +202,12 @@ def test_unit_slips_warn_naming_the_key() -> None:
         with pytest.raises(DesignSpecError, match=r"\[variables\] pole_width"):
             read_design_spec(doc)
     doc = tr09_doc()
-    doc["requirements"]["nominal_gap_m"] = 10.0      # mm typed into a metre key
+    doc["requirements"]["nominal_gap_m"] = 0.5       # implausible (500 mm), not impossible
     with pytest.warns(PlausibilityWarning, match="nominal_gap_m"):
         read_design_spec(doc)
+    doc["requirements"]["nominal_gap_m"] = 10.0      # mm typed into a metre key: a gap of
+    with pytest.raises(DesignSpecError, match=r"nominal_gap_m = 10.0 m cannot be physical"):
+        read_design_spec(doc)                        # metres is refused (fix25)
     # kN typed into the newton key: inside the range of any magnet (1 N - 200 kN) but a
     # thousandth of the base magnet's 19 kN per circuit at its operating point
     doc = tr09_doc()

@@ -92,7 +92,7 @@ def test_compare_on_imported_maps_says_they_are_imported(tmp_path: Path) -> None
     res = runner.invoke(app, ["compare", "u-magnet", str(tmp_path / "m.nc"), "--gap", "0.01",
                               "--current", "20", "--repeat", "1"])
     assert res.exit_code == 2, res.output
-    assert "imported from the table" in res.stderr and "export_fmu(maps" in res.stderr
+    assert "imported from the table" in res.stderr and "export fmu MAPS_FILE" in res.stderr
     assert "Traceback" not in res.output
     assert len(res.stderr.strip().splitlines()) == 1, res.stderr
 

@@ -349,7 +349,8 @@ def test_cli_import(own_csv: Path, tmp_path: Path) -> None:
                               "u-magnet", "--eddy-resistance", "8.8"])
     assert res.exit_code == 0, res.output
     assert "reciprocity residual coil: max 1.78 % at gap 0.004 m, current 2.5 A" in res.output
-    assert f"next: mk.CurrentModel(mk.load_maps({str(out)!r}))" in res.stderr
+    assert f"next: maglevkit export fmu {str(out)!r} -o magnet.fmu" in res.stderr
+    assert f"mk.CurrentModel(mk.load_maps({str(out)!r}))" in res.stderr
     maps = mk.load_maps(out)
     assert maps.dataset["eddy_resistance_fit_ohm"].values[0] == 8.8
     bad = _small(tmp_path, lambda r: _set(r, 4, 2, "nan"))

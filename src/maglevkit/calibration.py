@@ -892,6 +892,13 @@ NULL_RCOND = 1e-10
 near-null directions (rounding of the exact parameter derivatives is ~1e-9 relative to the
 residuals, squared in ``J^T J``: 1e-10 in ``J`` itself separates rank loss from it)."""
 
+UNSEEN_SINGULAR_VALUE = 1e-9
+"""The data see none of the fitted parameters when the parameter-scaled Jacobian's largest
+singular value is at most this: a change of every parameter by its scale moves the relative
+residuals by < 1e-9 (the derivatives' own rounding), e.g. ``resistance_scale`` and
+``eddy_conductance_scale`` on statics, whose Jacobian columns are exactly zero.
+:func:`calibrate` then refuses the fit (a file of start values tagged calibrated)."""
+
 NULL_SHARE = 0.05
 """A parameter with more than this share (sum of its squared components) of the near-null
 directions is named undetermined: the data fix it only together with the others there; a
@@ -1147,7 +1154,8 @@ def calibrate(magnet: Any, data: str | Path | StaticPoints | None, *,
               holdout_gaps_m: Sequence[float] = (),
               initial: Mapping[str, float] | None = None,
               steps: str | Path | StepResponses | None = None,
-              holdout_steps: str | Sequence[str] = ()) -> Calibration:
+              holdout_steps: str | Sequence[str] = (),
+              require_determined: bool = True) -> Calibration:
     """Fit calibration parameters of ``magnet`` to measured statics and/or voltage steps
     (module docstring).
 
@@ -1174,6 +1182,10 @@ def calibrate(magnet: Any, data: str | Path | StaticPoints | None, *,
         Labels of voltage steps (:attr:`VoltageStep.label`) left out of the fit and
         reported as the held-out check of the dynamics (``step_holdout``); a str is one
         label (labels may contain commas).
+    require_determined : bool, default True
+        Refuse (``DataError``) a fit in which the data see none of the parameters;
+        False returns it (:func:`select_parameters` scores every set by its held-out
+        error, a set the data cannot determine too).
 
     Raises
     ------
@@ -1183,8 +1195,12 @@ def calibrate(magnet: Any, data: str | Path | StaticPoints | None, *,
     DataError
         Bad data (:func:`read_points`, :func:`read_steps`), a unit slip (statics or step
         currents off the nominal magnet by more than :data:`UNIT_SLIP_RATIO`, a step
-        spanning more than :data:`STEP_SPAN_MAX_TAU` time constants: ms as s), or fewer
-        residuals than parameters.
+        spanning more than :data:`STEP_SPAN_MAX_TAU` time constants: ms as s), fewer
+        residuals than parameters, or data that determine none of the fitted parameters
+        nor any combination of them (:data:`UNSEEN_SINGULAR_VALUE`; e.g.
+        ``resistance_scale`` from statics alone: the message names them and the data that
+        would); parameters undetermined beside others, or only in combination, are
+        reported in :attr:`Calibration.undetermined`.
 
     Returns
     -------
@@ -1324,6 +1340,10 @@ def calibrate(magnet: Any, data: str | Path | StaticPoints | None, *,
     half = np.where(shares > NULL_SHARE, np.inf, half)
     undetermined = tuple(nm for nm, h, sc in zip(names, half, scales, strict=True)
                          if not h < sc)
+    if require_determined and not sv[0] > UNSEEN_SINGULAR_VALUE:
+        # every parameter undetermined and no direction either: the data see none of them
+        # (undetermined parameters with a determined combination are reported instead)
+        _refuse_undetermined(names, step_data is not None, fit_pts)
     active = tuple(nm for nm, v, a, b in zip(names, p, lo, hi, strict=True)
                    if v <= a + 1e-9 * max(1.0, abs(a)) or v >= b - 1e-9 * max(1.0, abs(b)))
     holdout: list[dict[str, Any]] = []
@@ -1363,6 +1383,30 @@ def calibrate(magnet: Any, data: str | Path | StaticPoints | None, *,
         nominal_step_points=nominal_step_rep, step_holdout=step_hold,
         nominal_step_holdout=nominal_step_hold,
         steps_sha256=steps_sha)
+
+
+def _refuse_undetermined(names: Sequence[str], with_steps: bool, pts: StaticPoints) -> None:
+    """Raise: the data determine none of the fitted parameters (a "calibrated" file would
+    hold the start values, tagged calibrated).  Names what data would determine them."""
+    dynamic = [n for n in names if n in DYNAMIC_PARAMETERS]
+    static = [n for n in names if n not in DYNAMIC_PARAMETERS]
+    needs = []
+    if dynamic:
+        one = len(dynamic) == 1
+        needs.append(f"{', '.join(dynamic)} {'does' if one else 'do'} not enter the statics: "
+                     f"measured voltage steps determine {'it' if one else 'them'} (steps=, "
+                     "maglevkit calibrate --steps)"
+                     + ("" if not with_steps else "; these steps do not (check their "
+                        "circuits and current change)"))
+    if static:
+        gaps, currents = np.unique(pts.gap_m).size, np.unique(pts.current_A).size
+        needs.append(f"{', '.join(static)}: force and/or flux linkage at more gaps and "
+                     "currents, where they act, would determine them (the fitted data: "
+                     f"{gaps} gap(s), {currents} current(s), held-out gaps left out)")
+    raise DataError(f"calibrate: the data cannot determine any of the fitted parameters "
+                    f"{list(names)} (they do not change the modelled data: a zero Jacobian), "
+                    f"so a calibrated file would hold their start values; "
+                    + "; ".join(needs))
 
 
 @dataclass(frozen=True)
@@ -1440,7 +1484,8 @@ def select_parameters(magnet: Any, data: str | Path | StaticPoints, *,
         for g in gaps:
             with warnings.catch_warnings():
                 warnings.simplefilter("ignore", MaglevkitWarning)
-                res = calibrate(magnet, pts, parameters=names, holdout_gaps_m=[g, *held])
+                res = calibrate(magnet, pts, parameters=names, holdout_gaps_m=[g, *held],
+                                require_determined=False)
             e = [abs(r["relative_error"]) for r in res.holdout
                  if math.isclose(r["gap_m"], g, rel_tol=1e-9, abs_tol=1e-12)]
             per_gap[g] = max(e)

@@ -147,12 +147,25 @@ round wire).  The conductor keys name no metal: the TR09 coils are aluminium str
 #: slip (mm typed into a metre key, kN into a newton key, A/mm^2 into A/m^2, gauss into
 #: tesla) and warns.  The bundled spec lies inside and the same spec with any one value
 #: times 1000 or 1/1000 outside; the variables' bounds take the magnet file's ranges.
+#: Values that cannot be physical are refused before solving (``physical_low`` /
+#: ``physical_high``): a gap above 1 m (metres for millimetres: ``nominal_gap_m = 10``
+#: ran IPOPT's 500 iterations, review25), a flux density in the iron above 10 T (iron
+#: saturates near 2 T; 15000 is gauss), a force reserve below 1 (the magnet at its peak
+#: current would not hold its own nominal force: no reserve).
 DESIGN_PLAUSIBLE: dict[str, Plausible] = {
-    "requirements.nominal_gap_m": Plausible(1e-3, 0.1, "m"),
-    "requirements.reserve_gap_m": Plausible(1e-3, 0.1, "m"),
+    "requirements.nominal_gap_m": Plausible(
+        1e-3, 0.1, "m", physical_high=1.0,
+        physical_note="an electromagnet's gap of a metre or more is no gap"),
+    "requirements.reserve_gap_m": Plausible(
+        1e-3, 0.1, "m", physical_high=1.0,
+        physical_note="an electromagnet's gap of a metre or more is no gap"),
     "requirements.force_N": Plausible(1.0, 2e5, "N"),
-    "requirements.reserve_factor": Plausible(0.1, 10.0, "-"),
-    "requirements.max_flux_density_T": Plausible(0.1, 2.5, "T"),
+    "requirements.reserve_factor": Plausible(
+        1.0, 10.0, "-", physical_low=1.0,
+        physical_note="a force reserve below 1 does not hold the nominal force"),
+    "requirements.max_flux_density_T": Plausible(
+        0.1, 2.5, "T", physical_high=10.0,
+        physical_note="iron saturates near 2 T"),
     "requirements.current_density_A_per_m2": Plausible(1e5, 1e8, "A/m^2"),
     "requirements.peak_current_density_A_per_m2": Plausible(1e5, 1e8, "A/m^2"),
     "requirements.supply_voltage_V": Plausible(1.0, 1e4, "V"),
@@ -268,7 +281,10 @@ def read_design_spec(source: str | Path | Mapping[str, Any], *, base_dir: str | 
     Raises
     ------
     DesignSpecError
-        Unknown, missing or bad keys (named with their table), bounds that are empty or
+        Unknown, missing or bad keys (named with their table), a value that cannot be
+        physical (outside :data:`DESIGN_PLAUSIBLE`'s ``physical_low`` / ``physical_high``:
+        a gap above 1 m, a flux density above 10 T, a reserve factor below 1; before
+        anything is solved), bounds that are empty or
         exclude nothing feasible, a base magnet that is neither a lumped U-magnet nor a
         levitation magnet, a variable the network's geometry does not admit (one it
         decides its structure on, or one neither its statics nor the winding depend on).
@@ -297,7 +313,8 @@ def read_design_spec(source: str | Path | Mapping[str, Any], *, base_dir: str | 
                               "requirements, coil, provenance")
     # before the schema's own checks, so that a slipped value it then refuses (e.g.
     # fill_factor = 600 for 0.6) is named with its unit and likely slip first (issue 27)
-    flagged = check_plausible(doc, DESIGN_PLAUSIBLE, label, stacklevel=3)
+    flagged = check_plausible(doc, DESIGN_PLAUSIBLE, label, stacklevel=3,
+                              error=DesignSpecError)
     design = _table(doc, "design")
     bad = sorted(set(design) - {"magnet", "objective", "flux_paths"})
     if bad:

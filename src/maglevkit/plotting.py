@@ -17,7 +17,8 @@ __all__ = ["covers_data", "figure_directory", "place_legend", "plot_comparison",
 
 
 def save(fig: Any, path: str | Path) -> Path:
-    """Save a figure as PNG (creating the folder) and close it.
+    """Save a figure (creating the folder) and close it; the format follows the suffix
+    (PNG for ``.png``, ...; the command line checks it first, ``plot_file``)
 
     Parameters
     ----------

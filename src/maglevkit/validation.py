@@ -277,15 +277,35 @@ class Plausible:
     :func:`check_plausible`.  The ranges are chosen so that every bundled file lies
     inside and the same file with any one value multiplied by 1000 or by 1/1000 lies
     outside (docs/decisions.md, "Plausible ranges of file values").
+
+    ``physical_low`` / ``physical_high`` (optional) bound what the key can mean at all (a
+    gap of metres, a flux density in iron of thousands of tesla, a force reserve below 1):
+    a positive value outside them is refused by :func:`check_plausible` instead of warned
+    (values <= 0 are left to the file's own checks); ``physical_note`` says why, in the
+    refusal.
     """
 
     low: float
     high: float
     unit: str
+    physical_low: float | None = None
+    physical_high: float | None = None
+    physical_note: str = ""
 
     def __post_init__(self) -> None:
         if not 0.0 < self.low < self.high:
             raise ValueError(f"Plausible range {self.low} ... {self.high}: need 0 < low < high")
+        if (self.physical_low is not None and self.physical_low > self.low) or (
+                self.physical_high is not None and self.physical_high < self.high):
+            raise ValueError(f"Plausible range {self.low} ... {self.high}: the physical "
+                             f"limits {self.physical_low} ... {self.physical_high} must "
+                             "enclose it")
+
+    def allowed(self) -> str:
+        """The physical limits in words, for a refusal (``"<= 1 m"``, ``">= 1 -"``)."""
+        parts = ([f">= {self.physical_low:g}"] if self.physical_low is not None else []) + (
+            [f"<= {self.physical_high:g}"] if self.physical_high is not None else [])
+        return f"{' and '.join(parts) or 'any value'} {self.unit}"
 
 
 #: The unit a value 1000 times too large / too small was most likely typed in, per SI unit.
@@ -305,6 +325,8 @@ def _slip(value: float, rng: Plausible) -> str:
     if rng.unit == "m/s" and rng.high > 50.0 and value > rng.high and value / 3.6 <= rng.high:
         return (f"typed in km/h instead of m/s? ({value:g} m/s is {value * 3.6:g} km/h; "
                 f"{value:g} km/h is {value / 3.6:.4g} m/s)")
+    if rng.unit == "T" and value > rng.high and rng.low <= value / 1e4 <= rng.high:
+        return f"typed in gauss instead of tesla? ({value:g} G is {value / 1e4:g} T)"
     if value > rng.high and rng.low <= value / 1000.0 <= rng.high:
         return f"1000 times too large: typed in {big} instead of {rng.unit}?"
     if value < rng.low and rng.low <= value * 1000.0 <= rng.high:
@@ -313,8 +335,10 @@ def _slip(value: float, rng: Plausible) -> str:
 
 
 def check_plausible(values: Mapping[str, Any], ranges: Mapping[str, Plausible],
-                    source: str = "", *, stacklevel: int = 3) -> list[str]:
-    """Warn about every file value outside its plausible range; the one such check.
+                    source: str = "", *, stacklevel: int = 3,
+                    error: Callable[[str], Exception] = InputError) -> list[str]:
+    """Warn about every file value outside its plausible range, refuse one outside its
+    physical limits; the one such check.
 
     Parameters
     ----------
@@ -326,11 +350,20 @@ def check_plausible(values: Mapping[str, Any], ranges: Mapping[str, Plausible],
         ``"table.key" -> Plausible``: the one table of ranges of a file kind.
     source : str
         The file's label for the message.
+    error : callable, default InputError
+        The exception (class) raised for a value outside :attr:`Plausible.physical_low`
+        ... :attr:`Plausible.physical_high` (e.g. the file kind's own error).
 
     Returns
     -------
     list of str
         The ``"table.key"`` names warned about (for tests and callers).
+
+    Raises
+    ------
+    Exception
+        ``error(message)`` for the first positive value outside its physical limits,
+        naming the key, the value, the unit, the allowed values and the likely slip.
 
     Warns
     -----
@@ -356,6 +389,15 @@ def check_plausible(values: Mapping[str, Any], ranges: Mapping[str, Plausible],
                 continue
             if mag == 0.0 or not math.isfinite(mag) or rng.low <= mag <= rng.high:
                 continue
+            val = float(item)
+            if val > 0.0 and ((rng.physical_low is not None and val < rng.physical_low) or (
+                    rng.physical_high is not None and val > rng.physical_high)):
+                raise error(f"{prefix}[{table}] {key} = {item!r} {rng.unit} cannot be "
+                            f"physical ({key} is in {rng.unit}): allowed are "
+                            f"{rng.allowed()} ("
+                            + (f"{rng.physical_note}; " if rng.physical_note else "")
+                            + f"plausible {rng.low:g} ... {rng.high:g} {rng.unit}); "
+                            f"{_slip(mag, rng)}")
             side = "above" if mag > rng.high else "below"
             warnings.warn(
                 f"{prefix}[{table}] {key} = {item!r} {rng.unit} is {side} the plausible range "

@@ -39,7 +39,8 @@ def design(
              "nominal point).")] = None,
     pareto: Annotated[Path | None, typer.Option(
         help="Also sweep the mass-power Pareto front (epsilon constraint) and plot it to this "
-             "PNG.")] = None,
+             "figure file; the format follows the suffix (.png, .pdf, .svg, .jpg, ...).")]
+    = None,
     pareto_points: Annotated[int, typer.Option(help="Designs on the Pareto front (>= 2).")]
     = 7,
     fmt: FormatOption = OutputFormat.table,

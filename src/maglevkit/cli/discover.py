@@ -51,6 +51,57 @@ def _text(folder: str, name: str) -> str:
     return (base / folder / f"{name}.toml" if folder else base / f"{name}.toml").read_text()
 
 
+#: Options of a magnet kind that its bundled example leaves at the default, offered in its
+#: template commented out: the [magnet] lines and the [provenance] line that goes with them
+#: (a file setting the key without a tag warns about the missing provenance).
+_TEMPLATE_OPTIONS: dict[str, tuple[str, str]] = {
+    "u_magnet": (
+        '# flux_paths = "window"    # air paths of the lumped network: "standard" (default,\n'
+        '#                          # Roters\' tubes), "split" or "window" (the edges by a\n'
+        '#                          # conformal map, end_effects = false; the network the FEM\n'
+        '#                          # calibration meets 2 % with; docs/magnets.md).  Uncomment\n'
+        '#                          # it with its [provenance] line.\n',
+        '# "magnet.flux_paths" = "[E] modelling choice: the lumped network\'s air paths '
+        '(docs/magnets.md)"\n'),
+}
+
+
+def _with_options(text: str) -> str:
+    """A magnet file's text with its kind's :data:`_TEMPLATE_OPTIONS` inserted, commented
+    out: the option at the end of ``[magnet]``, its tag at the end of ``[provenance]``
+    (each only if the file does not set the key and has the table)."""
+    if sys.version_info >= (3, 11):
+        import tomllib
+    else:  # pragma: no cover
+        import tomli as tomllib
+
+    doc = tomllib.loads(text)
+    kind = doc.get("magnet", {}).get("kind")
+    if kind not in _TEMPLATE_OPTIONS or "provenance" not in doc:
+        return text
+    option, tag = _TEMPLATE_OPTIONS[kind]
+    key = option.split("=")[0].lstrip("# ").strip()
+    if key in doc["magnet"]:
+        return text
+    lines = text.splitlines(keepends=True)
+
+    def table_end(name: str) -> int:
+        """Index after the last non-blank line of table ``[name]``."""
+        start = next(k for k, ln in enumerate(lines) if ln.strip() == f"[{name}]")
+        end = next((k for k in range(start + 1, len(lines))
+                    if lines[k].lstrip().startswith("[")), len(lines))
+        while end > start + 1 and not lines[end - 1].strip():
+            end -= 1
+        return end
+
+    for name, block in (("provenance", tag), ("magnet", option)):   # the later table first
+        at = table_end(name)
+        if not lines[at - 1].endswith("\n"):
+            lines[at - 1] += "\n"
+        lines[at:at] = [block]
+    return "".join(lines)
+
+
 def _names(kind: str) -> list[str]:
     from ..parameter_files import bundled_files
 
@@ -149,7 +200,8 @@ def template(
                    "and the likely unit slip.\n")
     else:
         header += ".\n"
-    sys.stdout.write(header + _text(folder, source))
+    body = _text(folder, source)
+    sys.stdout.write(header + (_with_options(body) if plural == "magnets" else body))
     sys.stdout.flush()
     use = _USE[plural].replace("NAME", "FILE")
     info(f"next: save it (maglevkit template {plural[:-1]} {source} > my.toml), edit it, "

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import math
 from pathlib import Path
-from typing import Annotated
+from typing import Annotated, Any
 
 import typer
 
@@ -22,9 +22,12 @@ app.add_typer(export_app, name="export",
                                       "Python needed).")
 def fmu(
     magnet: Annotated[str, typer.Argument(metavar="MAGNET", help="Magnet TOML file or bundled name (the maps "
-                                               "must belong to it).")],
-    maps_file: Annotated[Path, typer.Argument(metavar="MAPS_FILE", help="netCDF maps of this magnet "
-                                                   "(maglevkit maps build).")],
+                                               "must belong to it); alone: the maps file, "
+                                               "for maps imported from a table.")],
+    maps_file: Annotated[Path | None, typer.Argument(
+        metavar="MAPS_FILE", help="netCDF maps of this magnet (maglevkit maps build), or "
+                                    "maps imported from a table describing it (maglevkit "
+                                    "maps import).")] = None,
     output: Annotated[Path, typer.Option("-o", "--output", help="FMU file to write (.fmu; its "
                                                                 "folder must exist).")]
     = Path("magnet.fmu"),
@@ -66,11 +69,15 @@ def fmu(
     bundled TR09 magnets) exports the fitted RL eddy network with m branches instead of
     one R_ec; --motion-eddy the shielded-gap ladder (our extension of eq. 8 for gap
     motion; its maps need the motion_eddy_* variables), with --eddy-branches 2 the
-    three-state ladder (motion_eddy3_* variables).  See docs/fmu.md.
+    three-state ladder (motion_eddy3_* variables).  Maps imported from a table (maglevkit
+    maps import) take MAPS_FILE alone, or MAGNET MAPS_FILE with the magnet the table
+    describes (its circuits and gaps must be the maps'; it gives the start values); they
+    carry eq. 8 only.  See docs/fmu.md.
 
     \b
     Example:
       maglevkit export fmu tr09-standard maps.nc -o tr09.fmu
+      maglevkit export fmu imported.nc -o mine.fmu
     """
     if not (math.isfinite(max_substep) and max_substep > 0):   # was named max_substep_s
         raise fail(f"--max-substep {max_substep:g}: must be a finite number of seconds > 0")
@@ -83,16 +90,19 @@ def fmu(
     if eddy_branches == 2 and not motion_eddy:
         raise fail("--eddy-branches 2 needs --motion-eddy (it chooses the shielded-gap "
                    "ladder's sections; without --motion-eddy the FMU carries eq. 8)")
-    output_file(output, "--output", force=force, inputs=(magnet, maps_file))
+    output_file(output, "--output", force=force,
+                inputs=(magnet,) if maps_file is None else (magnet, maps_file))
     if output.suffix.lower() != ".fmu":
         raise fail(f"--output {str(output)!r}: an FMU file must end in .fmu")
     from ..export import export_fmu
-    from ..reduction import load_maps
 
-    mag = load_magnet_or_exit(magnet)
-    modes = 0 if motion_eddy and eddy_modes is None else eddy_modes_option(eddy_modes, mag)
     try:
-        maps = load_maps(maps_file, magnet=mag)
+        mag, maps = _magnet_and_maps(magnet, maps_file)
+        if mag is None or _imported_from(maps) is not None:
+            modes = _imported_eddy_modes(eddy_modes, motion_eddy, maps)
+        else:
+            modes = (0 if motion_eddy and eddy_modes is None
+                     else eddy_modes_option(eddy_modes, mag))
         lo_s, hi_s = float(maps.gaps_m[0]), float(maps.gaps_m[-1])
         lo_i, hi_i = float(maps.currents_A[0]), float(maps.currents_A[-1])
         for opt, value, lo, hi, unit in (("--gap", gap, lo_s, hi_s, "m"),
@@ -101,10 +111,10 @@ def fmu(
                 raise fail(f"{opt} {value:g} {unit} is outside the maps' range {lo:g}..{hi:g} "
                            f"{unit}")
         if gap is None:
-            nominal = getattr(mag, "nominal_gap", None)
+            nominal = getattr(mag, "nominal_gap", None) if mag is not None else None
             gap = nominal if nominal is not None and lo_s <= nominal <= hi_s else None
         if current is None:
-            nominal = getattr(mag, "nominal_current", None)
+            nominal = getattr(mag, "nominal_current", None) if mag is not None else None
             current = nominal if nominal is not None and lo_i <= nominal <= hi_i else None
         result = export_fmu(maps, output, model_identifier=model_identifier,
                             eddy_resistance=eddy_resistance, interpolation=interpolation,
@@ -113,7 +123,8 @@ def fmu(
                             eddy_branches=eddy_branches, eddy_modes=modes)
     except MaglevkitError as exc:
         raise fail(exc) from None
-    console.print(f"FMU (FMI 2.0 co-simulation) {result.model_identifier!r} of {mag.name!r}: "
+    of = mag.name if mag is not None else maps.dataset.attrs.get("magnet_name", "the table")
+    console.print(f"FMU (FMI 2.0 co-simulation) {result.model_identifier!r} of {of!r}: "
                   f"circuits {', '.join(result.circuit_names)}; inputs "
                   f"{', '.join(result.input_names)}; outputs {', '.join(result.output_names)}; "
                   f"parameters {', '.join(result.parameter_names)}; "
@@ -121,3 +132,71 @@ def fmu(
     info(f"wrote {result.path}")
     info(f"next: simulate it in an FMI 2.0 tool, e.g. fmpy.simulate_fmu({str(result.path)!r}, "
          "stop_time=0.2) in Python (docs/fmu.md)")
+
+
+def _imported_from(maps: Any) -> str | None:
+    """The table's source of maps imported from a table (``maglevkit maps import``), else
+    None (maps built from a magnet)."""
+    source = maps.dataset.attrs.get("table_source")
+    return None if source is None else str(source)
+
+
+def _magnet_and_maps(magnet: str, maps_file: Path | None) -> tuple[Any, Any]:
+    """(magnet or None, maps) of the command's one or two arguments.
+
+    Two arguments: built maps must belong to the magnet (the hash of its equivalent
+    circuit); imported maps have no such hash (they carry the table's), so the magnet
+    must describe them: the same circuits and only gap inputs the magnet has (the magnet
+    gives the start values: its nominal point).  One
+    argument: the maps file, which must be imported (built maps need their magnet: its
+    nominal point and its file's ``[reduced] eddy_modes``)."""
+    from ..reduction import load_maps
+
+    if maps_file is None:
+        path = Path(magnet)
+        if not path.is_file():
+            raise fail(f"one argument, {magnet!r}: it must be a maps file imported from a "
+                       "table (maglevkit maps import); for a magnet's built maps give "
+                       "MAGNET MAPS_FILE")
+        maps = load_maps(path)
+        if _imported_from(maps) is None:
+            raise fail(f"{magnet}: these maps were built from magnet "
+                       f"{maps.dataset.attrs.get('magnet_name')!r}; give it too: maglevkit "
+                       f"export fmu MAGNET {magnet} (one argument is for maps imported from "
+                       "a table)")
+        return None, maps
+    mag = load_magnet_or_exit(magnet)
+    maps = load_maps(maps_file)
+    source = _imported_from(maps)
+    if source is None:
+        maps.check_magnet(mag)
+        return mag, maps
+    net = mag.network
+    if sorted(maps.circuits) != sorted(net.circuit_names):
+        raise fail(f"{maps_file}: maps imported from {source!r} have the circuits "
+                   f"{', '.join(maps.circuits)}, magnet {mag.name!r} has "
+                   f"{', '.join(net.circuit_names)}; import the table with --magnet "
+                   f"{magnet}, or give the maps file alone")
+    gaps = sorted({g for group in maps.pole_groups.values() for g in group})
+    foreign = [g for g in gaps if g not in net.gap_names]
+    if foreign:
+        raise fail(f"{maps_file}: maps imported from {source!r} drive the gaps "
+                   f"{', '.join(foreign)}, which magnet {mag.name!r} does not have (its gaps: "
+                   f"{', '.join(net.gap_names)}); import the table with --magnet {magnet}, "
+                   "or give the maps file alone")
+    return mag, maps
+
+
+def _imported_eddy_modes(eddy_modes: int | None, motion_eddy: bool, maps: Any) -> int:
+    """``--eddy-modes`` for maps without a magnet's network (imported from a table): eq. 8
+    only; the eddy network and the shielded-gap ladder are fitted to a detailed model's
+    frequency response, which a table does not have."""
+    if motion_eddy:
+        raise fail("--motion-eddy: maps imported from a table carry no shielded-gap ladder "
+                   "(it is fitted to a magnet's detailed model, which a table does not have); "
+                   "leave it out (eq. 8 with the table's R_ec)")
+    if eddy_modes:
+        raise fail(f"--eddy-modes {eddy_modes}: maps imported from a table carry no eddy "
+                   "network (it is fitted to a magnet's detailed model, which a table does "
+                   "not have); allowed is 0 (eq. 8 with the table's R_ec)")
+    return eddy_modes_option(eddy_modes, maps)

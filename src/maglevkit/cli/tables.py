@@ -166,9 +166,8 @@ def import_table(
             console.print(f"reciprocity residual {c}: max {100 * v:.3g} % at "
                           f"{rep.reciprocity_worst[c]}")
     info(f"wrote {path}")
-    # (`maglevkit export fmu MAGNET MAPS` refuses imported maps: they belong to no magnet)
-    info(f"next: mk.CurrentModel(mk.load_maps({str(path)!r})) in Python, or an FMU: "
-         f"maglevkit.export.export_fmu(mk.load_maps({str(path)!r}), 'magnet.fmu')")
+    info(f"next: maglevkit export fmu {str(path)!r} -o magnet.fmu (an FMU of these maps), "
+         f"or mk.CurrentModel(mk.load_maps({str(path)!r})) in Python")
 
 
 def _comma_labels(text: str, labels: list[str]) -> list[str]:

@@ -360,10 +360,11 @@ class CharacteristicMaps:
             # "rebuild" hint (the message below) would send the user away from their data
             raise ParameterFileError(
                 f"these maps were imported from the table {source!r} (maglevkit maps import), "
-                f"not built from magnet {getattr(magnet, 'name', 'this model')!r}; what needs "
-                "the magnet's own maps (its detailed model beside them, e.g. maglevkit compare) "
-                "takes `maglevkit maps build MAGNET`; imported maps run in Python: "
-                "mk.CurrentModel(maps), MagnetBank, maglevkit.export.export_fmu(maps, PATH)")
+                f"not built from magnet {getattr(magnet, 'name', 'this model')!r}: what runs "
+                "the magnet's detailed model beside its maps (e.g. maglevkit compare) needs "
+                "maps made by that model, `maglevkit maps build MAGNET`, which a table cannot "
+                "give; imported maps run alone: `maglevkit export fmu MAPS_FILE`, "
+                "mk.CurrentModel(maps), MagnetBank")
         # Files of earlier versions stored the parameter-file hash instead; they are refused
         # too: the physics behind the same parameters may have changed since.
         raise ParameterFileError(
