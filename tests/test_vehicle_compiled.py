@@ -337,3 +337,35 @@ def test_vector_flags_change_no_bit_of_the_step(model: VehicleModel) -> None:
         outs.append([np.asarray(r) for r in res])
     for a, b in zip(*outs, strict=True):
         np.testing.assert_array_equal(a, b)
+
+
+@pytest.mark.parametrize("eddy_modes", [0, None])
+def test_initial_outputs_are_the_compiled_output_function_bit_for_bit(
+        eddy_modes: int | None) -> None:
+    """A run's initial coil currents and forces come from ``bank.outputs`` (nmpcnet; eq. 8
+    vehicles compiled ``bank.output_function`` per model before, ~1.1 s): the same bits as
+    that compiled function, on its first call (the mapped circuit function) and its later
+    ones (the inlined graph), eq. 8 and the eddy network; and they are what the run
+    records at t = 0."""
+    from maglevkit.models.compiled import compile_function
+
+    m = VehicleModel(load_vehicle(), eddy_modes=eddy_modes)
+    bank = m.bank
+    # distinct gaps per circuit (10 +- 1.5 mm), so that a mixed-up circuit would show
+    gaps = 0.010 + 1.5e-3 * np.sin(np.arange(bank.n_circuits))
+    state = bank.initial_state(gaps_m=gaps, currents_A=m.trim_current_A)
+    i_l = state.inductor_currents_A
+    f, _ = compile_function(bank.output_function, mode="always")
+    args = [i_l, bank.resistance_ohm * i_l, bank.circuit_gaps(gaps)]
+    if state.eddy_currents_A is not None:
+        args.append(state.eddy_currents_A)
+    ref_current, ref_force = (np.asarray(v).ravel() for v in f(*args)[:2])
+    for _ in range(3):           # the mapped call, the inlined graph's build, a later call
+        out = bank.outputs(state)
+        np.testing.assert_array_equal(out.currents_A, ref_current)
+        np.testing.assert_array_equal(out.circuit_force_N, ref_force)
+    run = m.run(speed_m_per_s=0.0, duration_s=0.002)
+    first = np.asarray(run.dataset["current"].isel(time=0).values)
+    gap0 = np.asarray(run.dataset["gap"].isel(time=0).values)
+    start = bank.initial_state(gaps_m=gap0, currents_A=m.trim_current_A)
+    np.testing.assert_array_equal(first, bank.outputs(start).currents_A)

@@ -484,9 +484,14 @@ class MagnetBank:
             raise InputError(f"members {diodes} are CurrentModel(freewheel=True) but the bank "
                              "has freewheel=False: give MagnetBank(..., freewheel=True) (the "
                              "diodes are a bank-wide option)")
+        self.eddy_step_s = min([m.ladder_step_s for m in ladders], default=math.inf)
+        """The longest stable RK4 sub-step of the members' eddy laws [s] (the shielded-gap
+        ladders', the eddy networks'; inf with eq. 8 members only): a stability limit, not
+        an accuracy one (``max_step_s`` is at most this; the MPC's prediction models take
+        it, :meth:`~maglevkit.control.model.MagnetHeaveModel.rk4_substeps`)."""
         if ladders:
             # the ladder's stable RK4 sub-step (CurrentModel limits its own the same way)
-            self.max_step_s = min([self.max_step_s] + [m.ladder_step_s for m in ladders])
+            self.max_step_s = min(self.max_step_s, self.eddy_step_s)
         names = [m.name for m in self._members]
         dup = sorted({n for n in names if names.count(n) > 1})
         if dup:

@@ -662,7 +662,6 @@ class VehicleModel:
         self._step_functions: dict[Any, Any] = {}
         self._measure_functions: dict[Any, Any] = {}
         self._part_functions: dict[float, Any] = {}
-        self._outputs_call: Any = None
         self._set_controllers(controller, controller_sample_time_s, mpc_options)
 
     # ------------------------------------------------------------------ set-up helpers
@@ -1076,16 +1075,18 @@ class VehicleModel:
         else:
             bstate = bank.initial_state(gaps_m=gaps_p, currents_A=self.trim_current_A)
             circ_avg = None
+        # the initial coil currents and forces in the steady state U = R_el I_L: the bank's
+        # outputs (its first call maps the circuit function, later ones take its inlined
+        # graph, 0.65 ms for the 50 TR09 circuits; a compiled output function per model
+        # gave the same bits after ~1.1 s of code generation, nmpcnet)
+        out0 = bank.outputs(bstate)
+        force_c = out0.circuit_force_N.copy()
+        current = out0.currents_A.copy()
         if self.fine:
-            out0 = bank.outputs(bstate)
-            force_c = out0.circuit_force_N.copy()
             pf0 = out0.pole_force_N
             assert pf0 is not None
             force_pts = pf0.copy()
-            current = out0.currents_A.copy()
         else:
-            current, force_c = self._initial_outputs(bstate.inductor_currents_A, gaps_p,
-                                                     bstate.eddy_currents_A)
             force_pts = force_c.copy()
         # controllers (vectorised over circuits)
         blend = tr.control_velocity_blend
@@ -1756,30 +1757,6 @@ class VehicleModel:
                                   f"returned {u!r} at t = {t:.4f} s; expected one finite "
                                   "voltage [V]")
             u_out[j] = u[0]
-
-    def _initial_outputs(self, i_l: np.ndarray, gaps: np.ndarray,
-                         i_e: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
-        """Coil currents [A] and forces [N] of the circuits (reduced magnets) in the steady
-        state ``U = R_el I_L`` at the gaps [m] (``i_e``: the eddy states of a bank with
-        them, as :attr:`BankState.eddy_currents_A`): what :meth:`MagnetBank.outputs`
-        gives, from the same function (:attr:`MagnetBank.output_function`), compiled once
-        per model (on CasADi's virtual machine it cost 10 ms per run, a sixth of a 3 s
-        run's whole ``run``; with eddy states too since switch26v, whose default flies
-        the eddy network)."""
-        from ..models.compiled import BoundCall, compile_function
-
-        bank = self.bank
-        if self._outputs_call is None:
-            f, _ = compile_function(bank.output_function, mode=bank.compiled_mode)
-            self._outputs_call = BoundCall(f)
-        call = self._outputs_call
-        call.args[0][:] = i_l
-        call.args[1][:] = bank.resistance_ohm * i_l
-        call.args[2][:] = gaps
-        if i_e is not None:        # (n_c, n_e) column-major, as the function's I_e
-            call.args[3][:] = np.ravel(i_e, order="F")
-        call.eval()
-        return call.res[0].copy(), call.res[1].copy()
 
     def _payload_gravity(self, fraction: float) -> np.ndarray:
         """Generalised gravity with every car body ``1 + fraction`` times as heavy [N, N m]."""
