@@ -326,7 +326,7 @@ class CurrentModel:
         CasADi's JIT (needs a C compiler on the ``PATH``; ~0.3 s once per sub-step count).
         :class:`SolverError` if compilation fails.  Implies ``lookup="bspline"``.
     lookup : {"tables", "bspline"}
-        How RK4 (``method="rk4"``, ``eddy_modes=0``) reads the maps in :meth:`step` and
+        How RK4 (``method="rk4"``; eq. 8 or the eddy network) reads the maps in :meth:`step` and
         :meth:`simulate`.  ``"tables"`` (default): the compiled per-cell tables of
         :class:`~maglevkit.reduced.bank.MagnetBank` (the same bicubic function as the
         B-spline, equal to it within 1e-12 relative on the standard scenarios,
@@ -339,8 +339,9 @@ class CurrentModel:
         is redone on the B-spline path (the continuation beyond the maps is the
         B-spline's), which raises or warns; maps on a grid that is not regular (or has
         fewer than 4 points) stay on the B-splines.  :meth:`linearize`, :attr:`ode` and
-        :attr:`outputs_fun` (AD, MPC), ``method="cvodes"``, ``eddy_modes > 0`` and
-        ``motion_eddy=True`` always use the B-splines.
+        :attr:`outputs_fun` (AD, MPC), ``method="cvodes"`` and ``motion_eddy=True``
+        always use the B-splines; ``eddy_modes > 0`` runs on the tables too (the bank's
+        eddy-network member; docs/reduction.md, "The compiled tables").
     compiled : {"auto", "always", "never"}
         How the tables are compiled (as :class:`~maglevkit.reduced.bank.MagnetBank`):
         ``"auto"`` (default) by the system C compiler, cached on disk, falling back to
@@ -599,7 +600,7 @@ class CurrentModel:
         self._fused: dict[int, ca.Function] = {}
         self._step_calls: dict[int, Any] = {}
         self._lin_fun: ca.Function | None = None
-        # the table kernel (eq. 8 with one R_ec, RK4): a bank of this one magnet, built
+        # the table kernel (eq. 8 or the eddy network, RK4): a bank of this one magnet, built
         # on first use
         self._use_tables = (lookup == "tables" and method == "rk4" and not self.jit
                             and not self.motion_eddy)
