@@ -64,6 +64,7 @@ from .core import (
     extend_values,
     rk4_substep,
     substep_count,
+    substep_counts,
 )
 
 if TYPE_CHECKING:
@@ -1231,8 +1232,7 @@ class CurrentModel:
         (n_steps, n_c, m) and the count of steps before the first flagged one (the rows
         from there on are not meaningful).
         """
-        from .bank import RUN_CHUNK
-        from .core import substep_counts
+        from .bank import RUN_CHUNK  # the bank builds on this module
 
         nc, m = self.n_circuits, self._n_e
         n = h.size
