@@ -172,3 +172,25 @@ def test_network_leaving_the_maps_gives_the_bspline_messages(tr09) -> None:
             runs.append(model.simulate(np.linspace(0.0, 0.4, 401), gaps_m=GAP, voltages_V=u,
                                        initial_currents_A=I0))
     assert _rel(runs[1].currents_A, runs[0].currents_A) <= REL
+
+
+def test_network_tables_without_a_compiler_equal_the_compiled_ones(tr09) -> None:
+    """``compiled="never"``: the same table step and time loop on CasADi's virtual machine
+    (no lane library to link against) give the compiled path's numbers to rounding."""
+    _, maps = tr09
+    t = np.linspace(0.0, 0.02, 21)
+    runs, steps = [], []
+    for compiled in ("auto", "never"):
+        model = CurrentModel(maps, eddy_modes=2, compiled=compiled)
+        u = 1.2 * model.resistance_ohm * I0
+        runs.append(model.simulate(t, gaps_m=GAP, voltages_V=u, initial_currents_A=I0))
+        st = model.initial_state(gaps_m=GAP, currents_A=I0)
+        for _ in range(20):
+            st, _ = model.step(st, 1e-3, u, gap_rates_m_per_s=0.01)
+        steps.append(st)
+        assert model._use_tables                      # neither fell back to the B-splines
+    for field in FIELDS:
+        assert _rel(getattr(runs[1], field), getattr(runs[0], field)) <= REL, field
+    assert _eddy_close(runs[1], runs[0], I0)
+    assert _rel(steps[1].inductor_currents_A, steps[0].inductor_currents_A) <= REL
+    assert _eddy_close(steps[1].eddy_currents_A, steps[0].eddy_currents_A, I0)

@@ -609,7 +609,7 @@ class CurrentModel:
         self._eddy_dims = (nc, m)
         self._bank: Any = None
         self._table_steps: dict[float, _TableStep] = {}
-        self._network_runs: dict[int, ca.Function] = {}
+        self._network_runs: dict[tuple[int, int], _NetworkRun] = {}
         self._input_shapes = ((self.n_circuits,), (len(self.gap_names),))
 
     # ------------------------------------------------------------------ helpers
@@ -1239,43 +1239,47 @@ class CurrentModel:
         il, coil, fc = (np.full((n, nc), np.nan) for _ in range(3))
         eddy = np.full((n, nc, m), np.nan)
         per = substep_counts(h, self.max_step_s)
+        if n > 1 and h[0] == 0.0:
+            # a step of 0 s changes nothing with any sub-step count: the next one's keeps
+            # it in the same loop (:meth:`_run_tables`' step 0)
+            per[0] = per[1]
         # the loop's state: I_L, then the branch currents column-major ((n_c, m) as CasADi)
         x = np.concatenate([i0, e0.reshape(nc, m).T.ravel()])
         k = 0
         while k < n:
-            run = self._network_runs.get(int(per[k]))
-            if run is None:
-                run = self._network_run(int(per[k]), RUN_CHUNK)
             other = np.flatnonzero(per[k:k + RUN_CHUNK] != per[k])
             c = int(other[0]) if other.size else min(RUN_CHUNK, n - k)
-            pad = RUN_CHUNK - c
-            # padded with steps of 0 s at the end gap (they change nothing)
-            end = s[k + c - 1] + sd[k + c - 1] * h[k + c - 1]
-
-            def block(v: np.ndarray, fill: np.ndarray, k: int = k, c: int = c,
-                      pad: int = pad) -> np.ndarray:
-                part = v[k:k + c]
-                return (np.vstack([part, np.broadcast_to(fill, (pad, nc))]) if pad
-                        else part).T
-
-            res = run(x, block(s, end), block(u, u[k + c - 1]), block(sd, np.zeros(nc)),
-                      np.concatenate([h[k:k + c], np.zeros(pad)])[None, :])
-            xs = np.asarray(res[0]).T[:c]
-            bad = np.flatnonzero(np.asarray(res[3]).ravel()[:c] != 0.0)
+            # two loop lengths (short runs and the rest), padded with steps of 0 s at the
+            # end gap (they change nothing)
+            chunk = _NETWORK_SHORT if c <= _NETWORK_SHORT else RUN_CHUNK
+            run = self._network_runs.get((int(per[k]), chunk))
+            if run is None:
+                run = self._network_run(int(per[k]), chunk)
+            run.x0[:] = x
+            run.s[:c], run.u[:c], run.sd[:c], run.h[:c] = (s[k:k + c], u[k:k + c],
+                                                            sd[k:k + c], h[k:k + c])
+            if c < chunk:
+                run.s[c:] = s[k + c - 1] + sd[k + c - 1] * h[k + c - 1]
+                run.u[c:] = u[k + c - 1]
+                run.sd[c:] = 0.0
+                run.h[c:] = 0.0
+            run.eval()
+            bad = np.flatnonzero(run.bad[:c])
             done = int(bad[0]) if bad.size else c
+            xs = run.x[:c]
             il[k:k + done] = xs[:done, :nc]
             eddy[k:k + done] = xs[:done, nc:].reshape(done, m, nc).transpose(0, 2, 1)
-            coil[k:k + done] = np.asarray(res[1]).T[:done]
-            fc[k:k + done] = np.asarray(res[2]).T[:done]
+            coil[k:k + done] = run.coil[:done]
+            fc[k:k + done] = run.force[:done]
             if done < c:
                 return il, coil, fc, eddy, k + done
             k += c
-            x = xs[c - 1]
+            x = xs[c - 1].copy()
         return il, coil, fc, eddy, n
 
-    def _network_run(self, substeps: int, chunk: int) -> ca.Function:
-        """The chunk loop of :meth:`_run_network` for steps of ``substeps`` RK4 sub-steps
-        (built, compiled and kept on first use)."""
+    def _network_run(self, substeps: int, chunk: int) -> _NetworkRun:
+        """The loop of ``chunk`` steps of :meth:`_run_network` for steps of ``substeps`` RK4
+        sub-steps (built, compiled and kept on first use)."""
         bank = self._table_bank()
         nc, m = self.n_circuits, self._n_e
         dt = self.max_step_s * substeps              # a step of this sub-step count
@@ -1295,8 +1299,9 @@ class CurrentModel:
             linked = compile_linked(run, lanes[1], flags=(*DEFAULT_FLAGS, "-ffp-contract=off"))
             if linked is not None:
                 run = linked
-        self._network_runs[substeps] = run
-        return run
+        call = _NetworkRun(run, chunk, nc, nc * (1 + m))
+        self._network_runs[(substeps, chunk)] = call
+        return call
 
     def _step_tables(self, state: CurrentModelState, dt: Any, voltages: Any, gaps: Any,
                      gap_rates: Any) -> tuple[CurrentModelState, CurrentOutputs] | None:
@@ -1711,6 +1716,28 @@ class _TableStep:
         return state, out
 
 
+class _NetworkRun:
+    """The eddy-network time loop of :meth:`CurrentModel._run_network` (``chunk`` steps)
+    through bound NumPy buffers: the state ``x0`` (``I_L``, then the branch currents
+    column-major), the step inputs ``s``, ``u``, ``sd`` (chunk, n_c) and ``h`` (chunk,);
+    after :attr:`eval` the states ``x`` (chunk, n_x), coil currents ``coil`` and circuit
+    forces ``force`` (chunk, n_c) after each step and the kernel's flag count ``bad``
+    per step.  The (n_c, chunk) matrices of the loop are the row-major (chunk, n_c)
+    arrays (CasADi's column-major nonzeros)."""
+
+    def __init__(self, f: ca.Function, chunk: int, nc: int, nx: int) -> None:
+        self.bound = BoundCall(f)
+        self.eval = self.bound.eval
+        a, r = self.bound.args, self.bound.res
+        self.x0, self.h, self.bad = a[0], a[4], r[3]
+        self.s, self.u, self.sd = (a[i].reshape(chunk, nc) for i in (1, 2, 3))
+        self.x = r[0].reshape(chunk, nx)
+        self.coil, self.force = (r[i].reshape(chunk, nc) for i in (1, 2))
+
+
+#: steps of the short eddy-network loop (runs of at most this many steps; longer ones
+#: take the bank's RUN_CHUNK)
+_NETWORK_SHORT = 64
 _T = TypeVar("_T")
 _F64 = np.dtype(np.float64)
 _NDARRAY = np.ndarray
