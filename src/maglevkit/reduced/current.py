@@ -64,6 +64,7 @@ from .core import (
     extend_values,
     rk4_substep,
     substep_count,
+    substep_counts,
 )
 
 if TYPE_CHECKING:
@@ -326,7 +327,7 @@ class CurrentModel:
         CasADi's JIT (needs a C compiler on the ``PATH``; ~0.3 s once per sub-step count).
         :class:`SolverError` if compilation fails.  Implies ``lookup="bspline"``.
     lookup : {"tables", "bspline"}
-        How RK4 (``method="rk4"``, ``eddy_modes=0``) reads the maps in :meth:`step` and
+        How RK4 (``method="rk4"``; eq. 8 or the eddy network) reads the maps in :meth:`step` and
         :meth:`simulate`.  ``"tables"`` (default): the compiled per-cell tables of
         :class:`~maglevkit.reduced.bank.MagnetBank` (the same bicubic function as the
         B-spline, equal to it within 1e-12 relative on the standard scenarios,
@@ -339,8 +340,9 @@ class CurrentModel:
         is redone on the B-spline path (the continuation beyond the maps is the
         B-spline's), which raises or warns; maps on a grid that is not regular (or has
         fewer than 4 points) stay on the B-splines.  :meth:`linearize`, :attr:`ode` and
-        :attr:`outputs_fun` (AD, MPC), ``method="cvodes"``, ``eddy_modes > 0`` and
-        ``motion_eddy=True`` always use the B-splines.
+        :attr:`outputs_fun` (AD, MPC), ``method="cvodes"`` and ``motion_eddy=True``
+        always use the B-splines; ``eddy_modes > 0`` runs on the tables too (the bank's
+        eddy-network member; docs/reduction.md, "The compiled tables").
     compiled : {"auto", "always", "never"}
         How the tables are compiled (as :class:`~maglevkit.reduced.bank.MagnetBank`):
         ``"auto"`` (default) by the system C compiler, cached on disk, falling back to
@@ -599,12 +601,15 @@ class CurrentModel:
         self._fused: dict[int, ca.Function] = {}
         self._step_calls: dict[int, Any] = {}
         self._lin_fun: ca.Function | None = None
-        # the table kernel (eq. 8 with one R_ec, RK4): a bank of this one magnet, built
+        # the table kernel (eq. 8 or the eddy network, RK4): a bank of this one magnet, built
         # on first use
-        self._use_tables = (lookup == "tables" and method == "rk4" and not m and not self.jit
+        self._use_tables = (lookup == "tables" and method == "rk4" and not self.jit
                             and not self.motion_eddy)
+        #: the shape of the eddy-network state (n_c, m) the table step takes as it is
+        self._eddy_dims = (nc, m)
         self._bank: Any = None
         self._table_steps: dict[float, _TableStep] = {}
+        self._network_runs: dict[tuple[int, int], _NetworkRun] = {}
         self._input_shapes = ((self.n_circuits,), (len(self.gap_names),))
 
     # ------------------------------------------------------------------ helpers
@@ -1164,14 +1169,17 @@ class CurrentModel:
         return self._bank
 
     def _run_tables(self, times: np.ndarray, s: np.ndarray, u: np.ndarray, sd: np.ndarray,
-                    i0: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
-        """``I_L``, coil currents and circuit forces (n_t, n_c) on the grid from the
-        compiled time loop; a flagged step raises from its reason codes
-        (:meth:`_raise_from_codes`), or where that leaves it to the B-spline path (and for
-        a flagged step 0, the start itself) None: then the B-spline path runs.
+                    i0: np.ndarray, e0: np.ndarray
+                    ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray | None] | None:
+        """``I_L``, coil currents and circuit forces (n_t, n_c) and the eddy-network branch
+        currents (n_t, n_c, m; None for eq. 8) on the grid from the compiled time loop; a
+        flagged step raises from its reason codes (:meth:`_raise_from_codes`), or where
+        that leaves it to the B-spline path (and for a flagged step 0, the start itself)
+        None: then the B-spline path runs.
 
         Step 0 has length 0: it gives the outputs at ``t_0`` with ``u[0]``; step ``k``
         runs from ``t_k-1`` with the substitute gap ``s[k-1]``, its rate and ``u[k-1]``.
+        ``e0``: the branch currents at the start, row-major (n_c, m) flattened.
         """
         bank = self._table_bank()
         if bank is None:
@@ -1185,22 +1193,115 @@ class CurrentModel:
         s_k[0], s_k[1:] = s[0], s[:-1]
         u_k[0], u_k[1:] = u[0], u[:-1]
         sd_k[0], sd_k[1:] = 0.0, sd
-        run = bank.run_steps(i0, s_k, u_k, sd_k, h, time_s=float(times[0]), stop_at_flag=True)
-        if run.n_good < times.size:
-            j = run.n_good
+        if self._n_e:
+            il, coil, fc, eddy, n_good = self._run_network(i0, e0, s_k, u_k, sd_k, h)
+        else:
+            run = bank.run_steps(i0, s_k, u_k, sd_k, h, time_s=float(times[0]),
+                                 stop_at_flag=True)
+            il, coil, fc, eddy, n_good = (run.inductor_currents_A, run.currents_A,
+                                          run.circuit_force_N, None, run.n_good)
+        if n_good < times.size:
+            j = n_good
             if j > 0 and not self.extrapolate:
                 # the flagged step's reason codes from the same compiled step (step j from
                 # t_j-1 with the state the loop reached), read as step() reads them; step 0
                 # (the start itself) and what they leave to it go to the B-spline path
-                res = bank.step_kernel(float(h[j])).call(
-                    {"I_L": run.inductor_currents_A[j - 1], "s": s_k[j], "U": u_k[j],
-                     "sdot": sd_k[j], "h": float(h[j])})
+                ins = {"I_L": il[j - 1], "s": s_k[j], "U": u_k[j], "sdot": sd_k[j],
+                       "h": float(h[j])}
+                kernel = bank.step_kernel(float(h[j]))
+                if eddy is not None:          # (n_c, m), or its column-major vec
+                    ins["I_e"] = np.reshape(eddy[j - 1], kernel.size_in("I_e"), order="F")
+                res = kernel.call(ins)
                 lo, hi = (np.asarray(res[k], dtype=float).ravel() for k in ("I_L_min", "I_L_max"))
                 self._raise_from_codes(np.asarray(res["flags"]).ravel(), s_k[j], sd_k[j],
-                                       run.inductor_currents_A[j - 1], u_k[j], lo, hi,
+                                       il[j - 1], u_k[j], lo, hi,
                                        float(times[j - 1]), float(times[j]))
             return None
-        return run.inductor_currents_A, run.currents_A, run.circuit_force_N
+        return il, coil, fc, eddy
+
+    def _run_network(self, i0: np.ndarray, e0: np.ndarray, s: np.ndarray, u: np.ndarray,
+                     sd: np.ndarray, h: np.ndarray
+                     ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, int]:
+        """The time loop of the table path with eddy-network branches (the bank's
+        ``run_steps`` carries ``I_L`` only): the bank's compiled step in a CasADi
+        ``mapaccum`` over up to :data:`~maglevkit.reduced.bank.RUN_CHUNK` steps of one RK4
+        sub-step count, compiled as C linked against the lane library where there is one.
+
+        Inputs as ``run_steps`` (``e0`` the branch currents, row-major (n_c, m)); returns
+        ``I_L``, coil currents, circuit forces (n_steps, n_c), branch currents
+        (n_steps, n_c, m) and the count of steps before the first flagged one (the rows
+        from there on are not meaningful).
+        """
+        from .bank import RUN_CHUNK  # the bank builds on this module
+
+        nc, m = self.n_circuits, self._n_e
+        n = h.size
+        il, coil, fc = (np.full((n, nc), np.nan) for _ in range(3))
+        eddy = np.full((n, nc, m), np.nan)
+        per = substep_counts(h, self.max_step_s)
+        if n > 1 and h[0] == 0.0:
+            # a step of 0 s changes nothing with any sub-step count: the next one's keeps
+            # it in the same loop (:meth:`_run_tables`' step 0)
+            per[0] = per[1]
+        # the loop's state: I_L, then the branch currents column-major ((n_c, m) as CasADi)
+        x = np.concatenate([i0, e0.reshape(nc, m).T.ravel()])
+        k = 0
+        while k < n:
+            other = np.flatnonzero(per[k:k + RUN_CHUNK] != per[k])
+            c = int(other[0]) if other.size else min(RUN_CHUNK, n - k)
+            # two loop lengths (short runs and the rest), padded with steps of 0 s at the
+            # end gap (they change nothing)
+            chunk = _NETWORK_SHORT if c <= _NETWORK_SHORT else RUN_CHUNK
+            run = self._network_runs.get((int(per[k]), chunk))
+            if run is None:
+                run = self._network_run(int(per[k]), chunk)
+            run.x0[:] = x
+            run.s[:c], run.u[:c], run.sd[:c], run.h[:c] = (s[k:k + c], u[k:k + c],
+                                                            sd[k:k + c], h[k:k + c])
+            if c < chunk:
+                run.s[c:] = s[k + c - 1] + sd[k + c - 1] * h[k + c - 1]
+                run.u[c:] = u[k + c - 1]
+                run.sd[c:] = 0.0
+                run.h[c:] = 0.0
+            run.eval()
+            bad = np.flatnonzero(run.bad[:c])
+            done = int(bad[0]) if bad.size else c
+            xs = run.x[:c]
+            il[k:k + done] = xs[:done, :nc]
+            eddy[k:k + done] = xs[:done, nc:].reshape(done, m, nc).transpose(0, 2, 1)
+            coil[k:k + done] = run.coil[:done]
+            fc[k:k + done] = run.force[:done]
+            if done < c:
+                return il, coil, fc, eddy, k + done
+            k += c
+            x = xs[c - 1].copy()
+        return il, coil, fc, eddy, n
+
+    def _network_run(self, substeps: int, chunk: int) -> _NetworkRun:
+        """The loop of ``chunk`` steps of :meth:`_run_network` for steps of ``substeps`` RK4
+        sub-steps (built, compiled and kept on first use)."""
+        bank = self._table_bank()
+        nc, m = self.n_circuits, self._n_e
+        dt = self.max_step_s * substeps              # a step of this sub-step count
+        lanes = bank.compiled_step_library(dt)
+        kernel = bank.step_kernel(dt) if lanes is None else lanes[0]
+        x = ca.MX.sym("x", nc * (1 + m))
+        sk, uk, sdk = (ca.MX.sym(v, nc) for v in ("s", "U", "sdot"))
+        hk = ca.MX.sym("h")
+        res = kernel.call({"I_L": x[:nc], "s": sk, "U": uk, "sdot": sdk, "h": hk,
+                           "I_e": ca.reshape(x[nc:], kernel.size_in("I_e"))})
+        step = ca.Function(f"maglevkit_cm_net_{kernel.name()}", [x, sk, uk, sdk, hk],
+                           [ca.vertcat(res["I_L_next"], ca.vec(res["I_e_next"])), res["I"],
+                            res["F"], res["n_bad"]])
+        run = step.mapaccum(f"maglevkit_cm_netrun{chunk}_{kernel.name()}", chunk)
+        if lanes is not None:
+            # the same operations as generated C, no contraction (as _TableStep._compile)
+            linked = compile_linked(run, lanes[1], flags=(*DEFAULT_FLAGS, "-ffp-contract=off"))
+            if linked is not None:
+                run = linked
+        call = _NetworkRun(run, chunk, nc, nc * (1 + m))
+        self._network_runs[(substeps, chunk)] = call
+        return call
 
     def _step_tables(self, state: CurrentModelState, dt: Any, voltages: Any, gaps: Any,
                      gap_rates: Any) -> tuple[CurrentModelState, CurrentOutputs] | None:
@@ -1214,7 +1315,13 @@ class CurrentModel:
         identity and shape tests; every other input goes through the same converters as
         before, with the same messages.
         """
-        if state.eddy_currents_A is not None:
+        e = state.eddy_currents_A
+        if self._n_e:
+            # the eddy-network branch currents (n_c, m): as they are when float64 of that
+            # shape, else through the B-spline path's converter (its messages)
+            if not (type(e) is _NDARRAY and e.dtype is _F64 and e.shape == self._eddy_dims):
+                e = self._eddy_state(state)
+        elif e is not None:
             return None                        # not a state of this model: say so there
         if type(dt) is float and 0.0 < dt < math.inf:
             call = self._table_steps.get(dt)
@@ -1244,7 +1351,7 @@ class CurrentModel:
             call = self._table_step(dt)
             if call is None:
                 return None
-        done = call(state.inductor_currents_A, g, u, gd, state.time_s + dt)
+        done = call(state.inductor_currents_A, g, u, gd, state.time_s + dt, e)
         if done is None:
             self._diagnose_table_step(call, state, g, u, gd, dt)
         return done            # None: the B-spline path raises, warns or integrates
@@ -1258,9 +1365,11 @@ class CurrentModel:
             if bank is None:
                 return None
             lanes = bank.compiled_step_library(dt)
-            call = (_TableStep(bank.step_kernel(dt), self._avg, self._share, dt)
+            call = (_TableStep(bank.step_kernel(dt), self._avg, self._share, dt,
+                               n_eddy=self._n_e)
                     if lanes is None
-                    else _TableStep(lanes[0], self._avg, self._share, dt, lanes[1]))
+                    else _TableStep(lanes[0], self._avg, self._share, dt, lanes[1],
+                                    n_eddy=self._n_e))
             if len(self._table_steps) > 16:
                 self._table_steps.clear()
             self._table_steps[dt] = call
@@ -1411,14 +1520,14 @@ class CurrentModel:
         # the table kernel flags every step whose gap path or currents leave the maps (the
         # same bounds with the same allowances as the check below), so a run it finishes
         # needs no check of its own; a flagged run takes the checked B-spline path
-        run = self._run_tables(times, s, u, sd, i0) if self._use_tables else None
+        run = self._run_tables(times, s, u, sd, i0, e0) if self._use_tables else None
         if run is None:
             self._check_range(s, np.broadcast_to(i0, s.shape), times)
         else:
-            il, coil_t, fc = run
+            il, coil_t, fc, ed = run
             final = _new(CurrentModelState, time_s=float(times[-1]),
                          inductor_currents_A=il[-1].copy(), gaps_m=g[-1].copy(),
-                         eddy_currents_A=None)
+                         eddy_currents_A=None if ed is None else ed[-1].copy())
             rates = np.empty(g.shape)
             rates[:-1] = secant
             rates[-1] = secant[-1]
@@ -1429,7 +1538,7 @@ class CurrentModel:
                 voltages_V=held, currents_A=coil_t, inductor_currents_A=il,
                 circuit_force_N=fc, pole_force_N=self._pole_forces(fc), force_N=row_sums(fc),
                 gap_names=self.gap_names, circuit_names=self.circuit_names,
-                final_state=final, eddy_currents_A=None)
+                final_state=final, eddy_currents_A=ed)
         xs, outs = self._integrate(times, np.concatenate([i0, s[0], e0]),
                                    np.concatenate([u[:-1], sd], axis=1).T)
         nc = self.n_circuits
@@ -1507,23 +1616,34 @@ class _TableStep:
     """
 
     def __init__(self, kernel: ca.Function, avg: np.ndarray, share: np.ndarray, h_s: float,
-                 library: Path | None = None) -> None:
+                 library: Path | None = None, n_eddy: int = 0) -> None:
         nc, ng = avg.shape
         x, u = ca.MX.sym("I_L", nc), ca.MX.sym("U", nc)
         g, gd, h = ca.MX.sym("gaps", ng), ca.MX.sym("gap_rates", ng), ca.MX.sym("h")
-        res = kernel.call({"I_L": x, "s": ca.mtimes(ca.DM(avg), g), "U": u,
-                           "sdot": ca.mtimes(ca.DM(avg), gd), "h": h})
+        ins = {"I_L": x, "s": ca.mtimes(ca.DM(avg), g), "U": u,
+               "sdot": ca.mtimes(ca.DM(avg), gd), "h": h}
+        # eddy-network branch currents (n_eddy per circuit): an (m, n_c) input and output
+        # here, whose column-major nonzeros are the row-major (n_c, m) array of
+        # CurrentModelState.eddy_currents_A; the bank's kernel takes them as (n_c, m)
+        e = ca.MX.sym("I_e", n_eddy, nc) if n_eddy else None
+        if e is not None:
+            ins["I_e"] = ca.reshape(e.T, kernel.size_in("I_e"))   # (n_c, m), or its vec
+        res = kernel.call(ins)
         g1 = g + gd * h
         flag = res["n_bad"] + ca.sum1(g <= 0) + ca.sum1(g1 <= 0)
         force = res["F"]
         # the block of results, the flag, and for a flagged step the kernel's reason codes
         # and sub-step current extremes
-        outs = [res["I_L_next"], res["I"], force, ca.mtimes(ca.DM(share), force),
-                res["member_F"], g1, res["I_L_next"], flag, res["flags"], res["I_L_min"],
-                res["I_L_max"]]
-        f = ca.Function(f"maglevkit_cm_{kernel.name()}", [x, g, u, gd, h], outs)
+        block = [res["I_L_next"], res["I"], force, ca.mtimes(ca.DM(share), force),
+                 res["member_F"], g1, res["I_L_next"]]
+        if e is not None:
+            block.append(ca.reshape(res["I_e_next"], nc, n_eddy).T)
+        outs = block + [flag, res["flags"], res["I_L_min"], res["I_L_max"]]
+        f = ca.Function(f"maglevkit_cm_{kernel.name()}", [x, g, u, gd, h]
+                        + ([e] if e is not None else []), outs)
         self.function, self.library, self.h_s = f, library, h_s
-        sizes = [f.nnz_out(i) for i in range(7)]
+        self.n_eddy = n_eddy
+        sizes = [f.nnz_out(i) for i in range(len(block))]
         self.block = np.zeros(sum(sizes))
         ends = np.cumsum([0, *sizes])
         self.slices = [slice(int(a), int(b)) for a, b in zip(ends[:-1], ends[1:], strict=True)]
@@ -1548,6 +1668,7 @@ class _TableStep:
         self.args = self.bound.args
         self.args[4][0] = self.h_s               # the step length: once per binding
         self.inputs = tuple(self.args[:4])
+        self.eddy_input = self.args[5] if self.n_eddy else None
         self.eval = self.bound.eval
 
     def _compile(self) -> None:
@@ -1561,17 +1682,20 @@ class _TableStep:
             self._bind(f)
 
     def __call__(self, i: np.ndarray, g: np.ndarray, u: np.ndarray, gd: np.ndarray,
-                 t1_s: float) -> tuple[CurrentModelState, CurrentOutputs] | None:
+                 t1_s: float, eddy: np.ndarray | None = None
+                 ) -> tuple[CurrentModelState, CurrentOutputs] | None:
         a0, a1, a2, a3 = self.inputs
         a0[:] = i
         a1[:] = g
         a2[:] = u
         a3[:] = gd
+        if self.eddy_input is not None:
+            self.eddy_input[:] = eddy.ravel()        # type: ignore[union-attr]
         self.eval()
         if self.flag[0]:
             return None
         b = self.block.copy()
-        s0, s1, s2, s3, _, s5, s6 = self.slices
+        s0, s1, s2, s3, _, s5, s6 = self.slices[:7]
         # both frozen dataclasses filled without their generated __init__ (one
         # object.__setattr__ per field): equal to CurrentModelState(t1_s, ...) and as frozen
         state = _new_object(CurrentModelState)
@@ -1579,7 +1703,8 @@ class _TableStep:
         d["time_s"] = t1_s
         d["inductor_currents_A"] = b[s0]
         d["gaps_m"] = b[s5]
-        d["eddy_currents_A"] = None
+        d["eddy_currents_A"] = (b[self.slices[7]].reshape(-1, self.n_eddy) if self.n_eddy
+                                else None)
         out = _new_object(CurrentOutputs)
         d = out.__dict__
         d["time_s"] = t1_s
@@ -1591,6 +1716,28 @@ class _TableStep:
         return state, out
 
 
+class _NetworkRun:
+    """The eddy-network time loop of :meth:`CurrentModel._run_network` (``chunk`` steps)
+    through bound NumPy buffers: the state ``x0`` (``I_L``, then the branch currents
+    column-major), the step inputs ``s``, ``u``, ``sd`` (chunk, n_c) and ``h`` (chunk,);
+    after :attr:`eval` the states ``x`` (chunk, n_x), coil currents ``coil`` and circuit
+    forces ``force`` (chunk, n_c) after each step and the kernel's flag count ``bad``
+    per step.  The (n_c, chunk) matrices of the loop are the row-major (chunk, n_c)
+    arrays (CasADi's column-major nonzeros)."""
+
+    def __init__(self, f: ca.Function, chunk: int, nc: int, nx: int) -> None:
+        self.bound = BoundCall(f)
+        self.eval = self.bound.eval
+        a, r = self.bound.args, self.bound.res
+        self.x0, self.h, self.bad = a[0], a[4], r[3]
+        self.s, self.u, self.sd = (a[i].reshape(chunk, nc) for i in (1, 2, 3))
+        self.x = r[0].reshape(chunk, nx)
+        self.coil, self.force = (r[i].reshape(chunk, nc) for i in (1, 2))
+
+
+#: steps of the short eddy-network loop (runs of at most this many steps; longer ones
+#: take the bank's RUN_CHUNK)
+_NETWORK_SHORT = 64
 _T = TypeVar("_T")
 _F64 = np.dtype(np.float64)
 _NDARRAY = np.ndarray
