@@ -194,3 +194,22 @@ def test_network_tables_without_a_compiler_equal_the_compiled_ones(tr09) -> None
     assert _eddy_close(runs[1], runs[0], I0)
     assert _rel(steps[1].inductor_currents_A, steps[0].inductor_currents_A) <= REL
     assert _eddy_close(steps[1].eddy_currents_A, steps[0].eddy_currents_A, I0)
+
+
+def test_network_steps_of_many_sub_steps_stay_on_the_bspline_path(tr09) -> None:
+    """A time grid whose steps need more RK4 sub-steps than the compiled network loop takes
+    (it unrolls them in C: 500 sub-steps were a 32 MB source compiling for minutes) runs on
+    the B-splines, with the same numbers as a B-spline model."""
+    _, maps = tr09
+    from maglevkit.reduced.current import _NETWORK_MAX_SUBSTEPS
+
+    dt = (_NETWORK_MAX_SUBSTEPS + 1) * 1e-3          # one more sub-step than allowed at 1 ms
+    t = np.arange(4) * dt
+    model = CurrentModel(maps, eddy_modes=2)
+    ref = CurrentModel(maps, eddy_modes=2, lookup="bspline")
+    u = 1.2 * model.resistance_ohm * I0
+    res = model.simulate(t, gaps_m=GAP, voltages_V=u, initial_currents_A=I0)
+    assert not model._network_runs                  # no compiled network loop was built
+    want = ref.simulate(t, gaps_m=GAP, voltages_V=u, initial_currents_A=I0)
+    for field in FIELDS:
+        assert _rel(getattr(res, field), getattr(want, field)) <= REL, field

@@ -270,6 +270,7 @@ def test_a_result_that_keeps_crossing_a_branch_is_refused(monkeypatch: pytest.Mo
     assert not out.success and out.status.startswith("Branch_Crossed (end fringe radius")
 
 
+@pytest.mark.slow   # 1-4 min; CLI / pool re-run of what fast tests cover (make test-all)
 def test_cli_design_tr09(tmp_path: Path) -> None:
     out = tmp_path / "tr09.toml"
     res = runner.invoke(app, ["design", "tr09-design", "-o", str(out), "--format", "json"])

@@ -545,6 +545,7 @@ def test_every_option_the_messages_recommend_exists() -> None:
         in " ".join(res.stderr.split())
 
 
+@pytest.mark.slow   # 1-4 min; CLI / pool re-run of what fast tests cover (make test-all)
 def test_commands_name_the_next_step(tmp_path: Path) -> None:
     # issue 27: "after each command a one-line next step where there is an obvious one"
     res = runner.invoke(app, ["statics", "u-magnet", "--gaps", "0.01", "--currents", "10"])

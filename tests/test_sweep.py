@@ -183,6 +183,7 @@ def _same_values(a: xr.Dataset, b: xr.Dataset) -> None:
                               equal_nan=a[name].dtype.kind == "f"), name
 
 
+@pytest.mark.slow   # 1-4 min; CLI / pool re-run of what fast tests cover (make test-all)
 def test_process_pool_and_dask_local_cluster_give_identical_datasets(serial: Any,
                                                                     folder: Path) -> None:
     """4 cases (2 speeds x 2 failures, the default payload) on 2 pool processes and on a

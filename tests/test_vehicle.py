@@ -367,6 +367,7 @@ def test_model_rejects_bad_input(rigid_model: VehicleModel) -> None:
         VehicleModel(load_vehicle(), magnets="fancy")
 
 
+@pytest.mark.slow   # 1-4 min; CLI / pool re-run of what fast tests cover (make test-all)
 def test_cli_vehicle_run(tmp_path: Any) -> None:
     from maglevkit.cli import app
 
@@ -397,6 +398,7 @@ def test_vehicle_guideway_default_window() -> None:
     assert gw.spans_needed(load_vehicle().length_m) == 5
 
 
+@pytest.mark.slow   # 1-4 min; CLI / pool re-run of what fast tests cover (make test-all)
 def test_guideway_file_on_the_api_and_the_cli(tmp_path: Any) -> None:
     # a user's guideway file (longer spans, stiffer girder) reaches the model's guideway;
     # the CLI's --guideway takes the same file and names a bad one (issue 27: the options

@@ -239,6 +239,7 @@ def test_infinite_r0_with_the_vehicle_diodes_names_the_magnet(monkeypatch) -> No
                      eddy_modes=2, freewheel=True, compiled="never")
 
 
+@pytest.mark.slow   # 1-4 min; CLI / pool re-run of what fast tests cover (make test-all)
 def test_cli_takes_the_option(tmp_path: Any) -> None:
     """``maglevkit vehicle run`` without ``--eddy-modes`` flies the magnet files' eddy
     network and writes both branch currents, ``--eddy-modes 0`` eq. 8 without them; 4,

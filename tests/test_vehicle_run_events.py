@@ -132,6 +132,7 @@ def test_cli_ctrl_c_writes_the_partial_run(monkeypatch: pytest.MonkeyPatch,
     assert [p.name for p in tmp_path.iterdir()] == ["run.nc"]      # no temporary file left
 
 
+@pytest.mark.slow   # 1-4 min; CLI / pool re-run of what fast tests cover (make test-all)
 def test_cli_touchdown_inside_a_step_reports_and_writes(tmp_path: Path) -> None:
     """The CLI: a 3 mm RMS random profile at 400 km/h closes a gap within a step (measured:
     s2m7/front, 2.45 mm at 0.048 s, 1.98 mm at 0.049 s): TOUCHDOWN on stdout, the file

@@ -1194,6 +1194,11 @@ class CurrentModel:
         u_k[0], u_k[1:] = u[0], u[:-1]
         sd_k[0], sd_k[1:] = 0.0, sd
         if self._n_e:
+            if int(np.max(substep_counts(h, self.max_step_s))) > _NETWORK_MAX_SUBSTEPS:
+                # the network's loop unrolls its sub-steps in C: steps of many sub-steps
+                # would compile for minutes (500 sub-steps: a 32 MB source); the B-splines
+                # take them
+                return None
             il, coil, fc, eddy, n_good = self._run_network(i0, e0, s_k, u_k, sd_k, h)
         else:
             run = bank.run_steps(i0, s_k, u_k, sd_k, h, time_s=float(times[0]),
@@ -1738,6 +1743,9 @@ class _NetworkRun:
 #: steps of the short eddy-network loop (runs of at most this many steps; longer ones
 #: take the bank's RUN_CHUNK)
 _NETWORK_SHORT = 64
+#: the most RK4 sub-steps per step that the eddy network's compiled time loop takes (more:
+#: the B-spline path; each sub-step is unrolled in the loop's C source)
+_NETWORK_MAX_SUBSTEPS = 16
 _T = TypeVar("_T")
 _F64 = np.dtype(np.float64)
 _NDARRAY = np.ndarray
