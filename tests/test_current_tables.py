@@ -33,11 +33,11 @@ def all_maps() -> dict[str, tuple[mk.Magnet, mk.CharacteristicMaps]]:
     return out
 
 
-def _rel(a: np.ndarray, b: np.ndarray) -> float:
+def rel_difference(a: np.ndarray, b: np.ndarray) -> float:
     return float(np.max(np.abs(a - b)) / max(np.max(np.abs(b)), 1e-300))
 
 
-def _no_bspline(monkeypatch: pytest.MonkeyPatch) -> None:
+def forbid_bspline(monkeypatch: pytest.MonkeyPatch) -> None:
     """Make the B-spline RK4 path fail, so that a passing call ran on the tables."""
     def fail(*args: object, **kwargs: object) -> None:
         raise AssertionError("the B-spline path ran")
@@ -66,16 +66,16 @@ def test_tables_equal_bspline_on_the_standard_scenarios(all_maps, name: str,
         span = (0.0, min(sc.duration_s, 0.3))
         refs.append((sc, span, mk.simulate(spline, span, dt_s=sc.dt_s, gaps_m=sc.gaps_m,
                                            voltages_V=sc.voltages_V, initial_currents_A=i0)))
-    _no_bspline(monkeypatch)
+    forbid_bspline(monkeypatch)
     for sc, span, ref in refs:
         res = mk.simulate(tables, span, dt_s=sc.dt_s, gaps_m=sc.gaps_m, voltages_V=sc.voltages_V,
                           initial_currents_A=i0)
         for field in ("currents_A", "inductor_currents_A", "circuit_force_N", "pole_force_N",
                       "force_N"):
-            assert _rel(getattr(res, field), getattr(ref, field)) <= REL, (sc.name, field)
+            assert rel_difference(getattr(res, field), getattr(ref, field)) <= REL, (sc.name, field)
         assert np.ptp(ref.currents_A) > 1e-3 * np.max(np.abs(ref.currents_A)), sc.name
         assert res.final_state.time_s == ref.final_state.time_s
-        assert _rel(res.final_state.inductor_currents_A,
+        assert rel_difference(res.final_state.inductor_currents_A,
                     ref.final_state.inductor_currents_A) <= REL
 
 
@@ -95,15 +95,15 @@ def test_step_on_tables_equals_bspline_step(all_maps, name: str,
     for k in range(t.size - 1):
         st, out = spline.step(st, 1e-3, u, gaps_m=g[k], gap_rates_m_per_s=(g[k + 1] - g[k]) / 1e-3)
         refs.append(out)
-    _no_bspline(monkeypatch)
+    forbid_bspline(monkeypatch)
     st = tables.initial_state(gaps_m=g[0], currents_A=i0)
     for k in range(t.size - 1):
         st, out = tables.step(st, 1e-3, u, gaps_m=g[k], gap_rates_m_per_s=(g[k + 1] - g[k]) / 1e-3)
         ref = refs[k]
         assert out.time_s == ref.time_s
-        assert _rel(out.currents_A, ref.currents_A) <= REL
-        assert _rel(out.circuit_force_N, ref.circuit_force_N) <= REL
-        assert _rel(out.pole_force_N, ref.pole_force_N) <= REL
+        assert rel_difference(out.currents_A, ref.currents_A) <= REL
+        assert rel_difference(out.circuit_force_N, ref.circuit_force_N) <= REL
+        assert rel_difference(out.pole_force_N, ref.pole_force_N) <= REL
         assert out.force_N == pytest.approx(ref.force_N, rel=REL)
     # the step's state and outputs are separate arrays
     assert st.inductor_currents_A is not out.inductor_currents_A
@@ -173,7 +173,7 @@ def test_tables_need_rk4_without_eddy_modes_and_a_known_lookup(all_maps) -> None
     a = cv.simulate(np.linspace(0.0, 0.05, 51), gaps_m=0.010, voltages_V=25.0, initial_currents_A=20.0)
     b = rk.simulate(np.linspace(0.0, 0.05, 51), gaps_m=0.010, voltages_V=25.0, initial_currents_A=20.0)
     # RK4 at 1 ms sub-steps stays within 3e-6 of CVODES (CurrentModel docstring)
-    assert _rel(b.currents_A, a.currents_A) <= 1e-5
+    assert rel_difference(b.currents_A, a.currents_A) <= 1e-5
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         CurrentModel(maps, compiled="never").simulate(np.linspace(0.0, 0.01, 11), gaps_m=0.010,

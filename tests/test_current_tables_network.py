@@ -16,6 +16,8 @@ from maglevkit.compare import standard_scenarios
 from maglevkit.errors import OutOfRangeError
 from maglevkit.reduced.current import CurrentModel
 
+from .test_current_tables import forbid_bspline, rel_difference
+
 GAPS = np.linspace(0.006, 0.014, 5)
 CURRENTS = np.linspace(0.0, 60.0, 7)
 # The tables hold the same bicubic function as the B-splines; the two paths differ only in
@@ -30,19 +32,6 @@ I0 = 30.0
 def tr09() -> tuple[mk.Magnet, mk.CharacteristicMaps]:
     mag = mk.load_magnet("tr09-standard", eddy_model="ladder")
     return mag, mk.build_maps(mag, gaps_m=GAPS, currents_A=CURRENTS, progress=False)
-
-
-def _rel(a: np.ndarray, b: np.ndarray) -> float:
-    return float(np.max(np.abs(a - b)) / max(np.max(np.abs(b)), 1e-300))
-
-
-def _no_bspline(monkeypatch: pytest.MonkeyPatch) -> None:
-    """Make the B-spline RK4 path fail, so that a passing call ran on the tables."""
-    def fail(*args: object, **kwargs: object) -> None:
-        raise AssertionError("the B-spline path ran")
-
-    monkeypatch.setattr(CurrentModel, "_integrate", fail)
-    monkeypatch.setattr(CurrentModel, "_step_call", fail)
 
 
 FIELDS = ("currents_A", "inductor_currents_A", "circuit_force_N", "pole_force_N", "force_N")
@@ -80,12 +69,12 @@ def test_network_simulate_and_step_on_tables_equal_bspline(tr09, m: int,
     for _ in range(40):
         states[0], out = spline.step(states[0], 1e-3, 1.2 * r_el * I0, gap_rates_m_per_s=rates)
         ref_steps.append((states[0], out))
-    _no_bspline(monkeypatch)
+    forbid_bspline(monkeypatch)
     for sc, span, ref in zip(scenarios, spans, refs, strict=True):
         res = mk.simulate(tables, span, dt_s=sc.dt_s, gaps_m=sc.gaps_m,
                           voltages_V=sc.voltages_V, initial_currents_A=I0)
         for field in FIELDS:
-            assert _rel(getattr(res, field), getattr(ref, field)) <= REL, (sc.name, field)
+            assert rel_difference(getattr(res, field), getattr(ref, field)) <= REL, (sc.name, field)
         assert _eddy_close(res, ref, float(np.max(np.abs(ref.inductor_currents_A)))), sc.name
         assert res.eddy_currents_A.shape == ref.eddy_currents_A.shape == (res.time_s.size, 2, m)
         # the branches carry current (the layout of (circuit, branch) is tested)
@@ -97,8 +86,8 @@ def test_network_simulate_and_step_on_tables_equal_bspline(tr09, m: int,
     assert max(float(np.max(np.abs(r.eddy_currents_A))) for r, _ in ref_steps) > 1e-2
     for ref_state, ref_out in ref_steps:
         st, out = tables.step(st, 1e-3, 1.2 * r_el * I0, gap_rates_m_per_s=rates)
-        assert _rel(out.currents_A, ref_out.currents_A) <= REL
-        assert _rel(out.force_N, ref_out.force_N) <= REL
+        assert rel_difference(out.currents_A, ref_out.currents_A) <= REL
+        assert rel_difference(out.force_N, ref_out.force_N) <= REL
         assert st.eddy_currents_A.shape == (2, m)
         assert _eddy_close(st.eddy_currents_A, ref_state.eddy_currents_A,
                            float(np.max(np.abs(ref_out.inductor_currents_A))))
@@ -118,7 +107,7 @@ def test_network_freewheel_on_tables_equals_bspline(tr09, monkeypatch: pytest.Mo
     t = np.linspace(0.0, 0.06, 601)
     u = np.where(t[:, None] < 0.01 - 1e-12, 1.2 * r_el * I0, -300.0)
     ref = spline.simulate(t, gaps_m=GAP, voltages_V=u, initial_currents_A=I0)
-    _no_bspline(monkeypatch)
+    forbid_bspline(monkeypatch)
     res = tables.simulate(t, gaps_m=GAP, voltages_V=u, initial_currents_A=I0)
     # the clamp acts for a third of the run (the freewheel law is what runs there): the
     # coil current is 0 up to rounding of the ~30 A sums it is formed from
@@ -126,13 +115,13 @@ def test_network_freewheel_on_tables_equals_bspline(tr09, monkeypatch: pytest.Mo
     for field in FIELDS:
         # the coil currents are zeros (to rounding) in both where blocked: compared in
         # absolute terms against the largest (30 A) by _rel
-        assert _rel(getattr(res, field), getattr(ref, field)) <= REL, field
+        assert rel_difference(getattr(res, field), getattr(ref, field)) <= REL, field
     assert _eddy_close(res, ref, I0)
     st = tables.initial_state(gaps_m=GAP, currents_A=I0)
     for k in range(t.size - 1):
         st, out = tables.step(st, 1e-4, u[k], gap_rates_m_per_s=0.0)
     assert (np.abs(out.currents_A) < 1e-12).all()        # blocked at the end
-    assert _rel(out.inductor_currents_A, ref.inductor_currents_A[-1]) <= REL
+    assert rel_difference(out.inductor_currents_A, ref.inductor_currents_A[-1]) <= REL
     assert _eddy_close(st.eddy_currents_A, ref.final_state.eddy_currents_A, I0)
 
 
@@ -171,7 +160,7 @@ def test_network_leaving_the_maps_gives_the_bspline_messages(tr09) -> None:
         with pytest.warns(UserWarning):
             runs.append(model.simulate(np.linspace(0.0, 0.4, 401), gaps_m=GAP, voltages_V=u,
                                        initial_currents_A=I0))
-    assert _rel(runs[1].currents_A, runs[0].currents_A) <= REL
+    assert rel_difference(runs[1].currents_A, runs[0].currents_A) <= REL
 
 
 def test_network_tables_without_a_compiler_equal_the_compiled_ones(tr09) -> None:
@@ -190,9 +179,9 @@ def test_network_tables_without_a_compiler_equal_the_compiled_ones(tr09) -> None
         steps.append(st)
         assert model._use_tables                      # neither fell back to the B-splines
     for field in FIELDS:
-        assert _rel(getattr(runs[1], field), getattr(runs[0], field)) <= REL, field
+        assert rel_difference(getattr(runs[1], field), getattr(runs[0], field)) <= REL, field
     assert _eddy_close(runs[1], runs[0], I0)
-    assert _rel(steps[1].inductor_currents_A, steps[0].inductor_currents_A) <= REL
+    assert rel_difference(steps[1].inductor_currents_A, steps[0].inductor_currents_A) <= REL
     assert _eddy_close(steps[1].eddy_currents_A, steps[0].eddy_currents_A, I0)
 
 
@@ -212,4 +201,4 @@ def test_network_steps_of_many_sub_steps_stay_on_the_bspline_path(tr09) -> None:
     assert not model._network_runs                  # no compiled network loop was built
     want = ref.simulate(t, gaps_m=GAP, voltages_V=u, initial_currents_A=I0)
     for field in FIELDS:
-        assert _rel(getattr(res, field), getattr(want, field)) <= REL, field
+        assert rel_difference(getattr(res, field), getattr(want, field)) <= REL, field
