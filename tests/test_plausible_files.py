@@ -11,6 +11,7 @@ import re
 import sys
 import warnings
 from importlib import resources
+from pathlib import Path
 from typing import Any
 
 import pytest
@@ -129,3 +130,60 @@ def test_the_check_skips_zero_and_non_numbers_and_checks_lists() -> None:
         assert check_plausible({"a": {"x": [2.0, -2000.0]}}, ranges) == ["a.x"]
     with pytest.raises(ValueError):
         Plausible(2.0, 1.0, "m")
+
+
+@pytest.mark.parametrize("value", [1e150, 1e-150])
+@pytest.mark.parametrize(("name", "key", "eddy_model"), [
+    ("tr-guidance", "rail.thickness", "ladder"),        # was OverflowError (ladder's J_rect)
+    ("tr09-standard", "magnet.back_height", "ladder"),
+    ("u-magnet", "magnet.pole_width", "ladder_split"),  # 1e-150 was ZeroDivisionError
+])
+def test_a_length_that_cannot_be_physical_is_refused_naming_key_value_and_limits(
+        name: str, key: str, eddy_model: str, value: float) -> None:
+    # tidy26: an absurd length reached the builders' laws (float overflow / division by
+    # zero, a traceback); the one plausibility table refuses it first, with the limits
+    params = copy.deepcopy(MAGNETS[name])
+    table, _, sub = key.partition(".")
+    params[table][sub] = value
+    params["magnet"]["eddy_model"] = eddy_model
+    with pytest.raises(mk.ParameterFileError,
+                       match=rf"\[{table}\] {sub} = {re.escape(repr(value))} m cannot be physical .*allowed "
+                             r"are >= 1e-08 and <= 10000 m"):
+        mk.build_magnet(params, source="f")
+
+
+def test_the_length_limits_refuse_no_unit_slip_of_a_bundled_file() -> None:
+    # the limits lie beyond every bundled length times 1000 / 1/1000 (those warn, see
+    # above) and enclose every plausible range
+    from maglevkit.magnets.base import MAGNET_LENGTH_PHYSICAL_M
+    lo, hi = MAGNET_LENGTH_PHYSICAL_M
+    for params in MAGNETS.values():
+        for name in dimensional_keys(params, MAGNET_PLAUSIBLE):
+            rng = MAGNET_PLAUSIBLE[name]
+            if rng.unit != "m":
+                continue
+            assert (rng.physical_low, rng.physical_high) == (lo, hi), name
+            table, _, key = name.partition(".")
+            values = params[table][key]
+            for v in values if isinstance(values, list) else [values]:
+                assert lo < abs(v) / 1000 and abs(v) * 1000 < hi, (name, v)
+
+
+def test_the_cli_refuses_an_absurd_length_with_one_line(tmp_path: Path) -> None:
+    from typer.testing import CliRunner
+
+    from maglevkit.cli import app
+    text = (resources.files("maglevkit") / "data" / "tr-guidance.toml").read_text()
+    bad = tmp_path / "bad.toml"
+    bad.write_text(re.sub(r"(?m)^(\[rail\]\n)thickness = .*$", r"\1thickness = 1e300", text)
+                   .replace('kind = "guidance_magnet"', 'kind = "guidance_magnet"\n'
+                            'eddy_model = "ladder"', 1))
+    assert "thickness = 1e300" in bad.read_text()
+    for command in (["statics", str(bad)], ["maps", "build", str(bad), "-o",
+                                             str(tmp_path / "m.nc")]):
+        res = CliRunner().invoke(app, command)
+        assert res.exit_code == 2, (command, res.output)
+        errors = [line for line in res.stderr.splitlines() if line.startswith("error")]
+        assert len(errors) == 1 and "[rail] thickness = 1e+300 m cannot be physical" \
+            in errors[0], res.stderr
+        assert "Traceback" not in res.output

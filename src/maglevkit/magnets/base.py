@@ -470,8 +470,22 @@ def take(table: Any, schema: Mapping[str, Schema], where: str) -> dict[str, Any]
     return out
 
 
+#: What a length of a magnet file can mean at all [m] (``Plausible.physical_low`` /
+#: ``physical_high`` of every length of :data:`MAGNET_PLAUSIBLE`): below 10 nm (a few dozen
+#: atoms) no iron part, sheet or clearance, above 10 km no part of an electromagnet.  A
+#: positive length outside is refused (:class:`~maglevkit.errors.ParameterFileError`
+#: naming the key, the value and these limits) before the builders, whose laws overflow
+#: or divide by zero far out (a guidance rail 1e150 m thick: ``thickness**3`` of the
+#: ladder's Saint-Venant factor overflowed).  Every bundled value times 1000 or 1/1000
+#: lies inside: such a unit slip warns, as before.
+MAGNET_LENGTH_PHYSICAL_M = (1e-8, 1e4)
+
+
 def _lengths(low: float, high: float, *names: str) -> dict[str, Plausible]:
-    return {name: Plausible(low, high, "m") for name in names}
+    lo, hi = MAGNET_LENGTH_PHYSICAL_M
+    return {name: Plausible(low, high, "m", physical_low=lo, physical_high=hi,
+                            physical_note="no part or clearance of an electromagnet")
+            for name in names}
 
 
 #: The plausible magnitudes of every dimensional key of a magnet file, of all kinds
@@ -479,6 +493,7 @@ def _lengths(low: float, high: float, *names: str) -> dict[str, Plausible]:
 #: and coils 2 mm ... 3 m, clearances and grooves 0.2 mm ... 0.5 m, resistances
 #: 5 mohm ... 100 ohm, nominal gaps 1 ... 100 mm, nominal currents 0.3 ... 3000 A: every
 #: bundled file lies inside, the same file with one value times 1000 or 1/1000 outside.
+#: Lengths beyond :data:`MAGNET_LENGTH_PHYSICAL_M` are refused, not warned.
 MAGNET_PLAUSIBLE: dict[str, Plausible] = {
     **_lengths(2e-3, 3.0, *(f"magnet.{k}" for k in (
         "pole_width", "leg_height", "yoke_thickness", "window_width", "coil_thickness",
@@ -667,7 +682,8 @@ def build_magnet(parameters: Mapping[str, Any], *, options: ModelOptions | None 
     Raises
     ------
     ParameterFileError
-        Unknown, missing or invalid tables and values.
+        Unknown, missing or invalid tables and values; a length that cannot be physical
+        (outside :data:`MAGNET_LENGTH_PHYSICAL_M`), naming the key, the value and the limits.
     InputError
         ``options.eddy_model`` not one the kind's builder has (:func:`eddy_models_of_kind`).
 
@@ -740,7 +756,8 @@ def _build(parameters: Mapping[str, Any], *, options: ModelOptions | None, sourc
     factors, factor_tags = read_calibration(parameters.get("calibration"), source)
     if check_provenance:   # a first build (not with_options): warn once, before the builder
         # can refuse the value without naming its key (a unit slip is the likely cause)
-        check_plausible(parameters, MAGNET_PLAUSIBLE, source or "parameters", stacklevel=4)
+        check_plausible(parameters, MAGNET_PLAUSIBLE, source or "parameters", stacklevel=4,
+                        error=ParameterFileError)
     try:
         # the file's option keys are read above; the builders' [magnet] schemas lack them
         name, network = builder({**parameters, "magnet": {
