@@ -466,3 +466,26 @@ def test_an_inconsistent_voltage_step_is_refused() -> None:
         eddy_resistance_from_step(t, late, voltage_step_V=10.0, resistance_ohm=r_el)
     ok = eddy_resistance_from_step(t, step(10.0), voltage_step_V=10.0, resistance_ohm=r_el)
     assert ok.inductance_H == pytest.approx(lt, rel=1e-8)
+
+
+def test_eddy_modes_on_imported_maps_says_what_the_user_can_do(tmp_path: Path) -> None:
+    # tidy26: the refusal said "rebuild them with this version (build_maps)", which
+    # imported maps cannot be; CurrentModel and MagnetBank give the one text
+    from maglevkit.reduced.bank import MagnetBank
+    s, i = np.meshgrid(GAPS, CURRENTS, indexing="ij")
+    ref = _analytic(s, i, 2e-3)
+    path = _write(tmp_path / "psi.csv", ["gap_m", "current_A", "flux_linkage_Wb"],
+                  [[s.flat[n], i.flat[n], ref["flux_linkage_Wb"].flat[n]] for n in range(s.size)])
+    maps = mk.maps_from_table(path, resistance_ohm=2.0, eddy_resistance_ohm=5.0)
+    texts = []
+    for make in (lambda: mk.CurrentModel(maps, eddy_modes=2),
+                 lambda: MagnetBank({"m": maps}, eddy_modes=2)):
+        with pytest.raises(mk.InputError) as err:
+            make()
+        texts.append(str(err.value))
+        assert "imported from the table" in texts[-1] and "psi.csv" in texts[-1]
+        assert "use eddy_modes=0" in texts[-1] and "R_ec" in texts[-1]
+        assert "maps build MAGNET" in texts[-1] and "rebuild" not in texts[-1]
+    assert texts[1] == "member 'm': " + texts[0]
+    # what the message offers works: eq. 8 with the table's R_ec
+    assert mk.CurrentModel(maps, eddy_modes=0).eddy_resistance_ohm == pytest.approx([5.0])

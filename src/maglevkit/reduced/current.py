@@ -2030,6 +2030,36 @@ def check_eddy_modes(value: Any) -> int:
     return int(value)
 
 
+def _no_eddy_network_message(maps: CharacteristicMaps, missing: Sequence[str]) -> str:
+    """Why ``eddy_modes > 0`` is refused on ``maps`` without an eddy network, and what the
+    user can do instead: the one text of :class:`CurrentModel` and
+    :class:`~maglevkit.reduced.bank.MagnetBank` (through :func:`eddy_network_parameters`).
+
+    Maps imported from a table (``maps_from_table``) cannot be rebuilt with ``build_maps``:
+    the network is fitted to the detailed model's voltage step, which a table does not
+    have; the table's own ``R_ec`` (eq. 8, ``eddy_modes=0``) is what they hold.  Other maps
+    without the variables were built before them.
+
+    Parameters
+    ----------
+    maps : CharacteristicMaps
+        The maps that lack the network.
+    missing : sequence of str
+        The ``eddy_network_*`` variables they lack.
+    """
+    if "table_report" in maps.dataset.attrs:
+        source = maps.dataset.attrs.get("table_source")
+        table = f"the table {source!r}" if source else "a table"
+        return (f"these maps were imported from {table} (maps_from_table) and hold no eddy "
+                "network (it is fitted to the detailed flux model's voltage step, which a "
+                "table does not have): use eddy_modes=0 (the paper's eq. 8 with the table's "
+                "R_ec, maps_from_table(eddy_resistance_ohm=...)), or build maps from a magnet "
+                "file (mk.build_maps / maglevkit maps build MAGNET) to use eddy_modes > 0")
+    return (f"these maps have no eddy network ({', '.join(missing)}; built by an earlier "
+            "version): rebuild them with this version from their magnet (mk.build_maps / "
+            "maglevkit maps build MAGNET) to use eddy_modes > 0, or use eddy_modes=0 (eq. 8)")
+
+
 def eddy_network_parameters(maps: CharacteristicMaps, m: int, resistance_ohm: np.ndarray, *,
                             what: str = "") -> tuple[dict[str, np.ndarray], float]:
     """The maps' fitted eddy network with ``m`` branches (``eddy_network_*`` variables of
@@ -2055,8 +2085,7 @@ def eddy_network_parameters(maps: CharacteristicMaps, m: int, resistance_ohm: np
              "eddy_network_inductance_H", "eddy_network_reference_inductance_H")
     missing = [n for n in names if n not in ds]
     if missing:
-        raise InputError(f"{what}these maps have no eddy network ({', '.join(missing)}); "
-                         "rebuild them with this version (build_maps) to use eddy_modes > 0")
+        raise InputError(what + _no_eddy_network_message(maps, missing))
     have = [int(v) for v in ds["eddy_modes"].values] if "eddy_modes" in ds.coords else []
     if m not in have:
         raise InputError(f"{what}eddy_modes = {m}: these maps hold eddy networks with {have} "
