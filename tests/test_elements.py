@@ -10,6 +10,14 @@ import pytest
 from scipy.integrate import quad
 
 import maglevkit as mk
+from maglevkit.circuit.elements import (
+    AirGap,
+    EdgeCornerPermeance,
+    FringePermeance,
+    GapLayerPermeance,
+    GapLeakage,
+)
+from maglevkit.errors import ParameterError
 from maglevkit.materials import MU0
 
 from .conftest import build_u, u_params
@@ -205,3 +213,25 @@ def test_air_gap_fringe_permeance_is_its_share_of_the_permeance() -> None:
         assert edged.permeance(s) == pytest.approx(plain.permeance(s) + f, rel=1e-14)
         cal = CalibratedLinear(name="g", inner=edged, fringing=1.5)
         assert cal.permeance(s) == pytest.approx(edged.permeance(s) + 0.5 * f, rel=1e-14)
+
+
+@pytest.mark.parametrize(("make", "label"), [
+    (lambda g: AirGap("e", gap_input=g, pole_area_m2=1e-3), "air gap"),
+    (lambda g: GapLeakage("e", gap_input=g, width_m=0.1, radius_m=0.01), "gap leakage"),
+    (lambda g: FringePermeance("e", gap_input=g, width_m=0.1, radius_m=0.01),
+     "fringe permeance"),
+    (lambda g: EdgeCornerPermeance("e", gap_input=g, width_m=0.1, coil_from_m=0.01,
+                                   coil_height_m=0.05), "edge corner permeance"),
+    (lambda g: GapLayerPermeance("e", gap_input=g, width_m=0.1, length_m=0.02),
+     "gap layer permeance"),
+])
+def test_gap_elements_share_the_gap_input_checks(make, label) -> None:  # type: ignore[no-untyped-def]
+    # tidy26: one base holds the gap boilerplate; GapLeakage lacked the gap_input check
+    # (an empty name was accepted and failed later, far from its cause)
+    el = make("g7")
+    assert el.gap == "g7"
+    assert float(el.permeance(0.01)) > 0.0
+    with pytest.raises(ParameterError, match=rf"^{label} 'e': needs a gap value$"):
+        el.permeance()
+    with pytest.raises(ParameterError, match=rf"^{label} 'e': gap_input must be a non-empty"):
+        make("")

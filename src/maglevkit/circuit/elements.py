@@ -30,7 +30,7 @@ from __future__ import annotations
 import math
 from abc import ABC, abstractmethod
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, ClassVar
 
 import casadi as ca
 import numpy as np
@@ -479,6 +479,41 @@ class LinearElement(Element):
         return flux_Wb * flux_Wb / (2.0 * self.permeance(gap_m))
 
 
+class _GapElement(LinearElement):
+    """A linear element whose permeance depends on one gap input: the boilerplate of
+    :class:`AirGap`, :class:`GapLeakage`, :class:`FringePermeance`,
+    :class:`EdgeCornerPermeance` and :class:`GapLayerPermeance` in one place.
+
+    Not a dataclass and without fields of its own: each subclass keeps its ``gap_input``
+    field where it was, so the elements' fields, reprs and thus the networks' hashes
+    (:func:`~maglevkit.reduction.maps.network_hash`) are those of the classes before.
+    """
+
+    #: The element's name in messages ("air gap", "gap leakage", ...).
+    _label: ClassVar[str] = "gap element"
+    gap_input: str
+
+    @property
+    def gap(self) -> str:
+        return self.gap_input
+
+    @property
+    def _owner(self) -> str:
+        """The element in messages: its ``_label`` and name."""
+        return f"{self._label} {self.name!r}"
+
+    def _check_gap_input(self) -> None:
+        """Refuse an empty or non-string ``gap_input`` (``ParameterError``)."""
+        if not isinstance(self.gap_input, str) or not self.gap_input:
+            raise ParameterError(f"{self._owner}: gap_input must be a non-empty name")
+
+    def _gap_value(self, gap_m: Any) -> Any:
+        """``gap_m`` itself; ``ParameterError`` when it is None (a gap element needs one)."""
+        if gap_m is None:
+            raise ParameterError(f"{self._owner}: needs a gap value")
+        return gap_m
+
+
 @renamed_keywords(length="length_m", cross_section="cross_section_m2")
 @dataclass(frozen=True)
 class IronPath(Element):
@@ -555,7 +590,7 @@ class IronPath(Element):
 
 @renamed_keywords(pole_area="pole_area_m2", slot_pitch="slot_pitch_m", slot_opening="slot_opening_m")
 @dataclass(frozen=True)
-class AirGap(LinearElement):
+class AirGap(_GapElement):
     """Air gap between a pole face and the rail/stator.
 
     ``G(s) = mu0 [A / s' + sum_e (2 w_e / pi) ln(1 + pi r_e / (2 s')) + sum_j A_j / (s' + d_j)]``
@@ -605,6 +640,7 @@ class AirGap(LinearElement):
         An empty ``gap_input`` or any of the above out of range.
     """
 
+    _label: ClassVar[str] = "air gap"
     gap_input: str = "s"
     pole_area_m2: float = 1.0
     fringe_edges: tuple[tuple[float, float], ...] = ()
@@ -614,9 +650,8 @@ class AirGap(LinearElement):
     face_slots: tuple[tuple[float, float], ...] = ()
 
     def __post_init__(self) -> None:
-        owner = f"air gap {self.name!r}"
-        if not isinstance(self.gap_input, str) or not self.gap_input:
-            raise ParameterError(f"{owner}: gap_input must be a non-empty name")
+        owner = self._owner
+        self._check_gap_input()
         _positive(owner, pole_area_m2=self.pole_area_m2)
         edges = tuple((w if symbolic(w) else float(w), r if symbolic(r) else float(r))
                       for w, r in self.fringe_edges)
@@ -640,10 +675,6 @@ class AirGap(LinearElement):
         if self.slot_pitch_m > 0.0 and not 0.0 < self.slot_opening_m < self.slot_pitch_m:
             raise ParameterError(f"{owner}: slot_opening_m must lie in (0, slot_pitch_m) when a "
                                  "slot pitch is given")
-
-    @property
-    def gap(self) -> str:
-        return self.gap_input
 
     @property
     def area(self) -> float:
@@ -705,8 +736,7 @@ class AirGap(LinearElement):
         float, ndarray or CasADi
             ``G`` [H].
         """
-        if gap_m is None:
-            raise ParameterError(f"air gap {self.name!r}: needs a gap value")
+        gap_m = self._gap_value(gap_m)
         s = self.effective_gap(gap_m)
         g = self._add_fringe(self.pole_area_m2 / s, s)
         for a, d in self.recesses:
@@ -970,7 +1000,7 @@ class LeakagePermeance(LinearElement):
 
 @renamed_keywords(width="width_m", radius="radius_m")
 @dataclass(frozen=True)
-class GapLeakage(LinearElement):
+class GapLeakage(_GapElement):
     """Gap-dependent leakage around a pole: ``G = mu0 w / pi ln(1 + pi r / s)``.
 
     Modelica's ``LeakageAroundPoles``: half-circle-and-straight-line tubes between two
@@ -991,19 +1021,17 @@ class GapLeakage(LinearElement):
     Raises
     ------
     ParameterError
-        ``width_m`` or ``radius_m`` not a finite number > 0.
+        An empty ``gap_input``, or ``width_m`` or ``radius_m`` not a finite number > 0.
     """
 
+    _label: ClassVar[str] = "gap leakage"
     gap_input: str = "s"
     width_m: float = 1.0
     radius_m: float = 1.0
 
     def __post_init__(self) -> None:
-        _positive(f"gap leakage {self.name!r}", width_m=self.width_m, radius_m=self.radius_m)
-
-    @property
-    def gap(self) -> str:
-        return self.gap_input
+        self._check_gap_input()
+        _positive(self._owner, width_m=self.width_m, radius_m=self.radius_m)
 
     @renamed_keywords(gap="gap_m")
     def permeance(self, gap_m: Any = None) -> Any:
@@ -1019,15 +1047,14 @@ class GapLeakage(LinearElement):
         float, ndarray or CasADi
             ``G`` [H].
         """
-        if gap_m is None:
-            raise ParameterError(f"gap leakage {self.name!r}: needs a gap value")
+        gap_m = self._gap_value(gap_m)
         return MU0 * self.width_m / math.pi * _log(1.0 + math.pi * self.radius_m / gap_m)
 
 
 @renamed_keywords(width="width_m", radius="radius_m", inner_radius="inner_radius_m",
                   slot_pitch="slot_pitch_m", slot_opening="slot_opening_m")
 @dataclass(frozen=True)
-class FringePermeance(LinearElement):
+class FringePermeance(_GapElement):
     """Fringing from a pole flank to a flat rail: ``G = (2 mu0 w/pi) ln(1 + pi r/(2 s))``.
 
     The fringe term of :class:`AirGap` (Roters' quarter circle from the flank at height
@@ -1067,6 +1094,7 @@ class FringePermeance(LinearElement):
         unknown ``law``.
     """
 
+    _label: ClassVar[str] = "fringe permeance"
     gap_input: str = "s"
     width_m: float = 1.0
     radius_m: float = 1.0
@@ -1076,9 +1104,8 @@ class FringePermeance(LinearElement):
     law: str = "roters"
 
     def __post_init__(self) -> None:
-        owner = f"fringe permeance {self.name!r}"
-        if not isinstance(self.gap_input, str) or not self.gap_input:
-            raise ParameterError(f"{owner}: gap_input must be a non-empty name")
+        owner = self._owner
+        self._check_gap_input()
         _positive(owner, width_m=self.width_m, radius_m=self.radius_m)
         _nonnegative(owner, inner_radius_m=self.inner_radius_m, slot_pitch_m=self.slot_pitch_m,
                      slot_opening_m=self.slot_opening_m)
@@ -1092,10 +1119,6 @@ class FringePermeance(LinearElement):
         if self.law not in FRINGE_LAWS:
             raise ParameterError(f"{owner}: law = {self.law!r} is not one of "
                                  f"{', '.join(map(repr, FRINGE_LAWS))}")
-
-    @property
-    def gap(self) -> str:
-        return self.gap_input
 
     @renamed_keywords(gap="gap_m")
     def permeance(self, gap_m: Any = None) -> Any:
@@ -1112,8 +1135,7 @@ class FringePermeance(LinearElement):
         float, ndarray or CasADi
             ``G`` [H].
         """
-        if gap_m is None:
-            raise ParameterError(f"fringe permeance {self.name!r}: needs a gap value")
+        gap_m = self._gap_value(gap_m)
         if self.slot_pitch_m > 0.0:
             gap_m = carter_coefficient(gap_m, self.slot_pitch_m, self.slot_opening_m) * gap_m
         law = edge_flank_per_mu0 if self.law == "conformal" else fringe_per_mu0
@@ -1128,7 +1150,7 @@ FRINGE_LAWS = ("roters", "conformal")
 
 
 @dataclass(frozen=True)
-class EdgeCornerPermeance(LinearElement):
+class EdgeCornerPermeance(_GapElement):
     """The face's corner flux of a pole's edges (gap-dependent): ``mu0 sum_k``
     :func:`edge_corner_per_mu0` ``(w, s, r, h, a_k)`` over its edges ``k``.
 
@@ -1162,6 +1184,7 @@ class EdgeCornerPermeance(LinearElement):
         finite number > 0, no edge, or an edge's entry not a number > 0.
     """
 
+    _label: ClassVar[str] = "edge corner permeance"
     gap_input: str = "s"
     width_m: float = 1.0
     coil_from_m: float = 1.0
@@ -1169,9 +1192,8 @@ class EdgeCornerPermeance(LinearElement):
     window_halves_m: tuple[float, ...] = (math.inf,)
 
     def __post_init__(self) -> None:
-        owner = f"edge corner permeance {self.name!r}"
-        if not isinstance(self.gap_input, str) or not self.gap_input:
-            raise ParameterError(f"{owner}: gap_input must be a non-empty name")
+        owner = self._owner
+        self._check_gap_input()
         _positive(owner, width_m=self.width_m, coil_from_m=self.coil_from_m,
                   coil_height_m=self.coil_height_m)
         if not isinstance(self.window_halves_m, tuple) or not self.window_halves_m:
@@ -1183,10 +1205,6 @@ class EdgeCornerPermeance(LinearElement):
             if not isinstance(a, (int, float)) or isinstance(a, bool) or not a > 0.0:
                 raise ParameterError(f"{owner}: window_halves_m entry {a!r} must be a number "
                                      "> 0 [m] (inf: no centre plane)")
-
-    @property
-    def gap(self) -> str:
-        return self.gap_input
 
     @renamed_keywords(gap="gap_m")
     def permeance(self, gap_m: Any = None) -> Any:
@@ -1202,8 +1220,7 @@ class EdgeCornerPermeance(LinearElement):
         float, ndarray or CasADi
             ``G`` [H].
         """
-        if gap_m is None:
-            raise ParameterError(f"edge corner permeance {self.name!r}: needs a gap value")
+        gap_m = self._gap_value(gap_m)
         g: Any = 0.0
         for a in self.window_halves_m:
             g = g + edge_corner_per_mu0(self.width_m, gap_m, self.coil_from_m,
@@ -1213,7 +1230,7 @@ class EdgeCornerPermeance(LinearElement):
 
 @renamed_keywords(width="width_m", length="length_m")
 @dataclass(frozen=True)
-class GapLayerPermeance(LinearElement):
+class GapLayerPermeance(_GapElement):
     """Air inside the gap layer between two neighbouring cells: ``G = mu0 w s / l``.
 
     The lateral link of a cell network whose row of cells fills the air gap (height
@@ -1240,19 +1257,15 @@ class GapLayerPermeance(LinearElement):
         An empty ``gap_input``, or ``width_m`` or ``length_m`` not a finite number > 0.
     """
 
+    _label: ClassVar[str] = "gap layer permeance"
     gap_input: str = "s"
     width_m: float = 1.0
     length_m: float = 1.0
 
     def __post_init__(self) -> None:
-        owner = f"gap layer permeance {self.name!r}"
-        if not isinstance(self.gap_input, str) or not self.gap_input:
-            raise ParameterError(f"{owner}: gap_input must be a non-empty name")
+        owner = self._owner
+        self._check_gap_input()
         _positive(owner, width_m=self.width_m, length_m=self.length_m)
-
-    @property
-    def gap(self) -> str:
-        return self.gap_input
 
     @renamed_keywords(gap="gap_m")
     def permeance(self, gap_m: Any = None) -> Any:
@@ -1268,8 +1281,7 @@ class GapLayerPermeance(LinearElement):
         float, ndarray or CasADi
             ``G`` [H].
         """
-        if gap_m is None:
-            raise ParameterError(f"gap layer permeance {self.name!r}: needs a gap value")
+        gap_m = self._gap_value(gap_m)
         return MU0 * self.width_m * gap_m / self.length_m
 
 
