@@ -507,11 +507,28 @@ class _GapElement(LinearElement):
         if not isinstance(self.gap_input, str) or not self.gap_input:
             raise ParameterError(f"{self._owner}: gap_input must be a non-empty name")
 
-    def _gap_value(self, gap_m: Any) -> Any:
-        """``gap_m`` itself; ``ParameterError`` when it is None (a gap element needs one)."""
+    @renamed_keywords(gap="gap_m")
+    def permeance(self, gap_m: Any = None) -> Any:
+        """Permeance ``G(s)`` [H] at the gap ``gap_m``: the law of the class docstring.
+
+        Parameters
+        ----------
+        gap_m : float, array_like or CasADi
+            Air gap s [m], > 0 (checked only where a law needs it, e.g. Carter's
+            coefficient); required (``ParameterError`` when None).
+
+        Returns
+        -------
+        float, ndarray or CasADi
+            ``G`` [H].
+        """
         if gap_m is None:
             raise ParameterError(f"{self._owner}: needs a gap value")
-        return gap_m
+        return self._permeance(gap_m)
+
+    @abstractmethod
+    def _permeance(self, gap_m: Any) -> Any:
+        """The law ``G(s)`` [H] at a given gap ``gap_m`` [m] (NumPy or CasADi)."""
 
 
 @renamed_keywords(length="length_m", cross_section="cross_section_m2")
@@ -722,21 +739,8 @@ class AirGap(_GapElement):
             g = g + fringe_per_mu0(w, r, s)
         return g
 
-    @renamed_keywords(gap="gap_m")
-    def permeance(self, gap_m: Any = None) -> Any:
-        """Permeance ``G(s)`` [H] of the gap (see the class docstring).
-
-        Parameters
-        ----------
-        gap_m : float, array_like or CasADi
-            Mechanical air gap s [m], > 0; required (``ParameterError`` when None).
-
-        Returns
-        -------
-        float, ndarray or CasADi
-            ``G`` [H].
-        """
-        gap_m = self._gap_value(gap_m)
+    def _permeance(self, gap_m: Any) -> Any:
+        """Permeance ``G(s)`` [H] of the gap (see the class docstring)."""
         s = self.effective_gap(gap_m)
         g = self._add_fringe(self.pole_area_m2 / s, s)
         for a, d in self.recesses:
@@ -1033,21 +1037,8 @@ class GapLeakage(_GapElement):
         self._check_gap_input()
         _positive(self._owner, width_m=self.width_m, radius_m=self.radius_m)
 
-    @renamed_keywords(gap="gap_m")
-    def permeance(self, gap_m: Any = None) -> Any:
-        """Permeance ``G = mu0 w / pi ln(1 + pi r / s)`` [H].
-
-        Parameters
-        ----------
-        gap_m : float, array_like or CasADi
-            Air gap s [m], > 0 (not checked here); required (``ParameterError`` when None).
-
-        Returns
-        -------
-        float, ndarray or CasADi
-            ``G`` [H].
-        """
-        gap_m = self._gap_value(gap_m)
+    def _permeance(self, gap_m: Any) -> Any:
+        """Permeance ``G = mu0 w / pi ln(1 + pi r / s)`` [H]."""
         return MU0 * self.width_m / math.pi * _log(1.0 + math.pi * self.radius_m / gap_m)
 
 
@@ -1120,22 +1111,9 @@ class FringePermeance(_GapElement):
             raise ParameterError(f"{owner}: law = {self.law!r} is not one of "
                                  f"{', '.join(map(repr, FRINGE_LAWS))}")
 
-    @renamed_keywords(gap="gap_m")
-    def permeance(self, gap_m: Any = None) -> Any:
+    def _permeance(self, gap_m: Any) -> Any:
         """Permeance [H]: ``(2 mu0 w / pi) ln(1 + pi r / (2 s))`` (Roters) or the
-        conformal map's strip (see the class docstring).
-
-        Parameters
-        ----------
-        gap_m : float, array_like or CasADi
-            Air gap s [m], > 0 (not checked here); required (``ParameterError`` when None).
-
-        Returns
-        -------
-        float, ndarray or CasADi
-            ``G`` [H].
-        """
-        gap_m = self._gap_value(gap_m)
+        conformal map's strip (see the class docstring)."""
         if self.slot_pitch_m > 0.0:
             gap_m = carter_coefficient(gap_m, self.slot_pitch_m, self.slot_opening_m) * gap_m
         law = edge_flank_per_mu0 if self.law == "conformal" else fringe_per_mu0
@@ -1206,21 +1184,8 @@ class EdgeCornerPermeance(_GapElement):
                 raise ParameterError(f"{owner}: window_halves_m entry {a!r} must be a number "
                                      "> 0 [m] (inf: no centre plane)")
 
-    @renamed_keywords(gap="gap_m")
-    def permeance(self, gap_m: Any = None) -> Any:
-        """Permeance [H] of the edges' corner flux (see the class docstring).
-
-        Parameters
-        ----------
-        gap_m : float, array_like or CasADi
-            Air gap s [m], > 0 (not checked here); required (``ParameterError`` when None).
-
-        Returns
-        -------
-        float, ndarray or CasADi
-            ``G`` [H].
-        """
-        gap_m = self._gap_value(gap_m)
+    def _permeance(self, gap_m: Any) -> Any:
+        """Permeance [H] of the edges' corner flux (see the class docstring)."""
         g: Any = 0.0
         for a in self.window_halves_m:
             g = g + edge_corner_per_mu0(self.width_m, gap_m, self.coil_from_m,
@@ -1267,21 +1232,8 @@ class GapLayerPermeance(_GapElement):
         self._check_gap_input()
         _positive(owner, width_m=self.width_m, length_m=self.length_m)
 
-    @renamed_keywords(gap="gap_m")
-    def permeance(self, gap_m: Any = None) -> Any:
-        """Permeance ``G = mu0 w s / l`` [H].
-
-        Parameters
-        ----------
-        gap_m : float, array_like or CasADi
-            Air gap s [m], > 0 (not checked here); required (``ParameterError`` when None).
-
-        Returns
-        -------
-        float, ndarray or CasADi
-            ``G`` [H].
-        """
-        gap_m = self._gap_value(gap_m)
+    def _permeance(self, gap_m: Any) -> Any:
+        """Permeance ``G = mu0 w s / l`` [H]."""
         return MU0 * self.width_m * gap_m / self.length_m
 
 
