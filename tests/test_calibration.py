@@ -25,7 +25,9 @@ from maglevkit.calibration import (
     write_calibrated_toml,
 )
 from maglevkit.cli import app
-from maglevkit.errors import DataError, DataWarning
+from maglevkit.errors import DataError
+
+from .statics_csv_checks import calibrate_own_statics
 
 ROOT = Path(__file__).resolve().parents[1]
 FEM = ROOT / "benchmarks" / "results" / "u_magnet_fem_statics.csv"
@@ -438,17 +440,5 @@ def test_the_statics_csv_reads_back_into_calibrate(tmp_path: Path) -> None:
     `calibrate` reads that file (a DataWarning names the derived columns it does not read) and,
     the data being the nominal model's own, returns the nominal factors.  Bound: the CSV's
     9 significant digits move the data by <= 5e-9 relative, so a factor by well under 1e-6."""
-    runner = CliRunner()
-    data = tmp_path / "s.csv"
-    res = runner.invoke(app, ["statics", "u-magnet", "--gaps", "0.004:0.012:5",
-                              "--currents", "5:40:4", "--csv", str(data)])
-    assert res.exit_code == 0, res.output
+    data = calibrate_own_statics("u-magnet", "0.004:0.012:5", "5:40:4", tmp_path)
     assert "differential_inductance_H" in data.read_text().splitlines()[0]
-    out = tmp_path / "c.toml"
-    with pytest.warns(DataWarning, match=r"differential_inductance_H.*not read"):
-        res = runner.invoke(app, ["calibrate", "u-magnet", str(data), "-o", str(out)])
-    assert res.exit_code == 0, res.output
-    cal = tomllib.loads(out.read_text())["calibration"]
-    for name in ("leakage_factor", "fringing_factor", "iron_field_scale"):
-        assert abs(cal[name] - 1.0) < 1e-6, (name, cal[name])
-    assert abs(cal["gap_offset_m"]) < 1e-9
