@@ -13,11 +13,10 @@ three-state), against the detailed model and against the ``CurrentModel`` on its
 
 from __future__ import annotations
 
-import importlib.util
 import math
 import shutil
+import sys
 import tempfile
-import time
 from pathlib import Path
 from typing import Any
 
@@ -26,34 +25,14 @@ import numpy as np
 import maglevkit as mk
 from maglevkit.reduced.bank import MagnetBank
 
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from timing_common import cpu_per_call, sibling_module  # noqa: E402
+
 TITLE = "Bank with shielded-gap ladder members: cost per circuit-step and gap-sine accuracy"
 
 DT = 1e-3
 N_CIRCUITS = 100
 SWEEP = (5.0, 50.0, 200.0)
-
-
-def _gap_motion() -> Any:
-    """The module ``bench_gap_motion`` next to this file (its maps grid, fundamentals and
-    error measure, written once)."""
-    spec = importlib.util.spec_from_file_location(
-        "bench_gap_motion", Path(__file__).with_name("bench_gap_motion.py"))
-    assert spec is not None and spec.loader is not None
-    mod = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(mod)
-    return mod
-
-
-def _per_step(fn: Any, steps: int) -> float:
-    """Best of 5 runs of CPU time per call [s]."""
-    fn()
-    best = math.inf
-    for _ in range(5):
-        t0 = time.process_time()
-        for _ in range(steps):
-            fn()
-        best = min(best, (time.process_time() - t0) / steps)
-    return best
 
 
 def cost(maps: mk.CharacteristicMaps, cache: Path,
@@ -91,7 +70,7 @@ def cost(maps: mk.CharacteristicMaps, cache: Path,
                  sd: np.ndarray = sd) -> None:
             stepper.advance(voltages_V=u, gaps_m=g, gap_rates_m_per_s=sd)
 
-        t = _per_step(step, 2000)
+        t = cpu_per_call(step, 2000, repeats=5, warm=True)
         sub = max(1, math.ceil(DT / bank.max_step_s * (1 - 1e-12)))
         rows.append(f"| {label} | {nc} | {sub} | {bank.max_step_s * 1e6:.0f} | "
                     f"{t / nc * 1e9:.0f} | {t / nc / sub * 1e9:.0f} |")
@@ -153,7 +132,7 @@ def network_sweep(gm: Any, ladder_maps: mk.CharacteristicMaps) -> list[str]:
 def run() -> str:
     if shutil.which("cc") is None:
         return "No C compiler on this machine: the compiled bank needs one."
-    gm = _gap_motion()
+    gm = sibling_module("bench_gap_motion")
     maps = mk.build_maps(mk.load_magnet(gm.MAGNET), gaps_m=gm.GRID[0], currents_A=gm.GRID[1],
                          progress=False)
     ladder_maps = mk.build_maps(mk.load_magnet(gm.MAGNET, eddy_model="ladder"),

@@ -44,6 +44,7 @@ import os
 import subprocess
 import sys
 import time
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -52,6 +53,9 @@ from maglevkit.control.realtime import vector_flags
 from maglevkit.models.compiled import compile_library
 from maglevkit.vehicle.simulation import VehicleModel, parse_irregularity
 from maglevkit.vehicle.train import load_vehicle
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from timing_common import bind_buffer, cpu_per_call  # noqa: E402
 
 TITLE = "Vehicle model: 3-section train, reduced magnets, elastic guideway, 1 kHz"
 
@@ -113,37 +117,16 @@ def irregularity_times(model: VehicleModel, prof: Any, v: float, dt: float = 1e-
     xi = model.point_xi_m
     start = 200.0 - xi
     x = start[None, :] + v * dt * np.arange(n)[:, None]
-    out = []
-    for f in (lambda: rnd.on_paths(x, start_m=start, step_m=v * dt),
-              lambda: rnd._on_paths_phasors(x, start, v * dt)):
-        best = float("inf")
-        for _ in range(3):
-            c0 = time.process_time()
-            f()
-            best = min(best, time.process_time() - c0)
-        out.append(best)
-    return out[0], out[1]
+    return (cpu_per_call(lambda: rnd.on_paths(x, start_m=start, step_m=v * dt), 1, repeats=3),
+            cpu_per_call(lambda: rnd._on_paths_phasors(x, start, v * dt), 1, repeats=3))
 
 
 def _time_calls(f: Any, args: list[np.ndarray], calls: int = CALLS, compile_it: bool = True
                 ) -> tuple[float, list]:
     """CPU time per call [s] of the compiled ``f`` (best of 3 batches) and its outputs."""
     fc = compile_library(f.name(), [f], flags=vector_flags())[0][0] if compile_it else f
-    buf, ev = fc.buffer()
-    arrs = [np.ascontiguousarray(np.asarray(a, dtype=float).ravel()) for a in args]
-    outs = [np.zeros(fc.nnz_out(i)) for i in range(fc.n_out())]
-    for i, a in enumerate(arrs):
-        buf.set_arg(i, memoryview(a))
-    for i, o in enumerate(outs):
-        buf.set_res(i, memoryview(o))
-    ev()
-    best = np.inf
-    for _ in range(3):
-        t0 = time.process_time()
-        for _ in range(calls):
-            ev()
-        best = min(best, (time.process_time() - t0) / calls)
-    return best, outs
+    ev, outs, _bound = bind_buffer(fc, args)
+    return cpu_per_call(ev, calls, repeats=3, warm=True), outs
 
 
 def part_times(model: VehicleModel, speed: float, dt: float = 1e-3) -> dict[str, float]:

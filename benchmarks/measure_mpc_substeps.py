@@ -21,9 +21,9 @@ Writes JSON (``--output``, default benchmarks/results/mpc_substeps.json).
 from __future__ import annotations
 
 import argparse
-import importlib.util
 import json
 import os
+import sys
 import time
 from pathlib import Path
 from typing import Any
@@ -35,18 +35,13 @@ from maglevkit.reduced.core import substep_count
 from maglevkit.vehicle import load_vehicle
 from maglevkit.vehicle.simulation import VehicleModel, parse_irregularity
 
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from timing_common import sibling_module  # noqa: E402
+
 HERE = Path(__file__).parent
 HORIZON = 10
 INTERVAL_S = 2e-3
 REFERENCE_SUBSTEPS = 32
-
-
-def _module(name: str) -> Any:
-    spec = importlib.util.spec_from_file_location(name, HERE / f"{name}.py")
-    assert spec is not None and spec.loader is not None
-    mod = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(mod)
-    return mod
 
 
 def _old_rule(self: MagnetHeaveModel, h: float, substeps: int) -> int:
@@ -110,7 +105,7 @@ def main() -> None:
     res["accuracy_eq8"] = accuracy(0)
     print(json.dumps(res, indent=1))
     if not args.skip_speed:
-        bench = _module("bench_vehicle")
+        bench = sibling_module("bench_vehicle")
         v = bench.SPEED_KMH / 3.6
         span = VehicleModel(load_vehicle()).guideway.span.length_m
         prof = parse_irregularity("sag:0.5e-3+random:0.3e-3:1", span_length_m=span)

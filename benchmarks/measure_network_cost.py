@@ -24,9 +24,9 @@ be equal bit for bit between before and after (checked, printed).  Pin it:
 from __future__ import annotations
 
 import argparse
-import importlib.util
 import json
 import math
+import sys
 import tempfile
 import time
 import warnings
@@ -41,24 +41,11 @@ import maglevkit.reduced.bank as bank_module
 from maglevkit.errors import ProvenanceWarning
 from maglevkit.reduced.bank import MagnetBank
 
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from timing_common import bind_buffer, cpu_per_call, sibling_module  # noqa: E402
+
 HERE = Path(__file__).parent
 DT = 1e-3
-
-
-def _module(name: str) -> Any:
-    spec = importlib.util.spec_from_file_location(name, HERE / f"{name}.py")
-    assert spec is not None and spec.loader is not None
-    mod = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(mod)
-    return mod
-
-
-def _best(fn: Callable[[], None], calls: int) -> float:
-    """CPU time per call [s] of one round of ``calls`` calls."""
-    t0 = time.process_time()
-    for _ in range(calls):
-        fn()
-    return (time.process_time() - t0) / calls
 
 
 def _mapped_outputs(bank: MagnetBank) -> Any:
@@ -81,8 +68,8 @@ def outputs_cost(model: Any, rounds: int) -> dict[str, Any]:
     equal = all(np.array_equal(np.asarray(x), np.asarray(y)) for x, y in zip(a, b, strict=True))
     t_old, t_new = [], []
     for _ in range(rounds):
-        t_old.append(_best(lambda: old(*args, bank._par), 5))
-        t_new.append(_best(lambda: new(*args, bank._par), 20))
+        t_old.append(cpu_per_call(lambda: old(*args, bank._par), 5))
+        t_new.append(cpu_per_call(lambda: new(*args, bank._par), 20))
     return {"circuits": bank.n_circuits, "table_size": int(bank.table.size),
             "mapped_ms": 1e3 * min(t_old), "inlined_ms": 1e3 * min(t_new),
             "ratio": min(t_old) / min(t_new), "bit_equal": bool(equal)}
@@ -111,16 +98,10 @@ def kernel_cost(maps: mk.CharacteristicMaps, cache: Path, rounds: int) -> dict[s
             bank._lanes.clear()
             f = bank._lanes_kernel(n)
             assert f is not None
-            buf, ev = f.buffer()
-            ins = [np.ascontiguousarray(a, dtype=float) for a in args]
-            res = [np.zeros(f.nnz_out(i)) for i in range(f.n_out())]
-            for i, a in enumerate(ins):
-                buf.set_arg(i, memoryview(a))
-            for i, r in enumerate(res):
-                buf.set_res(i, memoryview(r))
+            ev, res, bound = bind_buffer(f, args)
             ev()
             results[il] = [r.copy() for r in res]
-            keep.append((buf, ins, res))
+            keep.append((bound, res))
             calls[(label, il)] = ev
         bank_module._LANE_INTERLEAVE = 2
         out[label] = {"circuits": nc, "substeps": n, "bit_equal": all(
@@ -129,7 +110,7 @@ def kernel_cost(maps: mk.CharacteristicMaps, cache: Path, rounds: int) -> dict[s
     times: dict[tuple[str, int], list[float]] = {k: [] for k in calls}
     for _ in range(rounds):
         for k, ev in calls.items():
-            times[k].append(_best(ev, 2000))
+            times[k].append(cpu_per_call(ev, 2000))
     for (label, il), v in times.items():
         nc = out[label]["circuits"]
         out[label][f"interleave{il}_ns"] = 1e9 * min(v) / nc
@@ -143,7 +124,7 @@ def vehicle_cost(files: dict[str, str], rounds: int) -> dict[str, Any]:
     from maglevkit.vehicle import simulation as sim
     from maglevkit.vehicle.simulation import VehicleModel, parse_irregularity
 
-    veh = _module("measure_vehicle_eddy_modes")
+    veh = sibling_module("measure_vehicle_eddy_modes")
     cfg = veh.configs(files)
     models: dict[tuple[str, str], Any] = {}
     captured: dict[str, Any] = {}
@@ -202,7 +183,7 @@ def vehicle_cost(files: dict[str, str], rounds: int) -> dict[str, Any]:
             m.run(speed_m_per_s=400 / 3.6, duration_s=1.0, irregularity=prof, loop="compiled")
             run_t[k].append((time.process_time() - c0) / 1000)
             ev, nb = blocks[k][:2]
-            block_t[k].append(_best(ev, 100) / nb)
+            block_t[k].append(cpu_per_call(ev, 100) / nb)
     for (key, when) in models:
         out[key][f"run_us_{when}"] = 1e6 * min(run_t[(key, when)])
         out[key][f"block_us_{when}"] = 1e6 * min(block_t[(key, when)])
@@ -226,8 +207,8 @@ def main() -> None:
     a = ap.parse_args()
     warnings.simplefilter("ignore", ProvenanceWarning)
     result: dict[str, Any] = {"load_average_start": list(np.round(_load(), 2))}
-    gm = _module("bench_gap_motion")
-    veh = _module("measure_vehicle_eddy_modes")
+    gm = sibling_module("bench_gap_motion")
+    veh = sibling_module("measure_vehicle_eddy_modes")
     with tempfile.TemporaryDirectory() as tmp:
         files = veh.ladder_files(Path(tmp))
         ladder_maps = mk.build_maps(mk.load_magnet(files["tr09-standard"]),
