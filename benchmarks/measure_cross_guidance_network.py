@@ -18,9 +18,9 @@ variation, and gain and phase of the current's 50 Hz component per metre of gap.
 from __future__ import annotations
 
 import json
-import math
 import sys
 import time
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -28,6 +28,9 @@ import numpy as np
 import maglevkit as mk
 from maglevkit.vehicle.crossrun import CrossSectionModel
 from maglevkit.vehicle.irregularities import HarmonicProfile
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from replay_common import fundamental_errors, replay_detailed  # noqa: E402
 
 V = 400 / 3.6
 F_HZ = 50.0
@@ -69,46 +72,16 @@ def replay(model: CrossSectionModel, run: Any, calls: list[tuple[np.ndarray, ...
            magnet: Any) -> np.ndarray:
     """The detailed model's coil currents of MEMBER's circuits under the recorded inputs."""
     idx = list(range(*model.bank.circuit_slices[MEMBER].indices(model.bank.n_circuits)))
-    flux = mk.FluxModel(magnet)
-    maps = model.maps["guidance"]
-    gap_names = list(flux.gap_names)
-
-    def poles(vals: np.ndarray) -> np.ndarray:
-        out = np.full(len(gap_names), np.nan)
-        for c, val in zip(flux.circuit_names, vals, strict=True):
-            for p in maps.pole_groups[c]:
-                out[gap_names.index(p)] = val
-        assert not np.isnan(out).any()
-        return out
-
     ds = run.dataset
     i0 = ds.guidance_current.values[0, :2]
-    st = flux.initial_state(gaps_m=poles(calls[0][1][idx]), currents_A=i0)
-    ref = np.empty((len(calls) + 1, 2))
-    ref[0] = i0
-    for k, (u, g, r) in enumerate(calls):
-        st, out = flux.step(st, 1e-3, u[idx], poles(g[idx]), poles(r[idx]))
-        ref[k + 1] = out.currents_A
-    return ref
+    return replay_detailed(magnet, model.maps["guidance"].pole_groups, calls, idx,
+                           initial_gaps_m=calls[0][1][idx], initial_currents_A=i0)
 
 
 def compare(run: Any, ref: np.ndarray) -> dict[str, float]:
-    ds = run.dataset
-    t = ds.time.values
-    veh = ds.guidance_current.values[:, :2]     # guidance_left's circuits
-    sel = t >= 0.1
-    ph = np.exp(-2j * np.pi * F_HZ * t[sel])
-    g = ds.guidance_gap.values[sel, 0]
-    gain = 2 * np.mean((g - g.mean()) * ph)
-
-    def fund(x: np.ndarray) -> complex:
-        return complex(2 * np.mean((x - x.mean()) * ph) / gain)
-
-    zv, zr = fund(veh[sel, 0]), fund(ref[sel, 0])
-    return {"rms_error_A": float(np.sqrt(np.mean((veh[sel] - ref[sel]) ** 2))),
-            "rms_variation_A": float(np.sqrt(np.mean((ref[sel] - ref[sel].mean(axis=0)) ** 2))),
-            "gain_A_per_m": abs(zv), "gain_reference_A_per_m": abs(zr),
-            "phase_error_deg": math.degrees(np.angle(zv / zr))}
+    ds = run.dataset     # guidance_left's circuits
+    return fundamental_errors(ds.time.values, ds.guidance_current.values[:, :2], ref,
+                              ds.guidance_gap.values[:, 0], F_HZ)
 
 
 def main() -> None:

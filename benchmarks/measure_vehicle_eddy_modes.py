@@ -23,8 +23,8 @@ from __future__ import annotations
 import argparse
 import dataclasses
 import json
-import math
 import re
+import sys
 import tempfile
 import time
 from pathlib import Path
@@ -37,6 +37,9 @@ from maglevkit.errors import OutOfRangeError
 from maglevkit.vehicle.irregularities import HarmonicProfile
 from maglevkit.vehicle.simulation import Failure, VehicleModel, parse_irregularity
 from maglevkit.vehicle.train import load_vehicle
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from replay_common import fundamental_errors, replay_detailed  # noqa: E402
 
 DATA = Path(mk.__file__).parent / "data"
 
@@ -95,40 +98,12 @@ def physics(train: Any, kw: dict[str, Any], reference: Any) -> dict[str, float]:
     ds = run.dataset
     names = list(ds.circuit.values)
     idx = [names.index("s2m4/front"), names.index("s2m4/rear")]
-    flux = mk.FluxModel(reference)
-    maps = m.maps["standard"]
-    gap_names = list(flux.gap_names)
-
-    def poles(vals: np.ndarray) -> np.ndarray:
-        out = np.empty(len(gap_names))
-        for c, val in zip(flux.circuit_names, vals, strict=True):
-            for p in maps.pole_groups[c]:
-                out[gap_names.index(p)] = val
-        return out
-
-    st = flux.initial_state(gaps_m=poles(ds.gap.values[0, idx]),
-                            currents_A=m.trim_current_A[idx])
-    ref = np.empty((len(calls) + 1, 2))
-    ref[0] = ds.current.values[0, idx]
-    for k, (u, g, r) in enumerate(calls):
-        st, out = flux.step(st, 1e-3, u[idx], poles(g[idx]), poles(r[idx]))
-        ref[k + 1] = out.currents_A
-    t = ds.time.values
-    sel = t >= 0.1
-    veh = ds.current.values[:, idx]
-    ph = np.exp(-2j * np.pi * f * t[sel])
-    gap = ds.gap.values[sel, idx[0]]
-    gain = 2 * np.mean((gap - gap.mean()) * ph)
-
-    def fund(x: np.ndarray) -> complex:
-        return complex(2 * np.mean((x - x.mean()) * ph) / gain)
-
-    zv, zr = fund(veh[sel, 0]), fund(ref[sel, 0])
-    return {"rms_error_A": float(np.sqrt(np.mean((veh[sel] - ref[sel]) ** 2))),
-            "rms_variation_A": float(np.sqrt(np.mean((ref[sel] - ref[sel].mean(axis=0)) ** 2))),
-            "gain_A_per_m": abs(zv), "gain_reference_A_per_m": abs(zr),
-            "phase_deg": math.degrees(np.angle(zv)), "phase_reference_deg":
-            math.degrees(np.angle(zr)), "phase_error_deg": math.degrees(np.angle(zv / zr))}
+    ref = replay_detailed(reference, m.maps["standard"].pole_groups, calls, idx,
+                          initial_gaps_m=ds.gap.values[0, idx],
+                          initial_currents_A=m.trim_current_A[idx],
+                          first_row_A=ds.current.values[0, idx])
+    return fundamental_errors(ds.time.values, ds.current.values[:, idx], ref,
+                              ds.gap.values[:, idx[0]], f)
 
 
 def aims(m: VehicleModel) -> dict[str, Any]:
