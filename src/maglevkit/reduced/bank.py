@@ -1343,7 +1343,11 @@ class MagnetBank:
         The same compiled step as :meth:`step` (bit-identical results) with the loop over
         the steps in C (:mod:`.lanes`; without a compiler or with ``codegen="casadi"`` a
         CasADi ``mapaccum`` of the step), :data:`RUN_CHUNK` steps per call.  Banks of
-        reduced members with one gap input per circuit only.
+        reduced members with one gap input per circuit only, on eq. 8: the loop carries
+        ``I_L`` alone, so a bank with more states per circuit (shielded-gap ladder or
+        eddy-network members) is refused rather than run without them; its
+        :meth:`step` and :meth:`stepper` carry them, and ``CurrentModel(maps,
+        eddy_modes=m)`` runs its own compiled loop that does (docs/bank.md).
 
         Parameters
         ----------
@@ -1372,8 +1376,8 @@ class MagnetBank:
         Raises
         ------
         InputError
-            Not a bank of reduced members with circuit gap inputs, bad shapes or step
-            lengths.
+            Not a bank of reduced members with circuit gap inputs, members with eddy
+            states (``motion_eddy``, ``eddy_modes``), bad shapes or step lengths.
         OutOfRangeError, SolverError
             As :meth:`step`.
         """
