@@ -537,22 +537,19 @@ def test_bad_input(u_maps: CharacteristicMaps) -> None:
 
 
 def _gap_sine_sweep(mag: mk.Magnet, frequencies: tuple[float, ...], current_A: float = 34.0,
-                    *, held_flux_force: bool = False, file_default: bool = False
+                    *, held_flux_force: bool = False
                     ) -> dict[float, tuple[float, float, float]]:
     """Per frequency: the ladder's current error and force error relative to the
     detailed model's variation, and its current phase error [deg] against the gap sine
     10 +- 1 mm at the constant voltage of ``current_A`` (``benchmarks/bench_gap_motion.py``'s
     run; maps 12 x 41, identified at their reference point 11 mm / 40 A); with
-    ``held_flux_force`` on ``maps.with_held_flux_force()``; with ``file_default`` the
-    reduced model the magnet file names instead of the ladder (``CurrentModel(maps,
-    eddy_modes=maps.default_eddy_modes)``)."""
+    ``held_flux_force`` on ``maps.with_held_flux_force()``."""
     maps = mk.build_maps(mag, gaps_m=np.linspace(0.005, 0.016, 12),
                          currents_A=np.linspace(0.0, 80.0, 41), progress=False)
     if held_flux_force:
         maps = maps.with_held_flux_force()
     fm = mk.FluxModel(mag)
-    ladder = (mk.CurrentModel(maps, eddy_modes=maps.default_eddy_modes) if file_default
-              else mk.CurrentModel(maps, motion_eddy=True))
+    ladder = mk.CurrentModel(maps, motion_eddy=True)
     u0 = fm.resistances * current_A
     out = {}
     for f in frequencies:
@@ -613,10 +610,7 @@ def test_split_tr09_gap_sine_sweep_against_its_detailed_model() -> None:
     its aims 5 / 10 / 20 % (F(s, I_L + gamma I_e), gamma = -0.142 from the held-flux
     stiffness; measured 3.2 / 6.2 / 8.5 %; with the default gamma = 0 on the same maps
     17.8 / 38.7 % at 50 / 200 Hz; eq. 8: 2.7 / 20.3 / 46.4 %)."""
-    # split since issue 26; its lumped eddy elements given explicitly since switch26m (the
-    # file's ladder is the default now, whose reduced model is the test below; this ladder
-    # on the ladder's maps missed the 5 Hz aim, 6.1 %)
-    mag = mk.load_magnet("tr09-standard", eddy_model="lumped")
+    mag = mk.load_magnet("tr09-standard")     # split since issue 26 (the bundled default)
     assert mag.network.n_loops > 200          # the split network, not the lumped one
     assert mag.nominal_current == 31.7
     for f, (err, err_f, phase) in _gap_sine_sweep(mag, tuple(AIMS), mag.nominal_current,
@@ -630,25 +624,6 @@ def test_split_tr09_gap_sine_sweep_against_its_detailed_model() -> None:
     default = _gap_sine_sweep(mag, (50.0,), mag.nominal_current)[50.0]
     assert default[0] <= AIMS[50.0], default
     assert default[1] > FORCE_AIMS[50.0], default
-
-
-@pytest.mark.slow
-def test_file_default_tr09_gap_sine_sweep_against_its_detailed_model() -> None:
-    """Issue 26's sweep on what a user gets (review26): the bundled ``tr09-standard`` as
-    shipped (the eddy ladder, 6 layers) against its reduced model as the file names it (the
-    2-branch eddy network, ``[reduced] eddy_modes = 2``), 31.7 A.  Current within the aims
-    5 / 10 / 20 % at 5 / 50 / 200 Hz and the phase within 5 deg (measured 0.50 / 1.32 / 2.05
-    %, +0.0 / +0.4 deg; eq. 8 on the same maps 21.6 / 23.6 / 23.5 %, which misses the 5 Hz
-    aim, so the aims tell the two apart); the force within the same aims (measured 0.48 /
-    1.42 / 2.89 %; eq. 8 4.7 / 1.8 / 3.0 %)."""
-    mag = mk.load_magnet("tr09-standard")
-    assert mag.options.eddy_model == "ladder" and mag.default_eddy_modes == 2
-    for f, (err, err_f, phase) in _gap_sine_sweep(mag, tuple(AIMS), mag.nominal_current,
-                                                  file_default=True).items():
-        assert err <= AIMS[f], (f, err)
-        assert err_f <= FORCE_AIMS[f], (f, err_f)
-        if f <= 100.0:
-            assert abs(phase) <= 5.0, (f, phase)
 
 
 def test_a_fit_that_does_not_converge_is_reported(monkeypatch: pytest.MonkeyPatch) -> None:
