@@ -162,6 +162,18 @@ def test_the_eddy_network_follows_the_ladder_where_eq8_cannot() -> None:
         assert ac["eq8"] > 10.0 * ac["modes"], (sc.name, ac)
 
 
+def test_a_misspelt_key_lists_the_option_keys_as_allowed(tmp_path: Path) -> None:
+    # review26: "eddy_layer = 6" listed every [magnet] key but eddy_model and eddy_layers
+    # (the builders' schemas lack them; load_magnet reads them before the builder)
+    with pytest.raises(ParameterFileError) as err:
+        mk.load_magnet(_file(tmp_path, "eddy_layer = 6", provenance=False))
+    msg = str(err.value)
+    assert "[magnet]: unknown key(s) ['eddy_layer']; allowed keys are: " in msg
+    allowed = msg.split("allowed keys are: ", 1)[1].split(", ")
+    assert {"eddy_model", "eddy_layers", "end_effects", "flux_paths"} <= set(allowed)
+    assert len(allowed) == len(set(allowed))      # each key once
+
+
 def test_a_slip_in_the_file_lists_the_models_of_its_kind(tmp_path: Path) -> None:
     # review6: "ladr" in a guidance file listed 'ladder_split' as allowed, which the
     # guidance builder then refuses; the message names the kind's own models

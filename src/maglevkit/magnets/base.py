@@ -762,6 +762,11 @@ def _build(parameters: Mapping[str, Any], *, options: ModelOptions | None, sourc
         # the file's option keys are read above; the builders' [magnet] schemas lack them
         name, network = builder({**parameters, "magnet": {
             k: v for k, v in mag.items() if k not in FILE_OPTION_NAMES}}, materials, options)
+    except ParameterFileError as exc:
+        if not str(exc).startswith("[magnet]: unknown key(s)"):
+            raise
+        # the builder's schema lacks the option keys read above: list them as allowed too
+        raise ParameterFileError(f"{exc}, {', '.join(FILE_OPTION_NAMES)}") from None
     except (ParameterError, MaterialError) as exc:
         hint = ""
         if "eddy-current element" in str(exc):
