@@ -225,13 +225,14 @@ def guidance_magnet(*, end_effects: bool = True, eddy_currents: bool = True,
 
 
 #: the models held against the FEM: label -> magnet (built on first use); "ladder" is the
-#: guidance kind's ``eddy_model = "ladder"`` (legs, pole bars, yoke and rail as slab ladders)
-MODELS = {"2-D cut, lumped": lambda: guidance_magnet(end_effects=False),
+#: guidance kind's ``eddy_model = "ladder"`` (legs, pole bars, yoke and rail as slab ladders;
+#: the bundled file's since guideswitch, so "lumped" is named)
+MODELS = {"2-D cut, lumped": lambda: guidance_magnet(end_effects=False, eddy_model="lumped"),
           "2-D cut, ladder n = 6": lambda: guidance_magnet(
               end_effects=False, eddy_model="ladder", eddy_layers=6),
           "2-D cut, ladder n = 8": lambda: guidance_magnet(
               end_effects=False, eddy_model="ladder", eddy_layers=8),
-          "bundled, lumped": lambda: guidance_magnet(),
+          "bundled, lumped": lambda: guidance_magnet(eddy_model="lumped"),
           "bundled, ladder n = 8": lambda: guidance_magnet(eddy_model="ladder", eddy_layers=8)}
 #: the same networks without eddy elements against the FEM with sigma = 0
 STATIC_MODELS = {"2-D cut, no eddy currents vs FEM sigma = 0":

@@ -12,7 +12,11 @@ elements: the model the vehicle maps come from) and (b) the file on the eddy lad
 docs/validation_fem.md).  After 0.1 s: RMS of the coil-current error, the reference's RMS
 variation, and gain and phase of the current's 50 Hz component per metre of gap.
 
-    PYTHONPATH=src python benchmarks/measure_cross_guidance_network.py [out.json]
+    PYTHONPATH=src python benchmarks/measure_cross_guidance_network.py [--guidance FILE] [out.json]
+
+``--guidance FILE`` flies that guidance magnet file (e.g. the bundled one on the eddy
+ladder, guideswitch) on eq. 8 and the network with 2 and 3 branches and replays each run
+through the file's own detailed model.
 """
 
 from __future__ import annotations
@@ -84,23 +88,49 @@ def compare(run: Any, ref: np.ndarray) -> dict[str, float]:
                               ds.guidance_gap.values[:, 0], F_HZ)
 
 
-def main() -> None:
-    t0 = time.time()
-    refs = {"bundled (lumped)": mk.load_magnet("tr-guidance"),
+def configurations(argv: list[str]) -> tuple[dict[str, Any], list[tuple[str, str, Any]]]:
+    """The detailed references and the (label, guidance file, eddy modes) runs to make.
+
+    Without arguments: switch26v's comparison (the bundled guidance file on eq. 8 and on
+    the network, against the bundled and the 8-layer ladder detailed models).  With
+    ``--guidance FILE`` (a guidance magnet file, e.g. a copy of ``tr-guidance`` on the
+    ladder): that file flown on eq. 8 and on the network with 2 and 3 branches, against
+    its own detailed model (and the 8-layer ladder of the bundled file).
+    """
+    if "--guidance" not in argv:
+        refs = {"bundled (lumped)": mk.load_magnet("tr-guidance"),
+                "ladder (8 layers)": mk.load_magnet("tr-guidance", eddy_model="ladder",
+                                                    eddy_layers=8)}
+        return refs, [("guidance eq. 8 (default)", "tr-guidance", None),
+                      ("guidance network eddy_modes=2", "tr-guidance", {"guidance": 2})]
+    path = argv[argv.index("--guidance") + 1]
+    refs = {"its file": mk.load_magnet(path),
             "ladder (8 layers)": mk.load_magnet("tr-guidance", eddy_model="ladder",
                                                 eddy_layers=8)}
+    return refs, [(f"{path}, guidance eddy_modes={m}", path, {"guidance": m})
+                  for m in (0, 2, 3)]
+
+
+def main() -> None:
+    t0 = time.time()
+    argv = sys.argv[1:]
+    refs, runs = configurations(argv)
     out: dict[str, Any] = {}
-    for name, modes in (("guidance eq. 8 (default)", None),
-                        ("guidance network eddy_modes=2", {"guidance": 2})):
-        model = CrossSectionModel(eddy_modes=modes)
+    for name, guidance, modes in runs:
+        model = CrossSectionModel(guidance_magnet=guidance, eddy_modes=modes)
+        c0 = time.process_time()
         run, calls = record(model)
-        out[name] = {"eddy_modes_of": model.eddy_modes_of}
+        out[name] = {"eddy_modes_of": model.eddy_modes_of,
+                     "run_cpu_s": time.process_time() - c0,
+                     "min_guidance_gap_mm": 1e3 * float(run.dataset.guidance_gap.min()),
+                     "max_guidance_current_A": float(run.dataset.guidance_current.max())}
         for rname, mag in refs.items():
             out[name][rname] = compare(run, replay(model, run, calls, mag))
         print(name, json.dumps(out[name], indent=1), flush=True)
     out["wall_s"] = time.time() - t0
-    if len(sys.argv) > 1:
-        with open(sys.argv[1], "w") as fh:
+    paths = [a for a in argv if a.endswith(".json")]
+    if paths:
+        with open(paths[0], "w") as fh:
             json.dump(out, fh, indent=1)
 
 

@@ -157,7 +157,7 @@ def measure_accuracy(name: str, model: str, maps_model: str | None = None) -> di
                            "maps_eddy_model": maps_model or model, "current_A": i0,
                            "maps_cpu_s": maps_cpu, "compare": rows,
                            "detailed_cpu_s_per_scenario": det_cpu, **_fits(maps.dataset)}
-    if name == "tr09-standard":
+    if name in ("tr09-standard", "tr-guidance"):
         sys.path.insert(0, str(Path(__file__).parent))
         import bench_gap_motion as bgm
 

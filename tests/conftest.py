@@ -106,6 +106,16 @@ def paper_tr09(name: str = "tr09-standard", **options: Any) -> mk.Magnet:
     return mk.build_magnet(tr09_params(name, flux_paths="paper"), options=opts)
 
 
+def without_eddy_lines(text: str) -> str:
+    """A bundled magnet file's text without its eddy-model lines (``eddy_model``,
+    ``eddy_layers``, the ``[reduced]`` table and their provenance): the former network with
+    the lumped eddy elements and eq. 8 as its reduced model (the TR09 files' lines since
+    switch26m, the guidance file's since guideswitch)."""
+    return "\n".join(line for line in text.split("\n") if not line.startswith(
+        ("eddy_model = ", "eddy_layers = ", "[reduced]", "eddy_modes = ", '"magnet.eddy_model"',
+         '"magnet.eddy_layers"', '"reduced.eddy_modes"')))
+
+
 def paper_tr09_file(directory: Any, name: str = "tr09-standard") -> str:
     """Write the ``"paper"`` variant of a bundled TR09 file into ``directory``; its path."""
     text = (resources.files("maglevkit") / "data" / f"{name}.toml").read_text()
@@ -114,9 +124,7 @@ def paper_tr09_file(directory: Any, name: str = "tr09-standard") -> str:
     text = text.replace('\nflux_paths = "split"', '\nflux_paths = "paper"', 1)
     text = text.replace("\nnominal_current = 31.7", f"\nnominal_current = {PAPER_NOMINAL_CURRENT_A}", 1)
     # the former network's lumped eddy elements and eq. 8 (the file's lines since switch26m)
-    text = "\n".join(line for line in text.split("\n") if not line.startswith(
-        ("eddy_model = ", "eddy_layers = ", "[reduced]", "eddy_modes = ", '"magnet.eddy_model"',
-         '"magnet.eddy_layers"', '"reduced.eddy_modes"')))
+    text = without_eddy_lines(text)
     out = os.path.join(str(directory), f"{name}-paper.toml")
     with open(out, "w") as fh:
         fh.write(text)

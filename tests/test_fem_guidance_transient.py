@@ -124,7 +124,7 @@ def test_guidance_ladder_structure() -> None:
     import maglevkit as mk
     from maglevkit.errors import InputError
 
-    lumped = mk.load_magnet("tr-guidance")
+    lumped = mk.load_magnet("tr-guidance", eddy_model="lumped")   # the file's is the ladder
     ladder = mk.load_magnet("tr-guidance", eddy_model="ladder", eddy_layers=3)
     count = [sum(int(g > 0) for g in m.network.eddy_conductances) for m in (lumped, ladder)]
     # lumped: 4 half legs (the bars' iron inside), the yoke, the rail's middle and its 8
@@ -185,3 +185,38 @@ def test_flux_model_against_recorded_fem() -> None:
             m = mod.metrics(run["time_s"], run["current_A"], run["eddy_loss_J"], fem)
             assert _within(100 * m["err_max"], emax, 0.5), (case, net, m)
             assert _within(100 * (m["t63_s"] / m["t63_fem_s"] - 1), et63, 1.0), (case, net, m)
+
+
+@pytest.mark.slow   # ~2 min wall under load: two map sets (lumped, 8-layer ladder), 6 runs
+def test_bundled_reduced_model_against_recorded_fem() -> None:
+    """The reduced model the bundled file names (guideswitch: the 8-layer ladder's maps with
+    the 3-branch eddy network) against the FEM's voltage steps, both sections stepped like
+    the FEM's section: within issue 26's 5 % of the step for t >= 1 ms (measured on the
+    vehicle maps 4.2 / 2.4 / 3.9 %), no jump at 1 ms (-0.0 / -0.3 / -0.0 %).  The former
+    default (lumped elements, eq. 8) jumps by ``dU/(R_el + R_ec)``: +18.5 % of the step at
+    1 ms at every step (measured).  An independent check of the whole chain: the FEM knows
+    neither the network nor the reduction."""
+    import maglevkit as mk
+
+    mod = _script()
+    data = _record()
+    # maps spanning the three steps (6 and 10 mm, 10-50 A) with margin for the RK4 stages
+    grid = dict(gaps_m=np.linspace(0.005, 0.012, 8), currents_A=np.linspace(0.0, 60.0, 31),
+                progress=False)
+    bundled = mk.load_magnet("tr-guidance")
+    assert (bundled.options.eddy_model, bundled.default_eddy_modes) == ("ladder", 3)
+    now = mk.CurrentModel(mk.build_maps(bundled, **grid), eddy_modes=3)
+    before = mk.CurrentModel(mk.build_maps(mk.load_magnet("tr-guidance", eddy_model="lumped"),
+                                           **grid))
+    r_el = bundled.network.resistances
+    for ref in data["cases"]["runs"]:
+        got = {}
+        for label, model in (("now", now), ("before", before)):
+            res = mk.simulate(model, np.asarray(ref["time_s"]), gaps_m=ref["gap_m"],
+                              voltages_V=r_el * ref["i1_A"], initial_currents_A=ref["i0_A"])
+            m = mod.metrics(res.time_s, res.currents_A[:, 0], np.zeros_like(res.time_s), ref)
+            got[label] = (100 * m["err_1ms"], 100 * m["err_max"])
+        # bounds: the aim (5 %) for the network, 1 pp at 1 ms (measured <= 0.4 pp on these
+        # and on the vehicle maps); the former model at least 15 % (measured 18.5 %)
+        assert got["now"][1] < 5.0 and abs(got["now"][0]) < 1.0, (ref["label"], got)
+        assert got["before"][0] > 15.0, (ref["label"], got)

@@ -99,7 +99,7 @@ def guidance_results() -> dict[str, Any]:
 
     Coarse maps: the figures, not the model errors, are tested here (~8 s in all).
     """
-    mag = mk.load_magnet("tr-guidance")
+    mag = mk.load_magnet("tr-guidance", eddy_model="lumped")
     s0, i0 = mag.nominal_gap, mag.nominal_current
     maps = mk.build_maps(mag, gaps_m=np.linspace(0.006, 0.016, 6), currents_A=np.linspace(0, 80, 17))
     coupling = [c for c in standard_scenarios(mag, gap_m=s0, current_A=i0) if c.coupling]

@@ -1,7 +1,7 @@
 """The eddy model chosen in a magnet file: ``[magnet] eddy_model`` / ``eddy_layers``.
 
 A file may name its eddy model (issue 26 item 2, eddydefault26; the bundled TR09 files name
-the ladder since switch26m: the ladder should be one
+the ladder since switch26m, the guidance file since guideswitch: the ladder should be one
 line away for users, e.g. a vehicle whose ``standard_magnet`` is a copy of the bundled
 file with ``eddy_model = "ladder"``); an option given to ``load_magnet`` /
 ``with_options`` wins over the file's.  The networks are compared with the ones the
@@ -21,12 +21,27 @@ import maglevkit as mk
 from maglevkit.errors import ParameterFileError, ProvenanceWarning
 from maglevkit.reduction.maps import network_hash
 
-GUIDANCE = "tr-guidance"   # the smallest Transrapid network (66 branches): cheap to build
+from .conftest import without_eddy_lines
+
+GUIDANCE = "tr-guidance"   # the smallest Transrapid network (66 branches lumped): cheap to build
+
+
+def _lumped_text() -> str:
+    """The bundled guidance file's text without its eddy-model lines (guideswitch): no
+    eddy model named, the lumped elements (66 branches)."""
+    return without_eddy_lines(
+        (resources.files("maglevkit") / "data" / f"{GUIDANCE}.toml").read_text())
+
+
+def _lumped() -> mk.Magnet:
+    """The bundled guidance magnet on the lumped eddy elements (by option)."""
+    return mk.load_magnet(GUIDANCE, eddy_model="lumped")
 
 
 def _file(tmp_path: Path, lines: str, *, provenance: bool = True) -> str:
-    """A copy of the bundled guidance file with ``lines`` added to its [magnet] table."""
-    text = (resources.files("maglevkit") / "data" / f"{GUIDANCE}.toml").read_text()
+    """A copy of the bundled guidance file, without its eddy-model lines, with ``lines``
+    added to its [magnet] table."""
+    text = _lumped_text()
     assert "\n[magnet]\n" in text
     text = text.replace("\n[magnet]\n", f"\n[magnet]\n{lines}\n", 1)
     if provenance:
@@ -39,12 +54,15 @@ def _file(tmp_path: Path, lines: str, *, provenance: bool = True) -> str:
     return str(path)
 
 
-def test_a_file_without_the_keys_is_built_as_before() -> None:
-    # the bundled guidance file names no eddy model: the default lumped elements, 6 layers noted,
-    # and the same parameter hash as with the options given explicitly (maps and cached
-    # vehicle maps are keyed by it, so it must not move)
-    mag = mk.load_magnet(GUIDANCE)
-    explicit = mk.load_magnet(GUIDANCE, eddy_model="lumped", eddy_layers=6)
+def test_a_file_without_the_keys_is_built_as_before(tmp_path: Path) -> None:
+    # a file that names no eddy model (the bundled guidance file without its lines): the
+    # default lumped elements, 6 layers noted, and the same parameter hash as with the
+    # options given explicitly (maps and cached vehicle maps are keyed by it, so it must not
+    # move)
+    path = tmp_path / "plain.toml"
+    path.write_text(_lumped_text())
+    mag = mk.load_magnet(str(path))
+    explicit = mk.load_magnet(str(path), eddy_model="lumped", eddy_layers=6)
     assert (mag.options.eddy_model, mag.options.eddy_layers) == ("lumped", 6)
     assert mag.parameter_hash == explicit.parameter_hash
     assert network_hash(mag.network) == network_hash(explicit.network)
@@ -60,7 +78,7 @@ def test_the_file_chooses_the_ladder(tmp_path: Path) -> None:
     assert sorted(b.name for b in mag.network.branches) == sorted(
         b.name for b in ref.network.branches)
     assert network_hash(mag.network) == network_hash(ref.network)
-    lumped = mk.load_magnet(GUIDANCE)
+    lumped = _lumped()
     assert len(mag.network.branches) > len(lumped.network.branches)   # the tubes are there
     # the options of a rebuild keep the file's model
     assert mag.with_options(saturation=False).options.eddy_model == "ladder"
@@ -69,7 +87,7 @@ def test_the_file_chooses_the_ladder(tmp_path: Path) -> None:
 def test_an_option_wins_over_the_file(tmp_path: Path) -> None:
     path = _file(tmp_path, 'eddy_model = "ladder"\neddy_layers = 3')
     mag = mk.load_magnet(path, eddy_model="lumped")
-    assert network_hash(mag.network) == network_hash(mk.load_magnet(GUIDANCE).network)
+    assert network_hash(mag.network) == network_hash(_lumped().network)
     assert mk.load_magnet(path, eddy_layers=2).options.eddy_layers == 2
     assert mk.load_magnet(path).with_options(eddy_model="lumped").options.eddy_model == "lumped"
 
@@ -77,7 +95,7 @@ def test_an_option_wins_over_the_file(tmp_path: Path) -> None:
 def test_the_layers_alone_keep_the_lumped_model(tmp_path: Path) -> None:
     mag = mk.load_magnet(_file(tmp_path, "eddy_layers = 8"))
     assert (mag.options.eddy_model, mag.options.eddy_layers) == ("lumped", 8)
-    assert network_hash(mag.network) == network_hash(mk.load_magnet(GUIDANCE).network)
+    assert network_hash(mag.network) == network_hash(_lumped().network)
 
 
 @pytest.mark.parametrize("lines, words", [
@@ -105,7 +123,7 @@ def test_build_magnet_takes_the_file_only_where_told(tmp_path: Path) -> None:
 
     params = tomllib.loads(Path(_file(tmp_path, 'eddy_model = "ladder"\neddy_layers = 3'))
                            .read_text())
-    lumped = network_hash(mk.load_magnet(GUIDANCE).network)
+    lumped = network_hash(_lumped().network)
     # options given: they hold (as before the file keys existed), unless file_options says
     assert network_hash(mk.build_magnet(params, options=mk.ModelOptions()).network) == lumped
     told = mk.build_magnet(params, options=mk.ModelOptions(), file_options=("eddy_model",))
@@ -115,21 +133,19 @@ def test_build_magnet_takes_the_file_only_where_told(tmp_path: Path) -> None:
         mk.build_magnet(params, file_options=("saturation",))
 
 
-@pytest.mark.parametrize("name, model", [("tr09-standard", "ladder"), ("tr09-bow", "ladder"),
-                                         ("tr-guidance", "lumped")])
-def test_the_bundled_transrapid_magnets_name_their_eddy_model(name: str, model: str) -> None:
+@pytest.mark.parametrize("name, layers", [("tr09-standard", 6), ("tr09-bow", 6),
+                                          ("tr-guidance", 8)])
+def test_the_bundled_transrapid_magnets_name_their_eddy_model(name: str, layers: int) -> None:
     # switch26m (docs/decisions.md): the TR09 levitation magnets are built with the
     # ladder their transient FEM validates (6 layers), their reduced model is the eddy
-    # network ([reduced] eddy_modes = 2, tests/test_reduced_default.py); the guidance
-    # magnet keeps the lumped elements (its reduced models miss the 2 % either way,
-    # eddydefault26, guidered26) and names no eddy model
+    # network ([reduced] eddy_modes = 2, tests/test_reduced_default.py); guideswitch: the
+    # guidance magnet too, 8 layers (6 miss its FEM's t63 in saturation)
     text = (resources.files("maglevkit") / "data" / f"{name}.toml").read_text()
-    named = "\neddy_model" in text and "\neddy_layers" in text
-    assert named == (model == "ladder")
+    assert "\neddy_model" in text and "\neddy_layers" in text
     mag = mk.load_magnet(name)
-    assert mag.options.eddy_model == model
+    assert (mag.options.eddy_model, mag.options.eddy_layers) == ("ladder", layers)
     # the file's keys build the same network as the options (an independent path)
-    explicit = mk.load_magnet(name, eddy_model=model, eddy_layers=6)
+    explicit = mk.load_magnet(name, eddy_model="ladder", eddy_layers=layers)
     assert network_hash(mag.network) == network_hash(explicit.network)
 
 

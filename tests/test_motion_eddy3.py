@@ -419,7 +419,7 @@ def test_guidance_magnet_ladders_and_the_series_bound() -> None:
         detailed_frequency_response,
     )
 
-    net = mk.load_magnet("tr-guidance").network
+    net = mk.load_magnet("tr-guidance", eddy_model="lumped").network
     resp = detailed_frequency_response(net, gap=0.010, current=32.0)[0]
     r_el = float(net.resistances[0])
     r_jump = float(eddy_resistance(net, gap_m=0.010, current_A=32.0)[0])
@@ -451,7 +451,7 @@ def test_common_mode_responses_are_the_sum_of_the_single_gap_ones() -> None:
     gap -> current differs from the own-pole one by more than 3 % in the fit's band)."""
     from maglevkit.reduction.motion_eddy import detailed_frequency_response
 
-    net = mk.load_magnet("tr-guidance").network
+    net = mk.load_magnet("tr-guidance", eddy_model="lumped").network
     f = np.array([0.3, 5.0, 50.0, 300.0])
     own = detailed_frequency_response(net, gap=0.010, current=32.0, frequencies_Hz=f)
     common = detailed_frequency_response(net, gap=0.010, current=32.0, frequencies_Hz=f,

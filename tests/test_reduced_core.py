@@ -18,8 +18,10 @@ CURRENTS = np.linspace(0.0, 60.0, 7)
 
 @pytest.fixture(scope="module")
 def guidance_maps() -> mk.CharacteristicMaps:
+    # the lumped eddy elements by name (the file's is the ladder since guideswitch): a
+    # cheap two-circuit network with eq. 8's jump resistance
     # two circuits, each driving its own poles: the averaging/share matrices are not trivial
-    return mk.build_maps(mk.load_magnet("tr-guidance"), gaps_m=GAPS, currents_A=CURRENTS,
+    return mk.build_maps(mk.load_magnet("tr-guidance", eddy_model="lumped"), gaps_m=GAPS, currents_A=CURRENTS,
                          progress=False)
 
 

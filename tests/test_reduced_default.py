@@ -8,8 +8,9 @@ it (``maglevkit compare``, ``demo``, ``export fmu``, ``export_fmu``); an option 
 The entry points are checked against the library run with the option given explicitly
 (``CurrentModel(maps, eddy_modes=m)``, ``compare_models``), an independent path.
 
-The cheap magnet here is a copy of the bundled guidance file (66 branches, lumped eddy
-elements: its eddy network is fitted like any other) with a ``[reduced]`` table added.
+The cheap magnet here is a copy of the bundled guidance file without its eddy-model lines
+(66 branches, lumped eddy elements: its eddy network is fitted like any other) with a
+``[reduced]`` table added.
 """
 
 from __future__ import annotations
@@ -31,15 +32,19 @@ from maglevkit.reduction import default_eddy_modes
 from maglevkit.reduction.eddy_network import EDDY_NETWORK_MODES
 from maglevkit.reduction.maps import DEFAULT_EDDY_MODES_ATTRIBUTE
 
+from .conftest import without_eddy_lines
+
 GUIDANCE = "tr-guidance"
 runner = CliRunner()
 
 
 def _file(directory: Path, table: str | None, *, provenance: bool = True,
           name: str = "guidance.toml") -> str:
-    """A copy of the bundled guidance file with ``table`` (the body of a ``[reduced]``
-    table) added, tagged in ``[provenance]`` unless told otherwise."""
-    text = (resources.files("maglevkit") / "data" / f"{GUIDANCE}.toml").read_text()
+    """A copy of the bundled guidance file without its eddy-model lines (the lumped
+    elements; guideswitch) with ``table`` (the body of a ``[reduced]`` table) added, tagged
+    in ``[provenance]`` unless told otherwise."""
+    text = without_eddy_lines(
+        (resources.files("maglevkit") / "data" / f"{GUIDANCE}.toml").read_text())
     assert "\n[provenance]\n" in text and "\n[reduced]" not in text
     if table is not None:
         tags = "".join(f'"reduced.{line.split("=")[0].strip()}" = "[E] modelling choice"\n'
@@ -88,15 +93,16 @@ def test_the_allowed_values_are_one_list() -> None:
 
 def test_the_bundled_files(tmp_path: Path) -> None:
     # switch26m: the TR09 levitation magnets on the ladder with the network as their
-    # reduced model; the guidance magnet and the U-magnet unchanged (no table: eq. 8)
-    for name in ("tr09-standard", "tr09-bow"):
+    # reduced model; guideswitch: the guidance magnet on the 8-layer ladder with the
+    # 3-branch network; the U-magnet unchanged (no table: eq. 8)
+    for name, layers, modes in (("tr09-standard", 6, 2), ("tr09-bow", 6, 2),
+                                ("tr-guidance", 8, 3)):
         mag = mk.load_magnet(name)
-        assert (mag.options.eddy_model, mag.options.eddy_layers) == ("ladder", 6)
-        assert mag.default_eddy_modes == 2 == default_eddy_modes(mag)
+        assert (mag.options.eddy_model, mag.options.eddy_layers) == ("ladder", layers)
+        assert mag.default_eddy_modes == modes == default_eddy_modes(mag)
         assert mag.provenance["reduced.eddy_modes"].startswith("[E] modelling choice")
-    for name in ("tr-guidance", "u-magnet"):
-        mag = mk.load_magnet(name)
-        assert mag.options.eddy_model == "lumped" and mag.default_eddy_modes == 0
+    mag = mk.load_magnet("u-magnet")
+    assert mag.options.eddy_model == "lumped" and mag.default_eddy_modes == 0
     assert mk.load_magnet(_file(tmp_path, None)).default_eddy_modes == 0
 
 

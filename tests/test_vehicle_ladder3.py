@@ -180,8 +180,9 @@ def test_cross_section_compiled_step_carries_both_eddy_states() -> None:
     from maglevkit.vehicle.crossrun import CrossSectionModel, Crosswind
     from maglevkit.vehicle.irregularities import HarmonicProfile
 
-    lumped = lumped_tr09()["tr09-standard"]
-    model = CrossSectionModel(levitation_magnet=lumped, motion_eddy="levitation",
+    lumped, guidance = lumped_tr09()["tr09-standard"], lumped_tr09()["tr-guidance"]
+    model = CrossSectionModel(levitation_magnet=lumped, guidance_magnet=guidance,
+                              motion_eddy="levitation",
                               eddy_branches=2)
     assert model.bank.n_eddy_states == 2
     kw: dict[str, Any] = dict(speed_m_per_s=400 / 3.6, duration_s=0.5,
@@ -192,8 +193,10 @@ def test_cross_section_compiled_step_carries_both_eddy_states() -> None:
     assert lev.dims == ("time", "levitation_circuit", "eddy_state")
     assert float(np.abs(lev.values).max()) > 0.05 and float(np.abs(gui.values).max()) == 0.0
     assert "three-state" in a.attrs["magnets"]
-    with pytest.warns(MaglevkitWarning, match="guidance magnet 'tr-guidance'.*three-state"):
-        CrossSectionModel(levitation_magnet=lumped, motion_eddy=True, eddy_branches=2)
+    with pytest.warns(MaglevkitWarning,
+                      match="guidance magnet '.*tr-guidance-lumped.toml'.*three-state"):
+        CrossSectionModel(levitation_magnet=lumped, guidance_magnet=guidance, motion_eddy=True,
+                          eddy_branches=2)
 
 
 def test_options_in_the_file_and_their_refusals() -> None:

@@ -27,7 +27,8 @@ _LUMPED: dict[str, str] = {}
 
 
 def lumped_tr09() -> dict[str, str]:
-    """Paths of the bundled TR09 magnet files (``"tr09-standard"``, ``"tr09-bow"``) with
+    """Paths of the bundled TR09 magnet files (``"tr09-standard"``, ``"tr09-bow"``) and
+    of the guidance file (``"tr-guidance"``, since guideswitch) with
     the lumped eddy elements and eq. 8 as their reduced model (``eddy_model = "lumped"``,
     ``[reduced] eddy_modes = 0``; network hashes as the bundled files' before issue 26's
     eddy switch), and of the bundled vehicle file ``"tr09"`` flying them.  The
@@ -53,6 +54,14 @@ def lumped_tr09() -> dict[str, str]:
             p["reduced"]["eddy_modes"] = 0
             _LUMPED[name] = str(folder / f"{name}-lumped.toml")
             Path(_LUMPED[name]).write_text(toml_text(p))
+        # the guidance magnet's lumped file (guideswitch put the bundled one on the ladder)
+        from importlib import resources
+
+        from .conftest import without_eddy_lines
+
+        _LUMPED["tr-guidance"] = str(folder / "tr-guidance-lumped.toml")
+        Path(_LUMPED["tr-guidance"]).write_text(without_eddy_lines(
+            (resources.files("maglevkit") / "data" / "tr-guidance.toml").read_text()))
         v, _ = read_parameter_file("tr09", what="vehicle", folder="vehicle", table="vehicle")
         v["vehicle"].update(standard_magnet=_LUMPED["tr09-standard"],
                             bow_magnet=_LUMPED["tr09-bow"])
@@ -186,10 +195,12 @@ def test_cross_section_compiled_step_carries_the_eddy_currents() -> None:
                                 curve=TransitionCurve(4000.0, math.radians(12.0), 50.0),
                                 crosswind=gust, lateral=HarmonicProfile(0.2e-3, 100.0),
                                 failures=[Failure("guidance_left/front", 0.5)])
-    lumped = lumped_tr09()["tr09-standard"]
-    lev = CrossSectionModel(levitation_magnet=lumped, motion_eddy="levitation")
-    with pytest.warns(MaglevkitWarning, match="guidance magnet 'tr-guidance'.*28 %"):
-        every = CrossSectionModel(levitation_magnet=lumped, motion_eddy=True)
+    lumped, guidance = lumped_tr09()["tr09-standard"], lumped_tr09()["tr-guidance"]
+    lev = CrossSectionModel(levitation_magnet=lumped, guidance_magnet=guidance,
+                            motion_eddy="levitation")
+    with pytest.warns(MaglevkitWarning, match="guidance magnet '.*tr-guidance-lumped.toml'.*28 %"):
+        every = CrossSectionModel(levitation_magnet=lumped, guidance_magnet=guidance,
+                                  motion_eddy=True)
     for model, kw, eddy in ((lev, full, {"levitation": True, "guidance": False}),
                             (every, dict(speed_m_per_s=400 / 3.6, duration_s=0.5,
                                          crosswind=gust),

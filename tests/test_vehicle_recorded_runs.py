@@ -102,6 +102,15 @@ docs/decisions.md, "switch26v").  ``hp_detailed`` (detailed magnets, now the lad
 FluxModel) moved by 0.25 of the largest current.  The whole-run reference
 (vehicle_run_reference.nc) keeps its ``"paper"`` magnets with the lumped elements and eq. 8
 (tests/conftest.py ``paper_tr09_file``): unchanged, its stored maps still used.
+
+The six cross-section runs were re-recorded after the guidance file's eddy switch
+(guideswitch): ``tr-guidance`` on the eddy ladder (8 layers, its maps stored under the new
+hash, the lumped guidance maps deleted) with the 3-branch eddy network as its reduced
+model (the bank's eddy records now three states wide).  Against the recording before,
+largest change relative to the variable's largest value: guidance current 7.0e-3 (curve),
+1.6e-2 (gust), 5.9e-2 (failure), chassis_y <= 5.9e-2 (failure), car-body lateral
+acceleration <= 3.5e-2; the failure's lowest guidance gap 9.592 -> 9.577 mm, no touchdown
+(docs/decisions.md, "guideswitch").  Heave-pitch runs untouched.
 """
 
 from __future__ import annotations
