@@ -119,7 +119,7 @@ def test_the_key_is_read_and_needs_provenance(tmp_path: Path) -> None:
 
 @pytest.mark.parametrize("table, words", [
     ("eddy_modes = 4", ("[reduced] eddy_modes = 4", "allowed are 0, 1, 2, 3")),
-    ("eddy_modes = -1", ("[reduced] eddy_modes = -1", ">= 0")),
+    ("eddy_modes = -1", ("[reduced] eddy_modes = -1", "allowed are 0, 1, 2, 3")),
     ("eddy_modes = 2.5", ("[reduced] eddy_modes = 2.5", "whole number")),
     ('eddy_modes = "two"', ("[reduced] eddy_modes = 'two'", "whole number")),
     ("eddy_modes = true", ("[reduced] eddy_modes = True", "whole number")),
@@ -236,3 +236,37 @@ def test_export_fmu_takes_the_maps_default(one_branch, tmp_path: Path) -> None:
     eq8_maps.dataset.attrs[DEFAULT_EDDY_MODES_ATTRIBUTE] = 0
     with pytest.raises(mk.InputError, match="default to different eddy_modes"):
         export_fmu({"a": maps, "b": eq8_maps}, tmp_path / "mixed.fmu")
+
+
+@pytest.mark.parametrize("edit, words", [
+    # the file's own lumped elements with the ladder's layer count: the key does nothing
+    ({'eddy_model = "ladder"': 'eddy_model = "lumped"'},
+     ("eddy_layers = 6 has no effect", "eddy_model = 'lumped'")),
+    # fewer layers than any FEM check of the ladder (4, 6, 8)
+    ({"eddy_layers = 6": "eddy_layers = 2"}, ("eddy_layers = 2", "4 ... 8 layers")),
+    # the eddy network on lumped elements: measured no better than eq. 8 under gap motion
+    ({'eddy_model = "ladder"': 'eddy_model = "lumped"'},
+     ("[reduced] eddy_modes = 2 with eddy_model = 'lumped'", "eddy_modes = 0")),
+])
+def test_eddy_keys_that_do_nothing_or_leave_the_checked_range_are_warned(
+        tmp_path: Path, edit: dict[str, str], words: tuple[str, ...]) -> None:
+    text = (resources.files("maglevkit") / "data" / "tr09-standard.toml").read_text()
+    for old, new in edit.items():
+        assert old in text, old
+        text = text.replace(old, new)
+    path = tmp_path / "tr09-edited.toml"
+    path.write_text(text)
+    with pytest.warns(mk.PlausibilityWarning) as record:
+        mk.load_magnet(path)
+    messages = [str(w.message) for w in record if issubclass(w.category, mk.PlausibilityWarning)]
+    assert any(all(w in m for w in words) for m in messages), messages
+
+
+def test_eddy_keys_of_the_bundled_files_and_given_options_are_not_warned() -> None:
+    # the bundled files as shipped, and an option given to load_magnet (it wins, as meant)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", mk.PlausibilityWarning)
+        for name in ("tr09-standard", "tr09-bow", "tr-guidance"):
+            mk.load_magnet(name)
+            mk.load_magnet(name, eddy_model="lumped")
+        mk.load_magnet("tr09-standard", eddy_layers=2)
