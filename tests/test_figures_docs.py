@@ -332,14 +332,21 @@ def test_readme_and_equations_cite_the_paper_by_title() -> None:
 
 
 def test_paths_named_in_the_documents_exist() -> None:
-    """Every backticked repository path (``src/...``, ``docs/...``, ``tests/...``) exists;
+    """Every backticked repository path (``src/...``, ``docs/...``, ``tests/...``) exists (and a
+    ``file::test`` named the test);
     globs and placeholders (``NAME``) need at least one match."""
     seen = 0
     for f in DOCS:
         for path in re.findall(r"`((?:src|docs|tests)/[^`\s]+)`", f.read_text()):
             seen += 1
+            path, _, test = path.partition("::")   # tests/test_x.py::test_y: the test too
             pattern = re.sub(r"\b[A-Z]{3,}\b", "*", path.rstrip("/"))   # NAME.toml: a glob
-            assert list(ROOT.glob(pattern)), f"{f.name}: {path} does not exist"
+            found = list(ROOT.glob(pattern))
+            assert found, f"{f.name}: {path} does not exist"
+            if test:
+                name = test.split("[")[0]
+                assert any(re.search(rf"^\s*def {re.escape(name)}\(", p.read_text(), re.M)
+                           for p in found), f"{f.name}: {path} has no test {name}"
     assert seen >= 5
 
 
