@@ -402,20 +402,24 @@ def _assign_column(dst: np.ndarray, src: np.ndarray, j: int, m: int) -> None:
     dst[:, j * cols:(j + 1) * cols] = src.reshape(dst.shape[0], cols)
 
 
-#: Statics solvers of the networks built last in this process, by the network's name and
-#: repr (its every element, material and parameter): an equal network loaded again (a magnet
-#: file read twice, each CLI command in one session) reuses the solver instead of building
-#: it anew (TR09 split: ~2.5 s of CasADi per build).  Networks holding CasADi symbols are
-#: not shared (equal reprs, different symbols).
-_SHARED_SOLVERS: dict[tuple[str, str], _StaticSolver] = {}
+#: Statics solvers of the networks built last in this process, by the network's name, repr
+#: (its every element, material and parameter) and loop matrix (the basis its unknowns are
+#: in): an equal network loaded again (a magnet file read twice, each CLI command in one
+#: session) reuses the solver instead of building it anew (TR09 split: ~2.5 s of CasADi per
+#: build).  Networks holding CasADi symbols are not shared (equal reprs, other symbols).
+_SHARED_SOLVERS: dict[tuple[str, str, str], _StaticSolver] = {}
 _SHARED_SOLVERS_MAX = 8
 
 
 def _solver(network: Network) -> _StaticSolver:
     solver = network.cache.get("statics")
     if solver is None:
+        import hashlib
+
         text = repr((network.branches, network.circuits))
-        key = (network.name, text)
+        loops = np.ascontiguousarray(network.loop_matrix, dtype=float)
+        key = (network.name, text,
+               f"{loops.shape}" + hashlib.sha256(loops.tobytes()).hexdigest())
         shared = "SX(" not in text and "MX(" not in text
         solver = _SHARED_SOLVERS.pop(key, None) if shared else None
         if solver is None:
