@@ -204,23 +204,23 @@ def open_fmu(exported: Any, directory: Any) -> tuple[Any, dict[str, int], dict[s
 
 
 # ---------------------------------------------------------------- suite timing (CPU time)
-#: The test files that take longest (most CPU first; measured on a cold cache, see
-#: docs/decisions.md "suite10").  ``make test`` hands whole files to its two workers
-#: (``--dist loadfile --no-loadscope-reorder``) in collection order; collecting these first
-#: is longest-first scheduling, so that the workers finish together instead of one running
-#: a heavy file alone at the end.  A file not listed keeps its place after them; a stale
-#: entry only costs balance, never a test.
+#: The 30 test files that take longest, most CPU first (the test process's and its
+#: compilers'; measured with ``MAGLEVKIT_TEST_CPU_LOG`` on a cold cache, docs/decisions.md
+#: "suite10").  ``make test`` hands whole files to its two workers (``--dist loadfile
+#: --no-loadscope-reorder``) in collection order; collecting these first is longest-first
+#: scheduling, so that the workers finish together instead of one running a heavy file
+#: alone at the end.  A file not listed keeps its place after them; a stale entry only
+#: costs balance, never a test.
 HEAVY_FILES = (
-    "test_current_tables.py", "test_vehicle_controllers.py", "test_vehicle_motion_eddy.py",
-    "test_docs.py", "test_vehicle_compiled.py", "test_reduction_transient.py",
-    "test_vehicle_ladder3.py", "test_plausible_files.py", "test_reduction.py",
-    "test_magnets_characteristics.py", "test_design_tr09.py", "test_fmu.py",
-    "test_design_split.py", "test_compare.py", "test_bank_eddy_modes.py", "test_lanes.py",
-    "test_statics_csv_multi.py", "test_flux_sparse.py", "test_bank.py",
-    "test_current_tables_network.py", "test_vehicle_default_eddy.py", "test_first_hour.py",
-    "test_vehicle_recorded_runs.py", "test_calibration_steps.py", "test_sweep.py",
-    "test_motion_eddy3.py", "test_vehicle.py", "test_reduced_default.py",
-    "test_vehicle_eddy_modes.py", "test_cli.py",
+    "test_vehicle_motion_eddy.py", "test_vehicle_controllers.py", "test_first_hour.py",
+    "test_compare.py", "test_vehicle_ladder3.py", "test_design_split.py", "test_docs.py",
+    "test_current_tables.py", "test_magnets_characteristics.py", "test_reduction_transient.py",
+    "test_reduction.py", "test_bank.py", "test_plausible_files.py", "test_vehicle_compiled.py",
+    "test_design_tr09.py", "test_figures_docs.py", "test_current_tables_network.py",
+    "test_sweep.py", "test_statics_csv_multi.py", "test_bank_eddy_modes.py", "test_lanes.py",
+    "test_vehicle_default_eddy.py", "test_mpc_realtime.py", "test_vehicle_eddy_modes.py",
+    "test_realism.py", "test_mpc.py", "test_fmu.py", "test_calibration.py", "test_cli.py",
+    "test_network_freewheel.py",
 )
 
 
