@@ -28,9 +28,10 @@ demo: $(DEMO_STAMP)
 
 ## test: lint (ruff), type-check (mypy), the layers contract (import-linter) and the default
 ## test suite (two workers, one per core;
-## a test file stays on one worker, so its module fixtures are built once)
+## a test file stays on one worker, so its module fixtures are built once; files are handed
+## out in collection order, the heaviest first: tests/conftest.py HEAVY_FILES)
 test: $(STAMP) lint
-	$(BIN)/python -m pytest -q -n 2 --dist loadfile
+	$(BIN)/python -m pytest -q -n 2 --dist loadfile --no-loadscope-reorder
 
 ## test-all: also the slow validation tests
 test-all: $(STAMP) lint

@@ -209,3 +209,57 @@ def open_fmu(exported: Any, directory: Any) -> tuple[Any, dict[str, int], dict[s
     fmu.setupExperiment(startTime=0.0)
     fmu.enterInitializationMode()
     return fmu, vr, start
+
+
+# ---------------------------------------------------------------- suite timing (CPU time)
+#: The 30 test files that take longest, most CPU first (the test process's and its
+#: compilers'; measured with ``MAGLEVKIT_TEST_CPU_LOG`` on a cold cache, docs/decisions.md
+#: "suite10").  ``make test`` hands whole files to its two workers (``--dist loadfile
+#: --no-loadscope-reorder``) in collection order; collecting these first is longest-first
+#: scheduling, so that the workers finish together instead of one running a heavy file
+#: alone at the end.  A file not listed keeps its place after them; a stale entry only
+#: costs balance, never a test.
+HEAVY_FILES = (
+    "test_vehicle_motion_eddy.py", "test_vehicle_controllers.py", "test_first_hour.py",
+    "test_compare.py", "test_vehicle_ladder3.py", "test_design_split.py", "test_docs.py",
+    "test_current_tables.py", "test_magnets_characteristics.py", "test_reduction_transient.py",
+    "test_reduction.py", "test_bank.py", "test_plausible_files.py", "test_vehicle_compiled.py",
+    "test_design_tr09.py", "test_figures_docs.py", "test_current_tables_network.py",
+    "test_sweep.py", "test_statics_csv_multi.py", "test_bank_eddy_modes.py", "test_lanes.py",
+    "test_vehicle_default_eddy.py", "test_mpc_realtime.py", "test_vehicle_eddy_modes.py",
+    "test_realism.py", "test_mpc.py", "test_fmu.py", "test_calibration.py", "test_cli.py",
+    "test_network_freewheel.py",
+)
+
+
+def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item]) -> None:
+    """Collect the :data:`HEAVY_FILES` first, in their order (the rest keeps its order)."""
+    rank = {name: k for k, name in enumerate(HEAVY_FILES)}
+    items.sort(key=lambda item: rank.get(item.path.name, len(rank)))   # stable: files stay whole
+
+
+#: Set to a file path to append each test's CPU time there, one line per test phase:
+#: ``nodeid<TAB>phase<TAB>cpu_s<TAB>children_cpu_s`` (this process's CPU time, and that of
+#: its finished subprocesses: compilers, CLI runs, process pools).  CPU time, not wall time:
+#: the suite's machine is shared, and wall times there move with the load (docs/testing.md).
+CPU_LOG_VAR = "MAGLEVKIT_TEST_CPU_LOG"
+
+
+@pytest.hookimpl(hookwrapper=True)
+def pytest_runtest_protocol(item: pytest.Item, nextitem: pytest.Item | None) -> Any:
+    """Log the CPU time of each test's set-up, call and teardown (``CPU_LOG_VAR``)."""
+    path = os.environ.get(CPU_LOG_VAR)
+    if not path:
+        yield
+        return
+    import resource
+    import time
+
+    def children() -> float:
+        r = resource.getrusage(resource.RUSAGE_CHILDREN)
+        return r.ru_utime + r.ru_stime
+
+    t0, c0 = time.process_time(), children()
+    yield
+    with open(path, "a") as fh:
+        fh.write(f"{item.nodeid}\tall\t{time.process_time() - t0:.3f}\t{children() - c0:.3f}\n")

@@ -301,7 +301,9 @@ class FluxDAE:
     """Matrices, symbolic DAE and compiled step functions of one network and solver setup.
 
     Built through :func:`flux_dae` (once per network and setup); the reduction
-    (:mod:`maglevkit.reduction`) reads its matrices ``D``, ``K``, ``T``, ``Q`` and functions.
+    (:mod:`maglevkit.reduction`) reads its matrices ``D``, ``K``, ``T``, ``Q`` and functions,
+    and ``Kp`` = ``K^+`` (computed once here: an SVD of ~1.5 s on a ladder network's
+    528 x 356 ``K``, which the reduction's step and frequency identifications reuse).
 
     ``form``: ``"dense"`` (IDAS on ``y' = K^+ v``, ``Q v = 0``, ``v = h``: dense ``K^+`` and
     ``Q``) or ``"sparse"`` (IDAS on ``K y' = h`` with a sparse ``K``, for large networks;
@@ -361,6 +363,7 @@ class FluxDAE:
             raise TopologyError("internal: the flux-model reduction M = K D failed")
         Kp = np.linalg.pinv(K)
         self.D, self.M, self.K, self.T = D, M, K, T
+        self.Kp = Kp
         self._Q: np.ndarray | None = sla.null_space(K.T).T if form == "dense" else None
         nl, nc, ng, r = C.shape[0], N.shape[1], eq.n_gaps, D.shape[0]
         self.n_loops, self.n_circuits, self.n_gaps, self.n_diff = nl, nc, ng, r

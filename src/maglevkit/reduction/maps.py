@@ -647,7 +647,7 @@ class StepRun:
         T = ca.SX.sym("T")
         hv = ca.vertcat(-eq.residual / eddy_scale, U - resistance_scale
                         * net.resistances * eq.I)
-        ydot = ca.mtimes(ca.DM(np.linalg.pinv(d.K)), hv)
+        ydot = ca.mtimes(ca.DM(d.Kp), hv)
         alg = ca.vertcat(ca.mtimes(ca.DM(d.D), eq.x) - y, ca.mtimes(ca.DM(d.Q), hv))
         p = ca.vertcat(T, U, eq.s) if params is None else ca.vertcat(T, U, eq.s, params)
         dae = {"x": y, "z": ca.vertcat(eq.x, eq.I), "p": p, "ode": T * ydot, "alg": alg}

@@ -182,7 +182,7 @@ def detailed_frequency_response(net: Any, *, gap: float, current: float,
     y = ca.SX.sym("y", d.n_diff)
     U = ca.SX.sym("U", nc)
     hv = ca.vertcat(-eq.residual, U - net.resistances * eq.I)
-    ydot = ca.mtimes(ca.DM(np.linalg.pinv(d.K)), hv)
+    ydot = ca.mtimes(ca.DM(d.Kp), hv)
     alg = ca.vertcat(ca.mtimes(ca.DM(d.D), eq.x) - y, ca.mtimes(ca.DM(d.Q), hv))
     z = ca.vertcat(eq.x, eq.I)
     w = ca.vertcat(eq.s, U)
@@ -212,7 +212,7 @@ def detailed_frequency_response(net: Any, *, gap: float, current: float,
     gi = {g: k for k, g in enumerate(net.gap_names)}
     eye = np.eye(a.shape[0])
     nl = d.n_loops
-    out = []
+    owns, wins = [], []
     for j, c in enumerate(net.circuit_names):
         own = [gi[g] for g in groups[c]]
         win = np.zeros((ng + nc, 2))
@@ -222,9 +222,18 @@ def detailed_frequency_response(net: Any, *, gap: float, current: float,
         else:
             win[own, 0] = 1.0        # the circuit's own poles move together
             win[ng + j, 1] = 1.0     # its voltage
+        owns.append(own)
+        wins.append(win)
+    # one LU per frequency for every circuit's inputs (columns 2j, 2j + 1): the
+    # factorisation of the ladder network's ~360 states is the identification's cost
+    w_all = np.hstack(wins)
+    bw_all = b @ w_all
+    y_all = np.stack([np.linalg.solve(2j * np.pi * f * eye - a, bw_all) for f in freqs])
+    out = []
+    for j, (own, win) in enumerate(zip(owns, wins, strict=True)):
         res = np.empty((freqs.size, 4), dtype=complex)
-        for k, f in enumerate(freqs):
-            yy = np.linalg.solve(2j * np.pi * f * eye - a, b @ win)
+        for k in range(freqs.size):
+            yy = y_all[k][:, 2 * j:2 * j + 2]
             zz = cz @ yy + dz @ win
             force = (force_z @ zz + force_w @ win)[own].sum(axis=0)
             res[k] = (zz[nl + j, 0], force[0], zz[nl + j, 1], force[1])

@@ -115,7 +115,7 @@ class _HeldRamp:
         T = ca.SX.sym("T")
         ds = ca.SX.sym("ds", ng)
         hv = ca.vertcat(-eq.residual, ca.SX.zeros(nc))
-        ydot = ca.mtimes(ca.DM(np.linalg.pinv(d.K)), hv)
+        ydot = ca.mtimes(ca.DM(d.Kp), hv)
         alg = ca.vertcat(ca.mtimes(ca.DM(d.D), eq.x) - y, ca.mtimes(ca.DM(d.Q), hv))
         dae = {"x": ca.vertcat(y, eq.s), "z": ca.vertcat(eq.x, eq.I), "p": ca.vertcat(T, ds),
                "ode": ca.vertcat(T * ydot, ds), "alg": alg}
