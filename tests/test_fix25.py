@@ -370,3 +370,21 @@ def test_design_pareto_format_follows_the_suffix(tmp_path: Path) -> None:
                               "--pareto", str(jpg), "--pareto-points", "2"])
     assert res.exit_code == 0, res.output
     assert jpg.read_bytes()[:3] == b"\xff\xd8\xff"       # a JPEG, not a PNG named .jpg
+
+
+@pytest.mark.parametrize("name, kind", [("tr09-standard", "levitation_magnet"),
+                                        ("tr-guidance", "guidance_magnet")])
+def test_transrapid_templates_offer_end_effects_with_its_provenance(
+        tmp_path: Path, name: str, kind: str) -> None:
+    """Every magnet kind has the 2-D cut switch (issue 26); its template offers it (review26)."""
+    import warnings
+
+    text = _template(name)
+    assert "# end_effects = false" in text and '# "magnet.end_effects" = "[E]' in text
+    cut = tmp_path / f"{name}-cut.toml"
+    cut.write_text(text.replace("# end_effects = false", "end_effects = false")
+                   .replace('# "magnet.end_effects"', '"magnet.end_effects"'))
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")         # the uncommented option with its tag is quiet
+        mag = mk.load_magnet(cut)
+    assert mag.parameters["magnet"]["end_effects"] is False and mag.kind == kind

@@ -63,6 +63,13 @@ _TEMPLATE_OPTIONS: dict[str, tuple[str, str]] = {
         '#                          # it with its [provenance] line.\n',
         '# "magnet.flux_paths" = "[E] modelling choice: the lumped network\'s air paths '
         '(docs/magnets.md)"\n'),
+    **{kind: (
+        '# end_effects = false      # true (default): the magnet with its terms across the\n'
+        '#                          # cut (3-D); false: its 2-D cut, the like-for-like\n'
+        '#                          # partner of a 2-D FEM (docs/magnets.md).  Uncomment it\n'
+        '#                          # with its [provenance] line.\n',
+        '# "magnet.end_effects" = "[E] modelling choice: the 2-D cut, for a 2-D FEM '
+        '(docs/magnets.md)"\n') for kind in ("levitation_magnet", "guidance_magnet")},
 }
 
 
