@@ -17,8 +17,6 @@ bench`` (benchmarks/bench_gap_motion.py) is the slow test.
 
 from __future__ import annotations
 
-import importlib.util
-import sys
 from pathlib import Path
 from typing import Any
 
@@ -29,6 +27,8 @@ import maglevkit as mk
 from maglevkit.reduction import default_eddy_modes
 from maglevkit.reduction.motion_eddy import detailed_frequency_response
 
+from .conftest import load_script
+
 AIMS = {5.0: 0.05, 50.0: 0.10, 200.0: 0.20}
 """Issue 26's bounds on the current error relative to its variation, per frequency [Hz]."""
 PHASE_AIM_DEG, PHASE_UP_TO_HZ = 5.0, 100.0
@@ -38,13 +38,7 @@ PHASE_AIM_DEG, PHASE_UP_TO_HZ = 5.0, 100.0
 def _bench() -> Any:
     """benchmarks/bench_gap_motion.py (its sweep, grid and linearised response: the same
     code as the ``make bench`` section, not a copy)."""
-    path = Path(__file__).resolve().parents[1] / "benchmarks" / "bench_gap_motion.py"
-    spec = importlib.util.spec_from_file_location("bench_gap_motion_default", path)
-    assert spec is not None and spec.loader is not None
-    bench = importlib.util.module_from_spec(spec)
-    sys.modules[spec.name] = bench
-    spec.loader.exec_module(bench)
-    return bench
+    return load_script(Path(__file__).resolve().parents[1] / "benchmarks" / "bench_gap_motion.py")
 
 
 def _phase_error_deg(reduced: complex, detailed: complex) -> float:

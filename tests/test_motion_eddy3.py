@@ -28,6 +28,7 @@ from maglevkit.reduction.motion_eddy import (
     ladder_voltage_currents,
 )
 
+from .conftest import load_script
 from .test_reduced_motion_eddy import linear_responses, spline_point
 
 F = np.geomspace(0.1, 1000.0, 25)
@@ -322,17 +323,9 @@ def test_split_tr09_three_state_ladder_against_the_detailed_model() -> None:
     current 1.1 / 7.4 / 14.1 %, phase +0.4 / +3.5 / -2.3 deg), and the voltage step and the
     closed-loop scenario are no worse than with the two-state ladder (measured 0.88 / 0.52
     vs 2.91 / 3.59 % and 2.62 / 0.71 vs 5.74 / 1.60 %, current / force AC error)."""
-    import importlib.util
-    import sys
-
     from maglevkit.compare import compare_models, standard_scenarios
 
-    path = Path(__file__).resolve().parents[1] / "benchmarks" / "bench_gap_motion.py"
-    spec = importlib.util.spec_from_file_location("bench_gap_motion_l3", path)
-    assert spec is not None and spec.loader is not None
-    bench = importlib.util.module_from_spec(spec)
-    sys.modules[spec.name] = bench
-    spec.loader.exec_module(bench)
+    bench = load_script(Path(__file__).resolve().parents[1] / "benchmarks" / "bench_gap_motion.py")
     mag = mk.load_magnet("tr09-standard", eddy_model="lumped")   # as measured (switch26m)
     maps = mk.build_maps(mag, gaps_m=bench.GRID[0], currents_A=bench.GRID[1], progress=False)
     two = mk.CurrentModel(maps, motion_eddy=True)
