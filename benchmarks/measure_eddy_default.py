@@ -100,9 +100,9 @@ def measure_accuracy(name: str, model: str, maps_model: str | None = None) -> di
     """The reduced models on the maps of ``maps_model`` (default: ``model``) against the
     detailed model of eddy model ``model`` (the statics of both are the same: the ladder's
     tubes carry one flux density, so the maps differ only in their eddy fits)."""
+    from compare_common import compare_reduced_models
+
     import maglevkit as mk
-    import maglevkit.compare as cmp
-    from maglevkit.compare import compare_models, standard_scenarios
 
     mag = load(name, model)
     fm = mk.FluxModel(mag)
@@ -119,40 +119,8 @@ def measure_accuracy(name: str, model: str, maps_model: str | None = None) -> di
         print(f"no three-state ladder: {exc}", file=sys.stderr)
     for m in (2, 3):   # eq. 8 with the RL eddy network fitted to the voltage step
         reduced[f"modes{m}"] = mk.CurrentModel(maps, eddy_modes=m)
-    # every detailed run once: compare_models calls simulate / closed_loop for the
-    # detailed model of each reduced model; the same inputs give the same run
-    detailed: dict[Any, Any] = {}
-    cpu: dict[str, float] = {}
-    sim, loop = cmp.simulate, cmp.closed_loop
-
-    def shared(fn: Any, label: str) -> Any:
-        def run(m: Any, *a: Any, **kw: Any) -> Any:
-            if m is not fm:
-                return fn(m, *a, **kw)
-            key = (label, repr(a), kw.get("dt_s"), kw.get("duration_s"), id(
-                kw.get("gaps_m")), id(kw.get("voltages_V")), id(kw.get("gap_reference_m")),
-                id(kw.get("external_force_N")))
-            if key not in detailed:
-                t0 = time.process_time()
-                detailed[key] = fn(m, *a, **kw)
-                cpu[str(len(cpu))] = time.process_time() - t0
-            return detailed[key]
-        return run
-
-    cmp.simulate, cmp.closed_loop = shared(sim, "sim"), shared(loop, "loop")
-    try:
-        scen = standard_scenarios(mag, gap_m=gap, current_A=i0)
-        rows: dict[str, Any] = {}
-        for label, red in reduced.items():
-            res = compare_models(fm, red, scen, gap_m=gap, current_A=i0, repeat=0)
-            rows[label] = {r.scenario.name: {
-                "nrms_current": float(np.max(r.current_error)),
-                "nrms_force": float(np.max(r.force_error)),
-                "ac_current": float(np.nanmax(r.current_error_ac)),
-                "ac_force": float(np.nanmax(r.force_error_ac))} for r in res}
-        det_cpu = {s.name: (cpu[str(k)], s.duration_s) for k, s in enumerate(scen)}
-    finally:
-        cmp.simulate, cmp.closed_loop = sim, loop
+    # every detailed run once (compare_common)
+    rows, det_cpu = compare_reduced_models(mag, fm, reduced, gap_m=gap, current_A=i0)
     out: dict[str, Any] = {"magnet": name, "eddy_model": model,
                            "maps_eddy_model": maps_model or model, "current_A": i0,
                            "maps_cpu_s": maps_cpu, "compare": rows,

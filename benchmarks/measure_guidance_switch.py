@@ -43,9 +43,7 @@ GRID = (np.linspace(0.005, 0.016, 12), np.linspace(0.0, 80.0, 41))
 def measure_compare(path: str, ref_currents: list[float]) -> dict[str, Any]:
     """Reduced models on the file's maps against its detailed model (module docstring)."""
     import bench_gap_motion as bgm
-
-    import maglevkit.compare as cmp
-    from maglevkit.compare import compare_models, standard_scenarios
+    from compare_common import compare_reduced_models
 
     mag = mk.load_magnet(path)
     fm = mk.FluxModel(mag)
@@ -58,34 +56,7 @@ def measure_compare(path: str, ref_currents: list[float]) -> dict[str, Any]:
         other = mk.build_maps(mag, gaps_m=GRID[0], currents_A=GRID[1], progress=False,
                               eddy_reference=(gap, cur))
         reduced[f"modes2 at {cur:g} A"] = mk.CurrentModel(other, eddy_modes=2)
-    detailed: dict[Any, Any] = {}
-    sim, loop = cmp.simulate, cmp.closed_loop
-
-    def shared(fn: Any, label: str) -> Any:
-        def run(m: Any, *a: Any, **kw: Any) -> Any:
-            if m is not fm:
-                return fn(m, *a, **kw)
-            key = (label, repr(a), kw.get("dt_s"), kw.get("duration_s"), id(kw.get("gaps_m")),
-                   id(kw.get("voltages_V")), id(kw.get("gap_reference_m")),
-                   id(kw.get("external_force_N")))
-            if key not in detailed:
-                detailed[key] = fn(m, *a, **kw)
-            return detailed[key]
-        return run
-
-    cmp.simulate, cmp.closed_loop = shared(sim, "sim"), shared(loop, "loop")
-    try:
-        scen = standard_scenarios(mag, gap_m=gap, current_A=i0)
-        rows = {}
-        for label, red in reduced.items():
-            res = compare_models(fm, red, scen, gap_m=gap, current_A=i0, repeat=0)
-            rows[label] = {r.scenario.name: {
-                "nrms_current": float(np.max(r.current_error)),
-                "nrms_force": float(np.max(r.force_error)),
-                "ac_current": float(np.nanmax(r.current_error_ac)),
-                "ac_force": float(np.nanmax(r.force_error_ac))} for r in res}
-    finally:
-        cmp.simulate, cmp.closed_loop = sim, loop
+    rows, _ = compare_reduced_models(mag, fm, reduced, gap_m=gap, current_A=i0)
     sweep = bgm.sweep(fm, reduced, i0, frequencies=(5.0, 50.0, 200.0))
     gap_sine = {f"{r['f']:g} Hz": {label: {
         "ac_current": r[label][2], "ac_force": r[label][3],
