@@ -842,7 +842,7 @@ def _warn_eddy_keys(parameters: Mapping[str, Any], options: ModelOptions, label:
     """
     mag = parameters["magnet"]
     model_from_file = "eddy_model" in from_file_keys
-    ladder = options.eddy_model in ("ladder", "ladder_split")
+    ladder = options.eddy_model != "lumped"          # EDDY_MODELS' ladders
     if "eddy_layers" in mag and "eddy_layers" in from_file_keys:
         if model_from_file and not ladder:
             warnings.warn(f"{label}: [magnet] eddy_layers = {mag['eddy_layers']!r} has no "
@@ -852,7 +852,8 @@ def _warn_eddy_keys(parameters: Mapping[str, Any], options: ModelOptions, label:
         elif ladder and options.eddy_layers < LADDER_LAYERS_CHECKED_MIN:
             warnings.warn(f"{label}: [magnet] eddy_layers = {options.eddy_layers}: the "
                           f"ladder was checked against a FEM with "
-                          f"{LADDER_LAYERS_CHECKED_MIN} ... 8 layers (6 for the TR09 "
+                          f"{LADDER_LAYERS_CHECKED_MIN} ... {max(LADDER_COEFFICIENTS)} "
+                          "layers (6 for the TR09 "
                           "magnets, 8 for the guidance magnet); fewer resolve the "
                           "diffusion too coarsely", PlausibilityWarning, stacklevel=5)
     reduced = parameters.get("reduced")
